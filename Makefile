@@ -1,0 +1,37 @@
+# One-command set-up for newcomers: `make demo`, `make test`. Everything runs inside .venv.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV ?= .venv
+PY := $(VENV)/bin/python
+PIP := $(VENV)/bin/pip -q --disable-pip-version-check
+DEMO_DIR ?= demo_output
+
+# DDS traffic stays on 127.0.0.1 and rclpy logs go to a temporary folder (see README, "Network").
+export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
+export ROS_LOG_DIR ?= $(or $(TMPDIR),/tmp)/imu_noise_id_ros_log
+
+.PHONY: setup demo test lint bench clean
+
+$(VENV)/.installed: requirements.txt requirements-dev.txt setup.py setup.cfg package.xml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PIP) install --upgrade pip 2>&1 | grep -v '^WARNING: Location' || true
+	set -o pipefail; $(PIP) install -r requirements-dev.txt 2>&1 | { grep -v '^WARNING: Location' || true; }
+	set -o pipefail; $(PIP) install -e . 2>&1 | { grep -v '^WARNING: Location' || true; }
+	touch $@
+
+setup: $(VENV)/.installed
+
+demo: setup
+	$(PY) -m imu_noise_id.demo --out $(DEMO_DIR)
+
+lint: setup
+	$(VENV)/bin/ruff check .
+
+test: setup lint
+	$(PY) -m pytest -q
+
+bench: setup
+	$(PY) bench/run_all.py
+
+clean:
+	rm -rf $(VENV) build install log $(DEMO_DIR) .pytest_cache .ruff_cache

@@ -1,0 +1,1 @@
+"""The pure numerical core: numpy/scipy only, no ROS, no files, no plotting."""

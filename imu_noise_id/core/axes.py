@@ -1,0 +1,130 @@
+"""Axis names and the container for IMU time series shared by every layer.
+
+The six axes are named ``gyro_x gyro_y gyro_z accel_x accel_y accel_z`` in the sensor frame, in SI units
+(rad/s for gyroscopes, m/s² for accelerometers), as in REP-103/REP-145.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+GYRO_AXES: tuple[str, ...] = ("gyro_x", "gyro_y", "gyro_z")
+ACCEL_AXES: tuple[str, ...] = ("accel_x", "accel_y", "accel_z")
+AXES: tuple[str, ...] = GYRO_AXES + ACCEL_AXES
+
+UNITS: dict[str, str] = {**dict.fromkeys(GYRO_AXES, "rad/s"), **dict.fromkeys(ACCEL_AXES, "m/s^2")}
+
+
+def axis_index(name: str) -> int:
+    """Column of ``name`` in the (N, 6) array returned by :meth:`ImuSeries.samples`.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is not one of :data:`AXES`.
+    """
+    try:
+        return AXES.index(name)
+    except ValueError:
+        raise ValueError(f"unknown axis {name!r}: expected one of {', '.join(AXES)}") from None
+
+
+@dataclass
+class ImuSeries:
+    """IMU samples on a common time base.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Sample times in seconds (header stamps when read from a bag).
+    gyro : ndarray, shape (N, 3)
+        Angular rate [rad/s].
+    accel : ndarray, shape (N, 3)
+        Specific force [m/s²] (gravity included, as drivers publish it).
+    frame_id : str
+        Frame of the samples.
+    topic : str
+        Where the samples came from (topic name or a description).
+    """
+
+    t: np.ndarray
+    gyro: np.ndarray
+    accel: np.ndarray
+    frame_id: str = "imu_link"
+    topic: str = ""
+    notes: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.t = np.asarray(self.t, dtype=float)
+        self.gyro = np.asarray(self.gyro, dtype=float).reshape(-1, 3)
+        self.accel = np.asarray(self.accel, dtype=float).reshape(-1, 3)
+        n = self.t.shape[0]
+        if self.gyro.shape[0] != n or self.accel.shape[0] != n:
+            raise ValueError(
+                f"ImuSeries: t has {n} samples but gyro has {self.gyro.shape[0]} and accel "
+                f"{self.accel.shape[0]}"
+            )
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+    @property
+    def dt(self) -> float:
+        """Median sampling period [s]."""
+        if len(self) < 2:
+            raise ValueError("ImuSeries: need at least two samples to know the sampling period")
+        return float(np.median(np.diff(self.t)))
+
+    @property
+    def rate(self) -> float:
+        """Median sampling rate [Hz]."""
+        return 1.0 / self.dt
+
+    def samples(self) -> np.ndarray:
+        """All six axes as one (N, 6) array in :data:`AXES` order."""
+        return np.hstack([self.gyro, self.accel])
+
+    def axis(self, name: str) -> np.ndarray:
+        """One axis by name (see :data:`AXES`)."""
+        i = axis_index(name)
+        return self.gyro[:, i] if i < 3 else self.accel[:, i - 3]
+
+
+@dataclass
+class ScalarSeries:
+    """A scalar time series, e.g. sensor_msgs/Temperature [°C]."""
+
+    t: np.ndarray
+    value: np.ndarray
+    topic: str = ""
+
+
+@dataclass
+class OdometrySeries:
+    """nav_msgs/Odometry samples.
+
+    Attributes
+    ----------
+    t : (M,) header stamps [s]
+    position : (M, 3) [m] in ``frame_id`` (the odom frame)
+    orientation_xyzw : (M, 4) unit quaternion of ``child_frame_id`` in ``frame_id``
+    linear_velocity : (M, 3) [m/s] in ``child_frame_id`` (REP-105 twist convention)
+    angular_velocity : (M, 3) [rad/s] in ``child_frame_id``
+    pose_covariance, twist_covariance : (M, 6, 6) as published
+    """
+
+    t: np.ndarray
+    position: np.ndarray
+    orientation_xyzw: np.ndarray
+    linear_velocity: np.ndarray
+    angular_velocity: np.ndarray
+    pose_covariance: np.ndarray
+    twist_covariance: np.ndarray
+    frame_id: str = "odom"
+    child_frame_id: str = "base_link"
+    topic: str = ""
+
+    def __len__(self) -> int:
+        return int(np.asarray(self.t).shape[0])

@@ -1,0 +1,391 @@
+"""Stochastic error components of an inertial sensor.
+
+Each component is a small frozen dataclass holding its **continuous-time** parameters and offering:
+
+* ``simulate(n, dt, rng)``: n samples of the component's contribution to the sensor error;
+* ``block(dt)``: its state-space block (its part of Φ, Q, H, R, u and which elements are free), the form
+  paper 000 (Stebler et al. 2011) eqs. (4)–(5) and (7)–(9) use; the estimator assembles blocks with
+  :mod:`imu_noise_id.core.statespace`;
+* ``allan_variance(tau, dt)``: its theoretical Allan variance [u²];
+* ``psd(f, dt)``: its two-sided power spectral density [u²/Hz] (IEEE Std 952 convention, so that
+  AV(τ) = 4∫₀^∞ S(f) sin⁴(πfτ)/(πfτ)² df, paper 000 section 2);
+* ``per_sample(dt)`` / ``from_per_sample(dt, ...)``: exact conversion to and from per-sample values in
+  paper 000's notation (σ²_WN, σ²_RW, β, σ²_GM, ω).
+
+The Allan variances of WN, QN, RW and RR are exact for the *sampled* process at τ = m·dt (m integer); the
+Gauss–Markov AV is the continuous-time formula, accurate when τ_c ≫ dt.
+
+A new component plugs in by subclassing :class:`Component` and registering its name in
+:data:`COMPONENT_TYPES`; nothing in the estimators needs to change.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import asdict, dataclass, field
+from typing import ClassVar
+
+import numpy as np
+from scipy.signal import lfilter
+
+from . import units
+
+
+@dataclass(frozen=True)
+class StateBlock:
+    """One component's part of the linear-Gaussian state-space model (paper 000 eqs. 4–5).
+
+    x_{t+1} = Φ x_t + w_t + u,   w_t ~ N(0, Q);   y_t = H x_t + v_t,   v_t ~ N(0, R).
+
+    Attributes
+    ----------
+    phi, q : (p, p) arrays
+        Transition matrix and process-noise covariance of the block's ``p`` states.
+    h : (p,) array
+        The block's columns of the (1 × n) measurement matrix H.
+    r : float
+        Its contribution to the measurement-noise variance R (white noise only).
+    u : (p,) array
+        Its deterministic input per step (rate ramp).
+    phi_free, q_free, u_free : bool arrays of the same shapes
+        Which elements the estimator may change; the others stay fixed (paper 000 eq. 7).
+    r_free : bool
+        Whether ``r`` is free.
+    """
+
+    phi: np.ndarray
+    q: np.ndarray
+    h: np.ndarray
+    r: float = 0.0
+    u: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    phi_free: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
+    q_free: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
+    u_free: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    r_free: bool = False
+
+    @property
+    def n_states(self) -> int:
+        return int(self.phi.shape[0])
+
+
+def _as_tau(tau: np.ndarray | float) -> np.ndarray:
+    tau = np.asarray(tau, dtype=float)
+    if np.any(~np.isfinite(tau)) or np.any(tau <= 0):
+        raise ValueError("averaging times tau must be finite and > 0")
+    return tau
+
+
+def _as_freq(f: np.ndarray | float) -> np.ndarray:
+    f = np.asarray(f, dtype=float)
+    if np.any(~np.isfinite(f)) or np.any(f <= 0):
+        raise ValueError("frequencies f must be finite and > 0")
+    return f
+
+
+class Component(ABC):
+    """Base class of the stochastic error components (see the module docstring)."""
+
+    name: ClassVar[str]
+    #: Names of the continuous-time parameters, in the order positional spec values are read.
+    parameter_names: ClassVar[tuple[str, ...]]
+    #: Units of the continuous-time parameters, ``u`` standing for the signal's unit.
+    parameter_units: ClassVar[dict[str, str]]
+
+    @abstractmethod
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        """n samples [u] of the component's error contribution at sampling period dt [s]."""
+
+    @abstractmethod
+    def block(self, dt: float) -> StateBlock:
+        """The component's state-space block at sampling period dt [s]."""
+
+    @abstractmethod
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        """Theoretical Allan variance [u²] at averaging times tau [s]."""
+
+    @abstractmethod
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        """Two-sided power spectral density [u²/Hz] at frequencies f [Hz] (dt [s] matters for QN only)."""
+
+    @abstractmethod
+    def per_sample(self, dt: float) -> dict[str, float]:
+        """Per-sample values in paper 000's notation for sampling period dt [s]."""
+
+    @classmethod
+    @abstractmethod
+    def from_per_sample(cls, dt: float, **values: float) -> Component:
+        """Inverse of :meth:`per_sample`."""
+
+    def params(self) -> dict[str, float]:
+        """Continuous-time parameters by name."""
+        return {k: float(v) for k, v in asdict(self).items()}  # type: ignore[call-overload]
+
+    def __str__(self) -> str:
+        inner = ", ".join(f"{k}={v:.6g}" for k, v in self.params().items())
+        return f"{self.name}({inner})"
+
+
+@dataclass(frozen=True)
+class WN(Component):
+    """Gaussian white noise (angle / velocity random walk) with density N [u/√Hz].
+
+    Per-sample variance σ²_WN = N²/dt; AV(τ) = N²/τ; two-sided PSD S(f) = N².
+    """
+
+    noise_density: float
+
+    name: ClassVar[str] = "WN"
+    parameter_names: ClassVar[tuple[str, ...]] = ("noise_density",)
+    parameter_units: ClassVar[dict[str, str]] = {"noise_density": "u/sqrt(Hz)"}
+
+    def __post_init__(self) -> None:
+        units.white_noise_sigma2(self.noise_density, 1.0)
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        return rng.standard_normal(n) * math.sqrt(units.white_noise_sigma2(self.noise_density, dt))
+
+    def block(self, dt: float) -> StateBlock:
+        return StateBlock(
+            phi=np.zeros((0, 0)), q=np.zeros((0, 0)), h=np.zeros(0),
+            r=units.white_noise_sigma2(self.noise_density, dt), r_free=True,
+        )
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        return self.noise_density**2 / _as_tau(tau)
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        return np.full_like(_as_freq(f), self.noise_density**2)
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        return {"sigma2_wn": units.white_noise_sigma2(self.noise_density, dt)}
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> WN:
+        return cls(units.white_noise_density(values["sigma2_wn"], dt))
+
+
+@dataclass(frozen=True)
+class QN(Component):
+    """Quantisation noise of an integrating sensor, coefficient Q [u·s] (IEEE Std 952).
+
+    The rate error is e_k = (ε_k − ε_{k−1})/dt with ε_k white, var(ε) = Q² (uniform on ±√3·Q in
+    :meth:`simulate`, as a real quantiser's error is). AV(τ) = 3Q²/τ² exactly at τ = m·dt;
+    two-sided PSD of the sampled process S(f) = (4Q²/dt)·sin²(πf·dt) (→ (2πf)²Q²·dt for f ≪ 1/dt).
+
+    State-space block: states [ε_k/dt, ε_{k−1}/dt], Φ = [[0, 0], [1, 0]] (fixed), Q = diag(Q²/dt², 0)
+    (first element free), H = [1, −1].
+    """
+
+    Q: float
+
+    name: ClassVar[str] = "QN"
+    parameter_names: ClassVar[tuple[str, ...]] = ("Q",)
+    parameter_units: ClassVar[dict[str, str]] = {"Q": "u*s"}
+
+    def __post_init__(self) -> None:
+        units.quantization_sigma2(self.Q, 1.0)
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        eps = rng.uniform(-math.sqrt(3.0) * self.Q, math.sqrt(3.0) * self.Q, n + 1)
+        return np.diff(eps) / dt
+
+    def block(self, dt: float) -> StateBlock:
+        return StateBlock(
+            phi=np.array([[0.0, 0.0], [1.0, 0.0]]),
+            q=np.diag([units.quantization_sigma2(self.Q, dt), 0.0]),
+            h=np.array([1.0, -1.0]),
+            u=np.zeros(2),
+            phi_free=np.zeros((2, 2), bool),
+            q_free=np.array([[True, False], [False, False]]),
+            u_free=np.zeros(2, bool),
+        )
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        return 3.0 * self.Q**2 / _as_tau(tau) ** 2
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        return 4.0 * self.Q**2 * np.sin(math.pi * _as_freq(f) * dt) ** 2 / dt
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        return {"sigma2_qn": units.quantization_sigma2(self.Q, dt)}
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> QN:
+        return cls(math.sqrt(units._check_positive("sigma2_qn", values["sigma2_qn"])) * dt)
+
+
+@dataclass(frozen=True)
+class RW(Component):
+    """Random walk (rate random walk / bias random walk) with density K [u/s/√Hz].
+
+    x_{k+1} = x_k + w_k, var(w) = σ²_RW = K²·dt. Exact sampled AV: K²τ/3 + K²dt²/(6τ);
+    two-sided PSD S(f) = K²/(2πf)².
+    """
+
+    random_walk: float
+
+    name: ClassVar[str] = "RW"
+    parameter_names: ClassVar[tuple[str, ...]] = ("random_walk",)
+    parameter_units: ClassVar[dict[str, str]] = {"random_walk": "u/s/sqrt(Hz)"}
+
+    def __post_init__(self) -> None:
+        units.random_walk_sigma2(self.random_walk, 1.0)
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        return np.cumsum(rng.standard_normal(n) * math.sqrt(units.random_walk_sigma2(self.random_walk, dt)))
+
+    def block(self, dt: float) -> StateBlock:
+        return StateBlock(
+            phi=np.ones((1, 1)), q=np.array([[units.random_walk_sigma2(self.random_walk, dt)]]),
+            h=np.ones(1), u=np.zeros(1),
+            phi_free=np.zeros((1, 1), bool), q_free=np.ones((1, 1), bool), u_free=np.zeros(1, bool),
+        )
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        tau = _as_tau(tau)
+        return self.random_walk**2 * (tau / 3.0 + dt**2 / (6.0 * tau))
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        return self.random_walk**2 / (2.0 * math.pi * _as_freq(f)) ** 2
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        return {"sigma2_rw": units.random_walk_sigma2(self.random_walk, dt)}
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> RW:
+        return cls(units.random_walk_density(values["sigma2_rw"], dt))
+
+
+@dataclass(frozen=True)
+class GM(Component):
+    """First-order Gauss–Markov process with correlation time τ [s] and stationary std σ [u].
+
+    Exact discretisation: x_{k+1} = φ x_k + w_k, φ = exp(−dt/τ), var(w) = σ²(1 − φ²)
+    (paper 002 eq. 22). Paper 000 writes φ ≈ 1 − β·dt and var(w) ≈ 2βσ²_GM·dt with β = 1/τ, σ²_GM = σ².
+    Continuous-time AV: (2σ²τ_c/τ)·[1 − (τ_c/2τ)(3 − 4e^{−τ/τ_c} + e^{−2τ/τ_c})];
+    two-sided PSD: 2σ²τ_c / (1 + (2πfτ_c)²).
+    """
+
+    tau: float
+    sigma: float
+
+    name: ClassVar[str] = "GM"
+    parameter_names: ClassVar[tuple[str, ...]] = ("tau", "sigma")
+    parameter_units: ClassVar[dict[str, str]] = {"tau": "s", "sigma": "u"}
+
+    def __post_init__(self) -> None:
+        units.gm_phi(self.tau, 1.0)
+        units.gm_drive_sigma2(self.tau, self.sigma, 1.0)
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        phi = units.gm_phi(self.tau, dt)
+        drive = rng.standard_normal(n) * math.sqrt(units.gm_drive_sigma2(self.tau, self.sigma, dt))
+        x0 = rng.standard_normal() * self.sigma
+        out, _ = lfilter([1.0], [1.0, -phi], drive, zi=[phi * x0])
+        return out
+
+    def block(self, dt: float) -> StateBlock:
+        return StateBlock(
+            phi=np.array([[units.gm_phi(self.tau, dt)]]),
+            q=np.array([[units.gm_drive_sigma2(self.tau, self.sigma, dt)]]),
+            h=np.ones(1), u=np.zeros(1),
+            phi_free=np.ones((1, 1), bool), q_free=np.ones((1, 1), bool), u_free=np.zeros(1, bool),
+        )
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        x = _as_tau(tau) / self.tau
+        # 3 − 4e^{−x} + e^{−2x} written with expm1; below x = 1e-3 the series 2σ²(x/3 − x²/4 + 7x³/60)
+        # avoids the cancellation in 1 − (…)/(2x).
+        with np.errstate(divide="ignore", invalid="ignore"):
+            bracket = 1.0 - (-4.0 * np.expm1(-x) + np.expm1(-2.0 * x)) / (2.0 * x)
+            exact = 2.0 * self.sigma**2 * bracket / x
+        series = 2.0 * self.sigma**2 * (x / 3.0 - x**2 / 4.0 + 7.0 * x**3 / 60.0)
+        return np.where(x < 1e-3, series, exact)
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        f = _as_freq(f)
+        return 2.0 * self.sigma**2 * self.tau / (1.0 + (2.0 * math.pi * f * self.tau) ** 2)
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        return {
+            **units.gm_to_paper000(self.tau, self.sigma),
+            "phi": units.gm_phi(self.tau, dt),
+            "sigma2_drive": units.gm_drive_sigma2(self.tau, self.sigma, dt),
+        }
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> GM:
+        if "phi" in values:
+            return cls(*units.gm_from_discrete(values["phi"], values["sigma2_drive"], dt))
+        return cls(*units.gm_from_paper000(values["beta"], values["sigma2_gm"]))
+
+
+@dataclass(frozen=True)
+class RR(Component):
+    """Rate ramp / drift with slope ω [u/s]: y_k = ω·k·dt. AV(τ) = ω²τ²/2; two-sided PSD ω²/(2πf)³.
+
+    State-space block: one integrator state (Φ = 1, Q = 0, H = 1) driven by the deterministic input
+    u = ω·dt (paper 000 sections 4.1–4.3, where u enters the random-walk state).
+    """
+
+    slope: float
+
+    name: ClassVar[str] = "RR"
+    parameter_names: ClassVar[tuple[str, ...]] = ("slope",)
+    parameter_units: ClassVar[dict[str, str]] = {"slope": "u/s"}
+
+    def __post_init__(self) -> None:
+        units.ramp_per_sample(self.slope, 1.0)
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        return self.slope * dt * np.arange(n, dtype=float)
+
+    def block(self, dt: float) -> StateBlock:
+        return StateBlock(
+            phi=np.ones((1, 1)), q=np.zeros((1, 1)), h=np.ones(1),
+            u=np.array([units.ramp_per_sample(self.slope, dt)]),
+            phi_free=np.zeros((1, 1), bool), q_free=np.zeros((1, 1), bool), u_free=np.ones(1, bool),
+        )
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        return 0.5 * self.slope**2 * _as_tau(tau) ** 2
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        return self.slope**2 / (2.0 * math.pi * _as_freq(f)) ** 3
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        return {"omega": float(self.slope), "omega_dt": units.ramp_per_sample(self.slope, dt)}
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> RR:
+        if "omega_dt" in values:
+            return cls(values["omega_dt"] / dt)
+        return cls(values["omega"])
+
+
+#: Registry of component types by spec name.
+COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, GM, RR)}
+
+
+def total_allan_variance(components: list[Component], tau: np.ndarray, dt: float) -> np.ndarray:
+    """Theoretical AV of a sum of independent components (AVs add)."""
+    tau = _as_tau(tau)
+    return np.sum([c.allan_variance(tau, dt) for c in components], axis=0) if components else np.zeros_like(tau)
+
+
+def total_psd(components: list[Component], f: np.ndarray, dt: float) -> np.ndarray:
+    """Two-sided PSD of a sum of independent components."""
+    f = _as_freq(f)
+    return np.sum([c.psd(f, dt) for c in components], axis=0) if components else np.zeros_like(f)
+
+
+def simulate_sum(components: list[Component], n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+    """n samples of the sum of independent components."""
+    if n < 1:
+        raise ValueError(f"number of samples must be >= 1, got {n}")
+    units._check_positive("dt", dt, allow_zero=False)
+    out = np.zeros(n)
+    for c in components:
+        out += c.simulate(n, dt, rng)
+    return out

@@ -1,0 +1,161 @@
+"""Model spec strings: ``WN+GM+RW+RR``, ``WN+2GM``, and the same with parameter values.
+
+Grammar (whitespace ignored)::
+
+    spec      := term ("+" term)*
+    term      := [count] NAME ["(" args ")"]
+    args      := value ("," value)*  |  key "=" value ("," key "=" value)*
+
+``NAME`` is a key of :data:`~.components.COMPONENT_TYPES`; positional values follow the component's
+``parameter_names`` (continuous-time units, see :mod:`.units`). Examples::
+
+    WN+GM+RW                                            structure only
+    WN(2e-4)+RW(3e-6)                                   noise density 2e-4 u/√Hz, random walk 3e-6 u/s/√Hz
+    WN(noise_density=2e-4)+GM(tau=300, sigma=5e-5)
+
+An IMU model assigns specs to axes: ``gyro: SPEC; accel: SPEC`` (or per axis ``gyro_z: SPEC``), or one
+SPEC for all six axes.
+"""
+
+from __future__ import annotations
+
+import re
+
+from .axes import ACCEL_AXES, AXES, GYRO_AXES
+from .components import COMPONENT_TYPES, Component
+from .errors import InputError
+
+#: Order in which components are listed in canonical model names.
+CANONICAL_ORDER: tuple[str, ...] = ("WN", "QN", "GM", "RW", "RR")
+
+_TERM = re.compile(r"^(?P<count>\d+)?(?P<name>[A-Za-z]+)(?:\((?P<args>[^()]*)\))?$")
+
+
+class ModelSpecError(InputError):
+    """A model spec string could not be understood."""
+
+
+def _split_terms(spec: str) -> list[str]:
+    text = re.sub(r"\s+", "", spec)
+    if not text:
+        raise ModelSpecError("empty model spec: give components such as 'WN+RW'")
+    terms, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        depth += (ch == "(") - (ch == ")")
+        if ch == "+" and depth == 0:
+            terms.append(text[start:i])
+            start = i + 1
+    terms.append(text[start:])
+    if any(not t for t in terms):
+        raise ModelSpecError(f"model spec {spec!r} has an empty term (check the '+' signs)")
+    return terms
+
+
+def _parse_term(term: str, spec: str) -> tuple[int, str, str | None]:
+    match = _TERM.match(term)
+    if not match:
+        raise ModelSpecError(f"cannot read term {term!r} of model spec {spec!r}")
+    name = match["name"].upper()
+    if name not in COMPONENT_TYPES:
+        known = ", ".join(COMPONENT_TYPES)
+        raise ModelSpecError(f"unknown component {match['name']!r} in model spec {spec!r}: known are {known}")
+    count = int(match["count"]) if match["count"] else 1
+    if count < 1:
+        raise ModelSpecError(f"component count must be >= 1 in {term!r}")
+    return count, name, match["args"]
+
+
+def parse_structure(spec: str) -> list[str]:
+    """Component names of a spec, expanded (``WN+2GM`` → ``['WN', 'GM', 'GM']``), parameters ignored."""
+    names: list[str] = []
+    for term in _split_terms(spec):
+        count, name, _ = _parse_term(term, spec)
+        names.extend([name] * count)
+    return names
+
+
+def _parse_args(cls: type[Component], args: str, spec: str) -> dict[str, float]:
+    values: dict[str, float] = {}
+    items = [a for a in args.split(",") if a]
+    for pos, item in enumerate(items):
+        key, sep, raw = item.partition("=")
+        if not sep:
+            if pos >= len(cls.parameter_names):
+                raise ModelSpecError(f"{cls.name} takes {len(cls.parameter_names)} value(s) in {spec!r}")
+            key, raw = cls.parameter_names[pos], item
+        if key not in cls.parameter_names:
+            raise ModelSpecError(
+                f"{cls.name} has no parameter {key!r} in {spec!r}: its parameters are "
+                f"{', '.join(cls.parameter_names)}"
+            )
+        try:
+            values[key] = float(raw)
+        except ValueError:
+            raise ModelSpecError(f"value {raw!r} of {cls.name}.{key} in {spec!r} is not a number") from None
+    missing = [p for p in cls.parameter_names if p not in values]
+    if missing:
+        raise ModelSpecError(f"{cls.name} in {spec!r} needs {', '.join(missing)}")
+    return values
+
+
+def parse_model(spec: str) -> list[Component]:
+    """Components with their parameters, e.g. ``'WN(2e-4)+GM(tau=300,sigma=5e-5)'``.
+
+    Raises
+    ------
+    ModelSpecError
+        With a message naming the offending term and what is expected.
+    """
+    components: list[Component] = []
+    for term in _split_terms(spec):
+        count, name, args = _parse_term(term, spec)
+        cls = COMPONENT_TYPES[name]
+        if args is None:
+            raise ModelSpecError(
+                f"{name} in {spec!r} needs parameter values, e.g. {name}("
+                + ", ".join(f"{p}=…" for p in cls.parameter_names) + ")"
+            )
+        try:
+            component = cls(**_parse_args(cls, args, spec))
+        except ValueError as exc:
+            raise ModelSpecError(f"{name} in {spec!r}: {exc}") from None
+        components.extend([component] * count)
+    return components
+
+
+def structure_name(names: list[str]) -> str:
+    """Canonical model name: ``['GM', 'WN', 'GM', 'RW']`` → ``'WN+2GM+RW'``."""
+    counts = {n: names.count(n) for n in dict.fromkeys(names)}
+    ordered = [n for n in CANONICAL_ORDER if n in counts] + [n for n in counts if n not in CANONICAL_ORDER]
+    return "+".join(f"{counts[n]}{n}" if counts[n] > 1 else n for n in ordered)
+
+
+def model_name(components: list[Component]) -> str:
+    """Canonical structure name of a list of components."""
+    return structure_name([c.name for c in components])
+
+
+def parse_imu_model(text: str) -> dict[str, list[Component]]:
+    """Per-axis components from ``'gyro: SPEC; accel: SPEC'``, per-axis keys, or one SPEC for all axes.
+
+    Keys ``gyro`` / ``accel`` apply to their three axes; an axis key (``gyro_z``) overrides its group.
+    """
+    if ":" not in text:
+        components = parse_model(text)
+        return {axis: list(components) for axis in AXES}
+    groups = {"gyro": GYRO_AXES, "accel": ACCEL_AXES, **{a: (a,) for a in AXES}}
+    result: dict[str, list[Component]] = {}
+    entries = [e for e in text.split(";") if e.strip()]
+    # Group keys first so that axis keys override them.
+    entries.sort(key=lambda e: e.split(":", 1)[0].strip() in AXES)
+    for entry in entries:
+        key, _, spec = entry.partition(":")
+        key = key.strip()
+        if key not in groups:
+            raise ModelSpecError(f"unknown axis group {key!r}: use gyro, accel or one of {', '.join(AXES)}")
+        for axis in groups[key]:
+            result[axis] = parse_model(spec)
+    missing = [a for a in AXES if a not in result]
+    if missing:
+        raise ModelSpecError(f"IMU model gives no spec for {', '.join(missing)}")
+    return result

@@ -1,0 +1,1 @@
+"""Pipelines chaining core pieces: offline analysis of arrays, online streaming estimation."""

@@ -1,0 +1,1 @@
+"""Plots and reports (matplotlib, HTML): adapters over core results."""
