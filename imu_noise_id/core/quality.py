@@ -21,12 +21,14 @@ import numpy as np
 
 from .axes import ImuSeries
 from .errors import InputError
-from .simulate import STANDARD_GRAVITY
 
 #: Stamps are clock (epoch) times if the smallest non-zero one exceeds this [s]; zero stamps among them are unset.
 ZERO_STAMP_CLOCK_S = 60.0
 #: A gap is an interval longer than this many median periods.
 GAP_FACTOR = 1.5
+#: Standard gravity [m/s²], as in :mod:`.simulate` (not imported from there: it would pull in scipy, ~80 MB of
+#: memory, into the bag reader).
+STANDARD_GRAVITY = 9.80665
 #: At most this many gaps are listed one by one in the notes.
 MAX_LISTED_GAPS = 10
 
