@@ -40,7 +40,7 @@ def test_nonfinite_samples_are_dropped_and_counted():
 def test_all_nonfinite_raises():
     t, x = _series(50)
     x[:, 0] = np.nan
-    with pytest.raises(QualityError, match="all 50 samples have NaN/inf"):
+    with pytest.raises(QualityError, match=r"all 50 samples have NaN/inf"):
         repair_time_series(t, x)
 
 
@@ -99,7 +99,7 @@ def test_implausible_values_dropped_when_rare_and_rejected_when_many():
     assert report.n_implausible == 1 and np.abs(x2[0]).max() < 1e3
     assert "physically impossible" in report.notes()[0]
     x[:100, 0] = 5e3  # 10 % of samples: not corruption but wrong units → error
-    with pytest.raises(QualityError, match="exceed the physical limits"):
+    with pytest.raises(QualityError, match=r"exceed the physical limits"):
         repair_time_series(t, [x, x], max_abs=(1e3, None))
 
 

@@ -101,7 +101,7 @@ class QualityReport:
             )
             more = f" and {len(self.gaps) - MAX_LISTED_GAPS} more" if len(self.gaps) > MAX_LISTED_GAPS else ""
             notes.append(
-                f"{len(self.gaps)} gap(s) longer than {GAP_FACTOR:g}× the median period {self.dt_median:.6g} s "
+                f"{len(self.gaps)} gap(s) longer than {GAP_FACTOR:g}× the median period {self.dt_median:.4g} s "
                 f"(≈{missing} missing {what}, {total:.3f} s in total; times from the first stamp): {listed}{more}"
             )
         return notes
