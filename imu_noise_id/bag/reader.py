@@ -4,9 +4,10 @@ No ROS install is needed: :class:`rosbags.highlevel.AnyReader` reads the files a
 in them. Values come out as numpy arrays in the dataclasses of :mod:`imu_noise_id.core.axes`, timed by the
 messages' header stamps (``sec + nanosec·1e-9`` seconds).
 
-Speed and memory: messages are read in batches of :data:`BATCH` raw messages, decoded with numpy at fixed byte
-offsets (:mod:`.fastdecode`, identical to full deserialisation, which remains the fallback) and written into
-arrays preallocated from the bag's message counts, so no message objects are kept.
+Speed and memory: messages are read (mcap: by :mod:`.mcapfast` when chunks do not overlap) in batches of
+:data:`BATCH` raw messages, decoded with numpy at fixed byte offsets (:mod:`.fastdecode`, identical to full
+deserialisation, which remains the fallback) and written into arrays preallocated from the bag's message counts,
+so no message objects are kept.
 
 Every problem with the input raises :class:`~.errors.BagError` naming the bag, the topic and what to do, or is
 repaired by :func:`imu_noise_id.core.quality.repair_time_series` with a note in the result (see ``docs/bags.md``).
@@ -27,6 +28,7 @@ from ..core.axes import ImuSeries, OdometrySeries, ScalarSeries
 from ..core.quality import IMU_MAX_ABS, QualityError, repair_time_series
 from .errors import BagError
 from .fastdecode import FlatDecoder
+from .mcapfast import fast_mcap_messages
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 ODOM_TYPE = "nav_msgs/msg/Odometry"
@@ -309,7 +311,7 @@ def _read(
         total = sum(s.expected for s in streams.values())
         done = 0
         try:
-            messages = reader.messages(connections=connections)
+            messages = fast_mcap_messages(reader, connections) or reader.messages(connections=connections)
             single = next(iter(streams.values())) if len(streams) == 1 else None
             while batch := list(islice(messages, BATCH)):
                 if single is not None:
