@@ -47,15 +47,25 @@ def _mcap_storages(reader: Any) -> list[Any] | None:
     return storages
 
 
-def fast_mcap_messages(reader: Any, connections: Sequence[Any]) -> Iterator[tuple[Any, int, bytes]] | None:
-    """Like ``reader.messages(connections)`` for an mcap bag whose chunks do not overlap; None when not applicable."""
+def fast_mcap_batches(reader: Any, connections: Sequence[Any]) -> Iterator[list[tuple[Any, int, bytes]]] | None:
+    """The messages of ``reader.messages(connections)``, one list per mcap chunk, or None when not applicable.
+
+    Applicable to rosbag2 mcap bags (file or directory, no per-message compression) whose chunk index exists and
+    whose chunks do not overlap in time.
+    """
     storages = _mcap_storages(reader)
     if storages is None:
         return None
     return _iterate(storages, connections)
 
 
-def _iterate(storages: list[Any], connections: Sequence[Any]) -> Iterator[tuple[Any, int, bytes]]:
+def fast_mcap_messages(reader: Any, connections: Sequence[Any]) -> Iterator[tuple[Any, int, bytes]] | None:
+    """Like ``reader.messages(connections)`` (one message at a time), or None when not applicable."""
+    batches = fast_mcap_batches(reader, connections)
+    return None if batches is None else (message for batch in batches for message in batch)
+
+
+def _iterate(storages: list[Any], connections: Sequence[Any]) -> Iterator[list[tuple[Any, int, bytes]]]:
     from rosbags.rosbag2.storage_mcap import decompress
 
     for storage in storages:
@@ -77,7 +87,7 @@ def _iterate(storages: list[Any], connections: Sequence[Any]) -> Iterator[tuple[
             if len(compressed) != chunk.compressed_size:
                 raise McapFormatError("chunk data ends early")
             data = decompress(compressed, chunk.compression, chunk.uncompressed_size, crc)
-            yield from _chunk_messages(data, wanted)
+            yield _chunk_messages(data, wanted)
 
 
 def _chunk_messages(data: bytes, wanted: dict[int, Any]) -> list[tuple[Any, int, bytes]]:

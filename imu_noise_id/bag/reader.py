@@ -28,7 +28,7 @@ from ..core.axes import ImuSeries, OdometrySeries, ScalarSeries
 from ..core.quality import IMU_MAX_ABS, QualityError, repair_time_series
 from .errors import BagError
 from .fastdecode import FlatDecoder
-from .mcapfast import fast_mcap_messages
+from .mcapfast import fast_mcap_batches
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 ODOM_TYPE = "nav_msgs/msg/Odometry"
@@ -311,9 +311,8 @@ def _read(
         total = sum(s.expected for s in streams.values())
         done = 0
         try:
-            messages = fast_mcap_messages(reader, connections) or reader.messages(connections=connections)
             single = next(iter(streams.values())) if len(streams) == 1 else None
-            while batch := list(islice(messages, BATCH)):
+            for batch in _batches(reader, connections):
                 if single is not None:
                     _, receive, raws = zip(*batch, strict=True)
                     single.add(list(raws), list(receive))
@@ -334,6 +333,24 @@ def _read(
             t, arrays, topic_notes = _finish(stream, where, notes)
             results[msgtype] = (t, arrays, topic_notes, stream)
     return bag, results, notes
+
+
+def _batches(reader: Any, connections: list[Any]) -> Iterator[list[tuple[Any, int, bytes]]]:
+    """Lists of about BATCH (connection, receive time [ns], raw bytes), in the order rosbags yields them."""
+    chunks = fast_mcap_batches(reader, connections)
+    if chunks is None:
+        messages = reader.messages(connections=connections)
+        while batch := list(islice(messages, BATCH)):
+            yield batch
+        return
+    pending: list[tuple[Any, int, bytes]] = []
+    for chunk in chunks:
+        pending.extend(chunk)
+        if len(pending) >= BATCH:
+            yield pending
+            pending = []
+    if pending:
+        yield pending
 
 
 def _dispatch(batch: list[tuple[Any, int, bytes]], by_connection: dict[int, _Stream]) -> None:
