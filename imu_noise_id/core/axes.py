@@ -63,7 +63,8 @@ class ImuSeries:
         n = self.t.shape[0]
         if self.gyro.shape[0] != n or self.accel.shape[0] != n:
             raise ValueError(
-                f"ImuSeries: t has {n} samples but gyro has {self.gyro.shape[0]} and accel {self.accel.shape[0]}"
+                f"ImuSeries: t has {n} samples but gyro has {self.gyro.shape[0]} and accel "
+                f"{self.accel.shape[0]}"
             )
 
     def __len__(self) -> int:

@@ -147,11 +147,8 @@ class WN(Component):
 
     def block(self, dt: float) -> StateBlock:
         return StateBlock(
-            phi=np.zeros((0, 0)),
-            q=np.zeros((0, 0)),
-            h=np.zeros(0),
-            r=units.white_noise_sigma2(self.noise_density, dt),
-            r_free=True,
+            phi=np.zeros((0, 0)), q=np.zeros((0, 0)), h=np.zeros(0),
+            r=units.white_noise_sigma2(self.noise_density, dt), r_free=True,
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
@@ -240,13 +237,9 @@ class RW(Component):
 
     def block(self, dt: float) -> StateBlock:
         return StateBlock(
-            phi=np.ones((1, 1)),
-            q=np.array([[units.random_walk_sigma2(self.random_walk, dt)]]),
-            h=np.ones(1),
-            u=np.zeros(1),
-            phi_free=np.zeros((1, 1), bool),
-            q_free=np.ones((1, 1), bool),
-            u_free=np.zeros(1, bool),
+            phi=np.ones((1, 1)), q=np.array([[units.random_walk_sigma2(self.random_walk, dt)]]),
+            h=np.ones(1), u=np.zeros(1),
+            phi_free=np.zeros((1, 1), bool), q_free=np.ones((1, 1), bool), u_free=np.zeros(1, bool),
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
@@ -296,11 +289,8 @@ class GM(Component):
         return StateBlock(
             phi=np.array([[units.gm_phi(self.tau, dt)]]),
             q=np.array([[units.gm_drive_sigma2(self.tau, self.sigma, dt)]]),
-            h=np.ones(1),
-            u=np.zeros(1),
-            phi_free=np.ones((1, 1), bool),
-            q_free=np.ones((1, 1), bool),
-            u_free=np.zeros(1, bool),
+            h=np.ones(1), u=np.zeros(1),
+            phi_free=np.ones((1, 1), bool), q_free=np.ones((1, 1), bool), u_free=np.zeros(1, bool),
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
@@ -353,13 +343,9 @@ class RR(Component):
 
     def block(self, dt: float) -> StateBlock:
         return StateBlock(
-            phi=np.ones((1, 1)),
-            q=np.zeros((1, 1)),
-            h=np.ones(1),
+            phi=np.ones((1, 1)), q=np.zeros((1, 1)), h=np.ones(1),
             u=np.array([units.ramp_per_sample(self.slope, dt)]),
-            phi_free=np.zeros((1, 1), bool),
-            q_free=np.zeros((1, 1), bool),
-            u_free=np.ones(1, bool),
+            phi_free=np.zeros((1, 1), bool), q_free=np.zeros((1, 1), bool), u_free=np.ones(1, bool),
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:

@@ -85,7 +85,8 @@ def _parse_args(cls: type[Component], args: str, spec: str) -> dict[str, float]:
             key, raw = cls.parameter_names[pos], item
         if key not in cls.parameter_names:
             raise ModelSpecError(
-                f"{cls.name} has no parameter {key!r} in {spec!r}: its parameters are {', '.join(cls.parameter_names)}"
+                f"{cls.name} has no parameter {key!r} in {spec!r}: its parameters are "
+                f"{', '.join(cls.parameter_names)}"
             )
         try:
             values[key] = float(raw)
@@ -112,8 +113,7 @@ def parse_model(spec: str) -> list[Component]:
         if args is None:
             raise ModelSpecError(
                 f"{name} in {spec!r} needs parameter values, e.g. {name}("
-                + ", ".join(f"{p}=…" for p in cls.parameter_names)
-                + ")"
+                + ", ".join(f"{p}=…" for p in cls.parameter_names) + ")"
             )
         try:
             component = cls(**_parse_args(cls, args, spec))
