@@ -325,7 +325,7 @@ def _read(
             raise
         except Exception as exc:
             raise BagError(
-                f"{where} is truncated or corrupt: reading stopped after {done} of {total} messages "
+                f"{where} is truncated or corrupt: reading failed with {done} of {total} messages decoded "
                 f"({type(exc).__name__}: {_reason(exc)}). {_REPAIR_HINT}"
             ) from None
         results = {}
