@@ -111,7 +111,7 @@ def _open(path: str | Path) -> Iterator[Any]:
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
-    bag = Path(path)
+    bag = Path(path).expanduser()
     if not bag.exists():
         raise BagError(
             f"bag {str(bag)!r} does not exist: give a ROS 1 .bag file, a rosbag2 directory (with metadata.yaml) "
@@ -284,7 +284,7 @@ def _read(
     fast: bool,
 ) -> tuple[Path, dict[str, tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]], list[str]]:
     """Read the topics of the message types in ``wanted`` (msgtype → (topic or None, required)) in one pass."""
-    bag = Path(path)
+    bag = Path(path).expanduser()
     notes: list[str] = []
     with _open(bag) as reader:
         where = _describe(bag)

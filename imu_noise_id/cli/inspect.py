@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 DESCRIPTION = """\
@@ -25,7 +26,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def progress_printer(label: str) -> object:
+def progress_printer(label: str) -> Callable[[int, int], None] | None:
     """A ``progress(done, total)`` callback drawing a one-line bar on stderr when it is a terminal."""
     if not sys.stderr.isatty():
         return None
