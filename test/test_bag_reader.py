@@ -236,3 +236,37 @@ def test_fast_mcap_iteration_equals_rosbags(tmp_path, full_bag):
             ref = [(c.topic, t, d) for c, t, d in reader.messages(connections=reader.connections)]
             assert got == ref and len(got) > 1000
     assert np.array_equal(read_imu(compressed).gyro[:, 0], np.arange(3000.0) * 1e-3)
+
+
+def test_types_without_fixed_layout_are_fully_deserialised():
+    """A type with sequences (sensor_msgs/JointState) cannot take the numpy path: every message is deserialised."""
+    from rosbags.typesys import Stores, get_typestore
+
+    from imu_noise_id.bag.fastdecode import FlatDecoder, NotFlatError, flatten
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    joint_state = "sensor_msgs/msg/JointState"
+    with pytest.raises(NotFlatError, match="name has no fixed layout"):
+        flatten(store.fielddefs, joint_state)
+    Time, Header = store.types["builtin_interfaces/msg/Time"], store.types["std_msgs/msg/Header"]
+    empty = np.array([], dtype=float)
+    msgs = [
+        store.types[joint_state](
+            header=Header(stamp=Time(sec=10 + i, nanosec=5), frame_id="j"),
+            name=["a"],
+            position=np.array([0.5 * i]),
+            velocity=empty,
+            effort=empty,
+        )
+        for i in range(4)
+    ]
+    raws = [bytes(store.serialize_cdr(m, joint_state)) for m in msgs]
+    decoder = FlatDecoder(
+        store.fielddefs, joint_state, {"sec": ("header.stamp.sec",)},
+        strings=("header.frame_id",), ros1=False, deserialize=store.deserialize_cdr,
+    )  # fmt: skip
+    sec = np.empty(4, dtype=np.int64)
+    decoder.decode(raws, {"sec": sec})
+    assert not decoder.fast and (decoder.stats.fast, decoder.stats.fallback) == (0, 4)
+    np.testing.assert_array_equal(sec, [10, 11, 12, 13])
+    assert decoder.strings == {"header.frame_id": "j"}

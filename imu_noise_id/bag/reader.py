@@ -203,6 +203,8 @@ class _Stream:
     """Arrays of one topic, preallocated from the message count and filled batch by batch."""
 
     def __init__(self, reader: Any, msgtype: str, topic: str, count: int, fast: bool) -> None:
+        from rosbags.typesys import Stores, get_typestore
+
         self.msgtype = msgtype
         self.topic = topic
         self.decoder = FlatDecoder(
@@ -214,7 +216,9 @@ class _Stream:
             deserialize=reader.deserialize,
             fast=fast,
         )
-        self.widths = {k: w for k, w in self.decoder.widths().items() if k not in _STAMP}
+        # A bag whose definition is not flat still has the standard field sizes (e.g. 36 covariance values).
+        reference = get_typestore(Stores.LATEST).fielddefs if self.decoder.leaves is None else None
+        self.widths = {k: w for k, w in self.decoder.widths(reference).items() if k not in _STAMP}
         self.expected = count
         self.capacity = max(count, 1)
         self.n = 0
