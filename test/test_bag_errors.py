@@ -252,6 +252,8 @@ def test_non_static_data_flagged_by_inspect(shared_data, capsys):
     code, out, _ = cli(str(shared_data / "husky_robot_localization" / "test1.bag"), capsys=capsys)
     assert code == 0 and "not static (a static noise analysis of these data would be wrong)" in out
     assert "gyro_y: the 1 s means vary" in out
+    assert "declared angular_velocity_covariance diag (0.0004, 0.0004, 0.0004) (rad/s)²" in out
+    assert "odometry /husky_velocity_controller/odom: 3952 messages" in out
 
 
 def test_errors_are_input_errors_and_no_traceback_in_a_subprocess(tmp_path, ros_env):

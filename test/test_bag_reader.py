@@ -122,6 +122,8 @@ def test_independent_deserialisation_matches(full_bag):
     np.testing.assert_array_equal(bag.imu.gyro, gyro)
     np.testing.assert_array_equal(bag.imu.accel, accel)
     assert msgs[0].orientation_covariance[0] == -1.0  # REP-145: orientation not provided
+    assert bag.imu_covariance["orientation"][0, 0] == -1.0
+    np.testing.assert_array_equal(bag.imu_covariance["angular_velocity"], np.zeros((3, 3)))
 
 
 def test_mixed_frame_id_lengths_use_both_paths_and_stay_exact(tmp_path):
@@ -200,6 +202,9 @@ def test_ros1_bag_equals_its_rosbag2_copy(shared_data):
         for name in ("t", "position", "orientation_xyzw", "linear_velocity", "angular_velocity", "twist_covariance"):
             np.testing.assert_array_equal(getattr(ros1.odom, name), getattr(other.odom, name))
     assert (ros1.odom.frame_id, ros1.odom.child_frame_id, ros1.imu.frame_id) == ("odom", "base_link", "imu_link")
+    # Declared covariances of the Husky IMU (README): angular velocity 4e-4 (rad/s)², acceleration 9.604e-3 (m/s²)².
+    np.testing.assert_allclose(np.diag(ros1.imu_covariance["angular_velocity"]), [4e-4] * 3)
+    np.testing.assert_allclose(np.diag(ros2.imu_covariance["linear_acceleration"]), [9.604e-3] * 3)
     # Independent check against the npz made from the same messages (times relative to the first IMU stamp).
     npz = np.load(shared_data / HUSKY / "husky_test1.npz")
     np.testing.assert_array_equal(ros1.imu.gyro, npz["imu_gyro"])

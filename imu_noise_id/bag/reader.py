@@ -85,6 +85,9 @@ class BagContents:
     temperature : temperature [°C], or None when absent
     notes : every note about the bag and its topics (including the IMU's)
     decode_stats : topic → (messages decoded by numpy, messages fully deserialised)
+    imu_covariance : covariances declared in the first Imu message, ``orientation``, ``angular_velocity``
+        [(rad/s)²] and ``linear_acceleration`` [(m/s²)²], each 3×3 row-major as published (REP-145: all zeros =
+        unknown, element [0, 0] = -1 = field not provided)
     """
 
     path: Path
@@ -93,6 +96,7 @@ class BagContents:
     temperature: ScalarSeries | None = None
     notes: list[str] = field(default_factory=list)
     decode_stats: dict[str, tuple[int, int]] = field(default_factory=dict)
+    imu_covariance: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 # --- opening ----------------------------------------------------------------------------------------------------
@@ -222,6 +226,8 @@ class _Stream:
         self.expected = count
         self.capacity = max(count, 1)
         self.n = 0
+        self.first_raw: bytes | None = None
+        self.declared_covariance: dict[str, np.ndarray] = {}
         self.t = np.empty(self.capacity)
         self.receive_ns = np.empty(self.capacity, dtype=np.int64)
         self.arrays = {k: np.empty((self.capacity, w) if w > 1 else self.capacity) for k, w in self.widths.items()}
@@ -234,6 +240,8 @@ class _Stream:
 
     def add(self, raws: list[bytes], receive_ns: list[int]) -> None:
         k = len(raws)
+        if self.first_raw is None and raws:
+            self.first_raw = raws[0]
         if self.n + k > self.capacity:
             self._grow(self.n + k)
         s, e = self.n, self.n + k
@@ -253,6 +261,12 @@ class _Stream:
 def _finish(stream: _Stream, where: str, notes: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
     """Stamps and arrays of a stream after the documented repairs, with the notes about it."""
     topic_notes: list[str] = []
+    if stream.msgtype == IMU_TYPE and stream.first_raw is not None:
+        first = stream.decoder.deserialize(stream.first_raw, IMU_TYPE)
+        stream.declared_covariance = {
+            name: np.asarray(getattr(first, f"{name}_covariance"), dtype=float).reshape(3, 3)
+            for name in ("orientation", "angular_velocity", "linear_acceleration")
+        }
     t, receive_ns, arrays = stream.trimmed()
     if stream.n == 0:
         raise BagError(
@@ -443,6 +457,7 @@ def read_bag(
         temperature=_temperature(results[TEMPERATURE_TYPE]) if TEMPERATURE_TYPE in results else None,
         notes=notes,
         decode_stats=_stats(results),
+        imu_covariance=results[IMU_TYPE][3].declared_covariance,
     )
 
 
