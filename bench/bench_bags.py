@@ -169,11 +169,18 @@ def part_b(directory: Path, duration: float) -> None:
     peak, wall, rc = peak_rss_of([sys.executable, "-c", code], env)
     if rc != 0:
         raise SystemExit(f"reading failed with exit code {rc}")
+    check = code.replace("; import time", "; from imu_noise_id.core.quality import static_check; "
+                         "assert static_check(imu) == []; import time")  # fmt: skip
+    peak_check, wall_check, rc = peak_rss_of([sys.executable, "-c", check], env)
+    if rc != 0:
+        raise SystemExit(f"read + static_check failed with exit code {rc}")
     mb = 1024**2
     print(f"  decoded float64 arrays: {arrays / mb:.1f} MiB")
-    print(f"  peak RSS of read_imu:   {peak / mb:.1f} MiB = {peak / arrays:.2f}× the arrays ({wall:.1f} s)")
-    print(f"  interpreter + imports before reading: {base / mb:.1f} MiB; "
-          f"reading adds {(peak - base) / mb:.1f} MiB = {(peak - base) / arrays:.2f}× the arrays")  # fmt: skip
+    print(f"  interpreter + imports before reading: {base / mb:.1f} MiB")
+    for what, value, seconds in (("read_imu", peak, wall), ("read_imu + static_check", peak_check, wall_check)):
+        added = value - base
+        print(f"  peak RSS of {what + ':':26s} {value / mb:6.1f} MiB = {value / arrays:.2f}× the arrays; "
+              f"adds {added / mb:.1f} MiB = {added / arrays:.2f}× the arrays ({seconds:.1f} s)")  # fmt: skip
 
 
 def main() -> None:

@@ -229,13 +229,15 @@ class _Stream:
         self.first_raw: bytes | None = None
         self.declared_covariance: dict[str, np.ndarray] = {}
         self.t = np.empty(self.capacity)
-        self.receive_ns = np.empty(self.capacity, dtype=np.int64)
+        # Receive times are kept only while every header stamp seen is zero (then they replace the stamps).
+        self.receive_ns: np.ndarray | None = np.empty(self.capacity, dtype=np.int64)
         self.arrays = {k: np.empty((self.capacity, w) if w > 1 else self.capacity) for k, w in self.widths.items()}
 
     def _grow(self, need: int) -> None:
         self.capacity = max(need, int(self.capacity * 1.5))
         self.t = np.resize(self.t, self.capacity)
-        self.receive_ns = np.resize(self.receive_ns, self.capacity)
+        if self.receive_ns is not None:
+            self.receive_ns = np.resize(self.receive_ns, self.capacity)
         self.arrays = {k: np.resize(a, (self.capacity, *a.shape[1:])) for k, a in self.arrays.items()}
 
     def add(self, raws: list[bytes], receive_ns: list[int]) -> None:
@@ -250,12 +252,17 @@ class _Stream:
         views = {name: a[s:e] for name, a in self.arrays.items()}
         self.decoder.decode(raws, {"sec": sec, "nsec": nsec, **views})
         self.t[s:e] = sec + nsec * 1e-9
-        self.receive_ns[s:e] = receive_ns
+        if self.receive_ns is not None:
+            if np.any(sec) or np.any(nsec):
+                self.receive_ns = None
+            else:
+                self.receive_ns[s:e] = receive_ns
         self.n = e
 
-    def trimmed(self) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    def trimmed(self) -> tuple[np.ndarray, np.ndarray | None, dict[str, np.ndarray]]:
         n = self.n
-        return self.t[:n], self.receive_ns[:n], {k: a[:n] for k, a in self.arrays.items()}
+        receive = None if self.receive_ns is None else self.receive_ns[:n]
+        return self.t[:n], receive, {k: a[:n] for k, a in self.arrays.items()}
 
 
 def _finish(stream: _Stream, where: str, notes: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
@@ -275,7 +282,7 @@ def _finish(stream: _Stream, where: str, notes: list[str]) -> tuple[np.ndarray, 
         )
     if stream.n != stream.expected:
         topic_notes.append(f"the bag index announced {stream.expected} messages but {stream.n} were read")
-    if not np.any(t):
+    if receive_ns is not None:  # every header stamp is zero
         t = receive_ns * 1e-9
         topic_notes.append(
             "every header stamp is zero (the publisher does not set header.stamp): using the bag's receive times, "
