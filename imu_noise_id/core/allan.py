@@ -472,24 +472,62 @@ def _alpha_range(kind: Kind) -> tuple[int, int]:
     return (-4, 2) if kind == "hadamard" else (-2, 2)
 
 
+#: Half-width (in τ points) of the local log-log slope regression.
+SLOPE_HALF_WINDOW = 2
+
+
+def local_slopes(tau: np.ndarray, variance: np.ndarray, half_window: int = SLOPE_HALF_WINDOW) -> np.ndarray:
+    """Least-squares slope of log σ² vs log τ over ±``half_window`` neighbouring τ, per column.
+
+    Parameters
+    ----------
+    tau : ndarray, shape (T,)
+    variance : ndarray, shape (T,) or (T, k)
+        Non-positive values are ignored.
+
+    Returns
+    -------
+    ndarray, same shape as ``variance``; NaN where fewer than two usable points are in the window.
+    """
+    v = np.asarray(variance, dtype=float)
+    v2 = v[:, None] if v.ndim == 1 else v
+    lt = np.log(np.asarray(tau, dtype=float))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lv = np.log(np.where(v2 > 0, v2, np.nan))
+    mu = np.full(v2.shape, np.nan)
+    for i in range(lt.size):
+        sl = slice(max(0, i - half_window), min(lt.size, i + half_window + 1))
+        for j in range(v2.shape[1]):
+            y = lv[sl, j]
+            ok = np.isfinite(y)
+            if ok.sum() >= 2:
+                x = lt[sl][ok]
+                xc = x - x.mean()
+                mu[i, j] = float(np.dot(xc, y[ok] - y[ok].mean()) / np.dot(xc, xc))
+    return mu[:, 0] if v.ndim == 1 else mu
+
+
 def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: Kind) -> np.ndarray:
     """Noise exponent α per τ and axis from the local log-log slope μ of the variance: α = −μ − 1, rounded.
 
-    For AV, HV and TV a slope of −2 (quantisation / white phase noise) maps to α = 2 (flicker phase noise,
-    α = 1, has the same AV slope and is rare in IMUs). A single τ gives α = 0 (white noise).
+    μ is the regression slope over ±2 neighbouring τ (:func:`local_slopes`). For AV, HV and TV a slope of −2
+    (quantisation / white phase noise) maps to α = 2 (flicker phase noise, α = 1, has the same AV slope and
+    is rare in IMUs). α is then made non-increasing in τ (a running minimum): inertial sensor noise goes from
+    quantisation through white noise to flicker and random walk as τ grows, and this keeps one low point in a
+    noisy long-τ tail from being read as white phase noise, whose EDF would be huge and its interval far too
+    narrow. A single τ gives α = 0 (white noise).
     """
     variance = np.asarray(variance, dtype=float)
     lo, hi = _alpha_range(kind)
     if tau.size < 2:
         return np.zeros(variance.shape, dtype=int)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        logv = np.log(np.where(variance > 0, variance, np.nan))
-        mu = np.gradient(logv, np.log(tau), axis=0)
+    mu = local_slopes(tau, variance)
     mu = np.where(np.isfinite(mu), mu, -1.0)
     alpha = np.rint(-mu - 1.0)
     if kind != "modified":
         alpha = np.where(mu <= -1.5, 2.0, alpha)
-    return np.clip(alpha, lo, hi).astype(int)
+    alpha = np.minimum.accumulate(np.clip(alpha, lo, hi), axis=0)
+    return alpha.astype(int)
 
 
 def chi2_interval(variance: np.ndarray, edf: np.ndarray, confidence: float) -> tuple[np.ndarray, np.ndarray]:
