@@ -15,18 +15,23 @@ rate ramp     (RR)     +2    R²τ²/2                      R [u/s]
 
 Rule (documented in docs/analysis.md):
 
-1. **Lines.** Since the AVs of independent components add, the five coefficients c ≥ 0 are fitted together,
-   AV(τ) ≈ Σ_j c_j τ^μ_j, by non-negative weighted least squares over all τ (IEEE Std 952 annex C fits the
-   same sum). The weights are the inverse variances of the AV estimates, EDF/(2·model²) (a χ² variable with
-   EDF ν has relative variance 2/ν), iterated three times with the model in place of the noisy estimate so
-   that low points are not favoured. Noisy long-τ points therefore weigh little, a single spike in the tail
-   cannot make a parameter NaN, and a component a line cannot support gets c = 0.
+1. **Lines.** Since the AVs of independent components add, the coefficients c ≥ 0 are fitted together,
+   AV(τ) ≈ Σ_j c_j τ^μ_j, over all τ (IEEE Std 952 annex C fits the same sum). The fit minimises
+   Σ_i ρ(√(ν_i/2)·log(model_i/AV_i)) with ν_i the EDF (log of a χ²_ν/ν variable has variance ≈ 2/ν) and ρ
+   Huber's loss with threshold 2.5, bounded c ≥ 0, started from linear non-negative least squares with
+   weights ν/(2·model²). Noisy long-τ points therefore weigh little, a spike in the tail cannot make a
+   parameter NaN or drag it far, and a component no line supports gets c ≈ 0. QN, WN and RW are
+   always fitted; BI and RR are added only where the curve lies significantly above that base model
+   (its lower confidence limit above the base fit at two or more τ of their region).
 2. **Region.** A component's τ region is where its line is at least half of the fitted sum, i.e. where the
    local slope of the curve is within about ±0.5 (in AV, ±¼ in ADEV) of the component's slope. QN, BI and
    RR are reported only when they have such a region of at least two τ.
-3. **Confidence interval.** That of the single most precise AV point in the region (largest EDF), carried to
-   the parameter: AV estimates at neighbouring τ are strongly correlated, so averaging them adds little
-   information and a naive least-squares error would be too optimistic.
+3. **Confidence interval.** From the single AV point of the region with the most information on the
+   coefficient (largest ν·s², s the component's share of the fitted sum there): its χ² interval, relative,
+   divided by s (the other lines are taken as known) and carried to the parameter (∝ √c). AV estimates at
+   neighbouring τ are strongly correlated, so averaging them adds little information and a naive
+   least-squares error would be too optimistic; this interval is approximate (coverage measured in
+   ``bench/bench_allan_fit.py``).
 4. **No region.** When WN or RW dominates nowhere (e.g. the record is too short to reach the +½ slope), the
    value is the upper bound implied by the curve: N² ≤ τ·AV(τ) and K² ≤ 3·AV(τ)/τ at every τ, using the
    upper confidence limit and the smallest value over τ. It is flagged ``method="upper_bound"``.
@@ -44,8 +49,11 @@ from .allan import AllanResult
 
 #: A component's region: where its line is at least this fraction of the fitted sum.
 DOMINANCE = 0.5
-#: Iterations of the reweighted least squares.
+#: Iterations of the reweighted linear least squares that gives the starting point.
 IRLS_ITERATIONS = 3
+_TINY = 1e-300
+#: Huber threshold on standardised residuals: points beyond it are down-weighted (rule 1, outliers).
+HUBER_K = 2.5
 #: B = ADEV_min / BIAS_INSTABILITY_FACTOR (IEEE Std 952, flicker floor).
 BIAS_INSTABILITY_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
@@ -141,18 +149,29 @@ def fit_lines(tau: np.ndarray, variance: np.ndarray, edf: np.ndarray, names: tup
     basis = tau[:, None] ** _MUS[None, use]
     ok = np.isfinite(variance) & (variance > 0) & (edf > 0)
     basis, av, nu = basis[ok], variance[ok], edf[ok]
+    # Start: linear non-negative least squares, weights EDF/(2·model²), model refined a few times.
     model = av.copy()
-    sol = np.zeros(int(use.sum()))
+    start = np.zeros(int(use.sum()))
     for _ in range(IRLS_ITERATIONS):
         w = np.sqrt(nu / 2.0) / model
         a = basis * w[:, None]
-        scale = np.linalg.norm(a, axis=0)
-        scale[scale == 0] = 1.0
-        sol, _ = optimize.nnls(a / scale, av * w)
-        sol = sol / scale
-        model = np.maximum(basis @ sol, 1e-300)
+        col = np.linalg.norm(a, axis=0)
+        col[col == 0] = 1.0
+        start, _ = optimize.nnls(a / col, av * w)
+        start = start / col
+        model = np.maximum(basis @ start, _TINY)
+    # Final: log-space residuals √(ν/2)·log(model/AV) (symmetric for high and low points) with a Huber loss.
+    scale = np.median(av[:, None] / basis, axis=0)
+    sigma = np.sqrt(nu / 2.0)
+    log_av = np.log(av)
+
+    def residuals(x: np.ndarray) -> np.ndarray:
+        return sigma * (np.log(np.maximum(basis @ (x * scale), _TINY)) - log_av)
+
+    x0 = np.maximum(start / scale, 1e-6)
+    fit = optimize.least_squares(residuals, x0, bounds=(0.0, np.inf), loss="huber", f_scale=HUBER_K)
     coef = np.zeros(_MUS.size)
-    coef[use] = sol
+    coef[use] = fit.x * scale
     return coef
 
 
@@ -184,14 +203,21 @@ def select_lines(res: AllanResult, axis: int) -> np.ndarray:
     return base if len(keep) == len(BASE) else fit_lines(tau, av, edf, tuple(keep))
 
 
-def _component(name: str, coefficient: float, region: np.ndarray, res: AllanResult, axis: int) -> SlopeComponent:
+def _component(name: str, coef: np.ndarray, region: np.ndarray, res: AllanResult, axis: int) -> SlopeComponent:
+    j = _NAMES.index(name)
     mu, to_value = _LINES[name]
+    coefficient = float(coef[j])
     value = to_value(coefficient)
-    best = region[np.argmax(res.edf[region, axis])]
-    av = res.variance[best, axis]
-    lo, hi = math.sqrt(res.ci_low[best, axis] / av), math.sqrt(res.ci_high[best, axis] / av)
+    lines = _lines(coef, res.tau[region])
+    share = lines[:, j] / lines.sum(axis=1)
+    nu = res.edf[region, axis]
+    k = int(np.argmax(nu * share**2))  # the point with the most information on c (rule 3)
+    i = region[k]
+    av = res.variance[i, axis]
+    c_lo = max(1.0 + (res.ci_low[i, axis] / av - 1.0) / share[k], 0.0)
+    c_hi = 1.0 + (res.ci_high[i, axis] / av - 1.0) / share[k]
     tau = res.tau
-    return SlopeComponent(name, mu, coefficient, value, (value * lo, value * hi), "fit",
+    return SlopeComponent(name, mu, coefficient, value, (value * math.sqrt(c_lo), value * math.sqrt(c_hi)), "fit",
                           (float(tau[region[0]]), float(tau[region[-1]])), int(region.size))
 
 
@@ -220,7 +246,7 @@ def fit_axis_slopes(res: AllanResult, axis: int = 0) -> AxisSlopes:
     for j, name in enumerate(_NAMES):
         region = _region(j, coef, res.tau)
         if region.size >= 2 or (name in ("WN", "RW") and region.size >= 1):
-            found[name] = _component(name, float(coef[j]), region, res, axis)
+            found[name] = _component(name, coef, region, res, axis)
         elif name in ("WN", "RW"):
             found[name] = _upper_bound(name, res, axis)
         else:
