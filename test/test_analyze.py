@@ -69,7 +69,7 @@ def test_outputs_files_units_and_values(hour_result, tmp_path):
     for key in ("accelerometer_noise_density", "accelerometer_random_walk", "gyroscope_noise_density",
                 "gyroscope_random_walk"):
         assert doc[key] == pytest.approx(max(doc[f"{key}_xyz"]), rel=1e-5)
-        assert len(doc[f"{key}_ci95_xyz"]) == 3
+        assert len(doc[f"{key}_ci_xyz"]) == 3
     assert doc["gyroscope_noise_density"] == pytest.approx(GYRO_N, rel=0.05)
 
     lines = (tmp_path / "allan.csv").read_text().splitlines()

@@ -37,12 +37,13 @@ def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
     doc: dict = {k: _float(v) for k, v in kalibr_parameters(result, KALIBR_COMBINE).items()}
     doc["update_rate"] = _float(result.rate_hz)
     doc["rostopic"] = rostopic
+    doc["confidence_level"] = result.allan.confidence
     for sensor, axes in (("gyro", GYRO_AXES), ("accel", ACCEL_AXES)):
         for parameter in ("noise_density", "random_walk"):
             key = f"{_PREFIX[sensor]}_{parameter}"
             comps = [getattr(result.slopes[a], parameter) for a in axes]
             doc[f"{key}_xyz"] = [_float(c.value) for c in comps]
-            doc[f"{key}_ci95_xyz"] = [[_float(c.ci[0]), _float(c.ci[1])] for c in comps]
+            doc[f"{key}_ci_xyz"] = [[_float(c.ci[0]), _float(c.ci[1])] for c in comps]
             doc[f"{key}_method_xyz"] = [c.method for c in comps]
     return doc
 
@@ -57,7 +58,7 @@ def write_kalibr_yaml(result: StaticAnalysis, out_dir: Path, rostopic: str) -> P
         "#        *_random_walk: gyroscope rad/s^2/sqrt(Hz), accelerometer m/s^3/sqrt(Hz); update_rate Hz.",
         f"# The four Kalibr numbers are the {KALIBR_COMBINE} over the sensor's x, y, z axes; per-axis values are in",
         "# the *_xyz keys. White noise is the -1/2 slope line read at tau = 1 s, random walk the +1/2 slope line",
-        f"# at tau = 3 s; *_ci95_xyz: {100 * conf:.0f} % intervals; method upper_bound = slope not reached.",
+        f"# at tau = 3 s; *_ci_xyz: {100 * conf:g} % confidence intervals; method upper_bound = slope not reached.",
         f"# Data: {result.n} samples, {result.duration_s:.1f} s at {result.rate_hz:.6g} Hz from {result.topic or '?'}.",
     ]
     path = out_dir / "imu.yaml"
