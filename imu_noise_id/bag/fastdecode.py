@@ -8,7 +8,8 @@ the same. :class:`FlatDecoder` therefore
    ``pose.covariance`` …);
 2. groups a chunk of raw messages by total length, computes the layout (offsets) from the first message of a group
    by walking its leaves (CDR: each primitive aligned to its size, counted from the end of the 4-byte encapsulation
-   header; ROS 1: packed, strings without terminating NUL);
+   header; ROS 1: packed, strings without terminating NUL); messages of the same length with other string lengths
+   or byte order form further groups, up to :data:`MAX_LAYOUTS_PER_LENGTH`;
 3. checks with numpy that every message of the group has the same encapsulation header and the same string
    lengths (then the layout is the same), and reads each requested leaf through a strided view of the joined
    bytes (no structured-dtype copy, which would zero the gap bytes);
@@ -31,6 +32,9 @@ PRIMITIVES: dict[str, tuple[str, int]] = {
 }  # fmt: skip
 
 _BASE, _NAME, _ARRAY = 1, 2, 3  # rosbags' Nodetype values
+
+#: Layouts tried per message length and batch before the remaining messages are fully deserialised.
+MAX_LAYOUTS_PER_LENGTH = 8
 
 
 @dataclass(frozen=True)
@@ -188,7 +192,13 @@ class FlatDecoder:
             else:
                 rows = np.flatnonzero(lengths == length)
                 joined = b"".join([raws[i] for i in rows])
-            self._decode_group(joined, int(length), rows, raws, out)
+            for _ in range(MAX_LAYOUTS_PER_LENGTH):
+                rows = self._decode_group(joined, int(length), rows, raws, out)
+                if rows.size == 0:
+                    break
+                joined = b"".join([raws[i] for i in rows])
+            else:
+                self._fallback(raws, rows, out)
 
     def _decode_group(
         self,
@@ -197,19 +207,17 @@ class FlatDecoder:
         rows: np.ndarray,
         raws: Sequence[bytes],
         out: Mapping[str, np.ndarray],
-    ) -> None:
+    ) -> np.ndarray:
+        """Decode the rows that share the layout of the first one; return the rows left for another pass."""
         n = rows.size
         assert self.leaves is not None
         first = raws[rows[0]]
         layout = walk_layout(first, self.leaves, self.ros1) if length >= 4 else None
-        if layout is None or length - layout[1] > 3:
-            self._fallback(raws, rows, out)
-            return
+        if layout is None or length - layout[1] > 3 or (not self.ros1 and first[1] not in (0, 1)):
+            self._fallback(raws, rows[:1], out)
+            return rows[1:]
         offsets = layout[0]
         order = "<" if self.ros1 or first[1] == 1 else ">"
-        if not self.ros1 and first[1] not in (0, 1):
-            self._fallback(raws, rows, out)
-            return
         good = np.ones(n, dtype=bool)
         if not self.ros1:
             header = np.ndarray((n,), dtype="<u4", buffer=joined, offset=0, strides=(length,))
@@ -218,9 +226,8 @@ class FlatDecoder:
             if leaf.kind == "string":
                 lens = np.ndarray((n,), dtype=f"{order}u4", buffer=joined, offset=offsets[i], strides=(length,))
                 good &= lens == lens[0]
-        if not good.all():
-            bad = rows[~good]
-            self._fallback(raws, bad, out)
+        rest = rows[~good]
+        if rest.size:
             # Re-join only the good rows so that the strided views below see one layout.
             rows = rows[good]
             joined = b"".join([raws[i] for i in rows])
@@ -251,6 +258,7 @@ class FlatDecoder:
             value = bytes(first[offsets[i] + 4 : offsets[i] + 4 + text_len]).decode("utf-8", "replace")
             self._note_string(path, value)
         self.stats.fast += n
+        return rest
 
     # --- full deserialisation ----------------------------------------------------------------------------
     def _note_string(self, path: str, value: str) -> None:

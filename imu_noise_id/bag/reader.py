@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..core.axes import ImuSeries, OdometrySeries, ScalarSeries
-from ..core.quality import QualityError, repair_time_series
+from ..core.quality import IMU_MAX_ABS, QualityError, repair_time_series
 from .errors import BagError
 from .fastdecode import FlatDecoder
 
@@ -266,7 +266,8 @@ def _finish(stream: _Stream, where: str, notes: list[str]) -> tuple[np.ndarray, 
         topic_notes.append(f"{path} changes between messages; the first value {value!r} is reported")
     names = list(arrays)
     try:
-        t, columns, report = repair_time_series(t, [arrays[k] for k in names])
+        limits = IMU_MAX_ABS if stream.msgtype == IMU_TYPE else None
+        t, columns, report = repair_time_series(t, [arrays[k] for k in names], max_abs=limits)
     except QualityError as exc:
         raise BagError(f"topic {stream.topic!r} in {where}: {exc}. Check the sensor driver or record again") from None
     topic_notes.extend(report.notes("messages"))

@@ -2,7 +2,9 @@
 
 Repairs done by :func:`repair_time_series`, in this order, each counted in the returned :class:`QualityReport`:
 
-1. drop samples whose time or any value is NaN/±inf;
+1. drop samples whose time or any value is NaN/±inf, or whose magnitude exceeds a physical limit (``max_abs``,
+   e.g. :data:`IMU_MAX_ABS`: such values come from corrupt bytes or wrong units; more than
+   :data:`MAX_IMPLAUSIBLE_FRACTION` of them raise instead of being dropped);
 2. drop samples with a zero stamp when the other stamps are clock times (> :data:`ZERO_STAMP_CLOCK_S`),
    i.e. the publisher left ``header.stamp`` unset for them;
 3. sort by time (stable) when stamps go backwards;
@@ -21,12 +23,18 @@ import numpy as np
 
 from .axes import ImuSeries
 from .errors import InputError
-from .simulate import STANDARD_GRAVITY
 
 #: Stamps are clock (epoch) times if the smallest non-zero one exceeds this [s]; zero stamps among them are unset.
 ZERO_STAMP_CLOCK_S = 60.0
 #: A gap is an interval longer than this many median periods.
 GAP_FACTOR = 1.5
+#: Standard gravity [m/s²], as in :mod:`.simulate` (not imported from there: it would pull in scipy, ~80 MB of
+#: memory, into the bag reader).
+STANDARD_GRAVITY = 9.80665
+#: No IMU measures more than this: (gyro [rad/s] ≈ 57 000 °/s, accel [m/s²] ≈ 1000 g).
+IMU_MAX_ABS: tuple[float, float] = (1e3, 1e4)
+#: Above this fraction of impossible values the series is rejected rather than repaired.
+MAX_IMPLAUSIBLE_FRACTION = 0.01
 #: At most this many gaps are listed one by one in the notes.
 MAX_LISTED_GAPS = 10
 
@@ -43,6 +51,7 @@ class QualityReport:
     ----------
     n_input, n_output : samples before and after the repairs
     n_nonfinite : samples dropped because the time or a value was NaN/±inf
+    n_implausible : samples dropped because a value exceeded its physical limit
     n_zero_stamps : samples dropped because their stamp was 0 among clock-time stamps
     n_backwards : places where the stamp decreased (the series was sorted if > 0)
     n_duplicates : samples dropped because their stamp repeated the previous one
@@ -54,6 +63,7 @@ class QualityReport:
     n_input: int
     n_output: int = 0
     n_nonfinite: int = 0
+    n_implausible: int = 0
     n_zero_stamps: int = 0
     n_backwards: int = 0
     n_duplicates: int = 0
@@ -64,13 +74,19 @@ class QualityReport:
     @property
     def repaired(self) -> bool:
         """True if any sample was dropped or moved."""
-        return bool(self.n_nonfinite or self.n_zero_stamps or self.n_backwards or self.n_duplicates)
+        return bool(
+            self.n_nonfinite or self.n_implausible or self.n_zero_stamps or self.n_backwards or self.n_duplicates
+        )
 
     def notes(self, what: str = "samples") -> list[str]:
         """Human-readable notes, one per finding (empty when the series was clean)."""
         notes: list[str] = []
         if self.n_nonfinite:
             notes.append(f"dropped {self.n_nonfinite} of {self.n_input} {what} with NaN/inf time or values")
+        if self.n_implausible:
+            notes.append(
+                f"dropped {self.n_implausible} {what} with physically impossible values (corrupt data or wrong units)"
+            )
         if self.n_zero_stamps:
             notes.append(f"dropped {self.n_zero_stamps} {what} with a zero header stamp (stamp not set)")
         if self.n_backwards:
@@ -85,7 +101,7 @@ class QualityReport:
             )
             more = f" and {len(self.gaps) - MAX_LISTED_GAPS} more" if len(self.gaps) > MAX_LISTED_GAPS else ""
             notes.append(
-                f"{len(self.gaps)} gap(s) longer than {GAP_FACTOR:g}× the median period {self.dt_median:.6g} s "
+                f"{len(self.gaps)} gap(s) longer than {GAP_FACTOR:g}× the median period {self.dt_median:.4g} s "
                 f"(≈{missing} missing {what}, {total:.3f} s in total; times from the first stamp): {listed}{more}"
             )
         return notes
@@ -116,6 +132,7 @@ def repair_time_series(
     *,
     gap_factor: float = GAP_FACTOR,
     min_samples: int = 2,
+    max_abs: Sequence[float | None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray | list[np.ndarray], QualityReport]:
     """Drop bad samples, sort, drop duplicates and find gaps (see the module docstring for the rules).
 
@@ -125,6 +142,8 @@ def repair_time_series(
     data : (N, ...) array, or a sequence of such arrays sharing the first dimension (e.g. gyro and accel)
     gap_factor : an interval longer than ``gap_factor`` × median period is a gap
     min_samples : fewer valid samples than this raise :class:`QualityError`
+    max_abs : per data array, the largest plausible magnitude (None: no limit), e.g. :data:`IMU_MAX_ABS` for
+        (gyro, accel)
 
     Returns
     -------
@@ -135,7 +154,8 @@ def repair_time_series(
     Raises
     ------
     QualityError
-        If fewer than ``min_samples`` samples remain (e.g. every sample is NaN).
+        If fewer than ``min_samples`` samples remain (e.g. every sample is NaN), or more than
+        :data:`MAX_IMPLAUSIBLE_FRACTION` of the finite samples exceed ``max_abs``.
     """
     t = np.asarray(t, dtype=float)
     columns, single = _as_columns(data)
@@ -152,6 +172,21 @@ def repair_time_series(
         if not finite.any():
             raise QualityError(f"all {n} samples have NaN/inf time or values: nothing usable")
         t, columns = t[finite], _take(columns, finite)
+
+    if max_abs is not None:
+        m = t.shape[0]
+        plausible = np.ones(m, dtype=bool)
+        for c, limit in zip(columns, max_abs, strict=True):
+            if limit is not None:
+                plausible &= (np.abs(c.reshape(m, -1)) <= limit).all(axis=1)
+        report.n_implausible = int(m - np.count_nonzero(plausible))
+        if report.n_implausible > MAX_IMPLAUSIBLE_FRACTION * m:
+            raise QualityError(
+                f"{report.n_implausible} of {m} samples exceed the physical limits {tuple(max_abs)} "
+                "(wrong units, or corrupt data)"
+            )
+        if report.n_implausible:
+            t, columns = t[plausible], _take(columns, plausible)
 
     zero = t == 0.0
     n_zero = int(np.count_nonzero(zero))
