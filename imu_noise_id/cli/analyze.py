@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     imu = _read(args)
     result = _allan_stage(imu, args)
     paths = write_static_outputs(result, args.out, rostopic=imu.topic)
-    print(summary_table(result))
+    print(summary_table(result), flush=True)
     for w in result.warnings:
         print(f"warning: {w}", file=sys.stderr)
     print(f"results in {args.out}/: " + ", ".join(paths))
