@@ -216,15 +216,14 @@ def _as_columns(y: np.ndarray, dt: float, kind: Kind) -> np.ndarray:
 
 # --------------------------------------------------------------------------------------------- estimators
 def _phase(y: np.ndarray, dt: float) -> np.ndarray:
-    """Phase x (k, N+1): x_0 = 0, x_i = dt·Σ_{j<i}(y_j − ȳ) per column (mean removed for precision)."""
-    x = np.empty((y.shape[1], y.shape[0] + 1))
-    x[:, 0] = 0.0
-    x[:, 1:] = y.T
-    for row in x:
-        rates = row[1:]
-        rates -= rates.mean()
-        np.cumsum(rates, out=rates)
-        rates *= dt
+    """Phase x (N+1,) of one rate column: x_0 = 0, x_i = dt·Σ_{j<i}(y_j − ȳ) (mean removed for precision)."""
+    x = np.empty(y.shape[0] + 1)
+    x[0] = 0.0
+    rates = x[1:]
+    rates[:] = y
+    rates -= rates.mean()
+    np.cumsum(rates, out=rates)
+    rates *= dt
     return x
 
 
@@ -578,8 +577,8 @@ def allan_family(
     y = _as_columns(y, dt, kind)
     n = y.shape[0]
     m_arr = _resolve_m(n, dt, kind, tau=tau, m=m, per_decade=per_decade)
-    x = _phase(y, dt)
-    sums = np.stack([_SUMS[kind](row, m_arr) for row in x], axis=1)
+    # One axis at a time: memory stays at a few rows of N values whatever the number of axes.
+    sums = np.stack([_SUMS[kind](_phase(y[:, j], dt), m_arr) for j in range(y.shape[1])], axis=1)
     variance = _normalise(kind, sums, m_arr[:, None], n, dt)
     tau_arr = m_arr * dt
     if alpha is None:
@@ -601,6 +600,25 @@ def allan_family(
         kind=kind, dt=float(dt), n=n, m=m_arr, tau=tau_arr, variance=variance, ci_low=ci_low, ci_high=ci_high,
         edf=edf, alpha=alpha_arr, confidence=float(confidence),
     )
+
+
+def stack_axes(results: list[AllanResult]) -> AllanResult:
+    """Join results of the same kind, τ grid and samples computed on different axes into one (T, Σk) result.
+
+    Raises
+    ------
+    ValueError
+        If the results differ in kind, dt, n, m or confidence.
+    """
+    first = results[0]
+    for r in results[1:]:
+        if (r.kind, r.dt, r.n, r.confidence) != (first.kind, first.dt, first.n, first.confidence) or not np.array_equal(
+            r.m, first.m
+        ):
+            raise ValueError("stack_axes: results differ in kind, dt, n, tau grid or confidence")
+    cat = {f: np.hstack([getattr(r, f) for r in results]) for f in ("variance", "ci_low", "ci_high", "edf", "alpha")}
+    return AllanResult(kind=first.kind, dt=first.dt, n=first.n, m=first.m, tau=first.tau, confidence=first.confidence,
+                       **cat)
 
 
 def allan_variance(y: np.ndarray, dt: float, **kwargs) -> AllanResult:

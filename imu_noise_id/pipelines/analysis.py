@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS, AllanResult, allan_family
+from ..core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS, AllanResult, allan_family, stack_axes
 from ..core.allan_fit import AxisSlopes, fit_axis_slopes
 from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES, ImuSeries
 from ..core.errors import InputError
@@ -167,8 +167,8 @@ def analyze_static(
         raise InputError(
             f"{imu.topic or 'input'}: only {n} IMU samples; need at least {MIN_SAMPLES} for an Allan analysis"
         )
-    data = imu.samples()
-    if not np.all(np.isfinite(data)) or not np.all(np.isfinite(imu.t)):
+    finite = np.isfinite(imu.t).all() and np.isfinite(imu.gyro).all() and np.isfinite(imu.accel).all()
+    if not finite:
         raise InputError(f"{imu.topic or 'input'}: NaN/inf in the IMU samples or stamps; repair or drop them first")
     dt = imu.dt
     warnings = list(imu.notes) + _timing_warnings(imu.t, dt)
@@ -180,7 +180,12 @@ def analyze_static(
         )
     warnings += [f"not static: {m}" for m in motion]
     wanted = ["allan", *[k for k in kinds if k != "allan"]]
-    variances = {k: allan_family(data, dt, k, per_decade=per_decade, confidence=confidence) for k in wanted}
+    # Gyro and accel separately: no (N, 6) copy of the samples (peak memory, see docs/analysis.md).
+    variances = {
+        k: stack_axes([allan_family(block, dt, k, per_decade=per_decade, confidence=confidence)
+                       for block in (imu.gyro, imu.accel)])
+        for k in wanted
+    }
     duration = n * dt
     slopes = {}
     for j, name in enumerate(AXES):
