@@ -46,6 +46,7 @@ import numpy as np
 from scipy import optimize
 
 from .allan import AllanResult
+from .errors import InputError
 
 #: A component's region: where its line is at least this fraction of the fitted sum.
 DOMINANCE = 0.5
@@ -148,6 +149,11 @@ def fit_lines(tau: np.ndarray, variance: np.ndarray, edf: np.ndarray, names: tup
     use = np.array([n in names for n in _NAMES])
     basis = tau[:, None] ** _MUS[None, use]
     ok = np.isfinite(variance) & (variance > 0) & (edf > 0)
+    if ok.sum() < 3:
+        raise InputError(
+            f"only {ok.sum()} of {tau.size} Allan variances are positive: the signal is (nearly) constant, "
+            "so no noise parameters can be read from it"
+        )
     basis, av, nu = basis[ok], variance[ok], edf[ok]
     # Start: linear non-negative least squares, weights EDF/(2·model²), model refined a few times.
     model = av.copy()

@@ -170,6 +170,13 @@ def analyze_static(
     finite = np.isfinite(imu.t).all() and np.isfinite(imu.gyro).all() and np.isfinite(imu.accel).all()
     if not finite:
         raise InputError(f"{imu.topic or 'input'}: NaN/inf in the IMU samples or stamps; repair or drop them first")
+    for block, names in ((imu.gyro, GYRO_AXES), (imu.accel, ACCEL_AXES)):
+        for name, column in zip(names, block.T, strict=True):
+            if np.ptp(column) == 0:
+                raise InputError(
+                    f"{imu.topic or 'input'}: {name} is constant ({column[0]:g}) over all {n} samples: the driver "
+                    "does not publish this axis or the sensor is saturated; no noise can be identified"
+                )
     dt = imu.dt
     warnings = list(imu.notes) + _timing_warnings(imu.t, dt)
     motion = static_check(imu)
