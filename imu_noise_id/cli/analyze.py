@@ -52,10 +52,16 @@ def _read(args: argparse.Namespace):
 
 def _allan_stage(imu, args: argparse.Namespace):
     from ..pipelines.analysis import analyze_static
+    from .progress import TextProgress
 
-    return analyze_static(
-        imu, per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion
-    )
+    progress = TextProgress("Allan-family variances")
+    try:
+        return analyze_static(
+            imu, per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
+            progress=progress,
+        )
+    finally:
+        progress.close()
 
 
 def run(args: argparse.Namespace) -> int:

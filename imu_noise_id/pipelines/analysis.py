@@ -17,7 +17,7 @@ Stages
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -141,6 +141,7 @@ def analyze_static(
     per_decade: int = DEFAULT_PER_DECADE,
     confidence: float = DEFAULT_CONFIDENCE,
     allow_motion: bool = False,
+    progress: Callable[[int, int], None] | None = None,
 ) -> StaticAnalysis:
     """Allan-family variances and Allan-slope noise parameters of a static IMU recording.
 
@@ -156,6 +157,8 @@ def analyze_static(
         Two-sided level of the confidence intervals.
     allow_motion : bool
         Analyse even if the static check fails (its reasons become warnings).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each estimator.
 
     Raises
     ------
@@ -188,11 +191,13 @@ def analyze_static(
     warnings += [f"not static: {m}" for m in motion]
     wanted = ["allan", *[k for k in kinds if k != "allan"]]
     # Gyro and accel separately: no (N, 6) copy of the samples (peak memory, see docs/analysis.md).
-    variances = {
-        k: stack_axes([allan_family(block, dt, k, per_decade=per_decade, confidence=confidence)
-                       for block in (imu.gyro, imu.accel)])
-        for k in wanted
-    }
+    variances = {}
+    for step, kind in enumerate(wanted):
+        blocks = [allan_family(block, dt, kind, per_decade=per_decade, confidence=confidence)
+                  for block in (imu.gyro, imu.accel)]
+        variances[kind] = stack_axes(blocks)
+        if progress is not None:
+            progress(step + 1, len(wanted))
     duration = n * dt
     slopes = {}
     for j, name in enumerate(AXES):
