@@ -66,15 +66,15 @@ class SlopeComponent:
 
     Attributes
     ----------
-    name : {"QN", "WN", "RW", "RR"}
+    name : {"QN", "WN", "BI", "RW", "RR"}
     slope : float
         The line's slope μ in AV (the ADEV slope is μ/2).
     coefficient : float
         c in AV(τ) = c·τ^μ of the fitted line [u²·s^(−μ)].
     value : float
-        The parameter (Q [u·s], N [u/√Hz], K [u/s/√Hz] or R [u/s]).
+        The parameter (Q [u·s], N [u/√Hz], B [u], K [u/s/√Hz] or R [u/s]).
     ci : tuple of float
-        Its confidence interval (see the module docstring, rule 4); equal to (0, value) for an upper bound.
+        Its confidence interval (module docstring, rule 3); (0, value) for an upper bound (rule 4).
     method : {"fit", "upper_bound"}
     tau_range : tuple of float
         The τ [s] the line was fitted on (or where the bound was attained).
@@ -193,7 +193,7 @@ def _region(j: int, coef: np.ndarray, tau: np.ndarray) -> np.ndarray:
 
 
 def select_lines(res: AllanResult, axis: int) -> np.ndarray:
-    """Coefficients of the base lines plus the extras (BI, RR) the data need (rule 1b).
+    """Coefficients of the base lines plus the extras (BI, RR) the data need (rule 1).
 
     An extra line is kept when, in its region (of at least two τ), the AV's lower confidence limit lies above
     the base model at two or more τ: the curve is significantly higher than QN + WN + RW can explain there.
