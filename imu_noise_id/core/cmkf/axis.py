@@ -41,15 +41,19 @@ class AxisCmkf:
     mode : ``"pos_vel"`` or ``"vel"`` (see module docstring).
     pd_check : ``"joint"`` (paper) or ``"per_axis"``.
     min_samples : stacked samples needed before the estimate replaces the initial Ŝ_v.
+    pd_group : with ``pd_check="joint"``, the check is joint over consecutive groups of this many axes (e.g. 2 for
+        the x and y axes of each Monte-Carlo run); default all axes.
     """
 
     def __init__(
         self,
         n_axes: int,
         s_v0: float | np.ndarray,
+        *,
         mode: str = "pos_vel",
         pd_check: str = "joint",
         min_samples: int = 1,
+        pd_group: int | None = None,
     ) -> None:
         if mode not in MODES:
             raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
@@ -62,6 +66,9 @@ class AxisCmkf:
         self.mode = mode
         self.pd_check = pd_check
         self.min_samples = int(min_samples)
+        self.pd_group = int(pd_group or n_axes)
+        if self.n % self.pd_group:
+            raise ValueError(f"pd_group={pd_group} does not divide n_axes={n_axes}")
         self.S_used = s_v0
         if mode == "pos_vel":
             self.H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
@@ -143,13 +150,9 @@ class AxisCmkf:
             return
         ok = np.isfinite(s_new) & (s_new > 0)
         if self.pd_check == "joint":
-            if ok.all():
-                self.S_used = s_new.copy()
-            else:
-                self.rejected += 1
-        else:
-            self.S_used = np.where(ok, s_new, self.S_used)
-            self.rejected += int((~ok).any())
+            ok = np.repeat(ok.reshape(-1, self.pd_group).all(axis=1), self.pd_group)
+        self.S_used = np.where(ok, s_new, self.S_used)
+        self.rejected += int((~ok).any())
 
 
 def paper_interval(T: float, tau: float, sigma_ss: float) -> Interval:

@@ -220,6 +220,7 @@ class RobotCmkf:
         self._q_ni: rot.Quat | None = None
         self._q_ni_imu: rot.Quat | None = None
         self._q_nb_prev: rot.Quat | None = None
+        self._w_odo_prev: tuple[np.ndarray, np.ndarray] | None = None
         self._anchor: np.ndarray | None = None
         self._reinit = True
         self._r = [0.0, 0.0, 0.0]
@@ -482,14 +483,18 @@ class RobotCmkf:
         if T <= 0.0:
             return
         if vals["angular_velocity"] is not None:
-            dtheta_odo = (self.C_ib @ vals["angular_velocity"]) * T
+            w_now = self.C_ib @ vals["angular_velocity"]
             if cfg.angular_velocity_noise_std is not None:
                 rw = np.full(3, cfg.angular_velocity_noise_std**2)
             else:
                 rw = _cov_diag(twist_cov, slice(3, 6), self.C_ib)
                 if rw is None:
                     rw = np.full(3, cfg.default_angular_velocity_noise_std**2)
-            R = rw * T * T
+            prev, self._w_odo_prev = self._w_odo_prev, (w_now, rw)
+            if prev is None or new_chain:
+                return  # the trapezoid needs the rate at both ends of the interval
+            dtheta_odo = 0.5 * (prev[0] + w_now) * T  # trapezoid: the twist is the rate at the stamp
+            R = 0.25 * (prev[1] + rw) * T * T
         elif q_nb is not None and self._q_nb_prev is not None:
             dq = rot.multiply(rot.conjugate(self._q_nb_prev), q_nb)
             dtheta_odo = self.C_ib @ rot.to_rotvec(dq)

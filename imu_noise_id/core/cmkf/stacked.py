@@ -118,7 +118,7 @@ class StackedSvEstimator:
         """
         if interval is None:
             self._chain.clear()
-        Mo_pinv = None if interval is None else np.linalg.pinv(np.vstack([self.H @ interval.Phi, self.H]))
+        Mo_pinv = None if interval is None else _pinv_full_rank(np.vstack([self.H @ interval.Phi, self.H]))
         self._chain.append(_Epoch(np.asarray(z, float), np.asarray(R, float), interval, U, Mo_pinv))
         if len(self._chain) < 3:
             return False
@@ -145,17 +145,18 @@ class StackedSvEstimator:
         E1 = Mk[:, :m]
         E2 = Mk[:, m:] - Phi1 @ Mk1[:, :m]
         E3 = -Phi1 @ Mk1[:, m:]
-        CE = (
-            np.einsum("ij,njk,lk->nil", E1, e0.R, E1)
-            + np.einsum("ij,njk,lk->nil", E2, e1.R, E2)
-            + np.einsum("ij,njk,lk->nil", E3, e2.R, E3)
-        )
-        C = Z[:, :, None] * Z[:, None, :] - CW - CE
-        self.num += np.einsum("nij,ij->n", C, D)
+        CE = E1 @ e0.R @ E1.T + E2 @ e1.R @ E2.T + E3 @ e2.R @ E3.T
+        # ⟨Z Zᵀ − Cov(𝒲) − Cov(ℰ), D⟩_F per axis
+        self.num += np.sum((Z @ D) * Z, axis=1) - float(np.sum(CW * D)) - (CE.reshape(self.n_axes, -1) @ D.ravel())
         self.den += float(np.sum(D * D))
         self.count += 1
         self.last_Z = Z
         return True
+
+
+def _pinv_full_rank(M: np.ndarray) -> np.ndarray:
+    """Moore–Penrose pseudo-inverse ``(MᵀM)⁻¹Mᵀ`` of a full-column-rank M (eq. 29: M_o is, by observability)."""
+    return np.linalg.solve(M.T @ M, M.T)
 
 
 def cov_z_model(
