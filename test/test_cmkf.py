@@ -245,3 +245,32 @@ def test_bad_configuration_is_rejected():
         RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=(0, 0, 0, 0)))
     with pytest.raises(ValueError, match="initial S_v"):
         AxisCmkf(2, 0.0)
+
+
+def test_cli_cmkf_on_husky_bag(shared_data, tmp_path):
+    """The replay CLI on the Husky bag (IMU rotated: gravity on +y) writes the cmkf.yaml schema."""
+    import yaml
+
+    from imu_noise_id.cli import main
+
+    bag = shared_data / "husky_robot_localization" / "husky_test1_ros2"
+    out = tmp_path / "out"
+    assert main(["cmkf", str(bag), "--imu-rotation", "-1.570796327", "0", "1.570796327", "--out", str(out),
+                 "--no-plot"]) == 0
+    data = yaml.safe_load((out / "cmkf.yaml").read_text())
+    for key in ("accel_bias", "accel_bias_std", "S_v", "accel_noise_density", "gyro_bias", "gyro_bias_std"):
+        assert set(data[key]) == {"x", "y", "z"}
+    assert data["counters"]["imu"] == 11865 and data["counters"]["updates"] > 3900
+    assert data["status"] == "tracking"
+    lines = (out / "cmkf.csv").read_text().splitlines()
+    assert len(lines) == 3952 + 1
+    # gravity removed correctly: the estimated accel biases are small compared with g
+    assert max(abs(v) for v in data["accel_bias"].values()) < 0.5
+
+
+def test_cli_cmkf_bad_rotation_exits_2(shared_data, tmp_path, capsys):
+    from imu_noise_id.cli import main
+
+    bag = shared_data / "husky_robot_localization" / "husky_test1_ros2"
+    assert main(["cmkf", str(bag), "--imu-rotation", "1", "2", "--out", str(tmp_path)]) == 2
+    assert "--imu-rotation" in capsys.readouterr().err
