@@ -72,12 +72,12 @@ class AxisCmkf:
         self.S_used = s_v0
         if mode == "pos_vel":
             self.H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-            self.sub = np.array([0, 1, 2])
+            self.sub = slice(0, 3)
         else:
             self.H = np.array([[0.0, 1.0, 0.0]])
-            self.sub = np.array([1, 2])
+            self.sub = slice(1, 3)
         self.m = self.H.shape[0]
-        self.estimator = StackedSvEstimator(self.n, self.H[:, self.sub], bias_index=len(self.sub) - 1)
+        self.estimator = StackedSvEstimator(self.n, self.H[:, self.sub], bias_index=self.H[:, self.sub].shape[1] - 1)
         self.x = np.zeros((self.n, 3))
         self.P = np.zeros((self.n, 3, 3))
         self._pending: tuple[Interval, np.ndarray] | None = None
@@ -126,7 +126,7 @@ class AxisCmkf:
         H = self.H
         HP = H @ self.P  # (n, m, 3)
         S = HP @ H.T + R
-        Sinv = np.linalg.inv(S)
+        Sinv = 1.0 / S if self.m == 1 else np.linalg.inv(S)
         K = np.swapaxes(HP, 1, 2) @ Sinv  # (n, 3, m)
         nu = z - self.x @ H.T
         self.x = self.x + np.einsum("nim,nm->ni", K, nu)
@@ -138,7 +138,7 @@ class AxisCmkf:
         else:
             interval, U = self._pending
             sub = self.sub
-            sub_interval = Interval(interval.Phi[np.ix_(sub, sub)], interval.Qa1[np.ix_(sub, sub)], interval.qb)
+            sub_interval = Interval(interval.Phi[sub, sub], interval.Qa1[sub, sub], interval.qb)
             if self.estimator.add_epoch(z, R, sub_interval, U[:, sub]):
                 self._accept(self.estimator.estimate)
         self._pending = None

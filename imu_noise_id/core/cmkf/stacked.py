@@ -89,6 +89,8 @@ class StackedSvEstimator:
         self.m, self.d = self.H.shape
         self.Lam = np.zeros(self.d)
         self.Lam[bias_index] = 1.0
+        self._HLam = self.H @ self.Lam
+        self._eye = np.eye(self.d)
         self.num = np.zeros(self.n_axes)
         self.den = 0.0
         self.count = 0
@@ -134,20 +136,23 @@ class StackedSvEstimator:
         Yk = np.concatenate([e0.z - HU0, e1.z], axis=1)  # (n, 2m)
         Yk1 = np.concatenate([e1.z - HU1, e2.z], axis=1)
         Z = Yk @ Mk.T - (Yk1 @ Mk1.T) @ Phi1.T - e1.U  # (n, d)   eq. (33)
-        Mv = np.vstack([self.H, np.zeros_like(self.H)])
-        A1 = -Mk @ Mv
-        A2 = Phi1 @ Mk1 @ Mv - np.eye(self.d)
+        E1 = Mk[:, :m]  # M_o† [I; 0]
+        F1 = Phi1 @ Mk1[:, :m]  # F̂ M_o† [I; 0]
+        A1 = -E1 @ self.H  # −M_o† M_v   (M_v = [H; 0])
+        A2 = F1 @ self.H - self._eye  # F̂ M_o† M_v − I
         D = A1 @ e0.interval.Qa1 @ A1.T + A2 @ e1.interval.Qa1 @ A2.T  # eq. (35) basis
-        Mw = np.concatenate([self.H @ self.Lam, np.zeros(m)])
-        B1 = Mk @ Mw
-        B2 = self.Lam - Phi1 @ Mk1 @ Mw
-        CW = e0.interval.qb * np.outer(B1, B1) + e1.interval.qb * np.outer(B2, B2)
-        E1 = Mk[:, :m]
-        E2 = Mk[:, m:] - Phi1 @ Mk1[:, :m]
+        B1 = E1 @ self._HLam  # M_o† M_w  (M_w = [HΛ; 0])
+        B2 = self.Lam - F1 @ self._HLam
+        E2 = Mk[:, m:] - F1
         E3 = -Phi1 @ Mk1[:, m:]
-        CE = E1 @ e0.R @ E1.T + E2 @ e1.R @ E2.T + E3 @ e2.R @ E3.T
-        # ⟨Z Zᵀ − Cov(𝒲) − Cov(ℰ), D⟩_F per axis
-        self.num += np.sum((Z @ D) * Z, axis=1) - float(np.sum(CW * D)) - (CE.reshape(self.n_axes, -1) @ D.ravel())
+        # ⟨Z Zᵀ − Cov(𝒲) − Cov(ℰ), D⟩_F per axis, with ⟨E R Eᵀ, D⟩ = ⟨R, Eᵀ D E⟩ (no per-axis d×d products)
+        cw = e0.interval.qb * (B1 @ D @ B1) + e1.interval.qb * (B2 @ D @ B2)
+        ce = (
+            np.sum(e0.R * (E1.T @ D @ E1), axis=(1, 2))
+            + np.sum(e1.R * (E2.T @ D @ E2), axis=(1, 2))
+            + np.sum(e2.R * (E3.T @ D @ E3), axis=(1, 2))
+        )
+        self.num += np.sum((Z @ D) * Z, axis=1) - cw - ce
         self.den += float(np.sum(D * D))
         self.count += 1
         self.last_Z = Z
