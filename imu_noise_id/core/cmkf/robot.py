@@ -18,11 +18,15 @@ resolved in IMU axes; lever arm neglected) and ``r = C_in (p_n − p_anchor)``::
     ḃ_i = −b_i/τ + w_i                                                                    (eqs. 3–4)
 
 Per IMU sample k (period dt_k, sample value held over its interval) the known input is
-``u = f̃ + g_i − ω̂ × v̂`` with ``ω̂ = ω̃ − b̂_g`` and, as in eqs. (13)–(16),
-``r ← r + (v − ω̂ × r̂) dt + ½ (u − b̂) dt²``, ``v ← v + (u − b̂) dt``, ``b̂ ← φ b̂``. The transport terms
-``ω̂ × v̂`` and ``ω̂ × r̂`` and gravity are evaluated with the estimate and treated as known input; this is what makes
+``u = f̃ + g_i − ω̂ × v̂`` with ``ω̂ = ω̃ − b̂_g`` and, as in eqs. (13)–(16), ``v ← v + (u − b̂) dt``, ``b̂ ← φ b̂``
+and the displacement ``d = v dt + ½ (u − b̂) dt²``, which is accumulated in the odometry frame,
+``Δp_n ← Δp_n + C_ni d`` (``C_ni`` propagated with ω̂), and rotated into the IMU axes at the next epoch with the
+*measured* orientation: ``r̂⁻_k = C_in,k (C_ni,k−1 r̂⁺_{k−1} + Δp_n)`` — so the gyro's error does not multiply the
+distance travelled (the transport term ``ω × r`` of ṙ is never integrated). The transport term ``ω̂ × v̂``, the
+rotation of ``r`` and gravity are evaluated with the estimate and treated as known input; this is what makes
 the three axes decouple (one ``[r, v, b]`` filter per IMU axis, exactly paper 004's structure). The neglected error
-coupling ``ω × δv`` is small whenever velocity is measured every interval (|ω| T ≪ 1).
+couplings (``ω × δv``, the rotation of δr between epochs) are small whenever velocity is measured every interval
+(|ω| T ≪ 1).
 
 The IMU samples between two odometry epochs are accumulated into one interval of length ``T = Σ dt_k``
 (``β_j = Π_{l<j} φ_l``, ``m_j`` = mid-time of sample j from the start of the interval)::
@@ -222,6 +226,7 @@ class RobotCmkf:
         self._q_nb_prev: rot.Quat | None = None
         self._w_odo_prev: tuple[np.ndarray, np.ndarray] | None = None
         self._anchor: np.ndarray | None = None
+        self._C_ni_epoch: np.ndarray | None = None
         self._reinit = True
         self._r = [0.0, 0.0, 0.0]
         self._v = [0.0, 0.0, 0.0]
@@ -237,6 +242,7 @@ class RobotCmkf:
         self._beta = 1.0
         self._M0 = self._M1 = self._N1 = self._N2 = 0.0
         self._dtheta = [0.0, 0.0, 0.0]
+        self._dp = [0.0, 0.0, 0.0]
 
     def process_imu(
         self,
@@ -296,19 +302,21 @@ class RobotCmkf:
         x, y, z, w = q if q is not None else rot.IDENTITY
         g = self._g  # g_i = C_ni^T [0, 0, -g] = -g * (third row of C_ni)
         gx, gy, gz = -g * 2 * (x * z - y * w), -g * 2 * (y * z + x * w), -g * (1 - 2 * (x * x + y * y))
-        r, v, b = self._r, self._v, self._b
+        v, b = self._v, self._b
         ux = fx + gx - (oy * v[2] - oz * v[1])
         uy = fy + gy - (oz * v[0] - ox * v[2])
         uz = fz + gz - (ox * v[1] - oy * v[0])
         ax, ay, az = ux - b[0], uy - b[1], uz - b[2]
         h = 0.5 * dt * dt
-        if self.filter.mode == "pos_vel":
-            tx = oy * r[2] - oz * r[1]
-            ty = oz * r[0] - ox * r[2]
-            tz = ox * r[1] - oy * r[0]
-            r[0] += (v[0] - tx) * dt + ax * h
-            r[1] += (v[1] - ty) * dt + ay * h
-            r[2] += (v[2] - tz) * dt + az * h
+        if self.filter.mode == "pos_vel" and self._q_ni is not None:
+            # eq. (13) displacement, accumulated in the odometry frame (rotated back at the update, see _pose_prior)
+            dx, dy, dz = v[0] * dt + ax * h, v[1] * dt + ay * h, v[2] * dt + az * h
+            qx, qy, qz, qw = self._q_ni
+            tx, ty, tz = 2 * (qy * dz - qz * dy), 2 * (qz * dx - qx * dz), 2 * (qx * dy - qy * dx)
+            dp = self._dp
+            dp[0] += dx + qw * tx + qy * tz - qz * ty
+            dp[1] += dy + qw * ty + qz * tx - qx * tz
+            dp[2] += dz + qw * tz + qx * ty - qy * tx
         v[0] += ax * dt
         v[1] += ay * dt
         v[2] += az * dt
@@ -404,6 +412,8 @@ class RobotCmkf:
         if self._reinit or self._t_state is None:
             self._initialise(t, z, R)
         else:
+            if self.filter.mode == "pos_vel":
+                self._r = list(C_ni.T @ (self._C_ni_epoch @ np.array(self._r) + np.array(self._dp)))
             self.filter.predict(np.array([self._r, self._v, self._b]).T, self._interval())
             nis = self.filter.update(z, R, new_chain=new_chain)
             self._nis_accel = float(nis.sum())
@@ -414,6 +424,7 @@ class RobotCmkf:
         if q_nb is not None:
             self._q_ni = rot.multiply(q_nb, self.q_bi)
             self._q_nb_prev = q_nb
+        self._C_ni_epoch = C_ni
         self._t_update = t
         self._reset_interval()
         return True
