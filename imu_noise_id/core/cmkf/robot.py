@@ -66,6 +66,7 @@ import numpy as np
 
 from . import rotation as rot
 from .axis import AxisCmkf
+from .fast_vel import VelocityAxisCmkf
 from .gyro import GyroBiasFilter
 from .stacked import Interval
 
@@ -203,10 +204,14 @@ class RobotCmkf:
         self.q_bi = rot.normalise(config.imu_rotation_xyzw)
         self.C_bi = rot.to_matrix(self.q_bi)
         self.C_ib = self.C_bi.T
-        self.filter = AxisCmkf(
-            3, config.s_v0, mode="pos_vel" if config.measurement == "pose_twist" else "vel",
-            pd_check=config.pd_check, min_samples=config.min_samples,
-        )
+        # twist: the plain-float velocity filter (same equations as AxisCmkf mode "vel", tested equal)
+        self._fast = config.measurement == "twist"
+        self.filter: AxisCmkf | VelocityAxisCmkf
+        if self._fast:
+            self.filter = VelocityAxisCmkf(3, config.s_v0, pd_check=config.pd_check, min_samples=config.min_samples)
+        else:
+            self.filter = AxisCmkf(3, config.s_v0, mode="pos_vel", pd_check=config.pd_check,
+                                   min_samples=config.min_samples)
         self.gyro = GyroBiasFilter(config.gyro_bias_tau, config.gyro_bias_sigma, config.s_g0, config.min_samples)
         self.counters = dict.fromkeys(
             ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "odom_dropped_stamp",
@@ -335,6 +340,10 @@ class RobotCmkf:
         if self._q_ni is not None:
             self._q_ni = rot.multiply(self._q_ni, rot.from_rotvec(ox * dt, oy * dt, oz * dt))
 
+    def _vel_interval(self) -> tuple[float, float, float, float]:
+        """(T, β_v, φ, q_b) of the current interval for :class:`VelocityAxisCmkf`."""
+        return (self._T, self._M0, self._beta, (1.0 - self._beta**2) * self.config.accel_bias_sigma**2)
+
     def _interval(self) -> Interval:
         T, M0, M1, N1, N2 = self._T, self._M0, self._M1, self._N1, self._N2
         Phi = np.array([[1.0, T, -(T * M0 - M1)], [0.0, 1.0, -M0], [0.0, 0.0, self._beta]])
@@ -412,14 +421,17 @@ class RobotCmkf:
         if self._reinit or self._t_state is None:
             self._initialise(t, z, R)
         else:
-            if self.filter.mode == "pos_vel":
+            if self._fast:
+                self.filter.predict(self._v, self._b, self._vel_interval())
+                self._nis_accel = self.filter.update(z[:, 0].tolist(), R[:, 0, 0].tolist(), new_chain=new_chain)
+                self._v, self._b = list(self.filter.v), list(self.filter.b)
+            else:
                 self._r = list(C_ni.T @ (self._C_ni_epoch @ np.array(self._r) + np.array(self._dp)))
-            self.filter.predict(np.array([self._r, self._v, self._b]).T, self._interval())
-            nis = self.filter.update(z, R, new_chain=new_chain)
-            self._nis_accel = float(nis.sum())
+                self.filter.predict(np.array([self._r, self._v, self._b]).T, self._interval())
+                self._nis_accel = float(self.filter.update(z, R, new_chain=new_chain).sum())
+                self._r, self._v, self._b = (list(map(float, col)) for col in self.filter.x.T)
             self._nis_hist.append(self._nis_accel)
             self._gyro_update(vals, q_nb, twist_cov, new_chain)
-            self._r, self._v, self._b = (list(map(float, col)) for col in self.filter.x.T)
             self.counters["updates"] += 1
         if q_nb is not None:
             self._q_ni = rot.multiply(q_nb, self.q_bi)
@@ -463,8 +475,8 @@ class RobotCmkf:
     def _initialise(self, t: float, z: np.ndarray, R: np.ndarray) -> None:
         """(Re-)initialise r, v from the measurement; keep the bias and its variance (grown) if known."""
         if self.filter.initialised:
-            b0 = self.filter.x[:, 2].copy()
-            Pbb = self.filter.P[:, 2, 2].copy()
+            b0 = np.array(self._b)
+            Pbb = self._bias_var()
             if self._t_update is not None:
                 phi2 = math.exp(-2.0 * (t - self._t_update) / self.config.accel_bias_tau)
                 Pbb = phi2 * Pbb + (1.0 - phi2) * self.config.accel_bias_sigma**2
@@ -482,7 +494,10 @@ class RobotCmkf:
             P0[:, 1, 1] = R[:, 0, 0]
         x0[:, 2] = b0
         P0[:, 2, 2] = Pbb
-        self.filter.initialise(x0, P0)
+        if self._fast:
+            self.filter.initialise(x0[:, 1], b0, P0[:, 1, 1], Pbb)
+        else:
+            self.filter.initialise(x0, P0)
         self.gyro.reset_chain()
         self._r, self._v, self._b = (list(map(float, col)) for col in x0.T)
         self._t_state = t
@@ -493,6 +508,8 @@ class RobotCmkf:
         T = self._T
         if T <= 0.0:
             return
+        if new_chain:
+            self.gyro.reset_chain()
         if vals["angular_velocity"] is not None:
             w_now = self.C_ib @ vals["angular_velocity"]
             if cfg.angular_velocity_noise_std is not None:
@@ -513,16 +530,22 @@ class RobotCmkf:
             R = np.full(3, (std * T) ** 2)
         else:
             return
-        if new_chain:
-            self.gyro.reset_chain()
-        nis = self.gyro.update(np.asarray(self._dtheta) - dtheta_odo, T, R)
-        self._nis_gyro = float(nis.sum())
+        y = (np.asarray(self._dtheta) - dtheta_odo).tolist()
+        self._nis_gyro = self.gyro.update(y, T, R.tolist())
 
     # ------------------------------------------------------------------ results
+    def _bias_var(self) -> np.ndarray:
+        """Accelerometer-bias variance per axis, predicted to the current time."""
+        f = self.filter
+        if self._fast:
+            return f.covariance(self._vel_interval() if self._T > 0 else None)[:, 1, 1]
+        return (f.predict_covariance(self._interval()) if self._T > 0 else f.P)[:, 2, 2]
+
     def estimate(self) -> CmkfEstimate:
         """Current estimates (cheap; call at any rate). Between updates the covariance is predicted."""
         cfg = self.config
         f = self.filter
+        n_stacked = f.count if self._fast else f.estimator.count
         t = max(x for x in (self._t_imu, self._t_odom, -math.inf) if x is not None)
         observed = self._t_update is not None and self._t_state is not None and (
             (self._t_state - self._t_update) <= cfg.max_odom_gap
@@ -535,14 +558,13 @@ class RobotCmkf:
             status = "imu_only"
         elif not observed:
             status = "unobserved"
-        elif f.estimator.count < cfg.min_samples:
+        elif n_stacked < cfg.min_samples:
             status = "converging"
         else:
             status = "tracking"
         if f.initialised:
-            P = f.predict_covariance(self._interval()) if self._T > 0 else f.P
             bias = np.array(self._b)
-            bias_std = np.sqrt(P[:, 2, 2])
+            bias_std = np.sqrt(self._bias_var())
             g_var = self.gyro.predicted_variance(self._T)
         else:
             bias = np.zeros(3)
@@ -556,7 +578,7 @@ class RobotCmkf:
             accel_bias=bias,
             accel_bias_std=bias_std,
             S_v=f.S_used.copy(),
-            S_v_ls=f.estimator.estimate,
+            S_v_ls=f.S_ls if self._fast else f.estimator.estimate,
             accel_noise_density=np.sqrt(f.S_used),
             gyro_bias=self.gyro.b.copy(),
             gyro_bias_std=np.sqrt(g_var),
@@ -568,6 +590,6 @@ class RobotCmkf:
             nis_accel_mean=float(np.mean(self._nis_hist)) if self._nis_hist else math.nan,
             nis_gyro=self._nis_gyro,
             nis_gyro_dof=3,
-            n_stacked=f.estimator.count,
+            n_stacked=n_stacked,
             counters=dict(self.counters),
         )
