@@ -181,18 +181,28 @@ class CmkfEstimate:
     counters: dict[str, int] = field(default_factory=dict)
 
 
-def _finite(*values: float) -> bool:
-    return all(math.isfinite(v) for v in values)
+class _CovDiag:
+    """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 message covariance, cached on (Σ, C).
 
+    Returns None if the covariance is unknown (all zeros, −1 in the first element, NaN). Odometry drivers mostly
+    publish the same covariance in every message, so the cache makes this one comparison per message.
+    """
 
-def _cov_diag(cov: np.ndarray | None, block: slice, C: np.ndarray) -> np.ndarray | None:
-    """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 covariance; None if unknown (zeros, −1, NaN)."""
-    if cov is None:
-        return None
-    cov = np.asarray(cov, dtype=float).reshape(6, 6)[block, block]
-    if not np.all(np.isfinite(cov)) or cov[0, 0] < 0 or not np.any(cov):
-        return None
-    return np.einsum("ij,jk,ik->i", C, cov, C)
+    def __init__(self, block: slice) -> None:
+        self.block = block
+        self._key: bytes | None = None
+        self._value: np.ndarray | None = None
+
+    def __call__(self, cov: np.ndarray | None, C: np.ndarray) -> np.ndarray | None:
+        if cov is None:
+            return None
+        sub = np.asarray(cov, dtype=float).reshape(6, 6)[self.block, self.block]
+        key = sub.tobytes() + C.tobytes()
+        if key != self._key:
+            self._key = key
+            ok = np.all(np.isfinite(sub)) and sub[0, 0] >= 0 and np.any(sub)
+            self._value = np.einsum("ij,jk,ik->i", C, sub, C) if ok else None
+        return self._value
 
 
 class RobotCmkf:
@@ -240,6 +250,10 @@ class RobotCmkf:
         self._nis_accel = math.nan
         self._nis_gyro = math.nan
         self._nis_hist: deque[float] = deque(maxlen=config.nis_window)
+        self._nis_sum = 0.0
+        self._twist_lin_cov = _CovDiag(slice(0, 3))
+        self._twist_ang_cov = _CovDiag(slice(3, 6))
+        self._pose_cov = _CovDiag(slice(0, 3))
 
     # ------------------------------------------------------------------ IMU path
     def _reset_interval(self) -> None:
@@ -264,7 +278,7 @@ class RobotCmkf:
         t = float(t)
         wx, wy, wz = float(gyro[0]), float(gyro[1]), float(gyro[2])
         fx, fy, fz = float(accel[0]), float(accel[1]), float(accel[2])
-        if not _finite(t, wx, wy, wz, fx, fy, fz):
+        if not math.isfinite(t + wx + wy + wz + fx + fy + fz):  # NaN/inf anywhere makes the sum non-finite
             self.counters["imu_dropped_nan"] += 1
             return False
         if self._t_imu is not None and t <= self._t_imu:
@@ -338,7 +352,15 @@ class RobotCmkf:
         self._beta *= phi
         self._T += dt
         if self._q_ni is not None:
-            self._q_ni = rot.multiply(self._q_ni, rot.from_rotvec(ox * dt, oy * dt, oz * dt))
+            # q_ni ← q_ni ⊗ exp(ω̂ dt / 2), first order in the half angle, renormalised
+            ax_, ay_, az_ = 0.5 * ox * dt, 0.5 * oy * dt, 0.5 * oz * dt
+            qx, qy, qz, qw = self._q_ni
+            nx = qx + qw * ax_ + qy * az_ - qz * ay_
+            ny = qy + qw * ay_ + qz * ax_ - qx * az_
+            nz = qz + qw * az_ + qx * ay_ - qy * ax_
+            nw = qw - qx * ax_ - qy * ay_ - qz * az_
+            n = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
+            self._q_ni = (nx * n, ny * n, nz * n, nw * n)
 
     def _vel_interval(self) -> tuple[float, float, float, float]:
         """(T, β_v, φ, q_b) of the current interval for :class:`VelocityAxisCmkf`."""
@@ -375,7 +397,8 @@ class RobotCmkf:
             "angular_velocity": angular_velocity,
         }
         vals = {k: None if a is None else np.asarray(a, dtype=float).ravel() for k, a in arrays.items()}
-        if not math.isfinite(t) or any(a is not None and not np.all(np.isfinite(a)) for a in vals.values()):
+        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
+        if not math.isfinite(t + sum(float(a.sum()) for a in vals.values() if a is not None)):
             self.counters["odom_dropped_nan"] += 1
             return False
         if self._t_odom is not None and t <= self._t_odom:
@@ -430,7 +453,10 @@ class RobotCmkf:
                 self.filter.predict(np.array([self._r, self._v, self._b]).T, self._interval())
                 self._nis_accel = float(self.filter.update(z, R, new_chain=new_chain).sum())
                 self._r, self._v, self._b = (list(map(float, col)) for col in self.filter.x.T)
+            if len(self._nis_hist) == self._nis_hist.maxlen:
+                self._nis_sum -= self._nis_hist[0]
             self._nis_hist.append(self._nis_accel)
+            self._nis_sum += self._nis_accel
             self._gyro_update(vals, q_nb, twist_cov, new_chain)
             self.counters["updates"] += 1
         if q_nb is not None:
@@ -450,7 +476,7 @@ class RobotCmkf:
         if cfg.velocity_noise_std is not None:
             rv = np.full(3, cfg.velocity_noise_std**2)
         else:
-            rv = _cov_diag(twist_cov, slice(0, 3), self.C_ib)
+            rv = self._twist_lin_cov(twist_cov, self.C_ib)
             if rv is None:
                 rv = np.full(3, cfg.default_velocity_noise_std**2)
         if cfg.measurement == "twist":
@@ -463,7 +489,7 @@ class RobotCmkf:
         if cfg.position_noise_std is not None:
             rr = np.full(3, cfg.position_noise_std**2)
         else:
-            rr = _cov_diag(pose_cov, slice(0, 3), C_in)
+            rr = self._pose_cov(pose_cov, C_in)
             if rr is None:
                 rr = np.full(3, cfg.default_position_noise_std**2)
         z = np.column_stack([zr, zv])
@@ -515,7 +541,7 @@ class RobotCmkf:
             if cfg.angular_velocity_noise_std is not None:
                 rw = np.full(3, cfg.angular_velocity_noise_std**2)
             else:
-                rw = _cov_diag(twist_cov, slice(3, 6), self.C_ib)
+                rw = self._twist_ang_cov(twist_cov, self.C_ib)
                 if rw is None:
                     rw = np.full(3, cfg.default_angular_velocity_noise_std**2)
             prev, self._w_odo_prev = self._w_odo_prev, (w_now, rw)
@@ -587,7 +613,7 @@ class RobotCmkf:
             gyro_noise_density=np.sqrt(self.gyro.S_used),
             nis_accel=self._nis_accel,
             nis_accel_dof=3 * m,
-            nis_accel_mean=float(np.mean(self._nis_hist)) if self._nis_hist else math.nan,
+            nis_accel_mean=self._nis_sum / len(self._nis_hist) if self._nis_hist else math.nan,
             nis_gyro=self._nis_gyro,
             nis_gyro_dof=3,
             n_stacked=n_stacked,
