@@ -181,6 +181,18 @@ class CmkfEstimate:
     counters: dict[str, int] = field(default_factory=dict)
 
 
+def _as_floats(a: np.ndarray | list[float] | tuple[float, ...]) -> list[float]:
+    """A message vector as a list of floats (cheap for the 1-D arrays the node and the replay pass)."""
+    if isinstance(a, np.ndarray):
+        return a.astype(float, copy=False).ravel().tolist()
+    return [float(x) for x in a]
+
+
+def _rotate(rows: tuple[tuple[float, float, float], ...], v: list[float]) -> list[float]:
+    """``C v`` with C given by its rows (plain floats)."""
+    return [r[0] * v[0] + r[1] * v[1] + r[2] * v[2] for r in rows]
+
+
 class _CovDiag:
     """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 message covariance, cached on (Σ, C).
 
@@ -201,7 +213,7 @@ class _CovDiag:
         if key != self._key:
             self._key = key
             ok = np.all(np.isfinite(sub)) and sub[0, 0] >= 0 and np.any(sub)
-            self._value = np.einsum("ij,jk,ik->i", C, sub, C) if ok else None
+            self._value = np.einsum("ij,jk,ik->i", C, sub, C).tolist() if ok else None
         return self._value
 
 
@@ -214,6 +226,7 @@ class RobotCmkf:
         self.q_bi = rot.normalise(config.imu_rotation_xyzw)
         self.C_bi = rot.to_matrix(self.q_bi)
         self.C_ib = self.C_bi.T
+        self._C_ib_rows = tuple(tuple(float(c) for c in row) for row in self.C_ib)
         # twist: the plain-float velocity filter (same equations as AxisCmkf mode "vel", tested equal)
         self._fast = config.measurement == "twist"
         self.filter: AxisCmkf | VelocityAxisCmkf
@@ -396,9 +409,9 @@ class RobotCmkf:
             "position": position, "orientation_xyzw": orientation_xyzw, "linear_velocity": linear_velocity,
             "angular_velocity": angular_velocity,
         }
-        vals = {k: None if a is None else np.asarray(a, dtype=float).ravel() for k, a in arrays.items()}
+        vals = {k: None if a is None else _as_floats(a) for k, a in arrays.items()}
         # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
-        if not math.isfinite(t + sum(float(a.sum()) for a in vals.values() if a is not None)):
+        if not math.isfinite(t + sum(sum(a) for a in vals.values() if a is not None)):
             self.counters["odom_dropped_nan"] += 1
             return False
         if self._t_odom is not None and t <= self._t_odom:
@@ -434,19 +447,15 @@ class RobotCmkf:
         new_chain = self._t_update is None or (t - self._t_update) > cfg.max_odom_gap
         if new_chain and self._t_update is not None:
             self.counters["odom_gaps"] += 1
-        C_ni = None
-        if q_nb is not None:
-            q_ni = rot.multiply(q_nb, self.q_bi)
-            C_ni = rot.to_matrix(q_ni)
-        elif self._q_ni is not None:
-            C_ni = rot.to_matrix(self._q_ni)
+        q_ni = rot.multiply(q_nb, self.q_bi) if q_nb is not None else self._q_ni
+        C_ni = None if self._fast or q_ni is None else rot.to_matrix(q_ni)
         z, R = self._measurement(vals, C_ni, pose_cov, twist_cov)
         if self._reinit or self._t_state is None:
             self._initialise(t, z, R)
         else:
             if self._fast:
                 self.filter.predict(self._v, self._b, self._vel_interval())
-                self._nis_accel = self.filter.update(z[:, 0].tolist(), R[:, 0, 0].tolist(), new_chain=new_chain)
+                self._nis_accel = self.filter.update(z, R, new_chain=new_chain)
                 self._v, self._b = list(self.filter.v), list(self.filter.b)
             else:
                 self._r = list(C_ni.T @ (self._C_ni_epoch @ np.array(self._r) + np.array(self._dp)))
@@ -460,7 +469,7 @@ class RobotCmkf:
             self._gyro_update(vals, q_nb, twist_cov, new_chain)
             self.counters["updates"] += 1
         if q_nb is not None:
-            self._q_ni = rot.multiply(q_nb, self.q_bi)
+            self._q_ni = q_ni
             self._q_nb_prev = q_nb
         self._C_ni_epoch = C_ni
         self._t_update = t
@@ -470,18 +479,17 @@ class RobotCmkf:
     def _measurement(
         self, vals: dict, C_ni: np.ndarray | None, pose_cov: np.ndarray | None, twist_cov: np.ndarray | None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """z (3, m) and R (3, m, m) per IMU axis (velocity, or position and velocity)."""
+        """Per IMU axis: twist mode z, R as lists (3); pose_twist z (3, 2) and R (3, 2, 2) arrays."""
         cfg = self.config
-        zv = self.C_ib @ vals["linear_velocity"]
+        zv = _rotate(self._C_ib_rows, vals["linear_velocity"])
         if cfg.velocity_noise_std is not None:
-            rv = np.full(3, cfg.velocity_noise_std**2)
+            rv = [cfg.velocity_noise_std**2] * 3
         else:
             rv = self._twist_lin_cov(twist_cov, self.C_ib)
-            if rv is None:
-                rv = np.full(3, cfg.default_velocity_noise_std**2)
+            rv = [cfg.default_velocity_noise_std**2] * 3 if rv is None else rv
         if cfg.measurement == "twist":
-            return zv[:, None], rv[:, None, None]
-        p = vals["position"]
+            return zv, rv
+        p = np.array(vals["position"])
         if self._anchor is None:
             self._anchor = p.copy()
         C_in = C_ni.T
@@ -515,9 +523,9 @@ class RobotCmkf:
             x0[:, 0], x0[:, 1] = z[:, 0], z[:, 1]
             P0[:, 0, 0], P0[:, 1, 1] = R[:, 0, 0], R[:, 1, 1]
         else:
-            x0[:, 1] = z[:, 0]
+            x0[:, 1] = z
             P0[:, 0, 0] = 1.0  # r is not tracked in twist mode
-            P0[:, 1, 1] = R[:, 0, 0]
+            P0[:, 1, 1] = R
         x0[:, 2] = b0
         P0[:, 2, 2] = Pbb
         if self._fast:
@@ -537,27 +545,27 @@ class RobotCmkf:
         if new_chain:
             self.gyro.reset_chain()
         if vals["angular_velocity"] is not None:
-            w_now = self.C_ib @ vals["angular_velocity"]
+            w_now = _rotate(self._C_ib_rows, vals["angular_velocity"])
             if cfg.angular_velocity_noise_std is not None:
-                rw = np.full(3, cfg.angular_velocity_noise_std**2)
+                rw = [cfg.angular_velocity_noise_std**2] * 3
             else:
                 rw = self._twist_ang_cov(twist_cov, self.C_ib)
-                if rw is None:
-                    rw = np.full(3, cfg.default_angular_velocity_noise_std**2)
+                rw = [cfg.default_angular_velocity_noise_std**2] * 3 if rw is None else rw
             prev, self._w_odo_prev = self._w_odo_prev, (w_now, rw)
             if prev is None or new_chain:
                 return  # the trapezoid needs the rate at both ends of the interval
-            dtheta_odo = 0.5 * (prev[0] + w_now) * T  # trapezoid: the twist is the rate at the stamp
-            R = 0.25 * (prev[1] + rw) * T * T
+            # trapezoid: the twist is the rate at the stamp
+            dtheta_odo = [0.5 * (a + b) * T for a, b in zip(prev[0], w_now, strict=True)]
+            R = [0.25 * (a + b) * T * T for a, b in zip(prev[1], rw, strict=True)]
         elif q_nb is not None and self._q_nb_prev is not None:
             dq = rot.multiply(rot.conjugate(self._q_nb_prev), q_nb)
-            dtheta_odo = self.C_ib @ rot.to_rotvec(dq)
+            dtheta_odo = _rotate(self._C_ib_rows, rot.to_rotvec(dq).tolist())
             std = cfg.angular_velocity_noise_std or cfg.default_angular_velocity_noise_std
-            R = np.full(3, (std * T) ** 2)
+            R = [(std * T) ** 2] * 3
         else:
             return
-        y = (np.asarray(self._dtheta) - dtheta_odo).tolist()
-        self._nis_gyro = self.gyro.update(y, T, R.tolist())
+        y = [a - b for a, b in zip(self._dtheta, dtheta_odo, strict=True)]
+        self._nis_gyro = self.gyro.update(y, T, R)
 
     # ------------------------------------------------------------------ results
     def _bias_var(self) -> np.ndarray:
