@@ -148,9 +148,10 @@ class CmkfEstimate:
     ----------
     t : time of the estimate [s] (last processed stamp).
     status : ``no_data``, ``no_imu`` (odometry only: nothing to estimate), ``imu_only`` (no odometry yet),
-        ``unobserved`` (no odometry update for longer than ``max_odom_gap``), ``converging`` (fewer than
+        ``unobserved`` (no odometry update for longer than ``max_odom_gap``, or no IMU sample for longer than
+        ``max_imu_gap`` while odometry continues), ``converging`` (fewer than
         ``min_samples`` stacked samples) or ``tracking``.
-    observed : True when an odometry update happened within ``max_odom_gap``.
+    observed : True when an odometry update happened within ``max_odom_gap`` and the IMU is alive.
     accel_bias, accel_bias_std : [m/s²] per IMU axis; S_v : Ŝ_v in use [m²/s³]; S_v_ls : latest least-squares
         value (may be ≤ 0 early on); accel_noise_density : √Ŝ_v [m/s²/√Hz].
     gyro_bias, gyro_bias_std : [rad/s]; S_g, S_g_ls : [rad²/s]; gyro_noise_density : √Ŝ_g [rad/s/√Hz].
@@ -310,7 +311,8 @@ class RobotCmkf:
             return True  # no odometry yet: nothing to propagate from
         dt = t - self._t_state
         if dt > self.config.max_imu_gap:
-            self.counters["imu_gaps"] += 1
+            if not self._reinit:
+                self.counters["imu_gaps"] += 1
             self._reinit = True
             self._t_state = t
             return True
@@ -437,12 +439,12 @@ class RobotCmkf:
                     return False
                 self.counters["odom_late"] += 1
             elif t > self._t_state:
-                dt = t - self._t_state
-                if dt > cfg.max_imu_gap:
-                    self.counters["imu_gaps"] += 1
+                if t - self._t_imu > cfg.max_imu_gap:  # the last IMU sample is stale: cannot propagate
+                    if not self._reinit:
+                        self.counters["imu_gaps"] += 1
                     self._reinit = True
                 else:
-                    self._propagate(dt, self._last_imu)
+                    self._propagate(t - self._t_state, self._last_imu)
                 self._t_state = t
         new_chain = self._t_update is None or (t - self._t_update) > cfg.max_odom_gap
         if new_chain and self._t_update is not None:
@@ -581,8 +583,11 @@ class RobotCmkf:
         f = self.filter
         n_stacked = f.count if self._fast else f.estimator.count
         t = max(x for x in (self._t_imu, self._t_odom, -math.inf) if x is not None)
-        observed = self._t_update is not None and self._t_state is not None and (
-            (self._t_state - self._t_update) <= cfg.max_odom_gap
+        observed = (
+            self._t_update is not None
+            and self._t_state is not None
+            and (self._t_state - self._t_update) <= cfg.max_odom_gap
+            and (t - self._t_imu) <= cfg.max_imu_gap  # an IMU that stopped while odometry goes on observes nothing
         )
         if self._t_imu is None and self._t_odom is None:
             status = "no_data"
