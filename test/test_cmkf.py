@@ -363,3 +363,15 @@ def test_gravity_from_imu_orientation_equals_odometry_orientation_on_flat_ground
         ests[source] = f.estimate()
     np.testing.assert_allclose(ests["imu"].accel_bias, ests["odometry"].accel_bias, atol=2e-3)
     assert ests["imu"].status == ests["odometry"].status == "tracking"
+
+
+def test_malformed_odometry_is_dropped_not_raised():
+    run = _short_run()
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    _feed(f, run, imu_idx=range(100), odom_idx=range(10))
+    assert not f.process_odometry(1.05, orientation_xyzw=[0, 0, 0, 0], linear_velocity=[0.5, 0, 0])
+    assert not f.process_odometry(1.06, orientation_xyzw=[0, 0, 0, 1], linear_velocity=[0.5, 0])
+    assert f.estimate().counters["odom_dropped_nan"] == 2
+    # a covariance of the wrong size counts as unknown (default noise), not as an error
+    assert f.process_odometry(1.07, orientation_xyzw=[0, 0, 0, 1], linear_velocity=[0.5, 0, 0],
+                              twist_cov=np.eye(3))

@@ -207,9 +207,10 @@ class _CovDiag:
         self._value: np.ndarray | None = None
 
     def __call__(self, cov: np.ndarray | None, C: np.ndarray) -> np.ndarray | None:
-        if cov is None:
+        cov = None if cov is None else np.asarray(cov, dtype=float)
+        if cov is None or cov.size != 36:
             return None
-        sub = np.asarray(cov, dtype=float).reshape(6, 6)[self.block, self.block]
+        sub = cov.reshape(6, 6)[self.block, self.block]
         key = sub.tobytes() + C.tobytes()
         if key != self._key:
             self._key = key
@@ -407,30 +408,18 @@ class RobotCmkf:
         """
         cfg = self.config
         t = float(t)
-        arrays = {
+        checked = self._check_odometry(t, {
             "position": position, "orientation_xyzw": orientation_xyzw, "linear_velocity": linear_velocity,
             "angular_velocity": angular_velocity,
-        }
-        vals = {k: None if a is None else _as_floats(a) for k, a in arrays.items()}
-        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
-        if not math.isfinite(t + sum(sum(a) for a in vals.values() if a is not None)):
-            self.counters["odom_dropped_nan"] += 1
+        })
+        if checked is None:
             return False
-        if self._t_odom is not None and t <= self._t_odom:
-            self.counters["odom_dropped_stamp"] += 1
-            return False
-        needs = ["linear_velocity", "orientation_xyzw"] if cfg.gravity_source == "odometry" else ["linear_velocity"]
-        if cfg.measurement == "pose_twist":
-            needs = ["position", "orientation_xyzw", "linear_velocity"]
-        if any(vals[k] is None for k in needs):
-            self.counters["odom_dropped_missing"] += 1
-            return False
+        vals, q_nb = checked
         self.counters["odom"] += 1
         self._t_odom = t
         if self._last_imu is None:
             self.counters["odom_without_imu"] += 1
             return False
-        q_nb = rot.normalise(vals["orientation_xyzw"]) if vals["orientation_xyzw"] is not None else None
         # Bring the state to the odometry stamp.
         if self._t_state is not None:
             if t < self._t_state:
@@ -477,6 +466,35 @@ class RobotCmkf:
         self._t_update = t
         self._reset_interval()
         return True
+
+    def _check_odometry(self, t: float, arrays: dict) -> tuple[dict, rot.Quat | None] | None:
+        """The message's vectors as float lists and its unit quaternion, or None (dropped, counted)."""
+        cfg = self.config
+        vals = {k: None if a is None else _as_floats(a) for k, a in arrays.items()}
+        lengths = {"position": 3, "orientation_xyzw": 4, "linear_velocity": 3, "angular_velocity": 3}
+        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
+        bad = not math.isfinite(t + sum(sum(a) for a in vals.values() if a is not None)) or any(
+            a is not None and len(a) != lengths[k] for k, a in vals.items()
+        )
+        q_nb = None
+        if not bad and vals["orientation_xyzw"] is not None:
+            try:
+                q_nb = rot.normalise(vals["orientation_xyzw"])
+            except ValueError:  # zero quaternion: as unusable as NaN
+                bad = True
+        if bad:
+            self.counters["odom_dropped_nan"] += 1  # NaN/inf or malformed: unusable
+            return None
+        if self._t_odom is not None and t <= self._t_odom:
+            self.counters["odom_dropped_stamp"] += 1
+            return None
+        needs = ["linear_velocity", "orientation_xyzw"] if cfg.gravity_source == "odometry" else ["linear_velocity"]
+        if cfg.measurement == "pose_twist":
+            needs = ["position", "orientation_xyzw", "linear_velocity"]
+        if any(vals[k] is None for k in needs):
+            self.counters["odom_dropped_missing"] += 1
+            return None
+        return vals, q_nb
 
     def _measurement(
         self, vals: dict, C_ni: np.ndarray | None, pose_cov: np.ndarray | None, twist_cov: np.ndarray | None
