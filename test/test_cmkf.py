@@ -372,6 +372,8 @@ def test_malformed_odometry_is_dropped_not_raised():
     assert not f.process_odometry(1.05, orientation_xyzw=[0, 0, 0, 0], linear_velocity=[0.5, 0, 0])
     assert not f.process_odometry(1.06, orientation_xyzw=[0, 0, 0, 1], linear_velocity=[0.5, 0])
     assert f.estimate().counters["odom_dropped_nan"] == 2
+    assert not f.process_imu(1.055, [0.0, 0.0], [0.0, 0.0, 9.8])
+    assert f.estimate().counters["imu_dropped_nan"] == 1
     # a covariance of the wrong size counts as unknown (default noise), not as an error
     assert f.process_odometry(1.07, orientation_xyzw=[0, 0, 0, 1], linear_velocity=[0.5, 0, 0],
                               twist_cov=np.eye(3))

@@ -290,9 +290,12 @@ class RobotCmkf:
         The sample is held over ``(t_prev, t]``. ``orientation_xyzw`` (IMU orientation in a z-up world frame) is
         used for gravity only when ``gravity_source == "imu"``. Returns False if the sample was dropped.
         """
-        t = float(t)
-        wx, wy, wz = float(gyro[0]), float(gyro[1]), float(gyro[2])
-        fx, fy, fz = float(accel[0]), float(accel[1]), float(accel[2])
+        try:
+            t = float(t)
+            wx, wy, wz = (float(v) for v in gyro)
+            fx, fy, fz = (float(v) for v in accel)
+        except (TypeError, ValueError):  # not three numbers each: unusable
+            t = wx = wy = wz = fx = fy = fz = math.nan
         if not math.isfinite(t + wx + wy + wz + fx + fy + fz):  # NaN/inf anywhere makes the sum non-finite
             self.counters["imu_dropped_nan"] += 1
             return False
