@@ -377,3 +377,16 @@ def test_malformed_odometry_is_dropped_not_raised():
     # a covariance of the wrong size counts as unknown (default noise), not as an error
     assert f.process_odometry(1.07, orientation_xyzw=[0, 0, 0, 1], linear_velocity=[0.5, 0, 0],
                               twist_cov=np.eye(3))
+
+
+def test_cli_cmkf_bag_without_odometry_exits_2(tmp_path, capsys):
+    from imu_noise_id.cli import main
+
+    bag = tmp_path / "imu_only"
+    assert main(["simulate", "--model", "WN(1e-3)", "--rate", "100", "--duration", "2", "--out", str(bag),
+                 "--seed", "1"]) == 0
+    capsys.readouterr()
+    assert main(["cmkf", str(bag), "--out", str(tmp_path / "out")]) == 2
+    assert "Odometry" in capsys.readouterr().err
+    assert main(["cmkf", str(bag), "--s-v0", "-1", "--out", str(tmp_path / "out")]) == 2
+    assert "s_v0" in capsys.readouterr().err
