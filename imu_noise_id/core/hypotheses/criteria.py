@@ -78,7 +78,7 @@ def paper_case(case: int, dt: float = 1.0, grid: dict[str, int] | None = None, b
         raise InputError(f"paper 002 has cases 1, 2 and 3, got {case!r}")
     sizes = {"random_walk": 256, "tau": 32, "sigma": 32, "noise_density": 8}
     if case == 3:
-        sizes.update({"random_walk": 64, "tau": 16, "sigma": 16})
+        sizes.update({"random_walk": 64, "tau": 12, "sigma": 12, "noise_density": 12})
     sizes.update(grid or {})
     rt = math.sqrt(dt)
     rw = ParameterPrior("RW.random_walk", 0.04 / rt, 0.15 / rt, sizes["random_walk"], "log")
@@ -138,7 +138,7 @@ def record_indices(n_updates: int, n_points: int = 200) -> np.ndarray:
 
 
 def run_criteria(hset: HypothesisSet, duration_s: float, trials: int, *, seed: int | None = 0,
-                 record: np.ndarray | None = None, trial_batch: int = 100, case: str = "") -> CriteriaResult:
+                 record: np.ndarray | None = None, trial_batch: int = 50, case: str = "") -> CriteriaResult:
     """Monte-Carlo performance criteria of the bank on ``hset`` over ``duration_s`` seconds (section 3).
 
     Parameters
