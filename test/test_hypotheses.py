@@ -334,3 +334,25 @@ def test_criteria_cli_writes_json(tmp_path):
     assert "RW+WN:RW.random_walk" in doc["rsd"]["real"] and "GM+WN:GM.tau" in doc["rsd"]["calculated"]
     assert len(doc["t"]) == len(doc["error_probability"]["real"])
     assert main(["criteria", "--case", "2", "--trials", "1", "--out", str(tmp_path)]) == 2
+
+
+# -- performance criteria (small version of bench/bench_bank.py) ------------------------------------------------
+
+def test_small_criteria_run_near_paper_numbers():
+    # Paper 002 section 4 at the inferred dt = 0.1 s, 40 trials, 300 s, coarse grids. Paper: case 1 error ≈ 0
+    # after a couple of samples, case 2 ≈ 2 % at 2000 s. Loose bands (40 trials: binomial σ ≈ 0.05): case 1
+    # ≤ 0.15 after 1 s and ≤ 0.1 at 300 s, case 2 ≤ 0.15 at 300 s; real and calculated within 0.1 of each other;
+    # the RW's RSD shrinks with time and real and calculated agree within a factor 2.
+    from imu_noise_id.core.hypotheses.criteria import paper_case, run_criteria
+
+    grid = {"random_walk": 64, "tau": 10, "sigma": 10}
+    r1 = run_criteria(paper_case(1, dt=0.1, grid=grid), 300.0, 40, seed=1, record=[10, 3000])
+    assert r1.error_probability_real[0] <= 0.15
+    assert r1.error_probability_real[1] <= 0.10
+    assert abs(r1.error_probability_calculated[1] - r1.error_probability_real[1]) <= 0.1
+    r2 = run_criteria(paper_case(2, dt=0.1, grid=grid), 300.0, 40, seed=2, record=[10, 1000, 3000])
+    assert r2.error_probability_real[-1] <= 0.15
+    assert abs(r2.error_probability_calculated[-1] - r2.error_probability_real[-1]) <= 0.1
+    rsd_real, rsd_calc = r2.rsd_real["RW+WN:RW.random_walk"], r2.rsd_calculated["RW+WN:RW.random_walk"]
+    assert rsd_real[-1] < rsd_real[0] and rsd_calc[-1] < rsd_calc[0]
+    assert 0.5 < rsd_real[-1] / rsd_calc[-1] < 2.0
