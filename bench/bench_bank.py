@@ -1,6 +1,8 @@
 """Hypothesis-bank benchmark: throughput, the paper 002 section 4 reproduction (L trials), Allan variance vs bank.
 
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --trials 500 | tee docs/results/bench_bank.txt
+    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --dt 1 --trials 100 --skip-throughput --tag _dt1 \
+        | tee docs/results/bench_bank_dt1.txt        # the Δt = 1 s alternative (docs/hypotheses.md)
 
 Writes docs/results/criteria_case{1,2,3}.json, docs/results/criteria_table.md and docs/figures/hypotheses_*.png.
 """
@@ -121,7 +123,7 @@ def allan_vs_bank(dt: float, duration: float) -> None:
     plt.close(fig)
 
 
-def reproduction(trials: int, dt: float, duration: float) -> None:
+def reproduction(trials: int, dt: float, duration: float, tag: str = "") -> None:
     from imu_noise_id.report.hypotheses_plots import plot_criteria
 
     results = []
@@ -135,8 +137,8 @@ def reproduction(trials: int, dt: float, duration: float) -> None:
         results.append(r)
         print(f"\ncase {case}: {trials} trials, {r.settings['n_filters']} filters, dt {dt} s, {duration:.0f} s: "
               f"wall time {wall:.1f} s")
-        (RESULTS / f"criteria_case{case}.json").write_text(json.dumps(criteria_document(r)))
-        plot_criteria([r], FIGURES / f"hypotheses_case{case}.png", f"paper 002 case {case}, L = {trials}")
+        (RESULTS / f"criteria_case{case}{tag}.json").write_text(json.dumps(criteria_document(r)))
+        plot_criteria([r], FIGURES / f"hypotheses_case{case}{tag}.png", f"paper 002 case {case}, L = {trials}")
         shown = sorted({int(np.argmin(np.abs(r.t - x))) for x in (dt, 3 * dt, 10.0, 100.0, 1000.0, duration)})
         for i in shown:
             target = r.t[i]
@@ -148,8 +150,9 @@ def reproduction(trials: int, dt: float, duration: float) -> None:
             rows.append(f"| {case} | {PAPER[case] if target == duration else ''} | {r.t[i]:.1f} | "
                         f"{r.error_probability_real[i]:.3f} | {r.error_probability_calculated[i]:.3f} | "
                         f"{r.decided[i]:.3f} | {rsd} |")
-    (RESULTS / "criteria_table.md").write_text("\n".join(rows) + "\n")
-    plot_criteria(results, FIGURES / "hypotheses_criteria_all.png", f"paper 002 cases 1–3, L = {trials}, dt = {dt} s")
+    (RESULTS / f"criteria_table{tag}.md").write_text("\n".join(rows) + "\n")
+    plot_criteria(results, FIGURES / f"hypotheses_criteria_all{tag}.png",
+                  f"paper 002 cases 1–3, L = {trials}, dt = {dt} s")
 
 
 def main() -> int:
@@ -158,14 +161,17 @@ def main() -> int:
     ap.add_argument("--dt", type=float, default=0.1, help="sampling period inferred for paper 002 [s]")
     ap.add_argument("--duration", type=float, default=2000.0)
     ap.add_argument("--skip-reproduction", action="store_true")
+    ap.add_argument("--skip-throughput", action="store_true")
+    ap.add_argument("--tag", default="", help="suffix of the output file names (e.g. _dt1)")
     args = ap.parse_args()
     RESULTS.mkdir(parents=True, exist_ok=True)
     FIGURES.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    throughput(args.dt)
-    allan_vs_bank(args.dt, args.duration)
+    if not args.skip_throughput:
+        throughput(args.dt)
+        allan_vs_bank(args.dt, args.duration)
     if not args.skip_reproduction:
-        reproduction(args.trials, args.dt, args.duration)
+        reproduction(args.trials, args.dt, args.duration, args.tag)
     print(f"\ntotal wall time {time.perf_counter() - t0:.1f} s")
     return 0
 

@@ -110,7 +110,8 @@ def test_most_probable_is_true_and_estimates_within_rsd(truth, name, params):
         cell = true * 0.12 if p.startswith("GM") else true * 0.03
         assert abs(est.theta[p] - true) <= 4 * est.theta_std[p] + cell, (p, est.theta[p], est.theta_std[p])
     assert res.final.decision == name
-    assert est.state["bias"] == pytest.approx(0.4, abs=6 * est.state_std["bias"] + 0.05)
+    bias, bias_std = bank.state_estimates()[name]["bias"]
+    assert bias == pytest.approx(0.4, abs=6 * bias_std + 0.05)
 
 
 def test_block_averaged_bank_on_averaged_data():

@@ -56,7 +56,8 @@ def identify_series(series: ImuSeries, axes: list[str], hypotheses: str | None) 
         n_bank = len(y) // hset.block
         every = max(1, n_bank // MAX_ROWS)
         result = ident.run(y, record_every=every)
-        out["axes"][axis] = {"result": result, "offset": ident.offset, "hset": hset, "warmup": warmup}
+        out["axes"][axis] = {"result": result, "offset": ident.offset, "hset": hset, "warmup": warmup,
+                             "states": ident.bank.state_estimates()}
     return out
 
 
@@ -80,8 +81,8 @@ def _axis_yaml(axis: str, entry: dict[str, Any]) -> dict[str, Any]:
                 "theta": est.theta,
                 "theta_std": est.theta_std,
                 "rsd": {k: (None if not np.isfinite(v) else v) for k, v in est.rsd.items()},
-                "state": est.state,
-                "state_std": est.state_std,
+                "state": {s: v[0] for s, v in entry["states"][name].items()},
+                "state_std": {s: v[1] for s, v in entry["states"][name].items()},
                 "grid": {p.name: {"range": [p.low, p.high], "n": p.n, "spacing": p.spacing}
                          for p in next(h for h in hset.hypotheses if h.name == name).priors},
             }

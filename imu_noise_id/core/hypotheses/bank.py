@@ -40,16 +40,12 @@ class HypothesisEstimate:
         parameter name, continuous-time units.
     rsd : dict
         theta_std / theta (relative standard deviation of this data set's estimate).
-    state, state_std : dict
-        Mixture state estimate and its standard deviation by state name (``bias``, ``RW``, ``GM``, …) [u].
     """
 
     probability: float
     theta: dict[str, float]
     theta_std: dict[str, float]
     rsd: dict[str, float]
-    state: dict[str, float]
-    state_std: dict[str, float]
 
 
 @dataclass(frozen=True)
@@ -139,6 +135,7 @@ class HypothesisBank:
         self._pending = np.zeros(0)
         self._t_bank = 0.0  # time of the latest update [s] (the first bank sample is at bank_dt)
         self._n_updates = 0
+        self._snapshot: BankSnapshot | None = None
 
     # -- feeding ---------------------------------------------------------------------------------------
     def _blocks(self, y: np.ndarray) -> np.ndarray:
@@ -154,18 +151,22 @@ class HypothesisBank:
     def _feed(self, y: np.ndarray, record_every: int) -> tuple[np.ndarray, np.ndarray]:
         """Advance the bank over y; cumulative log-likelihoods and times of the recorded updates."""
         ybar = self._blocks(y)
+        if ybar.size == 0:
+            return np.zeros((0, 1, self.n_filters)), np.zeros(0)
+        self._snapshot = None
         lam, S = self._filters.advance(ybar[:, None])
         c = self._filters.accumulate(lam, S)
         index = self._n_updates + np.arange(1, ybar.size + 1)  # 1-based update numbers
         t = self._t_bank + self.hset.bank_dt * np.arange(1, ybar.size + 1)
-        if ybar.size:
-            self._t_bank = float(t[-1])
-            self._n_updates += ybar.size
+        self._t_bank = float(t[-1])
+        self._n_updates += ybar.size
+        if record_every == 1:
+            return c, t
         rows = np.flatnonzero(index % record_every == 0)
         return c[rows], t[rows]
 
     def step(self, y: float) -> BankSnapshot:
-        """Feed one input sample and return the bank's state (unchanged while an averaging block fills)."""
+        """Feed one input sample and return the bank's state (the same object while an averaging block fills)."""
         value = float(y)
         if not math.isfinite(value):
             raise InputError(f"sample {y!r} is not finite: skip it (and call gap(1)) instead")
@@ -214,32 +215,42 @@ class HypothesisBank:
         blocks = missed // m
         self._filters.gap(blocks)
         self._t_bank += blocks * self.hset.bank_dt
+        self._snapshot = None
 
     # -- reading ---------------------------------------------------------------------------------------
     def snapshot(self) -> BankSnapshot:
-        """Probabilities, decision, θ̂ and RSD per hypothesis, mixture states, after the latest update."""
+        """Probabilities, decision, θ̂ and RSD per hypothesis after the latest update (cached until the next)."""
+        if self._snapshot is not None:
+            return self._snapshot
         post = self._filters.evaluate(self._filters.c[None])
         probs = np.exp(post.log_prob[0, 0])
-        mixtures = self._filters.state_mixture(0)
         hyps = {}
         for k, hyp in enumerate(self.hset.hypotheses):
             mean, var = post.theta_mean[k][0, 0], post.theta_var[k][0, 0]
             std = np.sqrt(np.maximum(var, 0.0))
-            smean, scov = mixtures[k]
-            snames = self.model.state_names[k]
+            names = hyp.parameter_names
             hyps[hyp.name] = HypothesisEstimate(
                 probability=float(probs[k]),
-                theta=dict(zip(hyp.parameter_names, map(float, mean), strict=True)),
-                theta_std=dict(zip(hyp.parameter_names, map(float, std), strict=True)),
-                rsd={p: (float(s / v) if v > 0 else math.inf) for p, s, v in zip(hyp.parameter_names, std, mean,
-                                                                                     strict=True)},
-                state=dict(zip(snames, map(float, smean), strict=True)),
-                state_std=dict(zip(snames, map(float, np.sqrt(np.maximum(np.diag(scov), 0.0))), strict=True)),
+                theta=dict(zip(names, mean.tolist(), strict=True)),
+                theta_std=dict(zip(names, std.tolist(), strict=True)),
+                rsd={p: (s / v if v > 0 else math.inf) for p, s, v in zip(names, std.tolist(), mean.tolist(),
+                                                                             strict=True)},
             )
         best = int(np.argmax(probs))
         decision = self.names[best] if probs[best] >= self.hset.gamma else None
-        return BankSnapshot(
+        self._snapshot = BankSnapshot(
             n_updates=self._n_updates, t=self._t_bank,
-            probabilities={n: float(p) for n, p in zip(self.names, probs, strict=True)},
+            probabilities=dict(zip(self.names, probs.tolist(), strict=True)),
             decision=decision, hypotheses=hyps,
         )
+        return self._snapshot
+
+    def state_estimates(self) -> dict[str, dict[str, tuple[float, float]]]:
+        """Per hypothesis, the mixture state estimates (eq. 13) and standard deviations (eq. 14) by state name
+        (``bias``, ``RW``, ``GM``, …) [u]. Not part of :meth:`snapshot` to keep :meth:`step` cheap."""
+        out = {}
+        for k, (mean, cov) in enumerate(self._filters.state_mixture(0)):
+            std = np.sqrt(np.maximum(np.diag(cov), 0.0))
+            out[self.names[k]] = {n: (float(m), float(s)) for n, m, s in
+                                  zip(self.model.state_names[k], mean, std, strict=True)}
+        return out
