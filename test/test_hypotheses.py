@@ -357,3 +357,27 @@ def test_small_criteria_run_near_paper_numbers():
     rsd_real, rsd_calc = r2.rsd_real["RW+WN:RW.random_walk"], r2.rsd_calculated["RW+WN:RW.random_walk"]
     assert rsd_real[-1] < rsd_real[0] and rsd_calc[-1] < rsd_calc[0]
     assert 0.5 < rsd_real[-1] / rsd_calc[-1] < 2.0
+
+
+def test_identify_cli_on_a_simulated_bag(tmp_path):
+    import yaml
+
+    from imu_noise_id.cli import main
+
+    bag = tmp_path / "bag"
+    assert main(["simulate", "--model", "gyro: WN(2e-3)+GM(tau=20, sigma=5e-3); accel: WN(2e-2)+RW(1e-3)",
+                 "--rate", "50", "--duration", "200", "--out", str(bag), "--seed", "3"]) == 0
+    data = json.loads(json.dumps(GOOD))
+    data["block"] = 5
+    data["sensors"]["gyro"]["hypotheses"][1]["priors"] = {
+        "WN.noise_density": {"range": [1e-3, 4e-3], "n": 4, "spacing": "log"},
+        "GM.tau": {"range": [5, 100], "n": 5, "spacing": "log"},
+        "GM.sigma": {"range": [1e-3, 2e-2], "n": 5, "spacing": "log"}}
+    cfg = tmp_path / "h.yaml"
+    cfg.write_text(yaml.safe_dump(data))
+    out = tmp_path / "out"
+    assert main(["identify", str(bag), "--hypotheses", str(cfg), "--axis", "gyro_z", "--out", str(out),
+                 "--no-plot"]) == 0
+    doc = yaml.safe_load((out / "hypotheses.yaml").read_text())
+    assert doc["axes"]["gyro_z"]["decision"] == "WN+GM"
+    assert main(["identify", str(bag), "--hypotheses", str(cfg), "--axis", "accel_x", "--out", str(out)]) == 2

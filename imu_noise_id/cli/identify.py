@@ -115,7 +115,6 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_imu
 
     series = read_imu(args.bag, topic=args.topic)
-    series = getattr(series, "imu", series)
     res = identify_series(series, list(dict.fromkeys(args.axis)), args.hypotheses)
     out = Path(args.out)
     write_outputs(res, out, plot=not args.no_plot)
