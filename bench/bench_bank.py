@@ -1,8 +1,8 @@
 """Hypothesis-bank benchmark: throughput, the paper 002 section 4 reproduction (L trials), Allan variance vs bank.
 
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --trials 500 | tee docs/results/bench_bank.txt
-    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --dt 1 --trials 100 --skip-throughput --tag _dt1 \
-        | tee docs/results/bench_bank_dt1.txt        # the Δt = 1 s alternative (docs/hypotheses.md)
+    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --dt-sweep 100 \
+        | tee docs/results/bench_bank_dt_sweep.txt   # which Δt did the paper use? (docs/hypotheses.md)
 
 Writes docs/results/criteria_case{1,2,3}.json, docs/results/criteria_table.md and docs/figures/hypotheses_*.png.
 """
@@ -34,6 +34,9 @@ PAPER = {1: "≈ 0 after a couple of samples", 2: "≈ 2 % at 2000 s", 3: "≈ 1
 
 def throughput(dt: float) -> None:
     """Batch samples/s and streaming µs/step of a 2 × 256 bank."""
+    import os
+
+    print(f"machine load average (1, 5, 15 min) before timing: {os.getloadavg()} on {os.cpu_count()} cores")
     rt = math.sqrt(dt)
     wn = ParameterPrior("WN.noise_density", 0.5 * rt, 0.5 * rt, 1)
     h1 = Hypothesis(("RW", "WN"), (ParameterPrior("RW.random_walk", 0.04 / rt, 0.15 / rt, 256, "log"), wn))
@@ -150,6 +153,21 @@ def reproduction(trials: int, dt: float, duration: float, tag: str = "") -> None
                   f"paper 002 cases 1–3, L = {trials}, dt = {dt} s")
 
 
+def dt_sweep(trials: int, duration: float) -> None:
+    """Identification error at the end of the record vs the (unstated) sampling period of paper 002."""
+    print(f"\nsampling-period sweep ({trials} trials per point, {duration:.0f} s): identification error real/calc. "
+          "at the end, and for case 1 after 3 samples")
+    for dt in (0.05, 0.1, 0.2, 0.5, 1.0):
+        parts = []
+        for case in (1, 2, 3):
+            n = round(duration / dt)
+            r = run_criteria(paper_case(case, dt=dt), duration, trials, seed=10 + case, record=[3, n], case=str(case))
+            early = f" (after 3 samples {r.error_probability_real[0]:.3f})" if case == 1 else ""
+            parts.append(f"case {case} {r.error_probability_real[-1]:.3f}/{r.error_probability_calculated[-1]:.3f}"
+                         + early)
+        print(f"  dt = {dt:4.2f} s: " + "; ".join(parts))
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--trials", type=int, default=500)
@@ -158,6 +176,8 @@ def main() -> int:
     ap.add_argument("--skip-reproduction", action="store_true")
     ap.add_argument("--skip-throughput", action="store_true")
     ap.add_argument("--tag", default="", help="suffix of the output file names (e.g. _dt1)")
+    ap.add_argument("--dt-sweep", type=int, default=0, metavar="L",
+                    help="also run the sampling-period sweep with L trials per point")
     args = ap.parse_args()
     RESULTS.mkdir(parents=True, exist_ok=True)
     FIGURES.mkdir(parents=True, exist_ok=True)
@@ -167,6 +187,8 @@ def main() -> int:
         allan_vs_bank(args.dt, args.duration)
     if not args.skip_reproduction:
         reproduction(args.trials, args.dt, args.duration, args.tag)
+    if args.dt_sweep:
+        dt_sweep(args.dt_sweep, args.duration)
     print(f"\ntotal wall time {time.perf_counter() - t0:.1f} s")
     return 0
 
