@@ -157,7 +157,7 @@ def dt_sweep(trials: int, duration: float) -> None:
     """Identification error at the end of the record vs the (unstated) sampling period of paper 002."""
     print(f"\nsampling-period sweep ({trials} trials per point, {duration:.0f} s): identification error real/calc. "
           "at the end, and for case 1 after 3 samples")
-    for dt in (0.05, 0.1, 0.2, 0.5, 1.0):
+    for dt in (0.1, 0.2, 0.5, 1.0):
         parts = []
         for case in (1, 2, 3):
             n = round(duration / dt)
