@@ -410,3 +410,16 @@ def test_identify_cli_on_a_simulated_bag(tmp_path):
     doc = yaml.safe_load((out / "hypotheses.yaml").read_text())
     assert doc["axes"]["gyro_z"]["decision"] == "WN+GM"
     assert main(["identify", str(bag), "--hypotheses", str(cfg), "--axis", "accel_x", "--out", str(out)]) == 2
+
+
+def test_frozen_gains_change_little():
+    # Freezing the gains once they change by < 1e-5 per step (here after ~1300 steps, a coarse setting) must leave the
+    # probabilities and estimates close to the exact time-varying filters (tolerance 0) on 3000 samples.
+    rng = np.random.default_rng(21)
+    y = simulate_sum([GM(100.0, 1.0), WN(0.5)], 3000, 1.0, rng)
+    exact = HypothesisBank(rw_gm_set(n_rw=8, n_gm=6, gain_tolerance=0.0))
+    frozen = HypothesisBank(rw_gm_set(n_rw=8, n_gm=6, gain_tolerance=1e-5))
+    a, b = exact.run(y).final, frozen.run(y).final
+    assert frozen._filters.frozen and not exact._filters.frozen
+    assert abs(a.probabilities["GM+WN"] - b.probabilities["GM+WN"]) < 0.02
+    assert b.hypotheses["GM+WN"].theta["GM.tau"] == pytest.approx(a.hypotheses["GM+WN"].theta["GM.tau"], rel=0.02)
