@@ -3,6 +3,8 @@
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --trials 500 | tee docs/results/bench_bank.txt
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --dt-sweep 100 \
         | tee docs/results/bench_bank_dt_sweep.txt   # which Δt did the paper use? (docs/hypotheses.md)
+    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --default-set \
+        | tee docs/results/bench_bank_default_set.txt
 
 Writes docs/results/criteria_case{1,2,3}.json, docs/results/criteria_table.md and docs/figures/hypotheses_*.png.
 """
@@ -22,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from imu_noise_id.cli.criteria import criteria_document  # noqa: E402
-from imu_noise_id.core.components import GM, RW, simulate_sum  # noqa: E402
+from imu_noise_id.core.components import GM, RW, WN, simulate_sum  # noqa: E402
 from imu_noise_id.core.hypotheses import Hypothesis, HypothesisBank, HypothesisSet, ParameterPrior  # noqa: E402
 from imu_noise_id.core.hypotheses.criteria import paper_case, run_criteria  # noqa: E402
 from imu_noise_id.pipelines.hypotheses_config import hypothesis_set_factory, read_config  # noqa: E402
@@ -193,6 +195,20 @@ def wn_grid_effect(trials: int, dt: float, duration: float) -> None:
               f"{r.rsd_calculated['RW+WN:WN.noise_density'][-1]:.3f}/{r.rsd_calculated['GM+WN:WN.noise_density'][-1]:.3f}")
 
 
+def default_set_examples() -> None:
+    """The packaged default set on simulated gyro axes WN(2e-3)+RW(1e-4) at 100 Hz: Pr(WN+RW) vs record length."""
+    data, source = read_config(None)
+    make, warm = hypothesis_set_factory(data, 0.01, "gyro", source)
+    print("\ndefault hypothesis set, simulated gyro WN(2e-3)+RW(1e-4) at 100 Hz, three seeds:")
+    for duration in (300, 1500):
+        out = []
+        for seed in range(3):
+            y = simulate_sum([WN(2e-3), RW(1e-4)], duration * 100, 0.01, np.random.default_rng(seed))
+            final = AxisIdentifier(make, warm, 0.01).run(y, record_every=100).final
+            out.append(f"Pr(WN+RW) {final.probabilities['WN+RW']:.3f} (decision {final.decision})")
+        print(f"  {duration:5d} s: " + "; ".join(out))
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--trials", type=int, default=500)
@@ -200,6 +216,7 @@ def main() -> int:
     ap.add_argument("--duration", type=float, default=2000.0)
     ap.add_argument("--skip-reproduction", action="store_true")
     ap.add_argument("--skip-throughput", action="store_true")
+    ap.add_argument("--default-set", action="store_true", help="also run the default-set examples")
     ap.add_argument("--tag", default="", help="suffix of the output file names (e.g. _dt1)")
     ap.add_argument("--dt-sweep", type=int, default=0, metavar="L",
                     help="also run the sampling-period sweep with L trials per point")
@@ -212,6 +229,8 @@ def main() -> int:
         allan_vs_bank(args.dt, args.duration)
     if not args.skip_reproduction:
         reproduction(args.trials, args.dt, args.duration, args.tag)
+    if args.default_set:
+        default_set_examples()
     if args.dt_sweep:
         dt_sweep(args.dt_sweep, args.duration)
         wn_grid_effect(args.dt_sweep, args.dt, args.duration)
