@@ -3,7 +3,7 @@
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --trials 500 | tee docs/results/bench_bank.txt
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --dt-sweep 100 \
         | tee docs/results/bench_bank_dt_sweep.txt   # which Δt did the paper use? (docs/hypotheses.md)
-    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --default-set \
+    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --default-set --real \
         | tee docs/results/bench_bank_default_set.txt
 
 Writes docs/results/criteria_case{1,2,3}.json, docs/results/criteria_table.md and docs/figures/hypotheses_*.png.
@@ -209,6 +209,31 @@ def default_set_examples() -> None:
         print(f"  {duration:5d} s: " + "; ".join(out))
 
 
+def real_data() -> None:
+    """The default set on measured ADIS16405 run 1 (10 000 s at 100 Hz, static): gyro_x and accel_x."""
+    from imu_noise_id.cli.identify import identify_series
+    from imu_noise_id.core.axes import ImuSeries
+
+    path = ROOT.parent / "shared" / "data" / "adis16405_static" / "adis16405_run1.npz"
+    if not path.is_file():
+        print(f"\n{path} is absent: real-data example skipped")
+        return
+    d = np.load(path)
+    series = ImuSeries(t=d["t"], gyro=d["gyro"], accel=d["accel"])
+    t0 = time.perf_counter()
+    res = identify_series(series, ["gyro_x", "accel_x"], None)
+    wall = time.perf_counter() - t0
+    print(f"\nADIS16405 run 1 ({len(series)} samples per axis), default set: {wall:.1f} s for 2 axes")
+    for axis, e in res["axes"].items():
+        f = e["result"].final
+        probs = ", ".join(f"{k} {v:.3g}" for k, v in f.probabilities.items())
+        print(f"  {axis}: {probs}; decision {f.decision} first reached at {e['result'].decision_time:.0f} s; "
+              f"warm-up white-noise estimate {e['wn_estimate']:.3g}")
+        for h, est in f.hypotheses.items():
+            theta = ", ".join(f"{k} {v:.3g} (RSD {est.rsd[k]:.1g})" for k, v in est.theta.items())
+            print(f"    {h}: {theta}")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--trials", type=int, default=500)
@@ -217,6 +242,7 @@ def main() -> int:
     ap.add_argument("--skip-reproduction", action="store_true")
     ap.add_argument("--skip-throughput", action="store_true")
     ap.add_argument("--default-set", action="store_true", help="also run the default-set examples")
+    ap.add_argument("--real", action="store_true", help="also run the default set on measured ADIS16405 data")
     ap.add_argument("--tag", default="", help="suffix of the output file names (e.g. _dt1)")
     ap.add_argument("--dt-sweep", type=int, default=0, metavar="L",
                     help="also run the sampling-period sweep with L trials per point")
@@ -231,6 +257,8 @@ def main() -> int:
         reproduction(args.trials, args.dt, args.duration, args.tag)
     if args.default_set:
         default_set_examples()
+    if args.real:
+        real_data()
     if args.dt_sweep:
         dt_sweep(args.dt_sweep, args.duration)
         wn_grid_effect(args.dt_sweep, args.dt, args.duration)
