@@ -220,18 +220,20 @@ def real_data() -> None:
         return
     d = np.load(path)
     series = ImuSeries(t=d["t"], gyro=d["gyro"], accel=d["accel"])
-    t0 = time.perf_counter()
-    res = identify_series(series, ["gyro_x", "accel_x"], None)
-    wall = time.perf_counter() - t0
-    print(f"\nADIS16405 run 1 ({len(series)} samples per axis), default set: {wall:.1f} s for 2 axes")
-    for axis, e in res["axes"].items():
-        f = e["result"].final
-        probs = ", ".join(f"{k} {v:.3g}" for k, v in f.probabilities.items())
-        print(f"  {axis}: {probs}; decision {f.decision} first reached at {e['result'].decision_time:.0f} s; "
-              f"warm-up white-noise estimate {e['wn_estimate']:.3g}")
-        for h, est in f.hypotheses.items():
-            theta = ", ".join(f"{k} {v:.3g} (RSD {est.rsd[k]:.1g})" for k, v in est.theta.items())
-            print(f"    {h}: {theta}")
+    for refine in (0, 2):
+        t0 = time.perf_counter()
+        res = identify_series(series, ["gyro_x", "accel_x"], None, refine=refine)
+        wall = time.perf_counter() - t0
+        print(f"\nADIS16405 run 1 ({len(series)} samples per axis), default set, refine {refine}: {wall:.1f} s for "
+              "2 axes")
+        for axis, e in res["axes"].items():
+            f = e["result"].final
+            probs = ", ".join(f"{k} {v:.3g}" for k, v in f.probabilities.items())
+            print(f"  {axis} ({e['passes']} passes): {probs}; decision {f.decision} first reached at "
+                  f"{e['result'].decision_time:.0f} s; warm-up white-noise estimate {e['wn_estimate']:.3g}")
+            for h, est in f.hypotheses.items():
+                theta = ", ".join(f"{k} {v:.3g} (RSD {est.rsd[k]:.2g})" for k, v in est.theta.items())
+                print(f"    {h}: {theta}")
 
 
 def main() -> int:
