@@ -236,6 +236,27 @@ def real_data() -> None:
                 print(f"    {h}: {theta}")
 
 
+def replot() -> None:
+    """Redraw the criteria figures from the saved docs/results/criteria_case*.json."""
+    from types import SimpleNamespace
+
+    from imu_noise_id.report.hypotheses_plots import plot_criteria
+
+    results = []
+    for case in (1, 2, 3):
+        d = json.loads((RESULTS / f"criteria_case{case}.json").read_text())
+        r = SimpleNamespace(
+            case=str(d["case"]), t=np.array(d["t"]),
+            error_probability_real=np.array(d["error_probability"]["real"]),
+            error_probability_calculated=np.array(d["error_probability"]["calculated"]),
+            rsd_real={k: np.array(v) for k, v in d["rsd"]["real"].items()},
+            rsd_calculated={k: np.array(v) for k, v in d["rsd"]["calculated"].items()})
+        results.append(r)
+        plot_criteria([r], FIGURES / f"hypotheses_case{case}.png", f"paper 002 case {case}, L = {d['trials']}")
+    plot_criteria(results, FIGURES / "hypotheses_criteria_all.png",
+                  f"paper 002 cases 1–3, L = {d['trials']}, dt = {d['dt']} s")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--trials", type=int, default=500)
@@ -245,12 +266,16 @@ def main() -> int:
     ap.add_argument("--skip-throughput", action="store_true")
     ap.add_argument("--default-set", action="store_true", help="also run the default-set examples")
     ap.add_argument("--real", action="store_true", help="also run the default set on measured ADIS16405 data")
+    ap.add_argument("--replot", action="store_true", help="only redraw the criteria figures from the saved JSON")
     ap.add_argument("--tag", default="", help="suffix of the output file names (e.g. _dt1)")
     ap.add_argument("--dt-sweep", type=int, default=0, metavar="L",
                     help="also run the sampling-period sweep with L trials per point")
     args = ap.parse_args()
     RESULTS.mkdir(parents=True, exist_ok=True)
     FIGURES.mkdir(parents=True, exist_ok=True)
+    if args.replot:
+        replot()
+        return 0
     t0 = time.perf_counter()
     if not args.skip_throughput:
         throughput(args.dt)
