@@ -5,6 +5,8 @@
         | tee docs/results/bench_bank_dt_sweep.txt   # which Δt did the paper use? (docs/hypotheses.md)
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --default-set --real \
         | tee docs/results/bench_bank_default_set.txt
+    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --fig4 100 \
+        | tee docs/results/bench_bank_fig4.txt
 
 Writes docs/results/criteria_case{1,2,3}.json, docs/results/criteria_table.md and docs/figures/hypotheses_*.png.
 """
@@ -257,6 +259,40 @@ def replot() -> None:
                   f"paper 002 cases 1–3, L = {d['trials']}, dt = {d['dt']} s")
 
 
+def fig4(trials: int, dt: float, duration: float) -> None:
+    """Paper fig. 4: RSD of τ_m for τ_m ∈ [1, 5], [5, 25], [25, 125] min (GM hypothesis alone, case 1 noise)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    print(f"\npaper fig. 4: RSD of tau for three prior ranges (GM + bias only, sigma_v = 0, {trials} trials, "
+          f"dt = {dt} s)")
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.2))
+    n = round(duration / dt)
+    for (lo, hi), c in zip([(1, 5), (5, 25), (25, 125)], ["tab:red", "tab:green", "tab:blue"], strict=True):
+        h = Hypothesis(("GM",), (ParameterPrior("GM.tau", lo * 60.0, hi * 60.0, 32, "log"),
+                                 ParameterPrior("GM.sigma", 0.5, 1.5, 32, "log")))
+        r = run_criteria(HypothesisSet((h,), dt=dt), duration, trials, seed=4, case=f"tau {lo}-{hi} min")
+        rr, rc = r.rsd_real["GM:GM.tau"], r.rsd_calculated["GM:GM.tau"]
+        mean = (lo + hi) * 30.0
+        ax1.loglog(r.t, rr * mean, color=c, label=f"τ ∈ [{lo}, {hi}] min real")
+        ax1.loglog(r.t, rc * mean, color=c, ls="--", label="calc.")
+        ax2.semilogx(r.t, rr, color=c, label=f"τ ∈ [{lo}, {hi}] min real")
+        ax2.semilogx(r.t, rc, color=c, ls="--", label="calc.")
+        picks = [int(np.argmin(np.abs(r.t - x))) for x in (10.0, 100.0, 1000.0, n * dt)]
+        print(f"  tau in [{lo:3d}, {hi:3d}] min: RSD real/calc at " + ", ".join(
+            f"{r.t[i]:.0f} s {rr[i]:.3f}/{rc[i]:.3f}" for i in picks))
+    ax1.set_title("RMS error of τ̂ [s]", fontsize=9)
+    ax2.set_title("RSD of τ̂", fontsize=9)
+    for ax in (ax1, ax2):
+        ax.set_xlabel("time [s]")
+        ax.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(FIGURES / "hypotheses_fig4_tau_ranges.png", dpi=80)
+    plt.close(fig)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--trials", type=int, default=500)
@@ -267,6 +303,7 @@ def main() -> int:
     ap.add_argument("--default-set", action="store_true", help="also run the default-set examples")
     ap.add_argument("--real", action="store_true", help="also run the default set on measured ADIS16405 data")
     ap.add_argument("--replot", action="store_true", help="only redraw the criteria figures from the saved JSON")
+    ap.add_argument("--fig4", type=int, default=0, metavar="L", help="also run the paper's fig. 4 with L trials")
     ap.add_argument("--tag", default="", help="suffix of the output file names (e.g. _dt1)")
     ap.add_argument("--dt-sweep", type=int, default=0, metavar="L",
                     help="also run the sampling-period sweep with L trials per point")
@@ -282,6 +319,8 @@ def main() -> int:
         allan_vs_bank(args.dt, args.duration)
     if not args.skip_reproduction:
         reproduction(args.trials, args.dt, args.duration, args.tag)
+    if args.fig4:
+        fig4(args.fig4, args.dt, args.duration)
     if args.default_set:
         default_set_examples()
     if args.real:
