@@ -1,0 +1,85 @@
+"""Gyro-bias filter analogous to paper 004's CMKF: IMU angular rate against the odometry's rotation.
+
+Model per IMU axis (beyond the paper, which leaves the gyro to future work; same structure, one level lower)::
+
+    ω̃(t) = ω(t) + b_g(t) + n_g(t),      ḃ_g = −b_g/τ_g + w_g       (cf. eqs. 3–4, 9; S_g = ARW PSD [rad²/s])
+    y_k  = Δθ̃_k − Δθ_odo,k = ∫ ω̃ dt − Δθ_odo  over the odometry interval T_k (gyro increment as known input,
+                                                   cf. eq. 12; Δθ_odo from the odometry twist or orientation)
+    y_k / T_k = b_{g,k} + e_k,   Var(e_k) = S_g / T_k + R_k / T_k²   (R_k: variance of Δθ_odo,k)
+
+The bias is the only state (the angle itself is measured by the odometry every interval), so the filter is a
+scalar Kalman filter per axis with an exponentially correlated bias (Joseph form, eq. 27). The covariance matching
+step mirrors eqs. (28)–(35): eliminating the state between two epochs, ``d_k = y_k/T_k − φ_k y_{k−1}/T_{k−1} =
+w + e_k − φ_k e_{k−1}`` has ``E[d_k²] = q_k + S_g (1/T_k + φ_k²/T_{k−1}) + R_k/T_k² + φ_k² R_{k−1}/T_{k−1}²``, and
+the recursive least-squares solution for S_g is ``Σ (d² − q − R-terms) D_k / Σ D_k²`` with ``D_k = 1/T_k +
+φ_k²/T_{k−1}``; non-positive estimates fall back to the last positive one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class GyroBiasFilter:
+    """Per-axis gyro-bias Kalman filter with a covariance-matching estimate of the angle-random-walk PSD.
+
+    Parameters
+    ----------
+    tau : bias time constant [s]; sigma : steady-state bias σ [rad/s]; s_g0 : initial S_g [rad²/s];
+    min_samples : stacked samples before the S_g estimate replaces ``s_g0``.
+    """
+
+    def __init__(self, tau: float, sigma: float, s_g0: float, min_samples: int = 10) -> None:
+        self.tau = float(tau)
+        self.sigma = float(sigma)
+        self.b = np.zeros(3)
+        self.P = np.full(3, self.sigma**2)
+        self.S_used = np.full(3, float(s_g0))
+        self.min_samples = int(min_samples)
+        self.num = np.zeros(3)
+        self.den = 0.0
+        self.count = 0
+        self._prev: tuple[np.ndarray, float, np.ndarray] | None = None  # (y/T, T, R) of the last epoch
+
+    @property
+    def S_ls(self) -> np.ndarray:
+        """Latest least-squares S_g [rad²/s] (NaN before the first stacked sample)."""
+        return self.num / self.den if self.count else np.full(3, np.nan)
+
+    def reset_chain(self) -> None:
+        """Do not difference across a gap."""
+        self._prev = None
+
+    def predicted_variance(self, T: float) -> np.ndarray:
+        """Bias variance after ``T`` seconds without an update."""
+        phi2 = np.exp(-2.0 * T / self.tau)
+        return phi2 * self.P + (1.0 - phi2) * self.sigma**2
+
+    def update(self, y: np.ndarray, T: float, R: np.ndarray) -> np.ndarray:
+        """One odometry interval: ``y`` (3,) = Δθ̃ − Δθ_odo [rad], ``T`` [s], ``R`` (3,) variance of Δθ_odo [rad²].
+
+        Returns the normalised innovation squared per axis.
+        """
+        phi = np.exp(-T / self.tau)
+        q = (1.0 - phi**2) * self.sigma**2
+        b_pred = phi * self.b
+        P_pred = phi**2 * self.P + q
+        meas = y / T
+        r = self.S_used / T + R / T**2
+        S = P_pred + r
+        K = P_pred / S
+        nu = meas - b_pred
+        self.b = b_pred + K * nu
+        self.P = (1.0 - K) ** 2 * P_pred + K**2 * r
+        if self._prev is not None:
+            meas1, T1, R1 = self._prev
+            d = meas - phi * meas1
+            D = 1.0 / T + phi**2 / T1
+            self.num += (d * d - q - R / T**2 - phi**2 * R1 / T1**2) * D
+            self.den += D * D
+            self.count += 1
+            if self.count >= self.min_samples:
+                s = self.S_ls
+                self.S_used = np.where(s > 0, s, self.S_used)
+        self._prev = (meas, T, np.asarray(R, dtype=float))
+        return nu * nu / S

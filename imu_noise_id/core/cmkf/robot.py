@@ -1,0 +1,562 @@
+"""Paper 004's CMKF on a robot: three IMU axes, a rotated IMU, gravity, odometry slower than the IMU.
+
+Streaming API (one message per call, the same code for the ROS node and the offline replay)::
+
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=...))
+    f.process_imu(t, gyro, accel)                       # every IMU message, ~10 µs
+    f.process_odometry(t, orientation_xyzw=q, linear_velocity=v, angular_velocity=w, twist_cov=C)
+    est = f.estimate()                                  # CmkfEstimate: biases, S_v, noise densities, NIS, counters
+
+Model (per IMU axis i, state ``x_i = [r_i, v_i, b_i]``, all resolved in the IMU frame)
+---------------------------------------------------------------------------------------
+Frames: ``n`` = odometry frame (z up), ``b`` = base (``child_frame_id``), ``i`` = IMU; ``C_bi`` is the known IMU
+mounting rotation (parameter), ``C_nb`` the odometry orientation, ``C_ni = C_nb C_bi``. The IMU measures the specific
+force ``f̃ = f + b + n`` (gravity included) and the angular rate ``ω̃``. With ``v = C_in v_n`` (velocity of the IMU
+resolved in IMU axes; lever arm neglected) and ``r = C_in (p_n − p_anchor)``::
+
+    v̇ = f + g_i − ω × v,      ṙ = v − ω × r,      g_i = C_in [0, 0, −g]                  (body-frame kinematics)
+    ḃ_i = −b_i/τ + w_i                                                                    (eqs. 3–4)
+
+Per IMU sample k (period dt_k, sample value held over its interval) the known input is
+``u = f̃ + g_i − ω̂ × v̂`` with ``ω̂ = ω̃ − b̂_g`` and, as in eqs. (13)–(16),
+``r ← r + (v − ω̂ × r̂) dt + ½ (u − b̂) dt²``, ``v ← v + (u − b̂) dt``, ``b̂ ← φ b̂``. The transport terms
+``ω̂ × v̂`` and ``ω̂ × r̂`` and gravity are evaluated with the estimate and treated as known input; this is what makes
+the three axes decouple (one ``[r, v, b]`` filter per IMU axis, exactly paper 004's structure). The neglected error
+coupling ``ω × δv`` is small whenever velocity is measured every interval (|ω| T ≪ 1).
+
+The IMU samples between two odometry epochs are accumulated into one interval of length ``T = Σ dt_k``
+(``β_j = Π_{l<j} φ_l``, ``m_j`` = mid-time of sample j from the start of the interval)::
+
+    F̂ = [[1, T, −(T·Σβ_j dt_j − Σβ_j dt_j m_j)], [0, 1, −Σβ_j dt_j], [0, 0, Π φ_j]]
+    Q_a = S_v · [[T³ − 2T Σdt m + Σdt m², T² − Σdt m, 0], [T² − Σdt m, T, 0], [0, 0, 0]]
+    q_b = (1 − (Π φ_j)²) σ_ss²  (bias drive lumped at the end of the interval)
+
+which is the exact accumulation of the paper's per-sample (13)–(16) and (22) for the velocity-random-walk part
+(the bias drive inside the interval is lumped, an O(q_b T) approximation). Measurements at the odometry epoch:
+``z_v = C_ib^T v_b`` (twist, in ``child_frame_id``) and, in mode ``pose_twist``, ``z_r = C_in (p_n − p_anchor)``;
+``R`` = the per-axis diagonal of the rotated odometry covariance (or a parameter). Then the update (24)–(27) and the
+stacked estimator (28)–(35) at the odometry rate (:mod:`.stacked`, with time-varying interval matrices).
+
+Reduction to paper 004: for a sensor that does not rotate (``ω = 0``, ``C_ni = I``), one IMU sample per odometry
+epoch with period T, gravity on z and position + velocity measured, ``Σβ_j dt_j = T``, ``T·T − T·T/2 = T²/2``,
+``Q_a = S_v T [T²/4, T/2; T/2, 1] = S_v T Ĝ Ĝᵀ`` and ``u = Δṽ/T``: the x and y filters are exactly eqs. (13)–(17),
+(23)–(35) (tested numerically against :class:`~.paper.PaperCmkf`).
+
+Gyro: :class:`~.gyro.GyroBiasFilter` per IMU axis with ``y = ∫ω̃ dt − C_ib^T ω_b T`` (twist angular velocity) or the
+odometry's relative rotation when no angular velocity is given.
+
+Robustness: stamps not increasing (duplicated / out of order) and NaN/inf messages are dropped and counted; an
+odometry gap longer than ``max_odom_gap`` restarts the stacked-estimator chain (no Δv across a gap); an IMU gap
+longer than ``max_imu_gap`` cannot be propagated: the position/velocity states are re-initialised from the next
+odometry message (bias kept) and the chain restarts. Without IMU nothing can be estimated; with IMU only the filter
+propagates, its covariance grows and the estimate is flagged unobserved.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import rotation as rot
+from .axis import AxisCmkf
+from .gyro import GyroBiasFilter
+from .stacked import Interval
+
+MEASUREMENTS = ("twist", "pose_twist")
+GRAVITY_SOURCES = ("odometry", "imu")
+
+
+@dataclass
+class RobotCmkfConfig:
+    """Parameters of :class:`RobotCmkf` (SI units).
+
+    Attributes
+    ----------
+    imu_rotation_xyzw : orientation of the IMU frame in the base frame (``C_bi``), ROS quaternion order.
+    measurement : ``"twist"`` (body velocity only; right for wheel odometry, whose pose is integrated twist) or
+        ``"pose_twist"`` (position in the odom frame and body velocity, paper 004's eq. 8).
+    accel_bias_tau, accel_bias_sigma : bias time constant [s] and steady-state σ [m/s²] (eqs. 3–7, known).
+    s_v0 : initial Ŝ_v [m²/s³] for all axes (paper: 2e-6).
+    gyro_bias_tau, gyro_bias_sigma, s_g0 : the same for the gyro [s], [rad/s], [rad²/s].
+    velocity_noise_std, position_noise_std, angular_velocity_noise_std : override the odometry covariance
+        [m/s], [m], [rad/s]; ``None`` uses the message covariance, falling back to ``default_*`` when it is
+        missing or all zeros (REP-145: unknown).
+    gravity : [m/s²]; gravity_source : ``"odometry"`` (odometry orientation propagated with the gyro between
+        epochs) or ``"imu"`` (the ``orientation_xyzw`` given to :meth:`RobotCmkf.process_imu`, for planar odometry
+        that has no roll/pitch).
+    max_odom_gap, max_imu_gap : [s] (see module docstring); late_odom_tolerance : an odometry message up to this
+        much older than the IMU-propagated state is applied at the state time [s].
+    pd_check : ``"per_axis"`` or ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used.
+    nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean``.
+    """
+
+    imu_rotation_xyzw: tuple[float, float, float, float] = rot.IDENTITY
+    measurement: str = "twist"
+    accel_bias_tau: float = 3600.0
+    accel_bias_sigma: float = 0.1
+    s_v0: float = 1e-4
+    gyro_bias_tau: float = 3600.0
+    gyro_bias_sigma: float = 0.01
+    s_g0: float = 1e-6
+    velocity_noise_std: float | None = None
+    position_noise_std: float | None = None
+    angular_velocity_noise_std: float | None = None
+    default_velocity_noise_std: float = 0.05
+    default_position_noise_std: float = 0.05
+    default_angular_velocity_noise_std: float = 0.05
+    gravity: float = 9.80665
+    gravity_source: str = "odometry"
+    max_odom_gap: float = 1.0
+    max_imu_gap: float = 0.5
+    late_odom_tolerance: float = 0.05
+    pd_check: str = "per_axis"
+    min_samples: int = 10
+    nis_window: int = 50
+
+    def validate(self) -> None:
+        """Raise ValueError naming the first absurd parameter."""
+        if self.measurement not in MEASUREMENTS:
+            raise ValueError(f"measurement must be one of {MEASUREMENTS}, got {self.measurement!r}")
+        if self.gravity_source not in GRAVITY_SOURCES:
+            raise ValueError(f"gravity_source must be one of {GRAVITY_SOURCES}, got {self.gravity_source!r}")
+        rot.normalise(self.imu_rotation_xyzw)
+        for name in ("accel_bias_tau", "accel_bias_sigma", "s_v0", "gyro_bias_tau", "gyro_bias_sigma", "s_g0",
+                     "default_velocity_noise_std", "default_position_noise_std",
+                     "default_angular_velocity_noise_std", "max_odom_gap", "max_imu_gap"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+        for name in ("velocity_noise_std", "position_noise_std", "angular_velocity_noise_std"):
+            value = getattr(self, name)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be None or a finite number > 0, got {value!r}")
+
+
+@dataclass
+class CmkfEstimate:
+    """What :meth:`RobotCmkf.estimate` returns (IMU frame, SI units).
+
+    Attributes
+    ----------
+    t : time of the estimate [s] (last processed stamp).
+    status : ``no_data``, ``no_imu`` (odometry only: nothing to estimate), ``imu_only`` (no odometry yet),
+        ``unobserved`` (no odometry update for longer than ``max_odom_gap``), ``converging`` (fewer than
+        ``min_samples`` stacked samples) or ``tracking``.
+    observed : True when an odometry update happened within ``max_odom_gap``.
+    accel_bias, accel_bias_std : [m/s²] per IMU axis; S_v : Ŝ_v in use [m²/s³]; S_v_ls : latest least-squares
+        value (may be ≤ 0 early on); accel_noise_density : √Ŝ_v [m/s²/√Hz].
+    gyro_bias, gyro_bias_std : [rad/s]; S_g, S_g_ls : [rad²/s]; gyro_noise_density : √Ŝ_g [rad/s/√Hz].
+    nis_accel, nis_accel_dof : NIS of the last accelerometer-filter update (sum over axes) and its dof;
+    nis_accel_mean : mean over the last ``nis_window`` updates; nis_gyro, nis_gyro_dof : the same for the gyro.
+    n_stacked : stacked samples in the S_v estimate; counters : messages used and dropped, by reason.
+    """
+
+    t: float
+    status: str
+    observed: bool
+    accel_bias: np.ndarray
+    accel_bias_std: np.ndarray
+    S_v: np.ndarray
+    S_v_ls: np.ndarray
+    accel_noise_density: np.ndarray
+    gyro_bias: np.ndarray
+    gyro_bias_std: np.ndarray
+    S_g: np.ndarray
+    S_g_ls: np.ndarray
+    gyro_noise_density: np.ndarray
+    nis_accel: float
+    nis_accel_dof: int
+    nis_accel_mean: float
+    nis_gyro: float
+    nis_gyro_dof: int
+    n_stacked: int
+    counters: dict[str, int] = field(default_factory=dict)
+
+
+def _finite(*values: float) -> bool:
+    return all(math.isfinite(v) for v in values)
+
+
+def _cov_diag(cov: np.ndarray | None, block: slice, C: np.ndarray) -> np.ndarray | None:
+    """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 covariance; None if unknown (zeros, −1, NaN)."""
+    if cov is None:
+        return None
+    cov = np.asarray(cov, dtype=float).reshape(6, 6)[block, block]
+    if not np.all(np.isfinite(cov)) or cov[0, 0] < 0 or not np.any(cov):
+        return None
+    return np.einsum("ij,jk,ik->i", C, cov, C)
+
+
+class RobotCmkf:
+    """Streaming CMKF for accelerometer bias and S_v, plus the gyro-bias filter (see module docstring)."""
+
+    def __init__(self, config: RobotCmkfConfig | None = None) -> None:
+        self.config = config = config or RobotCmkfConfig()
+        config.validate()
+        self.q_bi = rot.normalise(config.imu_rotation_xyzw)
+        self.C_bi = rot.to_matrix(self.q_bi)
+        self.C_ib = self.C_bi.T
+        self.filter = AxisCmkf(
+            3, config.s_v0, mode="pos_vel" if config.measurement == "pose_twist" else "vel",
+            pd_check=config.pd_check, min_samples=config.min_samples,
+        )
+        self.gyro = GyroBiasFilter(config.gyro_bias_tau, config.gyro_bias_sigma, config.s_g0, config.min_samples)
+        self.counters = dict.fromkeys(
+            ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "odom_dropped_stamp",
+             "odom_dropped_nan", "odom_dropped_missing", "odom_late", "odom_without_imu", "odom_gaps", "imu_gaps"),
+            0,
+        )
+        self._g = config.gravity
+        self._phi_per_s = 1.0 / config.accel_bias_tau
+        # Streaming state (plain floats on the per-sample path).
+        self._t_imu: float | None = None
+        self._t_odom: float | None = None
+        self._t_state: float | None = None
+        self._t_update: float | None = None
+        self._last_imu: tuple[float, float, float, float, float, float] | None = None
+        self._q_ni: rot.Quat | None = None
+        self._q_ni_imu: rot.Quat | None = None
+        self._q_nb_prev: rot.Quat | None = None
+        self._w_odo_prev: tuple[np.ndarray, np.ndarray] | None = None
+        self._anchor: np.ndarray | None = None
+        self._reinit = True
+        self._r = [0.0, 0.0, 0.0]
+        self._v = [0.0, 0.0, 0.0]
+        self._b = [0.0, 0.0, 0.0]
+        self._reset_interval()
+        self._nis_accel = math.nan
+        self._nis_gyro = math.nan
+        self._nis_hist: deque[float] = deque(maxlen=config.nis_window)
+
+    # ------------------------------------------------------------------ IMU path
+    def _reset_interval(self) -> None:
+        self._T = 0.0
+        self._beta = 1.0
+        self._M0 = self._M1 = self._N1 = self._N2 = 0.0
+        self._dtheta = [0.0, 0.0, 0.0]
+
+    def process_imu(
+        self,
+        t: float,
+        gyro: tuple[float, float, float] | np.ndarray,
+        accel: tuple[float, float, float] | np.ndarray,
+        orientation_xyzw: tuple[float, float, float, float] | np.ndarray | None = None,
+    ) -> bool:
+        """Propagate with one IMU sample (stamp ``t`` [s], ``gyro`` [rad/s], ``accel`` [m/s²] with gravity).
+
+        The sample is held over ``(t_prev, t]``. ``orientation_xyzw`` (IMU orientation in a z-up world frame) is
+        used for gravity only when ``gravity_source == "imu"``. Returns False if the sample was dropped.
+        """
+        t = float(t)
+        wx, wy, wz = float(gyro[0]), float(gyro[1]), float(gyro[2])
+        fx, fy, fz = float(accel[0]), float(accel[1]), float(accel[2])
+        if not _finite(t, wx, wy, wz, fx, fy, fz):
+            self.counters["imu_dropped_nan"] += 1
+            return False
+        if self._t_imu is not None and t <= self._t_imu:
+            self.counters["imu_dropped_stamp"] += 1
+            return False
+        if orientation_xyzw is not None and self.config.gravity_source == "imu":
+            try:
+                self._q_ni_imu = rot.normalise(orientation_xyzw)
+            except ValueError:
+                self.counters["imu_dropped_nan"] += 1
+                return False
+        self.counters["imu"] += 1
+        self._t_imu = t
+        self._last_imu = (wx, wy, wz, fx, fy, fz)
+        if self._t_state is None:
+            return True  # no odometry yet: nothing to propagate from
+        dt = t - self._t_state
+        if dt > self.config.max_imu_gap:
+            self.counters["imu_gaps"] += 1
+            self._reinit = True
+            self._t_state = t
+            return True
+        if dt > 0.0:
+            self._propagate(dt, self._last_imu)
+            self._t_state = t
+        return True
+
+    def _propagate(self, dt: float, sample: tuple[float, float, float, float, float, float]) -> None:
+        """Eqs. (13)–(16) per IMU axis with the gravity- and transport-compensated input; interval accumulators.
+
+        ``sample`` = (gyro x, y, z [rad/s], accel x, y, z [m/s²]) held over ``dt``.
+        """
+        wx, wy, wz, fx, fy, fz = sample
+        bg = self.gyro.b
+        ox, oy, oz = wx - bg[0], wy - bg[1], wz - bg[2]
+        self._dtheta[0] += wx * dt
+        self._dtheta[1] += wy * dt
+        self._dtheta[2] += wz * dt
+        q = self._q_ni_imu if self.config.gravity_source == "imu" and self._q_ni_imu is not None else self._q_ni
+        x, y, z, w = q if q is not None else rot.IDENTITY
+        g = self._g  # g_i = C_ni^T [0, 0, -g] = -g * (third row of C_ni)
+        gx, gy, gz = -g * 2 * (x * z - y * w), -g * 2 * (y * z + x * w), -g * (1 - 2 * (x * x + y * y))
+        r, v, b = self._r, self._v, self._b
+        ux = fx + gx - (oy * v[2] - oz * v[1])
+        uy = fy + gy - (oz * v[0] - ox * v[2])
+        uz = fz + gz - (ox * v[1] - oy * v[0])
+        ax, ay, az = ux - b[0], uy - b[1], uz - b[2]
+        h = 0.5 * dt * dt
+        if self.filter.mode == "pos_vel":
+            tx = oy * r[2] - oz * r[1]
+            ty = oz * r[0] - ox * r[2]
+            tz = ox * r[1] - oy * r[0]
+            r[0] += (v[0] - tx) * dt + ax * h
+            r[1] += (v[1] - ty) * dt + ay * h
+            r[2] += (v[2] - tz) * dt + az * h
+        v[0] += ax * dt
+        v[1] += ay * dt
+        v[2] += az * dt
+        phi = math.exp(-dt * self._phi_per_s)
+        b[0] *= phi
+        b[1] *= phi
+        b[2] *= phi
+        m = self._T + 0.5 * dt
+        bd = self._beta * dt
+        self._M0 += bd
+        self._M1 += bd * m
+        self._N1 += dt * m
+        self._N2 += dt * m * m
+        self._beta *= phi
+        self._T += dt
+        if self._q_ni is not None:
+            self._q_ni = rot.multiply(self._q_ni, rot.from_rotvec(ox * dt, oy * dt, oz * dt))
+
+    def _interval(self) -> Interval:
+        T, M0, M1, N1, N2 = self._T, self._M0, self._M1, self._N1, self._N2
+        Phi = np.array([[1.0, T, -(T * M0 - M1)], [0.0, 1.0, -M0], [0.0, 0.0, self._beta]])
+        qrv = T * T - N1
+        Qa1 = np.array([[T**3 - 2.0 * T * N1 + N2, qrv, 0.0], [qrv, T, 0.0], [0.0, 0.0, 0.0]])
+        return Interval(Phi, Qa1, (1.0 - self._beta**2) * self.config.accel_bias_sigma**2)
+
+    # ------------------------------------------------------------------ odometry path
+    def process_odometry(
+        self,
+        t: float,
+        *,
+        position: np.ndarray | None = None,
+        orientation_xyzw: np.ndarray | None = None,
+        linear_velocity: np.ndarray | None = None,
+        angular_velocity: np.ndarray | None = None,
+        pose_cov: np.ndarray | None = None,
+        twist_cov: np.ndarray | None = None,
+    ) -> bool:
+        """One nav_msgs/Odometry message: pose in the odom frame, twist in ``child_frame_id`` (REP-105).
+
+        Covariances are the 6×6 row-major message fields (all zeros = unknown). Returns True if the message
+        produced a filter update (or initialised the filter).
+        """
+        cfg = self.config
+        t = float(t)
+        arrays = {
+            "position": position, "orientation_xyzw": orientation_xyzw, "linear_velocity": linear_velocity,
+            "angular_velocity": angular_velocity,
+        }
+        vals = {k: None if a is None else np.asarray(a, dtype=float).ravel() for k, a in arrays.items()}
+        if not math.isfinite(t) or any(a is not None and not np.all(np.isfinite(a)) for a in vals.values()):
+            self.counters["odom_dropped_nan"] += 1
+            return False
+        if self._t_odom is not None and t <= self._t_odom:
+            self.counters["odom_dropped_stamp"] += 1
+            return False
+        needs = ["linear_velocity", "orientation_xyzw"] if cfg.gravity_source == "odometry" else ["linear_velocity"]
+        if cfg.measurement == "pose_twist":
+            needs = ["position", "orientation_xyzw", "linear_velocity"]
+        if any(vals[k] is None for k in needs):
+            self.counters["odom_dropped_missing"] += 1
+            return False
+        self.counters["odom"] += 1
+        self._t_odom = t
+        if self._last_imu is None:
+            self.counters["odom_without_imu"] += 1
+            return False
+        q_nb = rot.normalise(vals["orientation_xyzw"]) if vals["orientation_xyzw"] is not None else None
+        # Bring the state to the odometry stamp.
+        if self._t_state is not None:
+            if t < self._t_state:
+                if self._t_state - t > cfg.late_odom_tolerance:
+                    self.counters["odom_dropped_stamp"] += 1
+                    return False
+                self.counters["odom_late"] += 1
+            elif t > self._t_state:
+                dt = t - self._t_state
+                if dt > cfg.max_imu_gap:
+                    self.counters["imu_gaps"] += 1
+                    self._reinit = True
+                else:
+                    self._propagate(dt, self._last_imu)
+                self._t_state = t
+        new_chain = self._t_update is None or (t - self._t_update) > cfg.max_odom_gap
+        if new_chain and self._t_update is not None:
+            self.counters["odom_gaps"] += 1
+        C_ni = None
+        if q_nb is not None:
+            q_ni = rot.multiply(q_nb, self.q_bi)
+            C_ni = rot.to_matrix(q_ni)
+        elif self._q_ni is not None:
+            C_ni = rot.to_matrix(self._q_ni)
+        z, R = self._measurement(vals, C_ni, pose_cov, twist_cov)
+        if self._reinit or self._t_state is None:
+            self._initialise(t, z, R)
+        else:
+            self.filter.predict(np.array([self._r, self._v, self._b]).T, self._interval())
+            nis = self.filter.update(z, R, new_chain=new_chain)
+            self._nis_accel = float(nis.sum())
+            self._nis_hist.append(self._nis_accel)
+            self._gyro_update(vals, q_nb, twist_cov, new_chain)
+            self._r, self._v, self._b = (list(map(float, col)) for col in self.filter.x.T)
+            self.counters["updates"] += 1
+        if q_nb is not None:
+            self._q_ni = rot.multiply(q_nb, self.q_bi)
+            self._q_nb_prev = q_nb
+        self._t_update = t
+        self._reset_interval()
+        return True
+
+    def _measurement(
+        self, vals: dict, C_ni: np.ndarray | None, pose_cov: np.ndarray | None, twist_cov: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """z (3, m) and R (3, m, m) per IMU axis (velocity, or position and velocity)."""
+        cfg = self.config
+        zv = self.C_ib @ vals["linear_velocity"]
+        if cfg.velocity_noise_std is not None:
+            rv = np.full(3, cfg.velocity_noise_std**2)
+        else:
+            rv = _cov_diag(twist_cov, slice(0, 3), self.C_ib)
+            if rv is None:
+                rv = np.full(3, cfg.default_velocity_noise_std**2)
+        if cfg.measurement == "twist":
+            return zv[:, None], rv[:, None, None]
+        p = vals["position"]
+        if self._anchor is None:
+            self._anchor = p.copy()
+        C_in = C_ni.T
+        zr = C_in @ (p - self._anchor)
+        if cfg.position_noise_std is not None:
+            rr = np.full(3, cfg.position_noise_std**2)
+        else:
+            rr = _cov_diag(pose_cov, slice(0, 3), C_in)
+            if rr is None:
+                rr = np.full(3, cfg.default_position_noise_std**2)
+        z = np.column_stack([zr, zv])
+        R = np.zeros((3, 2, 2))
+        R[:, 0, 0] = rr
+        R[:, 1, 1] = rv
+        return z, R
+
+    def _initialise(self, t: float, z: np.ndarray, R: np.ndarray) -> None:
+        """(Re-)initialise r, v from the measurement; keep the bias and its variance (grown) if known."""
+        if self.filter.initialised:
+            b0 = self.filter.x[:, 2].copy()
+            Pbb = self.filter.P[:, 2, 2].copy()
+            if self._t_update is not None:
+                phi2 = math.exp(-2.0 * (t - self._t_update) / self.config.accel_bias_tau)
+                Pbb = phi2 * Pbb + (1.0 - phi2) * self.config.accel_bias_sigma**2
+        else:
+            b0 = np.zeros(3)
+            Pbb = np.full(3, self.config.accel_bias_sigma**2)
+        x0 = np.zeros((3, 3))
+        P0 = np.zeros((3, 3, 3))
+        if self.filter.mode == "pos_vel":
+            x0[:, 0], x0[:, 1] = z[:, 0], z[:, 1]
+            P0[:, 0, 0], P0[:, 1, 1] = R[:, 0, 0], R[:, 1, 1]
+        else:
+            x0[:, 1] = z[:, 0]
+            P0[:, 0, 0] = 1.0  # r is not tracked in twist mode
+            P0[:, 1, 1] = R[:, 0, 0]
+        x0[:, 2] = b0
+        P0[:, 2, 2] = Pbb
+        self.filter.initialise(x0, P0)
+        self.gyro.reset_chain()
+        self._r, self._v, self._b = (list(map(float, col)) for col in x0.T)
+        self._t_state = t
+        self._reinit = False
+
+    def _gyro_update(self, vals: dict, q_nb: rot.Quat | None, twist_cov: np.ndarray | None, new_chain: bool) -> None:
+        cfg = self.config
+        T = self._T
+        if T <= 0.0:
+            return
+        if vals["angular_velocity"] is not None:
+            w_now = self.C_ib @ vals["angular_velocity"]
+            if cfg.angular_velocity_noise_std is not None:
+                rw = np.full(3, cfg.angular_velocity_noise_std**2)
+            else:
+                rw = _cov_diag(twist_cov, slice(3, 6), self.C_ib)
+                if rw is None:
+                    rw = np.full(3, cfg.default_angular_velocity_noise_std**2)
+            prev, self._w_odo_prev = self._w_odo_prev, (w_now, rw)
+            if prev is None or new_chain:
+                return  # the trapezoid needs the rate at both ends of the interval
+            dtheta_odo = 0.5 * (prev[0] + w_now) * T  # trapezoid: the twist is the rate at the stamp
+            R = 0.25 * (prev[1] + rw) * T * T
+        elif q_nb is not None and self._q_nb_prev is not None:
+            dq = rot.multiply(rot.conjugate(self._q_nb_prev), q_nb)
+            dtheta_odo = self.C_ib @ rot.to_rotvec(dq)
+            std = cfg.angular_velocity_noise_std or cfg.default_angular_velocity_noise_std
+            R = np.full(3, (std * T) ** 2)
+        else:
+            return
+        if new_chain:
+            self.gyro.reset_chain()
+        nis = self.gyro.update(np.asarray(self._dtheta) - dtheta_odo, T, R)
+        self._nis_gyro = float(nis.sum())
+
+    # ------------------------------------------------------------------ results
+    def estimate(self) -> CmkfEstimate:
+        """Current estimates (cheap; call at any rate). Between updates the covariance is predicted."""
+        cfg = self.config
+        f = self.filter
+        t = max(x for x in (self._t_imu, self._t_odom, -math.inf) if x is not None)
+        observed = self._t_update is not None and self._t_state is not None and (
+            (self._t_state - self._t_update) <= cfg.max_odom_gap
+        )
+        if self._t_imu is None and self._t_odom is None:
+            status = "no_data"
+        elif self._t_imu is None:
+            status = "no_imu"
+        elif not f.initialised:
+            status = "imu_only"
+        elif not observed:
+            status = "unobserved"
+        elif f.estimator.count < cfg.min_samples:
+            status = "converging"
+        else:
+            status = "tracking"
+        if f.initialised:
+            P = f.predict_covariance(self._interval()) if self._T > 0 else f.P
+            bias = np.array(self._b)
+            bias_std = np.sqrt(P[:, 2, 2])
+            g_var = self.gyro.predicted_variance(self._T)
+        else:
+            bias = np.zeros(3)
+            bias_std = np.full(3, cfg.accel_bias_sigma)
+            g_var = np.full(3, cfg.gyro_bias_sigma**2)
+        m = 2 if f.mode == "pos_vel" else 1
+        return CmkfEstimate(
+            t=float(t) if math.isfinite(t) else math.nan,
+            status=status,
+            observed=bool(observed),
+            accel_bias=bias,
+            accel_bias_std=bias_std,
+            S_v=f.S_used.copy(),
+            S_v_ls=f.estimator.estimate,
+            accel_noise_density=np.sqrt(f.S_used),
+            gyro_bias=self.gyro.b.copy(),
+            gyro_bias_std=np.sqrt(g_var),
+            S_g=self.gyro.S_used.copy(),
+            S_g_ls=self.gyro.S_ls,
+            gyro_noise_density=np.sqrt(self.gyro.S_used),
+            nis_accel=self._nis_accel,
+            nis_accel_dof=3 * m,
+            nis_accel_mean=float(np.mean(self._nis_hist)) if self._nis_hist else math.nan,
+            nis_gyro=self._nis_gyro,
+            nis_gyro_dof=3,
+            n_stacked=f.estimator.count,
+            counters=dict(self.counters),
+        )

@@ -1,0 +1,188 @@
+"""Stacked-measurement covariance estimator of paper 004 (Moghe, Zanetti, Akella), eqs. (28)–(35).
+
+Notation (one accelerometer axis, state ``x = [r, v, b]``: position, velocity, bias)::
+
+    x_k = F̂ x_{k-1} + U_{k-1} − ν_{k-1} + Λ w_{k-1}            (28), U = Ĝ Δṽ the known input
+    z_k = H x_k + η_k                                            (8)
+
+``ν_{k-1}`` is the effect of the velocity random walk on the state over one interval (the paper's ``Ĝ v_{k-1}``)
+with covariance ``Q_a = S_v · Qa1`` (``Qa1`` = the covariance for unit PSD; for the paper's one IMU sample per
+interval ``Qa1 = T Ĝ Ĝᵀ``), ``w`` the bias drive with variance ``q_b`` (eq. 7), ``η`` the measurement noise ``R``.
+
+Derivation of eqs. (29)–(35) (re-derived; the paper's eq. (33) has index slips, see ``papers/README.md``)::
+
+    Y_k   = [z_k; z_{k-1}] − M_a U_{k-1}  = M_o x_{k-1} + M_w w_{k-1} − M_v ν_{k-1} + E_k        (29)–(31)
+            M_o = [H F̂; H],  M_v = [H; 0],  M_a = [H; 0],  M_w = [H Λ; 0],  E_k = [η_k; η_{k-1}]
+    M_o† Y_k       = x_{k-1} + M_o† M_w w_{k-1} − M_o† M_v ν_{k-1} + M_o† E_k
+    F̂ M_o† Y_{k-1} = F̂ x_{k-2} + F̂ M_o† M_w w_{k-2} − F̂ M_o† M_v ν_{k-2} + F̂ M_o† E_{k-1}
+    and x_{k-1} − F̂ x_{k-2} − U_{k-2} = −ν_{k-2} + Λ w_{k-2}, hence
+
+    𝒵_k = M_o† Y_k − F̂ M_o† Y_{k-1} − U_{k-2}                                                   (33)
+        = [M_o† M_w] w_{k-1} + [Λ − F̂ M_o† M_w] w_{k-2}                                         (𝒲_k)
+        + A₁ ν_{k-1} + A₂ ν_{k-2},   A₁ = −M_o† M_v,   A₂ = F̂ M_o† M_v − I                       (𝒱_k)
+        + E₁ η_k + E₂ η_{k-1} + E₃ η_{k-2}                                                      (ℰ_k)
+          E₁ = M_o†[I; 0],  E₂ = M_o†[0; I] − F̂ M_o†[I; 0],  E₃ = −F̂ M_o†[0; I]
+
+so ``Cov(𝒵) = Cov(𝒲) + S_v (A₁ Qa1 A₁ᵀ + A₂ Qa1 A₂ᵀ) + Cov(ℰ)`` (eqs. 34–35): A₁ and A₂ are the coefficients of
+``ν_{k-1} = Ĝv_{k-1}`` and ``ν_{k-2} = Ĝv_{k-2}``, as stated in ``papers/README.md``. Note that ``ℰ_k`` spans
+three measurement epochs (the paper's ``E_k`` and ``E_{k-1}`` overlap in ``η_{k-1}``).
+
+Least squares for S_v (eq. 35): with the basis ``D = A₁ Qa1 A₁ᵀ + A₂ Qa1 A₂ᵀ`` and the recursive sample second
+moment ``C̄_k = (1/n) Σ 𝒵 𝒵ᵀ`` (𝒵 has zero mean in the model, so the uncentred sample covariance is used),
+``Ŝ_v = ⟨C̄_k − Cov(𝒲) − Cov(ℰ), D⟩_F / ⟨D, D⟩_F``. Beyond the paper, the matrices may change from interval to
+interval (IMU samples between odometry updates, jittery odometry rates); the estimator then accumulates
+``Σ ⟨𝒵𝒵ᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩ / Σ ⟨D_k, D_k⟩``, which is the least-squares solution over all epochs and
+equals the paper's formula when the matrices are constant.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Interval:
+    """What one propagation interval (between two measurement epochs) contributes, shared by all axes.
+
+    Attributes
+    ----------
+    Phi : (d, d) state transition F̂ over the interval (bias input folded in, eq. 17).
+    Qa1 : (d, d) covariance of ν (the velocity-random-walk effect) for unit PSD S_v = 1 [m²/s³].
+    qb : variance of the bias drive over the interval (eq. 7) [m²/s⁴].
+    """
+
+    Phi: np.ndarray
+    Qa1: np.ndarray
+    qb: float
+
+
+@dataclass(frozen=True)
+class _Epoch:
+    z: np.ndarray  # (n, m)
+    R: np.ndarray  # (n, m, m)
+    interval: Interval | None  # interval leading to this epoch
+    U: np.ndarray | None  # (n, d) known-input contribution over that interval
+    Mo_pinv: np.ndarray | None  # M_o† = [H F̂; H]† of that interval (eq. 29)
+
+
+class StackedSvEstimator:
+    """Recursive least-squares estimator of S_v per axis from stacked measurements (eqs. 28–35).
+
+    Parameters
+    ----------
+    n_axes : number of independent axes sharing the same interval matrices.
+    H : (m, d) measurement matrix of one axis on the (sub-)state used by the estimator.
+    bias_index : index of the bias in the (sub-)state (``Λ = e_bias``).
+
+    Notes
+    -----
+    Call :meth:`add_epoch` at every measurement epoch with the interval that led to it; an epoch with
+    ``interval=None`` starts a new chain (first epoch, or after a gap: no Δv is used across a gap).
+    """
+
+    def __init__(self, n_axes: int, H: np.ndarray, bias_index: int) -> None:
+        self.n_axes = int(n_axes)
+        self.H = np.atleast_2d(np.asarray(H, dtype=float))
+        self.m, self.d = self.H.shape
+        self.Lam = np.zeros(self.d)
+        self.Lam[bias_index] = 1.0
+        self._HLam = self.H @ self.Lam
+        self._eye = np.eye(self.d)
+        self.num = np.zeros(self.n_axes)
+        self.den = 0.0
+        self.count = 0
+        self._chain: deque[_Epoch] = deque(maxlen=3)
+        self.last_Z: np.ndarray | None = None
+
+    def reset_chain(self) -> None:
+        """Forget the last epochs (after a gap); the accumulated statistics are kept."""
+        self._chain.clear()
+
+    @property
+    def estimate(self) -> np.ndarray:
+        """Current least-squares Ŝ_v per axis [m²/s³] (NaN before the first stacked sample)."""
+        if self.count == 0 or self.den <= 0.0:
+            return np.full(self.n_axes, np.nan)
+        return self.num / self.den
+
+    def add_epoch(self, z: np.ndarray, R: np.ndarray, interval: Interval | None, U: np.ndarray | None) -> bool:
+        """Add measurement epoch k; returns True when a stacked sample 𝒵_k was formed and accumulated.
+
+        Parameters
+        ----------
+        z : (n, m) measurements of every axis at epoch k.
+        R : (n, m, m) their covariances.
+        interval : the interval k-1 → k (None starts a new chain).
+        U : (n, d) known-input contribution over that interval (``x̂⁻_k − F̂ x̂⁺_{k-1}``).
+        """
+        if interval is None:
+            self._chain.clear()
+        Mo_pinv = None if interval is None else _pinv_full_rank(np.vstack([self.H @ interval.Phi, self.H]))
+        self._chain.append(_Epoch(np.asarray(z, float), np.asarray(R, float), interval, U, Mo_pinv))
+        if len(self._chain) < 3:
+            return False
+        e2, e1, e0 = self._chain  # epochs k-2, k-1, k
+        if e0.interval is None or e1.interval is None:
+            return False
+        m = self.m
+        Mk = e0.Mo_pinv  # M_{o,k}†  (d, 2m)
+        Mk1 = e1.Mo_pinv  # M_{o,k-1}†
+        Phi1 = e1.interval.Phi
+        HU0 = e0.U @ self.H.T  # (n, m)
+        HU1 = e1.U @ self.H.T
+        Yk = np.concatenate([e0.z - HU0, e1.z], axis=1)  # (n, 2m)
+        Yk1 = np.concatenate([e1.z - HU1, e2.z], axis=1)
+        Z = Yk @ Mk.T - (Yk1 @ Mk1.T) @ Phi1.T - e1.U  # (n, d)   eq. (33)
+        E1 = Mk[:, :m]  # M_o† [I; 0]
+        F1 = Phi1 @ Mk1[:, :m]  # F̂ M_o† [I; 0]
+        A1 = -E1 @ self.H  # −M_o† M_v   (M_v = [H; 0])
+        A2 = F1 @ self.H - self._eye  # F̂ M_o† M_v − I
+        D = A1 @ e0.interval.Qa1 @ A1.T + A2 @ e1.interval.Qa1 @ A2.T  # eq. (35) basis
+        B1 = E1 @ self._HLam  # M_o† M_w  (M_w = [HΛ; 0])
+        B2 = self.Lam - F1 @ self._HLam
+        E2 = Mk[:, m:] - F1
+        E3 = -Phi1 @ Mk1[:, m:]
+        # ⟨Z Zᵀ − Cov(𝒲) − Cov(ℰ), D⟩_F per axis, with ⟨E R Eᵀ, D⟩ = ⟨R, Eᵀ D E⟩ (no per-axis d×d products)
+        cw = e0.interval.qb * (B1 @ D @ B1) + e1.interval.qb * (B2 @ D @ B2)
+        ce = (
+            np.sum(e0.R * (E1.T @ D @ E1), axis=(1, 2))
+            + np.sum(e1.R * (E2.T @ D @ E2), axis=(1, 2))
+            + np.sum(e2.R * (E3.T @ D @ E3), axis=(1, 2))
+        )
+        self.num += np.sum((Z @ D) * Z, axis=1) - cw - ce
+        self.den += float(np.sum(D * D))
+        self.count += 1
+        self.last_Z = Z
+        return True
+
+
+def _pinv_full_rank(M: np.ndarray) -> np.ndarray:
+    """Moore–Penrose pseudo-inverse ``(MᵀM)⁻¹Mᵀ`` of a full-column-rank M (eq. 29: M_o is, by observability)."""
+    return np.linalg.solve(M.T @ M, M.T)
+
+
+def cov_z_model(
+    Phi: np.ndarray, H: np.ndarray, *, Qa1: np.ndarray, qb: float, R: np.ndarray, S_v: float, bias_index: int
+) -> np.ndarray:
+    """Cov(𝒵) of eq. (34) for constant matrices (one axis): Cov(𝒲) + S_v D + Cov(ℰ)."""
+    H = np.atleast_2d(H)
+    m, d = H.shape
+    Lam = np.zeros(d)
+    Lam[bias_index] = 1.0
+    Mp = np.linalg.pinv(np.vstack([H @ Phi, H]))
+    Mv = np.vstack([H, np.zeros_like(H)])
+    A1 = -Mp @ Mv
+    A2 = Phi @ Mp @ Mv - np.eye(d)
+    Mw = np.concatenate([H @ Lam, np.zeros(m)])
+    B1 = Mp @ Mw
+    B2 = Lam - Phi @ Mp @ Mw
+    E1 = Mp[:, :m]
+    E2 = Mp[:, m:] - Phi @ Mp[:, :m]
+    E3 = -Phi @ Mp[:, m:]
+    cov_w = qb * (np.outer(B1, B1) + np.outer(B2, B2))
+    cov_v = S_v * (A1 @ Qa1 @ A1.T + A2 @ Qa1 @ A2.T)
+    cov_e = E1 @ R @ E1.T + E2 @ R @ E2.T + E3 @ R @ E3.T
+    return cov_w + cov_v + cov_e

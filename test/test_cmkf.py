@@ -1,0 +1,276 @@
+"""Tests of the covariance matching Kalman filter (paper 004) and its robot generalisation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core.cmkf.axis import AxisCmkf, paper_interval
+from imu_noise_id.core.cmkf.paper import (
+    PaperCmkf,
+    TurntableConfig,
+    simulate_turntable,
+    turntable_monte_carlo,
+)
+from imu_noise_id.core.cmkf.robot import RobotCmkf, RobotCmkfConfig
+from imu_noise_id.core.cmkf.robot_sim import replay_arrays, simulate_robot
+from imu_noise_id.core.cmkf.stacked import cov_z_model
+
+G = 9.80665
+
+
+def _paper_filter(cfg: TurntableConfig, z0: np.ndarray, pd_check: str = "joint") -> PaperCmkf:
+    x0 = np.array([z0[0], z0[1], 0.0, z0[2], z0[3], 0.0])
+    P0 = np.diag([cfg.R_diag[0], cfg.R_diag[1], cfg.sigma_ss**2] * 2)
+    return PaperCmkf(cfg.T, cfg.tau, cfg.q_b, np.diag(cfg.R_diag), cfg.S_v0, x0=x0, P0=P0, pd_check=pd_check)
+
+
+def test_cov_z_model_matches_sample_covariance():
+    """Eqs. (34)–(35) with A₁ = −M_o†M_v, A₂ = F̂M_o†M_v − I predict the sample covariance of simulated 𝒵.
+
+    A larger S_v than the paper's makes the S_v term visible; 20 000 samples of an MA(2) sequence give relative
+    standard errors of ~2 % on the variances: tolerance 8 % (4σ) on the diagonal, 0.06 on the correlations.
+    """
+    cfg = TurntableConfig(S_v=1e-3)
+    run = simulate_turntable(cfg, 2000.0, np.random.default_rng(11))
+    pf = _paper_filter(cfg, run.z[0])
+    Z = []
+    for k in range(len(run.dv)):
+        pf.predict(run.dv[k])
+        pf.update(run.z[k + 1])
+        if pf.n_Z:
+            Z.append(pf.stacked_sample())
+    Z = np.array(Z)
+    sample = Z.T @ Z / len(Z)
+    model = pf.cov_Z_model(np.array([cfg.S_v, cfg.S_v]))
+    np.testing.assert_allclose(np.diag(sample), np.diag(model), rtol=0.08)
+    corr = lambda C: C / np.sqrt(np.outer(np.diag(C), np.diag(C)))  # noqa: E731
+    np.testing.assert_allclose(corr(sample), corr(model), atol=0.06)
+    # The velocity-random-walk term is a visible part of Cov(𝒵) here (otherwise the test could not fail on A₁, A₂).
+    share = np.diag(cfg.S_v * pf.D[0] + cfg.S_v * pf.D[1]) / np.diag(model)
+    assert share.max() > 0.3
+    # The per-axis model of the stacked module agrees with the full-matrix one.
+    iv = paper_interval(cfg.T, cfg.tau, cfg.sigma_ss)
+    per_axis = cov_z_model(
+        iv.Phi, np.array([[1.0, 0, 0], [0, 1.0, 0]]), Qa1=iv.Qa1, qb=iv.qb, R=np.diag(cfg.R_diag[:2]),
+        S_v=cfg.S_v, bias_index=2,
+    )
+    scale = np.sqrt(np.outer(np.diag(per_axis), np.diag(per_axis)))
+    assert np.max(np.abs(model[:3, :3] - per_axis) / scale) < 1e-8
+
+
+def test_batched_axis_filter_equals_paper_filter():
+    cfg = TurntableConfig()
+    run = simulate_turntable(cfg, 300.0, np.random.default_rng(1))
+    pf = _paper_filter(cfg, run.z[0])
+    af = AxisCmkf(2, cfg.S_v0, pd_check="joint")
+    af.initialise(pf.x.reshape(2, 3), np.stack([pf.P[:3, :3], pf.P[3:, 3:]]))
+    iv = paper_interval(cfg.T, cfg.tau, cfg.sigma_ss)
+    Rax = np.broadcast_to(np.diag(cfg.R_diag[:2]), (2, 2, 2))
+    for k in range(len(run.dv)):
+        pf.predict(run.dv[k])
+        af.predict(af.x @ iv.Phi.T + run.dv[k][:, None] * np.array([cfg.T / 2, 1.0, 0.0]), iv)
+        pf.update(run.z[k + 1])
+        af.update(run.z[k + 1].reshape(2, 2), Rax)
+    np.testing.assert_allclose(af.x, pf.x.reshape(2, 3), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(af.S_used, pf.S_v, rtol=1e-9)
+    np.testing.assert_allclose(af.estimator.estimate, pf.S_v_ls, rtol=1e-9)
+
+
+def test_planar_robot_filter_equals_paper_filter():
+    """No rotation, identity mounting, gravity on z, one IMU sample per odometry epoch: the robot filter's x and y
+    axes are paper 004's filter (state, covariance, S_v estimate), up to the position anchor."""
+    cfg = TurntableConfig()
+    run = simulate_turntable(cfg, 200.0, np.random.default_rng(5))
+    pf = _paper_filter(cfg, run.z[0], pd_check="per_axis")
+    rc = RobotCmkf(RobotCmkfConfig(
+        measurement="pose_twist", accel_bias_tau=cfg.tau, accel_bias_sigma=cfg.sigma_ss, s_v0=cfg.S_v0,
+        min_samples=1, position_noise_std=math.sqrt(cfg.R_diag[0]), velocity_noise_std=math.sqrt(cfg.R_diag[1]),
+    ))
+
+    def odometry(k: int) -> None:
+        z = run.z[k]
+        rc.process_odometry(run.t[k], position=[z[0], z[2], 0.0], orientation_xyzw=[0, 0, 0, 1],
+                            linear_velocity=[z[1], z[3], 0.0], angular_velocity=[0.0, 0.0, 0.0])
+
+    rc.process_imu(-cfg.T, [0, 0, 0], [0, 0, G])
+    odometry(0)
+    for k in range(len(run.dv)):
+        pf.predict(run.dv[k])
+        rc.process_imu(run.t[k + 1], [0.0, 0.0, 0.0], [run.dv[k, 0] / cfg.T, run.dv[k, 1] / cfg.T, G])
+        pf.update(run.z[k + 1])
+        odometry(k + 1)
+    x = rc.filter.x[:2].copy()
+    x[:, 0] += run.z[0, [0, 2]]  # the robot filter measures position from the first odometry position
+    np.testing.assert_allclose(x, pf.x.reshape(2, 3), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(rc.filter.P[0], pf.P[:3, :3], rtol=1e-7, atol=1e-20)
+    np.testing.assert_allclose(rc.filter.P[1], pf.P[3:, 3:], rtol=1e-7, atol=1e-20)
+    np.testing.assert_allclose(rc.estimate().S_v[:2], pf.S_v, rtol=1e-7)
+    assert rc.estimate().n_stacked == pf.n_Z
+
+
+def test_turntable_converges_to_S_v():
+    """Short turntable Monte Carlo (6 runs, 15 min) with a noisier accelerometer (S_v = 1e-4, the paper's R):
+    the median Ŝ_v over the 12 axis filters is within 15 % of the truth and every one within a factor 2
+    (the paper's S_v = 1e-6 converges much more slowly: see bench/bench_cmkf_paper.py)."""
+    cfg = TurntableConfig(S_v=1e-4, S_v0=2e-4)
+    mc = turntable_monte_carlo(cfg, 900.0, 6, np.random.default_rng(3), record_every=100)
+    final = mc.S_v[:, -1].ravel() / cfg.S_v
+    assert abs(np.median(final) - 1.0) < 0.15
+    assert np.all((final > 0.5) & (final < 2.0))
+    # and the state is consistent once Ŝ_v has converged: average NEES of 6 dof within 20 %
+    assert 4.8 < mc.nees[:, mc.t > 450].mean() < 7.2
+
+
+@pytest.fixture(scope="module")
+def robot_run():
+    return simulate_robot(300.0, np.random.default_rng(7))
+
+
+def test_robot_recovers_biases_and_S_v(robot_run):
+    """Moving robot (turning, accelerating), IMU rotated (y up), IMU 100 Hz, odometry twist 10 Hz."""
+    run = robot_run
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, s_v0=2e-4))
+    est = replay_arrays(f, run)
+    e = est[-1]
+    assert e.status == "tracking" and e.observed
+    # biases within 3σ of the filter's own uncertainty (σ ≈ 5e-3 m/s² after 300 s with τ = 3600 s, σ_ss = 0.1)
+    assert np.all(np.abs(e.accel_bias - run.accel_bias) < 3 * e.accel_bias_std)
+    assert np.all(e.accel_bias_std < 0.01)
+    # S_v = 1e-4 from ~3000 stacked samples: within 25 % (observed spread over seeds ~10 %)
+    np.testing.assert_allclose(e.S_v, 1e-4, rtol=0.25)
+    np.testing.assert_allclose(e.accel_noise_density, np.sqrt(e.S_v))
+    # consistency: mean NIS over the last 2000 updates close to its 3 dof
+    nis = np.array([x.nis_accel for x in est[1000:]])
+    assert 2.7 < nis.mean() < 3.3
+    # gyro biases within 3σ, gyro NIS consistent
+    assert np.all(np.abs(e.gyro_bias - run.gyro_bias) < 3 * e.gyro_bias_std)
+    assert 2.5 < np.mean([x.nis_gyro for x in est[1000:]]) < 3.6
+
+
+def test_robot_pose_twist_mode_runs(robot_run):
+    """Position + velocity (paper's eq. 8) on the same robot: biases still recovered."""
+    run = robot_run
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement="pose_twist", s_v0=2e-4))
+    e = replay_arrays(f, run)[-1]
+    assert np.all(np.abs(e.accel_bias - run.accel_bias) < 0.015)
+
+
+def _short_run() -> object:
+    return simulate_robot(40.0, np.random.default_rng(2))
+
+
+def _feed(f: RobotCmkf, run, imu_idx=None, odom_idx=None) -> None:
+    imu_idx = range(len(run.imu_t)) if imu_idx is None else imu_idx
+    odom_idx = range(len(run.odom_t)) if odom_idx is None else odom_idx
+    events = [(run.imu_t[i], 0, i) for i in imu_idx] + [(run.odom_t[j], 1, j) for j in odom_idx]
+    for _, kind, i in sorted(events):
+        if kind == 0:
+            f.process_imu(run.imu_t[i], run.gyro[i], run.accel[i])
+        else:
+            f.process_odometry(run.odom_t[i], orientation_xyzw=run.orientation_xyzw[i],
+                               linear_velocity=run.linear_velocity[i], angular_velocity=run.angular_velocity[i],
+                               twist_cov=run.twist_cov[i])
+
+
+def test_odometry_gap_restarts_the_stacked_chain():
+    run = _short_run()
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    keep = [j for j in range(len(run.odom_t)) if not (15.0 < run.odom_t[j] < 18.0)]
+    _feed(f, run, odom_idx=keep)
+    e = f.estimate()
+    assert e.counters["odom_gaps"] == 1
+    # one chain restart costs the two epochs needed to refill the 3-epoch window
+    assert e.n_stacked == e.counters["updates"] - 2 - 2
+    assert e.status in ("converging", "tracking")
+    assert np.all(np.abs(e.accel_bias - run.accel_bias) < 3 * e.accel_bias_std)
+
+
+def test_out_of_order_duplicate_and_nan_messages_are_dropped():
+    run = _short_run()
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    _feed(f, run, imu_idx=range(1000), odom_idx=range(100))
+    before = f.estimate()
+    assert not f.process_imu(run.imu_t[999], run.gyro[999], run.accel[999])  # duplicate stamp
+    assert not f.process_imu(run.imu_t[500], run.gyro[500], run.accel[500])  # out of order
+    assert not f.process_imu(run.imu_t[999] + 0.005, [np.nan, 0, 0], run.accel[999])
+    assert not f.process_odometry(run.odom_t[99], orientation_xyzw=run.orientation_xyzw[99],
+                                  linear_velocity=run.linear_velocity[99])
+    assert not f.process_odometry(run.odom_t[99] + 0.01, orientation_xyzw=run.orientation_xyzw[99],
+                                  linear_velocity=[np.inf, 0, 0])
+    after = f.estimate()
+    c = after.counters
+    dropped = (c["imu_dropped_stamp"], c["imu_dropped_nan"], c["odom_dropped_stamp"], c["odom_dropped_nan"])
+    assert dropped == (2, 1, 1, 1)
+    np.testing.assert_array_equal(before.accel_bias, after.accel_bias)
+    # the stream continues normally afterwards
+    _feed(f, run, imu_idx=range(1000, len(run.imu_t)), odom_idx=range(100, len(run.odom_t)))
+    assert f.estimate().counters["updates"] > 300
+
+
+def test_odometry_only_estimates_nothing():
+    run = _short_run()
+    f = RobotCmkf(RobotCmkfConfig())
+    _feed(f, run, imu_idx=[])
+    e = f.estimate()
+    assert e.status == "no_imu" and not e.observed
+    assert e.counters["odom_without_imu"] == len(run.odom_t) and e.counters["updates"] == 0
+    assert RobotCmkf().estimate().status == "no_data"
+
+
+def test_imu_only_propagates_with_growing_covariance():
+    run = _short_run()
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    _feed(f, run, imu_idx=range(100), odom_idx=[])
+    e = f.estimate()
+    assert e.status == "imu_only" and not e.observed
+    np.testing.assert_array_equal(e.accel_bias_std, 0.1)  # the prior: nothing observed
+    # odometry stops after 10 s, IMU continues: unobserved, covariance grows
+    first_10s = [j for j in range(len(run.odom_t)) if run.odom_t[j] <= 10]
+    _feed(f, run, imu_idx=range(100, len(run.imu_t)), odom_idx=first_10s)
+    e = f.estimate()
+    assert e.status == "unobserved" and not e.observed
+    P_late = f.filter.predict_covariance(f._interval())
+    assert np.all(P_late[:, 1, 1] > 10 * f.filter.P[:, 1, 1])
+
+
+def test_bad_configuration_is_rejected():
+    with pytest.raises(ValueError, match="measurement"):
+        RobotCmkf(RobotCmkfConfig(measurement="gps"))
+    with pytest.raises(ValueError, match="s_v0"):
+        RobotCmkf(RobotCmkfConfig(s_v0=-1.0))
+    with pytest.raises(ValueError, match="quaternion"):
+        RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=(0, 0, 0, 0)))
+    with pytest.raises(ValueError, match="initial S_v"):
+        AxisCmkf(2, 0.0)
+
+
+def test_cli_cmkf_on_husky_bag(shared_data, tmp_path):
+    """The replay CLI on the Husky bag (IMU rotated: gravity on +y) writes the cmkf.yaml schema."""
+    import yaml
+
+    from imu_noise_id.cli import main
+
+    bag = shared_data / "husky_robot_localization" / "husky_test1_ros2"
+    out = tmp_path / "out"
+    assert main(["cmkf", str(bag), "--imu-rotation", "-1.570796327", "0", "1.570796327", "--out", str(out),
+                 "--no-plot"]) == 0
+    data = yaml.safe_load((out / "cmkf.yaml").read_text())
+    for key in ("accel_bias", "accel_bias_std", "S_v", "accel_noise_density", "gyro_bias", "gyro_bias_std"):
+        assert set(data[key]) == {"x", "y", "z"}
+    assert data["counters"]["imu"] == 11865 and data["counters"]["updates"] > 3900
+    assert data["status"] == "tracking"
+    lines = (out / "cmkf.csv").read_text().splitlines()
+    assert len(lines) == 3952 + 1
+    # gravity removed correctly: the estimated accel biases are small compared with g
+    assert max(abs(v) for v in data["accel_bias"].values()) < 0.5
+
+
+def test_cli_cmkf_bad_rotation_exits_2(shared_data, tmp_path, capsys):
+    from imu_noise_id.cli import main
+
+    bag = shared_data / "husky_robot_localization" / "husky_test1_ros2"
+    assert main(["cmkf", str(bag), "--imu-rotation", "1", "2", "--out", str(tmp_path)]) == 2
+    assert "--imu-rotation" in capsys.readouterr().err
