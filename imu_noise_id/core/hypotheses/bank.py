@@ -1,0 +1,256 @@
+"""Recursive Bayesian hypothesis bank (paper 002 section 2): streaming ``step`` and batch ``run``, one code path.
+
+>>> bank = HypothesisBank(hypothesis_set)
+>>> snap = bank.step(y)            # one error sample (the node, per axis)
+>>> result = bank.run(y_array)     # many samples (offline); continues from where step() left off
+
+``run(y)`` gives exactly the same numbers as calling ``step`` on every sample of ``y`` (both feed
+:class:`.kernel.FilterBank` blocks of samples, and its results do not depend on the block length).
+
+Pauses: the node stops feeding the bank while the robot moves. :meth:`HypothesisBank.gap` declares the
+number of input samples that were missed; the filters predict over them (states and covariances propagated
+through Φᵍ, no likelihood terms), so after the pause a RW hypothesis has a wider state uncertainty and a GM
+one has partly forgotten its state, exactly as if the samples had been missing. An incomplete averaging
+block at the pause is discarded. Without a call to ``gap`` the bank treats the next sample as the
+continuation of the series.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .kernel import FilterBank, check_samples
+from .model import BankModel, HypothesisSet, build_bank_model
+
+
+@dataclass(frozen=True)
+class HypothesisEstimate:
+    """Estimates under one hypothesis h_k (paper 002 eqs. 13–14).
+
+    Attributes
+    ----------
+    probability : float
+        Pr(H = h_k | Y_i) (eq. 10).
+    theta, theta_std : dict
+        Parameter estimates θ̂^k (posterior mean over the grid) and posterior standard deviations, by
+        parameter name, continuous-time units.
+    rsd : dict
+        theta_std / theta (relative standard deviation of this data set's estimate).
+    """
+
+    probability: float
+    theta: dict[str, float]
+    theta_std: dict[str, float]
+    rsd: dict[str, float]
+
+
+@dataclass(frozen=True)
+class BankSnapshot:
+    """The bank after its latest update.
+
+    Attributes
+    ----------
+    n_updates : int
+        Bank samples processed (block averages when averaging).
+    t : float
+        Time of the latest update [s], gaps included (update i of an uninterrupted series is at i·dt·block).
+    probabilities : dict
+        Hypothesis name → posterior probability.
+    decision : str or None
+        The most probable hypothesis once its probability reaches γ, else None.
+    hypotheses : dict
+        Hypothesis name → :class:`HypothesisEstimate`.
+    """
+
+    n_updates: int
+    t: float
+    probabilities: dict[str, float]
+    decision: str | None
+    hypotheses: dict[str, HypothesisEstimate]
+
+
+@dataclass
+class BankResult:
+    """Time series of a batch run.
+
+    Attributes
+    ----------
+    t : (N,) update times [s]
+    probabilities : (N, K) posterior probabilities, columns in ``names`` order
+    theta : dict name → (N, p_k) parameter estimates
+    theta_std : dict name → (N, p_k) posterior standard deviations
+    parameter_names : dict name → tuple of parameter names
+    final : BankSnapshot after the last sample
+    """
+
+    names: tuple[str, ...]
+    t: np.ndarray
+    probabilities: np.ndarray
+    theta: dict[str, np.ndarray]
+    theta_std: dict[str, np.ndarray]
+    parameter_names: dict[str, tuple[str, ...]]
+    final: BankSnapshot
+    gamma: float
+
+    @property
+    def decision_time(self) -> float | None:
+        """First time the largest probability reached γ (None if never)."""
+        hit = np.flatnonzero(self.probabilities.max(axis=1) >= self.gamma)
+        return float(self.t[hit[0]]) if hit.size else None
+
+
+class HypothesisBank:
+    """Bank of Kalman filters over the point-mass grids of competing hypotheses (paper 002 eqs. 3–14).
+
+    Parameters
+    ----------
+    hypothesis_set : HypothesisSet
+        Hypotheses, priors, grids, γ, block averaging.
+    chunk : int
+        Samples per vectorised block in :meth:`run` (memory ∝ chunk × number of filters).
+    """
+
+    def __init__(self, hypothesis_set: HypothesisSet, chunk: int = 512) -> None:
+        self.hset = hypothesis_set
+        self.model: BankModel = build_bank_model(hypothesis_set)
+        self.chunk = int(chunk)
+        self._filters = FilterBank(self.model, 1, hypothesis_set.gain_tolerance)
+        self.reset()
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return self.hset.names
+
+    @property
+    def n_filters(self) -> int:
+        return self.model.n_filters
+
+    def reset(self) -> None:
+        """Forget all data: prior probabilities, prior weights, prior states."""
+        self._filters.reset()
+        self._pending = np.zeros(0)
+        self._t_bank = 0.0  # time of the latest update [s] (the first bank sample is at bank_dt)
+        self._n_updates = 0
+        self._snapshot: BankSnapshot | None = None
+
+    # -- feeding ---------------------------------------------------------------------------------------
+    def _blocks(self, y: np.ndarray) -> np.ndarray:
+        """Complete block averages of pending + y; keeps the remainder pending."""
+        m = self.hset.block
+        if m == 1:
+            return y
+        data = np.concatenate([self._pending, y])
+        n_full = data.size // m
+        self._pending = data[n_full * m:].copy()
+        return data[: n_full * m].reshape(n_full, m).mean(axis=1)
+
+    def _feed(self, y: np.ndarray, record_every: int) -> tuple[np.ndarray, np.ndarray]:
+        """Advance the bank over y; cumulative log-likelihoods and times of the recorded updates."""
+        ybar = self._blocks(y)
+        if ybar.size == 0:
+            return np.zeros((0, 1, self.n_filters)), np.zeros(0)
+        self._snapshot = None
+        lam, S = self._filters.advance(ybar[:, None])
+        c = self._filters.accumulate(lam, S)
+        index = self._n_updates + np.arange(1, ybar.size + 1)  # 1-based update numbers
+        t = self._t_bank + self.hset.bank_dt * np.arange(1, ybar.size + 1)
+        self._t_bank = float(t[-1])
+        self._n_updates += ybar.size
+        if record_every == 1:
+            return c, t
+        rows = np.flatnonzero(index % record_every == 0)
+        return c[rows], t[rows]
+
+    def step(self, y: float) -> BankSnapshot:
+        """Feed one input sample and return the bank's state (the same object while an averaging block fills)."""
+        value = float(y)
+        if not math.isfinite(value):
+            raise InputError(f"sample {y!r} is not finite: skip it (and call gap(1)) instead")
+        self._feed(np.array([value]), 1)
+        return self.snapshot()
+
+    def run(self, y: np.ndarray, record_every: int = 1) -> BankResult:
+        """Feed an array of input samples; returns probabilities and estimates after every ``record_every``-th
+        bank update (counted from the first sample since :meth:`reset`, so rows match :meth:`step`)."""
+        arr = check_samples(y, "input samples").ravel()
+        if arr.size == 0:
+            raise InputError("no input samples given to the hypothesis bank")
+        if int(record_every) != record_every or record_every < 1:
+            raise InputError(f"record_every must be an integer >= 1, got {record_every!r}")
+        K = len(self.names)
+        logp, ts = [], []
+        means: list[list[np.ndarray]] = [[] for _ in range(K)]
+        variances: list[list[np.ndarray]] = [[] for _ in range(K)]
+        step = self.chunk * self.hset.block
+        for start in range(0, arr.size, step):
+            c, t = self._feed(arr[start:start + step], int(record_every))
+            post = self._filters.evaluate(c)
+            logp.append(post.log_prob[:, 0])
+            ts.append(t)
+            for k in range(K):
+                means[k].append(post.theta_mean[k][:, 0])
+                variances[k].append(post.theta_var[k][:, 0])
+        return BankResult(
+            names=self.names,
+            t=np.concatenate(ts),
+            probabilities=np.exp(np.concatenate(logp)),
+            theta={n: np.concatenate(means[k]) for k, n in enumerate(self.names)},
+            theta_std={n: np.sqrt(np.concatenate(variances[k])) for k, n in enumerate(self.names)},
+            parameter_names={h.name: h.parameter_names for h in self.hset.hypotheses},
+            final=self.snapshot(),
+            gamma=self.hset.gamma,
+        )
+
+    def gap(self, n_missing: int) -> None:
+        """Declare ``n_missing`` input samples that were not fed (a pause); see the module docstring."""
+        if int(n_missing) != n_missing or n_missing < 0:
+            raise InputError(f"gap must be a whole number of samples >= 0, got {n_missing!r}")
+        m = self.hset.block
+        missed = int(n_missing) + self._pending.size  # the incomplete block is dropped
+        self._pending = np.zeros(0)
+        blocks = missed // m
+        self._filters.gap(blocks)
+        self._t_bank += blocks * self.hset.bank_dt
+        self._snapshot = None
+
+    # -- reading ---------------------------------------------------------------------------------------
+    def snapshot(self) -> BankSnapshot:
+        """Probabilities, decision, θ̂ and RSD per hypothesis after the latest update (cached until the next)."""
+        if self._snapshot is not None:
+            return self._snapshot
+        post = self._filters.evaluate(self._filters.c[None])
+        probs = np.exp(post.log_prob[0, 0])
+        hyps = {}
+        for k, hyp in enumerate(self.hset.hypotheses):
+            mean, var = post.theta_mean[k][0, 0], post.theta_var[k][0, 0]
+            std = np.sqrt(np.maximum(var, 0.0))
+            names = hyp.parameter_names
+            hyps[hyp.name] = HypothesisEstimate(
+                probability=float(probs[k]),
+                theta=dict(zip(names, mean.tolist(), strict=True)),
+                theta_std=dict(zip(names, std.tolist(), strict=True)),
+                rsd={p: (s / v if v > 0 else math.inf) for p, s, v in zip(names, std.tolist(), mean.tolist(),
+                                                                             strict=True)},
+            )
+        best = int(np.argmax(probs))
+        decision = self.names[best] if probs[best] >= self.hset.gamma else None
+        self._snapshot = BankSnapshot(
+            n_updates=self._n_updates, t=self._t_bank,
+            probabilities=dict(zip(self.names, probs.tolist(), strict=True)),
+            decision=decision, hypotheses=hyps,
+        )
+        return self._snapshot
+
+    def state_estimates(self) -> dict[str, dict[str, tuple[float, float]]]:
+        """Per hypothesis, the mixture state estimates (eq. 13) and standard deviations (eq. 14) by state name
+        (``bias``, ``RW``, ``GM``, …) [u]. Not part of :meth:`snapshot` to keep :meth:`step` cheap."""
+        out = {}
+        for k, (mean, cov) in enumerate(self._filters.state_mixture(0)):
+            std = np.sqrt(np.maximum(np.diag(cov), 0.0))
+            out[self.names[k]] = {n: (float(m), float(s)) for n, m, s in
+                                  zip(self.model.state_names[k], mean, std, strict=True)}
+        return out

@@ -1,0 +1,247 @@
+"""The vectorised Kalman-filter bank and the posterior over hypotheses and grid points (paper 002 eqs. 4–14).
+
+Every grid point of every hypothesis is one Kalman filter; all filters advance in one array step, and so do
+``L`` independent data streams (the Monte-Carlo trials of :mod:`.criteria`; ``L = 1`` for the node/CLI).
+Two observations make this cheap:
+
+* The covariance recursion (eqs. 5–6, 8) does not depend on the data: it runs once per step for the F
+  filters and is shared by all L streams. It stops when the gains and innovation variances no longer change
+  (``HypothesisSet.gain_tolerance``); the last gains are then used as the steady-state gains.
+* Eqs. (10)–(12) are Bayes' rule applied recursively, so the posterior weight of grid point j of hypothesis
+  k after i samples is ``μ_0^{kj} exp(c_i^{kj})`` up to normalisation, with ``c_i^{kj}`` the cumulative
+  log-likelihood Σ_t log N(λ_t^{kj}; 0, Λ_t^{kj}) (eq. 9), and Pr(h_k | Y_i) ∝ Pr(h_k) Σ_j μ_0^{kj}
+  exp(c_i^{kj}) (eqs. 10–11). The bank therefore keeps ``c`` (a sum of logs, which cannot underflow) and
+  evaluates the normalisations of eqs. (10) and (12) with a log-sum-exp; over a block of samples the
+  cumulative sums are one ``cumsum``. The result is identical whatever the block length, so streaming
+  (one sample) and batch (many) agree exactly.
+
+Zero measurement noise (paper 002 case 1) is handled as the paper says: only the innovation variance Λ
+(eq. 8) is inverted, never R; Λ > 0 because every dynamic state is driven by noise.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .model import BankModel
+
+_LOG_2PI = math.log(2.0 * math.pi)
+#: Steps between two checks of the gains' convergence.
+_FREEZE_CHECK_EVERY = 16
+
+
+@dataclass
+class Posterior:
+    """Posterior quantities after each sample of a block (leading axes (T, L)).
+
+    Attributes
+    ----------
+    log_prob : (T, L, K) log Pr(H = h_k | Y_i) (eq. 10)
+    theta_mean : list over k of (T, L, p_k) θ̂^k_i (eq. 13)
+    theta_var : list over k of (T, L, p_k) diagonal of P^θk_i (eq. 14)
+    """
+
+    log_prob: np.ndarray
+    theta_mean: list[np.ndarray]
+    theta_var: list[np.ndarray]
+
+
+class FilterBank:
+    """State of the F Kalman filters for L data streams (see the module docstring).
+
+    Attributes
+    ----------
+    x : (n, L, F) state estimates x̂_i^{kj} (eq. 4)
+    c : (L, F) cumulative log-likelihoods
+    P : (n², F) covariance P_i^{kj} (vec, eq. 6), shared by the streams
+    """
+
+    def __init__(self, model: BankModel, n_streams: int = 1, gain_tolerance: float = 1e-10) -> None:
+        self.model = model
+        self.n_streams = int(n_streams)
+        self.gain_tolerance = float(gain_tolerance)
+        off = model.phi.copy()
+        for i in range(model.n):
+            off[i, i] = 0.0
+        diagonal = not off.any()
+        self._diag_phi = np.ascontiguousarray(np.einsum("iif->if", model.phi)) if diagonal else None
+        self._phiphi = (np.einsum("if,jf->ijf", self._diag_phi, self._diag_phi).reshape(model.n**2, -1)
+                        if diagonal else None)
+        self._h_ones = bool(np.all(model.h == 1.0))
+        self._phi4 = model.phi[:, :, None, :]
+        self._h3 = model.h[:, None, :]
+        self._h_mat = model.h[None, :, :]
+        self._starts = np.array([sl.start for sl in model.slices])
+        self._sizes = np.array([sl.stop - sl.start for sl in model.slices])
+        n_par = max(th.shape[1] for th in model.theta)
+        self._theta_rows = np.zeros((n_par, model.n_filters))
+        self._known = []
+        for sl, th in zip(model.slices, model.theta, strict=True):
+            self._theta_rows[: th.shape[1], sl] = th.T
+            self._known.append(np.all(th == th[0], axis=0))
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the prior: x̂₀ = 0, P₀, c = 0."""
+        m = self.model
+        self.x = np.zeros((m.n, self.n_streams, m.n_filters))
+        self.c = np.zeros((self.n_streams, m.n_filters))
+        self.P = m.p0.copy()
+        self.K = np.zeros((m.n, m.n_filters))
+        self.S = np.ones(m.n_filters)
+        self.frozen = False
+        self.n_steps = 0
+
+    # -- covariance recursion (data independent) -------------------------------------------------------
+    def _riccati(self) -> None:
+        """One step of eqs. (5), (6), (8): prediction, innovation variance Λ, gain K, update (all filters)."""
+        m = self.model
+        n = m.n
+        if self._phiphi is not None:
+            Pp = self._phiphi * self.P + m.q
+        else:
+            Pp = (m.phi_kron * self.P[None, :, :]).sum(axis=1) + m.q
+        if self._h_ones:
+            Ph = Pp.reshape(n, n, -1).sum(axis=1)
+            S = Ph.sum(axis=0) + m.r
+        else:
+            Ph = (Pp.reshape(n, n, -1) * self._h_mat).sum(axis=1)
+            S = (Ph * m.h).sum(axis=0) + m.r
+        if not S.min() > 0:
+            bad = int(np.argmin(S))
+            raise FloatingPointError(f"innovation variance of filter {bad} is {S[bad]}: a grid point has no "
+                                     "process or measurement noise")
+        K = Ph / S
+        self.P = Pp - (K[:, None, :] * Ph[None, :, :]).reshape(n * n, -1)
+        if self.gain_tolerance > 0 and self.n_steps % _FREEZE_CHECK_EVERY == 0 and self.n_steps > 0:
+            dk = float(np.max(np.abs(K - self.K)))
+            ds = float(np.max(np.abs(S - self.S) / S))
+            self.frozen = dk <= self.gain_tolerance and ds <= self.gain_tolerance
+        self.K, self.S = K, S
+
+    # -- data-dependent part ---------------------------------------------------------------------------
+    def advance(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Run eqs. (4)–(8) over a block of samples.
+
+        Parameters
+        ----------
+        y : (T, L) samples of the L streams.
+
+        Returns
+        -------
+        lam : (T, L, F) innovations λ_i^{kj} (eq. 7)
+        S : (T, F) their variances Λ_i^{kj} (eq. 8)
+        """
+        T = y.shape[0]
+        F = self.model.n_filters
+        lam = np.empty((T, self.n_streams, F))
+        S_out = np.empty((T, F))
+        x = self.x
+        for t in range(T):
+            if not self.frozen:
+                self._riccati()
+            xp = self._diag_phi[:, None, :] * x if self._diag_phi is not None else (self._phi4 * x[None]).sum(axis=1)
+            innov = y[t][:, None] - (xp.sum(axis=0) if self._h_ones else (self._h3 * xp).sum(axis=0))
+            x = xp + self.K[:, None, :] * innov[None]
+            lam[t] = innov
+            S_out[t] = self.S
+            self.n_steps += 1
+        self.x = x
+        return lam, S_out
+
+    def gap(self, n_missing: int) -> None:
+        """Predict over ``n_missing`` samples without measurements: x ← Φᵍx, P ← ΦᵍPΦᵍᵀ + Σ ΦⁱQΦⁱᵀ.
+
+        The likelihoods are not touched; the Riccati recursion restarts from the propagated covariance.
+        """
+        if n_missing <= 0:
+            return
+        m = self.model
+        n, F = m.n, m.n_filters
+        eye = np.broadcast_to(np.eye(n)[:, :, None], (n, n, F))
+        A_r, Q_r = eye.copy(), np.zeros((n, n, F))
+        A_b, Q_b = m.phi.copy(), m.q.reshape(n, n, F).copy()
+        g = int(n_missing)
+        while g:
+            if g & 1:
+                A_r = np.einsum("ijf,jkf->ikf", A_b, A_r)
+                Q_r = np.einsum("ijf,jkf,lkf->ilf", A_b, Q_r, A_b) + Q_b
+            g >>= 1
+            if g:
+                Q_b = np.einsum("ijf,jkf,lkf->ilf", A_b, Q_b, A_b) + Q_b
+                A_b = np.einsum("ijf,jkf->ikf", A_b, A_b)
+        P = self.P.reshape(n, n, F)
+        self.P = (np.einsum("ijf,jkf,lkf->ilf", A_r, P, A_r) + Q_r).reshape(n * n, F)
+        self.x = np.einsum("ijf,jlf->ilf", A_r, self.x)
+        self.frozen = False
+
+    def accumulate(self, lam: np.ndarray, S: np.ndarray) -> np.ndarray:
+        """Add the log-likelihoods (eq. 9) of a block to the cumulative sums; returns c after each sample (T, L, F).
+
+        The sums are accumulated sample by sample, so the result does not depend on how samples are blocked.
+        """
+        logS = np.log(S)
+        ell = -0.5 * ((_LOG_2PI + logS)[:, None, :] + lam * lam / S[:, None, :])
+        c = self.c
+        for t in range(ell.shape[0]):
+            np.add(c, ell[t], out=ell[t])
+            c = ell[t]
+        self.c = c.copy()
+        return ell
+
+    def evaluate(self, c: np.ndarray) -> Posterior:
+        """Eqs. (10)–(14) from cumulative log-likelihoods c (R, L, F): probabilities, θ̂ and their variances.
+
+        All hypotheses at once: per-hypothesis reductions are ``reduceat`` over the filter axis.
+        """
+        m = self.model
+        lj = c + m.log_mu0
+        top = np.maximum.reduceat(lj, self._starts, axis=-1)
+        e = np.exp(lj - np.repeat(top, self._sizes, axis=-1))
+        tot = np.add.reduceat(e, self._starts, axis=-1)
+        lse = top + np.log(tot)
+        mu = e / np.repeat(tot, self._sizes, axis=-1)  # eq. (12)
+        weighted = mu[..., None, :] * self._theta_rows  # (R, L, P, F)
+        mean = np.add.reduceat(weighted, self._starts, axis=-1)  # (R, L, P, K), eq. (13)
+        dev = self._theta_rows - np.repeat(mean, self._sizes, axis=-1)
+        var = np.add.reduceat(mu[..., None, :] * dev * dev, self._starts, axis=-1)  # eq. (14), diagonal
+        joint = lse + m.log_prior
+        jtop = joint.max(axis=-1, keepdims=True)
+        log_prob = joint - (jtop + np.log(np.exp(joint - jtop).sum(axis=-1, keepdims=True)))  # eq. (10)
+        means, variances = [], []
+        for k, theta in enumerate(m.theta):
+            p = theta.shape[1]
+            means.append(np.where(self._known[k], theta[0], mean[..., :p, k]))
+            variances.append(np.where(self._known[k], 0.0, var[..., :p, k]))
+        return Posterior(log_prob=log_prob, theta_mean=means, theta_var=variances)
+
+    def state_mixture(self, stream: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per hypothesis, the mixture state mean and covariance (eqs. 13–14) of one stream."""
+        m = self.model
+        n = m.n
+        lj = self.c[stream] + m.log_mu0
+        out = []
+        P = self.P.reshape(n, n, -1)
+        for k, sl in enumerate(m.slices):
+            part = lj[sl]
+            mu = np.exp(part - part.max())
+            mu /= mu.sum()
+            d = len(m.state_names[k])
+            xs = self.x[:d, stream, sl]
+            mean = xs @ mu
+            second = np.einsum("if,jf,f->ij", xs, xs, mu) + np.einsum("ijf,f->ij", P[:d, :d, sl], mu)
+            out.append((mean, second - np.outer(mean, mean)))
+        return out
+
+
+def check_samples(y: np.ndarray, what: str = "samples") -> np.ndarray:
+    """Float array of finite samples, else :class:`InputError`."""
+    arr = np.asarray(y, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.flatnonzero(~np.isfinite(arr.ravel()))[0])
+        raise InputError(f"{what} contain NaN or inf (first at index {bad}): remove or interpolate them first")
+    return arr

@@ -1,0 +1,337 @@
+"""Hypotheses about a sensor's error model and their point-mass parameter grids (paper 002, sections 2 and 4).
+
+A *hypothesis* is an error-model structure — a constant bias plus dynamic components (RW, GM) plus an
+optional white-noise component (WN) — with a uniform prior range for every unknown parameter (paper 002
+eq. 3; eqs. 21–23 for the RW-vs-GM example). Parameters are the project's **continuous-time** values
+(``RW.random_walk`` [u/s/√Hz], ``GM.tau`` [s], ``GM.sigma`` [u], ``WN.noise_density`` [u/√Hz]); the
+per-sample matrices Φ, Q (= ΓΓᵀ), H, R (= ΨΨᵀ) of each grid point come from
+:meth:`imu_noise_id.core.components.Component.block` at the sampling period, so that paper 002's per-sample
+σ_w, σ_m, σ_v correspond to ``random_walk·√Δt``, ``sigma`` and ``noise_density/√Δt``.
+
+Beyond the paper:
+
+* **Grid cells.** Each parameter range [low, high] is cut into ``n`` cells (equal widths, or equal ratios
+  for ``spacing="log"``); the grid point is the cell's (arithmetic or geometric) centre and its prior weight
+  the cell's width, so that both spacings represent the *uniform* prior of the paper. The weights of a
+  multi-parameter grid are products of cell widths.
+* **Block averaging.** With ``block = m > 1`` the bank sees averages of m consecutive samples. The average
+  of a RW or GM over a block is not a RW or GM at the slower rate; the exact discrete model of the averaged
+  samples (:func:`averaged_dynamic_block`) carries, per dynamic component, the value at the block's end
+  ``e_j`` and the block average ``a_j``::
+
+      e_j = φ^m e_{j−1} + d_j,      a_j = c e_{j−1} + u_j,      c = (1/m) Σ_{i=1..m} φ^i,
+      d_j = Σ_l φ^{m−l} w_l,        u_j = Σ_l g_l w_l,           g_l = (1/m) Σ_{i=l..m} φ^{i−l},
+
+  with the per-sample drive w_l ~ N(0, q) (q = σ²_RW or σ²(1 − φ²)), so that Q = q·[[Σα², Σαg], [Σαg, Σg²]]
+  (α_l = φ^{m−l}) and the averaged measurement is H = [0, 1] on (e, a). White noise averages to variance
+  σ²_v/m, the bias to itself. The model is exact (no approximation) for any m.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..components import GM, RW, WN
+from ..errors import InputError
+
+#: Unknown parameters of each supported component, in grid order.
+COMPONENT_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "RW": ("random_walk",),
+    "GM": ("tau", "sigma"),
+    "WN": ("noise_density",),
+}
+#: Components whose state enters the bank (WN is measurement noise).
+DYNAMIC_COMPONENTS: tuple[str, ...] = ("RW", "GM")
+
+
+@dataclass(frozen=True)
+class ParameterPrior:
+    """Uniform prior range of one parameter and its grid (paper 002 eq. 3).
+
+    Attributes
+    ----------
+    name : str
+        ``"<COMPONENT>.<parameter>"``, e.g. ``"GM.tau"``.
+    low, high : float
+        Range of the uniform prior, continuous-time units (``low == high`` means a known value).
+    n : int
+        Number of grid cells (1 when known).
+    spacing : str
+        ``"linear"`` (equal widths) or ``"log"`` (equal ratios).
+    """
+
+    name: str
+    low: float
+    high: float
+    n: int = 16
+    spacing: str = "linear"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.low) and math.isfinite(self.high)) or self.low < 0 or self.high < self.low:
+            raise InputError(f"prior range of {self.name} must be finite with 0 <= low <= high, got "
+                             f"[{self.low}, {self.high}]")
+        if self.spacing not in ("linear", "log"):
+            raise InputError(f"spacing of {self.name} must be 'linear' or 'log', got {self.spacing!r}")
+        if int(self.n) != self.n or self.n < 1:
+            raise InputError(f"grid size of {self.name} must be an integer >= 1, got {self.n!r}")
+        if self.high > self.low and self.n < 2:
+            raise InputError(f"{self.name} has a range [{self.low}, {self.high}] but a grid of {self.n} "
+                             "point(s): use n >= 2, or low == high for a known value")
+        if self.spacing == "log" and self.low <= 0:
+            raise InputError(f"log spacing of {self.name} needs low > 0, got {self.low}")
+        if self.name.split(".")[-1] in ("tau", "sigma", "random_walk") and self.low <= 0:
+            raise InputError(f"{self.name} must be > 0 over its prior range, got low = {self.low}")
+
+    @property
+    def known(self) -> bool:
+        return self.high == self.low
+
+    @property
+    def mean(self) -> float:
+        """Prior mean (the denominator of the RSD, paper 002 eq. 20)."""
+        return 0.5 * (self.low + self.high)
+
+    def cells(self) -> tuple[np.ndarray, np.ndarray]:
+        """Grid points (cell centres) and their prior weights (cell widths, normalised to sum 1)."""
+        if self.known:
+            return np.array([self.low]), np.ones(1)
+        if self.spacing == "log":
+            edges = np.geomspace(self.low, self.high, self.n + 1)
+            centres = np.sqrt(edges[:-1] * edges[1:])
+        else:
+            edges = np.linspace(self.low, self.high, self.n + 1)
+            centres = 0.5 * (edges[:-1] + edges[1:])
+        widths = np.diff(edges)
+        return centres, widths / widths.sum()
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """One error-model structure h_k with the priors of its parameters θ^k.
+
+    Attributes
+    ----------
+    components : tuple of str
+        Component names, each at most once, from ``RW``, ``GM``, ``WN`` (a constant bias state is always
+        added, paper 002 eqs. 21–22). Without ``WN`` the measurement noise is zero (paper 002 case 1).
+    priors : tuple of ParameterPrior
+        One per parameter of every component (see :data:`COMPONENT_PARAMETERS`).
+    probability : float
+        Prior probability Pr(H = h_k) (normalised over the set).
+    name : str
+        Label (default: the structure, e.g. ``"WN+RW"``).
+    """
+
+    components: tuple[str, ...]
+    priors: tuple[ParameterPrior, ...]
+    probability: float = 1.0
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        comps = tuple(c.upper() for c in self.components)
+        object.__setattr__(self, "components", comps)
+        label = self.name or "+".join(comps)
+        object.__setattr__(self, "name", label)
+        if not comps:
+            raise InputError(f"hypothesis {label!r} has no components")
+        for c in comps:
+            if c not in COMPONENT_PARAMETERS:
+                raise InputError(f"hypothesis {label!r}: component {c!r} is not supported by the bank "
+                                 f"(use {', '.join(COMPONENT_PARAMETERS)})")
+        if len(set(comps)) != len(comps):
+            raise InputError(f"hypothesis {label!r}: each component may appear once")
+        if not any(c in DYNAMIC_COMPONENTS for c in comps):
+            raise InputError(f"hypothesis {label!r} needs a dynamic component (RW or GM)")
+        expected = [f"{c}.{p}" for c in comps for p in COMPONENT_PARAMETERS[c]]
+        given = [p.name for p in self.priors]
+        if sorted(given) != sorted(expected):
+            raise InputError(f"hypothesis {label!r}: priors {given} do not match its parameters {expected}")
+        order = {name: i for i, name in enumerate(expected)}
+        object.__setattr__(self, "priors", tuple(sorted(self.priors, key=lambda p: order[p.name])))
+        if not (math.isfinite(self.probability) and self.probability > 0):
+            raise InputError(f"hypothesis {label!r}: prior probability must be > 0, got {self.probability}")
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.priors)
+
+    @property
+    def n_states(self) -> int:
+        return sum(c in DYNAMIC_COMPONENTS for c in self.components) + 1
+
+    def grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """Point-mass grid θ^{kj} (M_k, p) and prior weights μ_0^{kj} (M_k,) (paper 002 eq. 3)."""
+        cells = [p.cells() for p in self.priors]
+        points = np.array(list(itertools.product(*[c[0] for c in cells])), dtype=float)
+        weights = np.array([math.prod(w) for w in itertools.product(*[c[1] for c in cells])], dtype=float)
+        return points.reshape(len(weights), len(cells)), weights / weights.sum()
+
+
+@dataclass(frozen=True)
+class HypothesisSet:
+    """The competing hypotheses and the bank's settings.
+
+    Attributes
+    ----------
+    hypotheses : tuple of Hypothesis
+    dt : float
+        Sampling period of the input samples [s].
+    gamma : float
+        Decision threshold γ on the largest posterior probability (paper 002 section 2, about 0.8).
+    block : int
+        Number of input samples averaged into one bank sample (1 = no averaging).
+    bias_sigma : float
+        Prior standard deviation of the constant-bias state [u] (prior mean 0).
+    gain_tolerance : float
+        The bank stops iterating the (data-independent) Riccati equations once no gain and no relative
+        innovation variance changes by more than this in one step, and keeps the last gains (0 = never).
+    """
+
+    hypotheses: tuple[Hypothesis, ...]
+    dt: float
+    gamma: float = 0.8
+    block: int = 1
+    bias_sigma: float = 1.0
+    gain_tolerance: float = 1e-10
+    extra: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        if len(self.hypotheses) < 1:
+            raise InputError("a hypothesis set needs at least one hypothesis")
+        names = [h.name for h in self.hypotheses]
+        if len(set(names)) != len(names):
+            raise InputError(f"hypothesis names must be unique, got {names}")
+        if not (math.isfinite(self.dt) and self.dt > 0):
+            raise InputError(f"sampling period dt must be > 0 s, got {self.dt}")
+        if not (0.5 <= self.gamma <= 1.0):
+            raise InputError(f"decision threshold gamma must be in [0.5, 1], got {self.gamma}")
+        if int(self.block) != self.block or self.block < 1:
+            raise InputError(f"block (samples averaged per bank step) must be an integer >= 1, got {self.block}")
+        if not (math.isfinite(self.bias_sigma) and self.bias_sigma >= 0):
+            raise InputError(f"bias_sigma must be >= 0, got {self.bias_sigma}")
+        if not (self.gain_tolerance >= 0):
+            raise InputError(f"gain_tolerance must be >= 0, got {self.gain_tolerance}")
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(h.name for h in self.hypotheses)
+
+    @property
+    def bank_dt(self) -> float:
+        """Sampling period of the bank's samples [s] (``dt·block``)."""
+        return self.dt * self.block
+
+
+def averaged_dynamic_block(phi: float, q: float, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Exact (Φ, Q) of a first-order component (x_k = φ x_{k−1} + w_k, var w = q) seen through m-averages.
+
+    States (e_j, a_j): the value at the end of block j and the mean over block j (see the module
+    docstring for the derivation). ``phi = 1`` is the random walk.
+    """
+    lags = np.arange(m)  # l' = m − l = 0..m−1
+    alpha = phi ** lags[::-1]  # α_l = φ^{m−l}, l = 1..m
+    powers = phi ** np.arange(m)  # φ^0..φ^{m−1}
+    tail = np.cumsum(powers)  # Σ_{r=0}^{s} φ^r
+    g = tail[::-1] / m  # g_l = (1/m) Σ_{r=0}^{m−l} φ^r
+    c = float(np.sum(phi ** np.arange(1, m + 1))) / m
+    Phi = np.array([[phi**m, 0.0], [c, 0.0]])
+    Q = q * np.array([[alpha @ alpha, alpha @ g], [alpha @ g, g @ g]])
+    return Phi, Q
+
+
+@dataclass(frozen=True)
+class BankModel:
+    """State-space matrices of every filter of the bank, stacked (states padded to a common size).
+
+    Arrays put the filter index last so that the per-step operations are contiguous:
+    ``phi_kron`` (n², n², F) = Φ ⊗ Φ, ``q`` (n², F) = vec Q, ``h`` (n, F), ``hh`` (n², F) = vec hhᵀ,
+    ``phi`` (n, n, F), ``r`` (F,), ``p0`` (n², F). Padded states have Φ = Q = H = P₀ = 0 and stay zero.
+    ``slices[k]`` selects hypothesis k's filters; ``theta[k]`` (M_k, p_k) and ``log_mu0`` (F,) hold the
+    grid and log prior weights; ``log_prior`` (K,) the log prior probabilities of the hypotheses.
+    """
+
+    n: int
+    phi: np.ndarray
+    phi_kron: np.ndarray
+    q: np.ndarray
+    h: np.ndarray
+    hh: np.ndarray
+    r: np.ndarray
+    p0: np.ndarray
+    slices: tuple[slice, ...]
+    theta: tuple[np.ndarray, ...]
+    log_mu0: np.ndarray
+    log_prior: np.ndarray
+    state_names: tuple[tuple[str, ...], ...]
+
+    @property
+    def n_filters(self) -> int:
+        return int(self.r.shape[0])
+
+
+def _filter_matrices(hyp: Hypothesis, theta: np.ndarray, dt: float, m: int, bias_sigma: float):
+    """Φ, Q, h, R, P₀ of one grid point of ``hyp`` (unpadded) and the state names."""
+    values = dict(zip(hyp.parameter_names, theta, strict=True))
+    blocks, names = [], []
+    r = 0.0
+    for comp in hyp.components:
+        if comp == "WN":
+            r = WN(values["WN.noise_density"]).block(dt).r / m if values["WN.noise_density"] > 0 else 0.0
+            continue
+        if comp == "RW":
+            blk, var0 = RW(values["RW.random_walk"]).block(dt), 0.0
+        else:
+            gm = GM(values["GM.tau"], values["GM.sigma"])
+            blk, var0 = gm.block(dt), gm.sigma**2
+        phi, q = float(blk.phi[0, 0]), float(blk.q[0, 0])
+        if m == 1:
+            blocks.append((np.array([[phi]]), np.array([[q]]), np.ones(1), np.array([var0])))
+            names.append(comp)
+        else:
+            Phi, Q = averaged_dynamic_block(phi, q, m)
+            blocks.append((Phi, Q, np.array([0.0, 1.0]), np.array([var0, 0.0])))
+            names += [f"{comp}_end", comp]
+    blocks.append((np.ones((1, 1)), np.zeros((1, 1)), np.ones(1), np.array([bias_sigma**2])))
+    names.append("bias")
+    n = sum(b[2].size for b in blocks)
+    Phi, Q, h, p0 = np.zeros((n, n)), np.zeros((n, n)), np.zeros(n), np.zeros(n)
+    i = 0
+    for bphi, bq, bh, bp0 in blocks:
+        s = slice(i, i + bh.size)
+        Phi[s, s], Q[s, s], h[s], p0[s] = bphi, bq, bh, bp0
+        i += bh.size
+    return Phi, Q, h, r, np.diag(p0), tuple(names)
+
+
+def build_bank_model(hset: HypothesisSet) -> BankModel:
+    """Stack the Kalman-filter matrices of every grid point of every hypothesis (paper 002 step 1)."""
+    m = int(hset.block)
+    per_filter, slices, thetas, log_mu0, state_names = [], [], [], [], []
+    for hyp in hset.hypotheses:
+        theta, mu0 = hyp.grid()
+        start = len(per_filter)
+        for th in theta:
+            per_filter.append(_filter_matrices(hyp, th, hset.dt, m, hset.bias_sigma))
+        slices.append(slice(start, len(per_filter)))
+        thetas.append(theta)
+        log_mu0.append(np.log(mu0))
+        state_names.append(per_filter[-1][5])
+    n = max(f[0].shape[0] for f in per_filter)
+    F = len(per_filter)
+    phi, q, h, p0 = np.zeros((n, n, F)), np.zeros((n, n, F)), np.zeros((n, F)), np.zeros((n, n, F))
+    r = np.zeros(F)
+    for j, (Phi, Q, hv, rv, P0, _) in enumerate(per_filter):
+        d = hv.size
+        phi[:d, :d, j], q[:d, :d, j], h[:d, j], p0[:d, :d, j], r[j] = Phi, Q, hv, P0, rv
+    phi_kron = np.einsum("ikf,jlf->ijklf", phi, phi).reshape(n * n, n * n, F)
+    hh = np.einsum("if,jf->ijf", h, h).reshape(n * n, F)
+    prior = np.array([hyp.probability for hyp in hset.hypotheses], dtype=float)
+    return BankModel(
+        n=n, phi=phi, phi_kron=np.ascontiguousarray(phi_kron), q=q.reshape(n * n, F), h=h, hh=hh, r=r,
+        p0=p0.reshape(n * n, F), slices=tuple(slices), theta=tuple(thetas),
+        log_mu0=np.concatenate(log_mu0), log_prior=np.log(prior / prior.sum()), state_names=tuple(state_names),
+    )

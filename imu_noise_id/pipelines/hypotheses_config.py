@@ -1,0 +1,171 @@
+"""Hypothesis sets from YAML (``config/hypotheses_default.yaml`` describes the format) → core dataclasses.
+
+File reading lives here, not in the core; :func:`hypothesis_set_from_dict` turns the parsed mapping into a
+:class:`~imu_noise_id.core.hypotheses.HypothesisSet` for one sensor type and sampling period, raising
+:class:`~imu_noise_id.core.errors.InputError` with the offending key on any mistake.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from ..core.errors import InputError
+from ..core.hypotheses import Hypothesis, HypothesisSet, ParameterPrior
+from ..core.hypotheses.model import COMPONENT_PARAMETERS
+
+DEFAULT_FILE = "hypotheses_default.yaml"
+_TOP_KEYS = {"gamma", "block", "warmup", "gain_tolerance", "bias_sigma", "sensors", "hypotheses"}
+_SENSOR_KEYS = {"bias_sigma", "hypotheses", "gamma", "block", "warmup"}
+
+
+def default_config_path() -> Path:
+    """The packaged default hypothesis set (source tree ``config/``, else the ament share directory)."""
+    here = Path(__file__).resolve().parents[2] / "config" / DEFAULT_FILE
+    if here.is_file():
+        return here
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        shared = Path(get_package_share_directory("imu_noise_id")) / "config" / DEFAULT_FILE
+        if shared.is_file():
+            return shared
+    except Exception:  # any failure means "not installed with ament"
+        pass
+    raise InputError(f"cannot find the default {DEFAULT_FILE}: pass --hypotheses FILE")
+
+
+def read_config(path: str | Path | None) -> tuple[dict[str, Any], str]:
+    """Parse a hypotheses YAML file (default: the packaged one); returns the mapping and its source name."""
+    import yaml
+
+    p = Path(path) if path is not None else default_config_path()
+    if not p.is_file():
+        raise InputError(f"hypotheses file {p} does not exist")
+    try:
+        data = yaml.safe_load(p.read_text())
+    except yaml.YAMLError as exc:
+        raise InputError(f"hypotheses file {p} is not valid YAML: {exc}") from None
+    if not isinstance(data, dict):
+        raise InputError(f"hypotheses file {p} must hold a mapping with 'hypotheses' or 'sensors'")
+    return data, str(p)
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | str):
+        raise InputError(f"{where} must be a number, got {value!r}")
+    try:
+        out = float(value)
+    except ValueError:
+        raise InputError(f"{where} must be a number, got {value!r}") from None
+    if not math.isfinite(out):
+        raise InputError(f"{where} must be finite, got {value!r}")
+    return out
+
+
+def _prior(name: str, spec: Any, where: str) -> ParameterPrior:
+    where = f"{where}.priors.{name}"
+    if isinstance(spec, int | float) and not isinstance(spec, bool):
+        value = _number(spec, where)
+        return ParameterPrior(name, value, value, 1)
+    if not isinstance(spec, dict):
+        raise InputError(f"{where} must be a number (known value) or {{range: [low, high], n: N, spacing: log}}")
+    unknown = set(spec) - {"range", "n", "spacing", "value"}
+    if unknown:
+        raise InputError(f"{where}: unknown key(s) {sorted(unknown)} (use range, n, spacing or value)")
+    if "value" in spec:
+        value = _number(spec["value"], f"{where}.value")
+        return ParameterPrior(name, value, value, 1)
+    rng = spec.get("range")
+    if not isinstance(rng, list | tuple) or len(rng) != 2:
+        raise InputError(f"{where}.range must be [low, high]")
+    low, high = _number(rng[0], f"{where}.range[0]"), _number(rng[1], f"{where}.range[1]")
+    n = spec.get("n", 16)
+    if isinstance(n, bool) or not isinstance(n, int):
+        raise InputError(f"{where}.n must be an integer, got {n!r}")
+    spacing = spec.get("spacing", "linear")
+    try:
+        return ParameterPrior(name, low, high, n, str(spacing))
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
+
+
+def _hypothesis(spec: Any, i: int, where: str) -> Hypothesis:
+    where = f"{where}.hypotheses[{i}]"
+    if not isinstance(spec, dict):
+        raise InputError(f"{where} must be a mapping with 'priors' (and optionally name, components, probability)")
+    unknown = set(spec) - {"name", "components", "priors", "probability"}
+    if unknown:
+        raise InputError(f"{where}: unknown key(s) {sorted(unknown)}")
+    priors = spec.get("priors")
+    if not isinstance(priors, dict) or not priors:
+        raise InputError(f"{where}.priors must map parameter names (e.g. GM.tau) to prior ranges")
+    for name in priors:
+        comp, _, par = str(name).partition(".")
+        if comp not in COMPONENT_PARAMETERS or par not in COMPONENT_PARAMETERS[comp]:
+            known = ", ".join(f"{c}.{p}" for c, ps in COMPONENT_PARAMETERS.items() for p in ps)
+            raise InputError(f"{where}.priors: unknown parameter {name!r} (known: {known})")
+    comps = spec.get("components")
+    if comps is None:
+        comps = list(dict.fromkeys(str(n).split(".")[0] for n in priors))
+    if not isinstance(comps, list | tuple):
+        raise InputError(f"{where}.components must be a list such as [WN, GM]")
+    probability = _number(spec.get("probability", 1.0), f"{where}.probability")
+    try:
+        return Hypothesis(tuple(str(c) for c in comps), tuple(_prior(str(n), s, where) for n, s in priors.items()),
+                          probability, str(spec.get("name", "")))
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
+
+
+def hypothesis_set_from_dict(data: dict[str, Any], dt: float, sensor: str | None = None,
+                             source: str = "hypotheses") -> tuple[HypothesisSet, float]:
+    """The hypothesis set for ``sensor`` (``"gyro"``/``"accel"``) at input sampling period ``dt`` [s].
+
+    Returns the set and the warm-up duration [s] whose mean is subtracted before the bank.
+    """
+    unknown = set(data) - _TOP_KEYS
+    if unknown:
+        raise InputError(f"{source}: unknown top-level key(s) {sorted(unknown)} (known: {sorted(_TOP_KEYS)})")
+    section: dict[str, Any] = {}
+    where = source
+    if "sensors" in data:
+        sensors = data["sensors"]
+        if not isinstance(sensors, dict):
+            raise InputError(f"{source}.sensors must map sensor types (gyro, accel) to hypothesis sets")
+        if sensor is None or sensor not in sensors:
+            raise InputError(f"{source}.sensors has no entry for {sensor!r} (has {sorted(sensors)})")
+        section = sensors[sensor]
+        where = f"{source}.sensors.{sensor}"
+        if not isinstance(section, dict):
+            raise InputError(f"{where} must be a mapping")
+        bad = set(section) - _SENSOR_KEYS
+        if bad:
+            raise InputError(f"{where}: unknown key(s) {sorted(bad)} (known: {sorted(_SENSOR_KEYS)})")
+    merged = {k: v for k, v in data.items() if k != "sensors"} | section
+    hyps = merged.get("hypotheses")
+    if not isinstance(hyps, list) or not hyps:
+        raise InputError(f"{where}.hypotheses must be a non-empty list")
+    hypotheses = tuple(_hypothesis(h, i, where) for i, h in enumerate(hyps))
+    block = merged.get("block", 1)
+    if isinstance(block, bool) or not isinstance(block, int):
+        raise InputError(f"{where}.block must be an integer >= 1, got {block!r}")
+    warmup = _number(merged.get("warmup", 1.0), f"{where}.warmup")
+    if warmup < 0:
+        raise InputError(f"{where}.warmup must be >= 0 s, got {warmup}")
+    try:
+        hset = HypothesisSet(
+            hypotheses, dt=float(dt), gamma=_number(merged.get("gamma", 0.8), f"{where}.gamma"), block=block,
+            bias_sigma=_number(merged.get("bias_sigma", 1.0), f"{where}.bias_sigma"),
+            gain_tolerance=_number(merged.get("gain_tolerance", 1e-10), f"{where}.gain_tolerance"),
+        )
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
+    return hset, warmup
+
+
+def load_hypothesis_set(path: str | Path | None, dt: float, sensor: str | None = None) -> tuple[HypothesisSet, float]:
+    """Read a hypotheses YAML file (default: the packaged one) for ``sensor`` at sampling period ``dt``."""
+    data, source = read_config(path)
+    return hypothesis_set_from_dict(data, dt, sensor, source)
