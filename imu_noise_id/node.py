@@ -32,13 +32,9 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from .core.axes import AXES
 from .core.errors import InputError
-from .pipelines.online import PARAMETERS, Estimates, OnlineConfig, OnlineIdentifier, ParamSpec
+from .pipelines.online import PARAMETERS, OnlineConfig, OnlineIdentifier, ParamSpec
 
 NODE_NAME = "imu_noise_id_node"
-
-#: Column labels of ``~/noise`` (rows are the six axes).
-NOISE_COLUMNS = Estimates.NOISE_FIELDS
-
 
 def labelled_layout(msg: Float64MultiArray, rows_name: str, rows: tuple[str, ...], cols_name: str,
                     cols: tuple[str, ...]) -> None:
@@ -101,12 +97,13 @@ class ImuNoiseIdNode(Node):
         values = {}
         for spec in PARAMETERS:
             try:
-                param = self.declare_parameter(spec.name, spec.default, _descriptor(spec))
+                default = list(spec.default) if isinstance(spec.default, tuple) else spec.default
+                param = self.declare_parameter(spec.name, default, _descriptor(spec))
             except Exception as exc:  # rclpy raises several types for a bad override
                 raise InputError(f"parameter {spec.name}: {exc} (range [{spec.low}, {spec.high}] "
                                  f"{spec.unit})") from None
             values[spec.name] = param.value
-        self.identifier = OnlineIdentifier(OnlineConfig(values))
+        self.identifier = OnlineIdentifier(OnlineConfig(values))  # InputError names a bad value
         self.add_on_set_parameters_callback(self._on_set_parameters)
         cfg = self.identifier.config
 
@@ -156,8 +153,9 @@ class ImuNoiseIdNode(Node):
             w = msg.angular_velocity
             a = msg.linear_acceleration
             frame = msg.header.frame_id
+            q = msg.orientation
             out = self.identifier.process_imu(_stamp_seconds(msg.header.stamp), (w.x, w.y, w.z), (a.x, a.y, a.z),
-                                              frame, time.monotonic())
+                                              frame, time.monotonic(), orientation_xyzw=(q.x, q.y, q.z, q.w))
             self._imu_frame = frame
             self._imu_in = msg
             if out is not None:
@@ -177,8 +175,13 @@ class ImuNoiseIdNode(Node):
         try:
             v = msg.twist.twist.linear
             w = msg.twist.twist.angular
-            self.identifier.process_odometry(_stamp_seconds(msg.header.stamp), (v.x, v.y, v.z), (w.x, w.y, w.z),
-                                             msg.child_frame_id, time.monotonic())
+            p = msg.pose.pose.position
+            q = msg.pose.pose.orientation
+            self.identifier.process_odometry(
+                _stamp_seconds(msg.header.stamp), (v.x, v.y, v.z), (w.x, w.y, w.z), msg.child_frame_id,
+                time.monotonic(), position=(p.x, p.y, p.z), orientation_xyzw=(q.x, q.y, q.z, q.w),
+                pose_covariance=msg.pose.covariance, twist_covariance=msg.twist.covariance,
+            )
         except Exception as exc:
             self._log("odom_exception", f"odometry message not processed: {type(exc).__name__}: {exc}")
         self._flush_events()
@@ -212,9 +215,13 @@ class ImuNoiseIdNode(Node):
         if not math.isfinite(t):
             return self.get_clock().now().to_msg()
         sec = math.floor(t)
-        return Time(sec=int(sec), nanosec=min(int(round((t - sec) * 1e9)), 999_999_999))
+        return Time(sec=int(sec), nanosec=min(round((t - sec) * 1e9), 999_999_999))
 
     def _publish_estimates(self) -> None:
+        try:
+            self.identifier.update_identification()
+        except Exception as exc:  # a failing bank must not stop the biases and the corrected IMU
+            self._log("bank_exception", f"hypothesis bank update failed: {type(exc).__name__}: {exc}")
         est = self.identifier.estimates()
         if not math.isfinite(est.t):
             return
@@ -225,10 +232,18 @@ class ImuNoiseIdNode(Node):
             msg.header.frame_id = self._imu_frame
             msg.vector.x, msg.vector.y, msg.vector.z = (float(v) for v in vec)
             pub.publish(msg)
+        columns, table = est.noise_table()
         noise = Float64MultiArray()
-        labelled_layout(noise, "axis", AXES, "field", NOISE_COLUMNS)
-        noise.data = est.noise_table().ravel().tolist()
+        labelled_layout(noise, "axis", AXES, "field", columns)
+        noise.data = table.ravel().tolist()
         self.pub_noise.publish(noise)
+        report = self.identifier.hypotheses()
+        if report is not None:
+            columns, table = report.table()
+            hyp = Float64MultiArray()
+            labelled_layout(hyp, "axis", AXES, "hypothesis", columns)
+            hyp.data = table.ravel().tolist()
+            self.pub_hypotheses.publish(hyp)
 
     def _publish_diagnostics(self) -> None:
         now = time.monotonic()

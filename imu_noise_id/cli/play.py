@@ -1,0 +1,164 @@
+"""``imu-noise-id play BAG``: publish a bag's Imu, Odometry and Temperature messages with their original timing.
+
+pip-only ROS 2 installs have no ``ros2 bag play``; this is the small part of it the node's tests and demos need.
+Messages are published in bag (receive) time order, unchanged (header stamps included), on their recorded topic
+names, paced by the bag's receive times divided by ``--rate``. rosbag2 messages are forwarded as their CDR bytes;
+ROS 1 messages are converted. Publishers are reliable with a deep queue, so best-effort (sensor-data) and reliable
+subscribers both receive them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from ..core.errors import InputError
+
+#: Message types played, rosbags name → (ROS 2 module, class).
+PLAYED_TYPES: dict[str, tuple[str, str]] = {
+    "sensor_msgs/msg/Imu": ("sensor_msgs.msg", "Imu"),
+    "nav_msgs/msg/Odometry": ("nav_msgs.msg", "Odometry"),
+    "sensor_msgs/msg/Temperature": ("sensor_msgs.msg", "Temperature"),
+}
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``play`` subcommand."""
+    parser = subparsers.add_parser(
+        "play",
+        help="publish a bag's IMU, odometry and temperature messages with their original timing",
+        description="Publish the sensor_msgs/Imu, nav_msgs/Odometry and sensor_msgs/Temperature messages of a "
+        "bag (rosbag2 directory, .db3, .mcap or ROS 1 .bag) on their recorded topics with their original timing "
+        "(a stand-in for `ros2 bag play`, which pip installs lack). Header stamps are published unchanged.",
+    )
+    parser.add_argument("bag", type=Path, help="the bag to play")
+    parser.add_argument("--rate", type=float, default=1.0, help="playback speed factor (default 1; 2 = twice as fast)")
+    parser.add_argument("--loop", action="store_true", help="start again at the end, until interrupted")
+    parser.add_argument("--topics", nargs="+", metavar="TOPIC", help="play only these topics (default: all "
+                        "Imu, Odometry and Temperature topics)")
+    parser.add_argument("--remap", nargs="+", default=[], metavar="FROM:=TO",
+                        help="publish topic FROM under the name TO, e.g. /imu/data:=/imu")
+    parser.add_argument("--delay", type=float, default=1.0,
+                        help="seconds to wait after creating the publishers, so that subscribers are discovered "
+                        "before the first message (default 1)")
+    parser.add_argument("--quiet", action="store_true", help="no progress line")
+    parser.set_defaults(run=run)
+
+
+def _remaps(items: list[str]) -> dict[str, str]:
+    out = {}
+    for item in items:
+        if ":=" not in item:
+            raise InputError(f"--remap {item!r}: expected FROM:=TO, e.g. /imu/data:=/imu")
+        src, dst = item.split(":=", 1)
+        out[src] = dst
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    """Play the bag; returns 0 at the end (or on Ctrl-C with --loop)."""
+    if not (args.rate > 0):
+        raise InputError(f"--rate must be > 0, got {args.rate}")
+    if not (args.delay >= 0):
+        raise InputError(f"--delay must be >= 0 s, got {args.delay}")
+    remap = _remaps(args.remap)
+    messages = load_messages(args.bag, args.topics)
+    import rclpy
+
+    rclpy.init()
+    try:
+        node = rclpy.create_node("imu_noise_id_play")
+        publishers = _publishers(node, messages, remap)
+        time.sleep(args.delay)
+        while True:
+            play_once(messages, publishers, args.rate, quiet=args.quiet)
+            if not args.loop or not rclpy.ok():
+                break
+        node.destroy_node()
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        if rclpy.ok():
+            rclpy.shutdown()
+    return 0
+
+
+def load_messages(bag: Path, topics: list[str] | None) -> list[tuple[int, str, str, bytes]]:
+    """(receive time [ns], topic, type, CDR bytes) of the played messages, in bag order.
+
+    Raises
+    ------
+    InputError
+        If the bag cannot be opened, a requested topic is absent or has another type, or nothing is playable.
+    """
+    from rosbags.highlevel import AnyReader
+
+    if not bag.exists():
+        raise InputError(f"bag {str(bag)!r} does not exist")
+    try:
+        reader = AnyReader([bag])
+        reader.open()
+    except Exception as exc:  # rosbags raises several types for unreadable bags
+        raise InputError(f"cannot open bag {str(bag)!r}: {exc}") from None
+    try:
+        available = {c.topic: c.msgtype for c in reader.connections}
+        if topics:
+            for topic in topics:
+                if topic not in available:
+                    raise InputError(f"topic {topic!r} is not in {bag}; it has: {', '.join(sorted(available))}")
+                if available[topic] not in PLAYED_TYPES:
+                    raise InputError(f"topic {topic!r} has type {available[topic]}: play handles "
+                                     f"{', '.join(PLAYED_TYPES)}")
+        connections = [c for c in reader.connections if c.msgtype in PLAYED_TYPES
+                       and (not topics or c.topic in topics)]
+        if not connections:
+            raise InputError(f"{bag} has no Imu, Odometry or Temperature topic (topics: "
+                             f"{', '.join(f'{t} [{m}]' for t, m in sorted(available.items()))})")
+        ros1 = bag.suffix == ".bag"
+        out = []
+        for connection, timestamp, raw in reader.messages(connections=connections):
+            data = raw
+            if ros1:
+                msg = reader.deserialize(raw, connection.msgtype)
+                data = reader.typestore.serialize_cdr(msg, connection.msgtype)
+            out.append((timestamp, connection.topic, connection.msgtype, bytes(data)))
+    finally:
+        reader.close()
+    return out
+
+
+def _publishers(node: object, messages: list[tuple[int, str, str, bytes]], remap: dict[str, str]) -> dict:
+    import importlib
+
+    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+    qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    publishers = {}
+    for _, topic, msgtype, _ in messages:
+        if topic not in publishers:
+            module, cls = PLAYED_TYPES[msgtype]
+            msg_class = getattr(importlib.import_module(module), cls)
+            publishers[topic] = node.create_publisher(msg_class, remap.get(topic, topic), qos)
+    return publishers
+
+
+def play_once(messages: list[tuple[int, str, str, bytes]], publishers: dict, rate: float, quiet: bool = True) -> None:
+    """Publish every message at ``start + (t − t₀)/rate`` on the steady clock (late messages go out at once)."""
+    if not messages:
+        return
+    t0 = messages[0][0]
+    start = time.monotonic()
+    last_report = start
+    n = len(messages)
+    for i, (stamp, topic, _, data) in enumerate(messages):
+        target = start + (stamp - t0) * 1e-9 / rate
+        delay = target - time.monotonic()
+        if delay > 0:
+            time.sleep(delay)
+        publishers[topic].publish(data)
+        if not quiet and time.monotonic() - last_report > 1.0:
+            last_report = time.monotonic()
+            print(f"\rplay: {i + 1}/{n} messages, bag time {(stamp - t0) * 1e-9:.1f} s", end="", flush=True)
+    if not quiet:
+        print(f"\rplay: {n}/{n} messages, bag time {(messages[-1][0] - t0) * 1e-9:.1f} s", flush=True)
