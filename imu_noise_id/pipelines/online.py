@@ -752,6 +752,8 @@ class OnlineIdentifier:
             self._end_stationary()
             self.stationarity.reset()
         stats.accepted += 1
+        if stats.accepted % 100 == 0:
+            self._variance_cache = None
         self.last_imu_t = t
         if self.config.cmkf_gravity_source != "imu":
             orientation_xyzw = None
@@ -797,8 +799,8 @@ class OnlineIdentifier:
                             (float(accel[0]), float(accel[1]), float(accel[2])), gyro_var, accel_var)
 
     def _refresh_variance(self) -> None:
-        """Cache the covariance written into the corrected samples (refreshed by :meth:`update_identification`
-        and after every odometry update, not per sample)."""
+        """Cache the covariance written into the corrected samples (refreshed every 100 IMU samples, by
+        :meth:`update_identification` and after every odometry update, not per sample)."""
         variance, _ = self._covariance()
         if variance is None:
             self._variance_cache = (None, None)
