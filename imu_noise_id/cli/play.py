@@ -39,9 +39,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "Imu, Odometry and Temperature topics)")
     parser.add_argument("--remap", nargs="+", default=[], metavar="FROM:=TO",
                         help="publish topic FROM under the name TO, e.g. /imu/data:=/imu")
-    parser.add_argument("--delay", type=float, default=1.0,
-                        help="seconds to wait after creating the publishers, so that subscribers are discovered "
-                        "before the first message (default 1)")
+    parser.add_argument("--delay", type=float, default=2.0,
+                        help="wait up to this many seconds for every topic to have a subscriber before the first "
+                        "message, so that nothing is lost to DDS discovery (default 2)")
     parser.add_argument("--quiet", action="store_true", help="no progress line")
     parser.set_defaults(run=run)
 
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         node = rclpy.create_node("imu_noise_id_play")
         publishers = _publishers(node, messages, remap)
-        time.sleep(args.delay)
+        wait_for_subscribers(node, publishers, args.delay)
         while True:
             play_once(messages, publishers, args.rate, quiet=args.quiet)
             if not args.loop or not rclpy.ok():
@@ -141,6 +141,19 @@ def _publishers(node: object, messages: list[tuple[int, str, str, bytes]], remap
             msg_class = getattr(importlib.import_module(module), cls)
             publishers[topic] = node.create_publisher(msg_class, remap.get(topic, topic), qos)
     return publishers
+
+
+def wait_for_subscribers(node: object, publishers: dict, timeout: float) -> bool:
+    """Spin until every publisher has at least one subscription (True) or ``timeout`` seconds passed (False)."""
+    import rclpy
+
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if all(pub.get_subscription_count() > 0 for pub in publishers.values()):
+            time.sleep(0.2)  # matched on our side; give the other side a moment to match as well
+            return True
+        rclpy.spin_once(node, timeout_sec=0.05)
+    return False
 
 
 def play_once(messages: list[tuple[int, str, str, bytes]], publishers: dict, rate: float, quiet: bool = True) -> None:

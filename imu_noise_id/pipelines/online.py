@@ -166,6 +166,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "(0.05 m/s when it is unknown)", "m/s", 0.0, 100.0, runtime=False),
     ParamSpec("cmkf.angular_velocity_noise_std", 0.0, "odometry angular-velocity noise; 0: from the message "
               "covariance (0.05 rad/s when it is unknown)", "rad/s", 0.0, 100.0, runtime=False),
+    ParamSpec("cmkf.input_latency", 0.1, "IMU samples wait this long before the CMKF so that odometry up to "
+              "this much later (in header time) is still processed in stamp order", "s", 0.0, 5.0),
     ParamSpec("cmkf.max_odom_gap", 1.0, "an odometry gap longer than this restarts the S_v estimator chain", "s",
               0.01, 3600.0, runtime=False),
     ParamSpec("cmkf.max_imu_gap", 0.5, "an IMU gap longer than this re-initialises position and velocity", "s",
@@ -616,6 +618,7 @@ class OnlineIdentifier:
         self.identification_time = WindowStats(size=256)
         self.temperature = math.nan
         self.restarts = 0
+        self.cmkf_errors = 0
         self._window_stamp_counts: dict[str, int] = {}
         self._events: deque[tuple[str, str]] = deque(maxlen=100)
         self._hypothesis_data = self._load_hypotheses()
@@ -669,6 +672,8 @@ class OnlineIdentifier:
         self._guard: deque[tuple[float, np.ndarray]] = deque()
         self.cmkf = RobotCmkf(self._cmkf_config())
         self._cmkf_est = self.cmkf.estimate()
+        self._cmkf_imu: deque[tuple[float, Any, Any, Any]] = deque()
+        self._cmkf_odom: deque[tuple[float, dict[str, Any]]] = deque()
         self.gyro_bias = np.zeros(3)
         self.accel_bias = np.zeros(3)
         self.last_imu_t = math.nan
@@ -757,7 +762,8 @@ class OnlineIdentifier:
         self.last_imu_t = t
         if self.config.cmkf_gravity_source != "imu":
             orientation_xyzw = None
-        self.cmkf.process_imu(t, gyro, accel, orientation_xyzw)
+        self._cmkf_imu.append((t, gyro, accel, orientation_xyzw))
+        self._feed_cmkf(t - self.config.cmkf_input_latency)
         was_stationary = self.stationarity.stationary
         stationary = self.stationarity.update_imu(t, sample, self.gyro_bias)
         if stationary != was_stationary:
@@ -850,17 +856,49 @@ class OnlineIdentifier:
         self.stationarity.update_odometry(
             t, math.sqrt(float(v[:3] @ v[:3])), math.sqrt(float(v[3:] @ v[3:]))
         )
-        if self.cmkf.process_odometry(
-            t, position=position, orientation_xyzw=orientation_xyzw, linear_velocity=v[:3],
-            angular_velocity=v[3:], pose_cov=pose_covariance, twist_cov=twist_covariance,
-        ):
+        self._cmkf_odom.append((t, dict(
+            position=position, orientation_xyzw=orientation_xyzw, linear_velocity=v[:3], angular_velocity=v[3:],
+            pose_cov=None if pose_covariance is None else np.array(pose_covariance, dtype=float),
+            twist_cov=None if twist_covariance is None else np.array(twist_covariance, dtype=float),
+        )))
+        imu_alive = math.isfinite(self.last_imu_t) and abs(t - self.last_imu_t) < 1.0
+        self._feed_cmkf((self.last_imu_t if imu_alive else t) - self.config.cmkf_input_latency)
+        return True
+
+    def _feed_cmkf(self, horizon: float) -> None:
+        """Feed the CMKF, in stamp order, every queued IMU and odometry message stamped at or before ``horizon``.
+
+        IMU and odometry arrive on different topics with different latencies; the CMKF needs them in stamp order
+        (an odometry stamp behind its IMU-propagated state gives it a zero-length interval). Holding the IMU
+        samples ``cmkf.input_latency`` seconds restores the order for odometry up to that late.
+        """
+        imu, odom = self._cmkf_imu, self._cmkf_odom
+        updated = False
+        try:
+            while True:
+                t_imu = imu[0][0] if imu else math.inf
+                t_odom = odom[0][0] if odom else math.inf
+                if min(t_imu, t_odom) > horizon:
+                    break
+                if t_imu <= t_odom:
+                    t, gyro, accel, orientation = imu.popleft()
+                    self.cmkf.process_imu(t, gyro, accel, orientation)
+                else:
+                    t, kwargs = odom.popleft()
+                    updated |= self.cmkf.process_odometry(t, **kwargs)
+        except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
+            self.cmkf_errors += 1
+            self._count("cmkf_error")
+            self._event("cmkf_error", f"CMKF failed ({type(exc).__name__}: {exc}): restarting it")
+            self.cmkf = RobotCmkf(self._cmkf_config())
+            updated = True
+        if updated:
             est = self.cmkf.estimate()
             self._cmkf_est = est
             if self.cmkf.filter.initialised:
                 self.gyro_bias = est.gyro_bias
                 self.accel_bias = est.accel_bias
             self._variance_cache = None
-        return True
 
     def process_temperature(self, t: float, celsius: float, frame_id: str = "",
                             wall_time: float | None = None) -> bool:
@@ -1107,7 +1145,7 @@ class OnlineIdentifier:
                                     values)
         return DiagnosticStatus("Stationarity", OK, "moving or settling: identification paused", values)
 
-    def _consistency_status(self) -> DiagnosticStatus:
+    def _consistency_status(self) -> DiagnosticStatus:  # noqa: PLR0911 - one return per verdict
         """Normalised innovation squared of the CMKF over its last ``nis.window`` updates against χ² bounds."""
         est = self._cmkf_est
         n = min(est.counters.get("updates", 0), self.config.nis_window)
@@ -1118,6 +1156,9 @@ class OnlineIdentifier:
             if count and key not in ("imu", "odom", "updates"):
                 values[f"cmkf_{key}"] = str(count)
         name = "Filter consistency"
+        values["cmkf_restarts_after_errors"] = str(self.cmkf_errors)
+        if self._window_stamp_counts.get("cmkf_error"):
+            return DiagnosticStatus(name, ERROR, "the CMKF raised an error and was restarted (see the log)", values)
         if est.status in ("no_data", "no_imu", "imu_only"):
             return DiagnosticStatus(name, WARN, f"CMKF not running ({est.status.replace('_', ' ')}): it needs "
                                     "IMU and odometry", values)
