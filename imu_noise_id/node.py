@@ -110,7 +110,8 @@ class ImuNoiseIdNode(Node):
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._last_log: dict[str, float] = {}
         self._imu_frame = ""
-        self._imu_in = None
+        self._timings: dict[str, list[float]] | None = (
+            {"imu": [], "imu_cpu": [], "odom": [], "publish": []} if cfg.stats_file else None)
 
         self.pub_accel_bias = self.create_publisher(Vector3Stamped, "~/accel_bias", 10)
         self.pub_gyro_bias = self.create_publisher(Vector3Stamped, "~/gyro_bias", 10)
@@ -149,6 +150,7 @@ class ImuNoiseIdNode(Node):
     # -- inputs -----------------------------------------------------------------------------------------------------
     def _on_imu(self, msg: Imu) -> None:
         start = time.perf_counter()
+        cpu_start = time.thread_time() if self._timings is not None else 0.0
         try:
             w = msg.angular_velocity
             a = msg.linear_acceleration
@@ -157,7 +159,6 @@ class ImuNoiseIdNode(Node):
             out = self.identifier.process_imu(_stamp_seconds(msg.header.stamp), (w.x, w.y, w.z), (a.x, a.y, a.z),
                                               frame, time.monotonic(), orientation_xyzw=(q.x, q.y, q.z, q.w))
             self._imu_frame = frame
-            self._imu_in = msg
             if out is not None:
                 msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = out.gyro
                 msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z = out.accel
@@ -168,10 +169,15 @@ class ImuNoiseIdNode(Node):
         except Exception as exc:  # never die on input: report and continue
             self._log("imu_exception", f"IMU message not processed: {type(exc).__name__}: {exc}")
         finally:
-            self.identifier.processing_time.add(time.perf_counter() - start)
+            elapsed = time.perf_counter() - start
+            self.identifier.processing_time.add(elapsed)
+            if self._timings is not None:
+                self._timings["imu"].append(elapsed)
+                self._timings["imu_cpu"].append(time.thread_time() - cpu_start)
         self._flush_events()
 
     def _on_odom(self, msg: Odometry) -> None:
+        start = time.perf_counter()
         try:
             v = msg.twist.twist.linear
             w = msg.twist.twist.angular
@@ -184,6 +190,8 @@ class ImuNoiseIdNode(Node):
             )
         except Exception as exc:
             self._log("odom_exception", f"odometry message not processed: {type(exc).__name__}: {exc}")
+        if self._timings is not None:
+            self._timings["odom"].append(time.perf_counter() - start)
         self._flush_events()
 
     def _on_temperature(self, msg: Temperature) -> None:
@@ -217,7 +225,31 @@ class ImuNoiseIdNode(Node):
         sec = math.floor(t)
         return Time(sec=int(sec), nanosec=min(round((t - sec) * 1e9), 999_999_999))
 
+    def write_stats(self) -> None:
+        """Write the callback-time percentiles to ``stats_file`` (when set)."""
+        if self._timings is None:
+            return
+        import json
+
+        summary = {}
+        for key, values in self._timings.items():
+            arr = np.array(values) * 1e6
+            summary[key] = {"count": int(arr.size)} | ({
+                "p50_us": float(np.percentile(arr, 50)), "p90_us": float(np.percentile(arr, 90)),
+                "p99_us": float(np.percentile(arr, 99)), "p99.9_us": float(np.percentile(arr, 99.9)),
+                "max_us": float(arr.max())} if arr.size else {})
+        summary["imu_received"] = self.identifier.imu_stats.received
+        summary["odom_received"] = self.identifier.odom_stats.received
+        with open(self.identifier.config.stats_file, "w") as f:
+            json.dump(summary, f, indent=1)
+
     def _publish_estimates(self) -> None:
+        start = time.perf_counter()
+        self._publish_estimates_now()
+        if self._timings is not None:
+            self._timings["publish"].append(time.perf_counter() - start)
+
+    def _publish_estimates_now(self) -> None:
         try:
             self.identifier.update_identification()
         except Exception as exc:  # a failing bank must not stop the biases and the corrected IMU
@@ -289,15 +321,19 @@ def _usage() -> str:
     return "\n".join(lines)
 
 
-def _executor() -> Any:
-    """The EventsExecutor when this rclpy has it (about twice the message throughput), else single-threaded."""
-    try:
-        from rclpy.experimental import EventsExecutor
-    except ImportError:  # pragma: no cover - older rclpy
-        from rclpy.executors import SingleThreadedExecutor
+def _executor(kind: str) -> Any:
+    """The EventsExecutor (about twice the message throughput) when asked for and available, else
+    the SingleThreadedExecutor."""
+    if kind == "events":
+        try:
+            from rclpy.experimental import EventsExecutor
 
-        return SingleThreadedExecutor()
-    return EventsExecutor()
+            return EventsExecutor()
+        except ImportError:  # pragma: no cover - older rclpy
+            pass
+    from rclpy.executors import SingleThreadedExecutor
+
+    return SingleThreadedExecutor()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -314,7 +350,7 @@ def main(argv: list[str] | None = None) -> int:
         except InputError as exc:
             print(f"{NODE_NAME}: error: {exc}", file=sys.stderr)
             return 2
-        executor = _executor()
+        executor = _executor(node.identifier.config.executor)
         executor.add_node(node)
         try:
             # spin_once in a loop: EventsExecutor.spin() of rclpy 7.1 neither fires timers nor returns on SIGTERM.
@@ -323,6 +359,7 @@ def main(argv: list[str] | None = None) -> int:
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         finally:
+            node.write_stats()
             node.destroy_node()
     finally:
         if rclpy.ok():

@@ -178,6 +178,10 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               runtime=False),
     ParamSpec("hypotheses.bank_rate", 10.0, "rate of the bank's samples: the IMU samples are block-averaged to "
               "it (exact averaged models)", "Hz", 0.01, 1000.0, runtime=False),
+    ParamSpec("executor", "events", "rclpy executor: events (rclpy.experimental.EventsExecutor, about twice the "
+              "message throughput) or single_threaded", runtime=False, choices=("events", "single_threaded")),
+    ParamSpec("stats_file", "", "when set, every callback's processing time is kept and a JSON summary "
+              "(percentiles) is written to this file at shutdown (for bench/bench_node.py)", runtime=False),
     ParamSpec("imu_queue_depth", 200, "subscription queue depth of the IMU topic (sensor-data QoS)",
               "messages", 100, 100000, runtime=False),
     ParamSpec("odom_queue_depth", 100, "subscription queue depth of the odometry and temperature topics",
