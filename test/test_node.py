@@ -9,6 +9,7 @@ parameters at runtime.
 from __future__ import annotations
 
 import math
+import random
 import subprocess
 import sys
 import time
@@ -83,14 +84,21 @@ class Observer:
 
 
 @pytest.fixture(scope="module")
-def ros_context(ros_env):
-    rclpy.init()
+def domain_env(ros_env) -> dict[str, str]:
+    """The subprocess environment on a DDS domain of its own, so that concurrent runs cannot cross-talk."""
+    return {**ros_env, "ROS_DOMAIN_ID": str(random.randint(10, 99))}
+
+
+@pytest.fixture(scope="module")
+def ros_context(domain_env):
+    rclpy.init(domain_id=int(domain_env["ROS_DOMAIN_ID"]))
     yield
     rclpy.shutdown()
 
 
 @pytest.fixture(scope="module")
-def session(tmp_path_factory, ros_env, ros_context):
+def session(tmp_path_factory, domain_env, ros_context):
+    ros_env = domain_env
     work = tmp_path_factory.mktemp("node")
     run = simulate_demo_run(stand_before=15.0, drive=10.0, stand_after=10.0)
     bag = write_robot_bag(run, work / "robot_bag")
