@@ -182,7 +182,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "message throughput) or single_threaded", runtime=False, choices=("events", "single_threaded")),
     ParamSpec("stats_file", "", "when set, every callback's processing time is kept and a JSON summary "
               "(percentiles) is written to this file at shutdown (for bench/bench_node.py)", runtime=False),
-    ParamSpec("imu_queue_depth", 200, "subscription queue depth of the IMU topic (sensor-data QoS)",
+    ParamSpec("imu_queue_depth", 1000, "subscription queue depth of the IMU topic (sensor-data QoS)",
               "messages", 100, 100000, runtime=False),
     ParamSpec("odom_queue_depth", 100, "subscription queue depth of the odometry and temperature topics",
               "messages", 1, 100000, runtime=False),
