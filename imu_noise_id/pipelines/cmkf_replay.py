@@ -56,6 +56,9 @@ def replay(
 ) -> CmkfReplayResult:
     """Run :class:`RobotCmkf` over ``imu`` and ``odom`` (None: IMU only, nothing observable).
 
+    A field of ``odom`` (position, orientation, velocities, covariances) may be None when the source does not
+    provide it (e.g. motion capture without angular velocity).
+
     ``imu_orientation_xyzw`` (N, 4), the IMU's own orientation, is used for gravity only with
     ``config.gravity_source == "imu"``.
     """
@@ -67,6 +70,11 @@ def replay(
     to = np.asarray(odom.t, dtype=float) if odom is not None else np.zeros(0)
     # Stamp order with IMU first on ties: indices of the IMU samples to process before each odometry message.
     cut = np.searchsorted(ti, to, side="right")
+    fields = [] if odom is None else [
+        ("position", odom.position), ("orientation_xyzw", odom.orientation_xyzw),
+        ("linear_velocity", odom.linear_velocity), ("angular_velocity", odom.angular_velocity),
+        ("pose_cov", odom.pose_covariance), ("twist_cov", odom.twist_covariance),
+    ]
     rec = {name: [] for name in SERIES_FIELDS}
     nis_a, nis_g, status = [], [], []
     t_start = time.perf_counter()
@@ -81,11 +89,7 @@ def replay(
             i += 1
         if j == to.size:
             break
-        updated = filt.process_odometry(
-            to[j], position=odom.position[j], orientation_xyzw=odom.orientation_xyzw[j],
-            linear_velocity=odom.linear_velocity[j], angular_velocity=odom.angular_velocity[j],
-            pose_cov=odom.pose_covariance[j], twist_cov=odom.twist_covariance[j],
-        )
+        updated = filt.process_odometry(to[j], **{key: None if arr is None else arr[j] for key, arr in fields})
         est = filt.estimate()
         for name in SERIES_FIELDS:
             rec[name].append(getattr(est, name))

@@ -17,11 +17,15 @@ the recursive least-squares solution for S_g is ``Σ (d² − q − R-terms) D_k
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
 class GyroBiasFilter:
     """Per-axis gyro-bias Kalman filter with a covariance-matching estimate of the angle-random-walk PSD.
+
+    Plain-float algebra (three scalar filters): this runs at every odometry message of the ROS node.
 
     Parameters
     ----------
@@ -32,19 +36,29 @@ class GyroBiasFilter:
     def __init__(self, tau: float, sigma: float, s_g0: float, min_samples: int = 10) -> None:
         self.tau = float(tau)
         self.sigma = float(sigma)
-        self.b = np.zeros(3)
-        self.P = np.full(3, self.sigma**2)
-        self.S_used = np.full(3, float(s_g0))
+        self.bias = [0.0, 0.0, 0.0]
+        self.var = [self.sigma**2] * 3
+        self.S = [float(s_g0)] * 3
         self.min_samples = int(min_samples)
-        self.num = np.zeros(3)
+        self.num = [0.0, 0.0, 0.0]
         self.den = 0.0
         self.count = 0
-        self._prev: tuple[np.ndarray, float, np.ndarray] | None = None  # (y/T, T, R) of the last epoch
+        self._prev: tuple[list[float], float, list[float]] | None = None  # (y/T, T, R) of the last epoch
+
+    @property
+    def b(self) -> np.ndarray:
+        """Bias estimate per axis [rad/s]."""
+        return np.array(self.bias)
+
+    @property
+    def S_used(self) -> np.ndarray:
+        """S_g in use per axis [rad²/s]."""
+        return np.array(self.S)
 
     @property
     def S_ls(self) -> np.ndarray:
         """Latest least-squares S_g [rad²/s] (NaN before the first stacked sample)."""
-        return self.num / self.den if self.count else np.full(3, np.nan)
+        return np.array(self.num) / self.den if self.count else np.full(3, np.nan)
 
     def reset_chain(self) -> None:
         """Do not difference across a gap."""
@@ -52,34 +66,40 @@ class GyroBiasFilter:
 
     def predicted_variance(self, T: float) -> np.ndarray:
         """Bias variance after ``T`` seconds without an update."""
-        phi2 = np.exp(-2.0 * T / self.tau)
-        return phi2 * self.P + (1.0 - phi2) * self.sigma**2
+        phi2 = math.exp(-2.0 * T / self.tau)
+        return np.array([phi2 * p + (1.0 - phi2) * self.sigma**2 for p in self.var])
 
-    def update(self, y: np.ndarray, T: float, R: np.ndarray) -> np.ndarray:
-        """One odometry interval: ``y`` (3,) = Δθ̃ − Δθ_odo [rad], ``T`` [s], ``R`` (3,) variance of Δθ_odo [rad²].
+    def update(self, y: list[float], T: float, R: list[float]) -> float:
+        """One odometry interval: ``y`` (3) = Δθ̃ − Δθ_odo [rad], ``T`` [s], ``R`` (3) variance of Δθ_odo [rad²].
 
-        Returns the normalised innovation squared per axis.
+        Returns the normalised innovation squared summed over the axes (3 dof).
         """
-        phi = np.exp(-T / self.tau)
-        q = (1.0 - phi**2) * self.sigma**2
-        b_pred = phi * self.b
-        P_pred = phi**2 * self.P + q
-        meas = y / T
-        r = self.S_used / T + R / T**2
-        S = P_pred + r
-        K = P_pred / S
-        nu = meas - b_pred
-        self.b = b_pred + K * nu
-        self.P = (1.0 - K) ** 2 * P_pred + K**2 * r
+        phi = math.exp(-T / self.tau)
+        q = (1.0 - phi * phi) * self.sigma**2
+        meas = [yi / T for yi in y]
+        nis = 0.0
+        for i in range(3):
+            b_pred = phi * self.bias[i]
+            P_pred = phi * phi * self.var[i] + q
+            r = self.S[i] / T + R[i] / (T * T)
+            s = P_pred + r
+            K = P_pred / s
+            nu = meas[i] - b_pred
+            self.bias[i] = b_pred + K * nu
+            self.var[i] = (1.0 - K) ** 2 * P_pred + K * K * r  # Joseph form (27), scalar
+            nis += nu * nu / s
         if self._prev is not None:
             meas1, T1, R1 = self._prev
-            d = meas - phi * meas1
-            D = 1.0 / T + phi**2 / T1
-            self.num += (d * d - q - R / T**2 - phi**2 * R1 / T1**2) * D
+            D = 1.0 / T + phi * phi / T1
+            for i in range(3):
+                d = meas[i] - phi * meas1[i]
+                self.num[i] += (d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1)) * D
             self.den += D * D
             self.count += 1
             if self.count >= self.min_samples:
-                s = self.S_ls
-                self.S_used = np.where(s > 0, s, self.S_used)
-        self._prev = (meas, T, np.asarray(R, dtype=float))
-        return nu * nu / S
+                for i in range(3):
+                    s_new = self.num[i] / self.den
+                    if s_new > 0:
+                        self.S[i] = s_new
+        self._prev = (meas, T, list(R))
+        return nis

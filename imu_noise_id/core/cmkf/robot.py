@@ -18,11 +18,15 @@ resolved in IMU axes; lever arm neglected) and ``r = C_in (p_n − p_anchor)``::
     ḃ_i = −b_i/τ + w_i                                                                    (eqs. 3–4)
 
 Per IMU sample k (period dt_k, sample value held over its interval) the known input is
-``u = f̃ + g_i − ω̂ × v̂`` with ``ω̂ = ω̃ − b̂_g`` and, as in eqs. (13)–(16),
-``r ← r + (v − ω̂ × r̂) dt + ½ (u − b̂) dt²``, ``v ← v + (u − b̂) dt``, ``b̂ ← φ b̂``. The transport terms
-``ω̂ × v̂`` and ``ω̂ × r̂`` and gravity are evaluated with the estimate and treated as known input; this is what makes
+``u = f̃ + g_i − ω̂ × v̂`` with ``ω̂ = ω̃ − b̂_g`` and, as in eqs. (13)–(16), ``v ← v + (u − b̂) dt``, ``b̂ ← φ b̂``
+and the displacement ``d = v dt + ½ (u − b̂) dt²``, which is accumulated in the odometry frame,
+``Δp_n ← Δp_n + C_ni d`` (``C_ni`` propagated with ω̂), and rotated into the IMU axes at the next epoch with the
+*measured* orientation: ``r̂⁻_k = C_in,k (C_ni,k−1 r̂⁺_{k−1} + Δp_n)`` — so the gyro's error does not multiply the
+distance travelled (the transport term ``ω × r`` of ṙ is never integrated). The transport term ``ω̂ × v̂``, the
+rotation of ``r`` and gravity are evaluated with the estimate and treated as known input; this is what makes
 the three axes decouple (one ``[r, v, b]`` filter per IMU axis, exactly paper 004's structure). The neglected error
-coupling ``ω × δv`` is small whenever velocity is measured every interval (|ω| T ≪ 1).
+couplings (``ω × δv``, the rotation of δr between epochs) are small whenever velocity is measured every interval
+(|ω| T ≪ 1).
 
 The IMU samples between two odometry epochs are accumulated into one interval of length ``T = Σ dt_k``
 (``β_j = Π_{l<j} φ_l``, ``m_j`` = mid-time of sample j from the start of the interval)::
@@ -62,6 +66,7 @@ import numpy as np
 
 from . import rotation as rot
 from .axis import AxisCmkf
+from .fast_vel import VelocityAxisCmkf
 from .gyro import GyroBiasFilter
 from .stacked import Interval
 
@@ -176,18 +181,28 @@ class CmkfEstimate:
     counters: dict[str, int] = field(default_factory=dict)
 
 
-def _finite(*values: float) -> bool:
-    return all(math.isfinite(v) for v in values)
+class _CovDiag:
+    """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 message covariance, cached on (Σ, C).
 
+    Returns None if the covariance is unknown (all zeros, −1 in the first element, NaN). Odometry drivers mostly
+    publish the same covariance in every message, so the cache makes this one comparison per message.
+    """
 
-def _cov_diag(cov: np.ndarray | None, block: slice, C: np.ndarray) -> np.ndarray | None:
-    """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 covariance; None if unknown (zeros, −1, NaN)."""
-    if cov is None:
-        return None
-    cov = np.asarray(cov, dtype=float).reshape(6, 6)[block, block]
-    if not np.all(np.isfinite(cov)) or cov[0, 0] < 0 or not np.any(cov):
-        return None
-    return np.einsum("ij,jk,ik->i", C, cov, C)
+    def __init__(self, block: slice) -> None:
+        self.block = block
+        self._key: bytes | None = None
+        self._value: np.ndarray | None = None
+
+    def __call__(self, cov: np.ndarray | None, C: np.ndarray) -> np.ndarray | None:
+        if cov is None:
+            return None
+        sub = np.asarray(cov, dtype=float).reshape(6, 6)[self.block, self.block]
+        key = sub.tobytes() + C.tobytes()
+        if key != self._key:
+            self._key = key
+            ok = np.all(np.isfinite(sub)) and sub[0, 0] >= 0 and np.any(sub)
+            self._value = np.einsum("ij,jk,ik->i", C, sub, C) if ok else None
+        return self._value
 
 
 class RobotCmkf:
@@ -199,10 +214,14 @@ class RobotCmkf:
         self.q_bi = rot.normalise(config.imu_rotation_xyzw)
         self.C_bi = rot.to_matrix(self.q_bi)
         self.C_ib = self.C_bi.T
-        self.filter = AxisCmkf(
-            3, config.s_v0, mode="pos_vel" if config.measurement == "pose_twist" else "vel",
-            pd_check=config.pd_check, min_samples=config.min_samples,
-        )
+        # twist: the plain-float velocity filter (same equations as AxisCmkf mode "vel", tested equal)
+        self._fast = config.measurement == "twist"
+        self.filter: AxisCmkf | VelocityAxisCmkf
+        if self._fast:
+            self.filter = VelocityAxisCmkf(3, config.s_v0, pd_check=config.pd_check, min_samples=config.min_samples)
+        else:
+            self.filter = AxisCmkf(3, config.s_v0, mode="pos_vel", pd_check=config.pd_check,
+                                   min_samples=config.min_samples)
         self.gyro = GyroBiasFilter(config.gyro_bias_tau, config.gyro_bias_sigma, config.s_g0, config.min_samples)
         self.counters = dict.fromkeys(
             ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "odom_dropped_stamp",
@@ -222,6 +241,7 @@ class RobotCmkf:
         self._q_nb_prev: rot.Quat | None = None
         self._w_odo_prev: tuple[np.ndarray, np.ndarray] | None = None
         self._anchor: np.ndarray | None = None
+        self._C_ni_epoch: np.ndarray | None = None
         self._reinit = True
         self._r = [0.0, 0.0, 0.0]
         self._v = [0.0, 0.0, 0.0]
@@ -230,6 +250,10 @@ class RobotCmkf:
         self._nis_accel = math.nan
         self._nis_gyro = math.nan
         self._nis_hist: deque[float] = deque(maxlen=config.nis_window)
+        self._nis_sum = 0.0
+        self._twist_lin_cov = _CovDiag(slice(0, 3))
+        self._twist_ang_cov = _CovDiag(slice(3, 6))
+        self._pose_cov = _CovDiag(slice(0, 3))
 
     # ------------------------------------------------------------------ IMU path
     def _reset_interval(self) -> None:
@@ -237,6 +261,7 @@ class RobotCmkf:
         self._beta = 1.0
         self._M0 = self._M1 = self._N1 = self._N2 = 0.0
         self._dtheta = [0.0, 0.0, 0.0]
+        self._dp = [0.0, 0.0, 0.0]
 
     def process_imu(
         self,
@@ -253,7 +278,7 @@ class RobotCmkf:
         t = float(t)
         wx, wy, wz = float(gyro[0]), float(gyro[1]), float(gyro[2])
         fx, fy, fz = float(accel[0]), float(accel[1]), float(accel[2])
-        if not _finite(t, wx, wy, wz, fx, fy, fz):
+        if not math.isfinite(t + wx + wy + wz + fx + fy + fz):  # NaN/inf anywhere makes the sum non-finite
             self.counters["imu_dropped_nan"] += 1
             return False
         if self._t_imu is not None and t <= self._t_imu:
@@ -296,19 +321,21 @@ class RobotCmkf:
         x, y, z, w = q if q is not None else rot.IDENTITY
         g = self._g  # g_i = C_ni^T [0, 0, -g] = -g * (third row of C_ni)
         gx, gy, gz = -g * 2 * (x * z - y * w), -g * 2 * (y * z + x * w), -g * (1 - 2 * (x * x + y * y))
-        r, v, b = self._r, self._v, self._b
+        v, b = self._v, self._b
         ux = fx + gx - (oy * v[2] - oz * v[1])
         uy = fy + gy - (oz * v[0] - ox * v[2])
         uz = fz + gz - (ox * v[1] - oy * v[0])
         ax, ay, az = ux - b[0], uy - b[1], uz - b[2]
         h = 0.5 * dt * dt
-        if self.filter.mode == "pos_vel":
-            tx = oy * r[2] - oz * r[1]
-            ty = oz * r[0] - ox * r[2]
-            tz = ox * r[1] - oy * r[0]
-            r[0] += (v[0] - tx) * dt + ax * h
-            r[1] += (v[1] - ty) * dt + ay * h
-            r[2] += (v[2] - tz) * dt + az * h
+        if self.filter.mode == "pos_vel" and self._q_ni is not None:
+            # eq. (13) displacement, accumulated in the odometry frame (rotated back at the update, see _pose_prior)
+            dx, dy, dz = v[0] * dt + ax * h, v[1] * dt + ay * h, v[2] * dt + az * h
+            qx, qy, qz, qw = self._q_ni
+            tx, ty, tz = 2 * (qy * dz - qz * dy), 2 * (qz * dx - qx * dz), 2 * (qx * dy - qy * dx)
+            dp = self._dp
+            dp[0] += dx + qw * tx + qy * tz - qz * ty
+            dp[1] += dy + qw * ty + qz * tx - qx * tz
+            dp[2] += dz + qw * tz + qx * ty - qy * tx
         v[0] += ax * dt
         v[1] += ay * dt
         v[2] += az * dt
@@ -325,7 +352,19 @@ class RobotCmkf:
         self._beta *= phi
         self._T += dt
         if self._q_ni is not None:
-            self._q_ni = rot.multiply(self._q_ni, rot.from_rotvec(ox * dt, oy * dt, oz * dt))
+            # q_ni ← q_ni ⊗ exp(ω̂ dt / 2), first order in the half angle, renormalised
+            ax_, ay_, az_ = 0.5 * ox * dt, 0.5 * oy * dt, 0.5 * oz * dt
+            qx, qy, qz, qw = self._q_ni
+            nx = qx + qw * ax_ + qy * az_ - qz * ay_
+            ny = qy + qw * ay_ + qz * ax_ - qx * az_
+            nz = qz + qw * az_ + qx * ay_ - qy * ax_
+            nw = qw - qx * ax_ - qy * ay_ - qz * az_
+            n = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
+            self._q_ni = (nx * n, ny * n, nz * n, nw * n)
+
+    def _vel_interval(self) -> tuple[float, float, float, float]:
+        """(T, β_v, φ, q_b) of the current interval for :class:`VelocityAxisCmkf`."""
+        return (self._T, self._M0, self._beta, (1.0 - self._beta**2) * self.config.accel_bias_sigma**2)
 
     def _interval(self) -> Interval:
         T, M0, M1, N1, N2 = self._T, self._M0, self._M1, self._N1, self._N2
@@ -358,7 +397,8 @@ class RobotCmkf:
             "angular_velocity": angular_velocity,
         }
         vals = {k: None if a is None else np.asarray(a, dtype=float).ravel() for k, a in arrays.items()}
-        if not math.isfinite(t) or any(a is not None and not np.all(np.isfinite(a)) for a in vals.values()):
+        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
+        if not math.isfinite(t + sum(float(a.sum()) for a in vals.values() if a is not None)):
             self.counters["odom_dropped_nan"] += 1
             return False
         if self._t_odom is not None and t <= self._t_odom:
@@ -404,16 +444,25 @@ class RobotCmkf:
         if self._reinit or self._t_state is None:
             self._initialise(t, z, R)
         else:
-            self.filter.predict(np.array([self._r, self._v, self._b]).T, self._interval())
-            nis = self.filter.update(z, R, new_chain=new_chain)
-            self._nis_accel = float(nis.sum())
+            if self._fast:
+                self.filter.predict(self._v, self._b, self._vel_interval())
+                self._nis_accel = self.filter.update(z[:, 0].tolist(), R[:, 0, 0].tolist(), new_chain=new_chain)
+                self._v, self._b = list(self.filter.v), list(self.filter.b)
+            else:
+                self._r = list(C_ni.T @ (self._C_ni_epoch @ np.array(self._r) + np.array(self._dp)))
+                self.filter.predict(np.array([self._r, self._v, self._b]).T, self._interval())
+                self._nis_accel = float(self.filter.update(z, R, new_chain=new_chain).sum())
+                self._r, self._v, self._b = (list(map(float, col)) for col in self.filter.x.T)
+            if len(self._nis_hist) == self._nis_hist.maxlen:
+                self._nis_sum -= self._nis_hist[0]
             self._nis_hist.append(self._nis_accel)
+            self._nis_sum += self._nis_accel
             self._gyro_update(vals, q_nb, twist_cov, new_chain)
-            self._r, self._v, self._b = (list(map(float, col)) for col in self.filter.x.T)
             self.counters["updates"] += 1
         if q_nb is not None:
             self._q_ni = rot.multiply(q_nb, self.q_bi)
             self._q_nb_prev = q_nb
+        self._C_ni_epoch = C_ni
         self._t_update = t
         self._reset_interval()
         return True
@@ -427,7 +476,7 @@ class RobotCmkf:
         if cfg.velocity_noise_std is not None:
             rv = np.full(3, cfg.velocity_noise_std**2)
         else:
-            rv = _cov_diag(twist_cov, slice(0, 3), self.C_ib)
+            rv = self._twist_lin_cov(twist_cov, self.C_ib)
             if rv is None:
                 rv = np.full(3, cfg.default_velocity_noise_std**2)
         if cfg.measurement == "twist":
@@ -440,7 +489,7 @@ class RobotCmkf:
         if cfg.position_noise_std is not None:
             rr = np.full(3, cfg.position_noise_std**2)
         else:
-            rr = _cov_diag(pose_cov, slice(0, 3), C_in)
+            rr = self._pose_cov(pose_cov, C_in)
             if rr is None:
                 rr = np.full(3, cfg.default_position_noise_std**2)
         z = np.column_stack([zr, zv])
@@ -452,8 +501,8 @@ class RobotCmkf:
     def _initialise(self, t: float, z: np.ndarray, R: np.ndarray) -> None:
         """(Re-)initialise r, v from the measurement; keep the bias and its variance (grown) if known."""
         if self.filter.initialised:
-            b0 = self.filter.x[:, 2].copy()
-            Pbb = self.filter.P[:, 2, 2].copy()
+            b0 = np.array(self._b)
+            Pbb = self._bias_var()
             if self._t_update is not None:
                 phi2 = math.exp(-2.0 * (t - self._t_update) / self.config.accel_bias_tau)
                 Pbb = phi2 * Pbb + (1.0 - phi2) * self.config.accel_bias_sigma**2
@@ -471,7 +520,10 @@ class RobotCmkf:
             P0[:, 1, 1] = R[:, 0, 0]
         x0[:, 2] = b0
         P0[:, 2, 2] = Pbb
-        self.filter.initialise(x0, P0)
+        if self._fast:
+            self.filter.initialise(x0[:, 1], b0, P0[:, 1, 1], Pbb)
+        else:
+            self.filter.initialise(x0, P0)
         self.gyro.reset_chain()
         self._r, self._v, self._b = (list(map(float, col)) for col in x0.T)
         self._t_state = t
@@ -482,12 +534,14 @@ class RobotCmkf:
         T = self._T
         if T <= 0.0:
             return
+        if new_chain:
+            self.gyro.reset_chain()
         if vals["angular_velocity"] is not None:
             w_now = self.C_ib @ vals["angular_velocity"]
             if cfg.angular_velocity_noise_std is not None:
                 rw = np.full(3, cfg.angular_velocity_noise_std**2)
             else:
-                rw = _cov_diag(twist_cov, slice(3, 6), self.C_ib)
+                rw = self._twist_ang_cov(twist_cov, self.C_ib)
                 if rw is None:
                     rw = np.full(3, cfg.default_angular_velocity_noise_std**2)
             prev, self._w_odo_prev = self._w_odo_prev, (w_now, rw)
@@ -502,16 +556,22 @@ class RobotCmkf:
             R = np.full(3, (std * T) ** 2)
         else:
             return
-        if new_chain:
-            self.gyro.reset_chain()
-        nis = self.gyro.update(np.asarray(self._dtheta) - dtheta_odo, T, R)
-        self._nis_gyro = float(nis.sum())
+        y = (np.asarray(self._dtheta) - dtheta_odo).tolist()
+        self._nis_gyro = self.gyro.update(y, T, R.tolist())
 
     # ------------------------------------------------------------------ results
+    def _bias_var(self) -> np.ndarray:
+        """Accelerometer-bias variance per axis, predicted to the current time."""
+        f = self.filter
+        if self._fast:
+            return f.covariance(self._vel_interval() if self._T > 0 else None)[:, 1, 1]
+        return (f.predict_covariance(self._interval()) if self._T > 0 else f.P)[:, 2, 2]
+
     def estimate(self) -> CmkfEstimate:
         """Current estimates (cheap; call at any rate). Between updates the covariance is predicted."""
         cfg = self.config
         f = self.filter
+        n_stacked = f.count if self._fast else f.estimator.count
         t = max(x for x in (self._t_imu, self._t_odom, -math.inf) if x is not None)
         observed = self._t_update is not None and self._t_state is not None and (
             (self._t_state - self._t_update) <= cfg.max_odom_gap
@@ -524,14 +584,13 @@ class RobotCmkf:
             status = "imu_only"
         elif not observed:
             status = "unobserved"
-        elif f.estimator.count < cfg.min_samples:
+        elif n_stacked < cfg.min_samples:
             status = "converging"
         else:
             status = "tracking"
         if f.initialised:
-            P = f.predict_covariance(self._interval()) if self._T > 0 else f.P
             bias = np.array(self._b)
-            bias_std = np.sqrt(P[:, 2, 2])
+            bias_std = np.sqrt(self._bias_var())
             g_var = self.gyro.predicted_variance(self._T)
         else:
             bias = np.zeros(3)
@@ -545,7 +604,7 @@ class RobotCmkf:
             accel_bias=bias,
             accel_bias_std=bias_std,
             S_v=f.S_used.copy(),
-            S_v_ls=f.estimator.estimate,
+            S_v_ls=f.S_ls if self._fast else f.estimator.estimate,
             accel_noise_density=np.sqrt(f.S_used),
             gyro_bias=self.gyro.b.copy(),
             gyro_bias_std=np.sqrt(g_var),
@@ -554,9 +613,9 @@ class RobotCmkf:
             gyro_noise_density=np.sqrt(self.gyro.S_used),
             nis_accel=self._nis_accel,
             nis_accel_dof=3 * m,
-            nis_accel_mean=float(np.mean(self._nis_hist)) if self._nis_hist else math.nan,
+            nis_accel_mean=self._nis_sum / len(self._nis_hist) if self._nis_hist else math.nan,
             nis_gyro=self._nis_gyro,
             nis_gyro_dof=3,
-            n_stacked=f.estimator.count,
+            n_stacked=n_stacked,
             counters=dict(self.counters),
         )
