@@ -20,7 +20,12 @@ from imu_noise_id.core.hypotheses import (
 )
 from imu_noise_id.core.hypotheses.kernel import FilterBank
 from imu_noise_id.core.hypotheses.model import build_bank_model
-from imu_noise_id.pipelines.hypotheses_config import hypothesis_set_from_dict
+from imu_noise_id.pipelines.hypotheses_config import (
+    NeedsDataError,
+    hypothesis_set_factory,
+    hypothesis_set_from_dict,
+    white_noise_estimate,
+)
 from imu_noise_id.pipelines.hypotheses_online import AxisIdentifier
 
 
@@ -284,9 +289,33 @@ def test_default_config_loads_for_both_sensors():
     from imu_noise_id.pipelines.hypotheses_config import load_hypothesis_set
 
     for sensor in ("gyro", "accel"):
-        hset, _ = load_hypothesis_set(None, 0.01, sensor)
+        with pytest.raises(NeedsDataError):
+            load_hypothesis_set(None, 0.01, sensor)
+        hset, _ = load_hypothesis_set(None, 0.01, sensor, wn_estimate=1e-3)
         assert len(hset.hypotheses) == 2
         assert HypothesisBank(hset).n_filters == 512
+        wn = hset.hypotheses[0].priors[0]
+        assert wn.name == "WN.noise_density" and (wn.low, wn.high) == pytest.approx((5e-4, 2e-3))
+
+
+def test_auto_white_noise_range_from_the_warmup():
+    # White-noise estimate from first differences: 2000 samples of WN(0.01) + a slow RW → within 5 % (its
+    # standard error is 1/√(2·2000) ≈ 1.6 %); the identifier centres the auto range on it.
+    rng = np.random.default_rng(12)
+    dt = 0.01
+    y = simulate_sum([WN(0.01), RW(1e-4)], 2000, dt, rng) + 3.0
+    assert white_noise_estimate(y, dt) == pytest.approx(0.01, rel=0.05)
+    make, _ = hypothesis_set_factory(GOOD | {"sensors": {"gyro": {"hypotheses": [
+        {"priors": {"WN.noise_density": {"auto": 1.5, "n": 4}, "RW.random_walk": {"range": [1e-5, 1e-3], "n": 3}}}]}}},
+        dt, "gyro")
+    ident = AxisIdentifier(make, 20.0, dt)
+    ident.run(y)
+    wn = ident.bank.hset.hypotheses[0].priors[0]
+    assert ident.wn_estimate == pytest.approx(0.01, rel=0.05)
+    assert (wn.low, wn.high) == pytest.approx((ident.wn_estimate / 1.5, ident.wn_estimate * 1.5))
+    with pytest.raises(InputError, match=r"only WN\.noise_density"):
+        hypothesis_set_from_dict(GOOD | {"sensors": {"gyro": {"hypotheses": [
+            {"priors": {"WN.noise_density": 0.01, "RW.random_walk": {"auto": 2}}}]}}}, dt, "gyro", wn_estimate=0.01)
 
 
 # -- adapters ---------------------------------------------------------------------------------------------------
@@ -357,3 +386,27 @@ def test_small_criteria_run_near_paper_numbers():
     rsd_real, rsd_calc = r2.rsd_real["RW+WN:RW.random_walk"], r2.rsd_calculated["RW+WN:RW.random_walk"]
     assert rsd_real[-1] < rsd_real[0] and rsd_calc[-1] < rsd_calc[0]
     assert 0.5 < rsd_real[-1] / rsd_calc[-1] < 2.0
+
+
+def test_identify_cli_on_a_simulated_bag(tmp_path):
+    import yaml
+
+    from imu_noise_id.cli import main
+
+    bag = tmp_path / "bag"
+    assert main(["simulate", "--model", "gyro: WN(2e-3)+GM(tau=20, sigma=5e-3); accel: WN(2e-2)+RW(1e-3)",
+                 "--rate", "50", "--duration", "200", "--out", str(bag), "--seed", "3"]) == 0
+    data = json.loads(json.dumps(GOOD))
+    data["block"] = 5
+    data["sensors"]["gyro"]["hypotheses"][1]["priors"] = {
+        "WN.noise_density": {"range": [1e-3, 4e-3], "n": 4, "spacing": "log"},
+        "GM.tau": {"range": [5, 100], "n": 5, "spacing": "log"},
+        "GM.sigma": {"range": [1e-3, 2e-2], "n": 5, "spacing": "log"}}
+    cfg = tmp_path / "h.yaml"
+    cfg.write_text(yaml.safe_dump(data))
+    out = tmp_path / "out"
+    assert main(["identify", str(bag), "--hypotheses", str(cfg), "--axis", "gyro_z", "--out", str(out),
+                 "--no-plot"]) == 0
+    doc = yaml.safe_load((out / "hypotheses.yaml").read_text())
+    assert doc["axes"]["gyro_z"]["decision"] == "WN+GM"
+    assert main(["identify", str(bag), "--hypotheses", str(cfg), "--axis", "accel_x", "--out", str(out)]) == 2

@@ -12,7 +12,9 @@ import sys
 from ..core.errors import InputError
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("simulate", "inspect", "cmkf", "identify", "criteria", "play", "monitor")
+COMMANDS: tuple[str, ...] = (
+    "analyze", "simulate", "inspect", "cmkf", "identify", "criteria", "play", "monitor",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -40,7 +40,7 @@ def register(subparsers: Any) -> None:
 
 def identify_series(series: ImuSeries, axes: list[str], hypotheses: str | None) -> dict[str, Any]:
     """Run the bank on each axis of ``series``; returns per-axis results (dicts and time series)."""
-    from ..pipelines.hypotheses_config import hypothesis_set_from_dict, read_config
+    from ..pipelines.hypotheses_config import hypothesis_set_factory, read_config
     from ..pipelines.hypotheses_online import AxisIdentifier
 
     if len(series) < 2:
@@ -50,14 +50,14 @@ def identify_series(series: ImuSeries, axes: list[str], hypotheses: str | None) 
     out: dict[str, Any] = {"source": source, "dt": dt, "axes": {}}
     for axis in axes:
         sensor = axis.split("_")[0]
-        hset, warmup = hypothesis_set_from_dict(data, dt, sensor, source)
-        ident = AxisIdentifier(hset, warmup)
+        make, warmup = hypothesis_set_factory(data, dt, sensor, source)
+        ident = AxisIdentifier(make, warmup, dt)
         y = series.axis(axis)
-        n_bank = len(y) // hset.block
-        every = max(1, n_bank // MAX_ROWS)
+        block = make(1.0).block
+        every = max(1, len(y) // block // MAX_ROWS)
         result = ident.run(y, record_every=every)
-        out["axes"][axis] = {"result": result, "offset": ident.offset, "hset": hset, "warmup": warmup,
-                             "states": ident.bank.state_estimates()}
+        out["axes"][axis] = {"result": result, "offset": ident.offset, "hset": ident.bank.hset, "warmup": warmup,
+                             "wn_estimate": ident.wn_estimate, "states": ident.bank.state_estimates()}
     return out
 
 
@@ -72,6 +72,7 @@ def _axis_yaml(axis: str, entry: dict[str, Any]) -> dict[str, Any]:
         "duration_s": float(final.t),
         "probabilities": {k: float(v) for k, v in final.probabilities.items()},
         "offset_removed": float(entry["offset"]),
+        "warmup_white_noise_estimate": entry["wn_estimate"],
         "warmup_s": float(entry["warmup"]),
         "block": int(hset.block),
         "gamma": float(hset.gamma),
@@ -115,7 +116,6 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_imu
 
     series = read_imu(args.bag, topic=args.topic)
-    series = getattr(series, "imu", series)
     res = identify_series(series, list(dict.fromkeys(args.axis)), args.hypotheses)
     out = Path(args.out)
     write_outputs(res, out, plot=not args.no_plot)

@@ -8,8 +8,11 @@ File reading lives here, not in the core; :func:`hypothesis_set_from_dict` turns
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from ..core.errors import InputError
 from ..core.hypotheses import Hypothesis, HypothesisSet, ParameterPrior
@@ -64,34 +67,60 @@ def _number(value: Any, where: str) -> float:
     return out
 
 
-def _prior(name: str, spec: Any, where: str) -> ParameterPrior:
+class NeedsDataError(InputError):
+    """The set uses ``auto`` ranges, which need a white-noise estimate from the data."""
+
+
+def white_noise_estimate(y: np.ndarray, dt: float) -> float:
+    """White-noise density [u/√Hz] from first differences, √(var(Δy)/2 · dt) (the WN dominates Δy at IMU rates).
+
+    Used to centre ``auto`` white-noise ranges; the RW/GM increments inflate it slightly (by q/2 per sample).
+    """
+    d = np.diff(np.asarray(y, dtype=float))
+    if d.size < 2 or not np.all(np.isfinite(d)):
+        raise InputError("need at least 3 finite warm-up samples to estimate the white noise for an 'auto' range")
+    var = float(np.var(d)) / 2.0
+    if var <= 0:
+        raise InputError("the warm-up samples are constant: cannot centre an 'auto' white-noise range; give a range")
+    return math.sqrt(var * dt)
+
+
+def _prior(name: str, spec: Any, where: str, wn_estimate: float | None = None) -> ParameterPrior:
     where = f"{where}.priors.{name}"
     if isinstance(spec, int | float) and not isinstance(spec, bool):
         value = _number(spec, where)
         return ParameterPrior(name, value, value, 1)
     if not isinstance(spec, dict):
         raise InputError(f"{where} must be a number (known value) or {{range: [low, high], n: N, spacing: log}}")
-    unknown = set(spec) - {"range", "n", "spacing", "value"}
+    unknown = set(spec) - {"range", "n", "spacing", "value", "auto"}
     if unknown:
-        raise InputError(f"{where}: unknown key(s) {sorted(unknown)} (use range, n, spacing or value)")
+        raise InputError(f"{where}: unknown key(s) {sorted(unknown)} (use range, n, spacing, value or auto)")
     if "value" in spec:
         value = _number(spec["value"], f"{where}.value")
         return ParameterPrior(name, value, value, 1)
-    rng = spec.get("range")
+    if "auto" in spec:
+        factor = _number(spec["auto"], f"{where}.auto")
+        if name != "WN.noise_density" or factor <= 1 or "range" in spec:
+            raise InputError(f"{where}.auto: only WN.noise_density may use 'auto: FACTOR' (FACTOR > 1, no range)")
+        if wn_estimate is None:
+            raise NeedsDataError(f"{where} is 'auto': it needs a white-noise estimate from the data")
+        rng = [wn_estimate / factor, wn_estimate * factor]
+    else:
+        rng = spec.get("range")
     if not isinstance(rng, list | tuple) or len(rng) != 2:
         raise InputError(f"{where}.range must be [low, high]")
     low, high = _number(rng[0], f"{where}.range[0]"), _number(rng[1], f"{where}.range[1]")
     n = spec.get("n", 16)
     if isinstance(n, bool) or not isinstance(n, int):
         raise InputError(f"{where}.n must be an integer, got {n!r}")
-    spacing = spec.get("spacing", "linear")
+    spacing = spec.get("spacing", "log" if "auto" in spec else "linear")
     try:
         return ParameterPrior(name, low, high, n, str(spacing))
     except InputError as exc:
         raise InputError(f"{where}: {exc}") from None
 
 
-def _hypothesis(spec: Any, i: int, where: str) -> Hypothesis:
+def _hypothesis(spec: Any, i: int, where: str, wn_estimate: float | None) -> Hypothesis:
     where = f"{where}.hypotheses[{i}]"
     if not isinstance(spec, dict):
         raise InputError(f"{where} must be a mapping with 'priors' (and optionally name, components, probability)")
@@ -113,17 +142,21 @@ def _hypothesis(spec: Any, i: int, where: str) -> Hypothesis:
         raise InputError(f"{where}.components must be a list such as [WN, GM]")
     probability = _number(spec.get("probability", 1.0), f"{where}.probability")
     try:
-        return Hypothesis(tuple(str(c) for c in comps), tuple(_prior(str(n), s, where) for n, s in priors.items()),
+        return Hypothesis(tuple(str(c) for c in comps),
+                          tuple(_prior(str(n), s, where, wn_estimate) for n, s in priors.items()),
                           probability, str(spec.get("name", "")))
+    except NeedsDataError:
+        raise
     except InputError as exc:
         raise InputError(f"{where}: {exc}") from None
 
 
-def hypothesis_set_from_dict(data: dict[str, Any], dt: float, sensor: str | None = None,
-                             source: str = "hypotheses") -> tuple[HypothesisSet, float]:
+def hypothesis_set_from_dict(data: dict[str, Any], dt: float, sensor: str | None = None, source: str = "hypotheses",
+                             wn_estimate: float | None = None) -> tuple[HypothesisSet, float]:
     """The hypothesis set for ``sensor`` (``"gyro"``/``"accel"``) at input sampling period ``dt`` [s].
 
-    Returns the set and the warm-up duration [s] whose mean is subtracted before the bank.
+    Returns the set and the warm-up duration [s] whose mean is subtracted before the bank. ``auto`` white-noise
+    ranges are centred on ``wn_estimate`` [u/√Hz] (:class:`NeedsDataError` without it).
     """
     unknown = set(data) - _TOP_KEYS
     if unknown:
@@ -147,7 +180,7 @@ def hypothesis_set_from_dict(data: dict[str, Any], dt: float, sensor: str | None
     hyps = merged.get("hypotheses")
     if not isinstance(hyps, list) or not hyps:
         raise InputError(f"{where}.hypotheses must be a non-empty list")
-    hypotheses = tuple(_hypothesis(h, i, where) for i, h in enumerate(hyps))
+    hypotheses = tuple(_hypothesis(h, i, where, wn_estimate) for i, h in enumerate(hyps))
     block = merged.get("block", 1)
     if isinstance(block, bool) or not isinstance(block, int):
         raise InputError(f"{where}.block must be an integer >= 1, got {block!r}")
@@ -165,7 +198,26 @@ def hypothesis_set_from_dict(data: dict[str, Any], dt: float, sensor: str | None
     return hset, warmup
 
 
-def load_hypothesis_set(path: str | Path | None, dt: float, sensor: str | None = None) -> tuple[HypothesisSet, float]:
+def hypothesis_set_factory(data: dict[str, Any], dt: float, sensor: str | None = None,
+                           source: str = "hypotheses") -> tuple[Callable[[float | None], HypothesisSet], float]:
+    """A function white-noise estimate → hypothesis set (checked once now), and the warm-up [s].
+
+    Use it with :class:`~imu_noise_id.pipelines.hypotheses_online.AxisIdentifier`, which calls it after the
+    warm-up with :func:`white_noise_estimate` of the warm-up samples.
+    """
+    try:
+        _, warmup = hypothesis_set_from_dict(data, dt, sensor, source, None)
+    except NeedsDataError:
+        _, warmup = hypothesis_set_from_dict(data, dt, sensor, source, 1.0)
+
+    def make(wn_estimate: float | None) -> HypothesisSet:
+        return hypothesis_set_from_dict(data, dt, sensor, source, wn_estimate)[0]
+
+    return make, warmup
+
+
+def load_hypothesis_set(path: str | Path | None, dt: float, sensor: str | None = None,
+                        wn_estimate: float | None = None) -> tuple[HypothesisSet, float]:
     """Read a hypotheses YAML file (default: the packaged one) for ``sensor`` at sampling period ``dt``."""
     data, source = read_config(path)
-    return hypothesis_set_from_dict(data, dt, sensor, source)
+    return hypothesis_set_from_dict(data, dt, sensor, source, wn_estimate)

@@ -4,17 +4,21 @@ The raw axis (a gyro reading including its turn-on bias and the Earth rate, or a
 including gravity) is not an error signal yet. The bank's constant-bias state absorbs any offset, but its
 Gaussian prior (``bias_sigma``) must cover it; rather than a huge prior that also slows the bias estimate,
 the mean of the first ``warmup`` seconds is subtracted from every sample (the warm-up samples are then fed
-too), and ``bias_sigma`` only has to cover what is left. The node and ``imu-noise-id identify`` both use
-:class:`AxisIdentifier`.
+too), and ``bias_sigma`` only has to cover what is left. The warm-up also gives the white-noise estimate on
+which ``auto`` white-noise ranges are centred (:func:`.hypotheses_config.white_noise_estimate`). The node
+and ``imu-noise-id identify`` both use :class:`AxisIdentifier`.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 
 from ..core.errors import InputError
 from ..core.hypotheses import BankResult, BankSnapshot, HypothesisBank, HypothesisSet
 from ..core.hypotheses.kernel import check_samples
+from .hypotheses_config import white_noise_estimate
 
 
 class AxisIdentifier:
@@ -22,34 +26,54 @@ class AxisIdentifier:
 
     Parameters
     ----------
-    hypothesis_set : HypothesisSet
+    hypotheses : HypothesisSet, or a function white-noise estimate [u/√Hz] → HypothesisSet
+        (:func:`.hypotheses_config.hypothesis_set_factory`); a function is called once the warm-up is complete.
     warmup_s : float
-        Duration [s] whose mean is removed (0: nothing removed; at least one sample is always used when > 0).
+        Duration [s] whose mean is removed (0: nothing removed; at least 3 samples when > 0).
+    dt : float
+        Input sampling period [s] (required with a function; else taken from the set).
     """
 
-    def __init__(self, hypothesis_set: HypothesisSet, warmup_s: float = 1.0) -> None:
+    def __init__(self, hypotheses: HypothesisSet | Callable[[float | None], HypothesisSet], warmup_s: float = 1.0,
+                 dt: float | None = None) -> None:
         if not warmup_s >= 0:
             raise InputError(f"warm-up must be >= 0 s, got {warmup_s}")
-        self.bank = HypothesisBank(hypothesis_set)
-        self.n_warmup = max(1, round(warmup_s / hypothesis_set.dt)) if warmup_s > 0 else 0
+        if isinstance(hypotheses, HypothesisSet):
+            self._make: Callable[[float | None], HypothesisSet] = lambda _est: hypotheses
+            dt = hypotheses.dt
+        else:
+            self._make = hypotheses
+            if dt is None or not dt > 0:
+                raise InputError("AxisIdentifier needs the sampling period dt with a hypothesis-set function")
+        self.dt = float(dt)
+        self.n_warmup = max(3, round(warmup_s / self.dt)) if warmup_s > 0 else 0
+        self.bank: HypothesisBank | None = None
         self.reset()
 
     def reset(self) -> None:
-        """Forget everything, including the offset."""
-        self.bank.reset()
+        """Forget everything, including the offset and the white-noise estimate."""
         self._buffer: list[float] = []
-        self.offset: float | None = None if self.n_warmup else 0.0
+        self.offset: float | None = None
+        self.wn_estimate: float | None = None
+        self.bank = None
+        if self.n_warmup == 0:
+            self._start(np.zeros(0))
+
+    def _start(self, warm: np.ndarray) -> None:
+        """Offset, white-noise estimate and the bank from the warm-up samples."""
+        self.offset = float(np.mean(warm)) if warm.size else 0.0
+        self.wn_estimate = white_noise_estimate(warm, self.dt) if warm.size else None
+        self.bank = HypothesisBank(self._make(self.wn_estimate))
 
     def step(self, y: float) -> BankSnapshot | None:
         """One raw sample; None while the warm-up is collecting."""
-        if self.offset is None:
-            value = float(check_samples(y, "sample"))
-            self._buffer.append(value)
+        if self.bank is None:
+            self._buffer.append(float(check_samples(y, "sample")))
             if len(self._buffer) < self.n_warmup:
                 return None
             buf = np.array(self._buffer)
-            self.offset = float(np.mean(buf))
             self._buffer = []
+            self._start(buf)
             self.bank.run(buf - self.offset)
             return self.bank.snapshot()
         return self.bank.step(float(y) - self.offset)
@@ -57,16 +81,15 @@ class AxisIdentifier:
     def run(self, y: np.ndarray, record_every: int = 1) -> BankResult:
         """A whole raw series (the warm-up is its first ``n_warmup`` samples)."""
         arr = check_samples(y, "samples").ravel()
-        if self.offset is not None:
-            return self.bank.run(arr - self.offset, record_every)
-        if arr.size < self.n_warmup:
-            raise InputError(f"{arr.size} samples are fewer than the {self.n_warmup}-sample warm-up")
-        self.offset = float(np.mean(arr[: self.n_warmup]))
+        if self.bank is None:
+            if arr.size < self.n_warmup:
+                raise InputError(f"{arr.size} samples are fewer than the {self.n_warmup}-sample warm-up")
+            self._start(arr[: self.n_warmup])
         return self.bank.run(arr - self.offset, record_every)
 
     def gap(self, n_missing: int) -> None:
         """A pause of ``n_missing`` samples (see :meth:`HypothesisBank.gap`); during the warm-up it restarts it."""
-        if self.offset is None:
+        if self.bank is None:
             self._buffer = []
             return
         self.bank.gap(n_missing)
