@@ -112,7 +112,9 @@ def test_truncated_and_garbled_ros1_bag(shared_data, tmp_path):
     garbled = bytearray(raw)
     garbled[len(raw) // 2 : len(raw) // 2 + 64] = bytes(range(64))
     (tmp_path / "garbled.bag").write_bytes(bytes(garbled))
-    with pytest.raises(BagError, match=r"garbled.bag' is truncated or corrupt: reading stopped after \d+ of 15817"):
+    with pytest.raises(
+        BagError, match=r"garbled.bag' is truncated or corrupt: reading failed with \d+ of 15817 messages decoded"
+    ):
         read_bag(tmp_path / "garbled.bag")
 
 
@@ -123,7 +125,7 @@ def test_corrupt_message_in_mcap(good_bag, tmp_path):
     at = content.index(b"imu_link\x00", len(content) // 2)
     content[at - 4 : at] = b"\xff\xff\xff\x7f"
     data.write_bytes(bytes(content))
-    with pytest.raises(BagError, match=r"is truncated or corrupt: reading stopped after \d+ of \d+ messages"):
+    with pytest.raises(BagError, match=r"is truncated or corrupt: reading failed with \d+ of \d+ messages decoded"):
         read_imu(tmp_path / "bad")
 
 
@@ -250,6 +252,8 @@ def test_non_static_data_flagged_by_inspect(shared_data, capsys):
     code, out, _ = cli(str(shared_data / "husky_robot_localization" / "test1.bag"), capsys=capsys)
     assert code == 0 and "not static (a static noise analysis of these data would be wrong)" in out
     assert "gyro_y: the 1 s means vary" in out
+    assert "declared angular_velocity_covariance diag (0.0004, 0.0004, 0.0004) (rad/s)²" in out
+    assert "odometry /husky_velocity_controller/odom: 3952 messages" in out
 
 
 def test_errors_are_input_errors_and_no_traceback_in_a_subprocess(tmp_path, ros_env):

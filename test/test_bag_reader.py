@@ -122,6 +122,8 @@ def test_independent_deserialisation_matches(full_bag):
     np.testing.assert_array_equal(bag.imu.gyro, gyro)
     np.testing.assert_array_equal(bag.imu.accel, accel)
     assert msgs[0].orientation_covariance[0] == -1.0  # REP-145: orientation not provided
+    assert bag.imu_covariance["orientation"][0, 0] == -1.0
+    np.testing.assert_array_equal(bag.imu_covariance["angular_velocity"], np.zeros((3, 3)))
 
 
 def test_mixed_frame_id_lengths_use_both_paths_and_stay_exact(tmp_path):
@@ -200,8 +202,76 @@ def test_ros1_bag_equals_its_rosbag2_copy(shared_data):
         for name in ("t", "position", "orientation_xyzw", "linear_velocity", "angular_velocity", "twist_covariance"):
             np.testing.assert_array_equal(getattr(ros1.odom, name), getattr(other.odom, name))
     assert (ros1.odom.frame_id, ros1.odom.child_frame_id, ros1.imu.frame_id) == ("odom", "base_link", "imu_link")
+    # Declared covariances of the Husky IMU (README): angular velocity 4e-4 (rad/s)², acceleration 9.604e-3 (m/s²)².
+    np.testing.assert_allclose(np.diag(ros1.imu_covariance["angular_velocity"]), [4e-4] * 3)
+    np.testing.assert_allclose(np.diag(ros2.imu_covariance["linear_acceleration"]), [9.604e-3] * 3)
     # Independent check against the npz made from the same messages (times relative to the first IMU stamp).
     npz = np.load(shared_data / HUSKY / "husky_test1.npz")
     np.testing.assert_array_equal(ros1.imu.gyro, npz["imu_gyro"])
     np.testing.assert_array_equal(ros1.odom.linear_velocity, npz["odom_twist_linear"])
     np.testing.assert_allclose(ros1.imu.t - ros1.imu.t[0], npz["imu_t"], rtol=0, atol=1e-6)
+
+
+def test_fast_mcap_iteration_equals_rosbags(tmp_path, full_bag):
+    """The chunk walker yields the same (connection, log time, bytes) sequence as AnyReader.messages."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.rosbag2.enums import CompressionFormat, CompressionMode
+    from rosbags.typesys import Stores, get_typestore
+
+    from imu_noise_id.bag.mcapfast import fast_mcap_messages
+
+    path, _, _ = full_bag
+    store = get_typestore(Stores.ROS2_JAZZY)
+    compressed = tmp_path / "zstd"
+    writer = Writer(compressed, version=9, storage_plugin=StoragePlugin.MCAP)
+    writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)  # zstd chunks
+    with writer:
+        conn = writer.add_connection("/imu", IMU_TYPE, typestore=store)
+        buf, _ = encode_cdr(store.fielddefs, IMU_TYPE, {"angular_velocity.x": np.arange(3000.0) * 1e-3}, {})
+        for i in range(3000):
+            writer.write(conn, 10_000 + 7 * i, buf[i].tobytes())
+    for bag in (path, compressed):
+        with AnyReader([bag]) as reader:
+            fast = fast_mcap_messages(reader, reader.connections)
+            if bag.name == "sqlite3":
+                assert fast is None  # not an mcap bag: rosbags' iteration is used
+                continue
+            got = [(c.topic, t, d) for c, t, d in fast]
+            ref = [(c.topic, t, d) for c, t, d in reader.messages(connections=reader.connections)]
+            assert got == ref and len(got) > 1000
+    assert np.array_equal(read_imu(compressed).gyro[:, 0], np.arange(3000.0) * 1e-3)
+
+
+def test_types_without_fixed_layout_are_fully_deserialised():
+    """A type with sequences (sensor_msgs/JointState) cannot take the numpy path: every message is deserialised."""
+    from rosbags.typesys import Stores, get_typestore
+
+    from imu_noise_id.bag.fastdecode import FlatDecoder, NotFlatError, flatten
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    joint_state = "sensor_msgs/msg/JointState"
+    with pytest.raises(NotFlatError, match="name has no fixed layout"):
+        flatten(store.fielddefs, joint_state)
+    Time, Header = store.types["builtin_interfaces/msg/Time"], store.types["std_msgs/msg/Header"]
+    empty = np.array([], dtype=float)
+    msgs = [
+        store.types[joint_state](
+            header=Header(stamp=Time(sec=10 + i, nanosec=5), frame_id="j"),
+            name=["a"],
+            position=np.array([0.5 * i]),
+            velocity=empty,
+            effort=empty,
+        )
+        for i in range(4)
+    ]
+    raws = [bytes(store.serialize_cdr(m, joint_state)) for m in msgs]
+    decoder = FlatDecoder(
+        store.fielddefs, joint_state, {"sec": ("header.stamp.sec",)},
+        strings=("header.frame_id",), ros1=False, deserialize=store.deserialize_cdr,
+    )  # fmt: skip
+    sec = np.empty(4, dtype=np.int64)
+    decoder.decode(raws, {"sec": sec})
+    assert not decoder.fast and (decoder.stats.fast, decoder.stats.fallback) == (0, 4)
+    np.testing.assert_array_equal(sec, [10, 11, 12, 13])
+    assert decoder.strings == {"header.frame_id": "j"}

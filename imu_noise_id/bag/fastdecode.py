@@ -123,7 +123,7 @@ class FlatDecoder:
     msgtype : e.g. ``'sensor_msgs/msg/Imu'``
     outputs : output name → leaf paths whose values fill the output's columns in order, e.g.
         ``{'gyro': ('angular_velocity.x', 'angular_velocity.y', 'angular_velocity.z')}``; an array leaf fills
-        ``count`` columns. Numeric outputs are float64 except single integer leaves, which keep an int64 type.
+        ``count`` columns. The caller provides the destination arrays (their dtype decides the output type).
     strings : string leaf paths whose value (of the first message) is wanted, e.g. ``('header.frame_id',)``
     ros1 : ROS 1 serialisation instead of CDR
     deserialize : the full deserialiser ``(raw, msgtype) -> message``, used for the messages the numpy path
@@ -161,19 +161,13 @@ class FlatDecoder:
         if self.leaves is not None and any(i is None for i in self._leaf_index.values()):
             self.fast = False
 
-    def widths(self) -> dict[str, int]:
-        """Number of columns of every output (from the leaves, or 1 per path when the type is not flat)."""
-        counts = {leaf.path: leaf.count for leaf in self.leaves or []}
+    def widths(self, reference: Mapping[str, tuple] | None = None) -> dict[str, int]:
+        """Number of columns of every output, from the leaves (of ``reference`` fielddefs if the type is not flat)."""
+        leaves = self.leaves
+        if leaves is None and reference is not None:
+            leaves = flatten(reference, self.msgtype)
+        counts = {leaf.path: leaf.count for leaf in leaves or []}
         return {name: sum(counts.get(p, 1) for p in paths) for name, paths in self.outputs.items()}
-
-    def integer_outputs(self) -> set[str]:
-        """Outputs made of one integer leaf (stamps): kept as int64 so that no precision is lost."""
-        kinds = {leaf.path: leaf.kind for leaf in self.leaves or []}
-        return {
-            name
-            for name, paths in self.outputs.items()
-            if len(paths) == 1 and PRIMITIVES.get(kinds.get(paths[0], "float64"), ("f8",))[0][0] in "iu"
-        }
 
     # --- numpy path --------------------------------------------------------------------------------------
     def decode(self, raws: Sequence[bytes], out: Mapping[str, np.ndarray]) -> None:

@@ -4,9 +4,10 @@ No ROS install is needed: :class:`rosbags.highlevel.AnyReader` reads the files a
 in them. Values come out as numpy arrays in the dataclasses of :mod:`imu_noise_id.core.axes`, timed by the
 messages' header stamps (``sec + nanosec·1e-9`` seconds).
 
-Speed and memory: messages are read in batches of :data:`BATCH` raw messages, decoded with numpy at fixed byte
-offsets (:mod:`.fastdecode`, identical to full deserialisation, which remains the fallback) and written into
-arrays preallocated from the bag's message counts, so no message objects are kept.
+Speed and memory: messages are read (mcap: by :mod:`.mcapfast` when chunks do not overlap) in batches of
+:data:`BATCH` raw messages, decoded with numpy at fixed byte offsets (:mod:`.fastdecode`, identical to full
+deserialisation, which remains the fallback) and written into arrays preallocated from the bag's message counts,
+so no message objects are kept.
 
 Every problem with the input raises :class:`~.errors.BagError` naming the bag, the topic and what to do, or is
 repaired by :func:`imu_noise_id.core.quality.repair_time_series` with a note in the result (see ``docs/bags.md``).
@@ -27,6 +28,7 @@ from ..core.axes import ImuSeries, OdometrySeries, ScalarSeries
 from ..core.quality import IMU_MAX_ABS, QualityError, repair_time_series
 from .errors import BagError
 from .fastdecode import FlatDecoder
+from .mcapfast import fast_mcap_batches
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 ODOM_TYPE = "nav_msgs/msg/Odometry"
@@ -83,6 +85,9 @@ class BagContents:
     temperature : temperature [°C], or None when absent
     notes : every note about the bag and its topics (including the IMU's)
     decode_stats : topic → (messages decoded by numpy, messages fully deserialised)
+    imu_covariance : covariances declared in the first Imu message, ``orientation``, ``angular_velocity``
+        [(rad/s)²] and ``linear_acceleration`` [(m/s²)²], each 3×3 row-major as published (REP-145: all zeros =
+        unknown, element [0, 0] = -1 = field not provided)
     """
 
     path: Path
@@ -91,6 +96,7 @@ class BagContents:
     temperature: ScalarSeries | None = None
     notes: list[str] = field(default_factory=list)
     decode_stats: dict[str, tuple[int, int]] = field(default_factory=dict)
+    imu_covariance: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 # --- opening ----------------------------------------------------------------------------------------------------
@@ -109,7 +115,7 @@ def _open(path: str | Path) -> Iterator[Any]:
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
-    bag = Path(path)
+    bag = Path(path).expanduser()
     if not bag.exists():
         raise BagError(
             f"bag {str(bag)!r} does not exist: give a ROS 1 .bag file, a rosbag2 directory (with metadata.yaml) "
@@ -201,6 +207,8 @@ class _Stream:
     """Arrays of one topic, preallocated from the message count and filled batch by batch."""
 
     def __init__(self, reader: Any, msgtype: str, topic: str, count: int, fast: bool) -> None:
+        from rosbags.typesys import Stores, get_typestore
+
         self.msgtype = msgtype
         self.topic = topic
         self.decoder = FlatDecoder(
@@ -212,22 +220,30 @@ class _Stream:
             deserialize=reader.deserialize,
             fast=fast,
         )
-        self.widths = {k: w for k, w in self.decoder.widths().items() if k not in _STAMP}
+        # A bag whose definition is not flat still has the standard field sizes (e.g. 36 covariance values).
+        reference = get_typestore(Stores.LATEST).fielddefs if self.decoder.leaves is None else None
+        self.widths = {k: w for k, w in self.decoder.widths(reference).items() if k not in _STAMP}
         self.expected = count
         self.capacity = max(count, 1)
         self.n = 0
+        self.first_raw: bytes | None = None
+        self.declared_covariance: dict[str, np.ndarray] = {}
         self.t = np.empty(self.capacity)
-        self.receive_ns = np.empty(self.capacity, dtype=np.int64)
+        # Receive times are kept only while every header stamp seen is zero (then they replace the stamps).
+        self.receive_ns: np.ndarray | None = np.empty(self.capacity, dtype=np.int64)
         self.arrays = {k: np.empty((self.capacity, w) if w > 1 else self.capacity) for k, w in self.widths.items()}
 
     def _grow(self, need: int) -> None:
         self.capacity = max(need, int(self.capacity * 1.5))
         self.t = np.resize(self.t, self.capacity)
-        self.receive_ns = np.resize(self.receive_ns, self.capacity)
+        if self.receive_ns is not None:
+            self.receive_ns = np.resize(self.receive_ns, self.capacity)
         self.arrays = {k: np.resize(a, (self.capacity, *a.shape[1:])) for k, a in self.arrays.items()}
 
     def add(self, raws: list[bytes], receive_ns: list[int]) -> None:
         k = len(raws)
+        if self.first_raw is None and raws:
+            self.first_raw = raws[0]
         if self.n + k > self.capacity:
             self._grow(self.n + k)
         s, e = self.n, self.n + k
@@ -236,17 +252,28 @@ class _Stream:
         views = {name: a[s:e] for name, a in self.arrays.items()}
         self.decoder.decode(raws, {"sec": sec, "nsec": nsec, **views})
         self.t[s:e] = sec + nsec * 1e-9
-        self.receive_ns[s:e] = receive_ns
+        if self.receive_ns is not None:
+            if np.any(sec) or np.any(nsec):
+                self.receive_ns = None
+            else:
+                self.receive_ns[s:e] = receive_ns
         self.n = e
 
-    def trimmed(self) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    def trimmed(self) -> tuple[np.ndarray, np.ndarray | None, dict[str, np.ndarray]]:
         n = self.n
-        return self.t[:n], self.receive_ns[:n], {k: a[:n] for k, a in self.arrays.items()}
+        receive = None if self.receive_ns is None else self.receive_ns[:n]
+        return self.t[:n], receive, {k: a[:n] for k, a in self.arrays.items()}
 
 
 def _finish(stream: _Stream, where: str, notes: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
     """Stamps and arrays of a stream after the documented repairs, with the notes about it."""
     topic_notes: list[str] = []
+    if stream.msgtype == IMU_TYPE and stream.first_raw is not None:
+        first = stream.decoder.deserialize(stream.first_raw, IMU_TYPE)
+        stream.declared_covariance = {
+            name: np.asarray(getattr(first, f"{name}_covariance"), dtype=float).reshape(3, 3)
+            for name in ("orientation", "angular_velocity", "linear_acceleration")
+        }
     t, receive_ns, arrays = stream.trimmed()
     if stream.n == 0:
         raise BagError(
@@ -255,7 +282,7 @@ def _finish(stream: _Stream, where: str, notes: list[str]) -> tuple[np.ndarray, 
         )
     if stream.n != stream.expected:
         topic_notes.append(f"the bag index announced {stream.expected} messages but {stream.n} were read")
-    if not np.any(t):
+    if receive_ns is not None:  # every header stamp is zero
         t = receive_ns * 1e-9
         topic_notes.append(
             "every header stamp is zero (the publisher does not set header.stamp): using the bag's receive times, "
@@ -282,7 +309,7 @@ def _read(
     fast: bool,
 ) -> tuple[Path, dict[str, tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]], list[str]]:
     """Read the topics of the message types in ``wanted`` (msgtype → (topic or None, required)) in one pass."""
-    bag = Path(path)
+    bag = Path(path).expanduser()
     notes: list[str] = []
     with _open(bag) as reader:
         where = _describe(bag)
@@ -309,9 +336,8 @@ def _read(
         total = sum(s.expected for s in streams.values())
         done = 0
         try:
-            messages = reader.messages(connections=connections)
             single = next(iter(streams.values())) if len(streams) == 1 else None
-            while batch := list(islice(messages, BATCH)):
+            for batch in _batches(reader, connections):
                 if single is not None:
                     _, receive, raws = zip(*batch, strict=True)
                     single.add(list(raws), list(receive))
@@ -324,7 +350,7 @@ def _read(
             raise
         except Exception as exc:
             raise BagError(
-                f"{where} is truncated or corrupt: reading stopped after {done} of {total} messages "
+                f"{where} is truncated or corrupt: reading failed with {done} of {total} messages decoded "
                 f"({type(exc).__name__}: {_reason(exc)}). {_REPAIR_HINT}"
             ) from None
         results = {}
@@ -332,6 +358,24 @@ def _read(
             t, arrays, topic_notes = _finish(stream, where, notes)
             results[msgtype] = (t, arrays, topic_notes, stream)
     return bag, results, notes
+
+
+def _batches(reader: Any, connections: list[Any]) -> Iterator[list[tuple[Any, int, bytes]]]:
+    """Lists of about BATCH (connection, receive time [ns], raw bytes), in the order rosbags yields them."""
+    chunks = fast_mcap_batches(reader, connections)
+    if chunks is None:
+        messages = reader.messages(connections=connections)
+        while batch := list(islice(messages, BATCH)):
+            yield batch
+        return
+    pending: list[tuple[Any, int, bytes]] = []
+    for chunk in chunks:
+        pending.extend(chunk)
+        if len(pending) >= BATCH:
+            yield pending
+            pending = []
+    if pending:
+        yield pending
 
 
 def _dispatch(batch: list[tuple[Any, int, bytes]], by_connection: dict[int, _Stream]) -> None:
@@ -420,6 +464,7 @@ def read_bag(
         temperature=_temperature(results[TEMPERATURE_TYPE]) if TEMPERATURE_TYPE in results else None,
         notes=notes,
         decode_stats=_stats(results),
+        imu_covariance=results[IMU_TYPE][3].declared_covariance,
     )
 
 

@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 DESCRIPTION = """\
 List the topics of a bag (ROS 1 .bag, rosbag2 directory, .db3 or .mcap), read its sensor_msgs/Imu topic and print
 the number of samples, rate, duration, frame, the repairs made while reading (dropped NaN/inf samples, sorted
-or duplicated stamps, gaps) and whether the data look static (needed by the offline noise analysis)."""
+or duplicated stamps, gaps), the covariances the driver declares (and the noise densities they imply,
+√(covariance / rate)), odometry/temperature topics found, and whether the data look static (needed by the
+offline noise analysis)."""
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -25,7 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def progress_printer(label: str) -> object:
+def progress_printer(label: str) -> Callable[[int, int], None] | None:
     """A ``progress(done, total)`` callback drawing a one-line bar on stderr when it is a terminal."""
     if not sys.stderr.isatty():
         return None
@@ -40,20 +43,45 @@ def progress_printer(label: str) -> object:
     return show
 
 
+def _fmt(values: Iterable[float]) -> str:
+    return ", ".join(f"{v:.3g}" for v in values)
+
+
 def run(args: argparse.Namespace) -> int:
     """Print the topics, the IMU summary, the repair notes and the static check."""
-    from ..bag.reader import list_topics, read_imu
+    import numpy as np
+
+    from ..bag.reader import list_topics, read_bag
     from ..core.quality import static_check
 
     topics = list_topics(args.bag)
     print(f"{args.bag}:")
     for name, (msgtype, count) in topics.items():
         print(f"  {name:40s} {msgtype:32s} {count:>10d} msgs")
-    imu = read_imu(args.bag, args.topic, progress=progress_printer("reading"))
+    bag = read_bag(args.bag, imu_topic=args.topic, progress=progress_printer("reading"))
+    imu = bag.imu
     duration = float(imu.t[-1] - imu.t[0])
     print(f"IMU {imu.topic} (frame {imu.frame_id!r}): {len(imu)} samples, {imu.rate:.6g} Hz (median), {duration:.3f} s")
     for note in imu.notes:
         print(f"  note: {note}")
+    for name, unit in (("angular_velocity", "rad/s"), ("linear_acceleration", "m/s²")):
+        diag = np.diag(bag.imu_covariance.get(name, np.zeros((3, 3))))
+        if not np.any(diag):
+            print(f"  declared {name}_covariance: all zero (unknown)")
+        elif diag[0] == -1:
+            print(f"  declared {name}_covariance: -1 (not provided)")
+        else:
+            density = np.sqrt(np.clip(diag, 0, None) / imu.rate)
+            print(
+                f"  declared {name}_covariance diag ({_fmt(diag)}) ({unit})² "
+                f"⇒ noise density √(c/f) = ({_fmt(density)}) {unit}/√Hz"
+            )
+    for series, what in ((bag.odom, "odometry"), (bag.temperature, "temperature")):
+        if series is not None:
+            print(f"{what} {series.topic}: {len(series.t)} messages")
+    for note in bag.notes:
+        if not note.startswith(f"{imu.topic}: "):
+            print(f"  note: {note}")
     flags = static_check(imu)
     if flags:
         print("not static (a static noise analysis of these data would be wrong):")

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .axes import ImuSeries
+from .axes import AXES, ImuSeries
 from .errors import InputError
 
 #: Stamps are clock (epoch) times if the smallest non-zero one exceeds this [s]; zero stamps among them are unset.
@@ -177,8 +177,10 @@ def repair_time_series(
         m = t.shape[0]
         plausible = np.ones(m, dtype=bool)
         for c, limit in zip(columns, max_abs, strict=True):
-            if limit is not None:
-                plausible &= (np.abs(c.reshape(m, -1)) <= limit).all(axis=1)
+            flat = c.reshape(m, -1)
+            # The min/max test needs no N-sized temporary; the per-sample mask only when a value is out of range.
+            if limit is not None and flat.size and (flat.max() > limit or flat.min() < -limit):
+                plausible &= (np.abs(flat) <= limit).all(axis=1)
         report.n_implausible = int(m - np.count_nonzero(plausible))
         if report.n_implausible > MAX_IMPLAUSIBLE_FRACTION * m:
             raise QualityError(
@@ -237,8 +239,9 @@ BLOCK_S = 1.0
 
 
 def _block_means(x: np.ndarray, samples_per_block: int) -> np.ndarray:
+    """Means of consecutive blocks of a 1-D array (a strided view is reshaped without a copy)."""
     m = x.shape[0] // samples_per_block
-    return x[: m * samples_per_block].reshape(m, samples_per_block, -1).mean(axis=1)
+    return x[: m * samples_per_block].reshape(m, samples_per_block).mean(axis=1)
 
 
 def static_check(imu: ImuSeries, gravity: float = STANDARD_GRAVITY) -> list[str]:
@@ -259,36 +262,35 @@ def static_check(imu: ImuSeries, gravity: float = STANDARD_GRAVITY) -> list[str]
     if n < 20:
         return [f"only {n} samples: too short to check that the IMU was static"]
     flags: list[str] = []
-    data = imu.samples()
-    names = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
-
     g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
     if abs(g_mean - gravity) > GRAVITY_TOLERANCE:
         flags.append(
             f"|mean accel| = {g_mean:.3f} m/s² but a static IMU reads gravity ≈ {gravity:.3f} m/s² "
             f"(tolerance {GRAVITY_TOLERANCE} m/s²): the IMU moves, its accel is not in m/s², or gravity was removed"
         )
-
-    per_block = max(round(BLOCK_S / imu.dt), 1) if n >= 2 else 1
-    per_block = min(per_block, n // 10)
-    means = _block_means(data, per_block)
-    block_std = means.std(axis=0)
-    for i, name in enumerate(names):
+    dt = imu.dt
+    if not (np.isfinite(dt) and dt > 0):
+        return [f"median sampling period is {dt!r} s: repair the stamps (repair_time_series) before checking"]
+    per_block = min(max(round(BLOCK_S / dt), 1), n // 10)
+    motion_flags: list[str] = []
+    variance_flags: list[str] = []
+    # One axis at a time (strided views, no (N, 6) copy): a few N-sized temporaries at most.
+    for i, name in enumerate(AXES):
+        x = imu.gyro[:, i] if i < 3 else imu.accel[:, i - 3]
         limit, unit = (GYRO_BLOCK_STD_MAX, "rad/s") if i < 3 else (ACCEL_BLOCK_STD_MAX, "m/s²")
-        if block_std[i] > limit:
-            flags.append(
-                f"{name}: the {per_block * imu.dt:.3g} s means vary with std {block_std[i]:.3g} {unit} "
+        block_std = float(_block_means(x, per_block).std())
+        if block_std > limit:
+            motion_flags.append(
+                f"{name}: the {per_block * dt:.3g} s means vary with std {block_std:.3g} {unit} "
                 f"(> {limit} {unit}): the IMU rotates, moves or tilts"
             )
-
-    floor = np.var(np.diff(data, axis=0), axis=0) / 2.0
-    total = np.var(data, axis=0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(floor > 0, total / floor, np.inf)
-    for i, name in enumerate(names):
-        if total[i] > 0 and ratio[i] > VARIANCE_RATIO_MAX:
-            flags.append(
-                f"{name}: variance is {ratio[i]:.3g}× its white-noise floor (> {VARIANCE_RATIO_MAX:g}×): "
+        floor = float(np.var(np.diff(x))) / 2.0
+        total = float(np.var(x))
+        ratio = total / floor if floor > 0 else np.inf
+        if total > 0 and ratio > VARIANCE_RATIO_MAX:
+            variance_flags.append(
+                f"{name}: variance is {ratio:.3g}× its white-noise floor (> {VARIANCE_RATIO_MAX:g}×): "
                 "low-frequency motion, vibration or drift dominates"
             )
+    flags.extend(motion_flags + variance_flags)
     return flags
