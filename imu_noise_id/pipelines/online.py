@@ -37,7 +37,7 @@ from scipy.stats import chi2
 from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES
 from ..core.cmkf.robot import RobotCmkf, RobotCmkfConfig
 from ..core.errors import InputError
-from .hypotheses_config import hypothesis_set_from_dict, read_config
+from .hypotheses_config import hypothesis_set_factory, read_config
 from .hypotheses_online import AxisIdentifier
 
 # Diagnostic levels, equal to diagnostic_msgs/DiagnosticStatus.{OK, WARN, ERROR, STALE}.
@@ -667,7 +667,7 @@ class OnlineIdentifier:
             return None
         data, source = read_config(self.config.hypotheses_file or None)
         for sensor in ("gyro", "accel"):
-            hypothesis_set_from_dict(data, 0.01, sensor, source)
+            hypothesis_set_factory(data, 0.01, sensor, source)
         return {"data": data, "source": source}
 
     def _reset_estimation(self) -> None:
@@ -960,18 +960,23 @@ class OnlineIdentifier:
         data, source = self._hypothesis_data["data"], self._hypothesis_data["source"]
         block = max(1, round(1.0 / (dt * self.config.hypotheses_bank_rate)))
         banks = []
+        examples = []
         for axis in AXES:
             sensor = "gyro" if axis in GYRO_AXES else "accel"
-            hset, warmup = hypothesis_set_from_dict(data, dt, sensor, source)
-            hset = dataclasses.replace(hset, block=block)
-            banks.append(AxisIdentifier(hset, warmup))
+            factory, warmup = hypothesis_set_factory(data, dt, sensor, source)
+
+            def make(wn_estimate: float | None, factory: Any = factory) -> Any:
+                return dataclasses.replace(factory(wn_estimate), block=block)
+
+            banks.append(AxisIdentifier(make, warmup, dt=dt))
+            examples.append(make(1.0))  # for the names only (an ``auto`` range needs some estimate)
             self._bank_warmup = banks[-1].n_warmup
         self._banks = banks
         self._bank_dt = dt
         names: list[str] = []
         params: list[str] = []
-        for bank in banks:
-            for hyp in bank.bank.hset.hypotheses:
+        for hset in examples:
+            for hyp in hset.hypotheses:
                 if hyp.name not in names:
                     names.append(hyp.name)
                 for p in hyp.parameter_names:
@@ -992,7 +997,7 @@ class OnlineIdentifier:
         y[:, 3:] += self._accel_first_offset - stretch.accel_offset
         for i, bank in enumerate(self._banks):
             column = y[:, i]
-            if bank.offset is None and column.size < bank.n_warmup:
+            if bank.bank is None and column.size < bank.n_warmup:
                 column = np.concatenate([np.full(bank.n_warmup - column.size, column.mean()), column])
             bank.run(column)
             decision = bank.bank.snapshot().decision
@@ -1013,6 +1018,8 @@ class OnlineIdentifier:
         decision = np.full(6, -1.0)
         updates = np.zeros(6)
         for i, bank in enumerate(self._banks):
+            if bank.bank is None:
+                continue
             snap = bank.bank.snapshot()
             updates[i] = snap.n_updates
             if snap.n_updates == 0:
@@ -1028,6 +1035,8 @@ class OnlineIdentifier:
             return {}
         theta = {p: np.full(6, math.nan) for p in self._bank_parameters}
         for i, bank in enumerate(self._banks):
+            if bank.bank is None:
+                continue
             snap = bank.bank.snapshot()
             if snap.n_updates == 0:
                 continue
