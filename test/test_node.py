@@ -250,6 +250,14 @@ def test_a_runtime_parameter_change_takes_effect_and_bad_values_are_refused(sess
     assert session["node"].poll() is None
 
 
+def test_monitor_once_prints_a_snapshot_of_the_running_node(session, domain_env):
+    proc = subprocess.run([sys.executable, "-m", "imu_noise_id", "monitor", "--once", "--timeout", "30"],
+                          env=domain_env, capture_output=True, text=True, timeout=90, check=False)
+    assert proc.returncode == 0, proc.stderr
+    for text in ("gyro_x", "accel_z", "P(WN+RW)", "IMU input", "Noise density"):
+        assert text in proc.stdout
+
+
 def test_the_node_log_holds_no_tracebacks(session):
     text = Path(session["log"]).read_text()
     assert "Traceback" not in text
