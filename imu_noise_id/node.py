@@ -125,7 +125,6 @@ class ImuNoiseIdNode(Node):
         self.create_subscription(Temperature, "imu/temperature", self._on_temperature,
                                  _sensor_qos(cfg.odom_queue_depth))
 
-        self._diag_period = cfg.diagnostics_period
         self._diag_last = time.monotonic()
         self.create_timer(1.0 / cfg.publish_rate, self._publish_estimates, clock=self._steady)
         self.create_timer(cfg.diagnostics_period, self._publish_diagnostics, clock=self._steady)

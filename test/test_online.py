@@ -304,3 +304,25 @@ def test_odometry_arriving_after_later_imu_samples_is_processed_in_stamp_order()
     est = ident.estimates()
     assert est.cmkf_status == "tracking"
     assert ident.cmkf.counters["updates"] >= len(run.odom_t) - 10
+
+
+def test_without_odometry_the_imu_alone_decides_and_the_noise_is_still_identified():
+    rng = np.random.default_rng(8)
+    ident = OnlineIdentifier()
+    dt = 0.005
+    for k in range(4000):  # 20 s standing, no odometry at all
+        gyro = rng.normal(0.0, 1e-3 / math.sqrt(dt), 3) + 0.002
+        accel = rng.normal(0.0, 1e-2 / math.sqrt(dt), 3) + np.array([0.0, 0.0, 9.81])
+        ident.process_imu(100.0 + k * dt, tuple(gyro), tuple(accel))
+        if k % 20 == 0:
+            ident.update_identification()
+    est = ident.estimates()
+    assert est.stationary and est.cmkf_status == "imu_only"
+    assert np.all(np.isnan(est.gyro_bias))  # nothing to estimate a bias against: not published as a number
+    truth = np.array([1e-3] * 3 + [1e-2] * 3)
+    assert np.all(np.abs(est.noise_density / truth - 1) < 0.06)  # ~3000 differences: rstd ≈ 1.6 %
+    assert est.covariance_source == "stationary"
+    statuses = {s.name: s for s in ident.diagnostics(0.0, 1.0)}
+    assert statuses["Filter consistency"].level == WARN and "needs IMU and odometry" in statuses[
+        "Filter consistency"].message
+    assert ident.hypotheses() is not None and np.all(ident.hypotheses().updates > 100)

@@ -924,9 +924,10 @@ class OnlineIdentifier:
 
     # -- the hypothesis bank (batched) ------------------------------------------------------------------------------
     def update_identification(self) -> None:
-        """Feed the queued stationary samples to the per-axis hypothesis banks (the node calls it at
-        ``publish_rate``; a batch costs much less than the same samples one by one)."""
+        """Feed the queued stationary samples to the per-axis hypothesis banks and refresh the CMKF status (the
+        node calls it at ``publish_rate``; a batch costs much less than the same samples one by one)."""
         self._variance_cache = None
+        self._cmkf_est = self.cmkf.estimate()  # its status changes without odometry updates too
         if self._hypothesis_data is None or not self._stretches:
             return
         rate = self.imu_stamps.rate
