@@ -158,6 +158,8 @@ def wait_for_subscribers(node: object, publishers: dict, timeout: float) -> bool
 
 def play_once(messages: list[tuple[int, str, str, bytes]], publishers: dict, rate: float, quiet: bool = True) -> None:
     """Publish every message at ``start + (t − t₀)/rate`` on the steady clock (late messages go out at once)."""
+    import rclpy
+
     if not messages:
         return
     t0 = messages[0][0]
@@ -169,6 +171,8 @@ def play_once(messages: list[tuple[int, str, str, bytes]], publishers: dict, rat
         delay = target - time.monotonic()
         if delay > 0:
             time.sleep(delay)
+        if not rclpy.ok():  # Ctrl-C / SIGTERM: rclpy's signal handler shut the context down
+            return
         publishers[topic].publish(data)
         if not quiet and time.monotonic() - last_report > 1.0:
             last_report = time.monotonic()
