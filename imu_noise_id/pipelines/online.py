@@ -12,14 +12,18 @@ What happens per IMU sample
    rejected and counted; a gap (period larger than ``gap_factor`` × the nominal period) is accepted but restarts
    the stationarity detection; a sustained jump of time backwards (a restarted source, a looped bag) restarts
    the whole identification.
-2. Stationarity with hysteresis (:class:`StationarityDetector`): the odometry twist (when fresh) and
+2. The CMKF (:class:`~imu_noise_id.core.cmkf.robot.RobotCmkf`, paper 004 on a robot) receives the sample after
+   ``cmkf.input_latency`` seconds, merged in stamp order with the odometry (two topics, two latencies).
+3. Stationarity with hysteresis (:class:`StationarityDetector`): the odometry twist (when fresh) and
    exponentially weighted IMU statistics must both say "still" for ``stationary.enter_delay`` seconds; any
    sign of motion ends the stationary state at once.
-3. Stationary samples pass a delay line of ``stationary.guard`` seconds before they reach the noise
+4. Stationary samples pass a delay line of ``stationary.guard`` seconds before they reach the noise
    identification, and the line is emptied when motion is detected, so the last samples before a start —
    already disturbed but not yet detected — never reach it.
-4. Noise density per axis from the stationary samples (:class:`AllanTau0NoiseDensity`).
-5. Bias correction and the covariance N²·f of the corrected sample (REP-145: zeros mean "unknown").
+5. Noise density per axis from the stationary samples (:class:`AllanTau0NoiseDensity`); the samples are also
+   queued for the hypothesis bank (paper 002), which :meth:`OnlineIdentifier.update_identification` feeds in
+   batches.
+6. Bias correction and the covariance N²·f of the corrected sample (None while unknown).
 """
 
 from __future__ import annotations
