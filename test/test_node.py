@@ -262,3 +262,15 @@ def test_the_node_log_holds_no_tracebacks(session):
     text = Path(session["log"]).read_text()
     assert "Traceback" not in text
     assert "not processed" not in text
+
+
+@pytest.mark.parametrize(("override", "fragment"), [
+    ("stationary.window:=-1.0", "stationary.window"),
+    ("hypotheses.file:=/nonexistent/hypotheses.yaml", "/nonexistent/hypotheses.yaml"),
+])
+def test_a_bad_parameter_stops_the_start_with_a_message_naming_it(domain_env, override, fragment):
+    proc = subprocess.run([*node_command(config_path()), "-p", override], env=domain_env, capture_output=True,
+                          text=True, timeout=60, check=False)
+    assert proc.returncode == 2
+    assert fragment in proc.stderr
+    assert "Traceback" not in proc.stderr
