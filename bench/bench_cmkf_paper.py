@@ -76,8 +76,10 @@ def main() -> None:
     ratio = (mc.err[:, late] ** 2).mean(axis=(0, 1)) / mc.P_diag[:, late].mean(axis=(0, 1))
     print("  mean(err^2)/mean(P) [r, v, b]: x", np.array2string(ratio[0], precision=2),
           " y", np.array2string(ratio[1], precision=2))
-    print(f"  positive-definiteness fallbacks: S_v in use constant while the LS value was <= 0 "
-          f"(see fig. 6); final S_v_hat min {mc.S_v[:, -1].min():.3g}, max {mc.S_v[:, -1].max():.3g}")
+    K = round(args.hours * 3600.0 / cfg.T)
+    print(f"  positive-definiteness check refused the new S_v of at least one run at {mc.rejected_steps} of {K} "
+          f"steps (the last positive S_v was kept); final S_v_hat min {mc.S_v[:, -1].min():.3g}, "
+          f"max {mc.S_v[:, -1].max():.3g}")
 
     # Figures.
     th = t / 3600.0

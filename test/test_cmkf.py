@@ -315,3 +315,78 @@ def test_plain_float_velocity_filter_equals_batched_filter(robot_run):
     np.testing.assert_allclose(fast.S_ls, ref.estimator.estimate, rtol=1e-8)
     np.testing.assert_allclose(fast.S_used, ref.S_used, rtol=1e-8)
     assert fast.count == ref.estimator.count == 400 - 2 - 2
+
+
+def test_late_odometry_and_imu_gap():
+    run = _short_run()
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    _feed(f, run, imu_idx=range(1000), odom_idx=range(99))  # IMU to 10.0 s, odometry to 9.9 s
+    # odometry 10.0 s arrives after the IMU sample at 10.0 s (equal stamp: normal); one at 9.98 s is late
+    j = 99
+    assert f.process_odometry(run.odom_t[j] - 0.02, orientation_xyzw=run.orientation_xyzw[j],
+                              linear_velocity=run.linear_velocity[j], angular_velocity=run.angular_velocity[j])
+    assert f.estimate().counters["odom_late"] == 1
+    # the IMU stops for 2 s (> max_imu_gap): position/velocity re-initialised at the next odometry, bias kept
+    bias_before = f.estimate().accel_bias.copy()
+    _feed(f, run, imu_idx=[i for i in range(1000, len(run.imu_t)) if run.imu_t[i] <= 12.0],
+          odom_idx=[j for j in range(100, len(run.odom_t)) if run.odom_t[j] <= 13.0])
+    assert f.estimate().status == "unobserved"  # odometry goes on, the IMU stopped
+    _feed(f, run, imu_idx=[i for i in range(len(run.imu_t)) if run.imu_t[i] >= 14.0],
+          odom_idx=[j for j in range(len(run.odom_t)) if run.odom_t[j] > 13.0])
+    e = f.estimate()
+    assert e.counters["imu_gaps"] >= 1
+    assert e.status == "tracking"
+    assert np.all(np.abs(e.accel_bias - bias_before) < 3 * e.accel_bias_std)
+    assert np.all(np.abs(e.accel_bias - run.accel_bias) < 3 * e.accel_bias_std)
+
+
+def test_gravity_from_imu_orientation_equals_odometry_orientation_on_flat_ground():
+    """On flat ground the odometry's yaw-only orientation is the full orientation: gravity from the IMU's own
+    orientation (passed with every IMU sample) gives the same estimates up to the gyro-propagation error."""
+    from imu_noise_id.core.cmkf import rotation as rot
+
+    run = _short_run()
+    psi = np.interp(run.imu_t, run.odom_t, np.unwrap(2 * np.arctan2(run.orientation_xyzw[:, 2],
+                                                                     run.orientation_xyzw[:, 3])))
+    q_imu = [rot.multiply((0.0, 0.0, np.sin(p / 2), np.cos(p / 2)), run.imu_rotation_xyzw) for p in psi]
+    ests = {}
+    for source in ("odometry", "imu"):
+        f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, gravity_source=source))
+        events = sorted([(t, 0, i) for i, t in enumerate(run.imu_t)] + [(t, 1, j) for j, t in enumerate(run.odom_t)])
+        for _, kind, i in events:
+            if kind == 0:
+                f.process_imu(run.imu_t[i], run.gyro[i], run.accel[i], orientation_xyzw=q_imu[i])
+            else:
+                f.process_odometry(run.odom_t[i], orientation_xyzw=run.orientation_xyzw[i],
+                                   linear_velocity=run.linear_velocity[i], angular_velocity=run.angular_velocity[i],
+                                   twist_cov=run.twist_cov[i])
+        ests[source] = f.estimate()
+    np.testing.assert_allclose(ests["imu"].accel_bias, ests["odometry"].accel_bias, atol=2e-3)
+    assert ests["imu"].status == ests["odometry"].status == "tracking"
+
+
+def test_malformed_odometry_is_dropped_not_raised():
+    run = _short_run()
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    _feed(f, run, imu_idx=range(100), odom_idx=range(10))
+    assert not f.process_odometry(1.05, orientation_xyzw=[0, 0, 0, 0], linear_velocity=[0.5, 0, 0])
+    assert not f.process_odometry(1.06, orientation_xyzw=[0, 0, 0, 1], linear_velocity=[0.5, 0])
+    assert f.estimate().counters["odom_dropped_nan"] == 2
+    assert not f.process_imu(1.055, [0.0, 0.0], [0.0, 0.0, 9.8])
+    assert f.estimate().counters["imu_dropped_nan"] == 1
+    # a covariance of the wrong size counts as unknown (default noise), not as an error
+    assert f.process_odometry(1.07, orientation_xyzw=[0, 0, 0, 1], linear_velocity=[0.5, 0, 0],
+                              twist_cov=np.eye(3))
+
+
+def test_cli_cmkf_bag_without_odometry_exits_2(tmp_path, capsys):
+    from imu_noise_id.cli import main
+
+    bag = tmp_path / "imu_only"
+    assert main(["simulate", "--model", "WN(1e-3)", "--rate", "100", "--duration", "2", "--out", str(bag),
+                 "--seed", "1"]) == 0
+    capsys.readouterr()
+    assert main(["cmkf", str(bag), "--out", str(tmp_path / "out")]) == 2
+    assert "Odometry" in capsys.readouterr().err
+    assert main(["cmkf", str(bag), "--s-v0", "-1", "--out", str(tmp_path / "out")]) == 2
+    assert "s_v0" in capsys.readouterr().err

@@ -227,7 +227,8 @@ class TurntableMonteCarlo:
     ----------
     t : (J,) s, the recorded steps; err : (runs, J, 2, 3) state error x − x̂ per axis ([r, v, b]) after the update;
     P_diag : (runs, J, 2, 3); S_v : (runs, J, 2) Ŝ_v in use; nees : (runs, J) normalised estimation error squared
-    (6 dof); accel_err : (runs, J, 2) acceleration error a_k − (Δṽ_k/T − b̂_k) (paper fig. 5; 0 at the last step).
+    (6 dof); accel_err : (runs, J, 2) acceleration error a_k − (Δṽ_k/T − b̂_k) (paper fig. 5; 0 at the last step);
+    rejected_steps : steps at which the positive-definiteness check refused the new Ŝ_v of at least one run.
     """
 
     t: np.ndarray
@@ -236,6 +237,7 @@ class TurntableMonteCarlo:
     S_v: np.ndarray
     nees: np.ndarray
     accel_err: np.ndarray
+    rejected_steps: int = 0
 
 
 def simulate_turntable_batch(
@@ -321,5 +323,5 @@ def turntable_monte_carlo(
         filt.update(z[:, k + 1].reshape(n, 2), R)
     if K % record_every == 0:
         record(K)
-    return TurntableMonteCarlo(steps * cfg.T, err, Pd, Sv, nees, aerr)
+    return TurntableMonteCarlo(steps * cfg.T, err, Pd, Sv, nees, aerr, filt.rejected)
 

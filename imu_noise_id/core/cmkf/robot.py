@@ -148,9 +148,10 @@ class CmkfEstimate:
     ----------
     t : time of the estimate [s] (last processed stamp).
     status : ``no_data``, ``no_imu`` (odometry only: nothing to estimate), ``imu_only`` (no odometry yet),
-        ``unobserved`` (no odometry update for longer than ``max_odom_gap``), ``converging`` (fewer than
+        ``unobserved`` (no odometry update for longer than ``max_odom_gap``, or no IMU sample for longer than
+        ``max_imu_gap`` while odometry continues), ``converging`` (fewer than
         ``min_samples`` stacked samples) or ``tracking``.
-    observed : True when an odometry update happened within ``max_odom_gap``.
+    observed : True when an odometry update happened within ``max_odom_gap`` and the IMU is alive.
     accel_bias, accel_bias_std : [m/s²] per IMU axis; S_v : Ŝ_v in use [m²/s³]; S_v_ls : latest least-squares
         value (may be ≤ 0 early on); accel_noise_density : √Ŝ_v [m/s²/√Hz].
     gyro_bias, gyro_bias_std : [rad/s]; S_g, S_g_ls : [rad²/s]; gyro_noise_density : √Ŝ_g [rad/s/√Hz].
@@ -181,6 +182,18 @@ class CmkfEstimate:
     counters: dict[str, int] = field(default_factory=dict)
 
 
+def _as_floats(a: np.ndarray | list[float] | tuple[float, ...]) -> list[float]:
+    """A message vector as a list of floats (cheap for the 1-D arrays the node and the replay pass)."""
+    if isinstance(a, np.ndarray):
+        return a.astype(float, copy=False).ravel().tolist()
+    return [float(x) for x in a]
+
+
+def _rotate(rows: tuple[tuple[float, float, float], ...], v: list[float]) -> list[float]:
+    """``C v`` with C given by its rows (plain floats)."""
+    return [r[0] * v[0] + r[1] * v[1] + r[2] * v[2] for r in rows]
+
+
 class _CovDiag:
     """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 message covariance, cached on (Σ, C).
 
@@ -194,14 +207,15 @@ class _CovDiag:
         self._value: np.ndarray | None = None
 
     def __call__(self, cov: np.ndarray | None, C: np.ndarray) -> np.ndarray | None:
-        if cov is None:
+        cov = None if cov is None else np.asarray(cov, dtype=float)
+        if cov is None or cov.size != 36:
             return None
-        sub = np.asarray(cov, dtype=float).reshape(6, 6)[self.block, self.block]
+        sub = cov.reshape(6, 6)[self.block, self.block]
         key = sub.tobytes() + C.tobytes()
         if key != self._key:
             self._key = key
             ok = np.all(np.isfinite(sub)) and sub[0, 0] >= 0 and np.any(sub)
-            self._value = np.einsum("ij,jk,ik->i", C, sub, C) if ok else None
+            self._value = np.einsum("ij,jk,ik->i", C, sub, C).tolist() if ok else None
         return self._value
 
 
@@ -214,6 +228,7 @@ class RobotCmkf:
         self.q_bi = rot.normalise(config.imu_rotation_xyzw)
         self.C_bi = rot.to_matrix(self.q_bi)
         self.C_ib = self.C_bi.T
+        self._C_ib_rows = tuple(tuple(float(c) for c in row) for row in self.C_ib)
         # twist: the plain-float velocity filter (same equations as AxisCmkf mode "vel", tested equal)
         self._fast = config.measurement == "twist"
         self.filter: AxisCmkf | VelocityAxisCmkf
@@ -275,9 +290,12 @@ class RobotCmkf:
         The sample is held over ``(t_prev, t]``. ``orientation_xyzw`` (IMU orientation in a z-up world frame) is
         used for gravity only when ``gravity_source == "imu"``. Returns False if the sample was dropped.
         """
-        t = float(t)
-        wx, wy, wz = float(gyro[0]), float(gyro[1]), float(gyro[2])
-        fx, fy, fz = float(accel[0]), float(accel[1]), float(accel[2])
+        try:
+            t = float(t)
+            wx, wy, wz = (float(v) for v in gyro)
+            fx, fy, fz = (float(v) for v in accel)
+        except (TypeError, ValueError):  # not three numbers each: unusable
+            t = wx = wy = wz = fx = fy = fz = math.nan
         if not math.isfinite(t + wx + wy + wz + fx + fy + fz):  # NaN/inf anywhere makes the sum non-finite
             self.counters["imu_dropped_nan"] += 1
             return False
@@ -297,7 +315,8 @@ class RobotCmkf:
             return True  # no odometry yet: nothing to propagate from
         dt = t - self._t_state
         if dt > self.config.max_imu_gap:
-            self.counters["imu_gaps"] += 1
+            if not self._reinit:
+                self.counters["imu_gaps"] += 1
             self._reinit = True
             self._t_state = t
             return True
@@ -392,30 +411,18 @@ class RobotCmkf:
         """
         cfg = self.config
         t = float(t)
-        arrays = {
+        checked = self._check_odometry(t, {
             "position": position, "orientation_xyzw": orientation_xyzw, "linear_velocity": linear_velocity,
             "angular_velocity": angular_velocity,
-        }
-        vals = {k: None if a is None else np.asarray(a, dtype=float).ravel() for k, a in arrays.items()}
-        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
-        if not math.isfinite(t + sum(float(a.sum()) for a in vals.values() if a is not None)):
-            self.counters["odom_dropped_nan"] += 1
+        })
+        if checked is None:
             return False
-        if self._t_odom is not None and t <= self._t_odom:
-            self.counters["odom_dropped_stamp"] += 1
-            return False
-        needs = ["linear_velocity", "orientation_xyzw"] if cfg.gravity_source == "odometry" else ["linear_velocity"]
-        if cfg.measurement == "pose_twist":
-            needs = ["position", "orientation_xyzw", "linear_velocity"]
-        if any(vals[k] is None for k in needs):
-            self.counters["odom_dropped_missing"] += 1
-            return False
+        vals, q_nb = checked
         self.counters["odom"] += 1
         self._t_odom = t
         if self._last_imu is None:
             self.counters["odom_without_imu"] += 1
             return False
-        q_nb = rot.normalise(vals["orientation_xyzw"]) if vals["orientation_xyzw"] is not None else None
         # Bring the state to the odometry stamp.
         if self._t_state is not None:
             if t < self._t_state:
@@ -424,29 +431,25 @@ class RobotCmkf:
                     return False
                 self.counters["odom_late"] += 1
             elif t > self._t_state:
-                dt = t - self._t_state
-                if dt > cfg.max_imu_gap:
-                    self.counters["imu_gaps"] += 1
+                if t - self._t_imu > cfg.max_imu_gap:  # the last IMU sample is stale: cannot propagate
+                    if not self._reinit:
+                        self.counters["imu_gaps"] += 1
                     self._reinit = True
                 else:
-                    self._propagate(dt, self._last_imu)
+                    self._propagate(t - self._t_state, self._last_imu)
                 self._t_state = t
         new_chain = self._t_update is None or (t - self._t_update) > cfg.max_odom_gap
         if new_chain and self._t_update is not None:
             self.counters["odom_gaps"] += 1
-        C_ni = None
-        if q_nb is not None:
-            q_ni = rot.multiply(q_nb, self.q_bi)
-            C_ni = rot.to_matrix(q_ni)
-        elif self._q_ni is not None:
-            C_ni = rot.to_matrix(self._q_ni)
+        q_ni = rot.multiply(q_nb, self.q_bi) if q_nb is not None else self._q_ni
+        C_ni = None if self._fast or q_ni is None else rot.to_matrix(q_ni)
         z, R = self._measurement(vals, C_ni, pose_cov, twist_cov)
         if self._reinit or self._t_state is None:
             self._initialise(t, z, R)
         else:
             if self._fast:
                 self.filter.predict(self._v, self._b, self._vel_interval())
-                self._nis_accel = self.filter.update(z[:, 0].tolist(), R[:, 0, 0].tolist(), new_chain=new_chain)
+                self._nis_accel = self.filter.update(z, R, new_chain=new_chain)
                 self._v, self._b = list(self.filter.v), list(self.filter.b)
             else:
                 self._r = list(C_ni.T @ (self._C_ni_epoch @ np.array(self._r) + np.array(self._dp)))
@@ -460,28 +463,56 @@ class RobotCmkf:
             self._gyro_update(vals, q_nb, twist_cov, new_chain)
             self.counters["updates"] += 1
         if q_nb is not None:
-            self._q_ni = rot.multiply(q_nb, self.q_bi)
+            self._q_ni = q_ni
             self._q_nb_prev = q_nb
         self._C_ni_epoch = C_ni
         self._t_update = t
         self._reset_interval()
         return True
 
+    def _check_odometry(self, t: float, arrays: dict) -> tuple[dict, rot.Quat | None] | None:
+        """The message's vectors as float lists and its unit quaternion, or None (dropped, counted)."""
+        cfg = self.config
+        vals = {k: None if a is None else _as_floats(a) for k, a in arrays.items()}
+        lengths = {"position": 3, "orientation_xyzw": 4, "linear_velocity": 3, "angular_velocity": 3}
+        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
+        bad = not math.isfinite(t + sum(sum(a) for a in vals.values() if a is not None)) or any(
+            a is not None and len(a) != lengths[k] for k, a in vals.items()
+        )
+        q_nb = None
+        if not bad and vals["orientation_xyzw"] is not None:
+            try:
+                q_nb = rot.normalise(vals["orientation_xyzw"])
+            except ValueError:  # zero quaternion: as unusable as NaN
+                bad = True
+        if bad:
+            self.counters["odom_dropped_nan"] += 1  # NaN/inf or malformed: unusable
+            return None
+        if self._t_odom is not None and t <= self._t_odom:
+            self.counters["odom_dropped_stamp"] += 1
+            return None
+        needs = ["linear_velocity", "orientation_xyzw"] if cfg.gravity_source == "odometry" else ["linear_velocity"]
+        if cfg.measurement == "pose_twist":
+            needs = ["position", "orientation_xyzw", "linear_velocity"]
+        if any(vals[k] is None for k in needs):
+            self.counters["odom_dropped_missing"] += 1
+            return None
+        return vals, q_nb
+
     def _measurement(
         self, vals: dict, C_ni: np.ndarray | None, pose_cov: np.ndarray | None, twist_cov: np.ndarray | None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """z (3, m) and R (3, m, m) per IMU axis (velocity, or position and velocity)."""
+        """Per IMU axis: twist mode z, R as lists (3); pose_twist z (3, 2) and R (3, 2, 2) arrays."""
         cfg = self.config
-        zv = self.C_ib @ vals["linear_velocity"]
+        zv = _rotate(self._C_ib_rows, vals["linear_velocity"])
         if cfg.velocity_noise_std is not None:
-            rv = np.full(3, cfg.velocity_noise_std**2)
+            rv = [cfg.velocity_noise_std**2] * 3
         else:
             rv = self._twist_lin_cov(twist_cov, self.C_ib)
-            if rv is None:
-                rv = np.full(3, cfg.default_velocity_noise_std**2)
+            rv = [cfg.default_velocity_noise_std**2] * 3 if rv is None else rv
         if cfg.measurement == "twist":
-            return zv[:, None], rv[:, None, None]
-        p = vals["position"]
+            return zv, rv
+        p = np.array(vals["position"])
         if self._anchor is None:
             self._anchor = p.copy()
         C_in = C_ni.T
@@ -515,9 +546,9 @@ class RobotCmkf:
             x0[:, 0], x0[:, 1] = z[:, 0], z[:, 1]
             P0[:, 0, 0], P0[:, 1, 1] = R[:, 0, 0], R[:, 1, 1]
         else:
-            x0[:, 1] = z[:, 0]
+            x0[:, 1] = z
             P0[:, 0, 0] = 1.0  # r is not tracked in twist mode
-            P0[:, 1, 1] = R[:, 0, 0]
+            P0[:, 1, 1] = R
         x0[:, 2] = b0
         P0[:, 2, 2] = Pbb
         if self._fast:
@@ -537,27 +568,27 @@ class RobotCmkf:
         if new_chain:
             self.gyro.reset_chain()
         if vals["angular_velocity"] is not None:
-            w_now = self.C_ib @ vals["angular_velocity"]
+            w_now = _rotate(self._C_ib_rows, vals["angular_velocity"])
             if cfg.angular_velocity_noise_std is not None:
-                rw = np.full(3, cfg.angular_velocity_noise_std**2)
+                rw = [cfg.angular_velocity_noise_std**2] * 3
             else:
                 rw = self._twist_ang_cov(twist_cov, self.C_ib)
-                if rw is None:
-                    rw = np.full(3, cfg.default_angular_velocity_noise_std**2)
+                rw = [cfg.default_angular_velocity_noise_std**2] * 3 if rw is None else rw
             prev, self._w_odo_prev = self._w_odo_prev, (w_now, rw)
             if prev is None or new_chain:
                 return  # the trapezoid needs the rate at both ends of the interval
-            dtheta_odo = 0.5 * (prev[0] + w_now) * T  # trapezoid: the twist is the rate at the stamp
-            R = 0.25 * (prev[1] + rw) * T * T
+            # trapezoid: the twist is the rate at the stamp
+            dtheta_odo = [0.5 * (a + b) * T for a, b in zip(prev[0], w_now, strict=True)]
+            R = [0.25 * (a + b) * T * T for a, b in zip(prev[1], rw, strict=True)]
         elif q_nb is not None and self._q_nb_prev is not None:
             dq = rot.multiply(rot.conjugate(self._q_nb_prev), q_nb)
-            dtheta_odo = self.C_ib @ rot.to_rotvec(dq)
+            dtheta_odo = _rotate(self._C_ib_rows, rot.to_rotvec(dq).tolist())
             std = cfg.angular_velocity_noise_std or cfg.default_angular_velocity_noise_std
-            R = np.full(3, (std * T) ** 2)
+            R = [(std * T) ** 2] * 3
         else:
             return
-        y = (np.asarray(self._dtheta) - dtheta_odo).tolist()
-        self._nis_gyro = self.gyro.update(y, T, R.tolist())
+        y = [a - b for a, b in zip(self._dtheta, dtheta_odo, strict=True)]
+        self._nis_gyro = self.gyro.update(y, T, R)
 
     # ------------------------------------------------------------------ results
     def _bias_var(self) -> np.ndarray:
@@ -573,8 +604,11 @@ class RobotCmkf:
         f = self.filter
         n_stacked = f.count if self._fast else f.estimator.count
         t = max(x for x in (self._t_imu, self._t_odom, -math.inf) if x is not None)
-        observed = self._t_update is not None and self._t_state is not None and (
-            (self._t_state - self._t_update) <= cfg.max_odom_gap
+        observed = (
+            self._t_update is not None
+            and self._t_state is not None
+            and (self._t_state - self._t_update) <= cfg.max_odom_gap
+            and (t - self._t_imu) <= cfg.max_imu_gap  # an IMU that stopped while odometry goes on observes nothing
         )
         if self._t_imu is None and self._t_odom is None:
             status = "no_data"
