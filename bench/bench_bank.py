@@ -168,6 +168,18 @@ def dt_sweep(trials: int, duration: float) -> None:
         print(f"  dt = {dt:4.2f} s: " + "; ".join(parts))
 
 
+def wn_grid_effect(trials: int, dt: float, duration: float) -> None:
+    """Case 3 with coarser σ_v grids: how much of the identification error a coarse grid adds."""
+    print(f"\ncase 3 vs the size of the σ_v grid ({trials} trials, dt = {dt} s, {duration:.0f} s):")
+    for n_v in (3, 6):
+        r = run_criteria(paper_case(3, dt=dt, grid={"noise_density": n_v}), duration, trials, seed=33,
+                         record=[round(duration / dt)], case="3")
+        print(f"  σ_v grid {n_v:2d} cells: identification error real {r.error_probability_real[-1]:.3f}, calculated "
+              f"{r.error_probability_calculated[-1]:.3f}; RSD σ_v (RW/GM) real "
+              f"{r.rsd_real['RW+WN:WN.noise_density'][-1]:.3f}/{r.rsd_real['GM+WN:WN.noise_density'][-1]:.3f}, calc. "
+              f"{r.rsd_calculated['RW+WN:WN.noise_density'][-1]:.3f}/{r.rsd_calculated['GM+WN:WN.noise_density'][-1]:.3f}")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--trials", type=int, default=500)
@@ -189,6 +201,7 @@ def main() -> int:
         reproduction(args.trials, args.dt, args.duration, args.tag)
     if args.dt_sweep:
         dt_sweep(args.dt_sweep, args.duration)
+        wn_grid_effect(args.dt_sweep, args.dt, args.duration)
     print(f"\ntotal wall time {time.perf_counter() - t0:.1f} s")
     return 0
 
