@@ -326,3 +326,20 @@ def test_without_odometry_the_imu_alone_decides_and_the_noise_is_still_identifie
     assert statuses["Filter consistency"].level == WARN and "needs IMU and odometry" in statuses[
         "Filter consistency"].message
     assert ident.hypotheses() is not None and np.all(ident.hypotheses().updates > 100)
+
+
+def test_odometry_later_than_the_input_latency_is_dropped_not_fatal():
+    run = simulate_stop_and_go(np.random.default_rng(9), stand_before=3, drive=4, stand_after=3)
+    ident = OnlineIdentifier(OnlineConfig({"cmkf.input_latency": 0.02}))
+    events = [(t + 0.03, 0, k) for k, t in enumerate(run.odom_t)]  # always 30 ms late: beyond the 20 ms window
+    events += [(t, 1, k) for k, t in enumerate(run.imu_t)]
+    for _, kind, k in sorted(events):
+        if kind:
+            ident.process_imu(run.imu_t[k], tuple(run.gyro[k]), tuple(run.accel[k]))
+        else:
+            ident.process_odometry(run.odom_t[k], tuple(run.linear_velocity[k]), tuple(run.angular_velocity[k]),
+                                   position=tuple(run.position[k]), orientation_xyzw=tuple(run.orientation_xyzw[k]))
+    assert ident.cmkf_errors == 0
+    assert ident.odom_too_late >= len(run.odom_t) - 2  # the last ones may still wait in the queue
+    status = {s.name: s for s in ident.diagnostics(0.0, 1.0)}["Time stamps"]
+    assert status.level == WARN and "odom too late" in status.message

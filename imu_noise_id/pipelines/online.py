@@ -627,6 +627,7 @@ class OnlineIdentifier:
         self.temperature = math.nan
         self.restarts = 0
         self.cmkf_errors = 0
+        self.odom_too_late = 0
         self._window_stamp_counts: dict[str, int] = {}
         self._events: deque[tuple[str, str]] = deque(maxlen=100)
         self._hypothesis_data = self._load_hypotheses()
@@ -680,6 +681,7 @@ class OnlineIdentifier:
         self._guard: deque[tuple[float, np.ndarray]] = deque()
         self.cmkf = RobotCmkf(self._cmkf_config())
         self._cmkf_est = self.cmkf.estimate()
+        self._cmkf_fed_t = -math.inf
         self._cmkf_imu: deque[tuple[float, Any, Any, Any]] = deque()
         self._cmkf_odom: deque[tuple[float, dict[str, Any]]] = deque()
         self.gyro_bias = np.zeros(3)
@@ -891,14 +893,24 @@ class OnlineIdentifier:
                 if t_imu <= t_odom:
                     t, gyro, accel, orientation = imu.popleft()
                     self.cmkf.process_imu(t, gyro, accel, orientation)
+                    self._cmkf_fed_t = t
                 else:
                     t, kwargs = odom.popleft()
+                    if t < self._cmkf_fed_t:
+                        # Later than cmkf.input_latency: the CMKF has propagated past it (its own late path
+                        # raised on such input), so it is dropped here and counted.
+                        self.odom_too_late += 1
+                        self._count("odom_too_late")
+                        self._event("odom_too_late", f"odom: message at t = {t:.6f} s arrived more than "
+                                    "cmkf.input_latency after the IMU: not used by the CMKF")
+                        continue
                     updated |= self.cmkf.process_odometry(t, **kwargs)
-        except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
+        except (np.linalg.LinAlgError, ArithmeticError, ValueError) as exc:
             self.cmkf_errors += 1
             self._count("cmkf_error")
             self._event("cmkf_error", f"CMKF failed ({type(exc).__name__}: {exc}): restarting it")
             self.cmkf = RobotCmkf(self._cmkf_config())
+            self._cmkf_fed_t = -math.inf
             updated = True
         if updated:
             est = self.cmkf.estimate()
@@ -1175,6 +1187,7 @@ class OnlineIdentifier:
                 values[f"cmkf_{key}"] = str(count)
         name = "Filter consistency"
         values["cmkf_restarts_after_errors"] = str(self.cmkf_errors)
+        values["odom_too_late_for_cmkf"] = str(self.odom_too_late)
         if self._window_stamp_counts.get("cmkf_error"):
             return DiagnosticStatus(name, ERROR, "the CMKF raised an error and was restarted (see the log)", values)
         if est.status in ("no_data", "no_imu", "imu_only"):
