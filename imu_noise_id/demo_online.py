@@ -120,6 +120,24 @@ def summary(state: object) -> str:
 
 def run_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> int:
     """Run the whole demo (see the module docstring); returns 0 when the node produced its outputs."""
+    state = watch_demo(out, rate, seed)
+    return 0 if state.complete() else 1
+
+
+def online_part(ctx: object) -> None:
+    """The online demo as a part of ``python -m imu_noise_id.demo`` (:data:`imu_noise_id.demo.PARTS`).
+
+    Uses ``ctx.out`` and ``ctx.seed``; stores the node's final outputs (a
+    :class:`~imu_noise_id.cli.monitor.MonitorState`) in ``ctx.results["online"]`` and the bag in ``ctx.outputs``.
+    """
+    print("\n== online: the node on a simulated robot (stand, drive, stand), watched live ==")
+    state = watch_demo(Path(ctx.out) / "online", 2.0, int(ctx.seed))
+    ctx.results["online"] = state
+    ctx.outputs["online/demo_robot_bag"] = Path(ctx.out) / "online" / "demo_robot_bag"
+
+
+def watch_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> object:
+    """Steps 1–4 of the module docstring; returns the node's final outputs as a ``MonitorState``."""
     import rclpy
 
     from .cli.monitor import _Listener, render, watch
@@ -152,7 +170,7 @@ def run_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> int:
         player.wait(30)
         print(render(listener.state))
         print(summary(listener.state))
-        return 0 if listener.state.complete() else 1
+        return listener.state
     finally:
         if player is not None:
             stop(player)
