@@ -32,7 +32,8 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from .core.axes import AXES
 from .core.errors import InputError
-from .pipelines.online import PARAMETERS, OnlineConfig, OnlineIdentifier, ParamSpec
+from .pipelines.online import OnlineIdentifier
+from .pipelines.online_config import PARAMETERS, OnlineConfig, ParamSpec
 
 NODE_NAME = "imu_noise_id_node"
 

@@ -11,18 +11,9 @@ import yaml
 
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.simulate_stop_and_go import simulate_stop_and_go
-from imu_noise_id.pipelines.online import (
-    ERROR,
-    OK,
-    PARAMETERS,
-    STALE,
-    WARN,
-    AllanTau0NoiseDensity,
-    OnlineConfig,
-    OnlineIdentifier,
-    StampChecker,
-    StationarityDetector,
-)
+from imu_noise_id.pipelines.online import ERROR, OK, STALE, WARN, OnlineIdentifier
+from imu_noise_id.pipelines.online_blocks import AllanTau0NoiseDensity, StampChecker, StationarityDetector
+from imu_noise_id.pipelines.online_config import PARAMETERS, OnlineConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 GYRO_BIAS = (0.004, -0.006, 0.003)
