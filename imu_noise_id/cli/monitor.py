@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 
 from ..core.axes import AXES
 from ..core.errors import InputError
+from ..pipelines.online import ERROR, LEVEL_NAMES, OK, STALE, WARN
 
-LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
-_COLOURS = {0: "\x1b[32m", 1: "\x1b[33m", 2: "\x1b[31m", 3: "\x1b[35m"}
+_COLOURS = {OK: "\x1b[32m", WARN: "\x1b[33m", ERROR: "\x1b[31m", STALE: "\x1b[35m"}
 
 
 @dataclass
@@ -92,7 +92,7 @@ def render(state: MonitorState, colour: bool = False) -> str:
     if not state.diagnostics:
         lines.append("  (none received yet)")
     for name, (level, message) in sorted(state.diagnostics.items()):
-        tag = LEVELS.get(level, str(level))
+        tag = LEVEL_NAMES.get(level, str(level))
         if colour:
             tag = f"{_COLOURS.get(level, '')}{tag}\x1b[0m"
         lines.append(f"  {tag:5} {name}: {message}")
