@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 
 from ..core.axes import AXES
 from ..core.errors import InputError
-from ..pipelines.online import ERROR, LEVEL_NAMES, OK, STALE, WARN
 
-_COLOURS = {OK: "\x1b[32m", WARN: "\x1b[33m", ERROR: "\x1b[31m", STALE: "\x1b[35m"}
+#: ANSI colour per diagnostics level (OK, WARN, ERROR, STALE = 0, 1, 2, 3).
+_COLOURS = {0: "\x1b[32m", 1: "\x1b[33m", 2: "\x1b[31m", 3: "\x1b[35m"}
 
 
 @dataclass
@@ -54,6 +54,8 @@ def _column(table: tuple[list[str], list[str], list[list[float]]] | None, name: 
 
 def render(state: MonitorState, colour: bool = False) -> str:
     """The screen for ``state``: biases ± 1σ, noise figures, hypothesis probabilities, diagnostics."""
+    from ..pipelines.online import LEVEL_NAMES
+
     lines = [f"imu_noise_id monitor — node {state.node}   (header time {state.stamp:.2f} s)", ""]
     bias = _column(state.noise, "bias")
     bias_std = _column(state.noise, "bias_std")
