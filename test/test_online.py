@@ -334,3 +334,25 @@ def test_odometry_later_than_the_input_latency_is_dropped_not_fatal():
     assert ident.odom_too_late >= len(run.odom_t) - 2  # the last ones may still wait in the queue
     status = {s.name: s for s in ident.diagnostics(0.0, 1.0)}["Time stamps"]
     assert status.level == WARN and "odom too late" in status.message
+
+
+def test_play_converts_ros1_messages_to_the_ros2_types(shared_data):
+    """The ROS 1 Husky bag and its rosbag2 copy give the same ROS 2 messages (ROS 1 Header.seq dropped)."""
+    pytest.importorskip("rclpy")
+    from rclpy.serialization import deserialize_message
+
+    from imu_noise_id.cli.play import load_messages, message_class, to_rclpy
+
+    folder = shared_data / "husky_robot_localization"
+    if not (folder / "test1.bag").is_file():
+        pytest.skip("the Husky ROS 1 bag is absent")
+    topics = ["/imu/data", "/husky_velocity_controller/odom"]
+    ros1 = load_messages(folder / "test1.bag", topics)
+    ros2 = load_messages(folder / "husky_test1_ros2", topics)
+    assert len(ros1) == len(ros2)
+    for k in (0, 1, 2, 500, len(ros1) - 1):
+        t1, topic1, kind, obj = ros1[k]
+        t2, topic2, _, raw = ros2[k]
+        assert (t1, topic1) == (t2, topic2)
+        cls = message_class(kind)
+        assert to_rclpy(obj, cls) == deserialize_message(raw, cls)

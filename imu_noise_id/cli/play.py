@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import time
 from pathlib import Path
+from typing import Any
 
 from ..core.errors import InputError
 
@@ -64,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--delay must be >= 0 s, got {args.delay}")
     remap = _remaps(args.remap)
     messages = load_messages(args.bag, args.topics)
+    messages = [(t, topic, kind, data if isinstance(data, bytes) else to_rclpy(data, message_class(kind)))
+                for t, topic, kind, data in messages]
     import rclpy
 
     rclpy.init()
@@ -84,8 +87,11 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def load_messages(bag: Path, topics: list[str] | None) -> list[tuple[int, str, str, bytes]]:
-    """(receive time [ns], topic, type, CDR bytes) of the played messages, in bag order.
+def load_messages(bag: Path, topics: list[str] | None) -> list[tuple[int, str, str, Any]]:
+    """(receive time [ns], topic, type, data) of the played messages, in bag order.
+
+    ``data`` is the CDR bytes for rosbag2 bags and the deserialised (rosbags) message for ROS 1 bags, whose
+    types differ (``std_msgs/Header.seq``) and are converted with :func:`to_rclpy` before publishing.
 
     Raises
     ------
@@ -118,28 +124,48 @@ def load_messages(bag: Path, topics: list[str] | None) -> list[tuple[int, str, s
         ros1 = bag.suffix == ".bag"
         out = []
         for connection, timestamp, raw in reader.messages(connections=connections):
-            data = raw
-            if ros1:
-                msg = reader.deserialize(raw, connection.msgtype)
-                data = reader.typestore.serialize_cdr(msg, connection.msgtype)
-            out.append((timestamp, connection.topic, connection.msgtype, bytes(data)))
+            data = reader.deserialize(raw, connection.msgtype) if ros1 else bytes(raw)
+            out.append((timestamp, connection.topic, connection.msgtype, data))
     finally:
         reader.close()
     return out
 
 
-def _publishers(node: object, messages: list[tuple[int, str, str, bytes]], remap: dict[str, str]) -> dict:
+def message_class(msgtype: str) -> type:
+    """The rclpy message class of a played rosbags type name."""
     import importlib
 
+    module, cls = PLAYED_TYPES[msgtype]
+    return getattr(importlib.import_module(module), cls)
+
+
+def to_rclpy(src: Any, cls: type) -> Any:
+    """An rclpy message of class ``cls`` with the fields of a deserialised rosbags message (ROS 1 or ROS 2).
+
+    Fields the ROS 2 type does not have (``Header.seq`` of ROS 1) are left out.
+    """
+    import numpy as np
+
+    msg = cls()
+    for name in cls.get_fields_and_field_types():
+        value = getattr(src, name)
+        current = getattr(msg, name)
+        if hasattr(current, "get_fields_and_field_types"):
+            value = to_rclpy(value, type(current))
+        elif isinstance(value, np.ndarray):
+            value = value.astype(float)
+        setattr(msg, name, value)
+    return msg
+
+
+def _publishers(node: object, messages: list[tuple[int, str, str, Any]], remap: dict[str, str]) -> dict:
     from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
     qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE)
     publishers = {}
     for _, topic, msgtype, _ in messages:
         if topic not in publishers:
-            module, cls = PLAYED_TYPES[msgtype]
-            msg_class = getattr(importlib.import_module(module), cls)
-            publishers[topic] = node.create_publisher(msg_class, remap.get(topic, topic), qos)
+            publishers[topic] = node.create_publisher(message_class(msgtype), remap.get(topic, topic), qos)
     return publishers
 
 
@@ -156,7 +182,7 @@ def wait_for_subscribers(node: object, publishers: dict, timeout: float) -> bool
     return False
 
 
-def play_once(messages: list[tuple[int, str, str, bytes]], publishers: dict, rate: float, quiet: bool = True) -> None:
+def play_once(messages: list[tuple[int, str, str, Any]], publishers: dict, rate: float, quiet: bool = True) -> None:
     """Publish every message at ``start + (t − t₀)/rate`` on the steady clock (late messages go out at once)."""
     import rclpy
 
