@@ -410,3 +410,47 @@ def test_identify_cli_on_a_simulated_bag(tmp_path):
     doc = yaml.safe_load((out / "hypotheses.yaml").read_text())
     assert doc["axes"]["gyro_z"]["decision"] == "WN+GM"
     assert main(["identify", str(bag), "--hypotheses", str(cfg), "--axis", "accel_x", "--out", str(out)]) == 2
+
+
+def test_frozen_gains_change_little():
+    # Freezing the gains once they change by < 1e-5 per step (here after ~1300 steps, a coarse setting) must leave the
+    # probabilities and estimates close to the exact time-varying filters (tolerance 0) on 3000 samples.
+    rng = np.random.default_rng(21)
+    y = simulate_sum([GM(100.0, 1.0), WN(0.5)], 3000, 1.0, rng)
+    exact = HypothesisBank(rw_gm_set(n_rw=8, n_gm=6, gain_tolerance=0.0))
+    frozen = HypothesisBank(rw_gm_set(n_rw=8, n_gm=6, gain_tolerance=1e-5))
+    a, b = exact.run(y).final, frozen.run(y).final
+    assert frozen._filters.frozen and not exact._filters.frozen
+    assert abs(a.probabilities["GM+WN"] - b.probabilities["GM+WN"]) < 0.02
+    assert b.hypotheses["GM+WN"].theta["GM.tau"] == pytest.approx(a.hypotheses["GM+WN"].theta["GM.tau"], rel=0.02)
+
+
+def test_grid_refinement_zooms_on_the_posterior():
+    # A coarse 4 × 4 GM grid puts the posterior of 6000 samples on one cell (std far too small). Two refinement
+    # passes must reproduce the posterior of a brute-force 40 × 40 grid (an independent, 100× larger
+    # computation): mean within 0.5 and std within 35 % of the fine grid's std, same decision; the grids stay
+    # inside the prior and their weights are the prior mass of the refined box.
+    from imu_noise_id.core.hypotheses.model import refine_hypothesis_set
+    from imu_noise_id.pipelines.hypotheses_online import identify_offline
+
+    y = simulate_sum([GM(300.0, 1.0), WN(0.5)], 6000, 1.0, np.random.default_rng(13))
+    coarse = rw_gm_set(n_rw=8, n_gm=4)
+    first, _, _ = identify_offline(y, coarse, 0.0, 1.0, refine=0)
+    res, ident, passes = identify_offline(y, coarse, 0.0, 1.0, refine=2)
+    fine, _, _ = identify_offline(y, rw_gm_set(n_rw=8, n_gm=40), 0.0, 1.0, refine=0)
+    assert passes == 3
+    assert res.final.decision == fine.final.decision == "GM+WN"
+    assert res.final.probabilities["GM+WN"] == pytest.approx(fine.final.probabilities["GM+WN"], abs=0.02)
+    e0, e, ef = (r.final.hypotheses["GM+WN"] for r in (first, res, fine))
+    for p in ("GM.tau", "GM.sigma"):
+        assert e0.theta_std[p] < 0.4 * ef.theta_std[p]  # the coarse grid's posterior collapsed
+        assert abs(e.theta[p] - ef.theta[p]) <= 0.5 * ef.theta_std[p]
+        assert e.theta_std[p] == pytest.approx(ef.theta_std[p], rel=0.35)
+    for p in ident.bank.hset.hypotheses[1].priors:
+        if not p.known:
+            edges = p.edges()
+            assert p.low <= edges[0] < edges[-1] <= p.high
+            assert p.cells()[1].sum() == pytest.approx((edges[-1] - edges[0]) / (p.high - p.low))
+    with pytest.raises(InputError, match="inside its prior range"):
+        refine_hypothesis_set(coarse, {"RW+WN": {"RW.random_walk": 1.0}, "GM+WN": {"GM.tau": 1e5, "GM.sigma": 1.0}},
+                              {"RW+WN": {"RW.random_walk": 0.0}, "GM+WN": {"GM.tau": 0.0, "GM.sigma": 0.0}})

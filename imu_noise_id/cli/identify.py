@@ -34,14 +34,16 @@ def register(subparsers: Any) -> None:
                    help=f"axes to analyse (default: all six: {' '.join(AXES)})")
     p.add_argument("--topic", default=None, help="sensor_msgs/Imu topic (default: the only IMU topic)")
     p.add_argument("--out", default="identify_out", metavar="DIR", help="output directory (default: %(default)s)")
+    p.add_argument("--refine", type=int, default=2, metavar="N",
+                   help="grid-refinement passes: rerun with grids re-centred on the posterior (default: %(default)s)")
     p.add_argument("--no-plot", action="store_true", help="skip the PNG plot")
     p.set_defaults(run=run)
 
 
-def identify_series(series: ImuSeries, axes: list[str], hypotheses: str | None) -> dict[str, Any]:
-    """Run the bank on each axis of ``series``; returns per-axis results (dicts and time series)."""
+def identify_series(series: ImuSeries, axes: list[str], hypotheses: str | None, refine: int = 0) -> dict[str, Any]:
+    """Run the bank on each axis of ``series`` (``refine`` grid-refinement passes); per-axis results."""
     from ..pipelines.hypotheses_config import hypothesis_set_factory, read_config
-    from ..pipelines.hypotheses_online import AxisIdentifier
+    from ..pipelines.hypotheses_online import identify_offline
 
     if len(series) < 2:
         raise InputError(f"{series.topic or 'the IMU series'} has {len(series)} sample(s): need a recording")
@@ -51,13 +53,13 @@ def identify_series(series: ImuSeries, axes: list[str], hypotheses: str | None) 
     for axis in axes:
         sensor = axis.split("_")[0]
         make, warmup = hypothesis_set_factory(data, dt, sensor, source)
-        ident = AxisIdentifier(make, warmup, dt)
         y = series.axis(axis)
         block = make(1.0).block
         every = max(1, len(y) // block // MAX_ROWS)
-        result = ident.run(y, record_every=every)
+        result, ident, passes = identify_offline(y, make, warmup, dt, refine=refine, record_every=every)
         out["axes"][axis] = {"result": result, "offset": ident.offset, "hset": ident.bank.hset, "warmup": warmup,
-                             "wn_estimate": ident.wn_estimate, "states": ident.bank.state_estimates()}
+                             "wn_estimate": ident.wn_estimate, "states": ident.bank.state_estimates(),
+                             "passes": passes}
     return out
 
 
@@ -73,6 +75,7 @@ def _axis_yaml(axis: str, entry: dict[str, Any]) -> dict[str, Any]:
         "probabilities": {k: float(v) for k, v in final.probabilities.items()},
         "offset_removed": float(entry["offset"]),
         "warmup_white_noise_estimate": entry["wn_estimate"],
+        "passes": entry["passes"],
         "warmup_s": float(entry["warmup"]),
         "block": int(hset.block),
         "gamma": float(hset.gamma),
@@ -84,7 +87,8 @@ def _axis_yaml(axis: str, entry: dict[str, Any]) -> dict[str, Any]:
                 "rsd": {k: (None if not np.isfinite(v) else v) for k, v in est.rsd.items()},
                 "state": {s: v[0] for s, v in entry["states"][name].items()},
                 "state_std": {s: v[1] for s, v in entry["states"][name].items()},
-                "grid": {p.name: {"range": [p.low, p.high], "n": p.n, "spacing": p.spacing}
+                "grid": {p.name: {"range": [p.low, p.high], "n": p.n, "spacing": p.spacing,
+                                  "grid_range": [float(p.edges()[0]), float(p.edges()[-1])]}
                          for p in next(h for h in hset.hypotheses if h.name == name).priors},
             }
             for name, est in final.hypotheses.items()
@@ -116,7 +120,9 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_imu
 
     series = read_imu(args.bag, topic=args.topic)
-    res = identify_series(series, list(dict.fromkeys(args.axis)), args.hypotheses)
+    if args.refine < 0:
+        raise InputError(f"--refine must be >= 0, got {args.refine}")
+    res = identify_series(series, list(dict.fromkeys(args.axis)), args.hypotheses, args.refine)
     out = Path(args.out)
     write_outputs(res, out, plot=not args.no_plot)
     for axis, e in res["axes"].items():

@@ -93,3 +93,38 @@ class AxisIdentifier:
             self._buffer = []
             return
         self.bank.gap(n_missing)
+
+
+def identify_offline(y: np.ndarray, hypotheses: HypothesisSet | Callable[[float | None], HypothesisSet],
+                     warmup_s: float, dt: float, *, refine: int = 0,
+                     record_every: int = 1) -> tuple[BankResult, AxisIdentifier, int]:
+    """Batch identification of one raw axis, with optional grid refinement passes (offline only).
+
+    Each refinement pass re-centres the grids on the previous pass' posterior
+    (:func:`~imu_noise_id.core.hypotheses.model.refine_hypothesis_set`) and reruns the bank on the same data;
+    passes stop early when no grid range changes by more than 1 %. Returns the last pass' result, its
+    identifier (bank, offset, white-noise estimate) and the number of passes run.
+    """
+    from ..core.hypotheses.model import refine_hypothesis_set
+
+    ident = AxisIdentifier(hypotheses, warmup_s, dt)
+    result = ident.run(y, record_every)
+    passes = 1
+    for _ in range(int(refine)):
+        final = result.final
+        old = ident.bank.hset
+        new = refine_hypothesis_set(old, {h: e.theta for h, e in final.hypotheses.items()},
+                                    {h: e.theta_std for h, e in final.hypotheses.items()})
+        changed = any(
+            not np.allclose(p_new.edges()[[0, -1]], p_old.edges()[[0, -1]], rtol=0.01)
+            for h_new, h_old in zip(new.hypotheses, old.hypotheses, strict=True)
+            for p_new, p_old in zip(h_new.priors, h_old.priors, strict=True) if not p_new.known
+        )
+        if not changed:
+            break
+        wn = ident.wn_estimate
+        ident = AxisIdentifier(new, warmup_s, dt)  # same warm-up, so the same offset
+        result = ident.run(y, record_every)
+        ident.wn_estimate = wn  # the estimate that centred the first pass' auto range
+        passes += 1
+    return result, ident, passes

@@ -30,30 +30,44 @@ def plot_identify(res: dict[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
+def _panel_key(name: str) -> str:
+    """``"GM+WN:GM.tau"`` → ``"GM.tau (GM model)"``: the same parameter of the same model across cases."""
+    hyp, _, param = name.partition(":")
+    model = "RW" if "RW" in hyp.split("+") else "GM"
+    return f"{param} ({model} model)"
+
+
 def plot_criteria(results: list[Any], path: Path, title: str = "") -> None:
     """Real (solid) and calculated (dashed) identification-error probability and RSDs vs time."""
-    params = sorted({p for r in results for p in r.rsd_real})
-    fig, panels = plt.subplots(1, 1 + len(params), figsize=(3.3 * (1 + len(params)), 3.0), squeeze=False)
-    colors = ["tab:red", "tab:green", "tab:blue", "tab:orange"]
-    ax = panels[0, 0]
-    for i, r in enumerate(results):
-        c = colors[i % len(colors)]
+    panels_of: dict[str, list[tuple[Any, str]]] = {}
+    for r in results:
+        for name in r.rsd_real:
+            panels_of.setdefault(_panel_key(name), []).append((r, name))
+    keys = sorted(panels_of)
+    ncols = min(3, 1 + len(keys))
+    nrows = -(-(1 + len(keys)) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(3.6 * ncols, 2.8 * nrows), squeeze=False)
+    flat = list(axes.ravel())
+    colors = {"1": "tab:red", "2": "tab:green", "3": "tab:blue"}
+    ax = flat[0]
+    for r in results:
+        c = colors.get(str(r.case), "k")
         ax.plot(r.t, r.error_probability_real, color=c, label=f"case {r.case} real")
         ax.plot(r.t, r.error_probability_calculated, color=c, ls="--", label=f"case {r.case} calc.")
-    ax.set_xscale("log")
-    ax.set_xlabel("time [s]")
     ax.set_title("identification error probability", fontsize=9)
-    ax.legend(fontsize=6)
-    for j, p in enumerate(params):
-        ax = panels[0, 1 + j]
-        for i, r in enumerate(results):
-            if p in r.rsd_real:
-                c = colors[i % len(colors)]
-                ax.plot(r.t, r.rsd_real[p], color=c, label=f"case {r.case} real")
-                ax.plot(r.t, r.rsd_calculated[p], color=c, ls="--", label=f"case {r.case} calc.")
+    for ax, key in zip(flat[1:], keys, strict=False):
+        for r, name in panels_of[key]:
+            c = colors.get(str(r.case), "k")
+            ax.plot(r.t, r.rsd_real[name], color=c, label=f"case {r.case} real")
+            ax.plot(r.t, r.rsd_calculated[name], color=c, ls="--", label=f"case {r.case} calc.")
+        ax.set_title(f"RSD {key}", fontsize=9)
+    for i, ax in enumerate(flat):
+        if i > len(keys):
+            ax.axis("off")
+            continue
         ax.set_xscale("log")
-        ax.set_xlabel("time [s]")
-        ax.set_title(f"RSD {p}", fontsize=9)
+        ax.set_xlabel("time [s]", fontsize=8)
+        ax.tick_params(labelsize=7)
         ax.legend(fontsize=6)
     if title:
         fig.suptitle(title, fontsize=10)

@@ -72,7 +72,10 @@ def paper_case(case: int, dt: float = 1.0, grid: dict[str, int] | None = None, b
     per-sample: σ_w ∈ [0.04, 0.15] u, τ_m ∈ [1, 25] min, σ_m ∈ [0.5, 1.5] u, σ_v = 0 (case 1), 0.5 u
     (case 2), ∈ [0.25, 1] u (case 3). Converted to continuous time: random_walk = σ_w/√Δt,
     noise_density = σ_v·√Δt. ``grid`` sets the grid sizes (keys ``random_walk``, ``tau``, ``sigma``,
-    ``noise_density``); all grids are log-spaced with cell-width weights (uniform priors).
+    ``noise_density``); all grids are log-spaced with cell-width weights (uniform priors). Defaults: cases
+    1–2 random_walk 256, tau × sigma 32 × 32 (1280 filters); case 3 random_walk 64, tau × sigma 12 × 12,
+    noise_density 12 (2496 filters). The bias prior (and the simulated bias) is N(0, bias_sigma²) — the
+    paper does not state it.
     """
     if case not in (1, 2, 3):
         raise InputError(f"paper 002 has cases 1, 2 and 3, got {case!r}")

@@ -62,6 +62,11 @@ class ParameterPrior:
         Number of grid cells (1 when known).
     spacing : str
         ``"linear"`` (equal widths) or ``"log"`` (equal ratios).
+    grid_low, grid_high : float, optional
+        Sub-range [grid_low, grid_high] ⊆ [low, high] covered by the grid (grid refinement, see
+        :func:`refine_hypothesis_set`); the cells' prior weights stay fractions of the whole prior range, so the
+        hypothesis evidence keeps the prior mass outside the sub-range out (it assumes the likelihood is
+        negligible there). Default: the whole range.
     """
 
     name: str
@@ -69,6 +74,8 @@ class ParameterPrior:
     high: float
     n: int = 16
     spacing: str = "linear"
+    grid_low: float | None = None
+    grid_high: float | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.low) and math.isfinite(self.high)) or self.low < 0 or self.high < self.low:
@@ -85,6 +92,11 @@ class ParameterPrior:
             raise InputError(f"log spacing of {self.name} needs low > 0, got {self.low}")
         if self.name.split(".")[-1] in ("tau", "sigma", "random_walk") and self.low <= 0:
             raise InputError(f"{self.name} must be > 0 over its prior range, got low = {self.low}")
+        g_lo = self.low if self.grid_low is None else self.grid_low
+        g_hi = self.high if self.grid_high is None else self.grid_high
+        if not (self.low <= g_lo <= g_hi <= self.high) or (self.high > self.low and not g_hi > g_lo):
+            raise InputError(f"grid range [{g_lo}, {g_hi}] of {self.name} must lie inside its prior range "
+                             f"[{self.low}, {self.high}] and be non-empty")
 
     @property
     def known(self) -> bool:
@@ -95,18 +107,20 @@ class ParameterPrior:
         """Prior mean (the denominator of the RSD, paper 002 eq. 20)."""
         return 0.5 * (self.low + self.high)
 
+    def edges(self) -> np.ndarray:
+        """Cell edges of the grid (n + 1 values from grid_low to grid_high)."""
+        lo = self.low if self.grid_low is None else self.grid_low
+        hi = self.high if self.grid_high is None else self.grid_high
+        return np.geomspace(lo, hi, self.n + 1) if self.spacing == "log" else np.linspace(lo, hi, self.n + 1)
+
     def cells(self) -> tuple[np.ndarray, np.ndarray]:
-        """Grid points (cell centres) and their prior weights (cell widths, normalised to sum 1)."""
+        """Grid points (cell centres) and their prior weights (cell widths over the prior range's width; they sum
+        to 1 unless the grid covers only a sub-range)."""
         if self.known:
             return np.array([self.low]), np.ones(1)
-        if self.spacing == "log":
-            edges = np.geomspace(self.low, self.high, self.n + 1)
-            centres = np.sqrt(edges[:-1] * edges[1:])
-        else:
-            edges = np.linspace(self.low, self.high, self.n + 1)
-            centres = 0.5 * (edges[:-1] + edges[1:])
-        widths = np.diff(edges)
-        return centres, widths / widths.sum()
+        edges = self.edges()
+        centres = np.sqrt(edges[:-1] * edges[1:]) if self.spacing == "log" else 0.5 * (edges[:-1] + edges[1:])
+        return centres, np.diff(edges) / (self.high - self.low)
 
 
 @dataclass(frozen=True)
@@ -164,11 +178,15 @@ class Hypothesis:
         return sum(c in DYNAMIC_COMPONENTS for c in self.components) + 1
 
     def grid(self) -> tuple[np.ndarray, np.ndarray]:
-        """Point-mass grid θ^{kj} (M_k, p) and prior weights μ_0^{kj} (M_k,) (paper 002 eq. 3)."""
+        """Point-mass grid θ^{kj} (M_k, p) and prior weights μ_0^{kj} (M_k,) (paper 002 eq. 3).
+
+        The weights are the prior probabilities of the cells: they sum to 1, or to the prior mass of the
+        refined sub-box (:class:`ParameterPrior` ``grid_low``/``grid_high``).
+        """
         cells = [p.cells() for p in self.priors]
         points = np.array(list(itertools.product(*[c[0] for c in cells])), dtype=float)
         weights = np.array([math.prod(w) for w in itertools.product(*[c[1] for c in cells])], dtype=float)
-        return points.reshape(len(weights), len(cells)), weights / weights.sum()
+        return points.reshape(len(weights), len(cells)), weights
 
 
 @dataclass(frozen=True)
@@ -335,3 +353,39 @@ def build_bank_model(hset: HypothesisSet) -> BankModel:
         p0=p0.reshape(n * n, F), slices=tuple(slices), theta=tuple(thetas),
         log_mu0=np.concatenate(log_mu0), log_prior=np.log(prior / prior.sum()), state_names=tuple(state_names),
     )
+
+
+def refine_hypothesis_set(hset: HypothesisSet, theta: dict[str, dict[str, float]],
+                          theta_std: dict[str, dict[str, float]], n_sigma: float = 6.0) -> HypothesisSet:
+    """Grid refinement (beyond paper 002): re-centre every unknown parameter's grid on its posterior.
+
+    The new grid range is θ̂ ± max(n_sigma·std, 1 cell of the current grid) (in log space for log grids:
+    θ̂ ·/÷ exp(max(n_sigma·std/θ̂, 1 log cell ratio))), clipped to the prior range, with the same number of
+    cells, so a posterior collapsed on one cell is zoomed by n/2 per pass. Weights stay fractions of the
+    prior range (:meth:`ParameterPrior.cells`), so the hypothesis probabilities remain those of the original
+    uniform priors as long as the likelihood outside the new box is negligible. Rerunning the bank on the same
+    data with the refined set resolves posteriors that the first grid put on a single cell.
+    """
+    new_h = []
+    for hyp in hset.hypotheses:
+        priors = []
+        for p in hyp.priors:
+            if p.known:
+                priors.append(p)
+                continue
+            mean = theta[hyp.name][p.name]
+            std = theta_std[hyp.name][p.name]
+            e = p.edges()
+            if p.spacing == "log":
+                cell = float(np.max(np.log(e[1:] / e[:-1])))
+                half = max(n_sigma * std / mean, cell)
+                lo, hi = mean * math.exp(-half), mean * math.exp(half)
+            else:
+                cell = float(np.max(np.diff(e)))
+                half = max(n_sigma * std, cell)
+                lo, hi = mean - half, mean + half
+            lo, hi = max(lo, p.low), min(hi, p.high)
+            priors.append(ParameterPrior(p.name, p.low, p.high, p.n, p.spacing, grid_low=lo, grid_high=hi))
+        new_h.append(Hypothesis(hyp.components, tuple(priors), hyp.probability, hyp.name))
+    return HypothesisSet(tuple(new_h), dt=hset.dt, gamma=hset.gamma, block=hset.block, bias_sigma=hset.bias_sigma,
+                         gain_tolerance=hset.gain_tolerance)
