@@ -12,7 +12,9 @@ import sys
 from ..core.errors import InputError
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("analyze", "simulate", "inspect", "identify", "criteria", "cmkf")
+COMMANDS: tuple[str, ...] = (
+    "analyze", "simulate", "inspect", "identify", "criteria", "cmkf", "play", "monitor",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

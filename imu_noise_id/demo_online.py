@@ -1,0 +1,192 @@
+"""The online demo: a simulated robot bag played into ``imu_noise_id_node``, watched live, compared with the truth.
+
+``python -m imu_noise_id.demo_online [--out DIR] [--rate X]`` (``make demo`` calls :func:`run_demo`):
+
+1. simulate a robot that stands, drives and stands again (:func:`~imu_noise_id.core.simulate_stop_and_go.
+   simulate_stop_and_go`; known biases and noise densities) and write it as a rosbag2 bag;
+2. start the node as its own process with ``config/imu_noise_id.yaml``;
+3. play the bag (``imu-noise-id play``) and show the monitor view while the estimates converge;
+4. print the final estimates next to the simulation's truth.
+
+Every process keeps DDS on 127.0.0.1 (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .core.axes import AXES, ImuSeries, OdometrySeries
+from .core.cmkf.robot_sim import RobotRun
+from .core.simulate_stop_and_go import simulate_stop_and_go
+
+#: The demo robot's truth (also used by the end-to-end tests).
+DEMO_TRUTH = {
+    "gyro_bias": (0.004, -0.006, 0.003),
+    "accel_bias": (0.08, -0.05, 0.06),
+    "gyro_noise_density": 1e-3,
+    "accel_noise_density": 1e-2,
+}
+
+
+def config_path() -> Path:
+    """``config/imu_noise_id.yaml`` of the source tree, else of the ament install (share/imu_noise_id/config)."""
+    here = Path(__file__).resolve().parents[1] / "config" / "imu_noise_id.yaml"
+    if here.is_file():
+        return here
+    from ament_index_python.packages import get_package_share_directory
+
+    return Path(get_package_share_directory("imu_noise_id")) / "config" / "imu_noise_id.yaml"
+
+
+def ros_environment() -> dict[str, str]:
+    """This process's environment plus the network rule and a log folder (children inherit all of it)."""
+    env = dict(os.environ)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="imu_noise_id_ros_log_"))
+    return env
+
+
+def simulate_demo_run(seed: int = 7, *, stand_before: float = 20.0, drive: float = 25.0, stand_after: float = 20.0,
+                      imu_rate: float = 200.0, odom_rate: float = 50.0) -> RobotRun:
+    """The demo robot: stand, drive, stand, with :data:`DEMO_TRUTH` biases and white-noise densities."""
+    return simulate_stop_and_go(
+        np.random.default_rng(seed), stand_before=stand_before, drive=drive, stand_after=stand_after,
+        imu_rate=imu_rate, odom_rate=odom_rate, gyro_bias=DEMO_TRUTH["gyro_bias"],
+        accel_bias=DEMO_TRUTH["accel_bias"], gyro_noise_density=DEMO_TRUTH["gyro_noise_density"],
+        accel_noise_density=DEMO_TRUTH["accel_noise_density"],
+    )
+
+
+def write_robot_bag(run: RobotRun, path: Path, imu_topic: str = "/imu/data", odom_topic: str = "/odom") -> Path:
+    """Write a :class:`RobotRun` as a rosbag2 (mcap) bag with sensor_msgs/Imu and nav_msgs/Odometry."""
+    from .bag.writer import write_bag
+
+    imu = ImuSeries(t=run.imu_t, gyro=run.gyro, accel=run.accel, frame_id="imu_link", topic=imu_topic)
+    odom = OdometrySeries(
+        t=run.odom_t, position=run.position, orientation_xyzw=run.orientation_xyzw,
+        linear_velocity=run.linear_velocity, angular_velocity=run.angular_velocity,
+        pose_covariance=run.pose_cov, twist_covariance=run.twist_cov, frame_id="odom",
+        child_frame_id="base_link", topic=odom_topic,
+    )
+    return write_bag(path, imu, odom, imu_topic=imu_topic, odom_topic=odom_topic)
+
+
+def node_command(params_file: Path, *extra: str) -> list[str]:
+    """The command line that starts the node with ``params_file`` (plus extra ``--ros-args`` items)."""
+    return [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(params_file),
+            "-r", "imu:=/imu/data", *extra]
+
+
+def stop(process: subprocess.Popen, timeout: float = 10.0) -> None:
+    """Ctrl-C a child process, then kill it if it does not end."""
+    if process.poll() is None:
+        process.send_signal(signal.SIGINT)
+        try:
+            process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+def summary(state: object) -> str:
+    """Final estimates from a monitor state next to :data:`DEMO_TRUTH`."""
+    from .cli.monitor import _column
+
+    bias = _column(state.noise, "bias")
+    std = _column(state.noise, "bias_std")
+    density = _column(state.noise, "noise_density")
+    truth_bias = list(DEMO_TRUTH["gyro_bias"]) + list(DEMO_TRUTH["accel_bias"])
+    truth_n = [DEMO_TRUTH["gyro_noise_density"]] * 3 + [DEMO_TRUTH["accel_noise_density"]] * 3
+    lines = ["", "Final estimates vs the simulation's truth",
+             f"{'axis':8} {'bias':>10} {'± 1σ':>9} {'true':>9} {'err/σ':>6}   {'N':>9} {'true N':>9} {'err':>6}"]
+    for i, axis in enumerate(AXES):
+        z = (bias[i] - truth_bias[i]) / std[i] if std[i] > 0 else math.nan
+        rel = density[i] / truth_n[i] - 1.0
+        lines.append(f"{axis:8} {bias[i]:10.4g} {std[i]:9.2g} {truth_bias[i]:9.3g} {z:6.1f}   {density[i]:9.3g} "
+                     f"{truth_n[i]:9.3g} {rel:6.1%}")
+    lines.append("(N: white-noise density from the stationary segments [rad/s/√Hz, m/s²/√Hz])")
+    return "\n".join(lines)
+
+
+def run_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> int:
+    """Run the whole demo (see the module docstring); returns 0 when the node produced its outputs."""
+    state = watch_demo(out, rate, seed)
+    return 0 if state.complete() else 1
+
+
+def online_part(ctx: object) -> None:
+    """The online demo as a part of ``python -m imu_noise_id.demo`` (:data:`imu_noise_id.demo.PARTS`).
+
+    Uses ``ctx.out`` and ``ctx.seed``; stores the node's final outputs (a
+    :class:`~imu_noise_id.cli.monitor.MonitorState`) in ``ctx.results["online"]`` and the bag in ``ctx.outputs``.
+    """
+    print("\n== online: the node on a simulated robot (stand, drive, stand), watched live ==")
+    state = watch_demo(Path(ctx.out) / "online", 2.0, int(ctx.seed))
+    ctx.results["online"] = state
+    ctx.outputs["online/demo_robot_bag"] = Path(ctx.out) / "online" / "demo_robot_bag"
+
+
+def watch_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> object:
+    """Steps 1–4 of the module docstring; returns the node's final outputs as a ``MonitorState``."""
+    import rclpy
+
+    from .cli.monitor import _Listener, render, watch
+    from .cli.play import load_messages
+
+    work = Path(out) if out else Path(tempfile.mkdtemp(prefix="imu_noise_id_demo_"))
+    work.mkdir(parents=True, exist_ok=True)
+    bag = work / "demo_robot_bag"
+    if bag.exists():
+        import shutil
+
+        shutil.rmtree(bag)
+    run = simulate_demo_run(seed)
+    write_robot_bag(run, bag)
+    duration = float(run.imu_t[-1] - run.imu_t[0])
+    print(f"simulated robot: stand 20 s, drive 25 s, stand 20 s; IMU 200 Hz, odometry 50 Hz → {bag}")
+    env = ros_environment()
+    os.environ.update({k: env[k] for k in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOG_DIR")})
+    node = subprocess.Popen(node_command(config_path()), env=env)
+    player = None
+    rclpy.init()
+    try:
+        time.sleep(2.0)
+        load_messages(bag, None)  # fail early with a clear message if the bag is unreadable
+        player = subprocess.Popen([sys.executable, "-m", "imu_noise_id", "play", str(bag), "--rate", str(rate),
+                                   "--quiet"], env=env)
+        viewer = rclpy.create_node("imu_noise_id_demo_monitor")
+        listener = _Listener(viewer, "/imu_noise_id_node")
+        watch(viewer, listener, 1.0, duration / rate + 3.0)
+        player.wait(30)
+        print(render(listener.state))
+        print(summary(listener.state))
+        return listener.state
+    finally:
+        if player is not None:
+            stop(player)
+        stop(node)
+        if rclpy.ok():
+            rclpy.shutdown()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m imu_noise_id.demo_online", description=__doc__.split("\n")[0])
+    parser.add_argument("--out", type=Path, help="folder for the demo bag (default: a temporary folder)")
+    parser.add_argument("--rate", type=float, default=2.0, help="playback speed factor (default 2: ~35 s)")
+    parser.add_argument("--seed", type=int, default=7)
+    args = parser.parse_args(argv)
+    return run_demo(args.out, args.rate, args.seed)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

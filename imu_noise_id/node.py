@@ -1,0 +1,371 @@
+"""``imu_noise_id_node``: the rclpy adapter around :class:`imu_noise_id.pipelines.online.OnlineIdentifier`.
+
+Run it with ``ros2 run imu_noise_id imu_noise_id_node --ros-args --params-file config/imu_noise_id.yaml`` or
+``python -m imu_noise_id.node --ros-args …``. Topics, parameters and diagnostics are described in
+``docs/node.md``. This module only converts messages to numbers and back: every decision is made in the
+pipeline, which is tested without ROS.
+
+Time: estimation uses the header stamps only; the housekeeping timers (publishing, diagnostics, staleness) run
+on the steady clock, so they work with ``use_sim_time`` and no ``/clock`` publisher too.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from typing import Any
+
+import numpy as np
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Vector3Stamped
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
+from rclpy.clock import Clock, ClockType
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu, Temperature
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+
+from .core.axes import AXES
+from .core.errors import InputError
+from .pipelines.online import OnlineIdentifier
+from .pipelines.online_config import PARAMETERS, OnlineConfig, ParamSpec
+
+NODE_NAME = "imu_noise_id_node"
+
+def labelled_layout(msg: Float64MultiArray, rows_name: str, rows: tuple[str, ...], cols_name: str,
+                    cols: tuple[str, ...]) -> None:
+    """Fill ``msg.layout`` of a row-major ``len(rows)`` × ``len(cols)`` table.
+
+    Each dimension's label is ``"<name>:<label 1>,<label 2>,…"``, e.g. ``"axis:gyro_x,gyro_y,…"``.
+    """
+    msg.layout.dim = [
+        MultiArrayDimension(label=f"{rows_name}:{','.join(rows)}", size=len(rows), stride=len(rows) * len(cols)),
+        MultiArrayDimension(label=f"{cols_name}:{','.join(cols)}", size=len(cols), stride=len(cols)),
+    ]
+    msg.layout.data_offset = 0
+
+
+def parse_labelled(msg: Float64MultiArray) -> tuple[list[str], list[str], list[list[float]]]:
+    """Inverse of :func:`labelled_layout`: (row labels, column labels, rows of values)."""
+    dims = msg.layout.dim
+    rows = dims[0].label.split(":", 1)[1].split(",")
+    cols = dims[1].label.split(":", 1)[1].split(",")
+    data = [float(v) for v in msg.data]
+    ncol = len(cols)
+    return rows, cols, [data[i * ncol:(i + 1) * ncol] for i in range(len(rows))]
+
+
+def _descriptor(spec: ParamSpec) -> ParameterDescriptor:
+    unit = f" [{spec.unit}]" if spec.unit else ""
+    desc = ParameterDescriptor(
+        name=spec.name,
+        description=f"{spec.description}{unit}",
+        read_only=not spec.runtime,
+    )
+    if spec.low is not None and type(spec.default) is float:
+        desc.floating_point_range = [FloatingPointRange(from_value=float(spec.low), to_value=float(spec.high),
+                                                        step=0.0)]
+    elif spec.low is not None and type(spec.default) is int:
+        desc.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high), step=1)]
+    return desc
+
+
+def _sensor_qos(depth: int) -> QoSProfile:
+    """Sensor-data QoS (best effort, volatile) with a deep queue: it matches reliable publishers too."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+def _stamp_seconds(stamp: Any) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+class ImuNoiseIdNode(Node):
+    """The online identification node (see the module docstring and ``docs/node.md``).
+
+    Raises
+    ------
+    InputError
+        At start-up, when a parameter is out of range or of the wrong type (the message names it).
+    """
+
+    def __init__(self, node_name: str = NODE_NAME, **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        values = {}
+        for spec in PARAMETERS:
+            try:
+                default = list(spec.default) if isinstance(spec.default, tuple) else spec.default
+                param = self.declare_parameter(spec.name, default, _descriptor(spec))
+            except Exception as exc:  # rclpy raises several types for a bad override
+                raise InputError(f"parameter {spec.name}: {exc} (range [{spec.low}, {spec.high}] "
+                                 f"{spec.unit})") from None
+            values[spec.name] = param.value
+        self.identifier = OnlineIdentifier(OnlineConfig(values))  # InputError names a bad value
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        cfg = self.identifier.config
+
+        self._steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._last_log: dict[str, float] = {}
+        self._imu_frame = ""
+        self._timings: dict[str, list[float]] | None = (
+            {"imu": [], "imu_cpu": [], "odom": [], "publish": []} if cfg.stats_file else None)
+
+        self.pub_accel_bias = self.create_publisher(Vector3Stamped, "~/accel_bias", 10)
+        self.pub_gyro_bias = self.create_publisher(Vector3Stamped, "~/gyro_bias", 10)
+        self.pub_noise = self.create_publisher(Float64MultiArray, "~/noise", 10)
+        self.pub_hypotheses = self.create_publisher(Float64MultiArray, "~/hypotheses", 10)
+        self.pub_imu = self.create_publisher(Imu, "~/imu_corrected", cfg.imu_queue_depth)
+        self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+
+        self.create_subscription(Imu, "imu", self._on_imu, _sensor_qos(cfg.imu_queue_depth))
+        self.create_subscription(Odometry, "odom", self._on_odom, _sensor_qos(cfg.odom_queue_depth))
+        self.create_subscription(Temperature, "imu/temperature", self._on_temperature,
+                                 _sensor_qos(cfg.odom_queue_depth))
+
+        self._diag_last = time.monotonic()
+        self.create_timer(1.0 / cfg.publish_rate, self._publish_estimates, clock=self._steady)
+        self.create_timer(cfg.diagnostics_period, self._publish_diagnostics, clock=self._steady)
+        self.get_logger().info(
+            f"listening on {self.resolve_topic_name('imu')}, {self.resolve_topic_name('odom')}, "
+            f"{self.resolve_topic_name('imu/temperature')}; publishing under {self.get_fully_qualified_name()}/"
+        )
+
+    # -- parameters -------------------------------------------------------------------------------------------------
+    def _on_set_parameters(self, params: list[Parameter]) -> SetParametersResult:
+        changes = {p.name: p.value for p in params if p.name in {s.name for s in PARAMETERS}}
+        if not changes:
+            return SetParametersResult(successful=True)
+        try:
+            config = self.identifier.config.updated(changes)
+        except InputError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        self.identifier.set_config(config)
+        self.get_logger().info("parameters changed: " + ", ".join(f"{k}={v!r}" for k, v in changes.items()))
+        return SetParametersResult(successful=True)
+
+    # -- inputs -----------------------------------------------------------------------------------------------------
+    def _on_imu(self, msg: Imu) -> None:
+        start = time.perf_counter()
+        cpu_start = time.thread_time() if self._timings is not None else 0.0
+        try:
+            w = msg.angular_velocity
+            a = msg.linear_acceleration
+            frame = msg.header.frame_id
+            q = msg.orientation
+            out = self.identifier.process_imu(_stamp_seconds(msg.header.stamp), (w.x, w.y, w.z), (a.x, a.y, a.z),
+                                              frame, time.monotonic(), orientation_xyzw=(q.x, q.y, q.z, q.w))
+            self._imu_frame = frame
+            if out is not None:
+                msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = out.gyro
+                msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z = out.accel
+                if out.gyro_variance is not None:
+                    msg.angular_velocity_covariance = _diag9(out.gyro_variance)
+                    msg.linear_acceleration_covariance = _diag9(out.accel_variance)
+                self.pub_imu.publish(msg)
+        except Exception as exc:  # never die on input: report and continue
+            self._log("imu_exception", f"IMU message not processed: {type(exc).__name__}: {exc}")
+        finally:
+            elapsed = time.perf_counter() - start
+            self.identifier.processing_time.add(elapsed)
+            if self._timings is not None:
+                self._timings["imu"].append(elapsed)
+                self._timings["imu_cpu"].append(time.thread_time() - cpu_start)
+        self._flush_events()
+
+    def _on_odom(self, msg: Odometry) -> None:
+        start = time.perf_counter()
+        try:
+            v = msg.twist.twist.linear
+            w = msg.twist.twist.angular
+            p = msg.pose.pose.position
+            q = msg.pose.pose.orientation
+            self.identifier.process_odometry(
+                _stamp_seconds(msg.header.stamp), (v.x, v.y, v.z), (w.x, w.y, w.z), msg.child_frame_id,
+                time.monotonic(), position=(p.x, p.y, p.z), orientation_xyzw=(q.x, q.y, q.z, q.w),
+                pose_covariance=msg.pose.covariance, twist_covariance=msg.twist.covariance,
+            )
+        except Exception as exc:
+            self._log("odom_exception", f"odometry message not processed: {type(exc).__name__}: {exc}")
+        if self._timings is not None:
+            self._timings["odom"].append(time.perf_counter() - start)
+        self._flush_events()
+
+    def _on_temperature(self, msg: Temperature) -> None:
+        try:
+            self.identifier.process_temperature(_stamp_seconds(msg.header.stamp), msg.temperature,
+                                                msg.header.frame_id, time.monotonic())
+        except Exception as exc:
+            self._log("temperature_exception", f"temperature message not processed: {type(exc).__name__}: {exc}")
+        self._flush_events()
+
+    # -- logging ----------------------------------------------------------------------------------------------------
+    def _flush_events(self) -> None:
+        for key, text in self.identifier.pop_events():
+            self._log(key, text)
+
+    def _log(self, key: str, text: str) -> None:
+        """Warn, at most once per ``log_throttle`` seconds per kind of problem."""
+        now = time.monotonic()
+        last = self._last_log.get(key)
+        if last is not None and now - last < self.identifier.config.log_throttle:
+            return
+        self._last_log[key] = now
+        self.get_logger().warning(text)
+
+    # -- outputs ----------------------------------------------------------------------------------------------------
+    def _header_stamp(self, t: float) -> Any:
+        from builtin_interfaces.msg import Time
+
+        if not math.isfinite(t):
+            return self.get_clock().now().to_msg()
+        sec = math.floor(t)
+        return Time(sec=int(sec), nanosec=min(round((t - sec) * 1e9), 999_999_999))
+
+    def write_stats(self) -> None:
+        """Write the callback-time percentiles to ``stats_file`` (when set)."""
+        if self._timings is None:
+            return
+        import json
+
+        summary = {}
+        for key, values in self._timings.items():
+            arr = np.array(values) * 1e6
+            summary[key] = {"count": int(arr.size)} | ({
+                "p50_us": float(np.percentile(arr, 50)), "p90_us": float(np.percentile(arr, 90)),
+                "p99_us": float(np.percentile(arr, 99)), "p99.9_us": float(np.percentile(arr, 99.9)),
+                "max_us": float(arr.max())} if arr.size else {})
+        summary["imu_received"] = self.identifier.imu_stats.received
+        summary["odom_received"] = self.identifier.odom_stats.received
+        with open(self.identifier.config.stats_file, "w") as f:
+            json.dump(summary, f, indent=1)
+
+    def _publish_estimates(self) -> None:
+        start = time.perf_counter()
+        self._publish_estimates_now()
+        if self._timings is not None:
+            self._timings["publish"].append(time.perf_counter() - start)
+
+    def _publish_estimates_now(self) -> None:
+        try:
+            self.identifier.update_identification()
+        except Exception as exc:  # a failing bank must not stop the biases and the corrected IMU
+            self._log("bank_exception", f"hypothesis bank update failed: {type(exc).__name__}: {exc}")
+        est = self.identifier.estimates()
+        if not math.isfinite(est.t):
+            return
+        stamp = self._header_stamp(est.t)
+        for pub, vec in ((self.pub_gyro_bias, est.gyro_bias), (self.pub_accel_bias, est.accel_bias)):
+            msg = Vector3Stamped()
+            msg.header.stamp = stamp
+            msg.header.frame_id = self._imu_frame
+            msg.vector.x, msg.vector.y, msg.vector.z = (float(v) for v in vec)
+            pub.publish(msg)
+        columns, table = est.noise_table()
+        noise = Float64MultiArray()
+        labelled_layout(noise, "axis", AXES, "field", columns)
+        noise.data = table.ravel().tolist()
+        self.pub_noise.publish(noise)
+        report = self.identifier.hypotheses()
+        if report is not None:
+            columns, table = report.table()
+            hyp = Float64MultiArray()
+            labelled_layout(hyp, "axis", AXES, "hypothesis", columns)
+            hyp.data = table.ravel().tolist()
+            self.pub_hypotheses.publish(hyp)
+
+    def _publish_diagnostics(self) -> None:
+        now = time.monotonic()
+        window = now - self._diag_last
+        self._diag_last = now
+        self._flush_events()
+        statuses = self.identifier.diagnostics(now, window)
+        array = DiagnosticArray()
+        stamp = self.get_clock().now()
+        array.header.stamp = (stamp.to_msg() if stamp.nanoseconds > 0
+                              else self._header_stamp(self.identifier.last_imu_t))
+        name = self.get_fully_qualified_name().lstrip("/")
+        for s in statuses:
+            array.status.append(DiagnosticStatus(
+                level=bytes([s.level]), name=f"{name}: {s.name}", message=s.message,
+                hardware_id=self._imu_frame,
+                values=[KeyValue(key=k, value=v) for k, v in s.values.items()],
+            ))
+        self.pub_diag.publish(array)
+
+
+def _diag9(variance: tuple[float, float, float]) -> np.ndarray:
+    cov = np.zeros(9)
+    cov[0], cov[4], cov[8] = variance
+    return cov
+
+
+def _usage() -> str:
+    lines = [
+        f"usage: {NODE_NAME} [--ros-args --params-file FILE -p NAME:=VALUE -r imu:=TOPIC ...]",
+        "",
+        "Online IMU error identification: subscribes to imu (sensor_msgs/Imu), odom (nav_msgs/Odometry) and",
+        "imu/temperature (sensor_msgs/Temperature); publishes ~/accel_bias, ~/gyro_bias, ~/noise, ~/hypotheses,",
+        "~/imu_corrected and /diagnostics. Defaults: share/imu_noise_id/config/imu_noise_id.yaml; docs/node.md.",
+        "",
+        "parameters (name = default [range] unit):",
+    ]
+    for p in PARAMETERS:
+        rng = f"[{p.low:g}, {p.high:g}]" if p.low is not None else ""
+        when = "" if p.runtime else " (start-up only)"
+        lines.append(f"  {p.name} = {p.default!r} {rng} {p.unit}{when}".rstrip())
+        lines.append(f"      {p.description}")
+    return "\n".join(lines)
+
+
+def _executor(kind: str) -> Any:
+    """The EventsExecutor (about twice the message throughput) when asked for and available, else
+    the SingleThreadedExecutor."""
+    if kind == "events":
+        try:
+            from rclpy.experimental import EventsExecutor
+
+            return EventsExecutor()
+        except ImportError:  # pragma: no cover - older rclpy
+            pass
+    from rclpy.executors import SingleThreadedExecutor
+
+    return SingleThreadedExecutor()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``imu_noise_id_node`` (``python -m imu_noise_id.node``): spin until interrupted."""
+    args = list(sys.argv if argv is None else argv)
+    user_args = args[1:args.index("--ros-args")] if "--ros-args" in args else args[1:]
+    if "-h" in user_args or "--help" in user_args:
+        print(_usage())
+        return 0
+    rclpy.init(args=args)
+    try:
+        try:
+            node = ImuNoiseIdNode()
+        except InputError as exc:
+            print(f"{NODE_NAME}: error: {exc}", file=sys.stderr)
+            return 2
+        executor = _executor(node.identifier.config.executor)
+        executor.add_node(node)
+        try:
+            # spin_once in a loop: EventsExecutor.spin() of rclpy 7.1 neither fires timers nor returns on SIGTERM.
+            while rclpy.ok():
+                executor.spin_once(timeout_sec=0.1)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        finally:
+            node.write_stats()
+            node.destroy_node()
+    finally:
+        if rclpy.ok():
+            rclpy.shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,197 @@
+"""Parameters of the online identification (``imu_noise_id_node``): names, defaults, ranges, units, validation.
+
+:data:`PARAMETERS` is the single source: the node declares each with a ROS ParameterDescriptor, the shipped
+``config/imu_noise_id.yaml`` mirrors the defaults (a test keeps them in sync), and :class:`OnlineConfig`
+validates values at start-up and at runtime with messages that name the parameter.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..core.errors import InputError
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One tunable: ROS parameter name, default, closed range, unit and whether it may change at runtime."""
+
+    name: str
+    default: float | int | bool | str
+    description: str
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    runtime: bool = True
+    choices: tuple[str, ...] = ()
+
+    @property
+    def attr(self) -> str:
+        """Attribute name in :class:`OnlineConfig` (dots become underscores)."""
+        return self.name.replace(".", "_")
+
+    def check(self, value: Any) -> str | None:  # noqa: PLR0911 - one early return per kind of mistake
+        """The reason ``value`` is not acceptable, or None when it is."""
+        kind = type(self.default)
+        if kind is bool:
+            if not isinstance(value, bool):
+                return f"{self.name} must be true or false, got {value!r}"
+            return None
+        if kind is str:
+            if not isinstance(value, str):
+                return f"{self.name} must be a string, got {value!r}"
+            if self.choices and value not in self.choices:
+                return f"{self.name} must be one of {', '.join(self.choices)}, got {value!r}"
+            return None
+        if kind is tuple:
+            values = list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else None
+            if (values is None or len(values) != len(self.default)
+                    or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values)):
+                return f"{self.name} must be {len(self.default)} finite numbers, got {value!r}"
+            return None
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return f"{self.name} must be a number, got {value!r}"
+        if kind is int and not float(value).is_integer():
+            return f"{self.name} must be an integer, got {value!r}"
+        if not math.isfinite(float(value)):
+            return f"{self.name} must be finite, got {value!r}"
+        if (self.low is not None and value < self.low) or (self.high is not None and value > self.high):
+            return f"{self.name} = {value!r} is outside its range [{self.low}, {self.high}] {self.unit}".rstrip()
+        return None
+
+
+PARAMETERS: tuple[ParamSpec, ...] = (
+    ParamSpec("stationary.max_linear_speed", 0.05, "odometry |linear twist| below which the base is still",
+              "m/s", 0.0, 10.0),
+    ParamSpec("stationary.max_angular_speed", 0.05, "odometry |angular twist| below which the base is still",
+              "rad/s", 0.0, 10.0),
+    ParamSpec("stationary.max_gyro_rate", 0.05, "|mean angular rate − gyro bias| below which the IMU is still",
+              "rad/s", 0.0, 10.0),
+    ParamSpec("stationary.max_gyro_std", 0.05, "per-axis angular-rate standard deviation (over "
+              "stationary.window) below which the IMU is still", "rad/s", 0.0, 10.0),
+    ParamSpec("stationary.max_accel_std", 0.3, "per-axis specific-force standard deviation (over "
+              "stationary.window) below which the IMU is still", "m/s^2", 0.0, 100.0),
+    ParamSpec("stationary.window", 0.5, "time constant of the exponentially weighted IMU statistics", "s",
+              0.01, 60.0),
+    ParamSpec("stationary.enter_delay", 1.0, "hysteresis: the evidence must say 'still' this long before the "
+              "platform counts as stationary", "s", 0.0, 600.0),
+    ParamSpec("stationary.guard", 0.5, "stationary samples wait this long before the noise identification "
+              "uses them; they are dropped if motion starts meanwhile", "s", 0.0, 60.0),
+    ParamSpec("stationary.require_odometry", False, "true: never stationary without fresh odometry; false: "
+              "decide from the IMU statistics alone when odometry is absent"),
+    ParamSpec("odom_timeout", 0.5, "odometry older than this (header stamps, against the IMU stamp) counts "
+              "as absent", "s", 0.01, 60.0),
+    ParamSpec("gap_factor", 10.0, "a period longer than gap_factor × the nominal IMU period is a gap", "",
+              1.5, 1000.0),
+    ParamSpec("backward_reset_count", 50, "this many consecutive backward stamps mean the source restarted: "
+              "the identification restarts on the new time base", "messages", 2, 100000),
+    ParamSpec("stale_timeout", 2.0, "no message for this long (steady clock) makes an input STALE", "s",
+              0.1, 3600.0),
+    ParamSpec("expected_imu_rate", 0.0, "IMU rate expected [Hz]; a received rate below 80 % of it is a "
+              "warning (0: not checked)", "Hz", 0.0, 100000.0),
+    ParamSpec("expected_odom_rate", 0.0, "odometry rate expected; a received rate below 80 % of it is a "
+              "warning (0: not checked)", "Hz", 0.0, 100000.0),
+    ParamSpec("expected.gyro_bias_max", 0.1, "|gyro bias| above this on any axis is reported", "rad/s",
+              0.0, 100.0),
+    ParamSpec("expected.accel_bias_max", 0.5, "|accelerometer bias| above this on any axis is reported",
+              "m/s^2", 0.0, 100.0),
+    ParamSpec("expected.gyro_noise_density_max", 0.01, "gyro noise density above this is reported",
+              "rad/s/sqrt(Hz)", 0.0, 100.0),
+    ParamSpec("expected.accel_noise_density_max", 0.1, "accelerometer noise density above this is reported",
+              "m/s^2/sqrt(Hz)", 0.0, 1000.0),
+    ParamSpec("noise.min_samples", 200, "stationary samples needed before a noise density is published and "
+              "used for the corrected IMU covariance", "samples", 10, 10000000),
+    ParamSpec("nis.window", 100, "number of filter updates in the normalised-innovation-squared window",
+              "updates", 10, 100000),
+    ParamSpec("publish_rate", 10.0, "rate of ~/accel_bias, ~/gyro_bias, ~/noise and ~/hypotheses (steady "
+              "clock)", "Hz", 0.1, 1000.0, runtime=False),
+    ParamSpec("diagnostics_period", 1.0, "period of /diagnostics (steady clock)", "s", 0.05, 60.0,
+              runtime=False),
+    ParamSpec("log_throttle", 5.0, "minimum time between two log lines about the same input problem", "s",
+              0.0, 3600.0),
+    ParamSpec("cmkf.imu_rotation_xyzw", (0.0, 0.0, 0.0, 1.0), "orientation of the IMU frame in the base frame "
+              "(child_frame_id of the odometry), quaternion x y z w", runtime=False),
+    ParamSpec("cmkf.measurement", "twist", "odometry used by the CMKF: twist (body velocity, right for wheel "
+              "odometry) or pose_twist (position and velocity, paper 004 eq. 8)", runtime=False,
+              choices=("twist", "pose_twist")),
+    ParamSpec("cmkf.gravity_source", "odometry", "orientation for gravity compensation: odometry (its "
+              "orientation, propagated with the gyro) or imu (the Imu message's orientation)", runtime=False,
+              choices=("odometry", "imu")),
+    ParamSpec("cmkf.accel_bias_tau", 3600.0, "correlation time of the accelerometer bias (paper 004 eq. 3)", "s",
+              1.0, 1e7, runtime=False),
+    ParamSpec("cmkf.accel_bias_sigma", 0.1, "steady-state standard deviation of the accelerometer bias",
+              "m/s^2", 1e-6, 100.0, runtime=False),
+    ParamSpec("cmkf.s_v0", 1e-4, "initial velocity-random-walk PSD S_v", "m^2/s^3", 1e-12, 10.0, runtime=False),
+    ParamSpec("cmkf.gyro_bias_tau", 3600.0, "correlation time of the gyro bias", "s", 1.0, 1e7, runtime=False),
+    ParamSpec("cmkf.gyro_bias_sigma", 0.01, "steady-state standard deviation of the gyro bias", "rad/s",
+              1e-7, 10.0, runtime=False),
+    ParamSpec("cmkf.s_g0", 1e-6, "initial angle-random-walk PSD S_g", "rad^2/s", 1e-14, 1.0, runtime=False),
+    ParamSpec("cmkf.velocity_noise_std", 0.0, "odometry velocity noise; 0: from the message twist covariance "
+              "(0.05 m/s when it is unknown)", "m/s", 0.0, 100.0, runtime=False),
+    ParamSpec("cmkf.angular_velocity_noise_std", 0.0, "odometry angular-velocity noise; 0: from the message "
+              "covariance (0.05 rad/s when it is unknown)", "rad/s", 0.0, 100.0, runtime=False),
+    ParamSpec("cmkf.input_latency", 0.1, "IMU samples wait this long before the CMKF so that odometry up to "
+              "this much later (in header time) is still processed in stamp order", "s", 0.0, 5.0),
+    ParamSpec("cmkf.max_odom_gap", 1.0, "an odometry gap longer than this restarts the S_v estimator chain", "s",
+              0.01, 3600.0, runtime=False),
+    ParamSpec("cmkf.max_imu_gap", 0.5, "an IMU gap longer than this re-initialises position and velocity", "s",
+              0.001, 3600.0, runtime=False),
+    ParamSpec("hypotheses.enabled", True, "run the Bayesian hypothesis bank on stationary samples",
+              runtime=False),
+    ParamSpec("hypotheses.file", "", "hypothesis-set YAML (empty: the packaged config/hypotheses_default.yaml)",
+              runtime=False),
+    ParamSpec("hypotheses.bank_rate", 10.0, "rate of the bank's samples: the IMU samples are block-averaged to "
+              "it (exact averaged models)", "Hz", 0.01, 1000.0, runtime=False),
+    ParamSpec("executor", "events", "rclpy executor: events (rclpy.experimental.EventsExecutor, about twice the "
+              "message throughput) or single_threaded", runtime=False, choices=("events", "single_threaded")),
+    ParamSpec("stats_file", "", "when set, every callback's processing time is kept and a JSON summary "
+              "(percentiles) is written to this file at shutdown (for bench/bench_node.py)", runtime=False),
+    ParamSpec("imu_queue_depth", 1000, "subscription queue depth of the IMU topic (sensor-data QoS)",
+              "messages", 100, 100000, runtime=False),
+    ParamSpec("odom_queue_depth", 100, "subscription queue depth of the odometry and temperature topics",
+              "messages", 1, 100000, runtime=False),
+)
+
+PARAMETER_BY_NAME: dict[str, ParamSpec] = {p.name: p for p in PARAMETERS}
+
+
+@dataclass
+class OnlineConfig:
+    """Validated parameter values; attribute names are the parameter names with dots replaced by ``_``."""
+
+    values: dict[str, Any] = field(default_factory=lambda: {p.name: p.default for p in PARAMETERS})
+
+    def __post_init__(self) -> None:
+        merged = {p.name: p.default for p in PARAMETERS}
+        unknown = sorted(set(self.values) - set(merged))
+        if unknown:
+            raise InputError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(merged))}")
+        merged.update(self.values)
+        for name, value in merged.items():
+            spec = PARAMETER_BY_NAME[name]
+            if type(spec.default) is float and isinstance(value, int) and not isinstance(value, bool):
+                merged[name] = float(value)
+            reason = spec.check(merged[name])
+            if reason:
+                raise InputError(f"parameter {reason}")
+            if type(spec.default) is tuple:
+                merged[name] = tuple(float(v) for v in merged[name])
+        self.values = merged
+        for name, value in merged.items():
+            setattr(self, PARAMETER_BY_NAME[name].attr, value)
+
+    def updated(self, changes: dict[str, Any]) -> OnlineConfig:
+        """A new configuration with ``changes`` applied.
+
+        Raises
+        ------
+        InputError
+            If a name is unknown, a value is invalid or the parameter cannot change at runtime.
+        """
+        for name in changes:
+            spec = PARAMETER_BY_NAME.get(name)
+            if spec is not None and not spec.runtime:
+                raise InputError(f"parameter {name} cannot change at runtime: restart the node to change it")
+        return OnlineConfig({**self.values, **changes})
