@@ -390,3 +390,84 @@ def test_cli_cmkf_bag_without_odometry_exits_2(tmp_path, capsys):
     assert "Odometry" in capsys.readouterr().err
     assert main(["cmkf", str(bag), "--s-v0", "-1", "--out", str(tmp_path / "out")]) == 2
     assert "s_v0" in capsys.readouterr().err
+
+
+def _odom_kwargs(run, j: int) -> dict:
+    return dict(position=run.position[j], orientation_xyzw=run.orientation_xyzw[j],
+                linear_velocity=run.linear_velocity[j], angular_velocity=run.angular_velocity[j],
+                pose_cov=run.pose_cov[j], twist_cov=run.twist_cov[j])
+
+
+@pytest.mark.parametrize("measurement", ["twist", "pose_twist"])
+def test_late_duplicated_and_zero_interval_odometry_never_raises(measurement):
+    """Odometry stamped behind the IMU-propagated state (two late messages per epoch, the second one with no IMU
+    sample in between: a zero-length interval before the fix), duplicated stamps, and odometry repeated at the
+    stamp of the last update: the filter must neither raise (it raised LinAlgError / ZeroDivisionError) nor
+    produce non-finite estimates, and must count what it dropped."""
+    run = simulate_robot(10.0, np.random.default_rng(2))
+    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement))
+    for i in range(len(run.imu_t)):
+        f.process_imu(run.imu_t[i], run.gyro[i], run.accel[i])
+        if i % 10 == 9:
+            j = i // 10
+            for lag in (0.025, 0.015, 0.015, 0.5):  # late, late again, duplicate, beyond the tolerance
+                f.process_odometry(run.odom_t[j] - lag, **_odom_kwargs(run, j))
+            f.process_odometry(run.odom_t[j] - 0.015 + 1e-9, **_odom_kwargs(run, j))  # 1 ns after the last update
+    e = f.estimate()
+    c = e.counters
+    assert c["updates"] > 150
+    assert c["odom_dropped_stamp"] >= 99 and c["odom_dropped_interval"] >= 99
+    for name in ("accel_bias", "accel_bias_std", "S_v", "gyro_bias", "gyro_bias_std", "S_g"):
+        assert np.all(np.isfinite(getattr(e, name))), name
+    assert np.all(np.abs(e.accel_bias - run.accel_bias) < 4 * e.accel_bias_std)
+
+
+@pytest.mark.parametrize("measurement", ["twist", "pose_twist"])
+def test_late_odometry_within_tolerance_equals_in_order_processing(measurement):
+    """Odometry arriving up to 30 ms after IMU samples with later stamps is applied at its own stamp (rewind to the
+    last update, replay of the buffered IMU samples): the result equals processing the same stream in order."""
+    run = simulate_robot(20.0, np.random.default_rng(4))
+    cfg = RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement)
+    in_order, late = RobotCmkf(cfg), RobotCmkf(cfg)
+    odom_t = run.odom_t + 0.0037  # between IMU samples
+    for f, delay in ((in_order, 0.0), (late, 0.03)):
+        events = sorted([(t, 0, i) for i, t in enumerate(run.imu_t)]
+                        + [(t + delay, 1, j) for j, t in enumerate(odom_t)])
+        for _, kind, i in events:
+            if kind == 0:
+                f.process_imu(run.imu_t[i], run.gyro[i], run.accel[i])
+            else:
+                f.process_odometry(odom_t[i], **_odom_kwargs(run, i))
+    a, b = in_order.estimate(), late.estimate()
+    assert b.counters["odom_late"] == len(run.odom_t) - 1  # all but the last (no IMU sample after it)
+    assert a.counters["updates"] == b.counters["updates"] == len(run.odom_t) - 1
+    for name in ("accel_bias", "accel_bias_std", "S_v", "gyro_bias", "S_g"):
+        np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=1e-12, atol=1e-15, err_msg=name)
+    assert b.nis_accel_mean == pytest.approx(a.nis_accel_mean, rel=1e-12)
+
+
+def test_degenerate_intervals_in_the_estimators_are_skipped():
+    """The building blocks skip (and count) an update or stacked step they cannot compute instead of raising:
+    zero innovation variance (zero covariance, zero interval) and zero-length intervals (M_o singular)."""
+    from imu_noise_id.core.cmkf.fast_vel import VelocityAxisCmkf
+    from imu_noise_id.core.cmkf.stacked import Interval
+
+    fast = VelocityAxisCmkf(3, 1e-4)
+    ref = AxisCmkf(3, 1e-4, mode="pos_vel")
+    fast.initialise([0.0] * 3, [0.0] * 3, [0.0] * 3, [1e-2] * 3)
+    ref.initialise(np.zeros((3, 3)), np.stack([np.diag([0.0, 0.0, 1e-2])] * 3))
+    zero = Interval(np.eye(3), np.zeros((3, 3)), 0.0)
+    for _ in range(4):  # zero covariance, zero interval, R = 0: s = 0
+        fast.predict([0.0] * 3, [0.0] * 3, (0.0, 0.0, 1.0, 0.0))
+        assert math.isnan(fast.update([0.0] * 3, [0.0] * 3))
+        ref.predict(np.zeros((3, 3)), zero)
+        assert np.all(np.isnan(ref.update(np.zeros((3, 2)), np.zeros((3, 2, 2)))))
+    assert fast.skipped == 4 and ref.skipped == 4
+    for _ in range(4):  # R > 0: the update works, the stacked step over a zero-length interval does not
+        fast.predict(fast.v, fast.b, (0.0, 0.0, 1.0, 0.0))
+        assert np.isfinite(fast.update([0.0] * 3, [1e-4] * 3))
+        ref.predict(ref.x, zero)
+        assert np.all(np.isfinite(ref.update(np.zeros((3, 2)), np.stack([np.eye(2) * 1e-4] * 3))))
+    assert fast.skipped == 4 and ref.skipped == 4
+    assert fast.skipped_stacked == 4 and ref.skipped_stacked == 4
+    assert fast.count == ref.estimator.count == 0

@@ -83,6 +83,12 @@ class AxisCmkf:
         self._pending: tuple[Interval, np.ndarray] | None = None
         self.initialised = False
         self.rejected = 0  # estimates refused by the positive-definiteness check
+        self.skipped = 0  # updates skipped because an innovation covariance was not positive definite
+
+    @property
+    def skipped_stacked(self) -> int:
+        """Stacked-estimator steps skipped on a degenerate interval (M_o not invertible)."""
+        return self.estimator.skipped
 
     def initialise(self, x0: np.ndarray, P0: np.ndarray) -> None:
         """Set x̂₀ (n, 3) and P₀ (n, 3, 3); starts a new chain for the stacked estimator."""
@@ -126,6 +132,12 @@ class AxisCmkf:
         H = self.H
         HP = H @ self.P  # (n, m, 3)
         S = HP @ H.T + R
+        if not _all_positive_definite(S):
+            # beyond the paper: no update is possible (zero covariance, zero interval); skip it, restart the chain
+            self.skipped += 1
+            self._pending = None
+            self.estimator.reset_chain()
+            return np.full(self.n, np.nan)
         Sinv = 1.0 / S if self.m == 1 else np.linalg.inv(S)
         K = np.swapaxes(HP, 1, 2) @ Sinv  # (n, 3, m)
         nu = z - self.x @ H.T
@@ -153,6 +165,17 @@ class AxisCmkf:
             ok = np.repeat(ok.reshape(-1, self.pd_group).all(axis=1), self.pd_group)
         self.S_used = np.where(ok, s_new, self.S_used)
         self.rejected += int((~ok).any())
+
+
+def _all_positive_definite(S: np.ndarray) -> bool:
+    """True if every (m, m) matrix of the stack ``S`` is finite and positive definite (Cholesky succeeds)."""
+    if not np.all(np.isfinite(S)):
+        return False
+    try:
+        np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        return False
+    return True
 
 
 def paper_interval(T: float, tau: float, sigma_ss: float) -> Interval:

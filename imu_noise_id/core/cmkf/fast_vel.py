@@ -33,7 +33,13 @@ class _Epoch:
             self.inv = None
         else:
             self.T, self.Bv, self.beta, self.qb = interval
-            self.inv = (0.0, 1.0, -1.0 / self.Bv, 1.0 / self.Bv)  # M_o⁻¹ row-major
+            # M_o⁻¹ row-major; M_o is singular for a zero-length interval (β_v = 0): no stacked step uses it
+            self.inv = (0.0, 1.0, -1.0 / self.Bv, 1.0 / self.Bv) if self.Bv > 0.0 else None
+
+    @property
+    def degenerate(self) -> bool:
+        """True when the epoch has an interval but M_o of that interval cannot be inverted."""
+        return self.inv is None and not math.isnan(self.T)
 
 
 class VelocityAxisCmkf:
@@ -63,6 +69,8 @@ class VelocityAxisCmkf:
         self.den = 0.0
         self.count = 0
         self.rejected = 0
+        self.skipped = 0  # updates skipped: innovation variance not positive
+        self.skipped_stacked = 0  # stacked steps skipped: zero-length interval (M_o singular)
         self.initialised = False
         self._chain: deque[_Epoch] = deque(maxlen=3)
         self._pending: tuple[tuple[float, float, float, float], list[tuple[float, float]]] | None = None
@@ -116,7 +124,16 @@ class VelocityAxisCmkf:
         self._pending = (interval, U)
 
     def update(self, z: list[float], R: list[float], new_chain: bool = False) -> float:
-        """Joseph-form update (24)–(27) of every axis and one stacked-estimator step; returns the summed NIS."""
+        """Joseph-form update (24)–(27) of every axis and one stacked-estimator step; returns the summed NIS.
+
+        Beyond the paper: if an innovation variance ``s = P_vv + R`` is not positive (zero covariance and zero
+        interval), the update is skipped (counted in ``skipped``), NaN is returned and the stacked chain restarts.
+        """
+        if not all(self.pvv[i] + R[i] > 0.0 for i in range(self.n)):
+            self.skipped += 1
+            self._chain.clear()
+            self._pending = None
+            return math.nan
         nis = 0.0
         for i in range(self.n):
             pvv, pvb, pbb, r = self.pvv[i], self.pvb[i], self.pbb[i], R[i]
@@ -135,7 +152,9 @@ class VelocityAxisCmkf:
             self._chain.append(_Epoch(list(z), list(R), None, None))
         else:
             interval, U = self._pending
-            self._chain.append(_Epoch(list(z), list(R), interval, U))
+            epoch = _Epoch(list(z), list(R), interval, U)
+            self._chain.append(epoch)
+            self.skipped_stacked += epoch.degenerate
             if self._stack():
                 self._accept()
         self._pending = None

@@ -49,15 +49,23 @@ epoch with period T, gravity on z and position + velocity measured, ``Σβ_j dt_
 Gyro: :class:`~.gyro.GyroBiasFilter` per IMU axis with ``y = ∫ω̃ dt − C_ib^T ω_b T`` (twist angular velocity) or the
 odometry's relative rotation when no angular velocity is given.
 
-Robustness: stamps not increasing (duplicated / out of order) and NaN/inf messages are dropped and counted; an
-odometry gap longer than ``max_odom_gap`` restarts the stacked-estimator chain (no Δv across a gap); an IMU gap
-longer than ``max_imu_gap`` cannot be propagated: the position/velocity states are re-initialised from the next
-odometry message (bias kept) and the chain restarts. Without IMU nothing can be estimated; with IMU only the filter
-propagates, its covariance grows and the estimate is flagged unobserved.
+Robustness: stamps not increasing (duplicated / out of order) and NaN/inf messages are dropped and counted. Odometry
+stamped behind the IMU-propagated state (IMU and odometry come on two topics with different latencies) is applied
+at its own stamp when it is at most ``late_odom_tolerance`` late: the filter keeps a copy of its state at the last
+update and the IMU samples since, rewinds, processes the odometry and replays the samples — the result equals
+in-order processing (counted ``odom_late``); older odometry is dropped (``odom_dropped_late``). Odometry less than
+``min_odom_interval`` after the last update (a degenerate interval: M_o singular, divisions by T) is dropped
+(``odom_dropped_interval``), and the estimators skip, rather than raise on, any update or stacked step they cannot
+compute (``skipped_updates``, ``skipped_stacked``). An odometry gap longer than ``max_odom_gap`` restarts the
+stacked-estimator chain (no Δv across a gap); an IMU gap longer than ``max_imu_gap`` cannot be propagated: the
+position/velocity states are re-initialised from the next odometry message (bias kept) and the chain restarts.
+Without IMU nothing can be estimated; with IMU only the filter propagates, its covariance grows and the estimate is
+flagged unobserved.
 """
 
 from __future__ import annotations
 
+import copy
 import math
 from collections import deque
 from dataclasses import dataclass, field
@@ -68,7 +76,7 @@ from . import rotation as rot
 from .axis import AxisCmkf
 from .fast_vel import VelocityAxisCmkf
 from .gyro import GyroBiasFilter
-from .stacked import Interval
+from .stacked import Interval, StackedSvEstimator
 
 MEASUREMENTS = ("twist", "pose_twist")
 GRAVITY_SOURCES = ("odometry", "imu")
@@ -93,7 +101,9 @@ class RobotCmkfConfig:
         epochs) or ``"imu"`` (the ``orientation_xyzw`` given to :meth:`RobotCmkf.process_imu`, for planar odometry
         that has no roll/pitch).
     max_odom_gap, max_imu_gap : [s] (see module docstring); late_odom_tolerance : an odometry message up to this
-        much older than the IMU-propagated state is applied at the state time [s].
+        much older than the IMU-propagated state is applied at its own stamp (rewind and replay of the IMU samples
+        since the last update), older ones are dropped [s]; min_odom_interval : odometry closer than this to the
+        last update is dropped (degenerate interval) [s].
     pd_check : ``"per_axis"`` or ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used.
     nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean``.
     """
@@ -117,6 +127,7 @@ class RobotCmkfConfig:
     max_odom_gap: float = 1.0
     max_imu_gap: float = 0.5
     late_odom_tolerance: float = 0.05
+    min_odom_interval: float = 1e-4
     pd_check: str = "per_axis"
     min_samples: int = 10
     nis_window: int = 50
@@ -138,6 +149,10 @@ class RobotCmkfConfig:
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be None or a finite number > 0, got {value!r}")
+        for name in ("late_odom_tolerance", "min_odom_interval"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
 
 
 @dataclass
@@ -194,6 +209,28 @@ def _rotate(rows: tuple[tuple[float, float, float], ...], v: list[float]) -> lis
     return [r[0] * v[0] + r[1] * v[1] + r[2] * v[2] for r in rows]
 
 
+def _clone(value: object) -> object:
+    """Copy of a piece of streaming state, as deep as it is ever mutated in place (a fast ``copy.deepcopy``).
+
+    Lists, deques and arrays are copied; the filter objects are copied attribute by attribute; tuples, numbers and
+    the stacked estimators' epoch records (never changed after creation) are shared.
+    """
+    if isinstance(value, list):
+        return list(value)
+    if isinstance(value, deque):
+        return deque(value, value.maxlen)
+    if isinstance(value, np.ndarray):
+        return value.copy()
+    if isinstance(value, _FILTERS):
+        new = copy.copy(value)
+        vars(new).update({k: _clone(v) for k, v in vars(value).items()})
+        return new
+    return value
+
+
+_FILTERS = (AxisCmkf, VelocityAxisCmkf, GyroBiasFilter, StackedSvEstimator)
+
+
 class _CovDiag:
     """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 message covariance, cached on (Σ, C).
 
@@ -240,7 +277,8 @@ class RobotCmkf:
         self.gyro = GyroBiasFilter(config.gyro_bias_tau, config.gyro_bias_sigma, config.s_g0, config.min_samples)
         self.counters = dict.fromkeys(
             ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "odom_dropped_stamp",
-             "odom_dropped_nan", "odom_dropped_missing", "odom_late", "odom_without_imu", "odom_gaps", "imu_gaps"),
+             "odom_dropped_nan", "odom_dropped_missing", "odom_dropped_late", "odom_dropped_interval", "odom_late",
+             "odom_without_imu", "odom_gaps", "imu_gaps", "skipped_updates", "skipped_stacked"),
             0,
         )
         self._g = config.gravity
@@ -269,6 +307,26 @@ class RobotCmkf:
         self._twist_lin_cov = _CovDiag(slice(0, 3))
         self._twist_ang_cov = _CovDiag(slice(3, 6))
         self._pose_cov = _CovDiag(slice(0, 3))
+        # Late odometry: the streaming state right after the last update and the IMU samples since (before the
+        # first update: those of the last late_odom_tolerance; None: too many to keep, see _apply_imu).
+        self._snapshot: dict | None = None
+        self._replay: list[tuple[float, tuple, rot.Quat | None]] | None = []
+
+    _NOT_STATE = frozenset((
+        "config", "q_bi", "C_bi", "C_ib", "_C_ib_rows", "_fast", "counters", "_g", "_phi_per_s", "_t_odom",
+        "_twist_lin_cov", "_twist_ang_cov", "_pose_cov", "_snapshot", "_replay",
+    ))
+
+    def _save_state(self) -> dict:
+        """A copy of everything that processing a message changes (not the counters, not the last stamp)."""
+        return {k: _clone(v) for k, v in vars(self).items() if k not in self._NOT_STATE}
+
+    def _rewind(self) -> list[tuple[float, tuple, rot.Quat | None]]:
+        """Restore the state of the last update; returns the IMU samples processed since (to replay)."""
+        samples = self._replay
+        vars(self).update({k: _clone(v) for k, v in self._snapshot.items()})
+        self._replay = []
+        return samples
 
     # ------------------------------------------------------------------ IMU path
     def _reset_interval(self) -> None:
@@ -302,28 +360,47 @@ class RobotCmkf:
         if self._t_imu is not None and t <= self._t_imu:
             self.counters["imu_dropped_stamp"] += 1
             return False
+        q_imu = None
         if orientation_xyzw is not None and self.config.gravity_source == "imu":
             try:
-                self._q_ni_imu = rot.normalise(orientation_xyzw)
+                q_imu = rot.normalise(orientation_xyzw)
             except ValueError:
                 self.counters["imu_dropped_nan"] += 1
                 return False
         self.counters["imu"] += 1
+        self._apply_imu(t, (wx, wy, wz, fx, fy, fz), q_imu)
+        return True
+
+    def _apply_imu(self, t: float, sample: tuple[float, float, float, float, float, float],
+                   q_imu: rot.Quat | None) -> None:
+        """Process one checked IMU sample (also used to replay the samples after a late odometry message)."""
+        if q_imu is not None:
+            self._q_ni_imu = q_imu
         self._t_imu = t
-        self._last_imu = (wx, wy, wz, fx, fy, fz)
+        self._last_imu = sample
+        replay = self._replay
+        if replay is not None:
+            cfg = self.config
+            if self._t_update is None:  # before the first odometry: only the samples a late first one may need
+                replay.append((t, sample, q_imu))
+                while t - replay[0][0] > cfg.late_odom_tolerance:
+                    del replay[0]
+            elif t - self._t_update > cfg.max_odom_gap + cfg.late_odom_tolerance:
+                self._replay = None  # odometry stopped: stop keeping samples, late odometry will be dropped
+            else:
+                replay.append((t, sample, q_imu))
         if self._t_state is None:
-            return True  # no odometry yet: nothing to propagate from
+            return  # no odometry yet: nothing to propagate from
         dt = t - self._t_state
         if dt > self.config.max_imu_gap:
             if not self._reinit:
                 self.counters["imu_gaps"] += 1
             self._reinit = True
             self._t_state = t
-            return True
+            return
         if dt > 0.0:
             self._propagate(dt, self._last_imu)
             self._t_state = t
-        return True
 
     def _propagate(self, dt: float, sample: tuple[float, float, float, float, float, float]) -> None:
         """Eqs. (13)–(16) per IMU axis with the gravity- and transport-compensated input; interval accumulators.
@@ -423,21 +500,43 @@ class RobotCmkf:
         if self._last_imu is None:
             self.counters["odom_without_imu"] += 1
             return False
+        if self._t_update is not None and t - self._t_update < cfg.min_odom_interval:
+            self.counters["odom_dropped_interval"] += 1
+            return False
+        covs = (pose_cov, twist_cov)
+        t_now = self._t_imu if self._t_state is None else self._t_state
+        if t >= t_now:
+            return self._apply_odometry(t, vals, q_nb, covs)
+        if t_now - t > cfg.late_odom_tolerance or self._replay is None:
+            self.counters["odom_dropped_late"] += 1
+            return False
+        # Late: rewind to the last update (first message: nothing to rewind), replay the IMU samples up to t,
+        # update at t, replay the rest.
+        samples = self._rewind() if self._snapshot is not None else list(self._replay)
+        for sample in samples:
+            if sample[0] <= t:  # IMU first on equal stamps, as in stamp order
+                self._apply_imu(*sample)
+        updated = self._apply_odometry(t, vals, q_nb, covs)
+        for sample in samples:
+            if sample[0] > t:
+                self._apply_imu(*sample)
+        self.counters["odom_late"] += 1
+        return updated
+
+    def _apply_odometry(self, t: float, vals: dict, q_nb: rot.Quat | None,
+                        covs: tuple[np.ndarray | None, np.ndarray | None]) -> bool:
+        """Bring the state to ``t`` (not behind the state) and update with one checked odometry message."""
+        cfg = self.config
+        pose_cov, twist_cov = covs
         # Bring the state to the odometry stamp.
-        if self._t_state is not None:
-            if t < self._t_state:
-                if self._t_state - t > cfg.late_odom_tolerance:
-                    self.counters["odom_dropped_stamp"] += 1
-                    return False
-                self.counters["odom_late"] += 1
-            elif t > self._t_state:
-                if t - self._t_imu > cfg.max_imu_gap:  # the last IMU sample is stale: cannot propagate
-                    if not self._reinit:
-                        self.counters["imu_gaps"] += 1
-                    self._reinit = True
-                else:
-                    self._propagate(t - self._t_state, self._last_imu)
-                self._t_state = t
+        if self._t_state is not None and t > self._t_state:
+            if t - self._t_imu > cfg.max_imu_gap:  # the last IMU sample is stale: cannot propagate
+                if not self._reinit:
+                    self.counters["imu_gaps"] += 1
+                self._reinit = True
+            else:
+                self._propagate(t - self._t_state, self._last_imu)
+            self._t_state = t
         new_chain = self._t_update is None or (t - self._t_update) > cfg.max_odom_gap
         if new_chain and self._t_update is not None:
             self.counters["odom_gaps"] += 1
@@ -447,27 +546,35 @@ class RobotCmkf:
         if self._reinit or self._t_state is None:
             self._initialise(t, z, R)
         else:
+            f = self.filter
+            skipped_before = (f.skipped, f.skipped_stacked)
             if self._fast:
-                self.filter.predict(self._v, self._b, self._vel_interval())
-                self._nis_accel = self.filter.update(z, R, new_chain=new_chain)
-                self._v, self._b = list(self.filter.v), list(self.filter.b)
+                f.predict(self._v, self._b, self._vel_interval())
+                self._nis_accel = f.update(z, R, new_chain=new_chain)
+                self._v, self._b = list(f.v), list(f.b)
             else:
                 self._r = list(C_ni.T @ (self._C_ni_epoch @ np.array(self._r) + np.array(self._dp)))
-                self.filter.predict(np.array([self._r, self._v, self._b]).T, self._interval())
-                self._nis_accel = float(self.filter.update(z, R, new_chain=new_chain).sum())
-                self._r, self._v, self._b = (list(map(float, col)) for col in self.filter.x.T)
-            if len(self._nis_hist) == self._nis_hist.maxlen:
-                self._nis_sum -= self._nis_hist[0]
-            self._nis_hist.append(self._nis_accel)
-            self._nis_sum += self._nis_accel
+                f.predict(np.array([self._r, self._v, self._b]).T, self._interval())
+                self._nis_accel = float(f.update(z, R, new_chain=new_chain).sum())
+                self._r, self._v, self._b = (list(map(float, col)) for col in f.x.T)
+            self.counters["skipped_stacked"] += f.skipped_stacked - skipped_before[1]
+            if f.skipped > skipped_before[0]:
+                self.counters["skipped_updates"] += 1
+            else:
+                if len(self._nis_hist) == self._nis_hist.maxlen:
+                    self._nis_sum -= self._nis_hist[0]
+                self._nis_hist.append(self._nis_accel)
+                self._nis_sum += self._nis_accel
+                self.counters["updates"] += 1
             self._gyro_update(vals, q_nb, twist_cov, new_chain)
-            self.counters["updates"] += 1
         if q_nb is not None:
             self._q_ni = q_ni
             self._q_nb_prev = q_nb
         self._C_ni_epoch = C_ni
         self._t_update = t
         self._reset_interval()
+        self._snapshot = self._save_state()
+        self._replay = []
         return True
 
     def _check_odometry(self, t: float, arrays: dict) -> tuple[dict, rot.Quat | None] | None:

@@ -94,6 +94,7 @@ class StackedSvEstimator:
         self.num = np.zeros(self.n_axes)
         self.den = 0.0
         self.count = 0
+        self.skipped = 0  # epochs whose M_o could not be inverted (zero-length interval): the chain restarts
         self._chain: deque[_Epoch] = deque(maxlen=3)
         self.last_Z: np.ndarray | None = None
 
@@ -118,9 +119,12 @@ class StackedSvEstimator:
         interval : the interval k-1 → k (None starts a new chain).
         U : (n, d) known-input contribution over that interval (``x̂⁻_k − F̂ x̂⁺_{k-1}``).
         """
+        Mo_pinv = None if interval is None else _pinv_full_rank(np.vstack([self.H @ interval.Phi, self.H]))
+        if interval is not None and Mo_pinv is None:
+            self.skipped += 1
+            interval = U = None  # beyond the paper: a degenerate interval starts a new chain instead of raising
         if interval is None:
             self._chain.clear()
-        Mo_pinv = None if interval is None else _pinv_full_rank(np.vstack([self.H @ interval.Phi, self.H]))
         self._chain.append(_Epoch(np.asarray(z, float), np.asarray(R, float), interval, U, Mo_pinv))
         if len(self._chain) < 3:
             return False
@@ -159,8 +163,17 @@ class StackedSvEstimator:
         return True
 
 
-def _pinv_full_rank(M: np.ndarray) -> np.ndarray:
-    """Moore–Penrose pseudo-inverse ``(MᵀM)⁻¹Mᵀ`` of a full-column-rank M (eq. 29: M_o is, by observability)."""
+def _pinv_full_rank(M: np.ndarray, rcond: float = 1e-12) -> np.ndarray | None:
+    """Moore–Penrose pseudo-inverse ``(MᵀM)⁻¹Mᵀ`` of a full-column-rank M (eq. 29: M_o is, by observability).
+
+    Returns None when M is numerically rank deficient (condition number of M above ``1/rcond``), e.g. the
+    ``M_o = [H F̂; H]`` of a zero-length interval (``F̂ = I``), or not finite.
+    """
+    if not np.all(np.isfinite(M)):
+        return None
+    sv = np.linalg.svd(M, compute_uv=False)
+    if sv[-1] <= rcond * sv[0]:
+        return None
     return np.linalg.solve(M.T @ M, M.T)
 
 
