@@ -101,9 +101,29 @@ def test_fast_path_equals_full_deserialisation(full_bag):
     assert all(f == 0 for _, f in fast.decode_stats.values()) and all(n == 0 for n, _ in slow.decode_stats.values())
     for name in ("t", "gyro", "accel"):
         np.testing.assert_array_equal(getattr(fast.imu, name), getattr(slow.imu, name))
+    assert fast.imu.orientation_xyzw is None and slow.imu.orientation_xyzw is None  # simulated: not provided
     for name in ("t", "position", "orientation_xyzw", "pose_covariance", "twist_covariance", "angular_velocity"):
         np.testing.assert_array_equal(getattr(fast.odom, name), getattr(slow.odom, name))
     np.testing.assert_array_equal(fast.temperature.value, slow.temperature.value)
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_imu_orientation_round_trip_fast_equals_full(tmp_path, storage):
+    """The Imu orientation comes back as written, NaN where a message says "not provided" (REP-145:
+    orientation_covariance[0] = -1), identically on the numpy path and with full deserialisation."""
+    imu = simulated_imu(duration=5.0)
+    rng = np.random.default_rng(8)
+    q = rng.normal(size=(len(imu), 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q[::7] = np.nan  # written with orientation_covariance[0] = -1
+    imu.orientation_xyzw = q
+    write_bag(tmp_path / storage, imu, storage=storage)
+    fast, slow = read_bag(tmp_path / storage), read_bag(tmp_path / storage, fast=False)
+    assert fast.decode_stats["/imu/data"] == (len(imu), 0) and slow.decode_stats["/imu/data"] == (0, len(imu))
+    np.testing.assert_array_equal(fast.imu.orientation_xyzw, q)
+    np.testing.assert_array_equal(slow.imu.orientation_xyzw, q)
+    np.testing.assert_array_equal(read_imu(tmp_path / storage).orientation_xyzw, q)
+    np.testing.assert_array_equal(fast.imu.gyro, imu.gyro)
 
 
 def test_independent_deserialisation_matches(full_bag):
@@ -147,6 +167,9 @@ def test_mixed_frame_id_lengths_use_both_paths_and_stay_exact(tmp_path):
                 "angular_velocity.x": imu.gyro[i : i + 1, 0],
                 "angular_velocity.z": imu.gyro[i : i + 1, 2],
                 "linear_acceleration.z": imu.accel[i : i + 1, 2],
+                "orientation.z": np.array([np.sin(0.01 * i)]),
+                "orientation.w": np.array([np.cos(0.01 * i)]),
+                "orientation_covariance": np.array([[-1.0 if i % 3 == 0 else 0.01, *[0.0] * 8]]),
             }
             buf, _ = encode_cdr(store.fielddefs, IMU_TYPE, values, {"header.frame_id": frames[i % 8]})
             data = buf[0].tobytes()
@@ -157,9 +180,13 @@ def test_mixed_frame_id_lengths_use_both_paths_and_stay_exact(tmp_path):
     fast, slow = read_bag(tmp_path / "mixed"), read_bag(tmp_path / "mixed", fast=False)
     n_fast, n_fallback = fast.decode_stats["/imu"]
     assert n_fallback > 0 and n_fast > 0 and n_fast + n_fallback == len(imu)
-    for name in ("t", "gyro", "accel"):
+    for name in ("t", "gyro", "accel", "orientation_xyzw"):
         np.testing.assert_array_equal(getattr(fast.imu, name), getattr(slow.imu, name))
     np.testing.assert_array_equal(fast.imu.gyro[:, [0, 2]], imu.gyro[:, [0, 2]])
+    k = np.arange(len(imu))
+    expected = np.column_stack([0 * k, 0 * k, np.sin(0.01 * k), np.cos(0.01 * k)])
+    expected[k % 3 == 0] = np.nan  # orientation_covariance[0] = -1: not provided
+    np.testing.assert_array_equal(fast.imu.orientation_xyzw, expected)
     assert fast.imu.frame_id == "imu_" and any("header.frame_id changes" in n for n in fast.notes)
 
 
@@ -197,11 +224,14 @@ def test_ros1_bag_equals_its_rosbag2_copy(shared_data):
     assert len(ros1.imu) == 11865 and len(ros1.odom) == 3952
     assert ros1.decode_stats["/imu/data"] == (11865, 0)
     for other in (ros2, ros1_slow):
-        for name in ("t", "gyro", "accel"):
+        for name in ("t", "gyro", "accel", "orientation_xyzw"):
             np.testing.assert_array_equal(getattr(ros1.imu, name), getattr(other.imu, name))
         for name in ("t", "position", "orientation_xyzw", "linear_velocity", "angular_velocity", "twist_covariance"):
             np.testing.assert_array_equal(getattr(ros1.odom, name), getattr(other.odom, name))
     assert (ros1.odom.frame_id, ros1.odom.child_frame_id, ros1.imu.frame_id) == ("odom", "base_link", "imu_link")
+    # The Husky's UM6 provides its orientation in every message: unit quaternions
+    assert ros1.imu.orientation_xyzw is not None and np.isfinite(ros1.imu.orientation_xyzw).all()
+    np.testing.assert_allclose(np.linalg.norm(ros1.imu.orientation_xyzw, axis=1), 1.0, atol=1e-3)
     # Declared covariances of the Husky IMU (README): angular velocity 4e-4 (rad/s)², acceleration 9.604e-3 (m/s²)².
     np.testing.assert_allclose(np.diag(ros1.imu_covariance["angular_velocity"]), [4e-4] * 3)
     np.testing.assert_allclose(np.diag(ros2.imu_covariance["linear_acceleration"]), [9.604e-3] * 3)
@@ -209,6 +239,7 @@ def test_ros1_bag_equals_its_rosbag2_copy(shared_data):
     npz = np.load(shared_data / HUSKY / "husky_test1.npz")
     np.testing.assert_array_equal(ros1.imu.gyro, npz["imu_gyro"])
     np.testing.assert_array_equal(ros1.odom.linear_velocity, npz["odom_twist_linear"])
+    np.testing.assert_array_equal(ros1.imu.orientation_xyzw, npz["imu_quat_xyzw"])
     np.testing.assert_allclose(ros1.imu.t - ros1.imu.t[0], npz["imu_t"], rtol=0, atol=1e-6)
 
 

@@ -123,7 +123,8 @@ class FlatDecoder:
     msgtype : e.g. ``'sensor_msgs/msg/Imu'``
     outputs : output name → leaf paths whose values fill the output's columns in order, e.g.
         ``{'gyro': ('angular_velocity.x', 'angular_velocity.y', 'angular_velocity.z')}``; an array leaf fills
-        ``count`` columns. The caller provides the destination arrays (their dtype decides the output type).
+        ``count`` columns, one element of it (``'orientation_covariance[0]'``) one column. The caller provides
+        the destination arrays (their dtype decides the output type).
     strings : string leaf paths whose value (of the first message) is wanted, e.g. ``('header.frame_id',)``
     ros1 : ROS 1 serialisation instead of CDR
     deserialize : the full deserialiser ``(raw, msgtype) -> message``, used for the messages the numpy path
@@ -156,8 +157,12 @@ class FlatDecoder:
             self.leaves = None
         self.fast = fast and self.leaves is not None
         by_path = {leaf.path: i for i, leaf in enumerate(self.leaves or [])}
-        self._leaf_index = {p: by_path.get(p) for paths in self.outputs.values() for p in paths}
+        self._leaf_index = {p: by_path.get(_split_index(p)[0]) for paths in self.outputs.values() for p in paths}
         self._leaf_index.update({p: by_path.get(p) for p in self.string_paths})
+        for p, i in self._leaf_index.items():  # an element index must lie inside its array leaf
+            index = _split_index(p)[1]
+            if i is not None and index is not None and not 0 <= index < self.leaves[i].count:
+                self._leaf_index[p] = None
         if self.leaves is not None and any(i is None for i in self._leaf_index.values()):
             self.fast = False
 
@@ -167,7 +172,10 @@ class FlatDecoder:
         if leaves is None and reference is not None:
             leaves = flatten(reference, self.msgtype)
         counts = {leaf.path: leaf.count for leaf in leaves or []}
-        return {name: sum(counts.get(p, 1) for p in paths) for name, paths in self.outputs.items()}
+        return {
+            name: sum(1 if _split_index(p)[1] is not None else counts.get(p, 1) for p in paths)
+            for name, paths in self.outputs.items()
+        }
 
     # --- numpy path --------------------------------------------------------------------------------------
     def decode(self, raws: Sequence[bytes], out: Mapping[str, np.ndarray]) -> None:
@@ -234,14 +242,16 @@ class FlatDecoder:
                 i = self._leaf_index[path]
                 leaf = self.leaves[i]
                 kind, size = PRIMITIVES[leaf.kind]
+                index = _split_index(path)[1]
+                count, offset = (leaf.count, offsets[i]) if index is None else (1, offsets[i] + index * size)
                 view = np.ndarray(
-                    (n, leaf.count), dtype=f"{order}{kind}", buffer=joined, offset=offsets[i], strides=(length, size)
+                    (n, count), dtype=f"{order}{kind}", buffer=joined, offset=offset, strides=(length, size)
                 )
                 if dest.ndim == 1:
                     dest[targets] = view[:, 0]
                 else:
-                    dest[targets, col : col + leaf.count] = view
-                col += leaf.count
+                    dest[targets, col : col + count] = view
+                col += count
         for path in self.string_paths:
             i = self._leaf_index[path]
             strlen = int.from_bytes(first[offsets[i] : offsets[i] + 4], "little" if order == "<" else "big")
@@ -276,7 +286,16 @@ class FlatDecoder:
         self.stats.fallback += len(rows)
 
 
+def _split_index(path: str) -> tuple[str, int | None]:
+    """``'a.b[3]'`` → ``('a.b', 3)``; a path without an element index → ``(path, None)``."""
+    if path.endswith("]") and "[" in path:
+        base, _, index = path[:-1].rpartition("[")
+        return base, int(index)
+    return path, None
+
+
 def _get(msg: object, path: str) -> object:
+    path, index = _split_index(path)
     for part in path.split("."):
         msg = getattr(msg, part)
-    return msg
+    return msg if index is None else msg[index]

@@ -47,7 +47,13 @@ def _xyz(prefix: str, names: str = "xyz") -> tuple[str, ...]:
 
 
 _OUTPUTS: dict[str, dict[str, tuple[str, ...]]] = {
-    IMU_TYPE: {**_STAMP, "gyro": _xyz("angular_velocity"), "accel": _xyz("linear_acceleration")},
+    IMU_TYPE: {
+        **_STAMP,
+        "gyro": _xyz("angular_velocity"),
+        "accel": _xyz("linear_acceleration"),
+        "orientation_xyzw": _xyz("orientation", "xyzw"),
+        "orientation_cov0": ("orientation_covariance[0]",),
+    },
     ODOM_TYPE: {
         **_STAMP,
         "position": _xyz("pose.pose.position"),
@@ -64,6 +70,10 @@ _STRINGS: dict[str, tuple[str, ...]] = {
     ODOM_TYPE: ("header.frame_id", "child_frame_id"),
     TEMPERATURE_TYPE: (),
 }
+#: Outputs decoded batch by batch and consumed by :meth:`_Stream.add` (not kept per message).
+_TRANSIENT = frozenset({"orientation_cov0"})
+#: Largest plausible magnitude per output (None: no limit), see repair_time_series.
+_MAX_ABS = {"gyro": IMU_MAX_ABS[0], "accel": IMU_MAX_ABS[1]}
 _WHAT = {IMU_TYPE: "Imu", ODOM_TYPE: "Odometry", TEMPERATURE_TYPE: "Temperature"}
 _FLAG = {IMU_TYPE: "--topic", ODOM_TYPE: "--odom-topic", TEMPERATURE_TYPE: "--temperature-topic"}
 
@@ -223,6 +233,8 @@ class _Stream:
         # A bag whose definition is not flat still has the standard field sizes (e.g. 36 covariance values).
         reference = get_typestore(Stores.LATEST).fielddefs if self.decoder.leaves is None else None
         self.widths = {k: w for k, w in self.decoder.widths(reference).items() if k not in _STAMP}
+        self.transient = {k: w for k, w in self.widths.items() if k in _TRANSIENT}
+        self.widths = {k: w for k, w in self.widths.items() if k not in _TRANSIENT}
         self.expected = count
         self.capacity = max(count, 1)
         self.n = 0
@@ -250,7 +262,10 @@ class _Stream:
         sec = np.empty(k, dtype=np.int64)
         nsec = np.empty(k, dtype=np.int64)
         views = {name: a[s:e] for name, a in self.arrays.items()}
-        self.decoder.decode(raws, {"sec": sec, "nsec": nsec, **views})
+        transient = {name: np.empty((k, w) if w > 1 else k) for name, w in self.transient.items()}
+        self.decoder.decode(raws, {"sec": sec, "nsec": nsec, **views, **transient})
+        if "orientation_cov0" in transient:
+            _mark_orientation_not_provided(views["orientation_xyzw"], transient["orientation_cov0"])
         self.t[s:e] = sec + nsec * 1e-9
         if self.receive_ns is not None:
             if np.any(sec) or np.any(nsec):
@@ -263,6 +278,17 @@ class _Stream:
         n = self.n
         receive = None if self.receive_ns is None else self.receive_ns[:n]
         return self.t[:n], receive, {k: a[:n] for k, a in self.arrays.items()}
+
+
+def _mark_orientation_not_provided(q: np.ndarray, cov0: np.ndarray) -> None:
+    """Zero the orientation rows that are not provided (REP-145: ``orientation_covariance[0] == -1``) or unusable
+    (NaN/inf, zero quaternion), so that they neither drop the sample in the repair nor pass as an orientation.
+
+    The zero quaternion is the marker :func:`_imu` turns into NaN rows after the repair.
+    """
+    bad = (cov0 == -1.0) | ~np.isfinite(q).all(axis=1)
+    if bad.any():
+        q[bad] = 0.0
 
 
 def _finish(stream: _Stream, where: str, notes: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
@@ -293,7 +319,7 @@ def _finish(stream: _Stream, where: str, notes: list[str]) -> tuple[np.ndarray, 
         topic_notes.append(f"{path} changes between messages; the first value {value!r} is reported")
     names = list(arrays)
     try:
-        limits = IMU_MAX_ABS if stream.msgtype == IMU_TYPE else None
+        limits = [_MAX_ABS.get(k) for k in names] if stream.msgtype == IMU_TYPE else None
         t, columns, report = repair_time_series(t, [arrays[k] for k in names], max_abs=limits)
     except QualityError as exc:
         raise BagError(f"topic {stream.topic!r} in {where}: {exc}. Check the sensor driver or record again") from None
@@ -395,8 +421,13 @@ def _dispatch(batch: list[tuple[Any, int, bytes]], by_connection: dict[int, _Str
 def _imu(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]) -> ImuSeries:
     t, arrays, topic_notes, stream = entry
     frame = stream.decoder.strings.get("header.frame_id", "")
+    q = arrays["orientation_xyzw"]
+    provided = q.any(axis=1)  # the zero rows are the ones _mark_orientation_not_provided marked (or published so)
+    orientation = q if provided.any() else None
+    if orientation is not None and not provided.all():
+        orientation[~provided] = np.nan  # in place: the stream's buffer is ours
     return ImuSeries(t=t, gyro=arrays["gyro"], accel=arrays["accel"], frame_id=frame, topic=stream.topic,
-                     notes=list(topic_notes))  # fmt: skip
+                     notes=list(topic_notes), orientation_xyzw=orientation)  # fmt: skip
 
 
 def _odometry(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]) -> OdometrySeries:

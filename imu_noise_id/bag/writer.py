@@ -107,6 +107,12 @@ def _imu_values(imu: ImuSeries, rows: slice, stamp_ns: np.ndarray) -> tuple[dict
         "orientation.w": np.ones(n),
         "orientation_covariance": np.tile([ORIENTATION_NOT_PROVIDED, *[0.0] * 8], (n, 1)),
     }
+    if imu.orientation_xyzw is not None:  # rows with NaN stay "not provided"
+        q = imu.orientation_xyzw[rows]
+        provided = np.isfinite(q).all(axis=1)
+        for i, c in enumerate("xyzw"):
+            values[f"orientation.{c}"] = np.where(provided, q[:, i], 1.0 if c == "w" else 0.0)
+        values["orientation_covariance"][provided, 0] = 0.0  # provided, covariance unknown (REP-145)
     for i, c in enumerate("xyz"):
         values[f"angular_velocity.{c}"] = imu.gyro[rows, i]
         values[f"linear_acceleration.{c}"] = imu.accel[rows, i]

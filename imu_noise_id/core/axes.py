@@ -47,6 +47,13 @@ class ImuSeries:
         Frame of the samples.
     topic : str
         Where the samples came from (topic name or a description).
+    notes : list of str
+        What was repaired or is worth knowing about the samples.
+    orientation_xyzw : ndarray, shape (N, 4), or None
+        The sensor's own orientation estimate (sensor_msgs/Imu ``orientation``: the IMU frame in the driver's
+        world frame, quaternion x, y, z, w as published). A row is NaN where the message says it is not provided
+        (REP-145: ``orientation_covariance[0] == -1``) or carries no usable quaternion (zero, NaN); None when no
+        sample provides one.
     """
 
     t: np.ndarray
@@ -55,6 +62,7 @@ class ImuSeries:
     frame_id: str = "imu_link"
     topic: str = ""
     notes: list[str] = field(default_factory=list)
+    orientation_xyzw: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=float)
@@ -66,6 +74,12 @@ class ImuSeries:
                 f"ImuSeries: t has {n} samples but gyro has {self.gyro.shape[0]} and accel "
                 f"{self.accel.shape[0]}"
             )
+        if self.orientation_xyzw is not None:
+            self.orientation_xyzw = np.asarray(self.orientation_xyzw, dtype=float)
+            if self.orientation_xyzw.shape != (n, 4):
+                raise ValueError(
+                    f"ImuSeries: orientation_xyzw must have shape ({n}, 4), got {self.orientation_xyzw.shape}"
+                )
 
     def __len__(self) -> int:
         return int(self.t.shape[0])
