@@ -108,14 +108,19 @@ def test_fast_path_equals_full_deserialisation(full_bag):
 
 
 @pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
-def test_imu_orientation_round_trip_fast_equals_full(tmp_path, storage):
+def test_imu_orientation_round_trip_fast_equals_full(tmp_path, storage, monkeypatch):
     """The Imu orientation comes back as written, NaN where a message says "not provided" (REP-145:
-    orientation_covariance[0] = -1), identically on the numpy path and with full deserialisation."""
+    orientation_covariance[0] = -1), identically on the numpy path and with full deserialisation; batches before
+    the first provided orientation (no array allocated yet) read as not provided."""
+    import imu_noise_id.bag.reader as reader
+
+    monkeypatch.setattr(reader, "BATCH", 50)
     imu = simulated_imu(duration=5.0)
     rng = np.random.default_rng(8)
     q = rng.normal(size=(len(imu), 4))
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     q[::7] = np.nan  # written with orientation_covariance[0] = -1
+    q[:120] = np.nan  # the first batches provide none
     imu.orientation_xyzw = q
     write_bag(tmp_path / storage, imu, storage=storage)
     fast, slow = read_bag(tmp_path / storage), read_bag(tmp_path / storage, fast=False)

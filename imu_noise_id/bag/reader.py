@@ -70,8 +70,9 @@ _STRINGS: dict[str, tuple[str, ...]] = {
     ODOM_TYPE: ("header.frame_id", "child_frame_id"),
     TEMPERATURE_TYPE: (),
 }
-#: Outputs decoded batch by batch and consumed by :meth:`_Stream.add` (not kept per message).
-_TRANSIENT = frozenset({"orientation_cov0"})
+#: Outputs decoded batch by batch into temporaries and consumed by :meth:`_Stream.add`: the covariance flag is
+#: not kept, the orientation only from the first batch that provides one (no memory for IMUs that give none).
+_TRANSIENT: dict[str, frozenset[str]] = {IMU_TYPE: frozenset({"orientation_cov0", "orientation_xyzw"})}
 #: Largest plausible magnitude per output (None: no limit), see repair_time_series.
 _MAX_ABS = {"gyro": IMU_MAX_ABS[0], "accel": IMU_MAX_ABS[1]}
 _WHAT = {IMU_TYPE: "Imu", ODOM_TYPE: "Odometry", TEMPERATURE_TYPE: "Temperature"}
@@ -233,8 +234,9 @@ class _Stream:
         # A bag whose definition is not flat still has the standard field sizes (e.g. 36 covariance values).
         reference = get_typestore(Stores.LATEST).fielddefs if self.decoder.leaves is None else None
         self.widths = {k: w for k, w in self.decoder.widths(reference).items() if k not in _STAMP}
-        self.transient = {k: w for k, w in self.widths.items() if k in _TRANSIENT}
-        self.widths = {k: w for k, w in self.widths.items() if k not in _TRANSIENT}
+        transient = _TRANSIENT.get(msgtype, frozenset())
+        self.transient = {k: w for k, w in self.widths.items() if k in transient}
+        self.widths = {k: w for k, w in self.widths.items() if k not in transient}
         self.expected = count
         self.capacity = max(count, 1)
         self.n = 0
@@ -264,8 +266,8 @@ class _Stream:
         views = {name: a[s:e] for name, a in self.arrays.items()}
         transient = {name: np.empty((k, w) if w > 1 else k) for name, w in self.transient.items()}
         self.decoder.decode(raws, {"sec": sec, "nsec": nsec, **views, **transient})
-        if "orientation_cov0" in transient:
-            _mark_orientation_not_provided(views["orientation_xyzw"], transient["orientation_cov0"])
+        if "orientation_xyzw" in transient:
+            self._keep_orientation(s, e, transient["orientation_xyzw"], transient["orientation_cov0"])
         self.t[s:e] = sec + nsec * 1e-9
         if self.receive_ns is not None:
             if np.any(sec) or np.any(nsec):
@@ -273,6 +275,15 @@ class _Stream:
             else:
                 self.receive_ns[s:e] = receive_ns
         self.n = e
+
+    def _keep_orientation(self, s: int, e: int, q: np.ndarray, cov0: np.ndarray) -> None:
+        """Store rows ``s:e`` of the orientation, allocating its array at the first batch that provides one."""
+        _mark_orientation_not_provided(q, cov0)
+        kept = self.arrays.get("orientation_xyzw")
+        if kept is None and q.any():
+            kept = self.arrays["orientation_xyzw"] = np.zeros((self.capacity, 4))  # earlier rows: not provided
+        if kept is not None:
+            kept[s:e] = q
 
     def trimmed(self) -> tuple[np.ndarray, np.ndarray | None, dict[str, np.ndarray]]:
         n = self.n
@@ -421,11 +432,13 @@ def _dispatch(batch: list[tuple[Any, int, bytes]], by_connection: dict[int, _Str
 def _imu(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]) -> ImuSeries:
     t, arrays, topic_notes, stream = entry
     frame = stream.decoder.strings.get("header.frame_id", "")
-    q = arrays["orientation_xyzw"]
-    provided = q.any(axis=1)  # the zero rows are the ones _mark_orientation_not_provided marked (or published so)
-    orientation = q if provided.any() else None
-    if orientation is not None and not provided.all():
-        orientation[~provided] = np.nan  # in place: the stream's buffer is ours
+    orientation = arrays.get("orientation_xyzw")
+    if orientation is not None:
+        provided = orientation.any(axis=1)  # zero rows: marked by _mark_orientation_not_provided (or published so)
+        if not provided.any():
+            orientation = None  # provided only in samples the repair dropped
+        elif not provided.all():
+            orientation[~provided] = np.nan  # in place: the stream's buffer is ours
     return ImuSeries(t=t, gyro=arrays["gyro"], accel=arrays["accel"], frame_id=frame, topic=stream.topic,
                      notes=list(topic_notes), orientation_xyzw=orientation)  # fmt: skip
 
