@@ -6,7 +6,8 @@ Prints
       ``deserialize_cdr`` + attribute access, both on the same raw bytes, plus whole-read times. Times are CPU
       seconds of the (single-threaded) benchmark process, so that other jobs on a shared machine do not inflate them;
   (b) peak RSS of ``read_imu`` on 1 h at 400 Hz (1.44 M messages) in a fresh subprocess, against the size of the
-      decoded float64 arrays (t, gyro, accel) and the RSS of the same interpreter before reading.
+      decoded float64 arrays (t, gyro, accel; plus orientation for the bag whose messages provide one) and the RSS
+      of the same interpreter before reading.
 :func:`peak_rss_of` measures any command (e.g. ``imu-noise-id analyze``) the same way.
 """
 
@@ -72,9 +73,14 @@ def peak_rss_of(cmd: list[str], env: dict[str, str] | None = None, poll_s: float
     return peak, time.perf_counter() - start, proc.returncode
 
 
-def make_bag(directory: Path, rate: float, duration: float, storage: str) -> tuple[Path, int]:
+def make_bag(
+    directory: Path, rate: float, duration: float, storage: str, orientation: bool = False
+) -> tuple[Path, int]:
     imu = simulate_static_imu(parse_imu_model(SPEC), rate, duration, seed=1, t0=1.7e9)
-    path = directory / f"imu_{rate:g}hz_{duration:g}s_{storage}"
+    if orientation:  # a slowly turning sensor that reports its orientation (REP-145: provided)
+        half = 1e-3 * (imu.t - imu.t[0])
+        imu.orientation_xyzw = np.column_stack([0 * half, 0 * half, np.sin(half), np.cos(half)])
+    path = directory / f"imu_{rate:g}hz_{duration:g}s_{storage}{'_orientation' if orientation else ''}"
     start = time.perf_counter()
     write_bag(path, imu, storage=storage)
     print(f"  wrote {len(imu)} messages ({storage}) in {time.perf_counter() - start:.1f} s: {path.name}")
@@ -159,11 +165,13 @@ def part_a(directory: Path, duration: float) -> None:
 
 def part_b(directory: Path, duration: float) -> None:
     print(f"(b) peak RSS of reading {duration:g} s at 400 Hz ({round(400 * duration):,} messages), fresh subprocess")
-    path, n = make_bag(directory, 400.0, duration, "mcap")
-    arrays = n * 7 * 8  # t (N) + gyro (N, 3) + accel (N, 3), float64
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
     prelude = "from imu_noise_id.bag.reader import read_imu; import numpy, rosbags.highlevel, rosbags.typesys"
     base, _, _ = peak_rss_of([sys.executable, "-c", prelude + "; import time; time.sleep(0.2)"], env)
+    mb = 1024**2
+    print(f"  interpreter + imports before reading: {base / mb:.1f} MiB")
+    path, n = make_bag(directory, 400.0, duration, "mcap")
+    arrays = n * 7 * 8  # t (N) + gyro (N, 3) + accel (N, 3), float64
     # The child sleeps briefly after reading so that the last poll sees its final high-water mark.
     code = f"{prelude}; imu = read_imu({str(path)!r}); assert len(imu) == {n}; import time; time.sleep(0.2)"
     peak, wall, rc = peak_rss_of([sys.executable, "-c", code], env)
@@ -174,13 +182,26 @@ def part_b(directory: Path, duration: float) -> None:
     peak_check, wall_check, rc = peak_rss_of([sys.executable, "-c", check], env)
     if rc != 0:
         raise SystemExit(f"read + static_check failed with exit code {rc}")
-    mb = 1024**2
     print(f"  decoded float64 arrays: {arrays / mb:.1f} MiB")
-    print(f"  interpreter + imports before reading: {base / mb:.1f} MiB")
     for what, value, seconds in (("read_imu", peak, wall), ("read_imu + static_check", peak_check, wall_check)):
-        added = value - base
-        print(f"  peak RSS of {what + ':':26s} {value / mb:6.1f} MiB = {value / arrays:.2f}× the arrays; "
-              f"adds {added / mb:.1f} MiB = {added / arrays:.2f}× the arrays ({seconds:.1f} s)")  # fmt: skip
+        _print_peak(what, value, base, arrays, seconds)
+    # Messages that provide the orientation: 4 more float64 per message are kept (ImuSeries.orientation_xyzw).
+    path, n = make_bag(directory, 400.0, duration, "mcap", orientation=True)
+    arrays = n * 11 * 8
+    code = (f"{prelude}; imu = read_imu({str(path)!r}); assert len(imu) == {n}; "
+            "assert imu.orientation_xyzw is not None; import time; time.sleep(0.2)")  # fmt: skip
+    peak, wall, rc = peak_rss_of([sys.executable, "-c", code], env)
+    if rc != 0:
+        raise SystemExit(f"reading (with orientation) failed with exit code {rc}")
+    print(f"  decoded float64 arrays with orientation: {arrays / mb:.1f} MiB")
+    _print_peak("read_imu, orientation", peak, base, arrays, wall)
+
+
+def _print_peak(what: str, value: int, base: int, arrays: int, seconds: float) -> None:
+    mb = 1024**2
+    added = value - base
+    print(f"  peak RSS of {what + ':':26s} {value / mb:6.1f} MiB = {value / arrays:.2f}× the arrays; "
+          f"adds {added / mb:.1f} MiB = {added / arrays:.2f}× the arrays ({seconds:.1f} s)")  # fmt: skip
 
 
 def main() -> None:

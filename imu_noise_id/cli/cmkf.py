@@ -19,7 +19,8 @@ sensor_msgs/Imu and a nav_msgs/Odometry topic, as fast as it runs, exactly as th
   DIR/cmkf.png    biases, noise densities and NIS over time
 
 All results are per IMU axis (the Imu message frame). The IMU mounting rotation relative to the odometry's
-child frame (base_link) must be given with --imu-rotation unless it is the identity."""
+child frame (base_link) must be given with --imu-rotation unless it is the identity. Gravity is removed with the
+IMU's own orientation when its messages provide one (REP-145), else with the odometry's (--gravity-from)."""
 
 CSV_COLUMNS = (
     "accel_bias", "accel_bias_std", "S_v", "S_v_ls", "accel_noise_density",
@@ -46,6 +47,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--measurement", choices=("twist", "pose_twist"), default="twist",
                    help="twist: body velocity only (wheel odometry, default); pose_twist: position and velocity")
+    p.add_argument(
+        "--gravity-from", choices=("imu", "odom"), default=None,
+        help="orientation used to remove gravity: imu = the Imu messages' own orientation (right on uneven ground; "
+        "needs a driver that provides it), odom = the odometry orientation propagated with the gyro (planar wheel "
+        "odometry has no roll/pitch). Default: imu when the bag's Imu messages provide an orientation, else odom",
+    )
     p.add_argument("--velocity-noise-std", type=float, default=None, metavar="M_S",
                    help="odometry velocity noise σ [m/s] (default: the message covariance)")
     p.add_argument("--position-noise-std", type=float, default=None, metavar="M",
@@ -107,8 +114,19 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise InputError(f"parameter: {exc}") from None
     contents = read_bag(args.bag, imu_topic=args.imu_topic, odom_topic=args.odom_topic, require_odometry=True)
-    result = replay(contents.imu, contents.odom, config)
+    imu_orientation = contents.imu.orientation_xyzw
+    gravity_from = args.gravity_from or ("imu" if imu_orientation is not None else "odom")
+    if gravity_from == "imu" and imu_orientation is None:
+        raise InputError(
+            f"--gravity-from imu: the Imu messages of {contents.imu.topic!r} in {args.bag} provide no orientation "
+            "(orientation_covariance[0] = -1 or a zero quaternion): use --gravity-from odom"
+        )
+    config.gravity_source = "imu" if gravity_from == "imu" else "odometry"
+    result = replay(contents.imu, contents.odom, config, imu_orientation if gravity_from == "imu" else None)
     notes = [*contents.notes]
+    if gravity_from == "imu" and not np.isfinite(imu_orientation).all():
+        notes.append("some Imu messages provide no orientation: gravity uses the last one provided (the odometry's "
+                     "before the first)")
     if result.final.n_stacked == 0:
         notes.append("no stacked sample: S_v is the initial value (odometry too short or not overlapping the IMU)")
     args.out.mkdir(parents=True, exist_ok=True)
@@ -130,6 +148,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"{args.bag}: {result.info['imu_samples']} IMU samples ({result.info['imu_rate_hz']:.4g} Hz), "
           f"{result.info['odom_messages']} odometry ({result.info['odom_rate_hz']:.4g} Hz); status {e.status}")
     np.set_printoptions(precision=4)
+    print(f"  gravity from the {'IMU' if gravity_from == 'imu' else 'odometry'} orientation")
     print(f"  accel bias [m/s²]      {e.accel_bias} ± {e.accel_bias_std}")
     print(f"  accel noise [m/s²/√Hz] {e.accel_noise_density}  ({e.n_stacked} stacked samples)")
     print(f"  gyro bias [rad/s]      {e.gyro_bias} ± {e.gyro_bias_std}")

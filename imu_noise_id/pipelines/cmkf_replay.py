@@ -60,13 +60,18 @@ def replay(
     provide it (e.g. motion capture without angular velocity).
 
     ``imu_orientation_xyzw`` (N, 4), the IMU's own orientation, is used for gravity only with
-    ``config.gravity_source == "imu"``.
+    ``config.gravity_source == "imu"``; a NaN row (not provided, see :class:`~imu_noise_id.core.axes.ImuSeries`)
+    is passed as None, so the filter keeps the last orientation it was given.
     """
     config = config or RobotCmkfConfig()
     filt = RobotCmkf(config)
     ti = np.asarray(imu.t, dtype=float)
     imu_rows = np.column_stack([imu.gyro, imu.accel]).tolist()
-    quats = None if imu_orientation_xyzw is None else np.asarray(imu_orientation_xyzw, float).tolist()
+    quats = None
+    if imu_orientation_xyzw is not None:
+        q = np.asarray(imu_orientation_xyzw, dtype=float)
+        finite = np.isfinite(q).all(axis=1)
+        quats = [row if ok else None for row, ok in zip(q.tolist(), finite.tolist(), strict=True)]
     to = np.asarray(odom.t, dtype=float) if odom is not None else np.zeros(0)
     # Stamp order with IMU first on ties: indices of the IMU samples to process before each odometry message.
     cut = np.searchsorted(ti, to, side="right")
