@@ -31,3 +31,9 @@ def ros_env() -> dict[str, str]:
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     env.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="imu_noise_id_ros_log_"))
     return env
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Silence third-party deprecation warnings we cannot fix: lark (imported by rosidl when play/rclpy load message
+    definitions) imports the deprecated ``sre_parse`` / ``sre_constants`` modules."""
+    config.addinivalue_line("filterwarnings", r"ignore:module 'sre_(parse|constants)' is deprecated:DeprecationWarning")
