@@ -65,7 +65,6 @@ flagged unobserved.
 
 from __future__ import annotations
 
-import copy
 import math
 from collections import deque
 from dataclasses import dataclass, field
@@ -76,7 +75,7 @@ from . import rotation as rot
 from .axis import AxisCmkf
 from .fast_vel import VelocityAxisCmkf
 from .gyro import GyroBiasFilter
-from .stacked import Interval, StackedSvEstimator
+from .stacked import Interval
 
 MEASUREMENTS = ("twist", "pose_twist")
 GRAVITY_SOURCES = ("odometry", "imu")
@@ -210,25 +209,15 @@ def _rotate(rows: tuple[tuple[float, float, float], ...], v: list[float]) -> lis
 
 
 def _clone(value: object) -> object:
-    """Copy of a piece of streaming state, as deep as it is ever mutated in place (a fast ``copy.deepcopy``).
-
-    Lists, deques and arrays are copied; the filter objects are copied attribute by attribute; tuples, numbers and
-    the stacked estimators' epoch records (never changed after creation) are shared.
-    """
+    """Copy of a piece of streaming state as deep as it is mutated in place: lists (of numbers), deques and arrays
+    are copied, numbers and tuples shared."""
     if isinstance(value, list):
         return list(value)
     if isinstance(value, deque):
         return deque(value, value.maxlen)
     if isinstance(value, np.ndarray):
         return value.copy()
-    if isinstance(value, _FILTERS):
-        new = copy.copy(value)
-        vars(new).update({k: _clone(v) for k, v in vars(value).items()})
-        return new
     return value
-
-
-_FILTERS = (AxisCmkf, VelocityAxisCmkf, GyroBiasFilter, StackedSvEstimator)
 
 
 class _CovDiag:
@@ -312,13 +301,16 @@ class RobotCmkf:
         self._snapshot: dict | None = None
         self._replay: list[tuple[float, tuple, rot.Quat | None]] | None = []
 
+    # Not in the snapshot: constants, counters, the last odometry stamp, and the accelerometer and gyro filters,
+    # which only odometry updates change (the IMU path only reads them), so between two updates they are the
+    # state of the last update.
     _NOT_STATE = frozenset((
         "config", "q_bi", "C_bi", "C_ib", "_C_ib_rows", "_fast", "counters", "_g", "_phi_per_s", "_t_odom",
-        "_twist_lin_cov", "_twist_ang_cov", "_pose_cov", "_snapshot", "_replay",
+        "_twist_lin_cov", "_twist_ang_cov", "_pose_cov", "_snapshot", "_replay", "filter", "gyro",
     ))
 
     def _save_state(self) -> dict:
-        """A copy of everything that processing a message changes (not the counters, not the last stamp)."""
+        """A copy of what the IMU path changes after an update (see ``_NOT_STATE``)."""
         return {k: _clone(v) for k, v in vars(self).items() if k not in self._NOT_STATE}
 
     def _rewind(self) -> list[tuple[float, tuple, rot.Quat | None]]:
