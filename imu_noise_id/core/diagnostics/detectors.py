@@ -35,7 +35,7 @@ import numpy as np
 from scipy import stats
 
 from ..components import GM
-from .residuals import acf, av_misfit_z, ljung_box, spectral_peaks
+from .residuals import acf, av_misfit_z, chi2_log10_sf, ljung_box, spectral_peaks
 from .whitening import WhiteningFilter, score_test
 
 #: Default significance level of every detector.
@@ -267,7 +267,7 @@ def detect_correlation(e: np.ndarray, dt: float, *, alpha: float = ALPHA, lags: 
     thr = float(stats.chi2.isf(alpha, lags))
     return Finding(
         effect="GM", detector="ljung_box", statistic=lb.q, threshold=thr,
-        log10_p=float(stats.chi2.logsf(lb.q, lags) / _LN10), level=alpha,
+        log10_p=chi2_log10_sf(lb.q, lags), level=alpha,
         params={"tau": tau, "sigma_share": math.sqrt(r1)},
         evidence=f"innovations correlated: Ljung–Box Q = {lb.q:.1f} over {lags} lags (threshold {thr:.1f}), "
                  f"largest ρ = {lb.worst_rho:.3f} at lag {lb.worst_lag}; decay time ≈ {tau:.3g} s",
@@ -279,7 +279,7 @@ def _fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float
     """GM (τ_c, σ) whose AV best fits a positive AV excess in log space (grid over τ_c, σ² in closed form)."""
     best = (math.inf, float(tau[0]), 0.0)
     log_ex = np.log(excess)
-    for tc in np.geomspace(tau[0] / 10, tau[-1] * 3, 80):
+    for tc in np.geomspace(tau[0] / 2, tau[-1] * 3, 80):
         shape = GM(tau=float(tc), sigma=1.0).allan_variance(tau, 1.0)
         log_s2 = float(np.mean(log_ex - np.log(shape)))
         cost = float(np.sum((log_ex - np.log(shape) - log_s2) ** 2))

@@ -124,6 +124,19 @@ class SpectralPeak:
     n_bins: int
 
 
+def chi2_log10_sf(q: float, dof: int) -> float:
+    """log10 P(χ²_dof ≥ q), finite far into the tail.
+
+    Where scipy's ``logsf`` underflows to −inf, the leading term of the upper incomplete gamma function,
+    Γ(k/2, q/2)/Γ(k/2) ≈ (q/2)^{k/2−1} e^{−q/2} / Γ(k/2) (q ≫ k), is used.
+    """
+    value = float(stats.chi2.logsf(q, dof))
+    if math.isfinite(value):
+        return value / math.log(10.0)
+    half = 0.5 * dof
+    return ((half - 1.0) * math.log(0.5 * q) - 0.5 * q - math.lgamma(half)) / math.log(10.0)
+
+
 def max_exponential_log10_p(statistic: float, m: int) -> float:
     """log10 P(max of m i.i.d. Exp(1) ≥ statistic) = log10(1 − (1 − e^{−s})^m), stable for large s."""
     q = math.exp(-statistic) if statistic < 700 else 0.0

@@ -138,7 +138,7 @@ def score_test(e: np.ndarray, x_white: np.ndarray, nuisance_white: np.ndarray | 
     ``nuisance_white`` (whitened columns already in the model, e.g. the constant) are projected out of
     ``x_white`` first, so the test is for what the new columns add beyond them.
     """
-    from scipy import stats
+    from .residuals import chi2_log10_sf
 
     e = np.asarray(e, dtype=float)
     x = np.asarray(x_white, dtype=float).reshape(e.size, -1)
@@ -154,5 +154,5 @@ def score_test(e: np.ndarray, x_white: np.ndarray, nuisance_white: np.ndarray | 
     inv = np.linalg.inv(gram)
     stat = float(score @ inv @ score)
     k = x.shape[1]
-    return ScoreTest(statistic=stat, dof=k, log10_p=float(stats.chi2.logsf(stat, k) / math.log(10.0)),
+    return ScoreTest(statistic=stat, dof=k, log10_p=chi2_log10_sf(stat, k),
                      coef=inv @ score, se=np.sqrt(np.diag(inv)))

@@ -1,0 +1,444 @@
+"""The closed identification loop: fit → diagnose the residuals → add the missing effect → refit → compare.
+
+One axis at a time (:func:`run_closed_loop`):
+
+1. fit the starting structure (``fit_model`` of :mod:`imu_noise_id.pipelines.identification`, the
+   constrained EM of paper 000 section 3) and measure its errors (:class:`ResidualErrors`: log-likelihood,
+   BIC, AV misfit, Ljung–Box p of the standardised innovations, residual spectral peak ratio);
+2. run every detector of :mod:`imu_noise_id.core.diagnostics.detectors` on the fit's residuals;
+3. take the significant findings (at most one per effect, ranked by p-value), and for the
+   ``max_candidates`` most significant ones add the effect, initialised from its detector, and refit;
+4. a candidate is *accepted* when the BIC decreases **and** the residual evidence it targeted is gone
+   (its detector no longer fires at the same place); of the accepted candidates the one with the lowest BIC
+   becomes the next step;
+5. repeat until no detector fires ("residuals pass"), no candidate is accepted ("nothing improves"), or
+   ``max_steps`` steps were taken.
+
+Effects outside the linear-Gaussian state space enter as deterministic regressors in the measurement equation
+(``exog`` of ``fit_model``, coefficients estimated with the noise model): ``SIN`` (a sine and a cosine at the
+detected frequency), ``TEMP`` (temperature minus its mean), ``STEP`` (a unit step at the detected sample).
+``OUTLIERS`` are data cleaning: the flagged samples become missing (NaN), which is equivalent to one
+additive-outlier dummy per sample. To keep log-likelihoods and BICs comparable across steps, every step's
+``loglik`` counts each flagged sample as exactly fitted by its dummy (its contribution −½ ln(2πS), S the
+steady-state innovation variance) and its BIC counts one parameter per flagged sample over the full record.
+``GM``, ``RW``, ``RR``, ``QN`` are added to the state-space structure.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..core.allan import allan_variance
+from ..core.diagnostics import detectors as det
+from ..core.diagnostics.residuals import ResidualErrors, residual_errors, spectral_peaks
+from ..core.diagnostics.whitening import WhiteningFilter
+from ..core.errors import InputError
+from ..core.modelspec import parse_structure, structure_name
+
+#: Effects added to the state-space structure / entering as regressors / as data cleaning.
+STATE_EFFECTS = ("GM", "RW", "RR", "QN")
+EXOG_EFFECTS = ("SIN", "TEMP", "STEP")
+CLEANING_EFFECTS = ("OUTLIERS",)
+
+Fitter = Callable[..., Any]
+
+
+@dataclass(frozen=True)
+class ExogTerm:
+    """A deterministic regressor of the measurement equation.
+
+    Attributes
+    ----------
+    effect : str
+        ``SIN``, ``TEMP`` or ``STEP``.
+    params : dict
+        ``frequency`` [Hz] (SIN) or ``index`` (STEP, first sample after the shift); nothing for TEMP.
+    """
+
+    effect: str
+    params: dict[str, float]
+
+    def columns(self, n: int, dt: float, temperature: np.ndarray | None) -> np.ndarray:
+        """The term's (n, k) regressor columns."""
+        if self.effect == "SIN":
+            arg = 2.0 * math.pi * self.params["frequency"] * dt * np.arange(n)
+            return np.column_stack([np.sin(arg), np.cos(arg)])
+        if self.effect == "TEMP":
+            if temperature is None:
+                raise ValueError("TEMP term needs the temperature series")
+            return (temperature - np.mean(temperature))[:, None]
+        if self.effect == "STEP":
+            return (np.arange(n) >= int(self.params["index"])).astype(float)[:, None]
+        raise ValueError(f"unknown regressor effect {self.effect!r}")
+
+    def describe(self, coef: np.ndarray) -> dict[str, float]:
+        """Fitted values of the term from its coefficients (amplitude/phase, coefficient, size)."""
+        if self.effect == "SIN":
+            return {"frequency": self.params["frequency"], "amplitude": float(np.hypot(coef[0], coef[1])),
+                    "phase": float(math.atan2(coef[1], coef[0]))}
+        if self.effect == "TEMP":
+            return {"coefficient": float(coef[0])}
+        return {"index": self.params["index"], "time": self.params["time"], "size": float(coef[0])}
+
+
+@dataclass
+class LoopState:
+    """What the model holds at one step: stochastic structure, regressors, removed samples."""
+
+    structure: list[str]
+    exog_terms: list[ExogTerm] = field(default_factory=list)
+    flagged: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    init: dict[str, dict[str, float]] = field(default_factory=dict)
+
+    def name(self) -> str:
+        names = list(self.structure) + [t.effect for t in self.exog_terms]
+        if self.flagged.size:
+            names.append("OUTLIERS")
+        return structure_name(names)
+
+
+@dataclass
+class Diagnosis:
+    """A fit with its residuals, error measures and detector findings."""
+
+    fit: Any
+    errors: ResidualErrors
+    findings: list[det.Finding]
+    innovations: np.ndarray
+    tau: np.ndarray
+    av_data: np.ndarray
+    av_ci: tuple[np.ndarray, np.ndarray]
+    av_model: np.ndarray
+    exog_values: dict[str, dict[str, float]]
+
+
+@dataclass
+class Trial:
+    """A candidate effect tried at one step and why it was kept or not."""
+
+    finding: det.Finding
+    model: str
+    bic: float | None
+    accepted: bool
+    reason: str
+
+
+@dataclass
+class LoopStep:
+    """One accepted step of the loop (step 0 is the starting model)."""
+
+    index: int
+    model: str
+    added: str | None
+    evidence: str | None
+    finding: det.Finding | None
+    state: LoopState
+    diagnosis: Diagnosis
+    trials: list[Trial]
+
+    @property
+    def errors(self) -> ResidualErrors:
+        return self.diagnosis.errors
+
+
+@dataclass
+class LoopResult:
+    """The loop on one axis: its steps, the final verdict and what remains unexplained."""
+
+    axis: str | None
+    dt: float
+    n: int
+    steps: list[LoopStep]
+    passed: bool
+    verdict: str
+    remaining: list[det.Finding]
+
+    @property
+    def final(self) -> LoopStep:
+        return self.steps[-1]
+
+
+def _default_fitter() -> Fitter:
+    from .identification import fit_model
+
+    return fit_model
+
+
+def _call_fitter(fitter: Fitter, y: np.ndarray, dt: float, state: LoopState, exog: np.ndarray | None) -> Any:
+    kwargs: dict[str, Any] = {}
+    if exog is not None:
+        kwargs["exog"] = exog
+    if state.init and "init" in inspect.signature(fitter).parameters:
+        kwargs["init"] = state.init
+    return fitter(y, dt, structure_name(state.structure), **kwargs)
+
+
+def _fill_missing(y: np.ndarray) -> np.ndarray:
+    """Linear interpolation over NaN samples (for the Allan variance, which needs a gap-free series)."""
+    bad = ~np.isfinite(y)
+    if not bad.any():
+        return y
+    idx = np.arange(y.size)
+    out = y.copy()
+    out[bad] = np.interp(idx[bad], idx[~bad], y[~bad])
+    return out
+
+
+def _n_params(fit: Any) -> float:
+    return (float(fit.bic) + 2.0 * float(fit.loglik)) / math.log(float(fit.n))
+
+
+class _Loop:
+    def __init__(self, y: np.ndarray, dt: float, temperature: np.ndarray | None, fitter: Fitter, *,
+                 alpha: float, lags: int) -> None:
+        self.y, self.dt, self.temperature = y, dt, temperature
+        self.fitter, self.alpha, self.lags = fitter, alpha, lags
+        self.n_observed = int(np.isfinite(y).sum())
+        self.n = y.size
+
+    def exog(self, state: LoopState) -> tuple[np.ndarray | None, list[slice]]:
+        cols, slices, start = [], [], 0
+        for term in state.exog_terms:
+            c = term.columns(self.n, self.dt, self.temperature)
+            cols.append(c)
+            slices.append(slice(start, start + c.shape[1]))
+            start += c.shape[1]
+        return (np.hstack(cols) if cols else None), slices
+
+    def diagnose(self, state: LoopState) -> Diagnosis:
+        y = self.y.copy()
+        if state.flagged.size:
+            y[state.flagged] = np.nan
+        exog, slices = self.exog(state)
+        fit = _call_fitter(self.fitter, y, self.dt, state, exog)
+        coef = np.asarray(fit.exog_coef, dtype=float) if exog is not None else np.zeros(0)
+        exog_values = {f"{t.effect}{i}": t.describe(coef[s]) for i, (t, s) in enumerate(zip(state.exog_terms, slices,
+                                                                                        strict=True))}
+        residual_data = y - (exog @ coef if exog is not None else 0.0)
+        av = allan_variance(_fill_missing(residual_data), self.dt)
+        av_data = av.variance[:, 0]
+        av_ci = (av.ci_low[:, 0], av.ci_high[:, 0])
+        av_model = np.asarray(fit.theoretical_allan_variance(av.tau), dtype=float)
+        e = np.asarray(fit.standardized_innovations(), dtype=float).copy()
+        e[: min(10, e.size // 100)] = np.nan  # start-up transient of the filter
+        whitening = WhiteningFilter.from_components(list(fit.components), self.dt)
+        k = state.flagged.size
+        loglik = float(fit.loglik) - 0.5 * k * math.log(2.0 * math.pi * whitening.innovation_variance)
+        bic = -2.0 * loglik + (_n_params(fit) + k) * math.log(self.n_observed)
+        errors = residual_errors(e, self.dt, loglik=loglik, bic=bic, av_data=av_data, av_model=av_model,
+                                 lags=self.lags)
+        findings = self.detect(e, whitening, state, tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model)
+        return Diagnosis(fit=fit, errors=errors, findings=findings, innovations=e, tau=av.tau, av_data=av_data,
+                         av_ci=av_ci, av_model=av_model, exog_values=exog_values)
+
+    def detect(self, e: np.ndarray, whitening: WhiteningFilter, state: LoopState, *, tau: np.ndarray,
+               av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray) -> list[det.Finding]:
+        a = self.alpha
+        found = [det.detect_outliers(e, alpha=a), det.detect_sinusoid(e, self.dt, whitening, alpha=a),
+                 det.detect_step(e, self.dt, whitening, alpha=a), det.detect_correlation(e, self.dt, alpha=a,
+                                                                                        lags=self.lags)]
+        if "RR" not in state.structure:
+            found.append(det.detect_ramp(e, self.dt, whitening, alpha=a))
+        if self.temperature is not None and not any(t.effect == "TEMP" for t in state.exog_terms):
+            found.append(det.detect_temperature(e, self.temperature, whitening, alpha=a))
+        found += det.detect_av_signatures(tau, av_data, av_ci, av_model, alpha=a)
+        return found
+
+    def candidates(self, diag: Diagnosis, state: LoopState) -> list[det.Finding]:
+        """Significant findings that can be added, one per effect (most significant), ranked by p-value."""
+        best: dict[str, det.Finding] = {}
+        for f in diag.findings:
+            if not f.significant or not self.addable(f, state):
+                continue
+            current = best.get(f.effect)
+            if f.effect == "GM" and current is not None and current.detector != f.detector:
+                # Prefer the AV band (it locates τ) and keep the stronger p-value for the ranking.
+                av_f, other = (f, current) if f.detector == "av_band" else (current, f)
+                best["GM"] = det.Finding(**{**av_f.__dict__, "log10_p": min(av_f.log10_p, other.log10_p),
+                                            "evidence": av_f.evidence + "; " + other.evidence})
+            elif current is None or f.log10_p < current.log10_p:
+                best[f.effect] = f
+        return sorted(best.values(), key=lambda f: f.log10_p)
+
+    def addable(self, f: det.Finding, state: LoopState) -> bool:
+        if f.effect in ("RW", "RR", "QN"):
+            return f.effect not in state.structure
+        if f.effect == "TEMP":
+            return not any(t.effect == "TEMP" for t in state.exog_terms)
+        return True
+
+    def extend(self, state: LoopState, f: det.Finding, diag: Diagnosis) -> LoopState:
+        new = LoopState(structure=list(state.structure), exog_terms=list(state.exog_terms),
+                        flagged=state.flagged.copy(), init=dict(state.init))
+        if f.effect in STATE_EFFECTS:
+            new.structure.append(f.effect)
+            new.init[f"{f.effect}{sum(s == f.effect for s in new.structure)}"] = dict(f.params)
+        elif f.effect == "SIN":
+            new.exog_terms.append(ExogTerm("SIN", {"frequency": f.params["frequency"]}))
+        elif f.effect == "TEMP":
+            new.exog_terms.append(ExogTerm("TEMP", {}))
+        elif f.effect == "STEP":
+            new.exog_terms.append(ExogTerm("STEP", {"index": f.params["index"], "time": f.params["time"]}))
+        elif f.effect == "OUTLIERS":
+            new.flagged = np.union1d(state.flagged, f.indices)
+        return new
+
+    def evidence_gone(self, f: det.Finding, diag: Diagnosis) -> tuple[bool, str]:
+        """Whether the signature ``f`` targeted is absent from the new fit's residuals."""
+        e = diag.innovations
+        if f.effect == "SIN":
+            peak = spectral_peaks(e, self.dt)
+            width = 3.0 / (self.n * self.dt)
+            same = abs(peak.frequency - f.params["frequency"]) <= width
+            thr = f.threshold
+            return not (same and peak.statistic > thr), f"line at {f.params['frequency']:.4g} Hz " + (
+                "still there" if same and peak.statistic > thr else "gone")
+        if f.effect == "OUTLIERS":
+            new = next(g for g in diag.findings if g.effect == "OUTLIERS")
+            gone = new.statistic < f.statistic
+            return gone, f"largest |z| {f.statistic:.1f} → {new.statistic:.1f}"
+        if f.effect == "STEP":
+            w = WhiteningFilter.from_components(list(diag.fit.components), self.dt)
+            m = max(20, self.n // 200)
+            t_k = det.step_scan(e, w, m)
+            k = int(f.params["index"])
+            near = np.abs(t_k[max(0, k - m): k + m + 1])
+            stat = float(np.nanmax(near)) if np.isfinite(near).any() else 0.0
+            return stat <= f.threshold, f"step score near t = {f.params['time']:.6g} s: {stat:.1f}"
+        same = [g for g in diag.findings if g.effect == f.effect and g.detector == f.detector and g.significant]
+        if f.effect == "GM" and f.detector == "av_band":
+            tau = f.params["tau"]
+            same = [g for g in same if tau / 5 <= g.params["tau"] <= tau * 5]
+        if same:
+            return False, f"{f.effect} signature still significant: {same[0].evidence}"
+        return True, f"{f.effect} signature gone"
+
+
+def run_closed_loop(
+    y: np.ndarray,
+    dt: float,
+    start_structure: str,
+    *,
+    temperature: np.ndarray | None = None,
+    fitter: Fitter | None = None,
+    max_steps: int = 6,
+    max_candidates: int = 3,
+    alpha: float = det.ALPHA,
+    lags: int = 20,
+    axis: str | None = None,
+) -> LoopResult:
+    """Run the closed loop on one axis (see the module docstring for the rules).
+
+    Parameters
+    ----------
+    y : (N,) array
+        Samples of one axis [u] (rad/s or m/s²) at period ``dt``; NaN = missing.
+    dt : float
+        Sampling period [s].
+    start_structure : str
+        Starting model structure, e.g. ``"WN+RW"``.
+    temperature : (N,) array, optional
+        Sensor temperature [°C] at the sample times (see :func:`align_temperature`); enables ``TEMP``.
+    fitter : callable, optional
+        ``fitter(y, dt, structure, exog=..., [init=...])`` returning a FitResult; default
+        :func:`imu_noise_id.pipelines.identification.fit_model`.
+    max_steps : int
+        At most this many effects are added.
+    max_candidates : int
+        Candidates refitted per step.
+    alpha : float
+        Level of every detector.
+    lags : int
+        Ljung–Box lags.
+    axis : str, optional
+        Axis name, for the report.
+
+    Raises
+    ------
+    InputError
+        Bad input (not 1-D, inf, too few samples, temperature of another length or not finite).
+    """
+    y = np.asarray(y, dtype=float)
+    if y.ndim != 1:
+        raise InputError(f"closed loop: samples of one axis expected (1-D), got shape {y.shape}")
+    if np.any(np.isinf(y)):
+        raise InputError("closed loop: samples contain inf")
+    if int(np.isfinite(y).sum()) < 1000:
+        raise InputError(f"closed loop: need at least 1000 finite samples, got {int(np.isfinite(y).sum())}")
+    if not (np.isfinite(dt) and dt > 0):
+        raise InputError(f"closed loop: sampling period must be > 0, got {dt!r}")
+    if temperature is not None:
+        temperature = np.asarray(temperature, dtype=float)
+        if temperature.shape != y.shape or not np.all(np.isfinite(temperature)):
+            raise InputError("closed loop: temperature must be finite and aligned with the samples "
+                             "(use align_temperature)")
+        if np.ptp(temperature) <= 0:
+            temperature = None
+    if max_steps < 0 or max_candidates < 1:
+        raise InputError("closed loop: max_steps must be >= 0 and max_candidates >= 1")
+    loop = _Loop(y, float(dt), temperature, fitter or _default_fitter(), alpha=alpha, lags=lags)
+    state = LoopState(structure=parse_structure(start_structure))
+    diag = loop.diagnose(state)
+    steps = [LoopStep(0, state.name(), None, None, None, state, diag, [])]
+    verdict, passed = "", False
+    while True:
+        cands = loop.candidates(diag, state)
+        if not cands:
+            passed, verdict = True, "residuals pass: no detector fires at its level"
+            break
+        if len(steps) > max_steps:
+            verdict = f"stopped after {max_steps} added effects; residual evidence remains"
+            break
+        trials: list[Trial] = []
+        best: tuple[float, LoopState, Diagnosis, det.Finding] | None = None
+        for f in cands[:max_candidates]:
+            new_state = loop.extend(state, f, diag)
+            try:
+                new_diag = loop.diagnose(new_state)
+            except (InputError, ValueError, np.linalg.LinAlgError) as exc:
+                trials.append(Trial(f, new_state.name(), None, False, f"refit failed: {exc}"))
+                continue
+            bic_new = new_diag.errors.bic
+            improved = bic_new < diag.errors.bic
+            gone, why = loop.evidence_gone(f, new_diag)
+            ok = improved and gone
+            reason = (f"BIC {diag.errors.bic:.1f} → {bic_new:.1f} ({'better' if improved else 'not better'}); "
+                      f"{why}")
+            trials.append(Trial(f, new_state.name(), bic_new, ok, reason))
+            if ok and (best is None or bic_new < best[0]):
+                best = (bic_new, new_state, new_diag, f)
+        if best is None:
+            verdict = "nothing improves: no candidate lowered the BIC with its evidence gone"
+            steps[-1].trials = trials
+            break
+        _, state, diag, f = best
+        steps[-1].trials = trials
+        steps.append(LoopStep(len(steps), state.name(), f.effect, f.evidence, f, state, diag, []))
+    remaining = [f for f in diag.findings if f.significant]
+    return LoopResult(axis=axis, dt=float(dt), n=y.size, steps=steps, passed=passed, verdict=verdict,
+                      remaining=remaining)
+
+
+def align_temperature(t_samples: np.ndarray, t_temperature: np.ndarray, temperature: np.ndarray) -> np.ndarray:
+    """Temperature [°C] at the IMU sample times by linear interpolation (held constant beyond its ends).
+
+    Raises
+    ------
+    InputError
+        Fewer than two temperature samples, non-finite values, or non-increasing temperature times.
+    """
+    t_temperature = np.asarray(t_temperature, dtype=float)
+    temperature = np.asarray(temperature, dtype=float)
+    if t_temperature.size < 2 or t_temperature.shape != temperature.shape:
+        raise InputError("temperature topic: need at least two samples with stamps")
+    if not (np.all(np.isfinite(temperature)) and np.all(np.isfinite(t_temperature))):
+        raise InputError("temperature topic holds NaN/inf values")
+    if np.any(np.diff(t_temperature) <= 0):
+        raise InputError("temperature topic: stamps are not strictly increasing")
+    return np.interp(np.asarray(t_samples, dtype=float), t_temperature, temperature)
