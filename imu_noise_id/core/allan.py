@@ -216,15 +216,14 @@ def _as_columns(y: np.ndarray, dt: float, kind: Kind) -> np.ndarray:
 
 # --------------------------------------------------------------------------------------------- estimators
 def _phase(y: np.ndarray, dt: float) -> np.ndarray:
-    """Phase x (k, N+1): x_0 = 0, x_i = dt·Σ_{j<i}(y_j − ȳ) per column (mean removed for precision)."""
-    x = np.empty((y.shape[1], y.shape[0] + 1))
-    x[:, 0] = 0.0
-    x[:, 1:] = y.T
-    for row in x:
-        rates = row[1:]
-        rates -= rates.mean()
-        np.cumsum(rates, out=rates)
-        rates *= dt
+    """Phase x (N+1,) of one rate column: x_0 = 0, x_i = dt·Σ_{j<i}(y_j − ȳ) (mean removed for precision)."""
+    x = np.empty(y.shape[0] + 1)
+    x[0] = 0.0
+    rates = x[1:]
+    rates[:] = y
+    rates -= rates.mean()
+    np.cumsum(rates, out=rates)
+    rates *= dt
     return x
 
 
@@ -472,24 +471,62 @@ def _alpha_range(kind: Kind) -> tuple[int, int]:
     return (-4, 2) if kind == "hadamard" else (-2, 2)
 
 
+#: Half-width (in τ points) of the local log-log slope regression.
+SLOPE_HALF_WINDOW = 2
+
+
+def local_slopes(tau: np.ndarray, variance: np.ndarray, half_window: int = SLOPE_HALF_WINDOW) -> np.ndarray:
+    """Least-squares slope of log σ² vs log τ over ±``half_window`` neighbouring τ, per column.
+
+    Parameters
+    ----------
+    tau : ndarray, shape (T,)
+    variance : ndarray, shape (T,) or (T, k)
+        Non-positive values are ignored.
+
+    Returns
+    -------
+    ndarray, same shape as ``variance``; NaN where fewer than two usable points are in the window.
+    """
+    v = np.asarray(variance, dtype=float)
+    v2 = v[:, None] if v.ndim == 1 else v
+    lt = np.log(np.asarray(tau, dtype=float))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lv = np.log(np.where(v2 > 0, v2, np.nan))
+    mu = np.full(v2.shape, np.nan)
+    for i in range(lt.size):
+        sl = slice(max(0, i - half_window), min(lt.size, i + half_window + 1))
+        for j in range(v2.shape[1]):
+            y = lv[sl, j]
+            ok = np.isfinite(y)
+            if ok.sum() >= 2:
+                x = lt[sl][ok]
+                xc = x - x.mean()
+                mu[i, j] = float(np.dot(xc, y[ok] - y[ok].mean()) / np.dot(xc, xc))
+    return mu[:, 0] if v.ndim == 1 else mu
+
+
 def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: Kind) -> np.ndarray:
     """Noise exponent α per τ and axis from the local log-log slope μ of the variance: α = −μ − 1, rounded.
 
-    For AV, HV and TV a slope of −2 (quantisation / white phase noise) maps to α = 2 (flicker phase noise,
-    α = 1, has the same AV slope and is rare in IMUs). A single τ gives α = 0 (white noise).
+    μ is the regression slope over ±2 neighbouring τ (:func:`local_slopes`). For AV, HV and TV a slope of −2
+    (quantisation / white phase noise) maps to α = 2 (flicker phase noise, α = 1, has the same AV slope and
+    is rare in IMUs). α is then made non-increasing in τ (a running minimum): inertial sensor noise goes from
+    quantisation through white noise to flicker and random walk as τ grows, and this keeps one low point in a
+    noisy long-τ tail from being read as white phase noise, whose EDF would be huge and its interval far too
+    narrow. A single τ gives α = 0 (white noise).
     """
     variance = np.asarray(variance, dtype=float)
     lo, hi = _alpha_range(kind)
     if tau.size < 2:
         return np.zeros(variance.shape, dtype=int)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        logv = np.log(np.where(variance > 0, variance, np.nan))
-        mu = np.gradient(logv, np.log(tau), axis=0)
+    mu = local_slopes(tau, variance)
     mu = np.where(np.isfinite(mu), mu, -1.0)
     alpha = np.rint(-mu - 1.0)
     if kind != "modified":
         alpha = np.where(mu <= -1.5, 2.0, alpha)
-    return np.clip(alpha, lo, hi).astype(int)
+    alpha = np.minimum.accumulate(np.clip(alpha, lo, hi), axis=0)
+    return alpha.astype(int)
 
 
 def chi2_interval(variance: np.ndarray, edf: np.ndarray, confidence: float) -> tuple[np.ndarray, np.ndarray]:
@@ -540,8 +577,8 @@ def allan_family(
     y = _as_columns(y, dt, kind)
     n = y.shape[0]
     m_arr = _resolve_m(n, dt, kind, tau=tau, m=m, per_decade=per_decade)
-    x = _phase(y, dt)
-    sums = np.stack([_SUMS[kind](row, m_arr) for row in x], axis=1)
+    # One axis at a time: memory stays at a few rows of N values whatever the number of axes.
+    sums = np.stack([_SUMS[kind](_phase(y[:, j], dt), m_arr) for j in range(y.shape[1])], axis=1)
     variance = _normalise(kind, sums, m_arr[:, None], n, dt)
     tau_arr = m_arr * dt
     if alpha is None:
@@ -563,6 +600,25 @@ def allan_family(
         kind=kind, dt=float(dt), n=n, m=m_arr, tau=tau_arr, variance=variance, ci_low=ci_low, ci_high=ci_high,
         edf=edf, alpha=alpha_arr, confidence=float(confidence),
     )
+
+
+def stack_axes(results: list[AllanResult]) -> AllanResult:
+    """Join results of the same kind, τ grid and samples computed on different axes into one (T, Σk) result.
+
+    Raises
+    ------
+    ValueError
+        If the results differ in kind, dt, n, m or confidence.
+    """
+    first = results[0]
+    for r in results[1:]:
+        if (r.kind, r.dt, r.n, r.confidence) != (first.kind, first.dt, first.n, first.confidence) or not np.array_equal(
+            r.m, first.m
+        ):
+            raise ValueError("stack_axes: results differ in kind, dt, n, tau grid or confidence")
+    cat = {f: np.hstack([getattr(r, f) for r in results]) for f in ("variance", "ci_low", "ci_high", "edf", "alpha")}
+    return AllanResult(kind=first.kind, dt=first.dt, n=first.n, m=first.m, tau=first.tau, confidence=first.confidence,
+                       **cat)
 
 
 def allan_variance(y: np.ndarray, dt: float, **kwargs) -> AllanResult:
