@@ -34,7 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from ..core.allan import allan_variance
+from ..core.allan import allan_variance, identify_alpha
+from ..core.components import total_allan_variance
 from ..core.diagnostics import detectors as det
 from ..core.diagnostics.residuals import ResidualErrors, residual_errors, spectral_peaks
 from ..core.diagnostics.whitening import WhiteningFilter
@@ -221,10 +222,15 @@ class _Loop:
         exog_values = {f"{t.effect}{i}": t.describe(coef[s]) for i, (t, s) in enumerate(zip(state.exog_terms, slices,
                                                                                         strict=True))}
         residual_data = y - (exog @ coef if exog is not None else 0.0)
-        av = allan_variance(_fill_missing(residual_data), self.dt)
+        filled = _fill_missing(residual_data)
+        grid = allan_variance(filled, self.dt)
+        av_model = np.asarray(fit.theoretical_allan_variance(grid.tau), dtype=float)
+        # The AV's confidence intervals under the null "the model holds": the noise type at each τ (which
+        # sets the EDF) is read from the model's smooth AV, not from the noisy data.
+        alpha_model = identify_alpha(grid.tau, av_model[:, None], "allan")
+        av = allan_variance(filled, self.dt, m=grid.m, alpha=alpha_model)
         av_data = av.variance[:, 0]
         av_ci = (av.ci_low[:, 0], av.ci_high[:, 0])
-        av_model = np.asarray(fit.theoretical_allan_variance(av.tau), dtype=float)
         e = np.asarray(fit.standardized_innovations(), dtype=float).copy()
         e[: min(10, e.size // 100)] = np.nan  # start-up transient of the filter
         whitening = WhiteningFilter.from_components(list(fit.components), self.dt)
@@ -233,12 +239,16 @@ class _Loop:
         bic = -2.0 * loglik + (_n_params(fit) + k) * math.log(self.n_observed)
         errors = residual_errors(e, self.dt, loglik=loglik, bic=bic, av_data=av_data, av_model=av_model,
                                  lags=self.lags)
-        findings = self.detect(e, whitening, state, tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model)
+        white = [c for c in fit.components if c.name in ("WN", "QN")]
+        av_white = total_allan_variance(white, av.tau, self.dt) if white else None
+        findings = self.detect(e, whitening, state, tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model,
+                               av_white=av_white)
         return Diagnosis(fit=fit, errors=errors, findings=findings, innovations=e, tau=av.tau, av_data=av_data,
                          av_ci=av_ci, av_model=av_model, exog_values=exog_values)
 
     def detect(self, e: np.ndarray, whitening: WhiteningFilter, state: LoopState, *, tau: np.ndarray,
-               av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray) -> list[det.Finding]:
+               av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray,
+               av_white: np.ndarray | None) -> list[det.Finding]:
         a = self.alpha
         found = [det.detect_outliers(e, alpha=a), det.detect_sinusoid(e, self.dt, whitening, alpha=a),
                  det.detect_step(e, self.dt, whitening, alpha=a), det.detect_correlation(e, self.dt, alpha=a,
@@ -247,7 +257,7 @@ class _Loop:
             found.append(det.detect_ramp(e, self.dt, whitening, alpha=a))
         if self.temperature is not None and not any(t.effect == "TEMP" for t in state.exog_terms):
             found.append(det.detect_temperature(e, self.temperature, whitening, alpha=a))
-        found += det.detect_av_signatures(tau, av_data, av_ci, av_model, alpha=a)
+        found += det.detect_av_signatures(tau, av_data, av_ci, av_model, av_white=av_white, alpha=a)
         return found
 
     def candidates(self, diag: Diagnosis, state: LoopState) -> list[det.Finding]:

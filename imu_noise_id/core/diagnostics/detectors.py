@@ -289,7 +289,8 @@ def _fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float
 
 
 def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
-                         av_model: np.ndarray, *, alpha: float = ALPHA) -> list[Finding]:
+                         av_model: np.ndarray, *, av_white: np.ndarray | None = None,
+                         alpha: float = ALPHA) -> list[Finding]:
     """Bands of τ where the data's AV is significantly above the model's, each traced to a component.
 
     z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) (sd from the AV's 95 % CI); a τ is in excess when
@@ -299,6 +300,11 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
     * band at the shortest τ with slope < −1.5 (ADEV −1) → QN, Q from 3Q²/τ²;
     * band reaching the longest τ → RR if slope > 1.5 (ADEV +1, AV ω²τ²/2), else RW (AV K²τ/3);
     * otherwise (an interior bump) → GM, (τ_c, σ) fitted to the excess (the GM AV peaks near τ ≈ 1.9 τ_c).
+
+    A band of significant *deficit* (z_τ < −z*) reaching the longest τ means the model's long-τ growth
+    (a random walk or ramp that absorbed a bounded process) is not in the data: the data's AV beyond the white
+    part ``av_white`` (the model's WN + QN AV; default the WN line through the first τ) is a bounded hump
+    → GM, with (τ_c, σ) fitted to that hump.
     """
     tau = np.asarray(tau, dtype=float)
     av_data = np.asarray(av_data, dtype=float)
@@ -308,9 +314,22 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
         raise ValueError("detect_av_signatures: need ≥ 3 τ with matching AV arrays")
     z = av_misfit_z(av_data, av_ci, av_model)
     z_star = float(stats.norm.isf(alpha / m))
-    excess_mask = z > z_star
     findings: list[Finding] = []
-    idx = np.flatnonzero(excess_mask)
+    deficit = np.flatnonzero(z < -z_star)
+    if deficit.size and deficit[-1] == m - 1:
+        white = av_data[0] * tau[0] / tau if av_white is None else np.asarray(av_white, dtype=float)
+        hump = av_data - white
+        use = hump > 0
+        if use.sum() >= 3:
+            tc, sg = _fit_gm_to_excess(tau[use], hump[use])
+            zmin = float(-z[deficit].min())
+            findings.append(Finding(
+                effect="GM", detector="av_band", statistic=zmin, threshold=z_star, level=alpha,
+                log10_p=_bonferroni_log10_p(_norm_log10_sf(zmin), m), params={"tau": tc, "sigma": sg},
+                evidence=(f"model AV above the data at long τ (τ ≥ {tau[deficit[0]]:.3g} s, max |z| = {zmin:.1f}, "
+                          f"threshold {z_star:.2f}): the data's AV is bounded → GM with τ_c ≈ {tc:.3g} s, "
+                          f"σ ≈ {sg:.3g}")))
+    idx = np.flatnonzero(z > z_star)
     if idx.size == 0:
         return findings
     runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
