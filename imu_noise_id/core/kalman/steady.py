@@ -1,0 +1,160 @@
+"""Fast Kalman engine for time-invariant models in steady state: the filter and smoother as IIR filters.
+
+With Σ = P̄, the steady-state prediction covariance (``StateSpace.sigma_mode == 'steady'``), the Riccati
+recursion of paper 000's appendix is at its fixed point from the first sample: the gain K, the innovation
+variance F and the smoother gain J are constants, so
+
+    predicted state  x_{t+1} = A x_t + ΦK y_t + u,        A = Φ(I − K H)          (forward, causal)
+    smoothed state   x_{t−1}^N = J x_t^N + (x_{t−1}^{t−1} − J x_t^{t−1})          (backward, anti-causal)
+
+are linear time-invariant filters. They run in compiled code as cascades of first-order sections
+(``scipy.signal.lfilter``) in the Schur basis of A (resp. J): orthogonal, hence numerically as good as the
+plain recursion even with poles within 1e-6 of the unit circle, where a transfer-function (polynomial) form
+would lose all accuracy.
+
+The smoothed covariances are never stored: with D_t = P_t^N − P̄^N one has D_{t−1} = J D_t Jᵀ, so
+Σ_t P_t^N = N·P̄^N + X − J^N X J^{Nᵀ} with X the solution of the Lyapunov equation X = J X Jᵀ + D_N, and the lag-one
+covariance is P_{t,t−1}^N = P_t^N Jᵀ (equivalent to the paper's recursion; de Jong 1989).
+This engine requires no missing samples; :func:`imu_noise_id.core.kalman.smooth` falls back to the exact engine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import schur, solve_discrete_lyapunov
+from scipy.signal import lfilter
+
+from ..statespace import StateSpace
+from .common import LOG_2PI, Columns, InnovationResult, SmootherStats
+
+
+@dataclass(frozen=True)
+class SteadyGains:
+    """Constant gains of the steady-state filter and smoother."""
+
+    p_pred: np.ndarray  # P̄ = P_t^{t−1}
+    p_filt: np.ndarray  # P_t^t
+    k: np.ndarray  # Kalman gain on the predicted state
+    f: float  # innovation variance
+    a: np.ndarray  # Φ(I − K H)
+    j: np.ndarray  # smoother gain P_f Φᵀ P̄⁻¹
+
+
+def gains(model: StateSpace) -> SteadyGains:
+    """Steady-state gains of ``model`` (from the discrete algebraic Riccati equation)."""
+    P = model.steady_prediction_covariance()
+    h = model.h
+    Ph = P @ h
+    f = float(h @ Ph) + float(model.r)
+    k = Ph / f
+    Pf = P - np.outer(k, Ph)
+    Pf = 0.5 * (Pf + Pf.T)
+    a = model.phi @ (np.eye(model.n_states) - np.outer(k, h))
+    j = np.linalg.lstsq(P.T, (Pf @ model.phi.T).T, rcond=None)[0].T
+    return SteadyGains(P, Pf, k, f, a, j)
+
+
+def _schur(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A = U T Uᴴ with T upper triangular (real when all eigenvalues are real, else complex)."""
+    T, U = schur(A, output="real")
+    if A.shape[0] > 1 and np.any(np.abs(np.diag(T, -1)) > 0):
+        T, U = schur(A, output="complex")
+    return T, U
+
+
+def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
+    """w[:, :, 0] = w0, w[:, :, t+1] = T w[:, :, t] + cw[:, :, t]; shapes (p, m, N). T upper triangular.
+
+    One first-order ``lfilter`` per state (vectorised over the m columns), last state first, each driven by its
+    input plus the already computed states it couples to.
+    """
+    p = cw.shape[0]
+    w = np.empty_like(cw)
+    for i in range(p - 1, -1, -1):
+        drive = cw[i, :, :-1].copy()
+        for jj in range(i + 1, p):
+            if T[i, jj] != 0:
+                drive += T[i, jj] * w[jj, :, :-1]
+        lam = T[i, i]
+        w[i, :, 0] = w0[i]
+        w[i, :, 1:] = lfilter([1.0], [1.0, -lam], drive, axis=-1, zi=(lam * w0[i])[:, None])[0]
+    return w
+
+
+def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """x_0 = x0, x_{t+1} = A x_t + c_t; c has shape (p, m, N), x0 (p, m); returns x with c's shape.
+
+    Computed in the Schur basis A = U T Uᴴ (orthogonal, so no loss of accuracy) by :func:`_run_modes`.
+    """
+    if c.shape[0] == 0:
+        return np.zeros_like(c)
+    T, U = _schur(A)
+    Uh = U.conj().T
+    cw = np.einsum("ij,jmn->imn", Uh, c)
+    w = _run_modes(T, cw, Uh @ x0)
+    x = np.einsum("ij,jmn->imn", U, w)
+    return np.real(x) if np.iscomplexobj(x) else x
+
+
+def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns, full: bool):
+    """H x_t^{t−1} for every column (m, N), and with ``full`` the predicted states (p, m, N)."""
+    p = model.n_states
+    m, n = cols.y.shape
+    if p == 0:
+        return np.zeros((m, n)), np.zeros((0, m, n))
+    T, U = _schur(g.a)
+    Uh = U.conj().T
+    gain_w = Uh @ (model.phi @ g.k)
+    g_w = Uh @ cols.g
+    cw = gain_w[:, None, None] * cols.y[None, :, :] + g_w[:, :, None]
+    w = _run_modes(T, cw, Uh @ cols.m0)
+    hw = model.h @ U
+    out = np.einsum("i,imn->mn", hw, w)
+    out = np.real(out) if np.iscomplexobj(out) else out
+    if not full:
+        return out, None
+    x = np.einsum("ij,jmn->imn", U, w)
+    return out, (np.real(x) if np.iscomplexobj(x) else x)
+
+
+def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
+    """Innovations and their (constant) variance for every column; no missing samples allowed."""
+    g = gains(model)
+    hx, _ = _predicted_output(model, g, cols, full=False)
+    n = cols.y.shape[1]
+    return InnovationResult(cols.y - hx, np.full(n, g.f), np.ones(n, bool), constant_f=True)
+
+
+def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
+    """E-step statistics of the data column (column 0) with constant gains (see the module docstring)."""
+    g = gains(model)
+    one = Columns(cols.y[:1], cols.g[:, :1], cols.m0[:, :1], cols.names[:1])
+    y = one.y[0]
+    n, p = y.size, model.n_states
+    hx, xp3 = _predicted_output(model, g, one, full=True)
+    e = y - hx[0]
+    xp = xp3[:, 0, :]  # (p, N)
+    xf = xp + np.outer(g.k, e)
+    # Backward pass in reversed time: s_0 = x_N^N (= filtered), s_{k+1} = J s_k + a_{N−2−k}.
+    a = xf[:, :-1] - g.j @ xp[:, 1:]
+    c = np.zeros((p, 1, n))
+    c[:, 0, :-1] = a[:, ::-1]
+    xs = lti_states(g.j, c, xf[:, -1:])[:, 0, ::-1].T.copy()
+    # Smoothed covariances: P̄^N solves X = J X Jᵀ + (P_f − J P̄ Jᵀ); deviations decay as J^k D_N J^kᵀ.
+    J = g.j
+    p_bar_s = solve_discrete_lyapunov(J, g.p_filt - J @ g.p_pred @ J.T)
+    d_last = g.p_filt - p_bar_s
+    X = solve_discrete_lyapunov(J, d_last)
+    Jn = np.linalg.matrix_power(J, n)
+    Jn1 = np.linalg.matrix_power(J, n - 1)
+    sum_p = n * p_bar_s + X - Jn @ X @ Jn.T
+    sum_p = 0.5 * (sum_p + sum_p.T)
+    p_first = p_bar_s + Jn1 @ d_last @ Jn1.T
+    sum_lag = (sum_p - p_first) @ J.T
+    loglik = -0.5 * (n * (LOG_2PI + np.log(g.f)) + float(e @ e) / g.f)
+    return SmootherStats(
+        xs, sum_p, p_first, g.p_filt.copy(), sum_lag, float(model.h @ sum_p @ model.h), float(loglik),
+        np.ones(n, bool),
+    )
