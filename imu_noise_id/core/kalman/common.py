@@ -66,8 +66,8 @@ class SmootherStats:
         P_1^N and P_N^N.
     sum_lag : (p, p) array
         Σ_{t=2}^{N} P_{t,t−1}^N.
-    sum_hph_obs : float
-        Σ over observed t of H P_t^N Hᵀ.
+    sum_p_obs : (p, p) array
+        Σ over observed t of P_t^N.
     loglik : float
         Exact log-likelihood of the data at the model's current parameters (prediction-error decomposition).
     observed : (N,) bool array
@@ -78,7 +78,7 @@ class SmootherStats:
     p_first: np.ndarray
     p_last: np.ndarray
     sum_lag: np.ndarray
-    sum_hph_obs: float
+    sum_p_obs: np.ndarray
     loglik: float
     observed: np.ndarray
 

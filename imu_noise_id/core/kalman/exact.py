@@ -71,7 +71,7 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     Ps = Pf[-1].copy()
     obs = inn.observed
     sum_p = Ps.copy()
-    sum_hph = float(h @ Ps @ h) if obs[-1] else 0.0
+    sum_p_obs = Ps.copy() if obs[-1] else np.zeros((p, p))
     J = np.empty((n, p, p))
     for t in range(n - 1, 0, -1):
         J[t - 1] = np.linalg.solve(Pp[t].T, (Pf[t - 1] @ phi.T).T).T
@@ -80,7 +80,7 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
         Ps = 0.5 * (Ps + Ps.T)
         sum_p += Ps
         if obs[t - 1]:
-            sum_hph += float(h @ Ps @ h)
+            sum_p_obs += Ps
     p_first = Ps
     sum_lag = np.zeros((p, p))
     if n > 1:
@@ -92,4 +92,4 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     fo = inn.f[obs]
     eo = inn.e[0, obs]
     loglik = -0.5 * float(np.sum(LOG_2PI + np.log(fo) + eo * eo / fo))
-    return SmootherStats(xs, sum_p, p_first, Pf[-1].copy(), sum_lag, sum_hph, loglik, obs)
+    return SmootherStats(xs, sum_p, p_first, Pf[-1].copy(), sum_lag, sum_p_obs, loglik, obs)

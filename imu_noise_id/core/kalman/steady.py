@@ -155,6 +155,6 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     sum_lag = (sum_p - p_first) @ J.T
     loglik = -0.5 * (n * (LOG_2PI + np.log(g.f)) + float(e @ e) / g.f)
     return SmootherStats(
-        xs, sum_p, p_first, g.p_filt.copy(), sum_lag, float(model.h @ sum_p @ model.h), float(loglik),
+        xs, sum_p, p_first, g.p_filt.copy(), sum_lag, sum_p.copy(), float(loglik),
         np.ones(n, bool),
     )

@@ -1,0 +1,182 @@
+"""Maximum-likelihood finish, standard errors and information for component models (beyond paper 000).
+
+EM converges slowly near the optimum (paper 000 §3.5 and §5: "very long convergence time"). After a few EM
+iterations this module maximises the exact log-likelihood directly with L-BFGS-B, in log-parameters
+ϑ = log(continuous-time parameter) of each stochastic component (noise density, random walk, GM τ and σ, QN Q),
+so positivity holds by construction. The mean parameters (bias, ramp slope, exog coefficients, u, μ) are
+profiled out by GLS inside the likelihood (:func:`imu_noise_id.core.kalman.loglik`).
+
+The gradient is exact and cheap: by Fisher's identity ∂ℓ/∂ϑ = ∂Q(ϑ | ϑ_E)/∂ϑ at ϑ = ϑ_E, with Q the EM's
+expected complete-data log-likelihood (:func:`imu_noise_id.core.em.q_function`), evaluated from one smoother
+pass; the derivative of Q (a closed-form function of a few sums) is taken by central differences.
+
+Standard errors (paper 000 §3.4): the observed information is minus a numerical Hessian of ℓ (central
+differences of the exact gradient); for positive parameters the 95 % interval is exp(ϑ̂ ± 1.96·se_ϑ) and the
+physical standard error the delta-method value·se_ϑ.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+
+from . import em, kalman
+from .components import RR, Component
+from .errors import InputError
+from .statespace import StateSpace, with_components
+
+
+@dataclass(frozen=True)
+class Parameterisation:
+    """Log-parameters of the stochastic components of a structure (RR is a mean parameter, not included)."""
+
+    template: tuple[Component, ...]
+    entries: tuple[tuple[int, str], ...]  # (component index, parameter name)
+
+    @classmethod
+    def of(cls, components: list[Component]) -> Parameterisation:
+        entries = tuple(
+            (i, name) for i, c in enumerate(components) if not isinstance(c, RR) for name in c.parameter_names
+        )
+        return cls(tuple(components), entries)
+
+    @property
+    def labels(self) -> list[str]:
+        """``'<index>:<type>.<parameter>'`` per entry (index = component position in the structure)."""
+        return [f"{i}:{self.template[i].name}.{name}" for i, name in self.entries]
+
+    def to_theta(self, components: list[Component]) -> np.ndarray:
+        values = [components[i].params()[name] for i, name in self.entries]
+        if any(not (math.isfinite(v) and v > 0) for v in values):
+            raise InputError(f"component parameters must be finite and > 0 to fit, got {components}")
+        return np.log(values)
+
+    def to_components(self, theta: np.ndarray, model: StateSpace | None = None) -> list[Component]:
+        """Components at ϑ; RR slopes are taken from ``model`` (its profiled value) when given."""
+        params = [dict(c.params()) for c in self.template]
+        for (i, name), v in zip(self.entries, theta, strict=True):
+            params[i][name] = float(np.exp(v))
+        out: list[Component] = [type(c)(**p) for c, p in zip(self.template, params, strict=True)]
+        if model is not None:
+            from .statespace import to_components
+
+            fitted = to_components(model)
+            out = [f if isinstance(c, RR) else c for c, f in zip(out, fitted, strict=True)]
+        return out
+
+    def to_model(self, theta: np.ndarray, base: StateSpace) -> StateSpace:
+        """``base`` with Φ, Q, R at ϑ (mean parameters b, u, μ kept from ``base``)."""
+        comps = self.to_components(theta, base)
+        return with_components(base, comps)
+
+
+def loglik_and_grad(
+    par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *, step: float = 1e-6
+) -> tuple[float, np.ndarray, StateSpace]:
+    """Profile log-likelihood at ϑ, its exact gradient (Fisher's identity) and the model with GLS means."""
+    model = par.to_model(theta, base)
+    prof = kalman.loglik(model, y, z)
+    model = kalman.apply_beta(model, prof)
+    sums = em.estep(model, y, z)
+    grad = np.empty(theta.size)
+    for k in range(theta.size):
+        tp, tm = theta.copy(), theta.copy()
+        tp[k] += step
+        tm[k] -= step
+        grad[k] = (em.q_function(par.to_model(tp, model), sums) - em.q_function(par.to_model(tm, model), sums)) / (
+            2.0 * step
+        )
+    return prof.loglik, grad, model
+
+
+@dataclass
+class MLEResult:
+    """Outcome of :func:`maximise`."""
+
+    theta: np.ndarray
+    model: StateSpace
+    loglik: float
+    n_eval: int
+    converged: bool
+    message: str
+
+
+def maximise(
+    par: Parameterisation,
+    base: StateSpace,
+    y: np.ndarray,
+    z: np.ndarray,
+    *,
+    max_iter: int = 200,
+    bounds_width: float = 30.0,
+    tau_bounds: tuple[float, float] | None = None,
+) -> MLEResult:
+    """L-BFGS-B on the exact profile log-likelihood from ``base`` (e.g. the last EM iterate)."""
+    from .statespace import to_components
+
+    theta0 = par.to_theta(to_components(base))
+    bounds = [(t - bounds_width, t + bounds_width) for t in theta0]
+    if tau_bounds is not None:
+        for k, (_, name) in enumerate(par.entries):
+            if name == "tau":
+                lo, hi = math.log(tau_bounds[0]), math.log(tau_bounds[1])
+                bounds[k] = (lo, hi)
+                theta0[k] = min(max(theta0[k], lo), hi)
+    state = {"model": base, "n": 0, "best": (-np.inf, None, None)}
+    scale = max(float(np.sum(np.isfinite(y))), 1.0)
+
+    def fun(theta: np.ndarray) -> tuple[float, np.ndarray]:
+        state["n"] += 1
+        try:
+            ll, g, model = loglik_and_grad(par, theta, state["model"], y, z)
+        except (InputError, np.linalg.LinAlgError, ValueError):
+            return 1e10, np.zeros_like(theta)
+        if not math.isfinite(ll):
+            return 1e10, np.zeros_like(theta)
+        if ll > state["best"][0]:
+            state["best"] = (ll, theta.copy(), model)
+        return -ll / scale, -g / scale
+
+    res = minimize(
+        fun, theta0, jac=True, method="L-BFGS-B", bounds=bounds,
+        options={"maxiter": max_iter, "ftol": 1e-13, "gtol": 1e-9, "maxcor": 20},
+    )
+    ll, theta, model = state["best"]
+    if theta is None:
+        raise InputError("the likelihood could not be evaluated at any parameter value tried")
+    return MLEResult(theta, model, ll, state["n"], bool(res.success), str(res.message))
+
+
+def observed_information(
+    par: Parameterisation, theta: np.ndarray, model: StateSpace, y: np.ndarray, z: np.ndarray, *, step: float = 1e-3
+) -> np.ndarray:
+    """−∂²ℓ/∂ϑ∂ϑᵀ by central differences of the exact gradient (symmetrised)."""
+    k = theta.size
+    hess = np.empty((k, k))
+    for j in range(k):
+        tp, tm = theta.copy(), theta.copy()
+        tp[j] += step
+        tm[j] -= step
+        gp = loglik_and_grad(par, tp, model, y, z)[1]
+        gm = loglik_and_grad(par, tm, model, y, z)[1]
+        hess[:, j] = (gp - gm) / (2.0 * step)
+    return -0.5 * (hess + hess.T)
+
+
+def covariance_from_information(info: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Inverse of the observed information and whether it is positive definite.
+
+    When it is not (a flat or non-maximal direction: the parameter is not identified by these data), the
+    variance of every parameter loading on such a direction is set to +inf rather than to a misleading number.
+    """
+    w, v = np.linalg.eigh(info)
+    pos = w > 1e-12 * max(float(np.max(np.abs(w))), 1e-300)
+    cov = (v[:, pos] / w[pos]) @ v[:, pos].T
+    ok = bool(np.all(pos))
+    if not ok:
+        weak = (v[:, ~pos] ** 2).sum(axis=1) > 1e-6
+        cov[weak, weak] = np.inf
+    return cov, ok
