@@ -127,4 +127,16 @@ def fit_allan(names: list[str], av: EmpiricalAllan, dt: float, n_grid: int = 4) 
     if not results:
         raise InputError("the Allan-variance fit for initial values failed; give initial values (init=…)")
     results.sort(key=lambda r: r[0])
-    return results
+    return _distinct(results)
+
+
+def _distinct(results: list[tuple[float, list[Component]]], min_log_gap: float = 0.3) -> list:
+    """Drop solutions whose log-parameters are all within ``min_log_gap`` of a better one."""
+    kept: list[tuple[float, list[Component]]] = []
+    vecs: list[np.ndarray] = []
+    for cost, comps in results:
+        v = np.log([max(x, 1e-300) for c in comps if not isinstance(c, RR) for x in c.params().values()])
+        if all(np.max(np.abs(v - u)) > min_log_gap for u in vecs):
+            kept.append((cost, comps))
+            vecs.append(v)
+    return kept

@@ -169,14 +169,68 @@ def observed_information(
 def covariance_from_information(info: np.ndarray) -> tuple[np.ndarray, bool]:
     """Inverse of the observed information and whether it is positive definite.
 
-    When it is not (a flat or non-maximal direction: the parameter is not identified by these data), the
-    variance of every parameter loading on such a direction is set to +inf rather than to a misleading number.
+    When it is not (typically a variance driven to ~0 at the boundary: that component is not supported by the
+    data), the parameters loading most on the non-positive directions are removed one at a time until the rest
+    is positive definite; the removed ones get infinite variance (interval (0, ∞)), the others the inverse of
+    their (conditional) block.
     """
-    w, v = np.linalg.eigh(info)
-    pos = w > 1e-12 * max(float(np.max(np.abs(w))), 1e-300)
-    cov = (v[:, pos] / w[pos]) @ v[:, pos].T
-    ok = bool(np.all(pos))
-    if not ok:
-        weak = (v[:, ~pos] ** 2).sum(axis=1) > 1e-6
-        cov[weak, weak] = np.inf
-    return cov, ok
+    k = info.shape[0]
+    keep = list(range(k))
+    while keep:
+        sub = info[np.ix_(keep, keep)]
+        w, v = np.linalg.eigh(sub)
+        scale = max(float(np.max(np.abs(np.diag(sub)))), 1e-300)
+        if np.all(w > 1e-10 * scale):
+            break
+        worst = int(np.argmax(np.abs(v[:, int(np.argmin(w))])))
+        keep.pop(worst)
+    cov = np.full((k, k), 0.0)
+    np.fill_diagonal(cov, np.inf)
+    if keep:
+        cov[np.ix_(keep, keep)] = np.linalg.inv(info[np.ix_(keep, keep)])
+    return cov, len(keep) == k
+
+
+#: Half the 95 % χ²₁ quantile: a likelihood-ratio interval ends where ℓ drops by this much.
+LR_DROP_95 = 1.9207294103470103
+
+
+def likelihood_interval(
+    par: Parameterisation, theta: np.ndarray, k: int, model: StateSpace, y: np.ndarray,
+    *, z: np.ndarray, ll_max: float, step: float = 0.7, max_steps: int = 40,
+) -> tuple[float, float]:
+    """95 % likelihood-ratio interval of log-parameter k, the others held at their estimates (conditional).
+
+    Used where the Wald interval is meaningless (a variance near 0, a flat likelihood). Each end is bracketed
+    by steps of ``step`` in log space and refined by bisection; an end the likelihood never drops by
+    :data:`LR_DROP_95` within ``max_steps`` is ∓inf (i.e. the parameter may be 0 or unbounded).
+    """
+
+    def drop(v: float) -> float:
+        th = theta.copy()
+        th[k] = v
+        try:
+            return ll_max - kalman.loglik(par.to_model(th, model), y, z).loglik
+        except (InputError, np.linalg.LinAlgError):
+            return math.inf
+
+    ends = []
+    for direction in (-1.0, 1.0):
+        inside, outside = theta[k], None
+        for i in range(1, max_steps + 1):
+            v = theta[k] + direction * step * i
+            if drop(v) > LR_DROP_95:
+                outside = v
+                break
+            inside = v
+        if outside is None:
+            ends.append(direction * math.inf)
+            continue
+        for _ in range(8):
+            mid = 0.5 * (inside + outside)
+            if drop(mid) > LR_DROP_95:
+                outside = mid
+            else:
+                inside = mid
+        ends.append(0.5 * (inside + outside))
+    return ends[0], ends[1]

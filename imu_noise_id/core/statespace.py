@@ -219,6 +219,15 @@ def steady_prediction_covariance(phi: np.ndarray, q: np.ndarray, h: np.ndarray, 
     raise InputError("the steady-state Riccati iteration did not converge; the model parameters are degenerate")
 
 
+def validate_structure(names: list[str]) -> None:
+    """Raise InputError unless the structure is identifiable: exactly one WN; at most one QN, RW, RR."""
+    if names.count("WN") != 1:
+        raise InputError(f"model {'+'.join(names) or '(empty)'} needs exactly one WN component (white noise)")
+    for single in ("QN", "RW", "RR"):
+        if names.count(single) > 1:
+            raise InputError(f"model {'+'.join(names)} has {single} more than once; it is not identifiable")
+
+
 def from_components(
     components: list[Component],
     dt: float,
@@ -254,12 +263,7 @@ def from_components(
         On a structure the estimator cannot identify (no WN, duplicated WN/QN/RW/RR, RR in state mode with no
         RW or GM, unknown ``ramp``).
     """
-    names = [c.name for c in components]
-    if names.count("WN") != 1:
-        raise InputError(f"model {'+'.join(names) or '(empty)'} needs exactly one WN component (white noise)")
-    for single in ("QN", "RW", "RR"):
-        if names.count(single) > 1:
-            raise InputError(f"model {'+'.join(names)} has {single} more than once; it is not identifiable")
+    validate_structure([c.name for c in components])
     if ramp not in ("measurement", "state"):
         raise InputError(f"ramp must be 'measurement' or 'state', got {ramp!r}")
     if sigma_mode not in ("steady", "fixed"):

@@ -35,6 +35,9 @@ from ..core.modelspec import model_name, parse_model, parse_structure
 Z95 = 1.959963984540054
 #: Smallest number of observed samples accepted, and per free parameter.
 MIN_SAMPLES, MIN_SAMPLES_PER_PARAMETER = 100, 20
+#: Above this standard error in log space (a 95 % Wald interval wider than ×7 each way) the Wald interval is
+#: replaced by a likelihood-ratio one (:func:`imu_noise_id.core.mle.likelihood_interval`).
+WALD_MAX_SE_LOG = 1.0
 #: Default candidate structures of :func:`select_model` (RR / QN added when the AV suggests them).
 DEFAULT_CANDIDATES: tuple[str, ...] = ("WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM")
 
@@ -85,7 +88,10 @@ class FitResult:
         coefficients; each ``{value, se, ci95}``.
     se, ci95 : dict[str, ...]
         Standard error and 95 % interval of every component parameter, keyed ``WN.noise_density``, ``GM2.tau`` …,
-        physical units (intervals of positive parameters are exp(log-value ± 1.96·se_log), hence asymmetric).
+        physical units. Intervals of positive parameters are exp(log-value ± 1.96·se_log) (asymmetric); where
+        se_log > 1 or a thousandfold smaller value is not rejected by the data (weakly identified, e.g. a variance
+        near 0), a likelihood-ratio interval conditional on the other parameters is given instead, with lower
+        end 0 when the data cannot exclude 0.
     loglik, aic, bic : float
         Exact maximised log-likelihood; AIC = 2k − 2ℓ, BIC = k·ln(n) − 2ℓ with k = all free parameters.
     n : int
@@ -194,6 +200,18 @@ def _record_length(
     return RecordLengthAdvice(target, "95 % two-sided, relative half-width", t_now, needed, half, reliable)
 
 
+def _near_zero(par: mle.Parameterisation, res: mle.MLEResult, k: int, y: np.ndarray, z: np.ndarray) -> bool:
+    """Whether shrinking parameter k a thousandfold lowers ℓ by less than the 95 % LR threshold (the data
+    cannot tell it from 0, so a Wald interval in log space would be wrongly narrow)."""
+    th = res.theta.copy()
+    th[k] -= math.log(1e3)
+    try:
+        ll = kalman.loglik(par.to_model(th, res.model), y, z).loglik
+    except (InputError, np.linalg.LinAlgError):
+        return False
+    return res.loglik - ll < mle.LR_DROP_95
+
+
 def _one_start(
     start: list[Component], y: np.ndarray, z: np.ndarray, dt: float, *, exog_names: tuple[str, ...],
     em_iter: int, em_tol: float, polish: bool, tau_bounds: tuple[float, float],
@@ -222,7 +240,7 @@ def fit_model(
     exog_names: list[str] | None = None,
     init: list[Component] | None = None,
     drift: str | None = "em",
-    n_starts: int = 2,
+    n_starts: int = 3,
     em_iter: int = 30,
     em_tol: float = 1e-9,
     polish: bool = True,
@@ -259,10 +277,13 @@ def fit_model(
     """
     y = _check_signal(y, dt)
     names, given = _structure(structure)
+    ss.validate_structure(names)
     if init is not None:
         given = list(init)
         if [c.name for c in given] != names:
             raise InputError("init components do not match the structure")
+    if given is not None:
+        mle.Parameterisation.of(given).to_theta(given)  # positive, finite initial values
     has_rr = "RR" in names
     if has_rr and drift not in ("em", "ls"):
         raise InputError(f"structure has RR: drift must be 'em' or 'ls', got {drift!r}")
@@ -330,7 +351,7 @@ def fit_model(
                 start, y, z, dt, exog_names=user_names, em_iter=em_iter, em_tol=em_tol, polish=polish,
                 tau_bounds=tau_bounds,
             )
-        except InputError:
+        except (InputError, np.linalg.LinAlgError):
             continue
         lls.append(res[0].loglik)
         if best is None or res[0].loglik > best[0].loglik:
@@ -355,8 +376,11 @@ def fit_model(
             v = float(np.exp(res.theta[k]))
             s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
             se[lab] = v * s_log
-            ci[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log)) if math.isfinite(s_log) else (
-                0.0, math.inf)
+            if s_log <= WALD_MAX_SE_LOG and not _near_zero(par, res, k, y, z):
+                ci[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
+            else:
+                lo, hi = mle.likelihood_interval(par, res.theta, k, model_ss, y, z=z, ll_max=res.loglik)
+                ci[lab] = (math.exp(lo) if math.isfinite(lo) else 0.0, math.exp(hi) if math.isfinite(hi) else math.inf)
         advice = _record_length(noise_labels, cov, comps, n_obs, dt, target=target_precision)
     exog_coef: dict[str, dict] = {}
     for name, value, var in zip(prof.names, prof.beta, np.diag(prof.beta_cov), strict=True):

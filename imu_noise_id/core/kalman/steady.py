@@ -12,9 +12,11 @@ are linear time-invariant filters. They run in compiled code as cascades of firs
 plain recursion even with poles within 1e-6 of the unit circle, where a transfer-function (polynomial) form
 would lose all accuracy.
 
-The smoothed covariances are never stored: with D_t = P_t^N − P̄^N one has D_{t−1} = J D_t Jᵀ, so
-Σ_t P_t^N = N·P̄^N + X − J^N X J^{Nᵀ} with X the solution of the Lyapunov equation X = J X Jᵀ + D_N, and the lag-one
-covariance is P_{t,t−1}^N = P_t^N Jᵀ (equivalent to the paper's recursion; de Jong 1989).
+The smoothed covariances are never stored: they follow the affine recursion P_{t−1}^N = T(P_t^N) =
+J P_t^N Jᵀ + (P_f − J P̄ Jᵀ) from P_N^N = P_f, so Σ_t P_t^N = Σ_{k<N} T^k(P_f) and P_1^N = T^{N−1}(P_f) are
+computed exactly by binary doubling of the affine map (:func:`affine_power_sum`, O(log N) small products, no
+Lyapunov solve that would be ill-conditioned when J has an eigenvalue near 1). The lag-one covariance is
+P_{t,t−1}^N = P_t^N Jᵀ (equivalent to the paper's recursion; de Jong 1989).
 This engine requires no missing samples; :func:`imu_noise_id.core.kalman.smooth` falls back to the exact engine.
 """
 
@@ -23,7 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import schur, solve_discrete_lyapunov
+from scipy.linalg import schur
 from scipy.signal import lfilter
 
 from ..statespace import StateSpace
@@ -127,6 +129,39 @@ def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
     return InnovationResult(cols.y - hx, np.full(n, g.f), np.ones(n, bool), constant_f=True)
 
 
+def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Σ_{k=0}^{n−1} T^k(P0) and T^{n−1}(P0) for T(P) = J P Jᵀ + C, by binary doubling.
+
+    With K = J ⊗ J acting on vec(P), a block of k steps is (K^k, c_k = vec T^k(0), G_k = Σ_{j<k} K^j,
+    m_k = Σ_{j<k} c_j); block a followed by block b combines as K_{a+b} = K_b K_a, c_{a+b} = K_b c_a + c_b,
+    G_{a+b} = G_a + G_b K_a, m_{a+b} = m_a + G_b c_a + m_b.
+    """
+    p = J.shape[0]
+    eye = np.eye(p * p)
+
+    def combine(a, b):
+        Ka, ca, Ga, ma = a
+        Kb, cb, Gb, mb = b
+        return Kb @ Ka, Kb @ ca + cb, Ga + Gb @ Ka, ma + Gb @ ca + mb
+
+    def power(k):
+        result = (eye, np.zeros(p * p), np.zeros((p * p, p * p)), np.zeros(p * p))
+        step = (np.kron(J, J), C.flatten(order="F"), eye, np.zeros(p * p))
+        while k:
+            if k & 1:
+                result = combine(result, step)
+            step = combine(step, step)
+            k >>= 1
+        return result
+
+    p0 = P0.flatten(order="F")
+    _, _, G, m = power(n)
+    K1, c1, _, _ = power(n - 1)
+    total = (G @ p0 + m).reshape(p, p, order="F")
+    last = (K1 @ p0 + c1).reshape(p, p, order="F")
+    return 0.5 * (total + total.T), 0.5 * (last + last.T)
+
+
 def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     """E-step statistics of the data column (column 0) with constant gains (see the module docstring)."""
     g = gains(model)
@@ -142,16 +177,9 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     c = np.zeros((p, 1, n))
     c[:, 0, :-1] = a[:, ::-1]
     xs = lti_states(g.j, c, xf[:, -1:])[:, 0, ::-1].T.copy()
-    # Smoothed covariances: P̄^N solves X = J X Jᵀ + (P_f − J P̄ Jᵀ); deviations decay as J^k D_N J^kᵀ.
     J = g.j
-    p_bar_s = solve_discrete_lyapunov(J, g.p_filt - J @ g.p_pred @ J.T)
-    d_last = g.p_filt - p_bar_s
-    X = solve_discrete_lyapunov(J, d_last)
-    Jn = np.linalg.matrix_power(J, n)
-    Jn1 = np.linalg.matrix_power(J, n - 1)
-    sum_p = n * p_bar_s + X - Jn @ X @ Jn.T
-    sum_p = 0.5 * (sum_p + sum_p.T)
-    p_first = p_bar_s + Jn1 @ d_last @ Jn1.T
+    const = g.p_filt - J @ g.p_pred @ J.T
+    sum_p, p_first = affine_power_sum(J, const, g.p_filt, n)
     sum_lag = (sum_p - p_first) @ J.T
     loglik = -0.5 * (n * (LOG_2PI + np.log(g.f)) + float(e @ e) / g.f)
     return SmootherStats(
