@@ -127,10 +127,10 @@ def fit_allan(names: list[str], av: EmpiricalAllan, dt: float, n_grid: int = 4) 
     if not results:
         raise InputError("the Allan-variance fit for initial values failed; give initial values (init=…)")
     results.sort(key=lambda r: r[0])
-    return _distinct(results)
+    return distinct(results)
 
 
-def _distinct(results: list[tuple[float, list[Component]]], min_log_gap: float = 0.3) -> list:
+def distinct(results: list[tuple[float, list[Component]]], min_log_gap: float = 0.3) -> list:
     """Drop solutions whose log-parameters are all within ``min_log_gap`` of a better one."""
     kept: list[tuple[float, list[Component]]] = []
     vecs: list[np.ndarray] = []

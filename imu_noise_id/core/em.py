@@ -61,27 +61,54 @@ class Sums:
     loglik: float  # exact log-likelihood at the E-step's θ
 
 
-def estep(model: StateSpace, y: np.ndarray, z: np.ndarray, engine: str = "auto") -> Sums:
-    """Run the smoother and reduce its output to :class:`Sums`."""
-    st = kalman.smooth(model, y, z, engine=engine)
-    xs, obs = st.xs, st.observed
-    n = xs.shape[0]
-    xx = xs.T @ xs
-    s11 = xx - np.outer(xs[0], xs[0]) + st.sum_p - st.p_first
-    s00 = xx - np.outer(xs[-1], xs[-1]) + st.sum_p - st.p_last
-    s10 = xs[1:].T @ xs[:-1] + st.sum_lag
-    if np.all(obs):
-        xo, yo, zo = xs, y, z
+@dataclass(frozen=True)
+class DataSums:
+    """Sums of the data alone (the same at every E-step): Σ_obs z zᵀ, Σ_obs z y, Σ_obs y², and the data."""
+
+    y_obs: np.ndarray
+    zt_obs: np.ndarray  # (k, n_obs)
+    zz: np.ndarray
+    zy: np.ndarray
+    yy: float
+    observed: np.ndarray
+    all_observed: bool
+
+    @classmethod
+    def of(cls, y: np.ndarray, z: np.ndarray) -> DataSums:
+        obs = ~np.isnan(y)
+        allo = bool(np.all(obs))
+        yo = y if allo else y[obs]
+        zt = np.ascontiguousarray((z if allo else z[obs]).T)
+        return cls(yo, zt, zt @ zt.T, zt @ yo, float(yo @ yo), obs, allo)
+
+
+def sums_from_stats(st: kalman.SmootherStats, data: DataSums) -> Sums:
+    """Reduce smoother output to :class:`Sums` (paper 000 §3.3: P̃_t = P_t^N + x_t^N x_t^{Nᵀ})."""
+    X = st.xs  # (p, N)
+    xx = X @ X.T
+    s11 = xx - np.outer(X[:, 0], X[:, 0]) + st.sum_p - st.p_first
+    s00 = xx - np.outer(X[:, -1], X[:, -1]) + st.sum_p - st.p_last
+    s10 = X[:, 1:] @ X[:, :-1].T + st.sum_lag
+    xsum = X.sum(axis=1)
+    if data.all_observed:
+        xo = X
         pt_obs = xx + st.sum_p
     else:
-        xo, yo, zo = xs[obs], y[obs], z[obs]
-        pt_obs = xo.T @ xo + st.sum_p_obs
+        xo = X[:, data.observed]
+        pt_obs = xo @ xo.T + st.sum_p_obs
     return Sums(
-        n=n, n_obs=int(obs.sum()), s11=s11, s00=s00, s10=s10, x_next=xs[1:].sum(axis=0),
-        x_prev=xs[:-1].sum(axis=0), x1=xs[0].copy(), p1=st.p_first, pt_obs=pt_obs, yx_obs=yo @ xo,
-        zx_obs=zo.T @ xo, zz_obs=zo.T @ zo, zy_obs=zo.T @ yo, yy_obs=float(yo @ yo),
-        loglik=st.loglik,
+        n=X.shape[1], n_obs=data.y_obs.size, s11=s11, s00=s00, s10=s10, x_next=xsum - X[:, 0],
+        x_prev=xsum - X[:, -1], x1=X[:, 0].copy(), p1=st.p_first, pt_obs=pt_obs, yx_obs=xo @ data.y_obs,
+        zx_obs=data.zt_obs @ xo.T, zz_obs=data.zz, zy_obs=data.zy, yy_obs=data.yy, loglik=st.loglik,
     )
+
+
+def estep(
+    model: StateSpace, y: np.ndarray, z: np.ndarray, engine: str = "auto", data: DataSums | None = None
+) -> Sums:
+    """Run the smoother and reduce its output to :class:`Sums` (``data``: precomputed :class:`DataSums`)."""
+    st = kalman.smooth(model, y, z, engine=engine)
+    return sums_from_stats(st, data or DataSums.of(y, z))
 
 
 def _pinv_psd(m: np.ndarray) -> np.ndarray:
@@ -240,11 +267,12 @@ def run_em(
     if max_iter < 0:
         raise InputError(f"max_iter must be >= 0, got {max_iter}")
     result = EMResult(model)
-    s = estep(model, y, z, engine)
+    data = DataSums.of(y, z)
+    s = estep(model, y, z, engine, data)
     result.loglik.append(s.loglik)
     for _ in range(max_iter):
         new = mstep(result.model, s)
-        s = estep(new, y, z, engine)
+        s = estep(new, y, z, engine, data)
         result.model = new
         result.n_iter += 1
         result.loglik.append(s.loglik)

@@ -74,13 +74,12 @@ class Parameterisation:
 
 
 def loglik_and_grad(
-    par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *, step: float = 1e-6
+    par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *,
+    step: float = 1e-6, data: em.DataSums | None = None,
 ) -> tuple[float, np.ndarray, StateSpace]:
     """Profile log-likelihood at ϑ, its exact gradient (Fisher's identity) and the model with GLS means."""
-    model = par.to_model(theta, base)
-    prof = kalman.loglik(model, y, z)
-    model = kalman.apply_beta(model, prof)
-    sums = em.estep(model, y, z)
+    prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
+    sums = em.sums_from_stats(stats, data or em.DataSums.of(y, z))
     grad = np.empty(theta.size)
     for k in range(theta.size):
         tp, tm = theta.copy(), theta.copy()
@@ -113,37 +112,56 @@ def maximise(
     max_iter: int = 200,
     bounds_width: float = 30.0,
     tau_bounds: tuple[float, float] | None = None,
+    grad_tol: float = 1e-2,
+    metric: np.ndarray | None = None,
 ) -> MLEResult:
-    """L-BFGS-B on the exact profile log-likelihood from ``base`` (e.g. the last EM iterate)."""
+    """L-BFGS(-B) on the exact profile log-likelihood from ``base`` (e.g. the last EM iterate).
+
+    ``metric``: an approximation of the information −∂²ℓ/∂ϑ² (e.g. the Whittle one). When given, the search
+    runs in η = Lᵀ(ϑ − ϑ₀) with L Lᵀ = metric, where the Hessian is close to the identity and L-BFGS needs a
+    handful of iterations; out-of-range points then get a large objective instead of box bounds, and it stops
+    when every |∂ℓ/∂η| < 0.05 (less than ~1e-3 of log-likelihood left to gain). Without it, when every
+    |∂ℓ/∂ϑ| < ``grad_tol``.
+    """
     from .statespace import to_components
 
     theta0 = par.to_theta(to_components(base))
-    bounds = [(t - bounds_width, t + bounds_width) for t in theta0]
+    lo = theta0 - bounds_width
+    hi = theta0 + bounds_width
     if tau_bounds is not None:
         for k, (_, name) in enumerate(par.entries):
             if name == "tau":
-                lo, hi = math.log(tau_bounds[0]), math.log(tau_bounds[1])
-                bounds[k] = (lo, hi)
-                theta0[k] = min(max(theta0[k], lo), hi)
-    state = {"model": base, "n": 0, "best": (-np.inf, None, None)}
+                lo[k], hi[k] = math.log(tau_bounds[0]), math.log(tau_bounds[1])
+                theta0[k] = min(max(theta0[k], lo[k]), hi[k])
+    state = {"n": 0, "best": (-np.inf, None, None)}
+    data = em.DataSums.of(y, z)
     scale = max(float(np.sum(np.isfinite(y))), 1.0)
+    if metric is not None:
+        w, v = np.linalg.eigh(0.5 * (metric + metric.T))
+        w = np.maximum(w, 1e-6 * max(float(np.max(w)), 1e-300))
+        T = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ metric T = I
+    else:
+        T = np.eye(theta0.size)
 
-    def fun(theta: np.ndarray) -> tuple[float, np.ndarray]:
+    def fun(eta: np.ndarray) -> tuple[float, np.ndarray]:
+        theta = theta0 + T @ eta
+        if np.any(theta < lo) or np.any(theta > hi):
+            return 1e10, -T.T @ np.where(theta < lo, -1.0, np.where(theta > hi, 1.0, 0.0))
         state["n"] += 1
         try:
-            ll, g, model = loglik_and_grad(par, theta, state["model"], y, z)
+            ll, g, model = loglik_and_grad(par, theta, base, y, z, data=data)
         except (InputError, np.linalg.LinAlgError, ValueError):
-            return 1e10, np.zeros_like(theta)
+            return 1e10, np.zeros_like(eta)
         if not math.isfinite(ll):
-            return 1e10, np.zeros_like(theta)
+            return 1e10, np.zeros_like(eta)
         if ll > state["best"][0]:
             state["best"] = (ll, theta.copy(), model)
-        return -ll / scale, -g / scale
+        return -ll / scale, -(T.T @ g) / scale
 
-    res = minimize(
-        fun, theta0, jac=True, method="L-BFGS-B", bounds=bounds,
-        options={"maxiter": max_iter, "ftol": 1e-13, "gtol": 1e-9, "maxcor": 20},
-    )
+    # With the metric, |∂ℓ/∂η| ≈ √(2 × the gain a Newton step would still bring): 0.05 ⇒ < ~1e-3 left.
+    gtol = (0.05 if metric is not None else grad_tol) / scale
+    res = minimize(fun, np.zeros(theta0.size), jac=True, method="L-BFGS-B",
+                   options={"maxiter": max_iter, "ftol": 1e-15, "gtol": gtol, "maxcor": 20})
     ll, theta, model = state["best"]
     if theta is None:
         raise InputError("the likelihood could not be evaluated at any parameter value tried")
@@ -156,12 +174,13 @@ def observed_information(
     """−∂²ℓ/∂ϑ∂ϑᵀ by central differences of the exact gradient (symmetrised)."""
     k = theta.size
     hess = np.empty((k, k))
+    data = em.DataSums.of(y, z)
     for j in range(k):
         tp, tm = theta.copy(), theta.copy()
         tp[j] += step
         tm[j] -= step
-        gp = loglik_and_grad(par, tp, model, y, z)[1]
-        gm = loglik_and_grad(par, tm, model, y, z)[1]
+        gp = loglik_and_grad(par, tp, model, y, z, data=data)[1]
+        gm = loglik_and_grad(par, tm, model, y, z, data=data)[1]
         hess[:, j] = (gp - gm) / (2.0 * step)
     return -0.5 * (hess + hess.T)
 

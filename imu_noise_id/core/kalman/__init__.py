@@ -24,7 +24,8 @@ from .common import (
 )
 
 __all__ = [
-    "Columns", "InnovationResult", "ProfileResult", "SmootherStats", "apply_beta", "loglik", "smooth",
+    "Columns", "InnovationResult", "ProfileResult", "SmootherStats", "apply_beta", "loglik", "profile_and_smooth",
+    "smooth",
 ]
 
 ENGINES = ("auto", "steady", "exact")
@@ -53,6 +54,24 @@ def loglik(
     cols = build_columns(model, y, z, profile_mean)
     inn = _engine(model, y, engine).innovations(model, cols)
     return profile(inn, cols.names)
+
+
+def profile_and_smooth(
+    model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, engine: str = "auto"
+) -> tuple[ProfileResult, StateSpace, SmootherStats]:
+    """:func:`loglik` with the mean parameters profiled, the model at their estimate, and its E-step statistics.
+
+    One forward pass when the steady engine applies (see :func:`.steady.profile_and_smooth`).
+    """
+    y, z = check_data(y, z, model.n_regressors)
+    cols = build_columns(model, y, z, True)
+    eng = _engine(model, y, engine)
+    if eng is steady:
+        prof, stats = steady.profile_and_smooth(model, cols)
+        return prof, apply_beta(model, prof), stats
+    prof = profile(eng.innovations(model, cols), cols.names)
+    fitted = apply_beta(model, prof)
+    return prof, fitted, eng.smooth(fitted, build_columns(fitted, y, z, False))
 
 
 def smooth(model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, engine: str = "auto") -> SmootherStats:

@@ -58,8 +58,8 @@ class SmootherStats:
 
     Attributes
     ----------
-    xs : (N, p) array
-        Smoothed means x_t^N.
+    xs : (p, N) array
+        Smoothed means x_t^N (one row per state).
     sum_p : (p, p) array
         Σ_{t=1}^{N} P_t^N.
     p_first, p_last : (p, p) arrays

@@ -92,4 +92,4 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     fo = inn.f[obs]
     eo = inn.e[0, obs]
     loglik = -0.5 * float(np.sum(LOG_2PI + np.log(fo) + eo * eo / fo))
-    return SmootherStats(xs, sum_p, p_first, Pf[-1].copy(), sum_lag, sum_p_obs, loglik, obs)
+    return SmootherStats(np.ascontiguousarray(xs.T), sum_p, p_first, Pf[-1].copy(), sum_lag, sum_p_obs, loglik, obs)

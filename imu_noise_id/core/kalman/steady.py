@@ -29,7 +29,7 @@ from scipy.linalg import schur
 from scipy.signal import lfilter
 
 from ..statespace import StateSpace
-from .common import LOG_2PI, Columns, InnovationResult, SmootherStats
+from .common import LOG_2PI, Columns, InnovationResult, ProfileResult, SmootherStats, profile
 
 
 @dataclass(frozen=True)
@@ -162,27 +162,42 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
     return 0.5 * (total + total.T), 0.5 * (last + last.T)
 
 
-def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
-    """E-step statistics of the data column (column 0) with constant gains (see the module docstring)."""
-    g = gains(model)
-    one = Columns(cols.y[:1], cols.g[:, :1], cols.m0[:, :1], cols.names[:1])
-    y = one.y[0]
-    n, p = y.size, model.n_states
-    hx, xp3 = _predicted_output(model, g, one, full=True)
-    e = y - hx[0]
-    xp = xp3[:, 0, :]  # (p, N)
+def _smooth_from_forward(model: StateSpace, g: SteadyGains, xp: np.ndarray, e: np.ndarray) -> SmootherStats:
+    """Backward pass and covariance sums from the predicted states xp (p, N) and innovations e (N,)."""
+    n, p = e.size, model.n_states
     xf = xp + np.outer(g.k, e)
     # Backward pass in reversed time: s_0 = x_N^N (= filtered), s_{k+1} = J s_k + a_{N−2−k}.
     a = xf[:, :-1] - g.j @ xp[:, 1:]
     c = np.zeros((p, 1, n))
     c[:, 0, :-1] = a[:, ::-1]
-    xs = lti_states(g.j, c, xf[:, -1:])[:, 0, ::-1].T.copy()
+    xs = np.ascontiguousarray(lti_states(g.j, c, xf[:, -1:])[:, 0, ::-1])
     J = g.j
     const = g.p_filt - J @ g.p_pred @ J.T
     sum_p, p_first = affine_power_sum(J, const, g.p_filt, n)
     sum_lag = (sum_p - p_first) @ J.T
     loglik = -0.5 * (n * (LOG_2PI + np.log(g.f)) + float(e @ e) / g.f)
     return SmootherStats(
-        xs, sum_p, p_first, g.p_filt.copy(), sum_lag, sum_p.copy(), float(loglik),
-        np.ones(n, bool),
+        xs, sum_p, p_first, g.p_filt.copy(), sum_lag, sum_p.copy(), float(loglik), np.ones(n, bool),
     )
+
+
+def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
+    """E-step statistics of the data column (column 0) with constant gains (see the module docstring)."""
+    g = gains(model)
+    one = Columns(cols.y[:1], cols.g[:, :1], cols.m0[:, :1], cols.names[:1])
+    hx, xp3 = _predicted_output(model, g, one, full=True)
+    return _smooth_from_forward(model, g, xp3[:, 0, :], one.y[0] - hx[0])
+
+
+def profile_and_smooth(model: StateSpace, cols: Columns) -> tuple[ProfileResult, SmootherStats]:
+    """GLS profile of the free mean parameters and the smoother at their estimate, from one forward pass.
+
+    The filter is linear in its inputs, so the predicted states of the data at β̂ are those of column 0 plus
+    Σ_c β̂_c times those of the regressor columns; only the backward pass is left to run.
+    """
+    g = gains(model)
+    hx, x = _predicted_output(model, g, cols, full=True)
+    n = cols.y.shape[1]
+    prof = profile(InnovationResult(cols.y - hx, np.full(n, g.f), np.ones(n, bool), constant_f=True), cols.names)
+    xp = x[:, 0, :] + np.tensordot(x[:, 1:, :], prof.beta, axes=([1], [0])) if prof.beta.size else x[:, 0, :]
+    return prof, _smooth_from_forward(model, g, xp, prof.innovations)
