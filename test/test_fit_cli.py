@@ -1,0 +1,44 @@
+"""``imu-noise-id fit`` and the model.yaml adapter."""
+
+from __future__ import annotations
+
+import numpy as np
+import yaml
+
+from imu_noise_id.cli import main
+from imu_noise_id.core.modelspec import parse_imu_model
+from imu_noise_id.core.simulate import simulate_static_imu
+
+
+def _npz(tmp_path):
+    model = parse_imu_model("gyro: WN(1e-3)+RW(2e-4); accel: WN(2e-3)+GM(tau=2,sigma=3e-3)")
+    s = simulate_static_imu(model, 100.0, 30.0, seed=4)
+    path = tmp_path / "imu.npz"
+    np.savez(path, t=s.t, gyro=s.gyro, accel=s.accel)
+    return path
+
+
+def test_fit_writes_model_yaml(tmp_path, capsys):
+    path = _npz(tmp_path)
+    rc = main(["fit", str(path), "--model", "WN+RW", "--axis", "gyro_x", "--out", str(tmp_path / "out"),
+               "--starts", "1"])
+    assert rc == 0
+    doc = yaml.safe_load((tmp_path / "out" / "model.yaml").read_text())
+    ax = doc["axes"]["gyro_x"]
+    assert ax["model"] == "WN+RW" and ax["n"] == 3000 and ax["dt"] == 0.01 and ax["unit"] == "rad/s"
+    wn, rw = ax["components"]
+    assert wn["type"] == "WN" and wn["ci95"][0] <= 1e-3 <= wn["ci95"][1]
+    assert abs(wn["sigma2_wn"] / (wn["noise_density"] ** 2 / 0.01) - 1) < 1e-4  # per-sample = N²/dt
+    assert rw["type"] == "RW" and "sigma2_rw" in rw and len(rw["ci95"]) == 2
+    assert {"loglik", "aic", "bic", "record_length", "mean"} <= set(ax)
+    assert "WN.noise_density" in ax["record_length"]["parameters"]
+    assert "gyro_x: WN+RW" in capsys.readouterr().out
+
+
+def test_fit_errors_exit_2(tmp_path, capsys):
+    assert main(["fit", str(tmp_path / "missing.npz"), "--model", "WN+RW"]) == 2
+    path = _npz(tmp_path)
+    assert main(["fit", str(path), "--model", "WN+RW", "--axis", "gyro_w"]) == 2
+    assert main(["fit", str(path), "--model", "RW", "--axis", "gyro_x"]) == 2
+    err = capsys.readouterr().err
+    assert "no such file" in err and "unknown axis" in err and "WN" in err
