@@ -17,16 +17,19 @@ One axis at a time (:func:`run_closed_loop`):
 Effects outside the linear-Gaussian state space enter as deterministic regressors in the measurement equation
 (``exog`` of ``fit_model``, coefficients estimated with the noise model): ``SIN`` (a sine and a cosine at the
 detected frequency), ``TEMP`` (temperature minus its mean), ``STEP`` (a unit step at the detected sample).
-``OUTLIERS`` are data cleaning: the flagged samples become missing (NaN), which is equivalent to one
-additive-outlier dummy per sample. To keep log-likelihoods and BICs comparable across steps, every step's
-``loglik`` counts each flagged sample as exactly fitted by its dummy (its contribution −½ ln(2πS), S the
-steady-state innovation variance) and its BIC counts one parameter per flagged sample over the full record.
+``OUTLIERS`` are data cleaning with one additive-outlier dummy per flagged sample: with
+``outliers="impute"`` (default) each flagged sample is replaced by the previous fit's one-step prediction
+ŷ_t = y_t − ν_t, so that its innovation is (nearly) zero and the filter skips its update, which is what a
+dummy whose coefficient absorbs the spike does; the sample then contributes −½ ln(2πS_t) to the likelihood,
+as with the dummy. With ``outliers="missing"`` the flagged samples become NaN (the exact missing-sample
+treatment, but the estimator's slower engine); each then counts −½ ln(2πS) (S the steady-state innovation
+variance) in the reported log-likelihood, so that log-likelihoods stay comparable across steps. Either way the
+BIC counts one parameter per flagged sample.
 ``GM``, ``RW``, ``RR``, ``QN`` are added to the state-space structure.
 """
 
 from __future__ import annotations
 
-import inspect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -35,12 +38,12 @@ from typing import Any
 import numpy as np
 
 from ..core.allan import allan_variance, identify_alpha
-from ..core.components import total_allan_variance
+from ..core.components import GM, QN, RR, RW, Component, total_allan_variance
 from ..core.diagnostics import detectors as det
 from ..core.diagnostics.residuals import ResidualErrors, residual_errors, spectral_peaks
 from ..core.diagnostics.whitening import WhiteningFilter
 from ..core.errors import InputError
-from ..core.modelspec import parse_structure, structure_name
+from ..core.modelspec import CANONICAL_ORDER, parse_structure, structure_name
 
 #: Effects added to the state-space structure / entering as regressors / as data cleaning.
 STATE_EFFECTS = ("GM", "RW", "RR", "QN")
@@ -95,7 +98,8 @@ class LoopState:
     structure: list[str]
     exog_terms: list[ExogTerm] = field(default_factory=list)
     flagged: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
-    init: dict[str, dict[str, float]] = field(default_factory=dict)
+    imputed: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    init: list[Component] | None = None
 
     def name(self) -> str:
         names = list(self.structure) + [t.effect for t in self.exog_terms]
@@ -117,6 +121,7 @@ class Diagnosis:
     av_ci: tuple[np.ndarray, np.ndarray]
     av_model: np.ndarray
     exog_values: dict[str, dict[str, float]]
+    innovation_variance: float
 
 
 @dataclass
@@ -171,13 +176,25 @@ def _default_fitter() -> Fitter:
     return fit_model
 
 
-def _call_fitter(fitter: Fitter, y: np.ndarray, dt: float, state: LoopState, exog: np.ndarray | None) -> Any:
+def _canonical(components: list[Component]) -> list[Component]:
+    order = {name: i for i, name in enumerate(CANONICAL_ORDER)}
+    return sorted(components, key=lambda c: order.get(c.name, len(order)))
+
+
+def _call_fitter(fitter: Fitter, y: np.ndarray, dt: float, state: LoopState, *, exog: np.ndarray | None,
+                 exog_names: list[str]) -> Any:
     kwargs: dict[str, Any] = {}
     if exog is not None:
         kwargs["exog"] = exog
-    if state.init and "init" in inspect.signature(fitter).parameters:
+        kwargs["exog_names"] = exog_names
+    if state.init is not None:
         kwargs["init"] = state.init
     return fitter(y, dt, structure_name(state.structure), **kwargs)
+
+
+def _coef(fit: Any, names: list[str]) -> np.ndarray:
+    """The fitted coefficients of the loop's regressors, in ``names`` order."""
+    return np.array([float(fit.exog_coef[name]["value"]) for name in names])
 
 
 def _fill_missing(y: np.ndarray) -> np.ndarray:
@@ -192,35 +209,38 @@ def _fill_missing(y: np.ndarray) -> np.ndarray:
 
 
 def _n_params(fit: Any) -> float:
-    return (float(fit.bic) + 2.0 * float(fit.loglik)) / math.log(float(fit.n))
+    """Free parameters of a fit (``n_params``, else recovered from its BIC = k·ln n − 2ℓ)."""
+    k = getattr(fit, "n_params", 0)
+    return float(k) if k else (float(fit.bic) + 2.0 * float(fit.loglik)) / math.log(float(fit.n))
 
 
 class _Loop:
     def __init__(self, y: np.ndarray, dt: float, temperature: np.ndarray | None, fitter: Fitter, *,
-                 alpha: float, lags: int) -> None:
-        self.y, self.dt, self.temperature = y, dt, temperature
+                 alpha: float, lags: int, outliers: str) -> None:
+        self.y, self.dt, self.temperature, self.outliers = y, dt, temperature, outliers
         self.fitter, self.alpha, self.lags = fitter, alpha, lags
         self.n_observed = int(np.isfinite(y).sum())
         self.n = y.size
 
-    def exog(self, state: LoopState) -> tuple[np.ndarray | None, list[slice]]:
-        cols, slices, start = [], [], 0
-        for term in state.exog_terms:
+    def exog(self, state: LoopState) -> tuple[np.ndarray | None, list[str], list[slice]]:
+        cols, names, slices, start = [], [], [], 0
+        for i, term in enumerate(state.exog_terms):
             c = term.columns(self.n, self.dt, self.temperature)
             cols.append(c)
+            names += [f"{term.effect}{i + 1}_{j}" for j in range(c.shape[1])]
             slices.append(slice(start, start + c.shape[1]))
             start += c.shape[1]
-        return (np.hstack(cols) if cols else None), slices
+        return (np.hstack(cols) if cols else None), names, slices
 
     def diagnose(self, state: LoopState) -> Diagnosis:
         y = self.y.copy()
         if state.flagged.size:
-            y[state.flagged] = np.nan
-        exog, slices = self.exog(state)
-        fit = _call_fitter(self.fitter, y, self.dt, state, exog)
-        coef = np.asarray(fit.exog_coef, dtype=float) if exog is not None else np.zeros(0)
-        exog_values = {f"{t.effect}{i}": t.describe(coef[s]) for i, (t, s) in enumerate(zip(state.exog_terms, slices,
-                                                                                        strict=True))}
+            y[state.flagged] = np.nan if self.outliers == "missing" else state.imputed
+        exog, exog_names, slices = self.exog(state)
+        fit = _call_fitter(self.fitter, y, self.dt, state, exog=exog, exog_names=exog_names)
+        coef = _coef(fit, exog_names)
+        exog_values = {f"{t.effect}{i + 1}": t.describe(coef[s])
+                       for i, (t, s) in enumerate(zip(state.exog_terms, slices, strict=True))}
         residual_data = y - (exog @ coef if exog is not None else 0.0)
         filled = _fill_missing(residual_data)
         grid = allan_variance(filled, self.dt)
@@ -235,7 +255,9 @@ class _Loop:
         e[: min(10, e.size // 100)] = np.nan  # start-up transient of the filter
         whitening = WhiteningFilter.from_components(list(fit.components), self.dt)
         k = state.flagged.size
-        loglik = float(fit.loglik) - 0.5 * k * math.log(2.0 * math.pi * whitening.innovation_variance)
+        loglik = float(fit.loglik)
+        if self.outliers == "missing":
+            loglik -= 0.5 * k * math.log(2.0 * math.pi * whitening.innovation_variance)
         bic = -2.0 * loglik + (_n_params(fit) + k) * math.log(self.n_observed)
         errors = residual_errors(e, self.dt, loglik=loglik, bic=bic, av_data=av_data, av_model=av_model,
                                  lags=self.lags)
@@ -244,7 +266,8 @@ class _Loop:
         findings = self.detect(e, whitening, state, tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model,
                                av_white=av_white)
         return Diagnosis(fit=fit, errors=errors, findings=findings, innovations=e, tau=av.tau, av_data=av_data,
-                         av_ci=av_ci, av_model=av_model, exog_values=exog_values)
+                         av_ci=av_ci, av_model=av_model, exog_values=exog_values,
+                         innovation_variance=whitening.innovation_variance)
 
     def detect(self, e: np.ndarray, whitening: WhiteningFilter, state: LoopState, *, tau: np.ndarray,
                av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray,
@@ -284,11 +307,12 @@ class _Loop:
         return True
 
     def extend(self, state: LoopState, f: det.Finding, diag: Diagnosis) -> LoopState:
+        fitted = list(diag.fit.components)
         new = LoopState(structure=list(state.structure), exog_terms=list(state.exog_terms),
-                        flagged=state.flagged.copy(), init=dict(state.init))
+                        flagged=state.flagged.copy(), imputed=state.imputed.copy(), init=fitted)
         if f.effect in STATE_EFFECTS:
-            new.structure.append(f.effect)
-            new.init[f"{f.effect}{sum(s == f.effect for s in new.structure)}"] = dict(f.params)
+            new.structure = [c.name for c in _canonical([*fitted, self.component(f, diag)])]
+            new.init = _canonical([*fitted, self.component(f, diag)])
         elif f.effect == "SIN":
             new.exog_terms.append(ExogTerm("SIN", {"frequency": f.params["frequency"]}))
         elif f.effect == "TEMP":
@@ -296,8 +320,24 @@ class _Loop:
         elif f.effect == "STEP":
             new.exog_terms.append(ExogTerm("STEP", {"index": f.params["index"], "time": f.params["time"]}))
         elif f.effect == "OUTLIERS":
-            new.flagged = np.union1d(state.flagged, f.indices)
+            fresh = np.setdiff1d(f.indices, state.flagged)
+            prediction = self.y[fresh] - diag.innovations[fresh] * math.sqrt(diag.innovation_variance)
+            order = np.argsort(np.concatenate([state.flagged, fresh]))
+            new.flagged = np.concatenate([state.flagged, fresh])[order]
+            new.imputed = np.concatenate([state.imputed, prediction])[order]
         return new
+
+    def component(self, f: det.Finding, diag: Diagnosis) -> Component:
+        """The state-space component a finding asks for, with the detector's values as initial values."""
+        p = f.params
+        if f.effect == "GM":
+            sigma = p["sigma"] if "sigma" in p else p["sigma_share"] * math.sqrt(diag.innovation_variance)
+            return GM(tau=max(float(p["tau"]), 2.0 * self.dt), sigma=max(float(sigma), 1e-12))
+        if f.effect == "RW":
+            return RW(max(float(p["random_walk"]), 1e-15))
+        if f.effect == "QN":
+            return QN(max(float(p["Q"]), 1e-15))
+        return RR(float(p["slope"]))
 
     def evidence_gone(self, f: det.Finding, diag: Diagnosis) -> tuple[bool, str]:
         """Whether the signature ``f`` targeted is absent from the new fit's residuals."""
@@ -341,6 +381,7 @@ def run_closed_loop(
     max_candidates: int = 3,
     alpha: float = det.ALPHA,
     lags: int = 20,
+    outliers: str = "impute",
     axis: str | None = None,
 ) -> LoopResult:
     """Run the closed loop on one axis (see the module docstring for the rules).
@@ -366,6 +407,8 @@ def run_closed_loop(
         Level of every detector.
     lags : int
         Ljung–Box lags.
+    outliers : {"impute", "missing"}
+        How flagged outliers are removed (see the module docstring).
     axis : str, optional
         Axis name, for the report.
 
@@ -392,7 +435,9 @@ def run_closed_loop(
             temperature = None
     if max_steps < 0 or max_candidates < 1:
         raise InputError("closed loop: max_steps must be >= 0 and max_candidates >= 1")
-    loop = _Loop(y, float(dt), temperature, fitter or _default_fitter(), alpha=alpha, lags=lags)
+    if outliers not in ("impute", "missing"):
+        raise InputError(f"closed loop: outliers must be 'impute' or 'missing', got {outliers!r}")
+    loop = _Loop(y, float(dt), temperature, fitter or _default_fitter(), alpha=alpha, lags=lags, outliers=outliers)
     state = LoopState(structure=parse_structure(start_structure))
     diag = loop.diagnose(state)
     steps = [LoopStep(0, state.name(), None, None, None, state, diag, [])]
