@@ -298,8 +298,10 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
     position and the log-log slope of the excess AV_data − AV_model:
 
     * band at the shortest τ with slope < −1.5 (ADEV −1) → QN, Q from 3Q²/τ²;
-    * band reaching the longest τ → RR if slope > 1.5 (ADEV +1, AV ω²τ²/2), else RW (AV K²τ/3);
-    * otherwise (an interior bump) → GM, (τ_c, σ) fitted to the excess (the GM AV peaks near τ ≈ 1.9 τ_c).
+    * band whose excess keeps growing (slope > +0.5, or reaching the longest τ) without a peak inside →
+      RR if slope > 1.5 (ADEV +1, AV ω²τ²/2), else RW (AV K²τ/3);
+    * otherwise (a bump: the excess peaks inside the band) → GM, (τ_c, σ) fitted to the excess (the GM AV
+      peaks near τ ≈ 1.9 τ_c). A GM whose τ_c exceeds the record looks like a RW, as it does to any method.
 
     A band of significant *deficit* (z_τ < −z*) reaching the longest τ means the model's long-τ growth
     (a random walk or ramp that absorbed a bounded process) is not in the data: the data's AV beyond the white
@@ -338,6 +340,8 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
         zmax = float(z[run].max())
         slope = float(np.polyfit(np.log(t), np.log(ex), 1)[0]) if run.size >= 2 else math.nan
         band = f"τ = {t[0]:.3g}–{t[-1]:.3g} s" if run.size > 1 else f"τ = {t[0]:.3g} s"
+        # A bump: the excess peaks inside the band and has halved by its end.
+        peaked = run.size >= 3 and int(np.argmax(ex)) < run.size - 1 and ex[-1] < 0.5 * ex.max()
         common = {"detector": "av_band", "statistic": zmax, "threshold": z_star, "level": alpha,
                   "log10_p": _bonferroni_log10_p(_norm_log10_sf(zmax), m)}
         if run[0] == 0 and (run.size == 1 or slope < -1.5) and run[-1] < m - 1:
@@ -345,7 +349,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
             findings.append(Finding(effect="QN", params={"Q": q}, evidence=(
                 f"AV above the model at short τ ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}), "
                 f"excess slope {slope:.2f} (QN: −2)"), **common))
-        elif run[-1] == m - 1 and run.size < m:
+        elif not peaked and (run[-1] == m - 1 or slope > 0.5):
             if run.size >= 2 and slope > 1.5:
                 findings.append(Finding(effect="RR", params={"slope": math.sqrt(float(np.median(2 * ex / t**2)))},
                                         evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "

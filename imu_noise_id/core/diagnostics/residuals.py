@@ -107,8 +107,9 @@ class SpectralPeak:
     ratio : float
         Peak power / local median power (the "residual spectral peak ratio").
     statistic : float
-        ratio·ln 2: the peak in units of the floor's mean, Exp(1)-distributed at each bin under white residuals
-        (a periodogram ordinate of white noise is σ²·Exp(1), whose median is σ² ln 2).
+        s = ratio·ln 2, the peak in units of the floor's mean (a periodogram ordinate of white noise is
+        σ²·Exp(1), whose median is σ² ln 2), corrected for the uncertainty of the median floor so that it is
+        Exp(1)-distributed at each bin under white residuals.
     log10_p : float
         log10 of the Bonferroni-corrected p-value of the largest line: 1 − (1 − e^{−statistic})^M over the M
         searched bins (Fisher's g-test form for the maximum of M independent exponential ordinates).
@@ -188,7 +189,12 @@ def spectral_peaks(e: np.ndarray, dt: float, *, f_min: float | None = None,
     ratio = np.where(search, power / np.maximum(floor, np.finfo(float).tiny), 0.0)
     k = int(np.argmax(ratio))
     m = int(search.sum())
-    stat = float(ratio[k] * math.log(2.0))
+    raw = float(ratio[k] * math.log(2.0))
+    # The floor is a median of K = 2·half_width + 1 exponential ordinates, itself uncertain: its relative sd is
+    # ≈ 1/(ln 2·√K), so P(I/floor·ln2 > s) ≈ e^{−s + s²v/2}, v = 1/(ln²2·K) (lognormal floor error). The
+    # statistic is corrected to s − s²v/2 (linear beyond s = 1/v) so that it is again Exp(1) per bin.
+    v = 1.0 / (math.log(2.0) ** 2 * (2 * half_width + 1))
+    stat = raw - raw * raw * v / 2.0 if raw <= 1.0 / v else raw - 1.0 / (2.0 * v)
     log10_p = max_exponential_log10_p(stat, m)
     freq = float(freqs[k])
     if 0 < k < freqs.size - 1 and power[k - 1] > 0 and power[k + 1] > 0:
