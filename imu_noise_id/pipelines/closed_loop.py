@@ -24,8 +24,18 @@ dummy whose coefficient absorbs the spike does; the sample then contributes −�
 as with the dummy. With ``outliers="missing"`` the flagged samples become NaN (the exact missing-sample
 treatment, but the estimator's slower engine); each then counts −½ ln(2πS) (S the steady-state innovation
 variance) in the reported log-likelihood, so that log-likelihoods stay comparable across steps. Either way the
-BIC counts one parameter per flagged sample.
+BIC counts one parameter per flagged sample, and one more per searched location (a SIN's frequency, a STEP's
+sample), since the detector picked the best of many.
+
+A refit starts from the previous fit's components plus the new one at the detector's values; when the
+likelihood nevertheless drops (a local optimum: nested models cannot lose likelihood) it is refitted from the
+estimator's own starting values.
 ``GM``, ``RW``, ``RR``, ``QN`` are added to the state-space structure.
+
+The Allan variances (data with the fitted regressors removed, against the model's theoretical AV) use
+τ = m·dt up to a tenth of the record, where each estimate has roughly ten or more degrees of freedom; their
+95 % intervals take the noise type at each τ from the *model's* AV (the null hypothesis), not from the noisy
+data.
 """
 
 from __future__ import annotations
@@ -37,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.allan import allan_variance, identify_alpha
+from ..core.allan import allan_variance, choose_m, identify_alpha
 from ..core.components import GM, QN, RR, RW, Component, total_allan_variance
 from ..core.diagnostics import detectors as det
 from ..core.diagnostics.residuals import ResidualErrors, residual_errors, spectral_peaks
@@ -243,12 +253,13 @@ class _Loop:
                        for i, (t, s) in enumerate(zip(state.exog_terms, slices, strict=True))}
         residual_data = y - (exog @ coef if exog is not None else 0.0)
         filled = _fill_missing(residual_data)
-        grid = allan_variance(filled, self.dt)
-        av_model = np.asarray(fit.theoretical_allan_variance(grid.tau), dtype=float)
+        # τ up to a tenth of the record, where each AV estimate still has ≳ 10 degrees of freedom.
+        m = choose_m(self.n, "allan", m_max=max(2, self.n // 10))
+        av_model = np.asarray(fit.theoretical_allan_variance(m * self.dt), dtype=float)
         # The AV's confidence intervals under the null "the model holds": the noise type at each τ (which
         # sets the EDF) is read from the model's smooth AV, not from the noisy data.
-        alpha_model = identify_alpha(grid.tau, av_model[:, None], "allan")
-        av = allan_variance(filled, self.dt, m=grid.m, alpha=alpha_model)
+        alpha_model = identify_alpha(m * self.dt, av_model[:, None], "allan")
+        av = allan_variance(filled, self.dt, m=m, alpha=alpha_model)
         av_data = av.variance[:, 0]
         av_ci = (av.ci_low[:, 0], av.ci_high[:, 0])
         e = np.asarray(fit.standardized_innovations(), dtype=float).copy()
@@ -258,7 +269,9 @@ class _Loop:
         loglik = float(fit.loglik)
         if self.outliers == "missing":
             loglik -= 0.5 * k * math.log(2.0 * math.pi * whitening.innovation_variance)
-        bic = -2.0 * loglik + (_n_params(fit) + k) * math.log(self.n_observed)
+        # Searched locations are parameters too: a line's frequency, a step's sample (max over M positions).
+        searched = sum(t.effect in ("SIN", "STEP") for t in state.exog_terms)
+        bic = -2.0 * loglik + (_n_params(fit) + k + searched) * math.log(self.n_observed)
         errors = residual_errors(e, self.dt, loglik=loglik, bic=bic, av_data=av_data, av_model=av_model,
                                  lags=self.lags)
         white = [c for c in fit.components if c.name in ("WN", "QN")]
@@ -311,6 +324,9 @@ class _Loop:
         new = LoopState(structure=list(state.structure), exog_terms=list(state.exog_terms),
                         flagged=state.flagged.copy(), imputed=state.imputed.copy(), init=fitted)
         if f.effect in STATE_EFFECTS:
+            if f.params.get("deficit"):
+                # The model's long-τ growth absorbed a bounded process: restart that growth small.
+                fitted = [type(c)(c.params()["random_walk"] * 1e-2) if c.name == "RW" else c for c in fitted]
             new.structure = [c.name for c in _canonical([*fitted, self.component(f, diag)])]
             new.init = _canonical([*fitted, self.component(f, diag)])
         elif f.effect == "SIN":
@@ -456,6 +472,11 @@ def run_closed_loop(
             new_state = loop.extend(state, f, diag)
             try:
                 new_diag = loop.diagnose(new_state)
+                if new_diag.errors.loglik < diag.errors.loglik and new_state.init is not None:
+                    # Nested models cannot lose likelihood: a local optimum. Refit from the estimator's own starts.
+                    new_state.init = None
+                    retry = loop.diagnose(new_state)
+                    new_diag = retry if retry.errors.loglik > new_diag.errors.loglik else new_diag
             except (InputError, ValueError, np.linalg.LinAlgError) as exc:
                 trials.append(Trial(f, new_state.name(), None, False, f"refit failed: {exc}"))
                 continue

@@ -327,7 +327,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
             zmin = float(-z[deficit].min())
             findings.append(Finding(
                 effect="GM", detector="av_band", statistic=zmin, threshold=z_star, level=alpha,
-                log10_p=_bonferroni_log10_p(_norm_log10_sf(zmin), m), params={"tau": tc, "sigma": sg},
+                log10_p=_bonferroni_log10_p(_norm_log10_sf(zmin), m), params={"tau": tc, "sigma": sg, "deficit": 1.0},
                 evidence=(f"model AV above the data at long τ (τ ≥ {tau[deficit[0]]:.3g} s, max |z| = {zmin:.1f}, "
                           f"threshold {z_star:.2f}): the data's AV is bounded → GM with τ_c ≈ {tc:.3g} s, "
                           f"σ ≈ {sg:.3g}")))
