@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from ..core.allan import allan_variance, choose_m, identify_alpha
+from ..core.axes import AXES, ImuSeries, ScalarSeries
 from ..core.components import GM, QN, RR, RW, Component, total_allan_variance
 from ..core.diagnostics import detectors as det
 from ..core.diagnostics.residuals import ResidualErrors, residual_errors, spectral_peaks
@@ -518,3 +519,60 @@ def align_temperature(t_samples: np.ndarray, t_temperature: np.ndarray, temperat
     if np.any(np.diff(t_temperature) <= 0):
         raise InputError("temperature topic: stamps are not strictly increasing")
     return np.interp(np.asarray(t_samples, dtype=float), t_temperature, temperature)
+
+
+def block_average(y: np.ndarray, factor: int) -> np.ndarray:
+    """Means of consecutive blocks of ``factor`` samples (NaN-aware; a block of only NaN stays NaN).
+
+    Averaging keeps every effect slower than the new Nyquist frequency 1/(2·factor·dt) and divides the white
+    noise variance by ``factor`` (its density is unchanged); the closed loop on long records runs on it.
+    """
+    if factor < 1:
+        raise InputError(f"decimation factor must be >= 1, got {factor}")
+    y = np.asarray(y, dtype=float)
+    if factor == 1:
+        return y
+    n = (y.size // factor) * factor
+    blocks = y[:n].reshape(-1, factor)
+    counts = np.isfinite(blocks).sum(axis=1)
+    sums = np.nansum(blocks, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
+
+
+def run_closed_loop_imu(
+    imu: ImuSeries,
+    start: str | dict[str, str],
+    *,
+    temperature: ScalarSeries | None = None,
+    axes: tuple[str, ...] = AXES,
+    decimate: int = 1,
+    **loop_kwargs: Any,
+) -> dict[str, LoopResult]:
+    """The closed loop on several axes of an IMU recording (what ``analyze`` and ``loop`` call).
+
+    Parameters
+    ----------
+    imu : ImuSeries
+        The recording (its median period is the sampling period).
+    start : str or dict
+        Starting structure for every axis, or per axis (e.g. the model ``select_model`` chose).
+    temperature : ScalarSeries, optional
+        The bag's temperature topic; interpolated onto the IMU stamps (enables ``TEMP``).
+    axes : tuple of str
+        Axes to run.
+    decimate : int
+        Block-average this many samples first (long records on small machines); the report states it.
+    loop_kwargs
+        Passed to :func:`run_closed_loop`.
+    """
+    dt = imu.dt * decimate
+    temp = None
+    if temperature is not None:
+        temp = block_average(align_temperature(imu.t, temperature.t, temperature.value), decimate)
+    results = {}
+    for axis in axes:
+        structure = start[axis] if isinstance(start, dict) else start
+        y = block_average(imu.axis(axis), decimate)
+        results[axis] = run_closed_loop(y, dt, structure, temperature=temp, axis=axis, **loop_kwargs)
+    return results
