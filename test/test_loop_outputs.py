@@ -23,7 +23,7 @@ def sine_result():
     n = 8000
     y = simulate_sum([WN(1e-3), RW(2e-5)], n, DT, np.random.default_rng(3))
     y += 4e-3 * np.sin(2 * math.pi * 1.5 * np.arange(n) * DT)
-    return run_closed_loop(y, DT, "WN+RW", axis="gyro_z")
+    return run_closed_loop(y, DT, "WN+RW", axis="gyro_z", max_candidates=1)
 
 
 def test_model_yaml_gets_loop_steps(tmp_path, sine_result):
