@@ -27,6 +27,8 @@ import numpy as np
 from scipy import linalg, signal
 
 from ..components import Component
+from ..errors import InputError
+from ..statespace import steady_prediction_covariance
 
 
 def _system(components: list[Component], dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -42,24 +44,28 @@ def _system(components: list[Component], dt: float) -> tuple[np.ndarray, np.ndar
 
 
 def _steady_state_p(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
-    """Predicted-state covariance P solving the discrete algebraic Riccati equation (scaled by S ≈ R)."""
-    scale = r if r > 0 else float(np.trace(q)) or 1.0
-    qs, rs = q / scale, np.array([[max(r / scale, 1e-12)]])
+    """Predicted-state covariance P of the discrete algebraic Riccati equation.
+
+    The doubling algorithm of :func:`imu_noise_id.core.statespace.steady_prediction_covariance` first (robust
+    for the nearly-unit-root random walks of IMU models), scipy's generalised-eigenvalue DARE solver (scaled
+    by R) as the fallback.
+
+    Raises
+    ------
+    ValueError
+        If neither converges (a non-detectable or degenerate model).
+    """
     try:
-        p = linalg.solve_discrete_are(phi.T, h[:, None], qs, rs)
-        if np.all(np.isfinite(p)):
-            return p * scale
-    except (linalg.LinAlgError, ValueError):
+        return steady_prediction_covariance(phi, q, h, r)
+    except (InputError, np.linalg.LinAlgError):
         pass
-    # Fallback: plain Riccati iteration (converges for detectable / stabilisable blocks).
-    p = qs.copy() + np.eye(phi.shape[0])
-    for _ in range(200_000):
-        s = float(h @ p @ h) + rs[0, 0]
-        k = phi @ p @ h / s
-        p_new = phi @ p @ phi.T + qs - np.outer(k, k) * s
-        if np.max(np.abs(p_new - p)) <= 1e-13 * max(1.0, np.max(np.abs(p))):
-            return p_new * scale
-        p = p_new
+    scale = r if r > 0 else float(np.trace(q)) or 1.0
+    try:
+        p = linalg.solve_discrete_are(phi.T, h[:, None], q / scale, np.array([[max(r / scale, 1e-12)]]))
+    except (linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"no steady-state Kalman filter for this model: {exc}") from None
+    if not np.all(np.isfinite(p)):
+        raise ValueError("no steady-state Kalman filter for this model (non-finite Riccati solution)")
     return p * scale
 
 
