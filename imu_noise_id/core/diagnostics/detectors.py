@@ -94,12 +94,12 @@ def _norm_log10_sf(z: float) -> float:
 
 
 # --------------------------------------------------------------------------------------------- outliers
-def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA) -> Finding:
+def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA, only: np.ndarray | None = None) -> Finding:
     """Isolated spikes / heavy tails: robust z_t = (e_t − median) / (1.4826·MAD) beyond the Bonferroni bound.
 
     Under i.i.d. N(0, 1) innovations, P(max_t |z_t| > z*) ≤ α with z* = Φ⁻¹(1 − α/(2n)). Every sample beyond
-    z* is flagged (``indices``); the loop removes them as missing samples, which equals giving each its own
-    additive-outlier dummy (the likelihood of the remaining data is the same).
+    z* is flagged (``indices``); the loop removes them (one additive-outlier dummy each). ``only`` restricts
+    the statistic to given samples (to check whether flagged spikes are gone).
     """
     e = np.asarray(e, dtype=float)
     ok = np.isfinite(e)
@@ -111,6 +111,10 @@ def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA) -> Finding:
     if scale <= 0:
         raise ValueError("detect_outliers: innovations have zero spread")
     z = np.where(ok, (e - med) / scale, 0.0)
+    if only is not None:
+        keep = np.zeros(z.size, bool)
+        keep[np.asarray(only, dtype=int)] = True
+        z = np.where(keep, z, 0.0)
     z_star = float(stats.norm.isf(alpha / (2 * n)))
     idx = np.flatnonzero(np.abs(z) > z_star)
     zmax = float(np.max(np.abs(z)))
@@ -325,9 +329,11 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
         if use.sum() >= 3:
             tc, sg = _fit_gm_to_excess(tau[use], hump[use])
             zmin = float(-z[deficit].min())
+            params = {"tau": tc, "sigma": sg, "deficit": 1.0, "band_lo": float(tau[deficit[0]]),
+                      "band_hi": float(tau[-1])}
             findings.append(Finding(
                 effect="GM", detector="av_band", statistic=zmin, threshold=z_star, level=alpha,
-                log10_p=_bonferroni_log10_p(_norm_log10_sf(zmin), m), params={"tau": tc, "sigma": sg, "deficit": 1.0},
+                log10_p=_bonferroni_log10_p(_norm_log10_sf(zmin), m), params=params,
                 evidence=(f"model AV above the data at long τ (τ ≥ {tau[deficit[0]]:.3g} s, max |z| = {zmin:.1f}, "
                           f"threshold {z_star:.2f}): the data's AV is bounded → GM with τ_c ≈ {tc:.3g} s, "
                           f"σ ≈ {sg:.3g}")))
@@ -342,25 +348,28 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
         band = f"τ = {t[0]:.3g}–{t[-1]:.3g} s" if run.size > 1 else f"τ = {t[0]:.3g} s"
         # A bump: the excess peaks inside the band and has halved by its end.
         peaked = run.size >= 3 and int(np.argmax(ex)) < run.size - 1 and ex[-1] < 0.5 * ex.max()
+        band_params = {"band_lo": float(t[0]), "band_hi": float(t[-1])}
         common = {"detector": "av_band", "statistic": zmax, "threshold": z_star, "level": alpha,
                   "log10_p": _bonferroni_log10_p(_norm_log10_sf(zmax), m)}
         if run[0] == 0 and (run.size == 1 or slope < -1.5) and run[-1] < m - 1:
             q = math.sqrt(float(np.median(ex * t**2 / 3.0)))
-            findings.append(Finding(effect="QN", params={"Q": q}, evidence=(
+            findings.append(Finding(effect="QN", params={"Q": q, **band_params}, evidence=(
                 f"AV above the model at short τ ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}), "
                 f"excess slope {slope:.2f} (QN: −2)"), **common))
         elif not peaked and (run[-1] == m - 1 or slope > 0.5):
             if run.size >= 2 and slope > 1.5:
-                findings.append(Finding(effect="RR", params={"slope": math.sqrt(float(np.median(2 * ex / t**2)))},
+                findings.append(Finding(effect="RR", params={"slope": math.sqrt(float(np.median(2 * ex / t**2))),
+                                                                **band_params},
                                         evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "
                                                   f"excess slope {slope:.2f} (RR: +2)"), **common))
             else:
-                findings.append(Finding(effect="RW", params={"random_walk": math.sqrt(float(np.median(3 * ex / t)))},
+                findings.append(Finding(effect="RW", params={"random_walk": math.sqrt(float(np.median(3 * ex / t))),
+                                                                **band_params},
                                         evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "
                                                   f"excess slope {slope:.2f} (RW: +1)"), **common))
         else:
             tc, sg = _fit_gm_to_excess(t, ex) if run.size >= 2 else (float(t[0]) / 1.89, math.sqrt(ex[0] / 0.87))
-            findings.append(Finding(effect="GM", params={"tau": tc, "sigma": sg}, evidence=(
+            findings.append(Finding(effect="GM", params={"tau": tc, "sigma": sg, **band_params}, evidence=(
                 f"AV bump above the model ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}) → GM with "
                 f"τ_c ≈ {tc:.3g} s, σ ≈ {sg:.3g}"), **common))
     return findings

@@ -155,6 +155,24 @@ def periodogram(e: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     return k / (n * dt), spec[k]
 
 
+def _corrected(raw: float, half_width: int) -> float:
+    # The floor is a median of K = 2·half_width + 1 exponential ordinates, itself uncertain: its relative sd is
+    # ≈ 1/(ln 2·√K), so P(I/floor·ln2 > s) ≈ e^{−s + s²v/2}, v = 1/(ln²2·K) (lognormal floor error). The
+    # statistic is corrected to s − s²v/2 (linear beyond s = 1/v) so that it is again Exp(1) per bin.
+    v = 1.0 / (math.log(2.0) ** 2 * (2 * half_width + 1))
+    return raw - raw * raw * v / 2.0 if raw <= 1.0 / v else raw - 1.0 / (2.0 * v)
+
+
+def line_statistic(e: np.ndarray, dt: float, frequency: float, half_width: int = FLOOR_HALF_WIDTH) -> float:
+    """The (corrected, Exp(1) under white residuals) line statistic of :func:`spectral_peaks` at the bin nearest
+    ``frequency`` [Hz]: whether a *given* line is still in the residuals."""
+    freqs, power = periodogram(e, dt)
+    k = int(np.argmin(np.abs(freqs - frequency)))
+    lo, hi = max(0, k - half_width), min(freqs.size, k + half_width + 1)
+    floor = float(np.median(power[lo:hi]))
+    return _corrected(float(power[k] / floor * math.log(2.0)), half_width)
+
+
 def spectral_peaks(e: np.ndarray, dt: float, *, f_min: float | None = None,
                    half_width: int = FLOOR_HALF_WIDTH) -> SpectralPeak:
     """The largest line of the periodogram of ``e`` against its running median floor.
@@ -189,12 +207,7 @@ def spectral_peaks(e: np.ndarray, dt: float, *, f_min: float | None = None,
     ratio = np.where(search, power / np.maximum(floor, np.finfo(float).tiny), 0.0)
     k = int(np.argmax(ratio))
     m = int(search.sum())
-    raw = float(ratio[k] * math.log(2.0))
-    # The floor is a median of K = 2·half_width + 1 exponential ordinates, itself uncertain: its relative sd is
-    # ≈ 1/(ln 2·√K), so P(I/floor·ln2 > s) ≈ e^{−s + s²v/2}, v = 1/(ln²2·K) (lognormal floor error). The
-    # statistic is corrected to s − s²v/2 (linear beyond s = 1/v) so that it is again Exp(1) per bin.
-    v = 1.0 / (math.log(2.0) ** 2 * (2 * half_width + 1))
-    stat = raw - raw * raw * v / 2.0 if raw <= 1.0 / v else raw - 1.0 / (2.0 * v)
+    stat = _corrected(float(ratio[k] * math.log(2.0)), half_width)
     log10_p = max_exponential_log10_p(stat, m)
     freq = float(freqs[k])
     if 0 < k < freqs.size - 1 and power[k - 1] > 0 and power[k + 1] > 0:
