@@ -298,20 +298,28 @@ class _Loop:
         return found
 
     def candidates(self, diag: Diagnosis, state: LoopState) -> list[det.Finding]:
-        """Significant findings that can be added, one per effect (most significant), ranked by p-value."""
+        """Significant findings that can be added, ranked by p-value: the most significant one per effect, except
+        that Gauss–Markov candidates from distinct τ bands (an AV bump and a bounded long-τ AV) are kept apart;
+        Ljung–Box evidence merges into the strongest GM band (which locates τ) or stands alone without one."""
         best: dict[str, det.Finding] = {}
+        gms: list[det.Finding] = []
+        lb: det.Finding | None = None
         for f in diag.findings:
             if not f.significant or not self.addable(f, state):
                 continue
-            current = best.get(f.effect)
-            if f.effect == "GM" and current is not None and current.detector != f.detector:
-                # Prefer the AV band (it locates τ) and keep the stronger p-value for the ranking.
-                av_f, other = (f, current) if f.detector == "av_band" else (current, f)
-                best["GM"] = det.Finding(**{**av_f.__dict__, "log10_p": min(av_f.log10_p, other.log10_p),
-                                            "evidence": av_f.evidence + "; " + other.evidence})
-            elif current is None or f.log10_p < current.log10_p:
+            if f.effect == "GM" and f.detector == "ljung_box":
+                lb = f
+            elif f.effect == "GM":
+                gms.append(f)
+            elif f.effect not in best or f.log10_p < best[f.effect].log10_p:
                 best[f.effect] = f
-        return sorted(best.values(), key=lambda f: f.log10_p)
+        gms.sort(key=lambda f: f.log10_p)
+        if gms and lb is not None:
+            gms[0] = det.Finding(**{**gms[0].__dict__, "log10_p": min(gms[0].log10_p, lb.log10_p),
+                                    "evidence": gms[0].evidence + "; " + lb.evidence})
+        elif lb is not None:
+            gms = [lb]
+        return sorted([*best.values(), *gms[:2]], key=lambda f: f.log10_p)
 
     def addable(self, f: det.Finding, state: LoopState) -> bool:
         if f.effect in ("RW", "RR", "QN"):
