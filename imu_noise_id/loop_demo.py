@@ -37,18 +37,14 @@ def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, r
 def run_loop_demo(out: str | Path, *, seed: int = 7) -> dict:
     """Simulate, write and read the bag, run the loop on :data:`DEMO_AXES`, write model.yaml and report.html."""
     from .bag.reader import read_imu
-    from .cli.loop import summary
-    from .pipelines.closed_loop import run_closed_loop_imu
-    from .report.html import write_loop_report
-    from .report.loop_yaml import add_loop_to_model_yaml
+    from .cli.loop import loop_stage, summary
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     bag = simulate_demo_bag(out / "loop_demo_bag", seed=seed)
     imu = read_imu(bag)
-    results = run_closed_loop_imu(imu, "WN+RW", axes=DEMO_AXES)
-    add_loop_to_model_yaml(out / "model.yaml", results)
-    write_loop_report(out / "report.html", results, title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz (accel_x)")
+    results, _, _ = loop_stage(imu, None, out, start="WN+RW", axes=DEMO_AXES,
+                               title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz (accel_x)")
     print(summary(results))
     print(f"demo bag, model.yaml and report.html in {out}/")
     return results

@@ -7,6 +7,8 @@ import argparse
 from pathlib import Path
 
 DEFAULT_OUT = "imu_noise_id_results"
+#: Automatic decimation keeps at most this many samples per axis (a few seconds to a minute per fit).
+MAX_SAMPLES = 200_000
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -30,8 +32,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--start", default="WN+RW", help="starting model structure (default: WN+RW)")
     p.add_argument("--axes", default="gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z",
                    help="comma-separated axes (default: all six)")
-    p.add_argument("--decimate", type=int, default=1,
-                   help="block-average N samples first, for long recordings (default: 1 = none)")
+    p.add_argument("--decimate", type=int, default=0,
+                   help="block-average N samples first (default 0 = automatic: the smallest N leaving at most "
+                        f"{MAX_SAMPLES} samples per axis; 1 = none)")
     p.add_argument("--max-steps", type=int, default=6, help="most effects added per axis (default: 6)")
     p.add_argument("--alpha", type=float, default=0.01, help="level of every detector (default: 0.01)")
     p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
@@ -51,30 +54,50 @@ def summary(results: dict) -> str:
     return "\n".join(lines)
 
 
+def loop_stage(imu, temperature, out_dir: Path, *, start: str | dict[str, str] = "WN+RW",
+               axes: tuple[str, ...] | None = None, decimate: int = 0, max_steps: int = 6, alpha: float = 0.01,
+               title: str = "closed loop") -> tuple[dict, dict[str, Path], int]:
+    """Run the loop on an IMU recording and write ``out_dir/model.yaml`` (``loop:``) and ``out_dir/report.html``.
+
+    This is the stage ``analyze`` calls (unless ``--no-loop``): ``start`` is the starting structure for every
+    axis or per axis (e.g. the models the EM stage selected); ``decimate = 0`` picks the smallest block-average
+    factor leaving at most :data:`MAX_SAMPLES` samples per axis. Returns (results by axis, written paths,
+    decimation factor used).
+    """
+    from ..core.axes import AXES
+    from ..pipelines.closed_loop import run_closed_loop_imu
+    from ..report.html import write_loop_report
+    from ..report.loop_yaml import add_loop_to_model_yaml
+
+    factor = decimate if decimate >= 1 else max(1, -(-len(imu) // MAX_SAMPLES))
+    results = run_closed_loop_imu(imu, start, temperature=temperature, axes=axes or AXES, decimate=factor,
+                                  max_steps=max_steps, alpha=alpha)
+    note = f" (block-averaged by {factor})" if factor > 1 else ""
+    paths = {"model": add_loop_to_model_yaml(out_dir / "model.yaml", results),
+             "report": write_loop_report(out_dir / "report.html", results, title=title + note)}
+    return results, paths, factor
+
+
 def run(args: argparse.Namespace) -> int:
     """Read the bag, run the loop, write model.yaml and report.html."""
     from ..bag.reader import read_imu, read_temperature
     from ..core.axes import AXES
     from ..core.errors import InputError
     from ..core.modelspec import parse_structure
-    from ..pipelines.closed_loop import run_closed_loop_imu
-    from ..report.html import write_loop_report
-    from ..report.loop_yaml import add_loop_to_model_yaml
 
     axes = tuple(a.strip() for a in args.axes.split(",") if a.strip())
     unknown = [a for a in axes if a not in AXES]
     if unknown or not axes:
         raise InputError(f"--axes: unknown axis {', '.join(unknown) or '(none)'}; use {', '.join(AXES)}")
     parse_structure(args.start)
-    if args.decimate < 1 or args.max_steps < 0 or not 0 < args.alpha < 1:
-        raise InputError("--decimate must be >= 1, --max-steps >= 0 and --alpha in (0, 1)")
+    if args.decimate < 0 or args.max_steps < 0 or not 0 < args.alpha < 1:
+        raise InputError("--decimate must be >= 0, --max-steps >= 0 and --alpha in (0, 1)")
     imu = read_imu(args.bag, topic=args.topic)
     temperature = read_temperature(args.bag, topic=args.temperature_topic)
-    results = run_closed_loop_imu(imu, args.start, temperature=temperature, axes=axes, decimate=args.decimate,
-                                  max_steps=args.max_steps, alpha=args.alpha)
-    model = add_loop_to_model_yaml(args.out / "model.yaml", results)
-    report = write_loop_report(args.out / "report.html", results, title=f"closed loop: {args.bag.name}")
+    results, paths, factor = loop_stage(imu, temperature, args.out, start=args.start, axes=axes,
+                                        decimate=args.decimate, max_steps=args.max_steps, alpha=args.alpha,
+                                        title=f"closed loop: {args.bag.name}")
     print(summary(results), flush=True)
-    note = f" (block-averaged by {args.decimate})" if args.decimate > 1 else ""
-    print(f"results{note} in {args.out}/: {model.name}, {report.name}")
+    note = f" (block-averaged by {factor})" if factor > 1 else ""
+    print(f"results{note} in {args.out}/: " + ", ".join(p.name for p in paths.values()))
     return 0
