@@ -127,16 +127,18 @@ def fit_allan(names: list[str], av: EmpiricalAllan, dt: float, n_grid: int = 4) 
     if not results:
         raise InputError("the Allan-variance fit for initial values failed; give initial values (init=…)")
     results.sort(key=lambda r: r[0])
-    return distinct(results)
+    return distinct(results, av.tau, dt)
 
 
-def distinct(results: list[tuple[float, list[Component]]], min_log_gap: float = 0.3) -> list:
-    """Drop solutions whose log-parameters are all within ``min_log_gap`` of a better one."""
+def distinct(results: list[tuple[float, list[Component]]], tau: np.ndarray, dt: float,
+             rel: float = 0.1) -> list[tuple[float, list[Component]]]:
+    """Drop solutions whose theoretical AV is within ``rel`` of a better one's at every τ (the same fit for
+    practical purposes, e.g. differing only in a negligible random walk)."""
     kept: list[tuple[float, list[Component]]] = []
-    vecs: list[np.ndarray] = []
+    curves: list[np.ndarray] = []
     for cost, comps in results:
-        v = np.log([max(x, 1e-300) for c in comps if not isinstance(c, RR) for x in c.params().values()])
-        if all(np.max(np.abs(v - u)) > min_log_gap for u in vecs):
+        curve = np.log(total_allan_variance([c for c in comps if not isinstance(c, RR)], tau, dt))
+        if all(np.max(np.abs(curve - other)) > math.log1p(rel) for other in curves):
             kept.append((cost, comps))
-            vecs.append(v)
+            curves.append(curve)
     return kept

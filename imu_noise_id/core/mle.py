@@ -109,7 +109,7 @@ def maximise(
     y: np.ndarray,
     z: np.ndarray,
     *,
-    max_iter: int = 200,
+    max_iter: int = 40,
     bounds_width: float = 30.0,
     tau_bounds: tuple[float, float] | None = None,
     grad_tol: float = 1e-2,
@@ -216,13 +216,14 @@ LR_DROP_95 = 1.9207294103470103
 
 def likelihood_interval(
     par: Parameterisation, theta: np.ndarray, k: int, model: StateSpace, y: np.ndarray,
-    *, z: np.ndarray, ll_max: float, step: float = 0.7, max_steps: int = 40,
+    *, z: np.ndarray, ll_max: float, step: float = 1.0, max_steps: int = 25, lower: bool = True,
 ) -> tuple[float, float]:
     """95 % likelihood-ratio interval of log-parameter k, the others held at their estimates (conditional).
 
     Used where the Wald interval is meaningless (a variance near 0, a flat likelihood). Each end is bracketed
     by steps of ``step`` in log space and refined by bisection; an end the likelihood never drops by
     :data:`LR_DROP_95` within ``max_steps`` is ∓inf (i.e. the parameter may be 0 or unbounded).
+    ``lower=False`` skips the lower end (−inf: the caller knows the data cannot exclude 0).
     """
 
     def drop(v: float) -> float:
@@ -233,8 +234,8 @@ def likelihood_interval(
         except (InputError, np.linalg.LinAlgError):
             return math.inf
 
-    ends = []
-    for direction in (-1.0, 1.0):
+    ends = [] if lower else [-math.inf]
+    for direction in (-1.0, 1.0) if lower else (1.0,):
         inside, outside = theta[k], None
         for i in range(1, max_steps + 1):
             v = theta[k] + direction * step * i

@@ -352,7 +352,7 @@ def fit_model(
         fits = avfit.fit_allan(fit_names, av, dt)
         if bp is not None:
             fits = sorted((whittle.whittle_fit(c, y_av, dt, bp) for _, c in fits), key=lambda r: -r[0])
-            fits = avfit.distinct([(-w, c) for w, c in fits])
+            fits = avfit.distinct([(-w, c) for w, c in fits], av.tau, dt)
         starts = [c for _, c in fits[: max(n_starts, 1)]]
     best: tuple[mle.MLEResult, int] | None = None
     lls = []
@@ -388,10 +388,12 @@ def fit_model(
             v = float(np.exp(res.theta[k]))
             s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
             se[lab] = v * s_log
-            if s_log <= WALD_MAX_SE_LOG and not _near_zero(par, res, k, y, z):
+            zero = _near_zero(par, res, k, y, z)
+            if s_log <= WALD_MAX_SE_LOG and not zero:
                 ci[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
             else:
-                lo, hi = mle.likelihood_interval(par, res.theta, k, model_ss, y, z=z, ll_max=res.loglik)
+                lo, hi = mle.likelihood_interval(par, res.theta, k, model_ss, y, z=z, ll_max=res.loglik,
+                                                 lower=not zero)
                 ci[lab] = (math.exp(lo) if math.isfinite(lo) else 0.0, math.exp(hi) if math.isfinite(hi) else math.inf)
         advice = _record_length(noise_labels, cov, comps, n_obs, dt, target=target_precision)
     exog_coef: dict[str, dict] = {}
