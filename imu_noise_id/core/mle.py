@@ -26,6 +26,7 @@ from scipy.optimize import minimize
 from . import em, kalman
 from .components import RR, Component
 from .errors import InputError
+from .kalman.common import check_data
 from .statespace import StateSpace, with_components
 
 
@@ -134,6 +135,7 @@ def maximise(
                 lo[k], hi[k] = math.log(tau_bounds[0]), math.log(tau_bounds[1])
                 theta0[k] = min(max(theta0[k], lo[k]), hi[k])
     state = {"n": 0, "best": (-np.inf, None, None)}
+    y, z = check_data(y, z, base.n_regressors)
     data = em.DataSums.of(y, z)
     scale = max(float(np.sum(np.isfinite(y))), 1.0)
     if metric is not None:
@@ -174,6 +176,7 @@ def observed_information(
     """−∂²ℓ/∂ϑ∂ϑᵀ by central differences of the exact gradient (symmetrised)."""
     k = theta.size
     hess = np.empty((k, k))
+    y, z = check_data(y, z, model.n_regressors)
     data = em.DataSums.of(y, z)
     for j in range(k):
         tp, tm = theta.copy(), theta.copy()
