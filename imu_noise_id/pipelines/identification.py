@@ -265,7 +265,9 @@ def fit_model(
         Initial components (same structure); default: from the structure string's values or the AV fit.
     drift
         With RR in the structure: ``'em'`` joint estimation (default), ``'ls'`` least-squares removal first
-        (paper 000 §3.5(iii)). ``None`` forbids RR.
+        (paper 000 §3.5(iii)); the noise parameters then come from the detrended record, and the slope reported
+        is re-estimated by GLS with the fitted noise model (its OLS value is kept as ``ls_value``; the OLS
+        standard error would assume white residuals). ``None`` forbids RR.
     n_starts
         Number of distinct starts tried (best likelihood kept).
     spectral_init
@@ -402,9 +404,20 @@ def fit_model(
         s_b = math.sqrt(max(float(var), 0.0))
         exog_coef[key] = {"value": float(value), "se": s_b, "ci95": (value - Z95 * s_b, value + Z95 * s_b)}
     if ls_slope is not None:
-        comps.append(RR(ls_slope[0]))
-        exog_coef["ramp"] = {"value": ls_slope[0], "se": ls_slope[1],
-                             "ci95": (ls_slope[0] - Z95 * ls_slope[1], ls_slope[0] + Z95 * ls_slope[1])}
+        # The OLS standard error assumes white residuals and is far too small with RW/GM noise: re-estimate
+        # bias and slope by GLS on the original record with the fitted noise model (one closed-form step).
+        y_orig = y + ls_slope[0] * t
+        full = ss.from_components([*ss.to_components(model_ss), RR(ls_slope[0])], dt, exog_names=user_names)
+        z_full = np.column_stack([z[:, :1], t, z[:, 1:]])
+        gls = kalman.loglik(full, y_orig, z_full)
+        k_ramp = gls.names.index("b:ramp")
+        slope, s_b = float(gls.beta[k_ramp]), math.sqrt(max(float(gls.beta_cov[k_ramp, k_ramp]), 0.0))
+        comps.append(RR(slope))
+        k_bias = gls.names.index("b:bias")
+        b0, s0 = float(gls.beta[k_bias]), math.sqrt(max(float(gls.beta_cov[k_bias, k_bias]), 0.0))
+        exog_coef["bias"] = {"value": b0, "se": s0, "ci95": (b0 - Z95 * s0, b0 + Z95 * s0)}
+        exog_coef["ramp"] = {"value": slope, "se": s_b, "ci95": (slope - Z95 * s_b, slope + Z95 * s_b),
+                             "ls_value": ls_slope[0]}
     if "ramp" in exog_coef:
         rr_lab = next(lab for i, p, lab in parameter_labels(comps) if comps[i].name == "RR")
         se[rr_lab] = exog_coef["ramp"]["se"]
