@@ -161,3 +161,13 @@ def test_absurd_initial_values_are_rejected():
     y = np.random.default_rng(0).standard_normal(500)
     with pytest.raises(InputError):
         fit_model(y, 0.01, "WN+RW", init=[WN(0.1), RW(0.0)])
+
+
+def test_ls_drift_elimination_reports_a_gls_slope_interval():
+    # Paper 000 §3.5(iii): the ramp removed by least squares first. The OLS slope's own standard error would
+    # assume white residuals (here it would be ~50x too small); the reported interval must cover the truth.
+    y = simulate_sum([WN(0.2), RW(0.01), RR(2e-4)], 4000, 1.0, np.random.default_rng(3))
+    fit = fit_model(y, 1.0, "WN+RW+RR", drift="ls", n_starts=1)
+    ramp = fit.exog_coef["ramp"]
+    assert "ls_value" in ramp and ramp["ci95"][0] <= 2e-4 <= ramp["ci95"][1]
+    assert fit.ci95["RW.random_walk"][0] <= 0.01 <= fit.ci95["RW.random_walk"][1]
