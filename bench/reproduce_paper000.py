@@ -109,8 +109,13 @@ def exact_loglik(model: ss.StateSpace, y: np.ndarray) -> float:
     return kalman.loglik(model, y, profile_mean=False).loglik
 
 
-def fit_em(model: ss.StateSpace, y: np.ndarray, em_iter: int) -> tuple[ss.StateSpace, int]:
+DIVERGED: dict[str, int] = {}
+
+
+def fit_em(model: ss.StateSpace, y: np.ndarray, em_iter: int, label: str = "") -> tuple[ss.StateSpace, int]:
     run = em.run_em(model, y, max_iter=em_iter, tol=1e-10)
+    if run.diverged:
+        DIVERGED[label] = DIVERGED.get(label, 0) + 1
     return run.model, run.n_iter
 
 
@@ -157,9 +162,9 @@ def run_case(case: str, runs: int, em_iter: int) -> list[str]:
         y_ls = y - A @ coef
         for label, estimates in variants.items():
             if label == "EM":
-                model, n_it = fit_em(state_model(names, spec["start"]), y, em_iter)
+                model, n_it = fit_em(state_model(names, spec["start"]), y, em_iter, label)
             elif label.startswith("EM*"):
-                model, n_it = fit_em(state_model(names, spec["far"]), y, em_iter)
+                model, n_it = fit_em(state_model(names, spec["far"]), y, em_iter, label)
             elif label == "EM+QN":
                 model, n_it = fit_em_qn(state_model(names, spec["start"]), y), 3
             else:
@@ -167,7 +172,7 @@ def run_case(case: str, runs: int, em_iter: int) -> list[str]:
                 if label.startswith("EM+QN"):
                     model, n_it = fit_em_qn(start, y_ls), 3
                 else:
-                    model, n_it = fit_em(start, y_ls, em_iter)
+                    model, n_it = fit_em(start, y_ls, em_iter, label)
                 # Back on the full data: drift u = LS slope (fixed), the rest from the fit on the detrended
                 # record, μ by GLS.
                 theta = paper_theta(model)
@@ -184,7 +189,8 @@ def run_case(case: str, runs: int, em_iter: int) -> list[str]:
              f"iterations =="]
     for label, est in variants.items():
         lines += summarise(label, est, truth, reached[label])
-        lines.append(f"   iterations: median {np.median(iters[label]):.0f}, max {np.max(iters[label])}")
+        lines.append(f"   iterations: median {np.median(iters[label]):.0f}, max {np.max(iters[label])}; "
+                     f"EM stopped on a degenerate update in {DIVERGED.get(label, 0)} runs")
     lines.append(f"(wall time {time.perf_counter() - t0:.0f} s)")
     return lines
 
