@@ -375,29 +375,9 @@ def fit_model(
     res, n_iter = best
     model_ss = res.model
     comps = ss.to_components(model_ss)
-    par = mle.Parameterisation.of(comps)
     prof = kalman.loglik(model_ss, y, z)
-    labels_all = parameter_labels(comps)
-    noise_labels = [lab for i, p, lab in labels_all if not isinstance(comps[i], RR)]
     se: dict[str, float] = {}
     ci: dict[str, tuple[float, float]] = {}
-    info_ok = True
-    advice = None
-    if uncertainty:
-        info = mle.observed_information(par, res.theta, model_ss, y, z)
-        cov, info_ok = mle.covariance_from_information(info)
-        for k, lab in enumerate(noise_labels):
-            v = float(np.exp(res.theta[k]))
-            s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
-            se[lab] = v * s_log
-            zero = _near_zero(par, res, k, y, z)
-            if s_log <= WALD_MAX_SE_LOG and not zero:
-                ci[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
-            else:
-                lo, hi = mle.likelihood_interval(par, res.theta, k, model_ss, y, z=z, ll_max=res.loglik,
-                                                 lower=not zero)
-                ci[lab] = (math.exp(lo) if math.isfinite(lo) else 0.0, math.exp(hi) if math.isfinite(hi) else math.inf)
-        advice = _record_length(noise_labels, cov, comps, n_obs, dt, target=target_precision)
     exog_coef: dict[str, dict] = {}
     for name, value, var in zip(prof.names, prof.beta, np.diag(prof.beta_cov), strict=True):
         key = name.split(":", 1)[1]
@@ -426,12 +406,43 @@ def fit_model(
     comps = sorted(comps, key=lambda c: order.get(c.name, 99))
     k = n_free_noise + z.shape[1] + (1 if ls_slope is not None else 0)
     ll = float(prof.loglik)
-    return FitResult(
+    result = FitResult(
         model=model_name(comps), components=comps, exog_coef=exog_coef, se=se, ci95=ci, loglik=ll,
         aic=2 * k - 2 * ll, bic=k * math.log(n_obs) - 2 * ll, n=n_obs, dt=float(dt), n_iter=n_iter,
-        converged=res.converged, record_length=advice, information_ok=info_ok, n_eval=res.n_eval, n_params=k,
-        starts=lls, statespace=model_ss, _y=y, _z=z,
+        converged=res.converged, n_eval=res.n_eval, n_params=k, starts=lls, statespace=model_ss, _y=y, _z=z,
     )
+    return add_uncertainty(result, target_precision) if uncertainty else result
+
+
+def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult:
+    """Standard errors, 95 % intervals (§3.4) and the recording-length advice of a fit, in place.
+
+    Observed information = minus the Hessian of the exact log-likelihood in log-parameters; Wald intervals
+    in log space, likelihood-ratio ones where the parameter cannot be told from 0 or the information is flat.
+    """
+    if fit.statespace is None or fit._y is None:
+        raise InputError("this FitResult holds no data to compute its uncertainty from")
+    y, z, model_ss = fit._y, fit._z, fit.statespace
+    comps_ss = ss.to_components(model_ss)
+    par = mle.Parameterisation.of(comps_ss)
+    theta = par.to_theta(comps_ss)
+    res = mle.MLEResult(theta, model_ss, fit.loglik, 0, fit.converged, "")
+    noise_labels = [lab for i, _, lab in parameter_labels(comps_ss) if not isinstance(comps_ss[i], RR)]
+    info = mle.observed_information(par, theta, model_ss, y, z)
+    cov, fit.information_ok = mle.covariance_from_information(info)
+    for k, lab in enumerate(noise_labels):
+        v = float(np.exp(theta[k]))
+        s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
+        fit.se[lab] = v * s_log
+        zero = _near_zero(par, res, k, y, z)
+        if s_log <= WALD_MAX_SE_LOG and not zero:
+            fit.ci95[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
+        else:
+            lo, hi = mle.likelihood_interval(par, theta, k, model_ss, y, z=z, ll_max=fit.loglik, lower=not zero)
+            fit.ci95[lab] = (math.exp(lo) if math.isfinite(lo) else 0.0,
+                             math.exp(hi) if math.isfinite(hi) else math.inf)
+    fit.record_length = _record_length(noise_labels, cov, comps_ss, fit.n, fit.dt, target=target_precision)
+    return fit
 
 
 @dataclass
@@ -460,16 +471,22 @@ def suggest_candidates(y: np.ndarray, dt: float) -> list[str]:
 def select_model(
     y: np.ndarray, dt: float, candidates: list[str] | None = None, *, criterion: str = "bic", **fit_kwargs
 ) -> SelectionResult:
-    """Fit every candidate structure and rank them by BIC (or AIC); ΔBIC and Schwarz weights as evidence."""
+    """Fit every candidate structure and rank them by BIC (or AIC); ΔBIC and Schwarz weights as evidence.
+
+    Standard errors and the recording-length advice are computed for the winner only (unless
+    ``uncertainty=False``); :func:`add_uncertainty` adds them to any other fit of ``fits``.
+    """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
     y = _check_signal(y, dt)
     cands = list(candidates) if candidates else suggest_candidates(y, dt)
     fits: dict[str, FitResult] = {}
     errors: dict[str, str] = {}
+    uncertainty = fit_kwargs.pop("uncertainty", True)
+    target = fit_kwargs.get("target_precision", 0.10)
     for spec in cands:
         try:
-            fits[spec] = fit_model(y, dt, spec, **fit_kwargs)
+            fits[spec] = fit_model(y, dt, spec, uncertainty=False, **fit_kwargs)
         except InputError as exc:
             errors[spec] = str(exc)
     if not fits:
@@ -491,6 +508,8 @@ def select_model(
         else:
             table.append({"model": spec, "error": errors[spec]})
     table.sort(key=lambda r: r.get(criterion, math.inf))
+    if uncertainty:
+        add_uncertainty(fits[best_key], target)
     return SelectionResult(fits[best_key], table, fits)
 
 
