@@ -31,6 +31,7 @@ from scipy.signal import lfilter
 from imu_noise_id.core import em, kalman, mle
 from imu_noise_id.core import statespace as ss
 from imu_noise_id.core.components import GM, RR, RW, WN
+from imu_noise_id.core.errors import InputError
 
 N = 6000
 
@@ -105,8 +106,12 @@ def simulate(model: ss.StateSpace, rng: np.random.Generator) -> np.ndarray:
 
 
 def exact_loglik(model: ss.StateSpace, y: np.ndarray) -> float:
-    """Exact log-likelihood at the model's own parameters (its u and μ included)."""
-    return kalman.loglik(model, y, profile_mean=False).loglik
+    """Exact log-likelihood at the model's own parameters (its u and μ included); −inf for a degenerate model
+    (e.g. a GM pole at 1 beside an RW: no steady-state filter)."""
+    try:
+        return kalman.loglik(model, y, profile_mean=False).loglik
+    except InputError:
+        return -np.inf
 
 
 DIVERGED: dict[str, int] = {}
@@ -179,7 +184,10 @@ def run_case(case: str, runs: int, em_iter: int) -> list[str]:
                 theta["omega"] = float(coef[1])
                 full = state_model(names, theta)
                 full.u_free[:] = False
-                model = kalman.apply_beta(full, kalman.loglik(full, y))
+                try:
+                    model = kalman.apply_beta(full, kalman.loglik(full, y))
+                except InputError:
+                    model = full
             estimates.append(paper_theta(model))
             iters[label].append(n_it)
             reached[label].append(exact_loglik(model, y) >= ll_ref - 0.1)
