@@ -12,7 +12,7 @@ import sys
 from ..core.errors import InputError
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("fit",)
+COMMANDS: tuple[str, ...] = ("analyze", "fit", "simulate", "inspect")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,83 @@
+"""``imu-noise-id analyze BAG``: offline noise analysis of a static IMU recording.
+
+Stages (each a function; later issues add the EM model fit and the closed loop as further stages):
+read the bag → Allan-family variances and slope parameters (:func:`imu_noise_id.pipelines.analysis.analyze_static`)
+→ write ``imu.yaml``, the variance CSVs and ``allan.png`` → print the summary and where the results are.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+DEFAULT_OUT = "imu_noise_id_results"
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``analyze`` parser."""
+    p = subparsers.add_parser(
+        "analyze",
+        help="Allan-variance noise analysis of a static IMU bag (Kalibr imu.yaml, CSV, plot)",
+        description=(
+            "Read sensor_msgs/Imu from a static recording (ROS 1 .bag, rosbag2 sqlite3 or mcap), compute the "
+            "Allan, Hadamard, total and modified Allan variances of the six axes with confidence intervals, read "
+            "the white-noise density (-1/2 slope at tau = 1 s) and random walk (+1/2 slope at tau = 3 s), and "
+            "write DIR/imu.yaml (Kalibr format), DIR/allan.csv (+ hadamard.csv, total.csv, modified.csv) and "
+            "DIR/allan.png. The IMU must be at rest for the whole recording."
+        ),
+    )
+    p.add_argument("bag", type=Path, help="bag file or rosbag2 directory")
+    p.add_argument("--topic", help="sensor_msgs/Imu topic (needed only when the bag has several)")
+    p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
+    p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
+    p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
+    p.add_argument(
+        "--allow-motion", action="store_true",
+        help="analyse even if the static check finds motion (its findings become warnings)",
+    )
+    p.set_defaults(run=run)
+
+
+def _read(args: argparse.Namespace):
+    from ..bag.reader import read_imu
+    from .progress import TextProgress
+
+    progress = TextProgress(f"reading {args.bag.name}")
+    try:
+        return read_imu(args.bag, topic=args.topic, progress=progress)
+    finally:
+        progress.close()
+
+
+def _allan_stage(imu, args: argparse.Namespace):
+    from ..pipelines.analysis import analyze_static
+    from .progress import TextProgress
+
+    progress = TextProgress("Allan-family variances")
+    try:
+        return analyze_static(
+            imu, per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
+            progress=progress,
+        )
+    finally:
+        progress.close()
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read, analyse, write, report. Input problems raise InputError (exit 2)."""
+    from ..core.errors import InputError
+    from ..report.outputs import summary_table, write_static_outputs
+
+    if not 0.0 < args.confidence < 1.0:
+        raise InputError(f"--confidence must lie in (0, 1), got {args.confidence}")
+    if args.per_decade < 1:
+        raise InputError(f"--per-decade must be >= 1, got {args.per_decade}")
+    imu = _read(args)
+    result = _allan_stage(imu, args)
+    paths = write_static_outputs(result, args.out, rostopic=imu.topic)
+    print(summary_table(result), flush=True)
+    for w in result.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    print(f"results in {args.out}/: " + ", ".join(paths))
+    return 0

@@ -1,0 +1,276 @@
+"""Noise parameters read off an Allan-variance curve by its characteristic slopes (IEEE Std 952, Kalibr).
+
+On a log-log plot an independent power-law component adds a straight line AV = c·τ^μ (μ in *variance*; the
+deviation slope is μ/2):
+
+=====================  ====  ==========================  =====================================================
+component              μ     AV(τ)                       parameter read off the line
+=====================  ====  ==========================  =====================================================
+quantisation  (QN)     −2    3Q²/τ²                      Q [u·s]
+white noise   (WN)     −1    N²/τ                        N = ADEV of the line at τ = 1 s [u/√Hz]
+bias instability (BI)   0    (2 ln2/π)·B²                B = ADEV of the flat line / 0.664 [u]
+random walk   (RW)     +1    K²τ/3                       K = ADEV of the line at τ = 3 s [u/s/√Hz]
+rate ramp     (RR)     +2    R²τ²/2                      R [u/s]
+=====================  ====  ==========================  =====================================================
+
+Rule (documented in docs/analysis.md):
+
+1. **Lines.** Since the AVs of independent components add, the coefficients c ≥ 0 are fitted together,
+   AV(τ) ≈ Σ_j c_j τ^μ_j, over all τ (IEEE Std 952 annex C fits the same sum). The fit minimises
+   Σ_i ρ(√(ν_i/2)·log(model_i/AV_i)) with ν_i the EDF (log of a χ²_ν/ν variable has variance ≈ 2/ν) and ρ
+   Huber's loss with threshold 2.5, bounded c ≥ 0, started from linear non-negative least squares with
+   weights ν/(2·model²). Noisy long-τ points therefore weigh little, a spike in the tail cannot make a
+   parameter NaN or drag it far, and a component no line supports gets c ≈ 0. QN, WN and RW are
+   always fitted; BI and RR are added only where the curve lies significantly above that base model
+   (its lower confidence limit above the base fit at two or more τ of their region).
+2. **Region.** A component's τ region is where its line is at least half of the fitted sum, i.e. where the
+   local slope of the curve is within about ±0.5 (in AV, ±¼ in ADEV) of the component's slope. QN, BI and
+   RR are reported only when they have such a region of at least two τ.
+3. **Confidence interval.** From the single AV point of the region with the most information on the
+   coefficient (largest ν·s², s the component's share of the fitted sum there): its χ² interval, relative,
+   divided by s (the other lines are taken as known), widened in log (in quadrature) by the difference
+   between the fitted c and the c this point alone implies, and carried to the parameter (∝ √c). AV estimates at
+   neighbouring τ are strongly correlated, so averaging them adds little information and a naive
+   least-squares error would be too optimistic; this interval is approximate (coverage measured in
+   ``bench/bench_allan_fit.py``).
+4. **No region.** When WN or RW dominates nowhere (e.g. the record is too short to reach the +½ slope), the
+   value is the upper bound implied by the curve: N² ≤ τ·AV(τ) and K² ≤ 3·AV(τ)/τ at every τ, using the
+   upper confidence limit and the smallest value over τ. It is flagged ``method="upper_bound"``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from .allan import AllanResult
+from .errors import InputError
+
+#: A component's region: where its line is at least this fraction of the fitted sum.
+DOMINANCE = 0.5
+#: Iterations of the reweighted linear least squares that gives the starting point.
+IRLS_ITERATIONS = 3
+_TINY = 1e-300
+#: Huber threshold on standardised residuals: points beyond it are down-weighted (rule 1, outliers).
+HUBER_K = 2.5
+#: B = ADEV_min / BIAS_INSTABILITY_FACTOR (IEEE Std 952, flicker floor).
+BIAS_INSTABILITY_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
+
+
+@dataclass(frozen=True)
+class SlopeComponent:
+    """One Allan-slope parameter of one axis.
+
+    Attributes
+    ----------
+    name : {"QN", "WN", "BI", "RW", "RR"}
+    slope : float
+        The line's slope μ in AV (the ADEV slope is μ/2).
+    coefficient : float
+        c in AV(τ) = c·τ^μ of the fitted line [u²·s^(−μ)].
+    value : float
+        The parameter (Q [u·s], N [u/√Hz], B [u], K [u/s/√Hz] or R [u/s]).
+    ci : tuple of float
+        Its confidence interval (module docstring, rule 3); (0, value) for an upper bound (rule 4).
+    method : {"fit", "upper_bound"}
+    tau_range : tuple of float
+        The τ [s] the line was fitted on (or where the bound was attained).
+    n_points : int
+        Number of AV points used.
+    """
+
+    name: str
+    slope: float
+    coefficient: float
+    value: float
+    ci: tuple[float, float]
+    method: str
+    tau_range: tuple[float, float]
+    n_points: int
+
+    def line(self, tau: np.ndarray) -> np.ndarray:
+        """The fitted AV line c·τ^μ at ``tau`` [s]."""
+        return self.coefficient * np.asarray(tau, dtype=float) ** self.slope
+
+
+@dataclass(frozen=True)
+class AxisSlopes:
+    """Slope parameters of one axis; QN, BI and RR are None where the curve shows no region for them."""
+
+    noise_density: SlopeComponent
+    random_walk: SlopeComponent
+    quantization: SlopeComponent | None
+    bias_instability: SlopeComponent | None
+    rate_ramp: SlopeComponent | None
+
+    def components(self) -> list[SlopeComponent]:
+        """The reported components in order of slope, for plotting their lines."""
+        return [
+            c
+            for c in (self.quantization, self.noise_density, self.bias_instability, self.random_walk, self.rate_ramp)
+            if c is not None
+        ]
+
+
+# name: (μ, coefficient c → parameter value)
+_LINES: dict[str, tuple[float, object]] = {
+    "QN": (-2.0, lambda c: math.sqrt(c / 3.0)),
+    "WN": (-1.0, math.sqrt),
+    "BI": (0.0, lambda c: math.sqrt(c) / BIAS_INSTABILITY_FACTOR),
+    "RW": (1.0, lambda c: math.sqrt(3.0 * c)),
+    "RR": (2.0, lambda c: math.sqrt(2.0 * c)),
+}
+
+
+_NAMES = tuple(_LINES)
+_MUS = np.array([mu for mu, _ in _LINES.values()])
+#: The components always fitted (Kalibr's model plus quantisation); BI and RR are added when significant.
+BASE = ("QN", "WN", "RW")
+EXTRAS = ("BI", "RR")
+
+
+def fit_lines(tau: np.ndarray, variance: np.ndarray, edf: np.ndarray, names: tuple[str, ...] = _NAMES) -> np.ndarray:
+    """Non-negative coefficients c_j of AV(τ) ≈ Σ_j c_j τ^μ_j over the lines ``names`` (rule 1).
+
+    Parameters
+    ----------
+    tau, variance, edf : ndarray, shape (T,)
+        One axis of an Allan-variance result.
+    names : tuple of str
+        Lines to use (keys of ``_LINES``); the others get c = 0.
+
+    Returns
+    -------
+    ndarray, shape (5,)
+        Coefficients in QN, WN, BI, RW, RR order.
+    """
+    use = np.array([n in names for n in _NAMES])
+    basis = tau[:, None] ** _MUS[None, use]
+    ok = np.isfinite(variance) & (variance > 0) & (edf > 0)
+    if ok.sum() < 3:
+        raise InputError(
+            f"only {ok.sum()} of {tau.size} Allan variances are positive: the signal is (nearly) constant, "
+            "so no noise parameters can be read from it"
+        )
+    basis, av, nu = basis[ok], variance[ok], edf[ok]
+    # Start: linear non-negative least squares, weights EDF/(2·model²), model refined a few times.
+    model = av.copy()
+    start = np.zeros(int(use.sum()))
+    for _ in range(IRLS_ITERATIONS):
+        w = np.sqrt(nu / 2.0) / model
+        a = basis * w[:, None]
+        col = np.linalg.norm(a, axis=0)
+        col[col == 0] = 1.0
+        start, _ = optimize.nnls(a / col, av * w)
+        start = start / col
+        model = np.maximum(basis @ start, _TINY)
+    # Final: log-space residuals √(ν/2)·log(model/AV) (symmetric for high and low points) with a Huber loss.
+    scale = np.median(av[:, None] / basis, axis=0)
+    sigma = np.sqrt(nu / 2.0)
+    log_av = np.log(av)
+
+    def residuals(x: np.ndarray) -> np.ndarray:
+        return sigma * (np.log(np.maximum(basis @ (x * scale), _TINY)) - log_av)
+
+    x0 = np.maximum(start / scale, 1e-6)
+    fit = optimize.least_squares(residuals, x0, bounds=(0.0, np.inf), loss="huber", f_scale=HUBER_K)
+    coef = np.zeros(_MUS.size)
+    coef[use] = fit.x * scale
+    return coef
+
+
+def _lines(coef: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    return coef[None, :] * tau[:, None] ** _MUS[None, :]
+
+
+def _region(j: int, coef: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Indices of τ where line j is at least :data:`DOMINANCE` of the fitted sum (rule 2)."""
+    lines = _lines(coef, tau)
+    return np.flatnonzero((lines[:, j] > 0) & (lines[:, j] >= DOMINANCE * lines.sum(axis=1)))
+
+
+def select_lines(res: AllanResult, axis: int) -> np.ndarray:
+    """Coefficients of the base lines plus the extras (BI, RR) the data need (rule 1).
+
+    An extra line is kept when, in its region (of at least two τ), the AV's lower confidence limit lies above
+    the base model at two or more τ: the curve is significantly higher than QN + WN + RW can explain there.
+    """
+    tau, av, edf = res.tau, res.variance[:, axis], res.edf[:, axis]
+    base = fit_lines(tau, av, edf, BASE)
+    base_model = _lines(base, tau).sum(axis=1)
+    keep = list(BASE)
+    for extra in EXTRAS:
+        coef = fit_lines(tau, av, edf, (*BASE, extra))
+        region = _region(_NAMES.index(extra), coef, tau)
+        if region.size >= 2 and np.sum(res.ci_low[region, axis] > base_model[region]) >= 2:
+            keep.append(extra)
+    return base if len(keep) == len(BASE) else fit_lines(tau, av, edf, tuple(keep))
+
+
+def _component(name: str, coef: np.ndarray, region: np.ndarray, res: AllanResult, axis: int) -> SlopeComponent:
+    j = _NAMES.index(name)
+    mu, to_value = _LINES[name]
+    coefficient = float(coef[j])
+    value = to_value(coefficient)
+    lines = _lines(coef, res.tau[region])
+    share = lines[:, j] / lines.sum(axis=1)
+    nu = res.edf[region, axis]
+    k = int(np.argmax(nu * share**2))  # the point with the most information on c (rule 3)
+    i = region[k]
+    av = res.variance[i, axis]
+    c_lo = max(1.0 + (res.ci_low[i, axis] / av - 1.0) / share[k], 0.0)
+    c_hi = 1.0 + (res.ci_high[i, axis] / av - 1.0) / share[k]
+    # Widen by the disagreement between the fitted line and that point's own coefficient (in log, quadrature).
+    others = lines[k].sum() - lines[k, j]
+    own = (av - others) / res.tau[i] ** mu
+    if own > 0 and c_lo > 0:
+        d2 = math.log(own / coefficient) ** 2
+        c_lo = math.exp(-math.sqrt(math.log(c_lo) ** 2 + d2))
+        c_hi = math.exp(math.sqrt(math.log(c_hi) ** 2 + d2))
+    tau = res.tau
+    return SlopeComponent(name, mu, coefficient, value, (value * math.sqrt(c_lo), value * math.sqrt(c_hi)), "fit",
+                          (float(tau[region[0]]), float(tau[region[-1]])), int(region.size))
+
+
+def _upper_bound(name: str, res: AllanResult, axis: int) -> SlopeComponent:
+    mu, to_value = _LINES[name]
+    bounds = res.ci_high[:, axis] / res.tau**mu  # c ≤ AV_hi(τ)/τ^μ at every τ (rule 4)
+    i = int(np.argmin(bounds))
+    coefficient = float(bounds[i])
+    value = to_value(coefficient)
+    t = float(res.tau[i])
+    return SlopeComponent(name, mu, coefficient, value, (0.0, value), "upper_bound", (t, t), 1)
+
+
+def fit_axis_slopes(res: AllanResult, axis: int = 0) -> AxisSlopes:
+    """Allan-slope parameters of column ``axis`` of an Allan-variance result (rules 1–4 of the module).
+
+    Raises
+    ------
+    ValueError
+        If ``res`` is not an Allan variance (the slope relations above are those of the AV).
+    """
+    if res.kind != "allan":
+        raise ValueError(f"slope parameters are defined on the Allan variance, got a {res.kind} variance")
+    coef = select_lines(res, axis)
+    found: dict[str, SlopeComponent | None] = {}
+    for j, name in enumerate(_NAMES):
+        region = _region(j, coef, res.tau)
+        if region.size >= 2 or (name in ("WN", "RW") and region.size >= 1):
+            found[name] = _component(name, coef, region, res, axis)
+        elif name in ("WN", "RW"):
+            found[name] = _upper_bound(name, res, axis)
+        else:
+            found[name] = None
+    return AxisSlopes(
+        noise_density=found["WN"], random_walk=found["RW"], quantization=found["QN"],
+        bias_instability=found["BI"], rate_ramp=found["RR"],
+    )
+
+
+def fit_slopes(res: AllanResult) -> list[AxisSlopes]:
+    """:func:`fit_axis_slopes` for every column of ``res``."""
+    return [fit_axis_slopes(res, j) for j in range(res.variance.shape[1])]

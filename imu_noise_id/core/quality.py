@@ -1,0 +1,294 @@
+"""Checks and documented repairs of sampled time series (pure numpy; shared by the bag reader and the node).
+
+Repairs done by :func:`repair_time_series`, in this order, each counted in the returned :class:`QualityReport`:
+
+1. drop samples whose time or any value is NaN/±inf, or whose magnitude exceeds a physical limit (``max_abs``,
+   e.g. :data:`IMU_MAX_ABS`: such values come from corrupt bytes or wrong units; more than
+   :data:`MAX_IMPLAUSIBLE_FRACTION` of them raise instead of being dropped);
+2. drop samples with a zero stamp when the other stamps are clock times (> :data:`ZERO_STAMP_CLOCK_S`),
+   i.e. the publisher left ``header.stamp`` unset for them;
+3. sort by time (stable) when stamps go backwards;
+4. drop samples whose stamp equals the previous one (the first is kept);
+5. find gaps: intervals longer than ``gap_factor`` × the median period. Gaps are reported, not filled.
+
+:func:`static_check` flags data that is clearly not from a static sensor (for the static noise analyses).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .axes import ImuSeries
+from .errors import InputError
+
+#: Stamps are clock (epoch) times if the smallest non-zero one exceeds this [s]; zero stamps among them are unset.
+ZERO_STAMP_CLOCK_S = 60.0
+#: A gap is an interval longer than this many median periods.
+GAP_FACTOR = 1.5
+#: Standard gravity [m/s²], as in :mod:`.simulate` (not imported from there: it would pull in scipy, ~80 MB of
+#: memory, into the bag reader).
+STANDARD_GRAVITY = 9.80665
+#: No IMU measures more than this: (gyro [rad/s] ≈ 57 000 °/s, accel [m/s²] ≈ 1000 g).
+IMU_MAX_ABS: tuple[float, float] = (1e3, 1e4)
+#: Above this fraction of impossible values the series is rejected rather than repaired.
+MAX_IMPLAUSIBLE_FRACTION = 0.01
+#: At most this many gaps are listed one by one in the notes.
+MAX_LISTED_GAPS = 10
+
+
+class QualityError(InputError):
+    """The series cannot be repaired into something usable (e.g. no finite sample, fewer than two samples)."""
+
+
+@dataclass
+class QualityReport:
+    """What :func:`repair_time_series` found and did.
+
+    Attributes
+    ----------
+    n_input, n_output : samples before and after the repairs
+    n_nonfinite : samples dropped because the time or a value was NaN/±inf
+    n_implausible : samples dropped because a value exceeded its physical limit
+    n_zero_stamps : samples dropped because their stamp was 0 among clock-time stamps
+    n_backwards : places where the stamp decreased (the series was sorted if > 0)
+    n_duplicates : samples dropped because their stamp repeated the previous one
+    dt_median : median sampling period after the repairs [s]
+    gaps : (start time [s], length [s], estimated missing samples) of every gap, in time order
+    t0 : first stamp after the repairs [s] (gap start times in notes are given relative to it)
+    """
+
+    n_input: int
+    n_output: int = 0
+    n_nonfinite: int = 0
+    n_implausible: int = 0
+    n_zero_stamps: int = 0
+    n_backwards: int = 0
+    n_duplicates: int = 0
+    dt_median: float = float("nan")
+    gaps: list[tuple[float, float, int]] = field(default_factory=list)
+    t0: float = 0.0
+
+    @property
+    def repaired(self) -> bool:
+        """True if any sample was dropped or moved."""
+        return bool(
+            self.n_nonfinite or self.n_implausible or self.n_zero_stamps or self.n_backwards or self.n_duplicates
+        )
+
+    def notes(self, what: str = "samples") -> list[str]:
+        """Human-readable notes, one per finding (empty when the series was clean)."""
+        notes: list[str] = []
+        if self.n_nonfinite:
+            notes.append(f"dropped {self.n_nonfinite} of {self.n_input} {what} with NaN/inf time or values")
+        if self.n_implausible:
+            notes.append(
+                f"dropped {self.n_implausible} {what} with physically impossible values (corrupt data or wrong units)"
+            )
+        if self.n_zero_stamps:
+            notes.append(f"dropped {self.n_zero_stamps} {what} with a zero header stamp (stamp not set)")
+        if self.n_backwards:
+            notes.append(f"stamps went backwards {self.n_backwards} time(s): {what} sorted by stamp")
+        if self.n_duplicates:
+            notes.append(f"dropped {self.n_duplicates} {what} with a duplicated stamp (kept the first)")
+        if self.gaps:
+            total = sum(g[1] for g in self.gaps)
+            missing = sum(g[2] for g in self.gaps)
+            listed = ", ".join(
+                f"at t={start - self.t0:.3f} s for {length:.3f} s" for start, length, _ in self.gaps[:MAX_LISTED_GAPS]
+            )
+            more = f" and {len(self.gaps) - MAX_LISTED_GAPS} more" if len(self.gaps) > MAX_LISTED_GAPS else ""
+            notes.append(
+                f"{len(self.gaps)} gap(s) longer than {GAP_FACTOR:g}× the median period {self.dt_median:.4g} s "
+                f"(≈{missing} missing {what}, {total:.3f} s in total; times from the first stamp): {listed}{more}"
+            )
+        return notes
+
+
+def _as_columns(data: np.ndarray | Sequence[np.ndarray]) -> tuple[list[np.ndarray], bool]:
+    if isinstance(data, np.ndarray):
+        return [data], True
+    return list(data), False
+
+
+def _take(columns: list[np.ndarray], keep: np.ndarray) -> list[np.ndarray]:
+    return [c[keep] for c in columns]
+
+
+def find_gaps(t: np.ndarray, dt: float, gap_factor: float = GAP_FACTOR) -> list[tuple[float, float, int]]:
+    """Intervals of sorted stamps ``t`` longer than ``gap_factor * dt``: (start [s], length [s], missing samples)."""
+    if t.shape[0] < 2 or not dt > 0:
+        return []
+    steps = np.diff(t)
+    where = np.flatnonzero(steps > gap_factor * dt)
+    return [(float(t[i]), float(steps[i]), max(round(steps[i] / dt) - 1, 1)) for i in where]
+
+
+def repair_time_series(
+    t: np.ndarray,
+    data: np.ndarray | Sequence[np.ndarray],
+    *,
+    gap_factor: float = GAP_FACTOR,
+    min_samples: int = 2,
+    max_abs: Sequence[float | None] | None = None,
+) -> tuple[np.ndarray, np.ndarray | list[np.ndarray], QualityReport]:
+    """Drop bad samples, sort, drop duplicates and find gaps (see the module docstring for the rules).
+
+    Parameters
+    ----------
+    t : (N,) stamps [s]
+    data : (N, ...) array, or a sequence of such arrays sharing the first dimension (e.g. gyro and accel)
+    gap_factor : an interval longer than ``gap_factor`` × median period is a gap
+    min_samples : fewer valid samples than this raise :class:`QualityError`
+    max_abs : per data array, the largest plausible magnitude (None: no limit), e.g. :data:`IMU_MAX_ABS` for
+        (gyro, accel)
+
+    Returns
+    -------
+    t, data, report
+        Repaired copies (or the inputs themselves when nothing had to change; ``data`` in the same form as given)
+        and what was done.
+
+    Raises
+    ------
+    QualityError
+        If fewer than ``min_samples`` samples remain (e.g. every sample is NaN), or more than
+        :data:`MAX_IMPLAUSIBLE_FRACTION` of the finite samples exceed ``max_abs``.
+    """
+    t = np.asarray(t, dtype=float)
+    columns, single = _as_columns(data)
+    n = t.shape[0]
+    if any(c.shape[0] != n for c in columns):
+        raise ValueError("repair_time_series: t and data have different numbers of samples")
+    report = QualityReport(n_input=n)
+
+    finite = np.isfinite(t)
+    for c in columns:
+        finite &= np.isfinite(c.reshape(n, -1)).all(axis=1)
+    report.n_nonfinite = int(n - np.count_nonzero(finite))
+    if report.n_nonfinite:
+        if not finite.any():
+            raise QualityError(f"all {n} samples have NaN/inf time or values: nothing usable")
+        t, columns = t[finite], _take(columns, finite)
+
+    if max_abs is not None:
+        m = t.shape[0]
+        plausible = np.ones(m, dtype=bool)
+        for c, limit in zip(columns, max_abs, strict=True):
+            if limit is not None:
+                plausible &= (np.abs(c.reshape(m, -1)) <= limit).all(axis=1)
+        report.n_implausible = int(m - np.count_nonzero(plausible))
+        if report.n_implausible > MAX_IMPLAUSIBLE_FRACTION * m:
+            raise QualityError(
+                f"{report.n_implausible} of {m} samples exceed the physical limits {tuple(max_abs)} "
+                "(wrong units, or corrupt data)"
+            )
+        if report.n_implausible:
+            t, columns = t[plausible], _take(columns, plausible)
+
+    zero = t == 0.0
+    n_zero = int(np.count_nonzero(zero))
+    if 0 < n_zero < t.shape[0] and t[~zero].min() > ZERO_STAMP_CLOCK_S:
+        report.n_zero_stamps = n_zero
+        t, columns = t[~zero], _take(columns, ~zero)
+
+    steps = np.diff(t)
+    report.n_backwards = int(np.count_nonzero(steps < 0))
+    if report.n_backwards:
+        order = np.argsort(t, kind="stable")
+        t, columns = t[order], _take(columns, order)
+        steps = np.diff(t)
+
+    repeated = steps == 0
+    report.n_duplicates = int(np.count_nonzero(repeated))
+    if report.n_duplicates:
+        keep = np.concatenate(([True], ~repeated))
+        t, columns = t[keep], _take(columns, keep)
+        steps = np.diff(t)
+
+    report.n_output = int(t.shape[0])
+    if report.n_output < min_samples:
+        raise QualityError(
+            f"only {report.n_output} usable sample(s) of {n} after dropping bad ones; need at least {min_samples}"
+        )
+    if steps.size:
+        report.dt_median = float(np.median(steps))
+        report.gaps = find_gaps(t, report.dt_median, gap_factor)
+    report.t0 = float(t[0])
+    return t, (columns[0] if single else columns), report
+
+
+# --- static check -------------------------------------------------------------------------------------------
+
+#: |mean specific force| may differ from standard gravity by this much on a static IMU [m/s²]
+#: (local gravity spans 9.78–9.83 m/s²; a larger difference means motion, a scale error or removed gravity).
+GRAVITY_TOLERANCE = 0.3
+#: Standard deviation of 1 s means above which a gyro axis is rotating rather than drifting [rad/s] (≈0.6 °/s).
+GYRO_BLOCK_STD_MAX = 0.01
+#: Standard deviation of 1 s means above which an accelerometer axis is moving or tilting [m/s²].
+ACCEL_BLOCK_STD_MAX = 0.05
+#: Total variance above this multiple of the white-noise floor (var of first differences / 2) means
+#: low-frequency motion or vibration dominates the axis.
+VARIANCE_RATIO_MAX = 10.0
+#: Length of the blocks whose means reveal low-frequency motion [s].
+BLOCK_S = 1.0
+
+
+def _block_means(x: np.ndarray, samples_per_block: int) -> np.ndarray:
+    m = x.shape[0] // samples_per_block
+    return x[: m * samples_per_block].reshape(m, samples_per_block, -1).mean(axis=1)
+
+
+def static_check(imu: ImuSeries, gravity: float = STANDARD_GRAVITY) -> list[str]:
+    """Reasons why ``imu`` does not look like a static recording (empty list: looks static).
+
+    Flags, with the thresholds of this module (documented constants):
+
+    - ``|mean(accel)|`` differs from ``gravity`` by more than :data:`GRAVITY_TOLERANCE`;
+    - the standard deviation of :data:`BLOCK_S`-long block means exceeds :data:`GYRO_BLOCK_STD_MAX` (gyro) or
+      :data:`ACCEL_BLOCK_STD_MAX` (accel) on some axis: the sensor rotates, moves or tilts;
+    - an axis' total variance exceeds :data:`VARIANCE_RATIO_MAX` × its white-noise floor, estimated from first
+      differences as ``var(diff(x)) / 2`` (exact for white noise; random walks and slow drifts of static IMUs
+      over hours stay far below the threshold).
+
+    These are heuristics for *clearly* non-static data; a static analysis should warn, not silently proceed.
+    """
+    n = len(imu)
+    if n < 20:
+        return [f"only {n} samples: too short to check that the IMU was static"]
+    flags: list[str] = []
+    data = imu.samples()
+    names = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
+
+    g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
+    if abs(g_mean - gravity) > GRAVITY_TOLERANCE:
+        flags.append(
+            f"|mean accel| = {g_mean:.3f} m/s² but a static IMU reads gravity ≈ {gravity:.3f} m/s² "
+            f"(tolerance {GRAVITY_TOLERANCE} m/s²): the IMU moves, its accel is not in m/s², or gravity was removed"
+        )
+
+    per_block = max(round(BLOCK_S / imu.dt), 1) if n >= 2 else 1
+    per_block = min(per_block, n // 10)
+    means = _block_means(data, per_block)
+    block_std = means.std(axis=0)
+    for i, name in enumerate(names):
+        limit, unit = (GYRO_BLOCK_STD_MAX, "rad/s") if i < 3 else (ACCEL_BLOCK_STD_MAX, "m/s²")
+        if block_std[i] > limit:
+            flags.append(
+                f"{name}: the {per_block * imu.dt:.3g} s means vary with std {block_std[i]:.3g} {unit} "
+                f"(> {limit} {unit}): the IMU rotates, moves or tilts"
+            )
+
+    floor = np.var(np.diff(data, axis=0), axis=0) / 2.0
+    total = np.var(data, axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(floor > 0, total / floor, np.inf)
+    for i, name in enumerate(names):
+        if total[i] > 0 and ratio[i] > VARIANCE_RATIO_MAX:
+            flags.append(
+                f"{name}: variance is {ratio[i]:.3g}× its white-noise floor (> {VARIANCE_RATIO_MAX:g}×): "
+                "low-frequency motion, vibration or drift dominates"
+            )
+    return flags

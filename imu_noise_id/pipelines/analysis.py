@@ -1,0 +1,220 @@
+"""Offline analysis of a static IMU recording: arrays in, a result dataclass out (no files, no plots).
+
+:func:`analyze_static` runs the stages in order and returns a :class:`StaticAnalysis`; adapters
+(:mod:`imu_noise_id.report.outputs`, the ``analyze`` command) serialise and draw it. Later stages (EM model
+fits, the closed loop) take the same :class:`~imu_noise_id.core.axes.ImuSeries` and add their result to the
+dataclass as another field, so the command keeps one call per stage.
+
+Stages
+------
+1. checks: at least :data:`MIN_SAMPLES` samples, finite values, a constant sampling period (gaps are a
+   warning: the Allan estimators assume equally spaced samples), the static check of
+   :func:`imu_noise_id.core.quality.static_check` (clearly non-static data raises unless ``allow_motion``);
+2. the Allan family per axis (:func:`imu_noise_id.core.allan.allan_family`), AV always, others on request;
+3. the Allan-slope parameters per axis (:func:`imu_noise_id.core.allan_fit.fit_axis_slopes`), with warnings
+   where the random walk or white noise is only an upper bound.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS, AllanResult, allan_family, stack_axes
+from ..core.allan_fit import AxisSlopes, fit_axis_slopes
+from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES, ImuSeries
+from ..core.errors import InputError
+from ..core.quality import static_check
+
+#: Fewer samples than this cannot give a useful Allan curve (a few decades of τ).
+MIN_SAMPLES = 100
+#: Relative spread of the sampling intervals tolerated before the analysis warns about timing.
+JITTER_WARN = 0.05
+#: Gaps longer than this many periods make the constant-period assumption wrong: warn.
+GAP_WARN_FACTOR = 1.5
+
+
+class NotStaticError(InputError):
+    """The recording is clearly not static; the message lists why and how to override."""
+
+
+@dataclass
+class StaticAnalysis:
+    """Result of :func:`analyze_static`.
+
+    Attributes
+    ----------
+    axes : tuple of str
+        Axis names, the column order of every per-axis array (:data:`~imu_noise_id.core.axes.AXES`).
+    n : int
+        Samples per axis.
+    dt : float
+        Sampling period used [s] (median of the stamp differences).
+    duration_s : float
+        n·dt [s].
+    topic : str
+        Where the samples came from.
+    variances : dict of str to AllanResult
+        Allan-family results by kind (always ``"allan"``), each (T, 6).
+    slopes : dict of str to AxisSlopes
+        Allan-slope parameters per axis name.
+    warnings : list of str
+        Problems found (timing, motion, parameters that are only bounds); also the input's notes.
+    """
+
+    axes: tuple[str, ...]
+    n: int
+    dt: float
+    duration_s: float
+    topic: str
+    variances: dict[str, AllanResult]
+    slopes: dict[str, AxisSlopes]
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def allan(self) -> AllanResult:
+        """The Allan variance (T, 6)."""
+        return self.variances["allan"]
+
+    @property
+    def rate_hz(self) -> float:
+        """Sampling rate [Hz]."""
+        return 1.0 / self.dt
+
+    def sensor_value(self, sensor: str, parameter: str, combine: str = "max") -> float:
+        """One number per sensor, as Kalibr wants: ``combine`` ("max" or "rms") over the sensor's three axes.
+
+        Parameters
+        ----------
+        sensor : {"gyro", "accel"}
+        parameter : {"noise_density", "random_walk"}
+        """
+        names = GYRO_AXES if sensor == "gyro" else ACCEL_AXES
+        values = np.array([getattr(self.slopes[a], parameter).value for a in names])
+        if combine == "max":
+            return float(values.max())
+        if combine == "rms":
+            return float(np.sqrt(np.mean(values**2)))
+        raise ValueError(f"combine must be 'max' or 'rms', got {combine!r}")
+
+
+def _timing_warnings(t: np.ndarray, dt: float) -> list[str]:
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        raise InputError(
+            "sample times are not strictly increasing: sort the samples and drop duplicated stamps first "
+            "(the bag reader does this and notes it)"
+        )
+    warnings = []
+    gaps = int(np.count_nonzero(steps > GAP_WARN_FACTOR * dt))
+    if gaps:
+        warnings.append(
+            f"{gaps} gap(s) longer than {GAP_WARN_FACTOR:g}× the period {dt:.6g} s: the Allan estimators treat "
+            "the samples as equally spaced, so τ near and above the gaps is distorted"
+        )
+    spread = float(np.std(steps) / dt)
+    if spread > JITTER_WARN:
+        warnings.append(
+            f"sampling intervals vary by {100 * spread:.1f} % (std/median): short-τ Allan values are less reliable"
+        )
+    return warnings
+
+
+def _slope_warnings(name: str, slopes: AxisSlopes, duration_s: float) -> list[str]:
+    warnings = []
+    if slopes.noise_density.method == "upper_bound":
+        warnings.append(f"{name}: no white-noise (−½) region on the Allan curve; noise density is an upper bound")
+    if slopes.random_walk.method == "upper_bound":
+        warnings.append(
+            f"{name}: the random-walk (+½) slope is not reached within {duration_s:.0f} s; the random walk is an "
+            "upper bound. Record longer (several times the τ where the curve bottoms out)"
+        )
+    return warnings
+
+
+def analyze_static(
+    imu: ImuSeries,
+    *,
+    kinds: Sequence[str] = KINDS,
+    per_decade: int = DEFAULT_PER_DECADE,
+    confidence: float = DEFAULT_CONFIDENCE,
+    allow_motion: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+) -> StaticAnalysis:
+    """Allan-family variances and Allan-slope noise parameters of a static IMU recording.
+
+    Parameters
+    ----------
+    imu : ImuSeries
+        Samples of all six axes (rad/s, m/s²) at a constant period.
+    kinds : sequence of str
+        Allan-family variances to compute ("allan" is always included).
+    per_decade : int
+        Averaging times per decade.
+    confidence : float
+        Two-sided level of the confidence intervals.
+    allow_motion : bool
+        Analyse even if the static check fails (its reasons become warnings).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each estimator.
+
+    Raises
+    ------
+    InputError
+        Too few samples, NaN/inf, non-increasing stamps; :class:`NotStaticError` for clearly moving data.
+    """
+    n = len(imu)
+    if n < MIN_SAMPLES:
+        raise InputError(
+            f"{imu.topic or 'input'}: only {n} IMU samples; need at least {MIN_SAMPLES} for an Allan analysis"
+        )
+    finite = np.isfinite(imu.t).all() and np.isfinite(imu.gyro).all() and np.isfinite(imu.accel).all()
+    if not finite:
+        raise InputError(f"{imu.topic or 'input'}: NaN/inf in the IMU samples or stamps; repair or drop them first")
+    for block, names in ((imu.gyro, GYRO_AXES), (imu.accel, ACCEL_AXES)):
+        for name, column in zip(names, block.T, strict=True):
+            if np.ptp(column) == 0:
+                raise InputError(
+                    f"{imu.topic or 'input'}: {name} is constant ({column[0]:g}) over all {n} samples: the driver "
+                    "does not publish this axis or the sensor is saturated; no noise can be identified"
+                )
+    dt = imu.dt
+    warnings = list(imu.notes) + _timing_warnings(imu.t, dt)
+    motion = static_check(imu)
+    if motion and not allow_motion:
+        raise NotStaticError(
+            f"{imu.topic or 'input'} does not look static: " + "; ".join(motion)
+            + ". A static analysis needs the IMU at rest; pass allow_motion (CLI: --allow-motion) to analyse anyway"
+        )
+    warnings += [f"not static: {m}" for m in motion]
+    wanted = ["allan", *[k for k in kinds if k != "allan"]]
+    # Gyro and accel separately: no (N, 6) copy of the samples (peak memory, see docs/analysis.md).
+    variances = {}
+    for step, kind in enumerate(wanted):
+        blocks = [allan_family(block, dt, kind, per_decade=per_decade, confidence=confidence)
+                  for block in (imu.gyro, imu.accel)]
+        variances[kind] = stack_axes(blocks)
+        if progress is not None:
+            progress(step + 1, len(wanted))
+    duration = n * dt
+    slopes = {}
+    for j, name in enumerate(AXES):
+        slopes[name] = fit_axis_slopes(variances["allan"], j)
+        warnings += _slope_warnings(name, slopes[name], duration)
+    return StaticAnalysis(
+        axes=AXES, n=n, dt=dt, duration_s=duration, topic=imu.topic, variances=variances, slopes=slopes,
+        warnings=warnings,
+    )
+
+
+def kalibr_parameters(result: StaticAnalysis, combine: str = "max") -> dict[str, float]:
+    """Kalibr's four noise numbers [SI] from per-axis values combined by ``combine`` over each sensor's axes."""
+    return {
+        "accelerometer_noise_density": result.sensor_value("accel", "noise_density", combine),
+        "accelerometer_random_walk": result.sensor_value("accel", "random_walk", combine),
+        "gyroscope_noise_density": result.sensor_value("gyro", "noise_density", combine),
+        "gyroscope_random_walk": result.sensor_value("gyro", "random_walk", combine),
+    }
+

@@ -1,0 +1,120 @@
+"""Core repairs and checks of time series (imu_noise_id.core.quality): pure arrays, no bags."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core.axes import ImuSeries
+from imu_noise_id.core.modelspec import parse_imu_model
+from imu_noise_id.core.quality import QualityError, repair_time_series, static_check
+from imu_noise_id.core.simulate import simulate_static_imu
+
+
+def _series(n: int = 1000, dt: float = 0.01, t0: float = 100.0) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(0)
+    return t0 + dt * np.arange(n), rng.normal(size=(n, 3))
+
+
+def test_clean_series_is_returned_unchanged():
+    t, x = _series()
+    t2, x2, report = repair_time_series(t, x)
+    assert t2 is t and x2 is x
+    assert not report.repaired and report.notes() == [] and report.gaps == []
+    assert report.dt_median == pytest.approx(0.01)
+
+
+def test_nonfinite_samples_are_dropped_and_counted():
+    t, x = _series()
+    x[10, 1] = np.nan
+    x[20, 0] = np.inf
+    t[30] = np.nan
+    t2, x2, report = repair_time_series(t, x)
+    assert report.n_nonfinite == 3 and len(t2) == 997
+    assert np.all(np.isfinite(x2))
+    assert "dropped 3 of 1000 samples with NaN/inf" in report.notes()[0]
+    # The dropped samples leave 1-sample holes: reported as gaps, not hidden.
+    assert len(report.gaps) == 3
+
+
+def test_all_nonfinite_raises():
+    t, x = _series(50)
+    x[:, 0] = np.nan
+    with pytest.raises(QualityError, match=r"all 50 samples have NaN/inf"):
+        repair_time_series(t, x)
+
+
+def test_out_of_order_stamps_are_sorted_with_the_data():
+    t, x = _series()
+    perm = np.arange(1000)
+    perm[[100, 101]] = perm[[101, 100]]
+    perm[[500, 503]] = perm[[503, 500]]
+    t2, x2, report = repair_time_series(t[perm], x[perm])
+    assert report.n_backwards == 3  # 101>100, then 503>501 and 502>500
+    np.testing.assert_array_equal(t2, t)
+    np.testing.assert_array_equal(x2, x)
+    assert "sorted by stamp" in report.notes()[0]
+
+
+def test_duplicated_stamps_keep_the_first_sample():
+    t, x = _series()
+    t_dup = np.insert(t, 201, t[200])
+    x_dup = np.insert(x, 201, x[200] + 1.0, axis=0)  # the repeated stamp carries other data: still dropped
+    t2, x2, report = repair_time_series(t_dup, [x_dup, x_dup[:, :1]])
+    assert report.n_duplicates == 1
+    np.testing.assert_array_equal(t2, t)
+    np.testing.assert_array_equal(x2[0], x)  # the first of the two is kept
+    assert "duplicated stamp" in report.notes()[0]
+
+
+def test_gaps_are_reported_with_time_and_length():
+    t, x = _series(2000, dt=0.01, t0=1000.0)
+    keep = np.ones(2000, dtype=bool)
+    keep[500:600] = False  # 1 s hole after t = 1004.99 s
+    t2, _, report = repair_time_series(t[keep], x[keep])
+    assert len(report.gaps) == 1
+    start, length, missing = report.gaps[0]
+    assert start == pytest.approx(1004.99) and length == pytest.approx(1.01) and missing == 100
+    note = report.notes()[0]
+    assert "1 gap(s)" in note and "at t=4.990 s for 1.010 s" in note and "≈100 missing" in note
+    assert not report.repaired  # gaps are reported, not repaired
+    assert len(t2) == 1900
+
+
+def test_zero_stamps_among_clock_stamps_are_dropped_but_a_sim_time_origin_is_kept():
+    t, x = _series(t0=1.7e9)
+    t[[0, 7]] = 0.0
+    t2, _, report = repair_time_series(t, x)
+    assert report.n_zero_stamps == 2 and len(t2) == 998
+    assert "zero header stamp" in report.notes()[0]
+    t_sim, x_sim = _series(t0=0.0)  # simulation time starting at 0: the first stamp is legitimately 0
+    _, _, report_sim = repair_time_series(t_sim, x_sim)
+    assert report_sim.n_zero_stamps == 0 and not report_sim.repaired
+
+
+def test_implausible_values_dropped_when_rare_and_rejected_when_many():
+    t, x = _series()
+    x[5, 0] = 1e200
+    _, x2, report = repair_time_series(t, [x, x], max_abs=(1e3, None))
+    assert report.n_implausible == 1 and np.abs(x2[0]).max() < 1e3
+    assert "physically impossible" in report.notes()[0]
+    x[:100, 0] = 5e3  # 10 % of samples: not corruption but wrong units → error
+    with pytest.raises(QualityError, match=r"exceed the physical limits"):
+        repair_time_series(t, [x, x], max_abs=(1e3, None))
+
+
+def test_static_check_passes_simulated_static_imu_and_flags_motion():
+    model = parse_imu_model("gyro: WN(1e-3)+RW(1e-5); accel: WN(2e-3)+RW(4e-4)")
+    imu = simulate_static_imu(model, 100.0, 600.0, seed=4)
+    assert static_check(imu) == []
+    # Rotation about z at 0.2 Hz with 0.1 rad/s amplitude, and a tilt changing the gravity split on x/z.
+    moving = ImuSeries(t=imu.t, gyro=imu.gyro.copy(), accel=imu.accel.copy())
+    moving.gyro[:, 2] += 0.1 * np.sin(2 * np.pi * 0.2 * imu.t)
+    moving.accel[:, 0] += 0.5 * np.sin(2 * np.pi * 0.05 * imu.t)
+    flags = static_check(moving)
+    assert any(f.startswith("gyro_z: the 1 s means vary") for f in flags)
+    assert any(f.startswith("accel_x: the 1 s means vary") for f in flags)
+    assert any(f.startswith("gyro_z: variance is") for f in flags)
+    # Gravity removed (or wrong units): flagged with the reason.
+    no_g = ImuSeries(t=imu.t, gyro=imu.gyro, accel=imu.accel - [0.0, 0.0, 9.80665])
+    assert any("|mean accel| = 0.0" in f for f in static_check(no_g))
