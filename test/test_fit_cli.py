@@ -63,3 +63,20 @@ def test_allan_band_and_overlay_figure(tmp_path):
     out = save_allan_overlay(tmp_path / "f.png", [{"tau": av.tau, "avar": av.avar, "fit": fit,
                                                    "band": (tau, band)}])
     assert out.exists() and out.stat().st_size < 300_000
+
+
+def test_analyze_em_stage_through_a_bag(tmp_path, capsys):
+    from imu_noise_id.bag.writer import write_bag
+
+    model = parse_imu_model("gyro: WN(1e-3)+RW(2e-4); accel: WN(2e-3)+RW(3e-4)")
+    bag = write_bag(tmp_path / "static", simulate_static_imu(model, 100.0, 60.0, seed=8), storage="mcap")
+    out = tmp_path / "res"
+    assert main(["analyze", str(bag), "--out", str(out), "--model", "WN+RW"]) == 0
+    assert (out / "model.yaml").is_file() and (out / "allan_model.png").is_file()
+    axes = yaml.safe_load((out / "model.yaml").read_text())["axes"]
+    assert set(axes) == {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"}
+    kalibr = yaml.safe_load((out / "imu.yaml").read_text())
+    em_n = kalibr["gyroscope_noise_density_em_xyz"]
+    assert kalibr["gyroscope_noise_density"] == max(em_n) and "gyroscope_noise_density_allan" in kalibr
+    assert all(abs(n / 1e-3 - 1) < 0.05 for n in em_n)  # 6000 samples: se of N ≈ 1 %
+    assert "gyro_z: WN+RW" in capsys.readouterr().out
