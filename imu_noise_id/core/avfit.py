@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from .allan import allan_variance
 from .components import GM, QN, RR, RW, WN, Component, total_allan_variance
 from .errors import InputError
 
@@ -30,23 +31,14 @@ class EmpiricalAllan:
 
 
 def empirical_allan(y: np.ndarray, dt: float, max_fraction: float = 0.25) -> EmpiricalAllan:
-    """Overlapping AV (paper 000 eq. 2) at m = 1, 2, 4, … ≤ max_fraction·N from the cumulative sum, O(N) per τ.
-
-    NaN samples must have been filled by the caller (this is for initial values only).
-    """
+    """Overlapping AV (paper 000 eq. 2, :func:`imu_noise_id.core.allan.allan_variance`) at octave-spaced
+    m = 1, 2, 4, … ≤ max_fraction·N. NaN samples must have been filled by the caller (initial values only)."""
     y = np.asarray(y, dtype=float)
     n = y.size
-    x = np.concatenate([[0.0], np.cumsum(y - y.mean())]) * dt
     ms = 2 ** np.arange(0, max(int(math.log2(max(max_fraction * n, 1))) + 1, 1))
     ms = ms[(ms >= 1) & (2 * ms < n)]
-    taus, avs, ncl = [], [], []
-    for m in ms:
-        d = x[2 * m:] - 2.0 * x[m:-m] + x[: -2 * m]
-        tau = m * dt
-        taus.append(tau)
-        avs.append(float(d @ d) / (2.0 * tau * tau * d.size))
-        ncl.append(n / m)
-    return EmpiricalAllan(np.array(taus), np.array(avs), np.array(ncl))
+    res = allan_variance(y, dt, m=ms)
+    return EmpiricalAllan(res.tau, res.variance[:, 0], n / res.m)
 
 
 def _guess(names: list[str], av: EmpiricalAllan, gm_taus: list[float]) -> list[Component]:
