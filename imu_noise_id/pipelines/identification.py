@@ -39,6 +39,8 @@ MIN_SAMPLES, MIN_SAMPLES_PER_PARAMETER = 100, 20
 #: Above this standard error in log space (a 95 % Wald interval wider than ×7 each way) the Wald interval is
 #: replaced by a likelihood-ratio one (:func:`imu_noise_id.core.mle.likelihood_interval`).
 WALD_MAX_SE_LOG = 1.0
+#: Above this length a record with missing samples is searched gap-filled first (see fit_model).
+FILL_FIRST_MIN_SAMPLES = 20_000
 #: Default candidate structures of :func:`select_model` (RR / QN added when the AV suggests them).
 DEFAULT_CANDIDATES: tuple[str, ...] = ("WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM")
 
@@ -254,7 +256,10 @@ def fit_model(
     Parameters
     ----------
     y
-        Samples [u] at period ``dt`` [s]; NaN = missing (no update; the exact, slower engine is then used).
+        Samples [u] at period ``dt`` [s]; NaN = missing (no update; the exact engine, a Python loop, is then
+        used; for records longer than ``FILL_FIRST_MIN_SAMPLES`` the noise parameters are fitted on the record
+        with its gaps linearly filled (fast engine) — an approximation that is negligible for a few isolated
+        gaps — while the log-likelihood, mean parameters, innovations and intervals are exact with the gaps).
     structure
         ``'WN+GM+RW+RR'``, or a spec with values (``'WN(2e-4)+RW(3e-6)'``, used as the initial value), or
         a list of components (ditto).
@@ -356,13 +361,18 @@ def fit_model(
             fits = sorted((whittle.whittle_fit(c, y_av, dt, bp) for _, c in fits), key=lambda r: -r[0])
             fits = avfit.distinct([(-w, c) for w, c in fits], av.tau, dt)
         starts = [c for _, c in fits[: max(n_starts, 1)]]
+    # Long records with missing samples: the parameters are searched on the gap-filled record with the fast
+    # engine (beyond the paper; the exact engine is a Python loop); likelihood, means, innovations and intervals
+    # below are those of the record with its gaps.
+    fill_first = n_obs < n_total and n_total > FILL_FIRST_MIN_SAMPLES and polish
+    y_search = _filled(y) if fill_first else y
     best: tuple[mle.MLEResult, int] | None = None
     lls = []
     for start in starts:
         try:
             metric = whittle.whittle_information(start, y_av, dt, bp) if bp is not None else None
             res = _one_start(
-                start, y, z, dt, exog_names=user_names, em_iter=em_iter, em_tol=em_tol, polish=polish,
+                start, y_search, z, dt, exog_names=user_names, em_iter=em_iter, em_tol=em_tol, polish=polish,
                 tau_bounds=tau_bounds, metric=metric,
             )
         except (InputError, np.linalg.LinAlgError):
