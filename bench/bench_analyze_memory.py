@@ -20,6 +20,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_bags import make_bag, peak_rss_of  # noqa: E402
 
+#: Partial runs that show where the peak comes from.
+STAGES = {
+    "read_imu": "from imu_noise_id.bag.reader import read_imu; imu = read_imu({bag!r})",
+    "read_imu + static_check": "from imu_noise_id.bag.reader import read_imu; "
+    "from imu_noise_id.core.quality import static_check; imu = read_imu({bag!r}); static_check(imu)",
+    "read_imu + analyze_static (all 4 kinds)": "from imu_noise_id.bag.reader import read_imu; "
+    "from imu_noise_id.pipelines.analysis import analyze_static; imu = read_imu({bag!r}); analyze_static(imu)",
+}
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -39,11 +48,20 @@ def main() -> None:
         peak, wall, rc = peak_rss_of(cmd, env)
         if rc != 0:
             raise SystemExit(f"analyze failed with exit code {rc}")
+        stages = {}
+        for label, stage in STAGES.items():
+            code = f"{prelude}; {stage.format(bag=str(bag))}; import time; time.sleep(0.2)"
+            stages[label], _, rc = peak_rss_of([sys.executable, "-c", code], env)
+            if rc != 0:
+                raise SystemExit(f"stage {label!r} failed with exit code {rc}")
     mb = 1024**2
     print(f"decoded float64 arrays ({n:,} samples): {arrays / mb:.1f} MiB")
     print(f"peak RSS of analyze: {peak / mb:.1f} MiB = {peak / arrays:.2f}x the arrays; wall time {wall:.1f} s")
     print(f"interpreter + imports: {base / mb:.1f} MiB; analyze adds {(peak - base) / mb:.1f} MiB = "
           f"{(peak - base) / arrays:.2f}x the arrays")
+    print("peak RSS of the stages alone (same imports), added over the imports:")
+    for label, value in stages.items():
+        print(f"  {label:38s} {value / mb:7.1f} MiB  (+{(value - base) / arrays:.2f}x the arrays)")
 
 
 if __name__ == "__main__":

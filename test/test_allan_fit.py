@@ -9,6 +9,7 @@ import pytest
 
 from imu_noise_id.core import allan, allan_fit
 from imu_noise_id.core.components import QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.errors import InputError
 
 DT = 0.01
 
@@ -80,3 +81,9 @@ def test_all_axes_and_kind_check():
     assert len(allan_fit.fit_slopes(res)) == 3
     with pytest.raises(ValueError, match="Allan variance"):
         allan_fit.fit_axis_slopes(allan.hadamard_variance(y, DT))
+
+
+def test_constant_signal_gives_clear_error():
+    res = allan.allan_variance(np.full(1000, 3.0), DT)
+    with pytest.raises(InputError, match="constant"):
+        allan_fit.fit_axis_slopes(res)

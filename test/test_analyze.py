@@ -182,3 +182,18 @@ def test_progress_bar_only_on_a_tty():
         bar.close()
     assert "100.0 %" in tty.getvalue() and tty.getvalue().endswith("\n")
     assert pipe.getvalue() == ""
+
+
+def test_constant_axis_is_a_clear_error():
+    imu = simulate_static_imu(_model(), 100.0, 60.0, seed=1)
+    gyro = imu.gyro.copy()
+    gyro[:, 2] = 0.0
+    with pytest.raises(InputError, match="gyro_z is constant"):
+        analyze_static(ImuSeries(t=imu.t, gyro=gyro, accel=imu.accel))
+
+
+def test_analysis_reports_progress_per_estimator():
+    calls = []
+    imu = simulate_static_imu(_model(), 100.0, 30.0, seed=1)
+    analyze_static(imu, progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(1, 4), (2, 4), (3, 4), (4, 4)]

@@ -161,3 +161,24 @@ def test_absurd_initial_values_are_rejected():
     y = np.random.default_rng(0).standard_normal(500)
     with pytest.raises(InputError):
         fit_model(y, 0.01, "WN+RW", init=[WN(0.1), RW(0.0)])
+
+
+def test_ls_drift_elimination_reports_a_gls_slope_interval():
+    # Paper 000 §3.5(iii): the ramp removed by least squares first. The OLS slope's own standard error would
+    # assume white residuals (here it would be ~50x too small); the reported interval must cover the truth.
+    y = simulate_sum([WN(0.2), RW(0.01), RR(2e-4)], 4000, 1.0, np.random.default_rng(3))
+    fit = fit_model(y, 1.0, "WN+RW+RR", drift="ls", n_starts=1)
+    ramp = fit.exog_coef["ramp"]
+    assert "ls_value" in ramp and ramp["ci95"][0] <= 2e-4 <= ramp["ci95"][1]
+    assert fit.ci95["RW.random_walk"][0] <= 0.01 <= fit.ci95["RW.random_walk"][1]
+
+
+def test_long_record_with_gaps_is_fitted_gap_filled_then_scored_exactly():
+    truth = [WN(1e-3), GM(tau=0.5, sigma=1e-3)]
+    y = simulate_sum(truth, 25000, 0.01, np.random.default_rng(9))
+    y[[10, 5000, 5001, 20000]] = np.nan
+    fit = fit_model(y, 0.01, "WN+GM", n_starts=1, uncertainty=False)
+    assert fit.n == 24996
+    assert abs(fit.components[0].params()["noise_density"] / 1e-3 - 1) < 0.05
+    # The reported log-likelihood is the exact one of the record with its gaps.
+    assert fit.loglik == pytest.approx(kalman.loglik(fit.statespace, fit._y, fit._z, engine="exact").loglik)

@@ -33,6 +33,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
     p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
     p.add_argument(
+        "--model", default="none",
+        help="EM model fit per axis after the Allan stage: 'auto' (BIC over the default candidates), a structure "
+        "such as 'WN+GM+RW', or 'none' (default: Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
+        "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
+    )
+    p.add_argument(
         "--allow-motion", action="store_true",
         help="analyse even if the static check finds motion (its findings become warnings)",
     )
@@ -52,10 +58,30 @@ def _read(args: argparse.Namespace):
 
 def _allan_stage(imu, args: argparse.Namespace):
     from ..pipelines.analysis import analyze_static
+    from .progress import TextProgress
 
-    return analyze_static(
-        imu, per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion
-    )
+    progress = TextProgress("Allan-family variances")
+    try:
+        return analyze_static(
+            imu, per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
+            progress=progress,
+        )
+    finally:
+        progress.close()
+
+
+def _em_stage(imu, result, args: argparse.Namespace) -> dict:
+    """Constrained-EM / maximum-likelihood fit of every axis (issue 3), then model.yaml, allan_model.png and
+    the model values in imu.yaml."""
+    from ..report.model_outputs import write_model_outputs
+    from .fit import fit_axes
+
+    fits, selections = fit_axes(imu, args.model, list(result.axes))
+    allan = result.variances["allan"]
+    avar = {axis: (allan.tau, allan.variance[:, j]) for j, axis in enumerate(result.axes)}
+    return write_model_outputs(args.out, fits, selections, avar,
+                               meta={"source": str(args.bag), "topic": imu.topic, "command": "analyze",
+                                     "model": args.model})
 
 
 def run(args: argparse.Namespace) -> int:
@@ -70,6 +96,8 @@ def run(args: argparse.Namespace) -> int:
     imu = _read(args)
     result = _allan_stage(imu, args)
     paths = write_static_outputs(result, args.out, rostopic=imu.topic)
+    if args.model != "none":
+        paths.update(_em_stage(imu, result, args))
     print(summary_table(result), flush=True)
     for w in result.warnings:
         print(f"warning: {w}", file=sys.stderr)

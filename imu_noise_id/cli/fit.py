@@ -77,10 +77,32 @@ def sampling_period(t) -> float:
     return float(np.median(d))
 
 
+def fit_axes(series, model: str, axes: list[str], **kwargs):
+    """Fit ``model`` (or select with ``'auto'``) on each axis of an ImuSeries; returns (fits, selections)."""
+    from ..core.errors import InputError
+    from ..pipelines.identification import fit_model, select_model
+
+    fits, selections = {}, {}
+    dt = sampling_period(series.t)
+    for axis in axes:
+        y = series.axis(axis)
+        try:
+            if model == "auto":
+                sel = select_model(y, dt, **kwargs)
+                fits[axis], selections[axis] = sel.best, sel
+            else:
+                fits[axis] = fit_model(y, dt, model, **kwargs)
+        except InputError as exc:
+            raise InputError(f"{axis}: {exc}") from None
+        f = fits[axis]
+        print(f"{axis}: {f.model}  loglik {f.loglik:.6g}  BIC {f.bic:.6g}  "
+              + "  ".join(str(c) for c in f.components), flush=True)
+    return fits, selections
+
+
 def run(args: argparse.Namespace) -> int:
     from ..core.axes import AXES
     from ..core.errors import InputError
-    from ..pipelines.identification import fit_model, select_model
     from ..report.model_yaml import write_model_yaml
 
     axes = args.axis or list(AXES)
@@ -88,22 +110,8 @@ def run(args: argparse.Namespace) -> int:
     if bad:
         raise InputError(f"unknown axis {', '.join(bad)}: use {', '.join(AXES)}")
     series = load_series(args.bag, args.topic)
-    dt = sampling_period(series.t)
-    fits, selections = {}, {}
     kwargs = {"n_starts": args.starts, "target_precision": args.target_precision, "drift": args.drift}
-    for axis in axes:
-        y = series.axis(axis)
-        try:
-            if args.model == "auto":
-                sel = select_model(y, dt, **kwargs)
-                fits[axis], selections[axis] = sel.best, sel
-            else:
-                fits[axis] = fit_model(y, dt, args.model, **kwargs)
-        except InputError as exc:
-            raise InputError(f"{axis}: {exc}") from None
-        f = fits[axis]
-        print(f"{axis}: {f.model}  loglik {f.loglik:.6g}  BIC {f.bic:.6g}  "
-              + "  ".join(str(c) for c in f.components))
+    fits, selections = fit_axes(series, args.model, axes, **kwargs)
     out = write_model_yaml(Path(args.out) / "model.yaml", fits, selections,
                            meta={"source": str(args.bag), "topic": series.topic, "command": "fit",
                                  "model": args.model})

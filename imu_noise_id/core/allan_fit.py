@@ -28,7 +28,8 @@ Rule (documented in docs/analysis.md):
    RR are reported only when they have such a region of at least two τ.
 3. **Confidence interval.** From the single AV point of the region with the most information on the
    coefficient (largest ν·s², s the component's share of the fitted sum there): its χ² interval, relative,
-   divided by s (the other lines are taken as known) and carried to the parameter (∝ √c). AV estimates at
+   divided by s (the other lines are taken as known), widened in log (in quadrature) by the difference
+   between the fitted c and the c this point alone implies, and carried to the parameter (∝ √c). AV estimates at
    neighbouring τ are strongly correlated, so averaging them adds little information and a naive
    least-squares error would be too optimistic; this interval is approximate (coverage measured in
    ``bench/bench_allan_fit.py``).
@@ -46,6 +47,7 @@ import numpy as np
 from scipy import optimize
 
 from .allan import AllanResult
+from .errors import InputError
 
 #: A component's region: where its line is at least this fraction of the fitted sum.
 DOMINANCE = 0.5
@@ -64,15 +66,15 @@ class SlopeComponent:
 
     Attributes
     ----------
-    name : {"QN", "WN", "RW", "RR"}
+    name : {"QN", "WN", "BI", "RW", "RR"}
     slope : float
         The line's slope μ in AV (the ADEV slope is μ/2).
     coefficient : float
         c in AV(τ) = c·τ^μ of the fitted line [u²·s^(−μ)].
     value : float
-        The parameter (Q [u·s], N [u/√Hz], K [u/s/√Hz] or R [u/s]).
+        The parameter (Q [u·s], N [u/√Hz], B [u], K [u/s/√Hz] or R [u/s]).
     ci : tuple of float
-        Its confidence interval (see the module docstring, rule 4); equal to (0, value) for an upper bound.
+        Its confidence interval (module docstring, rule 3); (0, value) for an upper bound (rule 4).
     method : {"fit", "upper_bound"}
     tau_range : tuple of float
         The τ [s] the line was fitted on (or where the bound was attained).
@@ -148,6 +150,11 @@ def fit_lines(tau: np.ndarray, variance: np.ndarray, edf: np.ndarray, names: tup
     use = np.array([n in names for n in _NAMES])
     basis = tau[:, None] ** _MUS[None, use]
     ok = np.isfinite(variance) & (variance > 0) & (edf > 0)
+    if ok.sum() < 3:
+        raise InputError(
+            f"only {ok.sum()} of {tau.size} Allan variances are positive: the signal is (nearly) constant, "
+            "so no noise parameters can be read from it"
+        )
     basis, av, nu = basis[ok], variance[ok], edf[ok]
     # Start: linear non-negative least squares, weights EDF/(2·model²), model refined a few times.
     model = av.copy()
@@ -186,7 +193,7 @@ def _region(j: int, coef: np.ndarray, tau: np.ndarray) -> np.ndarray:
 
 
 def select_lines(res: AllanResult, axis: int) -> np.ndarray:
-    """Coefficients of the base lines plus the extras (BI, RR) the data need (rule 1b).
+    """Coefficients of the base lines plus the extras (BI, RR) the data need (rule 1).
 
     An extra line is kept when, in its region (of at least two τ), the AV's lower confidence limit lies above
     the base model at two or more τ: the curve is significantly higher than QN + WN + RW can explain there.
@@ -216,6 +223,13 @@ def _component(name: str, coef: np.ndarray, region: np.ndarray, res: AllanResult
     av = res.variance[i, axis]
     c_lo = max(1.0 + (res.ci_low[i, axis] / av - 1.0) / share[k], 0.0)
     c_hi = 1.0 + (res.ci_high[i, axis] / av - 1.0) / share[k]
+    # Widen by the disagreement between the fitted line and that point's own coefficient (in log, quadrature).
+    others = lines[k].sum() - lines[k, j]
+    own = (av - others) / res.tau[i] ** mu
+    if own > 0 and c_lo > 0:
+        d2 = math.log(own / coefficient) ** 2
+        c_lo = math.exp(-math.sqrt(math.log(c_lo) ** 2 + d2))
+        c_hi = math.exp(math.sqrt(math.log(c_hi) ** 2 + d2))
     tau = res.tau
     return SlopeComponent(name, mu, coefficient, value, (value * math.sqrt(c_lo), value * math.sqrt(c_hi)), "fit",
                           (float(tau[region[0]]), float(tau[region[-1]])), int(region.size))

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from .allan import allan_variance
 from .components import GM, QN, RR, RW, WN, Component, total_allan_variance
 from .errors import InputError
 
@@ -30,23 +31,14 @@ class EmpiricalAllan:
 
 
 def empirical_allan(y: np.ndarray, dt: float, max_fraction: float = 0.25) -> EmpiricalAllan:
-    """Overlapping AV (paper 000 eq. 2) at m = 1, 2, 4, … ≤ max_fraction·N from the cumulative sum, O(N) per τ.
-
-    NaN samples must have been filled by the caller (this is for initial values only).
-    """
+    """Overlapping AV (paper 000 eq. 2, :func:`imu_noise_id.core.allan.allan_variance`) at octave-spaced
+    m = 1, 2, 4, … ≤ max_fraction·N. NaN samples must have been filled by the caller (initial values only)."""
     y = np.asarray(y, dtype=float)
     n = y.size
-    x = np.concatenate([[0.0], np.cumsum(y - y.mean())]) * dt
     ms = 2 ** np.arange(0, max(int(math.log2(max(max_fraction * n, 1))) + 1, 1))
     ms = ms[(ms >= 1) & (2 * ms < n)]
-    taus, avs, ncl = [], [], []
-    for m in ms:
-        d = x[2 * m:] - 2.0 * x[m:-m] + x[: -2 * m]
-        tau = m * dt
-        taus.append(tau)
-        avs.append(float(d @ d) / (2.0 * tau * tau * d.size))
-        ncl.append(n / m)
-    return EmpiricalAllan(np.array(taus), np.array(avs), np.array(ncl))
+    res = allan_variance(y, dt, m=ms)
+    return EmpiricalAllan(res.tau, res.variance[:, 0], n / res.m)
 
 
 def _guess(names: list[str], av: EmpiricalAllan, gm_taus: list[float]) -> list[Component]:
@@ -127,16 +119,18 @@ def fit_allan(names: list[str], av: EmpiricalAllan, dt: float, n_grid: int = 4) 
     if not results:
         raise InputError("the Allan-variance fit for initial values failed; give initial values (init=…)")
     results.sort(key=lambda r: r[0])
-    return distinct(results)
+    return distinct(results, av.tau, dt)
 
 
-def distinct(results: list[tuple[float, list[Component]]], min_log_gap: float = 0.3) -> list:
-    """Drop solutions whose log-parameters are all within ``min_log_gap`` of a better one."""
+def distinct(results: list[tuple[float, list[Component]]], tau: np.ndarray, dt: float,
+             rel: float = 0.1) -> list[tuple[float, list[Component]]]:
+    """Drop solutions whose theoretical AV is within ``rel`` of a better one's at every τ (the same fit for
+    practical purposes, e.g. differing only in a negligible random walk)."""
     kept: list[tuple[float, list[Component]]] = []
-    vecs: list[np.ndarray] = []
+    curves: list[np.ndarray] = []
     for cost, comps in results:
-        v = np.log([max(x, 1e-300) for c in comps if not isinstance(c, RR) for x in c.params().values()])
-        if all(np.max(np.abs(v - u)) > min_log_gap for u in vecs):
+        curve = np.log(total_allan_variance([c for c in comps if not isinstance(c, RR)], tau, dt))
+        if all(np.max(np.abs(curve - other)) > math.log1p(rel) for other in curves):
             kept.append((cost, comps))
-            vecs.append(v)
+            curves.append(curve)
     return kept

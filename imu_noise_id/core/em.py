@@ -227,12 +227,15 @@ class EMResult:
         Number of M-steps done.
     converged : bool
         Whether the relative stopping rule was met.
+    diverged : bool
+        Whether an update made the model degenerate (no steady-state filter); the last good iterate is kept.
     """
 
     model: StateSpace
     loglik: list[float] = field(default_factory=list)
     n_iter: int = 0
     converged: bool = False
+    diverged: bool = False
 
 
 def relative_change(l_new: float, l_old: float, c: float = 1.0) -> float:
@@ -272,7 +275,13 @@ def run_em(
     result.loglik.append(s.loglik)
     for _ in range(max_iter):
         new = mstep(result.model, s)
-        s = estep(new, y, z, engine, data)
+        try:
+            s = estep(new, y, z, engine, data)
+        except (InputError, np.linalg.LinAlgError):
+            # The update left the space where the filter exists (e.g. a GM pole at 1 next to an RW: an
+            # unobservable pair). Paper 000 §3.5(iii) warns of such divergence; keep the last good iterate.
+            result.diverged = True
+            break
         result.model = new
         result.n_iter += 1
         result.loglik.append(s.loglik)

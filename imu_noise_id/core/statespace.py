@@ -205,7 +205,7 @@ def steady_prediction_covariance(phi: np.ndarray, q: np.ndarray, h: np.ndarray, 
     A = phi.T.copy()
     G = np.outer(h, h) / r
     X = q.copy()
-    for _ in range(200):
+    for _ in range(500):
         W = np.linalg.solve(eye + G @ X, A)  # (I + G X)⁻¹ A
         X_new = X + A.T @ X @ W
         G = G + A @ np.linalg.solve(eye + G @ X, G) @ A.T
@@ -213,7 +213,7 @@ def steady_prediction_covariance(phi: np.ndarray, q: np.ndarray, h: np.ndarray, 
         X_new = 0.5 * (X_new + X_new.T)
         if not np.all(np.isfinite(X_new)):
             break
-        if np.max(np.abs(X_new - X)) <= 1e-15 * np.max(np.abs(X_new)):
+        if np.max(np.abs(X_new - X)) <= 1e-14 * np.max(np.abs(X_new)):
             return X_new
         X = X_new
     raise InputError("the steady-state Riccati iteration did not converge; the model parameters are degenerate")

@@ -17,7 +17,7 @@ Stages
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -141,6 +141,7 @@ def analyze_static(
     per_decade: int = DEFAULT_PER_DECADE,
     confidence: float = DEFAULT_CONFIDENCE,
     allow_motion: bool = False,
+    progress: Callable[[int, int], None] | None = None,
 ) -> StaticAnalysis:
     """Allan-family variances and Allan-slope noise parameters of a static IMU recording.
 
@@ -156,6 +157,8 @@ def analyze_static(
         Two-sided level of the confidence intervals.
     allow_motion : bool
         Analyse even if the static check fails (its reasons become warnings).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each estimator.
 
     Raises
     ------
@@ -170,6 +173,13 @@ def analyze_static(
     finite = np.isfinite(imu.t).all() and np.isfinite(imu.gyro).all() and np.isfinite(imu.accel).all()
     if not finite:
         raise InputError(f"{imu.topic or 'input'}: NaN/inf in the IMU samples or stamps; repair or drop them first")
+    for block, names in ((imu.gyro, GYRO_AXES), (imu.accel, ACCEL_AXES)):
+        for name, column in zip(names, block.T, strict=True):
+            if np.ptp(column) == 0:
+                raise InputError(
+                    f"{imu.topic or 'input'}: {name} is constant ({column[0]:g}) over all {n} samples: the driver "
+                    "does not publish this axis or the sensor is saturated; no noise can be identified"
+                )
     dt = imu.dt
     warnings = list(imu.notes) + _timing_warnings(imu.t, dt)
     motion = static_check(imu)
@@ -181,11 +191,13 @@ def analyze_static(
     warnings += [f"not static: {m}" for m in motion]
     wanted = ["allan", *[k for k in kinds if k != "allan"]]
     # Gyro and accel separately: no (N, 6) copy of the samples (peak memory, see docs/analysis.md).
-    variances = {
-        k: stack_axes([allan_family(block, dt, k, per_decade=per_decade, confidence=confidence)
-                       for block in (imu.gyro, imu.accel)])
-        for k in wanted
-    }
+    variances = {}
+    for step, kind in enumerate(wanted):
+        blocks = [allan_family(block, dt, kind, per_decade=per_decade, confidence=confidence)
+                  for block in (imu.gyro, imu.accel)]
+        variances[kind] = stack_axes(blocks)
+        if progress is not None:
+            progress(step + 1, len(wanted))
     duration = n * dt
     slopes = {}
     for j, name in enumerate(AXES):

@@ -39,6 +39,8 @@ MIN_SAMPLES, MIN_SAMPLES_PER_PARAMETER = 100, 20
 #: Above this standard error in log space (a 95 % Wald interval wider than ×7 each way) the Wald interval is
 #: replaced by a likelihood-ratio one (:func:`imu_noise_id.core.mle.likelihood_interval`).
 WALD_MAX_SE_LOG = 1.0
+#: Above this length a record with missing samples is searched gap-filled first (see fit_model).
+FILL_FIRST_MIN_SAMPLES = 20_000
 #: Default candidate structures of :func:`select_model` (RR / QN added when the AV suggests them).
 DEFAULT_CANDIDATES: tuple[str, ...] = ("WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM")
 
@@ -254,7 +256,10 @@ def fit_model(
     Parameters
     ----------
     y
-        Samples [u] at period ``dt`` [s]; NaN = missing (no update; the exact, slower engine is then used).
+        Samples [u] at period ``dt`` [s]; NaN = missing (no update; the exact engine, a Python loop, is then
+        used; for records longer than ``FILL_FIRST_MIN_SAMPLES`` the noise parameters are fitted on the record
+        with its gaps linearly filled (fast engine) — an approximation that is negligible for a few isolated
+        gaps — while the log-likelihood, mean parameters, innovations and intervals are exact with the gaps).
     structure
         ``'WN+GM+RW+RR'``, or a spec with values (``'WN(2e-4)+RW(3e-6)'``, used as the initial value), or
         a list of components (ditto).
@@ -265,7 +270,9 @@ def fit_model(
         Initial components (same structure); default: from the structure string's values or the AV fit.
     drift
         With RR in the structure: ``'em'`` joint estimation (default), ``'ls'`` least-squares removal first
-        (paper 000 §3.5(iii)). ``None`` forbids RR.
+        (paper 000 §3.5(iii)); the noise parameters then come from the detrended record, and the slope reported
+        is re-estimated by GLS with the fitted noise model (its OLS value is kept as ``ls_value``; the OLS
+        standard error would assume white residuals). ``None`` forbids RR.
     n_starts
         Number of distinct starts tried (best likelihood kept).
     spectral_init
@@ -352,15 +359,20 @@ def fit_model(
         fits = avfit.fit_allan(fit_names, av, dt)
         if bp is not None:
             fits = sorted((whittle.whittle_fit(c, y_av, dt, bp) for _, c in fits), key=lambda r: -r[0])
-            fits = avfit.distinct([(-w, c) for w, c in fits])
+            fits = avfit.distinct([(-w, c) for w, c in fits], av.tau, dt)
         starts = [c for _, c in fits[: max(n_starts, 1)]]
+    # Long records with missing samples: the parameters are searched on the gap-filled record with the fast
+    # engine (beyond the paper; the exact engine is a Python loop); likelihood, means, innovations and intervals
+    # below are those of the record with its gaps.
+    fill_first = n_obs < n_total and n_total > FILL_FIRST_MIN_SAMPLES and polish
+    y_search = _filled(y) if fill_first else y
     best: tuple[mle.MLEResult, int] | None = None
     lls = []
     for start in starts:
         try:
             metric = whittle.whittle_information(start, y_av, dt, bp) if bp is not None else None
             res = _one_start(
-                start, y, z, dt, exog_names=user_names, em_iter=em_iter, em_tol=em_tol, polish=polish,
+                start, y_search, z, dt, exog_names=user_names, em_iter=em_iter, em_tol=em_tol, polish=polish,
                 tau_bounds=tau_bounds, metric=metric,
             )
         except (InputError, np.linalg.LinAlgError):
@@ -373,36 +385,29 @@ def fit_model(
     res, n_iter = best
     model_ss = res.model
     comps = ss.to_components(model_ss)
-    par = mle.Parameterisation.of(comps)
     prof = kalman.loglik(model_ss, y, z)
-    labels_all = parameter_labels(comps)
-    noise_labels = [lab for i, p, lab in labels_all if not isinstance(comps[i], RR)]
     se: dict[str, float] = {}
     ci: dict[str, tuple[float, float]] = {}
-    info_ok = True
-    advice = None
-    if uncertainty:
-        info = mle.observed_information(par, res.theta, model_ss, y, z)
-        cov, info_ok = mle.covariance_from_information(info)
-        for k, lab in enumerate(noise_labels):
-            v = float(np.exp(res.theta[k]))
-            s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
-            se[lab] = v * s_log
-            if s_log <= WALD_MAX_SE_LOG and not _near_zero(par, res, k, y, z):
-                ci[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
-            else:
-                lo, hi = mle.likelihood_interval(par, res.theta, k, model_ss, y, z=z, ll_max=res.loglik)
-                ci[lab] = (math.exp(lo) if math.isfinite(lo) else 0.0, math.exp(hi) if math.isfinite(hi) else math.inf)
-        advice = _record_length(noise_labels, cov, comps, n_obs, dt, target=target_precision)
     exog_coef: dict[str, dict] = {}
     for name, value, var in zip(prof.names, prof.beta, np.diag(prof.beta_cov), strict=True):
         key = name.split(":", 1)[1]
         s_b = math.sqrt(max(float(var), 0.0))
         exog_coef[key] = {"value": float(value), "se": s_b, "ci95": (value - Z95 * s_b, value + Z95 * s_b)}
     if ls_slope is not None:
-        comps.append(RR(ls_slope[0]))
-        exog_coef["ramp"] = {"value": ls_slope[0], "se": ls_slope[1],
-                             "ci95": (ls_slope[0] - Z95 * ls_slope[1], ls_slope[0] + Z95 * ls_slope[1])}
+        # The OLS standard error assumes white residuals and is far too small with RW/GM noise: re-estimate
+        # bias and slope by GLS on the original record with the fitted noise model (one closed-form step).
+        y_orig = y + ls_slope[0] * t
+        full = ss.from_components([*ss.to_components(model_ss), RR(ls_slope[0])], dt, exog_names=user_names)
+        z_full = np.column_stack([z[:, :1], t, z[:, 1:]])
+        gls = kalman.loglik(full, y_orig, z_full)
+        k_ramp = gls.names.index("b:ramp")
+        slope, s_b = float(gls.beta[k_ramp]), math.sqrt(max(float(gls.beta_cov[k_ramp, k_ramp]), 0.0))
+        comps.append(RR(slope))
+        k_bias = gls.names.index("b:bias")
+        b0, s0 = float(gls.beta[k_bias]), math.sqrt(max(float(gls.beta_cov[k_bias, k_bias]), 0.0))
+        exog_coef["bias"] = {"value": b0, "se": s0, "ci95": (b0 - Z95 * s0, b0 + Z95 * s0)}
+        exog_coef["ramp"] = {"value": slope, "se": s_b, "ci95": (slope - Z95 * s_b, slope + Z95 * s_b),
+                             "ls_value": ls_slope[0]}
     if "ramp" in exog_coef:
         rr_lab = next(lab for i, p, lab in parameter_labels(comps) if comps[i].name == "RR")
         se[rr_lab] = exog_coef["ramp"]["se"]
@@ -411,12 +416,43 @@ def fit_model(
     comps = sorted(comps, key=lambda c: order.get(c.name, 99))
     k = n_free_noise + z.shape[1] + (1 if ls_slope is not None else 0)
     ll = float(prof.loglik)
-    return FitResult(
+    result = FitResult(
         model=model_name(comps), components=comps, exog_coef=exog_coef, se=se, ci95=ci, loglik=ll,
         aic=2 * k - 2 * ll, bic=k * math.log(n_obs) - 2 * ll, n=n_obs, dt=float(dt), n_iter=n_iter,
-        converged=res.converged, record_length=advice, information_ok=info_ok, n_eval=res.n_eval, n_params=k,
-        starts=lls, statespace=model_ss, _y=y, _z=z,
+        converged=res.converged, n_eval=res.n_eval, n_params=k, starts=lls, statespace=model_ss, _y=y, _z=z,
     )
+    return add_uncertainty(result, target_precision) if uncertainty else result
+
+
+def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult:
+    """Standard errors, 95 % intervals (§3.4) and the recording-length advice of a fit, in place.
+
+    Observed information = minus the Hessian of the exact log-likelihood in log-parameters; Wald intervals
+    in log space, likelihood-ratio ones where the parameter cannot be told from 0 or the information is flat.
+    """
+    if fit.statespace is None or fit._y is None:
+        raise InputError("this FitResult holds no data to compute its uncertainty from")
+    y, z, model_ss = fit._y, fit._z, fit.statespace
+    comps_ss = ss.to_components(model_ss)
+    par = mle.Parameterisation.of(comps_ss)
+    theta = par.to_theta(comps_ss)
+    res = mle.MLEResult(theta, model_ss, fit.loglik, 0, fit.converged, "")
+    noise_labels = [lab for i, _, lab in parameter_labels(comps_ss) if not isinstance(comps_ss[i], RR)]
+    info = mle.observed_information(par, theta, model_ss, y, z)
+    cov, fit.information_ok = mle.covariance_from_information(info)
+    for k, lab in enumerate(noise_labels):
+        v = float(np.exp(theta[k]))
+        s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
+        fit.se[lab] = v * s_log
+        zero = _near_zero(par, res, k, y, z)
+        if s_log <= WALD_MAX_SE_LOG and not zero:
+            fit.ci95[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
+        else:
+            lo, hi = mle.likelihood_interval(par, theta, k, model_ss, y, z=z, ll_max=fit.loglik, lower=not zero)
+            fit.ci95[lab] = (math.exp(lo) if math.isfinite(lo) else 0.0,
+                             math.exp(hi) if math.isfinite(hi) else math.inf)
+    fit.record_length = _record_length(noise_labels, cov, comps_ss, fit.n, fit.dt, target=target_precision)
+    return fit
 
 
 @dataclass
@@ -445,16 +481,22 @@ def suggest_candidates(y: np.ndarray, dt: float) -> list[str]:
 def select_model(
     y: np.ndarray, dt: float, candidates: list[str] | None = None, *, criterion: str = "bic", **fit_kwargs
 ) -> SelectionResult:
-    """Fit every candidate structure and rank them by BIC (or AIC); ΔBIC and Schwarz weights as evidence."""
+    """Fit every candidate structure and rank them by BIC (or AIC); ΔBIC and Schwarz weights as evidence.
+
+    Standard errors and the recording-length advice are computed for the winner only (unless
+    ``uncertainty=False``); :func:`add_uncertainty` adds them to any other fit of ``fits``.
+    """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
     y = _check_signal(y, dt)
     cands = list(candidates) if candidates else suggest_candidates(y, dt)
     fits: dict[str, FitResult] = {}
     errors: dict[str, str] = {}
+    uncertainty = fit_kwargs.pop("uncertainty", True)
+    target = fit_kwargs.get("target_precision", 0.10)
     for spec in cands:
         try:
-            fits[spec] = fit_model(y, dt, spec, **fit_kwargs)
+            fits[spec] = fit_model(y, dt, spec, uncertainty=False, **fit_kwargs)
         except InputError as exc:
             errors[spec] = str(exc)
     if not fits:
@@ -476,6 +518,8 @@ def select_model(
         else:
             table.append({"model": spec, "error": errors[spec]})
     table.sort(key=lambda r: r.get(criterion, math.inf))
+    if uncertainty:
+        add_uncertainty(fits[best_key], target)
     return SelectionResult(fits[best_key], table, fits)
 
 
@@ -501,3 +545,15 @@ def simulate_allan_band(
             taus = np.asarray(tau, dtype=float)
             out.append(np.interp(np.log(taus), np.log(av.tau), av.avar))
     return taus, np.array(out)
+
+
+def kalibr_values(fit: FitResult) -> dict[str, float | None]:
+    """Kalibr ``imu.yaml`` values from a fitted model: ``noise_density`` [u/√Hz] from WN and ``random_walk``
+    [u/s/√Hz] from RW (None when the model has no RW: its long-term error is then a GM or a ramp, which Kalibr's
+    model cannot express; the caller keeps the Allan-slope value beside it)."""
+    wn = next((c for c in fit.components if c.name == "WN"), None)
+    rw = next((c for c in fit.components if c.name == "RW"), None)
+    return {
+        "noise_density": wn.params()["noise_density"] if wn else None,
+        "random_walk": rw.params()["random_walk"] if rw else None,
+    }

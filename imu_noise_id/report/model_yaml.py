@@ -63,7 +63,8 @@ def fit_to_dict(fit: FitResult, axis: str | None = None, selection: SelectionRes
         out["unit"] = UNITS[axis]
     out["components"] = [_component_entry(fit, i) for i in range(len(fit.components))]
     out["mean"] = {
-        k: {"value": _num(v["value"]), "se": _num(v["se"]), "ci95": [_num(c) for c in v["ci95"]]}
+        k: {"value": _num(v["value"]), "se": _num(v["se"]), "ci95": [_num(c) for c in v["ci95"]],
+            **({"ls_value": _num(v["ls_value"])} if "ls_value" in v else {})}
         for k, v in fit.exog_coef.items()
     }
     out.update({
