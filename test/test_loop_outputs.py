@@ -67,3 +67,24 @@ def test_loop_command_on_a_bag(tmp_path, capsys):
     assert (out / "report.html").exists()
     assert yaml.safe_load((out / "model.yaml").read_text())["axes"]["gyro_x"]["loop"][0]["model"] == "WN"
     assert main(["loop", str(tmp_path / "bag"), "--axes", "gyro_q", "--out", str(out)]) == 2
+
+
+def test_analyze_runs_the_loop_after_the_model_fit(tmp_path):
+    from imu_noise_id.bag.writer import write_bag
+
+    n = 4000
+    rng = np.random.default_rng(5)
+    gyro = np.column_stack([simulate_sum([WN(1e-3)], n, DT, rng) for _ in range(3)])
+    gyro[:, 2] += 5e-3 * np.sin(2 * math.pi * 2.0 * np.arange(n) * DT)  # undeclared line on gyro_z
+    accel = np.column_stack([simulate_sum([WN(2e-3)], n, DT, rng) for _ in range(3)])
+    accel[:, 2] += 9.81
+    write_bag(tmp_path / "bag", ImuSeries(t=np.arange(n) * DT, gyro=gyro, accel=accel))
+    out = tmp_path / "out"
+    assert main(["analyze", str(tmp_path / "bag"), "--model", "WN", "--out", str(out)]) == 0
+    axes = yaml.safe_load((out / "model.yaml").read_text())["axes"]
+    assert [s["added"] for s in axes["gyro_z"]["loop"]] == [None, "SIN"]
+    assert axes["gyro_x"]["loop_verdict"]["passed"]
+    assert (out / "report.html").exists()
+    out2 = tmp_path / "out2"
+    assert main(["analyze", str(tmp_path / "bag"), "--model", "WN", "--no-loop", "--out", str(out2)]) == 0
+    assert "loop" not in yaml.safe_load((out2 / "model.yaml").read_text())["axes"]["gyro_z"]
