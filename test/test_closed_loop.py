@@ -125,12 +125,13 @@ def test_spikes_are_flagged_and_removed():
 
 
 def test_no_effect_is_added_to_clean_data():
-    # False-alarm rate of the whole loop (detectors at α = 0.01, then BIC + evidence rules) over 6 seeded
-    # clean records. Measured: 0/6. Bound asserted: at most 1/6 (a family of 9 tests at 1 % each could fire
-    # in up to ~9 % of records before the BIC rule; P(≥ 2 of 6 | 9 %) ≈ 9 %, P(≥ 2 of 6 | 2 %) ≈ 0.6 %).
-    added = [len(run_closed_loop(_base(200 + s), DT, START).steps) - 1 for s in range(6)]
-    print("effects added on clean data:", added)
-    assert sum(a > 0 for a in added) <= 1
+    # False-alarm rate of the whole loop (detectors at α = 0.01, then the BIC + evidence rules) over 30 seeded
+    # clean WN+RW records. Measured: 0/30 (printed). Bound asserted: at most 3/30. Before the BIC rule the
+    # family of ~9 detectors at 1 % each could fire in up to ~9 % of records; the bound fails with probability
+    # ≈ 0.5 % if the loop's rate were 2 %, and ≈ 50 % if it were 10 %.
+    added = [len(run_closed_loop(_base(200 + s), DT, START).steps) - 1 for s in range(30)]
+    print("effects added on clean data:", added, "rate", sum(a > 0 for a in added) / len(added))
+    assert sum(a > 0 for a in added) <= 3
 
 
 def test_bad_input():
