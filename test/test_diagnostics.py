@@ -261,3 +261,32 @@ def test_innovation_monitor_white_correlated_and_inconsistent():
     assert not s.ok and "larger than predicted" in s.message
     with pytest.raises(ValueError):
         white.update(1.0, 0.0)
+
+
+def test_power_of_the_detectors_at_their_level():
+    # Power at α = 0.01 over 50 WN+RW records of 6000 samples (σ = 0.01 per sample), true model. Full effect
+    # sizes are where theory says power ≈ 1: a 0.15 σ sine (periodogram ordinate A²n/4σ² ≈ 34 vs a threshold
+    # ≈ 13), a 0.5 σ step at mid-record, a 1.5 °C temperature swing at 0.1 σ/°C, one 10 σ spike. Measured power
+    # is printed also at 0.4× and 0.1× the sizes; it must not increase as the effects shrink.
+    rng = np.random.default_rng(17)
+    trials, n = 50, 6000
+    t = np.arange(n) * DT
+    temp = 20 + 1.5 * np.sin(2 * math.pi * t / 30)
+    big = {"SIN": 0, "STEP": 0, "TEMP": 0, "OUTLIERS": 0}
+    mid, small = dict.fromkeys(big, 0), dict.fromkeys(big, 0)
+    for _ in range(trials):
+        base = simulate_sum(WN_RW, n, DT, rng)
+        for scale, tally in ((1.0, big), (0.4, mid), (0.1, small)):
+            y = base + scale * 1.5e-3 * np.sin(2 * math.pi * 1.7 * t)
+            y[n // 2:] += scale * 5e-3
+            y += scale * 1e-3 * (temp - 20)
+            y[n // 3] += scale * 0.1
+            e, w = _innovations(y, WN_RW)
+            tally["SIN"] += det.detect_sinusoid(e, DT, w).significant
+            tally["STEP"] += det.detect_step(e, DT, w).significant
+            tally["TEMP"] += det.detect_temperature(e, temp, w).significant
+            tally["OUTLIERS"] += n // 3 in det.detect_outliers(e).indices
+    print("power at α = 0.01 (full size):", {k: v / trials for k, v in big.items()},
+          "(0.4×):", {k: v / trials for k, v in mid.items()}, "(0.1×):", {k: v / trials for k, v in small.items()})
+    assert all(v / trials >= 0.9 for v in big.values()), big
+    assert all(small[k] <= mid[k] <= big[k] and small[k] < big[k] for k in big), (small, mid, big)
