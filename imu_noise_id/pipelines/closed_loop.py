@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -315,8 +315,8 @@ class _Loop:
                 best[f.effect] = f
         gms.sort(key=lambda f: f.log10_p)
         if gms and lb is not None:
-            gms[0] = det.Finding(**{**gms[0].__dict__, "log10_p": min(gms[0].log10_p, lb.log10_p),
-                                    "evidence": gms[0].evidence + "; " + lb.evidence})
+            gms[0] = replace(gms[0], log10_p=min(gms[0].log10_p, lb.log10_p),
+                             evidence=gms[0].evidence + "; " + lb.evidence)
         elif lb is not None:
             gms = [lb]
         return sorted([*best.values(), *gms[:2]], key=lambda f: f.log10_p)
@@ -479,7 +479,11 @@ def run_closed_loop(
     while True:
         cands = loop.candidates(diag, state)
         if not cands:
-            passed, verdict = True, "residuals pass: no detector fires at its level"
+            left = sorted({f.effect for f in diag.findings if f.significant})
+            passed = not left
+            verdict = ("residuals pass: no detector fires at its level" if passed else
+                       f"nothing more can be added: evidence for {', '.join(left)} remains, but these effects "
+                       "are already in the model")
             break
         if len(steps) > max_steps:
             verdict = f"stopped after {max_steps} added effects; residual evidence remains"
