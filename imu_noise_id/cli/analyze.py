@@ -101,8 +101,13 @@ def _loop_stage(imu, args: argparse.Namespace) -> dict:
     models = yaml.safe_load((args.out / "model.yaml").read_text())["axes"]
     start = {axis: entry["model"] for axis, entry in models.items()}
     try:
-        results, paths, factor = loop_stage(imu, read_temperature(args.bag), args.out, start=start,
-                                            axes=tuple(start), title=f"closed loop: {args.bag.name}")
+        temperature = read_temperature(args.bag)
+    except InputError as exc:
+        print(f"warning: closed loop without temperature: {exc}", file=sys.stderr)
+        temperature = None
+    try:
+        results, paths, factor = loop_stage(imu, temperature, args.out, start=start, axes=tuple(start),
+                                            title=f"closed loop: {args.bag.name}")
     except InputError as exc:
         print(f"warning: closed loop skipped: {exc}", file=sys.stderr)
         return {}
