@@ -40,6 +40,7 @@ data.
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -200,6 +201,8 @@ def _call_fitter(fitter: Fitter, y: np.ndarray, dt: float, state: LoopState, *, 
         kwargs["exog_names"] = exog_names
     if state.init is not None:
         kwargs["init"] = state.init
+    if "uncertainty" in inspect.signature(fitter).parameters:
+        kwargs["uncertainty"] = False  # the loop compares fits; intervals are the EM stage's job
     return fitter(y, dt, structure_name(state.structure), **kwargs)
 
 
