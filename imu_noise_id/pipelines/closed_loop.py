@@ -6,13 +6,15 @@ One axis at a time (:func:`run_closed_loop`):
    constrained EM of paper 000 section 3) and measure its errors (:class:`ResidualErrors`: log-likelihood,
    BIC, AV misfit, Ljung–Box p of the standardised innovations, residual spectral peak ratio);
 2. run every detector of :mod:`imu_noise_id.core.diagnostics.detectors` on the fit's residuals;
-3. take the significant findings (at most one per effect, ranked by p-value), and for the
-   ``max_candidates`` most significant ones add the effect, initialised from its detector, and refit;
-4. a candidate is *accepted* when the BIC decreases **and** the residual evidence it targeted is gone
-   (its detector no longer fires at the same place); of the accepted candidates the one with the lowest BIC
-   becomes the next step;
-5. repeat until no detector fires ("residuals pass"), no candidate is accepted ("nothing improves"), or
-   ``max_steps`` steps were taken.
+3. take the significant findings (the most significant per effect, GM candidates of distinct τ bands apart,
+   ranked by p-value), and for the ``max_candidates`` most significant ones add the effect, initialised from
+   its detector, and refit;
+4. a candidate is *accepted* when the BIC decreases **and** the residual evidence it targeted is gone (its
+   statistic, re-measured at the same place, is below its threshold or has halved); of the accepted
+   candidates the one with the lowest BIC becomes the next step;
+5. repeat until no detector fires ("residuals pass"), only evidence for effects already in the model remains
+   ("nothing more can be added"), no candidate is accepted ("nothing improves"), or ``max_steps`` effects were
+   added.
 
 Effects outside the linear-Gaussian state space enter as deterministic regressors in the measurement equation
 (``exog`` of ``fit_model``, coefficients estimated with the noise model): ``SIN`` (a sine and a cosine at the
@@ -29,8 +31,7 @@ sample), since the detector picked the best of many.
 
 A refit starts from the previous fit's components plus the new one at the detector's values; when the
 likelihood nevertheless drops (a local optimum: nested models cannot lose likelihood) it is refitted from the
-estimator's own starting values.
-``GM``, ``RW``, ``RR``, ``QN`` are added to the state-space structure.
+estimator's own starting values. ``GM``, ``RW``, ``RR``, ``QN`` are added to the state-space structure.
 
 The Allan variances (data with the fitted regressors removed, against the model's theoretical AV) use
 τ = m·dt up to a tenth of the record, where each estimate has roughly ten or more degrees of freedom; their
