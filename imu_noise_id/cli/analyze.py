@@ -1,6 +1,6 @@
 """``imu-noise-id analyze BAG``: offline noise analysis of a static IMU recording.
 
-Stages (each a function; later issues add the EM model fit and the closed loop as further stages):
+Stages (each a function): read → Allan → EM model fit (``--model``) → closed loop (unless ``--no-loop``):
 read the bag → Allan-family variances and slope parameters (:func:`imu_noise_id.pipelines.analysis.analyze_static`)
 → write ``imu.yaml``, the variance CSVs and ``allan.png`` → print the summary and where the results are.
 """
@@ -33,8 +33,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
     p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
     p.add_argument(
+        "--model", default="none",
+        help="EM model fit per axis after the Allan stage: 'auto' (BIC over the default candidates), a structure "
+        "such as 'WN+GM+RW', or 'none' (default: Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
+        "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
+    )
+    p.add_argument(
         "--allow-motion", action="store_true",
         help="analyse even if the static check finds motion (its findings become warnings)",
+    )
+    p.add_argument(
+        "--no-loop", action="store_true",
+        help="skip the closed loop that follows the model fit (residual diagnosis: adds missing GM/RW/RR/QN, "
+        "sinusoids, temperature, steps, outliers one at a time while BIC improves; writes a 'loop:' list per "
+        "axis into model.yaml and DIR/report.html). It runs by default whenever --model is given",
     )
     p.set_defaults(run=run)
 
@@ -64,6 +76,48 @@ def _allan_stage(imu, args: argparse.Namespace):
         progress.close()
 
 
+def _em_stage(imu, result, args: argparse.Namespace) -> dict:
+    """Constrained-EM / maximum-likelihood fit of every axis (issue 3), then model.yaml, allan_model.png and
+    the model values in imu.yaml."""
+    from ..report.model_outputs import write_model_outputs
+    from .fit import fit_axes
+
+    fits, selections = fit_axes(imu, args.model, list(result.axes))
+    allan = result.variances["allan"]
+    avar = {axis: (allan.tau, allan.variance[:, j]) for j, axis in enumerate(result.axes)}
+    return write_model_outputs(args.out, fits, selections, avar,
+                               meta={"source": str(args.bag), "topic": imu.topic, "command": "analyze",
+                                     "model": args.model})
+
+
+def _loop_stage(imu, args: argparse.Namespace) -> dict:
+    """Closed loop (issue 7) from each axis's fitted model in DIR/model.yaml: model.yaml ``loop:`` + report.html."""
+    import yaml
+
+    from ..bag.reader import read_temperature
+    from ..core.errors import InputError
+    from .loop import loop_stage
+
+    models = yaml.safe_load((args.out / "model.yaml").read_text())["axes"]
+    start = {axis: entry["model"] for axis, entry in models.items()}
+    try:
+        temperature = read_temperature(args.bag)
+    except InputError as exc:
+        print(f"warning: closed loop without temperature: {exc}", file=sys.stderr)
+        temperature = None
+    try:
+        results, paths, factor = loop_stage(imu, temperature, args.out, start=start, axes=tuple(start),
+                                            title=f"closed loop: {args.bag.name}")
+    except InputError as exc:
+        print(f"warning: closed loop skipped: {exc}", file=sys.stderr)
+        return {}
+    for axis, r in results.items():
+        print(f"{axis}: loop {r.steps[0].model} -> {r.final.model}: {r.verdict}", flush=True)
+    if factor > 1:
+        print(f"closed loop ran on {factor}-sample block averages", flush=True)
+    return {"loop_report": paths["report"]}
+
+
 def run(args: argparse.Namespace) -> int:
     """Read, analyse, write, report. Input problems raise InputError (exit 2)."""
     from ..core.errors import InputError
@@ -76,6 +130,10 @@ def run(args: argparse.Namespace) -> int:
     imu = _read(args)
     result = _allan_stage(imu, args)
     paths = write_static_outputs(result, args.out, rostopic=imu.topic)
+    if args.model != "none":
+        paths.update(_em_stage(imu, result, args))
+        if not args.no_loop:
+            paths.update(_loop_stage(imu, args))
     print(summary_table(result), flush=True)
     for w in result.warnings:
         print(f"warning: {w}", file=sys.stderr)

@@ -1,0 +1,136 @@
+"""Initial values for the EM from the Allan variance (paper 000 §3.5(i): "the AV, HV and TV methods could be
+used to obtain an initial guess").
+
+Beyond the paper: instead of reading slopes off the plot, the theoretical AV of the whole structure
+(:meth:`~.components.Component.allan_variance`, summed over components) is fitted to the empirical AV by least
+squares in log space, each τ weighted by the square root of its number of clusters (the log-AV's standard error
+falls like that), from several placements of the GM correlation times; the distinct solutions, best first, are
+the multi-start initial values of the likelihood fit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .allan import allan_variance
+from .components import GM, QN, RR, RW, WN, Component, total_allan_variance
+from .errors import InputError
+
+
+@dataclass(frozen=True)
+class EmpiricalAllan:
+    """Overlapping Allan variance at octave-spaced τ = m·dt."""
+
+    tau: np.ndarray
+    avar: np.ndarray
+    n_clusters: np.ndarray
+
+
+def empirical_allan(y: np.ndarray, dt: float, max_fraction: float = 0.25) -> EmpiricalAllan:
+    """Overlapping AV (paper 000 eq. 2, :func:`imu_noise_id.core.allan.allan_variance`) at octave-spaced
+    m = 1, 2, 4, … ≤ max_fraction·N. NaN samples must have been filled by the caller (initial values only)."""
+    y = np.asarray(y, dtype=float)
+    n = y.size
+    ms = 2 ** np.arange(0, max(int(math.log2(max(max_fraction * n, 1))) + 1, 1))
+    ms = ms[(ms >= 1) & (2 * ms < n)]
+    res = allan_variance(y, dt, m=ms)
+    return EmpiricalAllan(res.tau, res.variance[:, 0], n / res.m)
+
+
+def _guess(names: list[str], av: EmpiricalAllan, gm_taus: list[float]) -> list[Component]:
+    tau, a = av.tau, av.avar
+    t0, a0 = tau[0], a[0]
+    t_end, a_end = tau[-1], a[-1]
+    comps: list[Component] = []
+    gm_iter = iter(gm_taus)
+    n_gm = names.count("GM")
+    for name in names:
+        if name == "WN":
+            comps.append(WN(math.sqrt(a0 * t0) * 0.8))
+        elif name == "QN":
+            comps.append(QN(math.sqrt(a0 / 3.0) * t0 * 0.5))
+        elif name == "RW":
+            comps.append(RW(math.sqrt(3.0 * a_end / t_end) * 0.5))
+        elif name == "GM":
+            tc = next(gm_iter)
+            level = float(np.interp(math.log(min(max(1.9 * tc, t0), t_end)), np.log(tau), a))
+            comps.append(GM(tau=tc, sigma=math.sqrt(level / 0.38) / max(n_gm, 1)))
+        elif name == "RR":
+            comps.append(RR(0.0))
+        else:
+            raise InputError(f"no Allan-variance initial value for component {name}")
+    return comps
+
+
+def _gm_placements(n_gm: int, t_lo: float, t_hi: float, n_grid: int) -> list[list[float]]:
+    if n_gm == 0:
+        return [[]]
+    grid = np.exp(np.linspace(math.log(t_lo), math.log(t_hi), n_grid))
+    if n_gm == 1:
+        return [[float(t)] for t in grid]
+    out = []
+    for i in range(n_grid):
+        for j in range(i + 1, n_grid):
+            rest = list(np.exp(np.linspace(math.log(grid[j]), math.log(t_hi), n_gm - 1)))
+            out.append([float(grid[i]), *map(float, rest)])
+    return out
+
+
+def fit_allan(names: list[str], av: EmpiricalAllan, dt: float, n_grid: int = 4) -> list[tuple[float, list[Component]]]:
+    """Least-squares fits of the structure's theoretical AV to ``av`` in log space, best (lowest cost) first.
+
+    RR is left at slope 0 (the likelihood fit estimates it in closed form); the caller removes a linear trend
+    before computing ``av`` when the structure has RR.
+    """
+    fit_idx = [i for i, n in enumerate(names) if n != "RR"]
+    w = np.sqrt(av.n_clusters)
+    t_lo = max(3.0 * dt, av.tau[0])
+    t_hi = max(av.tau[-1] / 2.0, t_lo * 2.0)
+    results: list[tuple[float, list[Component]]] = []
+    for taus in _gm_placements(names.count("GM"), t_lo, t_hi, n_grid):
+        start = _guess(names, av, taus)
+        keys = [(i, k) for i in fit_idx for k in start[i].parameter_names]
+        x0 = np.log([start[i].params()[k] for i, k in keys])
+
+        def build(x: np.ndarray, start: list[Component] = start, keys: list = keys) -> list[Component]:
+            params = [dict(c.params()) for c in start]
+            for (i, k), v in zip(keys, x, strict=True):
+                params[i][k] = float(np.exp(v))
+            return [type(c)(**p) for c, p in zip(start, params, strict=True)]
+
+        def resid(x: np.ndarray, build=build) -> np.ndarray:
+            model_av = total_allan_variance([c for c in build(x) if not isinstance(c, RR)], av.tau, dt)
+            return (np.log(np.maximum(model_av, 1e-300)) - np.log(av.avar)) * w
+
+        lo, hi = x0 - 25.0, x0 + 25.0
+        for k, (_, name) in enumerate(keys):
+            if name == "tau":
+                lo[k], hi[k] = math.log(dt), math.log(50.0 * av.tau[-1])
+        x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+        try:
+            sol = least_squares(resid, x0, bounds=(lo, hi), method="trf", max_nfev=200)
+        except (ValueError, FloatingPointError):
+            continue
+        results.append((float(sol.cost), build(sol.x)))
+    if not results:
+        raise InputError("the Allan-variance fit for initial values failed; give initial values (init=…)")
+    results.sort(key=lambda r: r[0])
+    return distinct(results, av.tau, dt)
+
+
+def distinct(results: list[tuple[float, list[Component]]], tau: np.ndarray, dt: float,
+             rel: float = 0.1) -> list[tuple[float, list[Component]]]:
+    """Drop solutions whose theoretical AV is within ``rel`` of a better one's at every τ (the same fit for
+    practical purposes, e.g. differing only in a negligible random walk)."""
+    kept: list[tuple[float, list[Component]]] = []
+    curves: list[np.ndarray] = []
+    for cost, comps in results:
+        curve = np.log(total_allan_variance([c for c in comps if not isinstance(c, RR)], tau, dt))
+        if all(np.max(np.abs(curve - other)) > math.log1p(rel) for other in curves):
+            kept.append((cost, comps))
+            curves.append(curve)
+    return kept

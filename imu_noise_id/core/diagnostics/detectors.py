@@ -1,0 +1,375 @@
+"""Detectors that trace a residual signature of a fitted model to the effect the model lacks.
+
+Each detector returns a :class:`Finding`: the effect's name in the shared vocabulary (``GM``, ``RW``, ``RR``,
+``QN``, ``SIN``, ``TEMP``, ``STEP``, ``OUTLIERS``), a test statistic, its (multiplicity-corrected) p-value,
+the significance level, initial values for the effect's parameters (what the refit starts from) and a one-line
+evidence text. All tests are calibrated against the null "the fitted model is the data's model", under which
+the standardised innovations e_t are i.i.d. N(0, 1) and the empirical Allan variance scatters around the
+model's within its confidence interval.
+
+=========  ===========================================  =============================================
+effect     signature                                    statistic, null distribution, multiplicity
+=========  ===========================================  =============================================
+GM         AV excess in an interior band of τ           max z_τ of ln(AV_d/AV_m)/sd, N(0,1), Bonferroni τ
+GM         serial correlation of e (no AV band)         Ljung–Box Q, χ²_h
+RW / RR    AV excess reaching the longest τ, log-slope  as GM; slope ≈ +1 (ADEV +½) → RW, ≈ +2 → RR
+           ≈ +1 / +2
+RR         ramp regressor                               score test T² of a whitened ramp, χ²_1
+QN         AV excess at the shortest τ, slope ≈ −2      as GM (ADEV slope −1)
+SIN        periodogram line of e over local median      Exp(1) per bin, Fisher/Bonferroni over bins
+TEMP       e correlated with whitened temperature       score test, χ²_1
+STEP       level shift (whitened step at every k)       max_k |T_k|, N(0,1), Bonferroni over k
+OUTLIERS   isolated |robust z| of e (MAD scale)         max |z|, N(0,1), Bonferroni over samples
+=========  ===========================================  =============================================
+
+The score tests use :class:`.whitening.WhiteningFilter` (generalised least squares through the model's
+Kalman filter). Levels default to α = 0.01 per detector.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats
+
+from ..components import GM
+from .residuals import acf, av_misfit_z, chi2_log10_sf, ljung_box, spectral_peaks
+from .whitening import WhiteningFilter, score_test
+
+#: Default significance level of every detector.
+ALPHA = 0.01
+_LN10 = math.log(10.0)
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One detector's verdict on one candidate missing effect.
+
+    Attributes
+    ----------
+    effect : str
+        ``GM``, ``RW``, ``RR``, ``QN``, ``SIN``, ``TEMP``, ``STEP`` or ``OUTLIERS``.
+    detector : str
+        Which test produced it (``av_band``, ``ljung_box``, ``ramp_score``, ``periodogram``,
+        ``temperature_score``, ``step_scan``, ``robust_z``).
+    statistic, threshold : float
+        The test statistic and the value it must exceed to be significant at ``level``.
+    log10_p : float
+        log10 of the (multiplicity-corrected) p-value; used to rank findings.
+    level : float
+        Significance level α.
+    params : dict
+        Initial values for the effect, SI units in the key names' sense (``tau`` [s], ``sigma`` [u],
+        ``random_walk`` [u/s/√Hz], ``slope`` [u/s], ``Q`` [u·s], ``frequency`` [Hz], ``amplitude`` [u],
+        ``coefficient`` [u/°C], ``index`` (sample), ``time`` [s], ``size`` [u], ``count``).
+    evidence : str
+        One line saying what was seen.
+    indices : array of int
+        Samples concerned (outliers), else empty.
+    """
+
+    effect: str
+    detector: str
+    statistic: float
+    threshold: float
+    log10_p: float
+    level: float
+    params: dict[str, float]
+    evidence: str
+    indices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+
+    @property
+    def significant(self) -> bool:
+        return bool(self.statistic > self.threshold)
+
+
+def _bonferroni_log10_p(log10_p_single: float, m: int) -> float:
+    return min(0.0, log10_p_single + math.log10(max(m, 1)))
+
+
+def _norm_log10_sf(z: float) -> float:
+    return float(stats.norm.logsf(z) / _LN10)
+
+
+# --------------------------------------------------------------------------------------------- outliers
+def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA, only: np.ndarray | None = None) -> Finding:
+    """Isolated spikes / heavy tails: robust z_t = (e_t − median) / (1.4826·MAD) beyond the Bonferroni bound.
+
+    Under i.i.d. N(0, 1) innovations, P(max_t |z_t| > z*) ≤ α with z* = Φ⁻¹(1 − α/(2n)). Every sample beyond
+    z* is flagged (``indices``); the loop removes them (one additive-outlier dummy each). ``only`` restricts
+    the statistic to given samples (to check whether flagged spikes are gone).
+    """
+    e = np.asarray(e, dtype=float)
+    ok = np.isfinite(e)
+    n = int(ok.sum())
+    if n < 16:
+        raise ValueError("detect_outliers: need at least 16 finite innovations")
+    med = float(np.median(e[ok]))
+    scale = 1.4826 * float(np.median(np.abs(e[ok] - med)))
+    if scale <= 0:
+        raise ValueError("detect_outliers: innovations have zero spread")
+    z = np.where(ok, (e - med) / scale, 0.0)
+    if only is not None:
+        keep = np.zeros(z.size, bool)
+        keep[np.asarray(only, dtype=int)] = True
+        z = np.where(keep, z, 0.0)
+    z_star = float(stats.norm.isf(alpha / (2 * n)))
+    idx = np.flatnonzero(np.abs(z) > z_star)
+    zmax = float(np.max(np.abs(z)))
+    log10_p = _bonferroni_log10_p(_norm_log10_sf(zmax) + math.log10(2.0), n)
+    tail_ratio = float(np.std(e[ok]) / scale)
+    return Finding(
+        effect="OUTLIERS", detector="robust_z", statistic=zmax, threshold=z_star, log10_p=log10_p, level=alpha,
+        params={"count": float(idx.size), "fraction": idx.size / n, "max_abs_z": zmax, "std_over_mad": tail_ratio},
+        evidence=f"{idx.size} innovation(s) beyond |z| = {z_star:.2f} (robust MAD scale, Bonferroni over {n}); "
+                 f"max |z| = {zmax:.1f}, std/MAD-σ = {tail_ratio:.2f}",
+        indices=idx,
+    )
+
+
+# --------------------------------------------------------------------------------------------- sinusoid
+def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
+                    f_min: float | None = None) -> Finding:
+    """A narrow spectral line: the periodogram peak of e over its local median floor (:func:`spectral_peaks`).
+
+    Initial amplitude and phase come from the score test's GLS estimate of sin/cos at the peak frequency.
+    The threshold is the Exp(1) quantile that makes the maximum over the M searched bins exceed it with
+    probability α: s* = −ln(1 − (1 − α)^{1/M}).
+    """
+    peak = spectral_peaks(e, dt, f_min=f_min)
+    t = np.arange(np.asarray(e).size) * dt
+    cols = np.column_stack([np.sin(2 * math.pi * peak.frequency * t), np.cos(2 * math.pi * peak.frequency * t)])
+    ones = whitening.whiten(np.ones(t.size))
+    st = score_test(e, whitening.whiten(cols), ones)
+    amplitude = float(np.hypot(*st.coef))
+    s_star = float(-math.log(-math.expm1(math.log1p(-alpha) / peak.n_bins)))
+    return Finding(
+        effect="SIN", detector="periodogram", statistic=peak.statistic, threshold=s_star, log10_p=peak.log10_p,
+        level=alpha,
+        params={"frequency": peak.frequency, "amplitude": amplitude,
+                "phase": float(math.atan2(st.coef[1], st.coef[0])), "peak_ratio": peak.ratio},
+        evidence=f"spectral line at {peak.frequency:.4g} Hz, {peak.ratio:.1f}× the local median floor "
+                 f"(threshold {s_star / math.log(2):.1f}× over {peak.n_bins} bins), amplitude ≈ {amplitude:.3g}",
+    )
+
+
+# ------------------------------------------------------------------------------------------ temperature
+def detect_temperature(e: np.ndarray, temperature: np.ndarray, whitening: WhiteningFilter, *,
+                       alpha: float = ALPHA) -> Finding:
+    """Innovations correlated with the (whitened) temperature: score test of a thermal bias coefficient.
+
+    ``temperature`` [°C] is sampled at the IMU times (interpolate beforehand); the constant is a nuisance.
+    """
+    temp = np.asarray(temperature, dtype=float)
+    if temp.shape != np.asarray(e).shape or not np.all(np.isfinite(temp)):
+        raise ValueError("temperature must be finite and sampled at the IMU times (same length as the data)")
+    if np.ptp(temp) <= 0:
+        raise ValueError("temperature is constant: no thermal coefficient can be identified")
+    x = temp - temp.mean()
+    st = score_test(e, whitening.whiten(x), whitening.whiten(np.ones(x.size)))
+    z_star = float(stats.norm.isf(alpha / 2))
+    t_abs = math.sqrt(st.statistic)
+    coef = float(st.coef[0])
+    return Finding(
+        effect="TEMP", detector="temperature_score", statistic=t_abs, threshold=z_star, log10_p=st.log10_p,
+        level=alpha, params={"coefficient": coef, "coefficient_se": float(st.se[0])},
+        evidence=f"innovations correlate with temperature: score |T| = {t_abs:.1f} (threshold {z_star:.2f}), "
+                 f"coefficient ≈ {coef:.3g} ± {float(st.se[0]):.2g} per °C",
+    )
+
+
+# ------------------------------------------------------------------------------------------------ ramp
+def detect_ramp(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA) -> Finding:
+    """A rate ramp (drift): score test of a whitened ramp regressor t, the constant a nuisance."""
+    n = np.asarray(e).size
+    t = np.arange(n) * dt
+    st = score_test(e, whitening.whiten(t - t.mean()), whitening.whiten(np.ones(n)))
+    z_star = float(stats.norm.isf(alpha / 2))
+    t_abs = math.sqrt(st.statistic)
+    slope = float(st.coef[0])
+    return Finding(
+        effect="RR", detector="ramp_score", statistic=t_abs, threshold=z_star, log10_p=st.log10_p, level=alpha,
+        params={"slope": slope},
+        evidence=f"innovations correlate with a ramp: score |T| = {t_abs:.1f} (threshold {z_star:.2f}), "
+                 f"slope ≈ {slope:.3g} u/s",
+    )
+
+
+# ------------------------------------------------------------------------------------------------ steps
+def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np.ndarray:
+    """Score statistics T_k of a level shift at every sample k (NaN outside [min_segment, n − min_segment]).
+
+    The whitened step starting at k is the whitened unit step s shifted by k (LTI filter, zero start), so
+    Σ_t e_t s_{t−k} for all k is one FFT cross-correlation; the whitened constant (= s itself) is projected
+    out: T_k = (c_k − c_0 a_k/‖s‖²) / √(‖s_{0..n−k−1}‖² − a_k²/‖s‖²), c = e ⋆ s, a = s ⋆ s.
+    """
+    e = np.nan_to_num(np.asarray(e, dtype=float), nan=0.0)
+    n = e.size
+    s = whitening.whiten(np.ones(n))
+    size = 1 << math.ceil(math.log2(2 * n))
+    fs = np.fft.rfft(s, size)
+    c = np.fft.irfft(np.fft.rfft(e, size) * np.conj(fs), size)[:n]
+    a = np.fft.irfft(fs * np.conj(fs), size)[:n]
+    s2 = float(s @ s)
+    tail = np.cumsum(s**2)[::-1]  # tail[k] = Σ_{j < n−k} s_j²  (cumsum reversed: index k ↔ n−k−1)
+    num = c - c[0] * a / s2
+    den = tail - a**2 / s2
+    out = np.full(n, np.nan)
+    k = np.arange(min_segment, n - min_segment)
+    good = den[k] > 1e-12 * s2
+    out[k[good]] = num[k[good]] / np.sqrt(den[k[good]])
+    return out
+
+
+def detect_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
+                min_segment: int | None = None) -> Finding:
+    """A bias step (level shift): max_k |T_k| of :func:`step_scan`, Bonferroni over the scanned k.
+
+    Binary segmentation happens through the loop: after a step is added, the scan runs again on the new
+    innovations. The size estimate is the GLS coefficient at the best k.
+    """
+    e = np.asarray(e, dtype=float)
+    n = e.size
+    m = max(20, n // 200) if min_segment is None else int(min_segment)
+    if n < 4 * m:
+        raise ValueError(f"detect_step: {n} samples are too few for segments of {m}")
+    t_k = step_scan(e, whitening, m)
+    k = int(np.nanargmax(np.abs(t_k)))
+    t_max = float(abs(t_k[k]))
+    n_scan = int(np.isfinite(t_k).sum())
+    z_star = float(stats.norm.isf(alpha / (2 * n_scan)))
+    step = (np.arange(n) >= k).astype(float)
+    st = score_test(e, whitening.whiten(step), whitening.whiten(np.ones(n)))
+    size = float(st.coef[0])
+    return Finding(
+        effect="STEP", detector="step_scan", statistic=t_max, threshold=z_star,
+        log10_p=_bonferroni_log10_p(_norm_log10_sf(t_max) + math.log10(2.0), n_scan), level=alpha,
+        params={"index": float(k), "time": k * dt, "size": size, "size_se": float(st.se[0])},
+        evidence=f"level shift of {size:.3g} at t = {k * dt:.6g} s (sample {k}): |T| = {t_max:.1f} "
+                 f"(threshold {z_star:.2f}, Bonferroni over {n_scan} positions)",
+    )
+
+
+# ------------------------------------------------------------------------------------ serial correlation
+def detect_correlation(e: np.ndarray, dt: float, *, alpha: float = ALPHA, lags: int = 20) -> Finding:
+    """Serially correlated innovations → a (further) Gauss–Markov process; Ljung–Box over ``lags`` lags.
+
+    Its correlation time is initialised from the integral time scale of the innovations' ACF,
+    τ ≈ dt·Σ_k ρ_k / ρ_1 (exact for an exponential ACF), summed while ρ_k stays above its 2/√n noise level;
+    its σ from ρ_1 (the GM's share of the innovation variance, S = 1 after standardisation).
+    """
+    lb = ljung_box(e, lags)
+    n = int(np.isfinite(e).sum())
+    rho = acf(e, min(n // 4, 5000))
+    noise = 2.0 / math.sqrt(n)
+    r1 = max(float(rho[0]), noise)
+    below = np.flatnonzero(rho < noise)
+    stop = int(below[0]) if below.size else rho.size
+    tau = dt * max(1.0, float(np.sum(rho[:stop])) / r1)
+    thr = float(stats.chi2.isf(alpha, lags))
+    return Finding(
+        effect="GM", detector="ljung_box", statistic=lb.q, threshold=thr,
+        log10_p=chi2_log10_sf(lb.q, lags), level=alpha,
+        params={"tau": tau, "sigma_share": math.sqrt(r1)},
+        evidence=f"innovations correlated: Ljung–Box Q = {lb.q:.1f} over {lags} lags (threshold {thr:.1f}), "
+                 f"largest ρ = {lb.worst_rho:.3f} at lag {lb.worst_lag}; decay time ≈ {tau:.3g} s",
+    )
+
+
+# ------------------------------------------------------------------------------------- AV signatures
+def _fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]:
+    """GM (τ_c, σ) whose AV best fits a positive AV excess in log space (grid over τ_c, σ² in closed form)."""
+    best = (math.inf, float(tau[0]), 0.0)
+    log_ex = np.log(excess)
+    for tc in np.geomspace(tau[0] / 2, tau[-1] * 3, 80):
+        shape = GM(tau=float(tc), sigma=1.0).allan_variance(tau, 1.0)
+        log_s2 = float(np.mean(log_ex - np.log(shape)))
+        cost = float(np.sum((log_ex - np.log(shape) - log_s2) ** 2))
+        if cost < best[0]:
+            best = (cost, float(tc), math.exp(0.5 * log_s2))
+    return best[1], best[2]
+
+
+def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
+                         av_model: np.ndarray, *, av_white: np.ndarray | None = None,
+                         alpha: float = ALPHA) -> list[Finding]:
+    """Bands of τ where the data's AV is significantly above the model's, each traced to a component.
+
+    z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) (sd from the AV's 95 % CI); a τ is in excess when
+    z_τ > z* = Φ⁻¹(1 − α/M) over the M τ (Bonferroni). Each contiguous band of excess τ is classified by its
+    position and the log-log slope of the excess AV_data − AV_model:
+
+    * band at the shortest τ with slope < −1.5 (ADEV −1) → QN, Q from 3Q²/τ²;
+    * band whose excess keeps growing (slope > +0.5, or reaching the longest τ) without a peak inside →
+      RR if slope > 1.5 (ADEV +1, AV ω²τ²/2), else RW (AV K²τ/3);
+    * otherwise (a bump: the excess peaks inside the band) → GM, (τ_c, σ) fitted to the excess (the GM AV
+      peaks near τ ≈ 1.9 τ_c). A GM whose τ_c exceeds the record looks like a RW, as it does to any method.
+
+    A band of significant *deficit* (z_τ < −z*) reaching the longest τ means the model's long-τ growth
+    (a random walk or ramp that absorbed a bounded process) is not in the data: the data's AV beyond the white
+    part ``av_white`` (the model's WN + QN AV; default the WN line through the first τ) is a bounded hump
+    → GM, with (τ_c, σ) fitted to that hump.
+    """
+    tau = np.asarray(tau, dtype=float)
+    av_data = np.asarray(av_data, dtype=float)
+    av_model = np.asarray(av_model, dtype=float)
+    m = tau.size
+    if m < 3 or av_data.shape != tau.shape or av_model.shape != tau.shape:
+        raise ValueError("detect_av_signatures: need ≥ 3 τ with matching AV arrays")
+    z = av_misfit_z(av_data, av_ci, av_model)
+    z_star = float(stats.norm.isf(alpha / m))
+    findings: list[Finding] = []
+    deficit = np.flatnonzero(z < -z_star)
+    if deficit.size and deficit[-1] == m - 1:
+        white = av_data[0] * tau[0] / tau if av_white is None else np.asarray(av_white, dtype=float)
+        hump = av_data - white
+        use = hump > 0
+        if use.sum() >= 3:
+            tc, sg = _fit_gm_to_excess(tau[use], hump[use])
+            zmin = float(-z[deficit].min())
+            params = {"tau": tc, "sigma": sg, "deficit": 1.0, "band_lo": float(tau[deficit[0]]),
+                      "band_hi": float(tau[-1])}
+            findings.append(Finding(
+                effect="GM", detector="av_band", statistic=zmin, threshold=z_star, level=alpha,
+                log10_p=_bonferroni_log10_p(_norm_log10_sf(zmin), m), params=params,
+                evidence=(f"model AV above the data at long τ (τ ≥ {tau[deficit[0]]:.3g} s, max |z| = {zmin:.1f}, "
+                          f"threshold {z_star:.2f}): the data's AV is bounded → GM with τ_c ≈ {tc:.3g} s, "
+                          f"σ ≈ {sg:.3g}")))
+    idx = np.flatnonzero(z > z_star)
+    if idx.size == 0:
+        return findings
+    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+    for run in runs:
+        t, ex = tau[run], av_data[run] - av_model[run]
+        zmax = float(z[run].max())
+        slope = float(np.polyfit(np.log(t), np.log(ex), 1)[0]) if run.size >= 2 else math.nan
+        band = f"τ = {t[0]:.3g}–{t[-1]:.3g} s" if run.size > 1 else f"τ = {t[0]:.3g} s"
+        # A bump: the excess peaks inside the band and has halved by its end.
+        peaked = run.size >= 3 and int(np.argmax(ex)) < run.size - 1 and ex[-1] < 0.5 * ex.max()
+        band_params = {"band_lo": float(t[0]), "band_hi": float(t[-1])}
+        common = {"detector": "av_band", "statistic": zmax, "threshold": z_star, "level": alpha,
+                  "log10_p": _bonferroni_log10_p(_norm_log10_sf(zmax), m)}
+        if run[0] == 0 and (run.size == 1 or slope < -1.5) and run[-1] < m - 1:
+            q = math.sqrt(float(np.median(ex * t**2 / 3.0)))
+            findings.append(Finding(effect="QN", params={"Q": q, **band_params}, evidence=(
+                f"AV above the model at short τ ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}), "
+                f"excess slope {slope:.2f} (QN: −2)"), **common))
+        elif not peaked and (run[-1] == m - 1 or slope > 0.5):
+            if run.size >= 2 and slope > 1.5:
+                findings.append(Finding(effect="RR", params={"slope": math.sqrt(float(np.median(2 * ex / t**2))),
+                                                                **band_params},
+                                        evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "
+                                                  f"excess slope {slope:.2f} (RR: +2)"), **common))
+            else:
+                findings.append(Finding(effect="RW", params={"random_walk": math.sqrt(float(np.median(3 * ex / t))),
+                                                                **band_params},
+                                        evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "
+                                                  f"excess slope {slope:.2f} (RW: +1)"), **common))
+        else:
+            tc, sg = _fit_gm_to_excess(t, ex) if run.size >= 2 else (float(t[0]) / 1.89, math.sqrt(ex[0] / 0.87))
+            findings.append(Finding(effect="GM", params={"tau": tc, "sigma": sg, **band_params}, evidence=(
+                f"AV bump above the model ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}) → GM with "
+                f"τ_c ≈ {tc:.3g} s, σ ≈ {sg:.3g}"), **common))
+    return findings

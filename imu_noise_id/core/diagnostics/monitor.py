@@ -1,0 +1,146 @@
+"""Streaming residual diagnostics for an online filter: windowed Ljung–Box and NIS on its innovations.
+
+The online node (CMKF / hypothesis bank) feeds one innovation at a time and asks, now and then, whether its
+model still explains the data. The statistics are the offline loop's (:mod:`.residuals`), computed on the last
+``window`` innovations kept in a ring buffer, so the node reports the same evidence the offline report does.
+
+Usage (one scalar measurement channel)::
+
+    monitor = InnovationMonitor(window=2000, lags=10, alpha=0.001)
+    for nu, s in stream:                    # innovation ν_k [u] and its predicted variance S_k [u²]
+        monitor.update(nu, s)
+        if monitor.ready and k % 200 == 0:
+            status = monitor.status()
+            if not status.ok:
+                publish_warn(status.message)   # e.g. "model inadequate: residuals correlated at lag 1 ..."
+
+``update`` is O(1); ``status`` is O(window·log window). For a vector measurement feed each component's
+standardised innovation separately, or pass NIS values via :meth:`InnovationMonitor.update_nis`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from .residuals import ljung_box
+
+
+@dataclass(frozen=True)
+class MonitorStatus:
+    """Verdict on the innovations in the window.
+
+    Attributes
+    ----------
+    ok : bool
+        True when neither test rejects at ``alpha``.
+    ljung_box_p : float
+        Ljung–Box p-value of the standardised innovations (NaN if too few samples).
+    worst_lag : int
+        Lag of the largest autocorrelation.
+    worst_rho : float
+        That autocorrelation.
+    nis_mean : float
+        Mean normalised innovation squared ν²/S over the window (1 for a consistent filter).
+    nis_interval : tuple
+        Its two-sided (1 − alpha) acceptance interval, χ²_n / n.
+    n : int
+        Innovations in the window.
+    message : str
+        Human-readable summary for ``/diagnostics``.
+    """
+
+    ok: bool
+    ljung_box_p: float
+    worst_lag: int
+    worst_rho: float
+    nis_mean: float
+    nis_interval: tuple[float, float]
+    n: int
+    message: str
+
+
+class InnovationMonitor:
+    """Ring buffer of standardised innovations with windowed whiteness (Ljung–Box) and consistency (NIS) tests.
+
+    Parameters
+    ----------
+    window : int
+        Number of most recent innovations tested (≥ 50).
+    lags : int
+        Ljung–Box lags.
+    alpha : float
+        Level of each test; a node testing every few hundred samples should use a small α (e.g. 1e-3) to
+        keep false warnings rare.
+    """
+
+    def __init__(self, window: int = 2000, lags: int = 10, alpha: float = 1e-3) -> None:
+        if window < 50:
+            raise ValueError(f"window must be >= 50 innovations, got {window}")
+        if not 1 <= lags < window // 4:
+            raise ValueError(f"lags must be in [1, window/4), got {lags}")
+        if not 0 < alpha < 1:
+            raise ValueError(f"alpha must be in (0, 1), got {alpha}")
+        self.window, self.lags, self.alpha = int(window), int(lags), float(alpha)
+        self._e = np.zeros(self.window)
+        self._nis = np.zeros(self.window)
+        self._count = 0
+
+    @property
+    def ready(self) -> bool:
+        """Whether the buffer holds a full window."""
+        return self._count >= self.window
+
+    def update(self, innovation: float, variance: float) -> None:
+        """Add one scalar innovation ν [u] with its predicted variance S [u²] (> 0)."""
+        if not (variance > 0 and math.isfinite(variance) and math.isfinite(innovation)):
+            raise ValueError(f"innovation must be finite and its variance > 0, got {innovation!r}, {variance!r}")
+        i = self._count % self.window
+        self._e[i] = innovation / math.sqrt(variance)
+        self._nis[i] = innovation**2 / variance
+        self._count += 1
+
+    def update_nis(self, nis: float, dim: int) -> None:
+        """Add a vector innovation's NIS νᵀS⁻¹ν of dimension ``dim`` (NIS test only; whiteness needs scalars)."""
+        if not (nis >= 0 and math.isfinite(nis)) or dim < 1:
+            raise ValueError("NIS must be finite and >= 0 and dim >= 1")
+        i = self._count % self.window
+        self._e[i] = math.nan
+        self._nis[i] = nis / dim
+        self._count += 1
+
+    def _ordered(self, a: np.ndarray) -> np.ndarray:
+        n = min(self._count, self.window)
+        if self._count <= self.window:
+            return a[:n]
+        i = self._count % self.window
+        return np.concatenate([a[i:], a[:i]])
+
+    def status(self) -> MonitorStatus:
+        """Test the innovations in the window (needs at least ``4·lags`` of them)."""
+        n = min(self._count, self.window)
+        if n < 4 * self.lags:
+            raise ValueError(f"only {n} innovations buffered; need {4 * self.lags}")
+        e = self._ordered(self._e)
+        nis = self._ordered(self._nis)
+        nis_mean = float(np.mean(nis))
+        lo = float(stats.chi2.ppf(self.alpha / 2, n) / n)
+        hi = float(stats.chi2.isf(self.alpha / 2, n) / n)
+        problems = []
+        lb_p, lag, rho = math.nan, 0, math.nan
+        if np.isfinite(e).sum() >= 4 * self.lags:
+            lb = ljung_box(e, self.lags)
+            lb_p, lag, rho = lb.p_value, lb.worst_lag, lb.worst_rho
+            if lb_p < self.alpha:
+                problems.append(f"residuals correlated at lag {lag} (ρ = {rho:.2f}, Ljung–Box p = {lb_p:.1e})")
+        if not lo <= nis_mean <= hi:
+            word = "larger" if nis_mean > hi else "smaller"
+            problems.append(f"innovations {word} than predicted (mean NIS {nis_mean:.2f}, "
+                            f"expected {lo:.2f}–{hi:.2f})")
+        message = ("model inadequate: " + "; ".join(problems)) if problems else (
+            f"residuals white and consistent over the last {n} samples")
+        return MonitorStatus(ok=not problems, ljung_box_p=lb_p, worst_lag=lag, worst_rho=rho, nis_mean=nis_mean,
+                             nis_interval=(lo, hi), n=n, message=message)

@@ -1,0 +1,291 @@
+"""Constrained EM algorithm for state-space error models (paper 000, Stebler et al. 2011, §3).
+
+E-step: Kalman smoother with lag-one covariance (:mod:`.kalman`), reduced to the sums the M-step needs.
+M-step: the constrained closed-form updates of §3.3 for u, μ, Φ, H, Q, R, each matrix written
+``vec(M) = f + D·m`` (eqs. 7–9), applied one after the other with the latest values of the others (an ECM
+sequence of conditional maximisations, so each step still cannot decrease the expected complete-data
+log-likelihood). Σ stays fixed as the paper advises (§3.3).
+
+Beyond the paper (and why):
+
+* Measurement regressors b (bias, ramp, exog) get the closed-form update of a linear regression on
+  ``y_t − H x_t^N``, like H's update (the paper has u only).
+* The Q update's S uses ``Φ x̄ uᵀ + u x̄ᵀ Φᵀ``; paper 000 prints ``Φ x_{t−1}^N uᵀ Φᵀ`` in the term before last,
+  a slip (expanding E[(x_t − Φx_{t−1} − u)(…)ᵀ] gives the form used here).
+* With ``StateSpace.sigma_mode == 'steady'`` Σ is the steady-state prediction covariance of the current θ (so
+  the fast engine applies). The M-step does not account for Σ's dependence on θ: the iteration is then a
+  generalised EM whose ascent holds up to that O(1) term (vs O(N) for the rest); ``sigma_mode='fixed'`` is the
+  paper's exact EM, monotone to rounding (tested).
+* Free diagonal transition elements are kept in (1e-12, 1 − 1e-12) and free process-noise variances above a
+  tiny floor, so that a Gauss–Markov block stays a stationary GM process and Q stays invertible.
+* :func:`q_function` evaluates the expected complete-data log-likelihood at any θ from one E-step; by Fisher's
+  identity its gradient at the E-step's θ is the gradient of the exact log-likelihood, which the quasi-Newton
+  finish in :mod:`imu_noise_id.pipelines.identification` uses.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import kalman
+from .errors import InputError
+from .kalman.common import check_data
+from .statespace import PHI_RANGE, StateSpace
+
+#: Floor of free process-noise variances relative to R (keeps Q invertible in the Φ and u updates).
+Q_FLOOR_REL = 1e-20
+
+
+@dataclass
+class Sums:
+    """Expected sufficient statistics of one E-step (paper 000 §3.3, P̃_t = P_t^N + x_t^N x_t^{Nᵀ})."""
+
+    n: int
+    n_obs: int
+    s11: np.ndarray  # Σ_{t=2}^{N} P̃_t
+    s00: np.ndarray  # Σ_{t=2}^{N} P̃_{t−1}
+    s10: np.ndarray  # Σ_{t=2}^{N} P̃_{t,t−1}
+    x_next: np.ndarray  # Σ_{t=2}^{N} x_t^N
+    x_prev: np.ndarray  # Σ_{t=2}^{N} x_{t−1}^N
+    x1: np.ndarray  # x_1^N
+    p1: np.ndarray  # P_1^N
+    pt_obs: np.ndarray  # Σ_obs P̃_t
+    yx_obs: np.ndarray  # Σ_obs y_t x_t^N
+    zx_obs: np.ndarray  # Σ_obs z_t x_t^{Nᵀ}  (k, p)
+    zz_obs: np.ndarray  # Σ_obs z_t z_tᵀ
+    zy_obs: np.ndarray  # Σ_obs z_t y_t
+    yy_obs: float  # Σ_obs y_t²
+    loglik: float  # exact log-likelihood at the E-step's θ
+
+
+@dataclass(frozen=True)
+class DataSums:
+    """Sums of the data alone (the same at every E-step): Σ_obs z zᵀ, Σ_obs z y, Σ_obs y², and the data."""
+
+    y_obs: np.ndarray
+    zt_obs: np.ndarray  # (k, n_obs)
+    zz: np.ndarray
+    zy: np.ndarray
+    yy: float
+    observed: np.ndarray
+    all_observed: bool
+
+    @classmethod
+    def of(cls, y: np.ndarray, z: np.ndarray) -> DataSums:
+        obs = ~np.isnan(y)
+        allo = bool(np.all(obs))
+        yo = y if allo else y[obs]
+        zt = np.ascontiguousarray((z if allo else z[obs]).T)
+        return cls(yo, zt, zt @ zt.T, zt @ yo, float(yo @ yo), obs, allo)
+
+
+def sums_from_stats(st: kalman.SmootherStats, data: DataSums) -> Sums:
+    """Reduce smoother output to :class:`Sums` (paper 000 §3.3: P̃_t = P_t^N + x_t^N x_t^{Nᵀ})."""
+    X = st.xs  # (p, N)
+    xx = X @ X.T
+    s11 = xx - np.outer(X[:, 0], X[:, 0]) + st.sum_p - st.p_first
+    s00 = xx - np.outer(X[:, -1], X[:, -1]) + st.sum_p - st.p_last
+    s10 = X[:, 1:] @ X[:, :-1].T + st.sum_lag
+    xsum = X.sum(axis=1)
+    if data.all_observed:
+        xo = X
+        pt_obs = xx + st.sum_p
+    else:
+        xo = X[:, data.observed]
+        pt_obs = xo @ xo.T + st.sum_p_obs
+    return Sums(
+        n=X.shape[1], n_obs=data.y_obs.size, s11=s11, s00=s00, s10=s10, x_next=xsum - X[:, 0],
+        x_prev=xsum - X[:, -1], x1=X[:, 0].copy(), p1=st.p_first, pt_obs=pt_obs, yx_obs=xo @ data.y_obs,
+        zx_obs=data.zt_obs @ xo.T, zz_obs=data.zz, zy_obs=data.zy, yy_obs=data.yy, loglik=st.loglik,
+    )
+
+
+def estep(
+    model: StateSpace, y: np.ndarray, z: np.ndarray, engine: str = "auto", data: DataSums | None = None
+) -> Sums:
+    """Run the smoother and reduce its output to :class:`Sums` (``data``: precomputed :class:`DataSums`)."""
+    st = kalman.smooth(model, y, z, engine=engine)
+    return sums_from_stats(st, data or DataSums.of(y, z))
+
+
+def _pinv_psd(m: np.ndarray) -> np.ndarray:
+    return np.linalg.pinv(m, hermitian=True)
+
+
+def _measurement_sse(model: StateSpace, s: Sums) -> float:
+    """W = Σ_obs [(y_t − H x_t^N − b z_t)² + H P_t^N Hᵀ] from the sums."""
+    h, b = model.h, model.b
+    # E[(y − Hx − bz)²] summed: y² − 2 y Hx − 2 y bz + H P̃ H + 2 (bz)(Hx) + (bz)²
+    return float(
+        s.yy_obs - 2.0 * h @ s.yx_obs - 2.0 * b @ s.zy_obs + h @ s.pt_obs @ h
+        + 2.0 * b @ s.zx_obs @ h + b @ s.zz_obs @ b
+    )
+
+
+def mstep(model: StateSpace, s: Sums) -> StateSpace:
+    """One sweep of the constrained updates of paper 000 §3.3 (u, μ, Φ, H, Q, then b and R)."""
+    m = model.copy()
+    n1 = s.n - 1
+    p = m.n_states
+    q_inv = _pinv_psd(m.q) if p else np.zeros((0, 0))
+    if np.any(m.u_free):  # u update
+        f, D = m.design("u")
+        rhs = s.x_next - m.phi @ s.x_prev - n1 * f
+        m_u = np.linalg.solve(D.T @ q_inv @ D, D.T @ q_inv @ rhs) / n1
+        m = m.with_free_values("u", m_u)
+    if np.any(m.mu_free):  # μ update
+        sig_inv = _pinv_psd(m.initial_covariance())
+        f, D = m.design("mu")
+        m_mu = np.linalg.solve(D.T @ sig_inv @ D, D.T @ sig_inv @ (s.x1 - f))
+        m = m.with_free_values("mu", m_mu)
+    if np.any(m.phi_free):  # Φ update
+        f, D = m.design("phi")
+        kron = np.kron(s.s00, q_inv)
+        rhs = (q_inv @ s.s10).flatten(order="F") - kron @ f - (q_inv @ np.outer(m.u, s.x_prev)).flatten(order="F")
+        m_phi = np.linalg.solve(D.T @ kron @ D, D.T @ rhs)
+        m = m.with_free_values("phi", m_phi)
+        idx = np.flatnonzero(np.diag(m.phi_free))
+        m.phi[idx, idx] = np.clip(m.phi[idx, idx], *PHI_RANGE)
+    if np.any(m.h_free):  # H update (l = 1: R⁻¹ is a scalar)
+        f, D = m.design("h")
+        yx = s.yx_obs - m.b @ s.zx_obs
+        rhs = yx / m.r - (s.pt_obs / m.r) @ f
+        m_h = np.linalg.solve(D.T @ (s.pt_obs / m.r) @ D, D.T @ rhs)
+        m = m.with_free_values("h", m_h)
+    if np.any(m.q_free):  # Q update
+        phi, u = m.phi, m.u
+        S = (
+            s.s11 - s.s10 @ phi.T - phi @ s.s10.T + phi @ s.s00 @ phi.T
+            - np.outer(s.x_next, u) - np.outer(u, s.x_next)
+            + np.outer(phi @ s.x_prev, u) + np.outer(u, phi @ s.x_prev) + n1 * np.outer(u, u)
+        )
+        f, D = m.design("q")
+        m_q = np.linalg.solve(D.T @ D, D.T @ S.flatten(order="F")) / n1
+        m = m.with_free_values("q", m_q)
+        idx = np.flatnonzero(np.diag(m.q_free))
+        m.q[idx, idx] = np.maximum(m.q[idx, idx], Q_FLOOR_REL * max(m.r, 1e-300))
+    if np.any(m.b_free):  # regression coefficients (beyond the paper; closed form like H)
+        free = np.asarray(m.b_free, bool)
+        b_fix = np.where(free, 0.0, m.b)
+        rhs = s.zy_obs - s.zx_obs @ m.h - s.zz_obs @ b_fix
+        m.b[free] = np.linalg.solve(s.zz_obs[np.ix_(free, free)], rhs[free])
+    if m.r_free:  # R update
+        m.r = max(_measurement_sse(m, s) / s.n_obs, 1e-300)
+    return m
+
+
+def q_function(model: StateSpace, s: Sums) -> float:
+    """Expected complete-data log-likelihood Q(θ | θ_E) at ``model``'s θ, with the E-step sums of θ_E.
+
+    Includes the x_1 term with Σ(θ) (steady mode), so that by Fisher's identity ∂Q/∂θ at θ = θ_E equals the
+    gradient of the exact log-likelihood. States with zero process noise (deterministic transitions) drop out of
+    the Q term (their complete-data density is degenerate and does not depend on the free parameters).
+    """
+    n1 = s.n - 1
+    p = model.n_states
+    val = -0.5 * s.n_obs * math.log(2.0 * math.pi)
+    r = float(model.r)
+    val -= 0.5 * (s.n_obs * math.log(r) + _measurement_sse(model, s) / r)
+    if p == 0:
+        return val
+    sigma = model.initial_covariance()
+    d1 = s.x1 - model.mu
+    e1 = s.p1 + np.outer(d1, d1)
+    nz_sig = np.diag(sigma) > 0
+    if np.any(nz_sig):
+        sg = sigma[np.ix_(nz_sig, nz_sig)]
+        _, logdet = np.linalg.slogdet(sg)
+        val -= 0.5 * (logdet + float(np.trace(np.linalg.solve(sg, e1[np.ix_(nz_sig, nz_sig)]))))
+    phi, u = model.phi, model.u
+    S = (
+        s.s11 - s.s10 @ phi.T - phi @ s.s10.T + phi @ s.s00 @ phi.T
+        - np.outer(s.x_next, u) - np.outer(u, s.x_next)
+        + np.outer(phi @ s.x_prev, u) + np.outer(u, phi @ s.x_prev) + n1 * np.outer(u, u)
+    )
+    nz = np.diag(model.q) > 0
+    if np.any(nz):
+        qq = model.q[np.ix_(nz, nz)]
+        _, logdet = np.linalg.slogdet(qq)
+        val -= 0.5 * (n1 * logdet + float(np.trace(np.linalg.solve(qq, S[np.ix_(nz, nz)]))))
+    return float(val)
+
+
+@dataclass
+class EMResult:
+    """Outcome of :func:`run_em`.
+
+    Attributes
+    ----------
+    model : StateSpace
+        The last iterate.
+    loglik : list[float]
+        Exact log-likelihood at each iterate θ⁽⁰⁾, θ⁽¹⁾, … (from the E-steps; the last entry is the final model's).
+    n_iter : int
+        Number of M-steps done.
+    converged : bool
+        Whether the relative stopping rule was met.
+    diverged : bool
+        Whether an update made the model degenerate (no steady-state filter); the last good iterate is kept.
+    """
+
+    model: StateSpace
+    loglik: list[float] = field(default_factory=list)
+    n_iter: int = 0
+    converged: bool = False
+    diverged: bool = False
+
+
+def relative_change(l_new: float, l_old: float, c: float = 1.0) -> float:
+    """Stopping statistic of paper 000 §3.5(ii): (L⁺ − L)/(0.5·|L⁺ + L| + c)."""
+    return (l_new - l_old) / (0.5 * abs(l_new + l_old) + c)
+
+
+def run_em(
+    model: StateSpace,
+    y: np.ndarray,
+    z: np.ndarray | None = None,
+    *,
+    max_iter: int = 500,
+    tol: float = 1e-9,
+    c: float = 1.0,
+    engine: str = "auto",
+) -> EMResult:
+    """Iterate E- and M-steps until the relative stopping rule of §3.5(ii) falls below ``tol``.
+
+    Parameters
+    ----------
+    model
+        Initial θ⁽⁰⁾ with its free masks.
+    y, z
+        Signal (NaN = missing) and measurement regressors (N, k).
+    max_iter, tol, c
+        Iteration cap, threshold ε and constant c of the stopping rule.
+    engine
+        Kalman engine (``'auto'``, ``'steady'``, ``'exact'``).
+    """
+    y, z = check_data(y, z, model.n_regressors)
+    if max_iter < 0:
+        raise InputError(f"max_iter must be >= 0, got {max_iter}")
+    result = EMResult(model)
+    data = DataSums.of(y, z)
+    s = estep(model, y, z, engine, data)
+    result.loglik.append(s.loglik)
+    for _ in range(max_iter):
+        new = mstep(result.model, s)
+        try:
+            s = estep(new, y, z, engine, data)
+        except (InputError, np.linalg.LinAlgError):
+            # The update left the space where the filter exists (e.g. a GM pole at 1 next to an RW: an
+            # unobservable pair). Paper 000 §3.5(iii) warns of such divergence; keep the last good iterate.
+            result.diverged = True
+            break
+        result.model = new
+        result.n_iter += 1
+        result.loglik.append(s.loglik)
+        if abs(relative_change(result.loglik[-1], result.loglik[-2], c)) < tol:
+            result.converged = True
+            break
+    return result

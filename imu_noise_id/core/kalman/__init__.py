@@ -1,0 +1,81 @@
+"""Kalman filtering and smoothing for :class:`~imu_noise_id.core.statespace.StateSpace` models.
+
+Two engines with one API: :mod:`.exact` (the time-varying recursion of paper 000's appendix; any Σ, missing
+samples) and :mod:`.steady` (steady-state gains as IIR filters; Σ = P̄ and no missing samples). The functions
+here pick the engine (``engine='auto'``: steady when it applies, else exact).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+from ..statespace import StateSpace
+from . import exact, steady
+from .common import (
+    Columns,
+    InnovationResult,
+    ProfileResult,
+    SmootherStats,
+    apply_beta,
+    build_columns,
+    check_data,
+    profile,
+)
+
+__all__ = [
+    "Columns", "InnovationResult", "ProfileResult", "SmootherStats", "apply_beta", "loglik", "profile_and_smooth",
+    "smooth",
+]
+
+ENGINES = ("auto", "steady", "exact")
+
+
+def _engine(model: StateSpace, y: np.ndarray, engine: str):
+    if engine not in ENGINES:
+        raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+    can_steady = model.sigma_mode == "steady" and not np.any(np.isnan(y))
+    if engine == "steady" and not can_steady:
+        raise InputError("the steady engine needs sigma_mode='steady' and no missing samples")
+    return steady if (engine == "steady" or (engine == "auto" and can_steady)) else exact
+
+
+def loglik(
+    model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, profile_mean: bool = True,
+    engine: str = "auto",
+) -> ProfileResult:
+    """Exact log-likelihood (prediction-error decomposition) of y under ``model``.
+
+    With ``profile_mean`` the free mean parameters (b, u, μ) are set to their GLS estimate (closed form;
+    the maximum of the likelihood over them for the given noise parameters), else the model's values are used.
+    NaN samples are missing (no update).
+    """
+    y, z = check_data(y, z, model.n_regressors)
+    cols = build_columns(model, y, z, profile_mean)
+    inn = _engine(model, y, engine).innovations(model, cols)
+    return profile(inn, cols.names)
+
+
+def profile_and_smooth(
+    model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, engine: str = "auto"
+) -> tuple[ProfileResult, StateSpace, SmootherStats]:
+    """:func:`loglik` with the mean parameters profiled, the model at their estimate, and its E-step statistics.
+
+    One forward pass when the steady engine applies (see :func:`.steady.profile_and_smooth`).
+    """
+    y, z = check_data(y, z, model.n_regressors)
+    cols = build_columns(model, y, z, True)
+    eng = _engine(model, y, engine)
+    if eng is steady:
+        prof, stats = steady.profile_and_smooth(model, cols)
+        return prof, apply_beta(model, prof), stats
+    prof = profile(eng.innovations(model, cols), cols.names)
+    fitted = apply_beta(model, prof)
+    return prof, fitted, eng.smooth(fitted, build_columns(fitted, y, z, False))
+
+
+def smooth(model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, engine: str = "auto") -> SmootherStats:
+    """E-step: smoothed means and the summed covariances the M-step needs, at the model's current parameters."""
+    y, z = check_data(y, z, model.n_regressors)
+    cols = build_columns(model, y, z, profile=False)
+    return _engine(model, y, engine).smooth(model, cols)

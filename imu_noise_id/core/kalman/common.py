@@ -1,0 +1,190 @@
+"""Shared pieces of the Kalman engines: inputs ("columns"), results, and the regression (GLS) profile.
+
+Every engine runs the filter on several *columns* at once. Column 0 is the data: measurement ``y − Z·b``,
+state input ``u`` and initial mean ``μ``. The other columns are the responses of the same (linear) filter to the
+model's free mean parameters — regression coefficients ``b``, state inputs ``u``, initial means ``μ`` — so that
+the innovations are affine in them, e(β) = e₀ + Σ_c β_c·r_c, and generalised least squares gives their MLE for
+fixed noise parameters in closed form (a profile likelihood; beyond paper 000, which updates u and μ by EM only).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..statespace import StateSpace
+
+LOG_2PI = math.log(2.0 * math.pi)
+
+
+@dataclass
+class Columns:
+    """Inputs of a multi-column filter run.
+
+    Attributes
+    ----------
+    y : (m, N) array
+        Measurement input of each column (NaN in column 0 marks missing samples for all columns).
+    g : (p, m) array
+        Constant state input of each column (u for the data column).
+    m0 : (p, m) array
+        Initial state mean of each column (μ for the data column).
+    names : list[str]
+        ``'data'`` then ``'b:<regressor>'``, ``'u:<state>'``, ``'mu:<state>'`` for the mean parameters.
+    """
+
+    y: np.ndarray
+    g: np.ndarray
+    m0: np.ndarray
+    names: list[str]
+
+
+@dataclass
+class InnovationResult:
+    """Innovations of each column and their variance."""
+
+    e: np.ndarray  # (m, N); NaN where missing
+    f: np.ndarray  # (N,); NaN where missing
+    observed: np.ndarray  # (N,) bool
+    constant_f: bool = False  # F_t is the same at every t (steady engine)
+
+
+@dataclass
+class SmootherStats:
+    """What the M-step needs from the E-step (paper 000 §3.3 and appendix), without per-time covariances.
+
+    Attributes
+    ----------
+    xs : (p, N) array
+        Smoothed means x_t^N (one row per state).
+    sum_p : (p, p) array
+        Σ_{t=1}^{N} P_t^N.
+    p_first, p_last : (p, p) arrays
+        P_1^N and P_N^N.
+    sum_lag : (p, p) array
+        Σ_{t=2}^{N} P_{t,t−1}^N.
+    sum_p_obs : (p, p) array
+        Σ over observed t of P_t^N.
+    loglik : float
+        Exact log-likelihood of the data at the model's current parameters (prediction-error decomposition).
+    observed : (N,) bool array
+    """
+
+    xs: np.ndarray
+    sum_p: np.ndarray
+    p_first: np.ndarray
+    p_last: np.ndarray
+    sum_lag: np.ndarray
+    sum_p_obs: np.ndarray
+    loglik: float
+    observed: np.ndarray
+
+
+def check_data(y: np.ndarray, z: np.ndarray | None, n_regressors: int) -> tuple[np.ndarray, np.ndarray]:
+    """Validated float arrays (y (N,), Z (N, k)); NaN in y means missing, inf anywhere is an error."""
+    y = np.asarray(y, dtype=float).ravel()
+    if np.any(np.isinf(y)):
+        raise InputError("the signal contains infinite values; remove them or mark them as NaN (missing)")
+    if z is None:
+        z = np.zeros((y.size, 0))
+    z = np.asarray(z, dtype=float)
+    if z.ndim == 1:
+        z = z[:, None]
+    if z.shape != (y.size, n_regressors):
+        raise InputError(f"regressors must have shape ({y.size}, {n_regressors}), got {z.shape}")
+    if not np.all(np.isfinite(z)):
+        raise InputError("regressors (exog) must be finite everywhere, also where the signal is missing")
+    return y, z
+
+
+def build_columns(model: StateSpace, y: np.ndarray, z: np.ndarray, profile: bool) -> Columns:
+    """Column 0 = data at the model's current mean parameters; with ``profile`` one column per free one."""
+    p = model.n_states
+    free_b = np.flatnonzero(model.b_free) if profile else np.zeros(0, int)
+    free_u = np.flatnonzero(model.u_free) if profile else np.zeros(0, int)
+    free_mu = np.flatnonzero(model.mu_free) if profile else np.zeros(0, int)
+    b_fixed = np.where(model.b_free, 0.0, model.b) if profile else model.b
+    u0 = np.where(model.u_free, 0.0, model.u) if profile else model.u
+    mu0 = np.where(model.mu_free, 0.0, model.mu) if profile else model.mu
+    m = 1 + free_b.size + free_u.size + free_mu.size
+    ycols = np.zeros((m, y.size))
+    ycols[0] = y - z @ b_fixed if z.shape[1] else y
+    g, m0 = np.zeros((p, m)), np.zeros((p, m))
+    g[:, 0], m0[:, 0] = u0, mu0
+    names = ["data"]
+    c = 1
+    for j in free_b:
+        ycols[c] = -z[:, j]
+        names.append(f"b:{model.regressors[j]}")
+        c += 1
+    for j in free_u:
+        g[j, c] = 1.0
+        names.append(f"u:{j}")
+        c += 1
+    for j in free_mu:
+        m0[j, c] = 1.0
+        names.append(f"mu:{j}")
+        c += 1
+    return Columns(ycols, g, m0, names)
+
+
+@dataclass
+class ProfileResult:
+    """Log-likelihood with the free mean parameters at their GLS estimate (or as given)."""
+
+    loglik: float
+    beta: np.ndarray  # GLS estimates of the free mean parameters, in Columns.names[1:] order
+    beta_cov: np.ndarray  # their covariance (inverse of the GLS normal matrix)
+    names: list[str]
+    innovations: np.ndarray  # (N,) innovations at beta (NaN where missing)
+    variances: np.ndarray  # (N,)
+
+
+def profile(inn: InnovationResult, names: list[str], keep_innovations: bool = True) -> ProfileResult:
+    """GLS of the innovations on the regressor responses; exact Gaussian log-likelihood at the optimum.
+
+    e(β) = e₀ + Σ_c β_c r_c; β̂ minimises Σ_t e_t(β)²/F_t (the only β-dependent part of the log-likelihood).
+    """
+    obs = inn.observed
+    all_obs = bool(np.all(obs))
+    E = inn.e if all_obs else inn.e[:, obs]
+    if inn.constant_f:
+        f0 = float(inn.f[0])
+        G = (E @ E.T) / f0
+        sum_log_f = E.shape[1] * np.log(f0)
+    else:
+        f = inn.f if all_obs else inn.f[obs]
+        Ew = E / np.sqrt(f)
+        G = Ew @ Ew.T
+        sum_log_f = float(np.sum(np.log(f)))
+    k = E.shape[0] - 1
+    if k:
+        try:
+            cov = np.linalg.inv(G[1:, 1:])
+        except np.linalg.LinAlgError:
+            raise InputError("the regressors are collinear (e.g. a constant exog column besides the bias)") from None
+        beta = -cov @ G[1:, 0]
+        quad = float(G[0, 0] + beta @ G[1:, 0])
+    else:
+        beta, cov = np.zeros(0), np.zeros((0, 0))
+        quad = float(G[0, 0])
+    ll = -0.5 * (E.shape[1] * LOG_2PI + sum_log_f + quad)
+    e_full = (inn.e[0] + beta @ inn.e[1:]) if keep_innovations else np.zeros(0)
+    return ProfileResult(ll, beta, cov, names[1:], e_full, inn.f)
+
+
+def apply_beta(model: StateSpace, result: ProfileResult) -> StateSpace:
+    """A copy of ``model`` with its free mean parameters set to the GLS estimates."""
+    out = model.copy()
+    for name, value in zip(result.names, result.beta, strict=True):
+        kind, _, key = name.partition(":")
+        if kind == "b":
+            out.b[model.regressors.index(key)] = value
+        elif kind == "u":
+            out.u[int(key)] = value
+        else:
+            out.mu[int(key)] = value
+    return out

@@ -1,0 +1,95 @@
+"""Exact (time-varying) Kalman filter and RTS smoother with the lag-one covariance: paper 000, appendix.
+
+The reference engine: a plain recursion over time that handles any initial covariance Σ and missing samples
+(NaN → prediction only, no update). It stores per-time covariances, so it is meant for short series, series
+with gaps and as the yardstick the fast engine (:mod:`.steady`) is tested against.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..statespace import StateSpace
+from .common import LOG_2PI, Columns, InnovationResult, SmootherStats
+
+
+def _forward(model: StateSpace, cols: Columns):
+    """Forward filter on all columns; returns per-time predicted/filtered means and covariances."""
+    phi, q, h, r = model.phi, model.q, model.h, float(model.r)
+    m, n = cols.y.shape
+    ycols = cols.y.T
+    p = model.n_states
+    observed = ~np.isnan(ycols[:, 0])
+    xp = np.empty((n, p, m))
+    xf = np.empty((n, p, m))
+    Pp = np.empty((n, p, p))
+    Pf = np.empty((n, p, p))
+    K = np.zeros((n, p))
+    e = np.full((n, m), np.nan)
+    f = np.full(n, np.nan)
+    x = cols.m0.copy()
+    P = np.array(model.initial_covariance(), dtype=float)
+    for t in range(n):
+        xp[t], Pp[t] = x, P
+        if observed[t]:
+            Ph = P @ h
+            ft = float(h @ Ph) + r
+            k = Ph / ft
+            et = ycols[t] - h @ x
+            x = x + np.outer(k, et)
+            P = P - np.outer(k, Ph)
+            P = 0.5 * (P + P.T)
+            e[t], f[t], K[t] = et, ft, k
+        xf[t], Pf[t] = x, P
+        x = phi @ x + cols.g
+        P = phi @ P @ phi.T + q
+    return xp, xf, Pp, Pf, K, InnovationResult(e.T.copy(), f, observed)
+
+
+def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
+    """Innovations e_t = y_t − H x_t^{t−1} of every column and their variance F_t = H P_t^{t−1} Hᵀ + R."""
+    return _forward(model, cols)[-1]
+
+
+def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
+    """E-step statistics of the data column (column 0): RTS smoother and lag-one covariance (paper 000 appendix).
+
+    Backward pass, t = N, …, 2 (1-based)::
+
+        J_{t−1} = P_{t−1}^{t−1} Φᵀ (P_t^{t−1})⁻¹
+        x_{t−1}^N = x_{t−1}^{t−1} + J_{t−1}(x_t^N − x_t^{t−1})
+        P_{t−1}^N = P_{t−1}^{t−1} + J_{t−1}(P_t^N − P_t^{t−1})J_{t−1}ᵀ
+        P_{N,N−1}^N = (I − K_N H) Φ P_{N−1}^{N−1}
+        P_{t−1,t−2}^N = P_{t−1}^{t−1} J_{t−2}ᵀ + J_{t−1}(P_{t,t−1}^N − Φ P_{t−1}^{t−1}) J_{t−2}ᵀ
+    """
+    phi, h = model.phi, model.h
+    xp, xf, Pp, Pf, K, inn = _forward(model, Columns(cols.y[:1], cols.g[:, :1], cols.m0[:, :1], cols.names[:1]))
+    n, p = xp.shape[0], xp.shape[1]
+    xp, xf = xp[:, :, 0], xf[:, :, 0]
+    xs = np.empty((n, p))
+    xs[-1] = xf[-1]
+    Ps = Pf[-1].copy()
+    obs = inn.observed
+    sum_p = Ps.copy()
+    sum_p_obs = Ps.copy() if obs[-1] else np.zeros((p, p))
+    J = np.empty((n, p, p))
+    for t in range(n - 1, 0, -1):
+        J[t - 1] = np.linalg.solve(Pp[t].T, (Pf[t - 1] @ phi.T).T).T
+        xs[t - 1] = xf[t - 1] + J[t - 1] @ (xs[t] - xp[t])
+        Ps = Pf[t - 1] + J[t - 1] @ (Ps - Pp[t]) @ J[t - 1].T
+        Ps = 0.5 * (Ps + Ps.T)
+        sum_p += Ps
+        if obs[t - 1]:
+            sum_p_obs += Ps
+    p_first = Ps
+    sum_lag = np.zeros((p, p))
+    if n > 1:
+        lag = (np.eye(p) - np.outer(K[-1], h)) @ phi @ Pf[-2]
+        sum_lag += lag
+        for t in range(n - 1, 1, -1):  # 0-based t: lag(t) = P_{t,t-1} → lag(t-1) = P_{t-1,t-2}
+            lag = Pf[t - 1] @ J[t - 2].T + J[t - 1] @ (lag - phi @ Pf[t - 1]) @ J[t - 2].T
+            sum_lag += lag
+    fo = inn.f[obs]
+    eo = inn.e[0, obs]
+    loglik = -0.5 * float(np.sum(LOG_2PI + np.log(fo) + eo * eo / fo))
+    return SmootherStats(np.ascontiguousarray(xs.T), sum_p, p_first, Pf[-1].copy(), sum_lag, sum_p_obs, loglik, obs)

@@ -1,0 +1,203 @@
+"""Fast Kalman engine for time-invariant models in steady state: the filter and smoother as IIR filters.
+
+With Σ = P̄, the steady-state prediction covariance (``StateSpace.sigma_mode == 'steady'``), the Riccati
+recursion of paper 000's appendix is at its fixed point from the first sample: the gain K, the innovation
+variance F and the smoother gain J are constants, so
+
+    predicted state  x_{t+1} = A x_t + ΦK y_t + u,        A = Φ(I − K H)          (forward, causal)
+    smoothed state   x_{t−1}^N = J x_t^N + (x_{t−1}^{t−1} − J x_t^{t−1})          (backward, anti-causal)
+
+are linear time-invariant filters. They run in compiled code as cascades of first-order sections
+(``scipy.signal.lfilter``) in the Schur basis of A (resp. J): orthogonal, hence numerically as good as the
+plain recursion even with poles within 1e-6 of the unit circle, where a transfer-function (polynomial) form
+would lose all accuracy.
+
+The smoothed covariances are never stored: they follow the affine recursion P_{t−1}^N = T(P_t^N) =
+J P_t^N Jᵀ + (P_f − J P̄ Jᵀ) from P_N^N = P_f, so Σ_t P_t^N = Σ_{k<N} T^k(P_f) and P_1^N = T^{N−1}(P_f) are
+computed exactly by binary doubling of the affine map (:func:`affine_power_sum`, O(log N) small products, no
+Lyapunov solve that would be ill-conditioned when J has an eigenvalue near 1). The lag-one covariance is
+P_{t,t−1}^N = P_t^N Jᵀ (equivalent to the paper's recursion; de Jong 1989).
+This engine requires no missing samples; :func:`imu_noise_id.core.kalman.smooth` falls back to the exact engine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import schur
+from scipy.signal import lfilter
+
+from ..statespace import StateSpace
+from .common import LOG_2PI, Columns, InnovationResult, ProfileResult, SmootherStats, profile
+
+
+@dataclass(frozen=True)
+class SteadyGains:
+    """Constant gains of the steady-state filter and smoother."""
+
+    p_pred: np.ndarray  # P̄ = P_t^{t−1}
+    p_filt: np.ndarray  # P_t^t
+    k: np.ndarray  # Kalman gain on the predicted state
+    f: float  # innovation variance
+    a: np.ndarray  # Φ(I − K H)
+    j: np.ndarray  # smoother gain P_f Φᵀ P̄⁻¹
+
+
+def gains(model: StateSpace) -> SteadyGains:
+    """Steady-state gains of ``model`` (from the discrete algebraic Riccati equation)."""
+    P = model.steady_prediction_covariance()
+    h = model.h
+    Ph = P @ h
+    f = float(h @ Ph) + float(model.r)
+    k = Ph / f
+    Pf = P - np.outer(k, Ph)
+    Pf = 0.5 * (Pf + Pf.T)
+    a = model.phi @ (np.eye(model.n_states) - np.outer(k, h))
+    j = np.linalg.lstsq(P.T, (Pf @ model.phi.T).T, rcond=None)[0].T
+    return SteadyGains(P, Pf, k, f, a, j)
+
+
+def _schur(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A = U T Uᴴ with T upper triangular (real when all eigenvalues are real, else complex)."""
+    T, U = schur(A, output="real")
+    if A.shape[0] > 1 and np.any(np.abs(np.diag(T, -1)) > 0):
+        T, U = schur(A, output="complex")
+    return T, U
+
+
+def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
+    """w[:, :, 0] = w0, w[:, :, t+1] = T w[:, :, t] + cw[:, :, t]; shapes (p, m, N). T upper triangular.
+
+    One first-order ``lfilter`` per state (vectorised over the m columns), last state first, each driven by its
+    input plus the already computed states it couples to.
+    """
+    p = cw.shape[0]
+    w = np.empty_like(cw)
+    for i in range(p - 1, -1, -1):
+        drive = cw[i, :, :-1].copy()
+        for jj in range(i + 1, p):
+            if T[i, jj] != 0:
+                drive += T[i, jj] * w[jj, :, :-1]
+        lam = T[i, i]
+        w[i, :, 0] = w0[i]
+        w[i, :, 1:] = lfilter([1.0], [1.0, -lam], drive, axis=-1, zi=(lam * w0[i])[:, None])[0]
+    return w
+
+
+def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """x_0 = x0, x_{t+1} = A x_t + c_t; c has shape (p, m, N), x0 (p, m); returns x with c's shape.
+
+    Computed in the Schur basis A = U T Uᴴ (orthogonal, so no loss of accuracy) by :func:`_run_modes`.
+    """
+    if c.shape[0] == 0:
+        return np.zeros_like(c)
+    T, U = _schur(A)
+    Uh = U.conj().T
+    cw = np.einsum("ij,jmn->imn", Uh, c)
+    w = _run_modes(T, cw, Uh @ x0)
+    x = np.einsum("ij,jmn->imn", U, w)
+    return np.real(x) if np.iscomplexobj(x) else x
+
+
+def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns, full: bool):
+    """H x_t^{t−1} for every column (m, N), and with ``full`` the predicted states (p, m, N)."""
+    p = model.n_states
+    m, n = cols.y.shape
+    if p == 0:
+        return np.zeros((m, n)), np.zeros((0, m, n))
+    T, U = _schur(g.a)
+    Uh = U.conj().T
+    gain_w = Uh @ (model.phi @ g.k)
+    g_w = Uh @ cols.g
+    cw = gain_w[:, None, None] * cols.y[None, :, :] + g_w[:, :, None]
+    w = _run_modes(T, cw, Uh @ cols.m0)
+    hw = model.h @ U
+    out = np.einsum("i,imn->mn", hw, w)
+    out = np.real(out) if np.iscomplexobj(out) else out
+    if not full:
+        return out, None
+    x = np.einsum("ij,jmn->imn", U, w)
+    return out, (np.real(x) if np.iscomplexobj(x) else x)
+
+
+def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
+    """Innovations and their (constant) variance for every column; no missing samples allowed."""
+    g = gains(model)
+    hx, _ = _predicted_output(model, g, cols, full=False)
+    n = cols.y.shape[1]
+    return InnovationResult(cols.y - hx, np.full(n, g.f), np.ones(n, bool), constant_f=True)
+
+
+def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Σ_{k=0}^{n−1} T^k(P0) and T^{n−1}(P0) for T(P) = J P Jᵀ + C, by binary doubling.
+
+    With K = J ⊗ J acting on vec(P), a block of k steps is (K^k, c_k = vec T^k(0), G_k = Σ_{j<k} K^j,
+    m_k = Σ_{j<k} c_j); block a followed by block b combines as K_{a+b} = K_b K_a, c_{a+b} = K_b c_a + c_b,
+    G_{a+b} = G_a + G_b K_a, m_{a+b} = m_a + G_b c_a + m_b.
+    """
+    p = J.shape[0]
+    eye = np.eye(p * p)
+
+    def combine(a, b):
+        Ka, ca, Ga, ma = a
+        Kb, cb, Gb, mb = b
+        return Kb @ Ka, Kb @ ca + cb, Ga + Gb @ Ka, ma + Gb @ ca + mb
+
+    def power(k):
+        result = (eye, np.zeros(p * p), np.zeros((p * p, p * p)), np.zeros(p * p))
+        step = (np.kron(J, J), C.flatten(order="F"), eye, np.zeros(p * p))
+        while k:
+            if k & 1:
+                result = combine(result, step)
+            step = combine(step, step)
+            k >>= 1
+        return result
+
+    p0 = P0.flatten(order="F")
+    _, _, G, m = power(n)
+    K1, c1, _, _ = power(n - 1)
+    total = (G @ p0 + m).reshape(p, p, order="F")
+    last = (K1 @ p0 + c1).reshape(p, p, order="F")
+    return 0.5 * (total + total.T), 0.5 * (last + last.T)
+
+
+def _smooth_from_forward(model: StateSpace, g: SteadyGains, xp: np.ndarray, e: np.ndarray) -> SmootherStats:
+    """Backward pass and covariance sums from the predicted states xp (p, N) and innovations e (N,)."""
+    n, p = e.size, model.n_states
+    xf = xp + np.outer(g.k, e)
+    # Backward pass in reversed time: s_0 = x_N^N (= filtered), s_{k+1} = J s_k + a_{N−2−k}.
+    a = xf[:, :-1] - g.j @ xp[:, 1:]
+    c = np.zeros((p, 1, n))
+    c[:, 0, :-1] = a[:, ::-1]
+    xs = np.ascontiguousarray(lti_states(g.j, c, xf[:, -1:])[:, 0, ::-1])
+    J = g.j
+    const = g.p_filt - J @ g.p_pred @ J.T
+    sum_p, p_first = affine_power_sum(J, const, g.p_filt, n)
+    sum_lag = (sum_p - p_first) @ J.T
+    loglik = -0.5 * (n * (LOG_2PI + np.log(g.f)) + float(e @ e) / g.f)
+    return SmootherStats(
+        xs, sum_p, p_first, g.p_filt.copy(), sum_lag, sum_p.copy(), float(loglik), np.ones(n, bool),
+    )
+
+
+def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
+    """E-step statistics of the data column (column 0) with constant gains (see the module docstring)."""
+    g = gains(model)
+    one = Columns(cols.y[:1], cols.g[:, :1], cols.m0[:, :1], cols.names[:1])
+    hx, xp3 = _predicted_output(model, g, one, full=True)
+    return _smooth_from_forward(model, g, xp3[:, 0, :], one.y[0] - hx[0])
+
+
+def profile_and_smooth(model: StateSpace, cols: Columns) -> tuple[ProfileResult, SmootherStats]:
+    """GLS profile of the free mean parameters and the smoother at their estimate, from one forward pass.
+
+    The filter is linear in its inputs, so the predicted states of the data at β̂ are those of column 0 plus
+    Σ_c β̂_c times those of the regressor columns; only the backward pass is left to run.
+    """
+    g = gains(model)
+    hx, x = _predicted_output(model, g, cols, full=True)
+    n = cols.y.shape[1]
+    prof = profile(InnovationResult(cols.y - hx, np.full(n, g.f), np.ones(n, bool), constant_f=True), cols.names)
+    xp = x[:, 0, :] + np.tensordot(x[:, 1:, :], prof.beta, axes=([1], [0])) if prof.beta.size else x[:, 0, :]
+    return prof, _smooth_from_forward(model, g, xp, prof.innovations)

@@ -1,0 +1,268 @@
+"""Maximum-likelihood finish, standard errors and information for component models (beyond paper 000).
+
+EM converges slowly near the optimum (paper 000 §3.5 and §5: "very long convergence time"). After a few EM
+iterations this module maximises the exact log-likelihood directly with L-BFGS-B, in log-parameters
+ϑ = log(continuous-time parameter) of each stochastic component (noise density, random walk, GM τ and σ, QN Q),
+so positivity holds by construction. The mean parameters (bias, ramp slope, exog coefficients, u, μ) are
+profiled out by GLS inside the likelihood (:func:`imu_noise_id.core.kalman.loglik`).
+
+The gradient is exact and cheap: by Fisher's identity ∂ℓ/∂ϑ = ∂Q(ϑ | ϑ_E)/∂ϑ at ϑ = ϑ_E, with Q the EM's
+expected complete-data log-likelihood (:func:`imu_noise_id.core.em.q_function`), evaluated from one smoother
+pass; the derivative of Q (a closed-form function of a few sums) is taken by central differences.
+
+Standard errors (paper 000 §3.4): the observed information is minus a numerical Hessian of ℓ (central
+differences of the exact gradient); for positive parameters the 95 % interval is exp(ϑ̂ ± 1.96·se_ϑ) and the
+physical standard error the delta-method value·se_ϑ.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+
+from . import em, kalman
+from .components import RR, Component
+from .errors import InputError
+from .kalman.common import check_data
+from .statespace import StateSpace, with_components
+
+
+@dataclass(frozen=True)
+class Parameterisation:
+    """Log-parameters of the stochastic components of a structure (RR is a mean parameter, not included)."""
+
+    template: tuple[Component, ...]
+    entries: tuple[tuple[int, str], ...]  # (component index, parameter name)
+
+    @classmethod
+    def of(cls, components: list[Component]) -> Parameterisation:
+        entries = tuple(
+            (i, name) for i, c in enumerate(components) if not isinstance(c, RR) for name in c.parameter_names
+        )
+        return cls(tuple(components), entries)
+
+    @property
+    def labels(self) -> list[str]:
+        """``'<index>:<type>.<parameter>'`` per entry (index = component position in the structure)."""
+        return [f"{i}:{self.template[i].name}.{name}" for i, name in self.entries]
+
+    def to_theta(self, components: list[Component]) -> np.ndarray:
+        values = [components[i].params()[name] for i, name in self.entries]
+        if any(not (math.isfinite(v) and v > 0) for v in values):
+            raise InputError(f"component parameters must be finite and > 0 to fit, got {components}")
+        return np.log(values)
+
+    def to_components(self, theta: np.ndarray, model: StateSpace | None = None) -> list[Component]:
+        """Components at ϑ; RR slopes are taken from ``model`` (its profiled value) when given."""
+        params = [dict(c.params()) for c in self.template]
+        for (i, name), v in zip(self.entries, theta, strict=True):
+            params[i][name] = float(np.exp(v))
+        out: list[Component] = [type(c)(**p) for c, p in zip(self.template, params, strict=True)]
+        if model is not None:
+            from .statespace import to_components
+
+            fitted = to_components(model)
+            out = [f if isinstance(c, RR) else c for c, f in zip(out, fitted, strict=True)]
+        return out
+
+    def to_model(self, theta: np.ndarray, base: StateSpace) -> StateSpace:
+        """``base`` with Φ, Q, R at ϑ (mean parameters b, u, μ kept from ``base``)."""
+        comps = self.to_components(theta, base)
+        return with_components(base, comps)
+
+
+def loglik_and_grad(
+    par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *,
+    step: float = 1e-6, data: em.DataSums | None = None,
+) -> tuple[float, np.ndarray, StateSpace]:
+    """Profile log-likelihood at ϑ, its exact gradient (Fisher's identity) and the model with GLS means."""
+    prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
+    sums = em.sums_from_stats(stats, data or em.DataSums.of(y, z))
+    grad = np.empty(theta.size)
+    for k in range(theta.size):
+        tp, tm = theta.copy(), theta.copy()
+        tp[k] += step
+        tm[k] -= step
+        grad[k] = (em.q_function(par.to_model(tp, model), sums) - em.q_function(par.to_model(tm, model), sums)) / (
+            2.0 * step
+        )
+    return prof.loglik, grad, model
+
+
+@dataclass
+class MLEResult:
+    """Outcome of :func:`maximise`."""
+
+    theta: np.ndarray
+    model: StateSpace
+    loglik: float
+    n_eval: int
+    converged: bool
+    message: str
+
+
+def maximise(
+    par: Parameterisation,
+    base: StateSpace,
+    y: np.ndarray,
+    z: np.ndarray,
+    *,
+    max_iter: int = 40,
+    bounds_width: float = 30.0,
+    tau_bounds: tuple[float, float] | None = None,
+    grad_tol: float = 1e-2,
+    metric: np.ndarray | None = None,
+) -> MLEResult:
+    """L-BFGS(-B) on the exact profile log-likelihood from ``base`` (e.g. the last EM iterate).
+
+    ``metric``: an approximation of the information −∂²ℓ/∂ϑ² (e.g. the Whittle one). When given, the search
+    runs in η = Lᵀ(ϑ − ϑ₀) with L Lᵀ = metric, where the Hessian is close to the identity and L-BFGS needs a
+    handful of iterations; out-of-range points then get a large objective instead of box bounds, and it stops
+    when every |∂ℓ/∂η| < 0.05 (less than ~1e-3 of log-likelihood left to gain). Without it, when every
+    |∂ℓ/∂ϑ| < ``grad_tol``.
+    """
+    from .statespace import to_components
+
+    theta0 = par.to_theta(to_components(base))
+    lo = theta0 - bounds_width
+    hi = theta0 + bounds_width
+    if tau_bounds is not None:
+        for k, (_, name) in enumerate(par.entries):
+            if name == "tau":
+                lo[k], hi[k] = math.log(tau_bounds[0]), math.log(tau_bounds[1])
+                theta0[k] = min(max(theta0[k], lo[k]), hi[k])
+    state = {"n": 0, "best": (-np.inf, None, None)}
+    y, z = check_data(y, z, base.n_regressors)
+    data = em.DataSums.of(y, z)
+    scale = max(float(np.sum(np.isfinite(y))), 1.0)
+    if metric is not None:
+        w, v = np.linalg.eigh(0.5 * (metric + metric.T))
+        w = np.maximum(w, 1e-6 * max(float(np.max(w)), 1e-300))
+        T = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ metric T = I
+    else:
+        T = np.eye(theta0.size)
+
+    def fun(eta: np.ndarray) -> tuple[float, np.ndarray]:
+        theta = theta0 + T @ eta
+        if np.any(theta < lo) or np.any(theta > hi):
+            return 1e10, -T.T @ np.where(theta < lo, -1.0, np.where(theta > hi, 1.0, 0.0))
+        state["n"] += 1
+        try:
+            ll, g, model = loglik_and_grad(par, theta, base, y, z, data=data)
+        except (InputError, np.linalg.LinAlgError, ValueError):
+            return 1e10, np.zeros_like(eta)
+        if not math.isfinite(ll):
+            return 1e10, np.zeros_like(eta)
+        if ll > state["best"][0]:
+            state["best"] = (ll, theta.copy(), model)
+        return -ll / scale, -(T.T @ g) / scale
+
+    # With the metric, |∂ℓ/∂η| ≈ √(2 × the gain a Newton step would still bring): 0.05 ⇒ < ~1e-3 left.
+    gtol = (0.05 if metric is not None else grad_tol) / scale
+    res = minimize(fun, np.zeros(theta0.size), jac=True, method="L-BFGS-B",
+                   options={"maxiter": max_iter, "ftol": 1e-15, "gtol": gtol, "maxcor": 20})
+    ll, theta, model = state["best"]
+    if theta is None:
+        raise InputError("the likelihood could not be evaluated at any parameter value tried")
+    return MLEResult(theta, model, ll, state["n"], bool(res.success), str(res.message))
+
+
+def observed_information(
+    par: Parameterisation, theta: np.ndarray, model: StateSpace, y: np.ndarray, z: np.ndarray, *,
+    step: float = 1e-3, central: bool = False,
+) -> np.ndarray:
+    """−∂²ℓ/∂ϑ∂ϑᵀ by finite differences of the exact gradient (symmetrised).
+
+    Forward differences (k + 1 smoother passes; error O(step) ≈ 1e-3 relative, immaterial for standard errors)
+    or, with ``central``, central ones (2k passes, O(step²)).
+    """
+    k = theta.size
+    hess = np.empty((k, k))
+    y, z = check_data(y, z, model.n_regressors)
+    data = em.DataSums.of(y, z)
+    g0 = None if central else loglik_and_grad(par, theta, model, y, z, data=data)[1]
+    for j in range(k):
+        tp = theta.copy()
+        tp[j] += step
+        gp = loglik_and_grad(par, tp, model, y, z, data=data)[1]
+        if central:
+            tm = theta.copy()
+            tm[j] -= step
+            hess[:, j] = (gp - loglik_and_grad(par, tm, model, y, z, data=data)[1]) / (2.0 * step)
+        else:
+            hess[:, j] = (gp - g0) / step
+    return -0.5 * (hess + hess.T)
+
+
+def covariance_from_information(info: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Inverse of the observed information and whether it is positive definite.
+
+    When it is not (typically a variance driven to ~0 at the boundary: that component is not supported by the
+    data), the parameters loading most on the non-positive directions are removed one at a time until the rest
+    is positive definite; the removed ones get infinite variance (interval (0, ∞)), the others the inverse of
+    their (conditional) block.
+    """
+    k = info.shape[0]
+    keep = list(range(k))
+    while keep:
+        sub = info[np.ix_(keep, keep)]
+        w, v = np.linalg.eigh(sub)
+        scale = max(float(np.max(np.abs(np.diag(sub)))), 1e-300)
+        if np.all(w > 1e-10 * scale):
+            break
+        worst = int(np.argmax(np.abs(v[:, int(np.argmin(w))])))
+        keep.pop(worst)
+    cov = np.full((k, k), 0.0)
+    np.fill_diagonal(cov, np.inf)
+    if keep:
+        cov[np.ix_(keep, keep)] = np.linalg.inv(info[np.ix_(keep, keep)])
+    return cov, len(keep) == k
+
+
+#: Half the 95 % χ²₁ quantile: a likelihood-ratio interval ends where ℓ drops by this much.
+LR_DROP_95 = 1.9207294103470103
+
+
+def likelihood_interval(
+    par: Parameterisation, theta: np.ndarray, k: int, model: StateSpace, y: np.ndarray,
+    *, z: np.ndarray, ll_max: float, step: float = 1.0, max_steps: int = 25, lower: bool = True,
+) -> tuple[float, float]:
+    """95 % likelihood-ratio interval of log-parameter k, the others held at their estimates (conditional).
+
+    Used where the Wald interval is meaningless (a variance near 0, a flat likelihood). Each end is bracketed
+    by steps of ``step`` in log space and refined by bisection; an end the likelihood never drops by
+    :data:`LR_DROP_95` within ``max_steps`` is ∓inf (i.e. the parameter may be 0 or unbounded).
+    ``lower=False`` skips the lower end (−inf: the caller knows the data cannot exclude 0).
+    """
+
+    def drop(v: float) -> float:
+        th = theta.copy()
+        th[k] = v
+        try:
+            return ll_max - kalman.loglik(par.to_model(th, model), y, z).loglik
+        except (InputError, np.linalg.LinAlgError):
+            return math.inf
+
+    ends = [] if lower else [-math.inf]
+    for direction in (-1.0, 1.0) if lower else (1.0,):
+        inside, outside = theta[k], None
+        for i in range(1, max_steps + 1):
+            v = theta[k] + direction * step * i
+            if drop(v) > LR_DROP_95:
+                outside = v
+                break
+            inside = v
+        if outside is None:
+            ends.append(direction * math.inf)
+            continue
+        for _ in range(8):
+            mid = 0.5 * (inside + outside)
+            if drop(mid) > LR_DROP_95:
+                outside = mid
+            else:
+                inside = mid
+        ends.append(0.5 * (inside + outside))
+    return ends[0], ends[1]

@@ -1,0 +1,385 @@
+"""Linear-Gaussian state-space model of one sensor axis, assembled from error components.
+
+Paper 000 (Stebler et al. 2011), eqs. (4)–(5)::
+
+    x_{t+1} = Φ x_t + w_t + u,          w_t ~ N(0, Q)
+    y_t     = H x_t + bᵀ z_t + v_t,     v_t ~ N(0, R),      x_1 ~ N(μ, Σ)
+
+``z_t`` are known regressors of the measurement equation (a column of ones for the unknown constant bias,
+``t·dt`` for a rate ramp, and whatever the caller adds: sinusoids, temperature, bias steps); ``b`` are their
+coefficients. The regressors go beyond the paper, which only has the state input ``u``: a measurement-side
+regression is the same model for a bias and a ramp (an RW state starting at μ and driven by ``u = ω·dt`` sums
+to ``μ + ω·dt·(t − 1) + RW``) but its coefficients are estimated in closed form (generalised least squares)
+without the Φ–u ridges of paper 000 §3.5(iii), and it lets the closed loop add deterministic effects.
+
+Each matrix ``M`` of θ = {u, Φ, Q, R, H, μ, Σ} is split into fixed and free elements, ``M = M_fixed + M_free``
+and ``vec(M) = f + D·m`` (paper 000 eqs. 7–9; ``vec`` stacks columns): :meth:`StateSpace.design` returns
+``(f, D)``. The estimator only ever sees these matrices and masks, so a new component type plugs in through its
+:class:`~.components.StateBlock` without touching the estimator.
+
+Σ: paper 000 keeps Σ fixed at a small value (§3.3). Here ``sigma_mode="steady"`` (default) sets Σ to the
+steady-state *prediction* covariance P̄ of the current θ (the state covariance of a sensor that has been running
+and observed forever before the record starts). Beyond the paper, and for speed: with that prior the Kalman
+filter is time-invariant from the first sample and runs as an IIR filter (:mod:`.kalman.steady`).
+``sigma_mode="fixed"`` keeps the paper's fixed Σ.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .components import GM, QN, RR, RW, WN, Component
+from .errors import InputError
+
+#: Matrix names of θ in the order the EM updates them (paper 000 §3.3).
+MATRIX_NAMES: tuple[str, ...] = ("u", "mu", "phi", "h", "q", "r", "b")
+
+
+@dataclass(frozen=True)
+class BlockInfo:
+    """Where a component lives in the assembled model.
+
+    Attributes
+    ----------
+    name : str
+        Component type (``WN``, ``QN``, ``RW``, ``GM``, ``RR``).
+    states : tuple[int, ...]
+        Its state indices (empty for WN, and for RR in measurement mode).
+    regressor : int | None
+        Index into ``b`` of its regressor (RR in measurement mode), else None.
+    input_state : int | None
+        State the RR input ``u = ω·dt`` enters (RR in state mode), else None.
+    """
+
+    name: str
+    states: tuple[int, ...] = ()
+    regressor: int | None = None
+    input_state: int | None = None
+
+
+@dataclass
+class StateSpace:
+    """A univariate-measurement linear-Gaussian state-space model with fixed/free masks.
+
+    Attributes
+    ----------
+    phi, q, sigma : (p, p) arrays
+        Transition, process-noise covariance, initial-state covariance Σ (used when ``sigma_mode='fixed'``).
+    h, u, mu : (p,) arrays
+        Measurement row H, state input u, initial mean μ.
+    r : float
+        Measurement-noise variance R (per sample).
+    b : (k,) array
+        Coefficients of the measurement regressors z_t (names in ``regressors``).
+    *_free : bool masks of the same shapes
+        Free (estimated) elements; the others stay fixed.
+    dt : float
+        Sampling period [s].
+    blocks : tuple[BlockInfo, ...]
+        The components, in the order given, and where they live.
+    regressors : tuple[str, ...]
+        Names of the regressor columns (``bias``, ``ramp``, then the caller's).
+    sigma_mode : str
+        ``'steady'`` (Σ = steady-state prediction covariance of θ) or ``'fixed'`` (Σ as given).
+    """
+
+    phi: np.ndarray
+    q: np.ndarray
+    h: np.ndarray
+    r: float
+    u: np.ndarray
+    mu: np.ndarray
+    sigma: np.ndarray
+    b: np.ndarray
+    phi_free: np.ndarray
+    q_free: np.ndarray
+    h_free: np.ndarray
+    r_free: bool
+    u_free: np.ndarray
+    mu_free: np.ndarray
+    b_free: np.ndarray
+    dt: float
+    blocks: tuple[BlockInfo, ...] = ()
+    regressors: tuple[str, ...] = ()
+    sigma_mode: str = "steady"
+    _steady_cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def n_states(self) -> int:
+        return int(self.phi.shape[0])
+
+    @property
+    def n_regressors(self) -> int:
+        return int(self.b.shape[0])
+
+    def copy(self, **changes) -> StateSpace:
+        """A deep copy with some attributes replaced (the steady-state cache is not carried over)."""
+        fields = {
+            k: (np.array(v, copy=True) if isinstance(v, np.ndarray) else v)
+            for k, v in self.__dict__.items() if k != "_steady_cache"
+        }
+        fields.update(changes)
+        fields["_steady_cache"] = {}
+        return replace(self, **fields)
+
+    # -- vec(M) = f + D·m (paper 000 eqs. 7–9) -------------------------------------------------------------
+    def matrix(self, name: str) -> np.ndarray:
+        """θ-matrix ``name`` (one of :data:`MATRIX_NAMES`) as a 2-D array (vectors as columns)."""
+        value = np.atleast_1d(np.asarray(getattr(self, name), dtype=float))
+        return value.reshape(-1, 1) if value.ndim == 1 else value
+
+    def free_mask(self, name: str) -> np.ndarray:
+        mask = np.atleast_1d(np.asarray(getattr(self, f"{name}_free"), dtype=bool))
+        return mask.reshape(-1, 1) if mask.ndim == 1 else mask
+
+    def design(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """``(f, D)`` with ``vec(M) = f + D·m``: f = vec(M_fixed), D maps the free values m into vec(M_free)."""
+        value, mask = self.matrix(name), self.free_mask(name)
+        vec_mask = mask.flatten(order="F")
+        f = np.where(vec_mask, 0.0, value.flatten(order="F"))
+        D = np.eye(vec_mask.size)[:, vec_mask]
+        return f, D
+
+    def free_values(self, name: str) -> np.ndarray:
+        """The free values m of matrix ``name`` (column-major order)."""
+        return self.matrix(name).flatten(order="F")[self.free_mask(name).flatten(order="F")]
+
+    def with_free_values(self, name: str, m: np.ndarray) -> StateSpace:
+        """A copy with vec(M) = f + D·m."""
+        f, D = self.design(name)
+        shape = self.matrix(name).shape
+        value = (f + D @ np.asarray(m, dtype=float)).reshape(shape, order="F")
+        original = np.asarray(getattr(self, name))
+        if name == "r":
+            new_value: object = float(value[0, 0])
+        elif original.ndim == 1:
+            new_value = value[:, 0]
+        else:
+            new_value = value
+        return self.copy(**{name: new_value})
+
+    # -- initial-state covariance -------------------------------------------------------------------------
+    def steady_prediction_covariance(self) -> np.ndarray:
+        """P̄: fixed point of the prediction Riccati recursion P = Φ(P − PHᵀF⁻¹HP)Φᵀ + Q, F = HPHᵀ + R."""
+        key = (self.phi.tobytes(), self.q.tobytes(), self.h.tobytes(), float(self.r))
+        if key not in self._steady_cache:
+            self._steady_cache.clear()
+            self._steady_cache[key] = steady_prediction_covariance(self.phi, self.q, self.h, self.r)
+        return self._steady_cache[key]
+
+    def initial_covariance(self) -> np.ndarray:
+        """Σ = cov(x_1) before y_1 is seen: P̄ in ``'steady'`` mode, the stored Σ in ``'fixed'`` mode."""
+        return self.steady_prediction_covariance() if self.sigma_mode == "steady" else self.sigma
+
+    def check(self) -> None:
+        """Raise InputError on non-finite or invalid matrices (negative variances, R ≤ 0 with no state noise)."""
+        for name in ("phi", "q", "h", "u", "mu", "sigma", "b"):
+            if not np.all(np.isfinite(getattr(self, name))):
+                raise InputError(f"state-space matrix {name} has non-finite elements")
+        if not np.isfinite(self.r) or self.r < 0:
+            raise InputError(f"measurement-noise variance R must be finite and >= 0, got {self.r!r}")
+        if np.any(np.diag(self.q) < 0):
+            raise InputError("process-noise variances (diagonal of Q) must be >= 0")
+
+
+def steady_prediction_covariance(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
+    """Steady-state prediction covariance P̄ of the Kalman filter (discrete algebraic Riccati equation).
+
+    P = Φ P (I + G P)⁻¹ Φᵀ + Q with G = Hᵀ R⁻¹ H, solved by the structure-preserving doubling algorithm
+    (quadratic convergence: ~log2 of the slowest filter time constant iterations, each a few p×p products;
+    far cheaper than a generalised-eigenvalue DARE solver for the tiny p here).
+
+    Raises
+    ------
+    InputError
+        If R ≤ 0 (no white noise) or the iteration does not converge (a non-detectable model).
+    """
+    p = phi.shape[0]
+    if p == 0:
+        return np.zeros((0, 0))
+    if not r > 0:
+        raise InputError("the model has no steady-state Kalman filter: the white-noise variance R must be > 0")
+    eye = np.eye(p)
+    A = phi.T.copy()
+    G = np.outer(h, h) / r
+    X = q.copy()
+    for _ in range(500):
+        W = np.linalg.solve(eye + G @ X, A)  # (I + G X)⁻¹ A
+        X_new = X + A.T @ X @ W
+        G = G + A @ np.linalg.solve(eye + G @ X, G) @ A.T
+        A = A @ W
+        X_new = 0.5 * (X_new + X_new.T)
+        if not np.all(np.isfinite(X_new)):
+            break
+        if np.max(np.abs(X_new - X)) <= 1e-14 * np.max(np.abs(X_new)):
+            return X_new
+        X = X_new
+    raise InputError("the steady-state Riccati iteration did not converge; the model parameters are degenerate")
+
+
+def validate_structure(names: list[str]) -> None:
+    """Raise InputError unless the structure is identifiable: exactly one WN; at most one QN, RW, RR."""
+    if names.count("WN") != 1:
+        raise InputError(f"model {'+'.join(names) or '(empty)'} needs exactly one WN component (white noise)")
+    for single in ("QN", "RW", "RR"):
+        if names.count(single) > 1:
+            raise InputError(f"model {'+'.join(names)} has {single} more than once; it is not identifiable")
+
+
+def from_components(
+    components: list[Component],
+    dt: float,
+    *,
+    intercept: bool = True,
+    ramp: str = "measurement",
+    exog_names: tuple[str, ...] = (),
+    sigma_mode: str = "steady",
+) -> StateSpace:
+    """Assemble Φ, Q, H, R, u, μ, Σ, b and their free masks from components (paper 000 eqs. 4–9).
+
+    Parameters
+    ----------
+    components
+        At least a WN; at most one WN, QN, RW and RR; any number of GM.
+    dt
+        Sampling period [s].
+    intercept
+        Add the unknown constant bias as a regressor column of ones (coefficient ``bias`` [u]).
+    ramp
+        Where an RR component goes: ``'measurement'`` — regressor column ``t·dt`` whose coefficient is the
+        slope ω [u/s]; ``'state'`` — as in paper 000 §4, input ``u = ω·dt`` entering the RW state (or, with no
+        RW, the first GM state as in §4.2), free in the EM's u update.
+    exog_names
+        Names of the caller's extra regressor columns (appended after ``bias`` and ``ramp``).
+    sigma_mode
+        ``'steady'`` or ``'fixed'`` (see the module docstring). In ``'fixed'`` mode Σ is set to the stationary
+        covariance for GM and QN states and to 1e-12·R for RW states (the paper's "small value").
+
+    Raises
+    ------
+    InputError
+        On a structure the estimator cannot identify (no WN, duplicated WN/QN/RW/RR, RR in state mode with no
+        RW or GM, unknown ``ramp``).
+    """
+    validate_structure([c.name for c in components])
+    if ramp not in ("measurement", "state"):
+        raise InputError(f"ramp must be 'measurement' or 'state', got {ramp!r}")
+    if sigma_mode not in ("steady", "fixed"):
+        raise InputError(f"sigma_mode must be 'steady' or 'fixed', got {sigma_mode!r}")
+    blocks_of = {i: c.block(dt) for i, c in enumerate(components) if isinstance(c, (QN, RW, GM))}
+    p = sum(blk.n_states for blk in blocks_of.values())
+    phi, q = np.zeros((p, p)), np.zeros((p, p))
+    phi_free, q_free = np.zeros((p, p), bool), np.zeros((p, p), bool)
+    h, u, u_free = np.zeros(p), np.zeros(p), np.zeros(p, bool)
+    sigma = np.zeros((p, p))
+    r = 0.0
+    regressors: list[str] = ["bias"] if intercept else []
+    b_values: list[float] = [0.0] if intercept else []
+    info: list[BlockInfo] = []
+    start = 0
+    state_of: dict[int, tuple[int, ...]] = {}
+    for k, c in enumerate(components):
+        if isinstance(c, WN):
+            r = c.block(dt).r
+            continue
+        if isinstance(c, RR):
+            continue
+        blk = blocks_of[k]
+        sl = slice(start, start + blk.n_states)
+        phi[sl, sl], q[sl, sl] = blk.phi, blk.q
+        phi_free[sl, sl], q_free[sl, sl] = blk.phi_free, blk.q_free
+        h[sl] = blk.h
+        if isinstance(c, GM):
+            sigma[sl, sl] = c.sigma**2
+        elif isinstance(c, QN):
+            sigma[sl, sl] = np.eye(2) * blk.q[0, 0]
+        state_of[k] = tuple(range(sl.start, sl.stop))
+        start = sl.stop
+    for k, c in enumerate(components):
+        if isinstance(c, RR):
+            if ramp == "measurement":
+                regressors.append("ramp")
+                b_values.append(c.slope)
+                info.append(BlockInfo("RR", regressor=len(regressors) - 1))
+            else:
+                target = next((i for i, c2 in enumerate(components) if isinstance(c2, RW)), None)
+                if target is None:
+                    target = next((i for i, c2 in enumerate(components) if isinstance(c2, GM)), None)
+                if target is None:
+                    raise InputError("RR in state mode needs an RW or GM state for its input u to enter")
+                j = state_of[target][0]
+                u[j], u_free[j] = c.slope * dt, True
+                info.append(BlockInfo("RR", input_state=j))
+        else:
+            info.append(BlockInfo(c.name, states=state_of.get(k, ())))
+    for k, c in enumerate(components):
+        if isinstance(c, RW):
+            j = state_of[k][0]
+            sigma[j, j] = 1e-12 * r
+    regressors.extend(exog_names)
+    b_values.extend([0.0] * len(exog_names))
+    model = StateSpace(
+        phi=phi, q=q, h=h, r=r, u=u, mu=np.zeros(p), sigma=sigma, b=np.array(b_values, dtype=float),
+        phi_free=phi_free, q_free=q_free, h_free=np.zeros(p, bool), r_free=True, u_free=u_free,
+        mu_free=np.zeros(p, bool), b_free=np.ones(len(b_values), bool), dt=float(dt), blocks=tuple(info),
+        regressors=tuple(regressors), sigma_mode=sigma_mode,
+    )
+    model.check()
+    return model
+
+
+def with_components(model: StateSpace, components: list[Component]) -> StateSpace:
+    """A copy of ``model`` whose Φ, Q, R (and RR slope) take the values of ``components``.
+
+    ``components`` must have the model's structure, in the order the model was assembled from.
+    """
+    if [c.name for c in components] != [blk.name for blk in model.blocks]:
+        raise InputError("components do not match the model's structure")
+    out = model.copy()
+    for c, blk in zip(components, model.blocks, strict=True):
+        if isinstance(c, WN):
+            out.r = c.block(model.dt).r
+        elif isinstance(c, RR):
+            if blk.regressor is not None:
+                out.b[blk.regressor] = c.slope
+            else:
+                out.u[blk.input_state] = c.slope * model.dt
+        else:
+            sb = c.block(model.dt)
+            idx = np.array(blk.states)
+            out.phi[np.ix_(idx, idx)] = sb.phi
+            out.q[np.ix_(idx, idx)] = sb.q
+    return out
+
+
+#: Smallest and largest Gauss–Markov transition the conversion back to components accepts; EM updates that
+#: leave (0, 1) are clipped to this range (documented beyond-the-paper safeguard).
+PHI_RANGE: tuple[float, float] = (1e-12, 1.0 - 1e-12)
+
+
+def to_components(model: StateSpace) -> list[Component]:
+    """Fitted continuous-time components of ``model``, in the order it was assembled from."""
+    dt = model.dt
+    out: list[Component] = []
+    for blk in model.blocks:
+        if blk.name == "WN":
+            out.append(WN.from_per_sample(dt, sigma2_wn=max(float(model.r), 0.0)))
+            continue
+        if blk.name == "RR":
+            slope = model.b[blk.regressor] if blk.regressor is not None else model.u[blk.input_state] / dt
+            out.append(RR(float(slope)))
+            continue
+        i = blk.states[0]
+        qi = max(float(model.q[i, i]), 0.0)
+        if blk.name == "RW":
+            out.append(RW.from_per_sample(dt, sigma2_rw=qi))
+        elif blk.name == "QN":
+            out.append(QN.from_per_sample(dt, sigma2_qn=qi))
+        elif blk.name == "GM":
+            phi = float(np.clip(model.phi[i, i], *PHI_RANGE))
+            out.append(GM.from_per_sample(dt, phi=phi, sigma2_drive=qi))
+        else:  # pragma: no cover - a new component type adds its conversion here
+            raise InputError(f"no conversion back from state-space block {blk.name}")
+    return out

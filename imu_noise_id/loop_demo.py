@@ -1,0 +1,63 @@
+"""Demo of the closed loop on a simulated bag with effects the starting model does not declare.
+
+``python -m imu_noise_id.loop_demo --out DIR`` (or :func:`run_loop_demo` from ``make demo``): simulates a
+static IMU whose gyro_z holds an extra Gauss–Markov process and whose accel_x holds a 0.5 Hz vibration, writes
+it as a rosbag2 (mcap) bag, reads it back, and runs the loop from ``WN+RW`` on gyro_x (clean), gyro_z and
+accel_x. Writes ``DIR/loop_demo_bag/``, ``DIR/model.yaml`` and ``DIR/report.html``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+DEMO_AXES = ("gyro_x", "gyro_z", "accel_x")
+
+
+def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, rate_hz: float = 100.0) -> Path:
+    """Write the demo bag: WN+RW on every axis, plus GM(τ = 2 s) on gyro_z and a 0.5 Hz sine on accel_x."""
+    from .bag.writer import write_bag
+    from .core.components import GM, RW, WN
+    from .core.simulate import simulate_static_imu
+
+    model = {a: [WN(1e-3), RW(2e-5)] for a in ("gyro_x", "gyro_y", "gyro_z")}
+    model |= {a: [WN(2e-3), RW(4e-5)] for a in ("accel_x", "accel_y", "accel_z")}
+    model["gyro_z"] = [*model["gyro_z"], GM(tau=2.0, sigma=3e-3)]
+    imu = simulate_static_imu(model, rate_hz, duration_s, seed=seed)
+    imu.accel[:, 0] += 6e-3 * np.sin(2 * math.pi * 0.5 * imu.t)
+    if path.exists():
+        shutil.rmtree(path)
+    return write_bag(path, imu)
+
+
+def run_loop_demo(out: str | Path, *, seed: int = 7) -> dict:
+    """Simulate, write and read the bag, run the loop on :data:`DEMO_AXES`, write model.yaml and report.html."""
+    from .bag.reader import read_imu
+    from .cli.loop import loop_stage, summary
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    bag = simulate_demo_bag(out / "loop_demo_bag", seed=seed)
+    imu = read_imu(bag)
+    results, _, _ = loop_stage(imu, None, out, start="WN+RW", axes=DEMO_AXES,
+                               title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz (accel_x)")
+    print(summary(results))
+    print(f"demo bag, model.yaml and report.html in {out}/")
+    return results
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description="Closed-loop demo on a simulated bag with undeclared effects.")
+    parser.add_argument("--out", type=Path, default=Path("demo_output"), help="output directory")
+    parser.add_argument("--seed", type=int, default=7)
+    args = parser.parse_args(argv)
+    run_loop_demo(args.out, seed=args.seed)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,63 @@
+"""Allan-deviation plot with the fitted model's theoretical curve and a band of simulations (paper 000 figs.
+4, 6, 7: the AV of the record, thick, against the AVs of simulations of the fitted model, thin)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..pipelines.identification import FitResult
+
+
+def plot_allan_overlay(
+    ax, tau: np.ndarray, avar: np.ndarray, fit: FitResult, band: tuple[np.ndarray, np.ndarray] | None = None,
+    *, label: str = "record", unit: str = "u",
+) -> None:
+    """Draw the empirical Allan deviation, the fit's theoretical one and (optionally) simulated ones on ``ax``.
+
+    Parameters
+    ----------
+    tau, avar
+        Empirical averaging times [s] and Allan variance [u²].
+    fit
+        The fitted model (its components give the theoretical AV).
+    band
+        (tau, avar of shape (n_sim, len(tau))) from
+        :func:`imu_noise_id.pipelines.identification.simulate_allan_band`.
+    """
+    if band is not None:
+        btau, bav = band
+        for k, row in enumerate(bav):
+            ax.loglog(btau, np.sqrt(row), color="0.7", lw=0.6, label="simulations of the fit" if k == 0 else None)
+    ax.loglog(tau, np.sqrt(avar), color="k", lw=2.0, label=label)
+    fine = np.exp(np.linspace(np.log(tau[0]), np.log(tau[-1]), 200))
+    ax.loglog(fine, np.sqrt(fit.theoretical_allan_variance(fine)), color="C3", lw=1.4, ls="--",
+              label=f"fitted {fit.model} (theory)")
+    ax.set_xlabel("averaging time τ [s]")
+    ax.set_ylabel(f"Allan deviation [{unit}]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+
+
+def save_allan_overlay(path: str | Path, panels: list[dict], title: str | None = None) -> Path:
+    """One PNG with a panel per entry ``{tau, avar, fit, band, label, unit, title}`` (modest size)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.6), squeeze=False)
+    for ax, panel in zip(axes[0], panels, strict=True):
+        plot_allan_overlay(ax, panel["tau"], panel["avar"], panel["fit"], panel.get("band"),
+                           label=panel.get("label", "record"), unit=panel.get("unit", "u"))
+        if panel.get("title"):
+            ax.set_title(panel["title"], fontsize=9)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path

@@ -1,0 +1,117 @@
+"""State-space assembly and the Kalman engines: fast path = exact recursion = statsmodels; missing samples."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core import kalman
+from imu_noise_id.core import statespace as ss
+from imu_noise_id.core.components import GM, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.errors import InputError
+
+MIXES = {
+    "WN+RW+RR": [WN(0.2), RW(0.02), RR(1e-3)],
+    "WN+GM+RW+RR": [WN(0.3), GM(tau=20.0, sigma=0.5), RW(0.01), RR(1e-3)],
+    "WN+2GM": [WN(0.3), GM(tau=5.0, sigma=0.4), GM(tau=200.0, sigma=0.2)],
+    "WN+QN+GM": [WN(0.3), QN(0.2), GM(tau=30.0, sigma=0.3)],
+}
+
+
+def _data(components, n, dt=1.0, seed=0, bias=1.5):
+    rng = np.random.default_rng(seed)
+    y = simulate_sum(components, n, dt, rng) + bias
+    model = ss.from_components(components, dt)
+    z = np.column_stack([np.ones(n), dt * np.arange(n)])[:, : model.n_regressors]
+    return model, y, z
+
+
+def test_assembly_masks_and_round_trip():
+    comps = [WN(0.3), GM(tau=20.0, sigma=0.5), RW(0.01), RR(1e-3)]
+    m = ss.from_components(comps, 0.5)
+    assert m.n_states == 2 and m.regressors == ("bias", "ramp")
+    f, D = m.design("phi")  # vec(Φ) = f + D m: only the GM transition is free
+    assert D.shape == (4, 1) and f[3] == 1.0 and f[0] == 0.0
+    assert np.allclose(f + D @ m.free_values("phi"), m.phi.flatten(order="F"))
+    back = ss.to_components(m)
+    for a, b in zip(comps, back, strict=True):
+        for k, v in a.params().items():
+            assert b.params()[k] == pytest.approx(v, rel=1e-10)
+
+
+def test_paper_state_mode_puts_ramp_into_rw_state():
+    m = ss.from_components([WN(0.2), GM(tau=100.0, sigma=0.5), RW(0.02), RR(1e-4)], 1.0, ramp="state")
+    assert m.u_free.tolist() == [False, True] and m.u[1] == pytest.approx(1e-4)
+    m2 = ss.from_components([WN(0.2), GM(tau=100.0, sigma=0.5), RR(1e-3)], 1.0, ramp="state")
+    assert m2.u_free.tolist() == [True]
+
+
+@pytest.mark.parametrize("structure", ["WN", "RW", "WN+WN+RW"])
+def test_unidentifiable_structures_are_rejected(structure):
+    comps = {"WN": [WN(0.1)], "RW": [RW(0.1)], "WN+WN+RW": [WN(0.1), WN(0.2), RW(0.1)]}[structure]
+    if structure == "WN":
+        assert ss.from_components(comps, 1.0).n_states == 0
+        return
+    with pytest.raises(InputError):
+        ss.from_components(comps, 1.0)
+
+
+@pytest.mark.parametrize("name", list(MIXES))
+def test_fast_path_equals_exact_recursion(name):
+    model, y, z = _data(MIXES[name], 2000)
+    r_exact = kalman.loglik(model, y, z, engine="exact")
+    r_fast = kalman.loglik(model, y, z, engine="steady")
+    assert r_fast.loglik == pytest.approx(r_exact.loglik, abs=1e-8)
+    np.testing.assert_allclose(r_fast.beta, r_exact.beta, rtol=1e-9)
+    fitted = kalman.apply_beta(model, r_fast)
+    s_exact = kalman.smooth(fitted, y, z, engine="exact")
+    s_fast = kalman.smooth(fitted, y, z, engine="steady")
+    for key in ("xs", "sum_p", "p_first", "p_last", "sum_lag"):
+        a, b = getattr(s_exact, key), getattr(s_fast, key)
+        np.testing.assert_allclose(b, a, rtol=1e-8, atol=1e-10 * np.max(np.abs(a)), err_msg=key)
+    assert s_fast.loglik == pytest.approx(s_exact.loglik, abs=1e-8)
+
+
+def _statsmodels_loglik(model, y, z, sigma):
+    from statsmodels.tsa.statespace.mlemodel import MLEModel
+
+    p = model.n_states
+    mod = MLEModel(y, k_states=p)
+    mod.ssm["design"] = model.h.reshape(1, p)
+    mod.ssm["obs_intercept"] = (z @ model.b).reshape(1, -1)
+    mod.ssm["obs_cov"] = np.array([[model.r]])
+    mod.ssm["transition"] = model.phi
+    mod.ssm["state_intercept"] = model.u.reshape(p, 1)
+    mod.ssm["selection"] = np.eye(p)
+    mod.ssm["state_cov"] = model.q
+    mod.ssm.initialize_known(model.mu, sigma)
+    return float(mod.ssm.loglike())
+
+
+@pytest.mark.parametrize("sigma_mode", ["steady", "fixed"])
+@pytest.mark.parametrize("name", ["WN+GM+RW+RR", "WN+2GM"])
+def test_exact_loglik_equals_statsmodels(name, sigma_mode):
+    model, y, z = _data(MIXES[name], 1500, seed=3)
+    model = model.copy(sigma_mode=sigma_mode, mu=np.full(model.n_states, 0.05))
+    model.b[:] = [1.2, 2e-3][: model.n_regressors]
+    model.u[-1] = 1e-4
+    y[[10, 500, 501]] = np.nan
+    ours = kalman.loglik(model, y, z, profile_mean=False).loglik
+    theirs = _statsmodels_loglik(model, y, z, model.initial_covariance())
+    assert ours == pytest.approx(theirs, abs=1e-7)
+
+
+def test_missing_samples_are_skipped_not_filled():
+    model, y, z = _data(MIXES["WN+GM+RW+RR"], 800, seed=5)
+    y_gap = y.copy()
+    y_gap[100:110] = np.nan
+    r = kalman.loglik(model, y_gap, z)
+    assert np.all(np.isnan(r.innovations[100:110])) and np.all(np.isfinite(r.innovations[110:]))
+    # The likelihood of the remaining samples differs from that of the complete record.
+    assert r.loglik != pytest.approx(kalman.loglik(model, y, z).loglik)
+    with pytest.raises(InputError):
+        kalman.loglik(model, y_gap, z, engine="steady")
+    y_bad = y.copy()
+    y_bad[3] = np.inf
+    with pytest.raises(InputError):
+        kalman.loglik(model, y_bad, z)

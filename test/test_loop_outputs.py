@@ -1,0 +1,90 @@
+"""Closed-loop outputs: model.yaml ``loop:`` entries, self-contained report.html, the ``loop`` command."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import yaml
+
+from imu_noise_id.cli import main
+from imu_noise_id.core.axes import ImuSeries
+from imu_noise_id.core.components import RW, WN, simulate_sum
+from imu_noise_id.pipelines.closed_loop import block_average, run_closed_loop
+from imu_noise_id.report.html import write_loop_report
+from imu_noise_id.report.loop_yaml import add_loop_to_model_yaml
+
+DT = 0.01
+
+
+@pytest.fixture(scope="module")
+def sine_result():
+    n = 8000
+    y = simulate_sum([WN(1e-3), RW(2e-5)], n, DT, np.random.default_rng(3))
+    y += 4e-3 * np.sin(2 * math.pi * 1.5 * np.arange(n) * DT)
+    return run_closed_loop(y, DT, "WN+RW", axis="gyro_z", max_candidates=1)
+
+
+def test_model_yaml_gets_loop_steps(tmp_path, sine_result):
+    path = tmp_path / "model.yaml"
+    path.write_text(yaml.safe_dump({"axes": {"gyro_z": {"model": "WN+RW", "bic": -1.0}}}))
+    add_loop_to_model_yaml(path, {"gyro_z": sine_result})
+    doc = yaml.safe_load(path.read_text())
+    entry = doc["axes"]["gyro_z"]
+    assert entry["bic"] == -1.0  # existing fields kept
+    steps = entry["loop"]
+    assert steps[0]["added"] is None and steps[0]["evidence"] is None
+    assert steps[1]["added"] == "SIN" and steps[1]["how"] == "deterministic regressor"
+    assert steps[1]["regressors"]["SIN1"]["frequency"] == pytest.approx(1.5, abs=1 / (8000 * DT))
+    for key in ("loglik", "bic", "av_misfit", "ljung_box_p", "peak_ratio"):
+        assert key in steps[0]["error"]
+    assert steps[1]["error"]["bic"] < steps[0]["error"]["bic"]
+    assert entry["loop_verdict"]["final_model"] == "WN+RW+SIN"
+
+
+def test_report_html_is_self_contained(tmp_path, sine_result):
+    text = write_loop_report(tmp_path / "report.html", {"gyro_z": sine_result}).read_text()
+    assert text.count("data:image/png;base64,") == 3  # Allan before/after + ACF/PSD of both steps
+    assert "src=\"http" not in text and "WN+RW+SIN" in text and "deterministic regressor" in text
+
+
+def test_block_average():
+    y = np.array([1.0, 3.0, np.nan, 5.0, np.nan, np.nan, 7.0])
+    assert np.allclose(block_average(y, 2), [2.0, 5.0, np.nan], equal_nan=True)
+
+
+def test_loop_command_on_a_bag(tmp_path, capsys):
+    from imu_noise_id.bag.writer import write_bag
+
+    n = 6000
+    rng = np.random.default_rng(4)
+    gyro = np.column_stack([simulate_sum([WN(1e-3)], n, DT, rng) for _ in range(3)])
+    write_bag(tmp_path / "bag", ImuSeries(t=np.arange(n) * DT, gyro=gyro, accel=np.zeros((n, 3)) + 1.0))
+    out = tmp_path / "out"
+    assert main(["loop", str(tmp_path / "bag"), "--axes", "gyro_x", "--start", "WN", "--out", str(out)]) == 0
+    assert "residuals pass" in capsys.readouterr().out
+    assert (out / "report.html").exists()
+    assert yaml.safe_load((out / "model.yaml").read_text())["axes"]["gyro_x"]["loop"][0]["model"] == "WN"
+    assert main(["loop", str(tmp_path / "bag"), "--axes", "gyro_q", "--out", str(out)]) == 2
+
+
+def test_analyze_runs_the_loop_after_the_model_fit(tmp_path):
+    from imu_noise_id.bag.writer import write_bag
+
+    n = 4000
+    rng = np.random.default_rng(5)
+    gyro = np.column_stack([simulate_sum([WN(1e-3)], n, DT, rng) for _ in range(3)])
+    gyro[:, 2] += 5e-3 * np.sin(2 * math.pi * 2.0 * np.arange(n) * DT)  # undeclared line on gyro_z
+    accel = np.column_stack([simulate_sum([WN(2e-3)], n, DT, rng) for _ in range(3)])
+    accel[:, 2] += 9.81
+    write_bag(tmp_path / "bag", ImuSeries(t=np.arange(n) * DT, gyro=gyro, accel=accel))
+    out = tmp_path / "out"
+    assert main(["analyze", str(tmp_path / "bag"), "--model", "WN", "--out", str(out)]) == 0
+    axes = yaml.safe_load((out / "model.yaml").read_text())["axes"]
+    assert [s["added"] for s in axes["gyro_z"]["loop"]] == [None, "SIN"]
+    assert axes["gyro_x"]["loop_verdict"]["passed"]
+    assert (out / "report.html").exists()
+    out2 = tmp_path / "out2"
+    assert main(["analyze", str(tmp_path / "bag"), "--model", "WN", "--no-loop", "--out", str(out2)]) == 0
+    assert "loop" not in yaml.safe_load((out2 / "model.yaml").read_text())["axes"]["gyro_z"]
