@@ -12,14 +12,14 @@ per axis the fitted components in continuous-time units (noise_density [u/sqrt(H
 [u/s/sqrt(Hz)], GM tau [s] and sigma [u], RR slope [u/s], QN Q [u*s]) with their per-sample values, standard
 errors and 95 % intervals, the bias, log-likelihood, AIC, BIC and how long to record for +-10 % precision.
 
-BAG is a rosbag2 directory/file (read with imu_noise_id.bag.reader) or an .npz with arrays t [s], gyro
+BAG is a recording (ROS 1 .bag, rosbag2 sqlite3 or mcap; imu_noise_id.bag.reader) or an .npz with t [s], gyro
 [rad/s] (N,3) and accel [m/s^2] (N,3). The record must be static (sensor at rest)."""
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("fit", help="fit an error model (EM / maximum likelihood) and write model.yaml",
                               description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("bag", metavar="BAG", help="rosbag2 directory/file or .npz with t, gyro, accel")
+    p.add_argument("bag", metavar="BAG", help="bag file / rosbag2 directory, or .npz with t, gyro, accel")
     p.add_argument("--model", required=True,
                    help="structure, e.g. 'WN+GM+RW+RR' or 'WN+2GM'; 'auto' ranks the default candidates by BIC")
     p.add_argument("--axis", action="append", default=None,
