@@ -131,13 +131,19 @@ def short_bag(tmp_path_factory):
 
 
 def test_cli_analyze_end_to_end(short_bag, tmp_path, capsys):
-    """Through a real bag: exit 0, the files, the summary; N within 5 % (10 min is too short to test K)."""
+    """Through a real bag with the default stages (Allan, EM model selection, closed loop): exit 0, the files,
+    the summary; N within 5 % (10 min is too short to test K)."""
     out = tmp_path / "res"
     assert main(["analyze", str(short_bag), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "noise density" in printed and str(out) in printed
-    for name in ("imu.yaml", "allan.csv", "hadamard.csv", "total.csv", "modified.csv", "allan.png"):
+    for name in ("imu.yaml", "allan.csv", "hadamard.csv", "total.csv", "modified.csv", "allan.png",
+                 "model.yaml", "allan_model.png", "report.html"):
         assert (out / name).is_file(), name
+    models = yaml.safe_load((out / "model.yaml").read_text())["axes"]
+    assert set(models) == {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"}
+    for entry in models.values():
+        assert entry["model"].startswith("WN") and entry["loop"][0]["added"] is None
     doc = yaml.safe_load((out / "imu.yaml").read_text())
     assert doc["rostopic"] == "/imu/data"
     for n in doc["gyroscope_noise_density_xyz"]:
@@ -162,10 +168,11 @@ def test_cli_analyze_help(capsys):
 def test_demo_runs_short(tmp_path, capsys):
     from imu_noise_id import demo
 
-    assert demo.main(["--out", str(tmp_path), "--duration", "120", "--rate", "100"]) == 0
+    assert demo.main(["--out", str(tmp_path), "--duration", "120", "--rate", "100", "--parts", "offline"]) == 0
     printed = capsys.readouterr().out
-    assert "truth vs estimate" in printed
+    assert "truth vs estimates" in printed
     assert (tmp_path / "analysis" / "imu.yaml").is_file()
+    assert (tmp_path / "analysis" / "model.yaml").is_file()
 
 
 class _Tty(io.StringIO):

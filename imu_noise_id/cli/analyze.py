@@ -18,13 +18,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``analyze`` parser."""
     p = subparsers.add_parser(
         "analyze",
-        help="Allan-variance noise analysis of a static IMU bag (Kalibr imu.yaml, CSV, plot)",
+        help="noise analysis of a static IMU bag: Allan family, EM model fits, closed loop (imu.yaml, model.yaml)",
         description=(
             "Read sensor_msgs/Imu from a static recording (ROS 1 .bag, rosbag2 sqlite3 or mcap), compute the "
             "Allan, Hadamard, total and modified Allan variances of the six axes with confidence intervals, read "
             "the white-noise density (-1/2 slope at tau = 1 s) and random walk (+1/2 slope at tau = 3 s), and "
             "write DIR/imu.yaml (Kalibr format), DIR/allan.csv (+ hadamard.csv, total.csv, modified.csv) and "
-            "DIR/allan.png. The IMU must be at rest for the whole recording."
+            "DIR/allan.png; then fit error models per axis with the constrained EM algorithm (model selection by BIC, "
+            "95 %% confidence intervals, recording-length advice: DIR/model.yaml) and close the loop on the "
+            "residuals (DIR/report.html). The IMU must be at rest for the whole recording."
         ),
     )
     p.add_argument("bag", type=Path, help="bag file or rosbag2 directory")
@@ -33,9 +35,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
     p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
     p.add_argument(
-        "--model", default="none",
-        help="EM model fit per axis after the Allan stage: 'auto' (BIC over the default candidates), a structure "
-        "such as 'WN+GM+RW', or 'none' (default: Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
+        "--model", default="auto",
+        help="EM model fit per axis after the Allan stage: 'auto' (default: BIC over the default candidates), a "
+        "structure such as 'WN+GM+RW', or 'none' (Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
         "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
     )
     p.add_argument(
@@ -46,7 +48,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--no-loop", action="store_true",
         help="skip the closed loop that follows the model fit (residual diagnosis: adds missing GM/RW/RR/QN, "
         "sinusoids, temperature, steps, outliers one at a time while BIC improves; writes a 'loop:' list per "
-        "axis into model.yaml and DIR/report.html). It runs by default whenever --model is given",
+        "axis into model.yaml and DIR/report.html). It runs by default unless --model none",
     )
     p.set_defaults(run=run)
 
