@@ -21,6 +21,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_bags import make_bag, peak_rss_of  # noqa: E402
 
 #: Partial runs that show where the peak comes from.
+VARIANTS = {
+    "analyze (default: Allan + EM model selection + closed loop)": [],
+    "analyze --model none (Allan stage only)": ["--model", "none"],
+}
 STAGES = {
     "read_imu": "from imu_noise_id.bag.reader import read_imu; imu = read_imu({bag!r})",
     "read_imu + static_check": "from imu_noise_id.bag.reader import read_imu; "
@@ -44,10 +48,13 @@ def main() -> None:
         prelude = ("import imu_noise_id.cli.analyze, imu_noise_id.bag.reader, imu_noise_id.pipelines.analysis, "
                    "imu_noise_id.report.outputs, imu_noise_id.report.plots")
         base, _, _ = peak_rss_of([sys.executable, "-c", prelude + "; import time; time.sleep(0.2)"], env)
-        cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(Path(tmp) / "out")]
-        peak, wall, rc = peak_rss_of(cmd, env)
-        if rc != 0:
-            raise SystemExit(f"analyze failed with exit code {rc}")
+        runs = {}
+        for label, extra in VARIANTS.items():
+            cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(Path(tmp) / "out"), *extra]
+            peak, wall, rc = peak_rss_of(cmd, env)
+            if rc != 0:
+                raise SystemExit(f"{label} failed with exit code {rc}")
+            runs[label] = (peak, wall)
         stages = {}
         for label, stage in STAGES.items():
             code = f"{prelude}; {stage.format(bag=str(bag))}; import time; time.sleep(0.2)"
@@ -56,9 +63,10 @@ def main() -> None:
                 raise SystemExit(f"stage {label!r} failed with exit code {rc}")
     mb = 1024**2
     print(f"decoded float64 arrays ({n:,} samples): {arrays / mb:.1f} MiB")
-    print(f"peak RSS of analyze: {peak / mb:.1f} MiB = {peak / arrays:.2f}x the arrays; wall time {wall:.1f} s")
-    print(f"interpreter + imports: {base / mb:.1f} MiB; analyze adds {(peak - base) / mb:.1f} MiB = "
-          f"{(peak - base) / arrays:.2f}x the arrays")
+    print(f"interpreter + imports: {base / mb:.1f} MiB")
+    for label, (peak, wall) in runs.items():
+        print(f"peak RSS of {label}: {peak / mb:.1f} MiB = {peak / arrays:.2f}x the arrays, adds "
+              f"{(peak - base) / mb:.1f} MiB = {(peak - base) / arrays:.2f}x over the imports; wall time {wall:.1f} s")
     print("peak RSS of the stages alone (same imports), added over the imports:")
     for label, value in stages.items():
         print(f"  {label:38s} {value / mb:7.1f} MiB  (+{(value - base) / arrays:.2f}x the arrays)")

@@ -204,6 +204,11 @@ def test_nan_and_out_of_order_messages_do_not_stop_the_node(session):
     t = float(run.imu_t[-1])
     bad = [_imu(t + 0.005, gyro=(math.nan, 0.0, 0.0)), _imu(t - 1.0), _imu(t), _imu(t + 0.01, accel=(math.inf,) * 3)]
     good = [_imu(t + 0.02 + 0.005 * k, gyro=tuple(run.gyro[-1]), accel=tuple(run.accel[-1])) for k in range(5)]
+    # The played bag's corrected samples may still be in flight on a loaded machine: wait until they stop.
+    settled = -1
+    while settled != len(obs.corrected):
+        settled = len(obs.corrected)
+        obs.spin_until(lambda: False, 0.5)
     before = len(obs.corrected)
     for msg in bad + good:
         pub.publish(msg)

@@ -1,0 +1,83 @@
+"""Rerun the benchmarks whose numbers README.md and docs/ quote; each output goes to docs/results/.
+
+Usage (``make bench`` runs the default set)::
+
+    .venv/bin/python bench/run_all.py            # the issues' speed/memory goals (about 15–20 min)
+    .venv/bin/python bench/run_all.py --long     # also the Monte-Carlo paper reproductions (hours)
+    .venv/bin/python bench/run_all.py --list     # what would run
+
+Benchmarks are not tests: they print numbers, they do not assert them. Each script can also be run alone
+(its docstring gives the command). Scripts that need ``../shared/data`` say so and stop when it is absent.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+BENCH = Path(__file__).resolve().parent
+RESULTS = BENCH.parent / "docs" / "results"
+
+#: (script and arguments, output file in docs/results): the issues' "bench/ prints …" goals.
+GOALS: list[tuple[list[str], str]] = [
+    (["bench_allan.py"], "bench_allan.txt"),
+    (["bench_bags.py"], "bench_bags.txt"),
+    (["bench_analyze_memory.py"], "bench_analyze_memory.txt"),
+    (["bench_em.py"], "bench_em.txt"),
+    (["bench_bank.py", "--skip-reproduction"], "bench_bank_throughput.txt"),
+    (["bench_cmkf.py"], "cmkf_bench.txt"),
+    (["bench_node.py"], "bench_node.txt"),
+]
+
+#: Long Monte-Carlo reproductions and measured-data studies (``--long``).
+LONG: list[tuple[list[str], str]] = [
+    (["bench_bank.py", "--trials", "500", "--skip-throughput"], "bench_bank.txt"),
+    (["reproduce_paper000.py", "--case", "4.1", "--runs", "200"], "paper000_4.1.txt"),
+    (["reproduce_paper000.py", "--case", "4.2", "--runs", "200"], "paper000_4.2.txt"),
+    (["reproduce_paper000.py", "--case", "4.3", "--runs", "200"], "paper000_4.3.txt"),
+    (["reproduce_paper000_sec5.py"], "paper000_sec5.txt"),
+    (["bench_coverage.py"], "bench_coverage.txt"),
+    (["bench_allan_fit.py"], "bench_allan_fit.txt"),
+    (["bench_allan_ci.py"], "bench_allan_ci.txt"),
+    (["bench_cmkf_paper.py"], "cmkf_paper.txt"),
+    (["bench_cmkf_robot_sim.py"], "cmkf_robot_sim.txt"),
+    (["bench_cmkf_data.py"], "cmkf_data.txt"),
+    (["bench_node_husky.py"], "node_husky.txt"),
+    (["loop_measured.py"], "loop_measured.txt"),
+    (["bench_adis_analysis.py"], "adis_run1_analysis.txt"),
+]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--long", action="store_true", help="also run the long reproductions")
+    parser.add_argument("--list", action="store_true", help="only list what would run")
+    args = parser.parse_args(argv)
+    jobs = GOALS + (LONG if args.long else [])
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    env.setdefault("ROS_LOG_DIR", "/tmp/imu_noise_id_ros_log")
+    failed = []
+    for script, out in jobs:
+        line = f"python bench/{' '.join(script)} > docs/results/{out}"
+        if args.list:
+            print(line)
+            continue
+        print(f"== {line}", flush=True)
+        start = time.perf_counter()
+        with (RESULTS / out).open("w") as fh:
+            proc = subprocess.run([sys.executable, str(BENCH / script[0]), *script[1:]], stdout=fh,
+                                  stderr=subprocess.STDOUT, env=env, cwd=BENCH.parent, check=False)
+        print(f"   exit {proc.returncode} after {time.perf_counter() - start:.0f} s", flush=True)
+        if proc.returncode != 0:
+            failed.append(script[0])
+    if failed:
+        print(f"failed: {', '.join(failed)} (their outputs in docs/results/ say why)")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
