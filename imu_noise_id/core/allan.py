@@ -232,52 +232,43 @@ def _sum_sq(v: np.ndarray) -> float:
     return float(np.einsum("i,i->", v, v))
 
 
+def _lagged_difference(x: np.ndarray, m: int, order: int, buffers: list[np.ndarray]) -> np.ndarray:
+    """The order-th difference of x at lag m (Δ_m^order x), computed in the preallocated buffers."""
+    a = x
+    for k in range(order):
+        out = buffers[k][: a.size - m]
+        np.subtract(a[m:], a[:-m], out=out)
+        a = out
+    return a
+
+
+def _difference_sums(x: np.ndarray, m_list: np.ndarray, order: int) -> np.ndarray:
+    """Σ (Δ_m^order x)² per m, for one phase row x (order 2: Allan, order 3: Hadamard)."""
+    buffers = [np.empty(x.size) for _ in range(order)]
+    return np.array([_sum_sq(_lagged_difference(x, int(m), order, buffers)) for m in m_list])
+
+
 def _allan_sums(x: np.ndarray, m_list: np.ndarray) -> np.ndarray:
     """Σ (x_{i+2m} − 2x_{i+m} + x_i)² per m, for one phase row x."""
-    n1 = x.size
-    d1 = np.empty(n1)
-    d2 = np.empty(n1)
-    out = np.empty(m_list.size)
-    for i, m in enumerate(m_list):
-        a = d1[: n1 - m]
-        np.subtract(x[m:], x[:-m], out=a)
-        b = d2[: n1 - 2 * m]
-        np.subtract(a[m:], a[:-m], out=b)
-        out[i] = _sum_sq(b)
-    return out
+    return _difference_sums(x, m_list, 2)
 
 
 def _hadamard_sums(x: np.ndarray, m_list: np.ndarray) -> np.ndarray:
     """Σ (x_{i+3m} − 3x_{i+2m} + 3x_{i+m} − x_i)² per m, for one phase row x."""
-    n1 = x.size
-    d1, d2, d3 = np.empty(n1), np.empty(n1), np.empty(n1)
-    out = np.empty(m_list.size)
-    for i, m in enumerate(m_list):
-        a = d1[: n1 - m]
-        np.subtract(x[m:], x[:-m], out=a)
-        b = d2[: n1 - 2 * m]
-        np.subtract(a[m:], a[:-m], out=b)
-        c = d3[: n1 - 3 * m]
-        np.subtract(b[m:], b[:-m], out=c)
-        out[i] = _sum_sq(c)
-    return out
+    return _difference_sums(x, m_list, 3)
 
 
 def _modified_sums(x: np.ndarray, m_list: np.ndarray) -> np.ndarray:
     """Σ_j (Σ_{i=j}^{j+m−1} x_{i+2m} − 2x_{i+m} + x_i)² per m (moving sum through a cumulative sum)."""
-    n1 = x.size
-    d1, d2, cs = np.empty(n1), np.empty(n1), np.empty(n1 + 1)
+    buffers = [np.empty(x.size) for _ in range(2)]
+    cs = np.empty(x.size + 1)
     out = np.empty(m_list.size)
     for i, m in enumerate(m_list):
-        a = d1[: n1 - m]
-        np.subtract(x[m:], x[:-m], out=a)
-        b = d2[: n1 - 2 * m]
-        np.subtract(a[m:], a[:-m], out=b)
-        c = cs[: n1 - 2 * m + 1]
+        b = _lagged_difference(x, int(m), 2, buffers)
+        c = cs[: b.size + 1]
         c[0] = 0.0
         np.cumsum(b, out=c[1:])
-        s = c[m:] - c[:-m]
-        out[i] = _sum_sq(s)
+        out[i] = _sum_sq(c[m:] - c[:-m])
     return out
 
 
