@@ -5,6 +5,7 @@ Usage (``make bench`` runs the default set)::
     .venv/bin/python bench/run_all.py            # the issues' speed/memory goals (about 15–20 min)
     .venv/bin/python bench/run_all.py --long     # also the Monte-Carlo paper reproductions (hours)
     .venv/bin/python bench/run_all.py --list     # what would run
+    .venv/bin/python bench/run_all.py --only bench_allan.py bench_bags.py bench_analyze_memory.py   # issue 2's three
 
 Benchmarks are not tests: they print numbers, they do not assert them. Each script can also be run alone
 (its docstring gives the command). Scripts that need ``../shared/data`` say so and stop when it is absent.
@@ -56,8 +57,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--long", action="store_true", help="also run the long reproductions")
     parser.add_argument("--list", action="store_true", help="only list what would run")
+    parser.add_argument("--only", nargs="+", metavar="SCRIPT",
+                        help="run only these scripts (e.g. bench_allan.py bench_bags.py bench_analyze_memory.py)")
     args = parser.parse_args(argv)
     jobs = GOALS + (LONG if args.long else [])
+    if args.only:
+        jobs = [job for job in GOALS + LONG if job[0][0] in args.only]
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env.setdefault("ROS_LOG_DIR", "/tmp/imu_noise_id_ros_log")
     failed = []
@@ -69,9 +74,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"== {line}", flush=True)
         start = time.perf_counter()
         with (RESULTS / out).open("w") as fh:
-            proc = subprocess.run([sys.executable, str(BENCH / script[0]), *script[1:]], stdout=fh,
-                                  stderr=subprocess.STDOUT, env=env, cwd=BENCH.parent, check=False)
-        print(f"   exit {proc.returncode} after {time.perf_counter() - start:.0f} s", flush=True)
+            proc = subprocess.Popen([sys.executable, str(BENCH / script[0]), *script[1:]], stdout=subprocess.PIPE,
+                                    stderr=subprocess.STDOUT, env=env, cwd=BENCH.parent, text=True)
+            for text in proc.stdout:  # printed here and kept in docs/results
+                print(text, end="", flush=True)
+                fh.write(text)
+            proc.wait()
+        print(f"== exit {proc.returncode} after {time.perf_counter() - start:.0f} s", flush=True)
         if proc.returncode != 0:
             failed.append(script[0])
     if failed:

@@ -97,6 +97,10 @@ def fit_axes(series, model: str, axes: list[str], **kwargs):
         f = fits[axis]
         print(f"{axis}: {f.model}  loglik {f.loglik:.6g}  BIC {f.bic:.6g}  "
               + "  ".join(str(c) for c in f.components), flush=True)
+        # The outputs need the fitted models, not the records: drop them so memory does not grow per axis.
+        fits[axis] = f.without_data()
+        if axis in selections:
+            selections[axis] = selections[axis].without_data()
     return fits, selections
 
 

@@ -22,7 +22,7 @@ Pipeline of :func:`fit_model`:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -130,6 +130,13 @@ class FitResult:
     statespace: ss.StateSpace | None = field(default=None, repr=False)
     _y: np.ndarray | None = field(default=None, repr=False)
     _z: np.ndarray | None = field(default=None, repr=False)
+
+    def without_data(self) -> FitResult:
+        """This result without the record it was fitted to (two arrays of N floats), for keeping many results.
+
+        :meth:`standardized_innovations` needs the record and raises on the copy; everything else works.
+        """
+        return replace(self, _y=None, _z=None)
 
     def standardized_innovations(self) -> np.ndarray:
         """One-step innovations / √(their variance), NaN where the sample was missing."""
@@ -463,6 +470,12 @@ class SelectionResult:
     table: list[dict]  # per candidate: model, loglik, k, aic, bic, delta_bic, weight_bic, delta_aic, error
     fits: dict[str, FitResult]
 
+    def without_data(self) -> SelectionResult:
+        """The selection with every fit's record dropped (see :meth:`FitResult.without_data`)."""
+        fits = {k: f.without_data() for k, f in self.fits.items()}
+        best = next((fits[k] for k, f in self.fits.items() if f is self.best), self.best.without_data())
+        return SelectionResult(best, self.table, fits)
+
 
 def suggest_candidates(y: np.ndarray, dt: float) -> list[str]:
     """Default candidates plus RR when the AV rises like τ² at long τ, QN when it falls like τ⁻² at short τ."""
@@ -494,15 +507,23 @@ def select_model(
     errors: dict[str, str] = {}
     uncertainty = fit_kwargs.pop("uncertainty", True)
     target = fit_kwargs.get("target_precision", 0.10)
+    best_key: str | None = None
     for spec in cands:
         try:
-            fits[spec] = fit_model(y, dt, spec, uncertainty=False, **fit_kwargs)
+            fit = fit_model(y, dt, spec, uncertainty=False, **fit_kwargs)
         except InputError as exc:
             errors[spec] = str(exc)
-    if not fits:
+            continue
+        # Only the current best keeps its record (N floats per array): memory stays bounded on long records.
+        if best_key is None or getattr(fit, criterion) < getattr(fits[best_key], criterion):
+            if best_key is not None:
+                fits[best_key] = fits[best_key].without_data()
+            best_key = spec
+        else:
+            fit = fit.without_data()
+        fits[spec] = fit
+    if best_key is None:
         raise InputError("no candidate model could be fitted: " + "; ".join(f"{k}: {v}" for k, v in errors.items()))
-    crit = {k: getattr(f, criterion) for k, f in fits.items()}
-    best_key = min(crit, key=crit.get)
     bic_min = min(f.bic for f in fits.values())
     aic_min = min(f.aic for f in fits.values())
     wsum = sum(math.exp(-0.5 * (f.bic - bic_min)) for f in fits.values())
