@@ -75,14 +75,7 @@ class FilterBank:
         self._phi4 = model.phi[:, :, None, :]
         self._h3 = model.h[:, None, :]
         self._h_mat = model.h[None, :, :]
-        self._starts = np.array([sl.start for sl in model.slices])
-        self._sizes = np.array([sl.stop - sl.start for sl in model.slices])
-        n_par = max(th.shape[1] for th in model.theta)
-        self._theta_rows = np.zeros((n_par, model.n_filters))
-        self._known = []
-        for sl, th in zip(model.slices, model.theta, strict=True):
-            self._theta_rows[: th.shape[1], sl] = th.T
-            self._known.append(np.all(th == th[0], axis=0))
+        self._known = [np.all(th == th[0], axis=0) for th in model.theta]
         self.reset()
 
     def reset(self) -> None:
@@ -196,27 +189,37 @@ class FilterBank:
     def evaluate(self, c: np.ndarray) -> Posterior:
         """Eqs. (10)–(14) from cumulative log-likelihoods c (R, L, F): probabilities, θ̂ and their variances.
 
-        All hypotheses at once: per-hypothesis reductions are ``reduceat`` over the filter axis.
+        One hypothesis at a time on its contiguous slice of filters, and only for its unknown parameters (a
+        known one has θ̂ = its value and variance 0). Every operation is elementwise or a reduction over the
+        filter axis, so each row's result does not depend on how many rows are evaluated together: streaming
+        (one row) and batch (many rows) give identical numbers.
         """
         m = self.model
         lj = c + m.log_mu0
-        top = np.maximum.reduceat(lj, self._starts, axis=-1)
-        e = np.exp(lj - np.repeat(top, self._sizes, axis=-1))
-        tot = np.add.reduceat(e, self._starts, axis=-1)
-        lse = top + np.log(tot)
-        mu = e / np.repeat(tot, self._sizes, axis=-1)  # eq. (12)
-        weighted = mu[..., None, :] * self._theta_rows  # (R, L, P, F)
-        mean = np.add.reduceat(weighted, self._starts, axis=-1)  # (R, L, P, K), eq. (13)
-        dev = self._theta_rows - np.repeat(mean, self._sizes, axis=-1)
-        var = np.add.reduceat(mu[..., None, :] * dev * dev, self._starts, axis=-1)  # eq. (14), diagonal
+        lse = np.empty((*c.shape[:-1], len(m.slices)))
+        means, variances = [], []
+        for k, (sl, theta) in enumerate(zip(m.slices, m.theta, strict=True)):
+            part = lj[..., sl]
+            top = part.max(axis=-1, keepdims=True)
+            e = np.exp(part - top)
+            tot = e.sum(axis=-1, keepdims=True)
+            lse[..., k] = (top + np.log(tot))[..., 0]
+            p = theta.shape[1]
+            mean = np.broadcast_to(theta[0], (*c.shape[:-1], p)).copy()
+            var = np.zeros((*c.shape[:-1], p))
+            if not self._known[k].all():
+                mu = e / tot  # eq. (12)
+                for i in np.flatnonzero(~self._known[k]):
+                    col = theta[:, i]
+                    mi = (mu * col).sum(axis=-1, keepdims=True)  # eq. (13)
+                    dev = col - mi
+                    mean[..., i] = mi[..., 0]
+                    var[..., i] = (mu * (dev * dev)).sum(axis=-1)  # eq. (14), diagonal
+            means.append(mean)
+            variances.append(var)
         joint = lse + m.log_prior
         jtop = joint.max(axis=-1, keepdims=True)
         log_prob = joint - (jtop + np.log(np.exp(joint - jtop).sum(axis=-1, keepdims=True)))  # eq. (10)
-        means, variances = [], []
-        for k, theta in enumerate(m.theta):
-            p = theta.shape[1]
-            means.append(np.where(self._known[k], theta[0], mean[..., :p, k]))
-            variances.append(np.where(self._known[k], 0.0, var[..., :p, k]))
         return Posterior(log_prob=log_prob, theta_mean=means, theta_var=variances)
 
     def state_mixture(self, stream: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
