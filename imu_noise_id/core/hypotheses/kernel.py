@@ -91,25 +91,27 @@ class FilterBank:
 
     # -- covariance recursion (data independent) -------------------------------------------------------
     def _riccati(self) -> None:
-        """One step of eqs. (5), (6), (8): prediction, innovation variance Λ, gain K, update (all filters)."""
+        """One step of eqs. (5), (6), (8): prediction, innovation variance Λ, gain K, update (all filters).
+
+        Λ > 0 is checked by :meth:`advance` once per block (on every Λ it used).
+        """
         m = self.model
         n = m.n
         if self._phiphi is not None:
-            Pp = self._phiphi * self.P + m.q
+            Pp = self._phiphi * self.P
+            Pp += m.q
         else:
             Pp = (m.phi_kron * self.P[None, :, :]).sum(axis=1) + m.q
         if self._h_ones:
             Ph = Pp.reshape(n, n, -1).sum(axis=1)
-            S = Ph.sum(axis=0) + m.r
+            S = Ph.sum(axis=0)
+            S += m.r
         else:
             Ph = (Pp.reshape(n, n, -1) * self._h_mat).sum(axis=1)
             S = (Ph * m.h).sum(axis=0) + m.r
-        if not S.min() > 0:
-            bad = int(np.argmin(S))
-            raise FloatingPointError(f"innovation variance of filter {bad} is {S[bad]}: a grid point has no "
-                                     "process or measurement noise")
         K = Ph / S
-        self.P = Pp - (K[:, None, :] * Ph[None, :, :]).reshape(n * n, -1)
+        Pp -= (K[:, None, :] * Ph[None, :, :]).reshape(n * n, -1)
+        self.P = Pp
         if self.gain_tolerance > 0 and self.n_steps % _FREEZE_CHECK_EVERY == 0 and self.n_steps > 0:
             dk = float(np.max(np.abs(K - self.K)))
             ds = float(np.max(np.abs(S - self.S) / S))
@@ -128,21 +130,39 @@ class FilterBank:
         -------
         lam : (T, L, F) innovations λ_i^{kj} (eq. 7)
         S : (T, F) their variances Λ_i^{kj} (eq. 8)
+
+        Raises
+        ------
+        FloatingPointError
+            If some Λ ≤ 0 (a grid point without process and measurement noise).
         """
         T = y.shape[0]
         F = self.model.n_filters
         lam = np.empty((T, self.n_streams, F))
         S_out = np.empty((T, F))
+        yb = y[:, :, None]
         x = self.x
-        for t in range(T):
-            if not self.frozen:
-                self._riccati()
-            xp = self._diag_phi[:, None, :] * x if self._diag_phi is not None else (self._phi4 * x[None]).sum(axis=1)
-            innov = y[t][:, None] - (xp.sum(axis=0) if self._h_ones else (self._h3 * xp).sum(axis=0))
-            x = xp + self.K[:, None, :] * innov[None]
-            lam[t] = innov
-            S_out[t] = self.S
-            self.n_steps += 1
+        xp = np.empty_like(x)
+        gain_term = np.empty_like(x)
+        diag_phi = self._diag_phi[:, None, :] if self._diag_phi is not None else None
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for t in range(T):
+                if not self.frozen:
+                    self._riccati()
+                if diag_phi is not None:
+                    np.multiply(diag_phi, x, out=xp)
+                else:
+                    xp = (self._phi4 * x[None]).sum(axis=1)
+                innov = lam[t]
+                np.subtract(yb[t], xp.sum(axis=0) if self._h_ones else (self._h3 * xp).sum(axis=0), out=innov)
+                np.multiply(self.K[:, None, :], innov, out=gain_term)
+                x = xp + gain_term
+                S_out[t] = self.S
+                self.n_steps += 1
+        if not S_out.min() > 0:
+            bad = int(np.argmin(S_out.min(axis=0)))
+            raise FloatingPointError(f"innovation variance of filter {bad} is {S_out[:, bad].min()}: a grid point "
+                                     "has no process or measurement noise")
         self.x = x
         return lam, S_out
 
