@@ -119,6 +119,7 @@ class HypothesisBank:
         self.model: BankModel = build_bank_model(hypothesis_set)
         self.chunk = int(chunk)
         self._filters = FilterBank(self.model, 1, hypothesis_set.gain_tolerance)
+        self._parameter_names = [h.parameter_names for h in hypothesis_set.hypotheses]
         self.reset()
 
     @property
@@ -223,24 +224,23 @@ class HypothesisBank:
         if self._snapshot is not None:
             return self._snapshot
         post = self._filters.evaluate(self._filters.c[None])
-        probs = np.exp(post.log_prob[0, 0])
+        probs = np.exp(post.log_prob[0, 0]).tolist()
         hyps = {}
-        for k, hyp in enumerate(self.hset.hypotheses):
-            mean, var = post.theta_mean[k][0, 0], post.theta_var[k][0, 0]
-            std = np.sqrt(np.maximum(var, 0.0))
-            names = hyp.parameter_names
-            hyps[hyp.name] = HypothesisEstimate(
-                probability=float(probs[k]),
-                theta=dict(zip(names, mean.tolist(), strict=True)),
-                theta_std=dict(zip(names, std.tolist(), strict=True)),
-                rsd={p: (s / v if v > 0 else math.inf) for p, s, v in zip(names, std.tolist(), mean.tolist(),
-                                                                             strict=True)},
+        for k, name in enumerate(self.names):
+            mean = post.theta_mean[k][0, 0].tolist()
+            std = np.sqrt(np.maximum(post.theta_var[k][0, 0], 0.0)).tolist()
+            names = self._parameter_names[k]
+            hyps[name] = HypothesisEstimate(
+                probability=probs[k],
+                theta=dict(zip(names, mean, strict=True)),
+                theta_std=dict(zip(names, std, strict=True)),
+                rsd={p: (s / v if v > 0 else math.inf) for p, s, v in zip(names, std, mean, strict=True)},
             )
-        best = int(np.argmax(probs))
+        best = max(range(len(probs)), key=probs.__getitem__)
         decision = self.names[best] if probs[best] >= self.hset.gamma else None
         self._snapshot = BankSnapshot(
             n_updates=self._n_updates, t=self._t_bank,
-            probabilities=dict(zip(self.names, probs.tolist(), strict=True)),
+            probabilities=dict(zip(self.names, probs, strict=True)),
             decision=decision, hypotheses=hyps,
         )
         return self._snapshot

@@ -75,7 +75,11 @@ class FilterBank:
         self._phi4 = model.phi[:, :, None, :]
         self._h3 = model.h[:, None, :]
         self._h_mat = model.h[None, :, :]
-        self._known = [np.all(th == th[0], axis=0) for th in model.theta]
+        # per hypothesis: filter slice, indices of the unknown parameters, their grid values (n_free, F_k), θ row 0
+        self._hyp_params = []
+        for sl, th in zip(model.slices, model.theta, strict=True):
+            free = np.flatnonzero(~np.all(th == th[0], axis=0))
+            self._hyp_params.append((sl, free, np.ascontiguousarray(th[:, free].T), th[0].copy()))
         self.reset()
 
     def reset(self) -> None:
@@ -215,26 +219,25 @@ class FilterBank:
         (one row) and batch (many rows) give identical numbers.
         """
         m = self.model
+        lead = c.shape[:-1]
         lj = c + m.log_mu0
-        lse = np.empty((*c.shape[:-1], len(m.slices)))
+        lse = np.empty((*lead, len(m.slices)))
         means, variances = [], []
-        for k, (sl, theta) in enumerate(zip(m.slices, m.theta, strict=True)):
+        for k, (sl, free, grid, theta0) in enumerate(self._hyp_params):
             part = lj[..., sl]
             top = part.max(axis=-1, keepdims=True)
             e = np.exp(part - top)
             tot = e.sum(axis=-1, keepdims=True)
             lse[..., k] = (top + np.log(tot))[..., 0]
-            p = theta.shape[1]
-            mean = np.broadcast_to(theta[0], (*c.shape[:-1], p)).copy()
-            var = np.zeros((*c.shape[:-1], p))
-            if not self._known[k].all():
-                mu = e / tot  # eq. (12)
-                for i in np.flatnonzero(~self._known[k]):
-                    col = theta[:, i]
-                    mi = (mu * col).sum(axis=-1, keepdims=True)  # eq. (13)
-                    dev = col - mi
-                    mean[..., i] = mi[..., 0]
-                    var[..., i] = (mu * (dev * dev)).sum(axis=-1)  # eq. (14), diagonal
+            mean = np.empty((*lead, theta0.size))
+            mean[...] = theta0
+            var = np.zeros((*lead, theta0.size))
+            if free.size:
+                mu = (e / tot)[..., None, :]  # eq. (12)
+                mi = (mu * grid).sum(axis=-1)  # eq. (13)
+                dev = grid - mi[..., None]
+                mean[..., free] = mi
+                var[..., free] = (mu * (dev * dev)).sum(axis=-1)  # eq. (14), diagonal
             means.append(mean)
             variances.append(var)
         joint = lse + m.log_prior
