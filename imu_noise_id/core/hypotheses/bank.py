@@ -111,10 +111,11 @@ class HypothesisBank:
     hypothesis_set : HypothesisSet
         Hypotheses, priors, grids, γ, block averaging.
     chunk : int
-        Samples per vectorised block in :meth:`run` (memory ∝ chunk × number of filters).
+        Bank samples per vectorised block in :meth:`run` (memory ∝ chunk × number of filters). The default
+        keeps a block's arrays (64 × 512 filters × 8 B = 256 kB each) in the cache; 512 was 15–30 % slower.
     """
 
-    def __init__(self, hypothesis_set: HypothesisSet, chunk: int = 512) -> None:
+    def __init__(self, hypothesis_set: HypothesisSet, chunk: int = 64) -> None:
         self.hset = hypothesis_set
         self.model: BankModel = build_bank_model(hypothesis_set)
         self.chunk = int(chunk)

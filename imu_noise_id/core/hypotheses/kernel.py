@@ -107,8 +107,8 @@ class FilterBank:
         else:
             Pp = (m.phi_kron * self.P[None, :, :]).sum(axis=1) + m.q
         if self._h_ones:
-            Ph = Pp.reshape(n, n, -1).sum(axis=1)
-            S = Ph.sum(axis=0)
+            Ph = _sum_leading(Pp.reshape(n, n, -1).swapaxes(0, 1))
+            S = _sum_leading(Ph)
             S += m.r
         else:
             Ph = (Pp.reshape(n, n, -1) * self._h_mat).sum(axis=1)
@@ -158,7 +158,7 @@ class FilterBank:
                 else:
                     xp = (self._phi4 * x[None]).sum(axis=1)
                 innov = lam[t]
-                np.subtract(yb[t], xp.sum(axis=0) if self._h_ones else (self._h3 * xp).sum(axis=0), out=innov)
+                np.subtract(yb[t], _sum_leading(xp) if self._h_ones else (self._h3 * xp).sum(axis=0), out=innov)
                 np.multiply(self.K[:, None, :], innov, out=gain_term)
                 x = xp + gain_term
                 S_out[t] = self.S
@@ -262,6 +262,14 @@ class FilterBank:
             second = np.einsum("if,jf,f->ij", xs, xs, mu) + np.einsum("ijf,f->ij", P[:d, :d, sl], mu)
             out.append((mean, second - np.outer(mean, mean)))
         return out
+
+
+def _sum_leading(a: np.ndarray) -> np.ndarray:
+    """``a.sum(axis=0)`` for a short leading axis, as a chain of adds (the same order; fewer calls for n ≤ 3)."""
+    out = a[0] + a[1] if a.shape[0] > 1 else a[0].copy()
+    for row in a[2:]:
+        out += row
+    return out
 
 
 def check_samples(y: np.ndarray, what: str = "samples") -> np.ndarray:
