@@ -135,7 +135,7 @@ class HypothesisBank:
         """Forget all data: prior probabilities, prior weights, prior states."""
         self._filters.reset()
         self._pending = np.zeros(0)
-        self._t_bank = 0.0  # time of the latest update [s] (the first bank sample is at bank_dt)
+        self._ticks = 0  # bank sampling periods elapsed at the latest update, gaps included (t = ticks·bank_dt)
         self._n_updates = 0
         self._snapshot: BankSnapshot | None = None
 
@@ -159,8 +159,8 @@ class HypothesisBank:
         lam, S = self._filters.advance(ybar[:, None])
         c = self._filters.accumulate(lam, S)
         index = self._n_updates + np.arange(1, ybar.size + 1)  # 1-based update numbers
-        t = self._t_bank + self.hset.bank_dt * np.arange(1, ybar.size + 1)
-        self._t_bank = float(t[-1])
+        t = self.hset.bank_dt * (self._ticks + np.arange(1, ybar.size + 1))  # exact whatever the blocking
+        self._ticks += ybar.size
         self._n_updates += ybar.size
         if record_every == 1:
             return c, t
@@ -216,7 +216,7 @@ class HypothesisBank:
         self._pending = np.zeros(0)
         blocks = missed // m
         self._filters.gap(blocks)
-        self._t_bank += blocks * self.hset.bank_dt
+        self._ticks += blocks
         self._snapshot = None
 
     # -- reading ---------------------------------------------------------------------------------------
@@ -240,7 +240,7 @@ class HypothesisBank:
         best = max(range(len(probs)), key=probs.__getitem__)
         decision = self.names[best] if probs[best] >= self.hset.gamma else None
         self._snapshot = BankSnapshot(
-            n_updates=self._n_updates, t=self._t_bank,
+            n_updates=self._n_updates, t=self.hset.bank_dt * self._ticks,
             probabilities=dict(zip(self.names, probs, strict=True)),
             decision=decision, hypotheses=hyps,
         )
