@@ -51,12 +51,17 @@ def throughput(dt: float) -> None:
     y = simulate_sum([GM(300.0, 1.0)], 40_000, dt, np.random.default_rng(0)) + 0.5 * np.random.default_rng(
         1).standard_normal(40_000)
     for every in (1, 100):
-        bank = HypothesisBank(hset)
-        t0 = time.perf_counter()
-        bank.run(y, record_every=every)
-        el = time.perf_counter() - t0
+        walls, cpus = [], []
+        for _ in range(3):  # best of 3: the machine is shared
+            bank = HypothesisBank(hset)
+            t0, c0 = time.perf_counter(), time.process_time()
+            bank.run(y, record_every=every)
+            walls.append(time.perf_counter() - t0)
+            cpus.append(time.process_time() - c0)
+        el, cpu = min(walls), min(cpus)
         print(f"batch run, 2 x 256 filters, {y.size} samples, output every {every:>3} sample(s): "
-              f"{y.size / el:,.0f} samples/s ({el:.2f} s)")
+              f"{y.size / el:,.0f} samples/s wall ({el:.2f} s), {y.size / cpu:,.0f} samples/s of CPU time "
+              "(best of 3)")
     bank = HypothesisBank(hset)
     t0 = time.perf_counter()
     for v in y[:3000]:

@@ -111,14 +111,16 @@ class HypothesisBank:
     hypothesis_set : HypothesisSet
         Hypotheses, priors, grids, γ, block averaging.
     chunk : int
-        Samples per vectorised block in :meth:`run` (memory ∝ chunk × number of filters).
+        Bank samples per vectorised block in :meth:`run` (memory ∝ chunk × number of filters). The default
+        keeps a block's arrays (64 × 512 filters × 8 B = 256 kB each) in the cache; 512 was 15–30 % slower.
     """
 
-    def __init__(self, hypothesis_set: HypothesisSet, chunk: int = 512) -> None:
+    def __init__(self, hypothesis_set: HypothesisSet, chunk: int = 64) -> None:
         self.hset = hypothesis_set
         self.model: BankModel = build_bank_model(hypothesis_set)
         self.chunk = int(chunk)
         self._filters = FilterBank(self.model, 1, hypothesis_set.gain_tolerance)
+        self._parameter_names = [h.parameter_names for h in hypothesis_set.hypotheses]
         self.reset()
 
     @property
@@ -133,7 +135,7 @@ class HypothesisBank:
         """Forget all data: prior probabilities, prior weights, prior states."""
         self._filters.reset()
         self._pending = np.zeros(0)
-        self._t_bank = 0.0  # time of the latest update [s] (the first bank sample is at bank_dt)
+        self._ticks = 0  # bank sampling periods elapsed at the latest update, gaps included (t = ticks·bank_dt)
         self._n_updates = 0
         self._snapshot: BankSnapshot | None = None
 
@@ -157,8 +159,8 @@ class HypothesisBank:
         lam, S = self._filters.advance(ybar[:, None])
         c = self._filters.accumulate(lam, S)
         index = self._n_updates + np.arange(1, ybar.size + 1)  # 1-based update numbers
-        t = self._t_bank + self.hset.bank_dt * np.arange(1, ybar.size + 1)
-        self._t_bank = float(t[-1])
+        t = self.hset.bank_dt * (self._ticks + np.arange(1, ybar.size + 1))  # exact whatever the blocking
+        self._ticks += ybar.size
         self._n_updates += ybar.size
         if record_every == 1:
             return c, t
@@ -214,7 +216,7 @@ class HypothesisBank:
         self._pending = np.zeros(0)
         blocks = missed // m
         self._filters.gap(blocks)
-        self._t_bank += blocks * self.hset.bank_dt
+        self._ticks += blocks
         self._snapshot = None
 
     # -- reading ---------------------------------------------------------------------------------------
@@ -223,24 +225,23 @@ class HypothesisBank:
         if self._snapshot is not None:
             return self._snapshot
         post = self._filters.evaluate(self._filters.c[None])
-        probs = np.exp(post.log_prob[0, 0])
+        probs = np.exp(post.log_prob[0, 0]).tolist()
         hyps = {}
-        for k, hyp in enumerate(self.hset.hypotheses):
-            mean, var = post.theta_mean[k][0, 0], post.theta_var[k][0, 0]
-            std = np.sqrt(np.maximum(var, 0.0))
-            names = hyp.parameter_names
-            hyps[hyp.name] = HypothesisEstimate(
-                probability=float(probs[k]),
-                theta=dict(zip(names, mean.tolist(), strict=True)),
-                theta_std=dict(zip(names, std.tolist(), strict=True)),
-                rsd={p: (s / v if v > 0 else math.inf) for p, s, v in zip(names, std.tolist(), mean.tolist(),
-                                                                             strict=True)},
+        for k, name in enumerate(self.names):
+            mean = post.theta_mean[k][0, 0].tolist()
+            std = np.sqrt(np.maximum(post.theta_var[k][0, 0], 0.0)).tolist()
+            names = self._parameter_names[k]
+            hyps[name] = HypothesisEstimate(
+                probability=probs[k],
+                theta=dict(zip(names, mean, strict=True)),
+                theta_std=dict(zip(names, std, strict=True)),
+                rsd={p: (s / v if v > 0 else math.inf) for p, s, v in zip(names, std, mean, strict=True)},
             )
-        best = int(np.argmax(probs))
+        best = max(range(len(probs)), key=probs.__getitem__)
         decision = self.names[best] if probs[best] >= self.hset.gamma else None
         self._snapshot = BankSnapshot(
-            n_updates=self._n_updates, t=self._t_bank,
-            probabilities=dict(zip(self.names, probs.tolist(), strict=True)),
+            n_updates=self._n_updates, t=self.hset.bank_dt * self._ticks,
+            probabilities=dict(zip(self.names, probs, strict=True)),
             decision=decision, hypotheses=hyps,
         )
         return self._snapshot

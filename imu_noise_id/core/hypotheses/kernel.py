@@ -75,14 +75,11 @@ class FilterBank:
         self._phi4 = model.phi[:, :, None, :]
         self._h3 = model.h[:, None, :]
         self._h_mat = model.h[None, :, :]
-        self._starts = np.array([sl.start for sl in model.slices])
-        self._sizes = np.array([sl.stop - sl.start for sl in model.slices])
-        n_par = max(th.shape[1] for th in model.theta)
-        self._theta_rows = np.zeros((n_par, model.n_filters))
-        self._known = []
+        # per hypothesis: filter slice, indices of the unknown parameters, their grid values (n_free, F_k), θ row 0
+        self._hyp_params = []
         for sl, th in zip(model.slices, model.theta, strict=True):
-            self._theta_rows[: th.shape[1], sl] = th.T
-            self._known.append(np.all(th == th[0], axis=0))
+            free = np.flatnonzero(~np.all(th == th[0], axis=0))
+            self._hyp_params.append((sl, free, np.ascontiguousarray(th[:, free].T), th[0].copy()))
         self.reset()
 
     def reset(self) -> None:
@@ -98,25 +95,27 @@ class FilterBank:
 
     # -- covariance recursion (data independent) -------------------------------------------------------
     def _riccati(self) -> None:
-        """One step of eqs. (5), (6), (8): prediction, innovation variance Λ, gain K, update (all filters)."""
+        """One step of eqs. (5), (6), (8): prediction, innovation variance Λ, gain K, update (all filters).
+
+        Λ > 0 is checked by :meth:`advance` once per block (on every Λ it used).
+        """
         m = self.model
         n = m.n
         if self._phiphi is not None:
-            Pp = self._phiphi * self.P + m.q
+            Pp = self._phiphi * self.P
+            Pp += m.q
         else:
             Pp = (m.phi_kron * self.P[None, :, :]).sum(axis=1) + m.q
         if self._h_ones:
-            Ph = Pp.reshape(n, n, -1).sum(axis=1)
-            S = Ph.sum(axis=0) + m.r
+            Ph = _sum_leading(Pp.reshape(n, n, -1).swapaxes(0, 1))
+            S = _sum_leading(Ph)
+            S += m.r
         else:
             Ph = (Pp.reshape(n, n, -1) * self._h_mat).sum(axis=1)
             S = (Ph * m.h).sum(axis=0) + m.r
-        if not S.min() > 0:
-            bad = int(np.argmin(S))
-            raise FloatingPointError(f"innovation variance of filter {bad} is {S[bad]}: a grid point has no "
-                                     "process or measurement noise")
         K = Ph / S
-        self.P = Pp - (K[:, None, :] * Ph[None, :, :]).reshape(n * n, -1)
+        Pp -= (K[:, None, :] * Ph[None, :, :]).reshape(n * n, -1)
+        self.P = Pp
         if self.gain_tolerance > 0 and self.n_steps % _FREEZE_CHECK_EVERY == 0 and self.n_steps > 0:
             dk = float(np.max(np.abs(K - self.K)))
             ds = float(np.max(np.abs(S - self.S) / S))
@@ -135,21 +134,39 @@ class FilterBank:
         -------
         lam : (T, L, F) innovations λ_i^{kj} (eq. 7)
         S : (T, F) their variances Λ_i^{kj} (eq. 8)
+
+        Raises
+        ------
+        FloatingPointError
+            If some Λ ≤ 0 (a grid point without process and measurement noise).
         """
         T = y.shape[0]
         F = self.model.n_filters
         lam = np.empty((T, self.n_streams, F))
         S_out = np.empty((T, F))
+        yb = y[:, :, None]
         x = self.x
-        for t in range(T):
-            if not self.frozen:
-                self._riccati()
-            xp = self._diag_phi[:, None, :] * x if self._diag_phi is not None else (self._phi4 * x[None]).sum(axis=1)
-            innov = y[t][:, None] - (xp.sum(axis=0) if self._h_ones else (self._h3 * xp).sum(axis=0))
-            x = xp + self.K[:, None, :] * innov[None]
-            lam[t] = innov
-            S_out[t] = self.S
-            self.n_steps += 1
+        xp = np.empty_like(x)
+        gain_term = np.empty_like(x)
+        diag_phi = self._diag_phi[:, None, :] if self._diag_phi is not None else None
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for t in range(T):
+                if not self.frozen:
+                    self._riccati()
+                if diag_phi is not None:
+                    np.multiply(diag_phi, x, out=xp)
+                else:
+                    xp = (self._phi4 * x[None]).sum(axis=1)
+                innov = lam[t]
+                np.subtract(yb[t], _sum_leading(xp) if self._h_ones else (self._h3 * xp).sum(axis=0), out=innov)
+                np.multiply(self.K[:, None, :], innov, out=gain_term)
+                x = xp + gain_term
+                S_out[t] = self.S
+                self.n_steps += 1
+        if not S_out.min() > 0:
+            bad = int(np.argmin(S_out.min(axis=0)))
+            raise FloatingPointError(f"innovation variance of filter {bad} is {S_out[:, bad].min()}: a grid point "
+                                     "has no process or measurement noise")
         self.x = x
         return lam, S_out
 
@@ -196,27 +213,36 @@ class FilterBank:
     def evaluate(self, c: np.ndarray) -> Posterior:
         """Eqs. (10)–(14) from cumulative log-likelihoods c (R, L, F): probabilities, θ̂ and their variances.
 
-        All hypotheses at once: per-hypothesis reductions are ``reduceat`` over the filter axis.
+        One hypothesis at a time on its contiguous slice of filters, and only for its unknown parameters (a
+        known one has θ̂ = its value and variance 0). Every operation is elementwise or a reduction over the
+        filter axis, so each row's result does not depend on how many rows are evaluated together: streaming
+        (one row) and batch (many rows) give identical numbers.
         """
         m = self.model
+        lead = c.shape[:-1]
         lj = c + m.log_mu0
-        top = np.maximum.reduceat(lj, self._starts, axis=-1)
-        e = np.exp(lj - np.repeat(top, self._sizes, axis=-1))
-        tot = np.add.reduceat(e, self._starts, axis=-1)
-        lse = top + np.log(tot)
-        mu = e / np.repeat(tot, self._sizes, axis=-1)  # eq. (12)
-        weighted = mu[..., None, :] * self._theta_rows  # (R, L, P, F)
-        mean = np.add.reduceat(weighted, self._starts, axis=-1)  # (R, L, P, K), eq. (13)
-        dev = self._theta_rows - np.repeat(mean, self._sizes, axis=-1)
-        var = np.add.reduceat(mu[..., None, :] * dev * dev, self._starts, axis=-1)  # eq. (14), diagonal
+        lse = np.empty((*lead, len(m.slices)))
+        means, variances = [], []
+        for k, (sl, free, grid, theta0) in enumerate(self._hyp_params):
+            part = lj[..., sl]
+            top = part.max(axis=-1, keepdims=True)
+            e = np.exp(part - top)
+            tot = e.sum(axis=-1, keepdims=True)
+            lse[..., k] = (top + np.log(tot))[..., 0]
+            mean = np.empty((*lead, theta0.size))
+            mean[...] = theta0
+            var = np.zeros((*lead, theta0.size))
+            if free.size:
+                mu = (e / tot)[..., None, :]  # eq. (12)
+                mi = (mu * grid).sum(axis=-1)  # eq. (13)
+                dev = grid - mi[..., None]
+                mean[..., free] = mi
+                var[..., free] = (mu * (dev * dev)).sum(axis=-1)  # eq. (14), diagonal
+            means.append(mean)
+            variances.append(var)
         joint = lse + m.log_prior
         jtop = joint.max(axis=-1, keepdims=True)
         log_prob = joint - (jtop + np.log(np.exp(joint - jtop).sum(axis=-1, keepdims=True)))  # eq. (10)
-        means, variances = [], []
-        for k, theta in enumerate(m.theta):
-            p = theta.shape[1]
-            means.append(np.where(self._known[k], theta[0], mean[..., :p, k]))
-            variances.append(np.where(self._known[k], 0.0, var[..., :p, k]))
         return Posterior(log_prob=log_prob, theta_mean=means, theta_var=variances)
 
     def state_mixture(self, stream: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -236,6 +262,14 @@ class FilterBank:
             second = np.einsum("if,jf,f->ij", xs, xs, mu) + np.einsum("ijf,f->ij", P[:d, :d, sl], mu)
             out.append((mean, second - np.outer(mean, mean)))
         return out
+
+
+def _sum_leading(a: np.ndarray) -> np.ndarray:
+    """``a.sum(axis=0)`` for a short leading axis, as a chain of adds (the same order; fewer calls for n ≤ 3)."""
+    out = a[0] + a[1] if a.shape[0] > 1 else a[0].copy()
+    for row in a[2:]:
+        out += row
+    return out
 
 
 def check_samples(y: np.ndarray, what: str = "samples") -> np.ndarray:
