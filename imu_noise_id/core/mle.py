@@ -29,6 +29,10 @@ from .errors import InputError
 from .kalman.common import check_data
 from .statespace import StateSpace, with_components
 
+#: Metric information −∂²ℓ/∂ϑ_k² below which :func:`maximise` holds log-parameter k at its start: changing the
+#: parameter e-fold then changes ℓ by less than 5e-4 (the parameter sits at the ~0 boundary).
+FLAT_INFORMATION = 1e-3
+
 
 @dataclass(frozen=True)
 class Parameterisation:
@@ -123,6 +127,12 @@ def maximise(
     handful of iterations; out-of-range points then get a large objective instead of box bounds, and it stops
     when every |∂ℓ/∂η| < 0.05 (less than ~1e-3 of log-likelihood left to gain). Without it, when every
     |∂ℓ/∂ϑ| < ``grad_tol``.
+
+    Boundary (beyond the paper): a parameter whose metric information is below ``FLAT_INFORMATION`` (e.g. a
+    random walk the start already puts at ~0, where ℓ is flat in its log) is held at its start value and the
+    search runs over the others. Left free, its log would drift towards −∞ along a flat, numerically noisy
+    direction (the Fisher-identity gradient of a vanishing Q entry is a difference of nearly equal sums), and
+    L-BFGS would spend its iterations there without gaining likelihood.
     """
     from .statespace import to_components
 
@@ -139,9 +149,14 @@ def maximise(
     data = em.DataSums.of(y, z)
     scale = max(float(np.sum(np.isfinite(y))), 1.0)
     if metric is not None:
-        w, v = np.linalg.eigh(0.5 * (metric + metric.T))
+        free = np.diag(metric) > FLAT_INFORMATION
+        if not np.any(free):
+            free[:] = True
+        sub = metric[np.ix_(free, free)]
+        w, v = np.linalg.eigh(0.5 * (sub + sub.T))
         w = np.maximum(w, 1e-6 * max(float(np.max(w)), 1e-300))
-        T = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ metric T = I
+        T = np.zeros((theta0.size, int(free.sum())))
+        T[free] = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ metric T = I on the free entries
     else:
         T = np.eye(theta0.size)
 
@@ -162,7 +177,7 @@ def maximise(
 
     # With the metric, |∂ℓ/∂η| ≈ √(2 × the gain a Newton step would still bring): 0.05 ⇒ < ~1e-3 left.
     gtol = (0.05 if metric is not None else grad_tol) / scale
-    res = minimize(fun, np.zeros(theta0.size), jac=True, method="L-BFGS-B",
+    res = minimize(fun, np.zeros(T.shape[1]), jac=True, method="L-BFGS-B",
                    options={"maxiter": max_iter, "ftol": 1e-15, "gtol": gtol, "maxcor": 20})
     ll, theta, model = state["best"]
     if theta is None:
