@@ -252,6 +252,7 @@ def run_em(
     tol: float = 1e-9,
     c: float = 1.0,
     engine: str = "auto",
+    initial: kalman.SmootherStats | None = None,
 ) -> EMResult:
     """Iterate E- and M-steps until the relative stopping rule of §3.5(ii) falls below ``tol``.
 
@@ -265,13 +266,16 @@ def run_em(
         Iteration cap, threshold ε and constant c of the stopping rule.
     engine
         Kalman engine (``'auto'``, ``'steady'``, ``'exact'``).
+    initial
+        Smoother statistics of ``model`` on (y, z) when the caller already has them (e.g. from
+        :func:`imu_noise_id.core.kalman.profile_and_smooth`): the first E-step is then not repeated.
     """
     y, z = check_data(y, z, model.n_regressors)
     if max_iter < 0:
         raise InputError(f"max_iter must be >= 0, got {max_iter}")
     result = EMResult(model)
     data = DataSums.of(y, z)
-    s = estep(model, y, z, engine, data)
+    s = sums_from_stats(initial, data) if initial is not None else estep(model, y, z, engine, data)
     result.loglik.append(s.loglik)
     for _ in range(max_iter):
         new = mstep(result.model, s)
