@@ -221,11 +221,19 @@ def _one_start(
 ) -> tuple[mle.MLEResult, int]:
     model = ss.from_components(start, dt, ramp="measurement", intercept=True, exog_names=exog_names)
     _, model, stats = kalman.profile_and_smooth(model, y, z)  # GLS means and the first E-step in one pass
-    run = em.run_em(model, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
     par = mle.Parameterisation.of(start)
     if polish:
-        res = mle.maximise(par, run.model, y, z, tau_bounds=tau_bounds, metric=metric)
+        # The last EM iterate is scored by the quasi-Newton finish's first evaluation: no E-step for it here.
+        run = em.run_em(model, y, z, max_iter=em_iter, tol=em_tol, initial=stats, final_estep=False)
+        try:
+            res = mle.maximise(par, run.model, y, z, tau_bounds=tau_bounds, metric=metric)
+        except (InputError, np.linalg.LinAlgError):
+            # That unscored update may have left the filter's domain: redo EM with the check, which keeps the
+            # last good iterate (paper 000 §3.5(iii)).
+            run = em.run_em(model, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
+            res = mle.maximise(par, run.model, y, z, tau_bounds=tau_bounds, metric=metric)
     else:
+        run = em.run_em(model, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
         prof = kalman.loglik(run.model, y, z)
         fitted = kalman.apply_beta(run.model, prof)
         theta = par.to_theta(ss.to_components(fitted))
