@@ -182,3 +182,16 @@ def test_long_record_with_gaps_is_fitted_gap_filled_then_scored_exactly():
     assert abs(fit.components[0].params()["noise_density"] / 1e-3 - 1) < 0.05
     # The reported log-likelihood is the exact one of the record with its gaps.
     assert fit.loglik == pytest.approx(kalman.loglik(fit.statespace, fit._y, fit._z, engine="exact").loglik)
+
+
+def test_parameter_at_the_zero_boundary_does_not_stall_the_search():
+    # 36k samples whose random walk the data cannot resolve: the start puts it at ~0, where ℓ is flat in its
+    # log. Held there (mle.FLAT_INFORMATION), the search converges in a few evaluations (it used 36 when it
+    # walked down that flat direction) to the same likelihood: 114920.409 with the walk free.
+    truth = [WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-5), RR(1e-6)]
+    y = simulate_sum(truth, 36_000, 0.01, np.random.default_rng(1)) + 2e-3
+    fit = fit_model(y, 0.01, "WN+GM+RW+RR", uncertainty=False)
+    rw = next(c for c in fit.components if isinstance(c, RW))
+    assert rw.random_walk < 1e-7
+    assert fit.n_eval <= 10
+    assert fit.loglik >= 114920.409 - 1e-3

@@ -115,3 +115,19 @@ def test_missing_samples_are_skipped_not_filled():
     y_bad[3] = np.inf
     with pytest.raises(InputError):
         kalman.loglik(model, y_bad, z)
+
+
+@pytest.mark.parametrize("name", list(MIXES))
+@pytest.mark.parametrize("rel_step", [1e-6, 0.3])
+def test_newton_riccati_from_a_nearby_model_equals_doubling(name, rel_step):
+    # A copy solves its DARE by Newton from the original's P̄; it must agree with the doubling from scratch to
+    # the ~1e-13 relative rounding floor of the Kronecker solve (1e-11 leaves margin for poles near 1).
+    model = ss.from_components(MIXES[name], 1.0)
+    model.steady_prediction_covariance()
+    comps = [c if isinstance(c, RR) else type(c)(**{k: v * (1 + rel_step) for k, v in c.params().items()})
+             for c in MIXES[name]]
+    moved = ss.with_components(model, comps)
+    assert moved._steady_cache.get("guess") is not None  # the warm start is actually used
+    reference = ss.steady_prediction_covariance(moved.phi, moved.q, moved.h, moved.r)
+    np.testing.assert_allclose(moved.steady_prediction_covariance(), reference, rtol=0,
+                               atol=1e-11 * np.max(np.abs(reference)))

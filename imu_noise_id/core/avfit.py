@@ -80,6 +80,10 @@ def _gm_placements(n_gm: int, t_lo: float, t_hi: float, n_grid: int) -> list[lis
     return out
 
 
+#: Relative AV below which a component's amplitude is at its ~0 boundary in :func:`fit_allan`.
+AV_FLOOR = 1e-10
+
+
 def fit_allan(names: list[str], av: EmpiricalAllan, dt: float, n_grid: int = 4) -> list[tuple[float, list[Component]]]:
     """Least-squares fits of the structure's theoretical AV to ``av`` in log space, best (lowest cost) first.
 
@@ -96,8 +100,10 @@ def fit_allan(names: list[str], av: EmpiricalAllan, dt: float, n_grid: int = 4) 
         keys = [(i, k) for i in fit_idx for k in start[i].parameter_names]
         x0 = np.log([start[i].params()[k] for i, k in keys])
 
-        def build(x: np.ndarray, start: list[Component] = start, keys: list = keys) -> list[Component]:
-            params = [dict(c.params()) for c in start]
+        base = [c.params() for c in start]  # once per placement, not per residual (asdict is slow)
+
+        def build(x: np.ndarray, start: list[Component] = start, keys: list = keys, base=base) -> list[Component]:
+            params = [dict(b) for b in base]
             for (i, k), v in zip(keys, x, strict=True):
                 params[i][k] = float(np.exp(v))
             return [type(c)(**p) for c, p in zip(start, params, strict=True)]
@@ -107,9 +113,17 @@ def fit_allan(names: list[str], av: EmpiricalAllan, dt: float, n_grid: int = 4) 
             return (np.log(np.maximum(model_av, 1e-300)) - np.log(av.avar)) * w
 
         lo, hi = x0 - 25.0, x0 + 25.0
-        for k, (_, name) in enumerate(keys):
+        for k, (i, name) in enumerate(keys):
             if name == "tau":
                 lo[k], hi[k] = math.log(dt), math.log(50.0 * av.tau[-1])
+            else:
+                # Explicit ~0 boundary: the AV of a component scales with its amplitude²; below the amplitude
+                # where it is < AV_FLOOR of the measured AV at every τ it changes no residual, and trf would
+                # otherwise spend its iterations walking down that flat direction.
+                with np.errstate(divide="ignore"):
+                    ratio = float(np.min(av.avar / start[i].allan_variance(av.tau, dt)))
+                if math.isfinite(ratio) and ratio > 0:
+                    lo[k] = max(lo[k], x0[k] + 0.5 * math.log(AV_FLOOR * ratio))
         x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
         try:
             sol = least_squares(resid, x0, bounds=(lo, hi), method="trf", max_nfev=200)

@@ -252,6 +252,8 @@ def run_em(
     tol: float = 1e-9,
     c: float = 1.0,
     engine: str = "auto",
+    initial: kalman.SmootherStats | None = None,
+    final_estep: bool = True,
 ) -> EMResult:
     """Iterate E- and M-steps until the relative stopping rule of §3.5(ii) falls below ``tol``.
 
@@ -265,16 +267,27 @@ def run_em(
         Iteration cap, threshold ε and constant c of the stopping rule.
     engine
         Kalman engine (``'auto'``, ``'steady'``, ``'exact'``).
+    initial
+        Smoother statistics of ``model`` on (y, z) when the caller already has them (e.g. from
+        :func:`imu_noise_id.core.kalman.profile_and_smooth`): the first E-step is then not repeated.
+    final_estep
+        ``False``: after the ``max_iter``-th M-step return the model without the E-step that would score it
+        (for a caller that evaluates it anyway, e.g. the quasi-Newton finish); its log-likelihood is then not
+        in ``loglik`` and a divergence of that last update is not detected here.
     """
     y, z = check_data(y, z, model.n_regressors)
     if max_iter < 0:
         raise InputError(f"max_iter must be >= 0, got {max_iter}")
     result = EMResult(model)
     data = DataSums.of(y, z)
-    s = estep(model, y, z, engine, data)
+    s = sums_from_stats(initial, data) if initial is not None else estep(model, y, z, engine, data)
     result.loglik.append(s.loglik)
-    for _ in range(max_iter):
+    for it in range(max_iter):
         new = mstep(result.model, s)
+        if not final_estep and it == max_iter - 1:
+            result.model = new
+            result.n_iter += 1
+            break
         try:
             s = estep(new, y, z, engine, data)
         except (InputError, np.linalg.LinAlgError):

@@ -26,8 +26,12 @@ from scipy.optimize import minimize
 from . import em, kalman
 from .components import RR, Component
 from .errors import InputError
-from .kalman.common import check_data
+from .kalman.common import ProfileResult, check_data
 from .statespace import StateSpace, with_components
+
+#: Metric information −∂²ℓ/∂ϑ_k² below which :func:`maximise` holds log-parameter k at its start: changing the
+#: parameter e-fold then changes ℓ by less than 5e-4 (the parameter sits at the ~0 boundary).
+FLAT_INFORMATION = 1e-3
 
 
 @dataclass(frozen=True)
@@ -79,6 +83,15 @@ def loglik_and_grad(
     step: float = 1e-6, data: em.DataSums | None = None,
 ) -> tuple[float, np.ndarray, StateSpace]:
     """Profile log-likelihood at ϑ, its exact gradient (Fisher's identity) and the model with GLS means."""
+    ll, grad, model, _ = _loglik_grad_profile(par, theta, base, y, z, step=step, data=data)
+    return ll, grad, model
+
+
+def _loglik_grad_profile(
+    par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *,
+    step: float = 1e-6, data: em.DataSums | None = None,
+) -> tuple[float, np.ndarray, StateSpace, ProfileResult]:
+    """:func:`loglik_and_grad` and the GLS profile itself (β̂, its covariance)."""
     prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
     sums = em.sums_from_stats(stats, data or em.DataSums.of(y, z))
     grad = np.empty(theta.size)
@@ -89,7 +102,7 @@ def loglik_and_grad(
         grad[k] = (em.q_function(par.to_model(tp, model), sums) - em.q_function(par.to_model(tm, model), sums)) / (
             2.0 * step
         )
-    return prof.loglik, grad, model
+    return prof.loglik, grad, model, prof
 
 
 @dataclass
@@ -102,6 +115,7 @@ class MLEResult:
     n_eval: int
     converged: bool
     message: str
+    profile: ProfileResult | None = None  # the GLS profile at ``model`` on the data searched, when kept
 
 
 def maximise(
@@ -123,6 +137,12 @@ def maximise(
     handful of iterations; out-of-range points then get a large objective instead of box bounds, and it stops
     when every |∂ℓ/∂η| < 0.05 (less than ~1e-3 of log-likelihood left to gain). Without it, when every
     |∂ℓ/∂ϑ| < ``grad_tol``.
+
+    Boundary (beyond the paper): a parameter whose metric information is below ``FLAT_INFORMATION`` (e.g. a
+    random walk the start already puts at ~0, where ℓ is flat in its log) is held at its start value and the
+    search runs over the others. Left free, its log would drift towards −∞ along a flat, numerically noisy
+    direction (the Fisher-identity gradient of a vanishing Q entry is a difference of nearly equal sums), and
+    L-BFGS would spend its iterations there without gaining likelihood.
     """
     from .statespace import to_components
 
@@ -134,14 +154,19 @@ def maximise(
             if name == "tau":
                 lo[k], hi[k] = math.log(tau_bounds[0]), math.log(tau_bounds[1])
                 theta0[k] = min(max(theta0[k], lo[k]), hi[k])
-    state = {"n": 0, "best": (-np.inf, None, None)}
+    state = {"n": 0, "best": (-np.inf, None, None, None)}
     y, z = check_data(y, z, base.n_regressors)
     data = em.DataSums.of(y, z)
     scale = max(float(np.sum(np.isfinite(y))), 1.0)
     if metric is not None:
-        w, v = np.linalg.eigh(0.5 * (metric + metric.T))
+        free = np.diag(metric) > FLAT_INFORMATION
+        if not np.any(free):
+            free[:] = True
+        sub = metric[np.ix_(free, free)]
+        w, v = np.linalg.eigh(0.5 * (sub + sub.T))
         w = np.maximum(w, 1e-6 * max(float(np.max(w)), 1e-300))
-        T = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ metric T = I
+        T = np.zeros((theta0.size, int(free.sum())))
+        T[free] = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ metric T = I on the free entries
     else:
         T = np.eye(theta0.size)
 
@@ -151,23 +176,23 @@ def maximise(
             return 1e10, -T.T @ np.where(theta < lo, -1.0, np.where(theta > hi, 1.0, 0.0))
         state["n"] += 1
         try:
-            ll, g, model = loglik_and_grad(par, theta, base, y, z, data=data)
+            ll, g, model, prof = _loglik_grad_profile(par, theta, base, y, z, data=data)
         except (InputError, np.linalg.LinAlgError, ValueError):
             return 1e10, np.zeros_like(eta)
         if not math.isfinite(ll):
             return 1e10, np.zeros_like(eta)
         if ll > state["best"][0]:
-            state["best"] = (ll, theta.copy(), model)
+            state["best"] = (ll, theta.copy(), model, prof)
         return -ll / scale, -(T.T @ g) / scale
 
     # With the metric, |∂ℓ/∂η| ≈ √(2 × the gain a Newton step would still bring): 0.05 ⇒ < ~1e-3 left.
     gtol = (0.05 if metric is not None else grad_tol) / scale
-    res = minimize(fun, np.zeros(theta0.size), jac=True, method="L-BFGS-B",
+    res = minimize(fun, np.zeros(T.shape[1]), jac=True, method="L-BFGS-B",
                    options={"maxiter": max_iter, "ftol": 1e-15, "gtol": gtol, "maxcor": 20})
-    ll, theta, model = state["best"]
+    ll, theta, model, prof = state["best"]
     if theta is None:
         raise InputError("the likelihood could not be evaluated at any parameter value tried")
-    return MLEResult(theta, model, ll, state["n"], bool(res.success), str(res.message))
+    return MLEResult(theta, model, ll, state["n"], bool(res.success), str(res.message), prof)
 
 
 def observed_information(

@@ -227,17 +227,24 @@ def _one_start(
     em_iter: int, em_tol: float, polish: bool, tau_bounds: tuple[float, float], metric: np.ndarray | None,
 ) -> tuple[mle.MLEResult, int]:
     model = ss.from_components(start, dt, ramp="measurement", intercept=True, exog_names=exog_names)
-    prof = kalman.loglik(model, y, z)
-    model = kalman.apply_beta(model, prof)
-    run = em.run_em(model, y, z, max_iter=em_iter, tol=em_tol)
+    _, model, stats = kalman.profile_and_smooth(model, y, z)  # GLS means and the first E-step in one pass
     par = mle.Parameterisation.of(start)
     if polish:
-        res = mle.maximise(par, run.model, y, z, tau_bounds=tau_bounds, metric=metric)
+        # The last EM iterate is scored by the quasi-Newton finish's first evaluation: no E-step for it here.
+        run = em.run_em(model, y, z, max_iter=em_iter, tol=em_tol, initial=stats, final_estep=False)
+        try:
+            res = mle.maximise(par, run.model, y, z, tau_bounds=tau_bounds, metric=metric)
+        except (InputError, np.linalg.LinAlgError):
+            # That unscored update may have left the filter's domain: redo EM with the check, which keeps the
+            # last good iterate (paper 000 §3.5(iii)).
+            run = em.run_em(model, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
+            res = mle.maximise(par, run.model, y, z, tau_bounds=tau_bounds, metric=metric)
     else:
+        run = em.run_em(model, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
         prof = kalman.loglik(run.model, y, z)
         fitted = kalman.apply_beta(run.model, prof)
         theta = par.to_theta(ss.to_components(fitted))
-        res = mle.MLEResult(theta, fitted, prof.loglik, 0, run.converged, "EM only")
+        res = mle.MLEResult(theta, fitted, prof.loglik, 0, run.converged, "EM only", prof)
     return res, run.n_iter
 
 
@@ -392,7 +399,8 @@ def fit_model(
     res, n_iter = best
     model_ss = res.model
     comps = ss.to_components(model_ss)
-    prof = kalman.loglik(model_ss, y, z)
+    # The search's own profile at the optimum unless it ran on the gap-filled record.
+    prof = res.profile if res.profile is not None and not fill_first else kalman.loglik(model_ss, y, z)
     se: dict[str, float] = {}
     ci: dict[str, tuple[float, float]] = {}
     exog_coef: dict[str, dict] = {}
