@@ -317,6 +317,19 @@ class OnlineIdentifier:
                 self._event(f"{what}_frame", f"{what} frame_id changed from {stats.frame_id!r} to {frame_id!r}")
             stats.frame_id = frame_id
 
+    def _receive(self, stats: InputStats, frame_id: str, wall_time: float | None, what: str) -> None:
+        """Book-keeping shared by every input message: counters, arrival (steady clock) and frame changes."""
+        stats.received += 1
+        stats.window_received += 1
+        stats.last_wall = wall_time
+        self._note_frame(stats, frame_id, what)
+
+    def _usable_stamp(self, checker: StampChecker, t: float, what: str) -> str | None:
+        """The stamp verdict of an input message, or None when the stamp makes it unusable (bad, duplicated,
+        backward): counted and reported by :meth:`_stamp_verdict`."""
+        verdict = self._stamp_verdict(checker, t, what)
+        return None if verdict in ("bad_stamp", "duplicate", "backward") else verdict
+
     def _count(self, key: str) -> None:
         self._window_stamp_counts[key] = self._window_stamp_counts.get(key, 0) + 1
 
@@ -345,19 +358,15 @@ class OnlineIdentifier:
         :meth:`pop_events` and the diagnostics).
         """
         stats = self.imu_stats
-        stats.received += 1
-        stats.window_received += 1
-        stats.last_wall = wall_time
-        if stats.frame_id != frame_id:
-            self._note_frame(stats, frame_id, "imu")
+        self._receive(stats, frame_id, wall_time, "imu")
         sample = np.array((*gyro, *accel), dtype=float)
         if not np.isfinite(sample).all():
             stats.rejected_values += 1
             self._count("imu_nonfinite")
             self._event("imu_nonfinite", f"imu: message with non-finite angular rate or acceleration at t = {t!r}")
             return None
-        verdict = self._stamp_verdict(self.imu_stamps, t, "imu")
-        if verdict in ("bad_stamp", "duplicate", "backward"):
+        verdict = self._usable_stamp(self.imu_stamps, t, "imu")
+        if verdict is None:
             return None
         if verdict == "restart":
             self.restarts += 1
@@ -445,19 +454,15 @@ class OnlineIdentifier:
     ) -> bool:
         """One odometry message (pose in the odom frame, twist in the child frame); False when rejected."""
         stats = self.odom_stats
-        stats.received += 1
-        stats.window_received += 1
-        stats.last_wall = wall_time
-        if stats.frame_id != frame_id:
-            self._note_frame(stats, frame_id, "odom")
+        self._receive(stats, frame_id, wall_time, "odom")
         v = np.array((*linear_velocity, *angular_velocity), dtype=float)
         if not np.isfinite(v).all():
             stats.rejected_values += 1
             self._count("odom_nonfinite")
             self._event("odom_nonfinite", f"odom: message with non-finite twist at t = {t!r}")
             return False
-        verdict = self._stamp_verdict(self.odom_stamps, t, "odom")
-        if verdict in ("bad_stamp", "duplicate", "backward"):
+        verdict = self._usable_stamp(self.odom_stamps, t, "odom")
+        if verdict is None:
             return False
         stats.accepted += 1
         if verdict == "restart":
@@ -523,15 +528,12 @@ class OnlineIdentifier:
                             wall_time: float | None = None) -> bool:
         """One temperature message [°C]; False when it was rejected."""
         stats = self.temp_stats
-        stats.received += 1
-        stats.window_received += 1
-        stats.last_wall = wall_time
-        self._note_frame(stats, frame_id, "temperature")
+        self._receive(stats, frame_id, wall_time, "temperature")
         if not math.isfinite(celsius):
             stats.rejected_values += 1
             self._event("temperature_nonfinite", f"temperature: non-finite value at t = {t!r}")
             return False
-        if self._stamp_verdict(self.temp_stamps, t, "temperature") in ("bad_stamp", "duplicate", "backward"):
+        if self._usable_stamp(self.temp_stamps, t, "temperature") is None:
             return False
         stats.accepted += 1
         self.temperature = celsius
