@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.components import RW, WN
+from imu_noise_id.core.noise.components import RW, WN
 
 DT = 0.01
 SERIES = 400

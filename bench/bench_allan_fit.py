@@ -3,7 +3,7 @@
 Run: ``nice -n 10 python bench/bench_allan_fit.py [--runs R]`` (output in docs/results/bench_allan_fit.txt).
 Each run simulates 1 h at 200 Hz of WN + RW on six axes (gyro N = 1.7e-4 rad/s/√Hz, K = 2e-5 rad/s²/√Hz;
 accel N = 2e-3 m/s²/√Hz, K = 3e-4 m/s³/√Hz), computes the Allan variance and reads N and K with
-:func:`imu_noise_id.core.allan_fit.fit_axis_slopes`. Prints the relative errors (rms, max), how often
+:func:`imu_noise_id.core.allan.slopes.fit_axis_slopes`. Prints the relative errors (rms, max), how often
 the 95 % intervals hold the truth, and how often a parameter was only an upper bound.
 """
 
@@ -14,10 +14,10 @@ import argparse
 import numpy as np
 
 from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.allan_fit import fit_slopes
+from imu_noise_id.core.allan.slopes import fit_slopes
 from imu_noise_id.core.axes import AXES, GYRO_AXES
-from imu_noise_id.core.components import RW, WN
-from imu_noise_id.core.simulate import simulate_static_imu
+from imu_noise_id.core.noise.components import RW, WN
+from imu_noise_id.core.simulation.static import simulate_static_imu
 
 TRUTH = {a: (1.7e-4, 2e-5) if a in GYRO_AXES else (2e-3, 3e-4) for a in AXES}
 

@@ -31,8 +31,8 @@ from imu_noise_id.bag.fastdecode import FlatDecoder  # noqa: E402
 from imu_noise_id.bag.mcapfast import fast_mcap_messages  # noqa: E402
 from imu_noise_id.bag.reader import BATCH, IMU_TYPE, read_bag  # noqa: E402
 from imu_noise_id.bag.writer import write_bag  # noqa: E402
-from imu_noise_id.core.modelspec import parse_imu_model  # noqa: E402
-from imu_noise_id.core.simulate import simulate_static_imu  # noqa: E402
+from imu_noise_id.core.noise.modelspec import parse_imu_model  # noqa: E402
+from imu_noise_id.core.simulation.static import simulate_static_imu  # noqa: E402
 
 SPEC = "gyro: WN(1e-3)+RW(1e-5); accel: WN(2e-3)+RW(4e-4)"
 IMU_OUTPUTS = {

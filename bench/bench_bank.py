@@ -26,11 +26,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from imu_noise_id.cli.criteria import criteria_document  # noqa: E402
-from imu_noise_id.core.components import GM, RW, WN, simulate_sum  # noqa: E402
 from imu_noise_id.core.hypotheses import Hypothesis, HypothesisBank, HypothesisSet, ParameterPrior  # noqa: E402
+from imu_noise_id.core.hypotheses.axis import AxisIdentifier  # noqa: E402
+from imu_noise_id.core.hypotheses.config import hypothesis_set_factory  # noqa: E402
 from imu_noise_id.core.hypotheses.criteria import paper_case, run_criteria  # noqa: E402
-from imu_noise_id.pipelines.hypotheses_config import hypothesis_set_factory, read_config  # noqa: E402
-from imu_noise_id.pipelines.hypotheses_online import AxisIdentifier  # noqa: E402
+from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum  # noqa: E402
+from imu_noise_id.resources import read_hypotheses_file  # noqa: E402
 
 RESULTS = ROOT / "docs" / "results"
 FIGURES = ROOT / "docs" / "figures"
@@ -69,7 +70,7 @@ def throughput(dt: float) -> None:
     print(f"streaming step(), 2 x 256 filters (snapshot every call): {(time.perf_counter() - t0) / 3000 * 1e6:.0f} "
           "µs/step")
     for sensor in ("gyro", "accel"):
-        make, warm = hypothesis_set_factory(*read_config(None)[:1], 0.01, sensor)
+        make, warm = hypothesis_set_factory(*read_hypotheses_file(None)[:1], 0.01, sensor)
         ident = AxisIdentifier(make, warm, 0.01)
         noise = 1e-3 * np.random.default_rng(2).standard_normal(6000)
         times = np.empty(noise.size)
@@ -204,7 +205,7 @@ def wn_grid_effect(trials: int, dt: float, duration: float) -> None:
 
 def default_set_examples() -> None:
     """The packaged default set on simulated gyro axes WN(2e-3)+RW(1e-4) at 100 Hz: Pr(WN+RW) vs record length."""
-    data, source = read_config(None)
+    data, source = read_hypotheses_file(None)
     make, warm = hypothesis_set_factory(data, 0.01, "gyro", source)
     print("\ndefault hypothesis set, simulated gyro WN(2e-3)+RW(1e-4) at 100 Hz, three seeds:")
     for duration in (300, 1500):

@@ -19,7 +19,7 @@ import numpy as np
 from imu_noise_id.core.axes import ImuSeries, OdometrySeries
 from imu_noise_id.core.cmkf import rotation as rot
 from imu_noise_id.core.cmkf.robot import RobotCmkf, RobotCmkfConfig
-from imu_noise_id.core.cmkf.robot_sim import simulate_robot
+from imu_noise_id.core.simulation.robot import simulate_robot
 from imu_noise_id.pipelines.cmkf_replay import replay
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from imu_noise_id.core.cmkf.robot import RobotCmkf, RobotCmkfConfig
-from imu_noise_id.core.cmkf.robot_sim import replay_arrays, simulate_robot
+from imu_noise_id.core.simulation.robot import replay_arrays, simulate_robot
 
 
 def main() -> None:

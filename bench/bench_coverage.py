@@ -14,8 +14,8 @@ import time
 
 import numpy as np
 
-from imu_noise_id.core.components import GM, QN, RR, RW, WN, simulate_sum
-from imu_noise_id.pipelines.identification import fit_model, parameter_labels
+from imu_noise_id.core.estimation.fit import fit_model, parameter_labels
+from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
 
 MIXES = {
     "WN+RW+RR": ([WN(0.2), RW(0.01), RR(2e-4)], 4000, 1.0),

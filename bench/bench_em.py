@@ -18,9 +18,9 @@ import warnings
 import numpy as np
 
 from imu_noise_id.core import kalman
-from imu_noise_id.core import statespace as ss
-from imu_noise_id.core.components import GM, RR, RW, WN, simulate_sum
-from imu_noise_id.pipelines.identification import fit_model
+from imu_noise_id.core.estimation.fit import fit_model
+from imu_noise_id.core.kalman import statespace as ss
+from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 
 DT = 0.01
 TRUTH = [WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-5), RR(1e-6)]

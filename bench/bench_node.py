@@ -23,7 +23,10 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from imu_noise_id.demo_online import config_path, ros_environment, stop, write_robot_bag  # noqa: E402
+from imu_noise_id.demo_online import ros_environment, stop, write_robot_bag  # noqa: E402
+from imu_noise_id.resources import NODE_PARAMETERS, packaged_config  # noqa: E402
+
+NODE_CONFIG = packaged_config(NODE_PARAMETERS)
 
 
 def cpu_seconds(pid: int) -> float:
@@ -40,7 +43,7 @@ def main() -> int:
 
     import numpy as np
 
-    from imu_noise_id.core.simulate_stop_and_go import simulate_stop_and_go
+    from imu_noise_id.core.simulation.stop_and_go import simulate_stop_and_go
 
     work = Path(tempfile.mkdtemp(prefix="bench_node_"))
     third = args.duration / 3
@@ -50,7 +53,7 @@ def main() -> int:
     env = ros_environment()
     stats = work / "stats.json"
     node = subprocess.Popen(
-        [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(config_path()),
+        [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(NODE_CONFIG),
          "-r", "imu:=/imu/data", "-p", f"stats_file:={stats}", "-p", f"executor:={args.executor}"],
         env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
     )

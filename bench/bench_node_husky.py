@@ -22,7 +22,10 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from imu_noise_id.core.cmkf import rotation as rot  # noqa: E402
-from imu_noise_id.demo_online import config_path, ros_environment, stop  # noqa: E402
+from imu_noise_id.demo_online import ros_environment, stop  # noqa: E402
+from imu_noise_id.resources import NODE_PARAMETERS, packaged_config  # noqa: E402
+
+NODE_CONFIG = packaged_config(NODE_PARAMETERS)
 
 BAG = REPO.parent / "shared" / "data" / "husky_robot_localization" / "husky_test1_ros2"
 
@@ -37,7 +40,7 @@ def main() -> int:
     env = {**ros_environment(), "ROS_DOMAIN_ID": str(random.randint(10, 99))}
     q = rot.from_ypr(-math.pi / 2, 0.0, math.pi / 2)  # imu_link in base_link: gravity on +y of the IMU
     node = subprocess.Popen(
-        [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(config_path()),
+        [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(NODE_CONFIG),
          "-r", "imu:=/imu/data", "-r", "odom:=/husky_velocity_controller/odom",
          "-p", f"cmkf.imu_rotation_xyzw:=[{q[0]},{q[1]},{q[2]},{q[3]}]"],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,

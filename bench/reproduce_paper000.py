@@ -30,11 +30,12 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import lfilter
 
-from imu_noise_id.core import em, kalman, mle
-from imu_noise_id.core import statespace as ss
-from imu_noise_id.core.components import GM, RR, RW, WN
+from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.pipelines.identification import fit_model
+from imu_noise_id.core.estimation import em, mle
+from imu_noise_id.core.estimation.fit import fit_model
+from imu_noise_id.core.kalman import statespace as ss
+from imu_noise_id.core.noise.components import GM, RR, RW, WN
 
 N = 6000
 

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from imu_noise_id.core import avfit
-from imu_noise_id.pipelines.identification import fit_model, select_model, simulate_allan_band
+from imu_noise_id.core.estimation import starts as avfit
+from imu_noise_id.core.estimation.fit import fit_model, select_model, simulate_allan_band
 from imu_noise_id.report.plots_model import save_allan_overlay
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "adis16405_static" / "adis16405_run1.npz"

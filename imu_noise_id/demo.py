@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .core.axes import AXES, GYRO_AXES
-from .core.components import RW, WN, Component
+from .core.noise.components import RW, WN, Component
 
 #: The simulated IMU (a typical MEMS unit), continuous-time densities in SI units.
 GYRO_NOISE_DENSITY = 1.7e-4  # rad/s/√Hz
@@ -65,7 +65,7 @@ def offline_part(ctx: DemoContext) -> None:
 
     from .bag.writer import write_bag
     from .cli import main as cli_main
-    from .core.simulate import simulate_static_imu
+    from .core.simulation.static import simulate_static_imu
 
     print(f"== offline: simulate {ctx.duration_s:g} s of a static IMU at {ctx.rate_hz:g} Hz, then analyze ==")
     t0 = time.perf_counter()

@@ -2,7 +2,7 @@
 
 ``python -m imu_noise_id.demo_online [--out DIR] [--rate X]`` (``make demo`` calls :func:`run_demo`):
 
-1. simulate a robot that stands, drives and stands again (:func:`~imu_noise_id.core.simulate_stop_and_go.
+1. simulate a robot that stands, drives and stands again (:func:`~imu_noise_id.core.simulation.stop_and_go.
    simulate_stop_and_go`; known biases and noise densities) and write it as a rosbag2 bag;
 2. start the node as its own process with ``config/imu_noise_id.yaml``;
 3. play the bag (``imu-noise-id play``) and show the monitor view while the estimates converge;
@@ -26,8 +26,9 @@ from pathlib import Path
 import numpy as np
 
 from .core.axes import AXES, ImuSeries, OdometrySeries
-from .core.cmkf.robot_sim import RobotRun
-from .core.simulate_stop_and_go import simulate_stop_and_go
+from .core.simulation.robot import RobotRun
+from .core.simulation.stop_and_go import simulate_stop_and_go
+from .resources import NODE_PARAMETERS, packaged_config
 
 #: The demo robot's truth (also used by the end-to-end tests).
 DEMO_TRUTH = {
@@ -36,16 +37,6 @@ DEMO_TRUTH = {
     "gyro_noise_density": 1e-3,
     "accel_noise_density": 1e-2,
 }
-
-
-def config_path() -> Path:
-    """``config/imu_noise_id.yaml`` of the source tree, else of the ament install (share/imu_noise_id/config)."""
-    here = Path(__file__).resolve().parents[1] / "config" / "imu_noise_id.yaml"
-    if here.is_file():
-        return here
-    from ament_index_python.packages import get_package_share_directory
-
-    return Path(get_package_share_directory("imu_noise_id")) / "config" / "imu_noise_id.yaml"
 
 
 def ros_environment() -> dict[str, str]:
@@ -156,7 +147,7 @@ def watch_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> obj
     print(f"simulated robot: stand 20 s, drive 25 s, stand 20 s; IMU 200 Hz, odometry 50 Hz → {bag}")
     env = ros_environment()
     os.environ.update({k: env[k] for k in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOG_DIR")})
-    node = subprocess.Popen(node_command(config_path()), env=env)
+    node = subprocess.Popen(node_command(packaged_config(NODE_PARAMETERS)), env=env)
     player = None
     rclpy.init()
     try:

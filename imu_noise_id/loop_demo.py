@@ -21,8 +21,8 @@ DEMO_AXES = ("gyro_x", "gyro_z", "accel_x")
 def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, rate_hz: float = 100.0) -> Path:
     """Write the demo bag: WN+RW on every axis, plus GM(τ = 2 s) on gyro_z and a 0.5 Hz sine on accel_x."""
     from .bag.writer import write_bag
-    from .core.components import GM, RW, WN
-    from .core.simulate import simulate_static_imu
+    from .core.noise.components import GM, RW, WN
+    from .core.simulation.static import simulate_static_imu
 
     model = {a: [WN(1e-3), RW(2e-5)] for a in ("gyro_x", "gyro_y", "gyro_z")}
     model |= {a: [WN(2e-3), RW(4e-5)] for a in ("accel_x", "accel_y", "accel_z")}

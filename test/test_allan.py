@@ -11,8 +11,8 @@ import pytest
 from allantools import ci as at_ci
 
 from imu_noise_id.core import allan
-from imu_noise_id.core.components import RW, WN
 from imu_noise_id.core.errors import InputError
+from imu_noise_id.core.noise.components import RW, WN
 
 ALLANTOOLS = {"allan": allantools.oadev, "hadamard": allantools.ohdev, "total": allantools.totdev,
               "modified": allantools.mdev}

@@ -7,9 +7,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from imu_noise_id.core import allan, allan_fit
-from imu_noise_id.core.components import QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core import allan
+from imu_noise_id.core.allan import slopes as allan_fit
 from imu_noise_id.core.errors import InputError
+from imu_noise_id.core.noise.components import QN, RR, RW, WN, simulate_sum
 
 DT = 0.01
 

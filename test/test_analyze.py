@@ -11,9 +11,9 @@ import yaml
 from imu_noise_id.cli import main
 from imu_noise_id.cli.progress import TextProgress
 from imu_noise_id.core.axes import AXES, GYRO_AXES, ImuSeries
-from imu_noise_id.core.components import RW, WN
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.simulate import simulate_static_imu
+from imu_noise_id.core.noise.components import RW, WN
+from imu_noise_id.core.simulation.static import simulate_static_imu
 from imu_noise_id.pipelines.analysis import NotStaticError, analyze_static, kalibr_parameters
 from imu_noise_id.report.outputs import summary_table, write_static_outputs
 

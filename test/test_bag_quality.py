@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.axes import ImuSeries
-from imu_noise_id.core.modelspec import parse_imu_model
+from imu_noise_id.core.noise.modelspec import parse_imu_model
 from imu_noise_id.core.quality import QualityError, repair_time_series, static_check
-from imu_noise_id.core.simulate import simulate_static_imu
+from imu_noise_id.core.simulation.static import simulate_static_imu
 
 
 def _series(n: int = 1000, dt: float = 0.01, t0: float = 100.0) -> tuple[np.ndarray, np.ndarray]:

@@ -19,8 +19,8 @@ from imu_noise_id.bag.reader import (
 )
 from imu_noise_id.bag.writer import encode_cdr, write_bag
 from imu_noise_id.core.axes import ImuSeries, OdometrySeries, ScalarSeries
-from imu_noise_id.core.modelspec import parse_imu_model
-from imu_noise_id.core.simulate import simulate_static_imu
+from imu_noise_id.core.noise.modelspec import parse_imu_model
+from imu_noise_id.core.simulation.static import simulate_static_imu
 
 HUSKY = "husky_robot_localization"
 

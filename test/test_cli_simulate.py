@@ -7,8 +7,8 @@ import pytest
 
 from imu_noise_id.bag.reader import list_topics, read_imu
 from imu_noise_id.cli import main
-from imu_noise_id.core.modelspec import parse_imu_model
-from imu_noise_id.core.simulate import simulate_static_imu
+from imu_noise_id.core.noise.modelspec import parse_imu_model
+from imu_noise_id.core.simulation.static import simulate_static_imu
 
 SPEC = "gyro: WN(1e-3)+RW(1e-5); accel: WN(2e-3)+RW(4e-4)"
 

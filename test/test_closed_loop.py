@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from imu_noise_id.core.components import GM, RR, RW, WN, simulate_sum
 from imu_noise_id.core.errors import InputError
+from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 from imu_noise_id.pipelines.closed_loop import align_temperature, run_closed_loop
 
 DT = 0.01

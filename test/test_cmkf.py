@@ -15,8 +15,8 @@ from imu_noise_id.core.cmkf.paper import (
     turntable_monte_carlo,
 )
 from imu_noise_id.core.cmkf.robot import RobotCmkf, RobotCmkfConfig
-from imu_noise_id.core.cmkf.robot_sim import replay_arrays, simulate_robot
 from imu_noise_id.core.cmkf.stacked import cov_z_model
+from imu_noise_id.core.simulation.robot import replay_arrays, simulate_robot
 
 G = 9.80665
 

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from imu_noise_id.core import units
-from imu_noise_id.core.components import GM, QN, RR, RW, WN, simulate_sum, total_allan_variance
-from imu_noise_id.core.modelspec import (
+from imu_noise_id.core.noise import units
+from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum, total_allan_variance
+from imu_noise_id.core.noise.modelspec import (
     ModelSpecError,
     model_name,
     parse_imu_model,

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.allan import allan_variance, identify_alpha
-from imu_noise_id.core.components import GM, QN, RR, RW, WN, simulate_sum, total_allan_variance
 from imu_noise_id.core.diagnostics import detectors as det
 from imu_noise_id.core.diagnostics.monitor import InnovationMonitor
 from imu_noise_id.core.diagnostics.residuals import (
@@ -22,6 +21,7 @@ from imu_noise_id.core.diagnostics.residuals import (
     spectral_peaks,
 )
 from imu_noise_id.core.diagnostics.whitening import WhiteningFilter
+from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum, total_allan_variance
 
 DT = 0.01
 WN_RW = [WN(1e-3), RW(2e-5)]  # per-sample σ = 0.01

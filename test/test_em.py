@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imu_noise_id.core import em, kalman, mle
-from imu_noise_id.core import statespace as ss
-from imu_noise_id.core.components import GM, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.pipelines.identification import fit_model, select_model
+from imu_noise_id.core.estimation import em, mle
+from imu_noise_id.core.estimation.fit import fit_model, select_model
+from imu_noise_id.core.kalman import statespace as ss
+from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
 
 
 def _paper_43_data(n=600, seed=1):
@@ -104,7 +105,7 @@ def test_parameters_recovered_within_their_intervals(spec, truth, n, dt):
     y = simulate_sum(truth, n, dt, np.random.default_rng(7)) + 0.2
     fit = fit_model(y, dt, spec)
     assert fit.model == spec
-    from imu_noise_id.pipelines.identification import parameter_labels
+    from imu_noise_id.core.estimation.fit import parameter_labels
 
     for i, p, lab in parameter_labels(truth):
         lo, hi = fit.ci95[lab]

@@ -6,8 +6,8 @@ import numpy as np
 import yaml
 
 from imu_noise_id.cli import main
-from imu_noise_id.core.modelspec import parse_imu_model
-from imu_noise_id.core.simulate import simulate_static_imu
+from imu_noise_id.core.noise.modelspec import parse_imu_model
+from imu_noise_id.core.simulation.static import simulate_static_imu
 
 
 def _npz(tmp_path):
@@ -45,8 +45,8 @@ def test_fit_errors_exit_2(tmp_path, capsys):
 
 
 def test_allan_band_and_overlay_figure(tmp_path):
-    from imu_noise_id.core.components import GM, WN, simulate_sum
-    from imu_noise_id.pipelines.identification import fit_model, kalibr_values, simulate_allan_band
+    from imu_noise_id.core.estimation.fit import fit_model, kalibr_values, simulate_allan_band
+    from imu_noise_id.core.noise.components import GM, WN, simulate_sum
     from imu_noise_id.report.plots_model import save_allan_overlay
 
     y = simulate_sum([WN(0.01), GM(tau=1.0, sigma=0.02)], 4000, 0.01, np.random.default_rng(2))
@@ -57,7 +57,7 @@ def test_allan_band_and_overlay_figure(tmp_path):
     assert band.shape == (20, tau.size)
     assert np.all(np.abs(np.median(band[:, :5], axis=0) / theory[:5] - 1) < 0.15)
     assert kalibr_values(fit) == {"noise_density": fit.components[0].params()["noise_density"], "random_walk": None}
-    from imu_noise_id.core.avfit import empirical_allan
+    from imu_noise_id.core.estimation.starts import empirical_allan
 
     av = empirical_allan(y, 0.01)
     out = save_allan_overlay(tmp_path / "f.png", [{"tau": av.tau, "avar": av.avar, "fit": fit,

@@ -24,7 +24,7 @@ REL = 2e-5
 #: Absolute tolerance for numbers that are ~0 (a rounded 0 against 1e-17).
 ABS = 1e-12
 #: Keys whose values depend on where and how fast the test runs (paths, timings), not on the computation.
-VOLATILE = {"source", "bag", "imu_samples_per_second", "replay_seconds"}
+VOLATILE = {"source", "source_hypotheses", "bag", "imu_samples_per_second", "replay_seconds"}
 
 STATIC_MODEL = "gyro: WN(1e-3)+RW(2e-5); accel: WN(2e-3)+GM(tau=20, sigma=2e-3)+RW(4e-5)"
 
@@ -32,7 +32,7 @@ STATIC_MODEL = "gyro: WN(1e-3)+RW(2e-5); accel: WN(2e-3)+GM(tau=20, sigma=2e-3)+
 def _robot_bag(path: Path) -> Path:
     from imu_noise_id.bag.writer import write_bag
     from imu_noise_id.core.axes import ImuSeries, OdometrySeries
-    from imu_noise_id.core.cmkf.robot_sim import simulate_robot
+    from imu_noise_id.core.simulation.robot import simulate_robot
 
     run = simulate_robot(60.0, np.random.default_rng(11))
     imu = ImuSeries(t=run.imu_t + 100.0, gyro=run.gyro, accel=run.accel)

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.axes import ImuSeries
-from imu_noise_id.core.components import GM, RW, WN, simulate_sum
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.hypotheses import (
     Hypothesis,
@@ -18,15 +17,16 @@ from imu_noise_id.core.hypotheses import (
     ParameterPrior,
     averaged_dynamic_block,
 )
-from imu_noise_id.core.hypotheses.kernel import FilterBank
-from imu_noise_id.core.hypotheses.model import build_bank_model
-from imu_noise_id.pipelines.hypotheses_config import (
+from imu_noise_id.core.hypotheses.axis import AxisIdentifier
+from imu_noise_id.core.hypotheses.config import (
     NeedsDataError,
     hypothesis_set_factory,
     hypothesis_set_from_dict,
     white_noise_estimate,
 )
-from imu_noise_id.pipelines.hypotheses_online import AxisIdentifier
+from imu_noise_id.core.hypotheses.kernel import FilterBank
+from imu_noise_id.core.hypotheses.model import build_bank_model
+from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 
 
 def rw_gm_set(dt: float = 1.0, block: int = 1, wn: float | tuple[float, float] | None = 0.5,
@@ -286,12 +286,13 @@ def test_yaml_errors_are_clear(mutate, message):
 
 
 def test_default_config_loads_for_both_sensors():
-    from imu_noise_id.pipelines.hypotheses_config import load_hypothesis_set
+    from imu_noise_id.resources import read_hypotheses_file
 
+    data, source = read_hypotheses_file(None)
     for sensor in ("gyro", "accel"):
         with pytest.raises(NeedsDataError):
-            load_hypothesis_set(None, 0.01, sensor)
-        hset, _ = load_hypothesis_set(None, 0.01, sensor, wn_estimate=1e-3)
+            hypothesis_set_from_dict(data, 0.01, sensor, source)
+        hset, _ = hypothesis_set_from_dict(data, 0.01, sensor, source, wn_estimate=1e-3)
         assert len(hset.hypotheses) == 2
         assert HypothesisBank(hset).n_filters == 512
         wn = hset.hypotheses[0].priors[0]
@@ -430,8 +431,8 @@ def test_grid_refinement_zooms_on_the_posterior():
     # passes must reproduce the posterior of a brute-force 40 × 40 grid (an independent, 100× larger
     # computation): mean within 0.5 and std within 35 % of the fine grid's std, same decision; the grids stay
     # inside the prior and their weights are the prior mass of the refined box.
+    from imu_noise_id.core.hypotheses.axis import identify_offline
     from imu_noise_id.core.hypotheses.model import refine_hypothesis_set
-    from imu_noise_id.pipelines.hypotheses_online import identify_offline
 
     y = simulate_sum([GM(300.0, 1.0), WN(0.5)], 6000, 1.0, np.random.default_rng(13))
     coarse = rw_gm_set(n_rw=8, n_gm=4)

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core import kalman
-from imu_noise_id.core import statespace as ss
-from imu_noise_id.core.components import GM, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.errors import InputError
+from imu_noise_id.core.kalman import statespace as ss
+from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
 
 MIXES = {
     "WN+RW+RR": [WN(0.2), RW(0.02), RR(1e-3)],

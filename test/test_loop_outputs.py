@@ -10,7 +10,7 @@ import yaml
 
 from imu_noise_id.cli import main
 from imu_noise_id.core.axes import ImuSeries
-from imu_noise_id.core.components import RW, WN, simulate_sum
+from imu_noise_id.core.noise.components import RW, WN, simulate_sum
 from imu_noise_id.pipelines.closed_loop import block_average, run_closed_loop
 from imu_noise_id.report.html import write_loop_report
 from imu_noise_id.report.loop_yaml import add_loop_to_model_yaml

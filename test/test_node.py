@@ -30,13 +30,15 @@ from std_msgs.msg import Float64MultiArray  # noqa: E402
 
 from imu_noise_id.demo_online import (  # noqa: E402
     DEMO_TRUTH,
-    config_path,
     node_command,
     simulate_demo_run,
     stop,
     write_robot_bag,
 )
 from imu_noise_id.node import parse_labelled  # noqa: E402
+from imu_noise_id.resources import NODE_PARAMETERS, packaged_config  # noqa: E402
+
+NODE_CONFIG = packaged_config(NODE_PARAMETERS)
 
 pytestmark = pytest.mark.ros
 NODE = "/imu_noise_id_node"
@@ -103,7 +105,7 @@ def session(tmp_path_factory, domain_env, ros_context):
     run = simulate_demo_run(stand_before=15.0, drive=10.0, stand_after=10.0)
     bag = write_robot_bag(run, work / "robot_bag")
     log = open(work / "node.log", "w")  # noqa: SIM115 - closed in the teardown
-    node = subprocess.Popen(node_command(config_path()), env=ros_env, stdout=log, stderr=subprocess.STDOUT)
+    node = subprocess.Popen(node_command(NODE_CONFIG), env=ros_env, stdout=log, stderr=subprocess.STDOUT)
     observer = Observer()
     try:
         assert observer.spin_until(lambda: observer.node.count_publishers(f"{NODE}/imu_corrected") > 0, 30.0), \
@@ -277,7 +279,7 @@ def test_the_node_log_holds_no_tracebacks(session):
     ("hypotheses.file:=/nonexistent/hypotheses.yaml", "/nonexistent/hypotheses.yaml"),
 ])
 def test_a_bad_parameter_stops_the_start_with_a_message_naming_it(domain_env, override, fragment):
-    proc = subprocess.run([*node_command(config_path()), "-p", override], env=domain_env, capture_output=True,
+    proc = subprocess.run([*node_command(NODE_CONFIG), "-p", override], env=domain_env, capture_output=True,
                           text=True, timeout=60, check=False)
     assert proc.returncode == 2
     assert fragment in proc.stderr

@@ -19,7 +19,10 @@ rclpy = pytest.importorskip("rclpy")
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 
 from imu_noise_id.core.cmkf import rotation as rot  # noqa: E402
-from imu_noise_id.demo_online import config_path, stop  # noqa: E402
+from imu_noise_id.demo_online import stop  # noqa: E402
+from imu_noise_id.resources import NODE_PARAMETERS, packaged_config  # noqa: E402
+
+NODE_CONFIG = packaged_config(NODE_PARAMETERS)
 
 pytestmark = pytest.mark.ros
 NODE = "husky_imu_noise_id"
@@ -35,7 +38,7 @@ def test_husky_bag_replays_clean_through_the_node(shared_data, ros_env, tmp_path
     log = tmp_path / "node.log"
     with open(log, "w") as out:
         node = subprocess.Popen(
-            [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(config_path()),
+            [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(NODE_CONFIG),
              "-r", f"__node:={NODE}", "-r", "imu:=/husky/imu", "-r", "odom:=/husky/odom",
              "-p", f"cmkf.imu_rotation_xyzw:=[{q[0]},{q[1]},{q[2]},{q[3]}]"],
             env=env, stdout=out, stderr=subprocess.STDOUT,

@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.simulate_stop_and_go import simulate_stop_and_go
+from imu_noise_id.core.simulation.stop_and_go import simulate_stop_and_go
 from imu_noise_id.pipelines.online import ERROR, OK, STALE, WARN, OnlineIdentifier
 from imu_noise_id.pipelines.online_blocks import AllanTau0NoiseDensity, StampChecker, StationarityDetector
 from imu_noise_id.pipelines.online_config import PARAMETERS, OnlineConfig
@@ -32,7 +32,7 @@ def _flatten(tree: dict, prefix: str = "") -> dict:
 
 
 def test_yaml_defaults_match_the_declared_parameters():
-    data = yaml.safe_load((REPO_ROOT / "config" / "imu_noise_id.yaml").read_text())
+    data = yaml.safe_load((REPO_ROOT / "imu_noise_id" / "config" / "imu_noise_id.yaml").read_text())
     values = _flatten(data["imu_noise_id_node"]["ros__parameters"])
     assert sorted(values) == sorted(p.name for p in PARAMETERS)
     for p in PARAMETERS:

@@ -13,7 +13,7 @@ import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = "imu_noise_id"
-PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg", "resource", PACKAGE, "config")
+PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg", "resource", PACKAGE)
 
 
 @pytest.fixture(scope="module")
@@ -74,6 +74,6 @@ def test_resource_files_are_installed(built_workspace):
     share = prefix / "share" / PACKAGE
     assert (share / "package.xml").read_text() == (REPO_ROOT / "package.xml").read_text()
     assert (prefix / "share" / "ament_index" / "resource_index" / "packages" / PACKAGE).exists()
-    configs = sorted(p.name for p in (REPO_ROOT / "config").glob("*.yaml")) if (REPO_ROOT / "config").is_dir() else []
-    if configs:
-        assert sorted(p.name for p in (share / "config").glob("*.yaml")) == configs
+    configs = sorted(p.name for p in (REPO_ROOT / PACKAGE / "config").glob("*.yaml"))
+    assert configs == ["hypotheses_default.yaml", "imu_noise_id.yaml"]
+    assert sorted(p.name for p in (share / "config").glob("*.yaml")) == configs

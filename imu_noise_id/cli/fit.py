@@ -80,7 +80,7 @@ def sampling_period(t) -> float:
 def fit_axes(series, model: str, axes: list[str], **kwargs):
     """Fit ``model`` (or select with ``'auto'``) on each axis of an ImuSeries; returns (fits, selections)."""
     from ..core.errors import InputError
-    from ..pipelines.identification import fit_model, select_model
+    from ..core.estimation.fit import fit_model, select_model
 
     fits, selections = {}, {}
     dt = sampling_period(series.t)

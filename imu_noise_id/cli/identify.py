@@ -42,13 +42,14 @@ def register(subparsers: Any) -> None:
 
 def identify_series(series: ImuSeries, axes: list[str], hypotheses: str | None, refine: int = 0) -> dict[str, Any]:
     """Run the bank on each axis of ``series`` (``refine`` grid-refinement passes); per-axis results."""
-    from ..pipelines.hypotheses_config import hypothesis_set_factory, read_config
-    from ..pipelines.hypotheses_online import identify_offline
+    from ..core.hypotheses.axis import identify_offline
+    from ..core.hypotheses.config import hypothesis_set_factory
+    from ..resources import read_hypotheses_file
 
     if len(series) < 2:
         raise InputError(f"{series.topic or 'the IMU series'} has {len(series)} sample(s): need a recording")
     dt = series.dt
-    data, source = read_config(hypotheses)
+    data, source = read_hypotheses_file(hypotheses)
     out: dict[str, Any] = {"source": source, "dt": dt, "axes": {}}
     for axis in axes:
         sensor = axis.split("_")[0]

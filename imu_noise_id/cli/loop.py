@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_imu, read_temperature
     from ..core.axes import AXES
     from ..core.errors import InputError
-    from ..core.modelspec import parse_structure
+    from ..core.noise.modelspec import parse_structure
 
     axes = tuple(a.strip() for a in args.axes.split(",") if a.strip())
     unknown = [a for a in axes if a not in AXES]

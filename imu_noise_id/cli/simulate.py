@@ -62,7 +62,7 @@ def _spec_from_yaml(path: Path) -> str:
 
 
 def _spec_from_model_entry(path: Path, axis: str, entry: object) -> str:
-    from ..core.components import COMPONENT_TYPES
+    from ..core.noise.components import COMPONENT_TYPES
 
     components = entry.get("components") if isinstance(entry, dict) else None
     if not isinstance(components, list) or not components:
@@ -84,8 +84,8 @@ def run(args: argparse.Namespace) -> int:
     """Simulate and write the bag; print what was written and the true model."""
     from ..bag.writer import write_bag
     from ..core.axes import AXES, UNITS
-    from ..core.modelspec import model_name, parse_imu_model
-    from ..core.simulate import simulate_static_imu
+    from ..core.noise.modelspec import model_name, parse_imu_model
+    from ..core.simulation.static import simulate_static_imu
 
     model_path = Path(args.model)
     is_file = model_path.suffix in (".yaml", ".yml") or model_path.is_file()

@@ -11,7 +11,7 @@ Stages
    warning: the Allan estimators assume equally spaced samples), the static check of
    :func:`imu_noise_id.core.quality.static_check` (clearly non-static data raises unless ``allow_motion``);
 2. the Allan family per axis (:func:`imu_noise_id.core.allan.allan_family`), AV always, others on request;
-3. the Allan-slope parameters per axis (:func:`imu_noise_id.core.allan_fit.fit_axis_slopes`), with warnings
+3. the Allan-slope parameters per axis (:func:`imu_noise_id.core.allan.slopes.fit_axis_slopes`), with warnings
    where the random walk or white noise is only an upper bound.
 """
 
@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS, AllanResult, allan_family, stack_axes
-from ..core.allan_fit import AxisSlopes, fit_axis_slopes
+from ..core.allan.slopes import AxisSlopes, fit_axis_slopes
 from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES, ImuSeries
 from ..core.errors import InputError
 from ..core.quality import static_check

@@ -2,7 +2,7 @@
 
 One axis at a time (:func:`run_closed_loop`):
 
-1. fit the starting structure (``fit_model`` of :mod:`imu_noise_id.pipelines.identification`, the
+1. fit the starting structure (``fit_model`` of :mod:`imu_noise_id.core.estimation.fit`, the
    constrained EM of paper 000 section 3) and measure its errors (:class:`ResidualErrors`: log-likelihood,
    BIC, AV misfit, Ljung–Box p of the standardised innovations, residual spectral peak ratio);
 2. run every detector of :mod:`imu_noise_id.core.diagnostics.detectors` on the fit's residuals;
@@ -51,12 +51,12 @@ import numpy as np
 
 from ..core.allan import allan_variance, choose_m, identify_alpha
 from ..core.axes import AXES, ImuSeries, ScalarSeries
-from ..core.components import GM, QN, RR, RW, Component, total_allan_variance
 from ..core.diagnostics import detectors as det
 from ..core.diagnostics.residuals import ResidualErrors, av_misfit_z, line_statistic, residual_errors
 from ..core.diagnostics.whitening import WhiteningFilter
 from ..core.errors import InputError
-from ..core.modelspec import CANONICAL_ORDER, parse_structure, structure_name
+from ..core.noise.components import GM, QN, RR, RW, Component, total_allan_variance
+from ..core.noise.modelspec import CANONICAL_ORDER, parse_structure, structure_name
 
 #: Effects added to the state-space structure / entering as regressors / as data cleaning.
 STATE_EFFECTS = ("GM", "RW", "RR", "QN")
@@ -184,7 +184,7 @@ class LoopResult:
 
 
 def _default_fitter() -> Fitter:
-    from .identification import fit_model
+    from ..core.estimation.fit import fit_model
 
     return fit_model
 
@@ -436,7 +436,7 @@ def run_closed_loop(
         Sensor temperature [°C] at the sample times (see :func:`align_temperature`); enables ``TEMP``.
     fitter : callable, optional
         ``fitter(y, dt, structure, exog=..., [init=...])`` returning a FitResult; default
-        :func:`imu_noise_id.pipelines.identification.fit_model`.
+        :func:`imu_noise_id.core.estimation.fit.fit_model`.
     max_steps : int
         At most this many effects are added.
     max_candidates : int

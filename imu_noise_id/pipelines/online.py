@@ -41,8 +41,9 @@ from scipy.stats import chi2
 from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES
 from ..core.cmkf.robot import RobotCmkf, RobotCmkfConfig
 from ..core.errors import InputError
-from .hypotheses_config import hypothesis_set_factory, read_config
-from .hypotheses_online import AxisIdentifier
+from ..core.hypotheses.axis import AxisIdentifier
+from ..core.hypotheses.config import hypothesis_set_factory
+from ..resources import read_hypotheses_file
 from .online_blocks import AllanTau0NoiseDensity, StampChecker, StationarityDetector, WindowStats
 from .online_config import OnlineConfig
 
@@ -194,7 +195,7 @@ class OnlineIdentifier:
 
     - :class:`~imu_noise_id.core.cmkf.robot.RobotCmkf` (paper 004 on a robot): every accepted IMU and odometry
       message; it gives the accelerometer bias and Ŝ_v and, from its gyro-bias filter, the gyro bias.
-    - :class:`~imu_noise_id.pipelines.hypotheses_online.AxisIdentifier` per axis (paper 002's bank with the
+    - :class:`~imu_noise_id.core.hypotheses.axis.AxisIdentifier` per axis (paper 002's bank with the
       warm-up offset): fed in batches by :meth:`update_identification` with the stationary samples that passed
       the guard. Pauses are declared with ``gap`` (the filters predict over them). For the gyro axes the warm-up
       offset of the first stretch stays (the Earth rate and turn-on bias are constant); for the accelerometer
@@ -269,7 +270,7 @@ class OnlineIdentifier:
         """The hypothesis-set mapping (validated for both sensors now, so a bad file fails at start-up)."""
         if not self.config.hypotheses_enabled:
             return None
-        data, source = read_config(self.config.hypotheses_file or None)
+        data, source = read_hypotheses_file(self.config.hypotheses_file or None)
         for sensor in ("gyro", "accel"):
             hypothesis_set_factory(data, 0.01, sensor, source)
         return {"data": data, "source": source}

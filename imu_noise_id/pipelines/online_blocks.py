@@ -157,7 +157,7 @@ class AllanTau0NoiseDensity:
     """White-noise density per axis from consecutive stationary samples: the Allan variance at τ = Δt.
 
     σ²_A(Δt) = ½·E[(y_{k+1} − y_k)²] equals the per-sample white-noise variance σ² (IEEE Std 952), and the
-    density is N = √(σ²·Δt) (:func:`imu_noise_id.core.units.white_noise_density`). Differences remove the bias
+    density is N = √(σ²·Δt) (:func:`imu_noise_id.core.noise.units.white_noise_density`). Differences remove the bias
     and attenuate slow drifts (RW, GM with τ ≫ Δt); quantisation noise and vibration present while the platform
     stands still are included, which is what the covariance of the corrected IMU must carry. Only differences of
     samples from one uninterrupted stationary stretch are used (:meth:`break_chain` between stretches).

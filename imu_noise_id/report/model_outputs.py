@@ -9,7 +9,7 @@ import numpy as np
 import yaml
 
 from ..core.axes import ACCEL_AXES, GYRO_AXES, UNITS
-from ..pipelines.identification import FitResult, SelectionResult, kalibr_values, simulate_allan_band
+from ..core.estimation.fit import FitResult, SelectionResult, kalibr_values, simulate_allan_band
 from .model_yaml import write_model_yaml
 from .plots_model import save_allan_overlay
 

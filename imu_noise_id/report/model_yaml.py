@@ -25,7 +25,7 @@ from pathlib import Path
 import yaml
 
 from ..core.axes import UNITS
-from ..pipelines.identification import FitResult, SelectionResult, parameter_labels
+from ..core.estimation.fit import FitResult, SelectionResult, parameter_labels
 
 
 def _num(x: float) -> float:

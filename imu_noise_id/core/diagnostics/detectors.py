@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-from ..components import GM
+from ..noise.components import GM
 from .residuals import acf, av_misfit_z, chi2_log10_sf, ljung_box, spectral_peaks
 from .whitening import WhiteningFilter, score_test
 

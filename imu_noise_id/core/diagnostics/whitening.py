@@ -26,9 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import linalg, signal
 
-from ..components import Component
 from ..errors import InputError
-from ..statespace import steady_prediction_covariance
+from ..kalman.statespace import steady_prediction_covariance
+from ..noise.components import Component
 
 
 def _system(components: list[Component], dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -46,7 +46,7 @@ def _system(components: list[Component], dt: float) -> tuple[np.ndarray, np.ndar
 def _steady_state_p(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
     """Predicted-state covariance P of the discrete algebraic Riccati equation.
 
-    The doubling algorithm of :func:`imu_noise_id.core.statespace.steady_prediction_covariance` first (robust
+    The doubling algorithm of :func:`imu_noise_id.core.kalman.statespace.steady_prediction_covariance` first (robust
     for the nearly-unit-root random walks of IMU models), scipy's generalised-eigenvalue DARE solver (scaled
     by R) as the fallback.
 
@@ -86,7 +86,7 @@ class WhiteningFilter:
 
     @classmethod
     def from_components(cls, components: list[Component], dt: float) -> WhiteningFilter:
-        """Build the filter of a model given as fitted components (see :mod:`imu_noise_id.core.components`).
+        """Build the filter of a model given as fitted components (see :mod:`imu_noise_id.core.noise.components`).
 
         Raises
         ------

@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..components import GM, RW, WN, Component
 from ..errors import InputError
+from ..noise.components import GM, RW, WN, Component
 from .kernel import FilterBank
 from .model import Hypothesis, HypothesisSet, ParameterPrior, build_bank_model
 

@@ -5,7 +5,7 @@ optional white-noise component (WN) — with a uniform prior range for every unk
 eq. 3; eqs. 21–23 for the RW-vs-GM example). Parameters are the project's **continuous-time** values
 (``RW.random_walk`` [u/s/√Hz], ``GM.tau`` [s], ``GM.sigma`` [u], ``WN.noise_density`` [u/√Hz]); the
 per-sample matrices Φ, Q (= ΓΓᵀ), H, R (= ΨΨᵀ) of each grid point come from
-:meth:`imu_noise_id.core.components.Component.block` at the sampling period, so that paper 002's per-sample
+:meth:`imu_noise_id.core.noise.components.Component.block` at the sampling period, so that paper 002's per-sample
 σ_w, σ_m, σ_v correspond to ``random_walk·√Δt``, ``sigma`` and ``noise_density/√Δt``.
 
 Beyond the paper:
@@ -35,8 +35,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..components import GM, RW, WN
 from ..errors import InputError
+from ..noise.components import GM, RW, WN
 
 #: Unknown parameters of each supported component, in grid order.
 COMPONENT_PARAMETERS: dict[str, tuple[str, ...]] = {

@@ -1,4 +1,4 @@
-"""Kalman filtering and smoothing for :class:`~imu_noise_id.core.statespace.StateSpace` models.
+"""Kalman filtering and smoothing for :class:`~imu_noise_id.core.kalman.statespace.StateSpace` models.
 
 Two engines with one API: :mod:`.exact` (the time-varying recursion of paper 000's appendix; any Σ, missing
 samples) and :mod:`.steady` (steady-state gains as IIR filters; Σ = P̄ and no missing samples). The functions
@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..statespace import StateSpace
 from . import exact, steady
 from .common import (
     Columns,
@@ -22,6 +21,7 @@ from .common import (
     check_data,
     profile,
 )
+from .statespace import StateSpace
 
 __all__ = [
     "Columns", "InnovationResult", "ProfileResult", "SmootherStats", "apply_beta", "loglik", "profile_and_smooth",

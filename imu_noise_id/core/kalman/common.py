@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..statespace import StateSpace
+from .statespace import StateSpace
 
 LOG_2PI = math.log(2.0 * math.pi)
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..statespace import StateSpace
 from .common import LOG_2PI, Columns, InnovationResult, SmootherStats
+from .statespace import StateSpace
 
 
 def _forward(model: StateSpace, cols: Columns):

@@ -28,8 +28,8 @@ import numpy as np
 from scipy.linalg import schur
 from scipy.signal import lfilter
 
-from ..statespace import StateSpace
 from .common import LOG_2PI, Columns, InnovationResult, ProfileResult, SmootherStats, profile
+from .statespace import StateSpace
 
 
 @dataclass(frozen=True)

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from .components import GM, QN, RR, RW, WN, Component
-from .errors import InputError
+from ..errors import InputError
+from ..noise.components import GM, QN, RR, RW, WN, Component
 
 
 @dataclass(frozen=True)
@@ -123,7 +123,7 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float,
 def whittle_information(components: list[Component], y: np.ndarray, dt: float,
                         periodogram: BandedPeriodogram | None = None, step: float = 1e-3) -> np.ndarray:
     """Minus the Hessian of the banded Whittle log-likelihood in the log-parameters (non-RR components in
-    order, as :class:`imu_noise_id.core.mle.Parameterisation`), by central differences; an approximation of
+    order, as :class:`imu_noise_id.core.estimation.mle.Parameterisation`), by central differences; an approximation of
     the observed information that preconditions the exact-likelihood quasi-Newton finish."""
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(components) if not isinstance(c, RR) for k in c.parameter_names]

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import rotation as rot
+from ..cmkf import rotation as rot
 
 
 @dataclass

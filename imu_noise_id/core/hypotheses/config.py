@@ -1,6 +1,6 @@
-"""Hypothesis sets from YAML (``config/hypotheses_default.yaml`` describes the format) → core dataclasses.
-
-File reading lives here, not in the core; :func:`hypothesis_set_from_dict` turns the parsed mapping into a
+"""Hypothesis sets from their parsed YAML mapping (``imu_noise_id/config/hypotheses_default.yaml`` describes the
+format) → core dataclasses. Reading the file is the adapters' job (:mod:`imu_noise_id.resources`);
+:func:`hypothesis_set_from_dict` turns the parsed mapping into a
 :class:`~imu_noise_id.core.hypotheses.HypothesisSet` for one sensor type and sampling period, raising
 :class:`~imu_noise_id.core.errors.InputError` with the offending key on any mistake.
 """
@@ -9,50 +9,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..core.errors import InputError
-from ..core.hypotheses import Hypothesis, HypothesisSet, ParameterPrior
-from ..core.hypotheses.model import COMPONENT_PARAMETERS
+from ..errors import InputError
+from .model import COMPONENT_PARAMETERS, Hypothesis, HypothesisSet, ParameterPrior
 
-DEFAULT_FILE = "hypotheses_default.yaml"
 _TOP_KEYS = {"gamma", "block", "warmup", "gain_tolerance", "bias_sigma", "sensors", "hypotheses"}
 _SENSOR_KEYS = {"bias_sigma", "hypotheses", "gamma", "block", "warmup"}
-
-
-def default_config_path() -> Path:
-    """The packaged default hypothesis set (source tree ``config/``, else the ament share directory)."""
-    here = Path(__file__).resolve().parents[2] / "config" / DEFAULT_FILE
-    if here.is_file():
-        return here
-    try:
-        from ament_index_python.packages import get_package_share_directory
-
-        shared = Path(get_package_share_directory("imu_noise_id")) / "config" / DEFAULT_FILE
-        if shared.is_file():
-            return shared
-    except Exception:  # any failure means "not installed with ament"
-        pass
-    raise InputError(f"cannot find the default {DEFAULT_FILE}: pass --hypotheses FILE")
-
-
-def read_config(path: str | Path | None) -> tuple[dict[str, Any], str]:
-    """Parse a hypotheses YAML file (default: the packaged one); returns the mapping and its source name."""
-    import yaml
-
-    p = Path(path) if path is not None else default_config_path()
-    if not p.is_file():
-        raise InputError(f"hypotheses file {p} does not exist")
-    try:
-        data = yaml.safe_load(p.read_text())
-    except yaml.YAMLError as exc:
-        raise InputError(f"hypotheses file {p} is not valid YAML: {exc}") from None
-    if not isinstance(data, dict):
-        raise InputError(f"hypotheses file {p} must hold a mapping with 'hypotheses' or 'sensors'")
-    return data, str(p)
 
 
 def _number(value: Any, where: str) -> float:
@@ -202,7 +167,7 @@ def hypothesis_set_factory(data: dict[str, Any], dt: float, sensor: str | None =
                            source: str = "hypotheses") -> tuple[Callable[[float | None], HypothesisSet], float]:
     """A function white-noise estimate → hypothesis set (checked once now), and the warm-up [s].
 
-    Use it with :class:`~imu_noise_id.pipelines.hypotheses_online.AxisIdentifier`, which calls it after the
+    Use it with :class:`~imu_noise_id.core.hypotheses.axis.AxisIdentifier`, which calls it after the
     warm-up with :func:`white_noise_estimate` of the warm-up samples.
     """
     try:
@@ -214,10 +179,3 @@ def hypothesis_set_factory(data: dict[str, Any], dt: float, sensor: str | None =
         return hypothesis_set_from_dict(data, dt, sensor, source, wn_estimate)[0]
 
     return make, warmup
-
-
-def load_hypothesis_set(path: str | Path | None, dt: float, sensor: str | None = None,
-                        wn_estimate: float | None = None) -> tuple[HypothesisSet, float]:
-    """Read a hypotheses YAML file (default: the packaged one) for ``sensor`` at sampling period ``dt``."""
-    data, source = read_config(path)
-    return hypothesis_set_from_dict(data, dt, sensor, source, wn_estimate)

@@ -10,11 +10,11 @@ Pipeline of :func:`fit_model`:
 2. drift: with RR in the structure, ``drift='em'`` estimates the ramp jointly (a measurement regressor ``t·dt``
    whose coefficient is the slope, profiled by GLS in the likelihood and updated in closed form in the EM);
    ``drift='ls'`` removes a least-squares line first (paper 000 §3.5(iii)) and reports its slope;
-3. initial values: ``init`` if given, else the Allan-variance fit (:mod:`imu_noise_id.core.avfit`) from several
-   GM placements, each refined by a banded Whittle likelihood (:mod:`imu_noise_id.core.whittle`), the distinct
+3. initial values: ``init`` if given, else the Allan-variance fit (:mod:`.starts`) from several
+   GM placements, each refined by a banded Whittle likelihood (:mod:`.whittle`), the distinct
    best ones kept as starts (beyond the paper: §3.5(i) local maxima);
-4. per start, ``em_iter`` EM iterations (:mod:`imu_noise_id.core.em`) then L-BFGS-B on the exact likelihood
-   (:mod:`imu_noise_id.core.mle`; beyond the paper: EM's slow convergence); the best likelihood wins;
+4. per start, ``em_iter`` EM iterations (:mod:`.em`) then L-BFGS-B on the exact likelihood
+   (:mod:`.mle`; beyond the paper: EM's slow convergence); the best likelihood wins;
 5. standard errors and 95 % intervals from the observed information (§3.4), in physical units;
 6. recording-length advice from the per-sample information.
 """
@@ -26,18 +26,19 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..core import avfit, em, kalman, mle, whittle
-from ..core import statespace as ss
-from ..core.components import COMPONENT_TYPES, RR, Component, total_allan_variance
-from ..core.errors import InputError
-from ..core.modelspec import model_name, parse_model, parse_structure
+from .. import kalman
+from ..errors import InputError
+from ..kalman import statespace as ss
+from ..noise.components import COMPONENT_TYPES, RR, Component, total_allan_variance
+from ..noise.modelspec import model_name, parse_model, parse_structure
+from . import em, mle, starts, whittle
 
 #: Two-sided 95 % normal quantile.
 Z95 = 1.959963984540054
 #: Smallest number of observed samples accepted, and per free parameter.
 MIN_SAMPLES, MIN_SAMPLES_PER_PARAMETER = 100, 20
 #: Above this standard error in log space (a 95 % Wald interval wider than ×7 each way) the Wald interval is
-#: replaced by a likelihood-ratio one (:func:`imu_noise_id.core.mle.likelihood_interval`).
+#: replaced by a likelihood-ratio one (:func:`imu_noise_id.core.estimation.mle.likelihood_interval`).
 WALD_MAX_SE_LOG = 1.0
 #: Above this length a record with missing samples is searched gap-filled first (see fit_model).
 FILL_FIRST_MIN_SAMPLES = 20_000
@@ -290,7 +291,7 @@ def fit_model(
     n_starts
         Number of distinct starts tried (best likelihood kept).
     spectral_init
-        Refine the AV-fit starts by the Whittle likelihood of the differences (:mod:`imu_noise_id.core.whittle`)
+        Refine the AV-fit starts by the Whittle likelihood of the differences (:mod:`.whittle`)
         before ranking them, and precondition the quasi-Newton finish with the Whittle information (fast;
         beyond the paper).
     em_iter, em_tol
@@ -367,14 +368,14 @@ def fit_model(
         y_av = y_av - A @ np.linalg.lstsq(A, y_av, rcond=None)[0]
     bp = whittle.banded_periodogram(y_av) if spectral_init else None
     if given is not None:
-        starts = [given]
+        start_values = [given]
     else:
-        av = avfit.empirical_allan(y_av, dt)
-        fits = avfit.fit_allan(fit_names, av, dt)
+        av = starts.empirical_allan(y_av, dt)
+        fits = starts.fit_allan(fit_names, av, dt)
         if bp is not None:
             fits = sorted((whittle.whittle_fit(c, y_av, dt, bp) for _, c in fits), key=lambda r: -r[0])
-            fits = avfit.distinct([(-w, c) for w, c in fits], av.tau, dt)
-        starts = [c for _, c in fits[: max(n_starts, 1)]]
+            fits = starts.distinct([(-w, c) for w, c in fits], av.tau, dt)
+        start_values = [c for _, c in fits[: max(n_starts, 1)]]
     # Long records with missing samples: the parameters are searched on the gap-filled record with the fast
     # engine (beyond the paper; the exact engine is a Python loop); likelihood, means, innovations and intervals
     # below are those of the record with its gaps.
@@ -382,7 +383,7 @@ def fit_model(
     y_search = _filled(y) if fill_first else y
     best: tuple[mle.MLEResult, int] | None = None
     lls = []
-    for start in starts:
+    for start in start_values:
         try:
             metric = whittle.whittle_information(start, y_av, dt, bp) if bp is not None else None
             res = _one_start(
@@ -488,7 +489,7 @@ class SelectionResult:
 def suggest_candidates(y: np.ndarray, dt: float) -> list[str]:
     """Default candidates plus RR when the AV rises like τ² at long τ, QN when it falls like τ⁻² at short τ."""
     cands = list(DEFAULT_CANDIDATES)
-    av = avfit.empirical_allan(_filled(np.asarray(y, dtype=float)), dt)
+    av = starts.empirical_allan(_filled(np.asarray(y, dtype=float)), dt)
     if av.tau.size >= 4:
         slope_hi = np.polyfit(np.log(av.tau[-3:]), np.log(av.avar[-3:]), 1)[0]
         slope_lo = np.polyfit(np.log(av.tau[:3]), np.log(av.avar[:3]), 1)[0]
@@ -559,14 +560,14 @@ def simulate_allan_band(
 
     Returns (tau, avar) with avar of shape (n_sim, len(tau)); tau defaults to octaves up to n·dt/4.
     """
-    from ..core.components import simulate_sum
+    from ..noise.components import simulate_sum
 
     rng = np.random.default_rng(seed)
     out = []
     taus = None
     for _ in range(n_sim):
         sim = simulate_sum(fit.components, n, fit.dt, rng)
-        av = avfit.empirical_allan(sim, fit.dt)
+        av = starts.empirical_allan(sim, fit.dt)
         if tau is None:
             taus = av.tau
             out.append(av.avar)

@@ -15,10 +15,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..core.errors import InputError
-from ..core.hypotheses import BankResult, BankSnapshot, HypothesisBank, HypothesisSet
-from ..core.hypotheses.kernel import check_samples
-from .hypotheses_config import white_noise_estimate
+from ..errors import InputError
+from .bank import BankResult, BankSnapshot, HypothesisBank
+from .config import white_noise_estimate
+from .kernel import check_samples
+from .model import HypothesisSet
 
 
 class AxisIdentifier:
@@ -105,7 +106,7 @@ def identify_offline(y: np.ndarray, hypotheses: HypothesisSet | Callable[[float 
     passes stop early when no grid range changes by more than 1 %. Returns the last pass' result, its
     identifier (bank, offset, white-noise estimate) and the number of passes run.
     """
-    from ..core.hypotheses.model import refine_hypothesis_set
+    from .model import refine_hypothesis_set
 
     ident = AxisIdentifier(hypotheses, warmup_s, dt)
     result = ident.run(y, record_every)

@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import re
 
-from .axes import ACCEL_AXES, AXES, GYRO_AXES
+from ..axes import ACCEL_AXES, AXES, GYRO_AXES
+from ..errors import InputError
 from .components import COMPONENT_TYPES, Component
-from .errors import InputError
 
 #: Order in which components are listed in canonical model names.
 CANONICAL_ORDER: tuple[str, ...] = ("WN", "QN", "GM", "RW", "RR")

@@ -30,8 +30,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .components import GM, QN, RR, RW, WN, Component
-from .errors import InputError
+from ..errors import InputError
+from ..noise.components import GM, QN, RR, RW, WN, Component
 
 #: Matrix names of θ in the order the EM updates them (paper 000 §3.3).
 MATRIX_NAMES: tuple[str, ...] = ("u", "mu", "phi", "h", "q", "r", "b")

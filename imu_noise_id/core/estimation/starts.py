@@ -16,9 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from .allan import allan_variance
-from .components import GM, QN, RR, RW, WN, Component, total_allan_variance
-from .errors import InputError
+from ..allan import allan_variance
+from ..errors import InputError
+from ..noise.components import GM, QN, RR, RW, WN, Component, total_allan_variance
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ Each component is a small frozen dataclass holding its **continuous-time** param
 * ``simulate(n, dt, rng)``: n samples of the component's contribution to the sensor error;
 * ``block(dt)``: its state-space block (its part of Φ, Q, H, R, u and which elements are free), the form
   paper 000 (Stebler et al. 2011) eqs. (4)–(5) and (7)–(9) use; the estimator assembles blocks with
-  :mod:`imu_noise_id.core.statespace`;
+  :mod:`imu_noise_id.core.kalman.statespace`;
 * ``allan_variance(tau, dt)``: its theoretical Allan variance [u²];
 * ``psd(f, dt)``: its two-sided power spectral density [u²/Hz] (IEEE Std 952 convention, so that
   AV(τ) = 4∫₀^∞ S(f) sin⁴(πfτ)/(πfτ)² df, paper 000 section 2);

@@ -7,7 +7,7 @@ so positivity holds by construction. The mean parameters (bias, ramp slope, exog
 profiled out by GLS inside the likelihood (:func:`imu_noise_id.core.kalman.loglik`).
 
 The gradient is exact and cheap: by Fisher's identity ∂ℓ/∂ϑ = ∂Q(ϑ | ϑ_E)/∂ϑ at ϑ = ϑ_E, with Q the EM's
-expected complete-data log-likelihood (:func:`imu_noise_id.core.em.q_function`), evaluated from one smoother
+expected complete-data log-likelihood (:func:`imu_noise_id.core.estimation.em.q_function`), evaluated from one smoother
 pass; the derivative of Q (a closed-form function of a few sums) is taken by central differences.
 
 Standard errors (paper 000 §3.4): the observed information is minus a numerical Hessian of ℓ (central
@@ -23,11 +23,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from . import em, kalman
-from .components import RR, Component
-from .errors import InputError
-from .kalman.common import ProfileResult, check_data
-from .statespace import StateSpace, with_components
+from .. import kalman
+from ..errors import InputError
+from ..kalman.common import ProfileResult, check_data
+from ..kalman.statespace import StateSpace, with_components
+from ..noise.components import RR, Component
+from . import em
 
 #: Metric information −∂²ℓ/∂ϑ_k² below which :func:`maximise` holds log-parameter k at its start: changing the
 #: parameter e-fold then changes ℓ by less than 5e-4 (the parameter sits at the ~0 boundary).
@@ -66,7 +67,7 @@ class Parameterisation:
             params[i][name] = float(np.exp(v))
         out: list[Component] = [type(c)(**p) for c, p in zip(self.template, params, strict=True)]
         if model is not None:
-            from .statespace import to_components
+            from ..kalman.statespace import to_components
 
             fitted = to_components(model)
             out = [f if isinstance(c, RR) else c for c, f in zip(out, fitted, strict=True)]
@@ -144,7 +145,7 @@ def maximise(
     direction (the Fisher-identity gradient of a vanishing Q entry is a difference of nearly equal sums), and
     L-BFGS would spend its iterations there without gaining likelihood.
     """
-    from .statespace import to_components
+    from ..kalman.statespace import to_components
 
     theta0 = par.to_theta(to_components(base))
     lo = theta0 - bounds_width

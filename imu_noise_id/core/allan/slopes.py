@@ -46,8 +46,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from .allan import AllanResult
-from .errors import InputError
+from ..errors import InputError
+from .estimators import AllanResult
 
 #: A component's region: where its line is at least this fraction of the fitted sum.
 DOMINANCE = 0.5

@@ -20,7 +20,7 @@ Beyond the paper (and why):
   tiny floor, so that a Gauss–Markov block stays a stationary GM process and Q stays invertible.
 * :func:`q_function` evaluates the expected complete-data log-likelihood at any θ from one E-step; by Fisher's
   identity its gradient at the E-step's θ is the gradient of the exact log-likelihood, which the quasi-Newton
-  finish in :mod:`imu_noise_id.pipelines.identification` uses.
+  finish in :mod:`imu_noise_id.core.estimation.fit` uses.
 """
 
 from __future__ import annotations
@@ -30,10 +30,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import kalman
-from .errors import InputError
-from .kalman.common import check_data
-from .statespace import PHI_RANGE, StateSpace
+from .. import kalman
+from ..errors import InputError
+from ..kalman.common import check_data
+from ..kalman.statespace import PHI_RANGE, StateSpace
 
 #: Floor of free process-noise variances relative to R (keeps Q invertible in the Φ and u updates).
 Q_FLOOR_REL = 1e-20

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .axes import AXES, ImuSeries
-from .components import Component, simulate_sum
+from ..axes import AXES, ImuSeries
+from ..noise.components import Component, simulate_sum
 
 STANDARD_GRAVITY = 9.80665  # m/s²
 

@@ -6,9 +6,9 @@ start and stop, no side slip); before and after it stands still. In the base fra
 ``a_b = [ṡ, s·ω, 0]``, the specific force ``f_b = a_b + [0, 0, g]`` and the angular rate ``[0, 0, ω]``. The IMU,
 mounted with rotation ``C_bi``, reports the average of the true values over each sample period (computed on a
 grid ``substeps`` times finer), plus constant biases, white noise of density ``N`` (per-sample standard deviation
-``N/√Δt``) and, optionally, a bias random walk of density ``K`` (:class:`~imu_noise_id.core.components.RW`).
+``N/√Δt``) and, optionally, a bias random walk of density ``K`` (:class:`~imu_noise_id.core.noise.components.RW`).
 Odometry reports the true body velocity and yaw rate with white noise, the yaw orientation and the integrated
-position. The result is a :class:`~imu_noise_id.core.cmkf.robot_sim.RobotRun`.
+position. The result is a :class:`~imu_noise_id.core.simulation.robot.RobotRun`.
 """
 
 from __future__ import annotations
@@ -17,10 +17,10 @@ import math
 
 import numpy as np
 
-from .cmkf import rotation as rot
-from .cmkf.robot_sim import RobotRun
-from .components import RW
-from .simulate import STANDARD_GRAVITY
+from ..cmkf import rotation as rot
+from ..noise.components import RW
+from .robot import RobotRun
+from .static import STANDARD_GRAVITY
 
 
 def simulate_stop_and_go(

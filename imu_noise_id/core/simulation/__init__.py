@@ -1,0 +1,5 @@
+"""Simulated sensors with known errors, for the demo, the tests and the benchmarks.
+
+* :mod:`.static` — a static 6-axis IMU from per-axis component models;
+* :mod:`.robot` — a ground robot's IMU and wheel odometry (truth for the CMKF and the node).
+"""
