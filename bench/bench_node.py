@@ -23,8 +23,9 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from imu_noise_id.demo_online import ros_environment, stop, write_robot_bag  # noqa: E402
+from imu_noise_id.bag.writer import write_robot_bag  # noqa: E402
 from imu_noise_id.resources import NODE_PARAMETERS, packaged_config  # noqa: E402
+from imu_noise_id.ros.launch import ros_environment, stop  # noqa: E402
 
 NODE_CONFIG = packaged_config(NODE_PARAMETERS)
 

@@ -28,15 +28,11 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
 from std_msgs.msg import Float64MultiArray  # noqa: E402
 
-from imu_noise_id.demo_online import (  # noqa: E402
-    DEMO_TRUTH,
-    node_command,
-    simulate_demo_run,
-    stop,
-    write_robot_bag,
-)
+from imu_noise_id.bag.writer import write_robot_bag  # noqa: E402
+from imu_noise_id.demo.online import DEMO_TRUTH, simulate_demo_run  # noqa: E402
 from imu_noise_id.node import parse_labelled  # noqa: E402
 from imu_noise_id.resources import NODE_PARAMETERS, packaged_config  # noqa: E402
+from imu_noise_id.ros.launch import node_command, stop  # noqa: E402
 
 NODE_CONFIG = packaged_config(NODE_PARAMETERS)
 

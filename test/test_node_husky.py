@@ -19,8 +19,8 @@ rclpy = pytest.importorskip("rclpy")
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 
 from imu_noise_id.core.cmkf import rotation as rot  # noqa: E402
-from imu_noise_id.demo_online import stop  # noqa: E402
 from imu_noise_id.resources import NODE_PARAMETERS, packaged_config  # noqa: E402
+from imu_noise_id.ros.launch import stop  # noqa: E402
 
 NODE_CONFIG = packaged_config(NODE_PARAMETERS)
 

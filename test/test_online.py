@@ -258,8 +258,9 @@ def test_monitor_render_shows_every_section():
 
 
 def test_play_loads_a_bag_in_time_order_and_rejects_unknown_topics(tmp_path):
+    from imu_noise_id.bag.writer import write_robot_bag
     from imu_noise_id.cli.play import load_messages
-    from imu_noise_id.demo_online import simulate_demo_run, write_robot_bag
+    from imu_noise_id.demo.online import simulate_demo_run
 
     run = simulate_demo_run(stand_before=1.0, drive=1.0, stand_after=1.0)
     bag = write_robot_bag(run, tmp_path / "bag")

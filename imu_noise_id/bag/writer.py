@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..core.axes import ImuSeries, OdometrySeries, ScalarSeries
+from ..core.simulation.robot import RobotRun
 from .errors import BagError
 from .fastdecode import PRIMITIVES, flatten
 from .reader import IMU_TYPE, ODOM_TYPE, TEMPERATURE_TYPE
@@ -235,3 +236,15 @@ def _write_merged(
         i = row - first
         writer.write(connections[k], receive_lists[k][row], data[i * length : (i + 1) * length])
         cursor[k] = row + 1
+
+
+def write_robot_bag(run: RobotRun, path: Path, imu_topic: str = "/imu/data", odom_topic: str = "/odom") -> Path:
+    """Write a :class:`RobotRun` as a rosbag2 (mcap) bag with sensor_msgs/Imu and nav_msgs/Odometry."""
+    imu = ImuSeries(t=run.imu_t, gyro=run.gyro, accel=run.accel, frame_id="imu_link", topic=imu_topic)
+    odom = OdometrySeries(
+        t=run.odom_t, position=run.position, orientation_xyzw=run.orientation_xyzw,
+        linear_velocity=run.linear_velocity, angular_velocity=run.angular_velocity,
+        pose_covariance=run.pose_cov, twist_covariance=run.twist_cov, frame_id="odom",
+        child_frame_id="base_link", topic=odom_topic,
+    )
+    return write_bag(path, imu, odom, imu_topic=imu_topic, odom_topic=odom_topic)

@@ -1,6 +1,6 @@
 """Demo of the closed loop on a simulated bag with effects the starting model does not declare.
 
-``python -m imu_noise_id.loop_demo --out DIR`` (or :func:`run_loop_demo` from ``make demo``): simulates a
+``python -m imu_noise_id.demo.loop --out DIR`` (or :func:`run_loop_demo` from ``make demo``): simulates a
 static IMU whose gyro_z holds an extra Gauss–Markov process and whose accel_x holds a 0.5 Hz vibration, writes
 it as a rosbag2 (mcap) bag, reads it back, and runs the loop from ``WN+RW`` on gyro_x (clean), gyro_z and
 accel_x. Writes ``DIR/loop_demo_bag/``, ``DIR/model.yaml`` and ``DIR/report.html``.
@@ -20,9 +20,9 @@ DEMO_AXES = ("gyro_x", "gyro_z", "accel_x")
 
 def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, rate_hz: float = 100.0) -> Path:
     """Write the demo bag: WN+RW on every axis, plus GM(τ = 2 s) on gyro_z and a 0.5 Hz sine on accel_x."""
-    from .bag.writer import write_bag
-    from .core.noise.components import GM, RW, WN
-    from .core.simulation.static import simulate_static_imu
+    from ..bag.writer import write_bag
+    from ..core.noise.components import GM, RW, WN
+    from ..core.simulation.static import simulate_static_imu
 
     model = {a: [WN(1e-3), RW(2e-5)] for a in ("gyro_x", "gyro_y", "gyro_z")}
     model |= {a: [WN(2e-3), RW(4e-5)] for a in ("accel_x", "accel_y", "accel_z")}
@@ -36,8 +36,8 @@ def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, r
 
 def run_loop_demo(out: str | Path, *, seed: int = 7) -> dict:
     """Simulate, write and read the bag, run the loop on :data:`DEMO_AXES`, write model.yaml and report.html."""
-    from .bag.reader import read_imu
-    from .cli.loop import loop_stage, summary
+    from ..bag.reader import read_imu
+    from ..cli.loop import loop_stage, summary
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,6 +1,6 @@
 """The online demo: a simulated robot bag played into ``imu_noise_id_node``, watched live, compared with the truth.
 
-``python -m imu_noise_id.demo_online [--out DIR] [--rate X]`` (``make demo`` calls :func:`run_demo`):
+``python -m imu_noise_id.demo.online [--out DIR] [--rate X]`` (``make demo`` calls :func:`run_demo`):
 
 1. simulate a robot that stands, drives and stands again (:func:`~imu_noise_id.core.simulation.stop_and_go.
    simulate_stop_and_go`; known biases and noise densities) and write it as a rosbag2 bag;
@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import signal
 import subprocess
 import sys
 import tempfile
@@ -25,10 +24,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .core.axes import AXES, ImuSeries, OdometrySeries
-from .core.simulation.robot import RobotRun
-from .core.simulation.stop_and_go import simulate_stop_and_go
-from .resources import NODE_PARAMETERS, packaged_config
+from ..bag.writer import write_robot_bag
+from ..core.axes import AXES
+from ..core.simulation.robot import RobotRun
+from ..core.simulation.stop_and_go import simulate_stop_and_go
+from ..resources import NODE_PARAMETERS, packaged_config
+from ..ros.launch import node_command, ros_environment, stop
 
 #: The demo robot's truth (also used by the end-to-end tests).
 DEMO_TRUTH = {
@@ -37,14 +38,6 @@ DEMO_TRUTH = {
     "gyro_noise_density": 1e-3,
     "accel_noise_density": 1e-2,
 }
-
-
-def ros_environment() -> dict[str, str]:
-    """This process's environment plus the network rule and a log folder (children inherit all of it)."""
-    env = dict(os.environ)
-    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    env.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="imu_noise_id_ros_log_"))
-    return env
 
 
 def simulate_demo_run(seed: int = 7, *, stand_before: float = 20.0, drive: float = 25.0, stand_after: float = 20.0,
@@ -58,40 +51,9 @@ def simulate_demo_run(seed: int = 7, *, stand_before: float = 20.0, drive: float
     )
 
 
-def write_robot_bag(run: RobotRun, path: Path, imu_topic: str = "/imu/data", odom_topic: str = "/odom") -> Path:
-    """Write a :class:`RobotRun` as a rosbag2 (mcap) bag with sensor_msgs/Imu and nav_msgs/Odometry."""
-    from .bag.writer import write_bag
-
-    imu = ImuSeries(t=run.imu_t, gyro=run.gyro, accel=run.accel, frame_id="imu_link", topic=imu_topic)
-    odom = OdometrySeries(
-        t=run.odom_t, position=run.position, orientation_xyzw=run.orientation_xyzw,
-        linear_velocity=run.linear_velocity, angular_velocity=run.angular_velocity,
-        pose_covariance=run.pose_cov, twist_covariance=run.twist_cov, frame_id="odom",
-        child_frame_id="base_link", topic=odom_topic,
-    )
-    return write_bag(path, imu, odom, imu_topic=imu_topic, odom_topic=odom_topic)
-
-
-def node_command(params_file: Path, *extra: str) -> list[str]:
-    """The command line that starts the node with ``params_file`` (plus extra ``--ros-args`` items)."""
-    return [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(params_file),
-            "-r", "imu:=/imu/data", *extra]
-
-
-def stop(process: subprocess.Popen, timeout: float = 10.0) -> None:
-    """Ctrl-C a child process, then kill it if it does not end."""
-    if process.poll() is None:
-        process.send_signal(signal.SIGINT)
-        try:
-            process.wait(timeout)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
-
-
 def summary(state: object) -> str:
     """Final estimates from a monitor state next to :data:`DEMO_TRUTH`."""
-    from .cli.monitor import _column
+    from ..cli.monitor import _column
 
     bias = _column(state.noise, "bias")
     std = _column(state.noise, "bias_std")
@@ -131,8 +93,8 @@ def watch_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> obj
     """Steps 1–4 of the module docstring; returns the node's final outputs as a ``MonitorState``."""
     import rclpy
 
-    from .cli.monitor import _Listener, render, watch
-    from .cli.play import load_messages
+    from ..cli.monitor import _Listener, render, watch
+    from ..cli.play import load_messages
 
     work = Path(out) if out else Path(tempfile.mkdtemp(prefix="imu_noise_id_demo_"))
     work.mkdir(parents=True, exist_ok=True)
@@ -171,7 +133,7 @@ def watch_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> obj
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m imu_noise_id.demo_online", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m imu_noise_id.demo.online", description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, help="folder for the demo bag (default: a temporary folder)")
     parser.add_argument("--rate", type=float, default=2.0, help="playback speed factor (default 2: ~35 s)")
     parser.add_argument("--seed", type=int, default=7)

@@ -1,0 +1,1 @@
+"""The rclpy adapters: the node, its messages, and launch-free helpers to run it (no ``launch`` package on PyPI)."""

@@ -1,0 +1,41 @@
+"""Launch-free recipe for running the node: its environment (DDS on loopback), its command line, stopping it.
+
+ROS 2 from PyPI has no ``launch`` package and no ``ros2`` command: a node is a process started with
+``python -m imu_noise_id.node --ros-args …``. The demo, the benchmarks and the tests start it through these helpers,
+so every process they start keeps DDS on 127.0.0.1 (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) and writes its
+rclpy logs into a temporary folder.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+
+def ros_environment() -> dict[str, str]:
+    """This process's environment plus the network rule and a log folder (children inherit all of it)."""
+    env = dict(os.environ)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="imu_noise_id_ros_log_"))
+    return env
+
+
+def node_command(params_file: Path, *extra: str) -> list[str]:
+    """The command line that starts the node with ``params_file`` (plus extra ``--ros-args`` items)."""
+    return [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(params_file),
+            "-r", "imu:=/imu/data", *extra]
+
+
+def stop(process: subprocess.Popen, timeout: float = 10.0) -> None:
+    """Ctrl-C a child process, then kill it if it does not end."""
+    if process.poll() is None:
+        process.send_signal(signal.SIGINT)
+        try:
+            process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
