@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from imu_noise_id.core.axes import ImuSeries
-from imu_noise_id.pipelines.analysis import analyze_static
-from imu_noise_id.report.outputs import summary_table
+from imu_noise_id.pipelines.analyze.static import analyze_static
+from imu_noise_id.report.console import summary_table
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "adis16405_static" / "adis16405_run1.npz"
 

@@ -30,7 +30,7 @@ STAGES = {
     "read_imu + static_check": "from imu_noise_id.bag.reader import read_imu; "
     "from imu_noise_id.core.quality import static_check; imu = read_imu({bag!r}); static_check(imu)",
     "read_imu + analyze_static (all 4 kinds)": "from imu_noise_id.bag.reader import read_imu; "
-    "from imu_noise_id.pipelines.analysis import analyze_static; imu = read_imu({bag!r}); analyze_static(imu)",
+    "from imu_noise_id.pipelines.analyze.static import analyze_static; imu = read_imu({bag!r}); analyze_static(imu)",
 }
 
 
@@ -45,7 +45,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory(dir=args.tmp, prefix="bench_analyze_") as tmp:
         bag, n = make_bag(Path(tmp), args.rate, args.duration, "mcap")
         arrays = n * 7 * 8
-        prelude = ("import imu_noise_id.cli.analyze, imu_noise_id.bag.reader, imu_noise_id.pipelines.analysis, "
+        prelude = ("import imu_noise_id.cli.analyze, imu_noise_id.bag.reader, imu_noise_id.pipelines.analyze.static, "
                    "imu_noise_id.report.outputs, imu_noise_id.report.plots")
         base, _, _ = peak_rss_of([sys.executable, "-c", prelude + "; import time; time.sleep(0.2)"], env)
         runs = {}

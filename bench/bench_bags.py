@@ -29,7 +29,9 @@ sys.path.insert(0, str(REPO))
 
 from imu_noise_id.bag.fastdecode import FlatDecoder  # noqa: E402
 from imu_noise_id.bag.mcapfast import fast_mcap_messages  # noqa: E402
-from imu_noise_id.bag.reader import BATCH, IMU_TYPE, read_bag  # noqa: E402
+from imu_noise_id.bag.reader import read_bag  # noqa: E402
+from imu_noise_id.bag.stream import BATCH  # noqa: E402
+from imu_noise_id.bag.topics import IMU_TYPE  # noqa: E402
 from imu_noise_id.bag.writer import write_bag  # noqa: E402
 from imu_noise_id.core.noise.modelspec import parse_imu_model  # noqa: E402
 from imu_noise_id.core.simulation.static import simulate_static_imu  # noqa: E402

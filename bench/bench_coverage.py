@@ -14,8 +14,9 @@ import time
 
 import numpy as np
 
-from imu_noise_id.core.estimation.fit import fit_model, parameter_labels
+from imu_noise_id.core.estimation.model import FitOptions, fit_model
 from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.modelspec import parameter_labels
 
 MIXES = {
     "WN+RW+RR": ([WN(0.2), RW(0.01), RR(2e-4)], 4000, 1.0),
@@ -38,7 +39,7 @@ def main() -> None:
         done = 0
         for run in range(args.runs):
             y = simulate_sum(truth, n, dt, np.random.default_rng(1000 + run)) + 0.1
-            fit = fit_model(y, dt, spec, n_starts=2)
+            fit = fit_model(y, dt, spec, options=FitOptions(n_starts=2))
             done += 1
             for i, p, lab in labels:
                 value = truth[i].params()[p]

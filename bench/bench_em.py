@@ -18,7 +18,7 @@ import warnings
 import numpy as np
 
 from imu_noise_id.core import kalman
-from imu_noise_id.core.estimation.fit import fit_model
+from imu_noise_id.core.estimation.model import FitOptions, fit_model
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 
@@ -32,7 +32,7 @@ def simulate(n: int, seed: int = 1) -> np.ndarray:
 
 def our_fit(y: np.ndarray, **kw):
     t0, c0 = time.perf_counter(), time.process_time()
-    fit = fit_model(y, DT, "WN+GM+RW+RR", uncertainty=False, **kw)
+    fit = fit_model(y, DT, "WN+GM+RW+RR", options=FitOptions(uncertainty=False, **kw))
     our_fit.cpu = time.process_time() - c0
     return fit, time.perf_counter() - t0
 
@@ -87,7 +87,7 @@ def main() -> None:
     cpu1 = our_fit.cpu
     print(f"N =   360,000, one start: {sec1:.2f} s wall, {cpu1:.2f} s CPU, loglik {fit1.loglik:.3f}")
     t0 = time.perf_counter()
-    fit_model(y, DT, "WN+GM+RW+RR", n_starts=1)
+    fit_model(y, DT, "WN+GM+RW+RR", options=FitOptions(n_starts=1))
     print(f"N =   360,000, one start + standard errors + record-length advice: {time.perf_counter() - t0:.2f} s")
     if args.quick:
         return

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from imu_noise_id.core.axes import AXES
-from imu_noise_id.pipelines.closed_loop import block_average, run_closed_loop
+from imu_noise_id.pipelines.loop import block_average, run_closed_loop
 from imu_noise_id.report.loop_plots import allan_before_after
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"

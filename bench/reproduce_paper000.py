@@ -33,7 +33,7 @@ from scipy.signal import lfilter
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.estimation import em, mle
-from imu_noise_id.core.estimation.fit import fit_model
+from imu_noise_id.core.estimation.model import FitOptions, fit_model
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, RR, RW, WN
 
@@ -138,7 +138,7 @@ def fit_em_qn(model: ss.StateSpace, y: np.ndarray) -> ss.StateSpace:
 def pipeline_fit(names: list[str], y: np.ndarray) -> tuple[dict, float]:
     """fit_model on the record; the paper's parameters and the exact log-likelihood of the state form at them
     (μ of every state by GLS, as the state form estimates it, so that it compares with ``ref``)."""
-    fit = fit_model(y, 1.0, "+".join(names), uncertainty=False)
+    fit = fit_model(y, 1.0, "+".join(names), options=FitOptions(uncertainty=False))
     theta = {}
     for c in fit.components:
         ps = c.per_sample(1.0)

@@ -15,7 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from imu_noise_id.core.estimation import starts as avfit
-from imu_noise_id.core.estimation.fit import fit_model, select_model, simulate_allan_band
+from imu_noise_id.core.estimation.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.selection import select_model
+from imu_noise_id.core.simulation.bands import allan_band
 from imu_noise_id.report.plots_model import save_allan_overlay
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "adis16405_static" / "adis16405_run1.npz"
@@ -48,11 +50,11 @@ def main() -> None:
             print(f"  record for ±10 %: {lab}: {need / 3600:.3g} h (now {rl.current_s / 3600:.3g} h)"
                   f"{'' if rl.reliable[lab] else '  (lower bound: record not ≫ τ)'}")
         av = avfit.empirical_allan(y, dt)
-        band = simulate_allan_band(fit, y.size, av.tau, n_sim=20, seed=k)
+        band = allan_band(fit.components, fit.dt, y.size, av.tau, n_sim=20, seed=k)
         panels.append({"tau": av.tau, "avar": av.avar, "fit": fit, "band": band, "unit": "m/s²",
                        "label": f"ADIS16405 {axis}", "title": f"{axis}: WN+2GM"})
     print("\nBIC ranking on accel_y (default candidates + what the AV suggests):")
-    sel = select_model(accel[:, 1], dt, n_starts=2, uncertainty=False)
+    sel = select_model(accel[:, 1], dt, options=FitOptions(n_starts=2, uncertainty=False))
     for row in sel.table:
         print("  " + ", ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()))
     save_allan_overlay(OUT_FIG, panels, title="Paper 000 §5 model (WN + 2 GM) on ADIS16405 accelerometers, run 1")

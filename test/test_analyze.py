@@ -14,8 +14,10 @@ from imu_noise_id.core.axes import AXES, GYRO_AXES, ImuSeries
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.noise.components import RW, WN
 from imu_noise_id.core.simulation.static import simulate_static_imu
-from imu_noise_id.pipelines.analysis import NotStaticError, analyze_static, kalibr_parameters
-from imu_noise_id.report.outputs import summary_table, write_static_outputs
+from imu_noise_id.pipelines.analyze import AnalysisResult
+from imu_noise_id.pipelines.analyze.static import NotStaticError, analyze_static, kalibr_parameters
+from imu_noise_id.report.analysis import write_analysis
+from imu_noise_id.report.console import summary_table
 
 GYRO_N, GYRO_K = 1.7e-4, 2e-5  # rad/s/√Hz, rad/s²/√Hz
 ACCEL_N, ACCEL_K = 2e-3, 3e-4  # m/s²/√Hz, m/s³/√Hz
@@ -60,7 +62,7 @@ def test_kalibr_numbers_are_the_max_over_axes(hour_result):
 
 
 def test_outputs_files_units_and_values(hour_result, tmp_path):
-    paths = write_static_outputs(hour_result, tmp_path, rostopic="/imu/data")
+    paths = write_analysis(AnalysisResult(hour_result), tmp_path, rostopic="/imu/data", meta={})
     assert set(paths) == {"imu.yaml", "allan.csv", "allan.png"}
     text = (tmp_path / "imu.yaml").read_text()
     assert "rad/s/sqrt(Hz)" in text and "m/s^3/sqrt(Hz)" in text  # units stated in the comment header

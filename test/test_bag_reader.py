@@ -8,15 +8,12 @@ import numpy as np
 import pytest
 
 from imu_noise_id.bag.reader import (
-    IMU_TYPE,
-    ODOM_TYPE,
-    TEMPERATURE_TYPE,
-    list_topics,
     read_bag,
     read_imu,
     read_odometry,
-    read_temperature,
+    read_static,
 )
+from imu_noise_id.bag.topics import IMU_TYPE, ODOM_TYPE, TEMPERATURE_TYPE, list_topics
 from imu_noise_id.bag.writer import encode_cdr, write_bag
 from imu_noise_id.core.axes import ImuSeries, OdometrySeries, ScalarSeries
 from imu_noise_id.core.noise.modelspec import parse_imu_model
@@ -92,7 +89,7 @@ def test_round_trip_equals_the_written_arrays(full_bag, imu):
     # The single-topic readers give the same arrays.
     np.testing.assert_array_equal(read_imu(path).gyro, imu.gyro)
     np.testing.assert_array_equal(read_odometry(path).position, odom.position)
-    np.testing.assert_array_equal(read_temperature(path).value, temp.value)
+    np.testing.assert_array_equal(read_static(path).temperature.value, temp.value)
 
 
 def test_fast_path_equals_full_deserialisation(full_bag):
@@ -112,9 +109,9 @@ def test_imu_orientation_round_trip_fast_equals_full(tmp_path, storage, monkeypa
     """The Imu orientation comes back as written, NaN where a message says "not provided" (REP-145:
     orientation_covariance[0] = -1), identically on the numpy path and with full deserialisation; batches before
     the first provided orientation (no array allocated yet) read as not provided."""
-    import imu_noise_id.bag.reader as reader
+    import imu_noise_id.bag.stream as stream
 
-    monkeypatch.setattr(reader, "BATCH", 50)
+    monkeypatch.setattr(stream, "BATCH", 50)
     imu = simulated_imu(duration=5.0)
     rng = np.random.default_rng(8)
     q = rng.normal(size=(len(imu), 4))

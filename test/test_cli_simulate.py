@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imu_noise_id.bag.reader import list_topics, read_imu
+from imu_noise_id.bag.reader import read_imu
+from imu_noise_id.bag.topics import list_topics
 from imu_noise_id.cli import main
 from imu_noise_id.core.noise.modelspec import parse_imu_model
 from imu_noise_id.core.simulation.static import simulate_static_imu

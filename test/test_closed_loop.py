@@ -11,7 +11,7 @@ import pytest
 
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
-from imu_noise_id.pipelines.closed_loop import align_temperature, run_closed_loop
+from imu_noise_id.pipelines.loop import align_temperature, run_closed_loop
 
 DT = 0.01
 N = 20000
@@ -73,7 +73,7 @@ def test_sinusoid_is_found_with_frequency_and_amplitude():
 
 
 def test_temperature_bias_is_found_through_a_bag(tmp_path):
-    from imu_noise_id.bag.reader import read_imu, read_temperature
+    from imu_noise_id.bag.reader import read_static
     from imu_noise_id.bag.writer import write_bag
     from imu_noise_id.core.axes import ImuSeries, ScalarSeries
 
@@ -84,8 +84,8 @@ def test_temperature_bias_is_found_through_a_bag(tmp_path):
     t_temp = t[::100]  # temperature at 1 Hz
     write_bag(tmp_path / "bag", ImuSeries(t=t, gyro=gyro, accel=np.zeros((N, 3))),
               temperature=ScalarSeries(t=t_temp, value=temp[::100]))
-    imu = read_imu(tmp_path / "bag")
-    ts = read_temperature(tmp_path / "bag")
+    recording = read_static(tmp_path / "bag")
+    imu, ts = recording.imu, recording.temperature
     assert ts is not None
     r = run_closed_loop(imu.axis("gyro_z"), imu.dt, START, temperature=align_temperature(imu.t, ts.t, ts.value))
     assert _added(r) == ["TEMP"]

@@ -8,7 +8,8 @@ import pytest
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.estimation import em, mle
-from imu_noise_id.core.estimation.fit import fit_model, select_model
+from imu_noise_id.core.estimation.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.selection import select_model
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
 
@@ -84,7 +85,7 @@ def test_ci_coverage_wn_gm():
     hits = {k: 0 for k in truth}
     for seed in range(40):
         y = simulate_sum(comps, 1000, 1.0, np.random.default_rng(100 + seed)) + 1.0
-        fit = fit_model(y, 1.0, "WN+GM", n_starts=1, em_iter=3)
+        fit = fit_model(y, 1.0, "WN+GM", options=FitOptions(n_starts=1, em_iter=3))
         for k, v in truth.items():
             lo, hi = fit.ci95[k]
             hits[k] += lo <= v <= hi
@@ -105,7 +106,7 @@ def test_parameters_recovered_within_their_intervals(spec, truth, n, dt):
     y = simulate_sum(truth, n, dt, np.random.default_rng(7)) + 0.2
     fit = fit_model(y, dt, spec)
     assert fit.model == spec
-    from imu_noise_id.core.estimation.fit import parameter_labels
+    from imu_noise_id.core.noise.modelspec import parameter_labels
 
     for i, p, lab in parameter_labels(truth):
         lo, hi = fit.ci95[lab]
@@ -125,7 +126,8 @@ def test_missing_samples_and_exog():
     sinus = np.sin(2 * np.pi * 0.3 * t)
     y = simulate_sum([WN(0.05), GM(tau=5.0, sigma=0.1)], n, dt, rng) + 0.3 + 0.08 * sinus
     y[[50, 51, 700]] = np.nan
-    fit = fit_model(y, dt, "WN+GM", exog=sinus, exog_names=["sin0.3Hz"], n_starts=1, em_iter=3)
+    fit = fit_model(y, dt, "WN+GM", exog=sinus, exog_names=["sin0.3Hz"],
+                    options=FitOptions(n_starts=1, em_iter=3))
     coef = fit.exog_coef["sin0.3Hz"]
     assert coef["ci95"][0] <= 0.08 <= coef["ci95"][1]
     assert fit.n == n - 3
@@ -135,7 +137,7 @@ def test_missing_samples_and_exog():
 
 def test_select_model_prefers_the_true_structure():
     y = simulate_sum([WN(0.3), GM(tau=30.0, sigma=0.6)], 3000, 1.0, np.random.default_rng(5))
-    sel = select_model(y, 1.0, ["WN+RW", "WN+GM"], n_starts=1)
+    sel = select_model(y, 1.0, ["WN+RW", "WN+GM"], options=FitOptions(n_starts=1))
     assert sel.best.model == "WN+GM"
     assert sel.table[0]["delta_bic"] == 0.0 and sel.table[1]["delta_bic"] > 10.0
 
@@ -168,7 +170,7 @@ def test_ls_drift_elimination_reports_a_gls_slope_interval():
     # Paper 000 §3.5(iii): the ramp removed by least squares first. The OLS slope's own standard error would
     # assume white residuals (here it would be ~50x too small); the reported interval must cover the truth.
     y = simulate_sum([WN(0.2), RW(0.01), RR(2e-4)], 4000, 1.0, np.random.default_rng(3))
-    fit = fit_model(y, 1.0, "WN+RW+RR", drift="ls", n_starts=1)
+    fit = fit_model(y, 1.0, "WN+RW+RR", drift="ls", options=FitOptions(n_starts=1))
     ramp = fit.exog_coef["ramp"]
     assert "ls_value" in ramp and ramp["ci95"][0] <= 2e-4 <= ramp["ci95"][1]
     assert fit.ci95["RW.random_walk"][0] <= 0.01 <= fit.ci95["RW.random_walk"][1]
@@ -178,11 +180,11 @@ def test_long_record_with_gaps_is_fitted_gap_filled_then_scored_exactly():
     truth = [WN(1e-3), GM(tau=0.5, sigma=1e-3)]
     y = simulate_sum(truth, 25000, 0.01, np.random.default_rng(9))
     y[[10, 5000, 5001, 20000]] = np.nan
-    fit = fit_model(y, 0.01, "WN+GM", n_starts=1, uncertainty=False)
+    fit = fit_model(y, 0.01, "WN+GM", options=FitOptions(n_starts=1, uncertainty=False))
     assert fit.n == 24996
     assert abs(fit.components[0].params()["noise_density"] / 1e-3 - 1) < 0.05
     # The reported log-likelihood is the exact one of the record with its gaps.
-    assert fit.loglik == pytest.approx(kalman.loglik(fit.statespace, fit._y, fit._z, engine="exact").loglik)
+    assert fit.loglik == pytest.approx(kalman.loglik(fit.statespace, *fit.record, engine="exact").loglik)
 
 
 def test_parameter_at_the_zero_boundary_does_not_stall_the_search():
@@ -191,7 +193,7 @@ def test_parameter_at_the_zero_boundary_does_not_stall_the_search():
     # walked down that flat direction) to the same likelihood: 114920.409 with the walk free.
     truth = [WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-5), RR(1e-6)]
     y = simulate_sum(truth, 36_000, 0.01, np.random.default_rng(1)) + 2e-3
-    fit = fit_model(y, 0.01, "WN+GM+RW+RR", uncertainty=False)
+    fit = fit_model(y, 0.01, "WN+GM+RW+RR", options=FitOptions(uncertainty=False))
     rw = next(c for c in fit.components if isinstance(c, RW))
     assert rw.random_walk < 1e-7
     assert fit.n_eval <= 10

@@ -45,13 +45,15 @@ def test_fit_errors_exit_2(tmp_path, capsys):
 
 
 def test_allan_band_and_overlay_figure(tmp_path):
-    from imu_noise_id.core.estimation.fit import fit_model, kalibr_values, simulate_allan_band
+    from imu_noise_id.core.estimation.model import FitOptions, fit_model
+    from imu_noise_id.core.estimation.selection import kalibr_values
     from imu_noise_id.core.noise.components import GM, WN, simulate_sum
+    from imu_noise_id.core.simulation.bands import allan_band
     from imu_noise_id.report.plots_model import save_allan_overlay
 
     y = simulate_sum([WN(0.01), GM(tau=1.0, sigma=0.02)], 4000, 0.01, np.random.default_rng(2))
-    fit = fit_model(y, 0.01, "WN+GM", n_starts=1)
-    tau, band = simulate_allan_band(fit, 4000, n_sim=20, seed=1)
+    fit = fit_model(y, 0.01, "WN+GM", options=FitOptions(n_starts=1))
+    tau, band = allan_band(fit.components, fit.dt, 4000, n_sim=20, seed=1)
     theory = fit.theoretical_allan_variance(tau)
     # The simulations scatter around the fitted model's theoretical AV (median within 15 % at short τ).
     assert band.shape == (20, tau.size)

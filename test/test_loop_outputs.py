@@ -11,9 +11,9 @@ import yaml
 from imu_noise_id.cli import main
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
-from imu_noise_id.pipelines.closed_loop import block_average, run_closed_loop
+from imu_noise_id.pipelines.loop import block_average, run_closed_loop
 from imu_noise_id.report.html import write_loop_report
-from imu_noise_id.report.loop_yaml import add_loop_to_model_yaml
+from imu_noise_id.report.model_yaml import write_model_yaml
 
 DT = 0.01
 
@@ -27,12 +27,10 @@ def sine_result():
 
 
 def test_model_yaml_gets_loop_steps(tmp_path, sine_result):
-    path = tmp_path / "model.yaml"
-    path.write_text(yaml.safe_dump({"axes": {"gyro_z": {"model": "WN+RW", "bic": -1.0}}}))
-    add_loop_to_model_yaml(path, {"gyro_z": sine_result})
+    path = write_model_yaml(tmp_path / "model.yaml", {}, {"gyro_z": sine_result}, {"command": "loop"})
     doc = yaml.safe_load(path.read_text())
     entry = doc["axes"]["gyro_z"]
-    assert entry["bic"] == -1.0  # existing fields kept
+    assert (entry["model"], entry["n"], entry["dt"]) == ("WN+RW+SIN", 8000, DT)  # the loop's final model
     steps = entry["loop"]
     assert steps[0]["added"] is None and steps[0]["evidence"] is None
     assert steps[1]["added"] == "SIN" and steps[1]["how"] == "deterministic regressor"

@@ -4,84 +4,27 @@ No ROS install is needed: :class:`rosbags.highlevel.AnyReader` reads the files a
 in them. Values come out as numpy arrays in the dataclasses of :mod:`imu_noise_id.core.axes`, timed by the
 messages' header stamps (``sec + nanosec·1e-9`` seconds).
 
-Speed and memory: messages are read (mcap: by :mod:`.mcapfast` when chunks do not overlap) in batches of
-:data:`BATCH` raw messages, decoded with numpy at fixed byte offsets (:mod:`.fastdecode`, identical to full
-deserialisation, which remains the fallback) and written into arrays preallocated from the bag's message counts,
-so no message objects are kept.
+Reading is one pass over the chosen topics (:mod:`.stream`); opening the bag and choosing topics is in
+:mod:`.topics`.
 
 Every problem with the input raises :class:`~.errors.BagError` naming the bag, the topic and what to do, or is
 repaired by :func:`imu_noise_id.core.quality.repair_time_series` with a note in the result (see ``docs/bags.md``).
 """
 
+
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager, suppress
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from itertools import islice
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..core.axes import ImuSeries, OdometrySeries, ScalarSeries
-from ..core.quality import IMU_MAX_ABS, QualityError, repair_time_series
 from .errors import BagError
-from .fastdecode import FlatDecoder
-from .mcapfast import fast_mcap_batches
-
-IMU_TYPE = "sensor_msgs/msg/Imu"
-ODOM_TYPE = "nav_msgs/msg/Odometry"
-TEMPERATURE_TYPE = "sensor_msgs/msg/Temperature"
-
-#: Raw messages read and decoded at a time (about 5 MB of Imu messages).
-BATCH = 16384
-
-Progress = Callable[[int, int], None]
-
-_STAMP = {"sec": ("header.stamp.sec",), "nsec": ("header.stamp.nanosec",)}
-
-
-def _xyz(prefix: str, names: str = "xyz") -> tuple[str, ...]:
-    return tuple(f"{prefix}.{c}" for c in names)
-
-
-_OUTPUTS: dict[str, dict[str, tuple[str, ...]]] = {
-    IMU_TYPE: {
-        **_STAMP,
-        "gyro": _xyz("angular_velocity"),
-        "accel": _xyz("linear_acceleration"),
-        "orientation_xyzw": _xyz("orientation", "xyzw"),
-        "orientation_cov0": ("orientation_covariance[0]",),
-    },
-    ODOM_TYPE: {
-        **_STAMP,
-        "position": _xyz("pose.pose.position"),
-        "orientation_xyzw": _xyz("pose.pose.orientation", "xyzw"),
-        "linear_velocity": _xyz("twist.twist.linear"),
-        "angular_velocity": _xyz("twist.twist.angular"),
-        "pose_covariance": ("pose.covariance",),
-        "twist_covariance": ("twist.covariance",),
-    },
-    TEMPERATURE_TYPE: {**_STAMP, "value": ("temperature",)},
-}
-_STRINGS: dict[str, tuple[str, ...]] = {
-    IMU_TYPE: ("header.frame_id",),
-    ODOM_TYPE: ("header.frame_id", "child_frame_id"),
-    TEMPERATURE_TYPE: (),
-}
-#: Outputs decoded batch by batch into temporaries and consumed by :meth:`_Stream.add`: the covariance flag is
-#: not kept, the orientation only from the first batch that provides one (no memory for IMUs that give none).
-_TRANSIENT: dict[str, frozenset[str]] = {IMU_TYPE: frozenset({"orientation_cov0", "orientation_xyzw"})}
-#: Largest plausible magnitude per output (None: no limit), see repair_time_series.
-_MAX_ABS = {"gyro": IMU_MAX_ABS[0], "accel": IMU_MAX_ABS[1]}
-_WHAT = {IMU_TYPE: "Imu", ODOM_TYPE: "Odometry", TEMPERATURE_TYPE: "Temperature"}
-_FLAG = {IMU_TYPE: "--topic", ODOM_TYPE: "--odom-topic", TEMPERATURE_TYPE: "--temperature-topic"}
-
-_REPAIR_HINT = (
-    "The file is empty, truncated or corrupt (e.g. the recorder was killed): re-record it, or repair it with "
-    "`rosbag reindex` (ROS 1) / `ros2 bag reindex` (rosbag2) and try again"
-)
+from .stream import Progress, TopicStream, read_topics
+from .topics import IMU_TYPE, ODOM_TYPE, TEMPERATURE_TYPE
 
 
 @dataclass
@@ -110,326 +53,7 @@ class BagContents:
     imu_covariance: dict[str, np.ndarray] = field(default_factory=dict)
 
 
-# --- opening ----------------------------------------------------------------------------------------------------
-
-
-def _describe(path: Path) -> str:
-    if path.is_dir():
-        return f"rosbag2 directory {str(path)!r}"
-    kind = {".bag": "ROS 1 bag", ".mcap": "rosbag2 mcap file", ".db3": "rosbag2 sqlite3 file"}.get(path.suffix, "bag")
-    return f"{kind} {str(path)!r}"
-
-
-@contextmanager
-def _open(path: str | Path) -> Iterator[Any]:
-    """An open AnyReader, with every failure turned into a BagError."""
-    from rosbags.highlevel import AnyReader
-    from rosbags.typesys import Stores, get_typestore
-
-    bag = Path(path).expanduser()
-    if not bag.exists():
-        raise BagError(
-            f"bag {str(bag)!r} does not exist: give a ROS 1 .bag file, a rosbag2 directory (with metadata.yaml) "
-            "or a rosbag2 .db3/.mcap file"
-        )
-    if bag.is_file() and bag.suffix not in (".bag", ".db3", ".mcap"):
-        raise BagError(
-            f"{str(bag)!r} is not a bag: expected a ROS 1 .bag file, a rosbag2 directory or a .db3/.mcap file"
-        )
-    if bag.is_file() and bag.stat().st_size == 0:
-        raise BagError(f"{_describe(bag)} is empty (0 bytes): re-record it")
-    try:
-        reader = AnyReader([bag], default_typestore=get_typestore(Stores.LATEST))
-        reader.open()
-    except Exception as exc:
-        raise BagError(f"cannot open {_describe(bag)}: {_reason(exc)}. {_REPAIR_HINT}") from None
-    try:
-        yield reader
-    finally:
-        with suppress(Exception):
-            reader.close()
-
-
-def _reason(exc: BaseException) -> str:
-    text = str(exc).strip().rstrip(".") or type(exc).__name__
-    return text if len(text) < 300 else text[:300] + "…"
-
-
-def _topics(reader: Any) -> dict[str, tuple[str, int]]:
-    return {name: (info.msgtype or "(mixed types)", int(info.msgcount)) for name, info in reader.topics.items()}
-
-
-def list_topics(path: str | Path) -> dict[str, tuple[str, int]]:
-    """Topic → (message type, message count) of a bag, e.g. ``{'/imu/data': ('sensor_msgs/msg/Imu', 720000)}``."""
-    with _open(path) as reader:
-        return _topics(reader)
-
-
-def _listing(topics: Mapping[str, tuple[str, int]], msgtype: str | None = None) -> str:
-    rows = [f"{name} ({typ}, {count} msgs)" for name, (typ, count) in topics.items() if msgtype in (None, typ)]
-    return ", ".join(rows) if rows else "none"
-
-
-def _select(
-    topics: Mapping[str, tuple[str, int]],
-    msgtype: str,
-    topic: str | None,
-    where: str,
-    *,
-    required: bool,
-    notes: list[str],
-) -> str | None:
-    """The topic to read for ``msgtype`` (explicit, or the only one of that type), or None when optional."""
-    what, flag = _WHAT[msgtype], _FLAG[msgtype]
-    if topic is not None:
-        if topic not in topics:
-            raise BagError(
-                f"topic {topic!r} is not in {where}. {what} topics there: {_listing(topics, msgtype)}; "
-                f"all topics: {_listing(topics)}. Pass {flag} with one of them"
-            )
-        if topics[topic][0] != msgtype:
-            raise BagError(
-                f"topic {topic!r} in {where} has type {topics[topic][0]}, not {msgtype}. {what} topics there: "
-                f"{_listing(topics, msgtype)}. Pass {flag} with one of them"
-            )
-        return topic
-    candidates = [name for name, (typ, _) in topics.items() if typ == msgtype]
-    if len(candidates) == 1:
-        return candidates[0]
-    if len(candidates) > 1:
-        if required:
-            raise BagError(
-                f"{where} has {len(candidates)} {what} topics: {_listing(topics, msgtype)}. Pass {flag} to choose one"
-            )
-        notes.append(f"several {what} topics ({', '.join(candidates)}): none read; pass {flag} to choose one")
-        return None
-    if required:
-        raise BagError(
-            f"no {msgtype} topic in {where}; its topics are: {_listing(topics)}. "
-            f"Record the {what} topic (e.g. /imu/data) or read another bag"
-        )
-    return None
-
-
-# --- streaming decode -------------------------------------------------------------------------------------------
-
-
-class _Stream:
-    """Arrays of one topic, preallocated from the message count and filled batch by batch."""
-
-    def __init__(self, reader: Any, msgtype: str, topic: str, count: int, fast: bool) -> None:
-        from rosbags.typesys import Stores, get_typestore
-
-        self.msgtype = msgtype
-        self.topic = topic
-        self.decoder = FlatDecoder(
-            reader.typestore.fielddefs,
-            msgtype,
-            _OUTPUTS[msgtype],
-            strings=_STRINGS[msgtype],
-            ros1=not reader.is2,
-            deserialize=reader.deserialize,
-            fast=fast,
-        )
-        # A bag whose definition is not flat still has the standard field sizes (e.g. 36 covariance values).
-        reference = get_typestore(Stores.LATEST).fielddefs if self.decoder.leaves is None else None
-        self.widths = {k: w for k, w in self.decoder.widths(reference).items() if k not in _STAMP}
-        transient = _TRANSIENT.get(msgtype, frozenset())
-        self.transient = {k: w for k, w in self.widths.items() if k in transient}
-        self.widths = {k: w for k, w in self.widths.items() if k not in transient}
-        self.expected = count
-        self.capacity = max(count, 1)
-        self.n = 0
-        self.first_raw: bytes | None = None
-        self.declared_covariance: dict[str, np.ndarray] = {}
-        self.t = np.empty(self.capacity)
-        # Receive times are kept only while every header stamp seen is zero (then they replace the stamps).
-        self.receive_ns: np.ndarray | None = np.empty(self.capacity, dtype=np.int64)
-        self.arrays = {k: np.empty((self.capacity, w) if w > 1 else self.capacity) for k, w in self.widths.items()}
-
-    def _grow(self, need: int) -> None:
-        self.capacity = max(need, int(self.capacity * 1.5))
-        self.t = np.resize(self.t, self.capacity)
-        if self.receive_ns is not None:
-            self.receive_ns = np.resize(self.receive_ns, self.capacity)
-        self.arrays = {k: np.resize(a, (self.capacity, *a.shape[1:])) for k, a in self.arrays.items()}
-
-    def add(self, raws: list[bytes], receive_ns: list[int]) -> None:
-        k = len(raws)
-        if self.first_raw is None and raws:
-            self.first_raw = raws[0]
-        if self.n + k > self.capacity:
-            self._grow(self.n + k)
-        s, e = self.n, self.n + k
-        sec = np.empty(k, dtype=np.int64)
-        nsec = np.empty(k, dtype=np.int64)
-        views = {name: a[s:e] for name, a in self.arrays.items()}
-        transient = {name: np.empty((k, w) if w > 1 else k) for name, w in self.transient.items()}
-        self.decoder.decode(raws, {"sec": sec, "nsec": nsec, **views, **transient})
-        if "orientation_xyzw" in transient:
-            self._keep_orientation(s, e, transient["orientation_xyzw"], transient["orientation_cov0"])
-        self.t[s:e] = sec + nsec * 1e-9
-        if self.receive_ns is not None:
-            if np.any(sec) or np.any(nsec):
-                self.receive_ns = None
-            else:
-                self.receive_ns[s:e] = receive_ns
-        self.n = e
-
-    def _keep_orientation(self, s: int, e: int, q: np.ndarray, cov0: np.ndarray) -> None:
-        """Store rows ``s:e`` of the orientation, allocating its array at the first batch that provides one."""
-        _mark_orientation_not_provided(q, cov0)
-        kept = self.arrays.get("orientation_xyzw")
-        if kept is None and q.any():
-            kept = self.arrays["orientation_xyzw"] = np.zeros((self.capacity, 4))  # earlier rows: not provided
-        if kept is not None:
-            kept[s:e] = q
-
-    def trimmed(self) -> tuple[np.ndarray, np.ndarray | None, dict[str, np.ndarray]]:
-        n = self.n
-        receive = None if self.receive_ns is None else self.receive_ns[:n]
-        return self.t[:n], receive, {k: a[:n] for k, a in self.arrays.items()}
-
-
-def _mark_orientation_not_provided(q: np.ndarray, cov0: np.ndarray) -> None:
-    """Zero the orientation rows that are not provided (REP-145: ``orientation_covariance[0] == -1``) or unusable
-    (NaN/inf, zero quaternion), so that they neither drop the sample in the repair nor pass as an orientation.
-
-    The zero quaternion is the marker :func:`_imu` turns into NaN rows after the repair.
-    """
-    bad = (cov0 == -1.0) | ~np.isfinite(q).all(axis=1)
-    if bad.any():
-        q[bad] = 0.0
-
-
-def _finish(stream: _Stream, where: str, notes: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
-    """Stamps and arrays of a stream after the documented repairs, with the notes about it."""
-    topic_notes: list[str] = []
-    if stream.msgtype == IMU_TYPE and stream.first_raw is not None:
-        first = stream.decoder.deserialize(stream.first_raw, IMU_TYPE)
-        stream.declared_covariance = {
-            name: np.asarray(getattr(first, f"{name}_covariance"), dtype=float).reshape(3, 3)
-            for name in ("orientation", "angular_velocity", "linear_acceleration")
-        }
-    t, receive_ns, arrays = stream.trimmed()
-    if stream.n == 0:
-        raise BagError(
-            f"topic {stream.topic!r} in {where} has no readable messages (the index announced {stream.expected}). "
-            f"{_REPAIR_HINT}"
-        )
-    if stream.n != stream.expected:
-        topic_notes.append(f"the bag index announced {stream.expected} messages but {stream.n} were read")
-    if receive_ns is not None:  # every header stamp is zero
-        t = receive_ns * 1e-9
-        topic_notes.append(
-            "every header stamp is zero (the publisher does not set header.stamp): using the bag's receive times, "
-            "which include transport delays and jitter"
-        )
-    for path in sorted(stream.decoder.varying_strings):
-        value = stream.decoder.strings.get(path, "")
-        topic_notes.append(f"{path} changes between messages; the first value {value!r} is reported")
-    names = list(arrays)
-    try:
-        limits = [_MAX_ABS.get(k) for k in names] if stream.msgtype == IMU_TYPE else None
-        t, columns, report = repair_time_series(t, [arrays[k] for k in names], max_abs=limits)
-    except QualityError as exc:
-        raise BagError(f"topic {stream.topic!r} in {where}: {exc}. Check the sensor driver or record again") from None
-    topic_notes.extend(report.notes("messages"))
-    notes.extend(f"{stream.topic}: {note}" for note in topic_notes)
-    return t, dict(zip(names, columns, strict=True)), topic_notes
-
-
-def _read(
-    path: str | Path,
-    wanted: dict[str, tuple[str | None, bool]],
-    progress: Progress | None,
-    fast: bool,
-) -> tuple[Path, dict[str, tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]], list[str]]:
-    """Read the topics of the message types in ``wanted`` (msgtype → (topic or None, required)) in one pass."""
-    bag = Path(path).expanduser()
-    notes: list[str] = []
-    with _open(bag) as reader:
-        where = _describe(bag)
-        topics = _topics(reader)
-        if not topics or not any(count for _, count in topics.values()):
-            raise BagError(f"{where} contains no messages (topics: {_listing(topics)}): record data into it first")
-        streams: dict[str, _Stream] = {}
-        by_connection: dict[int, _Stream] = {}
-        for msgtype, (topic, required) in wanted.items():
-            name = _select(topics, msgtype, topic, where, required=required, notes=notes)
-            if name is None:
-                continue
-            count = topics[name][1]
-            if count == 0:
-                if required:
-                    raise BagError(f"topic {name!r} in {where} has no messages: record it, or choose another topic")
-                notes.append(f"{name}: no messages")
-                continue
-            stream = _Stream(reader, msgtype, name, count, fast)
-            streams[msgtype] = stream
-            for connection in reader.topics[name].connections:
-                by_connection[id(connection)] = stream
-        connections = [c for c in reader.connections if id(c) in by_connection]
-        total = sum(s.expected for s in streams.values())
-        done = 0
-        try:
-            single = next(iter(streams.values())) if len(streams) == 1 else None
-            for batch in _batches(reader, connections):
-                if single is not None:
-                    _, receive, raws = zip(*batch, strict=True)
-                    single.add(list(raws), list(receive))
-                else:
-                    _dispatch(batch, by_connection)
-                done += len(batch)
-                if progress is not None:
-                    progress(done, total)
-        except BagError:
-            raise
-        except Exception as exc:
-            raise BagError(
-                f"{where} is truncated or corrupt: reading failed with {done} of {total} messages decoded "
-                f"({type(exc).__name__}: {_reason(exc)}). {_REPAIR_HINT}"
-            ) from None
-        results = {}
-        for msgtype, stream in streams.items():
-            t, arrays, topic_notes = _finish(stream, where, notes)
-            results[msgtype] = (t, arrays, topic_notes, stream)
-    return bag, results, notes
-
-
-def _batches(reader: Any, connections: list[Any]) -> Iterator[list[tuple[Any, int, bytes]]]:
-    """Lists of about BATCH (connection, receive time [ns], raw bytes), in the order rosbags yields them."""
-    chunks = fast_mcap_batches(reader, connections)
-    if chunks is None:
-        messages = reader.messages(connections=connections)
-        while batch := list(islice(messages, BATCH)):
-            yield batch
-        return
-    pending: list[tuple[Any, int, bytes]] = []
-    for chunk in chunks:
-        pending.extend(chunk)
-        if len(pending) >= BATCH:
-            yield pending
-            pending = []
-    if pending:
-        yield pending
-
-
-def _dispatch(batch: list[tuple[Any, int, bytes]], by_connection: dict[int, _Stream]) -> None:
-    parts: dict[int, tuple[_Stream, list[bytes], list[int]]] = {}
-    for connection, receive, raw in batch:
-        stream = by_connection[id(connection)]
-        entry = parts.setdefault(id(stream), (stream, [], []))
-        entry[1].append(raw)
-        entry[2].append(receive)
-    for stream, raws, receive in parts.values():
-        stream.add(raws, receive)
-
-
-# --- series -----------------------------------------------------------------------------------------------------
-
-
-def _imu(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]) -> ImuSeries:
+def _imu(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], TopicStream]) -> ImuSeries:
     t, arrays, topic_notes, stream = entry
     frame = stream.decoder.strings.get("header.frame_id", "")
     orientation = arrays.get("orientation_xyzw")
@@ -443,7 +67,7 @@ def _imu(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]) ->
                      notes=list(topic_notes), orientation_xyzw=orientation)  # fmt: skip
 
 
-def _odometry(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]) -> OdometrySeries:
+def _odometry(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], TopicStream]) -> OdometrySeries:
     t, arrays, _, stream = entry
     strings = stream.decoder.strings
     return OdometrySeries(
@@ -460,12 +84,12 @@ def _odometry(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream
     )
 
 
-def _temperature(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], _Stream]) -> ScalarSeries:
+def _temperature(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], TopicStream]) -> ScalarSeries:
     t, arrays, _, stream = entry
     return ScalarSeries(t=t, value=arrays["value"], topic=stream.topic)
 
 
-def _stats(results: Mapping[str, tuple[Any, Any, Any, _Stream]]) -> dict[str, tuple[int, int]]:
+def _stats(results: Mapping[str, tuple[Any, Any, Any, TopicStream]]) -> dict[str, tuple[int, int]]:
     return {e[3].topic: (e[3].decoder.stats.fast, e[3].decoder.stats.fallback) for e in results.values()}
 
 
@@ -500,7 +124,7 @@ def read_bag(
         ODOM_TYPE: (odom_topic, require_odometry or odom_topic is not None),
         TEMPERATURE_TYPE: (temperature_topic, temperature_topic is not None),
     }
-    bag, results, notes = _read(path, wanted, progress, fast)
+    bag, results, notes = read_topics(path, wanted, progress, fast)
     return BagContents(
         path=bag,
         imu=_imu(results[IMU_TYPE]),
@@ -514,22 +138,52 @@ def read_bag(
 
 def read_imu(path: str | Path, topic: str | None = None, progress: Progress | None = None) -> ImuSeries:
     """The sensor_msgs/Imu series of ``topic`` (or of the bag's only Imu topic); repairs are in ``.notes``."""
-    _, results, _ = _read(path, {IMU_TYPE: (topic, True)}, progress, True)
+    _, results, _ = read_topics(path, {IMU_TYPE: (topic, True)}, progress, True)
     return _imu(results[IMU_TYPE])
 
 
 def read_odometry(path: str | Path, topic: str | None = None) -> OdometrySeries:
     """The nav_msgs/Odometry series of ``topic`` (or of the bag's only Odometry topic)."""
-    _, results, _ = _read(path, {ODOM_TYPE: (topic, True)}, None, True)
+    _, results, _ = read_topics(path, {ODOM_TYPE: (topic, True)}, None, True)
     return _odometry(results[ODOM_TYPE])
 
 
-def read_temperature(path: str | Path, topic: str | None = None) -> ScalarSeries | None:
-    """The sensor_msgs/Temperature series [°C] of ``topic``, of the only Temperature topic, or None if absent."""
-    bag = Path(path)
-    with _open(bag) as reader:
-        topics = _topics(reader)
-    if topic is None and not any(typ == TEMPERATURE_TYPE for typ, _ in topics.values()):
-        return None
-    _, results, _ = _read(bag, {TEMPERATURE_TYPE: (topic, True)}, None, True)
-    return _temperature(results[TEMPERATURE_TYPE])
+def read_static(path: str | Path, topic: str | None = None, temperature_topic: str | None = None,
+                progress: Progress | None = None) -> BagContents:
+    """What a static analysis reads, in one pass: the IMU series and, where present, the temperature [°C].
+
+    ``path`` may also be an ``.npz`` file with ``t`` [s] (or ``fs_hz``), ``gyro`` [rad/s] (N, 3) and ``accel``
+    [m/s²] (N, 3), e.g. a sensor's own log converted with numpy (no temperature then).
+    """
+    p = Path(path).expanduser()
+    if p.suffix == ".npz":
+        imu = read_npz(p)
+        return BagContents(path=p, imu=imu, notes=list(imu.notes))
+    wanted = {IMU_TYPE: (topic, True), TEMPERATURE_TYPE: (temperature_topic, temperature_topic is not None)}
+    bag, results, notes = read_topics(p, wanted, progress, True)
+    return BagContents(
+        path=bag, imu=_imu(results[IMU_TYPE]),
+        temperature=_temperature(results[TEMPERATURE_TYPE]) if TEMPERATURE_TYPE in results else None,
+        notes=notes, decode_stats=_stats(results), imu_covariance=results[IMU_TYPE][3].declared_covariance,
+    )
+
+
+def read_npz(path: Path) -> ImuSeries:
+    """An IMU series from an ``.npz`` file (see :func:`read_static`)."""
+    if not path.is_file():
+        raise BagError(f"{str(path)!r}: no such file")
+    try:
+        with np.load(path) as data:
+            missing = [k for k in ("gyro", "accel") if k not in data]
+            if missing:
+                raise BagError(f"{str(path)!r} lacks array(s) {', '.join(missing)}: it needs t (or fs_hz), gyro, accel")
+            gyro, accel = np.asarray(data["gyro"], float), np.asarray(data["accel"], float)
+            if "t" in data:
+                t = np.asarray(data["t"], float)
+            elif "fs_hz" in data:
+                t = np.arange(gyro.shape[0]) / float(data["fs_hz"])
+            else:
+                raise BagError(f"{str(path)!r} needs t [s] or fs_hz [Hz] beside gyro and accel")
+        return ImuSeries(t=t, gyro=gyro, accel=accel, topic=str(path))
+    except (OSError, ValueError) as exc:
+        raise BagError(f"{str(path)!r} is not a readable .npz with t, gyro, accel arrays: {exc}") from None

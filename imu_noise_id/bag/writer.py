@@ -21,7 +21,7 @@ from ..core.axes import ImuSeries, OdometrySeries, ScalarSeries
 from ..core.simulation.robot import RobotRun
 from .errors import BagError
 from .fastdecode import PRIMITIVES, flatten
-from .reader import IMU_TYPE, ODOM_TYPE, TEMPERATURE_TYPE
+from .topics import IMU_TYPE, ODOM_TYPE, TEMPERATURE_TYPE
 
 #: Messages serialised at a time (bounded memory for long series).
 CHUNK = 65536

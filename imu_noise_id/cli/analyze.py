@@ -1,8 +1,7 @@
 """``imu-noise-id analyze BAG``: offline noise analysis of a static IMU recording.
 
-Stages (each a function): read → Allan → EM model fit (``--model``) → closed loop (unless ``--no-loop``):
-read the bag → Allan-family variances and slope parameters (:func:`imu_noise_id.pipelines.analysis.analyze_static`)
-→ write ``imu.yaml``, the variance CSVs and ``allan.png`` → print the summary and where the results are.
+Parses the options, reads the bag once (IMU and temperature), runs :func:`imu_noise_id.pipelines.analyze.analyze`
+and writes its result with :func:`imu_noise_id.report.analysis.write_analysis`.
 """
 
 from __future__ import annotations
@@ -20,13 +19,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "analyze",
         help="noise analysis of a static IMU bag: Allan family, EM model fits, closed loop (imu.yaml, model.yaml)",
         description=(
-            "Read sensor_msgs/Imu from a static recording (ROS 1 .bag, rosbag2 sqlite3 or mcap), compute the "
-            "Allan, Hadamard, total and modified Allan variances of the six axes with confidence intervals, read "
-            "the white-noise density (-1/2 slope at tau = 1 s) and random walk (+1/2 slope at tau = 3 s), and "
-            "write DIR/imu.yaml (Kalibr format), DIR/allan.csv (+ hadamard.csv, total.csv, modified.csv) and "
-            "DIR/allan.png; then fit error models per axis with the constrained EM algorithm (model selection by BIC, "
-            "95 %% confidence intervals, recording-length advice: DIR/model.yaml) and close the loop on the "
-            "residuals (DIR/report.html). The IMU must be at rest for the whole recording."
+            "Read sensor_msgs/Imu from a static recording (ROS 1 .bag, rosbag2 sqlite3 or mcap, or an .npz with t, "
+            "gyro, accel), compute the Allan, Hadamard, total and modified Allan variances of the six axes with "
+            "confidence intervals, read the white-noise density (-1/2 slope at tau = 1 s) and random walk (+1/2 "
+            "slope at tau = 3 s), and write DIR/imu.yaml (Kalibr format), DIR/allan.csv (+ hadamard.csv, total.csv, "
+            "modified.csv) and DIR/allan.png; then fit error models per axis with the constrained EM algorithm "
+            "(model selection by BIC, 95 %% confidence intervals, recording-length advice: DIR/model.yaml) and "
+            "close the loop on the residuals (DIR/report.html). The IMU must be at rest for the whole recording."
         ),
     )
     p.add_argument("bag", type=Path, help="bag file or rosbag2 directory")
@@ -53,91 +52,37 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-def _read(args: argparse.Namespace):
-    from ..bag.reader import read_imu
-    from .progress import TextProgress
-
-    progress = TextProgress(f"reading {args.bag.name}")
-    try:
-        return read_imu(args.bag, topic=args.topic, progress=progress)
-    finally:
-        progress.close()
-
-
-def _allan_stage(imu, args: argparse.Namespace):
-    from ..pipelines.analysis import analyze_static
-    from .progress import TextProgress
-
-    progress = TextProgress("Allan-family variances")
-    try:
-        return analyze_static(
-            imu, per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
-            progress=progress,
-        )
-    finally:
-        progress.close()
-
-
-def _em_stage(imu, result, args: argparse.Namespace) -> dict:
-    """Constrained-EM / maximum-likelihood fit of every axis (issue 3), then model.yaml, allan_model.png and
-    the model values in imu.yaml."""
-    from ..report.model_outputs import write_model_outputs
-    from .fit import fit_axes
-
-    fits, selections = fit_axes(imu, args.model, list(result.axes))
-    allan = result.variances["allan"]
-    avar = {axis: (allan.tau, allan.variance[:, j]) for j, axis in enumerate(result.axes)}
-    return write_model_outputs(args.out, fits, selections, avar,
-                               meta={"source": str(args.bag), "topic": imu.topic, "command": "analyze",
-                                     "model": args.model})
-
-
-def _loop_stage(imu, args: argparse.Namespace) -> dict:
-    """Closed loop (issue 7) from each axis's fitted model in DIR/model.yaml: model.yaml ``loop:`` + report.html."""
-    import yaml
-
-    from ..bag.reader import read_temperature
-    from ..core.errors import InputError
-    from .loop import loop_stage
-
-    models = yaml.safe_load((args.out / "model.yaml").read_text())["axes"]
-    start = {axis: entry["model"] for axis, entry in models.items()}
-    try:
-        temperature = read_temperature(args.bag)
-    except InputError as exc:
-        print(f"warning: closed loop without temperature: {exc}", file=sys.stderr)
-        temperature = None
-    try:
-        results, paths, factor = loop_stage(imu, temperature, args.out, start=start, axes=tuple(start),
-                                            title=f"closed loop: {args.bag.name}")
-    except InputError as exc:
-        print(f"warning: closed loop skipped: {exc}", file=sys.stderr)
-        return {}
-    for axis, r in results.items():
-        print(f"{axis}: loop {r.steps[0].model} -> {r.final.model}: {r.verdict}", flush=True)
-    if factor > 1:
-        print(f"closed loop ran on {factor}-sample block averages", flush=True)
-    return {"loop_report": paths["report"]}
-
-
 def run(args: argparse.Namespace) -> int:
     """Read, analyse, write, report. Input problems raise InputError (exit 2)."""
-    from ..core.errors import InputError
-    from ..report.outputs import summary_table, write_static_outputs
+    from ..bag.reader import read_static
+    from ..pipelines.analyze import AnalyzeOptions, ModelStage, analyze
+    from ..report.analysis import write_analysis
+    from ..report.console import summary_table
+    from .progress import TextProgress
 
-    if not 0.0 < args.confidence < 1.0:
-        raise InputError(f"--confidence must lie in (0, 1), got {args.confidence}")
-    if args.per_decade < 1:
-        raise InputError(f"--per-decade must be >= 1, got {args.per_decade}")
-    imu = _read(args)
-    result = _allan_stage(imu, args)
-    paths = write_static_outputs(result, args.out, rostopic=imu.topic)
-    if args.model != "none":
-        paths.update(_em_stage(imu, result, args))
-        if not args.no_loop:
-            paths.update(_loop_stage(imu, args))
-    print(summary_table(result), flush=True)
-    for w in result.warnings:
+    options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
+                             models=ModelStage(args.model), loop=not args.no_loop)
+    with TextProgress(f"reading {args.bag.name}") as progress:
+        recording = read_static(args.bag, topic=args.topic, progress=progress)
+    with TextProgress("Allan-family variances") as progress:
+        result = analyze(recording.imu, recording.temperature, options, progress=progress, on_axis=_print_axis)
+    for warning in result.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    if result.loop_decimation > 1:
+        print(f"closed loop ran on {result.loop_decimation}-sample block averages", flush=True)
+    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model}
+    paths = write_analysis(result, args.out, rostopic=recording.imu.topic, meta=meta,
+                           title=f"closed loop: {args.bag.name}")
+    print(summary_table(result.static), flush=True)
+    for w in result.static.warnings:
         print(f"warning: {w}", file=sys.stderr)
     print(f"results in {args.out}/: " + ", ".join(paths))
     return 0
+
+
+def _print_axis(axis: str, fit, loop) -> None:
+    from ..report.console import fit_line, loop_line
+
+    print(fit_line(axis, fit), flush=True)
+    if loop is not None:
+        print(loop_line(axis, loop), flush=True)

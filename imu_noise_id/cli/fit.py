@@ -34,90 +34,27 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-def load_series(path: str, topic: str | None):
-    """ImuSeries from an .npz (t, gyro, accel) or a bag (imu_noise_id.bag.reader.read_imu)."""
-    import numpy as np
-
-    from ..core.axes import ImuSeries
-    from ..core.errors import InputError
-
-    p = Path(path)
-    if not p.exists():
-        raise InputError(f"{path}: no such file or directory")
-    if p.suffix == ".npz":
-        with np.load(p) as data:
-            missing = [k for k in ("gyro", "accel") if k not in data]
-            if missing:
-                raise InputError(f"{path}: .npz lacks array(s) {', '.join(missing)} (need t, gyro, accel)")
-            gyro, accel = np.asarray(data["gyro"], float), np.asarray(data["accel"], float)
-            if "t" in data:
-                t = np.asarray(data["t"], float)
-            elif "fs_hz" in data:
-                t = np.arange(gyro.shape[0]) / float(data["fs_hz"])
-            else:
-                raise InputError(f"{path}: .npz needs t [s] or fs_hz")
-        return ImuSeries(t=t, gyro=gyro, accel=accel, topic=str(p))
-    try:
-        from ..bag.reader import read_imu
-    except ImportError:
-        raise InputError(f"{path}: reading bags needs imu_noise_id.bag.reader, missing in this build; "
-                         "pass an .npz with t, gyro, accel") from None
-    return read_imu(path, topic=topic)
-
-
-def sampling_period(t) -> float:
-    """Median sample spacing [s]; InputError if the time stamps are not increasing."""
-    import numpy as np
-
-    from ..core.errors import InputError
-
-    d = np.diff(np.asarray(t, float))
-    if d.size == 0 or not np.all(np.isfinite(d)) or np.median(d) <= 0:
-        raise InputError("time stamps must be finite and increasing (need at least 2 samples)")
-    return float(np.median(d))
-
-
-def fit_axes(series, model: str, axes: list[str], **kwargs):
-    """Fit ``model`` (or select with ``'auto'``) on each axis of an ImuSeries; returns (fits, selections)."""
-    from ..core.errors import InputError
-    from ..core.estimation.fit import fit_model, select_model
-
-    fits, selections = {}, {}
-    dt = sampling_period(series.t)
-    for axis in axes:
-        y = series.axis(axis)
-        try:
-            if model == "auto":
-                sel = select_model(y, dt, **kwargs)
-                fits[axis], selections[axis] = sel.best, sel
-            else:
-                fits[axis] = fit_model(y, dt, model, **kwargs)
-        except InputError as exc:
-            raise InputError(f"{axis}: {exc}") from None
-        f = fits[axis]
-        print(f"{axis}: {f.model}  loglik {f.loglik:.6g}  BIC {f.bic:.6g}  "
-              + "  ".join(str(c) for c in f.components), flush=True)
-        # The outputs need the fitted models, not the records: drop them so memory does not grow per axis.
-        fits[axis] = f.without_data()
-        if axis in selections:
-            selections[axis] = selections[axis].without_data()
-    return fits, selections
-
-
 def run(args: argparse.Namespace) -> int:
+    from ..bag.reader import read_static
     from ..core.axes import AXES
     from ..core.errors import InputError
+    from ..core.estimation.model import FitOptions
+    from ..core.timing import sampling_period
+    from ..pipelines.analyze.models import ModelStage, fit_axes
+    from ..report.console import fit_line
     from ..report.model_yaml import write_model_yaml
 
     axes = args.axis or list(AXES)
     bad = [a for a in axes if a not in AXES]
     if bad:
         raise InputError(f"unknown axis {', '.join(bad)}: use {', '.join(AXES)}")
-    series = load_series(args.bag, args.topic)
-    kwargs = {"n_starts": args.starts, "target_precision": args.target_precision, "drift": args.drift}
-    fits, selections = fit_axes(series, args.model, axes, **kwargs)
-    out = write_model_yaml(Path(args.out) / "model.yaml", fits, selections,
-                           meta={"source": str(args.bag), "topic": series.topic, "command": "fit",
-                                 "model": args.model})
-    print(f"wrote {out}")
+    stage = ModelStage(args.model, FitOptions(n_starts=args.starts, target_precision=args.target_precision),
+                       args.drift)
+    series = read_static(args.bag, topic=args.topic).imu
+    models = fit_axes(series, axes, stage, sampling_period(series.t),
+                      on_fit=lambda axis, fit: print(fit_line(axis, fit), flush=True))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    meta = {"source": str(args.bag), "topic": series.topic, "command": "fit", "model": args.model}
+    print(f"wrote {write_model_yaml(out / 'model.yaml', models, meta=meta)}")
     return 0

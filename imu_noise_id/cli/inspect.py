@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from pathlib import Path
+
+from .progress import TextProgress
 
 DESCRIPTION = """\
 List the topics of a bag (ROS 1 .bag, rosbag2 directory, .db3 or .mcap), read its sensor_msgs/Imu topic and print
@@ -28,21 +29,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def progress_printer(label: str) -> Callable[[int, int], None] | None:
-    """A ``progress(done, total)`` callback drawing a one-line bar on stderr when it is a terminal."""
-    if not sys.stderr.isatty():
-        return None
-
-    def show(done: int, total: int) -> None:
-        width = 30
-        frac = done / total if total else 1.0
-        bar = "#" * round(width * min(frac, 1.0))
-        end = "\n" if done >= total else ""
-        print(f"\r{label} [{bar:<{width}}] {done}/{total}", end=end, file=sys.stderr, flush=True)
-
-    return show
-
-
 def _fmt(values: Iterable[float]) -> str:
     return ", ".join(f"{v:.3g}" for v in values)
 
@@ -51,14 +37,16 @@ def run(args: argparse.Namespace) -> int:
     """Print the topics, the IMU summary, the repair notes and the static check."""
     import numpy as np
 
-    from ..bag.reader import list_topics, read_bag
+    from ..bag.reader import read_bag
+    from ..bag.topics import list_topics
     from ..core.quality import static_check
 
     topics = list_topics(args.bag)
     print(f"{args.bag}:")
     for name, (msgtype, count) in topics.items():
         print(f"  {name:40s} {msgtype:32s} {count:>10d} msgs")
-    bag = read_bag(args.bag, imu_topic=args.topic, progress=progress_printer("reading"))
+    with TextProgress(f"reading {args.bag.name}") as progress:
+        bag = read_bag(args.bag, imu_topic=args.topic, progress=progress)
     imu = bag.imu
     duration = float(imu.t[-1] - imu.t[0])
     print(f"IMU {imu.topic} (frame {imu.frame_id!r}): {len(imu)} samples, {imu.rate:.6g} Hz (median), {duration:.3f} s")

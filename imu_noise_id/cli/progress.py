@@ -43,3 +43,9 @@ class TextProgress:
             self.stream.write("\n")
             self.stream.flush()
             self._drawn = False
+
+    def __enter__(self) -> TextProgress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

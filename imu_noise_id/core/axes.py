@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .timing import sampling_period
+
 GYRO_AXES: tuple[str, ...] = ("gyro_x", "gyro_y", "gyro_z")
 ACCEL_AXES: tuple[str, ...] = ("accel_x", "accel_y", "accel_z")
 AXES: tuple[str, ...] = GYRO_AXES + ACCEL_AXES
@@ -86,10 +88,8 @@ class ImuSeries:
 
     @property
     def dt(self) -> float:
-        """Median sampling period [s]."""
-        if len(self) < 2:
-            raise ValueError("ImuSeries: need at least two samples to know the sampling period")
-        return float(np.median(np.diff(self.t)))
+        """Sampling period [s] (:func:`~imu_noise_id.core.timing.sampling_period` of the stamps)."""
+        return sampling_period(self.t)
 
     @property
     def rate(self) -> float:

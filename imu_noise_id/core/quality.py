@@ -23,6 +23,7 @@ import numpy as np
 
 from .axes import AXES, ImuSeries
 from .errors import InputError
+from .timing import sampling_period
 
 #: Stamps are clock (epoch) times if the smallest non-zero one exceeds this [s]; zero stamps among them are unset.
 ZERO_STAMP_CLOCK_S = 60.0
@@ -216,10 +217,23 @@ def repair_time_series(
             f"only {report.n_output} usable sample(s) of {n} after dropping bad ones; need at least {min_samples}"
         )
     if steps.size:
-        report.dt_median = float(np.median(steps))
+        report.dt_median = sampling_period(t)
         report.gaps = find_gaps(t, report.dt_median, gap_factor)
     report.t0 = float(t[0])
     return t, (columns[0] if single else columns), report
+
+
+
+def interpolate_missing(y: np.ndarray) -> np.ndarray:
+    """``y`` with its NaN samples linearly interpolated from their neighbours (held at the ends); ``y`` itself when
+    nothing is missing. For estimators that need a gap-free series (the Allan variance, the periodogram)."""
+    bad = ~np.isfinite(y)
+    if not bad.any():
+        return y
+    idx = np.arange(y.size)
+    out = np.array(y, dtype=float)
+    out[bad] = np.interp(idx[bad], idx[~bad], y[~bad])
+    return out
 
 
 # --- static check -------------------------------------------------------------------------------------------

@@ -36,16 +36,21 @@ def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, r
 
 def run_loop_demo(out: str | Path, *, seed: int = 7) -> dict:
     """Simulate, write and read the bag, run the loop on :data:`DEMO_AXES`, write model.yaml and report.html."""
-    from ..bag.reader import read_imu
-    from ..cli.loop import loop_stage, summary
+    from ..bag.reader import read_static
+    from ..pipelines.loop import ImuLoop
+    from ..report.console import loop_table
+    from ..report.html import write_loop_report
+    from ..report.model_yaml import write_model_yaml
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     bag = simulate_demo_bag(out / "loop_demo_bag", seed=seed)
-    imu = read_imu(bag)
-    results, _, _ = loop_stage(imu, None, out, start="WN+RW", axes=DEMO_AXES,
-                               title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz (accel_x)")
-    print(summary(results))
+    recording = read_static(bag)
+    loop = ImuLoop(recording.imu, recording.temperature)
+    results = {axis: loop.run(axis, "WN+RW") for axis in DEMO_AXES}
+    write_model_yaml(out / "model.yaml", {}, results, {"source": str(bag), "command": "loop demo", "start": "WN+RW"})
+    write_loop_report(out / "report.html", results, title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz (accel_x)")
+    print(loop_table(results))
     print(f"demo bag, model.yaml and report.html in {out}/")
     return results
 

@@ -8,7 +8,7 @@ import html
 from pathlib import Path
 
 from ..core.axes import UNITS
-from ..pipelines.closed_loop import LoopResult
+from ..pipelines.loop import LoopResult
 from .loop_plots import allan_before_after, residual_acf_psd
 from .loop_yaml import HOW
 
@@ -71,7 +71,7 @@ def _axis_section(axis: str, result: LoopResult) -> str:
         out.append(f"<h3>{html.escape(label)}</h3>")
         out.append(_img(allan_before_after(before, after, unit, label), f"Allan deviation {label}"))
         for s in (before, after) if after else (before,):
-            out.append(_img(residual_acf_psd(s, result.dt, f"{axis} step {s.index}: {s.model}"),
+            out.append(_img(residual_acf_psd(s, f"{axis} step {s.index}: {s.model}"),
                             f"residual ACF and PSD, step {s.index}"))
     return "\n".join(out)
 

@@ -6,12 +6,11 @@ Each function returns PNG bytes (for embedding in ``report.html``) and can also 
 from __future__ import annotations
 
 import io
-import math
 from pathlib import Path
 
 import numpy as np
 
-from ..pipelines.closed_loop import LoopStep
+from ..pipelines.loop import LoopStep
 
 
 def _figure(width: float = 6.4, height: float = 3.4, ncols: int = 1):
@@ -55,29 +54,18 @@ def allan_before_after(before: LoopStep, after: LoopStep | None, unit: str = "u"
     return _png(plt, fig, path)
 
 
-def residual_acf_psd(step: LoopStep, dt: float, title: str = "", path: Path | None = None, lags: int = 60) -> bytes:
-    """Autocorrelation (with the ±1.96/√n band) and Welch PSD of the standardised innovations of a step."""
-    from scipy import signal
-
-    from ..core.diagnostics.residuals import acf
-
-    e = step.diagnosis.innovations
-    ok = np.isfinite(e)
-    n = int(ok.sum())
-    rho = acf(e, lags)
+def residual_acf_psd(step: LoopStep, title: str = "", path: Path | None = None) -> bytes:
+    """Autocorrelation (with its ±1.96/√n band) and Welch PSD of the standardised innovations of a step."""
+    s = step.diagnosis.spectra
     plt, fig, (a1, a2) = _figure(9.0, 3.0, ncols=2)
-    a1.bar(np.arange(1, lags + 1), rho, width=0.8, color="tab:gray")
-    band = 1.96 / math.sqrt(n)
-    a1.axhline(band, color="tab:red", ls="--", lw=0.8)
-    a1.axhline(-band, color="tab:red", ls="--", lw=0.8)
+    a1.bar(s.lags, s.acf, width=0.8, color="tab:gray")
+    a1.axhline(s.band, color="tab:red", ls="--", lw=0.8)
+    a1.axhline(-s.band, color="tab:red", ls="--", lw=0.8)
     a1.set_xlabel("lag [samples]")
     a1.set_ylabel("ACF of std. innovations")
     a1.set_title(f"Ljung–Box p = {step.errors.ljung_box_p:.2g}", fontsize=9)
-    x = np.where(ok, e, 0.0)
-    fs = 1.0 / dt
-    f, p = signal.welch(x, fs=fs, nperseg=min(4096, x.size))
-    a2.loglog(f[1:], p[1:], lw=0.7)
-    a2.axhline(2.0 / fs, color="tab:red", ls="--", lw=0.8, label="white, unit variance")
+    a2.loglog(s.frequency, s.psd, lw=0.7)
+    a2.axhline(s.white_level, color="tab:red", ls="--", lw=0.8, label="white, unit variance")
     a2.set_xlabel("frequency [Hz]")
     a2.set_ylabel("PSD [1/Hz]")
     a2.set_title(f"peak ratio {step.errors.peak_ratio:.1f} at {step.errors.peak_frequency:.3g} Hz", fontsize=9)

@@ -15,23 +15,23 @@ Per axis (``gyro_x`` … ``accel_z``)::
     candidates: [{model, loglik, k, aic, bic, delta_bic, weight_bic}, …]          # when selected
     record_length: {target, level, current_s, parameters: {label: {needed_s, needed_h, relative_halfwidth,
                     reliable}}}
+    loop: […]   loop_verdict: {…}                                                # the closed loop (:mod:`.loop_yaml`)
 """
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import yaml
 
 from ..core.axes import UNITS
-from ..core.estimation.fit import FitResult, SelectionResult, parameter_labels
-
-
-def _num(x: float) -> float:
-    """A plain float with 6 significant digits (inf/nan kept; YAML writes them as .inf/.nan)."""
-    x = float(x)
-    return x if not math.isfinite(x) else float(f"{x:.6g}")
+from ..core.estimation.results import FitResult
+from ..core.estimation.selection import SelectionResult
+from ..core.noise.modelspec import parameter_labels
+from ..pipelines.analyze.models import AxisModel
+from ..pipelines.loop import LoopResult
+from .loop_yaml import loop_to_dict
+from .numbers import num
 
 
 def _component_entry(fit: FitResult, index: int) -> dict:
@@ -39,9 +39,9 @@ def _component_entry(fit: FitResult, index: int) -> dict:
     labels = {p: lab for i, p, lab in parameter_labels(fit.components) if i == index}
     entry: dict = {"type": comp.name}
     params = comp.params()
-    entry.update({k: _num(v) for k, v in params.items()})
-    se = {p: _num(fit.se[lab]) for p, lab in labels.items() if lab in fit.se}
-    ci = {p: [_num(v) for v in fit.ci95[lab]] for p, lab in labels.items() if lab in fit.ci95}
+    entry.update({k: num(v) for k, v in params.items()})
+    se = {p: num(fit.se[lab]) for p, lab in labels.items() if lab in fit.se}
+    ci = {p: [num(v) for v in fit.ci95[lab]] for p, lab in labels.items() if lab in fit.ci95}
     if len(params) == 1:
         if se:
             entry["se"] = next(iter(se.values()))
@@ -52,52 +52,59 @@ def _component_entry(fit: FitResult, index: int) -> dict:
             entry["se"] = se
         if ci:
             entry["ci95"] = ci
-    entry.update({k: _num(v) for k, v in comp.per_sample(fit.dt).items()})
+    entry.update({k: num(v) for k, v in comp.per_sample(fit.dt).items()})
     return entry
 
 
 def fit_to_dict(fit: FitResult, axis: str | None = None, selection: SelectionResult | None = None) -> dict:
     """The ``model.yaml`` entry of one axis."""
-    out: dict = {"model": fit.model, "n": int(fit.n), "dt": _num(fit.dt)}
+    out: dict = {"model": fit.model, "n": int(fit.n), "dt": num(fit.dt)}
     if axis in UNITS:
         out["unit"] = UNITS[axis]
     out["components"] = [_component_entry(fit, i) for i in range(len(fit.components))]
     out["mean"] = {
-        k: {"value": _num(v["value"]), "se": _num(v["se"]), "ci95": [_num(c) for c in v["ci95"]],
-            **({"ls_value": _num(v["ls_value"])} if "ls_value" in v else {})}
+        k: {"value": num(v["value"]), "se": num(v["se"]), "ci95": [num(c) for c in v["ci95"]],
+            **({"ls_value": num(v["ls_value"])} if "ls_value" in v else {})}
         for k, v in fit.exog_coef.items()
     }
     out.update({
-        "loglik": _num(fit.loglik), "aic": _num(fit.aic), "bic": _num(fit.bic), "n_params": int(fit.n_params),
+        "loglik": num(fit.loglik), "aic": num(fit.aic), "bic": num(fit.bic), "n_params": int(fit.n_params),
         "converged": bool(fit.converged), "information_ok": bool(fit.information_ok),
     })
     if selection is not None:
-        out["candidates"] = [{k: (_num(v) if isinstance(v, float) else v) for k, v in row.items()}
+        out["candidates"] = [{k: (num(v) if isinstance(v, float) else v) for k, v in row.items()}
                              for row in selection.table]
     if fit.record_length is not None:
         rl = fit.record_length
         out["record_length"] = {
-            "target": rl.target, "level": rl.level, "current_s": _num(rl.current_s),
+            "target": rl.target, "level": rl.level, "current_s": num(rl.current_s),
             "parameters": {
-                lab: {"needed_s": _num(rl.needed_s[lab]), "needed_h": _num(rl.needed_s[lab] / 3600.0),
-                      "relative_halfwidth": _num(rl.relative_halfwidth[lab]), "reliable": bool(rl.reliable[lab])}
+                lab: {"needed_s": num(rl.needed_s[lab]), "needed_h": num(rl.needed_s[lab] / 3600.0),
+                      "relative_halfwidth": num(rl.relative_halfwidth[lab]), "reliable": bool(rl.reliable[lab])}
                 for lab in rl.needed_s
             },
         }
     return out
 
 
-def write_model_yaml(
-    path: str | Path, fits: dict[str, FitResult], selections: dict[str, SelectionResult] | None = None,
-    meta: dict | None = None,
-) -> Path:
-    """Write ``model.yaml`` with one entry per axis (and optional metadata: source, topic, command)."""
-    selections = selections or {}
-    doc: dict = {}
-    if meta:
-        doc["meta"] = meta
-    doc["axes"] = {axis: fit_to_dict(fit, axis, selections.get(axis)) for axis, fit in fits.items()}
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+def write_model_yaml(path: Path, models: dict[str, AxisModel], loops: dict[str, LoopResult] | None = None,
+                     meta: dict | None = None) -> Path:
+    """Write ``model.yaml``: per axis the model stage's entry (:func:`fit_to_dict`) and the loop's steps.
+
+    An axis with a loop but no model-stage fit (``imu-noise-id loop``) gets the loop's final model, ``n`` and ``dt``.
+    """
+    loops = loops or {}
+    axes: dict = {}
+    for axis in dict.fromkeys([*models, *loops]):
+        if axis in models:
+            entry = fit_to_dict(models[axis].fit, axis, models[axis].selection)
+        else:
+            loop = loops[axis]
+            entry = {"model": loop.final.model, "n": int(loop.n), "dt": num(loop.dt)}
+        if axis in loops:
+            entry.update(loop_to_dict(loops[axis]))
+        axes[axis] = entry
+    doc: dict = {"meta": meta} if meta else {}
+    doc["axes"] = axes
     path.write_text(yaml.safe_dump(doc, sort_keys=False, allow_unicode=True, width=120))
     return path

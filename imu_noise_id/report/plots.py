@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..core.axes import ACCEL_AXES, GYRO_AXES, UNITS
-from ..pipelines.analysis import StaticAnalysis
+from ..pipelines.analyze.static import StaticAnalysis
 
 _COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
 _LINE_LABELS = {"QN": "quantisation", "WN": "white noise", "BI": "bias inst.", "RW": "random walk", "RR": "rate ramp"}

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.estimation.fit import FitResult
+from ..core.estimation.results import FitResult
 
 
 def plot_allan_overlay(
@@ -24,7 +24,7 @@ def plot_allan_overlay(
         The fitted model (its components give the theoretical AV).
     band
         (tau, avar of shape (n_sim, len(tau))) from
-        :func:`imu_noise_id.core.estimation.fit.simulate_allan_band`.
+        :func:`imu_noise_id.core.simulation.bands.allan_band`.
     """
     if band is not None:
         btau, bav = band

@@ -20,7 +20,7 @@ Beyond the paper (and why):
   tiny floor, so that a Gauss–Markov block stays a stationary GM process and Q stays invertible.
 * :func:`q_function` evaluates the expected complete-data log-likelihood at any θ from one E-step; by Fisher's
   identity its gradient at the E-step's θ is the gradient of the exact log-likelihood, which the quasi-Newton
-  finish in :mod:`imu_noise_id.core.estimation.fit` uses.
+  finish in :mod:`imu_noise_id.core.estimation.search` uses.
 """
 
 from __future__ import annotations

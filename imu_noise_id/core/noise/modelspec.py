@@ -159,3 +159,19 @@ def parse_imu_model(text: str) -> dict[str, list[Component]]:
     if missing:
         raise ModelSpecError(f"IMU model gives no spec for {', '.join(missing)}")
     return result
+
+
+def parameter_labels(components: list[Component]) -> list[tuple[int, str, str]]:
+    """(component index, parameter, label) with labels such as ``WN.noise_density``, ``GM2.tau``.
+
+    A component type that occurs more than once is numbered in order (``GM1``, ``GM2``); the labels key the
+    standard errors and intervals of a fit and the ``model.yaml`` entries.
+    """
+    names = [c.name for c in components]
+    out = []
+    seen: dict[str, int] = {}
+    for i, c in enumerate(components):
+        seen[c.name] = seen.get(c.name, 0) + 1
+        tag = f"{c.name}{seen[c.name]}" if names.count(c.name) > 1 else c.name
+        out.extend((i, p, f"{tag}.{p}") for p in c.parameter_names)
+    return out

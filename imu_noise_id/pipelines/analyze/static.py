@@ -1,12 +1,7 @@
-"""Offline analysis of a static IMU recording: arrays in, a result dataclass out (no files, no plots).
+"""The Allan stage of ``analyze``: checks, the Allan family and the slope parameters of a static recording.
 
-:func:`analyze_static` runs the stages in order and returns a :class:`StaticAnalysis`; adapters
-(:mod:`imu_noise_id.report.outputs`, the ``analyze`` command) serialise and draw it. Later stages (EM model
-fits, the closed loop) take the same :class:`~imu_noise_id.core.axes.ImuSeries` and add their result to the
-dataclass as another field, so the command keeps one call per stage.
+:func:`analyze_static` returns a :class:`StaticAnalysis` (arrays in, a result dataclass out; no files, no plots):
 
-Stages
-------
 1. checks: at least :data:`MIN_SAMPLES` samples, finite values, a constant sampling period (gaps are a
    warning: the Allan estimators assume equally spaced samples), the static check of
    :func:`imu_noise_id.core.quality.static_check` (clearly non-static data raises unless ``allow_motion``);
@@ -22,11 +17,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS, AllanResult, allan_family, stack_axes
-from ..core.allan.slopes import AxisSlopes, fit_axis_slopes
-from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES, ImuSeries
-from ..core.errors import InputError
-from ..core.quality import static_check
+from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS, AllanResult, allan_family, stack_axes
+from ...core.allan.slopes import AxisSlopes, fit_axis_slopes
+from ...core.axes import ACCEL_AXES, AXES, GYRO_AXES, ImuSeries
+from ...core.errors import InputError
+from ...core.quality import static_check
 
 #: Fewer samples than this cannot give a useful Allan curve (a few decades of τ).
 MIN_SAMPLES = 100

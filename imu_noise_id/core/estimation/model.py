@@ -1,0 +1,249 @@
+"""The noise model of one axis: a component structure on one record, as statsmodels' ``MLEModel`` is a model on data.
+
+:class:`NoiseModel` holds the record (samples ``y`` [u] at period ``dt`` [s], NaN = missing), the structure
+(components such as ``WN+GM+RW+RR``), the measurement regressors ``z`` (a constant bias, the ramp of an RR
+component and the caller's exog columns: sinusoids, temperature, steps) and the drift treatment. It answers
+
+* :meth:`NoiseModel.statespace` — the state-space form of given components (paper 000 eqs. 4–9);
+* :meth:`NoiseModel.loglik` — the exact log-likelihood of given components, mean parameters profiled by GLS;
+* :meth:`NoiseModel.starting_values` — multi-start initial values from the Allan variance refined by the Whittle
+  likelihood (paper 000 §3.5(i) asks for AV-based initial values; beyond it: several GM placements);
+* :meth:`NoiseModel.fit` — constrained EM then quasi-Newton on the exact likelihood, intervals, advice
+  (:mod:`.search`, :mod:`.uncertainty`), returning a :class:`~.results.FitResult`.
+
+Model selection (:mod:`.selection`) and the closed loop share this object: they build one per candidate and call
+``fit``; nothing inspects a function signature.
+
+Drift (paper 000 §3.5(iii)): with RR in the structure, ``drift='em'`` estimates the ramp jointly (a regressor
+``t·dt`` whose coefficient is the slope, profiled in the likelihood and updated in closed form in the EM);
+``drift='ls'`` removes a least-squares line first and re-estimates bias and slope by GLS with the fitted noise model.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import kalman
+from ..errors import InputError
+from ..kalman import statespace as ss
+from ..noise.components import COMPONENT_TYPES, Component
+from ..noise.modelspec import parse_model, parse_structure
+from ..quality import interpolate_missing
+from . import mle, starts, whittle
+from .results import FitResult
+from .search import fit_noise_model
+
+#: Smallest number of observed samples accepted, and per free parameter.
+MIN_SAMPLES, MIN_SAMPLES_PER_PARAMETER = 100, 20
+#: Regressor names the model uses itself.
+RESERVED_REGRESSORS = ("bias", "ramp")
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """How :meth:`NoiseModel.fit` searches and what it reports.
+
+    Attributes
+    ----------
+    n_starts
+        Number of distinct starting values tried (best likelihood kept).
+    em_iter, em_tol
+        EM iterations before the quasi-Newton finish, and the §3.5(ii) stopping threshold. A few EM steps are
+        robust first steps from any start; the convergence itself is left to the quasi-Newton finish, which needs
+        far fewer likelihood evaluations than EM's linear convergence (``polish=False`` and a large ``em_iter``
+        give the paper's pure EM).
+    polish
+        Finish with L-BFGS-B on the exact likelihood (``False``: EM only, as in the paper).
+    spectral_init
+        Refine the AV-fit starts by the Whittle likelihood of the differences (:mod:`.whittle`) before ranking
+        them, and precondition the quasi-Newton finish with the Whittle information (fast; beyond the paper).
+    uncertainty
+        Compute the observed information, standard errors, intervals and the record-length advice.
+    target_precision
+        Relative 95 % half-width for the recording-length advice (0.10 = ±10 %).
+    """
+
+    n_starts: int = 3
+    em_iter: int = 3
+    em_tol: float = 1e-9
+    polish: bool = True
+    spectral_init: bool = True
+    uncertainty: bool = True
+    target_precision: float = 0.10
+
+    def __post_init__(self) -> None:
+        if not 0 < self.target_precision < 1:
+            raise InputError(f"target_precision must be in (0, 1), got {self.target_precision}")
+        if self.n_starts < 1 or self.em_iter < 0:
+            raise InputError(f"n_starts must be >= 1 and em_iter >= 0, got {self.n_starts}, {self.em_iter}")
+
+
+def check_signal(y: np.ndarray, dt: float) -> np.ndarray:
+    """``y`` as a float array after the input checks (InputError on bad dt, not 1-D, inf, too few, constant)."""
+    if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
+        raise InputError(f"sampling period dt must be a finite number > 0 s, got {dt!r}")
+    y = np.asarray(y, dtype=float)
+    if y.ndim != 1:
+        raise InputError(f"the signal must be one axis (1-D), got shape {y.shape}")
+    if np.any(np.isinf(y)):
+        raise InputError("the signal contains infinite values; remove them or mark them as NaN (missing)")
+    obs = np.isfinite(y)
+    if not np.any(obs):
+        raise InputError("the signal has no valid samples (all NaN)")
+    if int(obs.sum()) < MIN_SAMPLES:
+        raise InputError(f"the signal has {int(obs.sum())} valid samples; at least {MIN_SAMPLES} are needed")
+    if np.ptp(y[obs]) == 0.0:
+        raise InputError("the signal is constant: there is no noise to identify (sensor stuck or wrong topic?)")
+    return y
+
+
+def parse_structure_or_components(structure: str | list[Component]) -> tuple[list[str], list[Component] | None]:
+    """Component names and, when values are given (``'WN(2e-4)+RW(3e-6)'`` or Component objects), the components."""
+    if isinstance(structure, str):
+        if "(" in structure:
+            comps = parse_model(structure)
+            return [c.name for c in comps], comps
+        return parse_structure(structure), None
+    comps = list(structure)
+    if not comps or not all(isinstance(c, Component) for c in comps):
+        raise InputError("structure must be a model string such as 'WN+GM+RW' or a list of Component objects")
+    return [c.name for c in comps], comps
+
+
+class NoiseModel:
+    """A noise structure on one record (see the module docstring).
+
+    Parameters
+    ----------
+    y
+        Samples [u] at period ``dt`` [s]; NaN = missing.
+    structure
+        ``'WN+GM+RW+RR'``, a spec with values (``'WN(2e-4)+RW(3e-6)'``, used as the initial value) or a list of
+        components (ditto).
+    exog, exog_names
+        (N, k) deterministic regressors of the measurement equation y_t = H x_t + B z_t + v_t and their names;
+        B is estimated (GLS in the likelihood, closed form in the EM). Must be finite everywhere.
+    drift
+        With RR in the structure: ``'em'`` (joint) or ``'ls'`` (least-squares line removed first); ``None``
+        forbids RR.
+
+    Raises
+    ------
+    InputError
+        Bad signal, unidentifiable structure, bad exog, or too few samples for the number of parameters.
+    """
+
+    def __init__(self, y: np.ndarray, dt: float, structure: str | list[Component], *, exog: np.ndarray | None = None,
+                 exog_names: list[str] | tuple[str, ...] | None = None, drift: str | None = "em") -> None:
+        y = check_signal(y, dt)
+        names, given = parse_structure_or_components(structure)
+        ss.validate_structure(names)
+        if given is not None:
+            mle.Parameterisation.of(given).to_theta(given)  # positive, finite initial values
+        if "RR" in names and drift not in ("em", "ls"):
+            raise InputError(f"structure has RR: drift must be 'em' or 'ls', got {drift!r}")
+        self.dt = float(dt)
+        self.names = names
+        self.given = given
+        self.n_total = y.size
+        self.observed = np.isfinite(y)
+        self.n_obs = int(self.observed.sum())
+        self.t = self.dt * np.arange(self.n_total)
+        self.ls_slope: tuple[float, float] | None = None
+        self.fit_names = list(names)
+        if "RR" in names and drift == "ls":
+            y = self._remove_line(y)
+            self.fit_names = [n for n in names if n != "RR"]
+            if self.given is not None:
+                self.given = [c for c in self.given if c.name != "RR"]
+        self.y = y
+        self.exog_names, self.z = self._regressors(exog, exog_names)
+        self.n_free_noise = sum(len(COMPONENT_TYPES[n].parameter_names) for n in self.fit_names if n != "RR")
+        n_params = self.n_free_noise + self.z.shape[1]
+        if self.n_obs < MIN_SAMPLES_PER_PARAMETER * n_params:
+            raise InputError(
+                f"{self.n_obs} valid samples are too few for {n_params} parameters of {'+'.join(names)}; record at "
+                f"least {MIN_SAMPLES_PER_PARAMETER * n_params} samples or choose a simpler model"
+            )
+
+    def _remove_line(self, y: np.ndarray) -> np.ndarray:
+        """Least-squares line removed (paper 000 §3.5(iii)); its slope and OLS standard error kept."""
+        obs = self.observed
+        A = np.column_stack([np.ones(self.n_obs), self.t[obs]])
+        coef, *_ = np.linalg.lstsq(A, y[obs], rcond=None)
+        resid = y[obs] - A @ coef
+        s2 = float(resid @ resid) / max(self.n_obs - 2, 1)
+        cov_ls = s2 * np.linalg.inv(A.T @ A)
+        self.ls_slope = (float(coef[1]), math.sqrt(cov_ls[1, 1]))
+        return y - coef[1] * self.t
+
+    def _regressors(self, exog: np.ndarray | None, exog_names) -> tuple[tuple[str, ...], np.ndarray]:
+        columns = [np.ones(self.n_total)]
+        if "RR" in self.fit_names:
+            columns.append(self.t)
+        names: tuple[str, ...] = ()
+        if exog is not None:
+            exog = np.asarray(exog, dtype=float)
+            if exog.ndim == 1:
+                exog = exog[:, None]
+            if exog.shape[0] != self.n_total:
+                raise InputError(f"exog must have {self.n_total} rows (one per sample), got {exog.shape[0]}")
+            names = tuple(exog_names or [f"exog{j}" for j in range(exog.shape[1])])
+            if len(names) != exog.shape[1] or len(set(names)) != len(names):
+                raise InputError("exog_names must give one distinct name per exog column")
+            if set(names) & set(RESERVED_REGRESSORS):
+                raise InputError("exog names 'bias' and 'ramp' are reserved")
+            columns.extend(exog.T)
+        return names, np.column_stack(columns)
+
+    # -- the model at given parameters ------------------------------------------------------------------------
+    @property
+    def tau_bounds(self) -> tuple[float, float]:
+        """Range of GM correlation times searched [s]: one sample to 100 records."""
+        return self.dt, 100.0 * self.n_total * self.dt
+
+    def statespace(self, components: list[Component]) -> ss.StateSpace:
+        """State-space form of ``components`` (fitted structure, RR as a measurement regressor)."""
+        return ss.from_components(components, self.dt, ramp="measurement", intercept=True, exog_names=self.exog_names)
+
+    def loglik(self, components: list[Component]) -> float:
+        """Exact log-likelihood of ``components`` on the record, mean parameters at their GLS estimate."""
+        return float(kalman.loglik(self.statespace(components), self.y, self.z).loglik)
+
+    # -- starting values ------------------------------------------------------------------------------------
+    def detrended(self) -> np.ndarray:
+        """The gap-filled record, with a least-squares line removed when the fitted structure has RR (the AV and
+        the periodogram of the starting values must not see the ramp)."""
+        y_av = interpolate_missing(self.y)
+        if "RR" in self.fit_names:
+            A = np.column_stack([np.ones(self.n_total), self.t])
+            y_av = y_av - A @ np.linalg.lstsq(A, y_av, rcond=None)[0]
+        return y_av
+
+    def starting_values(self, n_starts: int, spectral: bool,
+                        periodogram: whittle.BandedPeriodogram | None = None) -> list[list[Component]]:
+        """The given components, or up to ``n_starts`` distinct starts from the AV fit (Whittle-refined)."""
+        if self.given is not None:
+            return [list(self.given)]
+        y_av = self.detrended()
+        av = starts.empirical_allan(y_av, self.dt)
+        fits = starts.fit_allan(self.fit_names, av, self.dt)
+        if spectral:
+            bp = periodogram or whittle.banded_periodogram(y_av)
+            fits = sorted((whittle.whittle_fit(c, y_av, self.dt, bp) for _, c in fits), key=lambda r: -r[0])
+            fits = starts.distinct([(-w, c) for w, c in fits], av.tau, self.dt)
+        return [c for _, c in fits[:max(n_starts, 1)]]
+
+    def fit(self, init: list[Component] | None = None, options: FitOptions | None = None) -> FitResult:
+        """Maximum-likelihood fit (EM then quasi-Newton) from ``init`` or the starting values (:mod:`.search`)."""
+        return fit_noise_model(self, init, options or FitOptions())
+
+
+def fit_model(y: np.ndarray, dt: float, structure: str | list[Component], *, exog: np.ndarray | None = None,
+              exog_names: list[str] | None = None, init: list[Component] | None = None, drift: str | None = "em",
+              options: FitOptions | None = None) -> FitResult:
+    """Fit one structure to one axis: ``NoiseModel(y, dt, structure, …).fit(init, options)``."""
+    return NoiseModel(y, dt, structure, exog=exog, exog_names=exog_names, drift=drift).fit(init, options)

@@ -1,0 +1,104 @@
+"""What a fit returns: the fitted components with their uncertainty, and the recording-length advice."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .. import kalman
+from ..errors import InputError
+from ..kalman.statespace import StateSpace
+from ..noise.components import Component, total_allan_variance
+
+
+@dataclass
+class RecordLengthAdvice:
+    """Recording length needed per parameter for a target relative precision.
+
+    ``needed_s[label]`` is the duration [s] for which the 95 % half-width of the parameter's interval
+    (1.96·se in log space, i.e. relative) shrinks to ``target``, assuming se ∝ 1/√T (per-sample information =
+    observed information / N). ``reliable[label]`` is False where that scaling is doubtful: GM parameters whose
+    correlation time is not ≪ the record (T < 20·τ_c); such parameters improve more slowly than 1/√T until the
+    record is many correlation times long, so the figure is a lower bound.
+    """
+
+    target: float
+    level: str
+    current_s: float
+    needed_s: dict[str, float]
+    relative_halfwidth: dict[str, float]
+    reliable: dict[str, bool]
+
+
+@dataclass
+class FitResult:
+    """Identified model of one axis (continuous-time components and their uncertainty).
+
+    Attributes
+    ----------
+    model : str
+        Canonical structure name (``modelspec.model_name``), e.g. ``WN+GM+RW``.
+    components : list[Component]
+        Fitted components, continuous-time units (RR's slope included when the structure has RR).
+    exog_coef : dict[str, dict]
+        Mean parameters: ``bias`` [u], ``ramp`` slope [u/s] when RR is a regressor, the caller's exog
+        coefficients; each ``{value, se, ci95}``.
+    se, ci95 : dict[str, ...]
+        Standard error and 95 % interval of every component parameter, keyed ``WN.noise_density``, ``GM2.tau`` …,
+        physical units. Intervals of positive parameters are exp(log-value ± 1.96·se_log) (asymmetric); where
+        se_log > 1 or a thousandfold smaller value is not rejected by the data (weakly identified, e.g. a variance
+        near 0), a likelihood-ratio interval conditional on the other parameters is given instead, with lower
+        end 0 when the data cannot exclude 0.
+    loglik, aic, bic : float
+        Exact maximised log-likelihood; AIC = 2k − 2ℓ, BIC = k·ln(n) − 2ℓ with k = all free parameters.
+    n : int
+        Number of observed (non-NaN) samples.
+    dt : float
+        Sampling period [s].
+    n_iter : int
+        EM iterations of the winning start (the quasi-Newton evaluations are in ``n_eval``).
+    converged : bool
+        Whether the quasi-Newton finish reported convergence.
+    record_length : RecordLengthAdvice | None
+        How long to record for the target precision (when the uncertainty was computed).
+    information_ok : bool
+        Whether the observed information was positive definite (else some se are inf: not identified).
+    """
+
+    model: str
+    components: list[Component]
+    exog_coef: dict[str, dict]
+    se: dict[str, float]
+    ci95: dict[str, tuple[float, float]]
+    loglik: float
+    aic: float
+    bic: float
+    n: int
+    dt: float
+    n_iter: int
+    converged: bool
+    record_length: RecordLengthAdvice | None = None
+    information_ok: bool = True
+    n_eval: int = 0
+    n_params: int = 0
+    starts: list[float] = field(default_factory=list)
+    statespace: StateSpace | None = field(default=None, repr=False)
+    record: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+
+    def without_data(self) -> FitResult:
+        """This result without the record it was fitted to (samples and regressors, N floats each), for keeping
+        many results. :meth:`standardized_innovations` needs the record and raises on the copy."""
+        return replace(self, record=None)
+
+    def standardized_innovations(self) -> np.ndarray:
+        """One-step innovations / √(their variance), NaN where the sample was missing."""
+        if self.statespace is None or self.record is None:
+            raise InputError("this FitResult holds no data to compute innovations from")
+        y, z = self.record
+        res = kalman.loglik(self.statespace, y, z, profile_mean=False)
+        return res.innovations / np.sqrt(res.variances)
+
+    def theoretical_allan_variance(self, tau: np.ndarray) -> np.ndarray:
+        """Allan variance [u²] of the fitted components at averaging times tau [s]."""
+        return total_allan_variance(self.components, np.asarray(tau, dtype=float), self.dt)

@@ -1,0 +1,135 @@
+"""The maximum-likelihood search of a :class:`~.model.NoiseModel`: constrained EM (paper 000 §3) then quasi-Newton.
+
+Per start (:meth:`~.model.NoiseModel.starting_values`), ``em_iter`` EM iterations (:mod:`.em`) then L-BFGS-B on
+the exact likelihood (:mod:`.mle`; beyond the paper: EM's slow convergence, §3.5 and §5); the best likelihood wins.
+Mean parameters (bias, ramp, exog) come from the GLS profile at the optimum; standard errors, intervals and the
+recording-length advice from :mod:`.uncertainty`.
+
+Long records with missing samples are searched on the gap-filled record with the fast (steady-state) engine
+(beyond the paper; the exact engine is a Python loop); likelihood, means, innovations and intervals are then those
+of the record with its gaps.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .. import kalman
+from ..errors import InputError
+from ..kalman import statespace as ss
+from ..noise.components import RR, Component
+from ..noise.modelspec import model_name, parameter_labels
+from ..quality import interpolate_missing
+from . import em, mle, whittle
+from .results import FitResult
+from .uncertainty import Z95, add_uncertainty
+
+if TYPE_CHECKING:
+    from .model import FitOptions, NoiseModel
+
+#: Above this length a record with missing samples is searched gap-filled first.
+FILL_FIRST_MIN_SAMPLES = 20_000
+
+
+def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options: FitOptions,
+               metric: np.ndarray | None) -> tuple[mle.MLEResult, int]:
+    """EM iterations then the quasi-Newton finish from one start; (result, EM iterations)."""
+    z = model.z
+    state = model.statespace(start)
+    _, state, stats = kalman.profile_and_smooth(state, y, z)  # GLS means and the first E-step in one pass
+    par = mle.Parameterisation.of(start)
+    em_iter, em_tol = options.em_iter, options.em_tol
+    if options.polish:
+        # The last EM iterate is scored by the quasi-Newton finish's first evaluation: no E-step for it here.
+        run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats, final_estep=False)
+        try:
+            res = mle.maximise(par, run.model, y, z, tau_bounds=model.tau_bounds, metric=metric)
+        except (InputError, np.linalg.LinAlgError):
+            # That unscored update may have left the filter's domain: redo EM with the check, which keeps the
+            # last good iterate (paper 000 §3.5(iii)).
+            run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
+            res = mle.maximise(par, run.model, y, z, tau_bounds=model.tau_bounds, metric=metric)
+    else:
+        run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
+        prof = kalman.loglik(run.model, y, z)
+        fitted = kalman.apply_beta(run.model, prof)
+        theta = par.to_theta(ss.to_components(fitted))
+        res = mle.MLEResult(theta, fitted, prof.loglik, 0, run.converged, "EM only", prof)
+    return res, run.n_iter
+
+
+def _mean_parameters(model: NoiseModel, fitted: ss.StateSpace, prof: kalman.ProfileResult,
+                     comps: list[Component]) -> dict[str, dict]:
+    """Bias, ramp and exog coefficients with their GLS standard errors; with ``drift='ls'`` the line's slope is
+    re-estimated by GLS on the original record with the fitted noise model (the OLS error assumes white residuals
+    and is far too small with RW/GM noise), and appended to ``comps`` as RR."""
+    coef: dict[str, dict] = {}
+    for name, value, var in zip(prof.names, prof.beta, np.diag(prof.beta_cov), strict=True):
+        s_b = math.sqrt(max(float(var), 0.0))
+        coef[name.split(":", 1)[1]] = {"value": float(value), "se": s_b, "ci95": (value - Z95 * s_b, value + Z95 * s_b)}
+    if model.ls_slope is not None:
+        t = model.t
+        y_orig = model.y + model.ls_slope[0] * t
+        full = ss.from_components([*ss.to_components(fitted), RR(model.ls_slope[0])], model.dt,
+                                  exog_names=model.exog_names)
+        z_full = np.column_stack([model.z[:, :1], t, model.z[:, 1:]])
+        gls = kalman.loglik(full, y_orig, z_full)
+        for key in ("ramp", "bias"):
+            k = gls.names.index(f"b:{key}")
+            value, s_b = float(gls.beta[k]), math.sqrt(max(float(gls.beta_cov[k, k]), 0.0))
+            coef[key] = {"value": value, "se": s_b, "ci95": (value - Z95 * s_b, value + Z95 * s_b)}
+        coef["ramp"]["ls_value"] = model.ls_slope[0]
+        comps.append(RR(coef["ramp"]["value"]))
+    return coef
+
+
+def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: FitOptions) -> FitResult:
+    """Maximum-likelihood fit of ``model`` (see the module docstring)."""
+    if init is not None:
+        if [c.name for c in init] != model.names:
+            raise InputError("init components do not match the structure")
+        init = [c for c in init if c.name != "RR"] if model.ls_slope is not None else list(init)
+        mle.Parameterisation.of(init).to_theta(init)
+    y_av = model.detrended()
+    bp = whittle.banded_periodogram(y_av) if options.spectral_init else None
+    start_values = [init] if init is not None else model.starting_values(options.n_starts, options.spectral_init, bp)
+    fill_first = model.n_obs < model.n_total and model.n_total > FILL_FIRST_MIN_SAMPLES and options.polish
+    y_search = interpolate_missing(model.y) if fill_first else model.y
+    best: tuple[mle.MLEResult, int] | None = None
+    lls = []
+    for start in start_values:
+        try:
+            metric = whittle.whittle_information(start, y_av, model.dt, bp) if bp is not None else None
+            res = _one_start(model, start, y_search, options, metric)
+        except (InputError, np.linalg.LinAlgError):
+            continue
+        lls.append(res[0].loglik)
+        if best is None or res[0].loglik > best[0].loglik:
+            best = res
+    if best is None:
+        raise InputError(f"no start of the {'+'.join(model.names)} fit gave a valid likelihood; try init=… values")
+    res, n_iter = best
+    comps = ss.to_components(res.model)
+    # The search's own profile at the optimum unless it ran on the gap-filled record.
+    prof = res.profile if res.profile is not None and not fill_first else kalman.loglik(res.model, model.y, model.z)
+    exog_coef = _mean_parameters(model, res.model, prof, comps)
+    se: dict[str, float] = {}
+    ci: dict[str, tuple[float, float]] = {}
+    if "ramp" in exog_coef:
+        rr_lab = next(lab for i, _, lab in parameter_labels(comps) if comps[i].name == "RR")
+        se[rr_lab] = exog_coef["ramp"]["se"]
+        ci[rr_lab] = exog_coef["ramp"]["ci95"]
+    order = {n: i for i, n in enumerate(model.names)}
+    comps = sorted(comps, key=lambda c: order.get(c.name, 99))
+    k = model.n_free_noise + model.z.shape[1] + (1 if model.ls_slope is not None else 0)
+    ll = float(prof.loglik)
+    result = FitResult(
+        model=model_name(comps), components=comps, exog_coef=exog_coef, se=se, ci95=ci, loglik=ll,
+        aic=2 * k - 2 * ll, bic=k * math.log(model.n_obs) - 2 * ll, n=model.n_obs, dt=model.dt, n_iter=n_iter,
+        converged=res.converged, n_eval=res.n_eval, n_params=k, starts=lls, statespace=res.model,
+        record=(model.y, model.z),
+    )
+    return add_uncertainty(result, options.target_precision) if options.uncertainty else result

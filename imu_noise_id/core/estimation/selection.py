@@ -1,0 +1,115 @@
+"""Model selection of one axis: every candidate structure fitted (:class:`~.model.NoiseModel`), ranked by BIC.
+
+ΔBIC and Schwarz weights are the evidence; standard errors and the recording-length advice are computed for the
+winner only (:func:`.uncertainty.add_uncertainty` adds them to any other fit). The default candidates cover the
+common IMU models; RR and QN candidates are added when the Allan variance's ends call for them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import InputError
+from ..quality import interpolate_missing
+from . import starts
+from .model import FitOptions, NoiseModel, check_signal
+from .results import FitResult
+from .uncertainty import add_uncertainty
+
+#: Default candidate structures of :func:`select_model` (RR / QN added when the AV suggests them).
+DEFAULT_CANDIDATES: tuple[str, ...] = ("WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM")
+
+
+@dataclass
+class SelectionResult:
+    """Model selection of one axis: the winner and the evidence."""
+
+    best: FitResult
+    table: list[dict]  # per candidate: model, loglik, k, aic, bic, delta_bic, weight_bic, delta_aic, error
+    fits: dict[str, FitResult]
+
+    def without_data(self) -> SelectionResult:
+        """The selection with every fit's record dropped (see :meth:`FitResult.without_data`)."""
+        fits = {k: f.without_data() for k, f in self.fits.items()}
+        best = next((fits[k] for k, f in self.fits.items() if f is self.best), self.best.without_data())
+        return SelectionResult(best, self.table, fits)
+
+
+def suggest_candidates(y: np.ndarray, dt: float) -> list[str]:
+    """Default candidates plus RR when the AV rises like τ² at long τ, QN when it falls like τ⁻² at short τ."""
+    cands = list(DEFAULT_CANDIDATES)
+    av = starts.empirical_allan(interpolate_missing(np.asarray(y, dtype=float)), dt)
+    if av.tau.size >= 4:
+        slope_hi = np.polyfit(np.log(av.tau[-3:]), np.log(av.avar[-3:]), 1)[0]
+        slope_lo = np.polyfit(np.log(av.tau[:3]), np.log(av.avar[:3]), 1)[0]
+        if slope_hi > 1.5:
+            cands += ["WN+RW+RR", "WN+GM+RW+RR"]
+        if slope_lo < -1.4:
+            cands += ["WN+QN+RW", "WN+QN+GM"]
+    return cands
+
+
+def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, *, criterion: str = "bic",
+                 drift: str | None = "em", options: FitOptions | None = None) -> SelectionResult:
+    """Fit every candidate structure and rank them by BIC (or AIC).
+
+    ``options.uncertainty`` applies to the winner only (the others are fitted without it).
+    """
+    if criterion not in ("bic", "aic"):
+        raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
+    options = options or FitOptions()
+    y = check_signal(y, dt)
+    cands = list(candidates) if candidates else suggest_candidates(y, dt)
+    fits: dict[str, FitResult] = {}
+    errors: dict[str, str] = {}
+    search = replace(options, uncertainty=False)
+    best_key: str | None = None
+    for spec in cands:
+        try:
+            fit = NoiseModel(y, dt, spec, drift=drift).fit(options=search)
+        except InputError as exc:
+            errors[spec] = str(exc)
+            continue
+        # Only the current best keeps its record (N floats per array): memory stays bounded on long records.
+        if best_key is None or getattr(fit, criterion) < getattr(fits[best_key], criterion):
+            if best_key is not None:
+                fits[best_key] = fits[best_key].without_data()
+            best_key = spec
+        else:
+            fit = fit.without_data()
+        fits[spec] = fit
+    if best_key is None:
+        raise InputError("no candidate model could be fitted: " + "; ".join(f"{k}: {v}" for k, v in errors.items()))
+    bic_min = min(f.bic for f in fits.values())
+    aic_min = min(f.aic for f in fits.values())
+    wsum = sum(math.exp(-0.5 * (f.bic - bic_min)) for f in fits.values())
+    table = []
+    for spec in cands:
+        if spec in fits:
+            f = fits[spec]
+            table.append({
+                "model": f.model, "loglik": f.loglik, "k": f.n_params, "aic": f.aic, "bic": f.bic,
+                "delta_bic": f.bic - bic_min, "delta_aic": f.aic - aic_min,
+                "weight_bic": math.exp(-0.5 * (f.bic - bic_min)) / wsum, "converged": f.converged,
+            })
+        else:
+            table.append({"model": spec, "error": errors[spec]})
+    table.sort(key=lambda r: r.get(criterion, math.inf))
+    if options.uncertainty:
+        add_uncertainty(fits[best_key], options.target_precision)
+    return SelectionResult(fits[best_key], table, fits)
+
+
+def kalibr_values(fit: FitResult) -> dict[str, float | None]:
+    """Kalibr ``imu.yaml`` values from a fitted model: ``noise_density`` [u/√Hz] from WN and ``random_walk``
+    [u/s/√Hz] from RW (None when the model has no RW: its long-term error is then a GM or a ramp, which Kalibr's
+    model cannot express; the caller keeps the Allan-slope value beside it)."""
+    wn = next((c for c in fit.components if c.name == "WN"), None)
+    rw = next((c for c in fit.components if c.name == "RW"), None)
+    return {
+        "noise_density": wn.params()["noise_density"] if wn else None,
+        "random_walk": rw.params()["random_walk"] if rw else None,
+    }

@@ -1,0 +1,155 @@
+"""``analyze`` as one pipeline: a static recording in, one :class:`AnalysisResult` out; data flows down once.
+
+Stages, each run once on data already in memory (the bag was read once, IMU and temperature together, by the
+adapter):
+
+1. the Allan stage (:mod:`.static`): checks, the Allan family of every axis, the slope parameters;
+2. the model stage (:mod:`.models`): per axis, model selection by BIC (or the structure asked for) with the
+   constrained EM and quasi-Newton, intervals and recording-length advice;
+3. the closed loop (:mod:`imu_noise_id.pipelines.loop`), starting from each axis's selected fit (not fitted again);
+4. the simulation band of every axis's fitted model (the AVs of simulations of it, for the report's plots).
+
+The report layer (:mod:`imu_noise_id.report.analysis`) writes every file once from the result.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS
+from ...core.axes import ImuSeries, ScalarSeries
+from ...core.errors import InputError
+from ...core.estimation.results import FitResult
+from ...core.simulation.bands import allan_band
+from ..loop import ImuLoop, LoopResult
+from .models import AUTO, AxisModel, ModelStage, fit_axis
+from .static import StaticAnalysis, analyze_static
+
+#: Simulations of each final model drawn as its band.
+BAND_SIMULATIONS = 20
+
+Progress = Callable[[int, int], None]
+#: Called when an axis is done: (axis, its model-stage fit, its loop or None).
+OnAxis = Callable[[str, FitResult, LoopResult | None], None]
+
+
+@dataclass(frozen=True)
+class AnalyzeOptions:
+    """Everything ``analyze`` can be asked (the CLI's options).
+
+    Attributes
+    ----------
+    kinds, per_decade, confidence, allow_motion
+        Allan stage: variances computed, averaging times per decade, interval level, analyse a moving record.
+    models
+        Model stage (``models.model == "none"``: Allan only, no loop).
+    loop
+        Run the closed loop after the model stage.
+    loop_decimate
+        Block-average factor of the loop (0 = automatic).
+    """
+
+    kinds: tuple[str, ...] = KINDS
+    per_decade: int = DEFAULT_PER_DECADE
+    confidence: float = DEFAULT_CONFIDENCE
+    allow_motion: bool = False
+    models: ModelStage = field(default_factory=ModelStage)
+    loop: bool = True
+    loop_decimate: int = 0
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.confidence < 1.0:
+            raise InputError(f"--confidence must lie in (0, 1), got {self.confidence}")
+        if self.per_decade < 1:
+            raise InputError(f"--per-decade must be >= 1, got {self.per_decade}")
+
+
+@dataclass
+class AnalysisResult:
+    """What ``analyze`` found, stage by stage (per-axis dictionaries keyed by axis name).
+
+    Attributes
+    ----------
+    static : the Allan stage (variances, slopes, data summary, warnings)
+    models : the model stage per axis (fits and selections, without their records)
+    loops : the closed loop per axis (empty without the loop)
+    loop_decimation : block-average factor the loop ran on (1 = the recording's own rate)
+    bands : per axis (τ [s], AVs of simulations of the fitted model (n_sim, T) [u²])
+    warnings : what the model and loop stages could not do, and why
+    """
+
+    static: StaticAnalysis
+    models: dict[str, AxisModel] = field(default_factory=dict)
+    loops: dict[str, LoopResult] = field(default_factory=dict)
+    loop_decimation: int = 1
+    bands: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def fits(self) -> dict:
+        """The model stage's fit of every axis."""
+        return {axis: m.fit for axis, m in self.models.items()}
+
+
+def _imu_loop(imu: ImuSeries, temperature: ScalarSeries | None, options: AnalyzeOptions,
+              warnings: list[str]) -> ImuLoop:
+    """The loop over the recording; without the temperature (and a warning saying why) if it is unusable."""
+    try:
+        return ImuLoop(imu, temperature, options.loop_decimate)
+    except InputError as exc:
+        warnings.append(f"closed loop without temperature: {exc}")
+        return ImuLoop(imu, None, options.loop_decimate)
+
+
+def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: AnalyzeOptions | None = None, *,
+            progress: Progress | None = None, on_axis: OnAxis | None = None) -> AnalysisResult:
+    """Run the stages of the module docstring on a static recording.
+
+    Parameters
+    ----------
+    imu
+        The six axes (rad/s, m/s²), repaired (the reader's notes in ``imu.notes``).
+    temperature
+        The recording's sensor temperature, if any (enables the loop's thermal-bias test).
+    options
+        What to compute.
+    progress
+        Called as ``progress(done, total)`` during the Allan stage.
+    on_axis
+        Called as each axis is done, e.g. to print its model and loop.
+
+    Raises
+    ------
+    InputError
+        Input a user can fix (too short, not static, constant axis, …): the message says what and what to do.
+    """
+    options = options or AnalyzeOptions()
+    static = analyze_static(imu, kinds=options.kinds, per_decade=options.per_decade, confidence=options.confidence,
+                            allow_motion=options.allow_motion, progress=progress)
+    result = AnalysisResult(static)
+    if not options.models.enabled:
+        return result
+    axes = list(static.axes)
+    loop = _imu_loop(imu, temperature, options, result.warnings) if options.loop else None
+    result.loop_decimation = loop.decimate if loop is not None else 1
+    for axis in axes:
+        model = fit_axis(imu, axis, options.models, static.dt)
+        fit = model.fit
+        if loop is not None:
+            try:
+                result.loops[axis] = loop.run(axis, fit)
+            except InputError as exc:
+                result.warnings.append(f"closed loop skipped: {exc}")
+                loop = None
+        if on_axis is not None:
+            on_axis(axis, fit, result.loops.get(axis))
+        result.models[axis] = model.without_data()
+        result.bands[axis] = allan_band(fit.components, static.dt, static.n, static.allan.tau,
+                                        n_sim=BAND_SIMULATIONS, seed=axes.index(axis))
+    return result
+
+
+__all__ = ["AUTO", "AnalysisResult", "AnalyzeOptions", "ModelStage", "StaticAnalysis", "analyze"]

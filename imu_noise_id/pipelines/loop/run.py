@@ -1,0 +1,232 @@
+"""Running the closed loop on one axis or on the axes of an IMU recording.
+
+The rules are in the package docstring (:mod:`imu_noise_id.pipelines.loop`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...core.axes import AXES, ImuSeries, ScalarSeries
+from ...core.diagnostics import detectors as det
+from ...core.errors import InputError
+from ...core.estimation.results import FitResult
+from ...core.noise.modelspec import parse_structure
+from .state import Diagnosis, LoopResult, LoopState, LoopStep, Trial
+from .steps import AxisLoop
+
+
+def run_closed_loop(
+    y: np.ndarray,
+    dt: float,
+    start: str | FitResult,
+    *,
+    temperature: np.ndarray | None = None,
+    max_steps: int = 6,
+    max_candidates: int = 3,
+    alpha: float = det.ALPHA,
+    lags: int = 20,
+    outliers: str = "impute",
+    axis: str | None = None,
+) -> LoopResult:
+    """Run the closed loop on one axis (see the module docstring for the rules).
+
+    Parameters
+    ----------
+    y : (N,) array
+        Samples of one axis [u] (rad/s or m/s²) at period ``dt``; NaN = missing.
+    dt : float
+        Sampling period [s].
+    start : str or FitResult
+        Starting model structure, e.g. ``"WN+RW"``, or a fit of it to this very record (e.g. the model
+        selection's winner, with its record), which then is step 0 as it is, not fitted again.
+    temperature : (N,) array, optional
+        Sensor temperature [°C] at the sample times (see :func:`align_temperature`); enables ``TEMP``.
+    max_steps : int
+        At most this many effects are added.
+    max_candidates : int
+        Candidates refitted per step.
+    alpha : float
+        Level of every detector.
+    lags : int
+        Ljung–Box lags.
+    outliers : {"impute", "missing"}
+        How flagged outliers are removed (see the module docstring).
+    axis : str, optional
+        Axis name, for the report.
+
+    Raises
+    ------
+    InputError
+        Bad input (not 1-D, inf, too few samples, temperature of another length or not finite).
+    """
+    y = np.asarray(y, dtype=float)
+    if y.ndim != 1:
+        raise InputError(f"closed loop: samples of one axis expected (1-D), got shape {y.shape}")
+    if np.any(np.isinf(y)):
+        raise InputError("closed loop: samples contain inf")
+    if int(np.isfinite(y).sum()) < 1000:
+        raise InputError(f"closed loop: need at least 1000 finite samples, got {int(np.isfinite(y).sum())}")
+    if not (np.isfinite(dt) and dt > 0):
+        raise InputError(f"closed loop: sampling period must be > 0, got {dt!r}")
+    if temperature is not None:
+        temperature = np.asarray(temperature, dtype=float)
+        if temperature.shape != y.shape or not np.all(np.isfinite(temperature)):
+            raise InputError("closed loop: temperature must be finite and aligned with the samples "
+                             "(use align_temperature)")
+        if np.ptp(temperature) <= 0:
+            temperature = None
+    if max_steps < 0 or max_candidates < 1:
+        raise InputError("closed loop: max_steps must be >= 0 and max_candidates >= 1")
+    if outliers not in ("impute", "missing"):
+        raise InputError(f"closed loop: outliers must be 'impute' or 'missing', got {outliers!r}")
+    loop = AxisLoop(y, float(dt), temperature, alpha=alpha, lags=lags, outliers=outliers)
+    start_fit = start if isinstance(start, FitResult) else None
+    if start_fit is not None and (start_fit.record is None or start_fit.n != int(np.isfinite(y).sum())):
+        raise InputError("closed loop: the starting fit must be a fit of this record that keeps its data")
+    state = LoopState(structure=parse_structure(start_fit.model if start_fit is not None else start))
+    diag = loop.diagnose(state, start_fit)
+    steps = [LoopStep(0, state.name(), None, None, None, state, diag, [])]
+    verdict, passed = "", False
+    while True:
+        cands = loop.candidates(diag, state)
+        if not cands:
+            left = sorted({f.effect for f in diag.findings if f.significant})
+            passed = not left
+            verdict = ("residuals pass: no detector fires at its level" if passed else
+                       f"nothing more can be added: evidence for {', '.join(left)} remains, but these effects "
+                       "are already in the model")
+            break
+        if len(steps) > max_steps:
+            verdict = f"stopped after {max_steps} added effects; residual evidence remains"
+            break
+        trials: list[Trial] = []
+        best: tuple[float, LoopState, Diagnosis, det.Finding] | None = None
+        for f in cands[:max_candidates]:
+            new_state = loop.extend(state, f, diag)
+            try:
+                new_diag = loop.diagnose(new_state)
+                if new_diag.errors.loglik < diag.errors.loglik and new_state.init is not None:
+                    # Nested models cannot lose likelihood: a local optimum. Refit from the estimator's own starts.
+                    new_state.init = None
+                    retry = loop.diagnose(new_state)
+                    new_diag = retry if retry.errors.loglik > new_diag.errors.loglik else new_diag
+            except (InputError, ValueError, np.linalg.LinAlgError) as exc:
+                trials.append(Trial(f, new_state.name(), None, False, f"refit failed: {exc}"))
+                continue
+            bic_new = new_diag.errors.bic
+            improved = bic_new < diag.errors.bic
+            gone, why = loop.evidence_gone(f, new_diag)
+            ok = improved and gone
+            reason = (f"BIC {diag.errors.bic:.1f} → {bic_new:.1f} ({'better' if improved else 'not better'}); "
+                      f"{why}")
+            trials.append(Trial(f, new_state.name(), bic_new, ok, reason))
+            if ok and (best is None or bic_new < best[0]):
+                best = (bic_new, new_state, new_diag, f)
+        if best is None:
+            verdict = "nothing improves: no candidate lowered the BIC with its evidence gone"
+            steps[-1].trials = trials
+            break
+        _, state, diag, f = best
+        steps[-1].trials = trials
+        steps.append(LoopStep(len(steps), state.name(), f.effect, f.evidence, f, state, diag, []))
+    remaining = [f for f in diag.findings if f.significant]
+    return LoopResult(axis=axis, dt=float(dt), n=y.size, steps=steps, passed=passed, verdict=verdict,
+                      remaining=remaining)
+
+
+def align_temperature(t_samples: np.ndarray, t_temperature: np.ndarray, temperature: np.ndarray) -> np.ndarray:
+    """Temperature [°C] at the IMU sample times by linear interpolation (held constant beyond its ends).
+
+    Raises
+    ------
+    InputError
+        Fewer than two temperature samples, non-finite values, or non-increasing temperature times.
+    """
+    t_temperature = np.asarray(t_temperature, dtype=float)
+    temperature = np.asarray(temperature, dtype=float)
+    if t_temperature.size < 2 or t_temperature.shape != temperature.shape:
+        raise InputError("temperature topic: need at least two samples with stamps")
+    if not (np.all(np.isfinite(temperature)) and np.all(np.isfinite(t_temperature))):
+        raise InputError("temperature topic holds NaN/inf values")
+    if np.any(np.diff(t_temperature) <= 0):
+        raise InputError("temperature topic: stamps are not strictly increasing")
+    return np.interp(np.asarray(t_samples, dtype=float), t_temperature, temperature)
+
+
+def block_average(y: np.ndarray, factor: int) -> np.ndarray:
+    """Means of consecutive blocks of ``factor`` samples (NaN-aware; a block of only NaN stays NaN).
+
+    Averaging keeps every effect slower than the new Nyquist frequency 1/(2·factor·dt) and divides the white
+    noise variance by ``factor`` (its density is unchanged); the closed loop on long records runs on it.
+    """
+    if factor < 1:
+        raise InputError(f"decimation factor must be >= 1, got {factor}")
+    y = np.asarray(y, dtype=float)
+    if factor == 1:
+        return y
+    n = (y.size // factor) * factor
+    blocks = y[:n].reshape(-1, factor)
+    counts = np.isfinite(blocks).sum(axis=1)
+    sums = np.nansum(blocks, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
+
+
+#: Automatic decimation keeps at most this many samples per axis (a few seconds to a minute per fit).
+MAX_SAMPLES = 200_000
+
+
+def decimation_factor(n: int, requested: int = 0) -> int:
+    """Block-average factor of the loop: ``requested`` if ≥ 1, else the smallest leaving ≤ :data:`MAX_SAMPLES`."""
+    if requested < 0:
+        raise InputError(f"decimation factor must be >= 0 (0 = automatic), got {requested}")
+    return requested if requested >= 1 else max(1, -(-n // MAX_SAMPLES))
+
+
+class ImuLoop:
+    """The closed loop on the axes of one IMU recording, one axis at a time (what ``analyze`` and ``loop`` run).
+
+    The temperature is aligned with the IMU stamps (and block-averaged) once, for every axis.
+
+    Parameters
+    ----------
+    imu : ImuSeries
+        The recording (its median period is the sampling period).
+    temperature : ScalarSeries, optional
+        The bag's temperature topic; interpolated onto the IMU stamps (enables ``TEMP``).
+    decimate : int
+        Block-average this many samples first (long records on small machines; the report states it);
+        0 = automatic (:func:`decimation_factor`).
+    loop_kwargs
+        Passed to :func:`run_closed_loop`.
+    """
+
+    def __init__(self, imu: ImuSeries, temperature: ScalarSeries | None = None, decimate: int = 0,
+                 **loop_kwargs: Any) -> None:
+        self.imu = imu
+        self.decimate = decimation_factor(len(imu), decimate)
+        self.dt = imu.dt * self.decimate
+        self.temperature = None
+        if temperature is not None:
+            aligned = align_temperature(imu.t, temperature.t, temperature.value)
+            self.temperature = block_average(aligned, self.decimate)
+        self.loop_kwargs = loop_kwargs
+
+    def run(self, axis: str, start: str | FitResult) -> LoopResult:
+        """The loop on ``axis`` from ``start``: a structure, or a fit of the axis (step 0 as it is on the full
+        record; on block averages only its structure is used)."""
+        if isinstance(start, FitResult) and self.decimate > 1:
+            start = start.model
+        y = block_average(self.imu.axis(axis), self.decimate)
+        return run_closed_loop(y, self.dt, start, temperature=self.temperature, axis=axis, **self.loop_kwargs)
+
+
+def run_closed_loop_imu(imu: ImuSeries, start: str | dict[str, str | FitResult], *,
+                        temperature: ScalarSeries | None = None, axes: tuple[str, ...] = AXES, decimate: int = 0,
+                        **loop_kwargs: Any) -> dict[str, LoopResult]:
+    """:class:`ImuLoop` on several axes from one starting structure, or per axis (structures or fits)."""
+    loop = ImuLoop(imu, temperature, decimate, **loop_kwargs)
+    return {axis: loop.run(axis, start[axis] if isinstance(start, dict) else start) for axis in axes}

@@ -1,0 +1,138 @@
+"""What the closed loop holds and reports: the model at each step, its diagnosis, the candidates tried."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...core.diagnostics import detectors as det
+from ...core.diagnostics.residuals import ResidualErrors
+from ...core.diagnostics.spectra import ResidualSpectra
+from ...core.estimation.results import FitResult
+from ...core.noise.components import Component
+from ...core.noise.modelspec import structure_name
+
+#: Effects added to the state-space structure / entering as regressors / as data cleaning.
+STATE_EFFECTS = ("GM", "RW", "RR", "QN")
+EXOG_EFFECTS = ("SIN", "TEMP", "STEP")
+CLEANING_EFFECTS = ("OUTLIERS",)
+
+
+@dataclass(frozen=True)
+class ExogTerm:
+    """A deterministic regressor of the measurement equation.
+
+    Attributes
+    ----------
+    effect : str
+        ``SIN``, ``TEMP`` or ``STEP``.
+    params : dict
+        ``frequency`` [Hz] (SIN) or ``index`` (STEP, first sample after the shift); nothing for TEMP.
+    """
+
+    effect: str
+    params: dict[str, float]
+
+    def columns(self, n: int, dt: float, temperature: np.ndarray | None) -> np.ndarray:
+        """The term's (n, k) regressor columns."""
+        if self.effect == "SIN":
+            arg = 2.0 * math.pi * self.params["frequency"] * dt * np.arange(n)
+            return np.column_stack([np.sin(arg), np.cos(arg)])
+        if self.effect == "TEMP":
+            if temperature is None:
+                raise ValueError("TEMP term needs the temperature series")
+            return (temperature - np.mean(temperature))[:, None]
+        if self.effect == "STEP":
+            return (np.arange(n) >= int(self.params["index"])).astype(float)[:, None]
+        raise ValueError(f"unknown regressor effect {self.effect!r}")
+
+    def describe(self, coef: np.ndarray) -> dict[str, float]:
+        """Fitted values of the term from its coefficients (amplitude/phase, coefficient, size)."""
+        if self.effect == "SIN":
+            return {"frequency": self.params["frequency"], "amplitude": float(np.hypot(coef[0], coef[1])),
+                    "phase": float(math.atan2(coef[1], coef[0]))}
+        if self.effect == "TEMP":
+            return {"coefficient": float(coef[0])}
+        return {"index": self.params["index"], "time": self.params["time"], "size": float(coef[0])}
+
+
+@dataclass
+class LoopState:
+    """What the model holds at one step: stochastic structure, regressors, removed samples."""
+
+    structure: list[str]
+    exog_terms: list[ExogTerm] = field(default_factory=list)
+    flagged: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    imputed: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    init: list[Component] | None = None
+
+    def name(self) -> str:
+        names = list(self.structure) + [t.effect for t in self.exog_terms]
+        if self.flagged.size:
+            names.append("OUTLIERS")
+        return structure_name(names)
+
+
+@dataclass
+class Diagnosis:
+    """A fit with its residuals, error measures and detector findings."""
+
+    fit: FitResult
+    errors: ResidualErrors
+    findings: list[det.Finding]
+    innovations: np.ndarray
+    tau: np.ndarray
+    av_data: np.ndarray
+    av_ci: tuple[np.ndarray, np.ndarray]
+    av_model: np.ndarray
+    exog_values: dict[str, dict[str, float]]
+    innovation_variance: float
+    spectra: ResidualSpectra
+
+
+@dataclass
+class Trial:
+    """A candidate effect tried at one step and why it was kept or not."""
+
+    finding: det.Finding
+    model: str
+    bic: float | None
+    accepted: bool
+    reason: str
+
+
+@dataclass
+class LoopStep:
+    """One accepted step of the loop (step 0 is the starting model)."""
+
+    index: int
+    model: str
+    added: str | None
+    evidence: str | None
+    finding: det.Finding | None
+    state: LoopState
+    diagnosis: Diagnosis
+    trials: list[Trial]
+
+    @property
+    def errors(self) -> ResidualErrors:
+        return self.diagnosis.errors
+
+
+@dataclass
+class LoopResult:
+    """The loop on one axis: its steps, the final verdict and what remains unexplained."""
+
+    axis: str | None
+    dt: float
+    n: int
+    steps: list[LoopStep]
+    passed: bool
+    verdict: str
+    remaining: list[det.Finding]
+
+    @property
+    def final(self) -> LoopStep:
+        return self.steps[-1]

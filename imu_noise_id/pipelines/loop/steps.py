@@ -1,0 +1,216 @@
+"""One axis of the closed loop: fit and diagnose a step, propose candidate effects, add one, judge the result."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from ...core.allan import allan_variance, choose_m, identify_alpha
+from ...core.diagnostics import detectors as det
+from ...core.diagnostics.residuals import av_misfit_z, line_statistic, residual_errors
+from ...core.diagnostics.spectra import residual_spectra
+from ...core.diagnostics.whitening import WhiteningFilter
+from ...core.estimation.model import FitOptions, NoiseModel
+from ...core.estimation.results import FitResult
+from ...core.noise.components import GM, QN, RR, RW, Component, total_allan_variance
+from ...core.noise.modelspec import CANONICAL_ORDER, structure_name
+from ...core.quality import interpolate_missing
+from .state import STATE_EFFECTS, Diagnosis, ExogTerm, LoopState
+
+
+def _canonical(components: list[Component]) -> list[Component]:
+    order = {name: i for i, name in enumerate(CANONICAL_ORDER)}
+    return sorted(components, key=lambda c: order.get(c.name, len(order)))
+
+
+def _coef(fit: FitResult, names: list[str]) -> np.ndarray:
+    """The fitted coefficients of the loop's regressors, in ``names`` order."""
+    return np.array([float(fit.exog_coef[name]["value"]) for name in names])
+
+
+class AxisLoop:
+    """One axis's record with the loop's settings: fits and diagnoses a :class:`LoopState`, proposes, adds and
+    judges candidate effects (the rules of :mod:`imu_noise_id.pipelines.loop`)."""
+
+    def __init__(self, y: np.ndarray, dt: float, temperature: np.ndarray | None, *, alpha: float, lags: int,
+                 outliers: str) -> None:
+        self.y, self.dt, self.temperature, self.outliers = y, dt, temperature, outliers
+        self.alpha, self.lags = alpha, lags
+        self.n_observed = int(np.isfinite(y).sum())
+        self.n = y.size
+
+    def exog(self, state: LoopState) -> tuple[np.ndarray | None, list[str], list[slice]]:
+        cols, names, slices, start = [], [], [], 0
+        for i, term in enumerate(state.exog_terms):
+            c = term.columns(self.n, self.dt, self.temperature)
+            cols.append(c)
+            names += [f"{term.effect}{i + 1}_{j}" for j in range(c.shape[1])]
+            slices.append(slice(start, start + c.shape[1]))
+            start += c.shape[1]
+        return (np.hstack(cols) if cols else None), names, slices
+
+    def diagnose(self, state: LoopState, fit: FitResult | None = None) -> Diagnosis:
+        """Fit ``state`` (unless ``fit``, already fitted to this record and state, is given) and diagnose it."""
+        y = self.y.copy()
+        if state.flagged.size:
+            y[state.flagged] = np.nan if self.outliers == "missing" else state.imputed
+        exog, exog_names, slices = self.exog(state)
+        if fit is None:
+            # The loop compares fits; intervals are the model selection's job.
+            model = NoiseModel(y, self.dt, structure_name(state.structure), exog=exog, exog_names=exog_names)
+            fit = model.fit(state.init, FitOptions(uncertainty=False))
+        coef = _coef(fit, exog_names)
+        exog_values = {f"{t.effect}{i + 1}": t.describe(coef[s])
+                       for i, (t, s) in enumerate(zip(state.exog_terms, slices, strict=True))}
+        residual_data = y - (exog @ coef if exog is not None else 0.0)
+        filled = interpolate_missing(residual_data)
+        # τ up to a tenth of the record, where each AV estimate still has ≳ 10 degrees of freedom.
+        m = choose_m(self.n, "allan", m_max=max(2, self.n // 10))
+        av_model = np.asarray(fit.theoretical_allan_variance(m * self.dt), dtype=float)
+        # The AV's confidence intervals under the null "the model holds": the noise type at each τ (which
+        # sets the EDF) is read from the model's smooth AV, not from the noisy data.
+        alpha_model = identify_alpha(m * self.dt, av_model[:, None], "allan")
+        av = allan_variance(filled, self.dt, m=m, alpha=alpha_model)
+        av_data = av.variance[:, 0]
+        av_ci = (av.ci_low[:, 0], av.ci_high[:, 0])
+        e = np.asarray(fit.standardized_innovations(), dtype=float).copy()
+        e[: min(10, e.size // 100)] = np.nan  # start-up transient of the filter
+        whitening = WhiteningFilter.from_components(list(fit.components), self.dt)
+        k = state.flagged.size
+        loglik = float(fit.loglik)
+        if self.outliers == "missing":
+            loglik -= 0.5 * k * math.log(2.0 * math.pi * whitening.innovation_variance)
+        # Searched locations are parameters too: a line's frequency, a step's sample (max over M positions).
+        searched = sum(t.effect in ("SIN", "STEP") for t in state.exog_terms)
+        bic = -2.0 * loglik + (fit.n_params + k + searched) * math.log(self.n_observed)
+        errors = residual_errors(e, self.dt, loglik=loglik, bic=bic, av_data=av_data, av_model=av_model,
+                                 lags=self.lags)
+        white = [c for c in fit.components if c.name in ("WN", "QN")]
+        av_white = total_allan_variance(white, av.tau, self.dt) if white else None
+        findings = self.detect(e, whitening, state, tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model,
+                               av_white=av_white)
+        return Diagnosis(fit=fit, errors=errors, findings=findings, innovations=e, tau=av.tau, av_data=av_data,
+                         av_ci=av_ci, av_model=av_model, exog_values=exog_values,
+                         innovation_variance=whitening.innovation_variance, spectra=residual_spectra(e, self.dt))
+
+    def detect(self, e: np.ndarray, whitening: WhiteningFilter, state: LoopState, *, tau: np.ndarray,
+               av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray,
+               av_white: np.ndarray | None) -> list[det.Finding]:
+        a = self.alpha
+        found = [det.detect_outliers(e, alpha=a), det.detect_sinusoid(e, self.dt, whitening, alpha=a),
+                 det.detect_step(e, self.dt, whitening, alpha=a), det.detect_correlation(e, self.dt, alpha=a,
+                                                                                        lags=self.lags)]
+        if "RR" not in state.structure:
+            found.append(det.detect_ramp(e, self.dt, whitening, alpha=a))
+        if self.temperature is not None and not any(t.effect == "TEMP" for t in state.exog_terms):
+            found.append(det.detect_temperature(e, self.temperature, whitening, alpha=a))
+        found += det.detect_av_signatures(tau, av_data, av_ci, av_model, av_white=av_white, alpha=a)
+        return found
+
+    def candidates(self, diag: Diagnosis, state: LoopState) -> list[det.Finding]:
+        """Significant findings that can be added, ranked by p-value: the most significant one per effect, except
+        that Gauss–Markov candidates from distinct τ bands (an AV bump and a bounded long-τ AV) are kept apart;
+        Ljung–Box evidence merges into the strongest GM band (which locates τ) or stands alone without one."""
+        best: dict[str, det.Finding] = {}
+        gms: list[det.Finding] = []
+        lb: det.Finding | None = None
+        for f in diag.findings:
+            if not f.significant or not self.addable(f, state):
+                continue
+            if f.effect == "GM" and f.detector == "ljung_box":
+                lb = f
+            elif f.effect == "GM":
+                gms.append(f)
+            elif f.effect not in best or f.log10_p < best[f.effect].log10_p:
+                best[f.effect] = f
+        gms.sort(key=lambda f: f.log10_p)
+        if gms and lb is not None:
+            gms[0] = replace(gms[0], log10_p=min(gms[0].log10_p, lb.log10_p),
+                             evidence=gms[0].evidence + "; " + lb.evidence)
+        elif lb is not None:
+            gms = [lb]
+        return sorted([*best.values(), *gms[:2]], key=lambda f: f.log10_p)
+
+    def addable(self, f: det.Finding, state: LoopState) -> bool:
+        if f.effect in ("RW", "RR", "QN"):
+            return f.effect not in state.structure
+        if f.effect == "TEMP":
+            return not any(t.effect == "TEMP" for t in state.exog_terms)
+        return True
+
+    def extend(self, state: LoopState, f: det.Finding, diag: Diagnosis) -> LoopState:
+        fitted = list(diag.fit.components)
+        new = LoopState(structure=list(state.structure), exog_terms=list(state.exog_terms),
+                        flagged=state.flagged.copy(), imputed=state.imputed.copy(), init=fitted)
+        if f.effect in STATE_EFFECTS:
+            if f.params.get("deficit"):
+                # The model's long-τ growth absorbed a bounded process: restart that growth small.
+                fitted = [type(c)(c.params()["random_walk"] * 1e-2) if c.name == "RW" else c for c in fitted]
+            new.structure = [c.name for c in _canonical([*fitted, self.component(f, diag)])]
+            new.init = _canonical([*fitted, self.component(f, diag)])
+        elif f.effect == "SIN":
+            new.exog_terms.append(ExogTerm("SIN", {"frequency": f.params["frequency"]}))
+        elif f.effect == "TEMP":
+            new.exog_terms.append(ExogTerm("TEMP", {}))
+        elif f.effect == "STEP":
+            new.exog_terms.append(ExogTerm("STEP", {"index": f.params["index"], "time": f.params["time"]}))
+        elif f.effect == "OUTLIERS":
+            fresh = np.setdiff1d(f.indices, state.flagged)
+            prediction = self.y[fresh] - diag.innovations[fresh] * math.sqrt(diag.innovation_variance)
+            order = np.argsort(np.concatenate([state.flagged, fresh]))
+            new.flagged = np.concatenate([state.flagged, fresh])[order]
+            new.imputed = np.concatenate([state.imputed, prediction])[order]
+        return new
+
+    def component(self, f: det.Finding, diag: Diagnosis) -> Component:
+        """The state-space component a finding asks for, with the detector's values as initial values."""
+        p = f.params
+        if f.effect == "GM":
+            sigma = p["sigma"] if "sigma" in p else p["sigma_share"] * math.sqrt(diag.innovation_variance)
+            return GM(tau=max(float(p["tau"]), 2.0 * self.dt), sigma=max(float(sigma), 1e-12))
+        if f.effect == "RW":
+            return RW(max(float(p["random_walk"]), 1e-15))
+        if f.effect == "QN":
+            return QN(max(float(p["Q"]), 1e-15))
+        return RR(float(p["slope"]))
+
+    def targeted_statistic(self, f: det.Finding, diag: Diagnosis) -> float:
+        """The statistic of the signature ``f`` targeted, re-measured at the same place on the new residuals."""
+        e = diag.innovations
+        w = WhiteningFilter.from_components(list(diag.fit.components), self.dt)
+        if f.detector == "av_band":
+            z = av_misfit_z(diag.av_data, diag.av_ci, diag.av_model)
+            band = (diag.tau >= f.params["band_lo"] * 0.999) & (diag.tau <= f.params["band_hi"] * 1.001)
+            z = -z if f.params.get("deficit") else z
+            return float(np.max(z[band])) if band.any() else 0.0
+        if f.effect == "SIN":
+            return line_statistic(e, self.dt, f.params["frequency"])
+        if f.effect == "OUTLIERS":
+            return det.detect_outliers(e, alpha=f.level, only=f.indices).statistic
+        if f.effect == "STEP":
+            m = max(20, self.n // 200)
+            k = int(f.params["index"])
+            near = np.abs(det.step_scan(e, w, m)[max(0, k - m): k + m + 1])
+            return float(np.nanmax(near)) if np.isfinite(near).any() else 0.0
+        rerun = {
+            "temperature_score": lambda: det.detect_temperature(e, self.temperature, w, alpha=f.level),
+            "ramp_score": lambda: det.detect_ramp(e, self.dt, w, alpha=f.level),
+            "ljung_box": lambda: det.detect_correlation(e, self.dt, alpha=f.level, lags=self.lags),
+        }
+        return float(rerun[f.detector]().statistic)
+
+    def evidence_gone(self, f: det.Finding, diag: Diagnosis) -> tuple[bool, str]:
+        """Whether the signature ``f`` targeted is gone from the new fit's residuals.
+
+        Gone: its statistic, re-measured at the same place (frequency, sample, τ band, samples), is below its
+        threshold, or has fallen to less than half its value (measured effects are rarely exactly the shape
+        added, e.g. a wandering line, a band-limited bump; what is left is new evidence for the next step).
+        """
+        stat = self.targeted_statistic(f, diag)
+        below = stat <= f.threshold
+        halved = stat <= 0.5 * f.statistic
+        word = "gone" if below else ("halved" if halved else "still there")
+        return below or halved, f"{f.detector} statistic {f.statistic:.1f} → {stat:.1f} (threshold " \
+                                f"{f.threshold:.1f}): {word}"

@@ -1,0 +1,46 @@
+"""The files of an analysis, each written once from the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult`.
+
+``imu.yaml`` (Kalibr keys and per-axis values), ``allan.csv`` and the other variance CSVs, ``allan.png``; with a
+model stage ``model.yaml`` (fits, candidates, recording-length advice and the loop's steps) and
+``allan_model.png``; with the loop ``report.html``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..core.axes import UNITS
+from ..pipelines.analyze import AnalysisResult
+from .html import write_loop_report
+from .imu_yaml import write_imu_yaml
+from .model_yaml import write_model_yaml
+from .plots import plot_allan_deviation
+from .plots_model import save_allan_overlay
+from .variance_csv import write_variance_csvs
+
+
+def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str, meta: dict,
+                   title: str = "closed loop") -> dict[str, Path]:
+    """Write every output of ``result`` into ``out_dir`` (created); returns the paths by file name."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    static = result.static
+    paths = {"imu.yaml": write_imu_yaml(out / "imu.yaml", static, result.models, rostopic)}
+    for p in write_variance_csvs(static.variances, static.axes, out):
+        paths[p.name] = p
+    paths["allan.png"] = plot_allan_deviation(static, out / "allan.png")
+    if not result.models:
+        return paths
+    paths["model.yaml"] = write_model_yaml(out / "model.yaml", result.models, result.loops, meta)
+    allan = static.allan
+    panels = []
+    for axis, model in result.models.items():
+        j = static.axes.index(axis)
+        panels.append({"tau": allan.tau, "avar": allan.variance[:, j], "fit": model.fit, "band": result.bands[axis],
+                       "unit": UNITS.get(axis, "u"), "label": axis, "title": f"{axis}: {model.fit.model}"})
+    paths["allan_model.png"] = save_allan_overlay(out / "allan_model.png", panels,
+                                                  title="Allan deviation vs fitted models")
+    if result.loops:
+        note = f" (block-averaged by {result.loop_decimation})" if result.loop_decimation > 1 else ""
+        paths["report.html"] = write_loop_report(out / "report.html", result.loops, title=title + note)
+    return paths

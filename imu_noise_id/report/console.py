@@ -1,0 +1,62 @@
+"""What the commands print: the Allan-slope noise density and random walk per axis, the closed loop's steps."""
+
+from __future__ import annotations
+
+import math
+
+from ..core.axes import UNITS
+from ..core.estimation.results import FitResult
+from ..pipelines.analyze.static import StaticAnalysis
+from ..pipelines.loop import LoopResult
+
+_SUMMARY_UNITS = {"rad/s": ("rad/s/sqrt(Hz)", "rad/s^2/sqrt(Hz)"), "m/s^2": ("m/s^2/sqrt(Hz)", "m/s^3/sqrt(Hz)")}
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.3e}" if math.isfinite(x) else "n/a"
+
+
+def summary_table(result: StaticAnalysis) -> str:
+    """Short text table: per axis white-noise density and random walk with their intervals."""
+    conf = 100 * result.allan.confidence
+    lines = [
+        f"{result.n} samples, {result.duration_s:.1f} s at {result.rate_hz:.6g} Hz ({result.topic or 'input'})",
+        f"{'axis':8s} {'noise density':>13s} {f'{conf:.0f}% CI':>23s}   {'random walk':>11s} {f'{conf:.0f}% CI':>23s}"
+        "  unit (N; K)",
+    ]
+    for a in result.axes:
+        s = result.slopes[a]
+        n, k = s.noise_density, s.random_walk
+        k_val = ("<" if k.method == "upper_bound" else " ") + _fmt(k.value)
+        n_val = ("<" if n.method == "upper_bound" else " ") + _fmt(n.value)
+        u_n, u_k = _SUMMARY_UNITS[UNITS[a]]
+        lines.append(
+            f"{a:8s} {n_val:>13s} [{_fmt(n.ci[0])}, {_fmt(n.ci[1])}]   {k_val:>11s} [{_fmt(k.ci[0])}, {_fmt(k.ci[1])}]"
+            f"  {u_n}; {u_k}"
+        )
+    lines.append("('<': upper bound, slope not reached in this record)")
+    return "\n".join(lines)
+
+
+def loop_table(results: dict[str, LoopResult]) -> str:
+    """One line per step: axis, step, model, errors."""
+    lines = [f"{'axis':8s} {'step':>4s} {'model':28s} {'loglik':>12s} {'BIC':>12s} {'AVmis':>6s} {'LB p':>8s} "
+             f"{'peak':>6s}"]
+    for axis, r in results.items():
+        for s in r.steps:
+            e = s.errors
+            lines.append(f"{axis:8s} {s.index:4d} {s.model:28s} {e.loglik:12.1f} {e.bic:12.1f} {e.av_misfit:6.3f} "
+                         f"{e.ljung_box_p:8.2g} {e.peak_ratio:6.1f}")
+        lines.append(f"{axis:8s}      -> {r.verdict}")
+    return "\n".join(lines)
+
+
+def fit_line(axis: str, fit: FitResult) -> str:
+    """One line per fitted axis: the model, its log-likelihood and BIC, the components."""
+    return (f"{axis}: {fit.model}  loglik {fit.loglik:.6g}  BIC {fit.bic:.6g}  "
+            + "  ".join(str(c) for c in fit.components))
+
+
+def loop_line(axis: str, loop: LoopResult) -> str:
+    """One line per axis the closed loop ran on: first and final model, the verdict."""
+    return f"{axis}: loop {loop.steps[0].model} -> {loop.final.model}: {loop.verdict}"
