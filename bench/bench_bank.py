@@ -219,8 +219,8 @@ def default_set_examples() -> None:
 
 def real_data() -> None:
     """The default set on measured ADIS16405 run 1 (10 000 s at 100 Hz, static): gyro_x and accel_x."""
-    from imu_noise_id.cli.identify import identify_series
     from imu_noise_id.core.axes import ImuSeries
+    from imu_noise_id.pipelines.identify import identify
 
     path = ROOT.parent / "shared" / "data" / "adis16405_static" / "adis16405_run1.npz"
     if not path.is_file():
@@ -230,15 +230,15 @@ def real_data() -> None:
     series = ImuSeries(t=d["t"], gyro=d["gyro"], accel=d["accel"])
     for refine in (0, 2):
         t0 = time.perf_counter()
-        res = identify_series(series, ["gyro_x", "accel_x"], None, refine=refine)
+        res = identify(series, ["gyro_x", "accel_x"], *read_hypotheses_file(None), refine=refine)
         wall = time.perf_counter() - t0
         print(f"\nADIS16405 run 1 ({len(series)} samples per axis), default set, refine {refine}: {wall:.1f} s for "
               "2 axes")
-        for axis, e in res["axes"].items():
-            f = e["result"].final
+        for axis, e in res.axes.items():
+            f = e.result.final
             probs = ", ".join(f"{k} {v:.3g}" for k, v in f.probabilities.items())
-            print(f"  {axis} ({e['passes']} passes): {probs}; decision {f.decision} first reached at "
-                  f"{e['result'].decision_time:.0f} s; warm-up white-noise estimate {e['wn_estimate']:.3g}")
+            print(f"  {axis} ({e.passes} passes): {probs}; decision {f.decision} first reached at "
+                  f"{e.result.decision_time:.0f} s; warm-up white-noise estimate {e.wn_estimate:.3g}")
             for h, est in f.hypotheses.items():
                 theta = ", ".join(f"{k} {v:.3g} (RSD {est.rsd[k]:.2g})" for k, v in est.theta.items())
                 print(f"    {h}: {theta}")

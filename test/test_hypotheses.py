@@ -321,8 +321,11 @@ def test_auto_white_noise_range_from_the_warmup():
 
 # -- adapters ---------------------------------------------------------------------------------------------------
 
-def test_identify_series_writes_outputs(tmp_path):
-    from imu_noise_id.cli.identify import identify_series, write_outputs
+def test_identify_writes_outputs(tmp_path):
+    from imu_noise_id.pipelines.identify import identify
+    from imu_noise_id.report.hypotheses_plots import plot_identify
+    from imu_noise_id.report.hypotheses_yaml import write_identification
+    from imu_noise_id.resources import read_hypotheses_file
 
     rng = np.random.default_rng(1)
     n, dt = 3000, 0.1
@@ -342,8 +345,9 @@ def test_identify_series_writes_outputs(tmp_path):
                                      "GM.tau": {"range": [5, 200], "n": 4, "spacing": "log"},
                                      "GM.sigma": {"range": [2e-3, 5e-2], "n": 4, "spacing": "log"}}}]}
     cfg.write_text(yaml.safe_dump(data))
-    res = identify_series(series, ["gyro_z", "accel_z"], str(cfg))
-    write_outputs(res, tmp_path / "out", plot=True)
+    res = identify(series, ["gyro_z", "accel_z"], *read_hypotheses_file(cfg))
+    write_identification(res, tmp_path / "out")
+    plot_identify(res, tmp_path / "out" / "hypotheses_probabilities.png")
     doc = yaml.safe_load((tmp_path / "out" / "hypotheses.yaml").read_text())
     assert set(doc["axes"]) == {"gyro_z", "accel_z"}
     assert doc["axes"]["accel_z"]["offset_removed"] == pytest.approx(9.81, abs=0.05)

@@ -8,6 +8,7 @@ import pytest
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.kalman import statespace as ss
+from imu_noise_id.core.kalman.riccati import steady_prediction_covariance
 from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
 
 MIXES = {
@@ -128,6 +129,6 @@ def test_newton_riccati_from_a_nearby_model_equals_doubling(name, rel_step):
              for c in MIXES[name]]
     moved = ss.with_components(model, comps)
     assert moved._steady_cache.get("guess") is not None  # the warm start is actually used
-    reference = ss.steady_prediction_covariance(moved.phi, moved.q, moved.h, moved.r)
+    reference = steady_prediction_covariance(moved.phi, moved.q, moved.h, moved.r)
     np.testing.assert_allclose(moved.steady_prediction_covariance(), reference, rtol=0,
                                atol=1e-11 * np.max(np.abs(reference)))

@@ -10,13 +10,15 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+from ..pipelines.identify import Identification
 
-def plot_identify(res: dict[str, Any], path: Path) -> None:
+
+def plot_identify(res: Identification, path: Path) -> None:
     """Posterior probability of each hypothesis vs time, one panel per axis, γ as a dashed line."""
-    axes = list(res["axes"])
+    axes = list(res.axes)
     fig, panels = plt.subplots(len(axes), 1, figsize=(7, 1.8 * len(axes) + 0.6), sharex=True, squeeze=False)
     for ax, axis in zip(panels[:, 0], axes, strict=True):
-        r = res["axes"][axis]["result"]
+        r = res.axes[axis].result
         for k, name in enumerate(r.names):
             ax.plot(r.t, r.probabilities[:, k], label=name)
         ax.axhline(r.gamma, color="k", ls="--", lw=0.8)

@@ -27,7 +27,7 @@ import numpy as np
 from scipy import linalg, signal
 
 from ..errors import InputError
-from ..kalman.statespace import steady_prediction_covariance
+from ..kalman.riccati import steady_prediction_covariance
 from ..noise.components import Component
 
 

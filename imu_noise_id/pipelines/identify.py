@@ -1,0 +1,70 @@
+"""``identify``: the recursive Bayesian hypothesis bank (paper 002) run over the axes of a static recording.
+
+Per axis: the hypothesis set of the axis's sensor (gyro or accel) at the recording's period, the warm-up offset
+removed, the bank run on the whole axis, optionally re-run with grids re-centred on the posterior
+(:func:`~imu_noise_id.core.hypotheses.axis.identify_offline`). The parsed hypothesis-set mapping comes from the
+adapter (the file is read there).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from ..core.axes import ImuSeries
+from ..core.errors import InputError
+from ..core.hypotheses import BankResult, HypothesisSet
+from ..core.hypotheses.axis import identify_offline
+from ..core.hypotheses.config import hypothesis_set_factory
+
+#: Rows per axis kept of the probabilities over time (for the CSV and the plot).
+MAX_ROWS = 2000
+
+
+@dataclass
+class AxisIdentification:
+    """The bank's outcome on one axis.
+
+    Attributes
+    ----------
+    result : the bank's probabilities and estimates over time (every ``record_every``-th block)
+    offset : warm-up mean removed [u]; wn_estimate : white-noise density of the warm-up [u/√Hz] (None: not needed)
+    hset : the hypothesis set of the last pass; warmup : warm-up duration [s]
+    states : per hypothesis, its state estimates (mean, std); passes : grid-refinement passes run
+    """
+
+    result: BankResult
+    offset: float
+    hset: HypothesisSet
+    warmup: float
+    wn_estimate: float | None
+    states: dict[str, dict[str, tuple[float, float]]]
+    passes: int
+
+
+@dataclass
+class Identification:
+    """``identify`` on several axes: the hypothesis file it used, the sampling period [s], each axis."""
+
+    source: str
+    dt: float
+    axes: dict[str, AxisIdentification]
+
+
+def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], source: str,
+             refine: int = 0) -> Identification:
+    """Run the bank on each axis of ``series`` with ``refine`` grid-refinement passes."""
+    if len(series) < 2:
+        raise InputError(f"{series.topic or 'the IMU series'} has {len(series)} sample(s): need a recording")
+    if refine < 0:
+        raise InputError(f"--refine must be >= 0, got {refine}")
+    dt = series.dt
+    out = Identification(source, dt, {})
+    for axis in axes:
+        make, warmup = hypothesis_set_factory(hypotheses, dt, axis.split("_")[0], source)
+        y = series.axis(axis)
+        every = max(1, len(y) // make(1.0).block // MAX_ROWS)
+        result, ident, passes = identify_offline(y, make, warmup, dt, refine=refine, record_every=every)
+        out.axes[axis] = AxisIdentification(result, ident.offset, ident.bank.hset, warmup, ident.wn_estimate,
+                                            ident.bank.state_estimates(), passes)
+    return out

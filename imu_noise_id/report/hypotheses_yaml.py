@@ -1,0 +1,62 @@
+"""``hypotheses.yaml`` and ``hypotheses_probabilities.csv`` of ``identify`` (decision, probabilities, θ̂ ± RSD)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from ..core.axes import UNITS
+from ..pipelines.identify import AxisIdentification, Identification
+
+
+def axis_entry(axis: str, entry: AxisIdentification) -> dict[str, Any]:
+    """The ``hypotheses.yaml`` entry of one axis."""
+    result, hset = entry.result, entry.hset
+    final = result.final
+    return {
+        "unit": UNITS[axis],
+        "decision": final.decision,
+        "decision_time_s": result.decision_time,
+        "duration_s": float(final.t),
+        "probabilities": {k: float(v) for k, v in final.probabilities.items()},
+        "offset_removed": float(entry.offset),
+        "warmup_white_noise_estimate": entry.wn_estimate,
+        "passes": entry.passes,
+        "warmup_s": float(entry.warmup),
+        "block": int(hset.block),
+        "gamma": float(hset.gamma),
+        "hypotheses": {
+            name: {
+                "probability": est.probability,
+                "theta": est.theta,
+                "theta_std": est.theta_std,
+                "rsd": {k: (None if not np.isfinite(v) else v) for k, v in est.rsd.items()},
+                "state": {s: v[0] for s, v in entry.states[name].items()},
+                "state_std": {s: v[1] for s, v in entry.states[name].items()},
+                "grid": {p.name: {"range": [p.low, p.high], "n": p.n, "spacing": p.spacing,
+                                  "grid_range": [float(p.edges()[0]), float(p.edges()[-1])]}
+                         for p in next(h for h in hset.hypotheses if h.name == name).priors},
+            }
+            for name, est in final.hypotheses.items()
+        },
+    }
+
+
+def write_identification(res: Identification, out_dir: Path) -> list[Path]:
+    """``hypotheses.yaml`` and ``hypotheses_probabilities.csv`` (probability of each hypothesis vs time)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    doc = {"source_hypotheses": res.source, "dt": res.dt,
+           "axes": {axis: axis_entry(axis, e) for axis, e in res.axes.items()}}
+    yaml_path = out_dir / "hypotheses.yaml"
+    yaml_path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    lines = ["axis,t_s,hypothesis,probability"]
+    for axis, e in res.axes.items():
+        r = e.result
+        for k, name in enumerate(r.names):
+            lines += [f"{axis},{t:.6g},{name},{p:.6g}" for t, p in zip(r.t, r.probabilities[:, k], strict=True)]
+    csv_path = out_dir / "hypotheses_probabilities.csv"
+    csv_path.write_text("\n".join(lines) + "\n")
+    return [yaml_path, csv_path]
