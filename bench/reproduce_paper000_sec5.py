@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from imu_noise_id.core.estimation import starts as avfit
+from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.estimation.model import FitOptions, fit_model
 from imu_noise_id.core.estimation.selection import select_model
 from imu_noise_id.core.simulation.bands import allan_band
@@ -49,9 +49,9 @@ def main() -> None:
         for lab, need in rl.needed_s.items():
             print(f"  record for ±10 %: {lab}: {need / 3600:.3g} h (now {rl.current_s / 3600:.3g} h)"
                   f"{'' if rl.reliable[lab] else '  (lower bound: record not ≫ τ)'}")
-        av = avfit.empirical_allan(y, dt)
+        av = allan_variance(y, dt)
         band = allan_band(fit.components, fit.dt, y.size, av.tau, n_sim=20, seed=k)
-        panels.append({"tau": av.tau, "avar": av.avar, "fit": fit, "band": band, "unit": "m/s²",
+        panels.append({"tau": av.tau, "avar": av.variance[:, 0], "fit": fit, "band": band, "unit": "m/s²",
                        "label": f"ADIS16405 {axis}", "title": f"{axis}: WN+2GM"})
     print("\nBIC ranking on accel_y (default candidates + what the AV suggests):")
     sel = select_model(accel[:, 1], dt, options=FitOptions(n_starts=2, uncertainty=False))

@@ -31,7 +31,7 @@ The confidence intervals and their equivalent degrees of freedom are in :mod:`.e
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -92,6 +92,12 @@ class AllanResult:
     def deviation(self) -> np.ndarray:
         """Square root of :attr:`variance` [u]."""
         return np.sqrt(self.variance)
+
+    def column(self, j: int) -> AllanResult:
+        """The result of axis ``j`` alone (arrays of shape (T, 1))."""
+        pick = slice(j, j + 1)
+        return replace(self, variance=self.variance[:, pick], ci_low=self.ci_low[:, pick],
+                       ci_high=self.ci_high[:, pick], edf=self.edf[:, pick], alpha=self.alpha[:, pick])
 
 
 # --------------------------------------------------------------------------------------------------- τ grid

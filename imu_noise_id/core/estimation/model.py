@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import kalman
+from ..allan import AllanResult
 from ..errors import InputError
 from ..kalman import statespace as ss
 from ..noise.components import COMPONENT_TYPES, Component
@@ -129,6 +130,10 @@ class NoiseModel:
     drift
         With RR in the structure: ``'em'`` (joint) or ``'ls'`` (least-squares line removed first); ``None``
         forbids RR.
+    allan
+        The Allan variance (one column) of :meth:`detrended` — the record itself, or with its least-squares line
+        removed when the fitted structure has RR — when the caller has it: the starting values are fitted to it
+        instead of computing it again.
 
     Raises
     ------
@@ -137,7 +142,8 @@ class NoiseModel:
     """
 
     def __init__(self, y: np.ndarray, dt: float, structure: str | list[Component], *, exog: np.ndarray | None = None,
-                 exog_names: list[str] | tuple[str, ...] | None = None, drift: str | None = "em") -> None:
+                 exog_names: list[str] | tuple[str, ...] | None = None, drift: str | None = "em",
+                 allan: AllanResult | None = None) -> None:
         y = check_signal(y, dt)
         names, given = parse_structure_or_components(structure)
         ss.validate_structure(names)
@@ -160,6 +166,7 @@ class NoiseModel:
             if self.given is not None:
                 self.given = [c for c in self.given if c.name != "RR"]
         self.y = y
+        self.allan = allan
         self.exog_names, self.z = self._regressors(exog, exog_names)
         self.n_free_noise = sum(len(COMPONENT_TYPES[n].parameter_names) for n in self.fit_names if n != "RR")
         n_params = self.n_free_noise + self.z.shape[1]
@@ -229,12 +236,13 @@ class NoiseModel:
         if self.given is not None:
             return [list(self.given)]
         y_av = self.detrended()
-        av = starts.empirical_allan(y_av, self.dt)
-        fits = starts.fit_allan(self.fit_names, av, self.dt)
+        if self.allan is None:
+            self.allan = starts.allan_of(y_av, self.dt)
+        fits = starts.fit_allan(self.fit_names, self.allan, self.dt)
         if spectral:
             bp = periodogram or whittle.banded_periodogram(y_av)
             fits = sorted((whittle.whittle_fit(c, y_av, self.dt, bp) for _, c in fits), key=lambda r: -r[0])
-            fits = starts.distinct([(-w, c) for w, c in fits], av.tau, self.dt)
+            fits = starts.distinct([(-w, c) for w, c in fits], self.allan.tau, self.dt)
         return [c for _, c in fits[:max(n_starts, 1)]]
 
     def fit(self, init: list[Component] | None = None, options: FitOptions | None = None) -> FitResult:

@@ -12,7 +12,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..allan import AllanResult
 from ..errors import InputError
+from ..noise.modelspec import parse_structure
 from ..quality import interpolate_missing
 from . import starts
 from .model import FitOptions, NoiseModel, check_signal
@@ -38,13 +40,15 @@ class SelectionResult:
         return SelectionResult(best, self.table, fits)
 
 
-def suggest_candidates(y: np.ndarray, dt: float) -> list[str]:
-    """Default candidates plus RR when the AV rises like τ² at long τ, QN when it falls like τ⁻² at short τ."""
+def suggest_candidates(allan: AllanResult) -> list[str]:
+    """Default candidates plus RR when the AV (one column, up to τ = N·dt/4) rises like τ² at its long-τ end, QN
+    when it falls like τ⁻² at its short-τ end."""
     cands = list(DEFAULT_CANDIDATES)
-    av = starts.empirical_allan(interpolate_missing(np.asarray(y, dtype=float)), dt)
-    if av.tau.size >= 4:
-        slope_hi = np.polyfit(np.log(av.tau[-3:]), np.log(av.avar[-3:]), 1)[0]
-        slope_lo = np.polyfit(np.log(av.tau[:3]), np.log(av.avar[:3]), 1)[0]
+    keep = allan.m <= starts.MAX_FRACTION * allan.n
+    tau, avar = allan.tau[keep], allan.variance[keep, 0]
+    if tau.size >= 4:
+        slope_hi = np.polyfit(np.log(tau[-3:]), np.log(avar[-3:]), 1)[0]
+        slope_lo = np.polyfit(np.log(tau[:3]), np.log(avar[:3]), 1)[0]
         if slope_hi > 1.5:
             cands += ["WN+RW+RR", "WN+GM+RW+RR"]
         if slope_lo < -1.4:
@@ -53,23 +57,31 @@ def suggest_candidates(y: np.ndarray, dt: float) -> list[str]:
 
 
 def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, *, criterion: str = "bic",
-                 drift: str | None = "em", options: FitOptions | None = None) -> SelectionResult:
+                 drift: str | None = "em", options: FitOptions | None = None,
+                 allan: AllanResult | None = None) -> SelectionResult:
     """Fit every candidate structure and rank them by BIC (or AIC).
 
-    ``options.uncertainty`` applies to the winner only (the others are fitted without it).
+    ``options.uncertainty`` applies to the winner only (the others are fitted without it). ``allan``: the record's
+    Allan variance (one column) when the caller has it; the starting values of every candidate without RR are
+    fitted to it, those with RR to the AV of the detrended record (computed once for all of them).
     """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
     options = options or FitOptions()
     y = check_signal(y, dt)
-    cands = list(candidates) if candidates else suggest_candidates(y, dt)
+    # The AV the starting values need, keyed by "the structure has RR" (then: of the detrended record).
+    allans = {False: allan if allan is not None else starts.allan_of(interpolate_missing(y), dt), True: None}
+    cands = list(candidates) if candidates else suggest_candidates(allans[False])
     fits: dict[str, FitResult] = {}
     errors: dict[str, str] = {}
     search = replace(options, uncertainty=False)
     best_key: str | None = None
     for spec in cands:
         try:
-            fit = NoiseModel(y, dt, spec, drift=drift).fit(options=search)
+            has_rr = "RR" in parse_structure(spec)
+            model = NoiseModel(y, dt, spec, drift=drift, allan=allans[has_rr])
+            fit = model.fit(options=search)
+            allans[has_rr] = model.allan
         except InputError as exc:
             errors[spec] = str(exc)
             continue

@@ -3,9 +3,10 @@ used to obtain an initial guess").
 
 Beyond the paper: instead of reading slopes off the plot, the theoretical AV of the whole structure
 (:meth:`~.components.Component.allan_variance`, summed over components) is fitted to the empirical AV by least
-squares in log space, each τ weighted by the square root of its number of clusters (the log-AV's standard error
+squares in log space, each τ weighted by the square root of its number of clusters N/m (the log-AV's standard error
 falls like that), from several placements of the GM correlation times; the distinct solutions, best first, are
-the multi-start initial values of the likelihood fit.
+the multi-start initial values of the likelihood fit. The AV is the one the analysis already computed
+(:class:`~imu_noise_id.core.allan.AllanResult`, one column), used up to τ = N·dt/4 where it is well determined.
 """
 
 from __future__ import annotations
@@ -16,32 +17,35 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..allan import allan_variance
+from ..allan import AllanResult, allan_variance
 from ..errors import InputError
 from ..noise.components import GM, QN, RR, RW, WN, Component, total_allan_variance
 
+#: The starting-value fit uses the AV at averaging factors m ≤ this fraction of the record.
+MAX_FRACTION = 0.25
+
 
 @dataclass(frozen=True)
-class EmpiricalAllan:
-    """Overlapping Allan variance at octave-spaced τ = m·dt."""
+class _Curve:
+    """The part of one axis's Allan variance the starting values are fitted to: τ [s], AV [u²], clusters N/m."""
 
     tau: np.ndarray
     avar: np.ndarray
     n_clusters: np.ndarray
 
-
-def empirical_allan(y: np.ndarray, dt: float, max_fraction: float = 0.25) -> EmpiricalAllan:
-    """Overlapping AV (paper 000 eq. 2, :func:`imu_noise_id.core.allan.allan_variance`) at octave-spaced
-    m = 1, 2, 4, … ≤ max_fraction·N. NaN samples must have been filled by the caller (initial values only)."""
-    y = np.asarray(y, dtype=float)
-    n = y.size
-    ms = 2 ** np.arange(0, max(int(math.log2(max(max_fraction * n, 1))) + 1, 1))
-    ms = ms[(ms >= 1) & (2 * ms < n)]
-    res = allan_variance(y, dt, m=ms)
-    return EmpiricalAllan(res.tau, res.variance[:, 0], n / res.m)
+    @classmethod
+    def of(cls, allan: AllanResult, max_fraction: float = MAX_FRACTION) -> _Curve:
+        """The first column of ``allan`` at m ≤ ``max_fraction``·N (at least the three shortest τ)."""
+        keep = allan.m <= max(max_fraction * allan.n, allan.m[min(2, allan.m.size - 1)])
+        return cls(allan.tau[keep], allan.variance[keep, 0], allan.n / allan.m[keep])
 
 
-def _guess(names: list[str], av: EmpiricalAllan, gm_taus: list[float]) -> list[Component]:
+def allan_of(y: np.ndarray, dt: float) -> AllanResult:
+    """The AV of a gap-filled record on the analysis grid, for callers that have none yet (a standalone fit)."""
+    return allan_variance(np.asarray(y, dtype=float), dt)
+
+
+def _guess(names: list[str], av: _Curve, gm_taus: list[float]) -> list[Component]:
     tau, a = av.tau, av.avar
     t0, a0 = tau[0], a[0]
     t_end, a_end = tau[-1], a[-1]
@@ -84,12 +88,14 @@ def _gm_placements(n_gm: int, t_lo: float, t_hi: float, n_grid: int) -> list[lis
 AV_FLOOR = 1e-10
 
 
-def fit_allan(names: list[str], av: EmpiricalAllan, dt: float, n_grid: int = 4) -> list[tuple[float, list[Component]]]:
-    """Least-squares fits of the structure's theoretical AV to ``av`` in log space, best (lowest cost) first.
+def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4) -> list[tuple[float, list[Component]]]:
+    """Least-squares fits of the structure's theoretical AV to the AV ``allan`` (one column) in log space, best (lowest
+    cost) first.
 
     RR is left at slope 0 (the likelihood fit estimates it in closed form); the caller removes a linear trend
     before computing ``av`` when the structure has RR.
     """
+    av = _Curve.of(allan)
     fit_idx = [i for i, n in enumerate(names) if n != "RR"]
     w = np.sqrt(av.n_clusters)
     t_lo = max(3.0 * dt, av.tau[0])

@@ -5,7 +5,8 @@ adapter):
 
 1. the Allan stage (:mod:`.static`): checks, the Allan family of every axis, the slope parameters;
 2. the model stage (:mod:`.models`): per axis, model selection by BIC (or the structure asked for) with the
-   constrained EM and quasi-Newton, intervals and recording-length advice;
+   constrained EM and quasi-Newton, intervals and recording-length advice; the starting values are fitted to the
+   Allan variance of stage 1 (not computed again);
 3. the closed loop (:mod:`imu_noise_id.pipelines.loop`), starting from each axis's selected fit (not fitted again);
 4. the simulation band of every axis's fitted model (the AVs of simulations of it, for the report's plots).
 
@@ -136,7 +137,7 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
     loop = _imu_loop(imu, temperature, options, result.warnings) if options.loop else None
     result.loop_decimation = loop.decimate if loop is not None else 1
     for axis in axes:
-        model = fit_axis(imu, axis, options.models, static.dt)
+        model = fit_axis(imu, axis, options.models, static.dt, static.allan.column(axes.index(axis)))
         fit = model.fit
         if loop is not None:
             try:

@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from ...core.allan import AllanResult
 from ...core.axes import ImuSeries
 from ...core.errors import InputError
 from ...core.estimation.model import FitOptions, NoiseModel
@@ -51,14 +52,17 @@ class ModelStage:
         return self.model != NONE
 
 
-def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float) -> AxisModel:
-    """Select or fit the model of one axis (InputError names the axis)."""
+def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: AllanResult | None = None) -> AxisModel:
+    """Select or fit the model of one axis (InputError names the axis); ``allan``: the axis's Allan variance
+    when the caller has it (the starting values are fitted to it)."""
     y = imu.axis(axis)
     try:
         if stage.model == AUTO:
-            sel = select_model(y, dt, drift=stage.drift, options=stage.options)
+            sel = select_model(y, dt, drift=stage.drift, options=stage.options, allan=allan)
             return AxisModel(sel.best, sel)
-        return AxisModel(NoiseModel(y, dt, stage.model, drift=stage.drift).fit(options=stage.options))
+        detrended = "RR" in parse_structure(stage.model)  # its starting values need the detrended record's AV
+        model = NoiseModel(y, dt, stage.model, drift=stage.drift, allan=None if detrended else allan)
+        return AxisModel(model.fit(options=stage.options))
     except InputError as exc:
         raise InputError(f"{axis}: {exc}") from None
 
