@@ -374,12 +374,6 @@ def total_allan_variance(components: list[Component], tau: np.ndarray, dt: float
     return np.sum([c.allan_variance(tau, dt) for c in components], axis=0) if components else np.zeros_like(tau)
 
 
-def total_psd(components: list[Component], f: np.ndarray, dt: float) -> np.ndarray:
-    """Two-sided PSD of a sum of independent components."""
-    f = _as_freq(f)
-    return np.sum([c.psd(f, dt) for c in components], axis=0) if components else np.zeros_like(f)
-
-
 def simulate_sum(components: list[Component], n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
     """n samples of the sum of independent components."""
     if n < 1:

@@ -104,14 +104,6 @@ def quantization_sigma2(q: float, dt: float) -> float:
     return _check_positive("Q", q) ** 2 / _check_positive("dt", dt, False) ** 2
 
 
-def quantization_from_lsb(lsb: float, dt: float) -> float:
-    """Quantisation coefficient Q [u·s] of an integrating sensor whose angle/velocity quantum is ``lsb·dt``.
-
-    IEEE Std 952: Q = Δ/√12 with Δ the angle (velocity) quantum.
-    """
-    return _check_positive("lsb", lsb) * _check_positive("dt", dt, False) / math.sqrt(12.0)
-
-
 def covariance_from_density(noise_density: float | np.ndarray, rate_hz: float) -> float | np.ndarray:
     """sensor_msgs/Imu covariance diagonal N²·f [u²] for a white-noise density N sampled at f [Hz]."""
     return np.square(noise_density) * _check_positive("rate_hz", rate_hz, False)
