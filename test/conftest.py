@@ -37,3 +37,12 @@ def pytest_configure(config: pytest.Config) -> None:
     """Silence third-party deprecation warnings we cannot fix: lark (imported by rosidl when play/rclpy load message
     definitions) imports the deprecated ``sre_parse`` / ``sre_constants`` modules."""
     config.addinivalue_line("filterwarnings", r"ignore:module 'sre_(parse|constants)' is deprecated:DeprecationWarning")
+
+
+@pytest.fixture(scope="session")
+def golden_run(tmp_path_factory) -> dict[str, Path]:
+    """The commands run once on the fixed-seed inputs of ``golden_run.py`` (result files by golden name; the
+    analyze output folder is the parent of ``analyze_imu.yaml``)."""
+    from golden_run import generate
+
+    return generate(tmp_path_factory.mktemp("golden"))

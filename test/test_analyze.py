@@ -123,21 +123,12 @@ def test_gap_warning():
     assert any("gap" in w for w in result.warnings)
 
 
-@pytest.fixture(scope="module")
-def short_bag(tmp_path_factory):
-    """10 min at 100 Hz written as a rosbag2 mcap bag with the bags branch's writer."""
-    from imu_noise_id.bag.writer import write_bag
-
-    imu = simulate_static_imu(_model(), 100.0, 600.0, seed=99)
-    return write_bag(tmp_path_factory.mktemp("bag") / "static", imu, storage="mcap")
-
-
-def test_cli_analyze_end_to_end(short_bag, tmp_path, capsys):
-    """Through a real bag with the default stages (Allan, EM model selection, closed loop): exit 0, the files,
-    the summary; N within 5 % (10 min is too short to test K)."""
-    out = tmp_path / "res"
-    assert main(["analyze", str(short_bag), "--out", str(out)]) == 0
-    printed = capsys.readouterr().out
+def test_cli_analyze_end_to_end(golden_run):
+    """Through a real bag with the default stages (Allan, EM model selection, closed loop) — the golden run's
+    ``analyze`` (10 min at 100 Hz, test/golden_run.py): the files, the summary; N within 5 % (10 min is too short
+    to test K)."""
+    out = golden_run["analyze_imu.yaml"].parent
+    printed = (out.parent / "analyze_stdout.txt").read_text()
     assert "noise density" in printed and str(out) in printed
     for name in ("imu.yaml", "allan.csv", "hadamard.csv", "total.csv", "modified.csv", "allan.png",
                  "model.yaml", "allan_model.png", "report.html"):
@@ -149,9 +140,9 @@ def test_cli_analyze_end_to_end(short_bag, tmp_path, capsys):
     doc = yaml.safe_load((out / "imu.yaml").read_text())
     assert doc["rostopic"] == "/imu/data"
     for n in doc["gyroscope_noise_density_xyz"]:
-        assert n == pytest.approx(GYRO_N, rel=0.05)
+        assert n == pytest.approx(1e-3, rel=0.05)  # golden_run.STATIC_MODEL
     for n in doc["accelerometer_noise_density_xyz"]:
-        assert n == pytest.approx(ACCEL_N, rel=0.05)
+        assert n == pytest.approx(2e-3, rel=0.05)
 
 
 def test_cli_analyze_input_errors_exit_2(tmp_path, capsys):

@@ -9,14 +9,12 @@ same commit, whose message says why.
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
-import yaml
+from golden_run import generate, load
 
 GOLDEN = Path(__file__).resolve().parent / "golden"
 #: Relative tolerance of numbers ("to rounding": the files hold 6 significant digits in places).
@@ -25,53 +23,6 @@ REL = 2e-5
 ABS = 1e-12
 #: Keys whose values depend on where and how fast the test runs (paths, timings), not on the computation.
 VOLATILE = {"source", "source_hypotheses", "bag", "imu_samples_per_second", "replay_seconds"}
-
-STATIC_MODEL = "gyro: WN(1e-3)+RW(2e-5); accel: WN(2e-3)+GM(tau=20, sigma=2e-3)+RW(4e-5)"
-
-
-def _robot_bag(path: Path) -> Path:
-    from imu_noise_id.bag.writer import write_bag
-    from imu_noise_id.core.axes import ImuSeries, OdometrySeries
-    from imu_noise_id.core.simulation.robot import simulate_robot
-
-    run = simulate_robot(60.0, np.random.default_rng(11))
-    imu = ImuSeries(t=run.imu_t + 100.0, gyro=run.gyro, accel=run.accel)
-    odom = OdometrySeries(t=run.odom_t + 100.0, position=run.position, orientation_xyzw=run.orientation_xyzw,
-                          linear_velocity=run.linear_velocity, angular_velocity=run.angular_velocity,
-                          pose_covariance=run.pose_cov, twist_covariance=run.twist_cov)
-    return write_bag(path, imu, odom)
-
-
-def generate(work: Path) -> dict[str, Path]:
-    """Simulate the inputs into ``work`` and run the commands; the result file of each, by golden name."""
-    from imu_noise_id.cli import main
-
-    work.mkdir(parents=True, exist_ok=True)
-    static = work / "static_bag"
-    assert main(["simulate", "--model", STATIC_MODEL, "--rate", "100", "--duration", "600", "--out", str(static),
-                 "--seed", "5"]) == 0
-    robot = _robot_bag(work / "robot_bag")
-    out = {}
-    assert main(["analyze", str(static), "--out", str(work / "analyze")]) == 0
-    out["analyze_imu.yaml"] = work / "analyze" / "imu.yaml"
-    out["analyze_model.yaml"] = work / "analyze" / "model.yaml"
-    assert main(["fit", str(static), "--model", "WN+GM+RW", "--axis", "gyro_z", "--axis", "accel_x",
-                 "--out", str(work / "fit")]) == 0
-    out["fit_model.yaml"] = work / "fit" / "model.yaml"
-    assert main(["cmkf", str(robot), "--imu-rotation", "-1.570796327", "0", "1.570796327", "--out",
-                 str(work / "cmkf"), "--no-plot"]) == 0
-    out["cmkf.yaml"] = work / "cmkf" / "cmkf.yaml"
-    assert main(["identify", str(static), "--axis", "gyro_x", "accel_z", "--out", str(work / "identify"),
-                 "--no-plot"]) == 0
-    out["hypotheses.yaml"] = work / "identify" / "hypotheses.yaml"
-    assert main(["criteria", "--case", "2", "--trials", "20", "--duration", "200", "--out", str(work / "criteria"),
-                 "--no-plot"]) == 0
-    out["criteria.json"] = work / "criteria" / "criteria.json"
-    return out
-
-
-def load(path: Path) -> object:
-    return json.loads(path.read_text()) if path.suffix == ".json" else yaml.safe_load(path.read_text())
 
 
 def differences(got: object, want: object, where: str = "") -> list[str]:
@@ -100,15 +51,10 @@ def differences(got: object, want: object, where: str = "") -> list[str]:
     return [] if got == want else [f"{where}: {got!r}, expected {want!r}"]
 
 
-@pytest.fixture(scope="module")
-def produced(tmp_path_factory) -> dict[str, Path]:
-    return generate(tmp_path_factory.mktemp("golden"))
-
-
 @pytest.mark.parametrize("name", ["analyze_imu.yaml", "analyze_model.yaml", "fit_model.yaml", "cmkf.yaml",
                                   "hypotheses.yaml", "criteria.json"])
-def test_output_equals_the_golden_file(produced, name):
-    found = differences(load(produced[name]), load(GOLDEN / name))
+def test_output_equals_the_golden_file(golden_run, name):
+    found = differences(load(golden_run[name]), load(GOLDEN / name))
     assert not found, f"{name} differs from test/golden/{name}:\n" + "\n".join(found[:40])
 
 
