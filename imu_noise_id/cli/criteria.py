@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
@@ -34,32 +33,10 @@ def register(subparsers: Any) -> None:
     p.set_defaults(run=run)
 
 
-def criteria_document(result: Any) -> dict[str, Any]:
-    """The ``criteria.json`` mapping (shared vocabulary) of a :class:`CriteriaResult`."""
-    return {
-        "case": int(result.case) if str(result.case).isdigit() else result.case,
-        "trials": result.trials,
-        "dt": result.dt,
-        "t": result.t.tolist(),
-        "error_probability": {
-            "real": result.error_probability_real.tolist(),
-            "calculated": result.error_probability_calculated.tolist(),
-            "calculated_true_hypothesis": result.error_probability_calculated_true.tolist(),
-        },
-        "rsd": {
-            "real": {k: v.tolist() for k, v in result.rsd_real.items()},
-            "calculated": {k: v.tolist() for k, v in result.rsd_calculated.items()},
-        },
-        "decided": result.decided.tolist(),
-        "decided_wrong": result.decided_wrong.tolist(),
-        "true_counts": result.true_counts,
-        "settings": result.settings,
-    }
-
-
 def run(args: argparse.Namespace) -> int:
     from ..core.errors import InputError
     from ..core.hypotheses.criteria import paper_case, run_criteria
+    from ..report.criteria_json import write_criteria_json
 
     if args.trials < 2:
         raise InputError(f"--trials must be >= 2, got {args.trials}")
@@ -68,8 +45,7 @@ def run(args: argparse.Namespace) -> int:
     hset = paper_case(args.case, dt=args.dt, bias_sigma=args.bias_sigma)
     result = run_criteria(hset, args.duration, args.trials, seed=args.seed, case=str(args.case))
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "criteria.json").write_text(json.dumps(criteria_document(result)))
+    write_criteria_json(result, out / "criteria.json")
     if not args.no_plot:
         from ..report.hypotheses_plots import plot_criteria
 

@@ -1,0 +1,71 @@
+"""Time (wall and CPU) and peak memory of the default ``imu-noise-id analyze`` on simulated static bags.
+
+Each bag is analysed by every source tree given, one after the other in the same run, so that a speed claim is a
+ratio measured side by side. The default compares this checkout with nothing; ``--baseline DIR`` adds another
+checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run with the same Python::
+
+    .venv/bin/python bench/bench_analyze_time.py --baseline ../baseline            # 1 h at 400 Hz (issue 10)
+    .venv/bin/python bench/bench_analyze_time.py --rates 200 400                     # issue 11's timings
+
+The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
+checkout. Printed: per rate and source, wall time, CPU time (user + system of the analyze process) and its peak RSS.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+MODEL = "gyro: WN(1.7e-4)+GM(tau=300, sigma=2e-5)+RW(2e-5); accel: WN(2e-3)+RW(3e-4)"
+
+
+def run_analyze(source: Path, bag: Path, out: Path) -> tuple[float, float, float]:
+    """(wall [s], CPU [s], peak RSS [MiB]) of ``python -m imu_noise_id analyze`` from ``source``."""
+    env = dict(os.environ, PYTHONPATH=str(source))
+    start = time.perf_counter()
+    proc = subprocess.Popen([sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out)],
+                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    _, status, usage = os.wait4(proc.pid, 0)
+    wall = time.perf_counter() - start
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    if proc.returncode != 0:
+        raise SystemExit(f"analyze from {source} failed:\n{proc.stderr.read()}")
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--rates", type=float, nargs="+", default=[400.0], help="IMU rates [Hz] (default 400)")
+    parser.add_argument("--duration", type=float, default=3600.0, help="record length [s] (default 3600)")
+    parser.add_argument("--baseline", type=Path, action="append", default=[],
+                        help="another checkout to time side by side (repeatable)")
+    args = parser.parse_args(argv)
+    sources = [("this checkout", ROOT)] + [(f"baseline {p}", p.resolve()) for p in args.baseline]
+    print(f"analyze, default options; {os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}")
+    with tempfile.TemporaryDirectory() as tmp:
+        for rate in args.rates:
+            bag = Path(tmp) / f"static_{rate:g}hz"
+            subprocess.run([sys.executable, "-m", "imu_noise_id", "simulate", "--model", MODEL, "--rate", str(rate),
+                            "--duration", str(args.duration), "--out", str(bag), "--seed", "1"], check=True,
+                           stdout=subprocess.DEVNULL, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+            print(f"\n{args.duration:g} s at {rate:g} Hz ({int(args.duration * rate)} samples per axis):")
+            times = {}
+            for name, source in sources:
+                wall, cpu, rss = run_analyze(source, bag, Path(tmp) / f"out_{len(times)}")
+                times[name] = wall
+                print(f"  {name:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB")
+            if len(sources) > 1:
+                for name, _ in sources[1:]:
+                    print(f"  {name}: {times[name] / times['this checkout']:.2f}× the wall time of this checkout")
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
