@@ -25,12 +25,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from imu_noise_id.report.criteria_json import criteria_document  # noqa: E402
 from imu_noise_id.core.hypotheses import Hypothesis, HypothesisBank, HypothesisSet, ParameterPrior  # noqa: E402
 from imu_noise_id.core.hypotheses.axis import AxisIdentifier  # noqa: E402
 from imu_noise_id.core.hypotheses.config import hypothesis_set_factory  # noqa: E402
 from imu_noise_id.core.hypotheses.criteria import paper_case, run_criteria  # noqa: E402
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum  # noqa: E402
+from imu_noise_id.report.criteria_json import criteria_document  # noqa: E402
 from imu_noise_id.resources import read_hypotheses_file  # noqa: E402
 
 RESULTS = ROOT / "docs" / "results"
