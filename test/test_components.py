@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.noise import units
-from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum, total_allan_variance
+from imu_noise_id.core.noise.components import GM, LPF, OSC, QN, RR, RW, WN, simulate_sum, total_allan_variance
 from imu_noise_id.core.noise.modelspec import (
     ModelSpecError,
     model_name,
@@ -22,7 +22,7 @@ DT = 0.01
 
 @pytest.mark.parametrize(
     "component",
-    [WN(2e-3), QN(1e-5), RW(3e-5), GM(tau=50.0, sigma=1e-3), RR(1e-6)],
+    [WN(2e-3), QN(1e-5), RW(3e-5), GM(tau=50.0, sigma=1e-3), RR(1e-6), LPF(1e-3, 15.0), OSC(0.5, 0.05, 6e-3)],
     ids=lambda c: c.name,
 )
 def test_per_sample_round_trip(component):
@@ -141,3 +141,63 @@ def test_model_spec_parsing():
 def test_model_spec_errors(spec, message):
     with pytest.raises(ModelSpecError, match=message):
         parse_model(spec)
+
+
+# -- the sensor's low-pass filter (LPF) and the narrow-band oscillation (OSC) ---------------------------------
+
+def _av_from_psd(component, tau: float) -> float:
+    """AV(τ) = 4∫₀^∞ S(f) sin⁴(πfτ)/(πfτ)² df by quadrature of the component's two-sided PSD."""
+    from scipy import integrate
+
+    f = np.concatenate([np.linspace(1e-6, 5.0, 1_000_001), np.geomspace(5.0, 1e4, 100_001)[1:]])
+    x = math.pi * f * tau
+    return 4.0 * float(integrate.trapezoid(component.psd(f, DT) * np.sin(x) ** 4 / x**2, f))
+
+
+@pytest.mark.parametrize("component", [OSC(0.5, 0.05, 6e-3), OSC(3.0, 0.6, 1e-3), LPF(1e-3, 20.0)],
+                         ids=str)
+@pytest.mark.parametrize("tau", [0.01, 0.3, 3.0, 30.0])
+def test_closed_form_allan_variance_equals_the_psd_integral(component, tau):
+    assert component.allan_variance(np.array([tau]), DT)[0] == pytest.approx(_av_from_psd(component, tau), rel=1e-6)
+
+
+def test_osc_block_is_the_exact_discretisation_of_a_stationary_oscillator():
+    """Φ P∞ Φᵀ + Q = P∞ (stationary), Φ's poles are e^{(−ζω₀ ± iω_d)dt}, and from_block inverts block."""
+    osc = OSC(0.5, 0.05, 6e-3)
+    blk = osc.block(DT)
+    p = osc.stationary_covariance()
+    np.testing.assert_allclose(blk.phi @ p @ blk.phi.T + blk.q, p, rtol=1e-10, atol=1e-18)
+    lam = np.linalg.eigvals(blk.phi)
+    z, w0 = osc.damping, 2 * math.pi * 0.5
+    assert abs(lam[0]) == pytest.approx(math.exp(-z * w0 * DT), rel=1e-12)
+    assert abs(np.angle(lam[0])) == pytest.approx(w0 * math.sqrt(1 - z * z) * DT, rel=1e-12)
+    back = OSC.from_block(blk.phi, blk.q, DT)
+    for key, value in osc.params().items():
+        assert back.params()[key] == pytest.approx(value, rel=1e-9)
+
+
+def test_osc_simulation_has_its_variance_and_its_line():
+    osc = OSC(2.0, 0.2, 1e-2)
+    y = np.concatenate([osc.simulate(100_000, DT, np.random.default_rng(s)) for s in range(8)])
+    assert y.var() == pytest.approx(1e-4, rel=0.05)  # ≈ 1000 correlation times of 1/(ζω₀) = 0.8 s per run
+    f = np.fft.rfftfreq(100_000, DT)
+    power = np.abs(np.fft.rfft(y[:100_000])) ** 2
+    assert f[np.argmax(power)] == pytest.approx(2.0, abs=0.2)
+
+
+def test_lpf_is_a_gauss_markov_process_with_its_passband_density():
+    """LPF(N, f_c) = GM(τ = 1/2πf_c, σ² = πN²f_c): PSD N² at f ≪ f_c, half of it at f_c; per-sample σ² < N²/dt."""
+    lpf = LPF(1e-3, 20.0)
+    gm = GM(tau=1 / (2 * math.pi * 20.0), sigma=1e-3 * math.sqrt(math.pi * 20.0))
+    f = np.array([0.01, 1.0, 20.0, 200.0])
+    np.testing.assert_allclose(lpf.psd(f, DT), gm.psd(f, DT), rtol=1e-12)
+    assert lpf.psd(np.array([0.01]), DT)[0] == pytest.approx(1e-6, rel=1e-6)
+    assert lpf.psd(np.array([20.0]), DT)[0] == pytest.approx(0.5e-6, rel=1e-12)
+    assert lpf.sigma**2 < 1e-6 / DT
+
+
+def test_osc_refuses_what_is_not_a_resonance():
+    with pytest.raises(ValueError, match="too wide"):
+        OSC(1.0, 3.0, 1e-3)
+    with pytest.raises(ValueError, match="Nyquist"):
+        OSC(60.0, 1.0, 1e-3).block(DT)

@@ -33,7 +33,8 @@ import numpy as np
 from .. import kalman
 from ..errors import InputError
 from ..kalman.common import check_data
-from ..kalman.statespace import PHI_RANGE, StateSpace
+from ..kalman.statespace import StateSpace
+from ..noise.components import PHI_RANGE
 
 #: Floor of free process-noise variances relative to R (keeps Q invertible in the Φ and u updates).
 Q_FLOOR_REL = 1e-20

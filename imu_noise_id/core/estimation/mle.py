@@ -269,7 +269,7 @@ def likelihood_interval(
         th[k] = v
         try:
             return ll_max - kalman.loglik(par.to_model(th, model), y, z).loglik
-        except (InputError, np.linalg.LinAlgError):
+        except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             return math.inf
 
     ends = [] if lower else [-math.inf]

@@ -238,9 +238,10 @@ class NoiseModel:
         y_av = self.detrended()
         if self.allan is None:
             self.allan = starts.allan_of(y_av, self.dt)
-        fits = starts.fit_allan(self.fit_names, self.allan, self.dt)
+        bp = periodogram or whittle.banded_periodogram(y_av) if spectral or "OSC" in self.fit_names else None
+        lines = whittle.spectral_lines(bp, self.dt, self.fit_names.count("OSC")) if "OSC" in self.fit_names else []
+        fits = starts.fit_allan(self.fit_names, self.allan, self.dt, osc_frequencies=lines)
         if spectral:
-            bp = periodogram or whittle.banded_periodogram(y_av)
             fits = sorted((whittle.whittle_fit(c, y_av, self.dt, bp) for _, c in fits), key=lambda r: -r[0])
             fits = starts.distinct([(-w, c) for w, c in fits], self.allan.tau, self.dt)
         return [c for _, c in fits[:max(n_starts, 1)]]

@@ -47,7 +47,7 @@ def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options
         run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats, final_estep=False)
         try:
             res = mle.maximise(par, run.model, y, z, tau_bounds=model.tau_bounds, metric=metric)
-        except (InputError, np.linalg.LinAlgError):
+        except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             # That unscored update may have left the filter's domain: redo EM with the check, which keeps the
             # last good iterate (paper 000 §3.5(iii)).
             run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
@@ -104,7 +104,7 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
         try:
             metric = whittle.whittle_information(start, y_av, model.dt, bp) if bp is not None else None
             res = _one_start(model, start, y_search, options, metric)
-        except (InputError, np.linalg.LinAlgError):
+        except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             continue
         lls.append(res[0].loglik)
         if best is None or res[0].loglik > best[0].loglik:

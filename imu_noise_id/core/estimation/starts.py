@@ -19,7 +19,7 @@ from scipy.optimize import least_squares
 
 from ..allan import AllanResult, allan_variance
 from ..errors import InputError
-from ..noise.components import GM, QN, RR, RW, WN, Component, total_allan_variance
+from ..noise.components import GM, LPF, OSC, QN, RR, RW, WN, Component, total_allan_variance
 
 #: The starting-value fit uses the AV at averaging factors m ≤ this fraction of the record.
 MAX_FRACTION = 0.25
@@ -45,16 +45,25 @@ def allan_of(y: np.ndarray, dt: float) -> AllanResult:
     return allan_variance(np.asarray(y, dtype=float), dt)
 
 
-def _guess(names: list[str], av: _Curve, gm_taus: list[float]) -> list[Component]:
+def _guess(names: list[str], av: _Curve, gm_taus: list[float], osc_frequencies: list[float],
+           dt: float) -> list[Component]:
     tau, a = av.tau, av.avar
     t0, a0 = tau[0], a[0]
     t_end, a_end = tau[-1], a[-1]
     comps: list[Component] = []
     gm_iter = iter(gm_taus)
+    osc_iter = iter(osc_frequencies)
     n_gm = names.count("GM")
+    white = math.sqrt(a0 * t0)
     for name in names:
         if name == "WN":
-            comps.append(WN(math.sqrt(a0 * t0) * 0.8))
+            comps.append(WN(white * (0.3 if "LPF" in names else 0.8)))
+        elif name == "LPF":
+            comps.append(LPF(white, 1.0 / (2.0 * math.pi * 2.0 * dt)))
+        elif name == "OSC":
+            f0 = next(osc_iter, 0.25 / dt)
+            level = float(np.interp(math.log(min(max(0.37 / f0, t0), t_end)), np.log(tau), a))
+            comps.append(OSC(f0, max(0.05 * f0, 4.0 / (av.tau[-1] * 4.0)), math.sqrt(level)))
         elif name == "QN":
             comps.append(QN(math.sqrt(a0 / 3.0) * t0 * 0.5))
         elif name == "RW":
@@ -84,16 +93,22 @@ def _gm_placements(n_gm: int, t_lo: float, t_hi: float, n_grid: int) -> list[lis
     return out
 
 
+#: Parameters the AV fit holds at their starting values.
+_HELD = {("OSC", "frequency"), ("OSC", "bandwidth")}
 #: Relative AV below which a component's amplitude is at its ~0 boundary in :func:`fit_allan`.
 AV_FLOOR = 1e-10
 
 
-def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4) -> list[tuple[float, list[Component]]]:
+def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
+              osc_frequencies: list[float] | None = None) -> list[tuple[float, list[Component]]]:
     """Least-squares fits of the structure's theoretical AV to the AV ``allan`` (one column) in log space, best (lowest
     cost) first.
 
     RR is left at slope 0 (the likelihood fit estimates it in closed form); the caller removes a linear trend
-    before computing ``av`` when the structure has RR.
+    before computing ``av`` when the structure has RR. An OSC's frequency and bandwidth are held at their starting
+    values (the AV barely constrains them; the Whittle and exact likelihoods do): its frequency from
+    ``osc_frequencies`` (e.g. the periodogram's lines, :func:`.whittle.spectral_lines`), else a quarter of the
+    sampling rate.
     """
     av = _Curve.of(allan)
     fit_idx = [i for i, n in enumerate(names) if n != "RR"]
@@ -102,8 +117,8 @@ def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4) 
     t_hi = max(av.tau[-1] / 2.0, t_lo * 2.0)
     results: list[tuple[float, list[Component]]] = []
     for taus in _gm_placements(names.count("GM"), t_lo, t_hi, n_grid):
-        start = _guess(names, av, taus)
-        keys = [(i, k) for i in fit_idx for k in start[i].parameter_names]
+        start = _guess(names, av, taus, list(osc_frequencies or []), dt)
+        keys = [(i, k) for i in fit_idx for k in start[i].parameter_names if (names[i], k) not in _HELD]
         x0 = np.log([start[i].params()[k] for i, k in keys])
 
         base = [c.params() for c in start]  # once per placement, not per residual (asdict is slow)
@@ -122,6 +137,8 @@ def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4) 
         for k, (i, name) in enumerate(keys):
             if name == "tau":
                 lo[k], hi[k] = math.log(dt), math.log(50.0 * av.tau[-1])
+            elif name == "cutoff":
+                lo[k], hi[k] = math.log(0.2 / (av.tau[-1])), math.log(0.5 / dt)
             else:
                 # Explicit ~0 boundary: the AV of a component scales with its amplitude²; below the amplitude
                 # where it is < AV_FLOOR of the measured AV at every τ it changes no residual, and trf would

@@ -56,7 +56,7 @@ def _near_zero(par: mle.Parameterisation, res: mle.MLEResult, k: int, y: np.ndar
     th[k] -= math.log(1e3)
     try:
         ll = kalman.loglik(par.to_model(th, res.model), y, z).loglik
-    except (InputError, np.linalg.LinAlgError):
+    except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
         return False
     return res.loglik - ll < mle.LR_DROP_95
 

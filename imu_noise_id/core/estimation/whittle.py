@@ -66,6 +66,18 @@ def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02) 
     return BandedPeriodogram(centre, counts.astype(float), power)
 
 
+def spectral_lines(bp: BandedPeriodogram, dt: float, count: int, half_window: int = 12) -> list[float]:
+    """Frequencies [Hz] of the ``count`` strongest lines of a banded periodogram: local maxima of the mean power per
+    band over its running median (±``half_window`` bands), strongest first (starting values of OSC components)."""
+    mean = bp.power / bp.count
+    k = np.arange(mean.size)
+    floor = np.array([np.median(mean[max(0, i - half_window): i + half_window + 1]) for i in k])
+    ratio = mean / np.maximum(floor, np.finfo(float).tiny)
+    peaks = [i for i in k[1:-1] if ratio[i] >= ratio[i - 1] and ratio[i] >= ratio[i + 1]]
+    peaks.sort(key=lambda i: -ratio[i])
+    return [float(bp.omega[i] / (2.0 * math.pi * dt)) for i in peaks[:count]]
+
+
 def difference_spectrum(components: list[Component], omega: np.ndarray, dt: float) -> np.ndarray:
     """Spectral density per sample of Δy for the components (RR only shifts the mean: no contribution)."""
     c = 2.0 - 2.0 * np.cos(omega)
@@ -82,8 +94,19 @@ def difference_spectrum(components: list[Component], omega: np.ndarray, dt: floa
             phi = ps["phi"]
             s += ps["sigma2_drive"] * c / (1.0 - 2.0 * phi * np.cos(omega) + phi * phi)
         elif not isinstance(comp, RR):
-            raise InputError(f"no difference spectrum for component {comp.name}")
+            blk = comp.block(dt)
+            s += block_spectrum(blk.phi, blk.q, blk.h, omega) * c
     return s
+
+
+def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """Spectral density per sample of y_k = h x_k, x_{k+1} = Φ x_k + w_k, var w = Q, at angular frequencies ω:
+    S(ω) = h G Q Gᴴ hᵀ with G = (e^{iω} I − Φ)⁻¹ (any stable block, e.g. LPF, OSC)."""
+    z = np.exp(1j * np.asarray(omega))
+    n = phi.shape[0]
+    g = np.linalg.inv(z[:, None, None] * np.eye(n) - phi[None, :, :])  # (W, n, n)
+    hg = np.einsum("i,wij->wj", h, g)
+    return np.real(np.einsum("wi,ij,wj->w", hg, q, hg.conj()))
 
 
 def whittle_fit(start: list[Component], y: np.ndarray, dt: float,

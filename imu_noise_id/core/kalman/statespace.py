@@ -31,7 +31,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import InputError
-from ..noise.components import GM, QN, RR, RW, WN, Component
+from ..noise.components import COMPONENT_TYPES, GM, RR, RW, WN, Component, StateBlock
 from .riccati import steady_prediction_covariance
 
 #: Matrix names of θ in the order the EM updates them (paper 000 §3.3).
@@ -194,11 +194,21 @@ class StateSpace:
             raise InputError("process-noise variances (diagonal of Q) must be >= 0")
 
 
+def _fixed_initial_covariance(blk: StateBlock, r: float) -> np.ndarray:
+    """Σ of a block in ``'fixed'`` mode: its stationary covariance when it is stable (GM, QN, LPF, OSC), else the
+    paper's "small value" 1e-12·R (RW)."""
+    if np.max(np.abs(np.linalg.eigvals(blk.phi))) < 1.0:
+        n = blk.n_states
+        p = np.linalg.solve(np.eye(n * n) - np.kron(blk.phi, blk.phi), blk.q.ravel()).reshape(n, n)
+        return 0.5 * (p + p.T)
+    return np.eye(blk.n_states) * 1e-12 * r
+
+
 def validate_structure(names: list[str]) -> None:
-    """Raise InputError unless the structure is identifiable: exactly one WN; at most one QN, RW, RR."""
+    """Raise InputError unless the structure is identifiable: exactly one WN; at most one QN, RW, RR, LPF."""
     if names.count("WN") != 1:
         raise InputError(f"model {'+'.join(names) or '(empty)'} needs exactly one WN component (white noise)")
-    for single in ("QN", "RW", "RR"):
+    for single in ("QN", "RW", "RR", "LPF"):
         if names.count(single) > 1:
             raise InputError(f"model {'+'.join(names)} has {single} more than once; it is not identifiable")
 
@@ -243,7 +253,7 @@ def from_components(
         raise InputError(f"ramp must be 'measurement' or 'state', got {ramp!r}")
     if sigma_mode not in ("steady", "fixed"):
         raise InputError(f"sigma_mode must be 'steady' or 'fixed', got {sigma_mode!r}")
-    blocks_of = {i: c.block(dt) for i, c in enumerate(components) if isinstance(c, (QN, RW, GM))}
+    blocks_of = {i: c.block(dt) for i, c in enumerate(components) if not isinstance(c, (WN, RR))}
     p = sum(blk.n_states for blk in blocks_of.values())
     phi, q = np.zeros((p, p)), np.zeros((p, p))
     phi_free, q_free = np.zeros((p, p), bool), np.zeros((p, p), bool)
@@ -266,10 +276,6 @@ def from_components(
         phi[sl, sl], q[sl, sl] = blk.phi, blk.q
         phi_free[sl, sl], q_free[sl, sl] = blk.phi_free, blk.q_free
         h[sl] = blk.h
-        if isinstance(c, GM):
-            sigma[sl, sl] = c.sigma**2
-        elif isinstance(c, QN):
-            sigma[sl, sl] = np.eye(2) * blk.q[0, 0]
         state_of[k] = tuple(range(sl.start, sl.stop))
         start = sl.stop
     for k, c in enumerate(components):
@@ -289,10 +295,9 @@ def from_components(
                 info.append(BlockInfo("RR", input_state=j))
         else:
             info.append(BlockInfo(c.name, states=state_of.get(k, ())))
-    for k, c in enumerate(components):
-        if isinstance(c, RW):
-            j = state_of[k][0]
-            sigma[j, j] = 1e-12 * r
+    for k, blk in blocks_of.items():
+        idx = np.array(state_of[k])
+        sigma[np.ix_(idx, idx)] = _fixed_initial_covariance(blk, r)
     regressors.extend(exog_names)
     b_values.extend([0.0] * len(exog_names))
     model = StateSpace(
@@ -329,11 +334,6 @@ def with_components(model: StateSpace, components: list[Component]) -> StateSpac
     return out
 
 
-#: Smallest and largest Gauss–Markov transition the conversion back to components accepts; EM updates that
-#: leave (0, 1) are clipped to this range (documented beyond-the-paper safeguard).
-PHI_RANGE: tuple[float, float] = (1e-12, 1.0 - 1e-12)
-
-
 def to_components(model: StateSpace) -> list[Component]:
     """Fitted continuous-time components of ``model``, in the order it was assembled from."""
     dt = model.dt
@@ -341,20 +341,11 @@ def to_components(model: StateSpace) -> list[Component]:
     for blk in model.blocks:
         if blk.name == "WN":
             out.append(WN.from_per_sample(dt, sigma2_wn=max(float(model.r), 0.0)))
-            continue
-        if blk.name == "RR":
+        elif blk.name == "RR":
             slope = model.b[blk.regressor] if blk.regressor is not None else model.u[blk.input_state] / dt
             out.append(RR(float(slope)))
-            continue
-        i = blk.states[0]
-        qi = max(float(model.q[i, i]), 0.0)
-        if blk.name == "RW":
-            out.append(RW.from_per_sample(dt, sigma2_rw=qi))
-        elif blk.name == "QN":
-            out.append(QN.from_per_sample(dt, sigma2_qn=qi))
-        elif blk.name == "GM":
-            phi = float(np.clip(model.phi[i, i], *PHI_RANGE))
-            out.append(GM.from_per_sample(dt, phi=phi, sigma2_drive=qi))
-        else:  # pragma: no cover - a new component type adds its conversion here
-            raise InputError(f"no conversion back from state-space block {blk.name}")
+        else:
+            idx = np.array(blk.states)
+            out.append(COMPONENT_TYPES[blk.name].from_block(model.phi[np.ix_(idx, idx)], model.q[np.ix_(idx, idx)],
+                                                            dt))
     return out

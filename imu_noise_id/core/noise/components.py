@@ -22,108 +22,18 @@ A new component plugs in by subclassing :class:`Component` and registering its n
 from __future__ import annotations
 
 import math
-from abc import ABC, abstractmethod
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 from scipy.signal import lfilter
 
 from . import units
+from .base import Component, StateBlock, as_freq, as_tau
+from .resonant import LPF, OSC
 
-
-@dataclass(frozen=True)
-class StateBlock:
-    """One component's part of the linear-Gaussian state-space model (paper 000 eqs. 4–5).
-
-    x_{t+1} = Φ x_t + w_t + u,   w_t ~ N(0, Q);   y_t = H x_t + v_t,   v_t ~ N(0, R).
-
-    Attributes
-    ----------
-    phi, q : (p, p) arrays
-        Transition matrix and process-noise covariance of the block's ``p`` states.
-    h : (p,) array
-        The block's columns of the (1 × n) measurement matrix H.
-    r : float
-        Its contribution to the measurement-noise variance R (white noise only).
-    u : (p,) array
-        Its deterministic input per step (rate ramp).
-    phi_free, q_free, u_free : bool arrays of the same shapes
-        Which elements the estimator may change; the others stay fixed (paper 000 eq. 7).
-    r_free : bool
-        Whether ``r`` is free.
-    """
-
-    phi: np.ndarray
-    q: np.ndarray
-    h: np.ndarray
-    r: float = 0.0
-    u: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    phi_free: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
-    q_free: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
-    u_free: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
-    r_free: bool = False
-
-    @property
-    def n_states(self) -> int:
-        return int(self.phi.shape[0])
-
-
-def _as_tau(tau: np.ndarray | float) -> np.ndarray:
-    tau = np.asarray(tau, dtype=float)
-    if np.any(~np.isfinite(tau)) or np.any(tau <= 0):
-        raise ValueError("averaging times tau must be finite and > 0")
-    return tau
-
-
-def _as_freq(f: np.ndarray | float) -> np.ndarray:
-    f = np.asarray(f, dtype=float)
-    if np.any(~np.isfinite(f)) or np.any(f <= 0):
-        raise ValueError("frequencies f must be finite and > 0")
-    return f
-
-
-class Component(ABC):
-    """Base class of the stochastic error components (see the module docstring)."""
-
-    name: ClassVar[str]
-    #: Names of the continuous-time parameters, in the order positional spec values are read.
-    parameter_names: ClassVar[tuple[str, ...]]
-    #: Units of the continuous-time parameters, ``u`` standing for the signal's unit.
-    parameter_units: ClassVar[dict[str, str]]
-
-    @abstractmethod
-    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
-        """n samples [u] of the component's error contribution at sampling period dt [s]."""
-
-    @abstractmethod
-    def block(self, dt: float) -> StateBlock:
-        """The component's state-space block at sampling period dt [s]."""
-
-    @abstractmethod
-    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        """Theoretical Allan variance [u²] at averaging times tau [s]."""
-
-    @abstractmethod
-    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
-        """Two-sided power spectral density [u²/Hz] at frequencies f [Hz] (dt [s] matters for QN only)."""
-
-    @abstractmethod
-    def per_sample(self, dt: float) -> dict[str, float]:
-        """Per-sample values in paper 000's notation for sampling period dt [s]."""
-
-    @classmethod
-    @abstractmethod
-    def from_per_sample(cls, dt: float, **values: float) -> Component:
-        """Inverse of :meth:`per_sample`."""
-
-    def params(self) -> dict[str, float]:
-        """Continuous-time parameters by name."""
-        return {k: float(v) for k, v in asdict(self).items()}  # type: ignore[call-overload]
-
-    def __str__(self) -> str:
-        inner = ", ".join(f"{k}={v:.6g}" for k, v in self.params().items())
-        return f"{self.name}({inner})"
+#: Smallest and largest Gauss–Markov transition :meth:`GM.from_block` accepts (the EM keeps φ inside too).
+PHI_RANGE: tuple[float, float] = (1e-12, 1.0 - 1e-12)
 
 
 @dataclass(frozen=True)
@@ -152,10 +62,10 @@ class WN(Component):
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        return self.noise_density**2 / _as_tau(tau)
+        return self.noise_density**2 / as_tau(tau)
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
-        return np.full_like(_as_freq(f), self.noise_density**2)
+        return np.full_like(as_freq(f), self.noise_density**2)
 
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"sigma2_wn": units.white_noise_sigma2(self.noise_density, dt)}
@@ -202,10 +112,10 @@ class QN(Component):
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        return 3.0 * self.Q**2 / _as_tau(tau) ** 2
+        return 3.0 * self.Q**2 / as_tau(tau) ** 2
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
-        return 4.0 * self.Q**2 * np.sin(math.pi * _as_freq(f) * dt) ** 2 / dt
+        return 4.0 * self.Q**2 * np.sin(math.pi * as_freq(f) * dt) ** 2 / dt
 
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"sigma2_qn": units.quantization_sigma2(self.Q, dt)}
@@ -213,6 +123,10 @@ class QN(Component):
     @classmethod
     def from_per_sample(cls, dt: float, **values: float) -> QN:
         return cls(math.sqrt(units._check_positive("sigma2_qn", values["sigma2_qn"])) * dt)
+
+    @classmethod
+    def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> QN:
+        return cls.from_per_sample(dt, sigma2_qn=max(float(q[0, 0]), 0.0))
 
 
 @dataclass(frozen=True)
@@ -243,11 +157,11 @@ class RW(Component):
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        tau = _as_tau(tau)
+        tau = as_tau(tau)
         return self.random_walk**2 * (tau / 3.0 + dt**2 / (6.0 * tau))
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
-        return self.random_walk**2 / (2.0 * math.pi * _as_freq(f)) ** 2
+        return self.random_walk**2 / (2.0 * math.pi * as_freq(f)) ** 2
 
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"sigma2_rw": units.random_walk_sigma2(self.random_walk, dt)}
@@ -255,6 +169,10 @@ class RW(Component):
     @classmethod
     def from_per_sample(cls, dt: float, **values: float) -> RW:
         return cls(units.random_walk_density(values["sigma2_rw"], dt))
+
+    @classmethod
+    def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> RW:
+        return cls.from_per_sample(dt, sigma2_rw=max(float(q[0, 0]), 0.0))
 
 
 @dataclass(frozen=True)
@@ -294,7 +212,7 @@ class GM(Component):
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        x = _as_tau(tau) / self.tau
+        x = as_tau(tau) / self.tau
         # 3 − 4e^{−x} + e^{−2x} written with expm1; below x = 1e-3 the series 2σ²(x/3 − x²/4 + 7x³/60)
         # avoids the cancellation in 1 − (…)/(2x).
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -304,7 +222,7 @@ class GM(Component):
         return np.where(x < 1e-3, series, exact)
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
-        f = _as_freq(f)
+        f = as_freq(f)
         return 2.0 * self.sigma**2 * self.tau / (1.0 + (2.0 * math.pi * f * self.tau) ** 2)
 
     def per_sample(self, dt: float) -> dict[str, float]:
@@ -319,6 +237,11 @@ class GM(Component):
         if "phi" in values:
             return cls(*units.gm_from_discrete(values["phi"], values["sigma2_drive"], dt))
         return cls(*units.gm_from_paper000(values["beta"], values["sigma2_gm"]))
+
+    @classmethod
+    def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> GM:
+        # EM updates that leave (0, 1) are clipped (a documented beyond-the-paper safeguard).
+        return cls.from_per_sample(dt, phi=float(np.clip(phi[0, 0], *PHI_RANGE)), sigma2_drive=max(float(q[0, 0]), 0.0))
 
 
 @dataclass(frozen=True)
@@ -349,10 +272,10 @@ class RR(Component):
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        return 0.5 * self.slope**2 * _as_tau(tau) ** 2
+        return 0.5 * self.slope**2 * as_tau(tau) ** 2
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
-        return self.slope**2 / (2.0 * math.pi * _as_freq(f)) ** 3
+        return self.slope**2 / (2.0 * math.pi * as_freq(f)) ** 3
 
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"omega": float(self.slope), "omega_dt": units.ramp_per_sample(self.slope, dt)}
@@ -365,12 +288,12 @@ class RR(Component):
 
 
 #: Registry of component types by spec name.
-COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, GM, RR)}
+COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, GM, RR, LPF, OSC)}
 
 
 def total_allan_variance(components: list[Component], tau: np.ndarray, dt: float) -> np.ndarray:
     """Theoretical AV of a sum of independent components (AVs add)."""
-    tau = _as_tau(tau)
+    tau = as_tau(tau)
     return np.sum([c.allan_variance(tau, dt) for c in components], axis=0) if components else np.zeros_like(tau)
 
 

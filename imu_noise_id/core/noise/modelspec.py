@@ -26,7 +26,7 @@ from ..errors import InputError
 from .components import COMPONENT_TYPES, Component
 
 #: Order in which components are listed in canonical model names.
-CANONICAL_ORDER: tuple[str, ...] = ("WN", "QN", "GM", "RW", "RR")
+CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "QN", "GM", "OSC", "RW", "RR")
 
 _TERM = re.compile(r"^(?P<count>\d+)?(?P<name>[A-Za-z]+)(?:\((?P<args>[^()]*)\))?$")
 

@@ -1,0 +1,109 @@
+"""The component protocol: what every stochastic error component of :mod:`.components` provides."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import asdict, dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class StateBlock:
+    """One component's part of the linear-Gaussian state-space model (paper 000 eqs. 4–5).
+
+    x_{t+1} = Φ x_t + w_t + u,   w_t ~ N(0, Q);   y_t = H x_t + v_t,   v_t ~ N(0, R).
+
+    Attributes
+    ----------
+    phi, q : (p, p) arrays
+        Transition matrix and process-noise covariance of the block's ``p`` states.
+    h : (p,) array
+        The block's columns of the (1 × n) measurement matrix H.
+    r : float
+        Its contribution to the measurement-noise variance R (white noise only).
+    u : (p,) array
+        Its deterministic input per step (rate ramp).
+    phi_free, q_free, u_free : bool arrays of the same shapes
+        Which elements the estimator may change; the others stay fixed (paper 000 eq. 7).
+    r_free : bool
+        Whether ``r`` is free.
+    """
+
+    phi: np.ndarray
+    q: np.ndarray
+    h: np.ndarray
+    r: float = 0.0
+    u: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    phi_free: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
+    q_free: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
+    u_free: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    r_free: bool = False
+
+    @property
+    def n_states(self) -> int:
+        return int(self.phi.shape[0])
+
+
+def as_tau(tau: np.ndarray | float) -> np.ndarray:
+    tau = np.asarray(tau, dtype=float)
+    if np.any(~np.isfinite(tau)) or np.any(tau <= 0):
+        raise ValueError("averaging times tau must be finite and > 0")
+    return tau
+
+
+def as_freq(f: np.ndarray | float) -> np.ndarray:
+    f = np.asarray(f, dtype=float)
+    if np.any(~np.isfinite(f)) or np.any(f <= 0):
+        raise ValueError("frequencies f must be finite and > 0")
+    return f
+
+
+class Component(ABC):
+    """Base class of the stochastic error components (see the module docstring)."""
+
+    name: ClassVar[str]
+    #: Names of the continuous-time parameters, in the order positional spec values are read.
+    parameter_names: ClassVar[tuple[str, ...]]
+    #: Units of the continuous-time parameters, ``u`` standing for the signal's unit.
+    parameter_units: ClassVar[dict[str, str]]
+
+    @abstractmethod
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        """n samples [u] of the component's error contribution at sampling period dt [s]."""
+
+    @abstractmethod
+    def block(self, dt: float) -> StateBlock:
+        """The component's state-space block at sampling period dt [s]."""
+
+    @abstractmethod
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        """Theoretical Allan variance [u²] at averaging times tau [s]."""
+
+    @abstractmethod
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        """Two-sided power spectral density [u²/Hz] at frequencies f [Hz] (dt [s] matters for QN only)."""
+
+    @abstractmethod
+    def per_sample(self, dt: float) -> dict[str, float]:
+        """Per-sample values in paper 000's notation for sampling period dt [s]."""
+
+    @classmethod
+    @abstractmethod
+    def from_per_sample(cls, dt: float, **values: float) -> Component:
+        """Inverse of :meth:`per_sample`."""
+
+    @classmethod
+    def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> Component:
+        """Inverse of :meth:`block` for components with states: the component whose block at period ``dt`` [s] has
+        transition ``phi`` and process noise ``q`` (what the EM updated)."""
+        raise NotImplementedError(f"{cls.name} has no state block to convert back from")
+
+    def params(self) -> dict[str, float]:
+        """Continuous-time parameters by name."""
+        return {k: float(v) for k, v in asdict(self).items()}  # type: ignore[call-overload]
+
+    def __str__(self) -> str:
+        inner = ", ".join(f"{k}={v:.6g}" for k, v in self.params().items())
+        return f"{self.name}({inner})"

@@ -1,0 +1,248 @@
+"""Coloured short-memory and narrow-band components: the sensor's own low-pass filter (LPF) and a narrow-band
+stochastic oscillation (OSC). Beyond papers 000/002, which know WN, QN, RW, GM and RR only.
+
+LPF — white noise of density N through the sensor's first-order low-pass of cutoff f_c
+    Many MEMS parts low-pass their output (a DLPF): the noise is then correlated from one sample to the next and a
+    WN model either reads a density that is far too small (AV at τ = dt below the −½ line) or mistakes it for a GM
+    with τ ≈ dt. The continuous model is x' = −ω_c x + ω_c w, ω_c = 2π f_c, w white of two-sided PSD N², so
+    S(f) = N² / (1 + (f/f_c)²): **N is the passband density** (what a filter integrating the IMU sees at low
+    frequency), and the process is a first-order Gauss–Markov process with τ = 1/ω_c and σ² = N² ω_c / 2 = π N² f_c.
+    Sampled at dt its per-sample variance is σ² = π N² f_c, smaller than the white-noise N²/dt whenever
+    f_c < 1/(π dt): that is the per-sample covariance a consumer of the corrected IMU stream must use.
+
+OSC — second-order resonant Gauss–Markov process
+    x'' + 2ζω₀x' + ω₀²x = w, w white of two-sided PSD q: a line at f₀ = ω₀/2π whose frequency wanders (a
+    vibration picked up through the mount, a fan, a motor, a structural mode), unlike a sinusoid of fixed frequency
+    and phase. Parameters: ``frequency`` f₀ [Hz], ``bandwidth`` B = 2ζf₀ [Hz] (the full width at half power of
+    the resonance to first order in ζ; the definition used for every ζ < 1) and the stationary ``sigma`` σ [u]
+    (q = 4ζω₀³σ²).
+    PSD: S(f) = q / ((ω₀² − ω²)² + (2ζω₀ω)²), ω = 2πf. Autocovariance (ζ < 1, ω_d = ω₀√(1 − ζ²), a = ζω₀):
+    R(u) = σ² e^{−a|u|} (cos ω_d u + (a/ω_d) sin ω_d|u|). State [x, x'], H = [1, 0]; the exact discretisation
+    Φ = exp(A dt), Q = P∞ − Φ P∞ Φᵀ with the stationary covariance P∞ = diag(σ², ω₀²σ²).
+    Allan variance from the autocovariance: with Ψ(τ) = 2∫₀^τ (τ − u) R(u) du (the variance of the τ-integral),
+    AV(τ) = (4Ψ(τ) − Ψ(2τ)) / (2τ²), in closed form through R(u) = Re(c e^{su}), s = −a + iω_d, c = σ²(1 − ia/ω_d):
+    Ψ(τ) = 2 Re(c (e^{sτ} − 1 − sτ)/s²).
+
+Neither block is updated by the EM's closed-form M-step (their Φ and Q are nonlinear in the parameters); their
+parameters are fitted by the quasi-Newton search on the exact likelihood (:mod:`imu_noise_id.core.estimation.mle`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from scipy import signal
+
+from . import units
+from .base import Component, StateBlock, as_freq, as_tau
+
+#: Largest damping ratio of an OSC (ζ < 1: a resonance, not two real poles).
+MAX_DAMPING = 0.95
+
+
+def _positive(name: str, value: float) -> float:
+    return units._check_positive(name, value, allow_zero=False)
+
+
+@dataclass(frozen=True)
+class LPF(Component):
+    """White noise of passband density N [u/√Hz] through a first-order low-pass of cutoff f_c [Hz] (see module)."""
+
+    noise_density: float
+    cutoff: float
+
+    name: ClassVar[str] = "LPF"
+    parameter_names: ClassVar[tuple[str, ...]] = ("noise_density", "cutoff")
+    parameter_units: ClassVar[dict[str, str]] = {"noise_density": "u/sqrt(Hz)", "cutoff": "Hz"}
+
+    def __post_init__(self) -> None:
+        _positive("noise_density", self.noise_density)
+        _positive("cutoff", self.cutoff)
+
+    @property
+    def tau(self) -> float:
+        """Correlation time 1/(2π f_c) [s]."""
+        return 1.0 / (2.0 * math.pi * self.cutoff)
+
+    @property
+    def sigma(self) -> float:
+        """Stationary standard deviation √(π N² f_c) [u]: the per-sample standard deviation."""
+        return self.noise_density * math.sqrt(math.pi * self.cutoff)
+
+    def _gm(self):
+        from .components import GM
+
+        return GM(tau=self.tau, sigma=self.sigma)
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        return self._gm().simulate(n, dt, rng)
+
+    def block(self, dt: float) -> StateBlock:
+        blk = self._gm().block(dt)
+        return StateBlock(phi=blk.phi, q=blk.q, h=blk.h, u=blk.u, phi_free=np.zeros((1, 1), bool),
+                          q_free=np.zeros((1, 1), bool), u_free=blk.u_free)
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        return self._gm().allan_variance(tau, dt)
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        phi = units.gm_phi(self.tau, dt)
+        return {"phi": phi, "sigma2": self.sigma**2, "sigma2_drive": self.sigma**2 * (1.0 - phi * phi)}
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> LPF:
+        tau, sigma = units.gm_from_discrete(values["phi"], values["sigma2_drive"], dt)
+        return cls.from_gm(tau, sigma)
+
+    @classmethod
+    def from_gm(cls, tau: float, sigma: float) -> LPF:
+        """The LPF that is the first-order GM process (τ [s], σ [u])."""
+        cutoff = 1.0 / (2.0 * math.pi * tau)
+        return cls(sigma / math.sqrt(math.pi * cutoff), cutoff)
+
+    @classmethod
+    def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> LPF:
+        from .components import GM
+
+        gm = GM.from_block(phi, q, dt)
+        return cls.from_gm(gm.tau, gm.sigma)
+
+
+@dataclass(frozen=True)
+class OSC(Component):
+    """Narrow-band stochastic oscillation: f₀ [Hz], half-power bandwidth B [Hz], stationary σ [u] (see module)."""
+
+    frequency: float
+    bandwidth: float
+    sigma: float
+
+    name: ClassVar[str] = "OSC"
+    parameter_names: ClassVar[tuple[str, ...]] = ("frequency", "bandwidth", "sigma")
+    parameter_units: ClassVar[dict[str, str]] = {"frequency": "Hz", "bandwidth": "Hz", "sigma": "u"}
+
+    def __post_init__(self) -> None:
+        _positive("frequency", self.frequency)
+        _positive("bandwidth", self.bandwidth)
+        units._check_positive("sigma", self.sigma)
+        if self.damping > MAX_DAMPING:
+            raise ValueError(f"OSC bandwidth {self.bandwidth:g} Hz is too wide for a resonance at {self.frequency:g} "
+                             f"Hz (damping {self.damping:.3g} > {MAX_DAMPING}): use a GM instead")
+
+    @property
+    def omega0(self) -> float:
+        """Natural angular frequency ω₀ = 2π f₀ [rad/s]."""
+        return 2.0 * math.pi * self.frequency
+
+    @property
+    def damping(self) -> float:
+        """Damping ratio ζ = B / (2 f₀)."""
+        return self.bandwidth / (2.0 * self.frequency)
+
+    def _poles(self) -> tuple[float, float]:
+        """(a, ω_d): decay rate ζω₀ [1/s] and damped angular frequency ω₀√(1 − ζ²) [rad/s]."""
+        z = self.damping
+        return z * self.omega0, self.omega0 * math.sqrt(1.0 - z * z)
+
+    def stationary_covariance(self) -> np.ndarray:
+        """P∞ of the state [x, x']: diag(σ², ω₀²σ²)."""
+        return np.diag([self.sigma**2, (self.omega0 * self.sigma) ** 2])
+
+    def transition(self, dt: float) -> np.ndarray:
+        """Φ = exp(A dt), A = [[0, 1], [−ω₀², −2ζω₀]] (closed form of the underdamped oscillator)."""
+        a, wd = self._poles()
+        e = math.exp(-a * dt)
+        c, s = math.cos(wd * dt), math.sin(wd * dt)
+        w0 = self.omega0
+        return e * np.array([[c + a / wd * s, s / wd], [-w0 * w0 / wd * s, c - a / wd * s]])
+
+    def block(self, dt: float) -> StateBlock:
+        if self.frequency >= 0.5 / _positive("dt", dt):
+            raise ValueError(f"OSC frequency {self.frequency:g} Hz is at or above the Nyquist frequency "
+                             f"{0.5 / dt:g} Hz of the sampling period {dt:g} s")
+        phi = self.transition(dt)
+        p = self.stationary_covariance()
+        q = p - phi @ p @ phi.T
+        q = 0.5 * (q + q.T)
+        return StateBlock(phi=phi, q=q, h=np.array([1.0, 0.0]), u=np.zeros(2), phi_free=np.zeros((2, 2), bool),
+                          q_free=np.zeros((2, 2), bool), u_free=np.zeros(2, bool))
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        blk = self.block(dt)
+        phi, h = blk.phi, blk.h
+        # x_{k+1} = Φ x_k + L z_k: each noise input through its transfer function, plus the free response of x_0.
+        lq = np.linalg.cholesky(blk.q + 1e-300 * np.eye(2))
+        den = np.array([1.0, -np.trace(phi), np.linalg.det(phi)])
+        out = np.zeros(n)
+        for j in range(2):
+            num, _ = signal.ss2tf(phi, lq[:, j:j + 1], h[None, :], np.zeros((1, 1)))
+            out += signal.lfilter(num[0], den, rng.standard_normal(n))
+        x0 = np.linalg.cholesky(self.stationary_covariance()) @ rng.standard_normal(2)
+        free = np.empty(n)
+        x = x0.copy()
+        y_prev = [h @ x, h @ (phi @ x)]
+        free[0] = y_prev[0]
+        if n > 1:
+            free[1] = y_prev[1]
+        # The free response obeys the characteristic recursion y_k = tr(Φ) y_{k−1} − det(Φ) y_{k−2}.
+        if n > 2:
+            free[2:] = signal.lfilter([1.0], den, np.zeros(n - 2),
+                                      zi=signal.lfiltic([1.0], den, y=[free[1], free[0]]))[0]
+        return out + free
+
+    def autocovariance_integral(self, tau: np.ndarray) -> np.ndarray:
+        """Ψ(τ) = 2∫₀^τ (τ − u) R(u) du [u²·s²] (the variance of ∫₀^τ x dt), in closed form (module docstring)."""
+        a, wd = self._poles()
+        s = complex(-a, wd)
+        c = self.sigma**2 * complex(1.0, -a / wd)
+        st = s * np.asarray(tau, dtype=float)
+        small = np.abs(st) < 1e-3
+        with np.errstate(over="ignore", invalid="ignore"):
+            exact = (np.exp(st) - 1.0 - st) / (s * s)
+        series = np.asarray(tau) ** 2 * (0.5 + st / 6.0 + st * st / 24.0)
+        return 2.0 * np.real(c * np.where(small, series, exact))
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        tau = as_tau(tau)
+        return (4.0 * self.autocovariance_integral(tau) - self.autocovariance_integral(2.0 * tau)) / (2.0 * tau**2)
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        w = 2.0 * math.pi * as_freq(f)
+        w0, z = self.omega0, self.damping
+        q = 4.0 * z * w0**3 * self.sigma**2
+        return q / ((w0 * w0 - w * w) ** 2 + (2.0 * z * w0 * w) ** 2)
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        a, wd = self._poles()
+        return {"damping": self.damping, "rho": math.exp(-a * dt), "theta": wd * dt, "sigma2": self.sigma**2}
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> OSC:
+        """From the per-sample pole ρ e^{±iθ} (ρ = e^{−a dt}, θ = ω_d dt) and σ²."""
+        return cls.from_poles(-math.log(values["rho"]) / dt, values["theta"] / dt, math.sqrt(values["sigma2"]))
+
+    @classmethod
+    def from_poles(cls, a: float, wd: float, sigma: float) -> OSC:
+        """From the decay rate a = ζω₀ [1/s], the damped angular frequency ω_d [rad/s] and σ [u]."""
+        w0 = math.hypot(a, wd)
+        z = a / w0
+        f0 = w0 / (2.0 * math.pi)
+        return cls(f0, 2.0 * z * f0, sigma)
+
+    @classmethod
+    def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> OSC:
+        lam = np.linalg.eigvals(phi)[0]
+        rho, theta = abs(lam), abs(np.angle(lam))
+        p = _stationary(phi, q)
+        return cls.from_per_sample(dt, rho=min(rho, 1.0 - 1e-12), theta=theta, sigma2=max(float(p[0, 0]), 0.0))
+
+
+def _stationary(phi: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """P with P = Φ P Φᵀ + Q (2×2, by the Kronecker form)."""
+    p = np.linalg.solve(np.eye(4) - np.kron(phi, phi), q.ravel()).reshape(2, 2)
+    return 0.5 * (p + p.T)
