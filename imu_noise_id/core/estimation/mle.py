@@ -49,6 +49,12 @@ class Parameterisation:
         )
         return cls(tuple(components), entries)
 
+    def steps(self, default: float) -> list[float]:
+        """Central-difference step of each log-parameter for the Fisher-identity gradient: ``default``, or the
+        component's own (:attr:`~imu_noise_id.core.noise.base.Component.gradient_steps`) where rounding in the
+        expected complete-data log-likelihood needs a larger one."""
+        return [self.template[i].gradient_steps.get(name, default) for i, name in self.entries]
+
     @property
     def labels(self) -> list[str]:
         """``'<index>:<type>.<parameter>'`` per entry (index = component position in the structure)."""
@@ -96,12 +102,12 @@ def _loglik_grad_profile(
     prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
     sums = em.sums_from_stats(stats, data or em.DataSums.of(y, z))
     grad = np.empty(theta.size)
-    for k in range(theta.size):
+    for k, h in enumerate(par.steps(step)):
         tp, tm = theta.copy(), theta.copy()
-        tp[k] += step
-        tm[k] -= step
+        tp[k] += h
+        tm[k] -= h
         grad[k] = (em.q_function(par.to_model(tp, model), sums) - em.q_function(par.to_model(tm, model), sums)) / (
-            2.0 * step
+            2.0 * h
         )
     return prof.loglik, grad, model, prof
 
