@@ -132,7 +132,7 @@ def fit_em_qn(model: ss.StateSpace, y: np.ndarray) -> ss.StateSpace:
     run = em.run_em(model, y, max_iter=3, tol=1e-10)
     comps = ss.to_components(run.model)
     par = mle.Parameterisation.of(comps)
-    return mle.maximise(par, run.model, y, None, tau_bounds=(0.5, 1e7)).model
+    return mle.maximise(par, run.model, y, None, bounds={"tau": (0.5, 1e7)}).model
 
 
 def pipeline_fit(names: list[str], y: np.ndarray) -> tuple[dict, float]:

@@ -178,12 +178,39 @@ def mstep(model: StateSpace, s: Sums) -> StateSpace:
     return m
 
 
-def q_function(model: StateSpace, s: Sums) -> float:
+def transition_residual(s: Sums, phi: np.ndarray, u: np.ndarray, around: StateSpace | None = None) -> np.ndarray:
+    """S(Φ, u) = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u)(…)ᵀ] from the E-step sums (paper 000 §3.3).
+
+    With ``around`` (the E-step's θ_E), S is written as S(Φ_E, u_E) plus the terms in Δ = Φ − Φ_E and δ = u − u_E
+    (beyond the paper, for the Fisher-identity gradient): S(Φ_E, u_E) is the same rounded number at every θ near
+    θ_E and cancels exactly in a finite difference, while the terms in Δ, δ carry no cancellation. Written directly,
+    S is a difference of sums of size N·P∞ whose result is N·Q — for a lightly damped oscillator Q ≈ 1e-5 P∞, and the
+    rounding, amplified by the 1/h of the difference, would swamp the gradient.
+    """
+    n1 = s.n - 1
+
+    def direct(ph: np.ndarray, uu: np.ndarray) -> np.ndarray:
+        return (s.s11 - s.s10 @ ph.T - ph @ s.s10.T + ph @ s.s00 @ ph.T
+                - np.outer(s.x_next, uu) - np.outer(uu, s.x_next)
+                + np.outer(ph @ s.x_prev, uu) + np.outer(uu, ph @ s.x_prev) + n1 * np.outer(uu, uu))
+
+    if around is None:
+        return direct(phi, u)
+    phi_e, u_e = around.phi, around.u
+    cross = s.s10 - phi_e @ s.s00 - np.outer(u_e, s.x_prev)  # Σ E[e_t x_{t−1}ᵀ], e_t = x_t − Φ_E x_{t−1} − u_E
+    mean = s.x_next - phi_e @ s.x_prev - n1 * u_e  # Σ E[e_t]
+    d, du = phi - phi_e, u - u_e
+    return (direct(phi_e, u_e) - cross @ d.T - d @ cross.T - np.outer(mean, du) - np.outer(du, mean)
+            + d @ s.s00 @ d.T + np.outer(d @ s.x_prev, du) + np.outer(du, d @ s.x_prev) + n1 * np.outer(du, du))
+
+
+def q_function(model: StateSpace, s: Sums, around: StateSpace | None = None) -> float:
     """Expected complete-data log-likelihood Q(θ | θ_E) at ``model``'s θ, with the E-step sums of θ_E.
 
     Includes the x_1 term with Σ(θ) (steady mode), so that by Fisher's identity ∂Q/∂θ at θ = θ_E equals the
     gradient of the exact log-likelihood. States with zero process noise (deterministic transitions) drop out of
     the Q term (their complete-data density is degenerate and does not depend on the free parameters).
+    ``around``: θ_E's model, for finite differences near it (:func:`transition_residual`).
     """
     n1 = s.n - 1
     p = model.n_states
@@ -200,12 +227,7 @@ def q_function(model: StateSpace, s: Sums) -> float:
         sg = sigma[np.ix_(nz_sig, nz_sig)]
         _, logdet = np.linalg.slogdet(sg)
         val -= 0.5 * (logdet + float(np.trace(np.linalg.solve(sg, e1[np.ix_(nz_sig, nz_sig)]))))
-    phi, u = model.phi, model.u
-    S = (
-        s.s11 - s.s10 @ phi.T - phi @ s.s10.T + phi @ s.s00 @ phi.T
-        - np.outer(s.x_next, u) - np.outer(u, s.x_next)
-        + np.outer(phi @ s.x_prev, u) + np.outer(u, phi @ s.x_prev) + n1 * np.outer(u, u)
-    )
+    S = transition_residual(s, model.phi, model.u, around)
     nz = np.diag(model.q) > 0
     if np.any(nz):
         qq = model.q[np.ix_(nz, nz)]

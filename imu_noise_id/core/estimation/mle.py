@@ -49,12 +49,6 @@ class Parameterisation:
         )
         return cls(tuple(components), entries)
 
-    def steps(self, default: float) -> list[float]:
-        """Central-difference step of each log-parameter for the Fisher-identity gradient: ``default``, or the
-        component's own (:attr:`~imu_noise_id.core.noise.base.Component.gradient_steps`) where rounding in the
-        expected complete-data log-likelihood needs a larger one."""
-        return [self.template[i].gradient_steps.get(name, default) for i, name in self.entries]
-
     @property
     def labels(self) -> list[str]:
         """``'<index>:<type>.<parameter>'`` per entry (index = component position in the structure)."""
@@ -102,13 +96,12 @@ def _loglik_grad_profile(
     prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
     sums = em.sums_from_stats(stats, data or em.DataSums.of(y, z))
     grad = np.empty(theta.size)
-    for k, h in enumerate(par.steps(step)):
+    for k in range(theta.size):
         tp, tm = theta.copy(), theta.copy()
-        tp[k] += h
-        tm[k] -= h
-        grad[k] = (em.q_function(par.to_model(tp, model), sums) - em.q_function(par.to_model(tm, model), sums)) / (
-            2.0 * h
-        )
+        tp[k] += step
+        tm[k] -= step
+        grad[k] = (em.q_function(par.to_model(tp, model), sums, model)
+                   - em.q_function(par.to_model(tm, model), sums, model)) / (2.0 * step)
     return prof.loglik, grad, model, prof
 
 
@@ -133,11 +126,13 @@ def maximise(
     *,
     max_iter: int = 40,
     bounds_width: float = 30.0,
-    tau_bounds: tuple[float, float] | None = None,
+    bounds: dict[str, tuple[float, float]] | None = None,
     grad_tol: float = 1e-2,
     metric: np.ndarray | None = None,
 ) -> MLEResult:
     """L-BFGS(-B) on the exact profile log-likelihood from ``base`` (e.g. the last EM iterate).
+
+    ``bounds`` maps a parameter name (``tau``, ``frequency``, ``bandwidth``, ``cutoff``) to its physical range.
 
     ``metric``: an approximation of the information −∂²ℓ/∂ϑ² (e.g. the Whittle one). When given, the search
     runs in η = Lᵀ(ϑ − ϑ₀) with L Lᵀ = metric, where the Hessian is close to the identity and L-BFGS needs a
@@ -156,11 +151,10 @@ def maximise(
     theta0 = par.to_theta(to_components(base))
     lo = theta0 - bounds_width
     hi = theta0 + bounds_width
-    if tau_bounds is not None:
-        for k, (_, name) in enumerate(par.entries):
-            if name == "tau":
-                lo[k], hi[k] = math.log(tau_bounds[0]), math.log(tau_bounds[1])
-                theta0[k] = min(max(theta0[k], lo[k]), hi[k])
+    for k, (_, name) in enumerate(par.entries):
+        if bounds and name in bounds:
+            lo[k], hi[k] = math.log(bounds[name][0]), math.log(bounds[name][1])
+            theta0[k] = min(max(theta0[k], lo[k]), hi[k])
     state = {"n": 0, "best": (-np.inf, None, None, None)}
     y, z = check_data(y, z, base.n_regressors)
     data = em.DataSums.of(y, z)

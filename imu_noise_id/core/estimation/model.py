@@ -208,9 +208,14 @@ class NoiseModel:
 
     # -- the model at given parameters ------------------------------------------------------------------------
     @property
-    def tau_bounds(self) -> tuple[float, float]:
-        """Range of GM correlation times searched [s]: one sample to 100 records."""
-        return self.dt, 100.0 * self.n_total * self.dt
+    def parameter_bounds(self) -> dict[str, tuple[float, float]]:
+        """Physical ranges searched: GM τ from one sample to 100 records; OSC and LPF frequencies between the
+        record's resolution and the Nyquist frequency; an OSC at least two resolution bins wide (a narrower line is
+        a sinusoid of fixed frequency and phase, a SIN regressor, not a random process the record can resolve)."""
+        span = self.n_total * self.dt
+        nyquist = 0.5 / self.dt
+        return {"tau": (self.dt, 100.0 * span), "frequency": (1.0 / span, nyquist), "bandwidth": (2.0 / span, nyquist),
+                "cutoff": (1.0 / span, nyquist)}
 
     def statespace(self, components: list[Component]) -> ss.StateSpace:
         """State-space form of ``components`` (fitted structure, RR as a measurement regressor)."""
@@ -242,7 +247,8 @@ class NoiseModel:
         lines = whittle.spectral_lines(bp, self.dt, self.fit_names.count("OSC")) if "OSC" in self.fit_names else []
         fits = starts.fit_allan(self.fit_names, self.allan, self.dt, osc_frequencies=lines)
         if spectral:
-            fits = sorted((whittle.whittle_fit(c, y_av, self.dt, bp) for _, c in fits), key=lambda r: -r[0])
+            fits = sorted((whittle.whittle_fit(c, y_av, self.dt, bp, self.parameter_bounds) for _, c in fits),
+                          key=lambda r: -r[0])
             fits = starts.distinct([(-w, c) for w, c in fits], self.allan.tau, self.dt)
         return [c for _, c in fits[:max(n_starts, 1)]]
 

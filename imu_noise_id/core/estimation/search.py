@@ -46,12 +46,12 @@ def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options
         # The last EM iterate is scored by the quasi-Newton finish's first evaluation: no E-step for it here.
         run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats, final_estep=False)
         try:
-            res = mle.maximise(par, run.model, y, z, tau_bounds=model.tau_bounds, metric=metric)
+            res = mle.maximise(par, run.model, y, z, bounds=model.parameter_bounds, metric=metric)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             # That unscored update may have left the filter's domain: redo EM with the check, which keeps the
             # last good iterate (paper 000 §3.5(iii)).
             run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
-            res = mle.maximise(par, run.model, y, z, tau_bounds=model.tau_bounds, metric=metric)
+            res = mle.maximise(par, run.model, y, z, bounds=model.parameter_bounds, metric=metric)
     else:
         run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
         prof = kalman.loglik(run.model, y, z)
@@ -86,6 +86,19 @@ def _mean_parameters(model: NoiseModel, fitted: ss.StateSpace, prof: kalman.Prof
     return coef
 
 
+def _line_windows(start_values: list[list[Component]], dt: float) -> list[tuple[float, float]]:
+    """Angular-frequency windows [rad/sample] around every starting OSC line, where the Whittle metric needs the
+    periodogram unbanded: ±max(20 bandwidths, 2 % of the frequency)."""
+    out = []
+    for start in start_values:
+        for c in start:
+            if c.name == "OSC":
+                half = max(20.0 * c.params()["bandwidth"], 0.02 * c.params()["frequency"])
+                f_lo, f_hi = max(c.params()["frequency"] - half, 0.0), c.params()["frequency"] + half
+                out.append((2.0 * math.pi * f_lo * dt, 2.0 * math.pi * f_hi * dt))
+    return out
+
+
 def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: FitOptions) -> FitResult:
     """Maximum-likelihood fit of ``model`` (see the module docstring)."""
     if init is not None:
@@ -96,6 +109,8 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
     y_av = model.detrended()
     bp = whittle.banded_periodogram(y_av) if options.spectral_init else None
     start_values = [init] if init is not None else model.starting_values(options.n_starts, options.spectral_init, bp)
+    if bp is not None and any(c.name == "OSC" for s in start_values for c in s):
+        bp = whittle.banded_periodogram(y_av, fine=_line_windows(start_values, model.dt))
     fill_first = model.n_obs < model.n_total and model.n_total > FILL_FIRST_MIN_SAMPLES and options.polish
     y_search = interpolate_missing(model.y) if fill_first else model.y
     best: tuple[mle.MLEResult, int] | None = None

@@ -35,9 +35,12 @@ class BandedPeriodogram:
     power: np.ndarray
 
 
-def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02) -> BandedPeriodogram:
+def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02,
+                       fine: list[tuple[float, float]] = ()) -> BandedPeriodogram:
     """Tapered periodogram I(ω_j) = |Σ_t w_t Δy_t e^{−iω_j t}|²/Σ_t w_t² of the demeaned differences,
-    j = 1…⌊(M−1)/2⌋, the lowest ``n_single`` frequencies kept single, the rest pooled in bands of width ratio·ω.
+    j = 1…⌊(M−1)/2⌋, the lowest ``n_single`` frequencies kept single, the rest pooled in bands of width ratio·ω,
+    except in the ``fine`` intervals (ω_lo, ω_hi) [rad/sample], where the frequencies stay single (around a
+    narrow line, whose shape a band would hide: an OSC's frequency and bandwidth).
 
     The Hann taper w matters: the spectrum of Δy spans many decades (white noise differenced is ∝ ω² at low
     frequency), and the untapered periodogram's leakage (≈ 2σ²_WN/M at every frequency) would swamp the
@@ -54,9 +57,14 @@ def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02) 
     j = np.arange(1, jmax + 1)
     per = (spec[1: jmax + 1].real ** 2 + spec[1: jmax + 1].imag ** 2) / float(taper @ taper)
     omega = 2.0 * math.pi * j / m
-    edges = list(range(0, min(n_single, jmax) + 1))
+    single = np.zeros(jmax + 2, bool)
+    single[: n_single + 1] = True
+    for lo, hi in fine:
+        single[max(int(lo * m / (2.0 * math.pi)) - 1, 0): min(int(hi * m / (2.0 * math.pi)) + 2, jmax + 2)] = True
+    edges = [0]
     while edges[-1] < jmax:
-        edges.append(min(max(edges[-1] + 1, int(edges[-1] * ratio)), jmax))
+        e = edges[-1]
+        edges.append(min(e + 1 if single[e + 1] else max(e + 1, int(e * ratio)), jmax))
     edges = np.array(edges)
     counts = np.diff(edges)
     csum = np.concatenate([[0.0], np.cumsum(per)])
@@ -109,11 +117,12 @@ def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndar
     return np.real(np.einsum("wi,ij,wj->w", hg, q, hg.conj()))
 
 
-def whittle_fit(start: list[Component], y: np.ndarray, dt: float,
-                periodogram: BandedPeriodogram | None = None) -> tuple[float, list[Component]]:
+def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: BandedPeriodogram | None = None,
+                bounds: dict[str, tuple[float, float]] | None = None) -> tuple[float, list[Component]]:
     """Maximise the banded Whittle likelihood of Δy over the log-parameters from ``start``.
 
     Returns (Whittle log-likelihood up to a constant, fitted components; RR slopes left as in ``start``).
+    ``bounds`` maps parameter names to their physical range (default: GM τ from dt/2 to 100 records).
     """
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
@@ -135,11 +144,15 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float,
             return 1e300
         return float(np.sum(bp.count * np.log(s) + bp.power / s))
 
-    bounds = []
+    ranges = bounds or {"tau": (dt / 2.0, 100.0 * t_total)}
+    box = []
     for (_, k), v in zip(keys, x0, strict=True):
-        bounds.append((math.log(dt / 2.0), math.log(100.0 * t_total)) if k == "tau" else (v - 30.0, v + 30.0))
-    x0 = np.clip(x0, [b[0] for b in bounds], [b[1] for b in bounds])
-    res = minimize(negll, x0, method="L-BFGS-B", bounds=bounds, options={"maxiter": 500})
+        if k in ranges:
+            box.append((math.log(ranges[k][0]), math.log(ranges[k][1])))
+        else:
+            box.append((v - 30.0, v + 30.0))
+    x0 = np.clip(x0, [b[0] for b in box], [b[1] for b in box])
+    res = minimize(negll, x0, method="L-BFGS-B", bounds=box, options={"maxiter": 500})
     return -float(res.fun), build(res.x)
 
 

@@ -8,9 +8,9 @@ variance F and the smoother gain J are constants, so
     smoothed state   x_{t−1}^N = J x_t^N + (x_{t−1}^{t−1} − J x_t^{t−1})          (backward, anti-causal)
 
 are linear time-invariant filters. They run in compiled code as cascades of first-order sections
-(``scipy.signal.lfilter``) in the Schur basis of A (resp. J): orthogonal, hence numerically as good as the
-plain recursion even with poles within 1e-6 of the unit circle, where a transfer-function (polynomial) form
-would lose all accuracy.
+(``scipy.signal.lfilter``) in the real Schur basis of A (resp. J): orthogonal, hence numerically as good as the
+plain recursion even with poles within 1e-6 of the unit circle, where a transfer-function (polynomial) form of
+the whole filter would lose all accuracy; a complex pole pair (an oscillator) is one real second-order section.
 
 The smoothed covariances are never stored: they follow the affine recursion P_{t−1}^N = T(P_t^N) =
 J P_t^N Jᵀ + (P_f − J P̄ Jᵀ) from P_N^N = P_f, so Σ_t P_t^N = Σ_{k<N} T^k(P_f) and P_1^N = T^{N−1}(P_f) are
@@ -58,46 +58,67 @@ def gains(model: StateSpace) -> SteadyGains:
     return SteadyGains(P, Pf, k, f, a, j)
 
 
-def _schur(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A = U T Uᴴ with T upper triangular (real when all eigenvalues are real, else complex)."""
-    T, U = schur(A, output="real")
-    if A.shape[0] > 1 and np.any(np.abs(np.diag(T, -1)) > 0):
-        T, U = schur(A, output="complex")
-    return T, U
+def _blocks(T: np.ndarray) -> list[slice]:
+    """The diagonal blocks of a real quasi-triangular Schur factor: 1×1 (real eigenvalue) or 2×2 (a complex pair)."""
+    p = T.shape[0]
+    out, i = [], 0
+    while i < p:
+        size = 2 if i + 1 < p and T[i + 1, i] != 0 else 1
+        out.append(slice(i, i + size))
+        i += size
+    return out
+
+
+def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
+    """x_0 = w0, x_{t+1} = B x_t + d_t for one diagonal block B (1×1 or 2×2); d (s, m, N), w0 (s, m).
+
+    The initial state enters as an input one step before t = 0 (x_{−1} = 0, d_{−1} = w0): x_{t} is output t + 1 of
+    the strictly proper filter (zI − B)⁻¹ applied to d' = [w0, d_0, …], per component one ``lfilter`` per input,
+    numerators the rows of adj(zI − B), denominator det(zI − B) (order 1 or 2, real coefficients).
+    """
+    s = B.shape[0]
+    dp = np.concatenate([w0[:, :, None], d], axis=2)
+    if s == 1:
+        return lfilter([0.0, 1.0], [1.0, -B[0, 0]], dp, axis=-1)[:, :, 1:]
+    den = [1.0, -(B[0, 0] + B[1, 1]), B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]]
+    adj = (((0.0, 1.0, -B[1, 1]), (0.0, 0.0, B[0, 1])), ((0.0, 0.0, B[1, 0]), (0.0, 1.0, -B[0, 0])))
+    out = np.empty_like(d)
+    for r in range(2):
+        out[r] = sum(lfilter(adj[r][c], den, dp[c], axis=-1)[:, 1:] for c in range(2) if adj[r][c][2] != 0 or c == r)
+    return out
 
 
 def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """w[:, :, 0] = w0, w[:, :, t+1] = T w[:, :, t] + cw[:, :, t]; shapes (p, m, N). T upper triangular.
+    """w[:, :, 0] = w0, w[:, :, t+1] = T w[:, :, t] + cw[:, :, t]; shapes (p, m, N). T real quasi-triangular.
 
-    One first-order ``lfilter`` per state (vectorised over the m columns), last state first, each driven by its
+    One block at a time (:func:`_run_block`, vectorised over the m columns), last block first, each driven by its
     input plus the already computed states it couples to.
     """
-    p = cw.shape[0]
     w = np.empty_like(cw)
-    for i in range(p - 1, -1, -1):
-        drive = cw[i, :, :-1].copy()
-        for jj in range(i + 1, p):
-            if T[i, jj] != 0:
-                drive += T[i, jj] * w[jj, :, :-1]
-        lam = T[i, i]
-        w[i, :, 0] = w0[i]
-        w[i, :, 1:] = lfilter([1.0], [1.0, -lam], drive, axis=-1, zi=(lam * w0[i])[:, None])[0]
+    for blk in reversed(_blocks(T)):
+        drive = cw[blk].copy()
+        later = slice(blk.stop, T.shape[0])
+        if later.start < later.stop and np.any(T[blk, later]):
+            drive += np.tensordot(T[blk, later], w[later], axes=1)
+        w[blk] = _run_block(T[blk, blk], drive, w0[blk])
     return w
+
+
+def _rotate(M: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """M applied to the first axis of x (p, m, N): one matrix product."""
+    return (M @ x.reshape(x.shape[0], -1)).reshape(M.shape[0], *x.shape[1:])
 
 
 def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
     """x_0 = x0, x_{t+1} = A x_t + c_t; c has shape (p, m, N), x0 (p, m); returns x with c's shape.
 
-    Computed in the Schur basis A = U T Uᴴ (orthogonal, so no loss of accuracy) by :func:`_run_modes`.
+    Computed in the real Schur basis A = U T Uᵀ (orthogonal, so no loss of accuracy; complex eigenvalue pairs
+    stay as real 2×2 blocks) by :func:`_run_modes`.
     """
     if c.shape[0] == 0:
         return np.zeros_like(c)
-    T, U = _schur(A)
-    Uh = U.conj().T
-    cw = np.einsum("ij,jmn->imn", Uh, c)
-    w = _run_modes(T, cw, Uh @ x0)
-    x = np.einsum("ij,jmn->imn", U, w)
-    return np.real(x) if np.iscomplexobj(x) else x
+    T, U = schur(A, output="real")
+    return _rotate(U, _run_modes(T, _rotate(U.T, c), U.T @ x0))
 
 
 def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns, full: bool):
@@ -106,19 +127,13 @@ def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns, full: bo
     m, n = cols.y.shape
     if p == 0:
         return np.zeros((m, n)), np.zeros((0, m, n))
-    T, U = _schur(g.a)
-    Uh = U.conj().T
-    gain_w = Uh @ (model.phi @ g.k)
-    g_w = Uh @ cols.g
+    T, U = schur(g.a, output="real")
+    gain_w = U.T @ (model.phi @ g.k)
+    g_w = U.T @ cols.g
     cw = gain_w[:, None, None] * cols.y[None, :, :] + g_w[:, :, None]
-    w = _run_modes(T, cw, Uh @ cols.m0)
-    hw = model.h @ U
-    out = np.einsum("i,imn->mn", hw, w)
-    out = np.real(out) if np.iscomplexobj(out) else out
-    if not full:
-        return out, None
-    x = np.einsum("ij,jmn->imn", U, w)
-    return out, (np.real(x) if np.iscomplexobj(x) else x)
+    w = _run_modes(T, cw, U.T @ cols.m0)
+    out = ((model.h @ U) @ w.reshape(p, -1)).reshape(m, n)
+    return out, (_rotate(U, w) if full else None)
 
 
 def innovations(model: StateSpace, cols: Columns) -> InnovationResult:

@@ -68,9 +68,6 @@ class Component(ABC):
     parameter_names: ClassVar[tuple[str, ...]]
     #: Units of the continuous-time parameters, ``u`` standing for the signal's unit.
     parameter_units: ClassVar[dict[str, str]]
-    #: Log-parameter steps of the likelihood gradient's central differences where the default (1e-6) is too small
-    #: for the rounding of the EM's expected complete-data log-likelihood (:mod:`imu_noise_id.core.estimation.mle`).
-    gradient_steps: ClassVar[dict[str, float]] = {}
 
     @abstractmethod
     def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:

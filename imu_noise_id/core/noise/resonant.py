@@ -20,7 +20,7 @@ OSC — second-order resonant Gauss–Markov process
     R(u) = σ² e^{−a|u|} (cos ω_d u + (a/ω_d) sin ω_d|u|). State [x, x'/ω₀] (scaled so that its stationary
     covariance is P∞ = σ² I and Q is well conditioned: the likelihood's gradient, taken through the EM's
     expected complete-data log-likelihood, needs Q⁻¹), H = [1, 0]; the exact discretisation Φ = S exp(A dt) S⁻¹
-    (S = diag(1, 1/ω₀)), Q = P∞ − Φ P∞ Φᵀ.
+    (S = diag(1, 1/ω₀)) and Q = P∞ − Φ P∞ Φᵀ, computed by Van Loan's method (no cancellation when Q ≪ P∞).
     Allan variance from the autocovariance: with Ψ(τ) = 2∫₀^τ (τ − u) R(u) du (the variance of the τ-integral),
     AV(τ) = (4Ψ(τ) − Ψ(2τ)) / (2τ²), in closed form through R(u) = Re(c e^{su}), s = −a + iω_d, c = σ²(1 − ia/ω_d):
     Ψ(τ) = 2 Re(c (e^{sτ} − 1 − sτ)/s²).
@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from scipy import signal
+from scipy import linalg, signal
 
 from . import units
 from .base import Component, StateBlock, as_freq, as_tau
@@ -127,9 +127,6 @@ class OSC(Component):
     name: ClassVar[str] = "OSC"
     parameter_names: ClassVar[tuple[str, ...]] = ("frequency", "bandwidth", "sigma")
     parameter_units: ClassVar[dict[str, str]] = {"frequency": "Hz", "bandwidth": "Hz", "sigma": "u"}
-    # Φ of a lightly damped oscillator is close to a rotation: Q ≪ P∞, and the sums of the expected complete-data
-    # log-likelihood cancel to ~1e-12 relative, which a 1e-6 step would amplify into gradient errors of ~2 %.
-    gradient_steps: ClassVar[dict[str, float]] = {"frequency": 1e-4, "bandwidth": 1e-4}
 
     def __post_init__(self) -> None:
         _positive("frequency", self.frequency)
@@ -166,14 +163,25 @@ class OSC(Component):
         w0 = self.omega0
         return e * np.array([[c + a / wd * s, w0 / wd * s], [-w0 / wd * s, c - a / wd * s]])
 
+    def process_noise(self, dt: float) -> np.ndarray:
+        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state by Van Loan's matrix exponential (accurate when
+        Q ≪ P∞, where P∞ − Φ P∞ Φᵀ would lose most of its digits to cancellation)."""
+        w0, a = self.omega0, self.damping * self.omega0
+        A = np.array([[0.0, w0], [-w0, -2.0 * a]])
+        W = np.diag([0.0, 4.0 * a * self.sigma**2])  # drive of x'/ω₀: q/ω₀² with q = 4ζω₀³σ²
+        M = np.zeros((4, 4))
+        M[:2, :2], M[:2, 2:], M[2:, 2:] = -A, W, A.T
+        E = linalg.expm(M * dt)
+        phi = E[2:, 2:].T
+        q = phi @ E[:2, 2:]
+        return 0.5 * (q + q.T)
+
     def block(self, dt: float) -> StateBlock:
         if self.frequency >= 0.5 / _positive("dt", dt):
             raise ValueError(f"OSC frequency {self.frequency:g} Hz is at or above the Nyquist frequency "
                              f"{0.5 / dt:g} Hz of the sampling period {dt:g} s")
         phi = self.transition(dt)
-        p = self.stationary_covariance()
-        q = p - phi @ p @ phi.T
-        q = 0.5 * (q + q.T)
+        q = self.process_noise(dt)
         return StateBlock(phi=phi, q=q, h=np.array([1.0, 0.0]), u=np.zeros(2), phi_free=np.zeros((2, 2), bool),
                           q_free=np.zeros((2, 2), bool), u_free=np.zeros(2, bool))
 
