@@ -70,11 +70,13 @@ def run(args: argparse.Namespace) -> int:
     for note in bag.notes:
         if not note.startswith(f"{imu.topic}: "):
             print(f"  note: {note}")
-    flags = static_check(imu)
-    if flags:
+    check = static_check(imu)
+    if check.flags:
         print("not static (a static noise analysis of these data would be wrong):")
-        for flag in flags:
+        for flag in check.flags:
             print(f"  - {flag}")
     else:
         print("looks static: fine for the offline noise analysis")
+    for note in check.notes:
+        print(f"  note: {note}")
     return 0

@@ -177,13 +177,13 @@ def analyze_static(
                 )
     dt = imu.dt
     warnings = list(imu.notes) + _timing_warnings(imu.t, dt)
-    motion = static_check(imu)
-    if motion and not allow_motion:
+    check = static_check(imu)
+    if check.flags and not allow_motion:
         raise NotStaticError(
-            f"{imu.topic or 'input'} does not look static: " + "; ".join(motion)
+            f"{imu.topic or 'input'} does not look static: " + "; ".join(check.flags)
             + ". A static analysis needs the IMU at rest; pass allow_motion (CLI: --allow-motion) to analyse anyway"
         )
-    warnings += [f"not static: {m}" for m in motion]
+    warnings += [f"not static: {m}" for m in check.flags] + check.notes
     wanted = ["allan", *[k for k in kinds if k != "allan"]]
     # Gyro and accel separately: no (N, 6) copy of the samples (peak memory, see docs/analysis.md).
     variances = {}
