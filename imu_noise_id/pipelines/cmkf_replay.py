@@ -11,10 +11,10 @@ import time
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.stats import chi2
 
 from ..core.axes import ImuSeries, OdometrySeries
 from ..core.cmkf.robot import CmkfEstimate, RobotCmkf, RobotCmkfConfig
+from ..core.diagnostics.consistency import nis_bounds
 
 #: Per-axis fields of :class:`CmkfEstimate` recorded over time.
 SERIES_FIELDS = (
@@ -122,7 +122,7 @@ def nis_summary(nis: np.ndarray, dof: int, skip_fraction: float = 0.2) -> dict[s
     x = x[int(skip_fraction * x.size):]
     if x.size == 0:
         return {"mean": math.nan, "dof": dof, "share_in_95": math.nan, "n": 0}
-    lo, hi = chi2.ppf([0.025, 0.975], dof)
+    lo, hi = nis_bounds(dof)
     return {"mean": float(x.mean()), "dof": dof, "share_in_95": float(np.mean((x >= lo) & (x <= hi))), "n": int(x.size)}
 
 

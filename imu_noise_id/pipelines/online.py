@@ -36,10 +36,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.stats import chi2
 
 from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES
 from ..core.cmkf.robot import RobotCmkf, RobotCmkfConfig
+from ..core.diagnostics.consistency import nis_bounds
 from ..core.errors import InputError
 from ..core.hypotheses.axis import AxisIdentifier
 from ..core.hypotheses.config import hypothesis_set_factory
@@ -799,8 +799,7 @@ class OnlineIdentifier:
             return DiagnosticStatus(name, WARN, "no odometry update recently: biases are predicted only", values)
         if n < 10 or not math.isfinite(est.nis_accel_mean):
             return DiagnosticStatus(name, OK, f"converging ({n} updates)", values)
-        dof = n * est.nis_accel_dof
-        low, high = chi2.ppf(0.025, dof) / n, chi2.ppf(0.975, dof) / n
+        low, high = nis_bounds(est.nis_accel_dof, n)
         values["nis_bounds_95"] = f"[{low:.3f}, {high:.3f}]"
         mean = est.nis_accel_mean
         if mean > 10.0 * est.nis_accel_dof:
