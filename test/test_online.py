@@ -11,8 +11,9 @@ import yaml
 
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.simulation.stop_and_go import simulate_stop_and_go
+from imu_noise_id.core.white_noise import FirstDifferences
 from imu_noise_id.pipelines.online import ERROR, OK, STALE, WARN, OnlineIdentifier
-from imu_noise_id.pipelines.online_blocks import AllanTau0NoiseDensity, StampChecker, StationarityDetector
+from imu_noise_id.pipelines.online_blocks import StampChecker, StationarityDetector
 from imu_noise_id.pipelines.online_config import PARAMETERS, OnlineConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -110,14 +111,39 @@ def test_stationarity_with_require_odometry_never_without_odometry():
 def test_allan_tau0_density_of_white_noise_and_its_rstd():
     rng = np.random.default_rng(2)
     dt, density = 0.005, 2e-3
-    est = AllanTau0NoiseDensity()
+    est = FirstDifferences(6)
     drift = np.cumsum(rng.normal(0, 1e-5, 20000))  # a slow random walk the differences must ignore
     for k in range(20000):
         est.add(k * dt, np.full(6, drift[k]) + rng.normal(0, density / math.sqrt(dt), 6))
     rstd = est.relative_std()
     assert rstd == pytest.approx(math.sqrt(3 / 19999) / 2)
     # Six axes within 4 relative standard deviations (a false alarm has probability < 1e-3).
-    assert np.all(np.abs(est.noise_density() / density - 1) < 4 * rstd)
+    assert np.all(np.abs(est.density() / density - 1) < 4 * rstd)
+
+
+def test_the_online_noise_density_is_the_batch_white_noise_estimate():
+    """One τ₀ estimate: the node's streaming FirstDifferences (stamps, chains) equals the hypotheses' batch
+    white_noise_estimate on the same samples, and a broken chain drops exactly the difference across the break."""
+    from imu_noise_id.core.hypotheses.config import white_noise_estimate
+
+    rng = np.random.default_rng(4)
+    dt = 0.01
+    y = 3.0 + rng.normal(0.0, 0.1, 500) + np.linspace(0.0, 0.5, 500)
+    stream = FirstDifferences(1)
+    for k, value in enumerate(y):
+        stream.add(100.0 + k * dt, np.array([value]))
+    assert stream.n == 499 and stream.sum_dt == pytest.approx(499 * dt)
+    assert stream.density()[0] == pytest.approx(white_noise_estimate(y, dt), rel=1e-9)
+    two = FirstDifferences(1)
+    for k, value in enumerate(y):
+        if k == 250:
+            two.break_chain()
+        two.add(100.0 + k * dt, np.array([value]))
+    assert two.n == 498
+    halves = FirstDifferences(1)
+    halves.add_series(y[:250])
+    halves.add_series(y[250:])
+    assert halves.density(dt)[0] == pytest.approx(two.density()[0], rel=1e-9)
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,8 @@ What happens per IMU sample
 4. Stationary samples pass a delay line of ``stationary.guard`` seconds before they reach the noise
    identification, and the line is emptied when motion is detected, so the last samples before a start —
    already disturbed but not yet detected — never reach it.
-5. Noise density per axis from the stationary samples (:class:`AllanTau0NoiseDensity`); the samples are also
+5. Noise density per axis from the stationary samples (the Allan variance at τ₀,
+   :class:`~imu_noise_id.core.white_noise.FirstDifferences`); the samples are also
    queued for the hypothesis bank (paper 002), which :meth:`OnlineIdentifier.update_identification` feeds in
    batches.
 6. Bias correction and the covariance N²·f of the corrected sample (None while unknown).
@@ -43,8 +44,9 @@ from ..core.diagnostics.consistency import nis_bounds
 from ..core.errors import InputError
 from ..core.hypotheses.axis import AxisIdentifier
 from ..core.hypotheses.config import hypothesis_set_factory
+from ..core.white_noise import FirstDifferences
 from ..resources import read_hypotheses_file
-from .online_blocks import AllanTau0NoiseDensity, StampChecker, StationarityDetector, WindowStats
+from .online_blocks import StampChecker, StationarityDetector, WindowStats
 from .online_config import OnlineConfig
 
 # Diagnostic levels, equal to diagnostic_msgs/DiagnosticStatus.{OK, WARN, ERROR, STALE}.
@@ -277,7 +279,7 @@ class OnlineIdentifier:
 
     def _reset_estimation(self) -> None:
         self.stationarity = StationarityDetector(self.config)
-        self.noise = AllanTau0NoiseDensity()
+        self.noise = FirstDifferences(6)
         self._guard: deque[tuple[float, np.ndarray]] = deque()
         self.cmkf = RobotCmkf(self._cmkf_config())
         self._cmkf_est = self.cmkf.estimate()
@@ -440,7 +442,7 @@ class OnlineIdentifier:
         if not math.isfinite(rate):
             return None, "none"
         if self.noise.n >= self.config.noise_min_samples:
-            return self.noise.noise_density() ** 2 * rate, "stationary"
+            return self.noise.density() ** 2 * rate, "stationary"
         est = self._cmkf_est
         if est.status == "tracking":
             return np.concatenate([est.S_g, est.S_v]) * rate, "cmkf"
@@ -679,7 +681,7 @@ class OnlineIdentifier:
             gyro_bias_std=est.gyro_bias_std.copy() if known else nan3.copy(),
             accel_bias=est.accel_bias.copy() if known else nan3.copy(),
             accel_bias_std=est.accel_bias_std.copy() if known else nan3.copy(),
-            noise_density=self.noise.noise_density() if enough else np.full(6, math.nan),
+            noise_density=self.noise.density() if enough else np.full(6, math.nan),
             noise_density_rstd=self.noise.relative_std() if enough else math.nan,
             noise_samples=self.noise.n,
             psd=np.concatenate([est.S_g, est.S_v]) if known else np.full(6, math.nan),
@@ -818,7 +820,7 @@ class OnlineIdentifier:
         if n < need:
             return DiagnosticStatus("Noise density", WARN, f"collecting stationary samples ({n}/{need}); "
                                     f"corrected IMU covariance from: {source}", values)
-        density = self.noise.noise_density()
+        density = self.noise.density()
         for axis, value in zip(AXES, density, strict=True):
             values[f"{axis}_noise_density"] = f"{value:.4g}"
         values["relative_std"] = f"{self.noise.relative_std():.3g}"

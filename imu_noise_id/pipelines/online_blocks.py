@@ -1,5 +1,5 @@
-"""Building blocks of the online identification: stamp checks, stationarity with hysteresis, the Allan-τ₀
-white-noise density and a windowed percentile buffer (each plain Python/numpy, tested on its own)."""
+"""Building blocks of the online identification: stamp checks, stationarity with hysteresis and a windowed
+percentile buffer (each plain Python/numpy, tested on its own)."""
 
 from __future__ import annotations
 
@@ -150,52 +150,6 @@ class StationarityDetector:
             self.stationary = True
             self.stationary_since = t
         return self.stationary
-
-
-@dataclass
-class AllanTau0NoiseDensity:
-    """White-noise density per axis from consecutive stationary samples: the Allan variance at τ = Δt.
-
-    σ²_A(Δt) = ½·E[(y_{k+1} − y_k)²] equals the per-sample white-noise variance σ² (IEEE Std 952), and the
-    density is N = √(σ²·Δt) (:func:`imu_noise_id.core.noise.units.white_noise_density`). Differences remove the bias
-    and attenuate slow drifts (RW, GM with τ ≫ Δt); quantisation noise and vibration present while the platform
-    stands still are included, which is what the covariance of the corrected IMU must carry. Only differences of
-    samples from one uninterrupted stationary stretch are used (:meth:`break_chain` between stretches).
-    """
-
-    sum_d2: np.ndarray = field(default_factory=lambda: np.zeros(6))
-    n: int = 0
-    sum_dt: float = 0.0
-    _prev: np.ndarray | None = None
-    _prev_t: float = 0.0
-
-    def add(self, t: float, sample: np.ndarray) -> None:
-        prev = self._prev
-        if prev is not None:
-            d = sample - prev
-            self.sum_d2 += d * d
-            self.n += 1
-            self.sum_dt += t - self._prev_t
-        self._prev = sample
-        self._prev_t = t
-
-    def break_chain(self) -> None:
-        self._prev = None
-
-    def noise_density(self) -> np.ndarray:
-        """N per axis [u/√Hz] (NaN before the first difference)."""
-        if self.n == 0:
-            return np.full(6, math.nan)
-        sigma2 = 0.5 * self.sum_d2 / self.n
-        return np.sqrt(sigma2 * (self.sum_dt / self.n))
-
-    def relative_std(self) -> float:
-        """Approximate relative standard deviation of N for white noise: √(3/n)/2.
-
-        For Gaussian white noise d_k = y_{k+1} − y_k has var(d_k²) = 8σ⁴ and cov(d_k², d_{k+1}²) = 2σ⁴, so
-        var(σ̂²) = var(Σd²/2n) ≈ 12nσ⁴/4n² = 3σ⁴/n; N ∝ √σ̂² halves the relative error.
-        """
-        return math.sqrt(3.0 / self.n) / 2.0 if self.n else math.nan
 
 
 @dataclass
