@@ -510,3 +510,31 @@ def test_cli_cmkf_gravity_from_imu_without_orientation_exits_2(tmp_path, capsys)
     assert "--gravity-from odom" in capsys.readouterr().err
     assert main(["cmkf", str(tmp_path / "bag"), "--out", str(tmp_path / "out"), "--no-plot"]) == 0  # default: odom
     assert "gravity from the odometry orientation" in capsys.readouterr().out
+
+
+def test_one_robot_simulator_with_two_motion_profiles():
+    """simulate_robot with the Weaving (default) and StopAndGo profiles: standing means zero odometry speed and an
+    IMU reading of gravity plus the biases; the optional bias random walk drifts the IMU, the rest stays."""
+    from imu_noise_id.core.cmkf import rotation as rot
+    from imu_noise_id.core.simulation.robot import RobotSensors, StopAndGo
+
+    sensors = RobotSensors(imu_rotation_xyzw=rot.IDENTITY, S_v=1e-8, S_g=1e-10, noise_order=("gyro", "accel"))
+    run = simulate_robot(12.0, np.random.default_rng(0), motion=StopAndGo(stand_before=4.0, drive=4.0),
+                         sensors=sensors, t0=50.0)
+    assert run.imu_t[0] == pytest.approx(50.01) and run.odom_t[-1] == pytest.approx(62.0)
+    standing = (run.odom_t - 50.0 < 4.0) | (run.odom_t - 50.0 > 8.0)
+    assert np.all(np.abs(run.linear_velocity[standing, 0]) < 0.01)
+    assert np.max(run.linear_velocity[~standing, 0]) > 0.9
+    still = run.imu_t - 50.0 < 3.9
+    np.testing.assert_allclose(run.accel[still].mean(axis=0), np.array([0, 0, G]) + sensors.accel_bias, atol=1e-3)
+    np.testing.assert_allclose(run.gyro[still].mean(axis=0), sensors.gyro_bias, atol=1e-4)
+    weaving = simulate_robot(12.0, np.random.default_rng(0))
+    assert np.all(weaving.linear_velocity[:, 0] > 0.1)  # always moving
+    drifting = simulate_robot(12.0, np.random.default_rng(0), motion=StopAndGo(stand_before=4.0, drive=4.0),
+                              sensors=RobotSensors(imu_rotation_xyzw=rot.IDENTITY, S_v=1e-8, S_g=1e-10,
+                                                   noise_order=("gyro", "accel"), accel_random_walk=0.05),
+                              t0=50.0)
+    np.testing.assert_array_equal(drifting.gyro, run.gyro)  # the white noise is drawn before the random walk
+    assert np.max(np.abs(drifting.accel - run.accel)) > 0.01
+    with pytest.raises(ValueError, match="noise_order"):
+        simulate_robot(1.0, np.random.default_rng(0), sensors=RobotSensors(noise_order=("gyro", "gyro")))

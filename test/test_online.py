@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.simulation.stop_and_go import simulate_stop_and_go
 from imu_noise_id.core.white_noise import FirstDifferences
+from imu_noise_id.demo.online import simulate_demo_run
 from imu_noise_id.pipelines.online import ERROR, OK, STALE, WARN, OnlineIdentifier
 from imu_noise_id.pipelines.online_blocks import StampChecker, StationarityDetector
 from imu_noise_id.pipelines.online_config import PARAMETERS, OnlineConfig
@@ -149,8 +149,7 @@ def test_the_online_noise_density_is_the_batch_white_noise_estimate():
 @pytest.fixture(scope="module")
 def replayed() -> tuple[OnlineIdentifier, object]:
     """A stand (25 s) – drive (20 s) – stand (20 s) run at 200 Hz IMU / 50 Hz odometry through the identifier."""
-    run = simulate_stop_and_go(np.random.default_rng(3), stand_before=25, drive=20, stand_after=20,
-                               gyro_bias=GYRO_BIAS, accel_bias=ACCEL_BIAS)
+    run = simulate_demo_run(3, stand_before=25, drive=20, stand_after=20)  # biases GYRO_BIAS, ACCEL_BIAS
     ident = OnlineIdentifier()
     i = j = 0
     ni, nj = len(run.imu_t), len(run.odom_t)
@@ -305,7 +304,7 @@ def test_play_loads_a_bag_in_time_order_and_rejects_unknown_topics(tmp_path):
 def test_odometry_arriving_after_later_imu_samples_is_processed_in_stamp_order():
     """Odometry delivered up to 60 ms after IMU samples with later stamps (two topics, two latencies): the CMKF
     still sees stamp order (without the reordering it raised LinAlgError on such input)."""
-    run = simulate_stop_and_go(np.random.default_rng(5), stand_before=5, drive=10, stand_after=5)
+    run = simulate_demo_run(5, stand_before=5, drive=10, stand_after=5)
     rng = np.random.default_rng(6)
     arrival = np.maximum.accumulate(run.odom_t + 0.06 * rng.random(run.odom_t.size))  # one topic keeps its order
     events = [(t, 0, k) for k, t in enumerate(arrival)]
@@ -347,7 +346,7 @@ def test_without_odometry_the_imu_alone_decides_and_the_noise_is_still_identifie
 
 
 def test_odometry_later_than_the_input_latency_is_dropped_not_fatal():
-    run = simulate_stop_and_go(np.random.default_rng(9), stand_before=3, drive=4, stand_after=3)
+    run = simulate_demo_run(9, stand_before=3, drive=4, stand_after=3)
     ident = OnlineIdentifier(OnlineConfig({"cmkf.input_latency": 0.02}))
     events = [(t + 0.03, 0, k) for k, t in enumerate(run.odom_t)]  # always 30 ms late: beyond the 20 ms window
     events += [(t, 1, k) for k, t in enumerate(run.imu_t)]

@@ -2,8 +2,9 @@
 
 ``python -m imu_noise_id.demo.online [--out DIR] [--rate X]`` (``make demo`` calls :func:`run_demo`):
 
-1. simulate a robot that stands, drives and stands again (:func:`~imu_noise_id.core.simulation.stop_and_go.
-   simulate_stop_and_go`; known biases and noise densities) and write it as a rosbag2 bag;
+1. simulate a robot that stands, drives and stands again (:func:`~imu_noise_id.core.simulation.robot.simulate_robot`
+   with the :class:`~imu_noise_id.core.simulation.robot.StopAndGo` profile; known biases and noise densities) and
+   write it as a rosbag2 bag;
 2. start the node as its own process with ``config/imu_noise_id.yaml``;
 3. play the bag (``imu-noise-id play``) and show the monitor view while the estimates converge;
 4. print the final estimates next to the simulation's truth.
@@ -26,8 +27,8 @@ import numpy as np
 
 from ..bag.writer import write_robot_bag
 from ..core.axes import AXES
-from ..core.simulation.robot import RobotRun
-from ..core.simulation.stop_and_go import simulate_stop_and_go
+from ..core.cmkf import rotation as rot
+from ..core.simulation.robot import RobotRun, RobotSensors, StopAndGo, simulate_robot
 from ..resources import NODE_PARAMETERS, packaged_config
 from ..ros.launch import node_command, ros_environment, stop
 
@@ -40,14 +41,21 @@ DEMO_TRUTH = {
 }
 
 
+#: The demo robot's sensors: :data:`DEMO_TRUTH`, odometry twist noise 5 mm/s and 5 mrad/s, IMU not rotated.
+DEMO_SENSORS = RobotSensors(
+    accel_bias=DEMO_TRUTH["accel_bias"], gyro_bias=DEMO_TRUTH["gyro_bias"],
+    S_v=DEMO_TRUTH["accel_noise_density"] ** 2, S_g=DEMO_TRUTH["gyro_noise_density"] ** 2,
+    velocity_noise_std=0.005, angular_velocity_noise_std=0.005, position_noise_std=0.0, pose_variance=(1e-4, 1e-4),
+    imu_rotation_xyzw=rot.IDENTITY, noise_order=("gyro", "accel"),
+)
+
+
 def simulate_demo_run(seed: int = 7, *, stand_before: float = 20.0, drive: float = 25.0, stand_after: float = 20.0,
-                      imu_rate: float = 200.0, odom_rate: float = 50.0) -> RobotRun:
-    """The demo robot: stand, drive, stand, with :data:`DEMO_TRUTH` biases and white-noise densities."""
-    return simulate_stop_and_go(
-        np.random.default_rng(seed), stand_before=stand_before, drive=drive, stand_after=stand_after,
-        imu_rate=imu_rate, odom_rate=odom_rate, gyro_bias=DEMO_TRUTH["gyro_bias"],
-        accel_bias=DEMO_TRUTH["accel_bias"], gyro_noise_density=DEMO_TRUTH["gyro_noise_density"],
-        accel_noise_density=DEMO_TRUTH["accel_noise_density"],
+                      imu_rate: float = 200.0, odom_rate: float = 50.0, substeps: int = 8) -> RobotRun:
+    """The demo robot: stand, drive, stand (stamps from 1000 s), with :data:`DEMO_SENSORS`."""
+    return simulate_robot(
+        stand_before + drive + stand_after, np.random.default_rng(seed), motion=StopAndGo(stand_before, drive),
+        sensors=DEMO_SENSORS, imu_rate=imu_rate, odom_rate=odom_rate, t0=1000.0, substeps=substeps,
     )
 
 
