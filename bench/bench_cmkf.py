@@ -18,7 +18,8 @@ import numpy as np
 
 from imu_noise_id.core.axes import ImuSeries, OdometrySeries
 from imu_noise_id.core.cmkf import rotation as rot
-from imu_noise_id.core.cmkf.robot import RobotCmkf, RobotCmkfConfig
+from imu_noise_id.core.cmkf.config import CmkfConfig
+from imu_noise_id.core.cmkf.robot import RobotCmkf
 from imu_noise_id.core.simulation.robot import simulate_robot
 from imu_noise_id.pipelines.cmkf_replay import replay
 
@@ -33,7 +34,7 @@ def sim_series(duration: float, imu_rate: float, odom_rate: float) -> tuple[ImuS
     return imu, odom, run.imu_rotation_xyzw
 
 
-def throughput(label: str, imu: ImuSeries, odom: OdometrySeries | None, cfg: RobotCmkfConfig, repeat: int = 3) -> None:
+def throughput(label: str, imu: ImuSeries, odom: OdometrySeries | None, cfg: CmkfConfig, repeat: int = 3) -> None:
     best = cpu_best = 0.0
     for _ in range(repeat):
         c0 = time.process_time()
@@ -46,7 +47,7 @@ def throughput(label: str, imu: ImuSeries, odom: OdometrySeries | None, cfg: Rob
           f"{cpu_best:>8.0f} per CPU-second (best of {repeat})")
 
 
-def latency(imu: ImuSeries, odom: OdometrySeries, cfg: RobotCmkfConfig) -> None:
+def latency(imu: ImuSeries, odom: OdometrySeries, cfg: CmkfConfig) -> None:
     f = RobotCmkf(cfg)
     ti, to, te = [], [], []
     imu_rows = [(float(t), tuple(g), tuple(a)) for t, g, a in zip(imu.t, imu.gyro, imu.accel, strict=True)]
@@ -86,16 +87,16 @@ def main() -> None:
         imu = ImuSeries(d["imu_t"], d["imu_gyro"], d["imu_accel"])
         odom = OdometrySeries(d["odom_t"], d["odom_pos"], d["odom_quat_xyzw"], d["odom_twist_linear"],
                               d["odom_twist_angular"], cov, cov)
-        cfg = RobotCmkfConfig(imu_rotation_xyzw=rot.from_ypr(-np.pi / 2, 0.0, np.pi / 2))
+        cfg = CmkfConfig(imu_rotation_xyzw=rot.from_ypr(-np.pi / 2, 0.0, np.pi / 2))
         throughput("Husky npz (IMU 30 Hz / odometry 10 Hz)", imu, odom, cfg)
     else:
         print(f"(Husky data not found at {husky}: skipped)")
     for imu_rate, odom_rate in ((100.0, 10.0), (400.0, 20.0)):
         imu, odom, q = sim_series(120.0, imu_rate, odom_rate)
-        cfg = RobotCmkfConfig(imu_rotation_xyzw=q)
+        cfg = CmkfConfig(imu_rotation_xyzw=q)
         throughput(f"simulated robot (IMU {imu_rate:g} Hz / odometry {odom_rate:g} Hz)", imu, odom, cfg)
         if imu_rate == 100.0:
-            throughput("same, pose_twist measurement", imu, odom, RobotCmkfConfig(imu_rotation_xyzw=q,
+            throughput("same, pose_twist measurement", imu, odom, CmkfConfig(imu_rotation_xyzw=q,
                                                                                    measurement="pose_twist"))
             first_second = OdometrySeries(*(np.asarray(a)[odom.t <= 1.0] for a in (
                 odom.t, odom.position, odom.orientation_xyzw, odom.linear_velocity, odom.angular_velocity,

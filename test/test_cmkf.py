@@ -8,13 +8,14 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.cmkf.axis import AxisCmkf, paper_interval
+from imu_noise_id.core.cmkf.config import CmkfConfig
 from imu_noise_id.core.cmkf.paper import (
     PaperCmkf,
     TurntableConfig,
     simulate_turntable,
     turntable_monte_carlo,
 )
-from imu_noise_id.core.cmkf.robot import RobotCmkf, RobotCmkfConfig
+from imu_noise_id.core.cmkf.robot import RobotCmkf
 from imu_noise_id.core.cmkf.stacked import cov_z_model
 from imu_noise_id.core.simulation.robot import replay_arrays, simulate_robot
 
@@ -85,7 +86,7 @@ def test_planar_robot_filter_equals_paper_filter():
     cfg = TurntableConfig()
     run = simulate_turntable(cfg, 200.0, np.random.default_rng(5))
     pf = _paper_filter(cfg, run.z[0], pd_check="per_axis")
-    rc = RobotCmkf(RobotCmkfConfig(
+    rc = RobotCmkf(CmkfConfig(
         measurement="pose_twist", accel_bias_tau=cfg.tau, accel_bias_sigma=cfg.sigma_ss, s_v0=cfg.S_v0,
         min_samples=1, position_noise_std=math.sqrt(cfg.R_diag[0]), velocity_noise_std=math.sqrt(cfg.R_diag[1]),
     ))
@@ -132,7 +133,7 @@ def robot_run():
 def test_robot_recovers_biases_and_S_v(robot_run):
     """Moving robot (turning, accelerating), IMU rotated (y up), IMU 100 Hz, odometry twist 10 Hz."""
     run = robot_run
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, s_v0=2e-4))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, s_v0=2e-4))
     est = replay_arrays(f, run)
     e = est[-1]
     assert e.status == "tracking" and e.observed
@@ -155,7 +156,7 @@ def test_robot_pose_twist_mode_runs(robot_run):
     innovations consistent (the displacement is accumulated in the odometry frame, so gyro errors do not multiply
     the distance travelled)."""
     run = robot_run
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement="pose_twist", s_v0=2e-4))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement="pose_twist", s_v0=2e-4))
     est = replay_arrays(f, run)
     e = est[-1]
     assert e.nis_accel_dof == 6
@@ -183,7 +184,7 @@ def _feed(f: RobotCmkf, run, imu_idx=None, odom_idx=None) -> None:
 
 def test_odometry_gap_restarts_the_stacked_chain():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     keep = [j for j in range(len(run.odom_t)) if not (15.0 < run.odom_t[j] < 18.0)]
     _feed(f, run, odom_idx=keep)
     e = f.estimate()
@@ -196,7 +197,7 @@ def test_odometry_gap_restarts_the_stacked_chain():
 
 def test_out_of_order_duplicate_and_nan_messages_are_dropped():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     _feed(f, run, imu_idx=range(1000), odom_idx=range(100))
     before = f.estimate()
     assert not f.process_imu(run.imu_t[999], run.gyro[999], run.accel[999])  # duplicate stamp
@@ -218,7 +219,7 @@ def test_out_of_order_duplicate_and_nan_messages_are_dropped():
 
 def test_odometry_only_estimates_nothing():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig())
+    f = RobotCmkf(CmkfConfig())
     _feed(f, run, imu_idx=[])
     e = f.estimate()
     assert e.status == "no_imu" and not e.observed
@@ -228,7 +229,7 @@ def test_odometry_only_estimates_nothing():
 
 def test_imu_only_propagates_with_growing_covariance():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     _feed(f, run, imu_idx=range(100), odom_idx=[])
     e = f.estimate()
     assert e.status == "imu_only" and not e.observed
@@ -245,11 +246,11 @@ def test_imu_only_propagates_with_growing_covariance():
 
 def test_bad_configuration_is_rejected():
     with pytest.raises(ValueError, match="measurement"):
-        RobotCmkf(RobotCmkfConfig(measurement="gps"))
+        RobotCmkf(CmkfConfig(measurement="gps"))
     with pytest.raises(ValueError, match="s_v0"):
-        RobotCmkf(RobotCmkfConfig(s_v0=-1.0))
+        RobotCmkf(CmkfConfig(s_v0=-1.0))
     with pytest.raises(ValueError, match="quaternion"):
-        RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=(0, 0, 0, 0)))
+        RobotCmkf(CmkfConfig(imu_rotation_xyzw=(0, 0, 0, 0)))
     with pytest.raises(ValueError, match="initial S_v"):
         AxisCmkf(2, 0.0)
 
@@ -319,7 +320,7 @@ def test_plain_float_velocity_filter_equals_batched_filter(robot_run):
 
 def test_late_odometry_and_imu_gap():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     _feed(f, run, imu_idx=range(1000), odom_idx=range(99))  # IMU to 10.0 s, odometry to 9.9 s
     # odometry 10.0 s arrives after the IMU sample at 10.0 s (equal stamp: normal); one at 9.98 s is late
     j = 99
@@ -351,7 +352,7 @@ def test_gravity_from_imu_orientation_equals_odometry_orientation_on_flat_ground
     q_imu = [rot.multiply((0.0, 0.0, np.sin(p / 2), np.cos(p / 2)), run.imu_rotation_xyzw) for p in psi]
     ests = {}
     for source in ("odometry", "imu"):
-        f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, gravity_source=source))
+        f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, gravity_source=source))
         events = sorted([(t, 0, i) for i, t in enumerate(run.imu_t)] + [(t, 1, j) for j, t in enumerate(run.odom_t)])
         for _, kind, i in events:
             if kind == 0:
@@ -367,7 +368,7 @@ def test_gravity_from_imu_orientation_equals_odometry_orientation_on_flat_ground
 
 def test_malformed_odometry_is_dropped_not_raised():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     _feed(f, run, imu_idx=range(100), odom_idx=range(10))
     assert not f.process_odometry(1.05, orientation_xyzw=[0, 0, 0, 0], linear_velocity=[0.5, 0, 0])
     assert not f.process_odometry(1.06, orientation_xyzw=[0, 0, 0, 1], linear_velocity=[0.5, 0])
@@ -405,7 +406,7 @@ def test_late_duplicated_and_zero_interval_odometry_never_raises(measurement):
     stamp of the last update: the filter must neither raise (it raised LinAlgError / ZeroDivisionError) nor
     produce non-finite estimates, and must count what it dropped."""
     run = simulate_robot(10.0, np.random.default_rng(2))
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement))
     for i in range(len(run.imu_t)):
         f.process_imu(run.imu_t[i], run.gyro[i], run.accel[i])
         if i % 10 == 9:
@@ -427,7 +428,7 @@ def test_late_odometry_within_tolerance_equals_in_order_processing(measurement):
     """Odometry arriving up to 30 ms after IMU samples with later stamps is applied at its own stamp (rewind to the
     last update, replay of the buffered IMU samples): the result equals processing the same stream in order."""
     run = simulate_robot(20.0, np.random.default_rng(4))
-    cfg = RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement)
+    cfg = CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement)
     in_order, late = RobotCmkf(cfg), RobotCmkf(cfg)
     odom_t = run.odom_t + 0.0037  # between IMU samples
     for f, delay in ((in_order, 0.0), (late, 0.03)):

@@ -42,6 +42,19 @@ def test_yaml_defaults_match_the_declared_parameters():
     OnlineConfig(values)  # the shipped file is valid
 
 
+def test_the_cmkf_defaults_are_written_once():
+    """The node's cmkf.* and nis.window parameters and the options of imu-noise-id cmkf default to CmkfConfig."""
+    from imu_noise_id.cli import build_parser
+    from imu_noise_id.core.cmkf.config import CmkfConfig
+    from imu_noise_id.pipelines.online_config import cmkf_config
+
+    assert cmkf_config(OnlineConfig()) == CmkfConfig()
+    args = build_parser().parse_args(["cmkf", "bag"])
+    for name in ("measurement", "velocity_noise_std", "position_noise_std", "angular_velocity_noise_std",
+                 "accel_bias_tau", "accel_bias_sigma", "s_v0", "gyro_bias_tau", "gyro_bias_sigma"):
+        assert getattr(args, name) == getattr(CmkfConfig(), name), name
+
+
 @pytest.mark.parametrize(
     ("name", "value", "fragment"),
     [

@@ -13,7 +13,8 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..core.axes import ImuSeries, OdometrySeries
-from ..core.cmkf.robot import CmkfEstimate, RobotCmkf, RobotCmkfConfig
+from ..core.cmkf.config import CmkfConfig
+from ..core.cmkf.robot import CmkfEstimate, RobotCmkf
 from ..core.diagnostics.consistency import nis_bounds
 
 #: Per-axis fields of :class:`CmkfEstimate` recorded over time.
@@ -40,7 +41,7 @@ class CmkfReplayResult:
     nis_gyro: np.ndarray
     status: list[str]
     final: CmkfEstimate
-    config: RobotCmkfConfig
+    config: CmkfConfig
     info: dict[str, object] = field(default_factory=dict)
 
 
@@ -51,7 +52,7 @@ def _rate(t: np.ndarray) -> float:
 def replay(
     imu: ImuSeries,
     odom: OdometrySeries | None,
-    config: RobotCmkfConfig | None = None,
+    config: CmkfConfig | None = None,
     imu_orientation_xyzw: np.ndarray | None = None,
 ) -> CmkfReplayResult:
     """Run :class:`RobotCmkf` over ``imu`` and ``odom`` (None: IMU only, nothing observable).
@@ -63,7 +64,7 @@ def replay(
     ``config.gravity_source == "imu"``; a NaN row (not provided, see :class:`~imu_noise_id.core.axes.ImuSeries`)
     is passed as None, so the filter keeps the last orientation it was given.
     """
-    config = config or RobotCmkfConfig()
+    config = config or CmkfConfig()
     filt = RobotCmkf(config)
     ti = np.asarray(imu.t, dtype=float)
     imu_rows = np.column_stack([imu.gyro, imu.accel]).tolist()

@@ -39,15 +39,14 @@ from typing import Any
 import numpy as np
 
 from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES
-from ..core.cmkf.robot import RobotCmkf, RobotCmkfConfig
+from ..core.cmkf.robot import RobotCmkf
 from ..core.diagnostics.consistency import nis_bounds
-from ..core.errors import InputError
 from ..core.hypotheses.axis import AxisIdentifier
 from ..core.hypotheses.config import hypothesis_set_factory
 from ..core.white_noise import FirstDifferences
 from ..resources import read_hypotheses_file
 from .online_blocks import StampChecker, StationarityDetector, WindowStats
-from .online_config import OnlineConfig
+from .online_config import OnlineConfig, cmkf_config
 
 # Diagnostic levels, equal to diagnostic_msgs/DiagnosticStatus.{OK, WARN, ERROR, STALE}.
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
@@ -244,30 +243,6 @@ class OnlineIdentifier:
             checker.gap_factor = config.gap_factor
             checker.backward_reset_count = config.backward_reset_count
 
-    def _cmkf_config(self) -> RobotCmkfConfig:
-        cfg = self.config
-        config = RobotCmkfConfig(
-            imu_rotation_xyzw=tuple(cfg.cmkf_imu_rotation_xyzw),
-            measurement=cfg.cmkf_measurement,
-            gravity_source=cfg.cmkf_gravity_source,
-            accel_bias_tau=cfg.cmkf_accel_bias_tau,
-            accel_bias_sigma=cfg.cmkf_accel_bias_sigma,
-            s_v0=cfg.cmkf_s_v0,
-            gyro_bias_tau=cfg.cmkf_gyro_bias_tau,
-            gyro_bias_sigma=cfg.cmkf_gyro_bias_sigma,
-            s_g0=cfg.cmkf_s_g0,
-            velocity_noise_std=cfg.cmkf_velocity_noise_std or None,
-            angular_velocity_noise_std=cfg.cmkf_angular_velocity_noise_std or None,
-            max_odom_gap=cfg.cmkf_max_odom_gap,
-            max_imu_gap=cfg.cmkf_max_imu_gap,
-            nis_window=cfg.nis_window,
-        )
-        try:
-            config.validate()
-        except ValueError as exc:
-            raise InputError(f"parameter cmkf.*: {exc}") from None
-        return config
-
     def _load_hypotheses(self) -> dict[str, Any] | None:
         """The hypothesis-set mapping (validated for both sensors now, so a bad file fails at start-up)."""
         if not self.config.hypotheses_enabled:
@@ -281,7 +256,7 @@ class OnlineIdentifier:
         self.stationarity = StationarityDetector(self.config)
         self.noise = FirstDifferences(6)
         self._guard: deque[tuple[float, np.ndarray]] = deque()
-        self.cmkf = RobotCmkf(self._cmkf_config())
+        self.cmkf = RobotCmkf(cmkf_config(self.config))
         self._cmkf_est = self.cmkf.estimate()
         self._cmkf_fed_t = -math.inf
         self._cmkf_imu: deque[tuple[float, Any, Any, Any]] = deque()
@@ -516,7 +491,7 @@ class OnlineIdentifier:
             self.cmkf_errors += 1
             self._count("cmkf_error")
             self._event("cmkf_error", f"CMKF failed ({type(exc).__name__}: {exc}): restarting it")
-            self.cmkf = RobotCmkf(self._cmkf_config())
+            self.cmkf = RobotCmkf(cmkf_config(self.config))
             self._cmkf_fed_t = -math.inf
             updated = True
         if updated:
