@@ -539,3 +539,59 @@ def test_one_robot_simulator_with_two_motion_profiles():
     assert np.max(np.abs(drifting.accel - run.accel)) > 0.01
     with pytest.raises(ValueError, match="noise_order"):
         simulate_robot(1.0, np.random.default_rng(0), sensors=RobotSensors(noise_order=("gyro", "gyro")))
+
+
+def _searchsorted_order(ti: np.ndarray, to: np.ndarray) -> list[tuple[bool, int]]:
+    """The replay's order before the stamp merger: the IMU samples up to each odometry stamp, then that message."""
+    cut = np.searchsorted(ti, to, side="right")
+    order, i = [], 0
+    for j in range(to.size + 1):
+        stop = int(cut[j]) if j < to.size else ti.size
+        order += [(False, k) for k in range(i, stop)]
+        i = max(i, stop)
+        if j < to.size:
+            order.append((True, j))
+    return order
+
+
+def test_stamp_merge_equals_the_searchsorted_order():
+    """Recorded streams: stamp_order is the order the replay had (IMU first on equal stamps), also with odometry
+    before or after all the IMU samples and with either stream empty."""
+    from imu_noise_id.core.cmkf.merge import stamp_order
+
+    rng = np.random.default_rng(21)
+    for _ in range(20):
+        ti = np.cumsum(rng.choice([0.01, 0.02], size=rng.integers(0, 60)))
+        to = np.round(np.sort(rng.uniform(-0.1, 0.7, size=rng.integers(0, 20))), 2)  # ties with IMU stamps
+        assert list(stamp_order(ti, to)) == _searchsorted_order(ti, to)
+
+
+def test_live_merge_restores_stamp_order_within_its_latency():
+    """Odometry delivered up to 40 ms after IMU samples stamped later: released in the recorded order, counted
+    LATE where it was put back; 80 ms late with a 50 ms allowance: TOO_LATE."""
+    from imu_noise_id.core.cmkf.merge import LATE, TOO_LATE, StampMerger
+
+    rng = np.random.default_rng(22)
+    ti = np.arange(1, 401) * 0.005
+    to = np.arange(1, 41) * 0.05 + 0.0013
+    for delay, allowance in ((0.04 * rng.random(to.size), 0.05), (np.full(to.size, 0.08), 0.05)):
+        arrival = sorted([(t, 0, i) for i, t in enumerate(ti)] + [(t + d, 1, j) for j, (t, d) in
+                                                                  enumerate(zip(to, delay, strict=True))])
+        merger = StampMerger(allowance)
+        released, newest_imu, expected_late = [], -1.0, 0
+        for _, kind, k in arrival:
+            if kind:
+                expected_late += newest_imu > to[k]
+                merger.push_odometry(to[k], k)
+            else:
+                newest_imu = ti[k]
+                merger.push_imu(ti[k], k)
+            released += list(merger.ready())
+        released += list(merger.flush())
+        orders = [order for _, is_odometry, _, order in released if is_odometry]
+        if allowance > delay.max():
+            assert [(o, k) for _, o, k, _ in released] == _searchsorted_order(ti, to)
+            assert merger.late == orders.count(LATE) == expected_late > 0 and merger.too_late == 0
+        else:
+            assert merger.too_late == orders.count(TOO_LATE) >= to.size - 2  # the last ones wait in the queue
+    assert merger.pending == 0

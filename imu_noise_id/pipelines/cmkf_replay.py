@@ -1,7 +1,8 @@
 """Offline replay of the online CMKF (:class:`~imu_noise_id.core.cmkf.robot.RobotCmkf`) over recorded arrays.
 
-The messages are fed one at a time in stamp order (IMU before odometry on equal stamps), exactly as the ROS node
-does, as fast as the filter runs; the estimate is recorded after every odometry message.
+The messages are fed one at a time in stamp order (IMU before odometry on equal stamps; the merge of
+:func:`~imu_noise_id.core.cmkf.merge.stamp_order`, the node's), as fast as the filter runs; the estimate is
+recorded after every odometry message.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 
 from ..core.axes import ImuSeries, OdometrySeries
 from ..core.cmkf.config import CmkfConfig
+from ..core.cmkf.merge import stamp_order
 from ..core.cmkf.robot import CmkfEstimate, RobotCmkf
 from ..core.diagnostics.consistency import nis_bounds
 
@@ -74,8 +76,6 @@ def replay(
         finite = np.isfinite(q).all(axis=1)
         quats = [row if ok else None for row, ok in zip(q.tolist(), finite.tolist(), strict=True)]
     to = np.asarray(odom.t, dtype=float) if odom is not None else np.zeros(0)
-    # Stamp order with IMU first on ties: indices of the IMU samples to process before each odometry message.
-    cut = np.searchsorted(ti, to, side="right")
     fields = [] if odom is None else [
         ("position", odom.position), ("orientation_xyzw", odom.orientation_xyzw),
         ("linear_velocity", odom.linear_velocity), ("angular_velocity", odom.angular_velocity),
@@ -84,18 +84,14 @@ def replay(
     rec = {name: [] for name in SERIES_FIELDS}
     nis_a, nis_g, status = [], [], []
     t_start = time.perf_counter()
-    i = 0
     ni = ti.size
     tl = ti.tolist()
-    for j in range(to.size + 1):
-        stop = int(cut[j]) if j < to.size else ni
-        while i < stop:
-            row = imu_rows[i]
-            filt.process_imu(tl[i], row[0:3], row[3:6], None if quats is None else quats[i])
-            i += 1
-        if j == to.size:
-            break
-        updated = filt.process_odometry(to[j], **{key: None if arr is None else arr[j] for key, arr in fields})
+    for is_odometry, k in stamp_order(ti, to):
+        if not is_odometry:
+            row = imu_rows[k]
+            filt.process_imu(tl[k], row[0:3], row[3:6], None if quats is None else quats[k])
+            continue
+        updated = filt.process_odometry(to[k], **{key: None if arr is None else arr[k] for key, arr in fields})
         est = filt.estimate()
         for name in SERIES_FIELDS:
             rec[name].append(getattr(est, name))

@@ -13,7 +13,8 @@ What happens per IMU sample
    the stationarity detection; a sustained jump of time backwards (a restarted source, a looped bag) restarts
    the whole identification.
 2. The CMKF (:class:`~imu_noise_id.core.cmkf.robot.RobotCmkf`, paper 004 on a robot) receives the sample after
-   ``cmkf.input_latency`` seconds, merged in stamp order with the odometry (two topics, two latencies).
+   ``cmkf.input_latency`` seconds, merged in stamp order with the odometry (two topics, two latencies) by a
+   :class:`~imu_noise_id.core.cmkf.merge.StampMerger`.
 3. Stationarity with hysteresis (:class:`StationarityDetector`): the odometry twist (when fresh) and
    exponentially weighted IMU statistics must both say "still" for ``stationary.enter_delay`` seconds; any
    sign of motion ends the stationary state at once.
@@ -39,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES
+from ..core.cmkf.merge import TOO_LATE, StampMerger
 from ..core.cmkf.robot import RobotCmkf
 from ..core.diagnostics.consistency import nis_bounds
 from ..core.hypotheses.axis import AxisIdentifier
@@ -239,6 +241,7 @@ class OnlineIdentifier:
         """Apply a new (validated) configuration at runtime; the estimates are kept."""
         self.config = config
         self.stationarity.config = config
+        self._cmkf_input.latency = config.cmkf_input_latency
         for checker in (self.imu_stamps, self.odom_stamps, self.temp_stamps):
             checker.gap_factor = config.gap_factor
             checker.backward_reset_count = config.backward_reset_count
@@ -258,9 +261,7 @@ class OnlineIdentifier:
         self._guard: deque[tuple[float, np.ndarray]] = deque()
         self.cmkf = RobotCmkf(cmkf_config(self.config))
         self._cmkf_est = self.cmkf.estimate()
-        self._cmkf_fed_t = -math.inf
-        self._cmkf_imu: deque[tuple[float, Any, Any, Any]] = deque()
-        self._cmkf_odom: deque[tuple[float, dict[str, Any]]] = deque()
+        self._cmkf_input: StampMerger[tuple | dict[str, Any]] = StampMerger(self.config.cmkf_input_latency)
         self.gyro_bias = np.zeros(3)
         self.accel_bias = np.zeros(3)
         self.last_imu_t = math.nan
@@ -358,8 +359,8 @@ class OnlineIdentifier:
         self.last_imu_t = t
         if self.config.cmkf_gravity_source != "imu":
             orientation_xyzw = None
-        self._cmkf_imu.append((t, gyro, accel, orientation_xyzw))
-        self._feed_cmkf(t - self.config.cmkf_input_latency)
+        self._cmkf_input.push_imu(t, (gyro, accel, orientation_xyzw))
+        self._feed_cmkf()
         was_stationary = self.stationarity.stationary
         stationary = self.stationarity.update_imu(t, sample, self.gyro_bias)
         if stationary != was_stationary:
@@ -448,51 +449,35 @@ class OnlineIdentifier:
         self.stationarity.update_odometry(
             t, math.sqrt(float(v[:3] @ v[:3])), math.sqrt(float(v[3:] @ v[3:]))
         )
-        self._cmkf_odom.append((t, dict(
+        self._cmkf_input.push_odometry(t, dict(
             position=position, orientation_xyzw=orientation_xyzw, linear_velocity=v[:3], angular_velocity=v[3:],
             pose_cov=None if pose_covariance is None else np.array(pose_covariance, dtype=float),
             twist_cov=None if twist_covariance is None else np.array(twist_covariance, dtype=float),
-        )))
-        imu_alive = math.isfinite(self.last_imu_t) and abs(t - self.last_imu_t) < 1.0
-        self._feed_cmkf((self.last_imu_t if imu_alive else t) - self.config.cmkf_input_latency)
+        ))
+        self._feed_cmkf()
         return True
 
-    def _feed_cmkf(self, horizon: float) -> None:
-        """Feed the CMKF, in stamp order, every queued IMU and odometry message stamped at or before ``horizon``.
-
-        IMU and odometry arrive on different topics with different latencies; the CMKF needs them in stamp order
-        (an odometry stamp behind its IMU-propagated state gives it a zero-length interval). Holding the IMU
-        samples ``cmkf.input_latency`` seconds restores the order for odometry up to that late.
-        """
-        imu, odom = self._cmkf_imu, self._cmkf_odom
+    def _feed_cmkf(self) -> None:
+        """Feed the CMKF the IMU and odometry messages the stamp merger releases (``cmkf.input_latency`` behind
+        the newest IMU stamp, in stamp order: IMU and odometry arrive on two topics with different latencies)."""
         updated = False
         try:
-            while True:
-                t_imu = imu[0][0] if imu else math.inf
-                t_odom = odom[0][0] if odom else math.inf
-                if min(t_imu, t_odom) > horizon:
-                    break
-                if t_imu <= t_odom:
-                    t, gyro, accel, orientation = imu.popleft()
-                    self.cmkf.process_imu(t, gyro, accel, orientation)
-                    self._cmkf_fed_t = t
+            for t, is_odometry, item, order in self._cmkf_input.ready():
+                if not is_odometry:
+                    self.cmkf.process_imu(t, *item)
+                elif order == TOO_LATE:
+                    # Later than cmkf.input_latency: the CMKF has propagated past it: dropped here and counted.
+                    self.odom_too_late += 1
+                    self._count("odom_too_late")
+                    self._event("odom_too_late", f"odom: message at t = {t:.6f} s arrived more than "
+                                "cmkf.input_latency after the IMU: not used by the CMKF")
                 else:
-                    t, kwargs = odom.popleft()
-                    if t < self._cmkf_fed_t:
-                        # Later than cmkf.input_latency: the CMKF has propagated past it (its own late path
-                        # raised on such input), so it is dropped here and counted.
-                        self.odom_too_late += 1
-                        self._count("odom_too_late")
-                        self._event("odom_too_late", f"odom: message at t = {t:.6f} s arrived more than "
-                                    "cmkf.input_latency after the IMU: not used by the CMKF")
-                        continue
-                    updated |= self.cmkf.process_odometry(t, **kwargs)
+                    updated |= self.cmkf.process_odometry(t, **item)
         except (np.linalg.LinAlgError, ArithmeticError, ValueError) as exc:
             self.cmkf_errors += 1
             self._count("cmkf_error")
             self._event("cmkf_error", f"CMKF failed ({type(exc).__name__}: {exc}): restarting it")
             self.cmkf = RobotCmkf(cmkf_config(self.config))
-            self._cmkf_fed_t = -math.inf
             updated = True
         if updated:
             est = self.cmkf.estimate()

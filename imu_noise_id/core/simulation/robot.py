@@ -26,6 +26,7 @@ from typing import Protocol
 import numpy as np
 
 from ..cmkf import rotation as rot
+from ..cmkf.merge import stamp_order
 from ..noise.components import RW
 from .static import STANDARD_GRAVITY
 
@@ -237,18 +238,14 @@ def simulate_robot(
 def replay_arrays(filt: object, run: RobotRun) -> list:
     """Feed a :class:`RobotRun` to a streaming filter in stamp order; returns the estimate after each odometry."""
     out = []
-    i = j = 0
-    ni, nj = len(run.imu_t), len(run.odom_t)
-    while i < ni or j < nj:
-        if j >= nj or (i < ni and run.imu_t[i] <= run.odom_t[j]):
-            filt.process_imu(run.imu_t[i], run.gyro[i], run.accel[i])
-            i += 1
-        else:
-            filt.process_odometry(
-                run.odom_t[j], position=run.position[j], orientation_xyzw=run.orientation_xyzw[j],
-                linear_velocity=run.linear_velocity[j], angular_velocity=run.angular_velocity[j],
-                pose_cov=run.pose_cov[j], twist_cov=run.twist_cov[j],
-            )
-            out.append(filt.estimate())
-            j += 1
+    for is_odometry, k in stamp_order(run.imu_t, run.odom_t):
+        if not is_odometry:
+            filt.process_imu(run.imu_t[k], run.gyro[k], run.accel[k])
+            continue
+        filt.process_odometry(
+            run.odom_t[k], position=run.position[k], orientation_xyzw=run.orientation_xyzw[k],
+            linear_velocity=run.linear_velocity[k], angular_velocity=run.angular_velocity[k],
+            pose_cov=run.pose_cov[k], twist_cov=run.twist_cov[k],
+        )
+        out.append(filt.estimate())
     return out
