@@ -19,6 +19,7 @@ import numpy as np
 from imu_noise_id.core.axes import ImuSeries, OdometrySeries
 from imu_noise_id.core.cmkf import rotation as rot
 from imu_noise_id.core.cmkf.config import CmkfConfig
+from imu_noise_id.core.cmkf.merge import stamp_order
 from imu_noise_id.core.cmkf.robot import RobotCmkf
 from imu_noise_id.core.simulation.robot import simulate_robot
 from imu_noise_id.pipelines.cmkf_replay import replay
@@ -51,19 +52,16 @@ def latency(imu: ImuSeries, odom: OdometrySeries, cfg: CmkfConfig) -> None:
     f = RobotCmkf(cfg)
     ti, to, te = [], [], []
     imu_rows = [(float(t), tuple(g), tuple(a)) for t, g, a in zip(imu.t, imu.gyro, imu.accel, strict=True)]
-    cut = np.searchsorted(imu.t, odom.t, side="right")
-    i = 0
     clock = time.perf_counter
-    for j in range(len(odom)):
-        while i < cut[j]:
-            a = clock()
-            f.process_imu(*imu_rows[i])
-            ti.append(clock() - a)
-            i += 1
+    for is_odometry, k in stamp_order(imu.t, odom.t):
         a = clock()
-        f.process_odometry(odom.t[j], orientation_xyzw=odom.orientation_xyzw[j],
-                           linear_velocity=odom.linear_velocity[j], angular_velocity=odom.angular_velocity[j],
-                           twist_cov=odom.twist_covariance[j])
+        if not is_odometry:
+            f.process_imu(*imu_rows[k])
+            ti.append(clock() - a)
+            continue
+        f.process_odometry(odom.t[k], orientation_xyzw=odom.orientation_xyzw[k],
+                           linear_velocity=odom.linear_velocity[k], angular_velocity=odom.angular_velocity[k],
+                           twist_cov=odom.twist_covariance[k])
         b = clock()
         f.estimate()
         to.append(b - a)

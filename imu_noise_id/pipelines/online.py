@@ -13,8 +13,8 @@ What happens per IMU sample
    the stationarity detection; a sustained jump of time backwards (a restarted source, a looped bag) restarts
    the whole identification.
 2. The CMKF (:class:`~imu_noise_id.core.cmkf.robot.RobotCmkf`, paper 004 on a robot) receives the sample after
-   ``cmkf.input_latency`` seconds, merged in stamp order with the odometry (two topics, two latencies) by a
-   :class:`~imu_noise_id.core.cmkf.merge.StampMerger`.
+   ``cmkf.input_latency`` seconds, merged in stamp order with the odometry (two topics, two latencies) by
+   :class:`~imu_noise_id.core.cmkf.stream.CmkfStream`.
 3. Stationarity with hysteresis (:class:`StationarityDetector`): the odometry twist (when fresh) and
    exponentially weighted IMU statistics must both say "still" for ``stationary.enter_delay`` seconds; any
    sign of motion ends the stationary state at once.
@@ -34,14 +34,16 @@ import dataclasses
 import math
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES
-from ..core.cmkf.merge import TOO_LATE, StampMerger
+from ..core.cmkf.merge import TOO_LATE
 from ..core.cmkf.robot import RobotCmkf
+from ..core.cmkf.stream import CmkfStream
 from ..core.diagnostics.consistency import nis_bounds
 from ..core.hypotheses.axis import AxisIdentifier
 from ..core.hypotheses.config import hypothesis_set_factory
@@ -241,7 +243,7 @@ class OnlineIdentifier:
         """Apply a new (validated) configuration at runtime; the estimates are kept."""
         self.config = config
         self.stationarity.config = config
-        self._cmkf_input.latency = config.cmkf_input_latency
+        self._cmkf.merger.latency = config.cmkf_input_latency
         for checker in (self.imu_stamps, self.odom_stamps, self.temp_stamps):
             checker.gap_factor = config.gap_factor
             checker.backward_reset_count = config.backward_reset_count
@@ -259,9 +261,8 @@ class OnlineIdentifier:
         self.stationarity = StationarityDetector(self.config)
         self.noise = FirstDifferences(6)
         self._guard: deque[tuple[float, np.ndarray]] = deque()
-        self.cmkf = RobotCmkf(cmkf_config(self.config))
-        self._cmkf_est = self.cmkf.estimate()
-        self._cmkf_input: StampMerger[tuple | dict[str, Any]] = StampMerger(self.config.cmkf_input_latency)
+        self._cmkf = CmkfStream(cmkf_config(self.config), on_odometry=self._on_cmkf_odometry)
+        self._cmkf_est = self._cmkf.estimate()
         self.gyro_bias = np.zeros(3)
         self.accel_bias = np.zeros(3)
         self.last_imu_t = math.nan
@@ -359,8 +360,7 @@ class OnlineIdentifier:
         self.last_imu_t = t
         if self.config.cmkf_gravity_source != "imu":
             orientation_xyzw = None
-        self._cmkf_input.push_imu(t, (gyro, accel, orientation_xyzw))
-        self._feed_cmkf()
+        self._feed_cmkf(self._cmkf.process_imu, t, gyro, accel, orientation_xyzw)
         was_stationary = self.stationarity.stationary
         stationary = self.stationarity.update_imu(t, sample, self.gyro_bias)
         if stationary != was_stationary:
@@ -449,35 +449,29 @@ class OnlineIdentifier:
         self.stationarity.update_odometry(
             t, math.sqrt(float(v[:3] @ v[:3])), math.sqrt(float(v[3:] @ v[3:]))
         )
-        self._cmkf_input.push_odometry(t, dict(
-            position=position, orientation_xyzw=orientation_xyzw, linear_velocity=v[:3], angular_velocity=v[3:],
+        self._feed_cmkf(
+            self._cmkf.process_odometry, t, position=position, orientation_xyzw=orientation_xyzw,
+            linear_velocity=v[:3], angular_velocity=v[3:],
             pose_cov=None if pose_covariance is None else np.array(pose_covariance, dtype=float),
             twist_cov=None if twist_covariance is None else np.array(twist_covariance, dtype=float),
-        ))
-        self._feed_cmkf()
+        )
         return True
 
-    def _feed_cmkf(self) -> None:
-        """Feed the CMKF the IMU and odometry messages the stamp merger releases (``cmkf.input_latency`` behind
-        the newest IMU stamp, in stamp order: IMU and odometry arrive on two topics with different latencies)."""
-        updated = False
+    @property
+    def cmkf(self) -> RobotCmkf:
+        """The CMKF (fed through a stamp merger, ``cmkf.input_latency`` behind the newest IMU stamp)."""
+        return self._cmkf.cmkf
+
+    def _feed_cmkf(self, process: Callable[..., bool], *args: Any, **kwargs: Any) -> None:
+        """One message to the CMKF's stamp merger, which passes on what is due (IMU and odometry arrive on two
+        topics with different latencies); any error from the filter restarts it and is reported."""
         try:
-            for t, is_odometry, item, order in self._cmkf_input.ready():
-                if not is_odometry:
-                    self.cmkf.process_imu(t, *item)
-                elif order == TOO_LATE:
-                    # Later than cmkf.input_latency: the CMKF has propagated past it: dropped here and counted.
-                    self.odom_too_late += 1
-                    self._count("odom_too_late")
-                    self._event("odom_too_late", f"odom: message at t = {t:.6f} s arrived more than "
-                                "cmkf.input_latency after the IMU: not used by the CMKF")
-                else:
-                    updated |= self.cmkf.process_odometry(t, **item)
+            updated = process(*args, **kwargs)
         except (np.linalg.LinAlgError, ArithmeticError, ValueError) as exc:
             self.cmkf_errors += 1
             self._count("cmkf_error")
             self._event("cmkf_error", f"CMKF failed ({type(exc).__name__}: {exc}): restarting it")
-            self.cmkf = RobotCmkf(cmkf_config(self.config))
+            self._cmkf.restart()
             updated = True
         if updated:
             est = self.cmkf.estimate()
@@ -486,6 +480,13 @@ class OnlineIdentifier:
                 self.gyro_bias = est.gyro_bias
                 self.accel_bias = est.accel_bias
             self._variance_cache = None
+
+    def _on_cmkf_odometry(self, t: float, order: int) -> None:
+        if order == TOO_LATE:  # the CMKF has propagated past it: not used
+            self.odom_too_late += 1
+            self._count("odom_too_late")
+            self._event("odom_too_late", f"odom: message at t = {t:.6f} s arrived more than "
+                        "cmkf.input_latency after the IMU: not used by the CMKF")
 
     def process_temperature(self, t: float, celsius: float, frame_id: str = "",
                             wall_time: float | None = None) -> bool:

@@ -139,6 +139,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec("cmkf.angular_velocity_noise_std", 0.0, "odometry angular-velocity noise; 0: from the message "
               f"covariance ({_CMKF.default_angular_velocity_noise_std:g} rad/s when it is unknown)", "rad/s", 0.0,
               100.0, runtime=False),
+    # CmkfConfig.late_odom_tolerance; the node's own default: a ROS graph's two topics differ by more than 0.05 s
     ParamSpec("cmkf.input_latency", 0.1, "IMU samples wait this long before the CMKF so that odometry up to "
               "this much later (in header time) is still processed in stamp order", "s", 0.0, 5.0),
     ParamSpec("cmkf.max_odom_gap", _CMKF.max_odom_gap, "an odometry gap longer than this restarts the S_v "
@@ -205,7 +206,8 @@ class OnlineConfig:
 
 
 def cmkf_config(config: OnlineConfig) -> CmkfConfig:
-    """The CMKF's parameters from the node's ``cmkf.*`` and ``nis.window`` (0 noise std: from the messages).
+    """The CMKF's parameters from the node's ``cmkf.*`` and ``nis.window`` (0 noise std: from the messages;
+    ``cmkf.input_latency`` is the stamp merger's ``late_odom_tolerance``).
 
     Raises
     ------
@@ -226,6 +228,7 @@ def cmkf_config(config: OnlineConfig) -> CmkfConfig:
         angular_velocity_noise_std=config.cmkf_angular_velocity_noise_std or None,
         max_odom_gap=config.cmkf_max_odom_gap,
         max_imu_gap=config.cmkf_max_imu_gap,
+        late_odom_tolerance=config.cmkf_input_latency,
         nis_window=config.nis_window,
     )
     try:

@@ -38,8 +38,9 @@ class CmkfConfig:
         roll/pitch).
     max_odom_gap, max_imu_gap : an odometry gap longer than this restarts the stacked estimator's chain; an IMU
         gap longer than this re-initialises position and velocity [s].
-    late_odom_tolerance : an odometry message up to this much older than the IMU-propagated state is applied at
-        its own stamp, older ones are dropped [s].
+    late_odom_tolerance : latency allowance of the stamp merger (:class:`~.stream.CmkfStream`): messages wait this
+        long behind the newest IMU stamp, so odometry up to this much later than the IMU samples (header time) is
+        still processed in stamp order [s] (the node's ``cmkf.input_latency``, whose default is 0.1 s).
     min_odom_interval : odometry closer than this to the last update is dropped (degenerate interval) [s].
     pd_check : ``"per_axis"`` or ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used.
     nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean`` (and the node's ``nis.window``).

@@ -25,8 +25,10 @@ from typing import Protocol
 
 import numpy as np
 
+from ..axes import ImuSeries, OdometrySeries
 from ..cmkf import rotation as rot
-from ..cmkf.merge import stamp_order
+from ..cmkf.robot import CmkfEstimate, RobotCmkf
+from ..cmkf.stream import feed_recording
 from ..noise.components import RW
 from .static import STANDARD_GRAVITY
 
@@ -235,17 +237,9 @@ def simulate_robot(
     )
 
 
-def replay_arrays(filt: object, run: RobotRun) -> list:
-    """Feed a :class:`RobotRun` to a streaming filter in stamp order; returns the estimate after each odometry."""
-    out = []
-    for is_odometry, k in stamp_order(run.imu_t, run.odom_t):
-        if not is_odometry:
-            filt.process_imu(run.imu_t[k], run.gyro[k], run.accel[k])
-            continue
-        filt.process_odometry(
-            run.odom_t[k], position=run.position[k], orientation_xyzw=run.orientation_xyzw[k],
-            linear_velocity=run.linear_velocity[k], angular_velocity=run.angular_velocity[k],
-            pose_cov=run.pose_cov[k], twist_cov=run.twist_cov[k],
-        )
-        out.append(filt.estimate())
-    return out
+def replay_arrays(filt: RobotCmkf, run: RobotRun) -> list[CmkfEstimate]:
+    """Feed a :class:`RobotRun` to a robot CMKF in stamp order; returns the estimate after each odometry message."""
+    imu = ImuSeries(run.imu_t, run.gyro, run.accel)
+    odom = OdometrySeries(run.odom_t, run.position, run.orientation_xyzw, run.linear_velocity, run.angular_velocity,
+                          run.pose_cov, run.twist_cov)
+    return [filt.estimate() for _ in feed_recording(filt, imu, odom)]
