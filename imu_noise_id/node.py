@@ -32,8 +32,9 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from .core.axes import AXES
 from .core.errors import InputError
-from .pipelines.online import OnlineIdentifier
-from .pipelines.online_config import PARAMETERS, OnlineConfig, ParamSpec
+from .pipelines.online import PARAMETERS, OnlineConfig, OnlineIdentifier
+from .pipelines.online.config import ParamSpec
+from .resources import read_hypotheses_file
 
 NODE_NAME = "imu_noise_id_node"
 
@@ -104,7 +105,9 @@ class ImuNoiseIdNode(Node):
                 raise InputError(f"parameter {spec.name}: {exc} (range [{spec.low}, {spec.high}] "
                                  f"{spec.unit})") from None
             values[spec.name] = param.value
-        self.identifier = OnlineIdentifier(OnlineConfig(values))  # InputError names a bad value
+        config = OnlineConfig(values)  # InputError names a bad value
+        hypotheses = read_hypotheses_file(config.hypotheses_file or None) if config.hypotheses_enabled else None
+        self.identifier = OnlineIdentifier(config, hypotheses)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         cfg = self.identifier.config
 
@@ -238,8 +241,8 @@ class ImuNoiseIdNode(Node):
                 "p50_us": float(np.percentile(arr, 50)), "p90_us": float(np.percentile(arr, 90)),
                 "p99_us": float(np.percentile(arr, 99)), "p99.9_us": float(np.percentile(arr, 99.9)),
                 "max_us": float(arr.max())} if arr.size else {})
-        summary["imu_received"] = self.identifier.imu_stats.received
-        summary["odom_received"] = self.identifier.odom_stats.received
+        summary["imu_received"] = self.identifier.imu.stats.received
+        summary["odom_received"] = self.identifier.odom.stats.received
         with open(self.identifier.config.stats_file, "w") as f:
             json.dump(summary, f, indent=1)
 

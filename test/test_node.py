@@ -174,7 +174,7 @@ def test_diagnostics_arrive_about_once_a_second(session):
     assert len(stamps) >= 5
     statuses = obs.statuses()
     for name in ("IMU input", "Odometry input", "Time stamps", "Stationarity", "Filter consistency",
-                 "Noise density", "Hypotheses", "Estimate ranges", "Processing"):
+                 "Filter innovations", "Noise density", "Hypotheses", "Estimate ranges", "Processing"):
         assert name in statuses, name
     assert statuses["Time stamps"][0] == 0
     assert statuses["Noise density"][0] == 0

@@ -1,73 +1,21 @@
-"""Building blocks of the online identification: stamp checks, stationarity with hysteresis and a windowed
-percentile buffer (each plain Python/numpy, tested on its own)."""
+"""Stationarity for the online identification: the decision with hysteresis, and the guard delay line.
+
+The noise identification (white-noise density, hypothesis bank) may only see samples of a platform standing
+still. :class:`StationarityDetector` decides from the odometry twist and the IMU statistics with hysteresis;
+:class:`StationaryGate` adds the guard: stationary samples wait ``stationary.guard`` seconds and are dropped when
+motion is detected meanwhile, so the start of a motion — already under way but not yet detected — never reaches
+the identification.
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections import deque
+from dataclasses import dataclass
 
 import numpy as np
 
-from .online_config import OnlineConfig
-
-
-@dataclass
-class StampChecker:
-    """Header-stamp checks for one input stream.
-
-    ``check(t)`` returns ``"ok"``, ``"gap"`` (accepted, after a period longer than ``gap_factor`` × the
-    nominal period), ``"restart"`` (accepted: ``backward_reset_count`` consecutive backward stamps mean the
-    source restarted), or the reason for rejecting the message: ``"bad_stamp"`` (zero or not finite),
-    ``"duplicate"`` or ``"backward"``.
-    """
-
-    gap_factor: float = 10.0
-    backward_reset_count: int = 50
-    last: float | None = None
-    period: float | None = None
-    consecutive_backward: int = 0
-    counts: dict[str, int] = field(
-        default_factory=lambda: dict.fromkeys(("ok", "gap", "restart", "bad_stamp", "duplicate", "backward"), 0)
-    )
-
-    def check(self, t: float) -> str:
-        verdict = self._verdict(t)
-        self.counts[verdict] += 1
-        return verdict
-
-    def _verdict(self, t: float) -> str:  # noqa: PLR0911 - one return per verdict
-        if not math.isfinite(t) or t <= 0.0:
-            return "bad_stamp"
-        last = self.last
-        if last is None:
-            self.last = t
-            return "ok"
-        dt = t - last
-        if dt == 0.0:
-            return "duplicate"
-        if dt < 0.0:
-            self.consecutive_backward += 1
-            if self.consecutive_backward >= self.backward_reset_count:
-                self.consecutive_backward = 0
-                self.last = t
-                self.period = None
-                return "restart"
-            return "backward"
-        self.consecutive_backward = 0
-        self.last = t
-        period = self.period
-        if period is None:
-            self.period = dt
-            return "ok"
-        if dt > self.gap_factor * period:
-            return "gap"
-        self.period = period + 0.01 * (dt - period)
-        return "ok"
-
-    @property
-    def rate(self) -> float:
-        """Nominal rate from the header stamps [Hz] (NaN until two stamps were seen)."""
-        return 1.0 / self.period if self.period else math.nan
+from .config import OnlineConfig
 
 
 @dataclass
@@ -152,28 +100,51 @@ class StationarityDetector:
         return self.stationary
 
 
-@dataclass
-class WindowStats:
-    """Percentiles over the last ``size`` values of a stream of numbers (processing times, NIS)."""
+class StationaryGate:
+    """:class:`StationarityDetector` followed by the guard delay line (see the module docstring).
 
-    size: int = 4096
-    _buf: np.ndarray | None = None
-    _i: int = 0
-    count: int = 0
+    Attributes
+    ----------
+    detector : the decision; transitions : number of changes between stationary and moving.
+    """
 
-    def add(self, value: float) -> None:
-        if self._buf is None or self._buf.shape[0] != self.size:
-            self._buf = np.empty(self.size)
-            self._i = 0
-        self._buf[self._i] = value
-        self._i = (self._i + 1) % self.size
-        self.count += 1
+    def __init__(self, config: OnlineConfig) -> None:
+        self.detector = StationarityDetector(config)
+        self.transitions = 0
+        self._guard: deque[tuple[float, np.ndarray]] = deque()
 
-    def values(self) -> np.ndarray:
-        if self._buf is None:
-            return np.empty(0)
-        return self._buf[: min(self.count, self.size)]
+    @property
+    def stationary(self) -> bool:
+        """Whether the platform is stationary now."""
+        return self.detector.stationary
 
-    def percentile(self, q: float) -> float:
-        v = self.values()
-        return float(np.percentile(v, q)) if v.size else math.nan
+    def configure(self, config: OnlineConfig) -> None:
+        """Apply changed parameters."""
+        self.detector.config = config
+
+    def update(self, t: float, sample: np.ndarray, gyro_bias: np.ndarray
+               ) -> tuple[bool, list[tuple[float, np.ndarray]]]:
+        """One IMU sample (6 values); returns whether it ended a stationary stretch, and the samples released
+        from the guard (stamp, values) for the noise identification."""
+        detector = self.detector
+        was = detector.stationary
+        stationary = detector.update_imu(t, sample, gyro_bias)
+        ended = False
+        if stationary != was:
+            self.transitions += 1
+            if not stationary:
+                self._guard.clear()
+                ended = True
+        released = []
+        if stationary:
+            guard = self._guard
+            guard.append((t, sample))
+            horizon = t - detector.config.stationary_guard
+            while guard and guard[0][0] <= horizon:
+                released.append(guard.popleft())
+        return ended, released
+
+    def interrupt(self) -> None:
+        """A gap in the IMU stamps: forget the guarded samples and start the decision afresh."""
+        self._guard.clear()
+        self.detector.reset()

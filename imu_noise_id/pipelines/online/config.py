@@ -2,7 +2,8 @@
 
 :data:`PARAMETERS` is the single source: the node declares each with a ROS ParameterDescriptor, the shipped
 ``config/imu_noise_id.yaml`` mirrors the defaults (a test keeps them in sync), and :class:`OnlineConfig`
-validates values at start-up and at runtime with messages that name the parameter.
+validates values at start-up and at runtime with messages that name the parameter. The CMKF's parameters take
+their defaults from :class:`~imu_noise_id.core.cmkf.config.CmkfConfig` (:func:`cmkf_config` maps them back).
 """
 
 from __future__ import annotations
@@ -11,8 +12,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..core.cmkf.config import GRAVITY_SOURCES, MEASUREMENTS, CmkfConfig
-from ..core.errors import InputError
+from ...core.cmkf.config import GRAVITY_SOURCES, MEASUREMENTS, CmkfConfig
+from ...core.errors import InputError
 
 #: The CMKF's defaults (the ``cmkf.*`` and ``nis.window`` parameters take theirs from here).
 _CMKF = CmkfConfig()
@@ -109,6 +110,12 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "used for the corrected IMU covariance", "samples", 10, 10000000),
     ParamSpec("nis.window", _CMKF.nis_window, "number of filter updates in the normalised-innovation-squared "
               "window", "updates", 10, 100000),
+    ParamSpec("innovations.window", 500, "filter updates in the whiteness and consistency tests of the CMKF's "
+              "and the gyro filter's innovations (per axis)", "updates", 50, 100000, runtime=False),
+    ParamSpec("innovations.lags", 10, "Ljung-Box lags of the innovation whiteness test (less than a quarter of "
+              "innovations.window)", "lags", 1, 1000, runtime=False),
+    ParamSpec("innovations.alpha", 1e-4, "level of each innovation test (they run every diagnostics period: keep "
+              "it small)", "", 1e-9, 0.1, runtime=False),
     ParamSpec("publish_rate", 10.0, "rate of ~/accel_bias, ~/gyro_bias, ~/noise and ~/hypotheses (steady "
               "clock)", "Hz", 0.1, 1000.0, runtime=False),
     ParamSpec("diagnostics_period", 1.0, "period of /diagnostics (steady clock)", "s", 0.05, 60.0,
