@@ -52,7 +52,7 @@ def main() -> int:
     env = ros_environment()
     stats = work / "stats.json"
     node = subprocess.Popen(
-        [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(NODE_CONFIG),
+        [sys.executable, "-m", "imu_noise_id.ros.node", "--ros-args", "--params-file", str(NODE_CONFIG),
          "-r", "imu:=/imu/data", "-p", f"stats_file:={stats}", "-p", f"executor:={args.executor}"],
         env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
     )

@@ -283,7 +283,7 @@ def test_a_sustained_jump_back_in_time_restarts_the_identification():
 
 
 def test_monitor_render_shows_every_section():
-    from imu_noise_id.cli.monitor import MonitorState, render
+    from imu_noise_id.ros.monitor import MonitorState, render
 
     fields = ["noise_density", "bias", "bias_std", "bank_WN.noise_density"]
     rows = [[1e-3, 0.004, 5e-4, 9e-4]] * 6
@@ -302,8 +302,8 @@ def test_monitor_render_shows_every_section():
 
 def test_play_loads_a_bag_in_time_order_and_rejects_unknown_topics(tmp_path):
     from imu_noise_id.bag.writer import write_robot_bag
-    from imu_noise_id.cli.play import load_messages
     from imu_noise_id.demo.online import simulate_demo_run
+    from imu_noise_id.ros.play import load_messages
 
     run = simulate_demo_run(stand_before=1.0, drive=1.0, stand_after=1.0)
     bag = write_robot_bag(run, tmp_path / "bag")
@@ -385,7 +385,7 @@ def test_play_converts_ros1_messages_to_the_ros2_types(shared_data):
     pytest.importorskip("rclpy")
     from rclpy.serialization import deserialize_message
 
-    from imu_noise_id.cli.play import load_messages, message_class, to_rclpy
+    from imu_noise_id.ros.play import load_messages, message_class, to_rclpy
 
     folder = shared_data / "husky_robot_localization"
     if not (folder / "test1.bag").is_file():
@@ -436,3 +436,17 @@ def test_unmodelled_vibration_reaches_the_diagnostics_as_correlated_innovations(
     assert float(shaken.values["accel_y_ljung_box_p"]) < 1e-10 and float(shaken.values["gyro_z_ljung_box_p"]) > 1e-4
     with pytest.raises(InputError, match="innovations"):
         OnlineIdentifier(OnlineConfig({"innovations.window": 50, "innovations.lags": 20}))
+
+
+def test_the_cli_parses_arguments_only_and_the_monitor_does_not_import_the_node():
+    """cli/play.py and cli/monitor.py only parse arguments and call imu_noise_id.ros: importing them (and the
+    monitor's view) loads neither rclpy nor the node."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import sys, imu_noise_id.cli.monitor, imu_noise_id.cli.play, imu_noise_id.ros.monitor; "
+            "print(sorted(m for m in ('rclpy', 'imu_noise_id.ros.node', 'imu_noise_id.ros.play') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=REPO_ROOT, env={**os.environ, "PYTHONPATH": str(REPO_ROOT)})
+    assert out.stdout.strip() == "[]"

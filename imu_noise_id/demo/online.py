@@ -61,11 +61,11 @@ def simulate_demo_run(seed: int = 7, *, stand_before: float = 20.0, drive: float
 
 def summary(state: object) -> str:
     """Final estimates from a monitor state next to :data:`DEMO_TRUTH`."""
-    from ..cli.monitor import _column
+    from ..ros.monitor import column
 
-    bias = _column(state.noise, "bias")
-    std = _column(state.noise, "bias_std")
-    density = _column(state.noise, "noise_density")
+    bias = column(state.noise, "bias")
+    std = column(state.noise, "bias_std")
+    density = column(state.noise, "noise_density")
     truth_bias = list(DEMO_TRUTH["gyro_bias"]) + list(DEMO_TRUTH["accel_bias"])
     truth_n = [DEMO_TRUTH["gyro_noise_density"]] * 3 + [DEMO_TRUTH["accel_noise_density"]] * 3
     lines = ["", "Final estimates vs the simulation's truth",
@@ -89,7 +89,7 @@ def online_part(ctx: object) -> None:
     """The online demo as a part of ``python -m imu_noise_id.demo`` (:data:`imu_noise_id.demo.PARTS`).
 
     Uses ``ctx.out`` and ``ctx.seed``; stores the node's final outputs (a
-    :class:`~imu_noise_id.cli.monitor.MonitorState`) in ``ctx.results["online"]`` and the bag in ``ctx.outputs``.
+    :class:`~imu_noise_id.ros.monitor.MonitorState`) in ``ctx.results["online"]`` and the bag in ``ctx.outputs``.
     """
     print("\n== online: the node on a simulated robot (stand, drive, stand), watched live ==")
     state = watch_demo(Path(ctx.out) / "online", 2.0, int(ctx.seed))
@@ -101,8 +101,8 @@ def watch_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> obj
     """Steps 1–4 of the module docstring; returns the node's final outputs as a ``MonitorState``."""
     import rclpy
 
-    from ..cli.monitor import _Listener, render, watch
-    from ..cli.play import load_messages
+    from ..ros.monitor import Listener, render, watch
+    from ..ros.play import load_messages
 
     work = Path(out) if out else Path(tempfile.mkdtemp(prefix="imu_noise_id_demo_"))
     work.mkdir(parents=True, exist_ok=True)
@@ -126,7 +126,7 @@ def watch_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> obj
         player = subprocess.Popen([sys.executable, "-m", "imu_noise_id", "play", str(bag), "--rate", str(rate),
                                    "--quiet"], env=env)
         viewer = rclpy.create_node("imu_noise_id_demo_monitor")
-        listener = _Listener(viewer, "/imu_noise_id_node")
+        listener = Listener(viewer, "/imu_noise_id_node")
         watch(viewer, listener, 1.0, duration / rate + 3.0)
         player.wait(30)
         print(render(listener.state))
