@@ -28,7 +28,7 @@ from .config import CmkfConfig
 FIELDS = {"position": 3, "orientation_xyzw": 4, "linear_velocity": 3, "angular_velocity": 3}
 
 
-def as_floats(a: np.ndarray | list[float] | tuple[float, ...]) -> list[float]:
+def _as_floats(a: np.ndarray | list[float] | tuple[float, ...]) -> list[float]:
     """A message vector as a list of floats (cheap for the 1-D arrays the node and the replay pass)."""
     if isinstance(a, np.ndarray):
         return a.astype(float, copy=False).ravel().tolist()
@@ -91,7 +91,7 @@ class TwistMeasurement:
     def values(fields: dict[str, object]) -> tuple[dict[str, list[float] | None], rot.Quat | None] | None:
         """The message's vectors as float lists and its unit quaternion; None if anything is NaN/inf or
         malformed (wrong length, zero quaternion)."""
-        vals = {k: None if a is None else as_floats(a) for k, a in fields.items()}
+        vals = {k: None if a is None else _as_floats(a) for k, a in fields.items()}
         # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
         if not math.isfinite(sum(sum(a) for a in vals.values() if a is not None)) or any(
             a is not None and len(a) != FIELDS[k] for k, a in vals.items()
