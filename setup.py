@@ -26,7 +26,7 @@ setup(
     entry_points={
         "console_scripts": [
             "imu-noise-id = imu_noise_id.cli:main",
-            "imu_noise_id_node = imu_noise_id.node:main",
+            "imu_noise_id_node = imu_noise_id.ros.node:main",
         ],
     },
 )

@@ -18,7 +18,9 @@ import numpy as np
 
 from imu_noise_id.core.axes import ImuSeries, OdometrySeries
 from imu_noise_id.core.cmkf import rotation as rot
-from imu_noise_id.core.cmkf.robot import RobotCmkf, RobotCmkfConfig
+from imu_noise_id.core.cmkf.config import CmkfConfig
+from imu_noise_id.core.cmkf.merge import stamp_order
+from imu_noise_id.core.cmkf.robot import RobotCmkf
 from imu_noise_id.core.simulation.robot import simulate_robot
 from imu_noise_id.pipelines.cmkf_replay import replay
 
@@ -33,7 +35,7 @@ def sim_series(duration: float, imu_rate: float, odom_rate: float) -> tuple[ImuS
     return imu, odom, run.imu_rotation_xyzw
 
 
-def throughput(label: str, imu: ImuSeries, odom: OdometrySeries | None, cfg: RobotCmkfConfig, repeat: int = 3) -> None:
+def throughput(label: str, imu: ImuSeries, odom: OdometrySeries | None, cfg: CmkfConfig, repeat: int = 3) -> None:
     best = cpu_best = 0.0
     for _ in range(repeat):
         c0 = time.process_time()
@@ -46,23 +48,20 @@ def throughput(label: str, imu: ImuSeries, odom: OdometrySeries | None, cfg: Rob
           f"{cpu_best:>8.0f} per CPU-second (best of {repeat})")
 
 
-def latency(imu: ImuSeries, odom: OdometrySeries, cfg: RobotCmkfConfig) -> None:
+def latency(imu: ImuSeries, odom: OdometrySeries, cfg: CmkfConfig) -> None:
     f = RobotCmkf(cfg)
     ti, to, te = [], [], []
     imu_rows = [(float(t), tuple(g), tuple(a)) for t, g, a in zip(imu.t, imu.gyro, imu.accel, strict=True)]
-    cut = np.searchsorted(imu.t, odom.t, side="right")
-    i = 0
     clock = time.perf_counter
-    for j in range(len(odom)):
-        while i < cut[j]:
-            a = clock()
-            f.process_imu(*imu_rows[i])
-            ti.append(clock() - a)
-            i += 1
+    for is_odometry, k in stamp_order(imu.t, odom.t):
         a = clock()
-        f.process_odometry(odom.t[j], orientation_xyzw=odom.orientation_xyzw[j],
-                           linear_velocity=odom.linear_velocity[j], angular_velocity=odom.angular_velocity[j],
-                           twist_cov=odom.twist_covariance[j])
+        if not is_odometry:
+            f.process_imu(*imu_rows[k])
+            ti.append(clock() - a)
+            continue
+        f.process_odometry(odom.t[k], orientation_xyzw=odom.orientation_xyzw[k],
+                           linear_velocity=odom.linear_velocity[k], angular_velocity=odom.angular_velocity[k],
+                           twist_cov=odom.twist_covariance[k])
         b = clock()
         f.estimate()
         to.append(b - a)
@@ -86,16 +85,16 @@ def main() -> None:
         imu = ImuSeries(d["imu_t"], d["imu_gyro"], d["imu_accel"])
         odom = OdometrySeries(d["odom_t"], d["odom_pos"], d["odom_quat_xyzw"], d["odom_twist_linear"],
                               d["odom_twist_angular"], cov, cov)
-        cfg = RobotCmkfConfig(imu_rotation_xyzw=rot.from_ypr(-np.pi / 2, 0.0, np.pi / 2))
+        cfg = CmkfConfig(imu_rotation_xyzw=rot.from_ypr(-np.pi / 2, 0.0, np.pi / 2))
         throughput("Husky npz (IMU 30 Hz / odometry 10 Hz)", imu, odom, cfg)
     else:
         print(f"(Husky data not found at {husky}: skipped)")
     for imu_rate, odom_rate in ((100.0, 10.0), (400.0, 20.0)):
         imu, odom, q = sim_series(120.0, imu_rate, odom_rate)
-        cfg = RobotCmkfConfig(imu_rotation_xyzw=q)
+        cfg = CmkfConfig(imu_rotation_xyzw=q)
         throughput(f"simulated robot (IMU {imu_rate:g} Hz / odometry {odom_rate:g} Hz)", imu, odom, cfg)
         if imu_rate == 100.0:
-            throughput("same, pose_twist measurement", imu, odom, RobotCmkfConfig(imu_rotation_xyzw=q,
+            throughput("same, pose_twist measurement", imu, odom, CmkfConfig(imu_rotation_xyzw=q,
                                                                                    measurement="pose_twist"))
             first_second = OdometrySeries(*(np.asarray(a)[odom.t <= 1.0] for a in (
                 odom.t, odom.position, odom.orientation_xyzw, odom.linear_velocity, odom.angular_velocity,

@@ -23,7 +23,7 @@ import numpy as np
 
 from imu_noise_id.core.axes import ImuSeries, OdometrySeries
 from imu_noise_id.core.cmkf import rotation as rot
-from imu_noise_id.core.cmkf.robot import RobotCmkfConfig
+from imu_noise_id.core.cmkf.config import CmkfConfig
 from imu_noise_id.pipelines.cmkf_replay import CmkfReplayResult, nis_summary, replay
 from imu_noise_id.report.cmkf_plot import plot_cmkf
 
@@ -67,7 +67,7 @@ def husky() -> None:
     print("=== Husky (robot_localization test1): 395 s, IMU 30 Hz (Microstrain 3DM-GX2), wheel odometry 10 Hz")
     results = {}
     for src in ("odometry", "imu"):
-        cfg = RobotCmkfConfig(imu_rotation_xyzw=q_bi, gravity_source=src, s_v0=1e-4)
+        cfg = CmkfConfig(imu_rotation_xyzw=q_bi, gravity_source=src, s_v0=1e-4)
         res = replay(imu, odom, cfg, d["imu_quat_xyzw"])
         results[src] = res
         report(f"Husky, twist, gravity from {src} orientation", res, FIG / f"cmkf_husky_{src}.png")
@@ -106,7 +106,7 @@ def broad(name: str, decimate: int = 10, pos_std: float = 2e-4, figure: bool = T
     twist_cov[:, range(3, 6), range(3, 6)] = 1.0  # no angular velocity given: the gyro uses the orientation
     # no angular velocity in the optical data (None): the gyro filter uses the change of orientation
     odom = OdometrySeries(to, p, q, v_b, None, pose_cov, twist_cov, topic="optitrack")
-    cfg = RobotCmkfConfig(measurement="pose_twist", s_v0=1e-4, max_odom_gap=0.5, angular_velocity_noise_std=0.01)
+    cfg = CmkfConfig(measurement="pose_twist", s_v0=1e-4, max_odom_gap=0.5, angular_velocity_noise_std=0.01)
     res = replay(imu, odom, cfg)
     lost = int(np.sum(~np.all(np.isfinite(p), axis=1)))
     print(f"\n=== BROAD {name}: {t[-1]:.0f} s, IMU {1 / np.median(np.diff(t)):.1f} Hz, optical position at "

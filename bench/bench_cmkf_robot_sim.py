@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from imu_noise_id.core.cmkf.robot import RobotCmkf, RobotCmkfConfig
+from imu_noise_id.core.cmkf.config import CmkfConfig
+from imu_noise_id.core.cmkf.robot import RobotCmkf
 from imu_noise_id.core.simulation.robot import replay_arrays, simulate_robot
 
 
@@ -22,7 +23,7 @@ def main() -> None:
     for seed in seeds:
         run = simulate_robot(300.0, np.random.default_rng(100 + seed))
         for mode in ("twist", "pose_twist"):
-            f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=mode, s_v0=2e-4))
+            f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=mode, s_v0=2e-4))
             est = replay_arrays(f, run)
             e = est[-1]
             zb = (e.accel_bias - run.accel_bias) / e.accel_bias_std

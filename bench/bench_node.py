@@ -42,19 +42,17 @@ def main() -> int:
     parser.add_argument("--executor", default="events", choices=("events", "single_threaded"))
     args = parser.parse_args()
 
-    import numpy as np
-
-    from imu_noise_id.core.simulation.stop_and_go import simulate_stop_and_go
+    from imu_noise_id.demo.online import simulate_demo_run
 
     work = Path(tempfile.mkdtemp(prefix="bench_node_"))
     third = args.duration / 3
-    run = simulate_stop_and_go(np.random.default_rng(0), stand_before=third, drive=third, stand_after=third,
-                               imu_rate=1000.0, odom_rate=100.0, substeps=2)
+    run = simulate_demo_run(0, stand_before=third, drive=third, stand_after=third, imu_rate=1000.0, odom_rate=100.0,
+                            substeps=2)
     bag = write_robot_bag(run, work / "bag")
     env = ros_environment()
     stats = work / "stats.json"
     node = subprocess.Popen(
-        [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(NODE_CONFIG),
+        [sys.executable, "-m", "imu_noise_id.ros.node", "--ros-args", "--params-file", str(NODE_CONFIG),
          "-r", "imu:=/imu/data", "-p", f"stats_file:={stats}", "-p", f"executor:={args.executor}"],
         env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
     )

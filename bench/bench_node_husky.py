@@ -40,7 +40,7 @@ def main() -> int:
     env = {**ros_environment(), "ROS_DOMAIN_ID": str(random.randint(10, 99))}
     q = rot.from_ypr(-math.pi / 2, 0.0, math.pi / 2)  # imu_link in base_link: gravity on +y of the IMU
     node = subprocess.Popen(
-        [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(NODE_CONFIG),
+        [sys.executable, "-m", "imu_noise_id.ros.node", "--ros-args", "--params-file", str(NODE_CONFIG),
          "-r", "imu:=/imu/data", "-r", "odom:=/husky_velocity_controller/odom",
          "-p", f"cmkf.imu_rotation_xyzw:=[{q[0]},{q[1]},{q[2]},{q[3]}]"],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,

@@ -6,7 +6,7 @@ Layers (imports point downwards only):
   variances, state-space models, Kalman filtering, estimators, diagnostics, simulation.
 * :mod:`imu_noise_id.pipelines` — offline and online pipelines that chain core pieces.
 * adapters — :mod:`imu_noise_id.bag` (rosbags I/O), :mod:`imu_noise_id.cli`, :mod:`imu_noise_id.report`,
-  :mod:`imu_noise_id.node` (rclpy).
+  :mod:`imu_noise_id.ros` (rclpy: the node, play, monitor).
 """
 
 __version__ = "0.1.0"

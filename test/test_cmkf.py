@@ -8,14 +8,16 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.cmkf.axis import AxisCmkf, paper_interval
+from imu_noise_id.core.cmkf.config import CmkfConfig
 from imu_noise_id.core.cmkf.paper import (
     PaperCmkf,
     TurntableConfig,
     simulate_turntable,
     turntable_monte_carlo,
 )
-from imu_noise_id.core.cmkf.robot import RobotCmkf, RobotCmkfConfig
+from imu_noise_id.core.cmkf.robot import RobotCmkf
 from imu_noise_id.core.cmkf.stacked import cov_z_model
+from imu_noise_id.core.cmkf.stream import CmkfStream
 from imu_noise_id.core.simulation.robot import replay_arrays, simulate_robot
 
 G = 9.80665
@@ -40,7 +42,7 @@ def test_cov_z_model_matches_sample_covariance():
     for k in range(len(run.dv)):
         pf.predict(run.dv[k])
         pf.update(run.z[k + 1])
-        if pf.n_Z:
+        if pf.count:
             Z.append(pf.stacked_sample())
     Z = np.array(Z)
     sample = Z.T @ Z / len(Z)
@@ -75,8 +77,8 @@ def test_batched_axis_filter_equals_paper_filter():
         pf.update(run.z[k + 1])
         af.update(run.z[k + 1].reshape(2, 2), Rax)
     np.testing.assert_allclose(af.x, pf.x.reshape(2, 3), rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(af.S_used, pf.S_v, rtol=1e-9)
-    np.testing.assert_allclose(af.estimator.estimate, pf.S_v_ls, rtol=1e-9)
+    np.testing.assert_allclose(af.S_used, pf.S_used, rtol=1e-9)
+    np.testing.assert_allclose(af.S_ls, pf.S_ls, rtol=1e-9)
 
 
 def test_planar_robot_filter_equals_paper_filter():
@@ -85,7 +87,7 @@ def test_planar_robot_filter_equals_paper_filter():
     cfg = TurntableConfig()
     run = simulate_turntable(cfg, 200.0, np.random.default_rng(5))
     pf = _paper_filter(cfg, run.z[0], pd_check="per_axis")
-    rc = RobotCmkf(RobotCmkfConfig(
+    rc = RobotCmkf(CmkfConfig(
         measurement="pose_twist", accel_bias_tau=cfg.tau, accel_bias_sigma=cfg.sigma_ss, s_v0=cfg.S_v0,
         min_samples=1, position_noise_std=math.sqrt(cfg.R_diag[0]), velocity_noise_std=math.sqrt(cfg.R_diag[1]),
     ))
@@ -107,8 +109,8 @@ def test_planar_robot_filter_equals_paper_filter():
     np.testing.assert_allclose(x, pf.x.reshape(2, 3), rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(rc.filter.P[0], pf.P[:3, :3], rtol=1e-7, atol=1e-20)
     np.testing.assert_allclose(rc.filter.P[1], pf.P[3:, 3:], rtol=1e-7, atol=1e-20)
-    np.testing.assert_allclose(rc.estimate().S_v[:2], pf.S_v, rtol=1e-7)
-    assert rc.estimate().n_stacked == pf.n_Z
+    np.testing.assert_allclose(rc.estimate().S_v[:2], pf.S_used, rtol=1e-7)
+    assert rc.estimate().n_stacked == pf.count
 
 
 def test_turntable_converges_to_S_v():
@@ -132,7 +134,7 @@ def robot_run():
 def test_robot_recovers_biases_and_S_v(robot_run):
     """Moving robot (turning, accelerating), IMU rotated (y up), IMU 100 Hz, odometry twist 10 Hz."""
     run = robot_run
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, s_v0=2e-4))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, s_v0=2e-4))
     est = replay_arrays(f, run)
     e = est[-1]
     assert e.status == "tracking" and e.observed
@@ -155,7 +157,7 @@ def test_robot_pose_twist_mode_runs(robot_run):
     innovations consistent (the displacement is accumulated in the odometry frame, so gyro errors do not multiply
     the distance travelled)."""
     run = robot_run
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement="pose_twist", s_v0=2e-4))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement="pose_twist", s_v0=2e-4))
     est = replay_arrays(f, run)
     e = est[-1]
     assert e.nis_accel_dof == 6
@@ -168,7 +170,7 @@ def _short_run() -> object:
     return simulate_robot(40.0, np.random.default_rng(2))
 
 
-def _feed(f: RobotCmkf, run, imu_idx=None, odom_idx=None) -> None:
+def _feed(f: RobotCmkf | CmkfStream, run, imu_idx=None, odom_idx=None) -> None:
     imu_idx = range(len(run.imu_t)) if imu_idx is None else imu_idx
     odom_idx = range(len(run.odom_t)) if odom_idx is None else odom_idx
     events = [(run.imu_t[i], 0, i) for i in imu_idx] + [(run.odom_t[j], 1, j) for j in odom_idx]
@@ -183,7 +185,7 @@ def _feed(f: RobotCmkf, run, imu_idx=None, odom_idx=None) -> None:
 
 def test_odometry_gap_restarts_the_stacked_chain():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     keep = [j for j in range(len(run.odom_t)) if not (15.0 < run.odom_t[j] < 18.0)]
     _feed(f, run, odom_idx=keep)
     e = f.estimate()
@@ -196,7 +198,7 @@ def test_odometry_gap_restarts_the_stacked_chain():
 
 def test_out_of_order_duplicate_and_nan_messages_are_dropped():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     _feed(f, run, imu_idx=range(1000), odom_idx=range(100))
     before = f.estimate()
     assert not f.process_imu(run.imu_t[999], run.gyro[999], run.accel[999])  # duplicate stamp
@@ -218,7 +220,7 @@ def test_out_of_order_duplicate_and_nan_messages_are_dropped():
 
 def test_odometry_only_estimates_nothing():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig())
+    f = RobotCmkf(CmkfConfig())
     _feed(f, run, imu_idx=[])
     e = f.estimate()
     assert e.status == "no_imu" and not e.observed
@@ -228,7 +230,7 @@ def test_odometry_only_estimates_nothing():
 
 def test_imu_only_propagates_with_growing_covariance():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     _feed(f, run, imu_idx=range(100), odom_idx=[])
     e = f.estimate()
     assert e.status == "imu_only" and not e.observed
@@ -238,18 +240,18 @@ def test_imu_only_propagates_with_growing_covariance():
     _feed(f, run, imu_idx=range(100, len(run.imu_t)), odom_idx=first_10s)
     e = f.estimate()
     assert e.status == "unobserved" and not e.observed
-    P_late = f.filter.covariance(f._vel_interval())
-    assert np.all(P_late[:, 0, 0] > 10 * np.array(f.filter.pvv))
-    assert np.all(e.accel_bias_std > np.sqrt(f.filter.pbb))
+    P_late = f.filter.predicted_P(f.imu.interval())
+    assert np.all(P_late[:, 1, 1] > 10 * f.filter.P[:, 1, 1])
+    assert np.all(e.accel_bias_std > np.sqrt(f.filter.P[:, 2, 2]))
 
 
 def test_bad_configuration_is_rejected():
     with pytest.raises(ValueError, match="measurement"):
-        RobotCmkf(RobotCmkfConfig(measurement="gps"))
+        RobotCmkf(CmkfConfig(measurement="gps"))
     with pytest.raises(ValueError, match="s_v0"):
-        RobotCmkf(RobotCmkfConfig(s_v0=-1.0))
+        RobotCmkf(CmkfConfig(s_v0=-1.0))
     with pytest.raises(ValueError, match="quaternion"):
-        RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=(0, 0, 0, 0)))
+        RobotCmkf(CmkfConfig(imu_rotation_xyzw=(0, 0, 0, 0)))
     with pytest.raises(ValueError, match="initial S_v"):
         AxisCmkf(2, 0.0)
 
@@ -286,32 +288,32 @@ def test_cli_cmkf_bad_rotation_exits_2(shared_data, tmp_path, capsys):
 def test_plain_float_velocity_filter_equals_batched_filter(robot_run):
     """The robot's twist path (VelocityAxisCmkf, plain floats) is AxisCmkf(mode="vel") written out."""
     from imu_noise_id.core.cmkf.fast_vel import VelocityAxisCmkf
-    from imu_noise_id.core.cmkf.stacked import Interval
+    from imu_noise_id.core.cmkf.interval import ImuInterval
 
     rng = np.random.default_rng(4)
     fast = VelocityAxisCmkf(3, 2e-4, pd_check="per_axis", min_samples=1)
     ref = AxisCmkf(3, 2e-4, mode="vel", pd_check="per_axis", min_samples=1)
     v0, b0 = rng.normal(size=3), rng.normal(size=3) * 0.01
-    fast.initialise(v0, b0, [1e-4] * 3, [1e-2] * 3)
-    ref.initialise(np.column_stack([np.zeros(3), v0, b0]), np.stack([np.diag([1.0, 1e-4, 1e-2])] * 3))
+    x0, P0 = np.column_stack([np.zeros(3), v0, b0]), np.stack([np.diag([1.0, 1e-4, 1e-2])] * 3)
+    fast.initialise(x0, P0)
+    ref.initialise(x0, P0)
     for k in range(400):
         T = 0.1 + 0.02 * rng.random()  # jittery odometry intervals
         Bv, beta = T * (1 - 1e-5), np.exp(-T / 3600)
         qb = (1 - beta**2) * 0.01
-        Phi = np.array([[1.0, T, -T * T / 2], [0.0, 1.0, -Bv], [0.0, 0.0, beta]])
-        Qa1 = np.array([[T**3 / 3, T * T / 2, 0], [T * T / 2, T, 0], [0, 0, 0]])
-        x_pred = ref.x @ Phi.T + rng.normal(size=(3, 3)) * 0.01
-        ref.predict(x_pred, Interval(Phi, Qa1, qb))
-        fast.predict(list(x_pred[:, 1]), list(x_pred[:, 2]), (T, Bv, beta, qb))
+        interval = ImuInterval(T, T * T / 2, Bv, beta, T**3 / 3, T * T / 2, qb)
+        x_pred = ref.x @ interval.Phi.T + rng.normal(size=(3, 3)) * 0.01
+        ref.predict(x_pred, interval)
+        fast.predict(x_pred, interval)
         z = rng.normal(size=3) * 0.01 + x_pred[:, 1]
         R = 1e-4 * (1 + rng.random(3))
         gap = k == 200
         nis_ref = ref.update(z[:, None], R[:, None, None], new_chain=gap)
-        nis_fast = fast.update(list(z), list(R), new_chain=gap)
-        assert nis_fast == pytest.approx(nis_ref.sum(), rel=1e-9)
-    np.testing.assert_allclose(fast.v, ref.x[:, 1], rtol=1e-9)
-    np.testing.assert_allclose(fast.b, ref.x[:, 2], rtol=1e-9, atol=1e-15)
-    np.testing.assert_allclose(fast.covariance(), ref.P[:, 1:, 1:], rtol=1e-8)
+        nis_fast = fast.update(z[:, None], R[:, None, None], new_chain=gap)
+        assert nis_fast.sum() == pytest.approx(nis_ref.sum(), rel=1e-9)
+    np.testing.assert_allclose(fast.x[:, 1], ref.x[:, 1], rtol=1e-9)
+    np.testing.assert_allclose(fast.x[:, 2], ref.x[:, 2], rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(fast.P[:, 1:, 1:], ref.P[:, 1:, 1:], rtol=1e-8)
     np.testing.assert_allclose(fast.S_ls, ref.estimator.estimate, rtol=1e-8)
     np.testing.assert_allclose(fast.S_used, ref.S_used, rtol=1e-8)
     assert fast.count == ref.estimator.count == 400 - 2 - 2
@@ -319,12 +321,13 @@ def test_plain_float_velocity_filter_equals_batched_filter(robot_run):
 
 def test_late_odometry_and_imu_gap():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = CmkfStream(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     _feed(f, run, imu_idx=range(1000), odom_idx=range(99))  # IMU to 10.0 s, odometry to 9.9 s
     # odometry 10.0 s arrives after the IMU sample at 10.0 s (equal stamp: normal); one at 9.98 s is late
     j = 99
-    assert f.process_odometry(run.odom_t[j] - 0.02, orientation_xyzw=run.orientation_xyzw[j],
-                              linear_velocity=run.linear_velocity[j], angular_velocity=run.angular_velocity[j])
+    f.process_odometry(run.odom_t[j] - 0.02, orientation_xyzw=run.orientation_xyzw[j],
+                       linear_velocity=run.linear_velocity[j], angular_velocity=run.angular_velocity[j])
+    assert f.flush()  # applied at its own stamp, between the IMU samples
     assert f.estimate().counters["odom_late"] == 1
     # the IMU stops for 2 s (> max_imu_gap): position/velocity re-initialised at the next odometry, bias kept
     bias_before = f.estimate().accel_bias.copy()
@@ -351,7 +354,7 @@ def test_gravity_from_imu_orientation_equals_odometry_orientation_on_flat_ground
     q_imu = [rot.multiply((0.0, 0.0, np.sin(p / 2), np.cos(p / 2)), run.imu_rotation_xyzw) for p in psi]
     ests = {}
     for source in ("odometry", "imu"):
-        f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, gravity_source=source))
+        f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, gravity_source=source))
         events = sorted([(t, 0, i) for i, t in enumerate(run.imu_t)] + [(t, 1, j) for j, t in enumerate(run.odom_t)])
         for _, kind, i in events:
             if kind == 0:
@@ -367,7 +370,7 @@ def test_gravity_from_imu_orientation_equals_odometry_orientation_on_flat_ground
 
 def test_malformed_odometry_is_dropped_not_raised():
     run = _short_run()
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
     _feed(f, run, imu_idx=range(100), odom_idx=range(10))
     assert not f.process_odometry(1.05, orientation_xyzw=[0, 0, 0, 0], linear_velocity=[0.5, 0, 0])
     assert not f.process_odometry(1.06, orientation_xyzw=[0, 0, 0, 1], linear_velocity=[0.5, 0])
@@ -405,7 +408,7 @@ def test_late_duplicated_and_zero_interval_odometry_never_raises(measurement):
     stamp of the last update: the filter must neither raise (it raised LinAlgError / ZeroDivisionError) nor
     produce non-finite estimates, and must count what it dropped."""
     run = simulate_robot(10.0, np.random.default_rng(2))
-    f = RobotCmkf(RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement))
+    f = CmkfStream(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement))
     for i in range(len(run.imu_t)):
         f.process_imu(run.imu_t[i], run.gyro[i], run.accel[i])
         if i % 10 == 9:
@@ -413,6 +416,7 @@ def test_late_duplicated_and_zero_interval_odometry_never_raises(measurement):
             for lag in (0.025, 0.015, 0.015, 0.5):  # late, late again, duplicate, beyond the tolerance
                 f.process_odometry(run.odom_t[j] - lag, **_odom_kwargs(run, j))
             f.process_odometry(run.odom_t[j] - 0.015 + 1e-9, **_odom_kwargs(run, j))  # 1 ns after the last update
+    f.flush()
     e = f.estimate()
     c = e.counters
     assert c["updates"] > 150
@@ -424,11 +428,11 @@ def test_late_duplicated_and_zero_interval_odometry_never_raises(measurement):
 
 @pytest.mark.parametrize("measurement", ["twist", "pose_twist"])
 def test_late_odometry_within_tolerance_equals_in_order_processing(measurement):
-    """Odometry arriving up to 30 ms after IMU samples with later stamps is applied at its own stamp (rewind to the
-    last update, replay of the buffered IMU samples): the result equals processing the same stream in order."""
+    """Odometry arriving up to 30 ms after IMU samples with later stamps is applied at its own stamp (the stamp
+    merger holds the IMU samples late_odom_tolerance behind): the result equals processing the stream in order."""
     run = simulate_robot(20.0, np.random.default_rng(4))
-    cfg = RobotCmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement)
-    in_order, late = RobotCmkf(cfg), RobotCmkf(cfg)
+    cfg = CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, measurement=measurement)
+    in_order, late = RobotCmkf(cfg), CmkfStream(cfg)
     odom_t = run.odom_t + 0.0037  # between IMU samples
     for f, delay in ((in_order, 0.0), (late, 0.03)):
         events = sorted([(t, 0, i) for i, t in enumerate(run.imu_t)]
@@ -438,6 +442,7 @@ def test_late_odometry_within_tolerance_equals_in_order_processing(measurement):
                 f.process_imu(run.imu_t[i], run.gyro[i], run.accel[i])
             else:
                 f.process_odometry(odom_t[i], **_odom_kwargs(run, i))
+    late.flush()
     a, b = in_order.estimate(), late.estimate()
     assert b.counters["odom_late"] == len(run.odom_t) - 1  # all but the last (no IMU sample after it)
     assert a.counters["updates"] == b.counters["updates"] == len(run.odom_t) - 1
@@ -450,22 +455,22 @@ def test_degenerate_intervals_in_the_estimators_are_skipped():
     """The building blocks skip (and count) an update or stacked step they cannot compute instead of raising:
     zero innovation variance (zero covariance, zero interval) and zero-length intervals (M_o singular)."""
     from imu_noise_id.core.cmkf.fast_vel import VelocityAxisCmkf
-    from imu_noise_id.core.cmkf.stacked import Interval
+    from imu_noise_id.core.cmkf.interval import ImuInterval
 
     fast = VelocityAxisCmkf(3, 1e-4)
     ref = AxisCmkf(3, 1e-4, mode="pos_vel")
-    fast.initialise([0.0] * 3, [0.0] * 3, [0.0] * 3, [1e-2] * 3)
+    fast.initialise(np.zeros((3, 3)), np.stack([np.diag([0.0, 0.0, 1e-2])] * 3))
     ref.initialise(np.zeros((3, 3)), np.stack([np.diag([0.0, 0.0, 1e-2])] * 3))
-    zero = Interval(np.eye(3), np.zeros((3, 3)), 0.0)
+    zero = ImuInterval(0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
     for _ in range(4):  # zero covariance, zero interval, R = 0: s = 0
-        fast.predict([0.0] * 3, [0.0] * 3, (0.0, 0.0, 1.0, 0.0))
-        assert math.isnan(fast.update([0.0] * 3, [0.0] * 3))
+        fast.predict(np.zeros((3, 3)), zero)
+        assert np.all(np.isnan(fast.update(np.zeros((3, 1)), np.zeros((3, 1, 1)))))
         ref.predict(np.zeros((3, 3)), zero)
         assert np.all(np.isnan(ref.update(np.zeros((3, 2)), np.zeros((3, 2, 2)))))
     assert fast.skipped == 4 and ref.skipped == 4
     for _ in range(4):  # R > 0: the update works, the stacked step over a zero-length interval does not
-        fast.predict(fast.v, fast.b, (0.0, 0.0, 1.0, 0.0))
-        assert np.isfinite(fast.update([0.0] * 3, [1e-4] * 3))
+        fast.predict(fast.x, zero)
+        assert np.all(np.isfinite(fast.update(np.zeros((3, 1)), np.full((3, 1, 1), 1e-4))))
         ref.predict(ref.x, zero)
         assert np.all(np.isfinite(ref.update(np.zeros((3, 2)), np.stack([np.eye(2) * 1e-4] * 3))))
     assert fast.skipped == 4 and ref.skipped == 4
@@ -510,3 +515,124 @@ def test_cli_cmkf_gravity_from_imu_without_orientation_exits_2(tmp_path, capsys)
     assert "--gravity-from odom" in capsys.readouterr().err
     assert main(["cmkf", str(tmp_path / "bag"), "--out", str(tmp_path / "out"), "--no-plot"]) == 0  # default: odom
     assert "gravity from the odometry orientation" in capsys.readouterr().out
+
+
+def test_one_robot_simulator_with_two_motion_profiles():
+    """simulate_robot with the Weaving (default) and StopAndGo profiles: standing means zero odometry speed and an
+    IMU reading of gravity plus the biases; the optional bias random walk drifts the IMU, the rest stays."""
+    from imu_noise_id.core.cmkf import rotation as rot
+    from imu_noise_id.core.simulation.robot import RobotSensors, StopAndGo
+
+    sensors = RobotSensors(imu_rotation_xyzw=rot.IDENTITY, S_v=1e-8, S_g=1e-10, noise_order=("gyro", "accel"))
+    run = simulate_robot(12.0, np.random.default_rng(0), motion=StopAndGo(stand_before=4.0, drive=4.0),
+                         sensors=sensors, t0=50.0)
+    assert run.imu_t[0] == pytest.approx(50.01) and run.odom_t[-1] == pytest.approx(62.0)
+    standing = (run.odom_t - 50.0 < 4.0) | (run.odom_t - 50.0 > 8.0)
+    assert np.all(np.abs(run.linear_velocity[standing, 0]) < 0.01)
+    assert np.max(run.linear_velocity[~standing, 0]) > 0.9
+    still = run.imu_t - 50.0 < 3.9
+    np.testing.assert_allclose(run.accel[still].mean(axis=0), np.array([0, 0, G]) + sensors.accel_bias, atol=1e-3)
+    np.testing.assert_allclose(run.gyro[still].mean(axis=0), sensors.gyro_bias, atol=1e-4)
+    weaving = simulate_robot(12.0, np.random.default_rng(0))
+    assert np.all(weaving.linear_velocity[:, 0] > 0.1)  # always moving
+    drifting = simulate_robot(12.0, np.random.default_rng(0), motion=StopAndGo(stand_before=4.0, drive=4.0),
+                              sensors=RobotSensors(imu_rotation_xyzw=rot.IDENTITY, S_v=1e-8, S_g=1e-10,
+                                                   noise_order=("gyro", "accel"), accel_random_walk=0.05),
+                              t0=50.0)
+    np.testing.assert_array_equal(drifting.gyro, run.gyro)  # the white noise is drawn before the random walk
+    assert np.max(np.abs(drifting.accel - run.accel)) > 0.01
+    with pytest.raises(ValueError, match="noise_order"):
+        simulate_robot(1.0, np.random.default_rng(0), sensors=RobotSensors(noise_order=("gyro", "gyro")))
+
+
+def _searchsorted_order(ti: np.ndarray, to: np.ndarray) -> list[tuple[bool, int]]:
+    """The replay's order before the stamp merger: the IMU samples up to each odometry stamp, then that message."""
+    cut = np.searchsorted(ti, to, side="right")
+    order, i = [], 0
+    for j in range(to.size + 1):
+        stop = int(cut[j]) if j < to.size else ti.size
+        order += [(False, k) for k in range(i, stop)]
+        i = max(i, stop)
+        if j < to.size:
+            order.append((True, j))
+    return order
+
+
+def test_stamp_merge_equals_the_searchsorted_order():
+    """Recorded streams: stamp_order is the order the replay had (IMU first on equal stamps), also with odometry
+    before or after all the IMU samples and with either stream empty."""
+    from imu_noise_id.core.cmkf.merge import stamp_order
+
+    rng = np.random.default_rng(21)
+    for _ in range(20):
+        ti = np.cumsum(rng.choice([0.01, 0.02], size=rng.integers(0, 60)))
+        to = np.round(np.sort(rng.uniform(-0.1, 0.7, size=rng.integers(0, 20))), 2)  # ties with IMU stamps
+        assert list(stamp_order(ti, to)) == _searchsorted_order(ti, to)
+
+
+def test_live_merge_restores_stamp_order_within_its_latency():
+    """Odometry delivered up to 40 ms after IMU samples stamped later: released in the recorded order, counted
+    LATE where it was put back; 80 ms late with a 50 ms allowance: TOO_LATE."""
+    from imu_noise_id.core.cmkf.merge import LATE, TOO_LATE, StampMerger
+
+    rng = np.random.default_rng(22)
+    ti = np.arange(1, 401) * 0.005
+    to = np.arange(1, 41) * 0.05 + 0.0013
+    for delay, allowance in ((0.04 * rng.random(to.size), 0.05), (np.full(to.size, 0.08), 0.05)):
+        arrival = sorted([(t, 0, i) for i, t in enumerate(ti)] + [(t + d, 1, j) for j, (t, d) in
+                                                                  enumerate(zip(to, delay, strict=True))])
+        merger = StampMerger(allowance)
+        released, newest_imu, expected_late = [], -1.0, 0
+        for _, kind, k in arrival:
+            if kind:
+                expected_late += newest_imu > to[k]
+                merger.push_odometry(to[k], k)
+            else:
+                newest_imu = ti[k]
+                merger.push_imu(ti[k], k)
+            released += list(merger.ready())
+        released += list(merger.flush())
+        orders = [order for _, is_odometry, _, order in released if is_odometry]
+        if allowance > delay.max():
+            assert [(o, k) for _, o, k, _ in released] == _searchsorted_order(ti, to)
+            assert merger.late == orders.count(LATE) == expected_late > 0 and merger.too_late == 0
+        else:
+            assert merger.too_late == orders.count(TOO_LATE) >= to.size - 2  # the last ones wait in the queue
+    assert merger.pending == 0
+
+
+def test_the_fast_and_the_exact_filter_are_interchangeable_in_the_robot_filter():
+    """RobotCmkf (twist) with its default VelocityAxisCmkf and with AxisCmkf(mode="vel") given instead: the same
+    estimates at every odometry message (one CmkfFilter interface, no branch on the filter type)."""
+    from imu_noise_id.core.cmkf.fast_vel import VelocityAxisCmkf
+
+    run = simulate_robot(30.0, np.random.default_rng(8))
+    cfg = CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, s_v0=2e-4)
+    fast, exact = RobotCmkf(cfg), RobotCmkf(cfg, AxisCmkf(3, cfg.s_v0, mode="vel", min_samples=cfg.min_samples,
+                                                            pd_check=cfg.pd_check))
+    assert isinstance(fast.filter, VelocityAxisCmkf)
+    a, b = replay_arrays(fast, run), replay_arrays(exact, run)
+    assert a[-1].status == "tracking" and a[-1].n_stacked > 250
+    for ea, eb in zip(a, b, strict=True):
+        for name in ("accel_bias", "accel_bias_std", "S_v", "gyro_bias", "gyro_bias_std", "S_g"):
+            np.testing.assert_allclose(getattr(ea, name), getattr(eb, name), rtol=1e-8, atol=1e-14, err_msg=name)
+        assert ea.nis_accel == pytest.approx(eb.nis_accel, rel=1e-8, nan_ok=True)
+        assert (ea.status, ea.n_stacked, ea.counters) == (eb.status, eb.n_stacked, eb.counters)
+    np.testing.assert_allclose(fast.filter.y, exact.filter.y, rtol=1e-8, atol=1e-14)
+    np.testing.assert_allclose(fast.filter.S, exact.filter.S, rtol=1e-8)
+    with pytest.raises(ValueError, match="measurement component"):
+        RobotCmkf(cfg, AxisCmkf(3, 1e-4, mode="pos_vel"))
+
+
+def test_the_robot_filter_drops_odometry_fed_behind_its_state():
+    """Without a stamp merger, odometry stamped behind the IMU-propagated state is dropped and counted (putting
+    two topics in stamp order is CmkfStream's job)."""
+    run = _short_run()
+    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw))
+    _feed(f, run, imu_idx=range(1000), odom_idx=range(99))  # IMU to 10.0 s, odometry to 9.9 s
+    before = f.estimate()
+    assert not f.process_odometry(9.98, orientation_xyzw=run.orientation_xyzw[99],
+                                  linear_velocity=run.linear_velocity[99])
+    after = f.estimate()
+    assert after.counters["odom_dropped_late"] == 1 and after.counters["updates"] == before.counters["updates"]
+    np.testing.assert_array_equal(after.accel_bias, before.accel_bias)

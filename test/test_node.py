@@ -1,6 +1,6 @@
 """End to end with real DDS on loopback: the node as its own process, a bag played from another process.
 
-The node runs ``python -m imu_noise_id.node --ros-args --params-file config/imu_noise_id.yaml``; a simulated robot
+The node runs ``python -m imu_noise_id.ros.node --ros-args --params-file config/imu_noise_id.yaml``; a simulated robot
 (stand 15 s, drive 10 s, stand 10 s; known biases and white-noise densities, :data:`DEMO_TRUTH`) is played with
 ``imu-noise-id play --rate 2``; this test process subscribes to the outputs, then sends bad messages and changes
 parameters at runtime.
@@ -30,9 +30,9 @@ from std_msgs.msg import Float64MultiArray  # noqa: E402
 
 from imu_noise_id.bag.writer import write_robot_bag  # noqa: E402
 from imu_noise_id.demo.online import DEMO_TRUTH, simulate_demo_run  # noqa: E402
-from imu_noise_id.node import parse_labelled  # noqa: E402
 from imu_noise_id.resources import NODE_PARAMETERS, packaged_config  # noqa: E402
 from imu_noise_id.ros.launch import node_command, stop  # noqa: E402
+from imu_noise_id.ros.messages import parse_labelled  # noqa: E402
 
 NODE_CONFIG = packaged_config(NODE_PARAMETERS)
 
@@ -174,7 +174,7 @@ def test_diagnostics_arrive_about_once_a_second(session):
     assert len(stamps) >= 5
     statuses = obs.statuses()
     for name in ("IMU input", "Odometry input", "Time stamps", "Stationarity", "Filter consistency",
-                 "Noise density", "Hypotheses", "Estimate ranges", "Processing"):
+                 "Filter innovations", "Noise density", "Hypotheses", "Estimate ranges", "Processing"):
         assert name in statuses, name
     assert statuses["Time stamps"][0] == 0
     assert statuses["Noise density"][0] == 0

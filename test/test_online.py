@@ -10,10 +10,13 @@ import pytest
 import yaml
 
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.simulation.stop_and_go import simulate_stop_and_go
+from imu_noise_id.core.white_noise import FirstDifferences
+from imu_noise_id.demo.online import simulate_demo_run
 from imu_noise_id.pipelines.online import ERROR, OK, STALE, WARN, OnlineIdentifier
-from imu_noise_id.pipelines.online_blocks import AllanTau0NoiseDensity, StampChecker, StationarityDetector
-from imu_noise_id.pipelines.online_config import PARAMETERS, OnlineConfig
+from imu_noise_id.pipelines.online.config import PARAMETERS, OnlineConfig
+from imu_noise_id.pipelines.online.inputs import StampChecker
+from imu_noise_id.pipelines.online.stationarity import StationarityDetector
+from imu_noise_id.resources import read_hypotheses_file
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 GYRO_BIAS = (0.004, -0.006, 0.003)
@@ -39,6 +42,22 @@ def test_yaml_defaults_match_the_declared_parameters():
         expected = list(p.default) if isinstance(p.default, tuple) else p.default
         assert values[p.name] == expected, p.name
     OnlineConfig(values)  # the shipped file is valid
+
+
+def test_the_cmkf_defaults_are_written_once():
+    """The node's cmkf.* and nis.window parameters and the options of imu-noise-id cmkf default to CmkfConfig."""
+    import dataclasses
+
+    from imu_noise_id.cli import build_parser
+    from imu_noise_id.core.cmkf.config import CmkfConfig
+    from imu_noise_id.pipelines.online.config import cmkf_config
+
+    # the one exception: the stamp merger's allowance, 0.1 s for a ROS graph's topics (node) and 0.05 s in the core
+    assert cmkf_config(OnlineConfig()) == dataclasses.replace(CmkfConfig(), late_odom_tolerance=0.1)
+    args = build_parser().parse_args(["cmkf", "bag"])
+    for name in ("measurement", "velocity_noise_std", "position_noise_std", "angular_velocity_noise_std",
+                 "accel_bias_tau", "accel_bias_sigma", "s_v0", "gyro_bias_tau", "gyro_bias_sigma"):
+        assert getattr(args, name) == getattr(CmkfConfig(), name), name
 
 
 @pytest.mark.parametrize(
@@ -110,22 +129,46 @@ def test_stationarity_with_require_odometry_never_without_odometry():
 def test_allan_tau0_density_of_white_noise_and_its_rstd():
     rng = np.random.default_rng(2)
     dt, density = 0.005, 2e-3
-    est = AllanTau0NoiseDensity()
+    est = FirstDifferences(6)
     drift = np.cumsum(rng.normal(0, 1e-5, 20000))  # a slow random walk the differences must ignore
     for k in range(20000):
         est.add(k * dt, np.full(6, drift[k]) + rng.normal(0, density / math.sqrt(dt), 6))
     rstd = est.relative_std()
     assert rstd == pytest.approx(math.sqrt(3 / 19999) / 2)
     # Six axes within 4 relative standard deviations (a false alarm has probability < 1e-3).
-    assert np.all(np.abs(est.noise_density() / density - 1) < 4 * rstd)
+    assert np.all(np.abs(est.density() / density - 1) < 4 * rstd)
+
+
+def test_the_online_noise_density_is_the_batch_white_noise_estimate():
+    """One τ₀ estimate: the node's streaming FirstDifferences (stamps, chains) equals the hypotheses' batch
+    white_noise_estimate on the same samples, and a broken chain drops exactly the difference across the break."""
+    from imu_noise_id.core.hypotheses.config import white_noise_estimate
+
+    rng = np.random.default_rng(4)
+    dt = 0.01
+    y = 3.0 + rng.normal(0.0, 0.1, 500) + np.linspace(0.0, 0.5, 500)
+    stream = FirstDifferences(1)
+    for k, value in enumerate(y):
+        stream.add(100.0 + k * dt, np.array([value]))
+    assert stream.n == 499 and stream.sum_dt == pytest.approx(499 * dt)
+    assert stream.density()[0] == pytest.approx(white_noise_estimate(y, dt), rel=1e-9)
+    two = FirstDifferences(1)
+    for k, value in enumerate(y):
+        if k == 250:
+            two.break_chain()
+        two.add(100.0 + k * dt, np.array([value]))
+    assert two.n == 498
+    halves = FirstDifferences(1)
+    halves.add_series(y[:250])
+    halves.add_series(y[250:])
+    assert halves.density(dt)[0] == pytest.approx(two.density()[0], rel=1e-9)
 
 
 @pytest.fixture(scope="module")
 def replayed() -> tuple[OnlineIdentifier, object]:
     """A stand (25 s) – drive (20 s) – stand (20 s) run at 200 Hz IMU / 50 Hz odometry through the identifier."""
-    run = simulate_stop_and_go(np.random.default_rng(3), stand_before=25, drive=20, stand_after=20,
-                               gyro_bias=GYRO_BIAS, accel_bias=ACCEL_BIAS)
-    ident = OnlineIdentifier()
+    run = simulate_demo_run(3, stand_before=25, drive=20, stand_after=20)  # biases GYRO_BIAS, ACCEL_BIAS
+    ident = OnlineIdentifier(hypotheses=read_hypotheses_file(None))
     i = j = 0
     ni, nj = len(run.imu_t), len(run.odom_t)
     corrected = []
@@ -163,7 +206,7 @@ def test_replay_recovers_biases_and_noise(replayed):
     np.testing.assert_allclose(est.covariance, est.noise_density**2 * 200.0, rtol=1e-3)
     assert est.noise_samples > 6000
     # Two stationary stretches, one drive: the guard and hysteresis leave exactly two entries.
-    assert ident.stationary_transitions in (3, 4)
+    assert ident.stationarity.transitions in (3, 4)
 
 
 def test_replay_feeds_the_bank_only_while_stationary(replayed):
@@ -184,8 +227,8 @@ def test_corrected_samples_have_biases_removed_and_covariances(replayed):
     ident, run, corrected = replayed
     last = corrected[-1]
     # The biases at that sample are those of the previous odometry update (they move by < 1e-4 per update).
-    assert np.all(np.abs(np.array(last.gyro) - (run.gyro[-1] - ident.gyro_bias)) < 1e-4)
-    assert np.all(np.abs(np.array(last.accel) - (run.accel[-1] - ident.accel_bias)) < 1e-3)
+    assert np.all(np.abs(np.array(last.gyro) - (run.gyro[-1] - ident.cmkf_feed.gyro_bias)) < 1e-4)
+    assert np.all(np.abs(np.array(last.accel) - (run.accel[-1] - ident.cmkf_feed.accel_bias)) < 1e-3)
     tail = np.array([c.gyro for c in corrected[-2000:]])
     assert np.all(np.abs(tail.mean(axis=0)) < 1e-3)  # standing still: the corrected rate averages to ~0
     assert last.gyro_variance == pytest.approx(tuple(ident.estimates().covariance[:3]), rel=0.05)
@@ -240,7 +283,7 @@ def test_a_sustained_jump_back_in_time_restarts_the_identification():
 
 
 def test_monitor_render_shows_every_section():
-    from imu_noise_id.cli.monitor import MonitorState, render
+    from imu_noise_id.ros.monitor import MonitorState, render
 
     fields = ["noise_density", "bias", "bias_std", "bank_WN.noise_density"]
     rows = [[1e-3, 0.004, 5e-4, 9e-4]] * 6
@@ -259,8 +302,8 @@ def test_monitor_render_shows_every_section():
 
 def test_play_loads_a_bag_in_time_order_and_rejects_unknown_topics(tmp_path):
     from imu_noise_id.bag.writer import write_robot_bag
-    from imu_noise_id.cli.play import load_messages
     from imu_noise_id.demo.online import simulate_demo_run
+    from imu_noise_id.ros.play import load_messages
 
     run = simulate_demo_run(stand_before=1.0, drive=1.0, stand_after=1.0)
     bag = write_robot_bag(run, tmp_path / "bag")
@@ -279,7 +322,7 @@ def test_play_loads_a_bag_in_time_order_and_rejects_unknown_topics(tmp_path):
 def test_odometry_arriving_after_later_imu_samples_is_processed_in_stamp_order():
     """Odometry delivered up to 60 ms after IMU samples with later stamps (two topics, two latencies): the CMKF
     still sees stamp order (without the reordering it raised LinAlgError on such input)."""
-    run = simulate_stop_and_go(np.random.default_rng(5), stand_before=5, drive=10, stand_after=5)
+    run = simulate_demo_run(5, stand_before=5, drive=10, stand_after=5)
     rng = np.random.default_rng(6)
     arrival = np.maximum.accumulate(run.odom_t + 0.06 * rng.random(run.odom_t.size))  # one topic keeps its order
     events = [(t, 0, k) for k, t in enumerate(arrival)]
@@ -292,15 +335,15 @@ def test_odometry_arriving_after_later_imu_samples_is_processed_in_stamp_order()
             ident.process_odometry(run.odom_t[k], tuple(run.linear_velocity[k]), tuple(run.angular_velocity[k]),
                                    position=tuple(run.position[k]), orientation_xyzw=tuple(run.orientation_xyzw[k]),
                                    twist_covariance=run.twist_cov[k].ravel())
-    assert ident.cmkf_errors == 0
+    assert ident.cmkf_feed.errors == 0
     est = ident.estimates()
     assert est.cmkf_status == "tracking"
-    assert ident.cmkf.counters["updates"] >= len(run.odom_t) - 10
+    assert ident.cmkf_feed.cmkf.counters["updates"] >= len(run.odom_t) - 10
 
 
 def test_without_odometry_the_imu_alone_decides_and_the_noise_is_still_identified():
     rng = np.random.default_rng(8)
-    ident = OnlineIdentifier()
+    ident = OnlineIdentifier(hypotheses=read_hypotheses_file(None))
     dt = 0.005
     for k in range(4000):  # 20 s standing, no odometry at all
         gyro = rng.normal(0.0, 1e-3 / math.sqrt(dt), 3) + 0.002
@@ -321,7 +364,7 @@ def test_without_odometry_the_imu_alone_decides_and_the_noise_is_still_identifie
 
 
 def test_odometry_later_than_the_input_latency_is_dropped_not_fatal():
-    run = simulate_stop_and_go(np.random.default_rng(9), stand_before=3, drive=4, stand_after=3)
+    run = simulate_demo_run(9, stand_before=3, drive=4, stand_after=3)
     ident = OnlineIdentifier(OnlineConfig({"cmkf.input_latency": 0.02}))
     events = [(t + 0.03, 0, k) for k, t in enumerate(run.odom_t)]  # always 30 ms late: beyond the 20 ms window
     events += [(t, 1, k) for k, t in enumerate(run.imu_t)]
@@ -331,8 +374,8 @@ def test_odometry_later_than_the_input_latency_is_dropped_not_fatal():
         else:
             ident.process_odometry(run.odom_t[k], tuple(run.linear_velocity[k]), tuple(run.angular_velocity[k]),
                                    position=tuple(run.position[k]), orientation_xyzw=tuple(run.orientation_xyzw[k]))
-    assert ident.cmkf_errors == 0
-    assert ident.odom_too_late >= len(run.odom_t) - 2  # the last ones may still wait in the queue
+    assert ident.cmkf_feed.errors == 0
+    assert ident.cmkf_feed.too_late >= len(run.odom_t) - 2  # the last ones may still wait in the queue
     status = {s.name: s for s in ident.diagnostics(0.0, 1.0)}["Time stamps"]
     assert status.level == WARN and "odom too late" in status.message
 
@@ -342,7 +385,7 @@ def test_play_converts_ros1_messages_to_the_ros2_types(shared_data):
     pytest.importorskip("rclpy")
     from rclpy.serialization import deserialize_message
 
-    from imu_noise_id.cli.play import load_messages, message_class, to_rclpy
+    from imu_noise_id.ros.play import load_messages, message_class, to_rclpy
 
     folder = shared_data / "husky_robot_localization"
     if not (folder / "test1.bag").is_file():
@@ -357,3 +400,53 @@ def test_play_converts_ros1_messages_to_the_ros2_types(shared_data):
         assert (t1, topic1) == (t2, topic2)
         cls = message_class(kind)
         assert to_rclpy(obj, cls) == deserialize_message(raw, cls)
+
+
+def _filter_innovations_status(vibration: float) -> object:
+    """The 'Filter innovations' status after a simulated robot (60 s, IMU 100 Hz, odometry 10 Hz) with a 1.3 Hz
+    specific-force oscillation of ``vibration`` m/s² on the IMU's y axis, which no filter model contains."""
+    from imu_noise_id.core.cmkf.merge import stamp_order
+    from imu_noise_id.core.simulation.robot import simulate_robot
+
+    run = simulate_robot(60.0, np.random.default_rng(1))
+    accel = run.accel.copy()
+    accel[:, 1] += vibration * np.sin(2 * math.pi * 1.3 * run.imu_t)
+    ident = OnlineIdentifier(OnlineConfig({"cmkf.imu_rotation_xyzw": run.imu_rotation_xyzw,
+                                           "innovations.window": 300}))
+    for is_odometry, k in stamp_order(run.imu_t, run.odom_t):
+        if is_odometry:
+            ident.process_odometry(100.0 + run.odom_t[k], tuple(run.linear_velocity[k]),
+                                   tuple(run.angular_velocity[k]), orientation_xyzw=tuple(run.orientation_xyzw[k]),
+                                   twist_covariance=run.twist_cov[k].ravel())
+        else:
+            ident.process_imu(100.0 + run.imu_t[k], tuple(run.gyro[k]), tuple(accel[k]))
+    return {s.name: s for s in ident.diagnostics(0.0, 1.0)}["Filter innovations"]
+
+
+def test_unmodelled_vibration_reaches_the_diagnostics_as_correlated_innovations():
+    """The InnovationMonitors on the CMKF's and the gyro filter's innovations make the 'Filter innovations' status:
+    white and consistent on the simulated robot; 'model inadequate: accel_y: residuals correlated at lag …' with a
+    0.05 m/s² vibration (about 5 σ of the accelerometer noise over an odometry interval)."""
+    clean = _filter_innovations_status(0.0)
+    assert clean.level == OK and "white and consistent" in clean.message
+    assert clean.values["channels_tested"] == "6/6"
+    shaken = _filter_innovations_status(0.05)
+    assert shaken.level == WARN
+    assert shaken.message.startswith("model inadequate: accel_y: residuals correlated at lag")
+    assert float(shaken.values["accel_y_ljung_box_p"]) < 1e-10 and float(shaken.values["gyro_z_ljung_box_p"]) > 1e-4
+    with pytest.raises(InputError, match="innovations"):
+        OnlineIdentifier(OnlineConfig({"innovations.window": 50, "innovations.lags": 20}))
+
+
+def test_the_cli_parses_arguments_only_and_the_monitor_does_not_import_the_node():
+    """cli/play.py and cli/monitor.py only parse arguments and call imu_noise_id.ros: importing them (and the
+    monitor's view) loads neither rclpy nor the node."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import sys, imu_noise_id.cli.monitor, imu_noise_id.cli.play, imu_noise_id.ros.monitor; "
+            "print(sorted(m for m in ('rclpy', 'imu_noise_id.ros.node', 'imu_noise_id.ros.play') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=REPO_ROOT, env={**os.environ, "PYTHONPATH": str(REPO_ROOT)})
+    assert out.stdout.strip() == "[]"

@@ -6,7 +6,11 @@ import argparse
 import math
 from pathlib import Path
 
+from ..core.cmkf.config import MEASUREMENTS, CmkfConfig
 from ..core.errors import InputError
+
+#: The defaults of the options: the CMKF's own.
+_DEFAULTS = CmkfConfig()
 
 DESCRIPTION = """\
 Run the online covariance matching Kalman filter (paper 004, generalised to a robot) over a bag with a
@@ -45,27 +49,34 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="IMU orientation in the base frame: 3 numbers = yaw pitch roll [rad] (static_transform_publisher "
         "order, e.g. -1.5708 0 1.5708) or 4 numbers = quaternion x y z w (default: identity)",
     )
-    p.add_argument("--measurement", choices=("twist", "pose_twist"), default="twist",
-                   help="twist: body velocity only (wheel odometry, default); pose_twist: position and velocity")
+    p.add_argument("--measurement", choices=MEASUREMENTS, default=_DEFAULTS.measurement,
+                   help=f"twist: body velocity only (wheel odometry); pose_twist: position and velocity "
+                   f"(default {_DEFAULTS.measurement})")
     p.add_argument(
         "--gravity-from", choices=("imu", "odom"), default=None,
         help="orientation used to remove gravity: imu = the Imu messages' own orientation (right on uneven ground; "
         "needs a driver that provides it), odom = the odometry orientation propagated with the gyro (planar wheel "
         "odometry has no roll/pitch). Default: imu when the bag's Imu messages provide an orientation, else odom",
     )
-    p.add_argument("--velocity-noise-std", type=float, default=None, metavar="M_S",
-                   help="odometry velocity noise σ [m/s] (default: the message covariance)")
-    p.add_argument("--position-noise-std", type=float, default=None, metavar="M",
-                   help="odometry position noise σ [m] (default: the message covariance)")
-    p.add_argument("--angular-velocity-noise-std", type=float, default=None, metavar="RAD_S",
-                   help="odometry angular-velocity noise σ [rad/s] (default: the message covariance)")
-    p.add_argument("--accel-bias-tau", type=float, default=3600.0, metavar="S", help="accel bias τ [s] (3600)")
-    p.add_argument("--accel-bias-sigma", type=float, default=0.1, metavar="M_S2",
-                   help="accel bias steady-state σ [m/s²] (0.1)")
-    p.add_argument("--s-v0", type=float, default=1e-4, metavar="M2_S3", help="initial S_v [m²/s³] (1e-4)")
-    p.add_argument("--gyro-bias-tau", type=float, default=3600.0, metavar="S", help="gyro bias τ [s] (3600)")
-    p.add_argument("--gyro-bias-sigma", type=float, default=0.01, metavar="RAD_S",
-                   help="gyro bias steady-state σ [rad/s] (0.01)")
+    p.add_argument("--velocity-noise-std", type=float, default=_DEFAULTS.velocity_noise_std, metavar="M_S",
+                   help="odometry velocity noise σ [m/s] (default: the message covariance, "
+                   f"{_DEFAULTS.default_velocity_noise_std:g} when it is unknown)")
+    p.add_argument("--position-noise-std", type=float, default=_DEFAULTS.position_noise_std, metavar="M",
+                   help="odometry position noise σ [m] (default: the message covariance, "
+                   f"{_DEFAULTS.default_position_noise_std:g} when it is unknown)")
+    p.add_argument("--angular-velocity-noise-std", type=float, default=_DEFAULTS.angular_velocity_noise_std,
+                   metavar="RAD_S", help="odometry angular-velocity noise σ [rad/s] (default: the message covariance, "
+                   f"{_DEFAULTS.default_angular_velocity_noise_std:g} when it is unknown)")
+    p.add_argument("--accel-bias-tau", type=float, default=_DEFAULTS.accel_bias_tau, metavar="S",
+                   help=f"accel bias τ [s] ({_DEFAULTS.accel_bias_tau:g})")
+    p.add_argument("--accel-bias-sigma", type=float, default=_DEFAULTS.accel_bias_sigma, metavar="M_S2",
+                   help=f"accel bias steady-state σ [m/s²] ({_DEFAULTS.accel_bias_sigma:g})")
+    p.add_argument("--s-v0", type=float, default=_DEFAULTS.s_v0, metavar="M2_S3",
+                   help=f"initial S_v [m²/s³] ({_DEFAULTS.s_v0:g})")
+    p.add_argument("--gyro-bias-tau", type=float, default=_DEFAULTS.gyro_bias_tau, metavar="S",
+                   help=f"gyro bias τ [s] ({_DEFAULTS.gyro_bias_tau:g})")
+    p.add_argument("--gyro-bias-sigma", type=float, default=_DEFAULTS.gyro_bias_sigma, metavar="RAD_S",
+                   help=f"gyro bias steady-state σ [rad/s] ({_DEFAULTS.gyro_bias_sigma:g})")
     p.add_argument("--no-plot", action="store_true", help="skip cmkf.png")
     p.set_defaults(run=run)
 
@@ -94,10 +105,9 @@ def run(args: argparse.Namespace) -> int:
     import yaml
 
     from ..bag.reader import read_bag
-    from ..core.cmkf.robot import RobotCmkfConfig
     from ..pipelines.cmkf_replay import replay, to_yaml_dict
 
-    config = RobotCmkfConfig(
+    config = CmkfConfig(
         imu_rotation_xyzw=imu_rotation(args.imu_rotation),
         measurement=args.measurement,
         velocity_noise_std=args.velocity_noise_std,

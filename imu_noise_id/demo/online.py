@@ -2,8 +2,9 @@
 
 ``python -m imu_noise_id.demo.online [--out DIR] [--rate X]`` (``make demo`` calls :func:`run_demo`):
 
-1. simulate a robot that stands, drives and stands again (:func:`~imu_noise_id.core.simulation.stop_and_go.
-   simulate_stop_and_go`; known biases and noise densities) and write it as a rosbag2 bag;
+1. simulate a robot that stands, drives and stands again (:func:`~imu_noise_id.core.simulation.robot.simulate_robot`
+   with the :class:`~imu_noise_id.core.simulation.robot.StopAndGo` profile; known biases and noise densities) and
+   write it as a rosbag2 bag;
 2. start the node as its own process with ``config/imu_noise_id.yaml``;
 3. play the bag (``imu-noise-id play``) and show the monitor view while the estimates converge;
 4. print the final estimates next to the simulation's truth.
@@ -26,8 +27,8 @@ import numpy as np
 
 from ..bag.writer import write_robot_bag
 from ..core.axes import AXES
-from ..core.simulation.robot import RobotRun
-from ..core.simulation.stop_and_go import simulate_stop_and_go
+from ..core.cmkf import rotation as rot
+from ..core.simulation.robot import RobotRun, RobotSensors, StopAndGo, simulate_robot
 from ..resources import NODE_PARAMETERS, packaged_config
 from ..ros.launch import node_command, ros_environment, stop
 
@@ -40,24 +41,31 @@ DEMO_TRUTH = {
 }
 
 
+#: The demo robot's sensors: :data:`DEMO_TRUTH`, odometry twist noise 5 mm/s and 5 mrad/s, IMU not rotated.
+DEMO_SENSORS = RobotSensors(
+    accel_bias=DEMO_TRUTH["accel_bias"], gyro_bias=DEMO_TRUTH["gyro_bias"],
+    S_v=DEMO_TRUTH["accel_noise_density"] ** 2, S_g=DEMO_TRUTH["gyro_noise_density"] ** 2,
+    velocity_noise_std=0.005, angular_velocity_noise_std=0.005, position_noise_std=0.0, pose_variance=(1e-4, 1e-4),
+    imu_rotation_xyzw=rot.IDENTITY, noise_order=("gyro", "accel"),
+)
+
+
 def simulate_demo_run(seed: int = 7, *, stand_before: float = 20.0, drive: float = 25.0, stand_after: float = 20.0,
-                      imu_rate: float = 200.0, odom_rate: float = 50.0) -> RobotRun:
-    """The demo robot: stand, drive, stand, with :data:`DEMO_TRUTH` biases and white-noise densities."""
-    return simulate_stop_and_go(
-        np.random.default_rng(seed), stand_before=stand_before, drive=drive, stand_after=stand_after,
-        imu_rate=imu_rate, odom_rate=odom_rate, gyro_bias=DEMO_TRUTH["gyro_bias"],
-        accel_bias=DEMO_TRUTH["accel_bias"], gyro_noise_density=DEMO_TRUTH["gyro_noise_density"],
-        accel_noise_density=DEMO_TRUTH["accel_noise_density"],
+                      imu_rate: float = 200.0, odom_rate: float = 50.0, substeps: int = 8) -> RobotRun:
+    """The demo robot: stand, drive, stand (stamps from 1000 s), with :data:`DEMO_SENSORS`."""
+    return simulate_robot(
+        stand_before + drive + stand_after, np.random.default_rng(seed), motion=StopAndGo(stand_before, drive),
+        sensors=DEMO_SENSORS, imu_rate=imu_rate, odom_rate=odom_rate, t0=1000.0, substeps=substeps,
     )
 
 
 def summary(state: object) -> str:
     """Final estimates from a monitor state next to :data:`DEMO_TRUTH`."""
-    from ..cli.monitor import _column
+    from ..ros.monitor import column
 
-    bias = _column(state.noise, "bias")
-    std = _column(state.noise, "bias_std")
-    density = _column(state.noise, "noise_density")
+    bias = column(state.noise, "bias")
+    std = column(state.noise, "bias_std")
+    density = column(state.noise, "noise_density")
     truth_bias = list(DEMO_TRUTH["gyro_bias"]) + list(DEMO_TRUTH["accel_bias"])
     truth_n = [DEMO_TRUTH["gyro_noise_density"]] * 3 + [DEMO_TRUTH["accel_noise_density"]] * 3
     lines = ["", "Final estimates vs the simulation's truth",
@@ -81,7 +89,7 @@ def online_part(ctx: object) -> None:
     """The online demo as a part of ``python -m imu_noise_id.demo`` (:data:`imu_noise_id.demo.PARTS`).
 
     Uses ``ctx.out`` and ``ctx.seed``; stores the node's final outputs (a
-    :class:`~imu_noise_id.cli.monitor.MonitorState`) in ``ctx.results["online"]`` and the bag in ``ctx.outputs``.
+    :class:`~imu_noise_id.ros.monitor.MonitorState`) in ``ctx.results["online"]`` and the bag in ``ctx.outputs``.
     """
     print("\n== online: the node on a simulated robot (stand, drive, stand), watched live ==")
     state = watch_demo(Path(ctx.out) / "online", 2.0, int(ctx.seed))
@@ -93,8 +101,8 @@ def watch_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> obj
     """Steps 1–4 of the module docstring; returns the node's final outputs as a ``MonitorState``."""
     import rclpy
 
-    from ..cli.monitor import _Listener, render, watch
-    from ..cli.play import load_messages
+    from ..ros.monitor import Listener, render, watch
+    from ..ros.play import load_messages
 
     work = Path(out) if out else Path(tempfile.mkdtemp(prefix="imu_noise_id_demo_"))
     work.mkdir(parents=True, exist_ok=True)
@@ -118,7 +126,7 @@ def watch_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> obj
         player = subprocess.Popen([sys.executable, "-m", "imu_noise_id", "play", str(bag), "--rate", str(rate),
                                    "--quiet"], env=env)
         viewer = rclpy.create_node("imu_noise_id_demo_monitor")
-        listener = _Listener(viewer, "/imu_noise_id_node")
+        listener = Listener(viewer, "/imu_noise_id_node")
         watch(viewer, listener, 1.0, duration / rate + 3.0)
         player.wait(30)
         print(render(listener.state))

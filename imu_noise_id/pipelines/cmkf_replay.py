@@ -1,7 +1,9 @@
 """Offline replay of the online CMKF (:class:`~imu_noise_id.core.cmkf.robot.RobotCmkf`) over recorded arrays.
 
-The messages are fed one at a time in stamp order (IMU before odometry on equal stamps), exactly as the ROS node
-does, as fast as the filter runs; the estimate is recorded after every odometry message.
+The messages are fed one at a time in stamp order (IMU before odometry on equal stamps; the merge of
+:func:`~imu_noise_id.core.cmkf.merge.stamp_order`, as in the node) by
+:func:`~imu_noise_id.core.cmkf.stream.feed_recording`, as fast as the filter runs; the estimate is recorded after
+every odometry message.
 """
 
 from __future__ import annotations
@@ -11,10 +13,12 @@ import time
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.stats import chi2
 
 from ..core.axes import ImuSeries, OdometrySeries
-from ..core.cmkf.robot import CmkfEstimate, RobotCmkf, RobotCmkfConfig
+from ..core.cmkf.config import CmkfConfig
+from ..core.cmkf.robot import CmkfEstimate, RobotCmkf
+from ..core.cmkf.stream import feed_recording
+from ..core.diagnostics.consistency import nis_bounds
 
 #: Per-axis fields of :class:`CmkfEstimate` recorded over time.
 SERIES_FIELDS = (
@@ -40,7 +44,7 @@ class CmkfReplayResult:
     nis_gyro: np.ndarray
     status: list[str]
     final: CmkfEstimate
-    config: RobotCmkfConfig
+    config: CmkfConfig
     info: dict[str, object] = field(default_factory=dict)
 
 
@@ -51,7 +55,7 @@ def _rate(t: np.ndarray) -> float:
 def replay(
     imu: ImuSeries,
     odom: OdometrySeries | None,
-    config: RobotCmkfConfig | None = None,
+    config: CmkfConfig | None = None,
     imu_orientation_xyzw: np.ndarray | None = None,
 ) -> CmkfReplayResult:
     """Run :class:`RobotCmkf` over ``imu`` and ``odom`` (None: IMU only, nothing observable).
@@ -63,38 +67,14 @@ def replay(
     ``config.gravity_source == "imu"``; a NaN row (not provided, see :class:`~imu_noise_id.core.axes.ImuSeries`)
     is passed as None, so the filter keeps the last orientation it was given.
     """
-    config = config or RobotCmkfConfig()
+    config = config or CmkfConfig()
     filt = RobotCmkf(config)
     ti = np.asarray(imu.t, dtype=float)
-    imu_rows = np.column_stack([imu.gyro, imu.accel]).tolist()
-    quats = None
-    if imu_orientation_xyzw is not None:
-        q = np.asarray(imu_orientation_xyzw, dtype=float)
-        finite = np.isfinite(q).all(axis=1)
-        quats = [row if ok else None for row, ok in zip(q.tolist(), finite.tolist(), strict=True)]
     to = np.asarray(odom.t, dtype=float) if odom is not None else np.zeros(0)
-    # Stamp order with IMU first on ties: indices of the IMU samples to process before each odometry message.
-    cut = np.searchsorted(ti, to, side="right")
-    fields = [] if odom is None else [
-        ("position", odom.position), ("orientation_xyzw", odom.orientation_xyzw),
-        ("linear_velocity", odom.linear_velocity), ("angular_velocity", odom.angular_velocity),
-        ("pose_cov", odom.pose_covariance), ("twist_cov", odom.twist_covariance),
-    ]
     rec = {name: [] for name in SERIES_FIELDS}
     nis_a, nis_g, status = [], [], []
     t_start = time.perf_counter()
-    i = 0
-    ni = ti.size
-    tl = ti.tolist()
-    for j in range(to.size + 1):
-        stop = int(cut[j]) if j < to.size else ni
-        while i < stop:
-            row = imu_rows[i]
-            filt.process_imu(tl[i], row[0:3], row[3:6], None if quats is None else quats[i])
-            i += 1
-        if j == to.size:
-            break
-        updated = filt.process_odometry(to[j], **{key: None if arr is None else arr[j] for key, arr in fields})
+    for updated in feed_recording(filt, imu, odom, imu_orientation_xyzw):
         est = filt.estimate()
         for name in SERIES_FIELDS:
             rec[name].append(getattr(est, name))
@@ -104,13 +84,13 @@ def replay(
     elapsed = time.perf_counter() - t_start
     final = filt.estimate()
     info: dict[str, object] = {
-        "imu_topic": imu.topic, "imu_frame": imu.frame_id, "imu_samples": int(ni), "imu_rate_hz": _rate(ti),
+        "imu_topic": imu.topic, "imu_frame": imu.frame_id, "imu_samples": int(ti.size), "imu_rate_hz": _rate(ti),
         "odom_topic": odom.topic if odom is not None else None,
         "odom_frame": odom.frame_id if odom is not None else None,
         "odom_child_frame": odom.child_frame_id if odom is not None else None,
         "odom_messages": int(to.size), "odom_rate_hz": _rate(to),
         "duration_s": float(max(ti[-1], to[-1] if to.size else ti[-1]) - min(ti[0], to[0] if to.size else ti[0])),
-        "replay_seconds": elapsed, "imu_samples_per_second": ni / elapsed if elapsed > 0 else math.inf,
+        "replay_seconds": elapsed, "imu_samples_per_second": ti.size / elapsed if elapsed > 0 else math.inf,
     }
     series = {name: np.array(v).reshape(-1, 3) for name, v in rec.items()}
     return CmkfReplayResult(to, series, np.array(nis_a), np.array(nis_g), status, final, config, info)
@@ -122,7 +102,7 @@ def nis_summary(nis: np.ndarray, dof: int, skip_fraction: float = 0.2) -> dict[s
     x = x[int(skip_fraction * x.size):]
     if x.size == 0:
         return {"mean": math.nan, "dof": dof, "share_in_95": math.nan, "n": 0}
-    lo, hi = chi2.ppf([0.025, 0.975], dof)
+    lo, hi = nis_bounds(dof)
     return {"mean": float(x.mean()), "dof": dof, "share_in_95": float(np.mean((x >= lo) & (x <= hi))), "n": int(x.size)}
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import chi2
 
+from ..core.diagnostics.consistency import nis_bounds
 from ..pipelines.cmkf_replay import CmkfReplayResult
 
 
@@ -36,7 +36,7 @@ def plot_cmkf(result: CmkfReplayResult, path: Path, title: str = "") -> None:
     dof_a, dof_g = result.final.nis_accel_dof, result.final.nis_gyro_dof
     axs[3].semilogy(t, result.nis_accel, ".", ms=1.5, color="C0", label=f"NIS accel ({dof_a} dof)")
     axs[3].semilogy(t, result.nis_gyro, ".", ms=1.5, color="C3", alpha=0.5, label=f"NIS gyro ({dof_g} dof)")
-    lo, hi = chi2.ppf([0.025, 0.975], dof_a)
+    lo, hi = nis_bounds(dof_a)
     axs[3].axhline(lo, color="k", lw=0.6, ls=":")
     axs[3].axhline(hi, color="k", lw=0.6, ls=":", label=f"χ²({dof_a}) 95 % bounds")
     axs[3].set_ylabel("NIS")

@@ -1,7 +1,7 @@
 """Launch-free recipe for running the node: its environment (DDS on loopback), its command line, stopping it.
 
 ROS 2 from PyPI has no ``launch`` package and no ``ros2`` command: a node is a process started with
-``python -m imu_noise_id.node --ros-args …``. The demo, the benchmarks and the tests start it through these helpers,
+``python -m imu_noise_id.ros.node --ros-args …``. The demo, the benchmarks and the tests start it through these helpers,
 so every process they start keeps DDS on 127.0.0.1 (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) and writes its
 rclpy logs into a temporary folder.
 """
@@ -26,7 +26,7 @@ def ros_environment() -> dict[str, str]:
 
 def node_command(params_file: Path, *extra: str) -> list[str]:
     """The command line that starts the node with ``params_file`` (plus extra ``--ros-args`` items)."""
-    return [sys.executable, "-m", "imu_noise_id.node", "--ros-args", "--params-file", str(params_file),
+    return [sys.executable, "-m", "imu_noise_id.ros.node", "--ros-args", "--params-file", str(params_file),
             "-r", "imu:=/imu/data", *extra]
 
 

@@ -25,14 +25,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .stacked import Interval, StackedSvEstimator
+from .interval import ImuInterval
+from .stacked import StackedSvEstimator
 
 MODES = ("pos_vel", "vel")
 PD_CHECKS = ("joint", "per_axis")
 
 
 class AxisCmkf:
-    """Batched per-axis CMKF (paper 004), one shared time base.
+    """Batched per-axis CMKF (paper 004), one shared time base (a :class:`~.protocol.CmkfFilter`).
 
     Parameters
     ----------
@@ -80,7 +81,9 @@ class AxisCmkf:
         self.estimator = StackedSvEstimator(self.n, self.H[:, self.sub], bias_index=self.H[:, self.sub].shape[1] - 1)
         self.x = np.zeros((self.n, 3))
         self.P = np.zeros((self.n, 3, 3))
-        self._pending: tuple[Interval, np.ndarray] | None = None
+        self.y = np.full((self.n, self.m), np.nan)
+        self.S = np.full((self.n, self.m, self.m), np.nan)
+        self._pending: tuple[ImuInterval, np.ndarray] | None = None
         self.initialised = False
         self.rejected = 0  # estimates refused by the positive-definiteness check
         self.skipped = 0  # updates skipped because an innovation covariance was not positive definite
@@ -90,6 +93,16 @@ class AxisCmkf:
         """Stacked-estimator steps skipped on a degenerate interval (M_o not invertible)."""
         return self.estimator.skipped
 
+    @property
+    def count(self) -> int:
+        """Stacked samples in the S_v estimate."""
+        return self.estimator.count
+
+    @property
+    def S_ls(self) -> np.ndarray:
+        """Latest least-squares Ŝ_v per axis [m²/s³] (NaN before the first stacked sample)."""
+        return self.estimator.estimate
+
     def initialise(self, x0: np.ndarray, P0: np.ndarray) -> None:
         """Set x̂₀ (n, 3) and P₀ (n, 3, 3); starts a new chain for the stacked estimator."""
         self.x = np.array(x0, dtype=float).reshape(self.n, 3)
@@ -98,7 +111,7 @@ class AxisCmkf:
         self.estimator.reset_chain()
         self.initialised = True
 
-    def predict(self, x_pred: np.ndarray, interval: Interval) -> None:
+    def predict(self, x_pred: np.ndarray, interval: ImuInterval) -> None:
         """Propagate the covariance over ``interval`` (eq. 23) to the already propagated state ``x_pred``.
 
         The known input of the interval is ``U = x_pred − F̂ x̂⁺`` (eq. 17 with Δṽ, or any known input).
@@ -106,13 +119,12 @@ class AxisCmkf:
         samples into one interval per measurement epoch).
         """
         Phi = interval.Phi
-        U = x_pred - self.x @ Phi.T
-        self.P = Phi @ self.P @ Phi.T + self.S_used[:, None, None] * interval.Qa1
-        self.P[:, 2, 2] += interval.qb
+        U = np.asarray(x_pred, dtype=float) - self.x @ Phi.T
+        self.P = self.predicted_P(interval)
         self.x = np.array(x_pred, dtype=float)
         self._pending = (interval, U)
 
-    def predict_covariance(self, interval: Interval) -> np.ndarray:
+    def predicted_P(self, interval: ImuInterval) -> np.ndarray:
         """P⁻ after ``interval`` without changing the filter (for reporting between updates)."""
         Phi = interval.Phi
         P = Phi @ self.P @ Phi.T + self.S_used[:, None, None] * interval.Qa1
@@ -132,6 +144,8 @@ class AxisCmkf:
         H = self.H
         HP = H @ self.P  # (n, m, 3)
         S = HP @ H.T + R
+        nu = z - self.x @ H.T
+        self.y, self.S = nu, S
         if not _all_positive_definite(S):
             # beyond the paper: no update is possible (zero covariance, zero interval); skip it, restart the chain
             self.skipped += 1
@@ -140,7 +154,6 @@ class AxisCmkf:
             return np.full(self.n, np.nan)
         Sinv = 1.0 / S if self.m == 1 else np.linalg.inv(S)
         K = np.swapaxes(HP, 1, 2) @ Sinv  # (n, 3, m)
-        nu = z - self.x @ H.T
         self.x = self.x + np.einsum("nim,nm->ni", K, nu)
         IKH = np.eye(3) - K @ H
         self.P = IKH @ self.P @ np.swapaxes(IKH, 1, 2) + K @ R @ np.swapaxes(K, 1, 2)
@@ -149,9 +162,7 @@ class AxisCmkf:
             self.estimator.add_epoch(z, R, None, None)
         else:
             interval, U = self._pending
-            sub = self.sub
-            sub_interval = Interval(interval.Phi[sub, sub], interval.Qa1[sub, sub], interval.qb)
-            if self.estimator.add_epoch(z, R, sub_interval, U[:, sub]):
+            if self.estimator.add_epoch(z, R, interval.matrices(self.sub), U[:, self.sub]):
                 self._accept(self.estimator.estimate)
         self._pending = None
         return nis
@@ -178,9 +189,8 @@ def _all_positive_definite(S: np.ndarray) -> bool:
     return True
 
 
-def paper_interval(T: float, tau: float, sigma_ss: float) -> Interval:
-    """Interval matrices of paper 004 for one IMU sample per measurement (eqs. 7, 17, 23)."""
+def paper_interval(T: float, tau: float, sigma_ss: float) -> ImuInterval:
+    """Interval of paper 004 for one IMU sample per measurement (eqs. 7, 17, 23): ``Q_a = S_v T Ĝ Ĝᵀ``."""
     phi = np.exp(-T / tau)
-    Phi = np.array([[1.0, T, -(T**2) / 2.0], [0.0, 1.0, -T], [0.0, 0.0, phi]])
-    G = np.array([T / 2.0, 1.0, 0.0])
-    return Interval(Phi, T * np.outer(G, G), (1.0 - phi**2) * sigma_ss**2)
+    half = T / 2.0
+    return ImuInterval(T, T**2 / 2.0, T, phi, T * (half * half), T * half, (1.0 - phi**2) * sigma_ss**2)

@@ -1,9 +1,10 @@
 """Paper 004's CMKF for velocity-only measurements, written out in plain-float algebra (the robot's hot path).
 
-Same equations as :class:`~.axis.AxisCmkf` in mode ``"vel"`` (tested equal), specialised to the observable state
-``[v, b]`` of each axis so that an odometry update costs a few hundred float operations instead of ~60 small
-numpy calls. With ``H = [1, 0]``, ``F̂ = [[1, −β_v], [0, φ]]`` and ``Q_a = S_v [[T, 0], [0, 0]]`` (the velocity
-block of the interval matrices of :mod:`.robot`):
+Same equations and interface (:class:`~.protocol.CmkfFilter`) as :class:`~.axis.AxisCmkf` in mode ``"vel"``
+(tested equal, and interchangeable in :class:`~.robot.RobotCmkf`), specialised to the observable state ``[v, b]``
+of each axis so that an odometry update costs a few hundred float operations instead of ~60 small numpy calls; the
+position ``r``, unobserved, is carried through unchanged. With ``H = [1, 0]``, ``F̂ = [[1, −β_v], [0, φ]]`` and
+``Q_a = S_v [[T, 0], [0, 0]]`` (the velocity block of :class:`~.interval.ImuInterval`):
 
 - propagation (23): ``P_vv ← P_vv − 2β_v P_vb + β_v² P_bb + Ŝ_v T``, ``P_vb ← φ (P_vb − β_v P_bb)``,
   ``P_bb ← φ² P_bb + q_b``;
@@ -21,18 +22,20 @@ from collections import deque
 
 import numpy as np
 
+from .interval import ImuInterval
+
 
 class _Epoch:
     __slots__ = ("Bv", "R", "T", "U", "beta", "inv", "qb", "z")
 
-    def __init__(self, z: list[float], R: list[float], interval: tuple[float, float, float, float] | None,
+    def __init__(self, z: list[float], R: list[float], interval: ImuInterval | None,
                  U: list[tuple[float, float]] | None) -> None:
         self.z, self.R, self.U = z, R, U
         if interval is None:
             self.T = self.Bv = self.beta = self.qb = math.nan
             self.inv = None
         else:
-            self.T, self.Bv, self.beta, self.qb = interval
+            self.T, self.Bv, self.beta, self.qb = interval.T, interval.Bv, interval.phi, interval.qb
             # M_o⁻¹ row-major; M_o is singular for a zero-length interval (β_v = 0): no stacked step uses it
             self.inv = (0.0, 1.0, -1.0 / self.Bv, 1.0 / self.Bv) if self.Bv > 0.0 else None
 
@@ -43,7 +46,8 @@ class _Epoch:
 
 
 class VelocityAxisCmkf:
-    """Velocity-measurement CMKF for ``n`` independent axes on one time base (plain floats).
+    """Velocity-measurement CMKF for ``n`` independent axes on one time base (plain floats; a
+    :class:`~.protocol.CmkfFilter` with ``m = 1``).
 
     Parameters
     ----------
@@ -51,7 +55,7 @@ class VelocityAxisCmkf:
     min_samples : stacked samples before the estimate replaces ``s_v0``.
     """
 
-    mode = "vel"
+    m = 1
 
     def __init__(self, n_axes: int, s_v0: float, *, pd_check: str = "per_axis", min_samples: int = 1) -> None:
         if not (math.isfinite(s_v0) and s_v0 > 0):
@@ -59,106 +63,138 @@ class VelocityAxisCmkf:
         self.n = int(n_axes)
         self.pd_check = pd_check
         self.min_samples = int(min_samples)
-        self.S = [float(s_v0)] * self.n
-        self.v = [0.0] * self.n
-        self.b = [0.0] * self.n
-        self.pvv = [0.0] * self.n
-        self.pvb = [0.0] * self.n
-        self.pbb = [0.0] * self.n
-        self.num = [0.0] * self.n
-        self.den = 0.0
+        self._S = [float(s_v0)] * self.n
+        self._r = [0.0] * self.n
+        self._v = [0.0] * self.n
+        self._b = [0.0] * self.n
+        self._pvv = [0.0] * self.n
+        self._pvb = [0.0] * self.n
+        self._pbb = [0.0] * self.n
+        self._nu = [math.nan] * self.n
+        self._s = [math.nan] * self.n
+        self._num = [0.0] * self.n
+        self._den = 0.0
         self.count = 0
         self.rejected = 0
         self.skipped = 0  # updates skipped: innovation variance not positive
         self.skipped_stacked = 0  # stacked steps skipped: zero-length interval (M_o singular)
         self.initialised = False
         self._chain: deque[_Epoch] = deque(maxlen=3)
-        self._pending: tuple[tuple[float, float, float, float], list[tuple[float, float]]] | None = None
+        self._pending: tuple[ImuInterval, list[tuple[float, float]]] | None = None
 
     # -- state ---------------------------------------------------------------------------------------------------
-    def initialise(self, v0: list[float], b0: list[float], pvv0: list[float], pbb0: list[float]) -> None:
-        """Set v̂, b̂ and a diagonal covariance; starts a new chain."""
-        self.v, self.b = [float(x) for x in v0], [float(x) for x in b0]
-        self.pvv, self.pbb = [float(x) for x in pvv0], [float(x) for x in pbb0]
-        self.pvb = [0.0] * self.n
+    def initialise(self, x0: np.ndarray, P0: np.ndarray) -> None:
+        """Set x̂₀ (n, 3) and the ``[v, b]`` block of P₀ (n, 3, 3); starts a new chain."""
+        x0 = np.asarray(x0, dtype=float).reshape(self.n, 3)
+        P0 = np.asarray(P0, dtype=float).reshape(self.n, 3, 3)
+        self._r, self._v, self._b = (col.tolist() for col in x0.T)
+        self._pvv, self._pvb, self._pbb = P0[:, 1, 1].tolist(), P0[:, 1, 2].tolist(), P0[:, 2, 2].tolist()
         self._chain.clear()
         self._pending = None
         self.initialised = True
 
     @property
+    def x(self) -> np.ndarray:
+        """(n, 3) state ``[r, v, b]`` per axis (``r`` as given, not estimated)."""
+        return np.array([self._r, self._v, self._b]).T
+
+    @property
+    def P(self) -> np.ndarray:
+        """(n, 3, 3) covariance; the ``r`` row and column are NaN (not estimated)."""
+        return self._covariance(self._pvv, self._pvb, self._pbb)
+
+    @property
+    def y(self) -> np.ndarray:
+        """(n, 1) innovations of the last update."""
+        return np.array(self._nu)[:, None]
+
+    @property
+    def S(self) -> np.ndarray:
+        """(n, 1, 1) innovation variances of the last update."""
+        return np.array(self._s)[:, None, None]
+
+    @property
     def S_used(self) -> np.ndarray:
         """Ŝ_v in use per axis [m²/s³]."""
-        return np.array(self.S)
+        return np.array(self._S)
 
     @property
     def S_ls(self) -> np.ndarray:
         """Latest least-squares Ŝ_v (NaN before the first stacked sample)."""
-        if self.count == 0 or self.den <= 0.0:
+        if self.count == 0 or self._den <= 0.0:
             return np.full(self.n, np.nan)
-        return np.array(self.num) / self.den
+        return np.array(self._num) / self._den
 
-    def covariance(self, interval: tuple[float, float, float, float] | None = None) -> np.ndarray:
-        """(n, 2, 2) covariance of ``[v, b]``, propagated over ``interval`` = (T, β_v, φ, q_b) if given."""
-        out = np.empty((self.n, 2, 2))
-        for i in range(self.n):
-            pvv, pvb, pbb = self.pvv[i], self.pvb[i], self.pbb[i]
-            if interval is not None:
-                T, Bv, beta, qb = interval
-                pvv, pvb, pbb = (pvv - 2 * Bv * pvb + Bv * Bv * pbb + self.S[i] * T, beta * (pvb - Bv * pbb),
-                                 beta * beta * pbb + qb)
-            out[i] = ((pvv, pvb), (pvb, pbb))
+    def _covariance(self, pvv: list[float], pvb: list[float], pbb: list[float]) -> np.ndarray:
+        out = np.full((self.n, 3, 3), np.nan)
+        out[:, 1, 1], out[:, 1, 2], out[:, 2, 1], out[:, 2, 2] = pvv, pvb, pvb, pbb
         return out
 
+    def _propagated(self, interval: ImuInterval) -> tuple[list[float], list[float], list[float]]:
+        """(P_vv, P_vb, P_bb) per axis after ``interval`` (eq. 23)."""
+        T, Bv, beta, qb = interval.T, interval.Bv, interval.phi, interval.qb
+        pvv, pvb, pbb, S = self._pvv, self._pvb, self._pbb, self._S
+        return ([pvv[i] - 2 * Bv * pvb[i] + Bv * Bv * pbb[i] + S[i] * T for i in range(self.n)],
+                [beta * (pvb[i] - Bv * pbb[i]) for i in range(self.n)],
+                [beta * beta * pbb[i] + qb for i in range(self.n)])
+
+    def predicted_P(self, interval: ImuInterval) -> np.ndarray:
+        """P⁻ after ``interval`` without changing the filter (for reporting between updates)."""
+        return self._covariance(*self._propagated(interval))
+
     # -- filter --------------------------------------------------------------------------------------------------
-    def predict(self, v_pred: list[float], b_pred: list[float], interval: tuple[float, float, float, float]) -> None:
-        """Covariance over ``interval`` = (T, β_v = Σβ_j dt_j, φ = Πφ_j, q_b) to the propagated ``v_pred, b_pred``."""
-        T, Bv, beta, qb = interval
+    def predict(self, x_pred: np.ndarray, interval: ImuInterval) -> None:
+        """Covariance over ``interval`` (β_v = Σβ_j dt_j, φ = Πφ_j, q_b) to the propagated ``x_pred`` (n, 3)."""
+        Bv, beta = interval.Bv, interval.phi
         U = []
         for i in range(self.n):
-            v, b, pvb, pbb = self.v[i], self.b[i], self.pvb[i], self.pbb[i]
-            U.append((v_pred[i] - (v - Bv * b), b_pred[i] - beta * b))
-            self.pvv[i] = self.pvv[i] - 2 * Bv * pvb + Bv * Bv * pbb + self.S[i] * T
-            self.pvb[i] = beta * (pvb - Bv * pbb)
-            self.pbb[i] = beta * beta * pbb + qb
-        self.v, self.b = [float(x) for x in v_pred], [float(x) for x in b_pred]
+            r, v, b = x_pred[i]
+            U.append((v - (self._v[i] - Bv * self._b[i]), b - beta * self._b[i]))
+            self._r[i], self._v[i], self._b[i] = float(r), float(v), float(b)
+        self._pvv, self._pvb, self._pbb = self._propagated(interval)
         self._pending = (interval, U)
 
-    def update(self, z: list[float], R: list[float], new_chain: bool = False) -> float:
-        """Joseph-form update (24)–(27) of every axis and one stacked-estimator step; returns the summed NIS.
+    def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
+        """Joseph-form update (24)–(27) of every axis and one stacked-estimator step; returns the NIS per axis.
 
-        Beyond the paper: if an innovation variance ``s = P_vv + R`` is not positive (zero covariance and zero
-        interval), the update is skipped (counted in ``skipped``), NaN is returned and the stacked chain restarts.
+        ``z`` (n, 1) and ``R`` (n, 1, 1), array-like. Beyond the paper: if an innovation variance
+        ``s = P_vv + R`` is not positive (zero covariance and zero interval), the update is skipped (counted in
+        ``skipped``), NaN is returned and the stacked chain restarts.
         """
-        if not all(self.pvv[i] + R[i] > 0.0 for i in range(self.n)):
+        n = self.n
+        z = [float(z[i][0]) for i in range(n)]
+        R = [float(R[i][0][0]) for i in range(n)]
+        self._nu = [z[i] - self._v[i] for i in range(n)]
+        self._s = [self._pvv[i] + R[i] for i in range(n)]
+        if not all(s > 0.0 for s in self._s):
             self.skipped += 1
             self._chain.clear()
             self._pending = None
-            return math.nan
-        nis = 0.0
-        for i in range(self.n):
-            pvv, pvb, pbb, r = self.pvv[i], self.pvb[i], self.pbb[i], R[i]
-            s = pvv + r
+            return np.full(n, np.nan)
+        nis = []
+        for i in range(n):
+            pvv, pvb, pbb, r = self._pvv[i], self._pvb[i], self._pbb[i], R[i]
+            s, nu = self._s[i], self._nu[i]
             kv, kb = pvv / s, pvb / s
-            nu = z[i] - self.v[i]
-            self.v[i] += kv * nu
-            self.b[i] += kb * nu
+            self._v[i] += kv * nu
+            self._b[i] += kb * nu
             a = 1.0 - kv
-            self.pvv[i] = a * a * pvv + kv * kv * r
-            self.pvb[i] = a * (pvb - kb * pvv) + kv * kb * r
-            self.pbb[i] = kb * kb * pvv - 2 * kb * pvb + pbb + kb * kb * r
-            nis += nu * nu / s
+            self._pvv[i] = a * a * pvv + kv * kv * r
+            self._pvb[i] = a * (pvb - kb * pvv) + kv * kb * r
+            self._pbb[i] = kb * kb * pvv - 2 * kb * pvb + pbb + kb * kb * r
+            nis.append(nu * nu / s)
         if self._pending is None or new_chain:
             self._chain.clear()
-            self._chain.append(_Epoch(list(z), list(R), None, None))
+            self._chain.append(_Epoch(z, R, None, None))
         else:
             interval, U = self._pending
-            epoch = _Epoch(list(z), list(R), interval, U)
+            epoch = _Epoch(z, R, interval, U)
             self._chain.append(epoch)
             self.skipped_stacked += epoch.degenerate
             if self._stack():
                 self._accept()
         self._pending = None
-        return nis
+        return np.array(nis)
 
     def _stack(self) -> bool:
         """Eqs. (28)–(35) for the last three epochs (see module docstring)."""
@@ -195,21 +231,21 @@ class VelocityAxisCmkf:
             zv = k00 * y0 + k01 * y1 - (p0 - Bv1 * p1) - e1.U[i][0]
             zb = k10 * y0 + k11 * y1 - beta1 * p1 - e1.U[i][1]
             zdz = zv * zv * dvv + 2 * zv * zb * dvb + zb * zb * dbb
-            self.num[i] += zdz - cw - (e0.R[i] * g1 + e1.R[i] * g2 + e2.R[i] * g3)
-        self.den += dvv * dvv + 2 * dvb * dvb + dbb * dbb
+            self._num[i] += zdz - cw - (e0.R[i] * g1 + e1.R[i] * g2 + e2.R[i] * g3)
+        self._den += dvv * dvv + 2 * dvb * dvb + dbb * dbb
         self.count += 1
         return True
 
     def _accept(self) -> None:
         """Positive-definiteness check with fallback to the last positive estimate."""
-        if self.count < self.min_samples or self.den <= 0.0:
+        if self.count < self.min_samples or self._den <= 0.0:
             return
-        new = [x / self.den for x in self.num]
+        new = [x / self._den for x in self._num]
         ok = [math.isfinite(x) and x > 0 for x in new]
         if self.pd_check == "joint" and not all(ok):
             self.rejected += 1
             return
         for i in range(self.n):
             if ok[i]:
-                self.S[i] = new[i]
+                self._S[i] = new[i]
         self.rejected += int(not all(ok))

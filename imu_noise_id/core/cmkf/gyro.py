@@ -25,7 +25,10 @@ import numpy as np
 class GyroBiasFilter:
     """Per-axis gyro-bias Kalman filter with a covariance-matching estimate of the angle-random-walk PSD.
 
-    Plain-float algebra (three scalar filters): this runs at every odometry message of the ROS node.
+    Plain-float algebra (three scalar filters): this runs at every odometry message of the ROS node. The naming
+    is the accelerometer filters' (:class:`~.protocol.CmkfFilter`): :meth:`predict` over an interval, then
+    :meth:`update` with the interval's measurement; state ``x`` (the biases), variance ``P``, innovations ``y``
+    and their variances ``S``.
 
     Parameters
     ----------
@@ -38,68 +41,92 @@ class GyroBiasFilter:
         self.sigma = float(sigma)
         self.bias = [0.0, 0.0, 0.0]
         self.var = [self.sigma**2] * 3
-        self.S = [float(s_g0)] * 3
+        self._S = [float(s_g0)] * 3
         self.min_samples = int(min_samples)
-        self.num = [0.0, 0.0, 0.0]
-        self.den = 0.0
+        self._num = [0.0, 0.0, 0.0]
+        self._den = 0.0
         self.count = 0
+        self._nu = [math.nan] * 3
+        self._s = [math.nan] * 3
+        self._T = math.nan
         self._prev: tuple[list[float], float, list[float]] | None = None  # (y/T, T, R) of the last epoch
 
     @property
-    def b(self) -> np.ndarray:
+    def x(self) -> np.ndarray:
         """Bias estimate per axis [rad/s]."""
         return np.array(self.bias)
 
     @property
+    def P(self) -> np.ndarray:
+        """Bias variance per axis [rad²/s²]."""
+        return np.array(self.var)
+
+    @property
+    def y(self) -> np.ndarray:
+        """Innovations of the last update per axis [rad/s]."""
+        return np.array(self._nu)
+
+    @property
+    def S(self) -> np.ndarray:
+        """Innovation variances of the last update per axis [rad²/s²]."""
+        return np.array(self._s)
+
+    @property
     def S_used(self) -> np.ndarray:
         """S_g in use per axis [rad²/s]."""
-        return np.array(self.S)
+        return np.array(self._S)
 
     @property
     def S_ls(self) -> np.ndarray:
         """Latest least-squares S_g [rad²/s] (NaN before the first stacked sample)."""
-        return np.array(self.num) / self.den if self.count else np.full(3, np.nan)
+        return np.array(self._num) / self._den if self.count else np.full(3, np.nan)
 
     def reset_chain(self) -> None:
         """Do not difference across a gap."""
         self._prev = None
 
-    def predicted_variance(self, T: float) -> np.ndarray:
+    def predicted_P(self, T: float) -> np.ndarray:
         """Bias variance after ``T`` seconds without an update."""
         phi2 = math.exp(-2.0 * T / self.tau)
         return np.array([phi2 * p + (1.0 - phi2) * self.sigma**2 for p in self.var])
 
-    def update(self, y: list[float], T: float, R: list[float]) -> float:
-        """One odometry interval: ``y`` (3) = Δθ̃ − Δθ_odo [rad], ``T`` [s], ``R`` (3) variance of Δθ_odo [rad²].
+    def predict(self, T: float) -> None:
+        """The next update closes an odometry interval of ``T`` [s] (> 0)."""
+        self._T = float(T)
+
+    def update(self, z: list[float], R: list[float]) -> float:
+        """The interval's measurement: ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) variance of Δθ_odo [rad²].
 
         Returns the normalised innovation squared summed over the axes (3 dof).
         """
+        T = self._T
         phi = math.exp(-T / self.tau)
         q = (1.0 - phi * phi) * self.sigma**2
-        meas = [yi / T for yi in y]
+        meas = [zi / T for zi in z]
         nis = 0.0
         for i in range(3):
             b_pred = phi * self.bias[i]
             P_pred = phi * phi * self.var[i] + q
-            r = self.S[i] / T + R[i] / (T * T)
+            r = self._S[i] / T + R[i] / (T * T)
             s = P_pred + r
             K = P_pred / s
             nu = meas[i] - b_pred
             self.bias[i] = b_pred + K * nu
             self.var[i] = (1.0 - K) ** 2 * P_pred + K * K * r  # Joseph form (27), scalar
+            self._nu[i], self._s[i] = nu, s
             nis += nu * nu / s
         if self._prev is not None:
             meas1, T1, R1 = self._prev
             D = 1.0 / T + phi * phi / T1
             for i in range(3):
                 d = meas[i] - phi * meas1[i]
-                self.num[i] += (d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1)) * D
-            self.den += D * D
+                self._num[i] += (d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1)) * D
+            self._den += D * D
             self.count += 1
             if self.count >= self.min_samples:
                 for i in range(3):
-                    s_new = self.num[i] / self.den
+                    s_new = self._num[i] / self._den
                     if s_new > 0:
-                        self.S[i] = s_new
+                        self._S[i] = s_new
         self._prev = (meas, T, list(R))
         return nis

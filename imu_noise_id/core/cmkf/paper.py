@@ -71,6 +71,13 @@ class PaperCmkf:
     T : sample time [s]; tau : bias time constants [s] (both axes); q_b : bias drive variance (eq. 7) [m²/s⁴];
     R : (4, 4) measurement covariance; S_v0 : initial Ŝ_v (both axes) [m²/s³]; x0, P0 : initial estimate.
     pd_check : ``"joint"`` (paper) or ``"per_axis"``; min_samples : stacked samples before Ŝ_v is used.
+
+    Attributes
+    ----------
+    The names of the other CMKFs (:class:`~.protocol.CmkfFilter`): ``x`` (6,), ``P`` (6, 6); ``y`` (4,) and
+    ``S`` (4, 4), the innovation of the last update and its covariance; ``S_used`` (2,) the Ŝ_v in use,
+    ``S_ls`` the latest least-squares solution, ``count`` the stacked samples. ``predict`` takes the paper's known
+    input Δṽ, ``update`` the measurement (R is the constant of the paper's model).
     """
 
     def __init__(
@@ -91,9 +98,11 @@ class PaperCmkf:
         self.Fh, self.Gh, self.H, self.Lam = mats["Fhat"], mats["Ghat"], mats["H"], mats["Lam"]
         self.R = np.asarray(R, dtype=float)
         self.Qb = q_b * np.eye(2)
-        self.S_v = np.array([S_v0, S_v0], dtype=float)
+        self.S_used = np.array([S_v0, S_v0], dtype=float)
         self.x = np.asarray(x0, dtype=float).copy()
         self.P = np.asarray(P0, dtype=float).copy()
+        self.y = np.full(4, np.nan)
+        self.S = np.full((4, 4), np.nan)
         self.pd_check = pd_check
         self.min_samples = int(min_samples)
         # Stacked-estimator constants (eqs. 29–35).
@@ -116,10 +125,10 @@ class PaperCmkf:
         self.D = [self._qa_basis(i) for i in range(2)]
         self.N = np.array([[np.sum(Di * Dj) for Dj in self.D] for Di in self.D])
         self.sum_ZZ = np.zeros((6, 6))
-        self.n_Z = 0
+        self.count = 0
         self._z_hist: list[np.ndarray] = []
         self._dv_hist: list[np.ndarray] = []
-        self.S_v_ls = np.full(2, np.nan)
+        self.S_ls = np.full(2, np.nan)
 
     def _qa_basis(self, axis: int) -> np.ndarray:
         """A₁ Q_a A₁ᵀ + A₂ Q_a A₂ᵀ for S_v = 1 on ``axis`` (eq. 35)."""
@@ -131,7 +140,7 @@ class PaperCmkf:
     @property
     def Q_a(self) -> np.ndarray:
         """Q̂_a = Ĝ diag(Ŝ_v T) Ĝᵀ used in eq. (23)."""
-        return self.Gh @ np.diag(self.S_v * self.T) @ self.Gh.T
+        return self.Gh @ np.diag(self.S_used * self.T) @ self.Gh.T
 
     def predict(self, dv: np.ndarray) -> None:
         """Eqs. (17) and (23) with the accelerometer increment Δṽ_k (2,) [m/s]."""
@@ -145,6 +154,7 @@ class PaperCmkf:
         S = H @ self.P @ H.T + R
         K = self.P @ H.T @ np.linalg.inv(S)
         nu = z - H @ self.x
+        self.y, self.S = nu, S
         self.x = self.x + K @ nu
         IKH = np.eye(6) - K @ H
         self.P = IKH @ self.P @ IKH.T + K @ R @ K.T
@@ -164,18 +174,18 @@ class PaperCmkf:
     def _estimate(self) -> None:
         Z = self.stacked_sample()
         self.sum_ZZ += np.outer(Z, Z)
-        self.n_Z += 1
-        C = self.sum_ZZ / self.n_Z - self.cov_W - self.cov_E
+        self.count += 1
+        C = self.sum_ZZ / self.count - self.cov_W - self.cov_E
         rhs = np.array([np.sum(C * Di) for Di in self.D])
-        self.S_v_ls = np.linalg.solve(self.N, rhs)
-        if self.n_Z < self.min_samples:
+        self.S_ls = np.linalg.solve(self.N, rhs)
+        if self.count < self.min_samples:
             return
-        ok = self.S_v_ls > 0  # Q̂_a = Ĝ diag(S_v T) Ĝᵀ is positive (semi-)definite iff every S_v > 0
+        ok = self.S_ls > 0  # Q̂_a = Ĝ diag(S_v T) Ĝᵀ is positive (semi-)definite iff every S_v > 0
         if self.pd_check == "joint":
             if ok.all():
-                self.S_v = self.S_v_ls.copy()
+                self.S_used = self.S_ls.copy()
         else:
-            self.S_v = np.where(ok, self.S_v_ls, self.S_v)
+            self.S_used = np.where(ok, self.S_ls, self.S_used)
 
     def cov_Z_model(self, S_v: np.ndarray) -> np.ndarray:
         """Cov(𝒵) of eqs. (34)–(35) for the PSDs ``S_v`` (2,)."""

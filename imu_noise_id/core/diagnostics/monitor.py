@@ -24,8 +24,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
+from .consistency import nis_bounds
 from .residuals import ljung_box
 
 
@@ -46,7 +46,7 @@ class MonitorStatus:
     nis_mean : float
         Mean normalised innovation squared ν²/S over the window (1 for a consistent filter).
     nis_interval : tuple
-        Its two-sided (1 − alpha) acceptance interval, χ²_n / n.
+        Its two-sided (1 − alpha) acceptance interval, χ²_n / n (:func:`.consistency.nis_bounds`).
     n : int
         Innovations in the window.
     message : str
@@ -127,8 +127,7 @@ class InnovationMonitor:
         e = self._ordered(self._e)
         nis = self._ordered(self._nis)
         nis_mean = float(np.mean(nis))
-        lo = float(stats.chi2.ppf(self.alpha / 2, n) / n)
-        hi = float(stats.chi2.isf(self.alpha / 2, n) / n)
+        lo, hi = nis_bounds(1, n, self.alpha)
         problems = []
         lb_p, lag, rho = math.nan, 0, math.nan
         if np.isfinite(e).sum() >= 4 * self.lags:

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..white_noise import FirstDifferences
 from .model import COMPONENT_PARAMETERS, Hypothesis, HypothesisSet, ParameterPrior
 
 _TOP_KEYS = {"gamma", "block", "warmup", "gain_tolerance", "bias_sigma", "sensors", "hypotheses"}
@@ -39,15 +40,18 @@ class NeedsDataError(InputError):
 def white_noise_estimate(y: np.ndarray, dt: float) -> float:
     """White-noise density [u/√Hz] from first differences, √(var(Δy)/2 · dt) (the WN dominates Δy at IMU rates).
 
-    Used to centre ``auto`` white-noise ranges; the RW/GM increments inflate it slightly (by q/2 per sample).
+    The Allan variance at τ₀ (:class:`~imu_noise_id.core.white_noise.FirstDifferences`, also the online node's
+    noise density). Used to centre ``auto`` white-noise ranges; the RW/GM increments inflate it slightly (by q/2
+    per sample).
     """
-    d = np.diff(np.asarray(y, dtype=float))
-    if d.size < 2 or not np.all(np.isfinite(d)):
+    y = np.asarray(y, dtype=float).ravel()
+    if y.size < 3 or not np.all(np.isfinite(y)):
         raise InputError("need at least 3 finite warm-up samples to estimate the white noise for an 'auto' range")
-    var = float(np.var(d)) / 2.0
-    if var <= 0:
+    diffs = FirstDifferences()
+    diffs.add_series(y)
+    if not diffs.variance()[0] > 0:
         raise InputError("the warm-up samples are constant: cannot centre an 'auto' white-noise range; give a range")
-    return math.sqrt(var * dt)
+    return float(diffs.density(dt)[0])
 
 
 def _prior(name: str, spec: Any, where: str, wn_estimate: float | None = None) -> ParameterPrior:

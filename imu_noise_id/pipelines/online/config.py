@@ -2,7 +2,8 @@
 
 :data:`PARAMETERS` is the single source: the node declares each with a ROS ParameterDescriptor, the shipped
 ``config/imu_noise_id.yaml`` mirrors the defaults (a test keeps them in sync), and :class:`OnlineConfig`
-validates values at start-up and at runtime with messages that name the parameter.
+validates values at start-up and at runtime with messages that name the parameter. The CMKF's parameters take
+their defaults from :class:`~imu_noise_id.core.cmkf.config.CmkfConfig` (:func:`cmkf_config` maps them back).
 """
 
 from __future__ import annotations
@@ -11,7 +12,11 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..core.errors import InputError
+from ...core.cmkf.config import GRAVITY_SOURCES, MEASUREMENTS, CmkfConfig
+from ...core.errors import InputError
+
+#: The CMKF's defaults (the ``cmkf.*`` and ``nis.window`` parameters take theirs from here).
+_CMKF = CmkfConfig()
 
 
 @dataclass(frozen=True)
@@ -103,41 +108,51 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "m/s^2/sqrt(Hz)", 0.0, 1000.0),
     ParamSpec("noise.min_samples", 200, "stationary samples needed before a noise density is published and "
               "used for the corrected IMU covariance", "samples", 10, 10000000),
-    ParamSpec("nis.window", 100, "number of filter updates in the normalised-innovation-squared window",
-              "updates", 10, 100000),
+    ParamSpec("nis.window", _CMKF.nis_window, "number of filter updates in the normalised-innovation-squared "
+              "window", "updates", 10, 100000),
+    ParamSpec("innovations.window", 500, "filter updates in the whiteness and consistency tests of the CMKF's "
+              "and the gyro filter's innovations (per axis)", "updates", 50, 100000, runtime=False),
+    ParamSpec("innovations.lags", 10, "Ljung-Box lags of the innovation whiteness test (less than a quarter of "
+              "innovations.window)", "lags", 1, 1000, runtime=False),
+    ParamSpec("innovations.alpha", 1e-4, "level of each innovation test (they run every diagnostics period: keep "
+              "it small)", "", 1e-9, 0.1, runtime=False),
     ParamSpec("publish_rate", 10.0, "rate of ~/accel_bias, ~/gyro_bias, ~/noise and ~/hypotheses (steady "
               "clock)", "Hz", 0.1, 1000.0, runtime=False),
     ParamSpec("diagnostics_period", 1.0, "period of /diagnostics (steady clock)", "s", 0.05, 60.0,
               runtime=False),
     ParamSpec("log_throttle", 5.0, "minimum time between two log lines about the same input problem", "s",
               0.0, 3600.0),
-    ParamSpec("cmkf.imu_rotation_xyzw", (0.0, 0.0, 0.0, 1.0), "orientation of the IMU frame in the base frame "
+    ParamSpec("cmkf.imu_rotation_xyzw", _CMKF.imu_rotation_xyzw, "orientation of the IMU frame in the base frame "
               "(child_frame_id of the odometry), quaternion x y z w", runtime=False),
-    ParamSpec("cmkf.measurement", "twist", "odometry used by the CMKF: twist (body velocity, right for wheel "
-              "odometry) or pose_twist (position and velocity, paper 004 eq. 8)", runtime=False,
-              choices=("twist", "pose_twist")),
-    ParamSpec("cmkf.gravity_source", "odometry", "orientation for gravity compensation: odometry (its "
+    ParamSpec("cmkf.measurement", _CMKF.measurement, "odometry used by the CMKF: twist (body velocity, right for "
+              "wheel odometry) or pose_twist (position and velocity, paper 004 eq. 8)", runtime=False,
+              choices=MEASUREMENTS),
+    ParamSpec("cmkf.gravity_source", _CMKF.gravity_source, "orientation for gravity compensation: odometry (its "
               "orientation, propagated with the gyro) or imu (the Imu message's orientation)", runtime=False,
-              choices=("odometry", "imu")),
-    ParamSpec("cmkf.accel_bias_tau", 3600.0, "correlation time of the accelerometer bias (paper 004 eq. 3)", "s",
-              1.0, 1e7, runtime=False),
-    ParamSpec("cmkf.accel_bias_sigma", 0.1, "steady-state standard deviation of the accelerometer bias",
-              "m/s^2", 1e-6, 100.0, runtime=False),
-    ParamSpec("cmkf.s_v0", 1e-4, "initial velocity-random-walk PSD S_v", "m^2/s^3", 1e-12, 10.0, runtime=False),
-    ParamSpec("cmkf.gyro_bias_tau", 3600.0, "correlation time of the gyro bias", "s", 1.0, 1e7, runtime=False),
-    ParamSpec("cmkf.gyro_bias_sigma", 0.01, "steady-state standard deviation of the gyro bias", "rad/s",
-              1e-7, 10.0, runtime=False),
-    ParamSpec("cmkf.s_g0", 1e-6, "initial angle-random-walk PSD S_g", "rad^2/s", 1e-14, 1.0, runtime=False),
+              choices=GRAVITY_SOURCES),
+    ParamSpec("cmkf.accel_bias_tau", _CMKF.accel_bias_tau, "correlation time of the accelerometer bias (paper 004 "
+              "eq. 3)", "s", 1.0, 1e7, runtime=False),
+    ParamSpec("cmkf.accel_bias_sigma", _CMKF.accel_bias_sigma, "steady-state standard deviation of the "
+              "accelerometer bias", "m/s^2", 1e-6, 100.0, runtime=False),
+    ParamSpec("cmkf.s_v0", _CMKF.s_v0, "initial velocity-random-walk PSD S_v", "m^2/s^3", 1e-12, 10.0,
+              runtime=False),
+    ParamSpec("cmkf.gyro_bias_tau", _CMKF.gyro_bias_tau, "correlation time of the gyro bias", "s", 1.0, 1e7,
+              runtime=False),
+    ParamSpec("cmkf.gyro_bias_sigma", _CMKF.gyro_bias_sigma, "steady-state standard deviation of the gyro bias",
+              "rad/s", 1e-7, 10.0, runtime=False),
+    ParamSpec("cmkf.s_g0", _CMKF.s_g0, "initial angle-random-walk PSD S_g", "rad^2/s", 1e-14, 1.0, runtime=False),
     ParamSpec("cmkf.velocity_noise_std", 0.0, "odometry velocity noise; 0: from the message twist covariance "
-              "(0.05 m/s when it is unknown)", "m/s", 0.0, 100.0, runtime=False),
+              f"({_CMKF.default_velocity_noise_std:g} m/s when it is unknown)", "m/s", 0.0, 100.0, runtime=False),
     ParamSpec("cmkf.angular_velocity_noise_std", 0.0, "odometry angular-velocity noise; 0: from the message "
-              "covariance (0.05 rad/s when it is unknown)", "rad/s", 0.0, 100.0, runtime=False),
+              f"covariance ({_CMKF.default_angular_velocity_noise_std:g} rad/s when it is unknown)", "rad/s", 0.0,
+              100.0, runtime=False),
+    # CmkfConfig.late_odom_tolerance; the node's own default: a ROS graph's two topics differ by more than 0.05 s
     ParamSpec("cmkf.input_latency", 0.1, "IMU samples wait this long before the CMKF so that odometry up to "
               "this much later (in header time) is still processed in stamp order", "s", 0.0, 5.0),
-    ParamSpec("cmkf.max_odom_gap", 1.0, "an odometry gap longer than this restarts the S_v estimator chain", "s",
-              0.01, 3600.0, runtime=False),
-    ParamSpec("cmkf.max_imu_gap", 0.5, "an IMU gap longer than this re-initialises position and velocity", "s",
-              0.001, 3600.0, runtime=False),
+    ParamSpec("cmkf.max_odom_gap", _CMKF.max_odom_gap, "an odometry gap longer than this restarts the S_v "
+              "estimator chain", "s", 0.01, 3600.0, runtime=False),
+    ParamSpec("cmkf.max_imu_gap", _CMKF.max_imu_gap, "an IMU gap longer than this re-initialises position and "
+              "velocity", "s", 0.001, 3600.0, runtime=False),
     ParamSpec("hypotheses.enabled", True, "run the Bayesian hypothesis bank on stationary samples",
               runtime=False),
     ParamSpec("hypotheses.file", "", "hypothesis-set YAML (empty: the packaged config/hypotheses_default.yaml)",
@@ -195,3 +210,36 @@ class OnlineConfig:
             if spec is not None and not spec.runtime:
                 raise InputError(f"parameter {name} cannot change at runtime: restart the node to change it")
         return OnlineConfig({**self.values, **changes})
+
+
+def cmkf_config(config: OnlineConfig) -> CmkfConfig:
+    """The CMKF's parameters from the node's ``cmkf.*`` and ``nis.window`` (0 noise std: from the messages;
+    ``cmkf.input_latency`` is the stamp merger's ``late_odom_tolerance``).
+
+    Raises
+    ------
+    InputError
+        If the combination is invalid (the message names the parameter).
+    """
+    cmkf = CmkfConfig(
+        imu_rotation_xyzw=tuple(config.cmkf_imu_rotation_xyzw),
+        measurement=config.cmkf_measurement,
+        gravity_source=config.cmkf_gravity_source,
+        accel_bias_tau=config.cmkf_accel_bias_tau,
+        accel_bias_sigma=config.cmkf_accel_bias_sigma,
+        s_v0=config.cmkf_s_v0,
+        gyro_bias_tau=config.cmkf_gyro_bias_tau,
+        gyro_bias_sigma=config.cmkf_gyro_bias_sigma,
+        s_g0=config.cmkf_s_g0,
+        velocity_noise_std=config.cmkf_velocity_noise_std or None,
+        angular_velocity_noise_std=config.cmkf_angular_velocity_noise_std or None,
+        max_odom_gap=config.cmkf_max_odom_gap,
+        max_imu_gap=config.cmkf_max_imu_gap,
+        late_odom_tolerance=config.cmkf_input_latency,
+        nis_window=config.nis_window,
+    )
+    try:
+        cmkf.validate()
+    except ValueError as exc:
+        raise InputError(f"parameter cmkf.*: {exc}") from None
+    return cmkf

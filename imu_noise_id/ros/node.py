@@ -1,9 +1,9 @@
 """``imu_noise_id_node``: the rclpy adapter around :class:`imu_noise_id.pipelines.online.OnlineIdentifier`.
 
 Run it with ``ros2 run imu_noise_id imu_noise_id_node --ros-args --params-file config/imu_noise_id.yaml`` or
-``python -m imu_noise_id.node --ros-args …``. Topics, parameters and diagnostics are described in
-``docs/node.md``. This module only converts messages to numbers and back: every decision is made in the
-pipeline, which is tested without ROS.
+``python -m imu_noise_id.ros.node --ros-args …``. Topics, parameters and diagnostics are described in
+``docs/node.md``. This module only converts messages to numbers and back and reads the hypothesis-set file: every
+decision is made in the pipeline, which is tested without ROS.
 
 Time: estimation uses the header stamps only; the housekeeping timers (publishing, diagnostics, staleness) run
 on the steady clock, so they work with ``use_sim_time`` and no ``/clock`` publisher too.
@@ -28,36 +28,16 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, Temperature
-from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+from std_msgs.msg import Float64MultiArray
 
-from .core.axes import AXES
-from .core.errors import InputError
-from .pipelines.online import OnlineIdentifier
-from .pipelines.online_config import PARAMETERS, OnlineConfig, ParamSpec
+from ..core.axes import AXES
+from ..core.errors import InputError
+from ..pipelines.online import PARAMETERS, OnlineConfig, OnlineIdentifier
+from ..pipelines.online.config import ParamSpec
+from ..resources import read_hypotheses_file
+from .messages import labelled_layout
 
 NODE_NAME = "imu_noise_id_node"
-
-def labelled_layout(msg: Float64MultiArray, rows_name: str, rows: tuple[str, ...], cols_name: str,
-                    cols: tuple[str, ...]) -> None:
-    """Fill ``msg.layout`` of a row-major ``len(rows)`` × ``len(cols)`` table.
-
-    Each dimension's label is ``"<name>:<label 1>,<label 2>,…"``, e.g. ``"axis:gyro_x,gyro_y,…"``.
-    """
-    msg.layout.dim = [
-        MultiArrayDimension(label=f"{rows_name}:{','.join(rows)}", size=len(rows), stride=len(rows) * len(cols)),
-        MultiArrayDimension(label=f"{cols_name}:{','.join(cols)}", size=len(cols), stride=len(cols)),
-    ]
-    msg.layout.data_offset = 0
-
-
-def parse_labelled(msg: Float64MultiArray) -> tuple[list[str], list[str], list[list[float]]]:
-    """Inverse of :func:`labelled_layout`: (row labels, column labels, rows of values)."""
-    dims = msg.layout.dim
-    rows = dims[0].label.split(":", 1)[1].split(",")
-    cols = dims[1].label.split(":", 1)[1].split(",")
-    data = [float(v) for v in msg.data]
-    ncol = len(cols)
-    return rows, cols, [data[i * ncol:(i + 1) * ncol] for i in range(len(rows))]
 
 
 def _descriptor(spec: ParamSpec) -> ParameterDescriptor:
@@ -104,7 +84,9 @@ class ImuNoiseIdNode(Node):
                 raise InputError(f"parameter {spec.name}: {exc} (range [{spec.low}, {spec.high}] "
                                  f"{spec.unit})") from None
             values[spec.name] = param.value
-        self.identifier = OnlineIdentifier(OnlineConfig(values))  # InputError names a bad value
+        config = OnlineConfig(values)  # InputError names a bad value
+        hypotheses = read_hypotheses_file(config.hypotheses_file or None) if config.hypotheses_enabled else None
+        self.identifier = OnlineIdentifier(config, hypotheses)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         cfg = self.identifier.config
 
@@ -238,8 +220,8 @@ class ImuNoiseIdNode(Node):
                 "p50_us": float(np.percentile(arr, 50)), "p90_us": float(np.percentile(arr, 90)),
                 "p99_us": float(np.percentile(arr, 99)), "p99.9_us": float(np.percentile(arr, 99.9)),
                 "max_us": float(arr.max())} if arr.size else {})
-        summary["imu_received"] = self.identifier.imu_stats.received
-        summary["odom_received"] = self.identifier.odom_stats.received
+        summary["imu_received"] = self.identifier.imu.stats.received
+        summary["odom_received"] = self.identifier.odom.stats.received
         with open(self.identifier.config.stats_file, "w") as f:
             json.dump(summary, f, indent=1)
 
@@ -337,7 +319,7 @@ def _executor(kind: str) -> Any:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``imu_noise_id_node`` (``python -m imu_noise_id.node``): spin until interrupted."""
+    """Entry point of ``imu_noise_id_node`` (``python -m imu_noise_id.ros.node``): spin until interrupted."""
     args = list(sys.argv if argv is None else argv)
     user_args = args[1:args.index("--ros-args")] if "--ros-args" in args else args[1:]
     if "-h" in user_args or "--help" in user_args:

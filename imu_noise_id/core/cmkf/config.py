@@ -1,0 +1,99 @@
+"""The robot CMKF's parameters: the one place their defaults are written.
+
+:class:`CmkfConfig` is read by :class:`~.robot.RobotCmkf`, by the node's ``cmkf.*`` and ``nis.window`` parameters
+(:data:`imu_noise_id.pipelines.online.config.PARAMETERS` takes its defaults from here), by the options of
+``imu-noise-id cmkf`` and by the offline replay, which records every field in ``cmkf.yaml``
+(``filter.parameters``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from . import rotation as rot
+
+MEASUREMENTS = ("twist", "pose_twist")
+GRAVITY_SOURCES = ("odometry", "imu")
+PD_CHECKS = ("per_axis", "joint")
+
+
+@dataclass
+class CmkfConfig:
+    """Parameters of :class:`~.robot.RobotCmkf` (SI units).
+
+    Attributes
+    ----------
+    imu_rotation_xyzw : orientation of the IMU frame in the base frame (``C_bi``), ROS quaternion order.
+    measurement : ``"twist"`` (body velocity only; right for wheel odometry, whose pose is integrated twist) or
+        ``"pose_twist"`` (position in the odom frame and body velocity, paper 004's eq. 8).
+    accel_bias_tau, accel_bias_sigma : bias time constant [s] and steady-state σ [m/s²] (eqs. 3–7, known).
+    s_v0 : initial Ŝ_v [m²/s³] for all axes (paper: 2e-6).
+    gyro_bias_tau, gyro_bias_sigma, s_g0 : the same for the gyro [s], [rad/s], [rad²/s].
+    velocity_noise_std, position_noise_std, angular_velocity_noise_std : override the odometry covariance
+        [m/s], [m], [rad/s]; ``None`` uses the message covariance, falling back to ``default_*`` when it is
+        missing or all zeros (REP-145: unknown).
+    gravity : [m/s²]; gravity_source : ``"odometry"`` (odometry orientation propagated with the gyro between
+        epochs) or ``"imu"`` (the ``orientation_xyzw`` given with the IMU samples, for planar odometry that has no
+        roll/pitch).
+    max_odom_gap, max_imu_gap : an odometry gap longer than this restarts the stacked estimator's chain; an IMU
+        gap longer than this re-initialises position and velocity [s].
+    late_odom_tolerance : latency allowance of the stamp merger (:class:`~.stream.CmkfStream`): messages wait this
+        long behind the newest IMU stamp, so odometry up to this much later than the IMU samples (header time) is
+        still processed in stamp order [s] (the node's ``cmkf.input_latency``, whose default is 0.1 s).
+    min_odom_interval : odometry closer than this to the last update is dropped (degenerate interval) [s].
+    pd_check : ``"per_axis"`` or ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used.
+    nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean`` (and the node's ``nis.window``).
+    """
+
+    imu_rotation_xyzw: tuple[float, float, float, float] = rot.IDENTITY
+    measurement: str = "twist"
+    accel_bias_tau: float = 3600.0
+    accel_bias_sigma: float = 0.1
+    s_v0: float = 1e-4
+    gyro_bias_tau: float = 3600.0
+    gyro_bias_sigma: float = 0.01
+    s_g0: float = 1e-6
+    velocity_noise_std: float | None = None
+    position_noise_std: float | None = None
+    angular_velocity_noise_std: float | None = None
+    default_velocity_noise_std: float = 0.05
+    default_position_noise_std: float = 0.05
+    default_angular_velocity_noise_std: float = 0.05
+    gravity: float = 9.80665
+    gravity_source: str = "odometry"
+    max_odom_gap: float = 1.0
+    max_imu_gap: float = 0.5
+    late_odom_tolerance: float = 0.05
+    min_odom_interval: float = 1e-4
+    pd_check: str = "per_axis"
+    min_samples: int = 10
+    nis_window: int = 50
+
+    def validate(self) -> None:
+        """Raise ValueError naming the first absurd parameter."""
+        if self.measurement not in MEASUREMENTS:
+            raise ValueError(f"measurement must be one of {MEASUREMENTS}, got {self.measurement!r}")
+        if self.gravity_source not in GRAVITY_SOURCES:
+            raise ValueError(f"gravity_source must be one of {GRAVITY_SOURCES}, got {self.gravity_source!r}")
+        rot.normalise(self.imu_rotation_xyzw)
+        for name in ("accel_bias_tau", "accel_bias_sigma", "s_v0", "gyro_bias_tau", "gyro_bias_sigma", "s_g0",
+                     "default_velocity_noise_std", "default_position_noise_std",
+                     "default_angular_velocity_noise_std", "max_odom_gap", "max_imu_gap"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+        for name in ("velocity_noise_std", "position_noise_std", "angular_velocity_noise_std"):
+            value = getattr(self, name)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be None or a finite number > 0, got {value!r}")
+        for name in ("late_odom_tolerance", "min_odom_interval"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        if self.pd_check not in PD_CHECKS:
+            raise ValueError(f"pd_check must be one of {PD_CHECKS}, got {self.pd_check!r}")
+        for name in ("min_samples", "nis_window"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")

@@ -1,0 +1,171 @@
+"""The IMU side of the robot CMKF: per-sample propagation (paper 004 eqs. 13–16) and the interval it forms.
+
+Frames: ``n`` = odometry frame (z up), ``b`` = base, ``i`` = IMU; ``C_ni`` = orientation of the IMU in the odometry
+frame. The IMU measures the specific force ``f̃ = f + b + n`` (gravity included) and the angular rate ``ω̃``.
+With ``v = C_in v_n`` (velocity of the IMU resolved in IMU axes; lever arm neglected)::
+
+    v̇ = f + g_i − ω × v,      ṙ = v − ω × r,      g_i = C_in [0, 0, −g]                  (body-frame kinematics)
+    ḃ_i = −b_i/τ + w_i                                                                    (eqs. 3–4)
+
+Per IMU sample k (period dt_k, sample value held over its interval) the known input is
+``u = f̃ + g_i − ω̂ × v̂`` with ``ω̂ = ω̃ − b̂_g`` and, as in eqs. (13)–(16), ``v ← v + (u − b̂) dt``, ``b̂ ← φ b̂``
+and the displacement ``d = v dt + ½ (u − b̂) dt²``, accumulated in the odometry frame, ``Δp_n ← Δp_n + C_ni d``
+(``C_ni`` propagated with ω̂; rotated into the IMU axes at the next epoch with the measured orientation, see
+:mod:`.measurement`). The transport term ``ω̂ × v̂`` and gravity are evaluated with the estimate and treated as
+known input; this is what makes the three axes decouple into paper 004's ``[r, v, b]`` structure.
+
+The IMU samples between two odometry epochs are accumulated into one interval of length ``T = Σ dt_j``
+(``β_j = Π_{l<j} φ_l``, ``m_j`` = mid-time of sample j from the start of the interval)::
+
+    F̂ = [[1, T, −(T·Σβ_j dt_j − Σβ_j dt_j m_j)], [0, 1, −Σβ_j dt_j], [0, 0, Π φ_j]]
+    Q_a = S_v · [[T³ − 2T Σdt m + Σdt m², T² − Σdt m, 0], [T² − Σdt m, T, 0], [0, 0, 0]]
+    q_b = (1 − (Π φ_j)²) σ_ss²  (bias drive lumped at the end of the interval)
+
+which is the exact accumulation of the paper's per-sample (13)–(16) and (22) for the velocity-random-walk part
+(the bias drive inside the interval is lumped, an O(q_b T) approximation). For one sample of length T this is
+eq. (17): ``Σβ dt = T``, ``T·T − T·T/2 = T²/2``, ``Q_a = S_v T Ĝ Ĝᵀ`` (:func:`~.axis.paper_interval`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from . import rotation as rot
+from .stacked import Interval
+
+
+@dataclass(frozen=True)
+class ImuInterval:
+    """One propagation interval between two measurement epochs, shared by all axes (eqs. 17, 22–23).
+
+    Attributes
+    ----------
+    T : length [s].
+    Bp, Bv : how the bias enters position and velocity over the interval (``F̂[0, 2] = −Bp``, ``F̂[1, 2] = −Bv``).
+    phi : bias transition ``Π φ_j`` (eq. 7).
+    Qrr, Qrv : position variance and position–velocity covariance of the velocity random walk for unit PSD
+        (the velocity variance is T).
+    qb : variance of the bias drive over the interval (eq. 7) [m²/s⁴].
+    """
+
+    T: float
+    Bp: float
+    Bv: float
+    phi: float
+    Qrr: float
+    Qrv: float
+    qb: float
+
+    @cached_property
+    def Phi(self) -> np.ndarray:
+        """F̂ of ``[r, v, b]`` (eq. 17 with the bias input folded in)."""
+        return np.array([[1.0, self.T, -self.Bp], [0.0, 1.0, -self.Bv], [0.0, 0.0, self.phi]])
+
+    @cached_property
+    def Qa1(self) -> np.ndarray:
+        """Covariance of the velocity-random-walk effect on ``[r, v, b]`` for S_v = 1 [m²/s³] (eqs. 22–23)."""
+        return np.array([[self.Qrr, self.Qrv, 0.0], [self.Qrv, self.T, 0.0], [0.0, 0.0, 0.0]])
+
+    def matrices(self, sub: slice) -> Interval:
+        """The interval of the sub-state ``sub`` of ``[r, v, b]`` for the stacked estimator."""
+        return Interval(self.Phi[sub, sub], self.Qa1[sub, sub], self.qb)
+
+
+class ImuPropagation:
+    """The accelerometer filter's state between two measurement epochs, propagated with every IMU sample.
+
+    Holds ``r̂, v̂, b̂`` per IMU axis (plain floats: this runs at the IMU rate), the displacement ``Δp_n`` (only
+    with ``track_position``), the gyro increment ``∫ω̃ dt`` of the interval (for the gyro filter), the orientation
+    ``q_ni`` propagated with the bias-corrected rate, and the sums behind :meth:`interval`.
+
+    Parameters
+    ----------
+    gravity : [m/s²]; bias_tau, bias_sigma : accelerometer bias time constant [s] and steady-state σ [m/s²];
+    track_position : accumulate the displacement (position measured at the epochs).
+    """
+
+    def __init__(self, gravity: float, bias_tau: float, bias_sigma: float, track_position: bool) -> None:
+        self._g = gravity
+        self._phi_per_s = 1.0 / bias_tau
+        self._sigma2 = bias_sigma**2
+        self.track_position = track_position
+        self.r = [0.0, 0.0, 0.0]
+        self.v = [0.0, 0.0, 0.0]
+        self.b = [0.0, 0.0, 0.0]
+        self.q_ni: rot.Quat | None = None
+        self.reset_interval()
+
+    def reset_interval(self) -> None:
+        """Start a new interval (after a measurement epoch)."""
+        self.T = 0.0
+        self._beta = 1.0
+        self._M0 = self._M1 = self._N1 = self._N2 = 0.0
+        self.dtheta = [0.0, 0.0, 0.0]
+        self.dp = [0.0, 0.0, 0.0]
+
+    def interval(self) -> ImuInterval:
+        """The interval accumulated since the last epoch."""
+        T, M0, M1, N1, N2, beta = self.T, self._M0, self._M1, self._N1, self._N2, self._beta
+        return ImuInterval(T, T * M0 - M1, M0, beta, T**3 - 2.0 * T * N1 + N2, T * T - N1,
+                           (1.0 - beta**2) * self._sigma2)
+
+    def step(self, dt: float, sample: tuple[float, ...], gyro_bias: list[float], q_gravity: rot.Quat | None) -> None:
+        """Eqs. (13)–(16) per IMU axis with the gravity- and transport-compensated input; the interval sums.
+
+        ``sample`` = (gyro x, y, z [rad/s], accel x, y, z [m/s²]) held over ``dt``; ``q_gravity`` = the IMU
+        orientation gravity is removed with (None: level).
+        """
+        wx, wy, wz, fx, fy, fz = sample
+        ox, oy, oz = wx - gyro_bias[0], wy - gyro_bias[1], wz - gyro_bias[2]
+        dtheta = self.dtheta
+        dtheta[0] += wx * dt
+        dtheta[1] += wy * dt
+        dtheta[2] += wz * dt
+        x, y, z, w = q_gravity if q_gravity is not None else rot.IDENTITY
+        g = self._g  # g_i = C_ni^T [0, 0, -g] = -g * (third row of C_ni)
+        gx, gy, gz = -g * 2 * (x * z - y * w), -g * 2 * (y * z + x * w), -g * (1 - 2 * (x * x + y * y))
+        v, b = self.v, self.b
+        ux = fx + gx - (oy * v[2] - oz * v[1])
+        uy = fy + gy - (oz * v[0] - ox * v[2])
+        uz = fz + gz - (ox * v[1] - oy * v[0])
+        ax, ay, az = ux - b[0], uy - b[1], uz - b[2]
+        h = 0.5 * dt * dt
+        q_ni = self.q_ni
+        if self.track_position and q_ni is not None:
+            # eq. (13) displacement, accumulated in the odometry frame (rotated back at the epoch)
+            dx, dy, dz = v[0] * dt + ax * h, v[1] * dt + ay * h, v[2] * dt + az * h
+            qx, qy, qz, qw = q_ni
+            tx, ty, tz = 2 * (qy * dz - qz * dy), 2 * (qz * dx - qx * dz), 2 * (qx * dy - qy * dx)
+            dp = self.dp
+            dp[0] += dx + qw * tx + qy * tz - qz * ty
+            dp[1] += dy + qw * ty + qz * tx - qx * tz
+            dp[2] += dz + qw * tz + qx * ty - qy * tx
+        v[0] += ax * dt
+        v[1] += ay * dt
+        v[2] += az * dt
+        phi = math.exp(-dt * self._phi_per_s)
+        b[0] *= phi
+        b[1] *= phi
+        b[2] *= phi
+        m = self.T + 0.5 * dt
+        bd = self._beta * dt
+        self._M0 += bd
+        self._M1 += bd * m
+        self._N1 += dt * m
+        self._N2 += dt * m * m
+        self._beta *= phi
+        self.T += dt
+        if q_ni is not None:
+            # q_ni ← q_ni ⊗ exp(ω̂ dt / 2), first order in the half angle, renormalised
+            hx, hy, hz = 0.5 * ox * dt, 0.5 * oy * dt, 0.5 * oz * dt
+            qx, qy, qz, qw = q_ni
+            nx = qx + qw * hx + qy * hz - qz * hy
+            ny = qy + qw * hy + qz * hx - qx * hz
+            nz = qz + qw * hz + qx * hy - qy * hx
+            nw = qw - qx * hx - qy * hy - qz * hz
+            n = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
+            self.q_ni = (nx * n, ny * n, nz * n, nw * n)

@@ -1,0 +1,215 @@
+"""The odometry side of the robot CMKF: a nav_msgs/Odometry message → measurements per IMU axis.
+
+Frames as in :mod:`.interval`; ``C_ib`` is the known IMU mounting rotation, ``C_nb`` the odometry orientation,
+``C_ni = C_nb C_bi``. At an odometry epoch, per IMU axis (paper 004's eq. 8 on a robot):
+
+- twist (:class:`TwistMeasurement`): ``z_v = C_ibᵀ v_b`` (twist in ``child_frame_id``, REP-105);
+- pose_twist (:class:`PoseTwistMeasurement`): also ``z_r = C_in (p_n − p_anchor)`` (position relative to the first
+  one, rotated with the measured orientation); the position prior is the displacement accumulated in the
+  odometry frame, ``r̂⁻_k = C_in,k (C_ni,k−1 r̂⁺_{k−1} + Δp_n)``, so the gyro's error does not multiply the distance
+  travelled;
+
+``R`` = the per-axis diagonal of the rotated message covariance (or a parameter; the ``default_*`` noise when the
+covariance is unknown: all zeros, −1, NaN). The gyro filter's measurement over the interval is the odometry's
+rotation ``Δθ_odo``: the trapezoid of the twist angular velocity, ``C_ibᵀ ½(ω_b,k−1 + ω_b,k) T``, or the relative
+rotation of consecutive odometry orientations when no angular velocity is given.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import rotation as rot
+from .config import CmkfConfig
+
+#: Vector fields of an odometry message and their lengths.
+FIELDS = {"position": 3, "orientation_xyzw": 4, "linear_velocity": 3, "angular_velocity": 3}
+
+
+def _as_floats(a: np.ndarray | list[float] | tuple[float, ...]) -> list[float]:
+    """A message vector as a list of floats (cheap for the 1-D arrays the node and the replay pass)."""
+    if isinstance(a, np.ndarray):
+        return a.astype(float, copy=False).ravel().tolist()
+    return [float(x) for x in a]
+
+
+def _rotate(rows: tuple[tuple[float, float, float], ...], v: list[float]) -> list[float]:
+    """``C v`` with C given by its rows (plain floats)."""
+    return [r[0] * v[0] + r[1] * v[1] + r[2] * v[2] for r in rows]
+
+
+class _CovDiag:
+    """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 message covariance, cached on (Σ, C).
+
+    Returns None if the covariance is unknown (all zeros, −1 in the first element, NaN). Odometry drivers mostly
+    publish the same covariance in every message, so the cache makes this one comparison per message.
+    """
+
+    def __init__(self, block: slice) -> None:
+        self.block = block
+        self._key: bytes | None = None
+        self._value: list[float] | None = None
+
+    def __call__(self, cov: np.ndarray | None, C: np.ndarray) -> list[float] | None:
+        cov = None if cov is None else np.asarray(cov, dtype=float)
+        if cov is None or cov.size != 36:
+            return None
+        sub = cov.reshape(6, 6)[self.block, self.block]
+        key = sub.tobytes() + C.tobytes()
+        if key != self._key:
+            self._key = key
+            ok = np.all(np.isfinite(sub)) and sub[0, 0] >= 0 and np.any(sub)
+            self._value = np.einsum("ij,jk,ik->i", C, sub, C).tolist() if ok else None
+        return self._value
+
+
+class TwistMeasurement:
+    """Body velocity per IMU axis (``m = 1``): wheel odometry, whose pose is only integrated twist.
+
+    Parameters
+    ----------
+    config : the filter's parameters (noise overrides and defaults, gravity source).
+    C_ib : rotation of base-frame vectors into the IMU frame.
+    """
+
+    m = 1
+
+    def __init__(self, config: CmkfConfig, C_ib: np.ndarray) -> None:
+        self.config = config
+        self.C_ib = C_ib
+        self._C_ib_rows = tuple(tuple(float(c) for c in row) for row in C_ib)
+        self._twist_lin_cov = _CovDiag(slice(0, 3))
+        self._twist_ang_cov = _CovDiag(slice(3, 6))
+        self._w_prev: tuple[list[float], list[float]] | None = None  # twist rate and its variance, last epoch
+        self._q_nb_prev: rot.Quat | None = None
+        self.needs = ("linear_velocity", "orientation_xyzw") if config.gravity_source == "odometry" else (
+            "linear_velocity",)
+
+    @staticmethod
+    def values(fields: dict[str, object]) -> tuple[dict[str, list[float] | None], rot.Quat | None] | None:
+        """The message's vectors as float lists and its unit quaternion; None if anything is NaN/inf or
+        malformed (wrong length, zero quaternion)."""
+        vals = {k: None if a is None else _as_floats(a) for k, a in fields.items()}
+        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
+        if not math.isfinite(sum(sum(a) for a in vals.values() if a is not None)) or any(
+            a is not None and len(a) != FIELDS[k] for k, a in vals.items()
+        ):
+            return None
+        q_nb = None
+        if vals["orientation_xyzw"] is not None:
+            try:
+                q_nb = rot.normalise(vals["orientation_xyzw"])
+            except ValueError:  # zero quaternion: as unusable as NaN
+                return None
+        return vals, q_nb
+
+    def missing(self, vals: dict[str, list[float] | None]) -> bool:
+        """True when a field this measurement needs is absent."""
+        return any(vals[k] is None for k in self.needs)
+
+    def measure(self, vals: dict[str, list[float] | None], q_ni: rot.Quat | None, pose_cov: np.ndarray | None,
+                twist_cov: np.ndarray | None) -> tuple[list, list]:
+        """``z`` (3, 1) and ``R`` (3, 1, 1) per IMU axis: the body velocity in IMU axes."""
+        zv, rv = self._velocity(vals, twist_cov)
+        return [[v] for v in zv], [[[r]] for r in rv]
+
+    def _velocity(self, vals: dict[str, list[float] | None], twist_cov: np.ndarray | None
+                  ) -> tuple[list[float], list[float]]:
+        cfg = self.config
+        zv = _rotate(self._C_ib_rows, vals["linear_velocity"])
+        if cfg.velocity_noise_std is not None:
+            return zv, [cfg.velocity_noise_std**2] * 3
+        rv = self._twist_lin_cov(twist_cov, self.C_ib)
+        return zv, [cfg.default_velocity_noise_std**2] * 3 if rv is None else rv
+
+    def position_prior(self, r: list[float], dp: list[float]) -> list[float]:
+        """r̂⁻ of the epoch: the position is not measured, so it is carried unchanged."""
+        return r
+
+    @staticmethod
+    def initial(z: list, R: list) -> tuple[list[float], list[float], list[float], list[float]]:
+        """(r₀, v₀, P_rr,0, P_vv,0) per axis from the first measurement (r is not tracked: 0 ± 1)."""
+        return [0.0] * 3, [v[0] for v in z], [1.0] * 3, [r[0][0] for r in R]
+
+    def rotation_increment(self, vals: dict[str, list[float] | None], q_nb: rot.Quat | None,
+                           twist_cov: np.ndarray | None, T: float, new_chain: bool
+                           ) -> tuple[list[float], list[float]] | None:
+        """The odometry's rotation over the interval of length ``T`` in IMU axes [rad] and its variance [rad²];
+        None when it cannot be formed (first twist rate after a gap, no angular velocity nor orientation)."""
+        cfg = self.config
+        if vals["angular_velocity"] is not None:
+            w_now = _rotate(self._C_ib_rows, vals["angular_velocity"])
+            if cfg.angular_velocity_noise_std is not None:
+                rw = [cfg.angular_velocity_noise_std**2] * 3
+            else:
+                rw = self._twist_ang_cov(twist_cov, self.C_ib)
+                rw = [cfg.default_angular_velocity_noise_std**2] * 3 if rw is None else rw
+            prev, self._w_prev = self._w_prev, (w_now, rw)
+            if prev is None or new_chain:
+                return None  # the trapezoid needs the rate at both ends of the interval
+            # trapezoid: the twist is the rate at the stamp
+            return ([0.5 * (a + b) * T for a, b in zip(prev[0], w_now, strict=True)],
+                    [0.25 * (a + b) * T * T for a, b in zip(prev[1], rw, strict=True)])
+        if q_nb is not None and self._q_nb_prev is not None:
+            dq = rot.multiply(rot.conjugate(self._q_nb_prev), q_nb)
+            std = cfg.angular_velocity_noise_std or cfg.default_angular_velocity_noise_std
+            return _rotate(self._C_ib_rows, rot.to_rotvec(dq).tolist()), [(std * T) ** 2] * 3
+        return None
+
+    def end_epoch(self, q_nb: rot.Quat | None) -> None:
+        """The epoch is processed: remember its orientation for the next one."""
+        if q_nb is not None:
+            self._q_nb_prev = q_nb
+
+
+class PoseTwistMeasurement(TwistMeasurement):
+    """Position in the odometry frame and body velocity per IMU axis (``m = 2``, paper 004's eq. 8): motion capture
+    or anything with an independent position."""
+
+    m = 2
+
+    def __init__(self, config: CmkfConfig, C_ib: np.ndarray) -> None:
+        super().__init__(config, C_ib)
+        self.needs = ("position", "orientation_xyzw", "linear_velocity")
+        self._pose_cov = _CovDiag(slice(0, 3))
+        self._anchor: np.ndarray | None = None
+        self._C_ni: np.ndarray | None = None  # orientation of the epoch being processed
+        self._C_ni_epoch: np.ndarray | None = None  # and of the last one
+
+    def measure(self, vals: dict[str, list[float] | None], q_ni: rot.Quat | None, pose_cov: np.ndarray | None,
+                twist_cov: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """``z`` (3, 2) and ``R`` (3, 2, 2) per IMU axis: position from the first one, and body velocity."""
+        cfg = self.config
+        zv, rv = self._velocity(vals, twist_cov)
+        p = np.array(vals["position"])
+        if self._anchor is None:
+            self._anchor = p.copy()
+        self._C_ni = rot.to_matrix(q_ni)
+        C_in = self._C_ni.T
+        zr = C_in @ (p - self._anchor)
+        if cfg.position_noise_std is not None:
+            rr = np.full(3, cfg.position_noise_std**2)
+        else:
+            rr = self._pose_cov(pose_cov, C_in)
+            if rr is None:
+                rr = np.full(3, cfg.default_position_noise_std**2)
+        z = np.column_stack([zr, zv])
+        R = np.zeros((3, 2, 2))
+        R[:, 0, 0] = rr
+        R[:, 1, 1] = rv
+        return z, R
+
+    def position_prior(self, r: list[float], dp: list[float]) -> list[float]:
+        """r̂⁻_k = C_in,k (C_ni,k−1 r̂⁺_{k−1} + Δp_n): the displacement accumulated in the odometry frame."""
+        return list(self._C_ni.T @ (self._C_ni_epoch @ np.array(r) + np.array(dp)))
+
+    @staticmethod
+    def initial(z: np.ndarray, R: np.ndarray) -> tuple[list[float], list[float], list[float], list[float]]:
+        """(r₀, v₀, P_rr,0, P_vv,0) per axis from the first measurement."""
+        return list(z[:, 0]), list(z[:, 1]), list(R[:, 0, 0]), list(R[:, 1, 1])
+
+    def end_epoch(self, q_nb: rot.Quat | None) -> None:
+        super().end_epoch(q_nb)
+        self._C_ni_epoch = self._C_ni

@@ -1,0 +1,107 @@
+"""The robot CMKF fed in stamp order: live messages through a :class:`~.merge.StampMerger`, or whole recordings.
+
+- :class:`CmkfStream`: IMU and odometry messages as they arrive (two topics, two latencies; the ROS node's online
+  identification); the merger holds them ``late_odom_tolerance`` seconds behind the newest IMU stamp and hands
+  them to :class:`~.robot.RobotCmkf` in stamp order.
+- :func:`feed_recording`: recorded IMU and odometry series (the offline replay, the simulated runs), merged by
+  :func:`~.merge.stamp_order`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import numpy as np
+
+from ..axes import ImuSeries, OdometrySeries
+from .config import CmkfConfig
+from .merge import LATE, TOO_LATE, StampMerger, stamp_order
+from .robot import CmkfEstimate, RobotCmkf
+
+#: Odometry fields of :meth:`RobotCmkf.process_odometry` and the :class:`OdometrySeries` attribute of each.
+ODOMETRY_FIELDS = (("position", "position"), ("orientation_xyzw", "orientation_xyzw"),
+                   ("linear_velocity", "linear_velocity"), ("angular_velocity", "angular_velocity"),
+                   ("pose_cov", "pose_covariance"), ("twist_cov", "twist_covariance"))
+
+
+class CmkfStream:
+    """A :class:`RobotCmkf` behind a :class:`StampMerger`: messages in arrival order, processed in stamp order.
+
+    Parameters
+    ----------
+    config : the filter's parameters; ``late_odom_tolerance`` is the merger's latency allowance [s].
+    on_odometry : called as ``on_odometry(t, order)`` after every odometry message the merger released (``order``:
+        :data:`~.merge.IN_ORDER`, :data:`~.merge.LATE` or :data:`~.merge.TOO_LATE`, the last not given to the
+        filter); :attr:`cmkf` then holds the filter's state after it.
+
+    Attributes
+    ----------
+    cmkf : the filter; merger : the merger (its ``latency`` may be changed at any time).
+    """
+
+    def __init__(self, config: CmkfConfig | None = None,
+                 on_odometry: Callable[[float, int], None] | None = None) -> None:
+        self.cmkf = RobotCmkf(config)
+        self.merger: StampMerger[Any] = StampMerger(self.cmkf.config.late_odom_tolerance)
+        self._on_odometry = on_odometry
+
+    def process_imu(self, t: float, gyro: Any, accel: Any, orientation_xyzw: Any = None) -> bool:
+        """Queue one IMU message (see :meth:`RobotCmkf.process_imu`) and process what is due; True if an odometry
+        message processed now updated (or initialised) the filter."""
+        self.merger.push_imu(float(t), (gyro, accel, orientation_xyzw))
+        return self._process(self.merger.ready())
+
+    def process_odometry(self, t: float, **fields: Any) -> bool:
+        """Queue one odometry message (keywords of :meth:`RobotCmkf.process_odometry`) and process what is due."""
+        self.merger.push_odometry(float(t), fields)
+        return self._process(self.merger.ready())
+
+    def flush(self) -> bool:
+        """Process every queued message (the end of the input)."""
+        return self._process(self.merger.flush())
+
+    def restart(self) -> None:
+        """A fresh filter with the same parameters; the queued messages are kept."""
+        self.cmkf = RobotCmkf(self.cmkf.config)
+
+    def estimate(self) -> CmkfEstimate:
+        """The filter's current estimates (of the messages processed so far)."""
+        return self.cmkf.estimate()
+
+    def _process(self, items: Iterator[tuple[float, bool, Any, int]]) -> bool:
+        updated = False
+        for t, is_odometry, item, order in items:
+            if not is_odometry:
+                self.cmkf.process_imu(t, *item)
+                continue
+            if order != TOO_LATE:
+                updated |= self.cmkf.process_odometry(t, late=order == LATE, **item)
+            if self._on_odometry is not None:
+                self._on_odometry(t, order)
+        return updated
+
+
+def feed_recording(cmkf: RobotCmkf, imu: ImuSeries, odom: OdometrySeries | None,
+                   imu_orientation_xyzw: np.ndarray | None = None) -> Iterator[bool]:
+    """Feed recorded series to ``cmkf`` in stamp order; yields after every odometry message whether it updated.
+
+    A field of ``odom`` may be None when the source does not provide it (e.g. motion capture without angular
+    velocity). ``imu_orientation_xyzw`` (N, 4), the IMU's own orientation, is given with the samples; a NaN row (not
+    provided, see :class:`ImuSeries`) is passed as None, so the filter keeps the last orientation it was given.
+    """
+    ti = np.asarray(imu.t, dtype=float)
+    times = ti.tolist()
+    rows = np.column_stack([imu.gyro, imu.accel]).tolist()
+    quats = None
+    if imu_orientation_xyzw is not None:
+        q = np.asarray(imu_orientation_xyzw, dtype=float)
+        quats = [row if ok else None for row, ok in zip(q.tolist(), np.isfinite(q).all(axis=1).tolist(), strict=True)]
+    to = np.zeros(0) if odom is None else np.asarray(odom.t, dtype=float)
+    fields = [] if odom is None else [(key, getattr(odom, name)) for key, name in ODOMETRY_FIELDS]
+    for is_odometry, k in stamp_order(ti, to):
+        if is_odometry:
+            yield cmkf.process_odometry(to[k], **{key: None if arr is None else arr[k] for key, arr in fields})
+        else:
+            row = rows[k]
+            cmkf.process_imu(times[k], row[0:3], row[3:6], None if quats is None else quats[k])

@@ -1,0 +1,98 @@
+"""The CMKF of the online identification: paper 004 on a robot, fed in stamp order, restarted on error.
+
+:class:`~imu_noise_id.core.cmkf.stream.CmkfStream` holds the IMU samples ``cmkf.input_latency`` seconds so that the
+odometry, which arrives on its own topic with its own latency, is processed in stamp order; odometry later than that
+is not used (counted, reported). Any error from the filter restarts it and is reported (the node never stops on
+it). After every odometry update the filters' innovations go to the :class:`~.innovations.InnovationChecks`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...core.cmkf.merge import TOO_LATE
+from ...core.cmkf.robot import CmkfEstimate, RobotCmkf
+from ...core.cmkf.stream import CmkfStream
+from .config import OnlineConfig, cmkf_config
+from .events import EventLog
+from .innovations import InnovationChecks
+
+
+class CmkfFeed:
+    """The CMKF behind its stamp merger, its latest estimate, and the checks of its innovations.
+
+    Attributes
+    ----------
+    estimate : the CMKF's estimate after the last update (or :meth:`refresh`).
+    gyro_bias, accel_bias : (3,) the biases the corrected IMU samples and the stationarity use (0 until the first
+        odometry update).
+    errors : restarts after an error; too_late : odometry messages that came later than ``cmkf.input_latency``.
+    innovations : the innovation checks of the current filter.
+
+    Raises
+    ------
+    InputError
+        If the ``cmkf.*`` or ``innovations.*`` parameters are invalid.
+    """
+
+    def __init__(self, config: OnlineConfig, events: EventLog) -> None:
+        self._config = cmkf_config(config)
+        self._innovation_parameters = (config.innovations_window, config.innovations_lags, config.innovations_alpha)
+        self._events = events
+        self.stream = CmkfStream(self._config, on_odometry=self._on_odometry)
+        self.innovations = InnovationChecks(*self._innovation_parameters, self.cmkf.filter.m)
+        self.estimate: CmkfEstimate = self.stream.estimate()
+        self.gyro_bias = np.zeros(3)
+        self.accel_bias = np.zeros(3)
+        self.errors = 0
+        self.too_late = 0
+
+    @property
+    def cmkf(self) -> RobotCmkf:
+        """The filter."""
+        return self.stream.cmkf
+
+    def set_latency(self, latency: float) -> None:
+        """``cmkf.input_latency`` changed at runtime."""
+        self.stream.merger.latency = latency
+
+    def imu(self, t: float, gyro: Any, accel: Any, orientation_xyzw: Any) -> bool:
+        """One accepted IMU message; True when the estimate changed (an odometry update was processed now)."""
+        return self._feed(self.stream.process_imu, t, gyro, accel, orientation_xyzw)
+
+    def odometry(self, t: float, **fields: Any) -> bool:
+        """One accepted odometry message (keywords of ``RobotCmkf.process_odometry``); True when the estimate
+        changed."""
+        return self._feed(self.stream.process_odometry, t, **fields)
+
+    def refresh(self) -> None:
+        """Re-read the estimate (its status changes without odometry updates too)."""
+        self.estimate = self.stream.estimate()
+
+    def _feed(self, process: Any, *args: Any, **kwargs: Any) -> bool:
+        try:
+            updated = process(*args, **kwargs)
+        except (np.linalg.LinAlgError, ArithmeticError, ValueError) as exc:
+            self.errors += 1
+            self._events.count("cmkf_error")
+            self._events.event("cmkf_error", f"CMKF failed ({type(exc).__name__}: {exc}): restarting it")
+            self.stream.restart()
+            self.innovations = InnovationChecks(*self._innovation_parameters, self.cmkf.filter.m)
+            updated = True
+        if updated:
+            self.estimate = est = self.stream.estimate()
+            if self.cmkf.filter.initialised:
+                self.gyro_bias = est.gyro_bias
+                self.accel_bias = est.accel_bias
+        return updated
+
+    def _on_odometry(self, t: float, order: int) -> None:
+        if order == TOO_LATE:  # the CMKF has propagated past it: not used
+            self.too_late += 1
+            self._events.count("odom_too_late")
+            self._events.event("odom_too_late", f"odom: message at t = {t:.6f} s arrived more than "
+                               "cmkf.input_latency after the IMU: not used by the CMKF")
+        else:
+            self.innovations.add(self.cmkf)

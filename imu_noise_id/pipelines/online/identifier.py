@@ -1,0 +1,285 @@
+"""The online identification composed of its parts: what happens with every message, and what comes out.
+
+Per IMU sample:
+
+1. :class:`~.inputs.Input` checks it (non-finite values, zero, duplicated or backward stamps are rejected and
+   counted); a gap in the stamps ends the stationary stretch, a sustained jump back in time restarts the whole
+   identification.
+2. :class:`~.cmkf_feed.CmkfFeed`: the CMKF (paper 004 on a robot) receives it ``cmkf.input_latency`` seconds
+   later, in stamp order with the odometry (two topics, two latencies).
+3. :class:`~.stationarity.StationaryGate`: stationarity with hysteresis, then the guard delay line.
+4. The stationary samples out of the guard go to :class:`~.noise.StationaryNoise` (white-noise density per axis)
+   and to the queue of :class:`~.bank.BankFeed` (paper 002's hypothesis bank), which
+   :meth:`OnlineIdentifier.update_identification` feeds in batches.
+5. The sample comes back bias-corrected with its covariance N²·f (None while unknown).
+
+Odometry messages are checked the same way and go to the stationarity and the CMKF. Everything is plain numbers
+in and dataclasses out: the rclpy node (:mod:`imu_noise_id.ros.node`) only converts messages and reads the
+hypothesis-set file, so every decision made here is unit-tested without ROS.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from .bank import BankFeed
+from .cmkf_feed import CmkfFeed
+from .config import OnlineConfig
+from .events import EventLog
+from .inputs import Input
+from .noise import StationaryNoise
+from .results import CorrectedImu, Estimates, HypothesesReport
+from .stationarity import StationaryGate
+from .status import (
+    DiagnosticStatus,
+    WindowStats,
+    consistency_status,
+    hypotheses_status,
+    input_status,
+    noise_status,
+    processing_status,
+    range_status,
+    stamp_status,
+    stationarity_status,
+)
+
+
+class OnlineIdentifier:
+    """Streaming identification of a robot's IMU errors (see the module docstring for the per-message steps).
+
+    Parameters
+    ----------
+    config : validated parameters (:data:`~.config.PARAMETERS`).
+    hypotheses : the parsed hypothesis-set mapping and its source name (the node reads the file); None: no
+        hypothesis bank.
+
+    Attributes
+    ----------
+    imu, odom, temperature : the inputs (counters, stamp checks); cmkf_feed : the CMKF; stationarity : the
+    stationarity gate; noise : the white-noise density; bank : the hypothesis bank (None without hypotheses);
+    processing_time, identification_time : callback and bank-batch times (the node adds the former);
+    restarts : identification restarts after a jump back in time; last_imu_t : stamp of the last IMU sample.
+
+    Raises
+    ------
+    InputError
+        If the CMKF or innovation parameters or the hypothesis set are invalid.
+    """
+
+    def __init__(self, config: OnlineConfig | None = None,
+                 hypotheses: tuple[Mapping[str, Any], str] | None = None) -> None:
+        self.config = config = config or OnlineConfig()
+        self._hypotheses = hypotheses
+        self.events = EventLog()
+        self.imu = Input("imu", config, self.events)
+        self.odom = Input("odom", config, self.events)
+        self.temperature = Input("temperature", config, self.events)
+        self.processing_time = WindowStats()
+        self.identification_time = WindowStats(size=256)
+        self.temperature_celsius = math.nan
+        self.restarts = 0
+        self._reset_estimation()
+
+    def _reset_estimation(self) -> None:
+        """Everything estimated starts again (a restarted source: a new time base)."""
+        config = self.config
+        self.cmkf_feed = CmkfFeed(config, self.events)
+        self.stationarity = StationaryGate(config)
+        self.noise = StationaryNoise()
+        self.bank = None if self._hypotheses is None else BankFeed(*self._hypotheses, config.hypotheses_bank_rate,
+                                                                  self.events)
+        self.last_imu_t = math.nan
+        self._variance_cache: tuple[tuple[float, ...] | None, tuple[float, ...] | None] | None = None
+
+    def set_config(self, config: OnlineConfig) -> None:
+        """Apply a new (validated) configuration at runtime; the estimates are kept."""
+        self.config = config
+        for source in (self.imu, self.odom, self.temperature):
+            source.configure(config)
+        self.stationarity.configure(config)
+        self.cmkf_feed.set_latency(config.cmkf_input_latency)
+
+    def pop_events(self) -> list[tuple[str, str]]:
+        """Input problems seen since the last call, as (key, message); the node logs them rate-limited by key."""
+        return self.events.pop()
+
+    # -- inputs -----------------------------------------------------------------------------------------------------
+    def process_imu(
+        self, t: float, gyro: tuple[float, float, float], accel: tuple[float, float, float],
+        frame_id: str = "", wall_time: float | None = None, *,
+        orientation_xyzw: tuple[float, float, float, float] | None = None,
+    ) -> CorrectedImu | None:
+        """One IMU message: header stamp ``t`` [s], angular rate [rad/s], specific force [m/s²].
+
+        ``orientation_xyzw`` is used by the CMKF only with ``cmkf.gravity_source: imu``. Returns the
+        bias-corrected sample, or None when the message was rejected (counted, and reported through
+        :meth:`pop_events` and the diagnostics).
+        """
+        sample = np.array((*gyro, *accel), dtype=float)
+        verdict = self.imu.receive(t, bool(np.isfinite(sample).all()), frame_id, wall_time,
+                                   "angular rate or acceleration")
+        if verdict is None:
+            return None
+        if verdict == "restart":
+            self.restarts += 1
+            self._reset_estimation()
+        elif verdict == "gap":
+            self._end_stationary()
+            self.stationarity.interrupt()
+        if self.imu.stats.accepted % 100 == 0:
+            self._variance_cache = None
+        self.last_imu_t = t
+        if self.config.cmkf_gravity_source != "imu":
+            orientation_xyzw = None
+        if self.cmkf_feed.imu(t, gyro, accel, orientation_xyzw):
+            self._variance_cache = None
+        ended, released = self.stationarity.update(t, sample, self.cmkf_feed.gyro_bias)
+        if ended:
+            self._end_stationary()
+        for t_s, y in released:
+            self.noise.add(t_s, y)
+            if self.bank is not None:
+                self.bank.add(t_s, y)
+        return self._corrected(t, sample)
+
+    def _end_stationary(self) -> None:
+        """Motion or a gap: the difference chain is broken and the bank's stretch ends."""
+        self.noise.break_chain()
+        if self.bank is not None:
+            self.bank.end_stretch()
+
+    def process_odometry(
+        self, t: float, linear_velocity: tuple[float, float, float], angular_velocity: tuple[float, float, float],
+        frame_id: str = "", wall_time: float | None = None, *,
+        position: tuple[float, float, float] | None = None,
+        orientation_xyzw: tuple[float, float, float, float] | None = None,
+        pose_covariance: np.ndarray | None = None, twist_covariance: np.ndarray | None = None,
+    ) -> bool:
+        """One odometry message (pose in the odom frame, twist in the child frame); False when rejected."""
+        v = np.array((*linear_velocity, *angular_velocity), dtype=float)
+        verdict = self.odom.receive(t, bool(np.isfinite(v).all()), frame_id, wall_time, "twist")
+        if verdict is None:
+            return False
+        detector = self.stationarity.detector
+        if verdict == "restart":
+            detector.odom_t = None
+        detector.update_odometry(t, math.sqrt(float(v[:3] @ v[:3])), math.sqrt(float(v[3:] @ v[3:])))
+        if self.cmkf_feed.odometry(
+            t, position=position, orientation_xyzw=orientation_xyzw, linear_velocity=v[:3], angular_velocity=v[3:],
+            pose_cov=None if pose_covariance is None else np.array(pose_covariance, dtype=float),
+            twist_cov=None if twist_covariance is None else np.array(twist_covariance, dtype=float),
+        ):
+            self._variance_cache = None
+        return True
+
+    def process_temperature(self, t: float, celsius: float, frame_id: str = "",
+                            wall_time: float | None = None) -> bool:
+        """One temperature message [°C]; False when it was rejected."""
+        if self.temperature.receive(t, math.isfinite(celsius), frame_id, wall_time, "value") is None:
+            return False
+        self.temperature_celsius = celsius
+        return True
+
+    # -- outputs ----------------------------------------------------------------------------------------------------
+    def _corrected(self, t: float, sample: np.ndarray) -> CorrectedImu:
+        gyro = sample[:3] - self.cmkf_feed.gyro_bias
+        accel = sample[3:] - self.cmkf_feed.accel_bias
+        if self._variance_cache is None:
+            self._refresh_variance()
+        gyro_var, accel_var = self._variance_cache
+        return CorrectedImu(t, (float(gyro[0]), float(gyro[1]), float(gyro[2])),
+                            (float(accel[0]), float(accel[1]), float(accel[2])), gyro_var, accel_var)
+
+    def _refresh_variance(self) -> None:
+        """Cache the covariance written into the corrected samples (refreshed every 100 IMU samples, by
+        :meth:`update_identification` and after every odometry update, not per sample)."""
+        variance, _ = self._covariance()
+        if variance is None:
+            self._variance_cache = (None, None)
+        else:
+            v = variance.tolist()
+            self._variance_cache = (tuple(v[:3]), tuple(v[3:]))
+
+    def _covariance(self) -> tuple[np.ndarray | None, str]:
+        return self.noise.covariance(self.imu.stamps.rate, self.config.noise_min_samples, self.cmkf_feed.estimate)
+
+    def update_identification(self) -> None:
+        """Feed the queued stationary samples to the per-axis hypothesis banks and refresh the CMKF status (the
+        node calls it at ``publish_rate``; a batch costs much less than the same samples one by one)."""
+        self._variance_cache = None
+        self.cmkf_feed.refresh()
+        if self.bank is None:
+            return
+        start = time.perf_counter()
+        if self.bank.feed(self.imu.stamps.rate):
+            self.identification_time.add(time.perf_counter() - start)
+
+    def hypotheses(self) -> HypothesesReport | None:
+        """Posterior probabilities and decisions per axis, or None before the banks exist."""
+        return None if self.bank is None else self.bank.report()
+
+    def estimates(self) -> Estimates:
+        """The current estimates (copies)."""
+        min_samples = self.config.noise_min_samples
+        est = self.cmkf_feed.estimate
+        known = self.cmkf_feed.cmkf.filter.initialised
+        nan3 = np.full(3, math.nan)
+        covariance, source = self._covariance()
+        return Estimates(
+            t=self.last_imu_t,
+            cmkf_status=est.status,
+            gyro_bias=est.gyro_bias.copy() if known else nan3.copy(),
+            gyro_bias_std=est.gyro_bias_std.copy() if known else nan3.copy(),
+            accel_bias=est.accel_bias.copy() if known else nan3.copy(),
+            accel_bias_std=est.accel_bias_std.copy() if known else nan3.copy(),
+            noise_density=self.noise.density(min_samples),
+            noise_density_rstd=self.noise.relative_std(min_samples),
+            noise_samples=self.noise.n,
+            psd=np.concatenate([est.S_g, est.S_v]) if known else np.full(6, math.nan),
+            covariance=covariance if covariance is not None else np.full(6, math.nan),
+            covariance_source=source,
+            imu_rate=self.imu.stamps.rate,
+            stationary=self.stationarity.stationary,
+            bank_theta={} if self.bank is None else self.bank.theta(),
+        )
+
+    def diagnostics(self, wall_now: float, window_s: float) -> list[DiagnosticStatus]:
+        """Statuses per function, computed at steady-clock time ``wall_now`` over the last ``window_s`` seconds.
+
+        Resets the per-window counters (received messages, stamp problems, decision changes).
+        """
+        cfg = self.config
+        feed = self.cmkf_feed
+        est = self.estimates()
+        statuses = [
+            input_status("IMU input", self.imu, wall_now, window_s, cfg.expected_imu_rate, True, cfg.stale_timeout),
+            input_status("Odometry input", self.odom, wall_now, window_s, cfg.expected_odom_rate,
+                         cfg.stationary_require_odometry, cfg.stale_timeout),
+        ]
+        if self.temperature.stats.received:
+            statuses.append(input_status("Temperature input", self.temperature, wall_now, window_s, 0.0, False,
+                                         cfg.stale_timeout))
+        counts = self.events.window_counts
+        statuses += [
+            stamp_status(counts, (self.imu, self.odom), self.restarts),
+            stationarity_status(self.stationarity, self.last_imu_t),
+            consistency_status(feed.estimate, cfg.nis_window, bool(counts.get("cmkf_error")), feed.errors,
+                               feed.too_late),
+            feed.innovations.status(),
+            noise_status(est, cfg.noise_min_samples),
+            hypotheses_status(self.hypotheses(), self.bank is not None,
+                              [] if self.bank is None else self.bank.decision_changes),
+            range_status(cfg, est),
+            processing_status(self.processing_time, self.identification_time),
+        ]
+        for source in (self.imu, self.odom, self.temperature):
+            source.stats.window_received = 0
+        self.events.new_period()
+        if self.bank is not None:
+            self.bank.decision_changes = []
+        return statuses

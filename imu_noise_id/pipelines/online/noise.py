@@ -1,0 +1,55 @@
+"""The white-noise density per axis from the stationary samples, and the covariance of the corrected IMU.
+
+The density is the Allan variance at τ₀ of the samples that passed the stationarity guard
+(:class:`~imu_noise_id.core.white_noise.FirstDifferences`: differences never span a pause). The variance written
+into ``~/imu_corrected`` is N²·f: from this density once ``noise.min_samples`` differences exist, before that from
+the CMKF's √Ŝ while it is tracking, else unknown.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...core.cmkf.robot import CmkfEstimate
+from ...core.white_noise import FirstDifferences
+
+
+class StationaryNoise:
+    """White-noise density per axis (AXES order) from consecutive stationary samples."""
+
+    def __init__(self) -> None:
+        self.differences = FirstDifferences(6)
+
+    @property
+    def n(self) -> int:
+        """Stationary sample differences used."""
+        return self.differences.n
+
+    def add(self, t: float, sample: np.ndarray) -> None:
+        """A stationary sample that passed the guard."""
+        self.differences.add(t, sample)
+
+    def break_chain(self) -> None:
+        """Motion or a gap: no difference across it."""
+        self.differences.break_chain()
+
+    def density(self, min_samples: int) -> np.ndarray:
+        """N per axis [u/√Hz]; NaN before ``min_samples`` differences."""
+        return self.differences.density() if self.n >= min_samples else np.full(6, math.nan)
+
+    def relative_std(self, min_samples: int) -> float:
+        """Relative standard deviation of N (NaN before ``min_samples`` differences)."""
+        return self.differences.relative_std() if self.n >= min_samples else math.nan
+
+    def covariance(self, rate: float, min_samples: int, cmkf: CmkfEstimate) -> tuple[np.ndarray | None, str]:
+        """N²·f per axis [u²] for the IMU rate ``rate`` [Hz] and its source: ``stationary`` (this density),
+        ``cmkf`` (Ŝ_g, Ŝ_v of a tracking CMKF) or ``none``."""
+        if not math.isfinite(rate):
+            return None, "none"
+        if self.n >= min_samples:
+            return self.differences.density() ** 2 * rate, "stationary"
+        if cmkf.status == "tracking":
+            return np.concatenate([cmkf.S_g, cmkf.S_v]) * rate, "cmkf"
+        return None, "none"

@@ -1,0 +1,105 @@
+"""What the online identification returns: plain dataclasses (the node turns them into messages)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class CorrectedImu:
+    """One bias-corrected IMU sample; variances are N²·f per axis, or None while no estimate exists."""
+
+    t: float
+    gyro: tuple[float, float, float]
+    accel: tuple[float, float, float]
+    gyro_variance: tuple[float, float, float] | None
+    accel_variance: tuple[float, float, float] | None
+
+
+@dataclass
+class Estimates:
+    """Current estimates, SI units; per-axis arrays in :data:`~imu_noise_id.core.axes.AXES` order.
+
+    Attributes
+    ----------
+    t : header stamp of the last IMU sample used [s]
+    cmkf_status : the CMKF's status (``no_data``, ``imu_only``, ``unobserved``, ``converging``, ``tracking``)
+    gyro_bias, gyro_bias_std : (3,) [rad/s] from the gyro-bias filter (NaN before the first odometry update)
+    accel_bias, accel_bias_std : (3,) [m/s²] from the CMKF (NaN before the first odometry update)
+    noise_density : (6,) white-noise density [u/√Hz] from stationary samples (NaN before ``noise.min_samples``)
+    noise_density_rstd : relative standard deviation of ``noise_density``
+    noise_samples : number of stationary sample differences used
+    psd : (6,) the CMKF's Ŝ_g per gyro axis [rad²/s] and Ŝ_v per accelerometer axis [m²/s³]
+    covariance : (6,) the variance N²·f [u²] written into ``~/imu_corrected`` (NaN while unknown)
+    covariance_source : ``stationary`` (Allan τ₀ density), ``cmkf`` (√Ŝ) or ``none``
+    imu_rate : nominal IMU rate from the header stamps [Hz]
+    stationary : whether the platform is stationary now
+    bank_theta : parameter name → (6,) θ̂ of each axis's most probable hypothesis (NaN where that hypothesis
+        has no such parameter or the axis has no bank yet)
+    """
+
+    t: float
+    cmkf_status: str
+    gyro_bias: np.ndarray
+    gyro_bias_std: np.ndarray
+    accel_bias: np.ndarray
+    accel_bias_std: np.ndarray
+    noise_density: np.ndarray
+    noise_density_rstd: float
+    noise_samples: int
+    psd: np.ndarray
+    covariance: np.ndarray
+    covariance_source: str
+    imu_rate: float
+    stationary: bool
+    bank_theta: dict[str, np.ndarray]
+
+    #: Column labels of :meth:`noise_table` before the bank's parameter names.
+    NOISE_FIELDS: tuple[str, ...] = (
+        "noise_density", "noise_density_rstd", "covariance", "bias", "bias_std", "cmkf_psd",
+        "cmkf_noise_density", "stationary_samples",
+    )
+
+    def noise_table(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """Column labels and the (6, columns) table of ``~/noise`` (rows in AXES order).
+
+        Columns: :attr:`NOISE_FIELDS`, then ``bank_<parameter>`` per parameter of the hypothesis set.
+        """
+        fields = self.NOISE_FIELDS + tuple(f"bank_{name}" for name in self.bank_theta)
+        table = np.full((6, len(fields)), math.nan)
+        table[:, 0] = self.noise_density
+        table[:, 1] = self.noise_density_rstd
+        table[:, 2] = self.covariance
+        table[:3, 3] = self.gyro_bias
+        table[3:, 3] = self.accel_bias
+        table[:3, 4] = self.gyro_bias_std
+        table[3:, 4] = self.accel_bias_std
+        table[:, 5] = self.psd
+        table[:, 6] = np.sqrt(self.psd)
+        table[:, 7] = self.noise_samples
+        for j, values in enumerate(self.bank_theta.values()):
+            table[:, len(self.NOISE_FIELDS) + j] = values
+        return fields, table
+
+
+@dataclass
+class HypothesesReport:
+    """Posterior probabilities per axis (rows in AXES order) and hypothesis (columns in ``names`` order).
+
+    ``decision`` holds the index of the decided hypothesis per axis (−1: undecided or no bank yet);
+    ``updates`` the number of bank samples per axis; probabilities are NaN for axes without a bank yet.
+    """
+
+    names: tuple[str, ...]
+    probabilities: np.ndarray
+    decision: np.ndarray
+    updates: np.ndarray
+
+    def table(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """Column labels (hypothesis names, ``decision``, ``bank_updates``) and the (6, columns) table."""
+        return (*self.names, "decision", "bank_updates"), np.column_stack(
+            [self.probabilities, self.decision, self.updates]
+        )

@@ -1,0 +1,229 @@
+"""Diagnostics of the online identification: levels, the status record and one function per status.
+
+Each function turns the state of one part into a :class:`DiagnosticStatus` (the node publishes them on
+``/diagnostics`` as ``<node>: <name>``); the composing identifier calls them once per diagnostics period.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...core.axes import ACCEL_AXES, AXES, GYRO_AXES
+from ...core.cmkf.robot import CmkfEstimate
+from ...core.diagnostics.consistency import nis_bounds
+from .config import OnlineConfig
+from .inputs import Input
+from .results import Estimates, HypothesesReport
+from .stationarity import StationaryGate
+
+# Diagnostic levels, equal to diagnostic_msgs/DiagnosticStatus.{OK, WARN, ERROR, STALE}.
+OK, WARN, ERROR, STALE = 0, 1, 2, 3
+LEVEL_NAMES = {OK: "OK", WARN: "WARN", ERROR: "ERROR", STALE: "STALE"}
+
+
+@dataclass
+class DiagnosticStatus:
+    """One diagnostics entry: ``name``, ``level`` (OK, WARN, ERROR, STALE), ``message`` and key–value details."""
+
+    name: str
+    level: int
+    message: str
+    values: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass
+class WindowStats:
+    """Percentiles over the last ``size`` values of a stream of numbers (processing times, NIS)."""
+
+    size: int = 4096
+    _buf: np.ndarray | None = None
+    _i: int = 0
+    count: int = 0
+
+    def add(self, value: float) -> None:
+        if self._buf is None or self._buf.shape[0] != self.size:
+            self._buf = np.empty(self.size)
+            self._i = 0
+        self._buf[self._i] = value
+        self._i = (self._i + 1) % self.size
+        self.count += 1
+
+    def values(self) -> np.ndarray:
+        if self._buf is None:
+            return np.empty(0)
+        return self._buf[: min(self.count, self.size)]
+
+    def percentile(self, q: float) -> float:
+        v = self.values()
+        return float(np.percentile(v, q)) if v.size else math.nan
+
+
+def input_status(name: str, source: Input, wall_now: float, window_s: float, expected_rate: float,  # noqa: PLR0917
+                 required: bool, stale_timeout: float) -> DiagnosticStatus:
+    """Rate received over the period, staleness (steady clock), expected rate, frame changes of one input."""
+    stats, stamps = source.stats, source.stamps
+    rate = stats.window_received / window_s if window_s > 0 else math.nan
+    values = {
+        "received": str(stats.received),
+        "accepted": str(stats.accepted),
+        "rate_received_hz": f"{rate:.2f}",
+        "rate_header_hz": f"{stamps.rate:.3f}",
+        "rejected_nonfinite": str(stats.rejected_values),
+        "frame_id": stats.frame_id or "",
+        "frame_id_changes": str(stats.frame_changes),
+    }
+    if stats.last_wall is None:
+        level = STALE if required else WARN
+        message = "no message received yet"
+        if name.startswith("Odometry"):
+            message += ": no CMKF update; stationarity from the IMU alone"
+        return DiagnosticStatus(name, level, message, values)
+    silent = wall_now - stats.last_wall
+    values["seconds_since_last"] = f"{silent:.2f}"
+    if silent > stale_timeout:
+        return DiagnosticStatus(name, STALE if required else WARN, f"no message for {silent:.1f} s", values)
+    if expected_rate > 0 and rate < 0.8 * expected_rate:
+        return DiagnosticStatus(name, WARN, f"rate {rate:.1f} Hz below the expected {expected_rate:g} Hz", values)
+    if stats.frame_changes:
+        return DiagnosticStatus(name, WARN, f"frame_id changed {stats.frame_changes} time(s), now "
+                                f"{stats.frame_id!r}", values)
+    return DiagnosticStatus(name, OK, f"{rate:.1f} Hz", values)
+
+
+def stamp_status(window_counts: dict[str, int], inputs: tuple[Input, ...], restarts: int) -> DiagnosticStatus:
+    """The period's stamp and value problems of every input, and the totals as values."""
+    values = {f"window_{k}": str(v) for k, v in sorted(window_counts.items())}
+    for source in inputs:
+        for k, v in source.stamps.counts.items():
+            if k != "ok":
+                values[f"total_{source.what}_{k}"] = str(v)
+    values["restarts"] = str(restarts)
+    if window_counts:
+        summary = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in sorted(window_counts.items()))
+        return DiagnosticStatus("Time stamps", WARN, f"in the last period: {summary}", values)
+    return DiagnosticStatus("Time stamps", OK, "monotonic, no gaps", values)
+
+
+def stationarity_status(gate: StationaryGate, last_imu_t: float) -> DiagnosticStatus:
+    """Informational: stationary or not, and the evidence."""
+    st = gate.detector
+    values = {
+        "stationary": str(st.stationary).lower(),
+        "imu_still": str(st.imu_still).lower(),
+        "odometry_fresh": str(st.odom_fresh).lower(),
+        "odometry_still": str(st.odom_still).lower(),
+        "transitions": str(gate.transitions),
+    }
+    if st.stationary:
+        held = last_imu_t - st.stationary_since
+        values["stationary_for_s"] = f"{held:.1f}"
+        return DiagnosticStatus("Stationarity", OK, f"stationary for {held:.1f} s: identification running", values)
+    return DiagnosticStatus("Stationarity", OK, "moving or settling: identification paused", values)
+
+
+def consistency_status(est: CmkfEstimate, nis_window: int, errors_now: bool, errors: int,  # noqa: PLR0911
+                       too_late: int) -> DiagnosticStatus:
+    """Normalised innovation squared of the CMKF over its last ``nis_window`` updates against χ² bounds."""
+    n = min(est.counters.get("updates", 0), nis_window)
+    values = {"cmkf_status": est.status, "updates": str(est.counters.get("updates", 0)),
+              "stacked_samples": str(est.n_stacked), "nis_accel_mean": f"{est.nis_accel_mean:.3f}",
+              "nis_accel_dof": str(est.nis_accel_dof), "nis_gyro_last": f"{est.nis_gyro:.3f}"}
+    for key, count in est.counters.items():
+        if count and key not in ("imu", "odom", "updates"):
+            values[f"cmkf_{key}"] = str(count)
+    name = "Filter consistency"
+    values["cmkf_restarts_after_errors"] = str(errors)
+    values["odom_too_late_for_cmkf"] = str(too_late)
+    if errors_now:
+        return DiagnosticStatus(name, ERROR, "the CMKF raised an error and was restarted (see the log)", values)
+    if est.status in ("no_data", "no_imu", "imu_only"):
+        return DiagnosticStatus(name, WARN, f"CMKF not running ({est.status.replace('_', ' ')}): it needs "
+                                "IMU and odometry", values)
+    if est.status == "unobserved":
+        return DiagnosticStatus(name, WARN, "no odometry update recently: biases are predicted only", values)
+    if n < 10 or not math.isfinite(est.nis_accel_mean):
+        return DiagnosticStatus(name, OK, f"converging ({n} updates)", values)
+    low, high = nis_bounds(est.nis_accel_dof, n)
+    values["nis_bounds_95"] = f"[{low:.3f}, {high:.3f}]"
+    mean = est.nis_accel_mean
+    if mean > 10.0 * est.nis_accel_dof:
+        return DiagnosticStatus(name, ERROR, f"NIS mean {mean:.2f} ≫ {est.nis_accel_dof}: the filter's noise "
+                                "model does not fit the data (check cmkf.* and the odometry covariance)", values)
+    if not low <= mean <= high:
+        return DiagnosticStatus(name, WARN, f"NIS mean {mean:.2f} outside its 95 % bounds [{low:.2f}, "
+                                f"{high:.2f}] over {n} updates", values)
+    return DiagnosticStatus(name, OK, f"NIS mean {mean:.2f} inside [{low:.2f}, {high:.2f}]", values)
+
+
+def noise_status(est: Estimates, needed: int) -> DiagnosticStatus:
+    """Stationary samples collected and the densities once there are enough."""
+    n = est.noise_samples
+    values = {"stationary_samples": str(n), "needed": str(needed), "covariance_source": est.covariance_source}
+    if n < needed:
+        return DiagnosticStatus("Noise density", WARN, f"collecting stationary samples ({n}/{needed}); "
+                                f"corrected IMU covariance from: {est.covariance_source}", values)
+    for axis, value in zip(AXES, est.noise_density, strict=True):
+        values[f"{axis}_noise_density"] = f"{value:.4g}"
+    values["relative_std"] = f"{est.noise_density_rstd:.3g}"
+    return DiagnosticStatus("Noise density", OK, f"estimated from {n} stationary samples", values)
+
+
+def hypotheses_status(report: HypothesesReport | None, enabled: bool, decision_changes: list[str]
+                      ) -> DiagnosticStatus:
+    """Decisions per axis; WARN in a period in which a decision changed."""
+    name = "Hypotheses"
+    if not enabled:
+        return DiagnosticStatus(name, OK, "hypothesis bank disabled (hypotheses.enabled: false)")
+    if report is None:
+        return DiagnosticStatus(name, OK, "waiting for stationary samples")
+    values = {}
+    decided = []
+    for i, axis in enumerate(AXES):
+        k = int(report.decision[i])
+        values[f"{axis}_decision"] = report.names[k] if k >= 0 else "undecided"
+        values[f"{axis}_updates"] = str(int(report.updates[i]))
+        if k >= 0:
+            decided.append(f"{axis} {report.names[k]}")
+    if decision_changes:
+        return DiagnosticStatus(name, WARN, "; ".join(decision_changes), values)
+    if len(decided) == 6:
+        return DiagnosticStatus(name, OK, "decided: " + ", ".join(decided), values)
+    return DiagnosticStatus(name, OK, f"{len(decided)}/6 axes decided", values)
+
+
+def range_status(config: OnlineConfig, est: Estimates) -> DiagnosticStatus:
+    """Biases and noise densities against the ``expected.*`` bounds."""
+    cfg = config
+    problems = []
+    for axis, value in zip(GYRO_AXES, est.gyro_bias, strict=True):
+        if abs(value) > cfg.expected_gyro_bias_max:
+            problems.append(f"{axis} bias {value:.3g} rad/s > {cfg.expected_gyro_bias_max:g}")
+    for axis, value in zip(ACCEL_AXES, est.accel_bias, strict=True):
+        if abs(value) > cfg.expected_accel_bias_max:
+            problems.append(f"{axis} bias {value:.3g} m/s^2 > {cfg.expected_accel_bias_max:g}")
+    for axis, value in zip(AXES, est.noise_density, strict=True):
+        limit = cfg.expected_gyro_noise_density_max if axis in GYRO_AXES else cfg.expected_accel_noise_density_max
+        if value > limit:
+            problems.append(f"{axis} noise density {value:.3g} > {limit:g}")
+    values = {"problems": str(len(problems))}
+    if problems:
+        return DiagnosticStatus("Estimate ranges", WARN, "; ".join(problems), values)
+    return DiagnosticStatus("Estimate ranges", OK, "estimates inside the expected ranges", values)
+
+
+def processing_status(processing_time: WindowStats, identification_time: WindowStats) -> DiagnosticStatus:
+    """Callback and bank-batch times (informational)."""
+    pt, it = processing_time, identification_time
+    values = {
+        "callbacks": str(pt.count),
+        "callback_p50_us": f"{pt.percentile(50) * 1e6:.1f}",
+        "callback_p99_us": f"{pt.percentile(99) * 1e6:.1f}",
+        "callback_max_us": f"{float(pt.values().max()) * 1e6:.1f}" if pt.count else "nan",
+        "bank_batches": str(it.count),
+        "bank_batch_p50_us": f"{it.percentile(50) * 1e6:.1f}",
+        "bank_batch_max_us": f"{float(it.values().max()) * 1e6:.1f}" if it.count else "nan",
+    }
+    return DiagnosticStatus("Processing", OK, f"p99 {values['callback_p99_us']} us per IMU callback", values)
