@@ -19,6 +19,8 @@ from ..core.cmkf.config import CmkfConfig
 from ..core.cmkf.robot import CmkfEstimate, RobotCmkf
 from ..core.cmkf.stream import feed_recording
 from ..core.diagnostics.consistency import nis_bounds
+from ..core.errors import InputError
+from ..core.timing import sampling_period
 
 #: Per-axis fields of :class:`CmkfEstimate` recorded over time.
 SERIES_FIELDS = (
@@ -49,7 +51,11 @@ class CmkfReplayResult:
 
 
 def _rate(t: np.ndarray) -> float:
-    return float(1.0 / np.median(np.diff(t))) if t.size > 1 else math.nan
+    """Rate [Hz] of a stream by the package's one sampling rule (nan for fewer than two usable stamps)."""
+    try:
+        return 1.0 / sampling_period(t)
+    except InputError:
+        return math.nan
 
 
 def replay(

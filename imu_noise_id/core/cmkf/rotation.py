@@ -48,15 +48,6 @@ def to_matrix(q: Quat) -> np.ndarray:
     )
 
 
-def from_rotvec(rx: float, ry: float, rz: float) -> Quat:
-    """Quaternion of the rotation vector ``(rx, ry, rz)`` [rad]."""
-    a = math.sqrt(rx * rx + ry * ry + rz * rz)
-    if a < 1e-12:
-        return normalise((0.5 * rx, 0.5 * ry, 0.5 * rz, 1.0))
-    s = math.sin(0.5 * a) / a
-    return (rx * s, ry * s, rz * s, math.cos(0.5 * a))
-
-
 def to_rotvec(q: Quat) -> np.ndarray:
     """Rotation vector [rad] of a unit quaternion (angle in [0, π])."""
     x, y, z, w = q
