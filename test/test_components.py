@@ -85,7 +85,8 @@ def test_gm_allan_variance_limits():
     gm = GM(tau=100.0, sigma=2e-3)
     q_c = 2 * gm.sigma**2 / gm.tau
     # tau << tau_c: random-walk-like K² tau / 3 with K² = 2σ²/τ_c; tau >> tau_c: white with N² = 2σ²τ_c.
-    assert gm.allan_variance(0.01, DT) == pytest.approx(q_c * 0.01 / 3, rel=1e-3)
+    # (sampled: at τ = dt the sampled random walk's K²(τ/3 + dt²/(6τ)) = K² dt / 2)
+    assert gm.allan_variance(0.01, DT) == pytest.approx(RW(math.sqrt(q_c)).allan_variance(0.01, DT), rel=1e-3)
     assert gm.allan_variance(1e6, DT) == pytest.approx(2 * gm.sigma**2 * gm.tau / 1e6, rel=1e-3)
     # continuity across the series/closed-form switch at tau/tau_c = 1e-3
     a, b = gm.allan_variance(np.array([0.0999999, 0.1000001]), DT)
@@ -157,8 +158,39 @@ def _av_from_psd(component, tau: float) -> float:
 @pytest.mark.parametrize("component", [OSC(0.5, 0.05, 6e-3), OSC(3.0, 0.6, 1e-3), LPF(1e-3, 20.0)],
                          ids=str)
 @pytest.mark.parametrize("tau", [0.01, 0.3, 3.0, 30.0])
-def test_closed_form_allan_variance_equals_the_psd_integral(component, tau):
-    assert component.allan_variance(np.array([tau]), DT)[0] == pytest.approx(_av_from_psd(component, tau), rel=1e-6)
+def test_sampled_allan_variance_tends_to_the_continuous_psd_integral(component, tau):
+    """With samples much closer than the process's memory the sampled AV is the continuous-time one."""
+    memory = 1.0 / (2.0 * math.pi * (component.cutoff if isinstance(component, LPF) else component.frequency))
+    fine = min(tau, memory) / 200.0
+    assert component.allan_variance(np.array([tau]), fine)[0] == pytest.approx(_av_from_psd(component, tau),
+                                                                               rel=2e-4)
+
+
+def _autocovariance(component, lag_s: np.ndarray) -> np.ndarray:
+    """R(u) of the component written out independently of the code under test (module docstrings)."""
+    if isinstance(component, LPF):
+        tau_c = 1.0 / (2.0 * math.pi * component.cutoff)
+        return math.pi * component.noise_density**2 * component.cutoff * np.exp(-lag_s / tau_c)
+    if isinstance(component, GM):
+        return component.sigma**2 * np.exp(-lag_s / component.tau)
+    zeta = component.bandwidth / (2.0 * component.frequency)
+    w0 = 2.0 * math.pi * component.frequency
+    a, wd = zeta * w0, w0 * math.sqrt(1.0 - zeta**2)
+    return component.sigma**2 * np.exp(-a * lag_s) * (np.cos(wd * lag_s) + a / wd * np.sin(wd * lag_s))
+
+
+@pytest.mark.parametrize("component", [OSC(0.5, 0.05, 6e-3), OSC(3.0, 0.6, 1e-3), LPF(1e-3, 20.0), GM(0.02, 1e-3),
+                                       GM(300.0, 2e-5)], ids=str)
+@pytest.mark.parametrize("m", [1, 2, 7, 100, 1000])
+def test_sampled_allan_variance_equals_the_sum_over_the_autocovariance(component, m):
+    """AV(m·dt) of the samples = (4S(m) − S(2m))/(2m²), S(k) = Σ_{|j|<k} (k − |j|) R(j·dt), summed directly."""
+    def block_sum_variance(k: int) -> float:
+        j = np.arange(1, k)
+        return k * float(_autocovariance(component, np.zeros(1))[0]) + 2.0 * float(
+            np.sum((k - j) * _autocovariance(component, j * DT)))
+
+    expected = (4.0 * block_sum_variance(m) - block_sum_variance(2 * m)) / (2.0 * m * m)
+    assert component.allan_variance(np.array([m * DT]), DT)[0] == pytest.approx(expected, rel=1e-6)
 
 
 def test_osc_block_is_the_exact_discretisation_of_a_stationary_oscillator():

@@ -30,21 +30,25 @@ def test_model_yaml_gets_loop_steps(tmp_path, sine_result):
     path = write_model_yaml(tmp_path / "model.yaml", {}, {"gyro_z": sine_result}, {"command": "loop"})
     doc = yaml.safe_load(path.read_text())
     entry = doc["axes"]["gyro_z"]
-    assert (entry["model"], entry["n"], entry["dt"]) == ("WN+RW+SIN", 8000, DT)  # the loop's final model
+    # The loop's final model: the line added, then the random walk (undetectable in 80 s) dropped by re-selection.
+    assert (entry["model"], entry["n"], entry["dt"]) == ("WN+SIN", 8000, DT)
     steps = entry["loop"]
     assert steps[0]["added"] is None and steps[0]["evidence"] is None
     assert steps[1]["added"] == "SIN" and steps[1]["how"] == "deterministic regressor"
+    assert steps[1]["dropped"] == ["RW"] and steps[0]["dropped"] == []
     assert steps[1]["regressors"]["SIN1"]["frequency"] == pytest.approx(1.5, abs=1 / (8000 * DT))
     for key in ("loglik", "bic", "av_misfit", "ljung_box_p", "peak_ratio"):
         assert key in steps[0]["error"]
     assert steps[1]["error"]["bic"] < steps[0]["error"]["bic"]
-    assert entry["loop_verdict"]["final_model"] == "WN+RW+SIN"
+    verdict = entry["loop_verdict"]
+    assert verdict["final_model"] == "WN+SIN" and verdict["passed"] and verdict["av_inside_band"]
 
 
 def test_report_html_is_self_contained(tmp_path, sine_result):
     text = write_loop_report(tmp_path / "report.html", {"gyro_z": sine_result}).read_text()
     assert text.count("data:image/png;base64,") == 3  # Allan before/after + ACF/PSD of both steps
-    assert "src=\"http" not in text and "WN+RW+SIN" in text and "deterministic regressor" in text
+    assert "src=\"http" not in text and "WN+SIN" in text and "deterministic regressor" in text
+    assert "dropped RW" in text
 
 
 def test_block_average():

@@ -37,11 +37,16 @@ def _axis_section(axis: str, result: LoopResult) -> str:
     cls = "pass" if result.passed else "fail"
     out.append(f'<p>Final model <b>{html.escape(result.final.model)}</b>; verdict: '
                f'<span class="{cls}">{html.escape(result.verdict)}</span></p>')
+    band = "inside" if result.av_inside_band else "outside"
+    out.append(f"<p class=small>The final model's Allan variance lies {band} the data's 95 % band at every τ "
+               f"(largest relative AV error {100 * result.max_rel_av_error:.0f} %)."
+               + (f" {html.escape(result.note)}" if result.note else "") + "</p>")
     rows = ["<tr><th>step</th><th class=l>model</th><th class=l>added (how)</th><th>log-lik</th><th>BIC</th>"
             "<th>AV misfit</th><th>Ljung–Box p</th><th>peak ratio</th><th class=l>evidence</th></tr>"]
     for s in result.steps:
         e = s.errors
         how = "" if s.added is None else f"{s.added} ({HOW.get(s.added, 'state-space component')})"
+        how += "".join(f"; dropped {d}" for d in s.dropped)
         rows.append(
             f"<tr><td>{s.index}</td><td class=l>{html.escape(s.model)}</td><td class=l>{html.escape(how)}</td>"
             f"<td>{_fmt(e.loglik, '.1f')}</td><td>{_fmt(e.bic, '.1f')}</td><td>{_fmt(e.av_misfit, '.3f')}</td>"

@@ -5,6 +5,7 @@ Per axis the loop adds (schema: /work/shared/notes/architecture.md)::
     loop:                                   # first step = starting model
       - model: WN+RW
         added: null                         # effect added at this step (null for the first)
+        dropped: []                         # components dropped by the re-selection after the addition
         how: null                           # state-space component | deterministic regressor | data cleaning
         evidence: null                      # what the detector saw
         error: {loglik: …, bic: …, av_misfit: …, ljung_box_p: …, peak_ratio: …, peak_frequency: …}
@@ -12,8 +13,12 @@ Per axis the loop adds (schema: /work/shared/notes/architecture.md)::
         regressors: {SIN1: {frequency: …, amplitude: …, phase: …}, TEMP2: {coefficient: …}, STEP3: {…}}
         outliers: 0                         # samples flagged so far
         rejected: [{added: GM, model: WN+GM+RW, reason: "BIC … → … (not better); …"}]   # tried, not kept
-    loop_verdict: {final_model: WN+RW+SIN, passed: true, verdict: "residuals pass: …",
-                   remaining: ["…evidence still significant…"]}
+                                            # (re-selection trials read "added: RW, reason: drop RW: …")
+    loop_verdict: {final_model: WN+OSC+SIN, passed: true, verdict: "residuals pass: …",
+                   remaining: ["…evidence still significant…"],
+                   av_inside_band: true,            # model AV inside the data's 95 % band at every τ
+                   max_rel_av_error: 0.08,          # largest |AV_model/AV_data − 1| over τ
+                   note: ""}                        # e.g. evidence left but of no practical significance
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ def step_to_dict(step: LoopStep) -> dict:
     return {
         "model": step.model,
         "added": step.added,
+        "dropped": list(step.dropped),
         "how": None if step.added is None else HOW.get(step.added, "state-space component"),
         "evidence": step.evidence,
         "error": {"loglik": num(e.loglik), "bic": num(e.bic), "av_misfit": num(e.av_misfit),
@@ -49,5 +55,7 @@ def loop_to_dict(result: LoopResult) -> dict:
     return {
         "loop": [step_to_dict(s) for s in result.steps],
         "loop_verdict": {"final_model": result.final.model, "passed": bool(result.passed), "verdict": result.verdict,
-                         "remaining": [f.evidence for f in result.remaining]},
+                         "remaining": [f.evidence for f in result.remaining],
+                         "av_inside_band": bool(result.av_inside_band),
+                         "max_rel_av_error": num(result.max_rel_av_error), "note": result.note},
     }

@@ -284,7 +284,8 @@ def _fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float
     best = (math.inf, float(tau[0]), 0.0)
     log_ex = np.log(excess)
     for tc in np.geomspace(tau[0] / 2, tau[-1] * 3, 80):
-        shape = GM(tau=float(tc), sigma=1.0).allan_variance(tau, 1.0)
+        # the continuous-time shape: sampled ever more finely than the process's memory
+        shape = GM(tau=float(tc), sigma=1.0).allan_variance(tau, 1e-3 * float(min(tc, tau[0])))
         log_s2 = float(np.mean(log_ex - np.log(shape)))
         cost = float(np.sum((log_ex - np.log(shape) - log_s2) ** 2))
         if cost < best[0]:

@@ -31,6 +31,7 @@ from scipy.signal import lfilter
 from . import units
 from .base import Component, StateBlock, as_freq, as_tau
 from .resonant import LPF, OSC
+from .sampled import sampled_allan_variance
 
 #: Smallest and largest Gauss–Markov transition :meth:`GM.from_block` accepts (the EM keeps φ inside too).
 PHI_RANGE: tuple[float, float] = (1e-12, 1.0 - 1e-12)
@@ -212,14 +213,9 @@ class GM(Component):
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        x = as_tau(tau) / self.tau
-        # 3 − 4e^{−x} + e^{−2x} written with expm1; below x = 1e-3 the series 2σ²(x/3 − x²/4 + 7x³/60)
-        # avoids the cancellation in 1 − (…)/(2x).
-        with np.errstate(divide="ignore", invalid="ignore"):
-            bracket = 1.0 - (-4.0 * np.expm1(-x) + np.expm1(-2.0 * x)) / (2.0 * x)
-            exact = 2.0 * self.sigma**2 * bracket / x
-        series = 2.0 * self.sigma**2 * (x / 3.0 - x**2 / 4.0 + 7.0 * x**3 / 60.0)
-        return np.where(x < 1e-3, series, exact)
+        """AV of the sampled process, R(j) = σ² e^{−j·dt/τ} (:mod:`imu_noise_id.core.noise.sampled`); for τ_c ≫ dt
+        it is the continuous-time 2σ²(τ_c/T)(1 − τ_c(3 − 4e^{−T/τ_c} + e^{−2T/τ_c})/(2T))."""
+        return sampled_allan_variance(self.sigma**2, -1.0 / self.tau, as_tau(tau), dt)
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         f = as_freq(f)

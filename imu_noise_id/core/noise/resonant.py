@@ -21,9 +21,9 @@ OSC — second-order resonant Gauss–Markov process
     covariance is P∞ = σ² I and Q is well conditioned: the likelihood's gradient, taken through the EM's
     expected complete-data log-likelihood, needs Q⁻¹), H = [1, 0]; the exact discretisation Φ = S exp(A dt) S⁻¹
     (S = diag(1, 1/ω₀)) and Q = P∞ − Φ P∞ Φᵀ, computed by Van Loan's method (no cancellation when Q ≪ P∞).
-    Allan variance from the autocovariance: with Ψ(τ) = 2∫₀^τ (τ − u) R(u) du (the variance of the τ-integral),
-    AV(τ) = (4Ψ(τ) − Ψ(2τ)) / (2τ²), in closed form through R(u) = Re(c e^{su}), s = −a + iω_d, c = σ²(1 − ia/ω_d):
-    Ψ(τ) = 2 Re(c (e^{sτ} − 1 − sτ)/s²).
+    Allan variance of the *sampled* process from the autocovariance R(u) = Re(c e^{su}), s = −a + iω_d,
+    c = σ²(1 − ia/ω_d), in closed form (:mod:`imu_noise_id.core.noise.sampled`; the continuous-time
+    AV(τ) = (4Ψ(τ) − Ψ(2τ))/(2τ²), Ψ(τ) = 2∫₀^τ (τ − u) R(u) du, is its limit for dt → 0).
 
 Neither block is updated by the EM's closed-form M-step (their Φ and Q are nonlinear in the parameters); their
 parameters are fitted by the quasi-Newton search on the exact likelihood (:mod:`imu_noise_id.core.estimation.mle`).
@@ -40,6 +40,7 @@ from scipy import linalg, signal
 
 from . import units
 from .base import Component, StateBlock, as_freq, as_tau
+from .sampled import sampled_allan_variance
 
 #: Largest damping ratio of an OSC (ζ < 1: a resonance, not two real poles).
 MAX_DAMPING = 0.95
@@ -208,21 +209,11 @@ class OSC(Component):
                                       zi=signal.lfiltic([1.0], den, y=[free[1], free[0]]))[0]
         return out + free
 
-    def autocovariance_integral(self, tau: np.ndarray) -> np.ndarray:
-        """Ψ(τ) = 2∫₀^τ (τ − u) R(u) du [u²·s²] (the variance of ∫₀^τ x dt), in closed form (module docstring)."""
-        a, wd = self._poles()
-        s = complex(-a, wd)
-        c = self.sigma**2 * complex(1.0, -a / wd)
-        st = s * np.asarray(tau, dtype=float)
-        small = np.abs(st) < 1e-3
-        with np.errstate(over="ignore", invalid="ignore"):
-            exact = (np.exp(st) - 1.0 - st) / (s * s)
-        series = np.asarray(tau) ** 2 * (0.5 + st / 6.0 + st * st / 24.0)
-        return 2.0 * np.real(c * np.where(small, series, exact))
-
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        tau = as_tau(tau)
-        return (4.0 * self.autocovariance_integral(tau) - self.autocovariance_integral(2.0 * tau)) / (2.0 * tau**2)
+        """AV of the sampled process (:mod:`imu_noise_id.core.noise.sampled`; R(u) = Re(c e^{su}) as in the module
+        docstring), which is what the estimator reads from data."""
+        a, wd = self._poles()
+        return sampled_allan_variance(self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd), as_tau(tau), dt)
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         w = 2.0 * math.pi * as_freq(f)

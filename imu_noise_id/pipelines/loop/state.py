@@ -15,7 +15,7 @@ from ...core.noise.components import Component
 from ...core.noise.modelspec import structure_name
 
 #: Effects added to the state-space structure / entering as regressors / as data cleaning.
-STATE_EFFECTS = ("GM", "RW", "RR", "QN")
+STATE_EFFECTS = ("GM", "RW", "RR", "QN", "OSC", "LPF")
 EXOG_EFFECTS = ("SIN", "TEMP", "STEP")
 CLEANING_EFFECTS = ("OUTLIERS",)
 
@@ -115,6 +115,7 @@ class LoopStep:
     state: LoopState
     diagnosis: Diagnosis
     trials: list[Trial]
+    dropped: tuple[str, ...] = ()
 
     @property
     def errors(self) -> ResidualErrors:
@@ -132,6 +133,9 @@ class LoopResult:
     passed: bool
     verdict: str
     remaining: list[det.Finding]
+    av_inside_band: bool = False
+    max_rel_av_error: float = float("nan")
+    note: str = ""
 
     @property
     def final(self) -> LoopStep:

@@ -9,13 +9,16 @@ import numpy as np
 
 from ...core.allan import allan_variance, choose_m, identify_alpha
 from ...core.diagnostics import detectors as det
+from ...core.diagnostics.lines import detect_broad_line, line_shape, pooled_line_statistic
 from ...core.diagnostics.residuals import av_misfit_z, line_statistic, residual_errors
 from ...core.diagnostics.spectra import residual_spectra
 from ...core.diagnostics.whitening import WhiteningFilter
 from ...core.estimation.model import FitOptions, NoiseModel
+from ...core.estimation.relabel import FILTER_MAX_TAU_SAMPLES, gm_as_filter
 from ...core.estimation.results import FitResult
 from ...core.noise.components import GM, QN, RR, RW, Component, total_allan_variance
 from ...core.noise.modelspec import CANONICAL_ORDER, structure_name
+from ...core.noise.resonant import LPF, MAX_DAMPING, OSC
 from ...core.quality import interpolate_missing
 from .state import STATE_EFFECTS, Diagnosis, ExogTerm, LoopState
 
@@ -61,6 +64,8 @@ class AxisLoop:
             # The loop compares fits; intervals are the model selection's job.
             model = NoiseModel(y, self.dt, structure_name(state.structure), exog=exog, exog_names=exog_names)
             fit = model.fit(state.init, FitOptions(uncertainty=False))
+        fit = gm_as_filter(fit)
+        state.structure = [c.name for c in fit.components if c.name != "RR" or "RR" in state.structure]
         coef = _coef(fit, exog_names)
         exog_values = {f"{t.effect}{i + 1}": t.describe(coef[s])
                        for i, (t, s) in enumerate(zip(state.exog_terms, slices, strict=True))}
@@ -89,17 +94,17 @@ class AxisLoop:
                                  lags=self.lags)
         white = [c for c in fit.components if c.name in ("WN", "QN")]
         av_white = total_allan_variance(white, av.tau, self.dt) if white else None
-        findings = self.detect(e, whitening, state, tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model,
+        findings = self.detect(e, whitening, state, filled, tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model,
                                av_white=av_white)
         return Diagnosis(fit=fit, errors=errors, findings=findings, innovations=e, tau=av.tau, av_data=av_data,
                          av_ci=av_ci, av_model=av_model, exog_values=exog_values,
                          innovation_variance=whitening.innovation_variance, spectra=residual_spectra(e, self.dt))
 
-    def detect(self, e: np.ndarray, whitening: WhiteningFilter, state: LoopState, *, tau: np.ndarray,
-               av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray,
+    def detect(self, e: np.ndarray, whitening: WhiteningFilter, state: LoopState, residual: np.ndarray, *,
+               tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray,
                av_white: np.ndarray | None) -> list[det.Finding]:
         a = self.alpha
-        found = [det.detect_outliers(e, alpha=a), det.detect_sinusoid(e, self.dt, whitening, alpha=a),
+        found = [det.detect_outliers(e, alpha=a), *self.detect_line(e, whitening, residual),
                  det.detect_step(e, self.dt, whitening, alpha=a), det.detect_correlation(e, self.dt, alpha=a,
                                                                                         lags=self.lags)]
         if "RR" not in state.structure:
@@ -108,6 +113,34 @@ class AxisLoop:
             found.append(det.detect_temperature(e, self.temperature, whitening, alpha=a))
         found += det.detect_av_signatures(tau, av_data, av_ci, av_model, av_white=av_white, alpha=a)
         return found
+
+    def detect_line(self, e: np.ndarray, whitening: WhiteningFilter, residual: np.ndarray) -> list[det.Finding]:
+        """The strongest spectral line as a SIN finding and, when significant, also as an OSC finding.
+
+        The single-bin search first; when it finds nothing, the pooled search for a line spread over many bins
+        (:func:`~imu_noise_id.core.diagnostics.lines.detect_broad_line`).
+        The line's shape (:func:`~imu_noise_id.core.diagnostics.lines.line_shape`, measured on the residual in the
+        data's units) says which it looks like and gives the OSC's starting f₀, bandwidth and σ; the look-alike is
+        listed first (a slightly smaller p-value) and both are tried, so that the likelihood has the last word.
+        """
+        sin = det.detect_sinusoid(e, self.dt, whitening, alpha=self.alpha)
+        if not sin.significant:  # only then the pooled search: a narrow line's single bin locates it best
+            sin = detect_broad_line(e, self.dt, alpha=self.alpha)
+        if not sin.significant:
+            return [sin]
+        shape = line_shape(residual, self.dt, sin.params["frequency"])
+        evidence = f"{sin.evidence}; {shape.reason}"
+        bandwidth = min(shape.bandwidth, MAX_DAMPING * shape.frequency)  # ζ ≤ MAX_DAMPING / 2
+        searched = {"line_frequency": sin.params["frequency"], "resolution": sin.params.get("resolution", 1)}
+        osc = replace(sin, effect="OSC", evidence=evidence,
+                      params={"frequency": shape.frequency, "bandwidth": bandwidth, "sigma": max(shape.sigma, 1e-12),
+                              "concentration": shape.concentration, **searched})
+        sin = replace(sin, evidence=evidence, params={**sin.params, "frequency": shape.frequency
+                                                      if sin.detector == "pooled_periodogram"
+                                                      else sin.params["frequency"],
+                                                      "concentration": shape.concentration, **searched})
+        first, second = (sin, osc) if shape.kind == "SIN" else (osc, sin)
+        return [replace(first, log10_p=first.log10_p - 1e-9), second]
 
     def candidates(self, diag: Diagnosis, state: LoopState) -> list[det.Finding]:
         """Significant findings that can be added, ranked by p-value: the most significant one per effect, except
@@ -131,10 +164,20 @@ class AxisLoop:
                              evidence=gms[0].evidence + "; " + lb.evidence)
         elif lb is not None:
             gms = [lb]
-        return sorted([*best.values(), *gms[:2]], key=lambda f: f.log10_p)
+        gms = [self.as_filter(f, state) for f in gms[:2]]
+        return sorted([*best.values(), *gms], key=lambda f: f.log10_p)
+
+    def as_filter(self, f: det.Finding, state: LoopState) -> det.Finding:
+        """A GM finding whose τ is below :data:`FILTER_MAX_TAU_SAMPLES` samples becomes an LPF finding (the sensor's
+        own low-pass: noise correlated from one sample to the next), unless the model already has one."""
+        tau = f.params.get("tau")
+        if tau is None or tau >= FILTER_MAX_TAU_SAMPLES * self.dt or "LPF" in state.structure:
+            return f
+        return replace(f, effect="LPF", evidence=f"{f.evidence}; memory of {tau / self.dt:.1f} samples: the "
+                                                 "sensor's own low-pass filter")
 
     def addable(self, f: det.Finding, state: LoopState) -> bool:
-        if f.effect in ("RW", "RR", "QN"):
+        if f.effect in ("RW", "RR", "QN", "LPF"):
             return f.effect not in state.structure
         if f.effect == "TEMP":
             return not any(t.effect == "TEMP" for t in state.exog_terms)
@@ -167,9 +210,15 @@ class AxisLoop:
     def component(self, f: det.Finding, diag: Diagnosis) -> Component:
         """The state-space component a finding asks for, with the detector's values as initial values."""
         p = f.params
-        if f.effect == "GM":
+        if f.effect == "OSC":
+            return OSC(frequency=float(p["frequency"]), bandwidth=float(p["bandwidth"]), sigma=float(p["sigma"]))
+        if f.effect in ("GM", "LPF"):
             sigma = p["sigma"] if "sigma" in p else p["sigma_share"] * math.sqrt(diag.innovation_variance)
-            return GM(tau=max(float(p["tau"]), 2.0 * self.dt), sigma=max(float(sigma), 1e-12))
+            tau, sigma = max(float(p["tau"]), 2.0 * self.dt), max(float(sigma), 1e-12)
+            if f.effect == "LPF":
+                # Memory of a few samples: the sensor's low-pass on its white noise (σ² = π N² f_c, τ = 1/2πf_c).
+                return LPF(noise_density=sigma * math.sqrt(2.0 * tau), cutoff=1.0 / (2.0 * math.pi * tau))
+            return GM(tau=tau, sigma=sigma)
         if f.effect == "RW":
             return RW(max(float(p["random_walk"]), 1e-15))
         if f.effect == "QN":
@@ -185,8 +234,10 @@ class AxisLoop:
             band = (diag.tau >= f.params["band_lo"] * 0.999) & (diag.tau <= f.params["band_hi"] * 1.001)
             z = -z if f.params.get("deficit") else z
             return float(np.max(z[band])) if band.any() else 0.0
-        if f.effect == "SIN":
-            return line_statistic(e, self.dt, f.params["frequency"])
+        if f.detector == "pooled_periodogram":
+            return pooled_line_statistic(e, self.dt, f.params["line_frequency"], int(f.params["resolution"]))
+        if f.effect in ("SIN", "OSC"):
+            return line_statistic(e, self.dt, f.params["line_frequency"])
         if f.effect == "OUTLIERS":
             return det.detect_outliers(e, alpha=f.level, only=f.indices).statistic
         if f.effect == "STEP":
