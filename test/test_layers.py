@@ -33,11 +33,8 @@ def _modules() -> list[Path]:
 
 def _imports(path: Path) -> list[tuple[str, int]]:
     """Absolute dotted names of everything ``path`` imports (relative imports resolved), with their levels."""
-    package = path.relative_to(PACKAGE.parent).with_suffix("").parts
-    if package[-1] == "__init__":
-        package = package[:-1]
-    else:
-        package = package[:-1]
+    # The package a relative import starts from: the folder of the module (for __init__.py, its own package).
+    package = path.relative_to(PACKAGE.parent).with_suffix("").parts[:-1]
     names = []
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
