@@ -11,7 +11,7 @@ import yaml
 from imu_noise_id.cli import main
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
-from imu_noise_id.pipelines.loop import block_average, run_closed_loop
+from imu_noise_id.pipelines.loop import run_closed_loop
 from imu_noise_id.report.html import write_loop_report
 from imu_noise_id.report.model_yaml import write_model_yaml
 
@@ -49,11 +49,6 @@ def test_report_html_is_self_contained(tmp_path, sine_result):
     assert text.count("data:image/png;base64,") == 3  # Allan before/after + ACF/PSD of both steps
     assert "src=\"http" not in text and "WN+SIN" in text and "deterministic regressor" in text
     assert "dropped RW" in text
-
-
-def test_block_average():
-    y = np.array([1.0, 3.0, np.nan, 5.0, np.nan, np.nan, 7.0])
-    assert np.allclose(block_average(y, 2), [2.0, 5.0, np.nan], equal_nan=True)
 
 
 def test_loop_command_on_a_bag(tmp_path, capsys):

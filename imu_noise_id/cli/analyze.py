@@ -68,8 +68,6 @@ def run(args: argparse.Namespace) -> int:
         result = analyze(recording.imu, recording.temperature, options, progress=progress, on_axis=_print_axis)
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)
-    if result.loop_decimation > 1:
-        print(f"closed loop ran on {result.loop_decimation}-sample block averages", flush=True)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model}
     paths = write_analysis(result, args.out, rostopic=recording.imu.topic, meta=meta,
                            title=f"closed loop: {args.bag.name}")

@@ -30,9 +30,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--start", default="WN+RW", help="starting model structure (default: WN+RW)")
     p.add_argument("--axes", default="gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z",
                    help="comma-separated axes (default: all six)")
-    p.add_argument("--decimate", type=int, default=0,
-                   help="block-average N samples first (default 0 = automatic: the smallest N leaving at most "
-                        "200 000 samples per axis, see docs/loop.md; 1 = none)")
     p.add_argument("--max-steps", type=int, default=6, help="most effects added per axis (default: 6)")
     p.add_argument("--alpha", type=float, default=0.01, help="level of every detector (default: 0.01)")
     p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
@@ -55,16 +52,15 @@ def run(args: argparse.Namespace) -> int:
     if unknown or not axes:
         raise InputError(f"--axes: unknown axis {', '.join(unknown) or '(none)'}; use {', '.join(AXES)}")
     parse_structure(args.start)
-    if args.decimate < 0 or args.max_steps < 0 or not 0 < args.alpha < 1:
-        raise InputError("--decimate must be >= 0, --max-steps >= 0 and --alpha in (0, 1)")
+    if args.max_steps < 0 or not 0 < args.alpha < 1:
+        raise InputError("--max-steps must be >= 0 and --alpha in (0, 1)")
     recording = read_static(args.bag, topic=args.topic, temperature_topic=args.temperature_topic)
-    loop = ImuLoop(recording.imu, recording.temperature, args.decimate, max_steps=args.max_steps, alpha=args.alpha)
+    loop = ImuLoop(recording.imu, recording.temperature, max_steps=args.max_steps, alpha=args.alpha)
     results = {axis: loop.run(axis, args.start) for axis in axes}
     print(loop_table(results), flush=True)
     args.out.mkdir(parents=True, exist_ok=True)
-    note = f" (block-averaged by {loop.decimate})" if loop.decimate > 1 else ""
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "loop", "start": args.start}
     paths = [write_model_yaml(args.out / "model.yaml", {}, results, meta),
-             write_loop_report(args.out / "report.html", results, title=f"closed loop: {args.bag.name}{note}")]
-    print(f"results{note} in {args.out}/: " + ", ".join(p.name for p in paths))
+             write_loop_report(args.out / "report.html", results, title=f"closed loop: {args.bag.name}")]
+    print(f"results in {args.out}/: " + ", ".join(p.name for p in paths))
     return 0

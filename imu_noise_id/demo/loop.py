@@ -1,9 +1,10 @@
 """Demo of the closed loop on a simulated bag with effects the starting model does not declare.
 
 ``python -m imu_noise_id.demo.loop --out DIR`` (or :func:`run_loop_demo` from ``make demo``): simulates a
-static IMU whose gyro_z holds an extra Gauss–Markov process and whose accel_x holds a 0.5 Hz vibration, writes
-it as a rosbag2 (mcap) bag, reads it back, and runs the loop from ``WN+RW`` on gyro_x (clean), gyro_z and
-accel_x. Writes ``DIR/loop_demo_bag/``, ``DIR/model.yaml`` and ``DIR/report.html``.
+static IMU whose gyro_z holds an extra Gauss–Markov process, accel_x a 0.5 Hz sine, accel_y a wandering 7 Hz
+vibration (a narrow-band oscillation, OSC) and accel_z the sensor's own 15 Hz low-pass filter (LPF) on its white
+noise; writes it as a rosbag2 (mcap) bag, reads it back, and runs the loop from ``WN+RW`` on gyro_x (clean) and
+those four axes. Writes ``DIR/loop_demo_bag/``, ``DIR/model.yaml`` and ``DIR/report.html``.
 """
 
 from __future__ import annotations
@@ -15,18 +16,21 @@ from pathlib import Path
 
 import numpy as np
 
-DEMO_AXES = ("gyro_x", "gyro_z", "accel_x")
+DEMO_AXES = ("gyro_x", "gyro_z", "accel_x", "accel_y", "accel_z")
 
 
 def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, rate_hz: float = 100.0) -> Path:
-    """Write the demo bag: WN+RW on every axis, plus GM(τ = 2 s) on gyro_z and a 0.5 Hz sine on accel_x."""
+    """Write the demo bag: WN+RW on every axis, plus GM(τ = 2 s) on gyro_z, a 0.5 Hz sine on accel_x, an OSC at
+    7 Hz on accel_y, and an LPF (15 Hz) in place of accel_z's white noise."""
     from ..bag.writer import write_bag
-    from ..core.noise.components import GM, RW, WN
+    from ..core.noise.components import GM, LPF, OSC, RW, WN
     from ..core.simulation.static import simulate_static_imu
 
     model = {a: [WN(1e-3), RW(2e-5)] for a in ("gyro_x", "gyro_y", "gyro_z")}
     model |= {a: [WN(2e-3), RW(4e-5)] for a in ("accel_x", "accel_y", "accel_z")}
     model["gyro_z"] = [*model["gyro_z"], GM(tau=2.0, sigma=3e-3)]
+    model["accel_y"] = [*model["accel_y"], OSC(frequency=7.0, bandwidth=0.3, sigma=4e-3)]
+    model["accel_z"] = [LPF(noise_density=2e-3, cutoff=15.0), RW(4e-5)]
     imu = simulate_static_imu(model, rate_hz, duration_s, seed=seed)
     imu.accel[:, 0] += 6e-3 * np.sin(2 * math.pi * 0.5 * imu.t)
     if path.exists():
@@ -49,7 +53,8 @@ def run_loop_demo(out: str | Path, *, seed: int = 7) -> dict:
     loop = ImuLoop(recording.imu, recording.temperature)
     results = {axis: loop.run(axis, "WN+RW") for axis in DEMO_AXES}
     write_model_yaml(out / "model.yaml", {}, results, {"source": str(bag), "command": "loop demo", "start": "WN+RW"})
-    write_loop_report(out / "report.html", results, title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz (accel_x)")
+    write_loop_report(out / "report.html", results, title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz sine "
+                      "(accel_x), 7 Hz wandering vibration (accel_y), 15 Hz low-pass (accel_z)")
     print(loop_table(results))
     print(f"demo bag, model.yaml and report.html in {out}/")
     return results

@@ -41,6 +41,5 @@ def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str
     paths["allan_model.png"] = save_allan_overlay(out / "allan_model.png", panels,
                                                   title="Allan deviation vs fitted models")
     if result.loops:
-        note = f" (block-averaged by {result.loop_decimation})" if result.loop_decimation > 1 else ""
-        paths["report.html"] = write_loop_report(out / "report.html", result.loops, title=title + note)
+        paths["report.html"] = write_loop_report(out / "report.html", result.loops, title=title)
     return paths

@@ -39,15 +39,16 @@ def summary_table(result: StaticAnalysis) -> str:
 
 
 def loop_table(results: dict[str, LoopResult]) -> str:
-    """One line per step: axis, step, model, errors."""
-    lines = [f"{'axis':8s} {'step':>4s} {'model':28s} {'loglik':>12s} {'BIC':>12s} {'AVmis':>6s} {'LB p':>8s} "
-             f"{'peak':>6s}"]
+    """One line per step: axis, step, change (added +, dropped −), model, errors; then the verdict."""
+    lines = [f"{'axis':8s} {'step':>4s} {'change':10s} {'model':24s} {'loglik':>12s} {'BIC':>12s} {'AVmis':>6s} "
+             f"{'LB p':>8s} {'peak':>6s}"]
     for axis, r in results.items():
         for s in r.steps:
             e = s.errors
-            lines.append(f"{axis:8s} {s.index:4d} {s.model:28s} {e.loglik:12.1f} {e.bic:12.1f} {e.av_misfit:6.3f} "
-                         f"{e.ljung_box_p:8.2g} {e.peak_ratio:6.1f}")
-        lines.append(f"{axis:8s}      -> {r.verdict}")
+            change = ("" if s.added is None else f"+{s.added}") + "".join(f" −{d}" for d in s.dropped)
+            lines.append(f"{axis:8s} {s.index:4d} {change:10s} {s.model:24s} {e.loglik:12.1f} {e.bic:12.1f} "
+                         f"{e.av_misfit:6.3f} {e.ljung_box_p:8.2g} {e.peak_ratio:6.1f}")
+        lines.append(f"{axis:8s}      -> {r.verdict}" + (f" ({r.note})" if r.note else ""))
     return "\n".join(lines)
 
 

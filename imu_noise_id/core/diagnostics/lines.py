@@ -169,7 +169,7 @@ def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float) -> Finding:
         v = _floor_error(r)
         log10_p = min(0.0, _log_sf(float(x[k]), r, v) / math.log(10.0) + math.log10(tests))
         target = math.log(alpha / tests)
-        threshold = float(optimize.brentq(lambda c, r=r, v=v: _log_sf(c, r, v) - target, r, 100.0 * r + 1000.0))
+        threshold = float(optimize.brentq(lambda c, r=r, v=v, t=target: _log_sf(c, r, v) - t, r, 100.0 * r + 1000.0))
         if best is None or log10_p < best[0]:
             best = (log10_p, float(x[k]), threshold, float(centre[k]), r)
     if best is None:

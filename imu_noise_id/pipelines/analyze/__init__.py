@@ -48,9 +48,7 @@ class AnalyzeOptions:
     models
         Model stage (``models.model == "none"``: Allan only, no loop).
     loop
-        Run the closed loop after the model stage.
-    loop_decimate
-        Block-average factor of the loop (0 = automatic).
+        Run the closed loop after the model stage (at the recording's own rate).
     """
 
     kinds: tuple[str, ...] = KINDS
@@ -59,7 +57,6 @@ class AnalyzeOptions:
     allow_motion: bool = False
     models: ModelStage = field(default_factory=ModelStage)
     loop: bool = True
-    loop_decimate: int = 0
 
     def __post_init__(self) -> None:
         if not 0.0 < self.confidence < 1.0:
@@ -77,7 +74,6 @@ class AnalysisResult:
     static : the Allan stage (variances, slopes, data summary, warnings)
     models : the model stage per axis (fits and selections, without their records)
     loops : the closed loop per axis (empty without the loop)
-    loop_decimation : block-average factor the loop ran on (1 = the recording's own rate)
     bands : per axis (τ [s], AVs of simulations of the fitted model (n_sim, T) [u²])
     warnings : what the model and loop stages could not do, and why
     """
@@ -85,7 +81,6 @@ class AnalysisResult:
     static: StaticAnalysis
     models: dict[str, AxisModel] = field(default_factory=dict)
     loops: dict[str, LoopResult] = field(default_factory=dict)
-    loop_decimation: int = 1
     bands: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
 
@@ -99,10 +94,10 @@ def _imu_loop(imu: ImuSeries, temperature: ScalarSeries | None, options: Analyze
               warnings: list[str]) -> ImuLoop:
     """The loop over the recording; without the temperature (and a warning saying why) if it is unusable."""
     try:
-        return ImuLoop(imu, temperature, options.loop_decimate)
+        return ImuLoop(imu, temperature)
     except InputError as exc:
         warnings.append(f"closed loop without temperature: {exc}")
-        return ImuLoop(imu, None, options.loop_decimate)
+        return ImuLoop(imu, None)
 
 
 def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: AnalyzeOptions | None = None, *,
@@ -135,7 +130,6 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
         return result
     axes = list(static.axes)
     loop = _imu_loop(imu, temperature, options, result.warnings) if options.loop else None
-    result.loop_decimation = loop.decimate if loop is not None else 1
     for axis in axes:
         model = fit_axis(imu, axis, options.models, static.dt, static.allan.column(axes.index(axis)))
         fit = model.fit

@@ -40,7 +40,7 @@ The Allan variances (data with the fitted regressors removed, against the model'
 data.
 """
 
-from .run import ImuLoop, align_temperature, block_average, decimation_factor, run_closed_loop, run_closed_loop_imu
+from .run import ImuLoop, align_temperature, run_closed_loop, run_closed_loop_imu
 from .state import (
     CLEANING_EFFECTS,
     EXOG_EFFECTS,
@@ -65,8 +65,6 @@ __all__ = [
     "LoopStep",
     "Trial",
     "align_temperature",
-    "block_average",
-    "decimation_factor",
     "run_closed_loop",
     "run_closed_loop_imu",
 ]

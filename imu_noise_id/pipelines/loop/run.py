@@ -264,40 +264,12 @@ def align_temperature(t_samples: np.ndarray, t_temperature: np.ndarray, temperat
     return np.interp(np.asarray(t_samples, dtype=float), t_temperature, temperature)
 
 
-def block_average(y: np.ndarray, factor: int) -> np.ndarray:
-    """Means of consecutive blocks of ``factor`` samples (NaN-aware; a block of only NaN stays NaN).
-
-    Averaging keeps every effect slower than the new Nyquist frequency 1/(2·factor·dt) and divides the white
-    noise variance by ``factor`` (its density is unchanged); the closed loop on long records runs on it.
-    """
-    if factor < 1:
-        raise InputError(f"decimation factor must be >= 1, got {factor}")
-    y = np.asarray(y, dtype=float)
-    if factor == 1:
-        return y
-    n = (y.size // factor) * factor
-    blocks = y[:n].reshape(-1, factor)
-    counts = np.isfinite(blocks).sum(axis=1)
-    sums = np.nansum(blocks, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
-
-
-#: Automatic decimation keeps at most this many samples per axis (a few seconds to a minute per fit).
-MAX_SAMPLES = 200_000
-
-
-def decimation_factor(n: int, requested: int = 0) -> int:
-    """Block-average factor of the loop: ``requested`` if ≥ 1, else the smallest leaving ≤ :data:`MAX_SAMPLES`."""
-    if requested < 0:
-        raise InputError(f"decimation factor must be >= 0 (0 = automatic), got {requested}")
-    return requested if requested >= 1 else max(1, -(-n // MAX_SAMPLES))
-
-
 class ImuLoop:
-    """The closed loop on the axes of one IMU recording, one axis at a time (what ``analyze`` and ``loop`` run).
+    """The closed loop on the axes of one IMU recording, one axis at a time (what ``analyze`` and ``loop`` run),
+    at the recording's own rate (nothing above a reduced Nyquist frequency is averaged away unexplained, and the
+    report shows the very fits ``model.yaml`` holds).
 
-    The temperature is aligned with the IMU stamps (and block-averaged) once, for every axis.
+    The temperature is aligned with the IMU stamps once, for every axis.
 
     Parameters
     ----------
@@ -305,36 +277,27 @@ class ImuLoop:
         The recording (its median period is the sampling period).
     temperature : ScalarSeries, optional
         The bag's temperature topic; interpolated onto the IMU stamps (enables ``TEMP``).
-    decimate : int
-        Block-average this many samples first (long records on small machines; the report states it);
-        0 = automatic (:func:`decimation_factor`).
     loop_kwargs
         Passed to :func:`run_closed_loop`.
     """
 
-    def __init__(self, imu: ImuSeries, temperature: ScalarSeries | None = None, decimate: int = 0,
-                 **loop_kwargs: Any) -> None:
+    def __init__(self, imu: ImuSeries, temperature: ScalarSeries | None = None, **loop_kwargs: Any) -> None:
         self.imu = imu
-        self.decimate = decimation_factor(len(imu), decimate)
-        self.dt = imu.dt * self.decimate
+        self.dt = imu.dt
         self.temperature = None
         if temperature is not None:
-            aligned = align_temperature(imu.t, temperature.t, temperature.value)
-            self.temperature = block_average(aligned, self.decimate)
+            self.temperature = align_temperature(imu.t, temperature.t, temperature.value)
         self.loop_kwargs = loop_kwargs
 
     def run(self, axis: str, start: str | FitResult) -> LoopResult:
-        """The loop on ``axis`` from ``start``: a structure, or a fit of the axis (step 0 as it is on the full
-        record; on block averages only its structure is used)."""
-        if isinstance(start, FitResult) and self.decimate > 1:
-            start = start.model
-        y = block_average(self.imu.axis(axis), self.decimate)
-        return run_closed_loop(y, self.dt, start, temperature=self.temperature, axis=axis, **self.loop_kwargs)
+        """The loop on ``axis`` from ``start``: a structure, or a fit of the axis (then step 0 as it is)."""
+        return run_closed_loop(self.imu.axis(axis), self.dt, start, temperature=self.temperature, axis=axis,
+                               **self.loop_kwargs)
 
 
 def run_closed_loop_imu(imu: ImuSeries, start: str | dict[str, str | FitResult], *,
-                        temperature: ScalarSeries | None = None, axes: tuple[str, ...] = AXES, decimate: int = 0,
+                        temperature: ScalarSeries | None = None, axes: tuple[str, ...] = AXES,
                         **loop_kwargs: Any) -> dict[str, LoopResult]:
     """:class:`ImuLoop` on several axes from one starting structure, or per axis (structures or fits)."""
-    loop = ImuLoop(imu, temperature, decimate, **loop_kwargs)
+    loop = ImuLoop(imu, temperature, **loop_kwargs)
     return {axis: loop.run(axis, start[axis] if isinstance(start, dict) else start) for axis in axes}
