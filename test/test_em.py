@@ -217,3 +217,16 @@ def test_fit_recovers_an_oscillation_and_a_low_pass(truth, spec):
     for i, p, label in parameter_labels(truth):
         value, true = fit.components[i].params()[p], truth[i].params()[p]
         assert abs(math.log(value / true)) < 2.6 * fit.se[label] / value + 0.01, (label, value, true)
+
+
+def test_covariance_from_information_survives_a_non_finite_row():
+    """A NaN in the observed information (a likelihood that overflowed near a boundary) made eigh raise
+    LinAlgError inside analyze's model selection; the parameter is now reported as not identified."""
+    from imu_noise_id.core.estimation.mle import covariance_from_information
+
+    cov, ok = covariance_from_information(np.array([[4.0, np.nan], [np.nan, np.nan]]))
+    assert not ok and cov[0, 0] == pytest.approx(0.25) and cov[1, 1] == np.inf
+    # what analyze met on a low-passed accelerometer: a row of 1e294 beside a zero diagonal
+    info = np.array([[0.0, 2.8e294, 0.0], [2.8e294, 27.9, -17.4], [0.0, -17.4, 180.0]])
+    cov, ok = covariance_from_information(info)
+    assert not ok and cov[0, 0] == np.inf and np.allclose(cov[1:, 1:], np.linalg.inv(info[1:, 1:]))

@@ -45,8 +45,8 @@ def test_fit_errors_exit_2(tmp_path, capsys):
 
 
 def test_allan_band_and_overlay_figure(tmp_path):
+    from imu_noise_id.core.estimation import kalibr
     from imu_noise_id.core.estimation.model import FitOptions, fit_model
-    from imu_noise_id.core.estimation.selection import kalibr_values
     from imu_noise_id.core.noise.components import GM, WN, simulate_sum
     from imu_noise_id.core.simulation.bands import allan_band
     from imu_noise_id.report.plots_model import save_allan_overlay
@@ -58,7 +58,8 @@ def test_allan_band_and_overlay_figure(tmp_path):
     # The simulations scatter around the fitted model's theoretical AV (median within 15 % at short τ).
     assert band.shape == (20, tau.size)
     assert np.all(np.abs(np.median(band[:, :5], axis=0) / theory[:5] - 1) < 0.15)
-    assert kalibr_values(fit) == {"noise_density": fit.components[0].params()["noise_density"], "random_walk": None}
+    assert kalibr.noise_density(fit).value == fit.components[0].params()["noise_density"]
+    assert kalibr.random_walk(fit).value is None  # WN+GM: no random walk to give Kalibr
     from imu_noise_id.core.allan import allan_variance
 
     av = allan_variance(y, 0.01)
@@ -78,7 +79,9 @@ def test_analyze_em_stage_through_a_bag(tmp_path, capsys):
     axes = yaml.safe_load((out / "model.yaml").read_text())["axes"]
     assert set(axes) == {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"}
     kalibr = yaml.safe_load((out / "imu.yaml").read_text())
-    em_n = kalibr["gyroscope_noise_density_em_xyz"]
-    assert kalibr["gyroscope_noise_density"] == max(em_n) and "gyroscope_noise_density_allan" in kalibr
-    assert all(abs(n / 1e-3 - 1) < 0.05 for n in em_n)  # 6000 samples: se of N ≈ 1 %
+    final_n = kalibr["gyroscope_noise_density_xyz"]
+    assert kalibr["gyroscope_noise_density"] == max(final_n) and "gyroscope_noise_density_allan" in kalibr
+    assert all(abs(n / 1e-3 - 1) < 0.05 for n in final_n)  # 6000 samples: se of N ≈ 1 %
+    # The intervals written are those of the numbers written.
+    assert all(lo < n < hi for n, (lo, hi) in zip(final_n, kalibr["gyroscope_noise_density_ci_xyz"], strict=True))
     assert "gyro_z: WN+RW" in capsys.readouterr().out

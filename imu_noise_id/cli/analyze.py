@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_static
     from ..pipelines.analyze import AnalyzeOptions, ModelStage, analyze
     from ..report.analysis import write_analysis
-    from ..report.console import summary_table
+    from ..report.console import final_table, summary_table
     from .progress import TextProgress
 
     options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
@@ -72,6 +72,8 @@ def run(args: argparse.Namespace) -> int:
     paths = write_analysis(result, args.out, rostopic=recording.imu.topic, meta=meta,
                            title=f"closed loop: {args.bag.name}")
     print(summary_table(result.static), flush=True)
+    if result.finals:
+        print(final_table(result.finals), flush=True)
     for w in result.static.warnings:
         print(f"warning: {w}", file=sys.stderr)
     print(f"results in {args.out}/: " + ", ".join(paths))

@@ -25,13 +25,13 @@ def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     static = result.static
-    paths = {"imu.yaml": write_imu_yaml(out / "imu.yaml", static, result.models, rostopic)}
+    paths = {"imu.yaml": write_imu_yaml(out / "imu.yaml", static, result.finals, rostopic)}
     for p in write_variance_csvs(static.variances, static.axes, out):
         paths[p.name] = p
     paths["allan.png"] = plot_allan_deviation(static, out / "allan.png")
     if not result.models:
         return paths
-    paths["model.yaml"] = write_model_yaml(out / "model.yaml", result.models, result.loops, meta)
+    paths["model.yaml"] = write_model_yaml(out / "model.yaml", result.models, result.loops, meta, result.finals)
     allan = static.allan
     panels = []
     for axis, model in result.models.items():

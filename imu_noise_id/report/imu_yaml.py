@@ -1,9 +1,9 @@
 """``imu.yaml``: the numbers users paste into Kalibr-style configs, written once from an analysis result.
 
-The four Kalibr keys are the max over the sensor's three axes. With a model stage they come from the fitted
-models (WN → noise density, RW → random walk) where every axis of the sensor has that component, the Allan-slope
-values staying beside them as ``<key>_allan``; without it, from the Allan slopes. Units are SI and stated in the
-header comment.
+The four Kalibr keys are the max over the sensor's three axes. With a model stage they come from each axis's
+final model (:mod:`imu_noise_id.pipelines.analyze.final`: passband N, RW's K, intervals of those very numbers),
+the Allan-slope readings staying beside them as ``<key>_allan_xyz``/``<key>_allan``; without it, from the Allan
+slopes. Units are SI and stated in the header comment, with the convention of every key.
 """
 
 from __future__ import annotations
@@ -13,8 +13,7 @@ from pathlib import Path
 import yaml
 
 from ..core.axes import ACCEL_AXES, GYRO_AXES
-from ..core.estimation.selection import kalibr_values
-from ..pipelines.analyze.models import AxisModel
+from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.static import StaticAnalysis, kalibr_parameters
 from .numbers import num
 
@@ -40,52 +39,78 @@ def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
     return doc
 
 
-def add_model_values(doc: dict, models: dict[str, AxisModel]) -> None:
-    """Put the fitted models' values into the Kalibr keys (see the module docstring), in place.
+def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
+    """Put the final models' numbers into the Kalibr keys and their per-axis lists, in place.
 
-    A sensor keeps its Allan value when a fitted axis has no WN (noise density) or no RW (random walk) — e.g. a
-    WN+GM model has no Kalibr random walk; ``<key>_source`` says which one each number is.
+    Per sensor with a final model on all three axes: ``<key>_xyz``, ``<key>_ci_xyz`` and ``<key>_method_xyz`` are
+    the final models' values, intervals and sources (``model`` or, for a random walk the model lacks,
+    ``allan_slope``/``allan_upper_bound``); the Kalibr key is their max; the Allan-slope values move to
+    ``<key>_allan_xyz`` (with ``_allan_ci_xyz``, ``_allan_method_xyz``) and ``<key>_allan`` (their max);
+    ``<prefix>_noise_stddev_per_sample_xyz`` is the per-sample standard deviation of the high-frequency noise.
     """
     for sensor, axes in _SENSORS:
-        if not all(a in models for a in axes):
+        if not all(a in finals for a in axes):
             continue
-        values = [kalibr_values(models[a].fit) for a in axes]
         for parameter in ("noise_density", "random_walk"):
             key = f"{_PREFIX[sensor]}_{parameter}"
-            per_axis = [v[parameter] for v in values]
-            doc[f"{key}_em_xyz"] = [None if v is None else num(v) for v in per_axis]
+            for suffix in ("", "_ci", "_method"):
+                doc[f"{key}_allan{suffix}_xyz"] = doc.pop(f"{key}{suffix}_xyz")
             doc[f"{key}_allan"] = doc[key]
-            if all(v is not None for v in per_axis):
-                doc[key] = num(max(per_axis))
-                doc[f"{key}_source"] = "EM model (max over axes); Allan-slope value in *_allan"
-            else:
-                doc[f"{key}_source"] = "Allan slope (the selected model has no such component on every axis)"
+            values, cis, methods = [], [], []
+            for i, axis in enumerate(axes):
+                v = getattr(finals[axis], parameter)
+                if v.value is not None:
+                    values.append(v.value)
+                    cis.append([num(v.ci95[0]), num(v.ci95[1])])
+                    methods.append("model")
+                else:  # not identifiable from the record: the Allan-slope reading (a bound when not reached)
+                    values.append(doc[f"{key}_allan_xyz"][i])
+                    cis.append(list(doc[f"{key}_allan_ci_xyz"][i]))
+                    methods.append("allan_" + ("upper_bound" if doc[f"{key}_allan_method_xyz"][i] == "upper_bound"
+                                               else "slope"))
+            doc[key] = num(max(values))
+            doc[f"{key}_xyz"] = [num(v) for v in values]
+            doc[f"{key}_ci_xyz"] = cis
+            doc[f"{key}_method_xyz"] = methods
+            doc[f"{key}_source_xyz"] = [getattr(finals[a], parameter).source for a in axes]
+        doc[f"{_PREFIX[sensor]}_noise_stddev_per_sample_xyz"] = [num(finals[a].noise_stddev_per_sample) for a in axes]
+        doc[f"{_PREFIX[sensor]}_final_model_xyz"] = [finals[a].fit.model for a in axes]
 
 
 def header(result: StaticAnalysis, with_models: bool) -> list[str]:
     """The comment lines at the top of ``imu.yaml`` (units, conventions, data)."""
     conf = result.allan.confidence
+    allan = "*_allan_xyz keys" if with_models else "*_xyz keys (the Kalibr numbers' source)"
+    origin = "the fitted noise models" if with_models else "the Allan variance"
     lines = [
-        "# IMU noise parameters for Kalibr / VIO, from the Allan variance (imu-noise-id analyze).",
-        "# Units: *_noise_density: gyroscope rad/s/sqrt(Hz), accelerometer m/s^2/sqrt(Hz);",
+        f"# IMU noise parameters for Kalibr / VIO, from {origin} (imu-noise-id analyze).",
+        "# Units: *_noise_density: gyroscope rad/s/sqrt(Hz), accelerometer m/s^2/sqrt(Hz) (continuous-time);",
         "#        *_random_walk: gyroscope rad/s^2/sqrt(Hz), accelerometer m/s^3/sqrt(Hz); update_rate Hz.",
         f"# The four Kalibr numbers are the {KALIBR_COMBINE} over the sensor's x, y, z axes; per-axis values are in",
-        "# the *_xyz keys. White noise is the -1/2 slope line read at tau = 1 s, random walk the +1/2 slope line",
-        f"# at tau = 3 s; *_ci_xyz: {100 * conf:g} % confidence intervals; method upper_bound = slope not reached.",
+        f"# the *_xyz keys, their {100 * conf:g} % confidence intervals in *_ci_xyz. Allan-slope readings ({allan}):",
+        "# white noise is the -1/2 slope line read at tau = 1 s, random walk the +1/2 slope line at tau = 3 s;",
+        "# method upper_bound = slope not reached in this record.",
         f"# Data: {result.n} samples, {result.duration_s:.1f} s at {result.rate_hz:.6g} Hz from {result.topic or '?'}.",
     ]
     if with_models:
         lines += [
-            "# EM stage: the Kalibr keys come from the fitted models (model.yaml) where every axis has the",
-            "# component (WN -> noise density, RW -> random walk); the Allan-slope values are in *_allan.",
+            "# With models (default): the Kalibr keys and *_xyz / *_ci_xyz come from each axis's FINAL model",
+            "# (model.yaml: the closed loop's last step, or the model selection), with its 95 % intervals:",
+            "# noise density = passband white noise sqrt(N_WN^2 + N_LPF^2), random walk = RW; oscillations (OSC),",
+            "# sinusoids, GMs, the sensor's low-pass shape and temperature are kept OUT of them (see model.yaml).",
+            "# *_method_xyz: model, or allan_slope / allan_upper_bound where the final model has no random walk",
+            "# (not identifiable from this record). The Allan-slope readings are in *_allan_xyz and *_allan.",
+            "# *_noise_stddev_per_sample_xyz: per-sample std of the high-frequency noise at update_rate, in u: use it",
+            "# (squared) as the Imu message covariance; it is below noise_density*sqrt(update_rate) where the",
+            "# sensor's own low-pass cuts below the Nyquist frequency.",
         ]
     return lines
 
 
-def write_imu_yaml(path: Path, result: StaticAnalysis, models: dict[str, AxisModel], rostopic: str) -> Path:
+def write_imu_yaml(path: Path, result: StaticAnalysis, finals: dict[str, FinalModel], rostopic: str) -> Path:
     """Write ``imu.yaml`` (see the module docstring)."""
     doc = kalibr_dict(result, rostopic)
-    add_model_values(doc, models)
-    text = "\n".join(header(result, bool(models))) + "\n"
+    add_final_values(doc, finals)
+    text = "\n".join(header(result, bool(finals))) + "\n"
     path.write_text(text + yaml.safe_dump(doc, sort_keys=False, default_flow_style=None))
     return path

@@ -16,6 +16,13 @@ Per axis (``gyro_x`` … ``accel_z``)::
     record_length: {target, level, current_s, parameters: {label: {needed_s, needed_h, relative_halfwidth,
                     reliable}}}
     loop: […]   loop_verdict: {…}                                                # the closed loop (:mod:`.loop_yaml`)
+    final:                                           # what imu.yaml's numbers come from (analyze)
+      source: "closed loop, step 2: WN+OSC+RW"       # or "model selection"
+      model: WN+OSC+RW
+      components: [{type: …, …, se, ci95}, …]        # as above, with intervals of the final fit
+      noise_density: {value, ci95, source}           # passband sqrt(N_WN² + N_LPF²) [u/√Hz]
+      random_walk: {value, ci95, source}             # RW [u/s/√Hz]; value null: not identifiable from this record
+      noise_stddev_per_sample: …                     # per-sample std of the high-frequency noise at dt [u]
 """
 
 from __future__ import annotations
@@ -28,6 +35,7 @@ from ..core.axes import UNITS
 from ..core.estimation.results import FitResult
 from ..core.estimation.selection import SelectionResult
 from ..core.noise.modelspec import parameter_labels
+from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
 from ..pipelines.loop import LoopResult
 from .loop_yaml import loop_to_dict
@@ -87,9 +95,22 @@ def fit_to_dict(fit: FitResult, axis: str | None = None, selection: SelectionRes
     return out
 
 
+def final_to_dict(final: FinalModel) -> dict:
+    """The ``final:`` entry of one axis."""
+    fitted = fit_to_dict(final.fit)
+    return {
+        "source": final.source, "model": final.fit.model, "components": fitted["components"],
+        **{name: {"value": None if v.value is None else num(v.value), "ci95": [num(v.ci95[0]), num(v.ci95[1])],
+                  "source": v.source}
+           for name, v in (("noise_density", final.noise_density), ("random_walk", final.random_walk))},
+        "noise_stddev_per_sample": num(final.noise_stddev_per_sample),
+    }
+
+
 def write_model_yaml(path: Path, models: dict[str, AxisModel], loops: dict[str, LoopResult] | None = None,
-                     meta: dict | None = None) -> Path:
-    """Write ``model.yaml``: per axis the model stage's entry (:func:`fit_to_dict`) and the loop's steps.
+                     meta: dict | None = None, finals: dict[str, FinalModel] | None = None) -> Path:
+    """Write ``model.yaml``: per axis the model stage's entry (:func:`fit_to_dict`), the loop's steps and the
+    final model.
 
     An axis with a loop but no model-stage fit (``imu-noise-id loop``) gets the loop's final model, ``n`` and ``dt``.
     """
@@ -103,6 +124,8 @@ def write_model_yaml(path: Path, models: dict[str, AxisModel], loops: dict[str, 
             entry = {"model": loop.final.model, "n": int(loop.n), "dt": num(loop.dt)}
         if axis in loops:
             entry.update(loop_to_dict(loops[axis]))
+        if finals and axis in finals:
+            entry["final"] = final_to_dict(finals[axis])
         axes[axis] = entry
     doc: dict = {"meta": meta} if meta else {}
     doc["axes"] = axes

@@ -223,16 +223,27 @@ def observed_information(
     return -0.5 * (hess + hess.T)
 
 
+#: Information about a log-parameter beyond this (an sd below 1e-50) is a numerical failure, not knowledge.
+MAX_INFORMATION = 1e100
+
+
 def covariance_from_information(info: np.ndarray) -> tuple[np.ndarray, bool]:
     """Inverse of the observed information and whether it is positive definite.
 
     When it is not (typically a variance driven to ~0 at the boundary: that component is not supported by the
     data), the parameters loading most on the non-positive directions are removed one at a time until the rest
     is positive definite; the removed ones get infinite variance (interval (0, ∞)), the others the inverse of
-    their (conditional) block.
+    their (conditional) block. Parameters whose information is not finite or absurd (beyond
+    :data:`MAX_INFORMATION`: a finite-difference step through a likelihood that overflowed near a boundary) are
+    removed first.
     """
     k = info.shape[0]
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.isfinite(info) & (np.abs(info) < MAX_INFORMATION))
     keep = list(range(k))
+    while keep and bad[np.ix_(keep, keep)].any():  # the parameter with the most bad entries (a bad diagonal first)
+        sub = bad[np.ix_(keep, keep)]
+        keep.pop(int(np.argmax(sub.sum(axis=1) + 0.5 * np.diag(sub))))
     while keep:
         sub = info[np.ix_(keep, keep)]
         w, v = np.linalg.eigh(sub)

@@ -13,11 +13,17 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
+
+from ..errors import InputError
+from ..kalman.statespace import to_components
 from ..noise.components import GM
 from ..noise.modelspec import structure_name
 from ..noise.resonant import LPF
 from .results import FitResult
+from .uncertainty import add_uncertainty
 
+Z95 = 1.959963984540054
 #: A GM whose τ is below this many sampling periods is read as the sensor's low-pass filter.
 FILTER_MAX_TAU_SAMPLES = 5
 
@@ -25,8 +31,9 @@ FILTER_MAX_TAU_SAMPLES = 5
 def gm_as_filter(fit: FitResult) -> FitResult:
     """``fit`` with its shortest GM renamed LPF when τ < :data:`FILTER_MAX_TAU_SAMPLES`·dt and the model has no LPF.
 
-    The cutoff's interval is the τ interval mapped through f_c = 1/(2πτ); the noise density's interval is not
-    carried over (it depends on σ and τ jointly) and is left out of ``se``/``ci95``.
+    The cutoff's interval is the τ interval mapped through f_c = 1/(2πτ). When the fit holds its log-parameter
+    covariance, it is carried to (ln N, ln f_c) by the linear map ln N = ln σ + ½ ln τ + ½ ln 2,
+    ln f_c = −ln τ − ln 2π, and the noise density gets its Wald interval and standard error from it.
     """
     gms = [(i, c) for i, c in enumerate(fit.components) if isinstance(c, GM)]
     if not gms or any(isinstance(c, LPF) for c in fit.components):
@@ -43,5 +50,31 @@ def gm_as_filter(fit: FitResult) -> FitResult:
         lo, hi = fit.ci95[f"{key}.tau"]
         ci95["LPF.cutoff"] = (1.0 / (2.0 * math.pi * hi) if hi > 0 else 0.0,
                               1.0 / (2.0 * math.pi * lo) if lo > 0 else math.inf)
+    labels, cov = list(fit.covariance_labels), fit.log_covariance
+    if f"{key}.sigma" in labels and f"{key}.tau" in labels:
+        i_s, i_t = labels.index(f"{key}.sigma"), labels.index(f"{key}.tau")
+        # J C Jᵀ with J = I but for the rows ln N = ln σ + ½ ln τ and ln f_c = −ln τ, written out so that the
+        # infinite variances of unidentified parameters never meet a zero of J.
+        cov = cov.copy()
+        cov[[i_s, i_t], :] = np.vstack([cov[i_s] + 0.5 * cov[i_t], -cov[i_t]])
+        cov[:, [i_s, i_t]] = np.column_stack([cov[:, i_s] + 0.5 * cov[:, i_t], -cov[:, i_t]])
+        labels[i_s], labels[i_t] = "LPF.noise_density", "LPF.cutoff"
+        sd = math.sqrt(max(float(cov[i_s, i_s]), 0.0))
+        n_lpf = components[i].noise_density
+        se["LPF.noise_density"] = n_lpf * sd
+        ci95["LPF.noise_density"] = (n_lpf * math.exp(-Z95 * sd), n_lpf * math.exp(Z95 * sd))
     return replace(fit, model=structure_name([c.name for c in components]), components=components, se=se,
-                   ci95=ci95)
+                   ci95=ci95, log_covariance=cov, covariance_labels=tuple(labels))
+
+
+def with_uncertainty(fit: FitResult) -> FitResult:
+    """:func:`~imu_noise_id.core.estimation.uncertainty.add_uncertainty` of a fit that may hold a renamed LPF.
+
+    The intervals are computed on the components as the state space holds them (a renamed LPF is a GM block
+    there), then the renaming is applied again, carrying the covariance (see :func:`gm_as_filter`).
+    """
+    if fit.statespace is None:
+        raise InputError("this FitResult holds no state space to compute its uncertainty from")
+    raw = to_components(fit.statespace)
+    as_fitted = replace(fit, model=structure_name([c.name for c in raw]), components=raw, se={}, ci95={})
+    return gm_as_filter(add_uncertainty(as_fitted))

@@ -64,6 +64,9 @@ class FitResult:
         How long to record for the target precision (when the uncertainty was computed).
     information_ok : bool
         Whether the observed information was positive definite (else some se are inf: not identified).
+    log_covariance, covariance_labels
+        Covariance of the log-parameters (inverse observed information) and their labels (``WN.noise_density`` …),
+        for intervals of derived quantities by the delta method (empty until the uncertainty is computed).
     """
 
     model: str
@@ -83,6 +86,8 @@ class FitResult:
     n_eval: int = 0
     n_params: int = 0
     starts: list[float] = field(default_factory=list)
+    log_covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+    covariance_labels: tuple[str, ...] = ()
     statespace: StateSpace | None = field(default=None, repr=False)
     record: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
 

@@ -113,15 +113,3 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     if options.uncertainty:
         add_uncertainty(fits[best_key], options.target_precision)
     return SelectionResult(fits[best_key], table, fits)
-
-
-def kalibr_values(fit: FitResult) -> dict[str, float | None]:
-    """Kalibr ``imu.yaml`` values from a fitted model: ``noise_density`` [u/√Hz] from WN and ``random_walk``
-    [u/s/√Hz] from RW (None when the model has no RW: its long-term error is then a GM or a ramp, which Kalibr's
-    model cannot express; the caller keeps the Allan-slope value beside it)."""
-    wn = next((c for c in fit.components if c.name == "WN"), None)
-    rw = next((c for c in fit.components if c.name == "RW"), None)
-    return {
-        "noise_density": wn.params()["noise_density"] if wn else None,
-        "random_walk": rw.params()["random_walk"] if rw else None,
-    }

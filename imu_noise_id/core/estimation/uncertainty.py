@@ -77,6 +77,8 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     noise_labels = [lab for i, _, lab in parameter_labels(comps_ss) if not isinstance(comps_ss[i], RR)]
     info = mle.observed_information(par, theta, model_ss, y, z)
     cov, fit.information_ok = mle.covariance_from_information(info)
+    k_noise = len(noise_labels)
+    fit.log_covariance, fit.covariance_labels = cov[:k_noise, :k_noise].copy(), tuple(noise_labels)
     for k, lab in enumerate(noise_labels):
         v = float(np.exp(theta[k]))
         s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf

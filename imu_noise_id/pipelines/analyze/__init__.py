@@ -7,8 +7,11 @@ adapter):
 2. the model stage (:mod:`.models`): per axis, model selection by BIC (or the structure asked for) with the
    constrained EM and quasi-Newton, intervals and recording-length advice; the starting values are fitted to the
    Allan variance of stage 1 (not computed again);
-3. the closed loop (:mod:`imu_noise_id.pipelines.loop`), starting from each axis's selected fit (not fitted again);
-4. the simulation band of every axis's fitted model (the AVs of simulations of it, for the report's plots).
+3. the closed loop (:mod:`imu_noise_id.pipelines.loop`), starting from each axis's selected fit (not fitted again),
+   at the recording's own rate;
+4. the final model of each axis (:mod:`.final`): the loop's last step or the selection, with intervals, and the
+   Kalibr numbers taken from it;
+5. the simulation band of every axis's fitted model (the AVs of simulations of it, for the report's plots).
 
 The report layer (:mod:`imu_noise_id.report.analysis`) writes every file once from the result.
 """
@@ -26,6 +29,7 @@ from ...core.errors import InputError
 from ...core.estimation.results import FitResult
 from ...core.simulation.bands import allan_band
 from ..loop import ImuLoop, LoopResult
+from .final import FinalModel, final_model
 from .models import AUTO, AxisModel, ModelStage, fit_axis
 from .static import StaticAnalysis, analyze_static
 
@@ -74,6 +78,7 @@ class AnalysisResult:
     static : the Allan stage (variances, slopes, data summary, warnings)
     models : the model stage per axis (fits and selections, without their records)
     loops : the closed loop per axis (empty without the loop)
+    finals : the final model per axis and the Kalibr numbers from it (empty without the model stage)
     bands : per axis (τ [s], AVs of simulations of the fitted model (n_sim, T) [u²])
     warnings : what the model and loop stages could not do, and why
     """
@@ -81,6 +86,7 @@ class AnalysisResult:
     static: StaticAnalysis
     models: dict[str, AxisModel] = field(default_factory=dict)
     loops: dict[str, LoopResult] = field(default_factory=dict)
+    finals: dict[str, FinalModel] = field(default_factory=dict)
     bands: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
 
@@ -139,6 +145,7 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
             except InputError as exc:
                 result.warnings.append(f"closed loop skipped: {exc}")
                 loop = None
+        result.finals[axis] = final_model(fit, result.loops.get(axis))
         if on_axis is not None:
             on_axis(axis, fit, result.loops.get(axis))
         result.models[axis] = model.without_data()
@@ -147,4 +154,4 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
     return result
 
 
-__all__ = ["AUTO", "AnalysisResult", "AnalyzeOptions", "ModelStage", "StaticAnalysis", "analyze"]
+__all__ = ["AUTO", "AnalysisResult", "AnalyzeOptions", "FinalModel", "ModelStage", "StaticAnalysis", "analyze"]

@@ -16,7 +16,7 @@ from ...core.diagnostics.whitening import WhiteningFilter
 from ...core.estimation.model import FitOptions, NoiseModel
 from ...core.estimation.relabel import FILTER_MAX_TAU_SAMPLES, gm_as_filter
 from ...core.estimation.results import FitResult
-from ...core.noise.components import GM, QN, RR, RW, Component, total_allan_variance
+from ...core.noise.components import GM, QN, RR, RW, WN, Component, total_allan_variance
 from ...core.noise.modelspec import CANONICAL_ORDER, structure_name
 from ...core.noise.resonant import LPF, MAX_DAMPING, OSC
 from ...core.quality import interpolate_missing
@@ -43,6 +43,9 @@ class AxisLoop:
         self.alpha, self.lags = alpha, lags
         self.n_observed = int(np.isfinite(y).sum())
         self.n = y.size
+        # A white noise driven to ~0 by a fit (beside a low-pass) cannot restart a refit: its floor as a start.
+        d = np.diff(y[np.isfinite(y)])
+        self.white_floor = 1e-3 * math.sqrt(max(float(np.var(d)) / 2.0, 1e-300) * dt)
 
     def exog(self, state: LoopState) -> tuple[np.ndarray | None, list[str], list[slice]]:
         cols, names, slices, start = [], [], [], 0
@@ -184,7 +187,8 @@ class AxisLoop:
         return True
 
     def extend(self, state: LoopState, f: det.Finding, diag: Diagnosis) -> LoopState:
-        fitted = list(diag.fit.components)
+        fitted = [WN(self.white_floor) if isinstance(c, WN) and c.noise_density < self.white_floor else c
+                  for c in diag.fit.components]
         new = LoopState(structure=list(state.structure), exog_terms=list(state.exog_terms),
                         flagged=state.flagged.copy(), imputed=state.imputed.copy(), init=fitted)
         if f.effect in STATE_EFFECTS:

@@ -1,0 +1,50 @@
+"""The final model of each axis: what the numbers users paste come from.
+
+The closed loop's last step when the loop changed the model (refitted intervals included), else the model stage's
+selection; a short-memory GM read as the sensor's low-pass (:func:`~imu_noise_id.core.estimation.relabel.gm_as_filter`).
+From it: the passband noise density N, the random walk K (or "not identifiable"), the per-sample variance of the
+high-frequency noise (:mod:`imu_noise_id.core.estimation.kalibr`) — oscillations, the internal filter's shape,
+GMs and regressors kept out of N and K.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ...core.estimation import kalibr
+from ...core.estimation.relabel import gm_as_filter, with_uncertainty
+from ...core.estimation.results import FitResult
+from ..loop import LoopResult
+
+
+@dataclass(frozen=True)
+class FinalModel:
+    """An axis's final model and the Kalibr numbers taken from it.
+
+    Attributes
+    ----------
+    fit : the final fit (without its record), with intervals
+    source : where it comes from, in words (model selection, or the loop's step and model)
+    noise_density, random_walk : Kalibr's N [u/√Hz] and K [u/s/√Hz] with intervals and their sources
+    noise_stddev_per_sample : √(per-sample variance of the high-frequency noise) at the recording's dt [u]
+    """
+
+    fit: FitResult
+    source: str
+    noise_density: kalibr.KalibrValue
+    random_walk: kalibr.KalibrValue
+    noise_stddev_per_sample: float
+
+
+def final_model(model_fit: FitResult, loop: LoopResult | None) -> FinalModel:
+    """The final model of one axis from its model-stage fit and its loop (module docstring)."""
+    if loop is None or len(loop.steps) == 1:
+        fit = gm_as_filter(model_fit)
+        source = "model selection" + ("" if loop is None else " (the closed loop added nothing)")
+    else:
+        fit = with_uncertainty(loop.final.diagnosis.fit)
+        source = f"closed loop, step {loop.final.index}: {loop.final.model}"
+    return FinalModel(fit=fit.without_data(), source=source, noise_density=kalibr.noise_density(fit),
+                      random_walk=kalibr.random_walk(fit),
+                      noise_stddev_per_sample=math.sqrt(kalibr.per_sample_noise_variance(fit)))
