@@ -41,13 +41,16 @@ def summary_table(result: StaticAnalysis) -> str:
 
 def final_table(finals: dict[str, FinalModel]) -> str:
     """The numbers imu.yaml's Kalibr keys are made of: per axis the final model, N and K with 95 % intervals."""
-    lines = ["Final models (imu.yaml's numbers; N = passband white noise, K = random walk; 95 % intervals):"]
+    lines = ["Final models (imu.yaml's numbers; N = passband white noise, K = random walk, B = bias instability, "
+             "'<' an upper bound; 95 % intervals):"]
     for axis, f in finals.items():
         n, k = f.noise_density, f.random_walk
         n_text = "n/a" if n.value is None else f"{_fmt(n.value)} [{_fmt(n.ci95[0])}, {_fmt(n.ci95[1])}]"
         k_text = ("not identifiable (see imu.yaml *_allan)" if k.value is None
                   else f"{_fmt(k.value)} [{_fmt(k.ci95[0])}, {_fmt(k.ci95[1])}]")
-        lines.append(f"{axis:8s} {f.fit.model:22s} N {n_text:34s} K {k_text}")
+        b = f.bias_instability
+        b_text = ("" if b.reached else "<") + f"{_fmt(b.value)} [{_fmt(b.ci95[0])}, {_fmt(b.ci95[1])}]"
+        lines.append(f"{axis:8s} {f.fit.model:22s} N {n_text:34s} K {k_text:34s} B {b_text}")
     return "\n".join(lines)
 
 

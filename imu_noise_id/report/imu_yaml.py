@@ -74,6 +74,15 @@ def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
             doc[f"{key}_method_xyz"] = methods
             doc[f"{key}_source_xyz"] = [getattr(finals[a], parameter).source for a in axes]
         doc[f"{_PREFIX[sensor]}_noise_stddev_per_sample_xyz"] = [num(finals[a].noise_stddev_per_sample) for a in axes]
+        key = f"{_PREFIX[sensor]}_bias_instability"
+        model_b = [finals[a].bias_instability for a in axes]
+        doc[f"{key}_xyz"] = [num(b.value) for b in model_b]
+        doc[f"{key}_ci_xyz"] = [[num(b.ci95[0]), num(b.ci95[1])] for b in model_b]
+        doc[f"{key}_method_xyz"] = ["model_minimum" if b.reached else "model_upper_bound" for b in model_b]
+        doc[f"{key}_tau_xyz"] = [num(b.tau_at_minimum) for b in model_b]
+        allan_b = [finals[a].bias_instability_allan for a in axes]
+        doc[f"{key}_allan_xyz"] = [num(b.value) for b in allan_b]
+        doc[f"{key}_allan_method_xyz"] = ["allan_minimum" if b.reached else "allan_upper_bound" for b in allan_b]
         doc[f"{_PREFIX[sensor]}_final_model_xyz"] = [finals[a].fit.model for a in axes]
 
 
@@ -103,6 +112,10 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
             "# *_noise_stddev_per_sample_xyz: per-sample std of the high-frequency noise at update_rate, in u: use it",
             "# (squared) as the Imu message covariance; it is below noise_density*sqrt(update_rate) where the",
             "# sensor's own low-pass cuts below the Nyquist frequency.",
+            "# *_bias_instability_xyz [rad/s or m/s^2]: min of the final model's Allan deviation (vibration lines left",
+            "# out) / 0.664 (IEEE 952), at *_tau_xyz, with a 95 % interval from the fit's parameter uncertainty;",
+            "# method model_upper_bound: the deviation still falls at a tenth of the record (not reached).",
+            "# *_bias_instability_allan_xyz: the same reading off the data's Allan deviation (no interval).",
         ]
     return lines
 

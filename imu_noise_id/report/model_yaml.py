@@ -23,6 +23,8 @@ Per axis (``gyro_x`` … ``accel_z``)::
       noise_density: {value, ci95, source}           # passband sqrt(N_WN² + N_LPF²) [u/√Hz]
       random_walk: {value, ci95, source}             # RW [u/s/√Hz]; value null: not identifiable from this record
       noise_stddev_per_sample: …                     # per-sample std of the high-frequency noise at dt [u]
+      bias_instability: {value, ci95, tau_at_minimum, reached, source}   # model AD min / 0.664 [u]
+      bias_instability_allan: {…}                    # the same off the data's AV (no interval)
 """
 
 from __future__ import annotations
@@ -104,6 +106,10 @@ def final_to_dict(final: FinalModel) -> dict:
                   "source": v.source}
            for name, v in (("noise_density", final.noise_density), ("random_walk", final.random_walk))},
         "noise_stddev_per_sample": num(final.noise_stddev_per_sample),
+        **{name: {"value": num(b.value), "ci95": [num(b.ci95[0]), num(b.ci95[1])], "tau_at_minimum":
+                  num(b.tau_at_minimum), "reached": bool(b.reached), "source": b.source}
+           for name, b in (("bias_instability", final.bias_instability),
+                           ("bias_instability_allan", final.bias_instability_allan))},
     }
 
 

@@ -145,7 +145,7 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
             except InputError as exc:
                 result.warnings.append(f"closed loop skipped: {exc}")
                 loop = None
-        result.finals[axis] = final_model(fit, result.loops.get(axis))
+        result.finals[axis] = final_model(fit, result.loops.get(axis), static.allan.column(axes.index(axis)))
         if on_axis is not None:
             on_axis(axis, fit, result.loops.get(axis))
         result.models[axis] = model.without_data()

@@ -4,7 +4,8 @@ The closed loop's last step when the loop changed the model (refitted intervals 
 selection; a short-memory GM read as the sensor's low-pass (:func:`~imu_noise_id.core.estimation.relabel.gm_as_filter`).
 From it: the passband noise density N, the random walk K (or "not identifiable"), the per-sample variance of the
 high-frequency noise (:mod:`imu_noise_id.core.estimation.kalibr`) — oscillations, the internal filter's shape,
-GMs and regressors kept out of N and K.
+GMs and regressors kept out of N and K — and the bias instability, read from the model with its interval and from
+the data's Allan deviation (:mod:`imu_noise_id.core.estimation.instability`).
 """
 
 from __future__ import annotations
@@ -12,7 +13,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ...core.allan import AllanResult
 from ...core.estimation import kalibr
+from ...core.estimation.instability import BiasInstability, bias_instability, bias_instability_from_allan
 from ...core.estimation.relabel import gm_as_filter, with_uncertainty
 from ...core.estimation.results import FitResult
 from ..loop import LoopResult
@@ -28,6 +31,7 @@ class FinalModel:
     source : where it comes from, in words (model selection, or the loop's step and model)
     noise_density, random_walk : Kalibr's N [u/√Hz] and K [u/s/√Hz] with intervals and their sources
     noise_stddev_per_sample : √(per-sample variance of the high-frequency noise) at the recording's dt [u]
+    bias_instability, bias_instability_allan : B [u] from the model (with interval) and from the data's AV
     """
 
     fit: FitResult
@@ -35,16 +39,27 @@ class FinalModel:
     noise_density: kalibr.KalibrValue
     random_walk: kalibr.KalibrValue
     noise_stddev_per_sample: float
+    bias_instability: BiasInstability
+    bias_instability_allan: BiasInstability
 
 
-def final_model(model_fit: FitResult, loop: LoopResult | None) -> FinalModel:
-    """The final model of one axis from its model-stage fit and its loop (module docstring)."""
+def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResult) -> FinalModel:
+    """The final model of one axis from its model-stage fit, its loop and its Allan variance (module docstring).
+
+    The bias instability is read over τ up to a tenth of the record (where the AV estimates still have ≳ 10
+    degrees of freedom), the model's and the data's alike.
+    """
     if loop is None or len(loop.steps) == 1:
         fit = gm_as_filter(model_fit)
         source = "model selection" + ("" if loop is None else " (the closed loop added nothing)")
     else:
         fit = with_uncertainty(loop.final.diagnosis.fit)
         source = f"closed loop, step {loop.final.index}: {loop.final.model}"
+    tau_max = fit.n * fit.dt / 10.0
+    supported = allan.tau <= tau_max
     return FinalModel(fit=fit.without_data(), source=source, noise_density=kalibr.noise_density(fit),
                       random_walk=kalibr.random_walk(fit),
-                      noise_stddev_per_sample=math.sqrt(kalibr.per_sample_noise_variance(fit)))
+                      noise_stddev_per_sample=math.sqrt(kalibr.per_sample_noise_variance(fit)),
+                      bias_instability=bias_instability(fit, tau_max),
+                      bias_instability_allan=bias_instability_from_allan(allan.tau[supported],
+                                                                         allan.variance[supported, 0]))

@@ -1,0 +1,103 @@
+"""Bias instability — the datasheet number — from a fitted model, with its interval, and from the Allan variance.
+
+IEEE Std 952 reads the bias instability B off the flat bottom of the Allan deviation, σ_min = √(2 ln 2 / π)·B
+≈ 0.664 B, where flicker noise dominates. Paper 000's models have no flicker component, but the minimum of the
+fitted model's Allan deviation is the same reading taken from a smooth curve instead of a noisy one (beyond the
+papers): B = min_τ σ_model(τ) / 0.664 over the averaging times the record supports (up to a tenth of its length,
+where the AV estimates still have ≳ 10 degrees of freedom). Narrow-band oscillations and regressors (vibration,
+sinusoids, temperature) are not bias: they are left out of σ_model. When the model's deviation still falls at
+the longest supported τ, the minimum is not reached: B is then an *upper bound* (``reached = False``).
+
+The interval propagates the fit's uncertainty: log-parameters drawn from N(θ̂, Σ) (Σ the inverse observed
+information kept by the fit; parameters the data do not identify held at their estimates), B recomputed for each
+draw, the 2.5 and 97.5 % quantiles taken.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..noise.components import Component, total_allan_variance
+from ..noise.modelspec import parameter_labels
+from .results import FitResult
+
+#: σ_min = FLICKER_FACTOR · B (IEEE Std 952: √(2 ln 2 / π)).
+FLICKER_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
+#: Components that are not bias (vibration lines) and stay out of the reading.
+NOT_BIAS = ("OSC",)
+#: Draws of the parameter distribution for the interval.
+N_DRAWS = 200
+
+
+@dataclass(frozen=True)
+class BiasInstability:
+    """Bias instability B [u] with its 95 % interval, the τ [s] of the minimum and whether it was reached."""
+
+    value: float
+    ci95: tuple[float, float]
+    tau_at_minimum: float
+    reached: bool
+    source: str
+
+
+def _tau_grid(dt: float, tau_max: float) -> np.ndarray:
+    return np.geomspace(dt, max(tau_max, 2.0 * dt), 2000)
+
+
+def _minimum(components: list[Component], dt: float, tau: np.ndarray) -> tuple[float, float, bool]:
+    bias = [c for c in components if c.name not in NOT_BIAS]
+    adev = np.sqrt(np.maximum(total_allan_variance(bias, tau, dt), 0.0))
+    k = int(np.argmin(adev))
+    return float(adev[k]) / FLICKER_FACTOR, float(tau[k]), k < tau.size - 1
+
+
+def bias_instability(fit: FitResult, tau_max: float, *, seed: int = 0) -> BiasInstability:
+    """B from ``fit`` over τ ∈ [dt, ``tau_max``] [s] (module docstring)."""
+    tau = _tau_grid(fit.dt, tau_max)
+    value, tau_min, reached = _minimum(list(fit.components), fit.dt, tau)
+    source = f"minimum of the model's Allan deviation (without {', '.join(NOT_BIAS)}) / {FLICKER_FACTOR:.3f}"
+    if not reached:
+        source += f"; still falling at τ = {tau_max:.3g} s: an upper bound"
+    return BiasInstability(value, _interval(fit, tau, seed), tau_min, reached, source)
+
+
+def _interval(fit: FitResult, tau: np.ndarray, seed: int) -> tuple[float, float]:
+    """2.5/97.5 % quantiles of B over draws of the log-parameters (nan when the fit holds no covariance)."""
+    labels = list(fit.covariance_labels)
+    # Parameters the data do not identify (infinite variance, e.g. a white noise driven to ~0 beside the sensor's
+    # low-pass) are held at their estimates.
+    index = {lab: i for i, lab in enumerate(labels) if np.isfinite(fit.log_covariance[i, i])}
+    slots = [(i, name, lab) for i, name, lab in parameter_labels(list(fit.components)) if lab in index]
+    if not slots:
+        return (math.nan, math.nan)
+    theta = np.array([math.log(fit.components[i].params()[name]) for i, name, _ in slots])
+    cov = fit.log_covariance[np.ix_([index[lab] for *_, lab in slots], [index[lab] for *_, lab in slots])]
+    draws = np.random.default_rng(seed).multivariate_normal(theta, cov, size=N_DRAWS, method="eigh")
+    values = []
+    for row in draws:
+        comps = list(fit.components)
+        updates: dict[int, dict[str, float]] = {}
+        for (i, name, _), v in zip(slots, row, strict=True):
+            updates.setdefault(i, {})[name] = math.exp(v)
+        try:
+            comps = [type(c)(**{**c.params(), **updates.get(i, {})}) for i, c in enumerate(comps)]
+        except ValueError:  # a draw outside a component's domain (e.g. an OSC too damped)
+            continue
+        values.append(_minimum(comps, fit.dt, tau)[0])
+    if len(values) < N_DRAWS // 2:
+        return (math.nan, math.nan)
+    lo, hi = np.quantile(values, [0.025, 0.975])
+    return (float(lo), float(hi))
+
+
+def bias_instability_from_allan(tau: np.ndarray, avar: np.ndarray) -> BiasInstability:
+    """The classic reading from an estimated Allan variance: min σ(τ) / 0.664 (no interval: the minimum of a noisy
+    curve is biased low; the model's reading is the one with an interval)."""
+    ok = np.isfinite(avar) & (avar > 0)
+    adev = np.sqrt(avar[ok])
+    k = int(np.argmin(adev))
+    return BiasInstability(float(adev[k]) / FLICKER_FACTOR, (math.nan, math.nan), float(tau[ok][k]),
+                           k < adev.size - 1, "minimum of the data's Allan deviation / 0.664")

@@ -1,0 +1,58 @@
+"""Bias instability from a fitted model (with its interval) and from the Allan variance, against known truths."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core.estimation.instability import (
+    FLICKER_FACTOR,
+    bias_instability,
+    bias_instability_from_allan,
+)
+from imu_noise_id.core.estimation.model import fit_model
+from imu_noise_id.core.estimation.results import FitResult
+from imu_noise_id.core.noise.components import GM, OSC, RW, WN, simulate_sum, total_allan_variance
+
+DT = 0.01
+
+
+def _fit_of(components) -> FitResult:
+    return FitResult(model="+".join(c.name for c in components), components=list(components), exog_coef={}, se={},
+                     ci95={}, loglik=0.0, aic=0.0, bic=0.0, n=1, dt=DT, n_iter=0, converged=True)
+
+
+def _truth(components, tau_max: float) -> float:
+    tau = np.geomspace(DT, tau_max, 4000)
+    return float(np.sqrt(total_allan_variance(components, tau, DT)).min()) / FLICKER_FACTOR
+
+
+def test_model_reading_is_the_minimum_of_the_model_deviation_and_leaves_vibration_out():
+    model = [WN(1e-3), GM(tau=10.0, sigma=5e-5), RW(1e-5)]
+    got = bias_instability(_fit_of(model), 1000.0)
+    assert got.reached and got.value == pytest.approx(_truth(model, 1000.0), rel=1e-3)
+    with_vibration = bias_instability(_fit_of([*model, OSC(frequency=0.5, bandwidth=0.05, sigma=5e-3)]), 1000.0)
+    assert with_vibration.value == pytest.approx(got.value, rel=1e-12)
+
+
+def test_white_noise_alone_gives_an_upper_bound():
+    got = bias_instability(_fit_of([WN(1e-3)]), 100.0)
+    assert not got.reached and got.tau_at_minimum == pytest.approx(100.0) and "upper bound" in got.source
+
+
+def test_interval_from_a_real_fit_covers_the_truth():
+    truth = [WN(1e-3), RW(1e-5)]  # deviation minimum at τ = √3·N/K ≈ 173 s, inside the 360 s supported
+    n = 360_000
+    y = simulate_sum(truth, n, DT, np.random.default_rng(4))
+    fit = fit_model(y, DT, "WN+RW")
+    got = bias_instability(fit, n * DT / 10)
+    lo, hi = got.ci95
+    assert got.reached and lo < got.value < hi and lo < _truth(truth, n * DT / 10) < hi
+    assert hi / lo < 2.0  # 1 h of data pins it down
+
+
+def test_allan_reading():
+    tau = np.array([0.1, 1.0, 10.0, 100.0])
+    avar = np.array([4e-6, 1e-6, 2.5e-7, 1e-6])
+    got = bias_instability_from_allan(tau, avar)
+    assert got.reached and got.tau_at_minimum == 10.0 and got.value == pytest.approx(5e-4 / FLICKER_FACTOR)
