@@ -28,6 +28,10 @@ def _canonical(components: list[Component]) -> list[Component]:
     return sorted(components, key=lambda c: order.get(c.name, len(order)))
 
 
+#: Line concentrations outside this range decide SIN (above) or OSC (below) alone; inside it both are tried.
+DECISIVE_SHARE = (0.2, 0.9)
+
+
 def _coef(fit: FitResult, names: list[str]) -> np.ndarray:
     """The fitted coefficients of the loop's regressors, in ``names`` order."""
     return np.array([float(fit.exog_coef[name]["value"]) for name in names])
@@ -124,7 +128,8 @@ class AxisLoop:
         (:func:`~imu_noise_id.core.diagnostics.lines.detect_broad_line`).
         The line's shape (:func:`~imu_noise_id.core.diagnostics.lines.line_shape`, measured on the residual in the
         data's units) says which it looks like and gives the OSC's starting f₀, bandwidth and σ; the look-alike is
-        listed first (a slightly smaller p-value) and both are tried, so that the likelihood has the last word.
+        listed first (a slightly smaller p-value) and, unless the shape is decisive (:data:`DECISIVE_SHARE`), both
+        are tried, so that the likelihood has the last word.
         """
         sin = det.detect_sinusoid(e, self.dt, whitening, alpha=self.alpha)
         if not sin.significant:  # only then the pooled search: a narrow line's single bin locates it best
@@ -143,6 +148,8 @@ class AxisLoop:
                                                       else sin.params["frequency"],
                                                       "concentration": shape.concentration, **searched})
         first, second = (sin, osc) if shape.kind == "SIN" else (osc, sin)
+        if not DECISIVE_SHARE[0] < shape.concentration < DECISIVE_SHARE[1]:
+            return [first]  # the shape leaves no doubt: the look-alike only
         return [replace(first, log10_p=first.log10_p - 1e-9), second]
 
     def candidates(self, diag: Diagnosis, state: LoopState) -> list[det.Finding]:
