@@ -17,6 +17,10 @@ $(VENV)/.installed: requirements.txt requirements-dev.txt setup.py setup.cfg pac
 	$(PIP) install --upgrade pip 2>&1 | grep -v '^WARNING: Location' || true
 	set -o pipefail; $(PIP) install -r requirements-dev.txt 2>&1 | { grep -v '^WARNING: Location' || true; }
 	set -o pipefail; $(PIP) install -e . 2>&1 | { grep -v '^WARNING: Location' || true; }
+	@# Chromium (Debian's package) renders report.html in the browser test; without it that test is skipped.
+	command -v chromium >/dev/null || { test "$$(id -u)" = 0 && command -v apt-get >/dev/null \
+	  && { apt-get install -y -q chromium >/dev/null 2>&1 || { apt-get update -qq && apt-get install -y -q chromium >/dev/null; }; }; } \
+	  || echo "note: chromium not installed; the browser test of report.html will be skipped"
 	touch $@
 
 setup: $(VENV)/.installed

@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"warning: {warning}", file=sys.stderr)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model}
     paths = write_analysis(result, args.out, rostopic=recording.imu.topic, meta=meta,
-                           title=f"closed loop: {args.bag.name}")
+                           title=f"IMU noise analysis: {args.bag.name}")
     print(summary_table(result.static), flush=True)
     if result.finals:
         print(final_table(result.finals), flush=True)

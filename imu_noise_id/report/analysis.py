@@ -1,8 +1,8 @@
 """The files of an analysis, each written once from the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult`.
 
 ``imu.yaml`` (Kalibr keys and per-axis values), ``allan.csv`` and the other variance CSVs, ``allan.png``; with a
-model stage ``model.yaml`` (fits, candidates, recording-length advice and the loop's steps) and
-``allan_model.png``; with the loop ``report.html``.
+model stage ``model.yaml`` (fits, candidates, recording-length advice, the loop's steps, the final models),
+``allan_model.png`` (the final models) and ``report.html`` (:mod:`.analysis_html`: the whole analysis).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from pathlib import Path
 
 from ..core.axes import UNITS
 from ..pipelines.analyze import AnalysisResult
-from .html import write_loop_report
+from .analysis_html import write_analysis_report
 from .imu_yaml import write_imu_yaml
 from .model_yaml import write_model_yaml
 from .plots import plot_allan_deviation
@@ -20,7 +20,7 @@ from .variance_csv import write_variance_csvs
 
 
 def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str, meta: dict,
-                   title: str = "closed loop") -> dict[str, Path]:
+                   title: str = "IMU noise analysis") -> dict[str, Path]:
     """Write every output of ``result`` into ``out_dir`` (created); returns the paths by file name."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -34,12 +34,11 @@ def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str
     paths["model.yaml"] = write_model_yaml(out / "model.yaml", result.models, result.loops, meta, result.finals)
     allan = static.allan
     panels = []
-    for axis, model in result.models.items():
+    for axis, final in result.finals.items():
         j = static.axes.index(axis)
-        panels.append({"tau": allan.tau, "avar": allan.variance[:, j], "fit": model.fit, "band": result.bands[axis],
-                       "unit": UNITS.get(axis, "u"), "label": axis, "title": f"{axis}: {model.fit.model}"})
+        panels.append({"tau": allan.tau, "avar": allan.variance[:, j], "fit": final.fit, "band": result.bands[axis],
+                       "unit": UNITS.get(axis, "u"), "label": axis, "title": f"{axis}: {final.fit.model}"})
     paths["allan_model.png"] = save_allan_overlay(out / "allan_model.png", panels,
-                                                  title="Allan deviation vs fitted models")
-    if result.loops:
-        paths["report.html"] = write_loop_report(out / "report.html", result.loops, title=title)
+                                                  title="Allan deviation vs final models")
+    paths["report.html"] = write_analysis_report(out / "report.html", result, meta, title)
     return paths

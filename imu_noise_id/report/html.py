@@ -12,7 +12,7 @@ from ..pipelines.loop import LoopResult
 from .loop_plots import allan_before_after, residual_acf_psd
 from .loop_yaml import HOW
 
-_STYLE = """
+STYLE = """
 body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}
 table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0}
 td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}
@@ -23,15 +23,15 @@ img{max-width:100%}
 """
 
 
-def _img(png: bytes, alt: str) -> str:
+def img_tag(png: bytes, alt: str) -> str:
     return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode()}">'
 
 
-def _fmt(x: float, spec: str = ".4g") -> str:
+def fmt(x: float, spec: str = ".4g") -> str:
     return format(float(x), spec)
 
 
-def _axis_section(axis: str, result: LoopResult) -> str:
+def loop_axis_section(axis: str, result: LoopResult) -> str:
     unit = UNITS.get(axis, "u")
     out = [f"<h2>{html.escape(axis)}</h2>"]
     cls = "pass" if result.passed else "fail"
@@ -49,8 +49,8 @@ def _axis_section(axis: str, result: LoopResult) -> str:
         how += "".join(f"; dropped {d}" for d in s.dropped)
         rows.append(
             f"<tr><td>{s.index}</td><td class=l>{html.escape(s.model)}</td><td class=l>{html.escape(how)}</td>"
-            f"<td>{_fmt(e.loglik, '.1f')}</td><td>{_fmt(e.bic, '.1f')}</td><td>{_fmt(e.av_misfit, '.3f')}</td>"
-            f"<td>{_fmt(e.ljung_box_p, '.2g')}</td><td>{_fmt(e.peak_ratio, '.1f')}</td>"
+            f"<td>{fmt(e.loglik, '.1f')}</td><td>{fmt(e.bic, '.1f')}</td><td>{fmt(e.av_misfit, '.3f')}</td>"
+            f"<td>{fmt(e.ljung_box_p, '.2g')}</td><td>{fmt(e.peak_ratio, '.1f')}</td>"
             f"<td class=l>{html.escape(s.evidence or '')}</td></tr>")
     out.append("<table>" + "".join(rows) + "</table>")
     fitted = ", ".join(str(c) for c in result.final.diagnosis.fit.components)
@@ -74,9 +74,9 @@ def _axis_section(axis: str, result: LoopResult) -> str:
     for before, after in pairs:
         label = f"{axis}: step {before.index}" + (f" → {after.index} (+{after.added})" if after else "")
         out.append(f"<h3>{html.escape(label)}</h3>")
-        out.append(_img(allan_before_after(before, after, unit, label), f"Allan deviation {label}"))
+        out.append(img_tag(allan_before_after(before, after, unit, label), f"Allan deviation {label}"))
         for s in (before, after) if after else (before,):
-            out.append(_img(residual_acf_psd(s, f"{axis} step {s.index}: {s.model}"),
+            out.append(img_tag(residual_acf_psd(s, f"{axis} step {s.index}: {s.model}"),
                             f"residual ACF and PSD, step {s.index}"))
     return "\n".join(out)
 
@@ -91,9 +91,9 @@ def render_loop_report(results: dict[str, LoopResult], title: str = "imu_noise_i
              "log-likelihood and BIC (comparable across steps), AV misfit = RMS of log10(AV_data/AV_model) over τ, "
              "Ljung–Box p-value of the standardised innovations (20 lags), and the largest periodogram line of the "
              "innovations over its local median.</p>")
-    body = "\n".join(_axis_section(axis, r) for axis, r in results.items())
+    body = "\n".join(loop_axis_section(axis, r) for axis, r in results.items())
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-            f"<style>{_STYLE}</style></head><body><h1>{html.escape(title)}</h1>{intro}{body}</body></html>")
+            f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>{intro}{body}</body></html>")
 
 
 def write_loop_report(path: str | Path, results: dict[str, LoopResult], title: str = "imu_noise_id closed loop"

@@ -41,14 +41,18 @@ def plot_allan_overlay(
 
 
 def save_allan_overlay(path: str | Path, panels: list[dict], title: str | None = None) -> Path:
-    """One PNG with a panel per entry ``{tau, avar, fit, band, label, unit, title}`` (modest size)."""
+    """One PNG with a panel per entry ``{tau, avar, fit, band, label, unit, title}``, three to a row."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.6), squeeze=False)
-    for ax, panel in zip(axes[0], panels, strict=True):
+    cols = min(3, len(panels))
+    rows = -(-len(panels) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.0 * cols, 4.0 * rows), squeeze=False)
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    for ax, panel in zip(axes.flat, panels, strict=False):
         plot_allan_overlay(ax, panel["tau"], panel["avar"], panel["fit"], panel.get("band"),
                            label=panel.get("label", "record"), unit=panel.get("unit", "u"))
         if panel.get("title"):
@@ -58,6 +62,33 @@ def save_allan_overlay(path: str | Path, panels: list[dict], title: str | None =
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=90)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def allan_panel_png(tau: np.ndarray, avar: np.ndarray, ci: tuple[np.ndarray, np.ndarray], fit: FitResult, *,
+                    band: tuple[np.ndarray, np.ndarray] | None, lines: dict[str, tuple[float, float]],
+                    unit: str, title: str) -> bytes:
+    """One readable panel (PNG bytes): the data's Allan deviation with its 95 % band, the slope lines read from it
+    (``lines``: name → (exponent μ of τ in the AV, coefficient c: AV = c·τ^μ)), the final model's deviation and
+    the simulations of it."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.0, 4.6))
+    ax.fill_between(tau, np.sqrt(ci[0]), np.sqrt(ci[1]), color="C0", alpha=0.2, lw=0, label="data 95 % band")
+    plot_allan_overlay(ax, tau, avar, fit, band, label="data", unit=unit)
+    for k, (name, (mu, c)) in enumerate(lines.items()):
+        ax.loglog(tau, np.sqrt(c * tau**mu), color=f"C{k + 4}", lw=0.9, ls=":", label=f"{name} slope line")
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    return buf.getvalue()

@@ -11,7 +11,7 @@ adapter):
    at the recording's own rate;
 4. the final model of each axis (:mod:`.final`): the loop's last step or the selection, with intervals, and the
    Kalibr numbers taken from it;
-5. the simulation band of every axis's fitted model (the AVs of simulations of it, for the report's plots).
+5. the simulation band of every axis's final model (the AVs of simulations of it, for the report's plots).
 
 The report layer (:mod:`imu_noise_id.report.analysis`) writes every file once from the result.
 """
@@ -79,7 +79,7 @@ class AnalysisResult:
     models : the model stage per axis (fits and selections, without their records)
     loops : the closed loop per axis (empty without the loop)
     finals : the final model per axis and the Kalibr numbers from it (empty without the model stage)
-    bands : per axis (τ [s], AVs of simulations of the fitted model (n_sim, T) [u²])
+    bands : per axis (τ [s], AVs of simulations of the final model (n_sim, T) [u²])
     warnings : what the model and loop stages could not do, and why
     """
 
@@ -149,7 +149,7 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
         if on_axis is not None:
             on_axis(axis, fit, result.loops.get(axis))
         result.models[axis] = model.without_data()
-        result.bands[axis] = allan_band(fit.components, static.dt, static.n, static.allan.tau,
+        result.bands[axis] = allan_band(result.finals[axis].fit.components, static.dt, static.n, static.allan.tau,
                                         n_sim=BAND_SIMULATIONS, seed=axes.index(axis))
     return result
 

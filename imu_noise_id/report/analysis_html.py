@@ -1,0 +1,125 @@
+"""The one self-contained ``report.html`` of an analysis (figures embedded as base64 PNG, no network).
+
+Sections, each written from the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult` (nothing recomputed but
+the figures): the data (rate, duration, topic, warnings and repairs), the numbers users paste (the final model's
+N, K and bias instability with their intervals and sources, the Allan readings beside them, the per-sample noise),
+one Allan panel per axis (data with its 95 % band, slope lines, the final model and simulations of it), the model
+selection's candidates, how long to record, and the closed loop's steps.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import html
+from pathlib import Path
+
+from ..core.axes import UNITS
+from ..pipelines.analyze import AnalysisResult
+from .html import STYLE, fmt, img_tag, loop_axis_section
+from .plots_model import allan_panel_png
+
+
+def _ci(value: float | None, ci: tuple[float, float]) -> str:
+    return "n/a" if value is None else f"{fmt(value)} [{fmt(ci[0])}, {fmt(ci[1])}]"
+
+
+def _data_section(result: AnalysisResult, meta: dict) -> str:
+    s = result.static
+    rows = [("source", meta.get("source", "?")), ("topic", s.topic), ("samples per axis", f"{s.n}"),
+            ("duration", f"{s.duration_s:.1f} s ({s.duration_s / 3600:.2f} h)"), ("rate", f"{s.rate_hz:.6g} Hz"),
+            ("command", meta.get("command", "analyze")), ("model", meta.get("model", "auto"))]
+    table = "".join(f"<tr><th class=l>{html.escape(k)}</th><td class=l>{html.escape(str(v))}</td></tr>"
+                    for k, v in rows)
+    warnings = s.warnings + result.warnings
+    items = "".join(f"<li>{html.escape(w)}</li>" for w in warnings) or "<li>none</li>"
+    return (f"<h2 id=data>Data</h2><table>{table}</table>"
+            f"<p>Warnings, repairs and the static check:</p><ul>{items}</ul>")
+
+
+def _numbers_section(result: AnalysisResult) -> str:
+    head = ("<tr><th class=l>axis</th><th class=l>final model (source)</th><th>N [u/√Hz], 95 %</th>"
+            "<th>K [u/s/√Hz], 95 %</th><th>bias instability B [u], 95 %</th><th>per-sample σ [u]</th>"
+            "<th>Allan N</th><th>Allan K</th><th>Allan B</th></tr>")
+    rows = []
+    for axis, f in result.finals.items():
+        slopes = result.static.slopes[axis]
+        b = f.bias_instability
+        k_text = _ci(f.random_walk.value, f.random_walk.ci95) if f.random_walk.value is not None else \
+            "not identifiable (no RW in the final model)"
+        rows.append(
+            f"<tr><td class=l>{axis} [{UNITS.get(axis, 'u')}]</td><td class=l>{html.escape(f.fit.model)} "
+            f"<span class=small>({html.escape(f.source)})</span></td>"
+            f"<td>{_ci(f.noise_density.value, f.noise_density.ci95)}</td><td>{html.escape(k_text)}</td>"
+            f"<td>{'' if b.reached else '&lt; '}{_ci(b.value, b.ci95)} <span class=small>at τ = "
+            f"{fmt(b.tau_at_minimum, '.3g')} s</span></td><td>{fmt(f.noise_stddev_per_sample)}</td>"
+            f"<td>{fmt(slopes.noise_density.value)}</td>"
+            f"<td>{'&lt; ' if slopes.random_walk.method == 'upper_bound' else ''}{fmt(slopes.random_walk.value)}</td>"
+            f"<td>{'' if f.bias_instability_allan.reached else '&lt; '}{fmt(f.bias_instability_allan.value)}</td>"
+            "</tr>")
+    note = ("<p class=small>N is the passband white-noise density √(N_WN² + N_LPF²); oscillations (OSC), sinusoids, "
+            "GMs, temperature and the sensor's low-pass shape are kept out of N and K. Where the final model has no "
+            "random walk, imu.yaml gives the Allan-slope reading (marked). B = min of the model's Allan deviation "
+            "without vibration lines / 0.664 ('&lt;': still falling at a tenth of the record, an upper bound). The "
+            "Kalibr keys of imu.yaml are the max of N and K over each sensor's three axes.</p>")
+    return f"<h2 id=numbers>The numbers to paste</h2><table>{head}{''.join(rows)}</table>{note}"
+
+
+def _allan_section(result: AnalysisResult) -> str:
+    s = result.static
+    out = ["<h2 id=allan>Allan deviation per axis</h2>"]
+    for axis, f in result.finals.items():
+        j = s.axes.index(axis)
+        lines = {c.name: (c.slope, c.coefficient) for c in s.slopes[axis].components()}
+        png = allan_panel_png(s.allan.tau, s.allan.variance[:, j], (s.allan.ci_low[:, j], s.allan.ci_high[:, j]),
+                              f.fit, band=result.bands.get(axis), lines=lines, unit=UNITS.get(axis, "u"),
+                              title=f"{axis}: final model {f.fit.model}")
+        out.append(img_tag(png, f"Allan deviation of {axis}"))
+    return "\n".join(out)
+
+
+def _selection_section(result: AnalysisResult) -> str:
+    out = ["<h2 id=selection>Model selection and recording length</h2>"]
+    for axis, m in result.models.items():
+        if m.selection is not None:
+            nan = float("nan")
+            rows = "".join(
+                f"<tr><td class=l>{html.escape(str(r.get('model')))}</td><td>{fmt(r.get('loglik', nan), '.1f')}"
+                f"</td><td>{r.get('k', '')}</td><td>{fmt(r.get('delta_bic', nan), '.2f')}</td>"
+                f"<td>{fmt(r.get('weight_bic', nan), '.3g')}</td>"
+                f"<td class=l>{html.escape(str(r.get('error', '')))}</td></tr>" for r in m.selection.table)
+            out.append(f"<h3>{axis}</h3><table><tr><th class=l>candidate</th><th>log-lik</th><th>k</th>"
+                       f"<th>ΔBIC</th><th>BIC weight</th><th class=l>error</th></tr>{rows}</table>")
+        advice = m.fit.record_length
+        if advice is not None:
+            items = "".join(
+                f"<li>{html.escape(lab)}: {fmt(advice.needed_s[lab] / 3600, '.3g')} h for ±{100 * advice.target:.0f} % "
+                f"(now ±{100 * advice.relative_halfwidth[lab]:.0f} %)"
+                + ("" if advice.reliable[lab] else " — a lower bound (correlation time not ≪ record)") + "</li>"
+                for lab in advice.needed_s)
+            out.append(f"<p>How long to record ({html.escape(m.fit.model)}, now {advice.current_s / 3600:.2f} h):"
+                       f"</p><ul>{items}</ul>")
+    return "\n".join(out)
+
+
+def render_analysis_report(result: AnalysisResult, meta: dict, title: str) -> str:
+    """The HTML text of the analysis report (module docstring)."""
+    when = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    parts = [_data_section(result, meta)]
+    if result.finals:
+        parts += [_numbers_section(result), _allan_section(result), _selection_section(result)]
+    if result.loops:
+        parts.append("<h2 id=loop>Closed loop</h2>")
+        parts += [loop_axis_section(axis, r) for axis, r in result.loops.items()]
+    nav = " · ".join(f"<a href='#{a}'>{t}</a>" for a, t in (("data", "data"), ("numbers", "numbers"),
+                                                             ("allan", "Allan"), ("selection", "selection"),
+                                                             ("loop", "closed loop")))
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+            f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>"
+            f"<p class=small>imu-noise-id analyze, {when}. {nav}</p>{''.join(parts)}</body></html>")
+
+
+def write_analysis_report(path: str | Path, result: AnalysisResult, meta: dict, title: str) -> Path:
+    """Write the self-contained report (figures embedded)."""
+    path = Path(path)
+    path.write_text(render_analysis_report(result, meta, title), encoding="utf-8")
+    return path
