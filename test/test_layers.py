@@ -16,11 +16,12 @@ PACKAGE = Path(__file__).resolve().parents[1] / "imu_noise_id"
 
 #: For each layer, the package's own layers it must not import.
 FORBIDDEN = {
-    "core": {"pipelines", "bag", "ros", "report", "cli", "demo", "resources"},
-    "pipelines": {"bag", "ros", "report", "cli", "demo"},
-    "bag": {"pipelines", "ros", "report", "cli", "demo"},
-    "report": {"ros", "cli", "demo", "bag"},
-    "ros": {"cli", "demo"},
+    "core": {"pipelines", "bag", "ros", "report", "cli", "demo", "resources", "batch"},
+    "pipelines": {"bag", "ros", "report", "cli", "demo", "batch"},
+    "bag": {"pipelines", "ros", "report", "cli", "demo", "batch"},
+    "report": {"ros", "cli", "demo", "bag", "batch"},
+    "ros": {"cli", "demo", "batch"},
+    "batch": {"cli", "demo", "ros"},
     "cli": {"demo"},
 }
 #: Third-party modules the core may use.

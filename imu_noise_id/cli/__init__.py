@@ -13,7 +13,7 @@ from ..core.errors import InputError
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
 COMMANDS: tuple[str, ...] = (
-    "analyze", "fit", "loop", "simulate", "inspect", "identify", "criteria", "cmkf", "play", "monitor",
+    "analyze", "batch", "fit", "loop", "simulate", "inspect", "identify", "criteria", "cmkf", "play", "monitor",
 )
 
 

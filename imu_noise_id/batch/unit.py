@@ -1,0 +1,139 @@
+"""One unit of work on a Dask worker: read the bag, run ``analyze``, write its outputs atomically, return rows.
+
+A unit never raises: a failure becomes its outcome (status ``failed`` and the error's one-line message), so that
+the batch goes on. Its outputs land in ``OUT/<unit name>/`` exactly as ``analyze`` writes them, plus
+``unit.json`` (the content hash, the options and the fleet-table rows): they are written into a temporary folder
+beside it and renamed into place, so an interrupted unit leaves no half-written folder and a rerun with the same
+inputs and options finds the finished one.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import time
+import traceback
+import uuid
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from ..core.errors import InputError
+from .units import Unit, content_hash
+
+MARKER = "unit.json"
+
+
+@dataclass
+class UnitOutcome:
+    """What a unit produced: its status (``ok``, ``failed``, ``skipped``), error, fleet rows and time."""
+
+    name: str
+    bag: str
+    topic: str | None
+    status: str
+    key: str
+    rows: list[dict] = field(default_factory=list)
+    error: str = ""
+    seconds: float = 0.0
+
+
+def analysis_options(options: dict):
+    """The :class:`~imu_noise_id.pipelines.analyze.AnalyzeOptions` of a batch's JSON options."""
+    from ..pipelines.analyze import AnalyzeOptions, ModelStage
+
+    return AnalyzeOptions(per_decade=int(options.get("per_decade", 8)),
+                          confidence=float(options.get("confidence", 0.95)),
+                          allow_motion=bool(options.get("allow_motion", False)),
+                          models=ModelStage(str(options.get("model", "auto"))), loop=bool(options.get("loop", True)))
+
+
+def _num(x: float | None) -> float | None:
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
+def fleet_rows(unit: Unit, result, warnings: list[str]) -> list[dict]:
+    """One row per axis: the Kalibr numbers with intervals (final model, else the Allan slopes), B, the loop."""
+    rows = []
+    for axis in result.static.axes:
+        row = {"bag": str(unit.bag), "topic": result.static.topic, "unit": unit.name, "axis": axis,
+               "status": "ok", "error": "", "rate_hz": _num(result.static.rate_hz),
+               "duration_s": _num(result.static.duration_s), "warnings": " | ".join(warnings)}
+        final = result.finals.get(axis)
+        if final is not None:
+            n, k, b = final.noise_density, final.random_walk, final.bias_instability
+            row |= {"model": final.fit.model, "noise_density": _num(n.value), "noise_density_lo": _num(n.ci95[0]),
+                    "noise_density_hi": _num(n.ci95[1]), "random_walk": _num(k.value),
+                    "random_walk_lo": _num(k.ci95[0]), "random_walk_hi": _num(k.ci95[1]),
+                    "bias_instability": _num(b.value), "bias_instability_lo": _num(b.ci95[0]),
+                    "bias_instability_hi": _num(b.ci95[1]), "source": final.source}
+        else:
+            s = result.static.slopes[axis]
+            row |= {"model": "allan", "noise_density": _num(s.noise_density.value),
+                    "noise_density_lo": _num(s.noise_density.ci[0]), "noise_density_hi": _num(s.noise_density.ci[1]),
+                    "random_walk": _num(s.random_walk.value), "random_walk_lo": _num(s.random_walk.ci[0]),
+                    "random_walk_hi": _num(s.random_walk.ci[1]), "bias_instability": None,
+                    "bias_instability_lo": None, "bias_instability_hi": None, "source": "Allan slopes"}
+        loop = result.loops.get(axis)
+        row |= {"loop_verdict": loop.verdict if loop else "", "loop_passed": bool(loop.passed) if loop else None}
+        rows.append(row)
+    return rows
+
+
+def failed_row(unit: Unit, error: str) -> dict:
+    """The one row of a failed unit."""
+    return {"bag": str(unit.bag), "topic": unit.topic, "unit": unit.name, "axis": None, "status": "failed",
+            "error": error}
+
+
+def finished(out_root: Path, unit: Unit, key: str) -> UnitOutcome | None:
+    """The outcome recorded by an earlier run of the same unit with the same content hash, if any."""
+    marker = out_root / unit.name / MARKER
+    try:
+        doc = json.loads(marker.read_text())
+    except (OSError, ValueError):
+        return None
+    if doc.get("key") != key or doc.get("status") != "ok":
+        return None
+    return UnitOutcome(unit.name, str(unit.bag), unit.topic, "skipped", key, doc.get("rows", []))
+
+
+def _replace_folder(tmp: Path, final: Path) -> None:
+    """Move ``tmp`` to ``final``, the old folder (if any) out of the way first and removed only afterwards."""
+    old = final.with_name(f".{final.name}.old-{uuid.uuid4().hex[:8]}")
+    if final.exists():
+        final.rename(old)
+    tmp.rename(final)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def run_unit(unit: Unit, options: dict, out_root: str) -> UnitOutcome:
+    """Analyse one unit (module docstring). Runs on a Dask worker; never raises."""
+    from ..bag.reader import read_static
+    from ..pipelines.analyze import analyze
+    from ..report.analysis import write_analysis
+
+    start = time.perf_counter()
+    out = Path(out_root)
+    key = ""
+    try:
+        key = content_hash(unit, options)
+        recording = read_static(unit.bag, topic=unit.topic)
+        result = analyze(recording.imu, recording.temperature, analysis_options(options))
+        tmp = out / f".{unit.name}.tmp-{uuid.uuid4().hex[:8]}"
+        meta = {"source": str(unit.bag), "topic": recording.imu.topic, "command": "batch",
+                "model": options.get("model", "auto")}
+        write_analysis(result, tmp, rostopic=recording.imu.topic, meta=meta, title=f"IMU noise analysis: {unit.name}")
+        warnings = list(result.static.warnings) + list(result.warnings)
+        outcome = UnitOutcome(unit.name, str(unit.bag), recording.imu.topic, "ok", key,
+                              fleet_rows(unit, result, warnings))
+        outcome.seconds = time.perf_counter() - start
+        (tmp / MARKER).write_text(json.dumps({**asdict(outcome), "options": options}, indent=1))
+        _replace_folder(tmp, out / unit.name)
+        return outcome
+    except InputError as exc:
+        error = str(exc)
+    except Exception as exc:  # a unit's failure is recorded, the batch goes on
+        error = f"internal error: {type(exc).__name__}: {exc} ({traceback.extract_tb(exc.__traceback__)[-1].name})"
+    return UnitOutcome(unit.name, str(unit.bag), unit.topic, "failed", key, [failed_row(unit, error)], error,
+                       time.perf_counter() - start)

@@ -1,0 +1,107 @@
+"""Units of work: every (bag, IMU topic) pair of the inputs, with the content hash that decides a rerun."""
+
+from __future__ import annotations
+
+import glob
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from ..bag.topics import IMU_TYPE, open_bag
+from ..core.errors import InputError
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One bag and one IMU topic, with the folder its outputs go to.
+
+    Attributes
+    ----------
+    bag : the bag (file or rosbag2 directory)
+    topic : the sensor_msgs/Imu topic (None: the bag's only one, or the bag could not be listed)
+    name : the unit's folder name under the batch output (bag name, topic with '/' → '_')
+    """
+
+    bag: Path
+    topic: str | None
+    name: str
+
+
+def _unit_name(bag: Path, topic: str | None) -> str:
+    stem = bag.name if bag.is_dir() else bag.stem
+    return stem if not topic else f"{stem}{topic.replace('/', '_')}"
+
+
+def imu_topics(bag: Path) -> list[str]:
+    """The bag's sensor_msgs/Imu topics (raises :class:`~imu_noise_id.bag.errors.BagError` if unreadable)."""
+    with open_bag(bag) as reader:
+        return sorted({c.topic for c in reader.connections if c.msgtype == IMU_TYPE})
+
+
+def _expand(pattern: str) -> list[Path]:
+    found = sorted(glob.glob(str(Path(pattern).expanduser()), recursive=True))
+    if not found:
+        raise InputError(f"{pattern!r}: no such bag (nothing matches)")
+    return [Path(p) for p in found]
+
+
+def read_manifest(path: Path) -> list[tuple[str, list[str] | None]]:
+    """(bag path or glob, topics or None) from a manifest: YAML ``bags: [{path: …, topics: [...]}, …]`` or one
+    path per line (``#`` comments)."""
+    if not path.is_file():
+        raise InputError(f"--manifest {str(path)!r}: no such file")
+    text = path.read_text()
+    if path.suffix in (".yaml", ".yml"):
+        try:
+            doc = yaml.safe_load(text) or {}
+            entries = doc["bags"]
+            return [(str(e["path"]), list(e["topics"]) if e.get("topics") else None) if isinstance(e, dict)
+                    else (str(e), None) for e in entries]
+        except (yaml.YAMLError, KeyError, TypeError) as exc:
+            raise InputError(f"--manifest {str(path)!r}: expected 'bags: [{{path: …, topics: […]}}, …]' "
+                             f"({exc})") from None
+    base = path.parent
+    lines = [ln.split("#", 1)[0].strip() for ln in text.splitlines()]
+    return [(str(p if Path(p).is_absolute() else base / p), None) for p in lines if p]
+
+
+def discover_units(inputs: list[str], topics: list[str] | None, manifest: Path | None = None) -> list[Unit]:
+    """The units of ``inputs`` (paths or globs) and the manifest's entries.
+
+    ``topics``: None or ``["all"]`` = every IMU topic of each bag (a bag that cannot be listed still becomes one
+    unit, which will fail with the reader's message); otherwise those topics, in every bag.
+    """
+    entries = [(p, None) for p in inputs] + (read_manifest(manifest) if manifest is not None else [])
+    if not entries:
+        raise InputError("no bags given: pass BAG_OR_GLOB arguments or --manifest FILE")
+    units: dict[str, Unit] = {}
+    for pattern, own_topics in entries:
+        for bag in _expand(pattern):
+            wanted = own_topics or (None if topics in (None, ["all"]) else topics)
+            if wanted is None:
+                try:
+                    wanted = imu_topics(bag) or [None]
+                except InputError:
+                    wanted = [None]
+            for topic in wanted:
+                unit = Unit(bag.resolve(), topic, _unit_name(bag, topic if len(wanted) > 1 else None))
+                if unit.name in units and units[unit.name].bag != unit.bag:
+                    unit = Unit(unit.bag, topic, f"{unit.name}_{hashlib.sha1(str(unit.bag).encode()).hexdigest()[:6]}")
+                units[unit.name] = unit
+    return list(units.values())
+
+
+def content_hash(unit: Unit, options: dict) -> str:
+    """SHA-256 of the bag's bytes (every file of a rosbag2 directory), the topic and the options."""
+    h = hashlib.sha256()
+    files = sorted(p for p in unit.bag.rglob("*") if p.is_file()) if unit.bag.is_dir() else [unit.bag]
+    for f in files:
+        h.update(str(f.relative_to(unit.bag) if unit.bag.is_dir() else f.name).encode())
+        with f.open("rb") as fh:
+            for chunk in iter(lambda fh=fh: fh.read(1 << 20), b""):
+                h.update(chunk)
+    h.update(json.dumps({"topic": unit.topic, "options": options}, sort_keys=True).encode())
+    return h.hexdigest()

@@ -1,0 +1,100 @@
+"""``imu-noise-id batch BAG_OR_GLOB…``: ``analyze`` over many bags and IMU topics on Dask, with a fleet table.
+
+Parses the options and calls :mod:`imu_noise_id.batch` (units, a local or remote Dask cluster) and
+:mod:`imu_noise_id.report.fleet` (table and report).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+DEFAULT_OUT = "imu_noise_id_batch"
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``batch`` parser."""
+    p = subparsers.add_parser(
+        "batch", help="analyze many bags / IMU topics on a Dask cluster, with a fleet table and report",
+        description=(
+            "Run the analyze pipeline on every (bag, IMU topic) unit of the inputs on Dask: a local cluster of "
+            "worker processes on 127.0.0.1 by default, or an existing one with --scheduler. Each unit's outputs "
+            "land in DIR/<unit>/ as analyze writes them; DIR/fleet.csv and DIR/fleet.parquet hold one row per unit "
+            "and axis (N, K, bias instability with 95 %% intervals, model, loop verdict, warnings, error); "
+            "DIR/fleet_report.html shows their spread, robust outliers and the pass/fail against --spec. A failed "
+            "unit is recorded and the batch goes on; rerunning the same command skips units whose bag contents and "
+            "options are unchanged."),
+    )
+    p.add_argument("inputs", nargs="*", metavar="BAG_OR_GLOB", help="bags, rosbag2 folders or glob patterns")
+    p.add_argument("--manifest", type=Path, help="YAML (bags: [{path, topics}]) or text file (one path per line)")
+    p.add_argument("--topics", nargs="+", default=["all"],
+                   help="IMU topics to analyse in every bag (default: all sensor_msgs/Imu topics of each bag)")
+    p.add_argument("--spec", type=Path,
+                   help="datasheet limits, YAML: {gyro: {noise_density: …, random_walk: …, bias_instability: …}, "
+                        "accel: {…}} (SI units, the largest allowed values)")
+    p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
+    p.add_argument("--workers", type=int, default=2, help="local cluster: worker processes (default: 2)")
+    p.add_argument("--memory-limit", default="4GiB", help="local cluster: memory limit per worker (default: 4GiB)")
+    p.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    p.add_argument("--model", default="auto", help="model stage as for analyze: auto, a structure, or none")
+    p.add_argument("--no-loop", action="store_true", help="skip the closed loop (as for analyze)")
+    p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade (default: 8)")
+    p.add_argument("--allow-motion", action="store_true", help="analyse even if the static check finds motion")
+    p.set_defaults(run=run)
+
+
+def _spec(path: Path | None) -> dict | None:
+    import yaml
+
+    from ..core.errors import InputError
+
+    if path is None:
+        return None
+    try:
+        doc = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise InputError(f"--spec {str(path)!r}: cannot read it ({exc})") from None
+    ok = isinstance(doc, dict) and all(
+        k in ("gyro", "accel") and isinstance(v, dict) and all(
+            p in ("noise_density", "random_walk", "bias_instability") and isinstance(x, int | float) and x > 0
+            for p, x in v.items()) for k, v in doc.items())
+    if not ok:
+        raise InputError(f"--spec {str(path)!r}: expected {{gyro: {{noise_density: …, random_walk: …, "
+                         "bias_instability: …}, accel: {…}}} with positive numbers in SI units")
+    return doc
+
+
+def run(args: argparse.Namespace) -> int:
+    """Discover the units, run them on Dask, write the fleet table and report."""
+    from ..batch import BatchProgress, discover_units, open_client, run_batch
+    from ..core.errors import InputError
+    from ..core.noise.modelspec import parse_structure
+    from ..report.fleet import annotate, write_fleet_report, write_tables
+
+    if args.workers < 1:
+        raise InputError(f"--workers must be >= 1, got {args.workers}")
+    if args.model not in ("auto", "none"):
+        parse_structure(args.model)
+    spec = _spec(args.spec)
+    units = discover_units(list(args.inputs), list(args.topics), args.manifest)
+    options = {"model": args.model, "loop": not args.no_loop, "per_decade": args.per_decade,
+               "allow_motion": args.allow_motion}
+    where = args.scheduler or f"a local cluster of {args.workers} workers on 127.0.0.1"
+    print(f"{len(units)} units on {where}", flush=True)
+
+    def progress(p: BatchProgress) -> None:
+        print(f"  {p.done + p.skipped}/{p.total} units ({p.failed} failed, {p.skipped} unchanged and skipped), "
+              f"~{p.left_s:.0f} s left [{p.elapsed_s:.0f} s]", flush=True)
+
+    with open_client(args.scheduler, args.workers, args.memory_limit) as client:
+        result = run_batch(units, options, args.out, client, progress=progress)
+    rows = annotate(result.rows, spec)
+    paths = [*write_tables(rows, args.out),
+             write_fleet_report(rows, args.out, title=f"IMU fleet: {len(units)} units", spec=spec)]
+    failed = [o for o in result.outcomes if o.status == "failed"]
+    for o in failed:
+        print(f"failed: {o.name}: {o.error}", file=sys.stderr)
+    print(f"{len(units) - len(failed)} of {len(units)} units done in {result.seconds:.0f} s; "
+          + ", ".join(str(p) for p in paths))
+    return 0

@@ -1,0 +1,124 @@
+"""The fleet table (CSV and Parquet: one row per unit and axis) and the fleet report (HTML, self-contained).
+
+Outliers and the specification verdicts are computed by :mod:`imu_noise_id.core.fleet`; files are written to a
+temporary name and renamed, so a reader never sees half a table.
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import io
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..core.fleet import OUTLIER_Z, modified_z, spec_verdict
+from .html import STYLE, fmt, img_tag
+
+PARAMETERS = ("noise_density", "random_walk", "bias_instability")
+COLUMNS = ("unit", "bag", "topic", "axis", "status", "error", "model", "noise_density", "noise_density_lo",
+           "noise_density_hi", "random_walk", "random_walk_lo", "random_walk_hi", "bias_instability",
+           "bias_instability_lo", "bias_instability_hi", "source", "loop_passed", "loop_verdict", "rate_hz",
+           "duration_s", "warnings", "noise_density_z", "random_walk_z", "bias_instability_z", "outlier",
+           "spec", "spec_margin")
+
+
+def annotate(rows: list[dict], spec: dict | None) -> list[dict]:
+    """The rows with the modified z of each parameter within its axis, the outlier flag and the spec verdict."""
+    out = [dict(r) for r in rows]
+    for axis in sorted({r["axis"] for r in out if r.get("axis")}):
+        same = [r for r in out if r.get("axis") == axis and r.get("status") != "failed"]
+        for p in PARAMETERS:
+            z = modified_z(np.array([r.get(p) if r.get(p) is not None else np.nan for r in same], dtype=float))
+            for r, zi in zip(same, z, strict=True):
+                r[f"{p}_z"] = None if not math.isfinite(zi) else float(zi)
+    for r in out:
+        flagged = [p for p in PARAMETERS if r.get(f"{p}_z") is not None and abs(r[f"{p}_z"]) > OUTLIER_Z]
+        r["outlier"] = ",".join(flagged)
+        limits = (spec or {}).get((r.get("axis") or "").split("_")[0], {})
+        verdicts = [(p, *spec_verdict(r.get(p), r.get(f"{p}_hi"), float(limit))) for p, limit in limits.items()]
+        if verdicts:
+            order = {"fail": 0, "undecided": 1, "missing": 2, "pass": 3}
+            worst = min(verdicts, key=lambda v: order[v[1]])
+            r["spec"] = worst[1] if worst[1] == "pass" else f"{worst[1]} ({worst[0]})"
+            r["spec_margin"] = min((v[2] for v in verdicts if math.isfinite(v[2])), default=None)
+    return out
+
+
+def _atomic(path: Path, data: bytes) -> Path:
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_bytes(data)
+    os.replace(tmp, path)
+    return path
+
+
+def write_tables(rows: list[dict], out: Path) -> list[Path]:
+    """``fleet.csv`` and ``fleet.parquet`` (columns :data:`COLUMNS`)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=COLUMNS, extrasaction="ignore")
+    writer.writeheader()
+    writer.writerows({c: r.get(c) for c in COLUMNS} for r in rows)
+    csv_path = _atomic(out / "fleet.csv", buf.getvalue().encode())
+    table = pa.table({c: pa.array([r.get(c) for r in rows], type=pa.float64() if c.endswith(
+        ("density", "_lo", "_hi", "_walk", "instability", "_z", "margin", "rate_hz", "duration_s")) else pa.string())
+        if c not in ("loop_passed",) else pa.array([r.get(c) for r in rows], type=pa.bool_()) for c in COLUMNS})
+    sink = pa.BufferOutputStream()
+    pq.write_table(table, sink)
+    return [csv_path, _atomic(out / "fleet.parquet", sink.getvalue().to_pybytes())]
+
+
+def _spread_png(rows: list[dict], parameter: str) -> bytes:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    axes = sorted({r["axis"] for r in rows if r.get("axis")})
+    fig, ax = plt.subplots(figsize=(7.5, 3.6))
+    for i, axis in enumerate(axes):
+        vals = [(r.get(parameter), bool(r.get("outlier") and parameter in r["outlier"])) for r in rows
+                if r.get("axis") == axis and r.get(parameter)]
+        x = np.full(len(vals), i) + np.linspace(-0.15, 0.15, len(vals)) if vals else []
+        ax.scatter(x, [v for v, _ in vals], c=["C3" if o else "C0" for _, o in vals], s=18)
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(axes)), axes, fontsize=8)
+    ax.set_title(f"{parameter} across units (red: outlier, |modified z| > {OUTLIER_Z})", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def write_fleet_report(rows: list[dict], out: Path, *, title: str, spec: dict | None) -> Path:
+    """``fleet_report.html``: counts, spread plots of N, K and B per axis, outliers, spec verdicts, failures."""
+    ok = [r for r in rows if r.get("status") != "failed"]
+    failed = [r for r in rows if r.get("status") == "failed"]
+    units = sorted({r["unit"] for r in rows})
+    parts = [f"<p>{len(units)} units, {len({r['unit'] for r in failed})} failed; {len(ok)} axis rows.</p>"]
+    parts += [img_tag(_spread_png(ok, p), f"spread of {p}") for p in PARAMETERS if any(r.get(p) for r in ok)]
+    flagged = [r for r in ok if r.get("outlier")]
+    items = "".join(f"<li>{html.escape(r['unit'])} {r['axis']}: {r['outlier']} (z = " + ", ".join(
+        f"{fmt(r[p + '_z'], '.2f')}" for p in r["outlier"].split(",")) + ")</li>" for r in flagged) or "<li>none</li>"
+    parts.append(f"<h2>Outliers</h2><ul>{items}</ul>")
+    if spec:
+        head = "<tr><th class=l>unit</th><th class=l>axis</th><th class=l>verdict</th><th>margin</th></tr>"
+        body = "".join(f"<tr><td class=l>{html.escape(r['unit'])}</td><td class=l>{r['axis']}</td>"
+                       f"<td class=l>{html.escape(str(r.get('spec', '')))}</td>"
+                       f"<td>{fmt(r['spec_margin'], '.2f') if r.get('spec_margin') is not None else ''}</td></tr>"
+                       for r in ok)
+        parts.append(f"<h2>Against the specification</h2><p class=small>{html.escape(str(spec))}; margin = "
+                     f"spec/value − 1</p><table>{head}{body}</table>")
+    if failed:
+        items = "".join(f"<li>{html.escape(r['unit'])}: {html.escape(r.get('error', ''))}</li>" for r in failed)
+        parts.append(f"<h2>Failed units</h2><ul>{items}</ul>")
+    text = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+            f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>{''.join(parts)}</body></html>")
+    return _atomic(out / "fleet_report.html", text.encode())

@@ -1,0 +1,107 @@
+"""``imu-noise-id batch`` on a real ``dask.distributed`` local cluster bound to 127.0.0.1 (issue 15)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+
+import pytest
+import yaml
+
+from imu_noise_id.batch import discover_units, open_client, run_batch
+from imu_noise_id.cli import main
+
+OPTIONS = {"model": "WN+RW", "loop": False, "per_decade": 8, "allow_motion": False}
+DENSITIES = (1e-3, 2e-3, 4e-3)
+
+
+@pytest.fixture(scope="module")
+def bags(tmp_path_factory):
+    """Three simulated static bags with known, different gyro noise densities, and a corrupt one."""
+    folder = tmp_path_factory.mktemp("fleet")
+    for i, n in enumerate(DENSITIES):
+        assert main(["simulate", "--model", f"gyro: WN({n})+RW(2e-5); accel: WN(2e-3)+RW(3e-4)", "--rate", "100",
+                     "--duration", "120", "--out", str(folder / f"imu{i}"), "--seed", str(i)]) == 0
+    (folder / "broken.mcap").write_bytes(b"not a bag at all")
+    return folder
+
+
+@pytest.fixture(scope="module")
+def client():
+    with open_client(None, workers=2, memory_limit="2GiB") as c:
+        assert all(addr.startswith("tcp://127.0.0.1:") for addr in c.scheduler_info()["workers"])
+        yield c
+
+
+def test_units_equal_analyze_and_a_corrupt_bag_is_one_failed_row(bags, client, tmp_path):
+    units = discover_units([str(bags / "*")], None)
+    result = run_batch(units, OPTIONS, tmp_path, client)
+    status = {o.name: o.status for o in result.outcomes}
+    assert status == {"broken": "failed", "imu0": "ok", "imu1": "ok", "imu2": "ok"}
+    broken = next(o for o in result.outcomes if o.name == "broken")
+    assert "broken.mcap" in broken.error and broken.rows[0]["status"] == "failed"
+    # each unit's numbers are analyze's on the same bag, with the same options
+    assert main(["analyze", str(bags / "imu1"), "--out", str(tmp_path / "direct"), "--model", "WN+RW",
+                 "--no-loop"]) == 0
+    direct = yaml.safe_load((tmp_path / "direct" / "imu.yaml").read_text())
+    rows = {r["axis"]: r for r in result.rows if r["unit"] == "imu1"}
+    assert [rows[a]["noise_density"] for a in ("gyro_x", "gyro_y", "gyro_z")] == pytest.approx(
+        direct["gyroscope_noise_density_xyz"], rel=1e-5)
+    assert rows["gyro_x"]["noise_density"] == pytest.approx(DENSITIES[1], rel=0.05)
+    # the unit's own imu.yaml is analyze's: the same numbers to the optimiser's tolerance (a worker's one-thread
+    # BLAS sums in another order, which moves a random walk on a flat likelihood within its interval)
+    unit_doc = yaml.safe_load((tmp_path / "imu1" / "imu.yaml").read_text())
+    for key in ("gyroscope_noise_density_xyz", "accelerometer_noise_density_xyz"):
+        assert unit_doc[key] == pytest.approx(direct[key], rel=1e-4)
+    for key in ("gyroscope_random_walk", "accelerometer_random_walk"):
+        for value, (lo, hi) in zip(unit_doc[f"{key}_xyz"], direct[f"{key}_ci_xyz"], strict=True):
+            assert lo <= value <= hi
+    # a second run skips the finished units and retries the failed one
+    again = run_batch(units, OPTIONS, tmp_path, client)
+    assert {o.name: o.status for o in again.outcomes} == {"broken": "failed", "imu0": "skipped", "imu1": "skipped",
+                                                           "imu2": "skipped"}
+    assert [r for r in again.rows if r["unit"] == "imu0"] == [r for r in result.rows if r["unit"] == "imu0"]
+
+
+def test_a_worker_killed_mid_run_still_yields_the_complete_table(bags, client, tmp_path):
+    units = discover_units([str(bags / "imu*")], None)
+    pids = client.run(os.getpid)
+    killed = []
+
+    def kill_a_busy_worker() -> None:
+        deadline = time.time() + 60
+        while time.time() < deadline and not killed:
+            busy = [addr for addr, tasks in client.processing().items() if tasks]
+            if busy:
+                os.kill(pids[busy[0]], signal.SIGKILL)
+                killed.append(busy[0])
+            time.sleep(0.05)
+
+    thread = threading.Thread(target=kill_a_busy_worker)
+    thread.start()
+    result = run_batch(units, OPTIONS, tmp_path, client)
+    thread.join()
+    assert killed, "no worker was busy to be killed"
+    assert [o.status for o in result.outcomes] == ["ok", "ok", "ok"]
+    assert len(result.rows) == 3 * 6 and all(r["noise_density"] > 0 for r in result.rows)
+
+
+def test_batch_command_writes_the_fleet_table_and_report(bags, tmp_path, capsys):
+    spec = tmp_path / "spec.yaml"
+    spec.write_text("gyro: {noise_density: 3.0e-3}\naccel: {noise_density: 1.0e-2}\n")
+    out = tmp_path / "out"
+    assert main(["batch", str(bags / "imu*"), "--out", str(out), "--model", "WN+RW", "--no-loop", "--spec",
+                 str(spec), "--workers", "1"]) == 0
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(out / "fleet.parquet").to_pylist()
+    assert len(table) == 18 and {r["unit"] for r in table} == {"imu0", "imu1", "imu2"}
+    verdicts = {r["unit"]: r["spec"] for r in table if r["axis"] == "gyro_x"}
+    assert verdicts["imu0"] == "pass" and verdicts["imu2"].startswith("fail")
+    assert (out / "fleet.csv").read_text().count("\n") == 19
+    report = (out / "fleet_report.html").read_text()
+    assert "Against the specification" in report and report.count("data:image/png;base64,") >= 2
+    assert "3 of 3 units done" in capsys.readouterr().out
+    assert main(["batch", str(tmp_path / "nothing*"), "--out", str(out)]) == 2
