@@ -24,7 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "confidence intervals, read the white-noise density (-1/2 slope at tau = 1 s) and random walk (+1/2 "
             "slope at tau = 3 s), and write DIR/imu.yaml (Kalibr format), DIR/allan.csv (+ hadamard.csv, total.csv, "
             "modified.csv) and DIR/allan.png; then fit error models per axis with the constrained EM algorithm "
-            "(model selection by BIC, 95 %% confidence intervals, recording-length advice: DIR/model.yaml) and "
+            "(model selection by BIC, 95 percent confidence intervals, recording-length advice: DIR/model.yaml) and "
             "close the loop on the residuals (DIR/report.html). The IMU must be at rest for the whole recording."
         ),
     )

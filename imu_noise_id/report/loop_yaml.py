@@ -38,7 +38,7 @@ def step_to_dict(step: LoopStep) -> dict:
         "dropped": list(step.dropped),
         "how": None if step.added is None else HOW.get(step.added, "state-space component"),
         "evidence": step.evidence,
-        "error": {"loglik": num(e.loglik), "bic": num(e.bic), "av_misfit": num(e.av_misfit),
+        "error": {"loglik": float(e.loglik), "bic": float(e.bic), "av_misfit": num(e.av_misfit),
                   "ljung_box_p": num(e.ljung_box_p), "peak_ratio": num(e.peak_ratio),
                   "peak_frequency": num(e.peak_frequency)},
         "components": [{"type": c.name, **{k: num(v) for k, v in c.params().items()}}

@@ -11,7 +11,7 @@ Per axis (``gyro_x`` … ``accel_z``)::
       - {type: GM, tau: …, sigma: …, se: {tau: …, sigma: …}, ci95: {tau: […], sigma: […]},
          beta: …, sigma2_gm: …, phi: …, sigma2_drive: …}
     mean: {bias: {value, se, ci95}, ramp: {…}, <exog>: {…}}                       # u, u/s, …
-    loglik: …   aic: …   bic: …   n_params: …   converged: …
+    loglik: …   aic: …   bic: …   n_params: …   converged: …                    # full precision (docs/em.md)
     candidates: [{model, loglik, k, aic, bic, delta_bic, weight_bic}, …]          # when selected
     record_length: {target, level, current_s, parameters: {label: {needed_s, needed_h, relative_halfwidth,
                     reliable}}}
@@ -41,7 +41,7 @@ from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
 from ..pipelines.loop import LoopResult
 from .loop_yaml import loop_to_dict
-from .numbers import num
+from .numbers import num, num_key
 
 
 def _component_entry(fit: FitResult, index: int) -> dict:
@@ -78,11 +78,11 @@ def fit_to_dict(fit: FitResult, axis: str | None = None, selection: SelectionRes
         for k, v in fit.exog_coef.items()
     }
     out.update({
-        "loglik": num(fit.loglik), "aic": num(fit.aic), "bic": num(fit.bic), "n_params": int(fit.n_params),
+        "loglik": float(fit.loglik), "aic": float(fit.aic), "bic": float(fit.bic), "n_params": int(fit.n_params),
         "converged": bool(fit.converged), "information_ok": bool(fit.information_ok),
     })
     if selection is not None:
-        out["candidates"] = [{k: (num(v) if isinstance(v, float) else v) for k, v in row.items()}
+        out["candidates"] = [{k: (num_key(k, v) if isinstance(v, float) else v) for k, v in row.items()}
                              for row in selection.table]
     if fit.record_length is not None:
         rl = fit.record_length

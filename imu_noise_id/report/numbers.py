@@ -12,3 +12,13 @@ def num(x: float) -> float:
     """A plain float with :data:`DIGITS` significant digits (inf and NaN kept; YAML writes them as .inf/.nan)."""
     x = float(x)
     return x if not math.isfinite(x) else float(f"{x:.{DIGITS}g}")
+
+
+#: Keys written at full precision: log-likelihoods and the criteria built from them differ in the 7th digit or
+#: later between candidates fitted to a million samples, and a reader must be able to check the selection.
+FULL_PRECISION = frozenset({"loglik", "aic", "bic", "delta_bic", "delta_aic"})
+
+
+def num_key(key: str, x: float) -> float:
+    """:func:`num`, except for the :data:`FULL_PRECISION` keys (written as the float they are)."""
+    return float(x) if key in FULL_PRECISION else num(x)
