@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+from pathlib import Path
 
 from ..core.errors import InputError
 
@@ -15,6 +17,29 @@ from ..core.errors import InputError
 COMMANDS: tuple[str, ...] = (
     "analyze", "batch", "fit", "loop", "simulate", "inspect", "identify", "criteria", "cmkf", "play", "monitor",
 )
+
+
+#: Commands whose ``--out`` is a directory they write into (``simulate``'s is the bag it writes).
+DIRECTORY_OUTPUT = frozenset({"analyze", "batch", "cmkf", "criteria", "fit", "identify", "loop"})
+
+
+def check_output_dir(path: Path) -> None:
+    """Create ``--out`` now, before any work, or say why it cannot be used.
+
+    Raises
+    ------
+    InputError
+        ``path`` is a file, cannot be created, or is not writable.
+    """
+    if path.exists() and not path.is_dir():
+        raise InputError(f"--out {str(path)!r} is a file, not a directory: give a directory to write the results into")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--out {str(path)!r} cannot be created ({exc.strerror or exc}): choose another "
+                         "directory") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise InputError(f"--out {str(path)!r} is not writable: choose another directory")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -34,10 +59,15 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        if args.command in DIRECTORY_OUTPUT:
+            check_output_dir(Path(args.out))
         return int(args.run(args) or 0)
     except InputError as exc:
         print(f"imu-noise-id {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # e.g. `imu-noise-id simulate … | head`: the reader left, the work is done
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except KeyboardInterrupt:
         print(f"imu-noise-id {args.command}: interrupted", file=sys.stderr)
         return 130

@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
+
+#: Bounds that keep a run within a machine's memory and a day (the paper's cases use 500 trials of 2000 s).
+MAX_TRIALS = 100_000
+MAX_SAMPLES = 1e7
 
 
 def register(subparsers: Any) -> None:
@@ -38,10 +43,13 @@ def run(args: argparse.Namespace) -> int:
     from ..core.hypotheses.criteria import paper_case, run_criteria
     from ..report.criteria_json import write_criteria_json
 
-    if args.trials < 2:
-        raise InputError(f"--trials must be >= 2, got {args.trials}")
-    if not args.duration > 0 or not args.dt > 0:
-        raise InputError("--duration and --dt must be > 0 s")
+    if not 2 <= args.trials <= MAX_TRIALS:
+        raise InputError(f"--trials must be between 2 and {MAX_TRIALS}, got {args.trials}")
+    if not (math.isfinite(args.duration) and math.isfinite(args.dt) and args.duration > 0 and args.dt > 0):
+        raise InputError("--duration and --dt must be finite and > 0 s")
+    if args.duration / args.dt > MAX_SAMPLES:
+        raise InputError(f"--duration / --dt = {args.duration / args.dt:.3g} samples per trial: at most "
+                         f"{MAX_SAMPLES:g}; shorten --duration or raise --dt")
     hset = paper_case(args.case, dt=args.dt, bias_sigma=args.bias_sigma)
     result = run_criteria(hset, args.duration, args.trials, seed=args.seed, case=str(args.case))
     out = Path(args.out)

@@ -27,12 +27,15 @@ import math
 
 import numpy as np
 
+#: No IMU parameter comes near this; beyond it squares and products overflow.
+ABSURD = 1e100
+
 
 def _check_positive(name: str, value: float, allow_zero: bool = True) -> float:
     value = float(value)
-    if not math.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
+    if not math.isfinite(value) or value < 0 or (value == 0 and not allow_zero) or value > ABSURD:
         need = "≥ 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} must be a finite number {need}, got {value!r}")
+        raise ValueError(f"{name} must be a finite number {need} and at most {ABSURD:g}, got {value!r}")
     return value
 
 
