@@ -41,3 +41,15 @@ def test_a_closed_pipe_is_not_a_traceback(tmp_path):
     assert proc.wait(timeout=60) == 0
     assert b"Traceback" not in proc.stderr.read()
     assert (tmp_path / "bag").exists()
+
+
+def test_missing_topic_messages_name_the_right_option_and_example(tmp_path, capsys):
+    """cmkf said "Pass --topic" while its option was --imu-topic, and "Record the Odometry topic (e.g. /imu/data)"."""
+    assert main(["simulate", "--model", "gyro: WN(1e-3); accel: WN(1e-3)", "--rate", "100", "--duration", "2",
+                 "--out", str(tmp_path / "bag")]) == 0
+    capsys.readouterr()
+    assert main(["cmkf", str(tmp_path / "bag"), "--topic", "/nope", "--out", str(tmp_path / "o")]) == 2
+    assert "Pass --topic" in capsys.readouterr().err  # and --topic is an option of cmkf
+    assert main(["cmkf", str(tmp_path / "bag"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "Odometry" in err and "/odom" in err and "/imu/data)" not in err

@@ -18,6 +18,7 @@ TEMPERATURE_TYPE = "sensor_msgs/msg/Temperature"
 
 WHAT = {IMU_TYPE: "Imu", ODOM_TYPE: "Odometry", TEMPERATURE_TYPE: "Temperature"}
 FLAG = {IMU_TYPE: "--topic", ODOM_TYPE: "--odom-topic", TEMPERATURE_TYPE: "--temperature-topic"}
+EXAMPLE = {IMU_TYPE: "/imu/data", ODOM_TYPE: "/odom", TEMPERATURE_TYPE: "/imu/temperature"}
 
 REPAIR_HINT = (
     "The file is empty, truncated or corrupt (e.g. the recorder was killed): re-record it, or repair it with "
@@ -119,6 +120,6 @@ def select_topic(
     if required:
         raise BagError(
             f"no {msgtype} topic in {where}; its topics are: {listing(topics)}. "
-            f"Record the {what} topic (e.g. /imu/data) or read another bag"
+            f"Record the {what} topic (e.g. {EXAMPLE[msgtype]}) or read another bag"
         )
     return None

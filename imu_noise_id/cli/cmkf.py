@@ -41,7 +41,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("bag", type=Path, metavar="BAG", help="ROS 1 .bag, rosbag2 directory, .db3 or .mcap")
-    p.add_argument("--imu-topic", default=None, metavar="T", help="sensor_msgs/Imu topic (needed if several)")
+    p.add_argument("--topic", "--imu-topic", dest="imu_topic", default=None, metavar="T",
+                   help="sensor_msgs/Imu topic (needed if several; --imu-topic is the same option)")
     p.add_argument("--odom-topic", default=None, metavar="T", help="nav_msgs/Odometry topic (needed if several)")
     p.add_argument("--out", type=Path, default=Path("cmkf_out"), metavar="DIR", help="output directory (cmkf_out)")
     p.add_argument(
