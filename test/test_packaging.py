@@ -77,3 +77,23 @@ def test_resource_files_are_installed(built_workspace):
     configs = sorted(p.name for p in (REPO_ROOT / PACKAGE / "config").glob("*.yaml"))
     assert configs == ["hypotheses_default.yaml", "imu_noise_id.yaml"]
     assert sorted(p.name for p in (share / "config").glob("*.yaml")) == configs
+
+
+def test_a_plain_wheel_carries_the_default_config_files(tmp_path):
+    """`pip install .` (not editable) must let identify and the node find their YAML files (issue 13)."""
+    import zipfile
+
+    proc = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
+                           str(tmp_path), str(REPO_ROOT)], capture_output=True, text=True, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    wheel = next(tmp_path.glob(f"{PACKAGE}-*.whl"))
+    names = zipfile.ZipFile(wheel).namelist()
+    assert f"{PACKAGE}/config/hypotheses_default.yaml" in names and f"{PACKAGE}/config/imu_noise_id.yaml" in names
+    site = tmp_path / "site"
+    zipfile.ZipFile(wheel).extractall(site)
+    code = ("from imu_noise_id.resources import read_hypotheses_file; data, source = read_hypotheses_file(None); "
+            "print(source); assert data")
+    run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(site)},
+                         capture_output=True, text=True, timeout=60, check=False)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip().startswith(str(site))
