@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from ...core.quality import IMU_MAX_ABS
 from .bank import BankFeed
 from .cmkf_feed import CmkfFeed
 from .config import OnlineConfig
@@ -121,8 +122,14 @@ class OnlineIdentifier:
         :meth:`pop_events` and the diagnostics).
         """
         sample = np.array((*gyro, *accel), dtype=float)
-        verdict = self.imu.receive(t, bool(np.isfinite(sample).all()), frame_id, wall_time,
-                                   "angular rate or acceleration")
+        # The offline reader's physical limits (|ω| ≤ 1e3 rad/s, |a| ≤ 1e4 m/s²): one absurd sample must not
+        # become a bias that lasts for the filters' correlation time.
+        with np.errstate(invalid="ignore"):
+            usable = bool(np.isfinite(sample).all() and np.abs(sample[:3]).max() <= IMU_MAX_ABS[0]
+                          and np.abs(sample[3:]).max() <= IMU_MAX_ABS[1])
+        verdict = self.imu.receive(t, usable, frame_id, wall_time,
+                                   f"or implausible angular rate or acceleration (limits {IMU_MAX_ABS[0]:g} rad/s, "
+                                   f"{IMU_MAX_ABS[1]:g} m/s²)")
         if verdict is None:
             return None
         if verdict == "restart":

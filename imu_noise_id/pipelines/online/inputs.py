@@ -32,18 +32,26 @@ class StampChecker:
     """Header-stamp checks for one input stream.
 
     ``check(t)`` returns ``"ok"``, ``"gap"`` (accepted, after a period longer than ``gap_factor`` × the
-    nominal period), ``"restart"`` (accepted: ``backward_reset_count`` consecutive backward stamps mean the
-    source restarted), or the reason for rejecting the message: ``"bad_stamp"`` (zero or not finite),
-    ``"duplicate"`` or ``"backward"``.
+    nominal period), ``"relearn"`` (accepted: :data:`RELEARN_COUNT` gaps in a row of nearly equal length are the
+    new rate, not gaps — a rate change, or a nominal period learnt from a burst or a first interval of a
+    microsecond), ``"restart"`` (accepted: ``backward_reset_count`` consecutive backward stamps mean the source
+    restarted), or the reason for rejecting the message: ``"bad_stamp"`` (zero or not finite), ``"duplicate"`` or
+    ``"backward"``.
     """
+
+    #: Consecutive gaps of nearly equal length (within a factor :data:`RELEARN_SPREAD`) that set a new period.
+    RELEARN_COUNT = 10
+    RELEARN_SPREAD = 2.0
 
     gap_factor: float = 10.0
     backward_reset_count: int = 50
     last: float | None = None
     period: float | None = None
     consecutive_backward: int = 0
+    gap_run: list[float] = field(default_factory=list)
     counts: dict[str, int] = field(
-        default_factory=lambda: dict.fromkeys(("ok", "gap", "restart", "bad_stamp", "duplicate", "backward"), 0)
+        default_factory=lambda: dict.fromkeys(("ok", "gap", "relearn", "restart", "bad_stamp", "duplicate",
+                                               "backward"), 0)
     )
 
     def check(self, t: float) -> str:
@@ -76,7 +84,16 @@ class StampChecker:
             self.period = dt
             return "ok"
         if dt > self.gap_factor * period:
-            return "gap"
+            self.gap_run.append(dt)
+            if len(self.gap_run) < self.RELEARN_COUNT:
+                return "gap"
+            run = self.gap_run[-self.RELEARN_COUNT:]
+            if max(run) > self.RELEARN_SPREAD * min(run):
+                return "gap"
+            self.period = float(sorted(run)[len(run) // 2])
+            self.gap_run.clear()
+            return "relearn"
+        self.gap_run.clear()
         self.period = period + 0.01 * (dt - period)
         return "ok"
 
@@ -113,7 +130,8 @@ class Input:
     def receive(self, t: float, finite: bool, frame_id: str, wall_time: float | None, nonfinite: str) -> str | None:
         """Book-keeping and checks of one message stamped ``t`` [s] that arrived at ``wall_time`` (steady clock).
 
-        ``finite`` says whether its values are all finite; ``nonfinite`` names what is not, for the event.
+        ``finite`` says whether its values are all finite and plausible; ``nonfinite`` names what is not, for the
+        event.
         Returns the stamp verdict of an accepted message (``ok``, ``gap``, ``restart``), or None when the message
         is rejected (non-finite values, zero, non-finite, duplicated or backward stamp), counted and reported.
         """
@@ -137,6 +155,9 @@ class Input:
             self._events.count(key)
             if verdict == "gap":
                 self._events.event(key, f"{what}: gap in header stamps before t = {t:.6f} s")
+            elif verdict == "relearn":
+                self._events.event(key, f"{what}: {self.stamps.RELEARN_COUNT} equal gaps in a row: the rate is "
+                                        f"now {self.stamps.rate:.4g} Hz")
             elif verdict == "restart":
                 self._events.event(key, f"{what}: stamps jumped back to t = {t:.6f} s and stayed there: restarting")
             else:

@@ -1,0 +1,54 @@
+"""The node's input checks must not be poisoned or locked by one bad message (issue 12, node part)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core.quality import IMU_MAX_ABS
+from imu_noise_id.pipelines.online import OnlineIdentifier
+from imu_noise_id.pipelines.online.inputs import StampChecker
+
+
+@pytest.mark.parametrize("absurd", [1e10, 1e300, -3.5e3])
+def test_an_absurd_but_finite_sample_is_rejected_like_the_offline_reader_does(absurd):
+    ident = OnlineIdentifier()
+    rng = np.random.default_rng(0)
+    for k in range(200):
+        ident.process_imu(0.01 * (k + 1), tuple(rng.normal(0, 1e-3, 3)), (0.0, 0.0, 9.81 + rng.normal(0, 1e-2)))
+    accepted = ident.imu.stats.accepted
+    assert ident.process_imu(2.01, (absurd, 0.0, 0.0), (0.0, 0.0, 9.81)) is None
+    assert ident.process_imu(2.02, (0.0, 0.0, 0.0), (0.0, 0.0, 1e5)) is None
+    assert ident.imu.stats.accepted == accepted and ident.imu.stats.rejected_values == 2
+    assert abs(absurd) > IMU_MAX_ABS[0]
+    # and the stream goes on
+    assert ident.process_imu(2.03, (0.0, 0.0, 0.0), (0.0, 0.0, 9.81)) is not None
+
+
+def _verdicts(checker: StampChecker, stamps) -> list[str]:
+    return [checker.check(t) for t in stamps]
+
+
+def test_a_tiny_first_interval_does_not_make_every_later_message_a_gap():
+    """Host-stamped serial drivers: the first two messages 1 µs apart, then 100 Hz."""
+    c = StampChecker(gap_factor=10.0)
+    stamps = [1.0, 1.000001, *(1.000001 + 0.01 * np.arange(1, 300))]
+    v = _verdicts(c, stamps)
+    assert v[-100:] == ["ok"] * 100, v[:40]
+    assert v.count("gap") <= StampChecker.RELEARN_COUNT
+    assert c.rate == pytest.approx(100.0, rel=0.05)
+
+
+def test_a_rate_drop_is_relearned():
+    c = StampChecker(gap_factor=10.0)
+    stamps = [*(0.01 * np.arange(1, 200)), *(2.0 + 0.2 * np.arange(1, 100))]  # 100 Hz, then 5 Hz
+    v = _verdicts(c, stamps)
+    assert v[-50:] == ["ok"] * 50 and c.rate == pytest.approx(5.0, rel=0.05)
+
+
+def test_a_single_gap_is_still_a_gap():
+    c = StampChecker(gap_factor=10.0)
+    v = _verdicts(c, [*(0.01 * np.arange(1, 100)), 5.0, *(5.0 + 0.01 * np.arange(1, 50))])
+    assert v.count("gap") == 1 and c.rate == pytest.approx(100.0, rel=0.01) and not math.isnan(c.rate)
