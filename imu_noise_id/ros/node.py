@@ -11,6 +11,7 @@ on the steady clock, so they work with ``use_sim_time`` and no ``/clock`` publis
 
 from __future__ import annotations
 
+import difflib
 import math
 import sys
 import time
@@ -75,6 +76,7 @@ class ImuNoiseIdNode(Node):
 
     def __init__(self, node_name: str = NODE_NAME, **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        self._accept_integer_overrides()
         values = {}
         for spec in PARAMETERS:
             try:
@@ -117,6 +119,21 @@ class ImuNoiseIdNode(Node):
         )
 
     # -- parameters -------------------------------------------------------------------------------------------------
+    def _accept_integer_overrides(self) -> None:
+        """``-p publish_rate:=20`` means 20.0: integer overrides of floating-point parameters become doubles (rclpy
+        would refuse them as the wrong type); overrides that name no parameter of this node are warned about (a
+        misspelled ``stationary.windw`` would otherwise be ignored silently)."""
+        floats = {spec.name for spec in PARAMETERS if type(spec.default) is float}
+        known = {spec.name for spec in PARAMETERS} | {"use_sim_time"}
+        overrides = self._parameter_overrides  # rclpy keeps the --ros-args / params-file values here
+        for name, param in list(overrides.items()):
+            if name in floats and param.type_ == Parameter.Type.INTEGER:
+                overrides[name] = Parameter(name, Parameter.Type.DOUBLE, float(param.value))
+            elif name not in known:
+                close = difflib.get_close_matches(name, sorted(known), n=1)
+                self.get_logger().warning(f"unknown parameter {name!r} ignored" +
+                                          (f": did you mean {close[0]!r}?" if close else ""))
+
     def _on_set_parameters(self, params: list[Parameter]) -> SetParametersResult:
         changes = {p.name: p.value for p in params if p.name in {s.name for s in PARAMETERS}}
         if not changes:
