@@ -26,3 +26,17 @@ def test_integer_overrides_of_floating_point_parameters_are_accepted(ros_env, mo
         node.destroy_node()
     finally:
         rclpy.shutdown(context=context)
+
+
+@pytest.mark.parametrize("content", [None, "a: [\n", "imu_noise_id_node: [1, 2]\n"])
+def test_a_missing_or_malformed_params_file_is_one_line_and_exit_2(ros_env, monkeypatch, tmp_path, capsys, content):
+    from imu_noise_id.ros.node import main
+
+    for key, value in ros_env.items():
+        monkeypatch.setenv(key, value)
+    path = tmp_path / "params.yaml"
+    if content is not None:
+        path.write_text(content)
+    assert main(["imu_noise_id_node", "--ros-args", "--params-file", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "imu_noise_id_node: error:" in err and "params" in err and "Traceback" not in err

@@ -342,7 +342,13 @@ def main(argv: list[str] | None = None) -> int:
     if "-h" in user_args or "--help" in user_args:
         print(_usage())
         return 0
-    rclpy.init(args=args)
+    try:
+        rclpy.init(args=args)
+    except RuntimeError as exc:  # rclpy's RCLError: a missing or malformed --params-file, a bad --ros-args
+        reason = str(exc).split(", at ")[0].removeprefix("failed to initialize rcl: ").strip()
+        print(f"{NODE_NAME}: error: {reason}. Check the --ros-args (a --params-file must exist and be ROS 2 "
+              "parameter YAML: node_name: ros__parameters: {…})", file=sys.stderr)
+        return 2
     try:
         try:
             node = ImuNoiseIdNode()
