@@ -52,3 +52,39 @@ def test_a_single_gap_is_still_a_gap():
     c = StampChecker(gap_factor=10.0)
     v = _verdicts(c, [*(0.01 * np.arange(1, 100)), 5.0, *(5.0 + 0.01 * np.arange(1, 50))])
     assert v.count("gap") == 1 and c.rate == pytest.approx(100.0, rel=0.01) and not math.isnan(c.rate)
+
+
+def _feed_still(ident: OnlineIdentifier, n: int, t0: float = 0.0, wall0: float = 0.0, frame: str = "imu") -> None:
+    rng = np.random.default_rng(1)
+    for k in range(n):
+        ident.process_imu(t0 + 0.01 * (k + 1), tuple(rng.normal(0, 1e-3, 3)),
+                          (0.0, 0.0, 9.81 + rng.normal(0, 1e-2)), frame, wall0 + 0.01 * (k + 1))
+
+
+def _status(statuses, name):
+    return next(s for s in statuses if s.name == name)
+
+
+def test_diagnostics_do_not_contradict_themselves():
+    """'OK IMU input: 0.0 Hz' after the input stopped, 'identification running' while the IMU is stale, p99 nan,
+    and a frame_id WARN that never clears."""
+    from imu_noise_id.pipelines.online import OK, STALE, WARN
+
+    ident = OnlineIdentifier()
+    diag = ident.diagnostics(wall_now=0.0, window_s=1.0)
+    assert "nan" not in _status(diag, "Processing").message
+    _feed_still(ident, 3000)  # 30 s still at 100 Hz
+    first = ident.diagnostics(wall_now=30.0, window_s=30.0)
+    assert _status(first, "IMU input").level == OK
+    # the input stops: in the next period nothing arrives, but the stale timeout is not reached yet
+    quiet = ident.diagnostics(wall_now=30.9, window_s=0.9)
+    imu = _status(quiet, "IMU input")
+    assert imu.level != OK or "0.0 Hz" not in imu.message
+    stale = ident.diagnostics(wall_now=60.0, window_s=29.1)
+    assert _status(stale, "IMU input").level == STALE
+    assert "identification running" not in _status(stale, "Stationarity").message
+    # one frame_id change warns in its period and clears afterwards
+    _feed_still(ident, 100, t0=30.0, wall0=60.0, frame="imu2")
+    assert _status(ident.diagnostics(wall_now=61.0, window_s=1.0), "IMU input").level == WARN
+    _feed_still(ident, 100, t0=31.0, wall0=61.0, frame="imu2")
+    assert _status(ident.diagnostics(wall_now=62.0, window_s=1.0), "IMU input").level == OK

@@ -263,8 +263,10 @@ class OnlineIdentifier:
         cfg = self.config
         feed = self.cmkf_feed
         est = self.estimates()
+        imu_status = input_status("IMU input", self.imu, wall_now, window_s, cfg.expected_imu_rate, True,
+                                  cfg.stale_timeout)
         statuses = [
-            input_status("IMU input", self.imu, wall_now, window_s, cfg.expected_imu_rate, True, cfg.stale_timeout),
+            imu_status,
             input_status("Odometry input", self.odom, wall_now, window_s, cfg.expected_odom_rate,
                          cfg.stationary_require_odometry, cfg.stale_timeout),
         ]
@@ -274,7 +276,7 @@ class OnlineIdentifier:
         counts = self.events.window_counts
         statuses += [
             stamp_status(counts, (self.imu, self.odom), self.restarts),
-            stationarity_status(self.stationarity, self.last_imu_t),
+            stationarity_status(self.stationarity, self.last_imu_t, self.imu.stats.window_received > 0),
             consistency_status(feed.estimate, cfg.nis_window, bool(counts.get("cmkf_error")), feed.errors,
                                feed.too_late),
             feed.innovations.status(),
@@ -286,6 +288,7 @@ class OnlineIdentifier:
         ]
         for source in (self.imu, self.odom, self.temperature):
             source.stats.window_received = 0
+            source.stats.window_frame_changes = 0
         self.events.new_period()
         if self.bank is not None:
             self.bank.decision_changes = []

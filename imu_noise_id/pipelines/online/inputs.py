@@ -25,6 +25,7 @@ class InputStats:
     last_wall: float | None = None
     frame_id: str | None = None
     frame_changes: int = 0
+    window_frame_changes: int = 0
 
 
 @dataclass
@@ -142,6 +143,7 @@ class Input:
         if stats.frame_id != frame_id:
             if stats.frame_id is not None:
                 stats.frame_changes += 1
+                stats.window_frame_changes += 1
                 self._events.event(f"{what}_frame", f"{what} frame_id changed from {stats.frame_id!r} to {frame_id!r}")
             stats.frame_id = frame_id
         if not finite:

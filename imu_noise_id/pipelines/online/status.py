@@ -85,11 +85,14 @@ def input_status(name: str, source: Input, wall_now: float, window_s: float, exp
     values["seconds_since_last"] = f"{silent:.2f}"
     if silent > stale_timeout:
         return DiagnosticStatus(name, STALE if required else WARN, f"no message for {silent:.1f} s", values)
+    if stats.window_received == 0:
+        return DiagnosticStatus(name, WARN, f"no message in the last {window_s:.1f} s (the last {silent:.1f} s ago)",
+                                values)
     if expected_rate > 0 and rate < 0.8 * expected_rate:
         return DiagnosticStatus(name, WARN, f"rate {rate:.1f} Hz below the expected {expected_rate:g} Hz", values)
-    if stats.frame_changes:
-        return DiagnosticStatus(name, WARN, f"frame_id changed {stats.frame_changes} time(s), now "
-                                f"{stats.frame_id!r}", values)
+    if stats.window_frame_changes:
+        return DiagnosticStatus(name, WARN, f"frame_id changed {stats.window_frame_changes} time(s) in the last "
+                                f"period, now {stats.frame_id!r} ({stats.frame_changes} in all)", values)
     return DiagnosticStatus(name, OK, f"{rate:.1f} Hz", values)
 
 
@@ -107,8 +110,8 @@ def stamp_status(window_counts: dict[str, int], inputs: tuple[Input, ...], resta
     return DiagnosticStatus("Time stamps", OK, "monotonic, no gaps", values)
 
 
-def stationarity_status(gate: StationaryGate, last_imu_t: float) -> DiagnosticStatus:
-    """Informational: stationary or not, and the evidence."""
+def stationarity_status(gate: StationaryGate, last_imu_t: float, imu_current: bool = True) -> DiagnosticStatus:
+    """Informational: stationary or not, and the evidence; nothing runs while the IMU input is silent."""
     st = gate.detector
     values = {
         "stationary": str(st.stationary).lower(),
@@ -117,6 +120,8 @@ def stationarity_status(gate: StationaryGate, last_imu_t: float) -> DiagnosticSt
         "odometry_still": str(st.odom_still).lower(),
         "transitions": str(gate.transitions),
     }
+    if not imu_current:
+        return DiagnosticStatus("Stationarity", OK, "no current IMU input: identification paused", values)
     if st.stationary:
         held = last_imu_t - st.stationary_since
         values["stationary_for_s"] = f"{held:.1f}"
@@ -226,4 +231,6 @@ def processing_status(processing_time: WindowStats, identification_time: WindowS
         "bank_batch_p50_us": f"{it.percentile(50) * 1e6:.1f}",
         "bank_batch_max_us": f"{float(it.values().max()) * 1e6:.1f}" if it.count else "nan",
     }
+    if not pt.count:
+        return DiagnosticStatus("Processing", OK, "no IMU callback yet", values)
     return DiagnosticStatus("Processing", OK, f"p99 {values['callback_p99_us']} us per IMU callback", values)
