@@ -88,3 +88,17 @@ def test_diagnostics_do_not_contradict_themselves():
     assert _status(ident.diagnostics(wall_now=61.0, window_s=1.0), "IMU input").level == WARN
     _feed_still(ident, 100, t0=31.0, wall0=61.0, frame="imu2")
     assert _status(ident.diagnostics(wall_now=62.0, window_s=1.0), "IMU input").level == OK
+
+
+def test_a_decision_is_held_until_its_probability_falls_clearly_below_gamma():
+    """WN+RW ↔ undecided flapped five times in the demo at γ = 0.8 with p hovering around 0.8."""
+    from imu_noise_id.pipelines.online.bank import held_decision
+
+    decision, changes = None, 0
+    for p in (0.75, 0.81, 0.79, 0.80, 0.78, 0.82, 0.76, 0.81):  # hovering at γ
+        new = held_decision(decision, {"WN+RW": p, "WN+GM": 1 - p}, 0.8)
+        changes += new != decision
+        decision = new
+    assert decision == "WN+RW" and changes == 1
+    assert held_decision("WN+RW", {"WN+RW": 0.65, "WN+GM": 0.35}, 0.8) is None
+    assert held_decision("WN+RW", {"WN+RW": 0.15, "WN+GM": 0.85}, 0.8) == "WN+GM"

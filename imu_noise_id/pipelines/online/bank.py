@@ -36,6 +36,22 @@ class _Stretch:
     accel_offset: np.ndarray | None = None
 
 
+#: A decision made at probability ≥ γ is kept until its probability falls below γ − this (or another hypothesis
+#: reaches γ): without it a posterior hovering at γ flaps between decided and undecided.
+DECISION_HYSTERESIS = 0.1
+
+
+def held_decision(previous: str | None, probabilities: Mapping[str, float], gamma: float,
+                  hysteresis: float = DECISION_HYSTERESIS) -> str | None:
+    """The decision with hysteresis: enter at p ≥ γ (paper 002's rule), leave below γ − ``hysteresis``."""
+    best = max(probabilities, key=probabilities.__getitem__)
+    if probabilities[best] >= gamma:
+        return best
+    if previous is not None and probabilities.get(previous, 0.0) >= gamma - hysteresis:
+        return previous
+    return None
+
+
 class BankFeed:
     """The per-axis hypothesis banks and the queue of stationary samples they have not seen yet.
 
@@ -153,13 +169,17 @@ class BankFeed:
             if bank.bank is None and column.size < bank.n_warmup:
                 column = np.concatenate([np.full(bank.n_warmup - column.size, column.mean()), column])
             bank.run(column)
-            decision = bank.bank.snapshot().decision
+            snap = bank.bank.snapshot()
             previous = self._decisions[i]
+            decision = held_decision(previous, snap.probabilities, bank.bank.hset.gamma)
             if decision != previous:
-                if previous is not None:
-                    text = f"{AXES[i]}: hypothesis decision changed from {previous} to {decision or 'undecided'}"
-                    self.decision_changes.append(text)
-                    self._events.event(f"decision_{AXES[i]}", text)
+                if previous is None:
+                    text = f"{AXES[i]}: decided {decision} (p = {snap.probabilities[decision]:.3f})"
+                else:
+                    text = (f"{AXES[i]}: hypothesis decision changed from {previous} to {decision or 'undecided'} "
+                            f"(p({previous}) = {snap.probabilities[previous]:.3f})")
+                self.decision_changes.append(text)
+                self._events.event(f"decision_{AXES[i]}", text)
                 self._decisions[i] = decision
 
     def report(self) -> HypothesesReport | None:
@@ -179,8 +199,8 @@ class BankFeed:
                 continue
             for name, p in snap.probabilities.items():
                 probs[i, names.index(name)] = p
-            if snap.decision is not None:
-                decision[i] = names.index(snap.decision)
+            if self._decisions[i] is not None:
+                decision[i] = names.index(self._decisions[i])
         return HypothesesReport(names, probs, decision, updates)
 
     def theta(self) -> dict[str, np.ndarray]:
