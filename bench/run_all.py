@@ -32,6 +32,8 @@ GOALS: list[tuple[list[str], str]] = [
     (["bench_bank.py", "--skip-reproduction"], "bench_bank_throughput.txt"),
     (["bench_cmkf.py"], "cmkf_bench.txt"),
     (["bench_node.py"], "bench_node.txt"),
+    (["bench_analyze_time.py", "--rates", "200", "400"], "bench_analyze_time_loop.txt"),
+    (["bench_batch.py"], "bench_batch.txt"),
 ]
 
 #: Long Monte-Carlo reproductions and measured-data studies (``--long``).
@@ -48,7 +50,8 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_cmkf_robot_sim.py"], "cmkf_robot_sim.txt"),
     (["bench_cmkf_data.py"], "cmkf_data.txt"),
     (["bench_node_husky.py"], "node_husky.txt"),
-    (["loop_measured.py"], "loop_measured.txt"),
+    (["loop_measured.py", "--samples", "100000", "--mtig-samples", "100000"], "loop_measured.txt"),
+    (["bench_loop_effects.py"], "bench_loop_effects.txt"),
     (["bench_adis_analysis.py"], "adis_run1_analysis.txt"),
 ]
 
