@@ -63,7 +63,8 @@ def test_kalibr_numbers_are_the_max_over_axes(hour_result):
 
 def test_outputs_files_units_and_values(hour_result, tmp_path):
     paths = write_analysis(AnalysisResult(hour_result), tmp_path, rostopic="/imu/data", meta={})
-    assert set(paths) == {"imu.yaml", "allan.csv", "allan.png"}
+    assert set(paths) == {"imu.yaml", "allan.csv", "allan.png", "exports/kalibr_imu_chain.yaml",
+                          "exports/orbslam3_imu.yaml", "exports/rep145_driver_params.yaml"}
     text = (tmp_path / "imu.yaml").read_text()
     assert "rad/s/sqrt(Hz)" in text and "m/s^3/sqrt(Hz)" in text  # units stated in the comment header
     doc = yaml.safe_load(text)

@@ -15,7 +15,8 @@ from ..core.errors import InputError
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
 COMMANDS: tuple[str, ...] = (
-    "analyze", "batch", "fit", "loop", "simulate", "inspect", "identify", "criteria", "cmkf", "play", "monitor",
+    "analyze", "batch", "export", "fit", "loop", "simulate", "inspect", "identify", "criteria", "cmkf", "play",
+    "monitor",
 )
 
 

@@ -1,7 +1,8 @@
 """The files of an analysis, each written once from the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult`.
 
-``imu.yaml`` (Kalibr keys and per-axis values), ``allan.csv`` and the other variance CSVs, ``allan.png``; with a
-model stage ``model.yaml`` (fits, candidates, recording-length advice, the loop's steps, the final models),
+``imu.yaml`` (Kalibr keys and per-axis values) and the filters' exports (``exports/``, :mod:`.exports`),
+``allan.csv`` and the other variance CSVs, ``allan.png``; with a model stage ``model.yaml`` (fits, candidates,
+recording-length advice, the loop's steps, the final models),
 ``allan_model.png`` (the final models) and ``report.html`` (:mod:`.analysis_html`: the whole analysis).
 """
 
@@ -12,7 +13,8 @@ from pathlib import Path
 from ..core.axes import UNITS
 from ..pipelines.analyze import AnalysisResult
 from .analysis_html import write_analysis_report
-from .imu_yaml import write_imu_yaml
+from .exports import write_exports
+from .imu_yaml import imu_doc, write_imu_yaml
 from .model_yaml import write_model_yaml
 from .plots import plot_allan_deviation
 from .plots_model import save_allan_overlay
@@ -25,7 +27,10 @@ def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     static = result.static
-    paths = {"imu.yaml": write_imu_yaml(out / "imu.yaml", static, result.finals, rostopic)}
+    doc = imu_doc(static, result.finals, rostopic)
+    paths = {"imu.yaml": write_imu_yaml(out / "imu.yaml", static, doc, bool(result.finals))}
+    for p in write_exports(doc, out / "exports"):
+        paths[f"exports/{p.name}"] = p
     for p in write_variance_csvs(static.variances, static.axes, out):
         paths[p.name] = p
     paths["allan.png"] = plot_allan_deviation(static, out / "allan.png")

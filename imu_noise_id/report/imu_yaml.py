@@ -120,10 +120,15 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
     return lines
 
 
-def write_imu_yaml(path: Path, result: StaticAnalysis, finals: dict[str, FinalModel], rostopic: str) -> Path:
-    """Write ``imu.yaml`` (see the module docstring)."""
+def imu_doc(result: StaticAnalysis, finals: dict[str, FinalModel], rostopic: str) -> dict:
+    """The content of ``imu.yaml`` (see the module docstring)."""
     doc = kalibr_dict(result, rostopic)
     add_final_values(doc, finals)
-    text = "\n".join(header(result, bool(finals))) + "\n"
+    return doc
+
+
+def write_imu_yaml(path: Path, result: StaticAnalysis, doc: dict, with_models: bool) -> Path:
+    """Write ``imu.yaml``: the header and ``doc`` (:func:`imu_doc`)."""
+    text = "\n".join(header(result, with_models)) + "\n"
     path.write_text(text + yaml.safe_dump(doc, sort_keys=False, default_flow_style=None))
     return path

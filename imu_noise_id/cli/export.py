@@ -1,0 +1,44 @@
+"""``imu-noise-id export DIR_OR_IMU_YAML --format …``: the filters' exports from an analysis's ``imu.yaml``.
+
+Reads only our own ``imu.yaml`` (never the bag) and writes with :mod:`imu_noise_id.report.exports`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``export`` parser."""
+    from ..report.exports import FORMATS
+
+    p = subparsers.add_parser(
+        "export", help="write the noise figures for OpenVINS, ORB-SLAM3 or a REP-145 driver from an imu.yaml",
+        description="Convert an analysis's imu.yaml (its final models' numbers) into another filter's format, each "
+                    "in its own units and conventions (stated in the file's header; see docs/analysis.md).")
+    p.add_argument("source", type=Path, help="an analyze output folder or its imu.yaml")
+    p.add_argument("--format", nargs="+", default=["all"], choices=[*FORMATS, "all"], help="formats (default: all)")
+    p.add_argument("--out", type=Path, help="output directory (default: SOURCE_FOLDER/exports)")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read imu.yaml, write the exports."""
+    import yaml
+
+    from ..core.errors import InputError
+    from ..report.exports import FORMATS, write_exports
+
+    path = args.source / "imu.yaml" if args.source.is_dir() else args.source
+    try:
+        doc = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError, UnicodeDecodeError) as exc:
+        raise InputError(f"{str(path)!r}: cannot read it as an imu.yaml ({exc}); give an analyze output folder") \
+            from None
+    if not isinstance(doc, dict):
+        raise InputError(f"{str(path)!r} is not an imu.yaml written by imu-noise-id analyze")
+    formats = tuple(FORMATS) if "all" in args.format else tuple(args.format)
+    for p in write_exports(doc, args.out or path.parent / "exports", formats):
+        print(p)
+    return 0
