@@ -20,12 +20,13 @@ from .units import Unit, content_hash
 
 @dataclass(frozen=True)
 class BatchProgress:
-    """Where a batch stands: units done (run now), failed among them, skipped (unchanged), total, wall time [s]
-    and the estimated time left [s]."""
+    """Where a batch stands: units done (run now), failed among them, skipped (unchanged), still running or queued
+    on the cluster, total, wall time [s] and the estimated time left [s]."""
 
     done: int
     failed: int
     skipped: int
+    running: int
     total: int
     elapsed_s: float
     left_s: float
@@ -97,5 +98,6 @@ def run_batch(units: list[Unit], options: dict, out_root: str | Path, client, *,
         if progress is not None:
             elapsed = time.perf_counter() - start
             left = len(futures) - ran
-            progress(BatchProgress(len(outcomes) - skipped, failed, skipped, len(units), elapsed, elapsed / ran * left))
+            progress(BatchProgress(len(outcomes) - skipped, failed, skipped, left, len(units), elapsed,
+                                   elapsed / ran * left))
     return BatchResult([outcomes[u.name] for u in units], time.perf_counter() - start)

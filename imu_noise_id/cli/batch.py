@@ -84,8 +84,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"{len(units)} units on {where}", flush=True)
 
     def progress(p: BatchProgress) -> None:
-        print(f"  {p.done + p.skipped}/{p.total} units ({p.failed} failed, {p.skipped} unchanged and skipped), "
-              f"~{p.left_s:.0f} s left [{p.elapsed_s:.0f} s]", flush=True)
+        print(f"  {p.done + p.skipped}/{p.total} units ({p.failed} failed, {p.skipped} unchanged and skipped, "
+              f"{p.running} running or queued), ~{p.left_s:.0f} s left [{p.elapsed_s:.0f} s]", flush=True)
 
     with open_client(args.scheduler, args.workers, args.memory_limit) as client:
         result = run_batch(units, options, args.out, client, progress=progress)
