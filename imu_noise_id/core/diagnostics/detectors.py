@@ -12,6 +12,8 @@ effect     signature                                    statistic, null distribu
 =========  ===========================================  =============================================
 GM         AV excess in an interior band of τ           max z_τ of ln(AV_d/AV_m)/sd, N(0,1), Bonferroni τ
 GM         serial correlation of e (no AV band)         Ljung–Box Q, χ²_h
+BI         AV excess (or, beyond a long-τ deficit, the  as GM; an excess within a factor 2 over ≥ 1
+           data's hump) flat over ≥ a decade of τ       decade of τ is flicker noise, tried beside GM
 RW / RR    AV excess reaching the longest τ, log-slope  as GM; slope ≈ +1 (ADEV +½) → RW, ≈ +2 → RR
            ≈ +1 / +2
 RR         ramp regressor                               score test T² of a whitened ramp, χ²_1
@@ -35,6 +37,7 @@ import numpy as np
 from scipy import stats
 
 from ..noise.components import GM
+from ..noise.flicker import PLATEAU
 from .residuals import acf, av_misfit_z, chi2_log10_sf, ljung_box, spectral_peaks
 from .whitening import WhiteningFilter, score_test
 
@@ -293,6 +296,40 @@ def _fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float
     return best[1], best[2]
 
 
+#: A flat AV excess: over at least FLAT_DECADES of τ, a smooth (quadratic in log-log) fit of it varies by at most a
+#: factor FLAT_RATIO. Flicker noise's AV is within 10 % of its plateau over a decade; a GM bump varies by ≥ 2.3×
+#: over any decade of τ, so a bump is never read as a plateau.
+FLAT_DECADES, FLAT_RATIO = 1.0, 2.0
+
+
+def _flicker_level(tau: np.ndarray, excess: np.ndarray) -> float | None:
+    """The bias instability B [u] of a flat AV excess (plateau (2 ln 2/π)·B², IEEE Std 952), None unless the excess
+    is flat (:data:`FLAT_RATIO`) over at least :data:`FLAT_DECADES` of τ."""
+    ok = excess > 0
+    if ok.sum() < 4 or math.log10(tau[ok][-1] / tau[ok][0]) < FLAT_DECADES:
+        return None
+    x, y = np.log(tau[ok]), np.log(excess[ok])
+    smooth = np.polyval(np.polyfit(x, y, 2), x)
+    if math.exp(float(smooth.max() - smooth.min())) > FLAT_RATIO:
+        return None
+    return math.sqrt(float(np.median(excess[ok])) / PLATEAU)
+
+
+def _with_flicker(finding: Finding, tau: np.ndarray, excess: np.ndarray) -> list[Finding]:
+    """``finding`` (a GM) and, when the excess is flat over a decade or more, a BI finding ranked just before it:
+    a bump is one GM, a plateau is the flicker noise of a bias instability (the likelihood decides)."""
+    level = _flicker_level(tau, excess)
+    if level is None:
+        return [finding]
+    flicker = Finding(effect="BI", detector=finding.detector, statistic=finding.statistic,
+                      threshold=finding.threshold, log10_p=finding.log10_p - 1e-9, level=finding.level,
+                      params={**{k: v for k, v in finding.params.items() if k not in ("tau", "sigma")},
+                              "bias_instability": level},
+                      evidence=f"{finding.evidence.split(' → ')[0]}; flat over {tau[0]:.3g}–{tau[-1]:.3g} s → "
+                               f"flicker noise (BI) with B ≈ {level:.3g}")
+    return [flicker, finding]
+
+
 def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
                          av_model: np.ndarray, *, av_white: np.ndarray | None = None,
                          alpha: float = ALPHA) -> list[Finding]:
@@ -307,11 +344,14 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
       RR if slope > 1.5 (ADEV +1, AV ω²τ²/2), else RW (AV K²τ/3);
     * otherwise (a bump: the excess peaks inside the band) → GM, (τ_c, σ) fitted to the excess (the GM AV
       peaks near τ ≈ 1.9 τ_c). A GM whose τ_c exceeds the record looks like a RW, as it does to any method.
+      When that excess is flat over a decade of τ or more it is also offered as flicker noise, BI (beyond the
+      papers: :mod:`imu_noise_id.core.noise.flicker`), with B² = median excess / (2 ln 2/π).
 
     A band of significant *deficit* (z_τ < −z*) reaching the longest τ means the model's long-τ growth
     (a random walk or ramp that absorbed a bounded process) is not in the data: the data's AV beyond the white
     part ``av_white`` (the model's WN + QN AV; default the WN line through the first τ) is a bounded hump
-    → GM, with (τ_c, σ) fitted to that hump.
+    → GM, with (τ_c, σ) fitted to that hump (and BI beside it when the hump is flat: a random walk that
+    absorbed flicker noise).
     """
     tau = np.asarray(tau, dtype=float)
     av_data = np.asarray(av_data, dtype=float)
@@ -332,12 +372,12 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
             zmin = float(-z[deficit].min())
             params = {"tau": tc, "sigma": sg, "deficit": 1.0, "band_lo": float(tau[deficit[0]]),
                       "band_hi": float(tau[-1])}
-            findings.append(Finding(
+            findings += _with_flicker(Finding(
                 effect="GM", detector="av_band", statistic=zmin, threshold=z_star, level=alpha,
                 log10_p=_bonferroni_log10_p(_norm_log10_sf(zmin), m), params=params,
                 evidence=(f"model AV above the data at long τ (τ ≥ {tau[deficit[0]]:.3g} s, max |z| = {zmin:.1f}, "
                           f"threshold {z_star:.2f}): the data's AV is bounded → GM with τ_c ≈ {tc:.3g} s, "
-                          f"σ ≈ {sg:.3g}")))
+                          f"σ ≈ {sg:.3g}")), tau[use], hump[use])
     idx = np.flatnonzero(z > z_star)
     if idx.size == 0:
         return findings
@@ -370,7 +410,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
                                                   f"excess slope {slope:.2f} (RW: +1)"), **common))
         else:
             tc, sg = _fit_gm_to_excess(t, ex) if run.size >= 2 else (float(t[0]) / 1.89, math.sqrt(ex[0] / 0.87))
-            findings.append(Finding(effect="GM", params={"tau": tc, "sigma": sg, **band_params}, evidence=(
+            findings += _with_flicker(Finding(effect="GM", params={"tau": tc, "sigma": sg, **band_params}, evidence=(
                 f"AV bump above the model ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}) → GM with "
-                f"τ_c ≈ {tc:.3g} s, σ ≈ {sg:.3g}"), **common))
+                f"τ_c ≈ {tc:.3g} s, σ ≈ {sg:.3g}"), **common), t, ex)
     return findings

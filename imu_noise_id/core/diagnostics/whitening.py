@@ -31,10 +31,14 @@ from ..kalman.riccati import steady_prediction_covariance
 from ..noise.components import Component
 
 
+def _stochastic_blocks(components: list[Component], dt: float) -> list:
+    """The state blocks of the components that have states (RR's deterministic integrator left out)."""
+    return [b for b in (c.block(dt) for c in components if c.name not in ("RR", "WN")) if b.n_states > 0]
+
+
 def _system(components: list[Component], dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    blocks = [c.block(dt) for c in components if c.name != "RR"]
-    r = float(sum(b.r for b in blocks))
-    stoch = [b for b in blocks if b.n_states > 0]
+    r = float(sum(c.block(dt).r for c in components if c.name == "WN"))
+    stoch = _stochastic_blocks(components, dt)
     if not stoch:
         return np.zeros((0, 0)), np.zeros((0, 0)), np.zeros(0), r
     phi = linalg.block_diag(*[b.phi for b in stoch])
@@ -104,8 +108,11 @@ class WhiteningFilter:
             raise ValueError("model has a non-positive innovation variance")
         k = phi @ p @ h / s  # predictor gain
         a = phi - np.outer(k, h)
-        zeros, poles, gain = signal.ss2zpk(a, k[:, None], -h[None, :], np.array([[1.0]]))
-        return cls(sos=signal.zpk2sos(zeros, poles, gain), innovation_variance=s)
+        # x → x̃ is 1 − h (zI − A)⁻¹ k = det(zI − Φ) / det(zI − A) (matrix determinant lemma, A + k h = Φ): its zeros
+        # are the eigenvalues of Φ, taken block by block (exact for a GM, RW or flicker ladder, where a generic
+        # invariant-zero computation loses the clustered zeros near 1 and the filter blows up), gain 1.
+        zeros = np.concatenate([np.linalg.eigvals(b.phi) for b in _stochastic_blocks(list(components), dt)])
+        return cls(sos=signal.zpk2sos(zeros, np.linalg.eigvals(a), 1.0), innovation_variance=s)
 
     def whiten(self, x: np.ndarray) -> np.ndarray:
         """Standardised innovations x̃ / √S of regressor column(s) ``x`` ((N,) or (N, k)), zero initial state."""

@@ -8,7 +8,11 @@ where the AV estimates still have ≳ 10 degrees of freedom). Narrow-band oscill
 sinusoids, temperature) are not bias: they are left out of σ_model. When the model's deviation still falls at
 the longest supported τ, the minimum is not reached: B is then an *upper bound* (``reached = False``).
 
-The interval propagates the fit's uncertainty: log-parameters drawn from N(θ̂, Σ) (Σ the inverse observed
+When the model holds flicker noise (a BI component, :mod:`imu_noise_id.core.noise.flicker`), B is that
+component's own parameter, the IEEE definition itself, with the fit's interval for it; the minimum of the model's
+deviation (which the white noise and the random walk lift above 0.664 B) is then not used.
+
+Otherwise the interval propagates the fit's uncertainty: log-parameters drawn from N(θ̂, Σ) (Σ the inverse observed
 information kept by the fit; parameters the data do not identify held at their estimates), B recomputed for each
 draw, the 2.5 and 97.5 % quantiles taken.
 """
@@ -57,6 +61,13 @@ def _minimum(components: list[Component], dt: float, tau: np.ndarray) -> tuple[f
 def bias_instability(fit: FitResult, tau_max: float, *, seed: int = 0) -> BiasInstability:
     """B from ``fit`` over τ ∈ [dt, ``tau_max``] [s] (module docstring)."""
     tau = _tau_grid(fit.dt, tau_max)
+    flicker = next((c for c in fit.components if c.name == "BI"), None)
+    if flicker is not None:
+        ci = fit.ci95.get("BI.bias_instability", (math.nan, math.nan))
+        _, tau_min, _ = _minimum(list(fit.components), fit.dt, tau)
+        return BiasInstability(float(flicker.params()["bias_instability"]), (float(ci[0]), float(ci[1])), tau_min,
+                               True,
+                               "the model's flicker-noise component BI (IEEE Std 952: PSD B²/(2πf))")
     value, tau_min, reached = _minimum(list(fit.components), fit.dt, tau)
     source = f"minimum of the model's Allan deviation (without {', '.join(NOT_BIAS)}) / {FLICKER_FACTOR:.3f}"
     if not reached:

@@ -19,7 +19,8 @@ from scipy.optimize import least_squares
 
 from ..allan import AllanResult, allan_variance
 from ..errors import InputError
-from ..noise.components import GM, LPF, OSC, QN, RR, RW, WN, Component, total_allan_variance
+from ..noise.components import BI, GM, LPF, OSC, QN, RR, RW, WN, Component, total_allan_variance
+from ..noise.flicker import PLATEAU, band_for_record
 
 #: The starting-value fit uses the AV at averaging factors m ≤ this fraction of the record.
 MAX_FRACTION = 0.25
@@ -32,12 +33,13 @@ class _Curve:
     tau: np.ndarray
     avar: np.ndarray
     n_clusters: np.ndarray
+    n: int
 
     @classmethod
     def of(cls, allan: AllanResult, max_fraction: float = MAX_FRACTION) -> _Curve:
         """The first column of ``allan`` at m ≤ ``max_fraction``·N (at least the three shortest τ)."""
         keep = allan.m <= max(max_fraction * allan.n, allan.m[min(2, allan.m.size - 1)])
-        return cls(allan.tau[keep], allan.variance[keep, 0], allan.n / allan.m[keep])
+        return cls(allan.tau[keep], allan.variance[keep, 0], allan.n / allan.m[keep], int(allan.n))
 
 
 def allan_of(y: np.ndarray, dt: float) -> AllanResult:
@@ -72,6 +74,9 @@ def _guess(names: list[str], av: _Curve, gm_taus: list[float], osc_frequencies: 
             tc = next(gm_iter)
             level = float(np.interp(math.log(min(max(1.9 * tc, t0), t_end)), np.log(tau), a))
             comps.append(GM(tau=tc, sigma=math.sqrt(level / 0.38) / max(n_gm, 1)))
+        elif name == "BI":
+            # The flicker plateau a little below the AV's minimum, over the band the record supports.
+            comps.append(BI(math.sqrt(0.5 * float(np.min(a)) / PLATEAU), *band_for_record(av.n, dt)))
         elif name == "RR":
             comps.append(RR(0.0))
         else:

@@ -14,7 +14,7 @@ the whole filter would lose all accuracy; a complex pole pair (an oscillator) is
 
 The smoothed covariances are never stored: they follow the affine recursion P_{t−1}^N = T(P_t^N) =
 J P_t^N Jᵀ + (P_f − J P̄ Jᵀ) from P_N^N = P_f, so Σ_t P_t^N = Σ_{k<N} T^k(P_f) and P_1^N = T^{N−1}(P_f) are
-computed exactly by binary doubling of the affine map (:func:`affine_power_sum`, O(log N) small products, no
+computed exactly by binary doubling of the affine map (:func:`affine_power_sum`, O(log N) p × p products, no
 Lyapunov solve that would be ill-conditioned when J has an eigenvalue near 1). The lag-one covariance is
 P_{t,t−1}^N = P_t^N Jᵀ (equivalent to the paper's recursion; de Jong 1989).
 This engine requires no missing samples; :func:`imu_noise_id.core.kalman.smooth` falls back to the exact engine.
@@ -145,23 +145,26 @@ def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
 
 
 def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Σ_{k=0}^{n−1} T^k(P0) and T^{n−1}(P0) for T(P) = J P Jᵀ + C, by binary doubling.
+    """Σ_{k=0}^{n−1} T^k(P0) and T^{n−1}(P0) for T(P) = J P Jᵀ + C, by binary doubling on p × p matrices.
 
-    With K = J ⊗ J acting on vec(P), a block of k steps is (K^k, c_k = vec T^k(0), G_k = Σ_{j<k} K^j,
-    m_k = Σ_{j<k} c_j); block a followed by block b combines as K_{a+b} = K_b K_a, c_{a+b} = K_b c_a + c_b,
-    G_{a+b} = G_a + G_b K_a, m_{a+b} = m_a + G_b c_a + m_b.
+    T^k(P0) = J^k P0 J^kᵀ + Σ_{j<k} M_j with M_j = J^j C J^jᵀ, so with the Stein sums X_k(P) = Σ_{j<k} J^j P J^jᵀ
+    and the weighted sum W_k = Σ_{j<k} j·M_j,
+
+        Σ_{k<n} T^k(P0) = X_n(P0) + (n − 1)·X_n(C) − W_n,        T^{n−1}(P0) = J^{n−1} P0 J^{n−1}ᵀ + X_{n−1}(C).
+
+    A block of a steps followed by one of b steps combines as A_{a+b} = A_a A_b (A_k = J^k),
+    X_{a+b} = X_a + A_a X_b A_aᵀ, W_{a+b} = W_a + A_a (W_b + a·X_b) A_aᵀ: O(p³ log n) work (the Kronecker form of
+    the same doubling costs O(p⁶ log n), prohibitive for the dozen states of a flicker ladder).
     """
-    p = J.shape[0]
-    eye = np.eye(p * p)
 
-    def combine(a, b):
-        Ka, ca, Ga, ma = a
-        Kb, cb, Gb, mb = b
-        return Kb @ Ka, Kb @ ca + cb, Ga + Gb @ Ka, ma + Gb @ ca + mb
+    def combine(first, second):
+        (ka, Aa, Xpa, Xca, Wa), (kb, Ab, Xpb, Xcb, Wb) = first, second
+        return (ka + kb, Aa @ Ab, Xpa + Aa @ Xpb @ Aa.T, Xca + Aa @ Xcb @ Aa.T, Wa + Aa @ (Wb + ka * Xcb) @ Aa.T)
 
     def power(k):
-        result = (eye, np.zeros(p * p), np.zeros((p * p, p * p)), np.zeros(p * p))
-        step = (np.kron(J, J), C.flatten(order="F"), eye, np.zeros(p * p))
+        zero = np.zeros_like(J)
+        result = (0, np.eye(J.shape[0]), zero, zero, zero)
+        step = (1, J, P0, C, zero)
         while k:
             if k & 1:
                 result = combine(result, step)
@@ -169,11 +172,10 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
             k >>= 1
         return result
 
-    p0 = P0.flatten(order="F")
-    _, _, G, m = power(n)
-    K1, c1, _, _ = power(n - 1)
-    total = (G @ p0 + m).reshape(p, p, order="F")
-    last = (K1 @ p0 + c1).reshape(p, p, order="F")
+    _, _, xp, xc, w = power(n)
+    _, a_last, _, xc_last, _ = power(n - 1)
+    total = xp + (n - 1) * xc - w
+    last = a_last @ P0 @ a_last.T + xc_last
     return 0.5 * (total + total.T), 0.5 * (last + last.T)
 
 

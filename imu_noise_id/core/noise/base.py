@@ -68,6 +68,8 @@ class Component(ABC):
     parameter_names: ClassVar[tuple[str, ...]]
     #: Units of the continuous-time parameters, ``u`` standing for the signal's unit.
     parameter_units: ClassVar[dict[str, str]]
+    #: Structure values a spec may give after the parameters, never estimated (e.g. a flicker ladder's band).
+    fixed_names: ClassVar[tuple[str, ...]] = ()
 
     @abstractmethod
     def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:

@@ -30,6 +30,7 @@ from scipy.signal import lfilter
 
 from . import units
 from .base import Component, StateBlock, as_freq, as_tau
+from .flicker import BI
 from .resonant import LPF, OSC
 from .sampled import sampled_allan_variance
 
@@ -284,7 +285,7 @@ class RR(Component):
 
 
 #: Registry of component types by spec name.
-COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, GM, RR, LPF, OSC)}
+COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, GM, RR, LPF, OSC, BI)}
 
 
 def total_allan_variance(components: list[Component], tau: np.ndarray, dt: float) -> np.ndarray:

@@ -12,6 +12,7 @@ Grammar (whitespace ignored)::
     WN+GM+RW                                            structure only
     WN(2e-4)+RW(3e-6)                                   noise density 2e-4 u/√Hz, random walk 3e-6 u/s/√Hz
     WN(noise_density=2e-4)+GM(tau=300, sigma=5e-5)
+    WN(2e-4)+BI(bias_instability=3e-5, tau_min=0.1, tau_max=3600)   a flicker band given (optional, default 1–1000 s)
 
 An IMU model assigns specs to axes: ``gyro: SPEC; accel: SPEC`` (or per axis ``gyro_z: SPEC``), or one
 SPEC for all six axes.
@@ -26,7 +27,7 @@ from ..errors import InputError
 from .components import COMPONENT_TYPES, Component
 
 #: Order in which components are listed in canonical model names.
-CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "QN", "GM", "OSC", "RW", "RR")
+CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "QN", "BI", "GM", "OSC", "RW", "RR")
 
 _TERM = re.compile(r"^(?P<count>\d+)?(?P<name>[A-Za-z]+)(?:\((?P<args>[^()]*)\))?$")
 
@@ -80,13 +81,14 @@ def _parse_args(cls: type[Component], args: str, spec: str) -> dict[str, float]:
     for pos, item in enumerate(items):
         key, sep, raw = item.partition("=")
         if not sep:
-            if pos >= len(cls.parameter_names):
-                raise ModelSpecError(f"{cls.name} takes {len(cls.parameter_names)} value(s) in {spec!r}")
-            key, raw = cls.parameter_names[pos], item
-        if key not in cls.parameter_names:
+            names = cls.parameter_names + cls.fixed_names
+            if pos >= len(names):
+                raise ModelSpecError(f"{cls.name} takes at most {len(names)} value(s) in {spec!r}")
+            key, raw = names[pos], item
+        if key not in cls.parameter_names + cls.fixed_names:
             raise ModelSpecError(
                 f"{cls.name} has no parameter {key!r} in {spec!r}: its parameters are "
-                f"{', '.join(cls.parameter_names)}"
+                f"{', '.join(cls.parameter_names + cls.fixed_names)}"
             )
         try:
             values[key] = float(raw)

@@ -16,7 +16,8 @@ from ...core.diagnostics.whitening import WhiteningFilter
 from ...core.estimation.model import FitOptions, NoiseModel
 from ...core.estimation.relabel import FILTER_MAX_TAU_SAMPLES, gm_as_filter
 from ...core.estimation.results import FitResult
-from ...core.noise.components import GM, QN, RR, RW, WN, Component, total_allan_variance
+from ...core.noise.components import BI, GM, QN, RR, RW, WN, Component, total_allan_variance
+from ...core.noise.flicker import band_for_record
 from ...core.noise.modelspec import CANONICAL_ORDER, structure_name
 from ...core.noise.resonant import LPF, MAX_DAMPING, OSC
 from ...core.quality import interpolate_missing
@@ -187,7 +188,7 @@ class AxisLoop:
                                                  "sensor's own low-pass filter")
 
     def addable(self, f: det.Finding, state: LoopState) -> bool:
-        if f.effect in ("RW", "RR", "QN", "LPF"):
+        if f.effect in ("RW", "RR", "QN", "LPF", "BI"):
             return f.effect not in state.structure
         if f.effect == "TEMP":
             return not any(t.effect == "TEMP" for t in state.exog_terms)
@@ -230,11 +231,14 @@ class AxisLoop:
                 # Memory of a few samples: the sensor's low-pass on its white noise (σ² = π N² f_c, τ = 1/2πf_c).
                 return LPF(noise_density=sigma * math.sqrt(2.0 * tau), cutoff=1.0 / (2.0 * math.pi * tau))
             return GM(tau=tau, sigma=sigma)
-        if f.effect == "RW":
-            return RW(max(float(p["random_walk"]), 1e-15))
-        if f.effect == "QN":
-            return QN(max(float(p["Q"]), 1e-15))
-        return RR(float(p["slope"]))
+        # One positive amplitude from the detector (RR's slope may have either sign).
+        if f.effect == "RR":
+            return RR(float(p["slope"]))
+        amplitude = {"BI": "bias_instability", "RW": "random_walk", "QN": "Q"}[f.effect]
+        value = max(float(p[amplitude]), 1e-15)
+        if f.effect == "BI":
+            return BI(value, *band_for_record(self.n, self.dt))
+        return {"RW": RW, "QN": QN}[f.effect](value)
 
     def targeted_statistic(self, f: det.Finding, diag: Diagnosis) -> float:
         """The statistic of the signature ``f`` targeted, re-measured at the same place on the new residuals."""

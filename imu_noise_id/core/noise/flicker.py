@@ -1,0 +1,145 @@
+"""Bias instability (flicker noise) as a state-space component: a ladder of first-order Gauss–Markov processes.
+
+The number on every datasheet, the "bias instability" B, is the level of the rate's 1/f (flicker) noise: IEEE Std 952
+(annex C) gives its two-sided PSD as S(f) = B²/(2π f) between a low and a high corner frequency, and its Allan
+variance as the plateau AV ≈ (2 ln 2/π)·B² ≈ (0.664 B)² for averaging times well inside the band. Papers 000/002 know
+no such component: a WN+RW model of a sensor with flicker noise buys the mid-τ power with a random walk far larger than
+the long-τ Allan variance supports (measured on the ADIS16405 accelerometers: the PSD falls as 1/f over two decades).
+
+A 1/f spectrum has no finite-dimensional state-space form, but a sum of first-order GM processes whose correlation
+times are spaced evenly in log τ, all with the same stationary variance, approximates it as closely as the spacing
+makes it (Keshner 1982, "1/f noise", Proc. IEEE 70(3); the usual construction for Kalman filters of clock and
+inertial-sensor flicker noise). With correlation times τ_i = τ_min·ρ^i (i = 0 … M−1, ρ = τ_max/τ_min)^(1/(M−1)))
+and each GM's variance σ_i², the sum's PSD is Σ 2σ_i²τ_i/(1 + (2πfτ_i)²); replacing the sum by an integral over
+ln τ (spacing ln ρ),
+
+    Σ_i 2σ_i²τ_i/(1 + (2πfτ_i)²) ≈ (2σ²/ln ρ) ∫ dτ/(1 + (2πfτ)²) = σ²/(2 f ln ρ)   for 1/(2πτ_max) ≪ f ≪ 1/(2πτ_min),
+
+which equals B²/(2π f) for σ_i² = σ² = B² ln ρ / π (by Poisson summation the sum's periodic ripple about the integral
+has relative amplitude ≈ 4·e^{−π²/ln ρ}: 8e-4 at :data:`PER_DECADE` = 2 correlation times per decade). What the
+finite band costs is at its ends: the PSD lies within 3.5 % of B²/(2π f) from a decade inside either end, and the
+Allan variance within 2 % of its plateau (2 ln 2/π)·B² from ~40 τ_min to ~τ_max/13 (tested).
+
+The band [τ_min, τ_max] is part of the structure, not a free parameter: the fit sets it from the record (the shortest
+correlation time a few samples long, the longest the record length: :func:`band_for_record`), and only B is
+estimated (by the quasi-Newton search on the exact likelihood, as LPF and OSC; the EM's closed-form M-step does not
+update the block, whose Φ and Q are fixed up to the common scale B²). Exact discretisation of every GM (φ_i =
+e^{−dt/τ_i}, drive σ²(1 − φ_i²)); the Allan variance is that of the *sampled* ladder
+(:mod:`imu_noise_id.core.noise.sampled`), exact at τ = m·dt.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from scipy.signal import lfilter
+
+from . import units
+from .base import Component, StateBlock, as_freq, as_tau
+from .sampled import sampled_allan_variance
+
+#: Correlation times per decade of the ladder (the ripple about 1/f falls fast with it; the cost grows with it).
+PER_DECADE = 2
+#: Allan-variance plateau of flicker noise over B²: 2 ln 2 / π (IEEE Std 952, annex C).
+PLATEAU = 2.0 * math.log(2.0) / math.pi
+#: The shortest correlation time of a fitted ladder, in samples (below it the white noise hides any flicker).
+TAU_MIN_SAMPLES = 10.0
+
+
+def band_for_record(n: int, dt: float) -> tuple[float, float]:
+    """The ladder's band [τ_min, τ_max] [s] for a record of ``n`` samples at ``dt`` [s]: from
+    :data:`TAU_MIN_SAMPLES` samples to the record length (a GM slower than the record is a constant there)."""
+    tau_min = TAU_MIN_SAMPLES * dt
+    return tau_min, max(n * dt, 10.0 * tau_min)
+
+
+def ladder_taus(tau_min: float, tau_max: float) -> np.ndarray:
+    """Correlation times [s] of the ladder: evenly spaced in log τ, :data:`PER_DECADE` a decade, ends included."""
+    decades = math.log10(tau_max / tau_min)
+    count = max(2, math.ceil(decades * PER_DECADE - 1e-9) + 1)
+    return np.exp(np.linspace(math.log(tau_min), math.log(tau_max), count))
+
+
+@dataclass(frozen=True)
+class BI(Component):
+    """Flicker (1/f) rate noise of bias instability B [u] over the band [τ_min, τ_max] [s] (see the module).
+
+    Two-sided PSD ≈ B²/(2π f) inside the band; Allan variance ≈ (2 ln 2/π)·B² on its plateau.
+    """
+
+    bias_instability: float
+    tau_min: float = 1.0
+    tau_max: float = 1000.0
+
+    name: ClassVar[str] = "BI"
+    parameter_names: ClassVar[tuple[str, ...]] = ("bias_instability",)
+    parameter_units: ClassVar[dict[str, str]] = {"bias_instability": "u", "tau_min": "s", "tau_max": "s"}
+    #: Structure values a spec may give after the parameters (the band), not estimated.
+    fixed_names: ClassVar[tuple[str, ...]] = ("tau_min", "tau_max")
+
+    def __post_init__(self) -> None:
+        units._check_positive("bias_instability", self.bias_instability)
+        units._check_positive("tau_min", self.tau_min, allow_zero=False)
+        units._check_positive("tau_max", self.tau_max, allow_zero=False)
+        if not self.tau_max > self.tau_min:
+            raise ValueError(f"BI band: tau_max ({self.tau_max:g} s) must exceed tau_min ({self.tau_min:g} s)")
+
+    @property
+    def taus(self) -> np.ndarray:
+        """The ladder's correlation times [s]."""
+        return ladder_taus(self.tau_min, self.tau_max)
+
+    @property
+    def sigma2_each(self) -> float:
+        """Stationary variance of every GM of the ladder, B² ln ρ / π [u²] (module docstring)."""
+        taus = self.taus
+        return self.bias_instability**2 * math.log(taus[1] / taus[0]) / math.pi
+
+    def _phi_drive(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        phi = np.exp(-dt / self.taus)
+        return phi, self.sigma2_each * -np.expm1(-2.0 * dt / self.taus)
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        phi, drive = self._phi_drive(dt)
+        out = np.zeros(n)
+        s = math.sqrt(self.sigma2_each)
+        for p, q in zip(phi, drive, strict=True):
+            x0 = rng.standard_normal() * s
+            out += lfilter([1.0], [1.0, -p], rng.standard_normal(n) * math.sqrt(q), zi=[p * x0])[0]
+        return out
+
+    def block(self, dt: float) -> StateBlock:
+        phi, drive = self._phi_drive(dt)
+        m = phi.size
+        return StateBlock(phi=np.diag(phi), q=np.diag(drive), h=np.ones(m), u=np.zeros(m),
+                          phi_free=np.zeros((m, m), bool), q_free=np.zeros((m, m), bool), u_free=np.zeros(m, bool))
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        tau = as_tau(tau)
+        return np.sum([sampled_allan_variance(self.sigma2_each, -1.0 / t, tau, dt) for t in self.taus], axis=0)
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        w = 2.0 * math.pi * as_freq(f)[..., None]
+        taus = self.taus
+        return np.sum(2.0 * self.sigma2_each * taus / (1.0 + (w * taus) ** 2), axis=-1)
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        phi = np.exp(-dt / self.taus)
+        return {"n_states": float(phi.size), "sigma2_each": self.sigma2_each, "phi_min": float(phi.min()),
+                "phi_max": float(phi.max())}
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> BI:
+        """From the per-GM variance ``sigma2_each`` and the band's ``phi_min``/``phi_max`` (:meth:`per_sample`)."""
+        tau_min, tau_max = -dt / math.log(values["phi_min"]), -dt / math.log(values["phi_max"])
+        rho = ladder_taus(tau_min, tau_max)
+        return cls(math.sqrt(values["sigma2_each"] * math.pi / math.log(rho[1] / rho[0])), tau_min, tau_max)
+
+    @classmethod
+    def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> BI:
+        p = np.diag(phi)
+        sigma2 = float(np.mean(np.diag(q) / -np.expm1(2.0 * np.log(p))))
+        return cls.from_per_sample(dt, sigma2_each=max(sigma2, 0.0), phi_min=float(p.min()), phi_max=float(p.max()))
