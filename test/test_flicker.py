@@ -86,3 +86,20 @@ def test_fit_keeps_flicker_out_of_the_random_walk():
     assert rw.random_walk < 2.5e-5
     reading = bias_instability(fit, fit.n * fit.dt / 10)
     assert reading.value == bi.bias_instability and reading.ci95 == (lo, hi)
+
+
+@pytest.mark.parametrize(("spec", "offered"), [
+    ("WN(2e-3)+BI(1e-3, 0.1, 1200)+RW(1e-5)", True),
+    ("WN(2e-3)+BI(2e-3, 0.1, 1200)", True),
+    ("WN(1e-3)+RW(2e-5)", False),
+    ("WN(2e-3)+GM(tau=20, sigma=2e-3)+RW(4e-5)", False),
+    ("WN(2e-3)+GM(tau=2, sigma=3e-3)", False),
+])
+def test_model_selection_offers_flicker_where_the_allan_variance_has_a_plateau(spec, offered):
+    """WN+BI+RW joins the candidates when the AV above the white-noise line is flat (within 1.3×) over a decade; a
+    GM bump, a random walk or white noise alone never look like that."""
+    from imu_noise_id.core.allan import allan_variance
+    from imu_noise_id.core.estimation.selection import suggest_candidates
+
+    y = simulate_sum(parse_model(spec), 120000, DT, np.random.default_rng(0))
+    assert ("WN+BI+RW" in suggest_candidates(allan_variance(y, DT))) is offered

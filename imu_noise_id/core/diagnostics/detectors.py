@@ -12,7 +12,7 @@ effect     signature                                    statistic, null distribu
 =========  ===========================================  =============================================
 GM         AV excess in an interior band of τ           max z_τ of ln(AV_d/AV_m)/sd, N(0,1), Bonferroni τ
 GM         serial correlation of e (no AV band)         Ljung–Box Q, χ²_h
-BI         AV excess (or, beyond a long-τ deficit, the  as GM; an excess within a factor 2 over ≥ 1
+BI         AV excess (or, beyond a long-τ deficit, the  as GM; an excess within a factor 1.3 over ≥ 1
            data's hump) flat over ≥ a decade of τ       decade of τ is flicker noise, tried beside GM
 RW / RR    AV excess reaching the longest τ, log-slope  as GM; slope ≈ +1 (ADEV +½) → RW, ≈ +2 → RR
            ≈ +1 / +2
@@ -297,28 +297,32 @@ def _fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float
 
 
 #: A flat AV excess: over at least FLAT_DECADES of τ, a smooth (quadratic in log-log) fit of it varies by at most a
-#: factor FLAT_RATIO. Flicker noise's AV is within 10 % of its plateau over a decade; a GM bump varies by ≥ 2.3×
-#: over any decade of τ, so a bump is never read as a plateau.
-FLAT_DECADES, FLAT_RATIO = 1.0, 2.0
+#: factor FLAT_RATIO. Flicker noise's AV is within 10 % of its plateau over a decade well inside its band; a GM
+#: bump varies by 1.5× over the decade centred on its peak and more over any other.
+FLAT_DECADES, FLAT_RATIO = 1.0, 1.3
 
 
-def _flicker_level(tau: np.ndarray, excess: np.ndarray) -> float | None:
-    """The bias instability B [u] of a flat AV excess (plateau (2 ln 2/π)·B², IEEE Std 952), None unless the excess
-    is flat (:data:`FLAT_RATIO`) over at least :data:`FLAT_DECADES` of τ."""
-    ok = excess > 0
-    if ok.sum() < 4 or math.log10(tau[ok][-1] / tau[ok][0]) < FLAT_DECADES:
-        return None
-    x, y = np.log(tau[ok]), np.log(excess[ok])
-    smooth = np.polyval(np.polyfit(x, y, 2), x)
-    if math.exp(float(smooth.max() - smooth.min())) > FLAT_RATIO:
-        return None
-    return math.sqrt(float(np.median(excess[ok])) / PLATEAU)
+def flicker_level(tau: np.ndarray, excess: np.ndarray) -> float | None:
+    """The bias instability B [u] of an AV excess with a plateau (2 ln 2/π)·B² (IEEE Std 952): the flattest window of
+    :data:`FLAT_DECADES` of τ over which a smooth (quadratic in log-log) fit of the positive excess varies by at
+    most :data:`FLAT_RATIO`; None when there is none."""
+    best: tuple[float, float] | None = None
+    for i in range(tau.size):
+        window = (tau >= tau[i]) & (tau <= tau[i] * 10.0**FLAT_DECADES * 1.0001)
+        if tau[window][-1] < tau[i] * 10.0**FLAT_DECADES * 0.9999 or window.sum() < 4 or np.any(excess[window] <= 0):
+            continue
+        x, y = np.log(tau[window]), np.log(excess[window])
+        smooth = np.polyval(np.polyfit(x, y, 2), x)
+        spread = float(smooth.max() - smooth.min())
+        if spread <= math.log(FLAT_RATIO) and (best is None or spread < best[0]):
+            best = (spread, math.sqrt(float(np.median(excess[window])) / PLATEAU))
+    return None if best is None else best[1]
 
 
 def _with_flicker(finding: Finding, tau: np.ndarray, excess: np.ndarray) -> list[Finding]:
     """``finding`` (a GM) and, when the excess is flat over a decade or more, a BI finding ranked just before it:
     a bump is one GM, a plateau is the flicker noise of a bias instability (the likelihood decides)."""
-    level = _flicker_level(tau, excess)
+    level = flicker_level(tau, excess)
     if level is None:
         return [finding]
     flicker = Finding(effect="BI", detector=finding.detector, statistic=finding.statistic,

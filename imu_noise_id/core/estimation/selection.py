@@ -13,6 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..allan import AllanResult
+from ..diagnostics.detectors import flicker_level
 from ..errors import InputError
 from ..noise.modelspec import parse_structure
 from ..quality import interpolate_missing
@@ -42,10 +43,14 @@ class SelectionResult:
 
 def suggest_candidates(allan: AllanResult) -> list[str]:
     """Default candidates plus RR when the AV (one column, up to τ = N·dt/4) rises like τ² at its long-τ end, QN
-    when it falls like τ⁻² at its short-τ end."""
+    when it falls like τ⁻² at its short-τ end, WN+BI+RW (flicker noise) when the AV above the white-noise line
+    through its first τ is flat over a decade of τ or more (the closed loop's rule,
+    :func:`~imu_noise_id.core.diagnostics.detectors.flicker_level`)."""
     cands = list(DEFAULT_CANDIDATES)
     keep = allan.m <= starts.MAX_FRACTION * allan.n
     tau, avar = allan.tau[keep], allan.variance[keep, 0]
+    if tau.size >= 4 and flicker_level(tau, avar - avar[0] * tau[0] / tau) is not None:
+        cands.append("WN+BI+RW")
     if tau.size >= 4:
         slope_hi = np.polyfit(np.log(tau[-3:]), np.log(avar[-3:]), 1)[0]
         slope_lo = np.polyfit(np.log(tau[:3]), np.log(avar[:3]), 1)[0]
