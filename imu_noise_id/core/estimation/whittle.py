@@ -112,8 +112,11 @@ def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndar
     S(ω) = h G Q Gᴴ hᵀ with G = (e^{iω} I − Φ)⁻¹ (any stable block, e.g. LPF, OSC)."""
     z = np.exp(1j * np.asarray(omega))
     n = phi.shape[0]
-    g = np.linalg.inv(z[:, None, None] * np.eye(n) - phi[None, :, :])  # (W, n, n)
-    hg = np.einsum("i,wij->wj", h, g)
+    if np.count_nonzero(phi - np.diag(np.diag(phi))) == 0:  # GM ladders, LPF: (zI − Φ)⁻¹ is diagonal
+        hg = h[None, :] / (z[:, None] - np.diag(phi)[None, :])
+    else:  # h G = solve((zI − Φ)ᵀ, hᵀ) per frequency (cheaper than forming the inverse)
+        a = np.swapaxes(z[:, None, None] * np.eye(n) - phi[None, :, :], 1, 2)
+        hg = np.linalg.solve(a, np.broadcast_to(h.astype(complex), (z.size, n))[:, :, None])[:, :, 0]
     return np.real(np.einsum("wi,ij,wj->w", hg, q, hg.conj()))
 
 
