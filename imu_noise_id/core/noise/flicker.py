@@ -118,8 +118,8 @@ class BI(Component):
                           phi_free=np.zeros((m, m), bool), q_free=np.zeros((m, m), bool), u_free=np.zeros(m, bool))
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        tau = as_tau(tau)
-        return np.sum([sampled_allan_variance(self.sigma2_each, -1.0 / t, tau, dt) for t in self.taus], axis=0)
+        taus = self.taus
+        return sampled_allan_variance(np.full(taus.size, self.sigma2_each), -1.0 / taus, as_tau(tau), dt)
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         w = 2.0 * math.pi * as_freq(f)[..., None]

@@ -34,10 +34,10 @@ def _expm1(w: np.ndarray) -> np.ndarray:
     return np.where(small, w + w * w / 2.0 + w * w * w / 6.0, direct)
 
 
-def _g(m: np.ndarray, w: complex) -> np.ndarray:
-    """g(m) = Σ_{j=1}^{m−1} (m − j) e^{jw} (module docstring), closed form or series."""
-    w = complex(w)
-    one_minus_z = -_expm1(np.full(m.shape, w))
+def _g(m: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """g(m) = Σ_{j=1}^{m−1} (m − j) e^{jw} (module docstring), closed form or series; ``w`` broadcasts against m."""
+    w = np.asarray(w, dtype=complex)
+    one_minus_z = -_expm1(np.broadcast_to(w, np.broadcast_shapes(m.shape, w.shape)))
     one_minus_zm = -_expm1(m * w)
     z = 1.0 - one_minus_z
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -46,24 +46,30 @@ def _g(m: np.ndarray, w: complex) -> np.ndarray:
     return np.where(np.abs(m * w) < SERIES_LIMIT, series, closed)
 
 
-def sampled_allan_variance(c: complex, s: complex, tau: np.ndarray, dt: float) -> np.ndarray:
+def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau: np.ndarray,
+                           dt: float) -> np.ndarray:
     """AV [u²] at ``tau`` [s] of the process sampled at ``dt`` [s] with R(u) = Re(c e^{s u}) (module docstring).
 
     Parameters
     ----------
-    c : complex
+    c : complex, or (k,) array
         Autocovariance weight [u²] (R(0) = Re c is the variance).
-    s : complex
-        Pole [1/s], Re s < 0.
+    s : complex, or (k,) array
+        Pole [1/s], Re s < 0. With arrays, the AV of the sum of the k processes (a flicker ladder) in one pass.
     tau : array
         Averaging times [s]; τ/dt is the number of samples averaged (integers for estimator τ).
     dt : float
         Sampling period [s].
     """
     m = np.asarray(tau, dtype=float) / dt
-    w = complex(s) * dt
+    c = np.asarray(c, dtype=complex)
+    w = np.asarray(s, dtype=complex) * dt
+    if c.ndim:  # one row per process, summed
+        m, c, w = m[None, ...], c.reshape(-1, *([1] * m.ndim)), w.reshape(-1, *([1] * m.ndim))
 
     def block_sum_variance(k: np.ndarray) -> np.ndarray:
-        return np.real(complex(c) * (k + 2.0 * _g(k, w)))
+        v = np.real(c * (k + 2.0 * _g(k, w)))
+        return v.sum(axis=0) if c.ndim else v
 
-    return (4.0 * block_sum_variance(m) - block_sum_variance(2.0 * m)) / (2.0 * m * m)
+    m_tau = np.asarray(tau, dtype=float) / dt
+    return (4.0 * block_sum_variance(m) - block_sum_variance(2.0 * m)) / (2.0 * m_tau * m_tau)
