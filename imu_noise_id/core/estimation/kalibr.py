@@ -4,15 +4,16 @@ Beyond paper 000, which fits the components but leaves what a WN+RW filter shoul
 fitted to a real sensor holds more than WN and RW: the sensor's own low-pass filter (LPF), narrow-band
 oscillations (OSC), Gauss–Markov bias processes, sinusoids. Kept out of N and K, they are reported on their own:
 
-- **N** is the passband white-noise density, √(N_WN² + N_LPF²) [u/√Hz]: what a filter integrating the IMU sees at
-  low frequency. An OSC, a GM or a sinusoid never enters it.
+- **N** is the passband white-noise density, √(N_WN² + N_LPF² + N_MA²) [u/√Hz] (the sensor's low-pass LPF or
+  averaging filter MA on part of its white noise): what a filter integrating the IMU sees at low frequency. An OSC,
+  a GM, flicker noise (BI) or a sinusoid never enters it.
 - **K** is the RW's density [u/s/√Hz], or *not identifiable from this record* when the final model has no RW (the
   caller then gives the Allan-slope bound).
-- The **per-sample variance** of the high-frequency noise at the sampling period dt is N_WN²/dt + π N_LPF² f_c:
-  smaller than N²/dt where the sensor's low-pass cuts below the Nyquist frequency — what a consumer of the
-  corrected IMU stream must put in its covariance.
+- The **per-sample variance** of the high-frequency noise at the sampling period dt is
+  N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt): smaller than N²/dt where the sensor's filter cuts below the Nyquist
+  frequency — what a consumer of the corrected IMU stream must put in its covariance.
 
-Intervals: 95 %, from the fit's log-parameter covariance by the delta method for N (a sum of two components), the
+Intervals: 95 %, from the fit's log-parameter covariance by the delta method for N (a sum of components), the
 fit's own intervals otherwise.
 """
 
@@ -23,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..noise.components import LPF, RW, WN
+from ..noise.components import LPF, MA, RW, WN
 from .results import FitResult
 
 Z95 = 1.959963984540054
@@ -62,24 +63,29 @@ def _log_cov(fit: FitResult, labels: list[str]) -> np.ndarray | None:
     return fit.log_covariance[np.ix_(k, k)]
 
 
+#: The components whose noise is white in the passband: the white noise and the sensor's own filters on it.
+PASSBAND = ("WN", "LPF", "MA")
+
+
 def noise_density(fit: FitResult) -> KalibrValue:
-    """Passband white-noise density N = √(N_WN² + N_LPF²) of the fit (module docstring)."""
-    wn = next((c for c in fit.components if isinstance(c, WN)), None)
-    lpf = next((c for c in fit.components if isinstance(c, LPF)), None)
-    if wn is None and lpf is None:
+    """Passband white-noise density N = √(N_WN² + N_LPF² + N_MA²) of the fit (module docstring)."""
+    parts = [c for c in fit.components if c.name in PASSBAND]
+    if not parts:
         return KalibrValue(None, (math.nan, math.nan), "the model has no white noise")
-    a = wn.noise_density if wn else 0.0
-    b = lpf.noise_density if lpf else 0.0
-    n = math.hypot(a, b)
-    source = "WN" if lpf is None else ("LPF (passband density)" if wn is None else
-                                       "WN and the sensor's low-pass LPF combined: sqrt(N_WN² + N_LPF²)")
-    if lpf is None and "WN.noise_density" in fit.ci95:
-        return KalibrValue(n, tuple(fit.ci95["WN.noise_density"]), source)
-    # Gradient of ln N = ½ ln(N_WN² + N_LPF²) in (ln N_WN, ln N_LPF): the shares of N² (delta method). A part
-    # holding less than NEGLIGIBLE_SHARE of N² (a white noise driven to ~0 beside the low-pass, whose own
-    # interval is then uninformative) is left out.
+    densities = [c.params()["noise_density"] for c in parts]
+    n = math.sqrt(sum(d * d for d in densities))
+    filters = [c.name for c in parts if c.name != "WN"]
+    source = "WN" if not filters else (f"{filters[0]} (passband density)" if len(parts) == 1 else
+                                       f"{' and '.join(c.name for c in parts)} combined (the sensor's own filter "
+                                       "on its white noise): sqrt of the sum of the squared passband densities")
+    labels_all = [f"{c.name}.noise_density" for c in parts]
+    if len(parts) == 1 and labels_all[0] in fit.ci95:
+        return KalibrValue(n, tuple(fit.ci95[labels_all[0]]), source)
+    # Gradient of ln N = ½ ln Σ N_i² in the ln N_i: the shares of N² (delta method). A part holding less than
+    # NEGLIGIBLE_SHARE of N² (a white noise driven to ~0 beside the low-pass, whose own interval is then
+    # uninformative) is left out.
     labels, grad = [], []
-    for lab, part in (("WN.noise_density", a), ("LPF.noise_density", b)):
+    for lab, part in zip(labels_all, densities, strict=True):
         if part * part >= NEGLIGIBLE_SHARE * n * n:
             labels.append(lab)
             grad.append(part * part / (n * n))
@@ -90,8 +96,8 @@ def noise_density(fit: FitResult) -> KalibrValue:
             var = float(g @ np.where(np.outer(g, g) > 0, cov, 0.0) @ g)
         if math.isfinite(var):
             return KalibrValue(n, _ci_from_log_sd(n, math.sqrt(max(var, 0.0))), source)
-    # A part without a Wald interval (e.g. a white noise next to 0 beside the low-pass): combine the two parts'
-    # own intervals end to end, √(lo_WN² + lo_LPF²) … √(hi_WN² + hi_LPF²) (conservative: as if fully correlated).
+    # A part without a Wald interval (e.g. a white noise next to 0 beside the low-pass): combine the parts' own
+    # intervals end to end, √(Σ lo_i²) … √(Σ hi_i²) (conservative: as if fully correlated).
     ends = [fit.ci95.get(lab) for lab in labels]
     if any(e is None for e in ends):
         return KalibrValue(n, (math.nan, math.nan), source)
@@ -108,11 +114,13 @@ def random_walk(fit: FitResult) -> KalibrValue:
 
 
 def per_sample_noise_variance(fit: FitResult) -> float:
-    """Variance per sample [u²] of the high-frequency noise at the fit's dt: N_WN²/dt + π N_LPF² f_c."""
+    """Variance per sample [u²] of the high-frequency noise at the fit's dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt)."""
     total = 0.0
     for c in fit.components:
         if isinstance(c, WN):
             total += c.noise_density**2 / fit.dt
         elif isinstance(c, LPF):
             total += math.pi * c.noise_density**2 * c.cutoff
+        elif isinstance(c, MA):
+            total += c.per_sample(fit.dt)["sigma2_per_sample"]
     return total

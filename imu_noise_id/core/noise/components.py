@@ -29,6 +29,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from . import units
+from .averaging import MA
 from .base import Component, StateBlock, as_freq, as_tau
 from .flicker import BI
 from .resonant import LPF, OSC
@@ -285,7 +286,7 @@ class RR(Component):
 
 
 #: Registry of component types by spec name.
-COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, GM, RR, LPF, OSC, BI)}
+COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, GM, RR, LPF, OSC, BI, MA)}
 
 
 def total_allan_variance(components: list[Component], tau: np.ndarray, dt: float) -> np.ndarray:

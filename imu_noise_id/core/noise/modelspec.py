@@ -27,7 +27,7 @@ from ..errors import InputError
 from .components import COMPONENT_TYPES, Component
 
 #: Order in which components are listed in canonical model names.
-CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "QN", "BI", "GM", "OSC", "RW", "RR")
+CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "MA", "QN", "BI", "GM", "OSC", "RW", "RR")
 
 _TERM = re.compile(r"^(?P<count>\d+)?(?P<name>[A-Za-z]+)(?:\((?P<args>[^()]*)\))?$")
 

@@ -15,7 +15,7 @@ from ...core.noise.components import Component
 from ...core.noise.modelspec import structure_name
 
 #: Effects added to the state-space structure / entering as regressors / as data cleaning.
-STATE_EFFECTS = ("GM", "RW", "RR", "QN", "OSC", "LPF", "BI")
+STATE_EFFECTS = ("GM", "RW", "RR", "QN", "OSC", "LPF", "MA", "BI")
 EXOG_EFFECTS = ("SIN", "TEMP", "STEP")
 CLEANING_EFFECTS = ("OUTLIERS",)
 

@@ -16,7 +16,7 @@ from ...core.diagnostics.whitening import WhiteningFilter
 from ...core.estimation.model import FitOptions, NoiseModel
 from ...core.estimation.relabel import FILTER_MAX_TAU_SAMPLES, gm_as_filter
 from ...core.estimation.results import FitResult
-from ...core.noise.components import BI, GM, QN, RR, RW, WN, Component, total_allan_variance
+from ...core.noise.components import BI, GM, MA, QN, RR, RW, WN, Component, total_allan_variance
 from ...core.noise.flicker import band_for_record
 from ...core.noise.modelspec import CANONICAL_ORDER, structure_name
 from ...core.noise.resonant import LPF, MAX_DAMPING, OSC
@@ -175,20 +175,23 @@ class AxisLoop:
                              evidence=gms[0].evidence + "; " + lb.evidence)
         elif lb is not None:
             gms = [lb]
-        gms = [self.as_filter(f, state) for f in gms[:2]]
+        gms = [g for f in gms[:2] for g in self.as_filter(f, state)]
         return sorted([*best.values(), *gms], key=lambda f: f.log10_p)
 
-    def as_filter(self, f: det.Finding, state: LoopState) -> det.Finding:
-        """A GM finding whose τ is below :data:`FILTER_MAX_TAU_SAMPLES` samples becomes an LPF finding (the sensor's
-        own low-pass: noise correlated from one sample to the next), unless the model already has one."""
+    def as_filter(self, f: det.Finding, state: LoopState) -> list[det.Finding]:
+        """A GM finding whose τ is below :data:`FILTER_MAX_TAU_SAMPLES` samples becomes the sensor's own filter (noise
+        correlated from one sample to the next), unless the model already has one: a first-order low-pass (LPF,
+        correlation decaying geometrically) and a two-tap average (MA, correlated over one sample only) are both
+        offered, the likelihood decides."""
         tau = f.params.get("tau")
-        if tau is None or tau >= FILTER_MAX_TAU_SAMPLES * self.dt or "LPF" in state.structure:
-            return f
-        return replace(f, effect="LPF", evidence=f"{f.evidence}; memory of {tau / self.dt:.1f} samples: the "
-                                                 "sensor's own low-pass filter")
+        if tau is None or tau >= FILTER_MAX_TAU_SAMPLES * self.dt or {"LPF", "MA"} & set(state.structure):
+            return [f]
+        memory = f"{f.evidence}; memory of {tau / self.dt:.1f} samples: the sensor's own"
+        return [replace(f, effect="LPF", evidence=f"{memory} low-pass filter"),
+                replace(f, effect="MA", log10_p=f.log10_p + 1e-9, evidence=f"{memory} averaging filter")]
 
     def addable(self, f: det.Finding, state: LoopState) -> bool:
-        if f.effect in ("RW", "RR", "QN", "LPF", "BI"):
+        if f.effect in ("RW", "RR", "QN", "LPF", "MA", "BI"):
             return f.effect not in state.structure
         if f.effect == "TEMP":
             return not any(t.effect == "TEMP" for t in state.exog_terms)
@@ -224,13 +227,8 @@ class AxisLoop:
         p = f.params
         if f.effect == "OSC":
             return OSC(frequency=float(p["frequency"]), bandwidth=float(p["bandwidth"]), sigma=float(p["sigma"]))
-        if f.effect in ("GM", "LPF"):
-            sigma = p["sigma"] if "sigma" in p else p["sigma_share"] * math.sqrt(diag.innovation_variance)
-            tau, sigma = max(float(p["tau"]), 2.0 * self.dt), max(float(sigma), 1e-12)
-            if f.effect == "LPF":
-                # Memory of a few samples: the sensor's low-pass on its white noise (σ² = π N² f_c, τ = 1/2πf_c).
-                return LPF(noise_density=sigma * math.sqrt(2.0 * tau), cutoff=1.0 / (2.0 * math.pi * tau))
-            return GM(tau=tau, sigma=sigma)
+        if f.effect in ("GM", "LPF", "MA"):
+            return self._short_memory(f, diag)
         # One positive amplitude from the detector (RR's slope may have either sign).
         if f.effect == "RR":
             return RR(float(p["slope"]))
@@ -239,6 +237,18 @@ class AxisLoop:
         if f.effect == "BI":
             return BI(value, *band_for_record(self.n, self.dt))
         return {"RW": RW, "QN": QN}[f.effect](value)
+
+    def _short_memory(self, f: det.Finding, diag: Diagnosis) -> Component:
+        """A GM of the finding's (τ, σ), or, read as the sensor's own filter with the same passband density
+        N = σ√(2τ), an LPF (σ² = π N² f_c, τ = 1/2πf_c) or an MA."""
+        p = f.params
+        sigma = p["sigma"] if "sigma" in p else p["sigma_share"] * math.sqrt(diag.innovation_variance)
+        tau, sigma = max(float(p["tau"]), 2.0 * self.dt), max(float(sigma), 1e-12)
+        if f.effect == "LPF":
+            return LPF(noise_density=sigma * math.sqrt(2.0 * tau), cutoff=1.0 / (2.0 * math.pi * tau))
+        if f.effect == "MA":
+            return MA(noise_density=sigma * math.sqrt(2.0 * tau))
+        return GM(tau=tau, sigma=sigma)
 
     def targeted_statistic(self, f: det.Finding, diag: Diagnosis) -> float:
         """The statistic of the signature ``f`` targeted, re-measured at the same place on the new residuals."""

@@ -1,0 +1,80 @@
+"""The sensor's averaging filter (MA): part of the white noise passed through a two-tap moving average.
+
+Many IMUs average their internal samples before output (the ADIS164xx's Bartlett window, the decimation filters of
+MEMS parts): consecutive outputs share internal samples, so the noise is correlated over exactly one sample and not
+beyond: a moving-average MA(1) process. Measured on the ADIS16405 gyros, the lag-1 autocorrelation of the noise is
+0.16 and the lag-2 one 0.000 ± 0.001, where the first-order low-pass (:class:`~.resonant.LPF`, an AR(1)) that
+matches the lag-1 value predicts 0.026: a misfit of the shortest averaging times that 10⁶ samples show plainly.
+Beyond papers 000/002.
+
+Model: e_k white with variance σ², y_k = e_k + e_{k−1} beside the white noise WN (a_k, variance σ_a²): the sum is an
+MA(1) process with lag-1 correlation σ²/(σ_a² + 2σ²) ∈ [0, ½]; the mirror image of quantisation noise, whose
+e_k − e_{k−1} has negative lag-1 correlation. Parameter: the passband density N [u/√Hz] of the averaged part
+(its PSD at f → 0, 4σ²·dt, so N² = 4σ²dt), so that the sensor's passband white-noise density is
+√(N_WN² + N_MA²) as with the LPF. Its per-sample variance is 2σ² = N²/(2dt).
+
+Two-sided PSD S(f) = N² cos²(πf·dt) (= 4σ²dt·cos²(πf dt)); autocovariance R(0) = 2σ², R(dt) = σ², 0 beyond; the Allan
+variance of the sampled process at τ = m·dt is exact: AV = (4m − 3)σ²/m² (from the block sums S(m) = (4m − 2)σ²,
+AV = (4S(m) − S(2m))/(2m²)), → N²/τ for m ≫ 1.
+
+State-space block (as QN's, paper 000 eqs. 4–5): states [e_k, e_{k−1}], Φ = [[0, 0], [1, 0]], Q = diag(σ², 0) with its
+first element free (the EM's closed-form M-step updates it), H = [1, 1].
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from . import units
+from .base import Component, StateBlock, as_freq, as_tau
+
+
+@dataclass(frozen=True)
+class MA(Component):
+    """A two-tap moving average of white noise of passband density N [u/√Hz] (see the module)."""
+
+    noise_density: float
+
+    name: ClassVar[str] = "MA"
+    parameter_names: ClassVar[tuple[str, ...]] = ("noise_density",)
+    parameter_units: ClassVar[dict[str, str]] = {"noise_density": "u/sqrt(Hz)"}
+
+    def __post_init__(self) -> None:
+        units._check_positive("noise_density", self.noise_density)
+
+    def sigma2(self, dt: float) -> float:
+        """Variance σ² [u²] of each of the two averaged samples, N²/(4 dt)."""
+        return self.noise_density**2 / (4.0 * dt)
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        e = rng.standard_normal(n + 1) * math.sqrt(self.sigma2(dt))
+        return e[1:] + e[:-1]
+
+    def block(self, dt: float) -> StateBlock:
+        return StateBlock(
+            phi=np.array([[0.0, 0.0], [1.0, 0.0]]), q=np.diag([self.sigma2(dt), 0.0]), h=np.array([1.0, 1.0]),
+            u=np.zeros(2), phi_free=np.zeros((2, 2), bool), q_free=np.array([[True, False], [False, False]]),
+            u_free=np.zeros(2, bool),
+        )
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        m = as_tau(tau) / dt
+        return (4.0 * m - 3.0) * self.sigma2(dt) / (m * m)
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        return self.noise_density**2 * np.cos(math.pi * as_freq(f) * dt) ** 2
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        return {"sigma2_ma": self.sigma2(dt), "sigma2_per_sample": 2.0 * self.sigma2(dt)}
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> MA:
+        return cls(math.sqrt(4.0 * dt * units._check_positive("sigma2_ma", values["sigma2_ma"])))
+
+    @classmethod
+    def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> MA:
+        return cls.from_per_sample(dt, sigma2_ma=max(float(q[0, 0]), 0.0))
