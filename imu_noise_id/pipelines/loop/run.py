@@ -16,6 +16,7 @@ from ...core.diagnostics import detectors as det
 from ...core.diagnostics.residuals import av_misfit_z
 from ...core.errors import InputError
 from ...core.estimation.results import FitResult
+from ...core.noise.flicker import PLATEAU
 from ...core.noise.modelspec import parse_structure
 from .state import Diagnosis, LoopResult, LoopState, LoopStep, Trial
 from .steps import AxisLoop
@@ -93,17 +94,13 @@ def run_closed_loop(
     diag = loop.diagnose(state, start_fit)
     steps = [LoopStep(0, state.name(), None, None, None, state, diag, [])]
     verdict, passed = "", False
+    explored = False
     while True:
         cands = loop.candidates(diag, state)
-        if not cands:
-            left = sorted({f.effect for f in diag.findings if f.significant})
-            passed = not left
-            verdict = ("residuals pass: no detector fires at its level" if passed else
-                       f"nothing more can be added: evidence for {', '.join(left)} remains, but these effects "
-                       "are already in the model")
-            break
         if len(steps) > max_steps:
-            verdict = f"stopped after {max_steps} added effects; residual evidence remains"
+            passed = not any(f.significant for f in diag.findings)
+            verdict = ("residuals pass: no detector fires at its level" if passed else
+                       f"stopped after {max_steps} added effects; residual evidence remains")
             break
         trials: list[Trial] = []
         best: tuple[float, LoopState, Diagnosis, det.Finding] | None = None
@@ -112,9 +109,20 @@ def run_closed_loop(
             trials.append(outcome[0])
             if outcome[1] is not None and (best is None or outcome[1].errors.bic < best[0]):
                 best = (outcome[1].errors.bic, outcome[2], outcome[1], f)
+        if best is None and not explored:
+            # One-at-a-time is stuck (no detector fires, or nothing it proposed was kept): the bounded joint search.
+            explored = True
+            best = _explore(loop, state, diag, trials)
         if best is None:
-            verdict = "nothing improves: no candidate lowered the BIC with its evidence gone and the AV no worse"
             steps[-1].trials += trials
+            if not cands:
+                left = sorted({f.effect for f in diag.findings if f.significant})
+                passed = not left
+                verdict = ("residuals pass: no detector fires at its level" if passed else
+                           f"nothing more can be added: evidence for {', '.join(left)} remains, but these effects "
+                           "are already in the model")
+            else:
+                verdict = "nothing improves: no candidate lowered the BIC with its evidence gone and the AV no worse"
             break
         previous = list(state.structure)
         _, state, diag, f = best
@@ -229,6 +237,42 @@ def _attempt(loop: AxisLoop, diag: Diagnosis, new_state: LoopState,
     ok = ok and gone
     return Trial(f, new_state.name(), new_diag.errors.bic, ok, f"{why}; {gone_why}"), (new_diag if ok else None), \
         new_state
+
+
+def _explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
+             trials: list[Trial]) -> tuple[float, LoopState, Diagnosis, det.Finding] | None:
+    """The bounded joint search when one-at-a-time is stuck: a bias process the detectors cannot see, added from the
+    current fit with its random walk restarted small (so that an RW that absorbed it can give way) — a GM at a
+    twentieth and at a fifth of the record, and flicker noise (BI) — each kept by the BIC and do-no-harm rules alone
+    (there is no detector evidence to see gone); the best kept, if any.
+
+    Beyond the detectors: a GM whose τ is a good fraction of the record leaves no AV bump and no innovation
+    correlation that a test at α = 0.01 would see, while the likelihood may tell it from the random walk that
+    otherwise absorbs it. BIC's penalty keeps clean records clean. Three refits, whatever the model.
+    """
+    span = loop.n * loop.dt
+    level = float(np.median(diag.av_data[diag.tau >= 0.1 * diag.tau[-1]])) if diag.tau.size else 0.0
+    proposals = [("GM", {"tau": span / 20.0, "sigma": math.sqrt(level / 0.38)}),
+                 ("GM", {"tau": span / 5.0, "sigma": math.sqrt(level / 0.38)})]
+    if "BI" not in state.structure:
+        proposals.append(("BI", {"bias_instability": math.sqrt(level / PLATEAU)}))
+    best: tuple[float, LoopState, Diagnosis, det.Finding] | None = None
+    for effect, params in proposals:
+        start = ", ".join(f"{k} {v:.3g}" for k, v in params.items())
+        finding = det.Finding(effect=effect, detector="joint_search", statistic=0.0, threshold=0.0, log10_p=0.0,
+                              level=0.0, params={**params, "deficit": 1.0},
+                              evidence=f"joint search: {effect} added ({start}), the random walk restarted small")
+        new_state = loop.extend(state, finding, diag)
+        try:
+            new_diag = _refit(loop, diag, new_state)
+        except (InputError, ValueError, np.linalg.LinAlgError) as exc:
+            trials.append(Trial(finding, new_state.name(), None, False, f"joint search: refit failed: {exc}"))
+            continue
+        ok, why = _judge(diag, new_diag)
+        trials.append(Trial(finding, new_state.name(), new_diag.errors.bic, ok, f"joint search: {why}"))
+        if ok and (best is None or new_diag.errors.bic < best[0]):
+            best = (new_diag.errors.bic, new_state, new_diag, finding)
+    return best
 
 
 #: Components re-selection may drop: those that absorb what the model lacks (an RW the short-term predictability
