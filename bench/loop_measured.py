@@ -3,7 +3,7 @@
 Usage (from the repository root; long on a shared 2-core machine, run it with nice)::
 
     PYTHONPATH=$PWD nice -n 10 python bench/loop_measured.py [--runs 1,2,3,4,5,6] [--axes gyro_x,...] \\
-        [--samples N] [--out docs/results/loop_measured.txt]
+        [--samples N] [--out docs/results/loop_measured.txt] [--resume]
 
 Each axis runs from WN+RW (the Kalibr model) at 100 Hz on the first ``--samples`` samples of the run (default all
 10⁶). Per axis it prints: the RMS AV misfit z (model vs data, in sd of the AV estimates) before and after, whether
@@ -11,12 +11,17 @@ the final model's AV lies inside the data's 95 % band at every τ (simultaneous 
 AV error, the OSC components (f₀, bandwidth, σ) and the strongest one's f₀ against the disturbance frequency the
 data's README lists for the run, the final random walk against the long-τ Allan bound, the verdict and the time.
 The summary counts them against the issue's targets.
+
+Each finished axis is appended at once to ``OUT.jsonl`` beside ``--out`` (the full records take hours on a shared
+2-core machine); ``--resume`` skips the axes already there and summarises them with the new ones.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -39,6 +44,22 @@ def long_tau_rw_bound(y: np.ndarray, dt: float) -> float:
     av = allan_variance(y, dt)
     far = av.tau >= 100.0
     return float(np.min(np.sqrt(3.0 * av.variance[far, 0] / av.tau[far]))) if far.any() else math.nan
+
+
+def _commit() -> str:
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                              cwd=Path(__file__).resolve().parents[1], check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def _as_json(res: dict) -> dict:
+    return {**res, "oscs": [c.params() for c in res["oscs"]]}
+
+
+def _from_json(res: dict) -> dict:
+    return {**res, "oscs": [OSC(**p) for p in res["oscs"]]}
 
 
 def run_axis(run: int, axis: str, y: np.ndarray, dt: float) -> dict:
@@ -88,13 +109,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--samples", type=int, default=0, help="first N samples of each run (0 = all)")
     ap.add_argument("--mtig-samples", type=int, default=0,
                     help="also run the contaminated MTi-G gyro_x on its first N samples (0 = not)")
-    ap.add_argument("--out", type=Path, default=None, help="also write the output here")
+    ap.add_argument("--out", type=Path, default=None, help="also write the output here (and each axis to OUT.jsonl)")
+    ap.add_argument("--resume", action="store_true", help="skip the axes OUT.jsonl already holds")
     args = ap.parse_args(argv)
     if not DATA.is_dir():
         print(f"no data at {DATA}", file=sys.stderr)
         return 2
     lines = [f"# bench/loop_measured.py --runs {args.runs} --axes {args.axes} --samples {args.samples} "
-             "(start WN+RW, full 100 Hz)"]
+             f"(start WN+RW, full 100 Hz) at commit {_commit()}"]
+    log = args.out.with_suffix(".jsonl") if args.out is not None else None
+    done = {}
+    if args.resume and log is not None and log.exists():
+        done = {(r["run"], r["axis"]): _from_json(r) for r in map(json.loads, log.read_text().splitlines())}
     results = []
     for run in (int(r) for r in args.runs.split(",") if r):
         d = np.load(DATA / f"adis16405_run{run}.npz")
@@ -102,7 +128,12 @@ def main(argv: list[str] | None = None) -> int:
         if args.samples:
             data = data[: args.samples]
         for axis in args.axes.split(","):
-            res = run_axis(run, axis, data[:, AXES.index(axis)], 1.0 / float(d["fs_hz"]))
+            res = done.get((run, axis))
+            if res is None:
+                res = run_axis(run, axis, data[:, AXES.index(axis)], 1.0 / float(d["fs_hz"]))
+                if log is not None:
+                    with log.open("a") as fh:
+                        fh.write(json.dumps(_as_json(res)) + "\n")
             results.append(res)
             lines.append(line(res))
             print(lines[-1], flush=True)

@@ -112,3 +112,23 @@ def test_a_short_memory_gm_is_renamed_lpf_with_the_same_av():
     slow = FitResult(model="WN+GM", components=[WN(1e-4), GM(tau=1.0, sigma=1e-3)], exog_coef={}, se={}, ci95={},
                      loglik=0.0, aic=0.0, bic=0.0, n=10, dt=DT, n_iter=0, converged=True)
     assert gm_as_filter(slow) is slow
+
+
+def test_a_line_and_its_harmonics_are_one_family_added_in_one_step():
+    """A wandering 0.5 Hz line with a third harmonic (the ADIS16405 accelerometers' 0.565 / 1.695 Hz pair) and a
+    fixed 3 Hz sine with its second harmonic: each family is one step (issue 11's groups), the members at their
+    frequencies."""
+    rng = np.random.default_rng(21)
+    f0 = 0.5
+    lines = [OSC(frequency=f0, bandwidth=0.01, sigma=4e-3), OSC(frequency=3 * f0, bandwidth=0.03, sigma=2e-3)]
+    y = simulate_sum([WN(2e-3), *lines], N, DT, rng)
+    result = run_closed_loop(y, DT, "WN+RW", axis="accel_x")
+    step = result.steps[1]
+    oscs = sorted(c.frequency for c in step.diagnosis.fit.components if isinstance(c, OSC))
+    assert step.added == "OSC" and "harmonics" in step.evidence
+    assert oscs == pytest.approx([0.5, 1.5], rel=0.02)
+    sines = simulate_sum([WN(2e-3)], N, DT, rng) + _sine(3e-3, 3.0) + _sine(1.5e-3, 6.0)
+    result = run_closed_loop(sines, DT, "WN+RW", axis="accel_x")
+    regressors = result.steps[1].diagnosis.exog_values
+    assert result.steps[1].added == "SIN" and len(regressors) == 2
+    assert sorted(v["frequency"] for v in regressors.values()) == pytest.approx([3.0, 6.0], rel=1e-3)

@@ -71,6 +71,8 @@ class Finding:
         One line saying what was seen.
     indices : array of int
         Samples concerned (outliers), else empty.
+    members : tuple of Finding
+        A family added in one step (a line and its harmonics), else empty.
     """
 
     effect: str
@@ -82,6 +84,7 @@ class Finding:
     params: dict[str, float]
     evidence: str
     indices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    members: tuple[Finding, ...] = ()
 
     @property
     def significant(self) -> bool:

@@ -23,7 +23,7 @@ import numpy as np
 from scipy import ndimage, optimize, stats
 
 from .detectors import Finding
-from .residuals import periodogram
+from .residuals import FLOOR_HALF_WIDTH, floor_corrected, periodogram
 
 #: Share of a line's excess power within ±2 bins of its peak above which it is a sinusoid (a pure sine: ≥ 0.9).
 SIN_CONCENTRATION = 0.6
@@ -180,3 +180,44 @@ def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float) -> Finding:
                    level=alpha, params={"frequency": f, "resolution": r},
                    evidence=f"broad spectral line near {f:.4g} Hz: {r} bins pooled hold {x / r:.1f}× the local "
                             f"floor (threshold {threshold / r:.1f}× over {tests} pooled bins)")
+
+
+#: Harmonics of a line searched for its family (2f₀ … HARMONIC_MAX·f₀).
+HARMONIC_MAX = 6
+
+
+def harmonics(e: np.ndarray, dt: float, frequency: float, bandwidth: float, *, alpha: float) -> list[float]:
+    """The harmonics k·f₀ (k = 2 … :data:`HARMONIC_MAX`, below 0.98 of the Nyquist frequency) of a detected line that
+    are lines too: frequencies [Hz] of the significant ones, from the residuals ``e``.
+
+    A motor, a fan or a mount excited at f₀ puts power at its harmonics; a wandering fundamental's k-th harmonic
+    wanders k times as far. Around each k·f₀ the window ±max(2 bins, 2k·B) is searched for the largest periodogram
+    ordinate over the running-median floor (the single-line statistic, Exp(1) per bin under white residuals,
+    corrected for the floor's own error); a harmonic is significant when that maximum exceeds the level-α
+    threshold of the maximum over *all* the bins searched around the harmonics (Bonferroni over M bins:
+    s* = −ln(1 − (1 − α)^{1/M})), far below the threshold over the whole spectrum because the places are given.
+    """
+    freqs, power = periodogram(e, dt)
+    df = freqs[1] - freqs[0]
+    half_width = min(FLOOR_HALF_WIDTH, max(8, freqs.size // 8))
+    floor = ndimage.median_filter(power, size=2 * half_width + 1, mode="reflect")
+    ratio = power / np.maximum(floor, np.finfo(float).tiny) * math.log(2.0)
+    windows = []
+    for k in range(2, HARMONIC_MAX + 1):
+        centre = k * frequency
+        if centre >= 0.98 * freqs[-1]:
+            break
+        half = max(2.0 * df, 2.0 * k * bandwidth)
+        windows.append(np.flatnonzero(np.abs(freqs - centre) <= half))
+    m = sum(w.size for w in windows)
+    if m == 0:
+        return []
+    threshold = -math.log(-math.expm1(math.log1p(-alpha) / m))
+    found = []
+    for w in windows:
+        if w.size == 0:
+            continue
+        best = w[int(np.argmax(ratio[w]))]
+        if floor_corrected(float(ratio[best]), half_width) > threshold:
+            found.append(float(freqs[best]))
+    return found

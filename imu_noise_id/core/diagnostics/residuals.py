@@ -155,7 +155,7 @@ def periodogram(e: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     return k / (n * dt), spec[k]
 
 
-def _corrected(raw: float, half_width: int) -> float:
+def floor_corrected(raw: float, half_width: int) -> float:
     # The floor is a median of K = 2·half_width + 1 exponential ordinates, itself uncertain: its relative sd is
     # ≈ 1/(ln 2·√K), so P(I/floor·ln2 > s) ≈ e^{−s + s²v/2}, v = 1/(ln²2·K) (lognormal floor error). The
     # statistic is corrected to s − s²v/2 (linear beyond s = 1/v) so that it is again Exp(1) per bin.
@@ -170,7 +170,7 @@ def line_statistic(e: np.ndarray, dt: float, frequency: float, half_width: int =
     k = int(np.argmin(np.abs(freqs - frequency)))
     lo, hi = max(0, k - half_width), min(freqs.size, k + half_width + 1)
     floor = float(np.median(power[lo:hi]))
-    return _corrected(float(power[k] / floor * math.log(2.0)), half_width)
+    return floor_corrected(float(power[k] / floor * math.log(2.0)), half_width)
 
 
 def spectral_peaks(e: np.ndarray, dt: float, *, f_min: float | None = None,
@@ -207,7 +207,7 @@ def spectral_peaks(e: np.ndarray, dt: float, *, f_min: float | None = None,
     ratio = np.where(search, power / np.maximum(floor, np.finfo(float).tiny), 0.0)
     k = int(np.argmax(ratio))
     m = int(search.sum())
-    stat = _corrected(float(ratio[k] * math.log(2.0)), half_width)
+    stat = floor_corrected(float(ratio[k] * math.log(2.0)), half_width)
     log10_p = max_exponential_log10_p(stat, m)
     freq = float(freqs[k])
     if 0 < k < freqs.size - 1 and power[k - 1] > 0 and power[k + 1] > 0:

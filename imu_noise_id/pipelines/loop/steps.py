@@ -9,7 +9,7 @@ import numpy as np
 
 from ...core.allan import allan_variance, choose_m, identify_alpha
 from ...core.diagnostics import detectors as det
-from ...core.diagnostics.lines import detect_broad_line, line_shape, pooled_line_statistic
+from ...core.diagnostics.lines import detect_broad_line, harmonics, line_shape, pooled_line_statistic
 from ...core.diagnostics.residuals import av_misfit_z, line_statistic, residual_errors
 from ...core.diagnostics.spectra import residual_spectra
 from ...core.diagnostics.whitening import WhiteningFilter
@@ -149,9 +149,34 @@ class AxisLoop:
                                                       else sin.params["frequency"],
                                                       "concentration": shape.concentration, **searched})
         first, second = (sin, osc) if shape.kind == "SIN" else (osc, sin)
+        family = self.harmonic_family(first, e, residual)
         if not DECISIVE_SHARE[0] < shape.concentration < DECISIVE_SHARE[1]:
-            return [first]  # the shape leaves no doubt: the look-alike only
-        return [replace(first, log10_p=first.log10_p - 1e-9), second]
+            return [*family, first]  # the shape leaves no doubt: the look-alike only
+        return [*family, replace(first, log10_p=first.log10_p - 1e-9), second]
+
+    def harmonic_family(self, line: det.Finding, e: np.ndarray, residual: np.ndarray) -> list[det.Finding]:
+        """The line and its significant harmonics (:func:`~imu_noise_id.core.diagnostics.lines.harmonics`) as one
+        finding added in one step (issue 11's groups), offered before the line alone; [] without harmonics.
+        Harmonics of a sine are sines at exact multiples of its frequency; those of an OSC are OSCs with the
+        shape measured at each."""
+        f0 = line.params["frequency"]
+        bandwidth = line.params.get("bandwidth", 0.0)
+        found = harmonics(e, self.dt, f0, bandwidth, alpha=self.alpha)
+        if not found:
+            return []
+        members = [line]
+        for h in found:
+            if line.effect == "SIN":
+                k = round(h / f0)
+                members.append(replace(line, params={**line.params, "frequency": k * f0}))
+            else:
+                shape = line_shape(residual, self.dt, h)
+                members.append(replace(line, params={**line.params, "frequency": shape.frequency,
+                                                     "bandwidth": min(shape.bandwidth, MAX_DAMPING * shape.frequency),
+                                                     "sigma": max(shape.sigma, 1e-12)}))
+        listed = ", ".join(f"{m.params['frequency']:.4g}" for m in members)
+        return [replace(line, log10_p=line.log10_p - 2e-9, members=tuple(members),
+                        evidence=f"{line.evidence}; with its harmonics: {line.effect} at {listed} Hz")]
 
     def candidates(self, diag: Diagnosis, state: LoopState) -> list[det.Finding]:
         """Significant findings that can be added, ranked by p-value: the most significant one per effect, except
@@ -167,8 +192,10 @@ class AxisLoop:
                 lb = f
             elif f.effect == "GM":
                 gms.append(f)
-            elif f.effect not in best or f.log10_p < best[f.effect].log10_p:
-                best[f.effect] = f
+            else:
+                key = f"{f.effect} family" if f.members else f.effect  # a family and the line alone both stay
+                if key not in best or f.log10_p < best[key].log10_p:
+                    best[key] = f
         gms.sort(key=lambda f: f.log10_p)
         if gms and lb is not None:
             gms[0] = replace(gms[0], log10_p=min(gms[0].log10_p, lb.log10_p),
@@ -198,6 +225,11 @@ class AxisLoop:
         return True
 
     def extend(self, state: LoopState, f: det.Finding, diag: Diagnosis) -> LoopState:
+        if f.members:  # a family: each member added in turn
+            for member in f.members:
+                state = self.extend(state, member, diag)
+                diag = replace(diag, fit=replace(diag.fit, components=list(state.init or diag.fit.components)))
+            return state
         fitted = [WN(self.white_floor) if isinstance(c, WN) and c.noise_density < self.white_floor else c
                   for c in diag.fit.components]
         new = LoopState(structure=list(state.structure), exog_terms=list(state.exog_terms),
