@@ -57,7 +57,7 @@ def test_a_bound_that_is_a_wn_rw_is_returned_exactly():
 def test_white_noise_alone_when_the_bound_falls_like_it():
     bound = _bound([WN(1e-3)], inflate=1.3)
     ob = overbound_wn_rw(TAU, bound, DT)
-    assert ob.random_walk == 0.0 and ob.noise_density == pytest.approx(1e-3 * np.sqrt(1.3), rel=1e-9)
+    assert ob.random_walk < 1e-9 and ob.noise_density == pytest.approx(1e-3 * np.sqrt(1.3), rel=1e-9)
 
 
 def test_bad_bounds_are_refused():
@@ -65,3 +65,18 @@ def test_bad_bounds_are_refused():
         overbound_wn_rw(np.array([]), np.array([]), DT)
     with pytest.raises(InputError, match="positive, finite"):
         overbound_wn_rw(TAU, np.where(TAU > 1, np.nan, 1.0), DT)
+
+
+def test_floors_keep_the_fitted_values_and_bind_when_the_range_is_short():
+    """Over 0.01–1 s a random walk of 2e-5 is invisible: without a floor K would drop to 0; with the fitted values
+    as floors K stays at them (reported as at its floor) and the bound still holds."""
+    short = TAU[TAU <= 1.0]
+    bound = WN(1.7e-4).allan_variance(short, DT)  # what the short range sees: white noise only
+    free = overbound_wn_rw(short, bound * 1.2, DT)
+    assert free.random_walk < 1e-9  # 0 up to the rounding of collinear constraints
+    held = overbound_wn_rw(short, bound * 1.2, DT, floor=(1.7e-4, 2e-5))
+    assert held.random_walk == pytest.approx(2e-5, rel=1e-12) and held.at_floor == (False, True)
+    assert held.noise_density >= 1.7e-4
+    assert np.all(held.allan_variance(short, DT) >= bound * 1.2 * (1 - 1e-12))
+    lower = WN(held.noise_density * (1 - 1e-4)).allan_variance(short, DT) + RW(2e-5).allan_variance(short, DT)
+    assert np.any(lower < bound * 1.2)  # N is as small as the bound allows once K is held
