@@ -10,6 +10,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..core.estimation.overbound import DEFAULT_HORIZON_S
+
 DEFAULT_OUT = "imu_noise_id_results"
 
 
@@ -44,6 +46,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="analyse even if the static check finds motion (its findings become warnings)",
     )
     p.add_argument(
+        "--horizon", type=float, default=DEFAULT_HORIZON_S, metavar="S",
+        help="longest time scale [s] the overbound must cover: the smallest WN+RW whose Allan variance lies above "
+        "the data's upper bound and the final model from the sampling period to S (imu.yaml 'overbound:', "
+        f"report.html; default {DEFAULT_HORIZON_S:g})")
+    p.add_argument("--overbound", action="store_true",
+                   help="also write the exports of the overbound's values into DIR/exports/overbound/")
+    p.add_argument(
         "--no-loop", action="store_true",
         help="skip the closed loop that follows the model fit (residual diagnosis: adds missing GM/RW/RR/QN, "
         "sinusoids, temperature, steps, outliers one at a time while BIC improves; writes a 'loop:' list per "
@@ -57,11 +66,11 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_static
     from ..pipelines.analyze import AnalyzeOptions, ModelStage, analyze
     from ..report.analysis import write_analysis
-    from ..report.console import final_table, summary_table
+    from ..report.console import final_table, overbound_lines, record_length_lines, summary_table
     from .progress import TextProgress
 
     options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
-                             models=ModelStage(args.model), loop=not args.no_loop)
+                             models=ModelStage(args.model), loop=not args.no_loop, horizon_s=args.horizon)
     with TextProgress(f"reading {args.bag.name}") as progress:
         recording = read_static(args.bag, topic=args.topic, progress=progress)
     with TextProgress("Allan-family variances") as progress:
@@ -70,10 +79,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"warning: {warning}", file=sys.stderr)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model}
     paths = write_analysis(result, args.out, rostopic=recording.imu.topic, meta=meta,
-                           title=f"IMU noise analysis: {args.bag.name}")
+                           title=f"IMU noise analysis: {args.bag.name}", overbound_exports=args.overbound)
     print(summary_table(result.static), flush=True)
     if result.finals:
         print(final_table(result.finals), flush=True)
+    for line in [*record_length_lines(result.fits), *overbound_lines(result.overbounds)]:
+        print(line, flush=True)
     for w in result.static.warnings:
         print(f"warning: {w}", file=sys.stderr)
     print(f"results in {args.out}/: " + ", ".join(paths))

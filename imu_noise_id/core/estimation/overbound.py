@@ -32,8 +32,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..noise.components import RW, WN
 
+#: Default end of the τ range [s] (it starts at the sampling period): the time scales of a VIO / GNSS-INS filter
+#: between aiding updates and the bias drift it must follow, from a fraction of a second to minutes.
+DEFAULT_HORIZON_S = 100.0
 #: A vertex is feasible when every constraint holds to this relative tolerance (rounding of the 2×2 solve).
 FEASIBLE_RTOL = 1e-9
 #: A constraint is binding when the overbound's AV is within this relative distance of the bound.
@@ -61,11 +63,13 @@ class WnRwOverbound:
 
     def allan_variance(self, tau: np.ndarray, dt: float) -> np.ndarray:
         """The overbound's Allan variance [u²] at ``tau`` [s]."""
-        return WN(self.noise_density).allan_variance(tau, dt) + RW(self.random_walk).allan_variance(tau, dt)
+        return _basis(np.asarray(tau, dtype=float), dt) @ np.array([self.noise_density**2, self.random_walk**2])
 
 
 def _basis(tau: np.ndarray, dt: float) -> np.ndarray:
     """(T, 2): the Allan variances of unit WN and unit RW at ``tau``."""
+    from ..noise.components import RW, WN  # scipy.signal behind it: not imported with the CLI's defaults
+
     return np.column_stack([WN(1.0).allan_variance(tau, dt), RW(1.0).allan_variance(tau, dt)])
 
 
