@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import yaml
 from scipy.optimize import linprog
 
 from imu_noise_id.core.errors import InputError
@@ -80,3 +81,70 @@ def test_floors_keep_the_fitted_values_and_bind_when_the_range_is_short():
     assert np.all(held.allan_variance(short, DT) >= bound * 1.2 * (1 - 1e-12))
     lower = WN(held.noise_density * (1 - 1e-4)).allan_variance(short, DT) + RW(2e-5).allan_variance(short, DT)
     assert np.any(lower < bound * 1.2)  # N is as small as the bound allows once K is held
+
+
+# --- the overbound stage of analyze, imu.yaml and the exports --------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def allan_only(tmp_path_factory):
+    """An Allan-only analysis (fast) of 10 min at 100 Hz with a GM bump WN+RW cannot follow, written out."""
+    from imu_noise_id.core.noise.modelspec import parse_imu_model
+    from imu_noise_id.core.simulation.static import simulate_static_imu
+    from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
+    from imu_noise_id.report.analysis import write_analysis
+
+    model = parse_imu_model("gyro: WN(1e-3)+GM(tau=20, sigma=3e-4)+RW(2e-5); accel: WN(2e-3)+RW(4e-5)")
+    result = analyze(simulate_static_imu(model, 100.0, 600.0, seed=3), None,
+                     AnalyzeOptions(models=ModelStage("none"), horizon_s=50.0))
+    out = tmp_path_factory.mktemp("allan_only")
+    write_analysis(result, out, rostopic="/imu", meta={}, overbound_exports=True)
+    return result, out
+
+
+def test_analysis_overbound_lies_above_the_data_upper_bound_over_the_range(allan_only):
+    result, _ = allan_only
+    allan = result.static.allan
+    for j, axis in enumerate(result.static.axes):
+        ob = result.overbounds[axis]
+        assert ob.tau_range[0] == pytest.approx(result.static.dt) and ob.tau_range[1] <= 50.0
+        in_range = (allan.tau >= ob.tau_range[0]) & (allan.tau <= ob.tau_range[1])
+        assert in_range.sum() > 20
+        av = ob.allan_variance(allan.tau[in_range], result.static.dt)
+        assert np.all(av >= allan.ci_high[in_range, j] * (1 - 1e-12)), axis
+        # not below the Allan-slope values imu.yaml gives without a model stage
+        assert ob.inflation_noise_density >= 1 - 1e-12 and ob.inflation_random_walk >= 1 - 1e-12
+        assert ob.reference_source == "Allan slopes"
+    # the GM bump (σ 3e-4 rad/s over τ ~ 20 s) needs a larger random walk than the slope reading on the gyro
+    assert max(result.overbounds[a].inflation_random_walk for a in ("gyro_x", "gyro_y", "gyro_z")) > 1.5
+
+
+def test_imu_yaml_overbound_section_and_exports(allan_only):
+    result, out = allan_only
+    doc = yaml.safe_load((out / "imu.yaml").read_text())
+    ob = doc["overbound"]
+    assert ob["horizon_s"] == 50.0 and ob["tau_range_s"][0] == pytest.approx(0.01)
+    assert ob["gyroscope_random_walk"] == pytest.approx(max(ob["gyroscope_random_walk_xyz"]))
+    for axis, entry in ob["axes"].items():
+        o = result.overbounds[axis]
+        assert entry["noise_density"] == pytest.approx(o.noise_density, rel=1e-5)
+        assert entry["inflation_random_walk"] == pytest.approx(o.inflation_random_walk, rel=1e-5)
+        assert set(entry) >= {"noise_density", "random_walk", "inflation_noise_density", "inflation_random_walk",
+                              "tau_range_s", "binding_tau_s"}
+    assert "# overbound:" in (out / "imu.yaml").read_text()
+    kalibr = yaml.safe_load((out / "exports" / "overbound" / "kalibr_imu.yaml").read_text())
+    assert kalibr["gyroscope_random_walk"] == pytest.approx(ob["gyroscope_random_walk"], rel=1e-5)
+    plain = yaml.safe_load((out / "exports" / "kalibr_imu.yaml").read_text())
+    assert plain["gyroscope_random_walk"] == pytest.approx(doc["gyroscope_random_walk"], rel=1e-5)
+
+
+def test_a_horizon_shorter_than_the_sampling_period_is_refused_before_the_model_stage(tmp_path, capsys):
+    from imu_noise_id.cli import main
+
+    assert main(["simulate", "--model", "gyro: WN(1e-3); accel: WN(2e-3)", "--rate", "100", "--duration", "60",
+                 "--out", str(tmp_path / "bag"), "--seed", "1"]) == 0
+    capsys.readouterr()
+    assert main(["analyze", str(tmp_path / "bag"), "--horizon", "0.001", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "--horizon 0.001 s is shorter than the sampling period" in err and "Traceback" not in err
+    assert not (tmp_path / "o" / "model.yaml").exists()

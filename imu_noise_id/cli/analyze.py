@@ -11,8 +11,7 @@ import sys
 from pathlib import Path
 
 from ..core.estimation.overbound import DEFAULT_HORIZON_S
-
-DEFAULT_OUT = "imu_noise_id_results"
+from .options import add_out, add_topic, model_spec
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -31,12 +30,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument("bag", type=Path, help="bag file or rosbag2 directory")
-    p.add_argument("--topic", help="sensor_msgs/Imu topic (needed only when the bag has several)")
-    p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
+    add_topic(p)
+    add_out(p, "analyze")
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
     p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
     p.add_argument(
-        "--model", default="auto",
+        "--model", default="auto", type=model_spec("auto", "none"),
         help="EM model fit per axis after the Allan stage: 'auto' (default: BIC over the default candidates), a "
         "structure such as 'WN+GM+RW', or 'none' (Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
         "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
