@@ -148,3 +148,12 @@ def test_fit_prints_the_recording_length_advice(static_bag, tmp_path, capsys):
                  str(tmp_path / "f")]) == 0
     out = capsys.readouterr().out
     assert "How long to record" in out and "gyro_x" in out
+
+
+def test_analyze_shows_the_allan_then_the_model_stage_progress(static_bag, tmp_path, monkeypatch):
+    tty = _Tty()
+    monkeypatch.setattr(sys, "stderr", tty)
+    assert main(["analyze", str(static_bag), "--model", "WN+RW", "--no-loop", "--out", str(tmp_path / "a")]) == 0
+    text = tty.getvalue()
+    assert "\rAllan-family variances [" in text and "\rfitting WN+RW [" in text and "(6/6 axes)" in text
+    assert text.index("Allan-family") < text.index("fitting WN+RW")

@@ -63,17 +63,37 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Read, analyse, write, report. Input problems raise InputError (exit 2)."""
     from ..bag.reader import read_static
+    from ..core.axes import AXES
     from ..pipelines.analyze import AnalyzeOptions, ModelStage, analyze
     from ..report.analysis import write_analysis
-    from ..report.console import final_table, overbound_lines, record_length_lines, summary_table
+    from ..report.console import final_table, fit_line, loop_line, overbound_lines, record_length_lines, summary_table
     from .progress import TextProgress
 
     options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
                              models=ModelStage(args.model), loop=not args.no_loop, horizon_s=args.horizon)
     with TextProgress(f"reading {args.bag.name}") as progress:
         recording = read_static(args.bag, topic=args.topic, progress=progress)
-    with TextProgress("Allan-family variances") as progress:
-        result = analyze(recording.imu, recording.temperature, options, progress=progress, on_axis=_print_axis)
+    allan = TextProgress("Allan-family variances")
+    stage = "model selection" if args.model == "auto" else f"fitting {args.model}"
+    models = TextProgress(stage + (" and closed loop" if options.loop else ""), unit="axes")
+    n_axes = len(AXES)
+    done: list[str] = []
+
+    def allan_progress(k: int, total: int) -> None:
+        allan(k, total)
+        if k == total and options.models.enabled:  # the Allan stage is over: the model stage's bar takes over
+            allan.close()
+            models(0, n_axes)
+
+    def on_axis(axis: str, fit, loop) -> None:
+        done.append(axis)
+        models.echo(fit_line(axis, fit))
+        if loop is not None:
+            models.echo(loop_line(axis, loop))
+        models(len(done), n_axes)
+
+    with allan, models:
+        result = analyze(recording.imu, recording.temperature, options, progress=allan_progress, on_axis=on_axis)
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model}
@@ -88,11 +108,3 @@ def run(args: argparse.Namespace) -> int:
         print(f"warning: {w}", file=sys.stderr)
     print(f"results in {args.out}/: " + ", ".join(paths))
     return 0
-
-
-def _print_axis(axis: str, fit, loop) -> None:
-    from ..report.console import fit_line, loop_line
-
-    print(fit_line(axis, fit), flush=True)
-    if loop is not None:
-        print(loop_line(axis, loop), flush=True)

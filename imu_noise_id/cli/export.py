@@ -22,8 +22,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "'overbound:': the smallest WN+RW covering the data's upper 95 % Allan bound over the filter's "
                     "tau range) into OUT/overbound/.")
     p.add_argument("source", type=Path, help="an analyze output folder or its imu.yaml")
-    p.add_argument("--format", nargs="+", default=["all"], choices=[*FORMATS, "all"],
-                   help=f"formats: {', '.join(FORMATS)} or all (default: all)")
+    p.add_argument("--format", nargs="+", default=["all"], choices=[*FORMATS, "all"], metavar="FORMAT",
+                   help=f"one or more of {', '.join(FORMATS)}, or all (default: all)")
     p.add_argument("--overbound", action="store_true",
                    help="export the overbound of imu.yaml (not the fitted values), into OUT/overbound/")
     p.add_argument("--out", type=Path, help="output directory (default: SOURCE_FOLDER/exports)")
