@@ -183,3 +183,17 @@ def test_overbound_exports_use_the_overbound_section(tmp_path):
     assert rep["angular_velocity_stddev"] == pytest.approx(3.4e-4 * math.sqrt(200.0))
     with pytest.raises(Exception, match="no 'overbound:' section"):
         write_exports(DOC, tmp_path, ("kalibr",), overbound=True)
+
+
+def test_export_command_formats_and_overbound(tmp_path, capsys):
+    ob = {"gyroscope_noise_density": 3.4e-4, "gyroscope_random_walk": 8.0e-5, "accelerometer_noise_density": 4.0e-3,
+          "accelerometer_random_walk": 9.0e-4, "tau_range_s": [0.005, 100.0]}
+    (tmp_path / "imu.yaml").write_text(yaml.safe_dump({**DOC, "overbound": ob}))
+    assert main(["export", str(tmp_path), "--format", "vins", "px4", "--overbound"]) == 0
+    assert sorted(p.name for p in (tmp_path / "exports" / "overbound").iterdir()) == ["px4_ekf2.params",
+                                                                                       "vins_imu.yaml"]
+    assert main(["export", str(tmp_path)]) == 0
+    assert {p.name for p in (tmp_path / "exports").iterdir() if p.is_file()} == {n for n, _ in FORMATS.values()}
+    (tmp_path / "imu.yaml").write_text(yaml.safe_dump(DOC))
+    assert main(["export", str(tmp_path), "--overbound"]) == 2
+    assert "no 'overbound:' section" in capsys.readouterr().err
