@@ -199,8 +199,8 @@ def wn_grid_effect(trials: int, dt: float, duration: float) -> None:
                          record=[round(duration / dt)], case="3")
         print(f"  σ_v grid {n_v:2d} cells: identification error real {r.error_probability_real[-1]:.3f}, calculated "
               f"{r.error_probability_calculated[-1]:.3f}; RSD σ_v (RW/GM) real "
-              f"{r.rsd_real['RW+WN:WN.noise_density'][-1]:.3f}/{r.rsd_real['GM+WN:WN.noise_density'][-1]:.3f}, calc. "
-              f"{r.rsd_calculated['RW+WN:WN.noise_density'][-1]:.3f}/{r.rsd_calculated['GM+WN:WN.noise_density'][-1]:.3f}")
+              f"{r.rsd_real['WN+RW:WN.noise_density'][-1]:.3f}/{r.rsd_real['WN+GM:WN.noise_density'][-1]:.3f}, calc. "
+              f"{r.rsd_calculated['WN+RW:WN.noise_density'][-1]:.3f}/{r.rsd_calculated['WN+GM:WN.noise_density'][-1]:.3f}")
 
 
 def default_set_examples() -> None:

@@ -48,7 +48,7 @@ def main() -> int:
     try:
         start = time.monotonic()
         subprocess.run([sys.executable, "-m", "imu_noise_id", "play", str(BAG), "--rate", str(args.rate), "--quiet",
-                        "--delay", "15", "--topics", "/imu/data", "/husky_velocity_controller/odom"],
+                        "--delay", "15", "--topic", "/imu/data", "/husky_velocity_controller/odom"],
                        env=env, check=True)
         print(f"played {BAG.name} at {args.rate:g}x in {time.monotonic() - start:.1f} s; the node's view at the end:")
         sys.stdout.flush()

@@ -53,6 +53,7 @@ LONG: list[tuple[list[str], str]] = [
     (["loop_measured.py", "--samples", "100000", "--mtig-samples", "100000"], "loop_measured.txt"),
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
     (["bench_adis_analysis.py"], "adis_run1_analysis.txt"),
+    (["bench_overbound.py"], "bench_overbound.txt"),
 ]
 
 

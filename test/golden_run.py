@@ -42,7 +42,7 @@ def generate(work: Path) -> dict[str, Path]:
     out = {}
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
-        assert main(["analyze", str(static), "--out", str(work / "analyze")]) == 0
+        assert main(["analyze", str(static), "--out", str(work / "analyze"), "--overbound"]) == 0
     (work / "analyze_stdout.txt").write_text(printed.getvalue())
     out["analyze_imu.yaml"] = work / "analyze" / "imu.yaml"
     out["analyze_model.yaml"] = work / "analyze" / "model.yaml"
@@ -52,7 +52,7 @@ def generate(work: Path) -> dict[str, Path]:
     assert main(["cmkf", str(robot), "--imu-rotation", "-1.570796327", "0", "1.570796327", "--out",
                  str(work / "cmkf"), "--no-plot"]) == 0
     out["cmkf.yaml"] = work / "cmkf" / "cmkf.yaml"
-    assert main(["identify", str(static), "--axis", "gyro_x", "accel_z", "--out", str(work / "identify"),
+    assert main(["identify", str(static), "--axis", "gyro_x,accel_z", "--out", str(work / "identify"),
                  "--no-plot"]) == 0
     out["hypotheses.yaml"] = work / "identify" / "hypotheses.yaml"
     assert main(["criteria", "--case", "2", "--trials", "20", "--duration", "200", "--out", str(work / "criteria"),

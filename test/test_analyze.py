@@ -64,7 +64,8 @@ def test_kalibr_numbers_are_the_max_over_axes(hour_result):
 def test_outputs_files_units_and_values(hour_result, tmp_path):
     paths = write_analysis(AnalysisResult(hour_result), tmp_path, rostopic="/imu/data", meta={})
     assert set(paths) == {"imu.yaml", "allan.csv", "allan.png", "exports/kalibr_imu_chain.yaml",
-                          "exports/orbslam3_imu.yaml", "exports/rep145_driver_params.yaml"}
+                          "exports/orbslam3_imu.yaml", "exports/rep145_driver_params.yaml", "exports/kalibr_imu.yaml",
+                          "exports/vins_imu.yaml", "exports/gtsam_imu.yaml", "exports/px4_ekf2.params"}
     text = (tmp_path / "imu.yaml").read_text()
     assert "rad/s/sqrt(Hz)" in text and "m/s^3/sqrt(Hz)" in text  # units stated in the comment header
     doc = yaml.safe_load(text)
@@ -144,6 +145,28 @@ def test_cli_analyze_end_to_end(golden_run):
         assert n == pytest.approx(1e-3, rel=0.05)  # golden_run.STATIC_MODEL
     for n in doc["accelerometer_noise_density_xyz"]:
         assert n == pytest.approx(2e-3, rel=0.05)
+    assert "How long to record" in printed and "Overbound" in printed
+    # the overbound (analyze --overbound): above the data's upper 95 % bound (allan.csv) and the final model's AV
+    # at every τ of its range, with the exports of its values
+    from imu_noise_id.core.estimation.overbound import WnRwOverbound
+    from imu_noise_id.core.noise.components import COMPONENT_TYPES
+
+    lines = (out / "allan.csv").read_text().splitlines()
+    header = next(ln for ln in lines if not ln.startswith("#")).split(",")
+    table = np.loadtxt([ln for ln in lines if not ln.startswith("#")][1:], delimiter=",")
+    tau = table[:, 0]
+    for axis, entry in doc["overbound"]["axes"].items():
+        lo, hi = entry["tau_range_s"]
+        keep = (tau >= lo * (1 - 1e-9)) & (tau <= hi * (1 + 1e-9))
+        ob = WnRwOverbound(entry["noise_density"], entry["random_walk"], (), (False, False), 1.0)
+        av = ob.allan_variance(tau[keep], 0.01)
+        assert np.all(av >= table[keep, header.index(f"{axis}_ci_high")] * (1 - 1e-5)), axis
+        final = [COMPONENT_TYPES[c["type"]](**{p: c[p] for p in COMPONENT_TYPES[c["type"]].parameter_names})
+                 for c in models[axis]["final"]["components"]]
+        model_av = sum(c.allan_variance(tau[keep], 0.01) for c in final)
+        assert np.all(av >= model_av * (1 - 1e-4)), axis
+        assert entry["inflation_noise_density"] >= 1 - 1e-5 and entry["inflation_random_walk"] >= 1 - 1e-5
+    assert (out / "exports" / "overbound" / "vins_imu.yaml").is_file()
 
 
 def test_cli_analyze_input_errors_exit_2(tmp_path, capsys):

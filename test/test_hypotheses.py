@@ -98,8 +98,8 @@ def test_gap_equals_repeated_prediction():
 # -- identification ---------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize(("truth", "name", "params"), [
-    ([RW(0.1), WN(0.5)], "RW+WN", {"RW.random_walk": 0.1}),
-    ([GM(120.0, 1.2), WN(0.5)], "GM+WN", {"GM.tau": 120.0, "GM.sigma": 1.2}),
+    ([RW(0.1), WN(0.5)], "WN+RW", {"RW.random_walk": 0.1}),
+    ([GM(120.0, 1.2), WN(0.5)], "WN+GM", {"GM.tau": 120.0, "GM.sigma": 1.2}),
 ])
 def test_most_probable_is_true_and_estimates_within_rsd(truth, name, params):
     # 4000 s at 1 s, paper-002 ranges, known σ_v: a clear case (fast GM, mid-range RW) must be recognised,
@@ -130,8 +130,8 @@ def test_block_averaged_bank_on_averaged_data():
     bank = HypothesisBank(hset)
     res = bank.run(y)
     assert res.final.n_updates == 3000
-    assert res.final.probabilities["GM+WN"] > 0.9
-    est = res.final.hypotheses["GM+WN"]
+    assert res.final.probabilities["WN+GM"] > 0.9
+    est = res.final.hypotheses["WN+GM"]
     assert abs(est.theta["GM.tau"] - 100.0) <= 4 * est.theta_std["GM.tau"] + 12.0
     assert abs(est.theta["GM.sigma"] - 1.0) <= 4 * est.theta_std["GM.sigma"] + 0.12
 
@@ -169,9 +169,9 @@ def test_streaming_equals_batch_exactly(block):
         snap = stream.step(v)
         if stream._n_updates > before:
             probs.append([snap.probabilities[n] for n in hset.names])
-            thetas.append(snap.hypotheses["GM+WN"].theta["GM.tau"])
+            thetas.append(snap.hypotheses["WN+GM"].theta["GM.tau"])
     np.testing.assert_array_equal(np.array(probs), res.probabilities)
-    np.testing.assert_array_equal(np.array(thetas), res.theta["GM+WN"][:, 0])
+    np.testing.assert_array_equal(np.array(thetas), res.theta["WN+GM"][:, 0])
     assert snap == res.final
     # run() continues from step(): feeding the rest in two pieces equals one piece
     a, b = HypothesisBank(hset), HypothesisBank(hset)
@@ -206,7 +206,7 @@ def test_gap_keeps_bank_consistent():
     assert snap.t == pytest.approx(2000.0)
     assert snap.n_updates == 1500
     assert sum(snap.probabilities.values()) == pytest.approx(1.0)
-    assert snap.probabilities["RW+WN"] > 0.5
+    assert snap.probabilities["WN+RW"] > 0.5
     with pytest.raises(InputError):
         bank.gap(-1)
 
@@ -366,7 +366,7 @@ def test_criteria_cli_writes_json(tmp_path):
     doc = json.loads((tmp_path / "criteria.json").read_text())
     assert {"case", "trials", "dt", "t", "error_probability", "rsd"} <= set(doc)
     assert set(doc["error_probability"]) >= {"real", "calculated"}
-    assert "RW+WN:RW.random_walk" in doc["rsd"]["real"] and "GM+WN:GM.tau" in doc["rsd"]["calculated"]
+    assert "WN+RW:RW.random_walk" in doc["rsd"]["real"] and "WN+GM:GM.tau" in doc["rsd"]["calculated"]
     assert len(doc["t"]) == len(doc["error_probability"]["real"])
     assert main(["criteria", "--case", "2", "--trials", "1", "--out", str(tmp_path)]) == 2
 
@@ -388,7 +388,7 @@ def test_small_criteria_run_near_paper_numbers():
     r2 = run_criteria(paper_case(2, dt=0.1, grid=grid), 300.0, 40, seed=2, record=[10, 1000, 3000])
     assert r2.error_probability_real[-1] <= 0.15
     assert abs(r2.error_probability_calculated[-1] - r2.error_probability_real[-1]) <= 0.1
-    rsd_real, rsd_calc = r2.rsd_real["RW+WN:RW.random_walk"], r2.rsd_calculated["RW+WN:RW.random_walk"]
+    rsd_real, rsd_calc = r2.rsd_real["WN+RW:RW.random_walk"], r2.rsd_calculated["WN+RW:RW.random_walk"]
     assert rsd_real[-1] < rsd_real[0] and rsd_calc[-1] < rsd_calc[0]
     assert 0.5 < rsd_real[-1] / rsd_calc[-1] < 2.0
 
@@ -426,8 +426,8 @@ def test_frozen_gains_change_little():
     frozen = HypothesisBank(rw_gm_set(n_rw=8, n_gm=6, gain_tolerance=1e-5))
     a, b = exact.run(y).final, frozen.run(y).final
     assert frozen._filters.frozen and not exact._filters.frozen
-    assert abs(a.probabilities["GM+WN"] - b.probabilities["GM+WN"]) < 0.02
-    assert b.hypotheses["GM+WN"].theta["GM.tau"] == pytest.approx(a.hypotheses["GM+WN"].theta["GM.tau"], rel=0.02)
+    assert abs(a.probabilities["WN+GM"] - b.probabilities["WN+GM"]) < 0.02
+    assert b.hypotheses["WN+GM"].theta["GM.tau"] == pytest.approx(a.hypotheses["WN+GM"].theta["GM.tau"], rel=0.02)
 
 
 def test_grid_refinement_zooms_on_the_posterior():
@@ -444,9 +444,9 @@ def test_grid_refinement_zooms_on_the_posterior():
     res, ident, passes = identify_offline(y, coarse, 0.0, 1.0, refine=2)
     fine, _, _ = identify_offline(y, rw_gm_set(n_rw=8, n_gm=40), 0.0, 1.0, refine=0)
     assert passes == 3
-    assert res.final.decision == fine.final.decision == "GM+WN"
-    assert res.final.probabilities["GM+WN"] == pytest.approx(fine.final.probabilities["GM+WN"], abs=0.02)
-    e0, e, ef = (r.final.hypotheses["GM+WN"] for r in (first, res, fine))
+    assert res.final.decision == fine.final.decision == "WN+GM"
+    assert res.final.probabilities["WN+GM"] == pytest.approx(fine.final.probabilities["WN+GM"], abs=0.02)
+    e0, e, ef = (r.final.hypotheses["WN+GM"] for r in (first, res, fine))
     for p in ("GM.tau", "GM.sigma"):
         assert e0.theta_std[p] < 0.4 * ef.theta_std[p]  # the coarse grid's posterior collapsed
         assert abs(e.theta[p] - ef.theta[p]) <= 0.5 * ef.theta_std[p]
@@ -457,5 +457,5 @@ def test_grid_refinement_zooms_on_the_posterior():
             assert p.low <= edges[0] < edges[-1] <= p.high
             assert p.cells()[1].sum() == pytest.approx((edges[-1] - edges[0]) / (p.high - p.low))
     with pytest.raises(InputError, match="inside its prior range"):
-        refine_hypothesis_set(coarse, {"RW+WN": {"RW.random_walk": 1.0}, "GM+WN": {"GM.tau": 1e5, "GM.sigma": 1.0}},
-                              {"RW+WN": {"RW.random_walk": 0.0}, "GM+WN": {"GM.tau": 0.0, "GM.sigma": 0.0}})
+        refine_hypothesis_set(coarse, {"WN+RW": {"RW.random_walk": 1.0}, "WN+GM": {"GM.tau": 1e5, "GM.sigma": 1.0}},
+                              {"WN+RW": {"RW.random_walk": 0.0}, "WN+GM": {"GM.tau": 0.0, "GM.sigma": 0.0}})

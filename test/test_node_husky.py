@@ -50,7 +50,7 @@ def test_husky_bag_replays_clean_through_the_node(shared_data, ros_env, tmp_path
             observer.create_subscription(DiagnosticArray, "/diagnostics", arrays.append, 50)
             player = subprocess.Popen(
                 [sys.executable, "-m", "imu_noise_id", "play", str(bag), "--rate", "20", "--quiet", "--delay", "15",
-                 "--topics", "/imu/data", "/husky_velocity_controller/odom",
+                 "--topic", "/imu/data", "/husky_velocity_controller/odom",
                  "--remap", "/imu/data:=/husky/imu", "/husky_velocity_controller/odom:=/husky/odom"], env=env,
             )
             end = time.monotonic() + 120

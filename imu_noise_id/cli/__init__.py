@@ -1,6 +1,7 @@
 """``imu-noise-id`` command line: one module per subcommand, each with ``register(subparsers)``.
 
-Exit codes: 0 success, 2 usage or input error (one message on stderr, no traceback), 1 internal error.
+Exit codes: 0 success, 2 usage or input error (one message on stderr, no traceback), 1 internal error. Shared
+options (``--out`` defaults, ``--topic``, ``--axis``, model specs) are spelt once in :mod:`.options`.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import sys
 from pathlib import Path
 
 from ..core.errors import InputError
+from .options import resolve_out
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
 COMMANDS: tuple[str, ...] = (
@@ -59,16 +61,26 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of ``imu-noise-id`` (and ``python -m imu_noise_id``)."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    made: Path | None = None  # an output folder this run created, removed again if the run fails and left it empty
     try:
         if args.command in DIRECTORY_OUTPUT:
-            check_output_dir(Path(args.out))
+            out = resolve_out(args)
+            made = None if out.exists() else out
+            check_output_dir(out)
         return int(args.run(args) or 0)
     except InputError as exc:
         print(f"imu-noise-id {args.command}: error: {exc}", file=sys.stderr)
+        _remove_if_empty(made)
         return 2
     except BrokenPipeError:  # e.g. `imu-noise-id simulate … | head`: the reader left, the work is done
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except KeyboardInterrupt:
         print(f"imu-noise-id {args.command}: interrupted", file=sys.stderr)
+        _remove_if_empty(made)
         return 130
+
+
+def _remove_if_empty(path: Path | None) -> None:
+    if path is not None and path.is_dir() and not any(path.iterdir()):
+        path.rmdir()

@@ -10,7 +10,8 @@ import argparse
 import sys
 from pathlib import Path
 
-DEFAULT_OUT = "imu_noise_id_results"
+from ..core.estimation.overbound import DEFAULT_HORIZON_S
+from .options import add_out, add_topic, model_spec
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -29,12 +30,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument("bag", type=Path, help="bag file or rosbag2 directory")
-    p.add_argument("--topic", help="sensor_msgs/Imu topic (needed only when the bag has several)")
-    p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
+    add_topic(p)
+    add_out(p, "analyze")
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
     p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
     p.add_argument(
-        "--model", default="auto",
+        "--model", default="auto", type=model_spec("auto", "none"),
         help="EM model fit per axis after the Allan stage: 'auto' (default: BIC over the default candidates), a "
         "structure such as 'WN+GM+RW', or 'none' (Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
         "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
@@ -43,6 +44,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--allow-motion", action="store_true",
         help="analyse even if the static check finds motion (its findings become warnings)",
     )
+    p.add_argument(
+        "--horizon", type=float, default=DEFAULT_HORIZON_S, metavar="S",
+        help="longest time scale [s] the overbound must cover: the smallest WN+RW whose Allan variance lies above "
+        "the data's upper bound and the final model from the sampling period to S (imu.yaml 'overbound:', "
+        f"report.html; default {DEFAULT_HORIZON_S:g})")
+    p.add_argument("--overbound", action="store_true",
+                   help="also write the exports of the overbound's values into DIR/exports/overbound/")
     p.add_argument(
         "--no-loop", action="store_true",
         help="skip the closed loop that follows the model fit (residual diagnosis: adds missing GM/RW/RR/QN, "
@@ -55,34 +63,48 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Read, analyse, write, report. Input problems raise InputError (exit 2)."""
     from ..bag.reader import read_static
+    from ..core.axes import AXES
     from ..pipelines.analyze import AnalyzeOptions, ModelStage, analyze
     from ..report.analysis import write_analysis
-    from ..report.console import final_table, summary_table
+    from ..report.console import final_table, fit_line, loop_line, overbound_lines, record_length_lines, summary_table
     from .progress import TextProgress
 
     options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
-                             models=ModelStage(args.model), loop=not args.no_loop)
+                             models=ModelStage(args.model), loop=not args.no_loop, horizon_s=args.horizon)
     with TextProgress(f"reading {args.bag.name}") as progress:
         recording = read_static(args.bag, topic=args.topic, progress=progress)
-    with TextProgress("Allan-family variances") as progress:
-        result = analyze(recording.imu, recording.temperature, options, progress=progress, on_axis=_print_axis)
+    allan = TextProgress("Allan-family variances")
+    stage = "model selection" if args.model == "auto" else f"fitting {args.model}"
+    models = TextProgress(stage + (" and closed loop" if options.loop else ""), unit="axes")
+    n_axes = len(AXES)
+    done: list[str] = []
+
+    def allan_progress(k: int, total: int) -> None:
+        allan(k, total)
+        if k == total and options.models.enabled:  # the Allan stage is over: the model stage's bar takes over
+            allan.close()
+            models(0, n_axes)
+
+    def on_axis(axis: str, fit, loop) -> None:
+        done.append(axis)
+        models.echo(fit_line(axis, fit))
+        if loop is not None:
+            models.echo(loop_line(axis, loop))
+        models(len(done), n_axes)
+
+    with allan, models:
+        result = analyze(recording.imu, recording.temperature, options, progress=allan_progress, on_axis=on_axis)
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model}
     paths = write_analysis(result, args.out, rostopic=recording.imu.topic, meta=meta,
-                           title=f"IMU noise analysis: {args.bag.name}")
+                           title=f"IMU noise analysis: {args.bag.name}", overbound_exports=args.overbound)
     print(summary_table(result.static), flush=True)
     if result.finals:
         print(final_table(result.finals), flush=True)
+    for line in [*record_length_lines(result.fits), *overbound_lines(result.overbounds)]:
+        print(line, flush=True)
     for w in result.static.warnings:
         print(f"warning: {w}", file=sys.stderr)
     print(f"results in {args.out}/: " + ", ".join(paths))
     return 0
-
-
-def _print_axis(axis: str, fit, loop) -> None:
-    from ..report.console import fit_line, loop_line
-
-    print(fit_line(axis, fit), flush=True)
-    if loop is not None:
-        print(loop_line(axis, loop), flush=True)

@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-DEFAULT_OUT = "imu_noise_id_batch"
+from .options import add_out, add_topic, model_spec
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -21,23 +21,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "Run the analyze pipeline on every (bag, IMU topic) unit of the inputs on Dask: a local cluster of "
             "worker processes on 127.0.0.1 by default, or an existing one with --scheduler. Each unit's outputs "
             "land in DIR/<unit>/ as analyze writes them; DIR/fleet.csv and DIR/fleet.parquet hold one row per unit "
-            "and axis (N, K, bias instability with 95 %% intervals, model, loop verdict, warnings, error); "
+            "and axis (N, K, bias instability with 95 % intervals, model, loop verdict, warnings, error); "
             "DIR/fleet_report.html shows their spread, robust outliers and the pass/fail against --spec. A failed "
             "unit is recorded and the batch goes on; rerunning the same command skips units whose bag contents and "
             "options are unchanged."),
     )
     p.add_argument("inputs", nargs="*", metavar="BAG_OR_GLOB", help="bags, rosbag2 folders or glob patterns")
     p.add_argument("--manifest", type=Path, help="YAML (bags: [{path, topics}]) or text file (one path per line)")
-    p.add_argument("--topics", nargs="+", default=["all"],
-                   help="IMU topics to analyse in every bag (default: all sensor_msgs/Imu topics of each bag)")
+    add_topic(p, "IMU topics to analyse in every bag, or all (default: all sensor_msgs/Imu topics of each bag)",
+              aliases=("--topics",), several=True, default=["all"])
     p.add_argument("--spec", type=Path,
                    help="datasheet limits, YAML: {gyro: {noise_density: …, random_walk: …, bias_instability: …}, "
                         "accel: {…}} (SI units, the largest allowed values)")
-    p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
+    add_out(p, "batch", per_bag=False)
     p.add_argument("--workers", type=int, default=2, help="local cluster: worker processes (default: 2)")
     p.add_argument("--memory-limit", default="4GiB", help="local cluster: memory limit per worker (default: 4GiB)")
     p.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    p.add_argument("--model", default="auto", help="model stage as for analyze: auto, a structure, or none")
+    p.add_argument("--model", default="auto", type=model_spec("auto", "none"),
+                   help="model stage as for analyze: auto, a structure, or none")
     p.add_argument("--no-loop", action="store_true", help="skip the closed loop (as for analyze)")
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade (default: 8)")
     p.add_argument("--allow-motion", action="store_true", help="analyse even if the static check finds motion")
@@ -69,15 +70,12 @@ def run(args: argparse.Namespace) -> int:
     """Discover the units, run them on Dask, write the fleet table and report."""
     from ..batch import BatchProgress, discover_units, open_client, run_batch
     from ..core.errors import InputError
-    from ..core.noise.modelspec import parse_structure
     from ..report.fleet import annotate, write_fleet_report, write_tables
 
     if args.workers < 1:
         raise InputError(f"--workers must be >= 1, got {args.workers}")
-    if args.model not in ("auto", "none"):
-        parse_structure(args.model)
     spec = _spec(args.spec)
-    units = discover_units(list(args.inputs), list(args.topics), args.manifest)
+    units = discover_units(list(args.inputs), list(args.topic), args.manifest)
     options = {"model": args.model, "loop": not args.no_loop, "per_decade": args.per_decade,
                "allow_motion": args.allow_motion}
     where = args.scheduler or f"a local cluster of {args.workers} workers on 127.0.0.1"

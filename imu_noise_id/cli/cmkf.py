@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..core.cmkf.config import MEASUREMENTS, CmkfConfig
 from ..core.errors import InputError
+from .options import add_out, add_topic
 
 #: The defaults of the options: the CMKF's own.
 _DEFAULTS = CmkfConfig()
@@ -41,10 +42,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("bag", type=Path, metavar="BAG", help="ROS 1 .bag, rosbag2 directory, .db3 or .mcap")
-    p.add_argument("--topic", "--imu-topic", dest="imu_topic", default=None, metavar="T",
-                   help="sensor_msgs/Imu topic (needed if several; --imu-topic is the same option)")
+    add_topic(p, "sensor_msgs/Imu topic (needed if several)", aliases=("--imu-topic",))
     p.add_argument("--odom-topic", default=None, metavar="T", help="nav_msgs/Odometry topic (needed if several)")
-    p.add_argument("--out", type=Path, default=Path("cmkf_out"), metavar="DIR", help="output directory (cmkf_out)")
+    add_out(p, "cmkf")
     p.add_argument(
         "--imu-rotation", type=float, nargs="+", default=None, metavar="V",
         help="IMU orientation in the base frame: 3 numbers = yaw pitch roll [rad] (static_transform_publisher "
@@ -124,7 +124,11 @@ def run(args: argparse.Namespace) -> int:
         config.validate()
     except ValueError as exc:
         raise InputError(f"parameter: {exc}") from None
-    contents = read_bag(args.bag, imu_topic=args.imu_topic, odom_topic=args.odom_topic, require_odometry=True)
+    from .progress import TextProgress
+
+    with TextProgress(f"reading {args.bag.name}") as progress:
+        contents = read_bag(args.bag, imu_topic=args.topic, odom_topic=args.odom_topic, require_odometry=True,
+                            progress=progress)
     imu_orientation = contents.imu.orientation_xyzw
     gravity_from = args.gravity_from or ("imu" if imu_orientation is not None else "odom")
     if gravity_from == "imu" and imu_orientation is None:
@@ -133,14 +137,15 @@ def run(args: argparse.Namespace) -> int:
             "(orientation_covariance[0] = -1 or a zero quaternion): use --gravity-from odom"
         )
     config.gravity_source = "imu" if gravity_from == "imu" else "odometry"
-    result = replay(contents.imu, contents.odom, config, imu_orientation if gravity_from == "imu" else None)
+    with TextProgress("CMKF replay", unit="odometry messages") as progress:
+        result = replay(contents.imu, contents.odom, config, imu_orientation if gravity_from == "imu" else None,
+                        progress=progress)
     notes = [*contents.notes]
     if gravity_from == "imu" and not np.isfinite(imu_orientation).all():
         notes.append("some Imu messages provide no orientation: gravity uses the last one provided (the odometry's "
                      "before the first)")
     if result.final.n_stacked == 0:
         notes.append("no stacked sample: S_v is the initial value (odometry too short or not overlapping the IMU)")
-    args.out.mkdir(parents=True, exist_ok=True)
     data = to_yaml_dict(result, notes)
     data["filter"]["bag"] = str(args.bag)
     (args.out / "cmkf.yaml").write_text(yaml.safe_dump(data, sort_keys=False))

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import math
-from pathlib import Path
 from typing import Any
+
+from .options import add_out
 
 #: Bounds that keep a run within a machine's memory and a day (the paper's cases use 500 trials of 2000 s).
 MAX_TRIALS = 100_000
@@ -33,7 +34,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--bias-sigma", type=float, default=1.0,
                    help="prior std of the constant bias [u], truth drawn from it too (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
-    p.add_argument("--out", default="criteria_out", metavar="DIR", help="output directory (default: %(default)s)")
+    add_out(p, "criteria", per_bag=False)
     p.add_argument("--no-plot", action="store_true", help="skip the PNG plot")
     p.set_defaults(run=run)
 
@@ -50,9 +51,13 @@ def run(args: argparse.Namespace) -> int:
     if args.duration / args.dt > MAX_SAMPLES:
         raise InputError(f"--duration / --dt = {args.duration / args.dt:.3g} samples per trial: at most "
                          f"{MAX_SAMPLES:g}; shorten --duration or raise --dt")
+    from .progress import TextProgress
+
     hset = paper_case(args.case, dt=args.dt, bias_sigma=args.bias_sigma)
-    result = run_criteria(hset, args.duration, args.trials, seed=args.seed, case=str(args.case))
-    out = Path(args.out)
+    with TextProgress(f"case {args.case}: {args.trials} trials", unit="trial-records") as progress:
+        result = run_criteria(hset, args.duration, args.trials, seed=args.seed, case=str(args.case),
+                              progress=progress)
+    out = args.out
     write_criteria_json(result, out / "criteria.json")
     if not args.no_plot:
         from ..report.hypotheses_plots import plot_criteria

@@ -14,11 +14,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     from ..report.exports import FORMATS
 
     p = subparsers.add_parser(
-        "export", help="write the noise figures for OpenVINS, ORB-SLAM3 or a REP-145 driver from an imu.yaml",
-        description="Convert an analysis's imu.yaml (its final models' numbers) into another filter's format, each "
-                    "in its own units and conventions (stated in the file's header; see docs/analysis.md).")
+        "export", help="write the noise figures for Kalibr, OpenVINS, VINS, ORB-SLAM3, GTSAM, PX4 EKF2 or a REP-145 "
+                       "driver from an imu.yaml",
+        description="Convert an analysis's imu.yaml (its final models' numbers) into other filters' formats, each in "
+                    "its own units and continuous/discrete convention, stated with the formula in the file's header "
+                    "(docs/analysis.md#exports). --overbound writes the overbound's values instead (imu.yaml "
+                    "'overbound:': the smallest WN+RW covering the data's upper 95 % Allan bound over the filter's "
+                    "tau range) into OUT/overbound/.")
     p.add_argument("source", type=Path, help="an analyze output folder or its imu.yaml")
-    p.add_argument("--format", nargs="+", default=["all"], choices=[*FORMATS, "all"], help="formats (default: all)")
+    p.add_argument("--format", nargs="+", default=["all"], choices=[*FORMATS, "all"], metavar="FORMAT",
+                   help=f"one or more of {', '.join(FORMATS)}, or all (default: all)")
+    p.add_argument("--overbound", action="store_true",
+                   help="export the overbound of imu.yaml (not the fitted values), into OUT/overbound/")
     p.add_argument("--out", type=Path, help="output directory (default: SOURCE_FOLDER/exports)")
     p.set_defaults(run=run)
 
@@ -39,6 +46,6 @@ def run(args: argparse.Namespace) -> int:
     if not isinstance(doc, dict):
         raise InputError(f"{str(path)!r} is not an imu.yaml written by imu-noise-id analyze")
     formats = tuple(FORMATS) if "all" in args.format else tuple(args.format)
-    for p in write_exports(doc, args.out or path.parent / "exports", formats):
+    for p in write_exports(doc, args.out or path.parent / "exports", formats, overbound=args.overbound):
         print(p)
     return 0

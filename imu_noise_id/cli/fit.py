@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
+
+from .options import add_axis, add_out, add_topic, model_spec
 
 DESCRIPTION = """\
 Fit a stochastic error model to the static IMU record in BAG by maximum likelihood (constrained EM of
@@ -20,12 +21,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("fit", help="fit an error model (EM / maximum likelihood) and write model.yaml",
                               description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("bag", metavar="BAG", help="bag file / rosbag2 directory, or .npz with t, gyro, accel")
-    p.add_argument("--model", required=True,
+    p.add_argument("--model", required=True, type=model_spec("auto"),
                    help="structure, e.g. 'WN+GM+RW+RR' or 'WN+2GM'; 'auto' ranks the default candidates by BIC")
-    p.add_argument("--axis", action="append", default=None,
-                   help="axis to fit (gyro_x … accel_z; repeatable); default: all six")
-    p.add_argument("--topic", default=None, help="IMU topic in the bag (default: the only sensor_msgs/Imu topic)")
-    p.add_argument("--out", default=".", metavar="DIR", help="output directory (default: current directory)")
+    add_axis(p)
+    add_topic(p)
+    add_out(p, "fit")
     p.add_argument("--drift", choices=("em", "ls"), default="em",
                    help="with RR: estimate the ramp jointly (em, default) or remove a least-squares line first (ls)")
     p.add_argument("--starts", type=int, default=3, help="Allan-variance initial values tried (default 3)")
@@ -35,26 +35,33 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Check the options, read the bag, fit each axis (progress on stderr), write model.yaml, print the advice."""
     from ..bag.reader import read_static
-    from ..core.axes import AXES
-    from ..core.errors import InputError
     from ..core.estimation.model import FitOptions
     from ..core.timing import sampling_period
     from ..pipelines.analyze.models import ModelStage, fit_axes
-    from ..report.console import fit_line
+    from ..report.console import fit_line, record_length_lines
     from ..report.model_yaml import write_model_yaml
+    from .options import parse_axes
+    from .progress import TextProgress
 
-    axes = args.axis or list(AXES)
-    bad = [a for a in axes if a not in AXES]
-    if bad:
-        raise InputError(f"unknown axis {', '.join(bad)}: use {', '.join(AXES)}")
+    axes = parse_axes(args.axis)
     stage = ModelStage(args.model, FitOptions(n_starts=args.starts, target_precision=args.target_precision),
                        args.drift)
-    series = read_static(args.bag, topic=args.topic).imu
-    models = fit_axes(series, axes, stage, sampling_period(series.t),
-                      on_fit=lambda axis, fit: print(fit_line(axis, fit), flush=True))
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    with TextProgress(f"reading {args.bag}") as progress:
+        series = read_static(args.bag, topic=args.topic, progress=progress).imu
+    with TextProgress(f"fitting {args.model}", unit="axes") as progress:
+        progress(0, len(axes))
+        fitted: list[str] = []
+
+        def on_fit(axis: str, fit) -> None:
+            fitted.append(axis)
+            progress.echo(fit_line(axis, fit))
+            progress(len(fitted), len(axes))
+
+        models = fit_axes(series, axes, stage, sampling_period(series.t), on_fit=on_fit)
     meta = {"source": str(args.bag), "topic": series.topic, "command": "fit", "model": args.model}
-    print(f"wrote {write_model_yaml(out / 'model.yaml', models, meta=meta)}")
+    print(f"wrote {write_model_yaml(args.out / 'model.yaml', models, meta=meta)}")
+    for line in record_length_lines({axis: m.fit for axis, m in models.items()}):
+        print(line)
     return 0

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from ..core.axes import AXES
+from .options import add_axis, add_out, add_topic
 
 
 def register(subparsers: Any) -> None:
@@ -21,13 +21,13 @@ def register(subparsers: Any) -> None:
             "DIR/hypotheses_probabilities.csv and DIR/hypotheses_probabilities.png."
         ),
     )
-    p.add_argument("bag", help="rosbag2 directory, .mcap/.db3 file or ROS 1 .bag with a static IMU recording")
+    p.add_argument("bag", type=Path,
+                   help="rosbag2 directory, .mcap/.db3 file or ROS 1 .bag with a static IMU recording")
     p.add_argument("--hypotheses", metavar="FILE", default=None,
                    help="hypothesis set YAML (default: config/hypotheses_default.yaml)")
-    p.add_argument("--axis", nargs="+", default=list(AXES), choices=AXES, metavar="AXIS",
-                   help=f"axes to analyse (default: all six: {' '.join(AXES)})")
-    p.add_argument("--topic", default=None, help="sensor_msgs/Imu topic (default: the only IMU topic)")
-    p.add_argument("--out", default="identify_out", metavar="DIR", help="output directory (default: %(default)s)")
+    add_axis(p)
+    add_topic(p)
+    add_out(p, "identify")
     p.add_argument("--refine", type=int, default=2, metavar="N",
                    help="grid-refinement passes: rerun with grids re-centred on the posterior (default: %(default)s)")
     p.add_argument("--no-plot", action="store_true", help="skip the PNG plot")
@@ -35,15 +35,22 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Check the options, read the bag, run the bank axis by axis (progress on stderr), write the results."""
     from ..bag.reader import read_imu
     from ..pipelines.identify import identify
     from ..report.hypotheses_yaml import write_identification
     from ..resources import read_hypotheses_file
+    from .options import parse_axes
+    from .progress import TextProgress
 
+    axes = parse_axes(args.axis)
     hypotheses, source = read_hypotheses_file(args.hypotheses)
-    series = read_imu(args.bag, topic=args.topic)
-    res = identify(series, list(dict.fromkeys(args.axis)), hypotheses, source, args.refine)
-    out = Path(args.out)
+    with TextProgress(f"reading {args.bag.name}") as progress:
+        series = read_imu(args.bag, topic=args.topic, progress=progress)
+    with TextProgress("hypothesis bank", unit="axes") as progress:
+        progress(0, len(axes))
+        res = identify(series, axes, hypotheses, source, args.refine, progress=progress)
+    out = args.out
     write_identification(res, out)
     if not args.no_plot:
         from ..report.hypotheses_plots import plot_identify

@@ -6,6 +6,7 @@ import argparse
 from collections.abc import Iterable
 from pathlib import Path
 
+from .options import add_topic
 from .progress import TextProgress
 
 DESCRIPTION = """\
@@ -25,7 +26,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("bag", type=Path, metavar="BAG", help="the bag")
-    parser.add_argument("--topic", default=None, metavar="T", help="Imu topic (needed when the bag has several)")
+    add_topic(parser)
     parser.set_defaults(run=run)
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-DEFAULT_OUT = "imu_noise_id_results"
+from .options import add_axis, add_out, add_topic, model_spec
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -25,40 +25,42 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument("bag", type=Path, help="bag file or rosbag2 directory")
-    p.add_argument("--topic", help="sensor_msgs/Imu topic (needed only when the bag has several)")
+    add_topic(p)
     p.add_argument("--temperature-topic", help="sensor_msgs/Temperature topic (default: the bag's only one)")
-    p.add_argument("--start", default="WN+RW", help="starting model structure (default: WN+RW)")
-    p.add_argument("--axes", default="gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z",
-                   help="comma-separated axes (default: all six)")
+    p.add_argument("--start", default="WN+RW", type=model_spec(), help="starting model structure (default: WN+RW)")
+    add_axis(p, aliases=("--axes",))
     p.add_argument("--max-steps", type=int, default=6, help="most effects added per axis (default: 6)")
     p.add_argument("--alpha", type=float, default=0.01, help="level of every detector (default: 0.01)")
-    p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
+    add_out(p, "loop")
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    """Read the bag, run the loop, write model.yaml and report.html."""
+    """Read the bag, run the loop axis by axis (progress on stderr), write model.yaml and report.html."""
     from ..bag.reader import read_static
-    from ..core.axes import AXES
     from ..core.errors import InputError
-    from ..core.noise.modelspec import parse_structure
     from ..pipelines.loop import ImuLoop
-    from ..report.console import loop_table
+    from ..report.console import loop_line, loop_table
     from ..report.html import write_loop_report
     from ..report.model_yaml import write_model_yaml
+    from .options import parse_axes
+    from .progress import TextProgress
 
-    axes = tuple(a.strip() for a in args.axes.split(",") if a.strip())
-    unknown = [a for a in axes if a not in AXES]
-    if unknown or not axes:
-        raise InputError(f"--axes: unknown axis {', '.join(unknown) or '(none)'}; use {', '.join(AXES)}")
-    parse_structure(args.start)
+    axes = parse_axes(args.axis)
     if args.max_steps < 0 or not 0 < args.alpha < 1:
         raise InputError("--max-steps must be >= 0 and --alpha in (0, 1)")
-    recording = read_static(args.bag, topic=args.topic, temperature_topic=args.temperature_topic)
+    with TextProgress(f"reading {args.bag.name}") as progress:
+        recording = read_static(args.bag, topic=args.topic, temperature_topic=args.temperature_topic,
+                                progress=progress)
     loop = ImuLoop(recording.imu, recording.temperature, max_steps=args.max_steps, alpha=args.alpha)
-    results = {axis: loop.run(axis, args.start) for axis in axes}
+    results = {}
+    with TextProgress(f"closed loop from {args.start}", unit="axes") as progress:
+        progress(0, len(axes))
+        for axis in axes:
+            results[axis] = loop.run(axis, args.start)
+            progress.echo(loop_line(axis, results[axis]))
+            progress(len(results), len(axes))
     print(loop_table(results), flush=True)
-    args.out.mkdir(parents=True, exist_ok=True)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "loop", "start": args.start}
     paths = [write_model_yaml(args.out / "model.yaml", {}, results, meta),
              write_loop_report(args.out / "report.html", results, title=f"closed loop: {args.bag.name}")]

@@ -10,6 +10,7 @@ import contextlib
 from pathlib import Path
 
 from ..core.errors import InputError
+from .options import add_topic
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -24,8 +25,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("bag", type=Path, help="the bag to play")
     parser.add_argument("--rate", type=float, default=1.0, help="playback speed factor (default 1; 2 = twice as fast)")
     parser.add_argument("--loop", action="store_true", help="start again at the end, until interrupted")
-    parser.add_argument("--topics", nargs="+", metavar="TOPIC", help="play only these topics (default: all "
-                        "Imu, Odometry and Temperature topics)")
+    add_topic(parser, "play only these topics (default: all Imu, Odometry and Temperature topics)",
+              aliases=("--topics",), several=True)
     parser.add_argument("--remap", nargs="+", default=[], metavar="FROM:=TO",
                         help="publish topic FROM under the name TO, e.g. /imu/data:=/imu")
     parser.add_argument("--delay", type=float, default=2.0,
@@ -55,6 +56,6 @@ def run(args: argparse.Namespace) -> int:
     from ..ros.play import play_bag
 
     with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C ends a --loop
-        play_bag(args.bag, rate=args.rate, loop=args.loop, topics=args.topics, remap=remap, delay=args.delay,
+        play_bag(args.bag, rate=args.rate, loop=args.loop, topics=args.topic, remap=remap, delay=args.delay,
                  quiet=args.quiet)
     return 0

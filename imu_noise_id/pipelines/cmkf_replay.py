@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -63,6 +64,7 @@ def replay(
     odom: OdometrySeries | None,
     config: CmkfConfig | None = None,
     imu_orientation_xyzw: np.ndarray | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> CmkfReplayResult:
     """Run :class:`RobotCmkf` over ``imu`` and ``odom`` (None: IMU only, nothing observable).
 
@@ -71,7 +73,8 @@ def replay(
 
     ``imu_orientation_xyzw`` (N, 4), the IMU's own orientation, is used for gravity only with
     ``config.gravity_source == "imu"``; a NaN row (not provided, see :class:`~imu_noise_id.core.axes.ImuSeries`)
-    is passed as None, so the filter keeps the last orientation it was given.
+    is passed as None, so the filter keeps the last orientation it was given. ``progress(done, total)`` is called
+    after every odometry message.
     """
     config = config or CmkfConfig()
     filt = RobotCmkf(config)
@@ -80,7 +83,9 @@ def replay(
     rec = {name: [] for name in SERIES_FIELDS}
     nis_a, nis_g, status = [], [], []
     t_start = time.perf_counter()
-    for updated in feed_recording(filt, imu, odom, imu_orientation_xyzw):
+    for k, updated in enumerate(feed_recording(filt, imu, odom, imu_orientation_xyzw), start=1):
+        if progress is not None:
+            progress(k, to.size)
         est = filt.estimate()
         for name in SERIES_FIELDS:
             rec[name].append(getattr(est, name))

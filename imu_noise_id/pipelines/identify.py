@@ -8,6 +8,7 @@ adapter (the file is read there).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -52,8 +53,9 @@ class Identification:
 
 
 def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], source: str,
-             refine: int = 0) -> Identification:
-    """Run the bank on each axis of ``series`` with ``refine`` grid-refinement passes."""
+             refine: int = 0, *, progress: Callable[[int, int], None] | None = None) -> Identification:
+    """Run the bank on each axis of ``series`` with ``refine`` grid-refinement passes; ``progress(done, total)``
+    after each axis."""
     if len(series) < 2:
         raise InputError(f"{series.topic or 'the IMU series'} has {len(series)} sample(s): need a recording")
     if refine < 0:
@@ -67,4 +69,6 @@ def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], sou
         result, ident, passes = identify_offline(y, make, warmup, dt, refine=refine, record_every=every)
         out.axes[axis] = AxisIdentification(result, ident.offset, ident.bank.hset, warmup, ident.wn_estimate,
                                             ident.bank.state_estimates(), passes)
+        if progress is not None:
+            progress(len(out.axes), len(axes))
     return out

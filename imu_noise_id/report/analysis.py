@@ -22,15 +22,21 @@ from .variance_csv import write_variance_csvs
 
 
 def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str, meta: dict,
-                   title: str = "IMU noise analysis") -> dict[str, Path]:
-    """Write every output of ``result`` into ``out_dir`` (created); returns the paths by file name."""
+                   title: str = "IMU noise analysis", overbound_exports: bool = False) -> dict[str, Path]:
+    """Write every output of ``result`` into ``out_dir`` (created); returns the paths by file name.
+
+    ``overbound_exports``: also the exports of the overbound's values (``exports/overbound/``).
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     static = result.static
-    doc = imu_doc(static, result.finals, rostopic)
+    doc = imu_doc(static, result.finals, rostopic, result.overbounds)
     paths = {"imu.yaml": write_imu_yaml(out / "imu.yaml", static, doc, bool(result.finals))}
     for p in write_exports(doc, out / "exports"):
         paths[f"exports/{p.name}"] = p
+    if overbound_exports:
+        for p in write_exports(doc, out / "exports", overbound=True):
+            paths[f"exports/{p.parent.name}/{p.name}"] = p
     for p in write_variance_csvs(static.variances, static.axes, out):
         paths[p.name] = p
     paths["allan.png"] = plot_allan_deviation(static, out / "allan.png")

@@ -4,7 +4,8 @@ Sections, each written from the :class:`~imu_noise_id.pipelines.analyze.Analysis
 the figures): the data (rate, duration, topic, warnings and repairs), the numbers users paste (the final model's
 N, K and bias instability with their intervals and sources, the Allan readings beside them, the per-sample noise),
 one Allan panel per axis (data with its 95 % band, slope lines, the final model and simulations of it), the model
-selection's candidates, how long to record, and the closed loop's steps.
+selection's candidates, how long to record, the closed loop's steps, and the overbound (the smallest WN+RW covering
+the data over the filter's τ range, drawn in each Allan panel).
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ from __future__ import annotations
 import datetime as _dt
 import html
 from pathlib import Path
+
+import numpy as np
 
 from ..core.axes import UNITS
 from ..pipelines.analyze import AnalysisResult
@@ -64,15 +67,45 @@ def _numbers_section(result: AnalysisResult) -> str:
     return f"<h2 id=numbers>The numbers to paste</h2><table>{head}{''.join(rows)}</table>{note}"
 
 
+def _overbound_section(result: AnalysisResult) -> str:
+    if not result.overbounds:
+        return ""
+    first = next(iter(result.overbounds.values()))
+    head = ("<tr><th class=l>axis</th><th>N [u/√Hz]</th><th>× over N</th><th>K [u/s/√Hz]</th><th>× over K</th>"
+            "<th>touches the bound at τ [s]</th><th class=l>inflated over</th></tr>")
+    rows = "".join(
+        f"<tr><td class=l>{axis} [{UNITS.get(axis, 'u')}]</td><td>{fmt(o.noise_density)}</td>"
+        f"<td>{fmt(o.inflation_noise_density, '.3g')}{' (fitted)' if o.bound.at_floor[0] else ''}</td>"
+        f"<td>{fmt(o.random_walk)}</td><td>{fmt(o.inflation_random_walk, '.3g')}"
+        f"{' (fitted)' if o.bound.at_floor[1] else ''}</td>"
+        f"<td>{', '.join(fmt(t, '.3g') for t in o.bound.binding_tau) or '—'}</td>"
+        f"<td class=l>{html.escape(o.reference_source)}</td></tr>" for axis, o in result.overbounds.items())
+    note = (f"<p>The honest version of “inflate the noise ×10”: for τ from {fmt(first.tau_range[0], '.3g')} s to "
+            f"{fmt(first.tau_range[1], '.3g')} s (the sampling period to --horizon {fmt(first.horizon_s, 'g')} s), "
+            f"the smallest white noise + random walk (Kalibr's N and K) whose Allan variance lies above "
+            f"{html.escape(first.covers.split(' (')[0])} at every τ of the range, and not below the fitted values "
+            "(least mean ratio of its AV to the bound over the τ grid). The factors say how much a WN+RW filter's "
+            "N and K must be raised to cover what this IMU does over that range; the orange line in each Allan "
+            "panel is this overbound. imu.yaml holds it under <code>overbound:</code>; "
+            "<code>imu-noise-id export DIR --overbound</code> writes the filters' files from it.</p>")
+    return f"<h2 id=overbound>Overbound (the honest ×10)</h2>{note}<table>{head}{rows}</table>"
+
+
 def _allan_section(result: AnalysisResult) -> str:
     s = result.static
     out = ["<h2 id=allan>Allan deviation per axis</h2>"]
     for axis, f in result.finals.items():
         j = s.axes.index(axis)
         lines = {c.name: (c.slope, c.coefficient) for c in s.slopes[axis].components()}
+        ob = result.overbounds.get(axis)
+        overbound = None
+        if ob is not None:
+            t = np.exp(np.linspace(np.log(ob.tau_range[0]), np.log(ob.tau_range[1]), 100))
+            overbound = (t, ob.allan_variance(t, s.dt), f"overbound WN+RW (N ×{ob.inflation_noise_density:.3g}, "
+                                                        f"K ×{ob.inflation_random_walk:.3g})")
         png = allan_panel_png(s.allan.tau, s.allan.variance[:, j], (s.allan.ci_low[:, j], s.allan.ci_high[:, j]),
                               f.fit, band=result.bands.get(axis), lines=lines, unit=UNITS.get(axis, "u"),
-                              title=f"{axis}: final model {f.fit.model}")
+                              title=f"{axis}: final model {f.fit.model}", overbound=overbound)
         out.append(img_tag(png, f"Allan deviation of {axis}"))
     return "\n".join(out)
 
@@ -106,12 +139,14 @@ def render_analysis_report(result: AnalysisResult, meta: dict, title: str) -> st
     when = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     parts = [_data_section(result, meta)]
     if result.finals:
-        parts += [_numbers_section(result), _allan_section(result), _selection_section(result)]
+        parts += [_numbers_section(result), _overbound_section(result), _allan_section(result),
+                  _selection_section(result)]
     if result.loops:
         parts.append("<h2 id=loop>Closed loop</h2>")
         parts += [loop_axis_section(axis, r) for axis, r in result.loops.items()]
     nav = " · ".join(f"<a href='#{a}'>{t}</a>" for a, t in (("data", "data"), ("numbers", "numbers"),
-                                                             ("allan", "Allan"), ("selection", "selection"),
+                                                             ("overbound", "overbound"), ("allan", "Allan"),
+                                                             ("selection", "selection"),
                                                              ("loop", "closed loop")))
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
             f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>"

@@ -1,4 +1,5 @@
-"""What the commands print: the Allan-slope noise density and random walk per axis, the closed loop's steps."""
+"""What the commands print: the Allan-slope noise density and random walk per axis, the closed loop's steps, the
+recording-length advice and the overbound."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import math
 from ..core.axes import UNITS
 from ..core.estimation.results import FitResult
 from ..pipelines.analyze.final import FinalModel
+from ..pipelines.analyze.overbound import AxisOverbound
 from ..pipelines.analyze.static import StaticAnalysis
 from ..pipelines.loop import LoopResult
 
@@ -77,3 +79,41 @@ def fit_line(axis: str, fit: FitResult) -> str:
 def loop_line(axis: str, loop: LoopResult) -> str:
     """One line per axis the closed loop ran on: first and final model, the verdict."""
     return f"{axis}: loop {loop.steps[0].model} -> {loop.final.model}: {loop.verdict}"
+
+
+def _duration(seconds: float) -> str:
+    if not math.isfinite(seconds):
+        return "n/a"
+    return f"{seconds / 3600:.3g} h" if seconds >= 3600 else f"{seconds / 60:.3g} min"
+
+
+def record_length_lines(fits: dict[str, FitResult]) -> list[str]:
+    """How long to record, per axis: the longest needed duration over the parameters, and which parameter it is."""
+    lines = []
+    for axis, fit in fits.items():
+        advice = fit.record_length
+        if advice is None or not advice.needed_s:
+            continue
+        label = max(advice.needed_s, key=advice.needed_s.get)
+        needed = advice.needed_s[label]
+        verdict = "enough" if needed <= advice.current_s else f"record {_duration(needed)}"
+        bound = "" if advice.reliable[label] else " (a lower bound: correlation time not << record)"
+        lines.append(f"{axis:8s} {fit.model:22s} now {_duration(advice.current_s)}: {verdict} for +-"
+                     f"{100 * advice.target:.0f} % on every parameter (hardest: {label}, now +-"
+                     f"{100 * advice.relative_halfwidth[label]:.0f} %){bound}")
+    if lines:
+        lines.insert(0, "How long to record (95 % half-widths; model.yaml record_length):")
+    return lines
+
+
+def overbound_lines(overbounds: dict[str, AxisOverbound]) -> list[str]:
+    """Per axis the overbound N and K with their inflation factors over imu.yaml's values."""
+    if not overbounds:
+        return []
+    first = next(iter(overbounds.values()))
+    lines = [f"Overbound (imu.yaml overbound:): smallest WN+RW above {first.covers.split(' (')[0]} for tau "
+             f"{first.tau_range[0]:.3g}-{first.tau_range[1]:.3g} s:"]
+    for axis, o in overbounds.items():
+        lines.append(f"{axis:8s} N {_fmt(o.noise_density)} (x{o.inflation_noise_density:.3g})  "
+                     f"K {_fmt(o.random_walk)} (x{o.inflation_random_walk:.3g})")
+    return lines

@@ -33,7 +33,7 @@ def plot_identify(res: Identification, path: Path) -> None:
 
 
 def _panel_key(name: str) -> str:
-    """``"GM+WN:GM.tau"`` → ``"GM.tau (GM model)"``: the same parameter of the same model across cases."""
+    """``"WN+GM:GM.tau"`` → ``"GM.tau (GM model)"``: the same parameter of the same model across cases."""
     hyp, _, param = name.partition(":")
     model = "RW" if "RW" in hyp.split("+") else "GM"
     return f"{param} ({model} model)"

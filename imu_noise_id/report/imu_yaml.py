@@ -14,6 +14,7 @@ import yaml
 
 from ..core.axes import ACCEL_AXES, GYRO_AXES
 from ..pipelines.analyze.final import FinalModel
+from ..pipelines.analyze.overbound import AxisOverbound
 from ..pipelines.analyze.static import StaticAnalysis, kalibr_parameters
 from .numbers import num
 
@@ -86,6 +87,41 @@ def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
         doc[f"{_PREFIX[sensor]}_final_model_xyz"] = [finals[a].fit.model for a in axes]
 
 
+def _range(values: list[float]) -> str:
+    lo, hi = min(values), max(values)
+    return f"x{lo:.3g}" if f"{lo:.3g}" == f"{hi:.3g}" else f"x{lo:.3g}-{hi:.3g}"
+
+
+def overbound_dict(overbounds: dict[str, AxisOverbound]) -> dict:
+    """The ``overbound:`` section: per sensor the Kalibr numbers (max over axes), per axis the values, the τ range,
+    the binding τ and the inflation factors over imu.yaml's per-axis values."""
+    first = next(iter(overbounds.values()))
+    out: dict = {"horizon_s": num(first.horizon_s), "tau_range_s": [num(first.tau_range[0]), num(first.tau_range[1])],
+                 "covers": first.covers.split(" (")[0]}
+    summary = []
+    for sensor, axes in _SENSORS:
+        obs = [overbounds[a] for a in axes if a in overbounds]
+        if len(obs) != len(axes):
+            continue
+        for parameter in ("noise_density", "random_walk"):
+            key = f"{_PREFIX[sensor]}_{parameter}"
+            out[key] = num(max(getattr(o, parameter) for o in obs))
+            out[f"{key}_xyz"] = [num(getattr(o, parameter)) for o in obs]
+        summary.append(f"{sensor} N {_range([o.inflation_noise_density for o in obs])}, "
+                       f"K {_range([o.inflation_random_walk for o in obs])}")
+    out["inflation_summary"] = "; ".join(summary)
+    out["axes"] = {axis: {"noise_density": num(o.noise_density), "random_walk": num(o.random_walk),
+                          "inflation_noise_density": num(o.inflation_noise_density),
+                          "inflation_random_walk": num(o.inflation_random_walk),
+                          "tau_range_s": [num(o.tau_range[0]), num(o.tau_range[1])],
+                          "binding_tau_s": [num(t) for t in o.bound.binding_tau],
+                          "at_fitted_value": {"noise_density": o.bound.at_floor[0],
+                                              "random_walk": o.bound.at_floor[1]},
+                          "inflated_over": o.reference_source, "covers": o.covers}
+                   for axis, o in overbounds.items()}
+    return out
+
+
 def header(result: StaticAnalysis, with_models: bool) -> list[str]:
     """The comment lines at the top of ``imu.yaml`` (units, conventions, data)."""
     conf = result.allan.confidence
@@ -117,13 +153,24 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
             "# method model_upper_bound: the deviation still falls at a tenth of the record (not reached).",
             "# *_bias_instability_allan_xyz: the same reading off the data's Allan deviation (no interval).",
         ]
+    lines += [
+        "# overbound: the honest version of 'inflate the noise x10': for the tau range a filter cares about",
+        "# (tau_range_s: the sampling period to --horizon), the smallest WN+RW (Kalibr form, same units) whose Allan",
+        "# variance lies above the data's upper confidence bound (and the final model's AV) at every tau of the",
+        "# range, and not below the values above; 'smallest' = least mean ratio AV_overbound/bound over the tau grid.",
+        "# Per axis with its inflation factors over the values above and the tau where it touches the bound",
+        "# (binding_tau_s). imu-noise-id export --overbound writes the filters' files from it.",
+    ]
     return lines
 
 
-def imu_doc(result: StaticAnalysis, finals: dict[str, FinalModel], rostopic: str) -> dict:
-    """The content of ``imu.yaml`` (see the module docstring)."""
+def imu_doc(result: StaticAnalysis, finals: dict[str, FinalModel], rostopic: str,
+            overbounds: dict[str, AxisOverbound] | None = None) -> dict:
+    """The content of ``imu.yaml`` (see the module docstring); with ``overbounds`` its ``overbound:`` section."""
     doc = kalibr_dict(result, rostopic)
     add_final_values(doc, finals)
+    if overbounds:
+        doc["overbound"] = overbound_dict(overbounds)
     return doc
 
 

@@ -69,10 +69,10 @@ def save_allan_overlay(path: str | Path, panels: list[dict], title: str | None =
 
 def allan_panel_png(tau: np.ndarray, avar: np.ndarray, ci: tuple[np.ndarray, np.ndarray], fit: FitResult, *,
                     band: tuple[np.ndarray, np.ndarray] | None, lines: dict[str, tuple[float, float]],
-                    unit: str, title: str) -> bytes:
+                    unit: str, title: str, overbound: tuple[np.ndarray, np.ndarray, str] | None = None) -> bytes:
     """One readable panel (PNG bytes): the data's Allan deviation with its 95 % band, the slope lines read from it
-    (``lines``: name → (exponent μ of τ in the AV, coefficient c: AV = c·τ^μ)), the final model's deviation and
-    the simulations of it."""
+    (``lines``: name → (exponent μ of τ in the AV, coefficient c: AV = c·τ^μ)), the final model's deviation, the
+    simulations of it and ``overbound`` (τ [s], its AV [u²], label) over its range."""
     import io
 
     import matplotlib
@@ -85,6 +85,10 @@ def allan_panel_png(tau: np.ndarray, avar: np.ndarray, ci: tuple[np.ndarray, np.
     plot_allan_overlay(ax, tau, avar, fit, band, label="data", unit=unit)
     for k, (name, (mu, c)) in enumerate(lines.items()):
         ax.loglog(tau, np.sqrt(c * tau**mu), color=f"C{k + 4}", lw=0.9, ls=":", label=f"{name} slope line")
+    if overbound is not None:
+        ob_tau, ob_av, ob_label = overbound
+        ax.loglog(ob_tau, np.sqrt(ob_av), color="C1", lw=2.2, alpha=0.85, label=ob_label)
+        ax.axvspan(ob_tau[0], ob_tau[-1], color="C1", alpha=0.05, lw=0)
     ax.set_title(title, fontsize=10)
     ax.legend(fontsize=7, loc="best")
     fig.tight_layout()

@@ -22,6 +22,7 @@ trial, sharing the data-independent covariance recursion.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -141,13 +142,15 @@ def record_indices(n_updates: int, n_points: int = 200) -> np.ndarray:
 
 
 def run_criteria(hset: HypothesisSet, duration_s: float, trials: int, *, seed: int | None = 0,
-                 record: np.ndarray | None = None, trial_batch: int = 50, case: str = "") -> CriteriaResult:
+                 record: np.ndarray | None = None, trial_batch: int = 50, case: str = "",
+                 progress: Callable[[int, int], None] | None = None) -> CriteriaResult:
     """Monte-Carlo performance criteria of the bank on ``hset`` over ``duration_s`` seconds (section 3).
 
     Parameters
     ----------
     record : update numbers (1-based) at which the criteria are evaluated (default :func:`record_indices`).
     trial_batch : trials run together in one vectorised bank (memory ∝ trial_batch × filters).
+    progress : called as ``progress(done, total)`` in trial-records (trials × record points) as they are done.
     """
     if trials < 2:
         raise InputError(f"the Monte Carlo needs at least 2 trials, got {trials}")
@@ -195,6 +198,8 @@ def run_criteria(hset: HypothesisSet, duration_s: float, trials: int, *, seed: i
                     truth = np.array([thetas[i][q] for i in idx[sel]])
                     sq[(k, q)][r] += np.sum((truth - post.theta_mean[k][0, sel, q]) ** 2)
                     var[(k, q)][r] += np.sum(post.theta_var[k][0, sel, q])
+            if progress is not None:
+                progress(b0 * R + idx.size * (r + 1), trials * R)
     counts = {h.name: int(np.sum(ks == k)) for k, h in enumerate(hset.hypotheses)}
     rsd_real, rsd_calc = {}, {}
     for k, q in keys:

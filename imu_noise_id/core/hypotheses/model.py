@@ -37,6 +37,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..noise.components import GM, RW, WN
+from ..noise.modelspec import structure_name
 
 #: Unknown parameters of each supported component, in grid order.
 COMPONENT_PARAMETERS: dict[str, tuple[str, ...]] = {
@@ -137,7 +138,7 @@ class Hypothesis:
     probability : float
         Prior probability Pr(H = h_k) (normalised over the set).
     name : str
-        Label (default: the structure, e.g. ``"WN+RW"``).
+        Label (default: the canonical structure name, e.g. ``"WN+RW"`` for components ``("RW", "WN")``).
     """
 
     components: tuple[str, ...]
@@ -148,7 +149,7 @@ class Hypothesis:
     def __post_init__(self) -> None:
         comps = tuple(c.upper() for c in self.components)
         object.__setattr__(self, "components", comps)
-        label = self.name or "+".join(comps)
+        label = self.name or structure_name(list(comps))  # canonical: WN+RW whatever the components' order
         object.__setattr__(self, "name", label)
         if not comps:
             raise InputError(f"hypothesis {label!r} has no components")

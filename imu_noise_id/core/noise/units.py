@@ -110,3 +110,26 @@ def quantization_sigma2(q: float, dt: float) -> float:
 def covariance_from_density(noise_density: float | np.ndarray, rate_hz: float) -> float | np.ndarray:
     """sensor_msgs/Imu covariance diagonal N²·f [u²] for a white-noise density N sampled at f [Hz]."""
     return np.square(noise_density) * _check_positive("rate_hz", rate_hz, False)
+
+
+def step_noise_std(density: float, step_s: float, weight: float = 1.0) -> float:
+    """The white-rate standard deviation σ a discrete filter must be given for white noise of density ``density``.
+
+    Many filters propagate a white input noise of std σ [u] (``density`` in u/√Hz: a measurement noise N, or a
+    bias random walk K in u/s/√Hz) over a step of ``step_s`` seconds by adding ``weight``·(step·σ)² to the
+    integrated state's variance. The continuous-time truth adds density²·step per step, so
+
+        σ = density / √(weight · step)
+
+    ``weight`` = 1: one input sample per step (PX4 EKF2 ``covariance.cpp``: ``sq(dt * noise)``; VINS' bias blocks
+    ``V = I·dt``); ½: the mid-point rule's two half-weighted samples treated as independent (VINS' ``V = ½·dt``
+    blocks on the acc/gyro noise of both ends of a step).
+    """
+    return _check_positive("density", density) / math.sqrt(
+        _check_positive("weight", weight, False) * _check_positive("step_s", step_s, False))
+
+
+def density_from_step_noise_std(sigma: float, step_s: float, weight: float = 1.0) -> float:
+    """Inverse of :func:`step_noise_std`: density = σ·√(weight · step)."""
+    return _check_positive("sigma", sigma) * math.sqrt(
+        _check_positive("weight", weight, False) * _check_positive("step_s", step_s, False))

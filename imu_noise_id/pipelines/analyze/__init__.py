@@ -11,13 +11,16 @@ adapter):
    at the recording's own rate;
 4. the final model of each axis (:mod:`.final`): the loop's last step or the selection, with intervals, and the
    Kalibr numbers taken from it;
-5. the simulation band of every axis's final model (the AVs of simulations of it, for the report's plots).
+5. the simulation band of every axis's final model (the AVs of simulations of it, for the report's plots);
+6. the overbound of every axis (:mod:`.overbound`): the smallest WN+RW covering the data's upper Allan bound and
+   the final model over the filter's τ range (also without the model stage: then the data's bound alone).
 
 The report layer (:mod:`imu_noise_id.report.analysis`) writes every file once from the result.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -31,6 +34,7 @@ from ...core.simulation.bands import allan_band
 from ..loop import ImuLoop, LoopResult
 from .final import FinalModel, final_model
 from .models import AUTO, AxisModel, ModelStage, fit_axis
+from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, overbounds
 from .static import StaticAnalysis, analyze_static
 
 #: Simulations of each final model drawn as its band.
@@ -53,6 +57,8 @@ class AnalyzeOptions:
         Model stage (``models.model == "none"``: Allan only, no loop).
     loop
         Run the closed loop after the model stage (at the recording's own rate).
+    horizon_s
+        End of the overbound's τ range [s] (it starts at the sampling period).
     """
 
     kinds: tuple[str, ...] = KINDS
@@ -61,8 +67,11 @@ class AnalyzeOptions:
     allow_motion: bool = False
     models: ModelStage = field(default_factory=ModelStage)
     loop: bool = True
+    horizon_s: float = DEFAULT_HORIZON_S
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.horizon_s) and self.horizon_s > 0):
+            raise InputError(f"--horizon must be a finite number of seconds > 0, got {self.horizon_s}")
         if not 0.0 < self.confidence < 1.0:
             raise InputError(f"--confidence must lie in (0, 1), got {self.confidence}")
         if self.per_decade < 1:
@@ -80,6 +89,7 @@ class AnalysisResult:
     loops : the closed loop per axis (empty without the loop)
     finals : the final model per axis and the Kalibr numbers from it (empty without the model stage)
     bands : per axis (τ [s], AVs of simulations of the final model (n_sim, T) [u²])
+    overbounds : per axis the smallest WN+RW covering the data's upper Allan bound and the final model
     warnings : what the model and loop stages could not do, and why
     """
 
@@ -88,6 +98,7 @@ class AnalysisResult:
     loops: dict[str, LoopResult] = field(default_factory=dict)
     finals: dict[str, FinalModel] = field(default_factory=dict)
     bands: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    overbounds: dict[str, AxisOverbound] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
 
     @property
@@ -132,8 +143,17 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
     static = analyze_static(imu, kinds=options.kinds, per_decade=options.per_decade, confidence=options.confidence,
                             allow_motion=options.allow_motion, progress=progress)
     result = AnalysisResult(static)
-    if not options.models.enabled:
-        return result
+    check_horizon(static, options.horizon_s)
+    if options.models.enabled:
+        _model_stages(imu, temperature, options, result, on_axis)
+    result.overbounds = overbounds(static, result.finals, options.horizon_s)
+    return result
+
+
+def _model_stages(imu: ImuSeries, temperature: ScalarSeries | None, options: AnalyzeOptions, result: AnalysisResult,
+                  on_axis: OnAxis | None) -> None:
+    """Stages 2–5 of the module docstring, into ``result``."""
+    static = result.static
     axes = list(static.axes)
     loop = _imu_loop(imu, temperature, options, result.warnings) if options.loop else None
     for axis in axes:
@@ -151,7 +171,7 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
         result.models[axis] = model.without_data()
         result.bands[axis] = allan_band(result.finals[axis].fit.components, static.dt, static.n, static.allan.tau,
                                         n_sim=BAND_SIMULATIONS, seed=axes.index(axis))
-    return result
 
 
-__all__ = ["AUTO", "AnalysisResult", "AnalyzeOptions", "FinalModel", "ModelStage", "StaticAnalysis", "analyze"]
+__all__ = ["AUTO", "DEFAULT_HORIZON_S", "AnalysisResult", "AnalyzeOptions", "AxisOverbound", "FinalModel",
+           "ModelStage", "StaticAnalysis", "analyze"]

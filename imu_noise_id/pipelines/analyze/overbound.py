@@ -1,0 +1,121 @@
+"""The overbound stage of ``analyze``: per axis, the smallest Kalibr WN+RW that covers what the data show.
+
+For the τ range a filter cares about — from the sampling period to a horizon (``--horizon``, default
+:data:`~imu_noise_id.core.estimation.overbound.DEFAULT_HORIZON_S`) — the bound to cover at each τ of the Allan
+grid is the larger of the data's upper confidence bound (the Allan stage's interval, 95 % by default) and the final
+model's Allan variance (all its components: GMs, oscillations, the low-pass — what a WN+RW filter cannot model but
+will see). The numbers are not below the values ``imu.yaml`` gives per axis (the final model's N and K, or the
+Allan-slope readings where it has none), so the inflation factors over them are ≥ 1. The LP itself:
+:mod:`imu_noise_id.core.estimation.overbound`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.errors import InputError
+from ...core.estimation.overbound import DEFAULT_HORIZON_S, WnRwOverbound, overbound_wn_rw
+from .final import FinalModel
+from .static import StaticAnalysis
+
+
+@dataclass(frozen=True)
+class AxisOverbound:
+    """The overbound of one axis and what it is measured against.
+
+    Attributes
+    ----------
+    bound : the LP's result (N [u/√Hz], K [u/s/√Hz], binding τ, floors reached, mean AV ratio)
+    tau_range : the τ [s] of the Allan grid actually covered (first, last); horizon_s : the range asked for ends here
+    covers : what the bound is made of, in words
+    reference_noise_density, reference_random_walk : the values the inflation factors are relative to (imu.yaml's
+        per-axis values) and ``reference_source`` where they come from
+    """
+
+    bound: WnRwOverbound
+    tau_range: tuple[float, float]
+    horizon_s: float
+    covers: str
+    reference_noise_density: float
+    reference_random_walk: float
+    reference_source: str
+
+    @property
+    def noise_density(self) -> float:
+        return self.bound.noise_density
+
+    @property
+    def random_walk(self) -> float:
+        return self.bound.random_walk
+
+    @property
+    def inflation_noise_density(self) -> float:
+        """N / N_reference (≥ 1)."""
+        return self.noise_density / self.reference_noise_density if self.reference_noise_density > 0 else math.inf
+
+    @property
+    def inflation_random_walk(self) -> float:
+        """K / K_reference (≥ 1)."""
+        return self.random_walk / self.reference_random_walk if self.reference_random_walk > 0 else math.inf
+
+    def allan_variance(self, tau: np.ndarray, dt: float) -> np.ndarray:
+        """The overbound's Allan variance [u²] at ``tau`` (for plots)."""
+        return self.bound.allan_variance(tau, dt)
+
+
+def _references(static: StaticAnalysis, axis: str, final: FinalModel | None) -> tuple[float, float, str]:
+    slopes = static.slopes[axis]
+    if final is None:
+        return slopes.noise_density.value, slopes.random_walk.value, "Allan slopes"
+    n = final.noise_density.value if final.noise_density.value is not None else slopes.noise_density.value
+    k, source = final.random_walk.value, "final model"
+    if k is None:
+        k, source = slopes.random_walk.value, "final model (N), Allan slope (K: the model has no random walk)"
+    return n, k, source
+
+
+def check_horizon(static: StaticAnalysis, horizon_s: float) -> None:
+    """Refuse a horizon shorter than the sampling period (before the model stage runs for minutes).
+
+    Raises
+    ------
+    InputError
+        ``horizon_s`` < the sampling period.
+    """
+    if not horizon_s >= static.dt:
+        raise InputError(f"--horizon {horizon_s:g} s is shorter than the sampling period {static.dt:g} s: give the "
+                         "longest time scale your filter must cover (e.g. 100)")
+
+
+def axis_overbound(static: StaticAnalysis, axis: str, final: FinalModel | None,
+                   horizon_s: float = DEFAULT_HORIZON_S) -> AxisOverbound:
+    """The overbound of ``axis`` over τ from the sampling period to ``horizon_s`` (module docstring).
+
+    Raises
+    ------
+    InputError
+        The horizon is shorter than the sampling period.
+    """
+    check_horizon(static, horizon_s)
+    allan = static.allan
+    j = static.axes.index(axis)
+    upper = allan.ci_high[:, j]
+    keep = (allan.tau <= horizon_s * (1 + 1e-9)) & np.isfinite(upper) & (upper > 0)
+    tau = allan.tau[keep]
+    bound = upper[keep]
+    covers = f"the data's upper {100 * allan.confidence:g} % Allan bound"
+    if final is not None:
+        bound = np.maximum(bound, final.fit.theoretical_allan_variance(tau))
+        covers += f" and the final model's AV ({final.fit.model})"
+    n_ref, k_ref, source = _references(static, axis, final)
+    result = overbound_wn_rw(tau, bound, static.dt, floor=(n_ref, k_ref))
+    return AxisOverbound(result, (float(tau[0]), float(tau[-1])), horizon_s, covers, n_ref, k_ref, source)
+
+
+def overbounds(static: StaticAnalysis, finals: dict[str, FinalModel],
+               horizon_s: float = DEFAULT_HORIZON_S) -> dict[str, AxisOverbound]:
+    """:func:`axis_overbound` of every axis (with its final model where there is one)."""
+    return {axis: axis_overbound(static, axis, finals.get(axis), horizon_s) for axis in static.axes}

@@ -1,0 +1,193 @@
+"""One renderer per consumer: an ``imu.yaml`` content in, the consumer's file text out, in its units and convention.
+
+Every file starts with comment lines saying where the numbers come from, the consumer's convention and the formula
+used (N, K: the noise density [u/√Hz] and random walk [u/s/√Hz] of ``imu.yaml``; f: its ``update_rate`` [Hz]).
+The conventions were read in each consumer's own code and documentation:
+
+- Kalibr (``kalibr_common/ConfigReader.py``, ``ImuParameters``): continuous-time N and K; Kalibr discretises
+  σ_d = N·√f itself and refuses values ≤ 0.
+- OpenVINS: Kalibr's IMU chain (``%YAML:1.0``, ``imu0:``, ``model: kalibr``), continuous-time.
+- ORB-SLAM3: ``IMU.NoiseGyro``/``IMU.NoiseAcc`` = N, ``IMU.GyroWalk``/``IMU.AccWalk`` = K (continuous-time; it
+  multiplies by √``IMU.Frequency`` itself).
+- VINS-Mono / VINS-Fusion (``integration_base.h``): ``noise = diag(acc_n², gyr_n², acc_n², gyr_n², acc_w²,
+  gyr_w²)``, propagated per IMU step dt = 1/f by ``V·noise·Vᵀ`` with ``V = ½·dt`` on the measurement noises of
+  both ends of the mid-point step and ``V = dt`` on the bias noises:
+  acc_n = N·√(2f), acc_w = K·√f (:func:`~imu_noise_id.core.noise.units.step_noise_std`, weights ½ and 1).
+- GTSAM (``PreintegrationParams.h``, ``PreintegrationCombinedParams.h``, ``ImuFactor.cpp``): continuous-time
+  "covariances" = densities squared: ``accelerometerCovariance`` = diag(N²) [(m/s²)²/Hz] (GTSAM divides by dt),
+  ``biasAccCovariance`` = diag(K²) [(m/s³)²/Hz] (GTSAM multiplies by dt); ``integrationCovariance`` and
+  ``biasAccOmegaInt`` are modelling choices, not IMU properties (left empty).
+- PX4 EKF2 (``EKF/covariance.cpp``, ``module.yaml``, ``params_*_bias.yaml``): per EKF prediction step of
+  P seconds (``EKF2_PREDICT_US``, default 10 ms) it adds ``sq(dt·EKF2_GYR_NOISE)`` [rad²] to the delta angles and
+  ``sq(dt·EKF2_GYR_B_NOISE)`` to the bias variance: EKF2_*_NOISE = N/√P [rad/s, m/s²], EKF2_*_B_NOISE = K/√P
+  [rad/s², m/s³] — not Kalibr's σ_d = N·√f, which would use the IMU rate instead of the EKF's.
+- REP-145 driver: the per-sample standard deviation at the driver's rate (``*_noise_stddev_per_sample_xyz``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import yaml
+
+from ..core.noise.units import step_noise_std
+from .numbers import num
+
+_SENSORS = (("gyroscope", "gyro"), ("accelerometer", "acc"))
+#: PX4's EKF prediction period (EKF2_PREDICT_US default, module.yaml) [s].
+PX4_PREDICT_PERIOD_S = 0.01
+#: PX4's documented (min, max) of each parameter (module.yaml, params_gyro_bias.yaml, params_accel_bias.yaml).
+PX4_LIMITS = {"EKF2_GYR_NOISE": (1e-4, 0.1), "EKF2_ACC_NOISE": (0.01, 1.0), "EKF2_GYR_B_NOISE": (0.0, 0.01),
+              "EKF2_ACC_B_NOISE": (0.0, 0.01)}
+#: VINS' per-step weights of the measurement noise (mid-point rule) and of the bias noise.
+VINS_NOISE_WEIGHT, VINS_WALK_WEIGHT = 0.5, 1.0
+
+
+def _origin(doc: dict) -> list[str]:
+    lines = [f"Written by imu-noise-id from {doc.get('rostopic', '?')} at {float(doc['update_rate']):g} Hz."]
+    ob = doc.get("overbound_of")
+    if ob:
+        lines.append(f"OVERBOUND values (imu.yaml 'overbound:'): {ob}")
+    else:
+        lines.append("Values: imu.yaml's Kalibr keys (each sensor's max over x, y, z of the final models' values).")
+    methods = sorted({m for key in ("gyroscope_random_walk_method_xyz", "accelerometer_random_walk_method_xyz")
+                      for m in doc.get(key, []) if m != "model"})
+    if methods and not ob:
+        lines.append("Note: some random walks are not identifiable from the record: Allan-slope reading or bound "
+                     f"used ({', '.join(methods)}).")
+    return lines
+
+
+def header(doc: dict, *convention: str, prefix: str = "# ") -> str:
+    """The comment lines of a file: origin, convention, formula."""
+    return "".join(f"{prefix}{line}\n" for line in [*_origin(doc), *convention])
+
+
+def _yaml_number(value: float) -> str:
+    """A float with 6 significant digits as YAML writes it (``2.0e-05``: readable as a number by every parser)."""
+    return yaml.safe_dump(float(f"{value:.6g}")).splitlines()[0]
+
+
+def _n(doc: dict, sensor: str) -> float:
+    return float(doc[f"{sensor}_noise_density"])
+
+
+def _k(doc: dict, sensor: str) -> float:
+    return float(doc[f"{sensor}_random_walk"])
+
+
+def kalibr(doc: dict) -> str:
+    """Kalibr's own ``imu.yaml`` (the six keys its ``ImuParameters`` reads)."""
+    body = ""
+    for sensor, unit, walk_unit in (("accelerometer", "m/s^2", "m/s^3"), ("gyroscope", "rad/s", "rad/s^2")):
+        body += (f"{sensor}_noise_density: {_yaml_number(_n(doc, sensor))}  # [{unit}/sqrt(Hz)] noise density "
+                 "(continuous-time)\n"
+                 f"{sensor}_random_walk: {_yaml_number(_k(doc, sensor))}  # [{walk_unit}/sqrt(Hz)] bias random "
+                 "walk\n")
+    body += (f"rostopic: {doc.get('rostopic', '/imu0')}\n"
+             f"update_rate: {_yaml_number(float(doc['update_rate']))}  # [Hz] Kalibr discretises "
+             "sigma_d = N*sqrt(update_rate)\n")
+    return header(doc, "Convention: Kalibr's, continuous-time N [u/sqrt(Hz)] and K [u/s/sqrt(Hz)]; Kalibr refuses "
+                       "values <= 0.") + body
+
+
+def openvins(doc: dict) -> str:
+    """OpenVINS / Kalibr IMU chain (continuous-time densities)."""
+    imu0 = {"T_i_b": [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+            **{f"{s}_{p}": float(doc[f"{s}_{p}"]) for s in ("accelerometer", "gyroscope")
+               for p in ("noise_density", "random_walk")},
+            "model": "kalibr", "rostopic": str(doc.get("rostopic", "/imu0")), "time_offset": 0.0,
+            "update_rate": float(doc["update_rate"])}
+    body = yaml.safe_dump({"imu0": imu0}, sort_keys=False, default_flow_style=None)
+    return "%YAML:1.0\n" + header(doc, "Convention: continuous-time noise densities N [u/sqrt(Hz)] and bias random "
+                                       "walks K [u/s/sqrt(Hz)], as Kalibr; T_i_b identity (set your extrinsics)") + body
+
+
+def orbslam3(doc: dict) -> str:
+    """ORB-SLAM3 IMU settings (continuous-time; ORB-SLAM3 scales by sqrt(IMU.Frequency))."""
+    body = {"IMU.NoiseGyro": _n(doc, "gyroscope"), "IMU.NoiseAcc": _n(doc, "accelerometer"),
+            "IMU.GyroWalk": _k(doc, "gyroscope"), "IMU.AccWalk": _k(doc, "accelerometer"),
+            "IMU.Frequency": float(doc["update_rate"])}
+    return "%YAML:1.0\n" + header(doc, "Convention: continuous-time: NoiseGyro/NoiseAcc in rad/s/sqrt(Hz), "
+                                       "m/s^2/sqrt(Hz); GyroWalk/AccWalk in rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)") + \
+        yaml.safe_dump(body, sort_keys=False)
+
+
+def vins(doc: dict) -> str:
+    """VINS-Mono / VINS-Fusion ``acc_n``, ``gyr_n``, ``acc_w``, ``gyr_w`` (per-IMU-step standard deviations)."""
+    f = float(doc["update_rate"])
+    values = {}
+    for sensor, short in (("accelerometer", "acc"), ("gyroscope", "gyr")):
+        values[f"{short}_n"] = step_noise_std(_n(doc, sensor), 1.0 / f, VINS_NOISE_WEIGHT)
+    for sensor, short in (("accelerometer", "acc"), ("gyroscope", "gyr")):
+        values[f"{short}_w"] = step_noise_std(_k(doc, sensor), 1.0 / f, VINS_WALK_WEIGHT)
+    body = "".join(f"{k}: {_yaml_number(v)}\n" for k, v in values.items())
+    return "%YAML:1.0\n" + header(
+        doc, "Convention: VINS propagates per IMU step dt = 1/update_rate (integration_base.h): the mid-point step "
+             "adds (dt/2)^2*acc_n^2 for each of its two samples, the bias dt^2*acc_w^2.",
+        f"Formula: acc_n = N*sqrt(2*f), acc_w = K*sqrt(f), f = {f:g} Hz (same for gyr_*), so that the propagated "
+        "variances grow as N^2*t and K^2*t.",
+        "acc_n [m/s^2], gyr_n [rad/s], acc_w [m/s^3], gyr_w [rad/s^2]. The often-quoted Kalibr discrete values "
+        "N*sqrt(f) and K/sqrt(f) differ from these by sqrt(2) and by f.") + body
+
+
+def _diag(doc: dict, sensor: str, parameter: str) -> list[list[float]]:
+    per_axis = doc.get(f"{sensor}_{parameter}_xyz") or [doc[f"{sensor}_{parameter}"]] * 3
+    return [[num(float(per_axis[i]) ** 2) if i == j else 0.0 for j in range(3)] for i in range(3)]
+
+
+def gtsam(doc: dict) -> str:
+    """GTSAM ``PreintegrationCombinedParams`` members (continuous-time covariances, densities squared)."""
+    body = {"accelerometerCovariance": _diag(doc, "accelerometer", "noise_density"),
+            "gyroscopeCovariance": _diag(doc, "gyroscope", "noise_density"),
+            "biasAccCovariance": _diag(doc, "accelerometer", "random_walk"),
+            "biasOmegaCovariance": _diag(doc, "gyroscope", "random_walk"),
+            "integrationCovariance": None, "biasAccOmegaInt": None}
+    return header(
+        doc, "Convention: GTSAM's continuous-time 'covariances' = densities squared, per axis on the diagonal (x, y, "
+             "z of imu.yaml's *_xyz): accelerometerCovariance = diag(N^2) [(m/s^2)^2/Hz], gyroscopeCovariance "
+             "[(rad/s)^2/Hz] (GTSAM divides by dt), biasAccCovariance = diag(K^2) [(m/s^3)^2/Hz], "
+             "biasOmegaCovariance [(rad/s^2)^2/Hz] (GTSAM multiplies by dt).",
+        "integrationCovariance (integration error) and biasAccOmegaInt (uncertainty of the initial bias) are "
+        "choices of your estimator, not properties of the IMU: not identifiable from a static record, left null.",
+        "Use: p = gtsam.PreintegrationCombinedParams.MakeSharedU(g); p.setAccelerometerCovariance(np.array(...)); "
+        "... (PreintegrationParams takes the first two only).") + \
+        yaml.safe_dump(body, sort_keys=False, default_flow_style=None)
+
+
+def px4_period(rate_hz: float) -> float:
+    """PX4's EKF prediction period [s]: EKF2_PREDICT_US's default as a whole number of IMU periods."""
+    return max(1, round(PX4_PREDICT_PERIOD_S * rate_hz)) / rate_hz
+
+
+def px4(doc: dict) -> str:
+    """PX4 EKF2 noise parameters as a QGroundControl ``.params`` file (tab-separated, MAV_PARAM_TYPE 9 = float)."""
+    period = px4_period(float(doc["update_rate"]))
+    values = {"EKF2_ACC_B_NOISE": step_noise_std(_k(doc, "accelerometer"), period),
+              "EKF2_ACC_NOISE": step_noise_std(_n(doc, "accelerometer"), period),
+              "EKF2_GYR_B_NOISE": step_noise_std(_k(doc, "gyroscope"), period),
+              "EKF2_GYR_NOISE": step_noise_std(_n(doc, "gyroscope"), period)}
+    notes = [f"Note: {name} = {v:.3g} lies outside PX4's documented range [{lo:g}, {hi:g}]"
+             for name, v in values.items() for lo, hi in [PX4_LIMITS[name]] if not lo <= v <= hi]
+    head = header(
+        doc, f"Convention: PX4 EKF2 adds sq(P*EKF2_GYR_NOISE) per prediction step of P = {period * 1e3:g} ms "
+             f"(EKF2_PREDICT_US default {PX4_PREDICT_PERIOD_S * 1e6:g} us as whole IMU periods) "
+             "(EKF/covariance.cpp).",
+        "Formula: EKF2_*_NOISE = N/sqrt(P) [rad/s, m/s^2], EKF2_*_B_NOISE = K/sqrt(P) [rad/s^2, m/s^3]; for another "
+        "EKF2_PREDICT_US multiply by sqrt(P/P_new). Not Kalibr's discrete sigma_d = N*sqrt(IMU rate).", *notes)
+    rows = "".join(f"1\t1\t{name}\t{v:.18f}\t9\n" for name, v in values.items())
+    return "# Onboard parameters for Vehicle 1\n#\n" + head + "#\n# Vehicle-Id Component-Id Name Value Type\n" + rows
+
+
+def rep145(doc: dict) -> str:
+    """REP-145 driver parameters: per-sample standard deviations at the driver's rate."""
+    per_sample = {}
+    for sensor, name in (("gyroscope", "angular_velocity_stddev"), ("accelerometer", "linear_acceleration_stddev")):
+        values = doc.get(f"{sensor}_noise_stddev_per_sample_xyz")
+        if values is None:  # Allan-only analysis or an overbound: white noise sampled at the rate
+            values = [_n(doc, sensor) * math.sqrt(float(doc["update_rate"]))]
+        per_sample[name] = float(max(values))
+    return header(doc, "Convention: per-sample standard deviation at update_rate (rad/s, m/s^2): sqrt of the "
+                       "sensor_msgs/Imu covariance diagonal; includes the sensor's own low-pass, not N*sqrt(rate) "
+                       "(an overbound or an Allan-only analysis has no low-pass: N*sqrt(rate))") + \
+        yaml.safe_dump(per_sample, sort_keys=False)
