@@ -21,7 +21,7 @@ def test_clean_series_is_returned_unchanged():
     t2, x2, report = repair_time_series(t, x)
     assert t2 is t and x2 is x
     assert not report.repaired and report.notes() == [] and report.gaps == []
-    assert report.dt_median == pytest.approx(0.01)
+    assert report.dt == pytest.approx(0.01) and report.period.source == "median_interval"
 
 
 def test_nonfinite_samples_are_dropped_and_counted():

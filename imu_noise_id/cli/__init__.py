@@ -43,6 +43,15 @@ def check_output_dir(path: Path) -> None:
         raise InputError(f"--out {str(path)!r} is not writable: choose another directory")
 
 
+def add_rate_option(parser: argparse.ArgumentParser) -> None:
+    """``--rate HZ``: the IMU's sample rate when its stamps cannot give it (see :mod:`imu_noise_id.core.timing`)."""
+    parser.add_argument(
+        "--rate", type=float, default=None, metavar="HZ",
+        help="the IMU's sample rate [Hz], e.g. the driver's configured output rate: use it instead of the rate "
+             "estimated from the stamps (needed when they are bursty and the bag's receive times disagree)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand registered."""
     parser = argparse.ArgumentParser(

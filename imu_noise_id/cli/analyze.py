@@ -10,6 +10,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from . import add_rate_option
+
 DEFAULT_OUT = "imu_noise_id_results"
 
 
@@ -31,6 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("bag", type=Path, help="bag file or rosbag2 directory")
     p.add_argument("--topic", help="sensor_msgs/Imu topic (needed only when the bag has several)")
     p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
+    add_rate_option(p)
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
     p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
     p.add_argument(
@@ -63,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
                              models=ModelStage(args.model), loop=not args.no_loop)
     with TextProgress(f"reading {args.bag.name}") as progress:
-        recording = read_static(args.bag, topic=args.topic, progress=progress)
+        recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
     with TextProgress("Allan-family variances") as progress:
         result = analyze(recording.imu, recording.temperature, options, progress=progress, on_axis=_print_axis)
     for warning in result.warnings:

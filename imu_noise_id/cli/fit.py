@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from . import add_rate_option
+
 DESCRIPTION = """\
 Fit a stochastic error model to the static IMU record in BAG by maximum likelihood (constrained EM of
 Stebler et al. 2011, finished by quasi-Newton on the exact Kalman-filter likelihood) and write DIR/model.yaml:
@@ -26,6 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="axis to fit (gyro_x … accel_z; repeatable); default: all six")
     p.add_argument("--topic", default=None, help="IMU topic in the bag (default: the only sensor_msgs/Imu topic)")
     p.add_argument("--out", default=".", metavar="DIR", help="output directory (default: current directory)")
+    add_rate_option(p)
     p.add_argument("--drift", choices=("em", "ls"), default="em",
                    help="with RR: estimate the ramp jointly (em, default) or remove a least-squares line first (ls)")
     p.add_argument("--starts", type=int, default=3, help="Allan-variance initial values tried (default 3)")
@@ -39,7 +42,6 @@ def run(args: argparse.Namespace) -> int:
     from ..core.axes import AXES
     from ..core.errors import InputError
     from ..core.estimation.model import FitOptions
-    from ..core.timing import sampling_period
     from ..pipelines.analyze.models import ModelStage, fit_axes
     from ..report.console import fit_line
     from ..report.model_yaml import write_model_yaml
@@ -50,8 +52,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"unknown axis {', '.join(bad)}: use {', '.join(AXES)}")
     stage = ModelStage(args.model, FitOptions(n_starts=args.starts, target_precision=args.target_precision),
                        args.drift)
-    series = read_static(args.bag, topic=args.topic).imu
-    models = fit_axes(series, axes, stage, sampling_period(series.t),
+    series = read_static(args.bag, topic=args.topic, rate_hz=args.rate).imu
+    models = fit_axes(series, axes, stage, series.dt,
                       on_fit=lambda axis, fit: print(fit_line(axis, fit), flush=True))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core.axes import AXES
+from . import add_rate_option
 
 
 def register(subparsers: Any) -> None:
@@ -31,6 +32,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--refine", type=int, default=2, metavar="N",
                    help="grid-refinement passes: rerun with grids re-centred on the posterior (default: %(default)s)")
     p.add_argument("--no-plot", action="store_true", help="skip the PNG plot")
+    add_rate_option(p)
     p.set_defaults(run=run)
 
 
@@ -41,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     from ..resources import read_hypotheses_file
 
     hypotheses, source = read_hypotheses_file(args.hypotheses)
-    series = read_imu(args.bag, topic=args.topic)
+    series = read_imu(args.bag, topic=args.topic, rate_hz=args.rate)
     res = identify(series, list(dict.fromkeys(args.axis)), hypotheses, source, args.refine)
     out = Path(args.out)
     write_identification(res, out)

@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from . import add_rate_option
+
 DEFAULT_OUT = "imu_noise_id_results"
 
 
@@ -33,6 +35,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--max-steps", type=int, default=6, help="most effects added per axis (default: 6)")
     p.add_argument("--alpha", type=float, default=0.01, help="level of every detector (default: 0.01)")
     p.add_argument("--out", type=Path, default=Path(DEFAULT_OUT), help=f"output directory (default: {DEFAULT_OUT})")
+    add_rate_option(p)
     p.set_defaults(run=run)
 
 
@@ -54,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     parse_structure(args.start)
     if args.max_steps < 0 or not 0 < args.alpha < 1:
         raise InputError("--max-steps must be >= 0 and --alpha in (0, 1)")
-    recording = read_static(args.bag, topic=args.topic, temperature_topic=args.temperature_topic)
+    recording = read_static(args.bag, topic=args.topic, temperature_topic=args.temperature_topic, rate_hz=args.rate)
     loop = ImuLoop(recording.imu, recording.temperature, max_steps=args.max_steps, alpha=args.alpha)
     results = {axis: loop.run(axis, args.start) for axis in axes}
     print(loop_table(results), flush=True)
