@@ -127,17 +127,18 @@ def _neighbour_intervals(t: np.ndarray, index: np.ndarray) -> np.ndarray:
 
 
 def _lattice(intervals: np.ndarray) -> tuple[float, bool]:
-    """(median single-step interval, whether the intervals are integer multiples of it): sample-time stamps with
-    lost messages sit on such a lattice (within :data:`LATTICE_TOLERANCE` of a whole number of steps)."""
+    """(period, whether the intervals are whole multiples of a step): sample-time stamps with lost messages sit on
+    such a lattice (within :data:`LATTICE_TOLERANCE` of a whole number of steps), and their period is the median of
+    the single steps; off the lattice it is the median interval."""
     step = float(np.quantile(intervals, 0.1))
     if not step > 0:
         return float(np.median(intervals)), False
     ratio = intervals / step
     whole = np.rint(ratio)
     near = (np.abs(ratio - whole) < LATTICE_TOLERANCE) & (whole >= 1)
+    on_lattice = bool(np.mean(near) >= LATTICE_FRACTION)
     ones = intervals[near & (whole == 1)]
-    single = float(np.median(ones)) if ones.size else float(np.median(intervals))
-    return single, bool(np.mean(near) >= LATTICE_FRACTION)
+    return (float(np.median(ones)) if on_lattice and ones.size else float(np.median(intervals))), on_lattice
 
 
 def _halves(t: np.ndarray, index: np.ndarray) -> tuple[float, float] | None:
