@@ -43,6 +43,12 @@ def check_output_dir(path: Path) -> None:
         raise InputError(f"--out {str(path)!r} is not writable: choose another directory")
 
 
+def print_notes(notes: list[str]) -> None:
+    """The reader's repair and timing notes on stderr, one ``note:`` line each (the result files keep them too)."""
+    for note in notes:
+        print(f"note: {note}", file=sys.stderr)
+
+
 def add_rate_option(parser: argparse.ArgumentParser) -> None:
     """``--rate HZ``: the IMU's sample rate when its stamps cannot give it (see :mod:`imu_noise_id.core.timing`)."""
     parser.add_argument(
@@ -78,6 +84,10 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # e.g. `imu-noise-id simulate … | head`: the reader left, the work is done
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:  # a file named on the command line cannot be used (name too long, permissions, disk full)
+        what = f" {str(exc.filename)[:120]!r}" if exc.filename else ""
+        print(f"imu-noise-id {args.command}: error: cannot use{what}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print(f"imu-noise-id {args.command}: interrupted", file=sys.stderr)
         return 130

@@ -71,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
         result = analyze(recording.imu, recording.temperature, options, progress=progress, on_axis=_print_axis)
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)
-    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model}
+    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model,
+            "notes": recording.notes}
     paths = write_analysis(result, args.out, rostopic=recording.imu.topic, meta=meta,
                            title=f"IMU noise analysis: {args.bag.name}")
     print(summary_table(result.static), flush=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from . import add_rate_option
+from . import add_rate_option, print_notes
 
 DESCRIPTION = """\
 Fit a stochastic error model to the static IMU record in BAG by maximum likelihood (constrained EM of
@@ -52,11 +52,14 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"unknown axis {', '.join(bad)}: use {', '.join(AXES)}")
     stage = ModelStage(args.model, FitOptions(n_starts=args.starts, target_precision=args.target_precision),
                        args.drift)
-    series = read_static(args.bag, topic=args.topic, rate_hz=args.rate).imu
+    recording = read_static(args.bag, topic=args.topic, rate_hz=args.rate)
+    series = recording.imu
+    print_notes(recording.notes)
     models = fit_axes(series, axes, stage, series.dt,
                       on_fit=lambda axis, fit: print(fit_line(axis, fit), flush=True))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    meta = {"source": str(args.bag), "topic": series.topic, "command": "fit", "model": args.model}
+    meta = {"source": str(args.bag), "topic": series.topic, "command": "fit", "model": args.model,
+            "notes": recording.notes}
     print(f"wrote {write_model_yaml(out / 'model.yaml', models, meta=meta)}")
     return 0

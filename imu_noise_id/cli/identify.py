@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core.axes import AXES
-from . import add_rate_option
+from . import add_rate_option, print_notes
 
 
 def register(subparsers: Any) -> None:
@@ -45,6 +45,7 @@ def run(args: argparse.Namespace) -> int:
     hypotheses, source = read_hypotheses_file(args.hypotheses)
     series = read_imu(args.bag, topic=args.topic, rate_hz=args.rate)
     res = identify(series, list(dict.fromkeys(args.axis)), hypotheses, source, args.refine)
+    print_notes(res.notes)
     out = Path(args.out)
     write_identification(res, out)
     if not args.no_plot:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from . import add_rate_option
+from . import add_rate_option, print_notes
 
 DEFAULT_OUT = "imu_noise_id_results"
 
@@ -58,11 +58,13 @@ def run(args: argparse.Namespace) -> int:
     if args.max_steps < 0 or not 0 < args.alpha < 1:
         raise InputError("--max-steps must be >= 0 and --alpha in (0, 1)")
     recording = read_static(args.bag, topic=args.topic, temperature_topic=args.temperature_topic, rate_hz=args.rate)
+    print_notes(recording.notes)
     loop = ImuLoop(recording.imu, recording.temperature, max_steps=args.max_steps, alpha=args.alpha)
     results = {axis: loop.run(axis, args.start) for axis in axes}
     print(loop_table(results), flush=True)
     args.out.mkdir(parents=True, exist_ok=True)
-    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "loop", "start": args.start}
+    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "loop", "start": args.start,
+            "notes": recording.notes}
     paths = [write_model_yaml(args.out / "model.yaml", {}, results, meta),
              write_loop_report(args.out / "report.html", results, title=f"closed loop: {args.bag.name}")]
     print(f"results in {args.out}/: " + ", ".join(p.name for p in paths))
