@@ -45,3 +45,32 @@ def cut_file(src: Path, dst: Path, fraction: float) -> Path:
     data = src.read_bytes()
     dst.write_bytes(data[: int(len(data) * fraction)])
     return dst
+
+
+def write_ros1_bag(path: Path, imu: ImuSeries, topic: str = "/imu/data", compression: str | None = None,
+                   chunk_bytes: int = 64 * 1024) -> Path:
+    """A ROS 1 bag of ``imu`` (rosbags' ROS 1 writer; small chunks so that a cut falls between several)."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC)
+    imu_type = store.types["sensor_msgs/msg/Imu"]
+    header_type, time_type = store.types["std_msgs/msg/Header"], store.types["builtin_interfaces/msg/Time"]
+    vector, quaternion = store.types["geometry_msgs/msg/Vector3"], store.types["geometry_msgs/msg/Quaternion"]
+    writer = Writer(path)
+    if compression:
+        writer.set_compression(getattr(Writer.CompressionFormat, compression.upper()))
+    writer.chunk_threshold = chunk_bytes
+    with writer:
+        conn = writer.add_connection(topic, imu_type.__msgtype__, typestore=store)
+        cov = np.zeros(9)
+        for i, t in enumerate(imu.t):
+            sec = int(t)
+            stamp = time_type(sec=sec, nanosec=round((t - sec) * 1e9) % 1_000_000_000)
+            msg = imu_type(header=header_type(seq=i, stamp=stamp, frame_id="imu_link"),
+                           orientation=quaternion(x=0.0, y=0.0, z=0.0, w=1.0),
+                           orientation_covariance=np.r_[-1.0, np.zeros(8)],
+                           angular_velocity=vector(*imu.gyro[i]), angular_velocity_covariance=cov,
+                           linear_acceleration=vector(*imu.accel[i]), linear_acceleration_covariance=cov)
+            writer.write(conn, round(t * 1e9), store.serialize_ros1(msg, imu_type.__msgtype__))
+    return path

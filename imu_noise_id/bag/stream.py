@@ -161,12 +161,12 @@ def _mark_orientation_not_provided(q: np.ndarray, cov0: np.ndarray) -> None:
         q[bad] = 0.0
 
 
-def finish(stream: TopicStream, where: str, notes: list[str], declared_hz: float | None = None
-           ) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
+def finish(stream: TopicStream, where: str, notes: list[str], declared_hz: float | None = None,
+           salvage_note: str | None = None) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
     """Stamps and arrays of a stream after the documented repairs, with the notes about it; the sampling period
     (from the header stamps, the messages' positions and the bag's receive times, or ``declared_hz``) is left in
-    ``stream.period``."""
-    topic_notes: list[str] = []
+    ``stream.period``. ``salvage_note`` (what a damaged bag lost) becomes the topic's first note."""
+    topic_notes: list[str] = [salvage_note] if salvage_note else []
     if stream.msgtype == IMU_TYPE and stream.first_raw is not None:
         first = stream.decoder.deserialize(stream.first_raw, IMU_TYPE)
         stream.declared_covariance = {
@@ -264,7 +264,8 @@ def read_topics(
         results = {}
         for msgtype, stream in streams.items():
             try:
-                t, arrays, topic_notes = finish(stream, where, notes, rate_hz if msgtype == IMU_TYPE else None)
+                t, arrays, topic_notes = finish(stream, where, notes, rate_hz if msgtype == IMU_TYPE else None,
+                                                getattr(reader, "note", None))
             except BagError as exc:
                 if wanted[msgtype][1]:
                     raise
