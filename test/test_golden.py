@@ -32,7 +32,7 @@ REL = 2e-5
 #: Absolute tolerance for numbers that are ~0 (a rounded 0 against 1e-17).
 ABS = 1e-12
 #: Keys whose values depend on where and how fast the test runs (paths, timings), not on the computation.
-VOLATILE = {"source", "source_hypotheses", "bag", "imu_samples_per_second", "replay_seconds"}
+VOLATILE = {"source", "source_hypotheses", "bag", "imu_samples_per_second", "replay_seconds", "run"}
 #: Files of fitted models (compared to their statistical resolution, module docstring).
 FITTED_FILES = ("analyze_imu.yaml", "analyze_model.yaml", "fit_model.yaml")
 #: An estimate may move by this fraction of its standard error.

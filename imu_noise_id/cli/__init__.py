@@ -10,8 +10,12 @@ import importlib
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..core.errors import InputError
+
+if TYPE_CHECKING:
+    from ..report.results_folder import ResultsFolder
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
 COMMANDS: tuple[str, ...] = (
@@ -49,6 +53,15 @@ def print_notes(notes: list[str]) -> None:
         print(f"note: {note}", file=sys.stderr)
 
 
+def results_folder(args: argparse.Namespace, source: str | None, topic: str | None) -> ResultsFolder:
+    """The staging and manifest of ``--out`` for this run (:mod:`imu_noise_id.report.results_folder`)."""
+    from ..report.results_folder import ResultsFolder, RunRecord, options_of
+
+    record = RunRecord(command=args.command, argv=list(args.argv), source=source, topic=topic,
+                       options=options_of(args), started=args.started)
+    return ResultsFolder(Path(args.out), record)
+
+
 def add_rate_option(parser: argparse.ArgumentParser) -> None:
     """``--rate HZ``: the IMU's sample rate when its stamps cannot give it (see :mod:`imu_noise_id.core.timing`)."""
     parser.add_argument(
@@ -72,8 +85,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``imu-noise-id`` (and ``python -m imu_noise_id``)."""
+    from ..report.results_folder import now
+
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
+    args.started = now()
     try:
         if args.command in DIRECTORY_OUTPUT:
             check_output_dir(Path(args.out))

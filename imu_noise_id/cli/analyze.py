@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from . import add_rate_option
+from . import add_rate_option, results_folder
 
 DEFAULT_OUT = "imu_noise_id_results"
 
@@ -73,8 +73,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"warning: {warning}", file=sys.stderr)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model,
             "notes": recording.notes}
-    paths = write_analysis(result, args.out, rostopic=recording.imu.topic, meta=meta,
-                           title=f"IMU noise analysis: {args.bag.name}")
+    folder = results_folder(args, str(args.bag), recording.imu.topic)
+    with folder as staging:
+        paths = write_analysis(result, staging, rostopic=recording.imu.topic, meta=meta,
+                               title=f"IMU noise analysis: {args.bag.name}")
+    folder.report()
     print(summary_table(result.static), flush=True)
     if result.finals:
         print(final_table(result.finals), flush=True)

@@ -7,6 +7,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+from . import results_folder
+
 #: Bounds that keep a run within a machine's memory and a day (the paper's cases use 500 trials of 2000 s).
 MAX_TRIALS = 100_000
 MAX_SAMPLES = 1e7
@@ -53,11 +55,14 @@ def run(args: argparse.Namespace) -> int:
     hset = paper_case(args.case, dt=args.dt, bias_sigma=args.bias_sigma)
     result = run_criteria(hset, args.duration, args.trials, seed=args.seed, case=str(args.case))
     out = Path(args.out)
-    write_criteria_json(result, out / "criteria.json")
-    if not args.no_plot:
-        from ..report.hypotheses_plots import plot_criteria
+    folder = results_folder(args, None, None)
+    with folder as staging:
+        write_criteria_json(result, staging / "criteria.json")
+        if not args.no_plot:
+            from ..report.hypotheses_plots import plot_criteria
 
-        plot_criteria([result], out / f"criteria_case{args.case}.png", f"paper 002 case {args.case}")
+            plot_criteria([result], staging / f"criteria_case{args.case}.png", f"paper 002 case {args.case}")
+    folder.report()
     print(f"case {args.case}, {args.trials} trials, dt {args.dt} s, at {result.t[-1]:g} s: identification error "
           f"real {result.error_probability_real[-1]:.3f}, calculated {result.error_probability_calculated[-1]:.3f}")
     for k, v in result.rsd_real.items():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from . import add_rate_option, print_notes
+from . import add_rate_option, print_notes, results_folder
 
 DESCRIPTION = """\
 Fit a stochastic error model to the static IMU record in BAG by maximum likelihood (constrained EM of
@@ -57,9 +57,11 @@ def run(args: argparse.Namespace) -> int:
     print_notes(recording.notes)
     models = fit_axes(series, axes, stage, series.dt,
                       on_fit=lambda axis, fit: print(fit_line(axis, fit), flush=True))
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     meta = {"source": str(args.bag), "topic": series.topic, "command": "fit", "model": args.model,
             "notes": recording.notes}
-    print(f"wrote {write_model_yaml(out / 'model.yaml', models, meta=meta)}")
+    folder = results_folder(args, str(args.bag), series.topic)
+    with folder as staging:
+        write_model_yaml(staging / "model.yaml", models, meta=meta)
+    folder.report()
+    print(f"wrote {Path(args.out) / 'model.yaml'}")
     return 0

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core.axes import AXES
-from . import add_rate_option, print_notes
+from . import add_rate_option, print_notes, results_folder
 
 
 def register(subparsers: Any) -> None:
@@ -47,11 +47,14 @@ def run(args: argparse.Namespace) -> int:
     res = identify(series, list(dict.fromkeys(args.axis)), hypotheses, source, args.refine)
     print_notes(res.notes)
     out = Path(args.out)
-    write_identification(res, out)
-    if not args.no_plot:
-        from ..report.hypotheses_plots import plot_identify
+    folder = results_folder(args, str(args.bag), series.topic)
+    with folder as staging:
+        write_identification(res, staging)
+        if not args.no_plot:
+            from ..report.hypotheses_plots import plot_identify
 
-        plot_identify(res, out / "hypotheses_probabilities.png")
+            plot_identify(res, staging / "hypotheses_probabilities.png")
+    folder.report()
     for axis, e in res.axes.items():
         f = e.result.final
         probs = ", ".join(f"{k} {v:.3f}" for k, v in f.probabilities.items())

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from . import add_rate_option, print_notes
+from . import add_rate_option, print_notes, results_folder
 
 DEFAULT_OUT = "imu_noise_id_results"
 
@@ -62,10 +62,12 @@ def run(args: argparse.Namespace) -> int:
     loop = ImuLoop(recording.imu, recording.temperature, max_steps=args.max_steps, alpha=args.alpha)
     results = {axis: loop.run(axis, args.start) for axis in axes}
     print(loop_table(results), flush=True)
-    args.out.mkdir(parents=True, exist_ok=True)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "loop", "start": args.start,
             "notes": recording.notes}
-    paths = [write_model_yaml(args.out / "model.yaml", {}, results, meta),
-             write_loop_report(args.out / "report.html", results, title=f"closed loop: {args.bag.name}")]
+    folder = results_folder(args, str(args.bag), recording.imu.topic)
+    with folder as staging:
+        paths = [write_model_yaml(staging / "model.yaml", {}, results, meta),
+                 write_loop_report(staging / "report.html", results, title=f"closed loop: {args.bag.name}")]
+    folder.report()
     print(f"results in {args.out}/: " + ", ".join(p.name for p in paths))
     return 0
