@@ -6,7 +6,9 @@ Repairs done by :func:`repair_time_series`, in this order, each counted in the r
    e.g. :data:`IMU_MAX_ABS`: such values come from corrupt bytes or wrong units; more than
    :data:`MAX_IMPLAUSIBLE_FRACTION` of them raise instead of being dropped);
 2. drop samples with a zero stamp when the other stamps are clock times (> :data:`ZERO_STAMP_CLOCK_S`),
-   i.e. the publisher left ``header.stamp`` unset for them;
+   i.e. the publisher left ``header.stamp`` unset for them, and samples whose stamp jumps away from both its
+   neighbours in message order by more than :data:`GLITCH_PERIODS` periods while the neighbours agree (one stamp
+   an hour in the future or the past: a clock glitch, not a gap);
 3. sort by time (stable) when stamps go backwards;
 4. drop samples whose stamp equals the previous one (the first is kept);
 5. estimate the sampling period from the stamps, the messages' positions and the receive times
@@ -30,6 +32,8 @@ from .timing import SamplePeriod, estimate_period
 
 #: Stamps are clock (epoch) times if the smallest non-zero one exceeds this [s]; zero stamps among them are unset.
 ZERO_STAMP_CLOCK_S = 60.0
+#: A stamp this many periods away from both message neighbours (which agree with each other) is a clock glitch.
+GLITCH_PERIODS = 100
 #: A gap is an interval longer than this many periods.
 GAP_FACTOR = 1.5
 #: Standard gravity [m/s²], as in :mod:`.simulate` (not imported from there: it would pull in scipy, ~80 MB of
@@ -57,6 +61,7 @@ class QualityReport:
     n_nonfinite : samples dropped because the time or a value was NaN/±inf
     n_implausible : samples dropped because a value exceeded its physical limit
     n_zero_stamps : samples dropped because their stamp was 0 among clock-time stamps
+    n_glitches : samples dropped because their stamp jumped away from both neighbours (see the module docstring)
     n_backwards : places where the stamp decreased (the series was sorted if > 0)
     n_duplicates : samples dropped because their stamp repeated the previous one
     period : the sampling period after the repairs, how it was obtained and what the stamps' trust is (None
@@ -71,6 +76,7 @@ class QualityReport:
     n_nonfinite: int = 0
     n_implausible: int = 0
     n_zero_stamps: int = 0
+    n_glitches: int = 0
     n_backwards: int = 0
     n_duplicates: int = 0
     period: SamplePeriod | None = None
@@ -82,7 +88,8 @@ class QualityReport:
     def repaired(self) -> bool:
         """True if any sample was dropped or moved."""
         return bool(
-            self.n_nonfinite or self.n_implausible or self.n_zero_stamps or self.n_backwards or self.n_duplicates
+            self.n_nonfinite or self.n_implausible or self.n_zero_stamps or self.n_glitches or self.n_backwards
+            or self.n_duplicates
         )
 
     @property
@@ -106,6 +113,9 @@ class QualityReport:
             )
         if self.n_zero_stamps:
             notes.append(f"dropped {self.n_zero_stamps} {what} with a zero header stamp (stamp not set)")
+        if self.n_glitches:
+            notes.append(f"dropped {self.n_glitches} {what} whose stamp jumps away from both neighbours by more than "
+                         f"{GLITCH_PERIODS} periods (a clock glitch, e.g. one stamp in the future)")
         if self.n_backwards:
             notes.append(f"stamps went backwards {self.n_backwards} time(s): {what} sorted by stamp")
         if self.n_duplicates:
@@ -149,6 +159,23 @@ def find_gaps(t: np.ndarray, period: SamplePeriod | float, gap_factor: float = G
         else dt
     where = np.flatnonzero(steps > gap_factor * reference)
     return [(float(t[i]), float(steps[i]), max(round(steps[i] / dt) - 1, 1)) for i in where]
+
+
+def _glitches(t: np.ndarray) -> np.ndarray:
+    """Samples (in message order) whose stamp is more than :data:`GLITCH_PERIODS` periods from both neighbours'
+    while the neighbours are within a few periods of each other."""
+    bad = np.zeros(t.shape[0], dtype=bool)
+    if t.shape[0] < 3:
+        return bad
+    steps = np.diff(t)
+    forward = steps[steps > 0]
+    if forward.size == 0:
+        return bad
+    limit = GLITCH_PERIODS * float(np.median(forward))
+    jump_in, jump_out = np.abs(steps[:-1]) > limit, np.abs(steps[1:]) > limit
+    bridged = np.abs(t[2:] - t[:-2]) < 0.1 * limit
+    bad[1:-1] = jump_in & jump_out & bridged
+    return bad
 
 
 def repair_time_series(
@@ -233,6 +260,11 @@ def repair_time_series(
     if 0 < n_zero < t.shape[0] and t[~zero].min() > ZERO_STAMP_CLOCK_S:
         report.n_zero_stamps = n_zero
         t, columns = t[~zero], _take(columns, ~zero)
+
+    glitch = _glitches(t)
+    report.n_glitches = int(np.count_nonzero(glitch))
+    if report.n_glitches:
+        t, columns = t[~glitch], _take(columns, ~glitch)
 
     steps = np.diff(t)
     report.n_backwards = int(np.count_nonzero(steps < 0))
