@@ -106,15 +106,15 @@ class TopicStream:
         self.declared_covariance: dict[str, np.ndarray] = {}
         self.period: SamplePeriod | None = None
         self.t = np.empty(self.capacity)
-        # Receive times: the stamps when every header stamp is zero, else a second clock for the period.
-        self.receive_ns = np.empty(self.capacity, dtype=np.int64)
+        # Receive times [s]: the stamps when every header stamp is zero, else a second clock for the period.
+        self.receive = np.empty(self.capacity)
         self.stamped = False
         self.arrays = {k: np.empty((self.capacity, w) if w > 1 else self.capacity) for k, w in self.widths.items()}
 
     def _grow(self, need: int) -> None:
         self.capacity = max(need, int(self.capacity * 1.5))
         self.t = np.resize(self.t, self.capacity)
-        self.receive_ns = np.resize(self.receive_ns, self.capacity)
+        self.receive = np.resize(self.receive, self.capacity)
         self.arrays = {k: np.resize(a, (self.capacity, *a.shape[1:])) for k, a in self.arrays.items()}
 
     def add(self, raws: list[bytes], receive_ns: list[int]) -> None:
@@ -133,7 +133,7 @@ class TopicStream:
             self._keep_orientation(s, e, transient["orientation_xyzw"], transient["orientation_cov0"])
         self.t[s:e] = sec + nsec * 1e-9
         self.stamped = self.stamped or bool(np.any(sec) or np.any(nsec))
-        self.receive_ns[s:e] = receive_ns
+        self.receive[s:e] = np.asarray(receive_ns, dtype=np.int64) * 1e-9
         self.n = e
 
     def _keep_orientation(self, s: int, e: int, q: np.ndarray, cov0: np.ndarray) -> None:
@@ -147,7 +147,7 @@ class TopicStream:
 
     def trimmed(self) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
         n = self.n
-        return self.t[:n], self.receive_ns[:n], {k: a[:n] for k, a in self.arrays.items()}
+        return self.t[:n], self.receive[:n], {k: a[:n] for k, a in self.arrays.items()}
 
 
 def _mark_orientation_not_provided(q: np.ndarray, cov0: np.ndarray) -> None:
@@ -173,7 +173,7 @@ def finish(stream: TopicStream, where: str, notes: list[str], declared_hz: float
             name: np.asarray(getattr(first, f"{name}_covariance"), dtype=float).reshape(3, 3)
             for name in ("orientation", "angular_velocity", "linear_acceleration")
         }
-    t, receive_ns, arrays = stream.trimmed()
+    t, receive, arrays = stream.trimmed()
     if stream.n == 0:
         raise BagError(
             f"topic {stream.topic!r} in {where} has no readable messages (the index announced {stream.expected}). "
@@ -181,7 +181,6 @@ def finish(stream: TopicStream, where: str, notes: list[str], declared_hz: float
         )
     if stream.n != stream.expected:
         topic_notes.append(f"the bag index announced {stream.expected} messages but {stream.n} were read")
-    receive: np.ndarray | None = receive_ns * 1e-9
     if not stream.stamped:  # every header stamp is zero
         t, receive = receive, None
         topic_notes.append(

@@ -47,6 +47,8 @@ LATTICE_FRACTION = 0.95
 MAX_LOST = 0.5
 #: The regression's lag is this fraction of the record (in messages).
 LAG_FRACTION = 0.1
+#: Pairs of stamps each estimate looks at, at most (evenly spread over longer records: bounded time and memory).
+MAX_PAIRS = 200_000
 #: The fix named whenever the stamps cannot be trusted.
 RATE_HINT = "pass --rate HZ with the sensor's configured output rate"
 
@@ -103,27 +105,39 @@ class SamplePeriod:
 
 def _check(t: np.ndarray) -> np.ndarray:
     t = np.asarray(t, dtype=float)
-    d = np.diff(t)
-    if d.size == 0 or not np.all(np.isfinite(t)) or np.median(d) <= 0:
+    if t.shape[0] < 2 or not np.isfinite(t).all():
+        raise InputError("time stamps must be finite and increasing (need at least 2 samples)")
+    i = _starts(t.shape[0], 1)
+    if np.median(t[i + 1] - t[i]) <= 0:
         raise InputError("time stamps must be finite and increasing (need at least 2 samples)")
     return t
+
+
+def _starts(n: int, span: int) -> np.ndarray:
+    """At most :data:`MAX_PAIRS` evenly spread start indices of pairs ``(i, i + span)`` in ``n`` samples."""
+    count = n - span
+    return np.arange(0, count, max(1, count // MAX_PAIRS))
 
 
 def _lag_slope(t: np.ndarray, index: np.ndarray) -> float:
     """Robust slope of ``t`` on ``index``: median of the lag-k slopes, k = :data:`LAG_FRACTION` of the record."""
     n = t.shape[0]
     k = max(1, int(n * LAG_FRACTION))
-    steps = (index[k:] - index[:-k]).astype(float)
+    i = _starts(n, k)
+    steps = (index[i + k] - index[i]).astype(float)
     ok = steps > 0
     if not ok.any():
         return float("nan")
-    return float(np.median((t[k:] - t[:-k])[ok] / steps[ok]))
+    return float(np.median((t[i + k] - t[i])[ok] / steps[ok]))
 
 
 def _neighbour_intervals(t: np.ndarray, index: np.ndarray) -> np.ndarray:
-    d = np.diff(t)
-    neighbours = np.diff(index) == 1
-    return d[neighbours] if neighbours.any() else d / np.maximum(np.diff(index), 1)
+    """Intervals between stamps of neighbouring messages (at most :data:`MAX_PAIRS`, evenly spread)."""
+    i = _starts(t.shape[0], 1)
+    d = t[i + 1] - t[i]
+    steps = index[i + 1] - index[i]
+    neighbours = steps == 1
+    return d[neighbours] if neighbours.any() else d / np.maximum(steps, 1)
 
 
 def _lattice(intervals: np.ndarray) -> tuple[float, bool]:
