@@ -37,7 +37,9 @@ def read_hypotheses_file(path: str | Path | None) -> tuple[dict[str, Any], str]:
     try:
         data = yaml.safe_load(p.read_text())
     except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        raise InputError(f"hypotheses file {p} is not valid YAML: {exc}") from None
+        raise InputError(f"hypotheses file {p} is not valid YAML: {' '.join(str(exc).split())}") from None
+    except OSError as exc:
+        raise InputError(f"hypotheses file {p} cannot be read ({exc.strerror or exc}): check its permissions") from None
     if not isinstance(data, dict):
         raise InputError(f"hypotheses file {p} must hold a mapping with 'hypotheses' or 'sensors'")
     return data, str(p)

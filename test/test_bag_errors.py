@@ -19,8 +19,6 @@ from imu_noise_id.cli import main
 from imu_noise_id.core.axes import ImuSeries, ScalarSeries
 from imu_noise_id.core.errors import InputError
 
-REPAIR_HINT = "re-record it, or repair it with `rosbag reindex` (ROS 1) / `ros2 bag reindex` (rosbag2)"
-
 
 def cli(*args: str, capsys) -> tuple[int, str, str]:
     code = main(["inspect", *args])
@@ -92,23 +90,22 @@ def test_bag_without_messages(tmp_path, capsys):
 
 @pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
 def test_truncated_rosbag2(tmp_path, storage, capsys):
+    """Cut in half: the complete messages are read with a note of the loss (test_truncated_bags.py has more)."""
     path = tmp_path / "bag"
     write_bag(path, simulated_imu(duration=10.0), storage=storage)
     data = _copy_storage_file(path, tmp_path / "cut")
     os.truncate(data, data.stat().st_size // 2)
-    expected = "File end magic is invalid" if storage == "mcap" else "database disk image is malformed"
-    with pytest.raises(BagError, match=f"cannot open rosbag2 directory .*: {expected}") as info:
-        read_imu(tmp_path / "cut")
-    assert REPAIR_HINT in str(info.value)
-    code, _, err = cli(str(tmp_path / "cut"), capsys=capsys)
-    assert code == 2 and expected in err
+    got = read_imu(tmp_path / "cut")
+    assert 300 < len(got) < 700 and "is damaged (cut short)" in got.notes[0]
+    code, out, _ = cli(str(tmp_path / "cut"), capsys=capsys)
+    assert code == 0 and "lost (metadata.yaml counts): /imu/data" in out
 
 
 def test_truncated_and_garbled_ros1_bag(shared_data, tmp_path):
     raw = (shared_data / "husky_robot_localization" / "test1.bag").read_bytes()
     (tmp_path / "cut.bag").write_bytes(raw[: len(raw) // 2])
-    with pytest.raises(BagError, match=r"cannot open ROS 1 bag .*cut.bag': Bag index looks damaged"):
-        read_imu(tmp_path / "cut.bag")
+    got = read_bag(tmp_path / "cut.bag")
+    assert 4000 < len(got.imu) < 6000 and "cut.bag is damaged (cut short)" in got.imu.notes[0]
     garbled = bytearray(raw)
     garbled[len(raw) // 2 : len(raw) // 2 + 64] = bytes(range(64))
     (tmp_path / "garbled.bag").write_bytes(bytes(garbled))
@@ -218,7 +215,7 @@ def test_gaps_are_noted_with_time_and_length(tmp_path):
     write_bag(tmp_path / "gap", ImuSeries(t=imu.t[keep], gyro=imu.gyro[keep], accel=imu.accel[keep]))
     got = read_imu(tmp_path / "gap")
     assert len(got.notes) == 1
-    assert "1 gap(s) longer than 1.5× the median period 0.01 s (≈250 missing messages" in got.notes[0]
+    assert "1 gap(s) longer than 1.5× the period 0.01 s (≈250 missing messages" in got.notes[0]
     assert "at t=1.990 s for 2.510 s" in got.notes[0]
 
 

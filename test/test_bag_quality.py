@@ -21,7 +21,7 @@ def test_clean_series_is_returned_unchanged():
     t2, x2, report = repair_time_series(t, x)
     assert t2 is t and x2 is x
     assert not report.repaired and report.notes() == [] and report.gaps == []
-    assert report.dt_median == pytest.approx(0.01)
+    assert report.dt == pytest.approx(0.01) and report.period.source == "median_interval"
 
 
 def test_nonfinite_samples_are_dropped_and_counted():
@@ -130,3 +130,18 @@ def test_static_check_accepts_a_low_passed_and_an_uncalibrated_static_imu():
     assert check.flags == [] and len(check.notes) == 1 and "+3.7 %" in check.notes[0]
     shaken = ImuSeries(t=imu.t, gyro=imu.gyro, accel=imu.accel + 0.2 * np.sin(2 * np.pi * 0.5 * imu.t)[:, None])
     assert any("|accel|" in f or "means vary" in f for f in static_check(shaken).flags)
+
+
+def test_a_stamp_far_from_both_neighbours_is_a_glitch_not_a_gap():
+    """One stamp an hour in the future (or before the record) used to sort to an end and leave a 1 h gap."""
+    t, x = _series()
+    t[400] += 3600.0
+    t[600] -= 7200.0
+    t2, _, report = repair_time_series(t, x)
+    assert report.n_glitches == 2 and len(t2) == 998 and report.n_backwards == 0
+    assert [g[2] for g in report.gaps] == [1, 1]  # the dropped samples leave one-sample holes, not an hour
+    assert "2 samples whose stamp jumps away from both neighbours" in report.notes()[0]
+    t, _ = _series()
+    gap = np.r_[t[:500], t[500:] + 3600.0]  # a real 1 h pause: neighbours disagree, kept as a gap
+    _, _, report = repair_time_series(gap, x)
+    assert report.n_glitches == 0 and len(report.gaps) == 1

@@ -272,7 +272,8 @@ def test_cli_cmkf_on_husky_bag(shared_data, tmp_path):
     assert data["counters"]["imu"] == 11865 and data["counters"]["updates"] > 3900
     assert data["status"] == "tracking"
     lines = (out / "cmkf.csv").read_text().splitlines()
-    assert len(lines) == 3952 + 1
+    assert lines[0].startswith("# imu-noise-id run: ")  # the run that wrote it
+    assert len(lines) == 1 + 3952 + 1
     # gravity removed correctly: the estimated accel biases are small compared with g
     assert max(abs(v) for v in data["accel_bias"].values()) < 0.5
 

@@ -14,6 +14,7 @@ repaired by :func:`imu_noise_id.core.quality.repair_time_series` with a note in 
 
 from __future__ import annotations
 
+import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,9 +23,11 @@ from typing import Any
 import numpy as np
 
 from ..core.axes import ImuSeries, OdometrySeries, ScalarSeries
+from ..core.errors import InputError
+from ..core.quality import IMU_MAX_ABS, repair_time_series
 from .errors import BagError
 from .stream import Progress, TopicStream, read_topics
-from .topics import IMU_TYPE, ODOM_TYPE, TEMPERATURE_TYPE
+from .topics import IMU_TYPE, ODOM_TYPE, TEMPERATURE_TYPE, reason
 
 
 @dataclass
@@ -64,7 +67,7 @@ def _imu(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], TopicStream]
         elif not provided.all():
             orientation[~provided] = np.nan  # in place: the stream's buffer is ours
     return ImuSeries(t=t, gyro=arrays["gyro"], accel=arrays["accel"], frame_id=frame, topic=stream.topic,
-                     notes=list(topic_notes), orientation_xyzw=orientation)  # fmt: skip
+                     notes=list(topic_notes), orientation_xyzw=orientation, period=stream.period)  # fmt: skip
 
 
 def _odometry(entry: tuple[np.ndarray, dict[str, np.ndarray], list[str], TopicStream]) -> OdometrySeries:
@@ -102,6 +105,7 @@ def read_bag(
     *,
     progress: Progress | None = None,
     fast: bool = True,
+    rate_hz: float | None = None,
 ) -> BagContents:
     """IMU, and where present odometry and temperature, of a bag in one pass.
 
@@ -113,6 +117,8 @@ def read_bag(
     require_odometry : raise when no odometry topic can be read
     progress : called as ``progress(messages_read, messages_total)`` after every batch
     fast : False decodes every message with rosbags' full deserialiser (reference path, several times slower)
+    rate_hz : the IMU's rate as declared by the user (``--rate``); None: from the stamps
+        (:func:`imu_noise_id.core.timing.estimate_period`)
 
     Raises
     ------
@@ -124,7 +130,7 @@ def read_bag(
         ODOM_TYPE: (odom_topic, require_odometry or odom_topic is not None),
         TEMPERATURE_TYPE: (temperature_topic, temperature_topic is not None),
     }
-    bag, results, notes = read_topics(path, wanted, progress, fast)
+    bag, results, notes = read_topics(path, wanted, progress, fast, rate_hz)
     return BagContents(
         path=bag,
         imu=_imu(results[IMU_TYPE]),
@@ -136,9 +142,16 @@ def read_bag(
     )
 
 
-def read_imu(path: str | Path, topic: str | None = None, progress: Progress | None = None) -> ImuSeries:
-    """The sensor_msgs/Imu series of ``topic`` (or of the bag's only Imu topic); repairs are in ``.notes``."""
-    _, results, _ = read_topics(path, {IMU_TYPE: (topic, True)}, progress, True)
+def read_imu(path: str | Path, topic: str | None = None, progress: Progress | None = None, *,
+             rate_hz: float | None = None) -> ImuSeries:
+    """The sensor_msgs/Imu series of ``topic`` (or of the bag's only Imu topic); repairs are in ``.notes``.
+
+    ``path`` may also be an ``.npz`` (see :func:`read_static`); ``rate_hz`` as in :func:`read_bag`.
+    """
+    p = Path(path).expanduser()
+    if p.suffix == ".npz":
+        return read_npz(p, rate_hz)
+    _, results, _ = read_topics(p, {IMU_TYPE: (topic, True)}, progress, True, rate_hz)
     return _imu(results[IMU_TYPE])
 
 
@@ -149,18 +162,19 @@ def read_odometry(path: str | Path, topic: str | None = None) -> OdometrySeries:
 
 
 def read_static(path: str | Path, topic: str | None = None, temperature_topic: str | None = None,
-                progress: Progress | None = None) -> BagContents:
+                progress: Progress | None = None, *, rate_hz: float | None = None) -> BagContents:
     """What a static analysis reads, in one pass: the IMU series and, where present, the temperature [°C].
 
     ``path`` may also be an ``.npz`` file with ``t`` [s] (or ``fs_hz``), ``gyro`` [rad/s] (N, 3) and ``accel``
-    [m/s²] (N, 3), e.g. a sensor's own log converted with numpy (no temperature then).
+    [m/s²] (N, 3), e.g. a sensor's own log converted with numpy (no temperature then). ``rate_hz`` as in
+    :func:`read_bag`.
     """
     p = Path(path).expanduser()
     if p.suffix == ".npz":
-        imu = read_npz(p)
-        return BagContents(path=p, imu=imu, notes=list(imu.notes))
+        imu = read_npz(p, rate_hz)
+        return BagContents(path=p, imu=imu, notes=[f"{imu.topic}: {note}" for note in imu.notes])
     wanted = {IMU_TYPE: (topic, True), TEMPERATURE_TYPE: (temperature_topic, temperature_topic is not None)}
-    bag, results, notes = read_topics(p, wanted, progress, True)
+    bag, results, notes = read_topics(p, wanted, progress, True, rate_hz)
     return BagContents(
         path=bag, imu=_imu(results[IMU_TYPE]),
         temperature=_temperature(results[TEMPERATURE_TYPE]) if TEMPERATURE_TYPE in results else None,
@@ -168,22 +182,56 @@ def read_static(path: str | Path, topic: str | None = None, temperature_topic: s
     )
 
 
-def read_npz(path: Path) -> ImuSeries:
-    """An IMU series from an ``.npz`` file (see :func:`read_static`)."""
-    if not path.is_file():
-        raise BagError(f"{str(path)!r}: no such file")
+def _npz_array(path: Path, data: Any, name: str, shape: str) -> np.ndarray:
     try:
-        with np.load(path) as data:
+        value = np.asarray(data[name], dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise BagError(f"{str(path)!r}: array {name!r} is not numeric ({reason(exc)}); it must be {shape}") from None
+    if (shape == "(N, 3)" and (value.ndim != 2 or value.shape[1] != 3)) or (shape == "(N,)" and value.ndim != 1):
+        raise BagError(f"{str(path)!r}: array {name!r} has shape {value.shape}; it must be {shape}")
+    return value
+
+
+def read_npz(path: Path, rate_hz: float | None = None) -> ImuSeries:
+    """An IMU series from an ``.npz`` file (see :func:`read_static`), repaired like a bag's samples (NaN rows
+    dropped, stamps sorted; :func:`imu_noise_id.core.quality.repair_time_series`). ``fs_hz`` in the file is a
+    declared rate, as is ``rate_hz`` (which wins).
+
+    Raises
+    ------
+    BagError
+        Missing, not a zip/npz, pickled or non-numeric arrays, wrong shapes, no ``t``/``fs_hz``, unusable samples.
+    """
+    where = repr(str(path))
+    if not path.is_file():
+        raise BagError(f"{where}: no such file")
+    try:
+        with np.load(path, allow_pickle=False) as data:
             missing = [k for k in ("gyro", "accel") if k not in data]
             if missing:
-                raise BagError(f"{str(path)!r} lacks array(s) {', '.join(missing)}: it needs t (or fs_hz), gyro, accel")
-            gyro, accel = np.asarray(data["gyro"], float), np.asarray(data["accel"], float)
+                raise BagError(f"{where} lacks array(s) {', '.join(missing)}: it needs t (or fs_hz), gyro, accel")
+            gyro, accel = _npz_array(path, data, "gyro", "(N, 3)"), _npz_array(path, data, "accel", "(N, 3)")
             if "t" in data:
-                t = np.asarray(data["t"], float)
+                t = _npz_array(path, data, "t", "(N,)")
+                declared = rate_hz
             elif "fs_hz" in data:
-                t = np.arange(gyro.shape[0]) / float(data["fs_hz"])
+                fs = np.asarray(data["fs_hz"])
+                if fs.size != 1 or not np.issubdtype(fs.dtype, np.number) or not 0 < float(fs.ravel()[0]) < 1e7:
+                    raise BagError(f"{where}: fs_hz must be one positive number of Hz, got {fs!r}")
+                declared = rate_hz or float(fs.ravel()[0])
+                t = np.arange(gyro.shape[0]) / declared
             else:
-                raise BagError(f"{str(path)!r} needs t [s] or fs_hz [Hz] beside gyro and accel")
-        return ImuSeries(t=t, gyro=gyro, accel=accel, topic=str(path))
-    except (OSError, ValueError) as exc:
-        raise BagError(f"{str(path)!r} is not a readable .npz with t, gyro, accel arrays: {exc}") from None
+                raise BagError(f"{where} needs t [s] or fs_hz [Hz] beside gyro and accel")
+    except BagError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise BagError(f"{where} is not a readable .npz with t, gyro, accel arrays: {reason(exc)}") from None
+    if not t.shape[0] == gyro.shape[0] == accel.shape[0]:
+        raise BagError(f"{where}: t, gyro and accel have {t.shape[0]}, {gyro.shape[0]} and {accel.shape[0]} rows; "
+                       "they must have one row per sample")
+    try:
+        t, (gyro, accel), report = repair_time_series(t, [gyro, accel], max_abs=IMU_MAX_ABS, declared_hz=declared)
+    except InputError as exc:
+        raise BagError(f"{where}: {exc}") from None
+    return ImuSeries(t=t, gyro=gyro, accel=accel, topic=str(path), notes=report.notes("samples"),
+                     period=report.period)

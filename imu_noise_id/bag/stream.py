@@ -9,6 +9,7 @@ repaired (:func:`imu_noise_id.core.quality.repair_time_series`) with a note per 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from dataclasses import replace
 from itertools import islice
 from pathlib import Path
 from typing import Any
@@ -16,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..core.quality import IMU_MAX_ABS, QualityError, repair_time_series
+from ..core.timing import SamplePeriod
 from .errors import BagError
 from .fastdecode import FlatDecoder
 from .mcapfast import fast_mcap_batches
@@ -102,16 +104,17 @@ class TopicStream:
         self.n = 0
         self.first_raw: bytes | None = None
         self.declared_covariance: dict[str, np.ndarray] = {}
+        self.period: SamplePeriod | None = None
         self.t = np.empty(self.capacity)
-        # Receive times are kept only while every header stamp seen is zero (then they replace the stamps).
-        self.receive_ns: np.ndarray | None = np.empty(self.capacity, dtype=np.int64)
+        # Receive times [s]: the stamps when every header stamp is zero, else a second clock for the period.
+        self.receive = np.empty(self.capacity)
+        self.stamped = False
         self.arrays = {k: np.empty((self.capacity, w) if w > 1 else self.capacity) for k, w in self.widths.items()}
 
     def _grow(self, need: int) -> None:
         self.capacity = max(need, int(self.capacity * 1.5))
         self.t = np.resize(self.t, self.capacity)
-        if self.receive_ns is not None:
-            self.receive_ns = np.resize(self.receive_ns, self.capacity)
+        self.receive = np.resize(self.receive, self.capacity)
         self.arrays = {k: np.resize(a, (self.capacity, *a.shape[1:])) for k, a in self.arrays.items()}
 
     def add(self, raws: list[bytes], receive_ns: list[int]) -> None:
@@ -129,11 +132,8 @@ class TopicStream:
         if "orientation_xyzw" in transient:
             self._keep_orientation(s, e, transient["orientation_xyzw"], transient["orientation_cov0"])
         self.t[s:e] = sec + nsec * 1e-9
-        if self.receive_ns is not None:
-            if np.any(sec) or np.any(nsec):
-                self.receive_ns = None
-            else:
-                self.receive_ns[s:e] = receive_ns
+        self.stamped = self.stamped or bool(np.any(sec) or np.any(nsec))
+        self.receive[s:e] = np.asarray(receive_ns, dtype=np.int64) * 1e-9
         self.n = e
 
     def _keep_orientation(self, s: int, e: int, q: np.ndarray, cov0: np.ndarray) -> None:
@@ -145,10 +145,9 @@ class TopicStream:
         if kept is not None:
             kept[s:e] = q
 
-    def trimmed(self) -> tuple[np.ndarray, np.ndarray | None, dict[str, np.ndarray]]:
+    def trimmed(self) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
         n = self.n
-        receive = None if self.receive_ns is None else self.receive_ns[:n]
-        return self.t[:n], receive, {k: a[:n] for k, a in self.arrays.items()}
+        return self.t[:n], self.receive[:n], {k: a[:n] for k, a in self.arrays.items()}
 
 
 def _mark_orientation_not_provided(q: np.ndarray, cov0: np.ndarray) -> None:
@@ -162,16 +161,19 @@ def _mark_orientation_not_provided(q: np.ndarray, cov0: np.ndarray) -> None:
         q[bad] = 0.0
 
 
-def finish(stream: TopicStream, where: str, notes: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
-    """Stamps and arrays of a stream after the documented repairs, with the notes about it."""
-    topic_notes: list[str] = []
+def finish(stream: TopicStream, where: str, notes: list[str], declared_hz: float | None = None,
+           salvage_note: str | None = None) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
+    """Stamps and arrays of a stream after the documented repairs, with the notes about it; the sampling period
+    (from the header stamps, the messages' positions and the bag's receive times, or ``declared_hz``) is left in
+    ``stream.period``. ``salvage_note`` (what a damaged bag lost) becomes the topic's first note."""
+    topic_notes: list[str] = [salvage_note] if salvage_note else []
     if stream.msgtype == IMU_TYPE and stream.first_raw is not None:
         first = stream.decoder.deserialize(stream.first_raw, IMU_TYPE)
         stream.declared_covariance = {
             name: np.asarray(getattr(first, f"{name}_covariance"), dtype=float).reshape(3, 3)
             for name in ("orientation", "angular_velocity", "linear_acceleration")
         }
-    t, receive_ns, arrays = stream.trimmed()
+    t, receive, arrays = stream.trimmed()
     if stream.n == 0:
         raise BagError(
             f"topic {stream.topic!r} in {where} has no readable messages (the index announced {stream.expected}). "
@@ -179,8 +181,8 @@ def finish(stream: TopicStream, where: str, notes: list[str]) -> tuple[np.ndarra
         )
     if stream.n != stream.expected:
         topic_notes.append(f"the bag index announced {stream.expected} messages but {stream.n} were read")
-    if receive_ns is not None:  # every header stamp is zero
-        t = receive_ns * 1e-9
+    if not stream.stamped:  # every header stamp is zero
+        t, receive = receive, None
         topic_notes.append(
             "every header stamp is zero (the publisher does not set header.stamp): using the bag's receive times, "
             "which include transport delays and jitter"
@@ -191,9 +193,13 @@ def finish(stream: TopicStream, where: str, notes: list[str]) -> tuple[np.ndarra
     names = list(arrays)
     try:
         limits = [_MAX_ABS.get(k) for k in names] if stream.msgtype == IMU_TYPE else None
-        t, columns, report = repair_time_series(t, [arrays[k] for k in names], max_abs=limits)
+        t, columns, report = repair_time_series(t, [arrays[k] for k in names], max_abs=limits, receive=receive,
+                                                declared_hz=declared_hz)
     except QualityError as exc:
         raise BagError(f"topic {stream.topic!r} in {where}: {exc}. Check the sensor driver or record again") from None
+    stream.period = report.period
+    if report.period.refusal is not None:
+        stream.period = replace(report.period, refusal=f"topic {stream.topic!r} in {where}: {report.period.refusal}")
     topic_notes.extend(report.notes("messages"))
     notes.extend(f"{stream.topic}: {note}" for note in topic_notes)
     return t, dict(zip(names, columns, strict=True)), topic_notes
@@ -204,8 +210,12 @@ def read_topics(
     wanted: dict[str, tuple[str | None, bool]],
     progress: Progress | None,
     fast: bool,
+    rate_hz: float | None = None,
 ) -> tuple[Path, dict[str, tuple[np.ndarray, dict[str, np.ndarray], list[str], TopicStream]], list[str]]:
-    """Read the topics of the message types in ``wanted`` (msgtype → (topic or None, required)) in one pass."""
+    """Read the topics of the message types in ``wanted`` (msgtype → (topic or None, required)) in one pass.
+
+    ``rate_hz`` is the IMU's declared rate (``--rate``), if any. An optional topic whose samples are unusable
+    (e.g. all NaN) is left out with a note."""
     bag = Path(path).expanduser()
     notes: list[str] = []
     with open_bag(bag) as reader:
@@ -252,7 +262,14 @@ def read_topics(
             ) from None
         results = {}
         for msgtype, stream in streams.items():
-            t, arrays, topic_notes = finish(stream, where, notes)
+            try:
+                t, arrays, topic_notes = finish(stream, where, notes, rate_hz if msgtype == IMU_TYPE else None,
+                                                getattr(reader, "note", None))
+            except BagError as exc:
+                if wanted[msgtype][1]:
+                    raise
+                notes.append(f"{stream.topic}: not used ({exc})")  # an optional topic: the rest is still usable
+                continue
             results[msgtype] = (t, arrays, topic_notes, stream)
     return bag, results, notes
 

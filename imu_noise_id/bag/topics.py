@@ -21,8 +21,8 @@ FLAG = {IMU_TYPE: "--topic", ODOM_TYPE: "--odom-topic", TEMPERATURE_TYPE: "--tem
 EXAMPLE = {IMU_TYPE: "/imu/data", ODOM_TYPE: "/odom", TEMPERATURE_TYPE: "/imu/temperature"}
 
 REPAIR_HINT = (
-    "The file is empty, truncated or corrupt (e.g. the recorder was killed): re-record it, or repair it with "
-    "`rosbag reindex` (ROS 1) / `ros2 bag reindex` (rosbag2) and try again"
+    "The file is not a bag this tool can read, or is damaged beyond its complete records: re-record it "
+    "(`rosbag reindex` / `ros2 bag reindex` rebuild a missing index, not data cut short)"
 )
 
 
@@ -52,16 +52,41 @@ def open_bag(path: str | Path) -> Iterator[Any]:
         )
     if bag.is_file() and bag.stat().st_size == 0:
         raise BagError(f"{describe(bag)} is empty (0 bytes): re-record it")
-    try:
-        reader = AnyReader([bag], default_typestore=get_typestore(Stores.LATEST))
-        reader.open()
-    except Exception as exc:
-        raise BagError(f"cannot open {describe(bag)}: {reason(exc)}. {REPAIR_HINT}") from None
+    reader: Any = _salvaged(bag, None) if _has_wal(bag) else None
+    if reader is None:
+        try:
+            reader = AnyReader([bag], default_typestore=get_typestore(Stores.LATEST))
+            reader.open()
+        except Exception as exc:
+            reader = _salvaged(bag, exc)
     try:
         yield reader
     finally:
         with suppress(Exception):
             reader.close()
+
+
+def _has_wal(bag: Path) -> bool:
+    """Whether a sqlite3 bag has a write-ahead log with frames beside it (rosbags would ignore them)."""
+    files = [bag] if bag.is_file() else sorted(bag.glob("*.db3")) if bag.is_dir() else []
+    return any(f.suffix == ".db3" and (w := f.with_name(f.name + "-wal")).is_file() and w.stat().st_size > 32
+               for f in files)
+
+
+def _salvaged(bag: Path, error: Exception | None) -> Any:
+    """The complete messages of a bag rosbags cannot open (:mod:`.salvage`), or a BagError naming ``error``."""
+    from .salvage import salvage
+
+    why = f"cannot open {describe(bag)}: {reason(error)}. " if error is not None else f"{describe(bag)}: "
+    try:
+        reader = salvage(bag)
+    except BagError as exc:
+        raise BagError(f"{why}{exc}") from None
+    except Exception as exc:  # a file too damaged to scan: the original reason is the message
+        raise BagError(f"{why}{type(exc).__name__} while salvaging. {REPAIR_HINT}") from None
+    if reader is None:
+        raise BagError(f"{why}{REPAIR_HINT}")
+    return reader
 
 
 def reason(exc: BaseException) -> str:

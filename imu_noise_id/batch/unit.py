@@ -112,8 +112,10 @@ def run_unit(unit: Unit, options: dict, out_root: str) -> UnitOutcome:
     from ..bag.reader import read_static
     from ..pipelines.analyze import analyze
     from ..report.analysis import write_analysis
+    from ..report.results_folder import RunRecord, now, stamp
 
     start = time.perf_counter()
+    started = now()
     out = Path(out_root)
     key = ""
     try:
@@ -122,8 +124,12 @@ def run_unit(unit: Unit, options: dict, out_root: str) -> UnitOutcome:
         result = analyze(recording.imu, recording.temperature, analysis_options(options))
         tmp = out / f".{unit.name}.tmp-{uuid.uuid4().hex[:8]}"
         meta = {"source": str(unit.bag), "topic": recording.imu.topic, "command": "batch",
-                "model": options.get("model", "auto")}
+                "model": options.get("model", "auto"), "notes": recording.notes}
         write_analysis(result, tmp, rostopic=recording.imu.topic, meta=meta, title=f"IMU noise analysis: {unit.name}")
+        record = RunRecord(command="batch", argv=[], source=str(unit.bag), topic=recording.imu.topic,
+                           options=dict(options), started=started, finished=now(), completed=True).as_dict()
+        for path in sorted(p for p in tmp.rglob("*") if p.is_file()):
+            stamp(path, path.relative_to(tmp).as_posix(), record)
         warnings = list(result.static.warnings) + list(result.warnings)
         outcome = UnitOutcome(unit.name, str(unit.bag), recording.imu.topic, "ok", key,
                               fleet_rows(unit, result, warnings))

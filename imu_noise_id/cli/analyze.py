@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from ..core.estimation.overbound import DEFAULT_HORIZON_S
+from . import add_rate_option, results_folder
 from .options import add_out, add_topic, model_spec
 
 
@@ -32,6 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("bag", type=Path, help="bag file or rosbag2 directory")
     add_topic(p)
     add_out(p, "analyze")
+    add_rate_option(p)
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
     p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
     p.add_argument(
@@ -72,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
                              models=ModelStage(args.model), loop=not args.no_loop, horizon_s=args.horizon)
     with TextProgress(f"reading {args.bag.name}") as progress:
-        recording = read_static(args.bag, topic=args.topic, progress=progress)
+        recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
     allan = TextProgress("Allan-family variances")
     stage = "model selection" if args.model == "auto" else f"fitting {args.model}"
     models = TextProgress(stage + (" and closed loop" if options.loop else ""), unit="axes")
@@ -96,9 +98,13 @@ def run(args: argparse.Namespace) -> int:
         result = analyze(recording.imu, recording.temperature, options, progress=allan_progress, on_axis=on_axis)
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)
-    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model}
-    paths = write_analysis(result, args.out, rostopic=recording.imu.topic, meta=meta,
-                           title=f"IMU noise analysis: {args.bag.name}", overbound_exports=args.overbound)
+    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model,
+            "notes": recording.notes}
+    folder = results_folder(args, str(args.bag), recording.imu.topic)
+    with folder as staging:
+        paths = write_analysis(result, staging, rostopic=recording.imu.topic, meta=meta,
+                               title=f"IMU noise analysis: {args.bag.name}", overbound_exports=args.overbound)
+    folder.report()
     print(summary_table(result.static), flush=True)
     if result.finals:
         print(final_table(result.finals), flush=True)

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..core.cmkf.config import MEASUREMENTS, CmkfConfig
 from ..core.errors import InputError
+from . import results_folder
 from .options import add_out, add_topic
 
 #: The defaults of the options: the CMKF's own.
@@ -148,18 +149,21 @@ def run(args: argparse.Namespace) -> int:
         notes.append("no stacked sample: S_v is the initial value (odometry too short or not overlapping the IMU)")
     data = to_yaml_dict(result, notes)
     data["filter"]["bag"] = str(args.bag)
-    (args.out / "cmkf.yaml").write_text(yaml.safe_dump(data, sort_keys=False))
     cols = ["t"] + [f"{name}_{a}" for name in CSV_COLUMNS for a in "xyz"] + ["nis_accel", "nis_gyro", "status"]
     table = np.column_stack([result.t] + [result.series[name] for name in CSV_COLUMNS]
                             + [result.nis_accel, result.nis_gyro])
-    with (args.out / "cmkf.csv").open("w") as fh:
-        fh.write(",".join(cols) + "\n")
-        for row, status in zip(table, result.status, strict=True):
-            fh.write(f"{row[0]:.6f}," + ",".join(f"{v:.9g}" for v in row[1:]) + f",{status}\n")
-    if not args.no_plot:
-        from ..report.cmkf_plot import plot_cmkf
+    folder = results_folder(args, str(args.bag), contents.imu.topic)
+    with folder as staging:
+        (staging / "cmkf.yaml").write_text(yaml.safe_dump(data, sort_keys=False))
+        with (staging / "cmkf.csv").open("w") as fh:
+            fh.write(",".join(cols) + "\n")
+            for row, status in zip(table, result.status, strict=True):
+                fh.write(f"{row[0]:.6f}," + ",".join(f"{v:.9g}" for v in row[1:]) + f",{status}\n")
+        if not args.no_plot:
+            from ..report.cmkf_plot import plot_cmkf
 
-        plot_cmkf(result, args.out / "cmkf.png", title=f"CMKF replay of {args.bag.name}")
+            plot_cmkf(result, staging / "cmkf.png", title=f"CMKF replay of {args.bag.name}")
+    folder.report()
     e = result.final
     print(f"{args.bag}: {result.info['imu_samples']} IMU samples ({result.info['imu_rate_hz']:.4g} Hz), "
           f"{result.info['odom_messages']} odometry ({result.info['odom_rate_hz']:.4g} Hz); status {e.status}")

@@ -6,6 +6,7 @@ import argparse
 import math
 from typing import Any
 
+from . import results_folder
 from .options import add_out
 
 #: Bounds that keep a run within a machine's memory and a day (the paper's cases use 500 trials of 2000 s).
@@ -58,11 +59,14 @@ def run(args: argparse.Namespace) -> int:
         result = run_criteria(hset, args.duration, args.trials, seed=args.seed, case=str(args.case),
                               progress=progress)
     out = args.out
-    write_criteria_json(result, out / "criteria.json")
-    if not args.no_plot:
-        from ..report.hypotheses_plots import plot_criteria
+    folder = results_folder(args, None, None)
+    with folder as staging:
+        write_criteria_json(result, staging / "criteria.json")
+        if not args.no_plot:
+            from ..report.hypotheses_plots import plot_criteria
 
-        plot_criteria([result], out / f"criteria_case{args.case}.png", f"paper 002 case {args.case}")
+            plot_criteria([result], staging / f"criteria_case{args.case}.png", f"paper 002 case {args.case}")
+    folder.report()
     print(f"case {args.case}, {args.trials} trials, dt {args.dt} s, at {result.t[-1]:g} s: identification error "
           f"real {result.error_probability_real[-1]:.3f}, calculated {result.error_probability_calculated[-1]:.3f}")
     for k, v in result.rsd_real.items():

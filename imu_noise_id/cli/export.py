@@ -36,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
 
     from ..core.errors import InputError
     from ..report.exports import FORMATS, write_exports
+    from ..report.results_folder import RunRecord, now, options_of, stamp
 
     path = args.source / "imu.yaml" if args.source.is_dir() else args.source
     try:
@@ -46,6 +47,9 @@ def run(args: argparse.Namespace) -> int:
     if not isinstance(doc, dict):
         raise InputError(f"{str(path)!r} is not an imu.yaml written by imu-noise-id analyze")
     formats = tuple(FORMATS) if "all" in args.format else tuple(args.format)
+    record = RunRecord(command="export", argv=list(args.argv), source=str(path), topic=doc.get("rostopic"),
+                       options=options_of(args), started=args.started, finished=now(), completed=True)
     for p in write_exports(doc, args.out or path.parent / "exports", formats, overbound=args.overbound):
+        stamp(p, p.name, record.as_dict())
         print(p)
     return 0

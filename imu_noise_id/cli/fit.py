@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
+from . import add_rate_option, print_notes, results_folder
 from .options import add_axis, add_out, add_topic, model_spec
 
 DESCRIPTION = """\
@@ -26,6 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_axis(p)
     add_topic(p)
     add_out(p, "fit")
+    add_rate_option(p)
     p.add_argument("--drift", choices=("em", "ls"), default="em",
                    help="with RR: estimate the ramp jointly (em, default) or remove a least-squares line first (ls)")
     p.add_argument("--starts", type=int, default=3, help="Allan-variance initial values tried (default 3)")
@@ -38,7 +41,6 @@ def run(args: argparse.Namespace) -> int:
     """Check the options, read the bag, fit each axis (progress on stderr), write model.yaml, print the advice."""
     from ..bag.reader import read_static
     from ..core.estimation.model import FitOptions
-    from ..core.timing import sampling_period
     from ..pipelines.analyze.models import ModelStage, fit_axes
     from ..report.console import fit_line, record_length_lines
     from ..report.model_yaml import write_model_yaml
@@ -49,7 +51,9 @@ def run(args: argparse.Namespace) -> int:
     stage = ModelStage(args.model, FitOptions(n_starts=args.starts, target_precision=args.target_precision),
                        args.drift)
     with TextProgress(f"reading {args.bag}") as progress:
-        series = read_static(args.bag, topic=args.topic, progress=progress).imu
+        recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
+    series = recording.imu
+    print_notes(recording.notes)
     with TextProgress(f"fitting {args.model}", unit="axes") as progress:
         progress(0, len(axes))
         fitted: list[str] = []
@@ -59,9 +63,14 @@ def run(args: argparse.Namespace) -> int:
             progress.echo(fit_line(axis, fit))
             progress(len(fitted), len(axes))
 
-        models = fit_axes(series, axes, stage, sampling_period(series.t), on_fit=on_fit)
-    meta = {"source": str(args.bag), "topic": series.topic, "command": "fit", "model": args.model}
-    print(f"wrote {write_model_yaml(args.out / 'model.yaml', models, meta=meta)}")
+        models = fit_axes(series, axes, stage, series.dt, on_fit=on_fit)
+    meta = {"source": str(args.bag), "topic": series.topic, "command": "fit", "model": args.model,
+            "notes": recording.notes}
+    folder = results_folder(args, str(args.bag), series.topic)
+    with folder as staging:
+        write_model_yaml(staging / "model.yaml", models, meta=meta)
+    folder.report()
+    print(f"wrote {Path(args.out) / 'model.yaml'}")
     for line in record_length_lines({axis: m.fit for axis, m in models.items()}):
         print(line)
     return 0

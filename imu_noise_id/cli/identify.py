@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from . import add_rate_option, print_notes, results_folder
 from .options import add_axis, add_out, add_topic
 
 
@@ -31,6 +32,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--refine", type=int, default=2, metavar="N",
                    help="grid-refinement passes: rerun with grids re-centred on the posterior (default: %(default)s)")
     p.add_argument("--no-plot", action="store_true", help="skip the PNG plot")
+    add_rate_option(p)
     p.set_defaults(run=run)
 
 
@@ -46,16 +48,20 @@ def run(args: argparse.Namespace) -> int:
     axes = parse_axes(args.axis)
     hypotheses, source = read_hypotheses_file(args.hypotheses)
     with TextProgress(f"reading {args.bag.name}") as progress:
-        series = read_imu(args.bag, topic=args.topic, progress=progress)
+        series = read_imu(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
     with TextProgress("hypothesis bank", unit="axes") as progress:
         progress(0, len(axes))
         res = identify(series, axes, hypotheses, source, args.refine, progress=progress)
+    print_notes(res.notes)
     out = args.out
-    write_identification(res, out)
-    if not args.no_plot:
-        from ..report.hypotheses_plots import plot_identify
+    folder = results_folder(args, str(args.bag), series.topic)
+    with folder as staging:
+        write_identification(res, staging)
+        if not args.no_plot:
+            from ..report.hypotheses_plots import plot_identify
 
-        plot_identify(res, out / "hypotheses_probabilities.png")
+            plot_identify(res, staging / "hypotheses_probabilities.png")
+    folder.report()
     for axis, e in res.axes.items():
         f = e.result.final
         probs = ", ".join(f"{k} {v:.3f}" for k, v in f.probabilities.items())

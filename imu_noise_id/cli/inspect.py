@@ -6,6 +6,7 @@ import argparse
 from collections.abc import Iterable
 from pathlib import Path
 
+from . import add_rate_option
 from .options import add_topic
 from .progress import TextProgress
 
@@ -27,6 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("bag", type=Path, metavar="BAG", help="the bag")
     add_topic(parser)
+    add_rate_option(parser)
     parser.set_defaults(run=run)
 
 
@@ -47,10 +49,13 @@ def run(args: argparse.Namespace) -> int:
     for name, (msgtype, count) in topics.items():
         print(f"  {name:40s} {msgtype:32s} {count:>10d} msgs")
     with TextProgress(f"reading {args.bag.name}") as progress:
-        bag = read_bag(args.bag, imu_topic=args.topic, progress=progress)
+        bag = read_bag(args.bag, imu_topic=args.topic, progress=progress, rate_hz=args.rate)
     imu = bag.imu
     duration = float(imu.t[-1] - imu.t[0])
-    print(f"IMU {imu.topic} (frame {imu.frame_id!r}): {len(imu)} samples, {imu.rate:.6g} Hz (median), {duration:.3f} s")
+    period = imu.sample_period()
+    print(f"IMU {imu.topic} (frame {imu.frame_id!r}): {len(imu)} samples, {duration:.3f} s; rate {period.describe()}")
+    if period.refusal is not None:
+        print(f"  not usable as it is: {period.refusal}")
     for note in imu.notes:
         print(f"  note: {note}")
     for name, unit in (("angular_velocity", "rad/s"), ("linear_acceleration", "m/s²")):
@@ -60,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         elif diag[0] == -1:
             print(f"  declared {name}_covariance: -1 (not provided)")
         else:
-            density = np.sqrt(np.clip(diag, 0, None) / imu.rate)
+            density = np.sqrt(np.clip(diag, 0, None) / period.rate_hz)
             print(
                 f"  declared {name}_covariance diag ({_fmt(diag)}) ({unit})² "
                 f"⇒ noise density √(c/f) = ({_fmt(density)}) {unit}/√Hz"
@@ -71,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     for note in bag.notes:
         if not note.startswith(f"{imu.topic}: "):
             print(f"  note: {note}")
-    check = static_check(imu)
+    check = static_check(imu, period.value)
     if check.flags:
         print("not static (a static noise analysis of these data would be wrong):")
         for flag in check.flags:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from . import add_rate_option, print_notes, results_folder
 from .options import add_axis, add_out, add_topic, model_spec
 
 
@@ -32,6 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--max-steps", type=int, default=6, help="most effects added per axis (default: 6)")
     p.add_argument("--alpha", type=float, default=0.01, help="level of every detector (default: 0.01)")
     add_out(p, "loop")
+    add_rate_option(p)
     p.set_defaults(run=run)
 
 
@@ -51,7 +53,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--max-steps must be >= 0 and --alpha in (0, 1)")
     with TextProgress(f"reading {args.bag.name}") as progress:
         recording = read_static(args.bag, topic=args.topic, temperature_topic=args.temperature_topic,
-                                progress=progress)
+                                progress=progress, rate_hz=args.rate)
+    print_notes(recording.notes)
     loop = ImuLoop(recording.imu, recording.temperature, max_steps=args.max_steps, alpha=args.alpha)
     results = {}
     with TextProgress(f"closed loop from {args.start}", unit="axes") as progress:
@@ -61,8 +64,12 @@ def run(args: argparse.Namespace) -> int:
             progress.echo(loop_line(axis, results[axis]))
             progress(len(results), len(axes))
     print(loop_table(results), flush=True)
-    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "loop", "start": args.start}
-    paths = [write_model_yaml(args.out / "model.yaml", {}, results, meta),
-             write_loop_report(args.out / "report.html", results, title=f"closed loop: {args.bag.name}")]
+    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "loop", "start": args.start,
+            "notes": recording.notes}
+    folder = results_folder(args, str(args.bag), recording.imu.topic)
+    with folder as staging:
+        paths = [write_model_yaml(staging / "model.yaml", {}, results, meta),
+                 write_loop_report(staging / "report.html", results, title=f"closed loop: {args.bag.name}")]
+    folder.report()
     print(f"results in {args.out}/: " + ", ".join(p.name for p in paths))
     return 0

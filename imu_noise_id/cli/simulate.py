@@ -80,6 +80,14 @@ def _spec_from_model_entry(path: Path, axis: str, entry: object) -> str:
     return "+".join(terms)
 
 
+def _is_file(path: Path) -> bool:
+    """Whether ``path`` names an existing file; False for what cannot be a file name (too long, NUL bytes)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
+
+
 def run(args: argparse.Namespace) -> int:
     """Simulate and write the bag; print what was written and the true model."""
     from ..bag.writer import write_bag
@@ -88,8 +96,8 @@ def run(args: argparse.Namespace) -> int:
     from ..core.simulation.static import simulate_static_imu
 
     model_path = Path(args.model)
-    is_file = model_path.suffix in (".yaml", ".yml") or model_path.is_file()
-    if is_file and not model_path.is_file():
+    is_file = model_path.suffix in (".yaml", ".yml") or _is_file(model_path)
+    if is_file and not _is_file(model_path):
         raise InputError(f"model file {args.model!r} does not exist: give a spec string or an existing YAML file")
     spec = _spec_from_yaml(model_path) if is_file else args.model
     model = parse_imu_model(spec)

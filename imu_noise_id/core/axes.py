@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .timing import sampling_period
+from .timing import SamplePeriod, estimate_period
 
 GYRO_AXES: tuple[str, ...] = ("gyro_x", "gyro_y", "gyro_z")
 ACCEL_AXES: tuple[str, ...] = ("accel_x", "accel_y", "accel_z")
@@ -56,6 +56,9 @@ class ImuSeries:
         world frame, quaternion x, y, z, w as published). A row is NaN where the message says it is not provided
         (REP-145: ``orientation_covariance[0] == -1``) or carries no usable quaternion (zero, NaN); None when no
         sample provides one.
+    period : SamplePeriod or None
+        The sampling period the reader estimated (stamps, message positions, receive times, a declared rate; see
+        :mod:`imu_noise_id.core.timing`); None: estimated from ``t`` alone when needed.
     """
 
     t: np.ndarray
@@ -65,6 +68,7 @@ class ImuSeries:
     topic: str = ""
     notes: list[str] = field(default_factory=list)
     orientation_xyzw: np.ndarray | None = None
+    period: SamplePeriod | None = None
 
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=float)
@@ -86,14 +90,24 @@ class ImuSeries:
     def __len__(self) -> int:
         return int(self.t.shape[0])
 
+    def sample_period(self) -> SamplePeriod:
+        """The reader's period estimate, or :func:`~imu_noise_id.core.timing.estimate_period` of ``t``."""
+        return self.period if self.period is not None else estimate_period(self.t)
+
     @property
     def dt(self) -> float:
-        """Sampling period [s] (:func:`~imu_noise_id.core.timing.sampling_period` of the stamps)."""
-        return sampling_period(self.t)
+        """Sampling period [s] (:meth:`sample_period`).
+
+        Raises
+        ------
+        InputError
+            The stamps cannot give the period (its refusal names the fix: a declared rate).
+        """
+        return self.sample_period().require()
 
     @property
     def rate(self) -> float:
-        """Median sampling rate [Hz]."""
+        """Sampling rate [Hz] (1 / :attr:`dt`)."""
         return 1.0 / self.dt
 
     def samples(self) -> np.ndarray:

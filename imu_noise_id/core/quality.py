@@ -6,10 +6,15 @@ Repairs done by :func:`repair_time_series`, in this order, each counted in the r
    e.g. :data:`IMU_MAX_ABS`: such values come from corrupt bytes or wrong units; more than
    :data:`MAX_IMPLAUSIBLE_FRACTION` of them raise instead of being dropped);
 2. drop samples with a zero stamp when the other stamps are clock times (> :data:`ZERO_STAMP_CLOCK_S`),
-   i.e. the publisher left ``header.stamp`` unset for them;
+   i.e. the publisher left ``header.stamp`` unset for them, and samples whose stamp jumps away from both its
+   neighbours in message order by more than :data:`GLITCH_PERIODS` periods while the neighbours agree (one stamp
+   an hour in the future or the past: a clock glitch, not a gap);
 3. sort by time (stable) when stamps go backwards;
 4. drop samples whose stamp equals the previous one (the first is kept);
-5. find gaps: intervals longer than ``gap_factor`` × the median period. Gaps are reported, not filled.
+5. estimate the sampling period from the stamps, the messages' positions and the receive times
+   (:func:`imu_noise_id.core.timing.estimate_period`: bursty host stamps, holes left by the drops);
+6. find gaps: intervals longer than ``gap_factor`` × the period (bursty stamps: × their 99th-percentile interval).
+   Gaps are reported, not filled.
 
 :func:`static_check` flags data that is clearly not from a static sensor (for the static noise analyses).
 """
@@ -23,11 +28,13 @@ import numpy as np
 
 from .axes import AXES, ImuSeries
 from .errors import InputError
-from .timing import sampling_period
+from .timing import SamplePeriod, estimate_period
 
 #: Stamps are clock (epoch) times if the smallest non-zero one exceeds this [s]; zero stamps among them are unset.
 ZERO_STAMP_CLOCK_S = 60.0
-#: A gap is an interval longer than this many median periods.
+#: A stamp this many periods away from both message neighbours (which agree with each other) is a clock glitch.
+GLITCH_PERIODS = 100
+#: A gap is an interval longer than this many periods.
 GAP_FACTOR = 1.5
 #: Standard gravity [m/s²], as in :mod:`.simulate` (not imported from there: it would pull in scipy, ~80 MB of
 #: memory, into the bag reader).
@@ -54,9 +61,12 @@ class QualityReport:
     n_nonfinite : samples dropped because the time or a value was NaN/±inf
     n_implausible : samples dropped because a value exceeded its physical limit
     n_zero_stamps : samples dropped because their stamp was 0 among clock-time stamps
+    n_glitches : samples dropped because their stamp jumped away from both neighbours (see the module docstring)
     n_backwards : places where the stamp decreased (the series was sorted if > 0)
     n_duplicates : samples dropped because their stamp repeated the previous one
-    dt_median : median sampling period after the repairs [s]
+    period : the sampling period after the repairs, how it was obtained and what the stamps' trust is (None
+        before it is estimated)
+    positions : (n_output,) each kept sample's position among the input samples (message order)
     gaps : (start time [s], length [s], estimated missing samples) of every gap, in time order
     t0 : first stamp after the repairs [s] (gap start times in notes are given relative to it)
     """
@@ -66,9 +76,11 @@ class QualityReport:
     n_nonfinite: int = 0
     n_implausible: int = 0
     n_zero_stamps: int = 0
+    n_glitches: int = 0
     n_backwards: int = 0
     n_duplicates: int = 0
-    dt_median: float = float("nan")
+    period: SamplePeriod | None = None
+    positions: np.ndarray | None = None
     gaps: list[tuple[float, float, int]] = field(default_factory=list)
     t0: float = 0.0
 
@@ -76,8 +88,19 @@ class QualityReport:
     def repaired(self) -> bool:
         """True if any sample was dropped or moved."""
         return bool(
-            self.n_nonfinite or self.n_implausible or self.n_zero_stamps or self.n_backwards or self.n_duplicates
+            self.n_nonfinite or self.n_implausible or self.n_zero_stamps or self.n_glitches or self.n_backwards
+            or self.n_duplicates
         )
+
+    @property
+    def dt(self) -> float:
+        """The period [s] (nan before it is estimated)."""
+        return self.period.value if self.period is not None else float("nan")
+
+    @property
+    def _gap_reference(self) -> str:
+        return "99th-percentile interval of the bursty stamps" if self.period and self.period.bursty else (
+            f"period {self.dt:.4g} s")
 
     def notes(self, what: str = "samples") -> list[str]:
         """Human-readable notes, one per finding (empty when the series was clean)."""
@@ -90,10 +113,15 @@ class QualityReport:
             )
         if self.n_zero_stamps:
             notes.append(f"dropped {self.n_zero_stamps} {what} with a zero header stamp (stamp not set)")
+        if self.n_glitches:
+            notes.append(f"dropped {self.n_glitches} {what} whose stamp jumps away from both neighbours by more than "
+                         f"{GLITCH_PERIODS} periods (a clock glitch, e.g. one stamp in the future)")
         if self.n_backwards:
             notes.append(f"stamps went backwards {self.n_backwards} time(s): {what} sorted by stamp")
         if self.n_duplicates:
             notes.append(f"dropped {self.n_duplicates} {what} with a duplicated stamp (kept the first)")
+        if self.period is not None:
+            notes += list(self.period.warnings) + list(self.period.notes)
         if self.gaps:
             total = sum(g[1] for g in self.gaps)
             missing = sum(g[2] for g in self.gaps)
@@ -102,7 +130,7 @@ class QualityReport:
             )
             more = f" and {len(self.gaps) - MAX_LISTED_GAPS} more" if len(self.gaps) > MAX_LISTED_GAPS else ""
             notes.append(
-                f"{len(self.gaps)} gap(s) longer than {GAP_FACTOR:g}× the median period {self.dt_median:.4g} s "
+                f"{len(self.gaps)} gap(s) longer than {GAP_FACTOR:g}× the {self._gap_reference} "
                 f"(≈{missing} missing {what}, {total:.3f} s in total; times from the first stamp): {listed}{more}"
             )
         return notes
@@ -118,13 +146,37 @@ def _take(columns: list[np.ndarray], keep: np.ndarray) -> list[np.ndarray]:
     return [c[keep] for c in columns]
 
 
-def find_gaps(t: np.ndarray, dt: float, gap_factor: float = GAP_FACTOR) -> list[tuple[float, float, int]]:
-    """Intervals of sorted stamps ``t`` longer than ``gap_factor * dt``: (start [s], length [s], missing samples)."""
+def find_gaps(t: np.ndarray, period: SamplePeriod | float, gap_factor: float = GAP_FACTOR
+              ) -> list[tuple[float, float, int]]:
+    """Intervals of sorted stamps ``t`` longer than ``gap_factor`` × the period (bursty stamps: × their 99th
+    percentile interval, as their normal delivery pauses are longer than the period): (start [s], length [s],
+    missing samples)."""
+    dt = period.value if isinstance(period, SamplePeriod) else float(period)
     if t.shape[0] < 2 or not dt > 0:
         return []
     steps = np.diff(t)
-    where = np.flatnonzero(steps > gap_factor * dt)
+    reference = max(dt, float(np.quantile(steps, 0.99))) if isinstance(period, SamplePeriod) and period.bursty \
+        else dt
+    where = np.flatnonzero(steps > gap_factor * reference)
     return [(float(t[i]), float(steps[i]), max(round(steps[i] / dt) - 1, 1)) for i in where]
+
+
+def _glitches(t: np.ndarray) -> np.ndarray:
+    """Samples (in message order) whose stamp is more than :data:`GLITCH_PERIODS` periods from both neighbours'
+    while the neighbours are within a tenth of that of each other (few N-sized temporaries: one diff, two masks)."""
+    bad = np.zeros(t.shape[0], dtype=bool)
+    if t.shape[0] < 3:
+        return bad
+    steps = np.diff(t)
+    sample = steps[:: max(1, steps.shape[0] // 200_000)]
+    forward = sample[sample > 0]
+    if forward.size == 0:
+        return bad
+    limit = GLITCH_PERIODS * float(np.median(forward))
+    big = np.abs(steps) > limit
+    i = np.flatnonzero(big[:-1] & big[1:])  # sample i + 1 jumps in and out
+    bad[i[np.abs(t[i + 2] - t[i]) < 0.1 * limit] + 1] = True
+    return bad
 
 
 def repair_time_series(
@@ -134,33 +186,46 @@ def repair_time_series(
     gap_factor: float = GAP_FACTOR,
     min_samples: int = 2,
     max_abs: Sequence[float | None] | None = None,
+    receive: np.ndarray | None = None,
+    declared_hz: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray | list[np.ndarray], QualityReport]:
-    """Drop bad samples, sort, drop duplicates and find gaps (see the module docstring for the rules).
+    """Drop bad samples, sort, drop duplicates, estimate the period and find gaps (rules: module docstring).
 
     Parameters
     ----------
     t : (N,) stamps [s]
     data : (N, ...) array, or a sequence of such arrays sharing the first dimension (e.g. gyro and accel)
-    gap_factor : an interval longer than ``gap_factor`` × median period is a gap
+    gap_factor : an interval longer than ``gap_factor`` × the period is a gap
     min_samples : fewer valid samples than this raise :class:`QualityError`
     max_abs : per data array, the largest plausible magnitude (None: no limit), e.g. :data:`IMU_MAX_ABS` for
         (gyro, accel)
+    receive : (N,) the bag's receive times [s] of the samples (a second clock for the period), or None
+    declared_hz : the rate the user declares (``--rate``), or None
 
     Returns
     -------
     t, data, report
         Repaired copies (or the inputs themselves when nothing had to change; ``data`` in the same form as given)
-        and what was done.
+        and what was done (with the period and each kept sample's input position).
 
     Raises
     ------
     QualityError
         If fewer than ``min_samples`` samples remain (e.g. every sample is NaN), or more than
         :data:`MAX_IMPLAUSIBLE_FRACTION` of the finite samples exceed ``max_abs``.
+    InputError
+        A declared rate that is not a positive number.
     """
     t = np.asarray(t, dtype=float)
     columns, single = _as_columns(data)
+    n_data = len(columns)
     n = t.shape[0]
+    # Positions and receive times travel with the samples through every drop and sort.
+    columns.append(np.arange(n, dtype=np.int32 if n < 2**31 else np.int64))
+    if receive is not None:
+        columns.append(np.asarray(receive, dtype=float))
+    if max_abs is not None:
+        max_abs = [*max_abs, *[None] * (len(columns) - n_data)]
     if any(c.shape[0] != n for c in columns):
         raise ValueError("repair_time_series: t and data have different numbers of samples")
     report = QualityReport(n_input=n)
@@ -185,7 +250,7 @@ def repair_time_series(
         report.n_implausible = int(m - np.count_nonzero(plausible))
         if report.n_implausible > MAX_IMPLAUSIBLE_FRACTION * m:
             raise QualityError(
-                f"{report.n_implausible} of {m} samples exceed the physical limits {tuple(max_abs)} "
+                f"{report.n_implausible} of {m} samples exceed the physical limits {tuple(max_abs[:n_data])} "
                 "(wrong units, or corrupt data)"
             )
         if report.n_implausible:
@@ -196,6 +261,11 @@ def repair_time_series(
     if 0 < n_zero < t.shape[0] and t[~zero].min() > ZERO_STAMP_CLOCK_S:
         report.n_zero_stamps = n_zero
         t, columns = t[~zero], _take(columns, ~zero)
+
+    glitch = _glitches(t)
+    report.n_glitches = int(np.count_nonzero(glitch))
+    if report.n_glitches:
+        t, columns = t[~glitch], _take(columns, ~glitch)
 
     steps = np.diff(t)
     report.n_backwards = int(np.count_nonzero(steps < 0))
@@ -216,10 +286,13 @@ def repair_time_series(
         raise QualityError(
             f"only {report.n_output} usable sample(s) of {n} after dropping bad ones; need at least {min_samples}"
         )
-    if steps.size:
-        report.dt_median = sampling_period(t)
-        report.gaps = find_gaps(t, report.dt_median, gap_factor)
+    report.positions = columns[n_data]
+    report.period = estimate_period(t, index=report.positions,
+                                    receive=columns[n_data + 1] if receive is not None else None,
+                                    declared_hz=declared_hz)
+    report.gaps = find_gaps(t, report.period, gap_factor)
     report.t0 = float(t[0])
+    columns = columns[:n_data]
     return t, (columns[0] if single else columns), report
 
 
@@ -271,7 +344,7 @@ def _block_means(x: np.ndarray, samples_per_block: int) -> np.ndarray:
     return x[: m * samples_per_block].reshape(m, samples_per_block).mean(axis=1)
 
 
-def static_check(imu: ImuSeries, gravity: float = STANDARD_GRAVITY) -> StaticCheck:
+def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STANDARD_GRAVITY) -> StaticCheck:
     """Whether ``imu`` looks like a static recording, judged by what motion does.
 
     Flags, with the thresholds of this module (documented constants):
@@ -304,7 +377,7 @@ def static_check(imu: ImuSeries, gravity: float = STANDARD_GRAVITY) -> StaticChe
             f"|mean accel| = {g_mean:.3f} m/s² is {100 * off / gravity:+.1f} % from standard gravity: the "
             "accelerometer's scale or bias is uncalibrated (not a sign of motion)"
         )
-    dt = imu.dt
+    dt = imu.dt if dt is None else dt
     per_block = min(max(round(BLOCK_S / dt), 1), n // 10)
     # One axis at a time (strided views, no (N, 6) copy): a few N-sized temporaries at most.
     for i, name in enumerate(AXES):

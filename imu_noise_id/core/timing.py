@@ -1,21 +1,267 @@
-"""The sampling period of a series of stamps (one rule for every reader, pipeline and command)."""
+"""The sampling period of a series of stamps: one rule for every reader, pipeline and command.
+
+Header stamps are not always sample times. A sensor-clock driver stamps each sample a constant period apart; a
+host-stamped serial driver (e.g. an MPU-6050 behind a USB UART) stamps samples when the host reads them, in
+bursts: five samples 2 ms apart, then 40 ms of silence. The median interval of such stamps is the burst spacing
+(a 100 Hz IMU read as ~500 Hz, every noise density 55 % low), not the period. Samples dropped by the repairs (NaN
+messages) leave holes whose intervals are multiples of the period. So the period is estimated several ways:
+
+- ``median_interval``: the median interval between stamps of *neighbouring messages* (positions in the bag one
+  apart, so holes left by dropped messages do not count);
+- ``index_regression``: a robust regression of the stamp on the message position, the median over i of
+  ``(t[i+k] − t[i]) / (position[i+k] − position[i])`` with a lag ``k`` of a tenth of the record: bursts average out
+  over the lag, a few gaps are outvoted (Theil–Sen-like slope at one lag);
+- ``span_count``: ``(t_last − t_first) / (position_last − position_first)`` (reported, not used: lost messages
+  bias it);
+- ``receive_regression``: the index regression on the bag's receive times (the recorder's clock);
+- ``declared``: the rate the user states (``--rate HZ``), e.g. the driver's configured output rate.
+
+Rule (:func:`estimate_period`): a declared rate wins (a warning if the stamps disagree by more than
+:data:`AGREE`). Otherwise, stamps are *bursty* when more than :data:`BURST_FRACTION` of the neighbouring-message
+intervals are shorter than half the regression period; regular stamps give the median interval (the classical
+choice; lost messages are gaps), bursty ones the index regression, with a warning — and when the bag's receive
+times disagree with it by more than :data:`AGREE` neither clock can be trusted: the period is refused
+(:attr:`SamplePeriod.refusal`) until the rate is declared. A rate that changes between the halves of the record
+by more than :data:`HALVES_AGREE` is warned about.
+"""
 
 from __future__ import annotations
+
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .errors import InputError
 
+#: Fraction of neighbouring-message intervals shorter than half the period above which stamps are bursty.
+BURST_FRACTION = 0.05
+#: Relative difference within which two period estimates agree.
+AGREE = 0.01
+#: Relative difference of the two halves' regression periods above which the rate is said to change.
+HALVES_AGREE = 0.02
+#: Intervals within this many steps of a whole number of steps are on the lattice of sample-time stamps.
+LATTICE_TOLERANCE = 0.1
+#: Fraction of intervals on the lattice for stamps to be sample times (with lost messages between some).
+LATTICE_FRACTION = 0.95
+#: Stamps on a lattice that would mean more than this fraction of lost messages are bursts (regular delivery).
+MAX_LOST = 0.5
+#: The regression's lag is this fraction of the record (in messages).
+LAG_FRACTION = 0.1
+#: Pairs of stamps each estimate looks at, at most (evenly spread over longer records: bounded time and memory).
+MAX_PAIRS = 200_000
+#: The fix named whenever the stamps cannot be trusted.
+RATE_HINT = "pass --rate HZ with the sensor's configured output rate"
 
-def sampling_period(t: np.ndarray) -> float:
-    """Median interval between consecutive stamps [s].
+
+@dataclass(frozen=True)
+class SamplePeriod:
+    """The sampling period chosen for a series, how, and what the other estimates said.
+
+    Attributes
+    ----------
+    value : the period used [s] (the best estimate even when ``refusal`` is set)
+    source : ``median_interval``, ``index_regression`` or ``declared`` (see the module docstring)
+    estimates : every estimate computed, name → period [s]
+    bursty : the stamps bunch (host stamping, transport batching): individual stamps are not sample times
+    warnings : what the user must know (the stamps cannot be taken at face value)
+    notes : worth knowing, no action needed
+    refusal : why no period can be trusted (then :meth:`require` raises), or None
+    """
+
+    value: float
+    source: str
+    estimates: dict[str, float] = field(default_factory=dict)
+    bursty: bool = False
+    warnings: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+    refusal: str | None = None
+
+    @property
+    def rate_hz(self) -> float:
+        """1 / period [Hz]."""
+        return 1.0 / self.value
+
+    @property
+    def trusted(self) -> bool:
+        """The stamps gave the period without doubt (no warning, no refusal) or it was declared."""
+        return self.refusal is None and not self.warnings
+
+    def require(self) -> float:
+        """The period [s]; raises :class:`InputError` naming the fix when it cannot be trusted."""
+        if self.refusal is not None:
+            raise InputError(self.refusal)
+        return self.value
+
+    def describe(self) -> str:
+        """One line: the rate, its source and the other estimates, e.g. for ``imu.yaml`` and the console."""
+        names = {"median_interval": "median stamp interval", "index_regression": "regression of stamp on message "
+                 "index", "span_count": "span/count", "receive_regression": "bag receive times",
+                 "declared": "declared (--rate)"}
+        others = ", ".join(f"{names[k]} {1 / v:.6g} Hz" for k, v in self.estimates.items()
+                           if k != self.source and np.isfinite(v) and v > 0)
+        return f"{self.rate_hz:.6g} Hz from the {names[self.source]}" + (f" (other estimates: {others})"
+                                                                          if others else "")
+
+
+def _check(t: np.ndarray) -> np.ndarray:
+    t = np.asarray(t, dtype=float)
+    if t.shape[0] < 2 or not np.isfinite(t).all():
+        raise InputError("time stamps must be finite and increasing (need at least 2 samples)")
+    i = _starts(t.shape[0], 1)
+    if np.median(t[i + 1] - t[i]) <= 0:
+        raise InputError("time stamps must be finite and increasing (need at least 2 samples)")
+    return t
+
+
+def _starts(n: int, span: int) -> np.ndarray:
+    """At most :data:`MAX_PAIRS` evenly spread start indices of pairs ``(i, i + span)`` in ``n`` samples."""
+    count = n - span
+    return np.arange(0, count, max(1, count // MAX_PAIRS))
+
+
+def _lag_slope(t: np.ndarray, index: np.ndarray) -> float:
+    """Robust slope of ``t`` on ``index``: median of the lag-k slopes, k = :data:`LAG_FRACTION` of the record."""
+    n = t.shape[0]
+    k = max(1, int(n * LAG_FRACTION))
+    i = _starts(n, k)
+    steps = (index[i + k] - index[i]).astype(float)
+    ok = steps > 0
+    if not ok.any():
+        return float("nan")
+    return float(np.median((t[i + k] - t[i])[ok] / steps[ok]))
+
+
+def _neighbour_intervals(t: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Intervals between stamps of neighbouring messages (at most :data:`MAX_PAIRS`, evenly spread)."""
+    i = _starts(t.shape[0], 1)
+    d = t[i + 1] - t[i]
+    steps = index[i + 1] - index[i]
+    neighbours = steps == 1
+    return d[neighbours] if neighbours.any() else d / np.maximum(steps, 1)
+
+
+def _lattice(intervals: np.ndarray) -> tuple[float, bool]:
+    """(period, whether the intervals are whole multiples of a step): sample-time stamps with lost messages sit on
+    such a lattice (within :data:`LATTICE_TOLERANCE` of a whole number of steps), and their period is the median of
+    the single steps; off the lattice it is the median interval."""
+    step = float(np.quantile(intervals, 0.1))
+    if not step > 0:
+        return float(np.median(intervals)), False
+    ratio = intervals / step
+    whole = np.rint(ratio)
+    near = (np.abs(ratio - whole) < LATTICE_TOLERANCE) & (whole >= 1)
+    on_lattice = bool(np.mean(near) >= LATTICE_FRACTION)
+    ones = intervals[near & (whole == 1)]
+    return (float(np.median(ones)) if on_lattice and ones.size else float(np.median(intervals))), on_lattice
+
+
+def _halves(t: np.ndarray, index: np.ndarray) -> tuple[float, float] | None:
+    n = t.shape[0]
+    if n < 200:
+        return None
+    h = n // 2
+    return _lag_slope(t[:h], index[:h]), _lag_slope(t[h:], index[h:])
+
+
+def _relative(a: float, b: float) -> float:
+    return abs(a - b) / b if np.isfinite(a) and np.isfinite(b) and b > 0 else float("inf")
+
+
+def estimate_period(
+    t: np.ndarray,
+    *,
+    index: np.ndarray | None = None,
+    receive: np.ndarray | None = None,
+    declared_hz: float | None = None,
+) -> SamplePeriod:
+    """The sampling period of stamps ``t`` by the rule of the module docstring.
+
+    Parameters
+    ----------
+    t : (N,) sorted stamps [s] of the samples used (after repairs)
+    index : (N,) each sample's position among the messages as recorded (default: 0 … N−1); holes are messages
+        dropped by the repairs
+    receive : (N,) the bag's receive times of the same samples [s], or None
+    declared_hz : the rate the user declares (``--rate``), or None
 
     Raises
     ------
     InputError
-        Fewer than two stamps, non-finite stamps, or a median interval ≤ 0 (stamps not increasing).
+        Fewer than two stamps, non-finite stamps, stamps not increasing, or a declared rate that is not a positive
+        finite number.
     """
-    d = np.diff(np.asarray(t, dtype=float))
-    if d.size == 0 or not np.all(np.isfinite(d)) or np.median(d) <= 0:
-        raise InputError("time stamps must be finite and increasing (need at least 2 samples)")
-    return float(np.median(d))
+    t = _check(t)
+    index = np.arange(t.shape[0]) if index is None else np.asarray(index)
+    intervals = _neighbour_intervals(t, index)
+    regression = _lag_slope(t, index)
+    span = (t[-1] - t[0]) / (index[-1] - index[0]) if index[-1] > index[0] else float("nan")
+    single, on_lattice = _lattice(intervals)
+    estimates = {"median_interval": single, "index_regression": regression, "span_count": float(span)}
+    reference = regression if np.isfinite(regression) and regression > 0 else single
+    bunched = float(np.mean(intervals < 0.5 * reference))
+    lost = 1.0 - single / reference
+    warnings: list[str] = []
+    notes: list[str] = []
+    refusal = None
+    value, source, bursty = single, "median_interval", False
+    if (on_lattice and lost > MAX_LOST) or (not on_lattice and bunched > BURST_FRACTION):
+        value, source, bursty = regression, "index_regression", True
+        typical = np.median(intervals)
+        alternative = (f" (or {1 / single:.6g} Hz with {100 * lost:.0f} % of the messages lost in transport: then "
+                       f"pass --rate {1 / single:.6g})" if on_lattice else "")
+        warnings.append(
+            f"stamps are bursty: {100 * bunched:.0f} % of the intervals between neighbouring messages are shorter "
+            f"than half the period (median interval {typical * 1e3:.4g} ms = {1 / typical:.6g} Hz): they are "
+            f"delivery times, not sample times. The period comes from the regression of stamp on message index "
+            f"({1 / regression:.6g} Hz){alternative} and the samples are taken as equally spaced; if the sensor's "
+            f"rate is known, {RATE_HINT}"
+        )
+    elif not on_lattice and _relative(single, regression) > AGREE and lost < 0:
+        warnings.append(
+            f"stamps jitter and disagree: median interval {1 / single:.6g} Hz (used), regression of stamp on message "
+            f"index {1 / regression:.6g} Hz; if the sensor's rate is known, {RATE_HINT}"
+        )
+    if receive is not None:
+        received = _lag_slope(np.asarray(receive, dtype=float), index)
+        estimates["receive_regression"] = received
+        off = _relative(received, value)
+        if bursty and off > AGREE:
+            refusal = (
+                f"the stamps cannot give the sample period: header stamps are bursty (median interval "
+                f"{1 / np.median(intervals):.6g} Hz, regression on message index {1 / regression:.6g} Hz) and the "
+                f"bag's receive times say {1 / received:.6g} Hz ({100 * off:.1f} % apart): {RATE_HINT}"
+            )
+        elif off > 0.05 and not bursty:
+            notes.append(f"the bag's receive times run at {1 / received:.6g} Hz, the header stamps (used) at "
+                         f"{1 / value:.6g} Hz (re-recorded or replayed at another speed?)")
+    halves = _halves(t, index)
+    if halves is not None and _relative(halves[1], halves[0]) > HALVES_AGREE:
+        warnings.append(
+            f"the rate changes within the record: {1 / halves[0]:.6g} Hz in the first half, {1 / halves[1]:.6g} Hz "
+            "in the second; the analyses assume one constant rate (split the record, or check the driver)"
+        )
+    if declared_hz is None:
+        return SamplePeriod(value, source, estimates, bursty, tuple(warnings), tuple(notes), refusal)
+    if not (np.isfinite(declared_hz) and declared_hz > 0):
+        raise InputError(f"--rate must be a positive number of Hz, got {declared_hz}")
+    estimates["declared"] = 1.0 / declared_hz
+    off = _relative(1.0 / declared_hz, value)
+    kept = [w for w in warnings if w.startswith("the rate changes")]
+    if refusal is not None or bursty:
+        notes.append(f"the stamps cannot give the period by themselves; the declared --rate {declared_hz:g} Hz is "
+                     "used")
+    elif off > AGREE:
+        kept.insert(0, f"--rate {declared_hz:g} Hz is used although the stamps say {1 / value:.6g} Hz "
+                       f"({100 * off:.1f} % apart)")
+    return SamplePeriod(1.0 / declared_hz, "declared", estimates, bursty, tuple(kept), tuple(notes))
+
+
+def sampling_period(t: np.ndarray) -> float:
+    """The period [s] of stamps ``t`` alone (:func:`estimate_period` without positions or receive times).
+
+    Raises
+    ------
+    InputError
+        Fewer than two stamps, non-finite stamps, or stamps not increasing.
+    """
+    return estimate_period(t).value

@@ -9,7 +9,7 @@ adapter (the file is read there).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from ..core.axes import ImuSeries
@@ -45,11 +45,13 @@ class AxisIdentification:
 
 @dataclass
 class Identification:
-    """``identify`` on several axes: the hypothesis file it used, the sampling period [s], each axis."""
+    """``identify`` on several axes: the hypothesis file it used, the sampling period [s], each axis, and the
+    input's notes (repairs and timing, as the reader made them)."""
 
     source: str
     dt: float
     axes: dict[str, AxisIdentification]
+    notes: list[str] = field(default_factory=list)
 
 
 def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], source: str,
@@ -61,7 +63,7 @@ def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], sou
     if refine < 0:
         raise InputError(f"--refine must be >= 0, got {refine}")
     dt = series.dt
-    out = Identification(source, dt, {})
+    out = Identification(source, dt, {}, [f"{series.topic}: {note}" for note in series.notes])
     for axis in axes:
         make, warmup = hypothesis_set_factory(hypotheses, dt, axis.split("_")[0], source)
         y = series.axis(axis)

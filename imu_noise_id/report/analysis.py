@@ -31,6 +31,7 @@ def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str
     out.mkdir(parents=True, exist_ok=True)
     static = result.static
     doc = imu_doc(static, result.finals, rostopic, result.overbounds)
+    doc["warnings"] = [*static.warnings, *result.warnings]
     paths = {"imu.yaml": write_imu_yaml(out / "imu.yaml", static, doc, bool(result.finals))}
     for p in write_exports(doc, out / "exports"):
         paths[f"exports/{p.name}"] = p

@@ -28,14 +28,19 @@ def _ci(value: float | None, ci: tuple[float, float]) -> str:
 
 def _data_section(result: AnalysisResult, meta: dict) -> str:
     s = result.static
+    rate = s.period.describe() if s.period is not None else f"{s.rate_hz:.6g} Hz"
     rows = [("source", meta.get("source", "?")), ("topic", s.topic), ("samples per axis", f"{s.n}"),
-            ("duration", f"{s.duration_s:.1f} s ({s.duration_s / 3600:.2f} h)"), ("rate", f"{s.rate_hz:.6g} Hz"),
+            ("duration", f"{s.duration_s:.1f} s ({s.duration_s / 3600:.2f} h)"), ("rate", rate),
             ("command", meta.get("command", "analyze")), ("model", meta.get("model", "auto"))]
     table = "".join(f"<tr><th class=l>{html.escape(k)}</th><td class=l>{html.escape(str(v))}</td></tr>"
                     for k, v in rows)
     warnings = s.warnings + result.warnings
     items = "".join(f"<li>{html.escape(w)}</li>" for w in warnings) or "<li>none</li>"
-    return (f"<h2 id=data>Data</h2><table>{table}</table>"
+    alarm = ""
+    if s.period is not None and not s.period.trusted:
+        alarm = "".join(f"<p class=warn><b>Sample rate not taken from the stamps at face value:</b> "
+                        f"{html.escape(w)}</p>" for w in s.period.warnings)
+    return (f"<h2 id=data>Data</h2>{alarm}<table>{table}</table>"
             f"<p>Warnings, repairs and the static check:</p><ul>{items}</ul>")
 
 

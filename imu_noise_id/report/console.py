@@ -24,9 +24,12 @@ def summary_table(result: StaticAnalysis) -> str:
     conf = 100 * result.allan.confidence
     lines = [
         f"{result.n} samples, {result.duration_s:.1f} s at {result.rate_hz:.6g} Hz ({result.topic or 'input'})",
-        f"{'axis':8s} {'noise density':>13s} {f'{conf:.0f}% CI':>23s}   {'random walk':>11s} {f'{conf:.0f}% CI':>23s}"
-        "  unit (N; K)",
     ]
+    if result.period is not None and not result.period.trusted:
+        lines.append(f"!! sample rate {result.period.describe()}: the stamps cannot be taken at face value (see the "
+                     "warnings; --rate HZ gives the rate)")
+    lines.append(f"{'axis':8s} {'noise density':>13s} {f'{conf:.0f}% CI':>23s}   {'random walk':>11s} "
+                 f"{f'{conf:.0f}% CI':>23s}  unit (N; K)")
     for a in result.axes:
         s = result.slopes[a]
         n, k = s.noise_density, s.random_walk

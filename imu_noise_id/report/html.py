@@ -20,6 +20,7 @@ td.l,th.l{text-align:left}
 .pass{color:#176317;font-weight:bold}.fail{color:#a33;font-weight:bold}
 img{max-width:100%}
 .small{font-size:0.8em;color:#555}
+.warn{border:2px solid #a33;background:#fdecea;padding:0.5em}
 """
 
 

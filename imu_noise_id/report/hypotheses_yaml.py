@@ -48,7 +48,7 @@ def axis_entry(axis: str, entry: AxisIdentification) -> dict[str, Any]:
 def write_identification(res: Identification, out_dir: Path) -> list[Path]:
     """``hypotheses.yaml`` and ``hypotheses_probabilities.csv`` (probability of each hypothesis vs time)."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    doc = {"source_hypotheses": res.source, "dt": res.dt,
+    doc = {"source_hypotheses": res.source, "dt": res.dt, "notes": list(res.notes),
            "axes": {axis: axis_entry(axis, e) for axis, e in res.axes.items()}}
     yaml_path = out_dir / "hypotheses.yaml"
     yaml_path.write_text(yaml.safe_dump(doc, sort_keys=False))

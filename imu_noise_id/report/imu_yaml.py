@@ -28,6 +28,9 @@ def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
     """Kalibr ``imu.yaml`` content from the Allan slopes: its six keys plus per-axis values, CIs and methods."""
     doc: dict = {k: num(v) for k, v in kalibr_parameters(result, KALIBR_COMBINE).items()}
     doc["update_rate"] = num(result.rate_hz)
+    if result.period is not None:
+        doc["update_rate_source"] = result.period.describe()
+        doc["update_rate_trusted"] = result.period.trusted
     doc["rostopic"] = rostopic
     doc["confidence_level"] = result.allan.confidence
     for sensor, axes in _SENSORS:
@@ -137,6 +140,8 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
         "# method upper_bound = slope not reached in this record.",
         f"# Data: {result.n} samples, {result.duration_s:.1f} s at {result.rate_hz:.6g} Hz from {result.topic or '?'}.",
     ]
+    if result.period is not None and not result.period.trusted:
+        lines += [f"# WARNING (update_rate): {w}" for w in result.period.warnings]
     if with_models:
         lines += [
             "# With models (default): the Kalibr keys and *_xyz / *_ci_xyz come from each axis's FINAL model",

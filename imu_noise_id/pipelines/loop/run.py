@@ -342,7 +342,7 @@ class ImuLoop:
     Parameters
     ----------
     imu : ImuSeries
-        The recording (its median period is the sampling period).
+        The recording (its :meth:`~imu_noise_id.core.axes.ImuSeries.sample_period` is the sampling period).
     temperature : ScalarSeries, optional
         The bag's temperature topic; interpolated onto the IMU stamps (enables ``TEMP``).
     loop_kwargs
