@@ -103,3 +103,24 @@ def test_model_selection_offers_flicker_where_the_allan_variance_has_a_plateau(s
 
     y = simulate_sum(parse_model(spec), 120000, DT, np.random.default_rng(0))
     assert ("WN+BI+RW" in suggest_candidates(allan_variance(y, DT))) is offered
+
+
+def test_the_loops_joint_search_adds_flicker_and_lets_the_random_walk_give_way():
+    """Issue 11's bounded joint search, on the record of the test above: from the WN+RW fit (K six times too
+    large), adding BI with the random walk restarted small wins by BIC and no harm to the AV; the GM placements
+    are judged the same way, each recorded as a trial."""
+    from imu_noise_id.pipelines.loop.run import _explore
+    from imu_noise_id.pipelines.loop.state import LoopState
+    from imu_noise_id.pipelines.loop.steps import AxisLoop
+
+    truth = [WN(2e-3), BI(5e-4, *band_for_record(120000, DT)), RW(1e-5)]
+    y = simulate_sum(truth, 120000, DT, np.random.default_rng(7))
+    loop = AxisLoop(y, DT, None, alpha=0.01, lags=20, outliers="impute")
+    state = LoopState(structure=["WN", "RW"])
+    diag = loop.diagnose(state)
+    trials = []
+    best = _explore(loop, state, diag, trials)
+    assert [t.finding.effect for t in trials] == ["GM", "GM", "BI"]
+    assert best is not None and best[3].effect == "BI" and best[2].errors.bic < diag.errors.bic
+    rw = [c for c in best[2].fit.components if c.name == "RW"]
+    assert not rw or rw[0].random_walk < 0.5 * diag.fit.components[1].random_walk
