@@ -10,11 +10,15 @@ Each case simulates ``--minutes`` at 100 Hz and runs the loop from WN+RW:
 - ``osc``: WN + RW + a wandering line (OSC: f₀ drawn in 0.4–15 Hz, bandwidth 2–6 % of f₀, σ ≈ 1–2× the
   per-sample white noise / 10), and ``osc+gm``: the same with a GM bias process (τ = 60 s);
 - ``lpf``: the sensor's low-pass (cutoff drawn in 5–30 Hz) on the white noise, + RW;
+- ``ma``: the sensor's averaging filter (a two-tap moving average on 40–70 % of the white noise's passband
+  density), + RW: the filter must be found as MA (not LPF);
+- ``bi``: flicker noise (bias instability B drawn in 2–5 × 10⁻⁴) over 0.1 s … the record, + WN + RW: K must not
+  absorb the flicker;
 - ``sin``: WN + RW + a fixed sinusoid (frequency drawn in 0.4–15 Hz);
 - ``clean``: WN + RW only (``--clean`` seeds).
 
 Printed per case: how often the right kind was chosen (OSC vs SIN, LPF found, nothing added on clean data), the
-errors of f₀, bandwidth, σ, cutoff, and of N (passband) and K of the final model, against the issue's targets (f₀
+errors of f₀, bandwidth, σ, cutoff, B, and of N (passband) and K of the final model, against the issue's targets (f₀
 2 %, bandwidth ±30 %, σ ±20 %, cutoff 20 %, SIN vs OSC ≥ 95 %, N 10 %, K 35 %, clean ≤ 1 in 30).
 """
 
@@ -28,7 +32,8 @@ from pathlib import Path
 import numpy as np
 
 from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.noise.components import GM, LPF, OSC, RW, WN, simulate_sum
+from imu_noise_id.core.noise.components import BI, GM, LPF, MA, OSC, RW, WN, simulate_sum
+from imu_noise_id.core.noise.flicker import band_for_record
 from imu_noise_id.pipelines.loop import run_closed_loop
 
 DT = 0.01
@@ -47,6 +52,13 @@ def simulate(case: str, seed: int, n: int) -> tuple[np.ndarray, dict]:
     elif case == "lpf":
         cutoff = float(rng.uniform(5.0, 30.0))
         comps, truth["cutoff"] = [LPF(noise_density=N_TRUE, cutoff=cutoff), RW(K_TRUE)], cutoff
+    elif case == "ma":
+        share = float(rng.uniform(0.4, 0.7))  # the averaged part's share of the passband density
+        comps = [WN(N_TRUE * math.sqrt(1 - share**2)), MA(N_TRUE * share), RW(K_TRUE)]
+        truth["filter"] = "MA"
+    elif case == "bi":
+        bias = float(rng.uniform(2e-4, 5e-4))
+        comps, truth["bias_instability"] = [WN(N_TRUE), BI(bias, *band_for_record(n, DT)), RW(K_TRUE)], bias
     else:
         comps = [WN(N_TRUE), RW(K_TRUE)]
     y = simulate_sum(comps, n, DT, rng)
@@ -72,6 +84,13 @@ def assess(y: np.ndarray, truth: dict) -> dict:
             c = near[0]
             out |= {"f0_err": abs(c.frequency / t.frequency - 1), "b_err": abs(c.bandwidth / t.bandwidth - 1),
                     "s_err": abs(c.sigma / t.sigma - 1)}
+    elif "filter" in truth:
+        out["right_kind"] = "MA" in r.final.model and "LPF" not in r.final.model
+    elif "bias_instability" in truth:
+        bi = next((c for c in fit.components if isinstance(c, BI)), None)
+        out["right_kind"] = bi is not None
+        if bi is not None:
+            out["bi_err"] = abs(bi.bias_instability / truth["bias_instability"] - 1)
     elif "cutoff" in truth:
         lpf = next((c for c in fit.components if isinstance(c, LPF)), None)
         out["right_kind"] = lpf is not None
@@ -92,7 +111,7 @@ def report(case: str, rows: list[dict]) -> list[str]:
     lines = [f"{case}: right kind {sum(r['right_kind'] for r in rows)} of {len(rows)}; "
              f"models: {', '.join(sorted({r['model'] for r in rows}))}"]
     for key, label in (("f0_err", "f0"), ("b_err", "bandwidth"), ("s_err", "sigma"), ("cutoff_err", "cutoff"),
-                       ("n_err", "N (passband)"), ("k_err", "K")):
+                       ("bi_err", "B"), ("n_err", "N (passband)"), ("k_err", "K")):
         if any(key in r for r in rows):
             lines.append(f"    {label:13s} error {pct(key)}")
     return lines
@@ -101,16 +120,18 @@ def report(case: str, rows: list[dict]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--line-seeds", type=int, default=20, help="seeds of the osc and sin cases (SIN vs OSC ≥ 95 %%)")
     ap.add_argument("--clean", type=int, default=30)
     ap.add_argument("--minutes", type=float, default=20.0)
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
     n = int(args.minutes * 60 / DT)
-    lines = [f"# bench/bench_loop_effects.py --seeds {args.seeds} --clean {args.clean} --minutes {args.minutes:g} "
+    lines = [f"# bench/bench_loop_effects.py --seeds {args.seeds} --line-seeds {args.line_seeds} --clean {args.clean} "
+             f"--minutes {args.minutes:g} "
              f"({n} samples at 100 Hz per record; start WN+RW; N = {N_TRUE}, K = {K_TRUE})"]
     start = time.perf_counter()
-    for case, seeds in (("osc", args.seeds), ("osc+gm", args.seeds), ("lpf", args.seeds), ("sin", args.seeds),
-                        ("clean", args.clean)):
+    for case, seeds in (("osc", args.line_seeds), ("osc+gm", args.seeds), ("lpf", args.seeds), ("ma", args.seeds),
+                        ("bi", args.seeds), ("sin", args.line_seeds), ("clean", args.clean)):
         rows = [assess(*simulate(case, 1000 + s, n)) for s in range(seeds)]
         new = report(case, rows)
         lines += new

@@ -90,11 +90,12 @@ def test_every_file_of_every_command_records_its_run(golden_run):
 
 def test_another_bag_with_other_options_leaves_nothing_of_the_first_run(analyzed, two_bags, capsys):
     out, _ = analyzed
+    before = _files(out)
     assert main(["analyze", str(two_bags[1]), "--model", "none", "--out", str(out)]) == 0
     files = _files(out)
     assert "model.yaml" not in files and "report.html" not in files and "allan_model.png" not in files
     assert {_run_of(out / f)["source"] for f in files} == {str(two_bags[1])}
-    assert "removed 3 file(s) an earlier run left" in capsys.readouterr().err
+    assert f"removed {len(before - files)} file(s) an earlier run left" in capsys.readouterr().err
 
 
 def test_a_run_of_another_command_on_the_same_bag_stays_and_one_on_another_bag_does_not(analyzed, two_bags):
