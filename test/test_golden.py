@@ -86,8 +86,12 @@ def _axis_loose(entry: dict) -> bool:
     return isinstance(comps, list) and any(isinstance(c, dict) and _unidentified(c) for c in comps)
 
 
-def _tolerance(key: str, want: object, parent: Tolerance, fitted: bool) -> Tolerance:
-    """The tolerance below ``key`` (module docstring); ``parent``: the tolerance above it."""
+def _tolerance(key: str, want: object, parent: Tolerance, fitted: bool, got: object = None) -> Tolerance:
+    """The tolerance below ``key`` (module docstring); ``parent``: the tolerance above it.
+
+    Whether a parameter is identified is read from both files: a weakly determined one (standard error near half its
+    value) is finite on one machine and infinite on another, and either reading makes its axis loose.
+    """
     if not fitted or parent.skip:
         return parent
     if key in LOGLIK_KEYS:
@@ -96,10 +100,10 @@ def _tolerance(key: str, want: object, parent: Tolerance, fitted: bool) -> Toler
         return Tolerance(rel=0.0, abs=WEIGHT_ABS)
     if any(key == k or (k.startswith("_") and key.endswith(k)) or key.startswith(k) for k in CURVATURE_KEYS):
         return Tolerance(skip=True) if parent.loose else Tolerance(rel=max(parent.rel, CURVATURE_REL))
-    if isinstance(want, dict) and _axis_loose(want):
+    if isinstance(want, dict) and (_axis_loose(want) or (isinstance(got, dict) and _axis_loose(got))):
         return Tolerance(rel=LOOSE_REL, loose=True)
     if isinstance(want, dict) and "se" in want:
-        if _unidentified(want):
+        if _unidentified(want) or (isinstance(got, dict) and _unidentified(got)):
             return Tolerance(skip=True)
         rel = max((SE_FRACTION * s / abs(v) for v, s in _se_pairs(want) if v), default=REL)
         return Tolerance(rel=rel, loose=parent.loose)
@@ -118,14 +122,14 @@ def differences(got: object, want: object, where: str = "", tol: Tolerance = Tol
                 out.append(f"{where}/{key}: {'missing' if key not in got else 'unexpected'}")
             else:
                 inner = _tolerance(str(key), want[key], tol if where or not fitted else Tolerance(rel=FIT_REL),
-                                   fitted)
+                                   fitted, got[key])
                 out += differences(got[key], want[key], f"{where}/{key}", inner, fitted)
         return out
     if isinstance(want, list) and isinstance(got, list):
         if len(got) != len(want):
             return [f"{where}: {len(got)} items, expected {len(want)}"]
         return [d for i, (g, w) in enumerate(zip(got, want, strict=True))
-                for d in differences(g, w, f"{where}[{i}]", _tolerance("", w, tol, fitted), fitted)]
+                for d in differences(g, w, f"{where}[{i}]", _tolerance("", w, tol, fitted, g), fitted)]
     if tol.skip:
         return []
     if isinstance(want, bool) or not isinstance(want, int | float) or not isinstance(got, int | float):
@@ -175,6 +179,10 @@ def test_fitted_numbers_are_compared_to_their_standard_error():
     found = differences(moved_n, want, fitted=True)
     assert found == ["/axes/gyro_z/components[0]/noise_density: 0.00101, expected 0.001",
                      "/axes/gyro_z/loglik: 1002.0, expected 1000.0"]
+    # Unidentified in the new file only (a weakly determined RW whose information is singular on this machine).
+    want["axes"]["gyro_z"]["components"][-1]["se"] = 0.48e-8
+    moved_n["axes"]["gyro_z"]["components"][-1].update(random_walk=1.1e-8, se=math.inf)
+    assert differences(moved_n, want, fitted=True) == found
 
 
 if __name__ == "__main__":
