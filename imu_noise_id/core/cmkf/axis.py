@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from .interval import ImuInterval
+from .matching import MatchingLeastSquares
 from .stacked import StackedSvEstimator
 
 MODES = ("pos_vel", "vel")
@@ -99,6 +100,11 @@ class AxisCmkf:
         return self.estimator.count
 
     @property
+    def matching(self) -> MatchingLeastSquares:
+        """The least squares behind :attr:`S_ls` (with its standard error)."""
+        return self.estimator.matching
+
+    @property
     def S_ls(self) -> np.ndarray:
         """Latest least-squares Ŝ_v per axis [m²/s³] (NaN before the first stacked sample)."""
         return self.estimator.estimate
@@ -130,6 +136,16 @@ class AxisCmkf:
         P = Phi @ self.P @ Phi.T + self.S_used[:, None, None] * interval.Qa1
         P[:, 2, 2] += interval.qb
         return P
+
+    def nis(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """NIS per axis the update with ``z`` (n, m) and ``R`` (n, m, m) would have, without updating (NaN on
+        every axis when an innovation covariance is not positive definite)."""
+        z = np.asarray(z, dtype=float).reshape(self.n, self.m)
+        S = self.H @ self.P @ self.H.T + np.asarray(R, dtype=float).reshape(self.n, self.m, self.m)
+        if not _all_positive_definite(S):
+            return np.full(self.n, np.nan)
+        nu = z - self.x @ self.H.T
+        return np.einsum("ni,ni->n", nu, np.linalg.solve(S, nu[:, :, None])[:, :, 0])
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
         """Joseph-form update (eqs. 24–27) and one step of the covariance estimator; returns NIS per axis.

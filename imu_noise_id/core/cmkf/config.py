@@ -44,6 +44,11 @@ class CmkfConfig:
     min_odom_interval : odometry closer than this to the last update is dropped (degenerate interval) [s].
     pd_check : ``"per_axis"`` or ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used.
     nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean`` (and the node's ``nis.window``).
+    nis_gate_probability : innovation gate of both filters (beyond the paper): an odometry update whose NIS exceeds
+        the ``1 − p`` quantile of χ²(dof) is rejected as an outlier (a bump, a saturated or corrupted sample) —
+        the accelerometer filter then restarts position and velocity from the measurement and keeps its bias, the
+        gyro filter keeps its bias, neither uses the epoch for S_v or S_g; after :data:`~.gate.GATE_PATIENCE`
+        rejections in a row the next update is accepted (a wrong prior must not lock the filter). 0: no gate.
     """
 
     imu_rotation_xyzw: tuple[float, float, float, float] = rot.IDENTITY
@@ -69,6 +74,7 @@ class CmkfConfig:
     pd_check: str = "per_axis"
     min_samples: int = 10
     nis_window: int = 50
+    nis_gate_probability: float = 1e-6
 
     def validate(self) -> None:
         """Raise ValueError naming the first absurd parameter."""
@@ -91,6 +97,8 @@ class CmkfConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        if not (math.isfinite(self.nis_gate_probability) and 0.0 <= self.nis_gate_probability < 0.5):
+            raise ValueError(f"nis_gate_probability must be in [0, 0.5), got {self.nis_gate_probability!r}")
         if self.pd_check not in PD_CHECKS:
             raise ValueError(f"pd_check must be one of {PD_CHECKS}, got {self.pd_check!r}")
         for name in ("min_samples", "nis_window"):

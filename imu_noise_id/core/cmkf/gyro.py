@@ -21,6 +21,8 @@ import math
 
 import numpy as np
 
+from .matching import MatchingLeastSquares
+
 
 class GyroBiasFilter:
     """Per-axis gyro-bias Kalman filter with a covariance-matching estimate of the angle-random-walk PSD.
@@ -43,9 +45,7 @@ class GyroBiasFilter:
         self.var = [self.sigma**2] * 3
         self._S = [float(s_g0)] * 3
         self.min_samples = int(min_samples)
-        self._num = [0.0, 0.0, 0.0]
-        self._den = 0.0
-        self.count = 0
+        self.matching = MatchingLeastSquares(3)
         self._nu = [math.nan] * 3
         self._s = [math.nan] * 3
         self._T = math.nan
@@ -77,9 +77,14 @@ class GyroBiasFilter:
         return np.array(self._S)
 
     @property
+    def count(self) -> int:
+        """Stacked samples in the S_g estimate."""
+        return self.matching.count
+
+    @property
     def S_ls(self) -> np.ndarray:
         """Latest least-squares S_g [rad²/s] (NaN before the first stacked sample)."""
-        return np.array(self._num) / self._den if self.count else np.full(3, np.nan)
+        return self.matching.estimate
 
     def reset_chain(self) -> None:
         """Do not difference across a gap."""
@@ -94,14 +99,37 @@ class GyroBiasFilter:
         """The next update closes an odometry interval of ``T`` [s] (> 0)."""
         self._T = float(T)
 
+    def _prior(self) -> tuple[float, float]:
+        """(φ, q) of the pending interval."""
+        phi = math.exp(-self._T / self.tau)
+        return phi, (1.0 - phi * phi) * self.sigma**2
+
+    def nis(self, z: list[float], R: list[float]) -> float:
+        """NIS (3 dof) that :meth:`update` with ``z`` and ``R`` would have, without updating (the innovation gate)."""
+        T = self._T
+        phi, q = self._prior()
+        total = 0.0
+        for i in range(3):
+            nu = z[i] / T - phi * self.bias[i]
+            total += nu * nu / (phi * phi * self.var[i] + q + self._S[i] / T + R[i] / (T * T))
+        return total
+
+    def coast(self) -> None:
+        """The pending interval without a measurement (a rejected update): the bias is only predicted, and no
+        covariance-matching step spans it."""
+        phi, q = self._prior()
+        for i in range(3):
+            self.bias[i] *= phi
+            self.var[i] = phi * phi * self.var[i] + q
+        self._prev = None
+
     def update(self, z: list[float], R: list[float]) -> float:
         """The interval's measurement: ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) variance of Δθ_odo [rad²].
 
         Returns the normalised innovation squared summed over the axes (3 dof).
         """
         T = self._T
-        phi = math.exp(-T / self.tau)
-        q = (1.0 - phi * phi) * self.sigma**2
+        phi, q = self._prior()
         meas = [zi / T for zi in z]
         nis = 0.0
         for i in range(3):
@@ -118,14 +146,13 @@ class GyroBiasFilter:
         if self._prev is not None:
             meas1, T1, R1 = self._prev
             D = 1.0 / T + phi * phi / T1
+            products = []
             for i in range(3):
                 d = meas[i] - phi * meas1[i]
-                self._num[i] += (d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1)) * D
-            self._den += D * D
-            self.count += 1
+                products.append((d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1)) * D)
+            self.matching.add(products, D * D)
             if self.count >= self.min_samples:
-                for i in range(3):
-                    s_new = self._num[i] / self._den
+                for i, s_new in enumerate(self.matching.values()):
                     if s_new > 0:
                         self._S[i] = s_new
         self._prev = (meas, T, list(R))

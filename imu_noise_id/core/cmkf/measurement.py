@@ -88,22 +88,26 @@ class TwistMeasurement:
             "linear_velocity",)
 
     @staticmethod
-    def values(fields: dict[str, object]) -> tuple[dict[str, list[float] | None], rot.Quat | None] | None:
-        """The message's vectors as float lists and its unit quaternion; None if anything is NaN/inf or
-        malformed (wrong length, zero quaternion)."""
+    def values(fields: dict[str, object]) -> tuple[dict[str, list[float] | None], rot.Quat | None, bool] | None:
+        """The message's vectors as float lists, its unit quaternion, and whether an orientation was given but
+        unusable (an all-zero or non-finite quaternion: REP-145's "no orientation"; the field is then None, and
+        :meth:`missing` says whether the measurement can do without it). None if another field is NaN/inf or
+        malformed (wrong length)."""
         vals = {k: None if a is None else _as_floats(a) for k, a in fields.items()}
-        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
-        if not math.isfinite(sum(sum(a) for a in vals.values() if a is not None)) or any(
-            a is not None and len(a) != FIELDS[k] for k, a in vals.items()
-        ):
+        if any(a is not None and len(a) != FIELDS[k] for k, a in vals.items()):
             return None
         q_nb = None
+        invalid = False
         if vals["orientation_xyzw"] is not None:
             try:
                 q_nb = rot.normalise(vals["orientation_xyzw"])
-            except ValueError:  # zero quaternion: as unusable as NaN
-                return None
-        return vals, q_nb
+            except ValueError:  # zero or non-finite quaternion: no orientation
+                vals["orientation_xyzw"] = None
+                invalid = True
+        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
+        if not math.isfinite(sum(sum(a) for a in vals.values() if a is not None)):
+            return None
+        return vals, q_nb, invalid
 
     def missing(self, vals: dict[str, list[float] | None]) -> bool:
         """True when a field this measurement needs is absent."""

@@ -1,0 +1,110 @@
+"""The covariance-matching least squares of paper 004 (eq. 35), streaming, with an honest standard error.
+
+Paper 004 solves ``C̄ − Cov(𝒲) − Cov(ℰ) = S_v D`` for S_v by least squares (eq. 35); over epochs whose matrices
+change (:mod:`.stacked`) the solution is a ratio of sums, per axis::
+
+    Ŝ = Σ_k q_k / Σ_k w_k,    q_k = ⟨𝒵_k𝒵_kᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩_F,    w_k = ⟨D_k, D_k⟩_F
+
+(the gyro filter's :mod:`.gyro` has the same form with scalar ``d_k``). The paper gives no uncertainty for Ŝ.
+Beyond the paper, its variance is estimated here by a block sandwich (batch means): the products ``q_k`` are
+dependent over a few epochs only (𝒵_k shares measurement noise with 𝒵_{k±1}, 𝒵_{k±2}), so sums over blocks of
+:data:`BLOCK` consecutive epochs are nearly independent, and for blocks ``j`` with sums ``Q_j, W_j``::
+
+    Var(Ŝ) ≈ J/(J − 1) · Σ_j (Q_j − Ŝ W_j)² / (Σ_j W_j)²          (J completed blocks, J − 1 degrees of freedom)
+
+the cluster-robust sandwich of the ratio estimator: it needs neither Gaussian noise nor constant intervals, and
+it contains whatever the model leaves out (odometry noise that is not white, a wrong declared covariance, motion
+that the filter does not model). Intervals use Student's t with J − 1 degrees of freedom
+(:mod:`.psd`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+#: Epochs per block of the sandwich variance (the products are dependent over two epochs at most).
+BLOCK = 32
+
+
+class MatchingLeastSquares:
+    """``Σ q_k / Σ w_k`` per axis, accumulated one epoch at a time, with the block sandwich variance.
+
+    Parameters
+    ----------
+    n_axes : number of axes (each has its own ``q_k``; the weights ``w_k`` are shared).
+    block : epochs per block of the variance estimate.
+
+    Attributes
+    ----------
+    num : (n,) Σ q_k; den : Σ w_k; count : epochs accumulated; blocks : completed blocks.
+    """
+
+    def __init__(self, n_axes: int, block: int = BLOCK) -> None:
+        self.n = int(n_axes)
+        self.block = int(block)
+        self.num = [0.0] * self.n
+        self.den = 0.0
+        self.count = 0
+        self.blocks = 0
+        self._q = [0.0] * self.n  # the current block's sums
+        self._w = 0.0
+        self._k = 0
+        self._qq = [0.0] * self.n  # Σ_j Q_j², Σ_j Q_j W_j, Σ_j W_j, Σ_j W_j² over completed blocks
+        self._qw = [0.0] * self.n
+        self._wc = 0.0
+        self._ww = 0.0
+
+    def add(self, q: Sequence[float], w: float) -> None:
+        """One epoch: its products ``q`` (n) and weight ``w``."""
+        num, cur = self.num, self._q
+        for i in range(self.n):
+            num[i] += q[i]
+            cur[i] += q[i]
+        self.den += w
+        self._w += w
+        self.count += 1
+        self._k += 1
+        if self._k == self.block:
+            wj = self._w
+            for i in range(self.n):
+                self._qq[i] += cur[i] * cur[i]
+                self._qw[i] += cur[i] * wj
+                cur[i] = 0.0
+            self._wc += wj
+            self._ww += wj * wj
+            self.blocks += 1
+            self._w = 0.0
+            self._k = 0
+
+    @property
+    def estimate(self) -> np.ndarray:
+        """Ŝ per axis (NaN before the first epoch)."""
+        if self.count == 0 or self.den <= 0.0:
+            return np.full(self.n, np.nan)
+        return np.array(self.num) / self.den
+
+    def values(self) -> list[float]:
+        """Ŝ per axis as floats (NaN before the first epoch): the filters' hot path."""
+        if self.count == 0 or self.den <= 0.0:
+            return [math.nan] * self.n
+        return [x / self.den for x in self.num]
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom of the variance estimate: completed blocks − 1 (0 before two blocks)."""
+        return max(self.blocks - 1, 0)
+
+    @property
+    def standard_error(self) -> np.ndarray:
+        """Standard error of Ŝ per axis (NaN before two completed blocks); see the module docstring."""
+        J = self.blocks
+        if J < 2 or self._wc <= 0.0:
+            return np.full(self.n, np.nan)
+        scale = J / (J - 1) / (self._wc * self._wc)
+        out = []
+        for s, qq, qw in zip(self.values(), self._qq, self._qw, strict=True):
+            out.append(math.sqrt(max(qq - 2.0 * s * qw + s * s * self._ww, 0.0) * scale))
+        return np.array(out)

@@ -1,0 +1,110 @@
+"""What the covariance matching says about a noise PSD (S_v or S_g): an estimate with its interval, or a bound.
+
+The least-squares value Ŝ (:mod:`.matching`) estimates the PSD with a standard error ``se`` on ``dof`` degrees of
+freedom. Per axis, with t = Student's t quantile (0.975 two-sided, 0.95 one-sided):
+
+- **identified**: the 95 % interval ``Ŝ ± t·se`` lies above 0; the noise density is √Ŝ with the interval's square
+  roots;
+- **not identifiable from this data**: the interval contains 0 — the PSD's contribution to the stacked
+  measurements is below what the odometry noise (and everything else not modelled) puts there; only the
+  one-sided 95 % upper bound ``max(Ŝ, 0) + t·se`` is known;
+- **negative**: even the upper bound is ≤ 0 — the model's noise terms are too large for the data (the odometry
+  covariance declared or assumed is too large, or the odometry is smoothed): nothing about the PSD;
+- **unknown**: fewer than two blocks of epochs (no standard error yet).
+
+Never the filter's working value (the prior, or the last positive least-squares value) in place of an estimate.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy.stats import t as student_t
+
+VERDICTS = ("identified", "not_identifiable", "negative", "unknown")
+
+
+@dataclass(frozen=True)
+class PsdEstimate:
+    """One sensor's PSD per axis from the covariance matching (SI: [m²/s³] for S_v, [rad²/s] for S_g).
+
+    Attributes
+    ----------
+    value, se : (3,) least-squares Ŝ (may be ≤ 0) and its standard error; dof : degrees of freedom of ``se``.
+    ci95 : (3, 2) two-sided 95 % interval of the PSD (lower end clipped at 0; NaN when unknown).
+    upper95 : (3,) one-sided 95 % upper bound of the PSD (NaN when unknown).
+    verdict : per axis one of :data:`VERDICTS`.
+    """
+
+    value: np.ndarray
+    se: np.ndarray
+    dof: int
+    ci95: np.ndarray
+    upper95: np.ndarray
+    verdict: tuple[str, ...]
+
+    @property
+    def identified(self) -> np.ndarray:
+        """(3,) bool: the axes whose PSD is identified."""
+        return np.array([v == "identified" for v in self.verdict])
+
+    def density(self) -> np.ndarray:
+        """(3,) noise density √Ŝ where identified, NaN elsewhere [u/√Hz]."""
+        return np.where(self.identified, np.sqrt(np.maximum(self.value, 0.0)), np.nan)
+
+    def density_ci95(self) -> np.ndarray:
+        """(3, 2) 95 % interval of the density where identified, NaN elsewhere."""
+        return np.where(self.identified[:, None], np.sqrt(np.maximum(self.ci95, 0.0)), np.nan)
+
+    def density_upper95(self) -> np.ndarray:
+        """(3,) one-sided 95 % upper bound of the density where not identifiable, NaN elsewhere."""
+        ok = np.array([v == "not_identifiable" for v in self.verdict])
+        return np.where(ok, np.sqrt(np.maximum(self.upper95, 0.0)), np.nan)
+
+    def describe(self, axes: tuple[str, ...], unit: str) -> list[str]:
+        """One sentence per axis (density unit ``unit``, e.g. ``m/s^2/sqrt(Hz)``) for summaries and diagnostics."""
+        out = []
+        n, lo_hi, up = self.density(), self.density_ci95(), self.density_upper95()
+        for i, axis in enumerate(axes):
+            verdict = self.verdict[i]
+            if verdict == "identified":
+                out.append(f"{axis}: {n[i]:.3g} {unit} (95 % CI {lo_hi[i, 0]:.3g} … {lo_hi[i, 1]:.3g})")
+            elif verdict == "not_identifiable":
+                out.append(f"{axis}: not identifiable from this data (the noise is below what the odometry noise "
+                           f"contributes); upper bound {up[i]:.3g} {unit} (95 %)")
+            elif verdict == "negative":
+                out.append(f"{axis}: not identifiable: the least squares is negative beyond its uncertainty "
+                           f"({self.value[i]:.3g} ± {self.se[i]:.2g}): the odometry noise assumed is too large for "
+                           "these data (declared covariance too large, or smoothed odometry)")
+            else:
+                out.append(f"{axis}: not estimated yet (too few odometry epochs for an uncertainty)")
+        return out
+
+
+def psd_estimate(value: np.ndarray, se: np.ndarray, dof: int) -> PsdEstimate:
+    """Per-axis verdicts and intervals from the least-squares values, their standard errors and ``dof``."""
+    t2, t1 = _t_quantiles(int(dof))
+    verdict, ci, upper = [], [], []
+    for v, e in zip(np.asarray(value, dtype=float).tolist(), np.asarray(se, dtype=float).tolist(), strict=True):
+        if not (math.isfinite(v) and math.isfinite(e) and dof >= 1):
+            verdict.append("unknown")
+            ci.append((math.nan, math.nan))
+            upper.append(math.nan)
+            continue
+        lo = v - t2 * e
+        verdict.append("identified" if lo > 0.0 else "negative" if v + t1 * e <= 0.0 else "not_identifiable")
+        ci.append((max(lo, 0.0), v + t2 * e))
+        upper.append(max(v, 0.0) + t1 * e)
+    return PsdEstimate(np.asarray(value, dtype=float), np.asarray(se, dtype=float), int(dof), np.array(ci),
+                       np.array(upper), tuple(verdict))
+
+
+@lru_cache(maxsize=4096)
+def _t_quantiles(dof: int) -> tuple[float, float]:
+    """Student's t quantiles 0.975 and 0.95 for ``dof`` degrees of freedom (NaN below 1)."""
+    if dof < 1:
+        return math.nan, math.nan
+    return float(student_t.ppf(0.975, dof)), float(student_t.ppf(0.95, dof))
