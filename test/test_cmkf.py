@@ -90,7 +90,8 @@ def test_planar_robot_filter_equals_paper_filter():
     pf = _paper_filter(cfg, run.z[0], pd_check="per_axis")
     rc = RobotCmkf(CmkfConfig(
         measurement="pose_twist", accel_bias_tau=cfg.tau, accel_bias_sigma=cfg.sigma_ss, s_v0=cfg.S_v0,
-        min_samples=1, nis_gate_probability=0.0, position_noise_std=math.sqrt(cfg.R_diag[0]), velocity_noise_std=math.sqrt(cfg.R_diag[1]),
+        min_samples=1, nis_gate_probability=0.0, position_noise_std=math.sqrt(cfg.R_diag[0]),
+        velocity_noise_std=math.sqrt(cfg.R_diag[1]),
     ))
 
     def odometry(k: int) -> None:

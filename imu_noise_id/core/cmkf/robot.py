@@ -37,6 +37,7 @@ propagates, its covariance grows and the estimate is flagged unobserved.
 from __future__ import annotations
 
 import math
+
 import numpy as np
 
 from . import rotation as rot
@@ -345,6 +346,11 @@ class RobotCmkf:
         return True
 
     # ------------------------------------------------------------------ results
+    @property
+    def last_nis(self) -> tuple[float, float]:
+        """NIS of the last (accelerometer, gyro) update, also when the gate rejected it."""
+        return self._nis_accel, self._nis_gyro
+
     def _bias_var(self) -> np.ndarray:
         """Accelerometer-bias variance per axis, predicted to the current time."""
         f = self.filter

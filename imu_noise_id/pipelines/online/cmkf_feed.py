@@ -96,3 +96,11 @@ class CmkfFeed:
                                "cmkf.input_latency after the IMU: not used by the CMKF")
         else:
             self.innovations.add(self.cmkf)
+            cmkf = self.cmkf
+            for gated, key, what, nis, gate in zip(cmkf.last_gated, ("cmkf_gated_accel", "cmkf_gated_gyro"),
+                                                   ("accelerometer", "gyro"), cmkf.last_nis, cmkf.gates, strict=True):
+                if gated:
+                    self._events.count(key)
+                    self._events.event(key, f"CMKF: {what} update at t = {t:.6f} s rejected by the innovation gate "
+                                       f"(NIS {nis:.3g} > {gate.threshold:.3g}): a bump, a saturated or corrupted "
+                                       "sample; the bias is kept")

@@ -98,6 +98,12 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "warning (0: not checked)", "Hz", 0.0, 100000.0),
     ParamSpec("expected_odom_rate", 0.0, "odometry rate expected; a received rate below 80 % of it is a "
               "warning (0: not checked)", "Hz", 0.0, 100000.0),
+    ParamSpec("imu_range.gyro", 0.0, "full scale of the gyro (datasheet range): samples at it are flagged as "
+              "saturated (0: unknown; then a value repeated at the largest magnitude seen, above 2 rad/s, is)",
+              "rad/s", 0.0, 1000.0),
+    ParamSpec("imu_range.accel", 0.0, "full scale of the accelerometer: samples at it are flagged as saturated (0: "
+              "unknown; then a value repeated at the largest magnitude seen, above 19 m/s^2, is)", "m/s^2", 0.0,
+              10000.0),
     ParamSpec("expected.gyro_bias_max", 0.1, "|gyro bias| above this on any axis is reported", "rad/s",
               0.0, 100.0),
     ParamSpec("expected.accel_bias_max", 0.5, "|accelerometer bias| above this on any axis is reported",

@@ -27,18 +27,20 @@ from typing import Any
 
 import numpy as np
 
+from ...core.axes import AXES
 from ...core.quality import IMU_MAX_ABS
 from .bank import BankFeed
 from .cmkf_feed import CmkfFeed
 from .config import OnlineConfig
 from .events import EventLog
-from .inputs import Input
+from .inputs import Input, SaturationCheck
 from .noise import StationaryNoise
 from .results import CorrectedImu, Estimates, HypothesesReport
 from .stationarity import StationaryGate
 from .status import (
     DiagnosticStatus,
     WindowStats,
+    cmkf_noise_status,
     consistency_status,
     hypotheses_status,
     input_status,
@@ -80,6 +82,7 @@ class OnlineIdentifier:
         self.imu = Input("imu", config, self.events)
         self.odom = Input("odom", config, self.events)
         self.temperature = Input("temperature", config, self.events)
+        self.saturation = SaturationCheck(config)
         self.processing_time = WindowStats()
         self.identification_time = WindowStats(size=256)
         self.temperature_celsius = math.nan
@@ -102,6 +105,7 @@ class OnlineIdentifier:
         self.config = config
         for source in (self.imu, self.odom, self.temperature):
             source.configure(config)
+        self.saturation.configure(config)
         self.stationarity.configure(config)
         self.cmkf_feed.set_latency(config.cmkf_input_latency)
 
@@ -132,6 +136,9 @@ class OnlineIdentifier:
                                    f"{IMU_MAX_ABS[1]:g} m/s²)")
         if verdict is None:
             return None
+        saturated = self.saturation.check(sample)
+        if saturated:
+            self._saturated(t, sample, saturated)
         if verdict == "restart":
             self.restarts += 1
             self._reset_estimation()
@@ -153,6 +160,16 @@ class OnlineIdentifier:
             if self.bank is not None:
                 self.bank.add(t_s, y)
         return self._corrected(t, sample)
+
+    def _saturated(self, t: float, sample: np.ndarray, axes: list[str]) -> None:
+        """Count and report a sample at the sensor's full scale (it is used: the CMKF's gate guards the biases)."""
+        stats = self.imu.stats
+        stats.saturated += 1
+        stats.window_saturated += 1
+        self.events.count("imu_saturated")
+        values = ", ".join(f"{axis} = {sample[AXES.index(axis)]:.6g}" for axis in axes)
+        self.events.event("imu_saturated", f"imu: sample at t = {t:.6f} s at the sensor's full scale ({values}): "
+                          "saturated (a bump or a turn beyond the range); set imu_range.* to the datasheet range")
 
     def _end_stationary(self) -> None:
         """Motion or a gap: the difference chain is broken and the bank's stretch ends."""
@@ -236,6 +253,9 @@ class OnlineIdentifier:
         est = self.cmkf_feed.estimate
         known = self.cmkf_feed.cmkf.filter.initialised
         nan3 = np.full(3, math.nan)
+        nan6 = np.full(6, math.nan)
+        identified = np.concatenate([est.gyro_psd.identified, est.accel_psd.identified])
+        values = np.concatenate([est.gyro_psd.value, est.accel_psd.value])
         covariance, source = self._covariance()
         return Estimates(
             t=self.last_imu_t,
@@ -247,7 +267,9 @@ class OnlineIdentifier:
             noise_density=self.noise.density(min_samples),
             noise_density_rstd=self.noise.relative_std(min_samples),
             noise_samples=self.noise.n,
-            psd=np.concatenate([est.S_g, est.S_v]) if known else np.full(6, math.nan),
+            psd=np.where(identified, values, math.nan) if known else nan6.copy(),
+            psd_se=np.concatenate([est.gyro_psd.se, est.accel_psd.se]) if known else nan6.copy(),
+            psd_upper=np.concatenate([est.gyro_psd.upper95, est.accel_psd.upper95]) if known else nan6.copy(),
             covariance=covariance if covariance is not None else np.full(6, math.nan),
             covariance_source=source,
             imu_rate=self.imu.stamps.rate,
@@ -277,8 +299,8 @@ class OnlineIdentifier:
         statuses += [
             stamp_status(counts, (self.imu, self.odom), self.restarts),
             stationarity_status(self.stationarity, self.last_imu_t, self.imu.stats.window_received > 0),
-            consistency_status(feed.estimate, cfg.nis_window, bool(counts.get("cmkf_error")), feed.errors,
-                               feed.too_late),
+            consistency_status(feed.estimate, counts, feed.errors, feed.too_late),
+            cmkf_noise_status(feed.estimate),
             feed.innovations.status(),
             noise_status(est, cfg.noise_min_samples),
             hypotheses_status(self.hypotheses(), self.bank is not None,
@@ -289,6 +311,7 @@ class OnlineIdentifier:
         for source in (self.imu, self.odom, self.temperature):
             source.stats.window_received = 0
             source.stats.window_frame_changes = 0
+            source.stats.window_saturated = 0
         self.events.new_period()
         if self.bank is not None:
             self.bank.decision_changes = []

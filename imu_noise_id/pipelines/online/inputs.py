@@ -10,6 +10,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
+from ...core.axes import AXES
 from .config import OnlineConfig
 from .events import EventLog
 
@@ -26,6 +29,8 @@ class InputStats:
     frame_id: str | None = None
     frame_changes: int = 0
     window_frame_changes: int = 0
+    saturated: int = 0
+    window_saturated: int = 0
 
 
 @dataclass
@@ -168,3 +173,39 @@ class Input:
             return None
         stats.accepted += 1
         return verdict
+
+
+class SaturationCheck:
+    """Flags IMU samples at the sensor's full scale (a bump or a fast turn clipped by the sensor).
+
+    With a declared range (``imu_range.gyro``, ``imu_range.accel``) a sample within 0.5 % of it is saturated.
+    Without, a clipped sensor shows itself by repeating one value at its extreme: a sample whose magnitude equals
+    the largest one seen on its axis, seen at least twice, and above :data:`FLOOR` (below the smallest common full
+    scales, 125 °/s and 2 g, a repeated extreme is ordinary quantisation) is flagged as saturated.
+    """
+
+    #: Smallest magnitude that can be a full scale without a declared range: gyro [rad/s], accelerometer [m/s²].
+    FLOOR = (2.0, 19.0)
+    #: A sample within this fraction of a declared range is saturated.
+    MARGIN = 0.995
+
+    def __init__(self, config: OnlineConfig) -> None:
+        self.configure(config)
+        self._extreme = np.zeros(6)
+        self._hits = np.zeros(6, dtype=int)
+
+    def configure(self, config: OnlineConfig) -> None:
+        """Apply changed parameters."""
+        self._range = np.repeat([config.imu_range_gyro, config.imu_range_accel], 3)
+        self._floor = np.repeat(self.FLOOR, 3)
+
+    def check(self, sample: np.ndarray) -> list[str]:
+        """The axes (names of :data:`~imu_noise_id.core.axes.AXES`) on which this sample is saturated."""
+        a = np.abs(sample)
+        higher = a > self._extreme
+        self._extreme = np.where(higher, a, self._extreme)
+        self._hits = np.where(higher, 1, self._hits + (a == self._extreme))
+        declared = self._range > 0
+        flagged = np.where(declared, a >= self.MARGIN * self._range,
+                           (a == self._extreme) & (self._hits >= 2) & (a >= self._floor))
+        return [AXES[i] for i in np.flatnonzero(flagged)]

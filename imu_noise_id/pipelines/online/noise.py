@@ -3,7 +3,7 @@
 The density is the Allan variance at τ₀ of the samples that passed the stationarity guard
 (:class:`~imu_noise_id.core.white_noise.FirstDifferences`: differences never span a pause). The variance written
 into ``~/imu_corrected`` is N²·f: from this density once ``noise.min_samples`` differences exist, before that from
-the CMKF's √Ŝ while it is tracking, else unknown.
+the CMKF's Ŝ while it is tracking (its 95 % upper bound on an axis where Ŝ is not identifiable), else unknown.
 """
 
 from __future__ import annotations
@@ -45,11 +45,23 @@ class StationaryNoise:
 
     def covariance(self, rate: float, min_samples: int, cmkf: CmkfEstimate) -> tuple[np.ndarray | None, str]:
         """N²·f per axis [u²] for the IMU rate ``rate`` [Hz] and its source: ``stationary`` (this density),
-        ``cmkf`` (Ŝ_g, Ŝ_v of a tracking CMKF) or ``none``."""
+        ``cmkf`` (Ŝ_g, Ŝ_v of a tracking CMKF, identified on every axis), ``cmkf_upper_bound`` (where an axis is not
+        identifiable, its 95 % upper bound: a conservative variance) or ``none`` (never the filter's prior)."""
         if not math.isfinite(rate):
             return None, "none"
         if self.n >= min_samples:
             return self.differences.density() ** 2 * rate, "stationary"
-        if cmkf.status == "tracking":
-            return np.concatenate([cmkf.S_g, cmkf.S_v]) * rate, "cmkf"
-        return None, "none"
+        if cmkf.status != "tracking":
+            return None, "none"
+        psd = []
+        bounded = False
+        for estimate in (cmkf.gyro_psd, cmkf.accel_psd):
+            for value, upper, verdict in zip(estimate.value, estimate.upper95, estimate.verdict, strict=True):
+                if verdict == "identified":
+                    psd.append(value)
+                elif verdict == "not_identifiable":
+                    psd.append(upper)
+                    bounded = True
+                else:
+                    return None, "none"
+        return np.array(psd) * rate, "cmkf_upper_bound" if bounded else "cmkf"
