@@ -155,16 +155,19 @@ class ImuNoiseIdNode(Node):
             a = msg.linear_acceleration
             frame = msg.header.frame_id
             q = msg.orientation
-            out = self.identifier.process_imu(_stamp_seconds(msg.header.stamp), (w.x, w.y, w.z), (a.x, a.y, a.z),
-                                              frame, time.monotonic(), orientation_xyzw=(q.x, q.y, q.z, q.w))
+            released = self.identifier.process_imu(
+                _stamp_seconds(msg.header.stamp), (w.x, w.y, w.z), (a.x, a.y, a.z), frame, time.monotonic(),
+                orientation_xyzw=(q.x, q.y, q.z, q.w), source=msg)
             self._imu_frame = frame
-            if out is not None:
-                msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = out.gyro
-                msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z = out.accel
+            for out in released:  # usually this message; a held one first after a jump in the stamps
+                corrected = out.source
+                corrected.angular_velocity.x, corrected.angular_velocity.y, corrected.angular_velocity.z = out.gyro
+                (corrected.linear_acceleration.x, corrected.linear_acceleration.y,
+                 corrected.linear_acceleration.z) = out.accel
                 if out.gyro_variance is not None:
-                    msg.angular_velocity_covariance = _diag9(out.gyro_variance)
-                    msg.linear_acceleration_covariance = _diag9(out.accel_variance)
-                self.pub_imu.publish(msg)
+                    corrected.angular_velocity_covariance = _diag9(out.gyro_variance)
+                    corrected.linear_acceleration_covariance = _diag9(out.accel_variance)
+                self.pub_imu.publish(corrected)
         except Exception as exc:  # never die on input: report and continue
             self._log("imu_exception", f"IMU message not processed: {type(exc).__name__}: {exc}")
         finally:

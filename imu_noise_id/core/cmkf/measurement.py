@@ -162,6 +162,11 @@ class TwistMeasurement:
             return _rotate(self._C_ib_rows, rot.to_rotvec(dq).tolist()), [(std * T) ** 2] * 3
         return None
 
+    def reset_chain(self) -> None:
+        """Forget the last epoch's rate and orientation (a new time line: no increment spans it)."""
+        self._w_prev = None
+        self._q_nb_prev = None
+
     def end_epoch(self, q_nb: rot.Quat | None) -> None:
         """The epoch is processed: remember its orientation for the next one."""
         if q_nb is not None:

@@ -116,6 +116,18 @@ class RobotCmkf:
         self._z_prev: tuple[list[float], list[float]] | None = None  # velocity measurement and variance, last epoch
         self._v_post = [0.0, 0.0, 0.0]  # velocity after the last update
 
+    def new_time_line(self) -> None:
+        """The input stamps restarted from an earlier time (a restarted driver, a bag played again): forget the
+        times and the interval in progress, keep what was estimated (biases and their variances, the S_v and S_g
+        least squares, the consistency windows); position and velocity restart from the next odometry message."""
+        self._t_imu = self._t_odom = self._t_state = self._t_update = None
+        self._last_imu = None
+        self._reinit = True
+        self._z_prev = None
+        self.imu.reset_interval()
+        self.gyro.reset_chain()
+        self.odometry.reset_chain()
+
     # ------------------------------------------------------------------ IMU path
     def process_imu(
         self,

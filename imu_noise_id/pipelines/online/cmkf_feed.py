@@ -67,6 +67,11 @@ class CmkfFeed:
         changed."""
         return self._feed(self.stream.process_odometry, t, **fields)
 
+    def new_time_line(self) -> None:
+        """The stamps of an input restarted: the filter forgets its times, keeps its estimates (biases, least
+        squares) and restarts position and velocity from the next odometry."""
+        self._feed(self.stream.new_time_line)
+
     def refresh(self) -> None:
         """Re-read the estimate (its status changes without odometry updates too)."""
         self.estimate = self.stream.estimate()

@@ -35,9 +35,12 @@ class StationaryNoise:
         """Motion or a gap: no difference across it."""
         self.differences.break_chain()
 
-    def density(self, min_samples: int) -> np.ndarray:
-        """N per axis [u/√Hz]; NaN before ``min_samples`` differences."""
-        return self.differences.density() if self.n >= min_samples else np.full(6, math.nan)
+    def density(self, min_samples: int, period: float | None) -> np.ndarray:
+        """N per axis [u/√Hz] for the nominal sampling ``period`` [s] (not the stamps' intervals, which bursts of
+        host-stamped messages make tiny); NaN before ``min_samples`` differences or while the period is unknown."""
+        if self.n < min_samples or not period:
+            return np.full(6, math.nan)
+        return self.differences.density(period)
 
     def relative_std(self, min_samples: int) -> float:
         """Relative standard deviation of N (NaN before ``min_samples`` differences)."""
@@ -50,7 +53,7 @@ class StationaryNoise:
         if not math.isfinite(rate):
             return None, "none"
         if self.n >= min_samples:
-            return self.differences.density() ** 2 * rate, "stationary"
+            return self.differences.variance() / 2.0, "stationary"  # σ² per sample = N²·f
         if cmkf.status != "tracking":
             return None, "none"
         psd = []

@@ -4,19 +4,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 
 @dataclass
 class CorrectedImu:
-    """One bias-corrected IMU sample; variances are N²·f per axis, or None while no estimate exists."""
+    """One bias-corrected IMU sample; variances are N²·f per axis, or None while no estimate exists; ``source``:
+    what the caller gave with the message (the node: the ROS message it republishes)."""
 
     t: float
     gyro: tuple[float, float, float]
     accel: tuple[float, float, float]
     gyro_variance: tuple[float, float, float] | None
     accel_variance: tuple[float, float, float] | None
+    source: Any = None
 
 
 @dataclass
