@@ -89,6 +89,7 @@ class ImuNoiseIdNode(Node):
         config = OnlineConfig(values)  # InputError names a bad value
         hypotheses = read_hypotheses_file(config.hypotheses_file or None) if config.hypotheses_enabled else None
         self.identifier = OnlineIdentifier(config, hypotheses)
+        self.add_pre_set_parameters_callback(self._integers_as_doubles)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         cfg = self.identifier.config
 
@@ -133,6 +134,14 @@ class ImuNoiseIdNode(Node):
                 close = difflib.get_close_matches(name, sorted(known), n=1)
                 self.get_logger().warning(f"unknown parameter {name!r} ignored" +
                                           (f": did you mean {close[0]!r}?" if close else ""))
+
+    @staticmethod
+    def _integers_as_doubles(params: list[Parameter]) -> list[Parameter]:
+        """``ros2 param set /imu_noise_id_node gap_factor 12`` sends an integer: it means 12.0 (rclpy would refuse
+        it as the wrong type), as ``-p gap_factor:=12`` does at start-up."""
+        floats = {spec.name for spec in PARAMETERS if type(spec.default) is float}
+        return [Parameter(p.name, Parameter.Type.DOUBLE, float(p.value))
+                if p.name in floats and p.type_ == Parameter.Type.INTEGER else p for p in params]
 
     def _on_set_parameters(self, params: list[Parameter]) -> SetParametersResult:
         changes = {p.name: p.value for p in params if p.name in {s.name for s in PARAMETERS}}

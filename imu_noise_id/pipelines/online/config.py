@@ -90,8 +90,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "as absent", "s", 0.01, 60.0),
     ParamSpec("gap_factor", 10.0, "a period longer than gap_factor × the nominal IMU period is a gap", "",
               1.5, 1000.0),
-    ParamSpec("backward_reset_count", 50, "this many consecutive backward stamps mean the source restarted: "
-              "the identification restarts on the new time base", "messages", 2, 100000),
+    ParamSpec("backward_reset_count", 10, "this many consecutive stamps behind the last accepted one, following "
+              "one another at about the stream's rate, are a restarted source: a new time line (what was "
+              "identified is kept)", "messages", 2, 100000),
     ParamSpec("stale_timeout", 2.0, "no message for this long (steady clock) makes an input STALE", "s",
               0.1, 3600.0),
     ParamSpec("expected_imu_rate", 0.0, "IMU rate expected [Hz]; a received rate below 80 % of it is a "
