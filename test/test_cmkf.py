@@ -644,3 +644,12 @@ def test_the_robot_filter_drops_odometry_fed_behind_its_state():
     after = f.estimate()
     assert after.counters["odom_dropped_late"] == 1 and after.counters["updates"] == before.counters["updates"]
     np.testing.assert_array_equal(after.accel_bias, before.accel_bias)
+
+
+def test_simulated_stamps_are_whole_nanoseconds_and_meet_where_the_rates_divide():
+    """As in a bag (integer nanoseconds), an odometry stamp at an IMU stamp is that stamp: 18 % of them were one
+    float ulp off, so the odometry update came before the IMU sample that ends its interval, one sample was held
+    over two periods and S_v and S_g came out 4–10 % high."""
+    run = simulate_robot(30.0, np.random.default_rng(0), odom_rate=20.0)
+    assert set(run.odom_t.tolist()) <= set(run.imu_t.tolist())
+    np.testing.assert_array_equal(np.round(run.imu_t * 1e9) / 1e9, run.imu_t)

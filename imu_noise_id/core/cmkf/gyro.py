@@ -10,9 +10,12 @@ Model per IMU axis (beyond the paper, which leaves the gyro to future work; same
 The bias is the only state (the angle itself is measured by the odometry every interval), so the filter is a
 scalar Kalman filter per axis with an exponentially correlated bias (Joseph form, eq. 27). The covariance matching
 step mirrors eqs. (28)–(35): eliminating the state between two epochs, ``d_k = y_k/T_k − φ_k y_{k−1}/T_{k−1} =
-w + e_k − φ_k e_{k−1}`` has ``E[d_k²] = q_k + S_g (1/T_k + φ_k²/T_{k−1}) + R_k/T_k² + φ_k² R_{k−1}/T_{k−1}²``, and
-the recursive least-squares solution for S_g is ``Σ (d² − q − R-terms) D_k / Σ D_k²`` with ``D_k = 1/T_k +
-φ_k²/T_{k−1}``; non-positive estimates fall back to the last positive one.
+w + e_k − φ_k e_{k−1}`` has ``E[d_k²] = q_k + S_g (1/T_k + φ_k²/T_{k−1}) + R_k/T_k² + φ_k² R_{k−1}/T_{k−1}²
+− 2φ_k c_k``, where ``c_k = Cov(e_k/T_k, e_{k−1}/T_{k−1})`` is not zero when the two intervals' odometry rotations
+share a measurement (the trapezoid of twist rates shares ``ω_{k−1}``: ``c_k = ¼ Var ω_{k−1}``), and the recursive
+least-squares solution for S_g is ``Σ (d² − q − R-terms + 2φc) D_k / Σ D_k²`` with ``D_k = 1/T_k +
+φ_k²/T_{k−1}`` (its standard error: :mod:`.matching`); non-positive estimates fall back to the last positive one
+as the filter's working value.
 """
 
 from __future__ import annotations
@@ -123,8 +126,9 @@ class GyroBiasFilter:
             self.var[i] = phi * phi * self.var[i] + q
         self._prev = None
 
-    def update(self, z: list[float], R: list[float]) -> float:
-        """The interval's measurement: ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) variance of Δθ_odo [rad²].
+    def update(self, z: list[float], R: list[float], shared: list[float] | None = None) -> float:
+        """The interval's measurement: ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) variance of Δθ_odo [rad²],
+        ``shared`` (3) covariance of Δθ_odo/T with the previous interval's [rad²/s²] (a twist rate both use).
 
         Returns the normalised innovation squared summed over the axes (3 dof).
         """
@@ -149,7 +153,8 @@ class GyroBiasFilter:
             products = []
             for i in range(3):
                 d = meas[i] - phi * meas1[i]
-                products.append((d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1)) * D)
+                cross = 2.0 * phi * shared[i] if shared is not None else 0.0  # E[e_k e_{k-1}] enters with −2φ
+                products.append((d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1) + cross) * D)
             self.matching.add(products, D * D)
             if self.count >= self.min_samples:
                 for i, s_new in enumerate(self.matching.values()):

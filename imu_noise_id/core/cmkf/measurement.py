@@ -139,9 +139,15 @@ class TwistMeasurement:
 
     def rotation_increment(self, vals: dict[str, list[float] | None], q_nb: rot.Quat | None,
                            twist_cov: np.ndarray | None, T: float, new_chain: bool
-                           ) -> tuple[list[float], list[float]] | None:
-        """The odometry's rotation over the interval of length ``T`` in IMU axes [rad] and its variance [rad²];
-        None when it cannot be formed (first twist rate after a gap, no angular velocity nor orientation)."""
+                           ) -> tuple[list[float], list[float], list[float]] | None:
+        """The odometry's rotation over the interval of length ``T`` in IMU axes [rad], its variance [rad²] and the
+        covariance of its mean rate (increment / T) with the previous interval's [rad²/s²]; None when it cannot be
+        formed (first twist rate after a gap, no angular velocity nor orientation).
+
+        The trapezoid ``½(ω_{k−1} + ω_k) T`` shares the rate ``ω_{k−1}`` with the previous interval's, so the two
+        mean rates' errors have covariance ``¼ Var(ω_{k−1})`` (the gyro filter's covariance matching needs it:
+        without it S_g is biased low by ``½ Var(ω)/D``, negative for noisy odometry). Increments from orientation
+        differences are taken as independent (their noise model is the angular-velocity σ times T)."""
         cfg = self.config
         if vals["angular_velocity"] is not None:
             w_now = _rotate(self._C_ib_rows, vals["angular_velocity"])
@@ -155,11 +161,12 @@ class TwistMeasurement:
                 return None  # the trapezoid needs the rate at both ends of the interval
             # trapezoid: the twist is the rate at the stamp
             return ([0.5 * (a + b) * T for a, b in zip(prev[0], w_now, strict=True)],
-                    [0.25 * (a + b) * T * T for a, b in zip(prev[1], rw, strict=True)])
+                    [0.25 * (a + b) * T * T for a, b in zip(prev[1], rw, strict=True)],
+                    [0.25 * a for a in prev[1]])
         if q_nb is not None and self._q_nb_prev is not None:
             dq = rot.multiply(rot.conjugate(self._q_nb_prev), q_nb)
             std = cfg.angular_velocity_noise_std or cfg.default_angular_velocity_noise_std
-            return _rotate(self._C_ib_rows, rot.to_rotvec(dq).tolist()), [(std * T) ** 2] * 3
+            return _rotate(self._C_ib_rows, rot.to_rotvec(dq).tolist()), [(std * T) ** 2] * 3, [0.0] * 3
         return None
 
     def reset_chain(self) -> None:

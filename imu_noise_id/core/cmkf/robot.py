@@ -340,7 +340,7 @@ class RobotCmkf:
         increment = self.odometry.rotation_increment(vals, q_nb, twist_cov, T, new_chain)
         if increment is None:
             return False
-        dtheta_odo, R = increment
+        dtheta_odo, R, shared = increment
         gyro = self.gyro
         gyro.predict(T)
         z = [a - b for a, b in zip(self.imu.dtheta, dtheta_odo, strict=True)]
@@ -353,7 +353,7 @@ class RobotCmkf:
             gyro.coast()
             return False
         self.agreement[1].add([a - b * T for a, b in zip(self.imu.dtheta, gyro.bias, strict=True)], dtheta_odo, R)
-        self._nis_gyro = gyro.update(z, R)
+        self._nis_gyro = gyro.update(z, R, shared)
         self.nis_windows[1].add(self._nis_gyro, gated=False)
         return True
 
