@@ -233,7 +233,7 @@ def to_yaml_dict(result: CmkfReplayResult, notes: list[str] | None = None) -> di
     """The ``cmkf.yaml`` schema of ``architecture.md`` (per IMU axis x, y, z; SI units) plus what the filter knew.
 
     Biases are null when no odometry update happened (the prior is not an estimate); noise densities are null
-    where not identified, with the 95 % upper bound where the data bound them.
+    where not identified, with the upper end of their 95 % interval where the data bound them.
     """
     e = result.final
     estimated = e.status not in ("no_data", "no_imu", "imu_only")
@@ -258,9 +258,9 @@ def to_yaml_dict(result: CmkfReplayResult, notes: list[str] | None = None) -> di
             "gyro_bias": "rad/s", "S_g": "rad^2/s", "gyro_noise_density": "rad/s/sqrt(Hz)",
             "conventions": "S_* least squares of paper 004 eq. 35 (may be <= 0) with a block-sandwich standard "
                            "error (*_se, Student t with *_dof degrees of freedom); *_noise_density = sqrt(S) where "
-                           "the 95 % interval excludes 0 (verdict identified), else null with the one-sided 95 % "
-                           "upper bound; *_in_filter: the working value the filter used (prior or last positive "
-                           "least-squares value), not an estimate",
+                           "the 95 % interval excludes 0 (verdict identified), else null with the upper end of "
+                           "the 95 % interval as *_upper_bound; *_in_filter: the working value the filter used "
+                           "(prior or last positive least-squares value), not an estimate",
         },
         "n_stacked": e.n_stacked,
         "nis": {"accel": consistency["accel"], "gyro": consistency["gyro"],

@@ -1,14 +1,13 @@
 """What the covariance matching says about a noise PSD (S_v or S_g): an estimate with its interval, or a bound.
 
 The least-squares value Ŝ (:mod:`.matching`) estimates the PSD with a standard error ``se`` on ``dof`` degrees of
-freedom. Per axis, with t = Student's t quantile (0.975 two-sided, 0.95 one-sided):
+freedom. Per axis, with t = Student's t 0.975 quantile, the 95 % interval is ``Ŝ ± t·se`` (lower end clipped at 0):
 
-- **identified**: the 95 % interval ``Ŝ ± t·se`` lies above 0; the noise density is √Ŝ with the interval's square
-  roots;
+- **identified**: the interval lies above 0; the noise density is √Ŝ with the interval's square roots;
 - **not identifiable from this data**: the interval contains 0 — the PSD's contribution to the stacked
-  measurements is below what the odometry noise (and everything else not modelled) puts there; only the
-  one-sided 95 % upper bound ``max(Ŝ, 0) + t·se`` is known;
-- **negative**: even the upper bound is ≤ 0 — the model's noise terms are too large for the data (the odometry
+  measurements is below what the odometry noise (and everything else not modelled) puts there; only the upper end
+  of the interval, ``Ŝ + t·se``, is known (a bound: the interval [0, Ŝ + t·se]);
+- **negative**: even the upper end is ≤ 0 — the model's noise terms are too large for the data (the odometry
   covariance declared or assumed is too large, or the odometry is smoothed): nothing about the PSD;
 - **unknown**: fewer than two blocks of epochs (no standard error yet).
 
@@ -35,7 +34,7 @@ class PsdEstimate:
     ----------
     value, se : (3,) least-squares Ŝ (may be ≤ 0) and its standard error; dof : degrees of freedom of ``se``.
     ci95 : (3, 2) two-sided 95 % interval of the PSD (lower end clipped at 0; NaN when unknown).
-    upper95 : (3,) one-sided 95 % upper bound of the PSD (NaN when unknown).
+    upper95 : (3,) its upper end: the bound where the PSD is not identifiable (NaN when unknown).
     verdict : per axis one of :data:`VERDICTS`.
     """
 
@@ -60,7 +59,7 @@ class PsdEstimate:
         return np.where(self.identified[:, None], np.sqrt(np.maximum(self.ci95, 0.0)), np.nan)
 
     def density_upper95(self) -> np.ndarray:
-        """(3,) one-sided 95 % upper bound of the density where not identifiable, NaN elsewhere."""
+        """(3,) upper end of the density's 95 % interval where the PSD is not identifiable, NaN elsewhere."""
         ok = np.array([v == "not_identifiable" for v in self.verdict])
         return np.where(ok, np.sqrt(np.maximum(self.upper95, 0.0)), np.nan)
 
@@ -74,7 +73,7 @@ class PsdEstimate:
                 out.append(f"{axis}: {n[i]:.3g} {unit} (95 % CI {lo_hi[i, 0]:.3g} … {lo_hi[i, 1]:.3g})")
             elif verdict == "not_identifiable":
                 out.append(f"{axis}: not identifiable from this data (the noise is below what the odometry noise "
-                           f"contributes); upper bound {up[i]:.3g} {unit} (95 %)")
+                           f"contributes): below {up[i]:.3g} {unit} (95 % interval)")
             elif verdict == "negative":
                 out.append(f"{axis}: not identifiable: the least squares is negative beyond its uncertainty "
                            f"({self.value[i]:.3g} ± {self.se[i]:.2g}): the odometry noise assumed is too large for "
@@ -86,7 +85,7 @@ class PsdEstimate:
 
 def psd_estimate(value: np.ndarray, se: np.ndarray, dof: int) -> PsdEstimate:
     """Per-axis verdicts and intervals from the least-squares values, their standard errors and ``dof``."""
-    t2, t1 = _t_quantiles(int(dof))
+    t2 = _t_quantile(int(dof))
     verdict, ci, upper = [], [], []
     for v, e in zip(np.asarray(value, dtype=float).tolist(), np.asarray(se, dtype=float).tolist(), strict=True):
         if not (math.isfinite(v) and math.isfinite(e) and dof >= 1):
@@ -94,17 +93,15 @@ def psd_estimate(value: np.ndarray, se: np.ndarray, dof: int) -> PsdEstimate:
             ci.append((math.nan, math.nan))
             upper.append(math.nan)
             continue
-        lo = v - t2 * e
-        verdict.append("identified" if lo > 0.0 else "negative" if v + t1 * e <= 0.0 else "not_identifiable")
-        ci.append((max(lo, 0.0), v + t2 * e))
-        upper.append(max(v, 0.0) + t1 * e)
+        lo, hi = v - t2 * e, v + t2 * e
+        verdict.append("identified" if lo > 0.0 else "negative" if hi <= 0.0 else "not_identifiable")
+        ci.append((max(lo, 0.0), hi))
+        upper.append(hi)
     return PsdEstimate(np.asarray(value, dtype=float), np.asarray(se, dtype=float), int(dof), np.array(ci),
                        np.array(upper), tuple(verdict))
 
 
 @lru_cache(maxsize=4096)
-def _t_quantiles(dof: int) -> tuple[float, float]:
-    """Student's t quantiles 0.975 and 0.95 for ``dof`` degrees of freedom (NaN below 1)."""
-    if dof < 1:
-        return math.nan, math.nan
-    return float(student_t.ppf(0.975, dof)), float(student_t.ppf(0.95, dof))
+def _t_quantile(dof: int) -> float:
+    """Student's t 0.975 quantile for ``dof`` degrees of freedom (NaN below 1)."""
+    return float(student_t.ppf(0.975, dof)) if dof >= 1 else math.nan

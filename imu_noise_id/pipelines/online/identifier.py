@@ -143,7 +143,8 @@ class OnlineIdentifier:
     def _imu_sample(self, verdict: str, t: float, sample: np.ndarray,
                     orientation_xyzw: tuple[float, float, float, float] | None, source: Any) -> CorrectedImu:
         """One accepted IMU sample through the CMKF, the stationarity and the noise identification."""
-        saturated = self.saturation.check(sample)
+        gyro, accel = sample[:3].tolist(), sample[3:].tolist()
+        saturated = self.saturation.check(gyro + accel)
         if saturated:
             self._saturated(t, sample, saturated)
         if verdict == "restart":
@@ -158,7 +159,6 @@ class OnlineIdentifier:
         self.last_imu_t = t
         if self.config.cmkf_gravity_source != "imu":
             orientation_xyzw = None
-        gyro, accel = sample[:3].tolist(), sample[3:].tolist()
         if self.cmkf_feed.imu(t, gyro, accel, orientation_xyzw):
             self._variance_cache = None
         ended, released = self.stationarity.update(t, sample, self.cmkf_feed.gyro_bias)
@@ -292,7 +292,8 @@ class OnlineIdentifier:
             noise_samples=self.noise.n,
             psd=np.where(identified, values, math.nan) if known else nan6.copy(),
             psd_se=np.concatenate([est.gyro_psd.se, est.accel_psd.se]) if known else nan6.copy(),
-            psd_upper=np.concatenate([est.gyro_psd.upper95, est.accel_psd.upper95]) if known else nan6.copy(),
+            psd_upper=np.concatenate([est.gyro_psd.density_upper95(), est.accel_psd.density_upper95()]) ** 2
+            if known else nan6.copy(),
             covariance=covariance if covariance is not None else np.full(6, math.nan),
             covariance_source=source,
             imu_rate=self.imu.stamps.rate,

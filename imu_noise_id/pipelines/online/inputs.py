@@ -9,10 +9,9 @@ further; a message after a jump in its stamps is held until the next one says wh
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
-
-import numpy as np
 
 from ...core.axes import AXES
 from .config import OnlineConfig
@@ -139,21 +138,26 @@ class SaturationCheck:
 
     def __init__(self, config: OnlineConfig) -> None:
         self.configure(config)
-        self._extreme = np.zeros(6)
-        self._hits = np.zeros(6, dtype=int)
+        self._extreme = [0.0] * 6
+        self._hits = [0] * 6
 
     def configure(self, config: OnlineConfig) -> None:
         """Apply changed parameters."""
-        self._range = np.repeat([config.imu_range_gyro, config.imu_range_accel], 3)
-        self._floor = np.repeat(self.FLOOR, 3)
+        self._range = [config.imu_range_gyro] * 3 + [config.imu_range_accel] * 3
+        self._floor = [self.FLOOR[0]] * 3 + [self.FLOOR[1]] * 3
 
-    def check(self, sample: np.ndarray) -> list[str]:
-        """The axes (names of :data:`~imu_noise_id.core.axes.AXES`) on which this sample is saturated."""
-        a = np.abs(sample)
-        higher = a > self._extreme
-        self._extreme = np.where(higher, a, self._extreme)
-        self._hits = np.where(higher, 1, self._hits + (a == self._extreme))
-        declared = self._range > 0
-        flagged = np.where(declared, a >= self.MARGIN * self._range,
-                           (a == self._extreme) & (self._hits >= 2) & (a >= self._floor))
-        return [AXES[i] for i in np.flatnonzero(flagged)]
+    def check(self, sample: Sequence[float]) -> list[str]:
+        """The axes (names of :data:`~imu_noise_id.core.axes.AXES`) on which this sample is saturated (plain
+        floats: this runs for every IMU message)."""
+        out = []
+        extreme, hits = self._extreme, self._hits
+        for i in range(6):
+            a = abs(sample[i])
+            if a > extreme[i]:
+                extreme[i], hits[i] = a, 1
+            elif a == extreme[i]:
+                hits[i] += 1
+            limit = self._range[i]
+            if (a >= self.MARGIN * limit) if limit > 0 else (a == extreme[i] and hits[i] >= 2 and a >= self._floor[i]):
+                out.append(AXES[i])
+        return out

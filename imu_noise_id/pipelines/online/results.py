@@ -37,7 +37,7 @@ class Estimates:
     noise_samples : number of stationary sample differences used
     psd : (6,) the CMKF's Ŝ_g per gyro axis [rad²/s] and Ŝ_v per accelerometer axis [m²/s³] where the data
         identify it (NaN elsewhere: never the filter's working value); psd_se : (6,) the least squares' standard
-        error; psd_upper : (6,) the one-sided 95 % upper bound of the PSD where it is not identifiable
+        error; psd_upper : (6,) where the PSD is not identifiable, the upper end of its 95 % interval (NaN elsewhere)
     covariance : (6,) the variance N²·f [u²] written into ``~/imu_corrected`` (NaN while unknown)
     covariance_source : ``stationary`` (Allan τ₀ density), ``cmkf`` (√Ŝ) or ``none``
     imu_rate : nominal IMU rate from the header stamps [Hz]
