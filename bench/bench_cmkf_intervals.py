@@ -10,7 +10,8 @@ sensor, over seeds × 3 axes:
 - the mean of the least-squares Ŝ / truth and its standard error (is the estimator biased?), and the mean of the
   value the filter *used* (the last positive least-squares value, the old reported figure);
 - the share of the two-sided 95 % intervals Ŝ ± t·se that cover the truth (target 95 %), of the axes
-  ``identified`` (interval above 0) and, among the others, of the upper ends of the 95 % intervals (the bound reported) above the truth.
+  ``identified`` (interval above 0) and, among the others, of the bounds reported (the intervals' upper ends)
+  above the truth.
 """
 
 from __future__ import annotations

@@ -91,4 +91,5 @@ def likely_cause(nis_ratio: float, checks: Sequence[AxisAgreement]) -> str:
                 "in sign and scale: the odometry covariance declared (or --velocity-noise-std) is likely too small, "
                 "or the odometry has slip or vibration the model does not know")
     return (f"the innovations are {nis_ratio:.3g}× smaller than the filter predicts: the odometry covariance declared "
-            "(or --velocity-noise-std) is likely too large")
+            "(or --velocity-noise-std) is likely too large, or the filter runs on the upper ends of S_v / S_g "
+            "intervals the data cannot narrow (see the noise verdicts)")

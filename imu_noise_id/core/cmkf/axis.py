@@ -30,7 +30,7 @@ from .matching import MatchingLeastSquares
 from .stacked import StackedSvEstimator
 
 MODES = ("pos_vel", "vel")
-PD_CHECKS = ("joint", "per_axis")
+PD_CHECKS = ("joint", "per_axis", "se_floor")
 
 
 class AxisCmkf:
@@ -41,7 +41,8 @@ class AxisCmkf:
     n_axes : number of independent axes.
     s_v0 : initial Ŝ_v per axis (scalar or (n,)) [m²/s³].
     mode : ``"pos_vel"`` or ``"vel"`` (see module docstring).
-    pd_check : ``"joint"`` (paper) or ``"per_axis"``.
+    pd_check : ``"joint"`` (paper), ``"per_axis"`` (last positive value per axis) or ``"se_floor"`` (the robot's
+        default, :meth:`~.matching.MatchingLeastSquares.working`).
     min_samples : stacked samples needed before the estimate replaces the initial Ŝ_v.
     pd_group : with ``pd_check="joint"``, the check is joint over consecutive groups of this many axes (e.g. 2 for
         the x and y axes of each Monte-Carlo run); default all axes.
@@ -186,6 +187,11 @@ class AxisCmkf:
     def _accept(self, s_new: np.ndarray) -> None:
         """Positive-definiteness check with fallback to the last positive-definite estimate (after eq. 35)."""
         if self.estimator.count < self.min_samples:
+            return
+        if self.pd_check == "se_floor":
+            used, kept = self.estimator.matching.working(self.S_used.tolist())
+            self.S_used = np.array(used)
+            self.rejected += int(kept > 0)
             return
         ok = np.isfinite(s_new) & (s_new > 0)
         if self.pd_check == "joint":

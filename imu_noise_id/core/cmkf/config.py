@@ -15,7 +15,7 @@ from . import rotation as rot
 
 MEASUREMENTS = ("twist", "pose_twist")
 GRAVITY_SOURCES = ("odometry", "imu")
-PD_CHECKS = ("per_axis", "joint")
+PD_CHECKS = ("se_floor", "per_axis", "joint")
 
 
 @dataclass
@@ -42,7 +42,11 @@ class CmkfConfig:
         long behind the newest IMU stamp, so odometry up to this much later than the IMU samples (header time) is
         still processed in stamp order [s] (the node's ``cmkf.input_latency``, whose default is 0.1 s).
     min_odom_interval : odometry closer than this to the last update is dropped (degenerate interval) [s].
-    pd_check : ``"per_axis"`` or ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used.
+    pd_check : the Ŝ_v and Ŝ_g the filters run with: ``"se_floor"`` (``max(Ŝ, se)``, the least-squares value
+        where it stands out of its standard error, else that error, unless the data contradict the noise model:
+        the filter stays consistent when the data cannot identify the PSD; beyond the paper, see
+        :meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` (the last positive value per axis) or
+        ``"joint"`` (paper: all axes at once); min_samples : stacked samples before Ŝ_v is used.
     nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean`` (and the node's ``nis.window``).
     nis_gate_probability : innovation gate of both filters (beyond the paper): an odometry update whose NIS exceeds
         the ``1 − p`` quantile of χ²(dof) is rejected as an outlier (a bump, a saturated or corrupted sample) —
@@ -71,7 +75,7 @@ class CmkfConfig:
     max_imu_gap: float = 0.5
     late_odom_tolerance: float = 0.05
     min_odom_interval: float = 1e-4
-    pd_check: str = "per_axis"
+    pd_check: str = "se_floor"
     min_samples: int = 10
     nis_window: int = 50
     nis_gate_probability: float = 1e-6

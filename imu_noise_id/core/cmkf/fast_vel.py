@@ -52,7 +52,8 @@ class VelocityAxisCmkf:
 
     Parameters
     ----------
-    n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³]; pd_check : ``"per_axis"`` or ``"joint"``;
+    n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³]; pd_check : the Ŝ_v used, ``"se_floor"``
+    (:meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` or ``"joint"`` (the last positive value);
     min_samples : stacked samples before the estimate replaces ``s_v0``.
     """
 
@@ -248,8 +249,13 @@ class VelocityAxisCmkf:
         return True
 
     def _accept(self) -> None:
-        """Positive-definiteness check with fallback to the last positive estimate."""
+        """The Ŝ_v used: the least squares floored at its standard error (``se_floor``), or the positive-definiteness
+        check with fallback to the last positive estimate (paper)."""
         if self.count < self.min_samples or self.matching.den <= 0.0:
+            return
+        if self.pd_check == "se_floor":
+            self._S, kept = self.matching.working(self._S)
+            self.rejected += int(kept > 0)
             return
         new = self.matching.values()
         ok = [math.isfinite(x) and x > 0 for x in new]

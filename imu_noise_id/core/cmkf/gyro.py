@@ -38,16 +38,19 @@ class GyroBiasFilter:
     Parameters
     ----------
     tau : bias time constant [s]; sigma : steady-state bias σ [rad/s]; s_g0 : initial S_g [rad²/s];
-    min_samples : stacked samples before the S_g estimate replaces ``s_g0``.
+    min_samples : stacked samples before the S_g estimate replaces ``s_g0``; pd_check : ``"se_floor"``
+    (:meth:`~.matching.MatchingLeastSquares.working`) or anything else for the last positive value.
     """
 
-    def __init__(self, tau: float, sigma: float, s_g0: float, min_samples: int = 10) -> None:
+    def __init__(self, tau: float, sigma: float, s_g0: float, min_samples: int = 10, pd_check: str = "se_floor"
+                 ) -> None:
         self.tau = float(tau)
         self.sigma = float(sigma)
         self.bias = [0.0, 0.0, 0.0]
         self.var = [self.sigma**2] * 3
         self._S = [float(s_g0)] * 3
         self.min_samples = int(min_samples)
+        self.pd_check = pd_check
         self.matching = MatchingLeastSquares(3)
         self._nu = [math.nan] * 3
         self._s = [math.nan] * 3
@@ -157,8 +160,11 @@ class GyroBiasFilter:
                 products.append((d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1) + cross) * D)
             self.matching.add(products, D * D)
             if self.count >= self.min_samples:
-                for i, s_new in enumerate(self.matching.values()):
-                    if s_new > 0:
-                        self._S[i] = s_new
+                if self.pd_check == "se_floor":
+                    self._S = self.matching.working(self._S)[0]
+                else:
+                    for i, s_new in enumerate(self.matching.values()):
+                        if s_new > 0:
+                            self._S[i] = s_new
         self._prev = (meas, T, list(R))
         return nis

@@ -22,8 +22,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from functools import lru_cache
 
 import numpy as np
+from scipy.stats import t as student_t
 
 #: Epochs per block of the sandwich variance (the products are dependent over two epochs at most).
 BLOCK = 32
@@ -108,3 +110,31 @@ class MatchingLeastSquares:
         for s, qq, qw in zip(self.values(), self._qq, self._qw, strict=True):
             out.append(math.sqrt(max(qq - 2.0 * s * qw + s * s * self._ww, 0.0) * scale))
         return np.array(out)
+
+    def working(self, current: Sequence[float]) -> tuple[list[float], int]:
+        """The PSD a filter should run with per axis (beyond paper 004, whose filter keeps the last positive
+        estimate), and the number of axes that kept ``current``.
+
+        ``max(Ŝ, se)`` while the 95 % interval ``Ŝ ± t·se`` reaches above 0: the least-squares value where it
+        stands out of its own uncertainty, else its standard error — the size of what the data cannot rule out. A
+        filter run on a value near 0 that a noisy least squares happened to pass through is overconfident (its NIS
+        far above its degrees of freedom, its biases' σ too small); one run on the upper end of a wide interval is
+        needlessly timid. Where even the interval's upper end is ≤ 0 the data contradict the noise model (the
+        odometry covariance assumed too large, smoothed or slowly varying odometry errors): ``current`` is kept, so
+        the inconsistency shows in the NIS instead of being absorbed. Before two blocks (no standard error) the
+        last positive value, as in the paper.
+        """
+        values = self.values()
+        if self.blocks < 2:
+            out = [v if math.isfinite(v) and v > 0 else c for v, c in zip(values, current, strict=True)]
+        else:
+            t = t_quantile(self.dof)
+            out = [max(v, e) if v + t * e > 0 else c
+                   for v, e, c in zip(values, self.standard_error.tolist(), current, strict=True)]
+        return out, sum(o is c for o, c in zip(out, current, strict=True))
+
+
+@lru_cache(maxsize=4096)
+def t_quantile(dof: int) -> float:
+    """Student's t 0.975 quantile for ``dof`` degrees of freedom (NaN below 1)."""
+    return float(student_t.ppf(0.975, dof)) if dof >= 1 else math.nan

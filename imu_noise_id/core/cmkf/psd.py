@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
-from scipy.stats import t as student_t
+
+from .matching import t_quantile
 
 VERDICTS = ("identified", "not_identifiable", "negative", "unknown")
 
@@ -85,7 +85,7 @@ class PsdEstimate:
 
 def psd_estimate(value: np.ndarray, se: np.ndarray, dof: int) -> PsdEstimate:
     """Per-axis verdicts and intervals from the least-squares values, their standard errors and ``dof``."""
-    t2 = _t_quantile(int(dof))
+    t2 = t_quantile(int(dof))
     verdict, ci, upper = [], [], []
     for v, e in zip(np.asarray(value, dtype=float).tolist(), np.asarray(se, dtype=float).tolist(), strict=True):
         if not (math.isfinite(v) and math.isfinite(e) and dof >= 1):
@@ -99,9 +99,3 @@ def psd_estimate(value: np.ndarray, se: np.ndarray, dof: int) -> PsdEstimate:
         upper.append(hi)
     return PsdEstimate(np.asarray(value, dtype=float), np.asarray(se, dtype=float), int(dof), np.array(ci),
                        np.array(upper), tuple(verdict))
-
-
-@lru_cache(maxsize=4096)
-def _t_quantile(dof: int) -> float:
-    """Student's t 0.975 quantile for ``dof`` degrees of freedom (NaN below 1)."""
-    return float(student_t.ppf(0.975, dof)) if dof >= 1 else math.nan

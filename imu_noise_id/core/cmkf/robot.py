@@ -94,7 +94,8 @@ class RobotCmkf:
         if self.filter.n != 3 or self.filter.m != self.odometry.m:
             raise ValueError(f"the accelerometer filter must have 3 axes and {self.odometry.m} measurement "
                              f"component(s) per axis for measurement {config.measurement!r}")
-        self.gyro = GyroBiasFilter(config.gyro_bias_tau, config.gyro_bias_sigma, config.s_g0, config.min_samples)
+        self.gyro = GyroBiasFilter(config.gyro_bias_tau, config.gyro_bias_sigma, config.s_g0, config.min_samples,
+                                   config.pd_check)
         self.imu = ImuPropagation(config.gravity, config.accel_bias_tau, config.accel_bias_sigma,
                                   track_position=self.odometry.m == 2)
         self.counters = dict.fromkeys(COUNTERS, 0)
