@@ -10,7 +10,7 @@ from scipy.stats import t as student_t
 
 from imu_noise_id.core.axes import ImuSeries, OdometrySeries
 from imu_noise_id.core.cmkf.config import CmkfConfig
-from imu_noise_id.core.cmkf.matching import MatchingLeastSquares
+from imu_noise_id.core.cmkf.matching import BLOCK, MatchingLeastSquares
 from imu_noise_id.core.cmkf.robot import RobotCmkf
 from imu_noise_id.core.cmkf.stream import feed_recording
 from imu_noise_id.core.simulation.robot import RobotSensors, simulate_robot
@@ -44,7 +44,7 @@ def test_the_block_sandwich_standard_error_matches_the_spread_of_the_estimate():
     for k in range(n):
         ls.add(q[k], w[k])
     est, se = ls.estimate, ls.standard_error
-    assert ls.dof == n // 32 - 1
+    assert ls.dof == n // BLOCK - 1
     assert np.mean(se) / np.std(est, ddof=1) == pytest.approx(1.0, abs=0.12)
     t = student_t.ppf(0.975, ls.dof)
     assert 0.92 <= np.mean(np.abs(est - truth) <= t * se) <= 0.98

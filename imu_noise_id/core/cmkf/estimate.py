@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
 from .agreement import AxisAgreement, likely_cause
 from .gate import NisWindow
-from .psd import PsdEstimate
+from .psd import PsdEstimate, psd_estimate
 
 #: Consistency verdicts, least to most severe (``unknown``: too few updates).
 CONSISTENCY_ORDER = ("unknown", "consistent", "marginal", "inconsistent")
@@ -29,12 +30,13 @@ class CmkfEstimate:
         the biases are not to be trusted).
     observed : True when an odometry update happened within ``max_odom_gap`` and the IMU is alive.
     accel_bias, accel_bias_std : [m/s²] per IMU axis (the prior 0 ± σ_ss before the first update).
-    S_v : Ŝ_v the filter uses [m²/s³] — the initial value or the last positive least-squares value: a working
-        value, not an estimate to report; S_v_ls : the least-squares value (may be ≤ 0).
-    accel_psd : the S_v estimate with its standard error, interval and per-axis verdict (:mod:`.psd`).
-    accel_noise_density : √S_v where identified, NaN elsewhere [m/s²/√Hz].
-    gyro_bias, gyro_bias_std : [rad/s]; S_g, S_g_ls, gyro_psd, gyro_noise_density : the same for the gyro
-        [rad²/s], [rad/s/√Hz].
+    S_v : Ŝ_v the filter uses [m²/s³] (:meth:`~.matching.MatchingLeastSquares.working`): a working value, not an
+        estimate to report; S_v_ls : the least-squares value (may be ≤ 0); accel_ls : (S_v_ls, its standard
+        error, degrees of freedom), from which :attr:`accel_psd` (the estimate with its interval and per-axis
+        verdict, :mod:`.psd`) and :attr:`accel_noise_density` (√S_v where identified, NaN elsewhere [m/s²/√Hz])
+        are computed when asked for.
+    gyro_bias, gyro_bias_std : [rad/s]; S_g, S_g_ls, gyro_ls, gyro_psd, gyro_noise_density : the same for the
+        gyro [rad²/s], [rad/s/√Hz].
     nis_accel, nis_accel_dof : NIS of the last accelerometer-filter update (sum over axes, also when gated) and
         its dof; nis_accel_mean : mean over the accepted updates among the last ``nis_window``; nis_gyro,
         nis_gyro_dof, nis_gyro_mean : the same for the gyro.
@@ -51,14 +53,12 @@ class CmkfEstimate:
     accel_bias_std: np.ndarray
     S_v: np.ndarray
     S_v_ls: np.ndarray
-    accel_psd: PsdEstimate
-    accel_noise_density: np.ndarray
+    accel_ls: tuple[np.ndarray, np.ndarray, int]
     gyro_bias: np.ndarray
     gyro_bias_std: np.ndarray
     S_g: np.ndarray
     S_g_ls: np.ndarray
-    gyro_psd: PsdEstimate
-    gyro_noise_density: np.ndarray
+    gyro_ls: tuple[np.ndarray, np.ndarray, int]
     nis_accel: float
     nis_accel_dof: int
     nis_accel_mean: float
@@ -70,6 +70,26 @@ class CmkfEstimate:
     consistency_reason: str
     n_stacked: int
     counters: dict[str, int] = field(default_factory=dict)
+
+    @cached_property
+    def accel_psd(self) -> PsdEstimate:
+        """S_v per axis with its interval and verdict."""
+        return psd_estimate(*self.accel_ls)
+
+    @cached_property
+    def gyro_psd(self) -> PsdEstimate:
+        """S_g per axis with its interval and verdict."""
+        return psd_estimate(*self.gyro_ls)
+
+    @property
+    def accel_noise_density(self) -> np.ndarray:
+        """√S_v where identified, NaN elsewhere [m/s²/√Hz]."""
+        return self.accel_psd.density()
+
+    @property
+    def gyro_noise_density(self) -> np.ndarray:
+        """√S_g where identified, NaN elsewhere [rad/s/√Hz]."""
+        return self.gyro_psd.density()
 
 
 def consistency(windows: Sequence[NisWindow], checks: Sequence[AxisAgreement]) -> tuple[str, str]:

@@ -28,7 +28,7 @@ import numpy as np
 from scipy.stats import t as student_t
 
 #: Epochs per block of the sandwich variance (the products are dependent over two epochs at most).
-BLOCK = 32
+BLOCK = 64
 
 
 class MatchingLeastSquares:
@@ -58,6 +58,7 @@ class MatchingLeastSquares:
         self._qw = [0.0] * self.n
         self._wc = 0.0
         self._ww = 0.0
+        self._working_se: tuple[int, list[float]] = (-1, [])
 
     def add(self, q: Sequence[float], w: float) -> None:
         """One epoch: its products ``q`` (n) and weight ``w``."""
@@ -128,9 +129,11 @@ class MatchingLeastSquares:
         if self.blocks < 2:
             out = [v if math.isfinite(v) and v > 0 else c for v, c in zip(values, current, strict=True)]
         else:
+            if self._working_se[0] != self.blocks:  # refreshed once per block: it changes slowly
+                self._working_se = (self.blocks, self.standard_error.tolist())
             t = t_quantile(self.dof)
             out = [max(v, e) if v + t * e > 0 else c
-                   for v, e, c in zip(values, self.standard_error.tolist(), current, strict=True)]
+                   for v, e, c in zip(values, self._working_se[1], current, strict=True)]
         return out, sum(o is c for o, c in zip(out, current, strict=True))
 
 

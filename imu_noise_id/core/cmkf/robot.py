@@ -51,7 +51,6 @@ from .gyro import GyroBiasFilter
 from .interval import ImuPropagation
 from .measurement import PoseTwistMeasurement, TwistMeasurement
 from .protocol import CmkfFilter
-from .psd import psd_estimate
 
 COUNTERS = ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "odom_dropped_stamp",
             "odom_dropped_nan", "odom_dropped_missing", "odom_dropped_late", "odom_dropped_interval", "odom_late",
@@ -403,8 +402,7 @@ class RobotCmkf:
             bias = np.zeros(3)
             bias_std = np.full(3, cfg.accel_bias_sigma)
             g_var = np.full(3, cfg.gyro_bias_sigma**2)
-        accel_psd = psd_estimate(f.S_ls, f.matching.standard_error, f.matching.dof)
-        gyro_psd = psd_estimate(gyro.S_ls, gyro.matching.standard_error, gyro.matching.dof)
+        S_v_ls, S_g_ls = f.S_ls, gyro.S_ls
         windows = self.nis_windows
         return CmkfEstimate(
             t=float(t) if math.isfinite(t) else math.nan,
@@ -413,15 +411,13 @@ class RobotCmkf:
             accel_bias=bias,
             accel_bias_std=bias_std,
             S_v=f.S_used.copy(),
-            S_v_ls=f.S_ls,
-            accel_psd=accel_psd,
-            accel_noise_density=accel_psd.density(),
+            S_v_ls=S_v_ls,
+            accel_ls=(S_v_ls, f.matching.standard_error, f.matching.dof),
             gyro_bias=gyro.x,
             gyro_bias_std=np.sqrt(g_var),
             S_g=gyro.S_used,
-            S_g_ls=gyro.S_ls,
-            gyro_psd=gyro_psd,
-            gyro_noise_density=gyro_psd.density(),
+            S_g_ls=S_g_ls,
+            gyro_ls=(S_g_ls, gyro.matching.standard_error, gyro.matching.dof),
             nis_accel=self._nis_accel,
             nis_accel_dof=3 * f.m,
             nis_accel_mean=windows[0].mean,
