@@ -95,6 +95,8 @@ class Input:
         if verdict == "hold":
             self._held = (t, payload)
             return out
+        if verdict == "restart":
+            self._held = None  # a message held on the old time line is forgotten with it
         if verdict != "ok":
             self._report(verdict, t)
         if verdict in ("ok", "relearn", "restart"):
