@@ -18,7 +18,7 @@ import numpy as np
 from ..core.axes import ImuSeries, OdometrySeries
 from ..core.cmkf.agreement import AxisAgreement, likely_cause
 from ..core.cmkf.config import CmkfConfig
-from ..core.cmkf.estimate import CONSISTENCY_ORDER
+from ..core.cmkf.estimate import worst_filter
 from ..core.cmkf.psd import PsdEstimate
 from ..core.cmkf.robot import CmkfEstimate, RobotCmkf
 from ..core.cmkf.stream import feed_recording
@@ -178,7 +178,8 @@ def consistency_summary(result: CmkfReplayResult) -> dict[str, object]:
     e = result.final
     accel = nis_summary(result.nis_accel, e.nis_accel_dof, result.gated_accel)
     gyro = nis_summary(result.nis_gyro, e.nis_gyro_dof, result.gated_gyro)
-    worst = max((accel, gyro), key=lambda s: CONSISTENCY_ORDER.index(s["verdict"]))
+    pair = (accel, gyro)
+    worst = pair[worst_filter([s["verdict"] for s in pair], [s["mean"] for s in pair], [s["dof"] for s in pair])]
     reason = ""
     if worst["verdict"] in ("marginal", "inconsistent"):
         reason = (f"accelerometer NIS mean {accel['mean']:.3g} for {accel['dof']} dof ({accel['gated']} updates "

@@ -73,6 +73,7 @@ class AxisCmkf:
         if self.n % self.pd_group:
             raise ValueError(f"pd_group={pd_group} does not divide n_axes={n_axes}")
         self.S_used = s_v0
+        self.s_v0 = s_v0.copy()
         if mode == "pos_vel":
             self.H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
             self.sub = slice(0, 3)
@@ -189,7 +190,7 @@ class AxisCmkf:
         if self.estimator.count < self.min_samples:
             return
         if self.pd_check == "se_floor":
-            used, kept = self.estimator.matching.working(self.S_used.tolist())
+            used, kept = self.estimator.matching.working(self.S_used.tolist(), self.s_v0.tolist())
             self.S_used = np.array(used)
             self.rejected += int(kept > 0)
             return

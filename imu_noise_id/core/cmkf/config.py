@@ -43,8 +43,8 @@ class CmkfConfig:
         still processed in stamp order [s] (the node's ``cmkf.input_latency``, whose default is 0.1 s).
     min_odom_interval : odometry closer than this to the last update is dropped (degenerate interval) [s].
     pd_check : the Ŝ_v and Ŝ_g the filters run with: ``"se_floor"`` (``max(Ŝ, se)``, the least-squares value
-        where it stands out of its standard error, else that error, unless the data contradict the noise model:
-        the filter stays consistent when the data cannot identify the PSD; beyond the paper, see
+        where it stands out of its standard error, else that error; ``s_v0`` / ``s_g0`` where the data contradict the
+        noise model: the filter stays consistent when the data cannot identify the PSD; beyond the paper, see
         :meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` (the last positive value per axis) or
         ``"joint"`` (paper: all axes at once); min_samples : stacked samples before Ŝ_v is used.
     nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean`` (and the node's ``nis.window``).

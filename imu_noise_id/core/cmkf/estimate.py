@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -92,10 +93,20 @@ class CmkfEstimate:
         return self.gyro_psd.density()
 
 
+def worst_filter(verdicts: Sequence[str], means: Sequence[float], dofs: Sequence[int]) -> int:
+    """The filter whose verdict is the most severe; among equals, the one whose mean NIS is furthest from its
+    degrees of freedom (by ratio): the one the likely cause is about."""
+    def severity(i: int) -> tuple[int, float]:
+        ratio = means[i] / dofs[i]
+        return (CONSISTENCY_ORDER.index(verdicts[i]),
+                abs(math.log(ratio)) if math.isfinite(ratio) and ratio > 0 else math.inf)
+    return max(range(len(verdicts)), key=severity)
+
+
 def consistency(windows: Sequence[NisWindow], checks: Sequence[AxisAgreement]) -> tuple[str, str]:
     """The worse verdict of the (accelerometer, gyro) NIS windows and, unless consistent, the reason."""
     verdicts = [w.verdict() for w in windows]
-    worst = max(range(len(windows)), key=lambda i: CONSISTENCY_ORDER.index(verdicts[i]))
+    worst = worst_filter(verdicts, [w.mean for w in windows], [w.dof for w in windows])
     verdict = verdicts[worst]
     if verdict not in ("marginal", "inconsistent"):
         return verdict, ""

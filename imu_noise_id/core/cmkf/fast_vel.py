@@ -66,6 +66,7 @@ class VelocityAxisCmkf:
         self.pd_check = pd_check
         self.min_samples = int(min_samples)
         self._S = [float(s_v0)] * self.n
+        self._prior = [float(s_v0)] * self.n
         self._r = [0.0] * self.n
         self._v = [0.0] * self.n
         self._b = [0.0] * self.n
@@ -254,7 +255,7 @@ class VelocityAxisCmkf:
         if self.count < self.min_samples or self.matching.den <= 0.0:
             return
         if self.pd_check == "se_floor":
-            self._S, kept = self.matching.working(self._S)
+            self._S, kept = self.matching.working(self._S, self._prior)
             self.rejected += int(kept > 0)
             return
         new = self.matching.values()

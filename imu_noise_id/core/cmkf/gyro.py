@@ -49,6 +49,7 @@ class GyroBiasFilter:
         self.bias = [0.0, 0.0, 0.0]
         self.var = [self.sigma**2] * 3
         self._S = [float(s_g0)] * 3
+        self._s_g0 = [float(s_g0)] * 3
         self.min_samples = int(min_samples)
         self.pd_check = pd_check
         self.matching = MatchingLeastSquares(3)
@@ -161,7 +162,7 @@ class GyroBiasFilter:
             self.matching.add(products, D * D)
             if self.count >= self.min_samples:
                 if self.pd_check == "se_floor":
-                    self._S = self.matching.working(self._S)[0]
+                    self._S = self.matching.working(self._S, self._s_g0)[0]
                 else:
                     for i, s_new in enumerate(self.matching.values()):
                         if s_new > 0:

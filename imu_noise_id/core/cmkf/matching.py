@@ -112,29 +112,29 @@ class MatchingLeastSquares:
             out.append(math.sqrt(max(qq - 2.0 * s * qw + s * s * self._ww, 0.0) * scale))
         return np.array(out)
 
-    def working(self, current: Sequence[float]) -> tuple[list[float], int]:
+    def working(self, current: Sequence[float], prior: Sequence[float]) -> tuple[list[float], int]:
         """The PSD a filter should run with per axis (beyond paper 004, whose filter keeps the last positive
-        estimate), and the number of axes that kept ``current``.
+        estimate), and the number of axes on which the data say nothing usable (``current`` or ``prior`` kept).
 
         ``max(Ŝ, se)`` while the 95 % interval ``Ŝ ± t·se`` reaches above 0: the least-squares value where it
         stands out of its own uncertainty, else its standard error — the size of what the data cannot rule out. A
         filter run on a value near 0 that a noisy least squares happened to pass through is overconfident (its NIS
         far above its degrees of freedom, its biases' σ too small); one run on the upper end of a wide interval is
         needlessly timid. Where even the interval's upper end is ≤ 0 the data contradict the noise model (the
-        odometry covariance assumed too large, smoothed or slowly varying odometry errors): ``current`` is kept, so
-        the inconsistency shows in the NIS instead of being absorbed. Before two blocks (no standard error) the
-        last positive value, as in the paper.
+        odometry covariance assumed too large, smoothed or slowly varying odometry errors): the configured
+        ``prior`` (per axis), so the inconsistency shows in the NIS instead of being absorbed and the value does
+        not depend on the path the least squares took. Before two blocks (no standard error) the last positive
+        value, as in the paper.
         """
         values = self.values()
         if self.blocks < 2:
             out = [v if math.isfinite(v) and v > 0 else c for v, c in zip(values, current, strict=True)]
-        else:
-            if self._working_se[0] != self.blocks:  # refreshed once per block: it changes slowly
-                self._working_se = (self.blocks, self.standard_error.tolist())
-            t = t_quantile(self.dof)
-            out = [max(v, e) if v + t * e > 0 else c
-                   for v, e, c in zip(values, self._working_se[1], current, strict=True)]
-        return out, sum(o is c for o, c in zip(out, current, strict=True))
+            return out, sum(not (math.isfinite(v) and v > 0) for v in values)
+        if self._working_se[0] != self.blocks:  # refreshed once per block: it changes slowly
+            self._working_se = (self.blocks, self.standard_error.tolist())
+        t = t_quantile(self.dof)
+        out = [max(v, e) if v + t * e > 0 else p for v, e, p in zip(values, self._working_se[1], prior, strict=True)]
+        return out, sum(v + t * e <= 0 for v, e in zip(values, self._working_se[1], strict=True))
 
 
 @lru_cache(maxsize=4096)
