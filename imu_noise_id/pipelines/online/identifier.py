@@ -150,9 +150,10 @@ class OnlineIdentifier:
         if verdict == "restart":
             self.restarts += 1
             self._new_time_line()
-        elif verdict == "gap":
-            self._end_stationary()
+        elif verdict == "gap":  # no difference across it; a short one (a driver's pause between bursts of host-
+            self.noise.break_chain()  # stamped messages) leaves the stationarity and the bank's stretch alone
             if t - self.last_imu_t > self.config.stationary_window:
+                self._end_stationary()
                 self.stationarity.interrupt()
         if self.imu.stats.accepted % 100 == 0:
             self._variance_cache = None
