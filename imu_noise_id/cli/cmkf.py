@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     import yaml
 
     from ..bag.reader import read_bag
-    from ..pipelines.cmkf_replay import SERIES_FIELDS, replay, to_yaml_dict
+    from ..pipelines.cmkf_replay import DENSITY_FIELDS, SERIES_FIELDS, replay, to_yaml_dict
 
     config = CmkfConfig(
         imu_rotation_xyzw=imu_rotation(args.imu_rotation),
@@ -146,9 +146,10 @@ def run(args: argparse.Namespace) -> int:
         notes.append("no stacked sample: S_v and S_g not estimated (odometry too short or not overlapping the IMU)")
     data = to_yaml_dict(result, notes)
     data["filter"]["bag"] = str(args.bag)
-    cols = (["t"] + [f"{name}_{a}" for name in SERIES_FIELDS for a in "xyz"]
+    names = [*SERIES_FIELDS, *DENSITY_FIELDS]
+    cols = (["t"] + [f"{name}_{a}" for name in names for a in "xyz"]
             + ["nis_accel", "nis_gyro", "gated_accel", "gated_gyro", "status"])
-    table = np.column_stack([result.t] + [result.series[name] for name in SERIES_FIELDS]
+    table = np.column_stack([result.t] + [result.series[name] for name in names]
                             + [result.nis_accel, result.nis_gyro, result.gated_accel, result.gated_gyro])
     folder = results_folder(args, str(args.bag), contents.imu.topic)
     with folder as staging:

@@ -19,7 +19,7 @@ from ..core.axes import ImuSeries, OdometrySeries
 from ..core.cmkf.agreement import AxisAgreement, likely_cause
 from ..core.cmkf.config import CmkfConfig
 from ..core.cmkf.estimate import worst_filter
-from ..core.cmkf.psd import PsdEstimate
+from ..core.cmkf.psd import PsdEstimate, density_series
 from ..core.cmkf.robot import CmkfEstimate, RobotCmkf
 from ..core.cmkf.stream import feed_recording
 from ..core.diagnostics.consistency import nis_bounds, nis_verdict
@@ -27,19 +27,17 @@ from ..core.errors import InputError
 from ..core.timing import sampling_period
 
 #: Per-axis values recorded over time: name → how to read it from a :class:`CmkfEstimate` (``S_v_in_filter``:
-#: the working value the filter uses; ``*_noise_density``: √S where identified; ``*_upper``: the 95 % upper
-#: bound where not identifiable).
+#: the working value the filter uses; ``S_v``, ``S_v_se``: the least squares and its standard error).
 SERIES_FIELDS: dict[str, Callable[[CmkfEstimate], np.ndarray]] = {
     "accel_bias": lambda e: e.accel_bias, "accel_bias_std": lambda e: e.accel_bias_std,
-    "S_v_in_filter": lambda e: e.S_v, "S_v": lambda e: e.accel_psd.value, "S_v_se": lambda e: e.accel_psd.se,
-    "accel_noise_density": lambda e: e.accel_noise_density,
-    "accel_noise_density_upper": lambda e: e.accel_psd.density_upper95(),
+    "S_v_in_filter": lambda e: e.S_v, "S_v": lambda e: e.accel_ls[0], "S_v_se": lambda e: e.accel_ls[1],
     "gyro_bias": lambda e: e.gyro_bias, "gyro_bias_std": lambda e: e.gyro_bias_std,
-    "S_g_in_filter": lambda e: e.S_g, "S_g": lambda e: e.gyro_psd.value, "S_g_se": lambda e: e.gyro_psd.se,
-    "gyro_noise_density": lambda e: e.gyro_noise_density,
-    "gyro_noise_density_upper": lambda e: e.gyro_psd.density_upper95(),
+    "S_g_in_filter": lambda e: e.S_g, "S_g": lambda e: e.gyro_ls[0], "S_g_se": lambda e: e.gyro_ls[1],
 }
-
+#: Per-axis series derived from those once the replay is done (:func:`~imu_noise_id.core.cmkf.psd.density_series`):
+#: √S where identified, and the upper end of the 95 % interval where not identifiable.
+DENSITY_FIELDS = ("accel_noise_density", "accel_noise_density_upper", "gyro_noise_density",
+                  "gyro_noise_density_upper")
 
 @dataclass
 class CmkfReplayResult:
@@ -47,7 +45,8 @@ class CmkfReplayResult:
 
     Attributes
     ----------
-    t : (M,) odometry stamps [s]; series : field → (M, 3) arrays (see :data:`SERIES_FIELDS`, IMU axes);
+    t : (M,) odometry stamps [s]; series : field → (M, 3) arrays (see :data:`SERIES_FIELDS` and
+    :data:`DENSITY_FIELDS`, IMU axes);
     nis_accel, nis_gyro : (M,) NIS of each update, also of the updates the innovation gate rejected (NaN when
     no update); gated_accel, gated_gyro : (M,) whether the gate rejected it; status : (M,) status strings;
     final : the estimate after the last message; config : the filter's parameters; agreement : the filter's
@@ -99,7 +98,7 @@ def replay(
     ti = np.asarray(imu.t, dtype=float)
     to = np.asarray(odom.t, dtype=float) if odom is not None else np.zeros(0)
     rec = {name: [] for name in SERIES_FIELDS}
-    nis_a, nis_g, gated, status = [], [], [], []
+    dof, nis_a, nis_g, gated, status = [], [], [], [], []
     t_start = time.perf_counter()
     for k, updated in enumerate(feed_recording(filt, imu, odom, imu_orientation_xyzw), start=1):
         if progress is not None:
@@ -107,6 +106,7 @@ def replay(
         est = filt.estimate()
         for name, read in SERIES_FIELDS.items():
             rec[name].append(read(est))
+        dof.append((est.accel_ls[2], est.gyro_ls[2]))
         nis_a.append(est.nis_accel if updated else math.nan)
         nis_g.append(est.nis_gyro if updated and (filt.last_update[1] or est.gated[1]) else math.nan)
         gated.append(est.gated)
@@ -123,6 +123,10 @@ def replay(
         "replay_seconds": elapsed, "imu_samples_per_second": ti.size / elapsed if elapsed > 0 else math.inf,
     }
     series = {name: np.array(v).reshape(-1, 3) for name, v in rec.items()}
+    dofs = np.array(dof, dtype=int).reshape(-1, 2)
+    for k, sensor, psd in ((0, "accel", "S_v"), (1, "gyro", "S_g")):
+        series[f"{sensor}_noise_density"], series[f"{sensor}_noise_density_upper"] = density_series(
+            series[psd], series[f"{psd}_se"], dofs[:, k:k + 1])
     gated_arr = np.array(gated, dtype=bool).reshape(-1, 2)
     return CmkfReplayResult(to, series, np.array(nis_a), np.array(nis_g), gated_arr[:, 0], gated_arr[:, 1], status,
                             final, config, filt.agreement, (filt.gates[0].threshold, filt.gates[1].threshold), info)

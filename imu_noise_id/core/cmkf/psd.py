@@ -16,7 +16,6 @@ Never the filter's working value (the prior, or the last positive least-squares 
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,17 +84,31 @@ class PsdEstimate:
 
 def psd_estimate(value: np.ndarray, se: np.ndarray, dof: int) -> PsdEstimate:
     """Per-axis verdicts and intervals from the least-squares values, their standard errors and ``dof``."""
-    t2 = t_quantile(int(dof))
-    verdict, ci, upper = [], [], []
-    for v, e in zip(np.asarray(value, dtype=float).tolist(), np.asarray(se, dtype=float).tolist(), strict=True):
-        if not (math.isfinite(v) and math.isfinite(e) and dof >= 1):
-            verdict.append("unknown")
-            ci.append((math.nan, math.nan))
-            upper.append(math.nan)
-            continue
-        lo, hi = v - t2 * e, v + t2 * e
-        verdict.append("identified" if lo > 0.0 else "negative" if hi <= 0.0 else "not_identifiable")
-        ci.append((max(lo, 0.0), hi))
-        upper.append(hi)
-    return PsdEstimate(np.asarray(value, dtype=float), np.asarray(se, dtype=float), int(dof), np.array(ci),
-                       np.array(upper), tuple(verdict))
+    value = np.asarray(value, dtype=float)
+    se = np.asarray(se, dtype=float)
+    codes, lo, hi = classify(value, se, np.full(value.shape, int(dof)))
+    known = codes != VERDICTS.index("unknown")
+    ci = np.where(known[:, None], np.column_stack([np.maximum(lo, 0.0), hi]), np.nan)
+    return PsdEstimate(value, se, int(dof), ci, np.where(known, hi, np.nan), tuple(VERDICTS[c] for c in codes))
+
+
+def classify(value: np.ndarray, se: np.ndarray, dof: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The verdicts (indices into :data:`VERDICTS`) and the 95 % interval ends ``Ŝ ∓ t·se`` of arrays of estimates
+    with their degrees of freedom (broadcast); the one rule, also for whole replays at once."""
+    value, se = np.asarray(value, dtype=float), np.asarray(se, dtype=float)
+    dof = np.broadcast_to(np.asarray(dof), value.shape)
+    t = np.vectorize(t_quantile, otypes=[float])(dof.astype(int)) if dof.size else np.zeros(value.shape)
+    with np.errstate(invalid="ignore"):
+        lo, hi = value - t * se, value + t * se
+        codes = np.where(lo > 0.0, 0, np.where(hi <= 0.0, 2, 1))
+    codes = np.where(np.isfinite(value) & np.isfinite(se) & (dof >= 1), codes, 3)
+    return codes, lo, hi
+
+
+def density_series(value: np.ndarray, se: np.ndarray, dof: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """√Ŝ where identified and √ of the interval's upper end where not identifiable (NaN elsewhere), for arrays
+    of estimates (a replay's time series)."""
+    codes, _, hi = classify(value, se, dof)
+    with np.errstate(invalid="ignore"):
+        return (np.where(codes == 0, np.sqrt(np.maximum(value, 0.0)), np.nan),
+                np.where(codes == 1, np.sqrt(np.maximum(hi, 0.0)), np.nan))

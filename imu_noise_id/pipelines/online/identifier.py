@@ -160,8 +160,7 @@ class OnlineIdentifier:
         self.last_imu_t = t
         if self.config.cmkf_gravity_source != "imu":
             orientation_xyzw = None
-        if self.cmkf_feed.imu(t, gyro, accel, orientation_xyzw):
-            self._variance_cache = None
+        self.cmkf_feed.imu(t, gyro, accel, orientation_xyzw)
         ended, released = self.stationarity.update(t, sample, self.cmkf_feed.gyro_bias)
         if ended:
             self._end_stationary()
@@ -221,8 +220,7 @@ class OnlineIdentifier:
             detector.odom_t = None
             self.cmkf_feed.new_time_line()
         detector.update_odometry(t, math.sqrt(float(v[:3] @ v[:3])), math.sqrt(float(v[3:] @ v[3:])))
-        if self.cmkf_feed.odometry(t, linear_velocity=v[:3], angular_velocity=v[3:], **fields):
-            self._variance_cache = None
+        self.cmkf_feed.odometry(t, linear_velocity=v[:3], angular_velocity=v[3:], **fields)
 
     def process_temperature(self, t: float, celsius: float, frame_id: str = "",
                             wall_time: float | None = None) -> bool:
@@ -244,8 +242,9 @@ class OnlineIdentifier:
                             (float(accel[0]), float(accel[1]), float(accel[2])), gyro_var, accel_var, source)
 
     def _refresh_variance(self) -> None:
-        """Cache the covariance written into the corrected samples (refreshed every 100 IMU samples, by
-        :meth:`update_identification` and after every odometry update, not per sample)."""
+        """Cache the covariance written into the corrected samples (refreshed every 100 IMU samples and by
+        :meth:`update_identification`, not per sample nor per odometry update: forming the CMKF's estimate costs
+        more than the update)."""
         variance, _ = self._covariance()
         if variance is None:
             self._variance_cache = (None, None)

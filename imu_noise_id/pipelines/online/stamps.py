@@ -155,10 +155,9 @@ class StampChecker:
         if len(block) > SUBWINDOW:
             self._means.append((block[-1] - block[0]) / (len(block) - 1))
             del block[:-1]
-        if self._means:
             means = sorted(self._means)
             # the trimmed mean (the shortest and the longest block dropped: a gap, or a block that caught fewer of a
             # bursty driver's pauses than its neighbours); with one or two blocks the shorter
             self.period = sum(means[1:-1]) / (len(means) - 2) if len(means) >= 3 else means[0]
-        elif len(block) > LEARN and self.period is None:
+        elif not self._means and self.period is None and len(block) > LEARN:
             self.period = (block[-1] - block[0]) / (len(block) - 1)
