@@ -253,7 +253,8 @@ class OnlineIdentifier:
             self._variance_cache = (tuple(v[:3]), tuple(v[3:]))
 
     def _covariance(self) -> tuple[np.ndarray | None, str]:
-        return self.noise.covariance(self.imu.stamps.rate, self.config.noise_min_samples, self.cmkf_feed.estimate)
+        return self.noise.covariance(self.imu.stamps.rate, self.config.noise_min_samples,
+                                     lambda: self.cmkf_feed.estimate)
 
     def update_identification(self) -> None:
         """Feed the queued stationary samples to the per-axis hypothesis banks and refresh the CMKF status (the

@@ -9,6 +9,7 @@ the CMKF's Ŝ while it is tracking (its 95 % upper bound on an axis where Ŝ is 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -46,19 +47,22 @@ class StationaryNoise:
         """Relative standard deviation of N (NaN before ``min_samples`` differences)."""
         return self.differences.relative_std() if self.n >= min_samples else math.nan
 
-    def covariance(self, rate: float, min_samples: int, cmkf: CmkfEstimate) -> tuple[np.ndarray | None, str]:
+    def covariance(self, rate: float, min_samples: int, cmkf: Callable[[], CmkfEstimate]
+                   ) -> tuple[np.ndarray | None, str]:
         """N²·f per axis [u²] for the IMU rate ``rate`` [Hz] and its source: ``stationary`` (this density),
         ``cmkf`` (Ŝ_g, Ŝ_v of a tracking CMKF, identified on every axis), ``cmkf_upper_bound`` (where an axis is not
-        identifiable, its 95 % upper bound: a conservative variance) or ``none`` (never the filter's prior)."""
+        identifiable, its 95 % upper bound: a conservative variance) or ``none`` (never the filter's prior).
+        ``cmkf`` gives the CMKF's estimate; it is asked for only when the stationary samples are too few."""
         if not math.isfinite(rate):
             return None, "none"
         if self.n >= min_samples:
             return self.differences.variance() / 2.0, "stationary"  # σ² per sample = N²·f
-        if cmkf.status != "tracking":
+        est = cmkf()
+        if est.status != "tracking":
             return None, "none"
         psd = []
         bounded = False
-        for estimate in (cmkf.gyro_psd, cmkf.accel_psd):
+        for estimate in (est.gyro_psd, est.accel_psd):
             for value, upper, verdict in zip(estimate.value, estimate.upper95, estimate.verdict, strict=True):
                 if verdict == "identified":
                     psd.append(value)
