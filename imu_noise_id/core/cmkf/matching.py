@@ -58,7 +58,7 @@ class MatchingLeastSquares:
         self._qw = [0.0] * self.n
         self._wc = 0.0
         self._ww = 0.0
-        self._working_se: tuple[int, list[float]] = (-1, [])
+        self._working_se: tuple[int, list[float], float] = (-1, [], math.nan)
 
     def add(self, q: Sequence[float], w: float) -> None:
         """One epoch: its products ``q`` (n) and weight ``w``."""
@@ -126,15 +126,31 @@ class MatchingLeastSquares:
         not depend on the path the least squares took. Before two blocks (no standard error) the last positive
         value, as in the paper.
         """
-        values = self.values()
+        den = self.den
+        if self.count == 0 or den <= 0.0:
+            return list(current), self.n
         if self.blocks < 2:
-            out = [v if math.isfinite(v) and v > 0 else c for v, c in zip(values, current, strict=True)]
-            return out, sum(not (math.isfinite(v) and v > 0) for v in values)
+            out, kept = [], 0
+            for x, c in zip(self.num, current, strict=True):
+                v = x / den
+                if v > 0.0:
+                    out.append(v)
+                else:
+                    out.append(c)
+                    kept += 1
+            return out, kept
         if self._working_se[0] != self.blocks:  # refreshed once per block: it changes slowly
-            self._working_se = (self.blocks, self.standard_error.tolist())
-        t = t_quantile(self.dof)
-        out = [max(v, e) if v + t * e > 0 else p for v, e, p in zip(values, self._working_se[1], prior, strict=True)]
-        return out, sum(v + t * e <= 0 for v, e in zip(values, self._working_se[1], strict=True))
+            self._working_se = (self.blocks, self.standard_error.tolist(), t_quantile(self.dof))
+        _, se, t = self._working_se
+        out, kept = [], 0
+        for x, e, p in zip(self.num, se, prior, strict=True):
+            v = x / den
+            if v + t * e > 0.0:
+                out.append(v if v > e else e)
+            else:
+                out.append(p)
+                kept += 1
+        return out, kept
 
 
 @lru_cache(maxsize=4096)
