@@ -117,4 +117,4 @@ class CmkfFeed:
                     self._events.count(key)
                     self._events.event(key, f"CMKF: {what} update at t = {t:.6f} s rejected by the innovation gate "
                                        f"(NIS {nis:.3g} > {gate.threshold:.3g}): a bump, a saturated or corrupted "
-                                       "sample; the bias is kept")
+                                       "sample, wheel slip; the bias is kept")

@@ -156,7 +156,7 @@ def consistency_status(est: CmkfEstimate, window_counts: dict[str, int], errors:
     values["odom_too_late_for_cmkf"] = str(too_late)
     gated = [f"{window_counts[key]} {what} update(s)" for key, what in GATED_COUNTS if window_counts.get(key)]
     gated_text = (f"; rejected by the innovation gate in the last period: {' and '.join(gated)} (a bump, a "
-                  "saturated or corrupted sample)") if gated else ""
+                  "saturated or corrupted sample, wheel slip)") if gated else ""
     if window_counts.get("cmkf_error"):
         return DiagnosticStatus(name, ERROR, "the CMKF raised an error and was restarted (see the log)", values)
     if est.status in ("no_data", "no_imu", "imu_only"):
