@@ -50,9 +50,10 @@ class CmkfConfig:
     nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean`` (and the node's ``nis.window``).
     nis_gate_probability : innovation gate of both filters (beyond the paper): an odometry update whose NIS exceeds
         the ``1 − p`` quantile of χ²(dof) is rejected as an outlier (a bump, a saturated or corrupted sample, wheel
-        slip) — the accelerometer filter then restarts position and velocity from the measurement and keeps its bias, the
-        gyro filter keeps its bias, neither uses the epoch for S_v or S_g; after :data:`~.gate.GATE_PATIENCE`
-        rejections in a row the next update is accepted (a wrong prior must not lock the filter). 0: no gate.
+        slip) — the accelerometer filter then restarts position and velocity from the measurement and keeps its
+        bias, the gyro filter keeps its bias, neither uses the epoch for S_v or S_g; after
+        :data:`~.gate.GATE_PATIENCE` rejections in a row the next update is accepted (a wrong prior must not lock
+        the filter). 0: no gate.
     """
 
     imu_rotation_xyzw: tuple[float, float, float, float] = rot.IDENTITY
