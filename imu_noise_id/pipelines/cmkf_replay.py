@@ -39,6 +39,7 @@ SERIES_FIELDS: dict[str, Callable[[CmkfEstimate], np.ndarray]] = {
 DENSITY_FIELDS = ("accel_noise_density", "accel_noise_density_upper", "gyro_noise_density",
                   "gyro_noise_density_upper")
 
+
 @dataclass
 class CmkfReplayResult:
     """Estimates after every odometry message, the final estimate and what the filter knew.
