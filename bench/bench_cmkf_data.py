@@ -24,7 +24,7 @@ import numpy as np
 from imu_noise_id.core.axes import ImuSeries, OdometrySeries
 from imu_noise_id.core.cmkf import rotation as rot
 from imu_noise_id.core.cmkf.config import CmkfConfig
-from imu_noise_id.pipelines.cmkf_replay import CmkfReplayResult, nis_summary, replay
+from imu_noise_id.pipelines.cmkf_replay import CmkfReplayResult, consistency_summary, replay, replay_status
 from imu_noise_id.report.cmkf_plot import plot_cmkf
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
@@ -38,17 +38,23 @@ def fmt(a: np.ndarray, p: int = 4) -> str:
 
 def report(label: str, res: CmkfReplayResult, fig: Path | None = None) -> None:
     e = res.final
-    na = nis_summary(res.nis_accel, e.nis_accel_dof)
-    ng = nis_summary(res.nis_gyro, e.nis_gyro_dof)
-    print(f"\n[{label}] status {e.status}, {e.n_stacked} stacked samples, "
+    consistency = consistency_summary(res)
+    na, ng = consistency["accel"], consistency["gyro"]
+    print(f"\n[{label}] status {replay_status(res, consistency['verdict'])}, {e.n_stacked} stacked samples, "
           f"{res.info['imu_samples_per_second']:.0f} IMU samples/s replay")
     print(f"  accel bias [m/s^2]        {fmt(e.accel_bias)} +- {fmt(e.accel_bias_std)}")
-    print(f"  S_v in use [m^2/s^3]      {fmt(e.S_v, 3)}  (last least squares {fmt(e.S_v_ls, 3)})")
-    print(f"  accel noise [m/s^2/rtHz]  {fmt(e.accel_noise_density)}")
+    print(f"  S_v least squares         {fmt(e.accel_psd.value, 3)} +- {fmt(e.accel_psd.se, 2)} "
+          f"(in the filter {fmt(e.S_v, 3)})")
+    for line in e.accel_psd.describe(("x", "y", "z"), "m/s^2/rtHz"):
+        print(f"    accel {line}")
     print(f"  gyro bias [rad/s]         {fmt(e.gyro_bias)} +- {fmt(e.gyro_bias_std)}")
-    print(f"  gyro noise [rad/s/rtHz]   {fmt(e.gyro_noise_density)}  (last least squares S_g {fmt(e.S_g_ls, 3)})")
+    print(f"  S_g least squares         {fmt(e.gyro_psd.value, 3)} +- {fmt(e.gyro_psd.se, 2)}")
+    for line in e.gyro_psd.describe(("x", "y", "z"), "rad/s/rtHz"):
+        print(f"    gyro {line}")
     print(f"  NIS accel: mean {na['mean']:.2f} for {na['dof']} dof, {100 * na['share_in_95']:.0f} % inside the "
-          f"95 % bounds (last 80 % of updates); gyro: mean {ng['mean']:.2f}, {100 * ng['share_in_95']:.0f} %")
+          f"95 % bounds, {na['gated']} gated (last 80 % of updates); gyro: mean {ng['mean']:.2f}, "
+          f"{100 * ng['share_in_95']:.0f} %, {ng['gated']} gated")
+    print(f"  consistency: {consistency['verdict']}" + (f": {consistency['reason']}" if consistency["reason"] else ""))
     drop = {k: v for k, v in e.counters.items() if v and k not in ("imu", "odom", "updates")}
     print(f"  counters: imu {e.counters['imu']}, odom {e.counters['odom']}, updates {e.counters['updates']}, {drop}")
     if fig is not None:

@@ -160,7 +160,10 @@ def test_published_biases_and_noise_converge_to_the_truth(session):
     density = obs.column("noise_density")
     truth = np.array([DEMO_TRUTH["gyro_noise_density"]] * 3 + [DEMO_TRUTH["accel_noise_density"]] * 3)
     assert np.all(np.abs(density / truth - 1) < 0.08)
-    assert np.all(np.isfinite(obs.column("cmkf_psd")))
+    # the CMKF's PSD per axis: an estimate where identified, else at most its 95 % upper bound (never the prior)
+    psd, upper = obs.column("cmkf_psd"), obs.column("cmkf_noise_density_upper")
+    assert not np.any(np.isfinite(psd) & np.isfinite(upper))
+    assert np.all(psd[np.isfinite(psd)] > 0)
     _, cols, rows = parse_labelled(obs.last["hypotheses"])
     assert cols[:2] == ["WN+RW", "WN+GM"] and cols[-2:] == ["decision", "bank_updates"]
     for row in rows:

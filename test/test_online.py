@@ -14,7 +14,7 @@ from imu_noise_id.core.white_noise import FirstDifferences
 from imu_noise_id.demo.online import simulate_demo_run
 from imu_noise_id.pipelines.online import ERROR, OK, STALE, WARN, OnlineIdentifier
 from imu_noise_id.pipelines.online.config import PARAMETERS, OnlineConfig
-from imu_noise_id.pipelines.online.inputs import StampChecker
+from imu_noise_id.pipelines.online.stamps import StampChecker
 from imu_noise_id.pipelines.online.stationarity import StationarityDetector
 from imu_noise_id.resources import read_hypotheses_file
 
@@ -90,11 +90,13 @@ def test_runtime_update_rejects_start_up_only_parameters_and_keeps_the_old_confi
 
 def test_stamp_checker_verdicts():
     c = StampChecker(gap_factor=5.0, backward_reset_count=3)
-    verdicts = [c.check(t) for t in (0.0, math.nan, 1.00, 1.01, 1.01, 1.005, 1.02, 1.5, 1.51)]
-    assert verdicts == ["bad_stamp", "bad_stamp", "ok", "ok", "duplicate", "backward", "ok", "gap", "ok"]
+    stamps = (0.0, math.nan, *(1.0 + 0.01 * np.arange(12)), 1.11, 1.105, 1.12, 1.5, 1.51)
+    verdicts = [c.check(t)[0] for t in stamps]
+    assert verdicts == ["bad_stamp", "bad_stamp", *["ok"] * 12, "duplicate", "backward", "ok", "hold", "ok"]
+    assert c.counts["gap"] == 1  # 1.5 was held, and 1.51 confirmed it
     assert c.rate == pytest.approx(100.0, rel=0.01)
-    # Three consecutive stamps behind the last accepted one: the source restarted.
-    assert [c.check(t) for t in (0.1, 0.11, 0.12, 0.13)] == ["backward", "backward", "restart", "ok"]
+    # Three consecutive stamps behind the last accepted one, following one another: the source restarted.
+    assert [c.check(t)[0] for t in (0.1, 0.11, 0.12, 0.13)] == ["backward", "backward", "restart", "ok"]
 
 
 def _still(det: StationarityDetector, t0: float, n: int, rate: float, rng: np.random.Generator) -> list[bool]:
@@ -174,7 +176,7 @@ def replayed() -> tuple[OnlineIdentifier, object]:
     corrected = []
     while i < ni or j < nj:
         if j >= nj or (i < ni and run.imu_t[i] <= run.odom_t[j]):
-            corrected.append(ident.process_imu(run.imu_t[i], tuple(run.gyro[i]), tuple(run.accel[i]), "imu_link",
+            corrected.extend(ident.process_imu(run.imu_t[i], tuple(run.gyro[i]), tuple(run.accel[i]), "imu_link",
                                                float(i) / 200))
             i += 1
             if i % 20 == 0:
@@ -236,13 +238,13 @@ def test_corrected_samples_have_biases_removed_and_covariances(replayed):
 
 def test_bad_messages_are_dropped_counted_and_reported():
     ident = OnlineIdentifier()
-    ok = ident.process_imu(10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8), "imu", 0.0)
+    [ok] = ident.process_imu(10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8), "imu", 0.0)
     assert ok is not None and ok.gyro_variance is None  # no noise estimate yet: REP-145 "unknown"
-    assert ident.process_imu(10.01, (math.nan, 0.0, 0.0), (0.0, 0.0, 9.8), "imu", 0.0) is None
-    assert ident.process_imu(10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8), "imu", 0.0) is None  # duplicate
-    assert ident.process_imu(9.0, (0.0, 0.0, 0.0), (0.0, 0.0, math.inf), "imu", 0.0) is None
-    assert ident.process_imu(9.5, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8), "imu", 0.0) is None  # backward
-    assert ident.process_imu(10.02, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8), "imu_other", 0.0) is not None
+    assert ident.process_imu(10.01, (math.nan, 0.0, 0.0), (0.0, 0.0, 9.8), "imu", 0.0) == []
+    assert ident.process_imu(10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8), "imu", 0.0) == []  # duplicate
+    assert ident.process_imu(9.0, (0.0, 0.0, 0.0), (0.0, 0.0, math.inf), "imu", 0.0) == []
+    assert ident.process_imu(9.5, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8), "imu", 0.0) == []  # backward
+    assert len(ident.process_imu(10.02, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8), "imu_other", 0.0)) == 1
     assert not ident.process_odometry(0.0, (0.0,) * 3, (0.0,) * 3, "base", 0.0)  # zero stamp
     assert not ident.process_odometry(10.0, (math.nan,) * 3, (0.0,) * 3, "base", 0.0)
     keys = {key for key, _ in ident.pop_events()}
@@ -273,12 +275,12 @@ def test_diagnostics_report_stale_inputs_and_estimates_out_of_range(replayed):
     ident.set_config(ident.config.updated({"expected.gyro_bias_max": 0.1}))
 
 
-def test_a_sustained_jump_back_in_time_restarts_the_identification():
+def test_a_sustained_jump_back_in_time_starts_a_new_time_line():
     ident = OnlineIdentifier(OnlineConfig({"backward_reset_count": 5}))
     for k in range(100):
         ident.process_imu(100.0 + k * 0.01, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8))
     results = [ident.process_imu(1.0 + k * 0.01, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8)) for k in range(10)]
-    assert [r is None for r in results] == [True] * 4 + [False] * 6
+    assert [len(r) for r in results] == [0] * 4 + [1] * 6
     assert ident.restarts == 1
 
 

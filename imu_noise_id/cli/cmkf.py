@@ -18,20 +18,17 @@ DESCRIPTION = """\
 Run the online covariance matching Kalman filter (paper 004, generalised to a robot) over a bag with a
 sensor_msgs/Imu and a nav_msgs/Odometry topic, as fast as it runs, exactly as the ROS node would, and write:
 
-  DIR/cmkf.yaml   final accelerometer bias [m/s²] ± std, velocity-random-walk PSD S_v [m²/s³] and
-                  accel noise density √S_v [m/s²/√Hz], gyro bias [rad/s] ± std and noise density, the
-                  innovation consistency (NIS), message counters and everything the filter knew
+  DIR/cmkf.yaml   final accelerometer bias [m/s²] ± std, velocity-random-walk PSD S_v [m²/s³] with its
+                  standard error and 95 % interval, accel noise density √S_v [m/s²/√Hz] where the data
+                  identify it (else a 95 % upper bound and the reason), the same for the gyro, the filter's
+                  consistency (NIS, updates rejected by the innovation gate, the likely cause when it is
+                  inconsistent), message counters and everything the filter knew
   DIR/cmkf.csv    the estimates after every odometry message
   DIR/cmkf.png    biases, noise densities and NIS over time
 
 All results are per IMU axis (the Imu message frame). The IMU mounting rotation relative to the odometry's
 child frame (base_link) must be given with --imu-rotation unless it is the identity. Gravity is removed with the
 IMU's own orientation when its messages provide one (REP-145), else with the odometry's (--gravity-from)."""
-
-CSV_COLUMNS = (
-    "accel_bias", "accel_bias_std", "S_v", "S_v_ls", "accel_noise_density",
-    "gyro_bias", "gyro_bias_std", "S_g", "S_g_ls", "gyro_noise_density",
-)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -107,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     import yaml
 
     from ..bag.reader import read_bag
-    from ..pipelines.cmkf_replay import replay, to_yaml_dict
+    from ..pipelines.cmkf_replay import DENSITY_FIELDS, SERIES_FIELDS, replay, to_yaml_dict
 
     config = CmkfConfig(
         imu_rotation_xyzw=imu_rotation(args.imu_rotation),
@@ -146,12 +143,14 @@ def run(args: argparse.Namespace) -> int:
         notes.append("some Imu messages provide no orientation: gravity uses the last one provided (the odometry's "
                      "before the first)")
     if result.final.n_stacked == 0:
-        notes.append("no stacked sample: S_v is the initial value (odometry too short or not overlapping the IMU)")
+        notes.append("no stacked sample: S_v and S_g not estimated (odometry too short or not overlapping the IMU)")
     data = to_yaml_dict(result, notes)
     data["filter"]["bag"] = str(args.bag)
-    cols = ["t"] + [f"{name}_{a}" for name in CSV_COLUMNS for a in "xyz"] + ["nis_accel", "nis_gyro", "status"]
-    table = np.column_stack([result.t] + [result.series[name] for name in CSV_COLUMNS]
-                            + [result.nis_accel, result.nis_gyro])
+    names = [*SERIES_FIELDS, *DENSITY_FIELDS]
+    cols = (["t"] + [f"{name}_{a}" for name in names for a in "xyz"]
+            + ["nis_accel", "nis_gyro", "gated_accel", "gated_gyro", "status"])
+    table = np.column_stack([result.t] + [result.series[name] for name in names]
+                            + [result.nis_accel, result.nis_gyro, result.gated_accel, result.gated_gyro])
     folder = results_folder(args, str(args.bag), contents.imu.topic)
     with folder as staging:
         (staging / "cmkf.yaml").write_text(yaml.safe_dump(data, sort_keys=False))
@@ -166,14 +165,17 @@ def run(args: argparse.Namespace) -> int:
     folder.report()
     e = result.final
     print(f"{args.bag}: {result.info['imu_samples']} IMU samples ({result.info['imu_rate_hz']:.4g} Hz), "
-          f"{result.info['odom_messages']} odometry ({result.info['odom_rate_hz']:.4g} Hz); status {e.status}")
+          f"{result.info['odom_messages']} odometry ({result.info['odom_rate_hz']:.4g} Hz); status {data['status']}")
     np.set_printoptions(precision=4)
     print(f"  gravity from the {'IMU' if gravity_from == 'imu' else 'odometry'} orientation")
-    print(f"  accel bias [m/s²]      {e.accel_bias} ± {e.accel_bias_std}")
-    print(f"  accel noise [m/s²/√Hz] {e.accel_noise_density}  ({e.n_stacked} stacked samples)")
-    print(f"  gyro bias [rad/s]      {e.gyro_bias} ± {e.gyro_bias_std}")
+    if data["accel_bias"]["x"] is not None:
+        print(f"  accel bias [m/s²]      {e.accel_bias} ± {e.accel_bias_std}")
+        print(f"  gyro bias [rad/s]      {e.gyro_bias} ± {e.gyro_bias_std}")
+    for line in data["summary"]:
+        print(f"  {line}")
     nis = data["nis"]["accel"]
-    print(f"  NIS accel mean {nis['mean']:.3g} (dof {nis['dof']}), {100 * nis['share_in_95']:.0f} % inside 95 % bounds")
+    print(f"  NIS accel mean {nis['mean']:.3g} (dof {nis['dof']}), {100 * nis['share_in_95']:.0f} % inside 95 % "
+          f"bounds, {nis['gated']} updates gated ({e.n_stacked} stacked samples)")
     print(f"  replay: {result.info['imu_samples_per_second']:.0f} IMU samples/s; wrote {args.out}/cmkf.yaml, .csv"
           + ("" if args.no_plot else ", .png"))
     return 0

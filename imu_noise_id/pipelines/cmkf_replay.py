@@ -16,18 +16,28 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..core.axes import ImuSeries, OdometrySeries
+from ..core.cmkf.agreement import AxisAgreement, likely_cause
 from ..core.cmkf.config import CmkfConfig
+from ..core.cmkf.estimate import worst_filter
+from ..core.cmkf.psd import PsdEstimate, density_series
 from ..core.cmkf.robot import CmkfEstimate, RobotCmkf
 from ..core.cmkf.stream import feed_recording
-from ..core.diagnostics.consistency import nis_bounds
+from ..core.diagnostics.consistency import nis_bounds, nis_verdict
 from ..core.errors import InputError
 from ..core.timing import sampling_period
 
-#: Per-axis fields of :class:`CmkfEstimate` recorded over time.
-SERIES_FIELDS = (
-    "accel_bias", "accel_bias_std", "S_v", "S_v_ls", "accel_noise_density",
-    "gyro_bias", "gyro_bias_std", "S_g", "S_g_ls", "gyro_noise_density",
-)
+#: Per-axis values recorded over time: name → how to read it from a :class:`CmkfEstimate` (``S_v_in_filter``:
+#: the working value the filter uses; ``S_v``, ``S_v_se``: the least squares and its standard error).
+SERIES_FIELDS: dict[str, Callable[[CmkfEstimate], np.ndarray]] = {
+    "accel_bias": lambda e: e.accel_bias, "accel_bias_std": lambda e: e.accel_bias_std,
+    "S_v_in_filter": lambda e: e.S_v, "S_v": lambda e: e.accel_ls[0], "S_v_se": lambda e: e.accel_ls[1],
+    "gyro_bias": lambda e: e.gyro_bias, "gyro_bias_std": lambda e: e.gyro_bias_std,
+    "S_g_in_filter": lambda e: e.S_g, "S_g": lambda e: e.gyro_ls[0], "S_g_se": lambda e: e.gyro_ls[1],
+}
+#: Per-axis series derived from those once the replay is done (:func:`~imu_noise_id.core.cmkf.psd.density_series`):
+#: √S where identified, and the upper end of the 95 % interval where not identifiable.
+DENSITY_FIELDS = ("accel_noise_density", "accel_noise_density_upper", "gyro_noise_density",
+                  "gyro_noise_density_upper")
 
 
 @dataclass
@@ -36,18 +46,26 @@ class CmkfReplayResult:
 
     Attributes
     ----------
-    t : (M,) odometry stamps [s]; series : field → (M, 3) arrays (see :data:`SERIES_FIELDS`, IMU axes);
-    nis_accel, nis_gyro : (M,) NIS of each update (NaN when no update); status : (M,) status strings;
-    final : the estimate after the last message; config : the filter's parameters; info : rates, frames, timing.
+    t : (M,) odometry stamps [s]; series : field → (M, 3) arrays (see :data:`SERIES_FIELDS` and
+    :data:`DENSITY_FIELDS`, IMU axes);
+    nis_accel, nis_gyro : (M,) NIS of each update, also of the updates the innovation gate rejected (NaN when
+    no update); gated_accel, gated_gyro : (M,) whether the gate rejected it; status : (M,) status strings;
+    final : the estimate after the last message; config : the filter's parameters; agreement : the filter's
+    per-axis IMU/odometry agreement checks (the likely cause of an inconsistency); gates : the NIS gates of the
+    accelerometer and gyro updates; info : rates, frames, timing.
     """
 
     t: np.ndarray
     series: dict[str, np.ndarray]
     nis_accel: np.ndarray
     nis_gyro: np.ndarray
+    gated_accel: np.ndarray
+    gated_gyro: np.ndarray
     status: list[str]
     final: CmkfEstimate
     config: CmkfConfig
+    agreement: tuple[AxisAgreement, AxisAgreement]
+    gates: tuple[float, float]
     info: dict[str, object] = field(default_factory=dict)
 
 
@@ -81,16 +99,18 @@ def replay(
     ti = np.asarray(imu.t, dtype=float)
     to = np.asarray(odom.t, dtype=float) if odom is not None else np.zeros(0)
     rec = {name: [] for name in SERIES_FIELDS}
-    nis_a, nis_g, status = [], [], []
+    dof, nis_a, nis_g, gated, status = [], [], [], [], []
     t_start = time.perf_counter()
     for k, updated in enumerate(feed_recording(filt, imu, odom, imu_orientation_xyzw), start=1):
         if progress is not None:
             progress(k, to.size)
         est = filt.estimate()
-        for name in SERIES_FIELDS:
-            rec[name].append(getattr(est, name))
+        for name, read in SERIES_FIELDS.items():
+            rec[name].append(read(est))
+        dof.append((est.accel_ls[2], est.gyro_ls[2]))
         nis_a.append(est.nis_accel if updated else math.nan)
-        nis_g.append(est.nis_gyro if updated else math.nan)
+        nis_g.append(est.nis_gyro if updated and (filt.last_update[1] or est.gated[1]) else math.nan)
+        gated.append(est.gated)
         status.append(est.status)
     elapsed = time.perf_counter() - t_start
     final = filt.estimate()
@@ -104,51 +124,154 @@ def replay(
         "replay_seconds": elapsed, "imu_samples_per_second": ti.size / elapsed if elapsed > 0 else math.inf,
     }
     series = {name: np.array(v).reshape(-1, 3) for name, v in rec.items()}
-    return CmkfReplayResult(to, series, np.array(nis_a), np.array(nis_g), status, final, config, info)
+    dofs = np.array(dof, dtype=int).reshape(-1, 2)
+    for k, sensor, psd in ((0, "accel", "S_v"), (1, "gyro", "S_g")):
+        series[f"{sensor}_noise_density"], series[f"{sensor}_noise_density_upper"] = density_series(
+            series[psd], series[f"{psd}_se"], dofs[:, k:k + 1])
+    gated_arr = np.array(gated, dtype=bool).reshape(-1, 2)
+    return CmkfReplayResult(to, series, np.array(nis_a), np.array(nis_g), gated_arr[:, 0], gated_arr[:, 1], status,
+                            final, config, filt.agreement, (filt.gates[0].threshold, filt.gates[1].threshold), info)
 
 
-def nis_summary(nis: np.ndarray, dof: int, skip_fraction: float = 0.2) -> dict[str, float]:
-    """Mean NIS and the share inside the χ²(dof) 95 % bounds, after dropping the first ``skip_fraction``."""
-    x = nis[np.isfinite(nis)]
-    x = x[int(skip_fraction * x.size):]
+def nis_summary(nis: np.ndarray, dof: int, gated: np.ndarray | None = None,
+                skip_fraction: float = 0.2) -> dict[str, float]:
+    """NIS of a replay after dropping the first ``skip_fraction`` of the updates: the mean of the updates the
+    innovation gate accepted, the share of all updates inside the χ²(dof) 95 % bounds (gated ones are outside),
+    the number and share gated, and the verdict of :func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict`."""
+    gated = np.zeros(nis.shape, dtype=bool) if gated is None else np.asarray(gated, dtype=bool)
+    keep = np.isfinite(nis) | gated
+    x, g = nis[keep], gated[keep]
+    start = int(skip_fraction * x.size)
+    x, g = x[start:], g[start:]
+    accepted = x[~g]
     if x.size == 0:
-        return {"mean": math.nan, "dof": dof, "share_in_95": math.nan, "n": 0}
+        return {"mean": math.nan, "dof": dof, "share_in_95": math.nan, "n": 0, "gated": 0, "gated_share": 0.0,
+                "verdict": "unknown"}
     lo, hi = nis_bounds(dof)
-    return {"mean": float(x.mean()), "dof": dof, "share_in_95": float(np.mean((x >= lo) & (x <= hi))), "n": int(x.size)}
+    mean = float(accepted.mean()) if accepted.size else math.nan
+    share = float(g.mean())
+    return {"mean": mean, "dof": dof, "share_in_95": float(np.mean((x >= lo) & (x <= hi) & ~g)), "n": int(x.size),
+            "gated": int(g.sum()), "gated_share": share,
+            "verdict": nis_verdict(mean, dof, int(accepted.size), share)}
+
+
+def _xyz(a: np.ndarray) -> dict[str, float | None]:
+    return {k: (float(v) if math.isfinite(v) else None) for k, v in zip("xyz", a, strict=True)}
+
+
+def _xyz_pairs(a: np.ndarray) -> dict[str, list[float] | None]:
+    return {k: ([float(lo), float(hi)] if math.isfinite(lo) else None) for k, (lo, hi) in zip("xyz", a, strict=True)}
+
+
+def psd_section(psd: PsdEstimate, prefix: str, density: str, in_filter: np.ndarray) -> dict[str, object]:
+    """The ``cmkf.yaml`` keys of one sensor's PSD: estimate, standard error, intervals, verdicts, bounds."""
+    return {
+        prefix: _xyz(psd.value),
+        f"{prefix}_se": _xyz(psd.se),
+        f"{prefix}_ci95": _xyz_pairs(psd.ci95),
+        f"{prefix}_dof": psd.dof,
+        density: _xyz(psd.density()),
+        f"{density}_ci95": _xyz_pairs(psd.density_ci95()),
+        f"{density}_upper_bound": _xyz(psd.density_upper95()),
+        f"{density}_verdict": dict(zip("xyz", psd.verdict, strict=True)),
+        f"{prefix}_in_filter": _xyz(in_filter),
+    }
+
+
+def consistency_summary(result: CmkfReplayResult) -> dict[str, object]:
+    """The replay's consistency verdict over the whole run (the worse of the two filters) and its likely cause."""
+    e = result.final
+    accel = nis_summary(result.nis_accel, e.nis_accel_dof, result.gated_accel)
+    gyro = nis_summary(result.nis_gyro, e.nis_gyro_dof, result.gated_gyro)
+    pair = (accel, gyro)
+    worst = pair[worst_filter([s["verdict"] for s in pair], [s["mean"] for s in pair], [s["dof"] for s in pair])]
+    reason = ""
+    if worst["verdict"] in ("marginal", "inconsistent"):
+        reason = (f"accelerometer NIS mean {accel['mean']:.3g} for {accel['dof']} dof ({accel['gated']} updates "
+                  f"gated), gyro NIS mean {gyro['mean']:.3g} for {gyro['dof']} dof ({gyro['gated']} gated). Likely "
+                  f"cause: {likely_cause(worst['mean'] / worst['dof'], result.agreement)}")
+    return {"verdict": worst["verdict"], "reason": reason, "accel": accel, "gyro": gyro}
+
+
+def replay_status(result: CmkfReplayResult, verdict: str) -> str:
+    """The final status with the consistency judged over the whole run (not only the last ``nis_window``
+    updates): ``inconsistent`` instead of converging/tracking when the run's verdict is inconsistent."""
+    status = result.final.status
+    if status not in ("converging", "tracking", "inconsistent"):
+        return status
+    if verdict == "inconsistent":
+        return "inconsistent"
+    return "converging" if result.final.n_stacked < result.config.min_samples else "tracking"
+
+
+def summary_lines(result: CmkfReplayResult) -> list[str]:
+    """What the replay found, in sentences: consistency, biases (or why not estimated), noise per axis."""
+    e = result.final
+    lines = []
+    verdict = consistency_summary(result)
+    if verdict["verdict"] == "inconsistent":
+        lines.append(f"WARNING: the filter is inconsistent: {verdict['reason']}")
+    elif verdict["verdict"] == "marginal":
+        lines.append(f"note: the filter is marginally consistent: {verdict['reason']}")
+    if e.status in ("no_data", "no_imu", "imu_only"):
+        lines.append(f"biases not estimated: {odometry_problem(e)}")
+    lines += [f"accel noise density {s}" for s in e.accel_psd.describe(("x", "y", "z"), "m/s^2/sqrt(Hz)")]
+    lines += [f"gyro noise density {s}" for s in e.gyro_psd.describe(("x", "y", "z"), "rad/s/sqrt(Hz)")]
+    return lines
+
+
+def odometry_problem(e: CmkfEstimate) -> str:
+    """Why no odometry message updated the filter, from its counters."""
+    c = e.counters
+    if c.get("odom_dropped_orientation"):
+        return (f"{c['odom_dropped_orientation']} odometry messages have no valid orientation (all-zero or NaN "
+                "quaternion) and the configured filter needs one (gravity from the odometry, or pose_twist): use "
+                "gravity from the IMU's orientation (--gravity-from imu) with twist measurements")
+    dropped = {k: v for k, v in c.items() if k.startswith("odom_dropped") and v}
+    if dropped:
+        return "every odometry message was dropped (" + ", ".join(f"{k}: {v}" for k, v in dropped.items()) + ")"
+    if c.get("odom_without_imu"):
+        return "the odometry does not overlap the IMU samples in time"
+    return "no odometry message"
 
 
 def to_yaml_dict(result: CmkfReplayResult, notes: list[str] | None = None) -> dict[str, object]:
-    """The ``cmkf.yaml`` schema of ``architecture.md`` (per IMU axis x, y, z; SI units) plus what the filter knew."""
+    """The ``cmkf.yaml`` schema of ``architecture.md`` (per IMU axis x, y, z; SI units) plus what the filter knew.
+
+    Biases are null when no odometry update happened (the prior is not an estimate); noise densities are null
+    where not identified, with the upper end of their 95 % interval where the data bound them.
+    """
     e = result.final
-
-    def xyz(a: np.ndarray) -> dict[str, float]:
-        return {k: float(v) for k, v in zip("xyz", a, strict=True)}
-
+    estimated = e.status not in ("no_data", "no_imu", "imu_only")
     cfg = asdict(result.config)
     cfg["imu_rotation_xyzw"] = [float(v) for v in cfg["imu_rotation_xyzw"]]
+    nan3 = np.full(3, math.nan)
+    consistency = consistency_summary(result)
     return {
         "frame": "IMU axes (sensor frame of the Imu messages)",
-        "status": e.status,
+        "status": replay_status(result, consistency["verdict"]),
         "observed": e.observed,
-        "accel_bias": xyz(e.accel_bias),
-        "accel_bias_std": xyz(e.accel_bias_std),
-        "S_v": xyz(e.S_v),
-        "S_v_least_squares": xyz(e.S_v_ls),
-        "accel_noise_density": xyz(e.accel_noise_density),
-        "gyro_bias": xyz(e.gyro_bias),
-        "gyro_bias_std": xyz(e.gyro_bias_std),
-        "S_g": xyz(e.S_g),
-        "S_g_least_squares": xyz(e.S_g_ls),
-        "gyro_noise_density": xyz(e.gyro_noise_density),
+        "consistency": {"verdict": consistency["verdict"], "reason": consistency["reason"]},
+        "summary": summary_lines(result),
+        "accel_bias": _xyz(e.accel_bias if estimated else nan3),
+        "accel_bias_std": _xyz(e.accel_bias_std if estimated else nan3),
+        **psd_section(e.accel_psd, "S_v", "accel_noise_density", e.S_v),
+        "gyro_bias": _xyz(e.gyro_bias if estimated else nan3),
+        "gyro_bias_std": _xyz(e.gyro_bias_std if estimated else nan3),
+        **psd_section(e.gyro_psd, "S_g", "gyro_noise_density", e.S_g),
         "units": {
             "accel_bias": "m/s^2", "S_v": "m^2/s^3", "accel_noise_density": "m/s^2/sqrt(Hz)",
             "gyro_bias": "rad/s", "S_g": "rad^2/s", "gyro_noise_density": "rad/s/sqrt(Hz)",
+            "conventions": "S_* least squares of paper 004 eq. 35 (may be <= 0) with a block-sandwich standard "
+                           "error (*_se, Student t with *_dof degrees of freedom); *_noise_density = sqrt(S) where "
+                           "the 95 % interval excludes 0 (verdict identified), else null with the upper end of "
+                           "the 95 % interval as *_upper_bound; *_in_filter: the working value the filter used "
+                           "(prior or last positive least-squares value), not an estimate",
         },
         "n_stacked": e.n_stacked,
-        "nis": {
-            "accel": nis_summary(result.nis_accel, e.nis_accel_dof),
-            "gyro": nis_summary(result.nis_gyro, e.nis_gyro_dof),
-        },
+        "nis": {"accel": consistency["accel"], "gyro": consistency["gyro"],
+                "gate": {"accel": result.gates[0], "gyro": result.gates[1],
+                         "probability": result.config.nis_gate_probability}},
         "counters": e.counters,
         "filter": {**{k: v for k, v in result.info.items() if k != "replay_seconds"}, "parameters": cfg},
         "notes": list(notes or []),

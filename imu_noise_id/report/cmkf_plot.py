@@ -29,10 +29,12 @@ def plot_cmkf(result: CmkfReplayResult, path: Path, title: str = "") -> None:
         axs[1].plot(t, g, colors[i], lw=1, label=f"gyro {axis}")
         axs[1].fill_between(t, g - 2 * gs, g + 2 * gs, color=colors[i], alpha=0.2)
         axs[2].semilogy(t, s["accel_noise_density"][:, i], colors[i], lw=1, label=f"√S_v {axis} [m/s²/√Hz]")
+        axs[2].semilogy(t, s["accel_noise_density_upper"][:, i], colors[i], lw=0.8, ls=":")
         axs[2].semilogy(t, s["gyro_noise_density"][:, i], colors[i], lw=1, ls="--", label=f"√S_g {axis} [rad/s/√Hz]")
+        axs[2].semilogy(t, s["gyro_noise_density_upper"][:, i], colors[i], lw=0.8, ls="-.")
     axs[0].set_ylabel("accel bias [m/s²]\n(±2σ)")
     axs[1].set_ylabel("gyro bias [rad/s]\n(±2σ)")
-    axs[2].set_ylabel("noise density")
+    axs[2].set_ylabel("noise density\n(dotted: 95 % upper\nbound, not identified)")
     dof_a, dof_g = result.final.nis_accel_dof, result.final.nis_gyro_dof
     axs[3].semilogy(t, result.nis_accel, ".", ms=1.5, color="C0", label=f"NIS accel ({dof_a} dof)")
     axs[3].semilogy(t, result.nis_gyro, ".", ms=1.5, color="C3", alpha=0.5, label=f"NIS gyro ({dof_g} dof)")

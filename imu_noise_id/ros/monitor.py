@@ -61,11 +61,14 @@ def render(state: MonitorState, colour: bool = False) -> str:
     density = column(state.noise, "noise_density")
     cov = column(state.noise, "covariance")
     cmkf_density = column(state.noise, "cmkf_noise_density")
+    cmkf_upper = column(state.noise, "cmkf_noise_density_upper")
     lines.append(f"{'axis':8} {'bias':>10} {'± 1σ':>10} {'N stat.':>10} {'N cmkf':>10} {'cov N²f':>10}"
-                 f"   unit, N in unit/√Hz")
+                 f"   unit, N in unit/√Hz (N cmkf '<x': not identifiable, below x)")
     for i, axis in enumerate(AXES):
         unit = "rad/s" if axis.startswith("gyro") else "m/s²"
-        lines.append(f"{axis:8} {_fmt(bias[i])} {_fmt(bias_std[i])} {_fmt(density[i])} {_fmt(cmkf_density[i])} "
+        n_cmkf = (f"<{cmkf_upper[i]:.2e}".rjust(10) if not math.isfinite(cmkf_density[i])
+                  and math.isfinite(cmkf_upper[i]) else _fmt(cmkf_density[i]))
+        lines.append(f"{axis:8} {_fmt(bias[i])} {_fmt(bias_std[i])} {_fmt(density[i])} {n_cmkf} "
                      f"{_fmt(cov[i])}   {unit}")
     if state.noise is not None:
         bank_cols = [c for c in state.noise[1] if c.startswith("bank_")]

@@ -89,6 +89,7 @@ class ImuNoiseIdNode(Node):
         config = OnlineConfig(values)  # InputError names a bad value
         hypotheses = read_hypotheses_file(config.hypotheses_file or None) if config.hypotheses_enabled else None
         self.identifier = OnlineIdentifier(config, hypotheses)
+        self.add_pre_set_parameters_callback(self._integers_as_doubles)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         cfg = self.identifier.config
 
@@ -134,6 +135,14 @@ class ImuNoiseIdNode(Node):
                 self.get_logger().warning(f"unknown parameter {name!r} ignored" +
                                           (f": did you mean {close[0]!r}?" if close else ""))
 
+    @staticmethod
+    def _integers_as_doubles(params: list[Parameter]) -> list[Parameter]:
+        """``ros2 param set /imu_noise_id_node gap_factor 12`` sends an integer: it means 12.0 (rclpy would refuse
+        it as the wrong type), as ``-p gap_factor:=12`` does at start-up."""
+        floats = {spec.name for spec in PARAMETERS if type(spec.default) is float}
+        return [Parameter(p.name, Parameter.Type.DOUBLE, float(p.value))
+                if p.name in floats and p.type_ == Parameter.Type.INTEGER else p for p in params]
+
     def _on_set_parameters(self, params: list[Parameter]) -> SetParametersResult:
         changes = {p.name: p.value for p in params if p.name in {s.name for s in PARAMETERS}}
         if not changes:
@@ -155,16 +164,19 @@ class ImuNoiseIdNode(Node):
             a = msg.linear_acceleration
             frame = msg.header.frame_id
             q = msg.orientation
-            out = self.identifier.process_imu(_stamp_seconds(msg.header.stamp), (w.x, w.y, w.z), (a.x, a.y, a.z),
-                                              frame, time.monotonic(), orientation_xyzw=(q.x, q.y, q.z, q.w))
+            released = self.identifier.process_imu(
+                _stamp_seconds(msg.header.stamp), (w.x, w.y, w.z), (a.x, a.y, a.z), frame, time.monotonic(),
+                orientation_xyzw=(q.x, q.y, q.z, q.w), source=msg)
             self._imu_frame = frame
-            if out is not None:
-                msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = out.gyro
-                msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z = out.accel
+            for out in released:  # usually this message; a held one first after a jump in the stamps
+                corrected = out.source
+                corrected.angular_velocity.x, corrected.angular_velocity.y, corrected.angular_velocity.z = out.gyro
+                (corrected.linear_acceleration.x, corrected.linear_acceleration.y,
+                 corrected.linear_acceleration.z) = out.accel
                 if out.gyro_variance is not None:
-                    msg.angular_velocity_covariance = _diag9(out.gyro_variance)
-                    msg.linear_acceleration_covariance = _diag9(out.accel_variance)
-                self.pub_imu.publish(msg)
+                    corrected.angular_velocity_covariance = _diag9(out.gyro_variance)
+                    corrected.linear_acceleration_covariance = _diag9(out.accel_variance)
+                self.pub_imu.publish(corrected)
         except Exception as exc:  # never die on input: report and continue
             self._log("imu_exception", f"IMU message not processed: {type(exc).__name__}: {exc}")
         finally:

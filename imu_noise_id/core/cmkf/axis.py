@@ -26,10 +26,11 @@ from __future__ import annotations
 import numpy as np
 
 from .interval import ImuInterval
+from .matching import MatchingLeastSquares
 from .stacked import StackedSvEstimator
 
 MODES = ("pos_vel", "vel")
-PD_CHECKS = ("joint", "per_axis")
+PD_CHECKS = ("joint", "per_axis", "se_floor")
 
 
 class AxisCmkf:
@@ -40,7 +41,8 @@ class AxisCmkf:
     n_axes : number of independent axes.
     s_v0 : initial Ŝ_v per axis (scalar or (n,)) [m²/s³].
     mode : ``"pos_vel"`` or ``"vel"`` (see module docstring).
-    pd_check : ``"joint"`` (paper) or ``"per_axis"``.
+    pd_check : ``"joint"`` (paper), ``"per_axis"`` (last positive value per axis) or ``"se_floor"`` (the robot's
+        default, :meth:`~.matching.MatchingLeastSquares.working`).
     min_samples : stacked samples needed before the estimate replaces the initial Ŝ_v.
     pd_group : with ``pd_check="joint"``, the check is joint over consecutive groups of this many axes (e.g. 2 for
         the x and y axes of each Monte-Carlo run); default all axes.
@@ -71,6 +73,7 @@ class AxisCmkf:
         if self.n % self.pd_group:
             raise ValueError(f"pd_group={pd_group} does not divide n_axes={n_axes}")
         self.S_used = s_v0
+        self.s_v0 = s_v0.copy()
         if mode == "pos_vel":
             self.H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
             self.sub = slice(0, 3)
@@ -97,6 +100,11 @@ class AxisCmkf:
     def count(self) -> int:
         """Stacked samples in the S_v estimate."""
         return self.estimator.count
+
+    @property
+    def matching(self) -> MatchingLeastSquares:
+        """The least squares behind :attr:`S_ls` (with its standard error)."""
+        return self.estimator.matching
 
     @property
     def S_ls(self) -> np.ndarray:
@@ -130,6 +138,16 @@ class AxisCmkf:
         P = Phi @ self.P @ Phi.T + self.S_used[:, None, None] * interval.Qa1
         P[:, 2, 2] += interval.qb
         return P
+
+    def nis(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """NIS per axis the update with ``z`` (n, m) and ``R`` (n, m, m) would have, without updating (NaN on
+        every axis when an innovation covariance is not positive definite)."""
+        z = np.asarray(z, dtype=float).reshape(self.n, self.m)
+        S = self.H @ self.P @ self.H.T + np.asarray(R, dtype=float).reshape(self.n, self.m, self.m)
+        if not _all_positive_definite(S):
+            return np.full(self.n, np.nan)
+        nu = z - self.x @ self.H.T
+        return np.einsum("ni,ni->n", nu, np.linalg.solve(S, nu[:, :, None])[:, :, 0])
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
         """Joseph-form update (eqs. 24–27) and one step of the covariance estimator; returns NIS per axis.
@@ -170,6 +188,11 @@ class AxisCmkf:
     def _accept(self, s_new: np.ndarray) -> None:
         """Positive-definiteness check with fallback to the last positive-definite estimate (after eq. 35)."""
         if self.estimator.count < self.min_samples:
+            return
+        if self.pd_check == "se_floor":
+            used, kept = self.estimator.matching.working(self.S_used.tolist(), self.s_v0.tolist())
+            self.S_used = np.array(used)
+            self.rejected += int(kept > 0)
             return
         ok = np.isfinite(s_new) & (s_new > 0)
         if self.pd_check == "joint":

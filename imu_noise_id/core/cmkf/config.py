@@ -15,7 +15,7 @@ from . import rotation as rot
 
 MEASUREMENTS = ("twist", "pose_twist")
 GRAVITY_SOURCES = ("odometry", "imu")
-PD_CHECKS = ("per_axis", "joint")
+PD_CHECKS = ("se_floor", "per_axis", "joint")
 
 
 @dataclass
@@ -42,8 +42,18 @@ class CmkfConfig:
         long behind the newest IMU stamp, so odometry up to this much later than the IMU samples (header time) is
         still processed in stamp order [s] (the node's ``cmkf.input_latency``, whose default is 0.1 s).
     min_odom_interval : odometry closer than this to the last update is dropped (degenerate interval) [s].
-    pd_check : ``"per_axis"`` or ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used.
+    pd_check : the Ŝ_v and Ŝ_g the filters run with: ``"se_floor"`` (``max(Ŝ, se)``, the least-squares value
+        where it stands out of its standard error, else that error; ``s_v0`` / ``s_g0`` where the data contradict the
+        noise model: the filter stays consistent when the data cannot identify the PSD; beyond the paper, see
+        :meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` (the last positive value per axis) or
+        ``"joint"`` (paper: all axes at once); min_samples : stacked samples before Ŝ_v is used.
     nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean`` (and the node's ``nis.window``).
+    nis_gate_probability : innovation gate of both filters (beyond the paper): an odometry update whose NIS exceeds
+        the ``1 − p`` quantile of χ²(dof) is rejected as an outlier (a bump, a saturated or corrupted sample, wheel
+        slip) — the accelerometer filter then restarts position and velocity from the measurement and keeps its
+        bias, the gyro filter keeps its bias, neither uses the epoch for S_v or S_g; after
+        :data:`~.gate.GATE_PATIENCE` rejections in a row the next update is accepted (a wrong prior must not lock
+        the filter). 0: no gate.
     """
 
     imu_rotation_xyzw: tuple[float, float, float, float] = rot.IDENTITY
@@ -66,9 +76,10 @@ class CmkfConfig:
     max_imu_gap: float = 0.5
     late_odom_tolerance: float = 0.05
     min_odom_interval: float = 1e-4
-    pd_check: str = "per_axis"
+    pd_check: str = "se_floor"
     min_samples: int = 10
     nis_window: int = 50
+    nis_gate_probability: float = 1e-6
 
     def validate(self) -> None:
         """Raise ValueError naming the first absurd parameter."""
@@ -91,6 +102,8 @@ class CmkfConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        if not (math.isfinite(self.nis_gate_probability) and 0.0 <= self.nis_gate_probability < 0.5):
+            raise ValueError(f"nis_gate_probability must be in [0, 0.5), got {self.nis_gate_probability!r}")
         if self.pd_check not in PD_CHECKS:
             raise ValueError(f"pd_check must be one of {PD_CHECKS}, got {self.pd_check!r}")
         for name in ("min_samples", "nis_window"):

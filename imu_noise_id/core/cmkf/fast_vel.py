@@ -23,6 +23,7 @@ from collections import deque
 import numpy as np
 
 from .interval import ImuInterval
+from .matching import MatchingLeastSquares
 
 
 class _Epoch:
@@ -51,7 +52,8 @@ class VelocityAxisCmkf:
 
     Parameters
     ----------
-    n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³]; pd_check : ``"per_axis"`` or ``"joint"``;
+    n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³]; pd_check : the Ŝ_v used, ``"se_floor"``
+    (:meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` or ``"joint"`` (the last positive value);
     min_samples : stacked samples before the estimate replaces ``s_v0``.
     """
 
@@ -64,6 +66,7 @@ class VelocityAxisCmkf:
         self.pd_check = pd_check
         self.min_samples = int(min_samples)
         self._S = [float(s_v0)] * self.n
+        self._prior = [float(s_v0)] * self.n
         self._r = [0.0] * self.n
         self._v = [0.0] * self.n
         self._b = [0.0] * self.n
@@ -72,9 +75,7 @@ class VelocityAxisCmkf:
         self._pbb = [0.0] * self.n
         self._nu = [math.nan] * self.n
         self._s = [math.nan] * self.n
-        self._num = [0.0] * self.n
-        self._den = 0.0
-        self.count = 0
+        self.matching = MatchingLeastSquares(self.n)
         self.rejected = 0
         self.skipped = 0  # updates skipped: innovation variance not positive
         self.skipped_stacked = 0  # stacked steps skipped: zero-length interval (M_o singular)
@@ -119,11 +120,14 @@ class VelocityAxisCmkf:
         return np.array(self._S)
 
     @property
+    def count(self) -> int:
+        """Stacked samples in the S_v estimate."""
+        return self.matching.count
+
+    @property
     def S_ls(self) -> np.ndarray:
         """Latest least-squares Ŝ_v (NaN before the first stacked sample)."""
-        if self.count == 0 or self._den <= 0.0:
-            return np.full(self.n, np.nan)
-        return np.array(self._num) / self._den
+        return self.matching.estimate
 
     def _covariance(self, pvv: list[float], pvb: list[float], pbb: list[float]) -> np.ndarray:
         out = np.full((self.n, 3, 3), np.nan)
@@ -153,6 +157,15 @@ class VelocityAxisCmkf:
             self._r[i], self._v[i], self._b[i] = float(r), float(v), float(b)
         self._pvv, self._pvb, self._pbb = self._propagated(interval)
         self._pending = (interval, U)
+
+    def nis(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """NIS per axis the update with ``z`` (n, 1) and ``R`` (n, 1, 1) would have, without updating (NaN where the
+        innovation variance is not positive)."""
+        out = []
+        for i in range(self.n):
+            nu, s = float(z[i][0]) - self._v[i], self._pvv[i] + float(R[i][0][0])
+            out.append(nu * nu / s if s > 0.0 else math.nan)
+        return np.array(out)
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
         """Joseph-form update (24)–(27) of every axis and one stacked-estimator step; returns the NIS per axis.
@@ -221,6 +234,7 @@ class VelocityAxisCmkf:
         g2 = e2v * e2v * dvv + 2 * e2v * e2b * dvb + e2b * e2b * dbb
         g3 = e3v * e3v * dvv + 2 * e3v * e3b * dvb + e3b * e3b * dbb
         cw = e1.qb * dbb  # ⟨q_b e_b e_bᵀ, D⟩ (HΛ = 0: only the w_{k−2} term)
+        q = []
         for i in range(self.n):
             y0 = e0.z[i] - e0.U[i][0]
             y1 = e1.z[i]
@@ -231,16 +245,20 @@ class VelocityAxisCmkf:
             zv = k00 * y0 + k01 * y1 - (p0 - Bv1 * p1) - e1.U[i][0]
             zb = k10 * y0 + k11 * y1 - beta1 * p1 - e1.U[i][1]
             zdz = zv * zv * dvv + 2 * zv * zb * dvb + zb * zb * dbb
-            self._num[i] += zdz - cw - (e0.R[i] * g1 + e1.R[i] * g2 + e2.R[i] * g3)
-        self._den += dvv * dvv + 2 * dvb * dvb + dbb * dbb
-        self.count += 1
+            q.append(zdz - cw - (e0.R[i] * g1 + e1.R[i] * g2 + e2.R[i] * g3))
+        self.matching.add(q, dvv * dvv + 2 * dvb * dvb + dbb * dbb)
         return True
 
     def _accept(self) -> None:
-        """Positive-definiteness check with fallback to the last positive estimate."""
-        if self.count < self.min_samples or self._den <= 0.0:
+        """The Ŝ_v used: the least squares floored at its standard error (``se_floor``), or the positive-definiteness
+        check with fallback to the last positive estimate (paper)."""
+        if self.count < self.min_samples or self.matching.den <= 0.0:
             return
-        new = [x / self._den for x in self._num]
+        if self.pd_check == "se_floor":
+            self._S, kept = self.matching.working(self._S, self._prior)
+            self.rejected += int(kept > 0)
+            return
+        new = self.matching.values()
         ok = [math.isfinite(x) and x > 0 for x in new]
         if self.pd_check == "joint" and not all(ok):
             self.rejected += 1

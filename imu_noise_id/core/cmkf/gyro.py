@@ -10,9 +10,12 @@ Model per IMU axis (beyond the paper, which leaves the gyro to future work; same
 The bias is the only state (the angle itself is measured by the odometry every interval), so the filter is a
 scalar Kalman filter per axis with an exponentially correlated bias (Joseph form, eq. 27). The covariance matching
 step mirrors eqs. (28)–(35): eliminating the state between two epochs, ``d_k = y_k/T_k − φ_k y_{k−1}/T_{k−1} =
-w + e_k − φ_k e_{k−1}`` has ``E[d_k²] = q_k + S_g (1/T_k + φ_k²/T_{k−1}) + R_k/T_k² + φ_k² R_{k−1}/T_{k−1}²``, and
-the recursive least-squares solution for S_g is ``Σ (d² − q − R-terms) D_k / Σ D_k²`` with ``D_k = 1/T_k +
-φ_k²/T_{k−1}``; non-positive estimates fall back to the last positive one.
+w + e_k − φ_k e_{k−1}`` has ``E[d_k²] = q_k + S_g (1/T_k + φ_k²/T_{k−1}) + R_k/T_k² + φ_k² R_{k−1}/T_{k−1}²
+− 2φ_k c_k``, where ``c_k = Cov(e_k/T_k, e_{k−1}/T_{k−1})`` is not zero when the two intervals' odometry rotations
+share a measurement (the trapezoid of twist rates shares ``ω_{k−1}``: ``c_k = ¼ Var ω_{k−1}``), and the recursive
+least-squares solution for S_g is ``Σ (d² − q − R-terms + 2φc) D_k / Σ D_k²`` with ``D_k = 1/T_k +
+φ_k²/T_{k−1}`` (its standard error: :mod:`.matching`); non-positive estimates fall back to the last positive one
+as the filter's working value.
 """
 
 from __future__ import annotations
@@ -20,6 +23,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from .matching import MatchingLeastSquares
 
 
 class GyroBiasFilter:
@@ -33,19 +38,21 @@ class GyroBiasFilter:
     Parameters
     ----------
     tau : bias time constant [s]; sigma : steady-state bias σ [rad/s]; s_g0 : initial S_g [rad²/s];
-    min_samples : stacked samples before the S_g estimate replaces ``s_g0``.
+    min_samples : stacked samples before the S_g estimate replaces ``s_g0``; pd_check : ``"se_floor"``
+    (:meth:`~.matching.MatchingLeastSquares.working`) or anything else for the last positive value.
     """
 
-    def __init__(self, tau: float, sigma: float, s_g0: float, min_samples: int = 10) -> None:
+    def __init__(self, tau: float, sigma: float, s_g0: float, min_samples: int = 10, pd_check: str = "se_floor"
+                 ) -> None:
         self.tau = float(tau)
         self.sigma = float(sigma)
         self.bias = [0.0, 0.0, 0.0]
         self.var = [self.sigma**2] * 3
         self._S = [float(s_g0)] * 3
+        self._s_g0 = [float(s_g0)] * 3
         self.min_samples = int(min_samples)
-        self._num = [0.0, 0.0, 0.0]
-        self._den = 0.0
-        self.count = 0
+        self.pd_check = pd_check
+        self.matching = MatchingLeastSquares(3)
         self._nu = [math.nan] * 3
         self._s = [math.nan] * 3
         self._T = math.nan
@@ -77,9 +84,14 @@ class GyroBiasFilter:
         return np.array(self._S)
 
     @property
+    def count(self) -> int:
+        """Stacked samples in the S_g estimate."""
+        return self.matching.count
+
+    @property
     def S_ls(self) -> np.ndarray:
         """Latest least-squares S_g [rad²/s] (NaN before the first stacked sample)."""
-        return np.array(self._num) / self._den if self.count else np.full(3, np.nan)
+        return self.matching.estimate
 
     def reset_chain(self) -> None:
         """Do not difference across a gap."""
@@ -94,14 +106,38 @@ class GyroBiasFilter:
         """The next update closes an odometry interval of ``T`` [s] (> 0)."""
         self._T = float(T)
 
-    def update(self, z: list[float], R: list[float]) -> float:
-        """The interval's measurement: ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) variance of Δθ_odo [rad²].
+    def _prior(self) -> tuple[float, float]:
+        """(φ, q) of the pending interval."""
+        phi = math.exp(-self._T / self.tau)
+        return phi, (1.0 - phi * phi) * self.sigma**2
+
+    def nis(self, z: list[float], R: list[float]) -> float:
+        """NIS (3 dof) that :meth:`update` with ``z`` and ``R`` would have, without updating (the innovation gate)."""
+        T = self._T
+        phi, q = self._prior()
+        total = 0.0
+        for i in range(3):
+            nu = z[i] / T - phi * self.bias[i]
+            total += nu * nu / (phi * phi * self.var[i] + q + self._S[i] / T + R[i] / (T * T))
+        return total
+
+    def coast(self) -> None:
+        """The pending interval without a measurement (a rejected update): the bias is only predicted, and no
+        covariance-matching step spans it."""
+        phi, q = self._prior()
+        for i in range(3):
+            self.bias[i] *= phi
+            self.var[i] = phi * phi * self.var[i] + q
+        self._prev = None
+
+    def update(self, z: list[float], R: list[float], shared: list[float] | None = None) -> float:
+        """The interval's measurement: ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) variance of Δθ_odo [rad²],
+        ``shared`` (3) covariance of Δθ_odo/T with the previous interval's [rad²/s²] (a twist rate both use).
 
         Returns the normalised innovation squared summed over the axes (3 dof).
         """
         T = self._T
-        phi = math.exp(-T / self.tau)
-        q = (1.0 - phi * phi) * self.sigma**2
+        phi, q = self._prior()
         meas = [zi / T for zi in z]
         nis = 0.0
         for i in range(3):
@@ -118,15 +154,18 @@ class GyroBiasFilter:
         if self._prev is not None:
             meas1, T1, R1 = self._prev
             D = 1.0 / T + phi * phi / T1
+            products = []
             for i in range(3):
                 d = meas[i] - phi * meas1[i]
-                self._num[i] += (d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1)) * D
-            self._den += D * D
-            self.count += 1
+                cross = 2.0 * phi * shared[i] if shared is not None else 0.0  # E[e_k e_{k-1}] enters with −2φ
+                products.append((d * d - q - R[i] / (T * T) - phi * phi * R1[i] / (T1 * T1) + cross) * D)
+            self.matching.add(products, D * D)
             if self.count >= self.min_samples:
-                for i in range(3):
-                    s_new = self._num[i] / self._den
-                    if s_new > 0:
-                        self._S[i] = s_new
+                if self.pd_check == "se_floor":
+                    self._S = self.matching.working(self._S, self._s_g0)[0]
+                else:
+                    for i, s_new in enumerate(self.matching.values()):
+                        if s_new > 0:
+                            self._S[i] = s_new
         self._prev = (meas, T, list(R))
         return nis

@@ -88,22 +88,26 @@ class TwistMeasurement:
             "linear_velocity",)
 
     @staticmethod
-    def values(fields: dict[str, object]) -> tuple[dict[str, list[float] | None], rot.Quat | None] | None:
-        """The message's vectors as float lists and its unit quaternion; None if anything is NaN/inf or
-        malformed (wrong length, zero quaternion)."""
+    def values(fields: dict[str, object]) -> tuple[dict[str, list[float] | None], rot.Quat | None, bool] | None:
+        """The message's vectors as float lists, its unit quaternion, and whether an orientation was given but
+        unusable (an all-zero or non-finite quaternion: REP-145's "no orientation"; the field is then None, and
+        :meth:`missing` says whether the measurement can do without it). None if another field is NaN/inf or
+        malformed (wrong length)."""
         vals = {k: None if a is None else _as_floats(a) for k, a in fields.items()}
-        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
-        if not math.isfinite(sum(sum(a) for a in vals.values() if a is not None)) or any(
-            a is not None and len(a) != FIELDS[k] for k, a in vals.items()
-        ):
+        if any(a is not None and len(a) != FIELDS[k] for k, a in vals.items()):
             return None
         q_nb = None
+        invalid = False
         if vals["orientation_xyzw"] is not None:
             try:
                 q_nb = rot.normalise(vals["orientation_xyzw"])
-            except ValueError:  # zero quaternion: as unusable as NaN
-                return None
-        return vals, q_nb
+            except ValueError:  # zero or non-finite quaternion: no orientation
+                vals["orientation_xyzw"] = None
+                invalid = True
+        # NaN/inf anywhere makes the sum non-finite (values near 1e308 are absurd here anyway)
+        if not math.isfinite(sum(sum(a) for a in vals.values() if a is not None)):
+            return None
+        return vals, q_nb, invalid
 
     def missing(self, vals: dict[str, list[float] | None]) -> bool:
         """True when a field this measurement needs is absent."""
@@ -135,9 +139,15 @@ class TwistMeasurement:
 
     def rotation_increment(self, vals: dict[str, list[float] | None], q_nb: rot.Quat | None,
                            twist_cov: np.ndarray | None, T: float, new_chain: bool
-                           ) -> tuple[list[float], list[float]] | None:
-        """The odometry's rotation over the interval of length ``T`` in IMU axes [rad] and its variance [rad²];
-        None when it cannot be formed (first twist rate after a gap, no angular velocity nor orientation)."""
+                           ) -> tuple[list[float], list[float], list[float]] | None:
+        """The odometry's rotation over the interval of length ``T`` in IMU axes [rad], its variance [rad²] and the
+        covariance of its mean rate (increment / T) with the previous interval's [rad²/s²]; None when it cannot be
+        formed (first twist rate after a gap, no angular velocity nor orientation).
+
+        The trapezoid ``½(ω_{k−1} + ω_k) T`` shares the rate ``ω_{k−1}`` with the previous interval's, so the two
+        mean rates' errors have covariance ``¼ Var(ω_{k−1})`` (the gyro filter's covariance matching needs it:
+        without it S_g is biased low by ``½ Var(ω)/D``, negative for noisy odometry). Increments from orientation
+        differences are taken as independent (their noise model is the angular-velocity σ times T)."""
         cfg = self.config
         if vals["angular_velocity"] is not None:
             w_now = _rotate(self._C_ib_rows, vals["angular_velocity"])
@@ -151,12 +161,18 @@ class TwistMeasurement:
                 return None  # the trapezoid needs the rate at both ends of the interval
             # trapezoid: the twist is the rate at the stamp
             return ([0.5 * (a + b) * T for a, b in zip(prev[0], w_now, strict=True)],
-                    [0.25 * (a + b) * T * T for a, b in zip(prev[1], rw, strict=True)])
+                    [0.25 * (a + b) * T * T for a, b in zip(prev[1], rw, strict=True)],
+                    [0.25 * a for a in prev[1]])
         if q_nb is not None and self._q_nb_prev is not None:
             dq = rot.multiply(rot.conjugate(self._q_nb_prev), q_nb)
             std = cfg.angular_velocity_noise_std or cfg.default_angular_velocity_noise_std
-            return _rotate(self._C_ib_rows, rot.to_rotvec(dq).tolist()), [(std * T) ** 2] * 3
+            return _rotate(self._C_ib_rows, rot.to_rotvec(dq).tolist()), [(std * T) ** 2] * 3, [0.0] * 3
         return None
+
+    def reset_chain(self) -> None:
+        """Forget the last epoch's rate and orientation (a new time line: no increment spans it)."""
+        self._w_prev = None
+        self._q_nb_prev = None
 
     def end_epoch(self, q_nb: rot.Quat | None) -> None:
         """The epoch is processed: remember its orientation for the next one."""

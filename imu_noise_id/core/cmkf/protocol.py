@@ -13,6 +13,7 @@ from typing import Protocol
 import numpy as np
 
 from .interval import ImuInterval
+from .matching import MatchingLeastSquares
 
 
 class CmkfFilter(Protocol):
@@ -26,6 +27,7 @@ class CmkfFilter(Protocol):
     P : (n, 3, 3) its covariance (NaN in the ``r`` row and column of a filter that does not estimate ``r``).
     y, S : innovations (n, m) and their covariances (n, m, m) of the last update.
     S_used : (n,) Ŝ_v in use [m²/s³]; S_ls : (n,) latest least-squares Ŝ_v (NaN before the first stacked sample).
+    matching : the least squares behind ``S_ls``, with its standard error (:mod:`.matching`);
     count : stacked samples in the estimate; rejected : estimates refused by the positive-definiteness check;
     skipped : updates skipped (innovation covariance not positive definite); skipped_stacked : stacked steps
     skipped (degenerate interval).
@@ -34,6 +36,7 @@ class CmkfFilter(Protocol):
     n: int
     m: int
     initialised: bool
+    matching: MatchingLeastSquares
     count: int
     rejected: int
     skipped: int
@@ -68,6 +71,10 @@ class CmkfFilter(Protocol):
 
     def predicted_P(self, interval: ImuInterval) -> np.ndarray:
         """P⁻ after ``interval`` without changing the filter (for reporting between updates)."""
+
+    def nis(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """NIS per axis that :meth:`update` with ``z`` and ``R`` would have now, without updating (for the
+        innovation gate, :mod:`.gate`)."""
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
         """Joseph update (24)–(27) with ``z`` (n, m) and ``R`` (n, m, m), then one stacked-estimator step (none

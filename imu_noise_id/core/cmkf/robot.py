@@ -37,15 +37,16 @@ propagates, its covariance grows and the estimate is flagged unobserved.
 from __future__ import annotations
 
 import math
-from collections import deque
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import rotation as rot
+from .agreement import AxisAgreement
 from .axis import AxisCmkf
 from .config import CmkfConfig
+from .estimate import CmkfEstimate, consistency
 from .fast_vel import VelocityAxisCmkf
+from .gate import InnovationGate, NisWindow
 from .gyro import GyroBiasFilter
 from .interval import ImuPropagation
 from .measurement import PoseTwistMeasurement, TwistMeasurement
@@ -53,49 +54,8 @@ from .protocol import CmkfFilter
 
 COUNTERS = ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "odom_dropped_stamp",
             "odom_dropped_nan", "odom_dropped_missing", "odom_dropped_late", "odom_dropped_interval", "odom_late",
-            "odom_without_imu", "odom_gaps", "imu_gaps", "skipped_updates", "skipped_stacked")
-
-
-@dataclass
-class CmkfEstimate:
-    """What :meth:`RobotCmkf.estimate` returns (IMU frame, SI units).
-
-    Attributes
-    ----------
-    t : time of the estimate [s] (last processed stamp).
-    status : ``no_data``, ``no_imu`` (odometry only: nothing to estimate), ``imu_only`` (no odometry yet),
-        ``unobserved`` (no odometry update for longer than ``max_odom_gap``, or no IMU sample for longer than
-        ``max_imu_gap`` while odometry continues), ``converging`` (fewer than
-        ``min_samples`` stacked samples) or ``tracking``.
-    observed : True when an odometry update happened within ``max_odom_gap`` and the IMU is alive.
-    accel_bias, accel_bias_std : [m/s²] per IMU axis; S_v : Ŝ_v in use [m²/s³]; S_v_ls : latest least-squares
-        value (may be ≤ 0 early on); accel_noise_density : √Ŝ_v [m/s²/√Hz].
-    gyro_bias, gyro_bias_std : [rad/s]; S_g, S_g_ls : [rad²/s]; gyro_noise_density : √Ŝ_g [rad/s/√Hz].
-    nis_accel, nis_accel_dof : NIS of the last accelerometer-filter update (sum over axes) and its dof;
-    nis_accel_mean : mean over the last ``nis_window`` updates; nis_gyro, nis_gyro_dof : the same for the gyro.
-    n_stacked : stacked samples in the S_v estimate; counters : messages used and dropped, by reason.
-    """
-
-    t: float
-    status: str
-    observed: bool
-    accel_bias: np.ndarray
-    accel_bias_std: np.ndarray
-    S_v: np.ndarray
-    S_v_ls: np.ndarray
-    accel_noise_density: np.ndarray
-    gyro_bias: np.ndarray
-    gyro_bias_std: np.ndarray
-    S_g: np.ndarray
-    S_g_ls: np.ndarray
-    gyro_noise_density: np.ndarray
-    nis_accel: float
-    nis_accel_dof: int
-    nis_accel_mean: float
-    nis_gyro: float
-    nis_gyro_dof: int
-    n_stacked: int
-    counters: dict[str, int] = field(default_factory=dict)
+            "odom_without_imu", "odom_gaps", "imu_gaps", "skipped_updates", "skipped_stacked", "gated_accel",
+            "gated_gyro", "odom_dropped_orientation", "odom_orientation_invalid")
 
 
 def default_filter(config: CmkfConfig) -> CmkfFilter:
@@ -133,11 +93,15 @@ class RobotCmkf:
         if self.filter.n != 3 or self.filter.m != self.odometry.m:
             raise ValueError(f"the accelerometer filter must have 3 axes and {self.odometry.m} measurement "
                              f"component(s) per axis for measurement {config.measurement!r}")
-        self.gyro = GyroBiasFilter(config.gyro_bias_tau, config.gyro_bias_sigma, config.s_g0, config.min_samples)
+        self.gyro = GyroBiasFilter(config.gyro_bias_tau, config.gyro_bias_sigma, config.s_g0, config.min_samples,
+                                   config.pd_check)
         self.imu = ImuPropagation(config.gravity, config.accel_bias_tau, config.accel_bias_sigma,
                                   track_position=self.odometry.m == 2)
         self.counters = dict.fromkeys(COUNTERS, 0)
         self.last_update = (False, False)  # (accelerometer filter, gyro filter) updated by the last odometry
+        self.gates = (InnovationGate(3 * self.filter.m, config.nis_gate_probability),
+                      InnovationGate(3, config.nis_gate_probability))
+        self.last_gated = (False, False)  # (accelerometer, gyro) update of the last odometry rejected by its gate
         self._t_imu: float | None = None
         self._t_odom: float | None = None
         self._t_state: float | None = None
@@ -147,8 +111,22 @@ class RobotCmkf:
         self._reinit = True
         self._nis_accel = math.nan
         self._nis_gyro = math.nan
-        self._nis_hist: deque[float] = deque(maxlen=config.nis_window)
-        self._nis_sum = 0.0
+        self.nis_windows = (NisWindow(3 * self.filter.m, config.nis_window), NisWindow(3, config.nis_window))
+        self.agreement = (AxisAgreement("velocity"), AxisAgreement("rotation"))
+        self._z_prev: tuple[list[float], list[float]] | None = None  # velocity measurement and variance, last epoch
+        self._v_post = [0.0, 0.0, 0.0]  # velocity after the last update
+
+    def new_time_line(self) -> None:
+        """The input stamps restarted from an earlier time (a restarted driver, a bag played again): forget the
+        times and the interval in progress, keep what was estimated (biases and their variances, the S_v and S_g
+        least squares, the consistency windows); position and velocity restart from the next odometry message."""
+        self._t_imu = self._t_odom = self._t_state = self._t_update = None
+        self._last_imu = None
+        self._reinit = True
+        self._z_prev = None
+        self.imu.reset_interval()
+        self.gyro.reset_chain()
+        self.odometry.reset_chain()
 
     # ------------------------------------------------------------------ IMU path
     def process_imu(
@@ -223,6 +201,7 @@ class RobotCmkf:
         """
         t = float(t)
         self.last_update = (False, False)
+        self.last_gated = (False, False)
         checked = self._usable_odometry(t, {"position": position, "orientation_xyzw": orientation_xyzw,
                                             "linear_velocity": linear_velocity, "angular_velocity": angular_velocity})
         if checked is None:
@@ -240,8 +219,10 @@ class RobotCmkf:
         elif self._t_odom is not None and t <= self._t_odom:
             reason = "odom_dropped_stamp"
         elif self.odometry.missing(checked[0]):
-            reason = "odom_dropped_missing"
+            # an invalid orientation (all-zero quaternion) is dropped only where it is needed
+            reason = "odom_dropped_orientation" if checked[2] else "odom_dropped_missing"
         else:
+            self.counters["odom_orientation_invalid"] += checked[2]
             self.counters["odom"] += 1
             self._t_odom = t
             if self._last_imu is None:
@@ -251,7 +232,7 @@ class RobotCmkf:
             elif t < (self._t_imu if self._t_state is None else self._t_state):
                 reason = "odom_dropped_late"  # behind the IMU-propagated state: fed out of stamp order
             else:
-                return checked
+                return checked[:2]
         self.counters[reason] += 1
         return None
 
@@ -276,7 +257,7 @@ class RobotCmkf:
         if self._reinit or self._t_state is None:
             self._initialise(t, z, R)
         else:
-            self._update(z, R, new_chain)
+            self._update(t, z, R, new_chain)
             self.last_update = (self.last_update[0], self._gyro_update(vals, q_nb, twist_cov, new_chain))
         if q_nb is not None:
             imu.q_ni = q_ni
@@ -284,31 +265,50 @@ class RobotCmkf:
         self._t_update = t
         imu.reset_interval()
 
-    def _update(self, z: list | np.ndarray, R: list | np.ndarray, new_chain: bool) -> None:
-        """Predict the accelerometer filter to the epoch (eq. 23) and update it (24)–(35)."""
+    def _update(self, t: float, z: list | np.ndarray, R: list | np.ndarray, new_chain: bool) -> None:
+        """Predict the accelerometer filter to the epoch (eq. 23) and update it (24)–(35), unless the innovation
+        gate rejects the update (:mod:`.gate`): then position and velocity restart from the measurement and the
+        predicted bias is kept."""
         f, imu = self.filter, self.imu
         skipped_before = (f.skipped, f.skipped_stacked)
+        velocity = ([float(row[-1]) for row in z], [float(r[-1][-1]) for r in R])
+        imu_change = [a - b for a, b in zip(imu.v, self._v_post, strict=True)]
         r_pred = self.odometry.position_prior(imu.r, imu.dp)
         f.predict(np.array([r_pred, imu.v, imu.b]).T, imu.interval())
+        nis_now = float(f.nis(z, R).sum())
+        previous, self._z_prev = self._z_prev, velocity
+        if self.gates[0].rejects(nis_now):
+            self.counters["gated_accel"] += 1
+            self.last_gated = (True, False)
+            self._nis_accel = nis_now
+            self.nis_windows[0].add(nis_now, gated=True)
+            self._initialise(t, z, R, bias=(f.x[:, 2].tolist(), f.P[:, 2, 2].copy()))
+            self._z_prev = velocity
+            return
+        if previous is not None and not new_chain:
+            self.agreement[0].add(imu_change, [a - b for a, b in zip(velocity[0], previous[0], strict=True)],
+                                  [a + b for a, b in zip(velocity[1], previous[1], strict=True)])
         nis = f.update(z, R, new_chain=new_chain)
         imu.r, imu.v, imu.b = f.x.T.tolist()
+        self._v_post = list(imu.v)
         self.counters["skipped_stacked"] += f.skipped_stacked - skipped_before[1]
         if f.skipped > skipped_before[0]:
             self.counters["skipped_updates"] += 1
             self._nis_accel = math.nan
             return
         self._nis_accel = float(nis.sum())
-        if len(self._nis_hist) == self._nis_hist.maxlen:
-            self._nis_sum -= self._nis_hist[0]
-        self._nis_hist.append(self._nis_accel)
-        self._nis_sum += self._nis_accel
+        self.nis_windows[0].add(self._nis_accel, gated=False)
         self.counters["updates"] += 1
         self.last_update = (True, False)
 
-    def _initialise(self, t: float, z: list | np.ndarray, R: list | np.ndarray) -> None:
-        """(Re-)initialise r, v from the measurement; keep the bias and its variance (grown) if known."""
+    def _initialise(self, t: float, z: list | np.ndarray, R: list | np.ndarray,
+                    bias: tuple[list[float], np.ndarray] | None = None) -> None:
+        """(Re-)initialise r, v from the measurement; keep the bias and its variance (grown) if known, or take
+        ``bias`` = (value, variance) per axis."""
         cfg = self.config
-        if self.filter.initialised:
+        if bias is not None:
+            b0, Pbb = bias
+        elif self.filter.initialised:
             b0 = list(self.imu.b)
             Pbb = self._bias_var()
             if self._t_update is not None:
@@ -323,7 +323,9 @@ class RobotCmkf:
         x0 = np.array([r0, v0, b0], dtype=float).T
         self.filter.initialise(x0, P0)
         self.gyro.reset_chain()
+        self._z_prev = None
         self.imu.r, self.imu.v, self.imu.b = x0.T.tolist()
+        self._v_post = list(self.imu.v)
         self._t_state = t
         self._reinit = False
 
@@ -338,12 +340,29 @@ class RobotCmkf:
         increment = self.odometry.rotation_increment(vals, q_nb, twist_cov, T, new_chain)
         if increment is None:
             return False
-        dtheta_odo, R = increment
-        self.gyro.predict(T)
-        self._nis_gyro = self.gyro.update([a - b for a, b in zip(self.imu.dtheta, dtheta_odo, strict=True)], R)
+        dtheta_odo, R, shared = increment
+        gyro = self.gyro
+        gyro.predict(T)
+        z = [a - b for a, b in zip(self.imu.dtheta, dtheta_odo, strict=True)]
+        nis = gyro.nis(z, R)
+        if self.gates[1].rejects(nis):
+            self.counters["gated_gyro"] += 1
+            self.last_gated = (self.last_gated[0], True)
+            self._nis_gyro = nis
+            self.nis_windows[1].add(nis, gated=True)
+            gyro.coast()
+            return False
+        self.agreement[1].add([a - b * T for a, b in zip(self.imu.dtheta, gyro.bias, strict=True)], dtheta_odo, R)
+        self._nis_gyro = gyro.update(z, R, shared)
+        self.nis_windows[1].add(self._nis_gyro, gated=False)
         return True
 
     # ------------------------------------------------------------------ results
+    @property
+    def last_nis(self) -> tuple[float, float]:
+        """NIS of the last (accelerometer, gyro) update, also when the gate rejected it."""
+        return self._nis_accel, self._nis_gyro
+
     def _bias_var(self) -> np.ndarray:
         """Accelerometer-bias variance per axis, predicted to the current time."""
         f = self.filter
@@ -372,6 +391,9 @@ class RobotCmkf:
             status = "converging"
         else:
             status = "tracking"
+        verdict, reason = consistency(self.nis_windows, self.agreement)
+        if verdict == "inconsistent" and status in ("converging", "tracking"):
+            status = "inconsistent"
         if f.initialised:
             bias = np.array(self.imu.b)
             bias_std = np.sqrt(self._bias_var())
@@ -380,6 +402,8 @@ class RobotCmkf:
             bias = np.zeros(3)
             bias_std = np.full(3, cfg.accel_bias_sigma)
             g_var = np.full(3, cfg.gyro_bias_sigma**2)
+        S_v_ls, S_g_ls = f.S_ls, gyro.S_ls
+        windows = self.nis_windows
         return CmkfEstimate(
             t=float(t) if math.isfinite(t) else math.nan,
             status=status,
@@ -387,18 +411,22 @@ class RobotCmkf:
             accel_bias=bias,
             accel_bias_std=bias_std,
             S_v=f.S_used.copy(),
-            S_v_ls=f.S_ls,
-            accel_noise_density=np.sqrt(f.S_used),
+            S_v_ls=S_v_ls,
+            accel_ls=(S_v_ls, f.matching.standard_error, f.matching.dof),
             gyro_bias=gyro.x,
             gyro_bias_std=np.sqrt(g_var),
             S_g=gyro.S_used,
-            S_g_ls=gyro.S_ls,
-            gyro_noise_density=np.sqrt(gyro.S_used),
+            S_g_ls=S_g_ls,
+            gyro_ls=(S_g_ls, gyro.matching.standard_error, gyro.matching.dof),
             nis_accel=self._nis_accel,
             nis_accel_dof=3 * f.m,
-            nis_accel_mean=self._nis_sum / len(self._nis_hist) if self._nis_hist else math.nan,
+            nis_accel_mean=windows[0].mean,
             nis_gyro=self._nis_gyro,
             nis_gyro_dof=3,
+            nis_gyro_mean=windows[1].mean,
+            gated=self.last_gated,
+            consistency=verdict,
+            consistency_reason=reason,
             n_stacked=f.count,
             counters=dict(self.counters),
         )

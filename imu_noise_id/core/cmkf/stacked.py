@@ -42,6 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .matching import MatchingLeastSquares
+
 
 @dataclass(frozen=True)
 class Interval:
@@ -91,9 +93,7 @@ class StackedSvEstimator:
         self.Lam[bias_index] = 1.0
         self._HLam = self.H @ self.Lam
         self._eye = np.eye(self.d)
-        self.num = np.zeros(self.n_axes)
-        self.den = 0.0
-        self.count = 0
+        self.matching = MatchingLeastSquares(self.n_axes)
         self.skipped = 0  # epochs whose M_o could not be inverted (zero-length interval): the chain restarts
         self._chain: deque[_Epoch] = deque(maxlen=3)
         self.last_Z: np.ndarray | None = None
@@ -103,11 +103,14 @@ class StackedSvEstimator:
         self._chain.clear()
 
     @property
+    def count(self) -> int:
+        """Stacked samples accumulated."""
+        return self.matching.count
+
+    @property
     def estimate(self) -> np.ndarray:
         """Current least-squares Ŝ_v per axis [m²/s³] (NaN before the first stacked sample)."""
-        if self.count == 0 or self.den <= 0.0:
-            return np.full(self.n_axes, np.nan)
-        return self.num / self.den
+        return self.matching.estimate
 
     def add_epoch(self, z: np.ndarray, R: np.ndarray, interval: Interval | None, U: np.ndarray | None) -> bool:
         """Add measurement epoch k; returns True when a stacked sample 𝒵_k was formed and accumulated.
@@ -156,9 +159,7 @@ class StackedSvEstimator:
             + np.sum(e1.R * (E2.T @ D @ E2), axis=(1, 2))
             + np.sum(e2.R * (E3.T @ D @ E3), axis=(1, 2))
         )
-        self.num += np.sum((Z @ D) * Z, axis=1) - cw - ce
-        self.den += float(np.sum(D * D))
-        self.count += 1
+        self.matching.add((np.sum((Z @ D) * Z, axis=1) - cw - ce).tolist(), float(np.sum(D * D)))
         self.last_Z = Z
         return True
 

@@ -61,6 +61,15 @@ class CmkfStream:
         """Process every queued message (the end of the input)."""
         return self._process(self.merger.flush())
 
+    def new_time_line(self) -> bool:
+        """The stamps restarted: the queued messages are processed, then the filter forgets its times (keeping
+        its estimates, :meth:`RobotCmkf.new_time_line`) and the merger starts afresh. True when a queued odometry
+        message updated the filter."""
+        updated = self.flush()
+        self.cmkf.new_time_line()
+        self.merger = StampMerger(self.merger.latency)
+        return updated
+
     def restart(self) -> None:
         """A fresh filter with the same parameters; the queued messages are kept."""
         self.cmkf = RobotCmkf(self.cmkf.config)

@@ -204,7 +204,7 @@ def simulate_robot(
         for name, density in (("gyro", sensors.gyro_random_walk), ("accel", sensors.accel_random_walk)):
             if density > 0:
                 imu[name][:, k] += RW(density).simulate(n, dt, rng)
-    imu_t = t0 + (np.arange(n) + 1) * dt
+    imu_t = _whole_nanoseconds(t0 + (np.arange(n) + 1) * dt)
 
     # Heading and position on a grid as fine as the IMU's (trapezoid), sampled at the odometry stamps.
     grid = np.linspace(0.0, duration, n * substeps + 1)
@@ -232,9 +232,16 @@ def simulate_robot(
         twist_cov[:, i, i] = sensors.velocity_noise_std**2
         twist_cov[:, 3 + i, 3 + i] = sensors.angular_velocity_noise_std**2
     return RobotRun(
-        imu_t, imu["gyro"], imu["accel"], t0 + odom_rel, position, quat, lin, ang, pose_cov, twist_cov,
+        imu_t, imu["gyro"], imu["accel"], _whole_nanoseconds(t0 + odom_rel), position, quat, lin, ang, pose_cov,
+        twist_cov,
         np.asarray(sensors.accel_bias, float), np.asarray(sensors.gyro_bias, float), tuple(q_bi),
     )
+
+
+def _whole_nanoseconds(t: np.ndarray) -> np.ndarray:
+    """Stamps rounded to integer nanoseconds, as a bag stores them: an odometry stamp that falls on an IMU stamp
+    is then that very float, and the merge puts the IMU sample that ends the interval first."""
+    return np.round(t * 1e9) / 1e9
 
 
 def replay_arrays(filt: RobotCmkf, run: RobotRun) -> list[CmkfEstimate]:

@@ -3,7 +3,8 @@
 The parts, one job each (:class:`OnlineIdentifier` composes them; :mod:`.identifier` lists the per-message steps):
 
 * :mod:`.config` — the node's parameters (names, defaults, ranges, units) and their validation;
-* :mod:`.inputs` — receive book-keeping, value and stamp checks of every input stream;
+* :mod:`.inputs` — receive book-keeping, value checks and saturation of every input stream;
+* :mod:`.stamps` — the header-stamp checks: the rate learnt robustly, gaps, outliers, new time lines;
 * :mod:`.cmkf_feed` — the CMKF (paper 004 on a robot) behind its stamp merger, restarted on error;
 * :mod:`.innovations` — whiteness and consistency of the filters' innovations;
 * :mod:`.stationarity` — stationary or moving, with hysteresis and the guard delay line;

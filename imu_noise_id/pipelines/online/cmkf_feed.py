@@ -25,7 +25,7 @@ class CmkfFeed:
 
     Attributes
     ----------
-    estimate : the CMKF's estimate after the last update (or :meth:`refresh`).
+    estimate : the CMKF's estimate after the last update (or :meth:`refresh`), formed when read.
     gyro_bias, accel_bias : (3,) the biases the corrected IMU samples and the stationarity use (0 until the first
         odometry update).
     errors : restarts after an error; too_late : odometry messages that came later than ``cmkf.input_latency``.
@@ -43,7 +43,7 @@ class CmkfFeed:
         self._events = events
         self.stream = CmkfStream(self._config, on_odometry=self._on_odometry)
         self.innovations = InnovationChecks(*self._innovation_parameters, self.cmkf.filter.m)
-        self.estimate: CmkfEstimate = self.stream.estimate()
+        self._estimate: CmkfEstimate | None = None
         self.gyro_bias = np.zeros(3)
         self.accel_bias = np.zeros(3)
         self.errors = 0
@@ -67,9 +67,22 @@ class CmkfFeed:
         changed."""
         return self._feed(self.stream.process_odometry, t, **fields)
 
+    def new_time_line(self) -> None:
+        """The stamps of an input restarted: the filter forgets its times, keeps its estimates (biases, least
+        squares) and restarts position and velocity from the next odometry."""
+        self._feed(self.stream.new_time_line)
+
+    @property
+    def estimate(self) -> CmkfEstimate:
+        """The CMKF's estimate after the last update or :meth:`refresh` (formed when asked for: the biases the
+        corrected samples need are read after every update without it)."""
+        if self._estimate is None:
+            self._estimate = self.stream.estimate()
+        return self._estimate
+
     def refresh(self) -> None:
         """Re-read the estimate (its status changes without odometry updates too)."""
-        self.estimate = self.stream.estimate()
+        self._estimate = None
 
     def _feed(self, process: Any, *args: Any, **kwargs: Any) -> bool:
         try:
@@ -82,10 +95,11 @@ class CmkfFeed:
             self.innovations = InnovationChecks(*self._innovation_parameters, self.cmkf.filter.m)
             updated = True
         if updated:
-            self.estimate = est = self.stream.estimate()
-            if self.cmkf.filter.initialised:
-                self.gyro_bias = est.gyro_bias
-                self.accel_bias = est.accel_bias
+            self._estimate = None
+            cmkf = self.cmkf
+            if cmkf.filter.initialised:
+                self.gyro_bias = cmkf.gyro.x
+                self.accel_bias = np.array(cmkf.imu.b)
         return updated
 
     def _on_odometry(self, t: float, order: int) -> None:
@@ -96,3 +110,11 @@ class CmkfFeed:
                                "cmkf.input_latency after the IMU: not used by the CMKF")
         else:
             self.innovations.add(self.cmkf)
+            cmkf = self.cmkf
+            for gated, key, what, nis, gate in zip(cmkf.last_gated, ("cmkf_gated_accel", "cmkf_gated_gyro"),
+                                                   ("accelerometer", "gyro"), cmkf.last_nis, cmkf.gates, strict=True):
+                if gated:
+                    self._events.count(key)
+                    self._events.event(key, f"CMKF: {what} update at t = {t:.6f} s rejected by the innovation gate "
+                                       f"(NIS {nis:.3g} > {gate.threshold:.3g}): a bump, a saturated or corrupted "
+                                       "sample, wheel slip; the bias is kept")

@@ -90,14 +90,21 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "as absent", "s", 0.01, 60.0),
     ParamSpec("gap_factor", 10.0, "a period longer than gap_factor × the nominal IMU period is a gap", "",
               1.5, 1000.0),
-    ParamSpec("backward_reset_count", 50, "this many consecutive backward stamps mean the source restarted: "
-              "the identification restarts on the new time base", "messages", 2, 100000),
+    ParamSpec("backward_reset_count", 10, "this many consecutive stamps behind the last accepted one, following "
+              "one another at about the stream's rate, are a restarted source: a new time line (what was "
+              "identified is kept)", "messages", 2, 100000),
     ParamSpec("stale_timeout", 2.0, "no message for this long (steady clock) makes an input STALE", "s",
               0.1, 3600.0),
     ParamSpec("expected_imu_rate", 0.0, "IMU rate expected [Hz]; a received rate below 80 % of it is a "
               "warning (0: not checked)", "Hz", 0.0, 100000.0),
     ParamSpec("expected_odom_rate", 0.0, "odometry rate expected; a received rate below 80 % of it is a "
               "warning (0: not checked)", "Hz", 0.0, 100000.0),
+    ParamSpec("imu_range.gyro", 0.0, "full scale of the gyro (datasheet range): samples at it are flagged as "
+              "saturated (0: unknown; then a value repeated at the largest magnitude seen, above 2 rad/s, is)",
+              "rad/s", 0.0, 1000.0),
+    ParamSpec("imu_range.accel", 0.0, "full scale of the accelerometer: samples at it are flagged as saturated (0: "
+              "unknown; then a value repeated at the largest magnitude seen, above 19 m/s^2, is)", "m/s^2", 0.0,
+              10000.0),
     ParamSpec("expected.gyro_bias_max", 0.1, "|gyro bias| above this on any axis is reported", "rad/s",
               0.0, 100.0),
     ParamSpec("expected.accel_bias_max", 0.5, "|accelerometer bias| above this on any axis is reported",

@@ -3,8 +3,10 @@
 Per IMU sample:
 
 1. :class:`~.inputs.Input` checks it (non-finite values, zero, duplicated or backward stamps are rejected and
-   counted); a gap in the stamps ends the stationary stretch, a sustained jump back in time restarts the whole
-   identification.
+   counted; a message after a jump in the stamps waits for the next one, which tells a gap from an isolated
+   outlier); a gap ends the stationary stretch, a time line that goes back and on from there (a restarted source)
+   is a gap of unknown length: nothing estimated is forgotten. :class:`~.inputs.SaturationCheck` flags samples at
+   the sensor's full scale.
 2. :class:`~.cmkf_feed.CmkfFeed`: the CMKF (paper 004 on a robot) receives it ``cmkf.input_latency`` seconds
    later, in stamp order with the odometry (two topics, two latencies).
 3. :class:`~.stationarity.StationaryGate`: stationarity with hysteresis, then the guard delay line.
@@ -27,18 +29,20 @@ from typing import Any
 
 import numpy as np
 
+from ...core.axes import AXES
 from ...core.quality import IMU_MAX_ABS
 from .bank import BankFeed
 from .cmkf_feed import CmkfFeed
 from .config import OnlineConfig
 from .events import EventLog
-from .inputs import Input
+from .inputs import Input, SaturationCheck
 from .noise import StationaryNoise
 from .results import CorrectedImu, Estimates, HypothesesReport
 from .stationarity import StationaryGate
 from .status import (
     DiagnosticStatus,
     WindowStats,
+    cmkf_noise_status,
     consistency_status,
     hypotheses_status,
     input_status,
@@ -64,7 +68,7 @@ class OnlineIdentifier:
     imu, odom, temperature : the inputs (counters, stamp checks); cmkf_feed : the CMKF; stationarity : the
     stationarity gate; noise : the white-noise density; bank : the hypothesis bank (None without hypotheses);
     processing_time, identification_time : callback and bank-batch times (the node adds the former);
-    restarts : identification restarts after a jump back in time; last_imu_t : stamp of the last IMU sample.
+    restarts : new time lines of the IMU stamps (a jump back in time); last_imu_t : stamp of the last IMU sample.
 
     Raises
     ------
@@ -80,14 +84,15 @@ class OnlineIdentifier:
         self.imu = Input("imu", config, self.events)
         self.odom = Input("odom", config, self.events)
         self.temperature = Input("temperature", config, self.events)
+        self.saturation = SaturationCheck(config)
         self.processing_time = WindowStats()
         self.identification_time = WindowStats(size=256)
         self.temperature_celsius = math.nan
         self.restarts = 0
-        self._reset_estimation()
+        self._start_estimation()
 
-    def _reset_estimation(self) -> None:
-        """Everything estimated starts again (a restarted source: a new time base)."""
+    def _start_estimation(self) -> None:
+        """The estimators, empty."""
         config = self.config
         self.cmkf_feed = CmkfFeed(config, self.events)
         self.stationarity = StationaryGate(config)
@@ -102,6 +107,7 @@ class OnlineIdentifier:
         self.config = config
         for source in (self.imu, self.odom, self.temperature):
             source.configure(config)
+        self.saturation.configure(config)
         self.stationarity.configure(config)
         self.cmkf_feed.set_latency(config.cmkf_input_latency)
 
@@ -113,13 +119,15 @@ class OnlineIdentifier:
     def process_imu(
         self, t: float, gyro: tuple[float, float, float], accel: tuple[float, float, float],
         frame_id: str = "", wall_time: float | None = None, *,
-        orientation_xyzw: tuple[float, float, float, float] | None = None,
-    ) -> CorrectedImu | None:
+        orientation_xyzw: tuple[float, float, float, float] | None = None, source: Any = None,
+    ) -> list[CorrectedImu]:
         """One IMU message: header stamp ``t`` [s], angular rate [rad/s], specific force [m/s²].
 
-        ``orientation_xyzw`` is used by the CMKF only with ``cmkf.gravity_source: imu``. Returns the
-        bias-corrected sample, or None when the message was rejected (counted, and reported through
-        :meth:`pop_events` and the diagnostics).
+        ``orientation_xyzw`` is used by the CMKF only with ``cmkf.gravity_source: imu``; ``source`` (e.g. the ROS
+        message) comes back in the corrected sample. Returns the bias-corrected samples this message released, in
+        stamp order: usually itself; none when it was rejected (counted, and reported through :meth:`pop_events`
+        and the diagnostics) or held after a jump in the stamps; the held one and itself when it confirmed the
+        jump.
         """
         sample = np.array((*gyro, *accel), dtype=float)
         # The offline reader's physical limits (|ω| ≤ 1e3 rad/s, |a| ≤ 1e4 m/s²): one absurd sample must not
@@ -127,24 +135,32 @@ class OnlineIdentifier:
         with np.errstate(invalid="ignore"):
             usable = bool(np.isfinite(sample).all() and np.abs(sample[:3]).max() <= IMU_MAX_ABS[0]
                           and np.abs(sample[3:]).max() <= IMU_MAX_ABS[1])
-        verdict = self.imu.receive(t, usable, frame_id, wall_time,
-                                   f"or implausible angular rate or acceleration (limits {IMU_MAX_ABS[0]:g} rad/s, "
-                                   f"{IMU_MAX_ABS[1]:g} m/s²)")
-        if verdict is None:
-            return None
+        released = self.imu.receive(t, usable, frame_id, wall_time,
+                                    f"or implausible angular rate or acceleration (limits {IMU_MAX_ABS[0]:g} rad/s, "
+                                    f"{IMU_MAX_ABS[1]:g} m/s²)", payload=(t, sample, orientation_xyzw, source))
+        return [self._imu_sample(verdict, *payload) for verdict, payload in released]
+
+    def _imu_sample(self, verdict: str, t: float, sample: np.ndarray,
+                    orientation_xyzw: tuple[float, float, float, float] | None, source: Any) -> CorrectedImu:
+        """One accepted IMU sample through the CMKF, the stationarity and the noise identification."""
+        gyro, accel = sample[:3].tolist(), sample[3:].tolist()
+        saturated = self.saturation.check(gyro + accel)
+        if saturated:
+            self._saturated(t, sample, saturated)
         if verdict == "restart":
             self.restarts += 1
-            self._reset_estimation()
-        elif verdict == "gap":
-            self._end_stationary()
-            self.stationarity.interrupt()
+            self._new_time_line()
+        elif verdict == "gap":  # no difference across it; a short one (a driver's pause between bursts of host-
+            self.noise.break_chain()  # stamped messages) leaves the stationarity and the bank's stretch alone
+            if t - self.last_imu_t > self.config.stationary_window:
+                self._end_stationary()
+                self.stationarity.interrupt()
         if self.imu.stats.accepted % 100 == 0:
             self._variance_cache = None
         self.last_imu_t = t
         if self.config.cmkf_gravity_source != "imu":
             orientation_xyzw = None
-        if self.cmkf_feed.imu(t, gyro, accel, orientation_xyzw):
-            self._variance_cache = None
+        self.cmkf_feed.imu(t, gyro, accel, orientation_xyzw)
         ended, released = self.stationarity.update(t, sample, self.cmkf_feed.gyro_bias)
         if ended:
             self._end_stationary()
@@ -152,7 +168,25 @@ class OnlineIdentifier:
             self.noise.add(t_s, y)
             if self.bank is not None:
                 self.bank.add(t_s, y)
-        return self._corrected(t, sample)
+        return self._corrected(t, sample, source)
+
+    def _new_time_line(self) -> None:
+        """The stamps went back and on from there (a restarted source): a gap of unknown length, nothing is
+        forgotten — the CMKF keeps its biases and least squares, the noise its differences, the bank its
+        posteriors (its next stretch declares no gap: a negative one is none)."""
+        self._end_stationary()
+        self.stationarity.interrupt()
+        self.cmkf_feed.new_time_line()
+
+    def _saturated(self, t: float, sample: np.ndarray, axes: list[str]) -> None:
+        """Count and report a sample at the sensor's full scale (it is used: the CMKF's gate guards the biases)."""
+        stats = self.imu.stats
+        stats.saturated += 1
+        stats.window_saturated += 1
+        self.events.count("imu_saturated")
+        values = ", ".join(f"{axis} = {sample[AXES.index(axis)]:.6g}" for axis in axes)
+        self.events.event("imu_saturated", f"imu: sample at t = {t:.6f} s at the sensor's full scale ({values}): "
+                          "saturated (a bump or a turn beyond the range); set imu_range.* to the datasheet range")
 
     def _end_stationary(self) -> None:
         """Motion or a gap: the difference chain is broken and the bank's stretch ends."""
@@ -167,44 +201,50 @@ class OnlineIdentifier:
         orientation_xyzw: tuple[float, float, float, float] | None = None,
         pose_covariance: np.ndarray | None = None, twist_covariance: np.ndarray | None = None,
     ) -> bool:
-        """One odometry message (pose in the odom frame, twist in the child frame); False when rejected."""
+        """One odometry message (pose in the odom frame, twist in the child frame); False when rejected (a message
+        held after a jump in the stamps is processed with the next one)."""
         v = np.array((*linear_velocity, *angular_velocity), dtype=float)
-        verdict = self.odom.receive(t, bool(np.isfinite(v).all()), frame_id, wall_time, "twist")
-        if verdict is None:
-            return False
+        fields = {"position": position, "orientation_xyzw": orientation_xyzw,
+                  "pose_cov": None if pose_covariance is None else np.array(pose_covariance, dtype=float),
+                  "twist_cov": None if twist_covariance is None else np.array(twist_covariance, dtype=float)}
+        before = self.odom.stats.accepted
+        for verdict, (t_m, v_m, fields_m) in self.odom.receive(t, bool(np.isfinite(v).all()), frame_id, wall_time,
+                                                               "twist", payload=(t, v, fields)):
+            self._odometry(verdict, t_m, v_m, fields_m)
+        return self.odom.stats.accepted > before or self.odom.stamps.held == t
+
+    def _odometry(self, verdict: str, t: float, v: np.ndarray, fields: dict[str, Any]) -> None:
+        """One accepted odometry message to the stationarity and the CMKF."""
         detector = self.stationarity.detector
         if verdict == "restart":
             detector.odom_t = None
+            self.cmkf_feed.new_time_line()
         detector.update_odometry(t, math.sqrt(float(v[:3] @ v[:3])), math.sqrt(float(v[3:] @ v[3:])))
-        if self.cmkf_feed.odometry(
-            t, position=position, orientation_xyzw=orientation_xyzw, linear_velocity=v[:3], angular_velocity=v[3:],
-            pose_cov=None if pose_covariance is None else np.array(pose_covariance, dtype=float),
-            twist_cov=None if twist_covariance is None else np.array(twist_covariance, dtype=float),
-        ):
-            self._variance_cache = None
-        return True
+        self.cmkf_feed.odometry(t, linear_velocity=v[:3], angular_velocity=v[3:], **fields)
 
     def process_temperature(self, t: float, celsius: float, frame_id: str = "",
                             wall_time: float | None = None) -> bool:
         """One temperature message [°C]; False when it was rejected."""
-        if self.temperature.receive(t, math.isfinite(celsius), frame_id, wall_time, "value") is None:
-            return False
-        self.temperature_celsius = celsius
-        return True
+        released = self.temperature.receive(t, math.isfinite(celsius), frame_id, wall_time, "value",
+                                           payload=celsius)
+        for _, value in released:
+            self.temperature_celsius = value
+        return bool(released) or self.temperature.stamps.held == t
 
     # -- outputs ----------------------------------------------------------------------------------------------------
-    def _corrected(self, t: float, sample: np.ndarray) -> CorrectedImu:
+    def _corrected(self, t: float, sample: np.ndarray, source: Any = None) -> CorrectedImu:
         gyro = sample[:3] - self.cmkf_feed.gyro_bias
         accel = sample[3:] - self.cmkf_feed.accel_bias
         if self._variance_cache is None:
             self._refresh_variance()
         gyro_var, accel_var = self._variance_cache
         return CorrectedImu(t, (float(gyro[0]), float(gyro[1]), float(gyro[2])),
-                            (float(accel[0]), float(accel[1]), float(accel[2])), gyro_var, accel_var)
+                            (float(accel[0]), float(accel[1]), float(accel[2])), gyro_var, accel_var, source)
 
     def _refresh_variance(self) -> None:
-        """Cache the covariance written into the corrected samples (refreshed every 100 IMU samples, by
-        :meth:`update_identification` and after every odometry update, not per sample)."""
+        """Cache the covariance written into the corrected samples (refreshed every 100 IMU samples and by
+        :meth:`update_identification`, not per sample nor per odometry update: forming the CMKF's estimate costs
+        more than the update)."""
         variance, _ = self._covariance()
         if variance is None:
             self._variance_cache = (None, None)
@@ -213,7 +253,8 @@ class OnlineIdentifier:
             self._variance_cache = (tuple(v[:3]), tuple(v[3:]))
 
     def _covariance(self) -> tuple[np.ndarray | None, str]:
-        return self.noise.covariance(self.imu.stamps.rate, self.config.noise_min_samples, self.cmkf_feed.estimate)
+        return self.noise.covariance(self.imu.stamps.rate, self.config.noise_min_samples,
+                                     lambda: self.cmkf_feed.estimate)
 
     def update_identification(self) -> None:
         """Feed the queued stationary samples to the per-axis hypothesis banks and refresh the CMKF status (the
@@ -236,6 +277,9 @@ class OnlineIdentifier:
         est = self.cmkf_feed.estimate
         known = self.cmkf_feed.cmkf.filter.initialised
         nan3 = np.full(3, math.nan)
+        nan6 = np.full(6, math.nan)
+        identified = np.concatenate([est.gyro_psd.identified, est.accel_psd.identified])
+        values = np.concatenate([est.gyro_psd.value, est.accel_psd.value])
         covariance, source = self._covariance()
         return Estimates(
             t=self.last_imu_t,
@@ -244,10 +288,13 @@ class OnlineIdentifier:
             gyro_bias_std=est.gyro_bias_std.copy() if known else nan3.copy(),
             accel_bias=est.accel_bias.copy() if known else nan3.copy(),
             accel_bias_std=est.accel_bias_std.copy() if known else nan3.copy(),
-            noise_density=self.noise.density(min_samples),
+            noise_density=self.noise.density(min_samples, self.imu.stamps.period),
             noise_density_rstd=self.noise.relative_std(min_samples),
             noise_samples=self.noise.n,
-            psd=np.concatenate([est.S_g, est.S_v]) if known else np.full(6, math.nan),
+            psd=np.where(identified, values, math.nan) if known else nan6.copy(),
+            psd_se=np.concatenate([est.gyro_psd.se, est.accel_psd.se]) if known else nan6.copy(),
+            psd_upper=np.concatenate([est.gyro_psd.density_upper95(), est.accel_psd.density_upper95()]) ** 2
+            if known else nan6.copy(),
             covariance=covariance if covariance is not None else np.full(6, math.nan),
             covariance_source=source,
             imu_rate=self.imu.stamps.rate,
@@ -277,8 +324,8 @@ class OnlineIdentifier:
         statuses += [
             stamp_status(counts, (self.imu, self.odom), self.restarts),
             stationarity_status(self.stationarity, self.last_imu_t, self.imu.stats.window_received > 0),
-            consistency_status(feed.estimate, cfg.nis_window, bool(counts.get("cmkf_error")), feed.errors,
-                               feed.too_late),
+            consistency_status(feed.estimate, counts, feed.errors, feed.too_late),
+            cmkf_noise_status(feed.estimate),
             feed.innovations.status(),
             noise_status(est, cfg.noise_min_samples),
             hypotheses_status(self.hypotheses(), self.bank is not None,
@@ -289,6 +336,7 @@ class OnlineIdentifier:
         for source in (self.imu, self.odom, self.temperature):
             source.stats.window_received = 0
             source.stats.window_frame_changes = 0
+            source.stats.window_saturated = 0
         self.events.new_period()
         if self.bank is not None:
             self.bank.decision_changes = []

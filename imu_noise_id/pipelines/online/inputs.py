@@ -2,16 +2,21 @@
 
 Every input message (IMU, odometry, temperature) passes :meth:`Input.receive`: it is counted (``received``, per
 diagnostics period, arrival time on the steady clock, frame changes), its values must be finite and its header
-stamp usable (:class:`StampChecker`); a rejected message is counted, reported as an event, and goes no further.
+stamp usable (:class:`~.stamps.StampChecker`); a rejected message is counted, reported as an event, and goes no
+further; a message after a jump in its stamps is held until the next one says whether the jump was real.
+:class:`SaturationCheck` flags IMU samples at the sensor's full scale.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
 
+from ...core.axes import AXES
 from .config import OnlineConfig
 from .events import EventLog
+from .stamps import RELEARN_COUNT, StampChecker
 
 
 @dataclass
@@ -26,82 +31,8 @@ class InputStats:
     frame_id: str | None = None
     frame_changes: int = 0
     window_frame_changes: int = 0
-
-
-@dataclass
-class StampChecker:
-    """Header-stamp checks for one input stream.
-
-    ``check(t)`` returns ``"ok"``, ``"gap"`` (accepted, after a period longer than ``gap_factor`` × the
-    nominal period), ``"relearn"`` (accepted: :data:`RELEARN_COUNT` gaps in a row of nearly equal length are the
-    new rate, not gaps — a rate change, or a nominal period learnt from a burst or a first interval of a
-    microsecond), ``"restart"`` (accepted: ``backward_reset_count`` consecutive backward stamps mean the source
-    restarted), or the reason for rejecting the message: ``"bad_stamp"`` (zero or not finite), ``"duplicate"`` or
-    ``"backward"``.
-    """
-
-    #: Consecutive gaps of nearly equal length (within a factor :data:`RELEARN_SPREAD`) that set a new period.
-    RELEARN_COUNT = 10
-    RELEARN_SPREAD = 2.0
-
-    gap_factor: float = 10.0
-    backward_reset_count: int = 50
-    last: float | None = None
-    period: float | None = None
-    consecutive_backward: int = 0
-    gap_run: list[float] = field(default_factory=list)
-    counts: dict[str, int] = field(
-        default_factory=lambda: dict.fromkeys(("ok", "gap", "relearn", "restart", "bad_stamp", "duplicate",
-                                               "backward"), 0)
-    )
-
-    def check(self, t: float) -> str:
-        verdict = self._verdict(t)
-        self.counts[verdict] += 1
-        return verdict
-
-    def _verdict(self, t: float) -> str:  # noqa: PLR0911 - one return per verdict
-        if not math.isfinite(t) or t <= 0.0:
-            return "bad_stamp"
-        last = self.last
-        if last is None:
-            self.last = t
-            return "ok"
-        dt = t - last
-        if dt == 0.0:
-            return "duplicate"
-        if dt < 0.0:
-            self.consecutive_backward += 1
-            if self.consecutive_backward >= self.backward_reset_count:
-                self.consecutive_backward = 0
-                self.last = t
-                self.period = None
-                return "restart"
-            return "backward"
-        self.consecutive_backward = 0
-        self.last = t
-        period = self.period
-        if period is None:
-            self.period = dt
-            return "ok"
-        if dt > self.gap_factor * period:
-            self.gap_run.append(dt)
-            if len(self.gap_run) < self.RELEARN_COUNT:
-                return "gap"
-            run = self.gap_run[-self.RELEARN_COUNT:]
-            if max(run) > self.RELEARN_SPREAD * min(run):
-                return "gap"
-            self.period = float(sorted(run)[len(run) // 2])
-            self.gap_run.clear()
-            return "relearn"
-        self.gap_run.clear()
-        self.period = period + 0.01 * (dt - period)
-        return "ok"
-
-    @property
-    def rate(self) -> float:
-        """Nominal rate from the header stamps [Hz] (NaN until two stamps were seen)."""
-        return 1.0 / self.period if self.period else math.nan
+    saturated: int = 0
+    window_saturated: int = 0
 
 
 class Input:
@@ -114,27 +45,28 @@ class Input:
     events : where rejected messages and stamp problems are reported.
     """
 
-    #: Stamp verdicts that make a message unusable.
-    UNUSABLE = ("bad_stamp", "duplicate", "backward")
-
     def __init__(self, what: str, config: OnlineConfig, events: EventLog) -> None:
         self.what = what
         self.stats = InputStats()
         self.stamps = StampChecker(config.gap_factor, config.backward_reset_count)
         self._events = events
+        self._held: tuple[float, Any] | None = None
 
     def configure(self, config: OnlineConfig) -> None:
         """Apply changed parameters."""
         self.stamps.gap_factor = config.gap_factor
         self.stamps.backward_reset_count = config.backward_reset_count
 
-    def receive(self, t: float, finite: bool, frame_id: str, wall_time: float | None, nonfinite: str) -> str | None:
+    def receive(self, t: float, finite: bool, frame_id: str, wall_time: float | None, nonfinite: str, *,
+                payload: Any = None) -> list[tuple[str, Any]]:
         """Book-keeping and checks of one message stamped ``t`` [s] that arrived at ``wall_time`` (steady clock).
 
         ``finite`` says whether its values are all finite and plausible; ``nonfinite`` names what is not, for the
-        event.
-        Returns the stamp verdict of an accepted message (``ok``, ``gap``, ``restart``), or None when the message
-        is rejected (non-finite values, zero, non-finite, duplicated or backward stamp), counted and reported.
+        event; ``payload`` is what the caller needs to process the message later.
+        Returns the messages to process now, in stamp order, as ``(verdict, payload)``: usually this one (``ok``,
+        ``relearn``, ``restart``); none when it is rejected (non-finite values, bad, duplicated or backward stamp:
+        counted and reported) or held after a jump in its stamps; the held one first (``gap``, ``relearn``) when
+        this message confirmed its jump.
         """
         what, stats = self.what, self.stats
         stats.received += 1
@@ -150,21 +82,84 @@ class Input:
             stats.rejected_values += 1
             self._events.count(f"{what}_nonfinite")
             self._events.event(f"{what}_nonfinite", f"{what}: message with non-finite {nonfinite} at t = {t!r}")
-            return None
-        verdict = self.stamps.check(t)
+            return []
+        verdict, held_verdict = self.stamps.check(t)
+        out = []
+        if held_verdict is not None:
+            held_t, held_payload = self._held
+            self._held = None
+            self._report(held_verdict, held_t)
+            if held_verdict != "outlier":
+                stats.accepted += 1
+                out.append((held_verdict, held_payload))
+        if verdict == "hold":
+            self._held = (t, payload)
+            return out
+        if verdict == "restart":
+            self._held = None  # a message held on the old time line is forgotten with it
         if verdict != "ok":
-            key = f"{what}_{verdict}"
-            self._events.count(key)
-            if verdict == "gap":
-                self._events.event(key, f"{what}: gap in header stamps before t = {t:.6f} s")
-            elif verdict == "relearn":
-                self._events.event(key, f"{what}: {self.stamps.RELEARN_COUNT} equal gaps in a row: the rate is "
-                                        f"now {self.stamps.rate:.4g} Hz")
-            elif verdict == "restart":
-                self._events.event(key, f"{what}: stamps jumped back to t = {t:.6f} s and stayed there: restarting")
-            else:
-                self._events.event(key, f"{what}: message dropped ({verdict.replace('_', ' ')} stamp {t!r})")
-        if verdict in self.UNUSABLE:
-            return None
-        stats.accepted += 1
-        return verdict
+            self._report(verdict, t)
+        if verdict in ("ok", "relearn", "restart"):
+            stats.accepted += 1
+            out.append((verdict, payload))
+        return out
+
+    def _report(self, verdict: str, t: float) -> None:
+        """Count and describe one stamp verdict other than ``ok``."""
+        what = self.what
+        key = f"{what}_{verdict}"
+        self._events.count(key)
+        if verdict == "gap":
+            self._events.event(key, f"{what}: gap in header stamps before t = {t:.6f} s")
+        elif verdict == "relearn":
+            self._events.event(key, f"{what}: {RELEARN_COUNT} equal gaps in a row: the rate is now "
+                                    f"{self.stamps.rate:.4g} Hz")
+        elif verdict == "restart":
+            self._events.event(key, f"{what}: stamps jumped back to t = {t:.6f} s and went on from there: a new "
+                                    "time line (what was identified is kept)")
+        elif verdict == "outlier":
+            self._events.event(key, f"{what}: message dropped, its stamp {t!r} jumped away from its neighbours' "
+                                    "and back (an isolated outlier)")
+        else:
+            self._events.event(key, f"{what}: message dropped ({verdict.replace('_', ' ')} stamp {t!r})")
+
+
+class SaturationCheck:
+    """Flags IMU samples at the sensor's full scale (a bump or a fast turn clipped by the sensor).
+
+    With a declared range (``imu_range.gyro``, ``imu_range.accel``) a sample within 0.5 % of it is saturated.
+    Without, a clipped sensor shows itself by repeating one value at its extreme: a sample whose magnitude equals
+    the largest one seen on its axis, seen at least twice, and above :data:`FLOOR` (below the smallest common full
+    scales, 125 °/s and 2 g, a repeated extreme is ordinary quantisation) is flagged as saturated.
+    """
+
+    #: Smallest magnitude that can be a full scale without a declared range: gyro [rad/s], accelerometer [m/s²].
+    FLOOR = (2.0, 19.0)
+    #: A sample within this fraction of a declared range is saturated.
+    MARGIN = 0.995
+
+    def __init__(self, config: OnlineConfig) -> None:
+        self.configure(config)
+        self._extreme = [0.0] * 6
+        self._hits = [0] * 6
+
+    def configure(self, config: OnlineConfig) -> None:
+        """Apply changed parameters."""
+        self._range = [config.imu_range_gyro] * 3 + [config.imu_range_accel] * 3
+        self._floor = [self.FLOOR[0]] * 3 + [self.FLOOR[1]] * 3
+
+    def check(self, sample: Sequence[float]) -> list[str]:
+        """The axes (names of :data:`~imu_noise_id.core.axes.AXES`) on which this sample is saturated (plain
+        floats: this runs for every IMU message)."""
+        out = []
+        extreme, hits = self._extreme, self._hits
+        for i in range(6):
+            a = abs(sample[i])
+            if a > extreme[i]:
+                extreme[i], hits[i] = a, 1
+            elif a == extreme[i]:
+                hits[i] += 1
+            limit = self._range[i]
+            if (a >= self.MARGIN * limit) if limit > 0 else (a == extreme[i] and hits[i] >= 2 and a >= self._floor[i]):
+                out.append(AXES[i])
+        return out

@@ -4,19 +4,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 
 @dataclass
 class CorrectedImu:
-    """One bias-corrected IMU sample; variances are N²·f per axis, or None while no estimate exists."""
+    """One bias-corrected IMU sample; variances are N²·f per axis, or None while no estimate exists; ``source``:
+    what the caller gave with the message (the node: the ROS message it republishes)."""
 
     t: float
     gyro: tuple[float, float, float]
     accel: tuple[float, float, float]
     gyro_variance: tuple[float, float, float] | None
     accel_variance: tuple[float, float, float] | None
+    source: Any = None
 
 
 @dataclass
@@ -32,7 +35,9 @@ class Estimates:
     noise_density : (6,) white-noise density [u/√Hz] from stationary samples (NaN before ``noise.min_samples``)
     noise_density_rstd : relative standard deviation of ``noise_density``
     noise_samples : number of stationary sample differences used
-    psd : (6,) the CMKF's Ŝ_g per gyro axis [rad²/s] and Ŝ_v per accelerometer axis [m²/s³]
+    psd : (6,) the CMKF's Ŝ_g per gyro axis [rad²/s] and Ŝ_v per accelerometer axis [m²/s³] where the data
+        identify it (NaN elsewhere: never the filter's working value); psd_se : (6,) the least squares' standard
+        error; psd_upper : (6,) where the PSD is not identifiable, the upper end of its 95 % interval (NaN elsewhere)
     covariance : (6,) the variance N²·f [u²] written into ``~/imu_corrected`` (NaN while unknown)
     covariance_source : ``stationary`` (Allan τ₀ density), ``cmkf`` (√Ŝ) or ``none``
     imu_rate : nominal IMU rate from the header stamps [Hz]
@@ -51,6 +56,8 @@ class Estimates:
     noise_density_rstd: float
     noise_samples: int
     psd: np.ndarray
+    psd_se: np.ndarray
+    psd_upper: np.ndarray
     covariance: np.ndarray
     covariance_source: str
     imu_rate: float
@@ -59,8 +66,8 @@ class Estimates:
 
     #: Column labels of :meth:`noise_table` before the bank's parameter names.
     NOISE_FIELDS: tuple[str, ...] = (
-        "noise_density", "noise_density_rstd", "covariance", "bias", "bias_std", "cmkf_psd",
-        "cmkf_noise_density", "stationary_samples",
+        "noise_density", "noise_density_rstd", "covariance", "bias", "bias_std", "cmkf_psd", "cmkf_psd_se",
+        "cmkf_noise_density", "cmkf_noise_density_upper", "stationary_samples",
     )
 
     def noise_table(self) -> tuple[tuple[str, ...], np.ndarray]:
@@ -78,8 +85,10 @@ class Estimates:
         table[:3, 4] = self.gyro_bias_std
         table[3:, 4] = self.accel_bias_std
         table[:, 5] = self.psd
-        table[:, 6] = np.sqrt(self.psd)
-        table[:, 7] = self.noise_samples
+        table[:, 6] = self.psd_se
+        table[:, 7] = np.sqrt(self.psd)
+        table[:, 8] = np.sqrt(self.psd_upper)
+        table[:, 9] = self.noise_samples
         for j, values in enumerate(self.bank_theta.values()):
             table[:, len(self.NOISE_FIELDS) + j] = values
         return fields, table

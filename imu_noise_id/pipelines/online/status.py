@@ -13,7 +13,6 @@ import numpy as np
 
 from ...core.axes import ACCEL_AXES, AXES, GYRO_AXES
 from ...core.cmkf.robot import CmkfEstimate
-from ...core.diagnostics.consistency import nis_bounds
 from .config import OnlineConfig
 from .inputs import Input
 from .results import Estimates, HypothesesReport
@@ -61,8 +60,8 @@ class WindowStats:
         return float(np.percentile(v, q)) if v.size else math.nan
 
 
-def input_status(name: str, source: Input, wall_now: float, window_s: float, expected_rate: float,  # noqa: PLR0917
-                 required: bool, stale_timeout: float) -> DiagnosticStatus:
+def input_status(name: str, source: Input, wall_now: float, window_s: float,  # noqa: PLR0911, PLR0917
+                 expected_rate: float, required: bool, stale_timeout: float) -> DiagnosticStatus:
     """Rate received over the period, staleness (steady clock), expected rate, frame changes of one input."""
     stats, stamps = source.stats, source.stamps
     rate = stats.window_received / window_s if window_s > 0 else math.nan
@@ -74,6 +73,7 @@ def input_status(name: str, source: Input, wall_now: float, window_s: float, exp
         "rejected_nonfinite": str(stats.rejected_values),
         "frame_id": stats.frame_id or "",
         "frame_id_changes": str(stats.frame_changes),
+        "saturated_samples": str(stats.saturated),
     }
     if stats.last_wall is None:
         level = STALE if required else WARN
@@ -90,6 +90,9 @@ def input_status(name: str, source: Input, wall_now: float, window_s: float, exp
                                 values)
     if expected_rate > 0 and rate < 0.8 * expected_rate:
         return DiagnosticStatus(name, WARN, f"rate {rate:.1f} Hz below the expected {expected_rate:g} Hz", values)
+    if stats.window_saturated:
+        return DiagnosticStatus(name, WARN, f"{stats.window_saturated} sample(s) at the sensor's full scale in the "
+                                f"last period (saturation; {stats.saturated} in all)", values)
     if stats.window_frame_changes:
         return DiagnosticStatus(name, WARN, f"frame_id changed {stats.window_frame_changes} time(s) in the last "
                                 f"period, now {stats.frame_id!r} ({stats.frame_changes} in all)", values)
@@ -97,7 +100,10 @@ def input_status(name: str, source: Input, wall_now: float, window_s: float, exp
 
 
 def stamp_status(window_counts: dict[str, int], inputs: tuple[Input, ...], restarts: int) -> DiagnosticStatus:
-    """The period's stamp and value problems of every input, and the totals as values."""
+    """The period's stamp and value problems of every input, and the totals as values (the CMKF's and the
+    saturation counts have their own statuses)."""
+    window_counts = {k: v for k, v in window_counts.items()
+                     if k.split("_")[0] in {s.what for s in inputs} and k != "imu_saturated"}
     values = {f"window_{k}": str(v) for k, v in sorted(window_counts.items())}
     for source in inputs:
         for k, v in source.stamps.counts.items():
@@ -129,38 +135,68 @@ def stationarity_status(gate: StationaryGate, last_imu_t: float, imu_current: bo
     return DiagnosticStatus("Stationarity", OK, "moving or settling: identification paused", values)
 
 
-def consistency_status(est: CmkfEstimate, nis_window: int, errors_now: bool, errors: int,  # noqa: PLR0911
+#: The per-period counts of updates the CMKF's innovation gate rejected, and which filter.
+GATED_COUNTS = (("cmkf_gated_accel", "accelerometer"), ("cmkf_gated_gyro", "gyro"))
+
+
+def consistency_status(est: CmkfEstimate, window_counts: dict[str, int], errors: int,  # noqa: PLR0911
                        too_late: int) -> DiagnosticStatus:
-    """Normalised innovation squared of the CMKF over its last ``nis_window`` updates against χ² bounds."""
-    n = min(est.counters.get("updates", 0), nis_window)
-    values = {"cmkf_status": est.status, "updates": str(est.counters.get("updates", 0)),
+    """The CMKF's consistency: its verdict over the last ``nis.window`` updates (NIS against χ² bounds, updates
+    rejected by the innovation gate) with the likely cause, the period's gated updates, why it is not running."""
+    c = est.counters
+    values = {"cmkf_status": est.status, "updates": str(c.get("updates", 0)),
               "stacked_samples": str(est.n_stacked), "nis_accel_mean": f"{est.nis_accel_mean:.3f}",
-              "nis_accel_dof": str(est.nis_accel_dof), "nis_gyro_last": f"{est.nis_gyro:.3f}"}
-    for key, count in est.counters.items():
+              "nis_accel_dof": str(est.nis_accel_dof), "nis_gyro_mean": f"{est.nis_gyro_mean:.3f}",
+              "nis_gyro_last": f"{est.nis_gyro:.3f}", "consistency": est.consistency}
+    for key, count in c.items():
         if count and key not in ("imu", "odom", "updates"):
             values[f"cmkf_{key}"] = str(count)
     name = "Filter consistency"
     values["cmkf_restarts_after_errors"] = str(errors)
     values["odom_too_late_for_cmkf"] = str(too_late)
-    if errors_now:
+    gated = [f"{window_counts[key]} {what} update(s)" for key, what in GATED_COUNTS if window_counts.get(key)]
+    gated_text = (f"; rejected by the innovation gate in the last period: {' and '.join(gated)} (a bump, a "
+                  "saturated or corrupted sample, wheel slip)") if gated else ""
+    if window_counts.get("cmkf_error"):
         return DiagnosticStatus(name, ERROR, "the CMKF raised an error and was restarted (see the log)", values)
     if est.status in ("no_data", "no_imu", "imu_only"):
+        reason = ""
+        if c.get("odom_dropped_orientation"):
+            reason = (f": {c['odom_dropped_orientation']} odometry messages dropped, their orientation is invalid "
+                      "(all-zero quaternion) and cmkf.gravity_source odometry needs it (use imu)")
+        elif c.get("odom_dropped_nan") or c.get("odom_dropped_missing"):
+            reason = ": odometry messages dropped (non-finite or missing fields, see the values)"
         return DiagnosticStatus(name, WARN, f"CMKF not running ({est.status.replace('_', ' ')}): it needs "
-                                "IMU and odometry", values)
+                                f"IMU and odometry{reason}", values)
     if est.status == "unobserved":
         return DiagnosticStatus(name, WARN, "no odometry update recently: biases are predicted only", values)
-    if n < 10 or not math.isfinite(est.nis_accel_mean):
-        return DiagnosticStatus(name, OK, f"converging ({n} updates)", values)
-    low, high = nis_bounds(est.nis_accel_dof, n)
-    values["nis_bounds_95"] = f"[{low:.3f}, {high:.3f}]"
-    mean = est.nis_accel_mean
-    if mean > 10.0 * est.nis_accel_dof:
-        return DiagnosticStatus(name, ERROR, f"NIS mean {mean:.2f} ≫ {est.nis_accel_dof}: the filter's noise "
-                                "model does not fit the data (check cmkf.* and the odometry covariance)", values)
-    if not low <= mean <= high:
-        return DiagnosticStatus(name, WARN, f"NIS mean {mean:.2f} outside its 95 % bounds [{low:.2f}, "
-                                f"{high:.2f}] over {n} updates", values)
-    return DiagnosticStatus(name, OK, f"NIS mean {mean:.2f} inside [{low:.2f}, {high:.2f}]", values)
+    if est.consistency == "inconsistent":
+        return DiagnosticStatus(name, ERROR, f"filter inconsistent, biases not to be trusted: "
+                                f"{est.consistency_reason}{gated_text}", values)
+    if est.consistency == "marginal":
+        return DiagnosticStatus(name, WARN, f"marginally consistent: {est.consistency_reason}{gated_text}", values)
+    if gated:
+        return DiagnosticStatus(name, WARN, gated_text.removeprefix("; ").capitalize(), values)
+    if est.consistency == "unknown":
+        return DiagnosticStatus(name, OK, f"converging ({c.get('updates', 0)} updates)", values)
+    return DiagnosticStatus(name, OK, f"NIS mean {est.nis_accel_mean:.2f} (accelerometer, {est.nis_accel_dof} dof), "
+                            f"{est.nis_gyro_mean:.2f} (gyro, 3 dof): consistent", values)
+
+
+def cmkf_noise_status(est: CmkfEstimate) -> DiagnosticStatus:
+    """What the CMKF's covariance matching says about S_g and S_v per axis: estimate with interval, or why not."""
+    name = "CMKF noise"
+    if est.status in ("no_data", "no_imu", "imu_only"):
+        return DiagnosticStatus(name, OK, "no odometry: nothing estimated")
+    values = {}
+    lines = []
+    for sensor, psd, unit in (("gyro", est.gyro_psd, "rad/s/sqrt(Hz)"), ("accel", est.accel_psd, "m/s^2/sqrt(Hz)")):
+        axes = tuple(f"{sensor}_{a}" for a in "xyz")
+        lines += psd.describe(axes, unit)
+        for axis, verdict in zip(axes, psd.verdict, strict=True):
+            values[f"{axis}_verdict"] = verdict
+    identified = sum(v == "identified" for v in (*est.gyro_psd.verdict, *est.accel_psd.verdict))
+    return DiagnosticStatus(name, OK, f"{identified}/6 axes identified. " + "; ".join(lines), values)
 
 
 def noise_status(est: Estimates, needed: int) -> DiagnosticStatus:

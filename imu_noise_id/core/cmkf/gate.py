@@ -1,0 +1,101 @@
+"""Innovation gate of the robot CMKF's filters, and the window of NIS values its consistency is judged on.
+
+One absurd update must not become a lasting bias.
+
+Beyond paper 004 (whose filter uses every measurement): a bump or a saturated IMU sample integrates into the
+interval's velocity and angle increments, and the filters' biases have correlation times of an hour, so one such
+interval would shift the published biases for minutes and poison the S_v / S_g least squares for good. The gate
+compares the normalised innovation squared (NIS) of an update, before it is applied, with the ``1 − p`` quantile
+of χ²(dof) (:func:`~imu_noise_id.core.diagnostics.consistency.nis_gate`) and rejects the update above it.
+
+A gate must not lock a filter whose prior is wrong (a bias far outside its prior σ makes every innovation large):
+after :data:`GATE_PATIENCE` rejections in a row the next update is accepted whatever its NIS, and the rejections
+are counted so that the consistency check (:func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict`) can
+call such a filter inconsistent; :class:`NisWindow` keeps the last updates' NIS and gate decisions for that.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+from ..diagnostics.consistency import nis_gate, nis_verdict
+
+#: Consecutive rejected updates after which the next one is accepted whatever its NIS.
+GATE_PATIENCE = 3
+
+
+class InnovationGate:
+    """χ² gate on the NIS of one filter's updates, with a patience against locking.
+
+    Parameters
+    ----------
+    dof : measurement components of one update (summed over the axes).
+    probability : tail probability of the gate (0: never reject).
+
+    Attributes
+    ----------
+    threshold : the NIS above which an update is rejected; rejected : updates rejected so far; in_a_row : the
+    current run of rejections; largest : the largest NIS rejected.
+    """
+
+    def __init__(self, dof: int, probability: float) -> None:
+        self.threshold = nis_gate(dof, probability)
+        self.rejected = 0
+        self.in_a_row = 0
+        self.largest = 0.0
+
+    def rejects(self, nis: float) -> bool:
+        """Whether the update with this NIS is rejected (counted); a NaN NIS is not (the filter skips it)."""
+        if not (nis > self.threshold) or self.in_a_row >= GATE_PATIENCE:
+            self.in_a_row = 0
+            return False
+        self.in_a_row += 1
+        self.rejected += 1
+        if math.isfinite(nis):
+            self.largest = max(self.largest, nis)
+        return True
+
+
+class NisWindow:
+    """The last ``size`` updates of one filter: their NIS (accepted updates) and which were gated.
+
+    Parameters
+    ----------
+    dof : measurement components of one update; size : updates kept (``nis_window``).
+    """
+
+    def __init__(self, dof: int, size: int) -> None:
+        self.dof = int(dof)
+        self._nis: deque[float] = deque(maxlen=size)
+        self._gated: deque[bool] = deque(maxlen=size)
+        self._sum = 0.0
+
+    def add(self, nis: float, gated: bool) -> None:
+        """One update's NIS (a gated one counts only as gated)."""
+        self._gated.append(gated)
+        if gated or not math.isfinite(nis):
+            return
+        if len(self._nis) == self._nis.maxlen:
+            self._sum -= self._nis[0]
+        self._nis.append(nis)
+        self._sum += nis
+
+    @property
+    def n(self) -> int:
+        """Accepted updates in the window."""
+        return len(self._nis)
+
+    @property
+    def mean(self) -> float:
+        """Mean NIS of the accepted updates in the window (NaN when none)."""
+        return self._sum / len(self._nis) if self._nis else math.nan
+
+    @property
+    def gated_share(self) -> float:
+        """Share of the window's updates rejected by the gate."""
+        return sum(self._gated) / len(self._gated) if self._gated else 0.0
+
+    def verdict(self) -> str:
+        """:func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict` of the window."""
+        return nis_verdict(self.mean, self.dof, self.n, self.gated_share)

@@ -1,0 +1,159 @@
+"""The covariance-matching least squares of paper 004 (eq. 35), streaming, with an honest standard error.
+
+Paper 004 solves ``C̄ − Cov(𝒲) − Cov(ℰ) = S_v D`` for S_v by least squares (eq. 35); over epochs whose matrices
+change (:mod:`.stacked`) the solution is a ratio of sums, per axis::
+
+    Ŝ = Σ_k q_k / Σ_k w_k,    q_k = ⟨𝒵_k𝒵_kᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩_F,    w_k = ⟨D_k, D_k⟩_F
+
+(the gyro filter's :mod:`.gyro` has the same form with scalar ``d_k``). The paper gives no uncertainty for Ŝ.
+Beyond the paper, its variance is estimated here by a block sandwich (batch means): the products ``q_k`` are
+dependent over a few epochs only (𝒵_k shares measurement noise with 𝒵_{k±1}, 𝒵_{k±2}), so sums over blocks of
+:data:`BLOCK` consecutive epochs are nearly independent, and for blocks ``j`` with sums ``Q_j, W_j``::
+
+    Var(Ŝ) ≈ J/(J − 1) · Σ_j (Q_j − Ŝ W_j)² / (Σ_j W_j)²          (J completed blocks, J − 1 degrees of freedom)
+
+the cluster-robust sandwich of the ratio estimator: it needs neither Gaussian noise nor constant intervals, and
+it contains whatever the model leaves out (odometry noise that is not white, a wrong declared covariance, motion
+that the filter does not model). Intervals use Student's t with J − 1 degrees of freedom
+(:mod:`.psd`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from functools import lru_cache
+
+import numpy as np
+from scipy.stats import t as student_t
+
+#: Epochs per block of the sandwich variance (the products are dependent over two epochs at most).
+BLOCK = 64
+
+
+class MatchingLeastSquares:
+    """``Σ q_k / Σ w_k`` per axis, accumulated one epoch at a time, with the block sandwich variance.
+
+    Parameters
+    ----------
+    n_axes : number of axes (each has its own ``q_k``; the weights ``w_k`` are shared).
+    block : epochs per block of the variance estimate.
+
+    Attributes
+    ----------
+    num : (n,) Σ q_k; den : Σ w_k; count : epochs accumulated; blocks : completed blocks.
+    """
+
+    def __init__(self, n_axes: int, block: int = BLOCK) -> None:
+        self.n = int(n_axes)
+        self.block = int(block)
+        self.num = [0.0] * self.n
+        self.den = 0.0
+        self.count = 0
+        self.blocks = 0
+        self._q = [0.0] * self.n  # the current block's sums
+        self._w = 0.0
+        self._k = 0
+        self._qq = [0.0] * self.n  # Σ_j Q_j², Σ_j Q_j W_j, Σ_j W_j, Σ_j W_j² over completed blocks
+        self._qw = [0.0] * self.n
+        self._wc = 0.0
+        self._ww = 0.0
+        self._working_se: tuple[int, list[float], float] = (-1, [], math.nan)
+
+    def add(self, q: Sequence[float], w: float) -> None:
+        """One epoch: its products ``q`` (n) and weight ``w``."""
+        num, cur = self.num, self._q
+        for i in range(self.n):
+            num[i] += q[i]
+            cur[i] += q[i]
+        self.den += w
+        self._w += w
+        self.count += 1
+        self._k += 1
+        if self._k == self.block:
+            wj = self._w
+            for i in range(self.n):
+                self._qq[i] += cur[i] * cur[i]
+                self._qw[i] += cur[i] * wj
+                cur[i] = 0.0
+            self._wc += wj
+            self._ww += wj * wj
+            self.blocks += 1
+            self._w = 0.0
+            self._k = 0
+
+    @property
+    def estimate(self) -> np.ndarray:
+        """Ŝ per axis (NaN before the first epoch)."""
+        if self.count == 0 or self.den <= 0.0:
+            return np.full(self.n, np.nan)
+        return np.array(self.num) / self.den
+
+    def values(self) -> list[float]:
+        """Ŝ per axis as floats (NaN before the first epoch): the filters' hot path."""
+        if self.count == 0 or self.den <= 0.0:
+            return [math.nan] * self.n
+        return [x / self.den for x in self.num]
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom of the variance estimate: completed blocks − 1 (0 before two blocks)."""
+        return max(self.blocks - 1, 0)
+
+    @property
+    def standard_error(self) -> np.ndarray:
+        """Standard error of Ŝ per axis (NaN before two completed blocks); see the module docstring."""
+        J = self.blocks
+        if J < 2 or self._wc <= 0.0:
+            return np.full(self.n, np.nan)
+        scale = J / (J - 1) / (self._wc * self._wc)
+        out = []
+        for s, qq, qw in zip(self.values(), self._qq, self._qw, strict=True):
+            out.append(math.sqrt(max(qq - 2.0 * s * qw + s * s * self._ww, 0.0) * scale))
+        return np.array(out)
+
+    def working(self, current: Sequence[float], prior: Sequence[float]) -> tuple[list[float], int]:
+        """The PSD a filter should run with per axis (beyond paper 004, whose filter keeps the last positive
+        estimate), and the number of axes on which the data say nothing usable (``current`` or ``prior`` kept).
+
+        ``max(Ŝ, se)`` while the 95 % interval ``Ŝ ± t·se`` reaches above 0: the least-squares value where it
+        stands out of its own uncertainty, else its standard error — the size of what the data cannot rule out. A
+        filter run on a value near 0 that a noisy least squares happened to pass through is overconfident (its NIS
+        far above its degrees of freedom, its biases' σ too small); one run on the upper end of a wide interval is
+        needlessly timid. Where even the interval's upper end is ≤ 0 the data contradict the noise model (the
+        odometry covariance assumed too large, smoothed or slowly varying odometry errors): the configured
+        ``prior`` (per axis), so the inconsistency shows in the NIS instead of being absorbed and the value does
+        not depend on the path the least squares took. Before two blocks (no standard error) the last positive
+        value, as in the paper.
+        """
+        den = self.den
+        if self.count == 0 or den <= 0.0:
+            return list(current), self.n
+        if self.blocks < 2:
+            out, kept = [], 0
+            for x, c in zip(self.num, current, strict=True):
+                v = x / den
+                if v > 0.0:
+                    out.append(v)
+                else:
+                    out.append(c)
+                    kept += 1
+            return out, kept
+        if self._working_se[0] != self.blocks:  # refreshed once per block: it changes slowly
+            self._working_se = (self.blocks, self.standard_error.tolist(), t_quantile(self.dof))
+        _, se, t = self._working_se
+        out, kept = [], 0
+        for x, e, p in zip(self.num, se, prior, strict=True):
+            v = x / den
+            if v + t * e > 0.0:
+                out.append(v if v > e else e)
+            else:
+                out.append(p)
+                kept += 1
+        return out, kept
+
+
+@lru_cache(maxsize=4096)
+def t_quantile(dof: int) -> float:
+    """Student's t 0.975 quantile for ``dof`` degrees of freedom (NaN below 1)."""
+    return float(student_t.ppf(0.975, dof)) if dof >= 1 else math.nan
