@@ -35,6 +35,19 @@ from . import em
 FLAT_INFORMATION = 1e-3
 
 
+def physical_bounds(n_total: int, dt: float) -> dict[str, tuple[float, float]]:
+    """Physical ranges of the parameters searched, for a record of ``n_total`` samples at period ``dt`` [s].
+
+    GM τ from one sample to 100 records; OSC and LPF frequencies between the record's resolution and the Nyquist
+    frequency; an OSC at least two resolution bins wide (a narrower line is a sinusoid of fixed frequency and phase,
+    a SIN regressor, not a random process the record can resolve).
+    """
+    span = n_total * dt
+    nyquist = 0.5 / dt
+    return {"tau": (dt, 100.0 * span), "frequency": (1.0 / span, nyquist), "bandwidth": (2.0 / span, nyquist),
+            "cutoff": (1.0 / span, nyquist)}
+
+
 @dataclass(frozen=True)
 class Parameterisation:
     """Log-parameters of the stochastic components of a structure (RR is a mean parameter, not included)."""
@@ -59,6 +72,14 @@ class Parameterisation:
         if any(not (math.isfinite(v) and v > 0) for v in values):
             raise InputError(f"component parameters must be finite and > 0 to fit, got {components}")
         return np.log(values)
+
+    def log_bounds(self, bounds: dict[str, tuple[float, float]]) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) of every log-parameter from physical ``bounds`` by parameter name (±inf where none)."""
+        lo, hi = np.full(len(self.entries), -np.inf), np.full(len(self.entries), np.inf)
+        for k, (_, name) in enumerate(self.entries):
+            if name in bounds:
+                lo[k], hi[k] = math.log(bounds[name][0]), math.log(bounds[name][1])
+        return lo, hi
 
     def to_components(self, theta: np.ndarray, model: StateSpace | None = None) -> list[Component]:
         """Components at ϑ; RR slopes are taken from ``model`` (its profiled value) when given."""
@@ -261,45 +282,3 @@ def covariance_from_information(info: np.ndarray) -> tuple[np.ndarray, bool]:
 
 #: Half the 95 % χ²₁ quantile: a likelihood-ratio interval ends where ℓ drops by this much.
 LR_DROP_95 = 1.9207294103470103
-
-
-def likelihood_interval(
-    par: Parameterisation, theta: np.ndarray, k: int, model: StateSpace, y: np.ndarray,
-    *, z: np.ndarray, ll_max: float, step: float = 1.0, max_steps: int = 25, lower: bool = True,
-) -> tuple[float, float]:
-    """95 % likelihood-ratio interval of log-parameter k, the others held at their estimates (conditional).
-
-    Used where the Wald interval is meaningless (a variance near 0, a flat likelihood). Each end is bracketed
-    by steps of ``step`` in log space and refined by bisection; an end the likelihood never drops by
-    :data:`LR_DROP_95` within ``max_steps`` is ∓inf (i.e. the parameter may be 0 or unbounded).
-    ``lower=False`` skips the lower end (−inf: the caller knows the data cannot exclude 0).
-    """
-
-    def drop(v: float) -> float:
-        th = theta.copy()
-        th[k] = v
-        try:
-            return ll_max - kalman.loglik(par.to_model(th, model), y, z).loglik
-        except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
-            return math.inf
-
-    ends = [] if lower else [-math.inf]
-    for direction in (-1.0, 1.0) if lower else (1.0,):
-        inside, outside = theta[k], None
-        for i in range(1, max_steps + 1):
-            v = theta[k] + direction * step * i
-            if drop(v) > LR_DROP_95:
-                outside = v
-                break
-            inside = v
-        if outside is None:
-            ends.append(direction * math.inf)
-            continue
-        for _ in range(8):
-            mid = 0.5 * (inside + outside)
-            if drop(mid) > LR_DROP_95:
-                outside = mid
-            else:
-                inside = mid
-        ends.append(0.5 * (inside + outside))
-    return ends[0], ends[1]
