@@ -105,11 +105,11 @@ def loglik_and_grad(
     step: float = 1e-6, data: em.DataSums | None = None,
 ) -> tuple[float, np.ndarray, StateSpace]:
     """Profile log-likelihood at ϑ, its exact gradient (Fisher's identity) and the model with GLS means."""
-    ll, grad, model, _ = _loglik_grad_profile(par, theta, base, y, z, step=step, data=data)
+    ll, grad, model, _ = loglik_grad_profile(par, theta, base, y, z, step=step, data=data)
     return ll, grad, model
 
 
-def _loglik_grad_profile(
+def loglik_grad_profile(
     par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *,
     step: float = 1e-6, data: em.DataSums | None = None,
 ) -> tuple[float, np.ndarray, StateSpace, ProfileResult]:
@@ -198,7 +198,7 @@ def maximise(
             return 1e10, -T.T @ np.where(theta < lo, -1.0, np.where(theta > hi, 1.0, 0.0))
         state["n"] += 1
         try:
-            ll, g, model, prof = _loglik_grad_profile(par, theta, base, y, z, data=data)
+            ll, g, model, prof = loglik_grad_profile(par, theta, base, y, z, data=data)
         except (InputError, np.linalg.LinAlgError, ValueError):
             return 1e10, np.zeros_like(eta)
         if not math.isfinite(ll):

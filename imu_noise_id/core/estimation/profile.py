@@ -1,4 +1,4 @@
-"""Profile-likelihood intervals, for where the observed information cannot be trusted (beyond paper 000 §3.4).
+"""Adjusted profile-likelihood intervals, where the observed information cannot be trusted (beyond paper 000 §3.4).
 
 Paper 000 §3.4 takes standard errors from the observed information: a Wald interval, right when the log-likelihood
 is close to quadratic over the interval. An IMU fit often breaks that: a variance at its zero boundary (a random
@@ -7,24 +7,37 @@ the log-parameters (a Gauss–Markov τ comparable with the record), parameters 
 of long τ against a random walk). Holding the other parameters at their estimates (a *conditional* interval)
 ignores that trade and is too narrow. The profile likelihood
 
-    ℓ_p(v) = max over ϑ_{−k} of ℓ(ϑ_k = v, ϑ_{−k})
+    ℓ_p(v) = max over ϑ_{−k} of ℓ(ϑ_k = v, ϑ_{−k})        (means b by GLS inside ℓ)
 
-gives the likelihood-ratio interval {v : 2(ℓ̂ − ℓ_p(v)) ≤ χ²₁(0.95)} (Cox & Hinkley 1974 §9.3; Venzon & Moolgavkar
-1988), invariant to the parameterisation, with its lower end 0 where the data cannot exclude 0.
+gives the likelihood-ratio interval (Cox & Hinkley 1974 §9.3; Venzon & Moolgavkar 1988), invariant to the
+parameterisation, with its lower end 0 where the data cannot exclude 0.
 
-Each end is found on the signed root r(v) = √(2(ℓ̂ − ℓ_p(v))), nearly linear in |v − v̂| when ℓ is nearly
-quadratic: first at the Wald end, outward by secant steps until r passes 1.96, then regula falsi (Illinois) until
-|r − 1.96| < :data:`R_TOL`. Each ℓ_p(v) is an L-BFGS-B maximisation over the other parameters, warm-started on the
-trace of the earlier points, in coordinates where it is well scaled:
+**Adjustment for the estimated means.** The bias and the ramp slope are estimated from the same record, and they
+soak up exactly the low-frequency variation a random walk or a long-τ GM explains: the ML estimates of those
+variances are biased low and the plain profile interval is too narrow (on 1 h of WN+GM+RW+RR with the RW near its
+zero boundary, 2(ℓ̂ − ℓ_p) at the true RW was 4.6–6.8 in 4 of 10 records). The interval uses the profile adjusted
+for the mean parameters b (Cox & Reid 1987, eq. 4; for variance parameters the restricted likelihood of Patterson &
+Thompson 1971, cf. Tunnicliffe Wilson 1989 for time series):
+
+    ℓ_A(v) = ℓ_p(v) − ½ log det(Zᵀ V⁻¹ Z)(v) = ℓ_p(v) + ½ log det cov(b̂)(v),
+
+evaluated at the ML profile's argmax (the adjustment varies slowly); the interval is {v : ℓ_A(v) ≥ max ℓ_A − 1.92}.
+The point estimates stay the ML ones of paper 000.
+
+**Search.** The centre (max of ℓ_A along the profile) from the profile at the Wald ends and a parabola through
+them; each end then on the signed root r(v) = √(2(max ℓ_A − ℓ_A(v))), nearly linear in |v − centre| when ℓ is
+nearly quadratic: outward by secant steps until r passes 1.96, then regula falsi (Illinois) until |r − 1.96| <
+:data:`R_TOL`. Each ℓ_p(v) is an L-BFGS-B maximisation over the other parameters, from the better of the trace's
+extrapolation and the estimate, in coordinates where it is well scaled:
 
 * interior log-parameters whitened by their block of the observed information (Hessian ≈ identity);
 * a parameter at its zero boundary *linearly*, as K/s (s its conditional upper 95 % end), with a floor at
   :data:`ZERO_FLOOR`·s, where it changes ℓ by a few hundredths at most (in its log it would sit on a flat
   plateau the search cannot leave);
-* a parameter the information cannot see at all (not at 0: e.g. a GM τ with its σ at 0) in its log, one unit an
-  e-fold, inside its physical range.
+* a parameter the information cannot see (a GM τ with its σ at 0) in its log, one unit an e-fold, inside its
+  physical range.
 
-The ramp slope (a mean parameter, GLS-profiled inside ℓ) is profiled the same way, with its regressor fixed.
+The ramp slope (a mean parameter) is profiled the same way with its regressor fixed (adjusted for the bias).
 """
 
 from __future__ import annotations
@@ -37,6 +50,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from .. import kalman
+from ..kalman.common import ProfileResult
 from ..kalman.statespace import StateSpace
 from . import em, mle
 
@@ -52,8 +66,15 @@ MAX_LOG_DISTANCE = 25.0
 MAX_POINTS = 12
 #: A profile point whose log-likelihood exceeds the fit's by more than this shows the fit missed the maximum.
 BETTER_BY = 0.05
+#: The inner maximisation moves the interior parameters at most this many standard errors from its start.
+MAX_WHITENED = 20.0
 #: Drop of ℓ at which an inner maximisation counts as failed (an evaluation outside the filter's domain).
 FAILED_DROP = 1e3
+
+#: One profile point: (distance from the centre, signed root r, argmax of the other parameters).
+Point = tuple[float, float, np.ndarray]
+#: ``profile_at(v, starts)`` → (ℓ_A(v), argmax) from the best of ``starts``.
+ProfileAt = Callable[[float, list[np.ndarray]], tuple[float, np.ndarray]]
 
 
 def whitening(info: np.ndarray) -> np.ndarray:
@@ -65,9 +86,17 @@ def whitening(info: np.ndarray) -> np.ndarray:
     return v / np.sqrt(w)
 
 
+def adjusted(prof: ProfileResult) -> float:
+    """ℓ + ½ log det cov(b̂): the log-likelihood adjusted for the GLS-estimated means (module docstring)."""
+    if prof.beta_cov.size == 0:
+        return float(prof.loglik)
+    sign, logdet = np.linalg.slogdet(prof.beta_cov)
+    return float(prof.loglik + 0.5 * logdet) if sign > 0 else -math.inf
+
+
 @dataclass
 class Profiler:
-    """Profile likelihood of a fit's log-parameters (and ramp slope) on its record.
+    """Adjusted profile likelihood of a fit's log-parameters (and ramp slope) on its record.
 
     Attributes
     ----------
@@ -95,36 +124,119 @@ class Profiler:
     zero: dict[int, float] = field(default_factory=dict)
     flat: set[int] = field(default_factory=set)
     n_eval: int = 0
-    better: tuple[float, np.ndarray, StateSpace] | None = None
+    better: float | None = None
 
     def __post_init__(self) -> None:
         self.data = em.DataSums.of(self.y, self.z)
+        self._zeros = np.where(np.isnan(self.y), np.nan, 0.0)
+        self._grad_c: dict[tuple[bool, ...], np.ndarray] = {}
 
     # -- ℓ at one point ------------------------------------------------------------------------------------
-    def loglik(self, theta: np.ndarray, base: StateSpace | None = None) -> float:
-        """Exact profile log-likelihood (means by GLS) at ϑ; −inf outside the filter's domain."""
+    def evaluate(self, theta: np.ndarray, base: StateSpace | None = None) -> tuple[float, float]:
+        """(ℓ, ℓ_A) at ϑ with the means of ``base`` (default: the fit's); −inf outside the filter's domain."""
         self.n_eval += 1
         try:
-            return float(kalman.loglik(self.par.to_model(theta, base or self.model), self.y, self.z).loglik)
+            prof = kalman.loglik(self.par.to_model(theta, base or self.model), self.y, self.z)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
-            return -math.inf
+            return -math.inf, -math.inf
+        return float(prof.loglik), adjusted(prof)
 
     def conditional_scale(self, k: int) -> float:
-        """Where ℓ, the others held, first drops by the 95 % threshold going up from ϑ̂_k in e²-fold steps: the
-        scale of a zero-boundary parameter (its conditional upper end, up to a factor e²)."""
+        """The conditional upper 95 % end of a zero-boundary parameter (the others held, ℓ down by 1.92), to 10 %:
+        bracketed going up from ϑ̂_k in e²-fold steps, then bisected in log."""
         th = self.theta.copy()
+        inside = float(self.theta[k])
         for step in range(1, int(MAX_LOG_DISTANCE / 2) + 1):
             th[k] = self.theta[k] + 2.0 * step
-            if self.ll_max - self.loglik(th) > mle.LR_DROP_95:
-                return float(np.exp(th[k]))
-        return float(np.exp(th[k]))
+            if self.ll_max - self.evaluate(th)[0] > mle.LR_DROP_95:
+                break
+            inside = float(th[k])
+        outside = float(th[k])
+        while outside - inside > 0.1:
+            th[k] = 0.5 * (inside + outside)
+            if self.ll_max - self.evaluate(th)[0] > mle.LR_DROP_95:
+                outside = float(th[k])
+            else:
+                inside = float(th[k])
+        return float(np.exp(outside))
 
     # -- the inner maximisation ----------------------------------------------------------------------------
-    def maximise(self, starts: list[np.ndarray], skip: int | None, base: StateSpace) -> tuple[float, np.ndarray]:
-        """max over the log-parameters but ``skip`` (held at its start value), from the best of ``starts``;
-        (ℓ, argmax)."""
-        start = starts[0] if len(starts) == 1 else max(starts, key=lambda t: self.loglik(t, base))
-        free = [j for j in range(self.theta.size) if j != skip]
+    def fallback_starts(self) -> list[np.ndarray]:
+        """Starts besides the trace's extrapolation: the estimate, and the estimate with each zero-boundary
+        parameter at s (the profile of a parameter that trades with it can jump to that branch)."""
+        out = [self.theta]
+        for j, scale in self.zero.items():
+            th = self.theta.copy()
+            th[j] = math.log(scale)
+            out.append(th)
+        return out
+
+    def adjustment(self, theta: np.ndarray, base: StateSpace) -> float:
+        """½ log det cov(b̂) at ϑ: a function of ϑ alone (the regressor columns filtered, the data column zero)."""
+        self.n_eval += 1
+        try:
+            prof = kalman.loglik(self.par.to_model(theta, base), self._zeros, self.z)
+        except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
+            return -math.inf
+        return adjusted(prof) - float(prof.loglik)
+
+    def adjustment_gradient(self, base: StateSpace) -> np.ndarray:
+        """∂(½ log det cov b̂)/∂ϑ at the estimate (with the means ``base`` leaves free), by forward differences of
+        0.05 (log units): the adjustment varies over many standard errors of ϑ, so one gradient serves every
+        profile point."""
+        key = tuple(bool(f) for f in base.b_free)
+        if key not in self._grad_c:
+            c0 = self.adjustment(self.theta, base)
+            grad = np.zeros(self.theta.size)
+            for j in range(self.theta.size):
+                th = self.theta.copy()
+                th[j] += 0.05
+                grad[j] = (self.adjustment(th, base) - c0) / 0.05
+            self._grad_c[key] = np.where(np.isfinite(grad), grad, 0.0)
+        return self._grad_c[key]
+
+    def wald_holds(self, k: int, cov: np.ndarray, a_hat: float, drop_range: tuple[float, float]) -> bool:
+        """Whether ℓ_A at the two Wald ends of log-parameter k — the interior others on the quadratic trace
+        ϑ̂ + Σ_{·k}/Σ_kk·(ϑ_k − ϑ̂_k), the zero-boundary and undetermined ones re-maximised — lies ``drop_range``
+        below ``a_hat``, its maximum at the estimate (ℓ quadratic, the adjustment immaterial, no trade with a
+        boundary parameter)."""
+        step = Z95 * cov[:, k] / math.sqrt(cov[k, k])
+        step = np.where(np.isfinite(step), step, 0.0)
+        loose = set(self.zero) | self.flat
+        for sign in (-1.0, 1.0):
+            th = self.theta + sign * step
+            if np.any(th < self.lo) or np.any(th > self.hi):
+                return False
+            if loose:
+                starts = [th] + [np.where(np.arange(th.size) == j, s[j], th) for s in self.fallback_starts()[1:]
+                                 for j in self.zero if s[j] != self.theta[j]]
+                a = self.maximise(starts, set(range(th.size)) - loose, self.model)[0]
+            else:
+                a = self.evaluate(th)[1]
+            if not drop_range[0] <= a_hat - a <= drop_range[1]:
+                return False
+        return True
+
+    def best_at_estimate(self) -> float:
+        """ℓ_A at the estimate, the zero-boundary and undetermined parameters re-maximised for it."""
+        a_hat = self.evaluate(self.theta)[1]
+        loose = set(self.zero) | self.flat
+        if loose:
+            a_hat = max(a_hat, self.maximise(self.fallback_starts(), set(range(self.theta.size)) - loose,
+                                             self.model)[0])
+        return a_hat
+
+    def maximise(self, starts: list[np.ndarray], fixed: set[int], base: StateSpace) -> tuple[float, np.ndarray]:
+        """max of ℓ_A over the log-parameters but those in ``fixed`` (held at their start values), from the best
+        of ``starts``; (ℓ_A at the argmax, argmax).
+
+        L-BFGS-B on ℓ plus the adjustment linearised at the start: its gradient at the estimate
+        (:meth:`adjustment_gradient`) for interior and undetermined parameters, by a forward difference at the
+        start for zero-boundary ones (there it changes fast). ℓ_A itself is exact at every point evaluated.
+        """
+        scored = [(self.evaluate(t, base), t) for t in starts] if len(starts) > 1 else []
+        start = max(scored, key=lambda p: p[0][1])[1] if scored else starts[0]
+        free = [j for j in range(self.theta.size) if j not in fixed]
         zero = [j for j in free if j in self.zero]
         flat = [j for j in free if j in self.flat and j not in self.zero]
         inner = [j for j in free if j not in zero and j not in flat]
@@ -141,158 +253,201 @@ class Profiler:
             th[flat] = np.clip(start[flat] + x[ni + nz:], self.lo[flat], self.hi[flat])
             return th, raw == th[inner]
 
-        best: list = [-math.inf, start]
+        x0 = np.concatenate([np.zeros(ni),
+                             np.clip(np.exp(start[zero]) / s, ZERO_FLOOR, ZERO_CAP) if nz else np.zeros(0),
+                             np.zeros(len(flat))])
+        grad_theta = self.adjustment_gradient(base)
+        c0 = self.adjustment(theta_of(x0)[0], base)
+        grad_c = np.concatenate([T.T @ grad_theta[inner], np.zeros(nz), grad_theta[flat]])
+        for i in range(ni, ni + nz):
+            xp = x0.copy()
+            xp[i] += 0.05 * max(x0[i], 0.1)
+            grad_c[i] = (self.adjustment(theta_of(xp)[0], base) - c0) / (xp[i] - x0[i])
+        grad_c = np.where(np.isfinite(grad_c), grad_c, 0.0)
+        best: list = [-math.inf, start, -math.inf]  # ℓ_A, ϑ, ℓ
 
         def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
             th, inside = theta_of(x)
             self.n_eval += 1
             try:
-                ll, g, _ = mle.loglik_and_grad(self.par, th, base, self.y, self.z, data=self.data)
+                ll, g, _, prof = mle.loglik_grad_profile(self.par, th, base, self.y, self.z, data=self.data)
             except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
                 return FAILED_DROP, np.zeros_like(x)
             if not math.isfinite(ll):
                 return FAILED_DROP, np.zeros_like(x)
-            if ll > best[0]:
-                best[:] = [ll, th]
-            grad = np.concatenate([T.T @ (g[inner] * inside), g[zero] / x[ni:ni + nz], g[flat]])
-            return self.ll_max - ll, -grad
+            a = adjusted(prof)
+            if a > best[0]:
+                best[:] = [a, th, ll]
+            grad = np.concatenate([T.T @ (g[inner] * inside), g[zero] / x[ni:ni + nz], g[flat]]) + grad_c
+            return self.ll_max - ll - float(grad_c @ (x - x0)), -grad
 
-        x0 = np.concatenate([np.zeros(ni),
-                             np.clip(np.exp(start[zero]) / s, ZERO_FLOOR, ZERO_CAP) if nz else np.zeros(0),
-                             np.zeros(len(flat))])
-        bounds = ([(None, None)] * ni + [(ZERO_FLOOR, ZERO_CAP)] * nz
+        bounds = ([(-MAX_WHITENED, MAX_WHITENED)] * ni + [(ZERO_FLOOR, ZERO_CAP)] * nz
                   + [(self.lo[j] - start[j], self.hi[j] - start[j]) for j in flat])
-        bounds = [(None if b is None or not math.isfinite(b) else b, None if c is None or not math.isfinite(c)
-                   else c) for b, c in bounds]
-        if free:
+        bounds = [tuple(None if b is None or not math.isfinite(b) else b for b in pair) for pair in bounds]
+        if free and math.isfinite(c0):
             minimize(fun, x0, jac=True, method="L-BFGS-B", bounds=bounds,
-                     options={"maxiter": 25, "maxfun": 40, "ftol": 1e-9, "gtol": 1e-2, "maxcor": 10})
-        else:
-            fun(x0)
-        ll, th = best
-        if ll > self.ll_max + BETTER_BY and (self.better is None or ll > self.better[0]):
-            self.better = (ll, th.copy(), base)
-        return ll, th
+                     options={"maxiter": 20, "maxfun": 30, "ftol": 1e-9, "gtol": 1e-2, "maxcor": 10})
+        if not math.isfinite(best[0]):
+            ll, a = self.evaluate(start, base)
+            best[:] = [a, start, ll]
+        a, th, ll = best
+        if ll > self.ll_max + BETTER_BY:
+            self.better = max(ll, self.better or -math.inf)
+        return a, th
 
-    # -- one end --------------------------------------------------------------------------------------------
-    def end(self, profile_at: Callable[[float, list[np.ndarray]], tuple[float, np.ndarray]], v_hat: float,
-            direction: float, first: float, predict: Callable[[float], list[np.ndarray]], limit: float) -> float:
-        """The end of the 95 % interval in ``direction`` (±1) of a profiled coordinate with estimate ``v_hat``.
+    # -- the centre and the ends ----------------------------------------------------------------------------
+    def centre(self, profile_at: ProfileAt, v_hat: float, a_hat: float, steps: list[float], *,
+               predict: Callable[[float], list[np.ndarray]], parabola: bool) -> list[tuple[float, float, np.ndarray]]:
+        """Profile points (v, ℓ_A, argmax) at ``v_hat`` and ``v_hat + step`` for each step, plus the vertex of the
+        parabola through them when ``parabola`` and it lies among them: the max of ℓ_A is the best of these."""
+        pts = [(v_hat, a_hat, self.theta)]
+        for step in steps:
+            a, th = profile_at(v_hat + step, predict(step))
+            pts.append((v_hat + step, a, th))
+        good = [p for p in pts if math.isfinite(p[1])]
+        if parabola and len(good) >= 3:
+            v = np.array([p[0] for p in good])
+            c2, c1, _ = np.polyfit(v - v_hat, [p[1] for p in good], 2)
+            vertex = -c1 / (2.0 * c2) if c2 < 0 else math.nan
+            if math.isfinite(vertex) and min(v - v_hat) < vertex < max(v - v_hat) and abs(vertex) > 0.05 * np.ptp(v):
+                a, th = profile_at(v_hat + vertex, predict(vertex))
+                pts.append((v_hat + vertex, a, th))
+        return pts
 
-        ``profile_at(v, starts)`` → (ℓ_p(v), argmax) from the best of ``starts``; ``first``: the first distance
-        tried (e.g. the Wald half-width); ``predict(d)``: starts for the first point at distance d; ``limit``: the largest distance
-        (±inf returned beyond it: the data do not bound the parameter that way).
+    def end(self, profile_at: ProfileAt, pts_all: list[tuple[float, float, np.ndarray]], direction: float,
+            first: float, limit: float) -> float:
+        """The end of the 95 % interval in ``direction`` (±1) from the best of ``pts_all`` (the centre).
+
+        ``pts_all``: profile points (v, ℓ_A, argmax) known so far; ``first``: the first distance tried when no
+        known point lies that way; ``limit``: the largest distance (±inf beyond it: the data do not bound the
+        parameter that way).
         """
-        pts: list[tuple[float, float, np.ndarray]] = [(0.0, 0.0, self.theta)]  # (distance, r, argmax)
-        d = min(max(first, 1e-6), limit)
+        v_c, a_max, th_c = max(pts_all, key=lambda p: p[1])
+
+        def root(a: float) -> float:
+            return math.sqrt(2.0 * max(a_max - a, 0.0)) if math.isfinite(a) else math.inf
+
+        known = sorted((direction * (v - v_c), root(a), th) for v, a, th in pts_all if direction * (v - v_c) > 0)
+        pts: list[Point] = [(0.0, 0.0, th_c)] + [p for p in known if math.isfinite(p[1])]
         inside: list[float] = [0.0, -Z95]  # Illinois regula falsi on f = r − Z95: [distance, f] with f < 0 …
         outside: list[float] | None = None  # … and with f > 0 once bracketed
+        for d, r, _ in known:
+            if r < Z95:
+                inside = [d, r - Z95]
+            elif outside is None:
+                outside = [d, min(r - Z95, 10.0 * Z95)]
         last_moved = 0  # which end the previous step replaced (−1 inside, +1 outside)
+        d = min(max(first, 1e-12), limit) if len(pts) == 1 else None
         for _ in range(MAX_POINTS):
-            # The trace's guess, and the estimate itself (the profile can have a second, worse branch that
-            # extrapolation walks into, e.g. a GM turning into a random walk at the largest τ).
-            starts = predict(d) if len(pts) < 2 else [_extrapolate(pts, d), self.theta]
-            ll, th = profile_at(v_hat + direction * d, starts)
-            r = math.sqrt(2.0 * max(self.ll_max - ll, 0.0)) if math.isfinite(ll) else math.inf
+            if outside is None:  # still inside: step outward along the secant of r, 1.25–4× further
+                if d is None:
+                    if inside[0] >= limit:
+                        return direction * math.inf
+                    (d0, r0, _), (d1, r1, _) = pts[-2], pts[-1]
+                    grow = d0 + (Z95 - r0) * (d1 - d0) / (r1 - r0) if r1 > r0 else math.inf
+                    d = min(max(grow, 1.25 * d1), 4.0 * d1, limit)
+            else:
+                if outside[0] - inside[0] < 1e-3 * outside[0]:
+                    break
+                d = inside[0] - inside[1] * (outside[0] - inside[0]) / (outside[1] - inside[1])
+            near = sorted(pts, key=lambda p: abs(p[0] - d))[:2]
+            ll_a, th = profile_at(v_c + direction * d, [_extrapolate(near, d), *self.fallback_starts()])
+            r = root(ll_a)
             if abs(r - Z95) < R_TOL:
-                return v_hat + direction * d
+                return v_c + direction * d
             if math.isfinite(r):
                 pts.append((d, r, th))
+                pts.sort(key=lambda p: p[0])
             f = min(r - Z95, 10.0 * Z95)  # an evaluation outside the domain counts as far outside
-            if f < 0 and d > inside[0]:
+            if f < 0:
                 inside = [d, f]
                 if outside is not None and last_moved == -1:
                     outside[1] *= 0.5
                 last_moved = -1
-            elif f > 0 and (outside is None or d < outside[0]):
+            else:
                 outside = [d, f]
                 if last_moved == 1:
                     inside[1] *= 0.5
                 last_moved = 1
-            if outside is None:  # still inside: step outward along the secant of r, 1.25–4× further
-                if d >= limit:
-                    return direction * math.inf
-                near = sorted(pts, key=lambda p: p[0])[-2:]
-                (d0, r0, _), (d1, r1, _) = near if len(near) == 2 else (pts[0], pts[0])
-                grow = d0 + (Z95 - r0) * (d1 - d0) / (r1 - r0) if r1 > r0 else math.inf
-                d = min(max(grow, 1.25 * d), 4.0 * d, limit)
-                continue
-            if outside[0] - inside[0] < 1e-3 * max(outside[0], 1e-3):
-                break
-            d = inside[0] - inside[1] * (outside[0] - inside[0]) / (outside[1] - inside[1])
+            d = None
         if outside is None:
             return direction * math.inf
         d = inside[0] - inside[1] * (outside[0] - inside[0]) / (outside[1] - inside[1])
-        return v_hat + direction * d
+        return v_c + direction * d
 
     # -- a log-parameter ------------------------------------------------------------------------------------
-    def interval(self, k: int, cov: np.ndarray, lower: bool = True) -> tuple[float, float]:
-        """95 % profile interval (lo, hi) of log-parameter k (−inf: 0 cannot be excluded; +inf: unbounded).
-
-        ``cov``: the Wald covariance (its column k predicts the trace's first point where finite);
-        ``lower=False``: the lower end is −inf without searching (the caller knows the data cannot exclude 0).
-        """
-        theta_hat = self.theta
-        col = cov[:, k] / cov[k, k] if math.isfinite(cov[k, k]) and cov[k, k] > 0 else np.zeros(theta_hat.size)
+    def interval(self, k: int, cov: np.ndarray) -> tuple[float, float]:
+        """95 % adjusted-profile interval (lo, hi) of log-parameter k (−inf: 0 cannot be excluded; +inf: the data
+        do not bound it). ``cov``: the Wald covariance (its column k predicts the trace's first points)."""
+        theta_hat, v_hat = self.theta, float(self.theta[k])
+        var = cov[k, k]
+        col = cov[:, k] / var if math.isfinite(var) and var > 0 else np.zeros(theta_hat.size)
         col = np.where(np.isfinite(col), col, 0.0)
         col[list(self.zero) + list(self.flat)] = 0.0  # the trace's first guess moves the interior ones only
-        se = math.sqrt(cov[k, k]) if math.isfinite(cov[k, k]) and cov[k, k] > 0 else math.inf
+        se = math.sqrt(var) if math.isfinite(var) and var > 0 else math.inf
 
         def profile_at(v: float, starts: list[np.ndarray]) -> tuple[float, np.ndarray]:
             starts = [s.copy() for s in starts]
             for s in starts:
                 s[k] = v
-            return self.maximise(starts, k, self.model)
+            return self.maximise(starts, {k}, self.model)
 
-        out = []
+        def predict(step: float) -> list[np.ndarray]:
+            return [np.clip(theta_hat + col * step, self.lo, self.hi), *self.fallback_starts()]
+
+        room = {d: min(MAX_LOG_DISTANCE, abs(b - v_hat)) if math.isfinite(b) else MAX_LOG_DISTANCE
+                for d, b in ((-1.0, self.lo[k]), (1.0, self.hi[k]))}
+        a_hat = self.evaluate(theta_hat)[1]
+        if k in self.zero:  # ℓ_A along K from 0 up to the conditional scale s, in e-fold steps
+            top = math.log(self.zero[k]) - v_hat
+            pts = self.centre(profile_at, v_hat, a_hat, [top - 2.0, top - 1.0, top],
+                              predict=predict, parabola=False)
+        else:
+            half = Z95 * se if se < 5.0 else 1.0
+            steps = [-min(half, 0.5 * room[-1.0]), min(half, 0.5 * room[1.0])]
+            pts = self.centre(profile_at, v_hat, a_hat, [s for s in steps if s != 0.0], predict=predict,
+                              parabola=True)
+        v_c = max(pts, key=lambda p: p[1])[0]
+        ends = []
         for direction in (-1.0, 1.0):
-            if direction < 0 and not lower:
-                out.append(-math.inf)
-                continue
-            v_hat = theta_hat[k]
-            if k in self.zero and direction > 0:
-                first = max(math.log(self.zero[k]) - 1.0 - v_hat, 0.5)  # inside [s/e², s], the conditional end
-            else:
-                first = Z95 * se if math.isfinite(se) and se < 5.0 else 1.0
+            limit = room[direction] + direction * (v_hat - v_c)
+            if k in self.zero and direction < 0:  # towards 0: unbounded unless ℓ_A at the estimate is outside
+                if a_hat >= max(p[1] for p in pts) - mle.LR_DROP_95:
+                    ends.append(-math.inf)
+                    continue
+                limit = v_c - v_hat
+            end = self.end(profile_at, pts, direction, 1.0 if se > 5.0 else Z95 * se, limit)
             bound = self.hi[k] if direction > 0 else self.lo[k]
-            limit = min(MAX_LOG_DISTANCE, abs(bound - v_hat)) if math.isfinite(bound) else MAX_LOG_DISTANCE
-
-            def predict(d: float, direction: float = direction) -> list[np.ndarray]:
-                return [np.clip(theta_hat + col * direction * d, self.lo, self.hi), theta_hat]
-
-            end = self.end(profile_at, v_hat, direction, first, predict, limit)
-            at_bound = math.isfinite(bound) and abs(end - bound) < 1e-9
-            out.append(direction * math.inf if at_bound else end)
-        return out[0], out[1]
+            ends.append(direction * math.inf if math.isfinite(bound) and abs(end - bound) < 1e-9 else end)
+        return ends[0], ends[1]
 
     # -- the ramp slope -------------------------------------------------------------------------------------
     def slope_interval(self, regressor: int, value: float, se: float) -> tuple[float, float]:
-        """95 % profile interval of the ramp slope (measurement regressor ``regressor``, GLS estimate ``value``,
-        GLS standard error ``se`` given the noise parameters)."""
+        """95 % adjusted-profile interval of the ramp slope (measurement regressor ``regressor``, GLS estimate
+        ``value``, GLS standard error ``se`` given the noise parameters)."""
         fixed = self.model.copy()
         fixed.b_free[regressor] = False
 
-        def profile_at(v: float, starts: list[np.ndarray]) -> tuple[float, np.ndarray]:
+        def base_at(v: float) -> StateSpace:
             base = fixed.copy()
             base.b[regressor] = v
-            return self.maximise(starts, None, base)
+            return base
 
-        def predict(d: float) -> list[np.ndarray]:
-            return [self.theta.copy()]
+        def profile_at(v: float, starts: list[np.ndarray]) -> tuple[float, np.ndarray]:
+            return self.maximise(starts, set(), base_at(v))
 
         scale = max(se, 1e-300)
-        limit = 1e6 * scale
-        lo = self.end(profile_at, value, -1.0, Z95 * scale, predict, limit)
-        hi = self.end(profile_at, value, 1.0, Z95 * scale, predict, limit)
-        return lo, hi
+        a_hat = self.evaluate(self.theta, base_at(value))[1]
+        pts = self.centre(profile_at, value, a_hat, [-Z95 * scale, Z95 * scale],
+                          predict=lambda _: self.fallback_starts(), parabola=True)
+        return (self.end(profile_at, pts, -1.0, Z95 * scale, 1e6 * scale),
+                self.end(profile_at, pts, 1.0, Z95 * scale, 1e6 * scale))
 
 
-def _extrapolate(pts: list[tuple[float, float, np.ndarray]], d: float) -> np.ndarray:
-    """Argmax at distance d by linear extrapolation (or interpolation) of the two nearest profile points."""
-    near = sorted(pts, key=lambda p: abs(p[0] - d))[:2]
+def _extrapolate(near: list[Point], d: float) -> np.ndarray:
+    """Argmax at distance d by linear extrapolation (or interpolation) of two profile points."""
+    if len(near) < 2 or near[1][0] == near[0][0]:
+        return near[0][2].copy()
     (d0, _, t0), (d1, _, t1) = near
-    if d1 == d0:
-        return t0.copy()
-    w = (d - d0) / (d1 - d0)
-    w = min(max(w, -1.0), 2.0)
+    w = min(max((d - d0) / (d1 - d0), -1.0), 2.0)
     return t0 + w * (t1 - t0)

@@ -69,20 +69,6 @@ def _near_zero(par: mle.Parameterisation, res: mle.MLEResult, k: int, y: np.ndar
     return res.loglik - ll < mle.LR_DROP_95
 
 
-def _wald_holds(prof: Profiler, cov: np.ndarray, k: int) -> bool:
-    """Whether ℓ at the two Wald ends of log-parameter k, the others on the quadratic trace
-    ϑ̂ + Σ_{·k}/Σ_kk·(ϑ_k − ϑ̂_k), lies :data:`WALD_DROP_RANGE` below the maximum."""
-    step = Z95 * cov[:, k] / math.sqrt(cov[k, k])
-    for sign in (-1.0, 1.0):
-        th = prof.theta + sign * step
-        if np.any(th < prof.lo) or np.any(th > prof.hi):
-            return False
-        drop = prof.ll_max - prof.loglik(th)
-        if not WALD_DROP_RANGE[0] <= drop <= WALD_DROP_RANGE[1]:
-            return False
-    return True
-
-
 def _ramp_regressor(model: ss.StateSpace) -> int | None:
     """Index of the free ramp regressor (RR in measurement mode), or None."""
     if "ramp" in model.regressors:
@@ -115,16 +101,17 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     zero = [k for k in near_zero if par.entries[k][1] not in bounds]
     prof.zero = {k: prof.conditional_scale(k) for k in zero}
     prof.flat = ({k for k in range(k_noise) if not np.isfinite(cov[k, k])} | set(near_zero)) - set(zero)
-    hessian_ok = fit.information_ok and not near_zero
+    a_hat = prof.best_at_estimate()
     for k, lab in enumerate(noise_labels):
         v = float(np.exp(theta[k]))
         s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
         fit.se[lab] = v * s_log
-        if hessian_ok and s_log <= WALD_MAX_SE_LOG and _wald_holds(prof, cov, k):
+        interior = k not in prof.zero and k not in prof.flat
+        if interior and s_log <= WALD_MAX_SE_LOG and prof.wald_holds(k, cov, a_hat, WALD_DROP_RANGE):
             fit.ci95[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
             fit.ci95_method[lab] = "wald"
         else:
-            lo_k, hi_k = prof.interval(k, cov, lower=k not in zero)
+            lo_k, hi_k = prof.interval(k, cov)
             fit.ci95[lab] = (math.exp(lo_k) if math.isfinite(lo_k) else 0.0,
                              math.exp(hi_k) if math.isfinite(hi_k) else math.inf)
             fit.ci95_method[lab] = "profile"
@@ -133,7 +120,7 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     if j is not None and rr_lab is not None and "ramp" in fit.exog_coef:
         ramp = fit.exog_coef["ramp"]
         fit.ci95_method[rr_lab] = "gls"
-        if not hessian_ok:  # the GLS interval holds the noise parameters, and a boundary RW trades with the ramp
+        if prof.zero or prof.flat:  # the GLS interval holds the noise parameters; a boundary RW trades with the ramp
             ramp["ci95"] = prof.slope_interval(j, ramp["value"], ramp["se"])
             fit.ci95[rr_lab] = ramp["ci95"]
             fit.ci95_method[rr_lab] = "profile"
