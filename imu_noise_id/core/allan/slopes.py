@@ -31,7 +31,8 @@ Rule (documented in docs/analysis.md):
 3. **Confidence interval.** From the single AV point of the region with the most information on the
    coefficient (largest ν·s², s the component's share of the fitted sum there): its χ² interval, relative,
    divided by s (the other lines are taken as known), widened in log (in quadrature) by the difference
-   between the fitted c and the c this point alone implies, and carried to the parameter (∝ √c). AV estimates at
+   between the fitted c and the c this point alone implies when that point's interval does not hold the
+   fitted c (a misfit), and carried to the parameter (∝ √c). AV estimates at
    neighbouring τ are strongly correlated, so averaging them adds little information and a naive
    least-squares error would be too optimistic; this interval is approximate (coverage measured in
    ``bench/bench_allan_fit.py``).
@@ -229,10 +230,12 @@ def _component(name: str, coef: np.ndarray, region: np.ndarray, res: AllanResult
     av = res.variance[i, axis]
     c_lo = max(1.0 + (res.ci_low[i, axis] / av - 1.0) / share[k], 0.0)
     c_hi = 1.0 + (res.ci_high[i, axis] / av - 1.0) / share[k]
-    # Widen by the disagreement between the fitted line and that point's own coefficient (in log, quadrature).
+    # Widen by the disagreement between the fitted line and that point's own coefficient (in log, quadrature)
+    # when the point's own interval does not hold the fitted line: a misfit, not the sampling noise the
+    # interval already describes (the fit pools the region's points and is, if anything, more precise).
     others = lines[k].sum() - lines[k, j]
     own = (av - others) / res.tau[i] ** mu
-    if own > 0 and c_lo > 0:
+    if own > 0 and c_lo > 0 and not c_lo <= coefficient / own <= c_hi:
         d2 = math.log(own / coefficient) ** 2
         c_lo = math.exp(-math.sqrt(math.log(c_lo) ** 2 + d2))
         c_hi = math.exp(math.sqrt(math.log(c_hi) ** 2 + d2))
