@@ -56,8 +56,8 @@ from . import em, mle
 
 #: Two-sided 95 % normal quantile: the signed root r at each end.
 Z95 = 1.959963984540054
-#: Each end is accepted when |r − Z95| is below this (an interval of 94.7–95.3 % nominal level).
-R_TOL = 0.03
+#: Each end is accepted when |r − Z95| is below this (an interval of 94.4–95.6 % nominal level).
+R_TOL = 0.05
 #: Zero-boundary parameters are searched in [ZERO_FLOOR·s, ZERO_CAP·s], s their conditional upper end.
 ZERO_FLOOR, ZERO_CAP = 0.01, 1e4
 #: An end further than this from the estimate (log units, i.e. a factor e^25 ≈ 7e10) is reported as unbounded.
@@ -66,6 +66,8 @@ MAX_LOG_DISTANCE = 25.0
 MAX_POINTS = 12
 #: A profile point whose log-likelihood exceeds the fit's by more than this shows the fit missed the maximum.
 BETTER_BY = 0.05
+#: Outward steps that raise the signed root by less than this (the profile is flat) jump to the end of the range.
+FLAT_PROGRESS = 0.1
 #: The inner maximisation moves the interior parameters at most this many standard errors from its start.
 MAX_WHITENED = 20.0
 #: Drop of ℓ at which an inner maximisation counts as failed (an evaluation outside the filter's domain).
@@ -124,7 +126,7 @@ class Profiler:
     zero: dict[int, float] = field(default_factory=dict)
     flat: set[int] = field(default_factory=set)
     n_eval: int = 0
-    better: float | None = None
+    better: tuple[float, np.ndarray] | None = None  # (ℓ, ϑ) above the fit's maximum, when met
 
     def __post_init__(self) -> None:
         self.data = em.DataSums.of(self.y, self.z)
@@ -270,7 +272,8 @@ class Profiler:
             th, inside = theta_of(x)
             self.n_eval += 1
             try:
-                ll, g, _, prof = mle.loglik_grad_profile(self.par, th, base, self.y, self.z, data=self.data)
+                ll, g, _, prof = mle.loglik_grad_profile(self.par, th, base, self.y, self.z, data=self.data,
+                                                        central=False)
             except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
                 return FAILED_DROP, np.zeros_like(x)
             if not math.isfinite(ll):
@@ -286,13 +289,13 @@ class Profiler:
         bounds = [tuple(None if b is None or not math.isfinite(b) else b for b in pair) for pair in bounds]
         if free and math.isfinite(c0):
             minimize(fun, x0, jac=True, method="L-BFGS-B", bounds=bounds,
-                     options={"maxiter": 20, "maxfun": 30, "ftol": 1e-9, "gtol": 1e-2, "maxcor": 10})
+                     options={"maxiter": 10, "maxfun": 12, "ftol": 1e-9, "gtol": 3e-2, "maxcor": 10})
         if not math.isfinite(best[0]):
             ll, a = self.evaluate(start, base)
             best[:] = [a, start, ll]
         a, th, ll = best
-        if ll > self.ll_max + BETTER_BY:
-            self.better = max(ll, self.better or -math.inf)
+        if ll > self.ll_max + BETTER_BY and (self.better is None or ll > self.better[0]):
+            self.better = (ll, th.copy())
         return a, th
 
     # -- the centre and the ends ----------------------------------------------------------------------------
@@ -344,8 +347,11 @@ class Profiler:
                     if inside[0] >= limit:
                         return direction * math.inf
                     (d0, r0, _), (d1, r1, _) = pts[-2], pts[-1]
-                    grow = d0 + (Z95 - r0) * (d1 - d0) / (r1 - r0) if r1 > r0 else math.inf
-                    d = min(max(grow, 1.25 * d1), 4.0 * d1, limit)
+                    if len(pts) >= 3 and r1 < r0 + FLAT_PROGRESS:  # a flat profile: try the end of the range
+                        d = limit
+                    else:
+                        grow = d0 + (Z95 - r0) * (d1 - d0) / (r1 - r0) if r1 > r0 else math.inf
+                        d = min(max(grow, 1.25 * d1), 4.0 * d1, limit)
             else:
                 if outside[0] - inside[0] < 1e-3 * outside[0]:
                     break

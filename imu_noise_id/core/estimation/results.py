@@ -70,8 +70,9 @@ class FitResult:
         Whether the observed information was positive definite (else some se are inf: not identified).
     profile_evaluations : int
         Log-likelihood evaluations the profile intervals took (0 when every interval is Wald).
-    better_loglik : float | None
-        A log-likelihood above ``loglik`` the profile search met (the fit missed the maximum), else None.
+    better_loglik, better_start
+        A log-likelihood above ``loglik`` the profile search met (the fit missed the maximum) and the components
+        there, else None; :meth:`~.model.NoiseModel.fit` then searches again from them.
     log_covariance, covariance_labels
         Covariance of the log-parameters (inverse observed information) and their labels (``WN.noise_density`` …),
         for intervals of derived quantities by the delta method (empty until the uncertainty is computed).
@@ -94,6 +95,7 @@ class FitResult:
     ci95_method: dict[str, str] = field(default_factory=dict)
     profile_evaluations: int = 0
     better_loglik: float | None = None
+    better_start: list[Component] | None = field(default=None, repr=False)
     n_eval: int = 0
     n_params: int = 0
     starts: list[float] = field(default_factory=list)

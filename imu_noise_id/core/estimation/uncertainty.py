@@ -126,6 +126,7 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
             fit.ci95_method[rr_lab] = "profile"
     fit.profile_evaluations = prof.n_eval
     if prof.better is not None:
-        fit.better_loglik = prof.better
+        fit.better_loglik = prof.better[0]
+        fit.better_start = par.to_components(prof.better[1], model_ss)
     fit.record_length = _record_length(noise_labels, cov, comps_ss, fit.n, fit.dt, target=target_precision)
     return fit
