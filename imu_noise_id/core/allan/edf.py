@@ -237,7 +237,8 @@ def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str, y: np.ndarr
     μ is the regression slope over ±2 neighbouring τ (:func:`local_slopes`). For AV, HV and TV a slope of −2 is
     white phase noise (α = 2) *or* flicker phase noise (α = 1, the same slope but for a log factor) or a
     low-pass-filtered white noise: with the rate samples ``y`` (N, k) and averaging factors ``m`` given, α is read
-    from the data's lag-1 autocorrelation (:func:`lag1_alpha`) wherever μ < :data:`STEEP_SLOPE`; without them a
+    from the data's lag-1 autocorrelation (:func:`lag1_alpha`) wherever μ < :data:`STEEP_SLOPE`, once per run of
+    such τ at its shortest τ; without them a
     slope of −2 maps to α = 2 (the modified AV's slope tells them apart itself: −3 vs −2). α is then made
     non-increasing in τ (a running minimum): inertial sensor noise goes from quantisation through white noise to
     flicker and random walk as τ grows, and this keeps one low point in a noisy long-τ tail from being read as
@@ -256,11 +257,17 @@ def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str, y: np.ndarr
             y2 = y[:, None] if y.ndim == 1 else y
             mu2 = mu[:, None] if mu.ndim == 1 else mu
             a2 = alpha[:, None] if alpha.ndim == 1 else alpha
-            for (i, j), slope in np.ndenumerate(mu2):
-                if slope < STEEP_SLOPE:
-                    est = lag1_alpha(y2[:, j], int(m[i]))
+            for j in range(mu2.shape[1]):
+                # One estimate per run of steep τ, at its shortest τ (the most averages, the most precise r₁):
+                # the noise type does not change inside the run, and r₁ from a few dozen averages would
+                # often read white phase noise as flicker.
+                steep = mu2[:, j] < STEEP_SLOPE
+                starts = np.flatnonzero(steep & ~np.concatenate([[False], steep[:-1]]))
+                for i0 in starts:
+                    run = i0 + np.flatnonzero(np.cumprod(steep[i0:]))
+                    est = lag1_alpha(y2[:, j], int(m[i0]))
                     if est is not None:
-                        a2[i, j] = float(np.rint(est))
+                        a2[run, j] = float(np.rint(est))
     alpha = np.minimum.accumulate(np.clip(alpha, lo, hi), axis=0)
     return alpha.astype(int)
 
