@@ -30,6 +30,10 @@ from ..kalman.statespace import StateSpace, with_components
 from ..noise.components import RR, Component
 from . import em
 
+#: Above this length a record with missing samples is searched (and its intervals profiled) gap-filled: the exact
+#: engine needed for the gaps is a Python loop (:mod:`.search`, :mod:`.uncertainty`).
+FILL_FIRST_MIN_SAMPLES = 20_000
+
 #: Metric information −∂²ℓ/∂ϑ_k² below which :func:`maximise` holds log-parameter k at its start: changing the
 #: parameter e-fold then changes ℓ by less than 5e-4 (the parameter sits at the ~0 boundary).
 FLAT_INFORMATION = 1e-3

@@ -31,8 +31,6 @@ from .uncertainty import Z95, add_uncertainty
 if TYPE_CHECKING:
     from .model import FitOptions, NoiseModel
 
-#: Above this length a record with missing samples is searched gap-filled first.
-FILL_FIRST_MIN_SAMPLES = 20_000
 
 
 def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options: FitOptions,
@@ -112,7 +110,7 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
     start_values = [init] if init is not None else model.starting_values(options.n_starts, options.spectral_init, bp)
     if bp is not None and any(c.name == "OSC" for s in start_values for c in s):
         bp = whittle.banded_periodogram(y_av, fine=_line_windows(start_values, model.dt))
-    fill_first = model.n_obs < model.n_total and model.n_total > FILL_FIRST_MIN_SAMPLES and options.polish
+    fill_first = model.n_obs < model.n_total and model.n_total > mle.FILL_FIRST_MIN_SAMPLES and options.polish
     y_search = interpolate_missing(model.y) if fill_first else model.y
     best: tuple[mle.MLEResult, int] | None = None
     lls = []

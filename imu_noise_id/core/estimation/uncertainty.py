@@ -22,6 +22,7 @@ from ..errors import InputError
 from ..kalman import statespace as ss
 from ..noise.components import RR, Component
 from ..noise.modelspec import parameter_labels
+from ..quality import interpolate_missing
 from . import mle
 from .profile import Profiler
 from .results import FitResult, RecordLengthAdvice
@@ -93,7 +94,13 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     fit.log_covariance, fit.covariance_labels = cov[:k_noise, :k_noise].copy(), tuple(noise_labels)
     bounds = mle.physical_bounds(np.size(y), fit.dt)
     lo, hi = par.log_bounds(bounds)
-    prof = Profiler(par, theta, model_ss, y, z, fit.loglik, info, lo, hi)
+    if np.isnan(y).any() and y.size > mle.FILL_FIRST_MIN_SAMPLES:
+        # Profiles need hundreds of evaluations: on a long record with gaps they run on the gap-filled record
+        # (the fast engine), an approximation the intervals of such records carry.
+        y_fill = interpolate_missing(y)
+        prof = Profiler(par, theta, model_ss, y_fill, z, kalman.loglik(model_ss, y_fill, z).loglik, info, lo, hi)
+    else:
+        prof = Profiler(par, theta, model_ss, y, z, fit.loglik, info, lo, hi)
     res = mle.MLEResult(theta, model_ss, fit.loglik, 0, fit.converged, "")
     near_zero = [k for k in range(k_noise) if _near_zero(par, res, k, y, z)]
     # An amplitude (a density, a σ) near 0 is at the boundary; a time or frequency (with a physical range) that
