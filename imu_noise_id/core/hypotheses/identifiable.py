@@ -105,7 +105,7 @@ def long_memory(hset: HypothesisSet, log_weights: list[np.ndarray], record_s: fl
             p_long = 1.0 - _cdf_at(edges, mass, LONG_TAU_FRACTION * record_s, log)
             bound = _quantile(edges, mass, LOWER_QUANTILE, log)
         if p_long >= 0.5:
-            out.append(LongMemory(hyp.name, _twin(hyp, hset), bound, float(record_s), p_long))
+            out.append(LongMemory(hyp.name, _twin(hyp, hset), float(bound), float(record_s), float(p_long)))
     return out
 
 
