@@ -66,5 +66,7 @@ def run(args: argparse.Namespace) -> int:
         f = e.result.final
         probs = ", ".join(f"{k} {v:.3f}" for k, v in f.probabilities.items())
         print(f"{axis}: {probs} -> decision {f.decision or 'none yet'}")
+        for g in f.long_memory:
+            print(f"  {g.text()}")
     print(f"wrote {out / 'hypotheses.yaml'}")
     return 0

@@ -22,6 +22,12 @@ def axis_entry(axis: str, entry: AxisIdentification) -> dict[str, Any]:
         "decision_time_s": result.decision_time,
         "duration_s": float(final.t),
         "probabilities": {k: float(v) for k, v in final.probabilities.items()},
+        "decision_probabilities": {k: float(v) for k, v in final.decision_probabilities.items()},
+        "indistinguishable": [
+            {"hypotheses": [g.hypothesis, *([g.twin] if g.twin else [])], "tau_lower_bound_s": g.tau_lower_bound,
+             "record_s": g.record_s, "probability_tau_beyond_half_record": g.probability_long, "note": g.text()}
+            for g in final.long_memory
+        ],
         "offset_removed": float(entry.offset),
         "warmup_white_noise_estimate": entry.wn_estimate,
         "passes": entry.passes,
@@ -31,9 +37,11 @@ def axis_entry(axis: str, entry: AxisIdentification) -> dict[str, Any]:
         "hypotheses": {
             name: {
                 "probability": est.probability,
-                "theta": est.theta,
-                "theta_std": est.theta_std,
-                "rsd": {k: (None if not np.isfinite(v) else v) for k, v in est.rsd.items()},
+                "theta": {k: (None if k in est.not_identifiable else v) for k, v in est.theta.items()},
+                "theta_std": {k: (None if k in est.not_identifiable else v) for k, v in est.theta_std.items()},
+                "rsd": {k: (None if not np.isfinite(v) or k in est.not_identifiable else v)
+                        for k, v in est.rsd.items()},
+                "not_identifiable": {k: f"> {v:.6g}" for k, v in est.not_identifiable.items()},
                 "state": {s: v[0] for s, v in entry.states[name].items()},
                 "state_std": {s: v[1] for s, v in entry.states[name].items()},
                 "grid": {p.name: {"range": [p.low, p.high], "n": p.n, "spacing": p.spacing,

@@ -52,16 +52,21 @@ def _component_entry(fit: FitResult, index: int) -> dict:
     entry.update({k: num(v) for k, v in params.items()})
     se = {p: num(fit.se[lab]) for p, lab in labels.items() if lab in fit.se}
     ci = {p: [num(v) for v in fit.ci95[lab]] for p, lab in labels.items() if lab in fit.ci95}
+    how = {p: fit.ci95_method[lab] for p, lab in labels.items() if lab in fit.ci95_method}
     if len(params) == 1:
         if se:
             entry["se"] = next(iter(se.values()))
         if ci:
             entry["ci95"] = next(iter(ci.values()))
+        if how:
+            entry["ci95_method"] = next(iter(how.values()))
     else:
         if se:
             entry["se"] = se
         if ci:
             entry["ci95"] = ci
+        if how:
+            entry["ci95_method"] = how
     entry.update({k: num(v) for k, v in comp.per_sample(fit.dt).items()})
     return entry
 

@@ -17,7 +17,9 @@ The EDF depends on the power-law noise type S_y(f) ∝ f^α at that τ:
 The noise type is an **assumption**. By default it is identified per τ and axis from the local log-log slope
 μ of the estimated variance (σ² ∝ τ^μ): α = −μ − 1 rounded to an integer, which maps white noise (μ = −1) to
 α = 0, random walk (μ = +1) to α = −2, and quantisation noise (μ = −2, or −3 for MAV) to α = 2; α is clipped
-to the range the EDF formulas cover (−2..2; −4..2 for HV). Pass ``alpha=`` to fix it instead. Deterministic
+to the range the EDF formulas cover (−2..2; −4..2 for HV). Where the slope says phase noise (μ = −2 in AV, HV,
+TV: white *or* flicker phase noise, or a low-pass-filtered white noise), the lag-1 autocorrelation of the data
+decides (:func:`identify_alpha` with the data, :func:`lag1_alpha`). Pass ``alpha=`` to fix it instead. Deterministic
 effects (a rate ramp, μ = +2) are not noise: their interval is only indicative.
 """
 
@@ -223,15 +225,24 @@ def local_slopes(tau: np.ndarray, variance: np.ndarray, half_window: int = SLOPE
     return mu[:, 0] if v.ndim == 1 else mu
 
 
-def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str) -> np.ndarray:
+#: Local AV slope below which the noise type is read from the lag-1 autocorrelation when the data are at hand
+#: (between white frequency noise, μ = −1, and phase noise, μ = −2).
+STEEP_SLOPE = -1.25
+
+
+def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str, y: np.ndarray | None = None,
+                   m: np.ndarray | None = None) -> np.ndarray:
     """Noise exponent α per τ and axis from the local log-log slope μ of the variance: α = −μ − 1, rounded.
 
-    μ is the regression slope over ±2 neighbouring τ (:func:`local_slopes`). For AV, HV and TV a slope of −2
-    (quantisation / white phase noise) maps to α = 2 (flicker phase noise, α = 1, has the same AV slope and
-    is rare in IMUs). α is then made non-increasing in τ (a running minimum): inertial sensor noise goes from
-    quantisation through white noise to flicker and random walk as τ grows, and this keeps one low point in a
-    noisy long-τ tail from being read as white phase noise, whose EDF would be huge and its interval far too
-    narrow. A single τ gives α = 0 (white noise).
+    μ is the regression slope over ±2 neighbouring τ (:func:`local_slopes`). For AV, HV and TV a slope of −2 is
+    white phase noise (α = 2) *or* flicker phase noise (α = 1, the same slope but for a log factor) or a
+    low-pass-filtered white noise: with the rate samples ``y`` (N, k) and averaging factors ``m`` given, α is read
+    from the data's lag-1 autocorrelation (:func:`lag1_alpha`) wherever μ < :data:`STEEP_SLOPE`, once per run of
+    such τ at its shortest τ; without them a
+    slope of −2 maps to α = 2 (the modified AV's slope tells them apart itself: −3 vs −2). α is then made
+    non-increasing in τ (a running minimum): inertial sensor noise goes from quantisation through white noise to
+    flicker and random walk as τ grows, and this keeps one low point in a noisy long-τ tail from being read as
+    white phase noise, whose EDF would be huge and its interval far too narrow. A single τ gives α = 0.
     """
     variance = np.asarray(variance, dtype=float)
     lo, hi = alpha_range(kind)
@@ -242,8 +253,56 @@ def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str) -> np.ndarr
     alpha = np.rint(-mu - 1.0)
     if kind != "modified":
         alpha = np.where(mu <= -1.5, 2.0, alpha)
+        if y is not None and m is not None:
+            y2 = y[:, None] if y.ndim == 1 else y
+            mu2 = mu[:, None] if mu.ndim == 1 else mu
+            a2 = alpha[:, None] if alpha.ndim == 1 else alpha
+            for j in range(mu2.shape[1]):
+                # One estimate per run of steep τ, at its shortest τ (the most averages, the most precise r₁):
+                # the noise type does not change inside the run, and r₁ from a few dozen averages would
+                # often read white phase noise as flicker.
+                steep = mu2[:, j] < STEEP_SLOPE
+                starts = np.flatnonzero(steep & ~np.concatenate([[False], steep[:-1]]))
+                for i0 in starts:
+                    run = i0 + np.flatnonzero(np.cumprod(steep[i0:]))
+                    est = lag1_alpha(y2[:, j], int(m[i0]))
+                    if est is not None:
+                        a2[run, j] = float(np.rint(est))
     alpha = np.minimum.accumulate(np.clip(alpha, lo, hi), axis=0)
     return alpha.astype(int)
+
+
+#: Fewest averages the lag-1 autocorrelation needs (Riley & Greenhall 2004 use it from about 30 points).
+LAG1_MIN_POINTS = 30
+
+
+def lag1_alpha(y: np.ndarray, m: int, d_max: int = 2) -> float | None:
+    """Noise exponent α of rate samples at averaging factor m from the lag-1 autocorrelation (Riley & Greenhall,
+    "Power law noise identification using the lag 1 autocorrelation", 2004, with frequency data).
+
+    The non-overlapping m-averages, a least-squares line removed, are differenced d = 0, 1, … times until
+    δ = r₁/(1 + r₁) < 0.25 (r₁ the lag-1 autocorrelation; at most ``d_max`` times); then α = −2(δ + d). White
+    phase noise gives r₁ = −½, α = 2; flicker phase noise α ≈ 1; white frequency noise r₁ = 0, α = 0; random walk
+    α = −2. It tells white from flicker phase noise, which the Allan variance's slope (−2 for both) cannot.
+    None when fewer than :data:`LAG1_MIN_POINTS` averages exist.
+    """
+    k = y.size // m
+    if k < LAG1_MIN_POINTS:
+        return None
+    z = y[: k * m].reshape(k, m).mean(axis=1)
+    t = np.arange(k, dtype=float)
+    z = z - np.polyval(np.polyfit(t, z, 1), t)
+    for d in range(d_max + 1):
+        zc = z - z.mean()
+        denom = float(zc @ zc)
+        if denom <= 0:
+            return None
+        r1 = float(zc[:-1] @ zc[1:]) / denom
+        delta = r1 / (1.0 + r1)
+        if delta < 0.25 or d == d_max:
+            return -2.0 * (delta + d)
+        z = np.diff(z)
+    return None
 
 
 def chi2_interval(variance: np.ndarray, edf: np.ndarray, confidence: float) -> tuple[np.ndarray, np.ndarray]:

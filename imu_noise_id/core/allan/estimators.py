@@ -320,7 +320,7 @@ def allan_family(
         Two-sided level of the χ² interval.
     alpha : int or array (T, k), optional
         Noise exponent assumed for the EDF; default: identified per τ from the local slope
-        (:func:`identify_alpha`).
+        (:func:`identify_alpha`), the data's lag-1 autocorrelation deciding where the slope is steep.
 
     Raises
     ------
@@ -335,7 +335,7 @@ def allan_family(
     variance = _normalise(kind, sums, m_arr[:, None], n, dt)
     tau_arr = m_arr * dt
     if alpha is None:
-        alpha_arr = identify_alpha(tau_arr, variance, kind)
+        alpha_arr = identify_alpha(tau_arr, variance, kind, y, m_arr)
     else:
         lo, hi = alpha_range(kind)
         alpha_arr = np.broadcast_to(np.asarray(alpha), variance.shape).astype(int)

@@ -20,16 +20,19 @@ Rule (documented in docs/analysis.md):
    Σ_i ρ(√(ν_i/2)·log(model_i/AV_i)) with ν_i the EDF (log of a χ²_ν/ν variable has variance ≈ 2/ν) and ρ
    Huber's loss with threshold 2.5, bounded c ≥ 0, started from linear non-negative least squares with
    weights ν/(2·model²). Noisy long-τ points therefore weigh little, a spike in the tail cannot make a
-   parameter NaN or drag it far, and a component no line supports gets c ≈ 0. QN, WN and RW are
-   always fitted; BI and RR are added only where the curve lies significantly above that base model
-   (its lower confidence limit above the base fit at two or more τ of their region).
+   parameter NaN or drag it far, and a component no line supports gets c ≈ 0. WN and RW are always
+   fitted; QN, BI and RR are added only where the curve lies significantly above that base model (its
+   lower confidence limit above the base fit at two or more τ of their region; for QN where its line is at
+   least 10 % of the sum). An always-fitted QN line bounded at c ≥ 0 took a share of the shortest-τ AV
+   on records without quantisation and biased N low by about its own standard error.
 2. **Region.** A component's τ region is where its line is at least half of the fitted sum, i.e. where the
    local slope of the curve is within about ±0.5 (in AV, ±¼ in ADEV) of the component's slope. QN, BI and
    RR are reported only when they have such a region of at least two τ.
 3. **Confidence interval.** From the single AV point of the region with the most information on the
    coefficient (largest ν·s², s the component's share of the fitted sum there): its χ² interval, relative,
    divided by s (the other lines are taken as known), widened in log (in quadrature) by the difference
-   between the fitted c and the c this point alone implies, and carried to the parameter (∝ √c). AV estimates at
+   between the fitted c and the c this point alone implies when that point's interval does not hold the
+   fitted c (a misfit), and carried to the parameter (∝ √c). AV estimates at
    neighbouring τ are strongly correlated, so averaging them adds little information and a naive
    least-squares error would be too optimistic; this interval is approximate (coverage measured in
    ``bench/bench_allan_fit.py``).
@@ -127,9 +130,12 @@ _LINES: dict[str, tuple[float, object]] = {
 
 _NAMES = tuple(_LINES)
 _MUS = np.array([mu for mu, _ in _LINES.values()])
-#: The components always fitted (Kalibr's model plus quantisation); BI and RR are added when significant.
-BASE = ("QN", "WN", "RW")
-EXTRAS = ("BI", "RR")
+#: The components always fitted (Kalibr's model); QN, BI and RR are added when significant.
+BASE = ("WN", "RW")
+EXTRAS = ("QN", "BI", "RR")
+#: QN is tested where its line is at least this fraction of the sum (it acts only at the shortest τ, where the AV
+#: is the most precise: a quantisation too weak to dominate anywhere still biases N if left out).
+QN_TEST_SHARE = 0.1
 
 
 def fit_lines(tau: np.ndarray, variance: np.ndarray, edf: np.ndarray, names: tuple[str, ...] = _NAMES) -> np.ndarray:
@@ -186,17 +192,18 @@ def _lines(coef: np.ndarray, tau: np.ndarray) -> np.ndarray:
     return coef[None, :] * tau[:, None] ** _MUS[None, :]
 
 
-def _region(j: int, coef: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """Indices of τ where line j is at least :data:`DOMINANCE` of the fitted sum (rule 2)."""
+def _region(j: int, coef: np.ndarray, tau: np.ndarray, share: float = DOMINANCE) -> np.ndarray:
+    """Indices of τ where line j is at least ``share`` (default :data:`DOMINANCE`) of the fitted sum (rule 2)."""
     lines = _lines(coef, tau)
-    return np.flatnonzero((lines[:, j] > 0) & (lines[:, j] >= DOMINANCE * lines.sum(axis=1)))
+    return np.flatnonzero((lines[:, j] > 0) & (lines[:, j] >= share * lines.sum(axis=1)))
 
 
 def select_lines(res: AllanResult, axis: int) -> np.ndarray:
-    """Coefficients of the base lines plus the extras (BI, RR) the data need (rule 1).
+    """Coefficients of the base lines (WN, RW) plus the extras (QN, BI, RR) the data need (rule 1).
 
-    An extra line is kept when, in its region (of at least two τ), the AV's lower confidence limit lies above
-    the base model at two or more τ: the curve is significantly higher than QN + WN + RW can explain there.
+    An extra line is kept when, in its region (of at least two τ; for QN where it is at least
+    :data:`QN_TEST_SHARE` of the sum), the AV's lower confidence limit lies above the base model at two or more
+    τ: the curve is significantly higher than WN + RW can explain there.
     """
     tau, av, edf = res.tau, res.variance[:, axis], res.edf[:, axis]
     base = fit_lines(tau, av, edf, BASE)
@@ -204,7 +211,7 @@ def select_lines(res: AllanResult, axis: int) -> np.ndarray:
     keep = list(BASE)
     for extra in EXTRAS:
         coef = fit_lines(tau, av, edf, (*BASE, extra))
-        region = _region(_NAMES.index(extra), coef, tau)
+        region = _region(_NAMES.index(extra), coef, tau, QN_TEST_SHARE if extra == "QN" else DOMINANCE)
         if region.size >= 2 and np.sum(res.ci_low[region, axis] > base_model[region]) >= 2:
             keep.append(extra)
     return base if len(keep) == len(BASE) else fit_lines(tau, av, edf, tuple(keep))
@@ -223,10 +230,12 @@ def _component(name: str, coef: np.ndarray, region: np.ndarray, res: AllanResult
     av = res.variance[i, axis]
     c_lo = max(1.0 + (res.ci_low[i, axis] / av - 1.0) / share[k], 0.0)
     c_hi = 1.0 + (res.ci_high[i, axis] / av - 1.0) / share[k]
-    # Widen by the disagreement between the fitted line and that point's own coefficient (in log, quadrature).
+    # Widen by the disagreement between the fitted line and that point's own coefficient (in log, quadrature)
+    # when the point's own interval does not hold the fitted line: a misfit, not the sampling noise the
+    # interval already describes (the fit pools the region's points and is, if anything, more precise).
     others = lines[k].sum() - lines[k, j]
     own = (av - others) / res.tau[i] ** mu
-    if own > 0 and c_lo > 0:
+    if own > 0 and c_lo > 0 and not c_lo <= coefficient / own <= c_hi:
         d2 = math.log(own / coefficient) ** 2
         c_lo = math.exp(-math.sqrt(math.log(c_lo) ** 2 + d2))
         c_hi = math.exp(math.sqrt(math.log(c_hi) ** 2 + d2))

@@ -30,9 +30,26 @@ from ..kalman.statespace import StateSpace, with_components
 from ..noise.components import RR, Component
 from . import em
 
+#: Above this length a record with missing samples is searched (and its intervals profiled) gap-filled: the exact
+#: engine needed for the gaps is a Python loop (:mod:`.search`, :mod:`.uncertainty`).
+FILL_FIRST_MIN_SAMPLES = 20_000
+
 #: Metric information −∂²ℓ/∂ϑ_k² below which :func:`maximise` holds log-parameter k at its start: changing the
 #: parameter e-fold then changes ℓ by less than 5e-4 (the parameter sits at the ~0 boundary).
 FLAT_INFORMATION = 1e-3
+
+
+def physical_bounds(n_total: int, dt: float) -> dict[str, tuple[float, float]]:
+    """Physical ranges of the parameters searched, for a record of ``n_total`` samples at period ``dt`` [s].
+
+    GM τ from one sample to 100 records; OSC and LPF frequencies between the record's resolution and the Nyquist
+    frequency; an OSC at least two resolution bins wide (a narrower line is a sinusoid of fixed frequency and phase,
+    a SIN regressor, not a random process the record can resolve).
+    """
+    span = n_total * dt
+    nyquist = 0.5 / dt
+    return {"tau": (dt, 100.0 * span), "frequency": (1.0 / span, nyquist), "bandwidth": (2.0 / span, nyquist),
+            "cutoff": (1.0 / span, nyquist)}
 
 
 @dataclass(frozen=True)
@@ -60,6 +77,14 @@ class Parameterisation:
             raise InputError(f"component parameters must be finite and > 0 to fit, got {components}")
         return np.log(values)
 
+    def log_bounds(self, bounds: dict[str, tuple[float, float]]) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) of every log-parameter from physical ``bounds`` by parameter name (±inf where none)."""
+        lo, hi = np.full(len(self.entries), -np.inf), np.full(len(self.entries), np.inf)
+        for k, (_, name) in enumerate(self.entries):
+            if name in bounds:
+                lo[k], hi[k] = math.log(bounds[name][0]), math.log(bounds[name][1])
+        return lo, hi
+
     def to_components(self, theta: np.ndarray, model: StateSpace | None = None) -> list[Component]:
         """Components at ϑ; RR slopes are taken from ``model`` (its profiled value) when given."""
         params = [dict(c.params()) for c in self.template]
@@ -84,24 +109,27 @@ def loglik_and_grad(
     step: float = 1e-6, data: em.DataSums | None = None,
 ) -> tuple[float, np.ndarray, StateSpace]:
     """Profile log-likelihood at ϑ, its exact gradient (Fisher's identity) and the model with GLS means."""
-    ll, grad, model, _ = _loglik_grad_profile(par, theta, base, y, z, step=step, data=data)
+    ll, grad, model, _ = loglik_grad_profile(par, theta, base, y, z, step=step, data=data)
     return ll, grad, model
 
 
-def _loglik_grad_profile(
+def loglik_grad_profile(
     par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *,
-    step: float = 1e-6, data: em.DataSums | None = None,
+    step: float = 1e-6, data: em.DataSums | None = None, central: bool = True,
 ) -> tuple[float, np.ndarray, StateSpace, ProfileResult]:
-    """:func:`loglik_and_grad` and the GLS profile itself (β̂, its covariance)."""
+    """:func:`loglik_and_grad` and the GLS profile itself (β̂, its covariance). ``central=False``: forward
+    differences of Q (half the evaluations; an O(step) error, immaterial away from the optimum's last digits)."""
     prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
     sums = em.sums_from_stats(stats, data or em.DataSums.of(y, z))
     grad = np.empty(theta.size)
+    q0 = None if central else em.q_function(par.to_model(theta, model), sums, model)
     for k in range(theta.size):
         tp, tm = theta.copy(), theta.copy()
         tp[k] += step
         tm[k] -= step
-        grad[k] = (em.q_function(par.to_model(tp, model), sums, model)
-                   - em.q_function(par.to_model(tm, model), sums, model)) / (2.0 * step)
+        q_plus = em.q_function(par.to_model(tp, model), sums, model)
+        grad[k] = ((q_plus - em.q_function(par.to_model(tm, model), sums, model)) / (2.0 * step) if central
+                   else (q_plus - q0) / step)
     return prof.loglik, grad, model, prof
 
 
@@ -177,7 +205,7 @@ def maximise(
             return 1e10, -T.T @ np.where(theta < lo, -1.0, np.where(theta > hi, 1.0, 0.0))
         state["n"] += 1
         try:
-            ll, g, model, prof = _loglik_grad_profile(par, theta, base, y, z, data=data)
+            ll, g, model, prof = loglik_grad_profile(par, theta, base, y, z, data=data)
         except (InputError, np.linalg.LinAlgError, ValueError):
             return 1e10, np.zeros_like(eta)
         if not math.isfinite(ll):
@@ -261,45 +289,3 @@ def covariance_from_information(info: np.ndarray) -> tuple[np.ndarray, bool]:
 
 #: Half the 95 % χ²₁ quantile: a likelihood-ratio interval ends where ℓ drops by this much.
 LR_DROP_95 = 1.9207294103470103
-
-
-def likelihood_interval(
-    par: Parameterisation, theta: np.ndarray, k: int, model: StateSpace, y: np.ndarray,
-    *, z: np.ndarray, ll_max: float, step: float = 1.0, max_steps: int = 25, lower: bool = True,
-) -> tuple[float, float]:
-    """95 % likelihood-ratio interval of log-parameter k, the others held at their estimates (conditional).
-
-    Used where the Wald interval is meaningless (a variance near 0, a flat likelihood). Each end is bracketed
-    by steps of ``step`` in log space and refined by bisection; an end the likelihood never drops by
-    :data:`LR_DROP_95` within ``max_steps`` is ∓inf (i.e. the parameter may be 0 or unbounded).
-    ``lower=False`` skips the lower end (−inf: the caller knows the data cannot exclude 0).
-    """
-
-    def drop(v: float) -> float:
-        th = theta.copy()
-        th[k] = v
-        try:
-            return ll_max - kalman.loglik(par.to_model(th, model), y, z).loglik
-        except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
-            return math.inf
-
-    ends = [] if lower else [-math.inf]
-    for direction in (-1.0, 1.0) if lower else (1.0,):
-        inside, outside = theta[k], None
-        for i in range(1, max_steps + 1):
-            v = theta[k] + direction * step * i
-            if drop(v) > LR_DROP_95:
-                outside = v
-                break
-            inside = v
-        if outside is None:
-            ends.append(direction * math.inf)
-            continue
-        for _ in range(8):
-            mid = 0.5 * (inside + outside)
-            if drop(mid) > LR_DROP_95:
-                outside = mid
-            else:
-                inside = mid
-        ends.append(0.5 * (inside + outside))
-    return ends[0], ends[1]

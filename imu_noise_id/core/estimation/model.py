@@ -209,13 +209,8 @@ class NoiseModel:
     # -- the model at given parameters ------------------------------------------------------------------------
     @property
     def parameter_bounds(self) -> dict[str, tuple[float, float]]:
-        """Physical ranges searched: GM τ from one sample to 100 records; OSC and LPF frequencies between the
-        record's resolution and the Nyquist frequency; an OSC at least two resolution bins wide (a narrower line is
-        a sinusoid of fixed frequency and phase, a SIN regressor, not a random process the record can resolve)."""
-        span = self.n_total * self.dt
-        nyquist = 0.5 / self.dt
-        return {"tau": (self.dt, 100.0 * span), "frequency": (1.0 / span, nyquist), "bandwidth": (2.0 / span, nyquist),
-                "cutoff": (1.0 / span, nyquist)}
+        """Physical ranges searched (:func:`.mle.physical_bounds` of this record)."""
+        return mle.physical_bounds(self.n_total, self.dt)
 
     def statespace(self, components: list[Component]) -> ss.StateSpace:
         """State-space form of ``components`` (fitted structure, RR as a measurement regressor)."""

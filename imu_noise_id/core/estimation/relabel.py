@@ -46,10 +46,12 @@ def gm_as_filter(fit: FitResult) -> FitResult:
     key = "GM" if len(gms) == 1 else f"GM{[j for j, _ in gms].index(i) + 1}"
     se = {k: v for k, v in fit.se.items() if not k.startswith(f"{key}.")}
     ci95 = {k: v for k, v in fit.ci95.items() if not k.startswith(f"{key}.")}
+    how = {k: v for k, v in fit.ci95_method.items() if not k.startswith(f"{key}.")}
     if f"{key}.tau" in fit.ci95:
         lo, hi = fit.ci95[f"{key}.tau"]
         ci95["LPF.cutoff"] = (1.0 / (2.0 * math.pi * hi) if hi > 0 else 0.0,
                               1.0 / (2.0 * math.pi * lo) if lo > 0 else math.inf)
+        how["LPF.cutoff"] = fit.ci95_method.get(f"{key}.tau", "wald")
     labels, cov = list(fit.covariance_labels), fit.log_covariance
     if f"{key}.sigma" in labels and f"{key}.tau" in labels:
         i_s, i_t = labels.index(f"{key}.sigma"), labels.index(f"{key}.tau")
@@ -63,8 +65,9 @@ def gm_as_filter(fit: FitResult) -> FitResult:
         n_lpf = components[i].noise_density
         se["LPF.noise_density"] = n_lpf * sd
         ci95["LPF.noise_density"] = (n_lpf * math.exp(-Z95 * sd), n_lpf * math.exp(Z95 * sd))
+        how["LPF.noise_density"] = "wald"
     return replace(fit, model=structure_name([c.name for c in components]), components=components, se=se,
-                   ci95=ci95, log_covariance=cov, covariance_labels=tuple(labels))
+                   ci95=ci95, ci95_method=how, log_covariance=cov, covariance_labels=tuple(labels))
 
 
 def with_uncertainty(fit: FitResult) -> FitResult:
@@ -76,5 +79,6 @@ def with_uncertainty(fit: FitResult) -> FitResult:
     if fit.statespace is None:
         raise InputError("this FitResult holds no state space to compute its uncertainty from")
     raw = to_components(fit.statespace)
-    as_fitted = replace(fit, model=structure_name([c.name for c in raw]), components=raw, se={}, ci95={})
+    as_fitted = replace(fit, model=structure_name([c.name for c in raw]), components=raw, se={}, ci95={},
+                        ci95_method={})
     return gm_as_filter(add_uncertainty(as_fitted))

@@ -46,10 +46,14 @@ class FitResult:
         coefficients; each ``{value, se, ci95}``.
     se, ci95 : dict[str, ...]
         Standard error and 95 % interval of every component parameter, keyed ``WN.noise_density``, ``GM2.tau`` …,
-        physical units. Intervals of positive parameters are exp(log-value ± 1.96·se_log) (asymmetric); where
-        se_log > 1 or a thousandfold smaller value is not rejected by the data (weakly identified, e.g. a variance
-        near 0), a likelihood-ratio interval conditional on the other parameters is given instead, with lower
-        end 0 when the data cannot exclude 0.
+        physical units. Intervals of positive parameters are exp(log-value ± 1.96·se_log) (asymmetric, Wald)
+        where the observed information can be trusted, else profile-likelihood intervals (the other parameters
+        re-maximised at every point; lower end 0 when the data cannot exclude 0, upper end inf when they do not
+        bound it): see :mod:`.uncertainty`. ``se`` is always the inverse-information one (inf where the
+        information does not determine the parameter).
+    ci95_method : dict[str, str]
+        How each interval was obtained: ``wald``, ``profile`` (profile likelihood) or ``gls`` (a mean parameter's
+        GLS interval given the noise parameters).
     loglik, aic, bic : float
         Exact maximised log-likelihood; AIC = 2k − 2ℓ, BIC = k·ln(n) − 2ℓ with k = all free parameters.
     n : int
@@ -64,6 +68,11 @@ class FitResult:
         How long to record for the target precision (when the uncertainty was computed).
     information_ok : bool
         Whether the observed information was positive definite (else some se are inf: not identified).
+    profile_evaluations : int
+        Log-likelihood evaluations the profile intervals took (0 when every interval is Wald).
+    better_loglik, better_start
+        A log-likelihood above ``loglik`` the profile search met (the fit missed the maximum) and the components
+        there, else None; :meth:`~.model.NoiseModel.fit` then searches again from them.
     log_covariance, covariance_labels
         Covariance of the log-parameters (inverse observed information) and their labels (``WN.noise_density`` …),
         for intervals of derived quantities by the delta method (empty until the uncertainty is computed).
@@ -83,6 +92,10 @@ class FitResult:
     converged: bool
     record_length: RecordLengthAdvice | None = None
     information_ok: bool = True
+    ci95_method: dict[str, str] = field(default_factory=dict)
+    profile_evaluations: int = 0
+    better_loglik: float | None = None
+    better_start: list[Component] | None = field(default=None, repr=False)
     n_eval: int = 0
     n_params: int = 0
     starts: list[float] = field(default_factory=list)

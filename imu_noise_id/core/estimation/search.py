@@ -3,7 +3,8 @@
 Per start (:meth:`~.model.NoiseModel.starting_values`), ``em_iter`` EM iterations (:mod:`.em`) then L-BFGS-B on
 the exact likelihood (:mod:`.mle`; beyond the paper: EM's slow convergence, §3.5 and §5); the best likelihood wins.
 Mean parameters (bias, ramp, exog) come from the GLS profile at the optimum; standard errors, intervals and the
-recording-length advice from :mod:`.uncertainty`.
+recording-length advice from :mod:`.uncertainty`. When the profile-likelihood search of the intervals meets a
+higher likelihood than the search's maximum, the search runs once more from there (beyond the paper).
 
 Long records with missing samples are searched on the gap-filled record with the fast (steady-state) engine
 (beyond the paper; the exact engine is a Python loop); likelihood, means, innovations and intervals are then those
@@ -30,8 +31,6 @@ from .uncertainty import Z95, add_uncertainty
 if TYPE_CHECKING:
     from .model import FitOptions, NoiseModel
 
-#: Above this length a record with missing samples is searched gap-filled first.
-FILL_FIRST_MIN_SAMPLES = 20_000
 
 
 def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options: FitOptions,
@@ -111,7 +110,7 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
     start_values = [init] if init is not None else model.starting_values(options.n_starts, options.spectral_init, bp)
     if bp is not None and any(c.name == "OSC" for s in start_values for c in s):
         bp = whittle.banded_periodogram(y_av, fine=_line_windows(start_values, model.dt))
-    fill_first = model.n_obs < model.n_total and model.n_total > FILL_FIRST_MIN_SAMPLES and options.polish
+    fill_first = model.n_obs < model.n_total and model.n_total > mle.FILL_FIRST_MIN_SAMPLES and options.polish
     y_search = interpolate_missing(model.y) if fill_first else model.y
     best: tuple[mle.MLEResult, int] | None = None
     lls = []
@@ -126,6 +125,27 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
             best = res
     if best is None:
         raise InputError(f"no start of the {'+'.join(model.names)} fit gave a valid likelihood; try init=… values")
+    result = _result(model, best, lls, fill_first)
+    if not options.uncertainty:
+        return result
+    add_uncertainty(result, options.target_precision)
+    if result.better_start is not None:
+        # The profile search met a higher likelihood than the search's maximum (a ridge the starts missed, e.g. a
+        # GM turning into a random walk): search again from there, once.
+        start = result.better_start
+        try:
+            metric = whittle.whittle_information(start, y_av, model.dt, bp) if bp is not None else None
+            again = _one_start(model, start, y_search, options, metric)
+        except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
+            return result
+        if again[0].loglik > result.loglik:
+            result = add_uncertainty(_result(model, again, [*lls, again[0].loglik], fill_first),
+                                     options.target_precision)
+    return result
+
+
+def _result(model: NoiseModel, best: tuple[mle.MLEResult, int], lls: list[float], fill_first: bool) -> FitResult:
+    """The :class:`FitResult` of the search's best (MLE result, EM iterations), without intervals."""
     res, n_iter = best
     comps = ss.to_components(res.model)
     # The search's own profile at the optimum unless it ran on the gap-filled record.
@@ -141,10 +161,9 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
     comps = sorted(comps, key=lambda c: order.get(c.name, 99))
     k = model.n_free_noise + model.z.shape[1] + (1 if model.ls_slope is not None else 0)
     ll = float(prof.loglik)
-    result = FitResult(
+    return FitResult(
         model=model_name(comps), components=comps, exog_coef=exog_coef, se=se, ci95=ci, loglik=ll,
         aic=2 * k - 2 * ll, bic=k * math.log(model.n_obs) - 2 * ll, n=model.n_obs, dt=model.dt, n_iter=n_iter,
         converged=res.converged, n_eval=res.n_eval, n_params=k, starts=lls, statespace=res.model,
         record=(model.y, model.z),
     )
-    return add_uncertainty(result, options.target_precision) if options.uncertainty else result

@@ -1,10 +1,14 @@
 """Uncertainty of a fit: standard errors and 95 % intervals (paper 000 §3.4), and how long to record.
 
 The observed information is minus the Hessian of the exact log-likelihood in the log-parameters
-(:func:`.mle.observed_information`); intervals are Wald intervals in log space, or likelihood-ratio intervals
-(:func:`.mle.likelihood_interval`) where the Wald form is meaningless: a standard error above
-:data:`WALD_MAX_SE_LOG` in log space, or a parameter the data cannot tell from 0 (a thousandfold smaller value lowers
-the likelihood by less than the 95 % threshold). The recording-length advice scales the per-sample information.
+(:func:`.mle.observed_information`); standard errors come from its inverse. Intervals are Wald intervals in log
+space where the Hessian can be trusted, profile-likelihood intervals (:mod:`.profile`) where it cannot (beyond the
+paper): when the information is not positive definite or a parameter sits at its zero boundary (a thousandfold
+smaller value lowers ℓ by less than the 95 % threshold) — then every parameter, the ramp slope included, is
+profiled, since the others trade against the boundary one; and per parameter when its standard error in log space
+exceeds :data:`WALD_MAX_SE_LOG` or ℓ at the Wald ends of the quadratic trace (ϑ̂ ± 1.96·Σ_{·k}/√Σ_kk) is not
+≈ 1.92 below the maximum (:data:`WALD_DROP_RANGE`: the likelihood is not quadratic over the interval). The
+recording-length advice scales the per-sample information.
 """
 
 from __future__ import annotations
@@ -18,14 +22,19 @@ from ..errors import InputError
 from ..kalman import statespace as ss
 from ..noise.components import RR, Component
 from ..noise.modelspec import parameter_labels
+from ..quality import interpolate_missing
 from . import mle
+from .profile import Profiler
 from .results import FitResult, RecordLengthAdvice
 
 #: Two-sided 95 % normal quantile.
 Z95 = 1.959963984540054
 #: Above this standard error in log space (a 95 % Wald interval wider than ×7 each way) the Wald interval is
-#: replaced by a likelihood-ratio one (:func:`.mle.likelihood_interval`).
+#: replaced by a profile-likelihood one.
 WALD_MAX_SE_LOG = 1.0
+#: The Wald interval stands when ℓ at both its ends on the quadratic trace is this far below the maximum (the
+#: signed root within 1.96 − 0.15 … 1.96 + 0.25: a quadratic log-likelihood gives exactly 1.92).
+WALD_DROP_RANGE = (0.5 * (Z95 - 0.15) ** 2, 0.5 * (Z95 + 0.25) ** 2)
 
 
 def _record_length(
@@ -61,34 +70,70 @@ def _near_zero(par: mle.Parameterisation, res: mle.MLEResult, k: int, y: np.ndar
     return res.loglik - ll < mle.LR_DROP_95
 
 
-def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult:
-    """Standard errors, 95 % intervals (§3.4) and the recording-length advice of a fit, in place.
+def _ramp_regressor(model: ss.StateSpace) -> int | None:
+    """Index of the free ramp regressor (RR in measurement mode), or None."""
+    if "ramp" in model.regressors:
+        j = model.regressors.index("ramp")
+        return j if bool(model.b_free[j]) else None
+    return None
 
-    Observed information = minus the Hessian of the exact log-likelihood in log-parameters; Wald intervals
-    in log space, likelihood-ratio ones where the parameter cannot be told from 0 or the information is flat.
-    """
+
+def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult:
+    """Standard errors, 95 % intervals (§3.4, profile likelihood where the Hessian fails: module docstring) and
+    the recording-length advice of a fit, in place. ``fit.ci95_method`` says which interval each parameter got."""
     if fit.statespace is None or fit.record is None:
         raise InputError("this FitResult holds no data to compute its uncertainty from")
     (y, z), model_ss = fit.record, fit.statespace
     comps_ss = ss.to_components(model_ss)
     par = mle.Parameterisation.of(comps_ss)
     theta = par.to_theta(comps_ss)
-    res = mle.MLEResult(theta, model_ss, fit.loglik, 0, fit.converged, "")
     noise_labels = [lab for i, _, lab in parameter_labels(comps_ss) if not isinstance(comps_ss[i], RR)]
     info = mle.observed_information(par, theta, model_ss, y, z)
     cov, fit.information_ok = mle.covariance_from_information(info)
     k_noise = len(noise_labels)
     fit.log_covariance, fit.covariance_labels = cov[:k_noise, :k_noise].copy(), tuple(noise_labels)
+    bounds = mle.physical_bounds(np.size(y), fit.dt)
+    lo, hi = par.log_bounds(bounds)
+    if np.isnan(y).any() and y.size > mle.FILL_FIRST_MIN_SAMPLES:
+        # Profiles need hundreds of evaluations: on a long record with gaps they run on the gap-filled record
+        # (the fast engine), an approximation the intervals of such records carry.
+        y_fill = interpolate_missing(y)
+        prof = Profiler(par, theta, model_ss, y_fill, z, kalman.loglik(model_ss, y_fill, z).loglik, info, lo, hi)
+    else:
+        prof = Profiler(par, theta, model_ss, y, z, fit.loglik, info, lo, hi)
+    res = mle.MLEResult(theta, model_ss, fit.loglik, 0, fit.converged, "")
+    near_zero = [k for k in range(k_noise) if _near_zero(par, res, k, y, z)]
+    # An amplitude (a density, a σ) near 0 is at the boundary; a time or frequency (with a physical range) that
+    # cannot be told from 0 is merely undetermined.
+    zero = [k for k in near_zero if par.entries[k][1] not in bounds]
+    prof.zero = {k: prof.conditional_scale(k) for k in zero}
+    prof.flat = ({k for k in range(k_noise) if not np.isfinite(cov[k, k])} | set(near_zero)) - set(zero)
+    a_hat = prof.best_at_estimate()
     for k, lab in enumerate(noise_labels):
         v = float(np.exp(theta[k]))
         s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
         fit.se[lab] = v * s_log
-        zero = _near_zero(par, res, k, y, z)
-        if s_log <= WALD_MAX_SE_LOG and not zero:
+        interior = k not in prof.zero and k not in prof.flat
+        if interior and s_log <= WALD_MAX_SE_LOG and prof.wald_holds(k, cov, a_hat, WALD_DROP_RANGE):
             fit.ci95[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
+            fit.ci95_method[lab] = "wald"
         else:
-            lo, hi = mle.likelihood_interval(par, theta, k, model_ss, y, z=z, ll_max=fit.loglik, lower=not zero)
-            fit.ci95[lab] = (math.exp(lo) if math.isfinite(lo) else 0.0,
-                             math.exp(hi) if math.isfinite(hi) else math.inf)
+            lo_k, hi_k = prof.interval(k, cov)
+            fit.ci95[lab] = (math.exp(lo_k) if math.isfinite(lo_k) else 0.0,
+                             math.exp(hi_k) if math.isfinite(hi_k) else math.inf)
+            fit.ci95_method[lab] = "profile"
+    j = _ramp_regressor(model_ss)
+    rr_lab = next((lab for i, _, lab in parameter_labels(comps_ss) if isinstance(comps_ss[i], RR)), None)
+    if j is not None and rr_lab is not None and "ramp" in fit.exog_coef:
+        ramp = fit.exog_coef["ramp"]
+        fit.ci95_method[rr_lab] = "gls"
+        if prof.zero or prof.flat:  # the GLS interval holds the noise parameters; a boundary RW trades with the ramp
+            ramp["ci95"] = prof.slope_interval(j, ramp["value"], ramp["se"])
+            fit.ci95[rr_lab] = ramp["ci95"]
+            fit.ci95_method[rr_lab] = "profile"
+    fit.profile_evaluations = prof.n_eval
+    if prof.better is not None:
+        fit.better_loglik = prof.better[0]
+        fit.better_start = par.to_components(prof.better[1], model_ss)
     fit.record_length = _record_length(noise_labels, cov, comps_ss, fit.n, fit.dt, target=target_precision)
     return fit

@@ -18,11 +18,12 @@ continuation of the series.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import InputError
+from .identifiable import LongMemory, long_memory, merged_probabilities
 from .kernel import FilterBank, check_samples
 from .model import BankModel, HypothesisSet, build_bank_model
 
@@ -40,12 +41,16 @@ class HypothesisEstimate:
         parameter name, continuous-time units.
     rsd : dict
         theta_std / theta (relative standard deviation of this data set's estimate).
+    not_identifiable : dict
+        Parameter name → lower bound of a parameter the record cannot resolve (a GM's τ beyond the record:
+        :mod:`.identifiable`); its θ̂ and RSD are then not measurements.
     """
 
     probability: float
     theta: dict[str, float]
     theta_std: dict[str, float]
     rsd: dict[str, float]
+    not_identifiable: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -61,9 +66,13 @@ class BankSnapshot:
     probabilities : dict
         Hypothesis name → posterior probability.
     decision : str or None
-        The most probable hypothesis once its probability reaches γ, else None.
+        The most probable hypothesis of ``decision_probabilities`` once its probability reaches γ, else None.
     hypotheses : dict
         Hypothesis name → :class:`HypothesisEstimate`.
+    long_memory : tuple of LongMemory
+        GM hypotheses the data seen so far cannot tell from their RW twin (:mod:`.identifiable`).
+    decision_probabilities : dict
+        ``probabilities`` with each such GM hypothesis merged into its RW twin (what the decision is taken on).
     """
 
     n_updates: int
@@ -71,6 +80,8 @@ class BankSnapshot:
     probabilities: dict[str, float]
     decision: str | None
     hypotheses: dict[str, HypothesisEstimate]
+    long_memory: tuple[LongMemory, ...] = ()
+    decision_probabilities: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -226,6 +237,10 @@ class HypothesisBank:
             return self._snapshot
         post = self._filters.evaluate(self._filters.c[None])
         probs = np.exp(post.log_prob[0, 0]).tolist()
+        t = self.hset.bank_dt * self._ticks
+        lj = self._filters.c[0] + self.model.log_mu0
+        longs = long_memory(self.hset, [lj[sl] for sl in self.model.slices], t) if self._n_updates else []
+        bounds = {g.hypothesis: {"GM.tau": g.tau_lower_bound} for g in longs}
         hyps = {}
         for k, name in enumerate(self.names):
             mean = post.theta_mean[k][0, 0].tolist()
@@ -236,13 +251,15 @@ class HypothesisBank:
                 theta=dict(zip(names, mean, strict=True)),
                 theta_std=dict(zip(names, std, strict=True)),
                 rsd={p: (s / v if v > 0 else math.inf) for p, s, v in zip(names, std, mean, strict=True)},
+                not_identifiable=bounds.get(name, {}),
             )
-        best = max(range(len(probs)), key=probs.__getitem__)
-        decision = self.names[best] if probs[best] >= self.hset.gamma else None
+        probabilities = dict(zip(self.names, probs, strict=True))
+        merged = merged_probabilities(probabilities, longs)
+        best = max(merged, key=merged.__getitem__)
         self._snapshot = BankSnapshot(
-            n_updates=self._n_updates, t=self.hset.bank_dt * self._ticks,
-            probabilities=dict(zip(self.names, probs, strict=True)),
-            decision=decision, hypotheses=hyps,
+            n_updates=self._n_updates, t=t, probabilities=probabilities,
+            decision=best if merged[best] >= self.hset.gamma else None, hypotheses=hyps,
+            long_memory=tuple(longs), decision_probabilities=merged,
         )
         return self._snapshot
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import InputError
 from .model import BankModel
+from .subcell import GridAxes, refine
 
 _LOG_2PI = math.log(2.0 * math.pi)
 #: Steps between two checks of the gains' convergence.
@@ -80,6 +81,7 @@ class FilterBank:
         for sl, th in zip(model.slices, model.theta, strict=True):
             free = np.flatnonzero(~np.all(th == th[0], axis=0))
             self._hyp_params.append((sl, free, np.ascontiguousarray(th[:, free].T), th[0].copy()))
+        self._grid_axes = [GridAxes.of(th) for th in model.theta]
         self.reset()
 
     def reset(self) -> None:
@@ -211,7 +213,9 @@ class FilterBank:
         return ell
 
     def evaluate(self, c: np.ndarray) -> Posterior:
-        """Eqs. (10)–(14) from cumulative log-likelihoods c (R, L, F): probabilities, θ̂ and their variances.
+        """Eqs. (10)–(14) from cumulative log-likelihoods c (R, L, F): probabilities, θ̂ and their variances;
+        a parameter the grid resolves to less than one cell gets its sub-cell mean and variance from the local
+        curvature of the log weights (:mod:`.subcell`, beyond the paper).
 
         One hypothesis at a time on its contiguous slice of filters, and only for its unknown parameters (a
         known one has θ̂ = its value and variance 0). Every operation is elementwise or a reduction over the
@@ -238,6 +242,8 @@ class FilterBank:
                 dev = grid - mi[..., None]
                 mean[..., free] = mi
                 var[..., free] = (mu * (dev * dev)).sum(axis=-1)  # eq. (14), diagonal
+                if self._grid_axes[k] is not None:  # parameters resolved below one cell (beyond the paper)
+                    refine(part, self._grid_axes[k], mean, var)
             means.append(mean)
             variances.append(var)
         joint = lse + m.log_prior

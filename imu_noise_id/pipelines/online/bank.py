@@ -171,13 +171,14 @@ class BankFeed:
             bank.run(column)
             snap = bank.bank.snapshot()
             previous = self._decisions[i]
-            decision = held_decision(previous, snap.probabilities, bank.bank.hset.gamma)
+            decision = held_decision(previous, snap.decision_probabilities, bank.bank.hset.gamma)
             if decision != previous:
                 if previous is None:
-                    text = f"{AXES[i]}: decided {decision} (p = {snap.probabilities[decision]:.3f})"
+                    text = f"{AXES[i]}: decided {decision} (p = {snap.decision_probabilities[decision]:.3f})"
                 else:
                     text = (f"{AXES[i]}: hypothesis decision changed from {previous} to {decision or 'undecided'} "
-                            f"(p({previous}) = {snap.probabilities[previous]:.3f})")
+                            f"(p({previous}) = {snap.decision_probabilities.get(previous, 0.0):.3f})")
+                text += "".join(f"; {g.text()}" for g in snap.long_memory)
                 self.decision_changes.append(text)
                 self._events.event(f"decision_{AXES[i]}", text)
                 self._decisions[i] = decision
@@ -190,6 +191,7 @@ class BankFeed:
         probs = np.full((6, len(names)), math.nan)
         decision = np.full(6, -1.0)
         updates = np.zeros(6)
+        notes = [""] * 6
         for i, bank in enumerate(self._banks):
             if bank.bank is None:
                 continue
@@ -197,14 +199,17 @@ class BankFeed:
             updates[i] = snap.n_updates
             if snap.n_updates == 0:
                 continue
+            notes[i] = "; ".join(g.text() for g in snap.long_memory)
             for name, p in snap.probabilities.items():
                 probs[i, names.index(name)] = p
             if self._decisions[i] is not None:
                 decision[i] = names.index(self._decisions[i])
-        return HypothesesReport(names, probs, decision, updates)
+        return HypothesesReport(names, probs, decision, updates, tuple(notes))
 
     def theta(self) -> dict[str, np.ndarray]:
-        """Parameter name → (6,) θ̂ of each axis's most probable hypothesis (NaN where it has no such parameter)."""
+        """Parameter name → (6,) θ̂ of each axis's most probable hypothesis (after merging a GM the record cannot tell
+        from its RW twin: :mod:`~imu_noise_id.core.hypotheses.identifiable`); NaN where it has no such parameter
+        or the record cannot resolve it."""
         if self._banks is None:
             return {}
         theta = {p: np.full(6, math.nan) for p in self.parameters}
@@ -214,7 +219,8 @@ class BankFeed:
             snap = bank.bank.snapshot()
             if snap.n_updates == 0:
                 continue
-            best = max(snap.probabilities, key=snap.probabilities.get)
+            best = max(snap.decision_probabilities, key=snap.decision_probabilities.get)
             for p, value in snap.hypotheses[best].theta.items():
-                theta[p][i] = value
+                if p not in snap.hypotheses[best].not_identifiable:
+                    theta[p][i] = value
         return theta

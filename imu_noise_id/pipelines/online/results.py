@@ -99,13 +99,15 @@ class HypothesesReport:
     """Posterior probabilities per axis (rows in AXES order) and hypothesis (columns in ``names`` order).
 
     ``decision`` holds the index of the decided hypothesis per axis (−1: undecided or no bank yet);
-    ``updates`` the number of bank samples per axis; probabilities are NaN for axes without a bank yet.
+    ``updates`` the number of bank samples per axis; probabilities are NaN for axes without a bank yet;
+    ``notes`` per axis the hypotheses the data seen cannot tell apart (empty when none).
     """
 
     names: tuple[str, ...]
     probabilities: np.ndarray
     decision: np.ndarray
     updates: np.ndarray
+    notes: tuple[str, ...] = ("",) * 6
 
     def table(self) -> tuple[tuple[str, ...], np.ndarray]:
         """Column labels (hypothesis names, ``decision``, ``bank_updates``) and the (6, columns) table."""

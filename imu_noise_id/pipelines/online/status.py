@@ -226,6 +226,8 @@ def hypotheses_status(report: HypothesesReport | None, enabled: bool, decision_c
         k = int(report.decision[i])
         values[f"{axis}_decision"] = report.names[k] if k >= 0 else "undecided"
         values[f"{axis}_updates"] = str(int(report.updates[i]))
+        if report.notes[i]:
+            values[f"{axis}_indistinguishable"] = report.notes[i]
         if k >= 0:
             decided.append(f"{axis} {report.names[k]}")
     if decision_changes:
