@@ -101,6 +101,17 @@ def check_signal(y: np.ndarray, dt: float) -> np.ndarray:
     return y
 
 
+def parameter_bounds(n: int, dt: float) -> dict[str, tuple[float, float]]:
+    """Physical ranges searched on an n-sample record at period dt [s]: GM τ from one sample to 100 records; OSC and
+    LPF frequencies between the record's resolution and the Nyquist frequency; an OSC at least two resolution bins
+    wide (a narrower line is a sinusoid of fixed frequency and phase, a SIN regressor, not a random process the record
+    can resolve)."""
+    span = n * dt
+    nyquist = 0.5 / dt
+    return {"tau": (dt, 100.0 * span), "frequency": (1.0 / span, nyquist), "bandwidth": (2.0 / span, nyquist),
+            "cutoff": (1.0 / span, nyquist)}
+
+
 def parse_structure_or_components(structure: str | list[Component]) -> tuple[list[str], list[Component] | None]:
     """Component names and, when values are given (``'WN(2e-4)+RW(3e-6)'`` or Component objects), the components."""
     if isinstance(structure, str):
@@ -209,13 +220,8 @@ class NoiseModel:
     # -- the model at given parameters ------------------------------------------------------------------------
     @property
     def parameter_bounds(self) -> dict[str, tuple[float, float]]:
-        """Physical ranges searched: GM τ from one sample to 100 records; OSC and LPF frequencies between the
-        record's resolution and the Nyquist frequency; an OSC at least two resolution bins wide (a narrower line is
-        a sinusoid of fixed frequency and phase, a SIN regressor, not a random process the record can resolve)."""
-        span = self.n_total * self.dt
-        nyquist = 0.5 / self.dt
-        return {"tau": (self.dt, 100.0 * span), "frequency": (1.0 / span, nyquist), "bandwidth": (2.0 / span, nyquist),
-                "cutoff": (1.0 / span, nyquist)}
+        """:func:`parameter_bounds` of this record."""
+        return parameter_bounds(self.n_total, self.dt)
 
     def statespace(self, components: list[Component]) -> ss.StateSpace:
         """State-space form of ``components`` (fitted structure, RR as a measurement regressor)."""
