@@ -90,3 +90,33 @@ def test_gmwm_refuses_what_it_cannot_fit():
         fit_gmwm(y, DT, "WN+2GM+RW")
     with pytest.raises(InputError):
         fit_gmwm(np.ones(5000), DT, "WN+RW")
+
+
+def test_wic_selects_the_true_structure_among_the_em_candidates():
+    from imu_noise_id.core.estimation.gmwm_select import full_structure, select_gmwm
+
+    assert full_structure(["WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM"]) == "WN+2GM+RW"
+    for truth, expected, seed in (([WN(1e-3), GM(2.0, 5e-4), RW(6e-5)], "WN+GM+RW", 3),
+                                  ([WN(1e-3), RW(5e-5)], "WN+RW", 4)):
+        y = simulate_sum(truth, 300_000, DT, np.random.default_rng(seed))
+        sel = select_gmwm(y, DT)
+        assert sel.best.model == expected, sel.table
+        assert sel.table[0]["model"] == expected and sel.table[0]["delta_wic"] == 0.0
+        assert sel.best.ci95 and all(not f.ci95 for m, f in sel.fits.items() if f is not sel.best)
+
+
+def test_pooled_fit_is_tighter_and_the_compatibility_test_separates_replicates():
+    from imu_noise_id.core.estimation.gmwm_pool import fit_pooled
+
+    truth = [WN(1e-3), GM(2.0, 5e-4), RW(6e-5)]
+    records = [(simulate_sum(truth, 150_000, DT, np.random.default_rng(s)), DT) for s in range(3)]
+    pooled = fit_pooled(records, "WN+GM+RW")
+    assert pooled.compatible and pooled.compatibility_dof == 2 * 4
+    assert not _truth_inside(pooled.fit, truth)
+    width = lambda f: np.log(f.ci95["RW.random_walk"][1] / f.ci95["RW.random_walk"][0])  # noqa: E731
+    assert width(pooled.fit) < min(width(r) for r in pooled.runs)
+    assert pooled.fit.n == 3 * 150_000
+    records[2] = (simulate_sum([WN(1e-3), GM(2.0, 5e-4), RW(2.5e-4)], 150_000, DT, np.random.default_rng(9)), DT)
+    assert not fit_pooled(records, "WN+GM+RW").compatible
+    with pytest.raises(InputError, match="two records"):
+        fit_pooled(records[:1], "WN+RW")

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..kalman import statespace as ss
-from ..noise.components import GM, RR, Component, simulate_sum
+from ..noise.components import COMPONENT_TYPES, GM, RR, Component, simulate_sum
 from ..noise.modelspec import CANONICAL_ORDER, model_name
 from ..quality import interpolate_missing
 from ..wavelet.robust import DEFAULT_EFFICIENCY
@@ -197,10 +197,12 @@ def _bootstrap(est: Estimate, options: GmwmOptions, slope_sign: float) -> dict[s
     return {lab: np.exp(np.array(draws)[:, k]) for k, lab in enumerate(est.problem.par.labels)}
 
 
-def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope_sign: float = 1.0) -> GmwmFit:
-    """The :class:`GmwmFit` of an :class:`Estimate` on one record (intervals, bootstrap, advice)."""
-    se, ci, how = intervals(est)
-    if options.bootstrap:
+def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope_sign: float = 1.0,
+          uncertainty: bool = True) -> GmwmFit:
+    """The :class:`GmwmFit` of an :class:`Estimate` (intervals, bootstrap and advice unless ``uncertainty`` is
+    False, e.g. for the candidates a selection does not keep)."""
+    se, ci, how = intervals(est) if uncertainty else ({}, {}, {})
+    if options.bootstrap and uncertainty:
         for lab, values in _bootstrap(est, options, slope_sign).items():
             ci[lab] = tuple(float(v) for v in np.quantile(values, [0.025, 0.975]))
             se[lab] = float(np.std(values, ddof=1))
@@ -215,7 +217,8 @@ def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope_sign:
     return GmwmFit(
         model=model_name(comps), components=comps, exog_coef={}, se=se, ci95=ci, loglik=math.nan, aic=math.nan,
         bic=math.nan, n=n, dt=dt, n_iter=est.best.n_eval, converged=est.best.converged,
-        record_length=_record_length(labels, cov, comps, n, dt, target=options.target_precision),
+        record_length=_record_length(labels, cov, comps, n, dt, target=options.target_precision) if uncertainty
+        else None,
         information_ok=est.inference.identified, n_eval=est.best.n_eval, n_params=len(labels),
         starts=list(est.start_objectives), log_covariance=cov, covariance_labels=tuple(labels), estimator="gmwm",
         wv=run.wv, wv_model=run.model(est.components), wv_covariance=est.covariances[0],
@@ -232,6 +235,21 @@ def prepare(y: np.ndarray, dt: float, options: GmwmOptions) -> tuple[WaveletVari
     t = np.arange(y.size, dtype=float)
     slope = float(np.polyfit(t, y, 1)[0]) if y.size > 2 else 0.0
     return wv, (-1.0 if slope < 0 else 1.0)
+
+
+def estimate_structure(wv: WaveletVariance, structure: str | list[Component], *, options: GmwmOptions,
+                       init: list[Component] | None = None) -> Estimate:
+    """The GMWM estimate of one structure on one record's WV, before intervals (:func:`fit_gmwm`)."""
+    names, given = parse_structure_or_components(structure)
+    ss.validate_structure(names)
+    n_params = sum(len(COMPONENT_TYPES[n].parameter_names) for n in names)
+    if wv.m.size <= n_params:
+        raise InputError(f"{wv.m.size} wavelet scales are too few for the {n_params} parameters of "
+                         f"{'+'.join(names)}: record longer or choose a simpler model")
+    start = init or given
+    starts = ([_with_ramp_start(list(start), wv)] if start is not None
+              else starting_values(names, wv, options.n_starts))
+    return estimate([eng.Moments(wv)], starts)
 
 
 def fit_gmwm(y: np.ndarray | None, dt: float, structure: str | list[Component], *,
@@ -252,27 +270,9 @@ def fit_gmwm(y: np.ndarray | None, dt: float, structure: str | list[Component], 
         Bad signal or structure, too few scales for the parameters, no start could be fitted.
     """
     options = options or GmwmOptions()
-    names, given = parse_structure_or_components(structure)
-    ss.validate_structure(names)
     if wv is None:
         if y is None:
             raise InputError("fit_gmwm needs the samples y or their wavelet variance wv")
         wv, slope_sign = prepare(y, dt, options)
-    n_params = sum(len(COMPONENT_PARAMS[n]) for n in names)
-    if wv.m.size <= n_params:
-        raise InputError(f"{wv.m.size} wavelet scales are too few for the {n_params} parameters of "
-                         f"{'+'.join(names)}: record longer or choose a simpler model")
-    start = init or given
-    starts = [_with_ramp_start(list(start), wv)] if start is not None else starting_values(names, wv,
-                                                                                            options.n_starts)
-    est = estimate([eng.Moments(wv)], starts)
+    est = estimate_structure(wv, structure, options=options, init=init)
     return dress(est, n=wv.n, dt=wv.dt, options=options, slope_sign=slope_sign)
-
-
-def _params_of() -> dict[str, tuple[str, ...]]:
-    from ..noise.components import COMPONENT_TYPES
-
-    return {name: cls.parameter_names for name, cls in COMPONENT_TYPES.items()}
-
-
-COMPONENT_PARAMS = _params_of()
