@@ -10,7 +10,8 @@ model to the robust WV (``robust=True``).
 What is done, step by step (beyond the paper where said):
 
 1. starting values: the Allan-variance fit of :func:`.starts.fit_allan` on the WV's own numbers (2ν̂ = AV);
-2. first step: Ω₁ = V(θ₀)⁻¹ at the best start, every start minimised, the lowest objective kept;
+2. first step: Ω₁ = diag(edf_j / 2ν̂_j²) (each scale's χ² variance, correlations ignored: consistent, not
+   efficient), every start minimised, the lowest objective kept;
 3. efficient step: Ω₂ = V(θ̂₁)⁻¹, minimised again (GMWM §3's efficient two-step estimator). V(θ) is the exact
    Gaussian covariance of the WV estimates under the model (:mod:`imu_noise_id.core.wavelet.covariance`; the paper
    estimates V from the data or by bootstrap);
@@ -144,7 +145,7 @@ def estimate(runs: list[eng.Moments], starts: list[list[Component]]) -> Estimate
     n, dt = max(r.wv.n for r in runs), runs[0].wv.dt
     par = eng.Parameters.of(canonical_order(starts[0]))
     theta0 = par.to_theta(list(par.template))
-    problem = eng.Problem(par, runs, eng.Weights.at(runs, list(par.template)), par.bounds(theta0, n, dt))
+    problem = eng.Problem(par, runs, eng.Weights.diagonal(runs), par.bounds(theta0, n, dt))
     results = []
     for start in starts:
         ordered = canonical_order(start)

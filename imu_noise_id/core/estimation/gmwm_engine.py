@@ -51,18 +51,20 @@ class Parameters:
     template: tuple[Component, ...]
     entries: tuple[tuple[int, str], ...]
     labels: tuple[str, ...]
+    base: tuple[dict[str, float], ...]  # the template's parameters (asdict is slow: read once)
 
     @classmethod
     def of(cls, components: list[Component]) -> Parameters:
         labels = parameter_labels(list(components))
-        return cls(tuple(components), tuple((i, p) for i, p, _ in labels), tuple(lab for *_, lab in labels))
+        return cls(tuple(components), tuple((i, p) for i, p, _ in labels), tuple(lab for *_, lab in labels),
+                   tuple(c.params() for c in components))
 
     def to_theta(self, components: list[Component]) -> np.ndarray:
         return np.log([abs(components[i].params()[p]) for i, p in self.entries])
 
     def to_components(self, theta: np.ndarray) -> list[Component]:
         """Components at θ (ValueError when θ leaves a component's domain, e.g. an OSC too damped)."""
-        params = [c.params() for c in self.template]
+        params = [dict(b) for b in self.base]
         for (i, p), v in zip(self.entries, theta, strict=True):
             params[i][p] = float(np.exp(v))
         return [type(c)(**kw) for c, kw in zip(self.template, params, strict=True)]
@@ -102,6 +104,13 @@ class Weights:
     def at(cls, runs: list[Moments], components: list[Component]) -> Weights:
         covs = [run.covariance(components) for run in runs]
         return cls(tuple(_inverse_cholesky(v) for v in covs), tuple(covs))
+
+    @classmethod
+    def diagonal(cls, runs: list[Moments]) -> Weights:
+        """The first step's weight: each scale's variance 2ν̂²/edf from the χ² law of its estimate (the gmwm
+        package's "fast" choice), correlations across scales ignored."""
+        covs = [np.diag(2.0 * run.wv.nu2**2 / run.wv.edf) for run in runs]
+        return cls(tuple(np.diag(1.0 / np.sqrt(np.diag(v))) for v in covs), tuple(covs))
 
     def omega(self, k: int) -> np.ndarray:
         return self.whiten[k].T @ self.whiten[k]
