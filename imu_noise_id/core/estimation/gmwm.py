@@ -142,10 +142,9 @@ def estimate(runs: list[eng.Moments], starts: list[list[Component]]) -> Estimate
     """Steps 2–4 of the module docstring on the records ``runs`` (one θ for all of them)."""
     if not starts:
         raise InputError("no starting values for the GMWM fit")
-    n, dt = max(r.wv.n for r in runs), runs[0].wv.dt
     par = eng.Parameters.of(canonical_order(starts[0]))
     theta0 = par.to_theta(list(par.template))
-    problem = eng.Problem(par, runs, eng.Weights.diagonal(runs), par.bounds(theta0, n, dt))
+    problem = eng.Problem(par, runs, eng.Weights.diagonal(runs), par.bounds(theta0, runs))
     results = []
     for start in starts:
         ordered = canonical_order(start)
@@ -158,7 +157,7 @@ def estimate(runs: list[eng.Moments], starts: list[list[Component]]) -> Estimate
     comps = canonical_order(par.to_components(best.theta))
     par = eng.Parameters.of(comps)
     theta = par.to_theta(comps)
-    problem = eng.Problem(par, runs, problem.weights, par.bounds(theta, n, dt))
+    problem = eng.Problem(par, runs, problem.weights, par.bounds(theta, runs))
     best = replace(best, theta=theta)
     move = float(np.max(np.abs(best.theta - first.theta)))
     covs = list(problem.weights.covariance) if move < 0.02 else [run.covariance(comps) for run in runs]

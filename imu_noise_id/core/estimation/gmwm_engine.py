@@ -40,6 +40,8 @@ Z95 = 1.959963984540054
 AMPLITUDES = frozenset({"noise_density", "random_walk", "sigma", "Q", "slope"})
 #: Half-width [log units] of the search box of amplitudes around their start.
 AMPLITUDE_WIDTH = 30.0
+#: A component whose WV is below this share of the data's at every scale is at its ~0 boundary.
+WV_FLOOR = 1e-8
 #: Above this standard error of a log-parameter a Wald interval is replaced by a profile one.
 WALD_MAX_SE_LOG = 1.0
 
@@ -69,14 +71,22 @@ class Parameters:
             params[i][p] = float(np.exp(v))
         return [type(c)(**kw) for c, kw in zip(self.template, params, strict=True)]
 
-    def bounds(self, theta0: np.ndarray, n: int, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """Search box: physical ranges for τ and frequencies (:func:`.model.parameter_bounds`), ±30 e-folds around
-        the start for amplitudes."""
+    def bounds(self, theta0: np.ndarray, runs: list[Moments]) -> tuple[np.ndarray, np.ndarray]:
+        """Search box: physical ranges for τ and frequencies (:func:`.model.parameter_bounds`); ±30 e-folds around
+        the start for amplitudes, whose lower end is raised to where the component's WV falls below
+        :data:`WV_FLOOR` of the data's at every scale (below it the objective is flat and the search would walk
+        down that direction for nothing; beyond the paper, as :func:`.starts.fit_allan` does)."""
+        n, dt = max(r.wv.n for r in runs), runs[0].wv.dt
         phys = parameter_bounds(n, dt)
         lo, hi = theta0 - AMPLITUDE_WIDTH, theta0 + AMPLITUDE_WIDTH
-        for k, (_, p) in enumerate(self.entries):
+        comps = self.to_components(theta0)
+        for k, (i, p) in enumerate(self.entries):
             if p in phys:
                 lo[k], hi[k] = math.log(phys[p][0]), math.log(phys[p][1])
+            elif p in AMPLITUDES:
+                ratio = min(float(np.min(r.wv.nu2 / np.maximum(r.model([comps[i]]), 1e-300))) for r in runs)
+                if math.isfinite(ratio) and ratio > 0:  # the WV of an amplitude scales with its square
+                    lo[k] = max(lo[k], min(theta0[k] + 0.5 * math.log(WV_FLOOR * ratio), theta0[k] - 1.0))
         return lo, hi
 
 
@@ -163,9 +173,9 @@ class Problem:
         return float(r @ r)
 
     def minimise(self, theta0: np.ndarray, free: np.ndarray | None = None,
-                 box: tuple[np.ndarray, np.ndarray] | None = None) -> Minimum:
+                 box: tuple[np.ndarray, np.ndarray] | None = None, tol: float = 1e-10) -> Minimum:
         """Trust-region least squares on the whitened residuals; ``free``: the entries searched (the others held at
-        ``theta0``); ``box``: another search box."""
+        ``theta0``); ``box``: another search box; ``tol``: relative tolerance (a profile needs less)."""
         lo, hi = box or self.box
         free = np.ones(theta0.size, bool) if free is None else free
         base = np.clip(theta0, lo + 1e-9, hi - 1e-9)
@@ -176,7 +186,7 @@ class Problem:
             return th
 
         sol = least_squares(lambda x: self.residuals(full(x)), base[free], bounds=(lo[free], hi[free]), method="trf",
-                            x_scale="jac", xtol=1e-10, ftol=1e-12, gtol=1e-10, max_nfev=200 * (int(free.sum()) + 1))
+                            x_scale="jac", xtol=tol, ftol=tol * 1e-2, gtol=tol, max_nfev=100 * (int(free.sum()) + 1))
         theta = full(sol.x)
         at_bound = np.zeros(theta.size, bool)
         at_bound[free] = (sol.x <= lo[free] + 1e-6) | (sol.x >= hi[free] - 1e-6)
@@ -188,7 +198,7 @@ class Problem:
         th[k] = value
         free = np.ones(th.size, bool)
         free[k] = False
-        low = self.objective(th) if not free.any() else self.minimise(th, free, box).objective
+        low = self.objective(th) if not free.any() else self.minimise(th, free, box, tol=1e-7).objective
         return low - best.objective
 
 
