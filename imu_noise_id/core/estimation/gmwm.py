@@ -178,6 +178,8 @@ def intervals(est: Estimate) -> tuple[dict[str, float], dict[str, tuple[float, f
             how[lab] = "wald (sandwich covariance, log scale)"
             continue
         lo, hi = eng.profile_interval(est.problem, est.best, k, lower=not zero)
+        if est.problem.par.entries[k][1] not in eng.AMPLITUDES:  # τ, frequencies: unbounded means the search range
+            lo, hi = (v if math.isfinite(v) else edge for v, edge in zip((lo, hi), est.problem.box_of(k), strict=True))
         ci[lab] = (math.exp(lo) if math.isfinite(lo) else 0.0, math.exp(hi) if math.isfinite(hi) else math.inf)
         how[lab] = "profile of the GMWM objective (chi2_1)" + (": indistinguishable from 0" if zero else "")
     return se, ci, how

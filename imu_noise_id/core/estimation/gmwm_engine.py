@@ -156,6 +156,10 @@ class Problem:
     weights: Weights
     box: tuple[np.ndarray, np.ndarray]
 
+    def box_of(self, k: int) -> tuple[float, float]:
+        """The search range of log-parameter k."""
+        return float(self.box[0][k]), float(self.box[1][k])
+
     def with_weights(self, weights: Weights) -> Problem:
         return Problem(self.par, self.runs, weights, self.box)
 
@@ -268,27 +272,27 @@ def infer(problem: Problem, best: Minimum, covariances: list[np.ndarray]) -> Inf
     return Inference(cov, bool(ok and keep.all()), best.objective, dof, p_value, optimism, tuple(z))
 
 
-def profile_interval(problem: Problem, best: Minimum, k: int, *, lower: bool = True, step: float = 1.0,
-                     max_steps: int = 25) -> tuple[float, float]:
+def profile_interval(problem: Problem, best: Minimum, k: int, *, lower: bool = True, first_step: float = 0.25,
+                     max_span: float = 40.0) -> tuple[float, float]:
     """95 % profile interval of log-parameter k: where the objective, minimised over the others, rises by
-    :data:`CHI2_95` (∓inf where it never does within ``max_steps`` steps of ``step``; lower end skipped with
-    ``lower=False``)."""
+    :data:`CHI2_95`. Each end is bracketed by doubling steps (0.25, 0.5, 1, … e-folds) and refined by bisection; an
+    end not reached within ``max_span`` e-folds is ∓inf (lower end skipped with ``lower=False``)."""
     ends = []
     for direction in (-1.0, 1.0):
         if direction < 0 and not lower:
             ends.append(-math.inf)
             continue
-        inside, outside = best.theta[k], None
-        for i in range(1, max_steps + 1):
-            v = best.theta[k] + direction * step * i
+        inside, outside, step = best.theta[k], None, first_step
+        while step <= max_span:
+            v = best.theta[k] + direction * step
             if problem.profile(best, k, v) > CHI2_95:
                 outside = v
                 break
-            inside = v
+            inside, step = v, 2.0 * step
         if outside is None:
             ends.append(direction * math.inf)
             continue
-        for _ in range(10):
+        while abs(outside - inside) > 0.01:
             mid = 0.5 * (inside + outside)
             inside, outside = (inside, mid) if problem.profile(best, k, mid) > CHI2_95 else (mid, outside)
         ends.append(0.5 * (inside + outside))

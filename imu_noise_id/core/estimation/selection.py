@@ -65,13 +65,13 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
 def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, *, criterion: str = "bic",
                  drift: str | None = "em", options: FitOptions | None = None,
                  allan: AllanResult | None = None,
-                 starts: dict[str, list[Component]] | None = None) -> SelectionResult:
+                 extra_starts: dict[str, list[Component]] | None = None) -> SelectionResult:
     """Fit every candidate structure and rank them by BIC (or AIC).
 
     ``options.uncertainty`` applies to the winner only (the others are fitted without it). ``allan``: the record's
     Allan variance (one column) when the caller has it; the starting values of every candidate without RR are
-    fitted to it, those with RR to the AV of the detrended record (computed once for all of them). ``starts``: a
-    further starting value per candidate (e.g. its GMWM fit).
+    fitted to it, those with RR to the AV of the detrended record (computed once for all of them).
+    ``extra_starts``: a further starting value per candidate (e.g. its GMWM fit).
     """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
@@ -88,7 +88,7 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         try:
             has_rr = "RR" in parse_structure(spec)
             model = NoiseModel(y, dt, spec, drift=drift, allan=allans[has_rr],
-                               starts=[starts[spec]] if starts and spec in starts else None)
+                               starts=[extra_starts[spec]] if extra_starts and spec in extra_starts else None)
             fit = model.fit(options=search)
             allans[has_rr] = model.allan
         except InputError as exc:

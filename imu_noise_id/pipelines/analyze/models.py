@@ -111,7 +111,7 @@ def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: All
         starts = ({k: list(f.components) for k, f in gm_sel.fits.items()} if gm_sel is not None
                   else {stage.model: list(gm.components)} if gm is not None else None)
         if stage.model == AUTO:
-            sel = select_model(y, dt, drift=stage.drift, options=stage.options, allan=allan, starts=starts)
+            sel = select_model(y, dt, drift=stage.drift, options=stage.options, allan=allan, extra_starts=starts)
             em, em_sel = sel.best, sel
         else:
             detrended = "RR" in parse_structure(stage.model)  # its starting values need the detrended record's AV
