@@ -55,6 +55,11 @@ def main() -> None:
               f"{pooled.j_statistic:.1f} on {pooled.dof} dof, p = {pooled.p_value:.3g}; "
               f"{time.perf_counter() - t0:.0f} s")
         print("   per-run J-test p: " + ", ".join(f"{r.p_value:.2g}" for r in pooled.runs))
+        print("   per-run share of C, J_k(pooled) − J_k(own): " + ", ".join(f"{v:.0f}" for v in pooled.run_rise))
+        worst = int(np.argmax(pooled.run_rise))
+        rest = fit_pooled([w for k, w in enumerate(wvs) if k != worst], spec, options=options)
+        print(f"   without run {worst + 1}: C = {rest.compatibility:.1f} on {rest.compatibility_dof} dof, "
+              f"p = {rest.compatibility_p:.3g}: {'compatible' if rest.compatible else 'NOT compatible'}")
         for i, p, lab in parameter_labels(f.components):
             value = f.components[i].params()[p]
             widths = [math.log(r.ci95[lab][1] / r.ci95[lab][0]) for r in pooled.runs

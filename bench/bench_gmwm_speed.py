@@ -13,6 +13,9 @@ Run:  nice -n 10 python bench/bench_gmwm_speed.py [--n 10000000] [--axes 6]
 3. The EM's model selection (``select_model``, the default candidates) on 10⁶ samples of one axis: its CPU per sample
    and the record length per axis beyond which the default analyze (selection on 6 axes, the loop roughly doubling
    it, issue 10's measurement) would take more than ten minutes of CPU on this machine.
+4. The GMWM as the EM's starting value (what ``analyze --estimator both`` does): on 10⁶ samples of each of three
+   axes, the EM from its default 3 Allan-variance starts against the EM from 1 Allan start plus the GMWM fit, CPU
+   and log-likelihood reached.
 """
 
 from __future__ import annotations
@@ -103,6 +106,23 @@ def em_threshold() -> None:
           "at 400 Hz)")
 
 
+def gmwm_start() -> None:
+    from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+
+    n = 10**6
+    print(f"\n== 4. EM from the Allan starts vs from the GMWM fit, {n} samples, WN+GM+RW ==")
+    print(f"{'axis':8} {'EM 3 AV starts CPU':>19} {'EM 1 AV + GMWM CPU (incl. GMWM)':>32} {'loglik gain':>12}")
+    for k, axis in enumerate(("gyro_x", "gyro_y", "accel_x")):
+        y = simulate_sum(AXES[axis], n, DT, np.random.default_rng(300 + k))
+        with Clock() as c0:
+            base = NoiseModel(y, DT, "WN+GM+RW").fit(options=FitOptions(uncertainty=False))
+        with Clock() as c1:
+            g = fit_gmwm(y, DT, "WN+GM+RW")
+            warm = NoiseModel(y, DT, "WN+GM+RW", starts=[g.components]).fit(
+                options=FitOptions(n_starts=1, uncertainty=False))
+        print(f"{axis:8} {c0.cpu:19.1f} {c1.cpu:32.1f} {warm.loglik - base.loglik:12.3f}", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--n", type=int, default=10**7)
@@ -114,6 +134,7 @@ def main() -> None:
     linear_pass()
     side_by_side(args.n, args.axes)
     em_threshold()
+    gmwm_start()
     print(f"# total {time.perf_counter() - t0:.0f} s, peak RSS {peak_mib():.0f} MiB")
 
 

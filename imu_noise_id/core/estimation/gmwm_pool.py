@@ -6,9 +6,10 @@ estimate one θ from the WVs of K replicates of a sensor: θ̂ = argmin Σ_k (ν
 compatible; we test it (beyond the paper, in the spirit of Hansen's J-test) with the efficient weights Ω_k of the
 pooled fit held fixed:
 
-    C = J_pooled(θ̂) − Σ_k J_k(θ̂_k) ~ χ²((K − 1)·p)   under "one θ for all replicates",
+    C = J_pooled(θ̂) − Σ_k J_k(θ̂_k) = Σ_k [J_k(θ̂) − J_k(θ̂_k)] ~ χ²((K − 1)·p)   under "one θ for all replicates",
 
-J_k(θ̂_k) each record's own minimum with its weight, J_pooled the pooled minimum. The pooled J alone,
+J_k(θ̂_k) each record's own minimum with its weight, J_pooled the pooled minimum; each record's term says how much
+it disagrees with the others. The pooled J alone,
 χ²(Σ J_k − p), tests "one θ and the model is right" together; C separates the two. Verdict at the 5 % level.
 """
 
@@ -44,6 +45,7 @@ class PooledFit:
     compatibility : C, its degrees of freedom (K − 1)·p, its p-value
     compatible : p-value ≥ :data:`COMPATIBILITY_ALPHA`
     residual_z : per record, the standardised WV residuals of the pooled fit
+    run_rise : per record, J_k(θ̂_pooled) − J_k(θ̂_k): its share of C (the records that disagree most stand out)
     """
 
     fit: GmwmFit
@@ -55,6 +57,7 @@ class PooledFit:
     compatibility_dof: int
     compatibility_p: float
     residual_z: list[np.ndarray]
+    run_rise: list[float]
 
     @property
     def compatible(self) -> bool:
@@ -81,16 +84,16 @@ def fit_pooled(records: list[tuple[np.ndarray, float]] | list[WaveletVariance], 
     starts = [list(given)] if given else [s for wv in wvs for s in starting_values(names, wv, 1)]
     est = estimate(runs, starts + [list(f.components) for f in own])
     pooled = dress(est, n=sum(wv.n for wv in wvs), dt=wvs[0].dt, options=options)
-    # Each record's own minimum under the pooled fit's weight (the same Ω_k as in J_pooled).
-    j_own = 0.0
+    # Each record's own minimum under the pooled fit's weight (the same Ω_k as in J_pooled); C = Σ_k of the rises.
+    rise = []
     for k, run in enumerate(runs):
         problem = eng.Problem(est.problem.par, [run], eng.Weights((est.problem.weights.whiten[k],),
                                                                   (est.problem.weights.covariance[k],)),
                               est.problem.box)
-        j_own += min(problem.minimise(est.best.theta).objective,
-                     problem.minimise(est.problem.par.to_theta(own[k].components)).objective)
-    p = est.best.theta.size
-    c_stat = max(est.best.objective - j_own, 0.0)
-    c_dof = (len(runs) - 1) * p
+        own_min = min(problem.minimise(est.best.theta).objective,
+                      problem.minimise(est.problem.par.to_theta(own[k].components)).objective)
+        rise.append(max(problem.objective(est.best.theta) - own_min, 0.0))
+    c_stat = float(sum(rise))
+    c_dof = (len(runs) - 1) * est.best.theta.size
     return PooledFit(pooled, own, est.inference.j_statistic, est.inference.dof, est.inference.p_value, c_stat, c_dof,
-                     float(chi2.sf(c_stat, c_dof)) if c_dof > 0 else math.nan, list(est.inference.residual_z))
+                     float(chi2.sf(c_stat, c_dof)) if c_dof > 0 else math.nan, list(est.inference.residual_z), rise)
