@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.noise import units
-from imu_noise_id.core.noise.components import GM, LPF, OSC, QN, RR, RW, WN, simulate_sum, total_allan_variance
+from imu_noise_id.core.noise.components import BI, GM, LPF, MA, OSC, QN, RR, RW, WN, simulate_sum, total_allan_variance
 from imu_noise_id.core.noise.modelspec import (
     ModelSpecError,
     model_name,
@@ -235,7 +235,8 @@ def test_osc_refuses_what_is_not_a_resonance():
         OSC(60.0, 1.0, 1e-3).block(DT)
 
 
-SUM_COV_COMPONENTS = [WN(1e-3), QN(2e-5), RW(4e-4), GM(0.05, 1e-3), GM(30.0, 2e-4), LPF(1e-3, 20.0),
+SUM_COV_COMPONENTS = [WN(1e-3), QN(2e-5), RW(4e-4), GM(0.05, 1e-3), GM(30.0, 2e-4), LPF(1e-3, 20.0), MA(1e-3),
+                      BI(2e-4, 0.1, 100.0),
                       OSC(3.0, 0.6, 1e-3)]
 
 

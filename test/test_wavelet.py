@@ -8,7 +8,7 @@ import pytest
 
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.components import BI, GM, MA, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.noise.resonant import LPF, OSC
 from imu_noise_id.core.wavelet import covariance as cv
 from imu_noise_id.core.wavelet.robust import BiweightScale
@@ -60,6 +60,7 @@ def _mc_wv(comps, n, reps, seed, scale=None):
 
 @pytest.mark.parametrize("component", [
     WN(1e-3), QN(2e-5), RW(5e-4), GM(0.2, 1e-3), GM(0.01, 1e-3), RR(2e-3), LPF(1e-3, 15.0), OSC(4.0, 0.8, 1e-3),
+    MA(1e-3), BI(3e-4, 0.1, 10.0),
 ], ids=str)
 def test_theoretical_wv_of_every_component_matches_simulation(component):
     """Mean WV of 400 simulated records against ν(θ) = AV/2 of the sampled process, within 4 standard errors."""
@@ -87,7 +88,8 @@ def _brute_covariance(comps, m, n):
 
 
 @pytest.mark.parametrize("comps", [[WN(1e-3), RW(1e-4)], [WN(1e-3), GM(0.3, 1e-3), RW(1e-4)], [QN(1e-5), WN(1e-3)],
-                                   [WN(1e-3), OSC(5.0, 0.5, 1e-3)]], ids=lambda c: "+".join(x.name for x in c))
+                                   [WN(1e-3), OSC(5.0, 0.5, 1e-3)], [WN(1e-3), MA(1e-3), BI(2e-4, 0.1, 10.0)]],
+                         ids=lambda c: "+".join(x.name for x in c))
 def test_covariance_lag_grid_equals_the_exact_lag_sum(comps):
     n = 1 << 12
     m = dyadic_m(n)

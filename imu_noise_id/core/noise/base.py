@@ -100,10 +100,10 @@ class Component(ABC):
         """
         raise NotImplementedError(f"{self.name} has no sum covariance")
 
-    def memory(self, dt: float) -> tuple[float, float]:
-        """(decay time [s] of the autocovariance, shortest period [s] of its oscillation): (0, inf) for components
-        whose increments are uncorrelated beyond a sample or two (WN, QN, RW, RR)."""
-        return 0.0, math.inf
+    def memory(self, dt: float) -> tuple[float, float, float]:
+        """(longest and shortest decay time [s] of the autocovariance, shortest period [s] of its oscillation):
+        (0, 0, inf) for components whose increments are uncorrelated beyond a sample or two (WN, QN, MA, RW, RR)."""
+        return 0.0, 0.0, math.inf
 
     @abstractmethod
     def per_sample(self, dt: float) -> dict[str, float]:

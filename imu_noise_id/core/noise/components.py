@@ -241,8 +241,8 @@ class GM(Component):
         """K(u) = −½ Var(y_1 + … + y_|u|), R(j) = σ² e^{−j·dt/τ} (:mod:`imu_noise_id.core.noise.sampled`)."""
         return -0.5 * block_sum_variance(self.sigma**2, -1.0 / self.tau, np.abs(np.asarray(lag, dtype=float)), dt)
 
-    def memory(self, dt: float) -> tuple[float, float]:
-        return self.tau, math.inf
+    def memory(self, dt: float) -> tuple[float, float, float]:
+        return self.tau, self.tau, math.inf
 
     def per_sample(self, dt: float) -> dict[str, float]:
         return {

@@ -94,8 +94,8 @@ class LPF(Component):
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
         return self._gm().sum_covariance(lag, dt)
 
-    def memory(self, dt: float) -> tuple[float, float]:
-        return self.tau, math.inf
+    def memory(self, dt: float) -> tuple[float, float, float]:
+        return self.tau, self.tau, math.inf
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
@@ -227,9 +227,9 @@ class OSC(Component):
         u = np.abs(np.asarray(lag, dtype=float))
         return -0.5 * block_sum_variance(self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd), u, dt)
 
-    def memory(self, dt: float) -> tuple[float, float]:
+    def memory(self, dt: float) -> tuple[float, float, float]:
         a, wd = self._poles()
-        return 1.0 / a, 2.0 * math.pi / wd
+        return 1.0 / a, 1.0 / a, 2.0 * math.pi / wd
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         w = 2.0 * math.pi * as_freq(f)

@@ -55,7 +55,10 @@ def _offsets(length: int, cap: float, fine: float) -> np.ndarray:
     """Offsets 0..length from a kink: steps ``cap`` (a piece's resolution), refined near the kink, where an
     exponential memory of ``fine`` samples shapes γ, by steps growing geometrically from max(1, fine/4)."""
     step = max(1, int(cap))
-    parts = [np.arange(0, length + 1, step, dtype=np.int64), np.array([length], dtype=np.int64)]
+    # The first lags are always taken one by one: a component whose K jumps at u = 0 (QN, MA) puts an isolated value
+    # at the kink itself, which must weigh one lag, not a whole step.
+    parts = [np.arange(0, length + 1, step, dtype=np.int64), np.array([length], dtype=np.int64),
+             np.arange(min(length, 3) + 1, dtype=np.int64)]
     if math.isfinite(fine) and step > 1:
         first = max(1.0, fine / 4.0)
         n_geo = math.ceil(math.log(max(cap / first, 1.0)) / math.log1p(FAN_RATIO)) + 1
@@ -138,9 +141,9 @@ def wv_covariance(components: list[Component], m: np.ndarray, n: int, dt: float,
     stochastic = [c for c in comps if not isinstance(c, RR)]
     decay, fine, period = 0.0, math.inf, math.inf
     for c in stochastic:
-        d, p = c.memory(dt)
-        if d > 0:
-            decay, fine = max(decay, d / dt), min(fine, d / dt)
+        longest, shortest, p = c.memory(dt)
+        if longest > 0:
+            decay, fine = max(decay, longest / dt), min(fine, shortest / dt)
         period = min(period, max(p / dt, 1.0))
     margin = int(min(_bucket(TAIL_DECAY_TIMES * decay), n))
     period = _bucket(period) / 2.0 if math.isfinite(period) else math.inf
