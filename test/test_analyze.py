@@ -188,6 +188,7 @@ def test_demo_runs_short(tmp_path, capsys):
     assert demo.main(["--out", str(tmp_path), "--duration", "120", "--rate", "100", "--parts", "offline"]) == 0
     printed = capsys.readouterr().out
     assert "truth vs estimates" in printed
+    assert "N GMWM" in printed and "EM and GMWM side by side" in printed  # make demo shows both estimators
     assert (tmp_path / "analysis" / "imu.yaml").is_file()
     assert (tmp_path / "analysis" / "model.yaml").is_file()
 

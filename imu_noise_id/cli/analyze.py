@@ -43,6 +43,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
     )
     p.add_argument(
+        "--estimator", choices=("auto", "em", "gmwm", "both"), default="auto",
+        help="model estimator: 'em' (maximum likelihood), 'gmwm' (wavelet variance; no closed loop), 'both' (GMWM, "
+        "then EM from its estimates, compared parameter by parameter) or 'auto' (default: EM, GMWM on records too "
+        "long for the EM, with a warning)",
+    )
+    p.add_argument("--robust", action="store_true",
+                   help="GMWM: fit the robust wavelet variance (bounded influence; for records with outliers)")
+    p.add_argument(
         "--allow-motion", action="store_true",
         help="analyse even if the static check finds motion (its findings become warnings)",
     )
@@ -66,13 +74,24 @@ def run(args: argparse.Namespace) -> int:
     """Read, analyse, write, report. Input problems raise InputError (exit 2)."""
     from ..bag.reader import read_static
     from ..core.axes import AXES
+    from ..core.estimation.gmwm import GmwmOptions
     from ..pipelines.analyze import AnalyzeOptions, ModelStage, analyze
     from ..report.analysis import write_analysis
-    from ..report.console import final_table, fit_line, loop_line, overbound_lines, record_length_lines, summary_table
+    from ..report.console import (
+        comparison_table,
+        final_table,
+        fit_line,
+        loop_line,
+        overbound_lines,
+        record_length_lines,
+        summary_table,
+    )
     from .progress import TextProgress
 
     options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
-                             models=ModelStage(args.model), loop=not args.no_loop, horizon_s=args.horizon)
+                             models=ModelStage(args.model, estimator=args.estimator,
+                                               gmwm=GmwmOptions(robust=args.robust)),
+                             loop=not args.no_loop, horizon_s=args.horizon)
     with TextProgress(f"reading {args.bag.name}") as progress:
         recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
     allan = TextProgress("Allan-family variances")
@@ -99,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model,
-            "notes": recording.notes}
+            "estimator": args.estimator, "notes": recording.notes}
     folder = results_folder(args, str(args.bag), recording.imu.topic)
     with folder as staging:
         paths = write_analysis(result, staging, rostopic=recording.imu.topic, meta=meta,
@@ -108,6 +127,8 @@ def run(args: argparse.Namespace) -> int:
     print(summary_table(result.static), flush=True)
     if result.finals:
         print(final_table(result.finals), flush=True)
+    if any(m.comparison is not None for m in result.models.values()):
+        print(comparison_table(result.models), flush=True)
     for line in [*record_length_lines(result.fits), *overbound_lines(result.overbounds)]:
         print(line, flush=True)
     for w in result.static.warnings:

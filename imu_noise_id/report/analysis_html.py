@@ -4,8 +4,9 @@ Sections, each written from the :class:`~imu_noise_id.pipelines.analyze.Analysis
 the figures): the data (rate, duration, topic, warnings and repairs), the numbers users paste (the final model's
 N, K and bias instability with their intervals and sources, the Allan readings beside them, the per-sample noise),
 one Allan panel per axis (data with its 95 % band, slope lines, the final model and simulations of it), the model
-selection's candidates, how long to record, the closed loop's steps, and the overbound (the smallest WN+RW covering
-the data over the filter's τ range, drawn in each Allan panel).
+selection's candidates, how long to record, the GMWM's J-test, WIC ranking and its comparison with the EM, the
+closed loop's steps, and the overbound (the smallest WN+RW covering the data over the filter's τ range, drawn in each
+Allan panel).
 """
 
 from __future__ import annotations
@@ -140,6 +141,40 @@ def _selection_section(result: AnalysisResult) -> str:
     return "\n".join(out)
 
 
+def _gmwm_section(result: AnalysisResult) -> str:
+    """Per axis with a GMWM fit: its J-test and misfitting τ, the WIC ranking, and the EM comparison row by row."""
+    out = ["<h2 id=gmwm>GMWM (wavelet variance) and the EM side by side</h2>"
+           "<p class=small>The GMWM fits the model to the Haar wavelet variance (half the Allan variance at "
+           "τ = 2^j·dt). Its J-test says whether the model can produce that curve; the scales with |z| &gt; 2 are "
+           "where it cannot. With both estimators, a parameter whose two estimates differ beyond their intervals "
+           "means the model is wrong somewhere.</p>"]
+    for axis, m in result.models.items():
+        g = m.gmwm
+        if g is None:
+            continue
+        misfit = [f"{fmt(t, '.3g')}" for t, z in zip(g.wv.tau, g.residual_z, strict=False) if abs(z) > 2]
+        robust = "; robust wavelet variance" if g.wv.robust else ""
+        out.append(f"<h3>{axis}: GMWM {html.escape(g.model)}</h3><p>J = {fmt(g.j_statistic, '.4g')} with {g.dof} "
+                   f"degrees of freedom, p = {fmt(g.p_value, '.3g')}; misfitting τ [s]: "
+                   f"{', '.join(misfit) or 'none'}{robust}.</p>")
+        if m.gmwm_selection is not None:
+            rows = "".join(f"<tr><td class=l>{html.escape(str(r['model']))}</td><td>{r.get('k', '')}</td>"
+                           f"<td>{fmt(r.get('delta_wic', float('nan')), '.2f')}</td>"
+                           f"<td>{fmt(r.get('p_value', float('nan')), '.3g')}</td>"
+                           f"<td class=l>{html.escape(str(r.get('error', '')))}</td></tr>"
+                           for r in m.gmwm_selection.table)
+            out.append("<table><tr><th class=l>candidate</th><th>k</th><th>ΔWIC</th><th>J-test p</th>"
+                       f"<th class=l>error</th></tr>{rows}</table>")
+        c = m.comparison
+        if c is not None:
+            rows = "".join(f"<tr><td class=l>{html.escape(r.quantity)}</td><td>{_ci(r.em, r.em_ci)}</td>"
+                           f"<td>{_ci(r.gmwm, r.gmwm_ci)}</td><td>{fmt(r.ratio, '.3f')}</td>"
+                           f"<td>{r.verdict}</td></tr>" for r in c.rows)
+            out.append("<table><tr><th class=l>parameter</th><th>EM, 95 %</th><th>GMWM, 95 %</th><th>ratio</th>"
+                       f"<th>verdict</th></tr>{rows}</table><p>{html.escape(c.verdict)}</p>")
+    return "\n".join(out)
+
+
 def render_analysis_report(result: AnalysisResult, meta: dict, title: str) -> str:
     """The HTML text of the analysis report (module docstring)."""
     when = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
@@ -147,12 +182,14 @@ def render_analysis_report(result: AnalysisResult, meta: dict, title: str) -> st
     if result.finals:
         parts += [_numbers_section(result), _overbound_section(result), _allan_section(result),
                   _selection_section(result)]
+    if any(m.gmwm is not None for m in result.models.values()):
+        parts.append(_gmwm_section(result))
     if result.loops:
         parts.append("<h2 id=loop>Closed loop</h2>")
         parts += [loop_axis_section(axis, r) for axis, r in result.loops.items()]
     nav = " · ".join(f"<a href='#{a}'>{t}</a>" for a, t in (("data", "data"), ("numbers", "numbers"),
                                                              ("overbound", "overbound"), ("allan", "Allan"),
-                                                             ("selection", "selection"),
+                                                             ("selection", "selection"), ("gmwm", "GMWM"),
                                                              ("loop", "closed loop")))
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
             f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>"

@@ -8,6 +8,7 @@ import math
 from ..core.axes import UNITS
 from ..core.estimation.results import FitResult
 from ..pipelines.analyze.final import FinalModel
+from ..pipelines.analyze.models import AxisModel
 from ..pipelines.analyze.overbound import AxisOverbound
 from ..pipelines.analyze.static import StaticAnalysis
 from ..pipelines.loop import LoopResult
@@ -74,9 +75,28 @@ def loop_table(results: dict[str, LoopResult]) -> str:
 
 
 def fit_line(axis: str, fit: FitResult) -> str:
-    """One line per fitted axis: the model, its log-likelihood and BIC, the components."""
-    return (f"{axis}: {fit.model}  loglik {fit.loglik:.6g}  BIC {fit.bic:.6g}  "
-            + "  ".join(str(c) for c in fit.components))
+    """One line per fitted axis: the model, its log-likelihood and BIC (a GMWM fit: its J-test), the components."""
+    if fit.estimator == "gmwm":
+        quality = f"GMWM J {fit.j_statistic:.4g} (dof {fit.dof}, p {fit.p_value:.3g})"
+    else:
+        quality = f"loglik {fit.loglik:.6g}  BIC {fit.bic:.6g}"
+    return f"{axis}: {fit.model}  {quality}  " + "  ".join(str(c) for c in fit.components)
+
+
+def comparison_table(models: dict[str, AxisModel]) -> str:
+    """EM and GMWM side by side per axis and parameter (95 % intervals), each row's verdict, each axis's verdict."""
+    lines = ["EM and GMWM side by side (95 % intervals; 'differ': |ln ratio| > 1.96 combined log-sd):",
+             f"{'axis':8s} {'quantity':26s} {'EM':>34s} {'GMWM':>34s} {'ratio':>6s}  verdict"]
+    for axis, m in models.items():
+        c = m.comparison
+        if c is None:
+            continue
+        for r in c.rows:
+            em = f"{_fmt(r.em)} [{_fmt(r.em_ci[0])}, {_fmt(r.em_ci[1])}]"
+            gm = f"{_fmt(r.gmwm)} [{_fmt(r.gmwm_ci[0])}, {_fmt(r.gmwm_ci[1])}]"
+            lines.append(f"{axis:8s} {r.quantity:26s} {em:>34s} {gm:>34s} {r.ratio:6.3f}  {r.verdict}")
+        lines.append(f"{axis:8s} -> {c.verdict}")
+    return "\n".join(lines)
 
 
 def loop_line(axis: str, loop: LoopResult) -> str:

@@ -3,18 +3,23 @@
 Per axis (``gyro_x`` … ``accel_z``)::
 
     model: WN+GM+RW            # canonical structure name
+    estimator: em              # em (maximum likelihood) or gmwm (wavelet moments, :mod:`.gmwm_yaml`)
     n: 360000                  # valid samples used
     dt: 0.01                   # sampling period [s]
     unit: rad/s                # signal unit u
     components:
-      - {type: WN, noise_density: …, se: …, ci95: [lo, hi], sigma2_wn: …}          # u/√Hz; per-sample u²
+      - {type: WN, estimator: em, noise_density: …, se: …, ci95: [lo, hi], sigma2_wn: …}  # u/√Hz; per-sample u²
       - {type: GM, tau: …, sigma: …, se: {tau: …, sigma: …}, ci95: {tau: […], sigma: […]},
          beta: …, sigma2_gm: …, phi: …, sigma2_drive: …}
     mean: {bias: {value, se, ci95}, ramp: {…}, <exog>: {…}}                       # u, u/s, …
-    loglik: …   aic: …   bic: …   n_params: …   converged: …                    # full precision (docs/em.md)
+    loglik: …   aic: …   bic: …   n_params: …   converged: …                    # full precision (docs/em.md);
+                                                                                 # null for a GMWM fit
     candidates: [{model, loglik, k, aic, bic, delta_bic, weight_bic}, …]          # when selected
     record_length: {target, level, current_s, parameters: {label: {needed_s, needed_h, relative_halfwidth,
                     reliable}}}
+    moments: {…}                       # a GMWM fit's J-test and wavelet variance (:mod:`.gmwm_yaml`)
+    gmwm: {…}   agreement: {…}         # with both estimators: the GMWM's whole entry, and the comparison
+    note: "…"                          # why the estimator differs from the one asked for (a record too long for EM)
     loop: […]   loop_verdict: {…}                                                # the closed loop (:mod:`.loop_yaml`)
     final:                                           # what imu.yaml's numbers come from (analyze)
       source: "closed loop, step 2: WN+OSC+RW"       # or "model selection"
@@ -34,12 +39,14 @@ from pathlib import Path
 import yaml
 
 from ..core.axes import UNITS
+from ..core.estimation.gmwm import GmwmFit
 from ..core.estimation.results import FitResult
 from ..core.estimation.selection import SelectionResult
 from ..core.noise.modelspec import parameter_labels
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
 from ..pipelines.loop import LoopResult
+from .gmwm_yaml import comparison_to_dict, gmwm_details, wic_candidates
 from .loop_yaml import loop_to_dict
 from .numbers import num, num_key
 
@@ -47,7 +54,7 @@ from .numbers import num, num_key
 def _component_entry(fit: FitResult, index: int) -> dict:
     comp = fit.components[index]
     labels = {p: lab for i, p, lab in parameter_labels(fit.components) if i == index}
-    entry: dict = {"type": comp.name}
+    entry: dict = {"type": comp.name, "estimator": fit.estimator}
     params = comp.params()
     entry.update({k: num(v) for k, v in params.items()})
     se = {p: num(fit.se[lab]) for p, lab in labels.items() if lab in fit.se}
@@ -73,7 +80,7 @@ def _component_entry(fit: FitResult, index: int) -> dict:
 
 def fit_to_dict(fit: FitResult, axis: str | None = None, selection: SelectionResult | None = None) -> dict:
     """The ``model.yaml`` entry of one axis."""
-    out: dict = {"model": fit.model, "n": int(fit.n), "dt": num(fit.dt)}
+    out: dict = {"model": fit.model, "estimator": fit.estimator, "n": int(fit.n), "dt": num(fit.dt)}
     if axis in UNITS:
         out["unit"] = UNITS[axis]
     out["components"] = [_component_entry(fit, i) for i in range(len(fit.components))]
@@ -82,10 +89,13 @@ def fit_to_dict(fit: FitResult, axis: str | None = None, selection: SelectionRes
             **({"ls_value": num(v["ls_value"])} if "ls_value" in v else {})}
         for k, v in fit.exog_coef.items()
     }
+    likelihood = fit.estimator == "em"
     out.update({
-        "loglik": float(fit.loglik), "aic": float(fit.aic), "bic": float(fit.bic), "n_params": int(fit.n_params),
-        "converged": bool(fit.converged), "information_ok": bool(fit.information_ok),
+        **{k: float(getattr(fit, k)) if likelihood else None for k in ("loglik", "aic", "bic")},
+        "n_params": int(fit.n_params), "converged": bool(fit.converged), "information_ok": bool(fit.information_ok),
     })
+    if isinstance(fit, GmwmFit):
+        out["moments"] = gmwm_details(fit)
     if selection is not None:
         out["candidates"] = [{k: (num_key(k, v) if isinstance(v, float) else v) for k, v in row.items()}
                              for row in selection.table]
@@ -118,6 +128,22 @@ def final_to_dict(final: FinalModel) -> dict:
     }
 
 
+def _axis_entry(model: AxisModel, axis: str) -> dict:
+    """An axis's model-stage entry: its fit, and the GMWM's fit, WIC candidates and the comparison when present."""
+    entry = fit_to_dict(model.fit, axis, model.selection)
+    if model.gmwm is not None:
+        gm = entry if model.fit.estimator == "gmwm" else fit_to_dict(model.gmwm, axis)
+        if model.gmwm_selection is not None:
+            gm["candidates"] = wic_candidates(model.gmwm_selection)
+        if gm is not entry:
+            entry["gmwm"] = gm
+    if model.comparison is not None:
+        entry["agreement"] = comparison_to_dict(model.comparison)
+    if model.note:
+        entry["note"] = model.note
+    return entry
+
+
 def write_model_yaml(path: Path, models: dict[str, AxisModel], loops: dict[str, LoopResult] | None = None,
                      meta: dict | None = None, finals: dict[str, FinalModel] | None = None) -> Path:
     """Write ``model.yaml``: per axis the model stage's entry (:func:`fit_to_dict`), the loop's steps and the
@@ -129,7 +155,7 @@ def write_model_yaml(path: Path, models: dict[str, AxisModel], loops: dict[str, 
     axes: dict = {}
     for axis in dict.fromkeys([*models, *loops]):
         if axis in models:
-            entry = fit_to_dict(models[axis].fit, axis, models[axis].selection)
+            entry = _axis_entry(models[axis], axis)
         else:
             loop = loops[axis]
             entry = {"model": loop.final.model, "n": int(loop.n), "dt": num(loop.dt)}

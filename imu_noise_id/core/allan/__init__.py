@@ -17,6 +17,7 @@ from .estimators import (
     hadamard_variance,
     max_m,
     modified_allan_variance,
+    second_differences,
     stack_axes,
     total_variance,
 )
@@ -24,5 +25,5 @@ from .estimators import (
 __all__ = [
     "DEFAULT_CONFIDENCE", "DEFAULT_PER_DECADE", "KINDS", "AllanResult", "allan_family", "allan_variance",
     "chi2_interval", "choose_m", "edf_greenhall", "edf_total", "hadamard_variance", "identify_alpha",
-    "local_slopes", "max_m", "modified_allan_variance", "stack_axes", "total_variance",
+    "local_slopes", "max_m", "modified_allan_variance", "second_differences", "stack_axes", "total_variance",
 ]

@@ -31,6 +31,7 @@ The confidence intervals and their equivalent degrees of freedom are in :mod:`.e
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from typing import Literal
 
@@ -234,6 +235,16 @@ def _difference_sums(x: np.ndarray, m_list: np.ndarray, order: int) -> np.ndarra
     """Σ (Δ_m^order x)² per m, for one phase row x (order 2: Allan, order 3: Hadamard)."""
     buffers = [np.empty(x.size) for _ in range(order)]
     return np.array([_sum_sq(_lagged_difference(x, int(m), order, buffers)) for m in m_list])
+
+
+def second_differences(y: np.ndarray, dt: float, m_list: np.ndarray) -> Iterator[tuple[int, np.ndarray]]:
+    """(m, x_{i+2m} − 2x_{i+m} + x_i for i = 0..N−2m) per m, x the phase of the rate column ``y`` [u·s] — the terms
+    the Allan variance sums (paper 000 eq. 2) and, divided by 2m·dt, the Haar MODWT wavelet coefficients of
+    :mod:`imu_noise_id.core.wavelet`. Each array is a view into one reused buffer: use it before the next."""
+    x = _phase(np.asarray(y, dtype=float), dt)
+    buffers = [np.empty(x.size) for _ in range(2)]
+    for m in m_list:
+        yield int(m), _lagged_difference(x, int(m), 2, buffers)
 
 
 def _allan_sums(x: np.ndarray, m_list: np.ndarray) -> np.ndarray:

@@ -134,6 +134,9 @@ class NoiseModel:
         The Allan variance (one column) of :meth:`detrended` — the record itself, or with its least-squares line
         removed when the fitted structure has RR — when the caller has it: the starting values are fitted to it
         instead of computing it again.
+    starts
+        Further starting values tried after the Allan-variance ones (e.g. the GMWM fit of the same structure,
+        :mod:`.gmwm`); ignored when they do not match the structure.
 
     Raises
     ------
@@ -143,7 +146,7 @@ class NoiseModel:
 
     def __init__(self, y: np.ndarray, dt: float, structure: str | list[Component], *, exog: np.ndarray | None = None,
                  exog_names: list[str] | tuple[str, ...] | None = None, drift: str | None = "em",
-                 allan: AllanResult | None = None) -> None:
+                 allan: AllanResult | None = None, starts: list[list[Component]] | None = None) -> None:
         y = check_signal(y, dt)
         names, given = parse_structure_or_components(structure)
         ss.validate_structure(names)
@@ -167,6 +170,9 @@ class NoiseModel:
                 self.given = [c for c in self.given if c.name != "RR"]
         self.y = y
         self.allan = allan
+        self.extra_starts = [sorted((c for c in start if c.name in self.fit_names),
+                                    key=lambda c: self.fit_names.index(c.name)) for start in (starts or [])]
+        self.extra_starts = [s for s in self.extra_starts if [c.name for c in s] == self.fit_names]
         self.exog_names, self.z = self._regressors(exog, exog_names)
         self.n_free_noise = sum(len(COMPONENT_TYPES[n].parameter_names) for n in self.fit_names if n != "RR")
         n_params = self.n_free_noise + self.z.shape[1]
@@ -232,7 +238,8 @@ class NoiseModel:
 
     def starting_values(self, n_starts: int, spectral: bool,
                         periodogram: whittle.BandedPeriodogram | None = None) -> list[list[Component]]:
-        """The given components, or up to ``n_starts`` distinct starts from the AV fit (Whittle-refined)."""
+        """The given components, or up to ``n_starts`` distinct starts from the AV fit (Whittle-refined), then the
+        caller's further starts."""
         if self.given is not None:
             return [list(self.given)]
         y_av = self.detrended()
@@ -245,7 +252,7 @@ class NoiseModel:
             fits = sorted((whittle.whittle_fit(c, y_av, self.dt, bp, self.parameter_bounds) for _, c in fits),
                           key=lambda r: -r[0])
             fits = starts.distinct([(-w, c) for w, c in fits], self.allan.tau, self.dt)
-        return [c for _, c in fits[:max(n_starts, 1)]]
+        return [c for _, c in fits[:max(n_starts, 1)]] + [list(c) for c in self.extra_starts]
 
     def fit(self, init: list[Component] | None = None, options: FitOptions | None = None) -> FitResult:
         """Maximum-likelihood fit (EM then quasi-Newton) from ``init`` or the starting values (:mod:`.search`)."""

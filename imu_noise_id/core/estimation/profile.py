@@ -15,9 +15,9 @@ parameterisation, with its lower end 0 where the data cannot exclude 0.
 **Adjustment for the estimated means.** The bias and the ramp slope are estimated from the same record, and they
 soak up exactly the low-frequency variation a random walk or a long-τ GM explains: the ML estimates of those
 variances are biased low and the plain profile interval is too narrow (on 1 h of WN+GM+RW+RR with the RW near its
-zero boundary, 2(ℓ̂ − ℓ_p) at the true RW was 4.6–6.8 in three of ten records at 10 Hz). The interval uses the profile adjusted
-for the mean parameters b (Cox & Reid 1987, eq. 4; for variance parameters the restricted likelihood of Patterson &
-Thompson 1971, cf. Tunnicliffe Wilson 1989 for time series):
+zero boundary, 2(ℓ̂ − ℓ_p) at the true RW was 4.6–6.8 in three of ten records at 10 Hz). The interval uses the
+profile adjusted for the mean parameters b (Cox & Reid 1987, eq. 4; for variance parameters the restricted
+likelihood of Patterson & Thompson 1971, cf. Tunnicliffe Wilson 1989 for time series):
 
     ℓ_A(v) = ℓ_p(v) − ½ log det(Zᵀ V⁻¹ Z)(v) = ℓ_p(v) + ½ log det cov(b̂)(v),
 

@@ -103,6 +103,8 @@ class FitResult:
     covariance_labels: tuple[str, ...] = ()
     statespace: StateSpace | None = field(default=None, repr=False)
     record: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+    #: Which estimator produced the numbers: ``em`` (maximum likelihood) or ``gmwm`` (:mod:`.gmwm`).
+    estimator: str = "em"
 
     def without_data(self) -> FitResult:
         """This result without the record it was fitted to (samples and regressors, N floats each), for keeping

@@ -15,6 +15,7 @@ import numpy as np
 from ..allan import AllanResult
 from ..diagnostics.detectors import flicker_level
 from ..errors import InputError
+from ..noise.components import Component
 from ..noise.modelspec import parse_structure
 from ..quality import interpolate_missing
 from . import starts
@@ -63,12 +64,14 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
 
 def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, *, criterion: str = "bic",
                  drift: str | None = "em", options: FitOptions | None = None,
-                 allan: AllanResult | None = None) -> SelectionResult:
+                 allan: AllanResult | None = None,
+                 extra_starts: dict[str, list[Component]] | None = None) -> SelectionResult:
     """Fit every candidate structure and rank them by BIC (or AIC).
 
     ``options.uncertainty`` applies to the winner only (the others are fitted without it). ``allan``: the record's
     Allan variance (one column) when the caller has it; the starting values of every candidate without RR are
     fitted to it, those with RR to the AV of the detrended record (computed once for all of them).
+    ``extra_starts``: a further starting value per candidate (e.g. its GMWM fit).
     """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
@@ -84,7 +87,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     for spec in cands:
         try:
             has_rr = "RR" in parse_structure(spec)
-            model = NoiseModel(y, dt, spec, drift=drift, allan=allans[has_rr])
+            model = NoiseModel(y, dt, spec, drift=drift, allan=allans[has_rr],
+                               starts=[extra_starts[spec]] if extra_starts and spec in extra_starts else None)
             fit = model.fit(options=search)
             allans[has_rr] = model.allan
         except InputError as exc:

@@ -68,6 +68,11 @@ class MA(Component):
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return self.noise_density**2 * np.cos(math.pi * as_freq(f) * dt) ** 2
 
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """K(u) = −½ S(|u|), S(m) = (4m − 2)σ² for m ≥ 1 and 0 at 0 (module docstring)."""
+        u = np.abs(np.asarray(lag, dtype=float))
+        return np.where(u > 0, -(2.0 * u - 1.0) * self.sigma2(dt), 0.0)
+
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"sigma2_ma": self.sigma2(dt), "sigma2_per_sample": 2.0 * self.sigma2(dt)}
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from dataclasses import asdict, dataclass, field
 from typing import ClassVar
@@ -86,6 +87,23 @@ class Component(ABC):
     @abstractmethod
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         """Two-sided power spectral density [u²/Hz] at frequencies f [Hz] (dt [s] matters for QN only)."""
+
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """Generalised covariance K(u) [u²] of the partial sums x_k = y_0 + … + y_{k−1} of the *sampled* component,
+        at integer lags u [samples] (beyond papers 000/002; what the wavelet-variance covariance needs).
+
+        For any two filters c, d that annihilate polynomials of degree ≤ 1 (Σ c_a = Σ a·c_a = 0, such as the Haar
+        wavelet's second difference of x), Cov(Σ_a c_a x_{p_a}, Σ_b d_b x_{q_b}) = Σ_a Σ_b c_a d_b K(q_b − p_a).
+        K is defined up to an even polynomial α + β u², which such filters cancel. For a stationary component
+        K(u) = −½ Var(y_1 + … + y_|u|); the Allan variance follows as AV(m·dt) = (6K(0) − 8K(m) + 2K(2m)) / (2m²)
+        (test_components checks it against :meth:`allan_variance` for every component).
+        """
+        raise NotImplementedError(f"{self.name} has no sum covariance")
+
+    def memory(self, dt: float) -> tuple[float, float, float]:
+        """(longest and shortest decay time [s] of the autocovariance, shortest period [s] of its oscillation):
+        (0, 0, inf) for components whose increments are uncorrelated beyond a sample or two (WN, QN, MA, RW, RR)."""
+        return 0.0, 0.0, math.inf
 
     @abstractmethod
     def per_sample(self, dt: float) -> dict[str, float]:

@@ -33,7 +33,7 @@ from .averaging import MA
 from .base import Component, StateBlock, as_freq, as_tau
 from .flicker import BI
 from .resonant import LPF, OSC
-from .sampled import sampled_allan_variance
+from .sampled import block_sum_variance, sampled_allan_variance
 
 #: Smallest and largest Gauss–Markov transition :meth:`GM.from_block` accepts (the EM keeps φ inside too).
 PHI_RANGE: tuple[float, float] = (1e-12, 1.0 - 1e-12)
@@ -69,6 +69,10 @@ class WN(Component):
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return np.full_like(as_freq(f), self.noise_density**2)
+
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """K(u) = −σ²|u|/2 with σ² = N²/dt (:meth:`Component.sum_covariance`)."""
+        return -0.5 * units.white_noise_sigma2(self.noise_density, dt) * np.abs(np.asarray(lag, dtype=float))
 
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"sigma2_wn": units.white_noise_sigma2(self.noise_density, dt)}
@@ -120,6 +124,10 @@ class QN(Component):
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return 4.0 * self.Q**2 * np.sin(math.pi * as_freq(f) * dt) ** 2 / dt
 
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """The sum of u samples telescopes to (ε_u − ε_0)/dt: K(u) = −Q²/dt² for u ≠ 0, 0 at u = 0."""
+        return np.where(np.asarray(lag) != 0, -units.quantization_sigma2(self.Q, dt), 0.0)
+
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"sigma2_qn": units.quantization_sigma2(self.Q, dt)}
 
@@ -165,6 +173,12 @@ class RW(Component):
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return self.random_walk**2 / (2.0 * math.pi * as_freq(f)) ** 2
+
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """K(u) = q(|u|³ − |u|)/12 with q = σ²_RW = K²·dt: the generalised covariance of a doubly summed white
+        noise (its second differences at lag 1 have variance q, at lag 2 variance 6q)."""
+        u = np.abs(np.asarray(lag, dtype=float))
+        return units.random_walk_sigma2(self.random_walk, dt) * (u**3 - u) / 12.0
 
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"sigma2_rw": units.random_walk_sigma2(self.random_walk, dt)}
@@ -223,6 +237,13 @@ class GM(Component):
         f = as_freq(f)
         return 2.0 * self.sigma**2 * self.tau / (1.0 + (2.0 * math.pi * f * self.tau) ** 2)
 
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """K(u) = −½ Var(y_1 + … + y_|u|), R(j) = σ² e^{−j·dt/τ} (:mod:`imu_noise_id.core.noise.sampled`)."""
+        return -0.5 * block_sum_variance(self.sigma**2, -1.0 / self.tau, np.abs(np.asarray(lag, dtype=float)), dt)
+
+    def memory(self, dt: float) -> tuple[float, float, float]:
+        return self.tau, self.tau, math.inf
+
     def per_sample(self, dt: float) -> dict[str, float]:
         return {
             **units.gm_to_paper000(self.tau, self.sigma),
@@ -274,6 +295,10 @@ class RR(Component):
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return self.slope**2 / (2.0 * math.pi * as_freq(f)) ** 3
+
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """Zero: the ramp is deterministic (its wavelet coefficients have a mean, no variance)."""
+        return np.zeros(np.shape(lag))
 
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"omega": float(self.slope), "omega_dt": units.ramp_per_sample(self.slope, dt)}

@@ -39,7 +39,7 @@ from scipy.signal import lfilter
 
 from . import units
 from .base import Component, StateBlock, as_freq, as_tau
-from .sampled import sampled_allan_variance
+from .sampled import block_sum_variance, sampled_allan_variance
 
 #: Correlation times per decade of the ladder (the ripple about 1/f falls fast with it; the cost grows with it).
 PER_DECADE = 2
@@ -120,6 +120,15 @@ class BI(Component):
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
         taus = self.taus
         return sampled_allan_variance(np.full(taus.size, self.sigma2_each), -1.0 / taus, as_tau(tau), dt)
+
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """K(u) = −½ Var(y_1 + … + y_|u|) of the ladder: the sum over its GMs (:mod:`.sampled`)."""
+        u = np.abs(np.asarray(lag, dtype=float))
+        return -0.5 * sum(block_sum_variance(self.sigma2_each, -1.0 / t, u, dt) for t in self.taus)
+
+    def memory(self, dt: float) -> tuple[float, float, float]:
+        taus = self.taus
+        return float(taus[-1]), float(taus[0]), math.inf
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         w = 2.0 * math.pi * as_freq(f)[..., None]

@@ -40,7 +40,7 @@ from scipy import linalg, signal
 
 from . import units
 from .base import Component, StateBlock, as_freq, as_tau
-from .sampled import sampled_allan_variance
+from .sampled import block_sum_variance, sampled_allan_variance
 
 #: Largest damping ratio of an OSC (ζ < 1: a resonance, not two real poles).
 MAX_DAMPING = 0.95
@@ -90,6 +90,12 @@ class LPF(Component):
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
         return self._gm().allan_variance(tau, dt)
+
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        return self._gm().sum_covariance(lag, dt)
+
+    def memory(self, dt: float) -> tuple[float, float, float]:
+        return self.tau, self.tau, math.inf
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
@@ -214,6 +220,16 @@ class OSC(Component):
         docstring), which is what the estimator reads from data."""
         a, wd = self._poles()
         return sampled_allan_variance(self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd), as_tau(tau), dt)
+
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """K(u) = −½ Var(y_1 + … + y_|u|) from R(u) = Re(c e^{su}) (module docstring)."""
+        a, wd = self._poles()
+        u = np.abs(np.asarray(lag, dtype=float))
+        return -0.5 * block_sum_variance(self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd), u, dt)
+
+    def memory(self, dt: float) -> tuple[float, float, float]:
+        a, wd = self._poles()
+        return 1.0 / a, 1.0 / a, 2.0 * math.pi / wd
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         w = 2.0 * math.pi * as_freq(f)

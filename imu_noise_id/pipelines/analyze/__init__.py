@@ -6,9 +6,10 @@ adapter):
 1. the Allan stage (:mod:`.static`): checks, the Allan family of every axis, the slope parameters;
 2. the model stage (:mod:`.models`): per axis, model selection by BIC (or the structure asked for) with the
    constrained EM and quasi-Newton, intervals and recording-length advice; the starting values are fitted to the
-   Allan variance of stage 1 (not computed again);
-3. the closed loop (:mod:`imu_noise_id.pipelines.loop`), starting from each axis's selected fit (not fitted again),
-   at the recording's own rate;
+   Allan variance of stage 1 (not computed again); or by the GMWM (WIC), or both compared, and the GMWM alone on
+   records too long for the EM;
+3. the closed loop (:mod:`imu_noise_id.pipelines.loop`), starting from each axis's selected EM fit (not fitted
+   again), at the recording's own rate (skipped for GMWM fits: it diagnoses the EM's innovations);
 4. the final model of each axis (:mod:`.final`): the loop's last step or the selection, with intervals, and the
    Kalibr numbers taken from it;
 5. the simulation band of every axis's final model (the AVs of simulations of it, for the report's plots);
@@ -159,7 +160,12 @@ def _model_stages(imu: ImuSeries, temperature: ScalarSeries | None, options: Ana
     for axis in axes:
         model = fit_axis(imu, axis, options.models, static.dt, static.allan.column(axes.index(axis)))
         fit = model.fit
-        if loop is not None:
+        if model.note is not None:
+            result.warnings.append(f"{axis}: {model.note}")
+        if loop is not None and fit.estimator != "em":
+            result.warnings.append(f"{axis}: closed loop skipped: it diagnoses the EM's one-step innovations, and this "
+                                   "axis was fitted by the GMWM (its J-test and per-scale residuals are in model.yaml)")
+        elif loop is not None:
             try:
                 result.loops[axis] = loop.run(axis, fit)
             except InputError as exc:

@@ -1,18 +1,30 @@
-"""The model stage: one error model per axis by maximum likelihood (paper 000's constrained EM and beyond).
+"""The model stage: one error model per axis, by maximum likelihood (paper 000's constrained EM and beyond), by the
+GMWM (:mod:`imu_noise_id.core.estimation.gmwm`), or both side by side.
 
 ``model = "auto"`` ranks the candidate structures by BIC (:func:`~imu_noise_id.core.estimation.selection.
-select_model`); a structure such as ``"WN+GM+RW"`` is fitted as given (:class:`~imu_noise_id.core.estimation.model.
-NoiseModel`). ``analyze`` and ``fit`` both run this stage.
+select_model`) or, for the GMWM, by WIC (:func:`~imu_noise_id.core.estimation.gmwm_select.select_gmwm`); a structure
+such as ``"WN+GM+RW"`` is fitted as given. ``estimator``:
+
+* ``em`` — the EM alone; ``gmwm`` — the GMWM alone;
+* ``both`` — the GMWM first, its fit of each structure then one more starting value of the EM's, the EM's fit the
+  axis's model (the closed loop needs its innovations), and the two compared parameter by parameter
+  (:mod:`imu_noise_id.core.estimation.agreement`);
+* ``auto`` (default) — the EM up to :data:`EM_MAX_SAMPLES` samples per axis, the GMWM beyond, with a note saying so.
+
+``analyze`` and ``fit`` both run this stage.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from ...core.allan import AllanResult
 from ...core.axes import ImuSeries
 from ...core.errors import InputError
+from ...core.estimation.agreement import Comparison, compare
+from ...core.estimation.gmwm import GmwmFit, GmwmOptions, fit_gmwm, prepare
+from ...core.estimation.gmwm_select import GmwmSelection, select_gmwm
 from ...core.estimation.model import FitOptions, NoiseModel
 from ...core.estimation.results import FitResult
 from ...core.estimation.selection import SelectionResult, select_model
@@ -20,19 +32,32 @@ from ...core.noise.modelspec import parse_structure
 
 #: ``model`` values that are not a structure.
 AUTO, NONE = "auto", "none"
+#: ``estimator`` values.
+ESTIMATORS = ("auto", "em", "gmwm", "both")
+#: Above this many samples per axis ``estimator = "auto"`` uses the GMWM: the default EM analysis (model selection
+#: and closed loop, 6 axes) then takes more than about ten minutes and over a GiB on this project's 2-core machine
+#: (measured: 1 244 s and 2.7 GB for 7.2 M samples per axis, issue 14; bench/bench_gmwm_speed.py → docs/gmwm.md).
+EM_MAX_SAMPLES = 4_000_000
 
 
 @dataclass
 class AxisModel:
     """The model stage's result for one axis: the fit (with its record while the axis is being processed) and, with
-    ``model = "auto"``, the selection it won."""
+    ``model = "auto"``, the selection it won; with the GMWM, its fit and WIC selection, and with both estimators
+    the comparison. ``note``: why the estimator differs from the one asked for."""
 
     fit: FitResult
     selection: SelectionResult | None = None
+    gmwm: GmwmFit | None = None
+    gmwm_selection: GmwmSelection | None = None
+    comparison: Comparison | None = None
+    note: str | None = None
 
     def without_data(self) -> AxisModel:
         """The same without the record (kept results stay small whatever the record length)."""
-        return AxisModel(self.fit.without_data(), self.selection.without_data() if self.selection else None)
+        fit = self.fit.without_data()
+        return replace(self, fit=fit, selection=self.selection.without_data() if self.selection else None,
+                       gmwm=fit if self.gmwm is self.fit else self.gmwm)
 
 
 @dataclass
@@ -42,14 +67,36 @@ class ModelStage:
     model: str = AUTO
     options: FitOptions = field(default_factory=FitOptions)
     drift: str | None = "em"
+    estimator: str = "auto"
+    gmwm: GmwmOptions = field(default_factory=GmwmOptions)
 
     def __post_init__(self) -> None:
         if self.model not in (AUTO, NONE):
             parse_structure(self.model)  # a bad spec is refused before any data is read or fitted
+        if self.estimator not in ESTIMATORS:
+            raise InputError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {self.estimator!r}")
 
     @property
     def enabled(self) -> bool:
         return self.model != NONE
+
+    def resolve(self, n: int) -> tuple[str, str | None]:
+        """The estimator used on an n-sample axis, and the note saying why when ``auto`` chose the GMWM."""
+        if self.estimator != "auto":
+            return self.estimator, None
+        if n > EM_MAX_SAMPLES:
+            return "gmwm", (f"{n} samples per axis are beyond what the EM fits on this machine in reasonable time "
+                            f"(threshold {EM_MAX_SAMPLES}, docs/gmwm.md): the GMWM was used (--estimator em forces "
+                            "the EM)")
+        return "em", None
+
+
+def _gmwm_axis(y, dt: float, stage: ModelStage, allan: AllanResult | None) -> tuple[GmwmFit, GmwmSelection | None]:
+    wv, sign = prepare(y, dt, stage.gmwm)
+    if stage.model == AUTO:
+        sel = select_gmwm(None, dt, options=stage.gmwm, allan=allan, wv=wv, slope_sign=sign)
+        return sel.best, sel
+    return fit_gmwm(None, dt, stage.model, options=stage.gmwm, wv=wv, slope_sign=sign), None
 
 
 def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: AllanResult | None = None) -> AxisModel:
@@ -57,12 +104,21 @@ def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: All
     when the caller has it (the starting values are fitted to it)."""
     y = imu.axis(axis)
     try:
+        estimator, note = stage.resolve(y.size)
+        gm, gm_sel = _gmwm_axis(y, dt, stage, allan) if estimator in ("gmwm", "both") else (None, None)
+        if estimator == "gmwm":
+            return AxisModel(gm, None, gm, gm_sel, note=note)
+        starts = ({k: list(f.components) for k, f in gm_sel.fits.items()} if gm_sel is not None
+                  else {stage.model: list(gm.components)} if gm is not None else None)
         if stage.model == AUTO:
-            sel = select_model(y, dt, drift=stage.drift, options=stage.options, allan=allan)
-            return AxisModel(sel.best, sel)
-        detrended = "RR" in parse_structure(stage.model)  # its starting values need the detrended record's AV
-        model = NoiseModel(y, dt, stage.model, drift=stage.drift, allan=None if detrended else allan)
-        return AxisModel(model.fit(options=stage.options))
+            sel = select_model(y, dt, drift=stage.drift, options=stage.options, allan=allan, extra_starts=starts)
+            em, em_sel = sel.best, sel
+        else:
+            detrended = "RR" in parse_structure(stage.model)  # its starting values need the detrended record's AV
+            model = NoiseModel(y, dt, stage.model, drift=stage.drift, allan=None if detrended else allan,
+                               starts=list(starts.values()) if starts else None)
+            em, em_sel = model.fit(options=stage.options), None
+        return AxisModel(em, em_sel, gm, gm_sel, compare(em, gm) if gm is not None else None, note)
     except InputError as exc:
         raise InputError(f"{axis}: {exc}") from None
 

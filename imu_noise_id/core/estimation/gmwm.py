@@ -1,0 +1,280 @@
+"""The Generalized Method of Wavelet Moments (GMWM): a stochastic error model fitted to the wavelet variance.
+
+Guerrier, Skaloud, Stebler & Victoria-Feser, "Wavelet-variance-based estimation for composite stochastic
+processes", JASA 108 (2013) ("GMWM" below): θ̂ = argmin (ν̂ − ν(θ))ᵀ Ω (ν̂ − ν(θ)) (GMWM eq. 3), ν̂ the Haar
+wavelet variance of the record (:mod:`imu_noise_id.core.wavelet`, GMWM eq. 2), ν(θ) its theoretical value for the
+components θ. After one O(N·J) pass over the record the fit works on J ≈ log₂N numbers, so its cost does not grow
+with N. The robust version (RGMWM; Guerrier, Molinari & Victoria-Feser 2014, Guerrier et al. 2020) fits the same
+model to the robust WV (``robust=True``).
+
+What is done, step by step (beyond the paper where said):
+
+1. starting values: the Allan-variance fit of :func:`.starts.fit_allan` on the WV's own numbers (2ν̂ = AV);
+2. first step: Ω₁ = diag(edf_j / 2ν̂_j²) (each scale's χ² variance, correlations ignored: consistent, not
+   efficient), every start minimised, the lowest objective kept;
+3. efficient step: Ω₂ = V(θ̂₁)⁻¹, minimised again (GMWM §3's efficient two-step estimator). V(θ) is the exact
+   Gaussian covariance of the WV estimates under the model (:mod:`imu_noise_id.core.wavelet.covariance`; the paper
+   estimates V from the data or by bootstrap);
+4. inference (:mod:`.gmwm_engine`): sandwich covariance of the log-parameters with V at θ̂ (GMWM Proposition 2),
+   Wald intervals in log space, or profile intervals of the objective (χ²₁) where the Wald form is meaningless (a
+   log-sd above 1, an amplitude the moments cannot tell from 0, a parameter at its search bound); the J-statistic
+   and each scale's standardised residual (which τ misfits); the WIC penalty;
+5. optionally a parametric bootstrap: ``bootstrap`` records simulated from θ̂, their WV refitted with Ω₂, the
+   2.5/97.5 % quantiles as intervals.
+
+The result is a :class:`~.results.FitResult` (``estimator = "gmwm"``, no likelihood: ``loglik``, ``aic``, ``bic``
+are NaN) with the GMWM's own numbers in :class:`GmwmFit`; ``model.yaml``, ``imu.yaml`` and the final-model code read
+it like an EM fit. An RR's slope enters the WV squared: its magnitude is fitted, its sign taken from the record's
+least-squares line.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import InputError
+from ..kalman import statespace as ss
+from ..noise.components import COMPONENT_TYPES, GM, RR, Component, simulate_sum
+from ..noise.modelspec import CANONICAL_ORDER, model_name
+from ..quality import interpolate_missing
+from ..wavelet.robust import DEFAULT_EFFICIENCY
+from ..wavelet.variance import DEFAULT_MAX_FRACTION, WaveletVariance, wavelet_variance
+from . import gmwm_engine as eng
+from .model import check_signal, parse_structure_or_components
+from .results import FitResult
+from .starts import fit_allan
+from .uncertainty import _record_length
+
+
+@dataclass(frozen=True)
+class GmwmOptions:
+    """How :func:`fit_gmwm` estimates.
+
+    Attributes
+    ----------
+    robust, efficiency : fit the robust WV (biweight M-estimator of that Gaussian efficiency) instead of the classical
+    max_fraction : longest scale used, m_J ≤ max_fraction·N
+    n_starts : Allan-variance starting values tried in the first step
+    bootstrap : parametric-bootstrap replicates for the intervals (0: asymptotic intervals only)
+    seed : of the bootstrap simulations
+    target_precision : relative 95 % half-width of the recording-length advice
+    """
+
+    robust: bool = False
+    efficiency: float = DEFAULT_EFFICIENCY
+    max_fraction: float = DEFAULT_MAX_FRACTION
+    n_starts: int = 3
+    bootstrap: int = 0
+    seed: int = 0
+    target_precision: float = 0.10
+
+    def __post_init__(self) -> None:
+        if self.n_starts < 1 or self.bootstrap < 0:
+            raise InputError(f"n_starts must be >= 1 and bootstrap >= 0, got {self.n_starts}, {self.bootstrap}")
+
+
+@dataclass
+class GmwmFit(FitResult):
+    """A GMWM fit: a :class:`FitResult` plus the wavelet moments and their fit (module docstring).
+
+    Attributes
+    ----------
+    wv : the WV fitted (classical or robust)
+    wv_model, wv_covariance : ν(θ̂) and V(θ̂) at the WV's scales
+    j_statistic, dof, p_value : the J-test of the model (χ² with ``dof`` degrees of freedom when it is right)
+    residual_z : (ν̂ − ν(θ̂)) / sd per scale: |z| > 2 marks the τ that misfit
+    wic_penalty : 2·tr(Ω A H⁻¹ Aᵀ Ω V) (WIC = ``j_statistic`` + ``wic_penalty`` under the fit's own weight)
+    interval_method : per parameter label, how its interval was obtained
+    """
+
+    wv: WaveletVariance | None = field(default=None, repr=False)
+    wv_model: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    wv_covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+    j_statistic: float = math.nan
+    dof: int = 0
+    p_value: float = math.nan
+    residual_z: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    wic_penalty: float = math.nan
+    interval_method: dict[str, str] = field(default_factory=dict)
+
+
+def canonical_order(components: list[Component]) -> list[Component]:
+    """Components in canonical order, Gauss–Markov processes by increasing τ (GM1 the fastest)."""
+    rank = {n: i for i, n in enumerate(CANONICAL_ORDER)}
+    return sorted(components, key=lambda c: (rank.get(c.name, 99), c.tau if isinstance(c, GM) else 0.0))
+
+
+def _with_ramp_start(components: list[Component], wv: WaveletVariance) -> list[Component]:
+    """RR's start: the slope whose WV (ω·τ/2)² makes up the excess of the longest scale over the other components."""
+    if not any(isinstance(c, RR) for c in components):
+        return components
+    others = [c for c in components if not isinstance(c, RR)]
+    excess = float(wv.nu2[-1] - (eng.theoretical_wv(others, wv.tau[-1:], wv.dt)[0] if others else 0.0))
+    slope = 2.0 * math.sqrt(max(excess, 1e-6 * wv.nu2[-1])) / wv.tau[-1]
+    return [RR(slope) if isinstance(c, RR) else c for c in components]
+
+
+def starting_values(names: list[str], wv: WaveletVariance, n_starts: int) -> list[list[Component]]:
+    """Up to ``n_starts`` distinct starts from the Allan-variance fit of the WV (2ν̂ is the AV)."""
+    fits = fit_allan(names, wv.as_allan(), wv.dt)
+    return [_with_ramp_start(list(c), wv) for _, c in fits[:n_starts]]
+
+
+@dataclass
+class Estimate:
+    """The efficient GMWM estimate of one structure on one or several records, before it is dressed as a result."""
+
+    problem: eng.Problem
+    best: eng.Minimum
+    inference: eng.Inference
+    covariances: list[np.ndarray]
+    start_objectives: list[float]
+
+    @property
+    def components(self) -> list[Component]:
+        return self.problem.par.to_components(self.best.theta)
+
+
+def estimate(runs: list[eng.Moments], starts: list[list[Component]]) -> Estimate:
+    """Steps 2–4 of the module docstring on the records ``runs`` (one θ for all of them)."""
+    if not starts:
+        raise InputError("no starting values for the GMWM fit")
+    par = eng.Parameters.of(canonical_order(starts[0]))
+    theta0 = par.to_theta(list(par.template))
+    problem = eng.Problem(par, runs, eng.Weights.diagonal(runs), par.bounds(theta0, runs))
+    results = []
+    for start in starts:
+        ordered = canonical_order(start)
+        if [c.name for c in ordered] == [c.name for c in par.template]:
+            results.append(problem.minimise(par.to_theta(ordered)))
+    first = min(results, key=lambda r: r.objective)
+    problem = problem.with_weights(eng.Weights.at(runs, par.to_components(first.theta)))
+    best = problem.minimise(first.theta)
+    # The components in canonical order at θ̂ (two GMs may have swapped), and the search box around them.
+    comps = canonical_order(par.to_components(best.theta))
+    par = eng.Parameters.of(comps)
+    theta = par.to_theta(comps)
+    problem = eng.Problem(par, runs, problem.weights, par.bounds(theta, runs))
+    best = replace(best, theta=theta)
+    move = float(np.max(np.abs(best.theta - first.theta)))
+    covs = list(problem.weights.covariance) if move < 0.02 else [run.covariance(comps) for run in runs]
+    return Estimate(problem, best, eng.infer(problem, best, covs), covs, [r.objective for r in results])
+
+
+def intervals(est: Estimate) -> tuple[dict[str, float], dict[str, tuple[float, float]], dict[str, str]]:
+    """Standard errors, 95 % intervals and how each was obtained (step 4 of the module docstring)."""
+    se, ci, how = {}, {}, {}
+    cov = est.inference.covariance
+    for k, lab in enumerate(est.problem.par.labels):
+        value = float(np.exp(est.best.theta[k]))
+        sd = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) and cov[k, k] >= 0 else math.inf
+        se[lab] = value * sd
+        zero = eng.near_zero(est.problem, est.best, k)
+        if sd <= eng.WALD_MAX_SE_LOG and not zero and not est.best.at_bound[k]:
+            ci[lab] = (value * math.exp(-eng.Z95 * sd), value * math.exp(eng.Z95 * sd))
+            how[lab] = "wald (sandwich covariance, log scale)"
+            continue
+        lo, hi = eng.profile_interval(est.problem, est.best, k, lower=not zero)
+        if est.problem.par.entries[k][1] not in eng.AMPLITUDES:  # τ, frequencies: unbounded means the search range
+            lo, hi = (v if math.isfinite(v) else edge for v, edge in zip((lo, hi), est.problem.box_of(k), strict=True))
+        ci[lab] = (math.exp(lo) if math.isfinite(lo) else 0.0, math.exp(hi) if math.isfinite(hi) else math.inf)
+        how[lab] = "profile of the GMWM objective (chi2_1)" + (": indistinguishable from 0" if zero else "")
+    return se, ci, how
+
+
+def _bootstrap(est: Estimate, options: GmwmOptions, slope_sign: float) -> dict[str, np.ndarray]:
+    """Parametric bootstrap of the log-parameters: records simulated from θ̂, their WV refitted with Ω₂."""
+    run = est.problem.runs[0].wv
+    rng = np.random.default_rng(options.seed)
+    comps = [RR(slope_sign * c.slope) if isinstance(c, RR) else c for c in est.components]
+    draws = []
+    for _ in range(options.bootstrap):
+        y = simulate_sum(comps, run.n, run.dt, rng)
+        wv = wavelet_variance(y, run.dt, robust=run.robust, efficiency=options.efficiency, m=run.m)
+        sim = eng.Problem(est.problem.par, [eng.Moments(wv)], est.problem.weights, est.problem.box)
+        draws.append(sim.minimise(est.best.theta).theta)
+    return {lab: np.exp(np.array(draws)[:, k]) for k, lab in enumerate(est.problem.par.labels)}
+
+
+def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope_sign: float = 1.0,
+          uncertainty: bool = True) -> GmwmFit:
+    """The :class:`GmwmFit` of an :class:`Estimate` (intervals, bootstrap and advice unless ``uncertainty`` is
+    False, e.g. for the candidates a selection does not keep)."""
+    se, ci, how = intervals(est) if uncertainty else ({}, {}, {})
+    if options.bootstrap and uncertainty:
+        for lab, values in _bootstrap(est, options, slope_sign).items():
+            ci[lab] = tuple(float(v) for v in np.quantile(values, [0.025, 0.975]))
+            se[lab] = float(np.std(values, ddof=1))
+            how[lab] = f"parametric bootstrap ({options.bootstrap} records)"
+    comps = [RR(slope_sign * c.slope) if isinstance(c, RR) else c for c in est.components]
+    for lab in list(ci):
+        if lab.startswith("RR") and slope_sign < 0:
+            ci[lab] = (-ci[lab][1], -ci[lab][0])
+    cov = est.inference.covariance
+    labels = list(est.problem.par.labels)
+    run = est.problem.runs[0]
+    return GmwmFit(
+        model=model_name(comps), components=comps, exog_coef={}, se=se, ci95=ci, loglik=math.nan, aic=math.nan,
+        bic=math.nan, n=n, dt=dt, n_iter=est.best.n_eval, converged=est.best.converged,
+        record_length=_record_length(labels, cov, comps, n, dt, target=options.target_precision) if uncertainty
+        else None,
+        information_ok=est.inference.identified, n_eval=est.best.n_eval, n_params=len(labels),
+        starts=list(est.start_objectives), log_covariance=cov, covariance_labels=tuple(labels), estimator="gmwm",
+        wv=run.wv, wv_model=run.model(est.components), wv_covariance=est.covariances[0],
+        j_statistic=est.inference.j_statistic, dof=est.inference.dof, p_value=est.inference.p_value,
+        residual_z=est.inference.residual_z[0], wic_penalty=est.inference.optimism, interval_method=how,
+    )
+
+
+def prepare(y: np.ndarray, dt: float, options: GmwmOptions) -> tuple[WaveletVariance, float]:
+    """The WV of a record (gaps filled first) and the sign of its least-squares slope."""
+    y = interpolate_missing(check_signal(y, dt))
+    wv = wavelet_variance(y, dt, robust=options.robust, efficiency=options.efficiency,
+                          max_fraction=options.max_fraction)
+    t = np.arange(y.size, dtype=float)
+    slope = float(np.polyfit(t, y, 1)[0]) if y.size > 2 else 0.0
+    return wv, (-1.0 if slope < 0 else 1.0)
+
+
+def estimate_structure(wv: WaveletVariance, structure: str | list[Component], *, options: GmwmOptions,
+                       init: list[Component] | None = None) -> Estimate:
+    """The GMWM estimate of one structure on one record's WV, before intervals (:func:`fit_gmwm`)."""
+    names, given = parse_structure_or_components(structure)
+    ss.validate_structure(names)
+    n_params = sum(len(COMPONENT_TYPES[n].parameter_names) for n in names)
+    if wv.m.size <= n_params:
+        raise InputError(f"{wv.m.size} wavelet scales are too few for the {n_params} parameters of "
+                         f"{'+'.join(names)}: record longer or choose a simpler model")
+    start = init or given
+    starts = ([_with_ramp_start(list(start), wv)] if start is not None
+              else starting_values(names, wv, options.n_starts))
+    return estimate([eng.Moments(wv)], starts)
+
+
+def fit_gmwm(y: np.ndarray | None, dt: float, structure: str | list[Component], *,
+             options: GmwmOptions | None = None, init: list[Component] | None = None,
+             wv: WaveletVariance | None = None, slope_sign: float = 1.0) -> GmwmFit:
+    """GMWM fit of one structure to one axis (module docstring).
+
+    Parameters
+    ----------
+    y : samples [u] at period ``dt`` [s] (NaN = missing, filled by interpolation), or None when ``wv`` is given
+    structure : ``'WN+GM+RW'``, a spec with values or components (then used as the start)
+    init : starting components (instead of the Allan-variance starts)
+    wv : the record's WV when the caller has it (``y`` is then not read); ``slope_sign`` then gives the RR's sign
+
+    Raises
+    ------
+    InputError
+        Bad signal or structure, too few scales for the parameters, no start could be fitted.
+    """
+    options = options or GmwmOptions()
+    if wv is None:
+        if y is None:
+            raise InputError("fit_gmwm needs the samples y or their wavelet variance wv")
+        wv, slope_sign = prepare(y, dt, options)
+    est = estimate_structure(wv, structure, options=options, init=init)
+    return dress(est, n=wv.n, dt=wv.dt, options=options, slope_sign=slope_sign)

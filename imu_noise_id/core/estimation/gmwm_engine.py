@@ -1,0 +1,309 @@
+"""The GMWM's numerical engine: the weighted wavelet-moment objective over one or several records, its minimum, the
+sandwich covariance, profile intervals and the J-statistic (Guerrier, Skaloud, Stebler & Victoria-Feser, JASA 108,
+2013, "GMWM" below; the several-records form is the MGMWM of Bakalli et al., "Multi-signal approaches for repeated
+sampling schemes in inertial sensor calibration").
+
+For records k = 1..K with WV estimates ν̂_k and weights Ω_k (:class:`Weights`), the estimator is
+
+    θ̂ = argmin_θ Σ_k (ν̂_k − ν_k(θ))ᵀ Ω_k (ν̂_k − ν_k(θ))                             (GMWM eq. 3)
+
+over log-parameters θ (positivity by construction; beyond the paper, which uses transformations per model). With
+A_k = ∂ν_k/∂θᵀ, H = Σ A_kᵀΩ_kA_k and S = Σ A_kᵀΩ_kV_kΩ_kA_k its asymptotic covariance is the sandwich
+Ξ = H⁻¹ S H⁻¹ (GMWM Proposition 2, here with the records independent), which is H⁻¹ when Ω_k = V_k⁻¹ (efficient).
+At the efficient weight the minimum is Hansen's J-statistic, χ² with Σ J_k − p degrees of freedom when the model is
+right, and the rise of the profiled objective above its minimum is χ²₁ for one parameter (the distance-metric
+statistic of Newey & West 1987), which gives the profile intervals used where Wald intervals are meaningless.
+The criterion's optimism 2 Σ tr(Ω_k A_k H⁻¹ A_kᵀ Ω_k V_k) is the WIC penalty (Guerrier et al. 2015, "wavelet
+information criterion"); it is 2p at the efficient weight.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import linalg
+from scipy.optimize import least_squares
+
+from ..noise.components import Component
+from ..noise.modelspec import parameter_labels
+from ..wavelet.covariance import theoretical_wv, wv_covariance
+from ..wavelet.variance import WaveletVariance
+from .mle import covariance_from_information, physical_bounds
+
+#: χ²₁ 95 % quantile: a profile interval ends where the objective rises by this much.
+CHI2_95 = 3.841458820694124
+Z95 = 1.959963984540054
+#: Parameters whose value scales a component's variance (may be indistinguishable from 0).
+AMPLITUDES = frozenset({"noise_density", "random_walk", "sigma", "Q", "slope"})
+#: Half-width [log units] of the search box of amplitudes around their start.
+AMPLITUDE_WIDTH = 30.0
+#: A component whose WV is below this share of the data's at every scale is at its ~0 boundary.
+WV_FLOOR = 1e-8
+#: Above this standard error of a log-parameter a Wald interval is replaced by a profile one.
+WALD_MAX_SE_LOG = 1.0
+
+
+@dataclass(frozen=True)
+class Parameters:
+    """Log-parameters θ of a structure: every parameter of every component (an RR's |slope| included)."""
+
+    template: tuple[Component, ...]
+    entries: tuple[tuple[int, str], ...]
+    labels: tuple[str, ...]
+    base: tuple[dict[str, float], ...]  # the template's parameters (asdict is slow: read once)
+
+    @classmethod
+    def of(cls, components: list[Component]) -> Parameters:
+        labels = parameter_labels(list(components))
+        return cls(tuple(components), tuple((i, p) for i, p, _ in labels), tuple(lab for *_, lab in labels),
+                   tuple(c.params() for c in components))
+
+    def to_theta(self, components: list[Component]) -> np.ndarray:
+        return np.log([abs(components[i].params()[p]) for i, p in self.entries])
+
+    def to_components(self, theta: np.ndarray) -> list[Component]:
+        """Components at θ (ValueError when θ leaves a component's domain, e.g. an OSC too damped)."""
+        params = [dict(b) for b in self.base]
+        for (i, p), v in zip(self.entries, theta, strict=True):
+            params[i][p] = float(np.exp(v))
+        return [type(c)(**kw) for c, kw in zip(self.template, params, strict=True)]
+
+    def bounds(self, theta0: np.ndarray, runs: list[Moments]) -> tuple[np.ndarray, np.ndarray]:
+        """Search box: physical ranges for τ and frequencies (:func:`.mle.physical_bounds`); ±30 e-folds around
+        the start for amplitudes, whose lower end is raised to where the component's WV falls below
+        :data:`WV_FLOOR` of the data's at every scale (below it the objective is flat and the search would walk
+        down that direction for nothing; beyond the paper, as :func:`.starts.fit_allan` does)."""
+        n, dt = max(r.wv.n for r in runs), runs[0].wv.dt
+        phys = physical_bounds(n, dt)
+        lo, hi = theta0 - AMPLITUDE_WIDTH, theta0 + AMPLITUDE_WIDTH
+        comps = self.to_components(theta0)
+        for k, (i, p) in enumerate(self.entries):
+            if p in phys:
+                lo[k], hi[k] = math.log(phys[p][0]), math.log(phys[p][1])
+            elif p in AMPLITUDES:
+                ratio = min(float(np.min(r.wv.nu2 / np.maximum(r.model([comps[i]]), 1e-300))) for r in runs)
+                if math.isfinite(ratio) and ratio > 0:  # the WV of an amplitude scales with its square
+                    lo[k] = max(lo[k], min(theta0[k] + 0.5 * math.log(WV_FLOOR * ratio), theta0[k] - 1.0))
+        return lo, hi
+
+
+@dataclass(frozen=True)
+class Moments:
+    """The WV of one record: what the objective compares the model with."""
+
+    wv: WaveletVariance
+
+    def model(self, components: list[Component]) -> np.ndarray:
+        return theoretical_wv(components, self.wv.tau, self.wv.dt)
+
+    def covariance(self, components: list[Component]) -> np.ndarray:
+        return wv_covariance(components, self.wv.m, self.wv.n, self.wv.dt, scale=self.wv.scale)
+
+
+@dataclass(frozen=True)
+class Weights:
+    """Ω_k = V_k⁻¹ of each record through the whitening matrices L_k⁻¹ (V_k = L_k L_kᵀ), and the V_k themselves."""
+
+    whiten: tuple[np.ndarray, ...]
+    covariance: tuple[np.ndarray, ...]
+
+    @classmethod
+    def at(cls, runs: list[Moments], components: list[Component]) -> Weights:
+        covs = [run.covariance(components) for run in runs]
+        return cls(tuple(_inverse_cholesky(v) for v in covs), tuple(covs))
+
+    @classmethod
+    def diagonal(cls, runs: list[Moments]) -> Weights:
+        """The first step's weight: each scale's variance 2ν̂²/edf from the χ² law of its estimate (the gmwm
+        package's "fast" choice), correlations across scales ignored."""
+        covs = [np.diag(2.0 * run.wv.nu2**2 / run.wv.edf) for run in runs]
+        return cls(tuple(np.diag(1.0 / np.sqrt(np.diag(v))) for v in covs), tuple(covs))
+
+    def omega(self, k: int) -> np.ndarray:
+        return self.whiten[k].T @ self.whiten[k]
+
+
+def _inverse_cholesky(v: np.ndarray) -> np.ndarray:
+    """L⁻¹ with V = L Lᵀ, through the correlation matrix (V spans many orders of magnitude); a near-singular V gets
+    a ridge of 1e-10 on its correlations."""
+    d = np.sqrt(np.diag(v))
+    corr = v / np.outer(d, d)
+    try:
+        chol = linalg.cholesky(corr, lower=True)
+    except linalg.LinAlgError:
+        chol = linalg.cholesky(corr + 1e-10 * np.eye(d.size), lower=True)
+    return linalg.solve_triangular(chol, np.eye(d.size), lower=True) / d[None, :]
+
+
+@dataclass(frozen=True)
+class Minimum:
+    theta: np.ndarray
+    objective: float
+    n_eval: int
+    converged: bool
+    at_bound: np.ndarray
+
+
+@dataclass(frozen=True)
+class Problem:
+    """The objective of GMWM eq. 3: parameters, records, weights and the search box."""
+
+    par: Parameters
+    runs: list[Moments]
+    weights: Weights
+    box: tuple[np.ndarray, np.ndarray]
+
+    def box_of(self, k: int) -> tuple[float, float]:
+        """The search range of log-parameter k."""
+        return float(self.box[0][k]), float(self.box[1][k])
+
+    def with_weights(self, weights: Weights) -> Problem:
+        return Problem(self.par, self.runs, weights, self.box)
+
+    def residuals(self, theta: np.ndarray) -> np.ndarray:
+        """Whitened moment residuals L_k⁻¹(ν̂_k − ν_k(θ)), stacked (their squared norm is the objective)."""
+        try:
+            comps = self.par.to_components(theta)
+        except ValueError:
+            return np.full(sum(r.wv.m.size for r in self.runs), 1e8)
+        return np.concatenate([w @ (run.wv.nu2 - run.model(comps))
+                               for run, w in zip(self.runs, self.weights.whiten, strict=True)])
+
+    def objective(self, theta: np.ndarray) -> float:
+        r = self.residuals(theta)
+        return float(r @ r)
+
+    def minimise(self, theta0: np.ndarray, free: np.ndarray | None = None,
+                 box: tuple[np.ndarray, np.ndarray] | None = None, tol: float = 1e-10) -> Minimum:
+        """Trust-region least squares on the whitened residuals; ``free``: the entries searched (the others held at
+        ``theta0``); ``box``: another search box; ``tol``: relative tolerance (a profile needs less)."""
+        lo, hi = box or self.box
+        free = np.ones(theta0.size, bool) if free is None else free
+        base = np.clip(theta0, lo + 1e-9, hi - 1e-9)
+
+        def full(x: np.ndarray) -> np.ndarray:
+            th = base.copy()
+            th[free] = x
+            return th
+
+        sol = least_squares(lambda x: self.residuals(full(x)), base[free], bounds=(lo[free], hi[free]), method="trf",
+                            x_scale="jac", xtol=tol, ftol=tol * 1e-2, gtol=tol, max_nfev=100 * (int(free.sum()) + 1))
+        theta = full(sol.x)
+        at_bound = np.zeros(theta.size, bool)
+        at_bound[free] = (sol.x <= lo[free] + 1e-6) | (sol.x >= hi[free] - 1e-6)
+        return Minimum(theta, 2.0 * float(sol.cost), int(sol.nfev), bool(sol.status > 0), at_bound)
+
+    def profile(self, best: Minimum, k: int, value: float, box: tuple[np.ndarray, np.ndarray] | None = None) -> float:
+        """Rise of the objective, minimised over the others, with log-parameter k held at ``value``."""
+        th = best.theta.copy()
+        th[k] = value
+        free = np.ones(th.size, bool)
+        free[k] = False
+        low = self.objective(th) if not free.any() else self.minimise(th, free, box, tol=1e-7).objective
+        return low - best.objective
+
+
+def jacobian(par: Parameters, theta: np.ndarray, run: Moments, step: float = 1e-5) -> np.ndarray:
+    """A = ∂ν/∂θᵀ (J × p) by central differences in the log-parameters."""
+    out = np.empty((run.wv.m.size, theta.size))
+    for k in range(theta.size):
+        tp, tm = theta.copy(), theta.copy()
+        tp[k] += step
+        tm[k] -= step
+        out[:, k] = (run.model(par.to_components(tp)) - run.model(par.to_components(tm))) / (2.0 * step)
+    return out
+
+
+@dataclass(frozen=True)
+class Inference:
+    """Sandwich covariance and goodness of fit at a minimum (module docstring).
+
+    Attributes
+    ----------
+    covariance : Ξ of the log-parameters (inf on the diagonal of parameters the moments do not identify)
+    identified : whether H was positive definite with no parameter on its search bound
+    j_statistic, dof, p_value : the minimum, its degrees of freedom Σ J_k − p and P(χ² > J)
+    optimism : the WIC penalty 2 Σ tr(Ω_k A_k H⁻¹ A_kᵀ Ω_k V_k)
+    residual_z : per record, (ν̂ − ν(θ̂)) / sd of that residual (which scales misfit)
+    """
+
+    covariance: np.ndarray
+    identified: bool
+    j_statistic: float
+    dof: int
+    p_value: float
+    optimism: float
+    residual_z: tuple[np.ndarray, ...]
+
+
+def infer(problem: Problem, best: Minimum, covariances: list[np.ndarray]) -> Inference:
+    """Ξ = H⁻¹SH⁻¹ with Ω from the problem's weights and V_k = ``covariances`` (at θ̂), the J-test, the residual z."""
+    from scipy.stats import chi2
+
+    par, runs, weights = problem.par, problem.runs, problem.weights
+    p = best.theta.size
+    jac = [jacobian(par, best.theta, run) for run in runs]
+    omegas = [weights.omega(k) for k in range(len(runs))]
+    h = sum(a.T @ o @ a for a, o in zip(jac, omegas, strict=True))
+    s = sum(a.T @ o @ v @ o @ a for a, o, v in zip(jac, omegas, covariances, strict=True))
+    keep = ~best.at_bound
+    h_inv = np.zeros((p, p))
+    sub, ok = covariance_from_information(h[np.ix_(keep, keep)])
+    h_inv[np.ix_(keep, keep)] = np.where(np.isfinite(sub), sub, 0.0)
+    finite = np.zeros(p, bool)
+    finite[np.flatnonzero(keep)[np.isfinite(np.diag(sub))]] = True
+    cov = np.full((p, p), 0.0)
+    cov[np.ix_(finite, finite)] = (h_inv @ s @ h_inv)[np.ix_(finite, finite)]
+    cov[~finite, ~finite] = np.inf
+    optimism = 2.0 * sum(float(np.trace(o @ a @ h_inv @ a.T @ o @ v))
+                         for a, o, v in zip(jac, omegas, covariances, strict=True))
+    z = []
+    for a, o, v in zip(jac, omegas, covariances, strict=True):
+        g = h_inv @ a.T @ o @ v
+        resid_cov = v - a @ g - g.T @ a.T + a @ np.where(np.isfinite(cov), cov, 0.0) @ a.T
+        run = runs[len(z)]
+        e = run.wv.nu2 - run.model(par.to_components(best.theta))
+        z.append(e / np.sqrt(np.maximum(np.diag(resid_cov), 1e-30 * np.diag(v))))
+    dof = sum(r.wv.m.size for r in runs) - int(keep.sum())
+    p_value = float(chi2.sf(best.objective, dof)) if dof > 0 else math.nan
+    return Inference(cov, bool(ok and keep.all()), best.objective, dof, p_value, optimism, tuple(z))
+
+
+def profile_interval(problem: Problem, best: Minimum, k: int, *, lower: bool = True, first_step: float = 0.25,
+                     max_span: float = 40.0) -> tuple[float, float]:
+    """95 % profile interval of log-parameter k: where the objective, minimised over the others, rises by
+    :data:`CHI2_95`. Each end is bracketed by doubling steps (0.25, 0.5, 1, … e-folds) and refined by bisection; an
+    end not reached within ``max_span`` e-folds is ∓inf (lower end skipped with ``lower=False``)."""
+    ends = []
+    for direction in (-1.0, 1.0):
+        if direction < 0 and not lower:
+            ends.append(-math.inf)
+            continue
+        inside, outside, step = best.theta[k], None, first_step
+        while step <= max_span:
+            v = best.theta[k] + direction * step
+            if problem.profile(best, k, v) > CHI2_95:
+                outside = v
+                break
+            inside, step = v, 2.0 * step
+        if outside is None:
+            ends.append(direction * math.inf)
+            continue
+        while abs(outside - inside) > 0.01:
+            mid = 0.5 * (inside + outside)
+            inside, outside = (inside, mid) if problem.profile(best, k, mid) > CHI2_95 else (mid, outside)
+        ends.append(0.5 * (inside + outside))
+    return ends[0], ends[1]
+
+
+def near_zero(problem: Problem, best: Minimum, k: int) -> bool:
+    """Whether amplitude k shrunk a thousandfold (the others re-fitted) raises the objective by less than
+    :data:`CHI2_95`: the moments cannot tell it from 0."""
+    if problem.par.entries[k][1] not in AMPLITUDES:
+        return False
+    value = best.theta[k] - math.log(1e3)
+    lo = problem.box[0].copy()
+    lo[k] = min(lo[k], value - 1.0)
+    return problem.profile(best, k, value, (lo, problem.box[1])) < CHI2_95

@@ -1,0 +1,99 @@
+"""Pooled GMWM over several recordings of one sensor, with a test that they share one model (MGMWM-style).
+
+Bakalli, Guerrier et al. ("Multi-signal approaches for repeated sampling schemes in inertial sensor calibration")
+estimate one θ from the WVs of K replicates of a sensor: θ̂ = argmin Σ_k (ν̂_k − ν_k(θ))ᵀ Ω_k (ν̂_k − ν_k(θ))
+(:mod:`.gmwm_engine`; each record keeps its own length and period). Pooling is right only when the replicates are
+compatible; we test it (beyond the paper, in the spirit of Hansen's J-test) with the efficient weights Ω_k of the
+pooled fit held fixed:
+
+    C = J_pooled(θ̂) − Σ_k J_k(θ̂_k) = Σ_k [J_k(θ̂) − J_k(θ̂_k)] ~ χ²((K − 1)·p)   under "one θ for all replicates",
+
+J_k(θ̂_k) each record's own minimum with its weight, J_pooled the pooled minimum; each record's term says how much
+it disagrees with the others. The pooled J alone,
+χ²(Σ J_k − p), tests "one θ and the model is right" together; C separates the two. Verdict at the 5 % level.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2
+
+from ..errors import InputError
+from ..kalman import statespace as ss
+from ..noise.components import Component
+from ..wavelet.variance import WaveletVariance
+from . import gmwm_engine as eng
+from .gmwm import GmwmFit, GmwmOptions, dress, estimate, fit_gmwm, prepare, starting_values
+from .model import parse_structure_or_components
+
+#: Level of the compatibility test.
+COMPATIBILITY_ALPHA = 0.05
+
+
+@dataclass
+class PooledFit:
+    """One structure fitted to K records of one sensor.
+
+    Attributes
+    ----------
+    fit : the pooled fit (one θ; ``n`` the total samples; its ``wv``/``residual_z`` are the first record's)
+    runs : each record's own GMWM fit of the structure
+    j_statistic, dof, p_value : the pooled J-test
+    compatibility : C, its degrees of freedom (K − 1)·p, its p-value
+    compatible : p-value ≥ :data:`COMPATIBILITY_ALPHA`
+    residual_z : per record, the standardised WV residuals of the pooled fit
+    run_rise : per record, J_k(θ̂_pooled) − J_k(θ̂_k): its share of C (the records that disagree most stand out)
+    """
+
+    fit: GmwmFit
+    runs: list[GmwmFit]
+    j_statistic: float
+    dof: int
+    p_value: float
+    compatibility: float
+    compatibility_dof: int
+    compatibility_p: float
+    residual_z: list[np.ndarray]
+    run_rise: list[float]
+
+    @property
+    def compatible(self) -> bool:
+        return self.compatibility_p >= COMPATIBILITY_ALPHA
+
+
+def fit_pooled(records: list[tuple[np.ndarray, float]] | list[WaveletVariance], structure: str | list[Component], *,
+               options: GmwmOptions | None = None) -> PooledFit:
+    """Pooled GMWM fit of ``structure`` to ``records`` ((samples, dt) pairs or their WVs) and the compatibility test.
+
+    Raises
+    ------
+    InputError
+        Fewer than two records, a bad record or structure.
+    """
+    options = options or GmwmOptions()
+    if len(records) < 2:
+        raise InputError(f"pooling needs at least two records of the sensor, got {len(records)}")
+    names, given = parse_structure_or_components(structure)
+    ss.validate_structure(names)
+    wvs = [r if isinstance(r, WaveletVariance) else prepare(r[0], r[1], options)[0] for r in records]
+    runs = [eng.Moments(wv) for wv in wvs]
+    own = [fit_gmwm(None, wv.dt, structure, options=options, wv=wv) for wv in wvs]
+    starts = [list(given)] if given else [s for wv in wvs for s in starting_values(names, wv, 1)]
+    est = estimate(runs, starts + [list(f.components) for f in own])
+    pooled = dress(est, n=sum(wv.n for wv in wvs), dt=wvs[0].dt, options=options)
+    # Each record's own minimum under the pooled fit's weight (the same Ω_k as in J_pooled); C = Σ_k of the rises.
+    rise = []
+    for k, run in enumerate(runs):
+        problem = eng.Problem(est.problem.par, [run], eng.Weights((est.problem.weights.whiten[k],),
+                                                                  (est.problem.weights.covariance[k],)),
+                              est.problem.box)
+        own_min = min(problem.minimise(est.best.theta).objective,
+                      problem.minimise(est.problem.par.to_theta(own[k].components)).objective)
+        rise.append(max(problem.objective(est.best.theta) - own_min, 0.0))
+    c_stat = float(sum(rise))
+    c_dof = (len(runs) - 1) * est.best.theta.size
+    return PooledFit(pooled, own, est.inference.j_statistic, est.inference.dof, est.inference.p_value, c_stat, c_dof,
+                     float(chi2.sf(c_stat, c_dof)) if c_dof > 0 else math.nan, list(est.inference.residual_z), rise)

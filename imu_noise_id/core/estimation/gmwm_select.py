@@ -1,0 +1,90 @@
+"""GMWM model selection by the wavelet information criterion (WIC) over the EM selection's candidate structures.
+
+Guerrier, Stebler, Skaloud & Victoria-Feser ("Wavelet information criterion", 2015, in the gmwm R package as
+``rank.models``) rank candidate models by an estimate of the expected prediction error of the WV,
+E[(ν̂⁰ − ν(θ̂))ᵀ Ω (ν̂⁰ − ν(θ̂))] for an independent copy ν̂⁰ of the moments, with **one** weight Ω for every
+candidate, that of the largest ("full") model. Its estimate is the fitted objective plus the optimism
+2·tr(Ω A H⁻¹ Aᵀ Ω V) (:mod:`.gmwm_engine`; the asymptotic form, not the bootstrap one): WIC = J(θ̃_k) + 2p_k when
+Ω = V⁻¹. Here the full model has, of every component type, the largest count any candidate has (e.g. WN+2GM+RW
+for the default candidates); its V(θ̂) is the common weight (when it cannot be fitted, the V of the candidate with
+the best J-test p-value). The candidates are those of :func:`.selection.suggest_candidates` (the EM's).
+
+Each candidate's reported fit (J-test) is its own efficient fit (:func:`.gmwm.fit_gmwm`), with intervals for the
+winner only; the common weight only ranks them.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+from ..allan import AllanResult
+from ..errors import InputError
+from ..noise.modelspec import parse_structure, structure_name
+from ..wavelet.variance import WaveletVariance
+from . import gmwm_engine as eng
+from .gmwm import Estimate, GmwmFit, GmwmOptions, dress, estimate_structure, prepare
+from .selection import suggest_candidates
+
+
+@dataclass
+class GmwmSelection:
+    """WIC ranking of one axis: the winner, the table (best first) and every fit.
+
+    ``table`` rows: model, k (parameters), wic, delta_wic, j_statistic, dof, p_value (the candidate's own J-test),
+    or model and error."""
+
+    best: GmwmFit
+    table: list[dict]
+    fits: dict[str, GmwmFit]
+    reference: str
+
+
+def full_structure(candidates: list[str]) -> str:
+    """The smallest structure nesting every candidate: per component type the largest count any candidate has."""
+    most: Counter[str] = Counter()
+    for spec in candidates:
+        for name, count in Counter(parse_structure(spec)).items():
+            most[name] = max(most[name], count)
+    return structure_name([n for n, c in most.items() for _ in range(c)])
+
+
+def select_gmwm(y, dt: float, candidates: list[str] | None = None, *, options: GmwmOptions | None = None,
+                allan: AllanResult | None = None, wv: WaveletVariance | None = None,
+                slope_sign: float = 1.0) -> GmwmSelection:
+    """Fit every candidate by GMWM and rank them by WIC (module docstring). ``allan``: the record's AV (one column)
+    for the candidate list when the caller has it; ``wv`` (with ``slope_sign``): the record's WV (``y`` unused)."""
+    options = options or GmwmOptions()
+    if wv is None:
+        wv, slope_sign = prepare(y, dt, options)
+    cands = list(candidates) if candidates else suggest_candidates(allan if allan is not None else wv.as_allan())
+    ests: dict[str, Estimate] = {}
+    errors: dict[str, str] = {}
+    for spec in cands:
+        try:
+            ests[spec] = estimate_structure(wv, spec, options=options)
+        except InputError as exc:
+            errors[spec] = str(exc)
+    if not ests:
+        raise InputError("no candidate model could be fitted: " + "; ".join(f"{k}: {v}" for k, v in errors.items()))
+    reference = full_structure(cands)
+    try:
+        ref = ests.get(reference) or estimate_structure(wv, reference, options=options)
+    except InputError:
+        reference, ref = max(ests.items(), key=lambda kv: kv[1].inference.p_value)
+    runs = [eng.Moments(wv)]
+    weights = eng.Weights.at(runs, ref.components)
+    wic = {}
+    for spec, est in ests.items():
+        problem = est.problem.with_weights(weights)
+        best = problem.minimise(est.best.theta)
+        wic[spec] = best.objective + eng.infer(problem, best, list(weights.covariance)).optimism
+    best_spec = min(wic, key=wic.get)
+    fits = {spec: dress(est, n=wv.n, dt=wv.dt, options=options, slope_sign=slope_sign,
+                        uncertainty=spec == best_spec) for spec, est in ests.items()}
+    low = wic[best_spec]
+    table = [{"model": fits[s].model, "k": fits[s].n_params, "wic": wic[s], "delta_wic": wic[s] - low,
+              "j_statistic": fits[s].j_statistic, "dof": fits[s].dof, "p_value": fits[s].p_value} for s in fits]
+    table.sort(key=lambda r: r["wic"])
+    table += [{"model": s, "error": e} for s, e in errors.items()]
+    return GmwmSelection(fits[best_spec], table, fits, reference)

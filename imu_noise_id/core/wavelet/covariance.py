@@ -1,0 +1,176 @@
+"""Theoretical wavelet variance of a component model and the covariance of the WV estimates across scales.
+
+Theoretical WV (GMWM eq. 3's ν(θ)): for the Haar filter ν²_j(θ) = AV(τ_j)/2 (:mod:`.variance`), and every component
+gives the exact Allan variance of its *sampled* process (:meth:`~imu_noise_id.core.noise.base.Component.
+allan_variance`), so ν(θ) is exact at the sampling period, not a continuous-time approximation.
+
+Covariance of the WV estimates (beyond the papers, which estimate it from the data or by bootstrap): for a Gaussian
+model it follows in closed form from the generalised covariance K(u) of the partial sums x of the signal
+(:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`). The Haar coefficient W_{j,t} is the second
+difference of x at lag m_j over 2m_j, so the cross-covariance of levels i and j at lag k is
+
+    γ_ij(k) = Cov(W_{i,t}, W_{j,t+k}) = Σ_{a,b=0}^{2} c_a c_b K(k + a m_i − b m_j) / (4 m_i m_j),  c = (1, −2, 1),
+
+and for Gaussian coefficients (Cov(X², Y²) = 2 Cov(X, Y)²; Serroukh, Walden & Percival 2000 for one level)
+
+    Cov(ν̂²_i, ν̂²_j) = 2 Σ_k n_ij(k) γ_ij(k)² / (M_i M_j)  (+ 4 μ_i μ_j Σ_k n_ij(k) γ_ij(k) / (M_i M_j) with a ramp),
+
+n_ij(k) the number of coefficient pairs at lag k inside the record (exact at finite N) and μ_j = ω·dt·m_j/2 the
+mean a rate ramp ω gives the coefficients. For the robust WV (:mod:`.robust`), γ² is replaced by the Hermite
+series ν_i²ν_j² Σ_k a_k² ρ^k/k! of ρ = γ/(ν_i ν_j), scaled by (2/e)².
+
+The lag sum: γ_ij is a piecewise polynomial of degree ≤ 3 between the nine kinks k = b m_j − a m_i (exactly zero
+outside [−2m_i, 2m_j] for WN, QN, RW), plus exponential tails of decay time τ_c for GM, LPF and OSC components.
+It is summed by the trapezoidal rule on an integer grid that is dense near the kinks (steps growing geometrically
+away from them) and has at least 64 points per polynomial piece; where the grid is every integer the sum is exact
+(test_wavelet checks it against the brute-force sum and a Monte-Carlo covariance).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from ..noise.components import RR, Component, total_allan_variance
+from .robust import HERMITE_ORDERS, BiweightScale
+
+#: The exponential tails of γ are followed for this many decay times.
+TAIL_DECAY_TIMES = 20.0
+#: Points per polynomial piece of γ at least; relative step of the geometric fans around each kink.
+PIECE_POINTS, FAN_RATIO = 64, 0.125
+#: Second difference of the phase (Haar filter on x).
+_C = (1.0, -2.0, 1.0)
+
+
+def theoretical_wv(components: list[Component], tau: np.ndarray, dt: float) -> np.ndarray:
+    """ν²(τ) = AV(τ)/2 [u²] of the sum of ``components`` at scales ``tau`` [s] (exact for the sampled process)."""
+    return 0.5 * total_allan_variance(list(components), np.asarray(tau, dtype=float), dt)
+
+
+def _offsets(length: int, cap: float, fine: float) -> np.ndarray:
+    """Offsets 0..length from a kink: steps ``cap`` (a piece's resolution), refined near the kink, where an
+    exponential memory of ``fine`` samples shapes γ, by steps growing geometrically from max(1, fine/4)."""
+    step = max(1, int(cap))
+    # The first lags are always taken one by one: a component whose K jumps at u = 0 (QN, MA) puts an isolated value
+    # at the kink itself, which must weigh one lag, not a whole step.
+    parts = [np.arange(0, length + 1, step, dtype=np.int64), np.array([length], dtype=np.int64),
+             np.arange(min(length, 3) + 1, dtype=np.int64)]
+    if math.isfinite(fine) and step > 1:
+        first = max(1.0, fine / 4.0)
+        n_geo = math.ceil(math.log(max(cap / first, 1.0)) / math.log1p(FAN_RATIO)) + 1
+        d = np.cumsum(first * (1.0 + FAN_RATIO) ** np.arange(n_geo))
+        parts.append(np.round(d[d < length]).astype(np.int64))
+    return np.unique(np.concatenate(parts))
+
+
+def _lag_grid(m_i: int, m_j: int, n: int, *, margin: int, period: float,
+              fine: float) -> tuple[np.ndarray, np.ndarray]:
+    """Integer lags and trapezoid weights for Σ_k f(k) over k ∈ [−2m_i − margin, 2m_j + margin] ∩ (−n, n): a
+    piece's resolution 1/PIECE_POINTS of its length, or an eighth of the shortest oscillation ``period``, refined
+    near the kinks for an exponential memory of ``fine`` samples (lengths in samples)."""
+    lo, hi = max(-2 * m_i - margin, -(n - 1)), min(2 * m_j + margin, n - 1)
+    kinks = {b * m_j - a * m_i for a in range(3) for b in range(3)}
+    nodes = sorted({lo, hi, *(k for k in kinks if lo < k < hi)})
+    parts = []
+    for p, q in itertools.pairwise(nodes):
+        length = q - p
+        off = _offsets(length // 2 + 1, min(length / PIECE_POINTS, period / 8.0), fine)
+        off = off[off <= length]
+        parts += [p + off, q - off]
+    k = np.unique(np.concatenate(parts)) if parts else np.array([lo], dtype=np.int64)
+    w = np.empty(k.size)
+    if k.size == 1:
+        w[0] = 1.0
+    else:
+        gaps = np.diff(k).astype(float)
+        w[0], w[-1] = 0.5 * gaps[0] + 0.5, 0.5 * gaps[-1] + 0.5
+        w[1:-1] = 0.5 * (gaps[:-1] + gaps[1:])
+    return k, w
+
+
+def _pair_counts(k: np.ndarray, m_i: int, m_j: int, n: int) -> np.ndarray:
+    """n_ij(k): coefficient pairs (s, s + k) with W_{i,s} and W_{j,s+k} both inside the record."""
+    top = np.minimum(n - 1, n - 1 - k)
+    bottom = np.maximum(2 * m_i - 1, 2 * m_j - 1 - k)
+    return np.maximum(top - bottom + 1, 0).astype(float)
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """The lag grids of every pair of scales, concatenated: lags, weights × pair counts, the pair's m_i and m_j per
+    point, and where each pair starts (for a segment sum)."""
+
+    k: np.ndarray
+    weight: np.ndarray
+    m_i: np.ndarray
+    m_j: np.ndarray
+    starts: np.ndarray
+    pairs: tuple[tuple[int, int], ...]
+
+
+@lru_cache(maxsize=32)
+def _plan(m: tuple[int, ...], n: int, margin: int, period: float, fine: float) -> _Plan:
+    parts, pairs = [], []
+    for i in range(len(m)):
+        for j in range(i, len(m)):
+            k, w = _lag_grid(m[i], m[j], n, margin=margin, period=period, fine=fine)
+            parts.append((k, w * _pair_counts(k, m[i], m[j], n), np.full(k.size, m[i]), np.full(k.size, m[j])))
+            pairs.append((i, j))
+    sizes = np.array([p[0].size for p in parts])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    k, w, mi, mj = (np.concatenate([p[q] for p in parts]) for q in range(4))
+    return _Plan(k, w, mi, mj, starts, tuple(pairs))
+
+
+def _bucket(x: float) -> float:
+    """x rounded up to a power of two (plans are shared between nearby models)."""
+    return 0.0 if x <= 0 else (math.inf if not math.isfinite(x) else 2.0 ** math.ceil(math.log2(x)))
+
+
+def wv_covariance(components: list[Component], m: np.ndarray, n: int, dt: float, *,
+                  scale: BiweightScale | None = None) -> np.ndarray:
+    """(J, J) covariance [u⁴] of the WV estimates at averaging factors ``m`` of an n-sample record of the Gaussian
+    model ``components`` (module docstring); ``scale``: that of the robust estimator instead of the classical one.
+    """
+    m = np.asarray(m, dtype=np.int64)
+    comps = list(components)
+    stochastic = [c for c in comps if not isinstance(c, RR)]
+    decay, fine, period = 0.0, math.inf, math.inf
+    for c in stochastic:
+        longest, shortest, p = c.memory(dt)
+        if longest > 0:
+            decay, fine = max(decay, longest / dt), min(fine, shortest / dt)
+        period = min(period, max(p / dt, 1.0))
+    margin = int(min(_bucket(TAIL_DECAY_TIMES * decay), n))
+    period = _bucket(period) / 2.0 if math.isfinite(period) else math.inf
+    fine = _bucket(fine) / 2.0 if math.isfinite(fine) else math.inf
+    plan = _plan(tuple(int(v) for v in m), int(n), margin, period, fine)
+    gamma = np.zeros(plan.k.size)
+    for a in range(3):
+        for b in range(3):
+            u = plan.k + a * plan.m_i - b * plan.m_j
+            gamma += _C[a] * _C[b] * np.sum([c.sum_covariance(u, dt) for c in stochastic], axis=0)
+    gamma /= 4.0 * plan.m_i * plan.m_j
+    nu2 = theoretical_wv(comps, m * dt, dt)
+    i_idx = np.array([p[0] for p in plan.pairs])
+    j_idx = np.array([p[1] for p in plan.pairs])
+    if scale is None:
+        terms = 2.0 * gamma**2
+    else:
+        nu_prod = np.repeat(np.sqrt(nu2[i_idx] * nu2[j_idx]), np.diff(np.append(plan.starts, plan.k.size)))
+        rho = gamma / nu_prod
+        terms = (4.0 / scale.e**2) * nu_prod**2 * sum(h * rho**order for h, order in
+                                                      zip(scale.hermite, HERMITE_ORDERS, strict=True))
+    slope = sum(abs(c.slope) for c in comps if isinstance(c, RR))
+    if slope:
+        mean = slope * dt * plan.m_i / 2.0, slope * dt * plan.m_j / 2.0
+        terms = terms + 4.0 * mean[0] * mean[1] * gamma
+    sums = np.add.reduceat(plan.weight * terms, plan.starts)
+    n_coef = (n - 2 * m + 1).astype(float)
+    out = np.empty((m.size, m.size))
+    out[i_idx, j_idx] = out[j_idx, i_idx] = sums / (n_coef[i_idx] * n_coef[j_idx])
+    return out

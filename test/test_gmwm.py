@@ -1,0 +1,122 @@
+"""GMWM estimator: recovers known truths with honest intervals, its goodness of fit, robustness, bootstrap."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core.errors import InputError
+from imu_noise_id.core.estimation.gmwm import GmwmOptions, fit_gmwm
+from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.modelspec import parameter_labels
+
+DT = 0.01
+
+
+def _truth_inside(fit, truth) -> list[str]:
+    """Labels whose true value lies outside the fit's 95 % interval."""
+    out = []
+    for i, p, lab in parameter_labels(truth):
+        value = abs(truth[i].params()[p])
+        lo, hi = fit.ci95[lab]
+        if not lo <= value <= hi:
+            out.append(f"{lab}: {value:.4g} outside [{lo:.4g}, {hi:.4g}]")
+    return out
+
+
+@pytest.mark.parametrize("spec, truth, seed", [
+    ("WN+RW", [WN(1e-3), RW(5e-5)], 1),
+    ("WN+GM+RW", [WN(1e-3), GM(2.0, 5e-4), RW(6e-5)], 2),
+    ("WN+QN+RW", [WN(5e-4), QN(3e-5), RW(5e-5)], 5),
+    ("WN+RW+RR", [WN(1e-3), RW(3e-5), RR(1e-5)], 4),
+], ids=lambda v: v if isinstance(v, str) else "")
+def test_gmwm_recovers_known_truths(spec, truth, seed):
+    y = simulate_sum(truth, 300_000, DT, np.random.default_rng(seed))
+    fit = fit_gmwm(y, DT, spec)
+    assert fit.estimator == "gmwm" and fit.model == spec
+    assert not _truth_inside(fit, truth), _truth_inside(fit, truth)
+    assert fit.p_value > 0.01 and fit.dof == fit.wv.m.size - len(fit.covariance_labels)
+    assert math.isnan(fit.loglik) and fit.n == y.size and fit.record_length is not None
+    np.testing.assert_allclose(fit.theoretical_allan_variance(fit.wv.tau) / 2, fit.wv_model, rtol=1e-12)
+    # The white noise is determined to about ±1 % by 50 minutes of data.
+    lo, hi = fit.ci95["WN.noise_density"]
+    assert hi / lo < 1.05
+
+
+def test_gmwm_j_test_flags_a_wrong_model_and_names_the_scales():
+    """WN+RW fitted to WN+GM(τ 2 s) data: the J-test rejects, and the misfitting τ are around the GM's τ."""
+    truth = [WN(1e-3), GM(2.0, 1e-3), RW(1e-5)]
+    y = simulate_sum(truth, 200_000, DT, np.random.default_rng(7))
+    wrong = fit_gmwm(y, DT, "WN+RW")
+    right = fit_gmwm(y, DT, "WN+GM+RW")
+    assert wrong.p_value < 1e-6 < right.p_value
+    worst = wrong.wv.tau[np.argmax(np.abs(wrong.residual_z))]
+    assert 0.1 <= worst <= 40.0
+
+
+def test_robust_gmwm_keeps_its_clean_intervals_under_outliers():
+    truth = [WN(1e-3), RW(1e-4)]
+    rng = np.random.default_rng(12)
+    y = simulate_sum(truth, 200_000, DT, rng)
+    robust = GmwmOptions(robust=True)
+    clean = fit_gmwm(y, DT, "WN+RW", options=robust)
+    dirty = y.copy()
+    idx = rng.choice(y.size, size=y.size // 100, replace=False)  # 1 % outliers, 30 white-noise sd
+    dirty[idx] += rng.choice([-1, 1], idx.size) * 30 * 1e-3 / math.sqrt(DT)
+    plain = fit_gmwm(dirty, DT, "WN+RW")
+    rob = fit_gmwm(dirty, DT, "WN+RW", options=robust)
+    lo, hi = clean.ci95["WN.noise_density"]
+    assert not lo <= plain.components[0].noise_density <= hi  # the plain estimate breaks
+    assert lo <= rob.components[0].noise_density <= hi
+    lo, hi = clean.ci95["RW.random_walk"]
+    assert lo <= rob.components[1].random_walk <= hi
+
+
+def test_gmwm_bootstrap_intervals():
+    truth = [WN(1e-3), RW(1e-4)]
+    y = simulate_sum(truth, 20_000, DT, np.random.default_rng(2))
+    fit = fit_gmwm(y, DT, "WN+RW", options=GmwmOptions(bootstrap=30, seed=1))
+    assert all(m.startswith("parametric bootstrap") for m in fit.interval_method.values())
+    for c, lab in ((fit.components[0], "WN.noise_density"), (fit.components[1], "RW.random_walk")):
+        lo, hi = fit.ci95[lab]
+        assert lo < c.params()[lab.split(".")[1]] < hi
+
+
+def test_gmwm_refuses_what_it_cannot_fit():
+    y = simulate_sum([WN(1e-3)], 200, DT, np.random.default_rng(0))
+    with pytest.raises(InputError, match="too few"):
+        fit_gmwm(y, DT, "WN+2GM+RW")
+    with pytest.raises(InputError):
+        fit_gmwm(np.ones(5000), DT, "WN+RW")
+
+
+def test_wic_selects_the_true_structure_among_the_em_candidates():
+    from imu_noise_id.core.estimation.gmwm_select import full_structure, select_gmwm
+
+    assert full_structure(["WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM"]) == "WN+2GM+RW"
+    for truth, expected, seed in (([WN(1e-3), GM(2.0, 5e-4), RW(6e-5)], "WN+GM+RW", 3),
+                                  ([WN(1e-3), RW(5e-5)], "WN+RW", 4)):
+        y = simulate_sum(truth, 300_000, DT, np.random.default_rng(seed))
+        sel = select_gmwm(y, DT)
+        assert sel.best.model == expected, sel.table
+        assert sel.table[0]["model"] == expected and sel.table[0]["delta_wic"] == 0.0
+        assert sel.best.ci95 and all(not f.ci95 for m, f in sel.fits.items() if f is not sel.best)
+
+
+def test_pooled_fit_is_tighter_and_the_compatibility_test_separates_replicates():
+    from imu_noise_id.core.estimation.gmwm_pool import fit_pooled
+
+    truth = [WN(1e-3), GM(2.0, 5e-4), RW(6e-5)]
+    records = [(simulate_sum(truth, 150_000, DT, np.random.default_rng(s)), DT) for s in range(3)]
+    pooled = fit_pooled(records, "WN+GM+RW")
+    assert pooled.compatible and pooled.compatibility_dof == 2 * 4
+    assert not _truth_inside(pooled.fit, truth)
+    width = lambda f: np.log(f.ci95["RW.random_walk"][1] / f.ci95["RW.random_walk"][0])  # noqa: E731
+    assert width(pooled.fit) < min(width(r) for r in pooled.runs)
+    assert pooled.fit.n == 3 * 150_000
+    records[2] = (simulate_sum([WN(1e-3), GM(2.0, 5e-4), RW(2.5e-4)], 150_000, DT, np.random.default_rng(9)), DT)
+    assert not fit_pooled(records, "WN+GM+RW").compatible
+    with pytest.raises(InputError, match="two records"):
+        fit_pooled(records[:1], "WN+RW")
