@@ -452,7 +452,7 @@ def test_coarse_grid_posterior_is_resolved_below_one_cell():
             assert abs(e.theta[p] - ef.theta[p]) <= 0.5 * ef.theta_std[p]
             assert e.theta_std[p] == pytest.approx(ef.theta_std[p], rel=0.35)
     sharp = refine_hypothesis_set(
-        coarse, {"WN+RW": {"RW.random_walk": 0.3}, "WN+GM": {"GM.tau": 300.0, "GM.sigma": 1.0}},
+        coarse, {"WN+RW": {"RW.random_walk": 0.1}, "WN+GM": {"GM.tau": 300.0, "GM.sigma": 1.0}},
         {"WN+RW": {"RW.random_walk": 0.001}, "WN+GM": {"GM.tau": 5.0, "GM.sigma": 0.01}})
     for p in sharp.hypotheses[1].priors:
         if not p.known:
