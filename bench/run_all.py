@@ -49,11 +49,16 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_cmkf_paper.py"], "cmkf_paper.txt"),
     (["bench_cmkf_robot_sim.py"], "cmkf_robot_sim.txt"),
     (["bench_cmkf_data.py"], "cmkf_data.txt"),
+    (["bench_cmkf_intervals.py"], "cmkf_intervals.txt"),
     (["bench_node_husky.py"], "node_husky.txt"),
     (["loop_measured.py", "--samples", "100000", "--mtig-samples", "100000"], "loop_measured.txt"),
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
     (["bench_adis_analysis.py"], "adis_run1_analysis.txt"),
     (["bench_overbound.py"], "bench_overbound.txt"),
+    (["bench_gmwm_speed.py"], "bench_gmwm_speed.txt"),
+    (["bench_gmwm_accuracy.py"], "bench_gmwm_accuracy.txt"),
+    (["bench_gmwm_robust.py"], "bench_gmwm_robust.txt"),
+    (["bench_gmwm_pooled.py"], "bench_gmwm_pooled.txt"),
 ]
 
 
