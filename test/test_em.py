@@ -230,3 +230,20 @@ def test_covariance_from_information_survives_a_non_finite_row():
     info = np.array([[0.0, 2.8e294, 0.0], [2.8e294, 27.9, -17.4], [0.0, -17.4, 180.0]])
     cov, ok = covariance_from_information(info)
     assert not ok and cov[0, 0] == np.inf and np.allclose(cov[1:, 1:], np.linalg.inv(info[1:, 1:]))
+
+
+def test_repeated_gauss_markov_processes_are_labelled_fastest_first():
+    """Issue 12 (coverage bench, WN+2GM seed 1010): the search returned the slow GM as GM1, so GM1's interval was
+    the slow process's and every label of model.yaml named the other process. A start listing the slow GM first
+    must still give GM1 the shorter τ, with intervals, information and state space in the same order."""
+    truth = [WN(0.3), GM(tau=3.0, sigma=0.6), GM(tau=60.0, sigma=0.4)]
+    y = simulate_sum(truth, 3000, 1.0, np.random.default_rng(1010)) + 0.1
+    fit = fit_model(y, 1.0, "WN+2GM", init=[truth[0], truth[2], truth[1]], options=FitOptions(n_starts=1))
+    gms = [c for c in fit.components if isinstance(c, GM)]
+    assert gms[0].tau < gms[1].tau
+    assert [type(c).__name__ for c in ss.to_components(fit.statespace)] == ["WN", "GM", "GM"]
+    assert [c.tau for c in ss.to_components(fit.statespace)[1:]] == pytest.approx([g.tau for g in gms])
+    for k, gm in enumerate(gms, start=1):
+        lo, hi = fit.ci95[f"GM{k}.tau"]
+        assert lo <= gm.tau <= hi
+    assert fit.loglik == pytest.approx(kalman.loglik(fit.statespace, *fit.record).loglik, abs=1e-6)

@@ -37,8 +37,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..kalman import statespace as ss
-from ..noise.components import COMPONENT_TYPES, GM, RR, Component, simulate_sum
-from ..noise.modelspec import CANONICAL_ORDER, model_name
+from ..noise.components import COMPONENT_TYPES, RR, Component, simulate_sum
+from ..noise.modelspec import CANONICAL_ORDER, gauss_markov_fastest_first, model_name
 from ..quality import interpolate_missing
 from ..wavelet.robust import DEFAULT_EFFICIENCY
 from ..wavelet.variance import DEFAULT_MAX_FRACTION, WaveletVariance, wavelet_variance
@@ -104,7 +104,7 @@ class GmwmFit(FitResult):
 def canonical_order(components: list[Component]) -> list[Component]:
     """Components in canonical order, Gauss–Markov processes by increasing τ (GM1 the fastest)."""
     rank = {n: i for i, n in enumerate(CANONICAL_ORDER)}
-    return sorted(components, key=lambda c: (rank.get(c.name, 99), c.tau if isinstance(c, GM) else 0.0))
+    return gauss_markov_fastest_first(sorted(components, key=lambda c: rank.get(c.name, 99)))
 
 
 def _with_ramp_start(components: list[Component], wv: WaveletVariance) -> list[Component]:

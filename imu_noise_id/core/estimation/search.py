@@ -22,7 +22,7 @@ from .. import kalman
 from ..errors import InputError
 from ..kalman import statespace as ss
 from ..noise.components import RR, Component
-from ..noise.modelspec import model_name, parameter_labels
+from ..noise.modelspec import gauss_markov_fastest_first, model_name, parameter_labels
 from ..quality import interpolate_missing
 from . import em, mle, whittle
 from .results import FitResult
@@ -144,13 +144,28 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
     return result
 
 
+def _fastest_first(model: NoiseModel, fitted: ss.StateSpace) -> ss.StateSpace:
+    """``fitted`` with its Gauss–Markov blocks by increasing τ (:func:`.modelspec.gauss_markov_fastest_first`), so
+    that the labels GM1, GM2 … of the result, its intervals and its information name the same process on every
+    record (the likelihood is symmetric in their order; beyond paper 000, which fits one GM). The same model:
+    the blocks are rebuilt from the components, the mean parameters copied."""
+    comps = ss.to_components(fitted)
+    ordered = gauss_markov_fastest_first(comps)
+    if all(a is b for a, b in zip(comps, ordered, strict=True)):
+        return fitted
+    out = model.statespace(ordered)
+    out.b, out.b_free = fitted.b.copy(), fitted.b_free.copy()
+    return out
+
+
 def _result(model: NoiseModel, best: tuple[mle.MLEResult, int], lls: list[float], fill_first: bool) -> FitResult:
     """The :class:`FitResult` of the search's best (MLE result, EM iterations), without intervals."""
     res, n_iter = best
-    comps = ss.to_components(res.model)
+    fitted = _fastest_first(model, res.model)
+    comps = ss.to_components(fitted)
     # The search's own profile at the optimum unless it ran on the gap-filled record.
-    prof = res.profile if res.profile is not None and not fill_first else kalman.loglik(res.model, model.y, model.z)
-    exog_coef = _mean_parameters(model, res.model, prof, comps)
+    prof = res.profile if res.profile is not None and not fill_first else kalman.loglik(fitted, model.y, model.z)
+    exog_coef = _mean_parameters(model, fitted, prof, comps)
     se: dict[str, float] = {}
     ci: dict[str, tuple[float, float]] = {}
     if "ramp" in exog_coef:
@@ -164,6 +179,6 @@ def _result(model: NoiseModel, best: tuple[mle.MLEResult, int], lls: list[float]
     return FitResult(
         model=model_name(comps), components=comps, exog_coef=exog_coef, se=se, ci95=ci, loglik=ll,
         aic=2 * k - 2 * ll, bic=k * math.log(model.n_obs) - 2 * ll, n=model.n_obs, dt=model.dt, n_iter=n_iter,
-        converged=res.converged, n_eval=res.n_eval, n_params=k, starts=lls, statespace=res.model,
+        converged=res.converged, n_eval=res.n_eval, n_params=k, starts=lls, statespace=fitted,
         record=(model.y, model.z),
     )

@@ -29,6 +29,17 @@ from .components import COMPONENT_TYPES, Component
 #: Order in which components are listed in canonical model names.
 CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "MA", "QN", "BI", "GM", "OSC", "RW", "RR")
 
+
+def gauss_markov_fastest_first(components: list[Component]) -> list[Component]:
+    """``components`` with the Gauss–Markov processes, in the places they hold, by increasing τ (GM1 the fastest).
+
+    A likelihood is symmetric in the order of like components (label switching): the labels ``GM1``, ``GM2`` … of
+    a fit name the same process whatever order its search found them in only once they are ordered.
+    """
+    gms = iter(sorted((c for c in components if c.name == "GM"), key=lambda c: c.params()["tau"]))
+    return [next(gms) if c.name == "GM" else c for c in components]
+
+
 _TERM = re.compile(r"^(?P<count>\d+)?(?P<name>[A-Za-z]+)(?:\((?P<args>[^()]*)\))?$")
 
 
