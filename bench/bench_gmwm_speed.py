@@ -9,7 +9,9 @@ Run:  nice -n 10 python bench/bench_gmwm_speed.py [--n 10000000] [--axes 6]
    J ≈ log₂N, not with N).
 2. ``--axes`` axes of ``--n`` samples at 1 kHz (2.8 h at 10⁷), each WN+GM+RW: the GMWM fit (WV pass, two-step fit,
    intervals) and the EM fit (``fit_model``, default options: 3 starts, EM + quasi-Newton, intervals) of the same
-   structure on the same samples, axis by axis; wall and CPU seconds and their ratio.
+   structure on the same samples, axis by axis; wall and CPU seconds and their ratio. An EM fit still running after
+   ``--em-budget`` seconds of wall time is stopped: its time and the ratio are then printed as lower bounds (">"),
+   its N and K as "—" (on 10⁷ samples the EM's profile-likelihood intervals alone ran for more than an hour).
 3. The EM's model selection (``select_model``, the default candidates) on 10⁶ samples of one axis: its CPU per sample
    and the record length per axis beyond which the default analyze (selection on 6 axes, the loop roughly doubling
    it, issue 10's measurement) would take more than ten minutes of CPU on this machine.
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import resource
+import signal
 import time
 
 import numpy as np
@@ -69,25 +72,47 @@ def linear_pass() -> None:
         del y
 
 
-def side_by_side(n: int, n_axes: int) -> None:
+class OverBudget(Exception):
+    """The EM fit ran past its wall-time budget."""
+
+
+def _over_budget(signum: int, frame: object) -> None:
+    raise OverBudget
+
+
+def side_by_side(n: int, n_axes: int, budget: float) -> None:
     print(f"\n== 2. {n_axes} axes x {n} samples at {1 / DT:g} Hz ({n * DT / 3600:.2f} h), WN+GM+RW: GMWM vs EM ==")
     print(f"{'axis':8} {'GMWM wall':>9} {'CPU':>7} {'EM wall':>9} {'CPU':>7} {'wall ratio':>10}  N_gmwm/N_em "
           "K_gmwm/K_em")
     totals = np.zeros(4)
+    any_stopped = False
     for k, (axis, truth) in enumerate(list(AXES.items())[:n_axes]):
         y = simulate_sum(truth, n, DT, np.random.default_rng(100 + k))
         with Clock() as cg:
             g = fit_gmwm(y, DT, "WN+GM+RW")
-        with Clock() as ce:
-            e = fit_model(y, DT, "WN+GM+RW")
+        signal.signal(signal.SIGALRM, _over_budget)
+        signal.setitimer(signal.ITIMER_REAL, budget)
+        e, stopped = None, False
+        try:
+            with Clock() as ce:
+                e = fit_model(y, DT, "WN+GM+RW")
+        except OverBudget:
+            stopped = True
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
         totals += (cg.wall, cg.cpu, ce.wall, ce.cpu)
-        ratio_n = g.components[0].noise_density / e.components[0].noise_density
-        ratio_k = g.components[2].random_walk / e.components[2].random_walk
-        print(f"{axis:8} {cg.wall:9.1f} {cg.cpu:7.1f} {ce.wall:9.1f} {ce.cpu:7.1f} {ce.wall / cg.wall:9.1f}x  "
-              f"{ratio_n:10.4f} {ratio_k:10.3f}   (peak RSS so far {peak_mib():.0f} MiB)", flush=True)
+        bound = ">" if stopped else " "
+        ratios = ("         —          —" if e is None else
+                  f"{g.components[0].noise_density / e.components[0].noise_density:10.4f} "
+                  f"{g.components[2].random_walk / e.components[2].random_walk:10.3f}")
+        print(f"{axis:8} {cg.wall:9.1f} {cg.cpu:7.1f} {bound}{ce.wall:8.1f} {ce.cpu:7.1f} "
+              f"{bound}{ce.wall / cg.wall:8.1f}x  {ratios}   (peak RSS so far {peak_mib():.0f} MiB)", flush=True)
+        any_stopped = any_stopped or stopped
         del y
-    print(f"{'total':8} {totals[0]:9.1f} {totals[1]:7.1f} {totals[2]:9.1f} {totals[3]:7.1f} "
-          f"{totals[2] / totals[0]:9.1f}x  (CPU ratio {totals[3] / totals[1]:.1f}x)")
+    bound = ">" if any_stopped else " "
+    print(f"{'total':8} {totals[0]:9.1f} {totals[1]:7.1f} {bound}{totals[2]:8.1f} {totals[3]:7.1f} "
+          f"{bound}{totals[2] / totals[0]:8.1f}x  (CPU ratio {bound}{totals[3] / totals[1]:.1f}x)"
+          + (f"; '>': the EM stopped at its {budget:g} s budget" if any_stopped else ""))
 
 
 def em_threshold() -> None:
@@ -127,14 +152,19 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--n", type=int, default=10**7)
     ap.add_argument("--axes", type=int, default=6)
+    ap.add_argument("--em-budget", type=float, default=300.0, help="wall seconds allowed to each EM fit of part 2")
+    ap.add_argument("--skip", nargs="*", type=int, default=[], help="parts not to run (3, 4: the EM-only parts)")
     args = ap.parse_args()
     t0 = time.perf_counter()
-    print(f"# bench_gmwm_speed.py --n {args.n} --axes {args.axes}; shared 2-core machine (other agents' load: the "
-          "ratios are side by side in one process, the absolute seconds are not)")
+    print(f"# bench_gmwm_speed.py --n {args.n} --axes {args.axes} --em-budget {args.em_budget:g}"
+          f"{' --skip ' + ' '.join(map(str, args.skip)) if args.skip else ''}; shared 2-core machine (other agents' "
+          "load: the ratios are side by side in one process, the absolute seconds are not)")
     linear_pass()
-    side_by_side(args.n, args.axes)
-    em_threshold()
-    gmwm_start()
+    side_by_side(args.n, args.axes, args.em_budget)
+    if 3 not in args.skip:
+        em_threshold()
+    if 4 not in args.skip:
+        gmwm_start()
     print(f"# total {time.perf_counter() - t0:.0f} s, peak RSS {peak_mib():.0f} MiB")
 
 
