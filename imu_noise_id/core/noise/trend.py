@@ -1,0 +1,102 @@
+"""The least-squares slope of a record and its exact variance under a noise model (beyond papers 000/002).
+
+The slope ω̂ = Σ w_i y_i of the least-squares line through y_0 … y_{N−1} (sampled at i·dt) has
+w_i = (i − ī)/(dt·S), ī = (N−1)/2, S = Σ(i − ī)² = N(N² − 1)/12. Written on the partial sums x_k = y_0 + … + y_{k−1}
+(k = 0 … N), ω̂ = Σ_k c_k x_k with c_k = w_{k−1} − w_k = α·(ī, −1, …, −1, ī), α = 1/(dt·S). The filter c
+annihilates polynomials of degree ≤ 1 in k (Σc_k = Σ k·c_k = 0), so for a sum of independent components with
+generalised covariances K(u) of their partial sums (:meth:`~.base.Component.sum_covariance`, defined up to an
+even quadratic that c cancels)
+
+    Var ω̂ = Σ_a Σ_b c_a c_b K(b − a) = Σ_{h=−N}^{N} C(h) K(h),     C(h) = Σ_a c_a c_{a+h},
+
+and C has a closed form: C(0) = α²(2ī² + N − 1), C(±h) = −α²·h for 1 ≤ h ≤ N − 1, C(±N) = α²·ī². Hence
+
+    Var ω̂ = α² [ (2ī² + N − 1)·K(0) − 2 Σ_{h=1}^{N−1} h·K(h) + 2 ī²·K(N) ],          (1)
+
+exact for the sampled components (white noise gives σ²/(dt²·S), the textbook value). The ramp itself (RR) is
+deterministic and adds nothing. The sum Σ h·K(h) is in closed form for WN (K = −σ²h/2), QN (K = −Q²/dt², h ≠ 0),
+RW (K = q(h³ − h)/12) and GM (K = −½σ²(h + 2g(h)), g(h) = φ(h(1 − φ) − 1 + φ^h)/(1 − φ)², φ = e^(−dt/τ), with
+Σ_{h≤M} h·φ^h = φ(1 − (M+1)φ^M + Mφ^(M+1))/(1 − φ)²), so that a fit can evaluate eq. (1) at every step on records of
+any length; other components (and a GM whose τ exceeds five records) are summed lag by lag, O(N).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import units
+from .base import Component
+
+#: Lags evaluated per chunk in eq. (1) (bounds the memory on records of 10⁷ samples and more).
+CHUNK = 1 << 20
+
+
+def ls_slope(y: np.ndarray, dt: float) -> float:
+    """Slope [u/s] of the least-squares line through the finite samples y (at times i·dt)."""
+    i = np.flatnonzero(np.isfinite(y)).astype(float)
+    if i.size < 2:
+        return 0.0
+    centred = i - i.mean()
+    return float(centred @ (y[i.astype(int)] - np.mean(y[i.astype(int)])) / (centred @ centred) / dt)
+
+
+def _power_sums(m: int) -> tuple[float, float, float]:
+    """Σ_{h=1}^{m} h, h², h⁴."""
+    s1 = m * (m + 1) / 2.0
+    s2 = m * (m + 1) * (2 * m + 1) / 6.0
+    s4 = m * (m + 1) * (2 * m + 1) * (3.0 * m * m + 3 * m - 1) / 30.0
+    return s1, s2, s4
+
+
+def _closed_form(comp: Component, n: int, dt: float) -> tuple[float, float] | None:
+    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one component in closed form, or None (module docstring)."""
+    m = n - 1
+    s1, s2, s4 = _power_sums(m)
+    p = comp.params()
+    if comp.name == "WN":
+        sigma2 = units.white_noise_sigma2(p["noise_density"], dt)
+        return -0.5 * sigma2 * s2, -0.5 * sigma2 * n
+    if comp.name == "QN":
+        c = units.quantization_sigma2(p["Q"], dt)
+        return -c * s1, -c
+    if comp.name == "RW":
+        q = units.random_walk_sigma2(p["random_walk"], dt)
+        return q * (s4 - s2) / 12.0, q * (float(n) ** 3 - n) / 12.0
+    if comp.name == "GM":
+        one_minus = -math.expm1(-dt / p["tau"])
+        if m * one_minus < 0.2:  # τ beyond ~5 records: the closed form cancels badly there
+            return None
+        phi = 1.0 - one_minus
+        sum_h_phi = phi * (1.0 - (m + 1) * phi**m + m * phi ** (m + 1)) / one_minus**2
+        sum_h_g = phi / one_minus**2 * (one_minus * s2 - s1 + sum_h_phi)
+        g_n = phi * (n * one_minus - 1.0 + phi**n) / one_minus**2
+        sigma2 = p["sigma"] ** 2
+        return -0.5 * sigma2 * (s2 + 2.0 * sum_h_g), -0.5 * sigma2 * (n + 2.0 * g_n)
+    return None
+
+
+def _lag_sums(comp: Component, n: int, dt: float) -> tuple[float, float]:
+    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one component, lag by lag."""
+    total = 0.0
+    for start in range(1, n, CHUNK):
+        h = np.arange(start, min(start + CHUNK, n), dtype=float)
+        total += float(h @ comp.sum_covariance(h, dt))
+    return total, float(comp.sum_covariance(np.array([float(n)]), dt)[0])
+
+
+def ls_slope_variance(components: list[Component], n: int, dt: float) -> float:
+    """Var ω̂ [(u/s)²] of the least-squares slope of n samples at period dt [s] of the sum of ``components`` (eq. 1)."""
+    if n < 2:
+        return math.inf
+    mid = 0.5 * (n - 1)
+    alpha = 12.0 / (dt * n * (n * n - 1.0))
+    total = 0.0
+    for comp in components:
+        if comp.name == "RR":
+            continue
+        sum_hk, k_n = _closed_form(comp, n, dt) or _lag_sums(comp, n, dt)
+        k_0 = float(comp.sum_covariance(np.zeros(1), dt)[0])
+        total += (2.0 * mid * mid + n - 1.0) * k_0 - 2.0 * sum_hk + 2.0 * mid * mid * k_n
+    return max(alpha * alpha * total, 0.0)
