@@ -11,8 +11,10 @@ Per parameter, with 95 % intervals (lo, hi) turned into log-scale standard devia
     z = ln(θ_GMWM / θ_EM) / √(s_EM² + s_GMWM²),   agree when |z| ≤ 1.96
 
 (conservative: the two estimates come from the same data and are positively correlated, so a real difference is
-flagged less often than 5 % + power suggests). Parameters without a finite interval on either side are
-"undetermined". When the two chose different structures, the Kalibr numbers N and K (:mod:`.kalibr`) are compared.
+flagged less often than 5 % + power suggests). A ramp's slope has a sign and may be 0: it is compared on the linear
+scale, z = (ω_GMWM − ω_EM)/√(s_EM² + s_GMWM²) with s = (hi − lo)/(2·1.96). Parameters without a finite interval
+on either side are "undetermined". When the two chose different structures, the Kalibr numbers N and K
+(:mod:`.kalibr`) are compared.
 """
 
 from __future__ import annotations
@@ -79,6 +81,16 @@ def _log_sd(ci: tuple[float, float]) -> float:
     return math.log(hi / lo) / (2.0 * Z95)
 
 
+def _linear_row(quantity: str, em: float, em_ci, gm: float, gm_ci) -> Agreement:
+    em_ci, gm_ci = tuple(em_ci), tuple(gm_ci)
+    sd = math.hypot(em_ci[1] - em_ci[0], gm_ci[1] - gm_ci[0]) / (2.0 * Z95)
+    if not (math.isfinite(sd) and sd > 0):
+        return Agreement(quantity, em, em_ci, gm, gm_ci, gm / em if em else math.nan, math.nan, "undetermined")
+    z = (gm - em) / sd
+    return Agreement(quantity, em, em_ci, gm, gm_ci, gm / em if em else math.nan, z,
+                     "agree" if abs(z) <= Z95 else "differ")
+
+
 def _row(quantity: str, em: float, em_ci, gm: float, gm_ci) -> Agreement:
     em_ci, gm_ci = tuple(em_ci), tuple(gm_ci)
     sd = math.hypot(_log_sd(em_ci), _log_sd(gm_ci))
@@ -89,8 +101,9 @@ def _row(quantity: str, em: float, em_ci, gm: float, gm_ci) -> Agreement:
 
 
 def _keyed(fit: FitResult) -> dict[tuple[str, int, str], tuple[str, float, tuple[float, float]]]:
-    """(type, rank, parameter) → (label, |value|, |interval|): components of a type ranked by GM τ (or order), so that
-    two fits whose GMs are listed in different orders are matched by correlation time."""
+    """(type, rank, parameter) → (label, value, interval), magnitudes but for the ramp's signed slope: components of
+    a type ranked by GM τ (or order), so that two fits whose GMs are listed in different orders are matched by
+    correlation time."""
     ranked: dict[int, int] = {}
     for name in {c.name for c in fit.components}:
         same = [i for i, c in enumerate(fit.components) if c.name == name]
@@ -100,8 +113,10 @@ def _keyed(fit: FitResult) -> dict[tuple[str, int, str], tuple[str, float, tuple
     for i, p, label in parameter_labels(list(fit.components)):
         if label in fit.ci95:
             lo, hi = fit.ci95[label]
-            out[(fit.components[i].name, ranked[i], p)] = (label, abs(fit.components[i].params()[p]),
-                                                           (min(abs(lo), abs(hi)), max(abs(lo), abs(hi))))
+            value = fit.components[i].params()[p]
+            if fit.components[i].name != "RR":
+                value, lo, hi = abs(value), min(abs(lo), abs(hi)), max(abs(lo), abs(hi))
+            out[(fit.components[i].name, ranked[i], p)] = (label, value, (lo, hi))
     return out
 
 
@@ -113,7 +128,7 @@ def compare(em: FitResult, gmwm: FitResult) -> Comparison:
         for key, (label, g_val, g_ci) in theirs.items():
             if key in mine:
                 _, e_val, e_ci = mine[key]
-                rows.append(_row(label, e_val, e_ci, g_val, g_ci))
+                rows.append((_linear_row if key[0] == "RR" else _row)(label, e_val, e_ci, g_val, g_ci))
     else:
         for name, getter in (("N (Kalibr noise density)", kalibr.noise_density),
                              ("K (Kalibr random walk)", kalibr.random_walk)):

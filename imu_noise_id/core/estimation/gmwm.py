@@ -24,8 +24,12 @@ What is done, step by step (beyond the paper where said):
 
 The result is a :class:`~.results.FitResult` (``estimator = "gmwm"``, no likelihood: ``loglik``, ``aic``, ``bic``
 are NaN) with the GMWM's own numbers in :class:`GmwmFit`; ``model.yaml``, ``imu.yaml`` and the final-model code read
-it like an EM fit. An RR's slope enters the WV squared: its magnitude is fitted, its sign taken from the record's
-least-squares line.
+it like an EM fit.
+
+The ramp (beyond the paper). An RR's slope enters the WV squared, where it trades with a random walk at the longest
+few scales: the WV fit keeps it as a nuisance (so that the other components are not pulled by the trend), and the
+slope reported, signed, with its interval, comes from the WV moments joined with the record's least-squares slope
+(:mod:`.gmwm_ramp`).
 """
 
 from __future__ import annotations
@@ -39,10 +43,12 @@ from ..errors import InputError
 from ..kalman import statespace as ss
 from ..noise.components import COMPONENT_TYPES, RR, Component, simulate_sum
 from ..noise.modelspec import CANONICAL_ORDER, gauss_markov_fastest_first, model_name
+from ..noise.trend import ls_slope
 from ..quality import interpolate_missing
 from ..wavelet.robust import DEFAULT_EFFICIENCY
 from ..wavelet.variance import DEFAULT_MAX_FRACTION, WaveletVariance, wavelet_variance
 from . import gmwm_engine as eng
+from .gmwm_ramp import fit_ramp
 from .model import check_signal, parse_structure_or_components
 from .results import FitResult
 from .starts import fit_allan
@@ -185,11 +191,16 @@ def intervals(est: Estimate) -> tuple[dict[str, float], dict[str, tuple[float, f
     return se, ci, how
 
 
-def _bootstrap(est: Estimate, options: GmwmOptions, slope_sign: float) -> dict[str, np.ndarray]:
+def _with_slope(components: list[Component], slope: float | None) -> list[Component]:
+    """The components with the RR's slope set to the least-squares one (when known)."""
+    return [RR(slope) if isinstance(c, RR) and slope is not None else c for c in components]
+
+
+def _bootstrap(est: Estimate, options: GmwmOptions, slope: float | None) -> dict[str, np.ndarray]:
     """Parametric bootstrap of the log-parameters: records simulated from θ̂, their WV refitted with Ω₂."""
     run = est.problem.runs[0].wv
     rng = np.random.default_rng(options.seed)
-    comps = [RR(slope_sign * c.slope) if isinstance(c, RR) else c for c in est.components]
+    comps = _with_slope(est.components, slope)
     draws = []
     for _ in range(options.bootstrap):
         y = simulate_sum(comps, run.n, run.dt, rng)
@@ -199,20 +210,23 @@ def _bootstrap(est: Estimate, options: GmwmOptions, slope_sign: float) -> dict[s
     return {lab: np.exp(np.array(draws)[:, k]) for k, lab in enumerate(est.problem.par.labels)}
 
 
-def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope_sign: float = 1.0,
+def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope: float | None = None,
           uncertainty: bool = True) -> GmwmFit:
     """The :class:`GmwmFit` of an :class:`Estimate` (intervals, bootstrap and advice unless ``uncertainty`` is
-    False, e.g. for the candidates a selection does not keep)."""
+    False, e.g. for the candidates a selection does not keep). ``slope``: the record's least-squares slope [u/s],
+    reported for an RR with its variance under the fitted noise (module docstring); None keeps the WV's |ω|."""
     se, ci, how = intervals(est) if uncertainty else ({}, {}, {})
     if options.bootstrap and uncertainty:
-        for lab, values in _bootstrap(est, options, slope_sign).items():
+        for lab, values in _bootstrap(est, options, slope).items():
             ci[lab] = tuple(float(v) for v in np.quantile(values, [0.025, 0.975]))
             se[lab] = float(np.std(values, ddof=1))
             how[lab] = f"parametric bootstrap ({options.bootstrap} records)"
-    comps = [RR(slope_sign * c.slope) if isinstance(c, RR) else c for c in est.components]
-    for lab in list(ci):
-        if lab.startswith("RR") and slope_sign < 0:
-            ci[lab] = (-ci[lab][1], -ci[lab][0])
+    rr_lab = next((lab for lab in est.problem.par.labels if lab.startswith("RR")), None)
+    if rr_lab is not None and slope is not None and uncertainty:
+        ramp = fit_ramp(est.problem, est.best.theta, slope, n, dt)
+        slope, se[rr_lab], ci[rr_lab] = ramp.slope, ramp.se, ramp.ci95
+        how[rr_lab] = "profile of the WV moments joined with the least-squares slope (chi2_1)"
+    comps = _with_slope(est.components, slope)
     cov = est.inference.covariance
     labels = list(est.problem.par.labels)
     run = est.problem.runs[0]
@@ -230,13 +244,12 @@ def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope_sign:
 
 
 def prepare(y: np.ndarray, dt: float, options: GmwmOptions) -> tuple[WaveletVariance, float]:
-    """The WV of a record (gaps filled first) and the sign of its least-squares slope."""
-    y = interpolate_missing(check_signal(y, dt))
-    wv = wavelet_variance(y, dt, robust=options.robust, efficiency=options.efficiency,
+    """The WV of a record (gaps filled first) and its least-squares slope [u/s] (of the samples observed)."""
+    y = check_signal(y, dt)
+    slope = ls_slope(y, dt)
+    wv = wavelet_variance(interpolate_missing(y), dt, robust=options.robust, efficiency=options.efficiency,
                           max_fraction=options.max_fraction)
-    t = np.arange(y.size, dtype=float)
-    slope = float(np.polyfit(t, y, 1)[0]) if y.size > 2 else 0.0
-    return wv, (-1.0 if slope < 0 else 1.0)
+    return wv, slope
 
 
 def estimate_structure(wv: WaveletVariance, structure: str | list[Component], *, options: GmwmOptions,
@@ -256,7 +269,7 @@ def estimate_structure(wv: WaveletVariance, structure: str | list[Component], *,
 
 def fit_gmwm(y: np.ndarray | None, dt: float, structure: str | list[Component], *,
              options: GmwmOptions | None = None, init: list[Component] | None = None,
-             wv: WaveletVariance | None = None, slope_sign: float = 1.0) -> GmwmFit:
+             wv: WaveletVariance | None = None, slope: float | None = None) -> GmwmFit:
     """GMWM fit of one structure to one axis (module docstring).
 
     Parameters
@@ -264,7 +277,8 @@ def fit_gmwm(y: np.ndarray | None, dt: float, structure: str | list[Component], 
     y : samples [u] at period ``dt`` [s] (NaN = missing, filled by interpolation), or None when ``wv`` is given
     structure : ``'WN+GM+RW'``, a spec with values or components (then used as the start)
     init : starting components (instead of the Allan-variance starts)
-    wv : the record's WV when the caller has it (``y`` is then not read); ``slope_sign`` then gives the RR's sign
+    wv : the record's WV when the caller has it (``y`` is then not read); ``slope`` then gives its least-squares
+        slope [u/s] (:func:`prepare`), reported for an RR
 
     Raises
     ------
@@ -275,6 +289,6 @@ def fit_gmwm(y: np.ndarray | None, dt: float, structure: str | list[Component], 
     if wv is None:
         if y is None:
             raise InputError("fit_gmwm needs the samples y or their wavelet variance wv")
-        wv, slope_sign = prepare(y, dt, options)
+        wv, slope = prepare(y, dt, options)
     est = estimate_structure(wv, structure, options=options, init=init)
-    return dress(est, n=wv.n, dt=wv.dt, options=options, slope_sign=slope_sign)
+    return dress(est, n=wv.n, dt=wv.dt, options=options, slope=slope)

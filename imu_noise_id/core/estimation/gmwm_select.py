@@ -51,12 +51,13 @@ def full_structure(candidates: list[str]) -> str:
 
 def select_gmwm(y, dt: float, candidates: list[str] | None = None, *, options: GmwmOptions | None = None,
                 allan: AllanResult | None = None, wv: WaveletVariance | None = None,
-                slope_sign: float = 1.0) -> GmwmSelection:
+                slope: float | None = None) -> GmwmSelection:
     """Fit every candidate by GMWM and rank them by WIC (module docstring). ``allan``: the record's AV (one column)
-    for the candidate list when the caller has it; ``wv`` (with ``slope_sign``): the record's WV (``y`` unused)."""
+    for the candidate list when the caller has it; ``wv`` (with ``slope``, its least-squares slope): the record's
+    WV (``y`` unused)."""
     options = options or GmwmOptions()
     if wv is None:
-        wv, slope_sign = prepare(y, dt, options)
+        wv, slope = prepare(y, dt, options)
     cands = list(candidates) if candidates else suggest_candidates(allan if allan is not None else wv.as_allan())
     ests: dict[str, Estimate] = {}
     errors: dict[str, str] = {}
@@ -80,7 +81,7 @@ def select_gmwm(y, dt: float, candidates: list[str] | None = None, *, options: G
         best = problem.minimise(est.best.theta)
         wic[spec] = best.objective + eng.infer(problem, best, list(weights.covariance)).optimism
     best_spec = min(wic, key=wic.get)
-    fits = {spec: dress(est, n=wv.n, dt=wv.dt, options=options, slope_sign=slope_sign,
+    fits = {spec: dress(est, n=wv.n, dt=wv.dt, options=options, slope=slope,
                         uncertainty=spec == best_spec) for spec, est in ests.items()}
     low = wic[best_spec]
     table = [{"model": fits[s].model, "k": fits[s].n_params, "wic": wic[s], "delta_wic": wic[s] - low,

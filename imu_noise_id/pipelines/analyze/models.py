@@ -92,11 +92,11 @@ class ModelStage:
 
 
 def _gmwm_axis(y, dt: float, stage: ModelStage, allan: AllanResult | None) -> tuple[GmwmFit, GmwmSelection | None]:
-    wv, sign = prepare(y, dt, stage.gmwm)
+    wv, slope = prepare(y, dt, stage.gmwm)
     if stage.model == AUTO:
-        sel = select_gmwm(None, dt, options=stage.gmwm, allan=allan, wv=wv, slope_sign=sign)
+        sel = select_gmwm(None, dt, options=stage.gmwm, allan=allan, wv=wv, slope=slope)
         return sel.best, sel
-    return fit_gmwm(None, dt, stage.model, options=stage.gmwm, wv=wv, slope_sign=sign), None
+    return fit_gmwm(None, dt, stage.model, options=stage.gmwm, wv=wv, slope=slope), None
 
 
 def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: AllanResult | None = None) -> AxisModel:
