@@ -106,3 +106,17 @@ def test_batch_command_writes_the_fleet_table_and_report(bags, tmp_path, capsys)
     printed = capsys.readouterr().out
     assert "3 of 3 units done" in printed and "3/3 units (0 failed, 0 unchanged and skipped, 0 running" in printed
     assert main(["batch", str(tmp_path / "nothing*"), "--out", str(out)]) == 2
+
+
+def test_batch_passes_rate_to_every_unit_and_refuses_a_bad_one(bags, tmp_path):
+    """``--rate`` as for analyze (the driver's declared rate when the stamps cannot give it), checked before any
+    cluster starts."""
+    from imu_noise_id.batch.unit import run_unit
+
+    unit = discover_units([str(bags / "imu0*")], None)[0]
+    outcome = run_unit(unit, {**OPTIONS, "rate": 100.0}, str(tmp_path))
+    assert outcome.status == "ok", outcome.error
+    doc = yaml.safe_load((tmp_path / unit.name / "imu.yaml").read_text())
+    assert doc["update_rate"] == 100.0 and "declared (--rate)" in doc["update_rate_source"]
+    assert main(["batch", str(bags / "imu0*"), "--out", str(tmp_path / "bad"), "--rate", "-5"]) == 2
+    assert not (tmp_path / "bad").exists()

@@ -120,7 +120,7 @@ def run_unit(unit: Unit, options: dict, out_root: str) -> UnitOutcome:
     key = ""
     try:
         key = content_hash(unit, options)
-        recording = read_static(unit.bag, topic=unit.topic)
+        recording = read_static(unit.bag, topic=unit.topic, rate_hz=options.get("rate"))
         result = analyze(recording.imu, recording.temperature, analysis_options(options))
         tmp = out / f".{unit.name}.tmp-{uuid.uuid4().hex[:8]}"
         meta = {"source": str(unit.bag), "topic": recording.imu.topic, "command": "batch",

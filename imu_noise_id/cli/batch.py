@@ -7,9 +7,11 @@ Parses the options and calls :mod:`imu_noise_id.batch` (units, a local or remote
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
+from . import add_rate_option
 from .options import add_out, add_topic, model_spec
 
 
@@ -42,6 +44,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--no-loop", action="store_true", help="skip the closed loop (as for analyze)")
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade (default: 8)")
     p.add_argument("--allow-motion", action="store_true", help="analyse even if the static check finds motion")
+    add_rate_option(p)
     p.set_defaults(run=run)
 
 
@@ -74,10 +77,14 @@ def run(args: argparse.Namespace) -> int:
 
     if args.workers < 1:
         raise InputError(f"--workers must be >= 1, got {args.workers}")
+    if args.rate is not None and not (math.isfinite(args.rate) and args.rate > 0):
+        raise InputError(f"--rate must be a positive number of Hz, got {args.rate}")
     spec = _spec(args.spec)
     units = discover_units(list(args.inputs), list(args.topic), args.manifest)
     options = {"model": args.model, "loop": not args.no_loop, "per_decade": args.per_decade,
                "allow_motion": args.allow_motion}
+    if args.rate is not None:  # only when given: the content hashes of earlier runs without it stay valid
+        options["rate"] = args.rate
     where = args.scheduler or f"a local cluster of {args.workers} workers on 127.0.0.1"
     print(f"{len(units)} units on {where}", flush=True)
 
