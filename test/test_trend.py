@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.components import GM, LPF, MA, OSC, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.noise.trend import ls_slope, ls_slope_variance
 
 N, DT = 300, 0.5
@@ -36,3 +36,17 @@ def test_ls_slope_skips_missing_samples():
     y = 3.0 + 0.25 * DT * IDX
     y[[5, 6, 100]] = np.nan
     assert ls_slope(y, DT) == pytest.approx(0.25)
+
+
+@pytest.mark.parametrize("component", [LPF(noise_density=2e-3, cutoff=15.0),
+                                       OSC(frequency=7.0, bandwidth=0.3, sigma=0.01), MA(1e-3)],
+                         ids=lambda c: c.name)
+def test_slope_variance_tail_in_closed_form_equals_the_full_lag_sum(component):
+    n, dt = 200_000, 0.01
+    lags = np.arange(1, n, dtype=float)
+    full = float(lags @ component.sum_covariance(lags, dt))
+    k_n = float(component.sum_covariance(np.array([float(n)]), dt)[0])
+    mid, alpha = 0.5 * (n - 1), 12.0 / (dt * n * (n * n - 1.0))
+    exact = alpha**2 * (-2.0 * full + 2.0 * mid * mid * k_n)  # K(0) = 0 for these components
+    assert float(component.sum_covariance(np.zeros(1), dt)[0]) == 0.0
+    assert ls_slope_variance([component], n, dt) == pytest.approx(exact, rel=1e-9)

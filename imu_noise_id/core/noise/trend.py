@@ -17,7 +17,8 @@ exact for the sampled components (white noise gives σ²/(dt²·S), the textbook
 deterministic and adds nothing. The sum Σ h·K(h) is in closed form for WN (K = −σ²h/2), QN (K = −Q²/dt², h ≠ 0),
 RW (K = q(h³ − h)/12) and GM (K = −½σ²(h + 2g(h)), g(h) = φ(h(1 − φ) − 1 + φ^h)/(1 − φ)², φ = e^(−dt/τ), with
 Σ_{h≤M} h·φ^h = φ(1 − (M+1)φ^M + Mφ^(M+1))/(1 − φ)²), so that a fit can evaluate eq. (1) at every step on records of
-any length; other components (and a GM whose τ exceeds five records) are summed lag by lag, O(N).
+any length; other components (and a GM whose τ exceeds five records) are summed lag by lag up to 40 of their
+longest decay times and in closed form beyond (K is linear in h there), so flicker noise alone costs O(N).
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ from .base import Component
 
 #: Lags evaluated per chunk in eq. (1) (bounds the memory on records of 10⁷ samples and more).
 CHUNK = 1 << 20
+#: Beyond this many of a stationary component's longest decay times its K(h) is summed in closed form.
+TAIL_DECAYS = 40.0
 
 
 def ls_slope(y: np.ndarray, dt: float) -> float:
@@ -78,12 +81,22 @@ def _closed_form(comp: Component, n: int, dt: float) -> tuple[float, float] | No
 
 
 def _lag_sums(comp: Component, n: int, dt: float) -> tuple[float, float]:
-    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one component, lag by lag."""
+    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one stationary component: lag by lag up to h₀ = 40 of its longest decay
+    times, beyond which K(h) = −½Var(y_1 + … + y_h) is linear in h to within e^(−40) (the long-run variance times
+    h plus a constant), so the rest of the sum is in closed form."""
+    m = n - 1
+    h0 = int(min(m, max(8, math.ceil(TAIL_DECAYS * comp.memory(dt)[0] / dt))))
     total = 0.0
-    for start in range(1, n, CHUNK):
-        h = np.arange(start, min(start + CHUNK, n), dtype=float)
+    for start in range(1, h0 + 1, CHUNK):
+        h = np.arange(start, min(start + CHUNK, h0 + 1), dtype=float)
         total += float(h @ comp.sum_covariance(h, dt))
-    return total, float(comp.sum_covariance(np.array([float(n)]), dt)[0])
+    if h0 == m:
+        return total, float(comp.sum_covariance(np.array([float(n)]), dt)[0])
+    k_prev, k_0 = (float(v) for v in comp.sum_covariance(np.array([h0 - 1.0, float(h0)]), dt))
+    slope = k_0 - k_prev
+    s1 = _power_sums(m)[0] - _power_sums(h0)[0]
+    s2 = _power_sums(m)[1] - _power_sums(h0)[1]
+    return total + (k_0 - h0 * slope) * s1 + slope * s2, k_0 + (n - h0) * slope
 
 
 def ls_slope_variance(components: list[Component], n: int, dt: float) -> float:
