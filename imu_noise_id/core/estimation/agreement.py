@@ -81,23 +81,20 @@ def _log_sd(ci: tuple[float, float]) -> float:
     return math.log(hi / lo) / (2.0 * Z95)
 
 
-def _linear_row(quantity: str, em: float, em_ci, gm: float, gm_ci) -> Agreement:
+def _row(quantity: str, em: float, em_ci, gm: float, gm_ci, *, linear: bool = False) -> Agreement:
+    """One compared quantity: z in log scale, or on the linear scale for a signed one (module docstring)."""
     em_ci, gm_ci = tuple(em_ci), tuple(gm_ci)
-    sd = math.hypot(em_ci[1] - em_ci[0], gm_ci[1] - gm_ci[0]) / (2.0 * Z95)
-    if not (math.isfinite(sd) and sd > 0):
-        return Agreement(quantity, em, em_ci, gm, gm_ci, gm / em if em else math.nan, math.nan, "undetermined")
-    z = (gm - em) / sd
-    return Agreement(quantity, em, em_ci, gm, gm_ci, gm / em if em else math.nan, z,
-                     "agree" if abs(z) <= Z95 else "differ")
-
-
-def _row(quantity: str, em: float, em_ci, gm: float, gm_ci) -> Agreement:
-    em_ci, gm_ci = tuple(em_ci), tuple(gm_ci)
-    sd = math.hypot(_log_sd(em_ci), _log_sd(gm_ci))
-    if not (em > 0 and gm > 0) or not math.isfinite(sd):
-        return Agreement(quantity, em, em_ci, gm, gm_ci, gm / em if em else math.nan, math.nan, "undetermined")
-    z = math.log(gm / em) / sd
-    return Agreement(quantity, em, em_ci, gm, gm_ci, gm / em, z, "agree" if abs(z) <= Z95 else "differ")
+    ratio = gm / em if em else math.nan
+    if linear:
+        sd = math.hypot(em_ci[1] - em_ci[0], gm_ci[1] - gm_ci[0]) / (2.0 * Z95)
+        determined = math.isfinite(sd) and sd > 0
+    else:
+        sd = math.hypot(_log_sd(em_ci), _log_sd(gm_ci))
+        determined = em > 0 and gm > 0 and math.isfinite(sd)
+    if not determined:
+        return Agreement(quantity, em, em_ci, gm, gm_ci, ratio, math.nan, "undetermined")
+    z = (gm - em) / sd if linear else math.log(gm / em) / sd
+    return Agreement(quantity, em, em_ci, gm, gm_ci, ratio, z, "agree" if abs(z) <= Z95 else "differ")
 
 
 def _keyed(fit: FitResult) -> dict[tuple[str, int, str], tuple[str, float, tuple[float, float]]]:
@@ -128,7 +125,7 @@ def compare(em: FitResult, gmwm: FitResult) -> Comparison:
         for key, (label, g_val, g_ci) in theirs.items():
             if key in mine:
                 _, e_val, e_ci = mine[key]
-                rows.append((_linear_row if key[0] == "RR" else _row)(label, e_val, e_ci, g_val, g_ci))
+                rows.append(_row(label, e_val, e_ci, g_val, g_ci, linear=key[0] == "RR"))
     else:
         for name, getter in (("N (Kalibr noise density)", kalibr.noise_density),
                              ("K (Kalibr random walk)", kalibr.random_walk)):
