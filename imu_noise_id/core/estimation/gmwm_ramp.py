@@ -16,8 +16,8 @@ the variance its mean adds at the longest scales (4μ²·Var of the coefficients
 the minimiser of its profile J_p(v) = min_{θ,a} J(θ, a, v) and its 95 % interval {v : J_p(v) − min J_p ≤ χ²₁,₀.₉₅}
 (the distance-metric statistic, as for the GMWM's other profile intervals). A random walk the WV can hardly see
 widens it by the trade it allows: V grows with K², at the price the WV moments put on K (with the ramp term free to
-take up the difference at the longest scales). Taking V at θ̂ alone ignores that trade (coverage 60 % on the same
-bench). The other parameters stay the WV fit's.
+take up the difference at the longest scales). Taking V at θ̂ alone ignores that trade (tried first: its intervals
+were too narrow). The other parameters stay the WV fit's.
 """
 
 from __future__ import annotations
