@@ -44,6 +44,7 @@ LONG: list[tuple[list[str], str]] = [
     (["reproduce_paper000.py", "--case", "4.3", "--runs", "200"], "paper000_4.3.txt"),
     (["reproduce_paper000_sec5.py"], "paper000_sec5.txt"),
     (["bench_coverage.py"], "bench_coverage.txt"),
+    (["probe_gm_tau_lr.py"], "probe_gm_tau_lr.txt"),
     (["bench_allan_fit.py"], "bench_allan_fit.txt"),
     (["bench_allan_ci.py"], "bench_allan_ci.txt"),
     (["bench_cmkf_paper.py"], "cmkf_paper.txt"),
