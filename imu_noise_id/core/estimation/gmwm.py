@@ -192,7 +192,7 @@ def intervals(est: Estimate) -> tuple[dict[str, float], dict[str, tuple[float, f
 
 
 def _with_slope(components: list[Component], slope: float | None) -> list[Component]:
-    """The components with the RR's slope set to the least-squares one (when known)."""
+    """The components with the RR's slope set to ``slope`` (signed; None keeps the WV's |ω|)."""
     return [RR(slope) if isinstance(c, RR) and slope is not None else c for c in components]
 
 
@@ -214,7 +214,8 @@ def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope: floa
           uncertainty: bool = True) -> GmwmFit:
     """The :class:`GmwmFit` of an :class:`Estimate` (intervals, bootstrap and advice unless ``uncertainty`` is
     False, e.g. for the candidates a selection does not keep). ``slope``: the record's least-squares slope [u/s],
-    reported for an RR with its variance under the fitted noise (module docstring); None keeps the WV's |ω|."""
+    from which an RR's slope and interval are fitted (:mod:`.gmwm_ramp`; without intervals it is reported as is);
+    None keeps the WV's |ω|."""
     se, ci, how = intervals(est) if uncertainty else ({}, {}, {})
     if options.bootstrap and uncertainty:
         for lab, values in _bootstrap(est, options, slope).items():

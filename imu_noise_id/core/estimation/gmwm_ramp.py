@@ -47,7 +47,6 @@ class RampFit:
 @dataclass
 class _Profile:
     problem: eng.Problem
-    k: int
     ls_slope: float
     n: int
     dt: float
@@ -74,8 +73,7 @@ class _Profile:
 def fit_ramp(problem: eng.Problem, theta: np.ndarray, ls_slope: float, n: int, dt: float) -> RampFit:
     """The slope of the RR in ``problem`` at the WV fit ``theta``, from eq. (1) with the record's least-squares
     slope ``ls_slope`` [u/s] of ``n`` samples at ``dt`` [s] (module docstring)."""
-    k = next(j for j, lab in enumerate(problem.par.labels) if lab.startswith("RR"))
-    prof = _Profile(problem, k, ls_slope, n, dt, theta.copy())
+    prof = _Profile(problem, ls_slope, n, dt, theta.copy())
     sd = math.sqrt(ls_slope_variance(problem.par.to_components(theta), n, dt))
     best = minimize_scalar(prof, bounds=(ls_slope - 4.0 * sd, ls_slope + 4.0 * sd), method="bounded",
                            options={"xatol": 0.02 * sd})

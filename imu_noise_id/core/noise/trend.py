@@ -38,11 +38,11 @@ TAIL_DECAYS = 40.0
 
 def ls_slope(y: np.ndarray, dt: float) -> float:
     """Slope [u/s] of the least-squares line through the finite samples y (at times i·dt)."""
-    i = np.flatnonzero(np.isfinite(y)).astype(float)
+    i = np.flatnonzero(np.isfinite(y))
     if i.size < 2:
         return 0.0
-    centred = i - i.mean()
-    return float(centred @ (y[i.astype(int)] - np.mean(y[i.astype(int)])) / (centred @ centred) / dt)
+    centred, values = i - i.mean(), y[i]
+    return float(centred @ (values - values.mean()) / (centred @ centred) / dt)
 
 
 def _power_sums(m: int) -> tuple[float, float, float]:
