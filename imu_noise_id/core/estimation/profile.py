@@ -60,6 +60,8 @@ Z95 = 1.959963984540054
 R_TOL = 0.05
 #: Zero-boundary parameters are searched in [ZERO_FLOOR·s, ZERO_CAP·s], s their conditional upper end.
 ZERO_FLOOR, ZERO_CAP = 0.01, 1e4
+#: Log offsets from s at which a zero-boundary parameter also starts inner maximisations (see Profiler.with_ladder).
+ZERO_LADDER = (1.0, 0.0, -1.0, -2.0, -3.0)
 #: An end further than this from the estimate (log units, i.e. a factor e^25 ≈ 7e10) is reported as unbounded.
 MAX_LOG_DISTANCE = 25.0
 #: Profile evaluations per end at most (outward steps and regula falsi together).
@@ -164,13 +166,25 @@ class Profiler:
 
     # -- the inner maximisation ----------------------------------------------------------------------------
     def fallback_starts(self) -> list[np.ndarray]:
-        """Starts besides the trace's extrapolation: the estimate, and the estimate with each zero-boundary
-        parameter at s (the profile of a parameter that trades with it can jump to that branch)."""
-        out = [self.theta]
+        """Starts besides the trace's extrapolation: :meth:`with_ladder` of the estimate."""
+        return self.with_ladder(self.theta)
+
+    def with_ladder(self, theta: np.ndarray) -> list[np.ndarray]:
+        """``theta``, and ``theta`` with each zero-boundary parameter at s·e^m for each m of :data:`ZERO_LADDER`.
+
+        The profile of a parameter that trades with a zero-boundary one jumps to another branch away from the
+        estimate: a GM τ held well below a long τ̂ (a GM that took over the random walk, K̂ ≈ 0) has its
+        maximum with K back near s. From K̂ ≈ 0 (the search's floor) the few inner steps stayed on the K ≈ 0
+        branch, and from K = s with the other parameters at the estimate (σ fitted to τ̂) the start scored too
+        low to be chosen: the interval ended where ℓ_A was still within 1 of its maximum (issue 12: GM τ
+        intervals of 1 h WN+GM+RW+RR records that excluded the true τ at 2(max ℓ_A − ℓ_A) ≈ 1). Each start
+        costs one evaluation; the best is maximised."""
+        out = [theta]
         for j, scale in self.zero.items():
-            th = self.theta.copy()
-            th[j] = math.log(scale)
-            out.append(th)
+            for m in ZERO_LADDER:
+                th = theta.copy()
+                th[j] = math.log(scale) + m
+                out.append(th)
         return out
 
     def adjustment(self, theta: np.ndarray, base: StateSpace) -> float:
@@ -357,7 +371,8 @@ class Profiler:
                     break
                 d = inside[0] - inside[1] * (outside[0] - inside[0]) / (outside[1] - inside[1])
             near = sorted(pts, key=lambda p: abs(p[0] - d))[:2]
-            ll_a, th = profile_at(v_c + direction * d, [_extrapolate(near, d), *self.fallback_starts()])
+            ll_a, th = profile_at(v_c + direction * d, [*self.with_ladder(_extrapolate(near, d)),
+                                                             *self.fallback_starts()])
             r = root(ll_a)
             if abs(r - Z95) < R_TOL:
                 return v_c + direction * d
@@ -399,7 +414,7 @@ class Profiler:
             return self.maximise(starts, {k}, self.model)
 
         def predict(step: float) -> list[np.ndarray]:
-            return [np.clip(theta_hat + col * step, self.lo, self.hi), *self.fallback_starts()]
+            return [*self.with_ladder(np.clip(theta_hat + col * step, self.lo, self.hi)), *self.fallback_starts()]
 
         room = {d: min(MAX_LOG_DISTANCE, abs(b - v_hat)) if math.isfinite(b) else MAX_LOG_DISTANCE
                 for d, b in ((-1.0, self.lo[k]), (1.0, self.hi[k]))}
