@@ -1,4 +1,9 @@
-"""Why issue 12's GM τ intervals under-cover (docs/em.md, "Interval coverage"): the LR statistic in bootstrap records.
+"""Whether the χ²₁ calibration of issue 12's GM τ intervals holds (docs/em.md, "Interval coverage"): the LR statistic
+in bootstrap records.
+
+It came out nominal (with the inner maximisations of its time, started at the estimate), which ruled out a
+Bartlett-type correction. The under-coverage it was written to explain came from the profile search itself (fixed
+in f362b8c): its inner maximisations never left the K ≈ 0 branch, so intervals ended where ℓ_A was still high.
 
 Run:  nice -n 10 python bench/probe_gm_tau_lr.py   (output: docs/results/probe_gm_tau_lr.txt; ~15 min)
 
