@@ -3,7 +3,7 @@
 Usage::
 
     PYTHONPATH=$PWD nice -n 10 python bench/bench_loop_effects.py [--seeds 10] [--clean 30] [--minutes 20] \\
-        [--out docs/results/bench_loop_effects.txt]
+        [--cases osc osc+gm …] [--out docs/results/bench_loop_effects.txt]
 
 Each case simulates ``--minutes`` at 100 Hz and runs the loop from WN+RW:
 
@@ -37,6 +37,7 @@ from imu_noise_id.core.noise.flicker import band_for_record
 from imu_noise_id.pipelines.loop import run_closed_loop
 
 DT = 0.01
+CASES = ("osc", "osc+gm", "lpf", "ma", "bi", "sin", "clean")
 N_TRUE, K_TRUE = 2e-3, 3e-4
 
 
@@ -123,15 +124,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--line-seeds", type=int, default=20, help="seeds of the osc and sin cases (SIN vs OSC ≥ 95 %%)")
     ap.add_argument("--clean", type=int, default=30)
     ap.add_argument("--minutes", type=float, default=20.0)
+    ap.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES), help="run only these cases")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
     n = int(args.minutes * 60 / DT)
     lines = [f"# bench/bench_loop_effects.py --seeds {args.seeds} --line-seeds {args.line_seeds} --clean {args.clean} "
-             f"--minutes {args.minutes:g} "
+             f"--minutes {args.minutes:g}{'' if args.cases == list(CASES) else ' --cases ' + ' '.join(args.cases)} "
              f"({n} samples at 100 Hz per record; start WN+RW; N = {N_TRUE}, K = {K_TRUE})"]
     start = time.perf_counter()
-    for case, seeds in (("osc", args.line_seeds), ("osc+gm", args.seeds), ("lpf", args.seeds), ("ma", args.seeds),
-                        ("bi", args.seeds), ("sin", args.line_seeds), ("clean", args.clean)):
+    seeds_of = {"osc": args.line_seeds, "sin": args.line_seeds, "clean": args.clean}
+    for case in (c for c in CASES if c in args.cases):
+        seeds = seeds_of.get(case, args.seeds)
         rows = [assess(*simulate(case, 1000 + s, n)) for s in range(seeds)]
         new = report(case, rows)
         lines += new
