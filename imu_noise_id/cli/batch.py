@@ -7,7 +7,6 @@ Parses the options and calls :mod:`imu_noise_id.batch` (units, a local or remote
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
@@ -73,12 +72,13 @@ def run(args: argparse.Namespace) -> int:
     """Discover the units, run them on Dask, write the fleet table and report."""
     from ..batch import BatchProgress, discover_units, open_client, run_batch
     from ..core.errors import InputError
+    from ..core.timing import check_declared_rate
     from ..report.fleet import annotate, write_fleet_report, write_tables
 
     if args.workers < 1:
         raise InputError(f"--workers must be >= 1, got {args.workers}")
-    if args.rate is not None and not (math.isfinite(args.rate) and args.rate > 0):
-        raise InputError(f"--rate must be a positive number of Hz, got {args.rate}")
+    if args.rate is not None:  # before a cluster starts, as each unit's reader would
+        check_declared_rate(args.rate)
     spec = _spec(args.spec)
     units = discover_units(list(args.inputs), list(args.topic), args.manifest)
     options = {"model": args.model, "loop": not args.no_loop, "per_decade": args.per_decade,

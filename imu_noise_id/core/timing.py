@@ -167,6 +167,12 @@ def _relative(a: float, b: float) -> float:
     return abs(a - b) / b if np.isfinite(a) and np.isfinite(b) and b > 0 else float("inf")
 
 
+def check_declared_rate(declared_hz: float) -> None:
+    """Refuse a declared rate (``--rate`` [Hz]) that is not a positive finite number."""
+    if not (np.isfinite(declared_hz) and declared_hz > 0):
+        raise InputError(f"--rate must be a positive number of Hz, got {declared_hz}")
+
+
 def estimate_period(
     t: np.ndarray,
     *,
@@ -242,8 +248,7 @@ def estimate_period(
         )
     if declared_hz is None:
         return SamplePeriod(value, source, estimates, bursty, tuple(warnings), tuple(notes), refusal)
-    if not (np.isfinite(declared_hz) and declared_hz > 0):
-        raise InputError(f"--rate must be a positive number of Hz, got {declared_hz}")
+    check_declared_rate(declared_hz)
     estimates["declared"] = 1.0 / declared_hz
     off = _relative(1.0 / declared_hz, value)
     kept = [w for w in warnings if w.startswith("the rate changes")]
