@@ -172,13 +172,9 @@ class Profiler:
     def with_ladder(self, theta: np.ndarray) -> list[np.ndarray]:
         """``theta``, and ``theta`` with each zero-boundary parameter at s·e^m for each m of :data:`ZERO_LADDER`.
 
-        The profile of a parameter that trades with a zero-boundary one jumps to another branch away from the
-        estimate: a GM τ held well below a long τ̂ (a GM that took over the random walk, K̂ ≈ 0) has its
-        maximum with K back near s. From K̂ ≈ 0 (the search's floor) the few inner steps stayed on the K ≈ 0
-        branch, and from K = s with the other parameters at the estimate (σ fitted to τ̂) the start scored too
-        low to be chosen: the interval ended where ℓ_A was still within 1 of its maximum (issue 12: GM τ
-        intervals of 1 h WN+GM+RW+RR records that excluded the true τ at 2(max ℓ_A − ℓ_A) ≈ 1). Each start
-        costs one evaluation; the best is maximised."""
+        The profile of a parameter that trades with a zero-boundary one can have its maximum on another branch,
+        e.g. a GM τ held well below a long τ̂ (K̂ ≈ 0) with K back near s: from K ≈ 0 alone the few inner steps
+        stay on the K ≈ 0 branch (issue 12; docs/em.md, "Interval coverage"). Each start costs one evaluation."""
         out = [theta]
         for j, scale in self.zero.items():
             for m in ZERO_LADDER:
@@ -186,6 +182,10 @@ class Profiler:
                 th[j] = math.log(scale) + m
                 out.append(th)
         return out
+
+    def starts_near(self, theta: np.ndarray) -> list[np.ndarray]:
+        """Starts of a profile point whose argmax is predicted at ``theta``: its ladder, then the fallbacks."""
+        return [*self.with_ladder(theta), *self.fallback_starts()]
 
     def adjustment(self, theta: np.ndarray, base: StateSpace) -> float:
         """½ log det cov(b̂) at ϑ: a function of ϑ alone (the regressor columns filtered, the data column zero)."""
@@ -371,8 +371,7 @@ class Profiler:
                     break
                 d = inside[0] - inside[1] * (outside[0] - inside[0]) / (outside[1] - inside[1])
             near = sorted(pts, key=lambda p: abs(p[0] - d))[:2]
-            ll_a, th = profile_at(v_c + direction * d, [*self.with_ladder(_extrapolate(near, d)),
-                                                             *self.fallback_starts()])
+            ll_a, th = profile_at(v_c + direction * d, self.starts_near(_extrapolate(near, d)))
             r = root(ll_a)
             if abs(r - Z95) < R_TOL:
                 return v_c + direction * d
@@ -414,7 +413,7 @@ class Profiler:
             return self.maximise(starts, {k}, self.model)
 
         def predict(step: float) -> list[np.ndarray]:
-            return [*self.with_ladder(np.clip(theta_hat + col * step, self.lo, self.hi)), *self.fallback_starts()]
+            return self.starts_near(np.clip(theta_hat + col * step, self.lo, self.hi))
 
         room = {d: min(MAX_LOG_DISTANCE, abs(b - v_hat)) if math.isfinite(b) else MAX_LOG_DISTANCE
                 for d, b in ((-1.0, self.lo[k]), (1.0, self.hi[k]))}
