@@ -4,16 +4,20 @@ re-selection, do-no-harm and practical significance — each against a known sim
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.diagnostics.lines import SIN_CONCENTRATION, detect_broad_line, line_shape
 from imu_noise_id.core.diagnostics.residuals import spectral_peaks
 from imu_noise_id.core.estimation.relabel import gm_as_filter
 from imu_noise_id.core.estimation.results import FitResult
 from imu_noise_id.core.noise.components import GM, LPF, OSC, RW, WN, simulate_sum, total_allan_variance
+from imu_noise_id.core.noise.flicker import BI, band_for_record
 from imu_noise_id.pipelines.loop import run_closed_loop
+from imu_noise_id.pipelines.loop.run import _judge
 
 DT = 0.01
 N = 120_000  # 20 min at 100 Hz
@@ -132,3 +136,45 @@ def test_a_line_and_its_harmonics_are_one_family_added_in_one_step():
     regressors = result.steps[1].diagnosis.exog_values
     assert result.steps[1].added == "SIN" and len(regressors) == 2
     assert sorted(v["frequency"] for v in regressors.values()) == pytest.approx([3.0, 6.0], rel=1e-3)
+
+
+def _av_diag(bic: float, ratio: float) -> SimpleNamespace:
+    """A diagnosis whose model AV is ``ratio`` × the data's at every τ (±10 % intervals)."""
+    data = np.full(8, 1e-6)
+    return SimpleNamespace(errors=SimpleNamespace(bic=bic), av_data=data, av_ci=(0.9 * data, 1.1 * data),
+                           av_model=ratio * data)
+
+
+def test_a_bic_tie_between_equal_size_models_is_broken_by_the_av():
+    before, closer = _av_diag(0.0, 3.0), _av_diag(4.0, 1.05)
+    assert _judge(before, closer, tie=True)[0]  # BIC worse by 4 (< 6), AV from far off to inside its band
+    assert not _judge(before, closer)[0]  # an addition still needs a better BIC
+    assert not _judge(before, _av_diag(8.0, 1.05), tie=True)[0]  # strong BIC evidence against it wins
+    assert not _judge(before, _av_diag(4.0, 2.9), tie=True)[0]  # an AV gain within its sampling noise is no tie-break
+
+
+def test_reselection_swaps_a_random_walk_for_the_flicker_it_stands_for():
+    # A sensor low-pass and flicker noise, no random walk, 5 min: WN+LPF+RW and WN+LPF+BI fit about equally well,
+    # the RW's AV grows far above the data's at long τ. Before the swap, 3 of these 6 records kept a random walk.
+    n = 30_000
+    found = []
+    for seed in range(6):
+        truth = [LPF(noise_density=4e-3, cutoff=20.0), BI(2e-3, *band_for_record(n, DT))]
+        y = simulate_sum(truth, n, DT, np.random.default_rng(seed))
+        final = run_closed_loop(y, DT, "WN+RW", max_steps=1).final.diagnosis.fit
+        assert not any(isinstance(c, RW) for c in final.components), final.model
+        found += [c.bias_instability for c in final.components if isinstance(c, BI)]
+    assert len(found) >= 5 and all(0.5 < b / 2e-3 < 1.5 for b in found), found
+
+
+def test_measured_accelerometer_random_walk_stays_within_the_long_tau_allan_variance(shared_data):
+    # ADIS16405 run 1 accel_x, first 300 s: the loop kept a random walk of 3.9e-3 m/s²/√s, 12× what the AV at
+    # τ ≥ 30 s supports (its AV 10× the data's there); the flicker noise it stood for is now modelled instead.
+    y = np.load(shared_data / "adis16405_static" / "adis16405_run1.npz")["accel"][:30_000, 0]
+    result = run_closed_loop(y, DT, "WN+RW", axis="accel_x", max_steps=1)
+    av = allan_variance(y, DT)
+    far = av.tau >= 30.0
+    bound = float(np.min(np.sqrt(3.0 * av.variance[far, 0] / av.tau[far])))
+    rw = [c.random_walk for c in result.final.diagnosis.fit.components if isinstance(c, RW)]
+    assert all(k <= bound for k in rw), (rw, bound)
+    assert result.max_rel_av_error < 2.0

@@ -105,7 +105,8 @@ class Trial:
 
 @dataclass
 class LoopStep:
-    """One accepted step of the loop (step 0 is the starting model)."""
+    """One accepted step of the loop (step 0 is the starting model). ``dropped``: what re-selection removed after
+    the addition, a swapped component as ``"RW (for BI)"``."""
 
     index: int
     model: str
