@@ -19,6 +19,7 @@ differences to an absolute :data:`LOGLIK_ABS`. Everything else stays at :data:`R
 from __future__ import annotations
 
 import math
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,6 +52,10 @@ UNIDENTIFIED_SE = 0.5
 #: Absolute tolerance of log-likelihood-scale numbers (a BIC difference below 1 is immaterial).
 LOGLIK_ABS = 1.0
 LOGLIK_KEYS = {"loglik", "aic", "bic", "delta_aic", "delta_bic", "loglik_diffuse"}
+#: Free-text keys of the fitted files whose numbers are log-likelihood-scale values and AV misfit z-scores (a loop
+#: trial's "BIC … → …; AV misfit z … → …"): their words are compared exactly, their numbers to :data:`LOGLIK_ABS`.
+TEXT_KEYS = {"reason"}
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 #: Keys holding numbers from the likelihood's curvature or from draws of it, and the overbound (it touches the final
 #: model's Allan variance, which moves with the fit over the flat parts of the likelihood).
 CURVATURE_KEYS = ("se", "ci95", "record_length", "weight_bic", "information_ok", "_ci_xyz", "bias_instability",
@@ -94,7 +99,7 @@ def _tolerance(key: str, want: object, parent: Tolerance, fitted: bool, got: obj
     """
     if not fitted or parent.skip:
         return parent
-    if key in LOGLIK_KEYS:
+    if key in LOGLIK_KEYS or key in TEXT_KEYS:
         return Tolerance(rel=0.0, abs=LOGLIK_ABS)
     if key == "weight_bic":
         return Tolerance(rel=0.0, abs=WEIGHT_ABS)
@@ -132,6 +137,8 @@ def differences(got: object, want: object, where: str = "", tol: Tolerance = Tol
                 for d in differences(g, w, f"{where}[{i}]", _tolerance("", w, tol, fitted, g), fitted)]
     if tol.skip:
         return []
+    if isinstance(want, str) and isinstance(got, str) and fitted and where.rsplit("/", 1)[-1] in TEXT_KEYS:
+        return [] if _same_text(got, want, tol) else [f"{where}: {got!r}, expected {want!r}"]
     if isinstance(want, bool) or not isinstance(want, int | float) or not isinstance(got, int | float):
         return [] if got == want else \
             [f"{where}: {got!r}, expected {want!r}"]
@@ -140,6 +147,14 @@ def differences(got: object, want: object, where: str = "", tol: Tolerance = Tol
     if got == want or math.isclose(got, want, rel_tol=tol.rel, abs_tol=max(tol.abs, ABS)):
         return []
     return [f"{where}: {got!r}, expected {want!r}"]
+
+
+def _same_text(got: str, want: str, tol: Tolerance) -> bool:
+    """Whether two free texts have the same words and their numbers agree within ``tol`` (:data:`TEXT_KEYS`)."""
+    if NUMBER.split(got) != NUMBER.split(want):
+        return False
+    pairs = zip(map(float, NUMBER.findall(got)), map(float, NUMBER.findall(want)), strict=True)
+    return all(math.isclose(g, w, rel_tol=tol.rel, abs_tol=tol.abs) for g, w in pairs)
 
 
 @pytest.mark.parametrize("name", ["analyze_imu.yaml", "analyze_model.yaml", "fit_model.yaml", "cmkf.yaml",
@@ -196,3 +211,18 @@ if __name__ == "__main__":
         for name, path in generate(Path(tmp)).items():
             shutil.copyfile(path, GOLDEN / name)
             print(f"wrote {GOLDEN / name}")
+
+
+def test_free_text_numbers_compare_at_loglik_resolution():
+    """A loop trial's reason may move by less than a unit of log-likelihood between machines, not in its words."""
+    def with_reason(text: str) -> dict:
+        return {"loop": [{"rejected": [{"reason": text}]}]}
+
+    want = with_reason("joint search: BIC -298917.5 → -298895.7 (not better); AV misfit z 0.7 → 0.7")
+
+    assert not differences(with_reason("joint search: BIC -298917.5 → -298895.5 (not better); AV misfit z 0.7 → 0.7"),
+                           want, fitted=True)
+    assert differences(with_reason("joint search: BIC -298917.5 → -298890.5 (not better); AV misfit z 0.7 → 0.7"),
+                       want, fitted=True)
+    assert differences(with_reason("joint search: BIC -298917.5 → -298895.7 (better); AV misfit z 0.7 → 0.7"),
+                       want, fitted=True)
