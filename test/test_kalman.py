@@ -132,3 +132,52 @@ def test_newton_riccati_from_a_nearby_model_equals_doubling(name, rel_step):
     reference = steady_prediction_covariance(moved.phi, moved.q, moved.h, moved.r)
     np.testing.assert_allclose(moved.steady_prediction_covariance(), reference, rtol=0,
                                atol=1e-11 * np.max(np.abs(reference)))
+
+
+def test_modal_and_schur_bases_give_the_exact_recursion():
+    """The steady engine's two bases (block-diagonal modal where well conditioned, Schur otherwise) against the exact
+    time-varying recursion, on a model with a flicker ladder, two oscillators and regressor columns."""
+    from imu_noise_id.core.kalman import steady
+    from imu_noise_id.core.noise.components import BI
+    from imu_noise_id.core.noise.resonant import LPF, OSC
+
+    dt, n = 0.01, 3000
+    comps = [WN(3e-3), LPF(noise_density=4e-3, cutoff=15.0), BI(4e-3, 0.1, n * dt),
+             OSC(frequency=0.565, bandwidth=0.05, sigma=4e-3), OSC(frequency=10.7, bandwidth=0.45, sigma=8e-3),
+             RW(2e-4)]
+    rng = np.random.default_rng(5)
+    t = dt * np.arange(n)
+    exog = np.column_stack([np.sin(2 * np.pi * 0.7 * t), np.cos(2 * np.pi * 0.7 * t)])
+    y = simulate_sum(comps, n, dt, rng) + 0.3 + exog @ [1e-3, -2e-3]
+    model = ss.from_components(comps, dt, exog_names=["s", "c"])
+    z = np.column_stack([np.ones(n), exog])
+    assert steady.decoupled_basis(steady.gains(model).a).modal
+    exact = kalman.loglik(model, y, z, engine="exact")
+    fitted = kalman.apply_beta(model, exact)
+    s_exact = kalman.smooth(fitted, y, z, engine="exact")
+    for max_cond in (steady.MODAL_MAX_COND, 0.0):  # 0: every model falls back to the Schur basis
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(steady, "MODAL_MAX_COND", max_cond)
+            prof, _, stats = kalman.profile_and_smooth(model, y, z, engine="steady")
+            s_fast = kalman.smooth(fitted, y, z, engine="steady")
+        assert prof.loglik == pytest.approx(exact.loglik, abs=1e-7)
+        np.testing.assert_allclose(prof.beta, exact.beta, rtol=1e-8)
+        for s in (stats, s_fast):
+            for key in ("xs", "sum_p", "sum_lag"):
+                a, b = getattr(s_exact, key), getattr(s, key)
+                np.testing.assert_allclose(b, a, rtol=1e-7, atol=1e-9 * np.max(np.abs(a)), err_msg=key)
+
+
+def test_a_nearly_defective_transition_runs_in_the_schur_basis():
+    from imu_noise_id.core.kalman import steady
+
+    jordan = np.array([[0.9, 1.0], [0.0, 0.9 + 1e-12]])
+    assert not steady.decoupled_basis(jordan).modal
+    assert steady.decoupled_basis(np.diag([0.5, 0.9])).modal
+    c = np.random.default_rng(1).standard_normal((2, 1, 50))
+    x = steady.lti_states(jordan, c, np.ones((2, 1)))
+    ref = np.empty_like(c)
+    ref[:, :, 0] = 1.0
+    for k in range(49):
+        ref[:, :, k + 1] = jordan @ ref[:, :, k] + c[:, :, k]
+    np.testing.assert_allclose(x, ref, rtol=1e-10, atol=1e-12)

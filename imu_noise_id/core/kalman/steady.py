@@ -7,10 +7,14 @@ variance F and the smoother gain J are constants, so
     predicted state  x_{t+1} = A x_t + ΦK y_t + u,        A = Φ(I − K H)          (forward, causal)
     smoothed state   x_{t−1}^N = J x_t^N + (x_{t−1}^{t−1} − J x_t^{t−1})          (backward, anti-causal)
 
-are linear time-invariant filters. They run in compiled code as cascades of first-order sections
-(``scipy.signal.lfilter``) in the real Schur basis of A (resp. J): orthogonal, hence numerically as good as the
-plain recursion even with poles within 1e-6 of the unit circle, where a transfer-function (polynomial) form of
-the whole filter would lose all accuracy; a complex pole pair (an oscillator) is one real second-order section.
+are linear time-invariant filters. They run in compiled code (``scipy.signal.lfilter``) as first- and
+second-order sections in a basis where A (resp. J) is block-diagonal: its real modal basis, one 1×1 block per
+real eigenvalue and one real 2×2 block per complex pair (an oscillator), where that basis is well conditioned
+(:data:`MODAL_MAX_COND`), so that the modes run independently and a step costs O(p) per column; otherwise the real
+Schur basis, orthogonal and so as accurate as the plain recursion whatever the eigenvalues, where each block is
+driven by the later ones it couples to (O(p²) per column: with the dozen states of a flicker ladder and a few
+regressor columns that coupling was most of a fit's time at 10⁶ samples). Either way poles within 1e-6 of the unit
+circle keep their accuracy, which a transfer-function (polynomial) form of the whole filter would lose.
 
 The smoothed covariances are never stored: they follow the affine recursion P_{t−1}^N = T(P_t^N) =
 J P_t^N Jᵀ + (P_f − J P̄ Jᵀ) from P_N^N = P_f, so Σ_t P_t^N = Σ_{k<N} T^k(P_f) and P_1^N = T^{N−1}(P_f) are
@@ -88,6 +92,17 @@ def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
     return out
 
 
+def _block_output(B: np.ndarray, c: np.ndarray, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
+    """c·x_t (m, N) of :func:`_run_block`'s recursion for one block B, without its states: one ``lfilter`` per input
+    of the block, numerator c·adj(zI − B) (the states of every column would be p × m × N numbers to store)."""
+    dp = np.concatenate([w0[:, :, None], d], axis=2)
+    if B.shape[0] == 1:
+        return c[0] * lfilter([0.0, 1.0], [1.0, -B[0, 0]], dp[0], axis=-1)[:, 1:]
+    den = [1.0, -(B[0, 0] + B[1, 1]), B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]]
+    num = ((0.0, c[0], c[1] * B[1, 0] - c[0] * B[1, 1]), (0.0, c[1], c[0] * B[0, 1] - c[1] * B[0, 0]))
+    return sum(lfilter(num[k], den, dp[k], axis=-1)[:, 1:] for k in range(2))
+
+
 def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
     """w[:, :, 0] = w0, w[:, :, t+1] = T w[:, :, t] + cw[:, :, t]; shapes (p, m, N). T real quasi-triangular.
 
@@ -109,37 +124,104 @@ def _rotate(M: np.ndarray, x: np.ndarray) -> np.ndarray:
     return (M @ x.reshape(x.shape[0], -1)).reshape(M.shape[0], *x.shape[1:])
 
 
+#: Largest condition number of the real modal basis used instead of the Schur basis: rounding errors of the states
+#: grow by at most this factor over the plain recursion's (≈ 1e-10 relative in double precision).
+MODAL_MAX_COND = 1e6
+
+
+@dataclass(frozen=True)
+class Basis:
+    """A = U T U⁻¹ with T real quasi-triangular (Schur, U orthogonal) or block-diagonal (``modal``)."""
+
+    t: np.ndarray
+    u: np.ndarray
+    u_inv: np.ndarray
+    modal: bool
+
+
+def _modal_basis(A: np.ndarray) -> Basis | None:
+    """The real modal basis of A (1×1 blocks for real eigenvalues, [[a, b], [−b, a]] for a ± ib) when its condition
+    number is below :data:`MODAL_MAX_COND`, else None (e.g. a nearly defective A)."""
+    lam, vec = np.linalg.eig(A)
+    if not (np.all(np.isfinite(lam)) and np.all(np.isfinite(vec))):
+        return None
+    p = A.shape[0]
+    cols, t = [], np.zeros((p, p))
+    i = 0
+    while i < p:
+        if lam[i].imag == 0.0:
+            t[i, i] = lam[i].real
+            cols.append(vec[:, i].real)
+            i += 1
+            continue
+        if i + 1 >= p or lam[i + 1] != np.conj(lam[i]):
+            return None
+        a, b = lam[i].real, lam[i].imag
+        t[i: i + 2, i: i + 2] = [[a, b], [-b, a]]
+        cols += [vec[:, i].real, vec[:, i].imag]
+        i += 2
+    u = np.column_stack(cols)
+    if np.linalg.cond(u) > MODAL_MAX_COND:
+        return None
+    return Basis(t, u, np.linalg.inv(u), True)
+
+
+def decoupled_basis(A: np.ndarray) -> Basis:
+    """The basis the filters run in (module docstring): modal where well conditioned, else real Schur."""
+    modal = _modal_basis(A)
+    if modal is not None:
+        return modal
+    T, U = schur(A, output="real")
+    return Basis(T, U, U.T, False)
+
+
 def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
     """x_0 = x0, x_{t+1} = A x_t + c_t; c has shape (p, m, N), x0 (p, m); returns x with c's shape.
 
-    Computed in the real Schur basis A = U T Uᵀ (orthogonal, so no loss of accuracy; complex eigenvalue pairs
-    stay as real 2×2 blocks) by :func:`_run_modes`.
+    Computed by :func:`_run_modes` in the basis of :func:`decoupled_basis` (complex eigenvalue pairs stay real
+    2×2 blocks).
     """
     if c.shape[0] == 0:
         return np.zeros_like(c)
-    T, U = schur(A, output="real")
-    return _rotate(U, _run_modes(T, _rotate(U.T, c), U.T @ x0))
+    b = decoupled_basis(A)
+    return _rotate(b.u, _run_modes(b.t, _rotate(b.u_inv, c), b.u_inv @ x0))
 
 
-def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns, full: bool):
-    """H x_t^{t−1} for every column (m, N), and with ``full`` the predicted states (p, m, N)."""
+def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple[np.ndarray, Basis | None]:
+    """H x_t^{t−1} for every column (m, N), and the basis the filter ran in (None without states).
+
+    In the modal basis each block's output is accumulated without storing the states of every column
+    (:func:`_block_output`); in the Schur basis the coupled blocks need them all (:func:`_run_modes`).
+    """
     p = model.n_states
     m, n = cols.y.shape
     if p == 0:
-        return np.zeros((m, n)), np.zeros((0, m, n))
-    T, U = schur(g.a, output="real")
-    gain_w = U.T @ (model.phi @ g.k)
-    g_w = U.T @ cols.g
-    cw = gain_w[:, None, None] * cols.y[None, :, :] + g_w[:, :, None]
-    w = _run_modes(T, cw, U.T @ cols.m0)
-    out = ((model.h @ U) @ w.reshape(p, -1)).reshape(m, n)
-    return out, (_rotate(U, w) if full else None)
+        return np.zeros((m, n)), None
+    b = decoupled_basis(g.a)
+    gain_w = b.u_inv @ (model.phi @ g.k)
+    g_w, w0, hu = b.u_inv @ cols.g, b.u_inv @ cols.m0, model.h @ b.u
+    if not b.modal:
+        w = _run_modes(b.t, gain_w[:, None, None] * cols.y[None, :, :] + g_w[:, :, None], w0)
+        return (hu @ w.reshape(p, -1)).reshape(m, n), b
+    out = np.zeros((m, n))
+    for blk in _blocks(b.t):
+        out += _block_output(b.t[blk, blk], hu[blk], gain_w[blk, None, None] * cols.y[None] + g_w[blk, :, None],
+                             w0[blk])
+    return out, b
+
+
+def _predicted_states(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
+                      m0: np.ndarray) -> np.ndarray:
+    """Predicted states x_t^{t−1} (p, N) of one column: measurement input y (N,), state input u (p,), initial mean
+    m0 (p,); the filter is linear, so those of a combination of columns are those of the combined inputs."""
+    c = (b.u_inv @ (model.phi @ g.k))[:, None] * y[None, :] + (b.u_inv @ u)[:, None]
+    return b.u @ _run_modes(b.t, c[:, None, :], (b.u_inv @ m0)[:, None])[:, 0, :]
 
 
 def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
     """Innovations and their (constant) variance for every column; no missing samples allowed."""
     g = gains(model)
-    hx, _ = _predicted_output(model, g, cols, full=False)
+    hx, _ = _predicted_output(model, g, cols)
     n = cols.y.shape[1]
     return InnovationResult(cols.y - hx, np.full(n, g.f), np.ones(n, bool), constant_f=True)
 
@@ -201,20 +283,26 @@ def _smooth_from_forward(model: StateSpace, g: SteadyGains, xp: np.ndarray, e: n
 def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     """E-step statistics of the data column (column 0) with constant gains (see the module docstring)."""
     g = gains(model)
-    one = Columns(cols.y[:1], cols.g[:, :1], cols.m0[:, :1], cols.names[:1])
-    hx, xp3 = _predicted_output(model, g, one, full=True)
-    return _smooth_from_forward(model, g, xp3[:, 0, :], one.y[0] - hx[0])
+    y = cols.y[0]
+    if model.n_states == 0:
+        return _smooth_from_forward(model, g, np.zeros((0, y.size)), y.copy())
+    xp = _predicted_states(model, g, decoupled_basis(g.a), y, cols.g[:, 0], m0=cols.m0[:, 0])
+    return _smooth_from_forward(model, g, xp, y - model.h @ xp)
 
 
 def profile_and_smooth(model: StateSpace, cols: Columns) -> tuple[ProfileResult, SmootherStats]:
-    """GLS profile of the free mean parameters and the smoother at their estimate, from one forward pass.
+    """GLS profile of the free mean parameters and the smoother at their estimate.
 
-    The filter is linear in its inputs, so the predicted states of the data at β̂ are those of column 0 plus
-    Σ_c β̂_c times those of the regressor columns; only the backward pass is left to run.
+    The forward pass gives every column's predicted output; the filter is linear in its inputs, so the predicted
+    states of the data at β̂ are those of the combined column (column 0 plus Σ_c β̂_c times the regressor columns),
+    one more forward pass of one column, then the backward pass.
     """
     g = gains(model)
-    hx, x = _predicted_output(model, g, cols, full=True)
+    hx, b = _predicted_output(model, g, cols)
     n = cols.y.shape[1]
     prof = profile(InnovationResult(cols.y - hx, np.full(n, g.f), np.ones(n, bool), constant_f=True), cols.names)
-    xp = x[:, 0, :] + np.tensordot(x[:, 1:, :], prof.beta, axes=([1], [0])) if prof.beta.size else x[:, 0, :]
+    if b is None:
+        return prof, _smooth_from_forward(model, g, np.zeros((0, n)), prof.innovations)
+    weights = np.concatenate([[1.0], prof.beta])
+    xp = _predicted_states(model, g, b, weights @ cols.y, cols.g @ weights, m0=cols.m0 @ weights)
     return prof, _smooth_from_forward(model, g, xp, prof.innovations)
