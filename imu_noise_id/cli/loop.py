@@ -30,7 +30,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--temperature-topic", help="sensor_msgs/Temperature topic (default: the bag's only one)")
     p.add_argument("--start", default="WN+RW", type=model_spec(), help="starting model structure (default: WN+RW)")
     add_axis(p, aliases=("--axes",))
-    p.add_argument("--max-steps", type=int, default=6, help="most effects added per axis (default: 6)")
+    p.add_argument("--max-steps", type=int, default=None,
+                   help="most effects added per axis (default: the loop's, as in analyze; docs/loop.md)")
     p.add_argument("--alpha", type=float, default=0.01, help="level of every detector (default: 0.01)")
     add_out(p, "loop")
     add_rate_option(p)
@@ -49,13 +50,14 @@ def run(args: argparse.Namespace) -> int:
     from .progress import TextProgress
 
     axes = parse_axes(args.axis)
-    if args.max_steps < 0 or not 0 < args.alpha < 1:
+    if (args.max_steps is not None and args.max_steps < 0) or not 0 < args.alpha < 1:
         raise InputError("--max-steps must be >= 0 and --alpha in (0, 1)")
     with TextProgress(f"reading {args.bag.name}") as progress:
         recording = read_static(args.bag, topic=args.topic, temperature_topic=args.temperature_topic,
                                 progress=progress, rate_hz=args.rate)
     print_notes(recording.notes)
-    loop = ImuLoop(recording.imu, recording.temperature, max_steps=args.max_steps, alpha=args.alpha)
+    steps = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    loop = ImuLoop(recording.imu, recording.temperature, alpha=args.alpha, **steps)
     results = {}
     with TextProgress(f"closed loop from {args.start}", unit="axes") as progress:
         progress(0, len(axes))

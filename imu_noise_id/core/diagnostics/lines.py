@@ -146,7 +146,7 @@ def pooled_line_statistic(e: np.ndarray, dt: float, frequency: float, resolution
     return float(x[int(np.argmin(np.abs(centre - frequency)))])
 
 
-def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float) -> Finding:
+def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float, exclude: tuple[float, ...] = ()) -> Finding:
     """A line too wide for one periodogram bin (a wandering vibration): the periodogram of the standardised
     innovations pooled over r bins, against its running median.
 
@@ -157,6 +157,10 @@ def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float) -> Finding:
     searched. Beyond the
     papers: the single-bin search (:func:`~imu_noise_id.core.diagnostics.detectors.detect_sinusoid`) misses a
     line whose power is spread over tens of bins, each below its threshold.
+
+    ``exclude``: frequencies [Hz] of lines found otherwise (a narrow line's single bin); the pooled bins within one
+    pooled bin of each are not searched, so that a broad line elsewhere is found beside it (the Bonferroni count
+    keeps them: conservative).
     """
     freqs, power = periodogram(e, dt)
     best: tuple[float, float, float, float, int] | None = None  # (log10 p, statistic, threshold, f, r)
@@ -165,6 +169,9 @@ def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float) -> Finding:
     for r in usable:
         centre, x = _pooled(power, freqs, r)
         x[centre < 4.0 / (2 * freqs.size * dt)] = 0.0
+        width = r * (freqs[1] - freqs[0])
+        for f_x in exclude:
+            x[np.abs(centre - f_x) <= 1.5 * width] = 0.0
         k = int(np.argmax(x))
         v = _floor_error(r)
         log10_p = min(0.0, _log_sf(float(x[k]), r, v) / math.log(10.0) + math.log10(tests))

@@ -22,6 +22,12 @@ from ...core.noise.modelspec import parse_structure
 from .state import Diagnosis, LoopResult, LoopState, LoopStep, Trial
 from .steps import AxisLoop, _canonical
 
+#: Effects the loop adds at most per axis. Measured accelerometers carry many at once: on 2000 s of ADIS16405 run 1
+#: accel_x the sensor's low-pass and its averaging, the 0.565 Hz line (a sinusoid and its wander), its third
+#: harmonic, a 10.6 Hz vibration and a spike each lowered the BIC with their evidence gone (seven), where six steps
+#: left the averaging out (AV misfit z 1.9 instead of 1.3).
+MAX_STEPS = 8
+
 
 def run_closed_loop(
     y: np.ndarray,
@@ -29,7 +35,7 @@ def run_closed_loop(
     start: str | FitResult,
     *,
     temperature: np.ndarray | None = None,
-    max_steps: int = 6,
+    max_steps: int = MAX_STEPS,
     max_candidates: int = 3,
     alpha: float = det.ALPHA,
     lags: int = 20,
