@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import optimize, stats
+from scipy.fft import next_fast_len
 
 from ..noise.components import GM
 from ..noise.flicker import PLATEAU
@@ -140,11 +141,20 @@ def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alp
                     f_min: float | None = None) -> Finding:
     """A narrow spectral line: the periodogram peak of e over its local median floor (:func:`spectral_peaks`).
 
-    Initial amplitude and phase come from the score test's GLS estimate of sin/cos at the peak frequency.
+    Initial amplitude and phase come from the score test's GLS estimate of sin/cos at the peak frequency (computed
+    only for a significant peak).
     The threshold is the Exp(1) quantile that makes the maximum over the M searched bins exceed it with
     probability α: s* = −ln(1 − (1 − α)^{1/M}).
     """
     peak = spectral_peaks(e, dt, f_min=f_min)
+    s_star = float(-math.log(-math.expm1(math.log1p(-alpha) / peak.n_bins)))
+    if peak.statistic <= s_star:  # no line: nothing to refine or size (each score test whitens two columns)
+        return Finding(effect="SIN", detector="periodogram", statistic=peak.statistic, threshold=s_star,
+                       log10_p=peak.log10_p, level=alpha,
+                       params={"frequency": peak.frequency, "peak_ratio": peak.ratio},
+                       evidence=f"no spectral line: the largest periodogram ordinate is {peak.ratio:.1f}× the local "
+                                f"median floor at {peak.frequency:.5g} Hz (threshold {s_star / math.log(2):.1f}× "
+                                f"over {peak.n_bins} bins)")
     t = np.arange(np.asarray(e).size) * dt
     ones = whitening.whiten(np.ones(t.size))
 
@@ -163,7 +173,6 @@ def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alp
     frequency = float(best.x) if -best.fun > test_at(peak.frequency).statistic else peak.frequency
     st = test_at(frequency)
     amplitude = float(np.hypot(*st.coef))
-    s_star = float(-math.log(-math.expm1(math.log1p(-alpha) / peak.n_bins)))
     return Finding(
         effect="SIN", detector="periodogram", statistic=peak.statistic, threshold=s_star, log10_p=peak.log10_p,
         level=alpha,
@@ -227,7 +236,7 @@ def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np
     e = np.nan_to_num(np.asarray(e, dtype=float), nan=0.0)
     n = e.size
     s = whitening.whiten(np.ones(n))
-    size = 1 << math.ceil(math.log2(2 * n))
+    size = next_fast_len(2 * n - 1, real=True)  # zero padding: the linear, not circular, correlation
     fs = np.fft.rfft(s, size)
     c = np.fft.irfft(np.fft.rfft(e, size) * np.conj(fs), size)[:n]
     a = np.fft.irfft(fs * np.conj(fs), size)[:n]

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage, stats
+from scipy.fft import next_fast_len
 
 #: Half-width (in periodogram bins) of the window whose median is the local floor of :func:`spectral_peaks`.
 FLOOR_HALF_WIDTH = 200
@@ -50,7 +51,7 @@ def acf(e: np.ndarray, nlags: int) -> np.ndarray:
     nlags = int(nlags)
     if not 1 <= nlags < x.size:
         raise ValueError(f"nlags must be in [1, {x.size - 1}], got {nlags}")
-    size = 1 << math.ceil(math.log2(2 * x.size))
+    size = next_fast_len(2 * x.size - 1, real=True)  # zero padding: the linear, not circular, correlation
     spec = np.fft.rfft(x, size)
     r = np.fft.irfft(spec * np.conj(spec), size)[: nlags + 1]
     return r[1:] / r[0]
