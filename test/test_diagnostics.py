@@ -227,6 +227,21 @@ def test_av_signature_silent_when_model_is_right():
     assert not [f for f in det.detect_av_signatures(tau, av_d, ci, av_m) if f.significant]
 
 
+def test_a_short_tau_excess_that_ends_early_is_no_random_walk():
+    """An AV excess rising over τ = 0.02–0.04 s and gone beyond (a vibration line's, on ADIS16405 run 1 accel_x)
+    is a bump, not a missing random walk; a random walk's excess reaching the last decade stays one."""
+    tau = np.geomspace(0.01, 1000.0, 41)
+    model = 1e-6 / tau
+    rising = (tau >= 0.02) & (tau <= 0.04)
+    data = model * np.where(rising, 1.0 + 0.2 * (tau / 0.02) ** 2, 1.0)  # excess ∝ τ: a random walk's slope
+    ci = (data * 0.98, data * 1.02)
+    found = [f for f in det.detect_av_signatures(tau, data, ci, model) if f.significant]
+    assert found and all(f.effect != "RW" for f in found), [f.evidence for f in found]
+    walk = model + 1e-8 * tau
+    found = [f for f in det.detect_av_signatures(tau, walk, (walk * 0.9, walk * 1.1), model) if f.significant]
+    assert [f.effect for f in found] == ["RW"]
+
+
 def test_av_deficit_of_an_overgrown_random_walk_points_to_gm():
     y = simulate_sum([WN(1e-3), GM(tau=2.0, sigma=3e-3)], 40000, DT, np.random.default_rng(14))
     model = [WN(1e-3), RW(3e-3)]  # what a WN+RW fit makes of a GM: a large random walk

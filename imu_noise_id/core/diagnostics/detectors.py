@@ -359,6 +359,10 @@ def _with_flicker(finding: Finding, tau: np.ndarray, excess: np.ndarray) -> list
     return [flicker, finding]
 
 
+#: A band of AV excess is read as a random walk or ramp only if it ends beyond this fraction of the longest τ.
+LAST_DECADE = 0.1
+
+
 def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
                          av_model: np.ndarray, *, av_white: np.ndarray | None = None,
                          alpha: float = ALPHA) -> list[Finding]:
@@ -369,8 +373,12 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
     position and the log-log slope of the excess AV_data − AV_model:
 
     * band at the shortest τ with slope < −1.5 (ADEV −1) → QN, Q from 3Q²/τ²;
-    * band whose excess keeps growing (slope > +0.5, or reaching the longest τ) without a peak inside →
-      RR if slope > 1.5 (ADEV +1, AV ω²τ²/2), else RW (AV K²τ/3);
+    * band whose excess keeps growing (slope > +0.5, or reaching the longest τ) without a peak inside, ending in
+      the last decade of τ → RR if slope > 1.5 (ADEV +1, AV ω²τ²/2), else RW (AV K²τ/3). A band that ends
+      before the last decade is not a missing random walk, whose excess would keep growing to the longest τ
+      (on ADIS16405 run 1 accel_x, 10⁶ samples, the excess at τ = 0.02–0.04 s left by a vibration line was read
+      as RW, its p-value hid the true long-τ band behind it, and the random walk the likelihood asked for,
+      judged by that short band's evidence, was refused);
     * otherwise (a bump: the excess peaks inside the band) → GM, (τ_c, σ) fitted to the excess (the GM AV
       peaks near τ ≈ 1.9 τ_c). A GM whose τ_c exceeds the record looks like a RW, as it does to any method.
       When that excess is flat over a decade of τ or more it is also offered as flicker noise, BI (beyond the
@@ -426,7 +434,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
             findings.append(Finding(effect="QN", params={"Q": q, **band_params}, evidence=(
                 f"AV above the model at short τ ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}), "
                 f"excess slope {slope:.2f} (QN: −2)"), **common))
-        elif not peaked and (run[-1] == m - 1 or slope > 0.5):
+        elif not peaked and (run[-1] == m - 1 or (slope > 0.5 and t[-1] >= LAST_DECADE * tau[-1])):
             if run.size >= 2 and slope > 1.5:
                 findings.append(Finding(effect="RR", params={"slope": math.sqrt(float(np.median(2 * ex / t**2))),
                                                                 **band_params},
