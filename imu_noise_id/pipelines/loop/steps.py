@@ -130,15 +130,14 @@ class AxisLoop:
         line best; the pooled search (:func:`~imu_noise_id.core.diagnostics.lines.detect_broad_line`) finds a line
         spread over many bins, each below its threshold. Both run at every step, so that a wide vibration (≈ 10 Hz,
         B ≈ 0.5 Hz on the ADIS16405 accelerometers) is not hidden while a narrow line elsewhere stays significant;
-        the pooled search then skips the narrow line's own pooled bins.
+        the pooled search then skips the narrow line's own pooled bins and those of its harmonics.
         """
         sin = det.detect_sinusoid(e, self.dt, whitening, alpha=self.alpha)
-        narrow = (sin.params["frequency"],) if sin.significant else ()
-        broad = detect_broad_line(e, self.dt, alpha=self.alpha, exclude=narrow)
-        lines = [f for f in (sin, broad) if f.significant]
-        if not lines:
-            return [sin]
-        return [g for f in lines for g in self.line_findings(f, e, residual)]
+        narrow = self.line_findings(sin, e, residual) if sin.significant else []
+        found = {float(m.params["frequency"]) for f in narrow for m in (f, *f.members)}
+        broad = detect_broad_line(e, self.dt, alpha=self.alpha, exclude=tuple(sorted(found)))
+        wide = self.line_findings(broad, e, residual) if broad.significant else []
+        return [*narrow, *wide] if narrow or wide else [sin]
 
     def line_findings(self, sin: det.Finding, e: np.ndarray, residual: np.ndarray) -> list[det.Finding]:
         """A significant line as its SIN and OSC findings (with its harmonic family, if any).
