@@ -8,7 +8,7 @@ Usage (from the repository root; long on a shared 2-core machine, run it with ni
 Each axis runs from WN+RW (the Kalibr model) at 100 Hz on the first ``--samples`` samples of the run (default all
 10⁶). Per axis it prints: the RMS AV misfit z (model vs data, in sd of the AV estimates) before and after, whether
 the final model's AV lies inside the data's 95 % band at every τ (simultaneous over octaves), the largest relative
-AV error, the OSC components (f₀, bandwidth, σ) and the strongest one's f₀ against the disturbance frequency the
+AV error, the OSC components (f₀, bandwidth, σ) and the f₀ of the one near the disturbance frequency the
 data's README lists for the run, the final random walk against the long-τ Allan bound, the verdict and the time.
 The summary counts them against the issue's targets.
 
@@ -104,7 +104,8 @@ def summary(results: list[dict]) -> list[str]:
     inside = sum(r["inside"] for r in results)
     accel = [r for r in results if r["axis"].startswith("accel")]
     one_osc = [r for r in accel if sum(abs(c.frequency / DISTURBANCE_HZ[r["run"]] - 1) < 0.05 for c in r["oscs"]) == 1]
-    strongest = [r for r in accel if r["oscs"] and abs(r["oscs"][0].frequency / DISTURBANCE_HZ[r["run"]] - 1) < 0.02]
+    # The disturbance's OSC is not always the strongest one: the ≈ 10 Hz vibration line often carries more power.
+    within2 = [r for r in one_osc if any(abs(c.frequency / DISTURBANCE_HZ[r["run"]] - 1) < 0.02 for c in r["oscs"])]
     rw_ok = [r for r in accel if r["rw"] is None or not math.isfinite(r["rw_bound"]) or r["rw"] <= r["rw_bound"]]
     rw_ok95 = [r for r in accel if r["rw"] is None or not math.isfinite(r.get("rw_bound95", math.nan))
                or r["rw"] <= r["rw_bound95"]]
@@ -113,7 +114,7 @@ def summary(results: list[dict]) -> list[str]:
         f"AV misfit improved (RMS z lower): {improved} of {n}   (target: 34 of 36)",
         f"final AV inside the data's 95 % band at every τ: {inside} of {n}   (target: 30 of 36)",
         f"accelerometer axes with exactly one OSC within ±5 % of the run's disturbance: {len(one_osc)} of {len(accel)}",
-        f"accelerometer axes whose strongest OSC is within 2 % of it: {len(strongest)} of {len(accel)}",
+        f"of those, the disturbance's OSC f₀ within 2 % of the README's: {len(within2)} of {len(one_osc)}",
         f"accelerometer random walks no larger than the long-τ AV supports (or none): {len(rw_ok)} of {len(accel)} "
         f"(point bound), {len(rw_ok95)} of {len(accel)} (95 % bound)",
     ]
