@@ -113,6 +113,10 @@ def summary(results: list[dict]) -> list[str]:
         f"axes: {n}",
         f"AV misfit improved (RMS z lower): {improved} of {n}   (target: 34 of 36)",
         f"final AV inside the data's 95 % band at every τ: {inside} of {n}   (target: 30 of 36)",
+        f"loop passed: {sum(r['passed'] for r in results)} of {n} "
+        f"({sum(r['verdict'].startswith('residuals pass') for r in results)} with the residuals passing, the "
+        "others with what remains of no practical significance: the AV inside the band or within 10 % of the data's "
+        "at every τ)",
         f"accelerometer axes with exactly one OSC within ±5 % of the run's disturbance: {len(one_osc)} of {len(accel)}",
         f"of those, the disturbance's OSC f₀ within 2 % of the README's: {len(within2)} of {len(one_osc)}",
         f"accelerometer random walks no larger than the long-τ AV supports (or none): {len(rw_ok)} of {len(accel)} "
@@ -162,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
         y = np.asarray(d["gyro_x"], dtype=float)[: args.mtig_samples]
         lines.append(line(run_axis(0, "gyro_x", y, 1.0 / float(d["fs_hz"]))).replace("run0", "MTi-G"))
         print(lines[-1], flush=True)
-    print("\n".join(lines[-6:]))
+    print("\n".join(lines[-7:]))
     if args.out is not None:
         args.out.write_text("\n".join(lines) + "\n")
     return 0

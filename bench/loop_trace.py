@@ -1,0 +1,74 @@
+"""The closed loop's steps and trials on one ADIS16405 axis, with the final model's AV against the data's at every τ:
+the trace behind the per-axis explanations in docs/loop.md ("Measured data").
+
+Usage (from the repository root)::
+
+    PYTHONPATH=$PWD python bench/loop_trace.py RUN AXIS [--samples N] [--out FILE]
+
+Prints each step (model, what was added and dropped, BIC, RMS AV misfit z, fitted parameters), every trial with the
+reason it was kept or refused, the verdict, the Allan deviations of data and model with the misfit z per τ, and the
+detector findings that remain.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from imu_noise_id.core.axes import AXES
+from imu_noise_id.core.diagnostics.residuals import av_misfit_z
+from imu_noise_id.pipelines.loop import run_closed_loop
+from imu_noise_id.pipelines.loop.run import av_rms_z
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "adis16405_static"
+
+
+def trace(run: int, axis: str, samples: int) -> list[str]:
+    d = np.load(DATA / f"adis16405_run{run}.npz")
+    y = np.hstack([d["gyro"], d["accel"]])[:, AXES.index(axis)]
+    if samples:
+        y = y[:samples]
+    start = time.perf_counter()
+    r = run_closed_loop(y, 1.0 / float(d["fs_hz"]), "WN+RW", axis=axis)
+    out = [f"# bench/loop_trace.py {run} {axis} --samples {samples}: {time.perf_counter() - start:.0f} s"]
+    for s in r.steps:
+        diag = s.diagnosis
+        out.append(f"step {s.index} {s.model} added={s.added} dropped={list(s.dropped)} "
+                   f"BIC {diag.errors.bic:.1f} AV z {av_rms_z(diag):.2f}")
+        out += [f"    {c.name} " + ", ".join(f"{k} {v:.4g}" for k, v in c.params().items())
+                for c in diag.fit.components]
+        out += [f"    trial {t.model} {'kept' if t.accepted else 'refused'}: {t.reason}" for t in s.trials]
+    diag = r.final.diagnosis
+    out.append(f"verdict: {r.verdict}; passed {r.passed}; inside the band {r.av_inside_band}; "
+               f"largest relative AV error {r.max_rel_av_error:.2f}" + (f"; {r.note}" if r.note else ""))
+    z = av_misfit_z(diag.av_data, diag.av_ci, diag.av_model)
+    out += [f"  tau {t:9.2f} s  ADEV data {math.sqrt(a):.3e}  model {math.sqrt(m):.3e}  z {zz:6.2f}"
+            for t, a, m, zz in zip(diag.tau, diag.av_data, diag.av_model, z, strict=True)]
+    out += [f"  remaining: {f.effect} {f.detector}: {f.evidence}" for f in diag.findings if f.significant]
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("run", type=int)
+    ap.add_argument("axis", choices=AXES)
+    ap.add_argument("--samples", type=int, default=100000, help="first N samples (0 = all)")
+    ap.add_argument("--out", type=Path, default=None)
+    args = ap.parse_args(argv)
+    if not DATA.is_dir():
+        print(f"no data at {DATA}", file=sys.stderr)
+        return 2
+    text = "\n".join(trace(args.run, args.axis, args.samples)) + "\n"
+    print(text, end="")
+    if args.out is not None:
+        args.out.write_text(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
