@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from adis import DATA, load_run  # bench/adis.py, beside this script
 
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.axes import AXES
@@ -34,7 +35,6 @@ from imu_noise_id.core.noise.components import OSC, RW
 from imu_noise_id.pipelines.loop import run_closed_loop
 from imu_noise_id.pipelines.loop.run import av_rms_z
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "adis16405_static"
 #: The ≈0.5 Hz disturbance's frequency per run, from the data's README.
 DISTURBANCE_HZ = {1: 0.565, 2: 0.565, 3: 0.54, 4: 0.535, 5: 0.47, 6: 0.565}
 
@@ -145,14 +145,11 @@ def main(argv: list[str] | None = None) -> int:
         done = {(r["run"], r["axis"]): _from_json(r) for r in map(json.loads, log.read_text().splitlines())}
     results = []
     for run in (int(r) for r in args.runs.split(",") if r):
-        d = np.load(DATA / f"adis16405_run{run}.npz")
-        data = np.hstack([d["gyro"], d["accel"]])
-        if args.samples:
-            data = data[: args.samples]
+        data, dt = load_run(run, args.samples)
         for axis in args.axes.split(","):
             res = done.get((run, axis))
             if res is None:
-                res = run_axis(run, axis, data[:, AXES.index(axis)], 1.0 / float(d["fs_hz"]))
+                res = run_axis(run, axis, data[:, AXES.index(axis)], dt)
                 if log is not None:
                     with log.open("a") as fh:
                         fh.write(json.dumps(_as_json(res)) + "\n")

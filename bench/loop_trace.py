@@ -18,23 +18,19 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
+from adis import DATA, load_run  # bench/adis.py, beside this script
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.diagnostics.residuals import av_misfit_z
 from imu_noise_id.pipelines.loop import run_closed_loop
 from imu_noise_id.pipelines.loop.run import av_rms_z
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "adis16405_static"
-
 
 def trace(run: int, axis: str, samples: int) -> list[str]:
-    d = np.load(DATA / f"adis16405_run{run}.npz")
-    y = np.hstack([d["gyro"], d["accel"]])[:, AXES.index(axis)]
-    if samples:
-        y = y[:samples]
+    data, dt = load_run(run, samples)
+    y = data[:, AXES.index(axis)]
     start = time.perf_counter()
-    r = run_closed_loop(y, 1.0 / float(d["fs_hz"]), "WN+RW", axis=axis)
+    r = run_closed_loop(y, dt, "WN+RW", axis=axis)
     out = [f"# bench/loop_trace.py {run} {axis} --samples {samples}: {time.perf_counter() - start:.0f} s"]
     for s in r.steps:
         diag = s.diagnosis

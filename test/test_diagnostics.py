@@ -11,6 +11,7 @@ import pytest
 
 from imu_noise_id.core.allan import allan_variance, identify_alpha
 from imu_noise_id.core.diagnostics import detectors as det
+from imu_noise_id.core.diagnostics.av_signatures import detect_av_signatures
 from imu_noise_id.core.diagnostics.monitor import InnovationMonitor
 from imu_noise_id.core.diagnostics.residuals import (
     acf,
@@ -214,7 +215,7 @@ def test_av_signature_names_the_missing_component(extra, effect, key, truth, rel
     model = [WN(1e-3)]
     y = simulate_sum([*model, extra], 40000, DT, np.random.default_rng(12))
     tau, av_d, ci, av_m = _av_inputs(y, model)
-    found = [f for f in det.detect_av_signatures(tau, av_d, ci, av_m) if f.significant]
+    found = [f for f in detect_av_signatures(tau, av_d, ci, av_m) if f.significant]
     best = min(found, key=lambda f: f.log10_p)
     assert best.effect == effect, [f.evidence for f in found]
     assert best.params[key] == pytest.approx(truth, rel=rel)
@@ -224,7 +225,7 @@ def test_av_signature_silent_when_model_is_right():
     model = [WN(1e-3), GM(tau=2.0, sigma=3e-3), RW(2e-5)]
     y = simulate_sum(model, 40000, DT, np.random.default_rng(13))
     tau, av_d, ci, av_m = _av_inputs(y, model)
-    assert not [f for f in det.detect_av_signatures(tau, av_d, ci, av_m) if f.significant]
+    assert not [f for f in detect_av_signatures(tau, av_d, ci, av_m) if f.significant]
 
 
 def test_a_short_tau_excess_that_ends_early_is_no_random_walk():
@@ -235,10 +236,10 @@ def test_a_short_tau_excess_that_ends_early_is_no_random_walk():
     rising = (tau >= 0.02) & (tau <= 0.04)
     data = model * np.where(rising, 1.0 + 0.2 * (tau / 0.02) ** 2, 1.0)  # excess ∝ τ: a random walk's slope
     ci = (data * 0.98, data * 1.02)
-    found = [f for f in det.detect_av_signatures(tau, data, ci, model) if f.significant]
+    found = [f for f in detect_av_signatures(tau, data, ci, model) if f.significant]
     assert found and all(f.effect != "RW" for f in found), [f.evidence for f in found]
     walk = model + 1e-8 * tau
-    found = [f for f in det.detect_av_signatures(tau, walk, (walk * 0.9, walk * 1.1), model) if f.significant]
+    found = [f for f in detect_av_signatures(tau, walk, (walk * 0.9, walk * 1.1), model) if f.significant]
     assert [f.effect for f in found] == ["RW"]
 
 
@@ -246,7 +247,7 @@ def test_av_deficit_of_an_overgrown_random_walk_points_to_gm():
     y = simulate_sum([WN(1e-3), GM(tau=2.0, sigma=3e-3)], 40000, DT, np.random.default_rng(14))
     model = [WN(1e-3), RW(3e-3)]  # what a WN+RW fit makes of a GM: a large random walk
     tau, av_d, ci, av_m = _av_inputs(y, model)
-    found = [f for f in det.detect_av_signatures(tau, av_d, ci, av_m, av_white=WN(1e-3).allan_variance(tau, DT))
+    found = [f for f in detect_av_signatures(tau, av_d, ci, av_m, av_white=WN(1e-3).allan_variance(tau, DT))
              if f.significant]
     assert [f.effect for f in found] == ["GM"]
     assert found[0].params["tau"] == pytest.approx(2.0, rel=0.6)

@@ -37,9 +37,7 @@ import numpy as np
 from scipy import optimize, stats
 from scipy.fft import next_fast_len
 
-from ..noise.components import GM
-from ..noise.flicker import PLATEAU
-from .residuals import acf, av_misfit_z, chi2_log10_sf, ljung_box, spectral_peaks
+from .residuals import acf, chi2_log10_sf, ljung_box, spectral_peaks
 from .whitening import ScoreTest, WhiteningFilter, score_test
 
 #: Default significance level of every detector.
@@ -92,11 +90,13 @@ class Finding:
         return bool(self.statistic > self.threshold)
 
 
-def _bonferroni_log10_p(log10_p_single: float, m: int) -> float:
+def bonferroni_log10_p(log10_p_single: float, m: int) -> float:
+    """log₁₀ of the Bonferroni-corrected p-value of the most extreme of ``m`` tests (capped at p = 1)."""
     return min(0.0, log10_p_single + math.log10(max(m, 1)))
 
 
-def _norm_log10_sf(z: float) -> float:
+def norm_log10_sf(z: float) -> float:
+    """log₁₀ P(Z > z) for a standard normal Z, finite far in the tail."""
     return float(stats.norm.logsf(z) / _LN10)
 
 
@@ -125,7 +125,7 @@ def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA, only: np.ndarray | N
     z_star = float(stats.norm.isf(alpha / (2 * n)))
     idx = np.flatnonzero(np.abs(z) > z_star)
     zmax = float(np.max(np.abs(z)))
-    log10_p = _bonferroni_log10_p(_norm_log10_sf(zmax) + math.log10(2.0), n)
+    log10_p = bonferroni_log10_p(norm_log10_sf(zmax) + math.log10(2.0), n)
     tail_ratio = float(np.std(e[ok]) / scale)
     return Finding(
         effect="OUTLIERS", detector="robust_z", statistic=zmax, threshold=z_star, log10_p=log10_p, level=alpha,
@@ -273,7 +273,7 @@ def detect_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: 
     size = float(st.coef[0])
     return Finding(
         effect="STEP", detector="step_scan", statistic=t_max, threshold=z_star,
-        log10_p=_bonferroni_log10_p(_norm_log10_sf(t_max) + math.log10(2.0), n_scan), level=alpha,
+        log10_p=bonferroni_log10_p(norm_log10_sf(t_max) + math.log10(2.0), n_scan), level=alpha,
         params={"index": float(k), "time": k * dt, "size": size, "size_se": float(st.se[0])},
         evidence=f"level shift of {size:.3g} at t = {k * dt:.6g} s (sample {k}): |T| = {t_max:.1f} "
                  f"(threshold {z_star:.2f}, Bonferroni over {n_scan} positions)",
@@ -304,150 +304,3 @@ def detect_correlation(e: np.ndarray, dt: float, *, alpha: float = ALPHA, lags: 
         evidence=f"innovations correlated: Ljung–Box Q = {lb.q:.1f} over {lags} lags (threshold {thr:.1f}), "
                  f"largest ρ = {lb.worst_rho:.3f} at lag {lb.worst_lag}; decay time ≈ {tau:.3g} s",
     )
-
-
-# ------------------------------------------------------------------------------------- AV signatures
-def _fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]:
-    """GM (τ_c, σ) whose AV best fits a positive AV excess in log space (grid over τ_c, σ² in closed form)."""
-    best = (math.inf, float(tau[0]), 0.0)
-    log_ex = np.log(excess)
-    for tc in np.geomspace(tau[0] / 2, tau[-1] * 3, 80):
-        # the continuous-time shape: sampled ever more finely than the process's memory
-        shape = GM(tau=float(tc), sigma=1.0).allan_variance(tau, 1e-3 * float(min(tc, tau[0])))
-        log_s2 = float(np.mean(log_ex - np.log(shape)))
-        cost = float(np.sum((log_ex - np.log(shape) - log_s2) ** 2))
-        if cost < best[0]:
-            best = (cost, float(tc), math.exp(0.5 * log_s2))
-    return best[1], best[2]
-
-
-#: A flat AV excess: over at least FLAT_DECADES of τ, a smooth (quadratic in log-log) fit of it varies by at most a
-#: factor FLAT_RATIO. Flicker noise's AV is within 10 % of its plateau over a decade well inside its band; a GM
-#: bump varies by 1.5× over the decade centred on its peak and more over any other.
-FLAT_DECADES, FLAT_RATIO = 1.0, 1.3
-
-
-def flicker_level(tau: np.ndarray, excess: np.ndarray) -> float | None:
-    """The bias instability B [u] of an AV excess with a plateau (2 ln 2/π)·B² (IEEE Std 952): the flattest window of
-    :data:`FLAT_DECADES` of τ over which a smooth (quadratic in log-log) fit of the positive excess varies by at
-    most :data:`FLAT_RATIO`; None when there is none."""
-    best: tuple[float, float] | None = None
-    for i in range(tau.size):
-        window = (tau >= tau[i]) & (tau <= tau[i] * 10.0**FLAT_DECADES * 1.0001)
-        if tau[window][-1] < tau[i] * 10.0**FLAT_DECADES * 0.9999 or window.sum() < 4 or np.any(excess[window] <= 0):
-            continue
-        x, y = np.log(tau[window]), np.log(excess[window])
-        smooth = np.polyval(np.polyfit(x, y, 2), x)
-        spread = float(smooth.max() - smooth.min())
-        if spread <= math.log(FLAT_RATIO) and (best is None or spread < best[0]):
-            best = (spread, math.sqrt(float(np.median(excess[window])) / PLATEAU))
-    return None if best is None else best[1]
-
-
-def _with_flicker(finding: Finding, tau: np.ndarray, excess: np.ndarray) -> list[Finding]:
-    """``finding`` (a GM) and, when the excess is flat over a decade or more, a BI finding ranked just before it:
-    a bump is one GM, a plateau is the flicker noise of a bias instability (the likelihood decides)."""
-    level = flicker_level(tau, excess)
-    if level is None:
-        return [finding]
-    flicker = Finding(effect="BI", detector=finding.detector, statistic=finding.statistic,
-                      threshold=finding.threshold, log10_p=finding.log10_p - 1e-9, level=finding.level,
-                      params={**{k: v for k, v in finding.params.items() if k not in ("tau", "sigma")},
-                              "bias_instability": level},
-                      evidence=f"{finding.evidence.split(' → ')[0]}; flat over {tau[0]:.3g}–{tau[-1]:.3g} s → "
-                               f"flicker noise (BI) with B ≈ {level:.3g}")
-    return [flicker, finding]
-
-
-#: A band of AV excess is read as a random walk or ramp only if it ends beyond this fraction of the longest τ.
-LAST_DECADE = 0.1
-
-
-def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
-                         av_model: np.ndarray, *, av_white: np.ndarray | None = None,
-                         alpha: float = ALPHA) -> list[Finding]:
-    """Bands of τ where the data's AV is significantly above the model's, each traced to a component.
-
-    z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) (sd from the AV's 95 % CI); a τ is in excess when
-    z_τ > z* = Φ⁻¹(1 − α/M) over the M τ (Bonferroni). Each contiguous band of excess τ is classified by its
-    position and the log-log slope of the excess AV_data − AV_model:
-
-    * band at the shortest τ with slope < −1.5 (ADEV −1) → QN, Q from 3Q²/τ²;
-    * band whose excess keeps growing (slope > +0.5, or reaching the longest τ) without a peak inside, ending in
-      the last decade of τ → RR if slope > 1.5 (ADEV +1, AV ω²τ²/2), else RW (AV K²τ/3). A band that ends
-      before the last decade is not a missing random walk, whose excess would keep growing to the longest τ
-      (on ADIS16405 run 1 accel_x, 10⁶ samples, the excess at τ = 0.02–0.04 s left by a vibration line was read
-      as RW, its p-value hid the true long-τ band behind it, and the random walk the likelihood asked for,
-      judged by that short band's evidence, was refused);
-    * otherwise (a bump: the excess peaks inside the band) → GM, (τ_c, σ) fitted to the excess (the GM AV
-      peaks near τ ≈ 1.9 τ_c). A GM whose τ_c exceeds the record looks like a RW, as it does to any method.
-      When that excess is flat over a decade of τ or more it is also offered as flicker noise, BI (beyond the
-      papers: :mod:`imu_noise_id.core.noise.flicker`), with B² = median excess / (2 ln 2/π).
-
-    A band of significant *deficit* (z_τ < −z*) reaching the longest τ means the model's long-τ growth
-    (a random walk or ramp that absorbed a bounded process) is not in the data: the data's AV beyond the white
-    part ``av_white`` (the model's WN + QN AV; default the WN line through the first τ) is a bounded hump
-    → GM, with (τ_c, σ) fitted to that hump (and BI beside it when the hump is flat: a random walk that
-    absorbed flicker noise).
-    """
-    tau = np.asarray(tau, dtype=float)
-    av_data = np.asarray(av_data, dtype=float)
-    av_model = np.asarray(av_model, dtype=float)
-    m = tau.size
-    if m < 3 or av_data.shape != tau.shape or av_model.shape != tau.shape:
-        raise ValueError("detect_av_signatures: need ≥ 3 τ with matching AV arrays")
-    z = av_misfit_z(av_data, av_ci, av_model)
-    z_star = float(stats.norm.isf(alpha / m))
-    findings: list[Finding] = []
-    deficit = np.flatnonzero(z < -z_star)
-    if deficit.size and deficit[-1] == m - 1:
-        white = av_data[0] * tau[0] / tau if av_white is None else np.asarray(av_white, dtype=float)
-        hump = av_data - white
-        use = hump > 0
-        if use.sum() >= 3:
-            tc, sg = _fit_gm_to_excess(tau[use], hump[use])
-            zmin = float(-z[deficit].min())
-            params = {"tau": tc, "sigma": sg, "deficit": 1.0, "band_lo": float(tau[deficit[0]]),
-                      "band_hi": float(tau[-1])}
-            findings += _with_flicker(Finding(
-                effect="GM", detector="av_band", statistic=zmin, threshold=z_star, level=alpha,
-                log10_p=_bonferroni_log10_p(_norm_log10_sf(zmin), m), params=params,
-                evidence=(f"model AV above the data at long τ (τ ≥ {tau[deficit[0]]:.3g} s, max |z| = {zmin:.1f}, "
-                          f"threshold {z_star:.2f}): the data's AV is bounded → GM with τ_c ≈ {tc:.3g} s, "
-                          f"σ ≈ {sg:.3g}")), tau[use], hump[use])
-    idx = np.flatnonzero(z > z_star)
-    if idx.size == 0:
-        return findings
-    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
-    for run in runs:
-        t, ex = tau[run], av_data[run] - av_model[run]
-        zmax = float(z[run].max())
-        slope = float(np.polyfit(np.log(t), np.log(ex), 1)[0]) if run.size >= 2 else math.nan
-        band = f"τ = {t[0]:.3g}–{t[-1]:.3g} s" if run.size > 1 else f"τ = {t[0]:.3g} s"
-        # A bump: the excess peaks inside the band and has halved by its end.
-        peaked = run.size >= 3 and int(np.argmax(ex)) < run.size - 1 and ex[-1] < 0.5 * ex.max()
-        band_params = {"band_lo": float(t[0]), "band_hi": float(t[-1])}
-        common = {"detector": "av_band", "statistic": zmax, "threshold": z_star, "level": alpha,
-                  "log10_p": _bonferroni_log10_p(_norm_log10_sf(zmax), m)}
-        if run[0] == 0 and (run.size == 1 or slope < -1.5) and run[-1] < m - 1:
-            q = math.sqrt(float(np.median(ex * t**2 / 3.0)))
-            findings.append(Finding(effect="QN", params={"Q": q, **band_params}, evidence=(
-                f"AV above the model at short τ ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}), "
-                f"excess slope {slope:.2f} (QN: −2)"), **common))
-        elif not peaked and (run[-1] == m - 1 or (slope > 0.5 and t[-1] >= LAST_DECADE * tau[-1])):
-            if run.size >= 2 and slope > 1.5:
-                findings.append(Finding(effect="RR", params={"slope": math.sqrt(float(np.median(2 * ex / t**2))),
-                                                                **band_params},
-                                        evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "
-                                                  f"excess slope {slope:.2f} (RR: +2)"), **common))
-            else:
-                findings.append(Finding(effect="RW", params={"random_walk": math.sqrt(float(np.median(3 * ex / t))),
-                                                                **band_params},
-                                        evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "
-                                                  f"excess slope {slope:.2f} (RW: +1)"), **common))
-        else:
-            tc, sg = _fit_gm_to_excess(t, ex) if run.size >= 2 else (float(t[0]) / 1.89, math.sqrt(ex[0] / 0.87))
-            findings += _with_flicker(Finding(effect="GM", params={"tau": tc, "sigma": sg, **band_params}, evidence=(
-                f"AV bump above the model ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}) → GM with "
-                f"τ_c ≈ {tc:.3g} s, σ ≈ {sg:.3g}"), **common), t, ex)
-    return findings

@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..allan import AllanResult
-from ..diagnostics.detectors import flicker_level
+from ..diagnostics.av_signatures import flicker_level
 from ..errors import InputError
 from ..noise.components import Component
 from ..noise.modelspec import parse_structure
@@ -46,7 +46,7 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
     """Default candidates plus RR when the AV (one column, up to τ = N·dt/4) rises like τ² at its long-τ end, QN
     when it falls like τ⁻² at its short-τ end, WN+BI+RW (flicker noise) when the AV above the white-noise line
     through its first τ is flat over a decade of τ or more (the closed loop's rule,
-    :func:`~imu_noise_id.core.diagnostics.detectors.flicker_level`)."""
+    :func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`)."""
     cands = list(DEFAULT_CANDIDATES)
     keep = allan.m <= starts.MAX_FRACTION * allan.n
     tau, avar = allan.tau[keep], allan.variance[keep, 0]

@@ -6,7 +6,8 @@ One axis at a time (:func:`run_closed_loop`):
    EM of paper 000 section 3), or take the fit the caller already has (the model selection's winner), and
    measure its errors (:class:`ResidualErrors`: log-likelihood,
    BIC, AV misfit, Ljung–Box p of the standardised innovations, residual spectral peak ratio);
-2. run every detector of :mod:`imu_noise_id.core.diagnostics.detectors` on the fit's residuals;
+2. run every detector of :mod:`imu_noise_id.core.diagnostics.detectors` and
+   :mod:`~imu_noise_id.core.diagnostics.av_signatures` on the fit's residuals;
 3. take the significant findings (the most significant per effect, GM candidates of distinct τ bands apart,
    ranked by p-value), and for the ``max_candidates`` most significant ones add the effect, initialised from
    its detector, and refit;

@@ -9,6 +9,7 @@ import numpy as np
 
 from ...core.allan import allan_variance, choose_m, identify_alpha
 from ...core.diagnostics import detectors as det
+from ...core.diagnostics.av_signatures import detect_av_signatures
 from ...core.diagnostics.lines import detect_broad_line, harmonics, line_shape, pooled_line_statistic
 from ...core.diagnostics.residuals import av_misfit_z, line_statistic, residual_errors
 from ...core.diagnostics.spectra import residual_spectra
@@ -119,7 +120,7 @@ class AxisLoop:
             found.append(det.detect_ramp(e, self.dt, whitening, alpha=a))
         if self.temperature is not None and not any(t.effect == "TEMP" for t in state.exog_terms):
             found.append(det.detect_temperature(e, self.temperature, whitening, alpha=a))
-        found += det.detect_av_signatures(tau, av_data, av_ci, av_model, av_white=av_white, alpha=a)
+        found += detect_av_signatures(tau, av_data, av_ci, av_model, av_white=av_white, alpha=a)
         return found
 
     def detect_line(self, e: np.ndarray, whitening: WhiteningFilter, residual: np.ndarray) -> list[det.Finding]:
