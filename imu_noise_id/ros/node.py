@@ -27,6 +27,7 @@ from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.publisher import Publisher
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, Temperature
 from std_msgs.msg import Float64MultiArray
@@ -176,7 +177,7 @@ class ImuNoiseIdNode(Node):
                 if out.gyro_variance is not None:
                     corrected.angular_velocity_covariance = _diag9(out.gyro_variance)
                     corrected.linear_acceleration_covariance = _diag9(out.accel_variance)
-                self.pub_imu.publish(corrected)
+                self._send(self.pub_imu, corrected)
         except Exception as exc:  # never die on input: report and continue
             self._log("imu_exception", f"IMU message not processed: {type(exc).__name__}: {exc}")
         finally:
@@ -254,6 +255,17 @@ class ImuNoiseIdNode(Node):
         with open(self.identifier.config.stats_file, "w") as f:
             json.dump(summary, f, indent=1)
 
+    def _send(self, publisher: Publisher, msg: Any) -> None:
+        """Publish ``msg`` unless the node is shutting down: a callback that is running when Ctrl-C shuts the
+        context down ends quietly instead of raising out of the executor."""
+        if not self.context.ok():
+            return
+        try:
+            publisher.publish(msg)
+        except RuntimeError:  # rclpy's RCLError: the context was shut down between the check and the publish
+            if self.context.ok():
+                raise
+
     def _publish_estimates(self) -> None:
         start = time.perf_counter()
         self._publish_estimates_now()
@@ -274,19 +286,19 @@ class ImuNoiseIdNode(Node):
             msg.header.stamp = stamp
             msg.header.frame_id = self._imu_frame
             msg.vector.x, msg.vector.y, msg.vector.z = (float(v) for v in vec)
-            pub.publish(msg)
+            self._send(pub, msg)
         columns, table = est.noise_table()
         noise = Float64MultiArray()
         labelled_layout(noise, "axis", AXES, "field", columns)
         noise.data = table.ravel().tolist()
-        self.pub_noise.publish(noise)
+        self._send(self.pub_noise, noise)
         report = self.identifier.hypotheses()
         if report is not None:
             columns, table = report.table()
             hyp = Float64MultiArray()
             labelled_layout(hyp, "axis", AXES, "hypothesis", columns)
             hyp.data = table.ravel().tolist()
-            self.pub_hypotheses.publish(hyp)
+            self._send(self.pub_hypotheses, hyp)
 
     def _publish_diagnostics(self) -> None:
         now = time.monotonic()
@@ -305,7 +317,7 @@ class ImuNoiseIdNode(Node):
                 hardware_id=self._imu_frame,
                 values=[KeyValue(key=k, value=v) for k, v in s.values.items()],
             ))
-        self.pub_diag.publish(array)
+        self._send(self.pub_diag, array)
 
 
 def _diag9(variance: tuple[float, float, float]) -> np.ndarray:
