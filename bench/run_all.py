@@ -58,6 +58,8 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
     (["bench_loop_effects.py", "--minutes", "120", "--cases", "osc+gm", "bi"], "bench_loop_effects_2h.txt"),
     (["probe_osc_gm_bic.py"], "probe_osc_gm_bic.txt"),
+    (["probe_pooled_line_group.py", "1", "gyro_z"], "probe_pooled_line_group_r1_gyro_z.txt"),
+    (["probe_pooled_line_group.py", "2", "gyro_z"], "probe_pooled_line_group_r2_gyro_z.txt"),
     (["bench_adis_analysis.py"], "adis_run1_analysis.txt"),
     (["bench_overbound.py"], "bench_overbound.txt"),
     (["bench_gmwm_speed.py"], "bench_gmwm_speed.txt"),
