@@ -22,16 +22,22 @@ from adis import DATA, load_run  # bench/adis.py, beside this script
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.diagnostics.residuals import av_misfit_z
-from imu_noise_id.pipelines.loop import run_closed_loop
+from imu_noise_id.pipelines.loop import LoopResult, run_closed_loop
 from imu_noise_id.pipelines.loop.run import av_rms_z
 
 
-def trace(run: int, axis: str, samples: int) -> list[str]:
+def trace(run: int, axis: str, samples: int, *, script: str = "bench/loop_trace.py") -> list[str]:
+    """The loop from WN+RW on ``axis`` of ADIS16405 run ``run`` (its first ``samples``), traced by :func:`describe`
+    under a header naming ``script``, the arguments and the time."""
     data, dt = load_run(run, samples)
-    y = data[:, AXES.index(axis)]
     start = time.perf_counter()
-    r = run_closed_loop(y, dt, "WN+RW", axis=axis)
-    out = [f"# bench/loop_trace.py {run} {axis} --samples {samples}: {time.perf_counter() - start:.0f} s"]
+    r = run_closed_loop(data[:, AXES.index(axis)], dt, "WN+RW", axis=axis)
+    return [f"# {script} {run} {axis} --samples {samples}: {time.perf_counter() - start:.0f} s", *describe(r)]
+
+
+def describe(r: LoopResult) -> list[str]:
+    """The lines of a loop's trace: steps with their fitted parameters and trials, verdict, AV per τ, what remains."""
+    out = []
     for s in r.steps:
         diag = s.diagnosis
         out.append(f"step {s.index} {s.model} added={s.added} dropped={list(s.dropped)} "
