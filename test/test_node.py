@@ -202,24 +202,35 @@ def test_nan_and_out_of_order_messages_do_not_stop_the_node(session):
     run, obs, node = session["run"], session["observer"], session["node"]
     pub = obs.node.create_publisher(Imu, "/imu/data", QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
     assert obs.spin_until(lambda: pub.get_subscription_count() > 0, 10.0)
-    t = float(run.imu_t[-1])
-    bad = [_imu(t + 0.005, gyro=(math.nan, 0.0, 0.0)), _imu(t - 1.0), _imu(t), _imu(t + 0.01, accel=(math.inf,) * 3)]
-    good = [_imu(t + 0.02 + 0.005 * k, gyro=tuple(run.gyro[-1]), accel=tuple(run.accel[-1])) for k in range(5)]
-    # The played bag's corrected samples may still be in flight on a loaded machine: wait until they stop.
+    # An anchor just after the bag's last sample, then bad messages whose stamps are off the bag's time grid (a
+    # sample of the played bag still in flight on a loaded machine must not be mistaken for one of them).
+    anchor = float(run.imu_t[-1]) + 0.02
+    bad = [_imu(anchor + 0.0051, gyro=(math.nan, 0.0, 0.0)), _imu(anchor - 0.0123), _imu(anchor),
+           _imu(anchor + 0.0101, accel=(math.inf,) * 3)]
+    good_stamps = [anchor] + [anchor + 0.02 + 0.005 * k for k in range(5)]
+    sent = [_imu(s, gyro=tuple(run.gyro[-1]), accel=tuple(run.accel[-1])) for s in good_stamps]
+    sent[1:1] = bad
+    # Let the played bag's corrected samples stop arriving first (the check below does not rely on it).
     settled = -1
     while settled != len(obs.corrected):
         settled = len(obs.corrected)
         obs.spin_until(lambda: False, 0.5)
     before = len(obs.corrected)
-    for msg in bad + good:
+    for msg in sent:
         pub.publish(msg)
         obs.spin_until(lambda: False, 0.05)
-    obs.spin_until(lambda: len(obs.corrected) >= before + 5, 10.0)
-    stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in obs.corrected[before:]]
-    good_stamps = [t + 0.02 + 0.005 * k for k in range(5)]
+    bag_stamps = {round(s * 1e6) for s in run.imu_t}
+
+    def ours() -> list[float]:
+        stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in obs.corrected[before:]]
+        return [s for s in stamps if round(s * 1e6) not in bag_stamps]
+
+    obs.spin_until(lambda: len(ours()) >= len(good_stamps), 10.0)
+    stamps = ours()
     # Only good ones came out, and the node kept working after the bad ones (best effort may lose one or two).
-    assert len(stamps) >= 3
-    assert all(min(abs(s - g) for g in good_stamps) < 1e-6 for s in stamps)
+    assert len(stamps) >= 4
+    assert all(min(abs(s - g) for g in good_stamps) < 1e-6 for s in stamps), stamps
+    assert len({round(s * 1e6) for s in stamps}) == len(stamps), "the duplicate of the anchor came out"
     n_diag = len(obs.diagnostics)
     obs.spin_until(lambda: len(obs.diagnostics) > n_diag + 1, 5.0)
     values = obs.statuses()["IMU input"][2]
