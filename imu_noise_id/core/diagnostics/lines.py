@@ -68,7 +68,7 @@ class LineShape:
                 f"{self.bandwidth:.3g} Hz ({self.bandwidth / self.resolution:.0f} bins)")
 
 
-def line_shape(residual: np.ndarray, dt: float, frequency: float) -> LineShape:
+def line_shape(residual: np.ndarray, dt: float, frequency: float, *, resolution: int = 1) -> LineShape:
     """Measure the line near ``frequency`` [Hz] in ``residual`` (data units, finite) sampled at ``dt`` [s].
 
     The floor is the median of the periodogram over the bins beyond the largest window searched (±
@@ -76,17 +76,26 @@ def line_shape(residual: np.ndarray, dt: float, frequency: float) -> LineShape:
     mean). The line's window starts at ±:data:`MIN_HALF_BINS` bins and doubles while the ring it adds holds
     significant excess power (more than :data:`RING_Z` standard deviations of the floor's noise), so that the
     line's power is summed over as few noise-only bins as possible.
+
+    ``resolution``: the pooled bins (periodogram bins each) of the search that found the line. That search judged
+    it against a running median over ±:data:`POOLED_FLOOR_HALF_WIDTH` pooled bins, so the largest window is at
+    least half of that, but within ±50 % of the line's frequency (nearer 0 Hz a random walk's or flicker's rise
+    would become the "line"): a hump wider than ±10 % of its frequency (the ADIS16405 gyro_z's ≈ 5 Hz wide
+    pedestal at 25 Hz) is otherwise measured against a floor inside itself, and its few bins above that floor look
+    like a sinusoid's. The window starts at one pooled bin (at most half the largest window): the search saw the
+    excess only summed over that many bins, and a ring of fewer may hold too little to grow the window.
     """
     freqs, power = periodogram(residual, dt)
     n = int(np.asarray(residual).size)
     df = 1.0 / (n * dt)
     k0 = int(np.argmin(np.abs(freqs - frequency)))
-    widest = max(MIN_HALF_BINS, math.ceil(WINDOW_FRACTION * frequency / df))
+    pooled_half = min((resolution * POOLED_FLOOR_HALF_WIDTH) // 2, k0 // 2) if resolution > 1 else 0
+    widest = max(MIN_HALF_BINS, math.ceil(WINDOW_FRACTION * frequency / df), pooled_half)
     lo_w, hi_w = max(0, k0 - widest), min(freqs.size, k0 + widest + 1)
     side = np.concatenate([power[max(0, lo_w - widest): lo_w], power[hi_w: hi_w + widest]])
     floor = float(np.median(side if side.size >= 8 else power)) / math.log(2.0)
     excess = power - floor
-    half = MIN_HALF_BINS
+    half = max(MIN_HALF_BINS, min(resolution // 2, widest // 2))
     while half < widest:
         ring = np.r_[excess[max(0, k0 - 2 * half): max(0, k0 - half)], excess[k0 + half + 1: k0 + 2 * half + 1]]
         if ring.size == 0 or ring.sum() <= RING_Z * floor * math.sqrt(ring.size):

@@ -13,7 +13,9 @@ One axis at a time (:func:`run_closed_loop`):
    its detector, and refit;
 4. a candidate is *accepted* when the BIC decreases **and** the residual evidence it targeted is gone (its
    statistic, re-measured at the same place, is below its threshold or has halved); of the accepted
-   candidates the one with the lowest BIC becomes the next step;
+   candidates the one with the lowest BIC becomes the next step; a resonance (OSC) for a broad line that lowers
+   the BIC but leaves the line's statistic above its threshold and above half brings the strongest resonance
+   left beside it, and the pair is judged as one step (a cluster, ``run._attempt_cluster``);
 5. repeat until no detector fires ("residuals pass"), only evidence for effects already in the model remains
    ("nothing more can be added"), no candidate is accepted ("nothing improves"), or ``max_steps`` effects were
    added.

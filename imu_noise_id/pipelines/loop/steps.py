@@ -148,7 +148,7 @@ class AxisLoop:
         listed first (a slightly smaller p-value) and, unless the shape is decisive (:data:`DECISIVE_SHARE`), both
         are tried, so that the likelihood has the last word.
         """
-        shape = line_shape(residual, self.dt, sin.params["frequency"])
+        shape = line_shape(residual, self.dt, sin.params["frequency"], resolution=int(sin.params.get("resolution", 1)))
         evidence = f"{sin.evidence}; {shape.reason}"
         bandwidth = min(shape.bandwidth, MAX_DAMPING * shape.frequency)  # ζ ≤ MAX_DAMPING / 2
         searched = {"line_frequency": sin.params["frequency"], "resolution": sin.params.get("resolution", 1)}
