@@ -9,6 +9,9 @@ DEMO_DIR ?= demo_output
 # DDS traffic stays on 127.0.0.1 and rclpy logs go to a temporary folder (see README, "Network").
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 export ROS_LOG_DIR ?= $(or $(TMPDIR),/tmp)/imu_noise_id_ros_log
+# One BLAS thread per process: the numbers in docs/results were measured so, and on a small machine the Dask workers
+# and the node's processes would otherwise each start a thread per core.
+export OPENBLAS_NUM_THREADS ?= 1
 
 .PHONY: setup demo test lint bench clean
 
