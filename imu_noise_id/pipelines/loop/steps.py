@@ -7,8 +7,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...core.allan import allan_variance, choose_m, identify_alpha
+from ...core.allan import allan_variance, choose_m
 from ...core.diagnostics import detectors as det
+from ...core.diagnostics.av_band import model_av_band
 from ...core.diagnostics.av_signatures import detect_av_signatures
 from ...core.diagnostics.lines import detect_broad_line, harmonics, line_shape, pooled_line_statistic
 from ...core.diagnostics.residuals import av_misfit_z, line_statistic, residual_errors
@@ -83,12 +84,11 @@ class AxisLoop:
         # τ up to a tenth of the record, where each AV estimate still has ≳ 10 degrees of freedom.
         m = choose_m(self.n, "allan", m_max=max(2, self.n // 10))
         av_model = np.asarray(fit.theoretical_allan_variance(m * self.dt), dtype=float)
-        # The AV's confidence intervals under the null "the model holds": the noise type at each τ (which
-        # sets the EDF) is read from the model's smooth AV, not from the noisy data.
-        alpha_model = identify_alpha(m * self.dt, av_model[:, None], "allan")
-        av = allan_variance(filled, self.dt, m=m, alpha=alpha_model)
+        av = allan_variance(filled, self.dt, m=m, alpha=0)
         av_data = av.variance[:, 0]
-        av_ci = (av.ci_low[:, 0], av.ci_high[:, 0])
+        # The AV's confidence intervals under the null "the model holds", with the estimator's exact variance for
+        # the fitted model (a power-law EDF misjudges τ where a line dominates; core/diagnostics/av_band.py).
+        av_ci = model_av_band(av_data, list(fit.components), m, filled.size, self.dt)
         e = np.asarray(fit.standardized_innovations(), dtype=float).copy()
         e[: min(10, e.size // 100)] = np.nan  # start-up transient of the filter
         whitening = WhiteningFilter.from_components(list(fit.components), self.dt)
