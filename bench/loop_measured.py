@@ -133,6 +133,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="also run the contaminated MTi-G gyro_x on its first N samples (0 = not)")
     ap.add_argument("--out", type=Path, default=None, help="also write the output here (and each axis to OUT.jsonl)")
     ap.add_argument("--resume", action="store_true", help="skip the axes OUT.jsonl already holds")
+    ap.add_argument("--summarise-only", action="store_true",
+                    help="with --resume: summarise the axes OUT.jsonl holds and fit none (a partial table)")
     args = ap.parse_args(argv)
     if not DATA.is_dir():
         print(f"no data at {DATA}", file=sys.stderr)
@@ -148,6 +150,8 @@ def main(argv: list[str] | None = None) -> int:
         data, dt = load_run(run, args.samples)
         for axis in args.axes.split(","):
             res = done.get((run, axis))
+            if res is None and args.summarise_only:
+                continue
             if res is None:
                 res = run_axis(run, axis, data[:, AXES.index(axis)], dt)
                 if log is not None:
@@ -158,7 +162,7 @@ def main(argv: list[str] | None = None) -> int:
             print(lines[-1], flush=True)
     if results:
         lines += ["", *summary(results)]
-    if args.mtig_samples:
+    if args.mtig_samples and not args.summarise_only:
         d = np.load(DATA.parent / "mtig_gyro_x_contaminated" / "mtig_cont_gyro_x.npz")
         y = np.asarray(d["gyro_x"], dtype=float)[: args.mtig_samples]
         lines.append(line(run_axis(0, "gyro_x", y, 1.0 / float(d["fs_hz"]))).replace("run0", "MTi-G"))
