@@ -49,8 +49,9 @@ def model_av_edf(components: list[Component], m: np.ndarray, n: int, dt: float) 
     stochastic = [c for c in components if not isinstance(c, RR)]
     slope = sum(abs(c.slope) for c in components if isinstance(c, RR))
     lags = np.arange(n + 1, dtype=float)
-    long_memory = [c for c in stochastic if c.memory(dt)[0] > 0]
-    short_memory = [c for c in stochastic if c.memory(dt)[0] <= 0]
+    long_memory, short_memory = [], []
+    for c in stochastic:
+        (long_memory if c.memory(dt)[0] > 0 else short_memory).append(c)
     k_long = np.sum([c.sum_covariance(lags, dt) for c in long_memory], axis=0) if long_memory else None
     edf = np.empty(m.size)
     for i, mi in enumerate(m):
