@@ -34,7 +34,7 @@ from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.noise.components import OSC, RW
 from imu_noise_id.pipelines.loop import run_closed_loop
-from imu_noise_id.pipelines.loop.run import av_rms_z
+from imu_noise_id.pipelines.loop.rules import av_rms_z
 
 #: The ≈0.5 Hz disturbance's frequency per run, from the data's README.
 DISTURBANCE_HZ = {1: 0.565, 2: 0.565, 3: 0.54, 4: 0.535, 5: 0.47, 6: 0.565}

@@ -23,7 +23,7 @@ from adis import DATA, load_run  # bench/adis.py, beside this script
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.diagnostics.residuals import av_misfit_z
 from imu_noise_id.pipelines.loop import LoopResult, run_closed_loop
-from imu_noise_id.pipelines.loop.run import av_rms_z
+from imu_noise_id.pipelines.loop.rules import av_rms_z
 
 
 def trace(run: int, axis: str, samples: int, *, script: str = "bench/loop_trace.py") -> list[str]:

@@ -109,9 +109,9 @@ def test_the_loops_joint_search_adds_flicker_and_lets_the_random_walk_give_way()
     """Issue 11's bounded joint search, on the record of the test above: from the WN+RW fit (K six times too
     large), adding BI with the random walk restarted small wins by BIC and no harm to the AV; the GM placement
     is judged the same way, each recorded as a trial."""
-    from imu_noise_id.pipelines.loop.run import _explore
     from imu_noise_id.pipelines.loop.state import LoopState
     from imu_noise_id.pipelines.loop.steps import AxisLoop
+    from imu_noise_id.pipelines.loop.trials import explore
 
     truth = [WN(2e-3), BI(5e-4, *band_for_record(120000, DT)), RW(1e-5)]
     y = simulate_sum(truth, 120000, DT, np.random.default_rng(7))
@@ -119,7 +119,7 @@ def test_the_loops_joint_search_adds_flicker_and_lets_the_random_walk_give_way()
     state = LoopState(structure=["WN", "RW"])
     diag = loop.diagnose(state)
     trials = []
-    best = _explore(loop, state, diag, trials)
+    best = explore(loop, state, diag, trials)
     assert [t.finding.effect for t in trials] == ["GM", "BI"]
     assert best is not None and best[3].effect == "BI" and best[2].errors.bic < diag.errors.bic
     rw = [c for c in best[2].fit.components if c.name == "RW"]

@@ -17,8 +17,9 @@ from imu_noise_id.core.estimation.results import FitResult
 from imu_noise_id.core.noise.components import GM, LPF, OSC, RW, WN, simulate_sum, total_allan_variance
 from imu_noise_id.core.noise.flicker import BI, band_for_record
 from imu_noise_id.pipelines.loop import LoopState, run_closed_loop
-from imu_noise_id.pipelines.loop.run import _attempt_cluster, _judge
+from imu_noise_id.pipelines.loop.rules import judge
 from imu_noise_id.pipelines.loop.steps import AxisLoop
+from imu_noise_id.pipelines.loop.trials import attempt_cluster
 
 DT = 0.01
 N = 120_000  # 20 min at 100 Hz
@@ -168,10 +169,10 @@ def _av_diag(bic: float, ratio: float) -> SimpleNamespace:
 
 def test_a_bic_tie_between_equal_size_models_is_broken_by_the_av():
     before, closer = _av_diag(0.0, 3.0), _av_diag(4.0, 1.05)
-    assert _judge(before, closer, tie=True)[0]  # BIC worse by 4 (< 6), AV from far off to inside its band
-    assert not _judge(before, closer)[0]  # an addition still needs a better BIC
-    assert not _judge(before, _av_diag(8.0, 1.05), tie=True)[0]  # strong BIC evidence against it wins
-    assert not _judge(before, _av_diag(4.0, 2.9), tie=True)[0]  # an AV gain within its sampling noise is no tie-break
+    assert judge(before, closer, tie=True)[0]  # BIC worse by 4 (< 6), AV from far off to inside its band
+    assert not judge(before, closer)[0]  # an addition still needs a better BIC
+    assert not judge(before, _av_diag(8.0, 1.05), tie=True)[0]  # strong BIC evidence against it wins
+    assert not judge(before, _av_diag(4.0, 2.9), tie=True)[0]  # an AV gain within its sampling noise is no tie-break
 
 
 def test_reselection_swaps_a_random_walk_for_the_flicker_it_stands_for():
@@ -225,8 +226,9 @@ def test_a_hump_wider_than_a_tenth_of_its_frequency_is_measured_as_the_pooled_se
 def test_a_cluster_of_resonances_is_judged_as_one_step_against_the_line_it_explains():
     """The cluster step (issue 11's groups) on a known truth: the ADIS16405 run 1 gyro_z's three resonances (two
     at 21.2 / 21.9 Hz, a 4.6 Hz wide pedestal at 26.3 Hz). From the one-OSC fit, the line left at ≈ 21.5 Hz is
-    given one more resonance; :func:`_attempt_cluster` adds the strongest resonance left beside it and judges the
-    pair against the line's original statistic: kept, with the three resonances at their frequencies (2 %)."""
+    given one more resonance; :func:`~imu_noise_id.pipelines.loop.trials.attempt_cluster` adds the strongest
+    resonance left beside it and judges the pair against the line's original statistic: kept, with the three
+    resonances at their frequencies (2 %)."""
     rng = np.random.default_rng(0)
     truth = [OSC(frequency=21.17, bandwidth=0.441, sigma=2.58e-3), OSC(frequency=21.87, bandwidth=0.875, sigma=3.67e-3),
              OSC(frequency=26.33, bandwidth=4.64, sigma=1.79e-3)]
@@ -238,7 +240,7 @@ def test_a_cluster_of_resonances_is_judged_as_one_step_against_the_line_it_expla
     assert line.detector == "pooled_periodogram" and line.params["line_frequency"] == pytest.approx(21.5, abs=0.5)
     one_state = loop.extend(LoopState(["WN", "OSC"]), line, diag)
     one_diag = loop.diagnose(one_state)
-    trials, kept, state = _attempt_cluster(loop, diag, one_state, one_diag, line, one_why="(one resonance)")
+    trials, kept, state = attempt_cluster(loop, diag, one_state, one_diag, line, one_why="(one resonance)")
     assert kept is not None and trials[-1].accepted, trials[-1].reason
     assert kept.errors.bic < one_diag.errors.bic < diag.errors.bic
     assert loop.evidence_gone(line, kept)[0]

@@ -15,7 +15,7 @@ One axis at a time (:func:`run_closed_loop`):
    statistic, re-measured at the same place, is below its threshold or has halved); of the accepted
    candidates the one with the lowest BIC becomes the next step; a resonance (OSC) for a broad line that lowers
    the BIC but leaves the line's statistic above its threshold and above half brings the strongest resonance
-   left beside it, and the pair is judged as one step (a cluster, ``run._attempt_cluster``);
+   left beside it, and the pair is judged as one step (a cluster, ``trials.attempt_cluster``);
 5. repeat until no detector fires ("residuals pass"), only evidence for effects already in the model remains
    ("nothing more can be added"), no candidate is accepted ("nothing improves"), or ``max_steps`` effects were
    added.
@@ -38,9 +38,10 @@ likelihood nevertheless drops (a local optimum: nested models cannot lose likeli
 estimator's own starting values. ``GM``, ``RW``, ``RR``, ``QN`` are added to the state-space structure.
 
 The Allan variances (data with the fitted regressors removed, against the model's theoretical AV) use
-τ = m·dt up to a tenth of the record, where each estimate has roughly ten or more degrees of freedom; their
-95 % intervals take the noise type at each τ from the *model's* AV (the null hypothesis), not from the noisy
-data.
+τ = m·dt up to a tenth of the record; their 95 % intervals are those of the estimator under the null hypothesis
+"the fitted model holds", with its exact variance for that model
+(:func:`~imu_noise_id.core.diagnostics.av_band.model_av_band`), not a power-law EDF read from the noisy data.
+The rules that judge one fit against another are in :mod:`.rules`, the moves a step tries in :mod:`.trials`.
 """
 
 from .run import ImuLoop, align_temperature, run_closed_loop, run_closed_loop_imu

@@ -1,0 +1,94 @@
+"""The loop's rules for judging one fitted model against another: the AV misfit, do no harm, the BIC tie, the
+simultaneous AV band and practical significance (issue 11's rules on real data). The loop that applies them is
+:mod:`imu_noise_id.pipelines.loop`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import stats
+
+from ...core.diagnostics.residuals import av_misfit_z
+from .state import Diagnosis
+
+#: "Do no harm": a step may raise the RMS of the AV misfit z-scores (model vs data, in sd of the AV estimates) by
+#: at most this much.
+AV_Z_TOLERANCE = 1.0
+
+
+def av_rms_z(diag: Diagnosis) -> float:
+    """RMS over τ of the AV misfit z-scores (log AV of data vs model in units of the estimate's sd)."""
+    z = av_misfit_z(diag.av_data, diag.av_ci, diag.av_model)
+    z = z[np.isfinite(z)]
+    return float(np.sqrt(np.mean(z**2))) if z.size else 0.0
+
+
+#: A BIC difference below this is no strong evidence either way (Kass & Raftery 1995, J. Am. Stat. Assoc. 90:
+#: ΔBIC 2–6 "positive", above 6 "strong"): between models of no more parameters, the AV then decides.
+BIC_TIE = 6.0
+#: How much a tie-breaking move must lower the RMS AV misfit z: twice what do-no-harm lets a step raise it.
+AV_Z_GAIN = 2.0 * AV_Z_TOLERANCE
+
+
+#: Practical significance: a model AV within this relative error of the data's AV is good enough at that τ.
+PRACTICAL_AV_ERROR = 0.10
+
+
+def simultaneous_z(diag: Diagnosis, level: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """(z_τ, finite mask, the simultaneous bound on |z|: Bonferroni over the octaves of τ)."""
+    z = av_misfit_z(diag.av_data, diag.av_ci, diag.av_model)
+    ok = np.isfinite(z)
+    if not ok.any():
+        return z, ok, 0.0
+    octaves = max(1.0, math.log2(diag.tau[ok].max() / diag.tau[ok].min()) + 1.0)
+    return z, ok, float(stats.norm.isf((1.0 - level) / (2.0 * octaves)))
+
+
+def practically_negligible(diag: Diagnosis, level: float = 0.95) -> bool:
+    """Whether at every τ the model's AV lies inside the data's simultaneous band (:func:`av_inside_band`) or
+    within :data:`PRACTICAL_AV_ERROR` of the data's AV: what is left is detectable but does not matter."""
+    z, ok, bound = simultaneous_z(diag, level)
+    rel = np.abs(diag.av_model / np.where(diag.av_data > 0, diag.av_data, np.nan) - 1.0)
+    return bool(ok.any() and np.all((np.abs(z[ok]) <= bound) | (rel[ok] <= PRACTICAL_AV_ERROR)))
+
+
+def av_inside_band(diag: Diagnosis, level: float = 0.95) -> bool:
+    """Whether the model's AV lies inside the data's ``level`` band at every τ, the band simultaneous over τ.
+
+    AV estimates one octave of τ apart are nearly independent and those closer are strongly correlated, so the
+    band is Bonferroni-corrected over the J octaves spanned: |z_τ| ≤ Φ⁻¹(1 − (1 − level)/(2J)) at every τ (a
+    pointwise 95 % band is left somewhere by a correct model more often than not).
+    """
+    z, ok, bound = simultaneous_z(diag, level)
+    return bool(ok.any() and np.max(np.abs(z[ok])) <= bound)
+
+
+def max_relative_av_error(diag: Diagnosis) -> float:
+    """Largest |AV_model / AV_data − 1| over τ."""
+    ok = diag.av_data > 0
+    return float(np.max(np.abs(diag.av_model[ok] / diag.av_data[ok] - 1.0))) if ok.any() else math.nan
+
+
+def judge(before: Diagnosis, after: Diagnosis, *, tie: bool = False) -> tuple[bool, str]:
+    """The BIC and do-no-harm rules: BIC lower and the AV misfit no worse than its sampling noise allows.
+
+    With ``tie`` (a move that adds no parameter: a drop or a swap of re-selection), a BIC worse by less than
+    :data:`BIC_TIE` is a tie the likelihood cannot break, and the AV decides: the move is kept when it lowers the
+    RMS AV misfit z by at least :data:`AV_Z_GAIN`.
+    """
+    improved = after.errors.bic < before.errors.bic
+    z0, z1 = av_rms_z(before), av_rms_z(after)
+    no_harm = z1 <= z0 + AV_Z_TOLERANCE
+    why = (f"BIC {before.errors.bic:.1f} → {after.errors.bic:.1f} ({'better' if improved else 'not better'}); "
+           f"AV misfit z {z0:.1f} → {z1:.1f}{'' if no_harm else ' (worse)'}")
+    if tie and not improved and after.errors.bic - before.errors.bic < BIC_TIE and z1 <= z0 - AV_Z_GAIN:
+        return True, why + f"; a BIC tie (within {BIC_TIE:g}) that the AV breaks"
+    return improved and no_harm, why
+
+
+def better(a: Diagnosis, b: Diagnosis) -> bool:
+    """Of two kept moves, the better: the lower BIC unless the two tie (:data:`BIC_TIE`), then the lower AV misfit."""
+    if abs(a.errors.bic - b.errors.bic) < BIC_TIE:
+        return av_rms_z(a) < av_rms_z(b)
+    return a.errors.bic < b.errors.bic
