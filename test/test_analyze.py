@@ -222,3 +222,34 @@ def test_analysis_reports_progress_per_estimator():
     imu = simulate_static_imu(_model(), 100.0, 30.0, seed=1)
     analyze_static(imu, progress=lambda done, total: calls.append((done, total)))
     assert calls == [(1, 4), (2, 4), (3, 4), (4, 4)]
+
+
+def test_axes_in_worker_processes_give_the_same_result():
+    """``jobs=2`` runs each axis's model stage, loop, final model and band in two worker processes (alive while the
+    axes come back, in axis order) and returns what one process computes, number for number; a bad ``jobs`` is an
+    InputError."""
+    import multiprocessing
+
+    from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
+
+    imu = simulate_static_imu(_model(), 100.0, 20.0, seed=7)
+    results, workers = {}, {}
+    for jobs in (1, 2):
+        seen: list[tuple[str, int]] = []
+        results[jobs] = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+RW"), jobs=jobs),
+                                on_axis=lambda axis, fit, loop, seen=seen: seen.append(
+                                    (axis, len(multiprocessing.active_children()))))
+        workers[jobs] = seen
+    assert [a for a, _ in workers[2]] == list(AXES)
+    assert min(k for _, k in workers[2]) == 2 and max(k for _, k in workers[1]) == 0
+    one, two = results[1], results[2]
+    assert one.warnings == two.warnings
+    for axis in AXES:
+        assert [c.params() for c in one.finals[axis].fit.components] == \
+            [c.params() for c in two.finals[axis].fit.components]
+        assert one.finals[axis].fit.loglik == two.finals[axis].fit.loglik
+        assert one.finals[axis].noise_density == two.finals[axis].noise_density
+        assert [s.model for s in one.loops[axis].steps] == [s.model for s in two.loops[axis].steps]
+        assert np.array_equal(one.bands[axis][1], two.bands[axis][1])
+    with pytest.raises(InputError, match="--jobs"):
+        AnalyzeOptions(jobs=-1)

@@ -67,6 +67,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "sinusoids, temperature, steps, outliers one at a time while BIC improves; writes a 'loop:' list per "
         "axis into model.yaml and DIR/report.html). It runs by default unless --model none",
     )
+    p.add_argument(
+        "--jobs", type=int, default=0, metavar="N",
+        help="worker processes for the per-axis model stage and loop, one axis each (default 0: one per available "
+        "core on records of 100000 samples or more; 1: none). The results are the same; peak memory adds up over "
+        "the workers")
     p.set_defaults(run=run)
 
 
@@ -91,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
                              models=ModelStage(args.model, estimator=args.estimator,
                                                gmwm=GmwmOptions(robust=args.robust)),
-                             loop=not args.no_loop, horizon_s=args.horizon)
+                             loop=not args.no_loop, horizon_s=args.horizon, jobs=args.jobs)
     with TextProgress(f"reading {args.bag.name}") as progress:
         recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
     allan = TextProgress("Allan-family variances")

@@ -16,13 +16,18 @@ adapter):
 6. the overbound of every axis (:mod:`.overbound`): the smallest WN+RW covering the data's upper Allan bound and
    the final model over the filter's τ range (also without the model stage: then the data's bound alone).
 
+Stages 2–5 of one axis do not depend on the other axes: on a long record they run in worker processes, one axis
+each (``AnalyzeOptions.jobs``), and their results come back in axis order, the same numbers as one after another.
+
 The report layer (:mod:`imu_noise_id.report.analysis`) writes every file once from the result.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+import multiprocessing
+import os
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -40,6 +45,9 @@ from .static import StaticAnalysis, analyze_static
 
 #: Simulations of each final model drawn as its band.
 BAND_SIMULATIONS = 20
+#: With ``jobs=0`` (automatic) a record of fewer samples per axis runs its axes in this process: a worker's start
+#: (≈ 1–2 s of imports) would be a good part of such an axis's time.
+PARALLEL_MIN_SAMPLES = 100_000
 
 Progress = Callable[[int, int], None]
 #: Called when an axis is done: (axis, its model-stage fit, its loop or None).
@@ -60,6 +68,10 @@ class AnalyzeOptions:
         Run the closed loop after the model stage (at the recording's own rate).
     horizon_s
         End of the overbound's τ range [s] (it starts at the sampling period).
+    jobs
+        Worker processes for stages 2–5, one axis each: 0 (default) one per available core, at most one per axis,
+        on records of at least :data:`PARALLEL_MIN_SAMPLES` samples per axis (shorter ones in this process); 1 all
+        in this process.
     """
 
     kinds: tuple[str, ...] = KINDS
@@ -69,8 +81,11 @@ class AnalyzeOptions:
     models: ModelStage = field(default_factory=ModelStage)
     loop: bool = True
     horizon_s: float = DEFAULT_HORIZON_S
+    jobs: int = 0
 
     def __post_init__(self) -> None:
+        if self.jobs < 0:
+            raise InputError(f"--jobs must be >= 0 (0: one per core), got {self.jobs}")
         if not (math.isfinite(self.horizon_s) and self.horizon_s > 0):
             raise InputError(f"--horizon must be a finite number of seconds > 0, got {self.horizon_s}")
         if not 0.0 < self.confidence < 1.0:
@@ -153,30 +168,97 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
 
 def _model_stages(imu: ImuSeries, temperature: ScalarSeries | None, options: AnalyzeOptions, result: AnalysisResult,
                   on_axis: OnAxis | None) -> None:
-    """Stages 2–5 of the module docstring, into ``result``."""
+    """Stages 2–5 of the module docstring, into ``result``: each axis by :func:`_axis_stages`, in worker processes
+    when ``options.jobs`` asks for them, the results taken in axis order."""
     static = result.static
-    axes = list(static.axes)
     loop = _imu_loop(imu, temperature, options, result.warnings) if options.loop else None
-    for axis in axes:
-        model = fit_axis(imu, axis, options.models, static.dt, static.allan.column(axes.index(axis)))
-        fit = model.fit
-        if model.note is not None:
-            result.warnings.append(f"{axis}: {model.note}")
-        if loop is not None and fit.estimator != "em":
-            result.warnings.append(f"{axis}: closed loop skipped: it diagnoses the EM's one-step innovations, and this "
-                                   "axis was fitted by the GMWM (its J-test and per-scale residuals are in model.yaml)")
-        elif loop is not None:
-            try:
-                result.loops[axis] = loop.run(axis, fit)
-            except InputError as exc:
-                result.warnings.append(f"closed loop skipped: {exc}")
-                loop = None
-        result.finals[axis] = final_model(fit, result.loops.get(axis), static.allan.column(axes.index(axis)))
+    context = _AxisContext(imu, loop, options, static)
+    for axis, outcome in _each_axis(context, _jobs(options.jobs, static.n, len(static.axes))):
+        result.warnings += [w for w in outcome.warnings if w not in result.warnings]
+        if outcome.loop is not None:
+            result.loops[axis] = outcome.loop
+        result.finals[axis] = outcome.final
         if on_axis is not None:
-            on_axis(axis, fit, result.loops.get(axis))
-        result.models[axis] = model.without_data()
-        result.bands[axis] = allan_band(result.finals[axis].fit.components, static.dt, static.n, static.allan.tau,
-                                        n_sim=BAND_SIMULATIONS, seed=axes.index(axis))
+            on_axis(axis, outcome.model.fit, outcome.loop)
+        result.models[axis] = outcome.model.without_data()
+        result.bands[axis] = outcome.band
+
+
+@dataclass(frozen=True)
+class _AxisContext:
+    """What every axis's stages read: the recording, the loop over it (or None), the options, the Allan stage."""
+
+    imu: ImuSeries
+    loop: ImuLoop | None
+    options: AnalyzeOptions
+    static: StaticAnalysis
+
+
+@dataclass(frozen=True)
+class _AxisOutcome:
+    """Stages 2–5 of one axis: the model stage (with its record), the loop (or None), the final model, the
+    simulation band (τ [s], AVs (n_sim, T) [u²]) and the warnings."""
+
+    model: AxisModel
+    loop: LoopResult | None
+    final: FinalModel
+    band: tuple[np.ndarray, np.ndarray]
+    warnings: list[str]
+
+
+def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
+    """Model stage, closed loop, final model and simulation band of one axis (stages 2–5)."""
+    static, options, loop = context.static, context.options, context.loop
+    column = static.allan.column(list(static.axes).index(axis))
+    model = fit_axis(context.imu, axis, options.models, static.dt, column)
+    fit = model.fit
+    warnings = [] if model.note is None else [f"{axis}: {model.note}"]
+    loop_result = None
+    if loop is not None and fit.estimator != "em":
+        warnings.append(f"{axis}: closed loop skipped: it diagnoses the EM's one-step innovations, and this axis was "
+                        "fitted by the GMWM (its J-test and per-scale residuals are in model.yaml)")
+    elif loop is not None:
+        try:
+            loop_result = loop.run(axis, fit)
+        except InputError as exc:
+            warnings.append(f"closed loop skipped: {exc}")
+    final = final_model(fit, loop_result, column)
+    band = allan_band(final.fit.components, static.dt, static.n, static.allan.tau, n_sim=BAND_SIMULATIONS,
+                      seed=list(static.axes).index(axis))
+    return _AxisOutcome(model, loop_result, final, band, warnings)
+
+
+def _jobs(asked: int, n: int, axes: int) -> int:
+    """Worker processes for ``axes`` axes of ``n`` samples when ``asked`` (:class:`AnalyzeOptions`); 1 = none."""
+    if asked == 0:
+        return min(len(os.sched_getaffinity(0)), axes) if n >= PARALLEL_MIN_SAMPLES else 1
+    return min(asked, axes)
+
+
+#: The context of a worker process's axes (set once per worker by :func:`_set_worker_context`).
+_WORKER_CONTEXT: list[_AxisContext] = []
+
+
+def _set_worker_context(context: _AxisContext) -> None:
+    _WORKER_CONTEXT[:] = [context]
+
+
+def _worker_axis(axis: str) -> _AxisOutcome:
+    return _axis_stages(_WORKER_CONTEXT[0], axis)
+
+
+def _each_axis(context: _AxisContext, jobs: int) -> Iterator[tuple[str, _AxisOutcome]]:
+    """(axis, its outcome) in axis order: here one after another, or from ``jobs`` worker processes (started
+    fresh, "spawn": nothing of this process is shared but the context, sent to each worker once). The workers
+    are stopped when the last axis is back or on the first error (an axis's InputError is raised here)."""
+    axes = list(context.static.axes)
+    if jobs <= 1:
+        for axis in axes:
+            yield axis, _axis_stages(context, axis)
+        return
+    with multiprocessing.get_context("spawn").Pool(jobs, initializer=_set_worker_context,
+                                                   initargs=(context,)) as pool:
+        yield from zip(axes, pool.imap(_worker_axis, axes), strict=True)
 
 
 __all__ = ["AUTO", "DEFAULT_HORIZON_S", "AnalysisResult", "AnalyzeOptions", "AxisOverbound", "FinalModel",
