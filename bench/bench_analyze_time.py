@@ -6,14 +6,18 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
 
     .venv/bin/python bench/bench_analyze_time.py --baseline ../baseline            # 1 h at 400 Hz (issue 10)
     .venv/bin/python bench/bench_analyze_time.py --rates 200 400                     # issue 11's timings
+    .venv/bin/python bench/bench_analyze_time.py --rates 200 --jobs 1 0               # one process vs one per core
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
-checkout. Printed: per rate and source, wall time, CPU time (user + system of the analyze process) and its peak RSS.
+checkout. Printed: per rate, source and ``--jobs`` value, wall time, CPU time (user + system of the analyze process
+and of the worker processes it reaped) and peak memory: the largest RSS of one process and the largest sum of the
+RSS of the analyze process and its workers (sampled every 0.1 s).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import subprocess
 import sys
@@ -21,22 +25,46 @@ import tempfile
 import time
 from pathlib import Path
 
+import psutil
+
 ROOT = Path(__file__).resolve().parents[1]
 MODEL = "gyro: WN(1.7e-4)+GM(tau=300, sigma=2e-5)+RW(2e-5); accel: WN(2e-3)+RW(3e-4)"
 
 
-def run_analyze(source: Path, bag: Path, out: Path) -> tuple[float, float, float]:
-    """(wall [s], CPU [s], peak RSS [MiB]) of ``python -m imu_noise_id analyze`` from ``source``."""
+def _tree_rss(pid: int) -> int:
+    """RSS [bytes] of process ``pid`` and all its descendants (0 once it is gone)."""
+    try:
+        root = psutil.Process(pid)
+        procs = [root, *root.children(recursive=True)]
+    except psutil.Error:
+        return 0
+    total = 0
+    for proc in procs:
+        with contextlib.suppress(psutil.Error):
+            total += proc.memory_info().rss
+    return total
+
+
+def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None) -> tuple[float, float, float, float]:
+    """(wall [s], CPU [s], peak RSS of one process [MiB], peak summed RSS of the process tree [MiB]) of
+    ``python -m imu_noise_id analyze`` from ``source`` (with ``--jobs`` when given)."""
     env = dict(os.environ, PYTHONPATH=str(source))
+    cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out)]
     start = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out)],
+    proc = subprocess.Popen(cmd + ([] if jobs is None else ["--jobs", str(jobs)]),
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    _, status, usage = os.wait4(proc.pid, 0)
+    tree = 0
+    while True:
+        pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
+        if pid:
+            break
+        tree = max(tree, _tree_rss(proc.pid))
+        time.sleep(0.1)
     wall = time.perf_counter() - start
     proc.returncode = os.waitstatus_to_exitcode(status)
     if proc.returncode != 0:
         raise SystemExit(f"analyze from {source} failed:\n{proc.stderr.read()}")
-    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, tree / 2.0**20
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -45,8 +73,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=3600.0, help="record length [s] (default 3600)")
     parser.add_argument("--baseline", type=Path, action="append", default=[],
                         help="another checkout to time side by side (repeatable)")
+    parser.add_argument("--jobs", type=int, nargs="+", default=None,
+                        help="time this checkout with each of these --jobs values (default: its default only)")
     args = parser.parse_args(argv)
-    sources = [("this checkout", ROOT)] + [(f"baseline {p}", p.resolve()) for p in args.baseline]
+    mine = [("this checkout", None)] if args.jobs is None else [(f"this checkout, --jobs {j}", j) for j in args.jobs]
+    sources = [(name, ROOT, jobs) for name, jobs in mine] + [(f"baseline {p}", p.resolve(), None)
+                                                              for p in args.baseline]
     print(f"analyze, default options; {os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}")
     with tempfile.TemporaryDirectory() as tmp:
         for rate in args.rates:
@@ -56,13 +88,14 @@ def main(argv: list[str] | None = None) -> int:
                            stdout=subprocess.DEVNULL, env=dict(os.environ, PYTHONPATH=str(ROOT)))
             print(f"\n{args.duration:g} s at {rate:g} Hz ({int(args.duration * rate)} samples per axis):")
             times = {}
-            for name, source in sources:
-                wall, cpu, rss = run_analyze(source, bag, Path(tmp) / f"out_{len(times)}")
+            for name, source, jobs in sources:
+                wall, cpu, rss, tree = run_analyze(source, bag, Path(tmp) / f"out_{len(times)}", jobs)
                 times[name] = wall
-                print(f"  {name:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB")
-            if len(sources) > 1:
-                for name, _ in sources[1:]:
-                    print(f"  {name}: {times[name] / times['this checkout']:.2f}× the wall time of this checkout")
+                print(f"  {name:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB "
+                      f"(process tree {tree:7.0f} MiB)", flush=True)
+            first = sources[0][0]
+            for name, _, _ in sources[1:]:
+                print(f"  {name}: {times[name] / times[first]:.2f}× the wall time of {first}")
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0
 
