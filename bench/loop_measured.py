@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 from adis import DATA, load_run  # bench/adis.py, beside this script
-from scipy import stats
 
 from imu_noise_id.core.allan import allan_variance
+from imu_noise_id.core.allan.rw_bound import random_walk_bound
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.noise.components import OSC, RW
 from imu_noise_id.pipelines.loop import run_closed_loop
@@ -54,19 +54,17 @@ def long_tau_rw_bounds(y: np.ndarray, dt: float) -> dict[str, float]:
     (χ² with the EDF of a random walk, the null K²τ/3). A minimum over M pointwise 95 % limits is not a 95 % bound:
     a true K exceeds it with probability up to M·5 %.
 
-    ``rw_bound95``: the same with each limit at the level 1 − 5 %/M (Bonferroni), so that the true K exceeds it with
-    probability ≤ 5 % whatever the correlation between octaves (under the χ² law of each estimate); the other
-    components only add AV, so the bound holds for K in any model. The summary judges a fitted random walk by it.
+    ``rw_bound95``: :func:`~imu_noise_id.core.allan.rw_bound.random_walk_bound` (what ``analyze`` flags a final K
+    by): each limit at the level 1 − 5 %/M (Bonferroni), so that the true K exceeds it with probability ≤ 5 %. The
+    summary judges a fitted random walk by it.
     """
     av = allan_variance(y, dt, confidence=0.90, alpha=-2)
     far = av.tau >= LONG_TAU
     if not far.any():
         return {"rw_bound": math.nan, "rw_bound95_pointwise": math.nan, "rw_bound95": math.nan}
-    tau, variance, edf = av.tau[far], av.variance[far, 0], av.edf[far, 0]
-    q = stats.chi2.ppf(0.05 / tau.size, edf)
-    return {"rw_bound": float(np.min(np.sqrt(3.0 * variance / tau))),
-            "rw_bound95_pointwise": float(np.min(np.sqrt(3.0 * av.ci_high[far, 0] / tau))),
-            "rw_bound95": float(np.min(np.sqrt(3.0 * variance * edf / q / tau)))}
+    return {"rw_bound": float(np.min(np.sqrt(3.0 * av.variance[far, 0] / av.tau[far]))),
+            "rw_bound95_pointwise": float(np.min(np.sqrt(3.0 * av.ci_high[far, 0] / av.tau[far]))),
+            "rw_bound95": random_walk_bound(av, tau_min=LONG_TAU).value}
 
 
 def _commit() -> str:

@@ -121,6 +121,13 @@ def final_to_dict(final: FinalModel) -> dict:
                   "source": v.source}
            for name, v in (("noise_density", final.noise_density), ("random_walk", final.random_walk))},
         "noise_stddev_per_sample": num(final.noise_stddev_per_sample),
+        "random_walk_long_tau_bound": {
+            "value": num(final.random_walk_bound.value), "level": final.random_walk_bound.level,
+            "tau_range": [num(t) for t in final.random_walk_bound.tau_range],
+            "simultaneous_over": final.random_walk_bound.estimates,
+            "random_walk_above_it": final.random_walk_above_bound,
+            "p_value_of_the_random_walk": (None if final.random_walk.value is None
+                                           else num(final.random_walk_bound.p_value(final.random_walk.value)))},
         **{name: {"value": num(b.value), "ci95": [num(b.ci95[0]), num(b.ci95[1])], "tau_at_minimum":
                   num(b.tau_at_minimum), "reached": bool(b.reached), "source": b.source}
            for name, b in (("bias_instability", final.bias_instability),

@@ -5,15 +5,18 @@ selection; a short-memory GM read as the sensor's low-pass (:func:`~imu_noise_id
 From it: the passband noise density N, the random walk K (or "not identifiable"), the per-sample variance of the
 high-frequency noise (:mod:`imu_noise_id.core.estimation.kalibr`) — oscillations, the internal filter's shape,
 GMs and regressors kept out of N and K — and the bias instability, read from the model with its interval and from
-the data's Allan deviation (:mod:`imu_noise_id.core.estimation.instability`).
+the data's Allan deviation (:mod:`imu_noise_id.core.estimation.instability`). A random walk above what the data's
+long-τ AV supports (:mod:`imu_noise_id.core.allan.rw_bound`, τ beyond the tenth of the record the model is judged
+on) is flagged in its source: a bounded wander fits the record as well, and only a longer record tells them apart.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ...core.allan import AllanResult
+from ...core.allan.rw_bound import RandomWalkBound, random_walk_bound
 from ...core.estimation import kalibr
 from ...core.estimation.instability import BiasInstability, bias_instability, bias_instability_from_allan
 from ...core.estimation.relabel import gm_as_filter, with_uncertainty
@@ -32,6 +35,7 @@ class FinalModel:
     noise_density, random_walk : Kalibr's N [u/√Hz] and K [u/s/√Hz] with intervals and their sources
     noise_stddev_per_sample : √(per-sample variance of the high-frequency noise) at the recording's dt [u]
     bias_instability, bias_instability_allan : B [u] from the model (with interval) and from the data's AV
+    random_walk_bound : the largest K the data's AV at τ ≥ a tenth of the record supports (95 %, simultaneous)
     """
 
     fit: FitResult
@@ -41,6 +45,12 @@ class FinalModel:
     noise_stddev_per_sample: float
     bias_instability: BiasInstability
     bias_instability_allan: BiasInstability
+    random_walk_bound: RandomWalkBound
+
+    @property
+    def random_walk_above_bound(self) -> bool:
+        """Whether the final K is above what the data's long-τ AV supports."""
+        return self.random_walk_bound.exceeded_by(self.random_walk.value)
 
 
 def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResult) -> FinalModel:
@@ -57,8 +67,15 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
         source = f"closed loop, step {loop.final.index}: {loop.final.model}"
     tau_max = fit.n * fit.dt / 10.0
     supported = allan.tau <= tau_max
+    bound = random_walk_bound(allan, tau_min=tau_max)
+    k = kalibr.random_walk(fit)
+    if bound.exceeded_by(k.value):
+        k = replace(k, source=f"{k.source}; above what the data's AV at τ = {bound.tau_range[0]:.3g}–"
+                              f"{bound.tau_range[1]:.3g} s supports ({bound.value:.3g} at 95 %, p = "
+                              f"{bound.p_value(k.value):.2g}): a bounded wander fits this record as well; a longer "
+                              "record tells them apart")
     return FinalModel(fit=fit.without_data(), source=source, noise_density=kalibr.noise_density(fit),
-                      random_walk=kalibr.random_walk(fit),
+                      random_walk=k, random_walk_bound=bound,
                       noise_stddev_per_sample=math.sqrt(kalibr.per_sample_noise_variance(fit)),
                       bias_instability=bias_instability(fit, tau_max),
                       bias_instability_allan=bias_instability_from_allan(allan.tau[supported],

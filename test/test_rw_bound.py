@@ -1,0 +1,85 @@
+"""The long-τ random-walk bound (core/allan/rw_bound.py) against known truths: its coverage on simulated random
+walks, and a bounded wander whose short-τ AV mimics a random walk."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core.allan import allan_variance
+from imu_noise_id.core.allan.rw_bound import random_walk_bound
+from imu_noise_id.core.noise.components import RW, WN, simulate_sum
+
+DT, N, K = 0.01, 20000, 1e-3
+
+
+def test_the_bound_holds_the_true_random_walk_at_its_level_where_the_minimum_of_pointwise_limits_does_not():
+    """300 records of WN + RW (200 s, τ ≥ 20 s: six AV estimates): the simultaneous 95 % bound is below the true
+    K in at most 5 % of them; the minimum of the six pointwise 95 % limits (what the bench printed before) is
+    below it in more than 5 %."""
+    simultaneous, pointwise = [], []
+    for seed in range(300):
+        y = simulate_sum([WN(2e-3), RW(K)], N, DT, np.random.default_rng(seed))
+        av = allan_variance(y, DT, confidence=0.90, alpha=-2)
+        bound = random_walk_bound(av)
+        far = av.tau >= 0.1 * N * DT
+        simultaneous.append(bound.value)
+        pointwise.append(float(np.min(np.sqrt(3.0 * av.ci_high[far, 0] / av.tau[far]))))
+    assert bound.estimates == 6 and bound.tau_range[1] == pytest.approx(N * DT / 2, rel=1e-3)
+    assert np.mean(np.array(simultaneous) < K) <= 0.05
+    assert np.mean(np.array(pointwise) < K) > 0.05
+    assert np.median(simultaneous) < 4.0 * K  # a bound, not a vacuous one
+
+
+def test_a_bounded_wander_that_looks_like_a_random_walk_at_short_tau_is_bounded_far_below_it():
+    """White noise + a slow sinusoid of period T/2: up to T/20 its AV rises like a random walk, but the record's
+    halves have the same mean. The bound is far below the K the rise implies, and flags it."""
+    t = np.arange(N) * DT
+    y = simulate_sum([WN(2e-3)], N, DT, np.random.default_rng(1)) + 0.05 * np.sin(2 * np.pi * t / (N * DT / 2))
+    av = allan_variance(y, DT, confidence=0.90, alpha=-2)
+    rise = av.tau <= N * DT / 20
+    k_rise = float(np.sqrt(3.0 * av.variance[rise, 0][-1] / av.tau[rise][-1]))
+    bound = random_walk_bound(av)
+    assert bound.value < 0.3 * k_rise
+    assert bound.exceeded_by(k_rise) and not bound.exceeded_by(None) and not bound.exceeded_by(0.1 * bound.value)
+
+
+def test_a_record_without_long_tau_estimates_has_no_bound():
+    y = simulate_sum([WN(2e-3)], 2000, DT, np.random.default_rng(2))
+    bound = random_walk_bound(allan_variance(y, DT), tau_min=1e4)
+    assert math.isnan(bound.value) and bound.estimates == 0 and not bound.exceeded_by(1.0)
+
+
+def test_analyze_flags_a_final_random_walk_the_long_tau_av_does_not_support():
+    """The final model of a WN+RW fit to the bounded wander above: its K (fitted to the short-term wander) is
+    above the bound, and the Kalibr value's source and model.yaml's entry say so; a true random walk is not
+    flagged."""
+    from imu_noise_id.core.estimation.model import NoiseModel
+    from imu_noise_id.pipelines.analyze.final import final_model
+    from imu_noise_id.report.model_yaml import final_to_dict
+
+    t = np.arange(N) * DT
+    wander = simulate_sum([WN(2e-3)], N, DT, np.random.default_rng(1)) + 0.05 * np.sin(2 * np.pi * t / (N * DT / 2))
+    walk = simulate_sum([WN(2e-3), RW(K)], N, DT, np.random.default_rng(3))
+    flagged = {}
+    for name, y in (("wander", wander), ("walk", walk)):
+        fit = NoiseModel(y, DT, "WN+RW").fit()
+        final = final_model(fit, None, allan_variance(y, DT))
+        flagged[name] = final
+    assert flagged["wander"].random_walk_above_bound
+    assert "above what the data's AV" in flagged["wander"].random_walk.source
+    entry = final_to_dict(flagged["wander"])["random_walk_long_tau_bound"]
+    assert entry["random_walk_above_it"] and entry["value"] < flagged["wander"].random_walk.value
+    assert not flagged["walk"].random_walk_above_bound and flagged["walk"].random_walk.source == "RW"
+
+
+def test_the_p_value_of_a_random_walk_is_small_exactly_where_the_bound_excludes_it():
+    """p < 5 % for any K above the bound and ≥ 5 % below it (the bound is where p crosses the level); p grows
+    as K shrinks."""
+    t = np.arange(N) * DT
+    y = simulate_sum([WN(2e-3)], N, DT, np.random.default_rng(1)) + 0.05 * np.sin(2 * np.pi * t / (N * DT / 2))
+    bound = random_walk_bound(allan_variance(y, DT))
+    assert bound.p_value(1.01 * bound.value) < 0.05 <= bound.p_value(0.99 * bound.value)
+    assert bound.p_value(10 * bound.value) < bound.p_value(2 * bound.value) < 0.05
