@@ -120,3 +120,16 @@ def test_batch_passes_rate_to_every_unit_and_refuses_a_bad_one(bags, tmp_path):
     assert doc["update_rate"] == 100.0 and "declared (--rate)" in doc["update_rate_source"]
     assert main(["batch", str(bags / "imu0*"), "--out", str(tmp_path / "bad"), "--rate", "-5"]) == 2
     assert not (tmp_path / "bad").exists()
+
+
+def test_a_unit_long_enough_for_parallel_axes_runs_in_its_dask_worker(client, tmp_path):
+    """A record of ≥ PARALLEL_MIN_SAMPLES per axis, where ``analyze`` alone would start a process per axis: in a
+    batch its axes run one after another in the worker (a daemonic Dask worker may not start processes)."""
+    from imu_noise_id.pipelines.analyze import PARALLEL_MIN_SAMPLES
+
+    duration = PARALLEL_MIN_SAMPLES / 100.0
+    assert main(["simulate", "--model", "gyro: WN(1e-3)+RW(2e-5); accel: WN(2e-3)+RW(3e-4)", "--rate", "100",
+                 "--duration", f"{duration:g}", "--out", str(tmp_path / "long" / "imu_long"), "--seed", "3"]) == 0
+    units = discover_units([str(tmp_path / "long" / "*")], None)
+    result = run_batch(units, {**OPTIONS, "model": "WN"}, tmp_path / "out", client)
+    assert [o.status for o in result.outcomes] == ["ok"], [o.error for o in result.outcomes]

@@ -39,13 +39,16 @@ class UnitOutcome:
 
 
 def analysis_options(options: dict):
-    """The :class:`~imu_noise_id.pipelines.analyze.AnalyzeOptions` of a batch's JSON options."""
+    """The :class:`~imu_noise_id.pipelines.analyze.AnalyzeOptions` of a batch's JSON options: a unit's axes one
+    after another in its worker (``jobs=1``): the cluster runs the units side by side, and a Dask worker process
+    (daemonic) may not start processes of its own."""
     from ..pipelines.analyze import AnalyzeOptions, ModelStage
 
     return AnalyzeOptions(per_decade=int(options.get("per_decade", 8)),
                           confidence=float(options.get("confidence", 0.95)),
                           allow_motion=bool(options.get("allow_motion", False)),
-                          models=ModelStage(str(options.get("model", "auto"))), loop=bool(options.get("loop", True)))
+                          models=ModelStage(str(options.get("model", "auto"))), loop=bool(options.get("loop", True)),
+                          jobs=1)
 
 
 def _num(x: float | None) -> float | None:
