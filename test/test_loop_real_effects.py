@@ -19,7 +19,7 @@ from imu_noise_id.core.noise.flicker import BI, band_for_record
 from imu_noise_id.pipelines.loop import LoopState, run_closed_loop
 from imu_noise_id.pipelines.loop.rules import judge
 from imu_noise_id.pipelines.loop.steps import AxisLoop
-from imu_noise_id.pipelines.loop.trials import attempt_cluster
+from imu_noise_id.pipelines.loop.trials import added_name, attempt_cluster
 
 DT = 0.01
 N = 120_000  # 20 min at 100 Hz
@@ -245,5 +245,8 @@ def test_a_cluster_of_resonances_is_judged_as_one_step_against_the_line_it_expla
     assert kept.errors.bic < one_diag.errors.bic < diag.errors.bic
     assert loop.evidence_gone(line, kept)[0]
     assert state.name() == "WN+3OSC" and len(trials[-1].finding.members) == 2
+    # the step is recorded as the pair it is (run_closed_loop takes the kept trial's finding)
+    assert "a cluster" in trials[-1].finding.evidence
+    assert added_name(["WN", "OSC"], state.structure, trials[-1].finding.effect) == "OSC+OSC"
     found = sorted(c.frequency for c in kept.fit.components if isinstance(c, OSC))
     assert found == pytest.approx([21.17, 21.87, 26.33], rel=0.02)

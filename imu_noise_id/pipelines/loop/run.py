@@ -112,7 +112,8 @@ def run_closed_loop(
             outcome = attempt(loop, diag, loop.extend(state, f, diag), f)
             trials += outcome[0]
             if outcome[1] is not None and (best is None or outcome[1].errors.bic < best[0]):
-                best = (outcome[1].errors.bic, outcome[2], outcome[1], f)
+                # the kept trial's finding: a cluster's group (both resonances), not the line's one finding
+                best = (outcome[1].errors.bic, outcome[2], outcome[1], outcome[0][-1].finding)
         if best is None and not explored:
             # One-at-a-time is stuck (no detector fires, or nothing it proposed was kept): the bounded joint search.
             explored = True

@@ -18,12 +18,13 @@ from .steps import AxisLoop, _canonical
 
 
 def added_name(before: list[str], after: list[str], effect: str) -> str:
-    """The component a step added (a GM finding can become an LPF once fitted), else the finding's effect."""
+    """The components a step added, joined by "+" (a GM finding can become an LPF once fitted; a cluster adds two
+    OSCs: "OSC+OSC"), else the finding's effect (a regressor or a cleaning)."""
     rest = list(after)
     for name in before:
         if name in rest:
             rest.remove(name)
-    return rest[0] if rest else effect
+    return "+".join(rest) if rest else effect
 
 
 def refit(loop: AxisLoop, diag: Diagnosis, new_state: LoopState) -> Diagnosis:
