@@ -14,12 +14,12 @@ from imu_noise_id.core.diagnostics.lines import SIN_CONCENTRATION, detect_broad_
 from imu_noise_id.core.diagnostics.residuals import spectral_peaks
 from imu_noise_id.core.estimation.relabel import gm_as_filter
 from imu_noise_id.core.estimation.results import FitResult
-from imu_noise_id.core.noise.components import GM, LPF, OSC, RW, WN, simulate_sum, total_allan_variance
+from imu_noise_id.core.noise.components import GM, LPF, MA, OSC, RW, WN, simulate_sum, total_allan_variance
 from imu_noise_id.core.noise.flicker import BI, band_for_record
 from imu_noise_id.pipelines.loop import LoopState, run_closed_loop
 from imu_noise_id.pipelines.loop.rules import judge
 from imu_noise_id.pipelines.loop.steps import AxisLoop
-from imu_noise_id.pipelines.loop.trials import added_name, attempt_cluster
+from imu_noise_id.pipelines.loop.trials import added_name, attempt, attempt_cluster
 
 DT = 0.01
 N = 120_000  # 20 min at 100 Hz
@@ -250,3 +250,27 @@ def test_a_cluster_of_resonances_is_judged_as_one_step_against_the_line_it_expla
     assert added_name(["WN", "OSC"], state.structure, trials[-1].finding.effect) == "OSC+OSC"
     found = sorted(c.frequency for c in kept.fit.components if isinstance(c, OSC))
     assert found == pytest.approx([21.17, 21.87, 26.33], rel=0.02)
+
+
+def test_a_broad_pedestal_beside_a_strong_line_is_started_again_at_the_pooled_scale():
+    """A 5.7 Hz wide resonance at 27.3 Hz beside a strong 21.8 Hz line (the ADIS16405 gyro_z's shape). The line's
+    shape, measured on the residual, starts the pedestal's OSC 0.13 Hz wide and the EM stays narrow (refused: the
+    line still there); :func:`~imu_noise_id.pipelines.loop.trials.attempt` starts it again at the pooled search's
+    scale (:func:`~imu_noise_id.pipelines.loop.trials.wide_start`) and keeps it, within issue 11's tolerances
+    (f₀ 2 %, bandwidth 30 %, σ 20 %), the strong line unchanged."""
+    main, pedestal = OSC(frequency=21.8, bandwidth=0.8, sigma=4.6e-3), OSC(frequency=27.3, bandwidth=5.7, sigma=1.8e-3)
+    y = simulate_sum([WN(4.7e-4), MA(4.2e-4), main, pedestal], 100_000, DT, np.random.default_rng(1))
+    loop = AxisLoop(y, DT, None, alpha=0.01, lags=20, outliers="impute")
+    state = LoopState(["WN", "MA", "OSC"], init=[WN(4.7e-4), MA(4.2e-4), main])
+    diag = loop.diagnose(state)
+    broad = next(f for f in loop.candidates(diag, state) if f.effect == "OSC")
+    assert broad.detector == "pooled_periodogram" and broad.params["bandwidth"] < 0.5
+    trials, kept, _ = attempt(loop, diag, state, broad)
+    assert not trials[0].accepted and "still there" in trials[0].reason
+    assert trials[-1].accepted and "started again" in trials[-1].finding.evidence and kept is not None
+    oscs = sorted((c for c in kept.fit.components if isinstance(c, OSC)), key=lambda c: c.frequency)
+    assert len(oscs) == 2
+    assert oscs[0].frequency == pytest.approx(main.frequency, rel=0.02)
+    assert oscs[1].frequency == pytest.approx(pedestal.frequency, rel=0.02)
+    assert oscs[1].bandwidth == pytest.approx(pedestal.bandwidth, rel=0.30)
+    assert oscs[1].sigma == pytest.approx(pedestal.sigma, rel=0.20)

@@ -109,7 +109,7 @@ def run_closed_loop(
         trials: list[Trial] = []
         best: tuple[float, LoopState, Diagnosis, det.Finding] | None = None
         for f in cands[:max_candidates]:
-            outcome = attempt(loop, diag, loop.extend(state, f, diag), f)
+            outcome = attempt(loop, diag, state, f)
             trials += outcome[0]
             if outcome[1] is not None and (best is None or outcome[1].errors.bic < best[0]):
                 # the kept trial's finding: a cluster's group (both resonances), not the line's one finding
