@@ -56,6 +56,7 @@ LONG: list[tuple[list[str], str]] = [
     (["loop_trace.py", "1", "gyro_z"], "loop_trace_r1_gyro_z.txt"),
     (["loop_trace.py", "1", "accel_x"], "loop_trace_r1_accel_x.txt"),
     (["bench_av_band.py"], "bench_av_band.txt"),
+    (["bench_rw_bound.py"], "bench_rw_bound.txt"),
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
     (["bench_loop_effects.py", "--minutes", "120", "--cases", "osc+gm", "bi"], "bench_loop_effects_2h.txt"),
     (["probe_osc_gm_bic.py"], "probe_osc_gm_bic.txt"),
