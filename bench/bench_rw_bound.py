@@ -19,9 +19,8 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from loop_measured import long_tau_rw_bounds  # bench/loop_measured.py, beside this script
 
-from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.allan.rw_bound import random_walk_bound
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 
 DT = 0.1
@@ -37,11 +36,10 @@ def shares(model: list, n: int, seeds: int) -> tuple[float, float, float, float]
     k = next(c.random_walk for c in model if isinstance(c, RW))
     simultaneous, pointwise, point = [], [], []
     for seed in range(seeds):
-        av = allan_variance(simulate_sum(model, n, DT, np.random.default_rng(seed)), DT, confidence=0.90, alpha=-2)
-        far = av.tau >= 0.1 * n * DT
-        simultaneous.append(random_walk_bound(av).value)
-        pointwise.append(float(np.min(np.sqrt(3.0 * av.ci_high[far, 0] / av.tau[far]))))
-        point.append(float(np.min(np.sqrt(3.0 * av.variance[far, 0] / av.tau[far]))))
+        bounds = long_tau_rw_bounds(simulate_sum(model, n, DT, np.random.default_rng(seed)), DT, 0.1 * n * DT)
+        simultaneous.append(bounds["rw_bound95"])
+        pointwise.append(bounds["rw_bound95_pointwise"])
+        point.append(bounds["rw_bound"])
     below = [float(np.mean(np.array(b) < k)) for b in (simultaneous, pointwise, point)]
     return below[0], below[1], below[2], float(np.median(simultaneous)) / k
 

@@ -44,8 +44,8 @@ DISTURBANCE_HZ = {1: 0.565, 2: 0.565, 3: 0.54, 4: 0.535, 5: 0.47, 6: 0.565}
 LONG_TAU = 100.0
 
 
-def long_tau_rw_bounds(y: np.ndarray, dt: float) -> dict[str, float]:
-    """The largest RW density [u/s/√Hz] the long-τ AV supports, from the AV at the M octaves τ ≥ :data:`LONG_TAU`.
+def long_tau_rw_bounds(y: np.ndarray, dt: float, tau_min: float = LONG_TAU) -> dict[str, float]:
+    """The largest RW density [u/s/√Hz] the long-τ AV supports, from the AV at the M octaves τ ≥ ``tau_min`` [s].
 
     ``rw_bound``: the point bound min_τ √(3·AV_hat(τ)/τ). A minimum over estimates of a few degrees of freedom each
     (one at τ = N/2), biased low: a random walk equal to the truth exceeds it in most records.
@@ -59,12 +59,12 @@ def long_tau_rw_bounds(y: np.ndarray, dt: float) -> dict[str, float]:
     summary judges a fitted random walk by it.
     """
     av = allan_variance(y, dt, confidence=0.90, alpha=-2)
-    far = av.tau >= LONG_TAU
+    far = av.tau >= tau_min
     if not far.any():
         return {"rw_bound": math.nan, "rw_bound95_pointwise": math.nan, "rw_bound95": math.nan}
     return {"rw_bound": float(np.min(np.sqrt(3.0 * av.variance[far, 0] / av.tau[far]))),
             "rw_bound95_pointwise": float(np.min(np.sqrt(3.0 * av.ci_high[far, 0] / av.tau[far]))),
-            "rw_bound95": random_walk_bound(av, tau_min=LONG_TAU).value}
+            "rw_bound95": random_walk_bound(av, tau_min=tau_min).value}
 
 
 def _commit() -> str:

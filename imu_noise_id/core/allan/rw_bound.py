@@ -46,7 +46,7 @@ class RandomWalkBound:
     Attributes
     ----------
     value : the bound [u/s/√Hz]; nan when the record has no AV estimate at τ ≥ ``tau_range[0]``
-    level : its confidence level, simultaneous over the ``estimates`` AV estimates it is the minimum over
+    level : its confidence level, simultaneous over the :attr:`estimates` AV estimates it is the minimum over
     tau_range : the τ [s] read (first, last)
     tau_at_minimum : the τ [s] where the bound is attained
     tau, variance, edf : the AV estimates read: τ [s], AV [u²] and a random walk's EDF
@@ -54,20 +54,24 @@ class RandomWalkBound:
 
     value: float
     level: float
-    estimates: int
     tau_range: tuple[float, float]
     tau_at_minimum: float
     tau: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     variance: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     edf: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
 
+    @property
+    def estimates(self) -> int:
+        """How many AV estimates the bound is simultaneous over (M)."""
+        return int(self.tau.size)
+
     def p_value(self, random_walk: float) -> float:
         """How strongly these AV estimates argue against a random walk K [u/s/√Hz]: the Bonferroni p-value of
         the hypothesis AV(τ) ≥ K²τ/3 (module docstring); 1 with no estimates."""
-        if self.tau.size == 0 or random_walk <= 0:
+        if self.estimates == 0 or random_walk <= 0:
             return 1.0
         tails = stats.chi2.cdf(self.edf * self.variance / (random_walk**2 * self.tau / 3.0), self.edf)
-        return float(min(1.0, self.tau.size * float(np.min(tails))))
+        return float(min(1.0, self.estimates * float(np.min(tails))))
 
     def exceeded_by(self, random_walk: float | None) -> bool:
         """Whether a fitted K is above the bound (False for no K or no bound)."""
@@ -83,11 +87,11 @@ def random_walk_bound(res: AllanResult, axis: int = 0, *, tau_min: float | None 
     start = RECORD_FRACTION * res.n * res.dt if tau_min is None else float(tau_min)
     use = np.flatnonzero((res.tau >= start) & (res.variance[:, axis] >= 0))
     if use.size == 0:
-        return RandomWalkBound(math.nan, level, 0, (start, start), math.nan)
+        return RandomWalkBound(math.nan, level, (start, start), math.nan)
     tau = res.tau[use]
     edf = np.array([edf_of("allan", -2, int(m), res.n) for m in res.m[use]])
     upper = res.variance[use, axis] * edf / stats.chi2.ppf((1.0 - level) / use.size, edf)
     bounds = np.sqrt(3.0 * upper / tau)
     i = int(np.argmin(bounds))
-    return RandomWalkBound(float(bounds[i]), level, int(use.size), (float(tau[0]), float(tau[-1])), float(tau[i]),
-                           tau, res.variance[use, axis].copy(), edf)
+    return RandomWalkBound(float(bounds[i]), level, (float(tau[0]), float(tau[-1])), float(tau[i]), tau,
+                           res.variance[use, axis].copy(), edf)

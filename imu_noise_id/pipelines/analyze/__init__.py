@@ -209,7 +209,8 @@ class _AxisOutcome:
 def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     """Model stage, closed loop, final model and simulation band of one axis (stages 2–5)."""
     static, options, loop = context.static, context.options, context.loop
-    column = static.allan.column(list(static.axes).index(axis))
+    index = list(static.axes).index(axis)
+    column = static.allan.column(index)
     model = fit_axis(context.imu, axis, options.models, static.dt, column)
     fit = model.fit
     warnings = [] if model.note is None else [f"{axis}: {model.note}"]
@@ -231,7 +232,7 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
                         f"p = {bound.p_value(k):.2g} over {bound.estimates} estimates): a bounded wander fits this "
                         "record as well; record longer before trusting K")
     band = allan_band(final.fit.components, static.dt, static.n, static.allan.tau, n_sim=BAND_SIMULATIONS,
-                      seed=list(static.axes).index(axis))
+                      seed=index)
     return _AxisOutcome(model, loop_result, final, band, warnings)
 
 
