@@ -109,11 +109,11 @@ def run_closed_loop(
         trials: list[Trial] = []
         best: tuple[float, LoopState, Diagnosis, det.Finding] | None = None
         for f in cands[:max_candidates]:
-            outcome = attempt(loop, diag, state, f)
-            trials += outcome[0]
-            if outcome[1] is not None and (best is None or outcome[1].errors.bic < best[0]):
-                # the kept trial's finding: a cluster's group (both resonances), not the line's one finding
-                best = (outcome[1].errors.bic, outcome[2], outcome[1], outcome[0][-1].finding)
+            tried, kept, kept_state, kept_for = attempt(loop, diag, state, f)
+            trials += tried
+            if kept is not None and (best is None or kept.errors.bic < best[0]):
+                # the finding it was kept for: a cluster's group (both resonances), a wide start's finding
+                best = (kept.errors.bic, kept_state, kept, kept_for)
         if best is None and not explored:
             # One-at-a-time is stuck (no detector fires, or nothing it proposed was kept): the bounded joint search.
             explored = True

@@ -94,13 +94,15 @@ class Diagnosis:
 
 @dataclass
 class Trial:
-    """A candidate effect tried at one step and why it was kept or not."""
+    """A candidate effect tried at one step and why it was kept or not. ``partly``: kept for a broad line it
+    explains in part (:func:`~imu_noise_id.pipelines.loop.trials.partly_explained`)."""
 
     finding: det.Finding
     model: str
     bic: float | None
     accepted: bool
     reason: str
+    partly: bool = False
 
 
 @dataclass
