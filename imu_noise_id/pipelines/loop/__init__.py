@@ -15,7 +15,9 @@ One axis at a time (:func:`run_closed_loop`):
    statistic, re-measured at the same place, is below its threshold or has halved); of the accepted
    candidates the one with the lowest BIC becomes the next step; a resonance (OSC) for a broad line that lowers
    the BIC but leaves the line's statistic above its threshold and above half brings the strongest resonance
-   left beside it, and the pair is judged as one step (a cluster, ``trials.attempt_cluster``);
+   left beside it, and the pair is judged as one step (a cluster, ``trials.attempt_cluster``); while the model's
+   AV is outside the data's band, a broad line's resonance (or pair) that lowers the BIC by 10 or more, the AV
+   misfit and the line's statistic is kept as explaining it in part (``trials.partly_explained``);
 5. repeat until no detector fires ("residuals pass"), only evidence for effects already in the model remains
    ("nothing more can be added"), no candidate is accepted ("nothing improves"), or ``max_steps`` effects were
    added.
