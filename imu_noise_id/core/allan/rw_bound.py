@@ -77,6 +77,13 @@ class RandomWalkBound:
         """Whether a fitted K is above the bound (False for no K or no bound)."""
         return random_walk is not None and math.isfinite(self.value) and random_walk > self.value
 
+    def excess(self, random_walk: float) -> str:
+        """What a K above the bound means, in words (the bound, its τ, the p-value): for a value's source and a
+        warning alike."""
+        return (f"above what the data's AV at τ = {self.tau_range[0]:.3g}–{self.tau_range[1]:.3g} s supports "
+                f"({self.value:.3g} at {100 * self.level:.0f} %, p = {self.p_value(random_walk):.2g} over "
+                f"{self.estimates} estimates): a bounded wander fits this record as well")
+
 
 def random_walk_bound(res: AllanResult, axis: int = 0, *, tau_min: float | None = None,
                       level: float = LEVEL) -> RandomWalkBound:

@@ -70,10 +70,7 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
     bound = random_walk_bound(allan, tau_min=tau_max)
     k = kalibr.random_walk(fit)
     if bound.exceeded_by(k.value):
-        k = replace(k, source=f"{k.source}; above what the data's AV at τ = {bound.tau_range[0]:.3g}–"
-                              f"{bound.tau_range[1]:.3g} s supports ({bound.value:.3g} at 95 %, p = "
-                              f"{bound.p_value(k.value):.2g}): a bounded wander fits this record as well; a longer "
-                              "record tells them apart")
+        k = replace(k, source=f"{k.source}; {bound.excess(k.value)}; a longer record tells them apart")
     return FinalModel(fit=fit.without_data(), source=source, noise_density=kalibr.noise_density(fit),
                       random_walk=k, random_walk_bound=bound,
                       noise_stddev_per_sample=math.sqrt(kalibr.per_sample_noise_variance(fit)),
