@@ -94,11 +94,12 @@ def partly_explained(loop: AxisLoop, f: det.Finding, before: Diagnosis, after: D
     shape that resonances only approximate (a wandering line: each resonance more lowers the BIC) is not chased
     further: what is left is of no practical significance (issue 11).
     """
-    if not broad_resonance(f) or av_inside_band(before):
-        return False, ""
-    stat = loop.targeted_statistic(f, after)
     gain = before.errors.bic - after.errors.bic
-    ok = gain >= PARTLY_BIC_GAIN and stat < f.statistic and av_rms_z(after) < av_rms_z(before)
+    if (not broad_resonance(f) or av_inside_band(before) or gain < PARTLY_BIC_GAIN
+            or av_rms_z(after) >= av_rms_z(before)):
+        return False, ""
+    # re-measured last (evidence_gone measured it already; the cheap conditions usually decide first)
+    ok = loop.targeted_statistic(f, after) < f.statistic
     return ok, (f"partly explained (BIC {gain:.0f} lower, the AV misfit and the line statistic lower, the AV "
                 "outside its band before)" if ok else "")
 
