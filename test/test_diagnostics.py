@@ -22,7 +22,10 @@ from imu_noise_id.core.diagnostics.residuals import (
     spectral_peaks,
 )
 from imu_noise_id.core.diagnostics.whitening import WhiteningFilter
+from imu_noise_id.core.noise.averaging import MA
 from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum, total_allan_variance
+from imu_noise_id.core.noise.flicker import BI
+from imu_noise_id.core.noise.resonant import LPF
 
 DT = 0.01
 WN_RW = [WN(1e-3), RW(2e-5)]  # per-sample σ = 0.01
@@ -104,6 +107,21 @@ def test_whitening_filter_gives_white_unit_innovations():
     assert np.nanstd(e[2000:]) == pytest.approx(1.0, abs=0.02)  # 3 sd of the std of 38000 N(0,1) ≈ 0.011
     assert ljung_box(e[2000:], 20).p_value > 0.001
 
+
+
+@pytest.mark.parametrize("wn", [1e-12, 1e-15])
+def test_whitening_filter_of_a_model_whose_white_noise_went_to_zero(wn):
+    """The loop's RW→BI swap on ADIS16405 run 4 accel_z (first 10⁵ samples) fitted the white noise to ~0 beside an
+    LPF and failed: "no steady-state Kalman filter … symplectic pencil has eigenvalues too close to the unit
+    circle" (R ≈ 1e-12 of the LPF's output noise). The LPF's state noise alone makes the output predictable with a
+    finite innovation variance; the filter must exist and whiten the model's own data."""
+    model = [WN(wn), LPF(4.4e-3, 32.5), MA(2.1e-3), BI(1e-4, 0.1, 1000.0), RW(1.25e-3)]
+    y = simulate_sum(model, 40000, DT, np.random.default_rng(41))
+    e, w = _innovations(y, model)
+    assert np.nanstd(e[2000:]) == pytest.approx(1.0, abs=0.02)
+    assert ljung_box(e[2000:], 20).p_value > 0.001
+    reference = WhiteningFilter.from_components([WN(0.0), *model[1:]], DT)
+    assert w.innovation_variance == pytest.approx(reference.innovation_variance, rel=1e-6)
 
 # ------------------------------------------------------------------------------------------- detectors
 def test_detectors_false_alarm_rate_with_the_true_model():

@@ -47,6 +47,25 @@ def _system(components: list[Component], dt: float) -> tuple[np.ndarray, np.ndar
     return phi, q, h, r
 
 
+#: The white-noise variance R the filter uses is at least this fraction of the state noise seen at the output in one
+#: step (h Q hᵀ): a fitted white noise below it (the loop's fits beside an LPF or MA that carries the whole
+#: high-frequency density reach R ≈ 1e-12 of it) changes the innovation variance S ≥ h Q hᵀ by less than this
+#: fraction, but leaves the Riccati equation too ill-conditioned for either solver.
+R_FLOOR = 1e-9
+
+
+def _filter_r(q: np.ndarray, h: np.ndarray, r: float) -> float:
+    """R raised to :data:`R_FLOOR` · h Q hᵀ (the trace of Q if no state noise reaches the output in one step).
+
+    Beyond the papers: with R → 0 the steady-state filter still exists when a state with process noise is
+    observed (the singular filtering problem; S → h Q hᵀ), but the doubling's G = hᵀh / R and the symplectic
+    pencil of scipy's solver then lose it ("eigenvalues too close to the unit circle"; ADIS16405 run 4 accel_z,
+    ``test_whitening_filter_of_a_model_whose_white_noise_went_to_zero``).
+    """
+    seen = float(h @ q @ h) or float(np.trace(q))
+    return max(r, R_FLOOR * seen)
+
+
 def _steady_state_p(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
     """Predicted-state covariance P of the discrete algebraic Riccati equation.
 
@@ -102,6 +121,7 @@ class WhiteningFilter:
             if r <= 0:
                 raise ValueError("model has no stochastic component: nothing to whiten with")
             return cls(sos=np.array([[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]]), innovation_variance=r)
+        r = _filter_r(q, h, r)
         p = _steady_state_p(phi, q, h, r)
         s = float(h @ p @ h + r)
         if not (s > 0 and math.isfinite(s)):
