@@ -65,14 +65,17 @@ def test_broad_line_search_finds_what_one_bin_misses():
 
 @pytest.mark.parametrize("m", [1, 2, 3, 17, 1000, 4099])
 def test_humps_against_the_direct_minimum(m):
-    """The sparse-table range minimum of :func:`humps` against the direct minimum over [k/2, k) per bin."""
-    x = np.random.default_rng(m).gamma(16.0, 1.0, m)
-    direct = np.array([k >= 1 and x[k // 2: k].min() < HUMP_DIP * x[k] for k in range(m)])
-    assert np.array_equal(humps(x), direct)
+    """The sparse-table range minimum of :func:`humps` against the direct minimum over [k/2, k) per bin; a rise
+    toward 0 Hz has no hump, a line on the floor is one."""
+    r = 16
+    x = np.random.default_rng(m).gamma(r, 1.0, m)
+    direct = np.array([k >= 1 and x[k // 2: k].min() - r < HUMP_DIP * (x[k] - r) for k in range(m)])
+    assert np.array_equal(humps(x, r), direct)
     if m > 20:
-        rise, line = 1.0 / np.arange(1, m + 1) ** 2, np.ones(m)
-        line[20] = 3.0
-        assert not humps(rise).any() and np.flatnonzero(humps(line)).tolist() == [20]
+        rise, line = r * (1.0 + 100.0 / np.arange(1, m + 1) ** 2), np.full(m, float(r))
+        line[20] = 3.0 * r
+        assert not humps(rise, r).any() and np.flatnonzero(humps(line, r)).tolist() == [20]
+
 
 @pytest.mark.parametrize("seed", range(4))
 def test_broad_line_search_does_not_take_a_bias_misfit_near_0_hz_for_a_line(seed):

@@ -147,20 +147,21 @@ def _pooled(power: np.ndarray, freqs: np.ndarray, r: int) -> tuple[np.ndarray, n
     return centre, r * pooled / np.maximum(floor / scale, np.finfo(float).tiny)
 
 
-#: A pooled bin is a line's only when the pooled spectrum dips below this fraction of it somewhere between half
-#: its frequency and it (:func:`humps`).
+#: A pooled bin is a line's only when the pooled spectrum's excess over its floor falls below this fraction of the
+#: bin's own excess somewhere between half its frequency and it (:func:`humps`).
 HUMP_DIP = 0.5
 
 
-def humps(x: np.ndarray) -> np.ndarray:
-    """Which pooled statistics ``x`` (index k ↔ frequency ≈ k pooled bins) stand on a hump: some pooled bin in
-    [k/2, k) is below :data:`HUMP_DIP` of x[k] (never the first bin, which has nothing below it).
+def humps(x: np.ndarray, r: int) -> np.ndarray:
+    """Which pooled statistics ``x`` (r·pooled/floor, ≈ r on the floor; index k ↔ frequency ≈ k pooled bins) stand
+    on a hump: some pooled bin in [k/2, k) has an excess x − r below :data:`HUMP_DIP` of x[k] − r (never the first
+    bin, which has nothing below it).
 
     Beyond the papers. A model that misses part of a slow bias process (a random walk, flicker, a long GM) leaves
     innovations whose spectrum rises toward 0 Hz; against the running-median floor that rise looks like a broad
     line in the lowest pooled bins (on ADIS16405 run 5 accel_y the loop kept a 0.001 Hz "resonance" for it, on
-    run 2 accel_x one at 0.002 Hz). A resonance's excess falls on both sides of its centre, a rise only on one:
-    between half a line's frequency and the line the spectrum returns to its floor (a harmonic's fundamental
+    run 2 accel_x one at 0.002 Hz). A resonance's excess falls on both sides of its centre, a rise's only on one:
+    between half a line's frequency and the line the excess falls back toward the floor (a harmonic's fundamental
     lies at f/2 itself, with floor bins between), while below a rising bin it only grows. Resonances wider than
     half their frequency (Q < 1) are thereby left to the low-pass and bias components.
     """
@@ -180,7 +181,7 @@ def humps(x: np.ndarray) -> np.ndarray:
     for jj in np.unique(j):
         at = j == jj
         low_min[at] = np.minimum(table[jj][lo[at]], table[jj][k[at] - 2**jj])
-    out[1:] = low_min < HUMP_DIP * x[1:]
+    out[1:] = low_min - r < HUMP_DIP * (x[1:] - r)
     return out
 
 
@@ -214,7 +215,7 @@ def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float, exclude: tuple[
     tests = sum(freqs.size // r for r in usable)
     for r in usable:
         centre, x = _pooled(power, freqs, r)
-        x[~humps(x)] = 0.0
+        x[~humps(x, r)] = 0.0
         width = r * (freqs[1] - freqs[0])
         for f_x in exclude:
             x[np.abs(centre - f_x) <= 1.5 * width] = 0.0

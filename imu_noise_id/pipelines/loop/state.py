@@ -10,6 +10,7 @@ import numpy as np
 from ...core.diagnostics import detectors as det
 from ...core.diagnostics.residuals import ResidualErrors
 from ...core.diagnostics.spectra import ResidualSpectra
+from ...core.diagnostics.whitening import WhiteningFilter
 from ...core.estimation.results import FitResult
 from ...core.noise.components import Component
 from ...core.noise.modelspec import structure_name
@@ -88,8 +89,13 @@ class Diagnosis:
     av_ci: tuple[np.ndarray, np.ndarray]
     av_model: np.ndarray
     exog_values: dict[str, dict[str, float]]
-    innovation_variance: float
+    whitening: WhiteningFilter
     spectra: ResidualSpectra
+
+    @property
+    def innovation_variance(self) -> float:
+        """The fit's steady-state innovation variance S [u²] (its whitening filter's)."""
+        return self.whitening.innovation_variance
 
 
 @dataclass

@@ -107,7 +107,7 @@ class AxisLoop:
                                av_white=av_white)
         return Diagnosis(fit=fit, errors=errors, findings=findings, innovations=e, tau=av.tau, av_data=av_data,
                          av_ci=av_ci, av_model=av_model, exog_values=exog_values,
-                         innovation_variance=whitening.innovation_variance, spectra=residual_spectra(e, self.dt))
+                         whitening=whitening, spectra=residual_spectra(e, self.dt))
 
     def detect(self, e: np.ndarray, whitening: WhiteningFilter, state: LoopState, residual: np.ndarray, *,
                tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray,
@@ -302,8 +302,7 @@ class AxisLoop:
 
     def targeted_statistic(self, f: det.Finding, diag: Diagnosis) -> float:
         """The statistic of the signature ``f`` targeted, re-measured at the same place on the new residuals."""
-        e = diag.innovations
-        w = WhiteningFilter.from_components(list(diag.fit.components), self.dt)
+        e, w = diag.innovations, diag.whitening
         if f.detector == "av_band":
             z = av_misfit_z(diag.av_data, diag.av_ci, diag.av_model)
             band = (diag.tau >= f.params["band_lo"] * 0.999) & (diag.tau <= f.params["band_hi"] * 1.001)
