@@ -36,7 +36,8 @@ def shares(model: list, n: int, seeds: int) -> tuple[float, float, float, float]
     k = next(c.random_walk for c in model if isinstance(c, RW))
     simultaneous, pointwise, point = [], [], []
     for seed in range(seeds):
-        bounds = long_tau_rw_bounds(simulate_sum(model, n, DT, np.random.default_rng(seed)), DT, 0.1 * n * DT)
+        bounds = long_tau_rw_bounds(simulate_sum(model, n, DT, np.random.default_rng(seed)), DT,
+                                    tau_min=0.1 * n * DT)
         simultaneous.append(bounds["rw_bound95"])
         pointwise.append(bounds["rw_bound95_pointwise"])
         point.append(bounds["rw_bound"])
