@@ -1,0 +1,71 @@
+"""Probe: would re-selection swapping the random walk for a Gauss–Markov process (as it swaps it for flicker) let an
+ADIS16405 accelerometer keep a smaller K? The loop from WN+RW on one axis with that extra move at every step.
+
+Usage (from the repository root)::
+
+    PYTHONPATH=$PWD python bench/probe_rw_gm_swap.py RUN AXIS [--samples N] [--out FILE]
+
+The extra move replaces the fitted RW by a GM of τ a tenth of the record and σ from the long-τ AV (the joint
+search's start, ``trials.explore``); everything else is the loop's. Prints the trace of ``bench/loop_trace.py``.
+Written for run 4 accel_z, whose RW (1.3·10⁻³ m/s²/√s) lies above the long-τ AV's simultaneous 95 % bound.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+from adis import DATA, load_run  # bench/adis.py, beside this script
+from loop_trace import describe
+
+from imu_noise_id.core.axes import AXES
+from imu_noise_id.core.noise.base import Component
+from imu_noise_id.core.noise.components import GM
+from imu_noise_id.pipelines.loop import run_closed_loop, trials
+from imu_noise_id.pipelines.loop.state import Diagnosis
+from imu_noise_id.pipelines.loop.steps import AxisLoop
+
+#: The re-selection moves of the loop as it is.
+LOOP_MOVES = trials.moves
+
+
+def moves_with_gm_swap(loop: AxisLoop, diag: Diagnosis, added: str) -> list[tuple[str, list[Component]]]:
+    """:func:`trials.moves` plus "swap RW (for GM)"."""
+    out = LOOP_MOVES(loop, diag, added)
+    fitted = list(diag.fit.components)
+    if added == "RW" or any(c.name == "GM" for c in fitted):
+        return out
+    for i, c in enumerate(fitted):
+        if c.name == "RW":
+            gm = GM(tau=loop.n * loop.dt / 10.0, sigma=math.sqrt(max(trials.long_tau_level(diag), 1e-30) / 0.38))
+            out.append(("swap RW (for GM)", trials._canonical([*fitted[:i], *fitted[i + 1:], gm])))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("run", type=int)
+    ap.add_argument("axis", choices=AXES)
+    ap.add_argument("--samples", type=int, default=100000, help="first N samples (0 = all)")
+    ap.add_argument("--out", type=Path, default=None)
+    args = ap.parse_args(argv)
+    if not DATA.is_dir():
+        print(f"no data at {DATA}", file=sys.stderr)
+        return 2
+    trials.moves = moves_with_gm_swap  # reselect() looks it up in its module
+    data, dt = load_run(args.run, args.samples)
+    start = time.perf_counter()
+    r = run_closed_loop(data[:, AXES.index(args.axis)], dt, "WN+RW", axis=args.axis)
+    text = "\n".join([f"# bench/probe_rw_gm_swap.py {args.run} {args.axis} --samples {args.samples}: "
+                      f"{time.perf_counter() - start:.0f} s", *describe(r)]) + "\n"
+    print(text, end="")
+    if args.out is not None:
+        args.out.write_text(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
