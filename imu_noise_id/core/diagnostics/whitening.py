@@ -49,8 +49,9 @@ def _system(components: list[Component], dt: float) -> tuple[np.ndarray, np.ndar
 
 #: The white-noise variance R the filter uses is at least this fraction of the state noise seen at the output in one
 #: step (h Q hᵀ): a fitted white noise below it (the loop's fits beside an LPF or MA that carries the whole
-#: high-frequency density reach R ≈ 1e-12 of it) changes the innovation variance S ≥ h Q hᵀ by less than this
-#: fraction, but leaves the Riccati equation too ill-conditioned for either solver.
+#: high-frequency density reach R ≈ 1e-12 of it) leaves the Riccati equation too ill-conditioned for either solver.
+#: Raising R by δ raises the innovation variance S ≥ h Q hᵀ by about √(δ · h Q hᵀ) at most (a random walk beside
+#: white noise: S ≈ q + √(q r)), i.e. by ≲ 3·10⁻⁵ of S here.
 R_FLOOR = 1e-9
 
 
