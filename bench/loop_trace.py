@@ -55,8 +55,9 @@ def describe(r: LoopResult) -> list[str]:
     return out
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None, *, script: str = "bench/loop_trace.py", description: str = __doc__) -> int:
+    """The trace of one axis (``script`` and ``description`` name a caller that changed the loop first)."""
+    ap = argparse.ArgumentParser(description=description.splitlines()[0])
     ap.add_argument("run", type=int)
     ap.add_argument("axis", choices=AXES)
     ap.add_argument("--samples", type=int, default=100000, help="first N samples (0 = all)")
@@ -65,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     if not DATA.is_dir():
         print(f"no data at {DATA}", file=sys.stderr)
         return 2
-    text = "\n".join(trace(args.run, args.axis, args.samples)) + "\n"
+    text = "\n".join(trace(args.run, args.axis, args.samples, script=script)) + "\n"
     print(text, end="")
     if args.out is not None:
         args.out.write_text(text)

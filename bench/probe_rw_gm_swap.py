@@ -12,19 +12,13 @@ Written for run 4 accel_z, whose RW (1.3·10⁻³ m/s²/√s) lies above the lon
 
 from __future__ import annotations
 
-import argparse
 import math
-import sys
-import time
-from pathlib import Path
 
-from adis import DATA, load_run  # bench/adis.py, beside this script
-from loop_trace import describe
+import loop_trace  # bench/loop_trace.py, beside this script
 
-from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.noise.base import Component
 from imu_noise_id.core.noise.components import GM
-from imu_noise_id.pipelines.loop import run_closed_loop, trials
+from imu_noise_id.pipelines.loop import trials
 from imu_noise_id.pipelines.loop.state import Diagnosis
 from imu_noise_id.pipelines.loop.steps import AxisLoop
 
@@ -46,25 +40,8 @@ def moves_with_gm_swap(loop: AxisLoop, diag: Diagnosis, added: str) -> list[tupl
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("run", type=int)
-    ap.add_argument("axis", choices=AXES)
-    ap.add_argument("--samples", type=int, default=100000, help="first N samples (0 = all)")
-    ap.add_argument("--out", type=Path, default=None)
-    args = ap.parse_args(argv)
-    if not DATA.is_dir():
-        print(f"no data at {DATA}", file=sys.stderr)
-        return 2
     trials.moves = moves_with_gm_swap  # reselect() looks it up in its module
-    data, dt = load_run(args.run, args.samples)
-    start = time.perf_counter()
-    r = run_closed_loop(data[:, AXES.index(args.axis)], dt, "WN+RW", axis=args.axis)
-    text = "\n".join([f"# bench/probe_rw_gm_swap.py {args.run} {args.axis} --samples {args.samples}: "
-                      f"{time.perf_counter() - start:.0f} s", *describe(r)]) + "\n"
-    print(text, end="")
-    if args.out is not None:
-        args.out.write_text(text)
-    return 0
+    return loop_trace.main(argv, script="bench/probe_rw_gm_swap.py", description=__doc__)
 
 
 if __name__ == "__main__":
