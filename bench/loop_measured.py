@@ -89,6 +89,13 @@ def _from_json(res: dict) -> dict:
     return {**res, "oscs": [OSC(**p) for p in res["oscs"]]}
 
 
+def _append(log: Path | None, res: dict) -> None:
+    """Append one finished axis to OUT.jsonl (nothing without ``--out``)."""
+    if log is not None:
+        with log.open("a") as fh:
+            fh.write(json.dumps(_as_json(res)) + "\n")
+
+
 def run_axis(run: int, axis: str, y: np.ndarray, dt: float) -> dict:
     start = time.perf_counter()
     r = run_closed_loop(y, dt, "WN+RW", axis=axis)
@@ -177,9 +184,7 @@ def main(argv: list[str] | None = None) -> int:
             y = data[:, AXES.index(axis)]
             if res is None:
                 res = run_axis(run, axis, y, dt)
-                if log is not None:
-                    with log.open("a") as fh:
-                        fh.write(json.dumps(_as_json(res)) + "\n")
+                _append(log, res)
             res = {**res, **long_tau_rw_bounds(y, dt, res["rw"])}
             results.append(res)
             lines.append(line(res))
@@ -193,9 +198,7 @@ def main(argv: list[str] | None = None) -> int:
         dt = 1.0 / float(d["fs_hz"])
         if res is None:  # logged as run 0
             res = run_axis(0, "gyro_x", y, dt)
-            if log is not None:
-                with log.open("a") as fh:
-                    fh.write(json.dumps(_as_json(res)) + "\n")
+            _append(log, res)
         lines.append(line({**res, **long_tau_rw_bounds(y, dt, res["rw"])}).replace("run0", "MTi-G"))
         print(lines[-1], flush=True)
     print("\n".join(lines[-7:]))

@@ -57,6 +57,8 @@ LONG: list[tuple[list[str], str]] = [
     (["loop_trace.py", "3", "gyro_z"], "loop_trace_r3_gyro_z.txt"),
     (["loop_trace.py", "6", "gyro_y"], "loop_trace_r6_gyro_y.txt"),
     (["loop_trace.py", "5", "accel_y"], "loop_trace_r5_accel_y.txt"),
+    (["loop_trace.py", "4", "accel_z"], "loop_trace_r4_accel_z.txt"),
+    (["probe_rw_gm_swap.py", "4", "accel_z"], "probe_rw_gm_swap_r4_accel_z.txt"),
     (["loop_trace.py", "1", "accel_x"], "loop_trace_r1_accel_x.txt"),
     (["bench_av_band.py"], "bench_av_band.txt"),
     (["bench_rw_bound.py"], "bench_rw_bound.txt"),

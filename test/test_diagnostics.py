@@ -108,7 +108,6 @@ def test_whitening_filter_gives_white_unit_innovations():
     assert ljung_box(e[2000:], 20).p_value > 0.001
 
 
-
 @pytest.mark.parametrize("wn", [1e-12, 1e-15])
 def test_whitening_filter_of_a_model_whose_white_noise_went_to_zero(wn):
     """The loop's RW→BI swap on ADIS16405 run 4 accel_z (first 10⁵ samples) fitted the white noise to ~0 beside an
@@ -127,6 +126,7 @@ def test_whitening_filter_of_a_model_whose_white_noise_went_to_zero(wn):
     reference = WhiteningFilter.from_components([WN(math.sqrt(r_ref * DT)), *model[1:]], DT)
     assert w.innovation_variance <= reference.innovation_variance
     assert w.innovation_variance == pytest.approx(reference.innovation_variance, rel=1e-3)
+
 
 # ------------------------------------------------------------------------------------------- detectors
 def test_detectors_false_alarm_rate_with_the_true_model():

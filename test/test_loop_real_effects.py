@@ -61,8 +61,6 @@ def test_broad_line_search_finds_what_one_bin_misses():
     assert found.significant and found.params["frequency"] == pytest.approx(2.0, abs=0.1)
 
 
-
-
 @pytest.mark.parametrize("m", [1, 2, 3, 17, 1000, 4099])
 def test_humps_against_the_direct_minimum(m):
     """The sparse-table range minimum of :func:`humps` against the direct minimum over [k/2, k) per bin; a rise
@@ -90,6 +88,7 @@ def test_broad_line_search_does_not_take_a_bias_misfit_near_0_hz_for_a_line(seed
     y += OSC(frequency=2.0, bandwidth=0.2, sigma=0.1).simulate(N, DT, rng)
     found = detect_broad_line(y, DT, alpha=0.01)
     assert found.significant and found.params["frequency"] == pytest.approx(2.0, abs=0.1), found.evidence
+
 
 def test_a_broad_line_is_offered_beside_a_narrow_one_elsewhere():
     """A wide 10 Hz vibration (B = 0.5 Hz, 2 % of the variance) beside a strong fixed 0.5 Hz sine: the single-bin

@@ -203,7 +203,9 @@ def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float, exclude: tuple[
     by Gauss–Hermite quadrature; the p-value is Bonferroni-corrected over every pooled bin at every resolution
     searched. Beyond the
     papers: the single-bin search (:func:`~imu_noise_id.core.diagnostics.detectors.detect_sinusoid`) misses a
-    line whose power is spread over tens of bins, each below its threshold.
+    line whose power is spread over tens of bins, each below its threshold. Only pooled bins on a hump
+    (:func:`humps`) are searched: a rise toward 0 Hz is a bias misfit, not a line (the Bonferroni count keeps the
+    others: conservative).
 
     ``exclude``: frequencies [Hz] of lines found otherwise (a narrow line's single bin); the pooled bins within one
     pooled bin of each are not searched, so that a broad line elsewhere is found beside it (the Bonferroni count
