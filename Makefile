@@ -12,6 +12,8 @@ export ROS_LOG_DIR ?= $(or $(TMPDIR),/tmp)/imu_noise_id_ros_log
 # One BLAS thread per process: the numbers in docs/results were measured so, and on a small machine the Dask workers
 # and the node's processes would otherwise each start a thread per core.
 export OPENBLAS_NUM_THREADS ?= 1
+# pytest-xdist workers for `make test` (one per core of the 2-core machines it runs on; 0 runs in this process).
+TEST_WORKERS ?= 2
 
 .PHONY: setup demo test lint bench clean
 
@@ -35,7 +37,7 @@ lint: setup
 	$(VENV)/bin/ruff check .
 
 test: setup lint
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
 
 bench: setup
 	$(PY) bench/run_all.py

@@ -33,6 +33,18 @@ def ros_env() -> dict[str, str]:
     return env
 
 
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Under pytest-xdist (``make test`` runs two workers), every test that starts rclpy or DDS runs on one worker,
+    one at a time, as they did before the suite ran on two: two nodes on loopback at once could share a domain (the
+    tests draw their ROS_DOMAIN_ID at random). The tests that read the golden run's outputs share one worker too,
+    so the session fixture that makes them runs once."""
+    for item in items:
+        if item.get_closest_marker("ros") or "ros_env" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.xdist_group("dds"))
+        elif "golden_run" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.xdist_group("golden"))
+
+
 def pytest_configure(config: pytest.Config) -> None:
     """Silence third-party deprecation warnings we cannot fix: lark (imported by rosidl when play/rclpy load message
     definitions) imports the deprecated ``sre_parse`` / ``sre_constants`` modules."""
