@@ -33,6 +33,7 @@ def ros_env() -> dict[str, str]:
     return env
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups into the node ids
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Under pytest-xdist (``make test`` runs two workers), every test that starts rclpy or DDS runs on one worker,
     one at a time, as they did before the suite ran on two: two nodes on loopback at once could share a domain (the
