@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import fcntl
+import json
 import os
 import tempfile
 from pathlib import Path
 
 import pytest
+from dds import domain_id
 
 # Set before anything imports rclpy (network rule: DDS traffic only to 127.0.0.1).
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
@@ -29,21 +32,10 @@ def ros_env() -> dict[str, str]:
     """Environment for subprocesses that may use rclpy: the full environment plus the network rule."""
     env = dict(os.environ)
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    # this xdist worker's own domain (the tests that start nodes draw theirs, from their worker's share, too)
+    env.setdefault("ROS_DOMAIN_ID", str(domain_id(10, 99)))
     env.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="imu_noise_id_ros_log_"))
     return env
-
-
-@pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups into the node ids
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Under pytest-xdist (``make test`` runs two workers), every test that starts rclpy or DDS runs on one worker,
-    one at a time, as they did before the suite ran on two: two nodes on loopback at once could share a domain (the
-    tests draw their ROS_DOMAIN_ID at random). The tests that read the golden run's outputs share one worker too,
-    so the session fixture that makes them runs once."""
-    for item in items:
-        if item.get_closest_marker("ros") or "ros_env" in getattr(item, "fixturenames", ()):
-            item.add_marker(pytest.mark.xdist_group("dds"))
-        elif "golden_run" in getattr(item, "fixturenames", ()):
-            item.add_marker(pytest.mark.xdist_group("golden"))
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -55,7 +47,19 @@ def pytest_configure(config: pytest.Config) -> None:
 @pytest.fixture(scope="session")
 def golden_run(tmp_path_factory) -> dict[str, Path]:
     """The commands run once on the fixed-seed inputs of ``golden_run.py`` (result files by golden name; the
-    analyze output folder is the parent of ``analyze_imu.yaml``)."""
+    analyze output folder is the parent of ``analyze_imu.yaml``).
+
+    Once per test run, also under pytest-xdist: the first worker to need it makes it under a lock in the folder the
+    workers' temporary folders share, and the others read where it is.
+    """
     from golden_run import generate
 
-    return generate(tmp_path_factory.mktemp("golden"))
+    shared = tmp_path_factory.getbasetemp()
+    shared = shared.parent if os.environ.get("PYTEST_XDIST_WORKER") else shared
+    with open(shared / "golden.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        index = shared / "golden" / "outputs.json"
+        if not index.exists():
+            outputs = generate(shared / "golden")
+            index.write_text(json.dumps({name: str(path) for name, path in outputs.items()}))
+        return {name: Path(path) for name, path in json.loads(index.read_text()).items()}

@@ -9,7 +9,6 @@ parameters at runtime.
 from __future__ import annotations
 
 import math
-import random
 import subprocess
 import sys
 import time
@@ -20,6 +19,7 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy")
 
+from dds import domain_id  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 from geometry_msgs.msg import Vector3Stamped  # noqa: E402
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue  # noqa: E402
@@ -84,7 +84,7 @@ class Observer:
 @pytest.fixture(scope="module")
 def domain_env(ros_env) -> dict[str, str]:
     """The subprocess environment on a DDS domain of its own, so that concurrent runs cannot cross-talk."""
-    return {**ros_env, "ROS_DOMAIN_ID": str(random.randint(10, 99))}
+    return {**ros_env, "ROS_DOMAIN_ID": str(domain_id(10, 99))}
 
 
 @pytest.fixture(scope="module")

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import random
 import signal
 import subprocess
 import time
 
 import pytest
+from dds import domain_id
 from test_packaging import built_workspace  # noqa: F401 - the colcon workspace fixture of the packaging test
 
 pytestmark = pytest.mark.ros
@@ -15,7 +15,7 @@ pytestmark = pytest.mark.ros
 
 def test_installed_node_starts_with_the_installed_parameters(built_workspace):  # noqa: F811
     prefix, env = built_workspace
-    env = {**env, "ROS_DOMAIN_ID": str(random.randint(10, 99))}
+    env = {**env, "ROS_DOMAIN_ID": str(domain_id(10, 99))}
     exe = prefix / "lib" / "imu_noise_id" / "imu_noise_id_node"
     params = prefix / "share" / "imu_noise_id" / "config" / "imu_noise_id.yaml"
     assert exe.is_file() and params.is_file()

@@ -7,7 +7,6 @@ IMU 30 Hz (mounted rotated: gravity on +y), wheel odometry ~10 Hz, 395 s of driv
 from __future__ import annotations
 
 import math
-import random
 import subprocess
 import sys
 import time
@@ -16,6 +15,7 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy")
 
+from dds import domain_id  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 
 from imu_noise_id.core.cmkf import rotation as rot  # noqa: E402
@@ -45,7 +45,7 @@ def test_husky_bag_replays_clean_through_the_node(shared_data, ros_env, tmp_path
     bag = shared_data / "husky_robot_localization" / "husky_test1_ros2"
     if not bag.is_dir():
         pytest.skip(f"{bag} is absent")
-    env = {**ros_env, "ROS_DOMAIN_ID": str(random.randint(10, 99))}
+    env = {**ros_env, "ROS_DOMAIN_ID": str(domain_id(10, 99))}
     q = rot.from_ypr(-math.pi / 2, 0.0, math.pi / 2)  # imu_link in base_link (the cmkf developer's Husky value)
     log = tmp_path / "node.log"
     with open(log, "w") as out:

@@ -12,7 +12,6 @@ parameter at start-up must stop it with one line and exit code 2.
 from __future__ import annotations
 
 import math
-import random
 import subprocess
 import time
 from pathlib import Path
@@ -22,6 +21,7 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy")
 
+from dds import domain_id  # noqa: E402
 from nav_msgs.msg import Odometry  # noqa: E402
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue  # noqa: E402
 from rcl_interfaces.srv import SetParameters  # noqa: E402
@@ -120,7 +120,7 @@ def _set(obs: Observer, name: str, kind: int, **value) -> tuple[bool, str]:
 
 @pytest.fixture(scope="module")
 def domain_env(ros_env) -> dict[str, str]:
-    return {**ros_env, "ROS_DOMAIN_ID": str(random.randint(100, 180))}
+    return {**ros_env, "ROS_DOMAIN_ID": str(domain_id(100, 180))}
 
 
 @pytest.fixture(scope="module")
