@@ -1,5 +1,7 @@
 """DDS domains for the tests that start ROS nodes: each pytest-xdist worker draws from its own share of a range, so
-that two nodes started at once by different workers never share a domain (a worker runs one test at a time)."""
+that two nodes started at once by different workers never share a domain (a worker runs one test at a time).
+``make test`` runs the ``ros``-marked tests in one process after the others; ``pytest -n 2`` on all of them, or the
+in-process nodes of the unmarked tests, still rely on this."""
 
 from __future__ import annotations
 
