@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,3 +16,11 @@ def load_run(run: int, samples: int = 0) -> tuple[np.ndarray, float]:
     d = np.load(DATA / f"adis16405_run{run}.npz")
     data = np.hstack([d["gyro"], d["accel"]])
     return (data[:samples] if samples else data), 1.0 / float(d["fs_hz"])
+
+
+def data_missing() -> bool:
+    """Whether the runs are absent (said on stderr): the benches then exit with 2."""
+    if DATA.is_dir():
+        return False
+    print(f"no data at {DATA}", file=sys.stderr)
+    return True

@@ -22,12 +22,11 @@ import argparse
 import json
 import math
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from adis import DATA, load_run  # bench/adis.py, beside this script
+from adis import DATA, data_missing, load_run  # bench/adis.py, beside this script
 
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.allan.rw_bound import random_walk_bound
@@ -165,8 +164,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--summarise-only", action="store_true",
                     help="with --resume: summarise the axes OUT.jsonl holds and fit none (a partial table)")
     args = ap.parse_args(argv)
-    if not DATA.is_dir():
-        print(f"no data at {DATA}", file=sys.stderr)
+    if data_missing():
         return 2
     lines = [f"# bench/loop_measured.py --runs {args.runs} --axes {args.axes} --samples {args.samples} "
              f"(start WN+RW, full 100 Hz) at commit {_commit()}"]

@@ -14,11 +14,10 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 import time
 from pathlib import Path
 
-from adis import DATA, load_run  # bench/adis.py, beside this script
+from adis import data_missing, load_run  # bench/adis.py, beside this script
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.diagnostics.residuals import av_misfit_z
@@ -63,8 +62,7 @@ def main(argv: list[str] | None = None, *, script: str = "bench/loop_trace.py", 
     ap.add_argument("--samples", type=int, default=100000, help="first N samples (0 = all)")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    if not DATA.is_dir():
-        print(f"no data at {DATA}", file=sys.stderr)
+    if data_missing():
         return 2
     text = "\n".join(trace(args.run, args.axis, args.samples, script=script)) + "\n"
     print(text, end="")

@@ -14,11 +14,10 @@ band by band from 2 Hz (the bias processes' band below is left out) to Nyquist.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
-from adis import DATA, load_run  # bench/adis.py, beside this script
+from adis import data_missing, load_run  # bench/adis.py, beside this script
 from scipy import signal
 
 from imu_noise_id.core.axes import AXES
@@ -61,8 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--samples", type=int, default=100000, help="first N samples (0 = all)")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    if not DATA.is_dir():
-        print(f"no data at {DATA}", file=sys.stderr)
+    if data_missing():
         return 2
     lines = [f"# bench/probe_gyro_z_line_shape.py --runs {args.runs} --axis {args.axis} --samples {args.samples}"]
     print(lines[0], flush=True)
