@@ -15,8 +15,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 # pytest-xdist workers for `make test` (one per core of the 2-core machines it runs on; 0 runs in this process). The
 # tests marked `ros` (nodes fed and observed over DDS in real time) run afterwards in one process with the machine to
 # themselves: beside another worker's fits a starved node drops messages (7000 sent, 5500 received) and misses its
-# timing checks. Work stealing keeps both workers busy to the end (the first pass took 9.2 min, against 12.1 with
-# xdist's default distribution, in two consecutive runs on one 2-core machine).
+# timing checks. Work stealing keeps both workers busy until the last test.
 TEST_WORKERS ?= 2
 
 .PHONY: setup demo test lint bench clean
