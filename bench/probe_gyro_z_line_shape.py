@@ -21,6 +21,7 @@ from adis import data_missing, load_run  # bench/adis.py, beside this script
 from scipy import signal
 
 from imu_noise_id.core.axes import AXES
+from imu_noise_id.core.diagnostics.residuals import acf
 from imu_noise_id.pipelines.loop import run_closed_loop
 
 #: Width [Hz] of the bands the two spectra are averaged over.
@@ -45,11 +46,9 @@ def probe(run: int, axis: str, samples: int) -> list[str]:
     for lo in np.arange(BAND_HZ, 0.5 / dt, BAND_HZ):
         band = (f >= lo) & (f < lo + BAND_HZ)
         out.append(f"  {lo:4.0f}–{lo + BAND_HZ:<4.0f} Hz  data/model PSD {p[band].mean() / model[band].mean():.3f}")
-    e = final.innovations[np.isfinite(final.innovations)]
-    e = e - e.mean()
-    acf = [float(np.dot(e[k:], e[:-k]) / np.dot(e, e)) for k in range(1, LAGS + 1)]
+    rho = acf(final.innovations, LAGS)
     out.append("  innovation autocorrelation, lags 1–{}: {}  (±{:.3f} at 2 sd)".format(
-        LAGS, " ".join(f"{a:+.3f}" for a in acf), 2.0 / np.sqrt(e.size)))
+        LAGS, " ".join(f"{a:+.3f}" for a in rho), 2.0 / np.sqrt(np.isfinite(final.innovations).sum())))
     return out
 
 
