@@ -36,8 +36,10 @@ BIC counts one parameter per flagged sample, and one more per searched location 
 sample), since the detector picked the best of many.
 
 A refit starts from the previous fit's components plus the new one at the detector's values; when the
-likelihood nevertheless drops (a local optimum: nested models cannot lose likelihood) it is refitted from the
-estimator's own starting values. ``GM``, ``RW``, ``RR``, ``QN`` are added to the state-space structure.
+likelihood nevertheless drops (a local optimum: nested models cannot lose likelihood) it is refitted with the
+line's power shared (a new resonance on a line an existing one carries: both start at σ/√2,
+``trials.shared_power_start``) and from the estimator's own starting values, the best kept. ``GM``, ``RW``,
+``RR``, ``QN`` are added to the state-space structure.
 
 The Allan variances (data with the fitted regressors removed, against the model's theoretical AV) use
 τ = m·dt up to a tenth of the record; their 95 % intervals are those of the estimator under the null hypothesis
