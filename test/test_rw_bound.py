@@ -75,6 +75,35 @@ def test_analyze_flags_a_final_random_walk_the_long_tau_av_does_not_support():
     assert not flagged["walk"].random_walk_above_bound and flagged["walk"].random_walk.source == "RW"
 
 
+def test_the_console_and_the_html_report_flag_a_random_walk_above_the_long_tau_bound():
+    """The flag reaches where users read K: the console's final table prints the K source's reason below the table
+    for the flagged axis only, and report.html's K cell names the bound and is marked as a warning."""
+    from types import SimpleNamespace
+
+    from imu_noise_id.core.allan.slopes import fit_axis_slopes
+    from imu_noise_id.core.estimation.model import NoiseModel
+    from imu_noise_id.pipelines.analyze.final import final_model
+    from imu_noise_id.report.analysis_html import _numbers_section
+    from imu_noise_id.report.console import final_table
+
+    t = np.arange(N) * DT
+    records = {"gyro_x": simulate_sum([WN(2e-3)], N, DT, np.random.default_rng(1))
+               + 0.05 * np.sin(2 * np.pi * t / (N * DT / 2)),
+               "gyro_y": simulate_sum([WN(2e-3), RW(K)], N, DT, np.random.default_rng(3))}
+    allan = {axis: allan_variance(y, DT) for axis, y in records.items()}
+    finals = {axis: final_model(NoiseModel(y, DT, "WN+RW").fit(), None, allan[axis]) for axis, y in records.items()}
+    assert finals["gyro_x"].random_walk_above_bound and not finals["gyro_y"].random_walk_above_bound
+    text = final_table(finals)
+    assert f"gyro_x   K flagged: {finals['gyro_x'].random_walk.source}" in text and "gyro_y   K flagged" not in text
+    slopes = {axis: fit_axis_slopes(av) for axis, av in allan.items()}
+    page = _numbers_section(SimpleNamespace(finals=finals, static=SimpleNamespace(slopes=slopes)))
+    cells = [row.split("</tr>")[0] for row in page.split("<tr>")[1:]]
+    flagged_row = next(c for c in cells if c.startswith("<td class=l>gyro_x"))
+    plain_row = next(c for c in cells if c.startswith("<td class=l>gyro_y"))
+    assert "<td class=warn>" in flagged_row and "above the long-τ AV" in flagged_row
+    assert "class=warn" not in plain_row and "above the long-τ AV" not in plain_row
+
+
 def test_the_p_value_of_a_random_walk_is_small_exactly_where_the_bound_excludes_it():
     """p < 5 % for any K above the bound and ≥ 5 % below it (the bound is where p crosses the level); p grows
     as K shrinks."""

@@ -55,10 +55,13 @@ def _numbers_section(result: AnalysisResult) -> str:
         b = f.bias_instability
         k_text = _ci(f.random_walk.value, f.random_walk.ci95) if f.random_walk.value is not None else \
             "not identifiable (no RW in the final model)"
+        if f.random_walk_above_bound:
+            k_text = f"{k_text} — above the long-τ AV's bound {fmt(f.random_walk_bound.value)}"
         rows.append(
             f"<tr><td class=l>{axis} [{UNITS.get(axis, 'u')}]</td><td class=l>{html.escape(f.fit.model)} "
             f"<span class=small>({html.escape(f.source)})</span></td>"
-            f"<td>{_ci(f.noise_density.value, f.noise_density.ci95)}</td><td>{html.escape(k_text)}</td>"
+            f"<td>{_ci(f.noise_density.value, f.noise_density.ci95)}</td>"
+            f"<td{' class=warn' if f.random_walk_above_bound else ''}>{html.escape(k_text)}</td>"
             f"<td>{'' if b.reached else '&lt; '}{_ci(b.value, b.ci95)} <span class=small>at τ = "
             f"{fmt(b.tau_at_minimum, '.3g')} s</span></td><td>{fmt(f.noise_stddev_per_sample)}</td>"
             f"<td>{fmt(slopes.noise_density.value)}</td>"
@@ -70,7 +73,10 @@ def _numbers_section(result: AnalysisResult) -> str:
             "N and K. Where the final model has no random walk, imu.yaml gives the Allan-slope reading (marked). "
             "B = the flicker component's bias instability when the model has one, else min of the model's Allan "
             "deviation without vibration lines / 0.664 ('&lt;': still falling at a tenth of the record, an upper "
-            "bound). The Kalibr keys of imu.yaml are the max of N and K over each sensor's three axes.</p>")
+            "bound). The Kalibr keys of imu.yaml are the max of N and K over each sensor's three axes. A K above the "
+            "long-τ AV's bound (the largest random walk the data's AV at τ beyond a tenth of the record supports, "
+            "95 % simultaneous) is flagged: a bounded wander fits the record as well, and only a longer record "
+            "tells them apart.</p>")
     return f"<h2 id=numbers>The numbers to paste</h2><table>{head}{''.join(rows)}</table>{note}"
 
 

@@ -46,7 +46,8 @@ def summary_table(result: StaticAnalysis) -> str:
 
 
 def final_table(finals: dict[str, FinalModel]) -> str:
-    """The numbers imu.yaml's Kalibr keys are made of: per axis the final model, N and K with 95 % intervals."""
+    """The numbers imu.yaml's Kalibr keys are made of: per axis the final model, N and K with 95 % intervals; below
+    them each K above what the data's long-τ AV supports, with its source's reason."""
     lines = ["Final models (imu.yaml's numbers; N = passband white noise, K = random walk, B = bias instability, "
              "'<' an upper bound; 95 % intervals):"]
     for axis, f in finals.items():
@@ -57,6 +58,7 @@ def final_table(finals: dict[str, FinalModel]) -> str:
         b = f.bias_instability
         b_text = ("" if b.reached else "<") + f"{_fmt(b.value)} [{_fmt(b.ci95[0])}, {_fmt(b.ci95[1])}]"
         lines.append(f"{axis:8s} {f.fit.model:22s} N {n_text:34s} K {k_text:34s} B {b_text}")
+    lines += [f"{axis:8s} K flagged: {f.random_walk.source}" for axis, f in finals.items() if f.random_walk_above_bound]
     return "\n".join(lines)
 
 
