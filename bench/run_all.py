@@ -67,6 +67,7 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
     (["bench_loop_effects.py", "--minutes", "120", "--cases", "osc+gm", "bi"], "bench_loop_effects_2h.txt"),
     (["probe_osc_gm_bic.py"], "probe_osc_gm_bic.txt"),
+    (["probe_k_bounded_wander.py"], "probe_k_bounded_wander.txt"),
     (["bench_adis_analysis.py"], "adis_run1_analysis.txt"),
     (["bench_overbound.py"], "bench_overbound.txt"),
     (["bench_gmwm_speed.py"], "bench_gmwm_speed.txt"),
