@@ -34,9 +34,8 @@ def refit(loop: AxisLoop, diag: Diagnosis, new_state: LoopState) -> Diagnosis:
     the model has) and from the estimator's own starts, the best kept."""
     new_diag = loop.diagnose(new_state)
     if new_diag.errors.loglik < diag.errors.loglik and new_state.init is not None:
-        for init in (shared_power_start(new_state.init, diag.fit.components), None):
-            if init is None and new_state.init is None:
-                continue
+        shared = shared_power_start(new_state.init, diag.fit.components)
+        for init in ([shared] if shared is not None else []) + [None]:
             new_state.init = init
             retry = loop.diagnose(new_state)
             new_diag = retry if retry.errors.loglik > new_diag.errors.loglik else new_diag
@@ -53,12 +52,10 @@ def shared_power_start(start: list[Component], fitted: list[Component]) -> list[
     fit in log-likelihood (a local optimum the estimator's own starts left 9.5 below), where the shared start gained
     893 (``test_loop_real_effects``).
     """
-    new = [i for i, c in enumerate(start) if isinstance(c, OSC) and c not in fitted]
-    old = [i for i, c in enumerate(start) if isinstance(c, OSC) and c in fitted]
-    shared = {i for i in new for j in old
-              if abs(start[i].frequency - start[j].frequency) < max(start[i].bandwidth, start[j].bandwidth)}
-    shared |= {j for j in old for i in shared if
-               abs(start[i].frequency - start[j].frequency) < max(start[i].bandwidth, start[j].bandwidth)}
+    oscs = [(i, c) for i, c in enumerate(start) if isinstance(c, OSC)]
+    overlapping = [(i, j) for i, new in oscs if new not in fitted for j, old in oscs
+                   if old in fitted and abs(new.frequency - old.frequency) < max(new.bandwidth, old.bandwidth)]
+    shared = {k for pair in overlapping for k in pair}
     if not shared:
         return None
     return [replace(c, sigma=c.sigma / math.sqrt(2.0)) if i in shared else c for i, c in enumerate(start)]
