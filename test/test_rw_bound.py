@@ -52,22 +52,27 @@ def test_a_record_without_long_tau_estimates_has_no_bound():
     assert math.isnan(bound.value) and bound.estimates == 0 and not bound.exceeded_by(1.0)
 
 
+def _bounded_wander_and_random_walk():
+    """The bounded wander above and a true random walk, each with its AV and the final model of its WN+RW fit."""
+    from imu_noise_id.core.estimation.model import NoiseModel
+    from imu_noise_id.pipelines.analyze.final import final_model
+
+    t = np.arange(N) * DT
+    records = {"wander": simulate_sum([WN(2e-3)], N, DT, np.random.default_rng(1))
+               + 0.05 * np.sin(2 * np.pi * t / (N * DT / 2)),
+               "walk": simulate_sum([WN(2e-3), RW(K)], N, DT, np.random.default_rng(3))}
+    allan = {name: allan_variance(y, DT) for name, y in records.items()}
+    finals = {name: final_model(NoiseModel(y, DT, "WN+RW").fit(), None, allan[name]) for name, y in records.items()}
+    return allan, finals
+
+
 def test_analyze_flags_a_final_random_walk_the_long_tau_av_does_not_support():
     """The final model of a WN+RW fit to the bounded wander above: its K (fitted to the short-term wander) is
     above the bound, and the Kalibr value's source and model.yaml's entry say so; a true random walk is not
     flagged."""
-    from imu_noise_id.core.estimation.model import NoiseModel
-    from imu_noise_id.pipelines.analyze.final import final_model
     from imu_noise_id.report.model_yaml import final_to_dict
 
-    t = np.arange(N) * DT
-    wander = simulate_sum([WN(2e-3)], N, DT, np.random.default_rng(1)) + 0.05 * np.sin(2 * np.pi * t / (N * DT / 2))
-    walk = simulate_sum([WN(2e-3), RW(K)], N, DT, np.random.default_rng(3))
-    flagged = {}
-    for name, y in (("wander", wander), ("walk", walk)):
-        fit = NoiseModel(y, DT, "WN+RW").fit()
-        final = final_model(fit, None, allan_variance(y, DT))
-        flagged[name] = final
+    _, flagged = _bounded_wander_and_random_walk()
     assert flagged["wander"].random_walk_above_bound
     assert "above what the data's AV" in flagged["wander"].random_walk.source
     entry = final_to_dict(flagged["wander"])["random_walk_long_tau_bound"]
@@ -81,25 +86,18 @@ def test_the_console_and_the_html_report_flag_a_random_walk_above_the_long_tau_b
     from types import SimpleNamespace
 
     from imu_noise_id.core.allan.slopes import fit_axis_slopes
-    from imu_noise_id.core.estimation.model import NoiseModel
-    from imu_noise_id.pipelines.analyze.final import final_model
     from imu_noise_id.report.analysis_html import _numbers_section
     from imu_noise_id.report.console import final_table
 
-    t = np.arange(N) * DT
-    records = {"gyro_x": simulate_sum([WN(2e-3)], N, DT, np.random.default_rng(1))
-               + 0.05 * np.sin(2 * np.pi * t / (N * DT / 2)),
-               "gyro_y": simulate_sum([WN(2e-3), RW(K)], N, DT, np.random.default_rng(3))}
-    allan = {axis: allan_variance(y, DT) for axis, y in records.items()}
-    finals = {axis: final_model(NoiseModel(y, DT, "WN+RW").fit(), None, allan[axis]) for axis, y in records.items()}
-    assert finals["gyro_x"].random_walk_above_bound and not finals["gyro_y"].random_walk_above_bound
+    allan, finals = _bounded_wander_and_random_walk()
+    assert finals["wander"].random_walk_above_bound and not finals["walk"].random_walk_above_bound
     text = final_table(finals)
-    assert f"gyro_x   K flagged: {finals['gyro_x'].random_walk.source}" in text and "gyro_y   K flagged" not in text
-    slopes = {axis: fit_axis_slopes(av) for axis, av in allan.items()}
+    assert f"wander   K flagged: {finals['wander'].random_walk.source}" in text and "walk     K flagged" not in text
+    slopes = {name: fit_axis_slopes(av) for name, av in allan.items()}
     page = _numbers_section(SimpleNamespace(finals=finals, static=SimpleNamespace(slopes=slopes)))
     cells = [row.split("</tr>")[0] for row in page.split("<tr>")[1:]]
-    flagged_row = next(c for c in cells if c.startswith("<td class=l>gyro_x"))
-    plain_row = next(c for c in cells if c.startswith("<td class=l>gyro_y"))
+    flagged_row = next(c for c in cells if c.startswith("<td class=l>wander"))
+    plain_row = next(c for c in cells if c.startswith("<td class=l>walk"))
     assert "<td class=warn>" in flagged_row and "above the long-τ AV" in flagged_row
     assert "class=warn" not in plain_row and "above the long-τ AV" not in plain_row
 
