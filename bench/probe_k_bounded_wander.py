@@ -28,7 +28,7 @@ from scipy.optimize import minimize
 from imu_noise_id.core.estimation import kalibr
 from imu_noise_id.core.estimation.relabel import with_uncertainty
 from imu_noise_id.core.estimation.whittle import banded_periodogram, difference_spectrum
-from imu_noise_id.core.noise.components import RW, Component
+from imu_noise_id.core.noise.components import GM, RW, Component
 from imu_noise_id.core.quality import interpolate_missing
 from imu_noise_id.pipelines.loop import run_closed_loop
 
@@ -46,14 +46,10 @@ def k_lower_end(components: list[Component], y: np.ndarray, dt: float) -> tuple[
     tau_max = y.size * dt / (2.0 * math.pi * CORNER_BIN)
     tau_min = max(10.0 * dt, tau_max / 1000.0)
     fixed = difference_spectrum([c for c in components if not isinstance(c, RW)], bp.omega, dt)
-    cos_w = np.cos(bp.omega)
 
     def loglik(k: float, x: np.ndarray | None) -> float:
-        s = fixed + k * k * dt
-        if x is not None:
-            phi = math.exp(-dt / math.exp(x[0]))  # GM in Δy: σ²(1 − φ²)·c(ω)/(1 − 2φ cos ω + φ²), whittle.py
-            drive = math.exp(2.0 * x[1]) * (1.0 - phi * phi)
-            s = s + drive * (2.0 - 2.0 * cos_w) / (1.0 - 2.0 * phi * cos_w + phi * phi)
+        varying = [RW(k)] + ([GM(tau=math.exp(x[0]), sigma=math.exp(x[1]))] if x is not None else [])
+        s = fixed + difference_spectrum(varying, bp.omega, dt)
         return -float(np.sum(bp.count * np.log(s) + bp.power / s))
 
     sigma_scale = k_hat * math.sqrt(tau_max)  # a GM whose short-term wander matches K̂'s over τ_max
