@@ -34,6 +34,7 @@ GOALS: list[tuple[list[str], str]] = [
     (["bench_node.py"], "bench_node.txt"),
     (["bench_analyze_time.py", "--rates", "200", "400"], "bench_analyze_time_loop.txt"),
     (["bench_batch.py"], "bench_batch.txt"),
+    (["bench_figures.py"], "bench_figures.txt"),
 ]
 
 #: Long Monte-Carlo reproductions and measured-data studies (``--long``).

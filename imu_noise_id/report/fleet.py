@@ -17,6 +17,7 @@ import numpy as np
 
 from ..core.fleet import OUTLIER_Z, modified_z, spec_verdict
 from .html import STYLE, fmt, img_tag
+from .layout import fix_margins
 
 PARAMETERS = ("noise_density", "random_walk", "bias_instability")
 COLUMNS = ("unit", "bag", "topic", "axis", "status", "error", "model", "noise_density", "noise_density_lo",
@@ -90,7 +91,7 @@ def _spread_png(rows: list[dict], parameter: str) -> bytes:
     ax.set_xticks(range(len(axes)), axes, fontsize=8)
     ax.set_title(f"{parameter} across units (red: outlier, |modified z| > {OUTLIER_Z})", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
+    fix_margins(fig)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
     plt.close(fig)

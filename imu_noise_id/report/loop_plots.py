@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pipelines.loop import LoopStep
+from .layout import fix_margins
 
 
 def _figure(width: float = 6.4, height: float = 3.4, ncols: int = 1):
@@ -23,9 +24,9 @@ def _figure(width: float = 6.4, height: float = 3.4, ncols: int = 1):
     return plt, fig, axes
 
 
-def _png(plt, fig, path: Path | None) -> bytes:
+def _png(plt, fig, path: Path | None, *, suptitle: bool = False) -> bytes:
     buf = io.BytesIO()
-    fig.tight_layout()
+    fix_margins(fig, suptitle=suptitle)
     fig.savefig(buf, format="png")
     plt.close(fig)
     data = buf.getvalue()
@@ -71,4 +72,4 @@ def residual_acf_psd(step: LoopStep, title: str = "", path: Path | None = None) 
     a2.set_title(f"peak ratio {step.errors.peak_ratio:.1f} at {step.errors.peak_frequency:.3g} Hz", fontsize=9)
     a2.legend(fontsize=7)
     fig.suptitle(title, fontsize=9)
-    return _png(plt, fig, path)
+    return _png(plt, fig, path, suptitle=bool(title))

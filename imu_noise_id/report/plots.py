@@ -12,6 +12,7 @@ import numpy as np
 
 from ..core.axes import ACCEL_AXES, GYRO_AXES, UNITS
 from ..pipelines.analyze.static import StaticAnalysis
+from .layout import fix_margins
 
 _COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
 _LINE_LABELS = {"QN": "quantisation", "WN": "white noise", "BI": "bias inst.", "RW": "random walk", "RR": "rate ramp"}
@@ -26,7 +27,7 @@ def plot_allan_deviation(result: StaticAnalysis, path: Path) -> Path:
     """
     res = result.allan
     tau = res.tau
-    fig, panels = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
+    fig, panels = plt.subplots(1, 2, figsize=(12, 4.8))
     for panel, axes, title in ((panels[0], GYRO_AXES, "Gyroscope"), (panels[1], ACCEL_AXES, "Accelerometer")):
         for name in axes:
             j = result.axes.index(name)
@@ -50,6 +51,7 @@ def plot_allan_deviation(result: StaticAnalysis, path: Path) -> Path:
         panel.set_ylabel(f"Allan deviation [{unit}]")
         panel.grid(True, which="both", alpha=0.3)
         panel.legend(title="dashed: slope lines; ▼ N at 1 s, ▲ K at 3 s", fontsize=8, title_fontsize=8)
+    fix_margins(fig)
     fig.savefig(path, dpi=90)
     plt.close(fig)
     return path

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.estimation.results import FitResult
+from .layout import fix_margins
 
 
 def plot_allan_overlay(
@@ -59,7 +60,7 @@ def save_allan_overlay(path: str | Path, panels: list[dict], title: str | None =
             ax.set_title(panel["title"], fontsize=9)
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
+    fix_margins(fig, suptitle=bool(title))
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
@@ -91,7 +92,7 @@ def allan_panel_png(tau: np.ndarray, avar: np.ndarray, ci: tuple[np.ndarray, np.
         ax.axvspan(ob_tau[0], ob_tau[-1], color="C1", alpha=0.05, lw=0)
     ax.set_title(title, fontsize=10)
     ax.legend(fontsize=7, loc="best")
-    fig.tight_layout()
+    fix_margins(fig)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
