@@ -9,7 +9,7 @@ from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.kalman.riccati import steady_prediction_covariance
-from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.components import GM, OSC, QN, RR, RW, WN, simulate_sum
 
 MIXES = {
     "WN+RW+RR": [WN(0.2), RW(0.02), RR(1e-3)],
@@ -181,3 +181,36 @@ def test_a_nearly_defective_transition_runs_in_the_schur_basis():
     for k in range(49):
         ref[:, :, k + 1] = jordan @ ref[:, :, k] + c[:, :, k]
     np.testing.assert_allclose(x, ref, rtol=1e-10, atol=1e-12)
+
+
+def test_a_model_without_a_steady_filter_in_double_precision_is_refused_without_numpy_warnings():
+    """A GM of σ 305 beside a white noise of 8e-8 per sample (an optimiser's trial step reaches such ratios): the
+    Riccati iteration ended on a P̄ with an eigenvalue of −5e12, whose log-likelihood was finite and meaningless.
+    The estimators take InputError as outside the domain (EM keeps its last good iterate)."""
+    import warnings
+
+    y, z = np.random.default_rng(0).standard_normal(5000) * 1e-3, np.ones((5000, 1))
+    model = ss.from_components([WN(7.62916e-06), GM(tau=7.8895e+06, sigma=305.336),
+                                OSC(frequency=0.161392, bandwidth=0.114937, sigma=6.63899e-05), RW(4.40886e-10)],
+                               0.01, ramp="measurement", intercept=True, exog_names=())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match="not positive semi-definite"):
+            kalman.loglik(model, y, z)
+
+
+def test_the_smoother_sums_of_a_nearly_exactly_observed_state_are_finite_without_numpy_warnings():
+    """A random walk of 20 beside a white noise of 1e-10 per sample: P̄ singular to rounding. The covariance sums'
+    binary doubling squared J once more after its last bit, and that unused power overflowed (RuntimeWarnings in
+    the measured-table logs); the sums themselves are finite."""
+    import warnings
+
+    y, z = np.random.default_rng(0).standard_normal(5000) * 1e-3, np.ones((5000, 1))
+    model = ss.from_components([WN(1.09806e-08), OSC(frequency=14.8243, bandwidth=0.0140424, sigma=704.795),
+                                OSC(frequency=0.196866, bandwidth=0.0583459, sigma=0.383911),
+                                OSC(frequency=0.261654, bandwidth=0.333958, sigma=1.17607e-06), RW(20.5649)],
+                               0.01, ramp="measurement", intercept=True, exog_names=())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        stats = kalman.smooth(model, y, z)
+    assert np.all(np.isfinite(stats.sum_p)) and np.isfinite(stats.loglik)

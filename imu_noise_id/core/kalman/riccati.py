@@ -10,6 +10,21 @@ import numpy as np
 
 from ..errors import InputError
 
+#: Most negative eigenvalue of P̄, relative to its largest, still taken for rounding of a covariance.
+PSD_TOLERANCE = 1e-8
+
+
+def _covariance(P: np.ndarray) -> np.ndarray:
+    """``P`` when it is a covariance to rounding (symmetric, eigenvalues ≥ −:data:`PSD_TOLERANCE` × the largest),
+    else InputError: with variances many decades apart (e.g. a Gauss–Markov σ of 300 beside a white noise of 1e-5
+    per sample, met by an optimiser's trial steps) the iteration can converge in double precision to a matrix with a
+    large negative eigenvalue, whose "likelihood" is finite and meaningless."""
+    w = np.linalg.eigvalsh(P)
+    if not (np.all(np.isfinite(w)) and w[0] >= -PSD_TOLERANCE * max(abs(w[-1]), abs(w[0]))):
+        raise InputError("the steady-state prediction covariance is not positive semi-definite in double precision "
+                         f"(eigenvalues {w[0]:.3g} … {w[-1]:.3g}); the model's variances are too far apart")
+    return P
+
 
 def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess: np.ndarray) -> np.ndarray | None:
     """P̄ by Newton's method on the DARE (Hewer 1971) from ``guess``; None unless it converges in a few steps.
@@ -55,7 +70,8 @@ def steady_prediction_covariance(
     Raises
     ------
     InputError
-        If R ≤ 0 (no white noise) or the iteration does not converge (a non-detectable model).
+        If R ≤ 0 (no white noise), the iteration does not converge (a non-detectable model) or what it converges to
+        is not a covariance (:func:`_covariance`).
     """
     p = phi.shape[0]
     if p == 0:
@@ -65,7 +81,7 @@ def steady_prediction_covariance(
     if guess is not None:
         P = _newton_dare(phi, q, h, float(r), np.asarray(guess, dtype=float))
         if P is not None:
-            return P
+            return _covariance(P)
     eye = np.eye(p)
     A = phi.T.copy()
     G = np.outer(h, h) / r
@@ -79,6 +95,6 @@ def steady_prediction_covariance(
         if not np.all(np.isfinite(X_new)):
             break
         if np.max(np.abs(X_new - X)) <= 1e-14 * np.max(np.abs(X_new)):
-            return X_new
+            return _covariance(X_new)
         X = X_new
     raise InputError("the steady-state Riccati iteration did not converge; the model parameters are degenerate")

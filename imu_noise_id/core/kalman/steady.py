@@ -26,12 +26,14 @@ This engine requires no missing samples; :func:`imu_noise_id.core.kalman.smooth`
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import schur
 from scipy.signal import lfilter
 
+from ..errors import InputError
 from .common import LOG_2PI, Columns, InnovationResult, ProfileResult, SmootherStats, profile
 from .statespace import StateSpace
 
@@ -49,11 +51,19 @@ class SteadyGains:
 
 
 def gains(model: StateSpace) -> SteadyGains:
-    """Steady-state gains of ``model`` (from the discrete algebraic Riccati equation)."""
+    """Steady-state gains of ``model`` (from the discrete algebraic Riccati equation).
+
+    Raises
+    ------
+    InputError
+        If the innovation variance is not positive and finite (no filter exists at these parameters).
+    """
     P = model.steady_prediction_covariance()
     h = model.h
     Ph = P @ h
     f = float(h @ Ph) + float(model.r)
+    if not (math.isfinite(f) and f > 0.0):
+        raise InputError(f"the steady-state innovation variance is {f:.3g}; no Kalman filter at these parameters")
     k = Ph / f
     Pf = P - np.outer(k, Ph)
     Pf = 0.5 * (Pf + Pf.T)
@@ -250,8 +260,9 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
         while k:
             if k & 1:
                 result = combine(result, step)
-            step = combine(step, step)
             k >>= 1
+            if k:  # (squared once more after the last bit, J^(2^m) could overflow and be thrown away)
+                step = combine(step, step)
         return result
 
     _, _, xp, xc, w = power(n)
@@ -272,7 +283,12 @@ def _smooth_from_forward(model: StateSpace, g: SteadyGains, xp: np.ndarray, e: n
     xs = np.ascontiguousarray(lti_states(g.j, c, xf[:, -1:])[:, 0, ::-1])
     J = g.j
     const = g.p_filt - J @ g.p_pred @ J.T
-    sum_p, p_first = affine_power_sum(J, const, g.p_filt, n)
+    with np.errstate(over="ignore", invalid="ignore"):
+        sum_p, p_first = affine_power_sum(J, const, g.p_filt, n)
+    if not (np.all(np.isfinite(sum_p)) and np.all(np.isfinite(p_first))):
+        # J = P_f Φᵀ P̄⁻¹ with P̄ singular to rounding (a state the data pin down exactly): its powers overflow.
+        raise InputError("the steady-state smoother's covariance sums overflow (a smoother gain on or outside the "
+                         "unit circle); the model's variances are too far apart")
     sum_lag = (sum_p - p_first) @ J.T
     loglik = -0.5 * (n * (LOG_2PI + np.log(g.f)) + float(e @ e) / g.f)
     return SmootherStats(
