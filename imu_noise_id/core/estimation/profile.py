@@ -27,8 +27,9 @@ The point estimates stay the ML ones of paper 000.
 **Search.** The centre (max of ℓ_A along the profile) from the profile at the Wald ends and a parabola through
 them; each end then on the signed root r(v) = √(2(max ℓ_A − ℓ_A(v))), nearly linear in |v − centre| when ℓ is
 nearly quadratic: outward by secant steps until r passes 1.96, then regula falsi (Illinois) until |r − 1.96| <
-:data:`R_TOL`. Each ℓ_p(v) is an L-BFGS-B maximisation over the other parameters, from the better of the trace's
-extrapolation and the estimate, in coordinates where it is well scaled:
+:data:`.profile_search.R_TOL` (that 1-D search is :mod:`.profile_search`). Each ℓ_p(v) is an L-BFGS-B
+maximisation over the other parameters, from the better of the trace's extrapolation and the estimate, in
+coordinates where it is well scaled:
 
 * interior log-parameters whitened by their block of the observed information (Hessian ≈ identity);
 * a parameter at its zero boundary *linearly*, as K/s (s its conditional upper 95 % end), with a floor at
@@ -43,7 +44,6 @@ The ramp slope (a mean parameter) is profiled the same way with its regressor fi
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -53,32 +53,21 @@ from .. import kalman
 from ..kalman.common import ProfileResult
 from ..kalman.statespace import StateSpace
 from . import em, mle
+from .profile_search import Z95, centre, end
 
-#: Two-sided 95 % normal quantile: the signed root r at each end.
-Z95 = 1.959963984540054
-#: Each end is accepted when |r − Z95| is below this (an interval of 94.4–95.6 % nominal level).
-R_TOL = 0.05
 #: Zero-boundary parameters are searched in [ZERO_FLOOR·s, ZERO_CAP·s], s their conditional upper end.
 ZERO_FLOOR, ZERO_CAP = 0.01, 1e4
 #: Log offsets from s at which a zero-boundary parameter also starts inner maximisations (see Profiler.with_ladder).
 ZERO_LADDER = (1.0, 0.0, -1.0, -2.0, -3.0)
 #: An end further than this from the estimate (log units, i.e. a factor e^25 ≈ 7e10) is reported as unbounded.
 MAX_LOG_DISTANCE = 25.0
-#: Profile evaluations per end at most (outward steps and regula falsi together).
-MAX_POINTS = 12
 #: A profile point whose log-likelihood exceeds the fit's by more than this shows the fit missed the maximum.
 BETTER_BY = 0.05
-#: Outward steps that raise the signed root by less than this (the profile is flat) jump to the end of the range.
-FLAT_PROGRESS = 0.1
 #: The inner maximisation moves the interior parameters at most this many standard errors from its start.
 MAX_WHITENED = 20.0
 #: Drop of ℓ at which an inner maximisation counts as failed (an evaluation outside the filter's domain).
 FAILED_DROP = 1e3
 
-#: One profile point: (distance from the centre, signed root r, argmax of the other parameters).
-Point = tuple[float, float, np.ndarray]
-#: ``profile_at(v, starts)`` → (ℓ_A(v), argmax) from the best of ``starts``.
-ProfileAt = Callable[[float, list[np.ndarray]], tuple[float, np.ndarray]]
 
 
 def whitening(info: np.ndarray) -> np.ndarray:
@@ -312,89 +301,6 @@ class Profiler:
             self.better = (ll, th.copy())
         return a, th
 
-    # -- the centre and the ends ----------------------------------------------------------------------------
-    def centre(self, profile_at: ProfileAt, v_hat: float, a_hat: float, steps: list[float], *,
-               predict: Callable[[float], list[np.ndarray]], parabola: bool) -> list[tuple[float, float, np.ndarray]]:
-        """Profile points (v, ℓ_A, argmax) at ``v_hat`` and ``v_hat + step`` for each step, plus the vertex of the
-        parabola through them when ``parabola`` and it lies among them: the max of ℓ_A is the best of these."""
-        pts = [(v_hat, a_hat, self.theta)]
-        for step in steps:
-            a, th = profile_at(v_hat + step, predict(step))
-            pts.append((v_hat + step, a, th))
-        good = [p for p in pts if math.isfinite(p[1])]
-        if parabola and len(good) >= 3:
-            v = np.array([p[0] for p in good])
-            c2, c1, _ = np.polyfit(v - v_hat, [p[1] for p in good], 2)
-            vertex = -c1 / (2.0 * c2) if c2 < 0 else math.nan
-            if math.isfinite(vertex) and min(v - v_hat) < vertex < max(v - v_hat) and abs(vertex) > 0.05 * np.ptp(v):
-                a, th = profile_at(v_hat + vertex, predict(vertex))
-                pts.append((v_hat + vertex, a, th))
-        return pts
-
-    def end(self, profile_at: ProfileAt, pts_all: list[tuple[float, float, np.ndarray]], direction: float,
-            first: float, limit: float) -> float:
-        """The end of the 95 % interval in ``direction`` (±1) from the best of ``pts_all`` (the centre).
-
-        ``pts_all``: profile points (v, ℓ_A, argmax) known so far; ``first``: the first distance tried when no
-        known point lies that way; ``limit``: the largest distance (±inf beyond it: the data do not bound the
-        parameter that way).
-        """
-        v_c, a_max, th_c = max(pts_all, key=lambda p: p[1])
-
-        def root(a: float) -> float:
-            return math.sqrt(2.0 * max(a_max - a, 0.0)) if math.isfinite(a) else math.inf
-
-        known = sorted((direction * (v - v_c), root(a), th) for v, a, th in pts_all if direction * (v - v_c) > 0)
-        pts: list[Point] = [(0.0, 0.0, th_c)] + [p for p in known if math.isfinite(p[1])]
-        inside: list[float] = [0.0, -Z95]  # Illinois regula falsi on f = r − Z95: [distance, f] with f < 0 …
-        outside: list[float] | None = None  # … and with f > 0 once bracketed
-        for d, r, _ in known:
-            if r < Z95:
-                inside = [d, r - Z95]
-            elif outside is None:
-                outside = [d, min(r - Z95, 10.0 * Z95)]
-        last_moved = 0  # which end the previous step replaced (−1 inside, +1 outside)
-        d = min(max(first, 1e-12), limit) if len(pts) == 1 else None
-        for _ in range(MAX_POINTS):
-            if outside is None:  # still inside: step outward along the secant of r, 1.25–4× further
-                if d is None:
-                    if inside[0] >= limit:
-                        return direction * math.inf
-                    (d0, r0, _), (d1, r1, _) = pts[-2], pts[-1]
-                    if len(pts) >= 3 and r1 < r0 + FLAT_PROGRESS:  # a flat profile: try the end of the range
-                        d = limit
-                    else:
-                        grow = d0 + (Z95 - r0) * (d1 - d0) / (r1 - r0) if r1 > r0 else math.inf
-                        d = min(max(grow, 1.25 * d1), 4.0 * d1, limit)
-            else:
-                if outside[0] - inside[0] < 1e-3 * outside[0]:
-                    break
-                d = inside[0] - inside[1] * (outside[0] - inside[0]) / (outside[1] - inside[1])
-            near = sorted(pts, key=lambda p: abs(p[0] - d))[:2]
-            ll_a, th = profile_at(v_c + direction * d, self.starts_near(_extrapolate(near, d)))
-            r = root(ll_a)
-            if abs(r - Z95) < R_TOL:
-                return v_c + direction * d
-            if math.isfinite(r):
-                pts.append((d, r, th))
-                pts.sort(key=lambda p: p[0])
-            f = min(r - Z95, 10.0 * Z95)  # an evaluation outside the domain counts as far outside
-            if f < 0:
-                inside = [d, f]
-                if outside is not None and last_moved == -1:
-                    outside[1] *= 0.5
-                last_moved = -1
-            else:
-                outside = [d, f]
-                if last_moved == 1:
-                    inside[1] *= 0.5
-                last_moved = 1
-            d = None
-        if outside is None:
-            return direction * math.inf
-        d = inside[0] - inside[1] * (outside[0] - inside[0]) / (outside[1] - inside[1])
-        return v_c + direction * d
-
     # -- a log-parameter ------------------------------------------------------------------------------------
     def interval(self, k: int, cov: np.ndarray) -> tuple[float, float]:
         """95 % adjusted-profile interval (lo, hi) of log-parameter k (−inf: 0 cannot be excluded; +inf: the data
@@ -420,12 +326,12 @@ class Profiler:
         a_hat = self.evaluate(theta_hat)[1]
         if k in self.zero:  # ℓ_A along K from 0 up to the conditional scale s, in e-fold steps
             top = math.log(self.zero[k]) - v_hat
-            pts = self.centre(profile_at, v_hat, a_hat, [top - 2.0, top - 1.0, top],
+            pts = centre(profile_at, v_hat, a_hat, theta_hat, [top - 2.0, top - 1.0, top],
                               predict=predict, parabola=False)
         else:
             half = Z95 * se if se < 5.0 else 1.0
             steps = [-min(half, 0.5 * room[-1.0]), min(half, 0.5 * room[1.0])]
-            pts = self.centre(profile_at, v_hat, a_hat, [s for s in steps if s != 0.0], predict=predict,
+            pts = centre(profile_at, v_hat, a_hat, theta_hat, [s for s in steps if s != 0.0], predict=predict,
                               parabola=True)
         v_c = max(pts, key=lambda p: p[1])[0]
         ends = []
@@ -436,9 +342,10 @@ class Profiler:
                     ends.append(-math.inf)
                     continue
                 limit = v_c - v_hat
-            end = self.end(profile_at, pts, direction, 1.0 if se > 5.0 else Z95 * se, limit)
+            v_end = end(profile_at, self.starts_near, pts, direction, first=1.0 if se > 5.0 else Z95 * se,
+                        limit=limit)
             bound = self.hi[k] if direction > 0 else self.lo[k]
-            ends.append(direction * math.inf if math.isfinite(bound) and abs(end - bound) < 1e-9 else end)
+            ends.append(direction * math.inf if math.isfinite(bound) and abs(v_end - bound) < 1e-9 else v_end)
         return ends[0], ends[1]
 
     # -- the ramp slope -------------------------------------------------------------------------------------
@@ -458,16 +365,8 @@ class Profiler:
 
         scale = max(se, 1e-300)
         a_hat = self.evaluate(self.theta, base_at(value))[1]
-        pts = self.centre(profile_at, value, a_hat, [-Z95 * scale, Z95 * scale],
+        pts = centre(profile_at, value, a_hat, self.theta, [-Z95 * scale, Z95 * scale],
                           predict=lambda _: self.fallback_starts(), parabola=True)
-        return (self.end(profile_at, pts, -1.0, Z95 * scale, 1e6 * scale),
-                self.end(profile_at, pts, 1.0, Z95 * scale, 1e6 * scale))
+        return (end(profile_at, self.starts_near, pts, -1.0, first=Z95 * scale, limit=1e6 * scale),
+                end(profile_at, self.starts_near, pts, 1.0, first=Z95 * scale, limit=1e6 * scale))
 
-
-def _extrapolate(near: list[Point], d: float) -> np.ndarray:
-    """Argmax at distance d by linear extrapolation (or interpolation) of two profile points."""
-    if len(near) < 2 or near[1][0] == near[0][0]:
-        return near[0][2].copy()
-    (d0, _, t0), (d1, _, t1) = near
-    w = min(max((d - d0) / (d1 - d0), -1.0), 2.0)
-    return t0 + w * (t1 - t0)
