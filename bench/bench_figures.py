@@ -32,23 +32,24 @@ def _tight(fig, **_: object) -> None:
 
 def _write(result, folder: Path, *, tight: bool) -> float:
     """CPU seconds of writing every output of ``result`` into ``folder``."""
-    fixed = layout.fix_margins
-    if tight:
-        for module in _users():
-            module.fix_margins = _tight
+    patched = _users() if tight else []
+    for module in patched:
+        module.fix_margins = _tight
     try:
         start = time.process_time()
         analysis.write_analysis(result, folder, rostopic="/imu", meta={"source": "bench"})
         return time.process_time() - start
     finally:
-        for module in _users():
-            module.fix_margins = fixed
+        for module in patched:
+            module.fix_margins = layout.fix_margins
 
 
 def _users() -> list:
-    from imu_noise_id.report import fleet, loop_plots, plots, plots_model
-
-    return [fleet, loop_plots, plots, plots_model]
+    """The loaded report modules that imported :func:`~imu_noise_id.report.layout.fix_margins` (each holds its own
+    reference, so each is patched)."""
+    return [m for name, m in list(sys.modules.items())
+            if name.startswith("imu_noise_id.report.") and m is not layout
+            and getattr(m, "fix_margins", None) is layout.fix_margins]
 
 
 def main(argv: list[str] | None = None) -> int:
