@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -187,8 +189,6 @@ def test_a_model_without_a_steady_filter_in_double_precision_is_refused_without_
     """A GM of σ 305 beside a white noise of 8e-8 per sample (an optimiser's trial step reaches such ratios): the
     Riccati iteration ended on a P̄ with an eigenvalue of −5e12, whose log-likelihood was finite and meaningless.
     The estimators take InputError as outside the domain (EM keeps its last good iterate)."""
-    import warnings
-
     y, z = np.random.default_rng(0).standard_normal(5000) * 1e-3, np.ones((5000, 1))
     model = ss.from_components([WN(7.62916e-06), GM(tau=7.8895e+06, sigma=305.336),
                                 OSC(frequency=0.161392, bandwidth=0.114937, sigma=6.63899e-05), RW(4.40886e-10)],
@@ -203,8 +203,6 @@ def test_the_smoother_sums_of_a_nearly_exactly_observed_state_are_finite_without
     """A random walk of 20 beside a white noise of 1e-10 per sample: P̄ singular to rounding. The covariance sums'
     binary doubling squared J once more after its last bit, and that unused power overflowed (RuntimeWarnings in
     the measured-table logs); the sums themselves are finite."""
-    import warnings
-
     y, z = np.random.default_rng(0).standard_normal(5000) * 1e-3, np.ones((5000, 1))
     model = ss.from_components([WN(1.09806e-08), OSC(frequency=14.8243, bandwidth=0.0140424, sigma=704.795),
                                 OSC(frequency=0.196866, bandwidth=0.0583459, sigma=0.383911),
