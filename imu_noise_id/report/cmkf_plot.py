@@ -8,6 +8,7 @@ import numpy as np
 
 from ..core.diagnostics.consistency import nis_bounds
 from ..pipelines.cmkf_replay import CmkfReplayResult
+from .png import write_png
 
 
 def plot_cmkf(result: CmkfReplayResult, path: Path, title: str = "") -> None:
@@ -51,5 +52,4 @@ def plot_cmkf(result: CmkfReplayResult, path: Path, title: str = "") -> None:
     if finite.any():
         axs[3].set_ylim(max(1e-3, np.nanpercentile(result.nis_accel[finite], 0.5)), None)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    write_png(fig, path, dpi=80)

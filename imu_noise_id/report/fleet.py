@@ -18,6 +18,7 @@ import numpy as np
 from ..core.fleet import OUTLIER_Z, modified_z, spec_verdict
 from .html import STYLE, fmt, img_tag
 from .layout import fix_margins
+from .png import png_bytes
 
 PARAMETERS = ("noise_density", "random_walk", "bias_instability")
 COLUMNS = ("unit", "bag", "topic", "axis", "status", "error", "model", "noise_density", "noise_density_lo",
@@ -92,10 +93,7 @@ def _spread_png(rows: list[dict], parameter: str) -> bytes:
     ax.set_title(f"{parameter} across units (red: outlier, |modified z| > {OUTLIER_Z})", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     fix_margins(fig)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    plt.close(fig)
-    return buf.getvalue()
+    return png_bytes(fig, dpi=100)
 
 
 def write_fleet_report(rows: list[dict], out: Path, *, title: str, spec: dict | None) -> Path:

@@ -11,6 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 from ..pipelines.identify import Identification
+from .png import write_png
 
 
 def plot_identify(res: Identification, path: Path) -> None:
@@ -28,8 +29,7 @@ def plot_identify(res: Identification, path: Path) -> None:
     panels[-1, 0].set_xlabel("time [s]")
     fig.suptitle("Posterior probability of each hypothesis")
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    write_png(fig, path, dpi=90)
 
 
 def _panel_key(name: str) -> str:
@@ -74,5 +74,4 @@ def plot_criteria(results: list[Any], path: Path, title: str = "") -> None:
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    write_png(fig, path, dpi=80)

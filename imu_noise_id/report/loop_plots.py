@@ -5,13 +5,13 @@ Each function returns PNG bytes (for embedding in ``report.html``) and can also 
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 
 from ..pipelines.loop import LoopStep
 from .layout import fix_margins
+from .png import png_bytes
 
 
 def _figure(width: float = 6.4, height: float = 3.4, ncols: int = 1):
@@ -21,15 +21,12 @@ def _figure(width: float = 6.4, height: float = 3.4, ncols: int = 1):
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, ncols, figsize=(width, height), dpi=80)
-    return plt, fig, axes
+    return fig, axes
 
 
-def _png(plt, fig, path: Path | None, *, suptitle: bool = False) -> bytes:
-    buf = io.BytesIO()
+def _png(fig, path: Path | None, *, suptitle: bool = False) -> bytes:
     fix_margins(fig, suptitle=suptitle)
-    fig.savefig(buf, format="png")
-    plt.close(fig)
-    data = buf.getvalue()
+    data = png_bytes(fig)
     if path is not None:
         Path(path).write_bytes(data)
     return data
@@ -38,7 +35,7 @@ def _png(plt, fig, path: Path | None, *, suptitle: bool = False) -> bytes:
 def allan_before_after(before: LoopStep, after: LoopStep | None, unit: str = "u", title: str = "",
                        path: Path | None = None) -> bytes:
     """ADEV of the data (95 % band) with the model's theoretical ADEV, before and (if given) after a step."""
-    plt, fig, ax = _figure()
+    fig, ax = _figure()
     for step, colour, label in ((before, "tab:blue", "before"), (after, "tab:red", "after")):
         if step is None:
             continue
@@ -52,13 +49,13 @@ def allan_before_after(before: LoopStep, after: LoopStep | None, unit: str = "u"
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title(title, fontsize=9)
-    return _png(plt, fig, path)
+    return _png(fig, path)
 
 
 def residual_acf_psd(step: LoopStep, title: str = "", path: Path | None = None) -> bytes:
     """Autocorrelation (with its ±1.96/√n band) and Welch PSD of the standardised innovations of a step."""
     s = step.diagnosis.spectra
-    plt, fig, (a1, a2) = _figure(9.0, 3.0, ncols=2)
+    fig, (a1, a2) = _figure(9.0, 3.0, ncols=2)
     a1.bar(s.lags, s.acf, width=0.8, color="tab:gray")
     a1.axhline(s.band, color="tab:red", ls="--", lw=0.8)
     a1.axhline(-s.band, color="tab:red", ls="--", lw=0.8)
@@ -72,4 +69,4 @@ def residual_acf_psd(step: LoopStep, title: str = "", path: Path | None = None) 
     a2.set_title(f"peak ratio {step.errors.peak_ratio:.1f} at {step.errors.peak_frequency:.3g} Hz", fontsize=9)
     a2.legend(fontsize=7)
     fig.suptitle(title, fontsize=9)
-    return _png(plt, fig, path, suptitle=bool(title))
+    return _png(fig, path, suptitle=bool(title))

@@ -13,6 +13,7 @@ import numpy as np
 from ..core.axes import ACCEL_AXES, GYRO_AXES, UNITS
 from ..pipelines.analyze.static import StaticAnalysis
 from .layout import fix_margins
+from .png import write_png
 
 _COLOURS = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
 _LINE_LABELS = {"QN": "quantisation", "WN": "white noise", "BI": "bias inst.", "RW": "random walk", "RR": "rate ramp"}
@@ -52,6 +53,4 @@ def plot_allan_deviation(result: StaticAnalysis, path: Path) -> Path:
         panel.grid(True, which="both", alpha=0.3)
         panel.legend(title="dashed: slope lines; ▼ N at 1 s, ▲ K at 3 s", fontsize=8, title_fontsize=8)
     fix_margins(fig)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-    return path
+    return write_png(fig, path, dpi=90)

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..core.estimation.results import FitResult
 from .layout import fix_margins
+from .png import png_bytes, write_png
 
 
 def plot_allan_overlay(
@@ -61,11 +62,7 @@ def save_allan_overlay(path: str | Path, panels: list[dict], title: str | None =
     if title:
         fig.suptitle(title, fontsize=10)
     fix_margins(fig, suptitle=bool(title))
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return write_png(fig, path, dpi=110)
 
 
 def allan_panel_png(tau: np.ndarray, avar: np.ndarray, ci: tuple[np.ndarray, np.ndarray], fit: FitResult, *,
@@ -74,7 +71,6 @@ def allan_panel_png(tau: np.ndarray, avar: np.ndarray, ci: tuple[np.ndarray, np.
     """One readable panel (PNG bytes): the data's Allan deviation with its 95 % band, the slope lines read from it
     (``lines``: name → (exponent μ of τ in the AV, coefficient c: AV = c·τ^μ)), the final model's deviation, the
     simulations of it and ``overbound`` (τ [s], its AV [u²], label) over its range."""
-    import io
 
     import matplotlib
 
@@ -93,7 +89,4 @@ def allan_panel_png(tau: np.ndarray, avar: np.ndarray, ci: tuple[np.ndarray, np.
     ax.set_title(title, fontsize=10)
     ax.legend(fontsize=7, loc="best")
     fix_margins(fig)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    return buf.getvalue()
+    return png_bytes(fig, dpi=110)
