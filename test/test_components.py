@@ -173,6 +173,8 @@ def _autocovariance(component, lag_s: np.ndarray) -> np.ndarray:
         return math.pi * component.noise_density**2 * component.cutoff * np.exp(-lag_s / tau_c)
     if isinstance(component, GM):
         return component.sigma**2 * np.exp(-lag_s / component.tau)
+    if isinstance(component, BI):  # the flicker ladder: a sum of GMs of equal variance
+        return sum(component.sigma2_each * np.exp(-lag_s / t) for t in component.taus)
     zeta = component.bandwidth / (2.0 * component.frequency)
     w0 = 2.0 * math.pi * component.frequency
     a, wd = zeta * w0, w0 * math.sqrt(1.0 - zeta**2)
@@ -180,7 +182,7 @@ def _autocovariance(component, lag_s: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize("component", [OSC(0.5, 0.05, 6e-3), OSC(3.0, 0.6, 1e-3), LPF(1e-3, 20.0), GM(0.02, 1e-3),
-                                       GM(300.0, 2e-5)], ids=str)
+                                       GM(300.0, 2e-5), BI(3e-4, 0.05, 500.0)], ids=str)
 @pytest.mark.parametrize("m", [1, 2, 7, 100, 1000])
 def test_sampled_allan_variance_equals_the_sum_over_the_autocovariance(component, m):
     """AV(m·dt) of the samples = (4S(m) − S(2m))/(2m²), S(k) = Σ_{|j|<k} (k − |j|) R(j·dt), summed directly."""

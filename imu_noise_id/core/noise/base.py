@@ -47,16 +47,21 @@ class StateBlock:
         return int(self.phi.shape[0])
 
 
+def _finite_positive(x: np.ndarray) -> bool:
+    """Every element finite and > 0 (two reductions: a NaN fails ``min() > 0``, an infinity ``isfinite(max())``)."""
+    return x.size == 0 or bool(x.min() > 0.0 and math.isfinite(x.max()))
+
+
 def as_tau(tau: np.ndarray | float) -> np.ndarray:
     tau = np.asarray(tau, dtype=float)
-    if np.any(~np.isfinite(tau)) or np.any(tau <= 0):
+    if not _finite_positive(tau):
         raise ValueError("averaging times tau must be finite and > 0")
     return tau
 
 
 def as_freq(f: np.ndarray | float) -> np.ndarray:
     f = np.asarray(f, dtype=float)
-    if np.any(~np.isfinite(f)) or np.any(f <= 0):
+    if not _finite_positive(f):
         raise ValueError("frequencies f must be finite and > 0")
     return f
 

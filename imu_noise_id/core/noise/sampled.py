@@ -26,24 +26,20 @@ import numpy as np
 SERIES_LIMIT = 1e-3
 
 
-def _expm1(w: np.ndarray) -> np.ndarray:
-    """e^w − 1 for complex w without cancellation near 0."""
-    small = np.abs(w) < 1e-5
-    with np.errstate(over="ignore", invalid="ignore"):
-        direct = np.exp(w) - 1.0
-    return np.where(small, w + w * w / 2.0 + w * w * w / 6.0, direct)
+def _series(m: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """g(m) from its series in w (module docstring), for m·|w| < :data:`SERIES_LIMIT`."""
+    return m * (m - 1.0) / 2.0 + w * (m**3 - m) / 6.0 + w * w * m * m * (m * m - 1.0) / 24.0
 
 
 def _g(m: np.ndarray, w: np.ndarray) -> np.ndarray:
     """g(m) = Σ_{j=1}^{m−1} (m − j) e^{jw} (module docstring), closed form or series; ``w`` broadcasts against m."""
     w = np.asarray(w, dtype=complex)
-    one_minus_z = -_expm1(np.broadcast_to(w, np.broadcast_shapes(m.shape, w.shape)))
-    one_minus_zm = -_expm1(m * w)
-    z = 1.0 - one_minus_z
+    one_minus_z = -np.expm1(w)  # per pole; broadcast against m below
+    mw = m * w
     with np.errstate(divide="ignore", invalid="ignore"):
-        closed = z * (m * one_minus_z - one_minus_zm) / one_minus_z**2
-    series = m * (m - 1.0) / 2.0 + w * (m**3 - m) / 6.0 + w * w * m * m * (m * m - 1.0) / 24.0
-    return np.where(np.abs(m * w) < SERIES_LIMIT, series, closed)
+        closed = (1.0 - one_minus_z) * (m * one_minus_z + np.expm1(mw)) / one_minus_z**2
+    small = np.abs(mw) < SERIES_LIMIT
+    return np.where(small, _series(m, w), closed) if small.any() else closed
 
 
 def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau: np.ndarray,
@@ -63,16 +59,20 @@ def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau
     """
     m = np.asarray(tau, dtype=float) / dt
     c = np.asarray(c, dtype=complex)
-    w = np.asarray(s, dtype=complex) * dt
-    if c.ndim:  # one row per process, summed
-        m, c, w = m[None, ...], c.reshape(-1, *([1] * m.ndim)), w.reshape(-1, *([1] * m.ndim))
+    if c.ndim:  # one row per process, summed; real poles (a flicker ladder) in real arithmetic
+        w = np.asarray(s, dtype=complex).reshape(-1, *([1] * m.ndim)) * dt
+        c = c.reshape(-1, *([1] * m.ndim))
+        real = not (w.imag.any() or c.imag.any())
 
-    def block_sum_variance(k: np.ndarray) -> np.ndarray:
-        v = np.real(c * (k + 2.0 * _g(k, w)))
-        return v.sum(axis=0) if c.ndim else v
+        def sums(k: np.ndarray) -> np.ndarray:
+            if real:
+                return (c.real * (k + 2.0 * _g_real(k, w.real))).sum(axis=0)
+            return np.real(c * (k + 2.0 * _g(k, w))).sum(axis=0)
+    else:
+        def sums(k: np.ndarray) -> np.ndarray:
+            return block_sum_variance(complex(c), complex(s), k, dt)
 
-    m_tau = np.asarray(tau, dtype=float) / dt
-    return (4.0 * block_sum_variance(m) - block_sum_variance(2.0 * m)) / (2.0 * m_tau * m_tau)
+    return (4.0 * sums(m) - sums(2.0 * m)) / (2.0 * m * m)
 
 
 def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.ndarray:
@@ -87,13 +87,10 @@ def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.n
     return np.real(complex(c) * (k + 2.0 * _g(k, w)))
 
 
-def _g_real(m: np.ndarray, w: float) -> np.ndarray:
-    """:func:`_g` for a real w < 0."""
+def _g_real(m: np.ndarray, w: float | np.ndarray) -> np.ndarray:
+    """:func:`_g` for real w < 0 (a float, or an array broadcasting against m)."""
     mw = m * w
-    one_minus_z = -_expm1(np.asarray(w))
-    closed = (1.0 - one_minus_z) * (m * one_minus_z + _expm1(mw)) / one_minus_z**2
+    one_minus_z = -np.expm1(w)
+    closed = (1.0 - one_minus_z) * (m * one_minus_z + np.expm1(mw)) / one_minus_z**2
     small = np.abs(mw) < SERIES_LIMIT
-    if not np.any(small):
-        return closed
-    series = m * (m - 1.0) / 2.0 + w * (m**3 - m) / 6.0 + w * w * m * m * (m * m - 1.0) / 24.0
-    return np.where(small, series, closed)
+    return np.where(small, _series(m, w), closed) if small.any() else closed
