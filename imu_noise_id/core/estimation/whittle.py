@@ -109,15 +109,24 @@ def difference_spectrum(components: list[Component], omega: np.ndarray, dt: floa
 
 def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndarray) -> np.ndarray:
     """Spectral density per sample of y_k = h x_k, x_{k+1} = Φ x_k + w_k, var w = Q, at angular frequencies ω:
-    S(ω) = h G Q Gᴴ hᵀ with G = (e^{iω} I − Φ)⁻¹ (any stable block, e.g. LPF, OSC)."""
+    S(ω) = h G Q Gᴴ hᵀ with G = (e^{iω} I − Φ)⁻¹ (any stable block, e.g. LPF, OSC).
+
+    h G is formed without a linear solve per frequency where the block allows: a diagonal Φ (GM ladders, LPF)
+    divides, a 2 × 2 one (OSC, MA) takes the adjugate, h G = h adj(zI − Φ) / det(zI − Φ); larger blocks solve.
+    """
     z = np.exp(1j * np.asarray(omega))
     n = phi.shape[0]
-    if np.count_nonzero(phi - np.diag(np.diag(phi))) == 0:  # GM ladders, LPF: (zI − Φ)⁻¹ is diagonal
+    if np.count_nonzero(phi - np.diag(np.diag(phi))) == 0:  # (zI − Φ)⁻¹ is diagonal
         hg = h[None, :] / (z[:, None] - np.diag(phi)[None, :])
+    elif n == 2:
+        m00, m11 = z - phi[0, 0], z - phi[1, 1]
+        m01, m10 = -phi[0, 1], -phi[1, 0]
+        det = m00 * m11 - m01 * m10
+        hg = np.stack([h[0] * m11 - h[1] * m10, h[1] * m00 - h[0] * m01], axis=1) / det[:, None]
     else:  # h G = solve((zI − Φ)ᵀ, hᵀ) per frequency (cheaper than forming the inverse)
         a = np.swapaxes(z[:, None, None] * np.eye(n) - phi[None, :, :], 1, 2)
         hg = np.linalg.solve(a, np.broadcast_to(h.astype(complex), (z.size, n))[:, :, None])[:, :, 0]
-    return np.real(np.einsum("wi,ij,wj->w", hg, q, hg.conj()))
+    return np.real(np.sum((hg @ q) * hg.conj(), axis=1))
 
 
 def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: BandedPeriodogram | None = None,
