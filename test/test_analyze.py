@@ -185,7 +185,7 @@ def test_cli_analyze_help(capsys):
 def test_demo_runs_short(tmp_path, capsys):
     from imu_noise_id import demo
 
-    assert demo.main(["--out", str(tmp_path), "--duration", "120", "--rate", "100", "--parts", "offline"]) == 0
+    assert demo.main(["--out", str(tmp_path), "--duration", "60", "--rate", "100", "--parts", "offline"]) == 0
     printed = capsys.readouterr().out
     assert "truth vs estimates" in printed
     assert "N GMWM" in printed and "EM and GMWM side by side" in printed  # make demo shows both estimators

@@ -125,13 +125,13 @@ def test_spikes_are_flagged_and_removed():
 
 
 def test_no_effect_is_added_to_clean_data():
-    # False-alarm rate of the whole loop (detectors at α = 0.01, then the BIC + evidence rules) over 30 seeded
-    # clean WN+RW records. Measured: 0/30 (printed). Bound asserted: at most 3/30. Before the BIC rule the
-    # family of ~9 detectors at 1 % each could fire in up to ~9 % of records; the bound fails with probability
-    # ≈ 0.5 % if the loop's rate were 2 %, and ≈ 50 % if it were 10 %.
-    added = [len(run_closed_loop(_base(200 + s), DT, START).steps) - 1 for s in range(30)]
+    # False alarms of the whole loop (detectors at α = 0.01, then the BIC + evidence rules) on 15 seeded clean
+    # WN+RW records: at most 2. Fails with probability ≈ 3.6 % at a true rate of 5 % and ≈ 18 % at 10 % (before the
+    # BIC rule the ~9 detectors at 1 % each could fire in up to ~9 % of records). The rate itself is measured in
+    # bench/bench_loop_effects.py (clean: 30 records of 20 min, docs/results/bench_loop_effects.txt).
+    added = [len(run_closed_loop(_base(200 + s), DT, START).steps) - 1 for s in range(15)]
     print("effects added on clean data:", added, "rate", sum(a > 0 for a in added) / len(added))
-    assert sum(a > 0 for a in added) <= 3
+    assert sum(a > 0 for a in added) <= 2
 
 
 def test_bad_input():
