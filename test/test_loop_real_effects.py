@@ -358,3 +358,32 @@ def test_a_broad_line_explained_in_part_is_kept_only_while_the_av_is_outside_its
     assert not loop.evidence_gone(line, two)[0]
     assert av_inside_band(diag) is not kept
     assert partly_explained(loop, line, diag, two)[0] is kept
+
+
+def _moves_from(components, added, swapped=()):
+    """Re-selection's moves from a fit of ``components`` on a 20 min record whose long-τ AV is 10⁻⁶ at τ ≈ 40 s."""
+    from imu_noise_id.pipelines.loop.trials import moves
+
+    tau = np.geomspace(0.01, 120.0, 40)
+    diag = SimpleNamespace(fit=SimpleNamespace(components=components), tau=tau, av_data=np.full(tau.size, 1e-6))
+    loop = SimpleNamespace(n=N, dt=DT)
+    return {label: comps for label, comps in moves(loop, diag, added, swapped)}
+
+
+def test_flicker_that_replaced_a_random_walk_is_swapped_back_once_the_gm_it_also_stood_for_is_modelled():
+    """bench_loop_effects' osc+clear_gm, seed 1000: the RW→BI swap after the OSC let BI stand for the RW and the
+    still unmodelled GM; after the GM was added no move offered the RW back, and the final WN+BI+GM+OSC (BIC
+    −594 987) kept no random walk where WN+GM+OSC+RW (−595 003, K within 1 % of the truth) fits better."""
+    flicker = BI(1.6e-3, *band_for_record(N, DT))
+    fitted = [WN(2e-3), flicker, GM(tau=2.0, sigma=3e-3), OSC(8.0, 0.4, 3e-3)]
+    offered = _moves_from(fitted, added="GM")
+    back = offered["swap BI (for RW)"]
+    rw = next(c for c in back if isinstance(c, RW))
+    assert not any(isinstance(c, BI) for c in back)
+    long_tau = float(np.median(np.geomspace(0.01, 120.0, 40)[np.geomspace(0.01, 120.0, 40) >= 12.0]))
+    assert rw.allan_variance(np.array([long_tau]), DT)[0] == pytest.approx(1e-6, rel=1e-9)  # from the long-τ AV
+    # never undone within the re-selection that made it, never offered for what was just added or beside a RW
+    assert "swap BI (for RW)" not in _moves_from(fitted, added="GM", swapped=("RW (for BI)",))
+    assert "swap BI (for RW)" not in _moves_from(fitted, added="BI")
+    assert not {"swap BI (for RW)", "swap RW (for BI)"} & set(_moves_from([*fitted, RW(3e-4)], added="GM"))
+    assert "swap RW (for BI)" not in _moves_from([WN(2e-3), RW(3e-4), GM(2.0, 3e-3)], "GM", ("BI (for RW)",))
