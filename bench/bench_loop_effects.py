@@ -8,7 +8,11 @@ Usage::
 Each case simulates ``--minutes`` at 100 Hz and runs the loop from WN+RW:
 
 - ``osc``: WN + RW + a wandering line (OSC: f₀ drawn in 0.4–15 Hz, bandwidth 2–6 % of f₀, σ ≈ 1–2× the
-  per-sample white noise / 10), and ``osc+gm``: the same with a GM bias process (τ = 60 s);
+  per-sample white noise / 10), and ``osc+gm``: the same with a GM bias process (τ = 60 s, σ = 2·10⁻³);
+- ``gm``: WN + RW + that GM without the line: whether what ``osc+gm`` gets wrong is the line's doing or the GM's;
+- ``osc+fast_gm``: the line beside a short-memory GM (τ = 2 s, σ = 10⁻³: its AV at τ ≈ 4 s is a third of the white
+  noise's, and beyond it the GM adds as much as the white noise), and ``osc+clear_gm``: the same GM three times
+  stronger (σ = 3·10⁻³), dominating the AV from 1 s to 30 s;
 - ``lpf``: the sensor's low-pass (cutoff drawn in 5–30 Hz) on the white noise, + RW;
 - ``ma``: the sensor's averaging filter (a two-tap moving average on 40–70 % of the white noise's passband
   density), + RW: the filter must be found as MA (not LPF);
@@ -37,7 +41,10 @@ from imu_noise_id.core.noise.flicker import band_for_record
 from imu_noise_id.pipelines.loop import run_closed_loop
 
 DT = 0.01
-CASES = ("osc", "osc+gm", "lpf", "ma", "bi", "sin", "clean")
+CASES = ("osc", "osc+gm", "gm", "osc+fast_gm", "osc+clear_gm", "lpf", "ma", "bi", "sin", "clean")
+#: The GM of each case that has one.
+GMS = {"osc+gm": GM(tau=60.0, sigma=2e-3), "gm": GM(tau=60.0, sigma=2e-3), "osc+fast_gm": GM(tau=2.0, sigma=1e-3),
+       "osc+clear_gm": GM(tau=2.0, sigma=3e-3)}
 N_TRUE, K_TRUE = 2e-3, 3e-4
 
 
@@ -45,11 +52,13 @@ def simulate(case: str, seed: int, n: int) -> tuple[np.ndarray, dict]:
     rng = np.random.default_rng(seed)
     f0 = float(rng.uniform(0.4, 15.0))
     truth: dict = {"case": case}
-    if case in ("osc", "osc+gm"):
+    if case in ("osc", "osc+gm", "osc+fast_gm", "osc+clear_gm"):
         osc = OSC(frequency=f0, bandwidth=f0 * float(rng.uniform(0.02, 0.06)),
                   sigma=N_TRUE / math.sqrt(DT) * float(rng.uniform(0.1, 0.2)))
-        comps = [WN(N_TRUE), osc, RW(K_TRUE)] + ([GM(tau=60.0, sigma=2e-3)] if case == "osc+gm" else [])
+        comps = [WN(N_TRUE), osc, RW(K_TRUE)] + ([GMS[case]] if case in GMS else [])
         truth["osc"] = osc
+    elif case == "gm":
+        comps = [WN(N_TRUE), RW(K_TRUE), GMS[case]]
     elif case == "lpf":
         cutoff = float(rng.uniform(5.0, 30.0))
         comps, truth["cutoff"] = [LPF(noise_density=N_TRUE, cutoff=cutoff), RW(K_TRUE)], cutoff
@@ -77,6 +86,13 @@ def assess(y: np.ndarray, truth: dict) -> dict:
     out["n_err"] = abs(n_val / N_TRUE - 1) if n_val else math.inf
     out["k_err"] = abs(k_val / K_TRUE - 1) if k_val else math.inf
     oscs = [c for c in fit.components if isinstance(c, OSC)]
+    if truth["case"] in GMS:
+        t = GMS[truth["case"]]
+        gm = min((c for c in fit.components if isinstance(c, GM)), default=None,
+                 key=lambda c: abs(math.log(c.tau / t.tau)))
+        out["gm_found"] = gm is not None
+        if gm is not None:
+            out |= {"gm_tau_err": abs(gm.tau / t.tau - 1), "gm_sigma_err": abs(gm.sigma / t.sigma - 1)}
     if "osc" in truth:
         t = truth["osc"]
         near = [c for c in oscs if abs(c.frequency / t.frequency - 1) < 0.05]
@@ -85,6 +101,8 @@ def assess(y: np.ndarray, truth: dict) -> dict:
             c = near[0]
             out |= {"f0_err": abs(c.frequency / t.frequency - 1), "b_err": abs(c.bandwidth / t.bandwidth - 1),
                     "s_err": abs(c.sigma / t.sigma - 1)}
+    elif truth["case"] == "gm":
+        out["right_kind"] = out["gm_found"]
     elif "filter" in truth:
         out["right_kind"] = "MA" in r.final.model and "LPF" not in r.final.model
     elif "bias_instability" in truth:
@@ -111,8 +129,14 @@ def report(case: str, rows: list[dict]) -> list[str]:
 
     lines = [f"{case}: right kind {sum(r['right_kind'] for r in rows)} of {len(rows)}; "
              f"models: {', '.join(sorted({r['model'] for r in rows}))}"]
+    no_rw = sum(not math.isfinite(r["k_err"]) for r in rows)
+    if no_rw:
+        lines.append(f"    no random walk in the final model in {no_rw} of {len(rows)} (K errors: the others)")
+    if any("gm_found" in r for r in rows):
+        lines.append(f"    GM found in {sum(r['gm_found'] for r in rows)} of {len(rows)}")
     for key, label in (("f0_err", "f0"), ("b_err", "bandwidth"), ("s_err", "sigma"), ("cutoff_err", "cutoff"),
-                       ("bi_err", "B"), ("n_err", "N (passband)"), ("k_err", "K")):
+                       ("bi_err", "B"), ("gm_tau_err", "GM tau"), ("gm_sigma_err", "GM sigma"),
+                       ("n_err", "N (passband)"), ("k_err", "K")):
         if any(key in r for r in rows):
             lines.append(f"    {label:13s} error {pct(key)}")
     return lines
