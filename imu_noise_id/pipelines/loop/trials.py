@@ -289,7 +289,7 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
         if c.name == "RW" and c.name != added and "BI" not in names and "BI (for RW)" not in swapped:
             flicker = BI(math.sqrt(level / PLATEAU), *band_for_record(loop.n, loop.dt))
             moves.append(("swap RW (for BI)", _canonical([*rest, flicker])))
-        if c.name == "BI" and c.name != added and "RW" not in names and "RW (for BI)" not in swapped:
+        if c.name == "BI" and c.name != added and "RW" not in names and "RW (for BI)" not in swapped and diag.tau.size:
             moves.append(("swap BI (for RW)", _canonical([*rest, RW(math.sqrt(3.0 * level / long_tau(diag)))])))
     return moves
 
