@@ -385,5 +385,6 @@ def test_flicker_that_replaced_a_random_walk_is_swapped_back_once_the_gm_it_also
     # never undone within the re-selection that made it, never offered for what was just added or beside a RW
     assert "swap BI (for RW)" not in _moves_from(fitted, added="GM", swapped=("RW (for BI)",))
     assert "swap BI (for RW)" not in _moves_from(fitted, added="BI")
+    assert "swap BI (for RW)" not in _moves_from(fitted, added="OSC")  # only once a GM is modelled
     assert not {"swap BI (for RW)", "swap RW (for BI)"} & set(_moves_from([*fitted, RW(3e-4)], added="GM"))
     assert "swap RW (for BI)" not in _moves_from([WN(2e-3), RW(3e-4), GM(2.0, 3e-3)], "GM", ("BI (for RW)",))

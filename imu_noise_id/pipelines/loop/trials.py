@@ -264,9 +264,9 @@ def long_tau_level(diag: Diagnosis) -> float:
 def moves(loop: AxisLoop, diag: Diagnosis, added: str,
           swapped: tuple[str, ...] = ()) -> list[tuple[str, list[Component]]]:
     """Re-selection's moves from the fitted components: drop each :data:`DROPPABLE` one but ``added``, swap a
-    random walk for flicker noise (BI) started from the long-τ AV, and swap flicker noise back for a random walk
-    started from the same level. ``swapped``: what this re-selection already swapped (``"RW (for BI)"``), never
-    undone within it.
+    random walk for flicker noise (BI) started from the long-τ AV, and, right after a GM was added, swap flicker noise
+    back for a random walk started from the same level. ``swapped``: what this re-selection already swapped
+    (``"RW (for BI)"``), never undone within it.
 
     The swaps are beyond the papers. On 20 min of the ADIS16405 accelerometers a random walk 3–5× larger than the
     long-τ AV supports and flicker noise fit to within 2–3 in log-likelihood (the likelihood rests on the few
@@ -274,7 +274,9 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
     follows it (``bench/loop_measured.py``). The way back: flicker noise that replaced a random walk while a
     short-memory GM was still unmodelled stands in for both; once the GM is added, the random walk it displaced
     fits better (``bench_loop_effects.py``'s ``osc+clear_gm``: without the way back the final model kept no random
-    walk in 9 of 10 records). Same number of parameters: the BIC tie rule of :func:`judge` applies.
+    walk in 9 of 10 records). Only after a GM: offered after any addition, the way back also took the flicker from
+    ADIS16405 run 5 accel_y after its second OSC, whose final AV then left the data's band (z 0.5 → 1.7). Same
+    number of parameters: the BIC tie rule of :func:`judge` applies.
     """
     fitted = list(diag.fit.components)
     moves: list[tuple[str, list[Component]]] = []
@@ -289,7 +291,8 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
         if c.name == "RW" and c.name != added and "BI" not in names and "BI (for RW)" not in swapped:
             flicker = BI(math.sqrt(level / PLATEAU), *band_for_record(loop.n, loop.dt))
             moves.append(("swap RW (for BI)", _canonical([*rest, flicker])))
-        if c.name == "BI" and c.name != added and "RW" not in names and "RW (for BI)" not in swapped and diag.tau.size:
+        if (c.name == "BI" and "GM" in added.split("+") and "RW" not in names and "RW (for BI)" not in swapped
+                and diag.tau.size):
             moves.append(("swap BI (for RW)", _canonical([*rest, RW(math.sqrt(3.0 * level / long_tau(diag)))])))
     return moves
 
