@@ -380,7 +380,8 @@ def test_flicker_that_replaced_a_random_walk_is_swapped_back_once_the_gm_it_also
     back = offered["swap BI (for RW)"]
     rw = next(c for c in back if isinstance(c, RW))
     assert not any(isinstance(c, BI) for c in back)
-    long_tau = float(np.median(np.geomspace(0.01, 120.0, 40)[np.geomspace(0.01, 120.0, 40) >= 12.0]))
+    tau = np.geomspace(0.01, 120.0, 40)  # _moves_from's
+    long_tau = float(np.median(tau[tau >= 12.0]))
     assert rw.allan_variance(np.array([long_tau]), DT)[0] == pytest.approx(1e-6, rel=1e-9)  # from the long-τ AV
     # never undone within the re-selection that made it, never offered for what was just added or beside a RW
     assert "swap BI (for RW)" not in _moves_from(fitted, added="GM", swapped=("RW (for BI)",))

@@ -71,7 +71,6 @@ def allan_panel_png(tau: np.ndarray, avar: np.ndarray, ci: tuple[np.ndarray, np.
     """One readable panel (PNG bytes): the data's Allan deviation with its 95 % band, the slope lines read from it
     (``lines``: name → (exponent μ of τ in the AV, coefficient c: AV = c·τ^μ)), the final model's deviation, the
     simulations of it and ``overbound`` (τ [s], its AV [u²], label) over its range."""
-
     import matplotlib
 
     matplotlib.use("Agg")

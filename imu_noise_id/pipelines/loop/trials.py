@@ -256,9 +256,14 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
 DROPPABLE = ("RW", "GM", "QN", "RR")
 
 
+def _last_decade(diag: Diagnosis) -> np.ndarray:
+    """Mask of the diagnosis's τ within the last decade (where the long-τ level is read)."""
+    return diag.tau >= 0.1 * diag.tau[-1]
+
+
 def long_tau_level(diag: Diagnosis) -> float:
     """The data's AV [u²] at long τ (median over the last decade of τ): the level a bias process starts from."""
-    return float(np.median(diag.av_data[diag.tau >= 0.1 * diag.tau[-1]])) if diag.tau.size else 0.0
+    return float(np.median(diag.av_data[_last_decade(diag)])) if diag.tau.size else 0.0
 
 
 def moves(loop: AxisLoop, diag: Diagnosis, added: str,
@@ -299,7 +304,7 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
 
 def long_tau(diag: Diagnosis) -> float:
     """The τ [s] of :func:`long_tau_level` (median over the last decade of τ)."""
-    return float(np.median(diag.tau[diag.tau >= 0.1 * diag.tau[-1]]))
+    return float(np.median(diag.tau[_last_decade(diag)]))
 
 
 def reselect(loop: AxisLoop, state: LoopState, diag: Diagnosis,
