@@ -38,6 +38,15 @@ def test_kalibr_discrete_conventions():
     assert units.covariance_from_density(1e-3, 200.0) == pytest.approx(2e-4)
 
 
+def test_the_random_walk_read_off_an_allan_variance_has_that_allan_variance():
+    # K = sqrt(3 AV / tau) inverts the random walk's continuous AV K^2 tau / 3 (its sampled AV adds K^2 dt^2/(6 tau))
+    tau = np.array([1.0, 10.0, 400.0])
+    k = units.random_walk_at_allan_variance(RW(3e-4).allan_variance(tau, 1e-6), tau)
+    assert k == pytest.approx(np.full(3, 3e-4), rel=1e-9)
+    assert isinstance(units.random_walk_at_allan_variance(3e-8, 1.0), float)
+    assert units.random_walk_at_allan_variance(3e-8, 1.0) == pytest.approx(3e-4)
+
+
 def test_gm_paper_notation():
     gm = GM(tau=125.0, sigma=0.5)
     p = gm.per_sample(1.0)

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
+from ..noise.units import random_walk_at_allan_variance
 from .edf import edf_of
 from .estimators import AllanResult
 
@@ -98,7 +99,7 @@ def random_walk_bound(res: AllanResult, axis: int = 0, *, tau_min: float | None 
     tau = res.tau[use]
     edf = np.array([edf_of("allan", -2, int(m), res.n) for m in res.m[use]])
     upper = res.variance[use, axis] * edf / stats.chi2.ppf((1.0 - level) / use.size, edf)
-    bounds = np.sqrt(3.0 * upper / tau)
+    bounds = random_walk_at_allan_variance(upper, tau)
     i = int(np.argmin(bounds))
     return RandomWalkBound(float(bounds[i]), level, (float(tau[0]), float(tau[-1])), float(tau[i]), tau,
                            res.variance[use, axis].copy(), edf)

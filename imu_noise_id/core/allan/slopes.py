@@ -50,6 +50,7 @@ import numpy as np
 from scipy import optimize
 
 from ..errors import InputError
+from ..noise.units import random_walk_at_allan_variance
 from .estimators import AllanResult
 
 #: A component's region: where its line is at least this fraction of the fitted sum.
@@ -123,7 +124,7 @@ _LINES: dict[str, tuple[float, object]] = {
     "QN": (-2.0, lambda c: math.sqrt(c / 3.0)),
     "WN": (-1.0, math.sqrt),
     "BI": (0.0, lambda c: math.sqrt(c) / BIAS_INSTABILITY_FACTOR),
-    "RW": (1.0, lambda c: math.sqrt(3.0 * c)),
+    "RW": (1.0, lambda c: random_walk_at_allan_variance(c, 1.0)),
     "RR": (2.0, lambda c: math.sqrt(2.0 * c)),
 }
 

@@ -12,6 +12,7 @@ from scipy import stats
 
 from ..noise.components import GM
 from ..noise.flicker import PLATEAU
+from ..noise.units import random_walk_at_allan_variance
 from .detectors import ALPHA, Finding, bonferroni_log10_p, norm_log10_sf
 from .residuals import av_misfit_z
 
@@ -150,8 +151,9 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
                                         evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "
                                                   f"excess slope {slope:.2f} (RR: +2)"), **common))
             else:
-                findings.append(Finding(effect="RW", params={"random_walk": math.sqrt(float(np.median(3 * ex / t))),
-                                                                **band_params},
+                # the median AV per second of τ: the random walk's AV at τ = 1 s
+                k = random_walk_at_allan_variance(float(np.median(ex / t)), 1.0)
+                findings.append(Finding(effect="RW", params={"random_walk": k, **band_params},
                                         evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "
                                                   f"excess slope {slope:.2f} (RW: +1)"), **common))
         else:

@@ -19,6 +19,7 @@ from scipy.optimize import least_squares
 
 from ..allan import AllanResult, allan_variance
 from ..errors import InputError
+from ..noise import units
 from ..noise.components import BI, GM, LPF, MA, OSC, QN, RR, RW, WN, Component, total_allan_variance
 from ..noise.flicker import PLATEAU, band_for_record
 
@@ -71,7 +72,7 @@ def _guess(names: list[str], av: _Curve, gm_taus: list[float], osc_frequencies: 
         elif name == "QN":
             comps.append(QN(math.sqrt(a0 / 3.0) * t0 * 0.5))
         elif name == "RW":
-            comps.append(RW(math.sqrt(3.0 * a_end / t_end) * 0.5))
+            comps.append(RW(units.random_walk_at_allan_variance(a_end, t_end) * 0.5))
         elif name == "GM":
             tc = next(gm_iter)
             level = float(np.interp(math.log(min(max(1.9 * tc, t0), t_end)), np.log(tau), a))

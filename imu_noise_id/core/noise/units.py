@@ -59,6 +59,14 @@ def random_walk_density(sigma2_per_sample: float, dt: float) -> float:
     return math.sqrt(_check_positive("sigma2_per_sample", sigma2_per_sample) / _check_positive("dt", dt, False))
 
 
+def random_walk_at_allan_variance(allan_variance: float | np.ndarray, tau: float | np.ndarray) -> float | np.ndarray:
+    """Density K = √(3·AV/τ) [u/s/√Hz] of the random walk whose Allan variance K²τ/3 (IEEE Std 952 Table C.2, the
+    +1 slope) equals ``allan_variance`` [u²] at ``tau`` [s]; element-wise on arrays. The one reading of a random
+    walk off an AV level: starting values, AV signatures, the long-τ bound, the slope fit and the loop's swaps."""
+    k = np.sqrt(3.0 * np.asarray(allan_variance, dtype=float) / np.asarray(tau, dtype=float))
+    return float(k) if k.ndim == 0 else k
+
+
 def gm_phi(tau: float, dt: float) -> float:
     """Exact transition φ = exp(−dt/τ) of a first-order Gauss–Markov process with correlation time τ [s]."""
     return math.exp(-_check_positive("dt", dt, False) / _check_positive("tau", tau, False))

@@ -14,6 +14,7 @@ from ...core.noise.base import Component
 from ...core.noise.components import RW
 from ...core.noise.flicker import BI, PLATEAU, band_for_record
 from ...core.noise.resonant import OSC
+from ...core.noise.units import random_walk_at_allan_variance
 from .rules import av_inside_band, av_rms_z, better, judge
 from .state import Diagnosis, LoopState, Trial
 from .steps import AxisLoop, _canonical
@@ -298,7 +299,8 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
             moves.append(("swap RW (for BI)", _canonical([*rest, flicker])))
         if (c.name == "BI" and "GM" in added.split("+") and "RW" not in names and "RW (for BI)" not in swapped
                 and diag.tau.size):
-            moves.append(("swap BI (for RW)", _canonical([*rest, RW(math.sqrt(3.0 * level / long_tau(diag)))])))
+            walk = RW(random_walk_at_allan_variance(level, long_tau(diag)))
+            moves.append(("swap BI (for RW)", _canonical([*rest, walk])))
     return moves
 
 
