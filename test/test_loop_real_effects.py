@@ -389,3 +389,33 @@ def test_flicker_that_replaced_a_random_walk_is_swapped_back_once_the_gm_it_also
     assert "swap BI (for RW)" not in _moves_from(fitted, added="OSC")  # only once a GM is modelled
     assert not {"swap BI (for RW)", "swap RW (for BI)"} & set(_moves_from([*fitted, RW(3e-4)], added="GM"))
     assert "swap RW (for BI)" not in _moves_from([WN(2e-3), RW(3e-4), GM(2.0, 3e-3)], "GM", ("BI (for RW)",))
+
+
+def test_flicker_standing_for_a_gm_and_a_random_walk_is_replaced_by_both_in_the_joint_search():
+    """bench_loop_effects' osc+clear_gm, seed 1005: flicker noise took the random walk's place before the GM was
+    modelled and the loop stopped at WN+BI+OSC (no random walk); neither the GM alone nor the walk alone pays, both
+    together lower the BIC by 22. Here without the line, on 10 min: the joint search offers the pair, started from
+    the AV the flicker carries, and keeps it (BIC 5 lower, K within 50 %); a random walk beside flicker noise gets
+    no such offer."""
+    from imu_noise_id.pipelines.loop.trials import explore, flicker_as_gm_and_walk
+
+    n = 60_000
+    truth_gm, truth_rw = GM(tau=2.0, sigma=3e-3), RW(3e-4)
+    y = simulate_sum([WN(2e-3), truth_gm, truth_rw], n, DT, np.random.default_rng(1005))
+    loop = AxisLoop(y, DT, None, alpha=0.01, lags=20, outliers="impute")
+    state = LoopState(structure=["WN", "BI"])
+    diag = loop.diagnose(state)
+    start = flicker_as_gm_and_walk(loop, diag)
+    assert [c.name for c in start] == ["WN", "GM", "RW"]
+    assert 0.5 < next(c for c in start if isinstance(c, GM)).tau / truth_gm.tau < 2.0
+    trials = []
+    best = explore(loop, state, diag, trials)
+    assert best is not None and best[3].effect == "GM+RW", [(t.model, t.bic, t.reason) for t in trials]
+    kept = {c.name: c for c in best[2].fit.components}
+    assert set(kept) == {"WN", "GM", "RW"}
+    assert kept["GM"].tau == pytest.approx(truth_gm.tau, rel=0.3)
+    assert kept["RW"].random_walk == pytest.approx(truth_rw.random_walk, rel=0.5)
+    assert best[0] < diag.errors.bic
+    with_walk = SimpleNamespace(fit=SimpleNamespace(components=[WN(2e-3), BI(1e-3, *band_for_record(n, DT)),
+                                                                  RW(3e-4)]), tau=diag.tau, av_data=diag.av_data)
+    assert flicker_as_gm_and_walk(loop, with_walk) is None

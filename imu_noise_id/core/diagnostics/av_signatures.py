@@ -17,7 +17,7 @@ from .detectors import ALPHA, Finding, bonferroni_log10_p, norm_log10_sf
 from .residuals import av_misfit_z
 
 
-def _fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]:
+def fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]:
     """GM (τ_c, σ) whose AV best fits a positive AV excess in log space (grid over τ_c, σ² in closed form)."""
     best = (math.inf, float(tau[0]), 0.0)
     log_ex = np.log(excess)
@@ -115,7 +115,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
         hump = av_data - white
         use = hump > 0
         if use.sum() >= 3:
-            tc, sg = _fit_gm_to_excess(tau[use], hump[use])
+            tc, sg = fit_gm_to_excess(tau[use], hump[use])
             zmin = float(-z[deficit].min())
             params = {"tau": tc, "sigma": sg, "deficit": 1.0, "band_lo": float(tau[deficit[0]]),
                       "band_hi": float(tau[-1])}
@@ -157,7 +157,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
                                         evidence=(f"AV above the model at long τ ({band}, max z = {zmax:.1f}), "
                                                   f"excess slope {slope:.2f} (RW: +1)"), **common))
         else:
-            tc, sg = _fit_gm_to_excess(t, ex) if run.size >= 2 else (float(t[0]) / 1.89, math.sqrt(ex[0] / 0.87))
+            tc, sg = fit_gm_to_excess(t, ex) if run.size >= 2 else (float(t[0]) / 1.89, math.sqrt(ex[0] / 0.87))
             findings += _with_flicker(Finding(effect="GM", params={"tau": tc, "sigma": sg, **band_params}, evidence=(
                 f"AV bump above the model ({band}, max z = {zmax:.1f}, threshold {z_star:.2f}) → GM with "
                 f"τ_c ≈ {tc:.3g} s, σ ≈ {sg:.3g}"), **common), t, ex)

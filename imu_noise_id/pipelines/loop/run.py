@@ -133,9 +133,11 @@ def run_closed_loop(
         _, state, diag, f = best
         steps[-1].trials += trials
         added = added_name(previous, state.structure, f.effect)
+        # what the step itself replaced (the joint search's flicker noise for a GM and a random walk)
+        replaced = [f"{name} (for {added})" for name in added_name(state.structure, previous, "").split("+") if name]
         state, diag, dropped, drop_trials = reselect(loop, state, diag, added=added)
         steps.append(LoopStep(len(steps), state.name(), added, f.evidence, f, state, diag, drop_trials,
-                              tuple(dropped)))
+                              tuple(replaced + dropped)))
     inside, worst = av_inside_band(diag), max_relative_av_error(diag)
     note = ""
     if not passed and practically_negligible(diag):
