@@ -107,6 +107,60 @@ _HELD = {("OSC", "frequency"), ("OSC", "bandwidth")}
 AV_FLOOR = 1e-10
 
 
+#: Parameters that shape a component's AV rather than scale it (differentiated numerically, in log).
+_SHAPE = ("tau", "cutoff")
+#: The log step of that numerical derivative.
+_SHAPE_STEP = 1e-6
+
+
+class _LogAvCurve:
+    """The weighted log-AV misfit of a structure as a function of its fitted parameters' logs, with its Jacobian.
+
+    r(x) = (ln Σ_c AV_c(τ) − ln AV_hat(τ))·√(N/m). Every fitted parameter but :data:`_SHAPE` is an amplitude a whose
+    component's AV is a²·shape(τ), so ∂r/∂ln a = 2·AV_c/Σ AV·√(N/m) exactly; τ of a GM and the cutoff of an LPF take
+    one forward difference of their own component's AV. One evaluation of each component's AV serves r and J at the
+    same x (the solver asks for both); a finite-difference Jacobian recomputed every component's AV once per
+    parameter, most of the cost of the fit.
+    """
+
+    def __init__(self, start: list[Component], keys: list[tuple[int, str]], av: _Curve, dt: float) -> None:
+        self.start, self.keys, self.av, self.dt = start, keys, av, dt
+        self.base = [c.params() for c in start]  # once per placement, not per residual (asdict is slow)
+        self.weight = np.sqrt(av.n_clusters)
+        self._x: np.ndarray | None = None
+        self._parts: dict[int, np.ndarray] = {}
+
+    def build(self, x: np.ndarray) -> list[Component]:
+        params = [dict(b) for b in self.base]
+        for (i, k), v in zip(self.keys, x, strict=True):
+            params[i][k] = float(np.exp(v))
+        return [type(c)(**p) for c, p in zip(self.start, params, strict=True)]
+
+    def _evaluate(self, x: np.ndarray) -> tuple[list[Component], dict[int, np.ndarray], np.ndarray]:
+        comps = self.build(x)
+        if self._x is None or not np.array_equal(x, self._x):
+            self._parts = {i: c.allan_variance(self.av.tau, self.dt) for i, c in enumerate(comps)
+                           if not isinstance(c, RR)}
+            self._x = np.array(x, copy=True)
+        return comps, self._parts, np.maximum(sum(self._parts.values()), 1e-300)
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        _, _, total = self._evaluate(x)
+        return (np.log(total) - np.log(self.av.avar)) * self.weight
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        comps, parts, total = self._evaluate(x)
+        jac = np.empty((self.av.tau.size, len(self.keys)))
+        for k, (i, name) in enumerate(self.keys):
+            if name in _SHAPE:
+                params = comps[i].params() | {name: float(np.exp(x[k] + _SHAPE_STEP))}
+                moved = type(comps[i])(**params).allan_variance(self.av.tau, self.dt)
+                jac[:, k] = np.log(np.maximum(total - parts[i] + moved, 1e-300) / total) / _SHAPE_STEP
+            else:
+                jac[:, k] = 2.0 * parts[i] / total
+        return jac * self.weight[:, None]
+
+
 def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
               osc_frequencies: list[float] | None = None) -> list[tuple[float, list[Component]]]:
     """Least-squares fits of the structure's theoretical AV to the AV ``allan`` (one column) in log space, best (lowest
@@ -120,7 +174,6 @@ def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
     """
     av = _Curve.of(allan)
     fit_idx = [i for i, n in enumerate(names) if n != "RR"]
-    w = np.sqrt(av.n_clusters)
     t_lo = max(3.0 * dt, av.tau[0])
     t_hi = max(av.tau[-1] / 2.0, t_lo * 2.0)
     results: list[tuple[float, list[Component]]] = []
@@ -129,18 +182,7 @@ def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
         keys = [(i, k) for i in fit_idx for k in start[i].parameter_names if (names[i], k) not in _HELD]
         x0 = np.log([start[i].params()[k] for i, k in keys])
 
-        base = [c.params() for c in start]  # once per placement, not per residual (asdict is slow)
-
-        def build(x: np.ndarray, start: list[Component] = start, keys: list = keys, base=base) -> list[Component]:
-            params = [dict(b) for b in base]
-            for (i, k), v in zip(keys, x, strict=True):
-                params[i][k] = float(np.exp(v))
-            return [type(c)(**p) for c, p in zip(start, params, strict=True)]
-
-        def resid(x: np.ndarray, build=build) -> np.ndarray:
-            model_av = total_allan_variance([c for c in build(x) if not isinstance(c, RR)], av.tau, dt)
-            return (np.log(np.maximum(model_av, 1e-300)) - np.log(av.avar)) * w
-
+        curve = _LogAvCurve(start, keys, av, dt)
         lo, hi = x0 - 25.0, x0 + 25.0
         for k, (i, name) in enumerate(keys):
             if name == "tau":
@@ -157,10 +199,11 @@ def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
                     lo[k] = max(lo[k], x0[k] + 0.5 * math.log(AV_FLOOR * ratio))
         x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
         try:
-            sol = least_squares(resid, x0, bounds=(lo, hi), method="trf", max_nfev=200)
+            sol = least_squares(curve.residuals, x0, jac=curve.jacobian, bounds=(lo, hi), method="trf",
+                                max_nfev=200)
         except (ValueError, FloatingPointError):
             continue
-        results.append((float(sol.cost), build(sol.x)))
+        results.append((float(sol.cost), curve.build(sol.x)))
     if not results:
         raise InputError("the Allan-variance fit for initial values failed; give initial values (init=…)")
     results.sort(key=lambda r: r[0])
