@@ -220,7 +220,7 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
              trials: list[Trial]) -> tuple[float, LoopState, Diagnosis, det.Finding] | None:
     """The bounded joint search when one-at-a-time is stuck: a bias process the detectors cannot see, added from the
     current fit with its random walk restarted small (so that an RW that absorbed it can give way) — a GM at a
-    tenth of the record and flicker noise (BI) —, and flicker noise that stands for a GM and a random walk replaced
+    tenth of the record and flicker noise (BI) — and flicker noise that stands for a GM and a random walk replaced
     by both (:func:`flicker_as_gm_and_walk`); each kept by the BIC and do-no-harm rules alone (there is no detector
     evidence to see gone); the best kept, if any.
 
@@ -275,10 +275,10 @@ def flicker_as_gm_and_walk(loop: AxisLoop, diag: Diagnosis) -> list[Component] |
 
     Beyond the papers: a joint move where one at a time is stuck (issue 11). Flicker noise that took a random
     walk's place while a short-memory GM was unmodelled stands for both (its plateau spans the GM's bump and the
-    walk's rise), and then neither single step pays: a GM beside the flicker explains nothing the flicker does not,
-    and swapping the flicker for a random walk leaves the bump. On ``bench_loop_effects.py``'s ``osc+clear_gm``
-    (GM τ = 2 s, σ = 3·10⁻³ beside K = 3·10⁻⁴, 20 min at 100 Hz) seed 1005 ended WN+BI+OSC; the GM and the walk
-    together lowered the BIC by 21.6 (GM τ 2.13 s, K 3.37·10⁻⁴), from this start as from the truth.
+    walk's rise), and the loop's one-at-a-time steps stop there. On ``bench_loop_effects.py``'s ``osc+clear_gm``
+    (GM τ = 2 s, σ = 3·10⁻³ beside K = 3·10⁻⁴, 20 min at 100 Hz) seeds 1005 and 1009 ended WN+BI+OSC without this
+    move; the GM and the walk together lower the BIC by 21.6 and 11.5 (K within 12 % and 4 %), from this start as
+    from the truth (``bench/probe_flicker_gm_rw.py``).
     """
     fitted = list(diag.fit.components)
     names = {c.name for c in fitted}
