@@ -19,7 +19,7 @@ import numpy as np
 from bench_loop_effects import DT, GMS, K_TRUE, simulate
 
 from imu_noise_id.core.noise.components import GM, RW
-from imu_noise_id.pipelines.loop import LoopState, run_closed_loop, trials
+from imu_noise_id.pipelines.loop import run_closed_loop, trials
 from imu_noise_id.pipelines.loop.steps import AxisLoop, _canonical
 from imu_noise_id.pipelines.loop.trials import flicker_as_gm_and_walk
 
@@ -53,8 +53,7 @@ def main() -> None:
                 rest = [c for c in start if not isinstance(c, GM | RW)]
                 for label, init in (("AV start", start), ("truth start", _canonical([*rest, GMS[case], RW(K_TRUE)]))):
                     gm0 = next(c for c in init if isinstance(c, GM))
-                    trial = LoopState(structure=[c.name for c in init], exog_terms=list(state.exog_terms),
-                                      flagged=state.flagged.copy(), imputed=np.array(state.imputed), init=init)
+                    trial = state.with_components(init)
                     d = loop.diagnose(trial)
                     k = [c.random_walk for c in d.fit.components if isinstance(c, RW)]
                     gms = [(round(c.tau, 3), round(c.sigma, 5)) for c in d.fit.components if isinstance(c, GM)]

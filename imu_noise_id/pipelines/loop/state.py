@@ -69,6 +69,12 @@ class LoopState:
     imputed: np.ndarray = field(default_factory=lambda: np.zeros(0))
     init: list[Component] | None = None
 
+    def with_components(self, components: list[Component]) -> LoopState:
+        """This state's regressors and removed samples (copied) with the stochastic structure of ``components``,
+        which start its fit."""
+        return LoopState(structure=[c.name for c in components], exog_terms=list(self.exog_terms),
+                         flagged=self.flagged.copy(), imputed=self.imputed.copy(), init=list(components))
+
     def name(self) -> str:
         names = list(self.structure) + [t.effect for t in self.exog_terms]
         if self.flagged.size:

@@ -250,8 +250,7 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
                               level=0.0, params={"tau": gm.tau, "sigma": gm.sigma, "random_walk": walk.random_walk},
                               evidence=f"joint search: flicker noise (BI) replaced by a GM (τ {gm.tau:.3g} s, σ "
                                        f"{gm.sigma:.3g}) and a random walk (K {walk.random_walk:.3g})")
-        tries.append((finding, LoopState(structure=[c.name for c in joint], exog_terms=list(state.exog_terms),
-                                         flagged=state.flagged.copy(), imputed=state.imputed.copy(), init=joint)))
+        tries.append((finding, state.with_components(joint)))
     best: tuple[float, LoopState, Diagnosis, det.Finding] | None = None
     for finding, new_state in tries:
         try:
@@ -290,8 +289,7 @@ def flicker_as_gm_and_walk(loop: AxisLoop, diag: Diagnosis) -> list[Component] |
     if int(use.sum()) < 2:
         return None
     tau, sigma = fit_gm_to_excess(diag.tau[use], carried[use])
-    walk = RW(random_walk_at_allan_variance(max(long_tau_level(diag), 1e-30), long_tau(diag)))
-    return _canonical([*rest, GM(tau=max(tau, 2.0 * loop.dt), sigma=sigma), walk])
+    return _canonical([*rest, GM(tau=max(tau, 2.0 * loop.dt), sigma=sigma), long_tau_walk(diag)])
 
 
 #: Components re-selection may drop: those that absorb what the model lacks (an RW the short-term predictability
@@ -341,14 +339,19 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
             moves.append(("swap RW (for BI)", _canonical([*rest, flicker])))
         if (c.name == "BI" and "GM" in added.split("+") and "RW" not in names and "RW (for BI)" not in swapped
                 and diag.tau.size):
-            walk = RW(random_walk_at_allan_variance(level, long_tau(diag)))
-            moves.append(("swap BI (for RW)", _canonical([*rest, walk])))
+            moves.append(("swap BI (for RW)", _canonical([*rest, long_tau_walk(diag)])))
     return moves
 
 
 def long_tau(diag: Diagnosis) -> float:
     """The τ [s] of :func:`long_tau_level` (median over the last decade of τ)."""
     return float(np.median(diag.tau[_last_decade(diag)]))
+
+
+def long_tau_walk(diag: Diagnosis) -> RW:
+    """The random walk whose AV is the data's long-τ level at its τ (:func:`long_tau_level`, :func:`long_tau`): the
+    start of a random walk put back in flicker noise's place."""
+    return RW(random_walk_at_allan_variance(max(long_tau_level(diag), 1e-30), long_tau(diag)))
 
 
 def reselect(loop: AxisLoop, state: LoopState, diag: Diagnosis,
@@ -361,8 +364,7 @@ def reselect(loop: AxisLoop, state: LoopState, diag: Diagnosis,
     while True:
         best: tuple[LoopState, Diagnosis, str] | None = None
         for label, components in moves(loop, diag, added, tuple(dropped)):
-            new_state = LoopState(structure=[d.name for d in components], exog_terms=list(state.exog_terms),
-                                  flagged=state.flagged.copy(), imputed=state.imputed.copy(), init=components)
+            new_state = state.with_components(components)
             name = label.split(" ", 1)[1]
             finding = det.Finding(effect=name, detector="reselection", statistic=0.0, threshold=0.0,
                                   log10_p=0.0, level=0.0, params={}, evidence=label)
