@@ -235,7 +235,7 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
     level = long_tau_level(diag)
     proposals = [("GM", {"tau": span / 10.0, "sigma": math.sqrt(level / 0.38)})]
     if "BI" not in state.structure:
-        proposals.append(("BI", {"bias_instability": math.sqrt(level / PLATEAU)}))
+        proposals.append(("BI", {"bias_instability": long_tau_flicker(loop, diag).bias_instability}))
     tries: list[tuple[det.Finding, LoopState]] = []
     for effect, params in proposals:
         start = ", ".join(f"{k} {v:.3g}" for k, v in params.items())
@@ -329,14 +329,12 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
     if len(fitted) < 2:
         return moves
     names = {c.name for c in fitted}
-    level = max(long_tau_level(diag), 1e-30)
     for i, c in enumerate(fitted):
         rest = [d for j, d in enumerate(fitted) if j != i]
         if c.name in DROPPABLE and c.name != added:
             moves.append((f"drop {c.name}", rest))
         if c.name == "RW" and c.name != added and "BI" not in names and "BI (for RW)" not in swapped:
-            flicker = BI(math.sqrt(level / PLATEAU), *band_for_record(loop.n, loop.dt))
-            moves.append(("swap RW (for BI)", _canonical([*rest, flicker])))
+            moves.append(("swap RW (for BI)", _canonical([*rest, long_tau_flicker(loop, diag)])))
         if (c.name == "BI" and "GM" in added.split("+") and "RW" not in names and "RW (for BI)" not in swapped
                 and diag.tau.size):
             moves.append(("swap BI (for RW)", _canonical([*rest, long_tau_walk(diag)])))
@@ -352,6 +350,13 @@ def long_tau_walk(diag: Diagnosis) -> RW:
     """The random walk whose AV is the data's long-τ level at its τ (:func:`long_tau_level`, :func:`long_tau`): the
     start of a random walk put back in flicker noise's place."""
     return RW(random_walk_at_allan_variance(max(long_tau_level(diag), 1e-30), long_tau(diag)))
+
+
+def long_tau_flicker(loop: AxisLoop, diag: Diagnosis) -> BI:
+    """Flicker noise over the record's band (:func:`~imu_noise_id.core.noise.flicker.band_for_record`) whose AV
+    plateau is the data's long-τ level (:func:`long_tau_level`): the start of flicker noise tried in a random walk's
+    place (re-selection's swap) or beside it (the joint search)."""
+    return BI(math.sqrt(max(long_tau_level(diag), 1e-30) / PLATEAU), *band_for_record(loop.n, loop.dt))
 
 
 def reselect(loop: AxisLoop, state: LoopState, diag: Diagnosis,
