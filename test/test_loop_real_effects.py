@@ -10,7 +10,14 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.diagnostics.lines import HUMP_DIP, SIN_CONCENTRATION, detect_broad_line, humps, line_shape
+from imu_noise_id.core.diagnostics.lines import (
+    HUMP_DIP,
+    SIN_CONCENTRATION,
+    detect_broad_line,
+    detect_innovation_hump,
+    humps,
+    line_shape,
+)
 from imu_noise_id.core.diagnostics.residuals import spectral_peaks
 from imu_noise_id.core.estimation.relabel import gm_as_filter
 from imu_noise_id.core.estimation.results import FitResult
@@ -419,3 +426,51 @@ def test_flicker_standing_for_a_gm_and_a_random_walk_is_replaced_by_both_in_the_
     with_walk = SimpleNamespace(fit=SimpleNamespace(components=[WN(2e-3), BI(1e-3, *band_for_record(n, DT)),
                                                                   RW(3e-4)]), tau=diag.tau, av_data=diag.av_data)
     assert flicker_as_gm_and_walk(loop, with_walk) is None
+
+
+def test_innovation_hump_finds_a_resonance_wider_than_the_line_searches_floor_and_nothing_in_white_noise():
+    """A resonance at 26 Hz, 7 Hz wide, lifting the innovations 20-30 % (ADIS16405 gyro_z's hump): the broad-line
+    search's running floor rises with it, the band search against the level finds it (f0 within 10 %, B within a
+    factor 2); white innovations give it at the test's level (Bonferroni over the bands: at most 4 of 100 at
+    alpha = 1 %), and a rise toward 0 Hz (a bias misfit) is not a hump."""
+    n = 60_000
+    rng = np.random.default_rng(7)
+    hump = OSC(frequency=26.0, bandwidth=7.0, sigma=0.25).simulate(n, DT, rng)
+    e = rng.standard_normal(n) + hump
+    e = (e - e.mean()) / e.std()
+    assert not detect_broad_line(e, DT, alpha=0.01).significant
+    found = detect_innovation_hump(e, DT, alpha=0.01)
+    assert found.finding.significant, found.finding.evidence
+    assert found.frequency == pytest.approx(26.0, rel=0.1)  # a start: the resonance's lower tail is the heavier
+    assert 3.5 <= found.bandwidth <= 14.0
+    hits = sum(detect_innovation_hump(np.random.default_rng(s).standard_normal(20_000), DT, alpha=0.01)
+               .finding.significant for s in range(100))
+    assert hits <= 4
+    white = np.random.default_rng(8).standard_normal(n)
+    rise = white + 0.03 * np.cumsum(np.random.default_rng(9).standard_normal(n))
+    assert not detect_innovation_hump((rise - rise.mean()) / rise.std(), DT, alpha=0.01).finding.significant
+
+
+def test_a_hump_in_the_innovations_becomes_a_resonance_in_the_joint_search():
+    """ADIS16405 run 3 gyro_z: the loop stopped at WN+MA+BI+OSC while its innovations held a hump from 22 to 30 Hz
+    that neither line search flags; a resonance there lowered the BIC by 301 (then the sensor's low-pass beside
+    it took the final AV inside the data's band). Here WN + RW + that resonance, fitted as WN+RW: the joint search
+    offers an OSC started near 26 Hz from the hump and keeps it."""
+    from imu_noise_id.pipelines.loop.trials import explore, hump_resonance
+
+    n = 60_000
+    truth = OSC(frequency=26.0, bandwidth=7.0, sigma=0.006)
+    y = simulate_sum([WN(2e-3), truth, RW(3e-4)], n, DT, np.random.default_rng(26))
+    loop = AxisLoop(y, DT, None, alpha=0.01, lags=20, outliers="impute")
+    state = LoopState(structure=["WN", "RW"])
+    diag = loop.diagnose(state)
+    start = hump_resonance(loop, diag)
+    assert start is not None and start.effect == "OSC"
+    assert start.params["frequency"] == pytest.approx(26.0, rel=0.1)
+    assert start.params["sigma"] == pytest.approx(truth.sigma, rel=0.5)
+    trials = []
+    best = explore(loop, state, diag, trials)
+    assert best is not None and best[3].detector == "innovation_hump", [(t.model, t.bic, t.reason) for t in trials]
+    osc = next(c for c in best[2].fit.components if isinstance(c, OSC))
+    assert osc.frequency == pytest.approx(26.0, rel=0.05)
+    assert osc.bandwidth == pytest.approx(7.0, rel=0.3)
