@@ -273,7 +273,11 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
 def hump_resonance(loop: AxisLoop, diag: Diagnosis) -> det.Finding | None:
     """A broad resonance (OSC) where the innovations' spectrum holds a significant hump
     (:func:`~imu_noise_id.core.diagnostics.lines.detect_innovation_hump`), as a finding with its starting f₀, B (at
-    most :data:`~imu_noise_id.core.noise.resonant.MAX_DAMPING`·f₀) and σ; None without one.
+    most :data:`~imu_noise_id.core.noise.resonant.MAX_DAMPING`·f₀) and σ; None without one, or when the hump is
+    wider than its centre frequency (Q < 1, as :func:`~imu_noise_id.core.diagnostics.lines.humps` leaves such
+    resonances to the low-pass and bias components): on ADIS16405 run 6 accel_z the WN+RW fit's innovations hold a
+    hump 15.6 Hz wide centred at 8.2 Hz, the sensor's filter and its 10 Hz vibration together, and an OSC started
+    there took the low-pass's place (fitted at 31 Hz, 50 Hz wide).
 
     σ² is the hump's excess in the data's units: Σ over its bands of (ratio − 1)·S_model(f)·Δf, twice (the
     components' PSDs are two-sided), as the innovations' spectrum over its level is the data's PSD over the model's
@@ -282,7 +286,7 @@ def hump_resonance(loop: AxisLoop, diag: Diagnosis) -> det.Finding | None:
     sensor's low-pass beside it, bring the final AV inside the data's band (run 3: z 1.7 → 1.3).
     """
     hump = detect_innovation_hump(diag.innovations, loop.dt, alpha=loop.alpha)
-    if not hump.finding.significant:
+    if not hump.finding.significant or hump.bandwidth > hump.frequency:
         return None
     width = hump.bandwidth / hump.band_frequency.size
     model_psd = np.sum([c.psd(hump.band_frequency, loop.dt) for c in diag.fit.components], axis=0)
