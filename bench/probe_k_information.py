@@ -35,6 +35,7 @@ from bench_loop_effects import DT, GMS, K_TRUE, N_TRUE, simulate
 from scipy.optimize import minimize
 from scipy.stats import ncx2, norm
 
+from imu_noise_id.core.estimation.mle import Parameterisation
 from imu_noise_id.core.estimation.whittle import difference_spectrum
 from imu_noise_id.core.noise.components import GM, RW, WN, Component
 
@@ -48,29 +49,16 @@ def fourier_omega(n: int) -> np.ndarray:
     return 2.0 * math.pi * np.arange(1, (m - 1) // 2 + 1) / m
 
 
-def _with_log_params(components: list[Component], x: np.ndarray) -> list[Component]:
-    out, i = [], 0
-    for c in components:
-        p = c.params()
-        keys = list(c.parameter_names)
-        out.append(type(c)(**{**p, **{k: float(np.exp(v)) for k, v in zip(keys, x[i:i + len(keys)], strict=True)}}))
-        i += len(keys)
-    return out
-
-
-def _log_params(components: list[Component]) -> np.ndarray:
-    return np.log([c.params()[k] for c in components for k in c.parameter_names])
-
-
 def fisher_information(components: list[Component], omega: np.ndarray, step: float = 1e-5) -> np.ndarray:
     """Σ_k g_k g_kᵀ with g_k = ∂ln S(ω_k)/∂θ in the log-parameters (central differences of ln S)."""
-    x0 = _log_params(components)
+    par = Parameterisation.of(components)
+    x0 = par.to_theta(components)
     grads = []
     for j in range(x0.size):
         e = np.zeros_like(x0)
         e[j] = step
-        up = np.log(difference_spectrum(_with_log_params(components, x0 + e), omega, DT))
-        down = np.log(difference_spectrum(_with_log_params(components, x0 - e), omega, DT))
+        up = np.log(difference_spectrum(par.to_components(x0 + e), omega, DT))
+        down = np.log(difference_spectrum(par.to_components(x0 - e), omega, DT))
         grads.append((up - down) / (2.0 * step))
     g = np.array(grads)
     return g @ g.T
@@ -79,16 +67,17 @@ def fisher_information(components: list[Component], omega: np.ndarray, step: flo
 def pseudo_true(truth: list[Component], model: list[Component], omega: np.ndarray) -> tuple[list[Component], float]:
     """(model minimising the expected Whittle divergence from ``truth``, that divergence Σ[ln(S_m/S) + S/S_m − 1])."""
     s_true = difference_spectrum(truth, omega, DT)
+    par = Parameterisation.of(model)
 
     def divergence(x: np.ndarray) -> float:
-        s = difference_spectrum(_with_log_params(model, x), omega, DT)
+        s = difference_spectrum(par.to_components(x), omega, DT)
         r = s_true / s
         return float(np.sum(r - np.log(r) - 1.0))
 
-    res = minimize(divergence, _log_params(model), method="Nelder-Mead",
+    res = minimize(divergence, par.to_theta(model), method="Nelder-Mead",
                    options={"xatol": 1e-6, "fatol": 1e-6, "maxiter": 4000, "maxfev": 8000})
     res = minimize(divergence, res.x, method="L-BFGS-B")
-    return _with_log_params(model, res.x), float(res.fun)
+    return par.to_components(res.x), float(res.fun)
 
 
 def case_components(case: str, seed: int) -> list[Component]:
