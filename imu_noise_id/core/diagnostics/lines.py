@@ -137,14 +137,33 @@ def _floor_error(r: int) -> float:
     return math.sqrt(math.pi / 2.0 / (r * (2 * POOLED_FLOOR_HALF_WIDTH + 1)))
 
 
+def _pool(power: np.ndarray, freqs: np.ndarray, r: int) -> tuple[np.ndarray, np.ndarray]:
+    """(centre frequencies, means) of the periodogram over consecutive groups of r bins (a partial last one dropped)."""
+    m = freqs.size // r
+    return freqs[: m * r].reshape(m, r).mean(axis=1), power[: m * r].reshape(m, r).mean(axis=1)
+
+
+def _gamma_scaled(pooled: np.ndarray, floor: np.ndarray | float, r: int) -> np.ndarray:
+    """r·pooled/floor with the floor (a median of pooled ordinates) scaled to the Gamma(r)/r mean: Gamma(r, 1) under
+    white innovations."""
+    scale = stats.gamma.median(r) / r
+    return r * pooled / np.maximum(np.asarray(floor) / scale, np.finfo(float).tiny)
+
+
+def _gamma_test(x: float, r: int, v: float, alpha: float, tests: int) -> tuple[float, float]:
+    """(log10 p-value, level-α threshold) of the largest of ``tests`` Gamma(r, 1) statistics (:func:`_log_sf` with
+    the floor's lognormal error ``v``), Bonferroni-corrected."""
+    log10_p = min(0.0, _log_sf(x, r, v) / math.log(10.0) + math.log10(tests))
+    target = math.log(alpha / tests)
+    threshold = float(optimize.brentq(lambda c: _log_sf(c, r, v) - target, r, 100.0 * r + 1000.0))
+    return log10_p, threshold
+
+
 def _pooled(power: np.ndarray, freqs: np.ndarray, r: int) -> tuple[np.ndarray, np.ndarray]:
     """(centre frequencies, Gamma(r)-scaled statistics r·pooled/floor) of the periodogram pooled over r bins."""
-    m = freqs.size // r
-    pooled = power[: m * r].reshape(m, r).mean(axis=1)
-    centre = freqs[: m * r].reshape(m, r).mean(axis=1)
+    centre, pooled = _pool(power, freqs, r)
     floor = ndimage.median_filter(pooled, size=2 * POOLED_FLOOR_HALF_WIDTH + 1, mode="reflect")
-    scale = stats.gamma.median(r) / r
-    return centre, r * pooled / np.maximum(floor / scale, np.finfo(float).tiny)
+    return centre, _gamma_scaled(pooled, floor, r)
 
 
 #: A pooled bin is a line's only when the pooled spectrum's excess over its floor falls below this fraction of the
@@ -222,10 +241,7 @@ def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float, exclude: tuple[
         for f_x in exclude:
             x[np.abs(centre - f_x) <= 1.5 * width] = 0.0
         k = int(np.argmax(x))
-        v = _floor_error(r)
-        log10_p = min(0.0, _log_sf(float(x[k]), r, v) / math.log(10.0) + math.log10(tests))
-        target = math.log(alpha / tests)
-        threshold = float(optimize.brentq(lambda c, r=r, v=v, t=target: _log_sf(c, r, v) - t, r, 100.0 * r + 1000.0))
+        log10_p, threshold = _gamma_test(float(x[k]), r, _floor_error(r), alpha, tests)
         if best is None or log10_p < best[0]:
             best = (log10_p, float(x[k]), threshold, float(centre[k]), r)
     if best is None:
@@ -324,16 +340,11 @@ def detect_innovation_hump(e: np.ndarray, dt: float, *, alpha: float, bands: int
         finding = Finding(effect="OSC", detector="innovation_hump", statistic=0.0, threshold=math.inf, log10_p=0.0,
                           level=alpha, params={}, evidence="record too short for the innovation-hump search")
         return InnovationHump(finding, math.nan, math.nan, np.zeros(0), np.zeros(0))
-    mean = power[: bands * r].reshape(bands, r).mean(axis=1)
-    centre = freqs[: bands * r].reshape(bands, r).mean(axis=1)
-    level = float(np.median(mean)) / (stats.gamma.median(r) / r)
-    x = r * mean / max(level, np.finfo(float).tiny)
+    centre, mean = _pool(power, freqs, r)
+    x = _gamma_scaled(mean, float(np.median(mean)), r)
     candidates = np.where(humps(x, r), x, 0.0)
     statistic = float(np.max(candidates))
-    v = math.sqrt(math.pi / 2.0 / (r * bands))
-    log10_p = min(0.0, _log_sf(statistic, r, v) / math.log(10.0) + math.log10(bands))
-    target = math.log(alpha / bands)
-    threshold = float(optimize.brentq(lambda c: _log_sf(c, r, v) - target, r, 100.0 * r + 1000.0))
+    log10_p, threshold = _gamma_test(statistic, r, math.sqrt(math.pi / 2.0 / (r * bands)), alpha, bands)
     # The hump's extent on the ratio smoothed over HUMP_SMOOTH bands (one band's ratio has sd 1/√r: its peak wanders).
     ratio = ndimage.uniform_filter1d(x / r, size=HUMP_SMOOTH, mode="nearest")
     k = int(np.argmax(np.where(candidates > 0, ratio, -np.inf)))
