@@ -283,7 +283,7 @@ def hump_resonance(loop: AxisLoop, diag: Diagnosis) -> det.Finding | None:
     components' PSDs are two-sided), as the innovations' spectrum over its level is the data's PSD over the model's
     where the model whitens. Beyond the papers: on ADIS16405 gyro_z the loop stops with WN+MA+BI+OSC while the
     innovations hold a hump from 22 to 30 Hz (``bench/probe_gyro_z_line_shape.py``); a resonance there, then the
-    sensor's low-pass beside it, bring the final AV inside the data's band (run 3: z 1.7 → 1.3).
+    sensor's low-pass beside it, bring the final AV inside the data's band (run 3: z 1.7 → 1.4).
     """
     hump = detect_innovation_hump(diag.innovations, loop.dt, alpha=loop.alpha)
     if not hump.finding.significant or hump.bandwidth > hump.frequency:
