@@ -277,7 +277,7 @@ def hump_resonance(loop: AxisLoop, diag: Diagnosis) -> det.Finding | None:
     wider than its centre frequency (Q < 1, as :func:`~imu_noise_id.core.diagnostics.lines.humps` leaves such
     resonances to the low-pass and bias components): on ADIS16405 run 6 accel_z the WN+RW fit's innovations hold a
     hump 15.6 Hz wide centred at 8.2 Hz, the sensor's filter and its 10 Hz vibration together, and an OSC started
-    there took the low-pass's place (fitted at 31 Hz, 50 Hz wide).
+    there took the low-pass's place (fitted at 31 Hz, 50 Hz wide; ``bench/probe_innovation_hump.py``).
 
     σ² is the hump's excess in the data's units: Σ over its bands of (ratio − 1)·S_model(f)·Δf, twice (the
     components' PSDs are two-sided), as the innovations' spectrum over its level is the data's PSD over the model's
