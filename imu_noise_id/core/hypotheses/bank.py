@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import InputError
 from .identifiable import LongMemory, long_memory, merged_probabilities
-from .kernel import FilterBank, check_samples
+from .kernel import FilterBank, Posterior, check_samples
 from .model import BankModel, HypothesisSet, build_bank_model
 
 
@@ -207,6 +207,11 @@ class HypothesisBank:
             for k in range(K):
                 means[k].append(post.theta_mean[k][:, 0])
                 variances[k].append(post.theta_var[k][:, 0])
+        if t.size and self._n_updates % record_every == 0:
+            # The last row recorded is the latest update: the snapshot reads it rather than evaluating it again
+            # (evaluate treats every row on its own, so the numbers are the same).
+            self._snapshot = self._snapshot_of(Posterior(
+                post.log_prob[-1:], [m[-1:] for m in post.theta_mean], [v[-1:] for v in post.theta_var]))
         return BankResult(
             names=self.names,
             t=np.concatenate(ts),
@@ -233,9 +238,12 @@ class HypothesisBank:
     # -- reading ---------------------------------------------------------------------------------------
     def snapshot(self) -> BankSnapshot:
         """Probabilities, decision, θ̂ and RSD per hypothesis after the latest update (cached until the next)."""
-        if self._snapshot is not None:
-            return self._snapshot
-        post = self._filters.evaluate(self._filters.c[None])
+        if self._snapshot is None:
+            self._snapshot = self._snapshot_of(self._filters.evaluate(self._filters.c[None]))
+        return self._snapshot
+
+    def _snapshot_of(self, post: Posterior) -> BankSnapshot:
+        """The snapshot of the latest update from its posterior (one row)."""
         probs = np.exp(post.log_prob[0, 0]).tolist()
         t = self.hset.bank_dt * self._ticks
         lj = self._filters.c[0] + self.model.log_mu0
@@ -256,12 +264,11 @@ class HypothesisBank:
         probabilities = dict(zip(self.names, probs, strict=True))
         merged = merged_probabilities(probabilities, longs)
         best = max(merged, key=merged.__getitem__)
-        self._snapshot = BankSnapshot(
+        return BankSnapshot(
             n_updates=self._n_updates, t=t, probabilities=probabilities,
             decision=best if merged[best] >= self.hset.gamma else None, hypotheses=hyps,
             long_memory=tuple(longs), decision_probabilities=merged,
         )
-        return self._snapshot
 
     def state_estimates(self) -> dict[str, dict[str, tuple[float, float]]]:
         """Per hypothesis, the mixture state estimates (eq. 13) and standard deviations (eq. 14) by state name

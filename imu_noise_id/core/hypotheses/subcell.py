@@ -83,28 +83,31 @@ def _plane_laplace(L: np.ndarray, dims: tuple[int, ...]) -> tuple[np.ndarray, np
     mass = e.sum(axis=-1)
     idx = np.stack(np.unravel_index(np.argmax(flat, axis=-1), shape), axis=-1)  # (…, c)
     n = np.array(shape)
+    strides = np.array([int(np.prod(shape[d + 1:])) for d in range(c)])
 
-    def at(offset: np.ndarray) -> np.ndarray:
-        j = np.clip(idx + offset, 0, n - 1)
-        return np.take_along_axis(flat, np.ravel_multi_index(tuple(np.moveaxis(j, -1, 0)), shape)[..., None],
-                                  axis=-1)[..., 0]
-
+    # Every cell the differences read, as offsets from the largest cell (clipped to the grid), gathered at once:
+    # the centre, ±1 and ±2 along each axis, then (+,+), (+,−), (−,+), (−,−) for each pair of axes.
     unit = np.eye(c, dtype=int)
-    v0 = at(np.zeros(c, int))
+    offsets = [np.zeros(c, int)] + [o * unit[d] for d in range(c) for o in (-2, -1, 1, 2)]
+    pairs = [(d, d2) for d in range(c) for d2 in range(d)]
+    offsets += [s1 * unit[d] + s2 * unit[d2] for d, d2 in pairs for s1, s2 in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+    cells = np.clip(idx[..., None, :] + np.array(offsets), 0, n - 1) @ strides  # (…, K)
+    values = np.take_along_axis(flat, cells, axis=-1)
+    v0 = values[..., 0]
     g, H = np.zeros((*v0.shape, c)), np.zeros((*v0.shape, c, c))
     t = np.zeros((*v0.shape, c))
     five = (idx >= 2) & (idx <= n - 3)
     inner = np.all((idx >= 1) & (idx <= n - 2), axis=-1)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for d in range(c):
-            vm2, vm1, vp1, vp2 = (at(o * unit[d]) for o in (-2, -1, 1, 2))
+            vm2, vm1, vp1, vp2 = (values[..., 1 + 4 * d + i] for i in range(4))
             f5 = five[..., d]
             g[..., d] = np.where(f5, (vm2 - 8.0 * vm1 + 8.0 * vp1 - vp2) / 12.0, 0.5 * (vp1 - vm1))
             H[..., d, d] = np.where(f5, (-vm2 + 16.0 * vm1 - 30.0 * v0 + 16.0 * vp1 - vp2) / 12.0, vp1 - 2.0 * v0 + vm1)
             t[..., d] = np.where(f5, 0.5 * (vp2 - 2.0 * vp1 + 2.0 * vm1 - vm2), 0.0)
-            for d2 in range(d):
-                o1, o2 = unit[d], unit[d2]
-                H[..., d, d2] = H[..., d2, d] = 0.25 * (at(o1 + o2) - at(o1 - o2) - at(o2 - o1) + at(-o1 - o2))
+        for i, (d, d2) in enumerate(pairs):
+            pp, pm, mp, mm = (values[..., 1 + 4 * c + 4 * i + j] for j in range(4))
+            H[..., d, d2] = H[..., d2, d] = 0.25 * (pp - pm - mp + mm)
         if c == 1:  # Newton on the cubic's derivative g + h x + t x²/2 = 0
             h, tt, gg = H[..., 0, 0], t[..., 0], g[..., 0]
             x = np.clip(-gg / h, -1.0, 1.0)
