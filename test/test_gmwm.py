@@ -9,8 +9,11 @@ import pytest
 
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.estimation.gmwm import GmwmOptions, fit_gmwm
+from imu_noise_id.core.noise.averaging import MA
 from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.flicker import BI
 from imu_noise_id.core.noise.modelspec import parameter_labels
+from imu_noise_id.core.noise.resonant import LPF, OSC
 from imu_noise_id.core.noise.trend import ls_slope, ls_slope_variance
 
 DT = 0.01
@@ -159,3 +162,31 @@ def test_em_and_gmwm_compare_a_negative_ramp_on_the_linear_scale():
     assert row.z == pytest.approx((row.gmwm - row.em) / se)
     flat = compare(em, gm.__class__(**{**gm.__dict__, "ci95": {**gm.ci95, "RR.slope": (-1e-3, 1e-3)}}))
     assert next(r for r in flat.rows if r.quantity == "RR.slope").verdict == "agree"  # across 0: not "undetermined"
+
+
+@pytest.mark.parametrize("truth", [
+    [WN(0.3), GM(tau=20.0, sigma=0.5), RW(0.005), RR(-2e-4)],
+    [WN(1e-3), LPF(2e-3, 5.0), RW(1e-4)],
+    [WN(1e-3), OSC(2.0, 0.3, 0.01), RW(1e-4)],
+    [WN(1e-3), BI(1e-4), QN(1e-5)],
+    [WN(1e-3), MA(2e-3), RW(1e-4)],
+], ids=lambda t: "+".join(c.name for c in t))
+def test_the_analytic_jacobian_of_the_moments_equals_finite_differences(truth):
+    """The solver's Jacobian (2ν_c for an amplitude, a difference of one component's WV for a shape parameter) and the
+    slope term's of the ramp profile, against a three-point finite difference of the whole residual vector."""
+    from scipy.optimize._numdiff import approx_derivative
+
+    from imu_noise_id.core.estimation import gmwm_engine as eng
+    from imu_noise_id.core.estimation.gmwm_ramp import _Profile
+    from imu_noise_id.core.wavelet.variance import wavelet_variance
+
+    dt = 0.01 if truth[1].name != "GM" else 1.0
+    runs = [eng.Moments(wavelet_variance(simulate_sum(truth, 4096, dt, np.random.default_rng(3)), dt))]
+    par = eng.Parameters.of(truth)
+    theta = par.to_theta(truth)
+    problem = eng.Problem(par, runs, eng.Weights.diagonal(runs), par.bounds(theta, runs))
+    numeric = approx_derivative(problem.residuals, theta, method="3-point")
+    np.testing.assert_allclose(problem.residual_jacobian(theta), numeric, rtol=0, atol=1e-6 * np.abs(numeric).max())
+    profile = _Profile(problem, -1e-4, 4096, dt, theta)
+    numeric = approx_derivative(lambda t: profile.residuals(t, -3e-4), theta, method="3-point")
+    np.testing.assert_allclose(profile.jacobian(theta, -3e-4), numeric, rtol=0, atol=1e-6 * np.abs(numeric).max())
