@@ -1,5 +1,5 @@
 """CPU time of writing an analysis (its figures) against the analysis itself, as written now and with each of the
-two savings undone, side by side in one process.
+three savings undone, side by side in one process.
 
     .venv/bin/python bench/bench_figures.py [--minutes 2] [--rate 100] [--repeats 5]
 
@@ -9,8 +9,10 @@ times in each variant, in turn:
 
 - ``now``: the margins of :mod:`imu_noise_id.report.layout` and the log axes' minor ticks at 2 and 5 of each decade
   (:mod:`imu_noise_id.report.png`);
-- ``every minor tick``: the same margins with matplotlib's eight minor ticks per decade;
-- ``tight_layout``: ``fig.tight_layout()`` in place of the margins, with every minor tick (as before both savings).
+- ``mathtext labels``: as now, but the log axes' powers of ten in matplotlib's mathtext instead of plain text;
+- ``every minor tick``: the same margins with matplotlib's eight minor ticks per decade (and mathtext labels);
+- ``tight_layout``: ``fig.tight_layout()`` in place of the margins, with every minor tick and mathtext labels (as
+  before all three savings).
 
 Printed: the analysis's CPU time, each variant's writing CPU time (median), its ratio to ``now`` and the writing's
 share of analyse + write.
@@ -38,7 +40,7 @@ def _tight(fig, **_: object) -> None:
     fig.tight_layout()
 
 
-VARIANTS = ("now", "every minor tick", "tight_layout")
+VARIANTS = ("now", "mathtext labels", "every minor tick", "tight_layout")
 
 
 def _write(result, folder: Path, variant: str) -> float:
@@ -46,13 +48,16 @@ def _write(result, folder: Path, variant: str) -> float:
     patched = _users() if variant == "tight_layout" else []
     for module in patched:
         module.fix_margins = _tight
-    png.LOG_MINOR_SUBS = "auto" if variant != "now" else THINNED  # "auto": matplotlib's default minor ticks
+    # "auto": matplotlib's default minor ticks
+    png.LOG_MINOR_SUBS = "auto" if variant in ("every minor tick", "tight_layout") else THINNED
+    png.PLAIN_POWERS = variant == "now"
     try:
         start = time.process_time()
         analysis.write_analysis(result, folder, rostopic="/imu", meta={"source": "bench"})
         return time.process_time() - start
     finally:
         png.LOG_MINOR_SUBS = THINNED
+        png.PLAIN_POWERS = True
         for module in patched:
             module.fix_margins = layout.fix_margins
 

@@ -49,3 +49,22 @@ def test_figures_are_written_as_png_and_closed(tmp_path):
     fig, ax = plt.subplots()
     path = write_png(fig, tmp_path / "sub" / "f.png")
     assert path.read_bytes().startswith(b"\x89PNG") and not plt.fignum_exists(fig.number)
+
+
+def test_log_axes_are_labelled_with_plain_text_powers_of_ten():
+    """Mathtext labels are parsed again for every figure (the cost ``bench_figures.py`` measures): the written figure's
+    log axes read 10⁻², 10⁰, … as plain text, a narrow axis's minor labels too (2×10⁻³), and a linear axis is left
+    alone."""
+    from imu_noise_id.report.png import plain_log_labels
+
+    fig, (wide, narrow) = plt.subplots(1, 2)
+    wide.loglog(np.logspace(-2, 2, 10), np.logspace(-2, 2, 10))
+    narrow.semilogy([0.0, 1.0], [2.1e-3, 4.6e-3])
+    plain_log_labels(fig)
+    fig.canvas.draw()
+    labels = [t.get_text() for t in wide.get_xticklabels() if t.get_text()]
+    assert "10⁻²" in labels and "10⁰" in labels and "10²" in labels and not any("$" in t for t in labels)
+    minor = [t.get_text() for t in narrow.yaxis.get_minorticklabels() if t.get_text()]
+    assert minor and all("×10⁻³" in t for t in minor)
+    assert all("$" not in t.get_text() for t in narrow.get_xticklabels())
+    plt.close(fig)
