@@ -23,7 +23,7 @@ def bags(tmp_path_factory):
     folder = tmp_path_factory.mktemp("fleet")
     for i, n in enumerate(DENSITIES):
         assert main(["simulate", "--model", f"gyro: WN({n})+RW(2e-5); accel: WN(2e-3)+RW(3e-4)", "--rate", "100",
-                     "--duration", "120", "--out", str(folder / f"imu{i}"), "--seed", str(i)]) == 0
+                     "--duration", "60", "--out", str(folder / f"imu{i}"), "--seed", str(i)]) == 0
     (folder / "broken.mcap").write_bytes(b"not a bag at all")
     return folder
 
