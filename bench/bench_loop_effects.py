@@ -23,7 +23,8 @@ Each case simulates ``--minutes`` at 100 Hz and runs the loop from WN+RW:
 
 Printed per case: how often the right kind was chosen (OSC vs SIN, LPF found, nothing added on clean data), the
 errors of f₀, bandwidth, σ, cutoff, B, and of N (passband) and K of the final model, against the issue's targets (f₀
-2 %, bandwidth ±30 %, σ ±20 %, cutoff 20 %, SIN vs OSC ≥ 95 %, N 10 %, K 35 %, clean ≤ 1 in 30).
+2 %, bandwidth ±30 %, σ ±20 %, cutoff 20 %, SIN vs OSC ≥ 95 %, N 10 %, K 35 %, clean ≤ 1 in 30), and how often
+the 95 % intervals of N and K that a user pastes hold the truth (where the final model has that component).
 """
 
 from __future__ import annotations
@@ -82,9 +83,13 @@ def assess(y: np.ndarray, truth: dict) -> dict:
     r = run_closed_loop(y, DT, "WN+RW", axis="x")
     fit = r.final.diagnosis.fit
     out = {"model": r.final.model, "steps": len(r.steps) - 1}
-    n_val, k_val = kalibr.noise_density(fit).value, kalibr.random_walk(fit).value
+    n_est, k_est = kalibr.noise_density(fit), kalibr.random_walk(fit)
+    n_val, k_val = n_est.value, k_est.value
     out["n_err"] = abs(n_val / N_TRUE - 1) if n_val else math.inf
     out["k_err"] = abs(k_val / K_TRUE - 1) if k_val else math.inf
+    for key, est, true in (("n_covered", n_est, N_TRUE), ("k_covered", k_est, K_TRUE)):
+        if est.value and all(math.isfinite(v) for v in est.ci95):
+            out[key] = est.ci95[0] <= true <= est.ci95[1]
     oscs = [c for c in fit.components if isinstance(c, OSC)]
     if truth["case"] in GMS:
         t = GMS[truth["case"]]
@@ -139,6 +144,9 @@ def report(case: str, rows: list[dict]) -> list[str]:
                        ("n_err", "N (passband)"), ("k_err", "K")):
         if any(key in r for r in rows):
             lines.append(f"    {label:13s} error {pct(key)}")
+    for key, label in (("n_covered", "N"), ("k_covered", "K")):
+        held = [r[key] for r in rows if key in r]
+        lines.append(f"    {label}'s 95 % interval holds the truth in {sum(held)} of {len(held)} (those with one)")
     return lines
 
 
