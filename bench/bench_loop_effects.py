@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from imu_noise_id.core.estimation import kalibr
+from imu_noise_id.core.estimation.relabel import with_uncertainty
 from imu_noise_id.core.noise.components import BI, GM, LPF, MA, OSC, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import band_for_record
 from imu_noise_id.pipelines.loop import run_closed_loop
@@ -81,7 +82,7 @@ def simulate(case: str, seed: int, n: int) -> tuple[np.ndarray, dict]:
 
 def assess(y: np.ndarray, truth: dict) -> dict:
     r = run_closed_loop(y, DT, "WN+RW", axis="x")
-    fit = r.final.diagnosis.fit
+    fit = with_uncertainty(r.final.diagnosis.fit)  # as analyze's final model: the intervals users paste
     out = {"model": r.final.model, "steps": len(r.steps) - 1}
     n_est, k_est = kalibr.noise_density(fit), kalibr.random_walk(fit)
     n_val, k_val = n_est.value, k_est.value
