@@ -20,6 +20,7 @@ information criterion"); it is 2p at the efficient weight.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -216,36 +217,43 @@ class Problem:
         return low - best.objective
 
 
-def jacobian(par: Parameters, theta: np.ndarray, run: Moments, step: float = 1e-5) -> np.ndarray:
-    """A = ∂ν/∂θᵀ (J × p) in the log-parameters θ.
+def log_gradient(par: Parameters, theta: np.ndarray, of_component: Callable[[Component], np.ndarray | float],
+                 step: float = 1e-5) -> np.ndarray:
+    """∂/∂θᵀ of Σ_c f(c) over the components at θ, for an f that adds over independent components and scales with
+    the square of each amplitude (a WV, the variance of the least-squares slope): (…, p), the last axis θ's.
 
-    The WVs of independent components add, and a component's WV scales with the square of its amplitude
-    (:data:`AMPLITUDES`), so ∂ν/∂ln a = 2ν_c exactly for an amplitude a of component c. Every other parameter
-    (τ, cutoff, frequency, bandwidth, a flicker level) takes a central difference of its own component's WV, one-sided
-    where a step leaves the component's domain. A finite-difference Jacobian of the whole model evaluated every
-    component once per parameter, most of a GMWM fit's time. ValueError when θ itself leaves a component's domain.
+    ∂f/∂ln a = 2f(c) exactly for an amplitude a of component c (:data:`AMPLITUDES`); every other parameter (τ,
+    cutoff, frequency, bandwidth, a flicker level) takes a central difference of its own component's f, one-sided
+    where a step leaves the component's domain. A finite-difference gradient of the whole sum evaluated every
+    component once per parameter. ValueError when θ itself leaves a component's domain.
     """
     comps = par.to_components(theta)
-    parts = [run.model([c]) for c in comps]
-    out = np.zeros((run.wv.m.size, theta.size))
+    parts = [np.asarray(of_component(c), dtype=float) for c in comps]
+    out = np.zeros((*parts[0].shape, theta.size))
     for k, (i, name) in enumerate(par.entries):
         if name in AMPLITUDES:
-            out[:, k] = 2.0 * parts[i]
+            out[..., k] = 2.0 * parts[i]
             continue
         moved = {}
         for h in (step, -step):
             shifted = theta.copy()
             shifted[k] += h
             try:
-                moved[h] = run.model([par.to_components(shifted)[i]])
+                moved[h] = np.asarray(of_component(par.to_components(shifted)[i]), dtype=float)
             except ValueError:
                 continue
         if len(moved) == 2:
-            out[:, k] = (moved[step] - moved[-step]) / (2.0 * step)
+            out[..., k] = (moved[step] - moved[-step]) / (2.0 * step)
         elif moved:
             (h, value), = moved.items()
-            out[:, k] = (value - parts[i]) / h
+            out[..., k] = (value - parts[i]) / h
     return out
+
+
+def jacobian(par: Parameters, theta: np.ndarray, run: Moments) -> np.ndarray:
+    """A = ∂ν/∂θᵀ (J × p) in the log-parameters θ (:func:`log_gradient` of the components' WVs: most of a GMWM fit's
+    time went to a finite-difference Jacobian of the whole model). ValueError when θ leaves a component's domain."""
+    return log_gradient(par, theta, lambda c: run.model([c]))
 
 
 @dataclass(frozen=True)

@@ -62,31 +62,17 @@ class _Profile:
 
     def jacobian(self, theta: np.ndarray, v: float) -> np.ndarray:
         """∂/∂θᵀ of :meth:`residuals`: the WV rows of :meth:`.gmwm_engine.Problem.residual_jacobian`, and the slope
-        term's −(ω̂ − v)/(2V^{3/2})·∂V/∂θ, where V = Σ_c V_c over the noise components scales with each amplitude's
-        square (∂V/∂ln a = 2V_c) and the other parameters take a central difference of their own component's V_c."""
+        term's −(ω̂ − v)/(2V^{3/2})·∂V/∂θ, with ∂V/∂θ from :func:`.gmwm_engine.log_gradient` (V = Σ_c V_c over the
+        noise components, each scaling with its amplitude's square)."""
         row = np.zeros(theta.size)
         try:
-            comps = self.problem.par.to_components(theta)
-            var = ls_slope_variance(comps, self.n, self.dt)
+            var = ls_slope_variance(self.problem.par.to_components(theta), self.n, self.dt)
             if var > 0:
-                row = -0.5 * (self.ls_slope - v) / var**1.5 * self._variance_gradient(theta, comps)
+                grad = eng.log_gradient(self.problem.par, theta, lambda c: ls_slope_variance([c], self.n, self.dt))
+                row = -0.5 * (self.ls_slope - v) / var**1.5 * grad
         except ValueError:
             pass
         return np.vstack([self.problem.residual_jacobian(theta), row])
-
-    def _variance_gradient(self, theta: np.ndarray, comps: list, step: float = 1e-5) -> np.ndarray:
-        par, grad = self.problem.par, np.zeros(theta.size)
-        for k, (i, name) in enumerate(par.entries):
-            if name in eng.AMPLITUDES:
-                grad[k] = 2.0 * ls_slope_variance([comps[i]], self.n, self.dt)
-                continue
-            ends = []
-            for h in (step, -step):
-                shifted = theta.copy()
-                shifted[k] += h
-                ends.append(ls_slope_variance([par.to_components(shifted)[i]], self.n, self.dt))
-            grad[k] = (ends[0] - ends[1]) / (2.0 * step)
-        return grad
 
     def __call__(self, v: float) -> float:
         """J_p(v): eq. (1) minimised over the noise parameters and the WV's ramp term with the slope at v."""
