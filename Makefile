@@ -16,8 +16,9 @@ export OPENBLAS_NUM_THREADS ?= 1
 # tests marked `ros` (nodes fed and observed over DDS in real time) run at the same time in a process of their own, and
 # the others at the lowest CPU priority (nice 19): beside another worker's fits at equal priority a starved node drops
 # messages (7000 sent, 5500 received) and misses its timing checks, while at nice 19 the fits only take the CPU time
-# the nodes leave (about a third of a core). Their output is shown when both runs are done. TEST_DDS_SHARES gives the
-# ros-marked run DDS domains of its own (test/dds.py). Work stealing keeps both workers busy until the last test.
+# the nodes leave (the ros-marked run uses about 0.7 of a core). Their output is shown when both runs are done.
+# TEST_DDS_SHARES gives the ros-marked run DDS domains of its own (test/dds.py). Work stealing keeps both workers busy
+# until the last test.
 TEST_WORKERS ?= 2
 
 .PHONY: setup demo test lint bench clean
