@@ -60,3 +60,25 @@ def test_gm_tau_interval_keeps_a_value_the_adjusted_profile_keeps():
     lo, hi = fit.ci95["GM.tau"]
     assert fit.ci95_method["GM.tau"] == "profile"
     assert lo <= 100.0 <= hi
+
+
+def test_observed_information_at_an_oscs_damping_bound_steps_back_into_its_domain():
+    """An OSC fitted at ζ = MAX_DAMPING (a broad low-pass hump): a forward step in ln B would leave the domain and
+    raise. The information then takes the backward difference, equal to the central one of an interior point
+    nearby within the finite-difference error."""
+    from imu_noise_id.core.noise.components import OSC
+    from imu_noise_id.core.noise.resonant import MAX_DAMPING
+
+    dt = 0.01
+    at_bound = [WN(3.5e-3), OSC(10.0, 2.0 * MAX_DAMPING * 10.0, 0.02)]
+    y = simulate_sum(at_bound, 4000, dt, np.random.default_rng(5))
+    z = np.ones((y.size, 1))  # the intercept
+    par = mle.Parameterisation.of(at_bound)
+    theta = par.to_theta(at_bound)
+    model = ss.from_components(at_bound, dt)
+    info = mle.observed_information(par, theta, model, y, z)
+    inside = theta.copy()
+    inside[2] -= 2e-3  # ln B just inside the bound
+    reference = mle.observed_information(par, inside, model, y, z, central=True)
+    assert np.all(np.isfinite(info))
+    np.testing.assert_allclose(info, reference, rtol=0.05, atol=0.05 * np.abs(np.diag(reference)).max())

@@ -31,6 +31,7 @@ from ..noise.components import Component
 from ..noise.modelspec import parameter_labels
 from ..wavelet.covariance import theoretical_wv, wv_covariance
 from ..wavelet.variance import WaveletVariance
+from .differences import derivative_in_domain, stepped
 from .mle import covariance_from_information, physical_bounds
 
 #: χ²₁ 95 % quantile: a profile interval ends where the objective rises by this much.
@@ -234,19 +235,10 @@ def log_gradient(par: Parameters, theta: np.ndarray, of_component: Callable[[Com
         if name in AMPLITUDES:
             out[..., k] = 2.0 * parts[i]
             continue
-        moved = {}
-        for h in (step, -step):
-            shifted = theta.copy()
-            shifted[k] += h
-            try:
-                moved[h] = np.asarray(of_component(par.to_components(shifted)[i]), dtype=float)
-            except ValueError:
-                continue
-        if len(moved) == 2:
-            out[..., k] = (moved[step] - moved[-step]) / (2.0 * step)
-        elif moved:
-            (h, value), = moved.items()
-            out[..., k] = (value - parts[i]) / h
+        d = derivative_in_domain(lambda h, i=i, k=k: of_component(par.to_components(stepped(theta, k, h))[i]), step,
+                                 lambda i=i: parts[i])
+        if d is not None:
+            out[..., k] = d
     return out
 
 

@@ -17,6 +17,7 @@ physical standard error the delta-method value·se_ϑ.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -29,6 +30,7 @@ from ..kalman.common import ProfileResult, check_data
 from ..kalman.statespace import StateSpace, with_components
 from ..noise.components import RR, Component
 from . import em
+from .differences import derivative_in_domain, stepped
 
 #: Above this length a record with missing samples is searched (and its intervals profiled) gap-filled: the exact
 #: engine needed for the gaps is a Python loop (:mod:`.search`, :mod:`.uncertainty`).
@@ -122,14 +124,13 @@ def loglik_grad_profile(
     prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
     sums = em.sums_from_stats(stats, data or em.DataSums.of(y, z))
     grad = np.empty(theta.size)
-    q0 = None if central else em.q_function(par.to_model(theta, model), sums, model)
+    at_theta = functools.cache(lambda: em.q_function(par.to_model(theta, model), sums, model))
     for k in range(theta.size):
-        tp, tm = theta.copy(), theta.copy()
-        tp[k] += step
-        tm[k] -= step
-        q_plus = em.q_function(par.to_model(tp, model), sums, model)
-        grad[k] = ((q_plus - em.q_function(par.to_model(tm, model), sums, model)) / (2.0 * step) if central
-                   else (q_plus - q0) / step)
+        d = derivative_in_domain(lambda h, k=k: em.q_function(par.to_model(stepped(theta, k, h), model), sums, model),
+                                 step, at_theta, central=central)
+        if d is None:
+            raise ValueError(f"no step of {step:g} around log-parameter {k} stays inside the components' domains")
+        grad[k] = float(d)
     return prof.loglik, grad, model, prof
 
 
@@ -236,23 +237,19 @@ def observed_information(
     """−∂²ℓ/∂ϑ∂ϑᵀ by finite differences of the exact gradient (symmetrised).
 
     Forward differences (k + 1 smoother passes; error O(step) ≈ 1e-3 relative, immaterial for standard errors)
-    or, with ``central``, central ones (2k passes, O(step²)).
+    or, with ``central``, central ones (2k passes, O(step²)). Where a step leaves a component's domain (an OSC
+    fitted at its largest damping, a step beyond it raising ValueError) the difference is taken on the other
+    side; a parameter that can step neither way gets a NaN column (not identified).
     """
     k = theta.size
     hess = np.empty((k, k))
     y, z = check_data(y, z, model.n_regressors)
     data = em.DataSums.of(y, z)
-    g0 = None if central else loglik_and_grad(par, theta, model, y, z, data=data)[1]
+    at_theta = functools.cache(lambda: loglik_and_grad(par, theta, model, y, z, data=data)[1])
     for j in range(k):
-        tp = theta.copy()
-        tp[j] += step
-        gp = loglik_and_grad(par, tp, model, y, z, data=data)[1]
-        if central:
-            tm = theta.copy()
-            tm[j] -= step
-            hess[:, j] = (gp - loglik_and_grad(par, tm, model, y, z, data=data)[1]) / (2.0 * step)
-        else:
-            hess[:, j] = (gp - g0) / step
+        d = derivative_in_domain(lambda h, j=j: loglik_and_grad(par, stepped(theta, j, h), model, y, z, data=data)[1],
+                                 step, at_theta, central=central)
+        hess[:, j] = np.nan if d is None else d
     return -0.5 * (hess + hess.T)
 
 

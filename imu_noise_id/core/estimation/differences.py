@@ -1,0 +1,44 @@
+"""Finite differences that stay inside the components' domains.
+
+A log-parameter step can leave a component's domain: an OSC fitted at its largest damping
+(:data:`~imu_noise_id.core.noise.resonant.MAX_DAMPING`) raises ValueError a step beyond it. The derivative is then
+taken on the side that stays inside — what an optimum on that boundary needs for its gradient and information.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+
+def derivative_in_domain(
+    shifted: Callable[[float], np.ndarray | float], step: float, at_zero: Callable[[], np.ndarray | float], *,
+    central: bool = True,
+) -> np.ndarray | None:
+    """d/dh of ``shifted(h)`` at h = 0 by a central (or, ``central=False``, forward) difference of ``step``; a
+    one-sided difference against ``at_zero()`` where a step raises ValueError; None when both steps do."""
+    values = {}
+    for h in (step, -step) if central else (step,):
+        try:
+            values[h] = np.asarray(shifted(h), dtype=float)
+        except ValueError:  # the step left a component's domain
+            continue
+    if not central and not values:
+        try:
+            values[-step] = np.asarray(shifted(-step), dtype=float)
+        except ValueError:
+            return None
+    if len(values) == 2:
+        return (values[step] - values[-step]) / (2.0 * step)
+    if not values:
+        return None
+    (h, value), = values.items()
+    return (value - np.asarray(at_zero(), dtype=float)) / h
+
+
+def stepped(theta: np.ndarray, k: int, h: float) -> np.ndarray:
+    """A copy of ``theta`` with entry ``k`` moved by ``h``."""
+    out = np.array(theta, dtype=float)
+    out[k] += h
+    return out
