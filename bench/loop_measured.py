@@ -9,8 +9,11 @@ Each axis runs from WN+RW (the Kalibr model) at 100 Hz on the first ``--samples`
 10⁶). Per axis it prints: the RMS AV misfit z (model vs data, in sd of the AV estimates) before and after, whether
 the final model's AV lies inside the data's 95 % band at every τ (simultaneous over octaves), the largest relative
 AV error, the OSC components (f₀, bandwidth, σ) and the f₀ of the one near the disturbance frequency the
-data's README lists for the run, the final random walk against the long-τ Allan bound, the verdict and the time.
-The summary counts them against the issue's targets.
+data's README lists for the run, the final random walk against the long-τ Allan bound, the final model's Kalibr N
+against the data's own passband level (the median of its Welch PSD over 1–6 Hz, between the vibration lines and
+below the sensor's filter: an estimate that shares nothing with the fit) and the N the white noise and the LPF/MA
+alone would give (the rule before short-memory OSCs entered N), the verdict and the time. The summary counts them
+against the issue's targets.
 
 Each finished axis is appended at once to ``OUT.jsonl`` beside ``--out`` (the full records take hours on a shared
 2-core machine); ``--resume`` skips the axes already there and summarises them with the new ones.
@@ -27,10 +30,13 @@ from pathlib import Path
 
 import numpy as np
 from adis import DATA, data_missing, load_run  # bench/adis.py, beside this script
+from scipy import signal
 
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.allan.rw_bound import random_walk_bound
 from imu_noise_id.core.axes import AXES
+from imu_noise_id.core.estimation import kalibr
+from imu_noise_id.core.estimation.relabel import gm_as_filter
 from imu_noise_id.core.noise.components import OSC, RW
 from imu_noise_id.pipelines.loop import run_closed_loop
 from imu_noise_id.pipelines.loop.rules import av_rms_z
@@ -72,6 +78,21 @@ def long_tau_rw_bounds(y: np.ndarray, dt: float, random_walk: float | None = Non
             "rw_bound95": bound.value, "rw_p": bound.p_value(random_walk) if random_walk else 1.0}
 
 
+#: The band [Hz] of the data's passband level: above the ≈ 0.5 Hz disturbance, below the ≈ 10 Hz vibration line
+#: and the sensor's filter (the median over the band steps over narrower lines).
+PASSBAND_HZ = (1.0, 6.0)
+#: A fitted N within this fraction of the data's passband level counts as agreeing with it.
+N_TOLERANCE = 0.10
+
+
+def passband_density(y: np.ndarray, dt: float) -> float:
+    """The data's white-noise level √S [u/√Hz] (two-sided S, the convention of N): the median over
+    :data:`PASSBAND_HZ` of the Welch PSD (4096-sample segments, one-sided, halved)."""
+    f, p = signal.welch(y - np.mean(y), fs=1.0 / dt, nperseg=4096)
+    band = (f >= PASSBAND_HZ[0]) & (f <= PASSBAND_HZ[1])
+    return math.sqrt(float(np.median(p[band])) / 2.0)
+
+
 def _commit() -> str:
     try:
         return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
@@ -101,21 +122,27 @@ def run_axis(run: int, axis: str, y: np.ndarray, dt: float) -> dict:
     fit = r.final.diagnosis.fit
     oscs = sorted((c for c in fit.components if isinstance(c, OSC)), key=lambda c: -c.sigma)
     rw = next((c.random_walk for c in fit.components if isinstance(c, RW)), None)
+    final = gm_as_filter(fit)  # what analyze's final model reads N from
+    white = [c.noise_density for c in final.components if c.name in ("WN", "LPF", "MA")]
     return {"run": run, "axis": axis, "z0": av_rms_z(r.steps[0].diagnosis), "z1": av_rms_z(r.final.diagnosis),
             "inside": r.av_inside_band, "max_rel": r.max_rel_av_error, "oscs": oscs, "rw": rw,
             "model": r.final.model, "changes": [
                 ("" if s.added is None else f"+{s.added}") + "".join(f" −{d}" for d in s.dropped)
                 for s in r.steps[1:]],
-            "verdict": r.verdict, "passed": r.passed, "seconds": time.perf_counter() - start}
+            "verdict": r.verdict, "passed": r.passed, "n": kalibr.noise_density(final).value,
+            "n_white": math.sqrt(sum(d * d for d in white)), "seconds": time.perf_counter() - start}
 
 
 def line(res: dict) -> str:
     osc = "; ".join(f"OSC {c.frequency:.3f} Hz B {c.bandwidth:.3f} σ {c.sigma:.3g}" for c in res["oscs"])
     rw = "none" if res["rw"] is None else f"{res['rw']:.3g}"
     p = "" if res["rw"] is None else f", p {res['rw_p']:.2g}"
+    n = "" if res.get("n") is None else (
+        f"N {res['n']:.3g} (data's passband {res['n_psd']:.3g}: {res['n'] / res['n_psd']:.2f}×; WN+LPF+MA alone "
+        f"{res['n_white'] / res['n_psd']:.2f}×)  ")
     return (f"run{res['run']} {res['axis']:8s} z {res['z0']:6.1f} → {res['z1']:5.1f}  inside {res['inside']!s:5s} "
             f"max rel {res['max_rel']:.2f}  RW {rw} (long-τ bound {res['rw_bound']:.3g}, 95 % pointwise "
-            f"{res['rw_bound95_pointwise']:.3g}, 95 % {res['rw_bound95']:.3g}{p})  "
+            f"{res['rw_bound95_pointwise']:.3g}, 95 % {res['rw_bound95']:.3g}{p})  {n}"
             f"{res['model']}  "
             f"[{', '.join(res['changes'])}]  {osc}  {res['seconds']:.0f} s\n      verdict: {res['verdict']}")
 
@@ -132,6 +159,10 @@ def summary(results: list[dict]) -> list[str]:
     def rw_ok(key: str) -> int:
         return sum(r["rw"] is None or not math.isfinite(r[key]) or r["rw"] <= r[key] for r in accel)
     least = min(accel, key=lambda r: r["rw_p"]) if accel else None
+    with_n = [r for r in results if r.get("n") is not None]
+
+    def n_ok(key: str) -> int:
+        return sum(abs(r[key] / r["n_psd"] - 1.0) <= N_TOLERANCE for r in with_n)
     return [
         f"axes: {n}",
         f"AV misfit improved (RMS z lower): {improved} of {n}   (issue 11's target on the 36 axes: 34)",
@@ -146,6 +177,9 @@ def summary(results: list[dict]) -> list[str]:
         f"{len(accel)} (95 % bound, simultaneous over the octaves τ ≥ {LONG_TAU:g} s); {rw_ok('rw_bound')} of "
         f"{len(accel)} (point bound), {rw_ok('rw_bound95_pointwise')} of {len(accel)} (minimum of pointwise 95 % "
         "limits)",
+        f"Kalibr N within {N_TOLERANCE:.0%} of the data's passband level ({PASSBAND_HZ[0]:g}–{PASSBAND_HZ[1]:g} Hz "
+        f"PSD median): {n_ok('n')} of {len(with_n)} axes that recorded N (fits before 2026-11-28 did not); "
+        f"with the white noise and LPF/MA alone: {n_ok('n_white')} of {len(with_n)}",
     ] + ([] if least is None else [
         f"the accelerometer random walks as one family: the smallest p-value against the long-τ AV is "
         f"{least['rw_p']:.2g} (run {least['run']} {least['axis']}), {min(1.0, len(accel) * least['rw_p']):.2g} "
@@ -183,7 +217,7 @@ def main(argv: list[str] | None = None) -> int:
             if res is None:
                 res = run_axis(run, axis, y, dt)
                 _append(log, res)
-            res = {**res, **long_tau_rw_bounds(y, dt, res["rw"])}
+            res = {**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt)}
             results.append(res)
             lines.append(line(res))
             print(lines[-1], flush=True)
@@ -197,9 +231,10 @@ def main(argv: list[str] | None = None) -> int:
         if res is None:  # logged as run 0
             res = run_axis(0, "gyro_x", y, dt)
             _append(log, res)
-        lines.append(line({**res, **long_tau_rw_bounds(y, dt, res["rw"])}).replace("run0", "MTi-G"))
+        lines.append(line({**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt)})
+                     .replace("run0", "MTi-G"))
         print(lines[-1], flush=True)
-    print("\n".join(lines[-7:]))
+    print("\n".join(lines[-8:]))
     if args.out is not None:
         args.out.write_text("\n".join(lines) + "\n")
     return 0

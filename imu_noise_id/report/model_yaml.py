@@ -25,7 +25,7 @@ Per axis (``gyro_x`` … ``accel_z``)::
       source: "closed loop, step 2: WN+OSC+RW"       # or "model selection"
       model: WN+OSC+RW
       components: [{type: …, …, se, ci95}, …]        # as above, with intervals of the final fit
-      noise_density: {value, ci95, source}           # passband sqrt(N_WN² + N_LPF² + N_MA²) [u/√Hz]
+      noise_density: {value, ci95, source}           # passband √(N_WN² + N_LPF² + N_MA² + N_OSC²) [u/√Hz]
       random_walk: {value, ci95, source}             # RW [u/s/√Hz]; value null: not identifiable from this record
       noise_stddev_per_sample: …                     # per-sample std of the high-frequency noise at dt [u]
       bias_instability: {value, ci95, tau_at_minimum, reached, source}   # model AD min / 0.664 [u]

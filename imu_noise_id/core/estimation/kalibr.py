@@ -4,14 +4,18 @@ Beyond paper 000, which fits the components but leaves what a WN+RW filter shoul
 fitted to a real sensor holds more than WN and RW: the sensor's own low-pass filter (LPF), narrow-band
 oscillations (OSC), Gauss–Markov bias processes, sinusoids. Kept out of N and K, they are reported on their own:
 
-- **N** is the passband white-noise density, √(N_WN² + N_LPF² + N_MA²) [u/√Hz] (the sensor's low-pass LPF or
-  averaging filter MA on part of its white noise): what a filter integrating the IMU sees at low frequency. An OSC,
-  a GM, flicker noise (BI) or a sinusoid never enters it.
+- **N** is the passband white-noise density √(Σ N_i²) [u/√Hz] over the white noise and the short-memory noise
+  that is white below its corner: the sensor's first-order low-pass LPF, its averaging filter MA (each N_i its
+  ``noise_density``) and an OSC whose memory 1/(πB) is a few samples — the sensor's second-order low-pass
+  (ζ ≥ 1/√2: no peak) or a broad resonance, N_i = √S(0) = σ√(B/π)/f₀. That is what a filter integrating the
+  IMU sees at low frequency. A narrow OSC (a vibration line or a wander), a GM, flicker noise (BI) or a sinusoid
+  never enters it.
 - **K** is the RW's density [u/s/√Hz], or *not identifiable from this record* when the final model has no RW (the
   caller then gives the Allan-slope bound).
 - The **per-sample variance** of the high-frequency noise at the sampling period dt is
-  N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt): smaller than N²/dt where the sensor's filter cuts below the Nyquist
-  frequency — what a consumer of the corrected IMU stream must put in its covariance.
+  N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt) + σ²_OSC (the short-memory OSCs' stationary variances): smaller than N²/dt
+  where the sensor's filter cuts below the Nyquist frequency — what a consumer of the corrected IMU stream must
+  put in its covariance.
 
 Intervals: 95 %, from the fit's log-parameter covariance by the delta method for N (a sum of components), the
 fit's own intervals otherwise.
@@ -24,7 +28,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..noise.components import LPF, MA, RW, WN
+from ..noise.base import Component
+from ..noise.components import LPF, MA, OSC, RW, WN
+from ..noise.modelspec import parameter_labels
+from .relabel import FILTER_MAX_TAU_SAMPLES
 from .results import FitResult
 
 Z95 = 1.959963984540054
@@ -63,45 +70,89 @@ def _log_cov(fit: FitResult, labels: list[str]) -> np.ndarray | None:
     return fit.log_covariance[np.ix_(k, k)]
 
 
-#: The components whose noise is white in the passband: the white noise and the sensor's own filters on it.
-PASSBAND = ("WN", "LPF", "MA")
+def is_short_memory_osc(c: Component, dt: float) -> bool:
+    """Whether ``c`` is an OSC whose memory is as short as that of the GM read as the sensor's first-order low-pass
+    (:func:`~.relabel.gm_as_filter`): an envelope decay time 1/(ζω₀) = 1/(πB) below
+    :data:`~.relabel.FILTER_MAX_TAU_SAMPLES` sampling periods. Such an OSC is high-frequency noise, white at
+    S(0) below its corner: the sensor's second-order low-pass (ζ ≥ 1/√2, no peak) or a broad resonance. A
+    longer one is a vibration line or a bias-like wander, kept out of N like a GM."""
+    return isinstance(c, OSC) and 1.0 / (math.pi * c.bandwidth) < FILTER_MAX_TAU_SAMPLES * dt
+
+
+def _passband_part(c: Component, dt: float) -> tuple[float, dict[str, float]] | None:
+    """(passband density √S(0) [u/√Hz], ∂ln density/∂ln parameter) of a component that enters N, else None.
+
+    WN, LPF and MA hold their passband density as ``noise_density``. A short-memory OSC's is √S(0) with
+    S(0) = q/ω₀⁴ = 4ζσ²/ω₀ = σ² B/(π f₀²) (:class:`~imu_noise_id.core.noise.resonant.OSC`'s PSD at 0 Hz).
+    """
+    if isinstance(c, (WN, LPF, MA)):
+        return c.noise_density, {"noise_density": 1.0}
+    if is_short_memory_osc(c, dt):
+        return (c.sigma * math.sqrt(c.bandwidth / math.pi) / c.frequency,
+                {"sigma": 1.0, "bandwidth": 0.5, "frequency": -1.0})
+    return None
+
+
+def _describe(c: Component, tag: str) -> str:
+    if isinstance(c, OSC):
+        return (f"{tag} ({c.frequency:.3g} Hz, bandwidth {c.bandwidth:.3g} Hz: a memory of "
+                f"{1e3 / (math.pi * c.bandwidth):.2g} ms, white below it)")
+    return tag
 
 
 def noise_density(fit: FitResult) -> KalibrValue:
-    """Passband white-noise density N = √(N_WN² + N_LPF² + N_MA²) of the fit (module docstring)."""
-    parts = [c for c in fit.components if c.name in PASSBAND]
+    """Passband white-noise density N = √(Σ N_i²) over the WN and the short-memory noise (module docstring)."""
+    labels_of = {(i, p): lab for i, p, lab in parameter_labels(fit.components)}
+    parts = [(i, c, part) for i, c in enumerate(fit.components) if (part := _passband_part(c, fit.dt)) is not None]
     if not parts:
         return KalibrValue(None, (math.nan, math.nan), "the model has no white noise")
-    densities = [c.params()["noise_density"] for c in parts]
-    n = math.sqrt(sum(d * d for d in densities))
-    filters = [c.name for c in parts if c.name != "WN"]
-    source = "WN" if not filters else (f"{filters[0]} (passband density)" if len(parts) == 1 else
-                                       f"{' and '.join(c.name for c in parts)} combined (the sensor's own filter "
-                                       "on its white noise): sqrt of the sum of the squared passband densities")
-    labels_all = [f"{c.name}.noise_density" for c in parts]
-    if len(parts) == 1 and labels_all[0] in fit.ci95:
-        return KalibrValue(n, tuple(fit.ci95[labels_all[0]]), source)
-    # Gradient of ln N = ½ ln Σ N_i² in the ln N_i: the shares of N² (delta method). A part holding less than
+    n = math.sqrt(sum(part[0] ** 2 for _, _, part in parts))
+    tags = [_describe(c, labels_of[i, c.parameter_names[0]].split(".")[0]) for i, c, _ in parts]
+    if len(parts) == 1:
+        source = tags[0] if tags[0] == "WN" else f"{tags[0]} (passband density)"
+    else:
+        what = ("the white noise and the short-memory noise, white below its corner"
+                if any(isinstance(c, OSC) for _, c, _ in parts) else "the sensor's own filter on its white noise")
+        source = f"{' and '.join(tags)} combined ({what}): sqrt of the sum of the squared passband densities"
+    exps0 = parts[0][2][1]
+    label0 = labels_of[parts[0][0], next(iter(exps0))]
+    if len(parts) == 1 and len(exps0) == 1 and label0 in fit.ci95:
+        return KalibrValue(n, tuple(fit.ci95[label0]), source)
+    # Delta method on ln N = ½ ln Σ N_i²: ∂ln N/∂ln p = Σ_i (N_i²/N²) ∂ln N_i/∂ln p. A part holding less than
     # NEGLIGIBLE_SHARE of N² (a white noise driven to ~0 beside the low-pass, whose own interval is then
     # uninformative) is left out.
-    labels, grad = [], []
-    for lab, part in zip(labels_all, densities, strict=True):
-        if part * part >= NEGLIGIBLE_SHARE * n * n:
-            labels.append(lab)
-            grad.append(part * part / (n * n))
-    cov = _log_cov(fit, labels)
+    kept = [(i, density, exps) for i, _, (density, exps) in parts if density**2 >= NEGLIGIBLE_SHARE * n * n]
+    gradient = {labels_of[i, p]: density**2 / (n * n) * e for i, density, exps in kept for p, e in exps.items()}
+    cov = _log_cov(fit, list(gradient))
     if cov is not None:
-        g = np.asarray(grad)
+        g = np.fromiter(gradient.values(), float)
         with np.errstate(invalid="ignore"):
-            var = float(g @ np.where(np.outer(g, g) > 0, cov, 0.0) @ g)
+            var = float(g @ np.where(np.outer(g, g) != 0, cov, 0.0) @ g)
         if math.isfinite(var):
             return KalibrValue(n, _ci_from_log_sd(n, math.sqrt(max(var, 0.0))), source)
-    # A part without a Wald interval (e.g. a white noise next to 0 beside the low-pass): combine the parts' own
-    # intervals end to end, √(Σ lo_i²) … √(Σ hi_i²) (conservative: as if fully correlated).
-    ends = [fit.ci95.get(lab) for lab in labels]
-    if any(e is None for e in ends):
-        return KalibrValue(n, (math.nan, math.nan), source)
-    return KalibrValue(n, (math.hypot(*(e[0] for e in ends)), math.hypot(*(e[1] for e in ends))), source)
+    # Without a usable covariance: each part's interval from its parameters' own interval ends (the end that
+    # lowers N_i for the lower limit), combined end to end, √(Σ lo_i²) … √(Σ hi_i²) (as if fully correlated).
+    los, his = [], []
+    for i, density, exps in kept:
+        lo = hi = density
+        for p, e in exps.items():
+            ends = fit.ci95.get(labels_of[i, p])
+            if ends is None:
+                return KalibrValue(n, (math.nan, math.nan), source)
+            value = fit.components[i].params()[p]
+            low, high = (min(ends), max(ends)) if e > 0 else (max(ends), min(ends))
+            lo *= _power_ratio(low, value, e)
+            hi *= _power_ratio(high, value, e)
+        los.append(lo)
+        his.append(hi)
+    return KalibrValue(n, (math.hypot(*los), math.hypot(*his)), source)
+
+
+def _power_ratio(end: float, value: float, exponent: float) -> float:
+    """(end/value)^exponent, with an interval end at 0 giving 0 (exponent > 0) or ∞ (exponent < 0)."""
+    if end > 0:
+        return (end / value) ** exponent
+    return 0.0 if exponent > 0 else math.inf
 
 
 def random_walk(fit: FitResult) -> KalibrValue:
@@ -114,7 +165,8 @@ def random_walk(fit: FitResult) -> KalibrValue:
 
 
 def per_sample_noise_variance(fit: FitResult) -> float:
-    """Variance per sample [u²] of the high-frequency noise at the fit's dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt)."""
+    """Variance per sample [u²] of the high-frequency noise at the fit's dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt)
+    + σ² of each short-memory OSC (module docstring)."""
     total = 0.0
     for c in fit.components:
         if isinstance(c, WN):
@@ -123,4 +175,6 @@ def per_sample_noise_variance(fit: FitResult) -> float:
             total += math.pi * c.noise_density**2 * c.cutoff
         elif isinstance(c, MA):
             total += c.per_sample(fit.dt)["sigma2_per_sample"]
+        elif is_short_memory_osc(c, fit.dt):
+            total += c.sigma**2
     return total
