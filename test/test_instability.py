@@ -35,6 +35,17 @@ def test_model_reading_is_the_minimum_of_the_model_deviation_and_leaves_vibratio
     assert with_vibration.value == pytest.approx(got.value, rel=1e-12)
 
 
+def test_a_short_memory_osc_counts_as_the_white_noise_it_is_at_long_tau():
+    """A broad 31.5 Hz OSC (the sensor's second-order low-pass, memory 6 ms) is white at the τ of the minimum: the
+    reading equals that of a white noise of the passband density √(N_WN² + S_OSC(0)); without it, B is lower."""
+    broad = OSC(31.5, 50.0, 0.02)
+    model = [WN(3.5e-3), broad, RW(2e-4)]
+    got = bias_instability(_fit_of(model), 100.0)
+    passband = WN(float(np.sqrt(3.5e-3**2 + broad.psd(1e-9, DT))))
+    assert got.value == pytest.approx(_truth([passband, RW(2e-4)], 100.0), rel=0.01)
+    assert got.value > 1.1 * _truth([WN(3.5e-3), RW(2e-4)], 100.0)
+
+
 def test_white_noise_alone_gives_an_upper_bound():
     got = bias_instability(_fit_of([WN(1e-3)]), 100.0)
     assert not got.reached and got.tau_at_minimum == pytest.approx(100.0) and "upper bound" in got.source

@@ -5,8 +5,10 @@ IEEE Std 952 reads the bias instability B off the flat bottom of the Allan devia
 fitted model's Allan deviation is the same reading taken from a smooth curve instead of a noisy one (beyond the
 papers): B = min_τ σ_model(τ) / 0.664 over the averaging times the record supports (up to a tenth of its length,
 where the AV estimates still have ≳ 10 degrees of freedom). Narrow-band oscillations and regressors (vibration,
-sinusoids, temperature) are not bias: they are left out of σ_model. When the model's deviation still falls at
-the longest supported τ, the minimum is not reached: B is then an *upper bound* (``reached = False``).
+sinusoids, temperature) are not bias: they are left out of σ_model; an OSC of a few samples' memory (the sensor's
+second-order low-pass, :func:`~.kalibr.is_short_memory_osc`) is white noise at these τ and stays in, as it does
+in N. When the model's deviation still falls at the longest supported τ, the minimum is not reached: B is then an
+*upper bound* (``reached = False``).
 
 When the model holds flicker noise (a BI component, :mod:`imu_noise_id.core.noise.flicker`), B is that
 component's own parameter, the IEEE definition itself, with the fit's interval for it; the minimum of the model's
@@ -26,6 +28,7 @@ import numpy as np
 
 from ..noise.components import Component, total_allan_variance
 from ..noise.modelspec import parameter_labels
+from .kalibr import is_short_memory_osc
 from .results import FitResult
 
 #: σ_min = FLICKER_FACTOR · B (IEEE Std 952: √(2 ln 2 / π)).
@@ -52,7 +55,7 @@ def _tau_grid(dt: float, tau_max: float) -> np.ndarray:
 
 
 def _minimum(components: list[Component], dt: float, tau: np.ndarray) -> tuple[float, float, bool]:
-    bias = [c for c in components if c.name not in NOT_BIAS]
+    bias = [c for c in components if c.name not in NOT_BIAS or is_short_memory_osc(c, dt)]
     adev = np.sqrt(np.maximum(total_allan_variance(bias, tau, dt), 0.0))
     k = int(np.argmin(adev))
     return float(adev[k]) / FLICKER_FACTOR, float(tau[k]), k < tau.size - 1
@@ -69,7 +72,8 @@ def bias_instability(fit: FitResult, tau_max: float, *, seed: int = 0) -> BiasIn
                                True,
                                "the model's flicker-noise component BI (IEEE Std 952: PSD B²/(2πf))")
     value, tau_min, reached = _minimum(list(fit.components), fit.dt, tau)
-    source = f"minimum of the model's Allan deviation (without {', '.join(NOT_BIAS)}) / {FLICKER_FACTOR:.3f}"
+    source = (f"minimum of the model's Allan deviation (without narrow {', '.join(NOT_BIAS)}) / "
+              f"{FLICKER_FACTOR:.3f}")
     if not reached:
         source += f"; still falling at τ = {tau_max:.3g} s: an upper bound"
     return BiasInstability(value, _interval(fit, tau, seed), tau_min, reached, source)

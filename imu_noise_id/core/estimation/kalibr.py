@@ -76,7 +76,7 @@ def is_short_memory_osc(c: Component, dt: float) -> bool:
     :data:`~.relabel.FILTER_MAX_TAU_SAMPLES` sampling periods. Such an OSC is high-frequency noise, white at
     S(0) below its corner: the sensor's second-order low-pass (ζ ≥ 1/√2, no peak) or a broad resonance. A
     longer one is a vibration line or a bias-like wander, kept out of N like a GM."""
-    return isinstance(c, OSC) and 1.0 / (math.pi * c.bandwidth) < FILTER_MAX_TAU_SAMPLES * dt
+    return isinstance(c, OSC) and c.memory(dt)[0] < FILTER_MAX_TAU_SAMPLES * dt
 
 
 def _passband_part(c: Component, dt: float) -> tuple[float, dict[str, float]] | None:
