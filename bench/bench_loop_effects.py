@@ -14,6 +14,9 @@ Each case simulates ``--minutes`` at 100 Hz and runs the loop from WN+RW:
   noise's, and beyond it the GM adds as much as the white noise), and ``osc+clear_gm``: the same GM three times
   stronger (σ = 3·10⁻³), dominating the AV from 1 s to 30 s;
 - ``lpf``: the sensor's low-pass (cutoff drawn in 5–30 Hz) on the white noise, + RW;
+- ``lpf2``: the sensor's second-order low-pass (an OSC of damping ζ drawn in 0.7–0.9, f₀ in 10–30 Hz: no or hardly
+  any peak, a memory of 5–23 ms) on 80–95 % of the white noise's passband density, the rest white (noise added after
+  the filter), + RW: the filter must be recognised (an OSC of short memory, an LPF or an MA) and N must hold it;
 - ``ma``: the sensor's averaging filter (a two-tap moving average on 40–70 % of the white noise's passband
   density), + RW: the filter must be found as MA (not LPF);
 - ``bi``: flicker noise (bias instability B drawn in 2–5 × 10⁻⁴) over 0.1 s … the record, + WN + RW: K must not
@@ -43,7 +46,7 @@ from imu_noise_id.core.noise.flicker import band_for_record
 from imu_noise_id.pipelines.loop import run_closed_loop
 
 DT = 0.01
-CASES = ("osc", "osc+gm", "gm", "osc+fast_gm", "osc+clear_gm", "lpf", "ma", "bi", "sin", "clean")
+CASES = ("osc", "osc+gm", "gm", "osc+fast_gm", "osc+clear_gm", "lpf", "lpf2", "ma", "bi", "sin", "clean")
 #: The GM of each case that has one.
 GMS = {"osc+gm": GM(tau=60.0, sigma=2e-3), "gm": GM(tau=60.0, sigma=2e-3), "osc+fast_gm": GM(tau=2.0, sigma=1e-3),
        "osc+clear_gm": GM(tau=2.0, sigma=3e-3)}
@@ -64,6 +67,14 @@ def simulate(case: str, seed: int, n: int) -> tuple[np.ndarray, dict]:
     elif case == "lpf":
         cutoff = float(rng.uniform(5.0, 30.0))
         comps, truth["cutoff"] = [LPF(noise_density=N_TRUE, cutoff=cutoff), RW(K_TRUE)], cutoff
+    elif case == "lpf2":
+        f_corner, damping = float(rng.uniform(10.0, 30.0)), float(rng.uniform(0.7, 0.9))
+        share = float(rng.uniform(0.8, 0.95))  # the filtered part's share of the passband density
+        # S(0) = σ² B / (π f₀²) = (share N)²  →  σ = share N f₀ √(π / B), B = 2ζ f₀
+        bandwidth = 2.0 * damping * f_corner
+        filtered = OSC(f_corner, bandwidth, N_TRUE * share * f_corner * math.sqrt(math.pi / bandwidth))
+        comps = [WN(N_TRUE * math.sqrt(1 - share**2)), filtered, RW(K_TRUE)]
+        truth["second_order"] = filtered
     elif case == "ma":
         share = float(rng.uniform(0.4, 0.7))  # the averaged part's share of the passband density
         comps = [WN(N_TRUE * math.sqrt(1 - share**2)), MA(N_TRUE * share), RW(K_TRUE)]
@@ -109,6 +120,12 @@ def assess(y: np.ndarray, truth: dict) -> dict:
                     "s_err": abs(c.sigma / t.sigma - 1)}
     elif truth["case"] == "gm":
         out["right_kind"] = out["gm_found"]
+    elif "second_order" in truth:
+        short = [c for c in oscs if kalibr.is_short_memory_osc(c, DT)]
+        out["right_kind"] = bool(short) or "LPF" in r.final.model or "MA" in r.final.model
+        if short:
+            c = min(short, key=lambda c: abs(math.log(c.frequency / truth["second_order"].frequency)))
+            out["corner_err"] = abs(c.frequency / truth["second_order"].frequency - 1)
     elif "filter" in truth:
         out["right_kind"] = "MA" in r.final.model and "LPF" not in r.final.model
     elif "bias_instability" in truth:
@@ -141,6 +158,7 @@ def report(case: str, rows: list[dict]) -> list[str]:
     if any("gm_found" in r for r in rows):
         lines.append(f"    GM found in {sum(r['gm_found'] for r in rows)} of {len(rows)}")
     for key, label in (("f0_err", "f0"), ("b_err", "bandwidth"), ("s_err", "sigma"), ("cutoff_err", "cutoff"),
+                       ("corner_err", "OSC f0"),
                        ("bi_err", "B"), ("gm_tau_err", "GM tau"), ("gm_sigma_err", "GM sigma"),
                        ("n_err", "N (passband)"), ("k_err", "K")):
         if any(key in r for r in rows):
