@@ -36,7 +36,7 @@ from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.allan.rw_bound import random_walk_bound
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.relabel import gm_as_filter
+from imu_noise_id.core.estimation.relabel import gm_as_filter, with_uncertainty
 from imu_noise_id.core.noise.components import OSC, RW
 from imu_noise_id.pipelines.loop import run_closed_loop
 from imu_noise_id.pipelines.loop.rules import av_rms_z
@@ -116,21 +116,30 @@ def _append(log: Path | None, res: dict) -> None:
             fh.write(json.dumps(_as_json(res)) + "\n")
 
 
-def run_axis(run: int, axis: str, y: np.ndarray, dt: float) -> dict:
+def run_axis(run: int, axis: str, y: np.ndarray, dt: float, intervals: bool = False) -> dict:
     start = time.perf_counter()
     r = run_closed_loop(y, dt, "WN+RW", axis=axis)
     fit = r.final.diagnosis.fit
     oscs = sorted((c for c in fit.components if isinstance(c, OSC)), key=lambda c: -c.sigma)
     rw = next((c.random_walk for c in fit.components if isinstance(c, RW)), None)
-    final = gm_as_filter(fit)  # what analyze's final model reads N from
+    final = with_uncertainty(fit) if intervals else gm_as_filter(fit)  # what analyze's final model reads N from
+    n = kalibr.noise_density(final)
     white = [c.noise_density for c in final.components if c.name in ("WN", "LPF", "MA")]
     return {"run": run, "axis": axis, "z0": av_rms_z(r.steps[0].diagnosis), "z1": av_rms_z(r.final.diagnosis),
             "inside": r.av_inside_band, "max_rel": r.max_rel_av_error, "oscs": oscs, "rw": rw,
             "model": r.final.model, "changes": [
                 ("" if s.added is None else f"+{s.added}") + "".join(f" −{d}" for d in s.dropped)
                 for s in r.steps[1:]],
-            "verdict": r.verdict, "passed": r.passed, "n": kalibr.noise_density(final).value,
-            "n_white": math.sqrt(sum(d * d for d in white)), "seconds": time.perf_counter() - start}
+            "verdict": r.verdict, "passed": r.passed, "n": n.value,
+            "n_white": math.sqrt(sum(d * d for d in white)), "seconds": time.perf_counter() - start,
+            **({"n_ci95": list(n.ci95)} if intervals else {})}
+
+
+def _interval(res: dict) -> str:
+    if "n_ci95" not in res:
+        return ""
+    lo, hi = res["n_ci95"]
+    return f"; 95 % interval {lo:.3g}–{hi:.3g}, {lo / res['n_psd']:.2f}–{hi / res['n_psd']:.2f}×"
 
 
 def line(res: dict) -> str:
@@ -139,7 +148,7 @@ def line(res: dict) -> str:
     p = "" if res["rw"] is None else f", p {res['rw_p']:.2g}"
     n = "" if res.get("n") is None else (
         f"N {res['n']:.3g} (data's passband {res['n_psd']:.3g}: {res['n'] / res['n_psd']:.2f}×; WN+LPF+MA alone "
-        f"{res['n_white'] / res['n_psd']:.2f}×)  ")
+        f"{res['n_white'] / res['n_psd']:.2f}×{_interval(res)})  ")
     return (f"run{res['run']} {res['axis']:8s} z {res['z0']:6.1f} → {res['z1']:5.1f}  inside {res['inside']!s:5s} "
             f"max rel {res['max_rel']:.2f}  RW {rw} (long-τ bound {res['rw_bound']:.3g}, 95 % pointwise "
             f"{res['rw_bound95_pointwise']:.3g}, 95 % {res['rw_bound95']:.3g}{p})  {n}"
@@ -194,6 +203,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mtig-samples", type=int, default=0,
                     help="also run the contaminated MTi-G gyro_x on its first N samples (0 = not); logged as run 0")
     ap.add_argument("--out", type=Path, default=None, help="also write the output here (and each axis to OUT.jsonl)")
+    ap.add_argument("--intervals", action="store_true",
+                    help="also compute the final fit's intervals (as analyze does) and print N's")
     ap.add_argument("--resume", action="store_true", help="skip the axes OUT.jsonl already holds")
     ap.add_argument("--summarise-only", action="store_true",
                     help="with --resume: summarise the axes OUT.jsonl holds and fit none (a partial table)")
@@ -215,7 +226,7 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             y = data[:, AXES.index(axis)]
             if res is None:
-                res = run_axis(run, axis, y, dt)
+                res = run_axis(run, axis, y, dt, args.intervals)
                 _append(log, res)
             res = {**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt)}
             results.append(res)
@@ -229,7 +240,7 @@ def main(argv: list[str] | None = None) -> int:
         y = np.asarray(d["gyro_x"], dtype=float)[: args.mtig_samples]
         dt = 1.0 / float(d["fs_hz"])
         if res is None:  # logged as run 0
-            res = run_axis(0, "gyro_x", y, dt)
+            res = run_axis(0, "gyro_x", y, dt, args.intervals)
             _append(log, res)
         lines.append(line({**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt)})
                      .replace("run0", "MTi-G"))
