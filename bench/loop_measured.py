@@ -10,10 +10,10 @@ Each axis runs from WN+RW (the Kalibr model) at 100 Hz on the first ``--samples`
 the final model's AV lies inside the data's 95 % band at every τ (simultaneous over octaves), the largest relative
 AV error, the OSC components (f₀, bandwidth, σ) and the f₀ of the one near the disturbance frequency the
 data's README lists for the run, the final random walk against the long-τ Allan bound, the final model's Kalibr N
-against the data's own passband level (the median of its Welch PSD over 1–6 Hz, between the vibration lines and
-below the sensor's filter: an estimate that shares nothing with the fit) and the N the white noise and the LPF/MA
-alone would give (the rule before short-memory OSCs entered N), the verdict and the time. The summary counts them
-against the issue's targets.
+(from its components, recorded in the ``.jsonl``) against the data's own passband level (the median of its Welch
+PSD over 1–6 Hz, between the vibration lines and below the sensor's filter: an estimate that shares nothing with
+the fit) and the N of the rule before 2026-11-28 (the continuous densities of WN, LPF and MA alone), the verdict
+and the time. The summary counts them against the issue's targets.
 
 Each finished axis is appended at once to ``OUT.jsonl`` beside ``--out`` (the full records take hours on a shared
 2-core machine); ``--resume`` skips the axes already there and summarises them with the new ones.
@@ -37,7 +37,7 @@ from imu_noise_id.core.allan.rw_bound import random_walk_bound
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.estimation import kalibr
 from imu_noise_id.core.estimation.relabel import gm_as_filter, with_uncertainty
-from imu_noise_id.core.noise.components import OSC, RW
+from imu_noise_id.core.noise.components import COMPONENT_TYPES, LPF, MA, OSC, RW, WN
 from imu_noise_id.pipelines.loop import run_closed_loop
 from imu_noise_id.pipelines.loop.rules import av_rms_z
 
@@ -123,16 +123,26 @@ def run_axis(run: int, axis: str, y: np.ndarray, dt: float, intervals: bool = Fa
     oscs = sorted((c for c in fit.components if isinstance(c, OSC)), key=lambda c: -c.sigma)
     rw = next((c.random_walk for c in fit.components if isinstance(c, RW)), None)
     final = with_uncertainty(fit) if intervals else gm_as_filter(fit)  # what analyze's final model reads N from
-    n = kalibr.noise_density(final)
-    white = [c.noise_density for c in final.components if c.name in ("WN", "LPF", "MA")]
     return {"run": run, "axis": axis, "z0": av_rms_z(r.steps[0].diagnosis), "z1": av_rms_z(r.final.diagnosis),
             "inside": r.av_inside_band, "max_rel": r.max_rel_av_error, "oscs": oscs, "rw": rw,
             "model": r.final.model, "changes": [
                 ("" if s.added is None else f"+{s.added}") + "".join(f" −{d}" for d in s.dropped)
                 for s in r.steps[1:]],
-            "verdict": r.verdict, "passed": r.passed, "n": n.value,
-            "n_white": math.sqrt(sum(d * d for d in white)), "seconds": time.perf_counter() - start,
-            **({"n_ci95": list(n.ci95)} if intervals else {})}
+            "verdict": r.verdict, "passed": r.passed, "seconds": time.perf_counter() - start,
+            "final_components": [{"type": c.name, **c.params()} for c in final.components],
+            **({"n_ci95": list(kalibr.noise_density(final).ci95)} if intervals else {})}
+
+
+def kalibr_n(res: dict, dt: float) -> dict[str, float]:
+    """N of the axis's final model (recorded as ``final_components``) by today's rule, and by the rule before
+    2026-11-28 (the continuous densities of WN, LPF and MA alone); None for axes fitted before components were
+    recorded."""
+    if "final_components" not in res:
+        return {"n": None, "n_white": None}
+    comps = [COMPONENT_TYPES[p["type"]](**{k: v for k, v in p.items() if k != "type"})
+             for p in res["final_components"]]
+    white = [c.noise_density for c in comps if isinstance(c, (WN, LPF, MA))]
+    return {"n": kalibr.passband_density(comps, dt), "n_white": math.sqrt(sum(d * d for d in white))}
 
 
 def _interval(res: dict) -> str:
@@ -147,7 +157,7 @@ def line(res: dict) -> str:
     rw = "none" if res["rw"] is None else f"{res['rw']:.3g}"
     p = "" if res["rw"] is None else f", p {res['rw_p']:.2g}"
     n = "" if res.get("n") is None else (
-        f"N {res['n']:.3g} (data's passband {res['n_psd']:.3g}: {res['n'] / res['n_psd']:.2f}×; WN+LPF+MA alone "
+        f"N {res['n']:.3g} (data's passband {res['n_psd']:.3g}: {res['n'] / res['n_psd']:.2f}×; the rule before, "
         f"{res['n_white'] / res['n_psd']:.2f}×{_interval(res)})  ")
     return (f"run{res['run']} {res['axis']:8s} z {res['z0']:6.1f} → {res['z1']:5.1f}  inside {res['inside']!s:5s} "
             f"max rel {res['max_rel']:.2f}  RW {rw} (long-τ bound {res['rw_bound']:.3g}, 95 % pointwise "
@@ -187,8 +197,9 @@ def summary(results: list[dict]) -> list[str]:
         f"{len(accel)} (point bound), {rw_ok('rw_bound95_pointwise')} of {len(accel)} (minimum of pointwise 95 % "
         "limits)",
         f"Kalibr N within {N_TOLERANCE:.0%} of the data's passband level ({PASSBAND_HZ[0]:g}–{PASSBAND_HZ[1]:g} Hz "
-        f"PSD median): {n_ok('n')} of {len(with_n)} axes that recorded N (fits before 2026-11-28 did not); "
-        f"with the white noise and LPF/MA alone: {n_ok('n_white')} of {len(with_n)}",
+        f"PSD median): {n_ok('n')} of {len(with_n)} axes that recorded their final model (fits before 2026-11-28 "
+        f"did not); by the rule before (the continuous densities of WN, LPF and MA): {n_ok('n_white')} of "
+        f"{len(with_n)}",
     ] + ([] if least is None else [
         f"the accelerometer random walks as one family: the smallest p-value against the long-τ AV is "
         f"{least['rw_p']:.2g} (run {least['run']} {least['axis']}), {min(1.0, len(accel) * least['rw_p']):.2g} "
@@ -228,7 +239,7 @@ def main(argv: list[str] | None = None) -> int:
             if res is None:
                 res = run_axis(run, axis, y, dt, args.intervals)
                 _append(log, res)
-            res = {**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt)}
+            res = {**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt), **kalibr_n(res, dt)}
             results.append(res)
             lines.append(line(res))
             print(lines[-1], flush=True)
@@ -242,8 +253,8 @@ def main(argv: list[str] | None = None) -> int:
         if res is None:  # logged as run 0
             res = run_axis(0, "gyro_x", y, dt, args.intervals)
             _append(log, res)
-        lines.append(line({**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt)})
-                     .replace("run0", "MTi-G"))
+        lines.append(line({**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt),
+                           **kalibr_n(res, dt)}).replace("run0", "MTi-G"))
         print(lines[-1], flush=True)
     print("\n".join(lines[-8:]))
     if args.out is not None:

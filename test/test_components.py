@@ -288,3 +288,15 @@ def test_sum_covariance_cross_filters_match_simulation():
     # Products of overlapping differences are correlated over a few lags: 3 × the iid standard error, 4 of them.
     assert float(np.mean(prod)) == pytest.approx(float(theory), abs=12.0 * float(np.std(prod)) / math.sqrt(prod.size))
     assert abs(float(theory)) > 20.0 * float(np.std(prod)) / math.sqrt(prod.size)  # the check can fail
+
+
+@pytest.mark.parametrize("component", [WN(1e-3), MA(2e-3), LPF(1e-3, 45.0), LPF(1e-3, 0.5), OSC(31.5, 50.0, 2e-2),
+                                       OSC(3.0, 0.6, 1e-3)], ids=str)
+def test_zero_frequency_density_is_the_long_tau_allan_level_of_the_sampled_component(component):
+    """τ·AV(τ) → N² beyond the memory (AV of the sampled process, exact): the density a filter integrating the samples
+    sees; the continuous PSD at 0 Hz only when the memory is many samples long."""
+    tau = np.array([1e5 * DT])
+    level = float(component.allan_variance(tau, DT)[0] * tau[0])
+    assert component.zero_frequency_density(DT) ** 2 == pytest.approx(level, rel=2e-3)
+    if component.memory(DT)[0] > 10 * DT:  # LPF(0.5 Hz), OSC(3 Hz)
+        assert component.zero_frequency_density(DT) ** 2 == pytest.approx(float(component.psd(1e-9, DT)), rel=1e-2)

@@ -12,7 +12,7 @@ from scipy import signal
 from imu_noise_id.core.estimation import kalibr
 from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
 from imu_noise_id.core.estimation.results import FitResult
-from imu_noise_id.core.noise.components import OSC, WN, simulate_sum
+from imu_noise_id.core.noise.components import LPF, OSC, WN, simulate_sum, total_allan_variance
 
 DT = 0.01
 WHITE = WN(3.5e-3)
@@ -45,22 +45,38 @@ def test_n_is_the_low_frequency_density_of_white_noise_and_a_broad_osc_and_leave
     assert kalibr.per_sample_noise_variance(fit) == pytest.approx(float(high.var()), rel=0.01)
 
 
+def test_n_of_a_low_pass_near_nyquist_is_its_density_as_sampled():
+    """An LPF at 45 Hz sampled at 100 Hz (the ADIS16405 accelerometers' fitted filter): the samples alias its tail,
+    and the data's low-frequency level — Welch PSD and τ·AV at long τ — is 1.27 times its continuous density N_LPF.
+    N is that level (the continuous N_LPF read 15 % low on the measured axes)."""
+    lpf, white = LPF(2.7e-3, 45.0), WN(1e-3)
+    n = kalibr.noise_density(_fit_of([white, lpf]))
+    y = simulate_sum([white, lpf], 400_000, DT, np.random.default_rng(6))
+    f, pxx = signal.welch(y, fs=1 / DT, nperseg=1024)
+    band = (f >= 0.5) & (f <= 5.0)
+    assert n.value == pytest.approx(math.sqrt(float(np.mean(pxx[band])) / 2.0), rel=0.02)
+    tau = np.array([1e3])
+    assert n.value**2 == pytest.approx(float(total_allan_variance([white, lpf], tau, DT)[0] * tau[0]), rel=1e-3)
+    assert lpf.zero_frequency_density(DT) == pytest.approx(1.27 * lpf.noise_density, rel=0.01)
+
+
 def test_ns_interval_without_covariance_takes_the_end_of_each_parameter_that_lowers_or_raises_n():
-    """No log-covariance: the broad OSC's passband density σ√(B/π)/f₀ takes σ's and B's lower ends and f₀'s upper
-    end for N's lower limit (and the reverse for the upper one)."""
-    ci = {"WN.noise_density": (3.3e-3, 3.7e-3), "OSC.frequency": (25.0, 40.0), "OSC.bandwidth": (30.0, 50.0),
+    """No log-covariance: the broad OSC's density takes σ's and B's lower ends and f₀'s upper end for N's lower
+    limit, and the reverse for the upper one (each within 2 % of the density evaluated there: N_i is linearised in
+    the log-parameters)."""
+    ci = {"WN.noise_density": (3.3e-3, 3.7e-3), "OSC.frequency": (28.0, 36.0), "OSC.bandwidth": (40.0, 50.0),
           "OSC.sigma": (0.015, 0.025)}
     n = kalibr.noise_density(_fit_of([WHITE, BROAD], ci))
-    lo = math.hypot(3.3e-3, 0.015 * math.sqrt(30.0 / math.pi) / 40.0)
-    hi = math.hypot(3.7e-3, 0.025 * math.sqrt(50.0 / math.pi) / 25.0)
-    assert n.ci95 == pytest.approx((lo, hi), rel=1e-12)
+    lo = math.hypot(3.3e-3, OSC(36.0, 40.0, 0.015).zero_frequency_density(DT))
+    hi = math.hypot(3.7e-3, OSC(28.0, 50.0, 0.025).zero_frequency_density(DT))
+    assert n.ci95 == pytest.approx((lo, hi), rel=0.02)
     assert n.ci95[0] < n.value < n.ci95[1]
 
 
 def test_a_fitted_white_noise_and_broad_osc_give_n_within_a_few_per_cent_with_an_interval_holding_it():
     """WN + broad OSC fitted by maximum likelihood (20 000 samples): the likelihood splits the passband between the
-    two loosely, their N within 3 % of the truth √(N_WN² + S_OSC(0)), its delta-method interval around it."""
-    truth = math.sqrt(WHITE.noise_density**2 + float(BROAD.psd(1e-9, DT)))
+    two loosely, their N within 3 % of the truth √(N_WN² + N_OSC²), its delta-method interval around it."""
+    truth = math.hypot(WHITE.noise_density, BROAD.zero_frequency_density(DT))
     y = simulate_sum([WHITE, BROAD], 20_000, DT, np.random.default_rng(4))
     fit = NoiseModel(y, DT, "WN+OSC").fit(init=[WN(3e-3), OSC(25.0, 40.0, 0.015)], options=FitOptions(n_starts=1))
     n = kalibr.noise_density(fit)

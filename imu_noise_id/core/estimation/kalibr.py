@@ -5,11 +5,13 @@ fitted to a real sensor holds more than WN and RW: the sensor's own low-pass fil
 oscillations (OSC), Gauss–Markov bias processes, sinusoids. Kept out of N and K, they are reported on their own:
 
 - **N** is the passband white-noise density √(Σ N_i²) [u/√Hz] over the white noise and the short-memory noise
-  that is white below its corner: the sensor's first-order low-pass LPF, its averaging filter MA (each N_i its
-  ``noise_density``) and an OSC whose memory 1/(πB) is a few samples — the sensor's second-order low-pass
-  (ζ ≥ 1/√2: no peak) or a broad resonance, N_i = √S(0) = σ√(B/π)/f₀. That is what a filter integrating the
-  IMU sees at low frequency. A narrow OSC (a vibration line or a wander), a GM, flicker noise (BI) or a sinusoid
-  never enters it.
+  that is white below its corner: the sensor's first-order low-pass LPF, its averaging filter MA and an OSC whose
+  memory 1/(πB) is a few samples (the sensor's second-order low-pass, ζ ≥ 1/√2: no peak, or a broad resonance).
+  Each N_i is the component's density at 0 Hz *as sampled* (:meth:`~.Component.zero_frequency_density`,
+  √(dt·Σ_j R(j))): the N with which its Allan variance falls as N²/τ beyond its memory, what a filter
+  integrating the samples sees. For a low-pass near the Nyquist frequency it exceeds the continuous passband
+  density (the samples alias its tail into the band: 1.27 N_LPF at f_c = 45 Hz, 100 Hz sampling). A narrow OSC
+  (a vibration line or a wander), a GM, flicker noise (BI) or a sinusoid never enters it.
 - **K** is the RW's density [u/s/√Hz], or *not identifiable from this record* when the final model has no RW (the
   caller then gives the Allan-slope bound).
 - The **per-sample variance** of the high-frequency noise at the sampling period dt is
@@ -24,17 +26,20 @@ fit's own intervals otherwise.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..noise.base import Component
 from ..noise.components import LPF, MA, OSC, RW, WN
 from ..noise.modelspec import parameter_labels
+from .differences import derivative_in_domain
 from .relabel import FILTER_MAX_TAU_SAMPLES
 from .results import FitResult
 
 Z95 = 1.959963984540054
+#: Log-parameter step of the passband densities' gradients.
+GRADIENT_STEP = 1e-6
 #: A part of N² below this share does not enter N's interval.
 NEGLIGIBLE_SHARE = 1e-6
 
@@ -79,18 +84,40 @@ def is_short_memory_osc(c: Component, dt: float) -> bool:
     return isinstance(c, OSC) and c.memory(dt)[0] < FILTER_MAX_TAU_SAMPLES * dt
 
 
-def _passband_part(c: Component, dt: float) -> tuple[float, dict[str, float]] | None:
-    """(passband density √S(0) [u/√Hz], ∂ln density/∂ln parameter) of a component that enters N, else None.
+def enters_n(c: Component, dt: float) -> bool:
+    """Whether ``c`` is white noise or short-memory noise white below its corner (module docstring)."""
+    return isinstance(c, (WN, LPF, MA)) or is_short_memory_osc(c, dt)
 
-    WN, LPF and MA hold their passband density as ``noise_density``. A short-memory OSC's is √S(0) with
-    S(0) = q/ω₀⁴ = 4ζσ²/ω₀ = σ² B/(π f₀²) (:class:`~imu_noise_id.core.noise.resonant.OSC`'s PSD at 0 Hz).
+
+def passband_density(components: list[Component], dt: float) -> float | None:
+    """N's value [u/√Hz] from components alone (None without white noise): √(Σ N_i²) over those that
+    :func:`enter N <enters_n>`, each at its zero-frequency density as sampled at ``dt`` [s]."""
+    parts = [c.zero_frequency_density(dt) for c in components if enters_n(c, dt)]
+    return math.sqrt(sum(d * d for d in parts)) if parts else None
+
+
+def _passband_part(c: Component, dt: float) -> tuple[float, dict[str, float]] | None:
+    """(density [u/√Hz], ∂ln density/∂ln parameter) of a component that enters N, else None.
+
+    The density is the sampled component's zero-frequency one (:meth:`~.Component.zero_frequency_density`), the
+    N its Allan variance shows at long τ; its log-gradient is a central difference in each log-parameter (one-sided
+    at an OSC's damping bound, :func:`~.differences.derivative_in_domain`), parameters it does not depend on
+    left out.
     """
-    if isinstance(c, (WN, LPF, MA)):
-        return c.noise_density, {"noise_density": 1.0}
-    if is_short_memory_osc(c, dt):
-        return (c.sigma * math.sqrt(c.bandwidth / math.pi) / c.frequency,
-                {"sigma": 1.0, "bandwidth": 0.5, "frequency": -1.0})
-    return None
+    if not enters_n(c, dt):
+        return None
+    density = c.zero_frequency_density(dt)
+    params = c.params()
+
+    def log_density(name: str, h: float) -> float:
+        return math.log(replace(c, **{name: params[name] * math.exp(h)}).zero_frequency_density(dt))
+
+    gradient = {}
+    for name in c.parameter_names:
+        d = derivative_in_domain(lambda h, name=name: log_density(name, h), GRADIENT_STEP, lambda: math.log(density))
+        if d is not None and abs(float(d)) > 1e-9:
+            gradient[name] = float(d)
+    return density, gradient
 
 
 def _describe(c: Component, tag: str) -> str:
@@ -114,9 +141,9 @@ def noise_density(fit: FitResult) -> KalibrValue:
         what = ("the white noise and the short-memory noise, white below its corner"
                 if any(isinstance(c, OSC) for _, c, _ in parts) else "the sensor's own filter on its white noise")
         source = f"{' and '.join(tags)} combined ({what}): sqrt of the sum of the squared passband densities"
-    exps0 = parts[0][2][1]
-    label0 = labels_of[parts[0][0], next(iter(exps0))]
-    if len(parts) == 1 and len(exps0) == 1 and label0 in fit.ci95:
+    gradient0 = parts[0][2][1]
+    label0 = labels_of[parts[0][0], next(iter(gradient0))]
+    if len(parts) == 1 and len(gradient0) == 1 and label0 in fit.ci95:
         return KalibrValue(n, tuple(fit.ci95[label0]), source)
     # Delta method on ln N = ½ ln Σ N_i²: ∂ln N/∂ln p = Σ_i (N_i²/N²) ∂ln N_i/∂ln p. A part holding less than
     # NEGLIGIBLE_SHARE of N² (a white noise driven to ~0 beside the low-pass, whose own interval is then
@@ -131,7 +158,8 @@ def noise_density(fit: FitResult) -> KalibrValue:
         if math.isfinite(var):
             return KalibrValue(n, _ci_from_log_sd(n, math.sqrt(max(var, 0.0))), source)
     # Without a usable covariance: each part's interval from its parameters' own interval ends (the end that
-    # lowers N_i for the lower limit), combined end to end, √(Σ lo_i²) … √(Σ hi_i²) (as if fully correlated).
+    # lowers N_i for the lower limit; N_i linearised in the log-parameters), combined end to end,
+    # √(Σ lo_i²) … √(Σ hi_i²) (as if fully correlated).
     los, his = [], []
     for i, density, exps in kept:
         lo = hi = density

@@ -73,6 +73,10 @@ class MA(Component):
         u = np.abs(np.asarray(lag, dtype=float))
         return np.where(u > 0, -(2.0 * u - 1.0) * self.sigma2(dt), 0.0)
 
+    def zero_frequency_density(self, dt: float) -> float:
+        """N exactly: dt·(2σ² + 2·σ²) = N² for the two-tap average (R(0) = 2σ², R(±dt) = σ²)."""
+        return self.noise_density
+
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"sigma2_ma": self.sigma2(dt), "sigma2_per_sample": 2.0 * self.sigma2(dt)}
 

@@ -105,6 +105,13 @@ class Component(ABC):
         """
         raise NotImplementedError(f"{self.name} has no sum covariance")
 
+    def zero_frequency_density(self, dt: float) -> float:
+        """√(dt·Σ_j R(j)) [u/√Hz]: the two-sided PSD at 0 Hz of the component *sampled* at dt, the density N with
+        which its Allan variance falls as N²/τ at τ beyond its memory (what a filter integrating the samples sees).
+        Equal to the continuous-time passband density only when the memory is many samples long: a low-pass
+        near the Nyquist frequency aliases its tail into the band. For the components white at low frequency."""
+        raise NotImplementedError(f"{self.name} is not white at low frequency")
+
     def memory(self, dt: float) -> tuple[float, float, float]:
         """(longest and shortest decay time [s] of the autocovariance, shortest period [s] of its oscillation):
         (0, 0, inf) for components whose increments are uncorrelated beyond a sample or two (WN, QN, MA, RW, RR)."""

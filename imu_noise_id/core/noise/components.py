@@ -74,6 +74,9 @@ class WN(Component):
         """K(u) = −σ²|u|/2 with σ² = N²/dt (:meth:`Component.sum_covariance`)."""
         return -0.5 * units.white_noise_sigma2(self.noise_density, dt) * np.abs(np.asarray(lag, dtype=float))
 
+    def zero_frequency_density(self, dt: float) -> float:
+        return self.noise_density
+
     def per_sample(self, dt: float) -> dict[str, float]:
         return {"sigma2_wn": units.white_noise_sigma2(self.noise_density, dt)}
 

@@ -40,7 +40,7 @@ from scipy import linalg, signal
 
 from . import units
 from .base import Component, StateBlock, as_freq, as_tau
-from .sampled import block_sum_variance, sampled_allan_variance
+from .sampled import block_sum_variance, sampled_allan_variance, zero_frequency_psd
 
 #: Largest damping ratio of an OSC (ζ < 1: a resonance, not two real poles).
 MAX_DAMPING = 0.95
@@ -99,6 +99,12 @@ class LPF(Component):
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
+
+    def zero_frequency_density(self, dt: float) -> float:
+        """N·√((x/2)·coth(x/2)), x = 2π f_c dt: the sampled AR(1)'s σ² dt (1 + φ)/(1 − φ) with φ = e^{−x}. Above N
+        when the cutoff is not far below the Nyquist frequency (1.27 N at 45 Hz and 100 Hz sampling): the
+        samples alias the low-pass's tail into the band."""
+        return math.sqrt(zero_frequency_psd(self.sigma**2, -1.0 / self.tau, dt))
 
     def per_sample(self, dt: float) -> dict[str, float]:
         phi = units.gm_phi(self.tau, dt)
@@ -236,6 +242,12 @@ class OSC(Component):
         w0, z = self.omega0, self.damping
         q = 4.0 * z * w0**3 * self.sigma**2
         return q / ((w0 * w0 - w * w) ** 2 + (2.0 * z * w0 * w) ** 2)
+
+    def zero_frequency_density(self, dt: float) -> float:
+        """√(dt·Σ_j R(j)) of the sampled oscillation (:func:`~.sampled.zero_frequency_psd`); the continuous S(0) =
+        σ² B/(π f₀²) in the limit of a memory 1/(πB) of many samples."""
+        a, wd = self._poles()
+        return math.sqrt(max(zero_frequency_psd(self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd), dt), 0.0))
 
     def per_sample(self, dt: float) -> dict[str, float]:
         a, wd = self._poles()

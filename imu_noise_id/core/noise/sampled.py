@@ -75,6 +75,13 @@ def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau
     return (4.0 * sums(m) - sums(2.0 * m)) / (2.0 * m * m)
 
 
+def zero_frequency_psd(c: complex, s: complex, dt: float) -> float:
+    """dt·Σ_{j=−∞}^{∞} R(j) = dt·Re(c (1 + z)/(1 − z)), z = e^{s·dt}: the two-sided PSD [u²/Hz] at 0 Hz of the process
+    sampled at ``dt`` [s] with R(u) = Re(c e^{s u}) (the limit of τ·AV(τ), from S(m)/m → Re(c(1 + 2z/(1 − z))))."""
+    z = np.exp(complex(s) * dt)
+    return float(dt * np.real(complex(c) * (1.0 + z) / (1.0 - z)))
+
+
 def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.ndarray:
     """S(k) = Var(y_1 + … + y_k) [u²] of the process sampled at ``dt`` [s] with R(u) = Re(c e^{s u}), for sample
     counts k ≥ 0 (module docstring; S(0) = 0), as the generalised covariance of the partial sums needs it
