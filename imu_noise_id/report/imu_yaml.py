@@ -146,8 +146,9 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
         lines += [
             "# With models (default): the Kalibr keys and *_xyz / *_ci_xyz come from each axis's FINAL model",
             "# (model.yaml: the closed loop's last step, or the model selection), with its 95 % intervals:",
-            "# noise density = passband white noise sqrt(N_WN^2 + N_LPF^2 + N_MA^2 + N_OSC^2), N_OSC the zero-",
-            "# frequency density of an OSC of a few samples' memory (white below its corner), random walk = RW;",
+            "# noise density = passband white noise sqrt(N_WN^2 + N_LPF^2 + N_MA^2 + N_OSC^2), each at its zero-",
+            "# frequency density as sampled (what the Allan variance shows as N^2/tau; an LPF near Nyquist aliases",
+            "# above its continuous N), N_OSC that of an OSC of a few samples' memory, random walk = RW;",
             "# narrow oscillations (OSC), sinusoids, GMs, flicker noise (BI), the shape of the sensor's own filter",
             "# (LPF, MA, broad OSC) and temperature are kept OUT of them (see model.yaml).",
             "# *_method_xyz: model, or allan_slope / allan_upper_bound where the final model has no random walk",
