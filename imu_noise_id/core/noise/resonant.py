@@ -5,8 +5,10 @@ LPF — white noise of density N through the sensor's first-order low-pass of cu
     Many MEMS parts low-pass their output (a DLPF): the noise is then correlated from one sample to the next and a
     WN model either reads a density that is far too small (AV at τ = dt below the −½ line) or mistakes it for a GM
     with τ ≈ dt. The continuous model is x' = −ω_c x + ω_c w, ω_c = 2π f_c, w white of two-sided PSD N², so
-    S(f) = N² / (1 + (f/f_c)²): **N is the passband density** (what a filter integrating the IMU sees at low
-    frequency), and the process is a first-order Gauss–Markov process with τ = 1/ω_c and σ² = N² ω_c / 2 = π N² f_c.
+    S(f) = N² / (1 + (f/f_c)²): **N is the continuous passband density**; the samples' low-frequency level, what a
+    filter integrating them sees, is N·√((x/2)·coth(x/2)), x = 2π f_c dt (:meth:`LPF.zero_frequency_density`:
+    the samples alias the tail above the Nyquist frequency, 1.27 N at f_c = 45 Hz and 100 Hz), and the process is
+    a first-order Gauss–Markov process with τ = 1/ω_c and σ² = N² ω_c / 2 = π N² f_c.
     Sampled at dt its per-sample variance is σ² = π N² f_c, smaller than the white-noise N²/dt whenever
     f_c < 1/(π dt): that is the per-sample covariance a consumer of the corrected IMU stream must use.
 
