@@ -85,7 +85,7 @@ PASSBAND_HZ = (1.0, 6.0)
 N_TOLERANCE = 0.10
 
 
-def passband_density(y: np.ndarray, dt: float) -> float:
+def data_passband_level(y: np.ndarray, dt: float) -> float:
     """The data's white-noise level √S [u/√Hz] (two-sided S, the convention of N): the median over
     :data:`PASSBAND_HZ` of the Welch PSD (4096-sample segments, one-sided, halved)."""
     f, p = signal.welch(y - np.mean(y), fs=1.0 / dt, nperseg=4096)
@@ -143,6 +143,11 @@ def kalibr_n(res: dict, dt: float) -> dict[str, float]:
              for p in res["final_components"]]
     white = [c.noise_density for c in comps if isinstance(c, (WN, LPF, MA))]
     return {"n": kalibr.passband_density(comps, dt), "n_white": math.sqrt(sum(d * d for d in white))}
+
+
+def with_data_checks(res: dict, y: np.ndarray, dt: float) -> dict:
+    """An axis's result with what the summary judges it by: the long-τ RW bounds, the data's passband level and N."""
+    return {**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": data_passband_level(y, dt), **kalibr_n(res, dt)}
 
 
 def _interval(res: dict) -> str:
@@ -239,7 +244,7 @@ def main(argv: list[str] | None = None) -> int:
             if res is None:
                 res = run_axis(run, axis, y, dt, args.intervals)
                 _append(log, res)
-            res = {**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt), **kalibr_n(res, dt)}
+            res = with_data_checks(res, y, dt)
             results.append(res)
             lines.append(line(res))
             print(lines[-1], flush=True)
@@ -253,8 +258,7 @@ def main(argv: list[str] | None = None) -> int:
         if res is None:  # logged as run 0
             res = run_axis(0, "gyro_x", y, dt, args.intervals)
             _append(log, res)
-        lines.append(line({**res, **long_tau_rw_bounds(y, dt, res["rw"]), "n_psd": passband_density(y, dt),
-                           **kalibr_n(res, dt)}).replace("run0", "MTi-G"))
+        lines.append(line(with_data_checks(res, y, dt)).replace("run0", "MTi-G"))
         print(lines[-1], flush=True)
     print("\n".join(lines[-8:]))
     if args.out is not None:

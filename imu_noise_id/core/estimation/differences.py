@@ -19,16 +19,13 @@ def derivative_in_domain(
     """d/dh of ``shifted(h)`` at h = 0 by a central (or, ``central=False``, forward) difference of ``step``; a
     one-sided difference against ``at_zero()`` where a step raises ValueError; None when both steps do."""
     values = {}
-    for h in (step, -step) if central else (step,):
+    for h in (step, -step):
+        if values and not central:  # the forward step stayed inside
+            break
         try:
             values[h] = np.asarray(shifted(h), dtype=float)
         except ValueError:  # the step left a component's domain
             continue
-    if not central and not values:
-        try:
-            values[-step] = np.asarray(shifted(-step), dtype=float)
-        except ValueError:
-            return None
     if len(values) == 2:
         return (values[step] - values[-step]) / (2.0 * step)
     if not values:

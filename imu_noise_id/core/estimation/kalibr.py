@@ -120,10 +120,10 @@ def _passband_part(c: Component, dt: float) -> tuple[float, dict[str, float]] | 
     return density, gradient
 
 
-def _describe(c: Component, tag: str) -> str:
+def _describe(c: Component, tag: str, dt: float) -> str:
     if isinstance(c, OSC):
         return (f"{tag} ({c.frequency:.3g} Hz, bandwidth {c.bandwidth:.3g} Hz: a memory of "
-                f"{1e3 / (math.pi * c.bandwidth):.2g} ms, white below it)")
+                f"{1e3 * c.memory(dt)[0]:.2g} ms, white below it)")
     return tag
 
 
@@ -134,7 +134,7 @@ def noise_density(fit: FitResult) -> KalibrValue:
     if not parts:
         return KalibrValue(None, (math.nan, math.nan), "the model has no white noise")
     n = math.sqrt(sum(part[0] ** 2 for _, _, part in parts))
-    tags = [_describe(c, labels_of[i, c.parameter_names[0]].split(".")[0]) for i, c, _ in parts]
+    tags = [_describe(c, labels_of[i, c.parameter_names[0]].split(".")[0], fit.dt) for i, c, _ in parts]
     if len(parts) == 1:
         source = tags[0] if tags[0] == "WN" else f"{tags[0]} (passband density)"
     else:
@@ -148,8 +148,8 @@ def noise_density(fit: FitResult) -> KalibrValue:
     # Delta method on ln N = ½ ln Σ N_i²: ∂ln N/∂ln p = Σ_i (N_i²/N²) ∂ln N_i/∂ln p. A part holding less than
     # NEGLIGIBLE_SHARE of N² (a white noise driven to ~0 beside the low-pass, whose own interval is then
     # uninformative) is left out.
-    kept = [(i, density, exps) for i, _, (density, exps) in parts if density**2 >= NEGLIGIBLE_SHARE * n * n]
-    gradient = {labels_of[i, p]: density**2 / (n * n) * e for i, density, exps in kept for p, e in exps.items()}
+    kept = [(i, density, slopes) for i, _, (density, slopes) in parts if density**2 >= NEGLIGIBLE_SHARE * n * n]
+    gradient = {labels_of[i, p]: density**2 / (n * n) * e for i, density, slopes in kept for p, e in slopes.items()}
     cov = _log_cov(fit, list(gradient))
     if cov is not None:
         g = np.fromiter(gradient.values(), float)
@@ -161,9 +161,9 @@ def noise_density(fit: FitResult) -> KalibrValue:
     # lowers N_i for the lower limit; N_i linearised in the log-parameters), combined end to end,
     # √(Σ lo_i²) … √(Σ hi_i²) (as if fully correlated).
     los, his = [], []
-    for i, density, exps in kept:
+    for i, density, slopes in kept:
         lo = hi = density
-        for p, e in exps.items():
+        for p, e in slopes.items():
             ends = fit.ci95.get(labels_of[i, p])
             if ends is None:
                 return KalibrValue(n, (math.nan, math.nan), source)

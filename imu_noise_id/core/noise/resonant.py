@@ -166,6 +166,11 @@ class OSC(Component):
         z = self.damping
         return z * self.omega0, self.omega0 * math.sqrt(1.0 - z * z)
 
+    def _autocovariance(self) -> tuple[complex, complex]:
+        """(c, s) of R(u) = Re(c e^{su}) (module docstring): c = σ²(1 − ia/ω_d), s = −a + iω_d."""
+        a, wd = self._poles()
+        return self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd)
+
     def stationary_covariance(self) -> np.ndarray:
         """P∞ of the state [x, x'/ω₀]: σ² I."""
         return np.eye(2) * self.sigma**2
@@ -226,14 +231,12 @@ class OSC(Component):
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
         """AV of the sampled process (:mod:`imu_noise_id.core.noise.sampled`; R(u) = Re(c e^{su}) as in the module
         docstring), which is what the estimator reads from data."""
-        a, wd = self._poles()
-        return sampled_allan_variance(self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd), as_tau(tau), dt)
+        return sampled_allan_variance(*self._autocovariance(), as_tau(tau), dt)
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
         """K(u) = −½ Var(y_1 + … + y_|u|) from R(u) = Re(c e^{su}) (module docstring)."""
-        a, wd = self._poles()
         u = np.abs(np.asarray(lag, dtype=float))
-        return -0.5 * block_sum_variance(self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd), u, dt)
+        return -0.5 * block_sum_variance(*self._autocovariance(), u, dt)
 
     def memory(self, dt: float) -> tuple[float, float, float]:
         a, wd = self._poles()
@@ -248,8 +251,7 @@ class OSC(Component):
     def zero_frequency_density(self, dt: float) -> float:
         """√(dt·Σ_j R(j)) of the sampled oscillation (:func:`~.sampled.zero_frequency_psd`); the continuous S(0) =
         σ² B/(π f₀²) in the limit of a memory 1/(πB) of many samples."""
-        a, wd = self._poles()
-        return math.sqrt(max(zero_frequency_psd(self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd), dt), 0.0))
+        return math.sqrt(max(zero_frequency_psd(*self._autocovariance(), dt), 0.0))
 
     def per_sample(self, dt: float) -> dict[str, float]:
         a, wd = self._poles()
