@@ -72,9 +72,7 @@ def simulate(case: str, seed: int, n: int) -> tuple[np.ndarray, dict]:
     elif case == "lpf2":
         f_corner, damping = float(rng.uniform(10.0, 30.0)), float(rng.uniform(0.7, 0.9))
         share = float(rng.uniform(0.8, 0.95))  # the filtered part's share of the passband density
-        # S(0) = σ² B / (π f₀²) = (share N)²  →  σ = share N f₀ √(π / B), B = 2ζ f₀
-        bandwidth = 2.0 * damping * f_corner
-        filtered = OSC(f_corner, bandwidth, N_TRUE * share * f_corner * math.sqrt(math.pi / bandwidth))
+        filtered = OSC.low_pass(N_TRUE * share, f_corner, damping)  # its continuous S(0) is (share N)²
         comps = [WN(N_TRUE * math.sqrt(1 - share**2)), filtered, RW(K_TRUE)]
         truth["second_order"] = filtered
     elif case == "ma":

@@ -241,6 +241,20 @@ def test_lpf_is_a_gauss_markov_process_with_its_passband_density():
     assert lpf.sigma**2 < 1e-6 / DT
 
 
+def test_osc_low_pass_is_the_butterworth_filter_of_white_noise_of_its_passband_density():
+    """OSC.low_pass(N, f₀): PSD N² at f ≪ f₀, half of it at f₀ (ζ = 1/√2: |H(f₀)|² = 1/4ζ²), then −40 dB a
+    decade where the first-order LPF falls by −20; the samples' zero-frequency level is N when its memory spans
+    many samples; another damping keeps S(0) = N² with |H(f₀)|² = 1/4ζ²."""
+    second, first = OSC.low_pass(1e-3, 2.0), LPF(1e-3, 2.0)
+    assert second.frequency == 2.0 and second.damping == pytest.approx(1 / math.sqrt(2), rel=1e-12)
+    f = np.array([1e-3, 2.0, 200.0])
+    np.testing.assert_allclose(second.psd(f, DT), [1e-6, 0.5e-6, 1e-6 * 1e-8], rtol=1e-3)
+    assert first.psd(f, DT)[2] == pytest.approx(1e-6 * 1e-4, rel=1e-3)
+    assert second.zero_frequency_density(DT) == pytest.approx(1e-3, rel=1e-6)
+    damped = OSC.low_pass(1e-3, 2.0, damping=0.9)
+    np.testing.assert_allclose(damped.psd(f[:2], DT), [1e-6, 1e-6 / (4 * 0.81)], rtol=1e-6)
+
+
 def test_osc_refuses_what_is_not_a_resonance():
     with pytest.raises(ValueError, match="too wide"):
         OSC(1.0, 3.0, 1e-3)

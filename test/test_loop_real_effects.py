@@ -483,3 +483,69 @@ def test_a_hump_in_the_innovations_becomes_a_resonance_in_the_joint_search():
     wide_diag = wide_loop.diagnose(state)
     assert detect_innovation_hump(wide_diag.innovations, DT, alpha=0.01).finding.significant
     assert hump_resonance(wide_loop, wide_diag) is None
+
+
+
+def _reselected_after_an_lpf(truth: list, n: int):
+    """Re-selection's (diagnosis, what it dropped) right after an LPF was added to WN + RW on ``truth`` (seed 1)."""
+    from imu_noise_id.pipelines.loop.trials import reselect
+
+    y = simulate_sum(truth, n, DT, np.random.default_rng(1))
+    loop = AxisLoop(y, DT, None, alpha=0.01, lags=20, outliers="impute")
+    state = LoopState(structure=["WN", "LPF", "RW"])
+    _, after, dropped, _ = reselect(loop, state, loop.diagnose(state), added="LPF")
+    return after, dropped
+
+
+def test_a_second_order_filter_read_as_a_first_order_low_pass_is_swapped_for_one():
+    """Right after the loop adds an LPF, re-selection tries a second-order low-pass (a Butterworth OSC) in its
+    place. On a sensor filtering 90 % of its passband density through a second-order low-pass (f₀ = 10 Hz, ζ =
+    0.75, 3 min) the swap lowers the BIC, finds the corner and the damping, and N's interval holds the truth. A
+    first-order filter keeps its LPF (the OSC's extra parameter does not pay)."""
+    from imu_noise_id.core.estimation import kalibr
+    from imu_noise_id.core.estimation.relabel import with_uncertainty
+
+    n = 18_000
+    second = [WN(1e-3 * math.sqrt(1 - 0.9**2)), OSC.low_pass(0.9e-3, 10.0, 0.75), RW(3e-5)]
+    first = [WN(0.3e-3), LPF(1e-3, 10.0), RW(3e-5)]
+    for truth, kept in ((second, "OSC"), (first, "LPF")):
+        after, dropped = _reselected_after_an_lpf(truth, n)
+        assert kept in after.fit.model and ("LPF (for OSC)" in dropped) == (kept == "OSC"), after.fit.model
+        lo, hi = kalibr.noise_density(with_uncertainty(after.fit)).ci95
+        assert lo <= kalibr.passband_density(truth, DT) <= hi
+        if kept == "OSC":
+            osc = next(c for c in after.fit.components if isinstance(c, OSC))
+            assert osc.frequency == pytest.approx(10.0, rel=0.05) and osc.damping == pytest.approx(0.75, rel=0.1)
+
+
+def test_a_second_order_low_pass_is_offered_for_a_new_lpf_and_makes_first_order_filters_droppable():
+    """The swap is offered right after an LPF was added, with the passband density kept and at least half of it
+    white at its start; a short-memory OSC just added makes the LPF and the MA droppable, a vibration line does
+    not."""
+    lpf = LPF(1e-3, 20.0)
+    offered = _moves_from([WN(1e-8), lpf, RW(3e-4)], added="LPF")
+    swapped = offered["swap LPF (for OSC)"]
+    white, osc = (next(c for c in swapped if isinstance(c, kind)) for kind in (WN, OSC))
+    assert white.noise_density == pytest.approx(0.5e-3, rel=1e-6) and osc.frequency == 20.0
+    assert math.hypot(white.noise_density, osc.zero_frequency_density(1e-6)) == pytest.approx(1e-3, rel=1e-4)
+    assert "swap LPF (for OSC)" not in _moves_from([WN(1e-8), lpf, RW(3e-4)], added="OSC")
+    filters = [WN(5e-4), lpf, MA(5e-4), RW(3e-4)]
+    short = OSC.low_pass(1e-3, 15.0)
+    assert {"drop LPF", "drop MA"} <= set(_moves_from([*filters, short], added="OSC"))
+    assert not {"drop LPF", "drop MA"} & set(_moves_from([*filters, OSC(8.0, 0.4, 3e-3)], added="OSC"))
+
+
+def test_the_starts_low_pass_is_tried_as_a_second_order_one():
+    """A start from the model selection whose short-memory GM is read as the sensor's LPF gets the same order
+    check: on the second-order record of the test above, WN + GM + RW fitted as analyze's selection does becomes
+    the loop's step 0 (WN + LPF + RW), and its first step swaps the LPF for the second-order low-pass."""
+    from imu_noise_id.core.estimation.model import FitOptions, fit_model
+
+    truth = [WN(1e-3 * math.sqrt(1 - 0.9**2)), OSC.low_pass(0.9e-3, 10.0, 0.75), RW(3e-5)]
+    y = simulate_sum(truth, 18_000, DT, np.random.default_rng(1))
+    start = fit_model(y, DT, "WN+GM+RW", options=FitOptions(uncertainty=False))
+    result = run_closed_loop(y, DT, start, max_steps=1)
+    assert result.steps[0].model == "WN+LPF+RW"
+    assert result.steps[1].dropped == ("LPF (for OSC)",) and "OSC" in result.final.model
+    osc = next(c for c in result.final.diagnosis.fit.components if isinstance(c, OSC))
+    assert osc.frequency == pytest.approx(10.0, rel=0.05)

@@ -46,6 +46,8 @@ from .sampled import block_sum_variance, sampled_allan_variance, zero_frequency_
 
 #: Largest damping ratio of an OSC (ζ < 1: a resonance, not two real poles).
 MAX_DAMPING = 0.95
+#: Damping ratio of a second-order Butterworth low-pass, 1/√2: the flattest passband without a peak.
+BUTTERWORTH_DAMPING = 1.0 / math.sqrt(2.0)
 
 
 def _positive(name: str, value: float) -> float:
@@ -256,6 +258,14 @@ class OSC(Component):
     def per_sample(self, dt: float) -> dict[str, float]:
         a, wd = self._poles()
         return {"damping": self.damping, "rho": math.exp(-a * dt), "theta": wd * dt, "sigma2": self.sigma**2}
+
+    @classmethod
+    def low_pass(cls, noise_density: float, corner: float, damping: float = BUTTERWORTH_DAMPING) -> OSC:
+        """White noise of passband density N [u/√Hz] through a second-order low-pass of corner f₀ [Hz] and damping
+        ζ: the OSC of f₀, B = 2ζf₀ whose continuous S(0) = σ² B/(π f₀²) is N² (σ = N f₀ √(π/B)). The default ζ =
+        1/√2 is the Butterworth filter's (flat passband, no peak)."""
+        bandwidth = 2.0 * damping * corner
+        return cls(corner, bandwidth, noise_density * corner * math.sqrt(math.pi / bandwidth))
 
     @classmethod
     def from_per_sample(cls, dt: float, **values: float) -> OSC:

@@ -5,7 +5,8 @@ One axis at a time (:func:`run_closed_loop`):
 1. fit the starting structure (a :class:`~imu_noise_id.core.estimation.model.NoiseModel`, the constrained
    EM of paper 000 section 3), or take the fit the caller already has (the model selection's winner), and
    measure its errors (:class:`ResidualErrors`: log-likelihood,
-   BIC, AV misfit, Ljung–Box p of the standardised innovations, residual spectral peak ratio);
+   BIC, AV misfit, Ljung–Box p of the standardised innovations, residual spectral peak ratio); a start holding
+   the sensor's first-order low-pass (LPF) tries a second-order one in its place (``trials.swap_start_filter``);
 2. run every detector of :mod:`imu_noise_id.core.diagnostics.detectors` and
    :mod:`~imu_noise_id.core.diagnostics.av_signatures` on the fit's residuals;
 3. take the significant findings (the most significant per effect, GM candidates of distinct τ bands apart,

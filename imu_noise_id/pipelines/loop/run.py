@@ -17,7 +17,7 @@ from ...core.noise.modelspec import parse_structure
 from .rules import PRACTICAL_AV_ERROR, av_inside_band, max_relative_av_error, practically_negligible
 from .state import Diagnosis, LoopResult, LoopState, LoopStep, Trial
 from .steps import AxisLoop
-from .trials import added_name, attempt, explore, reselect
+from .trials import added_name, attempt, explore, reselect, swap_start_filter
 
 #: Effects the loop adds at most per axis. Measured accelerometers carry many at once: on 2000 s of ADIS16405 run 1
 #: accel_x the sensor's low-pass and its averaging, the 0.565 Hz line (a sinusoid and its wander), its third
@@ -97,6 +97,14 @@ def run_closed_loop(
     state = LoopState(structure=parse_structure(start_fit.model if start_fit is not None else start))
     diag = loop.diagnose(state, start_fit)
     steps = [LoopStep(0, state.name(), None, None, None, state, diag, [])]
+    swapped = swap_start_filter(loop, state, diag) if max_steps > 0 else None
+    if swapped is not None:
+        trial = swapped[0]
+        steps[0].trials.append(trial)
+        if trial.accepted:
+            _, state, diag = swapped
+            steps.append(LoopStep(1, state.name(), "OSC", trial.finding.evidence, trial.finding, state, diag, [],
+                                  ("LPF (for OSC)",)))
     verdict, passed = "", False
     explored = False
     while True:
