@@ -18,17 +18,18 @@ import loop_trace  # bench/loop_trace.py, beside this script
 
 from imu_noise_id.core.noise.base import Component
 from imu_noise_id.core.noise.components import GM
-from imu_noise_id.pipelines.loop import trials
+from imu_noise_id.pipelines.loop import reselection, trials
 from imu_noise_id.pipelines.loop.state import Diagnosis
 from imu_noise_id.pipelines.loop.steps import AxisLoop
 
 #: The re-selection moves of the loop as it is.
-LOOP_MOVES = trials.moves
+LOOP_MOVES = reselection.moves
 
 
-def moves_with_gm_swap(loop: AxisLoop, diag: Diagnosis, added: str) -> list[tuple[str, list[Component]]]:
-    """:func:`trials.moves` plus "swap RW (for GM)"."""
-    out = LOOP_MOVES(loop, diag, added)
+def moves_with_gm_swap(loop: AxisLoop, diag: Diagnosis, added: str,
+                       swapped: tuple[str, ...] = ()) -> list[tuple[str, list[Component]]]:
+    """:func:`reselection.moves` plus "swap RW (for GM)"."""
+    out = LOOP_MOVES(loop, diag, added, swapped)
     fitted = list(diag.fit.components)
     if added == "RW" or any(c.name == "GM" for c in fitted):
         return out
@@ -40,7 +41,7 @@ def moves_with_gm_swap(loop: AxisLoop, diag: Diagnosis, added: str) -> list[tupl
 
 
 def main(argv: list[str] | None = None) -> int:
-    trials.moves = moves_with_gm_swap  # reselect() looks it up in its module
+    reselection.moves = moves_with_gm_swap  # reselect() looks it up in its module
     return loop_trace.main(argv, script="bench/probe_rw_gm_swap.py", description=__doc__)
 
 

@@ -369,7 +369,7 @@ def test_a_broad_line_explained_in_part_is_kept_only_while_the_av_is_outside_its
 
 def _moves_from(components, added, swapped=()):
     """Re-selection's moves from a fit of ``components`` on a 20 min record whose long-τ AV is 10⁻⁶ at τ ≈ 40 s."""
-    from imu_noise_id.pipelines.loop.trials import moves
+    from imu_noise_id.pipelines.loop.reselection import moves
 
     tau = np.geomspace(0.01, 120.0, 40)
     diag = SimpleNamespace(fit=SimpleNamespace(components=components), tau=tau, av_data=np.full(tau.size, 1e-6))
@@ -488,7 +488,7 @@ def test_a_hump_in_the_innovations_becomes_a_resonance_in_the_joint_search():
 
 def _reselected_after_an_lpf(truth: list, n: int):
     """Re-selection's (diagnosis, what it dropped) right after an LPF was added to WN + RW on ``truth`` (seed 1)."""
-    from imu_noise_id.pipelines.loop.trials import reselect
+    from imu_noise_id.pipelines.loop.reselection import reselect
 
     y = simulate_sum(truth, n, DT, np.random.default_rng(1))
     loop = AxisLoop(y, DT, None, alpha=0.01, lags=20, outliers="impute")

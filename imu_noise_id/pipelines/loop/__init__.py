@@ -6,7 +6,7 @@ One axis at a time (:func:`run_closed_loop`):
    EM of paper 000 section 3), or take the fit the caller already has (the model selection's winner), and
    measure its errors (:class:`ResidualErrors`: log-likelihood,
    BIC, AV misfit, Ljung–Box p of the standardised innovations, residual spectral peak ratio); a start holding
-   the sensor's first-order low-pass (LPF) tries a second-order one in its place (``trials.swap_start_filter``);
+   the sensor's first-order low-pass (LPF) tries a second-order one in its place (``reselection.swap_start_filter``);
 2. run every detector of :mod:`imu_noise_id.core.diagnostics.detectors` and
    :mod:`~imu_noise_id.core.diagnostics.av_signatures` on the fit's residuals;
 3. take the significant findings (the most significant per effect, GM candidates of distinct τ bands apart,
@@ -46,7 +46,8 @@ The Allan variances (data with the fitted regressors removed, against the model'
 τ = m·dt up to a tenth of the record; their 95 % intervals are those of the estimator under the null hypothesis
 "the fitted model holds", with its exact variance for that model
 (:func:`~imu_noise_id.core.diagnostics.av_band.model_av_band`), not a power-law EDF read from the noisy data.
-The rules that judge one fit against another are in :mod:`.rules`, the moves a step tries in :mod:`.trials`.
+The rules that judge one fit against another are in :mod:`.rules`, the moves a step tries in :mod:`.trials`,
+re-selection's drops and swaps in :mod:`.reselection`.
 """
 
 from .run import ImuLoop, align_temperature, run_closed_loop, run_closed_loop_imu

@@ -14,10 +14,11 @@ from ...core.diagnostics import detectors as det
 from ...core.errors import InputError
 from ...core.estimation.results import FitResult
 from ...core.noise.modelspec import parse_structure
+from .reselection import reselect, swap_start_filter
 from .rules import PRACTICAL_AV_ERROR, av_inside_band, max_relative_av_error, practically_negligible
 from .state import Diagnosis, LoopResult, LoopState, LoopStep, Trial
 from .steps import AxisLoop
-from .trials import added_name, attempt, explore, reselect, swap_start_filter
+from .trials import added_name, attempt, explore
 
 #: Effects the loop adds at most per axis. Measured accelerometers carry many at once: on 2000 s of ADIS16405 run 1
 #: accel_x the sensor's low-pass and its averaging, the 0.565 Hz line (a sinusoid and its wander), its third
