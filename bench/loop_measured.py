@@ -118,11 +118,13 @@ def _append(log: Path | None, res: dict) -> None:
 
 def run_axis(run: int, axis: str, y: np.ndarray, dt: float, intervals: bool = False) -> dict:
     start = time.perf_counter()
-    r = run_closed_loop(y, dt, "WN+RW", axis=axis)
+    r = run_closed_loop(y, dt, "WN+RW", axis=axis, intervals=intervals)
     fit = r.final.diagnosis.fit
     oscs = sorted((c for c in fit.components if isinstance(c, OSC)), key=lambda c: -c.sigma)
     rw = next((c.random_walk for c in fit.components if isinstance(c, RW)), None)
-    final = with_uncertainty(fit) if intervals else gm_as_filter(fit)  # what analyze's final model reads N from
+    # what analyze's final model reads N from (the loop gives the intervals, refitted if they met a higher
+    # likelihood, when it added an effect)
+    final = (fit if fit.record_length is not None else with_uncertainty(fit)) if intervals else gm_as_filter(fit)
     return {"run": run, "axis": axis, "z0": av_rms_z(r.steps[0].diagnosis), "z1": av_rms_z(r.final.diagnosis),
             "inside": r.av_inside_band, "max_rel": r.max_rel_av_error, "oscs": oscs, "rw": rw,
             "model": r.final.model, "changes": [
@@ -130,7 +132,7 @@ def run_axis(run: int, axis: str, y: np.ndarray, dt: float, intervals: bool = Fa
                 for s in r.steps[1:]],
             "verdict": r.verdict, "passed": r.passed, "seconds": time.perf_counter() - start,
             "final_components": [{"type": c.name, **c.params()} for c in final.components],
-            **({"n_ci95": list(kalibr.noise_density(final).ci95)} if intervals else {})}
+            **({"n_ci95": list(kalibr.noise_density(final).ci95), "note": r.note} if intervals else {})}
 
 
 def kalibr_n(res: dict, dt: float) -> dict[str, float]:

@@ -10,6 +10,7 @@ from .. import kalman
 from ..errors import InputError
 from ..kalman.statespace import StateSpace
 from ..noise.components import Component, total_allan_variance
+from .mle import LR_DROP_95
 
 
 @dataclass
@@ -105,6 +106,15 @@ class FitResult:
     record: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
     #: Which estimator produced the numbers: ``em`` (maximum likelihood) or ``gmwm`` (:mod:`.gmwm`).
     estimator: str = "em"
+
+    @property
+    def short_of_maximum(self) -> float | None:
+        """How far ``loglik`` lies below the higher log-likelihood the profile search of the intervals met
+        (``better_loglik``), when by more than the 95 % likelihood-ratio threshold (½·χ²₁(0.95) = 1.92): the fit is
+        not at the maximum and its intervals, computed around it, are not the maximum's. None otherwise."""
+        if self.better_loglik is None or self.better_loglik - self.loglik <= LR_DROP_95:
+            return None
+        return float(self.better_loglik - self.loglik)
 
     def without_data(self) -> FitResult:
         """This result without the record it was fitted to (samples and regressors, N floats each), for keeping

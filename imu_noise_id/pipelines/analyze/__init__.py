@@ -127,10 +127,10 @@ def _imu_loop(imu: ImuSeries, temperature: ScalarSeries | None, options: Analyze
               warnings: list[str]) -> ImuLoop:
     """The loop over the recording; without the temperature (and a warning saying why) if it is unusable."""
     try:
-        return ImuLoop(imu, temperature)
+        return ImuLoop(imu, temperature, intervals=True)
     except InputError as exc:
         warnings.append(f"closed loop without temperature: {exc}")
-        return ImuLoop(imu, None)
+        return ImuLoop(imu, None, intervals=True)
 
 
 def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: AnalyzeOptions | None = None, *,
@@ -224,6 +224,9 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
         except InputError as exc:
             warnings.append(f"closed loop skipped: {exc}")
     final = final_model(fit, loop_result, column)
+    if final.fit.short_of_maximum is not None:
+        warnings.append(f"{axis}: the final fit is {final.fit.short_of_maximum:.3g} below a log-likelihood its "
+                        "intervals' search met: its values and intervals are not the maximum's")
     if final.random_walk_above_bound:
         k = final.random_walk.value
         warnings.append(f"{axis}: the final random walk {k:.3g} is {final.random_walk_bound.excess(k)}; record "

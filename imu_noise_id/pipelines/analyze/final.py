@@ -56,6 +56,11 @@ class FinalModel:
 def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResult) -> FinalModel:
     """The final model of one axis from its model-stage fit, its loop and its Allan variance (module docstring).
 
+    The loop's final fit carries its intervals when the loop was run with ``intervals=True`` (then fitted again
+    where they met a higher likelihood, :func:`~imu_noise_id.pipelines.loop.run.final_intervals`), else they are
+    computed here. A fit still short of the maximum by more than the 95 % threshold
+    (:attr:`~imu_noise_id.core.estimation.results.FitResult.short_of_maximum`) says so in its sources.
+
     The bias instability is read over τ up to a tenth of the record (where the AV estimates still have ≳ 10
     degrees of freedom), the model's and the data's alike.
     """
@@ -63,15 +68,22 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
         fit = gm_as_filter(model_fit)
         source = "model selection" + ("" if loop is None else " (the closed loop added nothing)")
     else:
-        fit = with_uncertainty(loop.final.diagnosis.fit)
+        fit = loop.final.diagnosis.fit
+        fit = fit if fit.record_length is not None else with_uncertainty(fit)  # the loop's own, when it gave them
         source = f"closed loop, step {loop.final.index}: {loop.final.model}"
+    short = fit.short_of_maximum
+    if short is not None:
+        source += (f"; not at the likelihood's maximum: its intervals' search met a log-likelihood {short:.3g} "
+                   "higher, so the values and intervals are not the maximum's")
     tau_max = fit.n * fit.dt / 10.0
     supported = allan.tau <= tau_max
     bound = random_walk_bound(allan, tau_min=tau_max)
-    k = kalibr.random_walk(fit)
+    k, n = kalibr.random_walk(fit), kalibr.noise_density(fit)
     if bound.exceeded_by(k.value):
         k = replace(k, source=f"{k.source}; {bound.excess(k.value)}; a longer record tells them apart")
-    return FinalModel(fit=fit.without_data(), source=source, noise_density=kalibr.noise_density(fit),
+    if short is not None:
+        k, n = (replace(v, source=f"{v.source}; the fit is not at the likelihood's maximum") for v in (k, n))
+    return FinalModel(fit=fit.without_data(), source=source, noise_density=n,
                       random_walk=k, random_walk_bound=bound,
                       noise_stddev_per_sample=math.sqrt(kalibr.per_sample_noise_variance(fit)),
                       bias_instability=bias_instability(fit, tau_max),
