@@ -18,6 +18,7 @@ from imu_noise_id.pipelines.analyze.final import final_model
 from imu_noise_id.pipelines.loop.run import final_intervals
 from imu_noise_id.pipelines.loop.state import LoopResult, LoopState, LoopStep
 from imu_noise_id.pipelines.loop.steps import AxisLoop
+from imu_noise_id.report.model_yaml import fit_to_dict
 
 DT = 0.01
 N_TRUE = 1e-3
@@ -34,6 +35,13 @@ def collapsed():
     return y, loop, step
 
 
+@pytest.fixture(scope="module")
+def refitted(collapsed):
+    """:func:`final_intervals` of the collapsed step: (step, note)."""
+    _, loop, step = collapsed
+    return final_intervals(loop, step)
+
+
 def test_premise_a_search_from_a_collapsed_white_noise_stops_short_of_the_maximum(collapsed):
     _, loop, step = collapsed
     best = loop.diagnose(LoopState(structure=["WN", "RW"]))
@@ -41,9 +49,9 @@ def test_premise_a_search_from_a_collapsed_white_noise_stops_short_of_the_maximu
     assert step.diagnosis.fit.components[0].noise_density < 1e-6
 
 
-def test_the_final_step_is_fitted_again_where_its_intervals_met_the_maximum(collapsed):
-    _, loop, step = collapsed
-    final, note = final_intervals(loop, step)
+def test_the_final_step_is_fitted_again_where_its_intervals_met_the_maximum(collapsed, refitted):
+    step = collapsed[2]
+    final, note = refitted
     fit = final.diagnosis.fit
     n = fit.components[0].noise_density
     lo, hi = fit.ci95["WN.noise_density"]
@@ -52,7 +60,7 @@ def test_the_final_step_is_fitted_again_where_its_intervals_met_the_maximum(coll
     assert "fitted again" in note and final.state.init is not None
 
 
-def test_a_final_model_short_of_the_maximum_is_flagged_not_printed_as_if_it_held(collapsed):
+def test_a_final_model_short_of_the_maximum_is_flagged_not_printed_as_if_it_held(collapsed, refitted):
     y, _, step = collapsed
     start = LoopStep(0, "WN+RW", None, None, None, step.state, step.diagnosis, [])
     loop_result = LoopResult(axis="gyro_x", dt=DT, n=y.size, steps=[start, step], passed=True, verdict="",
@@ -60,3 +68,5 @@ def test_a_final_model_short_of_the_maximum_is_flagged_not_printed_as_if_it_held
     final = final_model(step.diagnosis.fit, loop_result, allan_variance(y, DT))
     assert "not at the likelihood's maximum" in final.source
     assert "not at the likelihood's maximum" in final.noise_density.source
+    assert fit_to_dict(final.fit)["short_of_maximum"] > 1000  # model.yaml says it of any fit
+    assert "short_of_maximum" not in fit_to_dict(refitted[0].diagnosis.fit)

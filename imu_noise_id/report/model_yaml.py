@@ -14,6 +14,8 @@ Per axis (``gyro_x`` … ``accel_z``)::
     mean: {bias: {value, se, ci95}, ramp: {…}, <exog>: {…}}                       # u, u/s, …
     loglik: …   aic: …   bic: …   n_params: …   converged: …                    # full precision (docs/em.md);
                                                                                  # null for a GMWM fit
+    short_of_maximum: …      # only when the intervals' search met a log-likelihood higher by this (> 1.92): the
+                             # fit is not at the maximum, its values and intervals are not the maximum's
     candidates: [{model, loglik, k, aic, bic, delta_bic, weight_bic}, …]          # when selected
     record_length: {target, level, current_s, parameters: {label: {needed_s, needed_h, relative_halfwidth,
                     reliable}}}
@@ -94,6 +96,8 @@ def fit_to_dict(fit: FitResult, axis: str | None = None, selection: SelectionRes
         **{k: float(getattr(fit, k)) if likelihood else None for k in ("loglik", "aic", "bic")},
         "n_params": int(fit.n_params), "converged": bool(fit.converged), "information_ok": bool(fit.information_ok),
     })
+    if fit.short_of_maximum is not None:
+        out["short_of_maximum"] = num(fit.short_of_maximum)
     if isinstance(fit, GmwmFit):
         out["moments"] = gmwm_details(fit)
     if selection is not None:
