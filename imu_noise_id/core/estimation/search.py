@@ -13,7 +13,9 @@ of the record with its gaps.
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -34,8 +36,12 @@ if TYPE_CHECKING:
 
 
 def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options: FitOptions,
-               metric: np.ndarray | None) -> tuple[mle.MLEResult, int]:
-    """EM iterations then the quasi-Newton finish from one start; (result, EM iterations)."""
+               metric_of: Callable[[list[Component]], np.ndarray] | None) -> tuple[mle.MLEResult, int]:
+    """EM iterations then the quasi-Newton finish from one start, preconditioned by ``metric_of`` the start's
+    components (the Whittle information) and again at its end if it stalled (:func:`.mle.maximise`); (result, EM
+    iterations)."""
+    metric = metric_of(start) if metric_of is not None else None
+    metric_at = (lambda fitted: metric_of(ss.to_components(fitted))) if metric_of is not None else None
     z = model.z
     state = model.statespace(start)
     _, state, stats = kalman.profile_and_smooth(state, y, z)  # GLS means and the first E-step in one pass
@@ -44,13 +50,15 @@ def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options
     if options.polish:
         # The last EM iterate is scored by the quasi-Newton finish's first evaluation: no E-step for it here.
         run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats, final_estep=False)
+        finish = functools.partial(mle.maximise, par, y=y, z=z, bounds=model.parameter_bounds, metric=metric,
+                                   metric_at=metric_at)
         try:
-            res = mle.maximise(par, run.model, y, z, bounds=model.parameter_bounds, metric=metric)
+            res = finish(run.model)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             # That unscored update may have left the filter's domain: redo EM with the check, which keeps the
             # last good iterate (paper 000 §3.5(iii)).
             run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
-            res = mle.maximise(par, run.model, y, z, bounds=model.parameter_bounds, metric=metric)
+            res = finish(run.model)
     else:
         run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats)
         prof = kalman.loglik(run.model, y, z)
@@ -114,10 +122,11 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
     y_search = interpolate_missing(model.y) if fill_first else model.y
     best: tuple[mle.MLEResult, int] | None = None
     lls = []
+    metric_of = (functools.partial(whittle.whittle_information, y=y_av, dt=model.dt, periodogram=bp)
+                 if bp is not None else None)
     for start in start_values:
         try:
-            metric = whittle.whittle_information(start, y_av, model.dt, bp) if bp is not None else None
-            res = _one_start(model, start, y_search, options, metric)
+            res = _one_start(model, start, y_search, options, metric_of)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             continue
         lls.append(res[0].loglik)
@@ -134,8 +143,7 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
         # GM turning into a random walk): search again from there, once.
         start = result.better_start
         try:
-            metric = whittle.whittle_information(start, y_av, model.dt, bp) if bp is not None else None
-            again = _one_start(model, start, y_search, options, metric)
+            again = _one_start(model, start, y_search, options, metric_of)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             return result
         if again[0].loglik > result.loglik:

@@ -134,7 +134,8 @@ def partly_explained(loop: AxisLoop, f: det.Finding, before: Diagnosis, after: D
 
 #: A refused broad-line resonance is started again with a bandwidth of this many pooled bins of its search (a fifth
 #: of its running-median floor's window; from 4 the EM stayed at a local optimum 1.2 Hz wide on the simulated 5.7 Hz
-#: pedestal of ``test_a_broad_pedestal_beside_a_strong_line_is_started_again_at_the_pooled_scale``).
+#: pedestal of ``test_a_broad_pedestal_beside_a_strong_line_is_found_at_its_width``, with the finish's metric before
+#: 2026-11-28).
 WIDE_START_POOLED_BINS = 16
 
 
@@ -149,7 +150,9 @@ def wide_start(loop: AxisLoop, f: det.Finding) -> det.Finding | None:
     started at the search's own scale it widens to the pedestal. On ADIS16405 run 6 gyro_z (first 10⁵ samples) the
     loop's start at 0.13 Hz lowered the BIC by 15 and was refused; started 1–4 Hz wide beside the final model the
     EM found a resonance at 27.3 Hz, 5.7 Hz wide (BIC −515), and the AV at τ = 0.03–0.04 s, 5 sd off before, came
-    back inside its band. ``test/test_loop_real_effects.py`` reproduces the refusal and its repair on a simulation.
+    back inside its band. ``test/test_loop_real_effects.py`` reproduced the refusal and its repair on a simulation
+    until the finish's metric became the Fisher information (2026-11-28, docs/em.md): the narrow start now widens
+    to that simulated pedestal itself, and the measured case was not run again.
     """
     resolution = f.params.get("resolution")
     frequency, bandwidth = f.params.get("frequency"), f.params.get("bandwidth")
