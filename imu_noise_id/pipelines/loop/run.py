@@ -183,16 +183,17 @@ def final_intervals(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
     residuals and AV are then the refit's.
     """
     fit = with_uncertainty(step.diagnosis.fit)
+    as_it_is = replace(step, diagnosis=replace(step.diagnosis, fit=fit)), ""
     if fit.short_of_maximum is None or fit.better_start is None:
-        return replace(step, diagnosis=replace(step.diagnosis, fit=fit)), ""
+        return as_it_is
     state = step.state.with_components(fit.better_start)
     try:
         diag = loop.diagnose(state)
     except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
-        return replace(step, diagnosis=replace(step.diagnosis, fit=fit)), ""
-    if diag.fit.loglik <= step.diagnosis.fit.loglik:
-        return replace(step, diagnosis=replace(step.diagnosis, fit=fit)), ""
+        return as_it_is
     gain = diag.fit.loglik - step.diagnosis.fit.loglik
+    if gain <= 0.0:
+        return as_it_is
     refit = with_uncertainty(diag.fit)
     return (replace(step, state=state, diagnosis=replace(diag, fit=refit)),
             f"the final fit was fitted again from where its intervals' search met a higher likelihood "
