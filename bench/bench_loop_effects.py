@@ -55,6 +55,16 @@ GMS = {"osc+gm": GM(tau=60.0, sigma=2e-3), "gm": GM(tau=60.0, sigma=2e-3), "osc+
 N_TRUE, K_TRUE = 2e-3, 3e-4
 
 
+def probe_arguments(doc: str) -> tuple[argparse.Namespace, int]:
+    """The ``--seeds`` and ``--minutes`` of a probe on these cases (its docstring's first paragraph as the help),
+    and the samples per record at :data:`DT`."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n", maxsplit=1)[0])
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--minutes", type=float, default=20.0)
+    args = ap.parse_args()
+    return args, int(args.minutes * 60 / DT)
+
+
 def simulate(case: str, seed: int, n: int) -> tuple[np.ndarray, dict]:
     rng = np.random.default_rng(seed)
     f0 = float(rng.uniform(0.4, 15.0))

@@ -17,12 +17,11 @@ n·Σw⁴/(Σw²)² of the log-likelihood ratio.
 
 from __future__ import annotations
 
-import argparse
 import math
 import time
 
 import numpy as np
-from bench_loop_effects import DT, K_TRUE, simulate
+from bench_loop_effects import DT, K_TRUE, probe_arguments, simulate
 from scipy.optimize import minimize
 
 from imu_noise_id.core.estimation import kalibr
@@ -80,11 +79,7 @@ def k_lower_end(components: list[Component], y: np.ndarray, dt: float) -> tuple[
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--minutes", type=float, default=20.0)
-    args = ap.parse_args()
-    n = int(args.minutes * 60 / DT)
+    args, n = probe_arguments(__doc__)
     print(f"# bench/probe_k_bounded_wander.py --seeds {args.seeds} --minutes {args.minutes:g} ({n} samples at "
           f"100 Hz; true K = {K_TRUE}; GM τ ≤ {n * DT / (2 * math.pi * CORNER_BIN):.3g} s)")
     for case in ("clean", "osc+gm"):

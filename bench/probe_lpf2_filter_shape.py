@@ -10,11 +10,10 @@ Run:  PYTHONPATH=$PWD nice -n 10 python bench/probe_lpf2_filter_shape.py [--seed
 
 from __future__ import annotations
 
-import argparse
 import math
 import time
 
-from bench_loop_effects import DT, K_TRUE, N_TRUE, simulate
+from bench_loop_effects import DT, K_TRUE, N_TRUE, probe_arguments, simulate
 
 from imu_noise_id.core.estimation import kalibr
 from imu_noise_id.core.estimation.relabel import with_uncertainty
@@ -36,11 +35,7 @@ def describe(label: str, model: str, diag: Diagnosis, n_true: float) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--minutes", type=float, default=20.0)
-    args = ap.parse_args()
-    n = int(args.minutes * 60 / DT)
+    args, n = probe_arguments(__doc__)
     print(f"# bench/probe_lpf2_filter_shape.py --seeds {args.seeds} --minutes {args.minutes:g} "
           f"({n} samples at 100 Hz; N as sampled, K = {K_TRUE})", flush=True)
     for s in range(args.seeds):
