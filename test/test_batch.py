@@ -37,9 +37,34 @@ def client():
         yield c
 
 
-def test_units_equal_analyze_and_a_corrupt_bag_is_one_failed_row(bags, client, tmp_path):
+def _kill_a_busy_worker(client, killed: list[str]) -> threading.Thread:
+    """A thread that SIGKILLs the first worker seen busy (within 60 s) and records its address in ``killed``."""
+    pids = client.run(os.getpid)
+
+    def kill() -> None:
+        deadline = time.time() + 60
+        while time.time() < deadline and not killed:
+            busy = [addr for addr, tasks in client.processing().items() if tasks]
+            if busy:
+                os.kill(pids[busy[0]], signal.SIGKILL)
+                killed.append(busy[0])
+            time.sleep(0.05)
+
+    thread = threading.Thread(target=kill)
+    thread.start()
+    return thread
+
+
+def test_units_equal_analyze_survive_a_killed_worker_and_a_corrupt_bag_is_one_failed_row(bags, client, tmp_path):
+    """One batch run, with a worker killed while it runs a unit: the killed unit is rerun, the table is complete,
+    each unit's numbers are analyze's, a corrupt bag is one failed row, and a second run skips what is done."""
     units = discover_units([str(bags / "*")], None)
+    killed: list[str] = []
+    killer = _kill_a_busy_worker(client, killed)
     result = run_batch(units, OPTIONS, tmp_path, client)
+    killer.join()
+    assert killed, "no worker was busy to be killed"
+    assert len(result.rows) == 3 * 6 + 1 and all(r["noise_density"] > 0 for r in result.rows if r["axis"])
     status = {o.name: o.status for o in result.outcomes}
     assert status == {"broken": "failed", "imu0": "ok", "imu1": "ok", "imu2": "ok"}
     broken = next(o for o in result.outcomes if o.name == "broken")
@@ -67,36 +92,15 @@ def test_units_equal_analyze_and_a_corrupt_bag_is_one_failed_row(bags, client, t
     assert [r for r in again.rows if r["unit"] == "imu0"] == [r for r in result.rows if r["unit"] == "imu0"]
 
 
-def test_a_worker_killed_mid_run_still_yields_the_complete_table(bags, client, tmp_path):
-    units = discover_units([str(bags / "imu*")], None)
-    pids = client.run(os.getpid)
-    killed = []
-
-    def kill_a_busy_worker() -> None:
-        deadline = time.time() + 60
-        while time.time() < deadline and not killed:
-            busy = [addr for addr, tasks in client.processing().items() if tasks]
-            if busy:
-                os.kill(pids[busy[0]], signal.SIGKILL)
-                killed.append(busy[0])
-            time.sleep(0.05)
-
-    thread = threading.Thread(target=kill_a_busy_worker)
-    thread.start()
-    result = run_batch(units, OPTIONS, tmp_path, client)
-    thread.join()
-    assert killed, "no worker was busy to be killed"
-    assert [o.status for o in result.outcomes] == ["ok", "ok", "ok"]
-    assert len(result.rows) == 3 * 6 and all(r["noise_density"] > 0 for r in result.rows)
-
-
-def test_batch_command_writes_the_fleet_table_and_report(bags, tmp_path, capsys):
+def test_batch_command_writes_the_fleet_table_and_report(bags, client, tmp_path, capsys):
+    """The command on the module's cluster through ``--scheduler`` (the local cluster it would start otherwise is
+    ``open_client``'s, which the ``client`` fixture starts)."""
     spec = tmp_path / "spec.yaml"
     spec.write_text("gyro: {noise_density: 3.0e-3}\naccel: {noise_density: 1.0e-2}\n")
     out = tmp_path / "out"
     # the lowest and the highest density: one unit passes the specification, one fails it
     assert main(["batch", str(bags / "imu[02]*"), "--out", str(out), "--model", "WN+RW", "--no-loop", "--spec",
-                 str(spec), "--workers", "1"]) == 0
+                 str(spec), "--scheduler", client.scheduler.address]) == 0
     import pyarrow.parquet as pq
 
     table = pq.read_table(out / "fleet.parquet").to_pylist()
