@@ -487,6 +487,10 @@ def test_a_hump_in_the_innovations_becomes_a_resonance_in_the_joint_search():
     osc = next(c for c in best[2].fit.components if isinstance(c, OSC))
     assert osc.frequency == pytest.approx(26.0, rel=0.05)
     assert osc.bandwidth == pytest.approx(7.0, rel=0.3)
+    # the hump's evidence is re-measured like any finding's: there before the resonance, gone with it
+    assert not loop.evidence_gone(start, diag)[0]
+    gone, why = loop.evidence_gone(start, best[2])
+    assert gone and "innovation_hump" in why, why
     # an elevation wider than its centre (two overlapping resonances; on ADIS16405 run 6 accel_z a filter's shape
     # beside a vibration) is no resonance to offer
     wide = simulate_sum([WN(2e-3), OSC(frequency=5.0, bandwidth=4.0, sigma=0.004),

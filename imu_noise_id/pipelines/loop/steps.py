@@ -11,7 +11,13 @@ from ...core.allan import allan_variance, choose_m
 from ...core.diagnostics import detectors as det
 from ...core.diagnostics.av_band import model_av_band
 from ...core.diagnostics.av_signatures import detect_av_signatures
-from ...core.diagnostics.lines import detect_broad_line, harmonics, line_shape, pooled_line_statistic
+from ...core.diagnostics.lines import (
+    detect_broad_line,
+    detect_innovation_hump,
+    harmonics,
+    line_shape,
+    pooled_line_statistic,
+)
 from ...core.diagnostics.residuals import av_misfit_z, line_statistic, residual_errors
 from ...core.diagnostics.spectra import residual_spectra
 from ...core.diagnostics.whitening import WhiteningFilter
@@ -301,8 +307,17 @@ class AxisLoop:
         return GM(tau=tau, sigma=sigma)
 
     def targeted_statistic(self, f: det.Finding, diag: Diagnosis) -> float:
-        """The statistic of the signature ``f`` targeted, re-measured at the same place on the new residuals."""
+        """The statistic of the signature ``f`` targeted, re-measured at the same place on the new residuals (a
+        whole-record test, and the joint search's innovation hump, run again)."""
         e, w = diag.innovations, diag.whitening
+        rerun = {
+            "temperature_score": lambda: det.detect_temperature(e, self.temperature, w, alpha=f.level),
+            "ramp_score": lambda: det.detect_ramp(e, self.dt, w, alpha=f.level),
+            "ljung_box": lambda: det.detect_correlation(e, self.dt, alpha=f.level, lags=self.lags),
+            "innovation_hump": lambda: detect_innovation_hump(e, self.dt, alpha=f.level).finding,
+        }
+        if f.detector in rerun:
+            return float(rerun[f.detector]().statistic)
         if f.detector == "av_band":
             z = av_misfit_z(diag.av_data, diag.av_ci, diag.av_model)
             band = (diag.tau >= f.params["band_lo"] * 0.999) & (diag.tau <= f.params["band_hi"] * 1.001)
@@ -319,12 +334,7 @@ class AxisLoop:
             k = int(f.params["index"])
             near = np.abs(det.step_scan(e, w, m)[max(0, k - m): k + m + 1])
             return float(np.nanmax(near)) if np.isfinite(near).any() else 0.0
-        rerun = {
-            "temperature_score": lambda: det.detect_temperature(e, self.temperature, w, alpha=f.level),
-            "ramp_score": lambda: det.detect_ramp(e, self.dt, w, alpha=f.level),
-            "ljung_box": lambda: det.detect_correlation(e, self.dt, alpha=f.level, lags=self.lags),
-        }
-        return float(rerun[f.detector]().statistic)
+        raise ValueError(f"no re-measure of a {f.detector} finding ({f.effect})")
 
     def evidence_gone(self, f: det.Finding, diag: Diagnosis) -> tuple[bool, str]:
         """Whether the signature ``f`` targeted is gone from the new fit's residuals.
