@@ -37,7 +37,15 @@ import numpy as np
 from scipy import optimize, stats
 from scipy.fft import next_fast_len
 
-from .residuals import acf, chi2_log10_sf, ljung_box, spectral_peaks
+from .residuals import (
+    SpectralPeak,
+    acf,
+    chi2_log10_sf,
+    ljung_box,
+    max_exponential_threshold,
+    spectral_lines,
+    spectral_peaks,
+)
 from .whitening import ScoreTest, WhiteningFilter, score_test
 
 #: Default significance level of every detector.
@@ -144,10 +152,10 @@ def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alp
     Initial amplitude and phase come from the score test's GLS estimate of sin/cos at the peak frequency (computed
     only for a significant peak).
     The threshold is the Exp(1) quantile that makes the maximum over the M searched bins exceed it with
-    probability α: s* = −ln(1 − (1 − α)^{1/M}).
+    probability α: s* = −ln(1 − (1 − α)^{1/M}) (:func:`max_exponential_threshold`).
     """
     peak = spectral_peaks(e, dt, f_min=f_min)
-    s_star = float(-math.log(-math.expm1(math.log1p(-alpha) / peak.n_bins)))
+    s_star = max_exponential_threshold(peak.n_bins, alpha)
     if peak.statistic <= s_star:  # no line: nothing to refine or size (each score test whitens two columns)
         return Finding(effect="SIN", detector="periodogram", statistic=peak.statistic, threshold=s_star,
                        log10_p=peak.log10_p, level=alpha,
@@ -155,6 +163,24 @@ def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alp
                        evidence=f"no spectral line: the largest periodogram ordinate is {peak.ratio:.1f}× the local "
                                 f"median floor at {peak.frequency:.5g} Hz (threshold {s_star / math.log(2):.1f}× "
                                 f"over {peak.n_bins} bins)")
+    return _sinusoid(e, dt, whitening, peak, s_star=s_star, alpha=alpha)
+
+
+def detect_sinusoids(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
+                     f_min: float | None = None) -> list[Finding]:
+    """Every narrow spectral line significant at family-wise level α (:func:`spectral_lines`, the threshold of
+    :func:`detect_sinusoid`), strongest first, each a finding as :func:`detect_sinusoid` gives the strongest.
+
+    Beyond the papers (paper 000's loop adds one effect per step): a consumer module's gyro can carry a dozen
+    vibration lines; found one per step, they use up the loop's steps (issue 11).
+    """
+    return [_sinusoid(e, dt, whitening, line, s_star=max_exponential_threshold(line.n_bins, alpha), alpha=alpha)
+            for line in spectral_lines(e, dt, alpha=alpha, f_min=f_min)]
+
+
+def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: SpectralPeak, *, s_star: float,
+              alpha: float) -> Finding:
+    """The finding of a significant line: its frequency refined and its amplitude and phase from the score test."""
     t = np.arange(np.asarray(e).size) * dt
     ones = whitening.whiten(np.ones(t.size))
 

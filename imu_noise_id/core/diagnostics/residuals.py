@@ -174,6 +174,37 @@ def line_statistic(e: np.ndarray, dt: float, frequency: float, half_width: int =
     return floor_corrected(float(power[k] / floor * math.log(2.0)), half_width)
 
 
+def _line_ratios(e: np.ndarray, dt: float, f_min: float | None,
+                 half_width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
+    """Frequencies, periodogram, its ratio to the running median floor (0 below ``f_min``), the number of bins
+    searched and the floor's half-width used (:func:`spectral_peaks`)."""
+    freqs, power = periodogram(e, dt)
+    if freqs.size < 4 * half_width:
+        half_width = max(8, freqs.size // 8)
+    floor = ndimage.median_filter(power, size=2 * half_width + 1, mode="reflect")
+    n_total = freqs.size * 2 + 1
+    f_lo = 4.0 / (n_total * dt) if f_min is None else float(f_min)
+    search = freqs >= f_lo
+    if not np.any(search):
+        raise ValueError("spectral_peaks: no frequency above f_min; the record is too short")
+    ratio = np.where(search, power / np.maximum(floor, np.finfo(float).tiny), 0.0)
+    return freqs, power, ratio, int(search.sum()), half_width
+
+
+def _peak_at(k: int, freqs: np.ndarray, power: np.ndarray, ratio: np.ndarray, *, m: int,
+             half_width: int) -> SpectralPeak:
+    """The line at bin index ``k``: its frequency refined by a parabola through the log periodogram."""
+    stat = floor_corrected(float(ratio[k] * math.log(2.0)), half_width)
+    freq = float(freqs[k])
+    if 0 < k < freqs.size - 1 and power[k - 1] > 0 and power[k + 1] > 0:
+        a, b, c = np.log(power[k - 1 : k + 2])
+        denom = a - 2 * b + c
+        if denom < 0:
+            freq += float(0.5 * (a - c) / denom) * (freqs[1] - freqs[0])
+    return SpectralPeak(frequency=freq, bin=k + 1, ratio=float(ratio[k]), statistic=stat,
+                        log10_p=float(max_exponential_log10_p(stat, m)), n_bins=m)
+
+
 def spectral_peaks(e: np.ndarray, dt: float, *, f_min: float | None = None,
                    half_width: int = FLOOR_HALF_WIDTH) -> SpectralPeak:
     """The largest line of the periodogram of ``e`` against its running median floor.
@@ -196,28 +227,42 @@ def spectral_peaks(e: np.ndarray, dt: float, *, f_min: float | None = None,
     Lagrange-multiplier test of a missing sinusoid; the running median makes it robust to the broad
     misfit a missing GM leaves in the spectrum.
     """
-    freqs, power = periodogram(e, dt)
-    if freqs.size < 4 * half_width:
-        half_width = max(8, freqs.size // 8)
-    floor = ndimage.median_filter(power, size=2 * half_width + 1, mode="reflect")
-    n_total = freqs.size * 2 + 1
-    f_lo = 4.0 / (n_total * dt) if f_min is None else float(f_min)
-    search = freqs >= f_lo
-    if not np.any(search):
-        raise ValueError("spectral_peaks: no frequency above f_min; the record is too short")
-    ratio = np.where(search, power / np.maximum(floor, np.finfo(float).tiny), 0.0)
-    k = int(np.argmax(ratio))
-    m = int(search.sum())
-    stat = floor_corrected(float(ratio[k] * math.log(2.0)), half_width)
-    log10_p = max_exponential_log10_p(stat, m)
-    freq = float(freqs[k])
-    if 0 < k < freqs.size - 1 and power[k - 1] > 0 and power[k + 1] > 0:
-        a, b, c = np.log(power[k - 1 : k + 2])
-        denom = a - 2 * b + c
-        if denom < 0:
-            freq += float(0.5 * (a - c) / denom) * (freqs[1] - freqs[0])
-    return SpectralPeak(frequency=freq, bin=k + 1, ratio=float(ratio[k]), statistic=stat,
-                        log10_p=float(log10_p), n_bins=m)
+    freqs, power, ratio, m, half_width = _line_ratios(e, dt, f_min, half_width)
+    return _peak_at(int(np.argmax(ratio)), freqs, power, ratio, m=m, half_width=half_width)
+
+
+#: Lines of :func:`spectral_lines` closer than this many bins to a stronger one are taken for its sidelobes.
+LINE_SEPARATION_BINS = 3
+
+
+def max_exponential_threshold(m: int, alpha: float) -> float:
+    """The value the maximum of ``m`` i.i.d. Exp(1) exceeds with probability ``alpha``: −ln(1 − (1 − α)^{1/m})."""
+    return float(-math.log(-math.expm1(math.log1p(-alpha) / m)))
+
+
+def spectral_lines(e: np.ndarray, dt: float, *, alpha: float, f_min: float | None = None,
+                   half_width: int = FLOOR_HALF_WIDTH) -> list[SpectralPeak]:
+    """Every line of the periodogram whose statistic (as in :func:`spectral_peaks`) exceeds the level-``alpha``
+    bound of the largest of the M searched bins (:func:`max_exponential_threshold`), strongest first; a bin within
+    :data:`LINE_SEPARATION_BINS` of a stronger line belongs to it.
+
+    Beyond the papers: each line listed is significant on its own at family-wise level α (the largest of the bins
+    that hold no line stays below the bound with probability 1 − α), so a dozen vibration lines are seen at once
+    rather than one per step.
+    """
+    freqs, power, ratio, m, half_width = _line_ratios(e, dt, f_min, half_width)
+    threshold = max_exponential_threshold(m, alpha)
+    above = np.flatnonzero(ratio * math.log(2.0) > threshold)  # the correction only lowers a statistic
+    lines: list[SpectralPeak] = []
+    taken = np.zeros(freqs.size, bool)
+    for k in above[np.argsort(-ratio[above])]:
+        if taken[max(0, k - LINE_SEPARATION_BINS): k + LINE_SEPARATION_BINS + 1].any():
+            continue
+        peak = _peak_at(int(k), freqs, power, ratio, m=m, half_width=half_width)
+        if peak.statistic > threshold:
+            lines.append(peak)
+            taken[k] = True
+    return lines
 
 
 def av_misfit(av_data: np.ndarray, av_model: np.ndarray) -> float:

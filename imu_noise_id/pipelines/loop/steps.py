@@ -18,7 +18,7 @@ from ...core.diagnostics.lines import (
     line_shape,
     pooled_line_statistic,
 )
-from ...core.diagnostics.residuals import av_misfit_z, line_statistic, residual_errors
+from ...core.diagnostics.residuals import LINE_SEPARATION_BINS, av_misfit_z, line_statistic, residual_errors
 from ...core.diagnostics.spectra import residual_spectra
 from ...core.diagnostics.whitening import WhiteningFilter
 from ...core.estimation.model import FitOptions, NoiseModel
@@ -139,20 +139,23 @@ class AxisLoop:
         B ≈ 0.5 Hz on the ADIS16405 accelerometers) is not hidden while a narrow line elsewhere stays significant;
         the pooled search then skips the narrow line's own pooled bins and those of its harmonics.
         """
-        sin = det.detect_sinusoid(e, self.dt, whitening, alpha=self.alpha)
-        narrow = self.line_findings(sin, e, residual) if sin.significant else []
+        lines = det.detect_sinusoids(e, self.dt, whitening, alpha=self.alpha)
+        sin = lines[0] if lines else det.detect_sinusoid(e, self.dt, whitening, alpha=self.alpha)
+        narrow = self.line_findings(sin, e, residual, others=lines[1:]) if sin.significant else []
         found = {float(m.params["frequency"]) for f in narrow for m in (f, *f.members)}
         broad = detect_broad_line(e, self.dt, alpha=self.alpha, exclude=tuple(sorted(found)))
         wide = self.line_findings(broad, e, residual) if broad.significant else []
         return [*narrow, *wide] if narrow or wide else [sin]
 
-    def line_findings(self, sin: det.Finding, e: np.ndarray, residual: np.ndarray) -> list[det.Finding]:
-        """A significant line as its SIN and OSC findings (with its harmonic family, if any).
+    def line_findings(self, sin: det.Finding, e: np.ndarray, residual: np.ndarray,
+                      others: list[det.Finding] | tuple[det.Finding, ...] = ()) -> list[det.Finding]:
+        """A significant line as its SIN and OSC findings (with its harmonic family, if any, or the group of every
+        significant narrow line, :meth:`line_group`).
 
         The line's shape (:func:`~imu_noise_id.core.diagnostics.lines.line_shape`, measured on the residual in the
         data's units) says which it looks like and gives the OSC's starting f₀, bandwidth and σ; the look-alike is
         listed first (a slightly smaller p-value) and, unless the shape is decisive (:data:`DECISIVE_SHARE`), both
-        are tried, so that the likelihood has the last word.
+        are tried, so that the likelihood has the last word. ``others``: the weaker significant narrow lines.
         """
         shape = line_shape(residual, self.dt, sin.params["frequency"], resolution=int(sin.params.get("resolution", 1)))
         evidence = f"{sin.evidence}; {shape.reason}"
@@ -167,9 +170,43 @@ class AxisLoop:
                                                       "concentration": shape.concentration, **searched})
         first, second = (sin, osc) if shape.kind == "SIN" else (osc, sin)
         family = self.harmonic_family(first, e, residual)
+        if shape.concentration >= DECISIVE_SHARE[1]:
+            family = self.line_group(first, family, others, residual) or family
         if not DECISIVE_SHARE[0] < shape.concentration < DECISIVE_SHARE[1]:
             return [*family, first]  # the shape leaves no doubt: the look-alike only
         return [*family, replace(first, log10_p=first.log10_p - 1e-9), second]
+
+    def line_group(self, first: det.Finding, family: list[det.Finding], others: list[det.Finding] | tuple[
+            det.Finding, ...], residual: np.ndarray) -> list[det.Finding]:
+        """The strongest line (a sinusoid beyond doubt), its harmonics and every other significant narrow line
+        whose shape is a sinusoid's beyond doubt (:data:`DECISIVE_SHARE`), as one finding added in one step
+        (issue 11's groups), in place of the harmonic family; [] when no other line qualifies.
+
+        Beyond the papers. A consumer module's gyro can carry a dozen narrow vibration lines between 1 and 6 Hz;
+        found one per step, they use up the loop's steps with evidence left (issue 11). Each line of the group is
+        significant on its own at the detector's family-wise level (:func:`~imu_noise_id.core.diagnostics.
+        detectors.detect_sinusoids`); a line whose power spreads beyond ±2 bins (a wandering line, an OSC) is
+        left to a later step, where its shape decides, so the ≈ 0.5 Hz wandering line of the ADIS16405
+        accelerometers is not split into sinusoids.
+        """
+        members = list(family[0].members) if family else [first]
+        resolution = 1.0 / (self.n * self.dt)
+        near = resolution * (LINE_SEPARATION_BINS + 1)
+        added = []
+        for line in others:
+            f = float(line.params["frequency"])
+            if any(abs(f - float(m.params["frequency"])) <= near for m in members):
+                continue
+            if line_shape(residual, self.dt, f).concentration < DECISIVE_SHARE[1]:
+                continue
+            members.append(line)
+            added.append(f)
+        if not added:
+            return []
+        listed = ", ".join(f"{f:.5g}" for f in added)
+        return [replace(first, log10_p=first.log10_p - 2e-9, members=tuple(members),
+                        evidence=f"{(family[0] if family else first).evidence}; with {len(added)} more narrow "
+                                 f"line(s), each significant on its own: SIN at {listed} Hz")]
 
     def harmonic_family(self, line: det.Finding, e: np.ndarray, residual: np.ndarray) -> list[det.Finding]:
         """The line and its significant harmonics (:func:`~imu_noise_id.core.diagnostics.lines.harmonics`) as one
