@@ -162,6 +162,26 @@ def test_sinusoid_detector_power_frequency_and_amplitude():
     assert f.params["amplitude"] == pytest.approx(2e-3, rel=0.1)  # se of the GLS amplitude ≈ σ√(2/n) ≈ 5 %
 
 
+def test_every_significant_line_is_listed_after_the_strongest_the_single_search_gives():
+    """``detect_sinusoids`` starts with ``detect_sinusoid``'s finding, significant or not (the loop reads the
+    strongest line from it), then lists the other significant lines, strongest first; white innovations list
+    nothing more."""
+    n = 20000
+    t = np.arange(n) * DT
+    rng = np.random.default_rng(6)
+    clean = simulate_sum(WN_RW, n, DT, rng)
+    lines = 3e-3 * np.sin(2 * math.pi * 0.53 * t + 0.4) + 2e-3 * np.sin(2 * math.pi * 3.7 * t + 1.1)
+    for y, expected in ((clean, []), (clean + lines, [3.7])):
+        e, w = _innovations(y, WN_RW)
+        first, *others = det.detect_sinusoids(e, DT, w)
+        single = det.detect_sinusoid(e, DT, w)
+        assert first.significant == single.significant == bool(expected)
+        assert first.params == single.params and first.statistic == single.statistic
+        assert [o.params["frequency"] for o in others] == pytest.approx(expected, abs=1 / (n * DT))
+        assert all(o.significant and o.statistic <= first.statistic for o in others)
+    assert first.params["frequency"] == pytest.approx(0.53, abs=1 / (n * DT))
+
+
 def test_step_detector_locates_the_shift_and_its_size():
     n = 20000
     y = simulate_sum(WN_RW, n, DT, np.random.default_rng(7))

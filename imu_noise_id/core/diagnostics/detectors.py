@@ -154,7 +154,25 @@ def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alp
     The threshold is the Exp(1) quantile that makes the maximum over the M searched bins exceed it with
     probability α: s* = −ln(1 − (1 − α)^{1/M}) (:func:`max_exponential_threshold`).
     """
-    peak = spectral_peaks(e, dt, f_min=f_min)
+    return _sinusoid(e, dt, whitening, spectral_peaks(e, dt, f_min=f_min), alpha=alpha)
+
+
+def detect_sinusoids(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
+                     f_min: float | None = None) -> list[Finding]:
+    """:func:`detect_sinusoid`'s finding (significant or not), then every other narrow spectral line significant at
+    family-wise level α (:func:`spectral_lines`, the same threshold), strongest first, each a finding as
+    :func:`detect_sinusoid` gives the strongest; one periodogram for all.
+
+    Beyond the papers (paper 000's loop adds one effect per step): a consumer module's gyro can carry a dozen
+    vibration lines; found one per step, they use up the loop's steps (issue 11).
+    """
+    return [_sinusoid(e, dt, whitening, line, alpha=alpha) for line in spectral_lines(e, dt, alpha=alpha, f_min=f_min)]
+
+
+def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: SpectralPeak, *, alpha: float) -> Finding:
+    """The finding of the line ``peak`` against the threshold of the maximum over its M bins: below it, the
+    absence of a line; above it, the line with its frequency refined and its amplitude and phase from the score
+    test."""
     s_star = max_exponential_threshold(peak.n_bins, alpha)
     if peak.statistic <= s_star:  # no line: nothing to refine or size (each score test whitens two columns)
         return Finding(effect="SIN", detector="periodogram", statistic=peak.statistic, threshold=s_star,
@@ -163,24 +181,6 @@ def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alp
                        evidence=f"no spectral line: the largest periodogram ordinate is {peak.ratio:.1f}× the local "
                                 f"median floor at {peak.frequency:.5g} Hz (threshold {s_star / math.log(2):.1f}× "
                                 f"over {peak.n_bins} bins)")
-    return _sinusoid(e, dt, whitening, peak, s_star=s_star, alpha=alpha)
-
-
-def detect_sinusoids(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
-                     f_min: float | None = None) -> list[Finding]:
-    """Every narrow spectral line significant at family-wise level α (:func:`spectral_lines`, the threshold of
-    :func:`detect_sinusoid`), strongest first, each a finding as :func:`detect_sinusoid` gives the strongest.
-
-    Beyond the papers (paper 000's loop adds one effect per step): a consumer module's gyro can carry a dozen
-    vibration lines; found one per step, they use up the loop's steps (issue 11).
-    """
-    return [_sinusoid(e, dt, whitening, line, s_star=max_exponential_threshold(line.n_bins, alpha), alpha=alpha)
-            for line in spectral_lines(e, dt, alpha=alpha, f_min=f_min)]
-
-
-def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: SpectralPeak, *, s_star: float,
-              alpha: float) -> Finding:
-    """The finding of a significant line: its frequency refined and its amplitude and phase from the score test."""
     t = np.arange(np.asarray(e).size) * dt
     ones = whitening.whiten(np.ones(t.size))
 

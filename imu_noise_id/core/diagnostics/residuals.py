@@ -242,19 +242,24 @@ def max_exponential_threshold(m: int, alpha: float) -> float:
 
 def spectral_lines(e: np.ndarray, dt: float, *, alpha: float, f_min: float | None = None,
                    half_width: int = FLOOR_HALF_WIDTH) -> list[SpectralPeak]:
-    """Every line of the periodogram whose statistic (as in :func:`spectral_peaks`) exceeds the level-``alpha``
-    bound of the largest of the M searched bins (:func:`max_exponential_threshold`), strongest first; a bin within
-    :data:`LINE_SEPARATION_BINS` of a stronger line belongs to it.
+    """The largest line of the periodogram (:func:`spectral_peaks`'s, significant or not), then every other line
+    whose statistic exceeds the level-``alpha`` bound of the largest of the M searched bins
+    (:func:`max_exponential_threshold`), strongest first; a bin within :data:`LINE_SEPARATION_BINS` of a stronger
+    line belongs to it. One periodogram and floor serve them all.
 
-    Beyond the papers: each line listed is significant on its own at family-wise level α (the largest of the bins
-    that hold no line stays below the bound with probability 1 − α), so a dozen vibration lines are seen at once
-    rather than one per step.
+    Beyond the papers: each line after the first is significant on its own at family-wise level α (the largest of
+    the bins that hold no line stays below the bound with probability 1 − α), so a dozen vibration lines are seen
+    at once rather than one per step.
     """
     freqs, power, ratio, m, half_width = _line_ratios(e, dt, f_min, half_width)
     threshold = max_exponential_threshold(m, alpha)
-    above = np.flatnonzero(ratio * math.log(2.0) > threshold)  # the correction only lowers a statistic
-    lines: list[SpectralPeak] = []
+    top = int(np.argmax(ratio))
+    lines = [_peak_at(top, freqs, power, ratio, m=m, half_width=half_width)]
+    if lines[0].statistic <= threshold:  # the statistic grows with the ratio: no weaker line is significant
+        return lines
     taken = np.zeros(freqs.size, bool)
+    taken[top] = True
+    above = np.flatnonzero(ratio * math.log(2.0) > threshold)  # the correction only lowers a statistic
     for k in above[np.argsort(-ratio[above])]:
         if taken[max(0, k - LINE_SEPARATION_BINS): k + LINE_SEPARATION_BINS + 1].any():
             continue

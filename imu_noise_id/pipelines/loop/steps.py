@@ -139,9 +139,8 @@ class AxisLoop:
         B ≈ 0.5 Hz on the ADIS16405 accelerometers) is not hidden while a narrow line elsewhere stays significant;
         the pooled search then skips the narrow line's own pooled bins and those of its harmonics.
         """
-        lines = det.detect_sinusoids(e, self.dt, whitening, alpha=self.alpha)
-        sin = lines[0] if lines else det.detect_sinusoid(e, self.dt, whitening, alpha=self.alpha)
-        narrow = self.line_findings(sin, e, residual, others=lines[1:]) if sin.significant else []
+        sin, *others = det.detect_sinusoids(e, self.dt, whitening, alpha=self.alpha)
+        narrow = self.line_findings(sin, e, residual, others=others) if sin.significant else []
         found = {float(m.params["frequency"]) for f in narrow for m in (f, *f.members)}
         broad = detect_broad_line(e, self.dt, alpha=self.alpha, exclude=tuple(sorted(found)))
         wide = self.line_findings(broad, e, residual) if broad.significant else []
