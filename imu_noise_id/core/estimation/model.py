@@ -2,7 +2,9 @@
 
 :class:`NoiseModel` holds the record (samples ``y`` [u] at period ``dt`` [s], NaN = missing), the structure
 (components such as ``WN+GM+RW+RR``), the measurement regressors ``z`` (a constant bias, the ramp of an RR
-component and the caller's exog columns: sinusoids, temperature, steps) and the drift treatment. It answers
+component and the caller's exog columns: sinusoids, temperature, steps) and the drift treatment. The columns that
+are pure sinusoids (a SIN term's) are recognised once, checked at every sample, and declared to the state space,
+whose steady Kalman engine then computes their response in closed form (:mod:`..kalman.harmonic`). It answers
 
 * :meth:`NoiseModel.statespace` — the state-space form of given components (paper 000 eqs. 4–9);
 * :meth:`NoiseModel.loglik` — the exact log-likelihood of given components, mean parameters profiled by GLS;
@@ -29,6 +31,7 @@ import numpy as np
 from .. import kalman
 from ..allan import AllanResult
 from ..errors import InputError
+from ..kalman import harmonic
 from ..kalman import statespace as ss
 from ..noise.components import COMPONENT_TYPES, Component
 from ..noise.modelspec import parse_model, parse_structure
@@ -174,6 +177,7 @@ class NoiseModel:
                                     key=lambda c: self.fit_names.index(c.name)) for start in (starts or [])]
         self.extra_starts = [s for s in self.extra_starts if [c.name for c in s] == self.fit_names]
         self.exog_names, self.z = self._regressors(exog, exog_names)
+        self.sinusoid_omega = tuple(harmonic.sinusoid_omega(column) for column in self.z.T)
         self.n_free_noise = sum(len(COMPONENT_TYPES[n].parameter_names) for n in self.fit_names if n != "RR")
         n_params = self.n_free_noise + self.z.shape[1]
         if self.n_obs < MIN_SAMPLES_PER_PARAMETER * n_params:
@@ -210,7 +214,7 @@ class NoiseModel:
             if set(names) & set(RESERVED_REGRESSORS):
                 raise InputError("exog names 'bias' and 'ramp' are reserved")
             columns.extend(exog.T)
-        return names, np.column_stack(columns)
+        return names, np.asfortranarray(np.column_stack(columns))  # each column contiguous (the filter's inputs)
 
     # -- the model at given parameters ------------------------------------------------------------------------
     @property
@@ -220,7 +224,8 @@ class NoiseModel:
 
     def statespace(self, components: list[Component]) -> ss.StateSpace:
         """State-space form of ``components`` (fitted structure, RR as a measurement regressor)."""
-        return ss.from_components(components, self.dt, ramp="measurement", intercept=True, exog_names=self.exog_names)
+        return ss.from_components(components, self.dt, ramp="measurement", intercept=True, exog_names=self.exog_names,
+                                  sinusoid_omega=self.sinusoid_omega)
 
     def loglik(self, components: list[Component]) -> float:
         """Exact log-likelihood of ``components`` on the record, mean parameters at their GLS estimate."""

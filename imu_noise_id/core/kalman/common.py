@@ -34,12 +34,17 @@ class Columns:
         Initial state mean of each column (μ for the data column).
     names : list[str]
         ``'data'`` then ``'b:<regressor>'``, ``'u:<state>'``, ``'mu:<state>'`` for the mean parameters.
+    omega : (m,) array
+        ω [rad/sample] of each column that is a regressor the model declares a sinusoid
+        (:attr:`.statespace.StateSpace.sinusoid_omega`), NaN for the others: the steady engine may compute its
+        response in closed form (:mod:`.harmonic`).
     """
 
     y: np.ndarray
     g: np.ndarray
     m0: np.ndarray
     names: list[str]
+    omega: np.ndarray
 
 
 @dataclass
@@ -115,10 +120,13 @@ def build_columns(model: StateSpace, y: np.ndarray, z: np.ndarray, profile: bool
     g, m0 = np.zeros((p, m)), np.zeros((p, m))
     g[:, 0], m0[:, 0] = u0, mu0
     names = ["data"]
+    omega = np.full(m, np.nan)
+    declared = model.sinusoid_omega or (math.nan,) * model.n_regressors
     c = 1
     for j in free_b:
         ycols[c] = -z[:, j]
         names.append(f"b:{model.regressors[j]}")
+        omega[c] = declared[j]
         c += 1
     for j in free_u:
         g[j, c] = 1.0
@@ -128,7 +136,7 @@ def build_columns(model: StateSpace, y: np.ndarray, z: np.ndarray, profile: bool
         m0[j, c] = 1.0
         names.append(f"mu:{j}")
         c += 1
-    return Columns(ycols, g, m0, names)
+    return Columns(ycols, g, m0, names, omega)
 
 
 @dataclass

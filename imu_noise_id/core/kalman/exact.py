@@ -63,7 +63,8 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
         P_{t−1,t−2}^N = P_{t−1}^{t−1} J_{t−2}ᵀ + J_{t−1}(P_{t,t−1}^N − Φ P_{t−1}^{t−1}) J_{t−2}ᵀ
     """
     phi, h = model.phi, model.h
-    xp, xf, Pp, Pf, K, inn = _forward(model, Columns(cols.y[:1], cols.g[:, :1], cols.m0[:, :1], cols.names[:1]))
+    data_only = Columns(cols.y[:1], cols.g[:, :1], cols.m0[:, :1], cols.names[:1], cols.omega[:1])
+    xp, xf, Pp, Pf, K, inn = _forward(model, data_only)
     n, p = xp.shape[0], xp.shape[1]
     xp, xf = xp[:, :, 0], xf[:, :, 0]
     xs = np.empty((n, p))

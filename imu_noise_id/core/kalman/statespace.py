@@ -84,6 +84,10 @@ class StateSpace:
         Names of the regressor columns (``bias``, ``ramp``, then the caller's).
     sigma_mode : str
         ``'steady'`` (Σ = steady-state prediction covariance of θ) or ``'fixed'`` (Σ as given).
+    sinusoid_omega : tuple[float, ...]
+        Empty, or per regressor its ω [rad/sample] when its column is a pure sinusoid a·cos ωt + b·sin ωt in every
+        record the model is run on (NaN for the others), as checked by whoever built the columns
+        (:func:`.harmonic.sinusoid_omega`): the steady engine then computes its response in closed form.
     """
 
     phi: np.ndarray
@@ -105,6 +109,7 @@ class StateSpace:
     blocks: tuple[BlockInfo, ...] = ()
     regressors: tuple[str, ...] = ()
     sigma_mode: str = "steady"
+    sinusoid_omega: tuple[float, ...] = ()
     _steady_cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -192,6 +197,9 @@ class StateSpace:
             raise InputError(f"measurement-noise variance R must be finite and >= 0, got {self.r!r}")
         if np.any(np.diag(self.q) < 0):
             raise InputError("process-noise variances (diagonal of Q) must be >= 0")
+        if self.sinusoid_omega and len(self.sinusoid_omega) != self.n_regressors:
+            raise InputError(f"sinusoid_omega needs one value per regressor ({self.n_regressors}), got "
+                             f"{len(self.sinusoid_omega)}")
 
 
 def _fixed_initial_covariance(blk: StateBlock, r: float) -> np.ndarray:
@@ -221,6 +229,7 @@ def from_components(
     ramp: str = "measurement",
     exog_names: tuple[str, ...] = (),
     sigma_mode: str = "steady",
+    sinusoid_omega: tuple[float, ...] = (),
 ) -> StateSpace:
     """Assemble Φ, Q, H, R, u, μ, Σ, b and their free masks from components (paper 000 eqs. 4–9).
 
@@ -241,6 +250,9 @@ def from_components(
     sigma_mode
         ``'steady'`` or ``'fixed'`` (see the module docstring). In ``'fixed'`` mode Σ is set to the stationary
         covariance for GM and QN states and to 1e-12·R for RW states (the paper's "small value").
+    sinusoid_omega
+        Empty, or ω [rad/sample] (NaN: not a sinusoid) of every regressor column, bias and ramp included
+        (:attr:`StateSpace.sinusoid_omega`).
 
     Raises
     ------
@@ -304,7 +316,7 @@ def from_components(
         phi=phi, q=q, h=h, r=r, u=u, mu=np.zeros(p), sigma=sigma, b=np.array(b_values, dtype=float),
         phi_free=phi_free, q_free=q_free, h_free=np.zeros(p, bool), r_free=True, u_free=u_free,
         mu_free=np.zeros(p, bool), b_free=np.ones(len(b_values), bool), dt=float(dt), blocks=tuple(info),
-        regressors=tuple(regressors), sigma_mode=sigma_mode,
+        regressors=tuple(regressors), sigma_mode=sigma_mode, sinusoid_omega=tuple(sinusoid_omega),
     )
     model.check()
     return model

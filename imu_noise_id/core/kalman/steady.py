@@ -22,6 +22,8 @@ computed exactly by binary doubling of the affine map (:func:`affine_power_sum`,
 Lyapunov solve that would be ill-conditioned when J has an eigenvalue near 1). The lag-one covariance is
 P_{t,t−1}^N = P_t^N Jᵀ (equivalent to the paper's recursion; de Jong 1989).
 This engine requires no missing samples; :func:`imu_noise_id.core.kalman.smooth` falls back to the exact engine.
+Regressor columns the model declares pure sinusoids (a SIN term's) are not filtered: their response is computed in
+closed form (:mod:`.harmonic`).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from scipy.linalg import schur
 from scipy.signal import lfilter
 
 from ..errors import InputError
+from . import harmonic
 from .common import LOG_2PI, Columns, InnovationResult, ProfileResult, SmootherStats, profile
 from .statespace import StateSpace
 
@@ -197,27 +200,70 @@ def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
     return _rotate(b.u, _run_modes(b.t, _rotate(b.u_inv, c), b.u_inv @ x0))
 
 
+#: Sinusoidal columns are computed in closed form when their free responses (min(k, p) columns over the samples
+#: where they have not died out) cost less than this share of filtering the k columns themselves.
+CLOSED_FORM_SHARE = 0.5
+
+
 def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple[np.ndarray, Basis | None]:
     """H x_t^{t−1} for every column (m, N), and the basis the filter ran in (None without states).
 
-    In the modal basis each block's output is accumulated without storing the states of every column
-    (:func:`_block_output`); in the Schur basis the coupled blocks need them all (:func:`_run_modes`).
+    Declared sinusoidal regressor columns in closed form (:func:`_sinusoid_output`) where that is cheaper
+    (:data:`CLOSED_FORM_SHARE`), the others filtered (:func:`_filtered_output`).
     """
     p = model.n_states
     m, n = cols.y.shape
     if p == 0:
         return np.zeros((m, n)), None
     b = decoupled_basis(g.a)
+    poles = np.linalg.eigvals(g.a)
+    closed = np.array([math.isfinite(w) and harmonic.obeys(cols.y[c], w) and harmonic.usable(poles, w)
+                       for c, w in enumerate(cols.omega)], dtype=bool)
+    k, length = int(closed.sum()), harmonic.free_response_length(poles, n)
+    if min(k, p) * length >= CLOSED_FORM_SHARE * k * n:  # the free responses would cost about what they save
+        return _filtered_output(model, g, b, cols.y, u=cols.g, m0=cols.m0), b
+    out = np.empty((m, n))
+    plain = np.flatnonzero(~closed)
+    out[plain] = _filtered_output(model, g, b, cols.y[plain], u=cols.g[:, plain], m0=cols.m0[:, plain])
+    _sinusoid_output(model, g, b, cols, rows=np.flatnonzero(closed), out=out, length=length)
+    return out, b
+
+
+def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, *, u: np.ndarray,
+                     m0: np.ndarray) -> np.ndarray:
+    """H x_t^{t−1} (m, N) of columns with measurement inputs y (m, N), state inputs u (p, m), initial means m0
+    (p, m), filtered in the basis b.
+
+    In the modal basis each block's output is accumulated without storing the states of every column
+    (:func:`_block_output`); in the Schur basis the coupled blocks need them all (:func:`_run_modes`).
+    """
+    p = model.n_states
+    m, n = y.shape
     gain_w = b.u_inv @ (model.phi @ g.k)
-    g_w, w0, hu = b.u_inv @ cols.g, b.u_inv @ cols.m0, model.h @ b.u
+    g_w, w0, hu = b.u_inv @ u, b.u_inv @ m0, model.h @ b.u
     if not b.modal:
-        w = _run_modes(b.t, gain_w[:, None, None] * cols.y[None, :, :] + g_w[:, :, None], w0)
-        return (hu @ w.reshape(p, -1)).reshape(m, n), b
+        w = _run_modes(b.t, gain_w[:, None, None] * y[None, :, :] + g_w[:, :, None], w0)
+        return (hu @ w.reshape(p, -1)).reshape(m, n)
     out = np.zeros((m, n))
     for blk in _blocks(b.t):
-        out += _block_output(b.t[blk, blk], hu[blk], gain_w[blk, None, None] * cols.y[None] + g_w[blk, :, None],
-                             w0[blk])
-    return out, b
+        out += _block_output(b.t[blk, blk], hu[blk], gain_w[blk, None, None] * y[None] + g_w[blk, :, None], w0[blk])
+    return out
+
+
+def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns, *, rows: np.ndarray,
+                     out: np.ndarray, length: int) -> None:
+    """Write H x_t^{t−1} of the sinusoidal measurement-input columns ``rows`` (from x_0 = 0, at ``cols.omega``) into
+    ``out[rows]`` in closed form (:mod:`.harmonic`): the steady response minus the free response of its initial
+    state, the latter filtered over its first ``length`` samples (where it has not died out), for the p unit states
+    (combined by one product) or the columns, whichever are fewer."""
+    p, k = model.n_states, rows.size
+    start = harmonic.steady_parts(g.a, model.phi @ g.k, model.h, cols.y, cols.omega, rows=rows, out=out)
+    if k <= p:
+        free = _filtered_output(model, g, b, np.zeros((k, length)), u=np.zeros((p, k)), m0=start)
+    else:
+        free = start.T @ _filtered_output(model, g, b, np.zeros((p, length)), u=np.zeros((p, p)), m0=np.eye(p))
+    for i, r in enumerate(rows):
+        out[r, :length] -= free[i]
 
 
 def _predicted_states(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,

@@ -1,0 +1,121 @@
+"""Regressor columns that are pure sinusoids: recognised once, and their steady-state filter response in closed form.
+
+The GLS profile (:mod:`.common`) runs the filter on one column per free regressor. A narrow line in the residual
+enters the closed loop as a SIN term, two columns sin(ωt), cos(ωt) (ω in rad per sample); a consumer module with a
+dozen lines carries two dozen such columns, and every likelihood evaluation filtered each of them like the data:
+nine times the cost of a fit without them (issue 11's twelve-line records).
+
+The steady-state filter is linear and time invariant (:mod:`.steady`): predicted state
+x_{t+1} = A x_t + g·y_t from x_0 = 0, with A = Φ(I − K H) stable and g = ΦK. For an input y_t = Re(ζ_t), ζ_t = ζ_0
+e^{jωt}, the particular solution Re(v ζ_t) with (e^{jω} I − A) v = g plus the free response from x_0 − Re(v ζ_0)
+give it exactly:
+
+    H x_t = Re(Hv)·y_t − Im(Hv)·ŷ_t − H A^t Re(v ζ_0),        ŷ_t = Im ζ_t = (cos ω·y_t − y_{t+1}) / sin ω.
+
+The first two terms are two multiply-adds over the column; the last is the free response of the p states, which
+decays like ρ(A)^t: it is computed once for the p unit initial states (or for the columns themselves when there
+are fewer) over the samples where it has not yet fallen below 1e-22 of its start, and combined by one matrix
+product. A column is only ever treated so when its sinusoid was checked against every sample by whoever built the
+regressors (:func:`sinusoid_omega`, called by :class:`~imu_noise_id.core.estimation.model.NoiseModel`), declared
+in :attr:`~.statespace.StateSpace.sinusoid_omega`, and still obeys the sinusoid's recurrence at a few samples of
+the column the engine is given (:func:`obeys`); otherwise it is filtered like any column.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: A column is a sinusoid when the recurrence y_{t+1} + y_{t−1} = 2 cos ω·y_t holds at every sample to this
+#: fraction of its largest value (the rounding of sin(ωt) at phases up to ~1e8 rad is far below it).
+RECURRENCE_TOL = 1e-7
+#: Frequencies this close to 0 or π (rad per sample) are not treated in closed form: ŷ divides by sin ω.
+MIN_SIN = 1e-6
+#: A filter pole closer than this to e^{jω} leaves the column to the plain filter (v would be ill-conditioned).
+MIN_POLE_DISTANCE = 1e-7
+#: The free response is kept until ρ(A)^t falls below this.
+FREE_RESPONSE_FLOOR = 1e-22
+
+
+def sinusoid_omega(column: np.ndarray) -> float:
+    """ω ∈ (0, π) [rad/sample] when ``column`` is a·cos ωt + b·sin ωt at every sample (to :data:`RECURRENCE_TOL`),
+    else NaN.
+
+    cos ω from the least-squares fit of the recurrence, through 1 − cos ω (computed from second differences, so a
+    low frequency keeps its digits); the recurrence is then checked at every sample.
+    """
+    z = np.asarray(column, dtype=float)
+    if z.ndim != 1 or z.size < 8 or not np.all(np.isfinite(z)):
+        return math.nan
+    mid, second = z[1:-1], z[2:] - 2.0 * z[1:-1] + z[:-2]
+    energy = float(mid @ mid)
+    if energy == 0.0:
+        return math.nan
+    one_minus_cos = -float(mid @ second) / (2.0 * energy)
+    if not 0.0 < one_minus_cos < 2.0:
+        return math.nan
+    omega = 2.0 * math.asin(math.sqrt(0.5 * one_minus_cos))
+    residual = second + 2.0 * one_minus_cos * mid
+    if float(np.max(np.abs(residual))) > RECURRENCE_TOL * float(np.max(np.abs(z))):
+        return math.nan
+    return omega if math.sin(omega) > MIN_SIN else math.nan
+
+
+def obeys(column: np.ndarray, omega: float) -> bool:
+    """Whether ``column`` obeys the recurrence of ω around its second, middle and last-but-one samples: a check
+    that the column run is the one whose sinusoid was declared, not a proof (:func:`sinusoid_omega` checked every
+    sample when the columns were built)."""
+    n = column.size
+    if n < 8 or math.sin(omega) <= MIN_SIN:
+        return False
+    centres = np.array([1, n // 2, n - 2])
+    before, here, after = column[centres - 1], column[centres], column[centres + 1]
+    residual = np.abs(after + before - 2.0 * math.cos(omega) * here)
+    scale = float(np.max(np.abs(np.concatenate([before, here, after]))))
+    return bool(np.all(residual <= RECURRENCE_TOL * scale))
+
+
+def quadrature(y: np.ndarray, omega: float) -> np.ndarray:
+    """ŷ_t = Im ζ_t of a sinusoid y_t = Re ζ_t at ω: (cos ω·y_t − y_{t+1}) / sin ω, y_N from the recurrence."""
+    c, s = math.cos(omega), math.sin(omega)
+    nxt = np.empty_like(y)
+    nxt[:-1] = y[1:]
+    nxt[-1] = 2.0 * c * y[-1] - y[-2]
+    return (c * y - nxt) / s
+
+
+def usable(poles: np.ndarray, omega: float) -> bool:
+    """Whether no pole of the filter (the eigenvalues of A) lies within :data:`MIN_POLE_DISTANCE` of e^{jω}."""
+    return bool(np.all(np.abs(np.exp(1j * omega) - poles) > MIN_POLE_DISTANCE))
+
+
+def free_response_length(poles: np.ndarray, n: int) -> int:
+    """Samples after which ρ(A)^t < :data:`FREE_RESPONSE_FLOOR` (at most n), ρ(A) the largest |pole|."""
+    rho = float(np.max(np.abs(poles))) if poles.size else 0.0
+    if rho >= 1.0:
+        return n
+    if rho <= 0.0:
+        return min(n, 1)
+    return min(n, math.ceil(math.log(FREE_RESPONSE_FLOOR) / math.log(rho)) + 1)
+
+
+def steady_parts(a: np.ndarray, g: np.ndarray, h: np.ndarray, y: np.ndarray, omega: np.ndarray, *,
+                 rows: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """Write Re(Hv)·y − Im(Hv)·ŷ of each sinusoidal input column ``y[r]`` (r in ``rows``, ω ``omega[r]``) into
+    ``out[r]``; return the initial states Re(v ζ_0) of their free responses (p, len(rows)).
+
+    A (p, p), g = ΦK (p,), H (p,) of the steady filter.
+    """
+    p = a.shape[0]
+    start = np.zeros((p, rows.size))
+    for i, r in enumerate(rows):
+        w = float(omega[r])
+        v = np.linalg.solve(np.exp(1j * w) * np.eye(p) - a, g.astype(complex))
+        hv = complex(h @ v)
+        y_hat = quadrature(y[r], w)
+        start[:, i] = v.real * y[r, 0] - v.imag * y_hat[0]
+        np.multiply(y[r], hv.real, out=out[r])
+        y_hat *= hv.imag
+        out[r] -= y_hat
+    return start
