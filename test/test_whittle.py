@@ -9,7 +9,12 @@ from scipy.linalg import solve_discrete_lyapunov
 
 from imu_noise_id.core.estimation.mle import LR_DROP_95
 from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
-from imu_noise_id.core.estimation.whittle import block_spectrum, whittle_information
+from imu_noise_id.core.estimation.whittle import (
+    banded_periodogram,
+    block_spectrum,
+    osc_start_frequencies,
+    whittle_information,
+)
 from imu_noise_id.core.noise.components import GM, LPF, MA, OSC, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import BI
 
@@ -64,3 +69,14 @@ def test_the_whittle_metric_is_positive_semidefinite_at_any_start(start):
     info = whittle_information(start, y, DT)
     assert np.allclose(info, info.T)
     assert np.min(np.linalg.eigvalsh(info)) >= -1e-9 * np.max(np.abs(info))
+
+
+def test_the_osc_start_frequencies_are_the_strongest_lines_strongest_first():
+    dt, n = 0.01, 120_000
+    rng = np.random.default_rng(4)
+    t = dt * np.arange(n)
+    y = simulate_sum([WN(1e-3), RW(1e-5)], n, dt, rng)
+    y += 1e-3 * np.sin(2 * np.pi * 1.3 * t) + 3e-3 * np.sin(2 * np.pi * 0.8 * t) + 1e-4 * np.sin(2 * np.pi * 2.1 * t)
+    found = osc_start_frequencies(banded_periodogram(y), dt, 2)
+    assert len(found) == 2  # not the weak 2.1 Hz line
+    assert found[0] == pytest.approx(0.8, rel=0.03) and found[1] == pytest.approx(1.3, rel=0.03)

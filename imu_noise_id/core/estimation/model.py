@@ -251,7 +251,8 @@ class NoiseModel:
         if self.allan is None:
             self.allan = starts.allan_of(y_av, self.dt)
         bp = periodogram or whittle.banded_periodogram(y_av) if spectral or "OSC" in self.fit_names else None
-        lines = whittle.spectral_lines(bp, self.dt, self.fit_names.count("OSC")) if "OSC" in self.fit_names else []
+        n_osc = self.fit_names.count("OSC")
+        lines = whittle.osc_start_frequencies(bp, self.dt, n_osc) if n_osc else []
         fits = starts.fit_allan(self.fit_names, self.allan, self.dt, osc_frequencies=lines)
         if spectral:
             fits = sorted((whittle.whittle_fit(c, y_av, self.dt, bp, self.parameter_bounds) for _, c in fits),

@@ -169,7 +169,7 @@ def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
     RR is left at slope 0 (the likelihood fit estimates it in closed form); the caller removes a linear trend
     before computing ``av`` when the structure has RR. An OSC's frequency and bandwidth are held at their starting
     values (the AV barely constrains them; the Whittle and exact likelihoods do): its frequency from
-    ``osc_frequencies`` (e.g. the periodogram's lines, :func:`.whittle.spectral_lines`), else a quarter of the
+    ``osc_frequencies`` (e.g. the periodogram's lines, :func:`.whittle.osc_start_frequencies`), else a quarter of the
     sampling rate.
     """
     av = _Curve.of(allan)

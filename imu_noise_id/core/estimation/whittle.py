@@ -74,7 +74,7 @@ def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02,
     return BandedPeriodogram(centre, counts.astype(float), power)
 
 
-def spectral_lines(bp: BandedPeriodogram, dt: float, count: int, half_window: int = 12) -> list[float]:
+def osc_start_frequencies(bp: BandedPeriodogram, dt: float, count: int, half_window: int = 12) -> list[float]:
     """Frequencies [Hz] of the ``count`` strongest lines of a banded periodogram: local maxima of the mean power per
     band over its running median (±``half_window`` bands), strongest first (starting values of OSC components)."""
     mean = bp.power / bp.count
