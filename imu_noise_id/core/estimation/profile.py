@@ -79,6 +79,16 @@ def whitening(info: np.ndarray) -> np.ndarray:
     return v / np.sqrt(w)
 
 
+def distinct(starts: list[np.ndarray]) -> list[np.ndarray]:
+    """``starts`` without exact repeats, in order. A profile point of a zero-boundary parameter gets its ladder
+    starts with that parameter then overwritten by the point's value: the whole ladder collapses onto one start."""
+    out: list[np.ndarray] = []
+    for s in starts:
+        if not any(np.array_equal(s, t) for t in out):
+            out.append(s)
+    return out
+
+
 def adjusted(prof: ProfileResult) -> float:
     """ℓ + ½ log det cov(b̂): the log-likelihood adjusted for the GLS-estimated means (module docstring)."""
     if prof.beta_cov.size == 0:
@@ -239,6 +249,7 @@ class Profiler:
         (:meth:`adjustment_gradient`) for interior and undetermined parameters, by a forward difference at the
         start for zero-boundary ones (there it changes fast). ℓ_A itself is exact at every point evaluated.
         """
+        starts = distinct(starts)
         scored = [(self.evaluate(t, base), t) for t in starts] if len(starts) > 1 else []
         start = max(scored, key=lambda p: p[0][1])[1] if scored else starts[0]
         free = [j for j in range(self.theta.size) if j not in fixed]
