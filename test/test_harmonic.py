@@ -110,6 +110,35 @@ def test_the_closed_form_response_equals_the_filter(name, schur):
         assert got.loglik == pytest.approx(exact.loglik, abs=1e-6)
 
 
+@pytest.mark.parametrize("schur", [False, True])
+def test_one_line_beside_fast_poles_is_in_closed_form_too(schur):
+    """One SIN term (two columns, fewer than the states) on a filter whose poles die out in a few hundred samples:
+    the free responses cost little, so the closed form is used, and it equals the filter."""
+    comps = [WN(2e-3), GM(tau=0.05, sigma=1e-3), LPF(noise_density=1e-3, cutoff=10.0)]
+    n = 30_000
+    exog = _sin_cos([3.1], n)
+    y = simulate_sum(comps, n, DT, np.random.default_rng(4)) + exog @ [2e-3, -1e-3]
+    z = np.asfortranarray(np.column_stack([np.ones(n), exog]))
+    declared = ss.from_components(comps, DT, exog_names=["s", "c"],
+                                  sinusoid_omega=tuple(harmonic.sinusoid_omega(c) for c in z.T))
+    closed_rows: list[int] = []
+    with pytest.MonkeyPatch.context() as mp:
+        if schur:
+            mp.setattr(steady, "MODAL_MAX_COND", 0.0)
+        spied = steady._sinusoid_output
+
+        def spy(*args, rows, **kwargs):
+            closed_rows.extend(rows.tolist())
+            return spied(*args, rows=rows, **kwargs)
+
+        mp.setattr(steady, "_sinusoid_output", spy)
+        got = kalman.loglik(declared, y, z)
+        want = kalman.loglik(ss.from_components(comps, DT, exog_names=["s", "c"]), y, z)
+    assert closed_rows == [2, 3]
+    assert got.loglik == pytest.approx(want.loglik, abs=1e-8)
+    np.testing.assert_allclose(got.beta, want.beta, rtol=1e-9)
+
+
 def test_a_declared_column_that_is_not_the_sinusoid_run_is_filtered():
     """The model declares a sinusoid; the column it is run on is another (a temperature series): the engine sees
     it, filters the column, and the result is the plain filter's."""

@@ -219,8 +219,9 @@ def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple
     poles = np.linalg.eigvals(g.a)
     closed = np.array([math.isfinite(w) and harmonic.obeys(cols.y[c], w) and harmonic.usable(poles, w)
                        for c, w in enumerate(cols.omega)], dtype=bool)
-    k, length = int(closed.sum()), harmonic.free_response_length(poles, n)
-    if min(k, p) * length >= CLOSED_FORM_SHARE * k * n:  # the free responses would cost about what they save
+    k, length, n_blocks = int(closed.sum()), harmonic.free_response_length(poles, n), len(_blocks(b.t))
+    free_cost = p * length if b.modal else min(k, p) * length * n_blocks  # one block over one column: 1 per sample
+    if free_cost >= CLOSED_FORM_SHARE * k * n * n_blocks:  # the free responses would cost about what they save
         return _filtered_output(model, g, b, cols.y, u=cols.g, m0=cols.m0), b
     out = np.empty((m, n))
     plain = np.flatnonzero(~closed)
@@ -254,16 +255,29 @@ def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns,
                      out: np.ndarray, length: int) -> None:
     """Write H x_t^{t−1} of the sinusoidal measurement-input columns ``rows`` (from x_0 = 0, at ``cols.omega``) into
     ``out[rows]`` in closed form (:mod:`.harmonic`): the steady response minus the free response of its initial
-    state, the latter filtered over its first ``length`` samples (where it has not died out), for the p unit states
-    (combined by one product) or the columns, whichever are fewer."""
+    state over its first ``length`` samples (where it has not died out). In the modal basis each block's output from
+    each of its own states is run once (:func:`_modal_free_responses`) and combined by one product; in the Schur
+    basis the p unit states or the columns, whichever are fewer, run through the coupled filter."""
     p, k = model.n_states, rows.size
     start = harmonic.steady_parts(g.a, model.phi @ g.k, model.h, cols.y, cols.omega, rows=rows, out=out)
-    if k <= p:
+    if b.modal:
+        free = (b.u_inv @ start).T @ _modal_free_responses(b, model.h @ b.u, length)
+    elif k <= p:
         free = _filtered_output(model, g, b, np.zeros((k, length)), u=np.zeros((p, k)), m0=start)
     else:
         free = start.T @ _filtered_output(model, g, b, np.zeros((p, length)), u=np.zeros((p, p)), m0=np.eye(p))
     for i, r in enumerate(rows):
         out[r, :length] -= free[i]
+
+
+def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
+    """R (p, length), R[j, t] = (H U)_blk T_blk^t e_j for each modal state j of block blk: the output of the free
+    response from w_0 = U⁻¹x_0 is w_0ᵀR (the blocks are decoupled, so each state runs through its own block only)."""
+    out = np.empty((b.t.shape[0], length))
+    for blk in _blocks(b.t):
+        s = blk.stop - blk.start
+        out[blk] = _block_output(b.t[blk, blk], hu[blk], np.zeros((s, s, length)), np.eye(s))
+    return out
 
 
 def _predicted_states(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
