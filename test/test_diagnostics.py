@@ -363,3 +363,29 @@ def test_sinusoid_frequency_is_refined_within_a_bin(f0):
     found = det.detect_sinusoid(y, DT, WhiteningFilter.from_components([WN(0.1)], DT))
     assert abs(found.params["frequency"] - f0) * n * DT < 0.05
     assert found.params["amplitude"] == pytest.approx(0.15, rel=0.05)
+
+
+@pytest.mark.parametrize("missing", [False, True])
+@pytest.mark.parametrize("n_nuisance", [1, 2])
+def test_the_score_test_is_the_drop_in_residual_sum_of_squares(missing, n_nuisance):
+    """e'X̃(X̃'X̃)⁻¹X̃'e with the nuisance projected out of X̃ is RSS(e on z) − RSS(e on z and x), and its
+    coefficients are x's in the joint regression (computed here by one least-squares fit of each)."""
+    from imu_noise_id.core.diagnostics.whitening import score_test
+
+    rng = np.random.default_rng(8)
+    n = 5000
+    z = np.column_stack([np.ones(n), rng.standard_normal(n)])[:, :n_nuisance] + 0.1 * rng.standard_normal((n, 1))
+    x = rng.standard_normal((n, 2)) + 0.3 * z[:, :1]
+    e = rng.standard_normal(n) + 0.05 * x[:, 0]
+    if missing:
+        e[rng.choice(n, 200, replace=False)] = np.nan
+    ok = np.isfinite(e)
+
+    def rss(a):
+        coef = np.linalg.lstsq(a[ok], e[ok], rcond=None)[0]
+        return float(np.sum((e[ok] - a[ok] @ coef) ** 2)), coef
+
+    (rss_z, _), (rss_zx, coef_zx) = rss(z), rss(np.column_stack([z, x]))
+    st = score_test(e, x, z)
+    assert st.statistic == pytest.approx(rss_z - rss_zx, rel=1e-9)
+    np.testing.assert_allclose(st.coef, coef_zx[n_nuisance:], rtol=1e-9)

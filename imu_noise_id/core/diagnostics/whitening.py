@@ -166,6 +166,15 @@ class ScoreTest:
     se: np.ndarray
 
 
+def _projection(z: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Least-squares coefficients of x (N, k) on z (N, j): in closed form for one column z (what every detector
+    projects out: the whitened constant), else by ``lstsq``."""
+    if z.shape[1] == 1:
+        zz = float(z[:, 0] @ z[:, 0])
+        return (z[:, 0] @ x)[None, :] / zz if zz > 0 else np.zeros((1, x.shape[1]))
+    return np.linalg.lstsq(z, x, rcond=None)[0]
+
+
 def score_test(e: np.ndarray, x_white: np.ndarray, nuisance_white: np.ndarray | None = None) -> ScoreTest:
     """Score test of whitened regressors ``x_white`` against standardised innovations ``e`` (NaN = missing).
 
@@ -177,10 +186,12 @@ def score_test(e: np.ndarray, x_white: np.ndarray, nuisance_white: np.ndarray | 
     e = np.asarray(e, dtype=float)
     x = np.asarray(x_white, dtype=float).reshape(e.size, -1)
     ok = np.isfinite(e)
-    e0, x0 = e[ok], x[ok]
+    every = bool(ok.all())  # no missing sample: the arrays as they are, no copies
+    e0, x0 = (e, x) if every else (e[ok], x[ok])
     if nuisance_white is not None:
-        z = np.asarray(nuisance_white, dtype=float).reshape(e.size, -1)[ok]
-        x0 = x0 - z @ np.linalg.lstsq(z, x0, rcond=None)[0]
+        z = np.asarray(nuisance_white, dtype=float).reshape(e.size, -1)
+        z = z if every else z[ok]
+        x0 = x0 - z @ _projection(z, x0)
     gram = x0.T @ x0
     if np.linalg.cond(gram) > 1e12:
         raise ValueError("regressors are (nearly) collinear with the model after whitening")
