@@ -3,6 +3,7 @@ equal to the filter's (the plain steady filter and the exact time-varying recurs
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -60,6 +61,24 @@ def test_the_noise_model_declares_its_sinusoid_columns_and_nothing_else():
     assert declared[2] == pytest.approx(omega, rel=1e-9) and declared[3] == pytest.approx(omega, rel=1e-9)
 
 
+@contextlib.contextmanager
+def _closed_form_spy(schur: bool):
+    """The rows the steady engine computes in closed form, listed while the block runs (in the Schur basis when
+    ``schur``: every model falls back to it)."""
+    closed_rows: list[int] = []
+    with pytest.MonkeyPatch.context() as mp:
+        if schur:
+            mp.setattr(steady, "MODAL_MAX_COND", 0.0)
+        spied = steady._sinusoid_output
+
+        def spy(*args, rows, **kwargs):
+            closed_rows.extend(rows.tolist())
+            return spied(*args, rows=rows, **kwargs)
+
+        mp.setattr(steady, "_sinusoid_output", spy)
+        yield closed_rows
+
+
 CASES = {
     "RW and a short GM": [WN(2e-3), GM(tau=1.0, sigma=1e-3), RW(3e-4)],
     "GM of 1e6 s beside RW (poles near 1)": [WN(2e-3), GM(tau=1e6, sigma=1e-5), RW(3e-4)],
@@ -85,17 +104,7 @@ def test_the_closed_form_response_equals_the_filter(name, schur):
     names = [f"{k}{i}" for i in range(len(freqs)) for k in ("s", "c")]
     declared = ss.from_components(comps, DT, exog_names=names, sinusoid_omega=omega)
     plain = declared.copy(sinusoid_omega=())
-    closed_rows: list[int] = []
-    with pytest.MonkeyPatch.context() as mp:
-        if schur:
-            mp.setattr(steady, "MODAL_MAX_COND", 0.0)
-        spied = steady._sinusoid_output
-
-        def spy(*args, rows, **kwargs):
-            closed_rows.extend(rows.tolist())
-            return spied(*args, rows=rows, **kwargs)
-
-        mp.setattr(steady, "_sinusoid_output", spy)
+    with _closed_form_spy(schur) as closed_rows:
         got, _, got_stats = kalman.profile_and_smooth(declared, y, z)
         assert sorted(set(closed_rows)) == list(range(2, 2 + 2 * len(freqs)))  # every line column, not the bias
         want, _, want_stats = kalman.profile_and_smooth(plain, y, z)
@@ -121,17 +130,7 @@ def test_one_line_beside_fast_poles_is_in_closed_form_too(schur):
     z = np.asfortranarray(np.column_stack([np.ones(n), exog]))
     declared = ss.from_components(comps, DT, exog_names=["s", "c"],
                                   sinusoid_omega=tuple(harmonic.sinusoid_omega(c) for c in z.T))
-    closed_rows: list[int] = []
-    with pytest.MonkeyPatch.context() as mp:
-        if schur:
-            mp.setattr(steady, "MODAL_MAX_COND", 0.0)
-        spied = steady._sinusoid_output
-
-        def spy(*args, rows, **kwargs):
-            closed_rows.extend(rows.tolist())
-            return spied(*args, rows=rows, **kwargs)
-
-        mp.setattr(steady, "_sinusoid_output", spy)
+    with _closed_form_spy(schur) as closed_rows:
         got = kalman.loglik(declared, y, z)
         want = kalman.loglik(ss.from_components(comps, DT, exog_names=["s", "c"]), y, z)
     assert closed_rows == [2, 3]
