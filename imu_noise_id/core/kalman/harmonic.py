@@ -1,9 +1,10 @@
 """Regressor columns that are pure sinusoids: recognised once, and their steady-state filter response in closed form.
 
-The GLS profile (:mod:`.common`) runs the filter on one column per free regressor. A narrow line in the residual
-enters the closed loop as a SIN term, two columns sin(ωt), cos(ωt) (ω in rad per sample); a consumer module with a
-dozen lines carries two dozen such columns, and every likelihood evaluation filtered each of them like the data:
-nine times the cost of a fit without them (issue 11's twelve-line records).
+Beyond the papers (paper 000's model has no regressors). The GLS profile (:mod:`.common`) runs the filter on one
+column per free regressor. A narrow line in the residual enters the closed loop as a SIN term, two columns
+sin(ωt), cos(ωt) (ω in rad per sample); a consumer module with a dozen lines carries two dozen such columns, and
+every likelihood evaluation filtered each of them like the data: 2.5 (20 min at 100 Hz) to 11 (1 h at 200 Hz)
+times the cost of an evaluation without them (``docs/results/bench_sin_regressors.txt``).
 
 The steady-state filter is linear and time invariant (:mod:`.steady`): predicted state
 x_{t+1} = A x_t + g·y_t from x_0 = 0, with A = Φ(I − K H) stable and g = ΦK. For an input y_t = Re(ζ_t), ζ_t = ζ_0
@@ -13,12 +14,14 @@ give it exactly:
     H x_t = Re(Hv)·y_t − Im(Hv)·ŷ_t − H A^t Re(v ζ_0),        ŷ_t = Im ζ_t = (cos ω·y_t − y_{t+1}) / sin ω.
 
 The first two terms are two multiply-adds over the column; the last is the free response of the p states, which
-decays like ρ(A)^t: it is computed once for the p unit initial states (or for the columns themselves when there
-are fewer) over the samples where it has not yet fallen below 1e-22 of its start, and combined by one matrix
-product. A column is only ever treated so when its sinusoid was checked against every sample by whoever built the
-regressors (:func:`sinusoid_omega`, called by :class:`~imu_noise_id.core.estimation.model.NoiseModel`), declared
-in :attr:`~.statespace.StateSpace.sinusoid_omega`, and still obeys the sinusoid's recurrence at a few samples of
-the column the engine is given (:func:`obeys`); otherwise it is filtered like any column.
+decays like ρ(A)^t: it is filtered once, over the samples where ρ(A)^t has not yet fallen below 1e-22, for each
+modal state through its own block (or, in the Schur basis, for the p unit states or the columns, whichever are
+fewer), and combined by one matrix product (:func:`.steady._sinusoid_output`, used where that costs less than half
+of filtering the columns). A column is only ever treated so when its sinusoid was checked against every sample by
+whoever built the regressors (:func:`sinusoid_omega`, called by
+:class:`~imu_noise_id.core.estimation.model.NoiseModel`), declared in
+:attr:`~.statespace.StateSpace.sinusoid_omega`, and still obeys the sinusoid's recurrence at a few samples of the
+column the engine is given (:func:`obeys`); otherwise it is filtered like any column.
 """
 
 from __future__ import annotations
