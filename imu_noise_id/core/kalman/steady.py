@@ -200,8 +200,9 @@ def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
     return _rotate(b.u, _run_modes(b.t, _rotate(b.u_inv, c), b.u_inv @ x0))
 
 
-#: Sinusoidal columns are computed in closed form when their free responses (min(k, p) columns over the samples
-#: where they have not died out) cost less than this share of filtering the k columns themselves.
+#: Sinusoidal columns are computed in closed form when their free responses (over the samples where they have not
+#: died out: p single-block runs in the modal basis, min(k, p) columns through every block in the Schur basis) cost
+#: less than this share of filtering the k columns themselves through every block.
 CLOSED_FORM_SHARE = 0.5
 
 
@@ -216,12 +217,15 @@ def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple
     if p == 0:
         return np.zeros((m, n)), None
     b = decoupled_basis(g.a)
-    poles = np.linalg.eigvals(g.a)
-    closed = np.array([math.isfinite(w) and harmonic.obeys(cols.y[c], w) and harmonic.usable(poles, w)
-                       for c, w in enumerate(cols.omega)], dtype=bool)
-    k, length, n_blocks = int(closed.sum()), harmonic.free_response_length(poles, n), len(_blocks(b.t))
+    declared = np.flatnonzero(np.isfinite(cols.omega))
+    poles = np.linalg.eigvals(g.a) if declared.size else np.zeros(0)  # (no sinusoid: nothing more per evaluation)
+    closed = np.zeros(m, bool)
+    closed[declared] = [harmonic.obeys(cols.y[c], cols.omega[c]) and harmonic.usable(poles, cols.omega[c])
+                        for c in declared]
+    k, n_blocks = int(closed.sum()), len(_blocks(b.t))
+    length = harmonic.free_response_length(poles, n) if k else n
     free_cost = p * length if b.modal else min(k, p) * length * n_blocks  # one block over one column: 1 per sample
-    if free_cost >= CLOSED_FORM_SHARE * k * n * n_blocks:  # the free responses would cost about what they save
+    if not k or free_cost >= CLOSED_FORM_SHARE * k * n * n_blocks:  # the free responses would cost what they save
         return _filtered_output(model, g, b, cols.y, u=cols.g, m0=cols.m0), b
     out = np.empty((m, n))
     plain = np.flatnonzero(~closed)
