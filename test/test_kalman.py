@@ -212,3 +212,27 @@ def test_the_smoother_sums_of_a_nearly_exactly_observed_state_are_finite_without
         warnings.simplefilter("error")
         stats = kalman.smooth(model, y, z)
     assert np.all(np.isfinite(stats.sum_p)) and np.isfinite(stats.loglik)
+
+
+@pytest.mark.parametrize("ramp", ["measurement", "state"])
+def test_new_values_give_the_model_assembled_afresh_and_the_ramp_stays_the_profiled_one(ramp):
+    # with_components remembers the blocks of the components it has seen (the gradient's steps change one at a
+    # time) and to_model takes only the RR blocks back from the profiled model: neither may change what is built
+    from imu_noise_id.core.estimation import mle
+    from imu_noise_id.core.noise.flicker import BI
+
+    first = [WN(0.3), GM(tau=20.0, sigma=0.5), OSC(0.2, 0.02, 0.4), BI(0.05, 1.0, 100.0), RW(0.01), RR(1e-3)]
+    moved = [WN(0.31), GM(tau=21.0, sigma=0.5), OSC(0.2, 0.02, 0.4), BI(0.05, 1.0, 100.0), RW(0.012), RR(1e-3)]
+    base = ss.from_components(first, 0.5, ramp=ramp)
+    for comps in (first, moved, first):
+        fresh = ss.from_components(comps, 0.5, ramp=ramp)
+        again = ss.with_components(base, comps)
+        for name in ("phi", "q", "r", "u", "b"):
+            assert np.array_equal(getattr(again, name), getattr(fresh, name)), name
+    profiled = ss.with_components(base, [*first[:-1], RR(4e-3)])
+    par = mle.Parameterisation.of(moved)
+    theta = par.to_theta(moved)
+    assert par.to_components(theta, profiled)[-1].slope == pytest.approx(4e-3, rel=1e-12)
+    for got, want in zip(par.to_components(theta, profiled)[:-1], moved[:-1], strict=True):
+        assert got.params() == pytest.approx(want.params(), rel=1e-12)
+    assert ss.ramp_components(profiled) == {5: ss.to_components(profiled)[5]}

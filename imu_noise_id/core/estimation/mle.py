@@ -94,11 +94,13 @@ class Parameterisation:
         for (i, name), v in zip(self.entries, theta, strict=True):
             params[i][name] = float(np.exp(v))
         out: list[Component] = [type(c)(**p) for c, p in zip(self.template, params, strict=True)]
-        if model is not None:
-            from ..kalman.statespace import to_components
+        if model is not None and any(isinstance(c, RR) for c in out):
+            from ..kalman.statespace import ramp_components
 
-            fitted = to_components(model)
-            out = [f if isinstance(c, RR) else c for c, f in zip(out, fitted, strict=True)]
+            # only the RR blocks: converting every block back (an OSC's eigenvalues, a ladder's) at each step of
+            # the gradient's finite differences was a fifth of a measured accelerometer's loop
+            fitted = ramp_components(model)
+            out = [fitted[k] if isinstance(c, RR) else c for k, c in enumerate(out)]
         return out
 
     def to_model(self, theta: np.ndarray, base: StateSpace) -> StateSpace:

@@ -26,6 +26,7 @@ filter is time-invariant from the first sample and runs as an IIR filter (:mod:`
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -322,6 +323,19 @@ def from_components(
     return model
 
 
+@functools.lru_cache(maxsize=256)
+def component_block(component: Component, dt: float) -> StateBlock:
+    """``component.block(dt)``, remembered: the gradient's finite differences (:mod:`..estimation.mle`) step one
+    parameter at a time, and every other component's block (an OSC's Van Loan exponential, a flicker ladder) would
+    be built again, identically, at each step. Components are frozen dataclasses, equal when their values are."""
+    return component.block(dt)
+
+
+def _span(states: tuple[int, ...]) -> slice:
+    """The block's states as a slice (:func:`from_components` gives each block consecutive states)."""
+    return slice(states[0], states[-1] + 1)
+
+
 def with_components(model: StateSpace, components: list[Component]) -> StateSpace:
     """A copy of ``model`` whose Φ, Q, R (and RR slope) take the values of ``components``.
 
@@ -332,18 +346,30 @@ def with_components(model: StateSpace, components: list[Component]) -> StateSpac
     out = model.copy()
     for c, blk in zip(components, model.blocks, strict=True):
         if isinstance(c, WN):
-            out.r = c.block(model.dt).r
+            out.r = component_block(c, model.dt).r
         elif isinstance(c, RR):
             if blk.regressor is not None:
                 out.b[blk.regressor] = c.slope
             else:
                 out.u[blk.input_state] = c.slope * model.dt
         else:
-            sb = c.block(model.dt)
-            idx = np.array(blk.states)
-            out.phi[np.ix_(idx, idx)] = sb.phi
-            out.q[np.ix_(idx, idx)] = sb.q
+            sb = component_block(c, model.dt)
+            span = _span(blk.states)
+            out.phi[span, span] = sb.phi
+            out.q[span, span] = sb.q
     return out
+
+
+def _ramp(model: StateSpace, blk: BlockInfo) -> RR:
+    """The RR component of block ``blk`` (its slope [u/s] as the model holds it: a regressor's b or a state's u)."""
+    slope = model.b[blk.regressor] if blk.regressor is not None else model.u[blk.input_state] / model.dt
+    return RR(float(slope))
+
+
+def ramp_components(model: StateSpace) -> dict[int, RR]:
+    """The RR components of ``model`` by block position, the others not converted (what
+    :meth:`~imu_noise_id.core.estimation.mle.Parameterisation.to_components` takes from a profiled model)."""
+    return {k: _ramp(model, blk) for k, blk in enumerate(model.blocks) if blk.name == "RR"}
 
 
 def to_components(model: StateSpace) -> list[Component]:
@@ -354,8 +380,7 @@ def to_components(model: StateSpace) -> list[Component]:
         if blk.name == "WN":
             out.append(WN.from_per_sample(dt, sigma2_wn=max(float(model.r), 0.0)))
         elif blk.name == "RR":
-            slope = model.b[blk.regressor] if blk.regressor is not None else model.u[blk.input_state] / dt
-            out.append(RR(float(slope)))
+            out.append(_ramp(model, blk))
         else:
             idx = np.array(blk.states)
             out.append(COMPONENT_TYPES[blk.name].from_block(model.phi[np.ix_(idx, idx)], model.q[np.ix_(idx, idx)],
