@@ -1,0 +1,87 @@
+"""CPU time of the closed loop on measured ADIS16405 axes, this checkout against other checkouts side by side.
+
+Each axis (its first ``--samples`` samples) runs the loop from WN+RW once per source tree, the trees in alternation
+and each in its own process with ``OPENBLAS_NUM_THREADS=1``, so that a speed claim is a ratio measured side by side
+in one run. Printed per axis and tree: the process's CPU time, the final model, its log-likelihood (full
+precision) and whether it equals the first tree's to the last digit (each tree's package is checked to be the one
+imported)::
+
+    git worktree add ../baseline <commit>
+    .venv/bin/python bench/bench_loop_measured_time.py --baseline ../baseline --axes 1:accel_x
+
+Needs ``../shared/data/adis16405_static`` (third-party data, not in the repository).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+from pathlib import Path
+
+from adis import data_missing  # bench/adis.py, beside this script
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Run in each source tree: the loop on one axis, one JSON line (model, log-likelihood as repr, verdict).
+ONE_AXIS = """
+import json, sys
+sys.path.insert(0, {bench!r})
+from adis import load_run
+import imu_noise_id
+from imu_noise_id.core.axes import AXES
+from imu_noise_id.pipelines.loop.run import run_closed_loop
+data, dt = load_run({run}, {samples})
+r = run_closed_loop(data[:, AXES.index({axis!r})], dt, "WN+RW", axis={axis!r})
+fit = r.steps[-1].diagnosis.fit
+print(json.dumps({{"model": fit.model, "loglik": repr(fit.loglik), "verdict": r.verdict,
+                  "package": imu_noise_id.__file__}}))
+"""
+
+
+def run_axis(source: Path, run: int, axis: str, samples: int) -> tuple[float, dict]:
+    """(CPU [s] of the child, its JSON line) of the loop on one axis with ``source`` first on the path."""
+    env = dict(os.environ, PYTHONPATH=str(source), OPENBLAS_NUM_THREADS="1")
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    code = ONE_AXIS.format(bench=str(ROOT / "bench"), run=run, samples=samples, axis=axis)
+    done = subprocess.run([sys.executable, "-c", code], env=env, cwd=source, capture_output=True, text=True,
+                          check=False)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode != 0:
+        raise SystemExit(f"the loop from {source} failed on run {run} {axis}:\n{done.stderr}")
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    if not Path(out["package"]).is_relative_to(source):
+        raise SystemExit(f"run from {source}, the loop imported {out['package']}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return cpu, out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--axes", nargs="+", default=["1:accel_x"], help="RUN:AXIS pairs (default 1:accel_x)")
+    parser.add_argument("--samples", type=int, default=100_000, help="first samples of each run (default 10^5)")
+    parser.add_argument("--baseline", type=Path, action="append", default=[], help="another checkout (repeatable)")
+    args = parser.parse_args(argv)
+    if data_missing():
+        return 2
+    sources = [("this checkout", ROOT), *[(f"baseline {p}", p.resolve()) for p in args.baseline]]
+    print(f"# bench/bench_loop_measured_time.py --samples {args.samples}; {os.cpu_count()} CPUs; load average "
+          f"before {os.getloadavg()[0]:.2f}")
+    for pair in args.axes:
+        run, axis = pair.split(":")
+        first: dict | None = None
+        for name, source in sources:
+            cpu, out = run_axis(source, int(run), axis, args.samples)
+            first = first or out
+            same = out["loglik"] == first["loglik"] and out["model"] == first["model"]
+            print(f"run {run} {axis:8s} {name:40s} CPU {cpu:7.1f} s  {out['model']}  loglik {out['loglik']}  "
+                  f"{'identical' if same else 'DIFFERENT'} to the first", flush=True)
+    print(f"load average after {os.getloadavg()[0]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
