@@ -97,8 +97,8 @@ class Parameterisation:
         if model is not None and any(isinstance(c, RR) for c in out):
             from ..kalman.statespace import ramp_components
 
-            # only the RR blocks: converting every block back (an OSC's eigenvalues, a ladder's) at each step of
-            # the gradient's finite differences was a fifth of a measured accelerometer's loop
+            # only the RR blocks: every block converted back (an OSC's eigenvalues, a ladder's) at each step of the
+            # gradient's finite differences was work thrown away
             fitted = ramp_components(model)
             out = [fitted[k] if isinstance(c, RR) else c for k, c in enumerate(out)]
         return out

@@ -327,8 +327,13 @@ def from_components(
 def component_block(component: Component, dt: float) -> StateBlock:
     """``component.block(dt)``, remembered: the gradient's finite differences (:mod:`..estimation.mle`) step one
     parameter at a time, and every other component's block (an OSC's Van Loan exponential, a flicker ladder) would
-    be built again, identically, at each step. Components are frozen dataclasses, equal when their values are."""
-    return component.block(dt)
+    be built again, identically, at each step. Components are frozen dataclasses, equal when their values are. The
+    block's arrays are shared by every caller, so they are read-only."""
+    block = component.block(dt)
+    for value in vars(block).values():
+        if isinstance(value, np.ndarray):
+            value.flags.writeable = False
+    return block
 
 
 def _span(states: tuple[int, ...]) -> slice:
