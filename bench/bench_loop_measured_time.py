@@ -3,8 +3,8 @@
 Each axis (its first ``--samples`` samples) runs the loop from WN+RW once per source tree, the trees in alternation
 and each in its own process with ``OPENBLAS_NUM_THREADS=1``, so that a speed claim is a ratio measured side by side
 in one run. Printed per axis and tree: the process's CPU time, the final model, its log-likelihood (full
-precision) and whether it equals the first tree's to the last digit (each tree's package is checked to be the one
-imported)::
+precision) and whether model, log-likelihood (to the last digit) and verdict equal the first tree's (each tree's
+package is checked to be the one imported)::
 
     git worktree add ../baseline <commit>
     .venv/bin/python bench/bench_loop_measured_time.py --baseline ../baseline --axes 1:accel_x
@@ -76,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
         for name, source in sources:
             cpu, out = run_axis(source, int(run), axis, args.samples)
             first = first or out
-            same = out["loglik"] == first["loglik"] and out["model"] == first["model"]
+            same = all(out[key] == first[key] for key in ("model", "loglik", "verdict"))
             print(f"run {run} {axis:8s} {name:40s} CPU {cpu:7.1f} s  {out['model']}  loglik {out['loglik']}  "
                   f"{'identical' if same else 'DIFFERENT'} to the first", flush=True)
     print(f"load average after {os.getloadavg()[0]:.2f}")

@@ -9,9 +9,11 @@ import pytest
 
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
+from imu_noise_id.core.estimation import mle
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.kalman.riccati import steady_prediction_covariance
 from imu_noise_id.core.noise.components import GM, OSC, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.flicker import BI
 
 MIXES = {
     "WN+RW+RR": [WN(0.2), RW(0.02), RR(1e-3)],
@@ -218,9 +220,6 @@ def test_the_smoother_sums_of_a_nearly_exactly_observed_state_are_finite_without
 def test_new_values_give_the_model_assembled_afresh_and_the_ramp_stays_the_profiled_one(ramp):
     # with_components remembers the blocks of the components it has seen (the gradient's steps change one at a
     # time) and to_model takes only the RR blocks back from the profiled model: neither may change what is built
-    from imu_noise_id.core.estimation import mle
-    from imu_noise_id.core.noise.flicker import BI
-
     first = [WN(0.3), GM(tau=20.0, sigma=0.5), OSC(0.2, 0.02, 0.4), BI(0.05, 1.0, 100.0), RW(0.01), RR(1e-3)]
     moved = [WN(0.31), GM(tau=21.0, sigma=0.5), OSC(0.2, 0.02, 0.4), BI(0.05, 1.0, 100.0), RW(0.012), RR(1e-3)]
     base = ss.from_components(first, 0.5, ramp=ramp)

@@ -222,6 +222,24 @@ def validate_structure(names: list[str]) -> None:
             raise InputError(f"model {'+'.join(names)} has {single} more than once; it is not identifiable")
 
 
+@functools.lru_cache(maxsize=256)
+def component_block(component: Component, dt: float) -> StateBlock:
+    """``component.block(dt)``, remembered: the gradient's finite differences (:mod:`..estimation.mle`) step one
+    parameter at a time, and every other component's block (an OSC's Van Loan exponential, a flicker ladder) would
+    be built again, identically, at each step. Components are frozen dataclasses, equal when their values are. The
+    block's arrays are shared by every caller, so they are read-only."""
+    block = component.block(dt)
+    for value in vars(block).values():
+        if isinstance(value, np.ndarray):
+            value.flags.writeable = False
+    return block
+
+
+def _span(states: tuple[int, ...]) -> slice:
+    """The block's states as a slice (:func:`from_components` gives each block consecutive states)."""
+    return slice(states[0], states[-1] + 1)
+
+
 def from_components(
     components: list[Component],
     dt: float,
@@ -266,7 +284,7 @@ def from_components(
         raise InputError(f"ramp must be 'measurement' or 'state', got {ramp!r}")
     if sigma_mode not in ("steady", "fixed"):
         raise InputError(f"sigma_mode must be 'steady' or 'fixed', got {sigma_mode!r}")
-    blocks_of = {i: c.block(dt) for i, c in enumerate(components) if not isinstance(c, (WN, RR))}
+    blocks_of = {i: component_block(c, dt) for i, c in enumerate(components) if not isinstance(c, (WN, RR))}
     p = sum(blk.n_states for blk in blocks_of.values())
     phi, q = np.zeros((p, p)), np.zeros((p, p))
     phi_free, q_free = np.zeros((p, p), bool), np.zeros((p, p), bool)
@@ -280,7 +298,7 @@ def from_components(
     state_of: dict[int, tuple[int, ...]] = {}
     for k, c in enumerate(components):
         if isinstance(c, WN):
-            r = c.block(dt).r
+            r = component_block(c, dt).r
             continue
         if isinstance(c, RR):
             continue
@@ -309,8 +327,8 @@ def from_components(
         else:
             info.append(BlockInfo(c.name, states=state_of.get(k, ())))
     for k, blk in blocks_of.items():
-        idx = np.array(state_of[k])
-        sigma[np.ix_(idx, idx)] = _fixed_initial_covariance(blk, r)
+        span = _span(state_of[k])
+        sigma[span, span] = _fixed_initial_covariance(blk, r)
     regressors.extend(exog_names)
     b_values.extend([0.0] * len(exog_names))
     model = StateSpace(
@@ -321,24 +339,6 @@ def from_components(
     )
     model.check()
     return model
-
-
-@functools.lru_cache(maxsize=256)
-def component_block(component: Component, dt: float) -> StateBlock:
-    """``component.block(dt)``, remembered: the gradient's finite differences (:mod:`..estimation.mle`) step one
-    parameter at a time, and every other component's block (an OSC's Van Loan exponential, a flicker ladder) would
-    be built again, identically, at each step. Components are frozen dataclasses, equal when their values are. The
-    block's arrays are shared by every caller, so they are read-only."""
-    block = component.block(dt)
-    for value in vars(block).values():
-        if isinstance(value, np.ndarray):
-            value.flags.writeable = False
-    return block
-
-
-def _span(states: tuple[int, ...]) -> slice:
-    """The block's states as a slice (:func:`from_components` gives each block consecutive states)."""
-    return slice(states[0], states[-1] + 1)
 
 
 def with_components(model: StateSpace, components: list[Component]) -> StateSpace:
@@ -387,7 +387,7 @@ def to_components(model: StateSpace) -> list[Component]:
         elif blk.name == "RR":
             out.append(_ramp(model, blk))
         else:
-            idx = np.array(blk.states)
-            out.append(COMPONENT_TYPES[blk.name].from_block(model.phi[np.ix_(idx, idx)], model.q[np.ix_(idx, idx)],
+            span = _span(blk.states)
+            out.append(COMPONENT_TYPES[blk.name].from_block(model.phi[span, span].copy(), model.q[span, span].copy(),
                                                             dt))
     return out
