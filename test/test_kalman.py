@@ -172,6 +172,23 @@ def test_modal_and_schur_bases_give_the_exact_recursion():
                 np.testing.assert_allclose(b, a, rtol=1e-7, atol=1e-9 * np.max(np.abs(a)), err_msg=key)
 
 
+def test_the_initial_state_as_the_filters_delay_state_gives_the_prepended_run_bit_for_bit():
+    """:func:`steady._strictly_proper` (the initial state w0 put into lfilter's delay state) against the run on the
+    input with w0 prepended, the form it replaces: equal to the last bit, for 1st- and 2nd-order sections over
+    several columns, whatever the sign of w0."""
+    from scipy.signal import lfilter
+
+    from imu_noise_id.core.kalman import steady
+
+    rng = np.random.default_rng(11)
+    d = rng.standard_normal((3, 400))
+    w0 = np.array([0.7, -1.3, 0.0])
+    second = [1.0, -1.8, 0.85]
+    for num, den in (((0.0, 1.0), [1.0, -0.97]), ((0.0, 1.0, -0.4), second), ((0.0, 0.0, 0.3), second)):
+        prepended = lfilter(num, den, np.concatenate([w0[:, None], d], axis=1), axis=-1)[:, 1:]
+        np.testing.assert_array_equal(steady._strictly_proper(num, den, d, w0), prepended)
+
+
 def test_a_nearly_defective_transition_runs_in_the_schur_basis():
     from imu_noise_id.core.kalman import steady
 

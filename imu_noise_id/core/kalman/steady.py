@@ -86,34 +86,54 @@ def _blocks(T: np.ndarray) -> list[slice]:
     return out
 
 
-def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """x_0 = w0, x_{t+1} = B x_t + d_t for one diagonal block B (1×1 or 2×2); d (s, m, N), w0 (s, m).
+def _strictly_proper(num: tuple[float, ...], den: list[float], d: np.ndarray, w0: np.ndarray) -> np.ndarray:
+    """Output t (t = 0 … N−1) of the strictly proper filter num/den (num[0] = 0) run on d' = [w0, d_0, …, d_{N−2}]
+    along the last axis, i.e. x_t with the initial state w0 entering as an input one step before t = 0.
 
-    The initial state enters as an input one step before t = 0 (x_{−1} = 0, d_{−1} = w0): x_{t} is output t + 1 of
-    the strictly proper filter (zI − B)⁻¹ applied to d' = [w0, d_0, …], per component one ``lfilter`` per input,
-    numerators the rows of adj(zI − B), denominator det(zI − B) (order 1 or 2, real coefficients).
+    The input w0 is not prepended (a copy of every column): it is the filter's initial delay state after that first
+    step, Z = (w0·num[1], w0·num[2]) (its output then is 0), so the outputs are those of the longer run bit for bit.
     """
-    s = B.shape[0]
-    dp = np.concatenate([w0[:, :, None], d], axis=2)
-    if s == 1:
-        return lfilter([0.0, 1.0], [1.0, -B[0, 0]], dp, axis=-1)[:, :, 1:]
+    zi = np.stack([w0 * c for c in num[1:]], axis=-1)
+    return lfilter(num, den, d, axis=-1, zi=zi)[0]
+
+
+def _accumulate(terms) -> np.ndarray:
+    """Σ of the arrays ``terms`` in their order, in place into the first one (no array per partial sum)."""
+    it = iter(terms)
+    out = next(it)
+    for term in it:
+        out += term
+    return out
+
+
+def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) -> None:
+    """x_0 = w0, x_{t+1} = B x_t + d_t for one diagonal block B (1×1 or 2×2), written into ``out``; d and out
+    (s, m, N), w0 (s, m).
+
+    x_t is output t of the strictly proper filter (zI − B)⁻¹ applied to d' = [w0, d_0, …]
+    (:func:`_strictly_proper`), per component one ``lfilter`` per input, numerators the rows of adj(zI − B),
+    denominator det(zI − B) (order 1 or 2, real coefficients).
+    """
+    if B.shape[0] == 1:
+        out[...] = _strictly_proper((0.0, 1.0), [1.0, -B[0, 0]], d, w0)
+        return
     den = [1.0, -(B[0, 0] + B[1, 1]), B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]]
     adj = (((0.0, 1.0, -B[1, 1]), (0.0, 0.0, B[0, 1])), ((0.0, 0.0, B[1, 0]), (0.0, 1.0, -B[0, 0])))
-    out = np.empty_like(d)
     for r in range(2):
-        out[r] = sum(lfilter(adj[r][c], den, dp[c], axis=-1)[:, 1:] for c in range(2) if adj[r][c][2] != 0 or c == r)
-    return out
+        out[r] = _accumulate(_strictly_proper(adj[r][c], den, d[c], w0[c])
+                             for c in range(2) if adj[r][c][2] != 0 or c == r)
 
 
 def _block_output(B: np.ndarray, c: np.ndarray, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
     """c·x_t (m, N) of :func:`_run_block`'s recursion for one block B, without its states: one ``lfilter`` per input
     of the block, numerator c·adj(zI − B) (the states of every column would be p × m × N numbers to store)."""
-    dp = np.concatenate([w0[:, :, None], d], axis=2)
     if B.shape[0] == 1:
-        return c[0] * lfilter([0.0, 1.0], [1.0, -B[0, 0]], dp[0], axis=-1)[:, 1:]
+        out = _strictly_proper((0.0, 1.0), [1.0, -B[0, 0]], d[0], w0[0])
+        out *= c[0]
+        return out
     den = [1.0, -(B[0, 0] + B[1, 1]), B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]]
     num = ((0.0, c[0], c[1] * B[1, 0] - c[0] * B[1, 1]), (0.0, c[1], c[0] * B[0, 1] - c[1] * B[0, 0]))
-    return sum(lfilter(num[k], den, dp[k], axis=-1)[:, 1:] for k in range(2))
+    return _accumulate(_strictly_proper(num[k], den, d[k], w0[k]) for k in range(2))
 
 
 def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
@@ -124,12 +144,20 @@ def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
     """
     w = np.empty_like(cw)
     for blk in reversed(_blocks(T)):
-        drive = cw[blk].copy()
+        drive = cw[blk]
         later = slice(blk.stop, T.shape[0])
         if later.start < later.stop and np.any(T[blk, later]):
-            drive += np.tensordot(T[blk, later], w[later], axes=1)
-        w[blk] = _run_block(T[blk, blk], drive, w0[blk])
+            drive = drive + np.tensordot(T[blk, later], w[later], axes=1)
+        _run_block(T[blk, blk], drive, w0[blk], out=w[blk])
     return w
+
+
+def _driven(gain: np.ndarray, y: np.ndarray, const: np.ndarray) -> np.ndarray:
+    """The inputs gain_i·y_{c,t} + const_{i,c} (s, m, N) of the states i fed by measurement columns y (m, N) through
+    ``gain`` (s,) with constant inputs ``const`` (s, m), built in one array."""
+    d = gain[:, None, None] * y[None]
+    d += const[:, :, None]
+    return d
 
 
 def _rotate(M: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -247,11 +275,11 @@ def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray,
     gain_w = b.u_inv @ (model.phi @ g.k)
     g_w, w0, hu = b.u_inv @ u, b.u_inv @ m0, model.h @ b.u
     if not b.modal:
-        w = _run_modes(b.t, gain_w[:, None, None] * y[None, :, :] + g_w[:, :, None], w0)
+        w = _run_modes(b.t, _driven(gain_w, y, g_w), w0)
         return (hu @ w.reshape(p, -1)).reshape(m, n)
     out = np.zeros((m, n))
     for blk in _blocks(b.t):
-        out += _block_output(b.t[blk, blk], hu[blk], gain_w[blk, None, None] * y[None] + g_w[blk, :, None], w0[blk])
+        out += _block_output(b.t[blk, blk], hu[blk], _driven(gain_w[blk], y, g_w[blk]), w0[blk])
     return out
 
 
@@ -288,8 +316,8 @@ def _predicted_states(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray
                       m0: np.ndarray) -> np.ndarray:
     """Predicted states x_t^{t−1} (p, N) of one column: measurement input y (N,), state input u (p,), initial mean
     m0 (p,); the filter is linear, so those of a combination of columns are those of the combined inputs."""
-    c = (b.u_inv @ (model.phi @ g.k))[:, None] * y[None, :] + (b.u_inv @ u)[:, None]
-    return b.u @ _run_modes(b.t, c[:, None, :], (b.u_inv @ m0)[:, None])[:, 0, :]
+    c = _driven(b.u_inv @ (model.phi @ g.k), y[None, :], (b.u_inv @ u)[:, None])
+    return b.u @ _run_modes(b.t, c, (b.u_inv @ m0)[:, None])[:, 0, :]
 
 
 def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
@@ -339,11 +367,13 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
 def _smooth_from_forward(model: StateSpace, g: SteadyGains, xp: np.ndarray, e: np.ndarray) -> SmootherStats:
     """Backward pass and covariance sums from the predicted states xp (p, N) and innovations e (N,)."""
     n, p = e.size, model.n_states
-    xf = xp + np.outer(g.k, e)
+    xf = np.multiply.outer(g.k, e)
+    xf += xp
     # Backward pass in reversed time: s_0 = x_N^N (= filtered), s_{k+1} = J s_k + a_{N−2−k}.
     a = xf[:, :-1] - g.j @ xp[:, 1:]
-    c = np.zeros((p, 1, n))
+    c = np.empty((p, 1, n))
     c[:, 0, :-1] = a[:, ::-1]
+    c[:, 0, -1] = 0.0
     xs = np.ascontiguousarray(lti_states(g.j, c, xf[:, -1:])[:, 0, ::-1])
     J = g.j
     const = g.p_filt - J @ g.p_pred @ J.T
