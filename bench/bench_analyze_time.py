@@ -45,13 +45,26 @@ def _tree_rss(pid: int) -> int:
     return total
 
 
+def imported_from(source: Path) -> Path:
+    """The package ``python -m imu_noise_id`` imports when run from ``source`` (``-m`` puts the working directory
+    first on the path, before PYTHONPATH: run from elsewhere, every tree would time the package found there)."""
+    done = subprocess.run([sys.executable, "-c", "import imu_noise_id; print(imu_noise_id.__file__)"],
+                          env=dict(os.environ, PYTHONPATH=str(source)), cwd=source, capture_output=True, text=True,
+                          check=True)
+    return Path(done.stdout.strip())
+
+
 def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None) -> tuple[float, float, float, float]:
     """(wall [s], CPU [s], peak RSS of one process [MiB], peak summed RSS of the process tree [MiB]) of
-    ``python -m imu_noise_id analyze`` from ``source`` (with ``--jobs`` when given)."""
+    ``python -m imu_noise_id analyze`` run in ``source`` (with ``--jobs`` when given), after checking that it imports
+    the package of ``source``."""
+    package = imported_from(source)
+    if not package.is_relative_to(source):
+        raise SystemExit(f"run from {source}, analyze would import {package}")
     env = dict(os.environ, PYTHONPATH=str(source))
     cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out)]
     start = time.perf_counter()
-    proc = subprocess.Popen(cmd + ([] if jobs is None else ["--jobs", str(jobs)]),
+    proc = subprocess.Popen(cmd + ([] if jobs is None else ["--jobs", str(jobs)]), cwd=source,
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     tree = 0
     while True:
@@ -85,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
             bag = Path(tmp) / f"static_{rate:g}hz"
             subprocess.run([sys.executable, "-m", "imu_noise_id", "simulate", "--model", MODEL, "--rate", str(rate),
                             "--duration", str(args.duration), "--out", str(bag), "--seed", "1"], check=True,
-                           stdout=subprocess.DEVNULL, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+                           stdout=subprocess.DEVNULL, env=dict(os.environ, PYTHONPATH=str(ROOT)), cwd=ROOT)
             print(f"\n{args.duration:g} s at {rate:g} Hz ({int(args.duration * rate)} samples per axis):")
             times = {}
             for name, source, jobs in sources:
