@@ -24,8 +24,8 @@ from imu_noise_id.core.axes import AXES
 from imu_noise_id.pipelines.loop import run_closed_loop
 
 
-class _TimeUp(Exception):
-    """Raised by the alarm to stop the loop at the time limit."""
+class _TimeUp(BaseException):
+    """Raised by the alarm to stop the loop at the time limit (not an Exception: no handler in the loop catches it)."""
 
 
 def _stop(*_) -> None:
