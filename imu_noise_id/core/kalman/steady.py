@@ -369,10 +369,10 @@ def _smooth_from_forward(model: StateSpace, g: SteadyGains, xp: np.ndarray, e: n
     n, p = e.size, model.n_states
     xf = np.multiply.outer(g.k, e)
     xf += xp
-    # Backward pass in reversed time: s_0 = x_N^N (= filtered), s_{k+1} = J s_k + a_{N−2−k}.
-    a = xf[:, :-1] - g.j @ xp[:, 1:]
+    # Backward pass in reversed time: s_0 = x_N^N (= filtered), s_{k+1} = J s_k + a_{N−2−k},
+    # a_t = x_t^t − J x_{t+1}^t, written reversed straight into the pass's input.
     c = np.empty((p, 1, n))
-    c[:, 0, :-1] = a[:, ::-1]
+    np.subtract(xf[:, -2::-1], (g.j @ xp[:, 1:])[:, ::-1], out=c[:, 0, :-1])
     c[:, 0, -1] = 0.0
     xs = np.ascontiguousarray(lti_states(g.j, c, xf[:, -1:])[:, 0, ::-1])
     J = g.j
