@@ -29,6 +29,7 @@ closed form (:mod:`.harmonic`).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -97,7 +98,7 @@ def _strictly_proper(num: tuple[float, ...], den: list[float], d: np.ndarray, w0
     return lfilter(num, den, d, axis=-1, zi=zi)[0]
 
 
-def _accumulate(terms) -> np.ndarray:
+def _accumulate(terms: Iterable[np.ndarray]) -> np.ndarray:
     """Σ of the arrays ``terms`` in their order, in place into the first one (no array per partial sum)."""
     it = iter(terms)
     out = next(it)
