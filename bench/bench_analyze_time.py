@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 
 import psutil
+from checkouts import check_imports_own_package  # bench/checkouts.py, beside this script
 
 ROOT = Path(__file__).resolve().parents[1]
 MODEL = "gyro: WN(1.7e-4)+GM(tau=300, sigma=2e-5)+RW(2e-5); accel: WN(2e-3)+RW(3e-4)"
@@ -45,22 +46,11 @@ def _tree_rss(pid: int) -> int:
     return total
 
 
-def imported_from(source: Path) -> Path:
-    """The package ``python -m imu_noise_id`` imports when run from ``source`` (``-m`` puts the working directory
-    first on the path, before PYTHONPATH: run from elsewhere, every tree would time the package found there)."""
-    done = subprocess.run([sys.executable, "-c", "import imu_noise_id; print(imu_noise_id.__file__)"],
-                          env=dict(os.environ, PYTHONPATH=str(source)), cwd=source, capture_output=True, text=True,
-                          check=True)
-    return Path(done.stdout.strip())
-
-
 def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None) -> tuple[float, float, float, float]:
     """(wall [s], CPU [s], peak RSS of one process [MiB], peak summed RSS of the process tree [MiB]) of
     ``python -m imu_noise_id analyze`` run in ``source`` (with ``--jobs`` when given), after checking that it imports
     the package of ``source``."""
-    package = imported_from(source)
-    if not package.is_relative_to(source):
-        raise SystemExit(f"run from {source}, analyze would import {package}")
+    check_imports_own_package(source, "analyze")
     env = dict(os.environ, PYTHONPATH=str(source))
     cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out)]
     start = time.perf_counter()

@@ -15,14 +15,12 @@ Needs ``../shared/data/adis16405_static`` (third-party data, not in the reposito
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import resource
-import subprocess
 import sys
 from pathlib import Path
 
 from adis import data_missing  # bench/adis.py, beside this script
+from checkouts import run_in_checkout  # bench/checkouts.py
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -31,32 +29,19 @@ ONE_AXIS = """
 import json, sys
 sys.path.insert(0, {bench!r})
 from adis import load_run
-import imu_noise_id
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.pipelines.loop.run import run_closed_loop
 data, dt = load_run({run}, {samples})
 r = run_closed_loop(data[:, AXES.index({axis!r})], dt, "WN+RW", axis={axis!r})
 fit = r.steps[-1].diagnosis.fit
-print(json.dumps({{"model": fit.model, "loglik": repr(fit.loglik), "verdict": r.verdict,
-                  "package": imu_noise_id.__file__}}))
+print(json.dumps({{"model": fit.model, "loglik": repr(fit.loglik), "verdict": r.verdict}}))
 """
 
 
 def run_axis(source: Path, run: int, axis: str, samples: int) -> tuple[float, dict]:
-    """(CPU [s] of the child, its JSON line) of the loop on one axis with ``source`` first on the path."""
-    env = dict(os.environ, PYTHONPATH=str(source), OPENBLAS_NUM_THREADS="1")
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    """(CPU [s] of the child, its JSON line) of the loop on one axis with ``source``'s package."""
     code = ONE_AXIS.format(bench=str(ROOT / "bench"), run=run, samples=samples, axis=axis)
-    done = subprocess.run([sys.executable, "-c", code], env=env, cwd=source, capture_output=True, text=True,
-                          check=False)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if done.returncode != 0:
-        raise SystemExit(f"the loop from {source} failed on run {run} {axis}:\n{done.stderr}")
-    out = json.loads(done.stdout.strip().splitlines()[-1])
-    if not Path(out["package"]).is_relative_to(source):
-        raise SystemExit(f"run from {source}, the loop imported {out['package']}")
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return cpu, out
+    return run_in_checkout(source, code, f"the loop on run {run} {axis}")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -23,12 +23,12 @@ basis (forced by ``MODAL_MAX_COND = 0``).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
-import subprocess
 import sys
 from pathlib import Path
+
+from checkouts import run_in_checkout  # bench/checkouts.py, beside this script
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -36,7 +36,6 @@ ROOT = Path(__file__).resolve().parents[1]
 ONE_TREE = """
 import hashlib, json, time
 import numpy as np
-import imu_noise_id
 from imu_noise_id.core import kalman
 from imu_noise_id.core.estimation import em
 from imu_noise_id.core.kalman import steady
@@ -85,22 +84,14 @@ for n in {lengths}:
                     digest.update(np.ascontiguousarray(value).tobytes())
             rows.append({{"n": n, "model": name, "basis": basis, "times": times, "lfilter_share": shares,
                          "loglik": repr(float(prof.loglik)), "digest": digest.hexdigest()}})
-print(json.dumps({{"package": imu_noise_id.__file__, "rows": rows}}))
+print(json.dumps(rows))
 """
 
 
 def run_tree(source: Path, lengths: list[int], evaluations: int) -> list[dict]:
     """The rows of one process running every case with ``source``'s package."""
-    env = dict(os.environ, PYTHONPATH=str(source), OPENBLAS_NUM_THREADS="1")
     code = ONE_TREE.format(lengths=lengths, evaluations=evaluations)
-    done = subprocess.run([sys.executable, "-c", code], env=env, cwd=source, capture_output=True, text=True,
-                          check=False)
-    if done.returncode != 0:
-        raise SystemExit(f"the evaluations from {source} failed:\n{done.stderr}")
-    out = json.loads(done.stdout.strip().splitlines()[-1])
-    if not Path(out["package"]).is_relative_to(source):
-        raise SystemExit(f"run from {source}, the evaluations imported {out['package']}")
-    return out["rows"]
+    return run_in_checkout(source, code, "the evaluations")[1]
 
 
 def main(argv: list[str] | None = None) -> int:
