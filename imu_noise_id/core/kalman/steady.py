@@ -94,8 +94,7 @@ def _strictly_proper(num: tuple[float, ...], den: list[float], d: np.ndarray, w0
     The input w0 is not prepended (a copy of every column): it is the filter's initial delay state after that first
     step, Z = (w0·num[1], w0·num[2]) (its output then is 0), so the outputs are those of the longer run bit for bit.
     """
-    zi = np.stack([w0 * c for c in num[1:]], axis=-1)
-    return lfilter(num, den, d, axis=-1, zi=zi)[0]
+    return lfilter(num, den, d, axis=-1, zi=np.multiply.outer(w0, num[1:]))[0]
 
 
 def _accumulate(terms: Iterable[np.ndarray]) -> np.ndarray:
