@@ -16,6 +16,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -106,6 +107,29 @@ def _line_windows(start_values: list[list[Component]], dt: float) -> list[tuple[
     return out
 
 
+@dataclass(frozen=True)
+class _Search:
+    """What every start of one fit is searched on: the record (gap-filled when ``fill_first``) and the Whittle
+    metric of a start's components (None without the spectral start)."""
+
+    y: np.ndarray
+    fill_first: bool
+    metric_of: Callable[[list[Component]], np.ndarray] | None
+
+
+def _search_of(model: NoiseModel, options: FitOptions, start_values: list[list[Component]],
+               periodogram: whittle.BandedPeriodogram | None, y_av: np.ndarray) -> _Search:
+    """The :class:`_Search` of ``model`` from ``start_values``: the periodogram unbanded around their OSC lines."""
+    bp = periodogram
+    if bp is not None and any(c.name == "OSC" for s in start_values for c in s):
+        bp = whittle.banded_periodogram(y_av, fine=_line_windows(start_values, model.dt))
+    fill_first = model.n_obs < model.n_total and model.n_total > mle.FILL_FIRST_MIN_SAMPLES and options.polish
+    y_search = interpolate_missing(model.y) if fill_first else model.y
+    metric_of = (functools.partial(whittle.whittle_information, y=y_av, dt=model.dt, periodogram=bp)
+                 if bp is not None else None)
+    return _Search(y_search, fill_first, metric_of)
+
+
 def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: FitOptions) -> FitResult:
     """Maximum-likelihood fit of ``model`` (see the module docstring)."""
     if init is not None:
@@ -116,17 +140,12 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
     y_av = model.detrended()
     bp = whittle.banded_periodogram(y_av) if options.spectral_init else None
     start_values = [init] if init is not None else model.starting_values(options.n_starts, options.spectral_init, bp)
-    if bp is not None and any(c.name == "OSC" for s in start_values for c in s):
-        bp = whittle.banded_periodogram(y_av, fine=_line_windows(start_values, model.dt))
-    fill_first = model.n_obs < model.n_total and model.n_total > mle.FILL_FIRST_MIN_SAMPLES and options.polish
-    y_search = interpolate_missing(model.y) if fill_first else model.y
+    search = _search_of(model, options, start_values, bp, y_av)
     best: tuple[mle.MLEResult, int] | None = None
     lls = []
-    metric_of = (functools.partial(whittle.whittle_information, y=y_av, dt=model.dt, periodogram=bp)
-                 if bp is not None else None)
     for start in start_values:
         try:
-            res = _one_start(model, start, y_search, options, metric_of)
+            res = _one_start(model, start, search.y, options, search.metric_of)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             continue
         lls.append(res[0].loglik)
@@ -134,22 +153,44 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
             best = res
     if best is None:
         raise InputError(f"no start of the {'+'.join(model.names)} fit gave a valid likelihood; try init=… values")
-    result = _result(model, best, lls, fill_first)
+    result = _result(model, best, lls, search.fill_first)
     if not options.uncertainty:
         return result
+    return _with_intervals(model, result, options, lambda _: search)
+
+
+def _with_intervals(model: NoiseModel, result: FitResult, options: FitOptions,
+                    search_of: Callable[[list[Component]], _Search]) -> FitResult:
+    """``result`` with its intervals (:func:`.uncertainty.add_uncertainty`). When their profile search met a higher
+    likelihood than the search's maximum (a ridge the starts missed, e.g. a GM turning into a random walk, or a
+    random walk every start left at its zero boundary, where ℓ is flat in log K), the search runs again from there
+    (on ``search_of`` that start), once, and the better fit gets the intervals."""
     add_uncertainty(result, options.target_precision)
-    if result.better_start is not None:
-        # The profile search met a higher likelihood than the search's maximum (a ridge the starts missed, e.g. a
-        # GM turning into a random walk): search again from there, once.
-        start = result.better_start
-        try:
-            again = _one_start(model, start, y_search, options, metric_of)
-        except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
-            return result
-        if again[0].loglik > result.loglik:
-            result = add_uncertainty(_result(model, again, [*lls, again[0].loglik], fill_first),
-                                     options.target_precision)
-    return result
+    start = result.better_start
+    if start is None:
+        return result
+    search = search_of(start)
+    try:
+        again = _one_start(model, start, search.y, options, search.metric_of)
+    except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
+        return result
+    if again[0].loglik <= result.loglik:
+        return result
+    return add_uncertainty(_result(model, again, [*result.starts, again[0].loglik], search.fill_first),
+                           options.target_precision)
+
+
+def add_intervals(model: NoiseModel, result: FitResult, options: FitOptions) -> FitResult:
+    """Intervals of a fit of ``model`` made without them (``options.uncertainty`` off, e.g. a model selection's
+    winner), searched again from a higher likelihood their profile search meets, as :func:`fit_noise_model`
+    does (:func:`_with_intervals`)."""
+
+    def search_of(start: list[Component]) -> _Search:
+        y_av = model.detrended()
+        bp = whittle.banded_periodogram(y_av) if options.spectral_init else None
+        return _search_of(model, options, [start], bp, y_av)
+
+    return _with_intervals(model, result, options, search_of)
 
 
 def _fastest_first(model: NoiseModel, fitted: ss.StateSpace) -> ss.StateSpace:

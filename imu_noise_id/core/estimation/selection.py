@@ -1,8 +1,9 @@
 """Model selection of one axis: every candidate structure fitted (:class:`~.model.NoiseModel`), ranked by BIC.
 
 ΔBIC and Schwarz weights are the evidence; standard errors and the recording-length advice are computed for the
-winner only (:func:`.uncertainty.add_uncertainty` adds them to any other fit). The default candidates cover the
-common IMU models; RR and QN candidates are added when the Allan variance's ends call for them.
+winner only (:func:`.uncertainty.add_uncertainty` adds them to any other fit), searched again, as a single fit
+is, when their profile search meets a higher likelihood (:func:`.search.add_intervals`). The default candidates
+cover the common IMU models; RR and QN candidates are added when the Allan variance's ends call for them.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from ..quality import interpolate_missing
 from . import starts
 from .model import FitOptions, NoiseModel, check_signal
 from .results import FitResult
-from .uncertainty import add_uncertainty
+from .search import add_intervals
 
 #: Default candidate structures of :func:`select_model` (RR / QN added when the AV suggests them).
 DEFAULT_CANDIDATES: tuple[str, ...] = ("WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM")
@@ -84,6 +85,7 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     errors: dict[str, str] = {}
     search = replace(options, uncertainty=False)
     best_key: str | None = None
+    best_model: NoiseModel | None = None
     for spec in cands:
         try:
             has_rr = "RR" in parse_structure(spec)
@@ -98,12 +100,14 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         if best_key is None or getattr(fit, criterion) < getattr(fits[best_key], criterion):
             if best_key is not None:
                 fits[best_key] = fits[best_key].without_data()
-            best_key = spec
+            best_key, best_model = spec, model
         else:
             fit = fit.without_data()
         fits[spec] = fit
-    if best_key is None:
+    if best_key is None or best_model is None:
         raise InputError("no candidate model could be fitted: " + "; ".join(f"{k}: {v}" for k, v in errors.items()))
+    if options.uncertainty:  # before the table: searched again, the winner's likelihood can only rise
+        fits[best_key] = add_intervals(best_model, fits[best_key], options)
     bic_min = min(f.bic for f in fits.values())
     aic_min = min(f.aic for f in fits.values())
     wsum = sum(math.exp(-0.5 * (f.bic - bic_min)) for f in fits.values())
@@ -119,6 +123,4 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         else:
             table.append({"model": spec, "error": errors[spec]})
     table.sort(key=lambda r: r.get(criterion, math.inf))
-    if options.uncertainty:
-        add_uncertainty(fits[best_key], options.target_precision)
     return SelectionResult(fits[best_key], table, fits)
