@@ -61,9 +61,16 @@ def test_fixed_elements_stay_fixed():
     assert np.array_equal(after.sigma, before.sigma)  # Σ is never updated (paper 000 §3.3)
 
 
-def test_fisher_identity_gradient_matches_finite_differences():
-    _, y = _paper_43_data(n=500, seed=4)
-    comps = [WN(0.4), GM(tau=30.0, sigma=0.3), RW(0.02), RR(0.0)]
+@pytest.mark.parametrize("case", ["paper 4.3", "OSC"])
+def test_fisher_identity_gradient_matches_finite_differences(case):
+    # The x_1 term's share comes from the DARE's adjoint (em.InitialTermGradient), the rest from differences of Q:
+    # their sum must be the exact likelihood's gradient, also with an OSC whose P̄ block the x_1 term weighs.
+    if case == "OSC":
+        comps = [WN(0.4), OSC(frequency=0.05, bandwidth=0.01, sigma=0.5), GM(tau=30.0, sigma=0.3), RW(0.02), RR(0.0)]
+        y = simulate_sum(comps, 500, 1.0, np.random.default_rng(4))
+    else:
+        _, y = _paper_43_data(n=500, seed=4)
+        comps = [WN(0.4), GM(tau=30.0, sigma=0.3), RW(0.02), RR(0.0)]
     model = ss.from_components(comps, 1.0)
     z = np.column_stack([np.ones(y.size), np.arange(y.size)])
     par = mle.Parameterisation.of(comps)

@@ -11,7 +11,7 @@ from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.estimation import mle
 from imu_noise_id.core.kalman import statespace as ss
-from imu_noise_id.core.kalman.riccati import steady_prediction_covariance
+from imu_noise_id.core.kalman.riccati import SteadyCovarianceSensitivity, steady_prediction_covariance
 from imu_noise_id.core.noise.components import GM, OSC, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import BI
 
@@ -137,6 +137,31 @@ def test_newton_riccati_from_a_nearby_model_equals_doubling(name, rel_step):
     np.testing.assert_allclose(moved.steady_prediction_covariance(), reference, rtol=0,
                                atol=1e-11 * np.max(np.abs(reference)))
 
+
+
+@pytest.mark.parametrize("direction", ["phi", "q", "h", "r"])
+def test_the_steady_covariance_sensitivity_equals_finite_differences_of_the_doubling(direction):
+    # tr(W dP̄) from the adjoint Stein solve against central differences of P̄ solved from scratch by the doubling
+    # (no shared code but the DARE's definition), along a random direction in each model matrix.
+    rng = np.random.default_rng(7)
+    phi = np.diag([0.95, 0.9, 0.8, 0.5, 0.7])
+    phi[1, 2] = 0.05
+    q, h, r = np.diag([0.1, 0.1, 0.01, 0.1, 0.2]), np.array([1.0, 1.0, 0.5, 1.0, 1.0]), 0.3
+    W = rng.standard_normal((5, 5))
+    W = W + W.T
+    step = {"phi": rng.standard_normal((5, 5)) * (phi != 0) * 1e-3, "q": np.diag(rng.random(5)) * 1e-4,
+            "h": rng.standard_normal(5) * 1e-2, "r": 0.01}[direction]
+
+    def moved(e: float) -> dict:
+        mats = {"phi": phi, "q": q, "h": h, "r": r}
+        mats[direction] = mats[direction] + e * step
+        return mats
+
+    sensitivity = SteadyCovarianceSensitivity.of(phi, q, h, r, P=steady_prediction_covariance(phi, q, h, r), W=W)
+    eps = 1e-6
+    numeric = (np.vdot(W, steady_prediction_covariance(**moved(eps)))
+               - np.vdot(W, steady_prediction_covariance(**moved(-eps)))) / (2 * eps)
+    assert sensitivity.linear(**moved(1.0)) - sensitivity.linear(**moved(0.0)) == pytest.approx(numeric, rel=1e-5)
 
 def test_modal_and_schur_bases_give_the_exact_recursion():
     """The steady engine's two bases (block-diagonal modal where well conditioned, Schur otherwise) against the exact

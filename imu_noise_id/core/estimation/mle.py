@@ -8,7 +8,9 @@ profiled out by GLS inside the likelihood (:func:`imu_noise_id.core.kalman.logli
 
 The gradient is exact and cheap: by Fisher's identity ∂ℓ/∂ϑ = ∂Q(ϑ | ϑ_E)/∂ϑ at ϑ = ϑ_E, with Q the EM's
 expected complete-data log-likelihood (:func:`imu_noise_id.core.estimation.em.q_function`), evaluated from one smoother
-pass; the derivative of Q (a closed-form function of a few sums) is taken by central differences.
+pass; the derivative of Q (a closed-form function of a few sums) is taken by central differences, but for its
+x_1 term, whose Σ = P̄(ϑ) would need a Riccati solve per step: that term's derivative comes from the DARE's adjoint,
+one Stein sum per gradient (:class:`imu_noise_id.core.estimation.em.InitialTermGradient`).
 
 Standard errors (paper 000 §3.4): the observed information is minus a numerical Hessian of ℓ (central
 differences of the exact gradient); for positive parameters the 95 % interval is exp(ϑ̂ ± 1.96·se_ϑ) and the
@@ -127,10 +129,16 @@ def loglik_grad_profile(
     prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
     sums = em.sums_from_stats(stats, data or em.DataSums.of(y, z))
     grad = np.empty(theta.size)
-    at_theta = functools.cache(lambda: em.q_function(par.to_model(theta, model), sums, model))
+    initial = em.InitialTermGradient.at(model, sums)
+
+    def q_near(th: np.ndarray) -> float:
+        """Q at ϑ near the E-step's, its x_1 term to first order (no DARE per step: em.InitialTermGradient)."""
+        near = par.to_model(th, model)
+        return em.q_function(near, sums, model, initial=False) + initial.of_model(near)
+
+    at_theta = functools.cache(lambda: q_near(theta))
     for k in range(theta.size):
-        d = derivative_in_domain(lambda h, k=k: em.q_function(par.to_model(stepped(theta, k, h), model), sums, model),
-                                 step, at_theta, central=central)
+        d = derivative_in_domain(lambda h, k=k: q_near(stepped(theta, k, h)), step, at_theta, central=central)
         if d is None:
             raise ValueError(f"no step of {step:g} around log-parameter {k} stays inside the components' domains")
         grad[k] = float(d)
