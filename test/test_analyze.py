@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import math
 
 import numpy as np
 import pytest
@@ -125,6 +126,35 @@ def test_gap_warning():
     assert any("gap" in w for w in result.warnings)
 
 
+def _intervals_hold_their_estimates(node, where: str) -> None:
+    """Every ``ci95`` in a model.yaml subtree is null (no interval) or an ordered pair without NaN that holds its
+    estimate: the ``value`` beside it, or the component parameter it belongs to."""
+    from imu_noise_id.core.noise.components import COMPONENT_TYPES
+
+    def holds(ci, value, at: str) -> None:
+        assert not any(math.isnan(v) for v in ci), f"{at}: NaN in {ci}"
+        assert ci[0] <= ci[1], at
+        if value is not None:
+            assert ci[0] * (1 - 1e-9) <= value <= ci[1] * (1 + 1e-9), f"{at}: {value} outside {ci}"
+
+    if isinstance(node, list):
+        for k, item in enumerate(node):
+            _intervals_hold_their_estimates(item, f"{where}[{k}]")
+        return
+    if not isinstance(node, dict):
+        return
+    ci = node.get("ci95")
+    if isinstance(ci, list):
+        names = COMPONENT_TYPES[node["type"]].parameter_names if "type" in node else ()
+        holds(ci, node.get("value", node.get(names[0]) if len(names) == 1 else None), where)
+    elif isinstance(ci, dict):
+        for name, pair in ci.items():
+            holds(pair, node.get(name), f"{where}.{name}")
+    for key, child in node.items():
+        if key != "ci95":
+            _intervals_hold_their_estimates(child, f"{where}.{key}")
+
+
 def test_cli_analyze_end_to_end(golden_run):
     """Through a real bag with the default stages (Allan, EM model selection, closed loop) — the golden run's
     ``analyze`` (10 min at 100 Hz, test/golden_run.py): the files, the summary; N within 5 % (10 min is too short
@@ -139,6 +169,8 @@ def test_cli_analyze_end_to_end(golden_run):
     assert set(models) == {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"}
     for entry in models.values():
         assert entry["model"].startswith("WN") and entry["loop"][0]["added"] is None
+    for axis, entry in models.items():
+        _intervals_hold_their_estimates(entry, axis)
     doc = yaml.safe_load((out / "imu.yaml").read_text())
     assert doc["rostopic"] == "/imu/data"
     for n in doc["gyroscope_noise_density_xyz"]:

@@ -31,7 +31,7 @@ Per axis (``gyro_x`` … ``accel_z``)::
       random_walk: {value, ci95, source}             # RW [u/s/√Hz]; value null: not identifiable from this record
       noise_stddev_per_sample: …                     # per-sample std of the high-frequency noise at dt [u]
       bias_instability: {value, ci95, tau_at_minimum, reached, source}   # model AD min / 0.664 [u]
-      bias_instability_allan: {…}                    # the same off the data's AV (no interval)
+      bias_instability_allan: {…}                    # the same off the data's AV (ci95: null, no interval)
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ from ..pipelines.analyze.models import AxisModel
 from ..pipelines.loop import LoopResult
 from .gmwm_yaml import comparison_to_dict, gmwm_details, wic_candidates
 from .loop_yaml import loop_to_dict
-from .numbers import num, num_key
+from .numbers import interval, num, num_key
 
 
 def _component_entry(fit: FitResult, index: int) -> dict:
@@ -121,8 +121,7 @@ def final_to_dict(final: FinalModel) -> dict:
     fitted = fit_to_dict(final.fit)
     return {
         "source": final.source, "model": final.fit.model, "components": fitted["components"],
-        **{name: {"value": None if v.value is None else num(v.value), "ci95": [num(v.ci95[0]), num(v.ci95[1])],
-                  "source": v.source}
+        **{name: {"value": None if v.value is None else num(v.value), "ci95": interval(v.ci95), "source": v.source}
            for name, v in (("noise_density", final.noise_density), ("random_walk", final.random_walk))},
         "noise_stddev_per_sample": num(final.noise_stddev_per_sample),
         "random_walk_long_tau_bound": {
@@ -132,7 +131,7 @@ def final_to_dict(final: FinalModel) -> dict:
             "random_walk_above_it": final.random_walk_above_bound,
             "p_value_of_the_random_walk": (None if final.random_walk.value is None
                                            else num(final.random_walk_bound.p_value(final.random_walk.value)))},
-        **{name: {"value": num(b.value), "ci95": [num(b.ci95[0]), num(b.ci95[1])], "tau_at_minimum":
+        **{name: {"value": num(b.value), "ci95": interval(b.ci95), "tau_at_minimum":
                   num(b.tau_at_minimum), "reached": bool(b.reached), "source": b.source}
            for name, b in (("bias_instability", final.bias_instability),
                            ("bias_instability_allan", final.bias_instability_allan))},

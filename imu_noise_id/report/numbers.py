@@ -22,3 +22,10 @@ FULL_PRECISION = frozenset({"loglik", "aic", "bic", "delta_bic", "delta_aic"})
 def num_key(key: str, x: float) -> float:
     """:func:`num`, except for the :data:`FULL_PRECISION` keys (written as the float they are)."""
     return float(x) if key in FULL_PRECISION else num(x)
+
+
+def interval(ci: tuple[float, float]) -> list[float] | None:
+    """A 95 % interval as ``[lo, hi]`` (:func:`num`), or None (YAML ``null``) for a reading without one (NaN)."""
+    if any(math.isnan(float(v)) for v in ci):
+        return None
+    return [num(ci[0]), num(ci[1])]
