@@ -18,9 +18,10 @@ Beyond the paper (and why):
   paper's exact EM, monotone to rounding (tested).
 * Free diagonal transition elements are kept in (1e-12, 1 − 1e-12) and free process-noise variances above a
   tiny floor, so that a Gauss–Markov block stays a stationary GM process and Q stays invertible.
-* :func:`q_function` evaluates the expected complete-data log-likelihood at any θ from one E-step; by Fisher's
-  identity its gradient at the E-step's θ is the gradient of the exact log-likelihood, which the quasi-Newton
-  finish in :mod:`imu_noise_id.core.estimation.search` uses.
+* :func:`q_function` evaluates the expected complete-data log-likelihood but its x_1 term at any θ from one
+  E-step, :class:`InitialTermGradient` that term to first order; by Fisher's identity the gradient of their sum at
+  the E-step's θ is the gradient of the exact log-likelihood, which the quasi-Newton finish in
+  :mod:`imu_noise_id.core.estimation.search` uses.
 """
 
 from __future__ import annotations
@@ -205,14 +206,16 @@ def transition_residual(s: Sums, phi: np.ndarray, u: np.ndarray, around: StateSp
             + d @ s.s00 @ d.T + np.outer(d @ s.x_prev, du) + np.outer(du, d @ s.x_prev) + n1 * np.outer(du, du))
 
 
-def q_function(model: StateSpace, s: Sums, around: StateSpace | None = None, *, initial: bool = True) -> float:
-    """Expected complete-data log-likelihood Q(θ | θ_E) at ``model``'s θ, with the E-step sums of θ_E.
+def q_function(model: StateSpace, s: Sums, around: StateSpace | None = None) -> float:
+    """Expected complete-data log-likelihood Q(θ | θ_E) at ``model``'s θ, with the E-step sums of θ_E, without its
+    x_1 term.
 
-    Includes the x_1 term with Σ(θ) (steady mode), so that by Fisher's identity ∂Q/∂θ at θ = θ_E equals the
-    gradient of the exact log-likelihood; ``initial=False`` leaves it out (:class:`InitialTermGradient` gives its
-    gradient without solving the DARE at every θ). States with zero process noise (deterministic transitions)
-    drop out of the Q term (their complete-data density is degenerate and does not depend on the free
-    parameters). ``around``: θ_E's model, for finite differences near it (:func:`transition_residual`).
+    By Fisher's identity ∂Q/∂θ at θ = θ_E equals the gradient of the exact log-likelihood. The x_1 term
+    −½(log det Σ + tr(Σ⁻¹E₁)) depends on θ through Σ = P̄(θ) in steady mode, which would need the DARE solved at
+    every θ: :class:`InitialTermGradient` gives its change to first order instead (in fixed mode it does not
+    depend on θ). States with zero process noise (deterministic transitions) drop out of the Q term (their
+    complete-data density is degenerate and does not depend on the free parameters). ``around``: θ_E's model,
+    for finite differences near it (:func:`transition_residual`).
     """
     n1 = s.n - 1
     p = model.n_states
@@ -221,8 +224,6 @@ def q_function(model: StateSpace, s: Sums, around: StateSpace | None = None, *, 
     val -= 0.5 * (s.n_obs * math.log(r) + _measurement_sse(model, s) / r)
     if p == 0:
         return val
-    if initial:
-        val += _initial_term(model.initial_covariance(), s, model.mu)
     S = transition_residual(s, model.phi, model.u, around)
     nz = np.diag(model.q) > 0
     if np.any(nz):
@@ -232,30 +233,18 @@ def q_function(model: StateSpace, s: Sums, around: StateSpace | None = None, *, 
     return float(val)
 
 
-def _initial_term(sigma: np.ndarray, s: Sums, mu: np.ndarray) -> float:
-    """E[log p(x_1)] without its constant: −½(log det Σ + tr(Σ⁻¹ E[(x_1 − μ)(x_1 − μ)ᵀ])) over the states with
-    Σ_ii > 0."""
-    d1 = s.x1 - mu
-    e1 = s.p1 + np.outer(d1, d1)
-    nz = np.diag(sigma) > 0
-    if not np.any(nz):
-        return 0.0
-    sg = sigma[np.ix_(nz, nz)]
-    _, logdet = np.linalg.slogdet(sg)
-    return -0.5 * (logdet + float(np.trace(np.linalg.solve(sg, e1[np.ix_(nz, nz)]))))
-
-
 @dataclass(frozen=True)
 class InitialTermGradient:
     """The x_1 term of Q to first order in the model matrices around θ_E, for the gradient of Q (beyond paper 000,
     whose Σ is fixed).
 
-    With Σ = P̄(θ) (steady mode) the x_1 term −½(log det Σ + tr(Σ⁻¹E₁)) changes with θ through the DARE; its
-    derivative is tr(W dΣ) with W = −½(Σ⁻¹ − Σ⁻¹E₁Σ⁻¹), and tr(W dP̄) is linear in the model matrices' change
+    With Σ = P̄(θ) (steady mode) the x_1 term −½(log det Σ + tr(Σ⁻¹E₁)), E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ] over the
+    states with Σ_ii > 0, changes with θ through the DARE; its derivative is tr(W dΣ) with
+    W = −½(Σ⁻¹ − Σ⁻¹E₁Σ⁻¹), and tr(W dP̄) is linear in the model matrices' change
     (:class:`~imu_noise_id.core.kalman.riccati.SteadyCovarianceSensitivity`). :meth:`of_model` of a nearby model
     differs from θ_E's by the term's change to first order, so finite differences of
-    ``q_function(…, initial=False) + of_model(…)`` give ∂Q/∂θ without a DARE per step. In fixed mode Σ does not
-    depend on θ and the term drops out of every difference.
+    ``q_function(…) + of_model(…)`` give ∂Q/∂θ without a DARE per step. In fixed mode Σ does not depend on θ and
+    the term drops out of every difference.
     """
 
     sensitivity: riccati.SteadyCovarianceSensitivity | None
@@ -266,11 +255,11 @@ class InitialTermGradient:
         if model.n_states == 0 or model.sigma_mode != "steady":
             return cls(None)
         sigma = model.initial_covariance()
+        d1 = s.x1 - model.mu
         nz = np.diag(sigma) > 0
+        e1 = (s.p1 + np.outer(d1, d1))[np.ix_(nz, nz)]
         W = np.zeros_like(sigma)
         if np.any(nz):
-            d1 = s.x1 - model.mu
-            e1 = (s.p1 + np.outer(d1, d1))[np.ix_(nz, nz)]
             inv = np.linalg.inv(sigma[np.ix_(nz, nz)])
             W[np.ix_(nz, nz)] = -0.5 * (inv - inv @ e1 @ inv)
         W = 0.5 * (W + W.T)

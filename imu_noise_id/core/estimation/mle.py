@@ -134,7 +134,7 @@ def loglik_grad_profile(
     def q_near(th: np.ndarray) -> float:
         """Q at ϑ near the E-step's, its x_1 term to first order (no DARE per step: em.InitialTermGradient)."""
         near = par.to_model(th, model)
-        return em.q_function(near, sums, model, initial=False) + initial.of_model(near)
+        return em.q_function(near, sums, model) + initial.of_model(near)
 
     at_theta = functools.cache(lambda: q_near(theta))
     for k in range(theta.size):
