@@ -261,8 +261,7 @@ class InitialTermGradient:
         W = np.zeros_like(sigma)
         if np.any(nz):
             inv = np.linalg.inv(sigma[np.ix_(nz, nz)])
-            W[np.ix_(nz, nz)] = -0.5 * (inv - inv @ e1 @ inv)
-        W = 0.5 * (W + W.T)
+            W[np.ix_(nz, nz)] = -0.5 * (inv - inv @ e1 @ inv)  # symmetrised by the Stein sum
         return cls(riccati.SteadyCovarianceSensitivity.of(model.phi, model.q, model.h, float(model.r), P=sigma, W=W))
 
     def of_model(self, model: StateSpace) -> float:
