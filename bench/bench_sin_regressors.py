@@ -70,7 +70,7 @@ def evaluation(y: np.ndarray, dt: float, k: int):
     par, base = mle.Parameterisation.of(comps), model.statespace(comps)
     theta = par.to_theta(comps)
     data = mle.em.DataSums.of(model.y, model.z)
-    return lambda: mle.loglik_grad_profile(par, theta, base, model.y, model.z, data=data, central=False)
+    return lambda: mle.loglik_grad_profile(par, theta, base, model.y, model.z, data=data)
 
 
 def evaluation_ms(y: np.ndarray, dt: float, k: int) -> tuple[float, float]:

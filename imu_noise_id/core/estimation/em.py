@@ -18,15 +18,14 @@ Beyond the paper (and why):
   paper's exact EM, monotone to rounding (tested).
 * Free diagonal transition elements are kept in (1e-12, 1 − 1e-12) and free process-noise variances above a
   tiny floor, so that a Gauss–Markov block stays a stationary GM process and Q stays invertible.
-* :func:`q_function` evaluates the expected complete-data log-likelihood but its x_1 term at any θ from one
-  E-step, :class:`InitialTermGradient` that term to first order; by Fisher's identity the gradient of their sum at
-  the E-step's θ is the gradient of the exact log-likelihood, which the quasi-Newton finish in
+* :class:`MatrixScore` differentiates the expected complete-data log-likelihood with respect to Φ, Q and R in
+  closed form from one E-step (its x_1 term by the DARE's adjoint, :class:`InitialTermGradient`); by Fisher's
+  identity that is the gradient of the exact log-likelihood, which the quasi-Newton finish in
   :mod:`imu_noise_id.core.estimation.search` uses.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -159,12 +158,7 @@ def mstep(model: StateSpace, s: Sums) -> StateSpace:
         m_h = np.linalg.solve(D.T @ (s.pt_obs / m.r) @ D, D.T @ rhs)
         m = m.with_free_values("h", m_h)
     if np.any(m.q_free):  # Q update
-        phi, u = m.phi, m.u
-        S = (
-            s.s11 - s.s10 @ phi.T - phi @ s.s10.T + phi @ s.s00 @ phi.T
-            - np.outer(s.x_next, u) - np.outer(u, s.x_next)
-            + np.outer(phi @ s.x_prev, u) + np.outer(u, phi @ s.x_prev) + n1 * np.outer(u, u)
-        )
+        S = transition_residual(s, m.phi, m.u)
         f, D = m.design("q")
         m_q = np.linalg.solve(D.T @ D, D.T @ S.flatten(order="F")) / n1
         m = m.with_free_values("q", m_q)
@@ -180,71 +174,78 @@ def mstep(model: StateSpace, s: Sums) -> StateSpace:
     return m
 
 
-def transition_residual(s: Sums, phi: np.ndarray, u: np.ndarray, around: StateSpace | None = None) -> np.ndarray:
-    """S(Φ, u) = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u)(…)ᵀ] from the E-step sums (paper 000 §3.3).
-
-    With ``around`` (the E-step's θ_E), S is written as S(Φ_E, u_E) plus the terms in Δ = Φ − Φ_E and δ = u − u_E
-    (beyond the paper, for the Fisher-identity gradient): S(Φ_E, u_E) is the same rounded number at every θ near
-    θ_E and cancels exactly in a finite difference, while the terms in Δ, δ carry no cancellation. Written directly,
-    S is a difference of sums of size N·P∞ whose result is N·Q — for a lightly damped oscillator Q ≈ 1e-5 P∞, and the
-    rounding, amplified by the 1/h of the difference, would swamp the gradient.
-    """
+def transition_residual(s: Sums, phi: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """S(Φ, u) = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u)(…)ᵀ] from the E-step sums (paper 000 §3.3; the Q update's S, and
+    the Q term of :class:`MatrixScore`)."""
     n1 = s.n - 1
-
-    def direct(ph: np.ndarray, uu: np.ndarray) -> np.ndarray:
-        return (s.s11 - s.s10 @ ph.T - ph @ s.s10.T + ph @ s.s00 @ ph.T
-                - np.outer(s.x_next, uu) - np.outer(uu, s.x_next)
-                + np.outer(ph @ s.x_prev, uu) + np.outer(uu, ph @ s.x_prev) + n1 * np.outer(uu, uu))
-
-    if around is None:
-        return direct(phi, u)
-    phi_e, u_e = around.phi, around.u
-    cross = s.s10 - phi_e @ s.s00 - np.outer(u_e, s.x_prev)  # Σ E[e_t x_{t−1}ᵀ], e_t = x_t − Φ_E x_{t−1} − u_E
-    mean = s.x_next - phi_e @ s.x_prev - n1 * u_e  # Σ E[e_t]
-    d, du = phi - phi_e, u - u_e
-    return (direct(phi_e, u_e) - cross @ d.T - d @ cross.T - np.outer(mean, du) - np.outer(du, mean)
-            + d @ s.s00 @ d.T + np.outer(d @ s.x_prev, du) + np.outer(du, d @ s.x_prev) + n1 * np.outer(du, du))
+    return (s.s11 - s.s10 @ phi.T - phi @ s.s10.T + phi @ s.s00 @ phi.T
+            - np.outer(s.x_next, u) - np.outer(u, s.x_next)
+            + np.outer(phi @ s.x_prev, u) + np.outer(u, phi @ s.x_prev) + n1 * np.outer(u, u))
 
 
-def q_function(model: StateSpace, s: Sums, around: StateSpace | None = None) -> float:
-    """Expected complete-data log-likelihood Q(θ | θ_E) at ``model``'s θ, with the E-step sums of θ_E, without its
-    x_1 term.
+@dataclass(frozen=True)
+class MatrixScore:
+    """The exact log-likelihood's gradient with respect to the model matrices Φ, Q and R at the E-step's θ_E, by
+    Fisher's identity (beyond paper 000, which maximises Q by EM alone): ∂ℓ/∂θ = ∂Q(θ | θ_E)/∂θ at θ = θ_E, Q the
+    expected complete-data log-likelihood of paper 000 §3.3,
 
-    By Fisher's identity ∂Q/∂θ at θ = θ_E equals the gradient of the exact log-likelihood. The x_1 term
-    −½(log det Σ + tr(Σ⁻¹E₁)) depends on θ through Σ = P̄(θ) in steady mode, which would need the DARE solved at
-    every θ: :class:`InitialTermGradient` gives its change to first order instead (in fixed mode it does not
-    depend on θ). States with zero process noise (deterministic transitions) drop out of the Q term (their
-    complete-data density is degenerate and does not depend on the free parameters). ``around``: θ_E's model,
-    for finite differences near it (:func:`transition_residual`).
+        Q = −½(N_obs ln 2πR + W/R) − ½((N−1) ln det Q + tr(Q⁻¹ S(Φ, u))) − ½(ln det Σ + tr(Σ⁻¹ E₁))
+
+    (W the measurement sum of squares, :func:`_measurement_sse`; S the transition residual,
+    :func:`transition_residual`; E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ]). Its derivatives are closed forms in the E-step sums:
+
+        ∂Q/∂R = −½(N_obs/R − W/R²),   ∂Q/∂Q = −½((N−1) Q⁻¹ − Q⁻¹ S Q⁻¹),   ∂Q/∂Φ = Q⁻¹ C,
+
+    with C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ] (dS = −C dΦᵀ − dΦ Cᵀ), over the states of non-zero process
+    noise (the others' complete-data density is degenerate and does not depend on the free parameters). In steady
+    mode the x_1 term depends on θ through Σ = P̄(θ); its share is the DARE's adjoint
+    (:class:`InitialTermGradient`), so no Riccati solve is needed per direction. The inner products
+    ⟨G_Φ, dΦ⟩ + ⟨G_Q, dQ⟩ + g_R dR (:meth:`directional`) then give ∂ℓ/∂ϑ for any parameter ϑ from the change of
+    its component's block alone (:meth:`~imu_noise_id.core.estimation.mle.Parameterisation.block_derivative`):
+    one smoother pass and a few p × p products per gradient, where differences of Q itself rebuilt the whole
+    model twice per parameter. H is not a function of the components' parameters and is held fixed.
     """
-    n1 = s.n - 1
-    p = model.n_states
-    val = -0.5 * s.n_obs * math.log(2.0 * math.pi)
-    r = float(model.r)
-    val -= 0.5 * (s.n_obs * math.log(r) + _measurement_sse(model, s) / r)
-    if p == 0:
-        return val
-    S = transition_residual(s, model.phi, model.u, around)
-    nz = np.diag(model.q) > 0
-    if np.any(nz):
-        qq = model.q[np.ix_(nz, nz)]
-        _, logdet = np.linalg.slogdet(qq)
-        val -= 0.5 * (n1 * logdet + float(np.trace(np.linalg.solve(qq, S[np.ix_(nz, nz)]))))
-    return float(val)
+
+    g_phi: np.ndarray
+    g_q: np.ndarray
+    g_r: float
+
+    @classmethod
+    def at(cls, model: StateSpace, s: Sums) -> MatrixScore:
+        """The gradient at θ_E's ``model`` from its E-step sums ``s`` (class docstring)."""
+        r = float(model.r)
+        g_r = -0.5 * (s.n_obs / r - _measurement_sse(model, s) / r**2)
+        p = model.n_states
+        g_phi, g_q = np.zeros((p, p)), np.zeros((p, p))
+        nz = np.diag(model.q) > 0
+        if np.any(nz):
+            q_inv = np.zeros((p, p))
+            q_inv[np.ix_(nz, nz)] = np.linalg.inv(model.q[np.ix_(nz, nz)])
+            S = transition_residual(s, model.phi, model.u)
+            cross = s.s10 - model.phi @ s.s00 - np.outer(model.u, s.x_prev)
+            g_phi = q_inv @ cross
+            g_q = -0.5 * ((s.n - 1) * q_inv - q_inv @ S @ q_inv)
+        initial = InitialTermGradient.at(model, s).sensitivity
+        if initial is not None:
+            g_phi, g_q, g_r = g_phi + initial.g_phi, g_q + initial.g_q, g_r + initial.g_r
+        return cls(g_phi, g_q, g_r)
+
+    def directional(self, states: slice, dphi: np.ndarray, dq: np.ndarray, dr: float) -> float:
+        """∂ℓ along a change dΦ, dQ of the block on ``states`` (the rest of Φ, Q unchanged) and dR."""
+        return float(np.vdot(self.g_phi[states, states], dphi) + np.vdot(self.g_q[states, states], dq)
+                     + self.g_r * dr)
 
 
 @dataclass(frozen=True)
 class InitialTermGradient:
-    """The x_1 term of Q to first order in the model matrices around θ_E, for the gradient of Q (beyond paper 000,
-    whose Σ is fixed).
+    """The x_1 term of Q to first order in the model matrices around θ_E, for :class:`MatrixScore` (beyond paper
+    000, whose Σ is fixed).
 
     With Σ = P̄(θ) (steady mode) the x_1 term −½(log det Σ + tr(Σ⁻¹E₁)), E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ] over the
     states with Σ_ii > 0, changes with θ through the DARE; its derivative is tr(W dΣ) with
     W = −½(Σ⁻¹ − Σ⁻¹E₁Σ⁻¹), and tr(W dP̄) is linear in the model matrices' change
-    (:class:`~imu_noise_id.core.kalman.riccati.SteadyCovarianceSensitivity`). :meth:`of_model` of a nearby model
-    differs from θ_E's by the term's change to first order, so finite differences of
-    ``q_function(…) + of_model(…)`` give ∂Q/∂θ without a DARE per step. In fixed mode Σ does not depend on θ and
-    the term drops out of every difference.
+    (:class:`~imu_noise_id.core.kalman.riccati.SteadyCovarianceSensitivity`). In fixed mode Σ does not depend on θ
+    and the term has no gradient (``sensitivity`` None).
     """
 
     sensitivity: riccati.SteadyCovarianceSensitivity | None
@@ -263,12 +264,6 @@ class InitialTermGradient:
             inv = np.linalg.inv(sigma[np.ix_(nz, nz)])
             W[np.ix_(nz, nz)] = -0.5 * (inv - inv @ e1 @ inv)  # symmetrised by the Stein sum
         return cls(riccati.SteadyCovarianceSensitivity.of(model.phi, model.q, model.h, float(model.r), P=sigma, W=W))
-
-    def of_model(self, model: StateSpace) -> float:
-        """The linear functional at ``model``'s matrices (0 in fixed mode)."""
-        if self.sensitivity is None:
-            return 0.0
-        return self.sensitivity.linear(model.phi, model.q, model.h, float(model.r))
 
 
 @dataclass

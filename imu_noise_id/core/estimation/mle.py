@@ -7,10 +7,10 @@ so positivity holds by construction. The mean parameters (bias, ramp slope, exog
 profiled out by GLS inside the likelihood (:func:`imu_noise_id.core.kalman.loglik`).
 
 The gradient is exact and cheap: by Fisher's identity ∂ℓ/∂ϑ = ∂Q(ϑ | ϑ_E)/∂ϑ at ϑ = ϑ_E, with Q the EM's
-expected complete-data log-likelihood (:func:`imu_noise_id.core.estimation.em.q_function`), evaluated from one smoother
-pass; the derivative of Q (a closed-form function of a few sums) is taken by central differences, but for its
-x_1 term, whose Σ = P̄(ϑ) would need a Riccati solve per step: that term's derivative comes from the DARE's adjoint,
-one Stein sum per gradient (:class:`imu_noise_id.core.estimation.em.InitialTermGradient`).
+expected complete-data log-likelihood, from one smoother pass. Its derivatives in the model matrices Φ, Q, R are
+closed forms in the E-step sums (:class:`imu_noise_id.core.estimation.em.MatrixScore`; the x_1 term's, whose
+Σ = P̄(ϑ), from the DARE's adjoint, one Stein sum per gradient), and each log-parameter moves only its own
+component's block, whose change is taken by central differences of that block alone.
 
 Standard errors (paper 000 §3.4): the observed information is minus a numerical Hessian of ℓ (central
 differences of the exact gradient); for positive parameters the 95 % interval is exp(ϑ̂ ± 1.96·se_ϑ) and the
@@ -22,7 +22,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import minimize
@@ -30,7 +30,7 @@ from scipy.optimize import minimize
 from .. import kalman
 from ..errors import InputError
 from ..kalman.common import ProfileResult, check_data
-from ..kalman.statespace import StateSpace, with_components
+from ..kalman.statespace import StateSpace, state_span, with_components
 from ..noise.components import RR, Component
 from . import em
 from .differences import derivative_in_domain, stepped
@@ -110,6 +110,24 @@ class Parameterisation:
         comps = self.to_components(theta, base)
         return with_components(base, comps)
 
+    def block_derivative(self, component: Component, theta: np.ndarray, k: int, dt: float,
+                         step: float) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """∂(Φ, Q, R)/∂ϑ_k of the block of ``component`` (the one log-parameter k belongs to, at ϑ = ``theta``) by
+        central differences of ``step`` (one-sided at a domain's edge, :func:`derivative_in_domain`): its Φ and Q
+        block and R (white noise only); None when no step stays inside the component's domain."""
+        name = self.entries[k][1]
+
+        def matrices(h: float) -> np.ndarray:
+            block = (replace(component, **{name: float(np.exp(theta[k] + h))}) if h else component).block(dt)
+            return np.concatenate([block.phi.ravel(), block.q.ravel(), [block.r]])
+
+        d = derivative_in_domain(matrices, step, lambda: matrices(0.0))
+        if d is None:
+            return None
+        p2 = (d.size - 1) // 2
+        p = math.isqrt(p2)
+        return d[:p2].reshape(p, p), d[p2:-1].reshape(p, p), float(d[-1])
+
 
 def loglik_and_grad(
     par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *,
@@ -122,26 +140,22 @@ def loglik_and_grad(
 
 def loglik_grad_profile(
     par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *,
-    step: float = 1e-6, data: em.DataSums | None = None, central: bool = True,
+    step: float = 1e-6, data: em.DataSums | None = None,
 ) -> tuple[float, np.ndarray, StateSpace, ProfileResult]:
-    """:func:`loglik_and_grad` and the GLS profile itself (β̂, its covariance). ``central=False``: forward
-    differences of Q (half the evaluations; an O(step) error, immaterial away from the optimum's last digits)."""
+    """:func:`loglik_and_grad` and the GLS profile itself (β̂, its covariance): the gradient is the log-likelihood's
+    gradient in the model matrices (:class:`~imu_noise_id.core.estimation.em.MatrixScore`, one smoother pass)
+    along each log-parameter's change of its own block (:meth:`Parameterisation.block_derivative`, differences
+    of ``step``)."""
     prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
-    sums = em.sums_from_stats(stats, data or em.DataSums.of(y, z))
+    score = em.MatrixScore.at(model, em.sums_from_stats(stats, data or em.DataSums.of(y, z)))
+    components = par.to_components(theta)
     grad = np.empty(theta.size)
-    initial = em.InitialTermGradient.at(model, sums)
-
-    def q_near(th: np.ndarray) -> float:
-        """Q at ϑ near the E-step's, its x_1 term to first order (no DARE per step: em.InitialTermGradient)."""
-        near = par.to_model(th, model)
-        return em.q_function(near, sums, model) + initial.of_model(near)
-
-    at_theta = functools.cache(lambda: q_near(theta))
     for k in range(theta.size):
-        d = derivative_in_domain(lambda h, k=k: q_near(stepped(theta, k, h)), step, at_theta, central=central)
-        if d is None:
+        i = par.entries[k][0]
+        change = par.block_derivative(components[i], theta, k, model.dt, step)
+        if change is None:
             raise ValueError(f"no step of {step:g} around log-parameter {k} stays inside the components' domains")
-        grad[k] = float(d)
+        grad[k] = score.directional(state_span(model.blocks[i].states), *change)
     return prof.loglik, grad, model, prof
 
 

@@ -286,8 +286,7 @@ class Profiler:
             th, inside = theta_of(x)
             self.n_eval += 1
             try:
-                ll, g, _, prof = mle.loglik_grad_profile(self.par, th, base, self.y, self.z, data=self.data,
-                                                        central=False)
+                ll, g, _, prof = mle.loglik_grad_profile(self.par, th, base, self.y, self.z, data=self.data)
             except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
                 return FAILED_DROP, np.zeros_like(x)
             if not math.isfinite(ll):

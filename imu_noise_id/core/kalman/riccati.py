@@ -137,8 +137,9 @@ class SteadyCovarianceSensitivity:
 
         G_Φ = 2 M Φ P_u,   G_Q = M,   g_r = Kᵀ N K,   g_h = −2 P̄ (I − K h)ᵀ N K.
 
-    This replaces a DARE solve per finite-difference step of the log-likelihood gradient (Fisher's identity,
-    :func:`imu_noise_id.core.estimation.mle.loglik_grad_profile`) by one Stein solve per gradient.
+    It gives the initial-state term's share of the log-likelihood's gradient in the model matrices (Fisher's
+    identity, :class:`imu_noise_id.core.estimation.em.MatrixScore`) with one Stein solve, where differences of P̄
+    would need a DARE solve per direction.
     """
 
     g_phi: np.ndarray
@@ -159,8 +160,3 @@ class SteadyCovarianceSensitivity:
         NK = N @ K
         closed = np.eye(h.size) - np.outer(K, h)
         return cls(g_phi=2.0 * M @ phi @ P_u, g_q=M, g_h=-2.0 * P @ closed.T @ NK, g_r=float(K @ NK))
-
-    def linear(self, phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> float:
-        """The linear functional ⟨G_Φ, Φ⟩ + ⟨G_Q, Q⟩ + g_h·h + g_r·r of a model's matrices: its difference between
-        two nearby models is tr(W ΔP̄) to first order."""
-        return float(np.vdot(self.g_phi, phi) + np.vdot(self.g_q, q) + self.g_h @ h + self.g_r * r)

@@ -235,9 +235,10 @@ def component_block(component: Component, dt: float) -> StateBlock:
     return block
 
 
-def _span(states: tuple[int, ...]) -> slice:
-    """The block's states as a slice (:func:`from_components` gives each block consecutive states)."""
-    return slice(states[0], states[-1] + 1)
+def state_span(states: tuple[int, ...]) -> slice:
+    """The block's states as a slice (:func:`from_components` gives each block consecutive states); empty for a
+    block without states (WN)."""
+    return slice(states[0], states[-1] + 1) if states else slice(0, 0)
 
 
 def from_components(
@@ -327,7 +328,7 @@ def from_components(
         else:
             info.append(BlockInfo(c.name, states=state_of.get(k, ())))
     for k, blk in blocks_of.items():
-        span = _span(state_of[k])
+        span = state_span(state_of[k])
         sigma[span, span] = _fixed_initial_covariance(blk, r)
     regressors.extend(exog_names)
     b_values.extend([0.0] * len(exog_names))
@@ -359,7 +360,7 @@ def with_components(model: StateSpace, components: list[Component]) -> StateSpac
                 out.u[blk.input_state] = c.slope * model.dt
         else:
             sb = component_block(c, model.dt)
-            span = _span(blk.states)
+            span = state_span(blk.states)
             out.phi[span, span] = sb.phi
             out.q[span, span] = sb.q
     return out
@@ -387,7 +388,7 @@ def to_components(model: StateSpace) -> list[Component]:
         elif blk.name == "RR":
             out.append(_ramp(model, blk))
         else:
-            span = _span(blk.states)
+            span = state_span(blk.states)
             out.append(COMPONENT_TYPES[blk.name].from_block(model.phi[span, span].copy(), model.q[span, span].copy(),
                                                             dt))
     return out
