@@ -1,15 +1,18 @@
-"""CPU time of the closed loop on measured ADIS16405 axes, this checkout against other checkouts side by side.
+"""CPU time of the closed loop on measured axes, this checkout against other checkouts side by side.
 
-Each axis (its first ``--samples`` samples) runs the loop from WN+RW once per source tree, the trees in alternation
+An axis is ``RUN:AXIS`` of the ADIS16405 static runs or ``broadTRIAL:AXIS`` of a BROAD trial's rest before its
+motion (a consumer module's short record, ``bench/broad.py``). Each axis (its first ``--samples`` samples) runs the
+loop from WN+RW once per source tree, the trees in alternation
 and each in its own process with ``OPENBLAS_NUM_THREADS=1``, so that a speed claim is a ratio measured side by side
 in one run. Printed per axis and tree: the process's CPU time, the final model, its log-likelihood (full
 precision) and whether model, log-likelihood (to the last digit) and verdict equal the first tree's (each tree's
 package is checked to be the one imported)::
 
     git worktree add ../baseline <commit>
-    .venv/bin/python bench/bench_loop_measured_time.py --baseline ../baseline --axes 1:accel_x
+    .venv/bin/python bench/bench_loop_measured_time.py --baseline ../baseline --axes 1:accel_x broad10:gyro_x
 
-Needs ``../shared/data/adis16405_static`` (third-party data, not in the repository).
+Needs ``../shared/data/adis16405_static`` and, for the BROAD axes, ``../shared/data/broad_trials`` (third-party
+data, not in the repository).
 """
 
 from __future__ import annotations
@@ -28,25 +31,30 @@ ROOT = Path(__file__).resolve().parents[1]
 ONE_AXIS = """
 import json, sys
 sys.path.insert(0, {bench!r})
-from adis import load_run
+from {loader_module} import {loader}
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.pipelines.loop.run import run_closed_loop
-data, dt = load_run({run}, {samples})
+data, dt = {loader}({run}, {samples})
 r = run_closed_loop(data[:, AXES.index({axis!r})], dt, "WN+RW", axis={axis!r})
 fit = r.steps[-1].diagnosis.fit
 print(json.dumps({{"model": fit.model, "loglik": repr(fit.loglik), "verdict": r.verdict}}))
 """
 
 
-def run_axis(source: Path, run: int, axis: str, samples: int) -> tuple[float, dict]:
-    """(CPU [s] of the child, its JSON line) of the loop on one axis with ``source``'s package."""
-    code = ONE_AXIS.format(bench=str(ROOT / "bench"), run=run, samples=samples, axis=axis)
-    return run_in_checkout(source, code, f"the loop on run {run} {axis}")
+def run_axis(source: Path, record: str, axis: str, samples: int) -> tuple[float, dict]:
+    """(CPU [s] of the child, its JSON line) of the loop on one axis of ``record`` (an ADIS16405 run's number or
+    ``broadTRIAL``) with ``source``'s package."""
+    broad = record.startswith("broad")
+    code = ONE_AXIS.format(bench=str(ROOT / "bench"), loader_module="broad" if broad else "adis",
+                           loader="load_rest" if broad else "load_run", run=int(record.removeprefix("broad")),
+                           samples=samples, axis=axis)
+    return run_in_checkout(source, code, f"the loop on {record} {axis}")
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--axes", nargs="+", default=["1:accel_x"], help="RUN:AXIS pairs (default 1:accel_x)")
+    parser.add_argument("--axes", nargs="+", default=["1:accel_x"],
+                        help="RUN:AXIS or broadTRIAL:AXIS pairs (default 1:accel_x)")
     parser.add_argument("--samples", type=int, default=100_000, help="first samples of each run (default 10^5)")
     parser.add_argument("--baseline", type=Path, action="append", default=[], help="another checkout (repeatable)")
     args = parser.parse_args(argv)
@@ -56,13 +64,14 @@ def main(argv: list[str] | None = None) -> int:
     print(f"# bench/bench_loop_measured_time.py --samples {args.samples}; {os.cpu_count()} CPUs; load average "
           f"before {os.getloadavg()[0]:.2f}")
     for pair in args.axes:
-        run, axis = pair.split(":")
+        record, axis = pair.split(":")
+        label = f"BROAD {record.removeprefix('broad')} rest" if record.startswith("broad") else f"run {record}"
         first: dict | None = None
         for name, source in sources:
-            cpu, out = run_axis(source, int(run), axis, args.samples)
+            cpu, out = run_axis(source, record, axis, args.samples)
             first = first or out
             same = all(out[key] == first[key] for key in ("model", "loglik", "verdict"))
-            print(f"run {run} {axis:8s} {name:40s} CPU {cpu:7.1f} s  {out['model']}  loglik {out['loglik']}  "
+            print(f"{label} {axis:8s} {name:40s} CPU {cpu:7.1f} s  {out['model']}  loglik {out['loglik']}  "
                   f"{'identical' if same else 'DIFFERENT'} to the first", flush=True)
     print(f"load average after {os.getloadavg()[0]:.2f}")
     return 0
