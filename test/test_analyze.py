@@ -15,7 +15,7 @@ from imu_noise_id.core.axes import AXES, GYRO_AXES, ImuSeries
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.noise.components import RW, WN
 from imu_noise_id.core.simulation.static import simulate_static_imu
-from imu_noise_id.pipelines.analyze import AnalysisResult
+from imu_noise_id.pipelines.analyze import AnalysisResult, AnalyzeOptions, ModelStage, analyze
 from imu_noise_id.pipelines.analyze.static import NotStaticError, analyze_static, kalibr_parameters
 from imu_noise_id.report.analysis import write_analysis
 from imu_noise_id.report.console import summary_table
@@ -101,6 +101,30 @@ def test_non_static_data_is_refused_then_allowed():
         analyze_static(moving, kinds=("allan",))
     result = analyze_static(moving, kinds=("allan",), allow_motion=True)
     assert any(w.startswith("not static") for w in result.warnings)
+
+
+def test_a_moment_of_motion_is_refused_with_its_still_stretch_which_analyze_then_takes(tmp_path, capsys):
+    # The record cut 1.5 s late (a hand already on the sensor): refused, naming the burst and the --span of the
+    # still stretch before it; analyze and the CLI then take just that stretch and say so.
+    imu = simulate_static_imu(_model(), 100.0, 60.0, seed=1)
+    u = imu.t - imu.t[0] - 58.0
+    shake = np.where(u >= 0, 0.2 * np.exp(-u / 1.5) * np.sin(2 * np.pi * 8.0 * u), 0.0)
+    touched = ImuSeries(t=imu.t, gyro=imu.gyro + shake[:, None], accel=imu.accel, topic="/imu/touched")
+    with pytest.raises(NotStaticError, match=r"/imu/touched.*motion bursts at t = 58\.0–.*--span 0\.0:57\.0"):
+        analyze_static(touched, kinds=("allan",))
+    result = analyze(touched, options=AnalyzeOptions(models=ModelStage("none"), span=(0.0, 57.0)))
+    assert result.static.n == 5701 and any(w.startswith("analysed t = 0–57 s") for w in result.static.warnings)
+    with pytest.raises(InputError, match="span 70:80 s holds fewer than two samples"):
+        analyze(touched, options=AnalyzeOptions(models=ModelStage("none"), span=(70.0, 80.0)))
+    bag = tmp_path / "touched.npz"
+    np.savez(bag, t=touched.t, gyro=touched.gyro, accel=touched.accel)
+    assert main(["analyze", str(bag), "--out", str(tmp_path / "refused"), "--model", "none"]) == 2
+    assert "--span 0.0:57.0" in capsys.readouterr().err and not (tmp_path / "refused").exists()
+    assert main(["analyze", str(bag), "--out", str(tmp_path / "still"), "--model", "none", "--span", "0:57"]) == 0
+    assert "analysed t = 0–57 s" in str(yaml.safe_load((tmp_path / "still" / "imu.yaml").read_text()))
+    with pytest.raises(SystemExit) as exc:
+        main(["analyze", str(bag), "--span", "57"])
+    assert exc.value.code == 2 and "START:END" in capsys.readouterr().err
 
 
 def test_bad_input_clear_errors():

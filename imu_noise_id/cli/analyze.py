@@ -12,7 +12,7 @@ from pathlib import Path
 
 from ..core.estimation.overbound import DEFAULT_HORIZON_S
 from . import add_rate_option, results_folder
-from .options import add_out, add_topic, model_spec
+from .options import add_out, add_topic, model_spec, span_spec
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -55,6 +55,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="analyse even if the static check finds motion (its findings become warnings)",
     )
     p.add_argument(
+        "--span", type=span_spec, default=None, metavar="START:END",
+        help="analyse only the samples from START to END seconds after the first one (START: or :END for the "
+        "rest), e.g. the still stretch the static check suggests around a moment of motion")
+    p.add_argument(
         "--horizon", type=float, default=DEFAULT_HORIZON_S, metavar="S",
         help="longest time scale [s] the overbound must cover: the smallest WN+RW whose Allan variance lies above "
         "the data's upper bound and the final model from the sampling period to S (imu.yaml 'overbound:', "
@@ -96,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
                              models=ModelStage(args.model, estimator=args.estimator,
                                                gmwm=GmwmOptions(robust=args.robust)),
-                             loop=not args.no_loop, horizon_s=args.horizon, jobs=args.jobs)
+                             loop=not args.no_loop, horizon_s=args.horizon, jobs=args.jobs, span=args.span)
     with TextProgress(f"reading {args.bag.name}") as progress:
         recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
     allan = TextProgress("Allan-family variances")

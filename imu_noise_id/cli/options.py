@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from collections.abc import Callable
 from pathlib import Path
 
@@ -101,3 +102,22 @@ def model_spec(*keywords: str) -> Callable[[str], str]:
 
     check.__name__ = "model spec"  # argparse names the type in its message
     return check
+
+
+def span_spec(text: str) -> tuple[float, float]:
+    """An argparse ``type`` for ``START:END``, seconds from the first sample (``START:`` to the end, ``:END`` from
+    the start)."""
+    start, sep, end = text.partition(":")
+    try:
+        if not sep:
+            raise ValueError
+        span = (float(start) if start.strip() else 0.0, float(end) if end.strip() else math.inf)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not START:END in seconds from the first sample, e.g. "
+                                         "0:35.3 or 120:") from None
+    if not (0.0 <= span[0] < span[1]) or math.isnan(span[0]):
+        raise argparse.ArgumentTypeError(f"{text!r}: START must be ≥ 0 and below END")
+    return span
+
+
+span_spec.__name__ = "span"  # argparse names the type in its message

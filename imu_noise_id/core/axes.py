@@ -6,10 +6,12 @@ The six axes are named ``gyro_x gyro_y gyro_z accel_x accel_y accel_z`` in the s
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import InputError
 from .timing import SamplePeriod, estimate_period
 
 GYRO_AXES: tuple[str, ...] = ("gyro_x", "gyro_y", "gyro_z")
@@ -109,6 +111,31 @@ class ImuSeries:
     def rate(self) -> float:
         """Sampling rate [Hz] (1 / :attr:`dt`)."""
         return 1.0 / self.dt
+
+    def between(self, start_s: float, end_s: float) -> ImuSeries:
+        """The samples from ``start_s`` to ``end_s`` [s] after the first one (both included; ``end_s`` may be inf),
+        with a note saying
+        which part of the record they are; the reader's period estimate is kept (the same clock).
+
+        Raises
+        ------
+        InputError
+            The span is empty, reversed or holds fewer than two samples.
+        """
+        elapsed = self.t - self.t[0]
+        if not (math.isfinite(start_s) and 0.0 <= start_s < end_s):
+            raise InputError(f"{self.topic or 'input'}: span {start_s:g}:{end_s:g} s must be two times [s] from "
+                             "the first sample, the first ≥ 0 and below the second (inf: to the end)")
+        keep = (elapsed >= start_s) & (elapsed <= end_s)
+        if np.count_nonzero(keep) < 2:
+            raise InputError(f"{self.topic or 'input'}: span {start_s:g}:{end_s:g} s holds fewer than two samples "
+                             f"of the record's 0–{elapsed[-1]:.4g} s")
+        orientation = self.orientation_xyzw[keep] if self.orientation_xyzw is not None else None
+        note = (f"analysed t = {start_s:g}–{min(end_s, float(elapsed[-1])):.4g} s from the first sample (span) of "
+                f"the record's 0–{elapsed[-1]:.4g} s")
+        return ImuSeries(t=self.t[keep], gyro=self.gyro[keep], accel=self.accel[keep], frame_id=self.frame_id,
+                         topic=self.topic, notes=[*self.notes, note], orientation_xyzw=orientation,
+                         period=self.period)
 
     def samples(self) -> np.ndarray:
         """All six axes as one (N, 6) array in :data:`AXES` order."""

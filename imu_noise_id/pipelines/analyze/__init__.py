@@ -72,6 +72,9 @@ class AnalyzeOptions:
         Worker processes for stages 2–5, one axis each: 0 (default) one per available core, at most one per axis,
         on records of at least :data:`PARALLEL_MIN_SAMPLES` samples per axis (shorter ones in this process); 1 all
         in this process.
+    span
+        Analyse only the samples from ``span[0]`` to ``span[1]`` [s] after the first one (e.g. the still stretch
+        the static check suggests around a moment of motion); None: the whole record.
     """
 
     kinds: tuple[str, ...] = KINDS
@@ -82,6 +85,7 @@ class AnalyzeOptions:
     loop: bool = True
     horizon_s: float = DEFAULT_HORIZON_S
     jobs: int = 0
+    span: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         if self.jobs < 0:
@@ -156,6 +160,8 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
         Input a user can fix (too short, not static, constant axis, …): the message says what and what to do.
     """
     options = options or AnalyzeOptions()
+    if options.span is not None:
+        imu = imu.between(*options.span)
     static = analyze_static(imu, kinds=options.kinds, per_decade=options.per_decade, confidence=options.confidence,
                             allow_motion=options.allow_motion, progress=progress)
     result = AnalysisResult(static)

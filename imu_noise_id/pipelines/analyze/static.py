@@ -208,9 +208,13 @@ def analyze_static(
     warnings = list(imu.notes) + timing
     check = static_check(imu, dt)
     if check.flags and not allow_motion:
+        still = "" if check.still_span is None else (
+            "; or analyse its longest still stretch alone: span=({0:.1f}, {1:.1f}) (CLI: --span {0:.1f}:{1:.1f})"
+            .format(*check.still_span))
         raise NotStaticError(
             f"{imu.topic or 'input'} does not look static: " + "; ".join(check.flags)
             + ". A static analysis needs the IMU at rest; pass allow_motion (CLI: --allow-motion) to analyse anyway"
+            + still
         )
     warnings += [f"not static: {m}" for m in check.flags] + check.notes
     wanted = ["allan", *[k for k in kinds if k != "allan"]]
