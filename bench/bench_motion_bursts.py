@@ -18,14 +18,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from broad import MOTION_MARGIN_S  # bench/broad.py, beside this script
 from numpy.lib.stride_tricks import sliding_window_view
 
 from imu_noise_id.core.axes import AXES, ImuSeries
 from imu_noise_id.core.quality import BURST_RATIO, burst_window, spread_ratios, static_check
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-#: The BROAD phases are also cut this much [s] farther from the motion.
-MARGIN_S = 2.0
 
 
 def sustained(x: np.ndarray, dt: float) -> float:
@@ -60,12 +59,12 @@ def main() -> int:
         moving = d["movement"]
         first, last = int(np.argmax(moving)), len(moving) - int(np.argmax(moving[::-1]))
         dt = float(np.median(np.diff(d["t"])))
-        margin = round(MARGIN_S / dt)
+        margin = round(MOTION_MARGIN_S / dt)
         trial = path.name.split("_")[1]
         for label, part in (("rest before, as flagged", slice(0, first)),
-                            (f"rest before, {MARGIN_S:g} s earlier", slice(0, first - margin)),
+                            (f"rest before, {MOTION_MARGIN_S:g} s earlier", slice(0, first - margin)),
                             ("rest after, as flagged", slice(last, None)),
-                            (f"rest after, {MARGIN_S:g} s later", slice(last + margin, None))):
+                            (f"rest after, {MOTION_MARGIN_S:g} s later", slice(last + margin, None))):
             report(f"BROAD {trial} {label}", d["gyro"][part], d["accel"][part], dt)
     return 0
 
