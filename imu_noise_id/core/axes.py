@@ -114,8 +114,8 @@ class ImuSeries:
 
     def between(self, start_s: float, end_s: float) -> ImuSeries:
         """The samples from ``start_s`` to ``end_s`` [s] after the first one (both included; ``end_s`` may be inf),
-        with a note saying
-        which part of the record they are; the reader's period estimate is kept (the same clock).
+        with a note saying which part of the record they are; the reader's period estimate is kept (the same
+        clock).
 
         Raises
         ------

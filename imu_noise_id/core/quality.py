@@ -349,7 +349,7 @@ class MotionBurst:
 
     Attributes
     ----------
-    start_s, end_s : its time from the first sample [s]
+    start_s, end_s : the stamps of its first and last sample, from the first sample's [s]
     axes : the axes that burst
     ratio : the largest sustained spread ratio over those axes (the smallest window ratio of the burst's windows)
     """
@@ -429,7 +429,8 @@ def motion_bursts(imu: ImuSeries, dt: float) -> list[MotionBurst]:
         axes = tuple(name for i, name in enumerate(AXES) if bursting[i, a:b].any())
         sustained = max(float(np.min(ratio[i, a:b][bursting[i, a:b]])) for i in range(len(AXES))
                         if bursting[i, a:b].any())
-        out.append(MotionBurst(a * width * dt, b * width * dt, axes, sustained))
+        elapsed = imu.t[[a * width, b * width - 1]] - imu.t[0]  # the stamps: the times a span selects by
+        out.append(MotionBurst(float(elapsed[0]), float(elapsed[1]), axes, sustained))
     return out
 
 
@@ -506,5 +507,5 @@ def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STAND
             f"spread at least {BURST_RATIO:g}× wider than over the record ({BURST_WINDOW_S:g} s windows): the IMU "
             "was moved, touched or knocked"
         )
-        out.still_span = still_span(out.bursts, n * dt)
+        out.still_span = still_span(out.bursts, float(imu.t[-1] - imu.t[0]))
     return out
