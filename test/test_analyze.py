@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import yaml
 
+from imu_noise_id.bag.writer import write_bag
 from imu_noise_id.cli import main
 from imu_noise_id.cli.progress import TextProgress
 from imu_noise_id.core.axes import AXES, GYRO_AXES, ImuSeries
@@ -125,6 +126,10 @@ def test_a_moment_of_motion_is_refused_with_its_still_stretch_which_analyze_then
     with pytest.raises(SystemExit) as exc:
         main(["analyze", str(bag), "--span", "57"])
     assert exc.value.code == 2 and "START:END" in capsys.readouterr().err
+    write_bag(tmp_path / "touched_bag", touched)
+    assert main(["inspect", str(tmp_path / "touched_bag")]) == 0
+    out = capsys.readouterr().out
+    assert "motion bursts at t = 58.0–" in out and "the longest still stretch: analyze --span 0.0:57.0" in out
 
 
 def test_bad_input_clear_errors():

@@ -81,6 +81,8 @@ def run(args: argparse.Namespace) -> int:
         print("not static (a static noise analysis of these data would be wrong):")
         for flag in check.flags:
             print(f"  - {flag}")
+        if check.still_span is not None:
+            print("  the longest still stretch: analyze --span {:.1f}:{:.1f}".format(*check.still_span))
     else:
         print("looks static: fine for the offline noise analysis")
     for note in check.notes:
