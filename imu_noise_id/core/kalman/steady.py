@@ -106,6 +106,13 @@ def _accumulate(terms: Iterable[np.ndarray]) -> np.ndarray:
     return out
 
 
+def _characteristic(B: np.ndarray) -> list[float]:
+    """det(zI − B) of a 1×1 or 2×2 block as the coefficients [1, a_1(, a_2)] of the filters' common denominator."""
+    if B.shape[0] == 1:
+        return [1.0, -B[0, 0]]
+    return [1.0, -(B[0, 0] + B[1, 1]), B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]]
+
+
 def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) -> None:
     """x_0 = w0, x_{t+1} = B x_t + d_t for one diagonal block B (1×1 or 2×2), written into ``out``; d and out
     (s, m, N), w0 (s, m).
@@ -114,10 +121,10 @@ def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) ->
     (:func:`_strictly_proper`), per component one ``lfilter`` per input, numerators the rows of adj(zI − B),
     denominator det(zI − B) (order 1 or 2, real coefficients).
     """
+    den = _characteristic(B)
     if B.shape[0] == 1:
-        out[...] = _strictly_proper((0.0, 1.0), [1.0, -B[0, 0]], d, w0)
+        out[...] = _strictly_proper((0.0, 1.0), den, d, w0)
         return
-    den = [1.0, -(B[0, 0] + B[1, 1]), B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]]
     adj = (((0.0, 1.0, -B[1, 1]), (0.0, 0.0, B[0, 1])), ((0.0, 0.0, B[1, 0]), (0.0, 1.0, -B[0, 0])))
     for r in range(2):
         out[r] = _accumulate(_strictly_proper(adj[r][c], den, d[c], w0[c])
@@ -127,11 +134,11 @@ def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) ->
 def _block_output(B: np.ndarray, c: np.ndarray, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
     """c·x_t (m, N) of :func:`_run_block`'s recursion for one block B, without its states: one ``lfilter`` per input
     of the block, numerator c·adj(zI − B) (the states of every column would be p × m × N numbers to store)."""
+    den = _characteristic(B)
     if B.shape[0] == 1:
-        out = _strictly_proper((0.0, 1.0), [1.0, -B[0, 0]], d[0], w0[0])
+        out = _strictly_proper((0.0, 1.0), den, d[0], w0[0])
         out *= c[0]
         return out
-    den = [1.0, -(B[0, 0] + B[1, 1]), B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]]
     num = ((0.0, c[0], c[1] * B[1, 0] - c[0] * B[1, 1]), (0.0, c[1], c[0] * B[0, 1] - c[1] * B[0, 0]))
     return _accumulate(_strictly_proper(num[k], den, d[k], w0[k]) for k in range(2))
 
