@@ -28,7 +28,7 @@ VARIANTS = {
 STAGES = {
     "read_imu": "from imu_noise_id.bag.reader import read_imu; imu = read_imu({bag!r})",
     "read_imu + static_check": "from imu_noise_id.bag.reader import read_imu; "
-    "from imu_noise_id.core.quality import static_check; imu = read_imu({bag!r}); static_check(imu)",
+    "from imu_noise_id.core.stillness import static_check; imu = read_imu({bag!r}); static_check(imu)",
     "read_imu + analyze_static (all 4 kinds)": "from imu_noise_id.bag.reader import read_imu; "
     "from imu_noise_id.pipelines.analyze.static import analyze_static; imu = read_imu({bag!r}); analyze_static(imu)",
 }

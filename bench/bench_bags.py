@@ -179,7 +179,7 @@ def part_b(directory: Path, duration: float) -> None:
     peak, wall, rc = peak_rss_of([sys.executable, "-c", code], env)
     if rc != 0:
         raise SystemExit(f"reading failed with exit code {rc}")
-    check = code.replace("; import time", "; from imu_noise_id.core.quality import static_check; "
+    check = code.replace("; import time", "; from imu_noise_id.core.stillness import static_check; "
                          "assert static_check(imu).static; import time")  # fmt: skip
     peak_check, wall_check, rc = peak_rss_of([sys.executable, "-c", check], env)
     if rc != 0:

@@ -1,12 +1,12 @@
-"""Motion bursts in measured records: what the static check's burst test (:func:`imu_noise_id.core.quality.
+"""Motion bursts in measured records: what the static check's burst test (:func:`imu_noise_id.core.stillness.
 motion_bursts`) reads on the real recordings of ``../shared/data``.
 
 Usage (from the repository root)::
 
     PYTHONPATH=$PWD python bench/bench_motion_bursts.py > docs/results/bench_motion_bursts.txt
 
-Per record and axis: the largest spread ratio any burst-long stretch (:data:`~imu_noise_id.core.quality.
-BURST_MIN_S`) holds in all its windows (the statistic :data:`~imu_noise_id.core.quality.BURST_RATIO` is compared
+Per record and axis: the largest spread ratio any burst-long stretch (:data:`~imu_noise_id.core.stillness.
+BURST_MIN_S`) holds in all its windows (the statistic :data:`~imu_noise_id.core.stillness.BURST_RATIO` is compared
 with), then the static check's bursts and the still stretch it suggests. Records: the six ADIS16405 static runs
 (2.8 h each), the MTi-G gyro (1.4 h, one axis) and the BROAD trials' rest phases, as the data's ``movement`` flag
 cuts them and 2 s farther from the motion (the flag lags the motion's start by 0.1–1.3 s).
@@ -22,7 +22,7 @@ from broad import MOTION_MARGIN_S  # bench/broad.py, beside this script
 from numpy.lib.stride_tricks import sliding_window_view
 
 from imu_noise_id.core.axes import AXES, ImuSeries
-from imu_noise_id.core.quality import BURST_RATIO, burst_window, spread_ratios, static_check
+from imu_noise_id.core.stillness import BURST_RATIO, burst_window, spread_ratios, static_check
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 

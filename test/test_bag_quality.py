@@ -1,4 +1,4 @@
-"""Core repairs and checks of time series (imu_noise_id.core.quality): pure arrays, no bags."""
+"""Core repairs and stillness checks of time series (core.quality, core.stillness): pure arrays, no bags."""
 
 from __future__ import annotations
 
@@ -9,8 +9,9 @@ import pytest
 
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.noise.modelspec import parse_imu_model
-from imu_noise_id.core.quality import QualityError, StaticCheck, repair_time_series, static_check
+from imu_noise_id.core.quality import QualityError, repair_time_series
 from imu_noise_id.core.simulation.static import simulate_static_imu
+from imu_noise_id.core.stillness import StaticCheck, static_check
 
 
 def _series(n: int = 1000, dt: float = 0.01, t0: float = 100.0) -> tuple[np.ndarray, np.ndarray]:

@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
 
     from ..bag.reader import read_bag
     from ..bag.topics import list_topics
-    from ..core.quality import static_check
+    from ..core.stillness import static_check
 
     topics = list_topics(args.bag)
     print(f"{args.bag}:")

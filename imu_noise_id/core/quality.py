@@ -16,7 +16,7 @@ Repairs done by :func:`repair_time_series`, in this order, each counted in the r
 6. find gaps: intervals longer than ``gap_factor`` × the period (bursty stamps: × their 99th-percentile interval).
    Gaps are reported, not filled.
 
-:func:`static_check` flags data that is clearly not from a static sensor (for the static noise analyses).
+Whether a record is from a still sensor is :mod:`.stillness`'s question.
 """
 
 from __future__ import annotations
@@ -26,7 +26,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .axes import AXES, ImuSeries
 from .errors import InputError
 from .timing import SamplePeriod, estimate_period
 
@@ -36,9 +35,6 @@ ZERO_STAMP_CLOCK_S = 60.0
 GLITCH_PERIODS = 100
 #: A gap is an interval longer than this many periods.
 GAP_FACTOR = 1.5
-#: Standard gravity [m/s²], as in :mod:`.simulate` (not imported from there: it would pull in scipy, ~80 MB of
-#: memory, into the bag reader).
-STANDARD_GRAVITY = 9.80665
 #: No IMU measures more than this: (gyro [rad/s] ≈ 57 000 °/s, accel [m/s²] ≈ 1000 g).
 IMU_MAX_ABS: tuple[float, float] = (1e3, 1e4)
 #: Above this fraction of impossible values the series is rejected rather than repaired.
@@ -306,206 +302,4 @@ def interpolate_missing(y: np.ndarray) -> np.ndarray:
     idx = np.arange(y.size)
     out = np.array(y, dtype=float)
     out[bad] = np.interp(idx[bad], idx[~bad], y[~bad])
-    return out
-
-
-# --- static check -------------------------------------------------------------------------------------------
-
-#: |mean specific force| may differ from standard gravity by this much without comment [m/s²] (local gravity spans
-#: 9.78–9.83 m/s²); a larger difference within :data:`GRAVITY_SCALE_TOLERANCE` is noted (scale or bias error).
-GRAVITY_TOLERANCE = 0.3
-#: Relative difference of |mean specific force| from gravity beyond which the record is not a static IMU reading
-#: gravity in m/s² (gravity removed, g units, or strong motion); consumer accelerometers err by a few % at most.
-GRAVITY_SCALE_TOLERANCE = 0.10
-#: Standard deviation of 1 s means above which a gyro axis is rotating rather than drifting [rad/s] (≈0.6 °/s).
-GYRO_BLOCK_STD_MAX = 0.01
-#: Standard deviation of 1 s means above which an accelerometer axis is moving or tilting [m/s²].
-ACCEL_BLOCK_STD_MAX = 0.05
-#: Length of the blocks whose means reveal low-frequency motion [s].
-BLOCK_S = 1.0
-
-
-#: Motion bursts: the spread of the samples is measured in windows of this length [s] …
-BURST_WINDOW_S = 0.25
-#: … as the mean square deviation from the window's median of all but this share of its samples (the largest
-#: deviations: a few spikes in a window are outliers, not motion) …
-BURST_TRIM = 0.1
-#: … and a burst is a stretch of at least :data:`BURST_MIN_S` [s] whose windows all spread this many times more
-#: than the record's median window on some axis: a touch, a knock, the start of a motion. On the real records of
-#: ``../shared/data`` (``bench/bench_motion_bursts.py``) the still ones stay at 8.3 or below (ADIS16405 runs 1–6,
-#: 2.8 h each, but for run 4; the MTi-G gyro; the BROAD rest phases), run 4's accel_y reaches 11.5, and so does the
-#: motion's settling in the 35 s BROAD trial 10 marks as rest after it; the knocks in ADIS16405 run 4 (accel_z, t ≈
-#: 4046 s and 5146 s, ±5 m/s² for 0.4 s) reach 36–48 and the 1.3 s of motion that trial 10's rest before its motion
-#: still holds reach 136. The threshold flags what is clearly motion.
-BURST_RATIO = 25.0
-BURST_MIN_S = 0.5
-#: The still stretch suggested in place of a record with bursts keeps this far [s] from them.
-STILL_MARGIN_S = 1.0
-
-
-@dataclass(frozen=True)
-class MotionBurst:
-    """A stretch where the samples spread far wider than over the rest of the record (:func:`motion_bursts`).
-
-    Attributes
-    ----------
-    start_s, end_s : the stamps of its first and last sample, from the first sample's [s]
-    axes : the axes that burst
-    ratio : the largest sustained spread ratio over those axes (the smallest window ratio of the burst's windows)
-    """
-
-    start_s: float
-    end_s: float
-    axes: tuple[str, ...]
-    ratio: float
-
-
-@dataclass
-class StaticCheck:
-    """What :func:`static_check` found: ``flags`` (reasons the record is not static), ``notes`` (worth knowing,
-    not signs of motion), the motion ``bursts`` and, when there are some, the longest ``still_span`` between them
-    (start, end [s] from the first sample, :data:`STILL_MARGIN_S` away from them)."""
-
-    flags: list[str] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-    bursts: list[MotionBurst] = field(default_factory=list)
-    still_span: tuple[float, float] | None = None
-
-    @property
-    def static(self) -> bool:
-        return not self.flags
-
-
-def _block_means(x: np.ndarray, samples_per_block: int) -> np.ndarray:
-    """Means of consecutive blocks of a 1-D array (a strided view is reshaped without a copy)."""
-    m = x.shape[0] // samples_per_block
-    return x[: m * samples_per_block].reshape(m, samples_per_block).mean(axis=1)
-
-
-def burst_window(dt: float) -> tuple[int, int]:
-    """(samples per :data:`BURST_WINDOW_S` window, windows per :data:`BURST_MIN_S` burst) at period ``dt`` [s]."""
-    width = max(round(BURST_WINDOW_S / dt), 8)
-    return width, max(round(BURST_MIN_S / (width * dt)), 2)
-
-
-def spread_ratios(x: np.ndarray, dt: float) -> np.ndarray:
-    """Per :func:`burst_window` window of ``x``: the mean square deviation from the window's median of its samples
-    but the :data:`BURST_TRIM` share that deviate most, over the median of that over the windows; zeros when that
-    median is 0 (most windows on one quantisation level: no scale to judge the axis by)."""
-    width = burst_window(dt)[0]
-    m = x.shape[0] // width
-    windows = x[: m * width].reshape(m, width)
-    dev = np.abs(windows - np.median(windows, axis=1, keepdims=True))
-    dev.sort(axis=1)
-    spread = np.mean(dev[:, : width - int(BURST_TRIM * width)] ** 2, axis=1)
-    level = float(np.median(spread)) if m else 0.0
-    return spread / level if level > 0 else np.zeros(m)
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(first, last + 1) of every run of True in ``mask``."""
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
-    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
-
-
-def motion_bursts(imu: ImuSeries, dt: float) -> list[MotionBurst]:
-    """Stretches of at least :data:`BURST_MIN_S` where on some axis every :data:`BURST_WINDOW_S` window's spread
-    is :data:`BURST_RATIO` or more times the record's median window spread (:func:`spread_ratios`); overlapping or
-    touching stretches of several axes are one burst. Motion that lasts a moment (a touch, a knock, a cut made a
-    second late) changes the record's Allan variance little over hours, but the model stage and the closed loop
-    fit it (as oscillations, outliers, a random walk), and so do N and K. ``dt``: the sampling period [s]."""
-    width, needed = burst_window(dt)
-    if len(imu) // width < 2 * needed:
-        return []
-    ratio = np.array([spread_ratios(imu.gyro[:, i] if i < 3 else imu.accel[:, i - 3], dt) for i in range(len(AXES))])
-    m = ratio.shape[1]
-    bursting = np.zeros((len(AXES), m), bool)
-    for i in range(len(AXES)):
-        for a, b in _runs(ratio[i] >= BURST_RATIO):
-            if b - a >= needed:
-                bursting[i, a:b] = True
-    out = []
-    for a, b in _runs(bursting.any(axis=0)):
-        axes = tuple(name for i, name in enumerate(AXES) if bursting[i, a:b].any())
-        sustained = max(float(np.min(ratio[i, a:b][bursting[i, a:b]])) for i in range(len(AXES))
-                        if bursting[i, a:b].any())
-        elapsed = imu.t[[a * width, b * width - 1]] - imu.t[0]  # the stamps: the times a span selects by
-        out.append(MotionBurst(float(elapsed[0]), float(elapsed[1]), axes, sustained))
-    return out
-
-
-def still_span(bursts: list[MotionBurst], duration_s: float) -> tuple[float, float] | None:
-    """The longest stretch of a record of ``duration_s`` [s] between ``bursts``, :data:`STILL_MARGIN_S` away from
-    them (not from the record's ends); None without bursts or when no stretch is left."""
-    if not bursts:
-        return None
-    edges = [0.0, *[x for b in bursts for x in (b.start_s - STILL_MARGIN_S, b.end_s + STILL_MARGIN_S)], duration_s]
-    spans = [(edges[k], edges[k + 1]) for k in range(0, len(edges), 2) if edges[k + 1] > edges[k]]
-    return max(spans, key=lambda span: span[1] - span[0]) if spans else None
-
-
-def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STANDARD_GRAVITY) -> StaticCheck:
-    """Whether ``imu`` looks like a static recording, judged by what motion does.
-
-    Flags, with the thresholds of this module (documented constants):
-
-    - ``|mean(accel)|`` differs from ``gravity`` by more than :data:`GRAVITY_SCALE_TOLERANCE` (relative): gravity
-      removed, accelerometer not in m/s², or the IMU is not at rest; a smaller difference beyond
-      :data:`GRAVITY_TOLERANCE` is a note (an uncalibrated accelerometer's scale or bias);
-    - the standard deviation of :data:`BLOCK_S`-long block means exceeds :data:`GYRO_BLOCK_STD_MAX` (gyro) or
-      :data:`ACCEL_BLOCK_STD_MAX` (accel) on some axis, or the block means of |accel| vary by more than
-      :data:`ACCEL_BLOCK_STD_MAX`: the sensor rotates, moves, tilts or is shaken;
-    - motion bursts (:func:`motion_bursts`): a moment of motion in an otherwise still record, which block means
-      of a second average away; the longest still stretch between them is suggested (:func:`still_span`).
-
-    Low-frequency power is what motion adds. The noise's own colour is not: a sensor whose internal low-pass filter
-    (a DLPF) smooths its white noise is still static, so no test compares the variance with a first-difference
-    noise floor. These are heuristics for *clearly* non-static data; a static analysis should warn, not silently
-    proceed.
-    """
-    n = len(imu)
-    if n < 20:
-        return StaticCheck([f"only {n} samples: too short to check that the IMU was static"])
-    out = StaticCheck()
-    g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
-    off = g_mean - gravity
-    if abs(off) > GRAVITY_SCALE_TOLERANCE * gravity:
-        out.flags.append(
-            f"|mean accel| = {g_mean:.3f} m/s² but a static IMU reads gravity ≈ {gravity:.3f} m/s² (tolerance "
-            f"{100 * GRAVITY_SCALE_TOLERANCE:g} %): the IMU moves, its accel is not in m/s², or gravity was removed"
-        )
-    elif abs(off) > GRAVITY_TOLERANCE:
-        out.notes.append(
-            f"|mean accel| = {g_mean:.3f} m/s² is {100 * off / gravity:+.1f} % from standard gravity: the "
-            "accelerometer's scale or bias is uncalibrated (not a sign of motion)"
-        )
-    dt = imu.dt if dt is None else dt
-    per_block = min(max(round(BLOCK_S / dt), 1), n // 10)
-    # One axis at a time (strided views, no (N, 6) copy): a few N-sized temporaries at most.
-    for i, name in enumerate(AXES):
-        x = imu.gyro[:, i] if i < 3 else imu.accel[:, i - 3]
-        limit, unit = (GYRO_BLOCK_STD_MAX, "rad/s") if i < 3 else (ACCEL_BLOCK_STD_MAX, "m/s²")
-        block_std = float(_block_means(x, per_block).std())
-        if block_std > limit:
-            out.flags.append(
-                f"{name}: the {per_block * dt:.3g} s means vary with std {block_std:.3g} {unit} "
-                f"(> {limit} {unit}): the IMU rotates, moves or tilts"
-            )
-    norm_std = float(_block_means(np.linalg.norm(imu.accel, axis=1), per_block).std())
-    if norm_std > ACCEL_BLOCK_STD_MAX:
-        out.flags.append(
-            f"|accel|: the {per_block * dt:.3g} s means vary with std {norm_std:.3g} m/s² (> {ACCEL_BLOCK_STD_MAX} "
-            "m/s²): the IMU is accelerated or shaken"
-        )
-    out.bursts = motion_bursts(imu, dt)
-    if out.bursts:
-        listed = ", ".join(f"{b.start_s:.1f}–{b.end_s:.1f} s ({', '.join(b.axes)}; {b.ratio:.0f}×)"
-                           for b in out.bursts[:MAX_LISTED_GAPS])
-        more = f" and {len(out.bursts) - MAX_LISTED_GAPS} more" if len(out.bursts) > MAX_LISTED_GAPS else ""
-        out.flags.append(
-            f"motion bursts at t = {listed}{more} from the first sample: for {BURST_MIN_S:g} s or more the samples "
-            f"spread at least {BURST_RATIO:g}× wider than over the record ({BURST_WINDOW_S:g} s windows): the IMU "
-            "was moved, touched or knocked"
-        )
-        out.still_span = still_span(out.bursts, float(imu.t[-1] - imu.t[0]))
     return out

@@ -6,7 +6,7 @@
    (:mod:`imu_noise_id.core.timing`: refused when the stamps cannot give it, warned about when they are bursty or
    disagree), missing samples (a warning: the Allan estimators and the models take the samples as consecutive at
    that period), the static check of
-   :func:`imu_noise_id.core.quality.static_check` (clearly non-static data raises unless ``allow_motion``);
+   :func:`imu_noise_id.core.stillness.static_check` (clearly non-static data raises unless ``allow_motion``);
 2. the Allan family per axis (:func:`imu_noise_id.core.allan.allan_family`), AV always, others on request;
 3. the Allan-slope parameters per axis (:func:`imu_noise_id.core.allan.slopes.fit_axis_slopes`), with warnings
    where the random walk or white noise is only an upper bound.
@@ -23,7 +23,7 @@ from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS, AllanRe
 from ...core.allan.slopes import AxisSlopes, fit_axis_slopes
 from ...core.axes import ACCEL_AXES, AXES, GYRO_AXES, ImuSeries
 from ...core.errors import InputError
-from ...core.quality import static_check
+from ...core.stillness import static_check
 from ...core.timing import SamplePeriod
 
 #: Fewer samples than this cannot give a useful Allan curve (a few decades of τ).
