@@ -115,7 +115,7 @@ def span_spec(text: str) -> tuple[float, float]:
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not START:END in seconds from the first sample, e.g. "
                                          "0:35.3 or 120:") from None
-    if not (0.0 <= span[0] < span[1]) or math.isnan(span[0]):
+    if not 0.0 <= span[0] < span[1]:
         raise argparse.ArgumentTypeError(f"{text!r}: START must be ≥ 0 and below END")
     return span
 

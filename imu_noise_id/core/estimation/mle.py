@@ -146,9 +146,9 @@ def loglik_grad_profile(
     gradient in the model matrices (:class:`~imu_noise_id.core.estimation.em.MatrixScore`, one smoother pass)
     along each log-parameter's change of its own block (:meth:`Parameterisation.block_derivative`, differences
     of ``step``)."""
-    prof, model, stats = kalman.profile_and_smooth(par.to_model(theta, base), y, z)
+    components = par.to_components(theta, base)
+    prof, model, stats = kalman.profile_and_smooth(with_components(base, components), y, z)
     score = em.MatrixScore.at(model, em.sums_from_stats(stats, data or em.DataSums.of(y, z)))
-    components = par.to_components(theta)
     grad = np.empty(theta.size)
     for k in range(theta.size):
         i = par.entries[k][0]
