@@ -1,6 +1,7 @@
 """Crafted IMU recordings for the input tests: bursty host stamps, NaN messages, truncated files.
 
-Helpers (not tests) shared by ``test_timing.py``, ``test_truncated_bags.py`` and ``test_bad_input_corpus.py``.
+Helpers (not tests) shared by ``test_timing.py``, ``test_truncated_bags.py``, ``test_bad_input_corpus.py``,
+``test_bag_quality.py`` and ``test_analyze.py``.
 """
 
 from __future__ import annotations
@@ -21,6 +22,17 @@ MODEL = f"gyro: WN({GYRO_N})+RW(1e-5); accel: WN({ACCEL_N})+RW(4e-4)"
 def static_imu(rate: float = 100.0, duration: float = 120.0, seed: int = 3, t0: float = 1.7e9) -> ImuSeries:
     """A simulated static IMU (:data:`MODEL`) whose stamps are its sample times."""
     return simulate_static_imu(parse_imu_model(MODEL), rate, duration, seed=seed, t0=t0)
+
+
+def touched(imu: ImuSeries, start_s: float, length_s: float, gyro: float, accel: float) -> ImuSeries:
+    """``imu`` with a hand's touch from ``start_s`` for ``length_s`` [s] after its first sample: a decaying 8 Hz shake
+    of amplitudes ``gyro`` [rad/s] on gyro_x, y and ``accel`` [m/s²] on accel_z (a moment of motion)."""
+    u = imu.t - imu.t[0] - start_s
+    shake = np.where((u >= 0) & (u < length_s), np.exp(-u / length_s) * np.sin(2 * np.pi * 8.0 * u), 0.0)
+    gyro_out, accel_out = imu.gyro.copy(), imu.accel.copy()
+    gyro_out[:, :2] += gyro * shake[:, None]
+    accel_out[:, 2] += accel * shake
+    return ImuSeries(t=imu.t, gyro=gyro_out, accel=accel_out, topic=imu.topic)
 
 
 def bursty_stamps(t: np.ndarray, read_every: float = 0.05, spacing: float = 0.002, seed: int = 1) -> np.ndarray:

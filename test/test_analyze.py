@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 import yaml
+from crafted import touched as touch
 
 from imu_noise_id.bag.writer import write_bag
 from imu_noise_id.cli import main
@@ -108,9 +109,8 @@ def test_a_moment_of_motion_is_refused_with_its_still_stretch_which_analyze_then
     # The record cut 1.5 s late (a hand already on the sensor): refused, naming the burst and the --span of the
     # still stretch before it; analyze and the CLI then take just that stretch and say so.
     imu = simulate_static_imu(_model(), 100.0, 60.0, seed=1)
-    u = imu.t - imu.t[0] - 58.0
-    shake = np.where(u >= 0, 0.2 * np.exp(-u / 1.5) * np.sin(2 * np.pi * 8.0 * u), 0.0)
-    touched = ImuSeries(t=imu.t, gyro=imu.gyro + shake[:, None], accel=imu.accel, topic="/imu/touched")
+    imu.topic = "/imu/touched"
+    touched = touch(imu, 58.0, 1.5, gyro=0.2, accel=0.2)
     with pytest.raises(NotStaticError, match=r"/imu/touched.*motion bursts at t = 58\.0–.*--span 0\.0:57\.0"):
         analyze_static(touched, kinds=("allan",))
     result = analyze(touched, options=AnalyzeOptions(models=ModelStage("none"), span=(0.0, 57.0)))

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from crafted import touched
 
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.noise.modelspec import parse_imu_model
@@ -135,31 +136,20 @@ def test_static_check_accepts_a_low_passed_and_an_uncalibrated_static_imu():
     assert any("|accel|" in f or "means vary" in f for f in static_check(shaken).flags)
 
 
-def _touched(imu: ImuSeries, start_s: float, length_s: float, gyro: float, accel: float) -> ImuSeries:
-    """``imu`` with a hand's touch from ``start_s`` for ``length_s`` [s]: a decaying 8 Hz shake of amplitudes
-    ``gyro`` [rad/s] on gyro_x, y and ``accel`` [m/s²] on accel_z."""
-    u = imu.t - imu.t[0] - start_s
-    shake = np.where((u >= 0) & (u < length_s), np.exp(-u / length_s) * np.sin(2 * np.pi * 8.0 * u), 0.0)
-    gyro_out, accel_out = imu.gyro.copy(), imu.accel.copy()
-    gyro_out[:, :2] += gyro * shake[:, None]
-    accel_out[:, 2] += accel * shake
-    return ImuSeries(t=imu.t, gyro=gyro_out, accel=accel_out)
-
-
 def test_static_check_finds_a_moment_of_motion_and_suggests_the_still_stretch():
     # A 1.5 s touch near the end of a 60 s record (the record cut a moment late): the 1 s means hardly move, the
     # spread in 0.25 s windows is ~ 100× the rest's. Flagged with its time, and the still stretch ends a second
     # before it.
     model = parse_imu_model("gyro: WN(1e-3)+RW(1e-5); accel: WN(2e-3)+RW(4e-4)")
     imu = simulate_static_imu(model, 100.0, 60.0, seed=5)
-    check = static_check(_touched(imu, 55.0, 1.5, gyro=0.1, accel=0.2))
+    check = static_check(touched(imu, 55.0, 1.5, gyro=0.1, accel=0.2))
     burst, = check.bursts
     assert burst.start_s == pytest.approx(55.0, abs=0.25) and 55.5 <= burst.end_s <= 56.75
     assert set(burst.axes) >= {"gyro_x", "gyro_y", "accel_z"} and burst.ratio >= 25
     assert len(check.flags) == 1 and check.flags[0].startswith("motion bursts at t = 55.0–")
     assert check.still_span == pytest.approx((0.0, burst.start_s - 1.0))
     # The same touch at a tenth of the amplitude is below the threshold: not clearly motion.
-    assert static_check(_touched(imu, 55.0, 1.5, gyro=0.002, accel=0.004)).bursts == []
+    assert static_check(touched(imu, 55.0, 1.5, gyro=0.002, accel=0.004)).bursts == []
 
 
 def test_static_check_leaves_spikes_steps_lines_and_coarse_quantisation_alone():
