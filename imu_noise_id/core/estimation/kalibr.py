@@ -6,12 +6,14 @@ oscillations (OSC), Gauss–Markov bias processes, sinusoids. Kept out of N and 
 
 - **N** is the passband white-noise density √(Σ N_i²) [u/√Hz] over the white noise and the short-memory noise
   that is white below its corner: the sensor's first-order low-pass LPF, its averaging filter MA and an OSC whose
-  memory 1/(πB) is a few samples (the sensor's second-order low-pass, ζ ≥ 1/√2: no peak, or a broad resonance).
+  memory 1/(πB) is short (the sensor's second-order low-pass, ζ ≥ 1/√2: no peak, or a broad resonance), "short"
+  being :func:`~..noise.resonant.filter_memory_limit` (five samples, or 50 ms at rates above 100 Hz) for every kind.
   Each N_i is the component's density at 0 Hz *as sampled* (:meth:`~.Component.zero_frequency_density`,
   √(dt·Σ_j R(j))): the N with which its Allan variance falls as N²/τ beyond its memory, what a filter
   integrating the samples sees. For a low-pass near the Nyquist frequency it exceeds the continuous passband
   density (the samples alias its tail into the band: 1.27 N_LPF at f_c = 45 Hz, 100 Hz sampling). A narrow OSC
-  (a vibration line or a wander), a GM, flicker noise (BI) or a sinusoid never enters it.
+  (a vibration line or a wander), a GM, an LPF fitted to a memory beyond that limit (a GM by another name),
+  flicker noise (BI) or a sinusoid never enters it.
 - **K** is the RW's density [u/s/√Hz], or *not identifiable from this record* when the final model has no RW (the
   caller then gives the Allan-slope bound).
 - The **per-sample variance** of the high-frequency noise at the sampling period dt is
@@ -33,8 +35,8 @@ import numpy as np
 from ..noise.base import Component
 from ..noise.components import LPF, MA, OSC, RW, WN
 from ..noise.modelspec import parameter_labels
+from ..noise.resonant import filter_memory_limit
 from .differences import derivative_in_domain
-from .relabel import FILTER_MAX_TAU_SAMPLES
 from .results import FitResult
 
 Z95 = 1.959963984540054
@@ -78,15 +80,22 @@ def _log_cov(fit: FitResult, labels: list[str]) -> np.ndarray | None:
 def is_short_memory_osc(c: Component, dt: float) -> bool:
     """Whether ``c`` is an OSC whose memory is as short as that of the GM read as the sensor's first-order low-pass
     (:func:`~.relabel.gm_as_filter`): an envelope decay time 1/(ζω₀) = 1/(πB) below
-    :data:`~.relabel.FILTER_MAX_TAU_SAMPLES` sampling periods. Such an OSC is high-frequency noise, white at
-    S(0) below its corner: the sensor's second-order low-pass (ζ ≥ 1/√2, no peak) or a broad resonance. A
-    longer one is a vibration line or a bias-like wander, kept out of N like a GM."""
-    return isinstance(c, OSC) and c.memory(dt)[0] < FILTER_MAX_TAU_SAMPLES * dt
+    :func:`~..noise.resonant.filter_memory_limit`. Such an OSC is high-frequency noise, white at S(0) below its
+    corner: the sensor's second-order low-pass (ζ ≥ 1/√2, no peak) or a broad resonance. A longer one is a vibration
+    line or a bias-like wander, kept out of N like a GM."""
+    return isinstance(c, OSC) and c.memory(dt)[0] < filter_memory_limit(dt)
+
+
+def is_slow_lpf(c: Component, dt: float) -> bool:
+    """Whether ``c`` is an LPF whose fitted memory 1/(2πf_c) is at or beyond
+    :func:`~..noise.resonant.filter_memory_limit`: a GM bias process by another name (the loop offers an LPF for a
+    short memory, and its fit may move the cutoff far down), kept out of N like a GM."""
+    return isinstance(c, LPF) and c.memory(dt)[0] >= filter_memory_limit(dt)
 
 
 def enters_n(c: Component, dt: float) -> bool:
     """Whether ``c`` is white noise or short-memory noise white below its corner (module docstring)."""
-    return isinstance(c, (WN, LPF, MA)) or is_short_memory_osc(c, dt)
+    return isinstance(c, (WN, MA)) or (isinstance(c, LPF) and not is_slow_lpf(c, dt)) or is_short_memory_osc(c, dt)
 
 
 def passband_density(components: list[Component], dt: float) -> float | None:
@@ -199,7 +208,7 @@ def per_sample_noise_variance(fit: FitResult) -> float:
     for c in fit.components:
         if isinstance(c, WN):
             total += c.noise_density**2 / fit.dt
-        elif isinstance(c, LPF):
+        elif isinstance(c, LPF) and not is_slow_lpf(c, fit.dt):
             total += math.pi * c.noise_density**2 * c.cutoff
         elif isinstance(c, MA):
             total += c.per_sample(fit.dt)["sigma2_per_sample"]

@@ -1,4 +1,4 @@
-"""A fitted Gauss–Markov process with a memory of a few samples is the sensor's own low-pass filter (LPF).
+"""A fitted Gauss–Markov process of short memory is the sensor's own low-pass filter (LPF).
 
 Beyond paper 000. A first-order GM with correlation time τ of a sample or two is, to the likelihood, exactly the
 white noise of the sensor's first-order low-pass filter of cutoff f_c = 1/(2πτ) (the same state-space block; see
@@ -6,6 +6,11 @@ white noise of the sensor's first-order low-pass filter of cutoff f_c = 1/(2πτ
 Read as a GM it is a bias process of absurd τ; read as an LPF its noise density N = σ√(2τ) is the passband
 white-noise density that belongs with the white noise. :func:`gm_as_filter` renames such a component and
 its parameters, nothing else (likelihood, state space and innovations are unchanged).
+
+"Short" is :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit`: five sampling periods, or 50 ms at
+rates above 100 Hz. A consumer part's lowest low-pass settings (a 5 Hz DLPF: 32 ms) at its kHz output rates have a
+memory of tens of samples; read as a bias GM, their noise was left out of N, which then held only the white floor
+behind the filter (10× low on a simulated 10 Hz DLPF at 400 Hz, ``test/test_sensor_filter.py``).
 """
 
 from __future__ import annotations
@@ -19,17 +24,14 @@ from ..errors import InputError
 from ..kalman.statespace import to_components
 from ..noise.components import GM
 from ..noise.modelspec import structure_name
-from ..noise.resonant import LPF
+from ..noise.resonant import LPF, filter_memory_limit
 from .results import FitResult
 from .uncertainty import add_uncertainty
 
 Z95 = 1.959963984540054
-#: A GM whose τ is below this many sampling periods is read as the sensor's low-pass filter.
-FILTER_MAX_TAU_SAMPLES = 5
-
-
 def gm_as_filter(fit: FitResult) -> FitResult:
-    """``fit`` with its shortest GM renamed LPF when τ < :data:`FILTER_MAX_TAU_SAMPLES`·dt and the model has no LPF.
+    """``fit`` with its shortest GM renamed LPF when τ < :func:`~..noise.resonant.filter_memory_limit` and the model
+    has no LPF.
 
     The cutoff's interval is the τ interval mapped through f_c = 1/(2πτ). When the fit holds its log-parameter
     covariance, it is carried to (ln N, ln f_c) by the linear map ln N = ln σ + ½ ln τ + ½ ln 2,
@@ -39,7 +41,7 @@ def gm_as_filter(fit: FitResult) -> FitResult:
     if not gms or any(isinstance(c, LPF) for c in fit.components):
         return fit
     i, gm = min(gms, key=lambda ic: ic[1].tau)
-    if gm.tau >= FILTER_MAX_TAU_SAMPLES * fit.dt:
+    if gm.tau >= filter_memory_limit(fit.dt):
         return fit
     components = list(fit.components)
     components[i] = LPF.from_gm(gm.tau, gm.sigma)

@@ -44,6 +44,23 @@ from . import units
 from .base import Component, StateBlock, as_freq, as_tau
 from .sampled import block_sum_variance, sampled_allan_variance, zero_frequency_psd
 
+#: The sensor's own filter has a memory below this many sampling periods ...
+FILTER_MAX_TAU_SAMPLES = 5
+#: ... or below this many seconds, whatever the rate. Such a process is white at τ = 1 s, where IEEE Std 952 and
+#: Kalibr read N: a GM's Allan variance is that of a white noise of its zero-frequency density times
+#: 1 − (τ_c/τ)(3/2 − 2e^{−τ/τ_c} + ½e^{−2τ/τ_c}), 0.925 at τ_c = 50 ms and τ = 1 s (the deviation within 4 %), and it
+#: holds a consumer part's lowest DLPF settings (5 Hz: 32 ms) at kHz output rates, where five samples are a few
+#: milliseconds.
+FILTER_MAX_TAU_S = 0.05
+
+
+def filter_memory_limit(dt: float) -> float:
+    """The longest memory [s] a component may have to be read as the sensor's own filter at sampling period ``dt``
+    [s] (a GM renamed LPF, an OSC or LPF counted in the passband N, the Allan-slope roll-off):
+    max(:data:`FILTER_MAX_TAU_SAMPLES`·dt, :data:`FILTER_MAX_TAU_S`)."""
+    return max(FILTER_MAX_TAU_SAMPLES * dt, FILTER_MAX_TAU_S)
+
+
 #: Largest damping ratio of an OSC (ζ < 1: a resonance, not two real poles).
 MAX_DAMPING = 0.95
 #: Damping ratio of a second-order Butterworth low-pass, 1/√2: the flattest passband without a peak.

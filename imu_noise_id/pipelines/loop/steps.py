@@ -22,12 +22,12 @@ from ...core.diagnostics.residuals import LINE_SEPARATION_BINS, av_misfit_z, lin
 from ...core.diagnostics.spectra import residual_spectra
 from ...core.diagnostics.whitening import WhiteningFilter
 from ...core.estimation.model import FitOptions, NoiseModel
-from ...core.estimation.relabel import FILTER_MAX_TAU_SAMPLES, gm_as_filter
+from ...core.estimation.relabel import gm_as_filter
 from ...core.estimation.results import FitResult
 from ...core.noise.components import BI, GM, MA, QN, RR, RW, WN, Component, total_allan_variance
 from ...core.noise.flicker import band_for_record
 from ...core.noise.modelspec import CANONICAL_ORDER, structure_name
-from ...core.noise.resonant import LPF, MAX_DAMPING, OSC
+from ...core.noise.resonant import LPF, MAX_DAMPING, OSC, filter_memory_limit
 from ...core.quality import interpolate_missing
 from .state import STATE_EFFECTS, Diagnosis, ExogTerm, LoopState
 
@@ -262,15 +262,16 @@ class AxisLoop:
         return sorted([*best.values(), *gms], key=lambda f: f.log10_p)
 
     def as_filter(self, f: det.Finding, state: LoopState) -> list[det.Finding]:
-        """A GM finding whose τ is below :data:`FILTER_MAX_TAU_SAMPLES` samples becomes the sensor's own filter (noise
-        correlated from one sample to the next): a first-order low-pass (LPF, correlation decaying geometrically) and
-        a two-tap average (MA, correlated over one sample only), each offered unless the model has it, the
-        likelihood decides. Both together shape the passband's edge more freely than either (measured on the
-        ADIS16405 accelerometers: lag-1 correlation 0.17–0.30, lag-2 0.02–0.05, between MA's 0 and an AR(1)'s ρ₁²;
-        with the LPF alone the AV misfit z stays at +4.5 at τ = 0.02 s and −5.5 at 0.06 s on 2000 s of run 1)."""
+        """A GM finding whose τ is below :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit` becomes the
+        sensor's own filter (noise correlated over a few samples, or a few milliseconds at kHz rates): a first-order
+        low-pass (LPF, correlation decaying geometrically) and a two-tap average (MA, correlated over one sample
+        only), each offered unless the model has it, the likelihood decides. Both together shape the passband's edge
+        more freely than either (measured on the ADIS16405 accelerometers: lag-1 correlation 0.17–0.30, lag-2
+        0.02–0.05, between MA's 0 and an AR(1)'s ρ₁²; with the LPF alone the AV misfit z stays at +4.5 at τ = 0.02 s
+        and −5.5 at 0.06 s on 2000 s of run 1)."""
         tau = f.params.get("tau")
         missing = [k for k in ("LPF", "MA") if k not in state.structure]
-        if tau is None or tau >= FILTER_MAX_TAU_SAMPLES * self.dt or not missing:
+        if tau is None or tau >= filter_memory_limit(self.dt) or not missing:
             return [f]
         memory = f"{f.evidence}; memory of {tau / self.dt:.1f} samples: the sensor's own"
         offer = {"LPF": replace(f, effect="LPF", evidence=f"{memory} low-pass filter"),
