@@ -14,11 +14,12 @@ import pytest
 from scipy import signal
 
 from imu_noise_id.core.allan import allan_variance
+from imu_noise_id.core.allan.slopes import fit_axis_slopes
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.estimation import kalibr
 from imu_noise_id.core.estimation.relabel import gm_as_filter
 from imu_noise_id.core.estimation.results import FitResult
-from imu_noise_id.core.noise.components import GM, LPF, RW, WN, simulate_sum
+from imu_noise_id.core.noise.components import GM, LPF, QN, RW, WN, simulate_sum
 from imu_noise_id.core.noise.resonant import filter_memory_limit
 from imu_noise_id.pipelines.analyze.final import final_model
 from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
@@ -90,3 +91,21 @@ def test_analyze_pastes_the_passband_density_of_a_10_hz_dlpf_at_400_hz(dlpf_reco
     assert n.value == pytest.approx(truth, rel=0.05)
     assert n.ci95[0] <= truth <= n.ci95[1]
 
+
+def test_the_allan_slope_reading_leaves_the_low_pass_roll_off_out():
+    """The AV of the DLPF record is flat at the shortest τ and falls as τ⁻¹ only beyond a few memories. Its Allan-
+    slope N (the −½ line at τ = 1 s) is within 5 % of the truth and read from a fit, not a "bound" below it, and the
+    roll-off is not taken for a bias-instability plateau; before, N was 7× low and labelled an upper bound."""
+    y = simulate_sum([FLOOR, DLPF, RW(2e-5)], int(600 * RATE), DT, np.random.default_rng(3))
+    s = fit_axis_slopes(allan_variance(y, DT))
+    truth = kalibr.passband_density([FLOOR, DLPF], DT)
+    assert s.noise_density.method == "fit" and s.noise_density.value == pytest.approx(truth, rel=0.05)
+    assert s.bias_instability is None
+    assert 5 * DLPF.tau < s.rolloff_tau < 25 * DLPF.tau
+
+
+@pytest.mark.parametrize("components", [[WN(1e-3), QN(3e-4)], [WN(1e-3), RW(1e-4)], [WN(1e-3), GM(2.0, 3e-3)]],
+                         ids=["quantisation", "random walk", "bias GM"])
+def test_a_curve_without_a_low_pass_is_read_whole(components):
+    y = simulate_sum(components, 200_000, 0.01, np.random.default_rng(1))
+    assert fit_axis_slopes(allan_variance(y, 0.01)).rolloff_tau is None

@@ -137,7 +137,8 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
         f"# The four Kalibr numbers are the {KALIBR_COMBINE} over the sensor's x, y, z axes; per-axis values are in",
         f"# the *_xyz keys, their {100 * conf:g} % confidence intervals in *_ci_xyz. Allan-slope readings ({allan}):",
         "# white noise is the -1/2 slope line read at tau = 1 s, random walk the +1/2 slope line at tau = 3 s;",
-        "# method upper_bound = slope not reached in this record.",
+        "# method upper_bound = slope not reached in this record. Where the shortest tau show the sensor's own",
+        "# low-pass (the AV falls slower than 1/tau, then steepens to it) the lines are read beyond that roll-off.",
         f"# Data: {result.n} samples, {result.duration_s:.1f} s at {result.rate_hz:.6g} Hz from {result.topic or '?'}.",
     ]
     if result.period is not None and not result.period.trusted:

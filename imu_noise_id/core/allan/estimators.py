@@ -100,6 +100,12 @@ class AllanResult:
         return replace(self, variance=self.variance[:, pick], ci_low=self.ci_low[:, pick],
                        ci_high=self.ci_high[:, pick], edf=self.edf[:, pick], alpha=self.alpha[:, pick])
 
+    def from_index(self, i: int) -> AllanResult:
+        """The result at the averaging times from index ``i`` on (every axis)."""
+        cut = slice(i, None)
+        return replace(self, m=self.m[cut], tau=self.tau[cut], variance=self.variance[cut], ci_low=self.ci_low[cut],
+                       ci_high=self.ci_high[cut], edf=self.edf[cut], alpha=self.alpha[cut])
+
 
 # --------------------------------------------------------------------------------------------------- τ grid
 def max_m(n: int, kind: Kind) -> int:

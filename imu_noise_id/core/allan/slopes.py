@@ -39,6 +39,18 @@ Rule (documented in docs/analysis.md):
 4. **No region.** When WN or RW dominates nowhere (e.g. the record is too short to reach the +½ slope), the
    value is the upper bound implied by the curve: N² ≤ τ·AV(τ) and K² ≤ 3·AV(τ)/τ at every τ, using the
    upper confidence limit and the smallest value over τ. It is flagged ``method="upper_bound"``.
+5. **The sensor's low-pass.** Beyond the IEEE lines. A sensor that low-passes its noise (a MEMS part's DLPF) makes
+   the AV at the shortest τ fall more slowly than white noise's τ⁻¹ before it steepens to it, and so lie *below*
+   its own white-noise line N²/τ there, which no sum of the non-negative lines above can do. Fitted anyway, that
+   roll-off was read as a bias-instability plateau beside a white-noise line far below the curve (7× on a simulated
+   10 Hz DLPF at 400 Hz), and rule 4's bound, taken at the shortest τ where the filter had cut the AV below N²/τ,
+   was no bound. So a stretch at the start flatter than −1 + 2·:data:`SLOPE_TOLERANCE` that ends in white noise's
+   −1 (within :data:`SLOPE_TOLERANCE`, not steeper: a vibration line's falling side is) at τ_j, no later than
+   :data:`ROLLOFF_MAX_MEMORIES` times the longest memory a sensor filter has (50 ms, or five samples below 100 Hz:
+   a slower one is a bias process over white noise), is left out when the
+   AV at the shortest τ lies below the white-noise line of WN + RW fitted from τ_j on (its upper confidence limit
+   below N²/τ₀): rules 1–4 use the τ from τ_j on, and ``AxisSlopes.rolloff_tau`` says where (None: the whole
+   curve). A white or quantised start lies on or above that line and is read whole.
 """
 
 from __future__ import annotations
@@ -50,6 +62,7 @@ import numpy as np
 from scipy import optimize
 
 from ..errors import InputError
+from ..noise.resonant import filter_memory_limit
 from ..noise.units import random_walk_at_allan_variance
 from .estimators import AllanResult
 
@@ -60,6 +73,18 @@ IRLS_ITERATIONS = 3
 _TINY = 1e-300
 #: Huber threshold on standardised residuals: points beyond it are down-weighted (rule 1, outliers).
 HUBER_K = 2.5
+#: Rule 5: a local AV slope within this of white noise's −1 (or steeper) may end the low-pass roll-off ...
+SLOPE_TOLERANCE = 0.1
+#: ... when at least this many τ remain to read the lines from, and the slopes of this many steps from there on
+#: are no steeper than −1 by more than the tolerance.
+ROLLOFF_MIN_POINTS = 8
+ROLLOFF_WHITE_STEPS = 3
+#: The roll-off is the sensor filter's only if it ends within this many of the longest memory a sensor filter has
+#: (:func:`~imu_noise_id.core.noise.resonant.filter_memory_limit`): a first-order low-pass's AV slope reaches
+#: −0.9 at about 16 memories, and with a white floor beside the filter up to 40 (simulated DLPFs, 200 Hz – 1 kHz,
+#: ``bench/bench_sensor_filter.py``). A slower "roll-off" is a Gauss–Markov bias process over white noise, whose
+#: white start is the sensor's noise.
+ROLLOFF_MAX_MEMORIES = 40
 #: B = ADEV_min / BIAS_INSTABILITY_FACTOR (IEEE Std 952, flicker floor).
 BIAS_INSTABILITY_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
@@ -102,13 +127,15 @@ class SlopeComponent:
 
 @dataclass(frozen=True)
 class AxisSlopes:
-    """Slope parameters of one axis; QN, BI and RR are None where the curve shows no region for them."""
+    """Slope parameters of one axis; QN, BI and RR are None where the curve shows no region for them;
+    ``rolloff_tau`` the τ [s] from which they were read when the shortest ones show the sensor's low-pass (rule 5)."""
 
     noise_density: SlopeComponent
     random_walk: SlopeComponent
     quantization: SlopeComponent | None
     bias_instability: SlopeComponent | None
     rate_ramp: SlopeComponent | None
+    rolloff_tau: float | None = None  # rule 5: the lines are read from this τ [s] on (None: the whole curve)
 
     def components(self) -> list[SlopeComponent]:
         """The reported components in order of slope, for plotting their lines."""
@@ -255,8 +282,53 @@ def _upper_bound(name: str, res: AllanResult, axis: int) -> SlopeComponent:
     return SlopeComponent(name, mu, coefficient, value, (0.0, value), "upper_bound", (t, t), 1)
 
 
+def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float) -> int:
+    """Where a stretch at the start flatter than white noise ends in it (:func:`rolloff_end`), 0 where none does.
+
+    With s_i = Δln AV/Δln τ from τ_i to τ_{i+1}, looked at before the curve's minimum: the first j after the first
+    s > −1 + 2·:data:`SLOPE_TOLERANCE` with s_j within :data:`SLOPE_TOLERANCE` of −1 or steeper, the next
+    :data:`ROLLOFF_WHITE_STEPS` slopes no steeper than −1 by more than that (the falling side of a vibration line's
+    bump is steeper), no later than :data:`ROLLOFF_MAX_MEMORIES` filter memories and with
+    :data:`ROLLOFF_MIN_POINTS` τ left.
+    """
+    ok = np.isfinite(av) & (av > 0)
+    stop = int(np.argmin(np.where(ok, av, np.inf)))
+    if stop < 2 or not ok[: stop + 1].all():
+        return 0
+    slope = np.diff(np.log(av[: stop + 1])) / np.diff(np.log(tau[: stop + 1]))
+    flatter = np.flatnonzero(slope > -1.0 + 2.0 * SLOPE_TOLERANCE)
+    ends = np.flatnonzero(slope[flatter[0]:] <= -1.0 + SLOPE_TOLERANCE) + flatter[0] if flatter.size else flatter
+    if not ends.size:
+        return 0
+    j = int(ends[0])
+    fits = tau.size - j >= ROLLOFF_MIN_POINTS and tau[j] <= ROLLOFF_MAX_MEMORIES * filter_memory_limit(dt)
+    white = not np.any(slope[j: j + ROLLOFF_WHITE_STEPS] < -1.0 - SLOPE_TOLERANCE)
+    return j if fits and white else 0
+
+
+def rolloff_end(res: AllanResult, axis: int = 0) -> int:
+    """Index of the first τ beyond the sensor's low-pass roll-off (rule 5), 0 when the curve shows none.
+
+    The candidate end τ_j of a stretch flatter than white noise (:func:`_rolloff_candidate`) is the filter's only if
+    the AV at the shortest τ lies below the white-noise line N²/τ of WN + RW fitted from τ_j on (its upper
+    confidence limit below the line's lower one, rule 3, so that neither estimate's noise can make one): no sum of
+    non-negative lines can do that, and a low-pass on white noise always does; a white or quantised start followed
+    by a line's bump lies on it or above.
+    """
+    j = _rolloff_candidate(res.tau, res.variance[:, axis], res.dt)
+    if not j:
+        return 0
+    rest = res.from_index(j)
+    base = fit_lines(rest.tau, rest.variance[:, axis], rest.edf[:, axis], BASE)
+    region = _region(_NAMES.index("WN"), base, rest.tau)
+    if not region.size:
+        return 0
+    n_low = _component("WN", base, region, rest, axis).ci[0]
+    return j if res.ci_high[0, axis] < n_low**2 / res.tau[0] else 0
+
+
 def fit_axis_slopes(res: AllanResult, axis: int = 0) -> AxisSlopes:
-    """Allan-slope parameters of column ``axis`` of an Allan-variance result (rules 1–4 of the module).
+    """Allan-slope parameters of column ``axis`` of an Allan-variance result (rules 1–5 of the module).
 
     Raises
     ------
@@ -265,6 +337,9 @@ def fit_axis_slopes(res: AllanResult, axis: int = 0) -> AxisSlopes:
     """
     if res.kind != "allan":
         raise ValueError(f"slope parameters are defined on the Allan variance, got a {res.kind} variance")
+    start = rolloff_end(res, axis)
+    if start:
+        res = res.from_index(start)
     coef = select_lines(res, axis)
     found: dict[str, SlopeComponent | None] = {}
     for j, name in enumerate(_NAMES):
@@ -277,7 +352,7 @@ def fit_axis_slopes(res: AllanResult, axis: int = 0) -> AxisSlopes:
             found[name] = None
     return AxisSlopes(
         noise_density=found["WN"], random_walk=found["RW"], quantization=found["QN"],
-        bias_instability=found["BI"], rate_ramp=found["RR"],
+        bias_instability=found["BI"], rate_ramp=found["RR"], rolloff_tau=float(res.tau[0]) if start else None,
     )
 
 
