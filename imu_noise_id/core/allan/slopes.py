@@ -23,8 +23,10 @@ Rule (documented in docs/analysis.md):
    parameter NaN or drag it far, and a component no line supports gets c ≈ 0. WN and RW are always
    fitted; QN, BI and RR are added only where the curve lies significantly above that base model (its
    lower confidence limit above the base fit at two or more τ of their region; for QN where its line is at
-   least 10 % of the sum). An always-fitted QN line bounded at c ≥ 0 took a share of the shortest-τ AV
-   on records without quantisation and biased N low by about its own standard error.
+   least 10 % of the sum), or where the fit with the line leaves the curve's confidence intervals at six fewer τ
+   than the base model (WN + RW forced through a flicker plateau overshoots the curve beyond it). An
+   always-fitted QN line bounded at c ≥ 0 took a share of the shortest-τ AV on records without quantisation and
+   biased N low by about its own standard error.
 2. **Region.** A component's τ region is where its line is at least half of the fitted sum, i.e. where the
    local slope of the curve is within about ±0.5 (in AV, ±¼ in ADEV) of the component's slope. QN, BI and
    RR are reported only when they have such a region of at least two τ.
@@ -164,6 +166,11 @@ EXTRAS = ("QN", "BI", "RR")
 #: QN is tested where its line is at least this fraction of the sum (it acts only at the shortest τ, where the AV
 #: is the most precise: a quantisation too weak to dominate anywhere still biases N if left out).
 QN_TEST_SHARE = 0.1
+#: An extra line is also kept when the fit with it leaves the curve's confidence intervals at this many τ fewer than
+#: WN + RW: most of a decade of the grid, more than one chance excursion of neighbouring (correlated) estimates
+#: makes (none on 180 simulated clean 10-minute axes, ``bench/bench_allan_fit.py``; two did at two τ fewer); on
+#: the ADIS16405 gyros whose flicker floor WN + RW bends through it is 14–18.
+MENDED_MIN = 6
 
 
 def fit_lines(tau: np.ndarray, variance: np.ndarray, edf: np.ndarray, names: tuple[str, ...] = _NAMES) -> np.ndarray:
@@ -229,18 +236,28 @@ def _region(j: int, coef: np.ndarray, tau: np.ndarray, share: float = DOMINANCE)
 def select_lines(res: AllanResult, axis: int) -> np.ndarray:
     """Coefficients of the base lines (WN, RW) plus the extras (QN, BI, RR) the data need (rule 1).
 
-    An extra line is kept when, in its region (of at least two τ; for QN where it is at least
-    :data:`QN_TEST_SHARE` of the sum), the AV's lower confidence limit lies above the base model at two or more
-    τ: the curve is significantly higher than WN + RW can explain there.
+    An extra line is kept when it has a region (of at least two τ; for QN where it is at least
+    :data:`QN_TEST_SHARE` of the sum) and either the AV's lower confidence limit lies above the base model at two
+    or more τ of it (the curve is significantly higher than WN + RW can explain there), or the fit with it lies
+    outside the AV's confidence interval at :data:`MENDED_MIN` fewer τ than the base model: WN + RW forced through a
+    plateau overshoots the curve elsewhere (ADIS16405 runs 1–2 gyro_x: the random walk bent through the flicker
+    floor lay above the data's upper limit at τ = 316–2400 s).
     """
     tau, av, edf = res.tau, res.variance[:, axis], res.edf[:, axis]
+    lo, hi = res.ci_low[:, axis], res.ci_high[:, axis]
     base = fit_lines(tau, av, edf, BASE)
     base_model = _lines(base, tau).sum(axis=1)
+
+    def misfits(model: np.ndarray) -> int:
+        return int(np.sum((lo > model) | (hi < model)))
+
     keep = list(BASE)
     for extra in EXTRAS:
         coef = fit_lines(tau, av, edf, (*BASE, extra))
         region = _region(_NAMES.index(extra), coef, tau, QN_TEST_SHARE if extra == "QN" else DOMINANCE)
-        if region.size >= 2 and np.sum(res.ci_low[region, axis] > base_model[region]) >= 2:
+        above = np.sum(lo[region] > base_model[region]) >= 2
+        mended = misfits(base_model) - misfits(_lines(coef, tau).sum(axis=1)) >= MENDED_MIN
+        if region.size >= 2 and (above or mended):
             keep.append(extra)
     return base if len(keep) == len(BASE) else fit_lines(tau, av, edf, tuple(keep))
 
