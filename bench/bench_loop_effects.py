@@ -65,13 +65,15 @@ def probe_arguments(doc: str) -> tuple[argparse.Namespace, int]:
     return args, int(args.minutes * 60 / DT)
 
 
-def simulate(case: str, seed: int, n: int) -> tuple[np.ndarray, dict]:
+def simulate(case: str, seed: int, n: int, dt: float = DT) -> tuple[np.ndarray, dict]:
+    """One record of ``case`` (``n`` samples at ``dt``) and its truth. A line's frequency is drawn in 0.4–15 Hz,
+    below 0.4/dt at lower rates (the same draws at 100 Hz)."""
     rng = np.random.default_rng(seed)
-    f0 = float(rng.uniform(0.4, 15.0))
+    f0 = float(rng.uniform(0.4, min(15.0, 0.4 / dt)))
     truth: dict = {"case": case}
     if case in ("osc", "osc+gm", "osc+fast_gm", "osc+clear_gm"):
         osc = OSC(frequency=f0, bandwidth=f0 * float(rng.uniform(0.02, 0.06)),
-                  sigma=N_TRUE / math.sqrt(DT) * float(rng.uniform(0.1, 0.2)))
+                  sigma=N_TRUE / math.sqrt(dt) * float(rng.uniform(0.1, 0.2)))
         comps = [WN(N_TRUE), osc, RW(K_TRUE)] + ([GMS[case]] if case in GMS else [])
         truth["osc"] = osc
     elif case == "gm":
@@ -91,19 +93,21 @@ def simulate(case: str, seed: int, n: int) -> tuple[np.ndarray, dict]:
         truth["filter"] = "MA"
     elif case == "bi":
         bias = float(rng.uniform(2e-4, 5e-4))
-        comps, truth["bias_instability"] = [WN(N_TRUE), BI(bias, *band_for_record(n, DT)), RW(K_TRUE)], bias
+        comps, truth["bias_instability"] = [WN(N_TRUE), BI(bias, *band_for_record(n, dt)), RW(K_TRUE)], bias
     else:
         comps = [WN(N_TRUE), RW(K_TRUE)]
-    y = simulate_sum(comps, n, DT, rng)
-    truth["n"] = kalibr.passband_density(comps, DT)  # the simulated samples' low-frequency white level
+    y = simulate_sum(comps, n, dt, rng)
+    truth["n"] = kalibr.passband_density(comps, dt)  # the simulated samples' low-frequency white level
+    truth["dt"] = dt
     if case == "sin":
-        y = y + 0.15 * N_TRUE / math.sqrt(DT) * np.sin(2 * math.pi * f0 * np.arange(n) * DT + 1.0)
+        y = y + 0.15 * N_TRUE / math.sqrt(dt) * np.sin(2 * math.pi * f0 * np.arange(n) * dt + 1.0)
         truth["frequency"] = f0
     return y, truth
 
 
 def assess(y: np.ndarray, truth: dict) -> dict:
-    r = run_closed_loop(y, DT, "WN+RW", axis="x")
+    dt = truth["dt"]
+    r = run_closed_loop(y, dt, "WN+RW", axis="x")
     fit = with_uncertainty(r.final.diagnosis.fit)  # as analyze's final model: the intervals users paste
     out = {"model": r.final.model, "steps": len(r.steps) - 1}
     n_est, k_est = kalibr.noise_density(fit), kalibr.random_walk(fit)
@@ -132,7 +136,7 @@ def assess(y: np.ndarray, truth: dict) -> dict:
     elif truth["case"] == "gm":
         out["right_kind"] = out["gm_found"]
     elif "second_order" in truth:
-        short = [c for c in oscs if kalibr.is_short_memory_osc(c, DT)]
+        short = [c for c in oscs if kalibr.is_short_memory_osc(c, dt)]
         out["right_kind"] = bool(short) or "LPF" in r.final.model or "MA" in r.final.model
         if short:
             c = min(short, key=lambda c: abs(math.log(c.frequency / truth["second_order"].frequency)))
@@ -186,18 +190,25 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--line-seeds", type=int, default=20, help="seeds of the osc and sin cases (SIN vs OSC ≥ 95 %%)")
     ap.add_argument("--clean", type=int, default=30)
     ap.add_argument("--minutes", type=float, default=20.0)
+    ap.add_argument("--rate", type=float, default=1.0 / DT,
+                    help="sampling rate [Hz] (default 100; below it only the cases without a sensor filter)")
     ap.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES), help="run only these cases")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    n = int(args.minutes * 60 / DT)
+    dt = 1.0 / args.rate
+    if args.rate < 1.0 / DT and {"lpf", "lpf2", "ma"} & set(args.cases):
+        ap.error("the sensor-filter cases (lpf, lpf2, ma) draw cutoffs up to 30 Hz: they need --rate 100 or more")
+    n = int(args.minutes * 60 / dt)
+    rate = "" if dt == DT else f" --rate {args.rate:g}"
     lines = [f"# bench/bench_loop_effects.py --seeds {args.seeds} --line-seeds {args.line_seeds} --clean {args.clean} "
-             f"--minutes {args.minutes:g}{'' if args.cases == list(CASES) else ' --cases ' + ' '.join(args.cases)} "
-             f"({n} samples at 100 Hz per record; start WN+RW; N = {N_TRUE}, K = {K_TRUE})"]
+             f"--minutes {args.minutes:g}{rate}"
+             f"{'' if args.cases == list(CASES) else ' --cases ' + ' '.join(args.cases)} "
+             f"({n} samples at {args.rate:g} Hz per record; start WN+RW; N = {N_TRUE}, K = {K_TRUE})"]
     start = time.perf_counter()
     seeds_of = {"osc": args.line_seeds, "sin": args.line_seeds, "clean": args.clean}
     for case in (c for c in CASES if c in args.cases):
         seeds = seeds_of.get(case, args.seeds)
-        rows = [assess(*simulate(case, 1000 + s, n)) for s in range(seeds)]
+        rows = [assess(*simulate(case, 1000 + s, n, dt)) for s in range(seeds)]
         new = report(case, rows)
         lines += new
         print("\n".join(new), flush=True)
