@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
+from scipy import optimize, stats
 
 from ..noise.components import GM
 from ..noise.flicker import PLATEAU
@@ -29,6 +29,32 @@ def fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]
         if cost < best[0]:
             best = (cost, float(tc), math.exp(0.5 * log_s2))
     return best[1], best[2]
+
+
+def gm_beside_walk(tau: np.ndarray, excess: np.ndarray, sd: np.ndarray) -> tuple[float, float, float]:
+    """GM (τ_c, σ) and random walk K whose AVs together best fit a positive AV excess: a grid over τ_c, (σ², K²) ≥ 0
+    by weighted least squares relative to the excess at each, the fit judged in log space with each τ weighted by
+    the standard deviation ``sd`` of its log excess (a bounded hump beside a walk that keeps growing)."""
+    best = (math.inf, float(tau[0]), 0.0, 0.0)
+    walk = tau / 3.0  # the random walk's AV per unit K²
+    weight = 1.0 / (sd * excess)
+    for tc in np.geomspace(tau[0] / 2, tau[-1] * 3, 80):
+        shape = GM(tau=float(tc), sigma=1.0).allan_variance(tau, 1e-3 * float(min(tc, tau[0])))
+        basis = np.column_stack([shape, walk])
+        coef, _ = optimize.nnls(basis * weight[:, None], excess * weight)
+        model = basis @ coef
+        if not np.all(model > 0):
+            continue
+        cost = float(np.sum((np.log(model / excess) / sd) ** 2))
+        if cost < best[0]:
+            best = (cost, float(tc), math.sqrt(coef[0]), math.sqrt(coef[1]))
+    return best[1], best[2], best[3]
+
+
+Z95 = 1.959963984540054
+#: A long-τ deficit's GM and walk are fitted to the data's AV beyond white noise from this fraction of the τ where
+#: the deficit begins (a GM's AV bends away from a random walk's within a decade below its τ_c) to the longest τ.
+DEFICIT_REACH = 0.1
 
 
 #: A flat AV excess: over at least FLAT_DECADES of τ, a smooth (quadratic in log-log) fit of it varies by at most a
@@ -94,11 +120,15 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
       When that excess is flat over a decade of τ or more it is also offered as flicker noise, BI (beyond the
       papers: :mod:`imu_noise_id.core.noise.flicker`), with B² = median excess / (2 ln 2/π).
 
-    A band of significant *deficit* (z_τ < −z*) reaching the longest τ means the model's long-τ growth
-    (a random walk or ramp that absorbed a bounded process) is not in the data: the data's AV beyond the white
-    part ``av_white`` (the model's WN + QN AV; default the WN line through the first τ) is a bounded hump
-    → GM, with (τ_c, σ) fitted to that hump (and BI beside it when the hump is flat: a random walk that
-    absorbed flicker noise).
+    A band of significant *deficit* (z_τ < −z*) in the last decade of τ, the model above the data at every longer
+    τ, means the model's long-τ growth (a random walk or ramp that absorbed a bounded process) is more than the
+    data hold: the data's AV beyond the white part ``av_white`` (the model's WN + QN AV; default the WN line through
+    the first τ) is a bounded hump beside whatever walk remains → GM, with (τ_c, σ) and the walk K the data keep
+    fitted to it together from a decade below the deficit's start (:func:`gm_beside_walk`; K in the finding's
+    ``random_walk``, where the refit restarts the walk), and BI beside it when the hump is flat (a random walk that
+    absorbed flicker noise). The longest τ
+    themselves need not be significant: with a few degrees of freedom there, a 24 h record's deficit from τ = 30 s
+    to its tenth, at z ≈ −8 over two decades, was missed because its last τ alone stood at z ≈ −2.
     """
     tau = np.asarray(tau, dtype=float)
     av_data = np.asarray(av_data, dtype=float)
@@ -110,14 +140,16 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
     z_star = float(stats.norm.isf(alpha / m))
     findings: list[Finding] = []
     deficit = np.flatnonzero(z < -z_star)
-    if deficit.size and deficit[-1] == m - 1:
+    if deficit.size and tau[deficit[-1]] >= LAST_DECADE * tau[-1] and np.all(z[deficit[-1]:] < 0):
         white = av_data[0] * tau[0] / tau if av_white is None else np.asarray(av_white, dtype=float)
         hump = av_data - white
-        use = hump > 0
+        use = (hump > 0) & (tau >= DEFICIT_REACH * tau[deficit[0]])
         if use.sum() >= 3:
-            tc, sg = fit_gm_to_excess(tau[use], hump[use])
+            # the log excess's standard deviation: the AV estimate's, scaled by how much of the AV the excess is
+            sd = np.log(av_ci[1] / av_ci[0]) / (2.0 * Z95) * av_data / np.where(use, hump, 1.0)
+            tc, sg, k = gm_beside_walk(tau[use], hump[use], sd[use])
             zmin = float(-z[deficit].min())
-            params = {"tau": tc, "sigma": sg, "deficit": 1.0, "band_lo": float(tau[deficit[0]]),
+            params = {"tau": tc, "sigma": sg, "random_walk": k, "deficit": 1.0, "band_lo": float(tau[deficit[0]]),
                       "band_hi": float(tau[-1])}
             findings += _with_flicker(Finding(
                 effect="GM", detector="av_band", statistic=zmin, threshold=z_star, level=alpha,

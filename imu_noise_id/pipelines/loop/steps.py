@@ -32,6 +32,13 @@ from ...core.quality import interpolate_missing
 from .state import STATE_EFFECTS, Diagnosis, ExogTerm, LoopState
 
 
+def _restarted_walk(fitted: float, f: det.Finding) -> float:
+    """The random walk a refit restarts from after a long-τ deficit: the finding's remaining walk when it has one
+    below the fitted (an AV deficit finding's joint GM + RW fit), else 1 % of the fitted."""
+    left = f.params.get("random_walk")
+    return float(left) if left is not None and 0.0 < left < fitted else fitted * 1e-2
+
+
 def _canonical(components: list[Component]) -> list[Component]:
     order = {name: i for i, name in enumerate(CANONICAL_ORDER)}
     return sorted(components, key=lambda c: order.get(c.name, len(order)))
@@ -265,13 +272,14 @@ class AxisLoop:
         """A GM finding whose τ is below :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit` becomes the
         sensor's own filter (noise correlated over a few samples, or a few milliseconds at kHz rates): a first-order
         low-pass (LPF, correlation decaying geometrically) and a two-tap average (MA, correlated over one sample
-        only), each offered unless the model has it, the likelihood decides. Both together shape the passband's edge
+        only), each offered unless the model has it, the likelihood decides (not a long-τ deficit's GM, which is about
+        the random walk, not the sensor's filter). Both together shape the passband's edge
         more freely than either (measured on the ADIS16405 accelerometers: lag-1 correlation 0.17–0.30, lag-2
         0.02–0.05, between MA's 0 and an AR(1)'s ρ₁²; with the LPF alone the AV misfit z stays at +4.5 at τ = 0.02 s
         and −5.5 at 0.06 s on 2000 s of run 1)."""
         tau = f.params.get("tau")
         missing = [k for k in ("LPF", "MA") if k not in state.structure]
-        if tau is None or tau >= filter_memory_limit(self.dt) or not missing:
+        if tau is None or tau >= filter_memory_limit(self.dt) or not missing or f.params.get("deficit"):
             return [f]
         memory = f"{f.evidence}; memory of {tau / self.dt:.1f} samples: the sensor's own"
         offer = {"LPF": replace(f, effect="LPF", evidence=f"{memory} low-pass filter"),
@@ -297,8 +305,10 @@ class AxisLoop:
                         flagged=state.flagged.copy(), imputed=state.imputed.copy(), init=fitted)
         if f.effect in STATE_EFFECTS:
             if f.params.get("deficit"):
-                # The model's long-τ growth absorbed a bounded process: restart that growth small.
-                fitted = [type(c)(c.params()["random_walk"] * 1e-2) if c.name == "RW" else c for c in fitted]
+                # The model's long-τ growth absorbed a bounded process: restart that growth at what the finding
+                # left of it, or small.
+                fitted = [type(c)(_restarted_walk(c.params()["random_walk"], f)) if c.name == "RW" else c
+                          for c in fitted]
             new.structure = [c.name for c in _canonical([*fitted, self.component(f, diag)])]
             new.init = _canonical([*fitted, self.component(f, diag)])
         elif f.effect == "SIN":
