@@ -34,7 +34,8 @@ def fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]
 def gm_beside_walk(tau: np.ndarray, excess: np.ndarray, sd: np.ndarray) -> tuple[float, float, float]:
     """GM (τ_c, σ) and random walk K whose AVs together best fit a positive AV excess: a grid over τ_c, (σ², K²) ≥ 0
     by weighted least squares relative to the excess at each, the fit judged in log space with each τ weighted by
-    the standard deviation ``sd`` of its log excess (a bounded hump beside a walk that keeps growing)."""
+    the spread ``sd`` of its log excess (any multiple of its standard deviation: a bounded hump beside a walk that
+    keeps growing)."""
     best = (math.inf, float(tau[0]), 0.0, 0.0)
     walk = tau / 3.0  # the random walk's AV per unit K²
     weight = 1.0 / (sd * excess)
@@ -51,7 +52,6 @@ def gm_beside_walk(tau: np.ndarray, excess: np.ndarray, sd: np.ndarray) -> tuple
     return best[1], best[2], best[3]
 
 
-Z95 = 1.959963984540054
 #: A long-τ deficit's GM and walk are fitted to the data's AV beyond white noise from this fraction of the τ where
 #: the deficit begins (a GM's AV bends away from a random walk's within a decade below its τ_c) to the longest τ.
 DEFICIT_REACH = 0.1
@@ -126,9 +126,9 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
     the first τ) is a bounded hump beside whatever walk remains → GM, with (τ_c, σ) and the walk K the data keep
     fitted to it together from a decade below the deficit's start (:func:`gm_beside_walk`; K in the finding's
     ``random_walk``, where the refit restarts the walk), and BI beside it when the hump is flat (a random walk that
-    absorbed flicker noise). The longest τ
-    themselves need not be significant: with a few degrees of freedom there, a 24 h record's deficit from τ = 30 s
-    to its tenth, at z ≈ −8 over two decades, was missed because its last τ alone stood at z ≈ −2.
+    absorbed flicker noise). The longest τ themselves need not be significant: with a few degrees of freedom there,
+    a 24 h record's deficit from τ = 30 s to its tenth, at z ≈ −8 over two decades, was missed because its last τ
+    alone stood at z ≈ −2.
     """
     tau = np.asarray(tau, dtype=float)
     av_data = np.asarray(av_data, dtype=float)
@@ -145,8 +145,8 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
         hump = av_data - white
         use = (hump > 0) & (tau >= DEFICIT_REACH * tau[deficit[0]])
         if use.sum() >= 3:
-            # the log excess's standard deviation: the AV estimate's, scaled by how much of the AV the excess is
-            sd = np.log(av_ci[1] / av_ci[0]) / (2.0 * Z95) * av_data / np.where(use, hump, 1.0)
+            # the log excess's spread, up to a constant: the AV estimate's interval, scaled by the excess's share
+            sd = np.log(av_ci[1] / av_ci[0]) * av_data / np.where(use, hump, 1.0)
             tc, sg, k = gm_beside_walk(tau[use], hump[use], sd[use])
             zmin = float(-z[deficit].min())
             params = {"tau": tc, "sigma": sg, "random_walk": k, "deficit": 1.0, "band_lo": float(tau[deficit[0]]),
