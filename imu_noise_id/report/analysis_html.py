@@ -69,7 +69,8 @@ def _numbers_section(result: AnalysisResult) -> str:
             f"<td>{'' if f.bias_instability_allan.reached else '&lt; '}{fmt(f.bias_instability_allan.value)}</td>"
             "</tr>")
     note = ("<p class=small>N is the passband white-noise density √(N_WN² + N_LPF² + N_MA² + N_OSC²), each at its "
-            "zero-frequency density as sampled (N_OSC: an OSC of a few samples' memory, white below its corner); "
+            "zero-frequency density as sampled (N_OSC: an OSC of short memory, five samples or 50 ms, white below its "
+            "corner); "
             "narrow oscillations (OSC), sinusoids, GMs, "
             "flicker noise (BI), temperature and the shape of the sensor's own filter are kept out of N and K. "
             "Where the final model has no random walk, imu.yaml gives the Allan-slope reading (marked). "

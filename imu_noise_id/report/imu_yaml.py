@@ -149,7 +149,7 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
             "# (model.yaml: the closed loop's last step, or the model selection), with its 95 % intervals:",
             "# noise density = passband white noise sqrt(N_WN^2 + N_LPF^2 + N_MA^2 + N_OSC^2), each at its zero-",
             "# frequency density as sampled (what the Allan variance shows as N^2/tau; an LPF near Nyquist aliases",
-            "# above its continuous N), N_OSC that of an OSC of a few samples' memory, random walk = RW;",
+            "# above its continuous N), N_OSC that of an OSC of short memory (5 samples or 50 ms), random walk = RW;",
             "# narrow oscillations (OSC), sinusoids, GMs, flicker noise (BI), the shape of the sensor's own filter",
             "# (LPF, MA, broad OSC) and temperature are kept OUT of them (see model.yaml).",
             "# *_method_xyz: model, or allan_slope / allan_upper_bound where the final model has no random walk",
