@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import solve_discrete_are
 
 from ..errors import InputError
 
@@ -67,7 +68,9 @@ def steady_prediction_covariance(
     (quadratic convergence: ~log2 of the slowest filter time constant iterations, each a few p×p products;
     far cheaper than a generalised-eigenvalue DARE solver for the tiny p here). With ``guess`` (P̄ of a nearby
     model), Newton's method from it is tried first (:func:`_newton_dare`; same stopping rule), doubling if it
-    does not converge within a few steps (it agrees with the doubling to ~1e-13 relative).
+    does not converge within a few steps (it agrees with the doubling to ~1e-13 relative). Where the doubling's
+    I + G X is singular to rounding (a state observed nearly exactly), the generalised Schur method
+    (:func:`_schur_dare`).
 
     Raises
     ------
@@ -84,6 +87,16 @@ def steady_prediction_covariance(
         P = _newton_dare(phi, q, h, float(r), np.asarray(guess, dtype=float))
         if P is not None:
             return _covariance(P)
+    try:
+        return _covariance(_doubling_dare(phi, q, h, float(r)))
+    except np.linalg.LinAlgError:
+        return _covariance(_schur_dare(phi, q, h, float(r)))
+
+
+def _doubling_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
+    """P̄ by the structure-preserving doubling algorithm; LinAlgError when I + G X is singular in double precision
+    (a state observed nearly exactly: a white noise of ~1e-14 per sample beside variances of ~1e3 makes G X ~1e17)."""
+    p = phi.shape[0]
     eye = np.eye(p)
     A = phi.T.copy()
     G = np.outer(h, h) / r
@@ -97,9 +110,20 @@ def steady_prediction_covariance(
         if not np.all(np.isfinite(X_new)):
             break
         if np.max(np.abs(X_new - X)) <= 1e-14 * np.max(np.abs(X_new)):
-            return _covariance(X_new)
+            return X_new
         X = X_new
     raise InputError("the steady-state Riccati iteration did not converge; the model parameters are degenerate")
+
+
+def _schur_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
+    """P̄ by the generalised Schur method (scipy's ``solve_discrete_are``, Arnold & Laub 1984), where the doubling's
+    I + G X is singular to rounding: slower, and it needs no inverse of that matrix."""
+    try:
+        P = solve_discrete_are(phi.T, h.reshape(-1, 1), q, np.array([[r]]))
+    except (np.linalg.LinAlgError, ValueError) as err:
+        raise InputError(f"the steady-state Riccati equation has no solution in double precision ({err}); the "
+                         "model parameters are degenerate") from err
+    return 0.5 * (P + P.T)
 
 
 #: Doublings of the Stein sum at most: 2⁶⁴ terms, beyond any closed-loop pole of a model the filter can run.
