@@ -26,9 +26,9 @@ import numpy as np
 
 from ..noise.modelspec import parameter_labels
 from . import kalibr
+from .quantiles import Z95
 from .results import FitResult
 
-Z95 = 1.959963984540054
 #: A GMWM scale whose standardised residual exceeds this misfits.
 MISFIT_Z = 2.0
 

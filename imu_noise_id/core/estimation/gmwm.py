@@ -50,6 +50,7 @@ from ..wavelet.variance import DEFAULT_MAX_FRACTION, WaveletVariance, wavelet_va
 from . import gmwm_engine as eng
 from .gmwm_ramp import fit_ramp
 from .model import check_signal, parse_structure_or_components
+from .quantiles import Z95
 from .results import FitResult
 from .starts import fit_allan
 from .uncertainty import _record_length
@@ -180,7 +181,7 @@ def intervals(est: Estimate) -> tuple[dict[str, float], dict[str, tuple[float, f
         se[lab] = value * sd
         zero = eng.near_zero(est.problem, est.best, k)
         if sd <= eng.WALD_MAX_SE_LOG and not zero and not est.best.at_bound[k]:
-            ci[lab] = (value * math.exp(-eng.Z95 * sd), value * math.exp(eng.Z95 * sd))
+            ci[lab] = (value * math.exp(-Z95 * sd), value * math.exp(Z95 * sd))
             how[lab] = "wald (sandwich covariance, log scale)"
             continue
         lo, hi = eng.profile_interval(est.problem, est.best, k, lower=not zero)

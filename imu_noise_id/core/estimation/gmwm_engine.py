@@ -33,10 +33,8 @@ from ..wavelet.covariance import theoretical_wv, wv_covariance
 from ..wavelet.variance import WaveletVariance
 from .differences import derivative_in_domain, stepped
 from .mle import covariance_from_information, physical_bounds
+from .quantiles import CHI2_95
 
-#: χ²₁ 95 % quantile: a profile interval ends where the objective rises by this much.
-CHI2_95 = 3.841458820694124
-Z95 = 1.959963984540054
 #: Parameters whose value scales a component's variance (may be indistinguishable from 0).
 AMPLITUDES = frozenset({"noise_density", "random_walk", "sigma", "Q", "slope"})
 #: Half-width [log units] of the search box of amplitudes around their start.

@@ -30,6 +30,7 @@ from scipy.optimize import brentq, least_squares, minimize_scalar
 
 from ..noise.trend import ls_slope_variance
 from . import gmwm_engine as eng
+from .quantiles import CHI2_95, Z95
 
 #: Bracketing steps outward from the centre (in units of the plug-in standard error √V(θ̂)) before giving up.
 MAX_STEPS = 12
@@ -99,13 +100,13 @@ def fit_ramp(problem: eng.Problem, theta: np.ndarray, ls_slope: float, n: int, d
         inside, outside = centre, None
         for step in range(1, MAX_STEPS + 1):
             v = centre + direction * sd * 2.0 ** (step - 1)
-            if prof(v) - floor > eng.CHI2_95:
+            if prof(v) - floor > CHI2_95:
                 outside = v
                 break
             inside = v
         if outside is None:
             ends.append(direction * math.inf)
             continue
-        ends.append(brentq(lambda v: prof(v) - floor - eng.CHI2_95, inside, outside, xtol=0.01 * sd))
+        ends.append(brentq(lambda v: prof(v) - floor - CHI2_95, inside, outside, xtol=0.01 * sd))
     lo, hi = ends
-    return RampFit(centre, (hi - lo) / (2.0 * eng.Z95), (lo, hi))
+    return RampFit(centre, (hi - lo) / (2.0 * Z95), (lo, hi))

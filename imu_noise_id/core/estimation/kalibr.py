@@ -37,9 +37,9 @@ from ..noise.components import LPF, MA, OSC, RW, WN
 from ..noise.modelspec import parameter_labels
 from ..noise.resonant import filter_memory_limit
 from .differences import derivative_in_domain
+from .quantiles import Z95
 from .results import FitResult
 
-Z95 = 1.959963984540054
 #: Log-parameter step of the passband densities' gradients.
 GRADIENT_STEP = 1e-6
 #: A part of N² below this share does not enter N's interval.

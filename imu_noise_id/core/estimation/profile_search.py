@@ -15,8 +15,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-#: Two-sided 95 % normal quantile: the signed root r at each end.
-Z95 = 1.959963984540054
+from .quantiles import Z95
+
 #: Each end is accepted when |r − Z95| is below this (an interval of 94.4–95.6 % nominal level).
 R_TOL = 0.05
 #: Profile evaluations per end at most (outward steps and regula falsi together).

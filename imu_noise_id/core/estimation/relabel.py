@@ -25,10 +25,11 @@ from ..kalman.statespace import to_components
 from ..noise.components import GM
 from ..noise.modelspec import structure_name
 from ..noise.resonant import LPF, filter_memory_limit
+from .quantiles import Z95
 from .results import FitResult
 from .uncertainty import add_uncertainty
 
-Z95 = 1.959963984540054
+
 def gm_as_filter(fit: FitResult) -> FitResult:
     """``fit`` with its shortest GM renamed LPF when τ < :func:`~..noise.resonant.filter_memory_limit` and the model
     has no LPF.

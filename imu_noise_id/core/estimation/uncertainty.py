@@ -25,10 +25,9 @@ from ..noise.modelspec import parameter_labels
 from ..quality import interpolate_missing
 from . import mle
 from .profile import Profiler
+from .quantiles import Z95
 from .results import FitResult, RecordLengthAdvice
 
-#: Two-sided 95 % normal quantile.
-Z95 = 1.959963984540054
 #: Above this standard error in log space (a 95 % Wald interval wider than ×7 each way) the Wald interval is
 #: replaced by a profile-likelihood one.
 WALD_MAX_SE_LOG = 1.0
