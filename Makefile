@@ -5,6 +5,10 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP := $(VENV)/bin/pip -q --disable-pip-version-check
 DEMO_DIR ?= demo_output
+# The exact versions a fresh machine installs (pip constraints, written by `make lock`); `make test-latest` empties it
+# to test the newest versions in a venv of their own.
+LOCK ?= requirements.lock
+CONSTRAIN := $(if $(LOCK),-c $(LOCK))
 
 # DDS traffic stays on 127.0.0.1 and rclpy logs go to a temporary folder (see README, "Network").
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
@@ -21,13 +25,13 @@ export OPENBLAS_NUM_THREADS ?= 1
 # until the last test.
 TEST_WORKERS ?= 2
 
-.PHONY: setup demo test lint bench clean
+.PHONY: setup demo test test-latest lock lint bench clean
 
-$(VENV)/.installed: requirements.txt requirements-dev.txt setup.py setup.cfg package.xml
+$(VENV)/.installed: requirements.txt requirements-dev.txt $(LOCK) setup.py setup.cfg package.xml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PIP) install --upgrade pip 2>&1 | grep -v '^WARNING: Location' || true
-	set -o pipefail; $(PIP) install -r requirements-dev.txt 2>&1 | { grep -v '^WARNING: Location' || true; }
-	set -o pipefail; $(PIP) install -e . 2>&1 | { grep -v '^WARNING: Location' || true; }
+	set -o pipefail; $(PIP) install -r requirements-dev.txt $(CONSTRAIN) 2>&1 | { grep -v '^WARNING: Location' || true; }
+	set -o pipefail; $(PIP) install -e . $(CONSTRAIN) 2>&1 | { grep -v '^WARNING: Location' || true; }
 	@# Chromium (Debian's package) renders report.html in the browser test; without it that test is skipped.
 	command -v chromium >/dev/null || { test "$$(id -u)" = 0 && command -v apt-get >/dev/null \
 	  && { apt-get install -y -q chromium >/dev/null 2>&1 || { apt-get update -qq && apt-get install -y -q chromium >/dev/null; }; }; } \
@@ -52,8 +56,16 @@ test: setup lint
 	wait $$ros; ros_status=$$?; echo "-- tests marked ros:"; cat $$ros_log; rm -f $$ros_log; \
 	test $$others = 0 -a $$ros_status = 0
 
+# The newest versions of everything (not part of .ci/run): what breaks first when the lock is renewed.
+test-latest:
+	$(MAKE) test VENV=.venv-latest LOCK=
+
+# Renew the lock: the newest versions, installed and tested in .venv-latest, become requirements.lock.
+lock: test-latest
+	.venv-latest/bin/python tools/write_lock.py > requirements.lock
+
 bench: setup
 	$(PY) bench/run_all.py
 
 clean:
-	rm -rf $(VENV) build install log $(DEMO_DIR) .pytest_cache .ruff_cache
+	rm -rf $(VENV) .venv-latest build install log $(DEMO_DIR) .pytest_cache .ruff_cache

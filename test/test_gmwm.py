@@ -106,13 +106,30 @@ def test_wic_selects_the_true_structure_among_the_em_candidates():
     from imu_noise_id.core.estimation.gmwm_select import full_structure, select_gmwm
 
     assert full_structure(["WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM"]) == "WN+2GM+RW"
-    for truth, expected, seed in (([WN(1e-3), GM(2.0, 5e-4), RW(6e-5)], "WN+GM+RW", 3),
-                                  ([WN(1e-3), RW(5e-5)], "WN+RW", 4)):
-        y = simulate_sum(truth, 300_000, DT, np.random.default_rng(seed))
+    y = simulate_sum([WN(1e-3), GM(2.0, 5e-4), RW(6e-5)], 300_000, DT, np.random.default_rng(3))
+    sel = select_gmwm(y, DT)
+    assert sel.best.model == "WN+GM+RW", sel.table
+    assert sel.table[0]["model"] == "WN+GM+RW" and sel.table[0]["delta_wic"] == 0.0
+    assert min(r["delta_wic"] for r in sel.table[1:]) > 1.0  # far from a tie: the next candidate (WN+2GM) 1.7
+    assert sel.best.ci95 and all(not f.ci95 for m, f in sel.fits.items() if f is not sel.best)
+
+
+def test_wic_tie_of_nested_structures_goes_to_the_fewest_parameters():
+    """A GM the data do not hold is fitted onto its bound beside the random walk: WN+GM+RW and WN+RW then have the
+    same WIC up to rounding, and the tie is the simpler structure's, on every seed and whatever the library
+    versions' last digits (before the rule the winner was WN+GM+RW on some machines, by 1e-12)."""
+    from imu_noise_id.core.estimation.gmwm_select import WIC_TIE, select_gmwm
+
+    ties = 0
+    for seed in (4, 5, 6, 9):
+        y = simulate_sum([WN(1e-3), RW(5e-5)], 300_000, DT, np.random.default_rng(seed))
         sel = select_gmwm(y, DT)
-        assert sel.best.model == expected, sel.table
-        assert sel.table[0]["model"] == expected and sel.table[0]["delta_wic"] == 0.0
-        assert sel.best.ci95 and all(not f.ci95 for m, f in sel.fits.items() if f is not sel.best)
+        wic = {r["model"]: r["wic"] for r in sel.table}
+        tied = [m for m in wic if wic[m] - min(wic.values()) <= WIC_TIE * max(1.0, abs(min(wic.values())))]
+        ties += len(tied) > 1
+        assert "WN+RW" in tied and sel.best.model == "WN+RW", sel.table
+        assert sel.table[0]["model"] == "WN+RW"
+    assert ties >= 3  # the case is a tie on most seeds, not a margin
 
 
 def test_pooled_fit_is_tighter_and_the_compatibility_test_separates_replicates():

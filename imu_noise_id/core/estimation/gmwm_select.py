@@ -11,6 +11,11 @@ the best J-test p-value). The candidates are those of :func:`.selection.suggest_
 
 Each candidate's reported fit (J-test) is its own efficient fit (:func:`.gmwm.fit_gmwm`), with intervals for the
 winner only; the common weight only ranks them.
+
+Beyond the paper: candidates whose WIC differ by no more than :data:`WIC_TIE` (relative) are one tie, won by the
+fewest parameters. A component that the data do not hold is fitted onto its bound (a GM beside a random walk whose
+variance goes to zero) and adds neither fit nor optimism, so the nested structures' WIC are equal up to rounding;
+without the rule the winner of such a tie was decided by the last digits of the linear algebra.
 """
 
 from __future__ import annotations
@@ -20,11 +25,14 @@ from dataclasses import dataclass
 
 from ..allan import AllanResult
 from ..errors import InputError
-from ..noise.modelspec import parse_structure, structure_name
+from ..noise.modelspec import parameter_labels, parse_structure, structure_name
 from ..wavelet.variance import WaveletVariance
 from . import gmwm_engine as eng
 from .gmwm import Estimate, GmwmFit, GmwmOptions, dress, estimate_structure, prepare
 from .selection import suggest_candidates
+
+#: Relative WIC difference within which two candidates are one tie (:func:`select_gmwm`).
+WIC_TIE = 1e-6
 
 
 @dataclass
@@ -80,12 +88,13 @@ def select_gmwm(y, dt: float, candidates: list[str] | None = None, *, options: G
         problem = est.problem.with_weights(weights)
         best = problem.minimise(est.best.theta)
         wic[spec] = best.objective + eng.infer(problem, best, list(weights.covariance)).optimism
-    best_spec = min(wic, key=wic.get)
+    low = min(wic.values())
+    tied = [spec for spec in wic if wic[spec] - low <= WIC_TIE * max(1.0, abs(low))]
+    best_spec = min(tied, key=lambda spec: len(parameter_labels(ests[spec].components)))
     fits = {spec: dress(est, n=wv.n, dt=wv.dt, options=options, slope=slope,
                         uncertainty=spec == best_spec) for spec, est in ests.items()}
-    low = wic[best_spec]
     table = [{"model": fits[s].model, "k": fits[s].n_params, "wic": wic[s], "delta_wic": wic[s] - low,
               "j_statistic": fits[s].j_statistic, "dof": fits[s].dof, "p_value": fits[s].p_value} for s in fits]
-    table.sort(key=lambda r: r["wic"])
+    table.sort(key=lambda r: (r["model"] != fits[best_spec].model, r["wic"]))
     table += [{"model": s, "error": e} for s, e in errors.items()]
     return GmwmSelection(fits[best_spec], table, fits, reference)
