@@ -53,16 +53,17 @@ def test_orbslam3_settings_are_continuous_time(tmp_path):
     text, doc = _load(write_exports(DOC, tmp_path, ("orbslam3",))[0])
     assert doc == {"IMU.NoiseGyro": 1.7e-4, "IMU.NoiseAcc": 2.0e-3, "IMU.GyroWalk": 2.0e-5, "IMU.AccWalk": 3.0e-4,
                    "IMU.Frequency": 200.0}
-    assert text.startswith("%YAML:1.0\n")
+    assert text.startswith("%YAML:1.0\n") and "Fragment:" in text and "IMU.T_b_c1" in text
 
 
 def test_rep145_driver_parameters_are_per_sample_stddevs(tmp_path):
     _, doc = _load(write_exports(DOC, tmp_path, ("rep145",))[0])
-    assert doc == {"angular_velocity_stddev": 2.4e-3, "linear_acceleration_stddev": 0.022}
+    # a ROS 2 parameter file: the /** node (every node), its ros__parameters
+    assert doc == {"/**": {"ros__parameters": {"angular_velocity_stddev": 2.4e-3, "linear_acceleration_stddev": 0.022}}}
     # An Allan-only imu.yaml has no per-sample values: white noise sampled at the rate, σ = N·√f.
     allan_only = {k: v for k, v in DOC.items() if "per_sample" not in k}
     _, doc = _load(write_exports(allan_only, tmp_path / "a", ("rep145",))[0])
-    assert doc["angular_velocity_stddev"] == pytest.approx(1.7e-4 * math.sqrt(200.0))
+    assert doc["/**"]["ros__parameters"]["angular_velocity_stddev"] == pytest.approx(1.7e-4 * math.sqrt(200.0))
 
 
 def test_export_command(tmp_path, capsys):
@@ -92,7 +93,8 @@ def test_kalibr_is_kalibrs_own_imu_yaml(tmp_path):
 def test_vins_values_give_the_true_variances_through_vins_propagation(tmp_path):
     text, doc = _load(write_exports(DOC, tmp_path, ("vins",))[0])
     assert text.startswith("%YAML:1.0\n")
-    assert list(doc) == ["acc_n", "gyr_n", "acc_w", "gyr_w"]  # VINS' euroc_config.yaml keys
+    assert list(doc) == ["acc_n", "gyr_n", "acc_w", "gyr_w", "g_norm"]  # VINS' euroc_config.yaml keys
+    assert doc["g_norm"] == 9.80665 and "Fragment:" in text
     dt = 1.0 / DOC["update_rate"]
     # integration_base.h: noise = diag(acc_n², gyr_n², acc_n², gyr_n², acc_w², gyr_w²); per step P += V noise Vᵀ
     # with V = ½dt on the measurement noises of both ends of the mid-point step (angle θ, velocity v) and V = dt
@@ -113,7 +115,7 @@ def test_vins_values_give_the_true_variances_through_vins_propagation(tmp_path):
     assert "acc_n = N*sqrt(2*f)" in text and "acc_w = K*sqrt(f)" in text
 
 
-def test_gtsam_covariances_are_continuous_densities_squared_per_axis(tmp_path):
+def test_gtsam_covariances_are_continuous_densities_squared_per_sensor(tmp_path):
     text, doc = _load(write_exports(DOC, tmp_path, ("gtsam",))[0])
     # the members of PreintegrationCombinedParams (CombinedImuFactorsExample: p->accelerometerCovariance = I·σ², …)
     assert set(doc) == {"accelerometerCovariance", "gyroscopeCovariance", "biasAccCovariance", "biasOmegaCovariance",
@@ -121,15 +123,16 @@ def test_gtsam_covariances_are_continuous_densities_squared_per_axis(tmp_path):
     assert doc["integrationCovariance"] is None and doc["biasAccOmegaInt"] is None  # not IMU properties
     acc = np.array(doc["accelerometerCovariance"])
     assert acc.shape == (3, 3) and np.count_nonzero(acc - np.diag(np.diag(acc))) == 0
-    np.testing.assert_allclose(np.sqrt(np.diag(acc)), DOC["accelerometer_noise_density_xyz"], rtol=1e-12)
+    # one value per sensor, the max over its axes (the Kalibr key), as the header says: not the *_xyz values
+    np.testing.assert_allclose(np.sqrt(np.diag(acc)), [DOC["accelerometer_noise_density"]] * 3, rtol=1e-6)
     # GTSAM's propagation (ImuFactor.cpp / CombinedImuFactor.cpp): per step the velocity gets
     # vel_H_acc (aCov/dt) vel_H_accᵀ with vel_H_acc = R·dt, the bias dt·biasAccCovariance.
     dt = 1.0 / DOC["update_rate"]
     steps = round(T / dt)
     vel = steps * dt * (acc / dt) * dt
     bias = steps * dt * np.array(doc["biasOmegaCovariance"])
-    np.testing.assert_allclose(np.diag(vel), np.square(DOC["accelerometer_noise_density_xyz"]) * T, rtol=1e-9)
-    np.testing.assert_allclose(np.diag(bias), np.square(DOC["gyroscope_random_walk_xyz"]) * T, rtol=1e-9)
+    np.testing.assert_allclose(np.diag(vel), [DOC["accelerometer_noise_density"] ** 2 * T] * 3, rtol=1e-6)
+    np.testing.assert_allclose(np.diag(bias), [DOC["gyroscope_random_walk"] ** 2 * T] * 3, rtol=1e-6)
     assert "integrationCovariance" in text and "not identifiable" in text
 
 
@@ -178,9 +181,9 @@ def test_overbound_exports_use_the_overbound_section(tmp_path):
     assert doc["gyroscope_noise_density"] == 3.4e-4 and doc["accelerometer_random_walk"] == 9.0e-4
     assert "OVERBOUND" in text and "[0.005, 100] s" in text and "N x1.8-2.0" in text
     _, gt = _load(paths[1])
-    assert np.sqrt(np.diag(gt["gyroscopeCovariance"])).tolist() == pytest.approx([3.4e-4, 3.0e-4, 3.1e-4])
+    assert np.sqrt(np.diag(gt["gyroscopeCovariance"])).tolist() == pytest.approx([3.4e-4] * 3)  # the sensor's max
     _, rep = _load(paths[2])  # no low-pass in a WN+RW: N*sqrt(f)
-    assert rep["angular_velocity_stddev"] == pytest.approx(3.4e-4 * math.sqrt(200.0))
+    assert rep["/**"]["ros__parameters"]["angular_velocity_stddev"] == pytest.approx(3.4e-4 * math.sqrt(200.0))
     with pytest.raises(Exception, match="no 'overbound:' section"):
         write_exports(DOC, tmp_path, ("kalibr",), overbound=True)
 

@@ -6,22 +6,29 @@ The conventions were read in each consumer's own code and documentation:
 
 - Kalibr (``kalibr_common/ConfigReader.py``, ``ImuParameters``): continuous-time N and K; Kalibr discretises
   σ_d = N·√f itself and refuses values ≤ 0.
-- OpenVINS: Kalibr's IMU chain (``%YAML:1.0``, ``imu0:``, ``model: kalibr``), continuous-time.
+- OpenVINS: Kalibr's IMU chain (``%YAML:1.0``, ``imu0:``, ``model: kalibr``), continuous-time, read with OpenCV's
+  ``cv::FileStorage`` (``ov_core/src/utils/opencv_yaml_parse.h``): a block sequence must be indented under its key
+  (OpenCV refuses the indentless form PyYAML writes), ``T_i_b`` is a sequence of four rows read as ``node[r][c]``.
 - ORB-SLAM3: ``IMU.NoiseGyro``/``IMU.NoiseAcc`` = N, ``IMU.GyroWalk``/``IMU.AccWalk`` = K (continuous-time; it
-  multiplies by √``IMU.Frequency`` itself).
+  multiplies by √``IMU.Frequency`` itself), each a real number (``Settings::readParameter<float>``). A fragment of
+  the settings file: ``IMU.T_b_c1`` (the camera-IMU extrinsics) and the camera keys come from the user's file.
 - VINS-Mono / VINS-Fusion (``integration_base.h``): ``noise = diag(acc_n², gyr_n², acc_n², gyr_n², acc_w²,
   gyr_w²)``, propagated per IMU step dt = 1/f by ``V·noise·Vᵀ`` with ``V = ½·dt`` on the measurement noises of
   both ends of the mid-point step and ``V = dt`` on the bias noises:
-  acc_n = N·√(2f), acc_w = K·√f (:func:`~imu_noise_id.core.noise.units.step_noise_std`, weights ½ and 1).
+  acc_n = N·√(2f), acc_w = K·√f (:func:`~imu_noise_id.core.noise.units.step_noise_std`, weights ½ and 1); and
+  ``g_norm`` (VINS reads 0 when it is absent), standard gravity. A fragment of the VINS config as well.
 - GTSAM (``PreintegrationParams.h``, ``PreintegrationCombinedParams.h``, ``ImuFactor.cpp``): continuous-time
-  "covariances" = densities squared: ``accelerometerCovariance`` = diag(N²) [(m/s²)²/Hz] (GTSAM divides by dt),
-  ``biasAccCovariance`` = diag(K²) [(m/s³)²/Hz] (GTSAM multiplies by dt); ``integrationCovariance`` and
-  ``biasAccOmegaInt`` are modelling choices, not IMU properties (left empty).
+  "covariances" = densities squared, one value per sensor (the Kalibr key, max over its axes) on the diagonal:
+  ``accelerometerCovariance`` = I·N² [(m/s²)²/Hz] (GTSAM divides by dt), ``biasAccCovariance`` = I·K²
+  [(m/s³)²/Hz] (GTSAM multiplies by dt): never an axis's own random walk, which where it is not identifiable can be
+  ~0 and would hold that bias constant; ``integrationCovariance`` and ``biasAccOmegaInt`` are modelling choices,
+  not IMU properties (left empty).
 - PX4 EKF2 (``EKF/covariance.cpp``, ``module.yaml``, ``params_*_bias.yaml``): per EKF prediction step of
   P seconds (``EKF2_PREDICT_US``, default 10 ms) it adds ``sq(dt·EKF2_GYR_NOISE)`` [rad²] to the delta angles and
   ``sq(dt·EKF2_GYR_B_NOISE)`` to the bias variance: EKF2_*_NOISE = N/√P [rad/s, m/s²], EKF2_*_B_NOISE = K/√P
   [rad/s², m/s³] — not Kalibr's σ_d = N·√f, which would use the IMU rate instead of the EKF's.
-- REP-145 driver: the per-sample standard deviation at the driver's rate (``*_noise_stddev_per_sample_xyz``).
+- REP-145 driver: the per-sample standard deviation at the driver's rate (``*_noise_stddev_per_sample_xyz``), as a
+  ROS 2 parameter file (``/**: ros__parameters:``: every node's parameters).
 """
 
 from __future__ import annotations
@@ -31,6 +38,7 @@ import math
 import yaml
 
 from ..core.noise.units import step_noise_std
+from ..core.stillness import STANDARD_GRAVITY
 from .numbers import num
 
 _SENSORS = (("gyroscope", "gyro"), ("accelerometer", "acc"))
@@ -41,6 +49,15 @@ PX4_LIMITS = {"EKF2_GYR_NOISE": (1e-4, 0.1), "EKF2_ACC_NOISE": (0.01, 1.0), "EKF
               "EKF2_ACC_B_NOISE": (0.0, 0.01)}
 #: VINS' per-step weights of the measurement noise (mid-point rule) and of the bias noise.
 VINS_NOISE_WEIGHT, VINS_WALK_WEIGHT = 0.5, 1.0
+#: The node name of the REP-145 parameter file: ``/**`` matches every node (ROS 2 parameter files' wildcard).
+ROS_PARAMETER_NODE = "/**"
+
+
+class _IndentedSequences(yaml.SafeDumper):
+    """PyYAML's safe dumper with block sequences indented under their key (OpenCV's FileStorage needs that)."""
+
+    def increase_indent(self, flow: bool = False, indentless: bool = False) -> None:
+        return super().increase_indent(flow, False)
 
 
 def _origin(doc: dict) -> list[str]:
@@ -92,29 +109,35 @@ def kalibr(doc: dict) -> str:
 
 
 def openvins(doc: dict) -> str:
-    """OpenVINS / Kalibr IMU chain (continuous-time densities)."""
+    """OpenVINS / Kalibr IMU chain (continuous-time densities) that OpenCV's ``cv::FileStorage`` reads key by key:
+    ``T_i_b`` a sequence of four rows of four numbers, block-indented under its key."""
     imu0 = {"T_i_b": [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
             **{f"{s}_{p}": float(doc[f"{s}_{p}"]) for s in ("accelerometer", "gyroscope")
                for p in ("noise_density", "random_walk")},
             "model": "kalibr", "rostopic": str(doc.get("rostopic", "/imu0")), "time_offset": 0.0,
             "update_rate": float(doc["update_rate"])}
-    body = yaml.safe_dump({"imu0": imu0}, sort_keys=False, default_flow_style=None)
+    body = yaml.dump({"imu0": imu0}, Dumper=_IndentedSequences, sort_keys=False, default_flow_style=None)
     return "%YAML:1.0\n" + header(doc, "Convention: continuous-time noise densities N [u/sqrt(Hz)] and bias random "
                                        "walks K [u/s/sqrt(Hz)], as Kalibr; T_i_b identity (set your extrinsics)") + body
 
 
 def orbslam3(doc: dict) -> str:
-    """ORB-SLAM3 IMU settings (continuous-time; ORB-SLAM3 scales by sqrt(IMU.Frequency))."""
+    """ORB-SLAM3 IMU settings (continuous-time; ORB-SLAM3 scales by sqrt(IMU.Frequency)), every value a real number;
+    a fragment: the header names the keys (``IMU.T_b_c1``) that must come from the user's settings file."""
     body = {"IMU.NoiseGyro": _n(doc, "gyroscope"), "IMU.NoiseAcc": _n(doc, "accelerometer"),
             "IMU.GyroWalk": _k(doc, "gyroscope"), "IMU.AccWalk": _k(doc, "accelerometer"),
             "IMU.Frequency": float(doc["update_rate"])}
-    return "%YAML:1.0\n" + header(doc, "Convention: continuous-time: NoiseGyro/NoiseAcc in rad/s/sqrt(Hz), "
-                                       "m/s^2/sqrt(Hz); GyroWalk/AccWalk in rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)") + \
+    return "%YAML:1.0\n" + header(
+        doc, "Convention: continuous-time: NoiseGyro/NoiseAcc in rad/s/sqrt(Hz), m/s^2/sqrt(Hz); GyroWalk/AccWalk in "
+             "rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)",
+        "Fragment: merge these keys into your ORB-SLAM3 settings file; IMU.T_b_c1 (the 4x4 opencv-matrix from "
+        "camera 1 to the IMU body, from your camera-IMU calibration) and the camera keys must come from it.") + \
         yaml.safe_dump(body, sort_keys=False)
 
 
 def vins(doc: dict) -> str:
-    """VINS-Mono / VINS-Fusion ``acc_n``, ``gyr_n``, ``acc_w``, ``gyr_w`` (per-IMU-step standard deviations)."""
+    """VINS-Mono / VINS-Fusion ``acc_n``, ``gyr_n``, ``acc_w``, ``gyr_w`` (per-IMU-step standard deviations) and
+    ``g_norm`` (standard gravity); a fragment of the VINS config, as its header says."""
     f = float(doc["update_rate"])
     values = {}
     for sensor, short in (("accelerometer", "acc"), ("gyroscope", "gyr")):
@@ -122,34 +145,42 @@ def vins(doc: dict) -> str:
     for sensor, short in (("accelerometer", "acc"), ("gyroscope", "gyr")):
         values[f"{short}_w"] = step_noise_std(_k(doc, sensor), 1.0 / f, VINS_WALK_WEIGHT)
     body = "".join(f"{k}: {_yaml_number(v)}\n" for k, v in values.items())
+    body += f"g_norm: {_yaml_number(STANDARD_GRAVITY)}  # [m/s^2] standard gravity: set your local value\n"
     return "%YAML:1.0\n" + header(
         doc, "Convention: VINS propagates per IMU step dt = 1/update_rate (integration_base.h): the mid-point step "
              "adds (dt/2)^2*acc_n^2 for each of its two samples, the bias dt^2*acc_w^2.",
         f"Formula: acc_n = N*sqrt(2*f), acc_w = K*sqrt(f), f = {f:g} Hz (same for gyr_*), so that the propagated "
         "variances grow as N^2*t and K^2*t.",
         "acc_n [m/s^2], gyr_n [rad/s], acc_w [m/s^3], gyr_w [rad/s^2]. The often-quoted Kalibr discrete values "
-        "N*sqrt(f) and K/sqrt(f) differ from these by sqrt(2) and by f.") + body
+        "N*sqrt(f) and K/sqrt(f) differ from these by sqrt(2) and by f.",
+        "Fragment: merge these keys into your VINS config (VINS reads g_norm as 0 when it is absent); the topics, "
+        "the camera calibration and the camera-IMU extrinsics must come from it.") + body
 
 
-def _diag(doc: dict, sensor: str, parameter: str) -> list[list[float]]:
-    per_axis = doc.get(f"{sensor}_{parameter}_xyz") or [doc[f"{sensor}_{parameter}"]] * 3
-    return [[num(float(per_axis[i]) ** 2) if i == j else 0.0 for j in range(3)] for i in range(3)]
+def _diag(value: float) -> list[list[float]]:
+    """I·value² as rows (:func:`~.numbers.num` digits)."""
+    return [[num(value**2) if i == j else 0.0 for j in range(3)] for i in range(3)]
 
 
 def gtsam(doc: dict) -> str:
-    """GTSAM ``PreintegrationCombinedParams`` members (continuous-time covariances, densities squared)."""
-    body = {"accelerometerCovariance": _diag(doc, "accelerometer", "noise_density"),
-            "gyroscopeCovariance": _diag(doc, "gyroscope", "noise_density"),
-            "biasAccCovariance": _diag(doc, "accelerometer", "random_walk"),
-            "biasOmegaCovariance": _diag(doc, "gyroscope", "random_walk"),
+    """GTSAM ``PreintegrationCombinedParams`` members (continuous-time covariances, densities squared): I·N², I·K²
+    with each sensor's Kalibr value (max over its axes) on every axis, never an axis's own value (where its random
+    walk is not identifiable that can be ~0, a bias covariance that would hold the bias constant)."""
+    body = {"accelerometerCovariance": _diag(_n(doc, "accelerometer")),
+            "gyroscopeCovariance": _diag(_n(doc, "gyroscope")),
+            "biasAccCovariance": _diag(_k(doc, "accelerometer")),
+            "biasOmegaCovariance": _diag(_k(doc, "gyroscope")),
             "integrationCovariance": None, "biasAccOmegaInt": None}
     return header(
-        doc, "Convention: GTSAM's continuous-time 'covariances' = densities squared, per axis on the diagonal (x, y, "
-             "z of imu.yaml's *_xyz): accelerometerCovariance = diag(N^2) [(m/s^2)^2/Hz], gyroscopeCovariance "
-             "[(rad/s)^2/Hz] (GTSAM divides by dt), biasAccCovariance = diag(K^2) [(m/s^3)^2/Hz], "
+        doc, "Convention: GTSAM's continuous-time 'covariances' = densities squared, the sensor's value (max over x, "
+             "y, z) on each axis of the diagonal: accelerometerCovariance = I*N^2 [(m/s^2)^2/Hz], "
+             "gyroscopeCovariance [(rad/s)^2/Hz] (GTSAM divides by dt), biasAccCovariance = I*K^2 [(m/s^3)^2/Hz], "
              "biasOmegaCovariance [(rad/s^2)^2/Hz] (GTSAM multiplies by dt).",
-        "integrationCovariance (integration error) and biasAccOmegaInt (uncertainty of the initial bias) are "
-        "choices of your estimator, not properties of the IMU: not identifiable from a static record, left null.",
+        "Not the per-axis values of imu.yaml's *_xyz: where an axis's random walk is not identifiable its value can "
+        "be ~0, and that bias covariance would hold the bias constant; the sensor's value is used on every axis.",
+        "integrationCovariance (integration error) and biasAccOmegaInt (uncertainty of the initial bias; GTSAM 4.3 "
+        "has none: put a prior on the first bias) are choices of your estimator, not properties of the IMU: not "
+        "identifiable from a static record, left null.",
         "Use: p = gtsam.PreintegrationCombinedParams.MakeSharedU(g); p.setAccelerometerCovariance(np.array(...)); "
         "... (PreintegrationParams takes the first two only).") + \
         yaml.safe_dump(body, sort_keys=False, default_flow_style=None)
@@ -180,7 +211,8 @@ def px4(doc: dict) -> str:
 
 
 def rep145(doc: dict) -> str:
-    """REP-145 driver parameters: per-sample standard deviations at the driver's rate."""
+    """REP-145 driver parameters: per-sample standard deviations at the driver's rate, as a ROS 2 parameter file
+    (``/**: ros__parameters:``, which every node reads)."""
     per_sample = {}
     for sensor, name in (("gyroscope", "angular_velocity_stddev"), ("accelerometer", "linear_acceleration_stddev")):
         values = doc.get(f"{sensor}_noise_stddev_per_sample_xyz")
@@ -189,5 +221,7 @@ def rep145(doc: dict) -> str:
         per_sample[name] = float(max(values))
     return header(doc, "Convention: per-sample standard deviation at update_rate (rad/s, m/s^2): sqrt of the "
                        "sensor_msgs/Imu covariance diagonal; includes the sensor's own low-pass, not N*sqrt(rate) "
-                       "(an overbound or an Allan-only analysis has no low-pass: N*sqrt(rate))") + \
-        yaml.safe_dump(per_sample, sort_keys=False)
+                       "(an overbound or an Allan-only analysis has no low-pass: N*sqrt(rate))",
+                  f"ROS 2 parameter file: {ROS_PARAMETER_NODE} gives every node these parameters; put your driver's "
+                  "node name there to give them to it alone.") + \
+        yaml.safe_dump({ROS_PARAMETER_NODE: {"ros__parameters": per_sample}}, sort_keys=False)

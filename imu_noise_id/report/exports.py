@@ -2,7 +2,8 @@
 
 Every export is written from the numbers of ``imu.yaml`` (the final models' values, max over each sensor's axes;
 see :mod:`.imu_yaml`) by a renderer of :mod:`.export_formats`, which states the consumer's convention and the
-formula in the file's comment header. With ``overbound=True`` the values are those of ``imu.yaml``'s
+formula in the file's comment header (``vins`` and ``orbslam3`` are fragments to merge into the user's config: the
+header names the keys that must come from it). With ``overbound=True`` the values are those of ``imu.yaml``'s
 ``overbound:`` section instead (:func:`overbound_doc`): the smallest WN+RW whose Allan variance covers the data's
 upper 95 % bound and the final model over the filter's τ range, per axis.
 
@@ -11,11 +12,11 @@ format                file                            convention
 ====================  ==============================  =====================================================
 ``kalibr``            ``kalibr_imu.yaml``             continuous-time N, K (Kalibr's own ``imu.yaml``)
 ``openvins``          ``kalibr_imu_chain.yaml``       continuous-time N, K (Kalibr IMU chain, ``imu0:``)
-``vins``              ``vins_imu.yaml``               per-IMU-step std: acc_n = N·√(2f), acc_w = K·√f
+``vins``              ``vins_imu.yaml``               per-IMU-step std: acc_n = N·√(2f), acc_w = K·√f; g_norm
 ``orbslam3``          ``orbslam3_imu.yaml``           continuous-time N, K and the frequency
-``gtsam``             ``gtsam_imu.yaml``              continuous-time covariances diag(N²), diag(K²)
+``gtsam``             ``gtsam_imu.yaml``              continuous-time covariances I·N², I·K² (one value a sensor)
 ``px4``               ``px4_ekf2.params``             per EKF step P: N/√P, K/√P (QGroundControl .params)
-``rep145``            ``rep145_driver_params.yaml``   per-sample std at the driver's rate
+``rep145``            ``rep145_driver_params.yaml``   per-sample std at the driver's rate (``/**: ros__parameters:``)
 ====================  ==============================  =====================================================
 """
 
