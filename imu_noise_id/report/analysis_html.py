@@ -135,9 +135,10 @@ def _selection_section(result: AnalysisResult) -> str:
                 f"<tr><td class=l>{html.escape(str(r.get('model')))}</td><td>{fmt(r.get('loglik', nan), '.1f')}"
                 f"</td><td>{r.get('k', '')}</td><td>{fmt(r.get('delta_bic', nan), '.2f')}</td>"
                 f"<td>{fmt(r.get('weight_bic', nan), '.3g')}</td>"
-                f"<td class=l>{html.escape(str(r.get('error', '')))}</td></tr>" for r in m.selection.table)
+                f"<td class=l>{html.escape(str(r.get('error', r.get('screened', ''))))}</td></tr>"
+                for r in m.selection.table)
             out.append(f"<h3>{axis}</h3><table><tr><th class=l>candidate</th><th>log-lik</th><th>k</th>"
-                       f"<th>ΔBIC</th><th>BIC weight</th><th class=l>error</th></tr>{rows}</table>")
+                       f"<th>ΔBIC</th><th>BIC weight</th><th class=l>note</th></tr>{rows}</table>")
         advice = m.fit.record_length
         if advice is not None:
             items = "".join(

@@ -16,7 +16,8 @@ Per axis (``gyro_x`` … ``accel_z``)::
                                                                                  # null for a GMWM fit
     short_of_maximum: …      # only when the intervals' search met a log-likelihood higher by this (> 1.92): the
                              # fit is not at the maximum, its values and intervals are not the maximum's
-    candidates: [{model, loglik, k, aic, bic, delta_bic, weight_bic}, …]          # when selected
+    candidates: [{model, loglik, k, aic, bic, delta_bic, weight_bic}, …]          # when selected; a row
+                                   # {model, screened, delta_bic_screen}: not fitted exactly (core/estimation/screen.py)
     record_length: {target, level, current_s, parameters: {label: {needed_s, needed_h, relative_halfwidth,
                     reliable}}}
     moments: {…}                       # a GMWM fit's J-test and wavelet variance (:mod:`.gmwm_yaml`)

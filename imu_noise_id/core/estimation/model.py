@@ -140,6 +140,9 @@ class NoiseModel:
     starts
         Further starting values tried after the Allan-variance ones (e.g. the GMWM fit of the same structure,
         :mod:`.gmwm`); ignored when they do not match the structure.
+    periodogram
+        The banded periodogram (:func:`.whittle.banded_periodogram`) of :meth:`detrended` when the caller has it
+        (e.g. a model selection, for every candidate of the same detrending): not computed again.
 
     Raises
     ------
@@ -149,7 +152,8 @@ class NoiseModel:
 
     def __init__(self, y: np.ndarray, dt: float, structure: str | list[Component], *, exog: np.ndarray | None = None,
                  exog_names: list[str] | tuple[str, ...] | None = None, drift: str | None = "em",
-                 allan: AllanResult | None = None, starts: list[list[Component]] | None = None) -> None:
+                 allan: AllanResult | None = None, starts: list[list[Component]] | None = None,
+                 periodogram: whittle.BandedPeriodogram | None = None) -> None:
         y = check_signal(y, dt)
         names, given = parse_structure_or_components(structure)
         ss.validate_structure(names)
@@ -173,6 +177,7 @@ class NoiseModel:
                 self.given = [c for c in self.given if c.name != "RR"]
         self.y = y
         self.allan = allan
+        self._periodogram = periodogram
         self.extra_starts = [sorted((c for c in start if c.name in self.fit_names),
                                     key=lambda c: self.fit_names.index(c.name)) for start in (starts or [])]
         self.extra_starts = [s for s in self.extra_starts if [c.name for c in s] == self.fit_names]
@@ -241,6 +246,12 @@ class NoiseModel:
             y_av = y_av - A @ np.linalg.lstsq(A, y_av, rcond=None)[0]
         return y_av
 
+    def banded_periodogram(self) -> whittle.BandedPeriodogram:
+        """The banded periodogram of :meth:`detrended` (computed once per model, or given)."""
+        if self._periodogram is None:
+            self._periodogram = whittle.banded_periodogram(self.detrended())
+        return self._periodogram
+
     def starting_values(self, n_starts: int, spectral: bool,
                         periodogram: whittle.BandedPeriodogram | None = None) -> list[list[Component]]:
         """The given components, or up to ``n_starts`` distinct starts from the AV fit (Whittle-refined), then the
@@ -250,7 +261,7 @@ class NoiseModel:
         y_av = self.detrended()
         if self.allan is None:
             self.allan = starts.allan_of(y_av, self.dt)
-        bp = periodogram or whittle.banded_periodogram(y_av) if spectral or "OSC" in self.fit_names else None
+        bp = periodogram or self.banded_periodogram() if spectral or "OSC" in self.fit_names else None
         n_osc = self.fit_names.count("OSC")
         lines = whittle.osc_start_frequencies(bp, self.dt, n_osc) if n_osc else []
         fits = starts.fit_allan(self.fit_names, self.allan, self.dt, osc_frequencies=lines)

@@ -138,7 +138,7 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
         init = [c for c in init if c.name != "RR"] if model.ls_slope is not None else list(init)
         mle.Parameterisation.of(init).to_theta(init)
     y_av = model.detrended()
-    bp = whittle.banded_periodogram(y_av) if options.spectral_init else None
+    bp = model.banded_periodogram() if options.spectral_init else None
     start_values = [init] if init is not None else model.starting_values(options.n_starts, options.spectral_init, bp)
     search = _search_of(model, options, start_values, bp, y_av)
     best: tuple[mle.MLEResult, int] | None = None
@@ -186,9 +186,8 @@ def add_intervals(model: NoiseModel, result: FitResult, options: FitOptions) -> 
     does (:func:`_with_intervals`)."""
 
     def search_of(start: list[Component]) -> _Search:
-        y_av = model.detrended()
-        bp = whittle.banded_periodogram(y_av) if options.spectral_init else None
-        return _search_of(model, options, [start], bp, y_av)
+        bp = model.banded_periodogram() if options.spectral_init else None
+        return _search_of(model, options, [start], bp, model.detrended())
 
     return _with_intervals(model, result, options, search_of)
 

@@ -19,7 +19,7 @@ from ..errors import InputError
 from ..noise.components import Component
 from ..noise.modelspec import parse_structure
 from ..quality import interpolate_missing
-from . import starts
+from . import screen, starts, whittle
 from .model import FitOptions, NoiseModel, check_signal
 from .results import FitResult
 from .search import add_intervals
@@ -73,6 +73,12 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     Allan variance (one column) when the caller has it; the starting values of every candidate without RR are
     fitted to it, those with RR to the AV of the detrended record (computed once for all of them).
     ``extra_starts``: a further starting value per candidate (e.g. its GMWM fit).
+
+    On a record of :data:`.screen.MIN_SAMPLES` samples or more (BIC only), the best candidate fitted so far is the
+    reference of a screen (:mod:`.screen`): each next candidate is first fitted to two statistics of fixed size from
+    its first starting value, and one whose BIC there cannot come within :data:`.screen.MARGIN` of the reference's
+    is not fitted exactly; its table row says so (``screened``, with the screen's ΔBIC against the reference then)
+    instead of a likelihood.
     """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
@@ -80,19 +86,32 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     y = check_signal(y, dt)
     # The AV the starting values need, keyed by "the structure has RR" (then: of the detrended record).
     allans = {False: allan if allan is not None else starts.allan_of(interpolate_missing(y), dt), True: None}
+    periodograms: dict[bool, whittle.BandedPeriodogram | None] = {False: None, True: None}  # the same, computed once
     cands = list(candidates) if candidates else suggest_candidates(allans[False])
     fits: dict[str, FitResult] = {}
     errors: dict[str, str] = {}
     search = replace(options, uncertainty=False)
     best_key: str | None = None
     best_model: NoiseModel | None = None
+    screening = criterion == "bic" and y.size >= screen.MIN_SAMPLES
+    statistics = screen.Statistics.of(interpolate_missing(y), dt) if screening else None
+    reference: screen.Reference | None = None
+    screened: dict[str, screen.Screen] = {}
     for spec in cands:
         try:
             has_rr = "RR" in parse_structure(spec)
-            model = NoiseModel(y, dt, spec, drift=drift, allan=allans[has_rr],
+            model = NoiseModel(y, dt, spec, drift=drift, allan=allans[has_rr], periodogram=periodograms[has_rr],
                                starts=[extra_starts[spec]] if extra_starts and spec in extra_starts else None)
+            if reference is not None and statistics is not None:
+                verdict = screen.screen(reference, model.starting_values(1, True)[0], statistics)
+                if not verdict.worth_exact_fit:
+                    screened[spec] = verdict
+                    allans[has_rr], periodograms[has_rr] = model.allan, model.banded_periodogram()
+                    continue
             fit = model.fit(options=search)
             allans[has_rr] = model.allan
+            if search.spectral_init:
+                periodograms[has_rr] = model.banded_periodogram()
         except InputError as exc:
             errors[spec] = str(exc)
             continue
@@ -101,6 +120,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
             if best_key is not None:
                 fits[best_key] = fits[best_key].without_data()
             best_key, best_model = spec, model
+            if statistics is not None:
+                reference = screen.Reference.fit(list(fit.components), statistics)
         else:
             fit = fit.without_data()
         fits[spec] = fit
@@ -120,6 +141,9 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
                 "delta_bic": f.bic - bic_min, "delta_aic": f.aic - aic_min,
                 "weight_bic": math.exp(-0.5 * (f.bic - bic_min)) / wsum, "converged": f.converged,
             })
+        elif spec in screened:
+            table.append({"model": spec, "screened": screened[spec].describe(),
+                          "delta_bic_screen": screened[spec].delta_bic})
         else:
             table.append({"model": spec, "error": errors[spec]})
     table.sort(key=lambda r: r.get(criterion, math.inf))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import replace
 
@@ -21,6 +22,7 @@ from ...core.diagnostics.lines import (
 from ...core.diagnostics.residuals import LINE_SEPARATION_BINS, av_misfit_z, line_statistic, residual_errors
 from ...core.diagnostics.spectra import residual_spectra
 from ...core.diagnostics.whitening import WhiteningFilter
+from ...core.estimation import screen
 from ...core.estimation.model import FitOptions, NoiseModel
 from ...core.estimation.relabel import gm_as_filter
 from ...core.estimation.results import FitResult
@@ -66,6 +68,19 @@ class AxisLoop:
         # A white noise driven to ~0 by a fit (beside a low-pass) cannot restart a refit: its floor as a start.
         d = np.diff(y[np.isfinite(y)])
         self.white_floor = 1e-3 * math.sqrt(max(float(np.var(d)) / 2.0, 1e-300) * dt)
+
+    @functools.cached_property
+    def statistics(self) -> screen.Statistics:
+        """The record's screening statistics (:mod:`~imu_noise_id.core.estimation.screen`), computed once."""
+        return screen.Statistics.of(interpolate_missing(self.y), self.dt)
+
+    def screen_reference(self, state: LoopState, diag: Diagnosis) -> screen.Reference | None:
+        """The fit of ``diag`` (of ``state``) on the screening statistics, or None where moves are not screened: a
+        record shorter than :data:`~imu_noise_id.core.estimation.screen.MIN_SAMPLES` samples (its exact refits are
+        cheap) or a state with regressors or removed samples (which the statistics do not hold)."""
+        if self.n < screen.MIN_SAMPLES or state.exog_terms or state.flagged.size:
+            return None
+        return screen.Reference.fit(list(diag.fit.components), self.statistics)
 
     def exog(self, state: LoopState) -> tuple[np.ndarray | None, list[str], list[slice]]:
         cols, names, slices, start = [], [], [], 0

@@ -13,6 +13,7 @@ from ...core.diagnostics import detectors as det
 from ...core.diagnostics.av_signatures import fit_gm_to_excess
 from ...core.diagnostics.lines import detect_innovation_hump
 from ...core.errors import InputError
+from ...core.estimation import screen
 from ...core.noise.base import Component
 from ...core.noise.components import GM, RW, total_allan_variance
 from ...core.noise.flicker import BI, PLATEAU, band_for_record
@@ -237,6 +238,11 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
     twentieth and at a fifth of the record converged to the same τ on flicker, hidden-GM and clean records, and
     the third refit cost a fifth of the default analyze at full rate), a third where flicker noise is modelled
     without a random walk or a GM, one more where the innovations hold a hump.
+
+    On a long record each move but the hump's is first screened on statistics of fixed size
+    (:func:`~imu_noise_id.core.estimation.screen.screen`, :meth:`.AxisLoop.screen_reference`): one that cannot lower
+    the BIC there is refused with the screen's figures and not refitted (its exact refit cost tens of passes over
+    every sample).
     """
     span = loop.n * loop.dt
     level = long_tau_level(diag)
@@ -262,7 +268,13 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
                                        f"{gm.sigma:.3g}) and a random walk (K {walk.random_walk:.3g})")
         tries.append((finding, state.with_components(joint)))
     best: tuple[float, LoopState, Diagnosis, det.Finding] | None = None
+    reference = loop.screen_reference(state, diag)
     for finding, new_state in tries:
+        verdict = (screen.screen(reference, new_state.init, loop.statistics)
+                   if reference is not None and finding is not hump and new_state.init is not None else None)
+        if verdict is not None and not verdict.worth_exact_fit:
+            trials.append(Trial(finding, new_state.name(), None, False, f"joint search: {verdict.describe()}"))
+            continue
         try:
             new_diag = refit(loop, diag, new_state)
         except (InputError, ValueError, np.linalg.LinAlgError) as exc:

@@ -1,0 +1,156 @@
+"""Is a candidate structure worth its exact fit? Its likelihood gain on two statistics of fixed size.
+
+An exact fit of a long record costs tens of likelihood passes over every sample (seconds each at 10⁶ samples). A
+candidate that cannot lower the BIC is found out for milliseconds to a second on two statistics whose size does not
+grow with the record, each computed once per record:
+
+* the banded Whittle likelihood of the differences (:mod:`.whittle`), which reads every frequency but the record's
+  lowest few (the Hann taper's leakage blurs those): the short-memory part, a GM of short τ;
+* the exact likelihood of the block sums (:mod:`.block_sums`), which reads every frequency below the blocks' own,
+  the lowest included: random walk, flicker noise, a GM of long τ.
+
+The gain of the candidate over the current structure is the larger of the two, each fitted from the candidate's
+start and from it with the current structure's values restored (a start may restart the random walk small), and,
+since an added GM's τ is what a start gets most wrong (a GM started at a tenth of the record converges at 0.8 s on
+flicker noise), from each with that τ moved down decade by decade to :data:`SHORTEST_TAU_SAMPLES` samples. The
+candidate goes on to its exact fit when the BIC it would reach, −2·gain + Δk·ln N, is below :data:`MARGIN`: a
+structure the data do not hold gains about nothing (ΔBIC ≈ Δk·ln N, 25–35 for a GM), one they do gains far more than
+the margin allows for the statistics' shortfall against the full likelihood (each reads one band of frequencies).
+
+Beyond the papers; the rule and its measurements: ``docs/em.md`` ("Screening on statistics of fixed size").
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..noise.components import GM, Component
+from . import block_sums, mle, whittle
+
+#: Screen ΔBIC below which a candidate is fitted exactly (units of −2 ln L; a GM costs 2·ln N, 24–33).
+MARGIN = 10.0
+#: Shortest GM τ [samples] a screen starts from.
+SHORTEST_TAU_SAMPLES = 5.0
+#: Fewest samples for which screening pays (below, an exact refit takes a few seconds).
+MIN_SAMPLES = 250_000
+
+
+@dataclass(frozen=True)
+class Statistics:
+    """The record's two screening statistics (computed once per record) and its length."""
+
+    periodogram: whittle.BandedPeriodogram
+    sums: block_sums.BlockSums
+    dt: float
+    n: int
+
+    @classmethod
+    def of(cls, y: np.ndarray, dt: float) -> Statistics:
+        """Both statistics of one axis ``y`` [u] (gap-filled) at period ``dt`` [s]."""
+        return cls(whittle.banded_periodogram(y), block_sums.block_sums(y, dt), float(dt), int(y.size))
+
+    def whittle_loglik(self, start: list[Component]) -> float:
+        """The banded Whittle log-likelihood maximised from ``start`` (the estimator's physical bounds)."""
+        bounds = mle.physical_bounds(self.n, self.dt)
+        return whittle.whittle_fit(start, np.empty(0), self.dt, self.periodogram, bounds)[0]
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The current structure fitted to both statistics (shared by every candidate screened against it)."""
+
+    components: list[Component]
+    whittle_loglik: float
+    block_loglik: float
+
+    @classmethod
+    def fit(cls, components: list[Component], stats: Statistics) -> Reference:
+        return cls(list(components), stats.whittle_loglik(components), block_sums.fit(components, stats.sums)[0])
+
+
+@dataclass(frozen=True)
+class Screen:
+    """What the statistics say of a candidate against the current structure.
+
+    Attributes
+    ----------
+    gain : float
+        The candidate's best log-likelihood gain over the current structure, on either statistic.
+    statistic : str
+        Which statistic gave it ("whittle" or "block sums").
+    extra_parameters : int
+        Parameters the candidate adds (negative: removes).
+    penalty : float
+        The full record's BIC penalty per parameter, ln N.
+    """
+
+    gain: float
+    statistic: str
+    extra_parameters: int
+    penalty: float
+
+    @property
+    def delta_bic(self) -> float:
+        """The BIC change the statistics say the candidate could reach."""
+        return -2.0 * self.gain + self.extra_parameters * self.penalty
+
+    @property
+    def worth_exact_fit(self) -> bool:
+        return self.delta_bic < MARGIN
+
+    def describe(self) -> str:
+        return (f"screened on statistics of fixed size: best log-likelihood gain {self.gain:.1f} ({self.statistic}) "
+                f"for {self.extra_parameters:+d} parameters, ΔBIC ≥ {self.delta_bic:+.1f} (exact fit from "
+                f"{MARGIN:g})")
+
+
+def _n_parameters(components: list[Component]) -> int:
+    return sum(len(c.parameter_names) for c in components)
+
+
+def _restored(candidate: list[Component], current: list[Component]) -> list[Component]:
+    """The candidate with each component the current structure has of the same type (in order) at its current value
+    (a start may restart one, e.g. a random walk restarted small beside a new bias process)."""
+    pool = {name: [c for c in current if c.name == name] for name in {c.name for c in current}}
+    return [pool[c.name].pop(0) if pool.get(c.name) else c for c in candidate]
+
+
+def _starts(candidate: list[Component], current: list[Component], dt: float) -> list[list[Component]]:
+    """The candidate's start and its :func:`_restored` version, each also with its added GMs' τ a decade shorter at a
+    time down to :data:`SHORTEST_TAU_SAMPLES` samples."""
+    known = set(current)
+    bases = [candidate] + ([restored] if (restored := _restored(candidate, current)) != candidate else [])
+    out = []
+    for base in bases:
+        scale = 1.0
+        while True:
+            moved = [replace(c, tau=c.tau * scale) if isinstance(c, GM) and c not in known else c for c in base]
+            added = [c for c in moved if isinstance(c, GM) and c not in known]
+            if scale < 1.0 and (not added or all(c.tau < SHORTEST_TAU_SAMPLES * dt for c in added)):
+                break
+            out.append(moved)
+            scale *= 0.1
+    return out
+
+
+def screen(reference: Reference, candidate: list[Component], stats: Statistics) -> Screen:
+    """The statistics' verdict on ``candidate`` (its starting components) against ``reference`` (module docstring).
+    A candidate that nests the current structure is never credited with a loss."""
+    best_gain, best_stat = -math.inf, "whittle"
+    block_span = stats.sums.block * stats.dt
+    known = set(reference.components)
+    for start in _starts(candidate, reference.components, stats.dt):
+        w = stats.whittle_loglik(start)
+        if w - reference.whittle_loglik > best_gain:
+            best_gain, best_stat = w - reference.whittle_loglik, "whittle"
+        if all(c.tau >= block_span for c in start if isinstance(c, GM) and c not in known):
+            b, _ = block_sums.fit(start, stats.sums)
+            if b - reference.block_loglik > best_gain:
+                best_gain, best_stat = b - reference.block_loglik, "block sums"
+    nests = not Counter(c.name for c in reference.components) - Counter(c.name for c in candidate)
+    return Screen(max(best_gain, 0.0) if nests else best_gain, best_stat,
+                  _n_parameters(candidate) - _n_parameters(reference.components), math.log(stats.n))
