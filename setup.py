@@ -1,10 +1,19 @@
-"""ament_python build script: installs the package, its ROS 2 resource files and executables."""
+"""ament_python build script: installs the package, its ROS 2 resource files and executables.
+
+The default YAML files have one copy, in config/ beside package.xml (the ament layout); they are installed as data
+files into share/imu_noise_id/config/, where imu_noise_id/resources.py finds them (and, in a source or editable
+checkout, in config/ itself).
+"""
 
 from glob import glob
 
 from setuptools import find_packages, setup
 
 PACKAGE = "imu_noise_id"
+# Relative to this file's folder, where pip and colcon run setup.py.
+CONFIG_FILES = sorted(glob("config/*.yaml"))
+if not CONFIG_FILES:
+    raise SystemExit("setup.py: config/*.yaml not found: run setup.py from the folder that holds it")
 
 setup(
     name=PACKAGE,
@@ -13,9 +22,8 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
-        (f"share/{PACKAGE}/config", glob(f"{PACKAGE}/config/*.yaml")),
+        (f"share/{PACKAGE}/config", CONFIG_FILES),
     ],
-    package_data={PACKAGE: ["config/*.yaml"]},
     python_requires=">=3.10",
     install_requires=["setuptools", "numpy>=1.24", "scipy>=1.10", "rosbags>=0.10", "pyyaml", "matplotlib",
                       "dask[distributed]>=2024.1", "pyarrow>=14"],

@@ -1,30 +1,103 @@
 """Files shipped with the package and user configuration files: found and parsed here, for the node and the CLI.
 
-The default parameter and hypothesis files live in ``imu_noise_id/config/`` (package data: present in an editable
-checkout, a wheel and a colcon install alike; ``setup.py`` also installs them into ``share/imu_noise_id/config/``,
-where ``ros2 run … --params-file`` users find them).
+The default parameter and hypothesis files (:data:`NODE_PARAMETERS`, :data:`DEFAULT_HYPOTHESES`) have one copy, in
+``config/`` at the top of the source tree (beside ``package.xml``, the ament convention). ``setup.py`` installs
+them as data files into ``<prefix>/share/imu_noise_id/config/``; they are not package data. :func:`packaged_config`
+looks for a file in these folders, in this order, and returns the first copy found:
+
+1. ``config/`` beside the package directory, when ``package.xml`` is there too: a source checkout, an editable
+   install (``pip install -e .`` installs no data files) or a ``colcon build --symlink-install``;
+2. ``<prefix>/share/imu_noise_id/config/``, where ``<prefix>`` is the installation prefix of the imported package,
+   the folder holding the ``lib/`` (``lib64/``, ``Lib/``) that holds its ``site-packages/`` or ``dist-packages/``:
+   a ``pip install .`` or wheel install into a venv, ``--user`` or ``--prefix``, and a colcon install
+   (``install/imu_noise_id/share/imu_noise_id/config/``);
+3. ``sys.prefix/share/imu_noise_id/config/``: the running interpreter's data directory, where pip puts the data
+   files of an install into this environment;
+4. ``config/`` in the package's ament share directory, when ``ament_index_python`` can be imported and
+   ``AMENT_PREFIX_PATH`` names a prefix that holds the package (a sourced ROS workspace). ament is optional: pip
+   installs neither need nor require it.
+
+The files of the imported code come first, so an editable checkout never picks up an older installed copy. When no
+folder has the file, :func:`packaged_config` raises :class:`~.core.errors.InputError` naming the file and every
+folder searched, and saying what to do: reinstall (``pip install .`` or ``colcon build``), run from a checkout that
+has ``config/``, or give the file explicitly (``--params-file``, ``identify --hypotheses``, the node's
+``hypotheses.file``).
 """
 
 from __future__ import annotations
 
+import os
+import sys
 from pathlib import Path
 from typing import Any
 
 from .core.errors import InputError
 
-CONFIG_DIR = Path(__file__).resolve().parent / "config"
+PACKAGE = "imu_noise_id"
+#: The directory of the imported package (``…/imu_noise_id``).
+PACKAGE_DIR = Path(__file__).resolve().parent
 #: The node's default parameters (``imu_noise_id_node: ros__parameters:``).
 NODE_PARAMETERS = "imu_noise_id.yaml"
 #: The default hypothesis set of the Bayesian bank.
 DEFAULT_HYPOTHESES = "hypotheses_default.yaml"
 
 
+def _ament_share() -> tuple[Path | None, str]:
+    """The package's ament share directory (or None) and why it is missing."""
+    if not os.environ.get("AMENT_PREFIX_PATH"):
+        return None, "AMENT_PREFIX_PATH is not set"
+    try:
+        from ament_index_python.packages import get_package_share_directory
+    except ImportError:
+        return None, "ament_index_python is not installed"
+    try:
+        return Path(get_package_share_directory(PACKAGE, print_warning=False)), ""
+    except (LookupError, OSError, ValueError):
+        return None, f"{PACKAGE} is not in AMENT_PREFIX_PATH"
+
+
+def config_dirs() -> list[Path]:
+    """The folders :func:`packaged_config` searches, in order (module docstring), without repetitions."""
+    dirs = []
+    checkout = PACKAGE_DIR.parent
+    if (checkout / "package.xml").is_file():
+        dirs.append(checkout / "config")
+    # <prefix>/lib/pythonX.Y/site-packages/imu_noise_id, or <prefix>/lib/site-packages/… (Windows: Lib).
+    lib = next((d for d in list(checkout.parents)[:2] if d.name.lower() in ("lib", "lib64")), None)
+    if lib is not None:
+        dirs.append(lib.parent / "share" / PACKAGE / "config")
+    dirs.append(Path(sys.prefix) / "share" / PACKAGE / "config")
+    share, _ = _ament_share()
+    if share is not None:
+        dirs.append(share / "config")
+    unique: list[Path] = []
+    for d in dirs:
+        if d not in unique:
+            unique.append(d)
+    return unique
+
+
 def packaged_config(name: str) -> Path:
-    """Path of the configuration file ``name`` shipped in ``imu_noise_id/config/``."""
-    path = CONFIG_DIR / name
-    if not path.is_file():
-        raise InputError(f"the packaged configuration file {name} is missing from {CONFIG_DIR}: reinstall the package")
-    return path
+    """Path of the shipped configuration file ``name`` (e.g. :data:`NODE_PARAMETERS`): the first copy found in
+    :func:`config_dirs` (order and error: module docstring).
+
+    Raises
+    ------
+    InputError
+        When none of the folders has the file.
+    """
+    dirs = config_dirs()
+    for d in dirs:
+        if (d / name).is_file():
+            return d / name
+    _, why_not_ament = _ament_share()
+    searched = ", ".join(str(d) for d in dirs) + (f" (not the ament index: {why_not_ament})" if why_not_ament else "")
+    raise InputError(
+        f"the default configuration file {name} of {PACKAGE} was not found; searched {searched}. Reinstall the "
+        f"package (`pip install .` or `colcon build`; an editable `pip install -e .` needs the checkout's config/ "
+        f"folder beside {PACKAGE}/), or give the file yourself (--params-file, identify --hypotheses, the node's "
+        f"hypotheses.file)"
+    )
 
 
 def read_hypotheses_file(path: str | Path | None) -> tuple[dict[str, Any], str]:

@@ -28,5 +28,5 @@ def test_installed_node_starts_with_the_installed_parameters(built_workspace):  
         proc.send_signal(signal.SIGINT)
         out, _ = proc.communicate(timeout=20)
     assert proc.returncode == 0, out
-    assert "listening on /imu, /odom, /imu/temperature" in out
+    assert "listening on /imu/data, /odom, /imu/temperature" in out
     assert "Traceback" not in out

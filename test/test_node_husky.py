@@ -51,7 +51,7 @@ def test_husky_bag_replays_clean_through_the_node(shared_data, ros_env, tmp_path
     with open(log, "w") as out:
         node = subprocess.Popen(
             [sys.executable, "-m", "imu_noise_id.ros.node", "--ros-args", "--params-file", str(NODE_CONFIG),
-             "-r", f"__node:={NODE}", "-r", "imu:=/husky/imu", "-r", "odom:=/husky/odom",
+             "-r", f"__node:={NODE}", "-r", "imu/data:=/husky/imu", "-r", "odom:=/husky/odom",
              "-p", f"cmkf.imu_rotation_xyzw:=[{q[0]},{q[1]},{q[2]},{q[3]}]"],
             env=env, stdout=out, stderr=subprocess.STDOUT,
         )

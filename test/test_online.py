@@ -35,7 +35,7 @@ def _flatten(tree: dict, prefix: str = "") -> dict:
 
 
 def test_yaml_defaults_match_the_declared_parameters():
-    data = yaml.safe_load((REPO_ROOT / "imu_noise_id" / "config" / "imu_noise_id.yaml").read_text())
+    data = yaml.safe_load((REPO_ROOT / "config" / "imu_noise_id.yaml").read_text())
     values = _flatten(data["imu_noise_id_node"]["ros__parameters"])
     assert sorted(values) == sorted(p.name for p in PARAMETERS)
     for p in PARAMETERS:
@@ -282,6 +282,17 @@ def test_a_sustained_jump_back_in_time_starts_a_new_time_line():
     results = [ident.process_imu(1.0 + k * 0.01, (0.0, 0.0, 0.0), (0.0, 0.0, 9.8)) for k in range(10)]
     assert [len(r) for r in results] == [0] * 4 + [1] * 6
     assert ident.restarts == 1
+
+
+def test_monitor_once_tells_a_silent_node_from_one_without_imu_input():
+    from imu_noise_id.ros.monitor import MonitorState, silence_message
+
+    state = MonitorState(node="/imu_noise_id_node")
+    assert "is it running" in silence_message(state, 10.0)
+    state.diagnostics["IMU input"] = (3, "no message received yet")
+    message = silence_message(state, 10.0)
+    assert "is running but published no estimates within 10 s" in message
+    assert "(its IMU input status: no message received yet)" in message and "-r imu/data:=TOPIC" in message
 
 
 def test_monitor_render_shows_every_section():

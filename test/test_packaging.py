@@ -1,4 +1,6 @@
-"""The package builds with colcon (from PyPI) in a fresh workspace and its installed executables run."""
+"""The package builds with colcon (from PyPI) in a fresh workspace and its installed executables run; every install
+kind (colcon, a wheel installed by pip into a venv, the editable checkout) finds the one copy of the default YAML
+files in config/ (imu_noise_id/resources.py says where it looks)."""
 
 from __future__ import annotations
 
@@ -13,16 +15,15 @@ import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = "imu_noise_id"
-PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg", "resource", PACKAGE)
+PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg", "resource", "config", PACKAGE)
+CONFIGS = ["hypotheses_default.yaml", "imu_noise_id.yaml"]
+# Prints where the installed code finds the node's parameters and the default hypothesis set, in this order.
+WHERE = ("from imu_noise_id import resources as r; "
+         "print(r.packaged_config(r.NODE_PARAMETERS)); print(r.read_hypotheses_file(None)[1])")
 
 
-@pytest.fixture(scope="module")
-def built_workspace(tmp_path_factory, ros_env) -> tuple[Path, dict[str, str]]:
-    colcon = Path(sys.executable).with_name("colcon")
-    if not colcon.exists():
-        pytest.skip(f"colcon is not installed next to {sys.executable} (pip install colcon-common-extensions)")
-    ws = tmp_path_factory.mktemp("ws")
-    src = ws / "src" / PACKAGE
+def _copy_sources(src: Path) -> None:
+    """The files of the package's source tree that a build reads (no build/ or egg-info left by an earlier one)."""
     src.mkdir(parents=True)
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
     for name in PACKAGE_FILES:
@@ -31,6 +32,27 @@ def built_workspace(tmp_path_factory, ros_env) -> tuple[Path, dict[str, str]]:
             shutil.copytree(path, src / name, ignore=ignore)
         elif path.exists():
             shutil.copy2(path, src / name)
+
+
+def _where(python: str | Path, cwd: Path, env: dict[str, str]) -> list[str]:
+    """Where ``python`` (with ``env``) finds the node's parameters and the default hypothesis set."""
+    run = subprocess.run([str(python), "-c", WHERE], cwd=cwd, env=env, capture_output=True, text=True, timeout=60,
+                         check=False)
+    assert run.returncode == 0, run.stderr
+    return run.stdout.split()
+
+
+def _expected(folder: Path) -> list[str]:
+    return [str(folder / "imu_noise_id.yaml"), str(folder / "hypotheses_default.yaml")]
+
+
+@pytest.fixture(scope="module")
+def built_workspace(tmp_path_factory, ros_env) -> tuple[Path, dict[str, str]]:
+    colcon = Path(sys.executable).with_name("colcon")
+    if not colcon.exists():
+        pytest.skip(f"colcon is not installed next to {sys.executable} (pip install colcon-common-extensions)")
+    ws = tmp_path_factory.mktemp("ws")
+    _copy_sources(ws / "src" / PACKAGE)
     proc = subprocess.run(
         [str(colcon), "build", "--base-paths", "src"],
         cwd=ws,
@@ -70,30 +92,93 @@ def test_installed_executables_run_with_help(built_workspace):
 
 
 def test_resource_files_are_installed(built_workspace):
-    prefix, _ = built_workspace
+    prefix, env = built_workspace
     share = prefix / "share" / PACKAGE
     assert (share / "package.xml").read_text() == (REPO_ROOT / "package.xml").read_text()
     assert (prefix / "share" / "ament_index" / "resource_index" / "packages" / PACKAGE).exists()
-    configs = sorted(p.name for p in (REPO_ROOT / PACKAGE / "config").glob("*.yaml"))
-    assert configs == ["hypotheses_default.yaml", "imu_noise_id.yaml"]
-    assert sorted(p.name for p in (share / "config").glob("*.yaml")) == configs
+    assert sorted(p.name for p in (REPO_ROOT / "config").glob("*.yaml")) == CONFIGS
+    for name in CONFIGS:
+        assert (share / "config" / name).read_text() == (REPO_ROOT / "config" / name).read_text()
+    # One copy: the YAML files are data files in share/, not package data beside the code.
+    site = prefix / Path(sysconfig.get_path("purelib")).relative_to(sysconfig.get_path("data"))
+    assert (site / PACKAGE / "resources.py").is_file() and not (site / PACKAGE / "config").exists()
+    # The installed code finds them there (through its own prefix, whatever the ament index says).
+    assert _where(sys.executable, prefix, env) == _expected(share / "config")
 
 
-def test_a_plain_wheel_carries_the_default_config_files(tmp_path):
-    """`pip install .` (not editable) must let identify and the node find their YAML files (issue 13)."""
+def test_a_wheel_installed_by_pip_finds_the_default_config_files(tmp_path):
+    """`pip install .` (not editable) of the wheel, into a new venv: the YAML files are its data files, installed
+    into the venv's share/imu_noise_id/config/, where identify and the node find them."""
     import zipfile
 
+    src = tmp_path / "src"
+    _copy_sources(src)
     proc = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
-                           str(tmp_path), str(REPO_ROOT)], capture_output=True, text=True, timeout=300, check=False)
+                           str(tmp_path), str(src)], capture_output=True, text=True, timeout=300, check=False)
     assert proc.returncode == 0, proc.stderr
     wheel = next(tmp_path.glob(f"{PACKAGE}-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
-    assert f"{PACKAGE}/config/hypotheses_default.yaml" in names and f"{PACKAGE}/config/imu_noise_id.yaml" in names
-    site = tmp_path / "site"
-    zipfile.ZipFile(wheel).extractall(site)
-    code = ("from imu_noise_id.resources import read_hypotheses_file; data, source = read_hypotheses_file(None); "
-            "print(source); assert data")
-    run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(site)},
-                         capture_output=True, text=True, timeout=60, check=False)
+    data = next(n.split("/")[0] for n in names if n.endswith(".data/data/share/imu_noise_id/package.xml"))
+    assert sorted(n for n in names if n.endswith(".yaml")) == [
+        f"{data}/data/share/{PACKAGE}/config/{name}" for name in CONFIGS]
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], timeout=120, check=True)
+    python = venv / "bin" / "python"
+    proc = subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install", "--no-deps", "--no-index",
+                           "-q", str(wheel)], capture_output=True, text=True, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    share = venv / "share" / PACKAGE / "config"
+    assert sorted(p.name for p in share.glob("*.yaml")) == CONFIGS
+    # The new venv has the package only; PyYAML comes from this venv's site-packages, on PYTHONPATH as a plain
+    # folder: its .pth files (the editable install of the checkout among them) are not run.
+    env = {**os.environ, "PYTHONPATH": sysconfig.get_path("purelib")}
+    env.pop("AMENT_PREFIX_PATH", None)
+    run = subprocess.run([str(python), "-c", "import imu_noise_id, sys; print(imu_noise_id.__file__, sys.prefix)"],
+                         cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60, check=False)
     assert run.returncode == 0, run.stderr
-    assert run.stdout.strip().startswith(str(site))
+    where, prefix = run.stdout.split()
+    assert Path(where).is_relative_to(venv) and Path(prefix) == venv
+    assert _where(python, tmp_path, env) == _expected(share)
+
+
+def test_the_editable_checkout_finds_config_beside_the_package(tmp_path):
+    """`pip install -e .` installs no data files: the checkout's own config/ is the copy used."""
+    env = {**os.environ, "PYTHONPATH": str(REPO_ROOT)}
+    env.pop("AMENT_PREFIX_PATH", None)
+    assert _where(sys.executable, tmp_path, env) == _expected(REPO_ROOT / "config")
+    assert not (REPO_ROOT / PACKAGE / "config").exists()
+
+
+def test_the_search_order_and_the_error_when_no_copy_is_found(tmp_path, monkeypatch):
+    """Installed prefix of the code, then sys.prefix, then the ament index; nothing found: a message naming the
+    file, the folders and what to do."""
+    from imu_noise_id import resources
+
+    site = tmp_path / "prefix" / "lib" / "python3" / "site-packages"
+    (site / PACKAGE).mkdir(parents=True)
+    monkeypatch.setattr(resources, "PACKAGE_DIR", site / PACKAGE)
+    monkeypatch.setattr(sys, "prefix", str(tmp_path / "env"))
+    monkeypatch.delenv("AMENT_PREFIX_PATH", raising=False)
+    name = resources.NODE_PARAMETERS
+    with pytest.raises(resources.InputError) as info:
+        resources.packaged_config(name)
+    message = str(info.value)
+    assert f"configuration file {name} of {PACKAGE} was not found" in message
+    assert str(tmp_path / "prefix" / "share" / PACKAGE / "config") in message
+    assert str(tmp_path / "env" / "share" / PACKAGE / "config") in message
+    assert "AMENT_PREFIX_PATH is not set" in message and "pip install ." in message and "--params-file" in message
+
+    def put(prefix: Path) -> Path:
+        path = prefix / "share" / PACKAGE / "config" / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("x: 1\n")
+        return path
+
+    ament = tmp_path / "ament"
+    (ament / "share" / "ament_index" / "resource_index" / "packages").mkdir(parents=True)
+    (ament / "share" / "ament_index" / "resource_index" / "packages" / PACKAGE).touch()
+    monkeypatch.setenv("AMENT_PREFIX_PATH", str(ament))
+    pytest.importorskip("ament_index_python")
+    for prefix in (ament, tmp_path / "env", tmp_path / "prefix"):  # each one found before the ones before it
+        path = put(prefix)
+        assert resources.packaged_config(name) == path

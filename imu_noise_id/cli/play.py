@@ -28,7 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_topic(parser, "play only these topics (default: all Imu, Odometry and Temperature topics)",
               aliases=("--topics",), several=True)
     parser.add_argument("--remap", nargs="+", default=[], metavar="FROM:=TO",
-                        help="publish topic FROM under the name TO, e.g. /imu/data:=/imu")
+                        help="publish topic FROM under the name TO, e.g. /imu:=/imu/data")
     parser.add_argument("--delay", type=float, default=2.0,
                         help="wait up to this many seconds for every topic to have a subscriber before the first "
                         "message, so that nothing is lost to DDS discovery (default 2)")
@@ -40,7 +40,7 @@ def _remaps(items: list[str]) -> dict[str, str]:
     out = {}
     for item in items:
         if ":=" not in item:
-            raise InputError(f"--remap {item!r}: expected FROM:=TO, e.g. /imu/data:=/imu")
+            raise InputError(f"--remap {item!r}: expected FROM:=TO, e.g. /imu:=/imu/data")
         src, dst = item.split(":=", 1)
         out[src] = dst
     return out

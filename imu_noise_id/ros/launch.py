@@ -25,9 +25,12 @@ def ros_environment() -> dict[str, str]:
 
 
 def node_command(params_file: Path, *extra: str) -> list[str]:
-    """The command line that starts the node with ``params_file`` (plus extra ``--ros-args`` items)."""
-    return [sys.executable, "-m", "imu_noise_id.ros.node", "--ros-args", "--params-file", str(params_file),
-            "-r", "imu:=/imu/data", *extra]
+    """The command line that starts the node with ``params_file`` (plus extra ``--ros-args`` items, e.g. remaps).
+
+    No remap is needed for bags written by ``imu-noise-id simulate`` or the demo: the node's default inputs are their
+    topics (``/imu/data``, ``/odom``, ``/imu/temperature``).
+    """
+    return [sys.executable, "-m", "imu_noise_id.ros.node", "--ros-args", "--params-file", str(params_file), *extra]
 
 
 def stop(process: subprocess.Popen, timeout: float = 10.0) -> None:

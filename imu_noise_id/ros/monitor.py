@@ -181,9 +181,21 @@ def snapshot(node: object, listener: Listener, timeout: float) -> None:
     while listener.state.complete() and time.monotonic() < settle:
         rclpy.spin_once(node, timeout_sec=0.1)
     if not listener.state.complete():
-        raise InputError(f"no outputs from node {listener.state.node} within {timeout:g} s: is it running (and "
-                         "with ROS_AUTOMATIC_DISCOVERY_RANGE/ROS_DOMAIN_ID like this shell)?")
+        raise InputError(silence_message(listener.state, timeout))
     print(render(listener.state))
+
+
+def silence_message(state: MonitorState, timeout: float) -> str:
+    """Why a snapshot has no outputs: the node is not heard at all, or it is (its diagnostics arrive) but has
+    published no estimates, which it does only after its first accepted IMU message."""
+    if not state.diagnostics:
+        return (f"no outputs from node {state.node} within {timeout:g} s: is it running (and with "
+                "ROS_AUTOMATIC_DISCOVERY_RANGE/ROS_DOMAIN_ID like this shell)?")
+    imu = state.diagnostics.get("IMU input")
+    status = f" (its IMU input status: {imu[1]})" if imu else ""
+    return (f"node {state.node} is running but published no estimates within {timeout:g} s: it has accepted no "
+            f"IMU message yet{status}. Publish on its IMU input (imu/data in its namespace, /imu/data by default; "
+            "e.g. `imu-noise-id play BAG`) or remap the input to your IMU topic: -r imu/data:=TOPIC")
 
 
 def watch(node: object, listener: Listener, period: float, duration: float, stream: object = None) -> None:

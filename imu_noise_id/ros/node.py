@@ -1,9 +1,11 @@
 """``imu_noise_id_node``: the rclpy adapter around :class:`imu_noise_id.pipelines.online.OnlineIdentifier`.
 
 Run it with ``ros2 run imu_noise_id imu_noise_id_node --ros-args --params-file config/imu_noise_id.yaml`` or
-``python -m imu_noise_id.ros.node --ros-args …``. Topics, parameters and diagnostics are described in
-``docs/node.md``. This module only converts messages to numbers and back and reads the hypothesis-set file: every
-decision is made in the pipeline, which is tested without ROS.
+``python -m imu_noise_id.ros.node --ros-args …``. Its inputs are the relative names :data:`IMU_INPUT`,
+:data:`ODOM_INPUT` and :data:`TEMPERATURE_INPUT` (``/imu/data``, ``/odom``, ``/imu/temperature`` without a namespace:
+the topics ``imu-noise-id simulate`` and the demo bags use); remap them with ``-r imu/data:=/my/imu``. Topics,
+parameters and diagnostics are described in ``docs/node.md``. This module only converts messages to numbers and
+back and reads the hypothesis-set file: every decision is made in the pipeline, which is tested without ROS.
 
 Time: estimation uses the header stamps only; the housekeeping timers (publishing, diagnostics, staleness) run
 on the steady clock, so they work with ``use_sim_time`` and no ``/clock`` publisher too.
@@ -40,6 +42,13 @@ from ..resources import read_hypotheses_file
 from .messages import labelled_layout
 
 NODE_NAME = "imu_noise_id_node"
+#: The IMU input, relative to the node's namespace: REP-145's name for a driver's sensor_msgs/Imu with orientation
+#: (``imu/data_raw`` carries the same rates and accelerations without it: ``-r imu/data:=imu/data_raw``).
+IMU_INPUT = "imu/data"
+ODOM_INPUT = "odom"
+TEMPERATURE_INPUT = "imu/temperature"
+#: The IMU input's name before it was ``imu/data``: a remap of it no longer applies and is warned about.
+OLD_IMU_INPUT = "imu"
 
 
 def _descriptor(spec: ParamSpec) -> ParameterDescriptor:
@@ -107,18 +116,31 @@ class ImuNoiseIdNode(Node):
         self.pub_imu = self.create_publisher(Imu, "~/imu_corrected", cfg.imu_queue_depth)
         self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
 
-        self.create_subscription(Imu, "imu", self._on_imu, _sensor_qos(cfg.imu_queue_depth))
-        self.create_subscription(Odometry, "odom", self._on_odom, _sensor_qos(cfg.odom_queue_depth))
-        self.create_subscription(Temperature, "imu/temperature", self._on_temperature,
+        self.create_subscription(Imu, IMU_INPUT, self._on_imu, _sensor_qos(cfg.imu_queue_depth))
+        self.create_subscription(Odometry, ODOM_INPUT, self._on_odom, _sensor_qos(cfg.odom_queue_depth))
+        self.create_subscription(Temperature, TEMPERATURE_INPUT, self._on_temperature,
                                  _sensor_qos(cfg.odom_queue_depth))
 
         self._diag_last = time.monotonic()
         self.create_timer(1.0 / cfg.publish_rate, self._publish_estimates, clock=self._steady)
         self.create_timer(cfg.diagnostics_period, self._publish_diagnostics, clock=self._steady)
         self.get_logger().info(
-            f"listening on {self.resolve_topic_name('imu')}, {self.resolve_topic_name('odom')}, "
-            f"{self.resolve_topic_name('imu/temperature')}; publishing under {self.get_fully_qualified_name()}/"
+            f"listening on {self.resolve_topic_name(IMU_INPUT)}, {self.resolve_topic_name(ODOM_INPUT)}, "
+            f"{self.resolve_topic_name(TEMPERATURE_INPUT)}; publishing under {self.get_fully_qualified_name()}/"
         )
+        stale = self.stale_imu_remap()
+        if stale:
+            self.get_logger().warning(stale)
+
+    def stale_imu_remap(self) -> str:
+        """A warning when ``-r imu:=TOPIC`` (the IMU input's old name) remaps to a topic the node does not listen
+        on (a remap of a name no subscription uses is ignored silently by ROS), else ``""``."""
+        old = self.resolve_topic_name(OLD_IMU_INPUT)
+        listening = self.resolve_topic_name(IMU_INPUT)
+        if old == self.resolve_topic_name(OLD_IMU_INPUT, only_expand=True) or old == listening:
+            return ""
+        return (f"the remap of '{OLD_IMU_INPUT}' to {old} does not apply: the IMU input is '{IMU_INPUT}' "
+                f"(listening on {listening}); remap it with -r {IMU_INPUT}:={old}")
 
     # -- parameters -------------------------------------------------------------------------------------------------
     def _accept_integer_overrides(self) -> None:
@@ -327,10 +349,11 @@ def _diag9(variance: tuple[float, float, float]) -> np.ndarray:
 
 def _usage() -> str:
     lines = [
-        f"usage: {NODE_NAME} [--ros-args --params-file FILE -p NAME:=VALUE -r imu:=TOPIC ...]",
+        f"usage: {NODE_NAME} [--ros-args --params-file FILE -p NAME:=VALUE -r {IMU_INPUT}:=TOPIC ...]",
         "",
-        "Online IMU error identification: subscribes to imu (sensor_msgs/Imu), odom (nav_msgs/Odometry) and",
-        "imu/temperature (sensor_msgs/Temperature); publishes ~/accel_bias, ~/gyro_bias, ~/noise, ~/hypotheses,",
+        f"Online IMU error identification: subscribes to {IMU_INPUT} (sensor_msgs/Imu), {ODOM_INPUT} "
+        "(nav_msgs/Odometry) and",
+        f"{TEMPERATURE_INPUT} (sensor_msgs/Temperature); publishes ~/accel_bias, ~/gyro_bias, ~/noise, ~/hypotheses,",
         "~/imu_corrected and /diagnostics. Defaults: share/imu_noise_id/config/imu_noise_id.yaml; docs/node.md.",
         "",
         "parameters (name = default [range] unit):",

@@ -1,4 +1,4 @@
-"""Hypothesis sets from their parsed YAML mapping (``imu_noise_id/config/hypotheses_default.yaml`` describes the
+"""Hypothesis sets from their parsed YAML mapping (``config/hypotheses_default.yaml`` describes the
 format) → core dataclasses. Reading the file is the adapters' job (:mod:`imu_noise_id.resources`);
 :func:`hypothesis_set_from_dict` turns the parsed mapping into a
 :class:`~imu_noise_id.core.hypotheses.HypothesisSet` for one sensor type and sampling period, raising
