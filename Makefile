@@ -47,13 +47,14 @@ lint: setup
 	$(VENV)/bin/ruff check .
 
 test: setup lint
-	@ros_log=$$(mktemp); shares=$$(( $(TEST_WORKERS) > 0 ? $(TEST_WORKERS) + 1 : 2 )); \
+	@start=$$(date +%s); ros_log=$$(mktemp); shares=$$(( $(TEST_WORKERS) > 0 ? $(TEST_WORKERS) + 1 : 2 )); \
 	TEST_DDS_SHARES=$$shares TEST_DDS_SHARE=$$(( shares - 1 )) $(PY) -m pytest -q -p no:cacheprovider -m ros \
 	  > $$ros_log 2>&1 & ros=$$!; \
 	echo "tests marked ros: running beside the others (their output follows at the end)"; \
 	TEST_DDS_SHARES=$$shares TEST_DDS_SHARE=0 nice -n 19 $(PY) -m pytest -q -n $(TEST_WORKERS) --dist worksteal \
 	  -m "not ros"; others=$$?; \
 	wait $$ros; ros_status=$$?; echo "-- tests marked ros:"; cat $$ros_log; rm -f $$ros_log; \
+	echo "make test: $$(( $$(date +%s) - start )) s wall"; \
 	test $$others = 0 -a $$ros_status = 0
 
 # The newest versions of everything (not part of .ci/run): what breaks first when the lock is renewed.

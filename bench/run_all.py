@@ -33,6 +33,7 @@ GOALS: list[tuple[list[str], str]] = [
     (["bench_cmkf.py"], "cmkf_bench.txt"),
     (["bench_node.py"], "bench_node.txt"),
     (["bench_analyze_time.py", "--rates", "200", "400"], "bench_analyze_time_loop.txt"),
+    (["bench_screen.py", "--seeds", "1", "2"], "bench_screen.txt"),
     (["bench_batch.py"], "bench_batch.txt"),
     (["bench_figures.py"], "bench_figures.txt"),
 ]
