@@ -53,8 +53,9 @@ UNIDENTIFIED_SE = 0.5
 LOGLIK_ABS = 1.0
 LOGLIK_KEYS = {"loglik", "aic", "bic", "delta_aic", "delta_bic", "loglik_diffuse"}
 #: Free-text keys of the fitted files whose numbers are log-likelihood-scale values and AV misfit z-scores (a loop
-#: trial's "BIC … → …; AV misfit z … → …"): their words are compared exactly, their numbers to :data:`LOGLIK_ABS`.
-TEXT_KEYS = {"reason"}
+#: trial's "BIC … → …; AV misfit z … → …") and the loop's band sentence (its largest relative AV error in whole per
+#: cent): their words are compared exactly, their numbers to :data:`LOGLIK_ABS`.
+TEXT_KEYS = {"reason", "av_band"}
 NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 #: Keys holding numbers from the likelihood's curvature or from draws of it, and the overbound (it touches the final
 #: model's Allan variance, which moves with the fit over the flat parts of the likelihood).

@@ -11,6 +11,7 @@ from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
 from ..pipelines.analyze.overbound import AxisOverbound
 from ..pipelines.analyze.static import StaticAnalysis
+from ..pipelines.av_band import av_band_claim
 from ..pipelines.loop import LoopResult
 
 _SUMMARY_UNITS = {"rad/s": ("rad/s/sqrt(Hz)", "rad/s^2/sqrt(Hz)"), "m/s^2": ("m/s^2/sqrt(Hz)", "m/s^3/sqrt(Hz)")}
@@ -73,6 +74,7 @@ def loop_table(results: dict[str, LoopResult]) -> str:
             lines.append(f"{axis:8s} {s.index:4d} {change:10s} {s.model:24s} {e.loglik:12.1f} {e.bic:12.1f} "
                          f"{e.av_misfit:6.3f} {e.ljung_box_p:8.2g} {e.peak_ratio:6.1f}")
         lines.append(f"{axis:8s}      -> {r.verdict}" + (f" ({r.note})" if r.note else ""))
+        lines.append(f"{axis:8s}         {av_band_claim(r).sentence()}")
     return "\n".join(lines)
 
 
@@ -102,8 +104,10 @@ def comparison_table(models: dict[str, AxisModel]) -> str:
 
 
 def loop_line(axis: str, loop: LoopResult) -> str:
-    """One line per axis the closed loop ran on: first and final model, the verdict."""
-    return f"{axis}: loop {loop.steps[0].model} -> {loop.final.model}: {loop.verdict}"
+    """Per axis the closed loop ran on: first and final model, the verdict; indented below it, where the final
+    model's AV lies against the data's band (:func:`~imu_noise_id.pipelines.av_band.av_band_claim`'s sentence)."""
+    return (f"{axis}: loop {loop.steps[0].model} -> {loop.final.model}: {loop.verdict}\n"
+            f"  {av_band_claim(loop).sentence()}")
 
 
 def _duration(seconds: float) -> str:

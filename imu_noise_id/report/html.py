@@ -8,6 +8,7 @@ import html
 from pathlib import Path
 
 from ..core.axes import UNITS
+from ..pipelines.av_band import av_band_claim
 from ..pipelines.loop import LoopResult
 from .loop_plots import allan_before_after, residual_acf_psd
 from .loop_yaml import HOW
@@ -38,9 +39,7 @@ def loop_axis_section(axis: str, result: LoopResult) -> str:
     cls = "pass" if result.passed else "fail"
     out.append(f'<p>Final model <b>{html.escape(result.final.model)}</b>; verdict: '
                f'<span class="{cls}">{html.escape(result.verdict)}</span></p>')
-    band = "inside" if result.av_inside_band else "outside"
-    out.append(f"<p class=small>The final model's Allan variance lies {band} the data's 95 % band at every τ "
-               f"(largest relative AV error {100 * result.max_rel_av_error:.0f} %)."
+    out.append(f"<p class=small>{html.escape(av_band_claim(result).sentence(), quote=False)}"
                + (f" {html.escape(result.note)}" if result.note else "") + "</p>")
     rows = ["<tr><th>step</th><th class=l>model</th><th class=l>added (how)</th><th>log-lik</th><th>BIC</th>"
             "<th>AV misfit</th><th>Ljung–Box p</th><th>peak ratio</th><th class=l>evidence</th></tr>"]

@@ -17,12 +17,15 @@ Per axis the loop adds (schema: /work/shared/notes/architecture.md)::
     loop_verdict: {final_model: WN+OSC+SIN, passed: true, verdict: "residuals pass: …",
                    remaining: ["…evidence still significant…"],
                    av_inside_band: true,            # model AV inside the data's 95 % band at every τ
+                   av_outside_band_tau: [],         # τ ranges [s] where it lies outside ([[lo, hi], …])
+                   av_band: "The final model's …",  # the sentence report.html and the console print
                    max_rel_av_error: 0.08,          # largest |AV_model/AV_data − 1| over τ
                    note: ""}                        # e.g. evidence left but of no practical significance
 """
 
 from __future__ import annotations
 
+from ..pipelines.av_band import av_band_claim
 from ..pipelines.loop import CLEANING_EFFECTS, EXOG_EFFECTS, LoopResult, LoopStep
 from .numbers import num
 
@@ -56,6 +59,6 @@ def loop_to_dict(result: LoopResult) -> dict:
         "loop": [step_to_dict(s) for s in result.steps],
         "loop_verdict": {"final_model": result.final.model, "passed": bool(result.passed), "verdict": result.verdict,
                          "remaining": [f.evidence for f in result.remaining],
-                         "av_inside_band": bool(result.av_inside_band),
+                         "av_inside_band": bool(result.av_inside_band), **av_band_claim(result).as_dict(),
                          "max_rel_av_error": num(result.max_rel_av_error), "note": result.note},
     }
