@@ -56,3 +56,55 @@ def test_report_model_yaml_and_console_give_the_same_band_sentence(tmp_path, par
     assert verdict["av_outside_band_tau"] and verdict["av_outside_band_tau"][0][0] > 10 * DT
     assert sentence in loop_line("gyro_z", partly_outside)
     assert sentence in loop_table({"gyro_z": partly_outside})
+
+
+@pytest.fixture(scope="module")
+def identified(tmp_path_factory):
+    """identify on a seeded WN+RW gyro record of 60 s: the GM hypothesis wins the raw probabilities but its τ is
+    beyond what the record can tell from a random walk, so the decision (on the merged probabilities) is WN+RW."""
+    from imu_noise_id.core.axes import ImuSeries
+    from imu_noise_id.core.noise.components import RW
+    from imu_noise_id.pipelines.identify import identify
+    from imu_noise_id.report.hypotheses_yaml import write_identification
+    from imu_noise_id.resources import read_hypotheses_file
+
+    out = {}
+    for seed, duration in ((0, 60.0), (0, 200.0)):
+        n = int(duration / DT)
+        rng = np.random.default_rng(seed)
+        gyro = np.stack([simulate_sum([WN(1e-3), RW(2e-5)], n, DT, rng) for _ in range(3)], axis=1)
+        accel = np.stack([simulate_sum([WN(2e-3), RW(4e-4)], n, DT, rng) for _ in range(3)], axis=1)
+        res = identify(ImuSeries(t=np.arange(n) * DT, gyro=gyro, accel=accel), ["gyro_z"], *read_hypotheses_file(None))
+        folder = tmp_path_factory.mktemp(f"identify_{seed}_{duration:.0f}")
+        write_identification(res, folder)
+        out[duration] = (res, yaml.safe_load((folder / "hypotheses.yaml").read_text())["axes"]["gyro_z"])
+    return out
+
+
+@pytest.mark.parametrize("duration", [60.0, 200.0])
+def test_identify_probabilities_are_probabilities(identified, duration):
+    res, entry = identified[duration]
+    for probs in (entry["probabilities"], entry["decision_probabilities"]):
+        assert all(0.0 <= p <= 1.0 for p in probs.values())
+        assert sum(probs.values()) == pytest.approx(1.0, abs=1e-12)
+    rows = res.axes["gyro_z"].result.probabilities
+    assert np.all((rows >= 0) & (rows <= 1)) and np.allclose(rows.sum(axis=1), 1.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("duration", [60.0, 200.0])
+def test_identify_console_line_and_yaml_tell_one_story(identified, duration):
+    from imu_noise_id.report.hypotheses_yaml import decision_line
+
+    entry = identified[duration][1]
+    line = decision_line("gyro_z", entry)
+    # a decision has its time and a time its decision
+    assert (entry["decision"] is None) == (entry["decision_time_s"] is None)
+    assert entry["decision"] == "WN+RW"
+    assert f"decision WN+RW at {entry['decision_time_s']:.3g} s" in line
+    for name, p in entry["probabilities"].items():
+        assert f"{name} {p:.3f}" in line
+    # the raw probabilities favour WN+GM: the line says on what the decision was taken, and why
+    assert entry["probabilities"]["WN+GM"] > 0.5
+    assert f"P(WN+RW) = {entry['decision_probabilities']['WN+RW']:.3f}" in line
+    assert "WN+GM merged into WN+RW" in line and "not identifiable" in line
+    assert entry["decision_note"] in line

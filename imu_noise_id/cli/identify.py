@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     """Check the options, read the bag, run the bank axis by axis (progress on stderr), write the results."""
     from ..bag.reader import read_imu
     from ..pipelines.identify import identify
-    from ..report.hypotheses_yaml import write_identification
+    from ..report.hypotheses_yaml import axis_entry, decision_line, write_identification
     from ..resources import read_hypotheses_file
     from .options import parse_axes
     from .progress import TextProgress
@@ -63,10 +63,10 @@ def run(args: argparse.Namespace) -> int:
             plot_identify(res, staging / "hypotheses_probabilities.png")
     folder.report()
     for axis, e in res.axes.items():
-        f = e.result.final
-        probs = ", ".join(f"{k} {v:.3f}" for k, v in f.probabilities.items())
-        print(f"{axis}: {probs} -> decision {f.decision or 'none yet'}")
-        for g in f.long_memory:
-            print(f"  {g.text()}")
+        entry = axis_entry(axis, e)
+        print(decision_line(axis, entry))
+        for g in e.result.final.long_memory:
+            if g.text() not in entry["decision_note"]:
+                print(f"  {g.text()}")
     print(f"wrote {out / 'hypotheses.yaml'}")
     return 0

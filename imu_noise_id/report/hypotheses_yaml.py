@@ -1,4 +1,5 @@
-"""``hypotheses.yaml`` and ``hypotheses_probabilities.csv`` of ``identify`` (decision, probabilities, θ̂ ± RSD)."""
+"""``hypotheses.yaml`` and ``hypotheses_probabilities.csv`` of ``identify`` (decision, probabilities, θ̂ ± RSD), and
+identify's console line of an axis, written from the same entry."""
 
 from __future__ import annotations
 
@@ -10,17 +11,48 @@ import yaml
 
 from ..core.axes import UNITS
 from ..pipelines.identify import AxisIdentification, Identification
+from .numbers import num
+
+
+def decision_note(entry: AxisIdentification) -> str:
+    """On what the axis's decision (or its absence) rests, in words: the probability it was taken on against γ and,
+    where a GM hypothesis the record cannot tell from its RW twin was merged into the decision, which and why (the
+    raw probabilities beside it may then favour the GM)."""
+    final, gamma = entry.result.final, entry.hset.gamma
+    merged = final.decision_probabilities
+    if final.decision is None:
+        best = max(merged, key=merged.__getitem__)
+        return f"largest P({best}) = {merged[best]:.3f} < gamma = {gamma:g}"
+    note = f"P({final.decision}) = {merged[final.decision]:.3f} >= gamma = {gamma:g}"
+    folded = [g for g in final.long_memory if g.twin == final.decision]
+    if folded:
+        note += "".join(f" with {g.hypothesis} merged into {g.twin} ({g.text()})" for g in folded)
+    return note
+
+
+def decision_line(axis: str, entry: dict[str, Any]) -> str:
+    """identify's console line of one axis from its ``hypotheses.yaml`` entry (:func:`axis_entry`), so that the two
+    cannot disagree: the probabilities, the decision with the time from which it held, and what it rests on."""
+    probs = ", ".join(f"{k} {v:.3f}" for k, v in entry["probabilities"].items())
+    if entry["decision"] is None:
+        return f"{axis}: {probs} -> no decision yet ({entry['decision_note']})"
+    return (f"{axis}: {probs} -> decision {entry['decision']} at {entry['decision_time_s']:.3g} s "
+            f"({entry['decision_note']})")
 
 
 def axis_entry(axis: str, entry: AxisIdentification) -> dict[str, Any]:
-    """The ``hypotheses.yaml`` entry of one axis."""
+    """The ``hypotheses.yaml`` entry of one axis: ``decision`` and ``decision_time_s`` are both null or both set,
+    ``decision_note`` says on what the decision rests (:func:`decision_note`), and the probabilities lie in [0, 1]
+    summing to 1."""
     result, hset = entry.result, entry.hset
     final = result.final
+    time = result.decision_time
     return {
         "unit": UNITS[axis],
         "decision": final.decision,
-        "decision_time_s": result.decision_time,
-        "duration_s": float(final.t),
+        "decision_time_s": None if time is None else num(time),
+        "decision_note": decision_note(entry),
+        "duration_s": num(final.t),
         "probabilities": {k: float(v) for k, v in final.probabilities.items()},
         "decision_probabilities": {k: float(v) for k, v in final.decision_probabilities.items()},
         "indistinguishable": [

@@ -53,6 +53,15 @@ class HypothesisEstimate:
     not_identifiable: dict[str, float] = field(default_factory=dict)
 
 
+def probabilities_of(log_prob: np.ndarray) -> np.ndarray:
+    """Posterior probabilities from log-probabilities normalised to 0 along the last axis: exponentiated, divided by
+    their sum and clipped to [0, 1], so that each row sums to 1 to rounding and none exceeds 1 (the exponentials of
+    the log-sum-exp normalisation sum to 1 only to its rounding, and a lone hypothesis came out as 1 + 1e-12)."""
+    lp = np.asarray(log_prob, dtype=float)
+    p = np.exp(lp - np.max(lp, axis=-1, keepdims=True))
+    return np.clip(p / np.sum(p, axis=-1, keepdims=True), 0.0, 1.0)
+
+
 @dataclass(frozen=True)
 class BankSnapshot:
     """The bank after its latest update.
@@ -64,7 +73,7 @@ class BankSnapshot:
     t : float
         Time of the latest update [s], gaps included (update i of an uninterrupted series is at i·dt·block).
     probabilities : dict
-        Hypothesis name → posterior probability.
+        Hypothesis name → posterior probability (in [0, 1], summing to 1 to rounding).
     decision : str or None
         The most probable hypothesis of ``decision_probabilities`` once its probability reaches γ, else None.
     hypotheses : dict
@@ -109,9 +118,18 @@ class BankResult:
 
     @property
     def decision_time(self) -> float | None:
-        """First time the largest probability reached γ (None if never)."""
-        hit = np.flatnonzero(self.probabilities.max(axis=1) >= self.gamma)
-        return float(self.t[hit[0]]) if hit.size else None
+        """Time [s] from which ``final.decision`` held to the end: the first recorded update after which the decided
+        hypothesis's probability, with the hypotheses merged into it at the end (``final.long_memory``) added, stayed
+        at or above γ; ``final.t`` when only the last update reached it. None exactly when ``final.decision`` is
+        None (a decision has a time and a time a decision)."""
+        decision = self.final.decision
+        if decision is None:
+            return None
+        merged = {decision} | {g.hypothesis for g in self.final.long_memory if g.twin == decision}
+        p = np.minimum(1.0, self.probabilities[:, [k for k, n in enumerate(self.names) if n in merged]].sum(axis=1))
+        below = np.flatnonzero(p < self.gamma)
+        start = 0 if below.size == 0 else below[-1] + 1
+        return float(self.t[start]) if start < self.t.size else float(self.final.t)
 
 
 class HypothesisBank:
@@ -215,7 +233,7 @@ class HypothesisBank:
         return BankResult(
             names=self.names,
             t=np.concatenate(ts),
-            probabilities=np.exp(np.concatenate(logp)),
+            probabilities=probabilities_of(np.concatenate(logp)),
             theta={n: np.concatenate(means[k]) for k, n in enumerate(self.names)},
             theta_std={n: np.sqrt(np.concatenate(variances[k])) for k, n in enumerate(self.names)},
             parameter_names={h.name: h.parameter_names for h in self.hset.hypotheses},
@@ -244,7 +262,7 @@ class HypothesisBank:
 
     def _snapshot_of(self, post: Posterior) -> BankSnapshot:
         """The snapshot of the latest update from its posterior (one row)."""
-        probs = np.exp(post.log_prob[0, 0]).tolist()
+        probs = probabilities_of(post.log_prob[0, 0]).tolist()
         t = self.hset.bank_dt * self._ticks
         lj = self._filters.c[0] + self.model.log_mu0
         longs = long_memory(self.hset, [lj[sl] for sl in self.model.slices], t) if self._n_updates else []

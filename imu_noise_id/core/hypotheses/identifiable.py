@@ -110,9 +110,10 @@ def long_memory(hset: HypothesisSet, log_weights: list[np.ndarray], record_s: fl
 
 
 def merged_probabilities(probabilities: dict[str, float], groups: list[LongMemory]) -> dict[str, float]:
-    """The probabilities with each long-memory GM hypothesis added to its RW twin (and left out)."""
+    """The probabilities with each long-memory GM hypothesis added to its RW twin (and left out); a sum is clipped
+    to 1 (two probabilities summing to 1 add to 1 + rounding)."""
     merged = dict(probabilities)
     for g in groups:
         if g.twin is not None and g.hypothesis in merged and g.twin in merged:
-            merged[g.twin] += merged.pop(g.hypothesis)
+            merged[g.twin] = min(1.0, merged[g.twin] + merged.pop(g.hypothesis))
     return merged
