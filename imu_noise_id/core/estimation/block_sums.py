@@ -37,6 +37,7 @@ from ..errors import InputError
 from ..noise.components import GM, RW, WN, Component
 from ..noise.flicker import BI
 from ..quality import interpolate_missing
+from .whittle import with_log_parameters
 
 #: Most blocks a record is cut into (an evaluation is O(M³)).
 MAX_BLOCKS = 256
@@ -131,15 +132,9 @@ def fit(start: list[Component], sums: BlockSums) -> tuple[float, list[Component]
     box = [tau_range if name == "tau" else (v - 30.0, v + 30.0) for (_, name), v in zip(keys, x0, strict=True)]
     x0 = np.clip(x0, [b[0] for b in box], [b[1] for b in box])
 
-    def build(x: np.ndarray) -> list[Component]:
-        params = [dict(c.params()) for c in start]
-        for (i, name), v in zip(keys, x, strict=True):
-            params[i][name] = float(np.exp(v))
-        return [type(c)(**p) for c, p in zip(start, params, strict=True)]
-
     def negll(x: np.ndarray) -> float:
         try:
-            comps = build(x)
+            comps = with_log_parameters(start, keys, x)
         except ValueError:
             return 1e300
         k = held_k + sum(c.sum_covariance(lags, sums.dt) for c in comps if isinstance(c, SLOW_TYPES))
@@ -150,4 +145,4 @@ def fit(start: list[Component], sums: BlockSums) -> tuple[float, list[Component]
         return -negll(x0), list(start)
     res = minimize(negll, x0, method="L-BFGS-B", bounds=box, options={"maxiter": 200})
     best = res.x if res.fun <= negll(x0) else x0
-    return -float(negll(best)), build(best)
+    return -float(negll(best)), with_log_parameters(start, keys, best)

@@ -129,6 +129,16 @@ def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndar
     return np.real(np.sum((hg @ q) * hg.conj(), axis=1))
 
 
+def with_log_parameters(components: list[Component], keys: list[tuple[int, str]],
+                        x: np.ndarray) -> list[Component]:
+    """``components`` with parameter ``keys[j]`` = (component index, parameter name) set to exp(x[j]) (the
+    searches over log-parameters; ValueError where a value is out of its component's range)."""
+    params = [dict(c.params()) for c in components]
+    for (i, name), v in zip(keys, x, strict=True):
+        params[i][name] = float(np.exp(v))
+    return [type(c)(**p) for c, p in zip(components, params, strict=True)]
+
+
 def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: BandedPeriodogram | None = None,
                 bounds: dict[str, tuple[float, float]] | None = None) -> tuple[float, list[Component]]:
     """Maximise the banded Whittle likelihood of Δy over the log-parameters from ``start``.
@@ -142,10 +152,7 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
     t_total = y.size * dt
 
     def build(x: np.ndarray) -> list[Component]:
-        params = [dict(c.params()) for c in start]
-        for (i, k), v in zip(keys, x, strict=True):
-            params[i][k] = float(np.exp(v))
-        return [type(c)(**p) for c, p in zip(start, params, strict=True)]
+        return with_log_parameters(start, keys, x)
 
     def negll(x: np.ndarray) -> float:
         try:
@@ -187,11 +194,7 @@ def whittle_information(components: list[Component], y: np.ndarray, dt: float,
     x0 = np.log([components[i].params()[k] for i, k in keys])
 
     def log_spectrum(x: np.ndarray) -> np.ndarray:
-        params = [dict(c.params()) for c in components]
-        for (i, k), v in zip(keys, x, strict=True):
-            params[i][k] = float(np.exp(v))
-        comps = [type(c)(**p) for c, p in zip(components, params, strict=True)]
-        return np.log(difference_spectrum(comps, bp.omega, dt))
+        return np.log(difference_spectrum(with_log_parameters(components, keys, x), bp.omega, dt))
 
     jac = np.column_stack([(log_spectrum(x0 + e) - log_spectrum(x0 - e)) / (2.0 * step)
                            for e in np.eye(x0.size) * step])
