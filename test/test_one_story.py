@@ -108,3 +108,30 @@ def test_identify_console_line_and_yaml_tell_one_story(identified, duration):
     assert f"P(WN+RW) = {entry['decision_probabilities']['WN+RW']:.3f}" in line
     assert "WN+GM merged into WN+RW" in line and "not identifiable" in line
     assert entry["decision_note"] in line
+
+
+def test_the_cmkf_summary_names_invalid_orientations_before_a_generic_cause():
+    """Every odometry orientation an all-zero quaternion (a driver that publishes none, its twist covariance 100×
+    too small) with gravity from the IMU: the filter is not consistent, and the counter that says the odometry is
+    not what it claims comes before the generic causes (a mirrored frame, a covariance scale) in the reason and the
+    summary's first line."""
+    from imu_noise_id.core.axes import ImuSeries, OdometrySeries
+    from imu_noise_id.core.cmkf.config import CmkfConfig
+    from imu_noise_id.core.simulation.robot import simulate_robot
+    from imu_noise_id.pipelines.cmkf_replay import replay, to_yaml_dict
+
+    run = simulate_robot(60.0, np.random.default_rng(2))
+    n = len(run.odom_t)
+    imu = ImuSeries(run.imu_t, run.gyro, run.accel)
+    odom = OdometrySeries(run.odom_t, run.position, np.zeros((n, 4)), run.linear_velocity, run.angular_velocity,
+                          run.pose_cov, run.twist_cov * 1e-2)  # and its twist covariance a placeholder
+    result = replay(imu, odom, CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, gravity_source="imu"),
+                    np.tile(run.imu_rotation_xyzw, (len(run.imu_t), 1)))
+    data = to_yaml_dict(result)
+    assert data["counters"]["odom_orientation_invalid"] == n
+    reason = data["consistency"]["reason"]
+    assert data["consistency"]["verdict"] in ("marginal", "inconsistent")
+    assert f"odom_orientation_invalid = {n}" in reason
+    generic = [reason.index(g) for g in ("mirrored", "too small", "too large") if g in reason]
+    assert generic and reason.index("odom_orientation_invalid") < min(generic)
+    assert "odom_orientation_invalid" in data["summary"][0]

@@ -187,10 +187,32 @@ def consistency_summary(result: CmkfReplayResult) -> dict[str, object]:
     worst = pair[worst_filter([s["verdict"] for s in pair], [s["mean"] for s in pair], [s["dof"] for s in pair])]
     reason = ""
     if worst["verdict"] in ("marginal", "inconsistent"):
+        generic = likely_cause(worst["mean"] / worst["dof"], result.agreement)
+        counted = counter_cause(e)
+        cause = f"{counted}. Other possible causes: {generic}" if counted else generic
         reason = (f"accelerometer NIS mean {accel['mean']:.3g} for {accel['dof']} dof ({accel['gated']} updates "
                   f"gated), gyro NIS mean {gyro['mean']:.3g} for {gyro['dof']} dof ({gyro['gated']} gated). Likely "
-                  f"cause: {likely_cause(worst['mean'] / worst['dof'], result.agreement)}")
+                  f"cause: {cause}")
     return {"verdict": worst["verdict"], "reason": reason, "accel": accel, "gyro": gyro}
+
+
+def counter_cause(e: CmkfEstimate) -> str:
+    """What the filter's counters say is wrong with its odometry, named before any generic cause of an inconsistency
+    ("" when they say nothing): every odometry message used with an invalid orientation (the source publishes none,
+    so its twist and covariances may be placeholders too), or at least as many odometry messages dropped as used."""
+    c = e.counters
+    used, invalid = c.get("odom", 0), c.get("odom_orientation_invalid", 0)
+    parts = []
+    if used and invalid >= used:
+        parts.append(f"every one of the {used} odometry messages used has an invalid orientation (all-zero or NaN "
+                     f"quaternion; odom_orientation_invalid = {invalid}): the odometry source publishes no "
+                     "orientation, and its twist and covariances may be placeholders as well: check the odometry "
+                     "driver before the filter's settings")
+    dropped = {k: v for k, v in c.items() if k.startswith("odom_dropped") and v}
+    if dropped and sum(dropped.values()) >= used:
+        parts.append(f"{sum(dropped.values())} odometry messages were dropped against {used} used ("
+                     + ", ".join(f"{k} = {v}" for k, v in dropped.items()) + ")")
+    return "; ".join(parts)
 
 
 def replay_status(result: CmkfReplayResult, verdict: str) -> str:
