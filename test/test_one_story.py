@@ -135,3 +135,46 @@ def test_the_cmkf_summary_names_invalid_orientations_before_a_generic_cause():
     generic = [reason.index(g) for g in ("mirrored", "too small", "too large") if g in reason]
     assert generic and reason.index("odom_orientation_invalid") < min(generic)
     assert "odom_orientation_invalid" in data["summary"][0]
+    # rates people read: six significant digits (1/median interval gave 100.00000000009095)
+    for key in ("imu_rate_hz", "odom_rate_hz"):
+        assert data["filter"][key] == float(f"{data['filter'][key]:.6g}")
+
+
+# -- numbers and options people read ---------------------------------------------------------------------------------
+
+EXPORT_DOC = {"gyroscope_noise_density": 1.7e-4, "gyroscope_random_walk": 2.0e-5,
+              "accelerometer_noise_density": 2.0017e-3, "accelerometer_random_walk": 3.0e-4,
+              "update_rate": 100.0000000000199, "rostopic": "/imu0"}
+
+
+def test_export_takes_comma_lists_of_formats(tmp_path):
+    from imu_noise_id.cli import main
+
+    (tmp_path / "imu.yaml").write_text(yaml.safe_dump(EXPORT_DOC))
+    assert main(["export", str(tmp_path), "--format", "kalibr,px4", "--format", "gtsam"]) == 0
+    assert sorted(p.name for p in (tmp_path / "exports").iterdir()) == [
+        "gtsam_imu.yaml", "kalibr_imu.yaml", "px4_ekf2.params"]
+    assert main(["export", str(tmp_path), "--format", "kalibr,nope"]) == 2
+
+
+def test_px4_params_are_written_with_seven_significant_digits(tmp_path):
+    from imu_noise_id.report.exports import write_exports
+
+    text = write_exports(EXPORT_DOC, tmp_path, ("px4",))[0].read_text()
+    rows = {line.split("\t")[2]: line.split("\t")[3] for line in text.splitlines() if not line.startswith("#")}
+    assert rows["EKF2_ACC_NOISE"] == "0.020017"  # N / sqrt(10 ms), not 0.020016999999999997 nor 18 decimals
+    for value in rows.values():
+        assert value == f"{float(value):.7g}"
+    assert "100.0000000000199" not in text
+
+
+def test_simulate_help_lists_every_component_with_its_units():
+    from imu_noise_id.cli.simulate import DESCRIPTION
+    from imu_noise_id.core.noise.components import COMPONENT_TYPES
+
+    for name, cls in COMPONENT_TYPES.items():
+        assert f"{name}(" in DESCRIPTION
+        for p in cls.parameter_names:
+            assert f"{p}=[{cls.parameter_units[p].replace('*', '·').replace('sqrt(Hz)', '√Hz')}]" in DESCRIPTION
+    assert "QN(Q=[u·s])" in DESCRIPTION and "Q=[u])" not in DESCRIPTION
+

@@ -19,6 +19,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from ..core.errors import InputError
+from ..report.numbers import num
 from .units import Unit, content_hash
 
 MARKER = "unit.json"
@@ -60,7 +61,7 @@ def fleet_rows(unit: Unit, result, warnings: list[str]) -> list[dict]:
     rows = []
     for axis in result.static.axes:
         row = {"bag": str(unit.bag), "topic": result.static.topic, "unit": unit.name, "axis": axis,
-               "status": "ok", "error": "", "rate_hz": _num(result.static.rate_hz),
+               "status": "ok", "error": "", "rate_hz": _num(num(result.static.rate_hz)),
                "duration_s": _num(result.static.duration_s), "warnings": " | ".join(warnings)}
         final = result.finals.get(axis)
         if final is not None:

@@ -22,12 +22,34 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "'overbound:': the smallest WN+RW covering the data's upper 95 % Allan bound over the filter's "
                     "tau range) into OUT/overbound/.")
     p.add_argument("source", type=Path, help="an analyze output folder or its imu.yaml")
-    p.add_argument("--format", nargs="+", default=["all"], choices=[*FORMATS, "all"], metavar="FORMAT",
-                   help=f"one or more of {', '.join(FORMATS)}, or all (default: all)")
+    p.add_argument("--format", nargs="+", action="extend", default=None, metavar="FORMAT[,FORMAT…]",
+                   help=f"one or more of {', '.join(FORMATS)}, or all; repeatable, space- or comma-separated like "
+                        "--axis (default: all)")
     p.add_argument("--overbound", action="store_true",
                    help="export the overbound of imu.yaml (not the fitted values), into OUT/overbound/")
     p.add_argument("--out", type=Path, help="output directory (default: SOURCE_FOLDER/exports)")
     p.set_defaults(run=run)
+
+
+def parse_formats(values: list[str] | None) -> tuple[str, ...]:
+    """The formats of ``--format`` values (comma lists, ``all`` for every one), in order, without repeats.
+
+    Raises
+    ------
+    InputError
+        An unknown format name (before any file is read).
+    """
+    from ..core.errors import InputError
+    from ..report.exports import FORMATS
+
+    names = [v.strip() for value in values or ["all"] for v in value.split(",") if v.strip()]
+    unknown = [n for n in names if n not in (*FORMATS, "all")]
+    if unknown:
+        raise InputError(f"--format {unknown[0]!r}: unknown format; use {', '.join(FORMATS)} or all, repeated or "
+                         "comma-separated")
+    if not names or "all" in names:
+        return tuple(FORMATS)
+    return tuple(dict.fromkeys(names))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -35,9 +57,10 @@ def run(args: argparse.Namespace) -> int:
     import yaml
 
     from ..core.errors import InputError
-    from ..report.exports import FORMATS, write_exports
+    from ..report.exports import write_exports
     from ..report.results_folder import RunRecord, now, options_of, stamp
 
+    formats = parse_formats(args.format)
     path = args.source / "imu.yaml" if args.source.is_dir() else args.source
     try:
         doc = yaml.safe_load(path.read_text())
@@ -46,7 +69,6 @@ def run(args: argparse.Namespace) -> int:
             from None
     if not isinstance(doc, dict):
         raise InputError(f"{str(path)!r} is not an imu.yaml written by imu-noise-id analyze")
-    formats = tuple(FORMATS) if "all" in args.format else tuple(args.format)
     record = RunRecord(command="export", argv=list(args.argv), source=str(path), topic=doc.get("rostopic"),
                        options=options_of(args), started=args.started, finished=now(), completed=True)
     for p in write_exports(doc, args.out or path.parent / "exports", formats, overbound=args.overbound):

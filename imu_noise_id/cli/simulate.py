@@ -6,16 +6,36 @@ import argparse
 from pathlib import Path
 
 from ..core.errors import InputError
+from ..core.noise.components import COMPONENT_TYPES
 
 _EXAMPLE = "gyro: WN(1e-3)+RW(1e-5); accel: WN(2e-3)+RW(4e-4)"
+
+
+def _unit(text: str) -> str:
+    return text.replace("sqrt(Hz)", "√Hz").replace("*", "·")
+
+
+def component_syntax() -> str:
+    """Every component of the registry (``COMPONENT_TYPES``) with its parameters and units, e.g.
+    ``GM(tau=[s], sigma=[u])``; optional fixed parameters in brackets. Written from the registry so that the help
+    cannot go stale."""
+    out = []
+    for name, cls in COMPONENT_TYPES.items():
+        units = cls.parameter_units
+        args = [f"{p}=[{_unit(units[p])}]" for p in cls.parameter_names]
+        args += [f"[{p}=[{_unit(units.get(p, '?'))}]]" for p in cls.fixed_names]
+        out.append(f"{name}({', '.join(args)})")
+    return ", ".join(out)
+
 
 DESCRIPTION = f"""\
 Simulate a static 6-axis IMU and write it as a rosbag2 bag (sensor_msgs/Imu, header stamps
 from --start-time).
 
 MODEL is a model spec string, e.g. "{_EXAMPLE}".
-Parameters are continuous-time: WN noise density [u/√Hz], RW random walk [u/s/√Hz],
-GM(tau=[s], sigma=[u]), QN(Q=[u]), RR(slope=[u/s]); u = rad/s for gyro, m/s² for accel.
+Components and their continuous-time parameters (positional in this order, or by name):
+{component_syntax()};
+u = rad/s for gyro, m/s² for accel.
 Keys: gyro, accel or single axes gyro_x … accel_z; a spec without key applies to all six axes.
 MODEL may also be a YAML file mapping the same keys to specs (e.g. `gyro: WN(1e-3)+RW(1e-5)`),
 or a model.yaml written by the analysis (`axes: {{AXIS: {{components: [{{type: WN, noise_density: …}}]}}}}`).

@@ -70,9 +70,10 @@ class CmkfReplayResult:
 
 
 def _rate(t: np.ndarray) -> float:
-    """Rate [Hz] of a stream by the package's one sampling rule (nan for fewer than two usable stamps)."""
+    """Rate [Hz] of a stream by the package's one sampling rule, to 6 significant digits as people read it (nan for
+    fewer than two usable stamps)."""
     try:
-        return 1.0 / sampling_period(t)
+        return float(f"{1.0 / sampling_period(t):.6g}")
     except InputError:
         return math.nan
 

@@ -206,7 +206,7 @@ def px4(doc: dict) -> str:
              "(EKF/covariance.cpp).",
         "Formula: EKF2_*_NOISE = N/sqrt(P) [rad/s, m/s^2], EKF2_*_B_NOISE = K/sqrt(P) [rad/s^2, m/s^3]; for another "
         "EKF2_PREDICT_US multiply by sqrt(P/P_new). Not Kalibr's discrete sigma_d = N*sqrt(IMU rate).", *notes)
-    rows = "".join(f"1\t1\t{name}\t{v:.18f}\t9\n" for name, v in values.items())
+    rows = "".join(f"1\t1\t{name}\t{v:.7g}\t9\n" for name, v in values.items())  # a float32's digits
     return "# Onboard parameters for Vehicle 1\n#\n" + head + "#\n# Vehicle-Id Component-Id Name Value Type\n" + rows
 
 
