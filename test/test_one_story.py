@@ -178,3 +178,52 @@ def test_simulate_help_lists_every_component_with_its_units():
             assert f"{p}=[{cls.parameter_units[p].replace('*', '·').replace('sqrt(Hz)', '√Hz')}]" in DESCRIPTION
     assert "QN(Q=[u·s])" in DESCRIPTION and "Q=[u])" not in DESCRIPTION
 
+
+
+# -- the node: the decision beside the probabilities the monitor shows ---------------------------------------------
+
+def test_the_node_reports_what_its_decision_rests_on_and_when_it_was_made():
+    """On a WN+RW record the bank decides WN+RW within seconds by merging the GM hypothesis it cannot tell apart,
+    while the raw P(WN+GM) it publishes leads: the report carries the probability the decision rests on, when it
+    was made and gamma, and the monitor's line says why the decision differs from the larger raw probability."""
+    from imu_noise_id.core.noise.components import RW
+    from imu_noise_id.pipelines.online.bank import BankFeed
+    from imu_noise_id.pipelines.online.events import EventLog
+    from imu_noise_id.resources import read_hypotheses_file
+    from imu_noise_id.ros.monitor import MonitorState, render
+
+    feed = BankFeed(*read_hypotheses_file(None), bank_rate=10.0, events=EventLog())
+    n, rng = 6000, np.random.default_rng(0)
+    y = np.stack([simulate_sum([WN(1e-3), RW(2e-5)], n, DT, rng) for _ in range(6)], axis=1)
+    for i in range(n):
+        feed.add(i * DT, y[i])
+    feed.end_stretch()
+    assert feed.feed(1.0 / DT)
+    report = feed.report()
+    cols, table = report.table()
+    k = cols.index("WN+RW")
+    i = 2  # gyro_z
+    assert table[i, cols.index("decision")] == k
+    raw = table[i, k]
+    held = table[i, cols.index("decision_probability")]
+    made = table[i, cols.index("decision_time_s")]
+    gamma = table[i, cols.index("gamma")]
+    assert held >= gamma and 0.0 < made <= n * DT
+    assert np.all((table[:, :2] >= 0) & (table[:, :2] <= 1))
+    text = render(MonitorState(node="/n", hypotheses=(["gyro_x"] * 6, list(cols), table.tolist())))
+    lines = text.splitlines()
+    header = next(j for j, s in enumerate(lines) if "P(WN+RW)" in s)
+    line = next(s for s in lines[header:] if s.startswith("gyro_z"))
+    if abs(held - raw) > 5e-4:  # the raw probabilities do not show the decision's: the line says why
+        assert f"P {held:.3f}" in line and "merged" in line and f"since {made:.3g} s" in line
+
+
+def test_a_decision_held_by_hysteresis_says_so_with_the_time_it_was_made():
+    from imu_noise_id.pipelines.online.results import decision_text
+
+    assert decision_text("WN+RW", raw=0.75, held=0.75, since=12.0, gamma=0.8) == (
+        "WN+RW (held: P 0.750 < gamma 0.8 since it was decided at 12 s)")
+    assert decision_text("WN+RW", raw=0.39, held=1.0, since=1.0, gamma=0.8) == (
+        "WN+RW (P 1.000 with the GM hypothesis it cannot tell apart merged, since 1 s)")
+    assert decision_text("WN+RW", raw=0.95, held=0.95, since=3.0, gamma=0.8) == "WN+RW (since 3 s)"
+    assert decision_text(None, raw=0.5, held=float("nan"), since=float("nan"), gamma=0.8) == "—"

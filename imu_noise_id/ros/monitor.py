@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from ..core.axes import AXES
 from ..core.errors import InputError
 from ..pipelines.online import LEVEL_NAMES
+from ..pipelines.online.results import HYPOTHESES_EXTRA_COLUMNS, decision_text
 
 #: ANSI colour per diagnostics level (OK, WARN, ERROR, STALE = 0, 1, 2, 3).
 _COLOURS = {0: "\x1b[32m", 1: "\x1b[33m", 2: "\x1b[31m", 3: "\x1b[35m"}
@@ -82,15 +83,20 @@ def render(state: MonitorState, colour: bool = False) -> str:
         lines.append("hypotheses: waiting for stationary data")
     else:
         _, cols, rows = state.hypotheses
-        names = [c for c in cols if c not in ("decision", "bank_updates")]
-        lines.append(f"{'axis':8} " + " ".join(f"P({n})".rjust(12) for n in names) + f" {'decision':>10} "
-                     f"{'updates':>8}")
+        names = [c for c in cols if c not in HYPOTHESES_EXTRA_COLUMNS]
+        lines.append(f"{'axis':8} " + " ".join(f"P({n})".rjust(12) for n in names) + f" {'updates':>8}  decision")
         for axis, row in zip(AXES, rows, strict=False):
             probs = " ".join((f"{row[j]:12.3f}" if math.isfinite(row[j]) else "—".rjust(12))
                              for j in range(len(names)))
             k = int(row[cols.index("decision")])
-            decision = names[k] if 0 <= k < len(names) else "—"
-            lines.append(f"{axis:8} {probs} {decision:>10} {int(row[cols.index('bank_updates')]):8d}")
+            name = names[k] if 0 <= k < len(names) else None
+
+            def value(col: str, row: list[float] = row) -> float:
+                return float(row[cols.index(col)]) if col in cols else math.nan
+
+            decision = decision_text(name, raw=row[k] if name else math.nan, held=value("decision_probability"),
+                                     since=value("decision_time_s"), gamma=value("gamma"))
+            lines.append(f"{axis:8} {probs} {int(row[cols.index('bank_updates')]):8d}  {decision}")
     lines.append("")
     lines.append("diagnostics:")
     if not state.diagnostics:

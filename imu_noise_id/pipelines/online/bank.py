@@ -81,6 +81,7 @@ class BankFeed:
         self._last_t: float | None = None
         self._accel_first_offset: np.ndarray | None = None
         self._decisions: list[str | None] = [None] * 6
+        self._decided_at = [math.nan] * 6  # bank time [s] each held decision was made
         self.decision_changes: list[str] = []
         self.names: tuple[str, ...] = ()
         self.parameters: tuple[str, ...] = ()
@@ -182,6 +183,7 @@ class BankFeed:
                 self.decision_changes.append(text)
                 self._events.event(f"decision_{AXES[i]}", text)
                 self._decisions[i] = decision
+                self._decided_at[i] = math.nan if decision is None else float(snap.t)
 
     def report(self) -> HypothesesReport | None:
         """Posterior probabilities and decisions per axis, or None before the banks exist."""
@@ -192,6 +194,7 @@ class BankFeed:
         decision = np.full(6, -1.0)
         updates = np.zeros(6)
         notes = [""] * 6
+        held, since, gamma = np.full(6, math.nan), np.full(6, math.nan), np.full(6, math.nan)
         for i, bank in enumerate(self._banks):
             if bank.bank is None:
                 continue
@@ -202,9 +205,12 @@ class BankFeed:
             notes[i] = "; ".join(g.text() for g in snap.long_memory)
             for name, p in snap.probabilities.items():
                 probs[i, names.index(name)] = p
+            gamma[i] = bank.bank.hset.gamma
             if self._decisions[i] is not None:
                 decision[i] = names.index(self._decisions[i])
-        return HypothesesReport(names, probs, decision, updates, tuple(notes))
+                held[i] = snap.decision_probabilities.get(self._decisions[i], 0.0)
+                since[i] = self._decided_at[i]
+        return HypothesesReport(names, probs, decision, updates, tuple(notes), held, since, gamma)
 
     def theta(self) -> dict[str, np.ndarray]:
         """Parameter name → (6,) θ̂ of each axis's most probable hypothesis (after merging a GM the record cannot tell

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -94,13 +94,20 @@ class Estimates:
         return fields, table
 
 
+def _nan6() -> np.ndarray:
+    return np.full(6, np.nan)
+
+
 @dataclass
 class HypothesesReport:
     """Posterior probabilities per axis (rows in AXES order) and hypothesis (columns in ``names`` order).
 
     ``decision`` holds the index of the decided hypothesis per axis (−1: undecided or no bank yet);
     ``updates`` the number of bank samples per axis; probabilities are NaN for axes without a bank yet;
-    ``notes`` per axis the hypotheses the data seen cannot tell apart (empty when none).
+    ``notes`` per axis the hypotheses the data seen cannot tell apart (empty when none). Beside the decision, what
+    it rests on: ``decision_probability`` (its probability now, with a GM hypothesis the data cannot tell from it
+    merged into it, so it may exceed the raw probability in ``probabilities``), ``decision_time`` (bank time [s] it
+    was made) and ``gamma`` (the threshold; a decision below it is held by hysteresis); NaN while undecided.
     """
 
     names: tuple[str, ...]
@@ -108,9 +115,31 @@ class HypothesesReport:
     decision: np.ndarray
     updates: np.ndarray
     notes: tuple[str, ...] = ("",) * 6
+    decision_probability: np.ndarray = field(default_factory=_nan6)
+    decision_time: np.ndarray = field(default_factory=_nan6)
+    gamma: np.ndarray = field(default_factory=_nan6)
 
     def table(self) -> tuple[tuple[str, ...], np.ndarray]:
-        """Column labels (hypothesis names, ``decision``, ``bank_updates``) and the (6, columns) table."""
-        return (*self.names, "decision", "bank_updates"), np.column_stack(
-            [self.probabilities, self.decision, self.updates]
-        )
+        """Column labels (hypothesis names, ``decision``, ``bank_updates``, ``decision_probability``,
+        ``decision_time_s``, ``gamma``) and the (6, columns) table."""
+        return (*self.names, "decision", "bank_updates", "decision_probability", "decision_time_s", "gamma"), \
+            np.column_stack([self.probabilities, self.decision, self.updates, self.decision_probability,
+                             self.decision_time, self.gamma])
+
+
+#: Columns of the ``~/hypotheses`` table that are not hypotheses.
+HYPOTHESES_EXTRA_COLUMNS = ("decision", "bank_updates", "decision_probability", "decision_time_s", "gamma")
+
+
+def decision_text(name: str | None, *, raw: float, held: float, since: float, gamma: float) -> str:
+    """The decision as a person reads it beside the raw probabilities: the name and the time it was made, and why
+    it is not the raw probability's: held by hysteresis below ``gamma``, or resting on a probability with a GM
+    hypothesis merged into it (``held`` above ``raw``). ``"—"`` while undecided."""
+    if name is None:
+        return "—"
+    when = f"{since:.3g} s" if np.isfinite(since) else "an earlier update"
+    if np.isfinite(held) and np.isfinite(gamma) and held < gamma:
+        return f"{name} (held: P {held:.3f} < gamma {gamma:g} since it was decided at {when})"
+    if np.isfinite(held) and abs(held - raw) > 5e-4:
+        return f"{name} (P {held:.3f} with the GM hypothesis it cannot tell apart merged, since {when})"
+    return f"{name} (since {when})"
