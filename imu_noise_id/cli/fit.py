@@ -77,6 +77,9 @@ def run(args: argparse.Namespace) -> int:
         def on_fit(axis: str, fit) -> None:
             fitted.append(axis)
             progress.echo(fit_line(axis, fit))
+            if fit.beyond_budget:
+                progress.echo(f"{axis}: profile budget spent; other intervals for "
+                              + ", ".join(f"{lab} ({how})" for lab, how in fit.beyond_budget.items()))
             progress(len(fitted), len(axes))
 
         models = fit_axes(series, axes, stage, series.dt, on_fit=on_fit)

@@ -12,6 +12,9 @@ from ..kalman.statespace import StateSpace
 from ..noise.components import Component, total_allan_variance
 from .mle import LR_DROP_95
 
+#: The end of a ``ci95_method`` given where the profile budget was spent (:mod:`.uncertainty`).
+BUDGET_SPENT = "profile budget spent"
+
 
 @dataclass
 class RecordLengthAdvice:
@@ -106,6 +109,12 @@ class FitResult:
     record: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
     #: Which estimator produced the numbers: ``em`` (maximum likelihood) or ``gmwm`` (:mod:`.gmwm`).
     estimator: str = "em"
+
+    @property
+    def beyond_budget(self) -> dict[str, str]:
+        """The parameters whose profile interval the budget did not allow (:data:`.uncertainty.PROFILE_BUDGET`),
+        with the method of the interval they got instead (label → ``ci95_method``)."""
+        return {lab: how for lab, how in self.ci95_method.items() if how.endswith(BUDGET_SPENT)}
 
     @property
     def short_of_maximum(self) -> float | None:

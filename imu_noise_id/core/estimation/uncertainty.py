@@ -8,7 +8,9 @@ smaller value lowers ℓ by less than the 95 % threshold) — then every paramet
 profiled, since the others trade against the boundary one; and per parameter when its standard error in log space
 exceeds :data:`WALD_MAX_SE_LOG` or ℓ at the Wald ends of the quadratic trace (ϑ̂ ± 1.96·Σ_{·k}/√Σ_kk) is not
 ≈ 1.92 below the maximum (:data:`WALD_DROP_RANGE`: the likelihood is not quadratic over the interval). The
-recording-length advice scales the per-sample information.
+profiles of one fit spend at most :data:`PROFILE_BUDGET` sample-evaluations (their cost grows with the record); past
+it a parameter gets the Wald interval (or, at its zero boundary, its conditional upper end) with its method saying
+so. The recording-length advice scales the per-sample information.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from ..quality import interpolate_missing
 from . import mle
 from .profile import Profiler
 from .quantiles import Z95
-from .results import FitResult, RecordLengthAdvice
+from .results import BUDGET_SPENT, FitResult, RecordLengthAdvice
 
 #: Above this standard error in log space (a 95 % Wald interval wider than ×7 each way) the Wald interval is
 #: replaced by a profile-likelihood one.
@@ -34,6 +36,22 @@ WALD_MAX_SE_LOG = 1.0
 #: The Wald interval stands when ℓ at both its ends on the quadratic trace is this far below the maximum (the
 #: signed root within 1.96 − 0.15 … 1.96 + 0.25: a quadratic log-likelihood gives exactly 1.92).
 WALD_DROP_RANGE = (0.5 * (Z95 - 0.15) ** 2, 0.5 * (Z95 + 0.25) ** 2)
+#: Likelihood evaluations × samples the profile intervals of one fit may spend (about a minute at 0.3 µs per sample
+#: and evaluation; 1 h at 100 Hz fits within it, at 10⁷ samples it allows about 20 evaluations). A parameter whose
+#: profile would start beyond it gets the interval of :func:`_beyond_budget`, its ``ci95_method`` ending in
+#: :data:`BUDGET_SPENT`.
+PROFILE_BUDGET = 2e8
+
+
+def _beyond_budget(v: float, s_log: float, conditional_end: float | None) -> tuple[tuple[float, float], str]:
+    """The interval of a parameter whose profile the budget no longer allows, and its method: the Wald interval in
+    log space where the information has one, else for a zero-boundary parameter (0, its conditional upper end) —
+    the others held, narrower than the profile's —, else (0, ∞)."""
+    if math.isfinite(s_log):
+        return (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log)), f"wald, {BUDGET_SPENT}"
+    if conditional_end is not None:
+        return (0.0, float(conditional_end)), f"conditional, {BUDGET_SPENT}"
+    return (0.0, math.inf), f"not bounded, {BUDGET_SPENT}"
 
 
 def _record_length(
@@ -108,6 +126,10 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     prof.zero = {k: prof.conditional_scale(k) for k in zero}
     prof.flat = ({k for k in range(k_noise) if not np.isfinite(cov[k, k])} | set(near_zero)) - set(zero)
     a_hat = prof.best_at_estimate()
+
+    def spent() -> bool:
+        return prof.n_eval * np.size(y) >= PROFILE_BUDGET
+
     for k, lab in enumerate(noise_labels):
         v = float(np.exp(theta[k]))
         s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
@@ -116,6 +138,8 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
         if interior and s_log <= WALD_MAX_SE_LOG and prof.wald_holds(k, cov, a_hat, WALD_DROP_RANGE):
             fit.ci95[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
             fit.ci95_method[lab] = "wald"
+        elif spent():
+            fit.ci95[lab], fit.ci95_method[lab] = _beyond_budget(v, s_log, prof.zero.get(k))
         else:
             lo_k, hi_k = prof.interval(k, cov)
             fit.ci95[lab] = (math.exp(lo_k) if math.isfinite(lo_k) else 0.0,
@@ -126,7 +150,9 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     if j is not None and rr_lab is not None and "ramp" in fit.exog_coef:
         ramp = fit.exog_coef["ramp"]
         fit.ci95_method[rr_lab] = "gls"
-        if prof.zero or prof.flat:  # the GLS interval holds the noise parameters; a boundary RW trades with the ramp
+        if (prof.zero or prof.flat) and spent():
+            fit.ci95_method[rr_lab] = f"gls, {BUDGET_SPENT}"
+        elif prof.zero or prof.flat:  # the GLS interval holds the noise parameters; a boundary RW trades with the ramp
             ramp["ci95"] = prof.slope_interval(j, ramp["value"], ramp["se"])
             fit.ci95[rr_lab] = ramp["ci95"]
             fit.ci95_method[rr_lab] = "profile"

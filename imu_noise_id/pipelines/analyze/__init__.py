@@ -36,6 +36,7 @@ from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS
 from ...core.axes import ImuSeries, ScalarSeries
 from ...core.errors import InputError
 from ...core.estimation.results import FitResult
+from ...core.estimation.uncertainty import PROFILE_BUDGET
 from ...core.simulation.bands import allan_band
 from ..loop import ImuLoop, LoopResult
 from .final import FinalModel, final_model
@@ -233,6 +234,10 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     if final.fit.short_of_maximum is not None:
         warnings.append(f"{axis}: the final fit is {final.fit.short_of_maximum:.3g} below a log-likelihood its "
                         "intervals' search met: its values and intervals are not the maximum's")
+    if final.fit.beyond_budget:
+        cut = ", ".join(f"{lab} ({how})" for lab, how in final.fit.beyond_budget.items())
+        warnings.append(f"{axis}: the final fit's profile intervals stopped at their budget "
+                        f"({PROFILE_BUDGET:.0e} sample-evaluations); these got other intervals: {cut}")
     if final.random_walk_above_bound:
         k = final.random_walk.value
         warnings.append(f"{axis}: the final random walk {k:.3g} is {final.random_walk_bound.excess(k)}; record "

@@ -1,0 +1,53 @@
+"""The profile intervals' budget (core/estimation/uncertainty.py): within it the intervals are as before; past it a
+parameter gets the Wald interval or its conditional upper end, and its method says so."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core.estimation import uncertainty
+from imu_noise_id.core.estimation.model import NoiseModel
+from imu_noise_id.core.estimation.quantiles import Z95
+from imu_noise_id.core.estimation.results import BUDGET_SPENT
+from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
+
+# A GM whose τ is not small against the record beside a random walk the record can hardly tell from 0 and a ramp:
+# the case whose intervals need profiles (bench_coverage's WN+GM+RW+RR, 1 h at 10 Hz).
+TRUTH = [WN(1e-3), GM(tau=100.0, sigma=3e-4), RW(1e-5), RR(1e-7)]
+DT, N = 0.1, 36_000
+
+
+@pytest.fixture(scope="module")
+def record() -> np.ndarray:
+    return simulate_sum(TRUTH, N, DT, np.random.default_rng(1000))
+
+
+@pytest.fixture(scope="module")
+def within(record):
+    return NoiseModel(record, DT, "WN+GM+RW+RR").fit()
+
+
+def test_within_the_budget_the_intervals_are_profiles(within):
+    assert "profile" in within.ci95_method.values() and not within.beyond_budget
+    assert within.profile_evaluations * N < uncertainty.PROFILE_BUDGET
+
+
+def test_past_the_budget_each_interval_says_what_it_is(record, within, monkeypatch):
+    monkeypatch.setattr(uncertainty, "PROFILE_BUDGET", 0.0)
+    fit = NoiseModel(record, DT, "WN+GM+RW+RR").fit()
+    # what precedes the profiles (the boundary checks, the conditional ends) is spent, no profile
+    assert fit.profile_evaluations < within.profile_evaluations / 3
+    assert fit.beyond_budget and all(how.endswith(BUDGET_SPENT) for how in fit.beyond_budget.values())
+    assert set(fit.beyond_budget) | {lab for lab, how in fit.ci95_method.items() if how == "wald"} == set(fit.ci95)
+    values = {f"{c.name}.{p}": v for c in fit.components for p, v in c.params().items()}
+    for lab, how in fit.beyond_budget.items():
+        lo, hi = fit.ci95[lab]
+        if how.startswith("wald"):
+            s_log = fit.se[lab] / values[lab]
+            wald = (values[lab] * math.exp(-Z95 * s_log), values[lab] * math.exp(Z95 * s_log))
+            assert (lo, hi) == pytest.approx(wald)
+        elif how.startswith("conditional"):
+            assert lo == 0.0 and values[lab] < hi < math.inf
