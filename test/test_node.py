@@ -30,6 +30,7 @@ from std_msgs.msg import Float64MultiArray  # noqa: E402
 
 from imu_noise_id.bag.writer import write_robot_bag  # noqa: E402
 from imu_noise_id.demo.online import DEMO_TRUTH, simulate_demo_run  # noqa: E402
+from imu_noise_id.pipelines.online.results import HYPOTHESES_EXTRA_COLUMNS  # noqa: E402
 from imu_noise_id.resources import NODE_PARAMETERS, packaged_config  # noqa: E402
 from imu_noise_id.ros.launch import node_command, stop  # noqa: E402
 from imu_noise_id.ros.messages import parse_labelled  # noqa: E402
@@ -165,10 +166,13 @@ def test_published_biases_and_noise_converge_to_the_truth(session):
     assert not np.any(np.isfinite(psd) & np.isfinite(upper))
     assert np.all(psd[np.isfinite(psd)] > 0)
     _, cols, rows = parse_labelled(obs.last["hypotheses"])
-    assert cols[:2] == ["WN+RW", "WN+GM"] and cols[-2:] == ["decision", "bank_updates"]
+    extra = list(HYPOTHESES_EXTRA_COLUMNS)
+    assert cols[:2] == ["WN+RW", "WN+GM"] and cols[-len(extra):] == extra
     for row in rows:
         assert row[0] + row[1] == pytest.approx(1.0)
-        assert row[-1] > 100
+        assert row[cols.index("bank_updates")] > 100
+        p_decision = row[cols.index("decision_probability")]
+        assert 0.0 <= p_decision <= 1.0 or math.isnan(p_decision)
 
 
 def test_diagnostics_arrive_about_once_a_second(session):

@@ -119,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
         done.append(axis)
         models.echo(fit_line(axis, fit))
         if loop is not None:
-            models.echo(loop_line(axis, loop))
+            models.echo(loop_line(axis, loop, fit.model))
         models(len(done), n_axes)
 
     with allan, models:
@@ -138,7 +138,8 @@ def run(args: argparse.Namespace) -> int:
         print(final_table(result.finals), flush=True)
     if any(m.comparison is not None for m in result.models.values()):
         print(comparison_table(result.models), flush=True)
-    for line in [*record_length_lines(result.fits), *overbound_lines(result.overbounds)]:
+    finals = {axis: final.fit for axis, final in result.finals.items()} or result.fits
+    for line in [*record_length_lines(finals), *overbound_lines(result.overbounds)]:
         print(line, flush=True)
     for w in result.static.warnings:
         print(f"warning: {w}", file=sys.stderr)

@@ -139,14 +139,15 @@ def _selection_section(result: AnalysisResult) -> str:
                 for r in m.selection.table)
             out.append(f"<h3>{axis}</h3><table><tr><th class=l>candidate</th><th>log-lik</th><th>k</th>"
                        f"<th>ΔBIC</th><th>BIC weight</th><th class=l>note</th></tr>{rows}</table>")
-        advice = m.fit.record_length
+        final = result.finals[axis].fit if axis in result.finals else m.fit  # the model users paste
+        advice = final.record_length
         if advice is not None:
             items = "".join(
                 f"<li>{html.escape(lab)}: {fmt(advice.needed_s[lab] / 3600, '.3g')} h for ±{100 * advice.target:.0f} % "
                 f"(now ±{100 * advice.relative_halfwidth[lab]:.0f} %)"
                 + ("" if advice.reliable[lab] else " — a lower bound (correlation time not ≪ record)") + "</li>"
                 for lab in advice.needed_s)
-            out.append(f"<p>How long to record ({html.escape(m.fit.model)}, now {advice.current_s / 3600:.2f} h):"
+            out.append(f"<p>How long to record ({html.escape(final.model)}, now {advice.current_s / 3600:.2f} h):"
                        f"</p><ul>{items}</ul>")
     return "\n".join(out)
 

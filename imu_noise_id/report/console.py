@@ -103,11 +103,23 @@ def comparison_table(models: dict[str, AxisModel]) -> str:
     return "\n".join(lines)
 
 
-def loop_line(axis: str, loop: LoopResult) -> str:
+def loop_line(axis: str, loop: LoopResult, selected: str | None = None) -> str:
     """Per axis the closed loop ran on: first and final model, the verdict; indented below it, where the final
-    model's AV lies against the data's band (:func:`~imu_noise_id.pipelines.av_band.av_band_claim`'s sentence)."""
-    return (f"{axis}: loop {loop.steps[0].model} -> {loop.final.model}: {loop.verdict}\n"
+    model's AV lies against the data's band (:func:`~imu_noise_id.pipelines.av_band.av_band_claim`'s sentence).
+    ``selected``: the model the loop started from (the model stage's); when the loop's first step names it
+    otherwise, the line says why."""
+    start = loop.steps[0].model
+    why = "" if selected is None or selected == start else f" ({_start_renamed(selected, start)})"
+    return (f"{axis}: loop {start}{why} -> {loop.final.model}: {loop.verdict}\n"
             f"  {av_band_claim(loop).sentence()}")
+
+
+def _start_renamed(selected: str, start: str) -> str:
+    """Why the loop's first step is named ``start`` where the model stage fitted ``selected``."""
+    if "LPF" in start.split("+") and "LPF" not in selected.split("+"):
+        return (f"the fitted {selected} with its shortest GM read as the sensor's low-pass: its τ is below the "
+                "filter's memory limit (five samples or 50 ms)")
+    return f"the fitted {selected}, renamed"
 
 
 def _duration(seconds: float) -> str:

@@ -1,0 +1,25 @@
+"""The console's loop line says why the loop's start is named otherwise than the fitted model, and the record-length
+advice of analyze speaks of the final model."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from imu_noise_id.core.estimation.model import fit_model
+from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
+from imu_noise_id.pipelines.loop import run_closed_loop
+from imu_noise_id.report.console import loop_line, record_length_lines
+
+DT = 0.01
+
+
+def test_a_fitted_gm_below_the_filter_memory_is_named_as_the_low_pass_with_the_reason():
+    y = simulate_sum([WN(1e-3), GM(tau=0.02, sigma=2e-2), RW(2e-5)], 20_000, DT, np.random.default_rng(4))
+    fit = fit_model(y, DT, "WN+GM+RW")
+    loop = run_closed_loop(y, DT, fit, max_steps=0)
+    assert loop.steps[0].model == "WN+LPF+RW"
+    line = loop_line("gyro_z", loop, fit.model).splitlines()[0]
+    assert line.startswith("gyro_z: loop WN+LPF+RW (the fitted WN+GM+RW with its shortest GM read as the sensor's "
+                           "low-pass")
+    assert "(" not in loop_line("gyro_z", loop, "WN+LPF+RW").splitlines()[0]
+    assert record_length_lines({"gyro_z": fit})[1].split()[1] == "WN+GM+RW"
