@@ -2,7 +2,8 @@
 
 :func:`static_check` flags data that is clearly not static: gravity not read, block means of a second that wander,
 and moments of motion in an otherwise still record (:func:`motion_bursts`, with the longest still stretch between
-them, :func:`still_span`). Pure numpy, like :mod:`.quality`, whose repairs come first.
+them, :func:`still_span`, or, in a record that moves for most of its length, its longest quiet stretch,
+:func:`quiet_span`). Pure numpy, like :mod:`.quality`, whose repairs come first.
 """
 
 from __future__ import annotations
@@ -48,6 +49,11 @@ BURST_MIN_S = 0.5
 STILL_MARGIN_S = 1.0
 #: At most this many bursts are listed one by one in the flag.
 MAX_LISTED_BURSTS = 10
+#: A record that moves for much of its length (a robot that stands, drives and stands): the longest stretch of at
+#: least :data:`QUIET_MIN_S` [s] whose :data:`BLOCK_S` means stay within this many times the block tests' limits of
+#: each other, on every axis, and that passes those tests, is suggested as its still stretch (:func:`quiet_span`).
+QUIET_RANGE = 2.0
+QUIET_MIN_S = 10.0
 
 
 @dataclass(frozen=True)
@@ -70,8 +76,9 @@ class MotionBurst:
 @dataclass
 class StaticCheck:
     """What :func:`static_check` found: ``flags`` (reasons the record is not static), ``notes`` (worth knowing,
-    not signs of motion), the motion ``bursts`` and, when there are some, the longest ``still_span`` between them
-    (start, end [s] from the first sample, :data:`STILL_MARGIN_S` away from them)."""
+    not signs of motion), the motion ``bursts`` and the ``still_span`` to analyse instead (start, end [s] from the
+    first sample): the longest stretch between bursts (:data:`STILL_MARGIN_S` away from them) or, without bursts,
+    the longest quiet one (:func:`quiet_span`); None when there is none."""
 
     flags: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
@@ -152,6 +159,64 @@ def still_span(bursts: list[MotionBurst], duration_s: float) -> tuple[float, flo
     return max(spans, key=lambda span: span[1] - span[0]) if spans else None
 
 
+def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY) -> tuple[float, float] | None:
+    """The longest stretch (start, end [s] from the first sample) of a moving record over which every axis's and
+    |accel|'s :data:`BLOCK_S` means stay within :data:`QUIET_RANGE` times the static tests' limits of each other,
+    less a block and :data:`STILL_MARGIN_S` at an end where motion follows or precedes (its onset hides in the last
+    block that passed), when at least :data:`QUIET_MIN_S` long and static by those tests (:func:`static_check`'s
+    block tests); None without one."""
+    n = len(imu)
+    per_block = max(round(BLOCK_S / dt), 1)
+    if n // per_block < 2:
+        return None
+    means = np.array([_windows(imu.axis(name), per_block).mean(axis=1) for name in AXES]
+                     + [_windows(np.linalg.norm(imu.accel, axis=1), per_block).mean(axis=1)])
+    limits = QUIET_RANGE * np.array([GYRO_BLOCK_STD_MAX if name in GYRO_AXES else ACCEL_BLOCK_STD_MAX
+                                     for name in AXES] + [ACCEL_BLOCK_STD_MAX])[:, None]
+    best, lo = (0, 0), 0
+    for hi in range(means.shape[1]):
+        while np.any(np.ptp(means[:, lo:hi + 1], axis=1, keepdims=True) > limits):
+            lo += 1
+        if hi + 1 - lo > best[1] - best[0]:
+            best = (lo, hi + 1)
+    start, end = (float(v) for v in imu.t[[best[0] * per_block, best[1] * per_block - 1]] - imu.t[0])
+    # a motion's onset hides in the last block that still passed: keep a block and the margin away from it
+    start += (STILL_MARGIN_S + BLOCK_S) if best[0] > 0 else 0.0
+    end -= (STILL_MARGIN_S + BLOCK_S) if best[1] < means.shape[1] else 0.0
+    if end - start < QUIET_MIN_S or _block_flags(imu.between(start, end), dt, gravity):
+        return None
+    return start, end
+
+
+def _block_flags(imu: ImuSeries, dt: float, gravity: float) -> list[str]:
+    """The gravity and block-mean flags of :func:`static_check` (its first two tests)."""
+    flags = []
+    g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
+    if abs(g_mean - gravity) > GRAVITY_SCALE_TOLERANCE * gravity:
+        flags.append(
+            f"|mean accel| = {g_mean:.3f} m/s² but a static IMU reads gravity ≈ {gravity:.3f} m/s² (tolerance "
+            f"{100 * GRAVITY_SCALE_TOLERANCE:g} %): the IMU moves, its accel is not in m/s², or gravity was removed"
+        )
+    n = len(imu)
+    per_block = min(max(round(BLOCK_S / dt), 1), n // 10)
+    # One axis at a time (strided views, no (N, 6) copy): a few N-sized temporaries at most.
+    for name in AXES:
+        limit, unit = (GYRO_BLOCK_STD_MAX, "rad/s") if name in GYRO_AXES else (ACCEL_BLOCK_STD_MAX, "m/s²")
+        block_std = float(_windows(imu.axis(name), per_block).mean(axis=1).std())
+        if block_std > limit:
+            flags.append(
+                f"{name}: the {per_block * dt:.3g} s means vary with std {block_std:.3g} {unit} "
+                f"(> {limit} {unit}): the IMU rotates, moves or tilts"
+            )
+    norm_std = float(_windows(np.linalg.norm(imu.accel, axis=1), per_block).mean(axis=1).std())
+    if norm_std > ACCEL_BLOCK_STD_MAX:
+        flags.append(
+            f"|accel|: the {per_block * dt:.3g} s means vary with std {norm_std:.3g} m/s² (> {ACCEL_BLOCK_STD_MAX} "
+            "m/s²): the IMU is accelerated or shaken"
+        )
+    return flags
+
+
 def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STANDARD_GRAVITY) -> StaticCheck:
     """Whether ``imu`` looks like a static recording, judged by what motion does.
 
@@ -164,7 +229,9 @@ def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STAND
       :data:`ACCEL_BLOCK_STD_MAX` (accel) on some axis, or the block means of |accel| vary by more than
       :data:`ACCEL_BLOCK_STD_MAX`: the sensor rotates, moves, tilts or is shaken;
     - motion bursts (:func:`motion_bursts`): a moment of motion in an otherwise still record, which block means
-      of a second average away; the longest still stretch between them is suggested (:func:`still_span`).
+      of a second average away; the longest still stretch between them is suggested (:func:`still_span`);
+    - without bursts, a flagged record's longest quiet stretch that passes the tests above is suggested instead
+      (:func:`quiet_span`: a robot that stands still before and after it drives).
 
     Low-frequency power is what motion adds. The noise's own colour is not: a sensor whose internal low-pass filter
     (a DLPF) smooths its white noise is still static, so no test compares the variance with a first-difference
@@ -174,35 +241,14 @@ def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STAND
     n = len(imu)
     if n < 20:
         return StaticCheck([f"only {n} samples: too short to check that the IMU was static"])
-    out = StaticCheck()
+    dt = imu.dt if dt is None else dt
+    out = StaticCheck(flags=_block_flags(imu, dt, gravity))
     g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
     off = g_mean - gravity
-    if abs(off) > GRAVITY_SCALE_TOLERANCE * gravity:
-        out.flags.append(
-            f"|mean accel| = {g_mean:.3f} m/s² but a static IMU reads gravity ≈ {gravity:.3f} m/s² (tolerance "
-            f"{100 * GRAVITY_SCALE_TOLERANCE:g} %): the IMU moves, its accel is not in m/s², or gravity was removed"
-        )
-    elif abs(off) > GRAVITY_TOLERANCE:
+    if GRAVITY_TOLERANCE < abs(off) <= GRAVITY_SCALE_TOLERANCE * gravity:
         out.notes.append(
             f"|mean accel| = {g_mean:.3f} m/s² is {100 * off / gravity:+.1f} % from standard gravity: the "
             "accelerometer's scale or bias is uncalibrated (not a sign of motion)"
-        )
-    dt = imu.dt if dt is None else dt
-    per_block = min(max(round(BLOCK_S / dt), 1), n // 10)
-    # One axis at a time (strided views, no (N, 6) copy): a few N-sized temporaries at most.
-    for name in AXES:
-        limit, unit = (GYRO_BLOCK_STD_MAX, "rad/s") if name in GYRO_AXES else (ACCEL_BLOCK_STD_MAX, "m/s²")
-        block_std = float(_windows(imu.axis(name), per_block).mean(axis=1).std())
-        if block_std > limit:
-            out.flags.append(
-                f"{name}: the {per_block * dt:.3g} s means vary with std {block_std:.3g} {unit} "
-                f"(> {limit} {unit}): the IMU rotates, moves or tilts"
-            )
-    norm_std = float(_windows(np.linalg.norm(imu.accel, axis=1), per_block).mean(axis=1).std())
-    if norm_std > ACCEL_BLOCK_STD_MAX:
-        out.flags.append(
-            f"|accel|: the {per_block * dt:.3g} s means vary with std {norm_std:.3g} m/s² (> {ACCEL_BLOCK_STD_MAX} "
-            "m/s²): the IMU is accelerated or shaken"
         )
     out.bursts = motion_bursts(imu, dt)
     if out.bursts:
@@ -215,4 +261,6 @@ def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STAND
             "was moved, touched or knocked"
         )
         out.still_span = still_span(out.bursts, float(imu.t[-1] - imu.t[0]))
+    elif out.flags:
+        out.still_span = quiet_span(imu, dt, gravity)
     return out
