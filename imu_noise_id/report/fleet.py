@@ -75,25 +75,39 @@ def write_tables(rows: list[dict], out: Path) -> list[Path]:
     return [csv_path, _atomic(out / "fleet.parquet", sink.getvalue().to_pybytes())]
 
 
-def _spread_png(rows: list[dict], parameter: str) -> bytes:
+#: Units of each plotted parameter per sensor (gyro axes in rad/s, accelerometer axes in m/s²).
+UNITS = {"noise_density": ("rad/s/√Hz", "m/s²/√Hz"), "random_walk": ("rad/s²/√Hz", "m/s³/√Hz"),
+         "bias_instability": ("rad/s", "m/s²")}
+
+
+def spread_figure(rows: list[dict], parameter: str) -> object:
+    """The spread of ``parameter`` across units: one panel per sensor (gyro, accelerometer), each on its own axis in
+    its own unit (:data:`UNITS`), one column of points per axis, outliers red."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    axes = sorted({r["axis"] for r in rows if r.get("axis")})
-    fig, ax = plt.subplots(figsize=(7.5, 3.6))
-    for i, axis in enumerate(axes):
-        vals = [(r.get(parameter), bool(r.get("outlier") and parameter in r["outlier"])) for r in rows
-                if r.get("axis") == axis and r.get(parameter)]
-        x = np.full(len(vals), i) + np.linspace(-0.15, 0.15, len(vals)) if vals else []
-        ax.scatter(x, [v for v, _ in vals], c=["C3" if o else "C0" for _, o in vals], s=18)
-    ax.set_yscale("log")
-    ax.set_xticks(range(len(axes)), axes, fontsize=8)
-    ax.set_title(f"{parameter} across units (red: outlier, |modified z| > {OUTLIER_Z})", fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
+    present = sorted({r["axis"] for r in rows if r.get("axis") and r.get(parameter)})
+    sensors = [(name, unit, [a for a in present if a.startswith(prefix)])
+               for name, prefix, unit in (("gyroscope", "gyro", UNITS[parameter][0]),
+                                          ("accelerometer", "accel", UNITS[parameter][1]))]
+    sensors = [s for s in sensors if s[2]]
+    fig, panels = plt.subplots(1, len(sensors), figsize=(7.5, 3.6), squeeze=False)
+    for ax, (name, unit, axes) in zip(panels[0], sensors, strict=True):
+        for i, axis in enumerate(axes):
+            vals = [(r[parameter], bool(r.get("outlier") and parameter in r["outlier"])) for r in rows
+                    if r.get("axis") == axis and r.get(parameter)]
+            x = np.full(len(vals), i) + np.linspace(-0.15, 0.15, len(vals))
+            ax.scatter(x, [v for v, _ in vals], c=["C3" if o else "C0" for _, o in vals], s=18)
+        ax.set_yscale("log")
+        ax.set_xticks(range(len(axes)), axes, fontsize=8)
+        ax.set_ylabel(f"{parameter} [{unit}]", fontsize=8)
+        ax.set_title(name, fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+    fig.suptitle(f"{parameter} across units (red: outlier, |modified z| > {OUTLIER_Z})", fontsize=9)
     fix_margins(fig)
-    return png_bytes(fig, dpi=100)
+    return fig
 
 
 def write_fleet_report(rows: list[dict], out: Path, *, title: str, spec: dict | None) -> Path:
@@ -102,7 +116,8 @@ def write_fleet_report(rows: list[dict], out: Path, *, title: str, spec: dict | 
     failed = [r for r in rows if r.get("status") == "failed"]
     units = sorted({r["unit"] for r in rows})
     parts = [f"<p>{len(units)} units, {len({r['unit'] for r in failed})} failed; {len(ok)} axis rows.</p>"]
-    parts += [img_tag(_spread_png(ok, p), f"spread of {p}") for p in PARAMETERS if any(r.get(p) for r in ok)]
+    parts += [img_tag(png_bytes(spread_figure(ok, p), dpi=100), f"spread of {p}")
+              for p in PARAMETERS if any(r.get(p) for r in ok)]
     flagged = [r for r in ok if r.get("outlier")]
     items = "".join(f"<li>{html.escape(r['unit'])} {r['axis']}: {r['outlier']} (z = " + ", ".join(
         f"{fmt(r[p + '_z'], '.2f')}" for p in r["outlier"].split(",")) + ")</li>" for r in flagged) or "<li>none</li>"
