@@ -120,6 +120,15 @@ def test_progress_shows_time_left_and_keeps_printed_lines_apart():
     assert "\r\033[Kgyro_x: WN+RW\n" in text  # the bar line cleared before the printed line, redrawn after it
 
 
+def test_progress_before_the_first_unit_says_when_the_time_left_is_known():
+    tty = _Tty()
+    bar = TextProgress("model selection", stream=tty, interval=0.0, unit="axes")
+    bar(0, 6)
+    assert "(0/6 axes)" in tty.getvalue() and "time left known after the first of the 6 axes" in tty.getvalue()
+    bar(2, 6)
+    assert tty.getvalue().endswith("left\033[K")
+
+
 @pytest.mark.parametrize("command", ["fit", "loop", "identify", "criteria", "cmkf"])
 def test_long_commands_show_progress_on_a_terminal(command, static_bag, tmp_path, monkeypatch, capsys):
     tty = _Tty()

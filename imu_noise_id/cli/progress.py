@@ -19,7 +19,8 @@ class TextProgress:
     """Callable ``progress(done, total)`` drawing ``label [#####.....]  45 % (9/20 units) 12 s, ~15 s left``.
 
     Draws at most every ``interval`` seconds; :meth:`close` ends the line. Does nothing when ``stream`` is not a
-    TTY (pipes, CI logs), so logs stay clean. The time left is extrapolated from the rate so far.
+    TTY (pipes, CI logs), so logs stay clean. The time left is extrapolated from the rate so far; before the first
+    unit is done the bar says when it will be known.
     """
 
     def __init__(self, label: str, stream: TextIO | None = None, width: int = 30, interval: float = 0.2,
@@ -40,7 +41,10 @@ class TextProgress:
         frac = min(max(done / total, 0.0), 1.0) if total > 0 else 0.0
         filled = round(frac * self.width)
         elapsed = time.monotonic() - self._start
-        left = f", ~{_seconds(elapsed * (1 - frac) / frac)} left" if 0 < frac < 1 else ""
+        if 0 < frac < 1:
+            left = f", ~{_seconds(elapsed * (1 - frac) / frac)} left"
+        else:
+            left = f", time left known after the first of the {total}{self.unit}" if done == 0 and total > 1 else ""
         return (f"\r{self.label} [{'#' * filled}{'.' * (self.width - filled)}] {100 * frac:5.1f} % "
                 f"({done}/{total}{self.unit}) {_seconds(elapsed)}{left}")
 
