@@ -3,6 +3,7 @@ the recording-length advice. Commands run in-process through ``imu_noise_id.cli.
 
 from __future__ import annotations
 
+import argparse
 import io
 import sys
 
@@ -166,3 +167,15 @@ def test_analyze_shows_the_allan_then_the_model_stage_progress(static_bag, tmp_p
     text = tty.getvalue()
     assert "\rAllan-family variances [" in text and "\rfitting WN+RW [" in text and "(6/6 axes)" in text
     assert text.index("Allan-family") < text.index("fitting WN+RW")
+
+
+def test_every_output_folder_option_is_called_out_dir():
+    """One spelling across the commands: ``--out DIR`` (export called its folder ``--out OUT`` and its input
+    ``source``)."""
+    from imu_noise_id.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    for name, parser in sub.choices.items():
+        outs = [a for a in parser._actions if "--out" in a.option_strings]
+        assert all(a.metavar == ("BAG" if name == "simulate" else "DIR") for a in outs), name  # simulate writes a bag
+        assert all(a.metavar is not None or a.dest not in ("source",) for a in parser._actions), name

@@ -20,14 +20,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "its own units and continuous/discrete convention, stated with the formula in the file's header "
                     "(docs/analysis.md#exports). --overbound writes the overbound's values instead (imu.yaml "
                     "'overbound:': the smallest WN+RW covering the data's upper 95 % Allan bound over the filter's "
-                    "tau range) into OUT/overbound/.")
-    p.add_argument("source", type=Path, help="an analyze output folder or its imu.yaml")
+                    "tau range) into the output folder's overbound/.")
+    p.add_argument("source", type=Path, metavar="DIR", help="an analyze output folder (DIR) or its imu.yaml")
     p.add_argument("--format", nargs="+", action="extend", default=None, metavar="FORMAT[,FORMAT…]",
                    help=f"one or more of {', '.join(FORMATS)}, or all; repeatable, space- or comma-separated like "
                         "--axis (default: all)")
     p.add_argument("--overbound", action="store_true",
-                   help="export the overbound of imu.yaml (not the fitted values), into OUT/overbound/")
-    p.add_argument("--out", type=Path, help="output directory (default: SOURCE_FOLDER/exports)")
+                   help="export the overbound of imu.yaml (not the fitted values), into the output folder's overbound/")
+    p.add_argument("--out", type=Path, metavar="DIR", help="output directory (default: DIR/exports of the analysis)")
     p.set_defaults(run=run)
 
 
