@@ -23,3 +23,18 @@ def test_a_fitted_gm_below_the_filter_memory_is_named_as_the_low_pass_with_the_r
                            "low-pass")
     assert "(" not in loop_line("gyro_z", loop, "WN+LPF+RW").splitlines()[0]
     assert record_length_lines({"gyro_z": fit})[1].split()[1] == "WN+GM+RW"
+
+
+def test_the_loop_demo_prints_its_final_models_against_what_was_simulated():
+    from types import SimpleNamespace
+
+    from imu_noise_id.demo.loop import truth_table
+
+    def final(model: str) -> SimpleNamespace:
+        return SimpleNamespace(final=SimpleNamespace(model=model))
+
+    rows = truth_table({"gyro_x": final("WN+RW"), "gyro_z": final("WN+GM"), "accel_z": final("WN+LPF+RR")})
+    rows = [line.split() for line in rows.splitlines()[1:]]
+    assert rows[0] == ["gyro_x", "WN+RW", "WN+RW", "-", "as", "simulated"]
+    assert rows[1] == ["gyro_z", "WN+GM+RW", "WN+GM", "yes", "−RW"]
+    assert rows[2] == ["accel_z", "LPF+RW", "WN+LPF+RR", "yes", "+WN", "+RR", "−RW"]

@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 DEMO_AXES = ("gyro_x", "gyro_z", "accel_x", "accel_y", "accel_z")
+#: What the demo bag holds beyond WN+RW, per axis (the truth the loop's final models are printed against).
+INSERTED = {"gyro_x": "", "gyro_z": "GM", "accel_x": "SIN", "accel_y": "OSC", "accel_z": "LPF"}
 
 
 def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, rate_hz: float = 100.0) -> Path:
@@ -38,6 +40,20 @@ def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, r
     return write_bag(path, imu)
 
 
+def truth_table(results: dict) -> str:
+    """Per demo axis: the simulated model (WN+RW plus the effect inserted), the loop's final model, whether it holds
+    the inserted effect and what else it added or dropped against the truth."""
+    lines = [f"{'axis':8s} {'simulated':14s} {'final model':22s} found  against the truth"]
+    for axis, loop in results.items():
+        truth = ["WN", *filter(None, [INSERTED[axis]]), "RW"] if axis != "accel_z" else ["LPF", "RW"]
+        final = loop.final.model.split("+")
+        found = "-" if not INSERTED[axis] else ("yes" if INSERTED[axis] in final else "no")
+        extra = [f"+{c}" for c in final if c not in truth] + [f"−{c}" for c in truth if c not in final]
+        lines.append(f"{axis:8s} {'+'.join(truth):14s} {loop.final.model:22s} {found:5s}  "
+                     f"{' '.join(extra) if extra else 'as simulated'}")
+    return "\n".join(lines)
+
+
 def run_loop_demo(out: str | Path, *, seed: int = 7) -> dict:
     """Simulate, write and read the bag, run the loop on :data:`DEMO_AXES`, write model.yaml and report.html."""
     from ..bag.reader import read_static
@@ -56,6 +72,7 @@ def run_loop_demo(out: str | Path, *, seed: int = 7) -> dict:
     write_loop_report(out / "report.html", results, title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz sine "
                       "(accel_x), 7 Hz wandering vibration (accel_y), 15 Hz low-pass (accel_z)")
     print(loop_table(results))
+    print(truth_table(results))
     print(f"demo bag, model.yaml and report.html in {out}/")
     return results
 
