@@ -227,3 +227,15 @@ def test_a_decision_held_by_hysteresis_says_so_with_the_time_it_was_made():
         "WN+RW (P 1.000 with the GM hypothesis it cannot tell apart merged, since 1 s)")
     assert decision_text("WN+RW", raw=0.95, held=0.95, since=3.0, gamma=0.8) == "WN+RW (since 3 s)"
     assert decision_text(None, raw=0.5, held=float("nan"), since=float("nan"), gamma=0.8) == "—"
+
+
+def test_an_av_outside_the_band_is_not_a_pass(partly_outside):
+    """The AV misfit is a residual too: detectors that pass beside a final AV outside the data's band (not within
+    the practical error either) end as not passed, and the verdict says what is left unexplained."""
+    from imu_noise_id.pipelines.loop.rules import practically_negligible, with_av_misfit
+
+    diag = partly_outside.final.diagnosis
+    assert not partly_outside.av_inside_band and not practically_negligible(diag)
+    passed, verdict = with_av_misfit(True, "residuals pass: no detector fires at its level", diag)
+    assert not passed and verdict.startswith("AV misfit left unexplained") and "largest relative AV error" in verdict
+    assert with_av_misfit(False, "nothing improves", diag) == (False, "nothing improves")

@@ -70,6 +70,16 @@ def max_relative_av_error(diag: Diagnosis) -> float:
     return float(np.max(np.abs(diag.av_model[ok] / diag.av_data[ok] - 1.0))) if ok.any() else math.nan
 
 
+def with_av_misfit(passed: bool, verdict: str, diag: Diagnosis) -> tuple[bool, str]:
+    """The loop's (passed, verdict) with the AV misfit counted as a residual: a final model whose AV leaves the
+    data's band (:func:`av_inside_band`) where that is not :func:`practically_negligible` has not passed, whatever
+    the detectors say, and the verdict says what is left unexplained."""
+    if not passed or av_inside_band(diag) or practically_negligible(diag):
+        return passed, verdict
+    return False, (f"AV misfit left unexplained: no detector fires, but the final model's Allan variance leaves the "
+                   f"data's 95 % band (largest relative AV error {100 * max_relative_av_error(diag):.0f} %)")
+
+
 def judge(before: Diagnosis, after: Diagnosis, *, tie: bool = False) -> tuple[bool, str]:
     """The BIC and do-no-harm rules: BIC lower and the AV misfit no worse than its sampling noise allows.
 

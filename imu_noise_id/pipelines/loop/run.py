@@ -17,7 +17,13 @@ from ...core.estimation.relabel import with_uncertainty
 from ...core.estimation.results import FitResult
 from ...core.noise.modelspec import parse_structure
 from .reselection import reselect, swap_start_filter
-from .rules import PRACTICAL_AV_ERROR, av_inside_band, max_relative_av_error, practically_negligible
+from .rules import (
+    PRACTICAL_AV_ERROR,
+    av_inside_band,
+    max_relative_av_error,
+    practically_negligible,
+    with_av_misfit,
+)
 from .state import Diagnosis, LoopResult, LoopState, LoopStep, Trial
 from .steps import AxisLoop
 from .trials import added_name, attempt, explore
@@ -165,6 +171,7 @@ def run_closed_loop(
             note, f"residual evidence remains ({left}) but is of no practical significance: at every τ the model's "
             f"AV lies inside the data's 95 % band or within {100 * PRACTICAL_AV_ERROR:.0f} % of the data's AV "
             f"(largest relative AV error {100 * worst:.0f} %)"]))
+    passed, verdict = with_av_misfit(passed, verdict, diag)
     remaining = [f for f in diag.findings if f.significant]
     return LoopResult(axis=axis, dt=float(dt), n=y.size, steps=steps, passed=passed, verdict=verdict,
                       remaining=remaining, av_inside_band=inside, max_rel_av_error=worst, note=note)
