@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import yaml
 from crafted import touched as touch
+from one_story import check_one_story
 
 from imu_noise_id.bag.writer import write_bag
 from imu_noise_id.cli import main
@@ -252,6 +253,7 @@ def test_demo_runs_short(tmp_path, capsys):
     assert "N GMWM" in printed and "EM and GMWM side by side" in printed  # make demo shows both estimators
     assert (tmp_path / "analysis" / "imu.yaml").is_file()
     assert (tmp_path / "analysis" / "model.yaml").is_file()
+    check_one_story(printed, tmp_path / "analysis")  # console, model.yaml, imu.yaml and report.html agree
 
 
 class _Tty(io.StringIO):

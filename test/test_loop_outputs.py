@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 import yaml
+from one_story import check_one_story
 
 from imu_noise_id.cli import main
 from imu_noise_id.core.axes import ImuSeries
@@ -66,7 +67,7 @@ def test_loop_command_on_a_bag(tmp_path, capsys):
     assert main(["loop", str(tmp_path / "bag"), "--axes", "gyro_q", "--out", str(out)]) == 2
 
 
-def test_analyze_runs_the_loop_after_the_model_fit(tmp_path):
+def test_analyze_runs_the_loop_after_the_model_fit(tmp_path, capsys):
     from imu_noise_id.bag.writer import write_bag
 
     n = 4000
@@ -78,6 +79,7 @@ def test_analyze_runs_the_loop_after_the_model_fit(tmp_path):
     write_bag(tmp_path / "bag", ImuSeries(t=np.arange(n) * DT, gyro=gyro, accel=accel))
     out = tmp_path / "out"
     assert main(["analyze", str(tmp_path / "bag"), "--model", "WN", "--out", str(out)]) == 0
+    check_one_story(capsys.readouterr().out, out)  # the loop's final model (gyro_z: WN+SIN) in every output
     axes = yaml.safe_load((out / "model.yaml").read_text())["axes"]
     assert [s["added"] for s in axes["gyro_z"]["loop"]] == [None, "SIN"]
     assert axes["gyro_x"]["loop_verdict"]["passed"]

@@ -66,7 +66,7 @@ def fleet_rows(unit: Unit, result, warnings: list[str]) -> list[dict]:
         final = result.finals.get(axis)
         if final is not None:
             n, k, b = final.noise_density, final.random_walk, final.bias_instability
-            row |= {"model": final.fit.model, "noise_density": _num(n.value), "noise_density_lo": _num(n.ci95[0]),
+            row |= {"model": final.model, "noise_density": _num(n.value), "noise_density_lo": _num(n.ci95[0]),
                     "noise_density_hi": _num(n.ci95[1]), "random_walk": _num(k.value),
                     "random_walk_lo": _num(k.ci95[0]), "random_walk_hi": _num(k.ci95[1]),
                     "bias_instability": _num(b.value), "bias_instability_lo": _num(b.ci95[0]),

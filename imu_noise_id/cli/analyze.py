@@ -139,7 +139,8 @@ def run(args: argparse.Namespace) -> int:
     if any(m.comparison is not None for m in result.models.values()):
         print(comparison_table(result.models), flush=True)
     finals = {axis: final.fit for axis, final in result.finals.items()} or result.fits
-    for line in [*record_length_lines(finals), *overbound_lines(result.overbounds)]:
+    names = {axis: final.model for axis, final in result.finals.items()}
+    for line in [*record_length_lines(finals, names), *overbound_lines(result.overbounds)]:
         print(line, flush=True)
     for w in result.static.warnings:
         print(f"warning: {w}", file=sys.stderr)

@@ -49,7 +49,7 @@ def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str
     for axis, final in result.finals.items():
         j = static.axes.index(axis)
         panels.append({"tau": allan.tau, "avar": allan.variance[:, j], "fit": final.fit, "band": result.bands[axis],
-                       "unit": UNITS.get(axis, "u"), "label": axis, "title": f"{axis}: {final.fit.model}"})
+                       "unit": UNITS.get(axis, "u"), "label": axis, "title": f"{axis}: {final.model}"})
     paths["allan_model.png"] = save_allan_overlay(out / "allan_model.png", panels,
                                                   title="Allan deviation vs final models")
     paths["report.html"] = write_analysis_report(out / "report.html", result, meta, title)

@@ -58,7 +58,7 @@ def _numbers_section(result: AnalysisResult) -> str:
         if f.random_walk_above_bound:
             k_text = f"{k_text} — above the long-τ AV's bound {fmt(f.random_walk_bound.value)}"
         rows.append(
-            f"<tr><td class=l>{axis} [{UNITS.get(axis, 'u')}]</td><td class=l>{html.escape(f.fit.model)} "
+            f"<tr><td class=l>{axis} [{UNITS.get(axis, 'u')}]</td><td class=l>{html.escape(f.model)} "
             f"<span class=small>({html.escape(f.source)})</span></td>"
             f"<td>{_ci(f.noise_density.value, f.noise_density.ci95)}</td>"
             f"<td{' class=warn' if f.random_walk_above_bound else ''}>{html.escape(k_text)}</td>"
@@ -121,7 +121,7 @@ def _allan_section(result: AnalysisResult) -> str:
                                                         f"K ×{ob.inflation_random_walk:.3g})")
         png = allan_panel_png(s.allan.tau, s.allan.variance[:, j], (s.allan.ci_low[:, j], s.allan.ci_high[:, j]),
                               f.fit, band=result.bands.get(axis), lines=lines, unit=UNITS.get(axis, "u"),
-                              title=f"{axis}: final model {f.fit.model}", overbound=overbound)
+                              title=f"{axis}: final model {f.model}", overbound=overbound)
         out.append(img_tag(png, f"Allan deviation of {axis}"))
     return "\n".join(out)
 
@@ -140,6 +140,7 @@ def _selection_section(result: AnalysisResult) -> str:
             out.append(f"<h3>{axis}</h3><table><tr><th class=l>candidate</th><th>log-lik</th><th>k</th>"
                        f"<th>ΔBIC</th><th>BIC weight</th><th class=l>note</th></tr>{rows}</table>")
         final = result.finals[axis].fit if axis in result.finals else m.fit  # the model users paste
+        name = result.finals[axis].model if axis in result.finals else m.fit.model
         advice = final.record_length
         if advice is not None:
             items = "".join(
@@ -147,7 +148,7 @@ def _selection_section(result: AnalysisResult) -> str:
                 f"(now ±{100 * advice.relative_halfwidth[lab]:.0f} %)"
                 + ("" if advice.reliable[lab] else " — a lower bound (correlation time not ≪ record)") + "</li>"
                 for lab in advice.needed_s)
-            out.append(f"<p>How long to record ({html.escape(final.model)}, now {advice.current_s / 3600:.2f} h):"
+            out.append(f"<p>How long to record ({html.escape(name)}, now {advice.current_s / 3600:.2f} h):"
                        f"</p><ul>{items}</ul>")
     return "\n".join(out)
 

@@ -58,7 +58,7 @@ def final_table(finals: dict[str, FinalModel]) -> str:
                   else f"{_fmt(k.value)} [{_fmt(k.ci95[0])}, {_fmt(k.ci95[1])}]")
         b = f.bias_instability
         b_text = ("" if b.reached else "<") + f"{_fmt(b.value)} [{_fmt(b.ci95[0])}, {_fmt(b.ci95[1])}]"
-        lines.append(f"{axis:8s} {f.fit.model:22s} N {n_text:34s} K {k_text:34s} B {b_text}")
+        lines.append(f"{axis:8s} {f.model:22s} N {n_text:34s} K {k_text:34s} B {b_text}")
     lines += [f"{axis:8s} K flagged: {f.random_walk.source}" for axis, f in finals.items() if f.random_walk_above_bound]
     return "\n".join(lines)
 
@@ -128,8 +128,9 @@ def _duration(seconds: float) -> str:
     return f"{seconds / 3600:.3g} h" if seconds >= 3600 else f"{seconds / 60:.3g} min"
 
 
-def record_length_lines(fits: dict[str, FitResult]) -> list[str]:
-    """How long to record, per axis: the longest needed duration over the parameters, and which parameter it is."""
+def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None = None) -> list[str]:
+    """How long to record, per axis: the longest needed duration over the parameters, and which parameter it is;
+    ``names``: the model's name per axis where it is not the fit's own (a final model with regressors)."""
     lines = []
     for axis, fit in fits.items():
         advice = fit.record_length
@@ -139,7 +140,8 @@ def record_length_lines(fits: dict[str, FitResult]) -> list[str]:
         needed = advice.needed_s[label]
         verdict = "enough" if needed <= advice.current_s else f"record {_duration(needed)}"
         bound = "" if advice.reliable[label] else " (a lower bound: correlation time not << record)"
-        lines.append(f"{axis:8s} {fit.model:22s} now {_duration(advice.current_s)}: {verdict} for +-"
+        name = (names or {}).get(axis, fit.model)
+        lines.append(f"{axis:8s} {name:22s} now {_duration(advice.current_s)}: {verdict} for +-"
                      f"{100 * advice.target:.0f} % on every parameter (hardest: {label}, now +-"
                      f"{100 * advice.relative_halfwidth[label]:.0f} %){bound}")
     if lines:

@@ -87,7 +87,7 @@ def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
         allan_b = [finals[a].bias_instability_allan for a in axes]
         doc[f"{key}_allan_xyz"] = [num(b.value) for b in allan_b]
         doc[f"{key}_allan_method_xyz"] = ["allan_minimum" if b.reached else "allan_upper_bound" for b in allan_b]
-        doc[f"{_PREFIX[sensor]}_final_model_xyz"] = [finals[a].fit.model for a in axes]
+        doc[f"{_PREFIX[sensor]}_final_model_xyz"] = [finals[a].model for a in axes]
 
 
 def _range(values: list[float]) -> str:

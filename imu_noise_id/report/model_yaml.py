@@ -121,7 +121,7 @@ def final_to_dict(final: FinalModel) -> dict:
     """The ``final:`` entry of one axis."""
     fitted = fit_to_dict(final.fit)
     return {
-        "source": final.source, "model": final.fit.model, "components": fitted["components"],
+        "source": final.source, "model": final.model, "components": fitted["components"],
         **{name: {"value": None if v.value is None else num(v.value), "ci95": interval(v.ci95), "source": v.source}
            for name, v in (("noise_density", final.noise_density), ("random_walk", final.random_walk))},
         "noise_stddev_per_sample": num(final.noise_stddev_per_sample),

@@ -32,6 +32,8 @@ class FinalModel:
     ----------
     fit : the final fit (without its record), with intervals
     source : where it comes from, in words (model selection, or the loop's step and model)
+    model : its name as every output prints it: the loop's last step's (regressors and removed outliers included,
+        e.g. WN+SIN, where ``fit.model`` names the stochastic components alone), else the fit's
     noise_density, random_walk : Kalibr's N [u/√Hz] and K [u/s/√Hz] with intervals and their sources
     noise_stddev_per_sample : √(per-sample variance of the high-frequency noise) at the recording's dt [u]
     bias_instability, bias_instability_allan : B [u] from the model (with interval) and from the data's AV
@@ -40,6 +42,7 @@ class FinalModel:
 
     fit: FitResult
     source: str
+    model: str
     noise_density: kalibr.KalibrValue
     random_walk: kalibr.KalibrValue
     noise_stddev_per_sample: float
@@ -71,6 +74,7 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
         fit = loop.final.diagnosis.fit
         fit = fit if fit.record_length is not None else with_uncertainty(fit)  # the loop's own, when it gave them
         source = f"closed loop, step {loop.final.index}: {loop.final.model}"
+    name = fit.model if loop is None or len(loop.steps) == 1 else loop.final.model
     short = fit.short_of_maximum
     if short is not None:
         source += (f"; not at the likelihood's maximum: its intervals' search met a log-likelihood {short:.3g} "
@@ -83,7 +87,7 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
         k = replace(k, source=f"{k.source}; {bound.excess(k.value)}; a longer record tells them apart")
     if short is not None:
         k, n = (replace(v, source=f"{v.source}; the fit is not at the likelihood's maximum") for v in (k, n))
-    return FinalModel(fit=fit.without_data(), source=source, noise_density=n,
+    return FinalModel(fit=fit.without_data(), source=source, model=name, noise_density=n,
                       random_walk=k, random_walk_bound=bound,
                       noise_stddev_per_sample=math.sqrt(kalibr.per_sample_noise_variance(fit)),
                       bias_instability=bias_instability(fit, tau_max),

@@ -109,7 +109,7 @@ def axis_overbound(static: StaticAnalysis, axis: str, final: FinalModel | None,
     covers = f"the data's upper {100 * allan.confidence:g} % Allan bound"
     if final is not None:
         bound = np.maximum(bound, final.fit.theoretical_allan_variance(tau))
-        covers += f" and the final model's AV ({final.fit.model})"
+        covers += f" and the final model's AV ({final.model})"
     n_ref, k_ref, source = _references(static, axis, final)
     result = overbound_wn_rw(tau, bound, static.dt, floor=(n_ref, k_ref))
     return AxisOverbound(result, (float(tau[0]), float(tau[-1])), horizon_s, covers, n_ref, k_ref, source)
