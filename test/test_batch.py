@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import io
 import os
 import signal
+import sys
 import threading
 import time
 
@@ -92,7 +94,13 @@ def test_units_equal_analyze_survive_a_killed_worker_and_a_corrupt_bag_is_one_fa
     assert [r for r in again.rows if r["unit"] == "imu0"] == [r for r in result.rows if r["unit"] == "imu0"]
 
 
-def test_batch_command_writes_the_fleet_table_and_report(bags, client, tmp_path, capsys):
+
+class _Tty(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_batch_command_writes_the_fleet_table_and_report(bags, client, tmp_path, capsys, monkeypatch):
     """The command on the module's cluster through ``--scheduler`` (the local cluster it would start otherwise is
     ``open_client``'s, which the ``client`` fixture starts)."""
     spec = tmp_path / "spec.yaml"
@@ -112,6 +120,13 @@ def test_batch_command_writes_the_fleet_table_and_report(bags, client, tmp_path,
     assert "Against the specification" in report and report.count("data:image/png;base64,") >= 2
     printed = capsys.readouterr().out
     assert "2 of 2 units done" in printed and "2/2 units (0 failed, 0 unchanged and skipped, 0 running" in printed
+    # on a terminal: the bar every command draws on stderr, not the log lines (one unit more; the two done skipped)
+    tty = _Tty()
+    monkeypatch.setattr(sys, "stderr", tty)
+    assert main(["batch", str(bags / "imu[012]*"), "--out", str(out), "--model", "WN+RW", "--no-loop", "--spec",
+                 str(spec), "--scheduler", client.scheduler.address]) == 0
+    assert "batch [" in tty.getvalue() and "(3/3 units)" in tty.getvalue()
+    assert "unchanged and skipped" not in capsys.readouterr().out
     assert main(["batch", str(tmp_path / "nothing*"), "--out", str(out)]) == 2
 
 

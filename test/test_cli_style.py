@@ -179,3 +179,13 @@ def test_every_output_folder_option_is_called_out_dir():
         outs = [a for a in parser._actions if "--out" in a.option_strings]
         assert all(a.metavar == ("BAG" if name == "simulate" else "DIR") for a in outs), name  # simulate writes a bag
         assert all(a.metavar is not None or a.dest not in ("source",) for a in parser._actions), name
+
+
+def test_loop_help_names_every_effect_the_loop_adds():
+    from imu_noise_id.cli.loop import LOOP_EFFECTS
+    from imu_noise_id.pipelines.loop.state import CLEANING_EFFECTS, EXOG_EFFECTS, STATE_EFFECTS
+
+    assert LOOP_EFFECTS == STATE_EFFECTS + EXOG_EFFECTS + CLEANING_EFFECTS
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    loop_help = next(c.help for c in sub._choices_actions if c.dest == "loop")
+    assert all(effect in loop_help for effect in LOOP_EFFECTS)

@@ -74,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
     from ..core.errors import InputError
     from ..core.timing import check_declared_rate
     from ..report.fleet import annotate, write_fleet_report, write_tables
+    from .progress import TextProgress
 
     if args.workers < 1:
         raise InputError(f"--workers must be >= 1, got {args.workers}")
@@ -88,11 +89,16 @@ def run(args: argparse.Namespace) -> int:
     where = args.scheduler or f"a local cluster of {args.workers} workers on 127.0.0.1"
     print(f"{len(units)} units on {where}", flush=True)
 
-    def progress(p: BatchProgress) -> None:
-        print(f"  {p.done + p.skipped}/{p.total} units ({p.failed} failed, {p.skipped} unchanged and skipped, "
-              f"{p.running} running or queued), ~{p.left_s:.0f} s left [{p.elapsed_s:.0f} s]", flush=True)
+    bar = TextProgress("batch", unit="units")
 
-    with open_client(args.scheduler, args.workers, args.memory_limit) as client:
+    def progress(p: BatchProgress) -> None:
+        # the bar of every command on a terminal; a line per unit into a log, where the bar is not drawn
+        bar(p.done + p.skipped, p.total)
+        if not bar.enabled:
+            print(f"  {p.done + p.skipped}/{p.total} units ({p.failed} failed, {p.skipped} unchanged and skipped, "
+                  f"{p.running} running or queued), ~{p.left_s:.0f} s left [{p.elapsed_s:.0f} s]", flush=True)
+
+    with open_client(args.scheduler, args.workers, args.memory_limit) as client, bar:
         result = run_batch(units, options, args.out, client, progress=progress)
     rows = annotate(result.rows, spec)
     paths = [*write_tables(rows, args.out),

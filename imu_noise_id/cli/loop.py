@@ -9,12 +9,16 @@ from pathlib import Path
 from . import add_rate_option, print_notes, results_folder
 from .options import add_axis, add_out, add_topic, model_spec
 
+#: The effects the loop adds, named in its help (the parser is built without importing the loop itself;
+#: ``test_cli_style`` holds this to the loop's STATE_EFFECTS, EXOG_EFFECTS and CLEANING_EFFECTS).
+LOOP_EFFECTS = ("GM", "RW", "RR", "QN", "OSC", "LPF", "MA", "BI", "SIN", "TEMP", "STEP", "OUTLIERS")
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``loop`` parser."""
     p = subparsers.add_parser(
         "loop",
-        help="closed loop: find the effects the noise model misses (GM, RW, RR, QN, SIN, TEMP, STEP, OUTLIERS)",
+        help=f"closed loop: find the effects the noise model misses ({', '.join(LOOP_EFFECTS)})",
         description=(
             "Fit a starting noise model to each chosen axis of a static bag, test its residuals (standardised "
             "innovations, Allan variance against the model's) for missing effects, add the most significant one "
