@@ -95,6 +95,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     best_model: NoiseModel | None = None
     screening = criterion == "bic" and y.size >= screen.MIN_SAMPLES
     statistics = screen.Statistics.of(interpolate_missing(y), dt) if screening else None
+    if statistics is not None:  # its periodogram is that of the record the candidates without RR start from
+        periodograms[False] = statistics.periodogram
     reference: screen.Reference | None = None
     screened: dict[str, screen.Screen] = {}
     for spec in cands:
