@@ -1,7 +1,6 @@
-"""The Allan-variance signatures of a fitted model's misfit: bands of τ where the data's AV leaves the model's
-confidence band, each traced to the component the model lacks (GM, BI, RW, RR, QN), and the flicker-noise level of
-a flat excess. The signature table is in :mod:`.detectors`; these findings share its :class:`~.detectors.Finding`.
-"""
+"""Allan-variance signatures of a fitted model's misfit: bands of τ where the data's AV leaves the model's
+confidence band, each traced to the missing component (GM, BI, RW, RR, QN); findings are
+:class:`~.detectors.Finding` (signature table in :mod:`.detectors`)."""
 
 from __future__ import annotations
 
@@ -32,10 +31,8 @@ def fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]
 
 
 def gm_beside_walk(tau: np.ndarray, excess: np.ndarray, sd: np.ndarray) -> tuple[float, float, float]:
-    """GM (τ_c, σ) and random walk K whose AVs together best fit a positive AV excess: a grid over τ_c, (σ², K²) ≥ 0
-    by weighted least squares relative to the excess at each, the fit judged in log space with each τ weighted by
-    the spread ``sd`` of its log excess (any multiple of its standard deviation: a bounded hump beside a walk that
-    keeps growing)."""
+    """GM (τ_c, σ) and random walk K whose AVs together best fit a positive AV excess: grid over τ_c, (σ², K²) ≥ 0 by
+    weighted least squares, judged in log space with each τ weighted by ``sd`` (the spread of its log excess)."""
     best = (math.inf, float(tau[0]), 0.0, 0.0)
     walk = tau / 3.0  # the random walk's AV per unit K²
     weight = 1.0 / (sd * excess)
@@ -64,9 +61,8 @@ FLAT_DECADES, FLAT_RATIO = 1.0, 1.3
 
 
 def flicker_level(tau: np.ndarray, excess: np.ndarray) -> float | None:
-    """The bias instability B [u] of an AV excess with a plateau (2 ln 2/π)·B² (IEEE Std 952): the flattest window of
-    :data:`FLAT_DECADES` of τ over which a smooth (quadratic in log-log) fit of the positive excess varies by at
-    most :data:`FLAT_RATIO`; None when there is none."""
+    """Bias instability B [u] of an AV excess with a plateau (2 ln 2/π)·B² (IEEE Std 952): the flattest
+    :data:`FLAT_DECADES` window whose quadratic log-log fit varies by at most :data:`FLAT_RATIO`; None if none."""
     best: tuple[float, float] | None = None
     for i in range(tau.size):
         window = (tau >= tau[i]) & (tau <= tau[i] * 10.0**FLAT_DECADES * 1.0001)
@@ -81,8 +77,7 @@ def flicker_level(tau: np.ndarray, excess: np.ndarray) -> float | None:
 
 
 def _with_flicker(finding: Finding, tau: np.ndarray, excess: np.ndarray) -> list[Finding]:
-    """``finding`` (a GM) and, when the excess is flat over a decade or more, a BI finding ranked just before it:
-    a bump is one GM, a plateau is the flicker noise of a bias instability (the likelihood decides)."""
+    """``finding`` (a GM) and, when the excess is flat over a decade or more, a BI finding ranked just before it."""
     level = flicker_level(tau, excess)
     if level is None:
         return [finding]
@@ -102,33 +97,23 @@ LAST_DECADE = 0.1
 def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
                          av_model: np.ndarray, *, av_white: np.ndarray | None = None,
                          alpha: float = ALPHA) -> list[Finding]:
-    """Bands of τ where the data's AV is significantly above the model's, each traced to a component.
+    """Bands of τ where the data's AV is significantly above (or, at long τ, below) the model's, each traced to a
+    component.
 
-    z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) (sd from the AV's 95 % CI); a τ is in excess when
-    z_τ > z* = Φ⁻¹(1 − α/M) over the M τ (Bonferroni). Each contiguous band of excess τ is classified by its
-    position and the log-log slope of the excess AV_data − AV_model:
+    z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) (sd from the 95 % CI); excess where z_τ > z* = Φ⁻¹(1 − α/M) over the
+    M τ (Bonferroni). Each contiguous band is classified by position and the log-log slope of AV_data − AV_model:
 
-    * band at the shortest τ with slope < −1.5 (ADEV −1) → QN, Q from 3Q²/τ²;
-    * band whose excess keeps growing (slope > +0.5, or reaching the longest τ) without a peak inside, ending in
-      the last decade of τ → RR if slope > 1.5 (ADEV +1, AV ω²τ²/2), else RW (AV K²τ/3). A band that ends
-      before the last decade is not a missing random walk, whose excess would keep growing to the longest τ
-      (on ADIS16405 run 1 accel_x, 10⁶ samples, the excess at τ = 0.02–0.04 s left by a vibration line was read
-      as RW, its p-value hid the true long-τ band behind it, and the random walk the likelihood asked for,
-      judged by that short band's evidence, was refused);
-    * otherwise (a bump: the excess peaks inside the band) → GM, (τ_c, σ) fitted to the excess (the GM AV
-      peaks near τ ≈ 1.9 τ_c). A GM whose τ_c exceeds the record looks like a RW, as it does to any method.
-      When that excess is flat over a decade of τ or more it is also offered as flicker noise, BI (beyond the
-      papers: :mod:`imu_noise_id.core.noise.flicker`), with B² = median excess / (2 ln 2/π).
+    * at the shortest τ with slope < −1.5 (ADEV −1) → QN, Q from 3Q²/τ²;
+    * growing without an interior peak and ending in the last decade of τ (:data:`LAST_DECADE`) → RR if slope > 1.5
+      (AV ω²τ²/2), else RW (AV K²τ/3);
+    * otherwise a bump → GM, (τ_c, σ) fitted to the excess (GM AV peaks near τ ≈ 1.9 τ_c); when flat over a decade
+      also BI (beyond the papers: :mod:`imu_noise_id.core.noise.flicker`), B² = median excess / (2 ln 2/π).
 
-    A band of significant *deficit* (z_τ < −z*) in the last decade of τ, the model above the data at every longer
-    τ, means the model's long-τ growth (a random walk or ramp that absorbed a bounded process) is more than the
-    data hold: the data's AV beyond the white part ``av_white`` (the model's WN + QN AV; default the WN line through
-    the first τ) is a bounded hump beside whatever walk remains → GM, with (τ_c, σ) and the walk K the data keep
-    fitted to it together from a decade below the deficit's start (:func:`gm_beside_walk`; K in the finding's
-    ``random_walk``, where the refit restarts the walk), and BI beside it when the hump is flat (a random walk that
-    absorbed flicker noise). The longest τ themselves need not be significant: with a few degrees of freedom there,
-    a 24 h record's deficit from τ = 30 s to its tenth, at z ≈ −8 over two decades, was missed because its last τ
-    alone stood at z ≈ −2.
+    A significant *deficit* (z_τ < −z*) in the last decade, the model above the data at every longer τ → GM with
+    (τ_c, σ) and K fitted together to the data's AV beyond the white part ``av_white`` (default the WN line through
+    the first τ) from :data:`DEFICIT_REACH` of the deficit's start (:func:`gm_beside_walk`; K in ``random_walk``),
+    and BI beside it when flat. The longest τ need not be significant themselves. Rationale: docs/loop.md,
+    "Why the detectors …".
     """
     tau = np.asarray(tau, dtype=float)
     av_data = np.asarray(av_data, dtype=float)

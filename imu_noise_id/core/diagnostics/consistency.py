@@ -1,12 +1,8 @@
-"""χ² acceptance bounds of the normalised innovation squared (NIS): the one consistency bound of the package.
+"""χ² acceptance bounds of the normalised innovation squared (NIS), the package's one consistency bound.
 
-For a consistent Kalman filter the NIS ``νᵀS⁻¹ν`` of an update with ``dof`` measurement components is χ²(dof)
-(paper 004 and the online node check their filters this way), and the sum of ``n`` independent NIS values is
-χ²(n·dof). :func:`nis_bounds` gives the two-sided acceptance interval of their mean. It is used by the online
-node's ``Filter consistency`` status, :class:`~.monitor.InnovationMonitor`, the CMKF replay's ``nis`` summary
-(:func:`imu_noise_id.pipelines.cmkf_replay.nis_summary`) and the NIS panel of ``cmkf.png``. :func:`nis_gate` is the
-CMKF's innovation gate (:mod:`imu_noise_id.core.cmkf.gate`) and :func:`nis_verdict` the consistency verdict the
-CMKF reports (its estimate's ``consistency``, the replay's summary, the node's diagnostics).
+The NIS νᵀS⁻¹ν of a consistent Kalman filter's update with ``dof`` components is χ²(dof); the sum of ``n``
+independent ones χ²(n·dof). Used by the node's filter status, :class:`~.monitor.InnovationMonitor`, the CMKF
+replay and gate (:mod:`imu_noise_id.core.cmkf.gate`) and ``cmkf.png``.
 """
 
 from __future__ import annotations
@@ -19,27 +15,8 @@ from scipy.stats import chi2
 
 @lru_cache(maxsize=1024)
 def nis_bounds(dof: int, n: int = 1, alpha: float = 0.05) -> tuple[float, float]:
-    """Two-sided ``1 − alpha`` acceptance interval of the mean of ``n`` independent NIS values of ``dof`` each.
-
-    Parameters
-    ----------
-    dof : int
-        Degrees of freedom of one NIS value (the measurement dimension), ≥ 1.
-    n : int
-        Number of NIS values averaged, ≥ 1 (1: the bounds of a single value).
-    alpha : float
-        Total probability outside the interval, in (0, 1) (0.05: the 95 % bounds).
-
-    Returns
-    -------
-    tuple of float
-        ``(χ²_{α/2}(n·dof) / n, χ²_{1−α/2}(n·dof) / n)``.
-
-    Raises
-    ------
-    ValueError
-        If ``dof`` or ``n`` is below 1 or ``alpha`` is not in (0, 1).
-    """
+    """Two-sided ``1 − alpha`` acceptance interval of the mean of ``n`` NIS values of ``dof`` each:
+    ``(χ²_{α/2}(n·dof)/n, χ²_{1−α/2}(n·dof)/n)``; ValueError if ``dof`` or ``n`` < 1 or ``alpha`` ∉ (0, 1)."""
     if dof < 1 or n < 1:
         raise ValueError(f"dof and n must be >= 1, got dof={dof}, n={n}")
     if not 0.0 < alpha < 1.0:
@@ -49,17 +26,8 @@ def nis_bounds(dof: int, n: int = 1, alpha: float = 0.05) -> tuple[float, float]
 
 
 def nis_gate(dof: int, probability: float) -> float:
-    """Innovation gate: the NIS above which one update of ``dof`` components is rejected as an outlier.
-
-    The ``1 − probability`` quantile of χ²(dof): a consistent filter rejects a good update with that
-    ``probability`` (1e-6 and 3 dof: 30.7, about one false rejection in 28 h at 10 Hz). ``probability = 0``
-    disables the gate (returns ``inf``).
-
-    Raises
-    ------
-    ValueError
-        If ``dof`` is below 1 or ``probability`` is not in [0, 0.5).
-    """
+    """The NIS above which one update of ``dof`` components is rejected: the ``1 − probability`` quantile of χ²(dof)
+    (1e-6, 3 dof: 30.7); ``probability = 0`` gives ``inf``; ValueError if ``dof`` < 1 or ``probability`` ∉ [0, 0.5)."""
     if dof < 1:
         raise ValueError(f"dof must be >= 1, got {dof}")
     if not 0.0 <= probability < 0.5:
@@ -74,12 +42,9 @@ INCONSISTENT_GATED_SHARE = 0.25
 
 
 def nis_verdict(mean: float, dof: int, n: int, gated_share: float = 0.0) -> str:
-    """Consistency of a filter from the mean of ``n`` NIS values of ``dof`` each and the share of gated updates.
-
-    Returns ``"unknown"`` (fewer than 10 values), ``"inconsistent"`` (mean beyond :data:`INCONSISTENT_FACTOR` × dof
-    either way, or more than :data:`INCONSISTENT_GATED_SHARE` of the updates gated), ``"marginal"`` (outside the
-    95 % bounds of :func:`nis_bounds`) or ``"consistent"``.
-    """
+    """Consistency from the mean of ``n`` NIS values of ``dof`` each and the share of gated updates: ``"unknown"``
+    (n < 10), ``"inconsistent"`` (mean beyond :data:`INCONSISTENT_FACTOR` × dof either way, or more than
+    :data:`INCONSISTENT_GATED_SHARE` gated), ``"marginal"`` (outside the 95 % bounds) or ``"consistent"``."""
     if gated_share > INCONSISTENT_GATED_SHARE:
         return "inconsistent"
     if n < 10 or not math.isfinite(mean):

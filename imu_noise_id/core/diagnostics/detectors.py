@@ -1,32 +1,7 @@
-"""Detectors that trace a residual signature of a fitted model to the effect the model lacks.
-
-Each detector returns a :class:`Finding`: the effect's name in the shared vocabulary (``GM``, ``RW``, ``RR``,
-``QN``, ``SIN``, ``TEMP``, ``STEP``, ``OUTLIERS``), a test statistic, its (multiplicity-corrected) p-value,
-the significance level, initial values for the effect's parameters (what the refit starts from) and a one-line
-evidence text. All tests are calibrated against the null "the fitted model is the data's model", under which
-the standardised innovations e_t are i.i.d. N(0, 1) and the empirical Allan variance scatters around the
-model's within its confidence interval.
-
-=========  ===========================================  =============================================
-effect     signature                                    statistic, null distribution, multiplicity
-=========  ===========================================  =============================================
-GM         AV excess in an interior band of τ           max z_τ of ln(AV_d/AV_m)/sd, N(0,1), Bonferroni τ
-GM         serial correlation of e (no AV band)         Ljung–Box Q, χ²_h
-BI         AV excess (or, beyond a long-τ deficit, the  as GM; an excess within a factor 1.3 over ≥ 1
-           data's hump) flat over ≥ a decade of τ       decade of τ is flicker noise, tried beside GM
-RW / RR    AV excess reaching the longest τ, log-slope  as GM; slope ≈ +1 (ADEV +½) → RW, ≈ +2 → RR
-           ≈ +1 / +2
-RR         ramp regressor                               score test T² of a whitened ramp, χ²_1
-QN         AV excess at the shortest τ, slope ≈ −2      as GM (ADEV slope −1)
-SIN        periodogram line of e over local median      Exp(1) per bin, Fisher/Bonferroni over bins
-TEMP       e correlated with whitened temperature       score test, χ²_1
-STEP       level shift (whitened step at every k)       max_k |T_k|, N(0,1), Bonferroni over k
-OUTLIERS   isolated |robust z| of e (MAD scale)         max |z|, N(0,1), Bonferroni over samples
-=========  ===========================================  =============================================
-
-The score tests use :class:`.whitening.WhiteningFilter` (generalised least squares through the model's
-Kalman filter). Levels default to α = 0.01 per detector.
-"""
+"""Detectors that trace a residual signature of a fitted model to the effect it lacks (GM, BI, RW, RR, QN, SIN, TEMP,
+STEP, OUTLIERS), each a :class:`Finding` at level α (default 0.01) under the null "the fitted model is the data's
+model" (e_t i.i.d. N(0, 1)); score tests whiten through :class:`.whitening.WhiteningFilter`. The signature table
+is in docs/loop.md, "Detectors"."""
 
 from __future__ import annotations
 
@@ -59,27 +34,15 @@ class Finding:
 
     Attributes
     ----------
-    effect : str
-        ``GM``, ``RW``, ``RR``, ``QN``, ``SIN``, ``TEMP``, ``STEP`` or ``OUTLIERS``.
-    detector : str
-        Which test produced it (``av_band``, ``ljung_box``, ``ramp_score``, ``periodogram``,
-        ``temperature_score``, ``step_scan``, ``robust_z``).
-    statistic, threshold : float
-        The test statistic and the value it must exceed to be significant at ``level``.
-    log10_p : float
-        log10 of the (multiplicity-corrected) p-value; used to rank findings.
-    level : float
-        Significance level α.
-    params : dict
-        Initial values for the effect, SI units in the key names' sense (``tau`` [s], ``sigma`` [u],
-        ``random_walk`` [u/s/√Hz], ``slope`` [u/s], ``Q`` [u·s], ``frequency`` [Hz], ``amplitude`` [u],
-        ``coefficient`` [u/°C], ``index`` (sample), ``time`` [s], ``size`` [u], ``count``).
-    evidence : str
-        One line saying what was seen.
-    indices : array of int
-        Samples concerned (outliers), else empty.
-    members : tuple of Finding
-        A family added in one step (a line and its harmonics), else empty.
+    effect : ``GM``, ``RW``, ``RR``, ``QN``, ``SIN``, ``TEMP``, ``STEP``, ``OUTLIERS`` (and the loop's others)
+    detector : the test (``av_band``, ``ljung_box``, ``ramp_score``, ``periodogram``, ``temperature_score``, …)
+    statistic, threshold : the statistic and the value it must exceed at ``level`` (α)
+    log10_p : log10 of the multiplicity-corrected p-value (ranks findings)
+    params : initial values, SI (``tau`` [s], ``sigma`` [u], ``random_walk`` [u/s/√Hz], ``slope`` [u/s],
+        ``Q`` [u·s], ``frequency`` [Hz], ``amplitude`` [u], ``coefficient`` [u/°C], ``index``, ``time`` [s], …)
+    evidence : one line saying what was seen
+    indices : samples concerned (outliers), else empty
+    members : a family added in one step (a line and its harmonics), else empty
     """
 
     effect: str
@@ -110,11 +73,9 @@ def norm_log10_sf(z: float) -> float:
 
 # --------------------------------------------------------------------------------------------- outliers
 def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA, only: np.ndarray | None = None) -> Finding:
-    """Isolated spikes / heavy tails: robust z_t = (e_t − median) / (1.4826·MAD) beyond the Bonferroni bound.
+    """Spikes: robust z_t = (e_t − median)/(1.4826·MAD) beyond z* = Φ⁻¹(1 − α/(2n)) (Bonferroni).
 
-    Under i.i.d. N(0, 1) innovations, P(max_t |z_t| > z*) ≤ α with z* = Φ⁻¹(1 − α/(2n)). Every sample beyond
-    z* is flagged (``indices``); the loop removes them (one additive-outlier dummy each). ``only`` restricts
-    the statistic to given samples (to check whether flagged spikes are gone).
+    Every sample beyond z* is in ``indices``. ``only`` restricts the statistic to given samples.
     """
     e = np.asarray(e, dtype=float)
     ok = np.isfinite(e)
@@ -147,32 +108,27 @@ def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA, only: np.ndarray | N
 # --------------------------------------------------------------------------------------------- sinusoid
 def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
                     f_min: float | None = None) -> Finding:
-    """A narrow spectral line: the periodogram peak of e over its local median floor (:func:`spectral_peaks`).
+    """A narrow line: the periodogram peak of e over its local median floor (:func:`spectral_peaks`).
 
-    Initial amplitude and phase come from the score test's GLS estimate of sin/cos at the peak frequency (computed
-    only for a significant peak).
-    The threshold is the Exp(1) quantile that makes the maximum over the M searched bins exceed it with
-    probability α: s* = −ln(1 − (1 − α)^{1/M}) (:func:`max_exponential_threshold`).
+    Threshold s* = −ln(1 − (1 − α)^{1/M}) over the M searched bins; a significant line's frequency is refined and
+    its amplitude and phase are the score test's GLS estimates.
     """
     return _sinusoid(e, dt, whitening, spectral_peaks(e, dt, f_min=f_min), alpha=alpha)
 
 
 def detect_sinusoids(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
                      f_min: float | None = None) -> list[Finding]:
-    """:func:`detect_sinusoid`'s finding (significant or not), then every other narrow spectral line significant at
-    family-wise level α (:func:`spectral_lines`, the same threshold), strongest first, each a finding as
-    :func:`detect_sinusoid` gives the strongest; one periodogram for all.
+    """:func:`detect_sinusoid`'s finding, then every other line significant at family-wise level α
+    (:func:`spectral_lines`), strongest first.
 
-    Beyond the papers (paper 000's loop adds one effect per step): a consumer module's gyro can carry a dozen
-    vibration lines; found one per step, they use up the loop's steps (issue 11).
+    Beyond the papers: paper 000's loop adds one effect per step; here all significant lines are found at once.
     """
     return [_sinusoid(e, dt, whitening, line, alpha=alpha) for line in spectral_lines(e, dt, alpha=alpha, f_min=f_min)]
 
 
 def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: SpectralPeak, *, alpha: float) -> Finding:
-    """The finding of the line ``peak`` against the threshold of the maximum over its M bins: below it, the
-    absence of a line; above it, the line with its frequency refined and its amplitude and phase from the score
-    test."""
+    """The finding of ``peak`` against the maximum-of-M-bins threshold; a line's frequency refined, amplitude and phase
+    from the score test."""
     s_star = max_exponential_threshold(peak.n_bins, alpha)
     if peak.statistic <= s_star:  # no line: nothing to refine or size (each score test whitens two columns)
         return Finding(effect="SIN", detector="periodogram", statistic=peak.statistic, threshold=s_star,
@@ -212,10 +168,7 @@ def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: Spectr
 # ------------------------------------------------------------------------------------------ temperature
 def detect_temperature(e: np.ndarray, temperature: np.ndarray, whitening: WhiteningFilter, *,
                        alpha: float = ALPHA) -> Finding:
-    """Innovations correlated with the (whitened) temperature: score test of a thermal bias coefficient.
-
-    ``temperature`` [°C] is sampled at the IMU times (interpolate beforehand); the constant is a nuisance.
-    """
+    """Score test of a thermal bias coefficient: e against the whitened ``temperature`` [°C] at the IMU times."""
     temp = np.asarray(temperature, dtype=float)
     if temp.shape != np.asarray(e).shape or not np.all(np.isfinite(temp)):
         raise ValueError("temperature must be finite and sampled at the IMU times (same length as the data)")
@@ -255,9 +208,8 @@ def detect_ramp(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: 
 def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np.ndarray:
     """Score statistics T_k of a level shift at every sample k (NaN outside [min_segment, n − min_segment]).
 
-    The whitened step starting at k is the whitened unit step s shifted by k (LTI filter, zero start), so
-    Σ_t e_t s_{t−k} for all k is one FFT cross-correlation; the whitened constant (= s itself) is projected
-    out: T_k = (c_k − c_0 a_k/‖s‖²) / √(‖s_{0..n−k−1}‖² − a_k²/‖s‖²), c = e ⋆ s, a = s ⋆ s.
+    One FFT cross-correlation for all k, the whitened constant s projected out:
+    T_k = (c_k − c_0 a_k/‖s‖²) / √(‖s_{0..n−k−1}‖² − a_k²/‖s‖²), c = e ⋆ s, a = s ⋆ s.
     """
     e = np.nan_to_num(np.asarray(e, dtype=float), nan=0.0)
     n = e.size
@@ -279,11 +231,7 @@ def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np
 
 def detect_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
                 min_segment: int | None = None) -> Finding:
-    """A bias step (level shift): max_k |T_k| of :func:`step_scan`, Bonferroni over the scanned k.
-
-    Binary segmentation happens through the loop: after a step is added, the scan runs again on the new
-    innovations. The size estimate is the GLS coefficient at the best k.
-    """
+    """A bias step: max_k |T_k| of :func:`step_scan`, Bonferroni over k; size is the GLS coefficient at the best k."""
     e = np.asarray(e, dtype=float)
     n = e.size
     m = max(20, n // 200) if min_segment is None else int(min_segment)
@@ -308,11 +256,9 @@ def detect_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: 
 
 # ------------------------------------------------------------------------------------ serial correlation
 def detect_correlation(e: np.ndarray, dt: float, *, alpha: float = ALPHA, lags: int = 20) -> Finding:
-    """Serially correlated innovations → a (further) Gauss–Markov process; Ljung–Box over ``lags`` lags.
+    """Serially correlated innovations → a Gauss–Markov process; Ljung–Box over ``lags`` lags.
 
-    Its correlation time is initialised from the integral time scale of the innovations' ACF,
-    τ ≈ dt·Σ_k ρ_k / ρ_1 (exact for an exponential ACF), summed while ρ_k stays above its 2/√n noise level;
-    its σ from ρ_1 (the GM's share of the innovation variance, S = 1 after standardisation).
+    Starts: τ ≈ dt·Σ_k ρ_k/ρ_1 (ACF summed while above 2/√n), σ share √ρ_1.
     """
     lb = ljung_box(e, lags)
     n = int(np.isfinite(e).sum())

@@ -1,17 +1,10 @@
 """Shape of a spectral line found in the residuals: a sinusoid (SIN) or a narrow-band oscillation (OSC).
 
-Beyond the papers. A sinusoid of fixed frequency and phase puts its power into the periodogram bin nearest its
-frequency and, through the leakage of the rectangular window (the Dirichlet kernel), into the next ones: at
-least 81 % of it lies within ±1 bin and 90 % within ±2 bins, wherever the frequency falls between bins. A line
-whose frequency wanders (a mount vibration, a motor, a fan) spreads its power over many bins: a resonant
-second-order Gauss–Markov process (:class:`~imu_noise_id.core.noise.resonant.OSC`) has a Lorentzian PSD whose
-interquartile range is its full half-power bandwidth B.
-
-:func:`line_shape` measures, around a detected line, the excess power over the local floor of the residual's
-periodogram (in the data's units): its power-weighted median (f₀), its interquartile range (B), its total
-(σ² = 2/n Σ excess, Parseval for one-sided ordinates) and the share within ±2 bins of the peak (the
-*concentration*). The line is a SIN when that share is at least :data:`SIN_CONCENTRATION`, an OSC otherwise;
-the loop tries both when the call is close and lets the likelihood decide.
+Beyond the papers. :func:`line_shape` measures the excess power over the local floor of the residual's
+periodogram around a line: power-weighted median f₀, interquartile range B (a Lorentzian's half-power bandwidth,
+:class:`~imu_noise_id.core.noise.resonant.OSC`), total σ² = 2/n Σ excess, and the share within ±2 bins of the peak
+(*concentration*; a fixed sinusoid puts ≥ 81 % within ±1 bin, ≥ 90 % within ±2). A SIN at concentration ≥
+:data:`SIN_CONCENTRATION`, an OSC otherwise. Also the pooled (broad-line), harmonic and innovation-hump searches.
 """
 
 from __future__ import annotations
@@ -36,13 +29,13 @@ RING_Z = 3.0
 
 @dataclass(frozen=True)
 class LineShape:
-    """A line's measured shape (see module).
+    """A line's measured shape (module docstring).
 
     Attributes
     ----------
     frequency : power-weighted median frequency of the excess [Hz]
     bandwidth : interquartile range of the excess power [Hz] (≥ two periodogram bins)
-    sigma : standard deviation of the line's process, from its excess power [u]
+    sigma : standard deviation of the line's process [u]
     concentration : share of the excess within ±2 bins of the peak
     resolution : periodogram bin width 1/(n·dt) [Hz]
     """
@@ -71,19 +64,11 @@ class LineShape:
 def line_shape(residual: np.ndarray, dt: float, frequency: float, *, resolution: int = 1) -> LineShape:
     """Measure the line near ``frequency`` [Hz] in ``residual`` (data units, finite) sampled at ``dt`` [s].
 
-    The floor is the median of the periodogram over the bins beyond the largest window searched (±
-    :data:`WINDOW_FRACTION` of the frequency), divided by ln 2 (the median of an Exp(1) ordinate is ln 2 of its
-    mean). The line's window starts at ±:data:`MIN_HALF_BINS` bins and doubles while the ring it adds holds
-    significant excess power (more than :data:`RING_Z` standard deviations of the floor's noise), so that the
-    line's power is summed over as few noise-only bins as possible.
-
-    ``resolution``: the pooled bins (periodogram bins each) of the search that found the line. That search judged
-    it against a running median over ±:data:`POOLED_FLOOR_HALF_WIDTH` pooled bins, so the largest window is at
-    least half of that, but within ±50 % of the line's frequency (nearer 0 Hz a random walk's or flicker's rise
-    would become the "line"): a hump wider than ±10 % of its frequency (the ADIS16405 gyro_z's ≈ 5 Hz wide
-    pedestal at 25 Hz) is otherwise measured against a floor inside itself, and its few bins above that floor look
-    like a sinusoid's. The window starts at one pooled bin (at most half the largest window): the search saw the
-    excess only summed over that many bins, and a ring of fewer may hold too little to grow the window.
+    Floor: median periodogram beyond the largest window (±:data:`WINDOW_FRACTION` of the frequency), / ln 2. The
+    window starts at ±:data:`MIN_HALF_BINS` bins and doubles while its new ring holds excess above :data:`RING_Z` sd.
+    ``resolution``: periodogram bins per pooled bin of the search that found the line; the largest window is then at
+    least half that search's floor span (±:data:`POOLED_FLOOR_HALF_WIDTH` pooled bins) but within ±50 % of the
+    frequency, and the window starts at one pooled bin (docs/loop.md, "Why the detectors …").
     """
     freqs, power = periodogram(residual, dt)
     n = int(np.asarray(residual).size)
@@ -132,8 +117,7 @@ def _log_sf(x: float, r: int, v: float) -> float:
 
 
 def _floor_error(r: int) -> float:
-    """Relative sd of the running-median floor: the median of K = 2·HW + 1 ordinates of relative sd 1/√r has sd
-    ≈ √(π/2)/√(rK)."""
+    """Relative sd of the running-median floor of K = 2·HW + 1 ordinates of relative sd 1/√r: ≈ √(π/2)/√(rK)."""
     return math.sqrt(math.pi / 2.0 / (r * (2 * POOLED_FLOOR_HALF_WIDTH + 1)))
 
 
@@ -144,15 +128,13 @@ def _pool(power: np.ndarray, freqs: np.ndarray, r: int) -> tuple[np.ndarray, np.
 
 
 def _gamma_scaled(pooled: np.ndarray, floor: np.ndarray | float, r: int) -> np.ndarray:
-    """r·pooled/floor with the floor (a median of pooled ordinates) scaled to the Gamma(r)/r mean: Gamma(r, 1) under
-    white innovations."""
+    """r·pooled/floor, the floor scaled to the Gamma(r)/r mean: Gamma(r, 1) under white innovations."""
     scale = stats.gamma.median(r) / r
     return r * pooled / np.maximum(np.asarray(floor) / scale, np.finfo(float).tiny)
 
 
 def _gamma_test(x: float, r: int, v: float, alpha: float, tests: int) -> tuple[float, float]:
-    """(log10 p-value, level-α threshold) of the largest of ``tests`` Gamma(r, 1) statistics (:func:`_log_sf` with
-    the floor's lognormal error ``v``), Bonferroni-corrected."""
+    """(log10 p, level-α threshold) of the max of ``tests`` Gamma(r, 1) statistics, floor error ``v``; Bonferroni."""
     log10_p = min(0.0, _log_sf(x, r, v) / math.log(10.0) + math.log10(tests))
     target = math.log(alpha / tests)
     threshold = float(optimize.brentq(lambda c: _log_sf(c, r, v) - target, r, 100.0 * r + 1000.0))
@@ -172,17 +154,11 @@ HUMP_DIP = 0.5
 
 
 def humps(x: np.ndarray, r: int) -> np.ndarray:
-    """Which pooled statistics ``x`` (r·pooled/floor, ≈ r on the floor; index k ↔ frequency ≈ k pooled bins) stand
-    on a hump: some pooled bin in [k/2, k) has an excess x − r below :data:`HUMP_DIP` of x[k] − r (never the first
-    bin, which has nothing below it).
+    """Which pooled statistics ``x`` (r·pooled/floor, index k ↔ k pooled bins) stand on a hump: some bin in [k/2, k)
+    has an excess x − r below :data:`HUMP_DIP` of x[k] − r (never the first bin).
 
-    Beyond the papers. A model that misses part of a slow bias process (a random walk, flicker, a long GM) leaves
-    innovations whose spectrum rises toward 0 Hz; against the running-median floor that rise looks like a broad
-    line in the lowest pooled bins (on ADIS16405 run 5 accel_y the loop kept a 0.001 Hz "resonance" for it, on
-    run 2 accel_x one at 0.002 Hz). A resonance's excess falls on both sides of its centre, a rise's only on one:
-    between half a line's frequency and the line the excess falls back toward the floor (a harmonic's fundamental
-    lies at f/2 itself, with floor bins between), while below a rising bin it only grows. Resonances wider than
-    half their frequency (Q < 1) are thereby left to the low-pass and bias components.
+    Beyond the papers: a rise toward 0 Hz (a slow bias misfit) is not a line; resonances with Q < 1 are left to
+    the low-pass and bias components.
     """
     m = x.size
     out = np.zeros(m, dtype=bool)
@@ -205,30 +181,19 @@ def humps(x: np.ndarray, r: int) -> np.ndarray:
 
 
 def pooled_line_statistic(e: np.ndarray, dt: float, frequency: float, resolution: int) -> float:
-    """The statistic of :func:`detect_broad_line` at the pooled bin nearest ``frequency`` [Hz]: whether a given
-    broad line is still in the residuals."""
+    """The statistic of :func:`detect_broad_line` at the pooled bin nearest ``frequency`` [Hz]."""
     freqs, power = periodogram(e, dt)
     centre, x = _pooled(power, freqs, int(resolution))
     return float(x[int(np.argmin(np.abs(centre - frequency)))])
 
 
 def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float, exclude: tuple[float, ...] = ()) -> Finding:
-    """A line too wide for one periodogram bin (a wandering vibration): the periodogram of the standardised
-    innovations pooled over r bins, against its running median.
+    """A line too wide for one bin: the innovations' periodogram pooled over r bins against its running median.
 
-    A pooled ordinate is the mean of r Exp(1) ordinates under white innovations, so r·(pooled / floor) follows
-    Gamma(r, 1) once the floor is scaled by the Gamma median (the running median estimates the median, not the
-    mean), up to the floor's own estimation error, taken as lognormal (:func:`_floor_error`) and integrated over
-    by Gauss–Hermite quadrature; the p-value is Bonferroni-corrected over every pooled bin at every resolution
-    searched. Beyond the
-    papers: the single-bin search (:func:`~imu_noise_id.core.diagnostics.detectors.detect_sinusoid`) misses a
-    line whose power is spread over tens of bins, each below its threshold. Only pooled bins on a hump
-    (:func:`humps`) are searched: a rise toward 0 Hz is a bias misfit, not a line (the Bonferroni count keeps the
-    others: conservative).
-
-    ``exclude``: frequencies [Hz] of lines found otherwise (a narrow line's single bin); the pooled bins within one
-    pooled bin of each are not searched, so that a broad line elsewhere is found beside it (the Bonferroni count
-    keeps them: conservative).
+    r·pooled/floor ~ Gamma(r, 1) under white innovations, the floor's lognormal error (:func:`_floor_error`)
+    integrated by Gauss–Hermite quadrature; Bonferroni over every pooled bin at every resolution; only bins on a
+    hump (:func:`humps`) are searched. ``exclude``: frequencies [Hz] of lines found otherwise, whose pooled bins
+    (±1) are skipped. Beyond the papers (the single-bin search misses a line spread over tens of bins).
     """
     freqs, power = periodogram(e, dt)
     best: tuple[float, float, float, float, int] | None = None  # (log10 p, statistic, threshold, f, r)
@@ -259,15 +224,10 @@ HARMONIC_MAX = 6
 
 
 def harmonics(e: np.ndarray, dt: float, frequency: float, bandwidth: float, *, alpha: float) -> list[float]:
-    """The harmonics k·f₀ (k = 2 … :data:`HARMONIC_MAX`, below 0.98 of the Nyquist frequency) of a detected line that
-    are lines too: frequencies [Hz] of the significant ones, from the residuals ``e``.
+    """Frequencies [Hz] of the significant harmonics k·f₀ (k = 2 … :data:`HARMONIC_MAX`, below 0.98 Nyquist) of a line.
 
-    A motor, a fan or a mount excited at f₀ puts power at its harmonics; a wandering fundamental's k-th harmonic
-    wanders k times as far. Around each k·f₀ the window ±max(2 bins, 2k·B) is searched for the largest periodogram
-    ordinate over the running-median floor (the single-line statistic, Exp(1) per bin under white residuals,
-    corrected for the floor's own error); a harmonic is significant when that maximum exceeds the level-α
-    threshold of the maximum over *all* the bins searched around the harmonics (Bonferroni over M bins:
-    s* = −ln(1 − (1 − α)^{1/M})), far below the threshold over the whole spectrum because the places are given.
+    Around each k·f₀ the window ±max(2 bins, 2k·B) is searched for the largest corrected single-line statistic;
+    significant above s* = −ln(1 − (1 − α)^{1/M}), M the bins searched around all harmonics.
     """
     freqs, power = periodogram(e, dt)
     df = freqs[1] - freqs[0]
@@ -307,11 +267,10 @@ class InnovationHump:
 
     Attributes
     ----------
-    finding : the detector's verdict (effect ``OSC``, detector ``innovation_hump``; f₀ and B in ``params``)
+    finding : the verdict (effect ``OSC``, detector ``innovation_hump``; f₀ and B in ``params``)
     frequency : excess-weighted centre of the hump's bands [Hz]
-    bandwidth : width of the bands whose smoothed excess is at least half the peak's [Hz] (at least one band)
-    band_frequency, ratio : the bands' centres [Hz] and their mean ordinate over the level (smoothed over
-        :data:`HUMP_SMOOTH` bands), for the hump's bands only
+    bandwidth : width of the bands whose smoothed excess is at least half the peak's [Hz]
+    band_frequency, ratio : the hump's bands' centres [Hz] and smoothed mean ordinate over the level
     """
 
     finding: Finding
@@ -322,18 +281,11 @@ class InnovationHump:
 
 
 def detect_innovation_hump(e: np.ndarray, dt: float, *, alpha: float, bands: int = HUMP_BANDS) -> InnovationHump:
-    """A resonance wider than the broad-line search's floor window: the periodogram of the standardised innovations
-    averaged over ``bands`` equal bands from 0 Hz to Nyquist, against the median band as the level.
+    """A resonance wider than the broad-line search's floor window: the innovations' periodogram averaged over
+    ``bands`` equal bands from 0 Hz to Nyquist against the median band.
 
-    Beyond the papers. :func:`detect_broad_line` compares pooled bins with a running median of ±40 pooled bins
-    (±10 Hz at 256 bins of 1000 s); a hump several hertz wide lifts that floor with it and stays below threshold.
-    The innovations of a right model are white, so at this scale the level is flat: a band's mean of r ordinates
-    over the median band follows Gamma(r)/r (the median's own error, relative sd √(π/2)/√(r·bands), integrated over
-    as in :func:`detect_broad_line`), Bonferroni-corrected over the bands. Only a hump counts (:func:`humps`:
-    the excess falls back between half its frequency and it; never the first band, where a bias misfit rises).
-    Measured on ADIS16405 gyro_z (run 3, 1000 s): the data's PSD lies 15–24 % above the loop's final model from 22
-    to 30 Hz (``bench/probe_gyro_z_line_shape.py``), 4–7 sd of a band's mean of 781 ordinates (1/√781 ≈ 3.6 %),
-    and neither search flags it.
+    A band's mean of r ordinates over the median follows Gamma(r)/r (median error √(π/2)/√(r·bands) integrated as
+    in :func:`detect_broad_line`), Bonferroni over the bands; humps only (:func:`humps`). Beyond the papers.
     """
     freqs, power = periodogram(e, dt)
     r = freqs.size // bands

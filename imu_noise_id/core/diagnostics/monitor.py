@@ -1,21 +1,14 @@
 """Streaming residual diagnostics for an online filter: windowed Ljung–Box and NIS on its innovations.
 
-The online node (CMKF / hypothesis bank) feeds one innovation at a time and asks, now and then, whether its
-model still explains the data. The statistics are the offline loop's (:mod:`.residuals`), computed on the last
-``window`` innovations kept in a ring buffer, so the node reports the same evidence the offline report does.
-
-Usage (one scalar measurement channel)::
+The offline loop's statistics (:mod:`.residuals`) on the last ``window`` innovations of a ring buffer::
 
     monitor = InnovationMonitor(window=2000, lags=10, alpha=0.001)
     for nu, s in stream:                    # innovation ν_k [u] and its predicted variance S_k [u²]
         monitor.update(nu, s)
         if monitor.ready and k % 200 == 0:
             status = monitor.status()
-            if not status.ok:
-                publish_warn(status.message)   # e.g. "model inadequate: residuals correlated at lag 1 ..."
 
-``update`` is O(1); ``status`` is O(window·log window). For a vector measurement feed each component's
-standardised innovation separately, or pass NIS values via :meth:`InnovationMonitor.update_nis`.
+``update`` is O(1), ``status`` O(window·log window); vector innovations go in as NIS (:meth:`update_nis`).
 """
 
 from __future__ import annotations
@@ -31,27 +24,9 @@ from .residuals import ljung_box
 
 @dataclass(frozen=True)
 class MonitorStatus:
-    """Verdict on the innovations in the window.
-
-    Attributes
-    ----------
-    ok : bool
-        True when neither test rejects at ``alpha``.
-    ljung_box_p : float
-        Ljung–Box p-value of the standardised innovations (NaN if too few samples).
-    worst_lag : int
-        Lag of the largest autocorrelation.
-    worst_rho : float
-        That autocorrelation.
-    nis_mean : float
-        Mean normalised innovation squared ν²/S over the window (1 for a consistent filter).
-    nis_interval : tuple
-        Its two-sided (1 − alpha) acceptance interval, χ²_n / n (:func:`.consistency.nis_bounds`).
-    n : int
-        Innovations in the window.
-    message : str
-        Human-readable summary for ``/diagnostics``.
-    """
+    """Verdict on the window: ``ok`` (neither test rejects at ``alpha``), ``ljung_box_p`` (NaN if too few samples),
+    ``worst_lag``/``worst_rho`` (largest autocorrelation), ``nis_mean`` (mean ν²/S, 1 when consistent) and its
+    ``nis_interval`` (:func:`.consistency.nis_bounds`), ``n`` innovations, ``message`` for ``/diagnostics``."""
 
     ok: bool
     ljung_box_p: float
@@ -64,18 +39,8 @@ class MonitorStatus:
 
 
 class InnovationMonitor:
-    """Ring buffer of standardised innovations with windowed whiteness (Ljung–Box) and consistency (NIS) tests.
-
-    Parameters
-    ----------
-    window : int
-        Number of most recent innovations tested (≥ 50).
-    lags : int
-        Ljung–Box lags.
-    alpha : float
-        Level of each test; a node testing every few hundred samples should use a small α (e.g. 1e-3) to
-        keep false warnings rare.
-    """
+    """Ring buffer of the last ``window`` (≥ 50) standardised innovations, tested by Ljung–Box over ``lags`` and by NIS,
+    each at level ``alpha``."""
 
     def __init__(self, window: int = 2000, lags: int = 10, alpha: float = 1e-3) -> None:
         if window < 50:

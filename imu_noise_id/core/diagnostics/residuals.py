@@ -1,18 +1,9 @@
 """Residual statistics of a fitted noise model: whiteness, spectral lines and Allan-variance misfit.
 
-These are the error measures the closed loop reports before and after each step and the statistics the
-detectors (:mod:`.detectors`) build on. They take arrays only; nothing here knows about the estimator.
-
-* Standardised one-step innovations e_t = ν_t / √S_t of a correct linear-Gaussian model are i.i.d. N(0, 1)
-  (the innovations of the Kalman filter, paper 000 appendix / paper 002 eq. 7). :func:`ljung_box` tests them for
-  serial correlation, :func:`spectral_peaks` for narrow spectral lines.
-* The Allan-variance misfit compares the empirical AV of the data with the model's theoretical AV
-  (paper 000 section 2): :func:`av_misfit` is the RMS of log10(AV_data / AV_model) over τ and
-  :func:`av_misfit_z` standardises the log ratio by the AV estimate's confidence interval.
-
-Missing samples are NaN in the innovation arrays; they are dropped (autocorrelations and periodograms use the
-remaining samples with NaN set to zero after centring, which is exact for the sums and a small approximation for
-the effective sample size when only a few samples are missing).
+Standardised innovations e_t = ν_t/√S_t of a correct model are i.i.d. N(0, 1) (paper 000 appendix, paper 002
+eq. 7): :func:`ljung_box` tests their serial correlation, :func:`spectral_peaks` narrow lines. :func:`av_misfit`
+and :func:`av_misfit_z` compare the data's AV with the model's (paper 000 section 2). Arrays only; NaN = missing
+(dropped, or set to zero after centring for ACF and periodogram).
 """
 
 from __future__ import annotations
@@ -43,10 +34,7 @@ def _finite_centred(e: np.ndarray, name: str = "innovations") -> tuple[np.ndarra
 
 
 def acf(e: np.ndarray, nlags: int) -> np.ndarray:
-    """Sample autocorrelation ρ_1..ρ_nlags of a series (NaN = missing), computed with an FFT.
-
-    ρ_k = Σ_t ẽ_t ẽ_{t+k} / Σ_t ẽ_t², ẽ the centred series (the estimator the Ljung–Box statistic uses).
-    """
+    """Sample autocorrelation ρ_1..ρ_nlags (NaN = missing) by FFT: ρ_k = Σ_t ẽ_t ẽ_{t+k} / Σ_t ẽ_t², ẽ centred."""
     x, _ = _finite_centred(e)
     nlags = int(nlags)
     if not 1 <= nlags < x.size:
@@ -59,22 +47,9 @@ def acf(e: np.ndarray, nlags: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class LjungBox:
-    """Ljung–Box portmanteau test of whiteness (Ljung & Box 1978).
+    """Ljung–Box test (Ljung & Box 1978): Q = n(n+2) Σ_{k=1}^{h} ρ_k²/(n − k) ~ χ²_h under i.i.d. residuals.
 
-    Q = n(n+2) Σ_{k=1}^{h} ρ_k² / (n − k) ~ χ²_h under i.i.d. residuals.
-
-    Attributes
-    ----------
-    q : float
-        The statistic.
-    lags : int
-        h.
-    p_value : float
-        P(χ²_h ≥ q).
-    worst_lag : int
-        Lag with the largest |ρ_k| (for messages such as "residuals correlated at lag 3").
-    worst_rho : float
-        ρ at that lag.
+    Attributes: ``q`` (Q), ``lags`` (h), ``p_value`` (P(χ²_h ≥ q)), ``worst_lag`` and ``worst_rho`` (the largest |ρ_k|).
     """
 
     q: float
@@ -101,21 +76,12 @@ class SpectralPeak:
 
     Attributes
     ----------
-    frequency : float
-        Frequency [Hz] of the peak, refined by parabolic interpolation of the log periodogram.
-    bin : int
-        Periodogram bin of the peak (frequency bin·fs/n_fft).
-    ratio : float
-        Peak power / local median power (the "residual spectral peak ratio").
-    statistic : float
-        s = ratio·ln 2, the peak in units of the floor's mean (a periodogram ordinate of white noise is
-        σ²·Exp(1), whose median is σ² ln 2), corrected for the uncertainty of the median floor so that it is
-        Exp(1)-distributed at each bin under white residuals.
-    log10_p : float
-        log10 of the Bonferroni-corrected p-value of the largest line: 1 − (1 − e^{−statistic})^M over the M
-        searched bins (Fisher's g-test form for the maximum of M independent exponential ordinates).
-    n_bins : int
-        M.
+    frequency : [Hz], refined by a parabola through the log periodogram
+    bin : its periodogram bin
+    ratio : peak power / local median power
+    statistic : s = ratio·ln 2, corrected for the floor's error: Exp(1) per bin under white residuals
+    log10_p : log10 of 1 − (1 − e^{−s})^M over the M searched bins (Fisher's g form)
+    n_bins : M
     """
 
     frequency: float
@@ -127,11 +93,8 @@ class SpectralPeak:
 
 
 def chi2_log10_sf(q: float, dof: int) -> float:
-    """log10 P(χ²_dof ≥ q), finite far into the tail.
-
-    Where scipy's ``logsf`` underflows to −inf, the leading term of the upper incomplete gamma function,
-    Γ(k/2, q/2)/Γ(k/2) ≈ (q/2)^{k/2−1} e^{−q/2} / Γ(k/2) (q ≫ k), is used.
-    """
+    """log10 P(χ²_dof ≥ q), finite far in the tail (Γ(k/2, q/2)/Γ(k/2) ≈ (q/2)^{k/2−1} e^{−q/2}/Γ(k/2) where scipy
+    underflows)."""
     value = float(stats.chi2.logsf(q, dof))
     if math.isfinite(value):
         return value / math.log(10.0)
@@ -165,8 +128,7 @@ def floor_corrected(raw: float, half_width: int) -> float:
 
 
 def line_statistic(e: np.ndarray, dt: float, frequency: float, half_width: int = FLOOR_HALF_WIDTH) -> float:
-    """The (corrected, Exp(1) under white residuals) line statistic of :func:`spectral_peaks` at the bin nearest
-    ``frequency`` [Hz]: whether a *given* line is still in the residuals."""
+    """The corrected line statistic of :func:`spectral_peaks` at the bin nearest ``frequency`` [Hz]."""
     freqs, power = periodogram(e, dt)
     k = int(np.argmin(np.abs(freqs - frequency)))
     lo, hi = max(0, k - half_width), min(freqs.size, k + half_width + 1)
@@ -176,8 +138,7 @@ def line_statistic(e: np.ndarray, dt: float, frequency: float, half_width: int =
 
 def _line_ratios(e: np.ndarray, dt: float, f_min: float | None,
                  half_width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
-    """Frequencies, periodogram, its ratio to the running median floor (0 below ``f_min``), the number of bins
-    searched and the floor's half-width used (:func:`spectral_peaks`)."""
+    """Frequencies, periodogram, ratio to the running median (0 below ``f_min``), bins searched, half-width used."""
     freqs, power = periodogram(e, dt)
     if freqs.size < 4 * half_width:
         half_width = max(8, freqs.size // 8)
@@ -193,7 +154,7 @@ def _line_ratios(e: np.ndarray, dt: float, f_min: float | None,
 
 def _peak_at(k: int, freqs: np.ndarray, power: np.ndarray, ratio: np.ndarray, *, m: int,
              half_width: int) -> SpectralPeak:
-    """The line at bin index ``k``: its frequency refined by a parabola through the log periodogram."""
+    """The line at bin index ``k``, its frequency refined by a parabola through the log periodogram."""
     stat = floor_corrected(float(ratio[k] * math.log(2.0)), half_width)
     freq = float(freqs[k])
     if 0 < k < freqs.size - 1 and power[k - 1] > 0 and power[k + 1] > 0:
@@ -207,26 +168,9 @@ def _peak_at(k: int, freqs: np.ndarray, power: np.ndarray, ratio: np.ndarray, *,
 
 def spectral_peaks(e: np.ndarray, dt: float, *, f_min: float | None = None,
                    half_width: int = FLOOR_HALF_WIDTH) -> SpectralPeak:
-    """The largest line of the periodogram of ``e`` against its running median floor.
-
-    Parameters
-    ----------
-    e : (N,) array
-        Standardised innovations (or any residual whose floor is locally flat); NaN = missing.
-    dt : float
-        Sampling period [s].
-    f_min : float, optional
-        Lowest frequency searched [Hz]; default 4 / record length (lines need a few periods to be lines).
-    half_width : int
-        Half-width of the running-median window in bins; a line narrower than this is a peak.
-
-    Notes
-    -----
-    For standardised innovations the periodogram ordinate at f is the score statistic for adding a sinusoid
-    at f to the model (the whitening filter scales the sinusoid and the noise alike), so this is the
-    Lagrange-multiplier test of a missing sinusoid; the running median makes it robust to the broad
-    misfit a missing GM leaves in the spectrum.
-    """
+    """The largest line of the periodogram of ``e`` (NaN = missing) at period ``dt`` [s] against its running median
+    over ±``half_width`` bins, from ``f_min`` [Hz] (default 4 / record length). For standardised innovations the
+    ordinate at f is the score (LM) statistic of a sinusoid missing at f."""
     freqs, power, ratio, m, half_width = _line_ratios(e, dt, f_min, half_width)
     return _peak_at(int(np.argmax(ratio)), freqs, power, ratio, m=m, half_width=half_width)
 
@@ -242,14 +186,11 @@ def max_exponential_threshold(m: int, alpha: float) -> float:
 
 def spectral_lines(e: np.ndarray, dt: float, *, alpha: float, f_min: float | None = None,
                    half_width: int = FLOOR_HALF_WIDTH) -> list[SpectralPeak]:
-    """The largest line of the periodogram (:func:`spectral_peaks`'s, significant or not), then every other line
-    whose statistic exceeds the level-``alpha`` bound of the largest of the M searched bins
-    (:func:`max_exponential_threshold`), strongest first; a bin within :data:`LINE_SEPARATION_BINS` of a stronger
-    line belongs to it. One periodogram and floor serve them all.
+    """The largest line (:func:`spectral_peaks`, significant or not), then every other line above the level-``alpha``
+    bound of the largest of the M bins (:func:`max_exponential_threshold`), strongest first; bins within
+    :data:`LINE_SEPARATION_BINS` of a stronger line belong to it.
 
-    Beyond the papers: each line after the first is significant on its own at family-wise level α (the largest of
-    the bins that hold no line stays below the bound with probability 1 − α), so a dozen vibration lines are seen
-    at once rather than one per step.
+    Beyond the papers: all lines at once, each significant on its own at family-wise level α.
     """
     freqs, power, ratio, m, half_width = _line_ratios(e, dt, f_min, half_width)
     threshold = max_exponential_threshold(m, alpha)
@@ -283,11 +224,7 @@ def av_misfit(av_data: np.ndarray, av_model: np.ndarray) -> float:
 
 
 def log_av_sd(av_ci: tuple[np.ndarray, np.ndarray], level: float = 0.95) -> np.ndarray:
-    """Standard deviation of ln AV_hat implied by a (lo, hi) confidence interval at ``level``.
-
-    For a χ²_ν-based AV interval, ln AV_hat has standard deviation ≈ √(2/ν), and the interval spans
-    ≈ ±z·√(2/ν) in ln; inverting gives sd = (ln hi − ln lo) / (2z).
-    """
+    """sd of ln AV_hat from its (lo, hi) interval at ``level``: (ln hi − ln lo)/(2z) (χ²_ν: ≈ √(2/ν))."""
     lo, hi = (np.asarray(a, dtype=float) for a in av_ci)
     if np.any(lo <= 0) or np.any(hi <= lo):
         raise ValueError("AV confidence intervals must satisfy 0 < lo < hi")
@@ -303,23 +240,9 @@ def av_misfit_z(av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_mo
 
 @dataclass(frozen=True)
 class ResidualErrors:
-    """The loop's error measures for one fitted model (see ``docs/loop.md``).
-
-    Attributes
-    ----------
-    loglik, bic : float
-        Log-likelihood and BIC of the fit (comparable between the loop's steps, see the pipeline).
-    av_misfit : float
-        RMS over τ of log10(AV_data / AV_model).
-    ljung_box_p : float
-        Ljung–Box p-value of the standardised innovations.
-    ljung_box_q : float
-        Its statistic, over ``ljung_box_lags`` lags.
-    peak_ratio : float
-        Largest periodogram line of the standardised innovations over its local median floor.
-    peak_frequency : float
-        Where [Hz].
-    """
+    """The loop's error measures for one fit (docs/loop.md): ``loglik``, ``bic``, ``av_misfit`` (RMS over τ of
+    log10(AV_data/AV_model)), ``ljung_box_p``/``_q`` over ``ljung_box_lags``, ``peak_ratio`` and ``peak_frequency``
+    [Hz] of the largest periodogram line over its local median."""
 
     loglik: float
     bic: float

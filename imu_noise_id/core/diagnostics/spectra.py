@@ -1,8 +1,5 @@
-"""Autocorrelation and power spectral density of a fit's standardised innovations, for the report's residual plots.
-
-White innovations (the fitted model explains the data) have ρ_k within ±1.96/√n and a flat PSD of 2·dt [1/Hz]
-(one-sided, unit variance); a missing effect shows as correlation at a lag or a line or bump in the PSD.
-"""
+"""Autocorrelation and PSD of a fit's standardised innovations, for the report's residual plots (white: ρ_k within
+±1.96/√n, one-sided PSD flat at 2·dt [1/Hz])."""
 
 from __future__ import annotations
 

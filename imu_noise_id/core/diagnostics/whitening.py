@@ -1,21 +1,13 @@
 """Steady-state innovation (whitening) filter of a fitted noise model, for score tests of missing regressors.
 
-A fitted linear-Gaussian model (paper 000 eqs. 4–5: x_{t+1} = Φ x_t + w_t, y_t = H x_t + v_t) turns the
-data into standardised innovations e_t that are i.i.d. N(0, 1) if the model holds. Passing a candidate
-deterministic regressor x_t (a temperature series, a step, a ramp, a sinusoid) through the *same* filter gives
-its whitened version x̃_t; the generalised-least-squares coefficient of x and its Lagrange-multiplier (score)
-statistic are then
+A fitted linear-Gaussian model (paper 000 eqs. 4–5) turns the data into standardised innovations e_t, i.i.d.
+N(0, 1) if it holds; a candidate regressor x_t passed through the same filter gives x̃_t, and
 
-    b = Σ e_t x̃_t / Σ x̃_t²,        T = Σ e_t x̃_t / √(Σ x̃_t²)  ~ N(0, 1) under "x is not in the data".
+    b = Σ e_t x̃_t / Σ x̃_t²,        T = Σ e_t x̃_t / √(Σ x̃_t²)  ~ N(0, 1) under "x is not in the data"
 
-This is the augmented-Kalman-filter view of regression with state-space errors (de Jong 1991): the GLS
-normal equations are sums over whitened data and regressors. It goes beyond the papers (which fit stochastic
-components only) and is what lets the closed loop test deterministic effects without refitting.
-
-The filter uses the steady-state gain (Riccati limit), so it is exact after the initial transient; near missing
-samples (where the time-varying filter would skip the update) it is an approximation, and the tests simply drop
-those samples from the sums. Deterministic states (the RR ramp integrator, whose process noise is zero) do not
-whiten anything and are left out.
+(GLS with state-space errors, de Jong 1991). Beyond the papers, which fit stochastic components only.
+Steady-state gain: exact after the transient, approximate near missing samples (dropped from the sums).
+Deterministic states (RR's integrator) are left out.
 """
 
 from __future__ import annotations
@@ -32,7 +24,7 @@ from ..noise.components import Component
 
 
 def _stochastic_blocks(components: list[Component], dt: float) -> list:
-    """The state blocks of the components that have states (RR's deterministic integrator left out)."""
+    """The state blocks of the components that have states (RR's integrator left out)."""
     return [b for b in (c.block(dt) for c in components if c.name not in ("RR", "WN")) if b.n_states > 0]
 
 
@@ -47,38 +39,24 @@ def _system(components: list[Component], dt: float) -> tuple[np.ndarray, np.ndar
     return phi, q, h, r
 
 
-#: The white-noise variance R the filter uses is at least this fraction of the state noise seen at the output in one
-#: step (h Q hᵀ): a fitted white noise below it (the loop's fits beside an LPF or MA that carries the whole
-#: high-frequency density reach R ≈ 1e-12 of it) leaves the Riccati equation too ill-conditioned for either solver.
-#: Raising R by δ raises the innovation variance S ≥ h Q hᵀ by about √(δ · h Q hᵀ) at most (a random walk beside
-#: white noise: S ≈ q + √(q r)), i.e. by ≲ 3·10⁻⁵ of S here.
+#: Floor of the white-noise variance R the filter uses, as a fraction of the state noise seen at the output in one
+#: step (h Q hᵀ); it raises the innovation variance by ≲ √(δ · h Q hᵀ) (docs/loop.md, "Why the detectors …").
 R_FLOOR = 1e-9
 
 
 def _filter_r(q: np.ndarray, h: np.ndarray, r: float) -> float:
     """R raised to :data:`R_FLOOR` · h Q hᵀ (the trace of Q if no state noise reaches the output in one step).
 
-    Beyond the papers: with R → 0 the steady-state filter still exists when a state with process noise is
-    observed (the singular filtering problem; S → h Q hᵀ), but the doubling's G = hᵀh / R and the symplectic
-    pencil of scipy's solver then lose it ("eigenvalues too close to the unit circle"; ADIS16405 run 4 accel_z,
-    ``test_whitening_filter_of_a_model_whose_white_noise_went_to_zero``).
+    Beyond the papers: keeps the Riccati solvers conditioned when a fitted white noise went to ~0.
     """
     seen = float(h @ q @ h) or float(np.trace(q))
     return max(r, R_FLOOR * seen)
 
 
 def _steady_state_p(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
-    """Predicted-state covariance P of the discrete algebraic Riccati equation.
-
-    The doubling algorithm of :func:`imu_noise_id.core.kalman.statespace.steady_prediction_covariance` first (robust
-    for the nearly-unit-root random walks of IMU models), scipy's generalised-eigenvalue DARE solver (scaled
-    by R) as the fallback.
-
-    Raises
-    ------
-    ValueError
-        If neither converges (a non-detectable or degenerate model).
-    """
+    """Predicted-state covariance P of the DARE: doubling
+    (:func:`~imu_noise_id.core.kalman.statespace.steady_prediction_covariance`), scipy's solver as fallback;
+    ValueError if neither converges."""
     try:
         return steady_prediction_covariance(phi, q, h, r)
     except (InputError, np.linalg.LinAlgError):
@@ -95,28 +73,15 @@ def _steady_state_p(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> 
 
 @dataclass(frozen=True)
 class WhiteningFilter:
-    """The fitted model's steady-state innovation filter, as second-order sections.
-
-    Attributes
-    ----------
-    sos : (n_sections, 6) array
-        The LTI filter x → x̃ (innovation of x: x_t − H x̂_{t|t−1}), for :func:`scipy.signal.sosfilt`.
-    innovation_variance : float
-        Steady-state innovation variance S = H P Hᵀ + R [u²].
-    """
+    """The fitted model's steady-state innovation filter: ``sos`` (second-order sections of x → x̃ = x_t − H x̂_{t|t−1},
+    for :func:`scipy.signal.sosfilt`) and ``innovation_variance`` S = H P Hᵀ + R [u²]."""
 
     sos: np.ndarray
     innovation_variance: float
 
     @classmethod
     def from_components(cls, components: list[Component], dt: float) -> WhiteningFilter:
-        """Build the filter of a model given as fitted components (see :mod:`imu_noise_id.core.noise.components`).
-
-        Raises
-        ------
-        ValueError
-            If the model has no noise (innovation variance 0).
-        """
+        """The filter of fitted ``components`` at period ``dt`` [s]; ValueError if the model has no noise."""
         phi, q, h, r = _system(list(components), dt)
         if phi.size == 0:
             if r <= 0:
@@ -143,21 +108,8 @@ class WhiteningFilter:
 
 @dataclass(frozen=True)
 class ScoreTest:
-    """Score (LM) test of adding regressor columns to a fitted model.
-
-    Attributes
-    ----------
-    statistic : float
-        e'X̃(X̃'X̃)⁻¹X̃'e ~ χ²_k under H0 (k = number of columns); for k = 1, T² with T ~ N(0, 1).
-    dof : int
-        k.
-    log10_p : float
-        log10 P(χ²_k ≥ statistic).
-    coef : (k,) array
-        GLS one-step estimate of the regressors' coefficients [u per regressor unit].
-    se : (k,) array
-        Their standard errors.
-    """
+    """Score (LM) test of adding k regressor columns: ``statistic`` e'X̃(X̃'X̃)⁻¹X̃'e ~ χ²_k under H0, ``dof`` k,
+    ``log10_p``, ``coef`` and ``se`` (GLS one-step coefficients [u per regressor unit] and standard errors)."""
 
     statistic: float
     dof: int
@@ -167,8 +119,7 @@ class ScoreTest:
 
 
 def _projection(z: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Least-squares coefficients of x (N, k) on z (N, j): in closed form for one column z (what every detector
-    projects out: the whitened constant), else by ``lstsq``."""
+    """Least-squares coefficients of x (N, k) on z (N, j); closed form for one column."""
     if z.shape[1] == 1:
         zz = float(z[:, 0] @ z[:, 0])
         return (z[:, 0] @ x)[None, :] / zz if zz > 0 else np.zeros((1, x.shape[1]))
@@ -176,11 +127,8 @@ def _projection(z: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def score_test(e: np.ndarray, x_white: np.ndarray, nuisance_white: np.ndarray | None = None) -> ScoreTest:
-    """Score test of whitened regressors ``x_white`` against standardised innovations ``e`` (NaN = missing).
-
-    ``nuisance_white`` (whitened columns already in the model, e.g. the constant) are projected out of
-    ``x_white`` first, so the test is for what the new columns add beyond them.
-    """
+    """Score test of whitened regressors ``x_white`` against standardised innovations ``e`` (NaN = missing), with the
+    whitened ``nuisance_white`` columns (e.g. the constant) projected out first."""
     from .residuals import chi2_log10_sf
 
     e = np.asarray(e, dtype=float)
