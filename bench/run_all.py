@@ -4,6 +4,7 @@ Usage (``make bench`` runs the default set)::
 
     .venv/bin/python bench/run_all.py            # the issues' speed/memory goals (about 15–20 min)
     .venv/bin/python bench/run_all.py --long     # also the Monte-Carlo paper reproductions (hours)
+    .venv/bin/python bench/run_all.py --studies  # also the studies of bench/studies/ that docs/ quotes (hours)
     .venv/bin/python bench/run_all.py --list     # what would run
     .venv/bin/python bench/run_all.py --only bench_allan.py bench_bags.py bench_analyze_memory.py   # issue 2's three
 
@@ -46,7 +47,6 @@ LONG: list[tuple[list[str], str]] = [
     (["reproduce_paper000.py", "--case", "4.3", "--runs", "200"], "paper000_4.3.txt"),
     (["reproduce_paper000_sec5.py"], "paper000_sec5.txt"),
     (["bench_coverage.py", "--runs", "100"], "bench_coverage.txt"),
-    (["probe_gm_tau_lr.py"], "probe_gm_tau_lr.txt"),
     (["bench_allan_fit.py"], "bench_allan_fit.txt"),
     (["bench_allan_ci.py"], "bench_allan_ci.txt"),
     (["bench_cmkf_paper.py"], "cmkf_paper.txt"),
@@ -55,21 +55,10 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_cmkf_intervals.py"], "cmkf_intervals.txt"),
     (["bench_node_husky.py"], "node_husky.txt"),
     (["loop_measured.py", "--samples", "100000", "--mtig-samples", "100000"], "loop_measured.txt"),
-    (["loop_trace.py", "1", "gyro_z"], "loop_trace_r1_gyro_z.txt"),
-    (["loop_trace.py", "2", "gyro_z"], "loop_trace_r2_gyro_z.txt"),
-    (["loop_trace.py", "3", "gyro_z"], "loop_trace_r3_gyro_z.txt"),
-    (["probe_gyro_z_line_shape.py"], "probe_gyro_z_line_shape.txt"),
-    (["loop_trace.py", "6", "gyro_y"], "loop_trace_r6_gyro_y.txt"),
-    (["loop_trace.py", "5", "accel_y"], "loop_trace_r5_accel_y.txt"),
-    (["loop_trace.py", "4", "accel_z"], "loop_trace_r4_accel_z.txt"),
-    (["probe_rw_gm_swap.py", "4", "accel_z"], "probe_rw_gm_swap_r4_accel_z.txt"),
-    (["loop_trace.py", "1", "accel_x"], "loop_trace_r1_accel_x.txt"),
     (["bench_av_band.py"], "bench_av_band.txt"),
     (["bench_rw_bound.py"], "bench_rw_bound.txt"),
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
     (["bench_loop_effects.py", "--minutes", "120", "--cases", "osc+gm", "bi"], "bench_loop_effects_2h.txt"),
-    (["probe_osc_gm_bic.py"], "probe_osc_gm_bic.txt"),
-    (["probe_k_bounded_wander.py"], "probe_k_bounded_wander.txt"),
     (["bench_adis_analysis.py"], "adis_run1_analysis.txt"),
     (["bench_overbound.py"], "bench_overbound.txt"),
     (["bench_gmwm_speed.py"], "bench_gmwm_speed.txt"),
@@ -78,17 +67,45 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_gmwm_pooled.py"], "bench_gmwm_pooled.txt"),
 ]
 
+#: Studies in bench/studies/ whose outputs docs/ quotes (``--studies``): one-off questions, not regression numbers.
+#: The side-by-side studies (``--baseline DIR``: bench_sensor_filter, bench_steady_engine, bench_loop_measured_time)
+#: need another checkout and are run by hand (their docstrings give the command).
+STUDIES: list[tuple[list[str], str]] = [
+    (["studies/probe_gm_tau_lr.py"], "probe_gm_tau_lr.txt"),
+    (["studies/loop_trace.py", "1", "gyro_z"], "loop_trace_r1_gyro_z.txt"),
+    (["studies/loop_trace.py", "2", "gyro_z"], "loop_trace_r2_gyro_z.txt"),
+    (["studies/loop_trace.py", "3", "gyro_z"], "loop_trace_r3_gyro_z.txt"),
+    (["studies/probe_gyro_z_line_shape.py"], "probe_gyro_z_line_shape.txt"),
+    (["studies/loop_trace.py", "6", "gyro_y"], "loop_trace_r6_gyro_y.txt"),
+    (["studies/loop_trace.py", "5", "accel_y"], "loop_trace_r5_accel_y.txt"),
+    (["studies/loop_trace.py", "4", "accel_z"], "loop_trace_r4_accel_z.txt"),
+    (["studies/probe_rw_gm_swap.py", "4", "accel_z"], "probe_rw_gm_swap_r4_accel_z.txt"),
+    (["studies/loop_trace.py", "1", "accel_x"], "loop_trace_r1_accel_x.txt"),
+    (["studies/probe_osc_gm_bic.py"], "probe_osc_gm_bic.txt"),
+    (["studies/probe_k_bounded_wander.py"], "probe_k_bounded_wander.txt"),
+    (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "probe_k_information.txt"),
+    (["studies/probe_flicker_gm_rw.py", "--cases", "osc+clear_gm", "osc+fast_gm"], "probe_flicker_gm_rw.txt"),
+    (["studies/probe_lpf2_filter_shape.py", "--seeds", "3"], "probe_lpf2_filter_shape.txt"),
+    (["studies/probe_innovation_hump.py"], "probe_innovation_hump.txt"),
+    (["studies/probe_fit_from_off_starts.py"], "probe_fit_from_off_starts_after.txt"),
+    (["studies/bench_sin_regressors.py"], "bench_sin_regressors.txt"),
+    (["studies/bench_motion_bursts.py"], "bench_motion_bursts.txt"),
+    (["studies/profile_loop_measured.py", "--run", "3", "--axis", "gyro_x", "--samples", "0", "--limit", "1500"],
+     "profile_loop_r3_gyro_x_full_5888da1.txt"),
+]
+
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--long", action="store_true", help="also run the long reproductions")
+    parser.add_argument("--studies", action="store_true", help="also run the studies of bench/studies/")
     parser.add_argument("--list", action="store_true", help="only list what would run")
     parser.add_argument("--only", nargs="+", metavar="SCRIPT",
                         help="run only these scripts (e.g. bench_allan.py bench_bags.py bench_analyze_memory.py)")
     args = parser.parse_args(argv)
-    jobs = GOALS + (LONG if args.long else [])
+    jobs = GOALS + (LONG if args.long else []) + (STUDIES if args.studies else [])
     if args.only:
-        jobs = [job for job in GOALS + LONG if job[0][0] in args.only]
+        jobs = [job for job in GOALS + LONG + STUDIES if Path(job[0][0]).name in args.only or job[0][0] in args.only]
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env.setdefault("ROS_LOG_DIR", "/tmp/imu_noise_id_ros_log")
     failed = []

@@ -433,9 +433,9 @@ def test_flicker_that_replaced_a_random_walk_is_swapped_back_once_the_gm_it_also
 def test_flicker_standing_for_a_gm_and_a_random_walk_is_replaced_by_both_in_the_joint_search():
     """bench_loop_effects' osc+clear_gm, seed 1005: flicker noise took the random walk's place before the GM was
     modelled and the loop stopped at WN+BI+OSC (no random walk); the GM and the walk together lower the BIC by 22
-    (bench/probe_flicker_gm_rw.py). Here without the line, on 10 min: the joint search offers the pair, started from
-    the AV the flicker carries, and keeps it (BIC 5 lower, K within 50 %); a random walk beside flicker noise gets
-    no such offer."""
+    (bench/studies/probe_flicker_gm_rw.py). Here without the line, on 10 min: the joint search offers the pair,
+    started from the AV the flicker carries, and keeps it (BIC 5 lower, K within 50 %); a random walk beside flicker
+    noise gets no such offer."""
     from imu_noise_id.pipelines.loop.trials import explore, flicker_as_gm_and_walk
 
     n = 60_000

@@ -38,11 +38,11 @@ BURST_WINDOW_S = 0.25
 BURST_TRIM = 0.1
 #: … and a burst is a stretch of at least :data:`BURST_MIN_S` [s] whose windows all spread this many times more
 #: than the record's median window on some axis: a touch, a knock, the start of a motion. On the real records of
-#: ``../shared/data`` (``bench/bench_motion_bursts.py``) the still ones stay at 8.3 or below (ADIS16405 runs 1–6,
-#: 2.8 h each, but for run 4; the MTi-G gyro; the BROAD rest phases), run 4's accel_y reaches 11.5, and so does the
-#: motion's settling in the 35 s BROAD trial 10 marks as rest after it; the knocks in ADIS16405 run 4 (accel_z, t ≈
-#: 4046 s and 5146 s, ±5 m/s² for 0.4 s) reach 36–48 and the 1.3 s of motion that trial 10's rest before its motion
-#: still holds reach 136. The threshold flags what is clearly motion.
+#: ``../shared/data`` (``bench/studies/bench_motion_bursts.py``) the still ones stay at 8.3 or below (ADIS16405
+#: runs 1–6, 2.8 h each, but for run 4; the MTi-G gyro; the BROAD rest phases), run 4's accel_y reaches 11.5, and
+#: so does the motion's settling in the 35 s BROAD trial 10 marks as rest after it; the knocks in ADIS16405 run 4
+#: (accel_z, t ≈ 4046 s and 5146 s, ±5 m/s² for 0.4 s) reach 36–48 and the 1.3 s of motion that trial 10's rest
+#: before its motion still holds reach 136. The threshold flags what is clearly motion.
 BURST_RATIO = 25.0
 BURST_MIN_S = 0.5
 #: The still stretch suggested in place of a record with bursts keeps this far [s] from them.

@@ -202,7 +202,7 @@ def maximise(
     gradient is not yet small: the start's metric no longer describes the likelihood where the search got to), it
     runs once more from its end with the metric recomputed there (beyond the paper; from starts a factor e^±1.5
     off, this took two of four searches that ended more than 1.92 short to the maximum,
-    ``bench/probe_fit_from_off_starts.py``).
+    ``bench/studies/probe_fit_from_off_starts.py``).
 
     Boundary (beyond the paper): a parameter whose metric information is below ``FLAT_INFORMATION`` (e.g. a
     random walk the start already puts at ~0, where ℓ is flat in its log) is held at its start value and the

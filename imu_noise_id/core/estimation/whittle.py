@@ -187,7 +187,8 @@ def whittle_information(components: list[Component], y: np.ndarray, dt: float,
     the Whittle likelihood used before is indefinite away from its maximum; at a loop's start it gave a parameter
     that mattered a negative diagonal, read as flat and held, and the finish stopped after one evaluation, 15–250
     below the maximum in log-likelihood on 10 min of white noise and a random walk started a decade off
-    (``test_whittle.py``; ``bench/probe_fit_from_off_starts.py``: 17 of 60 such fits ended more than 1.92 short, 2 now).
+    (``test_whittle.py``; ``bench/studies/probe_fit_from_off_starts.py``: 17 of 60 such fits ended more than 1.92
+    short, 2 now).
     """
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(components) if not isinstance(c, RR) for k in c.parameter_names]

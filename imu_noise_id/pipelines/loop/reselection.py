@@ -81,7 +81,7 @@ def second_order_start(fitted: list[Component], lpf: LPF) -> list[Component]:
     Beyond the papers (issue 11's sensor filter, "an AR(1)/AR(2) on the white part"). Many MEMS parts filter with a
     second-order low-pass, which the loop, offering a GM of a few samples' memory as a first-order LPF or an MA,
     fits as an LPF: the white noise beside it goes to ~0 (the LPF's slower roll-off carries it), N reads ≈ 3 %
-    high and its interval misses the truth (``bench/probe_lpf2_filter_shape.py``: WN + LPF + RW 40 in BIC above
+    high and its interval misses the truth (``bench/studies/probe_lpf2_filter_shape.py``: WN + LPF + RW 40 in BIC above
     the true WN + OSC + RW on 20 min records of ``bench_loop_effects.py``'s ``lpf2``). The white part restarts
     above ~0 because the likelihood is flat in its logarithm there: on seed 1000 of ``lpf2``, from the LPF fit's
     ~0 white noise the search stayed at an OSC on its bandwidth's bound, 605 below the optimum in log-likelihood;

@@ -294,12 +294,12 @@ def hump_resonance(loop: AxisLoop, diag: Diagnosis) -> det.Finding | None:
     wider than its centre frequency (Q < 1, as :func:`~imu_noise_id.core.diagnostics.lines.humps` leaves such
     resonances to the low-pass and bias components): on ADIS16405 run 6 accel_z the WN+RW fit's innovations hold a
     hump 15.6 Hz wide centred at 8.2 Hz, the sensor's filter and its 10 Hz vibration together, and an OSC started
-    there took the low-pass's place (fitted at 31 Hz, 50 Hz wide; ``bench/probe_innovation_hump.py``).
+    there took the low-pass's place (fitted at 31 Hz, 50 Hz wide; ``bench/studies/probe_innovation_hump.py``).
 
     σ² is the hump's excess in the data's units: Σ over its bands of (ratio − 1)·S_model(f)·Δf, twice (the
     components' PSDs are two-sided), as the innovations' spectrum over its level is the data's PSD over the model's
     where the model whitens. Beyond the papers: on ADIS16405 gyro_z the loop stops with WN+MA+BI+OSC while the
-    innovations hold a hump from 22 to 30 Hz (``bench/probe_gyro_z_line_shape.py``); a resonance there, then the
+    innovations hold a hump from 22 to 30 Hz (``bench/studies/probe_gyro_z_line_shape.py``); a resonance there, then the
     sensor's low-pass beside it, bring the final AV inside the data's band (run 3: z 1.7 → 1.4).
     """
     hump = detect_innovation_hump(diag.innovations, loop.dt, alpha=loop.alpha)
@@ -326,7 +326,7 @@ def flicker_as_gm_and_walk(loop: AxisLoop, diag: Diagnosis) -> list[Component] |
     walk's rise), and the loop's one-at-a-time steps stop there. On ``bench_loop_effects.py``'s ``osc+clear_gm``
     (GM τ = 2 s, σ = 3·10⁻³ beside K = 3·10⁻⁴, 20 min at 100 Hz) seeds 1005 and 1009 ended WN+BI+OSC without this
     move; the GM and the walk together lower the BIC by 21.6 and 11.5 (K within 12 % and 4 %), from this start as
-    from the truth (``bench/probe_flicker_gm_rw.py``).
+    from the truth (``bench/studies/probe_flicker_gm_rw.py``).
     """
     fitted = list(diag.fit.components)
     names = {c.name for c in fitted}

@@ -3,7 +3,7 @@ motion_bursts`) reads on the real recordings of ``../shared/data``.
 
 Usage (from the repository root)::
 
-    PYTHONPATH=$PWD python bench/bench_motion_bursts.py > docs/results/bench_motion_bursts.txt
+    PYTHONPATH=$PWD python bench/studies/bench_motion_bursts.py > docs/results/bench_motion_bursts.txt
 
 Per record and axis: the largest spread ratio any burst-long stretch (:data:`~imu_noise_id.core.stillness.
 BURST_MIN_S`) holds in all its windows (the statistic :data:`~imu_noise_id.core.stillness.BURST_RATIO` is compared
@@ -17,14 +17,16 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
+
 import numpy as np
-from broad import MOTION_MARGIN_S  # bench/broad.py, beside this script
+from broad import MOTION_MARGIN_S  # bench/broad.py
 from numpy.lib.stride_tricks import sliding_window_view
 
 from imu_noise_id.core.axes import AXES, ImuSeries
 from imu_noise_id.core.stillness import BURST_RATIO, burst_window, spread_ratios, static_check
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+DATA = Path(__file__).resolve().parents[3] / "shared" / "data"
 
 
 def sustained(x: np.ndarray, dt: float) -> float:
@@ -47,7 +49,7 @@ def main() -> int:
     if not DATA.is_dir():
         print(f"no data at {DATA}", file=sys.stderr)
         return 2
-    print(f"# bench/bench_motion_bursts.py: sustained spread ratio per axis (flagged at {BURST_RATIO:g})")
+    print(f"# bench/studies/bench_motion_bursts.py: sustained spread ratio per axis (flagged at {BURST_RATIO:g})")
     for run in range(1, 7):
         d = np.load(DATA / "adis16405_static" / f"adis16405_run{run}.npz")
         report(f"ADIS16405 run {run}", d["gyro"], d["accel"], 1.0 / float(d["fs_hz"]))

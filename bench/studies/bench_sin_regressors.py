@@ -1,6 +1,6 @@
 """Cost of the SIN terms: sinusoidal regressor columns in closed form vs filtered, side by side in one run.
 
-Run:  python bench/bench_sin_regressors.py [--quick]  (the repo keeps its output in
+Run:  python bench/studies/bench_sin_regressors.py [--quick]  (the repo keeps its output in
 docs/results/bench_sin_regressors.txt).
 
 A SIN term is two regressor columns; the GLS profile inside every likelihood evaluation used to filter each like

@@ -12,7 +12,7 @@ changes, reversals) and whether the log-likelihood and a digest of every E-step 
 the last bit::
 
     git worktree add ../baseline <commit>
-    .venv/bin/python bench/bench_steady_engine.py --baseline ../baseline
+    .venv/bin/python bench/studies/bench_steady_engine.py --baseline ../baseline
 
 The models: an ADIS16405 gyro's loop model (WN+MA+BI+2OSC+RW, 14 states: a flicker ladder, a 0.55 Hz and an
 8.7 Hz resonance) and the Kalibr-like WN+GM+RW, each with the bias as a regressor, on a simulated record of white
@@ -28,9 +28,11 @@ import statistics
 import sys
 from pathlib import Path
 
-from checkouts import run_in_checkout  # bench/checkouts.py, beside this script
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
-ROOT = Path(__file__).resolve().parents[1]
+from checkouts import run_in_checkout  # bench/checkouts.py
+
+ROOT = Path(__file__).resolve().parents[2]
 
 #: Run in each source tree: the evaluations of every case, one JSON line.
 ONE_TREE = """
@@ -102,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--baseline", type=Path, action="append", default=[], help="another checkout (repeatable)")
     args = parser.parse_args(argv)
     sources = [("this checkout", ROOT), *[(f"baseline {p}", p.resolve()) for p in args.baseline]]
-    print(f"# bench/bench_steady_engine.py --lengths {' '.join(map(str, args.lengths))} --evaluations "
+    print(f"# bench/studies/bench_steady_engine.py --lengths {' '.join(map(str, args.lengths))} --evaluations "
           f"{args.evaluations} --repeats {args.repeats}; {os.cpu_count()} CPUs; load average before "
           f"{os.getloadavg()[0]:.2f}")
     runs: dict[str, list[list[dict]]] = {name: [] for name, _ in sources}

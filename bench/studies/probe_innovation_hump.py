@@ -3,7 +3,7 @@ as WN+RW, and whether the joint search's hump trial (``pipelines.loop.trials.hum
 
 Usage (from the repository root)::
 
-    PYTHONPATH=$PWD python bench/probe_innovation_hump.py [--axes 6:accel_z,3:gyro_z] [--samples N] [--out FILE]
+    PYTHONPATH=$PWD python bench/studies/probe_innovation_hump.py [--axes 6:accel_z,3:gyro_z] [--samples N] [--out FILE]
 
 Per axis: the hump's evidence, its centre and half-height width [Hz], and the trial's offer (None where the hump is
 not significant or wider than its centre: Q < 1). Output: docs/results/probe_innovation_hump.txt.
@@ -12,9 +12,12 @@ not significant or wider than its centre: Q < 1). Output: docs/results/probe_inn
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
-from adis import data_missing, load_run  # bench/adis.py, beside this script
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
+
+from adis import data_missing, load_run  # bench/adis.py
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.diagnostics.lines import detect_innovation_hump
@@ -42,7 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if data_missing():
         return 2
-    lines = [f"# bench/probe_innovation_hump.py --axes {args.axes} --samples {args.samples}"]
+    lines = [f"# bench/studies/probe_innovation_hump.py --axes {args.axes} --samples {args.samples}"]
     for pair in args.axes.split(","):
         run, axis = pair.split(":")
         lines.append(probe(int(run), axis, args.samples))

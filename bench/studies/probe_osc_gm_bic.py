@@ -1,7 +1,7 @@
 """Whether bench_loop_effects' ``osc+gm`` case holds its GM: the likelihood gain of the true structure, fitted from
 the truth, over the loop's WN+OSC+RW, against what BIC asks (docs/loop.md, "Limitations").
 
-Run:  PYTHONPATH=$PWD nice -n 10 python bench/probe_osc_gm_bic.py [--seeds 3] [--minutes 20 120]
+Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_osc_gm_bic.py [--seeds 3] [--minutes 20 120]
 (output: docs/results/probe_osc_gm_bic.txt; about a minute per 2 h record)
 
 The GM (τ = 60 s, σ = 2·10⁻³) has, above its corner 1/(2πτ) = 2.7 mHz, the PSD of a random walk of density
@@ -15,7 +15,11 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
 from bench_loop_effects import DT, K_TRUE, N_TRUE, simulate
 
@@ -31,7 +35,8 @@ def main() -> None:
     ap.add_argument("--minutes", type=float, nargs="+", default=[20.0, 120.0])
     args = ap.parse_args()
     combined = math.sqrt(K_TRUE**2 + 2.0 * GM_TRUE.sigma**2 / GM_TRUE.tau)
-    print(f"# bench/probe_osc_gm_bic.py --seeds {args.seeds} --minutes {' '.join(f'{m:g}' for m in args.minutes)}; "
+    print(f"# bench/studies/probe_osc_gm_bic.py --seeds {args.seeds} "
+          f"--minutes {' '.join(f'{m:g}' for m in args.minutes)}; "
           f"truth WN({N_TRUE}) + OSC + {GM_TRUE} + RW({K_TRUE}); combined RW density {combined:.3g}")
     options = FitOptions(uncertainty=False, n_starts=1)
     for minutes in args.minutes:

@@ -2,7 +2,7 @@
 end of K when the loop's final model may also hold a GM (docs/loop.md, "Limitations"; why K's interval is not
 widened by it).
 
-Run:  PYTHONPATH=$PWD nice -n 10 python bench/probe_k_bounded_wander.py [--seeds 10] [--minutes 20]
+Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_k_bounded_wander.py [--seeds 10] [--minutes 20]
 (output: docs/results/probe_k_bounded_wander.txt; about 10 s per record)
 
 Per seed of bench_loop_effects' ``clean`` (WN + RW) and ``osc+gm`` (WN + OSC + RW + GM(τ = 60 s)) records: the loop
@@ -18,7 +18,11 @@ n·Σw⁴/(Σw²)² of the log-likelihood ratio.
 from __future__ import annotations
 
 import math
+import sys
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
 import numpy as np
 from bench_loop_effects import DT, K_TRUE, probe_arguments, simulate
@@ -80,7 +84,7 @@ def k_lower_end(components: list[Component], y: np.ndarray, dt: float) -> tuple[
 
 def main() -> None:
     args, n = probe_arguments(__doc__)
-    print(f"# bench/probe_k_bounded_wander.py --seeds {args.seeds} --minutes {args.minutes:g} ({n} samples at "
+    print(f"# bench/studies/probe_k_bounded_wander.py --seeds {args.seeds} --minutes {args.minutes:g} ({n} samples at "
           f"100 Hz; true K = {K_TRUE}; GM τ ≤ {n * DT / (2 * math.pi * CORNER_BIN):.3g} s)")
     for case in ("clean", "osc+gm"):
         wald_holds = low_holds = zero = 0

@@ -4,14 +4,18 @@ model, of that model without each first-order filter, and of the true structure 
 (docs/loop.md, re-selection: the filter's order). Its committed output ran with the loop before re-selection's
 second-order swap (3522ec7), whose final models it shows.
 
-Run:  PYTHONPATH=$PWD nice -n 10 python bench/probe_lpf2_filter_shape.py [--seeds 10]
+Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_lpf2_filter_shape.py [--seeds 10]
 (output: docs/results/probe_lpf2_filter_shape.txt; a few minutes per record)
 """
 
 from __future__ import annotations
 
 import math
+import sys
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
 from bench_loop_effects import DT, K_TRUE, N_TRUE, probe_arguments, simulate
 
@@ -36,7 +40,7 @@ def describe(label: str, model: str, diag: Diagnosis, n_true: float) -> str:
 
 def main() -> None:
     args, n = probe_arguments(__doc__)
-    print(f"# bench/probe_lpf2_filter_shape.py --seeds {args.seeds} --minutes {args.minutes:g} "
+    print(f"# bench/studies/probe_lpf2_filter_shape.py --seeds {args.seeds} --minutes {args.minutes:g} "
           f"({n} samples at 100 Hz; N as sampled, K = {K_TRUE})", flush=True)
     for s in range(args.seeds):
         t0 = time.perf_counter()

@@ -3,10 +3,11 @@ spectral density over the model's, in 2 Hz bands, and the innovations' autocorre
 
 Usage (from the repository root)::
 
-    PYTHONPATH=$PWD python bench/probe_gyro_z_line_shape.py [--runs 2,3,4,5] [--axis gyro_z] [--samples N] [--out FILE]
+    PYTHONPATH=$PWD python bench/studies/probe_gyro_z_line_shape.py [--runs 2,3,4,5] [--axis gyro_z] [--samples N] \
+        [--out FILE]
 
 Written for gyro_z of runs 2–5, whose final AV leaves the data's band at τ = 0.03–0.04 s (the model's ADEV ≈ 2 %
-above the data's): the loop from WN+RW (``bench/loop_trace.py``), then Welch's PSD of the record (2000-sample
+above the data's): the loop from WN+RW (``bench/studies/loop_trace.py``), then Welch's PSD of the record (2000-sample
 Hann segments, linear detrend; two-sided, as the components' ``psd``) over the sum of the final components' PSDs,
 band by band from 2 Hz (the bias processes' band below is left out) to Nyquist.
 """
@@ -14,10 +15,13 @@ band by band from 2 Hz (the bias processes' band below is left out) to Nyquist.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
+
 import numpy as np
-from adis import data_missing, load_run  # bench/adis.py, beside this script
+from adis import data_missing, load_run  # bench/adis.py
 from scipy import signal
 
 from imu_noise_id.core.axes import AXES
@@ -61,7 +65,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if data_missing():
         return 2
-    lines = [f"# bench/probe_gyro_z_line_shape.py --runs {args.runs} --axis {args.axis} --samples {args.samples}"]
+    lines = [f"# bench/studies/probe_gyro_z_line_shape.py --runs {args.runs} --axis {args.axis} "
+             f"--samples {args.samples}"]
     print(lines[0], flush=True)
     for run in (int(r) for r in args.runs.split(",")):
         found = probe(run, args.axis, args.samples)

@@ -3,7 +3,7 @@ the trace behind the per-axis explanations in docs/loop.md ("Measured data").
 
 Usage (from the repository root)::
 
-    PYTHONPATH=$PWD python bench/loop_trace.py RUN AXIS [--samples N] [--out FILE]
+    PYTHONPATH=$PWD python bench/studies/loop_trace.py RUN AXIS [--samples N] [--out FILE]
 
 Prints each step (model, what was added and dropped, BIC, RMS AV misfit z, fitted parameters), every trial with the
 reason it was kept or refused, the verdict, the Allan deviations of data and model with the misfit z per τ, and the
@@ -14,10 +14,13 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 from pathlib import Path
 
-from adis import data_missing, load_run  # bench/adis.py, beside this script
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
+
+from adis import data_missing, load_run  # bench/adis.py
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.diagnostics.residuals import av_misfit_z
@@ -25,7 +28,7 @@ from imu_noise_id.pipelines.loop import LoopResult, run_closed_loop
 from imu_noise_id.pipelines.loop.rules import av_rms_z
 
 
-def trace(run: int, axis: str, samples: int, *, script: str = "bench/loop_trace.py") -> list[str]:
+def trace(run: int, axis: str, samples: int, *, script: str = "bench/studies/loop_trace.py") -> list[str]:
     """The loop from WN+RW on ``axis`` of ADIS16405 run ``run`` (its first ``samples``), traced by :func:`describe`
     under a header naming ``script``, the arguments and the time."""
     data, dt = load_run(run, samples)
@@ -54,7 +57,8 @@ def describe(r: LoopResult) -> list[str]:
     return out
 
 
-def main(argv: list[str] | None = None, *, script: str = "bench/loop_trace.py", description: str = __doc__) -> int:
+def main(argv: list[str] | None = None, *, script: str = "bench/studies/loop_trace.py",
+         description: str = __doc__) -> int:
     """The trace of one axis (``script`` and ``description`` name a caller that changed the loop first)."""
     ap = argparse.ArgumentParser(description=description.splitlines()[0])
     ap.add_argument("run", type=int)

@@ -4,7 +4,7 @@ starts from the previous fit and a detector's guess). The search's finish (``mle
 the Whittle information at the start (``whittle.whittle_information``); run this at two commits to compare two
 metrics (docs/em.md, "The finish's metric").
 
-Run:  PYTHONPATH=$PWD nice -n 10 python bench/probe_fit_from_off_starts.py [--seeds 5 --starts 3]
+Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_fit_from_off_starts.py [--seeds 5 --starts 3]
 (output: docs/results/probe_fit_from_off_starts*.txt; about two minutes)
 """
 

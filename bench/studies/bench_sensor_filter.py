@@ -9,7 +9,7 @@ components' density as sampled, ``kalibr.passband_density``), whether N's 95 % i
 N's error and method, and the CPU time; then a summary per tree::
 
     git worktree add ../baseline <commit>
-    .venv/bin/python bench/bench_sensor_filter.py --baseline ../baseline
+    .venv/bin/python bench/studies/bench_sensor_filter.py --baseline ../baseline
 
 The truth per record: N = 1.5·10⁻⁴ u/√Hz through the DLPF (cutoff log-uniform in 5–40 Hz), a white floor of
 5–20 % of it, K = 2·10⁻⁵ u/s/√Hz; ``--minutes`` of data (default 5) per record.
@@ -21,16 +21,19 @@ import argparse
 import math
 import os
 import statistics
+import sys
 import tempfile
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
+
 import numpy as np
-from checkouts import run_in_checkout  # bench/checkouts.py, beside this script
+from checkouts import run_in_checkout  # bench/checkouts.py
 
 from imu_noise_id.core.estimation import kalibr
 from imu_noise_id.core.noise.components import LPF, RW, WN, simulate_sum
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 N_TRUE, K_TRUE = 1.5e-4, 2e-5
 
 #: Run in each source tree on one record: analyze's stages for one axis and the Allan-slope reading, one JSON line.
@@ -76,8 +79,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--baseline", type=Path, action="append", default=[], help="another checkout (repeatable)")
     args = ap.parse_args(argv)
     sources = [("this checkout", ROOT), *[(f"baseline {p}", p.resolve()) for p in args.baseline]]
-    print(f"# bench/bench_sensor_filter.py --rates {' '.join(f'{r:g}' for r in args.rates)} --seeds {args.seeds} "
-          f"--minutes {args.minutes:g}; {os.cpu_count()} CPUs; load average before {os.getloadavg()[0]:.2f}")
+    print(f"# bench/studies/bench_sensor_filter.py --rates {' '.join(f'{r:g}' for r in args.rates)} "
+          f"--seeds {args.seeds} --minutes {args.minutes:g}; {os.cpu_count()} CPUs; "
+          f"load average before {os.getloadavg()[0]:.2f}")
     print(f"# truth: N = {N_TRUE:g} through a first-order DLPF (cutoff log-uniform 5-40 Hz) beside a white floor of "
           f"5-20 % of it, K = {K_TRUE:g}; N's truth is the density as sampled")
     rows: dict[str, list[dict]] = {name: [] for name, _ in sources}

@@ -3,8 +3,8 @@
 The full 10⁶-sample records take an hour or more per heavy axis, so the profile is taken for at most
 ``--limit`` seconds and printed either way (stopped or finished), sorted by cumulative time::
 
-    PYTHONPATH=$PWD OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/profile_loop_measured.py --run 3 --axis gyro_x \\
-        --samples 0 --limit 1500 --stats /tmp/r3gx.prof
+    PYTHONPATH=$PWD OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/studies/profile_loop_measured.py \\
+        --run 3 --axis gyro_x --samples 0 --limit 1500 --stats /tmp/r3gx.prof
 
 Needs ``../shared/data/adis16405_static`` (third-party data, not in the repository).
 """
@@ -17,8 +17,11 @@ import pstats
 import signal
 import sys
 import time
+from pathlib import Path
 
-from adis import data_missing, load_run  # bench/adis.py, beside this script
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
+
+from adis import data_missing, load_run  # bench/adis.py
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.pipelines.loop import run_closed_loop

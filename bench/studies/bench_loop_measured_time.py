@@ -9,7 +9,7 @@ precision) and whether model, log-likelihood (to the last digit) and verdict equ
 package is checked to be the one imported)::
 
     git worktree add ../baseline <commit>
-    .venv/bin/python bench/bench_loop_measured_time.py --baseline ../baseline --axes 1:accel_x broad10:gyro_x
+    .venv/bin/python bench/studies/bench_loop_measured_time.py --baseline ../baseline --axes 1:accel_x broad10:gyro_x
 
 Needs ``../shared/data/adis16405_static`` and, for the BROAD axes, ``../shared/data/broad_trials`` (third-party
 data, not in the repository).
@@ -22,10 +22,12 @@ import os
 import sys
 from pathlib import Path
 
-from adis import data_missing  # bench/adis.py, beside this script
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
+
+from adis import data_missing  # bench/adis.py
 from checkouts import run_in_checkout  # bench/checkouts.py
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 #: Run in each source tree: the loop on one axis, one JSON line (model, log-likelihood as repr, verdict).
 ONE_AXIS = """
@@ -61,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     if data_missing():
         return 2
     sources = [("this checkout", ROOT), *[(f"baseline {p}", p.resolve()) for p in args.baseline]]
-    print(f"# bench/bench_loop_measured_time.py --samples {args.samples}; {os.cpu_count()} CPUs; load average "
+    print(f"# bench/studies/bench_loop_measured_time.py --samples {args.samples}; {os.cpu_count()} CPUs; load average "
           f"before {os.getloadavg()[0]:.2f}")
     for pair in args.axes:
         record, axis = pair.split(":")

@@ -5,7 +5,7 @@ It came out nominal (with the inner maximisations of its time, started at the es
 Bartlett-type correction. The under-coverage it was written to explain came from the profile search itself (fixed
 in f362b8c): its inner maximisations never left the K ≈ 0 branch, so intervals ended where ℓ_A was still high.
 
-Run:  nice -n 10 python bench/probe_gm_tau_lr.py   (output: docs/results/probe_gm_tau_lr.txt; ~15 min)
+Run:  nice -n 10 python bench/studies/probe_gm_tau_lr.py   (output: docs/results/probe_gm_tau_lr.txt; ~15 min)
 
 For four records of bench_coverage.py's WN+GM+RW+RR (seeds 1001 and 1030, whose fits lie near or below the true
 τ = 100 s; 1027 and 1052, on the long-τ branch with K ≈ 0), the fit's adjusted-profile machinery
@@ -95,7 +95,7 @@ def main() -> None:
     ap.add_argument("--truth", type=int, default=100)
     args = ap.parse_args()
     t0 = time.perf_counter()
-    print(f"# bench/probe_gm_tau_lr.py --seeds {args.seeds} --boot {args.boot} --truth {args.truth}; "
+    print(f"# bench/studies/probe_gm_tau_lr.py --seeds {args.seeds} --boot {args.boot} --truth {args.truth}; "
           f"truth {' + '.join(map(str, TRUTH))}, N = {N}, dt = {DT} s")
     for seed in (int(s) for s in args.seeds.split(",")):
         fit, prof, k, k_rw = _captured(seed)

@@ -1,7 +1,8 @@
 """Where the loop ends with flicker noise (BI) and neither a random walk nor a GM on bench_loop_effects' short-GM
 cases: the BIC of replacing the flicker by a GM and a random walk in one move (docs/loop.md, joint search).
 
-Run:  PYTHONPATH=$PWD nice -n 10 python bench/probe_flicker_gm_rw.py [--cases osc+clear_gm osc+fast_gm] [--seeds 10]
+Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_flicker_gm_rw.py \
+          [--cases osc+clear_gm osc+fast_gm] [--seeds 10]
 (output: docs/results/probe_flicker_gm_rw.txt; a minute or two per record)
 
 Per seed: the final model and BIC of the loop without that move (the joint search's third trial switched off, as
@@ -13,7 +14,11 @@ with the BIC difference (negative: the pair fits better), the fitted K and GM (Ï
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
 import numpy as np
 from bench_loop_effects import DT, GMS, K_TRUE, simulate

@@ -1,7 +1,7 @@
 """How well *any* estimator could know K in bench_loop_effects' GM cases: the Cramér–Rao bound of K and the
 random walk a model without the GM converges to (docs/loop.md, "Limitations"; issue 11's "K within 35 %").
 
-Run:  PYTHONPATH=$PWD nice -n 10 python bench/probe_k_information.py [--seeds 10] [--minutes 20 120]
+Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_k_information.py [--seeds 10] [--minutes 20 120]
 (output: docs/results/probe_k_information.txt; a few seconds per case; no simulation, no fit)
 
 For a Gaussian process whose first difference is stationary, the Fisher information of n samples is, to leading
@@ -29,6 +29,10 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
 import numpy as np
 from bench_loop_effects import DT, GMS, K_TRUE, N_TRUE, simulate
@@ -97,8 +101,9 @@ def main() -> None:
     ap.add_argument("--minutes", type=float, nargs="+", default=[20.0, 120.0])
     ap.add_argument("--cases", nargs="+", default=["clean", "gm", "osc+gm", "osc+fast_gm", "osc+clear_gm"])
     args = ap.parse_args()
-    print(f"# bench/probe_k_information.py --seeds {args.seeds} --minutes {' '.join(f'{m:g}' for m in args.minutes)}"
-          f" (100 Hz; N = {N_TRUE}, K = {K_TRUE}; seeds 1000 … as bench_loop_effects)")
+    print(f"# bench/studies/probe_k_information.py --seeds {args.seeds} "
+          f"--minutes {' '.join(f'{m:g}' for m in args.minutes)} (100 Hz; N = {N_TRUE}, K = {K_TRUE}; "
+          f"seeds 1000 … as bench_loop_effects)")
     for minutes in args.minutes:
         n = int(minutes * 60 / DT)
         omega = fourier_omega(n)

@@ -3,10 +3,10 @@ ADIS16405 accelerometer keep a smaller K? The loop from WN+RW on one axis with t
 
 Usage (from the repository root)::
 
-    PYTHONPATH=$PWD python bench/probe_rw_gm_swap.py RUN AXIS [--samples N] [--out FILE]
+    PYTHONPATH=$PWD python bench/studies/probe_rw_gm_swap.py RUN AXIS [--samples N] [--out FILE]
 
 The extra move replaces the fitted RW by a GM of τ a tenth of the record and σ from the long-τ AV (the joint
-search's start, ``trials.explore``); everything else is the loop's. Prints the trace of ``bench/loop_trace.py``.
+search's start, ``trials.explore``); everything else is the loop's. Prints the trace of ``bench/studies/loop_trace.py``.
 Written for run 4 accel_z, whose RW (1.3·10⁻³ m/s²/√s) lies above the long-τ AV's simultaneous 95 % bound.
 """
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-import loop_trace  # bench/loop_trace.py, beside this script
+import loop_trace  # bench/studies/loop_trace.py, beside this script
 
 from imu_noise_id.core.noise.base import Component
 from imu_noise_id.core.noise.components import GM
@@ -42,7 +42,7 @@ def moves_with_gm_swap(loop: AxisLoop, diag: Diagnosis, added: str,
 
 def main(argv: list[str] | None = None) -> int:
     reselection.moves = moves_with_gm_swap  # reselect() looks it up in its module
-    return loop_trace.main(argv, script="bench/probe_rw_gm_swap.py", description=__doc__)
+    return loop_trace.main(argv, script="bench/studies/probe_rw_gm_swap.py", description=__doc__)
 
 
 if __name__ == "__main__":
