@@ -1,9 +1,5 @@
-"""The Allan family: AV, HV, TV and MDEV with χ² confidence intervals, and slope parameters read off the AV.
-
-* :mod:`.estimators` — the four estimators over τ = m·dt, one signature for all (``allan_family``);
-* :mod:`.edf` — their equivalent degrees of freedom (Greenhall & Riley; NIST SP1065) and χ² intervals;
-* :mod:`.slopes` — noise density, random walk, quantisation, bias instability and rate ramp from the AV slopes.
-"""
+"""The Allan family: AV, HV, TV and MDEV with χ² confidence intervals (:mod:`.estimators`, :mod:`.edf`), noise
+parameters read off the AV slopes (:mod:`.slopes`) and the random-walk bound (:mod:`.rw_bound`)."""
 
 from .edf import chi2_interval, edf_greenhall, edf_total, identify_alpha, local_slopes
 from .estimators import (

@@ -1,26 +1,14 @@
-"""Equivalent degrees of freedom and χ² confidence intervals of the Allan-family estimators (:mod:`.estimators`).
+"""Equivalent degrees of freedom (EDF) and χ² confidence intervals of the Allan-family estimators.
 
-Confidence intervals
---------------------
-The estimate times ``edf / variance`` is treated as χ² with ``edf`` equivalent degrees of freedom
-(NIST SP1065 section 5.3), giving the two-sided interval [edf·σ̂²/χ²_{(1+c)/2}, edf·σ̂²/χ²_{(1−c)/2}].
-The EDF depends on the power-law noise type S_y(f) ∝ f^α at that τ:
+The estimate times ``edf / variance`` is χ²_edf (NIST SP1065 section 5.3); the EDF depends on the noise type
+S_y(f) ∝ f^α at that τ:
 
-* AV, HV, MAV: Greenhall's general EDF algorithm (C. A. Greenhall, W. J. Riley, "Uncertainty of stability
-  variances based on finite differences", PTTI 2003, eqs. 7–10 and tables 1–3), d = 2 (AV, MAV) or 3 (HV),
-  F = m (unmodified) or 1 (modified), S = m (overlapping). Exact sums are used when J ≤ 100 terms, the paper's
-  asymptotic table formulas otherwise (its cases 1–4).
-* TV: Howe's empirical fit edf = b·N/m − c (NIST SP1065 table 11) for α = 0, −1, −2; for α = 1, 2, where that
-  table has no entry, the overlapping-AV EDF from Greenhall's algorithm (TV is never worse than the AV it
-  improves on, so this errs on the wide side).
+* AV, HV, MAV: Greenhall's algorithm (Greenhall & Riley, PTTI 2003, eqs. 7–10, tables 1–3), d = 2 or 3, exact
+  sums for J ≤ 100 terms, the table asymptotics (cases 1–4) otherwise;
+* TV: edf = b·N/m − c (NIST SP1065 table 11) for α = 0, −1, −2; for α = 1, 2 the overlapping AV's EDF.
 
-The noise type is an **assumption**. By default it is identified per τ and axis from the local log-log slope
-μ of the estimated variance (σ² ∝ τ^μ): α = −μ − 1 rounded to an integer, which maps white noise (μ = −1) to
-α = 0, random walk (μ = +1) to α = −2, and quantisation noise (μ = −2, or −3 for MAV) to α = 2; α is clipped
-to the range the EDF formulas cover (−2..2; −4..2 for HV). Where the slope says phase noise (μ = −2 in AV, HV,
-TV: white *or* flicker phase noise, or a low-pass-filtered white noise), the lag-1 autocorrelation of the data
-decides (:func:`identify_alpha` with the data, :func:`lag1_alpha`). Pass ``alpha=`` to fix it instead. Deterministic
-effects (a rate ramp, μ = +2) are not noise: their interval is only indicative.
+α is an assumption: by default α = −μ − 1 from the local log-log slope μ (:func:`identify_alpha`), the lag-1
+autocorrelation deciding where the slope says phase noise (:func:`lag1_alpha`); ``alpha=`` fixes it.
 """
 
 from __future__ import annotations
@@ -68,14 +56,14 @@ def _sw(t: np.ndarray, alpha: int) -> np.ndarray:
 
 
 def _sx(t: np.ndarray, F: float, alpha: int) -> np.ndarray:
-    """Greenhall eq. (8): phase averaged over 1/F of the sample spacing (F = ∞: no averaging)."""
+    """Greenhall eq. (8): phase averaged over 1/F of the sample spacing."""
     if math.isinf(F):
         return _sw(t, alpha + 2)
     return F * F * (2.0 * _sw(t, alpha) - _sw(t - 1.0 / F, alpha) - _sw(t + 1.0 / F, alpha))
 
 
 def _sz(t: np.ndarray, F: float, alpha: int, d: int) -> np.ndarray:
-    """Greenhall eq. (9): autocovariance of the d-th difference, binomial weights (−1)^k C(2d, d+k)."""
+    """Greenhall eq. (9): autocovariance of the d-th difference, weights (−1)^k C(2d, d+k)."""
     t = np.asarray(t, dtype=float)
     total = np.zeros_like(t)
     for k in range(-d, d + 1):
@@ -96,7 +84,7 @@ def _basic_sum(J: int, M: float, S: float, F: float, *, alpha: int, d: int) -> f
 def edf_greenhall(
     alpha: int, d: int, m: int, n_phase: int, *, overlapping: bool = True, modified: bool = False
 ) -> float:
-    """Equivalent degrees of freedom of a d-th difference variance (Greenhall & Riley 2003, cases 1–4).
+    """EDF of a d-th difference variance (Greenhall & Riley 2003, cases 1–4).
 
     Parameters
     ----------
@@ -107,11 +95,9 @@ def edf_greenhall(
     m : int
         Averaging factor.
     n_phase : int
-        Number of phase points (N rate samples give N + 1).
-    overlapping : bool
-        Stride 1 (S = m) if True, else stride m (S = 1).
-    modified : bool
-        Phase averaged over m samples (F = 1), as in the modified Allan variance.
+        Phase points (N rate samples give N + 1).
+    overlapping, modified : bool
+        Stride 1 (S = m) or m (S = 1); phase averaged over m samples (F = 1).
     """
     if alpha + 2 * d <= 1:
         raise ValueError(f"Greenhall EDF needs alpha + 2d > 1, got alpha={alpha}, d={d}")
@@ -169,10 +155,8 @@ _TOTVAR_BC = {0: (1.50, 0.0), -1: (1.17, 0.22), -2: (0.93, 0.36)}  # NIST SP1065
 
 
 def edf_total(alpha: int, m: int, n: int) -> float:
-    """EDF of the total variance at τ = m·dt from n rate samples: b·n/m − c (NIST SP1065 table 11).
-
-    For α = 1, 2 (not in the table) the overlapping-AV EDF of Greenhall's algorithm is returned.
-    """
+    """EDF of the total variance at τ = m·dt from n samples: b·n/m − c (NIST SP1065 table 11); for α = 1, 2 the
+    overlapping AV's."""
     if alpha in _TOTVAR_BC:
         b, c = _TOTVAR_BC[alpha]
         return b * n / m - c
@@ -195,18 +179,8 @@ SLOPE_HALF_WINDOW = 2
 
 
 def local_slopes(tau: np.ndarray, variance: np.ndarray, half_window: int = SLOPE_HALF_WINDOW) -> np.ndarray:
-    """Least-squares slope of log σ² vs log τ over ±``half_window`` neighbouring τ, per column.
-
-    Parameters
-    ----------
-    tau : ndarray, shape (T,)
-    variance : ndarray, shape (T,) or (T, k)
-        Non-positive values are ignored.
-
-    Returns
-    -------
-    ndarray, same shape as ``variance``; NaN where fewer than two usable points are in the window.
-    """
+    """Least-squares slope of log σ² vs log τ over ±``half_window`` neighbouring τ, per column of ``variance`` (T,) or
+    (T, k); non-positive values ignored, NaN with fewer than two usable points."""
     v = np.asarray(variance, dtype=float)
     v2 = v[:, None] if v.ndim == 1 else v
     lt = np.log(np.asarray(tau, dtype=float))
@@ -232,17 +206,12 @@ STEEP_SLOPE = -1.25
 
 def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str, y: np.ndarray | None = None,
                    m: np.ndarray | None = None) -> np.ndarray:
-    """Noise exponent α per τ and axis from the local log-log slope μ of the variance: α = −μ − 1, rounded.
+    """Noise exponent α per τ and axis: α = −μ − 1 rounded, μ from :func:`local_slopes`, clipped to
+    :func:`alpha_range`.
 
-    μ is the regression slope over ±2 neighbouring τ (:func:`local_slopes`). For AV, HV and TV a slope of −2 is
-    white phase noise (α = 2) *or* flicker phase noise (α = 1, the same slope but for a log factor) or a
-    low-pass-filtered white noise: with the rate samples ``y`` (N, k) and averaging factors ``m`` given, α is read
-    from the data's lag-1 autocorrelation (:func:`lag1_alpha`) wherever μ < :data:`STEEP_SLOPE`, once per run of
-    such τ at its shortest τ; without them a
-    slope of −2 maps to α = 2 (the modified AV's slope tells them apart itself: −3 vs −2). α is then made
-    non-increasing in τ (a running minimum): inertial sensor noise goes from quantisation through white noise to
-    flicker and random walk as τ grows, and this keeps one low point in a noisy long-τ tail from being read as
-    white phase noise, whose EDF would be huge and its interval far too narrow. A single τ gives α = 0.
+    With rate samples ``y`` (N, k) and factors ``m``, α is read from the lag-1 autocorrelation (:func:`lag1_alpha`)
+    where μ < :data:`STEEP_SLOPE` (AV, HV, TV), once per run of such τ at its shortest τ; else μ = −2 maps to α = 2.
+    α is then made non-increasing in τ (running minimum). A single τ gives α = 0.
     """
     variance = np.asarray(variance, dtype=float)
     lo, hi = alpha_range(kind)
@@ -277,14 +246,10 @@ LAG1_MIN_POINTS = 30
 
 
 def lag1_alpha(y: np.ndarray, m: int, d_max: int = 2) -> float | None:
-    """Noise exponent α of rate samples at averaging factor m from the lag-1 autocorrelation (Riley & Greenhall,
-    "Power law noise identification using the lag 1 autocorrelation", 2004, with frequency data).
+    """Noise exponent α at averaging factor m from the lag-1 autocorrelation (Riley & Greenhall 2004, frequency data).
 
-    The non-overlapping m-averages, a least-squares line removed, are differenced d = 0, 1, … times until
-    δ = r₁/(1 + r₁) < 0.25 (r₁ the lag-1 autocorrelation; at most ``d_max`` times); then α = −2(δ + d). White
-    phase noise gives r₁ = −½, α = 2; flicker phase noise α ≈ 1; white frequency noise r₁ = 0, α = 0; random walk
-    α = −2. It tells white from flicker phase noise, which the Allan variance's slope (−2 for both) cannot.
-    None when fewer than :data:`LAG1_MIN_POINTS` averages exist.
+    The non-overlapping m-averages, a line removed, are differenced d = 0, 1, … (≤ ``d_max``) times until
+    δ = r₁/(1 + r₁) < 0.25; α = −2(δ + d). None with fewer than :data:`LAG1_MIN_POINTS` averages.
     """
     k = y.size // m
     if k < LAG1_MIN_POINTS:

@@ -1,31 +1,15 @@
-"""Allan-family variances of rate signals (gyro rad/s, accel m/s²) with χ² confidence intervals.
+"""Allan-family variances of rate samples y (gyro rad/s, accel m/s²) over τ = m·dt, vectorised over axes.
 
-Four estimators over τ = m·dt (m a positive integer), each vectorised over the axes of an (N,) or (N, k)
-array of *rate* samples y (``data_type="freq"`` in frequency-stability terms):
+With the phase x_0 = 0, x_i = dt·Σ_{j<i} (y_j − ȳ), i = 0..N:
 
-* ``"allan"``: maximal-overlap Allan variance, paper 000 (Stebler et al. 2011) eq. (2);
-* ``"hadamard"``: overlapping Hadamard variance, paper 000 section 2 (the estimator below eq. 2 with
-  N − 3τ + 1 terms);
-* ``"total"``: total variance, paper 000 section 2 (TV). The paper's formula is only sketched there (circular
-  shifts); we implement the standard form it cites ([28], Howe; NIST SP1065 eq. 25): the phase series is
-  extended by odd reflection at both ends and all N − 2 interior second differences are averaged;
-* ``"modified"``: modified Allan variance (NIST SP1065 eq. 14), not in paper 000: it averages the phase over
-  m samples before differencing and separates white from flicker phase noise.
+* ``allan``    AV(m)  = Σ_i (x_{i+2m} − 2x_{i+m} + x_i)² / (2 τ² (N − 2m + 1))         (paper 000 eq. 2)
+* ``hadamard`` HV(m)  = Σ_i (x_{i+3m} − 3x_{i+2m} + 3x_{i+m} − x_i)² / (6 τ² (N − 3m + 1)) (paper 000 sec. 2)
+* ``total``    TV(m)  = Σ_{i=1}^{N−1} (x*_{i−m} − 2x_i + x*_{i+m})² / (2 τ² (N − 1)), x* the phase reflected
+  oddly at both ends (paper 000 sec. 2; NIST SP1065 eq. 25)
+* ``modified`` MAV(m) = Σ_j (Σ_{i=j}^{j+m−1} x_{i+2m} − 2x_{i+m} + x_i)² / (2 m² τ² (N − 3m + 2)) (SP1065 eq. 14)
 
-With the phase (integrated rate) x_0 = 0, x_i = dt·Σ_{j<i} (y_j − ȳ), i = 0..N, the estimators are
-
-* AV(m)   = Σ_i (x_{i+2m} − 2x_{i+m} + x_i)² / (2 τ² (N − 2m + 1))                       (paper 000 eq. 2)
-* HV(m)   = Σ_i (x_{i+3m} − 3x_{i+2m} + 3x_{i+m} − x_i)² / (6 τ² (N − 3m + 1))
-* TV(m)   = Σ_{i=1}^{N−1} (x*_{i−m} − 2x_i + x*_{i+m})² / (2 τ² (N − 1)),
-  x*_{−j} = 2x_0 − x_j, x*_{N+j} = 2x_N − x_{N−j}
-* MAV(m)  = Σ_j (Σ_{i=j}^{j+m−1} x_{i+2m} − 2x_{i+m} + x_i)² / (2 m² τ² (N − 3m + 2))
-
-Each costs O(N) per τ (lagged differences of the phase, and a moving sum through a cumulative sum for MAV);
-the mean is removed before integrating so that the phase stays small and the differences keep their precision.
-These are the definitions allantools uses (``oadev``, ``ohdev``, ``totdev``, ``mdev`` with
-``data_type="freq"``); the tests check equality to a relative 1e-9.
-
-The confidence intervals and their equivalent degrees of freedom are in :mod:`.edf`.
+O(N) per τ; equal to allantools' ``oadev``, ``ohdev``, ``totdev``, ``mdev`` (``data_type="freq"``). Intervals:
+:mod:`.edf`.
 """
 
 from __future__ import annotations
@@ -56,25 +40,14 @@ class AllanResult:
     Attributes
     ----------
     kind : {"allan", "hadamard", "total", "modified"}
-        The estimator.
-    dt : float
-        Sampling period [s].
-    n : int
-        Number of samples per axis the estimate used.
-    m : ndarray of int, shape (T,)
-        Averaging factors, τ = m·dt.
-    tau : ndarray, shape (T,)
-        Averaging times [s].
-    variance : ndarray, shape (T, k)
-        The variance estimate [u²] (u = rad/s or m/s²).
-    ci_low, ci_high : ndarray, shape (T, k)
-        Two-sided ``confidence`` interval of the variance from the χ² law with ``edf`` degrees of freedom.
-    edf : ndarray, shape (T, k)
-        Equivalent degrees of freedom.
-    alpha : ndarray of int, shape (T, k)
-        Power-law noise exponent (S_y ∝ f^α) assumed for the EDF.
-    confidence : float
-        Confidence level of ``ci_low``/``ci_high``.
+    dt : sampling period [s]
+    n : samples per axis used
+    m, tau : (T,) averaging factors and times τ = m·dt [s]
+    variance : (T, k) the estimate [u²] (u = rad/s or m/s²)
+    ci_low, ci_high : (T, k) two-sided ``confidence`` χ² interval with ``edf`` degrees of freedom
+    edf : (T, k) equivalent degrees of freedom
+    alpha : (T, k) power-law exponent (S_y ∝ f^α) assumed for the EDF
+    confidence : the intervals' level
     """
 
     kind: str
@@ -109,11 +82,7 @@ class AllanResult:
 
 # --------------------------------------------------------------------------------------------------- τ grid
 def max_m(n: int, kind: Kind) -> int:
-    """Largest averaging factor m the estimator ``kind`` defines for n samples (0 if none).
-
-    AV needs at least two second differences (m ≤ (n − 1)/2), HV two third differences (m ≤ (n − 1)/3),
-    MAV two phase-averaged differences (m ≤ n/3); TV is limited to τ ≤ T/2 as in NIST SP1065.
-    """
+    """Largest m the estimator defines for n samples (0 if none): AV (n − 1)/2, HV (n − 1)/3, MAV n/3, TV τ ≤ T/2."""
     _check_kind(kind)
     if kind == "hadamard":
         return max((n - 1) // 3, 0)
@@ -125,15 +94,12 @@ def max_m(n: int, kind: Kind) -> int:
 def choose_m(
     n: int, kind: Kind = "allan", per_decade: int = DEFAULT_PER_DECADE, m_max: int | None = None
 ) -> np.ndarray:
-    """Log-spaced unique averaging factors 1 ≤ m ≤ ``m_max`` (default :func:`max_m`), ~``per_decade`` a decade.
-
-    The grid is 10^(j/per_decade) rounded to integers and de-duplicated, plus the largest allowed m so that
-    the longest τ the data supports is always shown.
+    """Log-spaced unique factors 1 ≤ m ≤ ``m_max`` (default :func:`max_m`, always included), ~``per_decade`` a decade.
 
     Raises
     ------
     InputError
-        If the series is too short for even m = 1, or ``per_decade`` < 1.
+        If the series is too short for m = 1, or ``per_decade`` < 1.
     """
     limit = max_m(n, kind)
     if limit < 1:
@@ -244,9 +210,8 @@ def _difference_sums(x: np.ndarray, m_list: np.ndarray, order: int) -> np.ndarra
 
 
 def second_differences(y: np.ndarray, dt: float, m_list: np.ndarray) -> Iterator[tuple[int, np.ndarray]]:
-    """(m, x_{i+2m} − 2x_{i+m} + x_i for i = 0..N−2m) per m, x the phase of the rate column ``y`` [u·s] — the terms
-    the Allan variance sums (paper 000 eq. 2) and, divided by 2m·dt, the Haar MODWT wavelet coefficients of
-    :mod:`imu_noise_id.core.wavelet`. Each array is a view into one reused buffer: use it before the next."""
+    """(m, x_{i+2m} − 2x_{i+m} + x_i for i = 0..N−2m) per m, x the phase of ``y`` [u·s]: the AV's terms (paper 000
+    eq. 2) and, / (2m·dt), the Haar MODWT coefficients. Each array is a view of one reused buffer."""
     x = _phase(np.asarray(y, dtype=float), dt)
     buffers = [np.empty(x.size) for _ in range(2)]
     for m in m_list:
@@ -325,24 +290,22 @@ def allan_family(
     Parameters
     ----------
     y : ndarray, shape (N,) or (N, k)
-        Rate samples (rad/s, m/s², …) at a constant period ``dt``; each column is one axis.
+        Rate samples (rad/s, m/s², …) at constant period ``dt``; one column per axis.
     dt : float
         Sampling period [s].
     kind : {"allan", "hadamard", "total", "modified"}
-        The estimator (see the module docstring for the formulas).
+        The estimator (module docstring).
     tau, m : array_like, optional
-        Averaging times [s] (rounded to m = τ/dt) or averaging factors; at most one of them. Default:
-        :func:`choose_m` (``per_decade`` log-spaced m up to :func:`max_m`).
+        Averaging times [s] (rounded to m = τ/dt) or factors, at most one; default :func:`choose_m`.
     confidence : float
         Two-sided level of the χ² interval.
     alpha : int or array (T, k), optional
-        Noise exponent assumed for the EDF; default: identified per τ from the local slope
-        (:func:`identify_alpha`), the data's lag-1 autocorrelation deciding where the slope is steep.
+        Noise exponent for the EDF; default :func:`identify_alpha`.
 
     Raises
     ------
     InputError
-        Too few samples, NaN/inf samples, bad dt, τ outside [dt, longest τ the estimator allows].
+        Too few samples, NaN/inf samples, bad dt, τ outside [dt, longest τ].
     """
     y = _as_columns(y, dt, kind)
     n = y.shape[0]
@@ -373,13 +336,8 @@ def allan_family(
 
 
 def stack_axes(results: list[AllanResult]) -> AllanResult:
-    """Join results of the same kind, τ grid and samples computed on different axes into one (T, Σk) result.
-
-    Raises
-    ------
-    ValueError
-        If the results differ in kind, dt, n, m or confidence.
-    """
+    """Join same-kind results computed on different axes into one (T, Σk) result; ValueError if kind, dt, n, m or
+    confidence differ."""
     first = results[0]
     for r in results[1:]:
         if (r.kind, r.dt, r.n, r.confidence) != (first.kind, first.dt, first.n, first.confidence) or not np.array_equal(

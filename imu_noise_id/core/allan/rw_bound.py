@@ -1,25 +1,11 @@
 """The largest random walk a record's long-τ Allan variance supports: a simultaneous upper confidence bound.
 
-A fitted model's random walk K is judged by the likelihood and, in the closed loop, by the AV up to a tenth of the
-record. Beyond that the AV estimates have few degrees of freedom each, yet they are what tells a random walk from a
-bounded wander: on the first 1000 s of an ADIS16405 accelerometer (run 4 accel_z) the AV rises as K²τ/3 with
-K ≈ 1.2·10⁻³ m/s²/√s from 17 s to 133 s, and the two halves of the record have the same mean to 1.5·10⁻⁴ m/s² (a
-random walk of that K makes them differ by 2.4·10⁻² in sd): the record's own long-τ AV argues against the K the
-model keeps (``bench/loop_measured.py``).
-
-Since the AVs of independent components add, AV(τ) ≥ K²τ/3 at every τ for any model holding a random walk K. With
-AV_hat(τ)·ν/AV(τ) read as χ²_ν (NIST SP1065 eq. 45; ν the EDF of a random walk, the smallest of the power laws
-α ≥ −2, so the bound errs wide), the one-sided limit at level 1 − q,
-
-    U(τ) = AV_hat(τ)·ν / χ²_ν(q),
-
-lies below AV(τ) with probability q. Taking q = (1 − level)/M over the M estimates at τ ≥ τ_min (Bonferroni, valid
-whatever their correlation), K ≤ min_τ √(3·U(τ)/τ) holds with probability ≥ ``level`` jointly. The minimum of
-pointwise limits (q = 1 − level at each τ) does not: a true K exceeds it with probability up to M·(1 − level).
-How strongly the data argue against a given K is the Bonferroni p-value min(1, M·min_τ F_ν(ν·AV_hat(τ)/(K²τ/3))),
-F_ν the χ²_ν distribution function: one estimate of one degree of freedom at τ = N/2 (the two halves' means)
-can bound K alone, and a near-zero one is not rare (P(χ²_1 < 10⁻⁴) ≈ 0.8 %), so a flag reports that p.
-Beyond the papers (IEEE Std 952 reads K off the +½ slope and gives no bound for a record too short to show it).
+AV(τ) ≥ K²τ/3 at every τ for any model holding a random walk K (AVs of independent components add). With
+AV_hat·ν/AV read as χ²_ν (NIST SP1065 eq. 45, ν a random walk's EDF), U(τ) = AV_hat(τ)·ν/χ²_ν(q) lies below
+AV(τ) with probability q; with q = (1 − level)/M over the M estimates at τ ≥ τ_min (Bonferroni),
+K ≤ min_τ √(3·U(τ)/τ) holds jointly with probability ≥ ``level``. The data's evidence against a given K is the
+p-value min(1, M·min_τ F_ν(ν·AV_hat(τ)/(K²τ/3))). Beyond the papers (IEEE Std 952 gives no bound); reasons:
+docs/analysis.md, "Why the slope rules …".
 """
 
 from __future__ import annotations
@@ -46,8 +32,8 @@ class RandomWalkBound:
 
     Attributes
     ----------
-    value : the bound [u/s/√Hz]; nan when the record has no AV estimate at τ ≥ ``tau_range[0]``
-    level : its confidence level, simultaneous over the :attr:`estimates` AV estimates it is the minimum over
+    value : the bound [u/s/√Hz]; nan without an AV estimate at τ ≥ ``tau_range[0]``
+    level : its confidence level, simultaneous over the :attr:`estimates` AV estimates
     tau_range : the τ [s] read (first, last)
     tau_at_minimum : the τ [s] where the bound is attained
     tau, variance, edf : the AV estimates read: τ [s], AV [u²] and a random walk's EDF
@@ -67,8 +53,7 @@ class RandomWalkBound:
         return int(self.tau.size)
 
     def p_value(self, random_walk: float) -> float:
-        """How strongly these AV estimates argue against a random walk K [u/s/√Hz]: the Bonferroni p-value of
-        the hypothesis AV(τ) ≥ K²τ/3 (module docstring); 1 with no estimates."""
+        """Bonferroni p-value of AV(τ) ≥ K²τ/3 for K = ``random_walk`` [u/s/√Hz]; 1 without estimates."""
         if self.estimates == 0 or random_walk <= 0:
             return 1.0
         tails = stats.chi2.cdf(self.edf * self.variance / (random_walk**2 * self.tau / 3.0), self.edf)
@@ -79,8 +64,7 @@ class RandomWalkBound:
         return random_walk is not None and math.isfinite(self.value) and random_walk > self.value
 
     def excess(self, random_walk: float) -> str:
-        """What a K above the bound means, in words (the bound, its τ, the p-value): for a value's source and a
-        warning alike."""
+        """What a K above the bound means, in words (the bound, its τ, the p-value)."""
         return (f"above what the data's AV at τ = {self.tau_range[0]:.3g}–{self.tau_range[1]:.3g} s supports "
                 f"({self.value:.3g} at {100 * self.level:.0f} %, p = {self.p_value(random_walk):.2g} over "
                 f"{self.estimates} estimates): a bounded wander fits this record as well")

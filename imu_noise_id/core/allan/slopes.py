@@ -1,8 +1,5 @@
 """Noise parameters read off an Allan-variance curve by its characteristic slopes (IEEE Std 952, Kalibr).
 
-On a log-log plot an independent power-law component adds a straight line AV = c·τ^μ (μ in *variance*; the
-deviation slope is μ/2):
-
 =====================  ====  ==========================  =====================================================
 component              μ     AV(τ)                       parameter read off the line
 =====================  ====  ==========================  =====================================================
@@ -13,46 +10,19 @@ random walk   (RW)     +1    K²τ/3                       K = ADEV of the line 
 rate ramp     (RR)     +2    R²τ²/2                      R [u/s]
 =====================  ====  ==========================  =====================================================
 
-Rule (documented in docs/analysis.md):
+Rules (docs/analysis.md, "Noise parameters from the slopes", with their reasons):
 
-1. **Lines.** Since the AVs of independent components add, the coefficients c ≥ 0 are fitted together,
-   AV(τ) ≈ Σ_j c_j τ^μ_j, over all τ (IEEE Std 952 annex C fits the same sum). The fit minimises
-   Σ_i ρ(√(ν_i/2)·log(model_i/AV_i)) with ν_i the EDF (log of a χ²_ν/ν variable has variance ≈ 2/ν) and ρ
-   Huber's loss with threshold 2.5, bounded c ≥ 0, started from linear non-negative least squares with
-   weights ν/(2·model²). Noisy long-τ points therefore weigh little, a spike in the tail cannot make a
-   parameter NaN or drag it far, and a component no line supports gets c ≈ 0. WN and RW are always
-   fitted; QN, BI and RR are added only where the curve lies significantly above that base model (its
-   lower confidence limit above the base fit at two or more τ of their region; for QN where its line is at
-   least 10 % of the sum), or where the fit with the line leaves the curve's confidence intervals at six fewer τ
-   than the base model (WN + RW forced through a flicker plateau overshoots the curve beyond it). An
-   always-fitted QN line bounded at c ≥ 0 took a share of the shortest-τ AV on records without quantisation and
-   biased N low by about its own standard error.
-2. **Region.** A component's τ region is where its line is at least half of the fitted sum, i.e. where the
-   local slope of the curve is within about ±0.5 (in AV, ±¼ in ADEV) of the component's slope. QN, BI and
-   RR are reported only when they have such a region of at least two τ.
-3. **Confidence interval.** From the single AV point of the region with the most information on the
-   coefficient (largest ν·s², s the component's share of the fitted sum there): its χ² interval, relative,
-   divided by s (the other lines are taken as known), widened in log (in quadrature) by the difference
-   between the fitted c and the c this point alone implies when that point's interval does not hold the
-   fitted c (a misfit), and carried to the parameter (∝ √c). AV estimates at
-   neighbouring τ are strongly correlated, so averaging them adds little information and a naive
-   least-squares error would be too optimistic; this interval is approximate (coverage measured in
-   ``bench/bench_allan_fit.py``).
-4. **No region.** When WN or RW dominates nowhere (e.g. the record is too short to reach the +½ slope), the
-   value is the upper bound implied by the curve: N² ≤ τ·AV(τ) and K² ≤ 3·AV(τ)/τ at every τ, using the
-   upper confidence limit and the smallest value over τ. It is flagged ``method="upper_bound"``.
-5. **The sensor's low-pass.** Beyond the IEEE lines. A sensor that low-passes its noise (a MEMS part's DLPF) makes
-   the AV at the shortest τ fall more slowly than white noise's τ⁻¹ before it steepens to it, and so lie *below*
-   its own white-noise line N²/τ there, which no sum of the non-negative lines above can do. Fitted anyway, that
-   roll-off was read as a bias-instability plateau beside a white-noise line far below the curve (7× on a simulated
-   10 Hz DLPF at 400 Hz), and rule 4's bound, taken at the shortest τ where the filter had cut the AV below N²/τ,
-   was no bound. So a stretch at the start flatter than −1 + 2·:data:`SLOPE_TOLERANCE` that ends in white noise's
-   −1 (within :data:`SLOPE_TOLERANCE`, not steeper: a vibration line's falling side is) at τ_j, no later than
-   :data:`ROLLOFF_MAX_MEMORIES` times the longest memory a sensor filter has (50 ms, or five samples below 100 Hz:
-   a slower one is a bias process over white noise), is left out when the
-   AV at the shortest τ lies below the white-noise line of WN + RW fitted from τ_j on (its upper confidence limit
-   below N²/τ₀): rules 1–4 use the τ from τ_j on, and ``AxisSlopes.rolloff_tau`` says where (None: the whole
-   curve). A white or quantised start lies on or above that line and is read whole.
+1. **Lines.** c ≥ 0 of AV(τ) ≈ Σ_j c_j τ^μ_j fitted together over all τ (IEEE Std 952 annex C), minimising
+   Σ_i ρ(√(ν_i/2)·log(model_i/AV_i)), ν the EDF, ρ Huber's loss (:data:`HUBER_K`). WN and RW always; QN, BI, RR
+   where the curve is significantly above WN + RW (:func:`select_lines`).
+2. **Region.** Where a line is at least :data:`DOMINANCE` of the fitted sum; QN, BI, RR need two τ of it.
+3. **Interval.** The χ² interval of the region's point with the largest ν·s² (s the line's share), divided by
+   s, widened in log by the fit's disagreement with that point when outside it; approximate.
+4. **No region.** For WN or RW the upper bound N² ≤ τ·AV_hi(τ), K² ≤ 3·AV_hi(τ)/τ, minimum over τ
+   (``method="upper_bound"``).
+5. **The sensor's low-pass** (beyond IEEE Std 952). A start flatter than white noise that ends in its −1 slope
+   (:func:`rolloff_end`) is left out when the shortest-τ AV lies below the white-noise line; rules 1–4 read
+   from there (``AxisSlopes.rolloff_tau``).
 """
 
 from __future__ import annotations
@@ -82,10 +52,7 @@ SLOPE_TOLERANCE = 0.1
 ROLLOFF_MIN_POINTS = 8
 ROLLOFF_WHITE_STEPS = 3
 #: The roll-off is the sensor filter's only if it ends within this many of the longest memory a sensor filter has
-#: (:func:`~imu_noise_id.core.noise.resonant.filter_memory_limit`): a first-order low-pass's AV slope reaches
-#: −0.9 at about 16 memories, and with a white floor beside the filter up to 40 (simulated DLPFs, 200 Hz – 1 kHz,
-#: ``bench/bench_sensor_filter.py``). A slower "roll-off" is a Gauss–Markov bias process over white noise, whose
-#: white start is the sensor's noise.
+#: (:func:`~imu_noise_id.core.noise.resonant.filter_memory_limit`); slower, it is a bias process over white noise.
 ROLLOFF_MAX_MEMORIES = 40
 #: B = ADEV_min / BIAS_INSTABILITY_FACTOR (IEEE Std 952, flicker floor).
 BIAS_INSTABILITY_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
@@ -98,19 +65,13 @@ class SlopeComponent:
     Attributes
     ----------
     name : {"QN", "WN", "BI", "RW", "RR"}
-    slope : float
-        The line's slope μ in AV (the ADEV slope is μ/2).
-    coefficient : float
-        c in AV(τ) = c·τ^μ of the fitted line [u²·s^(−μ)].
-    value : float
-        The parameter (Q [u·s], N [u/√Hz], B [u], K [u/s/√Hz] or R [u/s]).
-    ci : tuple of float
-        Its confidence interval (module docstring, rule 3); (0, value) for an upper bound (rule 4).
+    slope : the line's slope μ in AV (ADEV: μ/2)
+    coefficient : c in AV(τ) = c·τ^μ [u²·s^(−μ)]
+    value : Q [u·s], N [u/√Hz], B [u], K [u/s/√Hz] or R [u/s]
+    ci : its confidence interval (rule 3); (0, value) for an upper bound (rule 4)
     method : {"fit", "upper_bound"}
-    tau_range : tuple of float
-        The τ [s] the line was fitted on (or where the bound was attained).
-    n_points : int
-        Number of AV points used.
+    tau_range : the τ [s] fitted on (or where the bound was attained)
+    n_points : AV points used
     """
 
     name: str
@@ -129,8 +90,8 @@ class SlopeComponent:
 
 @dataclass(frozen=True)
 class AxisSlopes:
-    """Slope parameters of one axis; QN, BI and RR are None where the curve shows no region for them;
-    ``rolloff_tau`` the τ [s] from which they were read when the shortest ones show the sensor's low-pass (rule 5)."""
+    """Slope parameters of one axis (QN, BI, RR None without a region); ``rolloff_tau``: the τ [s] they were read
+    from when the shortest τ show the sensor's low-pass (rule 5)."""
 
     noise_density: SlopeComponent
     random_walk: SlopeComponent
@@ -167,27 +128,13 @@ EXTRAS = ("QN", "BI", "RR")
 #: is the most precise: a quantisation too weak to dominate anywhere still biases N if left out).
 QN_TEST_SHARE = 0.1
 #: An extra line is also kept when the fit with it leaves the curve's confidence intervals at this many τ fewer than
-#: WN + RW: most of a decade of the grid, more than one chance excursion of neighbouring (correlated) estimates
-#: makes (none on 180 simulated clean 10-minute axes, ``bench/bench_allan_fit.py``; two did at two τ fewer); on
-#: the ADIS16405 gyros whose flicker floor WN + RW bends through it is 14–18.
+#: WN + RW (reasons: docs/analysis.md, "Why the slope rules …").
 MENDED_MIN = 6
 
 
 def fit_lines(tau: np.ndarray, variance: np.ndarray, edf: np.ndarray, names: tuple[str, ...] = _NAMES) -> np.ndarray:
-    """Non-negative coefficients c_j of AV(τ) ≈ Σ_j c_j τ^μ_j over the lines ``names`` (rule 1).
-
-    Parameters
-    ----------
-    tau, variance, edf : ndarray, shape (T,)
-        One axis of an Allan-variance result.
-    names : tuple of str
-        Lines to use (keys of ``_LINES``); the others get c = 0.
-
-    Returns
-    -------
-    ndarray, shape (5,)
-        Coefficients in QN, WN, BI, RW, RR order.
-    """
+    """Non-negative coefficients (QN, WN, BI, RW, RR order; c = 0 for lines not in ``names``) of AV(τ) ≈ Σ_j c_j τ^μ_j
+    fitted to one axis's ``tau``, ``variance``, ``edf`` (rule 1)."""
     use = np.array([n in names for n in _NAMES])
     basis = tau[:, None] ** _MUS[None, use]
     ok = np.isfinite(variance) & (variance > 0) & (edf > 0)
@@ -234,14 +181,11 @@ def _region(j: int, coef: np.ndarray, tau: np.ndarray, share: float = DOMINANCE)
 
 
 def select_lines(res: AllanResult, axis: int) -> np.ndarray:
-    """Coefficients of the base lines (WN, RW) plus the extras (QN, BI, RR) the data need (rule 1).
+    """Coefficients of WN, RW plus the extras (QN, BI, RR) the data need (rule 1).
 
-    An extra line is kept when it has a region (of at least two τ; for QN where it is at least
-    :data:`QN_TEST_SHARE` of the sum) and either the AV's lower confidence limit lies above the base model at two
-    or more τ of it (the curve is significantly higher than WN + RW can explain there), or the fit with it lies
-    outside the AV's confidence interval at :data:`MENDED_MIN` fewer τ than the base model: WN + RW forced through a
-    plateau overshoots the curve elsewhere (ADIS16405 runs 1–2 gyro_x: the random walk bent through the flicker
-    floor lay above the data's upper limit at τ = 316–2400 s).
+    An extra is kept when it has a region (QN: where it is at least :data:`QN_TEST_SHARE` of the sum) and either the
+    AV's lower confidence limit lies above the base model at two or more τ of it, or the fit with it leaves the AV's
+    interval at :data:`MENDED_MIN` fewer τ than the base model.
     """
     tau, av, edf = res.tau, res.variance[:, axis], res.edf[:, axis]
     lo, hi = res.ci_low[:, axis], res.ci_high[:, axis]
@@ -300,13 +244,11 @@ def _upper_bound(name: str, res: AllanResult, axis: int) -> SlopeComponent:
 
 
 def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float) -> int:
-    """Where a stretch at the start flatter than white noise ends in it (:func:`rolloff_end`), 0 where none does.
+    """Where a start flatter than white noise ends in it (:func:`rolloff_end`), 0 where none does.
 
-    With s_i = Δln AV/Δln τ from τ_i to τ_{i+1}, looked at before the curve's minimum: the first j after the first
-    s > −1 + 2·:data:`SLOPE_TOLERANCE` with s_j within :data:`SLOPE_TOLERANCE` of −1 or steeper, the next
-    :data:`ROLLOFF_WHITE_STEPS` slopes no steeper than −1 by more than that (the falling side of a vibration line's
-    bump is steeper), no later than :data:`ROLLOFF_MAX_MEMORIES` filter memories and with
-    :data:`ROLLOFF_MIN_POINTS` τ left.
+    With s_i = Δln AV/Δln τ before the curve's minimum: the first j after an s > −1 + 2·:data:`SLOPE_TOLERANCE`
+    with s_j within :data:`SLOPE_TOLERANCE` of −1 or steeper, the next :data:`ROLLOFF_WHITE_STEPS` slopes no steeper
+    than −1 − tolerance, no later than :data:`ROLLOFF_MAX_MEMORIES` filter memories, :data:`ROLLOFF_MIN_POINTS` τ left.
     """
     ok = np.isfinite(av) & (av > 0)
     stop = int(np.argmin(np.where(ok, av, np.inf)))
@@ -324,14 +266,9 @@ def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float) -> int:
 
 
 def rolloff_end(res: AllanResult, axis: int = 0) -> int:
-    """Index of the first τ beyond the sensor's low-pass roll-off (rule 5), 0 when the curve shows none.
-
-    The candidate end τ_j of a stretch flatter than white noise (:func:`_rolloff_candidate`) is the filter's only if
-    the AV at the shortest τ lies below the white-noise line N²/τ of WN + RW fitted from τ_j on (its upper
-    confidence limit below the line's lower one, rule 3, so that neither estimate's noise can make one): no sum of
-    non-negative lines can do that, and a low-pass on white noise always does; a white or quantised start followed
-    by a line's bump lies on it or above.
-    """
+    """Index of the first τ beyond the sensor's low-pass roll-off (rule 5), 0 when none: the candidate
+    (:func:`_rolloff_candidate`) counts when the shortest-τ AV's upper limit lies below the lower limit of the
+    white-noise line of WN + RW fitted from there."""
     j = _rolloff_candidate(res.tau, res.variance[:, axis], res.dt)
     if not j:
         return 0
@@ -345,13 +282,7 @@ def rolloff_end(res: AllanResult, axis: int = 0) -> int:
 
 
 def fit_axis_slopes(res: AllanResult, axis: int = 0) -> AxisSlopes:
-    """Allan-slope parameters of column ``axis`` of an Allan-variance result (rules 1–5 of the module).
-
-    Raises
-    ------
-    ValueError
-        If ``res`` is not an Allan variance (the slope relations above are those of the AV).
-    """
+    """Allan-slope parameters of column ``axis`` (rules 1–5); ValueError if ``res`` is not an Allan variance."""
     if res.kind != "allan":
         raise ValueError(f"slope parameters are defined on the Allan variance, got a {res.kind} variance")
     start = rolloff_end(res, axis)
