@@ -1,9 +1,6 @@
-"""Kalman filtering and smoothing for :class:`~imu_noise_id.core.kalman.statespace.StateSpace` models.
-
-Two engines with one API: :mod:`.exact` (the time-varying recursion of paper 000's appendix; any Σ, missing
-samples) and :mod:`.steady` (steady-state gains as IIR filters; Σ = P̄ and no missing samples). The functions
-here pick the engine (``engine='auto'``: steady when it applies, else exact).
-"""
+"""Kalman filtering and smoothing for :class:`~imu_noise_id.core.kalman.statespace.StateSpace` models: the exact
+time-varying engine (:mod:`.exact`, paper 000 appendix; any Σ, missing samples) and the steady-state one
+(:mod:`.steady`; Σ = P̄, no missing samples), picked by ``engine='auto'``."""
 
 from __future__ import annotations
 
@@ -44,12 +41,8 @@ def loglik(
     model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, profile_mean: bool = True,
     engine: str = "auto",
 ) -> ProfileResult:
-    """Exact log-likelihood (prediction-error decomposition) of y under ``model``.
-
-    With ``profile_mean`` the free mean parameters (b, u, μ) are set to their GLS estimate (closed form;
-    the maximum of the likelihood over them for the given noise parameters), else the model's values are used.
-    NaN samples are missing (no update).
-    """
+    """Exact log-likelihood (prediction-error decomposition) of y under ``model``; with ``profile_mean`` the free mean
+    parameters (b, u, μ) at their closed-form GLS estimate. NaN samples are missing."""
     y, z = check_data(y, z, model.n_regressors)
     cols = build_columns(model, y, z, profile_mean)
     inn = _engine(model, y, engine).innovations(model, cols)
@@ -59,10 +52,7 @@ def loglik(
 def profile_and_smooth(
     model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, engine: str = "auto"
 ) -> tuple[ProfileResult, StateSpace, SmootherStats]:
-    """:func:`loglik` with the mean parameters profiled, the model at their estimate, and its E-step statistics.
-
-    One forward pass when the steady engine applies (see :func:`.steady.profile_and_smooth`).
-    """
+    """:func:`loglik` with the mean parameters profiled, the model at their estimate, and its E-step statistics."""
     y, z = check_data(y, z, model.n_regressors)
     cols = build_columns(model, y, z, True)
     eng = _engine(model, y, engine)

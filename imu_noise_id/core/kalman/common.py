@@ -1,10 +1,8 @@
-"""Shared pieces of the Kalman engines: inputs ("columns"), results, and the regression (GLS) profile.
+"""Shared pieces of the Kalman engines: inputs ("columns"), results, and the GLS profile of the mean parameters.
 
-Every engine runs the filter on several *columns* at once. Column 0 is the data: measurement ``y − Z·b``,
-state input ``u`` and initial mean ``μ``. The other columns are the responses of the same (linear) filter to the
-model's free mean parameters — regression coefficients ``b``, state inputs ``u``, initial means ``μ`` — so that
-the innovations are affine in them, e(β) = e₀ + Σ_c β_c·r_c, and generalised least squares gives their MLE for
-fixed noise parameters in closed form (a profile likelihood; beyond paper 000, which updates u and μ by EM only).
+Column 0 is the data (measurement y − Z·b, state input u, initial mean μ); the others are the filter's responses
+to each free mean parameter (b, u, μ), so e(β) = e₀ + Σ_c β_c·r_c and GLS gives their MLE in closed form (a
+profile likelihood; beyond paper 000, which updates u and μ by EM).
 """
 
 from __future__ import annotations
@@ -26,18 +24,11 @@ class Columns:
 
     Attributes
     ----------
-    y : (m, N) array
-        Measurement input of each column (NaN in column 0 marks missing samples for all columns).
-    g : (p, m) array
-        Constant state input of each column (u for the data column).
-    m0 : (p, m) array
-        Initial state mean of each column (μ for the data column).
-    names : list[str]
-        ``'data'`` then ``'b:<regressor>'``, ``'u:<state>'``, ``'mu:<state>'`` for the mean parameters.
-    omega : (m,) array
-        ω [rad/sample] of each column that is a regressor the model declares a sinusoid
-        (:attr:`.statespace.StateSpace.sinusoid_omega`), NaN for the others: the steady engine may compute its
-        response in closed form (:mod:`.harmonic`).
+    y : (m, N) measurement input per column (NaN in column 0 marks missing samples for all)
+    g : (p, m) constant state input per column (u for the data)
+    m0 : (p, m) initial state mean per column (μ for the data)
+    names : ``'data'``, then ``'b:<regressor>'``, ``'u:<state>'``, ``'mu:<state>'``
+    omega : (m,) ω [rad/sample] of declared sinusoidal regressor columns, NaN for the others (:mod:`.harmonic`)
     """
 
     y: np.ndarray
@@ -63,19 +54,13 @@ class SmootherStats:
 
     Attributes
     ----------
-    xs : (p, N) array
-        Smoothed means x_t^N (one row per state).
-    sum_p : (p, p) array
-        Σ_{t=1}^{N} P_t^N.
-    p_first, p_last : (p, p) arrays
-        P_1^N and P_N^N.
-    sum_lag : (p, p) array
-        Σ_{t=2}^{N} P_{t,t−1}^N.
-    sum_p_obs : (p, p) array
-        Σ over observed t of P_t^N.
-    loglik : float
-        Exact log-likelihood of the data at the model's current parameters (prediction-error decomposition).
-    observed : (N,) bool array
+    xs : (p, N) smoothed means x_t^N
+    sum_p : Σ_{t=1}^{N} P_t^N
+    p_first, p_last : P_1^N and P_N^N
+    sum_lag : Σ_{t=2}^{N} P_{t,t−1}^N
+    sum_p_obs : Σ over observed t of P_t^N
+    loglik : exact log-likelihood at the model's current parameters
+    observed : (N,) bool
     """
 
     xs: np.ndarray
@@ -152,10 +137,8 @@ class ProfileResult:
 
 
 def profile(inn: InnovationResult, names: list[str], keep_innovations: bool = True) -> ProfileResult:
-    """GLS of the innovations on the regressor responses; exact Gaussian log-likelihood at the optimum.
-
-    e(β) = e₀ + Σ_c β_c r_c; β̂ minimises Σ_t e_t(β)²/F_t (the only β-dependent part of the log-likelihood).
-    """
+    """GLS of the innovations on the regressor responses and the exact Gaussian log-likelihood at the optimum:
+    β̂ minimises Σ_t e_t(β)²/F_t, e(β) = e₀ + Σ_c β_c r_c."""
     obs = inn.observed
     all_obs = bool(np.all(obs))
     E = inn.e if all_obs else inn.e[:, obs]

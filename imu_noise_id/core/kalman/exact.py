@@ -1,9 +1,5 @@
-"""Exact (time-varying) Kalman filter and RTS smoother with the lag-one covariance: paper 000, appendix.
-
-The reference engine: a plain recursion over time that handles any initial covariance Σ and missing samples
-(NaN → prediction only, no update). It stores per-time covariances, so it is meant for short series, series
-with gaps and as the yardstick the fast engine (:mod:`.steady`) is tested against.
-"""
+"""Exact (time-varying) Kalman filter and RTS smoother with the lag-one covariance (paper 000, appendix): any Σ,
+missing samples (NaN → prediction only); per-time covariances stored. The yardstick for :mod:`.steady`."""
 
 from __future__ import annotations
 

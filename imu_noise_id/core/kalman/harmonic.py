@@ -1,27 +1,14 @@
-"""Regressor columns that are pure sinusoids: recognised once, and their steady-state filter response in closed form.
+"""Regressor columns that are pure sinusoids: recognised once, their steady-state filter response in closed form.
 
-Beyond the papers (paper 000's model has no regressors). The GLS profile (:mod:`.common`) runs the filter on one
-column per free regressor. A narrow line in the residual enters the closed loop as a SIN term, two columns
-sin(ωt), cos(ωt) (ω in rad per sample); a consumer module with a dozen lines carries two dozen such columns, and
-every likelihood evaluation filtered each of them like the data: 2.5 (20 min at 100 Hz) to 11 (1 h at 200 Hz)
-times the cost of an evaluation without them (``docs/results/bench_sin_regressors.txt``).
+Beyond the papers. For the steady filter x_{t+1} = A x_t + g·y_t (x_0 = 0, A = Φ(I − K H), g = ΦK) and an input
+y_t = Re(ζ_0 e^{jωt}), with (e^{jω} I − A) v = g:
 
-The steady-state filter is linear and time invariant (:mod:`.steady`): predicted state
-x_{t+1} = A x_t + g·y_t from x_0 = 0, with A = Φ(I − K H) stable and g = ΦK. For an input y_t = Re(ζ_t), ζ_t = ζ_0
-e^{jωt}, the particular solution Re(v ζ_t) with (e^{jω} I − A) v = g plus the free response from x_0 − Re(v ζ_0)
-give it exactly:
+    H x_t = Re(Hv)·y_t − Im(Hv)·ŷ_t − H A^t Re(v ζ_0),        ŷ_t = (cos ω·y_t − y_{t+1}) / sin ω.
 
-    H x_t = Re(Hv)·y_t − Im(Hv)·ŷ_t − H A^t Re(v ζ_0),        ŷ_t = Im ζ_t = (cos ω·y_t − y_{t+1}) / sin ω.
-
-The first two terms are two multiply-adds over the column; the last is the free response of the p states, which
-decays like ρ(A)^t: it is filtered once, over the samples where ρ(A)^t has not yet fallen below 1e-22, for each
-modal state through its own block (or, in the Schur basis, for the p unit states or the columns, whichever are
-fewer), and combined by one matrix product (:func:`.steady._sinusoid_output`, used where that costs less than half
-of filtering the columns). A column is only ever treated so when its sinusoid was checked against every sample by
-whoever built the regressors (:func:`sinusoid_omega`, called by
-:class:`~imu_noise_id.core.estimation.model.NoiseModel`), declared in
-:attr:`~.statespace.StateSpace.sinusoid_omega`, and still obeys the sinusoid's recurrence at a few samples of the
-column the engine is given (:func:`obeys`); otherwise it is filtered like any column.
+The free response (last term) is filtered only while ρ(A)^t ≥ :data:`FREE_RESPONSE_FLOOR`
+(:func:`.steady._sinusoid_output`). Only columns checked by :func:`sinusoid_omega` when built, declared in
+:attr:`~.statespace.StateSpace.sinusoid_omega` and passing :func:`obeys` are treated so. Speed: docs/em.md,
+"SIN terms".
 """
 
 from __future__ import annotations
@@ -42,12 +29,8 @@ FREE_RESPONSE_FLOOR = 1e-22
 
 
 def sinusoid_omega(column: np.ndarray) -> float:
-    """ω ∈ (0, π) [rad/sample] when ``column`` is a·cos ωt + b·sin ωt at every sample (to :data:`RECURRENCE_TOL`),
-    else NaN.
-
-    cos ω from the least-squares fit of the recurrence, through 1 − cos ω (computed from second differences, so a
-    low frequency keeps its digits); the recurrence is then checked at every sample.
-    """
+    """ω ∈ (0, π) [rad/sample] when ``column`` is a·cos ωt + b·sin ωt at every sample (to :data:`RECURRENCE_TOL`), else
+    NaN; cos ω from a least-squares fit of the recurrence via 1 − cos ω (second differences)."""
     z = np.asarray(column, dtype=float)
     if z.ndim != 1 or z.size < 8 or not np.all(np.isfinite(z)):
         return math.nan
@@ -66,9 +49,7 @@ def sinusoid_omega(column: np.ndarray) -> float:
 
 
 def obeys(column: np.ndarray, omega: float) -> bool:
-    """Whether ``column`` obeys the recurrence of ω around its second, middle and last-but-one samples: a check
-    that the column run is the one whose sinusoid was declared, not a proof (:func:`sinusoid_omega` checked every
-    sample when the columns were built)."""
+    """Whether ``column`` obeys ω's recurrence around its second, middle and last-but-one samples (a spot check)."""
     n = column.size
     if n < 8 or math.sin(omega) <= MIN_SIN:
         return False
@@ -105,11 +86,8 @@ def free_response_length(poles: np.ndarray, n: int) -> int:
 
 def steady_parts(a: np.ndarray, g: np.ndarray, h: np.ndarray, y: np.ndarray, omega: np.ndarray, *,
                  rows: np.ndarray, out: np.ndarray) -> np.ndarray:
-    """Write Re(Hv)·y − Im(Hv)·ŷ of each sinusoidal input column ``y[r]`` (r in ``rows``, ω ``omega[r]``) into
-    ``out[r]``; return the initial states Re(v ζ_0) of their free responses (p, len(rows)).
-
-    A (p, p), g = ΦK (p,), H (p,) of the steady filter.
-    """
+    """Write Re(Hv)·y − Im(Hv)·ŷ of each sinusoidal column ``y[r]`` (r in ``rows``, ω ``omega[r]``) into ``out[r]``;
+    return the free responses' initial states Re(v ζ_0) (p, len(rows)). A (p, p), g = ΦK (p,), H (p,)."""
     p = a.shape[0]
     start = np.zeros((p, rows.size))
     for i, r in enumerate(rows):

@@ -1,8 +1,5 @@
-"""The steady-state prediction covariance P̄ of a Kalman filter (discrete algebraic Riccati equation).
-
-Used for Σ = P̄ (``StateSpace.sigma_mode == 'steady'``: the filter is time-invariant from the first sample) and by
-the whitening filter of the residual diagnostics.
-"""
+"""The steady-state prediction covariance P̄ of a Kalman filter (discrete algebraic Riccati equation, DARE), for
+Σ = P̄ (``sigma_mode == 'steady'``) and the diagnostics' whitening filter."""
 
 from __future__ import annotations
 
@@ -18,10 +15,8 @@ PSD_TOLERANCE = 1e-8
 
 
 def _covariance(P: np.ndarray) -> np.ndarray:
-    """``P`` when it is a covariance to rounding (symmetric, eigenvalues ≥ −:data:`PSD_TOLERANCE` × the largest),
-    else InputError: with variances many decades apart (e.g. a Gauss–Markov σ of 300 beside a white noise of 1e-5
-    per sample, met by an optimiser's trial steps) the iteration can converge in double precision to a matrix with a
-    large negative eigenvalue, whose "likelihood" is finite and meaningless."""
+    """``P`` when it is a covariance to rounding (symmetric, eigenvalues ≥ −:data:`PSD_TOLERANCE` × the largest), else
+    InputError (variances many decades apart can converge to a matrix with a large negative eigenvalue)."""
     w = np.linalg.eigvalsh(P)
     if not (np.all(np.isfinite(w)) and w[0] >= -PSD_TOLERANCE * max(abs(w[-1]), abs(w[0]))):
         raise InputError("the steady-state prediction covariance is not positive semi-definite in double precision "
@@ -32,9 +27,7 @@ def _covariance(P: np.ndarray) -> np.ndarray:
 def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess: np.ndarray) -> np.ndarray | None:
     """P̄ by Newton's method on the DARE (Hewer 1971) from ``guess``; None unless it converges in a few steps.
 
-    With the gain L = Φ P hᵀ / (h P hᵀ + r) of the current P, the next P solves the Lyapunov equation
-    P = A P Aᵀ + Q + r L Lᵀ, A = Φ − L h (Kronecker form, p² unknowns). Quadratic convergence from a nearby
-    stabilising guess (e.g. P̄ of a model one finite-difference step away).
+    With L = Φ P hᵀ / (h P hᵀ + r), the next P solves P = A P Aᵀ + Q + r L Lᵀ, A = Φ − L h (Kronecker form).
     """
     p = phi.shape[0]
     if guess.shape != (p, p) or not np.all(np.isfinite(guess)):
@@ -62,21 +55,16 @@ def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess:
 def steady_prediction_covariance(
     phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, *, guess: np.ndarray | None = None
 ) -> np.ndarray:
-    """Steady-state prediction covariance P̄ of the Kalman filter (discrete algebraic Riccati equation).
+    """Steady-state prediction covariance P̄: P = Φ P (I + G P)⁻¹ Φᵀ + Q, G = Hᵀ R⁻¹ H.
 
-    P = Φ P (I + G P)⁻¹ Φᵀ + Q with G = Hᵀ R⁻¹ H, solved by the structure-preserving doubling algorithm
-    (quadratic convergence: ~log2 of the slowest filter time constant iterations, each a few p×p products;
-    far cheaper than a generalised-eigenvalue DARE solver for the tiny p here). With ``guess`` (P̄ of a nearby
-    model), Newton's method from it is tried first (:func:`_newton_dare`; same stopping rule), doubling if it
-    does not converge within a few steps (it agrees with the doubling to ~1e-13 relative). Where the doubling's
-    I + G X is singular to rounding (a state observed nearly exactly), the generalised Schur method
+    Solved by the structure-preserving doubling algorithm; with ``guess`` (P̄ of a nearby model) Newton's method
+    first (:func:`_newton_dare`); where the doubling's I + G X is singular to rounding, the generalised Schur method
     (:func:`_schur_dare`).
 
     Raises
     ------
     InputError
-        If R ≤ 0 (no white noise), the iteration does not converge (a non-detectable model) or what it converges to
-        is not a covariance (:func:`_covariance`).
+        If R ≤ 0, the iteration does not converge (a non-detectable model) or the result is not a covariance.
     """
     p = phi.shape[0]
     if p == 0:
@@ -94,8 +82,7 @@ def steady_prediction_covariance(
 
 
 def _doubling_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
-    """P̄ by the structure-preserving doubling algorithm; LinAlgError when I + G X is singular in double precision
-    (a state observed nearly exactly: a white noise of ~1e-14 per sample beside variances of ~1e3 makes G X ~1e17)."""
+    """P̄ by the structure-preserving doubling algorithm; LinAlgError when I + G X is singular in double precision."""
     p = phi.shape[0]
     eye = np.eye(p)
     A = phi.T.copy()
@@ -116,8 +103,7 @@ def _doubling_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> n
 
 
 def _schur_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
-    """P̄ by the generalised Schur method (scipy's ``solve_discrete_are``, Arnold & Laub 1984), where the doubling's
-    I + G X is singular to rounding: slower, and it needs no inverse of that matrix."""
+    """P̄ by the generalised Schur method (scipy's ``solve_discrete_are``, Arnold & Laub 1984)."""
     try:
         P = solve_discrete_are(phi.T, h.reshape(-1, 1), q, np.array([[r]]))
     except (np.linalg.LinAlgError, ValueError) as err:
@@ -131,11 +117,8 @@ STEIN_DOUBLINGS = 64
 
 
 def _stein_sum(A: np.ndarray, W: np.ndarray) -> np.ndarray:
-    """M = Σ_{j≥0} Aʲᵀ W Aʲ, the solution of M = Aᵀ M A + W for a stable A, by doubling: M ← M + A_kᵀ M A_k,
-    A_k ← A_k², until the increment is below 1e-16 of M (at most :data:`STEIN_DOUBLINGS`). Each step is two p × p
-    products, and nothing is solved: a closed-loop pole a hair inside the unit circle (a random walk at its zero
-    boundary) makes the Kronecker system I − Aᵀ⊗Aᵀ singular to working precision (rcond ~1e-24 met), where the
-    sum just takes more doublings."""
+    """M = Σ_{j≥0} Aʲᵀ W Aʲ (M = Aᵀ M A + W, A stable) by doubling, M ← M + A_kᵀ M A_k, A_k ← A_k², until the increment
+    is below 1e-16 of M (at most :data:`STEIN_DOUBLINGS`); no linear solve (stays exact for poles near 1)."""
     M = 0.5 * (W + W.T)
     Ak = A
     for _ in range(STEIN_DOUBLINGS):
@@ -151,19 +134,15 @@ def _stein_sum(A: np.ndarray, W: np.ndarray) -> np.ndarray:
 class SteadyCovarianceSensitivity:
     """First-order change of tr(W P̄) with the model matrices: tr(W dP̄) = ⟨G_Φ, dΦ⟩ + ⟨G_Q, dQ⟩ + g_h·dh + g_r·dr.
 
-    Differentiating the DARE P̄ = Φ P_u Φᵀ + Q, P_u = P̄ − S K Kᵀ (K = P̄ hᵀ / S, S = h P̄ hᵀ + r), at the optimal
-    gain (where the gain's own change drops out), gives the Stein equation dP̄ = A dP̄ Aᵀ + F with the closed-loop
-    A = Φ(I − K h) and F = dΦ P_u Φᵀ + Φ P_u dΦᵀ + dQ + Φ dP_u|ₕ,ᵣ Φᵀ, where dP_u|ₕ,ᵣ = K Kᵀ dr
-    − (I − K h) P̄ dhᵀ Kᵀ − K dh P̄ (I − K h)ᵀ. Its adjoint M = Aᵀ M A + W (one Stein solve for every direction)
-    turns tr(W dP̄) into tr(M F) (e.g. Giles 2008, "Collected matrix derivative results", for the adjoint
-    form; Anderson & Moore 1979 §4.4 for the closed loop); M = Σ_j Aʲᵀ W Aʲ is summed by doubling
-    (:func:`_stein_sum`). With N = Φᵀ M Φ:
+    Differentiating P̄ = Φ P_u Φᵀ + Q, P_u = P̄ − S K Kᵀ (K = P̄ hᵀ/S, S = h P̄ hᵀ + r) at the optimal gain gives
+    dP̄ = A dP̄ Aᵀ + F, A = Φ(I − K h), F = dΦ P_u Φᵀ + Φ P_u dΦᵀ + dQ + Φ dP_u|ₕ,ᵣ Φᵀ,
+    dP_u|ₕ,ᵣ = K Kᵀ dr − (I − K h) P̄ dhᵀ Kᵀ − K dh P̄ (I − K h)ᵀ; the adjoint M = Aᵀ M A + W (:func:`_stein_sum`;
+    Giles 2008, Anderson & Moore 1979 §4.4) gives tr(M F). With N = Φᵀ M Φ:
 
         G_Φ = 2 M Φ P_u,   G_Q = M,   g_r = Kᵀ N K,   g_h = −2 P̄ (I − K h)ᵀ N K.
 
-    It gives the initial-state term's share of the log-likelihood's gradient in the model matrices (Fisher's
-    identity, :class:`imu_noise_id.core.estimation.em.MatrixScore`) with one Stein solve, where differences of P̄
-    would need a DARE solve per direction.
+    Used for the initial-state term of the log-likelihood's gradient (Fisher's identity,
+    :class:`imu_noise_id.core.estimation.em.MatrixScore`).
     """
 
     g_phi: np.ndarray

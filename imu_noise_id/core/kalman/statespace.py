@@ -5,23 +5,10 @@ Paper 000 (Stebler et al. 2011), eqs. (4)–(5)::
     x_{t+1} = Φ x_t + w_t + u,          w_t ~ N(0, Q)
     y_t     = H x_t + bᵀ z_t + v_t,     v_t ~ N(0, R),      x_1 ~ N(μ, Σ)
 
-``z_t`` are known regressors of the measurement equation (a column of ones for the unknown constant bias,
-``t·dt`` for a rate ramp, and whatever the caller adds: sinusoids, temperature, bias steps); ``b`` are their
-coefficients. The regressors go beyond the paper, which only has the state input ``u``: a measurement-side
-regression is the same model for a bias and a ramp (an RW state starting at μ and driven by ``u = ω·dt`` sums
-to ``μ + ω·dt·(t − 1) + RW``) but its coefficients are estimated in closed form (generalised least squares)
-without the Φ–u ridges of paper 000 §3.5(iii), and it lets the closed loop add deterministic effects.
-
-Each matrix ``M`` of θ = {u, Φ, Q, R, H, μ, Σ} is split into fixed and free elements, ``M = M_fixed + M_free``
-and ``vec(M) = f + D·m`` (paper 000 eqs. 7–9; ``vec`` stacks columns): :meth:`StateSpace.design` returns
-``(f, D)``. The estimator only ever sees these matrices and masks, so a new component type plugs in through its
-:class:`~.components.StateBlock` without touching the estimator.
-
-Σ: paper 000 keeps Σ fixed at a small value (§3.3). Here ``sigma_mode="steady"`` (default) sets Σ to the
-steady-state *prediction* covariance P̄ of the current θ (the state covariance of a sensor that has been running
-and observed forever before the record starts). Beyond the paper, and for speed: with that prior the Kalman
-filter is time-invariant from the first sample and runs as an IIR filter (:mod:`.kalman.steady`).
-``sigma_mode="fixed"`` keeps the paper's fixed Σ.
+Each θ-matrix is ``vec(M) = f + D·m`` over its free elements (paper 000 eqs. 7–9; :meth:`StateSpace.design`).
+Beyond the paper: measurement regressors z_t (bias, ramp ``t·dt``, sinusoids, temperature, steps) with
+coefficients b estimated by GLS; and ``sigma_mode="steady"`` (default) sets Σ to the steady-state prediction
+covariance P̄, making the filter time-invariant (:mod:`.steady`); ``"fixed"`` keeps the paper's fixed Σ (§3.3).
 """
 
 from __future__ import annotations
@@ -41,19 +28,9 @@ MATRIX_NAMES: tuple[str, ...] = ("u", "mu", "phi", "h", "q", "r", "b")
 
 @dataclass(frozen=True)
 class BlockInfo:
-    """Where a component lives in the assembled model.
-
-    Attributes
-    ----------
-    name : str
-        Component type (``WN``, ``QN``, ``RW``, ``GM``, ``RR``).
-    states : tuple[int, ...]
-        Its state indices (empty for WN, and for RR in measurement mode).
-    regressor : int | None
-        Index into ``b`` of its regressor (RR in measurement mode), else None.
-    input_state : int | None
-        State the RR input ``u = ω·dt`` enters (RR in state mode), else None.
-    """
+    """Where a component lives in the assembled model: ``name`` (``WN``, ``QN``, ``RW``, ``GM``, ``RR``, …), its
+    ``states``, the index of its ``regressor`` in b (RR in measurement mode) and the ``input_state`` its u = ω·dt
+    enters (RR in state mode), else None."""
 
     name: str
     states: tuple[int, ...] = ()
@@ -67,28 +44,16 @@ class StateSpace:
 
     Attributes
     ----------
-    phi, q, sigma : (p, p) arrays
-        Transition, process-noise covariance, initial-state covariance Σ (used when ``sigma_mode='fixed'``).
-    h, u, mu : (p,) arrays
-        Measurement row H, state input u, initial mean μ.
-    r : float
-        Measurement-noise variance R (per sample).
-    b : (k,) array
-        Coefficients of the measurement regressors z_t (names in ``regressors``).
-    *_free : bool masks of the same shapes
-        Free (estimated) elements; the others stay fixed.
-    dt : float
-        Sampling period [s].
-    blocks : tuple[BlockInfo, ...]
-        The components, in the order given, and where they live.
-    regressors : tuple[str, ...]
-        Names of the regressor columns (``bias``, ``ramp``, then the caller's).
-    sigma_mode : str
-        ``'steady'`` (Σ = steady-state prediction covariance of θ) or ``'fixed'`` (Σ as given).
-    sinusoid_omega : tuple[float, ...]
-        Empty, or per regressor its ω [rad/sample] when its column is a pure sinusoid a·cos ωt + b·sin ωt in every
-        record the model is run on (NaN for the others), as checked by whoever built the columns
-        (:func:`.harmonic.sinusoid_omega`): the steady engine then computes its response in closed form.
+    phi, q, sigma : (p, p) transition, process-noise covariance, Σ (used when ``sigma_mode='fixed'``)
+    h, u, mu : (p,) measurement row H, state input u, initial mean μ
+    r : measurement-noise variance R per sample
+    b : (k,) coefficients of the regressors z_t (names in ``regressors``: ``bias``, ``ramp``, then the caller's)
+    *_free : bool masks of the same shapes (free = estimated)
+    dt : sampling period [s]
+    blocks : the components' :class:`BlockInfo`, in the order given
+    sigma_mode : ``'steady'`` (Σ = P̄ of θ) or ``'fixed'``
+    sinusoid_omega : empty, or per regressor its ω [rad/sample] when its column is a pure sinusoid in every record
+        (NaN otherwise; :func:`.harmonic.sinusoid_omega`), computed in closed form by the steady engine
     """
 
     phi: np.ndarray
@@ -122,11 +87,7 @@ class StateSpace:
         return int(self.b.shape[0])
 
     def copy(self, **changes) -> StateSpace:
-        """A deep copy with some attributes replaced.
-
-        The steady-state P̄ is not carried over as a value, only as the starting guess of the copy's own
-        Riccati solve (copies usually differ by a small parameter step: Newton then converges in 2–3 steps).
-        """
+        """A deep copy with some attributes replaced (P̄ carried only as the start of the copy's Riccati solve)."""
         fields = {
             k: (np.array(v, copy=True) if isinstance(v, np.ndarray) else v)
             for k, v in self.__dict__.items() if k != "_steady_cache"
@@ -204,8 +165,7 @@ class StateSpace:
 
 
 def _fixed_initial_covariance(blk: StateBlock, r: float) -> np.ndarray:
-    """Σ of a block in ``'fixed'`` mode: its stationary covariance when it is stable (GM, QN, LPF, OSC), else the
-    paper's "small value" 1e-12·R (RW)."""
+    """Σ of a block in ``'fixed'`` mode: stationary covariance when stable (GM, QN, LPF, OSC), else 1e-12·R (RW)."""
     if np.max(np.abs(np.linalg.eigvals(blk.phi))) < 1.0:
         n = blk.n_states
         p = np.linalg.solve(np.eye(n * n) - np.kron(blk.phi, blk.phi), blk.q.ravel()).reshape(n, n)
@@ -224,10 +184,7 @@ def validate_structure(names: list[str]) -> None:
 
 @functools.lru_cache(maxsize=256)
 def component_block(component: Component, dt: float) -> StateBlock:
-    """``component.block(dt)``, remembered: the gradient's finite differences (:mod:`..estimation.mle`) step one
-    parameter at a time, and every other component's block (an OSC's Van Loan exponential, a flicker ladder) would
-    be built again, identically, at each step. Components are frozen dataclasses, equal when their values are. The
-    block's arrays are shared by every caller, so they are read-only."""
+    """``component.block(dt)``, cached (components are frozen and equal by value); the arrays are shared, read-only."""
     block = component.block(dt)
     for value in vars(block).values():
         if isinstance(value, np.ndarray):
@@ -236,8 +193,7 @@ def component_block(component: Component, dt: float) -> StateBlock:
 
 
 def state_span(states: tuple[int, ...]) -> slice:
-    """The block's states as a slice (:func:`from_components` gives each block consecutive states); empty for a
-    block without states (WN)."""
+    """The block's (consecutive) states as a slice; empty for a block without states (WN)."""
     return slice(states[0], states[-1] + 1) if states else slice(0, 0)
 
 
@@ -256,29 +212,25 @@ def from_components(
     Parameters
     ----------
     components
-        At least a WN; at most one WN, QN, RW and RR; any number of GM.
+        At least a WN; at most one WN, QN, RW, RR, LPF, MA, BI.
     dt
         Sampling period [s].
     intercept
-        Add the unknown constant bias as a regressor column of ones (coefficient ``bias`` [u]).
+        Add the constant bias as a regressor column of ones (coefficient ``bias`` [u]).
     ramp
-        Where an RR component goes: ``'measurement'`` — regressor column ``t·dt`` whose coefficient is the
-        slope ω [u/s]; ``'state'`` — as in paper 000 §4, input ``u = ω·dt`` entering the RW state (or, with no
-        RW, the first GM state as in §4.2), free in the EM's u update.
+        Where an RR goes: ``'measurement'`` (regressor ``t·dt``, coefficient ω [u/s]) or ``'state'`` (paper 000 §4:
+        input u = ω·dt into the RW state, or the first GM's as in §4.2).
     exog_names
-        Names of the caller's extra regressor columns (appended after ``bias`` and ``ramp``).
+        Names of the caller's regressor columns (after ``bias`` and ``ramp``).
     sigma_mode
-        ``'steady'`` or ``'fixed'`` (see the module docstring). In ``'fixed'`` mode Σ is set to the stationary
-        covariance for GM and QN states and to 1e-12·R for RW states (the paper's "small value").
+        ``'steady'`` or ``'fixed'`` (module docstring; fixed: stationary Σ for GM, QN, 1e-12·R for RW).
     sinusoid_omega
-        Empty, or ω [rad/sample] (NaN: not a sinusoid) of every regressor column, bias and ramp included
-        (:attr:`StateSpace.sinusoid_omega`).
+        Empty, or ω [rad/sample] (NaN: not a sinusoid) of every regressor column.
 
     Raises
     ------
     InputError
-        On a structure the estimator cannot identify (no WN, duplicated WN/QN/RW/RR, RR in state mode with no
-        RW or GM, unknown ``ramp``).
+        On a structure the estimator cannot identify or an unknown ``ramp``.
     """
     validate_structure([c.name for c in components])
     if ramp not in ("measurement", "state"):
@@ -343,10 +295,7 @@ def from_components(
 
 
 def with_components(model: StateSpace, components: list[Component]) -> StateSpace:
-    """A copy of ``model`` whose Φ, Q, R (and RR slope) take the values of ``components``.
-
-    ``components`` must have the model's structure, in the order the model was assembled from.
-    """
+    """A copy of ``model`` whose Φ, Q, R (and RR slope) take the values of ``components`` (same structure and order)."""
     if [c.name for c in components] != [blk.name for blk in model.blocks]:
         raise InputError("components do not match the model's structure")
     out = model.copy()
@@ -373,8 +322,8 @@ def _ramp(model: StateSpace, blk: BlockInfo) -> RR:
 
 
 def ramp_components(model: StateSpace) -> dict[int, RR]:
-    """The RR components of ``model`` by block position, the others not converted (what
-    :meth:`~imu_noise_id.core.estimation.mle.Parameterisation.to_components` takes from a profiled model)."""
+    """The RR components of ``model`` by block position (for
+    :meth:`~imu_noise_id.core.estimation.mle.Parameterisation.to_components`)."""
     return {k: _ramp(model, blk) for k, blk in enumerate(model.blocks) if blk.name == "RR"}
 
 

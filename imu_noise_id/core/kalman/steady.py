@@ -1,29 +1,16 @@
 """Fast Kalman engine for time-invariant models in steady state: the filter and smoother as IIR filters.
 
-With Σ = P̄, the steady-state prediction covariance (``StateSpace.sigma_mode == 'steady'``), the Riccati
-recursion of paper 000's appendix is at its fixed point from the first sample: the gain K, the innovation
-variance F and the smoother gain J are constants, so
+With Σ = P̄ (``sigma_mode == 'steady'``) the Riccati recursion of paper 000's appendix is at its fixed point from
+the first sample; K, F and the smoother gain J are constant, so
 
     predicted state  x_{t+1} = A x_t + ΦK y_t + u,        A = Φ(I − K H)          (forward, causal)
     smoothed state   x_{t−1}^N = J x_t^N + (x_{t−1}^{t−1} − J x_t^{t−1})          (backward, anti-causal)
 
-are linear time-invariant filters. They run in compiled code (``scipy.signal.lfilter``) as first- and
-second-order sections in a basis where A (resp. J) is block-diagonal: its real modal basis, one 1×1 block per
-real eigenvalue and one real 2×2 block per complex pair (an oscillator), where that basis is well conditioned
-(:data:`MODAL_MAX_COND`), so that the modes run independently and a step costs O(p) per column; otherwise the real
-Schur basis, orthogonal and so as accurate as the plain recursion whatever the eigenvalues, where each block is
-driven by the later ones it couples to (O(p²) per column: with the dozen states of a flicker ladder and a few
-regressor columns that coupling was most of a fit's time at 10⁶ samples). Either way poles within 1e-6 of the unit
-circle keep their accuracy, which a transfer-function (polynomial) form of the whole filter would lose.
-
-The smoothed covariances are never stored: they follow the affine recursion P_{t−1}^N = T(P_t^N) =
-J P_t^N Jᵀ + (P_f − J P̄ Jᵀ) from P_N^N = P_f, so Σ_t P_t^N = Σ_{k<N} T^k(P_f) and P_1^N = T^{N−1}(P_f) are
-computed exactly by binary doubling of the affine map (:func:`affine_power_sum`, O(log N) p × p products, no
-Lyapunov solve that would be ill-conditioned when J has an eigenvalue near 1). The lag-one covariance is
-P_{t,t−1}^N = P_t^N Jᵀ (equivalent to the paper's recursion; de Jong 1989).
-This engine requires no missing samples; :func:`imu_noise_id.core.kalman.smooth` falls back to the exact engine.
-Regressor columns the model declares pure sinusoids (a SIN term's) are not filtered: their response is computed in
-closed form (:mod:`.harmonic`).
+run as ``scipy.signal.lfilter`` sections in the real modal basis of A (or J) where its condition number is below
+:data:`MODAL_MAX_COND`, else the real Schur basis (blocks driven by the later ones they couple to).
+Smoothed covariances follow P_{t−1}^N = J P_t^N Jᵀ + (P_f − J P̄ Jᵀ); their sum and P_1^N come from binary
+doubling (:func:`affine_power_sum`); P_{t,t−1}^N = P_t^N Jᵀ (de Jong 1989). No missing samples (the exact engine
+takes those). Declared sinusoidal regressor columns are computed in closed form (:mod:`.harmonic`).
 """
 
 from __future__ import annotations
@@ -55,13 +42,7 @@ class SteadyGains:
 
 
 def gains(model: StateSpace) -> SteadyGains:
-    """Steady-state gains of ``model`` (from the discrete algebraic Riccati equation).
-
-    Raises
-    ------
-    InputError
-        If the innovation variance is not positive and finite (no filter exists at these parameters).
-    """
+    """Steady-state gains of ``model`` (DARE); InputError if the innovation variance is not positive and finite."""
     P = model.steady_prediction_covariance()
     h = model.h
     Ph = P @ h
@@ -88,12 +69,8 @@ def _blocks(T: np.ndarray) -> list[slice]:
 
 
 def _strictly_proper(num: tuple[float, ...], den: list[float], d: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """Output t (t = 0 … N−1) of the strictly proper filter num/den (num[0] = 0) run on d' = [w0, d_0, …, d_{N−2}]
-    along the last axis, i.e. x_t with the initial state w0 entering as an input one step before t = 0.
-
-    The input w0 is not prepended (a copy of every column): it is the filter's initial delay state after that first
-    step, Z = (w0·num[1], w0·num[2]) (its output then is 0), so the outputs are those of the longer run bit for bit.
-    """
+    """Output t (t = 0 … N−1) of the strictly proper filter num/den (num[0] = 0) on d' = [w0, d_0, …, d_{N−2}] along the
+    last axis; w0 enters as the initial delay state (w0·num[1], w0·num[2]), not as a prepended copy."""
     return lfilter(num, den, d, axis=-1, zi=np.multiply.outer(w0, num[1:]))[0]
 
 
@@ -114,13 +91,8 @@ def _characteristic(B: np.ndarray) -> list[float]:
 
 
 def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) -> None:
-    """x_0 = w0, x_{t+1} = B x_t + d_t for one diagonal block B (1×1 or 2×2), written into ``out``; d and out
-    (s, m, N), w0 (s, m).
-
-    x_t is output t of the strictly proper filter (zI − B)⁻¹ applied to d' = [w0, d_0, …]
-    (:func:`_strictly_proper`), per component one ``lfilter`` per input, numerators the rows of adj(zI − B),
-    denominator det(zI − B) (order 1 or 2, real coefficients).
-    """
+    """x_0 = w0, x_{t+1} = B x_t + d_t for one 1×1 or 2×2 block B into ``out``; d, out (s, m, N), w0 (s, m). Numerators
+    the rows of adj(zI − B), denominator det(zI − B) (:func:`_strictly_proper`)."""
     den = _characteristic(B)
     if B.shape[0] == 1:
         out[...] = _strictly_proper((0.0, 1.0), den, d, w0)
@@ -132,8 +104,7 @@ def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) ->
 
 
 def _block_output(B: np.ndarray, c: np.ndarray, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """c·x_t (m, N) of :func:`_run_block`'s recursion for one block B, without its states: one ``lfilter`` per input
-    of the block, numerator c·adj(zI − B) (the states of every column would be p × m × N numbers to store)."""
+    """c·x_t (m, N) of :func:`_run_block`'s recursion without storing its states: numerator c·adj(zI − B)."""
     den = _characteristic(B)
     if B.shape[0] == 1:
         out = _strictly_proper((0.0, 1.0), den, d[0], w0[0])
@@ -144,11 +115,8 @@ def _block_output(B: np.ndarray, c: np.ndarray, d: np.ndarray, w0: np.ndarray) -
 
 
 def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """w[:, :, 0] = w0, w[:, :, t+1] = T w[:, :, t] + cw[:, :, t]; shapes (p, m, N). T real quasi-triangular.
-
-    One block at a time (:func:`_run_block`, vectorised over the m columns), last block first, each driven by its
-    input plus the already computed states it couples to.
-    """
+    """w[:, :, 0] = w0, w[:, :, t+1] = T w[:, :, t] + cw[:, :, t] (p, m, N), T real quasi-triangular: one block at a
+    time (:func:`_run_block`), last first, each driven by the states it couples to."""
     w = np.empty_like(cw)
     for blk in reversed(_blocks(T)):
         drive = cw[blk]
@@ -160,8 +128,7 @@ def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
 
 
 def _driven(gain: np.ndarray, y: np.ndarray, const: np.ndarray) -> np.ndarray:
-    """The inputs gain_i·y_{c,t} + const_{i,c} (s, m, N) of the states i fed by measurement columns y (m, N) through
-    ``gain`` (s,) with constant inputs ``const`` (s, m), built in one array."""
+    """The inputs gain_i·y_{c,t} + const_{i,c} (s, m, N) of the states fed by columns y (m, N)."""
     d = gain[:, None, None] * y[None]
     d += const[:, :, None]
     return d
@@ -224,11 +191,7 @@ def decoupled_basis(A: np.ndarray) -> Basis:
 
 
 def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
-    """x_0 = x0, x_{t+1} = A x_t + c_t; c has shape (p, m, N), x0 (p, m); returns x with c's shape.
-
-    Computed by :func:`_run_modes` in the basis of :func:`decoupled_basis` (complex eigenvalue pairs stay real
-    2×2 blocks).
-    """
+    """x_0 = x0, x_{t+1} = A x_t + c_t; c (p, m, N), x0 (p, m); x with c's shape, in :func:`decoupled_basis`."""
     if c.shape[0] == 0:
         return np.zeros_like(c)
     b = decoupled_basis(A)
@@ -242,11 +205,8 @@ CLOSED_FORM_SHARE = 0.5
 
 
 def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple[np.ndarray, Basis | None]:
-    """H x_t^{t−1} for every column (m, N), and the basis the filter ran in (None without states).
-
-    Declared sinusoidal regressor columns in closed form (:func:`_sinusoid_output`) where that is cheaper
-    (:data:`CLOSED_FORM_SHARE`), the others filtered (:func:`_filtered_output`).
-    """
+    """H x_t^{t−1} for every column (m, N) and the basis used (None without states); declared sinusoidal columns in
+    closed form where cheaper (:data:`CLOSED_FORM_SHARE`)."""
     p = model.n_states
     m, n = cols.y.shape
     if p == 0:
@@ -271,12 +231,8 @@ def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple
 
 def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, *, u: np.ndarray,
                      m0: np.ndarray) -> np.ndarray:
-    """H x_t^{t−1} (m, N) of columns with measurement inputs y (m, N), state inputs u (p, m), initial means m0
-    (p, m), filtered in the basis b.
-
-    In the modal basis each block's output is accumulated without storing the states of every column
-    (:func:`_block_output`); in the Schur basis the coupled blocks need them all (:func:`_run_modes`).
-    """
+    """H x_t^{t−1} (m, N) of columns with measurement inputs y (m, N), state inputs u (p, m), initial means m0 (p, m),
+    filtered in basis b."""
     p = model.n_states
     m, n = y.shape
     gain_w = b.u_inv @ (model.phi @ g.k)
@@ -292,11 +248,8 @@ def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray,
 
 def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns, *, rows: np.ndarray,
                      out: np.ndarray, length: int) -> None:
-    """Write H x_t^{t−1} of the sinusoidal measurement-input columns ``rows`` (from x_0 = 0, at ``cols.omega``) into
-    ``out[rows]`` in closed form (:mod:`.harmonic`): the steady response minus the free response of its initial
-    state over its first ``length`` samples (where it has not died out). In the modal basis each block's output from
-    each of its own states is run once (:func:`_modal_free_responses`) and combined by one product; in the Schur
-    basis the p unit states or the columns, whichever are fewer, run through the coupled filter."""
+    """Write H x_t^{t−1} of the sinusoidal columns ``rows`` (x_0 = 0, at ``cols.omega``) into ``out[rows]`` in closed
+    form (:mod:`.harmonic`): the steady response minus its initial state's free response over ``length`` samples."""
     p, k = model.n_states, rows.size
     start = harmonic.steady_parts(g.a, model.phi @ g.k, model.h, cols.y, cols.omega, rows=rows, out=out)
     if b.modal:
@@ -310,8 +263,8 @@ def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns,
 
 
 def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
-    """R (p, length), R[j, t] = (H U)_blk T_blk^t e_j for each modal state j of block blk: the output of the free
-    response from w_0 = U⁻¹x_0 is w_0ᵀR (the blocks are decoupled, so each state runs through its own block only)."""
+    """R (p, length), R[j, t] = (H U)_blk T_blk^t e_j per modal state j; the free response from w_0 = U⁻¹x_0 is
+    w_0ᵀR."""
     out = np.empty((b.t.shape[0], length))
     for blk in _blocks(b.t):
         s = blk.stop - blk.start
@@ -322,7 +275,7 @@ def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
 def _predicted_states(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
                       m0: np.ndarray) -> np.ndarray:
     """Predicted states x_t^{t−1} (p, N) of one column: measurement input y (N,), state input u (p,), initial mean
-    m0 (p,); the filter is linear, so those of a combination of columns are those of the combined inputs."""
+    m0 (p,)."""
     c = _driven(b.u_inv @ (model.phi @ g.k), y[None, :], (b.u_inv @ u)[:, None])
     return b.u @ _run_modes(b.t, c, (b.u_inv @ m0)[:, None])[:, 0, :]
 
@@ -336,16 +289,13 @@ def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
 
 
 def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Σ_{k=0}^{n−1} T^k(P0) and T^{n−1}(P0) for T(P) = J P Jᵀ + C, by binary doubling on p × p matrices.
+    """Σ_{k=0}^{n−1} T^k(P0) and T^{n−1}(P0) for T(P) = J P Jᵀ + C, by binary doubling on p × p matrices (O(p³ log n)).
 
-    T^k(P0) = J^k P0 J^kᵀ + Σ_{j<k} M_j with M_j = J^j C J^jᵀ, so with the Stein sums X_k(P) = Σ_{j<k} J^j P J^jᵀ
-    and the weighted sum W_k = Σ_{j<k} j·M_j,
+    With X_k(P) = Σ_{j<k} J^j P J^jᵀ, M_j = J^j C J^jᵀ, W_k = Σ_{j<k} j·M_j:
 
-        Σ_{k<n} T^k(P0) = X_n(P0) + (n − 1)·X_n(C) − W_n,        T^{n−1}(P0) = J^{n−1} P0 J^{n−1}ᵀ + X_{n−1}(C).
+        Σ_{k<n} T^k(P0) = X_n(P0) + (n − 1)·X_n(C) − W_n,        T^{n−1}(P0) = J^{n−1} P0 J^{n−1}ᵀ + X_{n−1}(C),
 
-    A block of a steps followed by one of b steps combines as A_{a+b} = A_a A_b (A_k = J^k),
-    X_{a+b} = X_a + A_a X_b A_aᵀ, W_{a+b} = W_a + A_a (W_b + a·X_b) A_aᵀ: O(p³ log n) work (the Kronecker form of
-    the same doubling costs O(p⁶ log n), prohibitive for the dozen states of a flicker ladder).
+    combining as A_{a+b} = A_a A_b, X_{a+b} = X_a + A_a X_b A_aᵀ, W_{a+b} = W_a + A_a (W_b + a·X_b) A_aᵀ.
     """
 
     def combine(first, second):
@@ -408,12 +358,8 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
 
 
 def profile_and_smooth(model: StateSpace, cols: Columns) -> tuple[ProfileResult, SmootherStats]:
-    """GLS profile of the free mean parameters and the smoother at their estimate.
-
-    The forward pass gives every column's predicted output; the filter is linear in its inputs, so the predicted
-    states of the data at β̂ are those of the combined column (column 0 plus Σ_c β̂_c times the regressor columns),
-    one more forward pass of one column, then the backward pass.
-    """
+    """GLS profile of the free mean parameters and the smoother at their estimate: one forward pass of every column,
+    one of the combined column at β̂, then the backward pass."""
     g = gains(model)
     hx, b = _predicted_output(model, g, cols)
     n = cols.y.shape[1]
