@@ -1,24 +1,11 @@
-"""The sensor's averaging filter (MA): part of the white noise passed through a two-tap moving average.
+"""The sensor's averaging filter (MA): part of the white noise through a two-tap moving average (beyond papers
+000/002; reasons: docs/em.md, "Why the components …").
 
-Many IMUs average their internal samples before output (the ADIS164xx's Bartlett window, the decimation filters of
-MEMS parts): consecutive outputs share internal samples, so the noise is correlated over exactly one sample and not
-beyond: a moving-average MA(1) process. Measured on the ADIS16405 gyros, the lag-1 autocorrelation of the noise is
-0.16 and the lag-2 one 0.000 ± 0.001, where the first-order low-pass (:class:`~.resonant.LPF`, an AR(1)) that
-matches the lag-1 value predicts 0.026: a misfit of the shortest averaging times that 10⁶ samples show plainly.
-Beyond papers 000/002.
-
-Model: e_k white with variance σ², y_k = e_k + e_{k−1} beside the white noise WN (a_k, variance σ_a²): the sum is an
-MA(1) process with lag-1 correlation σ²/(σ_a² + 2σ²) ∈ [0, ½]; the mirror image of quantisation noise, whose
-e_k − e_{k−1} has negative lag-1 correlation. Parameter: the passband density N [u/√Hz] of the averaged part
-(its PSD at f → 0, 4σ²·dt, so N² = 4σ²dt), so that the sensor's passband white-noise density is
-√(N_WN² + N_MA²) as with the LPF. Its per-sample variance is 2σ² = N²/(2dt).
-
-Two-sided PSD S(f) = N² cos²(πf·dt) (= 4σ²dt·cos²(πf dt)); autocovariance R(0) = 2σ², R(dt) = σ², 0 beyond; the Allan
-variance of the sampled process at τ = m·dt is exact: AV = (4m − 3)σ²/m² (from the block sums S(m) = (4m − 2)σ²,
-AV = (4S(m) − S(2m))/(2m²)), → N²/τ for m ≫ 1.
-
-State-space block (as QN's, paper 000 eqs. 4–5): states [e_k, e_{k−1}], Φ = [[0, 0], [1, 0]], Q = diag(σ², 0) with its
-first element free (the EM's closed-form M-step updates it), H = [1, 1].
+e_k white of variance σ², y_k = e_k + e_{k−1} beside the white noise: an MA(1) with lag-1 correlation in [0, ½].
+Parameter: passband density N [u/√Hz], N² = 4σ²dt (PSD at f → 0), per-sample variance 2σ² = N²/(2dt).
+S(f) = N² cos²(πf·dt); R(0) = 2σ², R(dt) = σ², 0 beyond; AV(m·dt) = (4m − 3)σ²/m² exactly (block sums
+S(m) = (4m − 2)σ², AV = (4S(m) − S(2m))/(2m²)). Block (as QN's): states [e_k, e_{k−1}], Φ = [[0, 0], [1, 0]],
+Q = diag(σ², 0) (first element free: the EM's M-step updates it), H = [1, 1].
 """
 
 from __future__ import annotations
@@ -35,7 +22,7 @@ from .base import Component, StateBlock, as_freq, as_tau
 
 @dataclass(frozen=True)
 class MA(Component):
-    """A two-tap moving average of white noise of passband density N [u/√Hz] (see the module)."""
+    """A two-tap moving average of white noise of passband density N [u/√Hz] (module docstring)."""
 
     noise_density: float
 
@@ -74,7 +61,7 @@ class MA(Component):
         return np.where(u > 0, -(2.0 * u - 1.0) * self.sigma2(dt), 0.0)
 
     def zero_frequency_density(self, dt: float) -> float:
-        """N exactly: dt·(2σ² + 2·σ²) = N² for the two-tap average (R(0) = 2σ², R(±dt) = σ²)."""
+        """N exactly: dt·(R(0) + 2R(dt)) = dt·4σ² = N²."""
         return self.noise_density
 
     def per_sample(self, dt: float) -> dict[str, float]:

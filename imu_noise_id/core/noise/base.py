@@ -12,24 +12,16 @@ import numpy as np
 
 @dataclass(frozen=True)
 class StateBlock:
-    """One component's part of the linear-Gaussian state-space model (paper 000 eqs. 4–5).
-
-    x_{t+1} = Φ x_t + w_t + u,   w_t ~ N(0, Q);   y_t = H x_t + v_t,   v_t ~ N(0, R).
+    """One component's part of the state-space model (paper 000 eqs. 4–5):
+    x_{t+1} = Φ x_t + w_t + u, w_t ~ N(0, Q); y_t = H x_t + v_t, v_t ~ N(0, R).
 
     Attributes
     ----------
-    phi, q : (p, p) arrays
-        Transition matrix and process-noise covariance of the block's ``p`` states.
-    h : (p,) array
-        The block's columns of the (1 × n) measurement matrix H.
-    r : float
-        Its contribution to the measurement-noise variance R (white noise only).
-    u : (p,) array
-        Its deterministic input per step (rate ramp).
-    phi_free, q_free, u_free : bool arrays of the same shapes
-        Which elements the estimator may change; the others stay fixed (paper 000 eq. 7).
-    r_free : bool
-        Whether ``r`` is free.
+    phi, q : (p, p) transition and process-noise covariance of the block's p states
+    h : (p,) the block's columns of H
+    r : its share of R (white noise only)
+    u : (p,) deterministic input per step (rate ramp)
+    phi_free, q_free, u_free, r_free : which elements the estimator may change (paper 000 eq. 7)
     """
 
     phi: np.ndarray
@@ -94,27 +86,25 @@ class Component(ABC):
         """Two-sided power spectral density [u²/Hz] at frequencies f [Hz] (dt [s] matters for QN only)."""
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """Generalised covariance K(u) [u²] of the partial sums x_k = y_0 + … + y_{k−1} of the *sampled* component,
-        at integer lags u [samples] (beyond papers 000/002; what the wavelet-variance covariance needs).
+        """Generalised covariance K(u) [u²] of the partial sums x_k = y_0 + … + y_{k−1} of the sampled component at
+        integer
+        lags u (beyond papers 000/002).
 
-        For any two filters c, d that annihilate polynomials of degree ≤ 1 (Σ c_a = Σ a·c_a = 0, such as the Haar
-        wavelet's second difference of x), Cov(Σ_a c_a x_{p_a}, Σ_b d_b x_{q_b}) = Σ_a Σ_b c_a d_b K(q_b − p_a).
-        K is defined up to an even polynomial α + β u², which such filters cancel. For a stationary component
-        K(u) = −½ Var(y_1 + … + y_|u|); the Allan variance follows as AV(m·dt) = (6K(0) − 8K(m) + 2K(2m)) / (2m²)
-        (test_components checks it against :meth:`allan_variance` for every component).
+        For filters c, d annihilating polynomials of degree ≤ 1, Cov(Σ_a c_a x_{p_a}, Σ_b d_b x_{q_b}) =
+        Σ_a Σ_b c_a d_b K(q_b − p_a); K is defined up to an even polynomial α + β u². Stationary components:
+        K(u) = −½ Var(y_1 + … + y_|u|); AV(m·dt) = (6K(0) − 8K(m) + 2K(2m))/(2m²).
         """
         raise NotImplementedError(f"{self.name} has no sum covariance")
 
     def zero_frequency_density(self, dt: float) -> float:
-        """√(dt·Σ_j R(j)) [u/√Hz]: the two-sided PSD at 0 Hz of the component *sampled* at dt, the density N with
-        which its Allan variance falls as N²/τ at τ beyond its memory (what a filter integrating the samples sees).
-        Equal to the continuous-time passband density only when the memory is many samples long: a low-pass
-        near the Nyquist frequency aliases its tail into the band. For the components white at low frequency."""
+        """√(dt·Σ_j R(j)) [u/√Hz]: the two-sided PSD at 0 Hz of the component sampled at dt (its AV → N²/τ beyond its
+        memory); for components white at low frequency."""
         raise NotImplementedError(f"{self.name} is not white at low frequency")
 
     def memory(self, dt: float) -> tuple[float, float, float]:
-        """(longest and shortest decay time [s] of the autocovariance, shortest period [s] of its oscillation):
-        (0, 0, inf) for components whose increments are uncorrelated beyond a sample or two (WN, QN, MA, RW, RR)."""
+        """(longest and shortest decay time [s] of the autocovariance, shortest period [s] of its oscillation); (0,
+        0, inf)
+        for components uncorrelated beyond a sample or two (WN, QN, MA, RW, RR)."""
         return 0.0, 0.0, math.inf
 
     @abstractmethod
@@ -128,8 +118,9 @@ class Component(ABC):
 
     @classmethod
     def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> Component:
-        """Inverse of :meth:`block` for components with states: the component whose block at period ``dt`` [s] has
-        transition ``phi`` and process noise ``q`` (what the EM updated)."""
+        """Inverse of :meth:`block` for components with states: the component with transition ``phi`` and process
+        noise
+        ``q`` at period ``dt`` [s]."""
         raise NotImplementedError(f"{cls.name} has no state block to convert back from")
 
     def params(self) -> dict[str, float]:

@@ -1,22 +1,9 @@
-"""Stochastic error components of an inertial sensor.
+"""Stochastic error components of an inertial sensor (WN, QN, RW, GM, RR; LPF, OSC, BI, MA in sibling modules).
 
-Each component is a small frozen dataclass holding its **continuous-time** parameters and offering:
-
-* ``simulate(n, dt, rng)``: n samples of the component's contribution to the sensor error;
-* ``block(dt)``: its state-space block (its part of Φ, Q, H, R, u and which elements are free), the form
-  paper 000 (Stebler et al. 2011) eqs. (4)–(5) and (7)–(9) use; the estimator assembles blocks with
-  :mod:`imu_noise_id.core.kalman.statespace`;
-* ``allan_variance(tau, dt)``: its theoretical Allan variance [u²];
-* ``psd(f, dt)``: its two-sided power spectral density [u²/Hz] (IEEE Std 952 convention, so that
-  AV(τ) = 4∫₀^∞ S(f) sin⁴(πfτ)/(πfτ)² df, paper 000 section 2);
-* ``per_sample(dt)`` / ``from_per_sample(dt, ...)``: exact conversion to and from per-sample values in
-  paper 000's notation (σ²_WN, σ²_RW, β, σ²_GM, ω).
-
-The Allan variances of WN, QN, RW and RR are exact for the *sampled* process at τ = m·dt (m integer); the
-Gauss–Markov AV is the continuous-time formula, accurate when τ_c ≫ dt.
-
-A new component plugs in by subclassing :class:`Component` and registering its name in
-:data:`COMPONENT_TYPES`; nothing in the estimators needs to change.
+Each is a frozen dataclass of **continuous-time** parameters with ``simulate(n, dt, rng)``, ``block(dt)`` (its
+state-space block, paper 000 eqs. 4–5 and 7–9), ``allan_variance(tau, dt)`` [u²] of the sampled process,
+``psd(f, dt)`` (two-sided [u²/Hz], IEEE Std 952: AV(τ) = 4∫₀^∞ S(f) sin⁴(πfτ)/(πfτ)² df) and
+``per_sample``/``from_per_sample`` (paper 000's notation). New types register in :data:`COMPONENT_TYPES`.
 """
 
 from __future__ import annotations
@@ -41,10 +28,7 @@ PHI_RANGE: tuple[float, float] = (1e-12, 1.0 - 1e-12)
 
 @dataclass(frozen=True)
 class WN(Component):
-    """Gaussian white noise (angle / velocity random walk) with density N [u/√Hz].
-
-    Per-sample variance σ²_WN = N²/dt; AV(τ) = N²/τ; two-sided PSD S(f) = N².
-    """
+    """Gaussian white noise (angle / velocity random walk), density N [u/√Hz]: σ²_WN = N²/dt, AV = N²/τ, S(f) = N²."""
 
     noise_density: float
 
@@ -87,13 +71,10 @@ class WN(Component):
 
 @dataclass(frozen=True)
 class QN(Component):
-    """Quantisation noise of an integrating sensor, coefficient Q [u·s] (IEEE Std 952).
+    """Quantisation noise of an integrating sensor, Q [u·s] (IEEE Std 952).
 
-    The rate error is e_k = (ε_k − ε_{k−1})/dt with ε_k white, var(ε) = Q² (uniform on ±√3·Q in
-    :meth:`simulate`, as a real quantiser's error is). AV(τ) = 3Q²/τ² exactly at τ = m·dt;
-    two-sided PSD of the sampled process S(f) = (4Q²/dt)·sin²(πf·dt) (→ (2πf)²Q²·dt for f ≪ 1/dt).
-
-    State-space block: states [ε_k/dt, ε_{k−1}/dt], Φ = [[0, 0], [1, 0]] (fixed), Q = diag(Q²/dt², 0)
+    e_k = (ε_k − ε_{k−1})/dt, var(ε) = Q² (uniform on ±√3·Q when simulated); AV(τ) = 3Q²/τ² at τ = m·dt;
+    S(f) = (4Q²/dt)·sin²(πf·dt). Block: states [ε_k/dt, ε_{k−1}/dt], Φ = [[0, 0], [1, 0]], Q = diag(Q²/dt², 0)
     (first element free), H = [1, −1].
     """
 
@@ -128,7 +109,7 @@ class QN(Component):
         return 4.0 * self.Q**2 * np.sin(math.pi * as_freq(f) * dt) ** 2 / dt
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """The sum of u samples telescopes to (ε_u − ε_0)/dt: K(u) = −Q²/dt² for u ≠ 0, 0 at u = 0."""
+        """K(u) = −Q²/dt² for u ≠ 0, 0 at u = 0 (the sum telescopes to (ε_u − ε_0)/dt)."""
         return np.where(np.asarray(lag) != 0, -units.quantization_sigma2(self.Q, dt), 0.0)
 
     def per_sample(self, dt: float) -> dict[str, float]:
@@ -145,11 +126,8 @@ class QN(Component):
 
 @dataclass(frozen=True)
 class RW(Component):
-    """Random walk (rate random walk / bias random walk) with density K [u/s/√Hz].
-
-    x_{k+1} = x_k + w_k, var(w) = σ²_RW = K²·dt. Exact sampled AV: K²τ/3 + K²dt²/(6τ);
-    two-sided PSD S(f) = K²/(2πf)².
-    """
+    """Random walk (rate / bias random walk), density K [u/s/√Hz]: var(w) = K²·dt, sampled AV K²τ/3 + K²dt²/(6τ),
+    S(f) = K²/(2πf)²."""
 
     random_walk: float
 
@@ -178,8 +156,7 @@ class RW(Component):
         return self.random_walk**2 / (2.0 * math.pi * as_freq(f)) ** 2
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """K(u) = q(|u|³ − |u|)/12 with q = σ²_RW = K²·dt: the generalised covariance of a doubly summed white
-        noise (its second differences at lag 1 have variance q, at lag 2 variance 6q)."""
+        """K(u) = q(|u|³ − |u|)/12, q = K²·dt (doubly summed white noise)."""
         u = np.abs(np.asarray(lag, dtype=float))
         return units.random_walk_sigma2(self.random_walk, dt) * (u**3 - u) / 12.0
 
@@ -197,12 +174,10 @@ class RW(Component):
 
 @dataclass(frozen=True)
 class GM(Component):
-    """First-order Gauss–Markov process with correlation time τ [s] and stationary std σ [u].
+    """First-order Gauss–Markov process, correlation time τ [s], stationary std σ [u].
 
-    Exact discretisation: x_{k+1} = φ x_k + w_k, φ = exp(−dt/τ), var(w) = σ²(1 − φ²)
-    (paper 002 eq. 22). Paper 000 writes φ ≈ 1 − β·dt and var(w) ≈ 2βσ²_GM·dt with β = 1/τ, σ²_GM = σ².
-    Continuous-time AV: (2σ²τ_c/τ)·[1 − (τ_c/2τ)(3 − 4e^{−τ/τ_c} + e^{−2τ/τ_c})];
-    two-sided PSD: 2σ²τ_c / (1 + (2πfτ_c)²).
+    φ = exp(−dt/τ), var(w) = σ²(1 − φ²) (paper 002 eq. 22; paper 000's Euler form φ ≈ 1 − β·dt, β = 1/τ);
+    S(f) = 2σ²τ_c/(1 + (2πfτ_c)²).
     """
 
     tau: float
@@ -232,8 +207,7 @@ class GM(Component):
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        """AV of the sampled process, R(j) = σ² e^{−j·dt/τ} (:mod:`imu_noise_id.core.noise.sampled`); for τ_c ≫ dt
-        it is the continuous-time 2σ²(τ_c/T)(1 − τ_c(3 − 4e^{−T/τ_c} + e^{−2T/τ_c})/(2T))."""
+        """AV of the sampled process, R(j) = σ² e^{−j·dt/τ} (:mod:`imu_noise_id.core.noise.sampled`)."""
         return sampled_allan_variance(self.sigma**2, -1.0 / self.tau, as_tau(tau), dt)
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
@@ -268,11 +242,8 @@ class GM(Component):
 
 @dataclass(frozen=True)
 class RR(Component):
-    """Rate ramp / drift with slope ω [u/s]: y_k = ω·k·dt. AV(τ) = ω²τ²/2; two-sided PSD ω²/(2πf)³.
-
-    State-space block: one integrator state (Φ = 1, Q = 0, H = 1) driven by the deterministic input
-    u = ω·dt (paper 000 sections 4.1–4.3, where u enters the random-walk state).
-    """
+    """Rate ramp with slope ω [u/s]: y_k = ω·k·dt, AV(τ) = ω²τ²/2, S(f) = ω²/(2πf)³. Block: an integrator (Φ = 1,
+    Q = 0, H = 1) driven by u = ω·dt (paper 000 sections 4.1–4.3)."""
 
     slope: float
 
@@ -300,7 +271,7 @@ class RR(Component):
         return self.slope**2 / (2.0 * math.pi * as_freq(f)) ** 3
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """Zero: the ramp is deterministic (its wavelet coefficients have a mean, no variance)."""
+        """Zero: the ramp is deterministic."""
         return np.zeros(np.shape(lag))
 
     def per_sample(self, dt: float) -> dict[str, float]:

@@ -1,31 +1,14 @@
 """Bias instability (flicker noise) as a state-space component: a ladder of first-order Gauss–Markov processes.
 
-The number on every datasheet, the "bias instability" B, is the level of the rate's 1/f (flicker) noise: IEEE Std 952
-(annex C) gives its two-sided PSD as S(f) = B²/(2π f) between a low and a high corner frequency, and its Allan
-variance as the plateau AV ≈ (2 ln 2/π)·B² ≈ (0.664 B)² for averaging times well inside the band. Papers 000/002 know
-no such component: a WN+RW model of a sensor with flicker noise buys the mid-τ power with a random walk far larger than
-the long-τ Allan variance supports (measured on the ADIS16405 accelerometers: the PSD falls as 1/f over two decades).
+IEEE Std 952 (annex C): two-sided PSD S(f) = B²/(2π f) between two corners, AV plateau (2 ln 2/π)·B² ≈ (0.664 B)².
+Beyond papers 000/002. GMs with τ_i = τ_min·ρ^i (i = 0 … M−1, ρ = (τ_max/τ_min)^(1/(M−1))) and equal variances
+σ² = B² ln ρ / π approximate it (Keshner 1982, Proc. IEEE 70(3)):
 
-A 1/f spectrum has no finite-dimensional state-space form, but a sum of first-order GM processes whose correlation
-times are spaced evenly in log τ, all with the same stationary variance, approximates it as closely as the spacing
-makes it (Keshner 1982, "1/f noise", Proc. IEEE 70(3); the usual construction for Kalman filters of clock and
-inertial-sensor flicker noise). With correlation times τ_i = τ_min·ρ^i (i = 0 … M−1, ρ = τ_max/τ_min)^(1/(M−1)))
-and each GM's variance σ_i², the sum's PSD is Σ 2σ_i²τ_i/(1 + (2πfτ_i)²); replacing the sum by an integral over
-ln τ (spacing ln ρ),
+    Σ_i 2σ²τ_i/(1 + (2πfτ_i)²) ≈ σ²/(2 f ln ρ) = B²/(2π f)   for 1/(2πτ_max) ≪ f ≪ 1/(2πτ_min),
 
-    Σ_i 2σ_i²τ_i/(1 + (2πfτ_i)²) ≈ (2σ²/ln ρ) ∫ dτ/(1 + (2πfτ)²) = σ²/(2 f ln ρ)   for 1/(2πτ_max) ≪ f ≪ 1/(2πτ_min),
-
-which equals B²/(2π f) for σ_i² = σ² = B² ln ρ / π (by Poisson summation the sum's periodic ripple about the integral
-has relative amplitude ≈ 4·e^{−π²/ln ρ}: 8e-4 at :data:`PER_DECADE` = 2 correlation times per decade). What the
-finite band costs is at its ends: the PSD lies within 3.5 % of B²/(2π f) from a decade inside either end, and the
-Allan variance within 2 % of its plateau (2 ln 2/π)·B² from ~40 τ_min to ~τ_max/13 (tested).
-
-The band [τ_min, τ_max] is part of the structure, not a free parameter: the fit sets it from the record (the shortest
-correlation time a few samples long, the longest the record length: :func:`band_for_record`), and only B is
-estimated (by the quasi-Newton search on the exact likelihood, as LPF and OSC; the EM's closed-form M-step does not
-update the block, whose Φ and Q are fixed up to the common scale B²). Exact discretisation of every GM (φ_i =
-e^{−dt/τ_i}, drive σ²(1 − φ_i²)); the Allan variance is that of the *sampled* ladder
-(:mod:`imu_noise_id.core.noise.sampled`), exact at τ = m·dt.
+ripple ≈ 4·e^{−π²/ln ρ} (8e-4 at :data:`PER_DECADE` = 2). The band is structure, set from the record
+(:func:`band_for_record`); only B is estimated (quasi-Newton on the exact likelihood). Exact discretisation of
+every GM; AV of the sampled ladder (:mod:`imu_noise_id.core.noise.sampled`).
 """
 
 from __future__ import annotations
@@ -50,8 +33,8 @@ TAU_MIN_SAMPLES = 10.0
 
 
 def band_for_record(n: int, dt: float) -> tuple[float, float]:
-    """The ladder's band [τ_min, τ_max] [s] for a record of ``n`` samples at ``dt`` [s]: from
-    :data:`TAU_MIN_SAMPLES` samples to the record length (a GM slower than the record is a constant there)."""
+    """The band [τ_min, τ_max] [s] for ``n`` samples at ``dt`` [s]: :data:`TAU_MIN_SAMPLES` samples to the record
+    length."""
     tau_min = TAU_MIN_SAMPLES * dt
     return tau_min, max(n * dt, 10.0 * tau_min)
 
@@ -65,10 +48,8 @@ def ladder_taus(tau_min: float, tau_max: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class BI(Component):
-    """Flicker (1/f) rate noise of bias instability B [u] over the band [τ_min, τ_max] [s] (see the module).
-
-    Two-sided PSD ≈ B²/(2π f) inside the band; Allan variance ≈ (2 ln 2/π)·B² on its plateau.
-    """
+    """Flicker (1/f) rate noise of bias instability B [u] over the band [τ_min, τ_max] [s] (module docstring): PSD
+    ≈ B²/(2π f) inside the band, AV ≈ (2 ln 2/π)·B² on its plateau."""
 
     bias_instability: float
     tau_min: float = 1.0

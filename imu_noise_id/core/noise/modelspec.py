@@ -6,16 +6,10 @@ Grammar (whitespace ignored)::
     term      := [count] NAME ["(" args ")"]
     args      := value ("," value)*  |  key "=" value ("," key "=" value)*
 
-``NAME`` is a key of :data:`~.components.COMPONENT_TYPES`; positional values follow the component's
-``parameter_names`` (continuous-time units, see :mod:`.units`). Examples::
-
-    WN+GM+RW                                            structure only
-    WN(2e-4)+RW(3e-6)                                   noise density 2e-4 u/√Hz, random walk 3e-6 u/s/√Hz
-    WN(noise_density=2e-4)+GM(tau=300, sigma=5e-5)
-    WN(2e-4)+BI(bias_instability=3e-5, tau_min=0.1, tau_max=3600)   a flicker band given (optional, default 1–1000 s)
-
-An IMU model assigns specs to axes: ``gyro: SPEC; accel: SPEC`` (or per axis ``gyro_z: SPEC``), or one
-SPEC for all six axes.
+``NAME`` is a key of :data:`~.components.COMPONENT_TYPES`; positional values follow its ``parameter_names``
+(continuous-time units, :mod:`.units`), e.g. ``WN(2e-4)+GM(tau=300, sigma=5e-5)`` or
+``WN(2e-4)+BI(bias_instability=3e-5, tau_min=0.1, tau_max=3600)``. An IMU model: ``gyro: SPEC; accel: SPEC``
+(or per axis ``gyro_z: SPEC``), or one SPEC for all six axes.
 """
 
 from __future__ import annotations
@@ -31,11 +25,8 @@ CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "MA", "QN", "BI", "GM", "OSC", 
 
 
 def gauss_markov_fastest_first(components: list[Component]) -> list[Component]:
-    """``components`` with the Gauss–Markov processes, in the places they hold, by increasing τ (GM1 the fastest).
-
-    A likelihood is symmetric in the order of like components (label switching): the labels ``GM1``, ``GM2`` … of
-    a fit name the same process whatever order its search found them in only once they are ordered.
-    """
+    """``components`` with the GMs, in the places they hold, by increasing τ (GM1 the fastest), so that labels are
+    independent of the order a search found them in."""
     gms = iter(sorted((c for c in components if c.name == "GM"), key=lambda c: c.params()["tau"]))
     return [next(gms) if c.name == "GM" else c for c in components]
 
@@ -112,13 +103,8 @@ def _parse_args(cls: type[Component], args: str, spec: str) -> dict[str, float]:
 
 
 def parse_model(spec: str) -> list[Component]:
-    """Components with their parameters, e.g. ``'WN(2e-4)+GM(tau=300,sigma=5e-5)'``.
-
-    Raises
-    ------
-    ModelSpecError
-        With a message naming the offending term and what is expected.
-    """
+    """Components with their parameters, e.g. ``'WN(2e-4)+GM(tau=300,sigma=5e-5)'``; ModelSpecError naming the
+    offending term."""
     components: list[Component] = []
     for term in _split_terms(spec):
         count, name, args = _parse_term(term, spec)
@@ -149,10 +135,9 @@ def model_name(components: list[Component]) -> str:
 
 
 def parse_imu_model(text: str) -> dict[str, list[Component]]:
-    """Per-axis components from ``'gyro: SPEC; accel: SPEC'``, per-axis keys, or one SPEC for all axes.
-
-    Keys ``gyro`` / ``accel`` apply to their three axes; an axis key (``gyro_z``) overrides its group.
-    """
+    """Per-axis components from ``'gyro: SPEC; accel: SPEC'`` (an axis key such as ``gyro_z`` overrides its group),
+    or
+    one SPEC for all axes."""
     if ":" not in text:
         components = parse_model(text)
         return {axis: list(components) for axis in AXES}
@@ -175,11 +160,8 @@ def parse_imu_model(text: str) -> dict[str, list[Component]]:
 
 
 def parameter_labels(components: list[Component]) -> list[tuple[int, str, str]]:
-    """(component index, parameter, label) with labels such as ``WN.noise_density``, ``GM2.tau``.
-
-    A component type that occurs more than once is numbered in order (``GM1``, ``GM2``); the labels key the
-    standard errors and intervals of a fit and the ``model.yaml`` entries.
-    """
+    """(component index, parameter, label) with labels such as ``WN.noise_density``, ``GM2.tau`` (repeated types
+    numbered in order)."""
     names = [c.name for c in components]
     out = []
     seen: dict[str, int] = {}

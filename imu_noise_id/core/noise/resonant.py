@@ -1,34 +1,17 @@
-"""Coloured short-memory and narrow-band components: the sensor's own low-pass filter (LPF) and a narrow-band
-stochastic oscillation (OSC). Beyond papers 000/002, which know WN, QN, RW, GM and RR only.
+"""The sensor's first-order low-pass (LPF) and a narrow-band stochastic oscillation (OSC); beyond papers 000/002.
 
-LPF — white noise of density N through the sensor's first-order low-pass of cutoff f_c
-    Many MEMS parts low-pass their output (a DLPF): the noise is then correlated from one sample to the next and a
-    WN model either reads a density that is far too small (AV at τ = dt below the −½ line) or mistakes it for a GM
-    with τ ≈ dt. The continuous model is x' = −ω_c x + ω_c w, ω_c = 2π f_c, w white of two-sided PSD N², so
-    S(f) = N² / (1 + (f/f_c)²): **N is the continuous passband density**; the samples' low-frequency level, what a
-    filter integrating them sees, is N·√((x/2)·coth(x/2)), x = 2π f_c dt (:meth:`LPF.zero_frequency_density`:
-    the samples alias the tail above the Nyquist frequency, 1.27 N at f_c = 45 Hz and 100 Hz), and the process is
-    a first-order Gauss–Markov process with τ = 1/ω_c and σ² = N² ω_c / 2 = π N² f_c.
-    Sampled at dt its per-sample variance is σ² = π N² f_c, smaller than the white-noise N²/dt whenever
-    f_c < 1/(π dt): that is the per-sample covariance a consumer of the corrected IMU stream must use.
+LPF: x' = −ω_c x + ω_c w, ω_c = 2π f_c, w white of two-sided PSD N²: S(f) = N²/(1 + (f/f_c)²), **N the
+continuous passband density**; a GM with τ = 1/ω_c, σ² = π N² f_c (the per-sample variance); the samples' 0 Hz
+density is N·√((x/2)·coth(x/2)), x = 2π f_c dt (:meth:`LPF.zero_frequency_density`).
 
-OSC — second-order resonant Gauss–Markov process
-    x'' + 2ζω₀x' + ω₀²x = w, w white of two-sided PSD q: a line at f₀ = ω₀/2π whose frequency wanders (a
-    vibration picked up through the mount, a fan, a motor, a structural mode), unlike a sinusoid of fixed frequency
-    and phase. Parameters: ``frequency`` f₀ [Hz], ``bandwidth`` B = 2ζf₀ [Hz] (the full width at half power of
-    the resonance to first order in ζ; the definition used for every ζ < 1) and the stationary ``sigma`` σ [u]
-    (q = 4ζω₀³σ²).
-    PSD: S(f) = q / ((ω₀² − ω²)² + (2ζω₀ω)²), ω = 2πf. Autocovariance (ζ < 1, ω_d = ω₀√(1 − ζ²), a = ζω₀):
-    R(u) = σ² e^{−a|u|} (cos ω_d u + (a/ω_d) sin ω_d|u|). State [x, x'/ω₀] (scaled so that its stationary
-    covariance is P∞ = σ² I and Q is well conditioned: the likelihood's gradient, taken through the EM's
-    expected complete-data log-likelihood, needs Q⁻¹), H = [1, 0]; the exact discretisation Φ = S exp(A dt) S⁻¹
-    (S = diag(1, 1/ω₀)) and Q = P∞ − Φ P∞ Φᵀ, computed by Van Loan's method (no cancellation when Q ≪ P∞).
-    Allan variance of the *sampled* process from the autocovariance R(u) = Re(c e^{su}), s = −a + iω_d,
-    c = σ²(1 − ia/ω_d), in closed form (:mod:`imu_noise_id.core.noise.sampled`; the continuous-time
-    AV(τ) = (4Ψ(τ) − Ψ(2τ))/(2τ²), Ψ(τ) = 2∫₀^τ (τ − u) R(u) du, is its limit for dt → 0).
+OSC: x'' + 2ζω₀x' + ω₀²x = w, w of two-sided PSD q = 4ζω₀³σ²; ``frequency`` f₀ [Hz], ``bandwidth``
+B = 2ζf₀ [Hz] (half-power width), ``sigma`` σ [u]. S(f) = q/((ω₀² − ω²)² + (2ζω₀ω)²); for ζ < 1, a = ζω₀,
+ω_d = ω₀√(1 − ζ²): R(u) = σ² e^{−a|u|}(cos ω_d u + (a/ω_d) sin ω_d|u|) = Re(c e^{su}), c = σ²(1 − ia/ω_d),
+s = −a + iω_d. State [x, x'/ω₀] (P∞ = σ² I), H = [1, 0], exact discretisation (Van Loan). AV of the sampled
+process (:mod:`imu_noise_id.core.noise.sampled`).
 
-Neither block is updated by the EM's closed-form M-step (their Φ and Q are nonlinear in the parameters); their
-parameters are fitted by the quasi-Newton search on the exact likelihood (:mod:`imu_noise_id.core.estimation.mle`).
+Both are fitted by the quasi-Newton search on the exact likelihood (:mod:`imu_noise_id.core.estimation.mle`),
+not the EM's M-step. Reasons for the models and constants: docs/em.md, "Why the components …".
 """
 
 from __future__ import annotations
@@ -46,17 +29,12 @@ from .sampled import block_sum_variance, sampled_allan_variance, zero_frequency_
 
 #: The sensor's own filter has a memory below this many sampling periods ...
 FILTER_MAX_TAU_SAMPLES = 5
-#: ... or below this many seconds, whatever the rate. Such a process is white at τ = 1 s, where IEEE Std 952 and
-#: Kalibr read N: a GM's Allan variance is that of a white noise of its zero-frequency density times
-#: 1 − (τ_c/τ)(3/2 − 2e^{−τ/τ_c} + ½e^{−2τ/τ_c}), 0.925 at τ_c = 50 ms and τ = 1 s (the deviation within 4 %), and it
-#: holds a consumer part's lowest DLPF settings (5 Hz: 32 ms) at kHz output rates, where five samples are a few
-#: milliseconds.
+#: ... or below this many seconds, whatever the rate (white at τ = 1 s, where IEEE Std 952 and Kalibr read N).
 FILTER_MAX_TAU_S = 0.05
 
 
 def filter_memory_limit(dt: float) -> float:
-    """The longest memory [s] a component may have to be read as the sensor's own filter at sampling period ``dt``
-    [s] (a GM renamed LPF, an OSC or LPF counted in the passband N, the Allan-slope roll-off):
+    """Longest memory [s] a component may have to count as the sensor's own filter at period ``dt`` [s]:
     max(:data:`FILTER_MAX_TAU_SAMPLES`·dt, :data:`FILTER_MAX_TAU_S`)."""
     return max(FILTER_MAX_TAU_SAMPLES * dt, FILTER_MAX_TAU_S)
 
@@ -73,7 +51,8 @@ def _positive(name: str, value: float) -> float:
 
 @dataclass(frozen=True)
 class LPF(Component):
-    """White noise of passband density N [u/√Hz] through a first-order low-pass of cutoff f_c [Hz] (see module)."""
+    """White noise of passband density N [u/√Hz] through a first-order low-pass of cutoff f_c [Hz] (module
+    docstring)."""
 
     noise_density: float
     cutoff: float
@@ -122,9 +101,9 @@ class LPF(Component):
         return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
 
     def zero_frequency_density(self, dt: float) -> float:
-        """N·√((x/2)·coth(x/2)), x = 2π f_c dt: the sampled AR(1)'s σ² dt (1 + φ)/(1 − φ) with φ = e^{−x}. Above N
-        when the cutoff is not far below the Nyquist frequency (1.27 N at 45 Hz and 100 Hz sampling): the
-        samples alias the low-pass's tail into the band."""
+        """N·√((x/2)·coth(x/2)), x = 2π f_c dt: the sampled AR(1)'s σ² dt (1 + φ)/(1 − φ), φ = e^{−x} (aliasing
+        raises it
+        above N near Nyquist)."""
         return math.sqrt(zero_frequency_psd(self.sigma**2, -1.0 / self.tau, dt))
 
     def per_sample(self, dt: float) -> dict[str, float]:
@@ -203,8 +182,8 @@ class OSC(Component):
         return e * np.array([[c + a / wd * s, w0 / wd * s], [-w0 / wd * s, c - a / wd * s]])
 
     def process_noise(self, dt: float) -> np.ndarray:
-        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state by Van Loan's matrix exponential (accurate when
-        Q ≪ P∞, where P∞ − Φ P∞ Φᵀ would lose most of its digits to cancellation)."""
+        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state by Van Loan's matrix exponential (no cancellation
+        for Q ≪ P∞)."""
         w0, a = self.omega0, self.damping * self.omega0
         A = np.array([[0.0, w0], [-w0, -2.0 * a]])
         W = np.diag([0.0, 4.0 * a * self.sigma**2])  # drive of x'/ω₀: q/ω₀² with q = 4ζω₀³σ²
@@ -248,8 +227,7 @@ class OSC(Component):
         return out + free
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        """AV of the sampled process (:mod:`imu_noise_id.core.noise.sampled`; R(u) = Re(c e^{su}) as in the module
-        docstring), which is what the estimator reads from data."""
+        """AV of the sampled process (:mod:`imu_noise_id.core.noise.sampled`, R(u) = Re(c e^{su}))."""
         return sampled_allan_variance(*self._autocovariance(), as_tau(tau), dt)
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
@@ -268,8 +246,8 @@ class OSC(Component):
         return q / ((w0 * w0 - w * w) ** 2 + (2.0 * z * w0 * w) ** 2)
 
     def zero_frequency_density(self, dt: float) -> float:
-        """√(dt·Σ_j R(j)) of the sampled oscillation (:func:`~.sampled.zero_frequency_psd`); the continuous S(0) =
-        σ² B/(π f₀²) in the limit of a memory 1/(πB) of many samples."""
+        """√(dt·Σ_j R(j)) of the sampled oscillation (:func:`~.sampled.zero_frequency_psd`); continuous limit
+        S(0) = σ² B/(π f₀²)."""
         return math.sqrt(max(zero_frequency_psd(*self._autocovariance(), dt), 0.0))
 
     def per_sample(self, dt: float) -> dict[str, float]:
@@ -278,9 +256,9 @@ class OSC(Component):
 
     @classmethod
     def low_pass(cls, noise_density: float, corner: float, damping: float = BUTTERWORTH_DAMPING) -> OSC:
-        """White noise of passband density N [u/√Hz] through a second-order low-pass of corner f₀ [Hz] and damping
-        ζ: the OSC of f₀, B = 2ζf₀ whose continuous S(0) = σ² B/(π f₀²) is N² (σ = N f₀ √(π/B)). The default ζ =
-        1/√2 is the Butterworth filter's (flat passband, no peak)."""
+        """White noise of passband density N [u/√Hz] through a second-order low-pass of corner f₀ [Hz], damping ζ:
+        the OSC
+        with B = 2ζf₀, σ = N f₀ √(π/B) (S(0) = N²); default ζ = 1/√2 (Butterworth)."""
         bandwidth = 2.0 * damping * corner
         return cls(corner, bandwidth, noise_density * corner * math.sqrt(math.pi / bandwidth))
 

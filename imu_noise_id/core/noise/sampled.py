@@ -1,21 +1,13 @@
-"""Allan variance of a *sampled* stationary process whose autocovariance is a sum of damped exponentials.
+"""Allan variance of a *sampled* stationary process whose autocovariance is a sum of damped exponentials (beyond
+papers 000/002: the estimator reads the samples' AV, which differs from the continuous process's by tens of per
+cent at τ ≈ dt for a memory of a sample or two).
 
-The Allan variance an estimator reads from data is that of the samples y_k = x(k·dt) averaged over m samples,
-not that of the continuous process averaged over τ = m·dt. The two agree when the process's memory is many
-samples long; for the sensor's own low-pass filter (memory of one or two samples) or a fast GM they differ by tens
-of per cent at the shortest τ, which the closed loop would read as a misfit. Beyond papers 000/002.
-
-With R(j) = Re(c·z^j) the autocovariance at lag j samples (z = e^{s·dt}; a GM: c = σ², s = −1/τ; an OSC:
-c = σ²(1 − i a/ω_d), s = −a + iω_d), the variance of a sum of m consecutive samples is
+With R(j) = Re(c·z^j), z = e^{s·dt} (GM: c = σ², s = −1/τ; OSC: c = σ²(1 − i a/ω_d), s = −a + iω_d):
 
     S(m) = Re(c·(m + 2 g(m))),     g(m) = Σ_{j=1}^{m−1} (m − j) z^j = z (m(1 − z) − (1 − z^m)) / (1 − z)²,
+    AV(m·dt) = (4 S(m) − S(2m)) / (2 m²),
 
-adjacent block sums A, B have Cov(A, B) = (S(2m) − 2S(m))/2, and the Allan variance of the block means is
-
-    AV(m·dt) = ½ Var(B/m − A/m) = (4 S(m) − S(2m)) / (2 m²)
-
-(the discrete counterpart of AV(τ) = (4Ψ(τ) − Ψ(2τ))/(2τ²)). Where m|s·dt| is small, g(m) is evaluated from its
-series m(m−1)/2 + w(m³ − m)/6 + w² m²(m² − 1)/24 (w = s·dt), which avoids the cancellation of the closed form.
+g(m) by its series m(m−1)/2 + w(m³ − m)/6 + w² m²(m² − 1)/24 (w = s·dt) where m|w| < :data:`SERIES_LIMIT`.
 """
 
 from __future__ import annotations
@@ -49,11 +41,11 @@ def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau
     Parameters
     ----------
     c : complex, or (k,) array
-        Autocovariance weight [u²] (R(0) = Re c is the variance).
+        Autocovariance weight [u²] (R(0) = Re c).
     s : complex, or (k,) array
-        Pole [1/s], Re s < 0. With arrays, the AV of the sum of the k processes (a flicker ladder) in one pass.
+        Pole [1/s], Re s < 0; with arrays, the AV of the sum of the k processes.
     tau : array
-        Averaging times [s]; τ/dt is the number of samples averaged (integers for estimator τ).
+        Averaging times [s] (τ/dt samples averaged).
     dt : float
         Sampling period [s].
     """
@@ -76,17 +68,16 @@ def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau
 
 
 def zero_frequency_psd(c: complex, s: complex, dt: float) -> float:
-    """dt·Σ_{j=−∞}^{∞} R(j) = dt·Re(c (1 + z)/(1 − z)), z = e^{s·dt}: the two-sided PSD [u²/Hz] at 0 Hz of the process
-    sampled at ``dt`` [s] with R(u) = Re(c e^{s u}) (the limit of τ·AV(τ), from S(m)/m → Re(c(1 + 2z/(1 − z))))."""
+    """dt·Σ_j R(j) = dt·Re(c (1 + z)/(1 − z)), z = e^{s·dt}: the two-sided PSD [u²/Hz] at 0 Hz of the sampled
+    process."""
     z = np.exp(complex(s) * dt)
     return float(dt * np.real(complex(c) * (1.0 + z) / (1.0 - z)))
 
 
 def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.ndarray:
-    """S(k) = Var(y_1 + … + y_k) [u²] of the process sampled at ``dt`` [s] with R(u) = Re(c e^{s u}), for sample
-    counts k ≥ 0 (module docstring; S(0) = 0), as the generalised covariance of the partial sums needs it
-    (:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`). A real pole (GM, LPF) is evaluated in real
-    arithmetic (several times faster on the long lag grids of the wavelet-variance covariance; equal to rounding)."""
+    """S(k) = Var(y_1 + … + y_k) [u²] of the sampled process with R(u) = Re(c e^{s u}) for k ≥ 0 (S(0) = 0); a real
+    pole
+    in real arithmetic."""
     k = np.asarray(k, dtype=float)
     w = complex(s) * dt
     if w.imag == 0.0 and complex(c).imag == 0.0:

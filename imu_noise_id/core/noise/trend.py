@@ -1,24 +1,13 @@
 """The least-squares slope of a record and its exact variance under a noise model (beyond papers 000/002).
 
-The slope ω̂ = Σ w_i y_i of the least-squares line through y_0 … y_{N−1} (sampled at i·dt) has
-w_i = (i − ī)/(dt·S), ī = (N−1)/2, S = Σ(i − ī)² = N(N² − 1)/12. Written on the partial sums x_k = y_0 + … + y_{k−1}
-(k = 0 … N), ω̂ = Σ_k c_k x_k with c_k = w_{k−1} − w_k = α·(ī, −1, …, −1, ī), α = 1/(dt·S). The filter c
-annihilates polynomials of degree ≤ 1 in k (Σc_k = Σ k·c_k = 0), so for a sum of independent components with
-generalised covariances K(u) of their partial sums (:meth:`~.base.Component.sum_covariance`, defined up to an
-even quadratic that c cancels)
-
-    Var ω̂ = Σ_a Σ_b c_a c_b K(b − a) = Σ_{h=−N}^{N} C(h) K(h),     C(h) = Σ_a c_a c_{a+h},
-
-and C has a closed form: C(0) = α²(2ī² + N − 1), C(±h) = −α²·h for 1 ≤ h ≤ N − 1, C(±N) = α²·ī². Hence
+ω̂ = Σ w_i y_i, w_i = (i − ī)/(dt·S), ī = (N−1)/2, S = N(N² − 1)/12; on the partial sums x_k, ω̂ = Σ_k c_k x_k,
+c_k = α·(ī, −1, …, −1, ī), α = 1/(dt·S), which annihilates degree ≤ 1, so with the components' generalised
+covariances K(u) (:meth:`~.base.Component.sum_covariance`)
 
     Var ω̂ = α² [ (2ī² + N − 1)·K(0) − 2 Σ_{h=1}^{N−1} h·K(h) + 2 ī²·K(N) ],          (1)
 
-exact for the sampled components (white noise gives σ²/(dt²·S), the textbook value). The ramp itself (RR) is
-deterministic and adds nothing. The sum Σ h·K(h) is in closed form for WN (K = −σ²h/2), QN (K = −Q²/dt², h ≠ 0),
-RW (K = q(h³ − h)/12) and GM (K = −½σ²(h + 2g(h)), g(h) = φ(h(1 − φ) − 1 + φ^h)/(1 − φ)², φ = e^(−dt/τ), with
-Σ_{h≤M} h·φ^h = φ(1 − (M+1)φ^M + Mφ^(M+1))/(1 − φ)²), so that a fit can evaluate eq. (1) at every step on records of
-any length; other components (and a GM whose τ exceeds five records) are summed lag by lag up to 40 of their
-longest decay times and in closed form beyond (K is linear in h there), so flicker noise alone costs O(N).
+exact for the sampled components. Σ h·K(h) in closed form for WN, QN, RW and GM; other components lag by lag up
+to :data:`TAIL_DECAYS` decay times and in closed form beyond (O(N)).
 """
 
 from __future__ import annotations
@@ -81,9 +70,8 @@ def _closed_form(comp: Component, n: int, dt: float) -> tuple[float, float] | No
 
 
 def _lag_sums(comp: Component, n: int, dt: float) -> tuple[float, float]:
-    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one stationary component: lag by lag up to h₀ = 40 of its longest decay
-    times, beyond which K(h) = −½Var(y_1 + … + y_h) is linear in h to within e^(−40) (the long-run variance times
-    h plus a constant), so the rest of the sum is in closed form."""
+    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one stationary component: lag by lag up to :data:`TAIL_DECAYS` decay times, in
+    closed form beyond (K linear in h there)."""
     m = n - 1
     h0 = int(min(m, max(8, math.ceil(TAIL_DECAYS * comp.memory(dt)[0] / dt))))
     total = 0.0

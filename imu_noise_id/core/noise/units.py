@@ -1,10 +1,7 @@
-"""Exact conversions between continuous-time noise parameters and per-sample (discrete) values.
+"""Exact conversions between continuous-time noise parameters and per-sample values (the one place they live).
 
-Naming rule used throughout the package: continuous-time densities are called ``noise_density`` and
-``random_walk``; per-sample variances carry a ``sigma2_`` prefix and always depend on the sampling period
-``dt`` [s]. Mixing the two is the most common error in this field, so every conversion lives here.
-
-For a signal in unit ``u`` (rad/s or m/s²):
+Continuous-time densities are ``noise_density`` and ``random_walk``; per-sample variances carry ``sigma2_`` and
+depend on ``dt`` [s]. For a signal in unit ``u`` (rad/s or m/s²):
 
 ========================  =====================  ==============================================
 quantity                  unit                   per-sample value for period ``dt``
@@ -16,9 +13,7 @@ rate ramp ω               u/s                    ω·dt per sample
 quantisation Q            u·s                    σ²_QN = Q²/dt² (variance of ε_k/dt)
 ========================  =====================  ==============================================
 
-Paper 000 (Stebler et al. 2011) writes the Gauss–Markov transition as ``1 − βΔt`` and the driving variance as
-``2βσ²_GM`` (first-order Euler). This package uses the exact discretisation, and converts to the paper's
-notation with :func:`gm_to_paper000`.
+Paper 000 (Stebler et al. 2011) uses the Euler form 1 − βΔt, 2βσ²_GM: :func:`gm_to_paper000`.
 """
 
 from __future__ import annotations
@@ -60,9 +55,8 @@ def random_walk_density(sigma2_per_sample: float, dt: float) -> float:
 
 
 def random_walk_at_allan_variance(allan_variance: float | np.ndarray, tau: float | np.ndarray) -> float | np.ndarray:
-    """Density K = √(3·AV/τ) [u/s/√Hz] of the random walk whose Allan variance K²τ/3 (IEEE Std 952 Table C.2, the
-    +1 slope) equals ``allan_variance`` [u²] at ``tau`` [s]; element-wise on arrays. The one reading of a random
-    walk off an AV level: starting values, AV signatures, the long-τ bound, the slope fit and the loop's swaps."""
+    """K = √(3·AV/τ) [u/s/√Hz] of the random walk whose AV K²τ/3 (IEEE Std 952 Table C.2) equals ``allan_variance``
+    [u²] at ``tau`` [s]; element-wise."""
     k = np.sqrt(3.0 * np.asarray(allan_variance, dtype=float) / np.asarray(tau, dtype=float))
     return float(k) if k.ndim == 0 else k
 
@@ -79,13 +73,7 @@ def gm_drive_sigma2(tau: float, sigma: float, dt: float) -> float:
 
 
 def gm_from_discrete(phi: float, drive_sigma2: float, dt: float) -> tuple[float, float]:
-    """Invert the exact discretisation: (φ, q) → (τ [s], σ [u]).
-
-    Raises
-    ------
-    ValueError
-        If φ is not in (0, 1) (the process would not be a stationary first-order Gauss–Markov process).
-    """
+    """(φ, q) → (τ [s], σ [u]), inverting the exact discretisation; ValueError unless φ ∈ (0, 1)."""
     if not 0.0 < phi < 1.0:
         raise ValueError(f"Gauss-Markov transition phi must lie in (0, 1), got {phi!r}")
     tau = -_check_positive("dt", dt, False) / math.log(phi)
@@ -121,17 +109,12 @@ def covariance_from_density(noise_density: float | np.ndarray, rate_hz: float) -
 
 
 def step_noise_std(density: float, step_s: float, weight: float = 1.0) -> float:
-    """The white-rate standard deviation σ a discrete filter must be given for white noise of density ``density``.
+    """The white-rate std σ [u] a discrete filter must be given for white noise of ``density`` (u/√Hz, or u/s/√Hz for
+    a bias random walk): σ = density / √(weight · step).
 
-    Many filters propagate a white input noise of std σ [u] (``density`` in u/√Hz: a measurement noise N, or a
-    bias random walk K in u/s/√Hz) over a step of ``step_s`` seconds by adding ``weight``·(step·σ)² to the
-    integrated state's variance. The continuous-time truth adds density²·step per step, so
-
-        σ = density / √(weight · step)
-
-    ``weight`` = 1: one input sample per step (PX4 EKF2 ``covariance.cpp``: ``sq(dt * noise)``; VINS' bias blocks
-    ``V = I·dt``); ½: the mid-point rule's two half-weighted samples treated as independent (VINS' ``V = ½·dt``
-    blocks on the acc/gyro noise of both ends of a step).
+    The filter adds ``weight``·(step·σ)² per step of ``step_s`` [s]; the truth adds density²·step. ``weight`` = 1:
+    one input sample per step (PX4 EKF2 ``covariance.cpp``, VINS' bias blocks); ½: the mid-point rule's two
+    half-weighted samples (VINS' ``V = ½·dt`` blocks).
     """
     return _check_positive("density", density) / math.sqrt(
         _check_positive("weight", weight, False) * _check_positive("step_s", step_s, False))
