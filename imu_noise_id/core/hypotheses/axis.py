@@ -1,13 +1,6 @@
-"""One IMU axis through the hypothesis bank: warm-up offset, then the bank — streaming or batch, same numbers.
-
-The raw axis (a gyro reading including its turn-on bias and the Earth rate, or an accelerometer reading
-including gravity) is not an error signal yet. The bank's constant-bias state absorbs any offset, but its
-Gaussian prior (``bias_sigma``) must cover it; rather than a huge prior that also slows the bias estimate,
-the mean of the first ``warmup`` seconds is subtracted from every sample (the warm-up samples are then fed
-too), and ``bias_sigma`` only has to cover what is left. The warm-up also gives the white-noise estimate on
-which ``auto`` white-noise ranges are centred (:func:`.hypotheses_config.white_noise_estimate`). The node
-and ``imu-noise-id identify`` both use :class:`AxisIdentifier`.
-"""
+"""One IMU axis through the hypothesis bank: the mean of the first ``warmup`` seconds is subtracted from every
+sample (so ``bias_sigma`` only covers what is left) and gives the white-noise estimate for ``auto`` ranges; then
+the bank. Used by the node and ``imu-noise-id identify``."""
 
 from __future__ import annotations
 
@@ -28,11 +21,11 @@ class AxisIdentifier:
     Parameters
     ----------
     hypotheses : HypothesisSet, or a function white-noise estimate [u/√Hz] → HypothesisSet
-        (:func:`.hypotheses_config.hypothesis_set_factory`); a function is called once the warm-up is complete.
+        (:func:`.config.hypothesis_set_factory`), called once the warm-up is complete.
     warmup_s : float
-        Duration [s] whose mean is removed (0: nothing removed; at least 3 samples when > 0).
+        Duration [s] whose mean is removed (0: none; at least 3 samples when > 0).
     dt : float
-        Input sampling period [s] (required with a function; else taken from the set).
+        Input sampling period [s] (required with a function).
     """
 
     def __init__(self, hypotheses: HypothesisSet | Callable[[float | None], HypothesisSet], warmup_s: float = 1.0,
@@ -99,13 +92,9 @@ class AxisIdentifier:
 def identify_offline(y: np.ndarray, hypotheses: HypothesisSet | Callable[[float | None], HypothesisSet],
                      warmup_s: float, dt: float, *, refine: int = 0,
                      record_every: int = 1) -> tuple[BankResult, AxisIdentifier, int]:
-    """Batch identification of one raw axis, with optional grid refinement passes (offline only).
-
-    Each refinement pass re-centres the grids on the previous pass' posterior
-    (:func:`~imu_noise_id.core.hypotheses.model.refine_hypothesis_set`) and reruns the bank on the same data;
-    passes stop early when no grid range changes by more than 1 %. Returns the last pass' result, its
-    identifier (bank, offset, white-noise estimate) and the number of passes run.
-    """
+    """Batch identification of one raw axis with up to ``refine`` grid-refinement passes
+    (:func:`~imu_noise_id.core.hypotheses.model.refine_hypothesis_set`, stopping when no range changes by more than
+    1 %); returns the last result, its identifier and the passes run."""
     from .model import refine_hypothesis_set
 
     ident = AxisIdentifier(hypotheses, warmup_s, dt)

@@ -2,17 +2,10 @@
 
 >>> bank = HypothesisBank(hypothesis_set)
 >>> snap = bank.step(y)            # one error sample (the node, per axis)
->>> result = bank.run(y_array)     # many samples (offline); continues from where step() left off
+>>> result = bank.run(y_array)     # many samples; continues from where step() left off
 
-``run(y)`` gives exactly the same numbers as calling ``step`` on every sample of ``y`` (both feed
-:class:`.kernel.FilterBank` blocks of samples, and its results do not depend on the block length).
-
-Pauses: the node stops feeding the bank while the robot moves. :meth:`HypothesisBank.gap` declares the
-number of input samples that were missed; the filters predict over them (states and covariances propagated
-through Φᵍ, no likelihood terms), so after the pause a RW hypothesis has a wider state uncertainty and a GM
-one has partly forgotten its state, exactly as if the samples had been missing. An incomplete averaging
-block at the pause is discarded. Without a call to ``gap`` the bank treats the next sample as the
-continuation of the series.
+``run(y)`` equals ``step`` on every sample. :meth:`HypothesisBank.gap` declares missed input samples: the filters
+predict over them (no likelihood terms), an incomplete averaging block is dropped.
 """
 
 from __future__ import annotations
@@ -34,16 +27,10 @@ class HypothesisEstimate:
 
     Attributes
     ----------
-    probability : float
-        Pr(H = h_k | Y_i) (eq. 10).
-    theta, theta_std : dict
-        Parameter estimates θ̂^k (posterior mean over the grid) and posterior standard deviations, by
-        parameter name, continuous-time units.
-    rsd : dict
-        theta_std / theta (relative standard deviation of this data set's estimate).
-    not_identifiable : dict
-        Parameter name → lower bound of a parameter the record cannot resolve (a GM's τ beyond the record:
-        :mod:`.identifiable`); its θ̂ and RSD are then not measurements.
+    probability : Pr(H = h_k | Y_i) (eq. 10)
+    theta, theta_std : posterior mean θ̂^k and std by parameter name, continuous-time units
+    rsd : theta_std / theta
+    not_identifiable : parameter → lower bound, for parameters the record cannot resolve (:mod:`.identifiable`)
     """
 
     probability: float
@@ -54,9 +41,9 @@ class HypothesisEstimate:
 
 
 def probabilities_of(log_prob: np.ndarray) -> np.ndarray:
-    """Posterior probabilities from log-probabilities normalised to 0 along the last axis: exponentiated, divided by
-    their sum and clipped to [0, 1], so that each row sums to 1 to rounding and none exceeds 1 (the exponentials of
-    the log-sum-exp normalisation sum to 1 only to its rounding, and a lone hypothesis came out as 1 + 1e-12)."""
+    """Probabilities from log-probabilities normalised to 0 along the last axis: exponentiated, divided by their sum
+    and
+    clipped to [0, 1]."""
     lp = np.asarray(log_prob, dtype=float)
     p = np.exp(lp - np.max(lp, axis=-1, keepdims=True))
     return np.clip(p / np.sum(p, axis=-1, keepdims=True), 0.0, 1.0)
@@ -68,20 +55,13 @@ class BankSnapshot:
 
     Attributes
     ----------
-    n_updates : int
-        Bank samples processed (block averages when averaging).
-    t : float
-        Time of the latest update [s], gaps included (update i of an uninterrupted series is at i·dt·block).
-    probabilities : dict
-        Hypothesis name → posterior probability (in [0, 1], summing to 1 to rounding).
-    decision : str or None
-        The most probable hypothesis of ``decision_probabilities`` once its probability reaches γ, else None.
-    hypotheses : dict
-        Hypothesis name → :class:`HypothesisEstimate`.
-    long_memory : tuple of LongMemory
-        GM hypotheses the data seen so far cannot tell from their RW twin (:mod:`.identifiable`).
-    decision_probabilities : dict
-        ``probabilities`` with each such GM hypothesis merged into its RW twin (what the decision is taken on).
+    n_updates : bank samples processed (block averages when averaging)
+    t : time of the latest update [s], gaps included
+    probabilities : hypothesis name → posterior probability
+    decision : the most probable hypothesis of ``decision_probabilities`` once it reaches γ, else None
+    hypotheses : hypothesis name → :class:`HypothesisEstimate`
+    long_memory : GM hypotheses the data cannot tell from their RW twin (:mod:`.identifiable`)
+    decision_probabilities : ``probabilities`` with each such GM merged into its RW twin
     """
 
     n_updates: int
@@ -118,10 +98,9 @@ class BankResult:
 
     @property
     def decision_time(self) -> float | None:
-        """Time [s] from which ``final.decision`` held to the end: the first recorded update after which the decided
-        hypothesis's probability, with the hypotheses merged into it at the end (``final.long_memory``) added, stayed
-        at or above γ; ``final.t`` when only the last update reached it. None exactly when ``final.decision`` is
-        None (a decision has a time and a time a decision)."""
+        """Time [s] from which ``final.decision`` (its probability with the merged long-memory hypotheses) stayed at
+        or
+        above γ; ``final.t`` when only the last update reached it; None exactly when ``final.decision`` is None."""
         decision = self.final.decision
         if decision is None:
             return None
@@ -140,8 +119,7 @@ class HypothesisBank:
     hypothesis_set : HypothesisSet
         Hypotheses, priors, grids, γ, block averaging.
     chunk : int
-        Bank samples per vectorised block in :meth:`run` (memory ∝ chunk × number of filters). The default
-        keeps a block's arrays (64 × 512 filters × 8 B = 256 kB each) in the cache; 512 was 15–30 % slower.
+        Bank samples per vectorised block in :meth:`run` (memory ∝ chunk × filters; docs/hypotheses.md, "Speed").
     """
 
     def __init__(self, hypothesis_set: HypothesisSet, chunk: int = 64) -> None:
@@ -205,8 +183,8 @@ class HypothesisBank:
         return self.snapshot()
 
     def run(self, y: np.ndarray, record_every: int = 1) -> BankResult:
-        """Feed an array of input samples; returns probabilities and estimates after every ``record_every``-th
-        bank update (counted from the first sample since :meth:`reset`, so rows match :meth:`step`)."""
+        """Feed an array of input samples; probabilities and estimates after every ``record_every``-th bank update
+        (counted from :meth:`reset`, so rows match :meth:`step`)."""
         arr = check_samples(y, "input samples").ravel()
         if arr.size == 0:
             raise InputError("no input samples given to the hypothesis bank")
@@ -289,8 +267,9 @@ class HypothesisBank:
         )
 
     def state_estimates(self) -> dict[str, dict[str, tuple[float, float]]]:
-        """Per hypothesis, the mixture state estimates (eq. 13) and standard deviations (eq. 14) by state name
-        (``bias``, ``RW``, ``GM``, …) [u]. Not part of :meth:`snapshot` to keep :meth:`step` cheap."""
+        """Per hypothesis, the mixture state estimates (eq. 13) and stds (eq. 14) [u] by state name (``bias``,
+        ``RW``,
+        ``GM``, …)."""
         out = {}
         for k, (mean, cov) in enumerate(self._filters.state_mixture(0)):
             std = np.sqrt(np.maximum(np.diag(cov), 0.0))

@@ -1,9 +1,6 @@
-"""Hypothesis sets from their parsed YAML mapping (``config/hypotheses_default.yaml`` describes the
-format) → core dataclasses. Reading the file is the adapters' job (:mod:`imu_noise_id.resources`);
-:func:`hypothesis_set_from_dict` turns the parsed mapping into a
-:class:`~imu_noise_id.core.hypotheses.HypothesisSet` for one sensor type and sampling period, raising
-:class:`~imu_noise_id.core.errors.InputError` with the offending key on any mistake.
-"""
+"""Hypothesis sets from their parsed YAML mapping (format: ``config/hypotheses_default.yaml``):
+:func:`hypothesis_set_from_dict` → :class:`~imu_noise_id.core.hypotheses.HypothesisSet`, InputError naming the
+offending key."""
 
 from __future__ import annotations
 
@@ -38,12 +35,8 @@ class NeedsDataError(InputError):
 
 
 def white_noise_estimate(y: np.ndarray, dt: float) -> float:
-    """White-noise density [u/√Hz] from first differences, √(var(Δy)/2 · dt) (the WN dominates Δy at IMU rates).
-
-    The Allan variance at τ₀ (:class:`~imu_noise_id.core.white_noise.FirstDifferences`, also the online node's
-    noise density). Used to centre ``auto`` white-noise ranges; the RW/GM increments inflate it slightly (by q/2
-    per sample).
-    """
+    """White-noise density [u/√Hz] from first differences, √(var(Δy)/2 · dt) (AV at τ₀,
+    :class:`~imu_noise_id.core.white_noise.FirstDifferences`); centres ``auto`` ranges."""
     y = np.asarray(y, dtype=float).ravel()
     if y.size < 3 or not np.all(np.isfinite(y)):
         raise InputError("need at least 3 finite warm-up samples to estimate the white noise for an 'auto' range")
@@ -122,11 +115,8 @@ def _hypothesis(spec: Any, i: int, where: str, wn_estimate: float | None) -> Hyp
 
 def hypothesis_set_from_dict(data: dict[str, Any], dt: float, sensor: str | None = None, source: str = "hypotheses",
                              wn_estimate: float | None = None) -> tuple[HypothesisSet, float]:
-    """The hypothesis set for ``sensor`` (``"gyro"``/``"accel"``) at input sampling period ``dt`` [s].
-
-    Returns the set and the warm-up duration [s] whose mean is subtracted before the bank. ``auto`` white-noise
-    ranges are centred on ``wn_estimate`` [u/√Hz] (:class:`NeedsDataError` without it).
-    """
+    """The set for ``sensor`` (``"gyro"``/``"accel"``) at input period ``dt`` [s] and the warm-up [s]; ``auto``
+    white-noise ranges centred on ``wn_estimate`` [u/√Hz] (:class:`NeedsDataError` without it)."""
     unknown = set(data) - _TOP_KEYS
     if unknown:
         raise InputError(f"{source}: unknown top-level key(s) {sorted(unknown)} (known: {sorted(_TOP_KEYS)})")
@@ -169,11 +159,8 @@ def hypothesis_set_from_dict(data: dict[str, Any], dt: float, sensor: str | None
 
 def hypothesis_set_factory(data: dict[str, Any], dt: float, sensor: str | None = None,
                            source: str = "hypotheses") -> tuple[Callable[[float | None], HypothesisSet], float]:
-    """A function white-noise estimate → hypothesis set (checked once now), and the warm-up [s].
-
-    Use it with :class:`~imu_noise_id.core.hypotheses.axis.AxisIdentifier`, which calls it after the
-    warm-up with :func:`white_noise_estimate` of the warm-up samples.
-    """
+    """A function white-noise estimate → hypothesis set (checked once now) and the warm-up [s], for
+    :class:`~imu_noise_id.core.hypotheses.axis.AxisIdentifier`."""
     try:
         _, warmup = hypothesis_set_from_dict(data, dt, sensor, source, None)
     except NeedsDataError:

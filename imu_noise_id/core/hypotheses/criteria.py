@@ -1,22 +1,10 @@
 """Performance criteria of the identification (paper 002 section 3) by Monte Carlo, and the section 4 cases.
 
-Each of L trials draws the true hypothesis from the prior probabilities and its parameters θ from their
-uniform prior ranges (continuous, not on the grid), simulates the error samples, and runs the bank. At each
-recorded time the harness accumulates
-
-* the real identification-error probability (eq. 15): the fraction of trials whose most probable
-  hypothesis is not the true one;
-* the calculated one (eq. 18): the mean of 1 − Pr(H = h_k* | Y_i), h_k* the most probable hypothesis. The
-  paper's text calls h_k* "the true hypothesis", but in section 2 h_k* is the most probable one, and only
-  that reading can be "calculated" on real data (where the truth is unknown) and agrees with eq. (15) for a
-  consistent posterior: E{1 − max_k Pr} = Pr(argmax ≠ true), whereas E{1 − Pr(true)} = E{1 − Σ_k Pr²} is
-  larger whenever the posteriors are not 0/1. The latter is kept as ``error_probability_calculated_true``;
-* the real parameter error variance (eq. 17) of the true hypothesis' estimate θ̂^k and the calculated one
-  (eq. 19): the mean posterior variance P^θk (eq. 14) — both over the trials in which h_k is true;
-* the relative standard deviations (eq. 20): their square roots over the prior mean E{θ}.
-
-Trials are vectorised: all trials of a batch run through one :class:`.kernel.FilterBank` with one stream per
-trial, sharing the data-independent covariance recursion.
+Each of L trials draws the true hypothesis from the prior and θ uniformly from the prior ranges, simulates and
+runs the bank (all trials of a batch as streams of one :class:`.kernel.FilterBank`). Per recorded time: the real
+(eq. 15) and calculated (eq. 18, 1 − Pr of the *most probable* hypothesis) identification-error probabilities,
+the literal reading of eq. 18 (1 − Pr(true), ``error_probability_calculated_true``), real and calculated
+parameter error variances (eqs. 17, 19) and RSDs (eq. 20).
 """
 
 from __future__ import annotations
@@ -38,16 +26,16 @@ _MAX_BLOCK = 16
 
 @dataclass
 class CriteriaResult:
-    """Performance criteria as functions of time (paper 002 eqs. 15, 17–20).
+    """Performance criteria over time (paper 002 eqs. 15, 17–20).
 
     Attributes
     ----------
-    t : (R,) times [s] of the recorded bank updates
+    t : (R,) times [s] of the recorded updates
     error_probability_real, error_probability_calculated : (R,) eqs. (15) and (18)
-    error_probability_calculated_true : (R,) mean of 1 − Pr(true hypothesis) (the literal reading of eq. 18)
-    rsd_real, rsd_calculated : dict ``"<hypothesis>:<parameter>"`` → (R,) eq. (20) from eqs. (17) / (19)
-    decided, decided_wrong : (R,) fraction of trials with a decision (max probability ≥ γ), and with a wrong one
-    true_counts : dict hypothesis → number of trials in which it was true
+    error_probability_calculated_true : (R,) mean of 1 − Pr(true hypothesis)
+    rsd_real, rsd_calculated : ``"<hypothesis>:<parameter>"`` → (R,) eq. (20) from eqs. (17) / (19)
+    decided, decided_wrong : (R,) fraction of trials with a decision (max Pr ≥ γ), and with a wrong one
+    true_counts : hypothesis → trials in which it was true
     """
 
     case: str
@@ -67,16 +55,12 @@ class CriteriaResult:
 
 def paper_case(case: int, dt: float = 1.0, grid: dict[str, int] | None = None, bias_sigma: float = 1.0,
                gamma: float = 0.8) -> HypothesisSet:
-    """The hypothesis set of paper 002 section 4, case 1, 2 or 3.
+    """The hypothesis set of paper 002 section 4, case 1, 2 or 3: RW (eq. 21) vs GM (eq. 22) with a bias, eq. (23).
 
-    RW (eq. 21) vs GM (eq. 22), each with a constant bias, measurements eq. (23). Paper values are
-    per-sample: σ_w ∈ [0.04, 0.15] u, τ_m ∈ [1, 25] min, σ_m ∈ [0.5, 1.5] u, σ_v = 0 (case 1), 0.5 u
-    (case 2), ∈ [0.25, 1] u (case 3). Converted to continuous time: random_walk = σ_w/√Δt,
-    noise_density = σ_v·√Δt. ``grid`` sets the grid sizes (keys ``random_walk``, ``tau``, ``sigma``,
-    ``noise_density``); all grids are log-spaced with cell-width weights (uniform priors). Defaults: cases
-    1–2 random_walk 256, tau × sigma 32 × 32 (1280 filters); case 3 random_walk 64, tau × sigma 12 × 12,
-    noise_density 12 (2496 filters). The bias prior (and the simulated bias) is N(0, bias_sigma²) — the
-    paper does not state it.
+    Paper values per sample: σ_w ∈ [0.04, 0.15] u, τ_m ∈ [1, 25] min, σ_m ∈ [0.5, 1.5] u, σ_v = 0 / 0.5 u /
+    ∈ [0.25, 1] u (cases 1–3); random_walk = σ_w/√Δt, noise_density = σ_v·√Δt. ``grid``: sizes by parameter (log
+    grids); defaults 256 and 32 × 32 (cases 1–2), 64, 12 × 12 and 12 (case 3). Bias prior N(0, bias_sigma²) (not in
+    the paper).
     """
     if case not in (1, 2, 3):
         raise InputError(f"paper 002 has cases 1, 2 and 3, got {case!r}")
@@ -115,10 +99,8 @@ def true_components(hyp: Hypothesis, theta: np.ndarray) -> list[Component]:
 
 def simulate_trial(hset: HypothesisSet, k: int, theta: np.ndarray, n_samples: int,
                    rng: np.random.Generator) -> np.ndarray:
-    """``n_samples`` input samples (rate 1/dt) of hypothesis k with parameters θ and a N(0, bias_sigma²) bias.
-
-    The RW starts at 0 and the GM in its stationary distribution, as the bank's priors assume.
-    """
+    """``n_samples`` inputs (rate 1/dt) of hypothesis k with θ and a N(0, bias_sigma²) bias; RW from 0, GM
+    stationary."""
     y = np.full(n_samples, rng.standard_normal() * hset.bias_sigma)
     for comp in true_components(hset.hypotheses[k], theta):
         y += comp.simulate(n_samples, hset.dt, rng)
@@ -144,14 +126,9 @@ def record_indices(n_updates: int, n_points: int = 200) -> np.ndarray:
 def run_criteria(hset: HypothesisSet, duration_s: float, trials: int, *, seed: int | None = 0,
                  record: np.ndarray | None = None, trial_batch: int = 50, case: str = "",
                  progress: Callable[[int, int], None] | None = None) -> CriteriaResult:
-    """Monte-Carlo performance criteria of the bank on ``hset`` over ``duration_s`` seconds (section 3).
-
-    Parameters
-    ----------
-    record : update numbers (1-based) at which the criteria are evaluated (default :func:`record_indices`).
-    trial_batch : trials run together in one vectorised bank (memory ∝ trial_batch × filters).
-    progress : called as ``progress(done, total)`` in trial-records (trials × record points) as they are done.
-    """
+    """Monte-Carlo performance criteria of the bank on ``hset`` over ``duration_s`` [s] (section 3): at ``record``
+    update numbers (default :func:`record_indices`), ``trial_batch`` trials per vectorised bank, ``progress(done,
+    total)`` in trial-records."""
     if trials < 2:
         raise InputError(f"the Monte Carlo needs at least 2 trials, got {trials}")
     n_updates = round(duration_s / hset.bank_dt)

@@ -1,16 +1,9 @@
 """Hypotheses the record at hand cannot tell apart (beyond paper 002).
 
-Over a span T much shorter than its correlation time τ, a Gauss–Markov process x_{k+1} = φx_k + w_k (φ = e^{−Δt/τ})
-is indistinguishable from a random walk: its increments are those of a RW of density σ√(2/τ), and the mean
-reversion that sets it apart shows only over spans of the order of τ. A bank comparing WN+GM with WN+RW on a
-record shorter than a couple of correlation times then reports a GM probability that is not evidence of a GM, and
-a τ estimate that is the grid's or the prior's upper region, not a measurement.
-
-The rule: when the posterior probability that τ exceeds :data:`LONG_TAU_FRACTION` of the span of data seen is at
-least one half, the GM hypothesis is *indistinguishable on this record* from its random-walk twin (the same
-components with RW for GM); its τ is reported as not identifiable, with the lower bound τ > τ_5 % (the posterior's
-5 % quantile), and the decision is taken on the merged probability of the pair, named after the RW (the simpler
-description of the same data).
+Over a span T ≪ τ a GM (φ = e^{−Δt/τ}) has the increments of a RW of density σ√(2/τ). When the posterior
+probability that τ > :data:`LONG_TAU_FRACTION` of the span seen is at least ½, the GM hypothesis is
+indistinguishable from its RW twin: τ is reported as not identifiable, τ > its :data:`LOWER_QUANTILE` quantile,
+and the decision uses the pair's merged probability, named after the RW.
 """
 
 from __future__ import annotations
@@ -30,14 +23,8 @@ LOWER_QUANTILE = 0.05
 
 @dataclass(frozen=True)
 class LongMemory:
-    """A GM hypothesis whose τ the record cannot resolve.
-
-    Attributes
-    ----------
-    hypothesis : the GM hypothesis; twin : its RW twin (None when the set has none)
-    tau_lower_bound : τ > this [s] (posterior 5 % quantile); record_s : span of data seen [s]
-    probability_long : posterior probability that τ > LONG_TAU_FRACTION·record_s
-    """
+    """A GM hypothesis whose τ the record cannot resolve: ``hypothesis``, its RW ``twin`` (or None),
+    ``tau_lower_bound`` [s], ``record_s`` (span seen [s]), ``probability_long`` (Pr τ > LONG_TAU_FRACTION·record_s)."""
 
     hypothesis: str
     twin: str | None
@@ -110,8 +97,7 @@ def long_memory(hset: HypothesisSet, log_weights: list[np.ndarray], record_s: fl
 
 
 def merged_probabilities(probabilities: dict[str, float], groups: list[LongMemory]) -> dict[str, float]:
-    """The probabilities with each long-memory GM hypothesis added to its RW twin (and left out); a sum is clipped
-    to 1 (two probabilities summing to 1 add to 1 + rounding)."""
+    """The probabilities with each long-memory GM hypothesis added to its RW twin (sums clipped to 1)."""
     merged = dict(probabilities)
     for g in groups:
         if g.twin is not None and g.hypothesis in merged and g.twin in merged:

@@ -1,22 +1,11 @@
 """The vectorised Kalman-filter bank and the posterior over hypotheses and grid points (paper 002 eqs. 4–14).
 
-Every grid point of every hypothesis is one Kalman filter; all filters advance in one array step, and so do
-``L`` independent data streams (the Monte-Carlo trials of :mod:`.criteria`; ``L = 1`` for the node/CLI).
-Two observations make this cheap:
-
-* The covariance recursion (eqs. 5–6, 8) does not depend on the data: it runs once per step for the F
-  filters and is shared by all L streams. It stops when the gains and innovation variances no longer change
-  (``HypothesisSet.gain_tolerance``); the last gains are then used as the steady-state gains.
-* Eqs. (10)–(12) are Bayes' rule applied recursively, so the posterior weight of grid point j of hypothesis
-  k after i samples is ``μ_0^{kj} exp(c_i^{kj})`` up to normalisation, with ``c_i^{kj}`` the cumulative
-  log-likelihood Σ_t log N(λ_t^{kj}; 0, Λ_t^{kj}) (eq. 9), and Pr(h_k | Y_i) ∝ Pr(h_k) Σ_j μ_0^{kj}
-  exp(c_i^{kj}) (eqs. 10–11). The bank therefore keeps ``c`` (a sum of logs, which cannot underflow) and
-  evaluates the normalisations of eqs. (10) and (12) with a log-sum-exp; over a block of samples the
-  cumulative sums are one ``cumsum``. The result is identical whatever the block length, so streaming
-  (one sample) and batch (many) agree exactly.
-
-Zero measurement noise (paper 002 case 1) is handled as the paper says: only the innovation variance Λ
-(eq. 8) is inverted, never R; Λ > 0 because every dynamic state is driven by noise.
+Each grid point of each hypothesis is one filter; all F filters and ``L`` data streams (Monte-Carlo trials;
+L = 1 for the node) advance in one array step. The data-independent covariance recursion (eqs. 5–6, 8) runs
+once for all streams and stops once the gains settle (``HypothesisSet.gain_tolerance``). The posterior weight of
+point j of hypothesis k is μ_0^{kj} exp(c_i^{kj}), c the cumulative log-likelihood (eq. 9), normalised by
+log-sum-exp (eqs. 10–12), so any block length gives the same numbers. Only Λ (eq. 8) is inverted, never R
+(zero measurement noise, case 1).
 """
 
 from __future__ import annotations
@@ -97,10 +86,7 @@ class FilterBank:
 
     # -- covariance recursion (data independent) -------------------------------------------------------
     def _riccati(self) -> None:
-        """One step of eqs. (5), (6), (8): prediction, innovation variance Λ, gain K, update (all filters).
-
-        Λ > 0 is checked by :meth:`advance` once per block (on every Λ it used).
-        """
+        """One step of eqs. (5), (6), (8) for all filters (Λ > 0 checked by :meth:`advance`)."""
         m = self.model
         n = m.n
         if self._phiphi is not None:
@@ -126,22 +112,8 @@ class FilterBank:
 
     # -- data-dependent part ---------------------------------------------------------------------------
     def advance(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Run eqs. (4)–(8) over a block of samples.
-
-        Parameters
-        ----------
-        y : (T, L) samples of the L streams.
-
-        Returns
-        -------
-        lam : (T, L, F) innovations λ_i^{kj} (eq. 7)
-        S : (T, F) their variances Λ_i^{kj} (eq. 8)
-
-        Raises
-        ------
-        FloatingPointError
-            If some Λ ≤ 0 (a grid point without process and measurement noise).
-        """
+        """Run eqs. (4)–(8) over a block ``y`` (T, L); returns innovations λ (T, L, F) (eq. 7) and their variances Λ
+        (T, F) (eq. 8). FloatingPointError if some Λ ≤ 0."""
         T = y.shape[0]
         F = self.model.n_filters
         lam = np.empty((T, self.n_streams, F))
@@ -173,10 +145,7 @@ class FilterBank:
         return lam, S_out
 
     def gap(self, n_missing: int) -> None:
-        """Predict over ``n_missing`` samples without measurements: x ← Φᵍx, P ← ΦᵍPΦᵍᵀ + Σ ΦⁱQΦⁱᵀ.
-
-        The likelihoods are not touched; the Riccati recursion restarts from the propagated covariance.
-        """
+        """Predict over ``n_missing`` samples: x ← Φᵍx, P ← ΦᵍPΦᵍᵀ + Σ ΦⁱQΦⁱᵀ; likelihoods untouched."""
         if n_missing <= 0:
             return
         m = self.model
@@ -199,10 +168,7 @@ class FilterBank:
         self.frozen = False
 
     def accumulate(self, lam: np.ndarray, S: np.ndarray) -> np.ndarray:
-        """Add the log-likelihoods (eq. 9) of a block to the cumulative sums; returns c after each sample (T, L, F).
-
-        The sums are accumulated sample by sample, so the result does not depend on how samples are blocked.
-        """
+        """Add a block's log-likelihoods (eq. 9) sample by sample; c after each sample (T, L, F)."""
         logS = np.log(S)
         ell = -0.5 * ((_LOG_2PI + logS)[:, None, :] + lam * lam / S[:, None, :])
         c = self.c
@@ -213,15 +179,9 @@ class FilterBank:
         return ell
 
     def evaluate(self, c: np.ndarray) -> Posterior:
-        """Eqs. (10)–(14) from cumulative log-likelihoods c (R, L, F): probabilities, θ̂ and their variances;
-        a parameter the grid resolves to less than one cell gets its sub-cell mean and variance from the local
-        curvature of the log weights (:mod:`.subcell`, beyond the paper).
-
-        One hypothesis at a time on its contiguous slice of filters, and only for its unknown parameters (a
-        known one has θ̂ = its value and variance 0). Every operation is elementwise or a reduction over the
-        filter axis, so each row's result does not depend on how many rows are evaluated together: streaming
-        (one row) and batch (many rows) give identical numbers.
-        """
+        """Eqs. (10)–(14) from cumulative log-likelihoods c (R, L, F): probabilities, θ̂ and variances per row;
+        parameters
+        resolved below one cell get sub-cell summaries (:mod:`.subcell`, beyond the paper)."""
         m = self.model
         lead = c.shape[:-1]
         lj = c + m.log_mu0

@@ -1,30 +1,19 @@
 """Hypotheses about a sensor's error model and their point-mass parameter grids (paper 002, sections 2 and 4).
 
-A *hypothesis* is an error-model structure — a constant bias plus dynamic components (RW, GM) plus an
-optional white-noise component (WN) — with a uniform prior range for every unknown parameter (paper 002
-eq. 3; eqs. 21–23 for the RW-vs-GM example). Parameters are the project's **continuous-time** values
-(``RW.random_walk`` [u/s/√Hz], ``GM.tau`` [s], ``GM.sigma`` [u], ``WN.noise_density`` [u/√Hz]); the
-per-sample matrices Φ, Q (= ΓΓᵀ), H, R (= ΨΨᵀ) of each grid point come from
-:meth:`imu_noise_id.core.noise.components.Component.block` at the sampling period, so that paper 002's per-sample
-σ_w, σ_m, σ_v correspond to ``random_walk·√Δt``, ``sigma`` and ``noise_density/√Δt``.
+A hypothesis is a constant bias plus dynamic components (RW, GM) plus optional WN, with a uniform prior range per
+unknown parameter (paper 002 eq. 3; eqs. 21–23). Parameters are continuous-time (``RW.random_walk``
+[u/s/√Hz], ``GM.tau`` [s], ``GM.sigma`` [u], ``WN.noise_density`` [u/√Hz]); paper 002's per-sample σ_w, σ_m,
+σ_v are ``random_walk·√Δt``, ``sigma`` and ``noise_density/√Δt``.
 
-Beyond the paper:
+Beyond the paper: **grid cells** (each range cut into ``n`` linear or log cells; the point is the cell's centre,
+its prior weight the cell's width, so both spacings represent the uniform prior) and **block averaging**
+(``block = m``: the exact model of m-sample averages, :func:`averaged_dynamic_block`, states end value e_j and
+block mean a_j per dynamic component)::
 
-* **Grid cells.** Each parameter range [low, high] is cut into ``n`` cells (equal widths, or equal ratios
-  for ``spacing="log"``); the grid point is the cell's (arithmetic or geometric) centre and its prior weight
-  the cell's width, so that both spacings represent the *uniform* prior of the paper. The weights of a
-  multi-parameter grid are products of cell widths.
-* **Block averaging.** With ``block = m > 1`` the bank sees averages of m consecutive samples. The average
-  of a RW or GM over a block is not a RW or GM at the slower rate; the exact discrete model of the averaged
-  samples (:func:`averaged_dynamic_block`) carries, per dynamic component, the value at the block's end
-  ``e_j`` and the block average ``a_j``::
+    e_j = φ^m e_{j−1} + d_j,      a_j = c e_{j−1} + u_j,      c = (1/m) Σ_{i=1..m} φ^i,
+    d_j = Σ_l φ^{m−l} w_l,        u_j = Σ_l g_l w_l,           g_l = (1/m) Σ_{i=l..m} φ^{i−l},
 
-      e_j = φ^m e_{j−1} + d_j,      a_j = c e_{j−1} + u_j,      c = (1/m) Σ_{i=1..m} φ^i,
-      d_j = Σ_l φ^{m−l} w_l,        u_j = Σ_l g_l w_l,           g_l = (1/m) Σ_{i=l..m} φ^{i−l},
-
-  with the per-sample drive w_l ~ N(0, q) (q = σ²_RW or σ²(1 − φ²)), so that Q = q·[[Σα², Σαg], [Σαg, Σg²]]
-  (α_l = φ^{m−l}) and the averaged measurement is H = [0, 1] on (e, a). White noise averages to variance
-  σ²_v/m, the bias to itself. The model is exact (no approximation) for any m.
+w_l ~ N(0, q), Q = q·[[Σα², Σαg], [Σαg, Σg²]] (α_l = φ^{m−l}), H = [0, 1]; white noise averages to σ²_v/m.
 """
 
 from __future__ import annotations
@@ -55,19 +44,12 @@ class ParameterPrior:
 
     Attributes
     ----------
-    name : str
-        ``"<COMPONENT>.<parameter>"``, e.g. ``"GM.tau"``.
-    low, high : float
-        Range of the uniform prior, continuous-time units (``low == high`` means a known value).
-    n : int
-        Number of grid cells (1 when known).
-    spacing : str
-        ``"linear"`` (equal widths) or ``"log"`` (equal ratios).
-    grid_low, grid_high : float, optional
-        Sub-range [grid_low, grid_high] ⊆ [low, high] covered by the grid (grid refinement, see
-        :func:`refine_hypothesis_set`); the cells' prior weights stay fractions of the whole prior range, so the
-        hypothesis evidence keeps the prior mass outside the sub-range out (it assumes the likelihood is
-        negligible there). Default: the whole range.
+    name : ``"<COMPONENT>.<parameter>"``, e.g. ``"GM.tau"``
+    low, high : the prior range, continuous-time units (``low == high``: known)
+    n : grid cells (1 when known)
+    spacing : ``"linear"`` or ``"log"``
+    grid_low, grid_high : optional sub-range covered by the grid (:func:`refine_hypothesis_set`); the cells'
+        weights stay fractions of the whole range
     """
 
     name: str
@@ -115,8 +97,7 @@ class ParameterPrior:
         return np.geomspace(lo, hi, self.n + 1) if self.spacing == "log" else np.linspace(lo, hi, self.n + 1)
 
     def cells(self) -> tuple[np.ndarray, np.ndarray]:
-        """Grid points (cell centres) and their prior weights (cell widths over the prior range's width; they sum
-        to 1 unless the grid covers only a sub-range)."""
+        """Grid points (cell centres) and prior weights (cell widths over the range's width)."""
         if self.known:
             return np.array([self.low]), np.ones(1)
         edges = self.edges()
@@ -130,15 +111,11 @@ class Hypothesis:
 
     Attributes
     ----------
-    components : tuple of str
-        Component names, each at most once, from ``RW``, ``GM``, ``WN`` (a constant bias state is always
-        added, paper 002 eqs. 21–22). Without ``WN`` the measurement noise is zero (paper 002 case 1).
-    priors : tuple of ParameterPrior
-        One per parameter of every component (see :data:`COMPONENT_PARAMETERS`).
-    probability : float
-        Prior probability Pr(H = h_k) (normalised over the set).
-    name : str
-        Label (default: the canonical structure name, e.g. ``"WN+RW"`` for components ``("RW", "WN")``).
+    components : names from ``RW``, ``GM``, ``WN``, each at most once (a bias state is always added, paper 002
+        eqs. 21–22; without ``WN`` the measurement noise is zero, case 1)
+    priors : one :class:`ParameterPrior` per parameter (:data:`COMPONENT_PARAMETERS`)
+    probability : prior Pr(H = h_k) (normalised over the set)
+    name : label (default the canonical structure name, e.g. ``"WN+RW"``)
     """
 
     components: tuple[str, ...]
@@ -179,11 +156,9 @@ class Hypothesis:
         return sum(c in DYNAMIC_COMPONENTS for c in self.components) + 1
 
     def grid(self) -> tuple[np.ndarray, np.ndarray]:
-        """Point-mass grid θ^{kj} (M_k, p) and prior weights μ_0^{kj} (M_k,) (paper 002 eq. 3).
-
-        The weights are the prior probabilities of the cells: they sum to 1, or to the prior mass of the
-        refined sub-box (:class:`ParameterPrior` ``grid_low``/``grid_high``).
-        """
+        """Point-mass grid θ^{kj} (M_k, p) and prior weights μ_0^{kj} (M_k,) (paper 002 eq. 3), summing to 1 or to
+        the
+        refined sub-box's prior mass."""
         cells = [p.cells() for p in self.priors]
         points = np.array(list(itertools.product(*[c[0] for c in cells])), dtype=float)
         weights = np.array([math.prod(w) for w in itertools.product(*[c[1] for c in cells])], dtype=float)
@@ -196,18 +171,13 @@ class HypothesisSet:
 
     Attributes
     ----------
-    hypotheses : tuple of Hypothesis
-    dt : float
-        Sampling period of the input samples [s].
-    gamma : float
-        Decision threshold γ on the largest posterior probability (paper 002 section 2, about 0.8).
-    block : int
-        Number of input samples averaged into one bank sample (1 = no averaging).
-    bias_sigma : float
-        Prior standard deviation of the constant-bias state [u] (prior mean 0).
-    gain_tolerance : float
-        The bank stops iterating the (data-independent) Riccati equations once no gain and no relative
-        innovation variance changes by more than this in one step, and keeps the last gains (0 = never).
+    hypotheses : tuple of :class:`Hypothesis`
+    dt : sampling period of the input samples [s]
+    gamma : decision threshold γ on the largest posterior probability (paper 002 section 2)
+    block : input samples averaged into one bank sample (1 = none)
+    bias_sigma : prior std of the constant-bias state [u] (mean 0)
+    gain_tolerance : the Riccati iteration stops once no gain or relative innovation variance changes by more
+        than this in a step (0 = never)
     """
 
     hypotheses: tuple[Hypothesis, ...]
@@ -246,11 +216,8 @@ class HypothesisSet:
 
 
 def averaged_dynamic_block(phi: float, q: float, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """Exact (Φ, Q) of a first-order component (x_k = φ x_{k−1} + w_k, var w = q) seen through m-averages.
-
-    States (e_j, a_j): the value at the end of block j and the mean over block j (see the module
-    docstring for the derivation). ``phi = 1`` is the random walk.
-    """
+    """Exact (Φ, Q) of x_k = φ x_{k−1} + w_k (var w = q) seen through m-averages, states (e_j, a_j) (module
+    docstring); ``phi = 1`` is the random walk."""
     lags = np.arange(m)  # l' = m − l = 0..m−1
     alpha = phi ** lags[::-1]  # α_l = φ^{m−l}, l = 1..m
     powers = phi ** np.arange(m)  # φ^0..φ^{m−1}
@@ -264,14 +231,11 @@ def averaged_dynamic_block(phi: float, q: float, m: int) -> tuple[np.ndarray, np
 
 @dataclass(frozen=True)
 class BankModel:
-    """State-space matrices of every filter of the bank, stacked (states padded to a common size).
-
-    Arrays put the filter index last so that the per-step operations are contiguous:
-    ``phi_kron`` (n², n², F) = Φ ⊗ Φ, ``q`` (n², F) = vec Q, ``h`` (n, F), ``hh`` (n², F) = vec hhᵀ,
-    ``phi`` (n, n, F), ``r`` (F,), ``p0`` (n², F). Padded states have Φ = Q = H = P₀ = 0 and stay zero.
-    ``slices[k]`` selects hypothesis k's filters; ``theta[k]`` (M_k, p_k) and ``log_mu0`` (F,) hold the
-    grid and log prior weights; ``log_prior`` (K,) the log prior probabilities of the hypotheses.
-    """
+    """State-space matrices of every filter of the bank, stacked, filter index last (padded states stay zero):
+    ``phi_kron`` (n², n², F) = Φ ⊗ Φ, ``q`` (n², F) = vec Q, ``h`` (n, F), ``hh`` (n², F) = vec hhᵀ, ``phi`` (n, n,
+    F),
+    ``r`` (F,), ``p0`` (n², F); ``slices[k]`` hypothesis k's filters, ``theta[k]`` (M_k, p_k), ``log_mu0`` (F,),
+    ``log_prior`` (K,)."""
 
     n: int
     phi: np.ndarray
@@ -358,14 +322,11 @@ def build_bank_model(hset: HypothesisSet) -> BankModel:
 
 def refine_hypothesis_set(hset: HypothesisSet, theta: dict[str, dict[str, float]],
                           theta_std: dict[str, dict[str, float]], n_sigma: float = 6.0) -> HypothesisSet:
-    """Grid refinement (beyond paper 002): re-centre every unknown parameter's grid on its posterior.
+    """Grid refinement (beyond paper 002): every unknown parameter's grid re-centred on its posterior.
 
-    The new grid range is θ̂ ± max(n_sigma·std, 1 cell of the current grid) (in log space for log grids:
-    θ̂ ·/÷ exp(max(n_sigma·std/θ̂, 1 log cell ratio))), clipped to the prior range, with the same number of
-    cells, so a posterior collapsed on one cell is zoomed by n/2 per pass. Weights stay fractions of the
-    prior range (:meth:`ParameterPrior.cells`), so the hypothesis probabilities remain those of the original
-    uniform priors as long as the likelihood outside the new box is negligible. Rerunning the bank on the same
-    data with the refined set resolves posteriors that the first grid put on a single cell.
+    New range θ̂ ± max(n_sigma·std, 1 cell) (log grids: θ̂ ·/÷ exp(max(n_sigma·std/θ̂, 1 log cell))), clipped to the
+    prior range, same number of cells; weights stay fractions of the prior range, so hypothesis probabilities keep
+    the original priors while the likelihood outside the box is negligible.
     """
     new_h = []
     for hyp in hset.hypotheses:

@@ -1,23 +1,11 @@
-"""Posterior mean and variance of a parameter the point-mass grid cannot resolve (beyond paper 002).
+"""Posterior mean and variance of a parameter the point-mass grid cannot resolve (beyond paper 002 eqs. 13–14,
+whose grid mean and variance collapse to one cell; docs/hypotheses.md).
 
-Paper 002 eqs. (13)–(14) take the posterior mean and variance of θ over the grid points. Once the data pin a
-parameter down to less than one cell, the posterior sits on a single grid point: its mean is that cell's centre
-(an error of up to half a cell) and its variance ~0, so the calculated RSD collapses while the real one is the
-grid's spacing (paper 002 case 3: σ_v, calculated 0.002–0.004 against a real 0.033; the paper's fig. 6b shows them
-equal).
-
-The grid values are samples of a smooth log posterior. Along a parameter d whose grid posterior spreads over less
-than one cell, each line of the grid (the other parameters at one grid point) is read by the local Taylor model
-of its log weights around its largest value: first, second and third derivatives from five points (fourth-order
-central differences; three points, a parabola, next to the grid's edge). The maximum of that cubic and the
-curvature there give the line's conditional mean and variance in the grid coordinate u (log θ on a log grid, θ on
-a linear one; a Laplace approximation within the line). The marginal of θ_d is the mixture of the lines weighted
-by their posterior masses, so a correlation with the other (resolved) parameters is kept. When several parameters
-collapsed together (a GM's τ and σ, strongly correlated), the sub-grid they span is read jointly: a Newton step
-with the gradient and Hessian of the log weights (mixed differences included), covariance −H⁻¹. A line whose maximum is
-at the grid's edge keeps its point-mass summary plus the variance of a uniform cell (δ²/12): the data put the
-parameter there and the grid cannot say where inside. Every operation is per row, so streaming (one row) and
-batch (many rows) give the same numbers.
+Along a parameter whose grid posterior spreads over less than one cell, each grid line is read by the Taylor
+model of its log weights around the maximum (five-point fourth-order differences; a parabola at the edge): the
+cubic's maximum and curvature give the line's mean and variance in u (log θ or θ; Laplace), mixed over lines by
+their masses. Parameters collapsed together are read jointly (Newton step, covariance −H⁻¹). A maximum at the
+grid's edge keeps its point-mass summary plus δ²/12. Per row, so streaming and batch agree.
 """
 
 from __future__ import annotations
@@ -68,12 +56,8 @@ class GridAxes:
 
 
 def _plane_laplace(L: np.ndarray, dims: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per sub-grid along the axes ``dims`` of log weights L (the other axes fixed): position of the maximum
-    (…, c) [cells], covariance (…, c, c) [cells²] and log mass (…).
-
-    One axis: the cubic of five points (module docstring). Several: a Newton step from the largest cell with the
-    gradient and the Hessian (fourth-order diagonal, second-order mixed differences), covariance −H⁻¹.
-    """
+    """Per sub-grid along ``dims`` of log weights L: position of the maximum (…, c) [cells], covariance (…, c, c)
+    [cells²] and log mass (…) (module docstring)."""
     c = len(dims)
     moved = np.moveaxis(L, dims, tuple(range(L.ndim - c, L.ndim)))
     shape = moved.shape[-c:]
@@ -136,9 +120,8 @@ def _plane_laplace(L: np.ndarray, dims: tuple[int, ...]) -> tuple[np.ndarray, np
 
 
 def refine(lj: np.ndarray, axes: GridAxes, mean: np.ndarray, var: np.ndarray) -> None:
-    """Replace in place the grid summaries ``mean``, ``var`` (…, p) of every parameter whose grid posterior
-    spreads over less than one cell by the sub-cell ones (module docstring); ``lj`` (…, M) are the hypothesis'
-    log weights log μ₀ + c, ``…`` any leading axes (rows, streams)."""
+    """Replace in place the summaries ``mean``, ``var`` (…, p) of parameters resolved below one cell by the sub-cell
+    ones; ``lj`` (…, M) the hypothesis' log weights log μ₀ + c."""
     lead = lj.shape[:-1]
     k = len(lead)
     L = lj.reshape(*lead, *axes.shape)
