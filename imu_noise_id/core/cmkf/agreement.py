@@ -1,17 +1,9 @@
-"""Do the IMU and the odometry agree on each axis? The likely cause behind an inconsistent CMKF.
+"""Do the IMU and the odometry agree on each axis? The likely cause behind an inconsistent CMKF (beyond paper 004).
 
-Beyond paper 004. An inconsistent filter (NIS far from its degrees of freedom, many gated updates) has one of two
-kinds of cause, and they look different in the data:
-
-- **frames**: a mirrored (left-handed) odometry frame or a wrong IMU mounting rotation. Then, per IMU axis, the
-  odometry's change over an interval does not follow the IMU's: the least-squares slope of the measured change
-  on the IMU-integrated change (velocity change for the accelerometer, rotation for the gyro) is near −1 (an
-  axis with the opposite sign) or far from 1 (axes mixed up) although the axis was excited;
-- **covariance scale**: the slopes are near 1 but the innovations are larger (or smaller) than the filter
-  predicts: the declared odometry covariance, or the noise and bias parameters, are off by that factor.
-
-:class:`AxisAgreement` accumulates the per-axis sums online; :func:`likely_cause` turns them and the mean NIS into
-one sentence.
+Per IMU axis, the least-squares slope of the odometry's change on the IMU-integrated change over the same
+interval (velocity for the accelerometer, rotation for the gyro): near −1 or far from 1 on an excited axis means
+**frames** (mirrored odometry frame, wrong mounting rotation); near 1 with a mean NIS off its dof means
+**covariance scale**. :func:`likely_cause` puts it in one sentence.
 """
 
 from __future__ import annotations
@@ -29,12 +21,7 @@ MIN_INTERVALS = 20
 
 
 class AxisAgreement:
-    """Per-axis least-squares slope of the odometry's change on the IMU's change over the same interval.
-
-    Parameters
-    ----------
-    what : ``"velocity"`` or ``"rotation"`` (for the messages); axes : the IMU axis names.
-    """
+    """Per-axis slope of the odometry's change on the IMU's (``what``: ``"velocity"`` or ``"rotation"``)."""
 
     def __init__(self, what: str, axes: Sequence[str] = ("x", "y", "z")) -> None:
         self.what = what

@@ -1,24 +1,15 @@
-"""Paper 004's CMKF for independent axes sharing one time base, state ``[r, v, b]`` per axis.
+"""Paper 004's CMKF for ``n`` independent axes sharing one time base, state ``[r, v, b]`` per axis (the paper's
+filter is block diagonal; n = 2 for the paper, 3 for the robot, 2·runs for the Monte Carlo).
 
-Paper 004's two-axis filter is block diagonal: each axis has its own ``[r, v, b]``, its own bias and its own
-S_v, and the matrices ``F̂, Ĝ, H, Λ`` are the same 3×3 / 2×3 blocks for every axis. This module runs ``n``
-such axes at once with batched numpy (n = 2 for the paper, 3 for the robot, 2·runs for the Monte Carlo).
-
-Equations (per axis, interval of length T between measurement epochs)::
+Per axis and interval of length T::
 
     x̂⁻ = F̂ x̂⁺ + U,   F̂ = [[1, T, −β_p], [0, 1, −β_v], [0, 0, φ]]     (17); one IMU sample: β_p = T²/2, β_v = T
     P⁻ = F̂ P F̂ᵀ + Ŝ_v Qa1 + q_b Λ Λᵀ                                   (23), Q̂_a = Ŝ_v Qa1
     K = P⁻ Hᵀ (H P⁻ Hᵀ + R)⁻¹,  x̂⁺ = x̂⁻ + K (z − H x̂⁻)                  (24)–(25)
     P⁺ = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ                               (27) Joseph form
 
-then the stacked estimator of :mod:`.stacked` (eqs. 28–35) and the positive-definiteness check: the Ŝ_v used in
-(23) is replaced by the new least-squares estimate only if it is positive (``pd_check="joint"``: all axes at once,
-as the paper checks Q̂_a; ``"per_axis"``: each axis on its own, a robot-side choice so that one unobservable axis
-does not freeze the others); otherwise the last positive-definite value is kept.
-
-Measurement modes: ``"pos_vel"`` (the paper's eq. 8, ``H = [[1,0,0],[0,1,0]]``) and ``"vel"`` (velocity only,
-e.g. wheel-odometry twist; the stacked estimator then works on the observable sub-state ``[v, b]`` with
-``H = [1, 0]``, for which ``M_o = [[1, −β_v], [1, 0]]`` is still full column rank).
+then :mod:`.stacked` (28–35) and the Ŝ_v check (``pd_check``). Modes: ``"pos_vel"`` (eq. 8,
+H = [[1,0,0],[0,1,0]]) and ``"vel"`` (H = [1, 0] on the observable [v, b], M_o = [[1, −β_v], [1, 0]]).
 """
 
 from __future__ import annotations
@@ -34,18 +25,14 @@ PD_CHECKS = ("joint", "per_axis", "se_floor")
 
 
 class AxisCmkf:
-    """Batched per-axis CMKF (paper 004), one shared time base (a :class:`~.protocol.CmkfFilter`).
+    """Batched per-axis CMKF (paper 004), a :class:`~.protocol.CmkfFilter`.
 
     Parameters
     ----------
-    n_axes : number of independent axes.
-    s_v0 : initial Ŝ_v per axis (scalar or (n,)) [m²/s³].
-    mode : ``"pos_vel"`` or ``"vel"`` (see module docstring).
-    pd_check : ``"joint"`` (paper), ``"per_axis"`` (last positive value per axis) or ``"se_floor"`` (the robot's
-        default, :meth:`~.matching.MatchingLeastSquares.working`).
-    min_samples : stacked samples needed before the estimate replaces the initial Ŝ_v.
-    pd_group : with ``pd_check="joint"``, the check is joint over consecutive groups of this many axes (e.g. 2 for
-        the x and y axes of each Monte-Carlo run); default all axes.
+    n_axes : number of axes; s_v0 : initial Ŝ_v (scalar or (n,)) [m²/s³]; mode : ``"pos_vel"`` or ``"vel"``.
+    pd_check : ``"joint"`` (paper: all axes, or groups of ``pd_group``), ``"per_axis"`` (last positive value per
+        axis) or ``"se_floor"`` (:meth:`~.matching.MatchingLeastSquares.working`).
+    min_samples : stacked samples before the estimate replaces ``s_v0``.
     """
 
     def __init__(
@@ -120,12 +107,9 @@ class AxisCmkf:
         self.initialised = True
 
     def predict(self, x_pred: np.ndarray, interval: ImuInterval) -> None:
-        """Propagate the covariance over ``interval`` (eq. 23) to the already propagated state ``x_pred``.
-
-        The known input of the interval is ``U = x_pred − F̂ x̂⁺`` (eq. 17 with Δṽ, or any known input).
-        Consecutive calls without an update in between are not allowed (the robot filter accumulates its IMU
-        samples into one interval per measurement epoch).
-        """
+        """Covariance over ``interval`` (eq. 23) to the already propagated ``x_pred`` (known input U = x_pred − F̂
+        x̂⁺, eq.
+        17); one call per measurement epoch."""
         Phi = interval.Phi
         U = np.asarray(x_pred, dtype=float) - self.x @ Phi.T
         self.P = self.predicted_P(interval)
@@ -140,8 +124,9 @@ class AxisCmkf:
         return P
 
     def nis(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """NIS per axis the update with ``z`` (n, m) and ``R`` (n, m, m) would have, without updating (NaN on
-        every axis when an innovation covariance is not positive definite)."""
+        """NIS per axis of the update with ``z`` (n, m), ``R`` (n, m, m), without updating (NaN everywhere when an
+        innovation
+        covariance is not positive definite)."""
         z = np.asarray(z, dtype=float).reshape(self.n, self.m)
         S = self.H @ self.P @ self.H.T + np.asarray(R, dtype=float).reshape(self.n, self.m, self.m)
         if not _all_positive_definite(S):
@@ -150,13 +135,9 @@ class AxisCmkf:
         return np.einsum("ni,ni->n", nu, np.linalg.solve(S, nu[:, :, None])[:, :, 0])
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
-        """Joseph-form update (eqs. 24–27) and one step of the covariance estimator; returns NIS per axis.
-
-        Parameters
-        ----------
-        z : (n, m) measurements; R : (n, m, m) their covariance.
-        new_chain : True after a gap (the stacked estimator does not use Δv across it).
-        """
+        """Joseph-form update (eqs. 24–27) with ``z`` (n, m), ``R`` (n, m, m) and one estimator step (none across a
+        gap:
+        ``new_chain``); NIS per axis."""
         z = np.asarray(z, dtype=float).reshape(self.n, self.m)
         R = np.asarray(R, dtype=float).reshape(self.n, self.m, self.m)
         H = self.H

@@ -1,10 +1,5 @@
-"""The robot CMKF's parameters: the one place their defaults are written.
-
-:class:`CmkfConfig` is read by :class:`~.robot.RobotCmkf`, by the node's ``cmkf.*`` and ``nis.window`` parameters
-(:data:`imu_noise_id.pipelines.online.config.PARAMETERS` takes its defaults from here), by the options of
-``imu-noise-id cmkf`` and by the offline replay, which records every field in ``cmkf.yaml``
-(``filter.parameters``).
-"""
+"""The robot CMKF's parameters: the one place their defaults are written (read by :class:`~.robot.RobotCmkf`, the
+node's ``cmkf.*`` and ``nis.window`` parameters, ``imu-noise-id cmkf`` and the replay's ``cmkf.yaml``)."""
 
 from __future__ import annotations
 
@@ -25,35 +20,22 @@ class CmkfConfig:
     Attributes
     ----------
     imu_rotation_xyzw : orientation of the IMU frame in the base frame (``C_bi``), ROS quaternion order.
-    measurement : ``"twist"`` (body velocity only; right for wheel odometry, whose pose is integrated twist) or
-        ``"pose_twist"`` (position in the odom frame and body velocity, paper 004's eq. 8).
+    measurement : ``"twist"`` (body velocity; wheel odometry) or ``"pose_twist"`` (position and body velocity, eq.
+    8).
     accel_bias_tau, accel_bias_sigma : bias time constant [s] and steady-state σ [m/s²] (eqs. 3–7, known).
-    s_v0 : initial Ŝ_v [m²/s³] for all axes (paper: 2e-6).
+    s_v0 : initial Ŝ_v [m²/s³] (paper: 2e-6).
     gyro_bias_tau, gyro_bias_sigma, s_g0 : the same for the gyro [s], [rad/s], [rad²/s].
-    velocity_noise_std, position_noise_std, angular_velocity_noise_std : override the odometry covariance
-        [m/s], [m], [rad/s]; ``None`` uses the message covariance, falling back to ``default_*`` when it is
-        missing or all zeros (REP-145: unknown).
-    gravity : [m/s²]; gravity_source : ``"odometry"`` (odometry orientation propagated with the gyro between
-        epochs) or ``"imu"`` (the ``orientation_xyzw`` given with the IMU samples, for planar odometry that has no
-        roll/pitch).
-    max_odom_gap, max_imu_gap : an odometry gap longer than this restarts the stacked estimator's chain; an IMU
-        gap longer than this re-initialises position and velocity [s].
-    late_odom_tolerance : latency allowance of the stamp merger (:class:`~.stream.CmkfStream`): messages wait this
-        long behind the newest IMU stamp, so odometry up to this much later than the IMU samples (header time) is
-        still processed in stamp order [s] (the node's ``cmkf.input_latency``, whose default is 0.1 s).
-    min_odom_interval : odometry closer than this to the last update is dropped (degenerate interval) [s].
-    pd_check : the Ŝ_v and Ŝ_g the filters run with: ``"se_floor"`` (``max(Ŝ, se)``, the least-squares value
-        where it stands out of its standard error, else that error; ``s_v0`` / ``s_g0`` where the data contradict the
-        noise model: the filter stays consistent when the data cannot identify the PSD; beyond the paper, see
-        :meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` (the last positive value per axis) or
-        ``"joint"`` (paper: all axes at once); min_samples : stacked samples before Ŝ_v is used.
-    nis_window : number of updates averaged in ``CmkfEstimate.nis_accel_mean`` (and the node's ``nis.window``).
-    nis_gate_probability : innovation gate of both filters (beyond the paper): an odometry update whose NIS exceeds
-        the ``1 − p`` quantile of χ²(dof) is rejected as an outlier (a bump, a saturated or corrupted sample, wheel
-        slip) — the accelerometer filter then restarts position and velocity from the measurement and keeps its
-        bias, the gyro filter keeps its bias, neither uses the epoch for S_v or S_g; after
-        :data:`~.gate.GATE_PATIENCE` rejections in a row the next update is accepted (a wrong prior must not lock
-        the filter). 0: no gate.
+    velocity_noise_std, position_noise_std, angular_velocity_noise_std : odometry noise overrides [m/s], [m],
+        [rad/s]; None: the message covariance, ``default_*`` when missing or all zeros (REP-145).
+    gravity : [m/s²]; gravity_source : ``"odometry"`` (its orientation, propagated with the gyro) or ``"imu"``.
+    max_odom_gap, max_imu_gap : [s] beyond which the stacked chain restarts / position and velocity re-initialise.
+    late_odom_tolerance : the stamp merger's latency allowance [s] (:class:`~.stream.CmkfStream`).
+    min_odom_interval : odometry closer than this to the last update is dropped [s].
+    pd_check : the Ŝ_v, Ŝ_g the filters run with: ``"se_floor"`` (:meth:`~.matching.MatchingLeastSquares.working`,
+        beyond the paper), ``"per_axis"`` or ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used.
+    nis_window : updates averaged in ``CmkfEstimate.nis_accel_mean`` (the node's ``nis.window``).
+    nis_gate_probability : innovation gate of both filters (beyond the paper, :mod:`.gate`): an update whose NIS
+        exceeds the ``1 − p`` quantile of χ²(dof) is rejected; 0: no gate.
     """
 
     imu_rotation_xyzw: tuple[float, float, float, float] = rot.IDENTITY

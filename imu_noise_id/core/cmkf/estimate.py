@@ -24,26 +24,20 @@ class CmkfEstimate:
     Attributes
     ----------
     t : time of the estimate [s] (last processed stamp).
-    status : ``no_data``, ``no_imu`` (odometry only: nothing to estimate), ``imu_only`` (no odometry yet),
-        ``unobserved`` (no odometry update for longer than ``max_odom_gap``, or no IMU sample for longer than
-        ``max_imu_gap`` while odometry continues), ``converging`` (fewer than ``min_samples`` stacked samples),
-        ``tracking``, or ``inconsistent`` (converging or tracking, but :attr:`consistency` is ``inconsistent``:
-        the biases are not to be trusted).
-    observed : True when an odometry update happened within ``max_odom_gap`` and the IMU is alive.
-    accel_bias, accel_bias_std : [m/s²] per IMU axis (the prior 0 ± σ_ss before the first update).
-    S_v : Ŝ_v the filter uses [m²/s³] (:meth:`~.matching.MatchingLeastSquares.working`): a working value, not an
-        estimate to report; S_v_ls : the least-squares value (may be ≤ 0); accel_ls : (S_v_ls, its standard
-        error, degrees of freedom), from which :attr:`accel_psd` (the estimate with its interval and per-axis
-        verdict, :mod:`.psd`) and :attr:`accel_noise_density` (√S_v where identified, NaN elsewhere [m/s²/√Hz])
-        are computed when asked for.
-    gyro_bias, gyro_bias_std : [rad/s]; S_g, S_g_ls, gyro_ls, gyro_psd, gyro_noise_density : the same for the
-        gyro [rad²/s], [rad/s/√Hz].
-    nis_accel, nis_accel_dof : NIS of the last accelerometer-filter update (sum over axes, also when gated) and
-        its dof; nis_accel_mean : mean over the accepted updates among the last ``nis_window``; nis_gyro,
-        nis_gyro_dof, nis_gyro_mean : the same for the gyro.
-    gated : whether the last odometry message's (accelerometer, gyro) update was rejected by the innovation gate.
-    consistency : the worse verdict of the two filters' NIS windows (:data:`CONSISTENCY_ORDER`);
-        consistency_reason : for ``marginal`` and ``inconsistent``, the numbers and the likely cause.
+    status : ``no_data``, ``no_imu``, ``imu_only``, ``unobserved`` (no odometry update within ``max_odom_gap``, or no
+        IMU within ``max_imu_gap``), ``converging`` (< ``min_samples`` stacked samples), ``tracking`` or
+        ``inconsistent`` (:attr:`consistency` is ``inconsistent``).
+    observed : an odometry update within ``max_odom_gap`` and the IMU alive.
+    accel_bias, accel_bias_std : [m/s²] per axis (0 ± σ_ss before the first update).
+    S_v : the working Ŝ_v [m²/s³] (not an estimate to report); S_v_ls : the least-squares value (may be ≤ 0);
+        accel_ls : (S_v_ls, standard error, dof), behind :attr:`accel_psd` and :attr:`accel_noise_density`.
+    gyro_bias, gyro_bias_std, S_g, S_g_ls, gyro_ls : the same for the gyro [rad/s], [rad²/s].
+    nis_accel, nis_accel_dof, nis_accel_mean : last accelerometer update's NIS (also when gated), its dof, the mean
+        over the accepted ones among the last ``nis_window``; nis_gyro, nis_gyro_dof, nis_gyro_mean : the gyro's.
+    gated : whether the last odometry message's (accelerometer, gyro) update was gated.
+    consistency, consistency_reason : the worse verdict of the two NIS windows (:data:`CONSISTENCY_ORDER`) and,
+    unless
+        consistent, the numbers and likely cause.
     n_stacked : stacked samples in the S_v estimate; counters : messages used, dropped and gated, by reason.
     """
 
@@ -94,8 +88,8 @@ class CmkfEstimate:
 
 
 def worst_filter(verdicts: Sequence[str], means: Sequence[float], dofs: Sequence[int]) -> int:
-    """The filter whose verdict is the most severe; among equals, the one whose mean NIS is furthest from its
-    degrees of freedom (by ratio): the one the likely cause is about."""
+    """The filter with the most severe verdict; among equals, the one whose mean NIS is furthest from its dof (by
+    ratio)."""
     def severity(i: int) -> tuple[int, float]:
         ratio = means[i] / dofs[i]
         return (CONSISTENCY_ORDER.index(verdicts[i]),

@@ -1,18 +1,12 @@
-"""Paper 004's CMKF for velocity-only measurements, written out in plain-float algebra (the robot's hot path).
+"""Paper 004's CMKF for velocity-only measurements in plain-float algebra (the robot's hot path): the equations and
+interface of :class:`~.axis.AxisCmkf` in mode ``"vel"`` (tested equal), on the observable [v, b] (r carried).
 
-Same equations and interface (:class:`~.protocol.CmkfFilter`) as :class:`~.axis.AxisCmkf` in mode ``"vel"``
-(tested equal, and interchangeable in :class:`~.robot.RobotCmkf`), specialised to the observable state ``[v, b]``
-of each axis so that an odometry update costs a few hundred float operations instead of ~60 small numpy calls; the
-position ``r``, unobserved, is carried through unchanged. With ``H = [1, 0]``, ``F̂ = [[1, −β_v], [0, φ]]`` and
-``Q_a = S_v [[T, 0], [0, 0]]`` (the velocity block of :class:`~.interval.ImuInterval`):
+With H = [1, 0], F̂ = [[1, −β_v], [0, φ]], Q_a = S_v [[T, 0], [0, 0]]:
 
-- propagation (23): ``P_vv ← P_vv − 2β_v P_vb + β_v² P_bb + Ŝ_v T``, ``P_vb ← φ (P_vb − β_v P_bb)``,
-  ``P_bb ← φ² P_bb + q_b``;
-- Joseph update (27) with ``s = P_vv + R``, ``K = [P_vv, P_vb]/s``;
-- stacked estimator (28)–(35): ``M_o = [[1, −β_v], [1, 0]]``, ``M_o⁻¹ = [[0, 1], [−1/β_v, 1/β_v]]``, the
-  velocity-random-walk basis ``D = T_k a₁a₁ᵀ + T_{k−1} a₂a₂ᵀ`` with ``a₁ = −M_o,k⁻¹[:, 0]`` and
-  ``a₂ = F̂_{k−1} M_o,k−1⁻¹[:, 0] − e_v`` (the first columns of A₁, A₂), ``Cov(𝒲) = q_b e_b e_bᵀ`` (``HΛ = 0``)
-  and ``⟨Cov(ℰ), D⟩ = Σ_j R_j E_jᵀ D E_j``.
+- propagation (23): P_vv ← P_vv − 2β_v P_vb + β_v² P_bb + Ŝ_v T, P_vb ← φ (P_vb − β_v P_bb), P_bb ← φ² P_bb + q_b;
+- Joseph update (27), s = P_vv + R, K = [P_vv, P_vb]/s;
+- stacked estimator (28)–(35): M_o⁻¹ = [[0, 1], [−1/β_v, 1/β_v]], D = T_k a₁a₁ᵀ + T_{k−1} a₂a₂ᵀ with
+  a₁ = −M_o,k⁻¹[:, 0], a₂ = F̂_{k−1} M_o,k−1⁻¹[:, 0] − e_v, Cov(𝒲) = q_b e_b e_bᵀ, ⟨Cov(ℰ), D⟩ = Σ_j R_j E_jᵀ D E_j.
 """
 
 from __future__ import annotations
@@ -47,13 +41,12 @@ class _Epoch:
 
 
 class VelocityAxisCmkf:
-    """Velocity-measurement CMKF for ``n`` independent axes on one time base (plain floats; a
-    :class:`~.protocol.CmkfFilter` with ``m = 1``).
+    """Velocity-measurement CMKF for ``n`` axes (a :class:`~.protocol.CmkfFilter` with m = 1).
 
     Parameters
     ----------
-    n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³]; pd_check : the Ŝ_v used, ``"se_floor"``
-    (:meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` or ``"joint"`` (the last positive value);
+    n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³]; pd_check : ``"se_floor"``
+    (:meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` or ``"joint"`` (last positive value);
     min_samples : stacked samples before the estimate replaces ``s_v0``.
     """
 
@@ -159,8 +152,7 @@ class VelocityAxisCmkf:
         self._pending = (interval, U)
 
     def nis(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """NIS per axis the update with ``z`` (n, 1) and ``R`` (n, 1, 1) would have, without updating (NaN where the
-        innovation variance is not positive)."""
+        """NIS per axis of the update with ``z`` (n, 1), ``R`` (n, 1, 1), without updating (NaN where s ≤ 0)."""
         out = []
         for i in range(self.n):
             nu, s = float(z[i][0]) - self._v[i], self._pvv[i] + float(R[i][0][0])
@@ -168,12 +160,9 @@ class VelocityAxisCmkf:
         return np.array(out)
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
-        """Joseph-form update (24)–(27) of every axis and one stacked-estimator step; returns the NIS per axis.
-
-        ``z`` (n, 1) and ``R`` (n, 1, 1), array-like. Beyond the paper: if an innovation variance
-        ``s = P_vv + R`` is not positive (zero covariance and zero interval), the update is skipped (counted in
-        ``skipped``), NaN is returned and the stacked chain restarts.
-        """
+        """Joseph-form update (24)–(27) and one estimator step; NIS per axis. Beyond the paper: where s = P_vv + R ≤
+        0 the
+        update is skipped (``skipped``), NaN returned, the chain restarted."""
         n = self.n
         z = [float(z[i][0]) for i in range(n)]
         R = [float(R[i][0][0]) for i in range(n)]
@@ -250,8 +239,8 @@ class VelocityAxisCmkf:
         return True
 
     def _accept(self) -> None:
-        """The Ŝ_v used: the least squares floored at its standard error (``se_floor``), or the positive-definiteness
-        check with fallback to the last positive estimate (paper)."""
+        """The Ŝ_v used: the least squares floored at its standard error (``se_floor``), or the last positive
+        estimate."""
         if self.count < self.min_samples or self.matching.den <= 0.0:
             return
         if self.pd_check == "se_floor":

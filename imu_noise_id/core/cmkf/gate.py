@@ -1,17 +1,10 @@
-"""Innovation gate of the robot CMKF's filters, and the window of NIS values its consistency is judged on.
+"""Innovation gate of the robot CMKF's filters and the window of NIS values its consistency is judged on (beyond
+paper 004, whose filter uses every measurement; reasons: docs/cmkf.md, "Innovation gate").
 
-One absurd update must not become a lasting bias.
-
-Beyond paper 004 (whose filter uses every measurement): a bump or a saturated IMU sample integrates into the
-interval's velocity and angle increments, and the filters' biases have correlation times of an hour, so one such
-interval would shift the published biases for minutes and poison the S_v / S_g least squares for good. The gate
-compares the normalised innovation squared (NIS) of an update, before it is applied, with the ``1 − p`` quantile
-of χ²(dof) (:func:`~imu_noise_id.core.diagnostics.consistency.nis_gate`) and rejects the update above it.
-
-A gate must not lock a filter whose prior is wrong (a bias far outside its prior σ makes every innovation large):
-after :data:`GATE_PATIENCE` rejections in a row the next update is accepted whatever its NIS, and the rejections
-are counted so that the consistency check (:func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict`) can
-call such a filter inconsistent; :class:`NisWindow` keeps the last updates' NIS and gate decisions for that.
+An update whose NIS exceeds the ``1 − p`` quantile of χ²(dof)
+(:func:`~imu_noise_id.core.diagnostics.consistency.nis_gate`) is rejected; after :data:`GATE_PATIENCE` rejections in
+a row the next is accepted whatever its NIS, and rejections count toward the consistency verdict
+(:class:`NisWindow`, :func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict`).
 """
 
 from __future__ import annotations
@@ -26,18 +19,8 @@ GATE_PATIENCE = 3
 
 
 class InnovationGate:
-    """χ² gate on the NIS of one filter's updates, with a patience against locking.
-
-    Parameters
-    ----------
-    dof : measurement components of one update (summed over the axes).
-    probability : tail probability of the gate (0: never reject).
-
-    Attributes
-    ----------
-    threshold : the NIS above which an update is rejected; rejected : updates rejected so far; in_a_row : the
-    current run of rejections; largest : the largest NIS rejected.
-    """
+    """χ² gate on the NIS of one filter's updates (``dof`` summed over the axes, tail ``probability``; 0: never
+    reject); attributes ``threshold``, ``rejected``, ``in_a_row``, ``largest`` (largest NIS rejected)."""
 
     def __init__(self, dof: int, probability: float) -> None:
         self.threshold = nis_gate(dof, probability)
@@ -58,12 +41,7 @@ class InnovationGate:
 
 
 class NisWindow:
-    """The last ``size`` updates of one filter: their NIS (accepted updates) and which were gated.
-
-    Parameters
-    ----------
-    dof : measurement components of one update; size : updates kept (``nis_window``).
-    """
+    """The last ``size`` updates of one filter (``dof`` each): NIS of the accepted ones and which were gated."""
 
     def __init__(self, dof: int, size: int) -> None:
         self.dof = int(dof)

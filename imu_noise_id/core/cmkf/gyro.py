@@ -1,21 +1,14 @@
-"""Gyro-bias filter analogous to paper 004's CMKF: IMU angular rate against the odometry's rotation.
+"""Gyro-bias filter analogous to paper 004's CMKF (beyond the paper, which leaves the gyro to future work).
 
-Model per IMU axis (beyond the paper, which leaves the gyro to future work; same structure, one level lower)::
+Per IMU axis (cf. eqs. 3–4, 9, 12; S_g the ARW PSD [rad²/s])::
 
-    ω̃(t) = ω(t) + b_g(t) + n_g(t),      ḃ_g = −b_g/τ_g + w_g       (cf. eqs. 3–4, 9; S_g = ARW PSD [rad²/s])
-    y_k  = Δθ̃_k − Δθ_odo,k = ∫ ω̃ dt − Δθ_odo  over the odometry interval T_k (gyro increment as known input,
-                                                   cf. eq. 12; Δθ_odo from the odometry twist or orientation)
-    y_k / T_k = b_{g,k} + e_k,   Var(e_k) = S_g / T_k + R_k / T_k²   (R_k: variance of Δθ_odo,k)
+    ω̃ = ω + b_g + n_g,   ḃ_g = −b_g/τ_g + w_g,   y_k = ∫ ω̃ dt − Δθ_odo,k,
+    y_k / T_k = b_{g,k} + e_k,   Var(e_k) = S_g / T_k + R_k / T_k²
 
-The bias is the only state (the angle itself is measured by the odometry every interval), so the filter is a
-scalar Kalman filter per axis with an exponentially correlated bias (Joseph form, eq. 27). The covariance matching
-step mirrors eqs. (28)–(35): eliminating the state between two epochs, ``d_k = y_k/T_k − φ_k y_{k−1}/T_{k−1} =
-w + e_k − φ_k e_{k−1}`` has ``E[d_k²] = q_k + S_g (1/T_k + φ_k²/T_{k−1}) + R_k/T_k² + φ_k² R_{k−1}/T_{k−1}²
-− 2φ_k c_k``, where ``c_k = Cov(e_k/T_k, e_{k−1}/T_{k−1})`` is not zero when the two intervals' odometry rotations
-share a measurement (the trapezoid of twist rates shares ``ω_{k−1}``: ``c_k = ¼ Var ω_{k−1}``), and the recursive
-least-squares solution for S_g is ``Σ (d² − q − R-terms + 2φc) D_k / Σ D_k²`` with ``D_k = 1/T_k +
-φ_k²/T_{k−1}`` (its standard error: :mod:`.matching`); non-positive estimates fall back to the last positive one
-as the filter's working value.
+A scalar Joseph-form filter per axis (eq. 27). Covariance matching (cf. eqs. 28–35): d_k = y_k/T_k −
+φ_k y_{k−1}/T_{k−1} has E[d_k²] = q_k + S_g D_k + R_k/T_k² + φ_k² R_{k−1}/T_{k−1}² − 2φ_k c_k,
+D_k = 1/T_k + φ_k²/T_{k−1}, c_k = Cov(e_k/T_k, e_{k−1}/T_{k−1}) (¼ Var ω_{k−1} for the twist trapezoid);
+Ŝ_g = Σ (d² − q − R-terms + 2φc) D_k / Σ D_k² (standard error: :mod:`.matching`).
 """
 
 from __future__ import annotations
@@ -28,17 +21,14 @@ from .matching import MatchingLeastSquares
 
 
 class GyroBiasFilter:
-    """Per-axis gyro-bias Kalman filter with a covariance-matching estimate of the angle-random-walk PSD.
-
-    Plain-float algebra (three scalar filters): this runs at every odometry message of the ROS node. The naming
-    is the accelerometer filters' (:class:`~.protocol.CmkfFilter`): :meth:`predict` over an interval, then
-    :meth:`update` with the interval's measurement; state ``x`` (the biases), variance ``P``, innovations ``y``
-    and their variances ``S``.
+    """Per-axis gyro-bias Kalman filter with a covariance-matching estimate of the angle-random-walk PSD (plain
+    floats;
+    the names of :class:`~.protocol.CmkfFilter`).
 
     Parameters
     ----------
-    tau : bias time constant [s]; sigma : steady-state bias σ [rad/s]; s_g0 : initial S_g [rad²/s];
-    min_samples : stacked samples before the S_g estimate replaces ``s_g0``; pd_check : ``"se_floor"``
+    tau : bias time constant [s]; sigma : steady-state bias σ [rad/s]; s_g0 : initial S_g [rad²/s]; min_samples :
+    stacked samples before Ŝ_g replaces ``s_g0``; pd_check : ``"se_floor"``
     (:meth:`~.matching.MatchingLeastSquares.working`) or anything else for the last positive value.
     """
 
@@ -122,8 +112,9 @@ class GyroBiasFilter:
         return total
 
     def coast(self) -> None:
-        """The pending interval without a measurement (a rejected update): the bias is only predicted, and no
-        covariance-matching step spans it."""
+        """The pending interval without a measurement (a rejected update): the bias is only predicted; no matching
+        step
+        spans it."""
         phi, q = self._prior()
         for i in range(3):
             self.bias[i] *= phi
@@ -131,11 +122,9 @@ class GyroBiasFilter:
         self._prev = None
 
     def update(self, z: list[float], R: list[float], shared: list[float] | None = None) -> float:
-        """The interval's measurement: ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) variance of Δθ_odo [rad²],
-        ``shared`` (3) covariance of Δθ_odo/T with the previous interval's [rad²/s²] (a twist rate both use).
-
-        Returns the normalised innovation squared summed over the axes (3 dof).
-        """
+        """Update with ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) = Var Δθ_odo [rad²] and ``shared`` (3) = the
+        covariance of
+        Δθ_odo/T with the previous interval's [rad²/s²]; returns the NIS summed over the axes (3 dof)."""
         T = self._T
         phi, q = self._prior()
         meas = [zi / T for zi in z]

@@ -1,29 +1,16 @@
 """The IMU side of the robot CMKF: per-sample propagation (paper 004 eqs. 13–16) and the interval it forms.
 
-Frames: ``n`` = odometry frame (z up), ``b`` = base, ``i`` = IMU; ``C_ni`` = orientation of the IMU in the odometry
-frame. The IMU measures the specific force ``f̃ = f + b + n`` (gravity included) and the angular rate ``ω̃``.
-With ``v = C_in v_n`` (velocity of the IMU resolved in IMU axes; lever arm neglected)::
-
-    v̇ = f + g_i − ω × v,      ṙ = v − ω × r,      g_i = C_in [0, 0, −g]                  (body-frame kinematics)
-    ḃ_i = −b_i/τ + w_i                                                                    (eqs. 3–4)
-
-Per IMU sample k (period dt_k, sample value held over its interval) the known input is
-``u = f̃ + g_i − ω̂ × v̂`` with ``ω̂ = ω̃ − b̂_g`` and, as in eqs. (13)–(16), ``v ← v + (u − b̂) dt``, ``b̂ ← φ b̂``
-and the displacement ``d = v dt + ½ (u − b̂) dt²``, accumulated in the odometry frame, ``Δp_n ← Δp_n + C_ni d``
-(``C_ni`` propagated with ω̂; rotated into the IMU axes at the next epoch with the measured orientation, see
-:mod:`.measurement`). The transport term ``ω̂ × v̂`` and gravity are evaluated with the estimate and treated as
-known input; this is what makes the three axes decouple into paper 004's ``[r, v, b]`` structure.
-
-The IMU samples between two odometry epochs are accumulated into one interval of length ``T = Σ dt_j``
-(``β_j = Π_{l<j} φ_l``, ``m_j`` = mid-time of sample j from the start of the interval)::
+Frames ``n`` (odometry, z up), ``b`` (base), ``i`` (IMU). ``f̃ = f + b + n`` (gravity included); with
+v = C_in v_n (lever arm neglected): v̇ = f + g_i − ω × v, ṙ = v − ω × r, g_i = C_in [0, 0, −g], ḃ_i = −b_i/τ + w_i
+(eqs. 3–4). Per sample: u = f̃ + g_i − ω̂ × v̂ (ω̂ = ω̃ − b̂_g, known input), v ← v + (u − b̂) dt, b̂ ← φ b̂,
+Δp_n ← Δp_n + C_ni (v dt + ½ (u − b̂) dt²). The samples between two epochs form one interval of T = Σ dt_j
+(β_j = Π_{l<j} φ_l, m_j the mid-time of sample j)::
 
     F̂ = [[1, T, −(T·Σβ_j dt_j − Σβ_j dt_j m_j)], [0, 1, −Σβ_j dt_j], [0, 0, Π φ_j]]
     Q_a = S_v · [[T³ − 2T Σdt m + Σdt m², T² − Σdt m, 0], [T² − Σdt m, T, 0], [0, 0, 0]]
-    q_b = (1 − (Π φ_j)²) σ_ss²  (bias drive lumped at the end of the interval)
+    q_b = (1 − (Π φ_j)²) σ_ss²  (bias drive lumped at the end: O(q_b T))
 
-which is the exact accumulation of the paper's per-sample (13)–(16) and (22) for the velocity-random-walk part
-(the bias drive inside the interval is lumped, an O(q_b T) approximation). For one sample of length T this is
-eq. (17): ``Σβ dt = T``, ``T·T − T·T/2 = T²/2``, ``Q_a = S_v T Ĝ Ĝᵀ`` (:func:`~.axis.paper_interval`).
+exactly eqs. (13)–(16), (22) accumulated; one sample gives eq. (17) (:func:`~.axis.paper_interval`).
 """
 
 from __future__ import annotations
@@ -40,17 +27,10 @@ from .stacked import Interval
 
 @dataclass(frozen=True)
 class ImuInterval:
-    """One propagation interval between two measurement epochs, shared by all axes (eqs. 17, 22–23).
-
-    Attributes
-    ----------
-    T : length [s].
-    Bp, Bv : how the bias enters position and velocity over the interval (``F̂[0, 2] = −Bp``, ``F̂[1, 2] = −Bv``).
-    phi : bias transition ``Π φ_j`` (eq. 7).
-    Qrr, Qrv : position variance and position–velocity covariance of the velocity random walk for unit PSD
-        (the velocity variance is T).
-    qb : variance of the bias drive over the interval (eq. 7) [m²/s⁴].
-    """
+    """One interval between two epochs, shared by all axes (eqs. 17, 22–23): ``T`` [s]; ``Bp``, ``Bv`` (F̂[0, 2] =
+    −Bp,
+    F̂[1, 2] = −Bv); ``phi`` = Π φ_j (eq. 7); ``Qrr``, ``Qrv`` position variance and position–velocity covariance for
+    unit PSD (velocity variance T); ``qb`` bias-drive variance (eq. 7) [m²/s⁴]."""
 
     T: float
     Bp: float
@@ -76,16 +56,14 @@ class ImuInterval:
 
 
 class ImuPropagation:
-    """The accelerometer filter's state between two measurement epochs, propagated with every IMU sample.
-
-    Holds ``r̂, v̂, b̂`` per IMU axis (plain floats: this runs at the IMU rate), the displacement ``Δp_n`` (only
-    with ``track_position``), the gyro increment ``∫ω̃ dt`` of the interval (for the gyro filter), the orientation
-    ``q_ni`` propagated with the bias-corrected rate, and the sums behind :meth:`interval`.
+    """The accelerometer filter's state between two epochs, propagated per IMU sample (plain floats): r̂, v̂, b̂ per
+    axis, Δp_n (with ``track_position``), the interval's gyro increment ∫ω̃ dt, the orientation q_ni and the sums
+    behind :meth:`interval`.
 
     Parameters
     ----------
     gravity : [m/s²]; bias_tau, bias_sigma : accelerometer bias time constant [s] and steady-state σ [m/s²];
-    track_position : accumulate the displacement (position measured at the epochs).
+    track_position : accumulate the displacement.
     """
 
     def __init__(self, gravity: float, bias_tau: float, bias_sigma: float, track_position: bool) -> None:
@@ -114,11 +92,9 @@ class ImuPropagation:
                            (1.0 - beta**2) * self._sigma2)
 
     def step(self, dt: float, sample: tuple[float, ...], gyro_bias: list[float], q_gravity: rot.Quat | None) -> None:
-        """Eqs. (13)–(16) per IMU axis with the gravity- and transport-compensated input; the interval sums.
-
-        ``sample`` = (gyro x, y, z [rad/s], accel x, y, z [m/s²]) held over ``dt``; ``q_gravity`` = the IMU
-        orientation gravity is removed with (None: level).
-        """
+        """Eqs. (13)–(16) per axis for ``sample`` (gyro [rad/s], accel [m/s²]) held over ``dt``; ``q_gravity`` the
+        IMU
+        orientation gravity is removed with (None: level)."""
         wx, wy, wz, fx, fy, fz = sample
         ox, oy, oz = wx - gyro_bias[0], wy - gyro_bias[1], wz - gyro_bias[2]
         dtheta = self.dtheta

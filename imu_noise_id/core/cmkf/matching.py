@@ -1,21 +1,9 @@
-"""The covariance-matching least squares of paper 004 (eq. 35), streaming, with an honest standard error.
+"""The covariance-matching least squares of paper 004 (eq. 35), streaming, with a standard error.
 
-Paper 004 solves ``C̄ − Cov(𝒲) − Cov(ℰ) = S_v D`` for S_v by least squares (eq. 35); over epochs whose matrices
-change (:mod:`.stacked`) the solution is a ratio of sums, per axis::
-
-    Ŝ = Σ_k q_k / Σ_k w_k,    q_k = ⟨𝒵_k𝒵_kᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩_F,    w_k = ⟨D_k, D_k⟩_F
-
-(the gyro filter's :mod:`.gyro` has the same form with scalar ``d_k``). The paper gives no uncertainty for Ŝ.
-Beyond the paper, its variance is estimated here by a block sandwich (batch means): the products ``q_k`` are
-dependent over a few epochs only (𝒵_k shares measurement noise with 𝒵_{k±1}, 𝒵_{k±2}), so sums over blocks of
-:data:`BLOCK` consecutive epochs are nearly independent, and for blocks ``j`` with sums ``Q_j, W_j``::
-
-    Var(Ŝ) ≈ J/(J − 1) · Σ_j (Q_j − Ŝ W_j)² / (Σ_j W_j)²          (J completed blocks, J − 1 degrees of freedom)
-
-the cluster-robust sandwich of the ratio estimator: it needs neither Gaussian noise nor constant intervals, and
-it contains whatever the model leaves out (odometry noise that is not white, a wrong declared covariance, motion
-that the filter does not model). Intervals use Student's t with J − 1 degrees of freedom
-(:mod:`.psd`).
+Per axis Ŝ = Σ_k q_k / Σ_k w_k, q_k = ⟨𝒵_k𝒵_kᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩_F, w_k = ⟨D_k, D_k⟩_F (:mod:`.stacked`;
+scalar d_k for :mod:`.gyro`). Beyond the paper: Var(Ŝ) ≈ J/(J − 1) · Σ_j (Q_j − Ŝ W_j)² / (Σ_j W_j)² over J
+completed blocks of :data:`BLOCK` epochs (a cluster-robust sandwich; the q_k depend over a few epochs only),
+J − 1 degrees of freedom, Student's t intervals (:mod:`.psd`).
 """
 
 from __future__ import annotations
@@ -32,17 +20,8 @@ BLOCK = 64
 
 
 class MatchingLeastSquares:
-    """``Σ q_k / Σ w_k`` per axis, accumulated one epoch at a time, with the block sandwich variance.
-
-    Parameters
-    ----------
-    n_axes : number of axes (each has its own ``q_k``; the weights ``w_k`` are shared).
-    block : epochs per block of the variance estimate.
-
-    Attributes
-    ----------
-    num : (n,) Σ q_k; den : Σ w_k; count : epochs accumulated; blocks : completed blocks.
-    """
+    """Σ q_k / Σ w_k per axis, one epoch at a time, with the block sandwich variance: ``n_axes`` (shared weights),
+    ``block`` epochs per block; attributes ``num`` (n,), ``den``, ``count``, ``blocks``."""
 
     def __init__(self, n_axes: int, block: int = BLOCK) -> None:
         self.n = int(n_axes)
@@ -113,18 +92,13 @@ class MatchingLeastSquares:
         return np.array(out)
 
     def working(self, current: Sequence[float], prior: Sequence[float]) -> tuple[list[float], int]:
-        """The PSD a filter should run with per axis (beyond paper 004, whose filter keeps the last positive
-        estimate), and the number of axes on which the data say nothing usable (``current`` or ``prior`` kept).
+        """The PSD a filter should run with per axis (beyond paper 004, which keeps the last positive estimate) and
+        the
+        number of axes on which ``current`` or ``prior`` was kept.
 
-        ``max(Ŝ, se)`` while the 95 % interval ``Ŝ ± t·se`` reaches above 0: the least-squares value where it
-        stands out of its own uncertainty, else its standard error — the size of what the data cannot rule out. A
-        filter run on a value near 0 that a noisy least squares happened to pass through is overconfident (its NIS
-        far above its degrees of freedom, its biases' σ too small); one run on the upper end of a wide interval is
-        needlessly timid. Where even the interval's upper end is ≤ 0 the data contradict the noise model (the
-        odometry covariance assumed too large, smoothed or slowly varying odometry errors): the configured
-        ``prior`` (per axis), so the inconsistency shows in the NIS instead of being absorbed and the value does
-        not depend on the path the least squares took. Before two blocks (no standard error) the last positive
-        value, as in the paper.
+        ``max(Ŝ, se)`` while the 95 % interval Ŝ ± t·se reaches above 0; where its upper end is ≤ 0 (the data
+        contradict
+        the noise model), ``prior``; before two blocks, the last positive value (``current``). Reasons: docs/cmkf.md.
         """
         den = self.den
         if self.count == 0 or den <= 0.0:

@@ -1,18 +1,13 @@
-"""The odometry side of the robot CMKF: a nav_msgs/Odometry message → measurements per IMU axis.
+"""The odometry side of the robot CMKF: a nav_msgs/Odometry message → measurements per IMU axis (paper 004 eq. 8
+on a robot; frames as in :mod:`.interval`, C_ni = C_nb C_bi).
 
-Frames as in :mod:`.interval`; ``C_ib`` is the known IMU mounting rotation, ``C_nb`` the odometry orientation,
-``C_ni = C_nb C_bi``. At an odometry epoch, per IMU axis (paper 004's eq. 8 on a robot):
+- twist (:class:`TwistMeasurement`): z_v = C_ibᵀ v_b (twist in ``child_frame_id``, REP-105);
+- pose_twist (:class:`PoseTwistMeasurement`): also z_r = C_in (p_n − p_anchor), with the prior
+  r̂⁻_k = C_in,k (C_ni,k−1 r̂⁺_{k−1} + Δp_n).
 
-- twist (:class:`TwistMeasurement`): ``z_v = C_ibᵀ v_b`` (twist in ``child_frame_id``, REP-105);
-- pose_twist (:class:`PoseTwistMeasurement`): also ``z_r = C_in (p_n − p_anchor)`` (position relative to the first
-  one, rotated with the measured orientation); the position prior is the displacement accumulated in the
-  odometry frame, ``r̂⁻_k = C_in,k (C_ni,k−1 r̂⁺_{k−1} + Δp_n)``, so the gyro's error does not multiply the distance
-  travelled;
-
-``R`` = the per-axis diagonal of the rotated message covariance (or a parameter; the ``default_*`` noise when the
-covariance is unknown: all zeros, −1, NaN). The gyro filter's measurement over the interval is the odometry's
-rotation ``Δθ_odo``: the trapezoid of the twist angular velocity, ``C_ibᵀ ½(ω_b,k−1 + ω_b,k) T``, or the relative
-rotation of consecutive odometry orientations when no angular velocity is given.
+R: the per-axis diagonal of the rotated message covariance (or a parameter; ``default_*`` when unknown). The gyro
+filter's measurement: the odometry's rotation C_ibᵀ ½(ω_b,k−1 + ω_b,k) T, or the relative rotation of
+consecutive orientations.
 """
 
 from __future__ import annotations
@@ -41,11 +36,8 @@ def _rotate(rows: tuple[tuple[float, float, float], ...], v: list[float]) -> lis
 
 
 class _CovDiag:
-    """Per-axis diagonal of ``C Σ Cᵀ`` for a 3×3 block of a 6×6 message covariance, cached on (Σ, C).
-
-    Returns None if the covariance is unknown (all zeros, −1 in the first element, NaN). Odometry drivers mostly
-    publish the same covariance in every message, so the cache makes this one comparison per message.
-    """
+    """Per-axis diagonal of C Σ Cᵀ for a 3×3 block of a 6×6 message covariance, cached on (Σ, C); None when unknown
+    (all zeros, −1 first, NaN)."""
 
     def __init__(self, block: slice) -> None:
         self.block = block
@@ -66,13 +58,8 @@ class _CovDiag:
 
 
 class TwistMeasurement:
-    """Body velocity per IMU axis (``m = 1``): wheel odometry, whose pose is only integrated twist.
-
-    Parameters
-    ----------
-    config : the filter's parameters (noise overrides and defaults, gravity source).
-    C_ib : rotation of base-frame vectors into the IMU frame.
-    """
+    """Body velocity per IMU axis (m = 1), for wheel odometry. ``config``: noise overrides and defaults; ``C_ib``:
+    base → IMU rotation."""
 
     m = 1
 
@@ -90,9 +77,10 @@ class TwistMeasurement:
     @staticmethod
     def values(fields: dict[str, object]) -> tuple[dict[str, list[float] | None], rot.Quat | None, bool] | None:
         """The message's vectors as float lists, its unit quaternion, and whether an orientation was given but
-        unusable (an all-zero or non-finite quaternion: REP-145's "no orientation"; the field is then None, and
-        :meth:`missing` says whether the measurement can do without it). None if another field is NaN/inf or
-        malformed (wrong length)."""
+        unusable
+        (all-zero or non-finite: REP-145's "no orientation"; the field is then None). None if another field is
+        NaN/inf
+        or malformed."""
         vals = {k: None if a is None else _as_floats(a) for k, a in fields.items()}
         if any(a is not None and len(a) != FIELDS[k] for k, a in vals.items()):
             return None
@@ -140,14 +128,10 @@ class TwistMeasurement:
     def rotation_increment(self, vals: dict[str, list[float] | None], q_nb: rot.Quat | None,
                            twist_cov: np.ndarray | None, T: float, new_chain: bool
                            ) -> tuple[list[float], list[float], list[float]] | None:
-        """The odometry's rotation over the interval of length ``T`` in IMU axes [rad], its variance [rad²] and the
-        covariance of its mean rate (increment / T) with the previous interval's [rad²/s²]; None when it cannot be
-        formed (first twist rate after a gap, no angular velocity nor orientation).
-
-        The trapezoid ``½(ω_{k−1} + ω_k) T`` shares the rate ``ω_{k−1}`` with the previous interval's, so the two
-        mean rates' errors have covariance ``¼ Var(ω_{k−1})`` (the gyro filter's covariance matching needs it:
-        without it S_g is biased low by ``½ Var(ω)/D``, negative for noisy odometry). Increments from orientation
-        differences are taken as independent (their noise model is the angular-velocity σ times T)."""
+        """The odometry's rotation over the interval ``T`` in IMU axes [rad], its variance [rad²] and the covariance
+        of its
+        mean rate with the previous interval's [rad²/s²] (¼ Var ω_{k−1} for the trapezoid, 0 for orientation
+        differences); None when it cannot be formed."""
         cfg = self.config
         if vals["angular_velocity"] is not None:
             w_now = _rotate(self._C_ib_rows, vals["angular_velocity"])
@@ -181,8 +165,7 @@ class TwistMeasurement:
 
 
 class PoseTwistMeasurement(TwistMeasurement):
-    """Position in the odometry frame and body velocity per IMU axis (``m = 2``, paper 004's eq. 8): motion capture
-    or anything with an independent position."""
+    """Position in the odometry frame and body velocity per IMU axis (m = 2, paper 004's eq. 8)."""
 
     m = 2
 

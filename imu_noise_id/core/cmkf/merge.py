@@ -1,13 +1,6 @@
-"""Stamp-ordered merge of the IMU and odometry streams: the one place the CMKF's input order is made.
-
-The robot CMKF (:class:`~.robot.RobotCmkf`) propagates with every IMU sample and updates at every odometry
-message, so it needs the two streams merged in header-stamp order (IMU first on equal stamps: the sample that
-ends an interval belongs to it). Recorded streams are merged exactly (:func:`stamp_order`). Live streams come on
-two topics with different latencies: :class:`StampMerger` holds the messages until the newest IMU stamp has moved
-``latency`` seconds past them, so odometry up to that much later than the IMU samples (in header time) is still
-put in stamp order; odometry later than that arrives behind IMU samples already released and cannot be ordered
-(reported :data:`TOO_LATE`, not given to the filter by :class:`~.stream.CmkfStream`).
-"""
+"""Stamp-ordered merge of the IMU and odometry streams (IMU first on equal stamps: the sample that ends an interval
+belongs to it). Recordings: :func:`stamp_order`. Live: :class:`StampMerger` holds messages until the newest IMU
+stamp is ``latency`` seconds past them; odometry later than that is :data:`TOO_LATE`."""
 
 from __future__ import annotations
 
@@ -28,19 +21,9 @@ IMU_SILENT = 1.0
 
 
 class StampMerger(Generic[Item]):
-    """IMU and odometry messages in, in arrival order; out in stamp order, ``latency`` seconds behind the IMU.
-
-    Every released message is a tuple ``(t, is_odometry, item, order)``: ``order`` is :data:`IN_ORDER`,
-    :data:`LATE` (an odometry message that arrived after IMU samples stamped later than it and was put back in
-    stamp order) or :data:`TOO_LATE` (an odometry message stamped before an IMU sample already released).
-    Each stream must arrive in its own stamp order (messages are released first in, first out per stream).
-
-    Parameters
-    ----------
-    latency : float
-        How long [s, header time] messages wait behind the newest IMU stamp (0: released as soon as no earlier
-        message can still come from the IMU).
-    """
+    """IMU and odometry messages in, in arrival order (each stream in its own stamp order); out in stamp order,
+    ``latency`` [s, header time] behind the newest IMU stamp, as ``(t, is_odometry, item, order)`` with ``order``
+    :data:`IN_ORDER`, :data:`LATE` (odometry put back in order) or :data:`TOO_LATE`."""
 
     def __init__(self, latency: float = 0.0) -> None:
         self.latency = float(latency)
@@ -102,11 +85,7 @@ class StampMerger(Generic[Item]):
 
 
 def stamp_order(imu_t: np.ndarray, odom_t: np.ndarray) -> Iterator[tuple[bool, int]]:
-    """Whole recordings: ``(is_odometry, index)`` of every message in stamp order, IMU first on equal stamps.
-
-    Both streams are known in advance, so nothing arrives late: the odometry is queued first and each IMU sample
-    releases what it follows.
-    """
+    """Whole recordings: ``(is_odometry, index)`` of every message in stamp order, IMU first on equal stamps."""
     merger: StampMerger[int] = StampMerger()
     for j, t in enumerate(np.asarray(odom_t, dtype=float).tolist()):
         merger.push_odometry(t, j)

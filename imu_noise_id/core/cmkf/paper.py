@@ -1,14 +1,10 @@
 """Paper 004 (Moghe, Zanetti, Akella) written out literally: the two-axis turntable CMKF with full matrices.
 
-This is the reference implementation (6 states ``[r_x, v_x, b_x, r_y, v_y, b_y]``, 4 measurements, the 8×6
-``M_o`` of eq. 29 and a joint least-squares solution for ``(S_vx, S_vy)``) against which the batched per-axis
-filter (:class:`~.axis.AxisCmkf`) and the robot filter (:class:`~.robot.RobotCmkf`) are tested. It also holds the
-turntable simulation of the paper's Simulations section (:func:`simulate_turntable`).
-
-Equations implemented: truth (6), (7), (9)–(12); propagation (17), (23) with ``Q̂_a = Ĝ diag(Ŝ_v T) Ĝᵀ``; update
-(24)–(27) (Joseph form); covariance estimator (28)–(35) with ``A₁ = −M_o† M_v``, ``A₂ = F̂ M_o† M_v − I`` acting on
-``Ĝv`` (derivation in :mod:`.stacked`); positive-definiteness check of ``Q̂_a`` (all axes jointly, as the paper
-checks the matrix) with fallback to the last positive-definite estimate.
+The reference (6 states ``[r_x, v_x, b_x, r_y, v_y, b_y]``, 4 measurements, the 8×6 M_o of eq. 29, joint least
+squares for (S_vx, S_vy)) :class:`~.axis.AxisCmkf` and :class:`~.robot.RobotCmkf` are tested against, and the
+Simulations section's turntable (:func:`simulate_turntable`). Equations: truth (6), (7), (9)–(12); propagation
+(17), (23) with Q̂_a = Ĝ diag(Ŝ_v T) Ĝᵀ; Joseph update (24)–(27); estimator (28)–(35) (:mod:`.stacked`); the joint
+positive-definiteness check of Q̂_a with fallback to the last positive-definite estimate.
 """
 
 from __future__ import annotations
@@ -21,14 +17,10 @@ from scipy.linalg import block_diag
 
 @dataclass(frozen=True)
 class TurntableConfig:
-    """Paper 004's simulation parameters (Simulations section) and the turntable profile (ours).
-
-    The paper shows its profile only as a figure (fig. 1: the table revolves, the sensor does not rotate). We use
-    a sensor on a circle of radius ``radius`` [m] at angular rate ``omega`` [rad/s]: ``r = radius·(cos ωt, sin ωt)``,
-    acceleration ``a = −radius·ω²·(cos ωt, sin ωt)`` (amplitude 0.2 m/s² with the defaults). Over each sample
-    the acceleration is held at its interval average ``a_k = (v(t_{k+1}) − v(t_k)) / T`` (the truth model (6)
-    assumes it constant), so the true velocity stays on the circle's at the sample times.
-    """
+    """Paper 004's simulation parameters and our turntable profile (the paper shows it only in fig. 1): the sensor on
+    a
+    circle of ``radius`` [m] at ``omega`` [rad/s], not rotating, a = −radius·ω²·(cos ωt, sin ωt), held at its
+    interval average a_k = (v(t_{k+1}) − v(t_k))/T (truth model (6))."""
 
     T: float = 0.1
     tau: float = 3600.0
@@ -68,16 +60,12 @@ class PaperCmkf:
 
     Parameters
     ----------
-    T : sample time [s]; tau : bias time constants [s] (both axes); q_b : bias drive variance (eq. 7) [m²/s⁴];
-    R : (4, 4) measurement covariance; S_v0 : initial Ŝ_v (both axes) [m²/s³]; x0, P0 : initial estimate.
-    pd_check : ``"joint"`` (paper) or ``"per_axis"``; min_samples : stacked samples before Ŝ_v is used.
+    T : sample time [s]; tau : bias time constants [s]; q_b : bias drive variance (eq. 7) [m²/s⁴]; R : (4, 4)
+    measurement covariance; S_v0 : initial Ŝ_v [m²/s³]; x0, P0 : initial estimate; pd_check : ``"joint"`` (paper)
+    or ``"per_axis"``; min_samples : stacked samples before Ŝ_v is used.
 
-    Attributes
-    ----------
-    The names of the other CMKFs (:class:`~.protocol.CmkfFilter`): ``x`` (6,), ``P`` (6, 6); ``y`` (4,) and
-    ``S`` (4, 4), the innovation of the last update and its covariance; ``S_used`` (2,) the Ŝ_v in use,
-    ``S_ls`` the latest least-squares solution, ``count`` the stacked samples. ``predict`` takes the paper's known
-    input Δṽ, ``update`` the measurement (R is the constant of the paper's model).
+    Attributes as :class:`~.protocol.CmkfFilter`: ``x`` (6,), ``P``, ``y`` (4,), ``S``, ``S_used`` (2,), ``S_ls``,
+    ``count``; ``predict`` takes Δṽ, ``update`` the measurement.
     """
 
     def __init__(
@@ -204,10 +192,9 @@ class TurntableRun:
 
 
 def simulate_turntable(cfg: TurntableConfig, duration: float, rng: np.random.Generator) -> TurntableRun:
-    """Simulate paper 004's revolving table with its truth model, eqs. (6), (7), (8), (12).
-
-    Returns ``K = round(duration / T)`` accelerometer samples and ``K + 1`` measurements (z_0 … z_K).
-    """
+    """Simulate paper 004's revolving table, eqs. (6), (7), (8), (12): K = round(duration / T) accelerometer samples
+    and
+    K + 1 measurements."""
     T = cfg.T
     K = round(duration / T)
     mats = paper_matrices(T, cfg.tau)
@@ -231,14 +218,15 @@ def simulate_turntable(cfg: TurntableConfig, duration: float, rng: np.random.Gen
 
 @dataclass
 class TurntableMonteCarlo:
-    """Time series of a batched Monte-Carlo run of the CMKF on the turntable (axes ordered run-major: x, y).
+    """Batched Monte-Carlo time series of the CMKF on the turntable (axes run-major: x, y).
 
     Attributes
     ----------
-    t : (J,) s, the recorded steps; err : (runs, J, 2, 3) state error x − x̂ per axis ([r, v, b]) after the update;
-    P_diag : (runs, J, 2, 3); S_v : (runs, J, 2) Ŝ_v in use; nees : (runs, J) normalised estimation error squared
-    (6 dof); accel_err : (runs, J, 2) acceleration error a_k − (Δṽ_k/T − b̂_k) (paper fig. 5; 0 at the last step);
-    rejected_steps : steps at which the positive-definiteness check refused the new Ŝ_v of at least one run.
+    t : (J,) recorded steps [s]
+    err : (runs, J, 2, 3) state error x − x̂ per axis after the update; P_diag : (runs, J, 2, 3)
+    S_v : (runs, J, 2) Ŝ_v in use; nees : (runs, J) NEES (6 dof)
+    accel_err : (runs, J, 2) a_k − (Δṽ_k/T − b̂_k) (paper fig. 5)
+    rejected_steps : steps at which the positive-definiteness check refused some run's new Ŝ_v
     """
 
     t: np.ndarray
@@ -288,12 +276,9 @@ def turntable_monte_carlo(
     min_samples: int = 1,
     record_every: int = 1,
 ) -> TurntableMonteCarlo:
-    """Run paper 004's CMKF (batched :class:`~.axis.AxisCmkf`, one filter per run and axis) on simulated runs.
-
-    Initial estimate: ``x̂₀ = [z_r, z_v, 0]`` per axis with ``P₀ = diag(R_r, R_v, σ_ss²)``; the Ŝ_v check is
-    joint over the two axes of each run (the paper's positive-definiteness check of Q̂_a). Results are stored every
-    ``record_every`` steps (memory: 3 h of 20 runs at every step would need ~0.4 GB).
-    """
+    """Paper 004's CMKF (batched :class:`~.axis.AxisCmkf`) on ``n_runs`` simulated runs: x̂₀ = [z_r, z_v, 0],
+    P₀ = diag(R_r, R_v, σ_ss²) per axis, the Ŝ_v check joint over each run's two axes; stored every
+    ``record_every`` steps."""
     from .axis import AxisCmkf, paper_interval
 
     x, dv, z, accel = simulate_turntable_batch(cfg, duration, n_runs, rng)

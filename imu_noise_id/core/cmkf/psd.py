@@ -1,17 +1,8 @@
 """What the covariance matching says about a noise PSD (S_v or S_g): an estimate with its interval, or a bound.
 
-The least-squares value Ŝ (:mod:`.matching`) estimates the PSD with a standard error ``se`` on ``dof`` degrees of
-freedom. Per axis, with t = Student's t 0.975 quantile, the 95 % interval is ``Ŝ ± t·se`` (lower end clipped at 0):
-
-- **identified**: the interval lies above 0; the noise density is √Ŝ with the interval's square roots;
-- **not identifiable from this data**: the interval contains 0 — the PSD's contribution to the stacked
-  measurements is below what the odometry noise (and everything else not modelled) puts there; only the upper end
-  of the interval, ``Ŝ + t·se``, is known (a bound: the interval [0, Ŝ + t·se]);
-- **negative**: even the upper end is ≤ 0 — the model's noise terms are too large for the data (the odometry
-  covariance declared or assumed is too large, or the odometry is smoothed): nothing about the PSD;
-- **unknown**: fewer than two blocks of epochs (no standard error yet).
-
-Never the filter's working value (the prior, or the last positive least-squares value) in place of an estimate.
+Per axis, with Ŝ ± t·se the 95 % interval (Student's t on ``dof``; lower end clipped at 0): **identified** (above
+0; density √Ŝ), **not identifiable** (contains 0; only the bound Ŝ + t·se), **negative** (upper end ≤ 0: the
+model's noise terms exceed the data's), **unknown** (fewer than two blocks). Never the filter's working value.
 """
 
 from __future__ import annotations
@@ -27,15 +18,9 @@ VERDICTS = ("identified", "not_identifiable", "negative", "unknown")
 
 @dataclass(frozen=True)
 class PsdEstimate:
-    """One sensor's PSD per axis from the covariance matching (SI: [m²/s³] for S_v, [rad²/s] for S_g).
-
-    Attributes
-    ----------
-    value, se : (3,) least-squares Ŝ (may be ≤ 0) and its standard error; dof : degrees of freedom of ``se``.
-    ci95 : (3, 2) two-sided 95 % interval of the PSD (lower end clipped at 0; NaN when unknown).
-    upper95 : (3,) its upper end: the bound where the PSD is not identifiable (NaN when unknown).
-    verdict : per axis one of :data:`VERDICTS`.
-    """
+    """One sensor's PSD per axis ([m²/s³] for S_v, [rad²/s] for S_g): ``value``, ``se`` (3,) and ``dof``; ``ci95``
+    (3, 2)
+    (NaN when unknown); ``upper95`` (3,) the bound; ``verdict`` per axis from :data:`VERDICTS`."""
 
     value: np.ndarray
     se: np.ndarray
@@ -93,8 +78,7 @@ def psd_estimate(value: np.ndarray, se: np.ndarray, dof: int) -> PsdEstimate:
 
 
 def classify(value: np.ndarray, se: np.ndarray, dof: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The verdicts (indices into :data:`VERDICTS`) and the 95 % interval ends ``Ŝ ∓ t·se`` of arrays of estimates
-    with their degrees of freedom (broadcast); the one rule, also for whole replays at once."""
+    """Verdicts (indices into :data:`VERDICTS`) and the interval ends Ŝ ∓ t·se of arrays of estimates (broadcast)."""
     value, se = np.asarray(value, dtype=float), np.asarray(se, dtype=float)
     dof = np.broadcast_to(np.asarray(dof), value.shape)
     t = np.vectorize(t_quantile, otypes=[float])(dof.astype(int)) if dof.size else np.zeros(value.shape)
@@ -106,8 +90,7 @@ def classify(value: np.ndarray, se: np.ndarray, dof: np.ndarray) -> tuple[np.nda
 
 
 def density_series(value: np.ndarray, se: np.ndarray, dof: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """√Ŝ where identified and √ of the interval's upper end where not identifiable (NaN elsewhere), for arrays
-    of estimates (a replay's time series)."""
+    """√Ŝ where identified, √ of the upper end where not identifiable, NaN elsewhere (a replay's time series)."""
     codes, _, hi = classify(value, se, dof)
     with np.errstate(invalid="ignore"):
         return (np.where(codes == 0, np.sqrt(np.maximum(value, 0.0)), np.nan),

@@ -1,37 +1,18 @@
 """Paper 004's CMKF on a robot: three IMU axes, a rotated IMU, gravity, odometry slower than the IMU.
 
-Streaming API (one message per call, in stamp order; :class:`~.stream.CmkfStream` puts two topics in that order)::
+Streaming (stamp order; :class:`~.stream.CmkfStream` merges two topics)::
 
     f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=...))
-    f.process_imu(t, gyro, accel)                       # every IMU message, ~10 µs
+    f.process_imu(t, gyro, accel)
     f.process_odometry(t, orientation_xyzw=q, linear_velocity=v, angular_velocity=w, twist_cov=C)
-    est = f.estimate()                                  # CmkfEstimate: biases, S_v, noise densities, NIS, counters
+    est = f.estimate()                                  # CmkfEstimate
 
-The filter is composed of three parts, one job each:
-
-- :class:`~.interval.ImuPropagation`: per IMU sample, the body-frame kinematics with gravity and transport terms
-  as known input (eqs. 13–16) and the interval matrices of the samples between two epochs (eqs. 17, 22–23);
-- :mod:`.measurement`: per odometry message, the measurements per IMU axis (eq. 8 on a robot) and the odometry's
-  rotation for the gyro;
-- the accelerometer filter, any :class:`~.protocol.CmkfFilter` (update (24)–(27), stacked S_v estimator
-  (28)–(35)): by default :class:`~.fast_vel.VelocityAxisCmkf` for twist measurements (plain floats, tested equal
-  to :class:`~.axis.AxisCmkf` in mode ``"vel"``, which can be given instead) and :class:`~.axis.AxisCmkf` for
-  position and velocity; plus the gyro-bias filter :class:`~.gyro.GyroBiasFilter`.
-
-Reduction to paper 004: for a sensor that does not rotate (``ω = 0``, ``C_ni = I``), one IMU sample per odometry
-epoch with period T, gravity on z and position + velocity measured, the x and y filters are exactly eqs. (13)–(17),
-(23)–(35) (tested numerically against :class:`~.paper.PaperCmkf`).
-
-Robustness: stamps not increasing (duplicated / out of order) and NaN/inf messages are dropped and counted.
-Odometry stamped behind the IMU-propagated state is dropped (``odom_dropped_late``: ordering two topics is the
-:class:`~.merge.StampMerger`'s job, which reports what it put back in order with ``late=True``, counted
-``odom_late``). Odometry less than ``min_odom_interval`` after the last update (a degenerate interval: M_o
-singular, divisions by T) is dropped (``odom_dropped_interval``), and the estimators skip, rather than raise on,
-any update or stacked step they cannot compute (``skipped_updates``, ``skipped_stacked``). An odometry gap longer
-than ``max_odom_gap`` restarts the stacked-estimator chain (no Δv across a gap); an IMU gap longer than
-``max_imu_gap`` cannot be propagated: the position/velocity states are re-initialised from the next odometry
-message (bias kept) and the chain restarts. Without IMU nothing can be estimated; with IMU only the filter
-propagates, its covariance grows and the estimate is flagged unobserved.
+Composed of :class:`~.interval.ImuPropagation` (eqs. 13–17, 22–23), :mod:`.measurement` (eq. 8 on a robot), the
+accelerometer :class:`~.protocol.CmkfFilter` (24)–(35) and :class:`~.gyro.GyroBiasFilter`. For a sensor that does
+not rotate, one IMU sample per epoch, gravity on z, position + velocity measured, the x and y filters are exactly
+eqs. (13)–(17), (23)–(35) (tested against :class:`~.paper.PaperCmkf`). Unusable input (non-increasing stamps,
+NaN/inf, late or degenerate odometry) is dropped and counted; gaps beyond ``max_odom_gap`` / ``max_imu_gap``
+restart the chain / the position and velocity (docs/cmkf.md).
 """
 
 from __future__ import annotations
@@ -59,26 +40,26 @@ COUNTERS = ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "o
 
 
 def default_filter(config: CmkfConfig) -> CmkfFilter:
-    """The accelerometer filter for ``config.measurement``: :class:`VelocityAxisCmkf` for twist (the node's hot
-    path), :class:`AxisCmkf` for position and velocity."""
+    """The accelerometer filter for ``config.measurement``: :class:`VelocityAxisCmkf` for twist, :class:`AxisCmkf`
+    for
+    position and velocity."""
     if config.measurement == "twist":
         return VelocityAxisCmkf(3, config.s_v0, pd_check=config.pd_check, min_samples=config.min_samples)
     return AxisCmkf(3, config.s_v0, mode="pos_vel", pd_check=config.pd_check, min_samples=config.min_samples)
 
 
 class RobotCmkf:
-    """Streaming CMKF for accelerometer bias and S_v, plus the gyro-bias filter (see the module docstring).
+    """Streaming CMKF for accelerometer bias and S_v, plus the gyro-bias filter (module docstring).
 
     Parameters
     ----------
     config : the parameters (validated here).
-    accel_filter : the accelerometer filter (3 axes, as many measurement components as ``config.measurement``
-        gives); default :func:`default_filter`.
+    accel_filter : the accelerometer filter (3 axes); default :func:`default_filter`.
 
     Attributes
     ----------
-    filter, gyro : the accelerometer and gyro-bias filters; their innovations ``y``, ``S`` are those of the last
-        update, and :attr:`last_update` says which filters the last odometry message updated.
+    filter, gyro : the accelerometer and gyro-bias filters (``y``, ``S`` of the last update; :attr:`last_update`
+        says which the last odometry message updated).
     counters : messages used and dropped, by reason (:data:`COUNTERS`).
     """
 
@@ -117,9 +98,9 @@ class RobotCmkf:
         self._v_post = [0.0, 0.0, 0.0]  # velocity after the last update
 
     def new_time_line(self) -> None:
-        """The input stamps restarted from an earlier time (a restarted driver, a bag played again): forget the
-        times and the interval in progress, keep what was estimated (biases and their variances, the S_v and S_g
-        least squares, the consistency windows); position and velocity restart from the next odometry message."""
+        """The input stamps restarted: forget times and the interval in progress, keep the estimates (biases, S_v and
+        S_g
+        least squares, consistency windows); position and velocity restart from the next odometry."""
         self._t_imu = self._t_odom = self._t_state = self._t_update = None
         self._last_imu = None
         self._reinit = True
@@ -136,11 +117,8 @@ class RobotCmkf:
         accel: tuple[float, float, float] | np.ndarray,
         orientation_xyzw: tuple[float, float, float, float] | np.ndarray | None = None,
     ) -> bool:
-        """Propagate with one IMU sample (stamp ``t`` [s], ``gyro`` [rad/s], ``accel`` [m/s²] with gravity).
-
-        The sample is held over ``(t_prev, t]``. ``orientation_xyzw`` (IMU orientation in a z-up world frame) is
-        used for gravity only when ``gravity_source == "imu"``. Returns False if the sample was dropped.
-        """
+        """Propagate with one IMU sample (stamp ``t`` [s], ``gyro`` [rad/s], ``accel`` [m/s²] with gravity) held over
+        (t_prev, t]; ``orientation_xyzw`` used for gravity when ``gravity_source == "imu"``. False if dropped."""
         try:
             t = float(t)
             wx, wy, wz = (float(v) for v in gyro)
@@ -193,12 +171,10 @@ class RobotCmkf:
         twist_cov: np.ndarray | None = None,
         late: bool = False,
     ) -> bool:
-        """One nav_msgs/Odometry message: pose in the odom frame, twist in ``child_frame_id`` (REP-105).
-
-        Covariances are the 6×6 row-major message fields (all zeros = unknown). ``late``: the message arrived after
-        IMU samples stamped later and was put back in stamp order (by a :class:`~.merge.StampMerger`; counted
-        ``odom_late`` when used). Returns True if the message produced a filter update (or initialised the filter).
-        """
+        """One nav_msgs/Odometry message (pose in the odom frame, twist in ``child_frame_id``, REP-105; 6×6 row-major
+        covariances, all zeros = unknown; ``late``: put back in stamp order by a :class:`~.merge.StampMerger`). True
+        if
+        it updated (or initialised) the filter."""
         t = float(t)
         self.last_update = (False, False)
         self.last_gated = (False, False)
@@ -266,9 +242,9 @@ class RobotCmkf:
         imu.reset_interval()
 
     def _update(self, t: float, z: list | np.ndarray, R: list | np.ndarray, new_chain: bool) -> None:
-        """Predict the accelerometer filter to the epoch (eq. 23) and update it (24)–(35), unless the innovation
-        gate rejects the update (:mod:`.gate`): then position and velocity restart from the measurement and the
-        predicted bias is kept."""
+        """Predict the accelerometer filter to the epoch (eq. 23) and update it (24)–(35), unless the gate
+        (:mod:`.gate`)
+        rejects it: then position and velocity restart from the measurement, the bias is kept."""
         f, imu = self.filter, self.imu
         skipped_before = (f.skipped, f.skipped_stacked)
         velocity = ([float(row[-1]) for row in z], [float(r[-1][-1]) for r in R])
@@ -303,8 +279,9 @@ class RobotCmkf:
 
     def _initialise(self, t: float, z: list | np.ndarray, R: list | np.ndarray,
                     bias: tuple[list[float], np.ndarray] | None = None) -> None:
-        """(Re-)initialise r, v from the measurement; keep the bias and its variance (grown) if known, or take
-        ``bias`` = (value, variance) per axis."""
+        """(Re-)initialise r, v from the measurement; keep the bias and its (grown) variance if known, or take
+        ``bias`` =
+        (value, variance) per axis."""
         cfg = self.config
         if bias is not None:
             b0, Pbb = bias

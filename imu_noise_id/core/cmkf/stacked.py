@@ -1,38 +1,17 @@
 """Stacked-measurement covariance estimator of paper 004 (Moghe, Zanetti, Akella), eqs. (28)–(35).
 
-Notation (one accelerometer axis, state ``x = [r, v, b]``: position, velocity, bias)::
-
-    x_k = F̂ x_{k-1} + U_{k-1} − ν_{k-1} + Λ w_{k-1}            (28), U = Ĝ Δṽ the known input
-    z_k = H x_k + η_k                                            (8)
-
-``ν_{k-1}`` is the effect of the velocity random walk on the state over one interval (the paper's ``Ĝ v_{k-1}``)
-with covariance ``Q_a = S_v · Qa1`` (``Qa1`` = the covariance for unit PSD; for the paper's one IMU sample per
-interval ``Qa1 = T Ĝ Ĝᵀ``), ``w`` the bias drive with variance ``q_b`` (eq. 7), ``η`` the measurement noise ``R``.
-
-Derivation of eqs. (29)–(35) (re-derived; the paper's eq. (33) has index slips, see ``papers/README.md``)::
-
-    Y_k   = [z_k; z_{k-1}] − M_a U_{k-1}  = M_o x_{k-1} + M_w w_{k-1} − M_v ν_{k-1} + E_k        (29)–(31)
-            M_o = [H F̂; H],  M_v = [H; 0],  M_a = [H; 0],  M_w = [H Λ; 0],  E_k = [η_k; η_{k-1}]
-    M_o† Y_k       = x_{k-1} + M_o† M_w w_{k-1} − M_o† M_v ν_{k-1} + M_o† E_k
-    F̂ M_o† Y_{k-1} = F̂ x_{k-2} + F̂ M_o† M_w w_{k-2} − F̂ M_o† M_v ν_{k-2} + F̂ M_o† E_{k-1}
-    and x_{k-1} − F̂ x_{k-2} − U_{k-2} = −ν_{k-2} + Λ w_{k-2}, hence
+One accelerometer axis, state ``x = [r, v, b]``: x_k = F̂ x_{k-1} + U_{k-1} − ν_{k-1} + Λ w_{k-1} (28),
+z_k = H x_k + η_k (8); ν the velocity random walk's effect, Cov ν = S_v·Qa1 (paper: Qa1 = T Ĝ Ĝᵀ), w the bias
+drive (q_b, eq. 7), η ~ R. With M_o = [H F̂; H], M_v = [H; 0], M_w = [H Λ; 0] (re-derived; derivation and the
+paper's index slips: docs/cmkf.md, ``papers/README.md``)::
 
     𝒵_k = M_o† Y_k − F̂ M_o† Y_{k-1} − U_{k-2}                                                   (33)
-        = [M_o† M_w] w_{k-1} + [Λ − F̂ M_o† M_w] w_{k-2}                                         (𝒲_k)
-        + A₁ ν_{k-1} + A₂ ν_{k-2},   A₁ = −M_o† M_v,   A₂ = F̂ M_o† M_v − I                       (𝒱_k)
-        + E₁ η_k + E₂ η_{k-1} + E₃ η_{k-2}                                                      (ℰ_k)
-          E₁ = M_o†[I; 0],  E₂ = M_o†[0; I] − F̂ M_o†[I; 0],  E₃ = −F̂ M_o†[0; I]
+        = [M_o† M_w] w_{k-1} + [Λ − F̂ M_o† M_w] w_{k-2} + A₁ ν_{k-1} + A₂ ν_{k-2} + E₁ η_k + E₂ η_{k-1} + E₃ η_{k-2}
+    A₁ = −M_o† M_v,  A₂ = F̂ M_o† M_v − I,  E₁ = M_o†[I; 0],  E₂ = M_o†[0; I] − F̂ M_o†[I; 0],  E₃ = −F̂ M_o†[0; I]
 
-so ``Cov(𝒵) = Cov(𝒲) + S_v (A₁ Qa1 A₁ᵀ + A₂ Qa1 A₂ᵀ) + Cov(ℰ)`` (eqs. 34–35): A₁ and A₂ are the coefficients of
-``ν_{k-1} = Ĝv_{k-1}`` and ``ν_{k-2} = Ĝv_{k-2}``, as stated in ``papers/README.md``. Note that ``ℰ_k`` spans
-three measurement epochs (the paper's ``E_k`` and ``E_{k-1}`` overlap in ``η_{k-1}``).
-
-Least squares for S_v (eq. 35): with the basis ``D = A₁ Qa1 A₁ᵀ + A₂ Qa1 A₂ᵀ`` and the recursive sample second
-moment ``C̄_k = (1/n) Σ 𝒵 𝒵ᵀ`` (𝒵 has zero mean in the model, so the uncentred sample covariance is used),
-``Ŝ_v = ⟨C̄_k − Cov(𝒲) − Cov(ℰ), D⟩_F / ⟨D, D⟩_F``. Beyond the paper, the matrices may change from interval to
-interval (IMU samples between odometry updates, jittery odometry rates); the estimator then accumulates
-``Σ ⟨𝒵𝒵ᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩ / Σ ⟨D_k, D_k⟩``, which is the least-squares solution over all epochs and
-equals the paper's formula when the matrices are constant.
+Cov(𝒵) = Cov(𝒲) + S_v D + Cov(ℰ), D = A₁ Qa1 A₁ᵀ + A₂ Qa1 A₂ᵀ (eq. 34), and
+Ŝ_v = Σ ⟨𝒵𝒵ᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩_F / Σ ⟨D_k, D_k⟩_F (eq. 35; the uncentred second moment; beyond the
+paper, matrices may change between intervals — equal to the paper's formula when constant).
 """
 
 from __future__ import annotations
@@ -47,14 +26,8 @@ from .matching import MatchingLeastSquares
 
 @dataclass(frozen=True)
 class Interval:
-    """What one propagation interval (between two measurement epochs) contributes, shared by all axes.
-
-    Attributes
-    ----------
-    Phi : (d, d) state transition F̂ over the interval (bias input folded in, eq. 17).
-    Qa1 : (d, d) covariance of ν (the velocity-random-walk effect) for unit PSD S_v = 1 [m²/s³].
-    qb : variance of the bias drive over the interval (eq. 7) [m²/s⁴].
-    """
+    """One propagation interval's contribution, shared by all axes: ``Phi`` (d, d) F̂ (bias input folded in, eq. 17),
+    ``Qa1`` (d, d) covariance of ν for S_v = 1 [m²/s³], ``qb`` bias-drive variance (eq. 7) [m²/s⁴]."""
 
     Phi: np.ndarray
     Qa1: np.ndarray
@@ -71,18 +44,15 @@ class _Epoch:
 
 
 class StackedSvEstimator:
-    """Recursive least-squares estimator of S_v per axis from stacked measurements (eqs. 28–35).
+    """Recursive least-squares S_v per axis from stacked measurements (eqs. 28–35).
 
     Parameters
     ----------
-    n_axes : number of independent axes sharing the same interval matrices.
-    H : (m, d) measurement matrix of one axis on the (sub-)state used by the estimator.
+    n_axes : axes sharing the interval matrices; H : (m, d) measurement matrix of one axis on the (sub-)state;
     bias_index : index of the bias in the (sub-)state (``Λ = e_bias``).
 
-    Notes
-    -----
-    Call :meth:`add_epoch` at every measurement epoch with the interval that led to it; an epoch with
-    ``interval=None`` starts a new chain (first epoch, or after a gap: no Δv is used across a gap).
+    Call :meth:`add_epoch` at every measurement epoch; ``interval=None`` starts a new chain (first epoch, after a
+    gap).
     """
 
     def __init__(self, n_axes: int, H: np.ndarray, bias_index: int) -> None:
@@ -113,15 +83,9 @@ class StackedSvEstimator:
         return self.matching.estimate
 
     def add_epoch(self, z: np.ndarray, R: np.ndarray, interval: Interval | None, U: np.ndarray | None) -> bool:
-        """Add measurement epoch k; returns True when a stacked sample 𝒵_k was formed and accumulated.
-
-        Parameters
-        ----------
-        z : (n, m) measurements of every axis at epoch k.
-        R : (n, m, m) their covariances.
-        interval : the interval k-1 → k (None starts a new chain).
-        U : (n, d) known-input contribution over that interval (``x̂⁻_k − F̂ x̂⁺_{k-1}``).
-        """
+        """Add epoch k (``z`` (n, m), ``R`` (n, m, m), the ``interval`` k-1 → k or None, ``U`` (n, d) = x̂⁻_k − F̂
+        x̂⁺_{k-1});
+        True when a stacked sample 𝒵_k was accumulated."""
         Mo_pinv = None if interval is None else _pinv_full_rank(np.vstack([self.H @ interval.Phi, self.H]))
         if interval is not None and Mo_pinv is None:
             self.skipped += 1
@@ -165,11 +129,7 @@ class StackedSvEstimator:
 
 
 def _pinv_full_rank(M: np.ndarray, rcond: float = 1e-12) -> np.ndarray | None:
-    """Moore–Penrose pseudo-inverse ``(MᵀM)⁻¹Mᵀ`` of a full-column-rank M (eq. 29: M_o is, by observability).
-
-    Returns None when M is numerically rank deficient (condition number of M above ``1/rcond``), e.g. the
-    ``M_o = [H F̂; H]`` of a zero-length interval (``F̂ = I``), or not finite.
-    """
+    """(MᵀM)⁻¹Mᵀ of a full-column-rank M (eq. 29); None when rank deficient (condition > 1/rcond) or not finite."""
     if not np.all(np.isfinite(M)):
         return None
     sv = np.linalg.svd(M, compute_uv=False)

@@ -1,11 +1,5 @@
-"""The robot CMKF fed in stamp order: live messages through a :class:`~.merge.StampMerger`, or whole recordings.
-
-- :class:`CmkfStream`: IMU and odometry messages as they arrive (two topics, two latencies; the ROS node's online
-  identification); the merger holds them ``late_odom_tolerance`` seconds behind the newest IMU stamp and hands
-  them to :class:`~.robot.RobotCmkf` in stamp order.
-- :func:`feed_recording`: recorded IMU and odometry series (the offline replay, the simulated runs), merged by
-  :func:`~.merge.stamp_order`.
-"""
+"""The robot CMKF fed in stamp order: live messages through a :class:`~.merge.StampMerger` (:class:`CmkfStream`), or
+whole recordings (:func:`feed_recording`, :func:`~.merge.stamp_order`)."""
 
 from __future__ import annotations
 
@@ -30,14 +24,12 @@ class CmkfStream:
 
     Parameters
     ----------
-    config : the filter's parameters; ``late_odom_tolerance`` is the merger's latency allowance [s].
-    on_odometry : called as ``on_odometry(t, order)`` after every odometry message the merger released (``order``:
+    config : the filter's parameters (``late_odom_tolerance``: the merger's latency [s]).
+    on_odometry : called as ``on_odometry(t, order)`` after every released odometry message (``order``:
         :data:`~.merge.IN_ORDER`, :data:`~.merge.LATE` or :data:`~.merge.TOO_LATE`, the last not given to the
-        filter); :attr:`cmkf` then holds the filter's state after it.
+        filter).
 
-    Attributes
-    ----------
-    cmkf : the filter; merger : the merger (its ``latency`` may be changed at any time).
+    Attributes: ``cmkf`` (the filter), ``merger`` (its ``latency`` may be changed at any time).
     """
 
     def __init__(self, config: CmkfConfig | None = None,
@@ -47,8 +39,8 @@ class CmkfStream:
         self._on_odometry = on_odometry
 
     def process_imu(self, t: float, gyro: Any, accel: Any, orientation_xyzw: Any = None) -> bool:
-        """Queue one IMU message (see :meth:`RobotCmkf.process_imu`) and process what is due; True if an odometry
-        message processed now updated (or initialised) the filter."""
+        """Queue one IMU message (:meth:`RobotCmkf.process_imu`) and process what is due; True if an odometry message
+        processed now updated the filter."""
         self.merger.push_imu(float(t), (gyro, accel, orientation_xyzw))
         return self._process(self.merger.ready())
 
@@ -62,9 +54,9 @@ class CmkfStream:
         return self._process(self.merger.flush())
 
     def new_time_line(self) -> bool:
-        """The stamps restarted: the queued messages are processed, then the filter forgets its times (keeping
-        its estimates, :meth:`RobotCmkf.new_time_line`) and the merger starts afresh. True when a queued odometry
-        message updated the filter."""
+        """The stamps restarted: process the queue, then the filter forgets its times
+        (:meth:`RobotCmkf.new_time_line`) and
+        the merger starts afresh; True if a queued odometry message updated the filter."""
         updated = self.flush()
         self.cmkf.new_time_line()
         self.merger = StampMerger(self.merger.latency)
@@ -94,11 +86,8 @@ class CmkfStream:
 def feed_recording(cmkf: RobotCmkf, imu: ImuSeries, odom: OdometrySeries | None,
                    imu_orientation_xyzw: np.ndarray | None = None) -> Iterator[bool]:
     """Feed recorded series to ``cmkf`` in stamp order; yields after every odometry message whether it updated.
-
-    A field of ``odom`` may be None when the source does not provide it (e.g. motion capture without angular
-    velocity). ``imu_orientation_xyzw`` (N, 4), the IMU's own orientation, is given with the samples; a NaN row (not
-    provided, see :class:`ImuSeries`) is passed as None, so the filter keeps the last orientation it was given.
-    """
+    Fields of
+    ``odom`` may be None; a NaN row of ``imu_orientation_xyzw`` (N, 4) is passed as None."""
     ti = np.asarray(imu.t, dtype=float)
     times = ti.tolist()
     rows = np.column_stack([imu.gyro, imu.accel]).tolist()
