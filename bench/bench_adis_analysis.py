@@ -4,7 +4,7 @@ Beside each axis's Allan-slope white noise: the data's own level, √(½·median
 reference the measured loop table uses), and the τ below which the slopes were not read (the sensor's low-pass
 roll-off, ``slopes`` rule 5).
 
-Run: ``nice -n 10 python bench/bench_adis_analysis.py`` (output in docs/results/adis_run1_analysis.txt).
+Run: ``nice -n 10 python bench/bench_adis_analysis.py`` (output in docs/results/bench_adis_analysis.txt).
 Needs ``../shared/data/adis16405_static/adis16405_run1.npz`` (third-party data, not in the repository).
 """
 

@@ -1,12 +1,13 @@
 """Hypothesis-bank benchmark: throughput, the paper 002 section 4 reproduction (L trials), Allan variance vs bank.
 
-    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --trials 500 | tee docs/results/bench_bank.txt
+    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-reproduction | tee docs/results/bench_bank_throughput.txt
+    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --trials 500 --skip-throughput | tee docs/results/bench_bank.txt
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --dt-sweep 100 \
-        | tee docs/results/bench_bank_dt_sweep.txt   # which Δt did the paper use? (docs/hypotheses.md)
+        | tee -a docs/results/bench_bank.txt   # which Δt did the paper use? (docs/hypotheses.md)
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --default-set --real \
-        | tee docs/results/bench_bank_default_set.txt
+        | tee -a docs/results/bench_bank.txt
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --fig4 100 \
-        | tee docs/results/bench_bank_fig4.txt
+        | tee -a docs/results/bench_bank.txt
 
 Writes docs/results/criteria_case{1,2,3}.json, docs/results/criteria_table.md and docs/figures/hypotheses_*.png.
 """

@@ -1,6 +1,6 @@
 """Throughput of the offline CMKF replay and per-call latency of the streaming API (what the ROS node pays).
 
-    PYTHONPATH=. nice -n 10 python bench/bench_cmkf.py > docs/results/cmkf_bench.txt
+    PYTHONPATH=. nice -n 10 python bench/bench_cmkf.py > docs/results/bench_cmkf.txt
 
 Cases: the Husky npz (IMU 30 Hz, odometry 10 Hz: one odometry update per 3 IMU samples), a simulated robot with
 IMU 100 Hz / odometry 10 Hz (twist and pose_twist) and IMU 400 Hz / odometry 20 Hz, and IMU only (odometry

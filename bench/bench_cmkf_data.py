@@ -1,6 +1,6 @@
 """The robot CMKF on measured data: the Husky bag (IMU 30 Hz + wheel odometry 10 Hz) and BROAD (IMU + OptiTrack).
 
-    PYTHONPATH=. nice -n 10 python bench/bench_cmkf_data.py > docs/results/cmkf_data.txt
+    PYTHONPATH=. nice -n 10 python bench/bench_cmkf_data.py > docs/results/bench_cmkf_data.txt
 
 Husky (``husky_test1.npz``): IMU mounted rotated (static_transform_publisher yaw pitch roll = −π/2 0 π/2 in
 robot_localization's test launch file: gravity on +y); wheel odometry twist (body velocity) as measurement; gravity

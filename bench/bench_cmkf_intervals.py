@@ -1,6 +1,6 @@
 """Do the CMKF's S_v and S_g intervals cover the truth on simulated robots, identifiable or not? (issue 12)
 
-    PYTHONPATH=. nice -n 10 python bench/bench_cmkf_intervals.py > docs/results/cmkf_intervals.txt
+    PYTHONPATH=. nice -n 10 python bench/bench_cmkf_intervals.py > docs/results/bench_cmkf_intervals.txt
 
 Robots of ``core/simulation/robot.py`` (weaving, IMU rotated as on the Husky, 100 Hz, constant biases) with
 odometry twist of several rates and noise levels, 300 s each, several seeds; the robot CMKF (twist measurement,

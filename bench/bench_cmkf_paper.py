@@ -5,9 +5,9 @@ R = diag(1e-8, 1e-6, 1e-8, 1e-6), Ŝ_v0 = 2e-6; 20 Monte-Carlo runs of 3 h. Our 
 period 10 s (the paper shows its profile only as a figure).
 
 Writes docs/figures/cmkf_paper_fig{1..6}.png, docs/figures/cmkf_paper_sv.png and prints the table that
-docs/results/cmkf_paper.txt keeps:
+docs/results/bench_cmkf_paper.txt keeps:
 
-    PYTHONPATH=. nice -n 10 python bench/bench_cmkf_paper.py > docs/results/cmkf_paper.txt
+    PYTHONPATH=. nice -n 10 python bench/bench_cmkf_paper.py > docs/results/bench_cmkf_paper.txt
 """
 
 from __future__ import annotations

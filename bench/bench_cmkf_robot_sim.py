@@ -1,6 +1,6 @@
 """The robot CMKF on simulated moving robots (turning, accelerating, IMU rotated y-up), several seeds.
 
-    PYTHONPATH=. nice -n 10 python bench/bench_cmkf_robot_sim.py > docs/results/cmkf_robot_sim.txt
+    PYTHONPATH=. nice -n 10 python bench/bench_cmkf_robot_sim.py > docs/results/bench_cmkf_robot_sim.txt
 
 Truth: S_v = 1e-4 m²/s³ (0.01 m/s²/√Hz), S_g = 1e-6 rad²/s, accel bias (0.05, −0.08, 0.03) m/s², gyro bias
 (0.002, −0.003, 0.001) rad/s; IMU 100 Hz, odometry 10 Hz with σ_v = 2 mm/s, σ_ω = 2 mrad/s; 300 s per run.

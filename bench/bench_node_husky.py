@@ -1,6 +1,6 @@
 """The measured Husky bag through imu_noise_id_node: what the node reports on a real robot.
 
-    nice -n 10 python bench/bench_node_husky.py [--rate 20] | tee docs/results/node_husky.txt
+    nice -n 10 python bench/bench_node_husky.py [--rate 20] | tee docs/results/bench_node_husky.txt
 
 robot_localization's test1 bag (``../shared/data/husky_robot_localization/husky_test1_ros2``: IMU 30 Hz mounted
 rotated, wheel odometry ~10 Hz, 395 s of driving with one 10 s stop) is played with ``imu-noise-id play`` into the

@@ -1,7 +1,7 @@
 """Reproduce the simulation studies of paper 000 (Stebler et al. 2011) §4.1–4.3 with this implementation.
 
 Run:  nice -n 10 python bench/reproduce_paper000.py --case 4.1 [--runs 200] [--em-iter 300]
-      (cases 4.1, 4.2, 4.3; output in docs/results/paper000_<case>.txt)
+      (cases 4.1, 4.2, 4.3; output in docs/results/reproduce_paper000.txt, one case after another)
 
 Units are the paper's: Δt = 1 (per-sample variances σ²_WN, σ²_RW, σ²_GM, β = 1 − φ, ω = u per sample).
 The data follow the paper's discrete models literally: x_{t+1} = Φ x_t + w_t + u, y_t = H x_t + v_t, x_1 = 0,

@@ -1,4 +1,4 @@
-"""Rerun the benchmarks whose numbers README.md and docs/ quote; each output goes to docs/results/.
+"""Rerun the benchmarks whose numbers README.md and docs/ quote; each output goes to docs/results/SCRIPT.txt.
 
 Usage (``make bench`` runs the default set)::
 
@@ -24,42 +24,54 @@ from pathlib import Path
 BENCH = Path(__file__).resolve().parent
 RESULTS = BENCH.parent / "docs" / "results"
 
-#: (script and arguments, output file in docs/results): the issues' "bench/ prints …" goals.
+#: (script and arguments, output file in docs/results): the issues' "bench/ prints …" goals. One output file per
+#: script, named after it; a script run several ways writes its runs one after another into that file.
 GOALS: list[tuple[list[str], str]] = [
     (["bench_allan.py"], "bench_allan.txt"),
     (["bench_bags.py"], "bench_bags.txt"),
     (["bench_analyze_memory.py"], "bench_analyze_memory.txt"),
     (["bench_em.py"], "bench_em.txt"),
+    (["bench_em.py", "--quick"], "bench_em.txt"),
     (["bench_bank.py", "--skip-reproduction"], "bench_bank_throughput.txt"),
-    (["bench_cmkf.py"], "cmkf_bench.txt"),
+    (["bench_cmkf.py"], "bench_cmkf.txt"),
     (["bench_node.py"], "bench_node.txt"),
-    (["bench_analyze_time.py", "--rates", "200", "400"], "bench_analyze_time_loop.txt"),
+    (["bench_node.py", "--executor", "single_threaded"], "bench_node.txt"),
+    (["bench_analyze_time.py", "--rates", "200", "400"], "bench_analyze_time.txt"),
     (["bench_screen.py", "--seeds", "1", "2"], "bench_screen.txt"),
     (["bench_batch.py"], "bench_batch.txt"),
     (["bench_figures.py"], "bench_figures.txt"),
 ]
 
-#: Long Monte-Carlo reproductions and measured-data studies (``--long``).
+#: Long Monte-Carlo reproductions and measured-data benchmarks (``--long``).
 LONG: list[tuple[list[str], str]] = [
     (["bench_bank.py", "--trials", "500", "--skip-throughput"], "bench_bank.txt"),
-    (["reproduce_paper000.py", "--case", "4.1", "--runs", "200"], "paper000_4.1.txt"),
-    (["reproduce_paper000.py", "--case", "4.2", "--runs", "200"], "paper000_4.2.txt"),
-    (["reproduce_paper000.py", "--case", "4.3", "--runs", "200"], "paper000_4.3.txt"),
-    (["reproduce_paper000_sec5.py"], "paper000_sec5.txt"),
+    (["bench_bank.py", "--skip-throughput", "--skip-reproduction", "--dt-sweep", "100"], "bench_bank.txt"),
+    (["bench_bank.py", "--skip-throughput", "--skip-reproduction", "--default-set", "--real"], "bench_bank.txt"),
+    (["bench_bank.py", "--skip-throughput", "--skip-reproduction", "--fig4", "100"], "bench_bank.txt"),
+    (["reproduce_paper000.py", "--case", "4.1", "--runs", "200"], "reproduce_paper000.txt"),
+    (["reproduce_paper000.py", "--case", "4.2", "--runs", "200"], "reproduce_paper000.txt"),
+    (["reproduce_paper000.py", "--case", "4.3", "--runs", "200"], "reproduce_paper000.txt"),
+    (["reproduce_paper000_sec5.py"], "reproduce_paper000_sec5.txt"),
     (["bench_coverage.py", "--runs", "100"], "bench_coverage.txt"),
     (["bench_allan_fit.py"], "bench_allan_fit.txt"),
+    (["bench_allan_fit.py", "--runs", "30", "--duration", "600"], "bench_allan_fit.txt"),
     (["bench_allan_ci.py"], "bench_allan_ci.txt"),
-    (["bench_cmkf_paper.py"], "cmkf_paper.txt"),
-    (["bench_cmkf_robot_sim.py"], "cmkf_robot_sim.txt"),
-    (["bench_cmkf_data.py"], "cmkf_data.txt"),
-    (["bench_cmkf_intervals.py"], "cmkf_intervals.txt"),
-    (["bench_node_husky.py"], "node_husky.txt"),
+    (["bench_cmkf_paper.py"], "bench_cmkf_paper.txt"),
+    (["bench_cmkf_robot_sim.py"], "bench_cmkf_robot_sim.txt"),
+    (["bench_cmkf_data.py"], "bench_cmkf_data.txt"),
+    (["bench_cmkf_intervals.py"], "bench_cmkf_intervals.txt"),
+    (["bench_node_husky.py"], "bench_node_husky.txt"),
     (["loop_measured.py", "--samples", "100000", "--mtig-samples", "100000"], "loop_measured.txt"),
+    (["loop_measured.py", "--axes", "gyro_x,gyro_y", "--samples", "0"], "loop_measured.txt"),
     (["bench_av_band.py"], "bench_av_band.txt"),
     (["bench_rw_bound.py"], "bench_rw_bound.txt"),
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
-    (["bench_loop_effects.py", "--minutes", "120", "--cases", "osc+gm", "bi"], "bench_loop_effects_2h.txt"),
-    (["bench_adis_analysis.py"], "adis_run1_analysis.txt"),
+    (["bench_loop_effects.py", "--minutes", "120", "--cases", "osc+gm", "bi"], "bench_loop_effects.txt"),
+    (["bench_loop_effects.py", "--clean", "10", "--minutes", "120", "--rate", "10",
+      "--cases", "osc+gm", "gm", "osc+fast_gm", "osc+clear_gm", "clean"], "bench_loop_effects.txt"),
+    (["bench_loop_effects.py", "--clean", "10", "--minutes", "1440", "--rate", "10",
+      "--cases", "gm", "osc+gm", "clean", "bi"], "bench_loop_effects.txt"),
+    (["bench_adis_analysis.py"], "bench_adis_analysis.txt"),
     (["bench_overbound.py"], "bench_overbound.txt"),
     (["bench_gmwm_speed.py"], "bench_gmwm_speed.txt"),
     (["bench_gmwm_accuracy.py"], "bench_gmwm_accuracy.txt"),
@@ -67,31 +79,28 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_gmwm_pooled.py"], "bench_gmwm_pooled.txt"),
 ]
 
-#: Studies in bench/studies/ whose outputs docs/ quotes (``--studies``): one-off questions, not regression numbers.
-#: The side-by-side studies (``--baseline DIR``: bench_sensor_filter, bench_steady_engine, bench_loop_measured_time)
-#: need another checkout and are run by hand (their docstrings give the command).
+#: Studies in bench/studies/ whose outputs docs/ quotes (``--studies``; outputs in docs/results/studies/): one-off
+#: questions, not regression numbers. The side-by-side studies (``--baseline DIR``: bench_sensor_filter,
+#: bench_steady_engine, bench_loop_measured_time) need another checkout and are run by hand (their docstrings give
+#: the command).
 STUDIES: list[tuple[list[str], str]] = [
-    (["studies/probe_gm_tau_lr.py"], "probe_gm_tau_lr.txt"),
-    (["studies/loop_trace.py", "1", "gyro_z"], "loop_trace_r1_gyro_z.txt"),
-    (["studies/loop_trace.py", "2", "gyro_z"], "loop_trace_r2_gyro_z.txt"),
-    (["studies/loop_trace.py", "3", "gyro_z"], "loop_trace_r3_gyro_z.txt"),
-    (["studies/probe_gyro_z_line_shape.py"], "probe_gyro_z_line_shape.txt"),
-    (["studies/loop_trace.py", "6", "gyro_y"], "loop_trace_r6_gyro_y.txt"),
-    (["studies/loop_trace.py", "5", "accel_y"], "loop_trace_r5_accel_y.txt"),
-    (["studies/loop_trace.py", "4", "accel_z"], "loop_trace_r4_accel_z.txt"),
-    (["studies/probe_rw_gm_swap.py", "4", "accel_z"], "probe_rw_gm_swap_r4_accel_z.txt"),
-    (["studies/loop_trace.py", "1", "accel_x"], "loop_trace_r1_accel_x.txt"),
-    (["studies/probe_osc_gm_bic.py"], "probe_osc_gm_bic.txt"),
-    (["studies/probe_k_bounded_wander.py"], "probe_k_bounded_wander.txt"),
-    (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "probe_k_information.txt"),
-    (["studies/probe_flicker_gm_rw.py", "--cases", "osc+clear_gm", "osc+fast_gm"], "probe_flicker_gm_rw.txt"),
-    (["studies/probe_lpf2_filter_shape.py", "--seeds", "3"], "probe_lpf2_filter_shape.txt"),
-    (["studies/probe_innovation_hump.py"], "probe_innovation_hump.txt"),
-    (["studies/probe_fit_from_off_starts.py"], "probe_fit_from_off_starts_after.txt"),
-    (["studies/bench_sin_regressors.py"], "bench_sin_regressors.txt"),
-    (["studies/bench_motion_bursts.py"], "bench_motion_bursts.txt"),
+    (["studies/probe_gm_tau_lr.py"], "studies/probe_gm_tau_lr.txt"),
+    *[(["studies/loop_trace.py", run, axis], "studies/loop_trace.txt")
+      for run, axis in [("1", "accel_x"), ("1", "accel_z"), ("1", "gyro_z"), ("2", "gyro_z"), ("3", "gyro_z"),
+                        ("4", "accel_z"), ("5", "accel_y"), ("6", "gyro_y"), ("6", "gyro_z")]],
+    (["studies/probe_gyro_z_line_shape.py"], "studies/probe_gyro_z_line_shape.txt"),
+    (["studies/probe_rw_gm_swap.py", "4", "accel_z"], "studies/probe_rw_gm_swap.txt"),
+    (["studies/probe_osc_gm_bic.py"], "studies/probe_osc_gm_bic.txt"),
+    (["studies/probe_k_bounded_wander.py"], "studies/probe_k_bounded_wander.txt"),
+    (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "studies/probe_k_information.txt"),
+    (["studies/probe_flicker_gm_rw.py", "--cases", "osc+clear_gm", "osc+fast_gm"], "studies/probe_flicker_gm_rw.txt"),
+    (["studies/probe_lpf2_filter_shape.py", "--seeds", "3"], "studies/probe_lpf2_filter_shape.txt"),
+    (["studies/probe_innovation_hump.py"], "studies/probe_innovation_hump.txt"),
+    (["studies/probe_fit_from_off_starts.py"], "studies/probe_fit_from_off_starts.txt"),
+    (["studies/bench_sin_regressors.py"], "studies/bench_sin_regressors.txt"),
+    (["studies/bench_motion_bursts.py"], "studies/bench_motion_bursts.txt"),
     (["studies/profile_loop_measured.py", "--run", "3", "--axis", "gyro_x", "--samples", "0", "--limit", "1500"],
-     "profile_loop_r3_gyro_x_full_5888da1.txt"),
+     "studies/profile_loop_measured.txt"),
 ]
 
 
@@ -109,14 +118,20 @@ def main(argv: list[str] | None = None) -> int:
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env.setdefault("ROS_LOG_DIR", "/tmp/imu_noise_id_ros_log")
     failed = []
+    written: set[str] = set()  # outputs begun in this run: a script's later runs append to its file
     for script, out in jobs:
-        line = f"python bench/{' '.join(script)} > docs/results/{out}"
+        line = f"python bench/{' '.join(script)} {'>>' if out in written else '>'} docs/results/{out}"
         if args.list:
+            written.add(out)
             print(line)
             continue
         print(f"== {line}", flush=True)
         start = time.perf_counter()
-        with (RESULTS / out).open("w") as fh:
+        with (RESULTS / out).open("a" if out in written else "w") as fh:
+            if out in written:
+                fh.write("\n")
+            written.add(out)
+            fh.write(f"# python bench/{' '.join(script)}\n")
             proc = subprocess.Popen([sys.executable, str(BENCH / script[0]), *script[1:]], stdout=subprocess.PIPE,
                                     stderr=subprocess.STDOUT, env=env, cwd=BENCH.parent, text=True)
             for text in proc.stdout:  # printed here and kept in docs/results

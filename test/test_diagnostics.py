@@ -303,7 +303,7 @@ def test_a_deficit_whose_longest_tau_are_too_few_to_be_significant_still_points_
     keep are fitted to the AV beyond white noise together, and start near the truth; before, the GM alone was fitted
     to that AV, walk and all, and started at τ ≈ 2200 s, from where the loop's refit never reached the GM (and on
     the same record at 10 Hz the deficit was not found at all: its longest τ, with few averages, were not
-    significant themselves, ``bench_loop_effects_24h.txt``)."""
+    significant themselves: the 24 h run in ``docs/results/bench_loop_effects.txt``)."""
     dt, n = 1.0, 86_400
     gm, walk = GM(tau=60.0, sigma=2e-3), RW(3e-4)
     y = simulate_sum([WN(2e-3), gm, walk], n, dt, np.random.default_rng(5))

@@ -486,7 +486,7 @@ def test_innovation_hump_finds_a_resonance_wider_than_the_line_searches_floor_an
 def test_a_hump_in_the_innovations_becomes_a_resonance_in_the_joint_search():
     """ADIS16405 run 3 gyro_z: the loop stopped at WN+MA+BI+OSC while its innovations held a hump from 22 to 30 Hz
     that neither line search flags; with a resonance there (then the sensor's low-pass beside it) the final AV
-    lies inside the data's band (docs/results/loop_measured_b53ab8b_reruns.txt). Here WN + RW + that resonance,
+    lay inside the data's band (the measured table refitted at b53ab8b). Here WN + RW + that resonance,
     fitted as WN+RW: the joint search offers an OSC started near 26 Hz from the hump and keeps it; a hump wider
     than its centre is not offered."""
     from imu_noise_id.pipelines.loop.trials import explore, hump_resonance

@@ -3,7 +3,7 @@ motion_bursts`) reads on the real recordings of ``../shared/data``.
 
 Usage (from the repository root)::
 
-    PYTHONPATH=$PWD python bench/studies/bench_motion_bursts.py > docs/results/bench_motion_bursts.txt
+    PYTHONPATH=$PWD python bench/studies/bench_motion_bursts.py > docs/results/studies/bench_motion_bursts.txt
 
 Per record and axis: the largest spread ratio any burst-long stretch (:data:`~imu_noise_id.core.stillness.
 BURST_MIN_S`) holds in all its windows (the statistic :data:`~imu_noise_id.core.stillness.BURST_RATIO` is compared

@@ -2,7 +2,7 @@
 random walk a model without the GM converges to (docs/loop.md, "Limitations"; issue 11's "K within 35 %").
 
 Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_k_information.py [--seeds 10] [--minutes 20 120]
-(output: docs/results/probe_k_information.txt; a few seconds per case; no simulation, no fit)
+(output: docs/results/studies/probe_k_information.txt; a few seconds per case; no simulation, no fit)
 
 For a Gaussian process whose first difference is stationary, the Fisher information of n samples is, to leading
 order in n, Whittle's (Whittle 1953; Brockwell & Davis 1991, §10.8):

@@ -154,7 +154,8 @@ def wide_start(loop: AxisLoop, f: det.Finding) -> det.Finding | None:
     back inside its band. ``test/test_loop_real_effects.py`` reproduced the refusal and its repair on a simulation
     until the finish's metric became the Fisher information (2026-11-28, docs/em.md): the narrow start now widens
     to that simulated pedestal itself, and on run 6 gyro_z it reaches the wide start's BIC
-    (``docs/results/loop_trace_r6_gyro_z.txt``). It stays as a second start for a narrow one still refused.
+    (``docs/results/studies/loop_trace.txt``, run 6 gyro_z). It stays as a second start for a narrow one still
+    refused.
     """
     resolution = f.params.get("resolution")
     frequency, bandwidth = f.params.get("frequency"), f.params.get("bandwidth")
