@@ -1,10 +1,6 @@
-"""Haar wavelet variance: the moments the GMWM fits (:mod:`imu_noise_id.core.estimation.gmwm`).
-
-* :mod:`.variance` — the WV of one axis at dyadic scales (half the maximal-overlap Allan variance), classical or
-  robust, with per-scale χ² intervals;
-* :mod:`.robust` — the bounded-influence M-estimator of a level's variance and the spike flags before it;
-* :mod:`.covariance` — the theoretical WV of a component model and the exact Gaussian covariance of the estimates.
-"""
+"""Haar wavelet variance, the moments the GMWM fits (:mod:`imu_noise_id.core.estimation.gmwm`): the WV at dyadic
+scales (:mod:`.variance`), its robust M-estimator (:mod:`.robust`) and the model-based covariance
+(:mod:`.covariance`)."""
 
 from .covariance import theoretical_wv, wv_covariance
 from .robust import BiweightScale, hampel_clean

@@ -1,29 +1,16 @@
 """Theoretical wavelet variance of a component model and the covariance of the WV estimates across scales.
 
-Theoretical WV (GMWM eq. 3's ν(θ)): for the Haar filter ν²_j(θ) = AV(τ_j)/2 (:mod:`.variance`), and every component
-gives the exact Allan variance of its *sampled* process (:meth:`~imu_noise_id.core.noise.base.Component.
-allan_variance`), so ν(θ) is exact at the sampling period, not a continuous-time approximation.
-
-Covariance of the WV estimates (beyond the papers, which estimate it from the data or by bootstrap): for a Gaussian
-model it follows in closed form from the generalised covariance K(u) of the partial sums x of the signal
-(:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`). The Haar coefficient W_{j,t} is the second
-difference of x at lag m_j over 2m_j, so the cross-covariance of levels i and j at lag k is
+ν²_j(θ) = AV(τ_j)/2 of the sampled components (GMWM eq. 3's ν(θ), exact at the sampling period). Beyond the
+papers (which estimate the covariance from the data or by bootstrap): for a Gaussian model, with K(u) the partial
+sums' generalised covariance (:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`),
 
     γ_ij(k) = Cov(W_{i,t}, W_{j,t+k}) = Σ_{a,b=0}^{2} c_a c_b K(k + a m_i − b m_j) / (4 m_i m_j),  c = (1, −2, 1),
+    Cov(ν̂²_i, ν̂²_j) = 2 Σ_k n_ij(k) γ_ij(k)² / (M_i M_j)  (+ 4 μ_i μ_j Σ_k n_ij(k) γ_ij(k) / (M_i M_j) with a ramp)
 
-and for Gaussian coefficients (Cov(X², Y²) = 2 Cov(X, Y)²; Serroukh, Walden & Percival 2000 for one level)
-
-    Cov(ν̂²_i, ν̂²_j) = 2 Σ_k n_ij(k) γ_ij(k)² / (M_i M_j)  (+ 4 μ_i μ_j Σ_k n_ij(k) γ_ij(k) / (M_i M_j) with a ramp),
-
-n_ij(k) the number of coefficient pairs at lag k inside the record (exact at finite N) and μ_j = ω·dt·m_j/2 the
-mean a rate ramp ω gives the coefficients. For the robust WV (:mod:`.robust`), γ² is replaced by the Hermite
-series ν_i²ν_j² Σ_k a_k² ρ^k/k! of ρ = γ/(ν_i ν_j), scaled by (2/e)².
-
-The lag sum: γ_ij is a piecewise polynomial of degree ≤ 3 between the nine kinks k = b m_j − a m_i (exactly zero
-outside [−2m_i, 2m_j] for WN, QN, RW), plus exponential tails of decay time τ_c for GM, LPF and OSC components.
-It is summed by the trapezoidal rule on an integer grid that is dense near the kinks (steps growing geometrically
-away from them) and has at least 64 points per polynomial piece; where the grid is every integer the sum is exact
-(test_wavelet checks it against the brute-force sum and a Monte-Carlo covariance).
+(Serroukh, Walden & Percival 2000 for one level), n_ij(k) the pairs inside the record, μ_j = ω·dt·m_j/2. For the
+robust WV, γ² becomes ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), scaled by (2/e)² (:mod:`.robust`). The lag sum
+is a trapezoid on a grid dense near γ's nine kinks (:data:`PIECE_POINTS` per piece; exact where the grid is every
+integer).
 """
 
 from __future__ import annotations
@@ -52,8 +39,9 @@ def theoretical_wv(components: list[Component], tau: np.ndarray, dt: float) -> n
 
 
 def _offsets(length: int, cap: float, fine: float) -> np.ndarray:
-    """Offsets 0..length from a kink: steps ``cap`` (a piece's resolution), refined near the kink, where an
-    exponential memory of ``fine`` samples shapes γ, by steps growing geometrically from max(1, fine/4)."""
+    """Offsets 0..length from a kink: steps ``cap``, refined near the kink (memory of ``fine`` samples) by steps
+    growing
+    geometrically from max(1, fine/4)."""
     step = max(1, int(cap))
     # The first lags are always taken one by one: a component whose K jumps at u = 0 (QN, MA) puts an isolated value
     # at the kink itself, which must weigh one lag, not a whole step.
@@ -69,9 +57,8 @@ def _offsets(length: int, cap: float, fine: float) -> np.ndarray:
 
 def _lag_grid(m_i: int, m_j: int, n: int, *, margin: int, period: float,
               fine: float) -> tuple[np.ndarray, np.ndarray]:
-    """Integer lags and trapezoid weights for Σ_k f(k) over k ∈ [−2m_i − margin, 2m_j + margin] ∩ (−n, n): a
-    piece's resolution 1/PIECE_POINTS of its length, or an eighth of the shortest oscillation ``period``, refined
-    near the kinks for an exponential memory of ``fine`` samples (lengths in samples)."""
+    """Integer lags and trapezoid weights for Σ_k f(k) over k ∈ [−2m_i − margin, 2m_j + margin] ∩ (−n, n) (module
+    docstring; lengths in samples)."""
     lo, hi = max(-2 * m_i - margin, -(n - 1)), min(2 * m_j + margin, n - 1)
     kinks = {b * m_j - a * m_i for a in range(3) for b in range(3)}
     nodes = sorted({lo, hi, *(k for k in kinks if lo < k < hi)})
@@ -101,8 +88,7 @@ def _pair_counts(k: np.ndarray, m_i: int, m_j: int, n: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Plan:
-    """The lag grids of every pair of scales, concatenated: lags, weights × pair counts, the pair's m_i and m_j per
-    point, and where each pair starts (for a segment sum)."""
+    """The lag grids of every pair of scales, concatenated (lags, weights × pair counts, m_i, m_j, pair starts)."""
 
     k: np.ndarray
     weight: np.ndarray
@@ -133,9 +119,8 @@ def _bucket(x: float) -> float:
 
 def wv_covariance(components: list[Component], m: np.ndarray, n: int, dt: float, *,
                   scale: BiweightScale | None = None) -> np.ndarray:
-    """(J, J) covariance [u⁴] of the WV estimates at averaging factors ``m`` of an n-sample record of the Gaussian
-    model ``components`` (module docstring); ``scale``: that of the robust estimator instead of the classical one.
-    """
+    """(J, J) covariance [u⁴] of the WV estimates at factors ``m`` of an n-sample record of the Gaussian model
+    ``components`` (module docstring); with ``scale``, of the robust estimator."""
     m = np.asarray(m, dtype=np.int64)
     comps = list(components)
     stochastic = [c for c in comps if not isinstance(c, RR)]

@@ -1,26 +1,14 @@
-"""Robust wavelet variance: a bounded-influence M-estimator of the variance of one level's wavelet coefficients.
+"""Robust wavelet variance: a bounded-influence M-estimator of one level's coefficient variance.
 
-Guerrier, Molinari & Victoria-Feser (Austrian J. Statistics 43, 2014) and Guerrier, Molinari, Victoria-Feser & Xu
-("Robust two-step wavelet-based inference for time series models", arXiv 2001.04214) replace the classical wavelet
-variance ν̂²_j = mean(W²_{j,t}) by an M-estimator with a bounded estimating function, so that a fraction of
-outlying coefficients moves the estimate by a bounded amount; the GMWM fitted to it is then robust (RGMWM).
-We use Tukey's biweight weights w_c(r) = (1 − (r/c)²)² for |r| < c (0 beyond) in the estimating equation
+After Guerrier, Molinari & Victoria-Feser (Austrian J. Statistics 43, 2014) and Guerrier, Molinari,
+Victoria-Feser & Xu (arXiv 2001.04214), with Tukey's biweight w_c(r) = (1 − (r/c)²)² (|r| < c):
 
     (1/M_j) Σ_t χ_c(W_{j,t} / ν_j) = 0,   χ_c(r) = w_c(r)·(r² − κ_c),   κ_c = E[w_c(Z) Z²] / E[w_c(Z)],
 
-Fisher-consistent for Gaussian coefficients (E χ_c(Z) = 0 with Z ~ N(0, 1), so E W² = ν² is what it estimates),
-with bounded influence that *vanishes* beyond c·ν: a coefficient far out changes nothing (beyond the papers' choice,
-whose bounded but non-zero influence leaves a bias proportional to the contamination: about 6 % of ν² for 2 % of
-outlying coefficients at 60 % efficiency). The equation also has the trivial root ν → 0, so it is solved by Newton
-steps from a high-breakdown start, the biweight S-scale (mean ρ(W/s) = ½, breakdown 50 %).
-
-The constant c is chosen for a given asymptotic efficiency relative to mean(W²) at independent Gaussian
-coefficients: the linearisation ν̂² − ν² ≈ (2ν²/e)·mean χ_c(W/ν), e = E[χ'_c(Z) Z], gives eff = e²/(2 Var χ_c(Z)).
-
-Beyond the papers (which estimate the robust estimator's covariance from the data): its covariance under a Gaussian
-model comes from the Hermite expansion of χ_c. For jointly Gaussian standardised coefficients of correlation ρ,
-Cov(χ(r), χ(r')) = Σ_{k even} a_k² ρ^k / k!, a_k = E[χ_c(Z) He_k(Z)] and a_2 = e (Stein's identity): the k = 2 term
-reproduces the classical covariance exactly, the higher ones carry the efficiency loss (:mod:`.covariance`).
+Fisher-consistent at the normal, solved by Newton steps from the biweight S-scale (breakdown 50 %). Efficiency
+relative to mean(W²): e²/(2 Var χ_c(Z)), e = E[χ'_c(Z) Z]. Beyond the papers: influence vanishing beyond c·ν
+(theirs is bounded but non-zero), and the Gaussian covariance from the Hermite expansion
+Cov(χ(r), χ(r')) = Σ_{k even} a_k² ρ^k / k!, a_k = E[χ_c(Z) He_k(Z)], a_2 = e (:mod:`.covariance`).
 """
 
 from __future__ import annotations
@@ -82,16 +70,8 @@ def _s_scale(w: np.ndarray, log_nu: float, iterations: int = 30) -> float:
 
 @dataclass(frozen=True)
 class BiweightScale:
-    """The biweight-weighted M-estimator of the variance at tuning constant ``c`` (module docstring).
-
-    Attributes
-    ----------
-    c : tuning constant (in units of the coefficients' standard deviation ν)
-    kappa : κ_c = E[w_c(Z) Z²] / E[w_c(Z)] (consistency at the normal)
-    e : E[χ'_c(Z) Z] = a_2
-    efficiency : e² / (2 Var χ_c(Z))
-    hermite : a_k²/k! for k in :data:`HERMITE_ORDERS` (the last one also holds the remainder of Var χ_c(Z))
-    """
+    """The biweight M-estimator of the variance at tuning constant ``c`` [ν] (module docstring): ``kappa`` κ_c, ``e``
+    = a_2, ``efficiency``, ``hermite`` a_k²/k! for :data:`HERMITE_ORDERS` (the last with the remainder)."""
 
     c: float
     kappa: float
@@ -112,8 +92,7 @@ class BiweightScale:
         return cls.of(c)
 
     def solve(self, w: np.ndarray, *, tol: float = 1e-8, max_iter: int = 40) -> float:
-        """ν̂² solving mean χ_c(w/ν) = 0 for the coefficients ``w``: Newton steps in log ν from the S-scale, kept
-        within the bracket they establish."""
+        """ν̂² solving mean χ_c(w/ν) = 0: Newton steps in log ν from the S-scale, kept within their bracket."""
         w = np.abs(np.asarray(w, dtype=float))
         if w.size == 0 or not np.any(w > 0):
             raise InputError("the robust wavelet variance needs non-zero wavelet coefficients")
@@ -171,17 +150,11 @@ HAMPEL_HALF_WINDOW, HAMPEL_THRESHOLD = 3, 6.5
 
 def hampel_clean(y: np.ndarray, half_window: int = HAMPEL_HALF_WINDOW,
                  threshold: float = HAMPEL_THRESHOLD) -> tuple[np.ndarray, np.ndarray]:
-    """``y`` with isolated outliers replaced by the running median of 2h + 1 samples, and the mask of those samples.
+    """``y`` with isolated outliers replaced by the running median of 2h + 1 samples, and their mask (beyond the
+    papers; the Hampel identifier: more than ``threshold`` × 1.4826·MAD from the running median).
 
-    Beyond the papers. A Haar coefficient at scale m averages 2m samples, so one spike moves 2m coefficients: at the
-    scales where most windows hold one (2m·ε ≳ ½ for a fraction ε of spikes) no scale-wise estimator can tell the
-    spikes from the signal, and the robust WV breaks down there (measured in docs/gmwm.md). Spikes are isolated in
-    time, though: a sample more than ``threshold`` robust standard deviations (1.4826·MAD of y − median) from the
-    running median of its 2h + 1 neighbours is flagged (the Hampel identifier; with h = 3 and threshold 6.5 it
-    flags a fraction ≈ 8e-7 of Gaussian white-noise samples, measured on 4·10⁶, and bursts of up to h samples are
-    caught). The robust WV then leaves out the coefficients
-    whose window holds a flagged sample (an unbiased subset) and, at the scales where too few remain, uses the
-    coefficients of the record with the flagged samples replaced by the median.
+    One spike moves 2m coefficients at scale m, which no scale-wise estimator resists; the robust WV drops the
+    coefficients touching flagged samples, or at scales where too few remain uses the cleaned record (docs/gmwm.md).
     """
     y = np.asarray(y, dtype=float)
     h = int(half_window)

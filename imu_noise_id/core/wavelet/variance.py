@@ -1,23 +1,14 @@
 """Haar MODWT wavelet variance of one axis at the dyadic scales, classical or robust, with per-scale intervals.
 
-Guerrier, Skaloud, Stebler & Victoria-Feser (JASA 108, 2013; "GMWM" below) estimate models from the wavelet
-variance (WV) of the maximal-overlap discrete wavelet transform (MODWT, Percival & Walden 2000). With the Haar
-filter, the level-j coefficient of the rate samples y at scale τ_j = m_j·dt, m_j = 2^{j−1}, is half the difference
-of two adjacent m_j-sample means,
+GMWM (Guerrier, Skaloud, Stebler & Victoria-Feser, JASA 108, 2013) with the MODWT (Percival & Walden 2000): at
+τ_j = m_j·dt, m_j = 2^{j−1},
 
-    W_{j,t} = (x_{t+2m} − 2x_{t+m} + x_t) / (2m·dt),   x the phase (integrated rate, :mod:`..allan.estimators`),
+    W_{j,t} = (x_{t+2m} − 2x_{t+m} + x_t) / (2m·dt),   x the phase (:mod:`..allan.estimators`),
 
-so the WV ν²_j = Var W_{j,t} is **half the Allan variance** at τ_j, and the classical estimator over the
-M_j = N − 2m_j + 1 coefficients that do not touch the record's ends (GMWM eq. 2) is exactly half the
-maximal-overlap AV (paper 000 eq. 2) — computed here by that very code, in O(N) per scale (O(N·J) in all).
-Its per-scale 95 % intervals are the AV's χ² intervals (Greenhall–Riley degrees of freedom, :mod:`..allan.edf`)
-halved. The covariance of the WV estimates across scales, which the GMWM's efficient weight and its intervals
-need, is model-based (:mod:`.covariance`).
-
-The robust WV (``robust=True``) solves the biweight M-equation of :mod:`.robust` on each level's coefficients,
-after isolated spikes were replaced by the running median (:func:`.robust.hampel_clean`: a spike moves 2m
-coefficients at scale m, which beyond some scale no scale-wise estimator can resist); its intervals use the χ² law
-with the degrees of freedom scaled by the estimator's efficiency (both beyond the papers).
+so ν²_j = AV(τ_j)/2 and the classical estimator over M_j = N − 2m_j + 1 coefficients (GMWM eq. 2) is half the
+maximal-overlap AV (paper 000 eq. 2), with half its χ² intervals (:mod:`..allan.edf`). ``robust=True``: the
+biweight M-estimator (:mod:`.robust`) after :func:`.robust.hampel_clean`, intervals with the EDF scaled by its
+efficiency (beyond the papers). Covariance across scales: :mod:`.covariance`.
 """
 
 from __future__ import annotations
@@ -45,14 +36,10 @@ class WaveletVariance:
 
     Attributes
     ----------
-    dt : sampling period [s]
-    n : number of samples
-    m : (J,) int, averaging factors 2^{j−1}; τ_j = m_j·dt
-    nu2 : (J,) WV estimates [u²] (half the AV at τ_j)
-    ci_low, ci_high : (J,) 95 % intervals of ``nu2``
-    edf : (J,) equivalent degrees of freedom of the intervals
-    robust : whether ``nu2`` is the robust (M-estimator) WV
-    scale : the M-estimator (None when classical)
+    dt : sampling period [s]; n : samples
+    m : (J,) averaging factors 2^{j−1} (τ_j = m_j·dt)
+    nu2 : (J,) WV estimates [u²]; ci_low, ci_high : their 95 % intervals; edf : the intervals' degrees of freedom
+    robust : whether ``nu2`` is the robust WV; scale : its M-estimator (None when classical)
     n_replaced : samples replaced as isolated spikes before the robust WV
     """
 
@@ -91,13 +78,7 @@ class WaveletVariance:
 
 
 def dyadic_m(n: int, max_fraction: float = DEFAULT_MAX_FRACTION) -> np.ndarray:
-    """Averaging factors 1, 2, 4, … up to ``max_fraction``·n (at least :data:`MIN_SCALES` of them).
-
-    Raises
-    ------
-    InputError
-        If the record is too short for :data:`MIN_SCALES` scales.
-    """
+    """Averaging factors 1, 2, 4, … up to ``max_fraction``·n; InputError with fewer than :data:`MIN_SCALES`."""
     if not 0.0 < max_fraction <= 0.5:
         raise InputError(f"max_fraction must lie in (0, 0.5], got {max_fraction}")
     j_max = math.floor(math.log2(max(max_fraction * n, 1.0))) + 1
@@ -113,9 +94,9 @@ def wavelet_variance(y: np.ndarray, dt: float, *, robust: bool = False, efficien
 
     Parameters
     ----------
-    y : (N,) rate samples [u] at period ``dt`` [s], finite (fill gaps first).
-    robust : use the biweight M-estimator (:mod:`.robust`) of asymptotic ``efficiency`` instead of mean(W²).
-    max_fraction : longest scale m_J ≤ max_fraction·N (:func:`dyadic_m`); or give the factors ``m`` directly.
+    y : (N,) finite rate samples [u] at period ``dt`` [s].
+    robust : the biweight M-estimator of asymptotic ``efficiency`` instead of mean(W²).
+    max_fraction : longest scale m_J ≤ max_fraction·N (:func:`dyadic_m`); or the factors ``m`` directly.
 
     Raises
     ------
