@@ -1,20 +1,12 @@
-"""Simulated ground robot with a rotated IMU and wheel-odometry-like messages (truth for the CMKF, the node, the demo).
+"""Simulated ground robot with a rotated IMU and wheel-odometry-like messages (truth for the CMKF, the node, the
+demo).
 
-The robot moves on flat ground (z up) with forward speed ``s(t)`` and yaw rate ``ω(t)`` given by a motion profile
-(no side slip):
-
-- :class:`Weaving` (the default): always moving, ``s = s0 + s1 sin(2πt/P_s)``,
-  ``ω = w1 sin(2πt/P_1) + w2 sin(2πt/P_2)`` (the CMKF's tests and benchmarks);
-- :class:`StopAndGo`: stands, drives for ``D`` seconds with ``s(τ) = V·w(τ)`` and ``ω(τ) = W·sin(2πτ/P)·w(τ)``,
-  window ``w(τ) = sin²(πτ/D)`` (smooth start and stop), then stands until the end (the node's tests and demo).
-
-In the base frame the acceleration is ``a_b = [ṡ, s ω, 0]``, the specific force ``f_b = a_b + [0, 0, g]``, the
-angular rate ``[0, 0, ω]``. The IMU, mounted with rotation ``C_bi``, reports per sample the *average* of the true
-specific force and rate over its period (an integrating sensor, paper 004 eq. 10; computed on a grid ``substeps``
-times finer) plus constant biases, white noise of PSD ``S_v`` [m²/s³] and ``S_g`` [rad²/s] (per-sample standard
-deviation √(S/Δt)) and, optionally, a bias random walk (:class:`~imu_noise_id.core.noise.components.RW`). Odometry
-reports the true body velocity and yaw rate with white noise, the yaw orientation and the position integrated on
-the fine grid (optionally with white noise). Everything the sensors add is a :class:`RobotSensors`.
+Flat ground (z up), forward speed s(t) and yaw rate ω(t) from a motion profile (:class:`Weaving`,
+:class:`StopAndGo`), no side slip: a_b = [ṡ, s ω, 0], f_b = a_b + [0, 0, g], rate [0, 0, ω]. The IMU (mounted with
+C_bi) reports the *average* of the true specific force and rate over its period (paper 004 eq. 10; a grid
+``substeps`` times finer) plus the :class:`RobotSensors` errors: constant biases, white noise of PSD S_v [m²/s³]
+and S_g [rad²/s] (per-sample σ = √(S/Δt)), optional bias random walks. Odometry: true body velocity and yaw
+rate with white noise, yaw orientation, position integrated on the fine grid.
 """
 
 from __future__ import annotations
@@ -97,8 +89,9 @@ class Weaving:
 
 @dataclass(frozen=True)
 class StopAndGo:
-    """Stand ``stand_before`` s, drive ``drive`` s (speed up to ``speed`` [m/s], yaw rate up to ``yaw_rate``
-    [rad/s] with period ``yaw_period`` [s], both under a sin² window), stand for the rest of the run."""
+    """Stand ``stand_before`` s, drive ``drive`` s (speed up to ``speed`` [m/s], yaw rate up to ``yaw_rate`` [rad/s]
+    of
+    period ``yaw_period`` [s], both under a sin² window), stand for the rest."""
 
     stand_before: float = 20.0
     drive: float = 30.0
@@ -131,15 +124,14 @@ class RobotSensors:
     Attributes
     ----------
     accel_bias, gyro_bias : constant biases per IMU axis [m/s²], [rad/s].
-    S_v, S_g : white-noise PSD of the accelerometer [m²/s³] and the gyro [rad²/s] (density² ; per-sample standard
-        deviation √(S/Δt)).
+    S_v, S_g : white-noise PSD of the accelerometer [m²/s³] and the gyro [rad²/s].
     accel_random_walk, gyro_random_walk : bias random-walk densities [m/s³/√Hz], [rad/s²/√Hz] (0: none).
-    velocity_noise_std, angular_velocity_noise_std, position_noise_std : white noise of the odometry twist [m/s],
-        [rad/s] and position [m] (0: exact); the twist covariance declares the first two.
-    pose_variance : (position [m²], orientation [rad²]) declared in the pose covariance; None:
-        (``position_noise_std``², 1e-6).
-    imu_rotation_xyzw : orientation of the IMU in the base frame (``C_bi``); None: the Husky bag's (y up).
-    noise_order : the sensor whose white noise is drawn from the generator first (a seeded run depends on it).
+    velocity_noise_std, angular_velocity_noise_std, position_noise_std : odometry white noise [m/s], [rad/s], [m]
+        (0: exact); the twist covariance declares the first two.
+    pose_variance : (position [m²], orientation [rad²]) declared; None: (``position_noise_std``², 1e-6).
+    imu_rotation_xyzw : orientation of the IMU in the base frame (``C_bi``); None: yaw −90°, roll 90° (the IMU's y
+        axis up).
+    noise_order : the sensor whose white noise is drawn first (a seeded run depends on it).
     """
 
     accel_bias: tuple[float, float, float] = (0.05, -0.08, 0.03)
@@ -168,9 +160,8 @@ def simulate_robot(
     substeps: int = 10,
     gravity: float = STANDARD_GRAVITY,
 ) -> RobotRun:
-    """Simulate ``duration`` seconds (see the module docstring); stamps start at ``t0`` [s].
-
-    ``motion`` defaults to :class:`Weaving`, ``sensors`` to :class:`RobotSensors` (IMU rotated as on the Husky).
+    """Simulate ``duration`` seconds (module docstring), stamps from ``t0`` [s]; ``motion`` defaults to
+    :class:`Weaving`, ``sensors`` to :class:`RobotSensors`.
 
     Raises
     ------
@@ -239,8 +230,7 @@ def simulate_robot(
 
 
 def _whole_nanoseconds(t: np.ndarray) -> np.ndarray:
-    """Stamps rounded to integer nanoseconds, as a bag stores them: an odometry stamp that falls on an IMU stamp
-    is then that very float, and the merge puts the IMU sample that ends the interval first."""
+    """Stamps rounded to integer nanoseconds, as a bag stores them (so coinciding stamps are equal floats)."""
     return np.round(t * 1e9) / 1e9
 
 

@@ -21,16 +21,9 @@ def simulate_static_imu(
     t0: float = 0.0,
     frame_id: str = "imu_link",
 ) -> ImuSeries:
-    """Samples of a static IMU whose errors follow ``model`` (axis name → components).
-
-    The accelerometer z axis also reads +``gravity`` (a level, static sensor, as drivers publish it).
-    Axes are simulated in :data:`~.axes.AXES` order from one generator, so a seed reproduces the data.
-
-    Raises
-    ------
-    ValueError
-        On a non-positive rate or duration, fewer than two samples, or a model missing an axis.
-    """
+    """Samples of a static, level IMU whose errors follow ``model`` (axis name → components); accel z also reads
+    +``gravity``. Axes in :data:`~.axes.AXES` order from one generator (a seed reproduces the data). ValueError on a
+    non-positive rate or duration, fewer than two samples, or a missing axis."""
     if not (np.isfinite(rate_hz) and rate_hz > 0):
         raise ValueError(f"rate must be > 0 Hz, got {rate_hz!r}")
     if not (np.isfinite(duration_s) and duration_s > 0):
