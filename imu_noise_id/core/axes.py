@@ -1,8 +1,5 @@
-"""Axis names and the container for IMU time series shared by every layer.
-
-The six axes are named ``gyro_x gyro_y gyro_z accel_x accel_y accel_z`` in the sensor frame, in SI units
-(rad/s for gyroscopes, m/s² for accelerometers), as in REP-103/REP-145.
-"""
+"""Axis names (``gyro_x gyro_y gyro_z accel_x accel_y accel_z``, sensor frame, rad/s and m/s², REP-103/REP-145) and
+the IMU time-series containers shared by every layer."""
 
 from __future__ import annotations
 
@@ -22,13 +19,7 @@ UNITS: dict[str, str] = {**dict.fromkeys(GYRO_AXES, "rad/s"), **dict.fromkeys(AC
 
 
 def axis_index(name: str) -> int:
-    """Column of ``name`` in the (N, 6) array returned by :meth:`ImuSeries.samples`.
-
-    Raises
-    ------
-    ValueError
-        If ``name`` is not one of :data:`AXES`.
-    """
+    """Column of ``name`` in :meth:`ImuSeries.samples`; ValueError if not one of :data:`AXES`."""
     try:
         return AXES.index(name)
     except ValueError:
@@ -41,26 +32,14 @@ class ImuSeries:
 
     Attributes
     ----------
-    t : ndarray, shape (N,)
-        Sample times in seconds (header stamps when read from a bag).
-    gyro : ndarray, shape (N, 3)
-        Angular rate [rad/s].
-    accel : ndarray, shape (N, 3)
-        Specific force [m/s²] (gravity included, as drivers publish it).
-    frame_id : str
-        Frame of the samples.
-    topic : str
-        Where the samples came from (topic name or a description).
-    notes : list of str
-        What was repaired or is worth knowing about the samples.
-    orientation_xyzw : ndarray, shape (N, 4), or None
-        The sensor's own orientation estimate (sensor_msgs/Imu ``orientation``: the IMU frame in the driver's
-        world frame, quaternion x, y, z, w as published). A row is NaN where the message says it is not provided
-        (REP-145: ``orientation_covariance[0] == -1``) or carries no usable quaternion (zero, NaN); None when no
-        sample provides one.
-    period : SamplePeriod or None
-        The sampling period the reader estimated (stamps, message positions, receive times, a declared rate; see
-        :mod:`imu_noise_id.core.timing`); None: estimated from ``t`` alone when needed.
+    t : (N,) sample times [s] (header stamps when read from a bag)
+    gyro : (N, 3) angular rate [rad/s]
+    accel : (N, 3) specific force [m/s²] (gravity included)
+    frame_id, topic : frame of the samples; where they came from
+    notes : what was repaired or is worth knowing
+    orientation_xyzw : (N, 4) the sensor's own orientation (x, y, z, w as published; NaN rows where not provided,
+        REP-145, or unusable), or None when no sample provides one
+    period : the reader's :class:`~imu_noise_id.core.timing.SamplePeriod`, or None (estimated from ``t`` when needed)
     """
 
     t: np.ndarray
@@ -98,13 +77,7 @@ class ImuSeries:
 
     @property
     def dt(self) -> float:
-        """Sampling period [s] (:meth:`sample_period`).
-
-        Raises
-        ------
-        InputError
-            The stamps cannot give the period (its refusal names the fix: a declared rate).
-        """
+        """Sampling period [s] (:meth:`sample_period`); InputError when the stamps cannot give it."""
         return self.sample_period().require()
 
     @property
@@ -114,14 +87,9 @@ class ImuSeries:
 
     def between(self, start_s: float, end_s: float) -> ImuSeries:
         """The samples from ``start_s`` to ``end_s`` [s] after the first one (both included; ``end_s`` may be inf),
-        with a note saying which part of the record they are; the reader's period estimate is kept (the same
-        clock).
-
-        Raises
-        ------
-        InputError
-            The span is empty, reversed or holds fewer than two samples.
-        """
+        with a
+        note saying which part they are; the period estimate is kept. InputError for an empty, reversed or one-sample
+        span."""
         elapsed = self.t - self.t[0]
         if not (math.isfinite(start_s) and 0.0 <= start_s < end_s):
             raise InputError(f"{self.topic or 'input'}: span {start_s:g}:{end_s:g} s must be two times [s] from "

@@ -1,13 +1,7 @@
-"""Fleet statistics: robust outliers among units and pass/fail against a datasheet specification.
-
-Outliers: the modified z-score of Iglewicz & Hoaglin (1993), z = 0.6745·(x − median)/MAD, computed on log values
-(noise figures are positive and spread multiplicatively); |z| > 3.5 flags a unit. With fewer than
-:data:`MIN_UNITS` units, or a MAD of 0, nothing is flagged (the spread cannot be judged).
-
-Specification: the largest allowed value of a parameter per sensor, e.g. ``{"gyro": {"noise_density": 3e-4}}``; a
-unit passes when the upper end of its 95 % interval is below it (the margin spec/value − 1 is reported beside), and
-is "undecided" when the value is below but the interval reaches above.
-"""
+"""Fleet statistics: the modified z-score of Iglewicz & Hoaglin (1993), z = 0.6745·(x − median)/MAD on log values
+(|z| > :data:`OUTLIER_Z` flags; nothing with fewer than :data:`MIN_UNITS` units or MAD 0), and pass/fail against a
+specification (largest allowed value per sensor, e.g. ``{"gyro": {"noise_density": 3e-4}}``: pass when the 95 %
+interval's upper end is below, undecided when only the value is)."""
 
 from __future__ import annotations
 

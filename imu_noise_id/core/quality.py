@@ -1,22 +1,11 @@
 """Checks and documented repairs of sampled time series (pure numpy; shared by the bag reader and the node).
 
-Repairs done by :func:`repair_time_series`, in this order, each counted in the returned :class:`QualityReport`:
-
-1. drop samples whose time or any value is NaN/±inf, or whose magnitude exceeds a physical limit (``max_abs``,
-   e.g. :data:`IMU_MAX_ABS`: such values come from corrupt bytes or wrong units; more than
-   :data:`MAX_IMPLAUSIBLE_FRACTION` of them raise instead of being dropped);
-2. drop samples with a zero stamp when the other stamps are clock times (> :data:`ZERO_STAMP_CLOCK_S`),
-   i.e. the publisher left ``header.stamp`` unset for them, and samples whose stamp jumps away from both its
-   neighbours in message order by more than :data:`GLITCH_PERIODS` periods while the neighbours agree (one stamp
-   an hour in the future or the past: a clock glitch, not a gap);
-3. sort by time (stable) when stamps go backwards;
-4. drop samples whose stamp equals the previous one (the first is kept);
-5. estimate the sampling period from the stamps, the messages' positions and the receive times
-   (:func:`imu_noise_id.core.timing.estimate_period`: bursty host stamps, holes left by the drops);
-6. find gaps: intervals longer than ``gap_factor`` × the period (bursty stamps: × their 99th-percentile interval).
-   Gaps are reported, not filled.
-
-Whether a record is from a still sensor is :mod:`.stillness`'s question.
+:func:`repair_time_series`, in order, each counted in the :class:`QualityReport`: (1) drop samples with a NaN/±inf
+time or value, or a magnitude beyond ``max_abs`` (more than :data:`MAX_IMPLAUSIBLE_FRACTION` raise); (2) drop zero
+stamps among clock times (> :data:`ZERO_STAMP_CLOCK_S`) and stamps :data:`GLITCH_PERIODS` periods away from both
+agreeing neighbours; (3) sort when stamps go backwards; (4) drop repeated stamps; (5) estimate the period
+(:func:`imu_noise_id.core.timing.estimate_period`); (6) report (not fill) gaps longer than ``gap_factor`` × the
+period. Stillness: :mod:`.stillness`.
 """
 
 from __future__ import annotations
@@ -54,17 +43,12 @@ class QualityReport:
     Attributes
     ----------
     n_input, n_output : samples before and after the repairs
-    n_nonfinite : samples dropped because the time or a value was NaN/±inf
-    n_implausible : samples dropped because a value exceeded its physical limit
-    n_zero_stamps : samples dropped because their stamp was 0 among clock-time stamps
-    n_glitches : samples dropped because their stamp jumped away from both neighbours (see the module docstring)
-    n_backwards : places where the stamp decreased (the series was sorted if > 0)
-    n_duplicates : samples dropped because their stamp repeated the previous one
-    period : the sampling period after the repairs, how it was obtained and what the stamps' trust is (None
-        before it is estimated)
-    positions : (n_output,) each kept sample's position among the input samples (message order)
-    gaps : (start time [s], length [s], estimated missing samples) of every gap, in time order
-    t0 : first stamp after the repairs [s] (gap start times in notes are given relative to it)
+    n_nonfinite, n_implausible, n_zero_stamps, n_glitches, n_duplicates : samples dropped by each rule
+    n_backwards : places where the stamp decreased (sorted if > 0)
+    period : the :class:`~.timing.SamplePeriod` after the repairs (None before it is estimated)
+    positions : (n_output,) each kept sample's position among the input samples
+    gaps : (start [s], length [s], estimated missing samples) of every gap, in time order
+    t0 : first stamp after the repairs [s] (gap times in notes are relative to it)
     """
 
     n_input: int
@@ -144,9 +128,9 @@ def _take(columns: list[np.ndarray], keep: np.ndarray) -> list[np.ndarray]:
 
 def find_gaps(t: np.ndarray, period: SamplePeriod | float, gap_factor: float = GAP_FACTOR
               ) -> list[tuple[float, float, int]]:
-    """Intervals of sorted stamps ``t`` longer than ``gap_factor`` × the period (bursty stamps: × their 99th
-    percentile interval, as their normal delivery pauses are longer than the period): (start [s], length [s],
-    missing samples)."""
+    """Intervals of sorted stamps ``t`` longer than ``gap_factor`` × the period (bursty stamps: × their
+    99th-percentile
+    interval): (start [s], length [s], missing samples)."""
     dt = period.value if isinstance(period, SamplePeriod) else float(period)
     if t.shape[0] < 2 or not dt > 0:
         return []
@@ -158,8 +142,9 @@ def find_gaps(t: np.ndarray, period: SamplePeriod | float, gap_factor: float = G
 
 
 def _glitches(t: np.ndarray) -> np.ndarray:
-    """Samples (in message order) whose stamp is more than :data:`GLITCH_PERIODS` periods from both neighbours'
-    while the neighbours are within a tenth of that of each other (few N-sized temporaries: one diff, two masks)."""
+    """Samples (message order) more than :data:`GLITCH_PERIODS` periods from both neighbours, which agree within a
+    tenth
+    of that."""
     bad = np.zeros(t.shape[0], dtype=bool)
     if t.shape[0] < 3:
         return bad
@@ -185,30 +170,27 @@ def repair_time_series(
     receive: np.ndarray | None = None,
     declared_hz: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray | list[np.ndarray], QualityReport]:
-    """Drop bad samples, sort, drop duplicates, estimate the period and find gaps (rules: module docstring).
+    """Drop bad samples, sort, drop duplicates, estimate the period and find gaps (module docstring).
 
     Parameters
     ----------
     t : (N,) stamps [s]
-    data : (N, ...) array, or a sequence of such arrays sharing the first dimension (e.g. gyro and accel)
+    data : (N, ...) array, or a sequence of such arrays (e.g. gyro and accel)
     gap_factor : an interval longer than ``gap_factor`` × the period is a gap
-    min_samples : fewer valid samples than this raise :class:`QualityError`
-    max_abs : per data array, the largest plausible magnitude (None: no limit), e.g. :data:`IMU_MAX_ABS` for
-        (gyro, accel)
-    receive : (N,) the bag's receive times [s] of the samples (a second clock for the period), or None
+    min_samples : fewer valid samples raise :class:`QualityError`
+    max_abs : per data array, the largest plausible magnitude (None: no limit), e.g. :data:`IMU_MAX_ABS`
+    receive : (N,) the bag's receive times [s], or None
     declared_hz : the rate the user declares (``--rate``), or None
 
     Returns
     -------
     t, data, report
-        Repaired copies (or the inputs themselves when nothing had to change; ``data`` in the same form as given)
-        and what was done (with the period and each kept sample's input position).
+        Repaired copies (or the inputs when nothing changed; ``data`` in the form given) and the report.
 
     Raises
     ------
     QualityError
-        If fewer than ``min_samples`` samples remain (e.g. every sample is NaN), or more than
-        :data:`MAX_IMPLAUSIBLE_FRACTION` of the finite samples exceed ``max_abs``.
+        Fewer than ``min_samples`` remain, or more than :data:`MAX_IMPLAUSIBLE_FRACTION` exceed ``max_abs``.
     InputError
         A declared rate that is not a positive number.
     """
@@ -294,8 +276,7 @@ def repair_time_series(
 
 
 def interpolate_missing(y: np.ndarray) -> np.ndarray:
-    """``y`` with its NaN samples linearly interpolated from their neighbours (held at the ends); ``y`` itself when
-    nothing is missing. For estimators that need a gap-free series (the Allan variance, the periodogram)."""
+    """``y`` with NaN samples linearly interpolated (held at the ends); ``y`` itself when nothing is missing."""
     bad = ~np.isfinite(y)
     if not bad.any():
         return y

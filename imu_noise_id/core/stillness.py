@@ -37,12 +37,7 @@ BURST_WINDOW_S = 0.25
 #: deviations: a few spikes in a window are outliers, not motion) …
 BURST_TRIM = 0.1
 #: … and a burst is a stretch of at least :data:`BURST_MIN_S` [s] whose windows all spread this many times more
-#: than the record's median window on some axis: a touch, a knock, the start of a motion. On the real records of
-#: ``../shared/data`` (``bench/studies/bench_motion_bursts.py``) the still ones stay at 8.3 or below (ADIS16405
-#: runs 1–6, 2.8 h each, but for run 4; the MTi-G gyro; the BROAD rest phases), run 4's accel_y reaches 11.5, and
-#: so does the motion's settling in the 35 s BROAD trial 10 marks as rest after it; the knocks in ADIS16405 run 4
-#: (accel_z, t ≈ 4046 s and 5146 s, ±5 m/s² for 0.4 s) reach 36–48 and the 1.3 s of motion that trial 10's rest
-#: before its motion still holds reach 136. The threshold flags what is clearly motion.
+#: than the record's median window on some axis (measured thresholds: docs/bags.md, "Static check").
 BURST_RATIO = 25.0
 BURST_MIN_S = 0.5
 #: The still stretch suggested in place of a record with bursts keeps this far [s] from them.
@@ -75,10 +70,9 @@ class MotionBurst:
 
 @dataclass
 class StaticCheck:
-    """What :func:`static_check` found: ``flags`` (reasons the record is not static), ``notes`` (worth knowing,
-    not signs of motion), the motion ``bursts`` and the ``still_span`` to analyse instead (start, end [s] from the
-    first sample): the longest stretch between bursts (:data:`STILL_MARGIN_S` away from them) or, without bursts,
-    the longest quiet one (:func:`quiet_span`); None when there is none."""
+    """What :func:`static_check` found: ``flags`` (reasons the record is not static), ``notes`` (worth knowing), the
+    motion ``bursts`` and the ``still_span`` to analyse instead (start, end [s] from the first sample; between bursts
+    or, without them, :func:`quiet_span`; None when there is none)."""
 
     flags: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
@@ -91,8 +85,7 @@ class StaticCheck:
 
 
 def _windows(x: np.ndarray, width: int) -> np.ndarray:
-    """Consecutive windows of ``width`` samples of a 1-D array, shape (m, width), the rest left out (a strided view
-    reshaped without a copy)."""
+    """Consecutive windows of ``width`` samples of a 1-D array, shape (m, width) (a strided view; the rest left out)."""
     m = x.shape[0] // width
     return x[: m * width].reshape(m, width)
 
@@ -104,9 +97,8 @@ def burst_window(dt: float) -> tuple[int, int]:
 
 
 def spread_ratios(x: np.ndarray, dt: float) -> np.ndarray:
-    """Per :func:`burst_window` window of ``x``: the mean square deviation from the window's median of its samples
-    but the :data:`BURST_TRIM` share that deviate most, over the median of that over the windows; zeros when that
-    median is 0 (most windows on one quantisation level: no scale to judge the axis by)."""
+    """Per :func:`burst_window` window of ``x``: the mean square deviation from the window's median of all but the
+    :data:`BURST_TRIM` share deviating most, over its median over the windows; zeros when that median is 0."""
     width = burst_window(dt)[0]
     windows = _windows(x, width)
     m = windows.shape[0]
@@ -124,11 +116,10 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def motion_bursts(imu: ImuSeries, dt: float) -> list[MotionBurst]:
-    """Stretches of at least :data:`BURST_MIN_S` where on some axis every :data:`BURST_WINDOW_S` window's spread
-    is :data:`BURST_RATIO` or more times the record's median window spread (:func:`spread_ratios`); overlapping or
-    touching stretches of several axes are one burst. Motion that lasts a moment (a touch, a knock, a cut made a
-    second late) changes the record's Allan variance little over hours, but the model stage and the closed loop
-    fit it (as oscillations, outliers, a random walk), and so do N and K. ``dt``: the sampling period [s]."""
+    """Stretches of at least :data:`BURST_MIN_S` where on some axis every window's spread is :data:`BURST_RATIO` or
+    more
+    times the median window's (:func:`spread_ratios`); overlapping stretches of several axes are one burst. ``dt``:
+    the sampling period [s]."""
     width, needed = burst_window(dt)
     if len(imu) // width < 2 * needed:
         return []
@@ -160,11 +151,10 @@ def still_span(bursts: list[MotionBurst], duration_s: float) -> tuple[float, flo
 
 
 def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY) -> tuple[float, float] | None:
-    """The longest stretch (start, end [s] from the first sample) of a moving record over which every axis's and
-    |accel|'s :data:`BLOCK_S` means stay within :data:`QUIET_RANGE` times the static tests' limits of each other,
-    less a block and :data:`STILL_MARGIN_S` at an end where motion follows or precedes (its onset hides in the last
-    block that passed), when at least :data:`QUIET_MIN_S` long and static by those tests (:func:`static_check`'s
-    block tests); None without one."""
+    """The longest stretch (start, end [s] from the first sample) of at least :data:`QUIET_MIN_S` over which every
+    axis's
+    and |accel|'s :data:`BLOCK_S` means stay within :data:`QUIET_RANGE` × the block tests' limits of each other and
+    which passes those tests, less a block and :data:`STILL_MARGIN_S` at an end next to motion; None without one."""
     n = len(imu)
     per_block = max(round(BLOCK_S / dt), 1)
     if n // per_block < 2:
@@ -218,25 +208,13 @@ def _block_flags(imu: ImuSeries, dt: float, gravity: float) -> list[str]:
 
 
 def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STANDARD_GRAVITY) -> StaticCheck:
-    """Whether ``imu`` looks like a static recording, judged by what motion does.
+    """Whether ``imu`` looks like a static recording, judged by what motion does (thresholds: the module constants).
 
-    Flags, with the thresholds of this module (documented constants):
-
-    - ``|mean(accel)|`` differs from ``gravity`` by more than :data:`GRAVITY_SCALE_TOLERANCE` (relative): gravity
-      removed, accelerometer not in m/s², or the IMU is not at rest; a smaller difference beyond
-      :data:`GRAVITY_TOLERANCE` is a note (an uncalibrated accelerometer's scale or bias);
-    - the standard deviation of :data:`BLOCK_S`-long block means exceeds :data:`GYRO_BLOCK_STD_MAX` (gyro) or
-      :data:`ACCEL_BLOCK_STD_MAX` (accel) on some axis, or the block means of |accel| vary by more than
-      :data:`ACCEL_BLOCK_STD_MAX`: the sensor rotates, moves, tilts or is shaken;
-    - motion bursts (:func:`motion_bursts`): a moment of motion in an otherwise still record, which block means
-      of a second average away; the longest still stretch between them is suggested (:func:`still_span`);
-    - without bursts, a flagged record's longest quiet stretch that passes the tests above is suggested instead
-      (:func:`quiet_span`: a robot that stands still before and after it drives).
-
-    Low-frequency power is what motion adds. The noise's own colour is not: a sensor whose internal low-pass filter
-    (a DLPF) smooths its white noise is still static, so no test compares the variance with a first-difference
-    noise floor. These are heuristics for *clearly* non-static data; a static analysis should warn, not silently
-    proceed.
+    Flags: |mean(accel)| off ``gravity`` by more than :data:`GRAVITY_SCALE_TOLERANCE` (relative; beyond
+    :data:`GRAVITY_TOLERANCE` only a note); the std of :data:`BLOCK_S` block means above :data:`GYRO_BLOCK_STD_MAX`
+    (gyro) or :data:`ACCEL_BLOCK_STD_MAX` (accel, and |accel|); motion bursts (:func:`motion_bursts`, with
+    :func:`still_span`); without bursts, a flagged record's :func:`quiet_span`. The noise's own colour (a DLPF) is
+    not tested. Heuristics for *clearly* non-static data.
     """
     n = len(imu)
     if n < 20:

@@ -1,28 +1,19 @@
 """The sampling period of a series of stamps: one rule for every reader, pipeline and command.
 
-Header stamps are not always sample times. A sensor-clock driver stamps each sample a constant period apart; a
-host-stamped serial driver (e.g. an MPU-6050 behind a USB UART) stamps samples when the host reads them, in
-bursts: five samples 2 ms apart, then 40 ms of silence. The median interval of such stamps is the burst spacing
-(a 100 Hz IMU read as ~500 Hz, every noise density 55 % low), not the period. Samples dropped by the repairs (NaN
-messages) leave holes whose intervals are multiples of the period. So the period is estimated several ways:
+Header stamps are not always sample times: a host-stamped serial driver stamps samples when the host reads them,
+in bursts, and dropped messages leave holes (reasons: docs/bags.md, "The sample period"). Estimates:
 
-- ``median_interval``: the median interval between stamps of *neighbouring messages* (positions in the bag one
-  apart, so holes left by dropped messages do not count);
-- ``index_regression``: a robust regression of the stamp on the message position, the median over i of
-  ``(t[i+k] − t[i]) / (position[i+k] − position[i])`` with a lag ``k`` of a tenth of the record: bursts average out
-  over the lag, a few gaps are outvoted (Theil–Sen-like slope at one lag);
-- ``span_count``: ``(t_last − t_first) / (position_last − position_first)`` (reported, not used: lost messages
-  bias it);
-- ``receive_regression``: the index regression on the bag's receive times (the recorder's clock);
-- ``declared``: the rate the user states (``--rate HZ``), e.g. the driver's configured output rate.
+- ``median_interval``: median interval between stamps of neighbouring messages (holes do not count);
+- ``index_regression``: median over i of (t[i+k] − t[i]) / (position[i+k] − position[i]), k a tenth of the record;
+- ``span_count``: (t_last − t_first) / (position_last − position_first) (reported only);
+- ``receive_regression``: the index regression on the bag's receive times;
+- ``declared``: the rate the user states (``--rate HZ``).
 
-Rule (:func:`estimate_period`): a declared rate wins (a warning if the stamps disagree by more than
-:data:`AGREE`). Otherwise, stamps are *bursty* when more than :data:`BURST_FRACTION` of the neighbouring-message
-intervals are shorter than half the regression period; regular stamps give the median interval (the classical
-choice; lost messages are gaps), bursty ones the index regression, with a warning — and when the bag's receive
-times disagree with it by more than :data:`AGREE` neither clock can be trusted: the period is refused
-(:attr:`SamplePeriod.refusal`) until the rate is declared. A rate that changes between the halves of the record
-by more than :data:`HALVES_AGREE` is warned about.
+Rule (:func:`estimate_period`): a declared rate wins (warned if the stamps disagree by more than :data:`AGREE`).
+Stamps are *bursty* when more than :data:`BURST_FRACTION` of the neighbouring intervals are shorter than half the
+regression period: regular stamps give the median interval, bursty ones the index regression with a warning, and
+are refused (:attr:`SamplePeriod.refusal`) when the receive times disagree by more than :data:`AGREE`. A rate
+changing between the halves by more than :data:`HALVES_AGREE` is warned about.
 """
 
 from __future__ import annotations
@@ -60,11 +51,10 @@ class SamplePeriod:
     Attributes
     ----------
     value : the period used [s] (the best estimate even when ``refusal`` is set)
-    source : ``median_interval``, ``index_regression`` or ``declared`` (see the module docstring)
+    source : ``median_interval``, ``index_regression`` or ``declared``
     estimates : every estimate computed, name → period [s]
-    bursty : the stamps bunch (host stamping, transport batching): individual stamps are not sample times
-    warnings : what the user must know (the stamps cannot be taken at face value)
-    notes : worth knowing, no action needed
+    bursty : individual stamps are not sample times (host stamping, transport batching)
+    warnings, notes : what the user must know; worth knowing
     refusal : why no period can be trusted (then :meth:`require` raises), or None
     """
 
@@ -141,9 +131,8 @@ def _neighbour_intervals(t: np.ndarray, index: np.ndarray) -> np.ndarray:
 
 
 def _lattice(intervals: np.ndarray) -> tuple[float, bool]:
-    """(period, whether the intervals are whole multiples of a step): sample-time stamps with lost messages sit on
-    such a lattice (within :data:`LATTICE_TOLERANCE` of a whole number of steps), and their period is the median of
-    the single steps; off the lattice it is the median interval."""
+    """(period, whether the intervals are whole multiples of a step within :data:`LATTICE_TOLERANCE`): on the lattice
+    the median single step, off it the median interval."""
     step = float(np.quantile(intervals, 0.1))
     if not step > 0:
         return float(np.median(intervals)), False
@@ -180,21 +169,19 @@ def estimate_period(
     receive: np.ndarray | None = None,
     declared_hz: float | None = None,
 ) -> SamplePeriod:
-    """The sampling period of stamps ``t`` by the rule of the module docstring.
+    """The sampling period of sorted stamps ``t`` [s] by the module docstring's rule.
 
     Parameters
     ----------
     t : (N,) sorted stamps [s] of the samples used (after repairs)
-    index : (N,) each sample's position among the messages as recorded (default: 0 … N−1); holes are messages
-        dropped by the repairs
-    receive : (N,) the bag's receive times of the same samples [s], or None
+    index : (N,) each sample's position among the recorded messages (default 0 … N−1)
+    receive : (N,) the bag's receive times [s], or None
     declared_hz : the rate the user declares (``--rate``), or None
 
     Raises
     ------
     InputError
-        Fewer than two stamps, non-finite stamps, stamps not increasing, or a declared rate that is not a positive
-        finite number.
+        Fewer than two stamps, non-finite or non-increasing stamps, or a declared rate that is not positive finite.
     """
     t = _check(t)
     index = np.arange(t.shape[0]) if index is None else np.asarray(index)
@@ -262,11 +249,5 @@ def estimate_period(
 
 
 def sampling_period(t: np.ndarray) -> float:
-    """The period [s] of stamps ``t`` alone (:func:`estimate_period` without positions or receive times).
-
-    Raises
-    ------
-    InputError
-        Fewer than two stamps, non-finite stamps, or stamps not increasing.
-    """
+    """The period [s] of stamps ``t`` alone (:func:`estimate_period`); InputError as there."""
     return estimate_period(t).value

@@ -1,15 +1,8 @@
 """White-noise density from first differences: the Allan variance at τ₀ = Δt, streaming or batch.
 
-For a white-noise sequence of per-sample variance σ², the first differences ``d_k = y_{k+1} − y_k`` have
-variance 2σ², so ``σ² = ½ Var(d)`` — the Allan variance at τ = Δt (IEEE Std 952) — and the density is
-``N = √(σ²·Δt)`` (:func:`imu_noise_id.core.noise.units.white_noise_density`). Differences remove the bias and
-attenuate slow drifts (RW, GM with τ ≫ Δt); quantisation noise and vibration are included. RW/GM increments
-inflate the estimate slightly (by q/2 per sample).
-
-:class:`FirstDifferences` keeps the sums of the differences (``Var(d)`` is their centred sample variance), so the
-same estimate serves whole arrays (``imu-noise-id identify``'s ``auto`` white-noise ranges,
-:func:`imu_noise_id.core.hypotheses.config.white_noise_estimate`) and the online node, which adds stationary
-samples one at a time and never differences across a pause (:meth:`FirstDifferences.break_chain`).
+σ² = ½ Var(y_{k+1} − y_k) (IEEE Std 952), N = √(σ²·Δt) (:func:`imu_noise_id.core.noise.units.white_noise_density`);
+bias removed, slow drifts attenuated, RW/GM increments inflate it by q/2 per sample. :class:`FirstDifferences`
+serves whole arrays and the online node (which never differences across a pause: :meth:`break_chain`).
 """
 
 from __future__ import annotations
@@ -20,13 +13,7 @@ import numpy as np
 
 
 class FirstDifferences:
-    """Running sums of the first differences of one or more channels and the white-noise density from them.
-
-    Parameters
-    ----------
-    channels : int
-        Number of channels (columns) of every sample.
-    """
+    """Running sums of the first differences of ``channels`` channels and the white-noise density from them."""
 
     def __init__(self, channels: int = 1) -> None:
         self.channels = int(channels)
@@ -69,18 +56,12 @@ class FirstDifferences:
         return np.maximum(self._sum_sq / self.n - mean * mean, 0.0)
 
     def density(self, dt: float | None = None) -> np.ndarray:
-        """White-noise density N = √(Var(d)/2 · Δt) per channel [u/√Hz].
-
-        ``dt`` is the sampling period [s]; None uses the mean time span of the differences added with stamps.
-        """
+        """N = √(Var(d)/2 · Δt) per channel [u/√Hz]; ``dt`` [s], or None for the mean span of the stamped
+        differences."""
         if dt is None:
             dt = self.sum_dt / self.n if self.n else math.nan
         return np.sqrt(0.5 * self.variance() * dt)
 
     def relative_std(self) -> float:
-        """Approximate relative standard deviation of N for white noise: √(3/n)/2.
-
-        For Gaussian white noise ``d_k`` has var(d_k²) = 8σ⁴ and cov(d_k², d_{k+1}²) = 2σ⁴, so
-        var(σ̂²) = var(Σd²/2n) ≈ 12nσ⁴/4n² = 3σ⁴/n; N ∝ √σ̂² halves the relative error.
-        """
+        """Approximate relative std of N for Gaussian white noise: √(3/n)/2 (var σ̂² ≈ 3σ⁴/n)."""
         return math.sqrt(3.0 / self.n) / 2.0 if self.n else math.nan
