@@ -1,20 +1,11 @@
 """Vectorised decoding of serialised ROS messages (CDR or ROS 1) with numpy at fixed byte offsets.
 
-A message type made of fixed-size primitives, fixed-size primitive arrays and strings (sensor_msgs/Imu,
-nav_msgs/Odometry, sensor_msgs/Temperature) has the same byte layout for every message whose string lengths are
-the same. :class:`FlatDecoder` therefore
-
-1. flattens the type's definition *as stored in the bag* into leaves (``header.stamp.sec``, ``angular_velocity.x``,
-   ``pose.covariance`` …);
-2. groups a chunk of raw messages by total length, computes the layout (offsets) from the first message of a group
-   by walking its leaves (CDR: each primitive aligned to its size, counted from the end of the 4-byte encapsulation
-   header; ROS 1: packed, strings without terminating NUL); messages of the same length with other string lengths
-   or byte order form further groups, up to :data:`MAX_LAYOUTS_PER_LENGTH`;
-3. checks with numpy that every message of the group has the same encapsulation header and the same string
-   lengths (then the layout is the same), and reads each requested leaf through a strided view of the joined
-   bytes (no structured-dtype copy, which would zero the gap bytes);
-4. sends the messages that do not fit (other layout, other byte order mixed in a group, types with sequences)
-   to the full deserialiser (``deserialize_cdr`` / ``deserialize_ros1``), so the values are always identical to it.
+A flat type (fixed-size primitives and arrays, strings) has one byte layout per set of string lengths.
+:class:`FlatDecoder` flattens the type's definition as stored in the bag into leaves, groups raw messages by
+length, takes each group's layout from its first message (CDR: aligned from the end of the 4-byte encapsulation
+header; ROS 1: packed), checks with numpy that every message shares header and string lengths (up to
+:data:`MAX_LAYOUTS_PER_LENGTH` layouts per length) and reads each leaf through a strided view; the rest goes to
+the full deserialiser, so values always equal it.
 """
 
 from __future__ import annotations
@@ -51,13 +42,8 @@ class NotFlatError(TypeError):
 
 
 def flatten(fielddefs: Mapping[str, tuple], msgtype: str, prefix: str = "") -> list[Leaf]:
-    """Leaves of ``msgtype`` in serialisation order, from a rosbags typestore's ``fielddefs``.
-
-    Raises
-    ------
-    NotFlatError
-        If a field is a sequence, an array of non-primitives, a bounded string or an unknown type.
-    """
+    """Leaves of ``msgtype`` in serialisation order from a typestore's ``fielddefs``; NotFlatError for a sequence, an
+    array of non-primitives, a bounded string or an unknown type."""
     leaves: list[Leaf] = []
     for name, (node, detail) in fielddefs[msgtype][1]:
         path = f"{prefix}{name}"
@@ -79,10 +65,7 @@ def _align(pos: int, size: int) -> int:
 
 
 def walk_layout(raw: bytes | memoryview, leaves: Sequence[Leaf], ros1: bool) -> tuple[list[int], int] | None:
-    """Byte offset of every leaf in ``raw`` (for a string: of its length field) and the end position.
-
-    Returns None if ``raw`` is too short or a string length runs past its end (then full deserialisation decides).
-    """
+    """Byte offset of every leaf in ``raw`` (strings: of the length field) and the end; None if ``raw`` is too short."""
     base = 0 if ros1 else 4
     pos = base
     offsets: list[int] = []
@@ -119,17 +102,13 @@ class FlatDecoder:
 
     Parameters
     ----------
-    fielddefs : the bag typestore's ``fielddefs`` (the definition the messages were written with)
-    msgtype : e.g. ``'sensor_msgs/msg/Imu'``
-    outputs : output name → leaf paths whose values fill the output's columns in order, e.g.
-        ``{'gyro': ('angular_velocity.x', 'angular_velocity.y', 'angular_velocity.z')}``; an array leaf fills
-        ``count`` columns, one element of it (``'orientation_covariance[0]'``) one column. The caller provides
-        the destination arrays (their dtype decides the output type).
-    strings : string leaf paths whose value (of the first message) is wanted, e.g. ``('header.frame_id',)``
+    fielddefs, msgtype : the bag typestore's definitions and the type, e.g. ``'sensor_msgs/msg/Imu'``
+    outputs : output name → leaf paths filling its columns, e.g. ``{'gyro': ('angular_velocity.x', …)}``; an array
+        leaf fills ``count`` columns, an element (``'orientation_covariance[0]'``) one; the caller gives the arrays
+    strings : string leaf paths whose first value is wanted, e.g. ``('header.frame_id',)``
     ros1 : ROS 1 serialisation instead of CDR
-    deserialize : the full deserialiser ``(raw, msgtype) -> message``, used for the messages the numpy path
-        cannot take
-    fast : False forces full deserialisation for every message (reference path for tests and benchmarks)
+    deserialize : the full deserialiser ``(raw, msgtype) -> message`` for what numpy cannot take
+    fast : False forces full deserialisation (reference path)
     """
 
     def __init__(

@@ -1,12 +1,6 @@
-"""Faster raw message iteration over indexed rosbag2 mcap files (same messages, same order as rosbags).
-
-rosbags' :class:`McapReader` wraps every record of a chunk in a ``BytesIO`` and merges all chunks through a heap,
-about 8 µs per message here. When the chunks of a file do not overlap in time (what recorders and
-:func:`imu_noise_id.bag.writer.write_bag` produce), the chunks can be read one after the other and their message
-records walked with ``struct.unpack_from``: same messages, same order (log time, stable within a chunk), several
-times faster. Chunks are decompressed and CRC-checked by rosbags' own ``decompress``. Everything else (other
-storages, overlapping or missing chunk indexes, per-message compression) goes through ``AnyReader.messages``.
-"""
+"""Faster raw message iteration over indexed rosbag2 mcap files (same messages, same order as rosbags): when the
+chunks do not overlap in time they are read one after the other and their records walked with
+``struct.unpack_from`` (rosbags' ``decompress`` and CRC); otherwise ``AnyReader.messages``."""
 
 from __future__ import annotations
 
@@ -48,11 +42,8 @@ def _mcap_storages(reader: Any) -> list[Any] | None:
 
 
 def fast_mcap_batches(reader: Any, connections: Sequence[Any]) -> Iterator[list[tuple[Any, int, bytes]]] | None:
-    """The messages of ``reader.messages(connections)``, one list per mcap chunk, or None when not applicable.
-
-    Applicable to rosbag2 mcap bags (file or directory, no per-message compression) whose chunk index exists and
-    whose chunks do not overlap in time.
-    """
+    """The messages of ``reader.messages(connections)``, one list per chunk, or None when not applicable (not a plain
+    rosbag2 mcap, per-message compression, no chunk index, overlapping chunks)."""
     storages = _mcap_storages(reader)
     if storages is None:
         return None

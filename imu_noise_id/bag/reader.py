@@ -1,14 +1,8 @@
-"""Read IMU, odometry and temperature series from ROS 1 ``.bag``, rosbag2 sqlite3 and rosbag2 mcap bags.
+"""Read IMU, odometry and temperature series from ROS 1 ``.bag``, rosbag2 sqlite3 and mcap bags (rosbags'
+``AnyReader``, no ROS install) into the dataclasses of :mod:`imu_noise_id.core.axes`, timed by header stamps.
 
-No ROS install is needed: :class:`rosbags.highlevel.AnyReader` reads the files and the message definitions stored
-in them. Values come out as numpy arrays in the dataclasses of :mod:`imu_noise_id.core.axes`, timed by the
-messages' header stamps (``sec + nanosec·1e-9`` seconds).
-
-Reading is one pass over the chosen topics (:mod:`.stream`); opening the bag and choosing topics is in
-:mod:`.topics`.
-
-Every problem with the input raises :class:`~.errors.BagError` naming the bag, the topic and what to do, or is
-repaired by :func:`imu_noise_id.core.quality.repair_time_series` with a note in the result (see ``docs/bags.md``).
+One pass over the chosen topics (:mod:`.stream`; opening and topics: :mod:`.topics`). Problems raise
+:class:`~.errors.BagError` (bag, topic, what to do) or are repaired with a note (docs/bags.md).
 """
 
 
@@ -37,14 +31,12 @@ class BagContents:
     Attributes
     ----------
     path : the bag
-    imu : the IMU series (repaired; its ``notes`` list the repairs)
-    odom : odometry, or None when the bag has none (or several and none was chosen)
-    temperature : temperature [°C], or None when absent
-    notes : every note about the bag and its topics (including the IMU's)
+    imu : the repaired IMU series (``notes``: the repairs)
+    odom, temperature : odometry and temperature [°C], or None when absent (or ambiguous)
+    notes : every note about the bag and its topics
     decode_stats : topic → (messages decoded by numpy, messages fully deserialised)
-    imu_covariance : covariances declared in the first Imu message, ``orientation``, ``angular_velocity``
-        [(rad/s)²] and ``linear_acceleration`` [(m/s²)²], each 3×3 row-major as published (REP-145: all zeros =
-        unknown, element [0, 0] = -1 = field not provided)
+    imu_covariance : the first Imu message's ``orientation``, ``angular_velocity`` [(rad/s)²] and
+        ``linear_acceleration`` [(m/s²)²] covariances, 3×3 row-major as published (REP-145)
     """
 
     path: Path
@@ -111,14 +103,13 @@ def read_bag(
 
     Parameters
     ----------
-    path : ROS 1 ``.bag``, rosbag2 directory, or rosbag2 ``.db3`` / ``.mcap`` file
-    imu_topic, odom_topic, temperature_topic : topics to read; None picks the only topic of the type. Odometry and
-        temperature are optional: absent (or ambiguous, with a note) gives None.
+    path : ROS 1 ``.bag``, rosbag2 directory, or ``.db3`` / ``.mcap`` file
+    imu_topic, odom_topic, temperature_topic : topics; None picks the only one of the type (odometry and
+        temperature are optional)
     require_odometry : raise when no odometry topic can be read
-    progress : called as ``progress(messages_read, messages_total)`` after every batch
-    fast : False decodes every message with rosbags' full deserialiser (reference path, several times slower)
-    rate_hz : the IMU's rate as declared by the user (``--rate``); None: from the stamps
-        (:func:`imu_noise_id.core.timing.estimate_period`)
+    progress : ``progress(messages_read, messages_total)`` after every batch
+    fast : False decodes every message with rosbags' full deserialiser (reference path)
+    rate_hz : the IMU's declared rate (``--rate``); None: from the stamps
 
     Raises
     ------
@@ -163,12 +154,9 @@ def read_odometry(path: str | Path, topic: str | None = None) -> OdometrySeries:
 
 def read_static(path: str | Path, topic: str | None = None, temperature_topic: str | None = None,
                 progress: Progress | None = None, *, rate_hz: float | None = None) -> BagContents:
-    """What a static analysis reads, in one pass: the IMU series and, where present, the temperature [°C].
-
-    ``path`` may also be an ``.npz`` file with ``t`` [s] (or ``fs_hz``), ``gyro`` [rad/s] (N, 3) and ``accel``
-    [m/s²] (N, 3), e.g. a sensor's own log converted with numpy (no temperature then). ``rate_hz`` as in
-    :func:`read_bag`.
-    """
+    """What a static analysis reads in one pass: the IMU series and, where present, the temperature [°C]. ``path``
+    may be
+    an ``.npz`` with ``t`` [s] (or ``fs_hz``), ``gyro`` [rad/s] (N, 3), ``accel`` [m/s²] (N, 3)."""
     p = Path(path).expanduser()
     if p.suffix == ".npz":
         imu = read_npz(p, rate_hz)
@@ -193,15 +181,8 @@ def _npz_array(path: Path, data: Any, name: str, shape: str) -> np.ndarray:
 
 
 def read_npz(path: Path, rate_hz: float | None = None) -> ImuSeries:
-    """An IMU series from an ``.npz`` file (see :func:`read_static`), repaired like a bag's samples (NaN rows
-    dropped, stamps sorted; :func:`imu_noise_id.core.quality.repair_time_series`). ``fs_hz`` in the file is a
-    declared rate, as is ``rate_hz`` (which wins).
-
-    Raises
-    ------
-    BagError
-        Missing, not a zip/npz, pickled or non-numeric arrays, wrong shapes, no ``t``/``fs_hz``, unusable samples.
-    """
+    """An IMU series from an ``.npz`` (:func:`read_static`), repaired like a bag's; ``rate_hz`` wins over ``fs_hz``.
+    BagError on a missing, non-npz, pickled or malformed file or unusable samples."""
     where = repr(str(path))
     if not path.is_file():
         raise BagError(f"{where}: no such file")

@@ -1,20 +1,10 @@
-"""Reading what is complete in a truncated bag (a recorder killed, a copy cut short), and saying what was lost.
+"""Reading what is complete in a truncated bag, and saying what was lost.
 
-rosbags opens a bag through its index (ROS 1: the connection and chunk records at the end; mcap: the summary after
-the footer magic; sqlite3: the database's B-tree), so a file cut at 99 % yields nothing, and ``ros2 bag reindex``
-cannot repair a file whose data ends mid-record. The data themselves are self-describing: the scanners walk the
-file from its start and keep every complete record —
-
-- mcap (:mod:`.scan_mcap`): schema, channel and message records, and chunks whose bytes are all there (each
-  decompressed and CRC-checked);
-- ROS 1 (:mod:`.scan_ros1`): chunks whose bytes are all there, with the connection records inside them;
-- sqlite3 (:mod:`.scan_sqlite`): every table leaf page of the file (and of a write-ahead log beside it), decoded
-  by the SQLite file format; rows of the ``topics`` and ``messages`` tables are recognised by their columns.
-
-:func:`salvage` returns a :class:`SalvagedReader` offering the part of rosbags' ``AnyReader`` interface the
-streaming decoder uses (topics, connections, typestore, ``messages``), and :attr:`SalvagedReader.note` says how
-much was read and lost (messages and seconds: exact where the bag's ``metadata.yaml`` survived, else estimated from
-the bytes lost).
+rosbags opens a bag through its index, so a cut file yields nothing. The scanners walk the file from its start
+and keep every complete record: mcap chunks and records (:mod:`.scan_mcap`), ROS 1 chunks (:mod:`.scan_ros1`),
+sqlite3 table leaf pages and WAL frames (:mod:`.scan_sqlite`). :func:`salvage` returns a :class:`SalvagedReader`
+(the part of ``AnyReader`` the decoder uses) whose :attr:`~SalvagedReader.note` says what was read and lost
+(exact with a surviving ``metadata.yaml``, else estimated from the bytes).
 """
 
 from __future__ import annotations
@@ -45,17 +35,14 @@ class Scan:
 
     Attributes
     ----------
-    channels : connection id → :class:`Channel`
-    counts : connection id → complete messages found
-    blocks : units to read messages from again (chunks, pages), in file order; opaque to this module
-    read_block : block → its messages ``(connection id, receive time [ns], raw bytes)`` in stored order
-    file_bytes : size of the file
-    read_bytes : bytes up to the end of the last complete record of the data
-    data_bytes : where the data ended when the file was whole, if the file says (ROS 1 ``index_pos``, SQLite's
-        page count), else None
-    data_complete : the data ended properly (only the index or summary after them is damaged or missing)
+    channels : connection id → :class:`Channel`; counts : connection id → complete messages
+    blocks, read_block : units to read again (chunks, pages) and block → ``(connection id, receive [ns], raw)``
+    file_bytes, read_bytes : file size, and bytes up to the end of the last complete record
+    data_bytes : where the data ended when whole, if the file says (ROS 1 ``index_pos``, SQLite page count), else
+    None
+    data_complete : the data ended properly (only the index or summary is damaged)
     first_ns, last_ns : receive times of the first and last complete messages
-    ros2 : CDR messages (rosbag2) rather than ROS 1 serialisation
+    ros2 : CDR messages (rosbag2) rather than ROS 1
     """
 
     channels: dict[int, Channel]
@@ -208,13 +195,8 @@ def _storage_file(path: Path) -> tuple[Path, Path | None] | None:
 
 
 def salvage(path: Path) -> SalvagedReader | None:
-    """A reader over the complete messages of a bag rosbags cannot open, or None (not a file this can read).
-
-    Raises
-    ------
-    BagError
-        The file is of a salvageable kind but holds no complete message.
-    """
+    """A reader over the complete messages of a bag rosbags cannot open, or None (not a file this can read); BagError
+    when a salvageable file holds no complete message."""
     found = _storage_file(path)
     if found is None:
         return None

@@ -1,13 +1,8 @@
 """Scanning an mcap file from its start for complete records (no summary needed), for :mod:`.salvage`.
 
-The MCAP format (https://mcap.dev/spec): the magic ``\\x89MCAP0\\r\\n``, then records of ``opcode (u8), length
-(u64), content``. Used here: Schema (0x03: id u16, name, encoding, data), Channel (0x04: id u16, schema id u16,
-topic, message encoding, metadata), Message (0x05: channel id u16, sequence u32, log time u64, publish time u64,
-data), Chunk (0x06: start and end time u64, uncompressed size u64, CRC u32, compression, records u64-sized) and
-DataEnd (0x0F: the data section is complete). Strings are u32-sized UTF-8. A record whose length runs past the end
-of the file is where the file was cut; a chunk is used when all its bytes are there and its CRC matches, and the
-chunk the cut falls in for the complete message records before the cut when it is uncompressed (the recorders'
-default; its CRC cannot be checked then).
+MCAP (https://mcap.dev/spec): magic, then ``opcode (u8), length (u64), content`` records; used: Schema (0x03),
+Channel (0x04), Message (0x05), Chunk (0x06) and DataEnd (0x0F). A chunk is used when all its bytes are there and
+its CRC matches; the chunk the cut falls in, for its complete records, when uncompressed.
 """
 
 from __future__ import annotations
@@ -72,8 +67,8 @@ def _records(buf: bytes) -> list[tuple[int, bytes]]:
 
 
 def _chunk_data(rec: bytes, partial: bool = False) -> bytes | None:
-    """The uncompressed records of a chunk record, or None when it is damaged (size, CRC, compression); with
-    ``partial`` (the file ends inside the chunk) the records there are of an uncompressed chunk."""
+    """A chunk record's uncompressed records, or None when damaged; ``partial``: the file ends inside it
+    (uncompressed)."""
     from rosbags.rosbag2.storage_mcap import decompress
 
     try:

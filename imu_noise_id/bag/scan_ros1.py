@@ -1,13 +1,9 @@
 """Scanning a ROS 1 bag (format 2.0) from its start for complete chunks (no index needed), for :mod:`.salvage`.
 
-The format (http://wiki.ros.org/Bags/Format/2.0): the line ``#ROSBAG V2.0``, then records of ``header length
-(u32), header (fields: u32 length, name=value), data length (u32), data``; the ``op`` field says which: 0x03 bag
-header, 0x05 chunk (``compression`` none/bz2/lz4, ``size`` uncompressed; its data are connection and message
-records), 0x04 index data, 0x07 connection (``conn``, ``topic``; data: a header with ``type``, ``md5sum``,
-``message_definition``), 0x02 message data (``conn``, ``time`` = sec u32 + nsec u32) and 0x06 chunk info. A
-recorder killed mid-write leaves the index (connections and chunk infos at the end) unwritten; a chunk is used when
-all its bytes are there and it decompresses to its announced size, and the chunk the cut falls in for its complete
-records when it is uncompressed.
+Format (http://wiki.ros.org/Bags/Format/2.0): ``#ROSBAG V2.0``, then ``header length (u32), header, data length
+(u32), data`` records, ``op``: 0x03 bag header, 0x05 chunk, 0x04 index data, 0x07 connection, 0x02 message data,
+0x06 chunk info. A chunk is used when complete and decompressing to its size; the cut one's complete records when
+uncompressed.
 """
 
 from __future__ import annotations
@@ -91,8 +87,8 @@ def _time_ns(fields: dict[str, bytes]) -> int:
 
 
 def _chunk_records(buf: bytes) -> tuple[list[tuple[dict[str, bytes], bytes]], int] | None:
-    """The records inside a chunk record ``buf`` (header and data) and how many of its bytes they use: all of a
-    complete chunk that decompresses to its size; the complete ones of an uncompressed chunk the file ends in."""
+    """The records inside a chunk record and the bytes they use (all of a complete chunk; the complete ones of an
+    uncompressed chunk the file ends in), or None."""
     (hlen,) = struct.unpack_from("<I", buf, 0)
     fields = _fields(buf[4 : 4 + hlen])
     (dlen,) = struct.unpack_from("<I", buf, 4 + hlen)

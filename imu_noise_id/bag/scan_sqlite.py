@@ -1,15 +1,9 @@
 """Scanning a rosbag2 sqlite3 file page by page for its rows (no intact B-tree needed), for :mod:`.salvage`.
 
-SQLite's file format (https://www.sqlite.org/fileformat2.html): pages of ``page size`` bytes (header offset 16);
-a table leaf page starts with type 0x0D, its cell count (u16 at +3) and cell pointers (u16 each from +8); a cell
-is ``payload size (varint), rowid (varint), payload`` (overflowing into a chain of pages beyond the local maximum
-``U − 35``); a payload is a record: a header of serial types (varints), then the values. A write-ahead log beside
-the file (``<name>-wal``: a 32-byte header, then frames of a 24-byte header and one page image) holds newer page
-images; rosbags opens sqlite3 bags as immutable and ignores it, so a WAL with frames is read here too.
-
-rosbag2's tables are recognised by their rows: ``messages (id, topic_id, timestamp, data)`` = (NULL or int, int,
-int, blob); ``topics (id, name, type, serialization_format, offered_qos_profiles, …)`` with a name starting with
-``/``; ``message_definitions (id, topic_type, encoding, encoded_message_definition, …)``.
+SQLite's file format (https://www.sqlite.org/fileformat2.html): table leaf pages (type 0x0D) of cells ``payload
+size, rowid, payload`` (with overflow chains), payloads as records; a write-ahead log's newer page images are read
+too (rosbags ignores them). rosbag2 rows are recognised by their columns: ``messages (id, topic_id, timestamp,
+data)``, ``topics (id, name, type, …)``, ``message_definitions (id, topic_type, encoding, …)``.
 """
 
 from __future__ import annotations

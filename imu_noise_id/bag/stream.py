@@ -1,10 +1,6 @@
-"""Streaming decode of the chosen topics in one pass: raw messages in batches, numpy at fixed byte offsets.
-
-Messages are read (mcap: by :mod:`.mcapfast` when chunks do not overlap) in batches of :data:`BATCH` raw messages,
-decoded with numpy (:mod:`.fastdecode`, identical to full deserialisation, which remains the fallback) and written
-into arrays preallocated from the bag's message counts, so no message objects are kept. Each topic's series is then
-repaired (:func:`imu_noise_id.core.quality.repair_time_series`) with a note per repair.
-"""
+"""Streaming decode of the chosen topics in one pass: batches of :data:`BATCH` raw messages (mcap via
+:mod:`.mcapfast` where chunks do not overlap), decoded by :mod:`.fastdecode` into arrays preallocated from the
+message counts, then repaired (:func:`imu_noise_id.core.quality.repair_time_series`) with a note per repair."""
 
 from __future__ import annotations
 
@@ -151,11 +147,9 @@ class TopicStream:
 
 
 def _mark_orientation_not_provided(q: np.ndarray, cov0: np.ndarray) -> None:
-    """Zero the orientation rows that are not provided (REP-145: ``orientation_covariance[0] == -1``) or unusable
-    (NaN/inf, zero quaternion), so that they neither drop the sample in the repair nor pass as an orientation.
-
-    The zero quaternion is the marker :func:`_imu` turns into NaN rows after the repair.
-    """
+    """Zero the orientation rows not provided (REP-145: ``orientation_covariance[0] == -1``) or unusable (NaN/inf,
+    zero
+    quaternion); :func:`_imu` turns the zero marker into NaN rows after the repair."""
     bad = (cov0 == -1.0) | ~np.isfinite(q).all(axis=1)
     if bad.any():
         q[bad] = 0.0
@@ -163,9 +157,8 @@ def _mark_orientation_not_provided(q: np.ndarray, cov0: np.ndarray) -> None:
 
 def finish(stream: TopicStream, where: str, notes: list[str], declared_hz: float | None = None,
            salvage_note: str | None = None) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
-    """Stamps and arrays of a stream after the documented repairs, with the notes about it; the sampling period
-    (from the header stamps, the messages' positions and the bag's receive times, or ``declared_hz``) is left in
-    ``stream.period``. ``salvage_note`` (what a damaged bag lost) becomes the topic's first note."""
+    """Stamps, arrays and notes of a stream after the repairs; the period (stamps, positions, receive times, or
+    ``declared_hz``) is left in ``stream.period``; ``salvage_note`` becomes the first note."""
     topic_notes: list[str] = [salvage_note] if salvage_note else []
     if stream.msgtype == IMU_TYPE and stream.first_raw is not None:
         first = stream.decoder.deserialize(stream.first_raw, IMU_TYPE)
@@ -212,10 +205,8 @@ def read_topics(
     fast: bool,
     rate_hz: float | None = None,
 ) -> tuple[Path, dict[str, tuple[np.ndarray, dict[str, np.ndarray], list[str], TopicStream]], list[str]]:
-    """Read the topics of the message types in ``wanted`` (msgtype → (topic or None, required)) in one pass.
-
-    ``rate_hz`` is the IMU's declared rate (``--rate``), if any. An optional topic whose samples are unusable
-    (e.g. all NaN) is left out with a note."""
+    """Read the topics of the types in ``wanted`` (msgtype → (topic or None, required)) in one pass; ``rate_hz`` the
+    IMU's declared rate; an unusable optional topic is left out with a note."""
     bag = Path(path).expanduser()
     notes: list[str] = []
     with open_bag(bag) as reader:

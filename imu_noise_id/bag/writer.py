@@ -1,12 +1,8 @@
 """Write IMU (and optionally odometry and temperature) series into a rosbag2 bag (mcap or sqlite3).
 
-Messages are serialised to little-endian CDR with numpy (:func:`encode_cdr`): the types written here are flat
-(primitives, fixed arrays, one or two strings whose value is the same for every message), so every message has
-the same byte layout and all of them are filled at once through strided views. The bytes equal rosbags'
-``serialize_cdr`` (checked in ``test/test_bag_writer.py``).
-
-Stamps: header stamps are ``t`` rounded to the nanosecond; the bag's receive times are the running maximum of the
-header stamps (as a recorder would see them: monotonic even when the header stamps are not), unless given.
+Flat messages serialised to little-endian CDR with numpy (:func:`encode_cdr`, equal to rosbags'
+``serialize_cdr``); header stamps are ``t`` rounded to the nanosecond, receive times the running maximum of the
+header stamps unless given.
 """
 
 from __future__ import annotations
@@ -37,13 +33,7 @@ def _typestore() -> object:
 
 
 def stamps_to_ns(t: np.ndarray) -> np.ndarray:
-    """Times [s] → integer nanoseconds (rounded), the resolution of ROS stamps.
-
-    Raises
-    ------
-    BagError
-        If a time is NaN/inf or negative (ROS stamps cannot hold them).
-    """
+    """Times [s] → integer nanoseconds (rounded); BagError for NaN/inf or negative times."""
     t = np.asarray(t, dtype=float)
     if not np.all(np.isfinite(t)) or np.any(t < 0) or np.any(t >= 2**31):
         raise BagError("stamps to write must be finite, >= 0 and before 2038 (int32 seconds)")
@@ -58,19 +48,11 @@ def encode_cdr(
     values: Mapping[str, np.ndarray],
     strings: Mapping[str, str],
 ) -> tuple[np.ndarray, int]:
-    """Serialise ``n`` flat messages to little-endian CDR with numpy.
+    """Serialise ``n`` flat messages to little-endian CDR: (n, length) uint8 rows and the length.
 
-    Parameters
-    ----------
-    fielddefs : a rosbags typestore's ``fielddefs``
-    msgtype : e.g. ``'sensor_msgs/msg/Imu'``
-    values : leaf path → array of shape (n,) or (n, count); leaves not given are zero
-    strings : string leaf path → value (the same in every message); strings not given are empty
-
-    Returns
-    -------
-    buffer, length
-        (n, length) uint8 array whose rows are the serialised messages.
+    ``values``: leaf path → (n,) or (n, count) array (missing leaves zero); ``strings``: string leaf → value (the
+    same
+    in every message; missing ones empty).
     """
     leaves = flatten(fielddefs, msgtype)
     n = next(iter(values.values())).shape[0]
@@ -153,19 +135,15 @@ def write_bag(
     temperature_topic: str = "/imu/temperature",
     receive_t: np.ndarray | None = None,
 ) -> Path:
-    """Write a rosbag2 bag (directory ``path`` with ``metadata.yaml``) holding the given series.
+    """Write a rosbag2 bag (directory ``path`` with ``metadata.yaml``, must not exist) holding the series; returns
+    it.
 
     Parameters
     ----------
-    path : the bag directory to create (must not exist)
-    imu, odom, temperature : series to write; their ``t`` become the header stamps (rounded to 1 ns)
+    imu, odom, temperature : series; their ``t`` become the header stamps (rounded to 1 ns)
     storage : ``"mcap"`` or ``"sqlite3"``
     imu_topic, odom_topic, temperature_topic : topic names
-    receive_t : the IMU messages' bag receive times [s]; default: running maximum of ``imu.t``
-
-    Returns
-    -------
-    Path of the bag directory.
+    receive_t : the IMU messages' receive times [s]; default the running maximum of ``imu.t``
 
     Raises
     ------
