@@ -1,10 +1,6 @@
-"""The files of an analysis, each written once from the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult`.
-
-``imu.yaml`` (Kalibr keys and per-axis values) and the filters' exports (``exports/``, :mod:`.exports`),
-``allan.csv`` and the other variance CSVs, ``allan.png``; with a model stage ``model.yaml`` (fits, candidates,
-recording-length advice, the loop's steps, the final models),
-``allan_model.png`` (the final models) and ``report.html`` (:mod:`.analysis_html`: the whole analysis).
-"""
+"""The files of an analysis, each written once from the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult`:
+``imu.yaml``, ``exports/`` (:mod:`.exports`), the variance CSVs, ``allan.png`` and, with a model stage,
+``model.yaml``, ``allan_model.png`` and ``report.html`` (:mod:`.analysis_html`)."""
 
 from __future__ import annotations
 

@@ -1,13 +1,7 @@
-"""The one self-contained ``report.html`` of an analysis (figures embedded as base64 PNG, no network).
-
-Sections, each written from the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult` (nothing recomputed but
-the figures): the data (rate, duration, topic, warnings and repairs), the numbers users paste (the final model's
-N, K and bias instability with their intervals and sources, the Allan readings beside them, the per-sample noise),
-one Allan panel per axis (data with its 95 % band, slope lines, the final model and simulations of it), the model
-selection's candidates, how long to record, the GMWM's J-test, WIC ranking and its comparison with the EM, the
-closed loop's steps, and the overbound (the smallest WN+RW covering the data over the filter's τ range, drawn in each
-Allan panel).
-"""
+"""The one self-contained ``report.html`` of an analysis (figures embedded as base64 PNG, no network), written from
+the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult` (nothing recomputed but the figures): the data, the
+numbers users paste, an Allan panel per axis, the model selection, record length, the GMWM, the loop's steps and
+the overbound."""
 
 from __future__ import annotations
 

@@ -47,8 +47,8 @@ def summary_table(result: StaticAnalysis) -> str:
 
 
 def final_table(finals: dict[str, FinalModel]) -> str:
-    """The numbers imu.yaml's Kalibr keys are made of: per axis the final model, N and K with 95 % intervals; below
-    them each K above what the data's long-τ AV supports, with its source's reason."""
+    """Per axis the final model, N and K with 95 % intervals (imu.yaml's Kalibr numbers); below, each K above what
+    the long-τ AV supports, with its source's reason."""
     lines = ["Final models (imu.yaml's numbers; N = passband white noise, K = random walk, B = bias instability, "
              "'<' an upper bound; 95 % intervals):"]
     for axis, f in finals.items():
@@ -104,10 +104,9 @@ def comparison_table(models: dict[str, AxisModel]) -> str:
 
 
 def loop_line(axis: str, loop: LoopResult, selected: str | None = None) -> str:
-    """Per axis the closed loop ran on: first and final model, the verdict; indented below it, where the final
-    model's AV lies against the data's band (:func:`~imu_noise_id.pipelines.av_band.av_band_claim`'s sentence).
-    ``selected``: the model the loop started from (the model stage's); when the loop's first step names it
-    otherwise, the line says why."""
+    """Per axis: first and final model and the verdict, then where the final AV lies against the data's band
+    (:func:`~imu_noise_id.pipelines.av_band.av_band_claim`); ``selected``: the model stage's model, explained when
+    the loop's first step names it otherwise."""
     start = loop.steps[0].model
     why = "" if selected is None or selected == start else f" ({_start_renamed(selected, start)})"
     return (f"{axis}: loop {start}{why} -> {loop.final.model}: {loop.verdict}\n"
@@ -129,8 +128,8 @@ def _duration(seconds: float) -> str:
 
 
 def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None = None) -> list[str]:
-    """How long to record, per axis: the longest needed duration over the parameters, and which parameter it is;
-    ``names``: the model's name per axis where it is not the fit's own (a final model with regressors)."""
+    """How long to record per axis: the longest needed duration over the parameters and which one; ``names``: the
+    model's name per axis where it is not the fit's own."""
     lines = []
     for axis, fit in fits.items():
         advice = fit.record_length

@@ -1,4 +1,4 @@
-"""``criteria.json``: paper 002's performance criteria over time (shared vocabulary, ``architecture.md``)."""
+"""``criteria.json``: paper 002's performance criteria over time (keys: docs/hypotheses.md)."""
 
 from __future__ import annotations
 

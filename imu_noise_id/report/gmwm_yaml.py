@@ -1,25 +1,7 @@
-"""Serialise GMWM results and the EM-vs-GMWM comparison for ``model.yaml``.
-
-A GMWM fit (``estimator: gmwm``) is written like an EM fit (:func:`.model_yaml.fit_to_dict`; ``loglik``, ``aic``,
-``bic`` are null: the GMWM has no likelihood) plus::
-
-    moments:
-      robust: false                       # the robust (M-estimator) wavelet variance was fitted
-      j_statistic: …   dof: …   p_value: …   # J-test of the model (chi2 with dof degrees of freedom if it is right)
-      misfit_tau: [s, …]                  # scales whose standardised WV residual exceeds 2
-      intervals: {label: "wald (sandwich covariance, log scale)" | "profile …" | "parametric bootstrap (…)"}
-      wavelet_variance: {tau: [s…], nu2: [u²…], ci95_low: […], ci95_high: […], model: […], residual_z: […]}
-      spikes_replaced: 0                  # robust: isolated spikes left out (docs/gmwm.md)
-    candidates: [{model, k, wic, delta_wic, j_statistic, dof, p_value}, …]   # WIC ranking (model auto)
-
-With both estimators, the axis's entry is the EM's, with ``gmwm:`` holding the GMWM's whole entry (as above) and
-``agreement:`` the comparison per parameter::
-
-    agreement:
-      verdict: "EM and GMWM agree within their intervals" | "… differ on …: the model is wrong somewhere; …"
-      parameters: [{quantity, em, em_ci95, gmwm, gmwm_ci95, ratio, z, verdict}, …]
-      misfit_tau: […]
-"""
+"""Serialise GMWM results and the EM-vs-GMWM comparison for ``model.yaml``: a GMWM fit is written like an EM fit
+(:func:`.model_yaml.fit_to_dict`; ``loglik``, ``aic``, ``bic`` null) plus ``moments:`` (J-test, misfitting τ,
+interval methods, wavelet variance, spikes replaced) and ``candidates`` (WIC ranking); with both estimators
+``gmwm:`` (the GMWM's entry) and ``agreement:`` (schema: docs/gmwm.md, "``model.yaml`` additions")."""
 
 from __future__ import annotations
 

@@ -15,9 +15,9 @@ from .numbers import num
 
 
 def decision_note(entry: AxisIdentification) -> str:
-    """On what the axis's decision (or its absence) rests, in words: the probability it was taken on against γ and,
-    where a GM hypothesis the record cannot tell from its RW twin was merged into the decision, which and why (the
-    raw probabilities beside it may then favour the GM)."""
+    """On what the axis's decision (or its absence) rests: the probability against γ and any GM hypothesis merged
+    into
+    its RW twin (whose raw probability may favour the GM)."""
     final, gamma = entry.result.final, entry.hset.gamma
     merged = final.decision_probabilities
     if final.decision is None:
@@ -31,8 +31,7 @@ def decision_note(entry: AxisIdentification) -> str:
 
 
 def decision_line(axis: str, entry: dict[str, Any]) -> str:
-    """identify's console line of one axis from its ``hypotheses.yaml`` entry (:func:`axis_entry`), so that the two
-    cannot disagree: the probabilities, the decision with the time from which it held, and what it rests on."""
+    """identify's console line of one axis from its ``hypotheses.yaml`` entry (:func:`axis_entry`), so the two agree."""
     probs = ", ".join(f"{k} {v:.3f}" for k, v in entry["probabilities"].items())
     if entry["decision"] is None:
         return f"{axis}: {probs} -> no decision yet ({entry['decision_note']})"
@@ -41,9 +40,8 @@ def decision_line(axis: str, entry: dict[str, Any]) -> str:
 
 
 def axis_entry(axis: str, entry: AxisIdentification) -> dict[str, Any]:
-    """The ``hypotheses.yaml`` entry of one axis: ``decision`` and ``decision_time_s`` are both null or both set,
-    ``decision_note`` says on what the decision rests (:func:`decision_note`), and the probabilities lie in [0, 1]
-    summing to 1."""
+    """The ``hypotheses.yaml`` entry of one axis: ``decision`` and ``decision_time_s`` both null or both set,
+    ``decision_note``, probabilities in [0, 1] summing to 1."""
     result, hset = entry.result, entry.hset
     final = result.final
     time = result.decision_time

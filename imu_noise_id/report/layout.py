@@ -1,11 +1,6 @@
-"""Fixed figure margins in inches, instead of matplotlib's tight or constrained layout.
-
-``tight_layout`` draws every tick label and title once to measure it before the figure is drawn again to be saved;
-on the log-log Allan panels (many minor ticks, mathtext labels) writing an analysis took 1.6× as long with it, and
-the figures were then 38 % of a short ``analyze`` (``bench/bench_figures.py`` → ``docs/results/bench_figures.txt``).
-The figures here have known contents (labels at known font sizes), so margins sized once in inches hold at any
-figure size (``test/test_report_layout.py``).
-"""
+"""Fixed figure margins in inches instead of matplotlib's tight or constrained layout (reasons: docs/analysis.md,
+"Why the figures are drawn as they are"); margins sized once hold at any figure size
+(``test/test_report_layout.py``)."""
 
 from __future__ import annotations
 
@@ -19,18 +14,13 @@ RIGHT = 0.15
 
 def fix_margins(fig, *, left: float = LEFT, bottom: float = BOTTOM, right: float = RIGHT, top: float = TITLE,
                 suptitle: bool = False, wspace: float = LEFT + 0.1, hspace: float = BOTTOM + TITLE) -> None:
-    """Place the subplots of ``fig`` with margins and gaps given in inches (not figure fractions).
+    """Place the subplots of ``fig`` (a regular ``plt.subplots`` grid) with margins and gaps in inches.
 
     Parameters
     ----------
-    fig
-        A matplotlib figure made with ``plt.subplots`` (a regular grid).
-    left, bottom, right, top
-        Margins [in]; ``top`` holds the panels' titles.
-    suptitle
-        Also leave :data:`SUPTITLE` above ``top`` for ``fig.suptitle``.
-    wspace, hspace
-        Gaps between panels [in]: the next panel's y labels, the lower panel's title and the upper's x labels.
+    left, bottom, right, top : margins [in]; ``top`` holds the panels' titles
+    suptitle : also leave :data:`SUPTITLE` above ``top`` for ``fig.suptitle``
+    wspace, hspace : gaps between panels [in]
     """
     width, height = fig.get_size_inches()
     grid = fig.axes[0].get_subplotspec().get_gridspec() if fig.axes else None

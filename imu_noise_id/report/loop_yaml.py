@@ -1,27 +1,6 @@
-"""Serialise closed-loop results (:class:`imu_noise_id.pipelines.loop.LoopResult`) for ``model.yaml``.
-
-Per axis the loop adds (schema: /work/shared/notes/architecture.md)::
-
-    loop:                                   # first step = starting model
-      - model: WN+RW
-        added: null                         # effect added at this step (null for the first)
-        dropped: []                         # components dropped by the re-selection after the addition
-        how: null                           # state-space component | deterministic regressor | data cleaning
-        evidence: null                      # what the detector saw
-        error: {loglik: …, bic: …, av_misfit: …, ljung_box_p: …, peak_ratio: …, peak_frequency: …}
-        components: [{type: WN, noise_density: …}, …]      # fitted, continuous-time SI units
-        regressors: {SIN1: {frequency: …, amplitude: …, phase: …}, TEMP2: {coefficient: …}, STEP3: {…}}
-        outliers: 0                         # samples flagged so far
-        rejected: [{added: GM, model: WN+GM+RW, reason: "BIC … → … (not better); …"}]   # tried, not kept
-                                            # (re-selection trials read "added: RW, reason: drop RW: …")
-    loop_verdict: {final_model: WN+OSC+SIN, passed: true, verdict: "residuals pass: …",
-                   remaining: ["…evidence still significant…"],
-                   av_inside_band: true,            # model AV inside the data's 95 % band at every τ
-                   av_outside_band_tau: [],         # τ ranges [s] where it lies outside ([[lo, hi], …])
-                   av_band: "The final model's …",  # the sentence report.html and the console print
-                   max_rel_av_error: 0.08,          # largest |AV_model/AV_data − 1| over τ
-                   note: ""}                        # e.g. evidence left but of no practical significance
-"""
+"""Serialise closed-loop results (:class:`imu_noise_id.pipelines.loop.LoopResult`) for ``model.yaml``: per axis a
+``loop:`` list (one entry per step: ``model``, ``added``, ``dropped``, ``how``, ``evidence``, ``error``,
+``components``, ``regressors``, ``outliers``, ``rejected``) and ``loop_verdict`` (schema: docs/loop.md, "Outputs")."""
 
 from __future__ import annotations
 

@@ -1,38 +1,11 @@
-"""Serialise identification results to ``model.yaml`` (schema: /work/shared/notes/architecture.md).
+"""Serialise identification results to ``model.yaml``, one entry per axis (``gyro_x`` … ``accel_z``).
 
-Per axis (``gyro_x`` … ``accel_z``)::
-
-    model: WN+GM+RW            # canonical structure name
-    estimator: em              # em (maximum likelihood) or gmwm (wavelet moments, :mod:`.gmwm_yaml`)
-    n: 360000                  # valid samples used
-    dt: 0.01                   # sampling period [s]
-    unit: rad/s                # signal unit u
-    components:
-      - {type: WN, estimator: em, noise_density: …, se: …, ci95: [lo, hi], sigma2_wn: …}  # u/√Hz; per-sample u²
-      - {type: GM, tau: …, sigma: …, se: {tau: …, sigma: …}, ci95: {tau: […], sigma: […]},
-         beta: …, sigma2_gm: …, phi: …, sigma2_drive: …}
-    mean: {bias: {value, se, ci95}, ramp: {…}, <exog>: {…}}                       # u, u/s, …
-    loglik: …   aic: …   bic: …   n_params: …   converged: …                    # full precision (docs/em.md);
-                                                                                 # null for a GMWM fit
-    short_of_maximum: …      # only when the intervals' search met a log-likelihood higher by this (> 1.92): the
-                             # fit is not at the maximum, its values and intervals are not the maximum's
-    candidates: [{model, loglik, k, aic, bic, delta_bic, weight_bic}, …]          # when selected; a row
-                                   # {model, screened, delta_bic_screen}: not fitted exactly (core/estimation/screen.py)
-    record_length: {target, level, current_s, parameters: {label: {needed_s, needed_h, relative_halfwidth,
-                    reliable}}}
-    moments: {…}                       # a GMWM fit's J-test and wavelet variance (:mod:`.gmwm_yaml`)
-    gmwm: {…}   agreement: {…}         # with both estimators: the GMWM's whole entry, and the comparison
-    note: "…"                          # why the estimator differs from the one asked for (a record too long for EM)
-    loop: […]   loop_verdict: {…}                                                # the closed loop (:mod:`.loop_yaml`)
-    final:                                           # what imu.yaml's numbers come from (analyze)
-      source: "closed loop, step 2: WN+OSC+RW"       # or "model selection"
-      model: WN+OSC+RW
-      components: [{type: …, …, se, ci95}, …]        # as above, with intervals of the final fit
-      noise_density: {value, ci95, source}           # passband √(N_WN² + N_LPF² + N_MA² + N_OSC²) [u/√Hz]
-      random_walk: {value, ci95, source}             # RW [u/s/√Hz]; value null: not identifiable from this record
-      noise_stddev_per_sample: …                     # per-sample std of the high-frequency noise at dt [u]
-      bias_instability: {value, ci95, tau_at_minimum, reached, source}   # model AD min / 0.664 [u]
-      bias_instability_allan: {…}                    # the same off the data's AV (ci95: null, no interval)
+Keys (documented in docs/em.md "``model.yaml``", docs/gmwm.md "``model.yaml`` additions", docs/loop.md
+"Outputs"): ``model``, ``estimator``, ``n``, ``dt`` [s], ``unit``; ``components`` (continuous-time values with
+``se``, ``ci95`` and per-sample values); ``mean`` (bias [u], ramp [u/s], regressors); ``loglik``, ``aic``,
+``bic`` (full precision; null for a GMWM fit), ``n_params``, ``converged``, ``short_of_maximum``; ``candidates``;
+``record_length``; ``moments``, ``gmwm``, ``agreement`` (:mod:`.gmwm_yaml`); ``note``; ``loop``, ``loop_verdict``
+(:mod:`.loop_yaml`); ``final`` (what imu.yaml's numbers come from: N, K, per-sample noise, bias instability).
 """
 
 from __future__ import annotations
@@ -157,11 +130,8 @@ def _axis_entry(model: AxisModel, axis: str) -> dict:
 
 def write_model_yaml(path: Path, models: dict[str, AxisModel], loops: dict[str, LoopResult] | None = None,
                      meta: dict | None = None, finals: dict[str, FinalModel] | None = None) -> Path:
-    """Write ``model.yaml``: per axis the model stage's entry (:func:`fit_to_dict`), the loop's steps and the
-    final model.
-
-    An axis with a loop but no model-stage fit (``imu-noise-id loop``) gets the loop's final model, ``n`` and ``dt``.
-    """
+    """Write ``model.yaml``: per axis the model stage's entry (:func:`fit_to_dict`), the loop's steps and the final
+    model (an axis with a loop only gets the loop's final model, ``n`` and ``dt``)."""
     loops = loops or {}
     axes: dict = {}
     for axis in dict.fromkeys([*models, *loops]):

@@ -20,12 +20,9 @@ _LINE_LABELS = {"QN": "quantisation", "WN": "white noise", "BI": "bias inst.", "
 
 
 def plot_allan_deviation(result: StaticAnalysis, path: Path) -> Path:
-    """``path`` (PNG): log-log Allan deviation of the gyro and accel axes with CI bands and fitted slope lines.
-
-    Each axis: the ADEV points and line, a shaded band from the square roots of the variance CI, and dashed
-    lines for the fitted slope components (drawn within a factor 10 of the τ range they were fitted on),
-    with markers for the noise density at τ = 1 s and the random walk at τ = 3 s.
-    """
+    """``path`` (PNG): log-log Allan deviation of every axis with its CI band, the fitted slope lines (within a
+    factor
+    10 of their τ range) and markers for N at τ = 1 s and K at τ = 3 s."""
     res = result.allan
     tau = res.tau
     fig, panels = plt.subplots(1, 2, figsize=(12, 4.8))

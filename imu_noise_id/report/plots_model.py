@@ -16,18 +16,8 @@ def plot_allan_overlay(
     ax, tau: np.ndarray, avar: np.ndarray, fit: FitResult, band: tuple[np.ndarray, np.ndarray] | None = None,
     *, label: str = "record", unit: str = "u",
 ) -> None:
-    """Draw the empirical Allan deviation, the fit's theoretical one and (optionally) simulated ones on ``ax``.
-
-    Parameters
-    ----------
-    tau, avar
-        Empirical averaging times [s] and Allan variance [u²].
-    fit
-        The fitted model (its components give the theoretical AV).
-    band
-        (tau, avar of shape (n_sim, len(tau))) from
-        :func:`imu_noise_id.core.simulation.bands.allan_band`.
-    """
+    """Draw the empirical Allan deviation (``tau`` [s], ``avar`` [u²]), ``fit``'s theoretical one and, with ``band``
+    (:func:`imu_noise_id.core.simulation.bands.allan_band`), simulated ones on ``ax``."""
     if band is not None:
         btau, bav = band
         for k, row in enumerate(bav):

@@ -1,15 +1,8 @@
 """Every report figure leaves through here: written as PNG (to a file or to bytes) and closed.
 
-Log axes get minor ticks at 2 and 5 of each decade instead of matplotlib's eight (2 … 9). Creating the tick objects
-(two lines, a grid line and two labels each, with their properties copied) was the largest single cost of writing
-an analysis, whose Allan panels span six decades on each axis: writing took 1.4× as long with every minor tick
-(``bench/bench_figures.py`` → ``docs/results/bench_figures.txt``), and the grid at 1-2-5 reads as well. Only axes
-spanning a decade or more are thinned: matplotlib labels no minor tick there, while on a narrower axis its minor
-ticks carry the only numbers.
-
-Log axes' powers of ten are written as plain text (10⁻³, 2×10⁻³) instead of mathtext: matplotlib parses every
-mathtext label again for each figure (its parse cache belongs to the figure's renderer): writing took 1.17× as
-long with mathtext labels (``bench/bench_figures.py``).
+Log axes spanning a decade or more get minor ticks at 2 and 5 of each decade only (:data:`LOG_MINOR_SUBS`), and
+powers of ten as plain text (10⁻³, 2×10⁻³) instead of mathtext (:data:`PLAIN_POWERS`); reasons: docs/analysis.md,
+"Why the figures are drawn as they are".
 """
 
 from __future__ import annotations

@@ -1,20 +1,12 @@
 """Results folders written atomically, every file stamped with the run that wrote it, nothing stale left beside it.
 
-A command writes its files into a hidden staging folder inside ``--out`` (:class:`ResultsFolder`); only when all
-are written are they stamped with the run record (:func:`stamp`) and renamed into place. So an interrupted run
-leaves the folder as it was (its staging folder is removed, or by the next run if the process was killed), never a
-complete-looking but partial result.
-
-The folder's manifest (:data:`MANIFEST`) lists the runs whose files it holds. A new run removes what an earlier run
-left that the new one supersedes: the files of a run of the same command, of a run on another bag or topic, or of a
-run some of whose files it rewrites (so another bag's ``model.yaml`` never stays beside a new ``imu.yaml``). Runs of
-other commands on the same bag and topic stay (``identify`` beside ``analyze``). Files with the names these
-commands write that no manifest accounts for (an older version's results) are renamed ``NAME.stale``, not deleted.
-
-The record (:class:`RunRecord`) says where the data came from, the command line and its options, when the run
-started and ended and ``completed: true``; it goes into each file in that file's own way: a ``run:`` mapping in the
-package's YAML and JSON files, a ``# imu-noise-id run: {…}`` comment line in CSV and foreign-format files (exports),
-a ``<meta name="imu-noise-id-run">`` element in HTML, a ``tEXt`` chunk in PNG.
+A command writes into a hidden staging folder inside ``--out`` (:class:`ResultsFolder`); once all files are
+written they are stamped (:func:`stamp`) and renamed into place, so an interrupted run leaves the folder as it was.
+The manifest (:data:`MANIFEST`) lists the runs whose files it holds; a new run removes what it supersedes (a run of
+the same command, on another bag or topic, or some of whose files it rewrites); other commands' runs on the same
+bag and topic stay; unaccounted files with this package's names are renamed ``NAME.stale``. The
+:class:`RunRecord` goes into each file its own way: a ``run:`` mapping (package YAML and JSON), a
+``# imu-noise-id run: {…}`` line (CSV, exports), ``<meta name="imu-noise-id-run">`` (HTML), a ``tEXt`` chunk (PNG).
 """
 
 from __future__ import annotations
@@ -152,8 +144,7 @@ def _supersedes(new: RunRecord, new_files: set[str], old: dict) -> bool:
 
 class ResultsFolder:
     """``with ResultsFolder(out, record) as staging:`` write into ``staging``; on success the files are stamped and
-    moved into ``out`` and what they supersede is removed (module docstring); on an exception ``out`` is left as
-    it was."""
+    moved into ``out`` and what they supersede is removed; on an exception ``out`` is left as it was."""
 
     def __init__(self, out: Path, record: RunRecord) -> None:
         self.out = Path(out)
