@@ -1,11 +1,6 @@
-"""Where a closed loop's final model lies against the data's 95 % Allan band: the one statement every output gives.
-
-The loop judges its final model by the data's Allan-variance band simultaneous over τ
-(:func:`~imu_noise_id.pipelines.loop.rules.av_inside_band`). :func:`av_band_claim` computes, from the same z-scores
-and bound, whether the model's AV is inside the band at every τ compared and, where it is not, the τ ranges
-outside it; :meth:`AvBandClaim.sentence` is the sentence ``report.html``, ``model.yaml`` (``loop_verdict``) and the
-console print, so that they cannot say different things, and :meth:`AvBandClaim.as_dict` its fields for YAML.
-"""
+"""Where a closed loop's final model lies against the data's 95 % Allan band, from the z-scores and simultaneous
+bound of :func:`~imu_noise_id.pipelines.loop.rules.av_inside_band`: :meth:`AvBandClaim.sentence` is the one
+sentence ``report.html``, ``model.yaml`` (``loop_verdict``) and the console print."""
 
 from __future__ import annotations
 
@@ -25,10 +20,10 @@ class AvBandClaim:
     Attributes
     ----------
     level : the band's coverage (0.95), simultaneous over τ (Bonferroni over the octaves spanned)
-    inside : True when the model's AV lies inside the band at every τ compared (the loop's ``av_inside_band``)
-    outside : τ ranges [s] (first and last τ of each run of neighbouring τ of the grid) where it lies outside
-    n_tau : τ compared (those with a finite z-score); n_outside : of them, outside the band
-    max_rel_av_error : largest |AV_model / AV_data − 1| over τ (the loop's)
+    inside : the model's AV is inside the band at every τ compared (the loop's ``av_inside_band``)
+    outside : τ ranges [s] (runs of neighbouring grid τ) where it lies outside
+    n_tau, n_outside : τ compared (finite z-score), and of them outside the band
+    max_rel_av_error : largest |AV_model / AV_data − 1| over τ
     """
 
     level: float
@@ -50,7 +45,8 @@ class AvBandClaim:
     def sentence(self) -> str:
         """The one sentence of the claim, e.g. "The final model's Allan variance lies outside the data's 95 % band
         (simultaneous over τ) at τ = 12.8–327 s (6 of 14 τ) and inside it elsewhere (largest relative AV error
-        45 %)."."""
+        45 %)."
+        """
         band = f"the data's {100 * self.level:.0f} % band (simultaneous over τ)"
         err = (f"largest relative AV error {100 * self.max_rel_av_error:.0f} %"
                if math.isfinite(self.max_rel_av_error) else "no relative AV error")
@@ -64,8 +60,8 @@ class AvBandClaim:
                 f"{self.n_tau} τ) and inside it elsewhere ({err}).")
 
     def as_dict(self) -> dict:
-        """``av_outside_band_tau`` ([[lo, hi], …] in s, 4 significant digits; [] when inside) and ``av_band``
-        (:meth:`sentence`), the fields ``model.yaml``'s ``loop_verdict`` adds beside ``av_inside_band``."""
+        """``av_outside_band_tau`` ([[lo, hi], …] [s]; [] when inside) and ``av_band`` (:meth:`sentence`) for
+        ``loop_verdict``."""
         return {"av_outside_band_tau": [[float(f"{lo:.4g}"), float(f"{hi:.4g}")] for lo, hi in self.outside],
                 "av_band": self.sentence()}
 

@@ -1,10 +1,6 @@
-"""Offline replay of the online CMKF (:class:`~imu_noise_id.core.cmkf.robot.RobotCmkf`) over recorded arrays.
-
-The messages are fed one at a time in stamp order (IMU before odometry on equal stamps; the merge of
-:func:`~imu_noise_id.core.cmkf.merge.stamp_order`, as in the node) by
-:func:`~imu_noise_id.core.cmkf.stream.feed_recording`, as fast as the filter runs; the estimate is recorded after
-every odometry message.
-"""
+"""Offline replay of the online CMKF (:class:`~imu_noise_id.core.cmkf.robot.RobotCmkf`) over recorded arrays, fed in
+stamp order by :func:`~imu_noise_id.core.cmkf.stream.feed_recording` as in the node; the estimate recorded after
+every odometry message."""
 
 from __future__ import annotations
 
@@ -44,15 +40,11 @@ DENSITY_FIELDS = ("accel_noise_density", "accel_noise_density_upper", "gyro_nois
 class CmkfReplayResult:
     """Estimates after every odometry message, the final estimate and what the filter knew.
 
-    Attributes
-    ----------
-    t : (M,) odometry stamps [s]; series : field → (M, 3) arrays (see :data:`SERIES_FIELDS` and
-    :data:`DENSITY_FIELDS`, IMU axes);
-    nis_accel, nis_gyro : (M,) NIS of each update, also of the updates the innovation gate rejected (NaN when
-    no update); gated_accel, gated_gyro : (M,) whether the gate rejected it; status : (M,) status strings;
-    final : the estimate after the last message; config : the filter's parameters; agreement : the filter's
-    per-axis IMU/odometry agreement checks (the likely cause of an inconsistency); gates : the NIS gates of the
-    accelerometer and gyro updates; info : rates, frames, timing.
+    Attributes ---------- t : (M,) odometry stamps [s]; series : field → (M, 3) (:data:`SERIES_FIELDS`,
+    :data:`DENSITY_FIELDS`) nis_accel, nis_gyro : (M,) NIS of each update (also gated ones; NaN without update);
+    gated_accel, gated_gyro : (M,) status : (M,) status strings; final : the last estimate; config : the filter's
+    parameters agreement : per-axis IMU/odometry agreement checks; gates : the NIS gates; info : rates, frames,
+    timing
     """
 
     t: np.ndarray
@@ -85,16 +77,9 @@ def replay(
     imu_orientation_xyzw: np.ndarray | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> CmkfReplayResult:
-    """Run :class:`RobotCmkf` over ``imu`` and ``odom`` (None: IMU only, nothing observable).
-
-    A field of ``odom`` (position, orientation, velocities, covariances) may be None when the source does not
-    provide it (e.g. motion capture without angular velocity).
-
-    ``imu_orientation_xyzw`` (N, 4), the IMU's own orientation, is used for gravity only with
-    ``config.gravity_source == "imu"``; a NaN row (not provided, see :class:`~imu_noise_id.core.axes.ImuSeries`)
-    is passed as None, so the filter keeps the last orientation it was given. ``progress(done, total)`` is called
-    after every odometry message.
-    """
+    """Run :class:`RobotCmkf` over ``imu`` and ``odom`` (None: IMU only); fields of ``odom`` may be None;
+    ``imu_orientation_xyzw`` (N, 4) is used for gravity only with ``gravity_source == "imu"`` (NaN rows passed as
+    None); ``progress(done, total)`` after every odometry message."""
     config = config or CmkfConfig()
     filt = RobotCmkf(config)
     ti = np.asarray(imu.t, dtype=float)
@@ -136,9 +121,8 @@ def replay(
 
 def nis_summary(nis: np.ndarray, dof: int, gated: np.ndarray | None = None,
                 skip_fraction: float = 0.2) -> dict[str, float]:
-    """NIS of a replay after dropping the first ``skip_fraction`` of the updates: the mean of the updates the
-    innovation gate accepted, the share of all updates inside the χ²(dof) 95 % bounds (gated ones are outside),
-    the number and share gated, and the verdict of :func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict`."""
+    """NIS of a replay after the first ``skip_fraction`` of the updates: mean of the accepted ones, share inside the
+    χ²(dof) 95 % bounds, number and share gated, and :func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict`."""
     gated = np.zeros(nis.shape, dtype=bool) if gated is None else np.asarray(gated, dtype=bool)
     keep = np.isfinite(nis) | gated
     x, g = nis[keep], gated[keep]
@@ -198,9 +182,8 @@ def consistency_summary(result: CmkfReplayResult) -> dict[str, object]:
 
 
 def counter_cause(e: CmkfEstimate) -> str:
-    """What the filter's counters say is wrong with its odometry, named before any generic cause of an inconsistency
-    ("" when they say nothing): every odometry message used with an invalid orientation (the source publishes none,
-    so its twist and covariances may be placeholders too), or at least as many odometry messages dropped as used."""
+    """What the filter's counters say is wrong with its odometry ("" when nothing): every message used with an
+    invalid orientation, or at least as many dropped as used."""
     c = e.counters
     used, invalid = c.get("odom", 0), c.get("odom_orientation_invalid", 0)
     parts = []
@@ -217,8 +200,8 @@ def counter_cause(e: CmkfEstimate) -> str:
 
 
 def replay_status(result: CmkfReplayResult, verdict: str) -> str:
-    """The final status with the consistency judged over the whole run (not only the last ``nis_window``
-    updates): ``inconsistent`` instead of converging/tracking when the run's verdict is inconsistent."""
+    """The final status with the consistency judged over the whole run (``inconsistent`` instead of
+    converging/tracking when the run's verdict is)."""
     status = result.final.status
     if status not in ("converging", "tracking", "inconsistent"):
         return status
@@ -259,11 +242,9 @@ def odometry_problem(e: CmkfEstimate) -> str:
 
 
 def to_yaml_dict(result: CmkfReplayResult, notes: list[str] | None = None) -> dict[str, object]:
-    """The ``cmkf.yaml`` schema of ``architecture.md`` (per IMU axis x, y, z; SI units) plus what the filter knew.
-
-    Biases are null when no odometry update happened (the prior is not an estimate); noise densities are null
-    where not identified, with the upper end of their 95 % interval where the data bound them.
-    """
+    """The ``cmkf.yaml`` content (per IMU axis x, y, z; SI units; docs/cmkf.md) plus what the filter knew: biases
+    null without an odometry update, noise densities null where not identified (with their 95 % upper end where
+    bounded)."""
     e = result.final
     estimated = e.status not in ("no_data", "no_imu", "imu_only")
     cfg = asdict(result.config)

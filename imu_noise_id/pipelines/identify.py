@@ -1,10 +1,6 @@
-"""``identify``: the recursive Bayesian hypothesis bank (paper 002) run over the axes of a static recording.
-
-Per axis: the hypothesis set of the axis's sensor (gyro or accel) at the recording's period, the warm-up offset
-removed, the bank run on the whole axis, optionally re-run with grids re-centred on the posterior
-(:func:`~imu_noise_id.core.hypotheses.axis.identify_offline`). The parsed hypothesis-set mapping comes from the
-adapter (the file is read there).
-"""
+"""``identify``: the hypothesis bank (paper 002) over the axes of a static recording, per axis with its sensor's
+hypothesis set, the warm-up offset removed and optional grid refinement
+(:func:`~imu_noise_id.core.hypotheses.axis.identify_offline`)."""
 
 from __future__ import annotations
 

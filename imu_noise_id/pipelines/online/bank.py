@@ -1,12 +1,9 @@
 """The hypothesis bank of the online identification (paper 002), fed in batches with stationary samples.
 
-Per axis an :class:`~imu_noise_id.core.hypotheses.axis.AxisIdentifier` (the bank with its warm-up offset). The
-stationary samples that passed the guard are queued per uninterrupted stretch and fed in batches (a batch costs
-much less than the same samples one by one); pauses between stretches are declared with ``gap`` (the filters
-predict over them). For the gyro axes the warm-up offset of the first stretch stays (the Earth rate and turn-on
-bias are constant); for the accelerometer axes, whose gravity component changes whenever the robot stops in
-another attitude, each stretch's own warm-up mean is removed (and the first stretch's added back), so an attitude
-change never looks like a bias random walk.
+Per axis an :class:`~imu_noise_id.core.hypotheses.axis.AxisIdentifier`; stationary samples are queued per
+uninterrupted stretch, pauses declared with ``gap``. Gyro axes keep the first stretch's warm-up offset;
+accelerometer axes remove each stretch's own warm-up mean (and add the first's back), so an attitude change never
+looks like a bias random walk.
 """
 
 from __future__ import annotations
@@ -53,13 +50,12 @@ def held_decision(previous: str | None, probabilities: Mapping[str, float], gamm
 
 
 class BankFeed:
-    """The per-axis hypothesis banks and the queue of stationary samples they have not seen yet.
+    """The per-axis banks and the queue of stationary samples they have not seen.
 
     Parameters
     ----------
-    data, source : the parsed hypothesis-set mapping and where it came from (for messages); it is checked for
-        both sensors now, so a bad set fails at start-up.
-    bank_rate : rate of the bank's samples [Hz] (``hypotheses.bank_rate``): IMU samples are block-averaged to it.
+    data, source : the parsed hypothesis-set mapping and its origin (checked for both sensors now).
+    bank_rate : rate of the bank's samples [Hz] (``hypotheses.bank_rate``; IMU samples block-averaged to it).
     events : where decision changes are reported.
 
     Raises
@@ -213,9 +209,8 @@ class BankFeed:
         return HypothesesReport(names, probs, decision, updates, tuple(notes), held, since, gamma)
 
     def theta(self) -> dict[str, np.ndarray]:
-        """Parameter name → (6,) θ̂ of each axis's most probable hypothesis (after merging a GM the record cannot tell
-        from its RW twin: :mod:`~imu_noise_id.core.hypotheses.identifiable`); NaN where it has no such parameter
-        or the record cannot resolve it."""
+        """Parameter → (6,) θ̂ of each axis's most probable hypothesis (after merging a long-memory GM into its RW
+        twin); NaN where it has no such parameter or the record cannot resolve it."""
         if self._banks is None:
             return {}
         theta = {p: np.full(6, math.nan) for p in self.parameters}

@@ -1,10 +1,7 @@
-"""The CMKF of the online identification: paper 004 on a robot, fed in stamp order, restarted on error.
-
-:class:`~imu_noise_id.core.cmkf.stream.CmkfStream` holds the IMU samples ``cmkf.input_latency`` seconds so that the
-odometry, which arrives on its own topic with its own latency, is processed in stamp order; odometry later than that
-is not used (counted, reported). Any error from the filter restarts it and is reported (the node never stops on
-it). After every odometry update the filters' innovations go to the :class:`~.innovations.InnovationChecks`.
-"""
+"""The CMKF of the online identification (paper 004 on a robot) behind a
+:class:`~imu_noise_id.core.cmkf.stream.CmkfStream` (IMU held ``cmkf.input_latency`` seconds so that odometry is
+processed in stamp order; later odometry is counted and unused), restarted and reported on any error; its
+innovations go to :class:`~.innovations.InnovationChecks`."""
 
 from __future__ import annotations
 
@@ -23,18 +20,9 @@ from .innovations import InnovationChecks
 class CmkfFeed:
     """The CMKF behind its stamp merger, its latest estimate, and the checks of its innovations.
 
-    Attributes
-    ----------
-    estimate : the CMKF's estimate after the last update (or :meth:`refresh`), formed when read.
-    gyro_bias, accel_bias : (3,) the biases the corrected IMU samples and the stationarity use (0 until the first
-        odometry update).
-    errors : restarts after an error; too_late : odometry messages that came later than ``cmkf.input_latency``.
-    innovations : the innovation checks of the current filter.
-
-    Raises
-    ------
-    InputError
-        If the ``cmkf.*`` or ``innovations.*`` parameters are invalid.
+    Attributes: ``estimate``; ``gyro_bias``, ``accel_bias`` (3,) used by the corrected samples and the stationarity
+    (0 before the first odometry update); ``errors`` (restarts), ``too_late`` (odometry later than the latency);
+    ``innovations``. InputError if the ``cmkf.*`` or ``innovations.*`` parameters are invalid.
     """
 
     def __init__(self, config: OnlineConfig, events: EventLog) -> None:
@@ -68,14 +56,12 @@ class CmkfFeed:
         return self._feed(self.stream.process_odometry, t, **fields)
 
     def new_time_line(self) -> None:
-        """The stamps of an input restarted: the filter forgets its times, keeps its estimates (biases, least
-        squares) and restarts position and velocity from the next odometry."""
+        """The stamps of an input restarted: the filter forgets its times and keeps its estimates."""
         self._feed(self.stream.new_time_line)
 
     @property
     def estimate(self) -> CmkfEstimate:
-        """The CMKF's estimate after the last update or :meth:`refresh` (formed when asked for: the biases the
-        corrected samples need are read after every update without it)."""
+        """The CMKF's estimate after the last update or :meth:`refresh` (formed when asked for)."""
         if self._estimate is None:
             self._estimate = self.stream.estimate()
         return self._estimate

@@ -1,10 +1,6 @@
-"""Parameters of the online identification (``imu_noise_id_node``): names, defaults, ranges, units, validation.
-
-:data:`PARAMETERS` is the single source: the node declares each with a ROS ParameterDescriptor, the shipped
-``config/imu_noise_id.yaml`` mirrors the defaults (a test keeps them in sync), and :class:`OnlineConfig`
-validates values at start-up and at runtime with messages that name the parameter. The CMKF's parameters take
-their defaults from :class:`~imu_noise_id.core.cmkf.config.CmkfConfig` (:func:`cmkf_config` maps them back).
-"""
+"""Parameters of ``imu_noise_id_node``: names, defaults, ranges, units, validation. :data:`PARAMETERS` is the single
+source (ROS ParameterDescriptors, ``config/imu_noise_id.yaml`` kept in sync by a test, :class:`OnlineConfig`
+validation); the CMKF's defaults come from :class:`~imu_noise_id.core.cmkf.config.CmkfConfig`."""
 
 from __future__ import annotations
 
@@ -205,13 +201,8 @@ class OnlineConfig:
             setattr(self, PARAMETER_BY_NAME[name].attr, value)
 
     def updated(self, changes: dict[str, Any]) -> OnlineConfig:
-        """A new configuration with ``changes`` applied.
-
-        Raises
-        ------
-        InputError
-            If a name is unknown, a value is invalid or the parameter cannot change at runtime.
-        """
+        """A new configuration with ``changes`` applied; InputError for an unknown name, an invalid value or a
+        parameter that cannot change at runtime."""
         for name in changes:
             spec = PARAMETER_BY_NAME.get(name)
             if spec is not None and not spec.runtime:
@@ -220,14 +211,8 @@ class OnlineConfig:
 
 
 def cmkf_config(config: OnlineConfig) -> CmkfConfig:
-    """The CMKF's parameters from the node's ``cmkf.*`` and ``nis.window`` (0 noise std: from the messages;
-    ``cmkf.input_latency`` is the stamp merger's ``late_odom_tolerance``).
-
-    Raises
-    ------
-    InputError
-        If the combination is invalid (the message names the parameter).
-    """
+    """The CMKF's parameters from ``cmkf.*`` and ``nis.window`` (0 noise std: from the messages;
+    ``cmkf.input_latency`` is ``late_odom_tolerance``); InputError naming the parameter of an invalid combination."""
     cmkf = CmkfConfig(
         imu_rotation_xyzw=tuple(config.cmkf_imu_rotation_xyzw),
         measurement=config.cmkf_measurement,

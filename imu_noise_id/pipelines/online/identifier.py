@@ -1,23 +1,12 @@
 """The online identification composed of its parts: what happens with every message, and what comes out.
 
-Per IMU sample:
-
-1. :class:`~.inputs.Input` checks it (non-finite values, zero, duplicated or backward stamps are rejected and
-   counted; a message after a jump in the stamps waits for the next one, which tells a gap from an isolated
-   outlier); a gap ends the stationary stretch, a time line that goes back and on from there (a restarted source)
-   is a gap of unknown length: nothing estimated is forgotten. :class:`~.inputs.SaturationCheck` flags samples at
-   the sensor's full scale.
-2. :class:`~.cmkf_feed.CmkfFeed`: the CMKF (paper 004 on a robot) receives it ``cmkf.input_latency`` seconds
-   later, in stamp order with the odometry (two topics, two latencies).
-3. :class:`~.stationarity.StationaryGate`: stationarity with hysteresis, then the guard delay line.
-4. The stationary samples out of the guard go to :class:`~.noise.StationaryNoise` (white-noise density per axis)
-   and to the queue of :class:`~.bank.BankFeed` (paper 002's hypothesis bank), which
-   :meth:`OnlineIdentifier.update_identification` feeds in batches.
-5. The sample comes back bias-corrected with its covariance N²·f (None while unknown).
-
-Odometry messages are checked the same way and go to the stationarity and the CMKF. Everything is plain numbers
-in and dataclasses out: the rclpy node (:mod:`imu_noise_id.ros.node`) only converts messages and reads the
-hypothesis-set file, so every decision made here is unit-tested without ROS.
+Per IMU sample: (1) :class:`~.inputs.Input` checks values and stamps (rejects counted; a message after a jump in
+the stamps waits for the next; a gap ends the stationary stretch; a restarted time line forgets nothing), and
+:class:`~.inputs.SaturationCheck` flags full-scale samples; (2) :class:`~.cmkf_feed.CmkfFeed` gets it
+``cmkf.input_latency`` later, in stamp order with the odometry; (3) :class:`~.stationarity.StationaryGate`
+(hysteresis, guard delay); (4) stationary samples out of the guard go to :class:`~.noise.StationaryNoise` and
+:class:`~.bank.BankFeed`; (5) the sample comes back bias-corrected with covariance N²·f (None while unknown).
+Odometry goes to the stationarity and the CMKF. Plain numbers in, dataclasses out (the node only converts).
 """
 
 from __future__ import annotations
@@ -55,20 +44,18 @@ from .status import (
 
 
 class OnlineIdentifier:
-    """Streaming identification of a robot's IMU errors (see the module docstring for the per-message steps).
+    """Streaming identification of a robot's IMU errors (module docstring).
 
     Parameters
     ----------
     config : validated parameters (:data:`~.config.PARAMETERS`).
-    hypotheses : the parsed hypothesis-set mapping and its source name (the node reads the file); None: no
-        hypothesis bank.
+    hypotheses : the parsed hypothesis-set mapping and its source name; None: no hypothesis bank.
 
     Attributes
     ----------
-    imu, odom, temperature : the inputs (counters, stamp checks); cmkf_feed : the CMKF; stationarity : the
-    stationarity gate; noise : the white-noise density; bank : the hypothesis bank (None without hypotheses);
-    processing_time, identification_time : callback and bank-batch times (the node adds the former);
-    restarts : new time lines of the IMU stamps (a jump back in time); last_imu_t : stamp of the last IMU sample.
+    imu, odom, temperature : the inputs; cmkf_feed, stationarity, noise, bank : the parts (bank None without
+    hypotheses); processing_time, identification_time : callback and bank-batch times; restarts : new time lines of
+    the IMU stamps; last_imu_t : stamp of the last IMU sample.
 
     Raises
     ------
@@ -121,14 +108,10 @@ class OnlineIdentifier:
         frame_id: str = "", wall_time: float | None = None, *,
         orientation_xyzw: tuple[float, float, float, float] | None = None, source: Any = None,
     ) -> list[CorrectedImu]:
-        """One IMU message: header stamp ``t`` [s], angular rate [rad/s], specific force [m/s²].
-
-        ``orientation_xyzw`` is used by the CMKF only with ``cmkf.gravity_source: imu``; ``source`` (e.g. the ROS
-        message) comes back in the corrected sample. Returns the bias-corrected samples this message released, in
-        stamp order: usually itself; none when it was rejected (counted, and reported through :meth:`pop_events`
-        and the diagnostics) or held after a jump in the stamps; the held one and itself when it confirmed the
-        jump.
-        """
+        """One IMU message: stamp ``t`` [s], angular rate [rad/s], specific force [m/s²]; ``orientation_xyzw`` for
+        the CMKF with ``cmkf.gravity_source: imu``; ``source`` comes back in the corrected sample. Returns the
+        bias-corrected samples released, in stamp order: usually itself; none when rejected or held after a jump; the
+        held one and itself when it confirmed the jump."""
         sample = np.array((*gyro, *accel), dtype=float)
         # The offline reader's physical limits (|ω| ≤ 1e3 rad/s, |a| ≤ 1e4 m/s²): one absurd sample must not
         # become a bias that lasts for the filters' correlation time.
@@ -171,9 +154,7 @@ class OnlineIdentifier:
         return self._corrected(t, sample, source)
 
     def _new_time_line(self) -> None:
-        """The stamps went back and on from there (a restarted source): a gap of unknown length, nothing is
-        forgotten — the CMKF keeps its biases and least squares, the noise its differences, the bank its
-        posteriors (its next stretch declares no gap: a negative one is none)."""
+        """The stamps went back and on (a restarted source): a gap of unknown length; nothing estimated is forgotten."""
         self._end_stationary()
         self.stationarity.interrupt()
         self.cmkf_feed.new_time_line()
@@ -201,8 +182,7 @@ class OnlineIdentifier:
         orientation_xyzw: tuple[float, float, float, float] | None = None,
         pose_covariance: np.ndarray | None = None, twist_covariance: np.ndarray | None = None,
     ) -> bool:
-        """One odometry message (pose in the odom frame, twist in the child frame); False when rejected (a message
-        held after a jump in the stamps is processed with the next one)."""
+        """One odometry message (pose in the odom frame, twist in the child frame); False when rejected."""
         v = np.array((*linear_velocity, *angular_velocity), dtype=float)
         fields = {"position": position, "orientation_xyzw": orientation_xyzw,
                   "pose_cov": None if pose_covariance is None else np.array(pose_covariance, dtype=float),
@@ -242,9 +222,8 @@ class OnlineIdentifier:
                             (float(accel[0]), float(accel[1]), float(accel[2])), gyro_var, accel_var, source)
 
     def _refresh_variance(self) -> None:
-        """Cache the covariance written into the corrected samples (refreshed every 100 IMU samples and by
-        :meth:`update_identification`, not per sample nor per odometry update: forming the CMKF's estimate costs
-        more than the update)."""
+        """Cache the covariance written into the corrected samples (every 100 IMU samples and by
+        :meth:`update_identification`)."""
         variance, _ = self._covariance()
         if variance is None:
             self._variance_cache = (None, None)
@@ -257,8 +236,8 @@ class OnlineIdentifier:
                                      lambda: self.cmkf_feed.estimate)
 
     def update_identification(self) -> None:
-        """Feed the queued stationary samples to the per-axis hypothesis banks and refresh the CMKF status (the
-        node calls it at ``publish_rate``; a batch costs much less than the same samples one by one)."""
+        """Feed the queued stationary samples to the banks in a batch and refresh the CMKF status (at
+        ``publish_rate``)."""
         self._variance_cache = None
         self.cmkf_feed.refresh()
         if self.bank is None:
@@ -303,10 +282,8 @@ class OnlineIdentifier:
         )
 
     def diagnostics(self, wall_now: float, window_s: float) -> list[DiagnosticStatus]:
-        """Statuses per function, computed at steady-clock time ``wall_now`` over the last ``window_s`` seconds.
-
-        Resets the per-window counters (received messages, stamp problems, decision changes).
-        """
+        """Statuses per function at steady-clock time ``wall_now`` over the last ``window_s`` seconds; resets the
+        per-window counters."""
         cfg = self.config
         feed = self.cmkf_feed
         est = self.estimates()

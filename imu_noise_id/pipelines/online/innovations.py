@@ -1,12 +1,7 @@
-"""Are the online filters' innovations white and consistent? One InnovationMonitor per measurement channel.
-
-After every odometry update the CMKF's innovations (per IMU axis: velocity, and position with ``pose_twist``) and
-the gyro-bias filter's (per axis) are standardised by their predicted variances and kept in a
-:class:`~imu_noise_id.core.diagnostics.monitor.InnovationMonitor` (windowed Ljung–Box and NIS tests, the offline
-loop's statistics). Correlated innovations mean the filter's model misses something (vibration, a lever arm, wheel
-slip, coloured odometry noise); inconsistent ones that its noise figures are wrong. The ``Filter innovations``
-status says which channel fails and how, e.g. "model inadequate: accel_y: residuals correlated at lag 1 …".
-"""
+"""Whiteness and consistency of the online filters' innovations: after every odometry update the CMKF's (per IMU axis
+and measurement component) and the gyro-bias filter's standardised innovations go to one
+:class:`~imu_noise_id.core.diagnostics.monitor.InnovationMonitor` per channel; the ``Filter innovations`` status
+names the failing channel."""
 
 from __future__ import annotations
 
@@ -24,18 +19,8 @@ NAME = "Filter innovations"
 
 
 class InnovationChecks:
-    """Innovation monitors of the CMKF (per IMU axis and measurement component) and of the gyro-bias filter.
-
-    Parameters
-    ----------
-    window, lags, alpha : of each :class:`InnovationMonitor` (``innovations.*`` parameters).
-    components : measurement components per axis of the CMKF (1: velocity; 2: position and velocity).
-
-    Raises
-    ------
-    InputError
-        If the monitor parameters are inconsistent (``lags`` not below ``window / 4``).
-    """
+    """Innovation monitors of the CMKF and the gyro-bias filter: ``window``, ``lags``, ``alpha`` of each monitor
+    (``innovations.*``), ``components`` per CMKF axis (1 or 2); InputError unless ``lags`` < ``window / 4``."""
 
     def __init__(self, window: int, lags: int, alpha: float, components: int) -> None:
         names = ("velocity",) if components == 1 else ("position", "velocity")

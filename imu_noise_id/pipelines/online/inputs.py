@@ -1,11 +1,5 @@
-"""The inputs of the online identification: receive book-keeping and the value and stamp checks, done once.
-
-Every input message (IMU, odometry, temperature) passes :meth:`Input.receive`: it is counted (``received``, per
-diagnostics period, arrival time on the steady clock, frame changes), its values must be finite and its header
-stamp usable (:class:`~.stamps.StampChecker`); a rejected message is counted, reported as an event, and goes no
-further; a message after a jump in its stamps is held until the next one says whether the jump was real.
-:class:`SaturationCheck` flags IMU samples at the sensor's full scale.
-"""
+"""The inputs of the online identification: receive book-keeping and the value and stamp checks
+(:class:`~.stamps.StampChecker`), done once per message; :class:`SaturationCheck` flags full-scale IMU samples."""
 
 from __future__ import annotations
 
@@ -59,15 +53,10 @@ class Input:
 
     def receive(self, t: float, finite: bool, frame_id: str, wall_time: float | None, nonfinite: str, *,
                 payload: Any = None) -> list[tuple[str, Any]]:
-        """Book-keeping and checks of one message stamped ``t`` [s] that arrived at ``wall_time`` (steady clock).
-
-        ``finite`` says whether its values are all finite and plausible; ``nonfinite`` names what is not, for the
-        event; ``payload`` is what the caller needs to process the message later.
-        Returns the messages to process now, in stamp order, as ``(verdict, payload)``: usually this one (``ok``,
-        ``relearn``, ``restart``); none when it is rejected (non-finite values, bad, duplicated or backward stamp:
-        counted and reported) or held after a jump in its stamps; the held one first (``gap``, ``relearn``) when
-        this message confirmed its jump.
-        """
+        """Book-keeping and checks of one message stamped ``t`` [s] arriving at ``wall_time`` (steady clock);
+        ``finite``: its values are finite and plausible (``nonfinite`` names what is not); ``payload``: kept for
+        processing. Returns ``(verdict, payload)`` pairs to process now, in stamp order (none when rejected or held;
+        the held one first when this one confirmed its jump)."""
         what, stats = self.what, self.stats
         stats.received += 1
         stats.window_received += 1
@@ -125,13 +114,8 @@ class Input:
 
 
 class SaturationCheck:
-    """Flags IMU samples at the sensor's full scale (a bump or a fast turn clipped by the sensor).
-
-    With a declared range (``imu_range.gyro``, ``imu_range.accel``) a sample within 0.5 % of it is saturated.
-    Without, a clipped sensor shows itself by repeating one value at its extreme: a sample whose magnitude equals
-    the largest one seen on its axis, seen at least twice, and above :data:`FLOOR` (below the smallest common full
-    scales, 125 °/s and 2 g, a repeated extreme is ordinary quantisation) is flagged as saturated.
-    """
+    """Flags IMU samples at the sensor's full scale: within 0.5 % of a declared ``imu_range.*``, or without one, a
+    repeated extreme magnitude of its axis above :data:`FLOOR` (125 °/s, 2 g)."""
 
     #: Smallest magnitude that can be a full scale without a declared range: gyro [rad/s], accelerometer [m/s²].
     FLOOR = (2.0, 19.0)

@@ -1,10 +1,7 @@
-"""The white-noise density per axis from the stationary samples, and the covariance of the corrected IMU.
-
-The density is the Allan variance at τ₀ of the samples that passed the stationarity guard
-(:class:`~imu_noise_id.core.white_noise.FirstDifferences`: differences never span a pause). The variance written
-into ``~/imu_corrected`` is N²·f: from this density once ``noise.min_samples`` differences exist, before that from
-the CMKF's Ŝ while it is tracking (its 95 % upper bound on an axis where Ŝ is not identifiable), else unknown.
-"""
+"""The white-noise density per axis from the stationary samples (AV at τ₀,
+:class:`~imu_noise_id.core.white_noise.FirstDifferences`) and the corrected IMU's variance N²·f: from this density
+after ``noise.min_samples`` differences, else from a tracking CMKF's Ŝ (its 95 % upper end where not
+identifiable), else unknown."""
 
 from __future__ import annotations
 
@@ -37,8 +34,8 @@ class StationaryNoise:
         self.differences.break_chain()
 
     def density(self, min_samples: int, period: float | None) -> np.ndarray:
-        """N per axis [u/√Hz] for the nominal sampling ``period`` [s] (not the stamps' intervals, which bursts of
-        host-stamped messages make tiny); NaN before ``min_samples`` differences or while the period is unknown."""
+        """N per axis [u/√Hz] for the nominal ``period`` [s]; NaN before ``min_samples`` differences or without a
+        period."""
         if self.n < min_samples or not period:
             return np.full(6, math.nan)
         return self.differences.density(period)
@@ -49,10 +46,8 @@ class StationaryNoise:
 
     def covariance(self, rate: float, min_samples: int, cmkf: Callable[[], CmkfEstimate]
                    ) -> tuple[np.ndarray | None, str]:
-        """N²·f per axis [u²] for the IMU rate ``rate`` [Hz] and its source: ``stationary`` (this density),
-        ``cmkf`` (Ŝ_g, Ŝ_v of a tracking CMKF, identified on every axis), ``cmkf_upper_bound`` (where an axis is not
-        identifiable, its 95 % upper bound: a conservative variance) or ``none`` (never the filter's prior).
-        ``cmkf`` gives the CMKF's estimate; it is asked for only when the stationary samples are too few."""
+        """N²·f per axis [u²] at IMU rate ``rate`` [Hz] and its source: ``stationary``, ``cmkf`` (identified on every
+        axis), ``cmkf_upper_bound`` or ``none``; ``cmkf`` is called only when stationary samples are too few."""
         if not math.isfinite(rate):
             return None, "none"
         if self.n >= min_samples:

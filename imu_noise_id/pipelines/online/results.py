@@ -11,8 +11,8 @@ import numpy as np
 
 @dataclass
 class CorrectedImu:
-    """One bias-corrected IMU sample; variances are N²·f per axis, or None while no estimate exists; ``source``:
-    what the caller gave with the message (the node: the ROS message it republishes)."""
+    """One bias-corrected IMU sample; variances N²·f per axis, or None while unknown; ``source``: what the caller
+    gave."""
 
     t: float
     gyro: tuple[float, float, float]
@@ -30,20 +30,16 @@ class Estimates:
     ----------
     t : header stamp of the last IMU sample used [s]
     cmkf_status : the CMKF's status (``no_data``, ``imu_only``, ``unobserved``, ``converging``, ``tracking``)
-    gyro_bias, gyro_bias_std : (3,) [rad/s] from the gyro-bias filter (NaN before the first odometry update)
-    accel_bias, accel_bias_std : (3,) [m/s²] from the CMKF (NaN before the first odometry update)
-    noise_density : (6,) white-noise density [u/√Hz] from stationary samples (NaN before ``noise.min_samples``)
-    noise_density_rstd : relative standard deviation of ``noise_density``
-    noise_samples : number of stationary sample differences used
-    psd : (6,) the CMKF's Ŝ_g per gyro axis [rad²/s] and Ŝ_v per accelerometer axis [m²/s³] where the data
-        identify it (NaN elsewhere: never the filter's working value); psd_se : (6,) the least squares' standard
-        error; psd_upper : (6,) where the PSD is not identifiable, the upper end of its 95 % interval (NaN elsewhere)
-    covariance : (6,) the variance N²·f [u²] written into ``~/imu_corrected`` (NaN while unknown)
-    covariance_source : ``stationary`` (Allan τ₀ density), ``cmkf`` (√Ŝ) or ``none``
-    imu_rate : nominal IMU rate from the header stamps [Hz]
-    stationary : whether the platform is stationary now
-    bank_theta : parameter name → (6,) θ̂ of each axis's most probable hypothesis (NaN where that hypothesis
-        has no such parameter or the axis has no bank yet)
+    gyro_bias, gyro_bias_std, accel_bias, accel_bias_std : (3,) [rad/s], [m/s²] (NaN before the first odometry
+    update)
+    noise_density, noise_density_rstd, noise_samples : (6,) white-noise density [u/√Hz] from stationary samples (NaN
+        before ``noise.min_samples``), its relative std, the differences used
+    psd, psd_se, psd_upper : (6,) Ŝ_g [rad²/s] and Ŝ_v [m²/s³] where identified, standard error, 95 % upper end where
+        not identifiable (NaN elsewhere)
+    covariance, covariance_source : (6,) N²·f [u²] of ``~/imu_corrected`` and its source (``stationary``, ``cmkf``,
+        ``none``)
+    imu_rate : nominal IMU rate [Hz]; stationary : stationary now
+    bank_theta : parameter → (6,) θ̂ of each axis's most probable hypothesis (NaN where absent)
     """
 
     t: float
@@ -100,14 +96,11 @@ def _nan6() -> np.ndarray:
 
 @dataclass
 class HypothesesReport:
-    """Posterior probabilities per axis (rows in AXES order) and hypothesis (columns in ``names`` order).
+    """Posterior probabilities per axis (rows, AXES order) and hypothesis (columns, ``names`` order; NaN without a
+    bank).
 
-    ``decision`` holds the index of the decided hypothesis per axis (−1: undecided or no bank yet);
-    ``updates`` the number of bank samples per axis; probabilities are NaN for axes without a bank yet;
-    ``notes`` per axis the hypotheses the data seen cannot tell apart (empty when none). Beside the decision, what
-    it rests on: ``decision_probability`` (its probability now, with a GM hypothesis the data cannot tell from it
-    merged into it, so it may exceed the raw probability in ``probabilities``), ``decision_time`` (bank time [s] it
-    was made) and ``gamma`` (the threshold; a decision below it is held by hysteresis); NaN while undecided.
+    ``decision``: index of the decided hypothesis (−1: none); ``updates``: bank samples; ``notes``: hypotheses the
+    data cannot tell apart; ``decision_probability`` (with merged long-memory GMs), ``decision_time`` [s], ``gamma``.
     """
 
     names: tuple[str, ...]
@@ -132,9 +125,8 @@ HYPOTHESES_EXTRA_COLUMNS = ("decision", "bank_updates", "decision_probability", 
 
 
 def decision_text(name: str | None, *, raw: float, held: float, since: float, gamma: float) -> str:
-    """The decision as a person reads it beside the raw probabilities: the name and the time it was made, and why
-    it is not the raw probability's: held by hysteresis below ``gamma``, or resting on a probability with a GM
-    hypothesis merged into it (``held`` above ``raw``). ``"—"`` while undecided."""
+    """The decision as a person reads it beside the raw probabilities (name, time, and why it differs from the raw
+    probability: hysteresis below ``gamma`` or a merged GM); ``"—"`` while undecided."""
     if name is None:
         return "—"
     when = f"{since:.3g} s" if np.isfinite(since) else "an earlier update"

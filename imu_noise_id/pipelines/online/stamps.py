@@ -1,20 +1,11 @@
-"""Header-stamp checks of one input stream: its rate learnt robustly, gaps, outliers, a restarted source.
+"""Header-stamp checks of one input stream (:class:`StampChecker`), against the stream's own history:
 
-Stamps are what the identification runs on, and drivers get them wrong in many ways. :class:`StampChecker`
-judges every stamp against the stream's own history:
-
-- **rate**: the period is the trimmed mean (shortest and longest dropped) of the mean intervals of the last
-  :data:`SUBWINDOWS` blocks of :data:`SUBWINDOW` accepted messages (span / count), so bursts of host-stamped
-  messages (many intervals of microseconds, then a pause) give the mean rate, one long gap does not move it, and a
-  first interval of a microsecond is forgotten once ten more have been seen (no stamp is judged a gap before that);
-- **gap**: an interval longer than ``gap_factor`` × the period; a message after such a jump is *held* until the
-  next one says what it was: a later stamp confirms the jump (the held message is released as ``gap``, then
-  the next is judged), a stamp back on the old time line makes the held one an isolated ``outlier`` (rejected; its
-  neighbours are not); :data:`RELEARN_COUNT` gaps in a row of nearly equal length are a new rate (``relearn``:
-  a rate drop of more than ``gap_factor``);
-- **backward**: a stamp behind the last accepted one is rejected; :attr:`backward_reset_count` of them in a row that
-  follow one another at about the stream's rate are a restarted source (``restart``: a new time line, e.g. a bag
-  played again), not noise;
+- **rate**: trimmed mean of the mean intervals of the last :data:`SUBWINDOWS` blocks of :data:`SUBWINDOW`
+  accepted messages (bursts give the mean rate; one gap does not move it); known after :data:`LEARN` intervals;
+- **gap**: an interval longer than ``gap_factor`` × the period; the message is *held* until the next: a later
+  stamp confirms it (``gap``), one back on the old time line makes it an ``outlier``; :data:`RELEARN_COUNT`
+  nearly equal gaps in a row are a new rate (``relearn``);
+- **backward**: rejected; ``backward_reset_count`` in a row at about the stream's rate are a ``restart``;
 - ``duplicate`` and ``bad_stamp`` (zero or not finite) are rejected.
 """
 
@@ -38,13 +29,9 @@ VERDICTS = ("ok", "gap", "relearn", "restart", "hold", "outlier", "bad_stamp", "
 
 @dataclass
 class StampChecker:
-    """Header-stamp checks for one input stream (see the module docstring).
-
-    :meth:`check` returns ``(verdict, held)``: the verdict of this stamp — ``ok``, ``relearn``, ``restart``
-    (accepted), ``hold`` (kept until the next stamp), or ``bad_stamp``, ``duplicate``, ``backward`` (rejected) —
-    and the verdict of the stamp held before it, if this one settled it: ``gap`` or ``relearn`` (accepted: process
-    it before this one) or ``outlier`` (rejected). ``counts`` counts every verdict.
-    """
+    """Header-stamp checks for one input stream (module docstring). :meth:`check` returns ``(verdict, held)``: this
+    stamp's ``ok``, ``relearn``, ``restart``, ``hold``, ``bad_stamp``, ``duplicate`` or ``backward``, and the held
+    stamp's ``gap``, ``relearn`` (process it first) or ``outlier``; ``counts`` counts every verdict."""
 
     gap_factor: float = 10.0
     backward_reset_count: int = 10
@@ -146,9 +133,7 @@ class StampChecker:
         self._means.clear()
 
     def _accept(self, t: float) -> None:
-        """``t`` is the new last stamp; its interval counts towards the period (a gap too: the median of the
-        blocks' means is what keeps one gap from moving the period, and a driver's pauses between bursts are part
-        of its mean rate)."""
+        """``t`` is the new last stamp; its interval counts towards the period (a gap too)."""
         block = self._block
         block.append(t)
         self.last = t

@@ -1,11 +1,6 @@
-"""Stationarity for the online identification: the decision with hysteresis, and the guard delay line.
-
-The noise identification (white-noise density, hypothesis bank) may only see samples of a platform standing
-still. :class:`StationarityDetector` decides from the odometry twist and the IMU statistics with hysteresis;
-:class:`StationaryGate` adds the guard: stationary samples wait ``stationary.guard`` seconds and are dropped when
-motion is detected meanwhile, so the start of a motion — already under way but not yet detected — never reaches
-the identification.
-"""
+"""Stationarity for the online identification: :class:`StationarityDetector` (odometry twist and IMU statistics,
+with hysteresis) and :class:`StationaryGate` (stationary samples wait ``stationary.guard`` seconds and are dropped
+if motion is detected meanwhile)."""
 
 from __future__ import annotations
 
@@ -20,15 +15,13 @@ from .config import OnlineConfig
 
 @dataclass
 class StationarityDetector:
-    """Stationary / moving decision from the odometry twist and the IMU statistics, with hysteresis.
+    """Stationary / moving decision with hysteresis.
 
-    The IMU says "still" when the exponentially weighted (time constant ``window``) standard deviation of every
-    gyro axis is below ``max_gyro_std``, of every accelerometer axis below ``max_accel_std``, and the weighted
-    mean angular rate minus the current gyro bias estimate is below ``max_gyro_rate`` in norm (a constant turn
-    has a small standard deviation). Fresh odometry (stamp within ``odom_timeout`` of the IMU stamp) says
-    "still" when its linear and angular speeds are below their thresholds; without fresh odometry the IMU
-    decides alone unless ``require_odometry``. The platform becomes stationary after the evidence said "still"
-    for ``enter_delay`` seconds without interruption and stops being stationary at the first contrary sample.
+    IMU "still": exponentially weighted (time constant ``window``) std of every gyro axis below ``max_gyro_std``, of
+    every accelerometer axis below ``max_accel_std``, and the mean rate minus the gyro bias below ``max_gyro_rate``.
+    Fresh odometry (within ``odom_timeout``) "still": speeds below their thresholds; without it the IMU decides alone
+    unless ``require_odometry``. Stationary after ``enter_delay`` seconds of "still"; moving at the first contrary
+    sample.
     """
 
     config: OnlineConfig
