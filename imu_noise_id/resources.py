@@ -1,27 +1,18 @@
 """Files shipped with the package and user configuration files: found and parsed here, for the node and the CLI.
 
-The default parameter and hypothesis files (:data:`NODE_PARAMETERS`, :data:`DEFAULT_HYPOTHESES`) have one copy, in
-``config/`` at the top of the source tree (beside ``package.xml``, the ament convention). ``setup.py`` installs
-them as data files into ``<prefix>/share/imu_noise_id/config/``; they are not package data. :func:`packaged_config`
-looks for a file in these folders, in this order, and returns the first copy found:
+The default files (:data:`NODE_PARAMETERS`, :data:`DEFAULT_HYPOTHESES`) live once in ``config/`` at the top of the
+source tree; ``setup.py`` installs them into ``<prefix>/share/imu_noise_id/config/``. :func:`packaged_config`
+returns the first copy found in, in order:
 
-1. ``config/`` beside the package directory, when ``package.xml`` is there too: a source checkout, an editable
-   install (``pip install -e .`` installs no data files) or a ``colcon build --symlink-install``;
-2. ``<prefix>/share/imu_noise_id/config/``, where ``<prefix>`` is the installation prefix of the imported package,
-   the folder holding the ``lib/`` (``lib64/``, ``Lib/``) that holds its ``site-packages/`` or ``dist-packages/``:
-   a ``pip install .`` or wheel install into a venv, ``--user`` or ``--prefix``, and a colcon install
-   (``install/imu_noise_id/share/imu_noise_id/config/``);
-3. ``sys.prefix/share/imu_noise_id/config/``: the running interpreter's data directory, where pip puts the data
-   files of an install into this environment;
-4. ``config/`` in the package's ament share directory, when ``ament_index_python`` can be imported and
-   ``AMENT_PREFIX_PATH`` names a prefix that holds the package (a sourced ROS workspace). ament is optional: pip
-   installs neither need nor require it.
+1. ``config/`` beside the package directory when ``package.xml`` is there too (checkout, editable install,
+   ``colcon build --symlink-install``);
+2. ``<prefix>/share/imu_noise_id/config/``, ``<prefix>`` the installation prefix of the imported package (venv,
+   ``--user``, ``--prefix``, colcon install);
+3. ``sys.prefix/share/imu_noise_id/config/``;
+4. the package's ament share directory, when ``ament_index_python`` imports and ``AMENT_PREFIX_PATH`` holds it.
 
-The files of the imported code come first, so an editable checkout never picks up an older installed copy. When no
-folder has the file, :func:`packaged_config` raises :class:`~.core.errors.InputError` naming the file and every
-folder searched, and saying what to do: reinstall (``pip install .`` or ``colcon build``), run from a checkout that
-has ``config/``, or give the file explicitly (``--params-file``, ``identify --hypotheses``, the node's
-``hypotheses.file``).
+Without the file it raises :class:`~.core.errors.InputError` naming the file, every folder searched and the fix
+(reinstall, run from a checkout, or give the file explicitly).
 """
 
 from __future__ import annotations
@@ -79,13 +70,7 @@ def config_dirs() -> list[Path]:
 
 def packaged_config(name: str) -> Path:
     """Path of the shipped configuration file ``name`` (e.g. :data:`NODE_PARAMETERS`): the first copy found in
-    :func:`config_dirs` (order and error: module docstring).
-
-    Raises
-    ------
-    InputError
-        When none of the folders has the file.
-    """
+    :func:`config_dirs`; InputError when none has it."""
     dirs = config_dirs()
     for d in dirs:
         if (d / name).is_file():

@@ -1,12 +1,10 @@
-"""The options the subcommands share, with one spelling and one meaning each (issue 13).
+"""The options the subcommands share, with one spelling and one meaning each.
 
-- ``--out DIR``: every command that writes a folder defaults to ``<BAG stem>_<command>`` in the current directory
-  (``imu_noise_id_<command>`` for commands without one bag: ``criteria``, ``batch``), so that analyses of
-  different bags never overwrite each other (:func:`default_out`).
+- ``--out DIR``: defaults to ``<BAG stem>_<command>`` in the current directory (``imu_noise_id_<command>`` without
+  one bag: ``criteria``, ``batch``) (:func:`default_out`).
 - ``--topic T``: the sensor_msgs/Imu topic (older spellings stay as hidden aliases).
 - ``--axis AXIS[,AXIS…]``: repeatable and/or a comma list; default all six axes (:func:`parse_axes`).
-- ``--model`` / ``--start``: model specs are checked while the command line is parsed, before any bag is read or
-  any folder made (:func:`model_spec`).
+- ``--model`` / ``--start``: model specs checked while the command line is parsed (:func:`model_spec`).
 """
 
 from __future__ import annotations

@@ -1,10 +1,6 @@
-"""Launch-free recipe for running the node: its environment (DDS on loopback), its command line, stopping it.
-
-ROS 2 from PyPI has no ``launch`` package and no ``ros2`` command: a node is a process started with
-``python -m imu_noise_id.ros.node --ros-args …``. The demo, the benchmarks and the tests start it through these helpers,
-so every process they start keeps DDS on 127.0.0.1 (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) and writes its
-rclpy logs into a temporary folder.
-"""
+"""Launch-free recipe for running the node (ROS 2 from PyPI has no ``launch`` package): its environment (DDS on
+127.0.0.1, ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, rclpy logs in a temporary folder), its command line
+(``python -m imu_noise_id.ros.node --ros-args …``), stopping it."""
 
 from __future__ import annotations
 
@@ -25,11 +21,7 @@ def ros_environment() -> dict[str, str]:
 
 
 def node_command(params_file: Path, *extra: str) -> list[str]:
-    """The command line that starts the node with ``params_file`` (plus extra ``--ros-args`` items, e.g. remaps).
-
-    No remap is needed for bags written by ``imu-noise-id simulate`` or the demo: the node's default inputs are their
-    topics (``/imu/data``, ``/odom``, ``/imu/temperature``).
-    """
+    """The command line that starts the node with ``params_file`` (plus extra ``--ros-args`` items, e.g. remaps)."""
     return [sys.executable, "-m", "imu_noise_id.ros.node", "--ros-args", "--params-file", str(params_file), *extra]
 
 
