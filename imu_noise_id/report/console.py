@@ -60,6 +60,8 @@ def final_table(finals: dict[str, FinalModel]) -> str:
         b_text = ("" if b.reached else "<") + f"{_fmt(b.value)} [{_fmt(b.ci95[0])}, {_fmt(b.ci95[1])}]"
         lines.append(f"{axis:8s} {f.model:22s} N {n_text:34s} K {k_text:34s} B {b_text}")
     lines += [f"{axis:8s} K flagged: {f.random_walk.source}" for axis, f in finals.items() if f.random_walk_above_bound]
+    lines += [f"{axis:8s} N and K unresolved (upper bounds: the overbound's): {f.unresolved}"
+              for axis, f in finals.items() if f.unresolved]
     return "\n".join(lines)
 
 

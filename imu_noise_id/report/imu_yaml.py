@@ -49,7 +49,9 @@ def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
     Per sensor with a final model on all three axes: ``<key>_xyz``, ``<key>_ci_xyz`` and ``<key>_method_xyz`` are
     the final models' values, intervals and sources (``model`` or, for a random walk the model lacks,
     ``allan_slope``/``allan_upper_bound``); the Kalibr key is their max; the Allan-slope values move to
-    ``<key>_allan_xyz`` (with ``_allan_ci_xyz``, ``_allan_method_xyz``) and ``<key>_allan`` (their max);
+    ``<key>_allan_xyz`` (with ``_allan_ci_xyz``, ``_allan_method_xyz``) and ``<key>_allan`` (their max); an axis
+    whose final model is not trusted for them (:mod:`imu_noise_id.pipelines.analyze.resolution`) has the method
+    ``unresolved``, its overbound's value and the interval (0, value);
     ``<prefix>_noise_stddev_per_sample_xyz`` is the per-sample standard deviation of the high-frequency noise.
     """
     for sensor, axes in _SENSORS:
@@ -66,7 +68,7 @@ def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
                 if v.value is not None:
                     values.append(v.value)
                     cis.append([num(v.ci95[0]), num(v.ci95[1])])
-                    methods.append("model")
+                    methods.append(v.method)
                 else:  # not identifiable from the record: the Allan-slope reading (a bound when not reached)
                     values.append(doc[f"{key}_allan_xyz"][i])
                     cis.append(list(doc[f"{key}_allan_ci_xyz"][i]))
@@ -153,7 +155,10 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
             "# narrow oscillations (OSC), sinusoids, GMs, flicker noise (BI), the shape of the sensor's own filter",
             "# (LPF, MA, broad OSC) and temperature are kept OUT of them (see model.yaml).",
             "# *_method_xyz: model, or allan_slope / allan_upper_bound where the final model has no random walk",
-            "# (not identifiable from this record). The Allan-slope readings are in *_allan_xyz and *_allan.",
+            "# (not identifiable from this record), or unresolved: the final model is not trusted for the axis (the",
+            "# closed loop's verdict failed, or its N disagrees with the data's passband level; *_source_xyz says",
+            "# which): the value is the axis's overbound (an upper bound, below), its interval [0, value].",
+            "# The Allan-slope readings are in *_allan_xyz and *_allan.",
             "# *_noise_stddev_per_sample_xyz: per-sample std of the high-frequency noise at update_rate, in u: use it",
             "# (squared) as the Imu message covariance; it is below noise_density*sqrt(update_rate) where the",
             "# sensor's own low-pass cuts below the Nyquist frequency.",

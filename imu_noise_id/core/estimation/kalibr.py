@@ -55,11 +55,14 @@ class KalibrValue:
     value : the number [u/√Hz or u/s/√Hz]; None when not identifiable from the record
     ci95 : its 95 % interval (lo, hi); (nan, nan) when the fit holds no uncertainty
     source : which components it comes from, in words
+    method : ``model`` (the fitted components' value) or ``unresolved`` (the model is not trusted for it: the value
+        is an upper bound, the axis's overbound, and ``ci95`` is (0, value))
     """
 
     value: float | None
     ci95: tuple[float, float]
     source: str
+    method: str = "model"
 
 
 def _ci_from_log_sd(value: float, sd: float) -> tuple[float, float]:

@@ -14,7 +14,10 @@ adapter):
    Kalibr numbers taken from it;
 5. the simulation band of every axis's final model (the AVs of simulations of it, for the report's plots);
 6. the overbound of every axis (:mod:`.overbound`): the smallest WN+RW covering the data's upper Allan bound and
-   the final model over the filter's τ range (also without the model stage: then the data's bound alone).
+   the final model over the filter's τ range (also without the model stage: then the data's bound alone);
+7. the resolution of every final model (:mod:`.resolution`): an axis whose loop verdict failed, or whose N
+   disagrees with the data's passband level, gives as upper bounds (method ``unresolved``) the N and K of its
+   overbound of the data's bound alone (the untrusted model's AV left out).
 
 Stages 2–5 of one axis do not depend on the other axes: on a long record they run in worker processes, one axis
 each (``AnalyzeOptions.jobs``), and their results come back in axis order, the same numbers as one after another.
@@ -41,7 +44,8 @@ from ...core.simulation.bands import allan_band
 from ..loop import ImuLoop, LoopResult
 from .final import FinalModel, final_model
 from .models import AUTO, AxisModel, ModelStage, fit_axis
-from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, overbounds
+from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, data_overbound, overbounds
+from .resolution import resolved, unresolved_reason
 from .static import StaticAnalysis, analyze_static
 
 #: Simulations of each final model drawn as its band.
@@ -170,6 +174,12 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
     if options.models.enabled:
         _model_stages(imu, temperature, options, result, on_axis)
     result.overbounds = overbounds(static, result.finals, options.horizon_s)
+    for axis, final in result.finals.items():
+        why = unresolved_reason(final, result.loops.get(axis), static.slopes[axis].noise_density)
+        if why is not None:
+            result.overbounds[axis] = data_overbound(static, axis, options.horizon_s)
+            result.finals[axis] = resolved(final, why, result.overbounds[axis])
+            result.warnings.append(f"{axis}: N and K unresolved, the overbound's values given (upper bounds): {why}")
     return result
 
 

@@ -38,6 +38,8 @@ class FinalModel:
     noise_stddev_per_sample : √(per-sample variance of the high-frequency noise) at the recording's dt [u]
     bias_instability, bias_instability_allan : B [u] from the model (with interval) and from the data's AV
     random_walk_bound : the largest K the data's AV at τ ≥ a tenth of the record supports (95 %, simultaneous)
+    unresolved : why the model is not trusted for N and K (:mod:`.resolution`), None when it is; then
+        ``noise_density`` and ``random_walk`` are the overbound's and ``model_values`` the model's own (N, K)
     """
 
     fit: FitResult
@@ -49,11 +51,13 @@ class FinalModel:
     bias_instability: BiasInstability
     bias_instability_allan: BiasInstability
     random_walk_bound: RandomWalkBound
+    unresolved: str | None = None
+    model_values: tuple[kalibr.KalibrValue, kalibr.KalibrValue] | None = None
 
     @property
     def random_walk_above_bound(self) -> bool:
-        """Whether the final K is above what the data's long-τ AV supports."""
-        return self.random_walk_bound.exceeded_by(self.random_walk.value)
+        """Whether the final K, a model's value, is above what the data's long-τ AV supports."""
+        return self.unresolved is None and self.random_walk_bound.exceeded_by(self.random_walk.value)
 
 
 def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResult) -> FinalModel:

@@ -12,7 +12,7 @@ Allan-slope readings where it has none), so the inflation factors over them are 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -113,6 +113,14 @@ def axis_overbound(static: StaticAnalysis, axis: str, final: FinalModel | None,
     n_ref, k_ref, source = _references(static, axis, final)
     result = overbound_wn_rw(tau, bound, static.dt, floor=(n_ref, k_ref))
     return AxisOverbound(result, (float(tau[0]), float(tau[-1])), horizon_s, covers, n_ref, k_ref, source)
+
+
+def data_overbound(static: StaticAnalysis, axis: str, horizon_s: float = DEFAULT_HORIZON_S) -> AxisOverbound:
+    """The overbound of the data's upper Allan bound alone (no model's AV, no floor but the Allan slopes'), measured
+    against itself: what an axis whose final model is not trusted gives as its N and K (:mod:`.resolution`)."""
+    bound = axis_overbound(static, axis, None, horizon_s)
+    return replace(bound, reference_noise_density=bound.noise_density, reference_random_walk=bound.random_walk,
+                   reference_source="this overbound (the final model is unresolved: its values are not given)")
 
 
 def overbounds(static: StaticAnalysis, finals: dict[str, FinalModel],

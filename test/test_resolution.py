@@ -1,0 +1,100 @@
+"""An axis whose final model is not trusted never pastes a component value as identified: method ``unresolved``,
+the overbound's N and K (upper bounds), the reason in every output."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import yaml
+from scipy import signal
+
+from imu_noise_id.core.allan.slopes import SlopeComponent
+from imu_noise_id.core.axes import AXES, GYRO_AXES
+from imu_noise_id.core.estimation.kalibr import KalibrValue
+from imu_noise_id.core.noise.components import RW, WN
+from imu_noise_id.core.simulation.static import simulate_static_imu
+from imu_noise_id.pipelines.analyze import AnalyzeOptions, analyze
+from imu_noise_id.pipelines.analyze.resolution import PASSBAND_FACTOR, passband_disagreement
+from imu_noise_id.report.analysis import write_analysis
+from imu_noise_id.report.console import final_table
+
+RATE = 200.0
+PASSBAND = 1e-3  # m/s²/√Hz, the white noise's density before the sensor's second-order low-pass
+
+
+def _reading(value: float, ci: tuple[float, float], method: str = "fit") -> SlopeComponent:
+    return SlopeComponent("WN", -1.0, value**2, value, ci, method, (0.1, 10.0), 12)
+
+
+@pytest.mark.parametrize(("n", "ci", "disagrees"), [
+    (8.1e-10, (0.0, 7e-7), True),  # a white noise driven to ~0 beside the process that took the passband
+    (1.02e-3, (1.0e-3, 1.04e-3), False),  # within the reading's interval
+    (1.3e-3, (1.29e-3, 1.31e-3), False),  # intervals disjoint, but within the practical factor
+    (2.5e-3, (2.4e-3, 2.6e-3), True),  # above it by more than the factor
+    (1e-3, (math.nan, math.nan), False),  # no interval: the value itself, within
+])
+def test_passband_disagreement_needs_disjoint_intervals_and_the_factor(n, ci, disagrees):
+    reading = _reading(1.0e-3, (0.97e-3, 1.03e-3))
+    why = passband_disagreement(KalibrValue(n, ci, "WN"), reading)
+    assert (why is not None) is disagrees
+    if disagrees:
+        assert f"{n / 1e-3:.3g} times the data's passband level" in why
+
+
+def test_an_upper_bound_reading_disagrees_only_with_an_n_above_it():
+    bound = _reading(8e-5, (0.0, 8e-5), method="upper_bound")
+    assert passband_disagreement(KalibrValue(8e-10, (0.0, 7e-7), "WN"), bound) is None
+    assert passband_disagreement(KalibrValue(PASSBAND_FACTOR * 1e-4, (1.9e-4, 2.1e-4), "WN"), bound) is not None
+
+
+@pytest.fixture(scope="module")
+def filtered(tmp_path_factory):
+    """5 min at 200 Hz: accel_y's white noise through a digital 2nd-order Butterworth low-pass at 12 Hz (a consumer
+    part's DLPF), the other axes WN + RW. A first-order GM takes accel_y's filtered noise beside a white noise
+    driven to ~0 (N ≈ 8·10⁻¹⁰ before this rule), and the loop's verdict fails."""
+    model = {a: [WN(1.7e-4), RW(2e-5)] if a in GYRO_AXES else [WN(2e-3), RW(3e-4)] for a in AXES}
+    imu = simulate_static_imu(model, RATE, 300.0, seed=52)
+    rng = np.random.default_rng(52)
+    white = rng.standard_normal(imu.t.size + 2000) * PASSBAND * math.sqrt(RATE)
+    accel = imu.accel.copy()
+    accel[:, 1] = signal.sosfilt(signal.butter(2, 12.0, fs=RATE, output="sos"), white)[2000:]
+    imu = replace(imu, accel=accel)
+    result = analyze(imu, options=AnalyzeOptions(jobs=1))
+    out = tmp_path_factory.mktemp("filtered")
+    write_analysis(result, out, rostopic="/imu/data", meta={})
+    return result, out
+
+
+def test_a_failed_verdict_pastes_the_overbound_as_unresolved(filtered):
+    result, out = filtered
+    final = result.finals["accel_y"]
+    assert not result.loops["accel_y"].passed
+    assert final.unresolved is not None and "verdict failed" in final.unresolved
+    assert final.noise_density.method == final.random_walk.method == "unresolved"
+    overbound = result.overbounds["accel_y"]
+    assert (final.noise_density.value, final.random_walk.value) == (overbound.noise_density, overbound.random_walk)
+    assert overbound.inflation_noise_density == overbound.inflation_random_walk == 1.0
+    # an upper bound on the passband level, never a value 10⁶ below it, and not inflated by the untrusted model
+    assert PASSBAND <= final.noise_density.value <= 1.5 * PASSBAND
+    assert final.model_values[0].value < 1e-3 * PASSBAND  # the model's own, kept in model.yaml
+    doc = yaml.safe_load((out / "imu.yaml").read_text())
+    assert doc["accelerometer_noise_density_method_xyz"][1] == "unresolved"
+    assert doc["accelerometer_noise_density_xyz"][1] == pytest.approx(final.noise_density.value, rel=1e-5)
+    assert doc["accelerometer_noise_density_ci_xyz"][1][0] == 0.0
+    assert doc["accelerometer_noise_density"] >= doc["accelerometer_noise_density_xyz"][1]
+    assert "accel_y  N and K unresolved" in final_table(result.finals)
+    entry = yaml.safe_load((out / "model.yaml").read_text())
+    assert "model_values" in str(entry)
+
+
+def test_resolved_axes_keep_their_model_values(filtered):
+    result, out = filtered
+    doc = yaml.safe_load((out / "imu.yaml").read_text())
+    for i, axis in enumerate(GYRO_AXES):
+        if result.loops[axis].passed:
+            assert result.finals[axis].unresolved is None
+            assert doc["gyroscope_noise_density_method_xyz"][i] == "model"
+            assert result.finals[axis].noise_density.value == pytest.approx(1.7e-4, rel=0.05)
