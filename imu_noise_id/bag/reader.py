@@ -154,9 +154,8 @@ def read_odometry(path: str | Path, topic: str | None = None) -> OdometrySeries:
 
 def read_static(path: str | Path, topic: str | None = None, temperature_topic: str | None = None,
                 progress: Progress | None = None, *, rate_hz: float | None = None) -> BagContents:
-    """What a static analysis reads in one pass: the IMU series and, where present, the temperature [°C]. ``path``
-    may be
-    an ``.npz`` with ``t`` [s] (or ``fs_hz``), ``gyro`` [rad/s] (N, 3), ``accel`` [m/s²] (N, 3)."""
+    """What a static analysis reads in one pass: the IMU series and, where present, the temperature [°C]. ``path`` may
+    be an ``.npz`` with ``t`` [s] (or ``fs_hz``), ``gyro`` [rad/s] (N, 3), ``accel`` [m/s²] (N, 3)."""
     p = Path(path).expanduser()
     if p.suffix == ".npz":
         imu = read_npz(p, rate_hz)

@@ -38,8 +38,7 @@ class Scan:
     channels : connection id → :class:`Channel`; counts : connection id → complete messages
     blocks, read_block : units to read again (chunks, pages) and block → ``(connection id, receive [ns], raw)``
     file_bytes, read_bytes : file size, and bytes up to the end of the last complete record
-    data_bytes : where the data ended when whole, if the file says (ROS 1 ``index_pos``, SQLite page count), else
-    None
+    data_bytes : where the data ended when whole, if the file says (ROS 1 ``index_pos``, SQLite page count), else None
     data_complete : the data ended properly (only the index or summary is damaged)
     first_ns, last_ns : receive times of the first and last complete messages
     ros2 : CDR messages (rosbag2) rather than ROS 1

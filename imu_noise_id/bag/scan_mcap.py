@@ -67,8 +67,8 @@ def _records(buf: bytes) -> list[tuple[int, bytes]]:
 
 
 def _chunk_data(rec: bytes, partial: bool = False) -> bytes | None:
-    """A chunk record's uncompressed records, or None when damaged; ``partial``: the file ends inside it
-    (uncompressed)."""
+    """A chunk record's uncompressed records, or None when damaged; ``partial``: the file ends inside it (uncompressed).
+    """
     from rosbags.rosbag2.storage_mcap import decompress
 
     try:

@@ -147,8 +147,7 @@ class TopicStream:
 
 
 def _mark_orientation_not_provided(q: np.ndarray, cov0: np.ndarray) -> None:
-    """Zero the orientation rows not provided (REP-145: ``orientation_covariance[0] == -1``) or unusable (NaN/inf,
-    zero
+    """Zero the orientation rows not provided (REP-145: ``orientation_covariance[0] == -1``) or unusable (NaN/inf, zero
     quaternion); :func:`_imu` turns the zero marker into NaN rows after the repair."""
     bad = (cov0 == -1.0) | ~np.isfinite(q).all(axis=1)
     if bad.any():

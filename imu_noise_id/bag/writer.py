@@ -50,10 +50,8 @@ def encode_cdr(
 ) -> tuple[np.ndarray, int]:
     """Serialise ``n`` flat messages to little-endian CDR: (n, length) uint8 rows and the length.
 
-    ``values``: leaf path → (n,) or (n, count) array (missing leaves zero); ``strings``: string leaf → value (the
-    same
-    in every message; missing ones empty).
-    """
+    ``values``: leaf path → (n,) or (n, count) array (missing leaves zero); ``strings``: string leaf → value (the same
+    in every message; missing ones empty)."""
     leaves = flatten(fielddefs, msgtype)
     n = next(iter(values.values())).shape[0]
     encoded = {leaf.path: strings.get(leaf.path, "").encode() for leaf in leaves if leaf.kind == "string"}
@@ -135,8 +133,7 @@ def write_bag(
     temperature_topic: str = "/imu/temperature",
     receive_t: np.ndarray | None = None,
 ) -> Path:
-    """Write a rosbag2 bag (directory ``path`` with ``metadata.yaml``, must not exist) holding the series; returns
-    it.
+    """Write a rosbag2 bag (directory ``path`` with ``metadata.yaml``, must not exist) holding the series; returns it.
 
     Parameters
     ----------

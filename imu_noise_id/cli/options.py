@@ -103,8 +103,8 @@ def model_spec(*keywords: str) -> Callable[[str], str]:
 
 
 def span_spec(text: str) -> tuple[float, float]:
-    """An argparse ``type`` for ``START:END``, seconds from the first sample (``START:`` to the end, ``:END`` from
-    the start)."""
+    """An argparse ``type`` for ``START:END``, seconds from the first sample (``START:`` to the end, ``:END`` from the
+    start)."""
     start, sep, end = text.partition(":")
     try:
         if not sep:

@@ -86,9 +86,8 @@ class ImuSeries:
         return 1.0 / self.dt
 
     def between(self, start_s: float, end_s: float) -> ImuSeries:
-        """The samples from ``start_s`` to ``end_s`` [s] after the first one (both included; ``end_s`` may be inf),
-        with a
-        note saying which part they are; the period estimate is kept. InputError for an empty, reversed or one-sample
+        """The samples from ``start_s`` to ``end_s`` [s] after the first one (both included; ``end_s`` may be inf), with
+        a note saying which part they are; the period estimate is kept. InputError for an empty, reversed or one-sample
         span."""
         elapsed = self.t - self.t[0]
         if not (math.isfinite(start_s) and 0.0 <= start_s < end_s):

@@ -128,8 +128,7 @@ def _take(columns: list[np.ndarray], keep: np.ndarray) -> list[np.ndarray]:
 
 def find_gaps(t: np.ndarray, period: SamplePeriod | float, gap_factor: float = GAP_FACTOR
               ) -> list[tuple[float, float, int]]:
-    """Intervals of sorted stamps ``t`` longer than ``gap_factor`` × the period (bursty stamps: × their
-    99th-percentile
+    """Intervals of sorted stamps ``t`` longer than ``gap_factor`` × the period (bursty stamps: × their 99th-percentile
     interval): (start [s], length [s], missing samples)."""
     dt = period.value if isinstance(period, SamplePeriod) else float(period)
     if t.shape[0] < 2 or not dt > 0:
@@ -142,8 +141,7 @@ def find_gaps(t: np.ndarray, period: SamplePeriod | float, gap_factor: float = G
 
 
 def _glitches(t: np.ndarray) -> np.ndarray:
-    """Samples (message order) more than :data:`GLITCH_PERIODS` periods from both neighbours, which agree within a
-    tenth
+    """Samples (message order) more than :data:`GLITCH_PERIODS` periods from both neighbours, which agree within a tenth
     of that."""
     bad = np.zeros(t.shape[0], dtype=bool)
     if t.shape[0] < 3:

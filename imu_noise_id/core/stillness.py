@@ -116,10 +116,9 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def motion_bursts(imu: ImuSeries, dt: float) -> list[MotionBurst]:
-    """Stretches of at least :data:`BURST_MIN_S` where on some axis every window's spread is :data:`BURST_RATIO` or
-    more
-    times the median window's (:func:`spread_ratios`); overlapping stretches of several axes are one burst. ``dt``:
-    the sampling period [s]."""
+    """Stretches of at least :data:`BURST_MIN_S` where on some axis every window's spread is :data:`BURST_RATIO` or more
+    times the median window's (:func:`spread_ratios`); overlapping stretches of several axes are one burst. ``dt``: the
+    sampling period [s]."""
     width, needed = burst_window(dt)
     if len(imu) // width < 2 * needed:
         return []
@@ -152,9 +151,8 @@ def still_span(bursts: list[MotionBurst], duration_s: float) -> tuple[float, flo
 
 def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY) -> tuple[float, float] | None:
     """The longest stretch (start, end [s] from the first sample) of at least :data:`QUIET_MIN_S` over which every
-    axis's
-    and |accel|'s :data:`BLOCK_S` means stay within :data:`QUIET_RANGE` × the block tests' limits of each other and
-    which passes those tests, less a block and :data:`STILL_MARGIN_S` at an end next to motion; None without one."""
+    axis's and |accel|'s :data:`BLOCK_S` means stay within :data:`QUIET_RANGE` × the block tests' limits of each other
+    and which passes those tests, less a block and :data:`STILL_MARGIN_S` at an end next to motion; None without one."""
     n = len(imu)
     per_block = max(round(BLOCK_S / dt), 1)
     if n // per_block < 2:

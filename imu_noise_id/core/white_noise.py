@@ -56,8 +56,8 @@ class FirstDifferences:
         return np.maximum(self._sum_sq / self.n - mean * mean, 0.0)
 
     def density(self, dt: float | None = None) -> np.ndarray:
-        """N = √(Var(d)/2 · Δt) per channel [u/√Hz]; ``dt`` [s], or None for the mean span of the stamped
-        differences."""
+        """N = √(Var(d)/2 · Δt) per channel [u/√Hz]; ``dt`` [s], or None for the mean span of the stamped differences.
+        """
         if dt is None:
             dt = self.sum_dt / self.n if self.n else math.nan
         return np.sqrt(0.5 * self.variance() * dt)

@@ -44,8 +44,7 @@ class AvBandClaim:
 
     def sentence(self) -> str:
         """The one sentence of the claim, e.g. "The final model's Allan variance lies outside the data's 95 % band
-        (simultaneous over τ) at τ = 12.8–327 s (6 of 14 τ) and inside it elsewhere (largest relative AV error
-        45 %)."
+        (simultaneous over τ) at τ = 12.8–327 s (6 of 14 τ) and inside it elsewhere (largest relative AV error 45 %)."
         """
         band = f"the data's {100 * self.level:.0f} % band (simultaneous over τ)"
         err = (f"largest relative AV error {100 * self.max_rel_av_error:.0f} %"

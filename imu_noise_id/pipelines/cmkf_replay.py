@@ -41,10 +41,9 @@ class CmkfReplayResult:
     """Estimates after every odometry message, the final estimate and what the filter knew.
 
     Attributes ---------- t : (M,) odometry stamps [s]; series : field → (M, 3) (:data:`SERIES_FIELDS`,
-    :data:`DENSITY_FIELDS`) nis_accel, nis_gyro : (M,) NIS of each update (also gated ones; NaN without update);
+        :data:`DENSITY_FIELDS`) nis_accel, nis_gyro : (M,) NIS of each update (also gated ones; NaN without update);
     gated_accel, gated_gyro : (M,) status : (M,) status strings; final : the last estimate; config : the filter's
-    parameters agreement : per-axis IMU/odometry agreement checks; gates : the NIS gates; info : rates, frames,
-    timing
+    parameters agreement : per-axis IMU/odometry agreement checks; gates : the NIS gates; info : rates, frames, timing
     """
 
     t: np.ndarray
@@ -242,9 +241,8 @@ def odometry_problem(e: CmkfEstimate) -> str:
 
 
 def to_yaml_dict(result: CmkfReplayResult, notes: list[str] | None = None) -> dict[str, object]:
-    """The ``cmkf.yaml`` content (per IMU axis x, y, z; SI units; docs/cmkf.md) plus what the filter knew: biases
-    null without an odometry update, noise densities null where not identified (with their 95 % upper end where
-    bounded)."""
+    """The ``cmkf.yaml`` content (per IMU axis x, y, z; SI units; docs/cmkf.md) plus what the filter knew: biases null
+    without an odometry update, noise densities null where not identified (with their 95 % upper end where bounded)."""
     e = result.final
     estimated = e.status not in ("no_data", "no_imu", "imu_only")
     cfg = asdict(result.config)

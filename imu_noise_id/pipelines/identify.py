@@ -52,8 +52,8 @@ class Identification:
 
 def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], source: str,
              refine: int = 0, *, progress: Callable[[int, int], None] | None = None) -> Identification:
-    """Run the bank on each axis of ``series`` with ``refine`` grid-refinement passes; ``progress(done, total)``
-    after each axis."""
+    """Run the bank on each axis of ``series`` with ``refine`` grid-refinement passes; ``progress(done, total)`` after
+    each axis."""
     if len(series) < 2:
         raise InputError(f"{series.topic or 'the IMU series'} has {len(series)} sample(s): need a recording")
     if refine < 0:

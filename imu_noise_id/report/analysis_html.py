@@ -1,7 +1,7 @@
-"""The one self-contained ``report.html`` of an analysis (figures embedded as base64 PNG, no network), written from
-the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult` (nothing recomputed but the figures): the data, the
-numbers users paste, an Allan panel per axis, the model selection, record length, the GMWM, the loop's steps and
-the overbound."""
+"""The one self-contained ``report.html`` of an analysis (figures embedded as base64 PNG, no network), written from the
+:class:`~imu_noise_id.pipelines.analyze.AnalysisResult` (nothing recomputed but the figures): the data, the numbers
+users paste, an Allan panel per axis, the model selection, record length, the GMWM, the loop's steps and the overbound.
+"""
 
 from __future__ import annotations
 

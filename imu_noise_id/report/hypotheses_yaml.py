@@ -15,8 +15,7 @@ from .numbers import num
 
 
 def decision_note(entry: AxisIdentification) -> str:
-    """On what the axis's decision (or its absence) rests: the probability against γ and any GM hypothesis merged
-    into
+    """On what the axis's decision (or its absence) rests: the probability against γ and any GM hypothesis merged into
     its RW twin (whose raw probability may favour the GM)."""
     final, gamma = entry.result.final, entry.hset.gamma
     merged = final.decision_probabilities

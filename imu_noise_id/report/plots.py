@@ -20,8 +20,7 @@ _LINE_LABELS = {"QN": "quantisation", "WN": "white noise", "BI": "bias inst.", "
 
 
 def plot_allan_deviation(result: StaticAnalysis, path: Path) -> Path:
-    """``path`` (PNG): log-log Allan deviation of every axis with its CI band, the fitted slope lines (within a
-    factor
+    """``path`` (PNG): log-log Allan deviation of every axis with its CI band, the fitted slope lines (within a factor
     10 of their τ range) and markers for N at τ = 1 s and K at τ = 3 s."""
     res = result.allan
     tau = res.tau

@@ -9,8 +9,7 @@ With the phase x_0 = 0, x_i = dt·Σ_{j<i} (y_j − ȳ), i = 0..N:
 * ``modified`` MAV(m) = Σ_j (Σ_{i=j}^{j+m−1} x_{i+2m} − 2x_{i+m} + x_i)² / (2 m² τ² (N − 3m + 2)) (SP1065 eq. 14)
 
 O(N) per τ; equal to allantools' ``oadev``, ``ohdev``, ``totdev``, ``mdev`` (``data_type="freq"``). Intervals:
-:mod:`.edf`.
-"""
+:mod:`.edf`."""
 
 from __future__ import annotations
 

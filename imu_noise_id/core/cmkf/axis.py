@@ -107,9 +107,8 @@ class AxisCmkf:
         self.initialised = True
 
     def predict(self, x_pred: np.ndarray, interval: ImuInterval) -> None:
-        """Covariance over ``interval`` (eq. 23) to the already propagated ``x_pred`` (known input U = x_pred − F̂
-        x̂⁺, eq.
-        17); one call per measurement epoch."""
+        """Covariance over ``interval`` (eq. 23) to the already propagated ``x_pred`` (known input U = x_pred − F̂ x̂⁺,
+        eq. 17); one call per measurement epoch."""
         Phi = interval.Phi
         U = np.asarray(x_pred, dtype=float) - self.x @ Phi.T
         self.P = self.predicted_P(interval)
@@ -125,8 +124,7 @@ class AxisCmkf:
 
     def nis(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
         """NIS per axis of the update with ``z`` (n, m), ``R`` (n, m, m), without updating (NaN everywhere when an
-        innovation
-        covariance is not positive definite)."""
+        innovation covariance is not positive definite)."""
         z = np.asarray(z, dtype=float).reshape(self.n, self.m)
         S = self.H @ self.P @ self.H.T + np.asarray(R, dtype=float).reshape(self.n, self.m, self.m)
         if not _all_positive_definite(S):
@@ -135,8 +133,7 @@ class AxisCmkf:
         return np.einsum("ni,ni->n", nu, np.linalg.solve(S, nu[:, :, None])[:, :, 0])
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
-        """Joseph-form update (eqs. 24–27) with ``z`` (n, m), ``R`` (n, m, m) and one estimator step (none across a
-        gap:
+        """Joseph-form update (eqs. 24–27) with ``z`` (n, m), ``R`` (n, m, m) and one estimator step (none across a gap:
         ``new_chain``); NIS per axis."""
         z = np.asarray(z, dtype=float).reshape(self.n, self.m)
         R = np.asarray(R, dtype=float).reshape(self.n, self.m, self.m)

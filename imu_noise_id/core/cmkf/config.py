@@ -20,8 +20,7 @@ class CmkfConfig:
     Attributes
     ----------
     imu_rotation_xyzw : orientation of the IMU frame in the base frame (``C_bi``), ROS quaternion order.
-    measurement : ``"twist"`` (body velocity; wheel odometry) or ``"pose_twist"`` (position and body velocity, eq.
-    8).
+    measurement : ``"twist"`` (body velocity; wheel odometry) or ``"pose_twist"`` (position and body velocity, eq. 8).
     accel_bias_tau, accel_bias_sigma : bias time constant [s] and steady-state σ [m/s²] (eqs. 3–7, known).
     s_v0 : initial Ŝ_v [m²/s³] (paper: 2e-6).
     gyro_bias_tau, gyro_bias_sigma, s_g0 : the same for the gyro [s], [rad/s], [rad²/s].

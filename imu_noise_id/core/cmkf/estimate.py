@@ -35,8 +35,7 @@ class CmkfEstimate:
     nis_accel, nis_accel_dof, nis_accel_mean : last accelerometer update's NIS (also when gated), its dof, the mean
         over the accepted ones among the last ``nis_window``; nis_gyro, nis_gyro_dof, nis_gyro_mean : the gyro's.
     gated : whether the last odometry message's (accelerometer, gyro) update was gated.
-    consistency, consistency_reason : the worse verdict of the two NIS windows (:data:`CONSISTENCY_ORDER`) and,
-    unless
+    consistency, consistency_reason : the worse verdict of the two NIS windows (:data:`CONSISTENCY_ORDER`) and, unless
         consistent, the numbers and likely cause.
     n_stacked : stacked samples in the S_v estimate; counters : messages used, dropped and gated, by reason.
     """

@@ -46,7 +46,7 @@ class VelocityAxisCmkf:
     Parameters
     ----------
     n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³]; pd_check : ``"se_floor"``
-    (:meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` or ``"joint"`` (last positive value);
+        (:meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` or ``"joint"`` (last positive value);
     min_samples : stacked samples before the estimate replaces ``s_v0``.
     """
 
@@ -160,9 +160,8 @@ class VelocityAxisCmkf:
         return np.array(out)
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
-        """Joseph-form update (24)–(27) and one estimator step; NIS per axis. Beyond the paper: where s = P_vv + R ≤
-        0 the
-        update is skipped (``skipped``), NaN returned, the chain restarted."""
+        """Joseph-form update (24)–(27) and one estimator step; NIS per axis. Beyond the paper: where s = P_vv + R ≤ 0
+        the update is skipped (``skipped``), NaN returned, the chain restarted."""
         n = self.n
         z = [float(z[i][0]) for i in range(n)]
         R = [float(R[i][0][0]) for i in range(n)]
@@ -239,8 +238,8 @@ class VelocityAxisCmkf:
         return True
 
     def _accept(self) -> None:
-        """The Ŝ_v used: the least squares floored at its standard error (``se_floor``), or the last positive
-        estimate."""
+        """The Ŝ_v used: the least squares floored at its standard error (``se_floor``), or the last positive estimate.
+        """
         if self.count < self.min_samples or self.matching.den <= 0.0:
             return
         if self.pd_check == "se_floor":

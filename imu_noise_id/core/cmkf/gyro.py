@@ -21,8 +21,7 @@ from .matching import MatchingLeastSquares
 
 
 class GyroBiasFilter:
-    """Per-axis gyro-bias Kalman filter with a covariance-matching estimate of the angle-random-walk PSD (plain
-    floats;
+    """Per-axis gyro-bias Kalman filter with a covariance-matching estimate of the angle-random-walk PSD (plain floats;
     the names of :class:`~.protocol.CmkfFilter`).
 
     Parameters
@@ -112,8 +111,7 @@ class GyroBiasFilter:
         return total
 
     def coast(self) -> None:
-        """The pending interval without a measurement (a rejected update): the bias is only predicted; no matching
-        step
+        """The pending interval without a measurement (a rejected update): the bias is only predicted; no matching step
         spans it."""
         phi, q = self._prior()
         for i in range(3):
@@ -122,9 +120,8 @@ class GyroBiasFilter:
         self._prev = None
 
     def update(self, z: list[float], R: list[float], shared: list[float] | None = None) -> float:
-        """Update with ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) = Var Δθ_odo [rad²] and ``shared`` (3) = the
-        covariance of
-        Δθ_odo/T with the previous interval's [rad²/s²]; returns the NIS summed over the axes (3 dof)."""
+        """Update with ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) = Var Δθ_odo [rad²] and ``shared`` (3) = the covariance
+        of Δθ_odo/T with the previous interval's [rad²/s²]; returns the NIS summed over the axes (3 dof)."""
         T = self._T
         phi, q = self._prior()
         meas = [zi / T for zi in z]

@@ -27,8 +27,7 @@ from .stacked import Interval
 
 @dataclass(frozen=True)
 class ImuInterval:
-    """One interval between two epochs, shared by all axes (eqs. 17, 22–23): ``T`` [s]; ``Bp``, ``Bv`` (F̂[0, 2] =
-    −Bp,
+    """One interval between two epochs, shared by all axes (eqs. 17, 22–23): ``T`` [s]; ``Bp``, ``Bv`` (F̂[0, 2] = −Bp,
     F̂[1, 2] = −Bv); ``phi`` = Π φ_j (eq. 7); ``Qrr``, ``Qrv`` position variance and position–velocity covariance for
     unit PSD (velocity variance T); ``qb`` bias-drive variance (eq. 7) [m²/s⁴]."""
 
@@ -92,8 +91,7 @@ class ImuPropagation:
                            (1.0 - beta**2) * self._sigma2)
 
     def step(self, dt: float, sample: tuple[float, ...], gyro_bias: list[float], q_gravity: rot.Quat | None) -> None:
-        """Eqs. (13)–(16) per axis for ``sample`` (gyro [rad/s], accel [m/s²]) held over ``dt``; ``q_gravity`` the
-        IMU
+        """Eqs. (13)–(16) per axis for ``sample`` (gyro [rad/s], accel [m/s²]) held over ``dt``; ``q_gravity`` the IMU
         orientation gravity is removed with (None: level)."""
         wx, wy, wz, fx, fy, fz = sample
         ox, oy, oz = wx - gyro_bias[0], wy - gyro_bias[1], wz - gyro_bias[2]

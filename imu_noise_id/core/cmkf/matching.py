@@ -92,14 +92,11 @@ class MatchingLeastSquares:
         return np.array(out)
 
     def working(self, current: Sequence[float], prior: Sequence[float]) -> tuple[list[float], int]:
-        """The PSD a filter should run with per axis (beyond paper 004, which keeps the last positive estimate) and
-        the
+        """The PSD a filter should run with per axis (beyond paper 004, which keeps the last positive estimate) and the
         number of axes on which ``current`` or ``prior`` was kept.
 
-        ``max(Ŝ, se)`` while the 95 % interval Ŝ ± t·se reaches above 0; where its upper end is ≤ 0 (the data
-        contradict
-        the noise model), ``prior``; before two blocks, the last positive value (``current``). Reasons: docs/cmkf.md.
-        """
+        ``max(Ŝ, se)`` while the 95 % interval Ŝ ± t·se reaches above 0; where its upper end is ≤ 0 (the data contradict
+        the noise model), ``prior``; before two blocks, the last positive value (``current``). Reasons: docs/cmkf.md."""
         den = self.den
         if self.count == 0 or den <= 0.0:
             return list(current), self.n

@@ -76,10 +76,8 @@ class TwistMeasurement:
 
     @staticmethod
     def values(fields: dict[str, object]) -> tuple[dict[str, list[float] | None], rot.Quat | None, bool] | None:
-        """The message's vectors as float lists, its unit quaternion, and whether an orientation was given but
-        unusable
-        (all-zero or non-finite: REP-145's "no orientation"; the field is then None). None if another field is
-        NaN/inf
+        """The message's vectors as float lists, its unit quaternion, and whether an orientation was given but unusable
+        (all-zero or non-finite: REP-145's "no orientation"; the field is then None). None if another field is NaN/inf
         or malformed."""
         vals = {k: None if a is None else _as_floats(a) for k, a in fields.items()}
         if any(a is not None and len(a) != FIELDS[k] for k, a in vals.items()):
@@ -128,9 +126,8 @@ class TwistMeasurement:
     def rotation_increment(self, vals: dict[str, list[float] | None], q_nb: rot.Quat | None,
                            twist_cov: np.ndarray | None, T: float, new_chain: bool
                            ) -> tuple[list[float], list[float], list[float]] | None:
-        """The odometry's rotation over the interval ``T`` in IMU axes [rad], its variance [rad²] and the covariance
-        of its
-        mean rate with the previous interval's [rad²/s²] (¼ Var ω_{k−1} for the trapezoid, 0 for orientation
+        """The odometry's rotation over the interval ``T`` in IMU axes [rad], its variance [rad²] and the covariance of
+        its mean rate with the previous interval's [rad²/s²] (¼ Var ω_{k−1} for the trapezoid, 0 for orientation
         differences); None when it cannot be formed."""
         cfg = self.config
         if vals["angular_velocity"] is not None:

@@ -17,10 +17,9 @@ from scipy.linalg import block_diag
 
 @dataclass(frozen=True)
 class TurntableConfig:
-    """Paper 004's simulation parameters and our turntable profile (the paper shows it only in fig. 1): the sensor on
-    a
-    circle of ``radius`` [m] at ``omega`` [rad/s], not rotating, a = −radius·ω²·(cos ωt, sin ωt), held at its
-    interval average a_k = (v(t_{k+1}) − v(t_k))/T (truth model (6))."""
+    """Paper 004's simulation parameters and our turntable profile (the paper shows it only in fig. 1): the sensor on a
+    circle of ``radius`` [m] at ``omega`` [rad/s], not rotating, a = −radius·ω²·(cos ωt, sin ωt), held at its interval
+    average a_k = (v(t_{k+1}) − v(t_k))/T (truth model (6))."""
 
     T: float = 0.1
     tau: float = 3600.0
@@ -192,8 +191,7 @@ class TurntableRun:
 
 
 def simulate_turntable(cfg: TurntableConfig, duration: float, rng: np.random.Generator) -> TurntableRun:
-    """Simulate paper 004's revolving table, eqs. (6), (7), (8), (12): K = round(duration / T) accelerometer samples
-    and
+    """Simulate paper 004's revolving table, eqs. (6), (7), (8), (12): K = round(duration / T) accelerometer samples and
     K + 1 measurements."""
     T = cfg.T
     K = round(duration / T)

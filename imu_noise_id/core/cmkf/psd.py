@@ -18,9 +18,8 @@ VERDICTS = ("identified", "not_identifiable", "negative", "unknown")
 
 @dataclass(frozen=True)
 class PsdEstimate:
-    """One sensor's PSD per axis ([m²/s³] for S_v, [rad²/s] for S_g): ``value``, ``se`` (3,) and ``dof``; ``ci95``
-    (3, 2)
-    (NaN when unknown); ``upper95`` (3,) the bound; ``verdict`` per axis from :data:`VERDICTS`."""
+    """One sensor's PSD per axis ([m²/s³] for S_v, [rad²/s] for S_g): ``value``, ``se`` (3,) and ``dof``; ``ci95`` (3,
+    2) (NaN when unknown); ``upper95`` (3,) the bound; ``verdict`` per axis from :data:`VERDICTS`."""
 
     value: np.ndarray
     se: np.ndarray

@@ -40,8 +40,7 @@ COUNTERS = ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "o
 
 
 def default_filter(config: CmkfConfig) -> CmkfFilter:
-    """The accelerometer filter for ``config.measurement``: :class:`VelocityAxisCmkf` for twist, :class:`AxisCmkf`
-    for
+    """The accelerometer filter for ``config.measurement``: :class:`VelocityAxisCmkf` for twist, :class:`AxisCmkf` for
     position and velocity."""
     if config.measurement == "twist":
         return VelocityAxisCmkf(3, config.s_v0, pd_check=config.pd_check, min_samples=config.min_samples)
@@ -99,8 +98,7 @@ class RobotCmkf:
 
     def new_time_line(self) -> None:
         """The input stamps restarted: forget times and the interval in progress, keep the estimates (biases, S_v and
-        S_g
-        least squares, consistency windows); position and velocity restart from the next odometry."""
+        S_g least squares, consistency windows); position and velocity restart from the next odometry."""
         self._t_imu = self._t_odom = self._t_state = self._t_update = None
         self._last_imu = None
         self._reinit = True
@@ -172,8 +170,7 @@ class RobotCmkf:
         late: bool = False,
     ) -> bool:
         """One nav_msgs/Odometry message (pose in the odom frame, twist in ``child_frame_id``, REP-105; 6×6 row-major
-        covariances, all zeros = unknown; ``late``: put back in stamp order by a :class:`~.merge.StampMerger`). True
-        if
+        covariances, all zeros = unknown; ``late``: put back in stamp order by a :class:`~.merge.StampMerger`). True if
         it updated (or initialised) the filter."""
         t = float(t)
         self.last_update = (False, False)
@@ -243,8 +240,7 @@ class RobotCmkf:
 
     def _update(self, t: float, z: list | np.ndarray, R: list | np.ndarray, new_chain: bool) -> None:
         """Predict the accelerometer filter to the epoch (eq. 23) and update it (24)–(35), unless the gate
-        (:mod:`.gate`)
-        rejects it: then position and velocity restart from the measurement, the bias is kept."""
+        (:mod:`.gate`) rejects it: then position and velocity restart from the measurement, the bias is kept."""
         f, imu = self.filter, self.imu
         skipped_before = (f.skipped, f.skipped_stacked)
         velocity = ([float(row[-1]) for row in z], [float(r[-1][-1]) for r in R])
@@ -279,9 +275,8 @@ class RobotCmkf:
 
     def _initialise(self, t: float, z: list | np.ndarray, R: list | np.ndarray,
                     bias: tuple[list[float], np.ndarray] | None = None) -> None:
-        """(Re-)initialise r, v from the measurement; keep the bias and its (grown) variance if known, or take
-        ``bias`` =
-        (value, variance) per axis."""
+        """(Re-)initialise r, v from the measurement; keep the bias and its (grown) variance if known, or take ``bias``
+        = (value, variance) per axis."""
         cfg = self.config
         if bias is not None:
             b0, Pbb = bias

@@ -51,8 +51,7 @@ class StackedSvEstimator:
     n_axes : axes sharing the interval matrices; H : (m, d) measurement matrix of one axis on the (sub-)state;
     bias_index : index of the bias in the (sub-)state (``Λ = e_bias``).
 
-    Call :meth:`add_epoch` at every measurement epoch; ``interval=None`` starts a new chain (first epoch, after a
-    gap).
+    Call :meth:`add_epoch` at every measurement epoch; ``interval=None`` starts a new chain (first epoch, after a gap).
     """
 
     def __init__(self, n_axes: int, H: np.ndarray, bias_index: int) -> None:
@@ -84,8 +83,7 @@ class StackedSvEstimator:
 
     def add_epoch(self, z: np.ndarray, R: np.ndarray, interval: Interval | None, U: np.ndarray | None) -> bool:
         """Add epoch k (``z`` (n, m), ``R`` (n, m, m), the ``interval`` k-1 → k or None, ``U`` (n, d) = x̂⁻_k − F̂
-        x̂⁺_{k-1});
-        True when a stacked sample 𝒵_k was accumulated."""
+        x̂⁺_{k-1}); True when a stacked sample 𝒵_k was accumulated."""
         Mo_pinv = None if interval is None else _pinv_full_rank(np.vstack([self.H @ interval.Phi, self.H]))
         if interval is not None and Mo_pinv is None:
             self.skipped += 1

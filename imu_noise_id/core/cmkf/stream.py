@@ -26,8 +26,7 @@ class CmkfStream:
     ----------
     config : the filter's parameters (``late_odom_tolerance``: the merger's latency [s]).
     on_odometry : called as ``on_odometry(t, order)`` after every released odometry message (``order``:
-        :data:`~.merge.IN_ORDER`, :data:`~.merge.LATE` or :data:`~.merge.TOO_LATE`, the last not given to the
-        filter).
+        :data:`~.merge.IN_ORDER`, :data:`~.merge.LATE` or :data:`~.merge.TOO_LATE`, the last not given to the filter).
 
     Attributes: ``cmkf`` (the filter), ``merger`` (its ``latency`` may be changed at any time).
     """
@@ -85,9 +84,8 @@ class CmkfStream:
 
 def feed_recording(cmkf: RobotCmkf, imu: ImuSeries, odom: OdometrySeries | None,
                    imu_orientation_xyzw: np.ndarray | None = None) -> Iterator[bool]:
-    """Feed recorded series to ``cmkf`` in stamp order; yields after every odometry message whether it updated.
-    Fields of
-    ``odom`` may be None; a NaN row of ``imu_orientation_xyzw`` (N, 4) is passed as None."""
+    """Feed recorded series to ``cmkf`` in stamp order; yields after every odometry message whether it updated. Fields
+    of ``odom`` may be None; a NaN row of ``imu_orientation_xyzw`` (N, 4) is passed as None."""
     ti = np.asarray(imu.t, dtype=float)
     times = ti.tolist()
     rows = np.column_stack([imu.gyro, imu.accel]).tolist()

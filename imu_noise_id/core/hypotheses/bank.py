@@ -41,8 +41,7 @@ class HypothesisEstimate:
 
 
 def probabilities_of(log_prob: np.ndarray) -> np.ndarray:
-    """Probabilities from log-probabilities normalised to 0 along the last axis: exponentiated, divided by their sum
-    and
+    """Probabilities from log-probabilities normalised to 0 along the last axis: exponentiated, divided by their sum and
     clipped to [0, 1]."""
     lp = np.asarray(log_prob, dtype=float)
     p = np.exp(lp - np.max(lp, axis=-1, keepdims=True))
@@ -98,8 +97,7 @@ class BankResult:
 
     @property
     def decision_time(self) -> float | None:
-        """Time [s] from which ``final.decision`` (its probability with the merged long-memory hypotheses) stayed at
-        or
+        """Time [s] from which ``final.decision`` (its probability with the merged long-memory hypotheses) stayed at or
         above γ; ``final.t`` when only the last update reached it; None exactly when ``final.decision`` is None."""
         decision = self.final.decision
         if decision is None:
@@ -267,8 +265,7 @@ class HypothesisBank:
         )
 
     def state_estimates(self) -> dict[str, dict[str, tuple[float, float]]]:
-        """Per hypothesis, the mixture state estimates (eq. 13) and stds (eq. 14) [u] by state name (``bias``,
-        ``RW``,
+        """Per hypothesis, the mixture state estimates (eq. 13) and stds (eq. 14) [u] by state name (``bias``, ``RW``,
         ``GM``, …)."""
         out = {}
         for k, (mean, cov) in enumerate(self._filters.state_mixture(0)):

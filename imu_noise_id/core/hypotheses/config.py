@@ -1,6 +1,6 @@
 """Hypothesis sets from their parsed YAML mapping (format: ``config/hypotheses_default.yaml``):
-:func:`hypothesis_set_from_dict` → :class:`~imu_noise_id.core.hypotheses.HypothesisSet`, InputError naming the
-offending key."""
+:func:`hypothesis_set_from_dict` → :class:`~imu_noise_id.core.hypotheses.HypothesisSet`, InputError naming the offending
+key."""
 
 from __future__ import annotations
 

@@ -57,11 +57,9 @@ def paper_case(case: int, dt: float = 1.0, grid: dict[str, int] | None = None, b
                gamma: float = 0.8) -> HypothesisSet:
     """The hypothesis set of paper 002 section 4, case 1, 2 or 3: RW (eq. 21) vs GM (eq. 22) with a bias, eq. (23).
 
-    Paper values per sample: σ_w ∈ [0.04, 0.15] u, τ_m ∈ [1, 25] min, σ_m ∈ [0.5, 1.5] u, σ_v = 0 / 0.5 u /
-    ∈ [0.25, 1] u (cases 1–3); random_walk = σ_w/√Δt, noise_density = σ_v·√Δt. ``grid``: sizes by parameter (log
-    grids); defaults 256 and 32 × 32 (cases 1–2), 64, 12 × 12 and 12 (case 3). Bias prior N(0, bias_sigma²) (not in
-    the paper).
-    """
+    Paper values per sample: σ_w ∈ [0.04, 0.15] u, τ_m ∈ [1, 25] min, σ_m ∈ [0.5, 1.5] u, σ_v = 0 / 0.5 u / ∈ [0.25, 1]
+    u (cases 1–3); random_walk = σ_w/√Δt, noise_density = σ_v·√Δt. ``grid``: sizes by parameter (log grids); defaults
+    256 and 32 × 32 (cases 1–2), 64, 12 × 12 and 12 (case 3). Bias prior N(0, bias_sigma²) (not in the paper)."""
     if case not in (1, 2, 3):
         raise InputError(f"paper 002 has cases 1, 2 and 3, got {case!r}")
     sizes = {"random_walk": 256, "tau": 32, "sigma": 32, "noise_density": 8}
@@ -99,8 +97,8 @@ def true_components(hyp: Hypothesis, theta: np.ndarray) -> list[Component]:
 
 def simulate_trial(hset: HypothesisSet, k: int, theta: np.ndarray, n_samples: int,
                    rng: np.random.Generator) -> np.ndarray:
-    """``n_samples`` inputs (rate 1/dt) of hypothesis k with θ and a N(0, bias_sigma²) bias; RW from 0, GM
-    stationary."""
+    """``n_samples`` inputs (rate 1/dt) of hypothesis k with θ and a N(0, bias_sigma²) bias; RW from 0, GM stationary.
+    """
     y = np.full(n_samples, rng.standard_normal() * hset.bias_sigma)
     for comp in true_components(hset.hypotheses[k], theta):
         y += comp.simulate(n_samples, hset.dt, rng)

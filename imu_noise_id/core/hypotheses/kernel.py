@@ -180,8 +180,7 @@ class FilterBank:
 
     def evaluate(self, c: np.ndarray) -> Posterior:
         """Eqs. (10)–(14) from cumulative log-likelihoods c (R, L, F): probabilities, θ̂ and variances per row;
-        parameters
-        resolved below one cell get sub-cell summaries (:mod:`.subcell`, beyond the paper)."""
+        parameters resolved below one cell get sub-cell summaries (:mod:`.subcell`, beyond the paper)."""
         m = self.model
         lead = c.shape[:-1]
         lj = c + m.log_mu0

@@ -156,8 +156,7 @@ class Hypothesis:
         return sum(c in DYNAMIC_COMPONENTS for c in self.components) + 1
 
     def grid(self) -> tuple[np.ndarray, np.ndarray]:
-        """Point-mass grid θ^{kj} (M_k, p) and prior weights μ_0^{kj} (M_k,) (paper 002 eq. 3), summing to 1 or to
-        the
+        """Point-mass grid θ^{kj} (M_k, p) and prior weights μ_0^{kj} (M_k,) (paper 002 eq. 3), summing to 1 or to the
         refined sub-box's prior mass."""
         cells = [p.cells() for p in self.priors]
         points = np.array(list(itertools.product(*[c[0] for c in cells])), dtype=float)
@@ -232,8 +231,7 @@ def averaged_dynamic_block(phi: float, q: float, m: int) -> tuple[np.ndarray, np
 @dataclass(frozen=True)
 class BankModel:
     """State-space matrices of every filter of the bank, stacked, filter index last (padded states stay zero):
-    ``phi_kron`` (n², n², F) = Φ ⊗ Φ, ``q`` (n², F) = vec Q, ``h`` (n, F), ``hh`` (n², F) = vec hhᵀ, ``phi`` (n, n,
-    F),
+    ``phi_kron`` (n², n², F) = Φ ⊗ Φ, ``q`` (n², F) = vec Q, ``h`` (n, F), ``hh`` (n², F) = vec hhᵀ, ``phi`` (n, n, F),
     ``r`` (F,), ``p0`` (n², F); ``slices[k]`` hypothesis k's filters, ``theta[k]`` (M_k, p_k), ``log_mu0`` (F,),
     ``log_prior`` (K,)."""
 

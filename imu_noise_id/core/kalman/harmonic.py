@@ -7,8 +7,7 @@ y_t = Re(ζ_0 e^{jωt}), with (e^{jω} I − A) v = g:
 
 The free response (last term) is filtered only while ρ(A)^t ≥ :data:`FREE_RESPONSE_FLOOR`
 (:func:`.steady._sinusoid_output`). Only columns checked by :func:`sinusoid_omega` when built, declared in
-:attr:`~.statespace.StateSpace.sinusoid_omega` and passing :func:`obeys` are treated so. Speed: docs/em.md,
-"SIN terms".
+:attr:`~.statespace.StateSpace.sinusoid_omega` and passing :func:`obeys` are treated so. Speed: docs/em.md, "SIN terms".
 """
 
 from __future__ import annotations

@@ -263,8 +263,8 @@ def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns,
 
 
 def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
-    """R (p, length), R[j, t] = (H U)_blk T_blk^t e_j per modal state j; the free response from w_0 = U⁻¹x_0 is
-    w_0ᵀR."""
+    """R (p, length), R[j, t] = (H U)_blk T_blk^t e_j per modal state j; the free response from w_0 = U⁻¹x_0 is w_0ᵀR.
+    """
     out = np.empty((b.t.shape[0], length))
     for blk in _blocks(b.t):
         s = blk.stop - blk.start
@@ -274,8 +274,8 @@ def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
 
 def _predicted_states(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
                       m0: np.ndarray) -> np.ndarray:
-    """Predicted states x_t^{t−1} (p, N) of one column: measurement input y (N,), state input u (p,), initial mean
-    m0 (p,)."""
+    """Predicted states x_t^{t−1} (p, N) of one column: measurement input y (N,), state input u (p,), initial mean m0
+    (p,)."""
     c = _driven(b.u_inv @ (model.phi @ g.k), y[None, :], (b.u_inv @ u)[:, None])
     return b.u @ _run_modes(b.t, c, (b.u_inv @ m0)[:, None])[:, 0, :]
 

@@ -87,8 +87,7 @@ class Component(ABC):
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
         """Generalised covariance K(u) [u²] of the partial sums x_k = y_0 + … + y_{k−1} of the sampled component at
-        integer
-        lags u (beyond papers 000/002).
+        integer lags u (beyond papers 000/002).
 
         For filters c, d annihilating polynomials of degree ≤ 1, Cov(Σ_a c_a x_{p_a}, Σ_b d_b x_{q_b}) =
         Σ_a Σ_b c_a d_b K(q_b − p_a); K is defined up to an even polynomial α + β u². Stationary components:
@@ -102,9 +101,8 @@ class Component(ABC):
         raise NotImplementedError(f"{self.name} is not white at low frequency")
 
     def memory(self, dt: float) -> tuple[float, float, float]:
-        """(longest and shortest decay time [s] of the autocovariance, shortest period [s] of its oscillation); (0,
-        0, inf)
-        for components uncorrelated beyond a sample or two (WN, QN, MA, RW, RR)."""
+        """(longest and shortest decay time [s] of the autocovariance, shortest period [s] of its oscillation); (0, 0,
+        inf) for components uncorrelated beyond a sample or two (WN, QN, MA, RW, RR)."""
         return 0.0, 0.0, math.inf
 
     @abstractmethod
@@ -118,8 +116,7 @@ class Component(ABC):
 
     @classmethod
     def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> Component:
-        """Inverse of :meth:`block` for components with states: the component with transition ``phi`` and process
-        noise
+        """Inverse of :meth:`block` for components with states: the component with transition ``phi`` and process noise
         ``q`` at period ``dt`` [s]."""
         raise NotImplementedError(f"{cls.name} has no state block to convert back from")
 

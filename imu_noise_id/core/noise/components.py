@@ -126,8 +126,8 @@ class QN(Component):
 
 @dataclass(frozen=True)
 class RW(Component):
-    """Random walk (rate / bias random walk), density K [u/s/√Hz]: var(w) = K²·dt, sampled AV K²τ/3 + K²dt²/(6τ),
-    S(f) = K²/(2πf)²."""
+    """Random walk (rate / bias random walk), density K [u/s/√Hz]: var(w) = K²·dt, sampled AV K²τ/3 + K²dt²/(6τ), S(f) =
+    K²/(2πf)²."""
 
     random_walk: float
 

@@ -103,8 +103,8 @@ def _parse_args(cls: type[Component], args: str, spec: str) -> dict[str, float]:
 
 
 def parse_model(spec: str) -> list[Component]:
-    """Components with their parameters, e.g. ``'WN(2e-4)+GM(tau=300,sigma=5e-5)'``; ModelSpecError naming the
-    offending term."""
+    """Components with their parameters, e.g. ``'WN(2e-4)+GM(tau=300,sigma=5e-5)'``; ModelSpecError naming the offending
+    term."""
     components: list[Component] = []
     for term in _split_terms(spec):
         count, name, args = _parse_term(term, spec)
@@ -135,8 +135,7 @@ def model_name(components: list[Component]) -> str:
 
 
 def parse_imu_model(text: str) -> dict[str, list[Component]]:
-    """Per-axis components from ``'gyro: SPEC; accel: SPEC'`` (an axis key such as ``gyro_z`` overrides its group),
-    or
+    """Per-axis components from ``'gyro: SPEC; accel: SPEC'`` (an axis key such as ``gyro_z`` overrides its group), or
     one SPEC for all axes."""
     if ":" not in text:
         components = parse_model(text)

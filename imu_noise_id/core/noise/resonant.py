@@ -51,8 +51,8 @@ def _positive(name: str, value: float) -> float:
 
 @dataclass(frozen=True)
 class LPF(Component):
-    """White noise of passband density N [u/√Hz] through a first-order low-pass of cutoff f_c [Hz] (module
-    docstring)."""
+    """White noise of passband density N [u/√Hz] through a first-order low-pass of cutoff f_c [Hz] (module docstring).
+    """
 
     noise_density: float
     cutoff: float
@@ -101,9 +101,8 @@ class LPF(Component):
         return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
 
     def zero_frequency_density(self, dt: float) -> float:
-        """N·√((x/2)·coth(x/2)), x = 2π f_c dt: the sampled AR(1)'s σ² dt (1 + φ)/(1 − φ), φ = e^{−x} (aliasing
-        raises it
-        above N near Nyquist)."""
+        """N·√((x/2)·coth(x/2)), x = 2π f_c dt: the sampled AR(1)'s σ² dt (1 + φ)/(1 − φ), φ = e^{−x} (aliasing raises
+        it above N near Nyquist)."""
         return math.sqrt(zero_frequency_psd(self.sigma**2, -1.0 / self.tau, dt))
 
     def per_sample(self, dt: float) -> dict[str, float]:
@@ -182,8 +181,8 @@ class OSC(Component):
         return e * np.array([[c + a / wd * s, w0 / wd * s], [-w0 / wd * s, c - a / wd * s]])
 
     def process_noise(self, dt: float) -> np.ndarray:
-        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state by Van Loan's matrix exponential (no cancellation
-        for Q ≪ P∞)."""
+        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state by Van Loan's matrix exponential (no cancellation for
+        Q ≪ P∞)."""
         w0, a = self.omega0, self.damping * self.omega0
         A = np.array([[0.0, w0], [-w0, -2.0 * a]])
         W = np.diag([0.0, 4.0 * a * self.sigma**2])  # drive of x'/ω₀: q/ω₀² with q = 4ζω₀³σ²
@@ -256,9 +255,8 @@ class OSC(Component):
 
     @classmethod
     def low_pass(cls, noise_density: float, corner: float, damping: float = BUTTERWORTH_DAMPING) -> OSC:
-        """White noise of passband density N [u/√Hz] through a second-order low-pass of corner f₀ [Hz], damping ζ:
-        the OSC
-        with B = 2ζf₀, σ = N f₀ √(π/B) (S(0) = N²); default ζ = 1/√2 (Butterworth)."""
+        """White noise of passband density N [u/√Hz] through a second-order low-pass of corner f₀ [Hz], damping ζ: the
+        OSC with B = 2ζf₀, σ = N f₀ √(π/B) (S(0) = N²); default ζ = 1/√2 (Butterworth)."""
         bandwidth = 2.0 * damping * corner
         return cls(corner, bandwidth, noise_density * corner * math.sqrt(math.pi / bandwidth))
 

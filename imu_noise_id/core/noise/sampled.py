@@ -68,15 +68,14 @@ def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau
 
 
 def zero_frequency_psd(c: complex, s: complex, dt: float) -> float:
-    """dt·Σ_j R(j) = dt·Re(c (1 + z)/(1 − z)), z = e^{s·dt}: the two-sided PSD [u²/Hz] at 0 Hz of the sampled
-    process."""
+    """dt·Σ_j R(j) = dt·Re(c (1 + z)/(1 − z)), z = e^{s·dt}: the two-sided PSD [u²/Hz] at 0 Hz of the sampled process.
+    """
     z = np.exp(complex(s) * dt)
     return float(dt * np.real(complex(c) * (1.0 + z) / (1.0 - z)))
 
 
 def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.ndarray:
-    """S(k) = Var(y_1 + … + y_k) [u²] of the sampled process with R(u) = Re(c e^{s u}) for k ≥ 0 (S(0) = 0); a real
-    pole
+    """S(k) = Var(y_1 + … + y_k) [u²] of the sampled process with R(u) = Re(c e^{s u}) for k ≥ 0 (S(0) = 0); a real pole
     in real arithmetic."""
     k = np.asarray(k, dtype=float)
     w = complex(s) * dt

@@ -11,8 +11,7 @@ from ..noise.components import Component, simulate_sum
 
 def allan_band(components: list[Component], dt: float, n: int, tau: np.ndarray | None = None, *, n_sim: int = 20,
                seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """AVs of ``n_sim`` simulations of ``components`` (n samples at ``dt`` [s]): (tau [s], avar [u²] (n_sim,
-    len(tau)));
+    """AVs of ``n_sim`` simulations of ``components`` (n samples at ``dt`` [s]): (tau [s], avar [u²] (n_sim, len(tau)));
     ``tau`` defaults to :func:`~imu_noise_id.core.allan.choose_m`'s grid, given values rounded to multiples of dt."""
     m = choose_m(n) if tau is None else np.unique(np.maximum(np.round(np.asarray(tau, float) / dt), 1))
     rng = np.random.default_rng(seed)

@@ -1,5 +1,4 @@
-"""Simulated ground robot with a rotated IMU and wheel-odometry-like messages (truth for the CMKF, the node, the
-demo).
+"""Simulated ground robot with a rotated IMU and wheel-odometry-like messages (truth for the CMKF, the node, the demo).
 
 Flat ground (z up), forward speed s(t) and yaw rate ω(t) from a motion profile (:class:`Weaving`,
 :class:`StopAndGo`), no side slip: a_b = [ṡ, s ω, 0], f_b = a_b + [0, 0, g], rate [0, 0, ω]. The IMU (mounted with
@@ -89,8 +88,7 @@ class Weaving:
 
 @dataclass(frozen=True)
 class StopAndGo:
-    """Stand ``stand_before`` s, drive ``drive`` s (speed up to ``speed`` [m/s], yaw rate up to ``yaw_rate`` [rad/s]
-    of
+    """Stand ``stand_before`` s, drive ``drive`` s (speed up to ``speed`` [m/s], yaw rate up to ``yaw_rate`` [rad/s] of
     period ``yaw_period`` [s], both under a sin² window), stand for the rest."""
 
     stand_before: float = 20.0
@@ -129,8 +127,8 @@ class RobotSensors:
     velocity_noise_std, angular_velocity_noise_std, position_noise_std : odometry white noise [m/s], [rad/s], [m]
         (0: exact); the twist covariance declares the first two.
     pose_variance : (position [m²], orientation [rad²]) declared; None: (``position_noise_std``², 1e-6).
-    imu_rotation_xyzw : orientation of the IMU in the base frame (``C_bi``); None: yaw −90°, roll 90° (the IMU's y
-        axis up).
+    imu_rotation_xyzw : orientation of the IMU in the base frame (``C_bi``); None: yaw −90°, roll 90° (the IMU's y axis
+        up).
     noise_order : the sensor whose white noise is drawn first (a seeded run depends on it).
     """
 

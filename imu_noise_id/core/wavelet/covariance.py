@@ -7,11 +7,9 @@ sums' generalised covariance (:meth:`~imu_noise_id.core.noise.base.Component.sum
     γ_ij(k) = Cov(W_{i,t}, W_{j,t+k}) = Σ_{a,b=0}^{2} c_a c_b K(k + a m_i − b m_j) / (4 m_i m_j),  c = (1, −2, 1),
     Cov(ν̂²_i, ν̂²_j) = 2 Σ_k n_ij(k) γ_ij(k)² / (M_i M_j)  (+ 4 μ_i μ_j Σ_k n_ij(k) γ_ij(k) / (M_i M_j) with a ramp)
 
-(Serroukh, Walden & Percival 2000 for one level), n_ij(k) the pairs inside the record, μ_j = ω·dt·m_j/2. For the
-robust WV, γ² becomes ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), scaled by (2/e)² (:mod:`.robust`). The lag sum
-is a trapezoid on a grid dense near γ's nine kinks (:data:`PIECE_POINTS` per piece; exact where the grid is every
-integer).
-"""
+(Serroukh, Walden & Percival 2000 for one level), n_ij(k) the pairs inside the record, μ_j = ω·dt·m_j/2. For the robust
+WV, γ² becomes ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), scaled by (2/e)² (:mod:`.robust`). The lag sum is a trapezoid
+on a grid dense near γ's nine kinks (:data:`PIECE_POINTS` per piece; exact where the grid is every integer)."""
 
 from __future__ import annotations
 
@@ -39,8 +37,7 @@ def theoretical_wv(components: list[Component], tau: np.ndarray, dt: float) -> n
 
 
 def _offsets(length: int, cap: float, fine: float) -> np.ndarray:
-    """Offsets 0..length from a kink: steps ``cap``, refined near the kink (memory of ``fine`` samples) by steps
-    growing
+    """Offsets 0..length from a kink: steps ``cap``, refined near the kink (memory of ``fine`` samples) by steps growing
     geometrically from max(1, fine/4)."""
     step = max(1, int(cap))
     # The first lags are always taken one by one: a component whose K jumps at u = 0 (QN, MA) puts an isolated value

@@ -51,8 +51,8 @@ class CmkfFeed:
         return self._feed(self.stream.process_imu, t, gyro, accel, orientation_xyzw)
 
     def odometry(self, t: float, **fields: Any) -> bool:
-        """One accepted odometry message (keywords of ``RobotCmkf.process_odometry``); True when the estimate
-        changed."""
+        """One accepted odometry message (keywords of ``RobotCmkf.process_odometry``); True when the estimate changed.
+        """
         return self._feed(self.stream.process_odometry, t, **fields)
 
     def new_time_line(self) -> None:

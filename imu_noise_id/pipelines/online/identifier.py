@@ -236,8 +236,8 @@ class OnlineIdentifier:
                                      lambda: self.cmkf_feed.estimate)
 
     def update_identification(self) -> None:
-        """Feed the queued stationary samples to the banks in a batch and refresh the CMKF status (at
-        ``publish_rate``)."""
+        """Feed the queued stationary samples to the banks in a batch and refresh the CMKF status (at ``publish_rate``).
+        """
         self._variance_cache = None
         self.cmkf_feed.refresh()
         if self.bank is None:

@@ -11,8 +11,8 @@ import numpy as np
 
 @dataclass
 class CorrectedImu:
-    """One bias-corrected IMU sample; variances N²·f per axis, or None while unknown; ``source``: what the caller
-    gave."""
+    """One bias-corrected IMU sample; variances N²·f per axis, or None while unknown; ``source``: what the caller gave.
+    """
 
     t: float
     gyro: tuple[float, float, float]
@@ -30,8 +30,7 @@ class Estimates:
     ----------
     t : header stamp of the last IMU sample used [s]
     cmkf_status : the CMKF's status (``no_data``, ``imu_only``, ``unobserved``, ``converging``, ``tracking``)
-    gyro_bias, gyro_bias_std, accel_bias, accel_bias_std : (3,) [rad/s], [m/s²] (NaN before the first odometry
-    update)
+    gyro_bias, gyro_bias_std, accel_bias, accel_bias_std : (3,) [rad/s], [m/s²] (NaN before the first odometry update)
     noise_density, noise_density_rstd, noise_samples : (6,) white-noise density [u/√Hz] from stationary samples (NaN
         before ``noise.min_samples``), its relative std, the differences used
     psd, psd_se, psd_upper : (6,) Ŝ_g [rad²/s] and Ŝ_v [m²/s³] where identified, standard error, 95 % upper end where

@@ -21,8 +21,7 @@ class StationarityDetector:
     every accelerometer axis below ``max_accel_std``, and the mean rate minus the gyro bias below ``max_gyro_rate``.
     Fresh odometry (within ``odom_timeout``) "still": speeds below their thresholds; without it the IMU decides alone
     unless ``require_odometry``. Stationary after ``enter_delay`` seconds of "still"; moving at the first contrary
-    sample.
-    """
+    sample."""
 
     config: OnlineConfig
     stationary: bool = False
