@@ -1,13 +1,9 @@
 """The sampling period of a series of stamps: one rule for every reader, pipeline and command.
 
-Header stamps are not always sample times: a host-stamped serial driver stamps samples when the host reads them,
-in bursts, and dropped messages leave holes (reasons: docs/bags.md, "The sample period"). Estimates:
-
-- ``median_interval``: median interval between stamps of neighbouring messages (holes do not count);
-- ``index_regression``: median over i of (t[i+k] − t[i]) / (position[i+k] − position[i]), k a tenth of the record;
-- ``span_count``: (t_last − t_first) / (position_last − position_first) (reported only);
-- ``receive_regression``: the index regression on the bag's receive times;
-- ``declared``: the rate the user states (``--rate HZ``).
+Header stamps are not always sample times (host-stamped bursts, holes left by dropped messages). Estimates
+(docs/bags.md, "The sample period"): ``median_interval`` (neighbouring messages), ``index_regression`` (median of
+lag-k slopes of stamp on message position, k a tenth of the record), ``span_count`` (reported only),
+``receive_regression`` (on the bag's receive times) and ``declared`` (``--rate HZ``).
 
 Rule (:func:`estimate_period`): a declared rate wins (warned if the stamps disagree by more than :data:`AGREE`).
 Stamps are *bursty* when more than :data:`BURST_FRACTION` of the neighbouring intervals are shorter than half the

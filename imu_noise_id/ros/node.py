@@ -1,14 +1,9 @@
-"""``imu_noise_id_node``: the rclpy adapter around :class:`imu_noise_id.pipelines.online.OnlineIdentifier`.
+"""``imu_noise_id_node``: the rclpy adapter around :class:`imu_noise_id.pipelines.online.OnlineIdentifier` (running
+it, topics, parameters, diagnostics: docs/node.md).
 
-Run it with ``ros2 run imu_noise_id imu_noise_id_node --ros-args --params-file config/imu_noise_id.yaml`` or
-``python -m imu_noise_id.ros.node --ros-args …``. Its inputs are the relative names :data:`IMU_INPUT`,
-:data:`ODOM_INPUT` and :data:`TEMPERATURE_INPUT` (``/imu/data``, ``/odom``, ``/imu/temperature`` without a namespace:
-the topics ``imu-noise-id simulate`` and the demo bags use); remap them with ``-r imu/data:=/my/imu``. Topics,
-parameters and diagnostics are described in ``docs/node.md``. This module only converts messages to numbers and
-back and reads the hypothesis-set file: every decision is made in the pipeline, which is tested without ROS.
-
-Time: estimation uses the header stamps only; the housekeeping timers (publishing, diagnostics, staleness) run
-on the steady clock, so they work with ``use_sim_time`` and no ``/clock`` publisher too.
+Inputs are the relative names :data:`IMU_INPUT`, :data:`ODOM_INPUT` and :data:`TEMPERATURE_INPUT`. This module
+only converts messages to numbers and back and reads the hypothesis-set file. Estimation uses the header stamps
+only; the housekeeping timers run on the steady clock (``use_sim_time`` without ``/clock`` works).
 """
 
 from __future__ import annotations

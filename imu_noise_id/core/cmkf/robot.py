@@ -1,18 +1,12 @@
-"""Paper 004's CMKF on a robot: three IMU axes, a rotated IMU, gravity, odometry slower than the IMU.
-
-Streaming (stamp order; :class:`~.stream.CmkfStream` merges two topics)::
-
-    f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=...))
-    f.process_imu(t, gyro, accel)
-    f.process_odometry(t, orientation_xyzw=q, linear_velocity=v, angular_velocity=w, twist_cov=C)
-    est = f.estimate()                                  # CmkfEstimate
+"""Paper 004's CMKF on a robot: three IMU axes, a rotated IMU, gravity, odometry slower than the IMU (streaming API:
+docs/cmkf.md; :class:`~.stream.CmkfStream` merges the two topics in stamp order).
 
 Composed of :class:`~.interval.ImuPropagation` (eqs. 13–17, 22–23), :mod:`.measurement` (eq. 8 on a robot), the
 accelerometer :class:`~.protocol.CmkfFilter` (24)–(35) and :class:`~.gyro.GyroBiasFilter`. For a sensor that does
 not rotate, one IMU sample per epoch, gravity on z, position + velocity measured, the x and y filters are exactly
 eqs. (13)–(17), (23)–(35) (tested against :class:`~.paper.PaperCmkf`). Unusable input (non-increasing stamps,
 NaN/inf, late or degenerate odometry) is dropped and counted; gaps beyond ``max_odom_gap`` / ``max_imu_gap``
-restart the chain / the position and velocity (docs/cmkf.md).
+restart the chain / the position and velocity.
 """
 
 from __future__ import annotations
