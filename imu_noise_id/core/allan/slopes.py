@@ -48,7 +48,7 @@ HUBER_K = 2.5
 #: Rule 5: a local AV slope within this of white noise's −1 (or steeper) may end the low-pass roll-off ...
 SLOPE_TOLERANCE = 0.1
 #: ... when at least this many τ remain to read the lines from, and the slopes of this many steps from there on
-#: are no steeper than −1 by more than the tolerance.
+#: are no steeper than −1 by more than the tolerance on average (single AV estimates wander on short records).
 ROLLOFF_MIN_POINTS = 8
 ROLLOFF_WHITE_STEPS = 3
 #: The roll-off is the sensor filter's only if it ends within this many of the longest memory a sensor filter has
@@ -246,12 +246,16 @@ def _upper_bound(name: str, res: AllanResult, axis: int) -> SlopeComponent:
 def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float) -> int:
     """Where a start flatter than white noise ends in it (:func:`rolloff_end`), 0 where none does.
 
-    With s_i = Δln AV/Δln τ before the curve's minimum: the first j after an s > −1 + 2·:data:`SLOPE_TOLERANCE`
-    with s_j within :data:`SLOPE_TOLERANCE` of −1 or steeper, the next :data:`ROLLOFF_WHITE_STEPS` slopes no steeper
-    than −1 − tolerance, no later than :data:`ROLLOFF_MAX_MEMORIES` filter memories, :data:`ROLLOFF_MIN_POINTS` τ left.
+    With s_i = Δln AV/Δln τ before the curve's minimum (beyond its first peak): the first j after an
+    s > −1 + 2·:data:`SLOPE_TOLERANCE` with s_j within :data:`SLOPE_TOLERANCE` of −1 or steeper, the next
+    :data:`ROLLOFF_WHITE_STEPS` slopes no steeper than −1 − tolerance on average, no later than
+    :data:`ROLLOFF_MAX_MEMORIES` filter memories, :data:`ROLLOFF_MIN_POINTS` τ left.
     """
     ok = np.isfinite(av) & (av > 0)
-    stop = int(np.argmin(np.where(ok, av, np.inf)))
+    # the curve's minimum beyond its first peak (a strong low-pass can put the global minimum at the shortest τ)
+    early = np.flatnonzero(ok & (tau <= ROLLOFF_MAX_MEMORIES * filter_memory_limit(dt)))
+    peak = int(early[np.argmax(av[early])]) if early.size else 0
+    stop = peak + int(np.argmin(np.where(ok, av, np.inf)[peak:]))
     if stop < 2 or not ok[: stop + 1].all():
         return 0
     slope = np.diff(np.log(av[: stop + 1])) / np.diff(np.log(tau[: stop + 1]))
@@ -261,7 +265,7 @@ def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float) -> int:
         return 0
     j = int(ends[0])
     fits = tau.size - j >= ROLLOFF_MIN_POINTS and tau[j] <= ROLLOFF_MAX_MEMORIES * filter_memory_limit(dt)
-    white = not np.any(slope[j: j + ROLLOFF_WHITE_STEPS] < -1.0 - SLOPE_TOLERANCE)
+    white = float(np.mean(slope[j: j + ROLLOFF_WHITE_STEPS])) >= -1.0 - SLOPE_TOLERANCE
     return j if fits and white else 0
 
 
