@@ -21,7 +21,7 @@ from .residuals import (
     spectral_lines,
     spectral_peaks,
 )
-from .whitening import ScoreTest, WhiteningFilter, score_test
+from .whitening import ScoreBasis, ScoreTest, WhiteningFilter, score_test
 
 #: Default significance level of every detector.
 ALPHA = 0.01
@@ -138,11 +138,11 @@ def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: Spectr
                                 f"median floor at {peak.frequency:.5g} Hz (threshold {s_star / math.log(2):.1f}× "
                                 f"over {peak.n_bins} bins)")
     t = np.arange(np.asarray(e).size) * dt
-    ones = whitening.whiten(np.ones(t.size))
+    basis = ScoreBasis.of(e, whitening.whiten(np.ones(t.size)))
 
     def test_at(f: float) -> ScoreTest:
         cols = np.column_stack([np.sin(2 * math.pi * f * t), np.cos(2 * math.pi * f * t)])
-        return score_test(e, whitening.whiten(cols), ones)
+        return basis.test(whitening.whiten(cols))
 
     # The frequency refined to a small fraction of a bin by maximising the score statistic within ±1 bin of the
     # peak: a line of fixed frequency removed at the bin's frequency leaves a residual line behind (the phase

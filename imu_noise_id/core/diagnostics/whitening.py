@@ -118,34 +118,66 @@ class ScoreTest:
     se: np.ndarray
 
 
-def _projection(z: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Least-squares coefficients of x (N, k) on z (N, j); closed form for one column."""
-    if z.shape[1] == 1:
-        zz = float(z[:, 0] @ z[:, 0])
-        return (z[:, 0] @ x)[None, :] / zz if zz > 0 else np.zeros((1, x.shape[1]))
-    return np.linalg.lstsq(z, x, rcond=None)[0]
+def _kept(ok: np.ndarray) -> slice | np.ndarray:
+    """The finite samples as a slice when they are one run (the usual case: the filter's start-up removed), else the
+    mask; a slice takes views, not copies, of every column."""
+    idx = np.flatnonzero(ok)
+    if idx.size and idx[-1] - idx[0] + 1 == idx.size:
+        return slice(int(idx[0]), int(idx[-1]) + 1)
+    return ok
+
+
+@dataclass(frozen=True)
+class ScoreBasis:
+    """Standardised innovations and whitened nuisance columns, prepared once for many score tests against them (a
+    line's frequency refined over many trial regressors).
+
+    Attributes
+    ----------
+    e : the finite innovations
+    kept : which samples they are (slice or mask)
+    z : the whitened nuisance columns at those samples (n, j), or None
+    """
+
+    e: np.ndarray
+    kept: slice | np.ndarray
+    z: np.ndarray | None
+
+    @classmethod
+    def of(cls, e: np.ndarray, nuisance_white: np.ndarray | None = None) -> ScoreBasis:
+        e = np.asarray(e, dtype=float)
+        kept = _kept(np.isfinite(e))
+        z = None if nuisance_white is None else np.asarray(nuisance_white, dtype=float).reshape(e.size, -1)[kept]
+        return cls(e[kept], kept, z)
+
+    def test(self, x_white: np.ndarray) -> ScoreTest:
+        """The score test of the whitened regressor columns ``x_white`` (N, k): the sums e'X̃ and X̃'X̃ with X̃ the
+        columns less their projection on the nuisance, from cross-products (no (N, k) temporaries for one nuisance
+        column: X̃'X̃ = X'X − X'z z'X / z'z, X̃'e = X'e − X'z z'e / z'z)."""
+        from .residuals import chi2_log10_sf
+
+        x = np.asarray(x_white, dtype=float).reshape(x_white.shape[0], -1)[self.kept]
+        gram, score = x.T @ x, x.T @ self.e
+        if self.z is not None and self.z.shape[1] == 1:
+            z = self.z[:, 0]
+            zz = float(z @ z)
+            if zz > 0:
+                xz = x.T @ z
+                gram = gram - np.outer(xz, xz) / zz
+                score = score - xz * float(z @ self.e) / zz
+        elif self.z is not None:
+            x = x - self.z @ np.linalg.lstsq(self.z, x, rcond=None)[0]
+            gram, score = x.T @ x, x.T @ self.e
+        if np.linalg.cond(gram) > 1e12:
+            raise ValueError("regressors are (nearly) collinear with the model after whitening")
+        inv = np.linalg.inv(gram)
+        stat = float(score @ inv @ score)
+        k = x.shape[1]
+        return ScoreTest(statistic=stat, dof=k, log10_p=chi2_log10_sf(stat, k),
+                         coef=inv @ score, se=np.sqrt(np.diag(inv)))
 
 
 def score_test(e: np.ndarray, x_white: np.ndarray, nuisance_white: np.ndarray | None = None) -> ScoreTest:
     """Score test of whitened regressors ``x_white`` against standardised innovations ``e`` (NaN = missing), with the
-    whitened ``nuisance_white`` columns (e.g. the constant) projected out first."""
-    from .residuals import chi2_log10_sf
-
-    e = np.asarray(e, dtype=float)
-    x = np.asarray(x_white, dtype=float).reshape(e.size, -1)
-    ok = np.isfinite(e)
-    every = bool(ok.all())  # no missing sample: the arrays as they are, no copies
-    e0, x0 = (e, x) if every else (e[ok], x[ok])
-    if nuisance_white is not None:
-        z = np.asarray(nuisance_white, dtype=float).reshape(e.size, -1)
-        z = z if every else z[ok]
-        x0 = x0 - z @ _projection(z, x0)
-    gram = x0.T @ x0
-    if np.linalg.cond(gram) > 1e12:
-        raise ValueError("regressors are (nearly) collinear with the model after whitening")
-    score = x0.T @ e0
-    inv = np.linalg.inv(gram)
-    stat = float(score @ inv @ score)
-    k = x.shape[1]
-    return ScoreTest(statistic=stat, dof=k, log10_p=chi2_log10_sf(stat, k),
-                     coef=inv @ score, se=np.sqrt(np.diag(inv)))
+    whitened ``nuisance_white`` columns (e.g. the constant) projected out first (:class:`ScoreBasis`)."""
+    return ScoreBasis.of(e, nuisance_white).test(x_white)
