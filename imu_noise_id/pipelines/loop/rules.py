@@ -1,6 +1,5 @@
-"""The loop's rules for judging one fitted model against another: the AV misfit, do no harm, the BIC tie, the
-simultaneous AV band and practical significance (issue 11's rules on real data). The loop that applies them is
-:mod:`imu_noise_id.pipelines.loop`."""
+"""The loop's rules for judging one fitted model against another: the AV misfit, do no harm, the BIC tie,
+the simultaneous AV band and practical significance."""
 
 from __future__ import annotations
 
@@ -46,20 +45,16 @@ def simultaneous_z(diag: Diagnosis, level: float) -> tuple[np.ndarray, np.ndarra
 
 
 def practically_negligible(diag: Diagnosis, level: float = 0.95) -> bool:
-    """Whether at every τ the model's AV lies inside the data's simultaneous band (:func:`av_inside_band`) or
-    within :data:`PRACTICAL_AV_ERROR` of the data's AV: what is left is detectable but does not matter."""
+    """Whether at every τ the model's AV lies inside the data's simultaneous band
+    (:func:`av_inside_band`) or within :data:`PRACTICAL_AV_ERROR` of the data's AV."""
     z, ok, bound = simultaneous_z(diag, level)
     rel = np.abs(diag.av_model / np.where(diag.av_data > 0, diag.av_data, np.nan) - 1.0)
     return bool(ok.any() and np.all((np.abs(z[ok]) <= bound) | (rel[ok] <= PRACTICAL_AV_ERROR)))
 
 
 def av_inside_band(diag: Diagnosis, level: float = 0.95) -> bool:
-    """Whether the model's AV lies inside the data's ``level`` band at every τ, the band simultaneous over τ.
-
-    AV estimates one octave of τ apart are nearly independent and those closer are strongly correlated, so the
-    band is Bonferroni-corrected over the J octaves spanned: |z_τ| ≤ Φ⁻¹(1 − (1 − level)/(2J)) at every τ (a
-    pointwise 95 % band is left somewhere by a correct model more often than not).
-    """
+    """Whether the model's AV lies inside the data's ``level`` band at every τ, Bonferroni over the J
+    octaves spanned: |z_τ| ≤ Φ⁻¹(1 − (1 − level)/(2J)) (AV estimates an octave apart are nearly independent)."""
     z, ok, bound = simultaneous_z(diag, level)
     return bool(ok.any() and np.max(np.abs(z[ok])) <= bound)
 
@@ -71,9 +66,8 @@ def max_relative_av_error(diag: Diagnosis) -> float:
 
 
 def with_av_misfit(passed: bool, verdict: str, diag: Diagnosis) -> tuple[bool, str]:
-    """The loop's (passed, verdict) with the AV misfit counted as a residual: a final model whose AV leaves the
-    data's band (:func:`av_inside_band`) where that is not :func:`practically_negligible` has not passed, whatever
-    the detectors say, and the verdict says what is left unexplained."""
+    """The loop's (passed, verdict) with the AV misfit counted as a residual: a final AV outside the
+    band (:func:`av_inside_band`) and not :func:`practically_negligible` fails, with the largest relative AV error."""
     if not passed or av_inside_band(diag) or practically_negligible(diag):
         return passed, verdict
     return False, (f"AV misfit left unexplained: no detector fires, but the final model's Allan variance leaves the "
@@ -81,12 +75,9 @@ def with_av_misfit(passed: bool, verdict: str, diag: Diagnosis) -> tuple[bool, s
 
 
 def judge(before: Diagnosis, after: Diagnosis, *, tie: bool = False) -> tuple[bool, str]:
-    """The BIC and do-no-harm rules: BIC lower and the AV misfit no worse than its sampling noise allows.
-
-    With ``tie`` (a move that adds no parameter: a drop or a swap of re-selection), a BIC worse by less than
-    :data:`BIC_TIE` is a tie the likelihood cannot break, and the AV decides: the move is kept when it lowers the
-    RMS AV misfit z by at least :data:`AV_Z_GAIN`.
-    """
+    """The BIC and do-no-harm rules: kept when the BIC is lower and the RMS AV misfit z rises by at most
+    :data:`AV_Z_TOLERANCE`. With ``tie`` (a move adding no parameter), a BIC worse by less than :data:`BIC_TIE` is kept
+    when the RMS AV misfit z falls by :data:`AV_Z_GAIN` or more. Returns (kept, reason)."""
     improved = after.errors.bic < before.errors.bic
     z0, z1 = av_rms_z(before), av_rms_z(after)
     no_harm = z1 <= z0 + AV_Z_TOLERANCE

@@ -1,7 +1,5 @@
-"""Running the closed loop on one axis or on the axes of an IMU recording.
-
-The rules are in the package docstring (:mod:`imu_noise_id.pipelines.loop`).
-"""
+"""Running the closed loop on one axis or on the axes of an IMU recording (rules:
+:mod:`imu_noise_id.pipelines.loop`)."""
 
 from __future__ import annotations
 
@@ -28,10 +26,7 @@ from .state import Diagnosis, LoopResult, LoopState, LoopStep, Trial
 from .steps import AxisLoop
 from .trials import added_name, attempt, explore
 
-#: Effects the loop adds at most per axis. Measured accelerometers carry many at once: on 2000 s of ADIS16405 run 1
-#: accel_x the sensor's low-pass and its averaging, the 0.565 Hz line (a sinusoid and its wander), its third
-#: harmonic, a 10.6 Hz vibration and a spike each lowered the BIC with their evidence gone (seven), where six steps
-#: left the averaging out (AV misfit z 1.9 instead of 1.3).
+#: Effects the loop adds at most per axis (docs/loop.md, "Why the loop's moves are built as they are").
 MAX_STEPS = 8
 
 
@@ -49,7 +44,7 @@ def run_closed_loop(
     axis: str | None = None,
     intervals: bool = False,
 ) -> LoopResult:
-    """Run the closed loop on one axis (see the module docstring for the rules).
+    """Run the closed loop on one axis (rules: :mod:`imu_noise_id.pipelines.loop`).
 
     Parameters
     ----------
@@ -58,30 +53,26 @@ def run_closed_loop(
     dt : float
         Sampling period [s].
     start : str or FitResult
-        Starting model structure, e.g. ``"WN+RW"``, or a fit of it to this very record (e.g. the model
-        selection's winner, with its record), which then is step 0 as it is, not fitted again.
+        Starting structure (``"WN+RW"``), or a fit of this very record (kept as step 0, not refitted).
     temperature : (N,) array, optional
-        Sensor temperature [°C] at the sample times (see :func:`align_temperature`); enables ``TEMP``.
-    max_steps : int
-        At most this many effects are added.
-    max_candidates : int
-        Candidates refitted per step.
+        Sensor temperature [°C] at the sample times (:func:`align_temperature`); enables ``TEMP``.
+    max_steps, max_candidates : int
+        At most this many effects added; candidates refitted per step.
     alpha : float
         Level of every detector.
     lags : int
         Ljung–Box lags.
     outliers : {"impute", "missing"}
-        How flagged outliers are removed (see the module docstring).
+        How flagged outliers are removed.
     axis : str, optional
         Axis name, for the report.
     intervals : bool
-        Give the final step's fit its 95 % intervals (:func:`final_intervals`) when the loop added an effect; the
-        steps are compared without them.
+        Give the final fit its 95 % intervals (:func:`final_intervals`) when an effect was added.
 
     Raises
     ------
     InputError
-        Bad input (not 1-D, inf, too few samples, temperature of another length or not finite).
+        Not 1-D, inf, fewer than 1000 finite samples, temperature misaligned or not finite.
     """
     y = np.asarray(y, dtype=float)
     if y.ndim != 1:
@@ -178,17 +169,11 @@ def run_closed_loop(
 
 
 def final_intervals(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
-    """``step`` (the loop's last) with the 95 % intervals of its fit
-    (:func:`~imu_noise_id.core.estimation.relabel.with_uncertainty`), and a note ("" unless it was fitted again).
-
-    Beyond the papers. Where the profile search of the intervals meets a log-likelihood above the fit's by more
-    than the 95 % threshold (:attr:`~imu_noise_id.core.estimation.results.FitResult.short_of_maximum`), the fit
-    stopped short of the maximum and intervals around it are not the maximum's (a white noise collapsed beside a
-    random walk, where the likelihood is flat in log N, stops a search that reports convergence 10⁴ below it; its
-    interval then excluded N itself): the step's structure is fitted again from there and diagnosed, once, as
-    :meth:`~imu_noise_id.core.estimation.model.NoiseModel.fit` does for a model-selection fit. The step's BIC,
-    residuals and AV are then the refit's.
-    """
+    """``step`` (the loop's last) with its fit's 95 % intervals
+    (:func:`~imu_noise_id.core.estimation.relabel.with_uncertainty`) and a note ("" unless refitted). Beyond the papers:
+    where the intervals' profile search met a higher likelihood
+    (:attr:`~imu_noise_id.core.estimation.results.FitResult.short_of_maximum`), the structure is refitted from there and
+    diagnosed once, and the step's BIC, residuals and AV are the refit's."""
     fit = with_uncertainty(step.diagnosis.fit)
     as_it_is = replace(step, diagnosis=replace(step.diagnosis, fit=fit)), ""
     if fit.short_of_maximum is None or fit.better_start is None:
@@ -208,13 +193,8 @@ def final_intervals(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
 
 
 def align_temperature(t_samples: np.ndarray, t_temperature: np.ndarray, temperature: np.ndarray) -> np.ndarray:
-    """Temperature [°C] at the IMU sample times by linear interpolation (held constant beyond its ends).
-
-    Raises
-    ------
-    InputError
-        Fewer than two temperature samples, non-finite values, or non-increasing temperature times.
-    """
+    """Temperature [°C] at the sample times ``t_samples`` [s], linearly interpolated (held beyond its ends); InputError
+    for fewer than two samples, non-finite values or non-increasing times."""
     t_temperature = np.asarray(t_temperature, dtype=float)
     temperature = np.asarray(temperature, dtype=float)
     if t_temperature.size < 2 or t_temperature.shape != temperature.shape:
@@ -227,18 +207,15 @@ def align_temperature(t_samples: np.ndarray, t_temperature: np.ndarray, temperat
 
 
 class ImuLoop:
-    """The closed loop on the axes of one IMU recording, one axis at a time (what ``analyze`` and ``loop`` run),
-    at the recording's own rate (nothing above a reduced Nyquist frequency is averaged away unexplained, and the
-    report shows the very fits ``model.yaml`` holds).
-
-    The temperature is aligned with the IMU stamps once, for every axis.
+    """The closed loop on the axes of one IMU recording at its own rate, one axis at a time (``analyze`` and ``loop``);
+    the temperature topic is aligned with the IMU stamps once.
 
     Parameters
     ----------
     imu : ImuSeries
-        The recording (its :meth:`~imu_noise_id.core.axes.ImuSeries.sample_period` is the sampling period).
+        The recording (its ``dt`` is the sampling period).
     temperature : ScalarSeries, optional
-        The bag's temperature topic; interpolated onto the IMU stamps (enables ``TEMP``).
+        The bag's temperature topic (enables ``TEMP``).
     loop_kwargs
         Passed to :func:`run_closed_loop`.
     """

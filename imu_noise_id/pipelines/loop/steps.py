@@ -75,9 +75,9 @@ class AxisLoop:
         return screen.Statistics.of(interpolate_missing(self.y), self.dt)
 
     def screen_reference(self, state: LoopState, diag: Diagnosis) -> screen.Reference | None:
-        """The fit of ``diag`` (of ``state``) on the screening statistics, or None where moves are not screened: a
-        record shorter than :data:`~imu_noise_id.core.estimation.screen.MIN_SAMPLES` samples (its exact refits are
-        cheap) or a state with regressors or removed samples (which the statistics do not hold)."""
+        """The fit of ``diag`` on the screening statistics, or None where moves are not screened: fewer than
+        :data:`~imu_noise_id.core.estimation.screen.MIN_SAMPLES` samples, or regressors or removed samples in
+        ``state``."""
         if self.n < screen.MIN_SAMPLES or state.exog_terms or state.flagged.size:
             return None
         return screen.Reference.fit(list(diag.fit.components), self.statistics)
@@ -152,15 +152,9 @@ class AxisLoop:
         return found
 
     def detect_line(self, e: np.ndarray, whitening: WhiteningFilter, residual: np.ndarray) -> list[det.Finding]:
-        """The strongest narrow spectral line and the strongest broad one, each as a SIN finding and, when
-        significant, also as an OSC finding.
-
-        The single-bin search (:func:`~imu_noise_id.core.diagnostics.detectors.detect_sinusoid`) locates a narrow
-        line best; the pooled search (:func:`~imu_noise_id.core.diagnostics.lines.detect_broad_line`) finds a line
-        spread over many bins, each below its threshold. Both run at every step, so that a wide vibration (≈ 10 Hz,
-        B ≈ 0.5 Hz on the ADIS16405 accelerometers) is not hidden while a narrow line elsewhere stays significant;
-        the pooled search then skips the narrow line's own pooled bins and those of its harmonics.
-        """
+        """The strongest narrow line (:func:`~imu_noise_id.core.diagnostics.detectors.detect_sinusoid`) and the
+        strongest broad one (:func:`~imu_noise_id.core.diagnostics.lines.detect_broad_line`, skipping the narrow line's
+        pooled bins and its harmonics'), each as a SIN finding and, when significant, an OSC finding."""
         sin, *others = det.detect_sinusoids(e, self.dt, whitening, alpha=self.alpha)
         narrow = self.line_findings(sin, e, residual, others=others) if sin.significant else []
         found = {float(m.params["frequency"]) for f in narrow for m in (f, *f.members)}
@@ -170,14 +164,10 @@ class AxisLoop:
 
     def line_findings(self, sin: det.Finding, e: np.ndarray, residual: np.ndarray,
                       others: list[det.Finding] | tuple[det.Finding, ...] = ()) -> list[det.Finding]:
-        """A significant line as its SIN and OSC findings (with its harmonic family, if any, or the group of every
-        significant narrow line, :meth:`line_group`).
-
-        The line's shape (:func:`~imu_noise_id.core.diagnostics.lines.line_shape`, measured on the residual in the
-        data's units) says which it looks like and gives the OSC's starting f₀, bandwidth and σ; the look-alike is
-        listed first (a slightly smaller p-value) and, unless the shape is decisive (:data:`DECISIVE_SHARE`), both
-        are tried, so that the likelihood has the last word. ``others``: the weaker significant narrow lines.
-        """
+        """A significant line as its SIN and OSC findings (with its harmonic family or :meth:`line_group`); the shape
+        (:func:`~imu_noise_id.core.diagnostics.lines.line_shape`) orders them, the look-alike first, and gives the OSC's
+        f₀, bandwidth and σ; outside :data:`DECISIVE_SHARE` only the look-alike is offered. ``others``: the weaker
+        significant narrow lines."""
         shape = line_shape(residual, self.dt, sin.params["frequency"], resolution=int(sin.params.get("resolution", 1)))
         evidence = f"{sin.evidence}; {shape.reason}"
         bandwidth = min(shape.bandwidth, MAX_DAMPING * shape.frequency)  # ζ ≤ MAX_DAMPING / 2
@@ -199,17 +189,11 @@ class AxisLoop:
 
     def line_group(self, first: det.Finding, family: list[det.Finding], others: list[det.Finding] | tuple[
             det.Finding, ...], residual: np.ndarray) -> list[det.Finding]:
-        """The strongest line (a sinusoid beyond doubt), its harmonics and every other significant narrow line
-        whose shape is a sinusoid's beyond doubt (:data:`DECISIVE_SHARE`), as one finding added in one step
-        (issue 11's groups), in place of the harmonic family; [] when no other line qualifies.
-
-        Beyond the papers. A consumer module's gyro can carry a dozen narrow vibration lines between 1 and 6 Hz;
-        found one per step, they use up the loop's steps with evidence left (issue 11). Each line of the group is
-        significant on its own at the detector's family-wise level (:func:`~imu_noise_id.core.diagnostics.
-        detectors.detect_sinusoids`); a line whose power spreads beyond ±2 bins (a wandering line, an OSC) is
-        left to a later step, where its shape decides, so the ≈ 0.5 Hz wandering line of the ADIS16405
-        accelerometers is not split into sinusoids.
-        """
+        """The strongest line, its harmonics and every other significant narrow line whose shape is a sinusoid's beyond
+        doubt (:data:`DECISIVE_SHARE`), as one finding in place of the harmonic family; [] when no other line qualifies.
+        Each is significant on its own at the family-wise level
+        (:func:`~imu_noise_id.core.diagnostics.detectors.detect_sinusoids`). Beyond the papers (docs/loop.md, "Many
+        narrow lines in one step")."""
         members = list(family[0].members) if family else [first]
         resolution = 1.0 / (self.n * self.dt)
         near = resolution * (LINE_SEPARATION_BINS + 1)
@@ -231,9 +215,7 @@ class AxisLoop:
 
     def harmonic_family(self, line: det.Finding, e: np.ndarray, residual: np.ndarray) -> list[det.Finding]:
         """The line and its significant harmonics (:func:`~imu_noise_id.core.diagnostics.lines.harmonics`) as one
-        finding added in one step (issue 11's groups), offered before the line alone; [] without harmonics.
-        Harmonics of a sine are sines at exact multiples of its frequency; those of an OSC are OSCs with the
-        shape measured at each."""
+        finding, SINs at exact multiples or OSCs shaped at each; [] without harmonics."""
         f0 = line.params["frequency"]
         bandwidth = line.params.get("bandwidth", 0.0)
         found = harmonics(e, self.dt, f0, bandwidth, alpha=self.alpha)
@@ -254,10 +236,9 @@ class AxisLoop:
                         evidence=f"{line.evidence}; with its harmonics: {line.effect} at {listed} Hz")]
 
     def candidates(self, diag: Diagnosis, state: LoopState) -> list[det.Finding]:
-        """Significant findings that can be added, ranked by p-value: the most significant one per effect, except
-        that Gauss–Markov candidates from distinct τ bands (an AV bump and a bounded long-τ AV) and lines from the
-        narrow and the broad search are kept apart;
-        Ljung–Box evidence merges into the strongest GM band (which locates τ) or stands alone without one."""
+        """Significant findings that can be added, ranked by p-value: the most significant per effect, GM candidates of
+        distinct τ bands and narrow and broad lines kept apart; Ljung–Box evidence merges into the strongest GM band or
+        stands alone."""
         best: dict[str, det.Finding] = {}
         gms: list[det.Finding] = []
         lb: det.Finding | None = None
@@ -284,14 +265,9 @@ class AxisLoop:
         return sorted([*best.values(), *gms], key=lambda f: f.log10_p)
 
     def as_filter(self, f: det.Finding, state: LoopState) -> list[det.Finding]:
-        """A GM finding whose τ is below :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit` becomes the
-        sensor's own filter (noise correlated over a few samples, or a few milliseconds at kHz rates): a first-order
-        low-pass (LPF, correlation decaying geometrically) and a two-tap average (MA, correlated over one sample
-        only), each offered unless the model has it, the likelihood decides (not a long-τ deficit's GM, which is about
-        the random walk, not the sensor's filter). Both together shape the passband's edge
-        more freely than either (measured on the ADIS16405 accelerometers: lag-1 correlation 0.17–0.30, lag-2
-        0.02–0.05, between MA's 0 and an AR(1)'s ρ₁²; with the LPF alone the AV misfit z stays at +4.5 at τ = 0.02 s
-        and −5.5 at 0.06 s on 2000 s of run 1)."""
+        """A GM finding with τ below :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit` (not a long-τ
+        deficit's) as the sensor's own filter: an LPF and an MA finding, each unless the model has it. Reasons:
+        docs/loop.md, "The loop's rules" 2."""
         tau = f.params.get("tau")
         missing = [k for k in ("LPF", "MA") if k not in state.structure]
         if tau is None or tau >= filter_memory_limit(self.dt) or not missing or f.params.get("deficit"):
@@ -399,12 +375,8 @@ class AxisLoop:
         raise ValueError(f"no re-measure of a {f.detector} finding ({f.effect})")
 
     def evidence_gone(self, f: det.Finding, diag: Diagnosis) -> tuple[bool, str]:
-        """Whether the signature ``f`` targeted is gone from the new fit's residuals.
-
-        Gone: its statistic, re-measured at the same place (frequency, sample, τ band, samples), is below its
-        threshold, or has fallen to less than half its value (measured effects are rarely exactly the shape
-        added, e.g. a wandering line, a band-limited bump; what is left is new evidence for the next step).
-        """
+        """Whether the signature ``f`` targeted is gone from the new fit's residuals: its statistic, re-measured at the
+        same place (frequency, sample, τ band, samples), is below its threshold or below half its value."""
         stat = self.targeted_statistic(f, diag)
         below = stat <= f.threshold
         halved = stat <= 0.5 * f.statistic
