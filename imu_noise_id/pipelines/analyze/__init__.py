@@ -1,28 +1,13 @@
 """``analyze`` as one pipeline: a static recording in, one :class:`AnalysisResult` out; data flows down once.
 
-Stages, each run once on data already in memory (the bag was read once, IMU and temperature together, by the
-adapter):
-
-1. the Allan stage (:mod:`.static`): checks, the Allan family of every axis, the slope parameters;
-2. the model stage (:mod:`.models`): per axis, model selection by BIC (or the structure asked for) with the
-   constrained EM and quasi-Newton, intervals and recording-length advice; the starting values are fitted to the
-   Allan variance of stage 1 (not computed again); or by the GMWM (WIC), or both compared, and the GMWM alone on
-   records too long for the EM;
-3. the closed loop (:mod:`imu_noise_id.pipelines.loop`), starting from each axis's selected EM fit (not fitted
-   again), at the recording's own rate (skipped for GMWM fits: it diagnoses the EM's innovations);
-4. the final model of each axis (:mod:`.final`): the loop's last step or the selection, with intervals, and the
-   Kalibr numbers taken from it;
-5. the simulation band of every axis's final model (the AVs of simulations of it, for the report's plots);
-6. the overbound of every axis (:mod:`.overbound`): the smallest WN+RW covering the data's upper Allan bound and
-   the final model over the filter's τ range (also without the model stage: then the data's bound alone);
-7. the resolution of every final model (:mod:`.resolution`): an axis whose loop verdict failed, or whose N
-   disagrees with the data's passband level, gives as upper bounds (method ``unresolved``) the N and K of its
-   overbound of the data's bound alone (the untrusted model's AV left out).
-
-Stages 2–5 of one axis do not depend on the other axes: on a long record they run in worker processes, one axis
-each (``AnalyzeOptions.jobs``), and their results come back in axis order, the same numbers as one after another.
-
-The report layer (:mod:`imu_noise_id.report.analysis`) writes every file once from the result.
+Stages, each run once on data in memory: 1. the Allan stage (:mod:`.static`); 2. the model stage (:mod:`.models`:
+selection by BIC with the constrained EM, starts fitted to stage 1's AV, or the GMWM by WIC, or both); 3. the closed
+loop (:mod:`imu_noise_id.pipelines.loop`) from each axis's selected EM fit at the recording's own rate (not for GMWM
+fits); 4. the final model (:mod:`.final`); 5. the simulation band of each final model; 6. the overbound
+(:mod:`.overbound`); 7. the resolution (:mod:`.resolution`: an unresolved axis gives its data overbound's N and K as
+upper bounds). Stages 2–5 of one axis run in worker processes on long records (``AnalyzeOptions.jobs``), the results in
+axis order and the same as serially. The report layer (:mod:`imu_noise_id.report.analysis`) writes the files from the
+result.
 """
 
 from __future__ import annotations
@@ -70,16 +55,14 @@ class AnalyzeOptions:
     models
         Model stage (``models.model == "none"``: Allan only, no loop).
     loop
-        Run the closed loop after the model stage (at the recording's own rate).
+        Run the closed loop after the model stage.
     horizon_s
         End of the overbound's τ range [s] (it starts at the sampling period).
     jobs
-        Worker processes for stages 2–5, one axis each: 0 (default) one per available core, at most one per axis,
-        on records of at least :data:`PARALLEL_MIN_SAMPLES` samples per axis (shorter ones in this process); 1 all
-        in this process.
+        Worker processes for stages 2–5: 0 one per core (at most one per axis) from :data:`PARALLEL_MIN_SAMPLES`
+        samples per axis, else in this process; 1 all in this process.
     span
-        Analyse only the samples from ``span[0]`` to ``span[1]`` [s] after the first one (e.g. the still stretch
-        the static check suggests around a moment of motion); None: the whole record.
+        Analyse only ``span[0]`` to ``span[1]`` [s] after the first sample; None: the whole record.
     """
 
     kinds: tuple[str, ...] = KINDS
@@ -105,18 +88,9 @@ class AnalyzeOptions:
 
 @dataclass
 class AnalysisResult:
-    """What ``analyze`` found, stage by stage (per-axis dictionaries keyed by axis name).
-
-    Attributes
-    ----------
-    static : the Allan stage (variances, slopes, data summary, warnings)
-    models : the model stage per axis (fits and selections, without their records)
-    loops : the closed loop per axis (empty without the loop)
-    finals : the final model per axis and the Kalibr numbers from it (empty without the model stage)
-    bands : per axis (τ [s], AVs of simulations of the final model (n_sim, T) [u²])
-    overbounds : per axis the smallest WN+RW covering the data's upper Allan bound and the final model
-    warnings : what the model and loop stages could not do, and why
-    """
+    """What ``analyze`` found, per stage (per-axis dictionaries keyed by axis name): ``static`` (Allan stage),
+    ``models`` (fits and selections, without records), ``loops`` (empty without the loop), ``finals`` (final model and
+    Kalibr numbers), ``bands`` ((τ [s], simulated AVs (n_sim, T) [u²])), ``overbounds``, ``warnings``."""
 
     static: StaticAnalysis
     models: dict[str, AxisModel] = field(default_factory=dict)
@@ -151,18 +125,16 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
     imu
         The six axes (rad/s, m/s²), repaired (the reader's notes in ``imu.notes``).
     temperature
-        The recording's sensor temperature, if any (enables the loop's thermal-bias test).
+        The sensor temperature, if any (enables the loop's TEMP test).
     options
         What to compute.
-    progress
-        Called as ``progress(done, total)`` during the Allan stage.
-    on_axis
-        Called as each axis is done, e.g. to print its model and loop.
+    progress, on_axis
+        Called as ``progress(done, total)`` during the Allan stage; as each axis is done.
 
     Raises
     ------
     InputError
-        Input a user can fix (too short, not static, constant axis, …): the message says what and what to do.
+        Input a user can fix (too short, not static, constant axis, …), the message saying what to do.
     """
     options = options or AnalyzeOptions()
     if options.span is not None:
@@ -277,9 +249,8 @@ def _worker_axis(axis: str) -> _AxisOutcome:
 
 
 def _each_axis(context: _AxisContext, jobs: int) -> Iterator[tuple[str, _AxisOutcome]]:
-    """(axis, its outcome) in axis order: here one after another, or from ``jobs`` worker processes (started
-    fresh, "spawn": nothing of this process is shared but the context, sent to each worker once). The workers
-    are stopped when the last axis is back or on the first error (an axis's InputError is raised here)."""
+    """(axis, its outcome) in axis order, here or from ``jobs`` "spawn" worker processes (the context sent to each
+    once); the workers stop after the last axis or the first error (an axis's InputError raised here)."""
     axes = list(context.static.axes)
     if jobs <= 1:
         for axis in axes:

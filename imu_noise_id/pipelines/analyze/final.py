@@ -1,14 +1,9 @@
-"""The final model of each axis: what the numbers users paste come from.
-
-The closed loop's last step when the loop changed the model (refitted intervals included), else the model stage's
-selection; a short-memory GM read as the sensor's low-pass (:func:`~imu_noise_id.core.estimation.relabel.gm_as_filter`).
-From it: the passband noise density N, the random walk K (or "not identifiable"), the per-sample variance of the
-high-frequency noise (:mod:`imu_noise_id.core.estimation.kalibr`) — oscillations, the internal filter's shape,
-GMs and regressors kept out of N and K — and the bias instability, read from the model with its interval and from
-the data's Allan deviation (:mod:`imu_noise_id.core.estimation.instability`). A random walk above what the data's
-long-τ AV supports (:mod:`imu_noise_id.core.allan.rw_bound`, τ beyond the tenth of the record the model is judged
-on) is flagged in its source: a bounded wander fits the record as well, and only a longer record tells them apart.
-"""
+"""The final model of each axis, which the numbers users paste come from: the loop's last step when the loop changed the
+model, else the selection (a short-memory GM read as the sensor's low-pass,
+:func:`~imu_noise_id.core.estimation.relabel.gm_as_filter`). From it N, K (or "not identifiable") and the per-sample
+high-frequency variance (:mod:`imu_noise_id.core.estimation.kalibr`; lines, filter shape, GMs and regressors kept out),
+and the bias instability from the model and the data's AV (:mod:`imu_noise_id.core.estimation.instability`); a K above
+the data's long-τ bound (:mod:`imu_noise_id.core.allan.rw_bound`) is flagged in its source."""
 
 from __future__ import annotations
 
@@ -31,15 +26,15 @@ class FinalModel:
     Attributes
     ----------
     fit : the final fit (without its record), with intervals
-    source : where it comes from, in words (model selection, or the loop's step and model)
-    model : its name as every output prints it: the loop's last step's (regressors and removed outliers included,
-        e.g. WN+SIN, where ``fit.model`` names the stochastic components alone), else the fit's
-    noise_density, random_walk : Kalibr's N [u/√Hz] and K [u/s/√Hz] with intervals and their sources
-    noise_stddev_per_sample : √(per-sample variance of the high-frequency noise) at the recording's dt [u]
+    source : where it comes from, in words
+    model : its name in every output: the loop's last step's (regressors and outliers included, e.g. WN+SIN), else the
+        fit's
+    noise_density, random_walk : N [u/√Hz] and K [u/s/√Hz] with intervals and sources
+    noise_stddev_per_sample : √(per-sample high-frequency variance) at the recording's dt [u]
     bias_instability, bias_instability_allan : B [u] from the model (with interval) and from the data's AV
-    random_walk_bound : the largest K the data's AV at τ ≥ a tenth of the record supports (95 %, simultaneous)
-    unresolved : why the model is not trusted for N and K (:mod:`.resolution`), None when it is; then
-        ``noise_density`` and ``random_walk`` are the overbound's and ``model_values`` the model's own (N, K)
+    random_walk_bound : the largest K the AV at τ ≥ a tenth of the record supports (95 %, simultaneous)
+    unresolved : why N and K are not the model's (:mod:`.resolution`), else None; then ``noise_density`` and
+        ``random_walk`` are the overbound's and ``model_values`` the model's (N, K)
     """
 
     fit: FitResult
@@ -61,16 +56,10 @@ class FinalModel:
 
 
 def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResult) -> FinalModel:
-    """The final model of one axis from its model-stage fit, its loop and its Allan variance (module docstring).
-
-    The loop's final fit carries its intervals when the loop was run with ``intervals=True`` (then fitted again
-    where they met a higher likelihood, :func:`~imu_noise_id.pipelines.loop.run.final_intervals`), else they are
-    computed here. A fit still short of the maximum by more than the 95 % threshold
-    (:attr:`~imu_noise_id.core.estimation.results.FitResult.short_of_maximum`) says so in its sources.
-
-    The bias instability is read over τ up to a tenth of the record (where the AV estimates still have ≳ 10
-    degrees of freedom), the model's and the data's alike.
-    """
+    """The final model of one axis from its model-stage fit, its loop and its AV (module docstring): intervals computed
+    here unless the loop gave them (:func:`~imu_noise_id.pipelines.loop.run.final_intervals`); a fit short of the
+    maximum (:attr:`~imu_noise_id.core.estimation.results.FitResult.short_of_maximum`) says so in its sources; B read
+    over τ up to a tenth of the record."""
     if loop is None or len(loop.steps) == 1:
         fit = gm_as_filter(model_fit)
         source = "model selection" + ("" if loop is None else " (the closed loop added nothing)")

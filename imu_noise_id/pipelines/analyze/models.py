@@ -1,17 +1,11 @@
-"""The model stage: one error model per axis, by maximum likelihood (paper 000's constrained EM and beyond), by the
-GMWM (:mod:`imu_noise_id.core.estimation.gmwm`), or both side by side.
+"""The model stage of ``analyze`` and ``fit``: one error model per axis by maximum likelihood (paper 000's constrained
+EM and beyond), by the GMWM (:mod:`imu_noise_id.core.estimation.gmwm`), or both.
 
-``model = "auto"`` ranks the candidate structures by BIC (:func:`~imu_noise_id.core.estimation.selection.
-select_model`) or, for the GMWM, by WIC (:func:`~imu_noise_id.core.estimation.gmwm_select.select_gmwm`); a structure
-such as ``"WN+GM+RW"`` is fitted as given. ``estimator``:
-
-* ``em`` — the EM alone; ``gmwm`` — the GMWM alone;
-* ``both`` — the GMWM first, its fit of each structure then one more starting value of the EM's, the EM's fit the
-  axis's model (the closed loop needs its innovations), and the two compared parameter by parameter
-  (:mod:`imu_noise_id.core.estimation.agreement`);
-* ``auto`` (default) — the EM up to :data:`EM_MAX_SAMPLES` samples per axis, the GMWM beyond, with a note saying so.
-
-``analyze`` and ``fit`` both run this stage.
+``model = "auto"`` ranks the candidate structures by BIC (:func:`~imu_noise_id.core.estimation.selection.select_model`)
+or WIC (:func:`~imu_noise_id.core.estimation.gmwm_select.select_gmwm`); a structure (``"WN+GM+RW"``) is fitted as given.
+``estimator``: ``em``; ``gmwm``; ``both`` (the GMWM's fits one more EM start, the EM's fit the model, the two compared
+by :mod:`imu_noise_id.core.estimation.agreement`); ``auto`` (the EM up to :data:`EM_MAX_SAMPLES` samples per axis, the
+GMWM beyond, with a note).
 """
 
 from __future__ import annotations
@@ -36,7 +30,7 @@ AUTO, NONE = "auto", "none"
 ESTIMATORS = ("auto", "em", "gmwm", "both")
 #: Above this many samples per axis ``estimator = "auto"`` uses the GMWM: the default EM analysis (model selection
 #: and closed loop, 6 axes) then takes more than about ten minutes and over a GiB on this project's 2-core machine
-#: (measured: 1 244 s and 2.7 GB for 7.2 M samples per axis, issue 14; bench/bench_gmwm_speed.py → docs/gmwm.md).
+#: (docs/gmwm.md, ``estimator``).
 EM_MAX_SAMPLES = 4_000_000
 
 

@@ -1,13 +1,7 @@
-"""The overbound stage of ``analyze``: per axis, the smallest Kalibr WN+RW that covers what the data show.
-
-For the τ range a filter cares about — from the sampling period to a horizon (``--horizon``, default
-:data:`~imu_noise_id.core.estimation.overbound.DEFAULT_HORIZON_S`) — the bound to cover at each τ of the Allan
-grid is the larger of the data's upper confidence bound (the Allan stage's interval, 95 % by default) and the final
-model's Allan variance (all its components: GMs, oscillations, the low-pass — what a WN+RW filter cannot model but
-will see). The numbers are not below the values ``imu.yaml`` gives per axis (the final model's N and K, or the
-Allan-slope readings where it has none), so the inflation factors over them are ≥ 1. The LP itself:
-:mod:`imu_noise_id.core.estimation.overbound`.
-"""
+"""The overbound stage of ``analyze``: per axis, the smallest Kalibr WN+RW whose AV covers, at each τ of the Allan grid
+from the sampling period to a horizon (default :data:`~imu_noise_id.core.estimation.overbound.DEFAULT_HORIZON_S`), the
+larger of the data's upper confidence bound and the final model's AV (all components), and is not below ``imu.yaml``'s
+per-axis N and K (inflation factors ≥ 1). The LP: :mod:`imu_noise_id.core.estimation.overbound`."""
 
 from __future__ import annotations
 
@@ -29,10 +23,10 @@ class AxisOverbound:
     Attributes
     ----------
     bound : the LP's result (N [u/√Hz], K [u/s/√Hz], binding τ, floors reached, mean AV ratio)
-    tau_range : the τ [s] of the Allan grid actually covered (first, last); horizon_s : the range asked for ends here
+    tau_range : the τ [s] of the grid covered (first, last); horizon_s : the range asked for ends here
     covers : what the bound is made of, in words
-    reference_noise_density, reference_random_walk : the values the inflation factors are relative to (imu.yaml's
-        per-axis values) and ``reference_source`` where they come from
+    reference_noise_density, reference_random_walk, reference_source : imu.yaml's per-axis values the inflation
+        factors are relative to, and where they come from
     """
 
     bound: WnRwOverbound
@@ -78,13 +72,7 @@ def _references(static: StaticAnalysis, axis: str, final: FinalModel | None) -> 
 
 
 def check_horizon(static: StaticAnalysis, horizon_s: float) -> None:
-    """Refuse a horizon shorter than the sampling period (before the model stage runs for minutes).
-
-    Raises
-    ------
-    InputError
-        ``horizon_s`` < the sampling period.
-    """
+    """Refuse (InputError) a horizon ``horizon_s`` [s] shorter than the sampling period, before the model stage runs."""
     if not horizon_s >= static.dt:
         raise InputError(f"--horizon {horizon_s:g} s is shorter than the sampling period {static.dt:g} s: give the "
                          "longest time scale your filter must cover (e.g. 100)")
@@ -92,13 +80,8 @@ def check_horizon(static: StaticAnalysis, horizon_s: float) -> None:
 
 def axis_overbound(static: StaticAnalysis, axis: str, final: FinalModel | None,
                    horizon_s: float = DEFAULT_HORIZON_S) -> AxisOverbound:
-    """The overbound of ``axis`` over τ from the sampling period to ``horizon_s`` (module docstring).
-
-    Raises
-    ------
-    InputError
-        The horizon is shorter than the sampling period.
-    """
+    """The overbound of ``axis`` over τ from the sampling period to ``horizon_s`` [s] (module docstring); InputError
+    when the horizon is shorter than the sampling period."""
     check_horizon(static, horizon_s)
     allan = static.allan
     j = static.axes.index(axis)

@@ -1,19 +1,11 @@
 """Whether an axis's final model may give its N and K, and what is given where it may not.
 
-A final model is *unresolved* for the numbers users paste when
-
-* the closed loop's verdict failed (:attr:`~imu_noise_id.pipelines.loop.LoopResult.passed`): its residuals hold
-  evidence no effect explained, so its components are not identified as what they are named; or
-* its passband noise density N disagrees with the data's own passband reading, the Allan variance's white-noise
-  line (:func:`~imu_noise_id.core.allan.slopes.fit_axis_slopes`): the two 95 % intervals are disjoint and the
-  values differ by more than :data:`PASSBAND_FACTOR` (the model put the passband noise in a component N leaves
-  out, e.g. a Gauss–Markov process standing for a higher-order sensor filter beside a white noise driven to ~0).
-
-An unresolved axis gives, for both N and K, the values of the overbound of its data
-(:func:`~.overbound.data_overbound`: the smallest WN + RW whose Allan variance covers the data's upper confidence
-bound over the τ range a filter cares about; the untrusted model's AV is left out) as upper bounds, interval
-(0, value), method ``unresolved``, and the reason in its source. The model's
-own values stay in ``model.yaml``. Why: ``docs/analysis.md`` ("Why an unresolved axis pastes its overbound").
+Unresolved: the loop's verdict failed (:attr:`~imu_noise_id.pipelines.loop.LoopResult.passed`), or N disagrees with the
+AV's white-noise line (:func:`~imu_noise_id.core.allan.slopes.fit_axis_slopes`: 95 % intervals disjoint and values more
+than :data:`PASSBAND_FACTOR` apart). An unresolved axis gives as N and K its data overbound's values
+(:func:`~.overbound.data_overbound`) as upper bounds, interval (0, value), method ``unresolved``, the reason in its
+source; the model's own values stay in ``model.yaml``. Why: docs/analysis.md, "Why an unresolved axis pastes its
+overbound".
 """
 
 from __future__ import annotations
@@ -32,11 +24,8 @@ PASSBAND_FACTOR = 2.0
 
 
 def passband_disagreement(n: KalibrValue, reading: SlopeComponent) -> str | None:
-    """Why the model's N [u/√Hz] disagrees with the data's white-noise reading (module docstring), or None.
-
-    ``reading`` is the Allan-slope N with its interval; an upper bound (``method="upper_bound"``, interval
-    (0, value)) disagrees only with an N above it.
-    """
+    """Why the model's N [u/√Hz] disagrees with the Allan-slope ``reading`` (module docstring), or None; an upper-bound
+    reading (interval (0, value)) disagrees only with an N above it."""
     if n.value is None or not reading.value > 0:
         return None
     lo, hi = (n.value if math.isnan(v) else v for v in n.ci95)  # no interval: the value itself

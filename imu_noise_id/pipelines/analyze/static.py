@@ -1,16 +1,9 @@
-"""The Allan stage of ``analyze``: checks, the Allan family and the slope parameters of a static recording.
-
-:func:`analyze_static` returns a :class:`StaticAnalysis` (arrays in, a result dataclass out; no files, no plots):
-
-1. checks: at least :data:`MIN_SAMPLES` samples, finite values, the sampling period by the package's one rule
-   (:mod:`imu_noise_id.core.timing`: refused when the stamps cannot give it, warned about when they are bursty or
-   disagree), missing samples (a warning: the Allan estimators and the models take the samples as consecutive at
-   that period), the static check of
-   :func:`imu_noise_id.core.stillness.static_check` (clearly non-static data raises unless ``allow_motion``);
-2. the Allan family per axis (:func:`imu_noise_id.core.allan.allan_family`), AV always, others on request;
-3. the Allan-slope parameters per axis (:func:`imu_noise_id.core.allan.slopes.fit_axis_slopes`), with warnings
-   where the random walk or white noise is only an upper bound.
-"""
+"""The Allan stage of ``analyze``: :func:`analyze_static` checks a static recording (:data:`MIN_SAMPLES`, finite values,
+the sampling period by :mod:`imu_noise_id.core.timing`, missing samples,
+:func:`imu_noise_id.core.stillness.static_check`: non-static data raise unless ``allow_motion``), computes the Allan
+family per axis (:func:`imu_noise_id.core.allan.allan_family`) and the Allan-slope parameters
+(:func:`imu_noise_id.core.allan.slopes.fit_axis_slopes`, warned about where only an upper bound), into a
+:class:`StaticAnalysis`."""
 
 from __future__ import annotations
 
@@ -46,25 +39,21 @@ class StaticAnalysis:
     Attributes
     ----------
     axes : tuple of str
-        Axis names, the column order of every per-axis array (:data:`~imu_noise_id.core.axes.AXES`).
-    n : int
-        Samples per axis.
-    dt : float
-        Sampling period used [s] (``period.value``).
-    duration_s : float
-        n·dt [s].
+        Axis names, the column order of every per-axis array.
+    n, dt, duration_s : int, float, float
+        Samples per axis, sampling period [s] (``period.value``), n·dt [s].
     topic : str
         Where the samples came from.
     variances : dict of str to AllanResult
         Allan-family results by kind (always ``"allan"``), each (T, 6).
     slopes : dict of str to AxisSlopes
-        Allan-slope parameters per axis name.
+        Allan-slope parameters per axis.
     warnings : list of str
-        Problems found (timing, motion, parameters that are only bounds); also the input's notes.
+        Problems found (timing, motion, bounds) and the input's notes.
     period : SamplePeriod or None
-        How the period was obtained, the other estimates and whether the stamps could be trusted.
+        How the period was obtained.
     missing : int
-        Samples the sensor produced within the record but the series lacks (dropped or lost; from the period).
+        Samples the sensor produced within the record but the series lacks.
     """
 
     axes: tuple[str, ...]
@@ -89,13 +78,8 @@ class StaticAnalysis:
         return 1.0 / self.dt
 
     def sensor_value(self, sensor: str, parameter: str, combine: str = "max") -> float:
-        """One number per sensor, as Kalibr wants: ``combine`` ("max" or "rms") over the sensor's three axes.
-
-        Parameters
-        ----------
-        sensor : {"gyro", "accel"}
-        parameter : {"noise_density", "random_walk"}
-        """
+        """One number per sensor for Kalibr: ``combine`` ("max" or "rms") of ``parameter`` ("noise_density" or
+        "random_walk") over the three axes of ``sensor`` ("gyro" or "accel")."""
         names = GYRO_AXES if sensor == "gyro" else ACCEL_AXES
         values = np.array([getattr(self.slopes[a], parameter).value for a in names])
         if combine == "max":
