@@ -1,8 +1,4 @@
-"""Batch estimation of stochastic error models (paper 000 and beyond).
-
-* :mod:`.em` — the constrained EM algorithm (E-step sums, M-step updates, Q function);
-* :mod:`.mle` — quasi-Newton finish on the exact likelihood, observed information, likelihood intervals;
-* :mod:`.whittle` — banded Whittle likelihood of the differenced signal (fast starting values);
-* :mod:`.starts` — starting values from the Allan variance;
-* :mod:`.fit` — one structure fitted to one axis, model selection and recording-length advice.
-"""
+"""Batch estimation of stochastic error models (paper 000 and beyond): the constrained EM (:mod:`.em`), the
+exact-likelihood finish and intervals (:mod:`.mle`, :mod:`.uncertainty`, :mod:`.profile`), Whittle and Allan starts
+(:mod:`.whittle`, :mod:`.starts`), one structure's fit (:mod:`.model`), model selection (:mod:`.selection`), the GMWM
+(:mod:`.gmwm`) and the numbers users paste (:mod:`.kalibr`, :mod:`.instability`, :mod:`.overbound`)."""

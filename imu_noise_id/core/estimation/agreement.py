@@ -1,20 +1,10 @@
-"""EM and GMWM side by side: does each parameter agree between the two estimators, and if not, where does the model
-misfit?
+"""EM and GMWM side by side: does each parameter agree between the two estimators (beyond the papers)?
 
-Beyond the papers. The EM (paper 000) maximises the exact likelihood of the samples; the GMWM (:mod:`.gmwm`) matches
-the whole wavelet-variance curve. Fitted to the same record with the same, right model they estimate the same θ;
-when they disagree beyond their intervals the model is wrong somewhere, and the GMWM's standardised WV residuals say
-at which τ (|z| > 2).
-
-Per parameter, with 95 % intervals (lo, hi) turned into log-scale standard deviations s = ln(hi/lo)/(2·1.96):
-
-    z = ln(θ_GMWM / θ_EM) / √(s_EM² + s_GMWM²),   agree when |z| ≤ 1.96
-
-(conservative: the two estimates come from the same data and are positively correlated, so a real difference is
-flagged less often than 5 % + power suggests). A ramp's slope has a sign and may be 0: it is compared on the linear
-scale, z = (ω_GMWM − ω_EM)/√(s_EM² + s_GMWM²) with s = (hi − lo)/(2·1.96). Parameters without a finite interval
-on either side are "undetermined". When the two chose different structures, the Kalibr numbers N and K
-(:mod:`.kalibr`) are compared.
+Per parameter, 95 % intervals (lo, hi) as log-scale sd s = ln(hi/lo)/(2·1.96), z = ln(θ_GMWM/θ_EM)/√(s_EM² + s_GMWM²),
+agree when |z| ≤ 1.96 (conservative: the two estimates are positively correlated). A ramp's signed slope is compared
+linearly, s = (hi − lo)/(2·1.96). Without a finite interval on either side: "undetermined". Different structures: the
+Kalibr N and K (:mod:`.kalibr`) are compared. The GMWM's |z| > 2 WV residuals say which τ misfit (docs/gmwm.md,
+"Agreement with the EM").
 """
 
 from __future__ import annotations

@@ -1,35 +1,13 @@
 """The Generalized Method of Wavelet Moments (GMWM): a stochastic error model fitted to the wavelet variance.
 
-Guerrier, Skaloud, Stebler & Victoria-Feser, "Wavelet-variance-based estimation for composite stochastic
-processes", JASA 108 (2013) ("GMWM" below): θ̂ = argmin (ν̂ − ν(θ))ᵀ Ω (ν̂ − ν(θ)) (GMWM eq. 3), ν̂ the Haar
-wavelet variance of the record (:mod:`imu_noise_id.core.wavelet`, GMWM eq. 2), ν(θ) its theoretical value for the
-components θ. After one O(N·J) pass over the record the fit works on J ≈ log₂N numbers, so its cost does not grow
-with N. The robust version (RGMWM; Guerrier, Molinari & Victoria-Feser 2014, Guerrier et al. 2020) fits the same
-model to the robust WV (``robust=True``).
-
-What is done, step by step (beyond the paper where said):
-
-1. starting values: the Allan-variance fit of :func:`.starts.fit_allan` on the WV's own numbers (2ν̂ = AV);
-2. first step: Ω₁ = diag(edf_j / 2ν̂_j²) (each scale's χ² variance, correlations ignored: consistent, not
-   efficient), every start minimised, the lowest objective kept;
-3. efficient step: Ω₂ = V(θ̂₁)⁻¹, minimised again (GMWM §3's efficient two-step estimator). V(θ) is the exact
-   Gaussian covariance of the WV estimates under the model (:mod:`imu_noise_id.core.wavelet.covariance`; the paper
-   estimates V from the data or by bootstrap);
-4. inference (:mod:`.gmwm_engine`): sandwich covariance of the log-parameters with V at θ̂ (GMWM Proposition 2),
-   Wald intervals in log space, or profile intervals of the objective (χ²₁) where the Wald form is meaningless (a
-   log-sd above 1, an amplitude the moments cannot tell from 0, a parameter at its search bound); the J-statistic
-   and each scale's standardised residual (which τ misfits); the WIC penalty;
-5. optionally a parametric bootstrap: ``bootstrap`` records simulated from θ̂, their WV refitted with Ω₂, the
-   2.5/97.5 % quantiles as intervals.
-
-The result is a :class:`~.results.FitResult` (``estimator = "gmwm"``, no likelihood: ``loglik``, ``aic``, ``bic``
-are NaN) with the GMWM's own numbers in :class:`GmwmFit`; ``model.yaml``, ``imu.yaml`` and the final-model code read
-it like an EM fit.
-
-The ramp (beyond the paper). An RR's slope enters the WV squared, where it trades with a random walk at the longest
-few scales: the WV fit keeps it as a nuisance (so that the other components are not pulled by the trend), and the
-slope reported, signed, with its interval, comes from the WV moments joined with the record's least-squares slope
-(:mod:`.gmwm_ramp`).
+Guerrier, Skaloud, Stebler & Victoria-Feser, JASA 108 (2013) ("GMWM"): θ̂ = argmin (ν̂ − ν(θ))ᵀ Ω (ν̂ − ν(θ)) (GMWM
+eq. 3), ν̂ the Haar WV (:mod:`imu_noise_id.core.wavelet`, GMWM eq. 2), robust WV with ``robust=True`` (RGMWM; Guerrier,
+Molinari & Victoria-Feser 2014). Steps: Allan starts (:func:`.starts.fit_allan`, 2ν̂ = AV); Ω₁ = diag(edf_j/2ν̂_j²);
+efficient Ω₂ = V(θ̂₁)⁻¹ with V the exact Gaussian WV covariance (:mod:`imu_noise_id.core.wavelet.covariance`; beyond the
+paper, which estimates V); inference by :mod:`.gmwm_engine` (sandwich, GMWM Proposition 2; Wald or profile intervals,
+J-statistic, WIC penalty); optional parametric bootstrap. An RR's slope comes from :mod:`.gmwm_ramp` (beyond the paper).
+The result is a :class:`~.results.FitResult` (``estimator = "gmwm"``, ``loglik``/``aic``/``bic`` NaN) with
+:class:`GmwmFit`. Details: docs/gmwm.md, "The estimator".
 """
 
 from __future__ import annotations
@@ -213,10 +191,9 @@ def _bootstrap(est: Estimate, options: GmwmOptions, slope: float | None) -> dict
 
 def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope: float | None = None,
           uncertainty: bool = True) -> GmwmFit:
-    """The :class:`GmwmFit` of an :class:`Estimate` (intervals, bootstrap and advice unless ``uncertainty`` is
-    False, e.g. for the candidates a selection does not keep). ``slope``: the record's least-squares slope [u/s],
-    from which an RR's slope and interval are fitted (:mod:`.gmwm_ramp`; without intervals it is reported as is);
-    None keeps the WV's |ω|."""
+    """The :class:`GmwmFit` of an :class:`Estimate` (intervals, bootstrap and advice unless ``uncertainty`` is False).
+    ``slope``: the record's least-squares slope [u/s] for an RR's slope and interval (:mod:`.gmwm_ramp`); None keeps the
+    WV's |ω|."""
     se, ci, how = intervals(est) if uncertainty else ({}, {}, {})
     if options.bootstrap and uncertainty:
         for lab, values in _bootstrap(est, options, slope).items():

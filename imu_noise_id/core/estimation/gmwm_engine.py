@@ -1,20 +1,12 @@
-"""The GMWM's numerical engine: the weighted wavelet-moment objective over one or several records, its minimum, the
-sandwich covariance, profile intervals and the J-statistic (Guerrier, Skaloud, Stebler & Victoria-Feser, JASA 108,
-2013, "GMWM" below; the several-records form is the MGMWM of Bakalli et al., "Multi-signal approaches for repeated
-sampling schemes in inertial sensor calibration").
-
-For records k = 1..K with WV estimates ν̂_k and weights Ω_k (:class:`Weights`), the estimator is
+"""The GMWM's numerical engine over one or several records (GMWM: Guerrier et al., JASA 108, 2013; several records: the
+MGMWM of Bakalli et al., "Multi-signal approaches for repeated sampling schemes in inertial sensor calibration").
 
     θ̂ = argmin_θ Σ_k (ν̂_k − ν_k(θ))ᵀ Ω_k (ν̂_k − ν_k(θ))                             (GMWM eq. 3)
 
-over log-parameters θ (positivity by construction; beyond the paper, which uses transformations per model). With
-A_k = ∂ν_k/∂θᵀ, H = Σ A_kᵀΩ_kA_k and S = Σ A_kᵀΩ_kV_kΩ_kA_k its asymptotic covariance is the sandwich
-Ξ = H⁻¹ S H⁻¹ (GMWM Proposition 2, here with the records independent), which is H⁻¹ when Ω_k = V_k⁻¹ (efficient).
-At the efficient weight the minimum is Hansen's J-statistic, χ² with Σ J_k − p degrees of freedom when the model is
-right, and the rise of the profiled objective above its minimum is χ²₁ for one parameter (the distance-metric
-statistic of Newey & West 1987), which gives the profile intervals used where Wald intervals are meaningless.
-The criterion's optimism 2 Σ tr(Ω_k A_k H⁻¹ A_kᵀ Ω_k V_k) is the WIC penalty (Guerrier et al. 2015, "wavelet
-information criterion"); it is 2p at the efficient weight.
+over log-parameters θ (beyond the paper). With A_k = ∂ν_k/∂θᵀ, H = Σ A_kᵀΩ_kA_k, S = Σ A_kᵀΩ_kV_kΩ_kA_k the covariance
+is Ξ = H⁻¹ S H⁻¹ (GMWM Proposition 2; H⁻¹ when Ω_k = V_k⁻¹). At the efficient weight the minimum is Hansen's
+J-statistic, χ²(Σ J_k − p), and the profiled objective's rise is χ²₁ (Newey & West 1987), giving profile intervals. WIC
+penalty: 2 Σ tr(Ω_k A_k H⁻¹ A_kᵀ Ω_k V_k) (Guerrier et al. 2015), 2p at the efficient weight.
 """
 
 from __future__ import annotations
@@ -71,10 +63,9 @@ class Parameters:
         return [type(c)(**kw) for c, kw in zip(self.template, params, strict=True)]
 
     def bounds(self, theta0: np.ndarray, runs: list[Moments]) -> tuple[np.ndarray, np.ndarray]:
-        """Search box: physical ranges for τ and frequencies (:func:`.mle.physical_bounds`); ±30 e-folds around
-        the start for amplitudes, whose lower end is raised to where the component's WV falls below
-        :data:`WV_FLOOR` of the data's at every scale (below it the objective is flat and the search would walk
-        down that direction for nothing; beyond the paper, as :func:`.starts.fit_allan` does)."""
+        """Search box: physical ranges for τ and frequencies (:func:`.mle.physical_bounds`); ±30 e-folds around the
+        start for amplitudes, the lower end raised to where the component's WV is below :data:`WV_FLOOR` of the data's
+        at every scale (beyond the paper, as :func:`.starts.fit_allan`)."""
         n, dt = max(r.wv.n for r in runs), runs[0].wv.dt
         phys = physical_bounds(n, dt)
         lo, hi = theta0 - AMPLITUDE_WIDTH, theta0 + AMPLITUDE_WIDTH
@@ -116,8 +107,8 @@ class Weights:
 
     @classmethod
     def diagonal(cls, runs: list[Moments]) -> Weights:
-        """The first step's weight: each scale's variance 2ν̂²/edf from the χ² law of its estimate (the gmwm
-        package's "fast" choice), correlations across scales ignored."""
+        """The first step's weight: each scale's variance 2ν̂²/edf (χ² law; the gmwm package's "fast" choice),
+        correlations ignored."""
         covs = [np.diag(2.0 * run.wv.nu2**2 / run.wv.edf) for run in runs]
         return cls(tuple(np.diag(1.0 / np.sqrt(np.diag(v))) for v in covs), tuple(covs))
 
@@ -218,14 +209,10 @@ class Problem:
 
 def log_gradient(par: Parameters, theta: np.ndarray, of_component: Callable[[Component], np.ndarray | float],
                  step: float = 1e-5) -> np.ndarray:
-    """∂/∂θᵀ of Σ_c f(c) over the components at θ, for an f that adds over independent components and scales with
-    the square of each amplitude (a WV, the variance of the least-squares slope): (…, p), the last axis θ's.
-
-    ∂f/∂ln a = 2f(c) exactly for an amplitude a of component c (:data:`AMPLITUDES`); every other parameter (τ,
-    cutoff, frequency, bandwidth, a flicker level) takes a central difference of its own component's f, one-sided
-    where a step leaves the component's domain. A finite-difference gradient of the whole sum evaluated every
-    component once per parameter. ValueError when θ itself leaves a component's domain.
-    """
+    """∂/∂θᵀ of Σ_c f(c) at θ, for f additive over independent components and scaling with each amplitude's square (a
+    WV, the LS slope's variance): (…, p). ∂f/∂ln a = 2f(c) exactly for amplitudes (:data:`AMPLITUDES`); other parameters
+    by a central difference of their own component's f (one-sided at a domain edge). ValueError when θ leaves a
+    component's domain."""
     comps = par.to_components(theta)
     parts = [np.asarray(of_component(c), dtype=float) for c in comps]
     out = np.zeros((*parts[0].shape, theta.size))
@@ -241,8 +228,8 @@ def log_gradient(par: Parameters, theta: np.ndarray, of_component: Callable[[Com
 
 
 def jacobian(par: Parameters, theta: np.ndarray, run: Moments) -> np.ndarray:
-    """A = ∂ν/∂θᵀ (J × p) in the log-parameters θ (:func:`log_gradient` of the components' WVs: most of a GMWM fit's
-    time went to a finite-difference Jacobian of the whole model). ValueError when θ leaves a component's domain."""
+    """A = ∂ν/∂θᵀ (J × p) in the log-parameters (:func:`log_gradient` of the components' WVs); ValueError when θ leaves
+    a component's domain."""
     return log_gradient(par, theta, lambda c: run.model([c]))
 
 

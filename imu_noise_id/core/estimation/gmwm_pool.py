@@ -1,16 +1,13 @@
 """Pooled GMWM over several recordings of one sensor, with a test that they share one model (MGMWM-style).
 
-Bakalli, Guerrier et al. ("Multi-signal approaches for repeated sampling schemes in inertial sensor calibration")
-estimate one θ from the WVs of K replicates of a sensor: θ̂ = argmin Σ_k (ν̂_k − ν_k(θ))ᵀ Ω_k (ν̂_k − ν_k(θ))
-(:mod:`.gmwm_engine`; each record keeps its own length and period). Pooling is right only when the replicates are
-compatible; we test it (beyond the paper, in the spirit of Hansen's J-test) with the efficient weights Ω_k of the
-pooled fit held fixed:
+Bakalli, Guerrier et al. ("Multi-signal approaches for repeated sampling schemes in inertial sensor calibration"):
+θ̂ = argmin Σ_k (ν̂_k − ν_k(θ))ᵀ Ω_k (ν̂_k − ν_k(θ)) (:mod:`.gmwm_engine`; each record its own length and period).
+Compatibility (beyond the paper, after Hansen's J-test), the pooled fit's efficient Ω_k held fixed:
 
     C = J_pooled(θ̂) − Σ_k J_k(θ̂_k) = Σ_k [J_k(θ̂) − J_k(θ̂_k)] ~ χ²((K − 1)·p)   under "one θ for all replicates",
 
-J_k(θ̂_k) each record's own minimum with its weight, J_pooled the pooled minimum; each record's term says how much
-it disagrees with the others. The pooled J alone,
-χ²(Σ J_k − p), tests "one θ and the model is right" together; C separates the two. Verdict at the 5 % level.
+each term showing how much record k disagrees; the pooled J, χ²(Σ J_k − p), tests one θ and the model together. Verdict
+at the 5 % level.
 """
 
 from __future__ import annotations

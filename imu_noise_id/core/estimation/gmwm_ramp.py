@@ -1,23 +1,15 @@
 """The ramp of a GMWM fit: the wavelet moments joined with the record's least-squares slope (beyond the papers).
 
-An RR's slope ω enters the Haar WV squared, as (ω·τ/2)² at scale τ, where it trades with a random walk over the few
-longest scales: fitted from the WV alone its magnitude was biased low (−18 %) with an RMSE 1.8× the EM's, and its
-interval covered 77 % (``bench/bench_gmwm_accuracy.py``, WN+GM+RW+RR). The record's least-squares slope ω̂ is a
-first moment: E ω̂ = ω, Var ω̂ = V(θ) (:func:`imu_noise_id.core.noise.trend.ls_slope_variance`, exact for the noise
-components θ), and for Gaussian noise it is uncorrelated with every WV estimate (an odd against even moments). The
-GMM objective over both sets of moments is the GMWM's (GMWM eq. 3) plus one term,
+An RR's slope ω enters the Haar WV squared, (ω·τ/2)². The record's least-squares slope ω̂ has E ω̂ = ω, Var ω̂ = V(θ)
+(:func:`imu_noise_id.core.noise.trend.ls_slope_variance`, exact) and, for Gaussian noise, is uncorrelated with every WV
+estimate. The GMM objective over both (GMWM eq. 3 plus one term), continuously updated in V, the WV's ramp term a
+nuisance magnitude a:
 
-    J(θ, a, ω) = (ν̂ − ν(θ, a))ᵀ Ω (ν̂ − ν(θ, a)) + (ω̂ − ω)² / V(θ),                   (1)
+    J(θ, a, ω) = (ν̂ − ν(θ, a))ᵀ Ω (ν̂ − ν(θ, a)) + (ω̂ − ω)² / V(θ).                   (1)
 
-continuously updated in V, where the WV's ramp term keeps its own magnitude a (a nuisance, not tied to |ω|): the
-WV covariance V(θ) of :mod:`imu_noise_id.core.wavelet.covariance` treats the ramp as deterministic and leaves out
-the variance its mean adds at the longest scales (4μ²·Var of the coefficients' mean), so the WV's own information on
-|ω| is overstated (tying a to |ω| gave intervals narrower than the least-squares one alone). The slope reported is
-the minimiser of its profile J_p(v) = min_{θ,a} J(θ, a, v) and its 95 % interval {v : J_p(v) − min J_p ≤ χ²₁,₀.₉₅}
-(the distance-metric statistic, as for the GMWM's other profile intervals). A random walk the WV can hardly see
-widens it by the trade it allows: V grows with K², at the price the WV moments put on K (with the ramp term free to
-take up the difference at the longest scales). Taking V at θ̂ alone ignores that trade (tried first: its intervals
-were too narrow). The other parameters stay the WV fit's.
+The slope is the minimiser of J_p(v) = min_{θ,a} J(θ, a, v), its 95 % interval {v : J_p(v) − min J_p ≤ χ²₁,₀.₉₅} (the
+distance-metric statistic); the other parameters stay the WV fit's. Why: docs/gmwm.md, "The ramp" and "Accuracy against
+the EM".
 """
 
 from __future__ import annotations

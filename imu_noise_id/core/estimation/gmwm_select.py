@@ -1,21 +1,12 @@
-"""GMWM model selection by the wavelet information criterion (WIC) over the EM selection's candidate structures.
+"""GMWM model selection by the wavelet information criterion (WIC) over the EM selection's candidates.
 
-Guerrier, Stebler, Skaloud & Victoria-Feser ("Wavelet information criterion", 2015, in the gmwm R package as
-``rank.models``) rank candidate models by an estimate of the expected prediction error of the WV,
-E[(ν̂⁰ − ν(θ̂))ᵀ Ω (ν̂⁰ − ν(θ̂))] for an independent copy ν̂⁰ of the moments, with **one** weight Ω for every
-candidate, that of the largest ("full") model. Its estimate is the fitted objective plus the optimism
-2·tr(Ω A H⁻¹ Aᵀ Ω V) (:mod:`.gmwm_engine`; the asymptotic form, not the bootstrap one): WIC = J(θ̃_k) + 2p_k when
-Ω = V⁻¹. Here the full model has, of every component type, the largest count any candidate has (e.g. WN+2GM+RW
-for the default candidates); its V(θ̂) is the common weight (when it cannot be fitted, the V of the candidate with
-the best J-test p-value). The candidates are those of :func:`.selection.suggest_candidates` (the EM's).
-
-Each candidate's reported fit (J-test) is its own efficient fit (:func:`.gmwm.fit_gmwm`), with intervals for the
-winner only; the common weight only ranks them.
-
-Beyond the paper: candidates whose WIC differ by no more than :data:`WIC_TIE` (relative) are one tie, won by the
-fewest parameters. A component that the data do not hold is fitted onto its bound (a GM beside a random walk whose
-variance goes to zero) and adds neither fit nor optimism, so the nested structures' WIC are equal up to rounding;
-without the rule the winner of such a tie was decided by the last digits of the linear algebra.
+Guerrier, Stebler, Skaloud & Victoria-Feser ("Wavelet information criterion", 2015; gmwm's ``rank.models``):
+WIC = J(θ̃_k) + 2·tr(Ω A H⁻¹ Aᵀ Ω V) (:mod:`.gmwm_engine`, asymptotic optimism; 2p_k when Ω = V⁻¹) under one weight Ω
+for all candidates, the V(θ̂) of the full model (of each component type the largest count any candidate has, e.g.
+WN+2GM+RW; if it cannot be fitted, the candidate with the best J-test p-value). Candidates:
+:func:`.selection.suggest_candidates`; each reported fit is its own efficient fit, intervals for the winner only. Beyond
+the paper: WICs within :data:`WIC_TIE` (relative) tie, won by the fewest parameters (docs/gmwm.md, "Why the GMWM's
+engine and selection are built as they are").
 """
 
 from __future__ import annotations

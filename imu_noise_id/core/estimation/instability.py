@@ -1,22 +1,11 @@
-"""Bias instability — the datasheet number — from a fitted model, with its interval, and from the Allan variance.
+"""Bias instability B — the datasheet number — from a fitted model, with its interval, and from the AV.
 
-IEEE Std 952 reads the bias instability B off the flat bottom of the Allan deviation, σ_min = √(2 ln 2 / π)·B
-≈ 0.664 B, where flicker noise dominates. Paper 000's models have no flicker component, but the minimum of the
-fitted model's Allan deviation is the same reading taken from a smooth curve instead of a noisy one (beyond the
-papers): B = min_τ σ_model(τ) / 0.664 over the averaging times the record supports (up to a tenth of its length,
-where the AV estimates still have ≳ 10 degrees of freedom). Narrow-band oscillations and regressors (vibration,
-sinusoids, temperature) are not bias: they are left out of σ_model; an OSC of a few samples' memory (the sensor's
-second-order low-pass, :func:`~.kalibr.is_short_memory_osc`) is white noise at these τ and stays in, as it does
-in N. When the model's deviation still falls at the longest supported τ, the minimum is not reached: B is then an
-*upper bound* (``reached = False``).
-
-When the model holds flicker noise (a BI component, :mod:`imu_noise_id.core.noise.flicker`), B is that
-component's own parameter, the IEEE definition itself, with the fit's interval for it; the minimum of the model's
-deviation (which the white noise and the random walk lift above 0.664 B) is then not used.
-
-Otherwise the interval propagates the fit's uncertainty: log-parameters drawn from N(θ̂, Σ) (Σ the inverse observed
-information kept by the fit; parameters the data do not identify held at their estimates), B recomputed for each
-draw, the 2.5 and 97.5 % quantiles taken.
+IEEE Std 952: σ_min = √(2 ln 2/π)·B ≈ 0.664 B on the flat bottom of the Allan deviation. From the model (beyond the
+papers): B = min_τ σ_model(τ)/0.664 over τ up to a tenth of the record, narrow OSCs and regressors left out,
+short-memory OSCs (:func:`~.kalibr.is_short_memory_osc`) kept; an upper bound (``reached = False``) when σ_model still
+falls at the longest τ. With a BI component (:mod:`imu_noise_id.core.noise.flicker`), B is its parameter with the fit's
+interval. Otherwise the interval: log-parameters drawn from N(θ̂, Σ) (Σ the inverse observed information; unidentified
+parameters held), B recomputed, the 2.5/97.5 % quantiles.
 """
 
 from __future__ import annotations

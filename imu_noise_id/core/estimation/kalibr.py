@@ -1,28 +1,14 @@
-"""The numbers users paste (Kalibr's noise density N and random walk K) from a fitted model, with intervals.
+"""The numbers users paste (Kalibr's noise density N and random walk K) from a fitted model, with 95 % intervals (beyond
+paper 000).
 
-Beyond paper 000, which fits the components but leaves what a WN+RW filter should be told to the user. A model
-fitted to a real sensor holds more than WN and RW: the sensor's own low-pass filter (LPF), narrow-band
-oscillations (OSC), Gauss–Markov bias processes, sinusoids. Kept out of N and K, they are reported on their own:
+- **N** [u/√Hz] = √(Σ N_i²) over WN, LPF, MA and short-memory OSCs (:func:`is_short_memory_osc`; memory below
+  :func:`~..noise.resonant.filter_memory_limit`), each N_i the sampled zero-frequency density
+  √(dt·Σ_j R(j)) (:meth:`~.Component.zero_frequency_density`); narrow OSCs, GMs, slow LPFs, BI and sinusoids never
+  enter. Interval by the delta method.
+- **K** [u/s/√Hz]: the RW's density with its interval, or *not identifiable* (None) without an RW.
+- **Per-sample variance** [u²] at dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt) + σ²_OSC (short-memory OSCs).
 
-- **N** is the passband white-noise density √(Σ N_i²) [u/√Hz] over the white noise and the short-memory noise
-  that is white below its corner: the sensor's first-order low-pass LPF, its averaging filter MA and an OSC whose
-  memory 1/(πB) is short (the sensor's second-order low-pass, ζ ≥ 1/√2: no peak, or a broad resonance), "short"
-  being :func:`~..noise.resonant.filter_memory_limit` (five samples, or 50 ms at rates above 100 Hz) for every kind.
-  Each N_i is the component's density at 0 Hz *as sampled* (:meth:`~.Component.zero_frequency_density`,
-  √(dt·Σ_j R(j))): the N with which its Allan variance falls as N²/τ beyond its memory, what a filter
-  integrating the samples sees. For a low-pass near the Nyquist frequency it exceeds the continuous passband
-  density (the samples alias its tail into the band: 1.27 N_LPF at f_c = 45 Hz, 100 Hz sampling). A narrow OSC
-  (a vibration line or a wander), a GM, an LPF fitted to a memory beyond that limit (a GM by another name),
-  flicker noise (BI) or a sinusoid never enters it.
-- **K** is the RW's density [u/s/√Hz], or *not identifiable from this record* when the final model has no RW (the
-  caller then gives the Allan-slope bound).
-- The **per-sample variance** of the high-frequency noise at the sampling period dt is
-  N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt) + σ²_OSC (the short-memory OSCs' stationary variances): smaller than N²/dt
-  where the sensor's filter cuts below the Nyquist frequency — what a consumer of the corrected IMU stream must
-  put in its covariance.
-
-Intervals: 95 %, from the fit's log-parameter covariance by the delta method for N (a sum of components), the
-fit's own intervals otherwise.
+Why: docs/em.md, "Why the intervals, starts and Kalibr numbers are computed as they are".
 """
 
 from __future__ import annotations
@@ -81,18 +67,15 @@ def _log_cov(fit: FitResult, labels: list[str]) -> np.ndarray | None:
 
 
 def is_short_memory_osc(c: Component, dt: float) -> bool:
-    """Whether ``c`` is an OSC whose memory is as short as that of the GM read as the sensor's first-order low-pass
-    (:func:`~.relabel.gm_as_filter`): an envelope decay time 1/(ζω₀) = 1/(πB) below
-    :func:`~..noise.resonant.filter_memory_limit`. Such an OSC is high-frequency noise, white at S(0) below its
-    corner: the sensor's second-order low-pass (ζ ≥ 1/√2, no peak) or a broad resonance. A longer one is a vibration
-    line or a bias-like wander, kept out of N like a GM."""
+    """Whether ``c`` is an OSC with envelope decay time 1/(ζω₀) = 1/(πB) below
+    :func:`~..noise.resonant.filter_memory_limit` (the sensor's second-order low-pass or a broad resonance: white below
+    its corner, part of N); a longer one is a line or a wander, kept out of N."""
     return isinstance(c, OSC) and c.memory(dt)[0] < filter_memory_limit(dt)
 
 
 def is_slow_lpf(c: Component, dt: float) -> bool:
-    """Whether ``c`` is an LPF whose fitted memory 1/(2πf_c) is at or beyond
-    :func:`~..noise.resonant.filter_memory_limit`: a GM bias process by another name (the loop offers an LPF for a
-    short memory, and its fit may move the cutoff far down), kept out of N like a GM."""
+    """Whether ``c`` is an LPF whose memory 1/(2πf_c) is at or beyond :func:`~..noise.resonant.filter_memory_limit`: a
+    GM by another name, kept out of N."""
     return isinstance(c, LPF) and c.memory(dt)[0] >= filter_memory_limit(dt)
 
 
@@ -109,13 +92,9 @@ def passband_density(components: list[Component], dt: float) -> float | None:
 
 
 def _passband_part(c: Component, dt: float) -> tuple[float, dict[str, float]] | None:
-    """(density [u/√Hz], ∂ln density/∂ln parameter) of a component that enters N, else None.
-
-    The density is the sampled component's zero-frequency one (:meth:`~.Component.zero_frequency_density`), the
-    N its Allan variance shows at long τ; its log-gradient is a central difference in each log-parameter (one-sided
-    at an OSC's damping bound, :func:`~.differences.derivative_in_domain`), parameters it does not depend on
-    left out.
-    """
+    """(density [u/√Hz], ∂ln density/∂ln parameter) of a component that enters N, else None: the sampled zero-frequency
+    density (:meth:`~.Component.zero_frequency_density`) and its central-difference log-gradient (one-sided at an OSC's
+    damping bound, :func:`~.differences.derivative_in_domain`)."""
     if not enters_n(c, dt):
         return None
     density = c.zero_frequency_density(dt)

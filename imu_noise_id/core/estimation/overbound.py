@@ -1,27 +1,16 @@
-"""The smallest white noise + random walk (Kalibr's two numbers) whose Allan variance lies above a given bound.
+"""The smallest white noise + random walk (Kalibr's N and K) whose Allan variance lies above a given bound (beyond the
+papers: the computed "inflate my noise ×10").
 
-Beyond the papers: the honest answer to "why must I inflate my noise ×10 before my filter works?". A filter that
-models an axis as WN + RW (Kalibr's N and K) is consistent at a time scale τ only if the model's Allan variance
-is at least what the sensor really does at τ. Where the sensor has more than WN + RW (bias instability, a
-Gauss–Markov bump, vibration lines, a low-pass) the fitted N and K under-state it, and the user inflates by hand.
-Here the inflation is computed: over the averaging times τ_i the user's filter cares about, with b_i the bound to
-cover (the data's upper 95 % Allan bound and the final model's AV), find a = N² ≥ 0 and c = K² ≥ 0 with
+Over the τ_i a filter cares about, with b_i the bound (the data's upper 95 % Allan bound and the final model's AV), find
+a = N² ≥ 0, c = K² ≥ 0 with
 
     AV_WN+RW(τ_i) = a·g(τ_i) + c·h(τ_i) ≥ b_i    for every i,
 
-g = 1/τ and h = τ/3 + dt²/(6τ) the exact Allan variances of unit WN and RW sampled at dt
-(:meth:`~imu_noise_id.core.noise.components.WN.allan_variance`, :meth:`~imu_noise_id.core.noise.components.RW.
-allan_variance`). Constraints and unknowns are linear in (a, c): a two-variable linear programme.
-
-Objective (which "smallest", and why): minimise Σ_i AV_WN+RW(τ_i) / b_i — the mean ratio of the overbound's AV
-to the bound over the τ grid. It is linear (so the optimum is a vertex of the feasible polygon and is found
-exactly by enumerating the vertices), scale-free (each τ counts by how far the overbound sits above *its* bound,
-not by the size of the AV there), and on the log-spaced Allan grid every decade of time scales weighs the same.
-At the optimum the AV touches the bound at one or two τ (the binding ones): lowering N or K breaks the bound there.
-
-Optionally the two numbers are kept at or above floors (N ≥ N₀, K ≥ K₀: the fitted values), two more linear
-constraints: the inflation factors over the fitted values are then ≥ 1, and a random walk is not dropped because
-the τ range is too short to see it. A floor that binds is reported like a binding τ.
+g = 1/τ, h = τ/3 + dt²/(6τ) (the sampled WN and RW AVs, :meth:`~imu_noise_id.core.noise.components.WN.allan_variance`,
+:meth:`~imu_noise_id.core.noise.components.RW.allan_variance`), minimising the mean ratio Σ_i AV_WN+RW(τ_i)/b_i: a
+two-variable linear programme solved exactly at a vertex; the AV touches the bound at the binding τ. Optional floors
+N ≥ N₀, K ≥ K₀ (the fitted values: factors ≥ 1, no random walk dropped for a short τ range) are two more constraints.
+Why this objective: docs/analysis.md, "Overbound (the honest ×10)".
 """
 
 from __future__ import annotations
@@ -88,19 +77,19 @@ def _vertices(G: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def overbound_wn_rw(tau: np.ndarray, bound: np.ndarray, dt: float,
                     floor: tuple[float, float] = (0.0, 0.0)) -> WnRwOverbound:
-    """The WN + RW of least mean ratio whose Allan variance is ≥ ``bound`` at every ``tau`` (module docstring).
+    """The WN + RW of least mean ratio whose AV is ≥ ``bound`` at every ``tau`` (module docstring).
 
     Parameters
     ----------
-    tau : averaging times [s] (the τ range the filter cares about, e.g. the Allan grid within it)
-    bound : the Allan variance [u²] to cover at each τ (positive, finite)
-    dt : sampling period [s] (the exact discrete RW Allan variance depends on it)
-    floor : (N₀ [u/√Hz], K₀ [u/s/√Hz]): the result is not below them (default: no floor)
+    tau : averaging times [s] (the τ range the filter cares about)
+    bound : the AV [u²] to cover at each τ (positive, finite)
+    dt : sampling period [s]
+    floor : (N₀ [u/√Hz], K₀ [u/s/√Hz]) the result is not below (default: none)
 
     Raises
     ------
     InputError
-        No τ, or a bound that is not positive and finite.
+        No τ, or a bound not positive and finite.
     """
     tau = np.asarray(tau, dtype=float)
     bound = np.asarray(bound, dtype=float)

@@ -1,44 +1,20 @@
 """Adjusted profile-likelihood intervals, where the observed information cannot be trusted (beyond paper 000 §3.4).
 
-Paper 000 §3.4 takes standard errors from the observed information: a Wald interval, right when the log-likelihood
-is close to quadratic over the interval. An IMU fit often breaks that: a variance at its zero boundary (a random
-walk the record cannot tell from 0, where the information has no inverse), a likelihood far from quadratic in
-the log-parameters (a Gauss–Markov τ comparable with the record), parameters that trade against each other (a GM
-of long τ against a random walk). Holding the other parameters at their estimates (a *conditional* interval)
-ignores that trade and is too narrow. The profile likelihood
+The profile likelihood (Cox & Hinkley 1974 §9.3; Venzon & Moolgavkar 1988)
 
     ℓ_p(v) = max over ϑ_{−k} of ℓ(ϑ_k = v, ϑ_{−k})        (means b by GLS inside ℓ)
 
-gives the likelihood-ratio interval (Cox & Hinkley 1974 §9.3; Venzon & Moolgavkar 1988), invariant to the
-parameterisation, with its lower end 0 where the data cannot exclude 0.
-
-**Adjustment for the estimated means.** The bias and the ramp slope are estimated from the same record, and they
-soak up exactly the low-frequency variation a random walk or a long-τ GM explains: the ML estimates of those
-variances are biased low and the plain profile interval is too narrow (on 1 h of WN+GM+RW+RR with the RW near its
-zero boundary, 2(ℓ̂ − ℓ_p) at the true RW was 4.6–6.8 in three of ten records at 10 Hz). The interval uses the
-profile adjusted for the mean parameters b (Cox & Reid 1987, eq. 4; for variance parameters the restricted
-likelihood of Patterson & Thompson 1971, cf. Tunnicliffe Wilson 1989 for time series):
+adjusted for the estimated bias and ramp (Cox & Reid 1987, eq. 4; the restricted likelihood of Patterson & Thompson
+1971, cf. Tunnicliffe Wilson 1989):
 
     ℓ_A(v) = ℓ_p(v) − ½ log det(Zᵀ V⁻¹ Z)(v) = ℓ_p(v) + ½ log det cov(b̂)(v),
 
-evaluated at the ML profile's argmax (the adjustment varies slowly); the interval is {v : ℓ_A(v) ≥ max ℓ_A − 1.92}.
-The point estimates stay the ML ones of paper 000.
-
-**Search.** The centre (max of ℓ_A along the profile) from the profile at the Wald ends and a parabola through
-them; each end then on the signed root r(v) = √(2(max ℓ_A − ℓ_A(v))), nearly linear in |v − centre| when ℓ is
-nearly quadratic: outward by secant steps until r passes 1.96, then regula falsi (Illinois) until |r − 1.96| <
-:data:`.profile_search.R_TOL` (that 1-D search is :mod:`.profile_search`). Each ℓ_p(v) is an L-BFGS-B
-maximisation over the other parameters, from the better of the trace's extrapolation and the estimate, in
-coordinates where it is well scaled:
-
-* interior log-parameters whitened by their block of the observed information (Hessian ≈ identity);
-* a parameter at its zero boundary *linearly*, as K/s (s its conditional upper 95 % end), with a floor at
-  :data:`ZERO_FLOOR`·s, where it changes ℓ by a few hundredths at most (in its log it would sit on a flat
-  plateau the search cannot leave);
-* a parameter the information cannot see (a GM τ with its σ at 0) in its log, one unit an e-fold, inside its
-  physical range.
-
-The ramp slope (a mean parameter) is profiled the same way with its regressor fixed (adjusted for the bias).
+the adjustment evaluated at the ML profile's argmax; the interval is {v : ℓ_A(v) ≥ max ℓ_A − 1.92}, lower end 0 where 0
+cannot be excluded; point estimates stay paper 000's ML ones. Search: :mod:`.profile_search` on the signed root
+r(v) = √(2(max ℓ_A − ℓ_A(v))); each ℓ_p(v) by L-BFGS-B over the others, interior log-parameters whitened by their
+information block, zero-boundary ones linearly as K/s with a floor :data:`ZERO_FLOOR`·s, unidentified ones in their log
+within their physical range; the ramp slope profiled with its regressor fixed. Why: docs/em.md, "Why the intervals,
+starts and Kalibr numbers are computed as they are".
 """
 
 from __future__ import annotations
@@ -169,11 +145,9 @@ class Profiler:
         return self.with_ladder(self.theta)
 
     def with_ladder(self, theta: np.ndarray) -> list[np.ndarray]:
-        """``theta``, and ``theta`` with each zero-boundary parameter at s·e^m for each m of :data:`ZERO_LADDER`.
-
-        The profile of a parameter that trades with a zero-boundary one can have its maximum on another branch,
-        e.g. a GM τ held well below a long τ̂ (K̂ ≈ 0) with K back near s: from K ≈ 0 alone the few inner steps
-        stay on the K ≈ 0 branch (issue 12; docs/em.md, "Interval coverage"). Each start costs one evaluation."""
+        """``theta``, and ``theta`` with each zero-boundary parameter at s·e^m for each m of :data:`ZERO_LADDER` (one
+        evaluation each): a profile that trades with a zero-boundary parameter may peak on another branch (docs/em.md,
+        "Interval coverage")."""
         out = [theta]
         for j, scale in self.zero.items():
             for m in ZERO_LADDER:

@@ -1,16 +1,10 @@
-"""A fitted Gauss–Markov process of short memory is the sensor's own low-pass filter (LPF).
+"""A fitted Gauss–Markov process of short memory is the sensor's own low-pass filter (LPF; beyond paper 000).
 
-Beyond paper 000. A first-order GM with correlation time τ of a sample or two is, to the likelihood, exactly the
-white noise of the sensor's first-order low-pass filter of cutoff f_c = 1/(2πτ) (the same state-space block; see
-:class:`~imu_noise_id.core.noise.resonant.LPF`), and it is what a WN+GM fit does with a DLPF-filtered sensor.
-Read as a GM it is a bias process of absurd τ; read as an LPF its noise density N = σ√(2τ) is the passband
-white-noise density that belongs with the white noise. :func:`gm_as_filter` renames such a component and
-its parameters, nothing else (likelihood, state space and innovations are unchanged).
-
-"Short" is :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit`: five sampling periods, or 50 ms at
-rates above 100 Hz. A consumer part's lowest low-pass settings (a 5 Hz DLPF: 32 ms) at its kHz output rates have a
-memory of tens of samples; read as a bias GM, their noise was left out of N, which then held only the white floor
-behind the filter (10× low on a simulated 10 Hz DLPF at 400 Hz, ``test/test_sensor_filter.py``).
+A first-order GM of correlation time τ below :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit` is, to the
+likelihood, the same state-space block as the LPF of cutoff f_c = 1/(2πτ)
+(:class:`~imu_noise_id.core.noise.resonant.LPF`) with passband density N = σ√(2τ). :func:`gm_as_filter` renames the
+component and its parameters, nothing else (likelihood, state space and innovations unchanged). Why: docs/loop.md, "The
+loop's rules" 1.
 """
 
 from __future__ import annotations
@@ -74,11 +68,8 @@ def gm_as_filter(fit: FitResult) -> FitResult:
 
 
 def with_uncertainty(fit: FitResult) -> FitResult:
-    """:func:`~imu_noise_id.core.estimation.uncertainty.add_uncertainty` of a fit that may hold a renamed LPF.
-
-    The intervals are computed on the components as the state space holds them (a renamed LPF is a GM block
-    there), then the renaming is applied again, carrying the covariance (see :func:`gm_as_filter`).
-    """
+    """:func:`~imu_noise_id.core.estimation.uncertainty.add_uncertainty` of a fit that may hold a renamed LPF: intervals
+    computed on the GM block, then the renaming (and covariance) applied again (:func:`gm_as_filter`)."""
     if fit.statespace is None:
         raise InputError("this FitResult holds no state space to compute its uncertainty from")
     raw = to_components(fit.statespace)

@@ -18,14 +18,9 @@ BUDGET_SPENT = "profile budget spent"
 
 @dataclass
 class RecordLengthAdvice:
-    """Recording length needed per parameter for a target relative precision.
-
-    ``needed_s[label]`` is the duration [s] for which the 95 % half-width of the parameter's interval
-    (1.96·se in log space, i.e. relative) shrinks to ``target``, assuming se ∝ 1/√T (per-sample information =
-    observed information / N). ``reliable[label]`` is False where that scaling is doubtful: GM parameters whose
-    correlation time is not ≪ the record (T < 20·τ_c); such parameters improve more slowly than 1/√T until the
-    record is many correlation times long, so the figure is a lower bound.
-    """
+    """Recording length needed per parameter for a target relative precision: ``needed_s[label]`` [s] where 1.96·se (log
+    space) shrinks to ``target``, assuming se ∝ 1/√T; ``reliable[label]`` False for GM parameters with T < 20·τ_c (they
+    improve more slowly: the figure is a lower bound)."""
 
     target: float
     level: str
@@ -46,40 +41,29 @@ class FitResult:
     components : list[Component]
         Fitted components, continuous-time units (RR's slope included when the structure has RR).
     exog_coef : dict[str, dict]
-        Mean parameters: ``bias`` [u], ``ramp`` slope [u/s] when RR is a regressor, the caller's exog
-        coefficients; each ``{value, se, ci95}``.
+        Mean parameters ``bias`` [u], ``ramp`` [u/s], the caller's exog coefficients; each ``{value, se, ci95}``.
     se, ci95 : dict[str, ...]
-        Standard error and 95 % interval of every component parameter, keyed ``WN.noise_density``, ``GM2.tau`` …,
-        physical units. Intervals of positive parameters are exp(log-value ± 1.96·se_log) (asymmetric, Wald)
-        where the observed information can be trusted, else profile-likelihood intervals (the other parameters
-        re-maximised at every point; lower end 0 when the data cannot exclude 0, upper end inf when they do not
-        bound it): see :mod:`.uncertainty`. ``se`` is always the inverse-information one (inf where the
-        information does not determine the parameter).
+        Standard error (inverse information; inf where undetermined) and 95 % interval of every component parameter,
+        keyed ``WN.noise_density``, ``GM2.tau`` …, physical units; intervals Wald in log space or profile likelihood
+        (:mod:`.uncertainty`; lower end 0, upper inf where the data do not bound them).
     ci95_method : dict[str, str]
-        How each interval was obtained: ``wald``, ``profile`` (profile likelihood) or ``gls`` (a mean parameter's
-        GLS interval given the noise parameters).
+        ``wald``, ``profile`` or ``gls`` (a mean parameter's GLS interval).
     loglik, aic, bic : float
-        Exact maximised log-likelihood; AIC = 2k − 2ℓ, BIC = k·ln(n) − 2ℓ with k = all free parameters.
-    n : int
-        Number of observed (non-NaN) samples.
-    dt : float
-        Sampling period [s].
-    n_iter : int
-        EM iterations of the winning start (the quasi-Newton evaluations are in ``n_eval``).
-    converged : bool
-        Whether the quasi-Newton finish reported convergence.
+        Exact maximised log-likelihood; AIC = 2k − 2ℓ, BIC = k·ln(n) − 2ℓ, k all free parameters.
+    n, dt : int, float
+        Observed (non-NaN) samples; sampling period [s].
+    n_iter, converged
+        EM iterations of the winning start; whether the quasi-Newton finish converged.
     record_length : RecordLengthAdvice | None
-        How long to record for the target precision (when the uncertainty was computed).
+        How long to record for the target precision.
     information_ok : bool
-        Whether the observed information was positive definite (else some se are inf: not identified).
+        Whether the observed information was positive definite.
     profile_evaluations : int
-        Log-likelihood evaluations the profile intervals took (0 when every interval is Wald).
+        Log-likelihood evaluations of the profile intervals.
     better_loglik, better_start
-        A log-likelihood above ``loglik`` the profile search met (the fit missed the maximum) and the components
-        there, else None; :meth:`~.model.NoiseModel.fit` then searches again from them.
+        A higher log-likelihood the profile search met and its components, else None.
     log_covariance, covariance_labels
-        Covariance of the log-parameters (inverse observed information) and their labels (``WN.noise_density`` …),
-        for intervals of derived quantities by the delta method (empty until the uncertainty is computed).
+        Log-parameter covariance (inverse observed information) and labels, for the delta method.
     """
 
     model: str
@@ -118,9 +102,8 @@ class FitResult:
 
     @property
     def short_of_maximum(self) -> float | None:
-        """How far ``loglik`` lies below the higher log-likelihood the profile search of the intervals met
-        (``better_loglik``), when by more than the 95 % likelihood-ratio threshold (½·χ²₁(0.95) = 1.92): the fit is
-        not at the maximum and its intervals, computed around it, are not the maximum's. None otherwise."""
+        """How far ``loglik`` lies below ``better_loglik`` when by more than ½·χ²₁(0.95) = 1.92 (the fit is not at the
+        maximum and its intervals are not the maximum's); None otherwise."""
         if self.better_loglik is None or self.better_loglik - self.loglik <= LR_DROP_95:
             return None
         return float(self.better_loglik - self.loglik)

@@ -1,10 +1,5 @@
-"""Model selection of one axis: every candidate structure fitted (:class:`~.model.NoiseModel`), ranked by BIC.
-
-ΔBIC and Schwarz weights are the evidence; standard errors and the recording-length advice are computed for the
-winner only (:func:`.uncertainty.add_uncertainty` adds them to any other fit), searched again, as a single fit
-is, when their profile search meets a higher likelihood (:func:`.search.add_intervals`). The default candidates
-cover the common IMU models; RR and QN candidates are added when the Allan variance's ends call for them.
-"""
+"""Model selection of one axis: every candidate structure fitted (:class:`~.model.NoiseModel`), ranked by BIC (ΔBIC,
+Schwarz weights); intervals and recording-length advice for the winner only (:func:`.search.add_intervals`)."""
 
 from __future__ import annotations
 
@@ -69,16 +64,11 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
                  extra_starts: dict[str, list[Component]] | None = None) -> SelectionResult:
     """Fit every candidate structure and rank them by BIC (or AIC).
 
-    ``options.uncertainty`` applies to the winner only (the others are fitted without it). ``allan``: the record's
-    Allan variance (one column) when the caller has it; the starting values of every candidate without RR are
-    fitted to it, those with RR to the AV of the detrended record (computed once for all of them).
-    ``extra_starts``: a further starting value per candidate (e.g. its GMWM fit).
-
-    On a record of :data:`.screen.MIN_SAMPLES` samples or more (BIC only), the best candidate fitted so far is the
-    reference of a screen (:mod:`.screen`): each next candidate is first fitted to two statistics of fixed size from
-    its first starting value, and one whose BIC there cannot come within :data:`.screen.MARGIN` of the reference's
-    is not fitted exactly; its table row says so (``screened``, with the screen's ΔBIC against the reference then)
-    instead of a likelihood.
+    ``options.uncertainty`` applies to the winner only. ``allan``: the record's AV (one column), the start of every
+    candidate without RR (those with RR: the detrended record's AV). ``extra_starts``: a further start per candidate
+    (e.g. its GMWM fit). From :data:`.screen.MIN_SAMPLES` samples (BIC only) each next candidate is first fitted on the
+    screen's statistics against the best so far (:mod:`.screen`) and not fitted exactly when it cannot come within
+    :data:`.screen.MARGIN`; its row says ``screened`` with that ΔBIC.
     """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")

@@ -1,12 +1,9 @@
-"""Initial values for the EM from the Allan variance (paper 000 §3.5(i): "the AV, HV and TV methods could be
-used to obtain an initial guess").
+"""Initial values for the EM from the Allan variance (paper 000 §3.5(i)).
 
-Beyond the paper: instead of reading slopes off the plot, the theoretical AV of the whole structure
-(:meth:`~.components.Component.allan_variance`, summed over components) is fitted to the empirical AV by least
-squares in log space, each τ weighted by the square root of its number of clusters N/m (the log-AV's standard error
-falls like that), from several placements of the GM correlation times; the distinct solutions, best first, are
-the multi-start initial values of the likelihood fit. The AV is the one the analysis already computed
-(:class:`~imu_noise_id.core.allan.AllanResult`, one column), used up to τ = N·dt/4 where it is well determined.
+Beyond the paper: the structure's theoretical AV (:meth:`~.components.Component.allan_variance`, summed) is fitted to
+the empirical AV (one column of :class:`~imu_noise_id.core.allan.AllanResult`, τ ≤ N·dt/4) by least squares in log
+space, each τ weighted by √(N/m), from several GM τ placements; the distinct solutions, best first, are the likelihood
+fit's multi-start values.
 """
 
 from __future__ import annotations
@@ -114,14 +111,9 @@ _SHAPE_STEP = 1e-6
 
 
 class _LogAvCurve:
-    """The weighted log-AV misfit of a structure as a function of its fitted parameters' logs, with its Jacobian.
-
-    r(x) = (ln Σ_c AV_c(τ) − ln AV_hat(τ))·√(N/m). Every fitted parameter but :data:`_SHAPE` is an amplitude a whose
-    component's AV is a²·shape(τ), so ∂r/∂ln a = 2·AV_c/Σ AV·√(N/m) exactly; τ of a GM and the cutoff of an LPF take
-    one forward difference of their own component's AV. One evaluation of each component's AV serves r and J at the
-    same x (the solver asks for both); a finite-difference Jacobian recomputed every component's AV once per
-    parameter, most of the cost of the fit.
-    """
+    """The weighted log-AV misfit r(x) = (ln Σ_c AV_c(τ) − ln AV_hat(τ))·√(N/m) of a structure in its parameters' logs,
+    with its Jacobian: ∂r/∂ln a = 2·AV_c/Σ AV·√(N/m) for amplitudes, one forward difference of its own component's AV
+    for :data:`_SHAPE` parameters (GM τ, LPF cutoff); one AV evaluation per component serves r and J."""
 
     def __init__(self, start: list[Component], keys: list[tuple[int, str]], av: _Curve, dt: float) -> None:
         self.start, self.keys, self.av, self.dt = start, keys, av, dt
@@ -163,15 +155,9 @@ class _LogAvCurve:
 
 def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
               osc_frequencies: list[float] | None = None) -> list[tuple[float, list[Component]]]:
-    """Least-squares fits of the structure's theoretical AV to the AV ``allan`` (one column) in log space, best (lowest
-    cost) first.
-
-    RR is left at slope 0 (the likelihood fit estimates it in closed form); the caller removes a linear trend
-    before computing ``av`` when the structure has RR. An OSC's frequency and bandwidth are held at their starting
-    values (the AV barely constrains them; the Whittle and exact likelihoods do): its frequency from
-    ``osc_frequencies`` (e.g. the periodogram's lines, :func:`.whittle.osc_start_frequencies`), else a quarter of the
-    sampling rate.
-    """
+    """Least-squares fits of the structure's theoretical AV to ``allan`` (one column) in log space, lowest cost first.
+    RR stays at slope 0 (the caller detrends); an OSC's frequency (``osc_frequencies``, else a quarter of the sampling
+    rate) and bandwidth are held."""
     av = _Curve.of(allan)
     fit_idx = [i for i, n in enumerate(names) if n != "RR"]
     t_lo = max(3.0 * dt, av.tau[0])

@@ -1,16 +1,11 @@
 """Uncertainty of a fit: standard errors and 95 % intervals (paper 000 §3.4), and how long to record.
 
-The observed information is minus the Hessian of the exact log-likelihood in the log-parameters
-(:func:`.mle.observed_information`); standard errors come from its inverse. Intervals are Wald intervals in log
-space where the Hessian can be trusted, profile-likelihood intervals (:mod:`.profile`) where it cannot (beyond the
-paper): when the information is not positive definite or a parameter sits at its zero boundary (a thousandfold
-smaller value lowers ℓ by less than the 95 % threshold) — then every parameter, the ramp slope included, is
-profiled, since the others trade against the boundary one; and per parameter when its standard error in log space
-exceeds :data:`WALD_MAX_SE_LOG` or ℓ at the Wald ends of the quadratic trace (ϑ̂ ± 1.96·Σ_{·k}/√Σ_kk) is not
-≈ 1.92 below the maximum (:data:`WALD_DROP_RANGE`: the likelihood is not quadratic over the interval). The
-profiles of one fit spend at most :data:`PROFILE_BUDGET` sample-evaluations (their cost grows with the record); past
-it a parameter gets the Wald interval (or, at its zero boundary, its conditional upper end) with its method saying
-so. The recording-length advice scales the per-sample information.
+Standard errors from the inverse observed information in the log-parameters (:func:`.mle.observed_information`); Wald
+intervals in log space, or (beyond the paper) profile intervals (:mod:`.profile`): for every parameter when the
+information is not positive definite or one sits at its zero boundary (a thousandfold smaller value lowers ℓ by less
+than 1.92); for one parameter when its log-se exceeds :data:`WALD_MAX_SE_LOG` or ℓ at its Wald ends is not within
+:data:`WALD_DROP_RANGE` of 1.92 below the maximum. At most :data:`PROFILE_BUDGET` sample-evaluations per fit, then Wald
+(or the conditional upper end), the method saying so. Advice: the per-sample information scaled.
 """
 
 from __future__ import annotations
