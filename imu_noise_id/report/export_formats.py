@@ -1,34 +1,16 @@
-"""One renderer per consumer: an ``imu.yaml`` content in, the consumer's file text out, in its units and convention.
+"""One renderer per consumer: an ``imu.yaml`` content in, the consumer's file text out, in its units and convention,
+under a comment header stating the source, the convention and the formula (N [u/√Hz], K [u/s/√Hz] of ``imu.yaml``; f its
+``update_rate`` [Hz]; P the PX4 EKF step [s]):
 
-Every file starts with comment lines saying where the numbers come from, the consumer's convention and the formula
-used (N, K: the noise density [u/√Hz] and random walk [u/s/√Hz] of ``imu.yaml``; f: its ``update_rate`` [Hz]).
-The conventions were read in each consumer's own code and documentation:
+- Kalibr, OpenVINS (Kalibr IMU chain, block-indented for OpenCV's ``cv::FileStorage``), ORB-SLAM3: continuous-time
+  N, K;
+- VINS-Mono / VINS-Fusion (``integration_base.h``): per IMU step, acc_n = N·√(2f), acc_w = K·√f
+  (:func:`~imu_noise_id.core.noise.units.step_noise_std`, weights ½ and 1), ``g_norm`` standard gravity;
+- GTSAM (``PreintegrationCombinedParams``): covariances I·N², I·K² with each sensor's Kalibr value;
+- PX4 EKF2 (``EKF/covariance.cpp``): EKF2_*_NOISE = N/√P, EKF2_*_B_NOISE = K/√P;
+- REP-145 driver: the per-sample standard deviation at the driver's rate (``/**: ros__parameters:``).
 
-- Kalibr (``kalibr_common/ConfigReader.py``, ``ImuParameters``): continuous-time N and K; Kalibr discretises
-  σ_d = N·√f itself and refuses values ≤ 0.
-- OpenVINS: Kalibr's IMU chain (``%YAML:1.0``, ``imu0:``, ``model: kalibr``), continuous-time, read with OpenCV's
-  ``cv::FileStorage`` (``ov_core/src/utils/opencv_yaml_parse.h``): a block sequence must be indented under its key
-  (OpenCV refuses the indentless form PyYAML writes), ``T_i_b`` is a sequence of four rows read as ``node[r][c]``.
-- ORB-SLAM3: ``IMU.NoiseGyro``/``IMU.NoiseAcc`` = N, ``IMU.GyroWalk``/``IMU.AccWalk`` = K (continuous-time; it
-  multiplies by √``IMU.Frequency`` itself), each a real number (``Settings::readParameter<float>``). A fragment of
-  the settings file: ``IMU.T_b_c1`` (the camera-IMU extrinsics) and the camera keys come from the user's file.
-- VINS-Mono / VINS-Fusion (``integration_base.h``): ``noise = diag(acc_n², gyr_n², acc_n², gyr_n², acc_w²,
-  gyr_w²)``, propagated per IMU step dt = 1/f by ``V·noise·Vᵀ`` with ``V = ½·dt`` on the measurement noises of
-  both ends of the mid-point step and ``V = dt`` on the bias noises:
-  acc_n = N·√(2f), acc_w = K·√f (:func:`~imu_noise_id.core.noise.units.step_noise_std`, weights ½ and 1); and
-  ``g_norm`` (VINS reads 0 when it is absent), standard gravity. A fragment of the VINS config as well.
-- GTSAM (``PreintegrationParams.h``, ``PreintegrationCombinedParams.h``, ``ImuFactor.cpp``): continuous-time
-  "covariances" = densities squared, one value per sensor (the Kalibr key, max over its axes) on the diagonal:
-  ``accelerometerCovariance`` = I·N² [(m/s²)²/Hz] (GTSAM divides by dt), ``biasAccCovariance`` = I·K²
-  [(m/s³)²/Hz] (GTSAM multiplies by dt): never an axis's own random walk, which where it is not identifiable can be
-  ~0 and would hold that bias constant; ``integrationCovariance`` and ``biasAccOmegaInt`` are modelling choices,
-  not IMU properties (left empty).
-- PX4 EKF2 (``EKF/covariance.cpp``, ``module.yaml``, ``params_*_bias.yaml``): per EKF prediction step of
-  P seconds (``EKF2_PREDICT_US``, default 10 ms) it adds ``sq(dt·EKF2_GYR_NOISE)`` [rad²] to the delta angles and
-  ``sq(dt·EKF2_GYR_B_NOISE)`` to the bias variance: EKF2_*_NOISE = N/√P [rad/s, m/s²], EKF2_*_B_NOISE = K/√P
-  [rad/s², m/s³] — not Kalibr's σ_d = N·√f, which would use the IMU rate instead of the EKF's.
-- REP-145 driver: the per-sample standard deviation at the driver's rate (``*_noise_stddev_per_sample_xyz``), as a
-  ROS 2 parameter file (``/**: ros__parameters:``: every node's parameters).
+Where each convention was read and why: docs/analysis.md, "Exports".
 """
 
 from __future__ import annotations
@@ -163,9 +145,8 @@ def _diag(value: float) -> list[list[float]]:
 
 
 def gtsam(doc: dict) -> str:
-    """GTSAM ``PreintegrationCombinedParams`` members (continuous-time covariances, densities squared): I·N², I·K²
-    with each sensor's Kalibr value (max over its axes) on every axis, never an axis's own value (where its random
-    walk is not identifiable that can be ~0, a bias covariance that would hold the bias constant)."""
+    """GTSAM ``PreintegrationCombinedParams`` members (continuous-time covariances, densities squared): I·N², I·K² with
+    each sensor's Kalibr value (max over its axes) on every axis, never an axis's own (docs/analysis.md, "Exports")."""
     body = {"accelerometerCovariance": _diag(_n(doc, "accelerometer")),
             "gyroscopeCovariance": _diag(_n(doc, "gyroscope")),
             "biasAccCovariance": _diag(_k(doc, "accelerometer")),

@@ -1,23 +1,9 @@
-"""Exports of the noise figures for the filters people run, each in its own units and conventions (issue 13).
+"""Exports of the noise figures for the filters people run, each in its own units and conventions.
 
-Every export is written from the numbers of ``imu.yaml`` (the final models' values, max over each sensor's axes;
-see :mod:`.imu_yaml`) by a renderer of :mod:`.export_formats`, which states the consumer's convention and the
-formula in the file's comment header (``vins`` and ``orbslam3`` are fragments to merge into the user's config: the
-header names the keys that must come from it). With ``overbound=True`` the values are those of ``imu.yaml``'s
-``overbound:`` section instead (:func:`overbound_doc`): the smallest WN+RW whose Allan variance covers the data's
-upper 95 % bound and the final model over the filter's τ range, per axis.
-
-====================  ==============================  =====================================================
-format                file                            convention
-====================  ==============================  =====================================================
-``kalibr``            ``kalibr_imu.yaml``             continuous-time N, K (Kalibr's own ``imu.yaml``)
-``openvins``          ``kalibr_imu_chain.yaml``       continuous-time N, K (Kalibr IMU chain, ``imu0:``)
-``vins``              ``vins_imu.yaml``               per-IMU-step std: acc_n = N·√(2f), acc_w = K·√f; g_norm
-``orbslam3``          ``orbslam3_imu.yaml``           continuous-time N, K and the frequency
-``gtsam``             ``gtsam_imu.yaml``              continuous-time covariances I·N², I·K² (one value a sensor)
-``px4``               ``px4_ekf2.params``             per EKF step P: N/√P, K/√P (QGroundControl .params)
-``rep145``            ``rep145_driver_params.yaml``   per-sample std at the driver's rate (``/**: ros__parameters:``)
-====================  ==============================  =====================================================
+Every export is rendered by :mod:`.export_formats` from ``imu.yaml``'s numbers (:mod:`.imu_yaml`: the final models'
+values, max over each sensor's axes) or, with ``overbound=True``, from its ``overbound:`` section
+(:func:`overbound_doc`). Formats (:data:`FORMATS`): ``kalibr``, ``openvins``, ``vins``, ``orbslam3``, ``gtsam``,
+``px4``, ``rep145``; files and conventions: docs/analysis.md, "Exports".
 """
 
 from __future__ import annotations
@@ -40,16 +26,9 @@ OVERBOUND_DIR = "overbound"
 
 
 def overbound_doc(doc: dict) -> dict:
-    """``doc`` with its Kalibr keys and per-axis values replaced by those of its ``overbound:`` section.
-
-    The per-sample standard deviations are dropped (the overbound is a WN + RW without the sensor's low-pass:
-    REP-145 then uses N·√f), and ``overbound_of`` says what the values are.
-
-    Raises
-    ------
-    InputError
-        ``doc`` has no ``overbound:`` section (an imu.yaml written before it existed).
-    """
+    """``doc`` with its Kalibr keys and per-axis values replaced by its ``overbound:`` section's, the per-sample
+    standard deviations dropped (a WN + RW has no low-pass: REP-145 then uses N·√f) and ``overbound_of`` saying what the
+    values are; InputError without an ``overbound:`` section."""
     ob = doc.get("overbound")
     if not isinstance(ob, dict) or not all(isinstance(ob.get(k), int | float) for k in REQUIRED[:4]):
         raise InputError("imu.yaml has no 'overbound:' section with the four Kalibr numbers: rerun imu-noise-id "
@@ -69,14 +48,9 @@ def overbound_doc(doc: dict) -> dict:
 
 def write_exports(doc: dict, out_dir: Path, formats: tuple[str, ...] = tuple(FORMATS), *,
                   overbound: bool = False) -> list[Path]:
-    """Write the ``formats`` from the ``imu.yaml`` content ``doc`` into ``out_dir`` (temporary name, then rename);
-    with ``overbound``, the overbound's values into ``out_dir/overbound/``.
-
-    Raises
-    ------
-    InputError
-        ``doc`` lacks a number an export needs (or the overbound section), or a format is unknown.
-    """
+    """Write the ``formats`` from the ``imu.yaml`` content ``doc`` into ``out_dir`` (temporary name, then rename); with
+    ``overbound``, the overbound's values into ``out_dir/overbound/``. InputError when ``doc`` lacks a number an export
+    needs (or the overbound section) or a format is unknown."""
     missing = [k for k in REQUIRED if not isinstance(doc.get(k), int | float)]
     if missing:
         raise InputError(f"imu.yaml lacks {', '.join(missing)}: rerun imu-noise-id analyze")

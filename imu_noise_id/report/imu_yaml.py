@@ -46,13 +46,12 @@ def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
 def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
     """Put the final models' numbers into the Kalibr keys and their per-axis lists, in place.
 
-    Per sensor with a final model on all three axes: ``<key>_xyz``, ``<key>_ci_xyz`` and ``<key>_method_xyz`` are
-    the final models' values, intervals and sources (``model`` or, for a random walk the model lacks,
-    ``allan_slope``/``allan_upper_bound``); the Kalibr key is their max; the Allan-slope values move to
-    ``<key>_allan_xyz`` (with ``_allan_ci_xyz``, ``_allan_method_xyz``) and ``<key>_allan`` (their max); an axis
-    whose final model is not trusted for them (:mod:`imu_noise_id.pipelines.analyze.resolution`) has the method
-    ``unresolved``, its overbound's value and the interval (0, value);
-    ``<prefix>_noise_stddev_per_sample_xyz`` is the per-sample standard deviation of the high-frequency noise.
+    Per sensor with a final model on all three axes: ``<key>_xyz``, ``<key>_ci_xyz``, ``<key>_method_xyz`` the final
+    values, intervals and sources (``model``; ``allan_slope``/``allan_upper_bound`` for a random walk the model lacks;
+    ``unresolved``, the overbound's value and (0, value), for an axis :mod:`imu_noise_id.pipelines.analyze.resolution`
+    does not trust); the Kalibr key their max; the Allan-slope values moved to ``<key>_allan_xyz`` (with
+    ``_allan_ci_xyz``, ``_allan_method_xyz``) and ``<key>_allan``; ``<prefix>_noise_stddev_per_sample_xyz`` the
+    per-sample standard deviation of the high-frequency noise.
     """
     for sensor, axes in _SENSORS:
         if not all(a in finals for a in axes):
