@@ -6,15 +6,15 @@ import math
 
 import numpy as np
 import pytest
-
-from imu_noise_id.core.cmkf.axis import AxisCmkf, paper_interval
-from imu_noise_id.core.cmkf.config import CmkfConfig
-from imu_noise_id.core.cmkf.paper import (
+from reference_cmkf import (
     PaperCmkf,
     TurntableConfig,
     simulate_turntable,
     turntable_monte_carlo,
 )
+
+from imu_noise_id.core.cmkf.axis import AxisCmkf, paper_interval
+from imu_noise_id.core.cmkf.config import CmkfConfig
 from imu_noise_id.core.cmkf.robot import RobotCmkf
 from imu_noise_id.core.cmkf.stacked import cov_z_model
 from imu_noise_id.core.cmkf.stream import CmkfStream

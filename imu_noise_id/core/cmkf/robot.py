@@ -4,9 +4,9 @@ docs/cmkf.md; :class:`~.stream.CmkfStream` merges the two topics in stamp order)
 Composed of :class:`~.interval.ImuPropagation` (eqs. 13–17, 22–23), :mod:`.measurement` (eq. 8 on a robot), the
 accelerometer :class:`~.protocol.CmkfFilter` (24)–(35) and :class:`~.gyro.GyroBiasFilter`. For a sensor that does
 not rotate, one IMU sample per epoch, gravity on z, position + velocity measured, the x and y filters are exactly
-eqs. (13)–(17), (23)–(35) (tested against :class:`~.paper.PaperCmkf`). Unusable input (non-increasing stamps,
-NaN/inf, late or degenerate odometry) is dropped and counted; gaps beyond ``max_odom_gap`` / ``max_imu_gap``
-restart the chain / the position and velocity.
+eqs. (13)–(17), (23)–(35) (tested against ``PaperCmkf`` in ``test/reference_cmkf.py``). Unusable input
+(non-increasing stamps, NaN/inf, late or degenerate odometry) is dropped and counted; gaps beyond ``max_odom_gap`` /
+``max_imu_gap`` restart the chain / the position and velocity.
 """
 
 from __future__ import annotations

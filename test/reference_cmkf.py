@@ -1,10 +1,15 @@
 """Paper 004 (Moghe, Zanetti, Akella) written out literally: the two-axis turntable CMKF with full matrices.
 
+A test and benchmark reference, not part of the package: ``test/test_cmkf.py`` imports it (the test folder is on
+``sys.path`` under pytest) and ``bench/bench_cmkf_paper.py`` adds ``test/`` to ``sys.path`` to import it.
+
 The reference (6 states ``[r_x, v_x, b_x, r_y, v_y, b_y]``, 4 measurements, the 8×6 M_o of eq. 29, joint least
-squares for (S_vx, S_vy)) :class:`~.axis.AxisCmkf` and :class:`~.robot.RobotCmkf` are tested against, and the
+squares for (S_vx, S_vy)) :class:`imu_noise_id.core.cmkf.axis.AxisCmkf` and
+:class:`imu_noise_id.core.cmkf.robot.RobotCmkf` are tested against, and the
 Simulations section's turntable (:func:`simulate_turntable`). Equations: truth (6), (7), (9)–(12); propagation
-(17), (23) with Q̂_a = Ĝ diag(Ŝ_v T) Ĝᵀ; Joseph update (24)–(27); estimator (28)–(35) (:mod:`.stacked`); the joint
-positive-definiteness check of Q̂_a with fallback to the last positive-definite estimate.
+(17), (23) with Q̂_a = Ĝ diag(Ŝ_v T) Ĝᵀ; Joseph update (24)–(27); estimator (28)–(35) (as in
+:mod:`imu_noise_id.core.cmkf.stacked`); the joint positive-definiteness check of Q̂_a with fallback to the last
+positive-definite estimate.
 """
 
 from __future__ import annotations
@@ -13,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import block_diag
+
+from imu_noise_id.core.cmkf.axis import AxisCmkf, paper_interval
 
 
 @dataclass(frozen=True)
@@ -63,8 +70,8 @@ class PaperCmkf:
     measurement covariance; S_v0 : initial Ŝ_v [m²/s³]; x0, P0 : initial estimate; pd_check : ``"joint"`` (paper)
     or ``"per_axis"``; min_samples : stacked samples before Ŝ_v is used.
 
-    Attributes as :class:`~.protocol.CmkfFilter`: ``x`` (6,), ``P``, ``y`` (4,), ``S``, ``S_used`` (2,), ``S_ls``,
-    ``count``; ``predict`` takes Δṽ, ``update`` the measurement.
+    Attributes as :class:`imu_noise_id.core.cmkf.protocol.CmkfFilter`: ``x`` (6,), ``P``, ``y`` (4,), ``S``,
+    ``S_used`` (2,), ``S_ls``, ``count``; ``predict`` takes Δṽ, ``update`` the measurement.
     """
 
     def __init__(
@@ -274,11 +281,9 @@ def turntable_monte_carlo(
     min_samples: int = 1,
     record_every: int = 1,
 ) -> TurntableMonteCarlo:
-    """Paper 004's CMKF (batched :class:`~.axis.AxisCmkf`) on ``n_runs`` simulated runs: x̂₀ = [z_r, z_v, 0],
+    """Paper 004's CMKF (batched :class:`AxisCmkf`) on ``n_runs`` simulated runs: x̂₀ = [z_r, z_v, 0],
     P₀ = diag(R_r, R_v, σ_ss²) per axis, the Ŝ_v check joint over each run's two axes; stored every
     ``record_every`` steps."""
-    from .axis import AxisCmkf, paper_interval
-
     x, dv, z, accel = simulate_turntable_batch(cfg, duration, n_runs, rng)
     K = dv.shape[1]
     n = 2 * n_runs
