@@ -13,10 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .axes import AXES, GYRO_AXES, ImuSeries
+from .constants import STANDARD_GRAVITY
 
-#: Standard gravity [m/s²], as in :mod:`.simulation.static` (not imported from there: it would pull in scipy,
-#: ~80 MB of memory, into the bag reader).
-STANDARD_GRAVITY = 9.80665
 #: |mean specific force| may differ from standard gravity by this much without comment [m/s²] (local gravity spans
 #: 9.78–9.83 m/s²); a larger difference within :data:`GRAVITY_SCALE_TOLERANCE` is noted (scale or bias error).
 GRAVITY_TOLERANCE = 0.3

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.constants import CONFIDENCE_95
 from .loop import LoopResult
 from .loop.rules import simultaneous_z
 
@@ -65,7 +66,7 @@ class AvBandClaim:
                 "av_band": self.sentence()}
 
 
-def av_band_claim(result: LoopResult, level: float = 0.95) -> AvBandClaim:
+def av_band_claim(result: LoopResult, level: float = CONFIDENCE_95) -> AvBandClaim:
     """The claim for ``result``'s final step, from the z-scores and simultaneous bound the loop's verdict used
     (``inside`` equals ``result.av_inside_band`` for ``level`` 0.95)."""
     diag = result.final.diagnosis

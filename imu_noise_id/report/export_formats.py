@@ -19,8 +19,8 @@ import math
 
 import yaml
 
+from ..core.constants import STANDARD_GRAVITY
 from ..core.noise.units import step_noise_std
-from ..core.stillness import STANDARD_GRAVITY
 from .numbers import num
 
 _SENSORS = (("gyroscope", "gyro"), ("accelerometer", "acc"))

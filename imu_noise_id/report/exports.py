@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from ..core.constants import CONFIDENCE_95
 from ..core.errors import InputError
 from . import export_formats as fmt
 
@@ -39,8 +40,9 @@ def overbound_doc(doc: dict) -> dict:
         if f"{key}_xyz" in ob:
             out[f"{key}_xyz"] = ob[f"{key}_xyz"]
     lo, hi = ob.get("tau_range_s", [float("nan")] * 2)
+    level = float(doc.get("confidence_level", CONFIDENCE_95))
     out["overbound_of"] = (f"the smallest WN+RW whose Allan variance lies above the data's upper "
-                           f"{100 * float(doc.get('confidence_level', 0.95)):g} % bound and the final model's AV at "
+                           f"{100 * level:g} % bound and the final model's AV at "
                            f"every tau in [{lo:g}, {hi:g}] s, not below the fitted values; inflation over them: "
                            f"{ob.get('inflation_summary', 'see imu.yaml')}")
     return out

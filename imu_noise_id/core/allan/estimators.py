@@ -20,6 +20,7 @@ from typing import Literal
 
 import numpy as np
 
+from ..constants import CONFIDENCE_95
 from ..errors import InputError
 from .edf import alpha_range, chi2_interval, edf_of, identify_alpha
 
@@ -29,7 +30,7 @@ KINDS: tuple[str, ...] = ("allan", "hadamard", "total", "modified")
 #: Default number of averaging times per decade of τ.
 DEFAULT_PER_DECADE = 8
 #: Default two-sided confidence level of the intervals.
-DEFAULT_CONFIDENCE = 0.95
+DEFAULT_CONFIDENCE = CONFIDENCE_95
 
 
 @dataclass(frozen=True)

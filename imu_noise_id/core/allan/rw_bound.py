@@ -16,12 +16,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
+from ..constants import CONFIDENCE_95
 from ..noise.units import random_walk_at_allan_variance
 from .edf import edf_of
 from .estimators import AllanResult
 
-#: The bound's default confidence level.
-LEVEL = 0.95
 #: By default the bound reads the AV from a tenth of the record on (where the loop's AV stops judging a model).
 RECORD_FRACTION = 0.1
 
@@ -71,7 +70,7 @@ class RandomWalkBound:
 
 
 def random_walk_bound(res: AllanResult, axis: int = 0, *, tau_min: float | None = None,
-                      level: float = LEVEL) -> RandomWalkBound:
+                      level: float = CONFIDENCE_95) -> RandomWalkBound:
     """The simultaneous ``level`` upper bound on K from column ``axis`` of an Allan-variance result at
     τ ≥ ``tau_min`` [s] (default :data:`RECORD_FRACTION` of the record), module docstring."""
     if res.kind != "allan":

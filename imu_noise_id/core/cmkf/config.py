@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..constants import STANDARD_GRAVITY
 from . import rotation as rot
 
 MEASUREMENTS = ("twist", "pose_twist")
@@ -51,7 +52,7 @@ class CmkfConfig:
     default_velocity_noise_std: float = 0.05
     default_position_noise_std: float = 0.05
     default_angular_velocity_noise_std: float = 0.05
-    gravity: float = 9.80665
+    gravity: float = STANDARD_GRAVITY
     gravity_source: str = "odometry"
     max_odom_gap: float = 1.0
     max_imu_gap: float = 0.5

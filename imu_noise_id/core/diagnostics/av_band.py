@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..allan import chi2_interval
+from ..constants import CONFIDENCE_95
 from ..noise.components import RR, Component
 
 #: v_j for j = −2 … 2: the autocorrelation of the second difference (1, −2, 1).
@@ -71,7 +72,7 @@ def _difference_covariance(k: np.ndarray, ell: np.ndarray, m: int) -> np.ndarray
 
 
 def model_av_band(av_data: np.ndarray, components: list[Component], m: np.ndarray, n: int, dt: float, *,
-                  confidence: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+                  confidence: float = CONFIDENCE_95) -> tuple[np.ndarray, np.ndarray]:
     """The (low, high) ``confidence`` interval [u²] of ``av_data`` at ``m`` with the EDF of :func:`model_av_edf`
     (NIST SP1065 eq. 45)."""
     edf = np.maximum(model_av_edf(components, m, n, dt), 1.0)

@@ -15,6 +15,8 @@ import numpy as np
 from scipy import ndimage, stats
 from scipy.fft import next_fast_len
 
+from ..constants import CONFIDENCE_95
+
 #: Half-width (in periodogram bins) of the window whose median is the local floor of :func:`spectral_peaks`.
 FLOOR_HALF_WIDTH = 200
 
@@ -223,7 +225,7 @@ def av_misfit(av_data: np.ndarray, av_model: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.log10(av_data[ok] / av_model[ok]) ** 2)))
 
 
-def log_av_sd(av_ci: tuple[np.ndarray, np.ndarray], level: float = 0.95) -> np.ndarray:
+def log_av_sd(av_ci: tuple[np.ndarray, np.ndarray], level: float = CONFIDENCE_95) -> np.ndarray:
     """sd of ln AV_hat from its (lo, hi) interval at ``level``: (ln hi − ln lo)/(2z) (χ²_ν: ≈ √(2/ν))."""
     lo, hi = (np.asarray(a, dtype=float) for a in av_ci)
     if np.any(lo <= 0) or np.any(hi <= lo):
@@ -233,7 +235,7 @@ def log_av_sd(av_ci: tuple[np.ndarray, np.ndarray], level: float = 0.95) -> np.n
 
 
 def av_misfit_z(av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray,
-                level: float = 0.95) -> np.ndarray:
+                level: float = CONFIDENCE_95) -> np.ndarray:
     """Per-τ standardised misfit z_τ = ln(AV_data / AV_model) / sd(ln AV_hat), ≈ N(0, 1) if the model holds."""
     return np.log(np.asarray(av_data, float) / np.asarray(av_model, float)) / log_av_sd(av_ci, level)
 

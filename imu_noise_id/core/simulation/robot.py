@@ -20,8 +20,8 @@ from ..axes import ImuSeries, OdometrySeries
 from ..cmkf import rotation as rot
 from ..cmkf.robot import CmkfEstimate, RobotCmkf
 from ..cmkf.stream import feed_recording
+from ..constants import STANDARD_GRAVITY
 from ..noise.components import RW
-from .static import STANDARD_GRAVITY
 
 
 @dataclass

@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..axes import AXES, ImuSeries
+from ..constants import STANDARD_GRAVITY
 from ..noise.components import Component, simulate_sum
-
-STANDARD_GRAVITY = 9.80665  # m/s²
 
 
 def simulate_static_imu(

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..allan import AllanResult, allan_variance, chi2_interval, second_differences
+from ..constants import CONFIDENCE_95
 from ..errors import InputError
 from .robust import DEFAULT_EFFICIENCY, BiweightScale, hampel_clean
 
@@ -69,7 +70,7 @@ class WaveletVariance:
         col = lambda a: 2.0 * np.asarray(a, dtype=float)[:, None]  # noqa: E731
         return AllanResult(kind="allan", dt=self.dt, n=self.n, m=self.m, tau=self.tau, variance=col(self.nu2),
                            ci_low=col(self.ci_low), ci_high=col(self.ci_high), edf=self.edf[:, None],
-                           alpha=np.zeros((self.m.size, 1), int), confidence=0.95)
+                           alpha=np.zeros((self.m.size, 1), int), confidence=CONFIDENCE_95)
 
     def select(self, keep: np.ndarray) -> WaveletVariance:
         """The scales where ``keep`` is True."""
@@ -124,5 +125,5 @@ def wavelet_variance(y: np.ndarray, dt: float, *, robust: bool = False, efficien
         use = d[clean] if clean.sum() >= MIN_CLEAN_SHARE * d.size else d
         nu2_rob[j] = scale.solve(use / (2.0 * mm * dt))
     edf_rob = np.maximum(edf * scale.efficiency, 1.0)
-    lo, hi = chi2_interval(nu2_rob, edf_rob, 0.95)
+    lo, hi = chi2_interval(nu2_rob, edf_rob, CONFIDENCE_95)
     return WaveletVariance(float(dt), y.size, av.m, nu2_rob, lo, hi, edf_rob, True, scale, int(flagged.sum()))

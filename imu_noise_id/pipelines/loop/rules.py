@@ -8,6 +8,7 @@ import math
 import numpy as np
 from scipy import stats
 
+from ...core.constants import CONFIDENCE_95
 from ...core.diagnostics.residuals import av_misfit_z
 from .state import Diagnosis
 
@@ -44,7 +45,7 @@ def simultaneous_z(diag: Diagnosis, level: float) -> tuple[np.ndarray, np.ndarra
     return z, ok, float(stats.norm.isf((1.0 - level) / (2.0 * octaves)))
 
 
-def practically_negligible(diag: Diagnosis, level: float = 0.95) -> bool:
+def practically_negligible(diag: Diagnosis, level: float = CONFIDENCE_95) -> bool:
     """Whether at every τ the model's AV lies inside the data's simultaneous band
     (:func:`av_inside_band`) or within :data:`PRACTICAL_AV_ERROR` of the data's AV."""
     z, ok, bound = simultaneous_z(diag, level)
@@ -52,7 +53,7 @@ def practically_negligible(diag: Diagnosis, level: float = 0.95) -> bool:
     return bool(ok.any() and np.all((np.abs(z[ok]) <= bound) | (rel[ok] <= PRACTICAL_AV_ERROR)))
 
 
-def av_inside_band(diag: Diagnosis, level: float = 0.95) -> bool:
+def av_inside_band(diag: Diagnosis, level: float = CONFIDENCE_95) -> bool:
     """Whether the model's AV lies inside the data's ``level`` band at every τ, Bonferroni over the J
     octaves spanned: |z_τ| ≤ Φ⁻¹(1 − (1 − level)/(2J)) (AV estimates an octave apart are nearly independent)."""
     z, ok, bound = simultaneous_z(diag, level)
