@@ -21,8 +21,8 @@ if TYPE_CHECKING:
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
 COMMANDS: tuple[str, ...] = (
-    "analyze", "batch", "export", "fit", "loop", "simulate", "inspect", "identify", "criteria", "cmkf", "play",
-    "monitor",
+    "analyze", "batch", "export", "fit", "loop", "simulate", "inspect", "compare", "identify", "criteria", "cmkf",
+    "play", "monitor",
 )
 
 

@@ -1,0 +1,132 @@
+"""One axis of a recording against its reference (an earlier analysis of this unit, or of the fleet's typical one).
+
+Three tests, each at a stated false-alarm rate:
+
+* the white-noise level, sequentially (:mod:`.noise_level`: Page's CUSUM on pair differences, both ways);
+* a bias step inside the record: the level-shift score scan of the innovations under the reference model
+  (:func:`~imu_noise_id.core.diagnostics.detectors.detect_step`, Bonferroni over the scanned samples);
+* a new spectral line: the periodogram search of the same innovations
+  (:func:`~imu_noise_id.core.diagnostics.detectors.detect_sinusoids`) from :data:`LINE_MIN_FREQUENCY` up, lines the
+  reference models as sinusoid regressors (``known_lines``) left out. Lines the reference's components hold (OSC)
+  are whitened by them.
+
+The innovations are those of the reference's final model (its components, at the record's period), the record's
+first sample subtracted (the bias of another unit or another day is no fault). Without components the reference is
+white noise of its density N. The step and line tests run at α = min(0.01, λ·T) for λ false alarms per hour and a
+record of T hours.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..diagnostics import detectors as det
+from ..diagnostics.whitening import WhiteningFilter
+from ..noise.base import Component
+from ..noise.components import WN, total_allan_variance
+from .noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO, NoiseLevel, watch_noise_level
+
+#: Relative tolerance of a reference density given without a usable interval (±10 %).
+DEFAULT_TOLERANCE = 0.10
+#: Lines within this many frequency bins of a known line are the known line.
+KNOWN_LINE_BINS = 3
+#: Lowest frequency [Hz] searched for a new line: below it, wander is the noise model's (its long-τ AV), not a
+#: vibration.
+LINE_MIN_FREQUENCY = 0.1
+
+
+@dataclass(frozen=True)
+class AxisReference:
+    """What one axis should look like.
+
+    Attributes
+    ----------
+    noise_density : N [u/√Hz] and ``noise_density_ci`` its 95 % interval ((nan, nan) or a zero lower end: none)
+    components : the reference's final model, or None (white noise of density N)
+    known_lines : frequencies [Hz] the reference removed as sinusoid regressors
+    """
+
+    noise_density: float
+    noise_density_ci: tuple[float, float]
+    components: list[Component] | None = None
+    known_lines: tuple[float, ...] = ()
+
+    def model(self, dt: float) -> list[Component]:
+        return list(self.components) if self.components else [WN(self.noise_density)]
+
+    def difference_variance(self, dt: float) -> tuple[float, tuple[float, float], str]:
+        """E[(y_{t+1} − y_t)²] = 2·AV(dt) [u²] of the reference model, its interval (N's relative interval, squared,
+        or ±:data:`DEFAULT_TOLERANCE` in N when it has none) and a note saying which."""
+        v = 2.0 * float(total_allan_variance(self.model(dt), np.array([dt]), dt)[0])
+        lo, hi = self.noise_density_ci
+        if math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= self.noise_density <= hi:
+            return v, (v * (lo / self.noise_density) ** 2, v * (hi / self.noise_density) ** 2), ""
+        tol = DEFAULT_TOLERANCE
+        return v, (v * (1 - tol) ** 2, v * (1 + tol) ** 2), (f"the reference's N has no interval: ±{100 * tol:g} % "
+                                                              "used")
+
+
+@dataclass(frozen=True)
+class AxisComparison:
+    """One axis's outcome: the noise-level test, the significant bias step and new line (None without), notes."""
+
+    noise: NoiseLevel
+    step: det.Finding | None
+    line: det.Finding | None
+    alpha: float
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def degraded(self) -> bool:
+        return self.noise.alarm is not None or self.step is not None or self.line is not None
+
+    def findings(self) -> list[str]:
+        """What differs from the reference, in words (empty when within)."""
+        out = []
+        a = self.noise.alarm
+        if a is not None:
+            out.append(f"noise {'up' if a.direction == 'up' else 'down'}: density {self.noise.ratio:.3g}× the "
+                       f"reference [{self.noise.ratio_ci[0]:.3g}, {self.noise.ratio_ci[1]:.3g}] since "
+                       f"{a.since_s:.1f} s (alarm at {a.time_s:.1f} s)")
+        if self.step is not None:
+            p = self.step.params
+            out.append(f"bias step of {p['size']:.3g} at {p['time']:.1f} s")
+        if self.line is not None:
+            p = self.line.params
+            out.append(f"new line at {p['frequency']:.4g} Hz (amplitude {p.get('amplitude', math.nan):.3g})")
+        return out
+
+
+def _new_line(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,
+              known: tuple[float, ...]) -> det.Finding | None:
+    near = KNOWN_LINE_BINS / (e.size * dt)
+    for line in det.detect_sinusoids(e, dt, whitening, alpha=alpha, f_min=LINE_MIN_FREQUENCY):
+        if line.significant and all(abs(line.params["frequency"] - f) > near for f in known):
+            return line
+    return None
+
+
+def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: float = DEFAULT_RATIO,
+                 false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> AxisComparison:
+    """The three tests of the module docstring on samples ``y`` [u] at period ``dt`` [s].
+
+    Raises
+    ------
+    ValueError
+        Too short a record for the tests (fewer than 200 samples) or a reference without noise.
+    """
+    y = np.asarray(y, dtype=float)
+    v, interval, note = reference.difference_variance(dt)
+    noise = watch_noise_level(y, dt, v, interval, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour)
+    hours = y.size * dt / 3600.0
+    alpha = min(det.ALPHA, false_alarms_per_hour * hours)
+    whitening = WhiteningFilter.from_components(reference.model(dt), dt)
+    first = y[np.isfinite(y)][0]
+    e = whitening.whiten(np.nan_to_num(y - first, nan=0.0))
+    e[: min(10, e.size // 100)] = np.nan  # the filter's start-up
+    step = det.detect_step(e, dt, whitening, alpha=alpha)
+    line = _new_line(e, dt, whitening, alpha, reference.known_lines)
+    return AxisComparison(noise, step if step.significant else None, line, alpha, [note] if note else [])

@@ -1,0 +1,137 @@
+"""Sequential test of an axis's white-noise level against its reference: Page's CUSUM on pair differences.
+
+The record is cut into disjoint pairs of samples and each pair's difference d_k = y_{2k+1} − y_{2k} taken: the
+bias and any slow process cancel, and for the sensor's high-frequency noise the d_k are independent (disjoint
+pairs), zero-mean Gaussian of variance v = E[(y_{t+1} − y_t)²] = 2·AV(τ = dt) (the Allan variance at the sampling
+period). Under the reference, v lies in [v_lo, v_hi] (its interval); a degradation multiplies the noise density by
+a factor ρ, v by ρ².
+
+Each direction runs Page's CUSUM (Page 1954; Basseville & Nikiforov 1993, eq. 2.2.9) of the log-likelihood ratio
+of v₁ against v₀,
+
+    s_k = ½ ln(v₀/v₁) + ½ d_k² (1/v₀ − 1/v₁),    S_k = max(0, S_{k−1} + s_k),
+
+up: v₀ = v_hi, v₁ = ρ² v_ref; down: v₀ = v_lo, v₁ = v_ref/ρ². It alarms when S_k > h. The false alarms are bounded
+by Lorden's inequality on the mean run length to a false alarm, ARL₀ ≥ e^h (Basseville & Nikiforov eq. 5.2.73): h =
+ln(3600 · r / λ) for λ false alarms per hour at r increments per second keeps the rate at or below λ for any
+noise level inside the reference's interval. The detection delay is about h / KL(v₁‖v₀) increments.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+#: Noise-density ratio the test is tuned to detect (live / reference, either way).
+DEFAULT_RATIO = 1.5
+#: False alarms per hour of data the threshold allows (per axis and direction).
+DEFAULT_FALSE_ALARMS_PER_HOUR = 0.1
+
+
+@dataclass(frozen=True)
+class LevelAlarm:
+    """A CUSUM alarm: ``direction`` "up" (noisier) or "down"; ``time_s`` when it fired and ``since_s`` where the
+    change began (the last time the CUSUM was at zero before it), both from the record's start [s]."""
+
+    direction: str
+    time_s: float
+    since_s: float
+
+
+@dataclass(frozen=True)
+class NoiseLevel:
+    """The test's outcome on one axis.
+
+    Attributes
+    ----------
+    ratio, ratio_ci : live / reference noise density over the record (or since the alarm's change) and its 95 %
+        interval (χ² of the pair differences)
+    alarm : the first alarm, or None
+    threshold : h
+    increments : pair differences tested
+    """
+
+    ratio: float
+    ratio_ci: tuple[float, float]
+    alarm: LevelAlarm | None
+    threshold: float
+    increments: int
+
+
+def threshold(false_alarms_per_hour: float, increments_per_s: float) -> float:
+    """h = ln(3600·r/λ): Lorden's ARL₀ ≥ e^h at r increments per second gives at most λ false alarms per hour."""
+    if not false_alarms_per_hour > 0:
+        raise ValueError(f"false alarms per hour must be > 0, got {false_alarms_per_hour!r}")
+    return math.log(max(3600.0 * increments_per_s / false_alarms_per_hour, math.e))
+
+
+def pair_differences(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(d_k, index of the pair's second sample) over disjoint pairs with both samples finite."""
+    y = np.asarray(y, dtype=float)
+    m = y.size // 2
+    d = y[1: 2 * m: 2] - y[0: 2 * m: 2]
+    ok = np.isfinite(d)
+    return d[ok], (2 * np.arange(m) + 1)[ok]
+
+
+def _cusum_alarm(llr: np.ndarray, h: float) -> tuple[int, int] | None:
+    """(alarm index, change index) of Page's CUSUM on the increments ``llr``: S_k = X_k − min(0, min_{j≤k} X_j)
+    with X the cumulative sum (the recursion's closed form); None without an alarm."""
+    x = np.cumsum(llr)
+    s = x - np.minimum(np.minimum.accumulate(x), 0.0)
+    over = np.flatnonzero(s > h)
+    if not over.size:
+        return None
+    k = int(over[0])
+    zeros = np.flatnonzero(s[:k] <= 0.0)
+    return k, (int(zeros[-1]) + 1 if zeros.size else 0)
+
+
+def _ratio(d: np.ndarray, v_ref: float) -> tuple[float, tuple[float, float]]:
+    """Live / reference density from the mean of d² and its 95 % χ² interval."""
+    n = d.size
+    mean = float(np.mean(d * d))
+    lo, hi = stats.chi2.ppf([0.975, 0.025], n)
+    return math.sqrt(mean / v_ref), (math.sqrt(mean * n / lo / v_ref), math.sqrt(mean * n / hi / v_ref))
+
+
+def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[float, float], *,
+                      ratio: float = DEFAULT_RATIO,
+                      false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> NoiseLevel:
+    """Both CUSUMs of the module docstring on samples ``y`` [u] at period ``dt`` [s].
+
+    Parameters
+    ----------
+    v_ref, v_interval : the reference's E[(y_{t+1} − y_t)²] [u²] and its interval (v_lo, v_hi)
+    ratio : the density ratio ρ > 1 the test is tuned to (both ways)
+    false_alarms_per_hour : λ, per direction
+
+    Raises
+    ------
+    ValueError
+        Fewer than 100 pair differences, a non-positive reference, or ρ ≤ 1.
+    """
+    if not ratio > 1.0:
+        raise ValueError(f"the ratio to detect must be > 1, got {ratio!r}")
+    v_lo, v_hi = v_interval
+    if not (0 < v_lo <= v_ref <= v_hi):
+        raise ValueError(f"reference variance {v_ref!r} must be positive and inside its interval {v_interval!r}")
+    d, index = pair_differences(y)
+    if d.size < 100:
+        raise ValueError(f"{d.size} pair differences are too few for the noise-level test (100 or more)")
+    h = threshold(false_alarms_per_hour, 0.5 / dt)
+    d2 = d * d
+    alarms = []
+    for direction, v0, v1 in (("up", v_hi, ratio**2 * v_ref), ("down", v_lo, v_ref / ratio**2)):
+        if (direction == "up" and v1 <= v0) or (direction == "down" and v1 >= v0):
+            continue  # the reference's interval is wider than the change: nothing to tell apart
+        found = _cusum_alarm(0.5 * math.log(v0 / v1) + 0.5 * d2 * (1.0 / v0 - 1.0 / v1), h)
+        if found is not None:
+            alarms.append(LevelAlarm(direction, float(index[found[0]] * dt), float(index[found[1]] * dt)))
+    alarm = min(alarms, key=lambda a: a.time_s) if alarms else None
+    since = d if alarm is None else d[index * dt >= alarm.since_s]
+    value, ci = _ratio(since if since.size >= 100 else d, v_ref)
+    return NoiseLevel(value, ci, alarm, h, int(d.size))

@@ -1,0 +1,69 @@
+"""``compare`` as one pipeline: a static recording and a reference in, one :class:`Comparison` out.
+
+Every axis is tested against the reference's (:func:`~imu_noise_id.core.watch.compare.compare_axis`: noise level by
+CUSUM, bias step, new line); the recording must be static (:func:`~imu_noise_id.core.stillness.static_check`) and
+at the reference's rate (within :data:`RATE_TOLERANCE`), else it is refused with what differs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..core.axes import ImuSeries
+from ..core.errors import InputError
+from ..core.stillness import static_check
+from ..core.watch.compare import AxisComparison, AxisReference, compare_axis
+from ..core.watch.noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO
+
+#: Largest relative difference between the recording's rate and the reference's.
+RATE_TOLERANCE = 0.02
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Per axis the tests' outcome, and notes (what differs in the inputs without being refused)."""
+
+    axes: dict[str, AxisComparison]
+    duration_s: float
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def degraded(self) -> list[str]:
+        return [axis for axis, c in self.axes.items() if c.degraded]
+
+
+def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float, topic: str | None = None, *,
+            ratio: float = DEFAULT_RATIO,
+            false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> Comparison:
+    """Test ``imu`` against ``references`` made at ``rate_hz`` [Hz] from ``topic``.
+
+    Raises
+    ------
+    InputError
+        Another rate than the reference's, a recording that is not static, or one too short for the tests.
+    """
+    period = imu.sample_period()
+    if period.refusal is not None:
+        raise InputError(f"compare: {period.refusal}")
+    dt = period.value
+    rate = 1.0 / dt
+    if abs(rate - rate_hz) > RATE_TOLERANCE * rate_hz:
+        raise InputError(f"compare: the recording is at {rate:.6g} Hz, the reference at {rate_hz:.6g} Hz: compare "
+                         "against an analysis of a recording at the same rate (densities per sample and the "
+                         "sensor's filter depend on it)")
+    check = static_check(imu, dt)
+    if check.flags:
+        raise InputError("compare: the recording does not look static (" + "; ".join(check.flags) + "): give the "
+                         "still part with --span START:END")
+    notes = []
+    if topic and imu.topic and topic != imu.topic:
+        notes.append(f"the reference was made from {topic}, this recording is {imu.topic}")
+    data = {**{a: imu.gyro[:, i] for i, a in enumerate(("gyro_x", "gyro_y", "gyro_z"))},
+            **{a: imu.accel[:, i] for i, a in enumerate(("accel_x", "accel_y", "accel_z"))}}
+    axes = {}
+    for axis, ref in references.items():
+        try:
+            axes[axis] = compare_axis(data[axis], dt, ref, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour)
+        except ValueError as exc:
+            raise InputError(f"compare: {axis}: {exc}") from None
+    return Comparison(axes, float(imu.t[-1] - imu.t[0]), notes)

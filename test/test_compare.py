@@ -1,0 +1,120 @@
+"""``compare``: a recording against its reference analysis — the noise-level CUSUM, the bias step, a new line, the
+exit codes and the refusals."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from imu_noise_id.bag.writer import write_bag
+from imu_noise_id.cli import main
+from imu_noise_id.core.axes import AXES, GYRO_AXES
+from imu_noise_id.core.noise.components import RW, WN, simulate_sum
+from imu_noise_id.core.simulation.static import simulate_static_imu
+from imu_noise_id.core.watch.compare import AxisReference, compare_axis
+from imu_noise_id.core.watch.noise_level import threshold, watch_noise_level
+from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
+from imu_noise_id.report.analysis import write_analysis
+
+DT = 0.01
+N, K = 1e-3, 2e-5
+TRUTH = [WN(N), RW(K)]
+REFERENCE = AxisReference(N, (0.99 * N, 1.01 * N), TRUTH)
+MINUTES = 20
+
+
+def _record(seed: int) -> np.ndarray:
+    return simulate_sum(TRUTH, int(MINUTES * 60 / DT), DT, np.random.default_rng(seed))
+
+
+def test_the_threshold_keeps_lordens_bound():
+    """h = ln(3600 r / λ): e^h mean increments between false alarms is 1/λ hours at r per second."""
+    h = threshold(0.1, 50.0)
+    assert math.exp(h) / 50.0 / 3600.0 == pytest.approx(10.0)
+
+
+def test_an_unchanged_unit_raises_no_alarm():
+    """20 records of 20 min (6.7 h) of the reference's own model: no test fires (each allows 0.1 per hour)."""
+    for seed in range(20):
+        c = compare_axis(_record(seed), DT, REFERENCE)
+        assert not c.degraded, (seed, c.findings())
+        assert c.noise.ratio_ci[0] <= 1.0 <= c.noise.ratio_ci[1] * 1.01
+
+
+def test_a_noise_density_up_by_half_is_found_within_a_minute():
+    """The white noise's density steps ×1.5 at 10 min: the CUSUM alarms within 60 s in every seed, dates the change
+    to within 30 s and measures the ratio since then within 5 % (its 95 % interval holding 1.5 in most seeds)."""
+    n = int(MINUTES * 60 / DT)
+    held = 0
+    for seed in range(20):
+        rng = np.random.default_rng(100 + seed)
+        y = _record(seed)
+        y[n // 2:] += simulate_sum([WN(N * math.sqrt(1.5**2 - 1))], n - n // 2, DT, rng)
+        c = compare_axis(y, DT, REFERENCE)
+        alarm = c.noise.alarm
+        assert alarm is not None and alarm.direction == "up"
+        assert 600.0 <= alarm.time_s <= 660.0, seed
+        assert abs(alarm.since_s - 600.0) <= 30.0
+        assert c.noise.ratio == pytest.approx(1.5, rel=0.05)
+        held += c.noise.ratio_ci[0] <= 1.5 <= c.noise.ratio_ci[1]
+    assert held >= 16
+
+
+def test_a_noise_density_down_is_found_too():
+    y = _record(7)
+    n = y.size
+    y[n // 2:] = simulate_sum([WN(N / 1.6), RW(K)], n - n // 2, DT, np.random.default_rng(8)) + y[n // 2]
+    alarm = watch_noise_level(y, DT, 2 * N**2 / DT, (2 * (0.99 * N) ** 2 / DT, 2 * (1.01 * N) ** 2 / DT)).alarm
+    assert alarm is not None and alarm.direction == "down" and 600.0 <= alarm.time_s <= 660.0
+
+
+def test_a_bias_step_and_a_new_line_are_found_where_they_are():
+    y = _record(3)
+    n = y.size
+    stepped = y.copy()
+    stepped[n // 2:] += 2e-3  # 0.2 of the per-sample noise
+    c = compare_axis(stepped, DT, REFERENCE)
+    assert c.step is not None and abs(c.step.params["time"] - 600.0) < 5.0 and c.line is None
+    assert c.step.params["size"] == pytest.approx(2e-3, rel=0.3)
+    t = np.arange(n) * DT
+    vibrating = y + 1e-3 * np.sin(2 * math.pi * 30.0 * t) * (t >= 600.0)
+    c = compare_axis(vibrating, DT, REFERENCE)
+    assert c.line is not None and c.line.params["frequency"] == pytest.approx(30.0, abs=0.01)
+    # the same line known to the reference (a sinusoid regressor of its loop) is no news
+    assert compare_axis(vibrating, DT, replace(REFERENCE, known_lines=(30.0,))).line is None
+
+
+@pytest.fixture(scope="module")
+def reference_dir(tmp_path_factory):
+    """An analysis of a 10 min, 100 Hz recording of the unit (WN + RW, the structure given: the test is compare's)."""
+    model = {a: [WN(1.7e-4), RW(2e-5)] if a in GYRO_AXES else [WN(2e-3), RW(3e-4)] for a in AXES}
+    imu = simulate_static_imu(model, 100.0, 600.0, seed=51)
+    result = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+RW"), loop=False, jobs=1))
+    out = tmp_path_factory.mktemp("reference")
+    write_analysis(result, out, rostopic="/imu/data", meta={})
+    return out, model
+
+
+def test_the_command_says_within_degraded_or_refused(reference_dir, tmp_path, capsys):
+    out, model = reference_dir
+    same = simulate_static_imu(model, 100.0, 600.0, seed=52)
+    write_bag(tmp_path / "same", same)
+    assert main(["compare", str(tmp_path / "same"), "--reference", str(out)]) == 0
+    assert "within the reference" in capsys.readouterr().out
+    gyro = same.gyro.copy()
+    rng = np.random.default_rng(53)
+    gyro[30000:, 2] += rng.standard_normal(30000) * 1.7e-4 * math.sqrt(1.5**2 - 1) * math.sqrt(100.0)
+    write_bag(tmp_path / "noisier", replace(same, gyro=gyro))
+    assert main(["compare", str(tmp_path / "noisier"), "--reference", str(out)]) == 1
+    printed = capsys.readouterr().out
+    assert "DEGRADED: gyro_z" in printed and "noise up" in printed
+    fast = simulate_static_imu(model, 200.0, 300.0, seed=54)
+    write_bag(tmp_path / "fast", fast)
+    assert main(["compare", str(tmp_path / "fast"), "--reference", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "200 Hz" in err and "100 Hz" in err and "Traceback" not in err
+    assert main(["compare", str(tmp_path / "same"), "--reference", str(tmp_path)]) == 2
+    assert "imu.yaml" in capsys.readouterr().err
