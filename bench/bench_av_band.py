@@ -2,7 +2,7 @@
 
 Usage (from the repository root)::
 
-    PYTHONPATH=$PWD python bench/bench_av_band.py [--seeds 40] [--out docs/results/bench_av_band.txt]
+    PYTHONPATH=$PWD python bench/bench_av_band.py [--seeds 40] [--out FILE]
 
 Simulates ``--seeds`` records of 1000 s at 100 Hz of an ADIS16405-like accelerometer model (WN + the 0.565 Hz line
 + a 10.8 Hz vibration), computes the Allan variance at the loop's τ and the misfit z-scores against the true model

@@ -3,7 +3,7 @@
 Usage (from the repository root; long on a shared 2-core machine, run it with nice)::
 
     PYTHONPATH=$PWD nice -n 10 python bench/loop_measured.py [--runs 1,2,3,4,5,6] [--axes gyro_x,...] \\
-        [--samples N] [--out docs/results/loop_measured.txt] [--resume]
+        [--samples N] [--out FILE] [--resume]
 
 Each axis runs from WN+RW (the Kalibr model) at 100 Hz on the first ``--samples`` samples of the run (default all
 10⁶). Per axis it prints: the RMS AV misfit z (model vs data, in sd of the AV estimates) before and after, whether

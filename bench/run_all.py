@@ -63,7 +63,6 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_node_husky.py"], "bench_node_husky.txt"),
     (["loop_measured.py", "--samples", "100000", "--mtig-samples", "100000"], "loop_measured.txt"),
     (["loop_measured.py", "--axes", "gyro_x,gyro_y", "--samples", "0"], "loop_measured.txt"),
-    (["bench_av_band.py"], "bench_av_band.txt"),
     (["bench_rw_bound.py"], "bench_rw_bound.txt"),
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
     (["bench_loop_effects.py", "--minutes", "120", "--cases", "osc+gm", "bi"], "bench_loop_effects.txt"),
@@ -79,28 +78,16 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_gmwm_pooled.py"], "bench_gmwm_pooled.txt"),
 ]
 
-#: Studies in bench/studies/ whose outputs docs/ quotes (``--studies``; outputs in docs/results/studies/): one-off
+#: Studies in bench/studies/ whose outputs README.md quotes (``--studies``; outputs in docs/results/studies/): one-off
 #: questions, not regression numbers. The side-by-side studies (``--baseline DIR``: bench_sensor_filter,
 #: bench_steady_engine, bench_loop_measured_time) need another checkout and are run by hand (their docstrings give
-#: the command).
+#: the command). The other studies keep no output: docs/ states what each found and names the script that
+#: reproduces it (``loop_trace.py RUN AXIS``, ``probe_*.py``, ``profile_loop_measured.py``); as is
+#: bench/bench_av_band.py's check of the model AV band (docs/loop.md).
 STUDIES: list[tuple[list[str], str]] = [
-    (["studies/probe_gm_tau_lr.py"], "studies/probe_gm_tau_lr.txt"),
-    *[(["studies/loop_trace.py", run, axis], "studies/loop_trace.txt")
-      for run, axis in [("1", "accel_x"), ("1", "accel_z"), ("1", "gyro_z"), ("2", "gyro_z"), ("3", "gyro_z"),
-                        ("4", "accel_z"), ("5", "accel_y"), ("6", "gyro_y"), ("6", "gyro_z")]],
-    (["studies/probe_gyro_z_line_shape.py"], "studies/probe_gyro_z_line_shape.txt"),
-    (["studies/probe_rw_gm_swap.py", "4", "accel_z"], "studies/probe_rw_gm_swap.txt"),
-    (["studies/probe_osc_gm_bic.py"], "studies/probe_osc_gm_bic.txt"),
-    (["studies/probe_k_bounded_wander.py"], "studies/probe_k_bounded_wander.txt"),
     (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "studies/probe_k_information.txt"),
-    (["studies/probe_flicker_gm_rw.py", "--cases", "osc+clear_gm", "osc+fast_gm"], "studies/probe_flicker_gm_rw.txt"),
-    (["studies/probe_lpf2_filter_shape.py", "--seeds", "3"], "studies/probe_lpf2_filter_shape.txt"),
-    (["studies/probe_innovation_hump.py"], "studies/probe_innovation_hump.txt"),
-    (["studies/probe_fit_from_off_starts.py"], "studies/probe_fit_from_off_starts.txt"),
     (["studies/bench_sin_regressors.py"], "studies/bench_sin_regressors.txt"),
     (["studies/bench_motion_bursts.py"], "studies/bench_motion_bursts.txt"),
-    (["studies/profile_loop_measured.py", "--run", "3", "--axis", "gyro_x", "--samples", "0", "--limit", "1500"],
-     "studies/profile_loop_measured.txt"),
 ]
 
 

@@ -3,9 +3,9 @@
 What every L-BFGS evaluation of a fit does with the data (``mle.loglik_grad_profile``): the steady engine's filter
 over the data and regressor columns, the GLS profile, the predicted states and the backward smoother
 (``kalman.profile_and_smooth``), then the E-step sums (``em.sums_from_stats``). On a full 10⁶-sample record that is
-almost all of a loop's time (1257 of the first 1500 s on ADIS16405 run 3 gyro_x: ``profile_loop_measured.py`` →
-``docs/results/studies/profile_loop_measured.txt``). Each tree runs in its own process
-(``OPENBLAS_NUM_THREADS=1``, the package imported from that tree, checked), the trees in alternation, ``--repeats``
+almost all of a loop's time (1257 of the first 1500 s on ADIS16405 run 3 gyro_x:
+``bench/studies/profile_loop_measured.py``). Each tree runs in its own process (``OPENBLAS_NUM_THREADS=1``, the
+package imported from that tree, checked), the trees in alternation, ``--repeats``
 times each; per model, length and basis it prints the median and the smallest time of ``--evaluations`` evaluations,
 the share spent inside ``scipy.signal.lfilter`` (the recursions themselves; the rest is array passes: inputs, basis
 changes, reversals) and whether the log-likelihood and a digest of every E-step statistic equal the first tree's to

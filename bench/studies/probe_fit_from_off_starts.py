@@ -5,7 +5,7 @@ the Whittle information at the start (``whittle.whittle_information``); run this
 metrics (docs/em.md, "The finish's metric").
 
 Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_fit_from_off_starts.py [--seeds 5 --starts 3]
-(output: docs/results/studies/probe_fit_from_off_starts.txt; about two minutes)
+(prints its findings; about two minutes)
 """
 
 from __future__ import annotations

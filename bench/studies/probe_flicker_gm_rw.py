@@ -3,7 +3,7 @@ cases: the BIC of replacing the flicker by a GM and a random walk in one move (d
 
 Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_flicker_gm_rw.py \
           [--cases osc+clear_gm osc+fast_gm] [--seeds 10]
-(output: docs/results/studies/probe_flicker_gm_rw.txt; a minute or two per record)
+(prints its findings; a minute or two per record)
 
 Per seed: the final model and BIC of the loop without that move (the joint search's third trial switched off, as
 before a83961c); where it holds BI without RW or GM, the pair fitted from two starts — the

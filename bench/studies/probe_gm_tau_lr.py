@@ -5,7 +5,7 @@ It came out nominal (with the inner maximisations of its time, started at the es
 Bartlett-type correction. The under-coverage it was written to explain came from the profile search itself (fixed
 in f362b8c): its inner maximisations never left the K ≈ 0 branch, so intervals ended where ℓ_A was still high.
 
-Run:  nice -n 10 python bench/studies/probe_gm_tau_lr.py   (output: docs/results/studies/probe_gm_tau_lr.txt; ~15 min)
+Run:  nice -n 10 python bench/studies/probe_gm_tau_lr.py   (prints its findings; ~15 min)
 
 For four records of bench_coverage.py's WN+GM+RW+RR (seeds 1001 and 1030, whose fits lie near or below the true
 τ = 100 s; 1027 and 1052, on the long-τ branch with K ≈ 0), the fit's adjusted-profile machinery

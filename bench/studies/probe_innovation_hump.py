@@ -6,7 +6,7 @@ Usage (from the repository root)::
     PYTHONPATH=$PWD python bench/studies/probe_innovation_hump.py [--axes 6:accel_z,3:gyro_z] [--samples N] [--out FILE]
 
 Per axis: the hump's evidence, its centre and half-height width [Hz], and the trial's offer (None where the hump is
-not significant or wider than its centre: Q < 1). Output: docs/results/studies/probe_innovation_hump.txt.
+not significant or wider than its centre: Q < 1). It prints its findings.
 """
 
 from __future__ import annotations

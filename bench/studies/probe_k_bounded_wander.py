@@ -3,7 +3,7 @@ end of K when the loop's final model may also hold a GM (docs/loop.md, "Limitati
 widened by it).
 
 Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_k_bounded_wander.py [--seeds 10] [--minutes 20]
-(output: docs/results/studies/probe_k_bounded_wander.txt; about 10 s per record)
+(prints its findings; about 10 s per record)
 
 Per seed of bench_loop_effects' ``clean`` (WN + RW) and ``osc+gm`` (WN + OSC + RW + GM(τ = 60 s)) records: the loop
 from WN+RW, its final K with the Wald interval ``analyze`` reports, and the lower end of K's 95 % profile interval

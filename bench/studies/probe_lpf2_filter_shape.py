@@ -5,7 +5,7 @@ model, of that model without each first-order filter, and of the true structure 
 second-order swap (3522ec7), whose final models it shows.
 
 Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_lpf2_filter_shape.py [--seeds 10]
-(output: docs/results/studies/probe_lpf2_filter_shape.txt; a few minutes per record)
+(prints its findings; a few minutes per record)
 """
 
 from __future__ import annotations

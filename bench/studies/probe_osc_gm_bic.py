@@ -2,7 +2,7 @@
 the truth, over the loop's WN+OSC+RW, against what BIC asks (docs/loop.md, "Limitations").
 
 Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_osc_gm_bic.py [--seeds 3] [--minutes 20 120]
-(output: docs/results/studies/probe_osc_gm_bic.txt; about a minute per 2 h record)
+(prints its findings; about a minute per 2 h record)
 
 The GM (τ = 60 s, σ = 2·10⁻³) has, above its corner 1/(2πτ) = 2.7 mHz, the PSD of a random walk of density
 σ·√(2/τ) = 3.65·10⁻⁴, more than the true K = 3·10⁻⁴: WN+OSC+RW takes both as one random walk of density
