@@ -10,9 +10,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..core.estimation.overbound import DEFAULT_HORIZON_S
 from . import add_rate_option, results_folder
-from .options import add_out, add_topic, model_spec, span_spec
+from .options import add_analysis_options, add_out, add_topic, analysis_options
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -34,48 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_topic(p)
     add_out(p, "analyze")
     add_rate_option(p)
-    p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
-    p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
-    p.add_argument(
-        "--model", default="auto", type=model_spec("auto", "none"),
-        help="EM model fit per axis after the Allan stage: 'auto' (default: BIC over the default candidates), a "
-        "structure such as 'WN+GM+RW', or 'none' (Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
-        "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
-    )
-    p.add_argument(
-        "--estimator", choices=("auto", "em", "gmwm", "both"), default="auto",
-        help="model estimator: 'em' (maximum likelihood), 'gmwm' (wavelet variance; no closed loop), 'both' (GMWM, "
-        "then EM from its estimates, compared parameter by parameter) or 'auto' (default: EM, GMWM on records too "
-        "long for the EM, with a warning)",
-    )
-    p.add_argument("--robust", action="store_true",
-                   help="GMWM: fit the robust wavelet variance (bounded influence; for records with outliers)")
-    p.add_argument(
-        "--allow-motion", action="store_true",
-        help="analyse even if the static check finds motion (its findings become warnings)",
-    )
-    p.add_argument(
-        "--span", type=span_spec, default=None, metavar="START:END",
-        help="analyse only the samples from START to END seconds after the first one (START: or :END for the "
-        "rest), e.g. the still stretch the static check suggests around a moment of motion")
-    p.add_argument(
-        "--horizon", type=float, default=DEFAULT_HORIZON_S, metavar="S",
-        help="longest time scale [s] the overbound must cover: the smallest WN+RW whose Allan variance lies above "
-        "the data's upper bound and the final model from the sampling period to S (imu.yaml 'overbound:', "
-        f"report.html; default {DEFAULT_HORIZON_S:g})")
-    p.add_argument("--overbound", action="store_true",
-                   help="also write the exports of the overbound's values into DIR/exports/overbound/")
-    p.add_argument(
-        "--no-loop", action="store_true",
-        help="skip the closed loop that follows the model fit (residual diagnosis: adds missing GM/RW/RR/QN, "
-        "sinusoids, temperature, steps, outliers one at a time while BIC improves; writes a 'loop:' list per "
-        "axis into model.yaml and DIR/report.html). It runs by default unless --model none",
-    )
-    p.add_argument(
-        "--jobs", type=int, default=0, metavar="N",
-        help="worker processes for the per-axis model stage and loop, one axis each (default 0: one per available "
-        "core on records of 100000 samples or more; 1: none). The results are the same; peak memory adds up over "
-        "the workers")
+    add_analysis_options(p)
     p.set_defaults(run=run)
 
 
@@ -83,8 +41,7 @@ def run(args: argparse.Namespace) -> int:
     """Read, analyse, write, report. Input problems raise InputError (exit 2)."""
     from ..bag.reader import read_static
     from ..core.axes import AXES
-    from ..core.estimation.gmwm import GmwmOptions
-    from ..pipelines.analyze import AnalyzeOptions, ModelStage, analyze
+    from ..pipelines.analyze import analyze
     from ..report.analysis import write_analysis
     from ..report.console import (
         comparison_table,
@@ -97,10 +54,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from .progress import TextProgress
 
-    options = AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
-                             models=ModelStage(args.model, estimator=args.estimator,
-                                               gmwm=GmwmOptions(robust=args.robust)),
-                             loop=not args.no_loop, horizon_s=args.horizon, jobs=args.jobs, span=args.span)
+    options = analysis_options(args)
     with TextProgress(f"reading {args.bag.name}") as progress:
         recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
     allan = TextProgress("Allan-family variances")

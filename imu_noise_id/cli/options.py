@@ -5,6 +5,9 @@
 - ``--topic T``: the sensor_msgs/Imu topic (older spellings stay as hidden aliases).
 - ``--axis AXIS[,AXIS…]``: repeatable and/or a comma list; default all six axes (:func:`parse_axes`).
 - ``--model`` / ``--start``: model specs checked while the command line is parsed (:func:`model_spec`).
+- The analysis options of ``analyze`` and ``batch`` (``--model``, ``--estimator``, ``--horizon``, ``--span``, …):
+  added by :func:`add_analysis_options`, turned into one
+  :class:`~imu_noise_id.pipelines.analyze.AnalyzeOptions` by :func:`analysis_options`.
 """
 
 from __future__ import annotations
@@ -13,9 +16,14 @@ import argparse
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..core.axes import AXES
 from ..core.errors import InputError
+from ..core.estimation.overbound import DEFAULT_HORIZON_S
+
+if TYPE_CHECKING:
+    from ..pipelines.analyze import AnalyzeOptions
 
 
 def default_out(command: str, bag: str | Path | None) -> Path:
@@ -119,3 +127,70 @@ def span_spec(text: str) -> tuple[float, float]:
 
 
 span_spec.__name__ = "span"  # argparse names the type in its message
+
+
+def add_analysis_options(p: argparse.ArgumentParser, *, jobs: bool = True) -> None:
+    """The options of one analysis (``analyze``; ``batch`` runs every unit with them): the Allan stage, the model
+    stage, the loop, the overbound and its exports; ``jobs``: also ``--jobs`` (``batch`` runs its units side by side
+    on its Dask workers instead, each unit's axes one after another). :func:`analysis_options` reads them back."""
+    p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
+    p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
+    p.add_argument(
+        "--model", default="auto", type=model_spec("auto", "none"),
+        help="EM model fit per axis after the Allan stage: 'auto' (default: BIC over the default candidates), a "
+        "structure such as 'WN+GM+RW', or 'none' (Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
+        "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
+    )
+    p.add_argument(
+        "--estimator", choices=("auto", "em", "gmwm", "both"), default="auto",
+        help="model estimator: 'em' (maximum likelihood), 'gmwm' (wavelet variance; no closed loop), 'both' (GMWM, "
+        "then EM from its estimates, compared parameter by parameter) or 'auto' (default: EM, GMWM on records too "
+        "long for the EM, with a warning)",
+    )
+    p.add_argument("--robust", action="store_true",
+                   help="GMWM: fit the robust wavelet variance (bounded influence; for records with outliers)")
+    p.add_argument(
+        "--allow-motion", action="store_true",
+        help="analyse even if the static check finds motion (its findings become warnings)",
+    )
+    p.add_argument(
+        "--span", type=span_spec, default=None, metavar="START:END",
+        help="analyse only the samples from START to END seconds after the first one (START: or :END for the "
+        "rest), e.g. the still stretch the static check suggests around a moment of motion")
+    p.add_argument(
+        "--horizon", type=float, default=DEFAULT_HORIZON_S, metavar="S",
+        help="longest time scale [s] the overbound must cover: the smallest WN+RW whose Allan variance lies above "
+        "the data's upper bound and the final model from the sampling period to S (imu.yaml 'overbound:', "
+        f"report.html; default {DEFAULT_HORIZON_S:g})")
+    p.add_argument("--overbound", action="store_true",
+                   help="also write the exports of the overbound's values into DIR/exports/overbound/")
+    p.add_argument(
+        "--no-loop", action="store_true",
+        help="skip the closed loop that follows the model fit (residual diagnosis: adds missing GM/RW/RR/QN, "
+        "sinusoids, temperature, steps, outliers one at a time while BIC improves; writes a 'loop:' list per "
+        "axis into model.yaml and DIR/report.html). It runs by default unless --model none",
+    )
+    if jobs:
+        p.add_argument(
+            "--jobs", type=int, default=0, metavar="N",
+            help="worker processes for the per-axis model stage and loop, one axis each (default 0: one per "
+            "available core on records of 100000 samples or more; 1: none). The results are the same; peak memory "
+            "adds up over the workers")
+
+
+def analysis_options(args: argparse.Namespace, *, jobs: int | None = None) -> AnalyzeOptions:
+    """The :class:`~imu_noise_id.pipelines.analyze.AnalyzeOptions` of the options :func:`add_analysis_options`
+    added (``jobs``: instead of ``--jobs``). ``--overbound`` is not among them: it says which files are written.
+
+    Raises
+    ------
+    InputError
+        A value out of range (``--horizon``, ``--confidence``, ``--per-decade``, ``--jobs``).
+    """
+    from ..core.estimation.gmwm import GmwmOptions
+    from ..pipelines.analyze import AnalyzeOptions, ModelStage
+
+    return AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
+                          models=ModelStage(args.model, estimator=args.estimator, gmwm=GmwmOptions(robust=args.robust)),
+                          loop=not args.no_loop, horizon_s=args.horizon, jobs=args.jobs if jobs is None else jobs,
+                          span=args.span)
