@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import os
 import signal
@@ -12,10 +13,11 @@ import time
 import pytest
 import yaml
 
-from imu_noise_id.batch import discover_units, open_client, run_batch
+from imu_noise_id.batch import BatchOptions, discover_units, open_client, run_batch
 from imu_noise_id.cli import main
+from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage
 
-OPTIONS = {"model": "WN+RW", "loop": False, "per_decade": 8, "allow_motion": False}
+OPTIONS = BatchOptions(AnalyzeOptions(models=ModelStage("WN+RW"), loop=False))
 DENSITIES = (1e-3, 2e-3, 4e-3)
 
 
@@ -136,7 +138,7 @@ def test_batch_passes_rate_to_every_unit_and_refuses_a_bad_one(bags, tmp_path):
     from imu_noise_id.batch.unit import run_unit
 
     unit = discover_units([str(bags / "imu0*")], None)[0]
-    outcome = run_unit(unit, {**OPTIONS, "rate": 100.0}, str(tmp_path))
+    outcome = run_unit(unit, dataclasses.replace(OPTIONS, rate=100.0), str(tmp_path))
     assert outcome.status == "ok", outcome.error
     doc = yaml.safe_load((tmp_path / unit.name / "imu.yaml").read_text())
     assert doc["update_rate"] == 100.0 and "declared (--rate)" in doc["update_rate_source"]
@@ -153,5 +155,5 @@ def test_a_unit_long_enough_for_parallel_axes_runs_in_its_dask_worker(client, tm
     assert main(["simulate", "--model", "gyro: WN(1e-3)+RW(2e-5); accel: WN(2e-3)+RW(3e-4)", "--rate", "100",
                  "--duration", f"{duration:g}", "--out", str(tmp_path / "long" / "imu_long"), "--seed", "3"]) == 0
     units = discover_units([str(tmp_path / "long" / "*")], None)
-    result = run_batch(units, {**OPTIONS, "model": "WN"}, tmp_path / "out", client)
+    result = run_batch(units, AnalyzeOptions(models=ModelStage("WN"), loop=False), tmp_path / "out", client)
     assert [o.status for o in result.outcomes] == ["ok"], [o.error for o in result.outcomes]

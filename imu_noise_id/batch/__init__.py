@@ -3,7 +3,7 @@ a ``dask.distributed`` client (:mod:`.runner`); the fleet table and report by :m
 
 from .runner import BatchProgress, BatchResult, open_client, run_batch
 from .unit import UnitOutcome, run_unit
-from .units import Unit, discover_units
+from .units import BatchOptions, Unit, discover_units
 
-__all__ = ["BatchProgress", "BatchResult", "Unit", "UnitOutcome", "discover_units", "open_client", "run_batch",
-           "run_unit"]
+__all__ = ["BatchOptions", "BatchProgress", "BatchResult", "Unit", "UnitOutcome", "discover_units", "open_client",
+           "run_batch", "run_unit"]

@@ -2,8 +2,9 @@
 
 No home-made scheduler, queue or pool: ``dask.distributed`` runs the units (one task each, worker processes with a
 memory limit, a killed worker's tasks rescheduled by the scheduler) and :func:`dask.distributed.as_completed`
-reports them as they finish. A unit whose outputs are already on disk with the same content hash (bag bytes, topic,
-options) is not submitted again, so an interrupted batch resumes where it stopped.
+reports them as they finish. Every unit gets the same :class:`~.units.BatchOptions` (``analyze``'s options; a
+dataclass, pickled to the workers as it is). A unit whose outputs are already on disk with the same content hash
+(bag bytes, topic, every option) is not submitted again, so an interrupted batch resumes where it stopped.
 """
 
 from __future__ import annotations
@@ -14,8 +15,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..pipelines.analyze import AnalyzeOptions
 from .unit import UnitOutcome, finished, run_unit
-from .units import Unit, content_hash
+from .units import BatchOptions, Unit, content_hash
 
 
 @dataclass(frozen=True)
@@ -62,11 +64,15 @@ def open_client(scheduler: str | None = None, workers: int = 2, memory_limit: st
     return Client(cluster)
 
 
-def run_batch(units: list[Unit], options: dict, out_root: str | Path, client, *,
+def run_batch(units: list[Unit], options: BatchOptions | AnalyzeOptions, out_root: str | Path, client, *,
               progress: Progress | None = None) -> BatchResult:
-    """Run every unit not already finished (module docstring) on ``client``; never raises for a unit's failure."""
+    """Run every unit not already finished (module docstring) on ``client`` with ``options`` (an
+    :class:`AnalyzeOptions` alone: without ``--rate`` and the overbound's exports); never raises for a unit's
+    failure."""
     from dask.distributed import as_completed
 
+    if isinstance(options, AnalyzeOptions):
+        options = BatchOptions(options)
     start = time.perf_counter()
     out = Path(out_root)
     out.mkdir(parents=True, exist_ok=True)

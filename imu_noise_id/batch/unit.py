@@ -1,7 +1,8 @@
 """One unit of work on a Dask worker: read the bag, run ``analyze``, write its outputs atomically, return rows.
 
 A unit never raises: a failure becomes its outcome (status ``failed`` and the error's one-line message), so that
-the batch goes on. Its outputs land in ``OUT/<unit name>/`` exactly as ``analyze`` writes them, plus
+the batch goes on. It runs with the batch's :class:`~.units.BatchOptions` (``analyze``'s options, the same object on
+every worker). Its outputs land in ``OUT/<unit name>/`` exactly as ``analyze`` writes them, plus
 ``unit.json`` (the content hash, the options and the fleet-table rows): they are written into a temporary folder
 beside it and renamed into place, so an interrupted unit leaves no half-written folder and a rerun with the same
 inputs and options finds the finished one.
@@ -20,7 +21,7 @@ from pathlib import Path
 
 from ..core.errors import InputError
 from ..report.numbers import num
-from .units import Unit, content_hash
+from .units import BatchOptions, Unit, content_hash
 
 MARKER = "unit.json"
 
@@ -37,19 +38,6 @@ class UnitOutcome:
     rows: list[dict] = field(default_factory=list)
     error: str = ""
     seconds: float = 0.0
-
-
-def analysis_options(options: dict):
-    """The :class:`~imu_noise_id.pipelines.analyze.AnalyzeOptions` of a batch's JSON options: a unit's axes one
-    after another in its worker (``jobs=1``): the cluster runs the units side by side, and a Dask worker process
-    (daemonic) may not start processes of its own."""
-    from ..pipelines.analyze import AnalyzeOptions, ModelStage
-
-    return AnalyzeOptions(per_decade=int(options.get("per_decade", 8)),
-                          confidence=float(options.get("confidence", 0.95)),
-                          allow_motion=bool(options.get("allow_motion", False)),
-                          models=ModelStage(str(options.get("model", "auto"))), loop=bool(options.get("loop", True)),
-                          jobs=1)
 
 
 def _num(x: float | None) -> float | None:
@@ -111,7 +99,13 @@ def _replace_folder(tmp: Path, final: Path) -> None:
     shutil.rmtree(old, ignore_errors=True)
 
 
-def run_unit(unit: Unit, options: dict, out_root: str) -> UnitOutcome:
+def _title(unit: Unit) -> str:
+    """The report's title, as ``analyze`` gives it: the bag's name (and the topic when the bag has several)."""
+    several = bool(unit.topic) and unit.name.endswith(unit.topic.replace("/", "_"))
+    return f"IMU noise analysis: {unit.bag.name}" + (f" {unit.topic}" if several else "")
+
+
+def run_unit(unit: Unit, options: BatchOptions, out_root: str) -> UnitOutcome:
     """Analyse one unit (module docstring). Runs on a Dask worker; never raises."""
     from ..bag.reader import read_static
     from ..pipelines.analyze import analyze
@@ -124,21 +118,23 @@ def run_unit(unit: Unit, options: dict, out_root: str) -> UnitOutcome:
     key = ""
     try:
         key = content_hash(unit, options)
-        recording = read_static(unit.bag, topic=unit.topic, rate_hz=options.get("rate"))
-        result = analyze(recording.imu, recording.temperature, analysis_options(options))
+        recording = read_static(unit.bag, topic=unit.topic, rate_hz=options.rate)
+        result = analyze(recording.imu, recording.temperature, options.analysis)
         tmp = out / f".{unit.name}.tmp-{uuid.uuid4().hex[:8]}"
-        meta = {"source": str(unit.bag), "topic": recording.imu.topic, "command": "batch",
-                "model": options.get("model", "auto"), "notes": recording.notes}
-        write_analysis(result, tmp, rostopic=recording.imu.topic, meta=meta, title=f"IMU noise analysis: {unit.name}")
+        models = options.analysis.models
+        meta = {"source": str(unit.bag), "topic": recording.imu.topic, "command": "batch", "model": models.model,
+                "estimator": models.estimator, "notes": recording.notes}
+        write_analysis(result, tmp, rostopic=recording.imu.topic, meta=meta, title=_title(unit),
+                       overbound_exports=options.overbound_exports)
         record = RunRecord(command="batch", argv=[], source=str(unit.bag), topic=recording.imu.topic,
-                           options=dict(options), started=started, finished=now(), completed=True).as_dict()
+                           options=options.as_dict(), started=started, finished=now(), completed=True).as_dict()
         for path in sorted(p for p in tmp.rglob("*") if p.is_file()):
             stamp(path, path.relative_to(tmp).as_posix(), record)
         warnings = list(result.static.warnings) + list(result.warnings)
         outcome = UnitOutcome(unit.name, str(unit.bag), recording.imu.topic, "ok", key,
                               fleet_rows(unit, result, warnings))
         outcome.seconds = time.perf_counter() - start
-        (tmp / MARKER).write_text(json.dumps({**asdict(outcome), "options": options}, indent=1))
+        (tmp / MARKER).write_text(json.dumps({**asdict(outcome), "options": options.as_dict()}, indent=1))
         _replace_folder(tmp, out / unit.name)
         return outcome
     except InputError as exc:

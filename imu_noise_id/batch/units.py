@@ -1,17 +1,57 @@
-"""Units of work: every (bag, IMU topic) pair of the inputs, with the content hash that decides a rerun."""
+"""Units of work: every (bag, IMU topic) pair of the inputs, the options every unit runs with, and the content hash
+that decides a rerun."""
 
 from __future__ import annotations
 
+import dataclasses
 import glob
 import hashlib
 import json
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
 
 from ..bag.topics import IMU_TYPE, open_bag
 from ..core.errors import InputError
+from ..pipelines.analyze import AnalyzeOptions
+
+
+@dataclass(frozen=True)
+class BatchOptions:
+    """What every unit of a batch is asked: ``analyze``'s options, shipped as they are to the Dask workers.
+
+    Attributes
+    ----------
+    analysis : the analysis (its ``jobs`` is set to 1: the cluster runs the units side by side, and a Dask worker
+        process, daemonic, may not start processes of its own; the axes of a unit run one after another)
+    rate : the declared sample rate [Hz] (``--rate``), or None: estimated from the stamps
+    overbound_exports : also write the overbound's exports (``--overbound``)
+    """
+
+    analysis: AnalyzeOptions = field(default_factory=AnalyzeOptions)
+    rate: float | None = None
+    overbound_exports: bool = False
+
+    def __post_init__(self) -> None:
+        if self.analysis.jobs != 1:
+            object.__setattr__(self, "analysis", dataclasses.replace(self.analysis, jobs=1))
+
+    def as_dict(self) -> dict:
+        """Every option as plain JSON values, nested as the dataclasses are (the same text for equal options in any
+        process: the content hash and ``unit.json``); an unbounded ``--span`` end is the string ``"inf"``."""
+
+        def plain(value):
+            if isinstance(value, float) and not math.isfinite(value):
+                return str(value)
+            if isinstance(value, dict):
+                return {k: plain(v) for k, v in value.items()}
+            if isinstance(value, list | tuple):
+                return [plain(v) for v in value]
+            return value
+
+        return plain(dataclasses.asdict(self))
 
 
 @dataclass(frozen=True)
@@ -94,8 +134,9 @@ def discover_units(inputs: list[str], topics: list[str] | None, manifest: Path |
     return list(units.values())
 
 
-def content_hash(unit: Unit, options: dict) -> str:
-    """SHA-256 of the bag's bytes (every file of a rosbag2 directory), the topic and the options."""
+def content_hash(unit: Unit, options: BatchOptions) -> str:
+    """SHA-256 of the bag's bytes (every file of a rosbag2 directory), the topic and every option
+    (:meth:`BatchOptions.as_dict`): a changed option runs the unit again."""
     h = hashlib.sha256()
     files = sorted(p for p in unit.bag.rglob("*") if p.is_file()) if unit.bag.is_dir() else [unit.bag]
     for f in files:
@@ -103,5 +144,5 @@ def content_hash(unit: Unit, options: dict) -> str:
         with f.open("rb") as fh:
             for chunk in iter(lambda fh=fh: fh.read(1 << 20), b""):
                 h.update(chunk)
-    h.update(json.dumps({"topic": unit.topic, "options": options}, sort_keys=True).encode())
+    h.update(json.dumps({"topic": unit.topic, "options": options.as_dict()}, sort_keys=True, allow_nan=False).encode())
     return h.hexdigest()

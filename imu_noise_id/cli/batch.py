@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from . import add_rate_option
-from .options import add_out, add_topic, model_spec
+from .options import add_analysis_options, add_out, add_topic, analysis_options
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -25,7 +25,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "and axis (N, K, bias instability with 95 % intervals, model, loop verdict, warnings, error); "
             "DIR/fleet_report.html shows their spread, robust outliers and the pass/fail against --spec. A failed "
             "unit is recorded and the batch goes on; rerunning the same command skips units whose bag contents and "
-            "options are unchanged."),
+            "options are unchanged. Every unit runs with analyze's options (the same flags and defaults; its axes "
+            "one after another, the units side by side on the workers, so without --jobs)."),
     )
     p.add_argument("inputs", nargs="*", metavar="BAG_OR_GLOB", help="bags, rosbag2 folders or glob patterns")
     p.add_argument("--manifest", type=Path, help="YAML (bags: [{path, topics}]) or text file (one path per line)")
@@ -38,12 +39,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--workers", type=int, default=2, help="local cluster: worker processes (default: 2)")
     p.add_argument("--memory-limit", default="4GiB", help="local cluster: memory limit per worker (default: 4GiB)")
     p.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    p.add_argument("--model", default="auto", type=model_spec("auto", "none"),
-                   help="model stage as for analyze: auto, a structure, or none")
-    p.add_argument("--no-loop", action="store_true", help="skip the closed loop (as for analyze)")
-    p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade (default: 8)")
-    p.add_argument("--allow-motion", action="store_true", help="analyse even if the static check finds motion")
     add_rate_option(p)
+    add_analysis_options(p, jobs=False)
     p.set_defaults(run=run)
 
 
@@ -70,7 +67,7 @@ def _spec(path: Path | None) -> dict | None:
 
 def run(args: argparse.Namespace) -> int:
     """Discover the units, run them on Dask, write the fleet table and report."""
-    from ..batch import BatchProgress, discover_units, open_client, run_batch
+    from ..batch import BatchOptions, BatchProgress, discover_units, open_client, run_batch
     from ..core.errors import InputError
     from ..core.timing import check_declared_rate
     from ..report.fleet import annotate, write_fleet_report, write_tables
@@ -80,12 +77,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--workers must be >= 1, got {args.workers}")
     if args.rate is not None:  # before a cluster starts, as each unit's reader would
         check_declared_rate(args.rate)
+    options = BatchOptions(analysis_options(args, jobs=1), rate=args.rate, overbound_exports=args.overbound)
     spec = _spec(args.spec)
     units = discover_units(list(args.inputs), list(args.topic), args.manifest)
-    options = {"model": args.model, "loop": not args.no_loop, "per_decade": args.per_decade,
-               "allow_motion": args.allow_motion}
-    if args.rate is not None:  # only when given: the content hashes of earlier runs without it stay valid
-        options["rate"] = args.rate
     where = args.scheduler or f"a local cluster of {args.workers} workers on 127.0.0.1"
     print(f"{len(units)} units on {where}", flush=True)
 
