@@ -6,13 +6,14 @@ import argparse
 import math
 from pathlib import Path
 
-from ..core.cmkf.config import MEASUREMENTS, CmkfConfig
+from ..core.cmkf.config import CmkfConfig
 from ..core.errors import InputError
+from ..pipelines.online.config import CMKF_TUNABLES, CmkfTunable
 from . import results_folder
 from .options import add_out, add_topic
 
-#: The defaults of the options: the CMKF's own.
-_DEFAULTS = CmkfConfig()
+#: The CMKF's fields that are options of this command (``--accel-bias-tau`` …), declared with the node's.
+OPTIONS: tuple[CmkfTunable, ...] = tuple(t for t in CMKF_TUNABLES if t.option)
 
 DESCRIPTION = """\
 Run the online covariance matching Kalman filter (paper 004, generalised to a robot) over a bag with a
@@ -48,36 +49,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="IMU orientation in the base frame: 3 numbers = yaw pitch roll [rad] (static_transform_publisher "
         "order, e.g. -1.5708 0 1.5708) or 4 numbers = quaternion x y z w (default: identity)",
     )
-    p.add_argument("--measurement", choices=MEASUREMENTS, default=_DEFAULTS.measurement,
-                   help=f"twist: body velocity only (wheel odometry); pose_twist: position and velocity "
-                   f"(default {_DEFAULTS.measurement})")
     p.add_argument(
         "--gravity-from", choices=("imu", "odom"), default=None,
         help="orientation used to remove gravity: imu = the Imu messages' own orientation (right on uneven ground; "
         "needs a driver that provides it), odom = the odometry orientation propagated with the gyro (planar wheel "
         "odometry has no roll/pitch). Default: imu when the bag's Imu messages provide an orientation, else odom",
     )
-    p.add_argument("--velocity-noise-std", type=float, default=_DEFAULTS.velocity_noise_std, metavar="M_S",
-                   help="odometry velocity noise σ [m/s] (default: the message covariance, "
-                   f"{_DEFAULTS.default_velocity_noise_std:g} when it is unknown)")
-    p.add_argument("--position-noise-std", type=float, default=_DEFAULTS.position_noise_std, metavar="M",
-                   help="odometry position noise σ [m] (default: the message covariance, "
-                   f"{_DEFAULTS.default_position_noise_std:g} when it is unknown)")
-    p.add_argument("--angular-velocity-noise-std", type=float, default=_DEFAULTS.angular_velocity_noise_std,
-                   metavar="RAD_S", help="odometry angular-velocity noise σ [rad/s] (default: the message covariance, "
-                   f"{_DEFAULTS.default_angular_velocity_noise_std:g} when it is unknown)")
-    p.add_argument("--accel-bias-tau", type=float, default=_DEFAULTS.accel_bias_tau, metavar="S",
-                   help=f"accel bias τ [s] ({_DEFAULTS.accel_bias_tau:g})")
-    p.add_argument("--accel-bias-sigma", type=float, default=_DEFAULTS.accel_bias_sigma, metavar="M_S2",
-                   help=f"accel bias steady-state σ [m/s²] ({_DEFAULTS.accel_bias_sigma:g})")
-    p.add_argument("--s-v0", type=float, default=_DEFAULTS.s_v0, metavar="M2_S3",
-                   help=f"initial S_v [m²/s³] ({_DEFAULTS.s_v0:g})")
-    p.add_argument("--gyro-bias-tau", type=float, default=_DEFAULTS.gyro_bias_tau, metavar="S",
-                   help=f"gyro bias τ [s] ({_DEFAULTS.gyro_bias_tau:g})")
-    p.add_argument("--gyro-bias-sigma", type=float, default=_DEFAULTS.gyro_bias_sigma, metavar="RAD_S",
-                   help=f"gyro bias steady-state σ [rad/s] ({_DEFAULTS.gyro_bias_sigma:g})")
+    add_cmkf_options(p)
     p.add_argument("--no-plot", action="store_true", help="skip cmkf.png")
     p.set_defaults(run=run)
+
+
+def add_cmkf_options(p: argparse.ArgumentParser) -> None:
+    """An option per field of :data:`OPTIONS`: its type, default (the CMKF's), choices, description and unit."""
+    for t in OPTIONS:
+        default = "" if t.default is None else f" (default: {t.default:g})" if t.kind is float \
+            else f" (default: {t.default})"
+        unit = f" [{t.unit}]" if t.unit else ""
+        metavar = None if t.choices else t.unit.upper().replace("/", "_").replace("^", "") or None
+        p.add_argument(f"--{t.field.replace('_', '-')}", type=t.kind, default=t.default, choices=t.choices or None,
+                       metavar=metavar, help=f"{t.description}{unit}{default}")
 
 
 def imu_rotation(values: list[float] | None) -> tuple[float, float, float, float]:
@@ -106,18 +97,8 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_bag
     from ..pipelines.cmkf_replay import DENSITY_FIELDS, SERIES_FIELDS, replay, to_yaml_dict
 
-    config = CmkfConfig(
-        imu_rotation_xyzw=imu_rotation(args.imu_rotation),
-        measurement=args.measurement,
-        velocity_noise_std=args.velocity_noise_std,
-        position_noise_std=args.position_noise_std,
-        angular_velocity_noise_std=args.angular_velocity_noise_std,
-        accel_bias_tau=args.accel_bias_tau,
-        accel_bias_sigma=args.accel_bias_sigma,
-        s_v0=args.s_v0,
-        gyro_bias_tau=args.gyro_bias_tau,
-        gyro_bias_sigma=args.gyro_bias_sigma,
-    )
+    config = CmkfConfig(imu_rotation_xyzw=imu_rotation(args.imu_rotation),
+                        **{t.field: t.value(getattr(args, t.field)) for t in OPTIONS})
     try:
         config.validate()
     except ValueError as exc:

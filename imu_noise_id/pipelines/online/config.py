@@ -1,18 +1,25 @@
 """Parameters of ``imu_noise_id_node``: names, defaults, ranges, units, validation. :data:`PARAMETERS` is the single
 source (ROS ParameterDescriptors, ``config/imu_noise_id.yaml`` kept in sync by a test, :class:`OnlineConfig`
-validation); the CMKF's defaults come from :class:`~imu_noise_id.core.cmkf.config.CmkfConfig`."""
+validation). The CMKF's tunables are declared once, in :data:`CMKF_TUNABLES`: each names a
+:class:`~imu_noise_id.core.cmkf.config.CmkfConfig` field, whose type and default it takes, with its description,
+unit and range; the node's ``cmkf.*`` and ``nis.window`` parameters, the options of ``imu-noise-id cmkf`` and
+:func:`cmkf_config` are made from it."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass, field
+import types
+import typing
+from dataclasses import dataclass
 from typing import Any
 
 from ...core.cmkf.config import GRAVITY_SOURCES, MEASUREMENTS, CmkfConfig
 from ...core.errors import InputError
 
-#: The CMKF's defaults (the ``cmkf.*`` and ``nis.window`` parameters take theirs from here).
+#: The CMKF's defaults and field types (the ``cmkf.*`` and ``nis.window`` parameters take theirs from here).
 _CMKF = CmkfConfig()
+_CMKF_TYPES = typing.get_type_hints(CmkfConfig)
 
 
 @dataclass(frozen=True)
@@ -63,6 +70,100 @@ class ParamSpec:
         return None
 
 
+@dataclass(frozen=True)
+class CmkfTunable:
+    """One :class:`CmkfConfig` field a user may set: its description, unit, range and choices; where it is set (a
+    node parameter, an option of ``imu-noise-id cmkf``). Its type and default are the field's."""
+
+    field: str
+    description: str
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    choices: tuple[str, ...] = ()
+    #: The node parameter's name ("": ``cmkf.<field>``; None: not a node parameter).
+    parameter: str | None = ""
+    #: An option ``--<field with dashes>`` of ``imu-noise-id cmkf``.
+    option: bool = False
+    runtime: bool = False
+    #: The node's default where it is not the field's (an optional field's None is the node's 0.0 anyway).
+    node_default: float | None = None
+
+    @property
+    def kind(self) -> type:
+        """The field's type without None (float, int, str or tuple)."""
+        hint = _CMKF_TYPES[self.field]
+        args = [a for a in typing.get_args(hint) if a is not type(None)]
+        base = args[0] if isinstance(hint, types.UnionType) else hint
+        return typing.get_origin(base) or base
+
+    @property
+    def optional(self) -> bool:
+        """The field takes None (the node's 0)."""
+        return type(None) in typing.get_args(_CMKF_TYPES[self.field])
+
+    @property
+    def default(self) -> Any:
+        """The field's default in :class:`CmkfConfig` (None for an optional field left unset)."""
+        return getattr(_CMKF, self.field)
+
+    @property
+    def name(self) -> str:
+        return self.parameter or f"cmkf.{self.field}"
+
+    def spec(self) -> ParamSpec:
+        """The node parameter (an optional field's None is 0.0: "from the messages")."""
+        default = self.node_default if self.node_default is not None else self.default
+        default = self.kind(0 if default is None else default)
+        return ParamSpec(self.name, default, self.description, self.unit, self.low, self.high, self.runtime,
+                         self.choices)
+
+    def value(self, value: Any) -> Any:
+        """The field's value from a parameter or option value (0 or None of an optional field: None)."""
+        if self.optional and not value:
+            return None
+        return tuple(float(v) for v in value) if self.kind is tuple else value
+
+
+#: The CMKF's tunables (the node's parameters in this order).
+CMKF_TUNABLES: tuple[CmkfTunable, ...] = (
+    CmkfTunable("nis_window", "number of filter updates in the normalised-innovation-squared window", "updates", 10,
+                100000, parameter="nis.window", runtime=True),
+    CmkfTunable("imu_rotation_xyzw", "orientation of the IMU frame in the base frame (child_frame_id of the "
+                "odometry), quaternion x y z w"),
+    CmkfTunable("measurement", "odometry used by the CMKF: twist (body velocity, right for wheel odometry) or "
+                "pose_twist (position and velocity, paper 004 eq. 8)", choices=MEASUREMENTS, option=True),
+    CmkfTunable("gravity_source", "orientation for gravity compensation: odometry (its orientation, propagated with "
+                "the gyro) or imu (the Imu message's orientation)", choices=GRAVITY_SOURCES),
+    CmkfTunable("accel_bias_tau", "correlation time of the accelerometer bias (paper 004 eq. 3)", "s", 1.0, 1e7,
+                option=True),
+    CmkfTunable("accel_bias_sigma", "steady-state standard deviation of the accelerometer bias", "m/s^2", 1e-6,
+                100.0, option=True),
+    CmkfTunable("s_v0", "initial velocity-random-walk PSD S_v", "m^2/s^3", 1e-12, 10.0, option=True),
+    CmkfTunable("gyro_bias_tau", "correlation time of the gyro bias", "s", 1.0, 1e7, option=True),
+    CmkfTunable("gyro_bias_sigma", "steady-state standard deviation of the gyro bias", "rad/s", 1e-7, 10.0,
+                option=True),
+    CmkfTunable("s_g0", "initial angle-random-walk PSD S_g", "rad^2/s", 1e-14, 1.0),
+    CmkfTunable("velocity_noise_std", "odometry velocity noise; 0: from the message twist covariance "
+                f"({_CMKF.default_velocity_noise_std:g} m/s when it is unknown)", "m/s", 0.0, 100.0, option=True),
+    CmkfTunable("position_noise_std", "odometry position noise (pose_twist); 0: from the message pose covariance "
+                f"({_CMKF.default_position_noise_std:g} m when it is unknown)", "m", 0.0, 100.0, parameter=None,
+                option=True),
+    CmkfTunable("angular_velocity_noise_std", "odometry angular-velocity noise; 0: from the message covariance "
+                f"({_CMKF.default_angular_velocity_noise_std:g} rad/s when it is unknown)", "rad/s", 0.0, 100.0,
+                option=True),
+    # the node's own default: a ROS graph's two topics differ by more than the core's 0.05 s
+    CmkfTunable("late_odom_tolerance", "IMU samples wait this long before the CMKF so that odometry up to this much "
+                "later (in header time) is still processed in stamp order", "s", 0.0, 5.0,
+                parameter="cmkf.input_latency", runtime=True, node_default=0.1),
+    CmkfTunable("max_odom_gap", "an odometry gap longer than this restarts the S_v estimator chain", "s", 0.01,
+                3600.0),
+    CmkfTunable("max_imu_gap", "an IMU gap longer than this re-initialises position and velocity", "s", 0.001,
+                3600.0),
+)
+_CMKF_SPECS = {t.name: t.spec() for t in CMKF_TUNABLES if t.parameter is not None}
+
+
 PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec("stationary.max_linear_speed", 0.05, "odometry |linear twist| below which the base is still",
               "m/s", 0.0, 10.0),
@@ -111,8 +212,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "m/s^2/sqrt(Hz)", 0.0, 1000.0),
     ParamSpec("noise.min_samples", 200, "stationary samples needed before a noise density is published and "
               "used for the corrected IMU covariance", "samples", 10, 10000000),
-    ParamSpec("nis.window", _CMKF.nis_window, "number of filter updates in the normalised-innovation-squared "
-              "window", "updates", 10, 100000),
+    _CMKF_SPECS["nis.window"],
     ParamSpec("innovations.window", 500, "filter updates in the whiteness and consistency tests of the CMKF's "
               "and the gyro filter's innovations (per axis)", "updates", 50, 100000, runtime=False),
     ParamSpec("innovations.lags", 10, "Ljung-Box lags of the innovation whiteness test (less than a quarter of "
@@ -125,37 +225,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               runtime=False),
     ParamSpec("log_throttle", 5.0, "minimum time between two log lines about the same input problem", "s",
               0.0, 3600.0),
-    ParamSpec("cmkf.imu_rotation_xyzw", _CMKF.imu_rotation_xyzw, "orientation of the IMU frame in the base frame "
-              "(child_frame_id of the odometry), quaternion x y z w", runtime=False),
-    ParamSpec("cmkf.measurement", _CMKF.measurement, "odometry used by the CMKF: twist (body velocity, right for "
-              "wheel odometry) or pose_twist (position and velocity, paper 004 eq. 8)", runtime=False,
-              choices=MEASUREMENTS),
-    ParamSpec("cmkf.gravity_source", _CMKF.gravity_source, "orientation for gravity compensation: odometry (its "
-              "orientation, propagated with the gyro) or imu (the Imu message's orientation)", runtime=False,
-              choices=GRAVITY_SOURCES),
-    ParamSpec("cmkf.accel_bias_tau", _CMKF.accel_bias_tau, "correlation time of the accelerometer bias (paper 004 "
-              "eq. 3)", "s", 1.0, 1e7, runtime=False),
-    ParamSpec("cmkf.accel_bias_sigma", _CMKF.accel_bias_sigma, "steady-state standard deviation of the "
-              "accelerometer bias", "m/s^2", 1e-6, 100.0, runtime=False),
-    ParamSpec("cmkf.s_v0", _CMKF.s_v0, "initial velocity-random-walk PSD S_v", "m^2/s^3", 1e-12, 10.0,
-              runtime=False),
-    ParamSpec("cmkf.gyro_bias_tau", _CMKF.gyro_bias_tau, "correlation time of the gyro bias", "s", 1.0, 1e7,
-              runtime=False),
-    ParamSpec("cmkf.gyro_bias_sigma", _CMKF.gyro_bias_sigma, "steady-state standard deviation of the gyro bias",
-              "rad/s", 1e-7, 10.0, runtime=False),
-    ParamSpec("cmkf.s_g0", _CMKF.s_g0, "initial angle-random-walk PSD S_g", "rad^2/s", 1e-14, 1.0, runtime=False),
-    ParamSpec("cmkf.velocity_noise_std", 0.0, "odometry velocity noise; 0: from the message twist covariance "
-              f"({_CMKF.default_velocity_noise_std:g} m/s when it is unknown)", "m/s", 0.0, 100.0, runtime=False),
-    ParamSpec("cmkf.angular_velocity_noise_std", 0.0, "odometry angular-velocity noise; 0: from the message "
-              f"covariance ({_CMKF.default_angular_velocity_noise_std:g} rad/s when it is unknown)", "rad/s", 0.0,
-              100.0, runtime=False),
-    # CmkfConfig.late_odom_tolerance; the node's own default: a ROS graph's two topics differ by more than 0.05 s
-    ParamSpec("cmkf.input_latency", 0.1, "IMU samples wait this long before the CMKF so that odometry up to "
-              "this much later (in header time) is still processed in stamp order", "s", 0.0, 5.0),
-    ParamSpec("cmkf.max_odom_gap", _CMKF.max_odom_gap, "an odometry gap longer than this restarts the S_v "
-              "estimator chain", "s", 0.01, 3600.0, runtime=False),
-    ParamSpec("cmkf.max_imu_gap", _CMKF.max_imu_gap, "an IMU gap longer than this re-initialises position and "
-              "velocity", "s", 0.001, 3600.0, runtime=False),
+    *(spec for name, spec in _CMKF_SPECS.items() if name.startswith("cmkf.")),
     ParamSpec("hypotheses.enabled", True, "run the Bayesian hypothesis bank on stationary samples",
               runtime=False),
     ParamSpec("hypotheses.file", "", "hypothesis-set YAML (empty: the packaged config/hypotheses_default.yaml)",
@@ -175,30 +245,91 @@ PARAMETERS: tuple[ParamSpec, ...] = (
 PARAMETER_BY_NAME: dict[str, ParamSpec] = {p.name: p for p in PARAMETERS}
 
 
-@dataclass
+def _validated(values: dict[str, Any]) -> dict[str, Any]:
+    """Every parameter's value: ``values`` over the defaults, checked (InputError naming the first bad one), ints of
+    float parameters as floats, tuples of floats."""
+    merged = {p.name: p.default for p in PARAMETERS}
+    unknown = sorted(set(values) - set(merged))
+    if unknown:
+        raise InputError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(merged))}")
+    merged.update(values)
+    for name, value in merged.items():
+        spec = PARAMETER_BY_NAME[name]
+        if type(spec.default) is float and isinstance(value, int) and not isinstance(value, bool):
+            merged[name] = float(value)
+        reason = spec.check(merged[name])
+        if reason:
+            raise InputError(f"parameter {reason}")
+        if type(spec.default) is tuple:
+            merged[name] = tuple(float(v) for v in merged[name])
+    return merged
+
+
+@dataclass(frozen=True, init=False)
 class OnlineConfig:
-    """Validated parameter values; attribute names are the parameter names with dots replaced by ``_``."""
+    """Validated parameter values, one field per parameter of :data:`PARAMETERS` (its name with dots replaced by
+    ``_``; the defaults and ranges are there). ``OnlineConfig(values)``: ``values`` (by parameter name) over the
+    defaults; InputError for an unknown name or an invalid value."""
 
-    values: dict[str, Any] = field(default_factory=lambda: {p.name: p.default for p in PARAMETERS})
+    stationary_max_linear_speed: float
+    stationary_max_angular_speed: float
+    stationary_max_gyro_rate: float
+    stationary_max_gyro_std: float
+    stationary_max_accel_std: float
+    stationary_window: float
+    stationary_enter_delay: float
+    stationary_guard: float
+    stationary_require_odometry: bool
+    odom_timeout: float
+    gap_factor: float
+    backward_reset_count: int
+    stale_timeout: float
+    expected_imu_rate: float
+    expected_odom_rate: float
+    imu_range_gyro: float
+    imu_range_accel: float
+    expected_gyro_bias_max: float
+    expected_accel_bias_max: float
+    expected_gyro_noise_density_max: float
+    expected_accel_noise_density_max: float
+    noise_min_samples: int
+    nis_window: int
+    innovations_window: int
+    innovations_lags: int
+    innovations_alpha: float
+    publish_rate: float
+    diagnostics_period: float
+    log_throttle: float
+    cmkf_imu_rotation_xyzw: tuple[float, ...]
+    cmkf_measurement: str
+    cmkf_gravity_source: str
+    cmkf_accel_bias_tau: float
+    cmkf_accel_bias_sigma: float
+    cmkf_s_v0: float
+    cmkf_gyro_bias_tau: float
+    cmkf_gyro_bias_sigma: float
+    cmkf_s_g0: float
+    cmkf_velocity_noise_std: float
+    cmkf_angular_velocity_noise_std: float
+    cmkf_input_latency: float
+    cmkf_max_odom_gap: float
+    cmkf_max_imu_gap: float
+    hypotheses_enabled: bool
+    hypotheses_file: str
+    hypotheses_bank_rate: float
+    executor: str
+    stats_file: str
+    imu_queue_depth: int
+    odom_queue_depth: int
 
-    def __post_init__(self) -> None:
-        merged = {p.name: p.default for p in PARAMETERS}
-        unknown = sorted(set(self.values) - set(merged))
-        if unknown:
-            raise InputError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(merged))}")
-        merged.update(self.values)
-        for name, value in merged.items():
-            spec = PARAMETER_BY_NAME[name]
-            if type(spec.default) is float and isinstance(value, int) and not isinstance(value, bool):
-                merged[name] = float(value)
-            reason = spec.check(merged[name])
-            if reason:
-                raise InputError(f"parameter {reason}")
-            if type(spec.default) is tuple:
-                merged[name] = tuple(float(v) for v in merged[name])
-        self.values = merged
-        for name, value in merged.items():
-            setattr(self, PARAMETER_BY_NAME[name].attr, value)
+    def __init__(self, values: dict[str, Any] | None = None) -> None:
+        for name, value in _validated(dict(values or {})).items():
+            object.__setattr__(self, PARAMETER_BY_NAME[name].attr, value)  # a frozen dataclass's own way
+
+    @property
+    def values(self) -> dict[str, Any]:
+        """Every parameter's value by parameter name."""
+        return {p.name: getattr(self, p.attr) for p in PARAMETERS}
 
     def updated(self, changes: dict[str, Any]) -> OnlineConfig:
         """A new configuration with ``changes`` applied; InputError for an unknown name, an invalid value or a
@@ -210,26 +341,16 @@ class OnlineConfig:
         return OnlineConfig({**self.values, **changes})
 
 
+if [f.name for f in dataclasses.fields(OnlineConfig)] != [p.attr for p in PARAMETERS]:
+    raise ImportError("OnlineConfig's fields must be PARAMETERS' attribute names, in their order")
+
+
 def cmkf_config(config: OnlineConfig) -> CmkfConfig:
-    """The CMKF's parameters from ``cmkf.*`` and ``nis.window`` (0 noise std: from the messages;
-    ``cmkf.input_latency`` is ``late_odom_tolerance``); InputError naming the parameter of an invalid combination."""
-    cmkf = CmkfConfig(
-        imu_rotation_xyzw=tuple(config.cmkf_imu_rotation_xyzw),
-        measurement=config.cmkf_measurement,
-        gravity_source=config.cmkf_gravity_source,
-        accel_bias_tau=config.cmkf_accel_bias_tau,
-        accel_bias_sigma=config.cmkf_accel_bias_sigma,
-        s_v0=config.cmkf_s_v0,
-        gyro_bias_tau=config.cmkf_gyro_bias_tau,
-        gyro_bias_sigma=config.cmkf_gyro_bias_sigma,
-        s_g0=config.cmkf_s_g0,
-        velocity_noise_std=config.cmkf_velocity_noise_std or None,
-        angular_velocity_noise_std=config.cmkf_angular_velocity_noise_std or None,
-        max_odom_gap=config.cmkf_max_odom_gap,
-        max_imu_gap=config.cmkf_max_imu_gap,
-        late_odom_tolerance=config.cmkf_input_latency,
-        nis_window=config.nis_window,
-    )
+    """The CMKF's parameters from ``cmkf.*`` and ``nis.window`` (:data:`CMKF_TUNABLES`: 0 noise std: from the
+    messages; ``cmkf.input_latency`` is ``late_odom_tolerance``); InputError naming the parameter of an invalid
+    combination."""
+    cmkf = CmkfConfig(**{t.field: t.value(getattr(config, t.spec().attr)) for t in CMKF_TUNABLES
+                         if t.parameter is not None})
     try:
         cmkf.validate()
     except ValueError as exc:
