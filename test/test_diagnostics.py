@@ -411,3 +411,21 @@ def test_the_score_test_is_the_drop_in_residual_sum_of_squares(missing, n_nuisan
     st = score_test(e, x, z)
     assert st.statistic == pytest.approx(rss_z - rss_zx, rel=1e-9)
     np.testing.assert_allclose(st.coef, coef_zx[n_nuisance:], rtol=1e-9)
+
+
+def test_a_line_refined_past_the_nyquist_frequency_is_sized_in_the_last_bin():
+    """A peak whose parabola puts it beyond the Nyquist frequency (the innovations of a model whose spectrum vanishes
+    there, a digital low-pass's, rise towards it) is refined within the last bin; before, its search interval was
+    reversed and the refit that diagnosed it failed ("The lower bound exceeds the upper bound")."""
+    from imu_noise_id.core.diagnostics.detectors import _sinusoid
+    from imu_noise_id.core.diagnostics.residuals import SpectralPeak
+    from imu_noise_id.core.diagnostics.whitening import WhiteningFilter
+    from imu_noise_id.core.noise.components import WN
+
+    n, dt = 4000, 0.01
+    e = np.random.default_rng(0).standard_normal(n) + 3.0 * np.cos(np.pi * np.arange(n))
+    resolution = 1.0 / (n * dt)
+    peak = SpectralPeak(frequency=0.5 / dt + 0.3 * resolution, bin=n // 2, ratio=1e3, statistic=700.0,
+                        log10_p=-300.0, n_bins=n // 2)
+    found = _sinusoid(e, dt, WhiteningFilter.from_components([WN(1.0)], dt), peak, alpha=0.01)
+    assert found.significant and found.params["frequency"] <= 0.5 / dt

@@ -148,11 +148,12 @@ def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: Spectr
     # peak: a line of fixed frequency removed at the bin's frequency leaves a residual line behind (the phase
     # drifts by π·δf·T across the record), which the loop would otherwise model a second time.
     resolution = 1.0 / (t.size * dt)
-    best = optimize.minimize_scalar(lambda f: -test_at(f).statistic, method="bounded",
-                                    bounds=(max(peak.frequency - resolution, resolution),
-                                            min(peak.frequency + resolution, 0.5 / dt - resolution)),
+    upper = min(peak.frequency + resolution, 0.5 / dt - resolution)
+    lower = min(max(peak.frequency - resolution, resolution), upper)  # a peak in the Nyquist bin: the last bin
+    best = optimize.minimize_scalar(lambda f: -test_at(f).statistic, method="bounded", bounds=(lower, upper),
                                     options={"xatol": 1e-3 * resolution})
-    frequency = float(best.x) if -best.fun > test_at(peak.frequency).statistic else peak.frequency
+    start = min(peak.frequency, upper)
+    frequency = float(best.x) if -best.fun > test_at(start).statistic else start
     st = test_at(frequency)
     amplitude = float(np.hypot(*st.coef))
     return Finding(
