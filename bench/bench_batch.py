@@ -24,9 +24,10 @@ from pathlib import Path
 
 from imu_noise_id.batch import discover_units, open_client, run_batch
 from imu_noise_id.cli import main as cli
+from imu_noise_id.pipelines.analyze import AnalyzeOptions
 
 MODEL = "gyro: WN(1.7e-4)+GM(tau=300, sigma=2e-5)+RW(2e-5); accel: WN(2e-3)+RW(3e-4)"
-OPTIONS = {"model": "auto", "loop": True, "per_decade": 8, "allow_motion": False}
+OPTIONS = AnalyzeOptions()  # analyze's defaults (model selection, the loop, 8 τ per decade)
 
 
 def timed_batch(units, out: Path, workers: int) -> tuple[float, float, int]:
