@@ -1,12 +1,13 @@
 """The numbers users paste (Kalibr's noise density N and random walk K) from a fitted model, with 95 % intervals (beyond
 paper 000).
 
-- **N** [u/√Hz] = √(Σ N_i²) over WN, LPF, MA and short-memory OSCs (:func:`is_short_memory_osc`; memory below
+- **N** [u/√Hz] = √(Σ N_i²) over WN, LPF, DLPF, MA and short-memory OSCs (:func:`is_short_memory_osc`; memory below
   :func:`~..noise.resonant.filter_memory_limit`), each N_i the sampled zero-frequency density
   √(dt·Σ_j R(j)) (:meth:`~.Component.zero_frequency_density`); narrow OSCs, GMs, slow LPFs, BI and sinusoids never
   enter. Interval by the delta method.
 - **K** [u/s/√Hz]: the RW's density with its interval, or *not identifiable* (None) without an RW.
-- **Per-sample variance** [u²] at dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt) + σ²_OSC (short-memory OSCs).
+- **Per-sample variance** [u²] at dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt) + R_DLPF(0) + σ²_OSC (short-memory
+  OSCs).
 
 Why: docs/em.md, "Why the intervals, starts and Kalibr numbers are computed as they are".
 """
@@ -19,7 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..noise.base import Component
-from ..noise.components import LPF, MA, OSC, RW, WN
+from ..noise.components import DLPF, LPF, MA, OSC, RW, WN
 from ..noise.modelspec import parameter_labels
 from ..noise.resonant import filter_memory_limit
 from .differences import derivative_in_domain
@@ -76,12 +77,13 @@ def is_short_memory_osc(c: Component, dt: float) -> bool:
 def is_slow_lpf(c: Component, dt: float) -> bool:
     """Whether ``c`` is an LPF whose memory 1/(2πf_c) is at or beyond :func:`~..noise.resonant.filter_memory_limit`: a
     GM by another name, kept out of N."""
-    return isinstance(c, LPF) and c.memory(dt)[0] >= filter_memory_limit(dt)
+    return isinstance(c, (LPF, DLPF)) and c.memory(dt)[0] >= filter_memory_limit(dt)
 
 
 def enters_n(c: Component, dt: float) -> bool:
     """Whether ``c`` is white noise or short-memory noise white below its corner (module docstring)."""
-    return isinstance(c, (WN, MA)) or (isinstance(c, LPF) and not is_slow_lpf(c, dt)) or is_short_memory_osc(c, dt)
+    return (isinstance(c, (WN, MA)) or (isinstance(c, (LPF, DLPF)) and not is_slow_lpf(c, dt))
+            or is_short_memory_osc(c, dt))
 
 
 def passband_density(components: list[Component], dt: float) -> float | None:
@@ -185,14 +187,14 @@ def random_walk(fit: FitResult) -> KalibrValue:
 
 def per_sample_noise_variance(fit: FitResult) -> float:
     """Variance per sample [u²] of the high-frequency noise at the fit's dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt)
-    + σ² of each short-memory OSC (module docstring)."""
+    + R_DLPF(0) + σ² of each short-memory OSC (module docstring)."""
     total = 0.0
     for c in fit.components:
         if isinstance(c, WN):
             total += c.noise_density**2 / fit.dt
         elif isinstance(c, LPF) and not is_slow_lpf(c, fit.dt):
             total += math.pi * c.noise_density**2 * c.cutoff
-        elif isinstance(c, MA):
+        elif isinstance(c, (MA, DLPF)) and not is_slow_lpf(c, fit.dt):
             total += c.per_sample(fit.dt)["sigma2_per_sample"]
         elif is_short_memory_osc(c, fit.dt):
             total += c.sigma**2

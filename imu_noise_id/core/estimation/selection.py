@@ -9,6 +9,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..allan import AllanResult
+from ..allan.slopes import rolloff_end
 from ..diagnostics.av_signatures import flicker_level
 from ..errors import InputError
 from ..noise.components import Component
@@ -42,12 +43,15 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
     """Default candidates plus RR when the AV (one column, up to τ = N·dt/4) rises like τ² at its long-τ end, QN
     when it falls like τ⁻² at its short-τ end, WN+BI+RW (flicker noise) when the AV above the white-noise line
     through its first τ is flat over a decade of τ or more (the closed loop's rule,
-    :func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`)."""
+    :func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`), WN+DLPF+RW (the sensor's digital low-pass,
+    second order) when the AV's shortest τ show its roll-off (:func:`~imu_noise_id.core.allan.slopes.rolloff_end`)."""
     cands = list(DEFAULT_CANDIDATES)
     keep = allan.m <= starts.MAX_FRACTION * allan.n
     tau, avar = allan.tau[keep], allan.variance[keep, 0]
     if tau.size >= 4 and flicker_level(tau, avar - avar[0] * tau[0] / tau) is not None:
         cands.append("WN+BI+RW")
+    if rolloff_end(allan):
+        cands.append("WN+DLPF+RW")
     if tau.size >= 4:
         slope_hi = np.polyfit(np.log(tau[-3:]), np.log(avar[-3:]), 1)[0]
         slope_lo = np.polyfit(np.log(tau[:3]), np.log(avar[:3]), 1)[0]

@@ -17,7 +17,7 @@ from scipy.optimize import least_squares
 from ..allan import AllanResult, allan_variance
 from ..errors import InputError
 from ..noise import units
-from ..noise.components import BI, GM, LPF, MA, OSC, QN, RR, RW, WN, Component, total_allan_variance
+from ..noise.components import BI, DLPF, GM, LPF, MA, OSC, QN, RR, RW, WN, Component, total_allan_variance
 from ..noise.flicker import PLATEAU, band_for_record
 
 #: The starting-value fit uses the AV at averaging factors m ≤ this fraction of the record.
@@ -57,11 +57,13 @@ def _guess(names: list[str], av: _Curve, gm_taus: list[float], osc_frequencies: 
     white = math.sqrt(a0 * t0)
     for name in names:
         if name == "WN":
-            comps.append(WN(white * (0.3 if "LPF" in names or "MA" in names else 0.8)))
+            comps.append(WN(white * (0.3 if {"LPF", "DLPF", "MA"} & set(names) else 0.8)))
         elif name == "LPF":
             comps.append(LPF(white, 1.0 / (2.0 * math.pi * 2.0 * dt)))
         elif name == "MA":
             comps.append(MA(white))
+        elif name == "DLPF":
+            comps.append(DLPF(white, 0.25 / dt))
         elif name == "OSC":
             f0 = next(osc_iter, 0.25 / dt)
             level = float(np.interp(math.log(min(max(0.37 / f0, t0), t_end)), np.log(tau), a))

@@ -174,10 +174,11 @@ def _fixed_initial_covariance(blk: StateBlock, r: float) -> np.ndarray:
 
 
 def validate_structure(names: list[str]) -> None:
-    """Raise InputError unless the structure is identifiable: exactly one WN; at most one QN, RW, RR, LPF, MA, BI."""
+    """Raise InputError unless the structure is identifiable: exactly one WN; at most one QN, RW, RR, LPF, DLPF, MA,
+    BI."""
     if names.count("WN") != 1:
         raise InputError(f"model {'+'.join(names) or '(empty)'} needs exactly one WN component (white noise)")
-    for single in ("QN", "RW", "RR", "LPF", "MA", "BI"):
+    for single in ("QN", "RW", "RR", "LPF", "DLPF", "MA", "BI"):
         if names.count(single) > 1:
             raise InputError(f"model {'+'.join(names)} has {single} more than once; it is not identifiable")
 

@@ -18,6 +18,7 @@ from scipy.signal import lfilter
 from . import units
 from .averaging import MA
 from .base import Component, StateBlock, as_freq, as_tau
+from .digital import DLPF
 from .flicker import BI
 from .resonant import LPF, OSC
 from .sampled import block_sum_variance, sampled_allan_variance
@@ -285,7 +286,7 @@ class RR(Component):
 
 
 #: Registry of component types by spec name.
-COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, GM, RR, LPF, OSC, BI, MA)}
+COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, GM, RR, LPF, DLPF, OSC, BI, MA)}
 
 
 def total_allan_variance(components: list[Component], tau: np.ndarray, dt: float) -> np.ndarray:

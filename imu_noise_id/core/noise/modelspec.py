@@ -21,7 +21,7 @@ from ..errors import InputError
 from .components import COMPONENT_TYPES, Component
 
 #: Order in which components are listed in canonical model names.
-CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "MA", "QN", "BI", "GM", "OSC", "RW", "RR")
+CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "DLPF", "MA", "QN", "BI", "GM", "OSC", "RW", "RR")
 
 
 def gauss_markov_fastest_first(components: list[Component]) -> list[Component]:

@@ -1,0 +1,183 @@
+"""The sensor's digital low-pass (DLPF): white noise of passband density N through a Butterworth filter of order n
+designed by the bilinear transform at the sampling rate, as MEMS parts apply it on chip (beyond papers 000/002).
+
+w_k white of variance σ² = N²/dt, y = H(z) w with H = B(z)/A(z) = ``scipy.signal.butter(n, f_c, fs=1/dt)``:
+H(1) = 1, so the two-sided PSD at 0 Hz is σ²·dt = N² exactly, and S(f) = N²|H(e^{i2πf dt})|² — zero at the
+Nyquist frequency (the bilinear transform's zeros at z = −1), which no sampled continuous-time filter (LPF, OSC)
+reproduces. Parameters: N [u/√Hz] and f_c [Hz] (the −3 dB frequency, 0 < f_c < 1/(2 dt)); the order n is a
+structure value (``DLPF(n=4)`` in a spec), not estimated.
+
+Block (direct form II, n + 1 states, no feed-through): the bilinear transform puts every zero at z = −1, so
+B(z) = b₀(1 + z⁻¹)ⁿ; with s_k = b₀w_k − Σ_i a_i s_{k−i}, y_k = Σ_{i=0..n} C(n, i) s_{k−i}: states [s_k … s_{k−n}],
+Φ the companion matrix of A, Q = diag(b₀²σ², 0 …) (its first element free: the EM's M-step updates it; f_c by the
+quasi-Newton search), H the binomial coefficients C(n, i) — independent of the parameters, as the state-space
+engines expect of H.
+
+Autocovariance R(j) = σ² Σ_k h_k h_{k+j} from the impulse response h (run until it has decayed below 10⁻¹⁴ of
+its peak); S(m) = Var(y_1 + … + y_m) = m R(0) + 2 Σ_{j<m} (m − j) R(j), exact up to the response's length J and
+m(R(0) + 2 Σ R) − 2 Σ j R(j) beyond it; AV(m·dt) = (4 S(m) − S(2m))/(2m²).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from scipy import optimize, signal
+
+from . import units
+from .base import Component, StateBlock, as_freq, as_tau
+
+#: Orders a DLPF may have.
+ORDERS = (1, 2, 3, 4)
+#: The impulse response is run until it stays below this share of its peak.
+DECAY = 1e-14
+#: ... and for at most this many samples.
+MAX_RESPONSE = 1 << 20
+
+
+@functools.lru_cache(maxsize=256)
+def _design(order: int, cutoff_per_sample: float) -> tuple[np.ndarray, np.ndarray]:
+    """(b, a) of the Butterworth low-pass of ``order`` at ``cutoff_per_sample`` = f_c·dt (< ½)."""
+    b, a = signal.butter(order, 2.0 * cutoff_per_sample)
+    return np.asarray(b, dtype=float), np.asarray(a, dtype=float)
+
+
+@functools.lru_cache(maxsize=64)
+def _covariance(order: int, cutoff_per_sample: float) -> np.ndarray:
+    """R(j)/σ² for j = 0 … J−1 (module docstring)."""
+    b, a = _design(order, cutoff_per_sample)
+    radius = max(float(np.max(np.abs(np.roots(a)))), 1e-3)
+    length = int(min(MAX_RESPONSE, max(64, math.ceil(math.log(DECAY) / math.log(radius)) + 4 * order)))
+    impulse = np.zeros(length)
+    impulse[0] = 1.0
+    h = signal.lfilter(b, a, impulse)
+    size = 1 << math.ceil(math.log2(2 * length))
+    spectrum = np.fft.rfft(h, size)
+    return np.fft.irfft(spectrum * np.conj(spectrum), size)[:length]
+
+
+@dataclass(frozen=True)
+class DLPF(Component):
+    """White noise of passband density N [u/√Hz] through an n-th order digital Butterworth low-pass at f_c [Hz]
+    (module docstring)."""
+
+    noise_density: float
+    cutoff: float
+    order: int = 2
+
+    name: ClassVar[str] = "DLPF"
+    parameter_names: ClassVar[tuple[str, ...]] = ("noise_density", "cutoff")
+    parameter_units: ClassVar[dict[str, str]] = {"noise_density": "u/sqrt(Hz)", "cutoff": "Hz"}
+    fixed_names: ClassVar[tuple[str, ...]] = ("order",)
+
+    def __post_init__(self) -> None:
+        units._check_positive("noise_density", self.noise_density)
+        units._check_positive("cutoff", self.cutoff, allow_zero=False)
+        if int(self.order) != self.order or int(self.order) not in ORDERS:
+            raise ValueError(f"DLPF order must be one of {ORDERS}, got {self.order!r}")
+        object.__setattr__(self, "order", int(self.order))
+
+    def _per_sample(self, dt: float) -> float:
+        x = self.cutoff * dt
+        if not 0.0 < x < 0.5:
+            raise ValueError(f"DLPF cutoff {self.cutoff:g} Hz must lie below the Nyquist frequency {0.5 / dt:g} Hz")
+        return x
+
+    def coefficients(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """(b, a) of the filter at period ``dt`` [s]."""
+        return _design(self.order, self._per_sample(dt))
+
+    def sigma2(self, dt: float) -> float:
+        """Variance σ² = N²/dt [u²] of the white noise driving the filter."""
+        return self.noise_density**2 / dt
+
+    def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+        b, a = self.coefficients(dt)
+        warm = _covariance(self.order, self._per_sample(dt)).size
+        w = rng.standard_normal(n + warm) * math.sqrt(self.sigma2(dt))
+        return signal.lfilter(b, a, w)[warm:]
+
+    def block(self, dt: float) -> StateBlock:
+        b, a = self.coefficients(dt)
+        p = self.order + 1
+        phi = np.zeros((p, p))
+        phi[0, : self.order] = -a[1:]
+        phi[1:, :-1] = np.eye(p - 1)
+        q = np.zeros((p, p))
+        q[0, 0] = b[0] ** 2 * self.sigma2(dt)
+        q_free = np.zeros((p, p), bool)
+        q_free[0, 0] = True
+        h = np.array([math.comb(self.order, i) for i in range(p)], dtype=float)
+        return StateBlock(phi=phi, q=q, h=h, u=np.zeros(p), phi_free=np.zeros((p, p), bool), q_free=q_free,
+                          u_free=np.zeros(p, bool))
+
+    def autocovariance(self, lags: np.ndarray, dt: float) -> np.ndarray:
+        """R(j) [u²] at integer lags (0 beyond the response's length)."""
+        r = _covariance(self.order, self._per_sample(dt)) * self.sigma2(dt)
+        j = np.abs(np.asarray(lags, dtype=int))
+        return np.where(j < r.size, r[np.minimum(j, r.size - 1)], 0.0)
+
+    def block_sum_variance(self, m: np.ndarray, dt: float) -> np.ndarray:
+        """S(m) = Var(y_1 + … + y_m) [u²] at integer m ≥ 0 (module docstring)."""
+        r = _covariance(self.order, self._per_sample(dt)) * self.sigma2(dt)
+        j = np.arange(r.size)
+        # S(m) = m R0 + 2 Σ_{j=1}^{m−1} (m − j) R(j) = m (R0 + 2 C1(m)) − 2 C2(m), C1, C2 the prefix sums of R, jR
+        c1 = np.concatenate([[0.0], np.cumsum(r[1:])])
+        c2 = np.concatenate([[0.0], np.cumsum(j[1:] * r[1:])])
+        m = np.rint(np.asarray(m, dtype=float)).astype(np.int64)
+        k = np.clip(m - 1, 0, r.size - 1)
+        return np.where(m > 0, m * (r[0] + 2.0 * c1[k]) - 2.0 * c2[k], 0.0)
+
+    def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
+        m = np.rint(as_tau(tau) / dt)
+        return (4.0 * self.block_sum_variance(m, dt) - self.block_sum_variance(2.0 * m, dt)) / (2.0 * m * m)
+
+    def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
+        """K(u) = −½ S(|u|) (the base class's convention for stationary components)."""
+        return -0.5 * self.block_sum_variance(np.abs(np.asarray(lag, dtype=float)), dt)
+
+    def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
+        b, a = self.coefficients(dt)
+        _, response = signal.freqz(b, a, worN=2.0 * math.pi * as_freq(f) * dt)
+        return self.noise_density**2 * np.abs(response) ** 2
+
+    def zero_frequency_density(self, dt: float) -> float:
+        """N exactly (H(1) = 1)."""
+        return self.noise_density
+
+    def memory(self, dt: float) -> tuple[float, float, float]:
+        _, a = self.coefficients(dt)
+        poles = np.roots(a)
+        decay = -dt / np.log(np.maximum(np.abs(poles), 1e-300))
+        angle = np.abs(np.angle(poles))
+        period = float(2.0 * math.pi * dt / np.max(angle)) if np.max(angle) > 0 else math.inf
+        return float(np.max(decay)), float(np.min(decay)), period
+
+    def per_sample(self, dt: float) -> dict[str, float]:
+        r0 = float(_covariance(self.order, self._per_sample(dt))[0]) * self.sigma2(dt)
+        return {"sigma2_dlpf": self.sigma2(dt), "sigma2_per_sample": r0}
+
+    @classmethod
+    def from_per_sample(cls, dt: float, **values: float) -> DLPF:
+        return cls(math.sqrt(units._check_positive("sigma2_dlpf", values["sigma2_dlpf"]) * dt), values["cutoff"],
+                   int(values.get("order", 2)))
+
+    @classmethod
+    def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> DLPF:
+        """The DLPF whose companion matrix is ``phi``: f_c solved from its first coefficient a₁ (monotonic in f_c for
+        a Butterworth), N = √(Q₀₀·dt)/b₀."""
+        order = phi.shape[0] - 1
+        a1 = -float(phi[0, 0])
+
+        def gap(x: float) -> float:
+            return float(_design(order, x)[1][1]) - a1
+
+        lo, hi = 1e-9, 0.5 - 1e-9
+        x = optimize.brentq(gap, lo, hi, xtol=1e-14) if gap(lo) * gap(hi) < 0 else (lo if abs(gap(lo)) < abs(
+            gap(hi)) else hi)
+        b0 = float(_design(order, x)[0][0])
+        return cls(math.sqrt(max(float(q[0, 0]), 0.0) * dt) / b0, x / dt, order)
