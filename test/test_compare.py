@@ -118,3 +118,53 @@ def test_the_command_says_within_degraded_or_refused(reference_dir, tmp_path, ca
     assert "200 Hz" in err and "100 Hz" in err and "Traceback" not in err
     assert main(["compare", str(tmp_path / "same"), "--reference", str(tmp_path)]) == 2
     assert "imu.yaml" in capsys.readouterr().err
+
+
+def _standing_identifier(watch, gyro_z_ratio_after: float | None, seconds: float = 240.0, seed: int = 4):
+    """An OnlineIdentifier fed ``seconds`` of a standing IMU at 200 Hz (gyro N 1e-3, accel N 1e-2); from half-time on
+    gyro_z's density multiplied by ``gyro_z_ratio_after`` (None: unchanged)."""
+    from imu_noise_id.pipelines.online import OnlineIdentifier
+
+    rng = np.random.default_rng(seed)
+    ident = OnlineIdentifier(watch=watch)
+    dt = 0.005
+    n = int(seconds / dt)
+    for k in range(n):
+        scale = np.array([1e-3, 1e-3, 1e-3, 1e-2, 1e-2, 1e-2]) / math.sqrt(dt)
+        if gyro_z_ratio_after is not None and k >= n // 2:
+            scale[2] *= gyro_z_ratio_after
+        y = rng.standard_normal(6) * scale + np.array([0.002, 0.0, 0.0, 0.0, 0.0, 9.81])
+        ident.process_imu(100.0 + k * dt, tuple(y[:3]), tuple(y[3:]))
+    return ident
+
+
+def _watch(rate_hz: float = 200.0):
+    from imu_noise_id.pipelines.online.watch import ReferenceWatch
+
+    refs = {a: AxisReference(1e-3 if a in GYRO_AXES else 1e-2, ((0.98e-3, 1.02e-3) if a in GYRO_AXES
+                                                              else (0.98e-2, 1.02e-2))) for a in AXES}
+    return ReferenceWatch(refs, rate_hz, "calibration", ratio=1.5, false_alarms_per_hour=0.1)
+
+
+def test_the_online_watch_flags_gyro_z_within_a_minute_and_says_since_when():
+    from imu_noise_id.pipelines.online import OK, WARN
+
+    quiet = {s.name: s for s in _standing_identifier(_watch(), None).diagnostics(0.0, 1.0)}
+    assert quiet["Reference watch (gyro)"].level == OK and quiet["Reference watch (accel)"].level == OK
+    ident = _standing_identifier(_watch(), 1.5)
+    statuses = {s.name: s for s in ident.diagnostics(0.0, 1.0)}
+    gyro = statuses["Reference watch (gyro)"]
+    assert gyro.level == WARN and "gyro_z noise up" in gyro.message
+    alarm = ident.watch.axes()["gyro_z"].alarm
+    assert 220.0 <= alarm.time_s <= 280.0 and abs(alarm.since_s - 220.0) < 20.0  # the change at 100 + 120 s
+    assert float(gyro.values["gyro_z_density_ratio"]) == pytest.approx(1.5, rel=0.1)
+    assert statuses["Reference watch (accel)"].level == OK
+
+
+def test_a_reference_from_another_rate_is_refused_with_what_differs():
+    from imu_noise_id.pipelines.online import ERROR
+
+    statuses = {s.name: s for s in _standing_identifier(_watch(100.0), None, seconds=20.0).diagnostics(0.0, 1.0)}
+    assert statuses["Reference watch (gyro)"].level == ERROR
+    assert "100 Hz" in statuses["Reference watch (gyro)"].message and "200 Hz" in statuses[
+        "Reference watch (gyro)"].message

@@ -33,9 +33,9 @@ def _load(path: Path) -> dict:
     try:
         doc = yaml.safe_load(path.read_text())
     except (OSError, yaml.YAMLError) as exc:
-        raise InputError(f"--reference: cannot read {path} ({exc}): give the folder `analyze` wrote") from None
+        raise InputError(f"reference: cannot read {path} ({exc}): give the folder `analyze` wrote") from None
     if not isinstance(doc, dict):
-        raise InputError(f"--reference: {path} is not an analyze output (no mapping at its top)")
+        raise InputError(f"reference: {path} is not an analyze output (no mapping at its top)")
     return doc
 
 
@@ -68,6 +68,8 @@ def read_reference(path: str | Path) -> Reference:
         No readable imu.yaml, or one without per-axis noise densities.
     """
     path = Path(path)
+    if not path.exists():
+        raise InputError(f"reference: {path} does not exist: give the folder `analyze` wrote (or its imu.yaml)")
     folder = path if path.is_dir() else path.parent
     imu = _load(folder / "imu.yaml")
     model = _load(folder / "model.yaml").get("axes", {}) if (folder / "model.yaml").exists() else {}
@@ -79,12 +81,12 @@ def read_reference(path: str | Path) -> Reference:
             value = float(imu[f"{key}_xyz"][i])
             ci = tuple(float(v) for v in imu.get(f"{key}_ci_xyz", [[math.nan, math.nan]] * 3)[i])
         except (KeyError, IndexError, TypeError, ValueError):
-            raise InputError(f"--reference: {folder / 'imu.yaml'} has no per-axis {key}_xyz: give the folder "
+            raise InputError(f"reference: {folder / 'imu.yaml'} has no per-axis {key}_xyz: give the folder "
                              "`analyze` wrote") from None
         entry = model.get(axis, {})
         components = _components(entry["final"]) if "final" in entry else None
         axes[axis] = AxisReference(value, ci, components, _known_lines(entry))
     rate = imu.get("update_rate")
     if not isinstance(rate, (int, float)) or not rate > 0:
-        raise InputError(f"--reference: {folder / 'imu.yaml'} has no update_rate")
+        raise InputError(f"reference: {folder / 'imu.yaml'} has no update_rate")
     return Reference(axes, float(rate), imu.get("rostopic"), folder)

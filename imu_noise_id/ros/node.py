@@ -25,7 +25,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, Temperature
 from std_msgs.msg import Float64MultiArray
 
@@ -33,6 +33,8 @@ from ..core.axes import AXES
 from ..core.errors import InputError
 from ..pipelines.online import PARAMETERS, OnlineConfig, OnlineIdentifier
 from ..pipelines.online.config import ParamSpec
+from ..pipelines.online.watch import ReferenceWatch
+from ..report.reference import read_reference
 from ..resources import read_hypotheses_file
 from .messages import labelled_layout
 
@@ -93,7 +95,7 @@ class ImuNoiseIdNode(Node):
             values[spec.name] = param.value
         config = OnlineConfig(values)  # InputError names a bad value
         hypotheses = read_hypotheses_file(config.hypotheses_file or None) if config.hypotheses_enabled else None
-        self.identifier = OnlineIdentifier(config, hypotheses)
+        self.identifier = OnlineIdentifier(config, hypotheses, self._reference_watch(config))
         self.add_pre_set_parameters_callback(self._integers_as_doubles)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         cfg = self.identifier.config
@@ -110,6 +112,10 @@ class ImuNoiseIdNode(Node):
         self.pub_hypotheses = self.create_publisher(Float64MultiArray, "~/hypotheses", 10)
         self.pub_imu = self.create_publisher(Imu, "~/imu_corrected", cfg.imu_queue_depth)
         self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                             reliability=ReliabilityPolicy.RELIABLE)
+        self.pub_health = (self.create_publisher(DiagnosticArray, "~/health", latched)
+                           if self.identifier.watch is not None else None)
 
         self.create_subscription(Imu, IMU_INPUT, self._on_imu, _sensor_qos(cfg.imu_queue_depth))
         self.create_subscription(Odometry, ODOM_INPUT, self._on_odom, _sensor_qos(cfg.odom_queue_depth))
@@ -126,6 +132,19 @@ class ImuNoiseIdNode(Node):
         stale = self.stale_imu_remap()
         if stale:
             self.get_logger().warning(stale)
+
+    def _reference_watch(self, config: OnlineConfig) -> ReferenceWatch | None:
+        """The watch against ``reference`` (None when empty); an unreadable reference is logged and reported on
+        /diagnostics (ERROR), the node runs on."""
+        if not config.reference:
+            return None
+        options = {"ratio": config.watch_ratio, "false_alarms_per_hour": config.watch_false_alarms_per_hour}
+        try:
+            ref = read_reference(config.reference)
+        except InputError as exc:
+            self.get_logger().error(f"reference: {exc}")
+            return ReferenceWatch(None, math.nan, config.reference, error=str(exc), **options)
+        return ReferenceWatch(ref.axes, ref.rate_hz, str(ref.source), **options)
 
     def stale_imu_remap(self) -> str:
         """A warning when ``-r imu:=TOPIC`` (the IMU input's old name) remaps to a topic the node does not listen
@@ -334,6 +353,10 @@ class ImuNoiseIdNode(Node):
                 values=[KeyValue(key=k, value=v) for k, v in s.values.items()],
             ))
         self._send(self.pub_diag, array)
+        if self.pub_health is not None:
+            health = DiagnosticArray(header=array.header)
+            health.status = [s for s in array.status if s.name.endswith(("(gyro)", "(accel)"))]
+            self._send(self.pub_health, health)
 
 
 def _diag9(variance: tuple[float, float, float]) -> np.ndarray:

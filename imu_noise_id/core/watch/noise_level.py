@@ -68,6 +68,17 @@ def threshold(false_alarms_per_hour: float, increments_per_s: float) -> float:
     return math.log(max(3600.0 * increments_per_s / false_alarms_per_hour, math.e))
 
 
+def directions(v_ref: float, v_interval: tuple[float, float], ratio: float) -> list[tuple[str, float, float]]:
+    """(direction, a, b) of each CUSUM, its increment s = a + b·d² (module docstring); a direction whose change lies
+    inside the reference's interval is left out (nothing to tell apart)."""
+    v_lo, v_hi = v_interval
+    out = []
+    for direction, v0, v1 in (("up", v_hi, ratio**2 * v_ref), ("down", v_lo, v_ref / ratio**2)):
+        if (direction == "up" and v1 > v0) or (direction == "down" and v1 < v0):
+            out.append((direction, 0.5 * math.log(v0 / v1), 0.5 * (1.0 / v0 - 1.0 / v1)))
+    return out
+
+
 def pair_differences(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(d_k, index of the pair's second sample) over disjoint pairs with both samples finite."""
     y = np.asarray(y, dtype=float)
@@ -125,10 +136,8 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
     h = threshold(false_alarms_per_hour, 0.5 / dt)
     d2 = d * d
     alarms = []
-    for direction, v0, v1 in (("up", v_hi, ratio**2 * v_ref), ("down", v_lo, v_ref / ratio**2)):
-        if (direction == "up" and v1 <= v0) or (direction == "down" and v1 >= v0):
-            continue  # the reference's interval is wider than the change: nothing to tell apart
-        found = _cusum_alarm(0.5 * math.log(v0 / v1) + 0.5 * d2 * (1.0 / v0 - 1.0 / v1), h)
+    for direction, a, b in directions(v_ref, v_interval, ratio):
+        found = _cusum_alarm(a + b * d2, h)
         if found is not None:
             alarms.append(LevelAlarm(direction, float(index[found[0]] * dt), float(index[found[1]] * dt)))
     alarm = min(alarms, key=lambda a: a.time_s) if alarms else None

@@ -232,6 +232,12 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               runtime=False),
     ParamSpec("hypotheses.bank_rate", 10.0, "rate of the bank's samples: the IMU samples are block-averaged to "
               "it (exact averaged models)", "Hz", 0.01, 1000.0, runtime=False),
+    ParamSpec("reference", "", "results folder (or its imu.yaml) of an analyze of this IMU: while stationary, each "
+              "axis's noise density is watched against it (empty: no watch)", runtime=False),
+    ParamSpec("watch.ratio", 1.5, "noise-density ratio (live/reference, either way) the reference watch is tuned to",
+              "", 1.01, 100.0, runtime=False),
+    ParamSpec("watch.false_alarms_per_hour", 0.1, "false alarms per hour of stationary data the reference watch "
+              "allows per axis and direction", "1/h", 1e-9, 3600.0, runtime=False),
     ParamSpec("executor", "events", "rclpy executor: events (rclpy.experimental.EventsExecutor, about twice the "
               "message throughput) or single_threaded", runtime=False, choices=("events", "single_threaded")),
     ParamSpec("stats_file", "", "when set, every callback's processing time is kept and a JSON summary "
@@ -317,6 +323,9 @@ class OnlineConfig:
     hypotheses_enabled: bool
     hypotheses_file: str
     hypotheses_bank_rate: float
+    reference: str
+    watch_ratio: float
+    watch_false_alarms_per_hour: float
     executor: str
     stats_file: str
     imu_queue_depth: int

@@ -4,9 +4,10 @@ Per IMU sample: (1) :class:`~.inputs.Input` checks values and stamps (rejects co
 the stamps waits for the next; a gap ends the stationary stretch; a restarted time line forgets nothing), and
 :class:`~.inputs.SaturationCheck` flags full-scale samples; (2) :class:`~.cmkf_feed.CmkfFeed` gets it
 ``cmkf.input_latency`` later, in stamp order with the odometry; (3) :class:`~.stationarity.StationaryGate`
-(hysteresis, guard delay); (4) stationary samples out of the guard go to :class:`~.noise.StationaryNoise` and
-:class:`~.bank.BankFeed`; (5) the sample comes back bias-corrected with covariance N²·f (None while unknown).
-Odometry goes to the stationarity and the CMKF. Plain numbers in, dataclasses out (the node only converts).
+(hysteresis, guard delay); (4) stationary samples out of the guard go to :class:`~.noise.StationaryNoise`,
+:class:`~.bank.BankFeed` and, with a reference, :class:`~.watch.ReferenceWatch`; (5) the sample comes back bias-
+corrected with covariance N²·f (None while unknown). Odometry goes to the stationarity and the CMKF. Plain numbers
+in, dataclasses out (the node only converts).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from .status import (
     stamp_status,
     stationarity_status,
 )
+from .watch import ReferenceWatch
 
 
 class OnlineIdentifier:
@@ -50,6 +52,7 @@ class OnlineIdentifier:
     ----------
     config : validated parameters (:data:`~.config.PARAMETERS`).
     hypotheses : the parsed hypothesis-set mapping and its source name; None: no hypothesis bank.
+    watch : the watch against this IMU's reference (:mod:`.watch`), fed the stationary samples; None: no watch.
 
     Attributes
     ----------
@@ -64,9 +67,10 @@ class OnlineIdentifier:
     """
 
     def __init__(self, config: OnlineConfig | None = None,
-                 hypotheses: tuple[Mapping[str, Any], str] | None = None) -> None:
+                 hypotheses: tuple[Mapping[str, Any], str] | None = None, watch: ReferenceWatch | None = None) -> None:
         self.config = config = config or OnlineConfig()
         self._hypotheses = hypotheses
+        self.watch = watch
         self.events = EventLog()
         self.imu = Input("imu", config, self.events)
         self.odom = Input("odom", config, self.events)
@@ -135,6 +139,8 @@ class OnlineIdentifier:
             self._new_time_line()
         elif verdict == "gap":  # no difference across it; a short one (a driver's pause between bursts of host-
             self.noise.break_chain()  # stamped messages) leaves the stationarity and the bank's stretch alone
+            if self.watch is not None:
+                self.watch.break_chain()
             if t - self.last_imu_t > self.config.stationary_window:
                 self._end_stationary()
                 self.stationarity.interrupt()
@@ -151,6 +157,8 @@ class OnlineIdentifier:
             self.noise.add(t_s, y)
             if self.bank is not None:
                 self.bank.add(t_s, y)
+            if self.watch is not None:
+                self.watch.add(t_s, y, self.imu.stamps.period)
         return self._corrected(t, sample, source)
 
     def _new_time_line(self) -> None:
@@ -174,6 +182,8 @@ class OnlineIdentifier:
         self.noise.break_chain()
         if self.bank is not None:
             self.bank.end_stretch()
+        if self.watch is not None:
+            self.watch.break_chain()
 
     def process_odometry(
         self, t: float, linear_velocity: tuple[float, float, float], angular_velocity: tuple[float, float, float],
@@ -309,6 +319,7 @@ class OnlineIdentifier:
                               [] if self.bank is None else self.bank.decision_changes),
             range_status(cfg, est),
             processing_status(self.processing_time, self.identification_time),
+            *(self.watch.statuses() if self.watch is not None else []),
         ]
         for source in (self.imu, self.odom, self.temperature):
             source.stats.window_received = 0
