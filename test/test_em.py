@@ -305,3 +305,20 @@ def test_select_model_winner_is_at_the_maximum_its_interval_search_found():
                for k in np.geomspace(3e-6, 3e-4, 41))
     assert best.loglik >= grid - 0.05
     assert best.better_loglik is None or best.better_loglik <= best.loglik + 0.05
+
+
+def test_the_score_at_a_white_noise_of_exactly_zero_is_a_domain_error():
+    """A profile search that drives the white noise beside a digital low-pass to 0.0 asks for the gradient there: a
+    ValueError (outside the domain, which the searches step back from), not a ZeroDivisionError that ended the whole
+    analysis."""
+    from imu_noise_id.core.noise.digital import DLPF
+
+    dt = 0.005
+    y = simulate_sum([WN(1e-4), DLPF(1e-3, 12.0)], 5000, dt, np.random.default_rng(2))
+    model = ss.from_components([WN(1e-4), DLPF(1e-3, 12.0)], dt)
+    z = np.ones((y.size, 1))
+    _, _, stats = kalman.profile_and_smooth(model, y, z)
+    sums = em.sums_from_stats(stats, em.DataSums.of(y, z))
+    zero = ss.from_components([WN(0.0), DLPF(1e-3, 12.0)], dt)
+    with pytest.raises(ValueError, match="white-noise variance is zero"):
+        em.MatrixScore.at(zero, sums)

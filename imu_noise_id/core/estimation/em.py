@@ -214,6 +214,8 @@ class MatrixScore:
     def at(cls, model: StateSpace, s: Sums) -> MatrixScore:
         """The gradient at θ_E's ``model`` from its E-step sums ``s`` (class docstring)."""
         r = float(model.r)
+        if not r * r > 0.0:  # a white noise driven to (numerically) zero beside a filter that carries it: no score
+            raise ValueError("the white-noise variance is zero: the likelihood's gradient is not defined there")
         g_r = -0.5 * (s.n_obs / r - _measurement_sse(model, s) / r**2)
         p = model.n_states
         g_phi, g_q = np.zeros((p, p)), np.zeros((p, p))
