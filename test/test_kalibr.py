@@ -83,3 +83,38 @@ def test_a_fitted_white_noise_and_broad_osc_give_n_within_a_few_per_cent_with_an
     assert n.value == pytest.approx(truth, rel=0.03)
     assert n.ci95[0] < truth < n.ci95[1]
     assert fit.components[0].noise_density < 0.9 * truth  # the white noise alone: the N this replaced
+
+
+def test_a_walk_the_record_does_not_identify_is_given_as_its_upper_end():
+    """K whose 95 % interval reaches zero is given as that interval's upper end, method ``bound``, interval (0, it):
+    on 10 min at 200 Hz of WN (1e-3) + RW (1e-5) the fits gave K = 1e-7 and 1e-10 on two axes — 100× below the
+    truth, not a bound."""
+    from imu_noise_id.core.estimation.kalibr import KalibrValue, unidentified_as_bound
+
+    low = unidentified_as_bound(KalibrValue(1.0e-10, (0.0, 1.5e-5), "RW"))
+    assert (low.value, low.ci95, low.method) == (1.5e-5, (0.0, 1.5e-5), "bound") and "reaches zero" in low.source
+    kept = KalibrValue(2e-5, (1.1e-5, 4.5e-5), "RW")
+    assert unidentified_as_bound(kept) is kept
+    none = KalibrValue(None, (math.nan, math.nan), "no RW")
+    assert unidentified_as_bound(none) is none
+
+
+def test_a_short_record_gives_k_as_a_bound_at_or_above_the_truth_and_says_so():
+    from imu_noise_id.core.allan import allan_variance
+    from imu_noise_id.core.axes import ImuSeries
+    from imu_noise_id.core.noise.components import RW, WN, simulate_sum
+    from imu_noise_id.pipelines.analyze.final import final_model
+    from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
+    from imu_noise_id.report.console import final_table
+
+    dt = 0.005
+    y = simulate_sum([WN(1e-3), RW(1e-5)], 120_000, dt, np.random.default_rng(3))
+    data = np.column_stack([y] * 6)
+    imu = ImuSeries(np.arange(y.size) * dt, data[:, :3], data[:, 3:])
+    allan = allan_variance(y, dt)
+    final = final_model(fit_axis(imu, "gyro_x", ModelStage("WN+RW"), dt, allan).fit, None, allan)
+    k = final.random_walk
+    assert k.method == "bound" and k.ci95 == (0.0, k.value) and k.value >= 1e-5
+    assert not final.random_walk_above_bound
+    printed = final_table({"gyro_x": final})
+    assert "K <" in printed and "K not identified by this 10 min record" in printed

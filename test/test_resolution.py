@@ -16,7 +16,7 @@ from imu_noise_id.core.axes import AXES, GYRO_AXES
 from imu_noise_id.core.estimation.kalibr import KalibrValue
 from imu_noise_id.core.noise.components import RW, WN
 from imu_noise_id.core.simulation.static import simulate_static_imu
-from imu_noise_id.pipelines.analyze import AnalyzeOptions, analyze
+from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
 from imu_noise_id.pipelines.analyze.resolution import PASSBAND_FACTOR, passband_disagreement
 from imu_noise_id.report.analysis import write_analysis
 from imu_noise_id.report.console import final_table
@@ -53,8 +53,9 @@ def test_an_upper_bound_reading_disagrees_only_with_an_n_above_it():
 @pytest.fixture(scope="module")
 def filtered(tmp_path_factory):
     """5 min at 200 Hz: accel_y's white noise through a digital 2nd-order Butterworth low-pass at 12 Hz (a consumer
-    part's DLPF), the other axes WN + RW. A first-order GM takes accel_y's filtered noise beside a white noise
-    driven to ~0 (N ≈ 8·10⁻¹⁰ before this rule), and the loop's verdict fails."""
+    part's DLPF) with no white floor after it, the other axes WN + RW; the structure given, WN+GM (as the model
+    selection chose before it offered the DLPF): the GM takes accel_y's filtered noise beside a white noise driven
+    to ~0 (N ≈ 8·10⁻¹⁰), and the loop's verdict fails."""
     model = {a: [WN(1.7e-4), RW(2e-5)] if a in GYRO_AXES else [WN(2e-3), RW(3e-4)] for a in AXES}
     imu = simulate_static_imu(model, RATE, 300.0, seed=52)
     rng = np.random.default_rng(52)
@@ -62,7 +63,7 @@ def filtered(tmp_path_factory):
     accel = imu.accel.copy()
     accel[:, 1] = signal.sosfilt(signal.butter(2, 12.0, fs=RATE, output="sos"), white)[2000:]
     imu = replace(imu, accel=accel)
-    result = analyze(imu, options=AnalyzeOptions(jobs=1))
+    result = analyze(imu, options=AnalyzeOptions(models=ModelStage("WN+GM"), jobs=1))
     out = tmp_path_factory.mktemp("filtered")
     write_analysis(result, out, rostopic="/imu/data", meta={})
     return result, out

@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     folder.report()
     print(summary_table(result.static), flush=True)
     if result.finals:
-        print(final_table(result.finals), flush=True)
+        print(final_table(result.finals, result.static), flush=True)
     if any(m.comparison is not None for m in result.models.values()):
         print(comparison_table(result.models), flush=True)
     finals = {axis: final.fit for axis, final in result.finals.items()} or result.fits

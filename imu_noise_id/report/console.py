@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from ..core.axes import UNITS
+from ..core.estimation.kalibr import walk_crossing_tau
 from ..core.estimation.results import FitResult
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
@@ -46,7 +47,7 @@ def summary_table(result: StaticAnalysis) -> str:
     return "\n".join(lines)
 
 
-def final_table(finals: dict[str, FinalModel]) -> str:
+def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = None) -> str:
     """Per axis the final model, N and K with 95 % intervals (imu.yaml's Kalibr numbers); below, each K above what
     the long-τ AV supports, with its source's reason."""
     lines = ["Final models (imu.yaml's numbers; N = passband white noise, K = random walk, B = bias instability, "
@@ -55,14 +56,47 @@ def final_table(finals: dict[str, FinalModel]) -> str:
         n, k = f.noise_density, f.random_walk
         n_text = "n/a" if n.value is None else f"{_fmt(n.value)} [{_fmt(n.ci95[0])}, {_fmt(n.ci95[1])}]"
         k_text = ("not identifiable (see imu.yaml *_allan)" if k.value is None
-                  else f"{_fmt(k.value)} [{_fmt(k.ci95[0])}, {_fmt(k.ci95[1])}]")
+                  else f"{'<' if k.method != 'model' else ''}{_fmt(k.value)} [{_fmt(k.ci95[0])}, {_fmt(k.ci95[1])}]")
         b = f.bias_instability
         b_text = ("" if b.reached else "<") + f"{_fmt(b.value)} [{_fmt(b.ci95[0])}, {_fmt(b.ci95[1])}]"
         lines.append(f"{axis:8s} {f.model:22s} N {n_text:34s} K {k_text:34s} B {b_text}")
     lines += [f"{axis:8s} K flagged: {f.random_walk.source}" for axis, f in finals.items() if f.random_walk_above_bound]
     lines += [f"{axis:8s} N and K unresolved (upper bounds: the overbound's): {f.unresolved}"
               for axis, f in finals.items() if f.unresolved]
+    lines += short_for_walk_lines(finals, static)
     return "\n".join(lines)
+
+
+def short_for_walk_lines(finals: dict[str, FinalModel], static: StaticAnalysis | None = None) -> list[str]:
+    """Per axis whose record is too short for K — K given as a bound (its interval reaches zero, or the final model
+    has no random walk and the Allan slope gives a bound), or the walk crossing the white-noise floor beyond a third of
+    the record (:func:`~imu_noise_id.core.estimation.kalibr.walk_crossing_tau`) —: that τ, the record length that
+    would identify a walk as large as the value given (three times that τ) and what was given meanwhile. ``static``:
+    the Allan stage, whose slope reading of K is what an axis without a random walk in its final model gives."""
+    lines = []
+    for axis, f in finals.items():
+        n, k, method = f.noise_density.value, f.random_walk.value, f.random_walk.method
+        if k is None and static is not None and axis in static.slopes:
+            walk = static.slopes[axis].random_walk
+            k, method = walk.value, ("Allan-slope bound" if walk.method == "upper_bound" else "Allan slope")
+        if not n or not k:
+            continue
+        record = f.fit.n * f.fit.dt
+        crossing = walk_crossing_tau(n, k)
+        bounded = method in ("bound", "unresolved", "Allan-slope bound")
+        if not bounded and crossing <= record / 3.0:
+            continue
+        if bounded:
+            smallest = walk_crossing_tau(n, 1.0) / (record / 3.0)  # K whose walk crosses at a third of the record
+            lines.append(f"{axis:8s} K not identified by this {_duration(record)} record (its interval reaches "
+                         f"zero): a record identifies walks well above 3*sqrt(3)*N/T = {_fmt(smallest)} here, each "
+                         f"tenfold smaller walk needs a tenfold longer record; given: K <= {_fmt(k)} ({method})")
+        else:
+            lines.append(f"{axis:8s} too short for K: the walk of {_fmt(k)} crosses the white-noise floor at tau = "
+                         f"{_duration(crossing)}, beyond a third of this {_duration(record)} record; record "
+                         f"{_duration(3.0 * crossing)} or more to identify it. Given meanwhile: K = {_fmt(k)} "
+                         f"({method})")
+    return lines
 
 
 def loop_table(results: dict[str, LoopResult]) -> str:

@@ -42,8 +42,9 @@ class KalibrValue:
     value : the number [u/√Hz or u/s/√Hz]; None when not identifiable from the record
     ci95 : its 95 % interval (lo, hi); (nan, nan) when the fit holds no uncertainty
     source : which components it comes from, in words
-    method : ``model`` (the fitted components' value) or ``unresolved`` (the model is not trusted for it: the value
-        is an upper bound, the axis's overbound, and ``ci95`` is (0, value))
+    method : ``model`` (the fitted components' value), ``bound`` (not identified by the record: the upper end of its
+        interval, ``ci95`` (0, value)) or ``unresolved`` (the model is not trusted for it: the value is an upper
+        bound, the axis's overbound, and ``ci95`` is (0, value))
     """
 
     value: float | None
@@ -199,3 +200,21 @@ def per_sample_noise_variance(fit: FitResult) -> float:
         elif is_short_memory_osc(c, fit.dt):
             total += c.sigma**2
     return total
+
+
+def unidentified_as_bound(k: KalibrValue) -> KalibrValue:
+    """``k`` as it is when its 95 % interval excludes zero; else (the record does not identify the walk: any K from 0
+    to the upper end fits) the upper end, method ``bound``, interval (0, upper end) — never a point estimate below what
+    the data allow."""
+    if k.value is None or not (k.ci95[0] <= 0.0 and math.isfinite(k.ci95[1]) and k.ci95[1] > 0.0):
+        return k
+    hi = float(k.ci95[1])
+    return KalibrValue(hi, (0.0, hi), f"{k.source}; not identified by this record: its 95 % interval [0, {hi:.3g}] "
+                                      f"reaches zero (the fitted {k.value:.3g} is one of the values it allows), the "
+                                      "upper end given", method="bound")
+
+
+def walk_crossing_tau(noise_density: float, random_walk: float) -> float:
+    """τ [s] where a random walk's Allan variance K²τ/3 crosses white noise's N²/τ: √3·N/K (IEEE Std 952's lines;
+    N [u/√Hz], K [u/s/√Hz]); inf without a walk. A record shorter than three times it cannot identify K."""
+    return math.sqrt(3.0) * noise_density / random_walk if random_walk > 0 else math.inf

@@ -51,8 +51,8 @@ class FinalModel:
 
     @property
     def random_walk_above_bound(self) -> bool:
-        """Whether the final K, a model's value, is above what the data's long-τ AV supports."""
-        return self.unresolved is None and self.random_walk_bound.exceeded_by(self.random_walk.value)
+        """Whether the final K, a model's value (not a bound), is above what the data's long-τ AV supports."""
+        return self.random_walk.method == "model" and self.random_walk_bound.exceeded_by(self.random_walk.value)
 
 
 def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResult) -> FinalModel:
@@ -75,8 +75,8 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
     tau_max = fit.n * fit.dt / 10.0
     supported = allan.tau <= tau_max
     bound = random_walk_bound(allan, tau_min=tau_max)
-    k, n = kalibr.random_walk(fit), kalibr.noise_density(fit)
-    if bound.exceeded_by(k.value):
+    k, n = kalibr.unidentified_as_bound(kalibr.random_walk(fit)), kalibr.noise_density(fit)
+    if k.method == "model" and bound.exceeded_by(k.value):
         k = replace(k, source=f"{k.source}; {bound.excess(k.value)}; a longer record tells them apart")
     if short is not None:
         k, n = (replace(v, source=f"{v.source}; the fit is not at the likelihood's maximum") for v in (k, n))
