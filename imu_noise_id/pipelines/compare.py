@@ -2,7 +2,8 @@
 
 Every axis is tested against the reference's (:func:`~imu_noise_id.core.watch.compare.compare_axis`: noise level by
 CUSUM, bias step, new line); the recording must be static (:func:`~imu_noise_id.core.stillness.static_check`) and
-at the reference's rate (within :data:`RATE_TOLERANCE`), else it is refused with what differs.
+at the reference's rate (:func:`~imu_noise_id.core.watch.compare.rate_mismatch`), else it is refused with what
+differs.
 """
 
 from __future__ import annotations
@@ -12,11 +13,8 @@ from dataclasses import dataclass, field
 from ..core.axes import ImuSeries
 from ..core.errors import InputError
 from ..core.stillness import static_check
-from ..core.watch.compare import AxisComparison, AxisReference, compare_axis
+from ..core.watch.compare import AxisComparison, AxisReference, compare_axis, rate_mismatch
 from ..core.watch.noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO
-
-#: Largest relative difference between the recording's rate and the reference's.
-RATE_TOLERANCE = 0.02
 
 
 @dataclass(frozen=True)
@@ -46,11 +44,9 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
     if period.refusal is not None:
         raise InputError(f"compare: {period.refusal}")
     dt = period.value
-    rate = 1.0 / dt
-    if abs(rate - rate_hz) > RATE_TOLERANCE * rate_hz:
-        raise InputError(f"compare: the recording is at {rate:.6g} Hz, the reference at {rate_hz:.6g} Hz: compare "
-                         "against an analysis of a recording at the same rate (densities per sample and the "
-                         "sensor's filter depend on it)")
+    mismatch = rate_mismatch(1.0 / dt, rate_hz, "")
+    if mismatch is not None:
+        raise InputError(f"compare: {mismatch}")
     check = static_check(imu, dt)
     if check.flags:
         raise InputError("compare: the recording does not look static (" + "; ".join(check.flags) + "): give the "

@@ -29,6 +29,8 @@ from ..noise.base import Component
 from ..noise.components import WN, total_allan_variance
 from .noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO, NoiseLevel, watch_noise_level
 
+#: Largest relative difference between a recording's rate and its reference's.
+RATE_TOLERANCE = 0.02
 #: Relative tolerance of a reference density given without a usable interval (±10 %).
 DEFAULT_TOLERANCE = 0.10
 #: Lines within this many frequency bins of a known line are the known line.
@@ -98,6 +100,16 @@ class AxisComparison:
             p = self.line.params
             out.append(f"new line at {p['frequency']:.4g} Hz (amplitude {p.get('amplitude', math.nan):.3g})")
         return out
+
+
+def rate_mismatch(rate_hz: float, reference_rate_hz: float, source: str) -> str | None:
+    """Why a recording at ``rate_hz`` cannot be compared with a reference made at ``reference_rate_hz`` (from
+    ``source``), or None within :data:`RATE_TOLERANCE`: densities per sample and the sensor's filter depend on it."""
+    if abs(rate_hz - reference_rate_hz) <= RATE_TOLERANCE * reference_rate_hz:
+        return None
+    made = f"the reference {source}" if source else "the reference"
+    return (f"{made} was made at {reference_rate_hz:.6g} Hz, this IMU runs at {rate_hz:.6g} Hz: compare against an "
+            "analysis of a recording at the same rate")
 
 
 def _new_line(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,

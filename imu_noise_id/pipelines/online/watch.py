@@ -7,12 +7,9 @@ period is known."""
 from __future__ import annotations
 
 from ...core.axes import ACCEL_AXES, AXES, GYRO_AXES
-from ...core.watch.compare import AxisReference
+from ...core.watch.compare import AxisReference, rate_mismatch
 from ...core.watch.sequential import AxisWatch, SequentialNoiseWatch
 from .status import ERROR, OK, WARN, DiagnosticStatus
-
-#: Largest relative difference between the IMU's rate and the reference's.
-RATE_TOLERANCE = 0.02
 
 
 class ReferenceWatch:
@@ -31,10 +28,8 @@ class ReferenceWatch:
         if self.refused is not None or period is None:
             return
         if self.watch is None:
-            rate = 1.0 / period
-            if abs(rate - self.rate_hz) > RATE_TOLERANCE * self.rate_hz:
-                self.refused = (f"the reference {self.source} was made at {self.rate_hz:.6g} Hz, this IMU runs at "
-                                f"{rate:.6g} Hz: analyze a recording at this rate")
+            self.refused = rate_mismatch(1.0 / period, self.rate_hz, self.source)
+            if self.refused is not None:
                 return
             v, intervals = [], []
             for axis in AXES:
