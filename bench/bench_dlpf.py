@@ -1,0 +1,148 @@
+"""N behind a sensor's digital low-pass of any order, as ``analyze`` pastes it, this checkout against others.
+
+White noise of passband density N = 10⁻³ through a digital Butterworth low-pass (``scipy.signal.butter``, order 1,
+2 or 4, cutoff 5–100 Hz below 0.4 × the rate), a white floor of a tenth of it after the filter (the ADC's) and a
+random walk K = 2·10⁻⁵. Each record runs ``analyze``'s stages for one axis — the model selection (with intervals),
+the closed loop from its winner, the final model and, where the checkout has it, the resolution of an untrusted
+model (``unresolved``: the overbound of the data's Allan bound) — in each source tree's own process
+(``bench/checkouts.py``), on the same samples. Printed per record and tree: the final model, the pasted N's error
+against the passband level √(N² + floor²), its method, whether its interval holds the level, whether K's interval
+holds the truth, and the CPU time; then per tree: pasted N within 3 % of the passband level, never below half of
+it, K's interval coverage::
+
+    git worktree add ../baseline <commit>
+    .venv/bin/python bench/bench_dlpf.py --baseline ../baseline
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from checkouts import run_in_checkout  # bench/checkouts.py, beside this script
+from scipy import signal
+
+from imu_noise_id.core.noise.components import RW, WN, simulate_sum
+
+ROOT = Path(__file__).resolve().parents[1]
+N_TRUE, FLOOR, K_TRUE = 1e-3, 1e-4, 2e-5
+#: (rate [Hz], cutoff [Hz]) cells; each is run at every order. (1 kHz is left out: a record's loop there took up to
+#: 500 s of CPU at 400 Hz with a fourth-order filter, where seven resonances approximate its shape.)
+CELLS = ((200.0, 5.0), (200.0, 12.0), (200.0, 20.0), (200.0, 40.0), (400.0, 100.0))
+ORDERS = (1, 2, 4)
+
+#: Run in each source tree on one record: one axis through analyze's stages, one JSON line.
+ONE_RECORD = """
+import json, math
+import numpy as np
+from imu_noise_id.core.axes import ImuSeries
+from imu_noise_id.pipelines.analyze.final import final_model
+from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
+from imu_noise_id.pipelines.analyze.static import analyze_static
+from imu_noise_id.pipelines.loop import ImuLoop
+y = np.load({path!r})
+dt = {dt!r}
+data = np.column_stack([y] * 6)
+imu = ImuSeries(np.arange(y.size) * dt, data[:, :3], data[:, 3:])
+static = analyze_static(imu, kinds=("allan",), allow_motion=True)
+allan = static.allan.column(0)
+model = fit_axis(imu, "gyro_x", ModelStage(), dt, allan)
+loop = ImuLoop(imu, None, intervals=True).run("gyro_x", model.fit)
+final = final_model(model.fit, loop, allan)
+method = "model"
+try:
+    from imu_noise_id.pipelines.analyze.overbound import data_overbound
+    from imu_noise_id.pipelines.analyze.resolution import resolved, unresolved_reason
+    why = unresolved_reason(final, loop, static.slopes["gyro_x"].noise_density)
+    if why is not None:
+        final = resolved(final, why, data_overbound(static, "gyro_x"))
+        method = "unresolved"
+except ImportError:
+    pass
+n, k = final.noise_density, final.random_walk
+print(json.dumps({{"model": final.model, "n": n.value, "n_ci": n.ci95, "k": k.value, "k_ci": k.ci95,
+                  "method": method, "passed": loop.passed}}))
+"""
+
+
+def simulate(rate: float, cutoff: float, order: int, minutes: float, seed: int) -> tuple[np.ndarray, float]:
+    """(samples, dt) of one record (module docstring)."""
+    rng = np.random.default_rng(seed)
+    dt = 1.0 / rate
+    n = int(minutes * 60 * rate)
+    warm = int(20 * rate / cutoff) + 1000
+    w = rng.standard_normal(n + warm) * N_TRUE / math.sqrt(dt)
+    y = signal.sosfilt(signal.butter(order, cutoff, fs=rate, output="sos"), w)[warm:]
+    return y + simulate_sum([WN(FLOOR), RW(K_TRUE)], n, dt, rng), dt
+
+
+def _done(log: Path) -> dict[str, tuple[dict, str]]:
+    """The records an earlier run printed: per line head (cell, order, seed, tree) its row and the line."""
+    out = {}
+    for line in log.read_text().splitlines():
+        found = re.match(r"(.{6} Hz order \d cutoff .{5} Hz seed \d+  .{30} )\S+ +N +([-+\d.]+) % \((\w+), "
+                         r"interval holds: (\w+)\)  K interval holds: (\w+)", line)
+        if found:
+            head, err, method, n_held, k_held = found.groups()
+            out[head] = ({"err": float(err) / 100.0, "n_held": n_held == "True", "k_held": k_held == "True",
+                          "method": method}, line)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=1, help="records per cell and order")
+    ap.add_argument("--minutes", type=float, default=5.0)
+    ap.add_argument("--orders", type=int, nargs="+", default=list(ORDERS))
+    ap.add_argument("--baseline", type=Path, action="append", default=[], help="another checkout (repeatable)")
+    ap.add_argument("--resume", type=Path, default=None,
+                    help="an earlier run's output: its records are taken from it, not run again")
+    args = ap.parse_args(argv)
+    done = _done(args.resume) if args.resume else {}
+    sources = [("this checkout", ROOT), *[(f"baseline {p}", p.resolve()) for p in args.baseline]]
+    passband = math.hypot(N_TRUE, FLOOR)
+    print(f"# bench/bench_dlpf.py --seeds {args.seeds} --minutes {args.minutes:g} --orders "
+          f"{' '.join(map(str, args.orders))}; {os.cpu_count()} CPUs; load average before {os.getloadavg()[0]:.2f}")
+    if args.resume:
+        print(f"# records printed by an earlier run ({args.resume.name}) are taken from it, not run again")
+    print(f"# truth: N = {N_TRUE:g} through a digital Butterworth low-pass, a white floor {FLOOR:g} after it, "
+          f"K = {K_TRUE:g}; the passband level sqrt(N^2 + floor^2) = {passband:.4g}")
+    rows: dict[str, list[dict]] = {name: [] for name, _ in sources}
+    with tempfile.TemporaryDirectory() as tmp:
+        for rate, cutoff in CELLS:
+            for order in args.orders:
+                for seed in range(args.seeds):
+                    y, dt = simulate(rate, cutoff, order, args.minutes, 7919 * order + int(rate + cutoff) + seed)
+                    path = str(Path(tmp) / "record.npy")
+                    np.save(path, y)
+                    for name, source in sources:
+                        head = f"{rate:6g} Hz order {order} cutoff {cutoff:5.1f} Hz seed {seed}  {name:30s} "
+                        if head in done:
+                            rows[name].append(done[head][0])
+                            print(done[head][1], flush=True)
+                            continue
+                        cpu, out = run_in_checkout(source, ONE_RECORD.format(path=path, dt=dt), "one record")
+                        err = out["n"] / passband - 1.0 if out["n"] else -1.0
+                        n_held = bool(out["n"]) and out["n_ci"][0] <= passband <= out["n_ci"][1]
+                        k_held = out["k"] is not None and out["k_ci"][0] <= K_TRUE <= out["k_ci"][1]
+                        rows[name].append({"err": err, "n_held": n_held, "k_held": k_held, "method": out["method"]})
+                        print(f"{head}{out['model']:24s} N {100 * err:+9.1f} % ({out['method']}, interval holds: "
+                              f"{n_held})  K interval holds: {k_held}  loop passed: {out['passed']}  CPU {cpu:6.1f} s",
+                              flush=True)
+    for name, _ in sources:
+        r = rows[name]
+        print(f"{name}: N within 3 % of the passband level on {sum(abs(x['err']) <= 0.03 for x in r)} of {len(r)}, "
+              f"below half of it on {sum(x['err'] < -0.5 for x in r)}; unresolved on "
+              f"{sum(x['method'] == 'unresolved' for x in r)}; N's interval holds it on {sum(x['n_held'] for x in r)}; "
+              f"K's interval holds the truth on {sum(x['k_held'] for x in r)}")
+    print(f"load average after {os.getloadavg()[0]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
