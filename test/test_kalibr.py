@@ -118,3 +118,23 @@ def test_a_short_record_gives_k_as_a_bound_at_or_above_the_truth_and_says_so():
     assert not final.random_walk_above_bound
     printed = final_table({"gyro_x": final})
     assert "K <" in printed and "K not identified by this 10 min record" in printed
+
+
+def test_the_allan_reading_that_stands_in_for_k_says_so_with_its_tau_range(tmp_path):
+    """A final model without a random walk gives the Allan-slope K in imu.yaml; its source says it stands in and the
+    τ range it was read over, never silently."""
+    import yaml
+
+    from imu_noise_id.core.axes import AXES
+    from imu_noise_id.core.simulation.static import simulate_static_imu
+    from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
+    from imu_noise_id.report.analysis import write_analysis
+
+    imu = simulate_static_imu({a: [WN(1e-3)] for a in AXES}, 100.0, 300.0, seed=9)
+    result = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN"), loop=False, jobs=1))
+    write_analysis(result, tmp_path, rostopic="/imu/data", meta={})
+    doc = yaml.safe_load((tmp_path / "imu.yaml").read_text())
+    for method, source in zip(doc["gyroscope_random_walk_method_xyz"], doc["gyroscope_random_walk_source_xyz"],
+                              strict=True):
+        assert method.startswith("allan_")
+        assert "given instead: the Allan" in source and "read over tau" in source

@@ -43,7 +43,7 @@ def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
     return doc
 
 
-def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
+def add_final_values(doc: dict, finals: dict[str, FinalModel], result: StaticAnalysis | None = None) -> None:
     """Put the final models' numbers into the Kalibr keys and their per-axis lists, in place.
 
     Per sensor with a final model on all three axes: ``<key>_xyz``, ``<key>_ci_xyz``, ``<key>_method_xyz`` the final
@@ -51,7 +51,8 @@ def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
     ``unresolved``, the overbound's value and (0, value), for an axis :mod:`imu_noise_id.pipelines.analyze.resolution`
     does not trust); the Kalibr key their max; the Allan-slope values moved to ``<key>_allan_xyz`` (with
     ``_allan_ci_xyz``, ``_allan_method_xyz``) and ``<key>_allan``; ``<prefix>_noise_stddev_per_sample_xyz`` the
-    per-sample standard deviation of the high-frequency noise.
+    per-sample standard deviation of the high-frequency noise. Where the Allan-slope reading stands in (``result``
+    given), ``<key>_source_xyz`` says so with the τ range it was read over.
     """
     for sensor, axes in _SENSORS:
         if not all(a in finals for a in axes):
@@ -61,23 +62,25 @@ def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
             for suffix in ("", "_ci", "_method"):
                 doc[f"{key}_allan{suffix}_xyz"] = doc.pop(f"{key}{suffix}_xyz")
             doc[f"{key}_allan"] = doc[key]
-            values, cis, methods = [], [], []
+            values, cis, methods, sources = [], [], [], []
             for i, axis in enumerate(axes):
                 v = getattr(finals[axis], parameter)
                 if v.value is not None:
                     values.append(v.value)
                     cis.append([num(v.ci95[0]), num(v.ci95[1])])
                     methods.append(v.method)
+                    sources.append(v.source)
                 else:  # not identifiable from the record: the Allan-slope reading (a bound when not reached)
                     values.append(doc[f"{key}_allan_xyz"][i])
                     cis.append(list(doc[f"{key}_allan_ci_xyz"][i]))
-                    methods.append("allan_" + ("upper_bound" if doc[f"{key}_allan_method_xyz"][i] == "upper_bound"
-                                               else "slope"))
+                    bound = doc[f"{key}_allan_method_xyz"][i] == "upper_bound"
+                    methods.append("allan_" + ("upper_bound" if bound else "slope"))
+                    sources.append(f"{v.source}; given instead: {_allan_reading(result, axis, parameter, bound)}")
             doc[key] = num(max(values))
             doc[f"{key}_xyz"] = [num(v) for v in values]
             doc[f"{key}_ci_xyz"] = cis
             doc[f"{key}_method_xyz"] = methods
-            doc[f"{key}_source_xyz"] = [getattr(finals[a], parameter).source for a in axes]
+            doc[f"{key}_source_xyz"] = sources
         doc[f"{_PREFIX[sensor]}_noise_stddev_per_sample_xyz"] = [num(finals[a].noise_stddev_per_sample) for a in axes]
         key = f"{_PREFIX[sensor]}_bias_instability"
         model_b = [finals[a].bias_instability for a in axes]
@@ -89,6 +92,16 @@ def add_final_values(doc: dict, finals: dict[str, FinalModel]) -> None:
         doc[f"{key}_allan_xyz"] = [num(b.value) for b in allan_b]
         doc[f"{key}_allan_method_xyz"] = ["allan_minimum" if b.reached else "allan_upper_bound" for b in allan_b]
         doc[f"{_PREFIX[sensor]}_final_model_xyz"] = [finals[a].model for a in axes]
+
+
+def _allan_reading(result: StaticAnalysis | None, axis: str, parameter: str, bound: bool) -> str:
+    """The Allan-slope reading standing in for a model value, in words, with the τ range it was read over."""
+    what = ("the Allan variance's upper bound (its slope line not reached in this record)" if bound
+            else "the Allan-slope reading (its slope line)")
+    if result is None or axis not in result.slopes:
+        return what
+    lo, hi = getattr(result.slopes[axis], parameter).tau_range
+    return f"{what}, read over tau {lo:.3g}–{hi:.3g} s"
 
 
 def _range(values: list[float]) -> str:
@@ -182,7 +195,7 @@ def imu_doc(result: StaticAnalysis, finals: dict[str, FinalModel], rostopic: str
             overbounds: dict[str, AxisOverbound] | None = None) -> dict:
     """The content of ``imu.yaml`` (see the module docstring); with ``overbounds`` its ``overbound:`` section."""
     doc = kalibr_dict(result, rostopic)
-    add_final_values(doc, finals)
+    add_final_values(doc, finals, result)
     if overbounds:
         doc["overbound"] = overbound_dict(overbounds)
     return doc
