@@ -54,12 +54,10 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
     notes = []
     if topic and imu.topic and topic != imu.topic:
         notes.append(f"the reference was made from {topic}, this recording is {imu.topic}")
-    data = {**{a: imu.gyro[:, i] for i, a in enumerate(("gyro_x", "gyro_y", "gyro_z"))},
-            **{a: imu.accel[:, i] for i, a in enumerate(("accel_x", "accel_y", "accel_z"))}}
     axes = {}
     for axis, ref in references.items():
         try:
-            axes[axis] = compare_axis(data[axis], dt, ref, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour)
+            axes[axis] = compare_axis(imu.axis(axis), dt, ref, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour)
         except ValueError as exc:
             raise InputError(f"compare: {axis}: {exc}") from None
     return Comparison(axes, float(imu.t[-1] - imu.t[0]), notes)

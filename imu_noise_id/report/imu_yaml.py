@@ -24,6 +24,12 @@ _PREFIX = {"gyro": "gyroscope", "accel": "accelerometer"}
 _SENSORS = (("gyro", GYRO_AXES), ("accel", ACCEL_AXES))
 
 
+def axis_key(axis: str, parameter: str) -> str:
+    """The imu.yaml key of ``parameter`` for ``axis``'s sensor, e.g. ``gyroscope_noise_density`` for gyro_z (its
+    per-axis lists add ``_xyz``)."""
+    return f"{_PREFIX['gyro' if axis in GYRO_AXES else 'accel']}_{parameter}"
+
+
 def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
     """Kalibr ``imu.yaml`` content from the Allan slopes: its six keys plus per-axis values, CIs and methods."""
     doc: dict = {k: num(v) for k, v in kalibr_parameters(result, KALIBR_COMBINE).items()}

@@ -10,13 +10,12 @@ from pathlib import Path
 
 import yaml
 
-from ..core.axes import ACCEL_AXES, AXES, GYRO_AXES
+from ..core.axes import AXES
 from ..core.errors import InputError
 from ..core.noise.base import Component
 from ..core.noise.components import COMPONENT_TYPES
 from ..core.watch.compare import AxisReference
-
-_PREFIX = {**{a: "gyroscope" for a in GYRO_AXES}, **{a: "accelerometer" for a in ACCEL_AXES}}
+from .imu_yaml import axis_key
 
 
 @dataclass(frozen=True)
@@ -75,7 +74,7 @@ def read_reference(path: str | Path) -> Reference:
     model = _load(folder / "model.yaml").get("axes", {}) if (folder / "model.yaml").exists() else {}
     axes = {}
     for axis in AXES:
-        key = f"{_PREFIX[axis]}_noise_density"
+        key = axis_key(axis, "noise_density")
         i = AXES.index(axis) % 3
         try:
             value = float(imu[f"{key}_xyz"][i])
