@@ -11,7 +11,8 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
 checkout. Printed: per rate, source and ``--jobs`` value, wall time, CPU time (user + system of the analyze process
 and of the worker processes it reaped) and peak memory: the largest RSS of one process and the largest sum of the
-RSS of the analyze process and its workers (sampled every 0.1 s).
+RSS of the analyze process and its workers (sampled every 0.1 s). Each checkout runs without the BLAS thread-count
+variables in its environment, as from a user's shell.
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ import psutil
 from checkouts import check_imports_own_package  # bench/checkouts.py, beside this script
 
 ROOT = Path(__file__).resolve().parents[1]
+#: Left out of the environment the checkouts run in (:func:`_user_environment`).
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 MODEL = "gyro: WN(1.7e-4)+GM(tau=300, sigma=2e-5)+RW(2e-5); accel: WN(2e-3)+RW(3e-4)"
 
 
@@ -46,12 +49,18 @@ def _tree_rss(pid: int) -> int:
     return total
 
 
+def _user_environment() -> dict[str, str]:
+    """This process's environment without the BLAS thread-count variables (``make`` sets one): each checkout runs
+    with what a user's shell gives it, and sets its own threads or not."""
+    return {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
+
+
 def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None) -> tuple[float, float, float, float]:
     """(wall [s], CPU [s], peak RSS of one process [MiB], peak summed RSS of the process tree [MiB]) of
     ``python -m imu_noise_id analyze`` run in ``source`` (with ``--jobs`` when given), after checking that it imports
     the package of ``source``."""
     check_imports_own_package(source, "analyze")
-    env = dict(os.environ, PYTHONPATH=str(source))
+    env = dict(_user_environment(), PYTHONPATH=str(source))
     cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out)]
     start = time.perf_counter()
     proc = subprocess.Popen(cmd + ([] if jobs is None else ["--jobs", str(jobs)]), cwd=source,
@@ -82,7 +91,8 @@ def main(argv: list[str] | None = None) -> int:
     mine = [("this checkout", None)] if args.jobs is None else [(f"this checkout, --jobs {j}", j) for j in args.jobs]
     sources = [(name, ROOT, jobs) for name, jobs in mine] + [(f"baseline {p}", p.resolve(), None)
                                                               for p in args.baseline]
-    print(f"analyze, default options; {os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}")
+    print(f"analyze, default options, no BLAS thread-count variable set; {os.cpu_count()} CPUs; load average before: "
+          f"{os.getloadavg()[0]:.2f}")
     with tempfile.TemporaryDirectory() as tmp:
         for rate in args.rates:
             bag = Path(tmp) / f"static_{rate:g}hz"

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..core.errors import InputError
+from . import blas_threads  # noqa: F401  (before .options, which loads numpy)
 from .options import resolve_out
 
 if TYPE_CHECKING:
