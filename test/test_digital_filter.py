@@ -12,6 +12,7 @@ from scipy import linalg, signal
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.estimation import kalibr
+from imu_noise_id.core.estimation.model import NoiseModel
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
 from imu_noise_id.core.noise.digital import DLPF
 from imu_noise_id.core.noise.modelspec import parse_model
@@ -88,3 +89,24 @@ def test_the_selection_fits_a_second_order_dlpf_and_pastes_its_passband_level():
     passband = math.hypot(1e-3, 1e-4)
     assert n_hat.value == pytest.approx(passband, rel=0.03)
     assert n_hat.ci95[0] <= passband <= n_hat.ci95[1]
+
+
+@pytest.mark.parametrize(("order", "rate", "cutoff"), [(1, 200.0, 12.0), (3, 200.0, 12.0), (4, 200.0, 12.0),
+                                                      (4, 200.0, 40.0), (4, 400.0, 100.0)])
+def test_the_fit_takes_the_filters_order(order, rate, cutoff):
+    """5 min through a Butterworth of ``order`` (a white floor and a random walk beside it): the fit of WN+DLPF+RW ends
+    at that order (chosen among the starts by the Whittle likelihood; before, every DLPF was of the second order and
+    the loop added resonances for the rest of the roll-off), and N is within 4 % of the passband level. At a quarter
+    of the rate the AV's start had put the white floor at ~0, and from there the Whittle fits had taken the filter of
+    the first order with its cutoff at the Nyquist frequency (N 10⁵ low)."""
+    dt = 1.0 / rate
+    rng = np.random.default_rng(12 + order)
+    n = int(300 * rate)
+    w = rng.standard_normal(n + 4000) * 1e-3 / math.sqrt(dt)
+    y = signal.sosfilt(signal.butter(order, cutoff, fs=rate, output="sos"), w)[4000:]
+    y = y + simulate_sum([WN(1e-4), RW(2e-5)], n, dt, rng)
+    fit = NoiseModel(y, dt, "WN+DLPF+RW").fit()
+    dlpf = next(c for c in fit.components if isinstance(c, DLPF))
+    assert dlpf.order == order
+    assert dlpf.cutoff == pytest.approx(cutoff, rel=0.05)
+    assert kalibr.noise_density(fit).value == pytest.approx(math.hypot(1e-3, 1e-4), rel=0.04)

@@ -254,7 +254,8 @@ class NoiseModel:
 
     def starting_values(self, n_starts: int, spectral: bool,
                         periodogram: whittle.BandedPeriodogram | None = None) -> list[list[Component]]:
-        """The given components, or up to ``n_starts`` distinct starts from the AV fit (Whittle-refined), then the
+        """The given components, or up to ``n_starts`` distinct starts from the AV fit (Whittle-refined, a DLPF at
+        the order whose Whittle fit is best, :func:`.starts.filter_orders`; order 2 without ``spectral``), then the
         caller's further starts."""
         if self.given is not None:
             return [list(self.given)]
@@ -265,9 +266,9 @@ class NoiseModel:
         n_osc = self.fit_names.count("OSC")
         lines = whittle.osc_start_frequencies(bp, self.dt, n_osc) if n_osc else []
         fits = starts.fit_allan(self.fit_names, self.allan, self.dt, osc_frequencies=lines)
-        if spectral:
-            fits = sorted((whittle.whittle_fit(c, y_av, self.dt, bp, self.parameter_bounds) for _, c in fits),
-                          key=lambda r: -r[0])
+        if spectral:  # a DLPF's order is chosen here, by the Whittle likelihood (:func:`.starts.filter_orders`)
+            fits = sorted((whittle.whittle_fit(v, y_av, self.dt, bp, self.parameter_bounds)
+                           for _, c in fits for v in starts.filter_orders(c)), key=lambda r: -r[0])
             fits = starts.distinct([(-w, c) for w, c in fits], self.allan.tau, self.dt)
         return [c for _, c in fits[:max(n_starts, 1)]] + [list(c) for c in self.extra_starts]
 

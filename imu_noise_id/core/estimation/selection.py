@@ -44,7 +44,8 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
     when it falls like τ⁻² at its short-τ end, WN+BI+RW (flicker noise) when the AV above the white-noise line
     through its first τ is flat over a decade of τ or more (the closed loop's rule,
     :func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`), WN+DLPF+RW (the sensor's digital low-pass,
-    second order) when the AV's shortest τ show its roll-off (:func:`~imu_noise_id.core.allan.slopes.rolloff_end`)."""
+    its order chosen by the starts, :func:`~.starts.filter_orders`) when the AV's shortest τ show its roll-off
+    (:func:`~imu_noise_id.core.allan.slopes.rolloff_end`)."""
     cands = list(DEFAULT_CANDIDATES)
     keep = allan.m <= starts.MAX_FRACTION * allan.n
     tau, avar = allan.tau[keep], allan.variance[keep, 0]

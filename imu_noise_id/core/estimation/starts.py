@@ -9,7 +9,7 @@ fit's multi-start values.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -18,6 +18,7 @@ from ..allan import AllanResult, allan_variance
 from ..errors import InputError
 from ..noise import units
 from ..noise.components import BI, DLPF, GM, LPF, MA, OSC, QN, RR, RW, WN, Component, total_allan_variance
+from ..noise.digital import ORDERS as DLPF_ORDERS
 from ..noise.flicker import PLATEAU, band_for_record
 
 #: The starting-value fit uses the AV at averaging factors m ≤ this fraction of the record.
@@ -196,6 +197,31 @@ def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
         raise InputError("the Allan-variance fit for initial values failed; give initial values (init=…)")
     results.sort(key=lambda r: r[0])
     return distinct(results, av.tau, dt)
+
+
+#: A white noise beside a DLPF starts at least at this fraction of the DLPF's passband density.
+DLPF_FLOOR_START = 0.1
+
+
+def filter_orders(components: list[Component]) -> list[list[Component]]:
+    """``components`` with each DLPF at every order of :data:`~imu_noise_id.core.noise.digital.ORDERS` (its noise
+    density and cutoff kept), one list per combination, and each white noise beside it at least
+    :data:`DLPF_FLOOR_START` of its density; ``[components]`` without a DLPF.
+
+    The order is a structure value no likelihood search moves: the starts' Whittle fits
+    (:meth:`.model.NoiseModel.starting_values`) choose it, the roll-off's steepness near the Nyquist frequency telling
+    the orders apart. They can only where the white floor after the filter starts visible: an AV fit that put it at
+    ~0 (the filter's own white level absorbing it) left the Whittle likelihood flat in its log, and the filter alone
+    then took the floor with its cutoff at the Nyquist frequency."""
+    dlpfs = [c for c in components if isinstance(c, DLPF)]
+    if not dlpfs:
+        return [list(components)]
+    floor = DLPF_FLOOR_START * max(c.noise_density for c in dlpfs)
+    out = [[replace(c, noise_density=max(c.noise_density, floor)) if isinstance(c, WN) else c for c in components]]
+    for i, c in enumerate(components):
+        if isinstance(c, DLPF):
+            out = [[*v[:i], replace(c, order=order), *v[i + 1:]] for v in out for order in DLPF_ORDERS]
+    return out
 
 
 def distinct(results: list[tuple[float, list[Component]]], tau: np.ndarray, dt: float,

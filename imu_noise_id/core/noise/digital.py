@@ -5,7 +5,8 @@ w_k white of variance σ² = N²/dt, y = H(z) w with H = B(z)/A(z) = ``scipy.sig
 H(1) = 1, so the two-sided PSD at 0 Hz is σ²·dt = N² exactly, and S(f) = N²|H(e^{i2πf dt})|² — zero at the
 Nyquist frequency (the bilinear transform's zeros at z = −1), which no sampled continuous-time filter (LPF, OSC)
 reproduces. Parameters: N [u/√Hz] and f_c [Hz] (the −3 dB frequency, 0 < f_c < 1/(2 dt)); the order n is a
-structure value (``DLPF(n=4)`` in a spec), not estimated.
+structure value (``DLPF(1e-3, 12, order=4)`` in a spec) that no likelihood search moves: a fit's starts take the
+order whose Whittle fit is best (:func:`imu_noise_id.core.estimation.starts.filter_orders`).
 
 Block (direct form II, n + 1 states, no feed-through): the bilinear transform puts every zero at z = −1, so
 B(z) = b₀(1 + z⁻¹)ⁿ; with s_k = b₀w_k − Σ_i a_i s_{k−i}, y_k = Σ_{i=0..n} C(n, i) s_{k−i}: states [s_k … s_{k−n}],
