@@ -19,6 +19,7 @@ from imu_noise_id.batch.units import content_hash
 from imu_noise_id.cli import build_parser, main
 from imu_noise_id.cli.options import analysis_options
 from imu_noise_id.core.estimation.gmwm import GmwmOptions
+from imu_noise_id.core.noise.digital import SensorFilter
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage
 
 #: analyze's options that batch spells differently or leaves out, and why: the bag is batch's BAG_OR_GLOB…;
@@ -27,10 +28,11 @@ from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage
 NOT_SHARED = ("bag", "--topic", "--out", "--jobs")
 #: Non-default values of every analysis option, on the command line and as the options they must give.
 ARGV = ["--per-decade", "6", "--confidence", "0.9", "--model", "WN+RW", "--estimator", "both", "--robust",
-        "--allow-motion", "--span", "5:295", "--horizon", "40", "--no-loop"]
+        "--allow-motion", "--span", "5:295", "--horizon", "40", "--no-loop", "--sensor-filter", "42:2"]
 EXPECTED = AnalyzeOptions(per_decade=6, confidence=0.9, allow_motion=True,
-                          models=ModelStage("WN+RW", estimator="both", gmwm=GmwmOptions(robust=True)), loop=False,
-                          horizon_s=40.0, jobs=1, span=(5.0, 295.0))
+                          models=ModelStage("WN+RW", estimator="both", gmwm=GmwmOptions(robust=True),
+                                            sensor_filter=SensorFilter(42.0, 2)),
+                          loop=False, horizon_s=40.0, jobs=1, span=(5.0, 295.0))
 
 
 def _subparsers() -> dict:
@@ -46,7 +48,8 @@ def test_batch_accepts_every_analyze_option_with_the_same_flags_defaults_and_hel
     commands = _subparsers()
     analyze, batch = _actions(commands["analyze"]), _actions(commands["batch"])
     shared = [name for name in analyze if name not in NOT_SHARED]
-    assert {"--estimator", "--horizon", "--span", "--robust", "--confidence", "--overbound", "--rate"} <= set(shared)
+    assert {"--estimator", "--horizon", "--span", "--robust", "--confidence", "--overbound", "--rate",
+            "--sensor-filter"} <= set(shared)
     for name in shared:
         a, b = analyze[name], batch.get(name)
         assert b is not None, f"batch lacks {name}"
@@ -84,6 +87,8 @@ def test_options_pickle_and_every_option_changes_the_resume_key(tmp_path):
         "model": dataclasses.replace(EXPECTED, models=dataclasses.replace(models, model="WN+GM+RW")),
         "estimator": dataclasses.replace(EXPECTED, models=dataclasses.replace(models, estimator="em")),
         "robust": dataclasses.replace(EXPECTED, models=dataclasses.replace(models, gmwm=GmwmOptions())),
+        "sensor_filter": dataclasses.replace(EXPECTED,
+                                             models=dataclasses.replace(models, sensor_filter=SensorFilter(42.0))),
         "loop": dataclasses.replace(EXPECTED, loop=True),
         "horizon": dataclasses.replace(EXPECTED, horizon_s=41.0),
         "span": dataclasses.replace(EXPECTED, span=(5.0, float("inf"))),

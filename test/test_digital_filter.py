@@ -7,14 +7,18 @@ import math
 
 import numpy as np
 import pytest
+import yaml
 from scipy import linalg, signal
 
+from imu_noise_id.cli import main
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.axes import ImuSeries
+from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.model import NoiseModel
+from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.selection import select_model, suggest_candidates
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
-from imu_noise_id.core.noise.digital import DLPF
+from imu_noise_id.core.noise.digital import DLPF, SensorFilter
 from imu_noise_id.core.noise.modelspec import parse_model
 from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
 
@@ -110,3 +114,45 @@ def test_the_fit_takes_the_filters_order(order, rate, cutoff):
     assert dlpf.order == order
     assert dlpf.cutoff == pytest.approx(cutoff, rel=0.05)
     assert kalibr.noise_density(fit).value == pytest.approx(math.hypot(1e-3, 1e-4), rel=0.04)
+
+
+def test_a_known_sensor_filter_is_offered_and_its_order_kept():
+    """The user's sensor filter: without a roll-off in the data the selection still offers (and judges) WN+DLPF+RW;
+    with one, the fitted DLPF has the order the user gave (here 2, where the data's filter is of the fourth order:
+    the user's configuration is taken, the data choose only without it)."""
+    rng = np.random.default_rng(5)
+    n = 60_000
+    plain = simulate_sum([WN(1e-3), RW(2e-5)], n, DT, rng)
+    known = SensorFilter(20.0, 2)
+    assert "WN+DLPF+RW" not in suggest_candidates(allan_variance(plain, DT))
+    table = select_model(plain, DT, options=FitOptions(uncertainty=False), sensor_filter=known).table
+    assert "WN+DLPF+RW" in [row["model"] for row in table]
+    w = rng.standard_normal(n + 4000) * 1e-3 / math.sqrt(DT)
+    y = signal.sosfilt(signal.butter(4, 12.0, fs=1.0 / DT, output="sos"), w)[4000:] + plain * 0.1
+    told = NoiseModel(y, DT, "WN+DLPF+RW", sensor_filter=SensorFilter(12.0, 2))
+    fit = told.fit(options=FitOptions(uncertainty=False))
+    assert next(c for c in fit.components if isinstance(c, DLPF)).order == 2
+    with pytest.raises(InputError, match="Nyquist"):
+        NoiseModel(y, DT, "WN+DLPF+RW", sensor_filter=SensorFilter(120.0))
+
+
+def test_analyze_takes_the_sensor_filter_option(tmp_path, capsys):
+    """``analyze --sensor-filter HZ:ORDER`` on a bag whose noise passes a fourth-order filter: model.yaml's DLPF has
+    that order; a cutoff above the Nyquist frequency and a malformed value are refused (exit 2) with the option
+    named."""
+    bag = tmp_path / "dlpf"
+    assert main(["simulate", "--model", "WN(1e-4)+DLPF(1e-3, 12, order=4)+RW(2e-5)", "--rate", "200",
+                 "--duration", "120", "--out", str(bag), "--seed", "3"]) == 0
+    out = tmp_path / "out"
+    assert main(["analyze", str(bag), "--out", str(out), "--model", "WN+DLPF+RW", "--no-loop", "--jobs", "1",
+                 "--sensor-filter", "12:4"]) == 0
+    text = (out / "model.yaml").read_text()
+    assert yaml.safe_load(text)["run"]["options"]["sensor_filter"] == "12:4"
+    assert "DLPF" in text and "order: 4.0" in text
+    capsys.readouterr()
+    assert main(["analyze", str(bag), "--out", str(tmp_path / "out2"), "--sensor-filter", "150"]) == 2
+    assert "--sensor-filter" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stop:
+        main(["analyze", str(bag), "--out", str(tmp_path / "out3"), "--sensor-filter", "12:5"])
+    assert stop.value.code == 2
+    assert "--sensor-filter" in capsys.readouterr().err

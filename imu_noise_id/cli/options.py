@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 from ..core.axes import AXES
 from ..core.errors import InputError
 from ..core.estimation.overbound import DEFAULT_HORIZON_S
+from ..core.noise.digital import SensorFilter
 
 if TYPE_CHECKING:
     from ..pipelines.analyze import AnalyzeOptions
@@ -129,6 +130,20 @@ def span_spec(text: str) -> tuple[float, float]:
 span_spec.__name__ = "span"  # argparse names the type in its message
 
 
+def sensor_filter_spec(text: str) -> SensorFilter:
+    """An argparse ``type`` for ``HZ[:ORDER]``: the sensor's digital low-pass, its −3 dB cutoff [Hz] and, when known,
+    its Butterworth order (1–4)."""
+    cutoff, sep, order = text.partition(":")
+    try:
+        return SensorFilter(float(cutoff), int(order) if sep else None)
+    except ValueError as exc:
+        detail = str(exc) if "sensor filter" in str(exc) else "HZ and ORDER must be numbers"
+        raise argparse.ArgumentTypeError(f"{text!r} is not HZ[:ORDER], e.g. 42 or 42:2 ({detail})") from None
+
+
+sensor_filter_spec.__name__ = "sensor filter"  # argparse names the type in its message
+
+
 def add_analysis_options(p: argparse.ArgumentParser, *, jobs: bool = True) -> None:
     """The options of one analysis (``analyze``; ``batch`` runs every unit with them): the Allan stage, the model
     stage, the loop, the overbound and its exports; ``jobs``: also ``--jobs`` (``batch`` runs its units side by side
@@ -149,6 +164,11 @@ def add_analysis_options(p: argparse.ArgumentParser, *, jobs: bool = True) -> No
     )
     p.add_argument("--robust", action="store_true",
                    help="GMWM: fit the robust wavelet variance (bounded influence; for records with outliers)")
+    p.add_argument(
+        "--sensor-filter", type=sensor_filter_spec, default=None, metavar="HZ[:ORDER]",
+        help="the sensor's digital low-pass as configured (datasheet and driver): its -3 dB cutoff [Hz] and, when "
+        "known, its Butterworth order 1-4, e.g. 42 or 42:2. The model selection then offers WN+DLPF+RW with the "
+        "filter started there (the cutoff is still estimated; without ORDER the data choose it)")
     p.add_argument(
         "--allow-motion", action="store_true",
         help="analyse even if the static check finds motion (its findings become warnings)",
@@ -191,6 +211,7 @@ def analysis_options(args: argparse.Namespace, *, jobs: int | None = None) -> An
     from ..pipelines.analyze import AnalyzeOptions, ModelStage
 
     return AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
-                          models=ModelStage(args.model, estimator=args.estimator, gmwm=GmwmOptions(robust=args.robust)),
+                          models=ModelStage(args.model, estimator=args.estimator, gmwm=GmwmOptions(robust=args.robust),
+                                            sensor_filter=args.sensor_filter),
                           loop=not args.no_loop, horizon_s=args.horizon, jobs=args.jobs if jobs is None else jobs,
                           span=args.span)

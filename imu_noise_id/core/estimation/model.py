@@ -34,6 +34,7 @@ from ..errors import InputError
 from ..kalman import harmonic
 from ..kalman import statespace as ss
 from ..noise.components import COMPONENT_TYPES, Component
+from ..noise.digital import SensorFilter
 from ..noise.modelspec import parse_model, parse_structure
 from ..quality import interpolate_missing
 from . import mle, starts, whittle
@@ -143,6 +144,9 @@ class NoiseModel:
     periodogram
         The banded periodogram (:func:`.whittle.banded_periodogram`) of :meth:`detrended` when the caller has it
         (e.g. a model selection, for every candidate of the same detrending): not computed again.
+    sensor_filter
+        What the user knows of the sensor's digital low-pass: a DLPF in the structure starts at its cutoff and
+        order (:func:`.starts.filter_orders`). InputError when its cutoff is not below the Nyquist frequency.
 
     Raises
     ------
@@ -153,8 +157,15 @@ class NoiseModel:
     def __init__(self, y: np.ndarray, dt: float, structure: str | list[Component], *, exog: np.ndarray | None = None,
                  exog_names: list[str] | tuple[str, ...] | None = None, drift: str | None = "em",
                  allan: AllanResult | None = None, starts: list[list[Component]] | None = None,
-                 periodogram: whittle.BandedPeriodogram | None = None) -> None:
+                 periodogram: whittle.BandedPeriodogram | None = None,
+                 sensor_filter: SensorFilter | None = None) -> None:
         y = check_signal(y, dt)
+        if sensor_filter is not None:
+            try:
+                sensor_filter.check_rate(dt)
+            except ValueError as exc:
+                raise InputError(str(exc)) from None
+        self.sensor_filter = sensor_filter
         names, given = parse_structure_or_components(structure)
         ss.validate_structure(names)
         if given is not None:
@@ -268,7 +279,8 @@ class NoiseModel:
         fits = starts.fit_allan(self.fit_names, self.allan, self.dt, osc_frequencies=lines)
         if spectral:  # a DLPF's order is chosen here, by the Whittle likelihood (:func:`.starts.filter_orders`)
             fits = sorted((whittle.whittle_fit(v, y_av, self.dt, bp, self.parameter_bounds)
-                           for _, c in fits for v in starts.filter_orders(c)), key=lambda r: -r[0])
+                           for _, c in fits for v in starts.filter_orders(c, self.sensor_filter)),
+                          key=lambda r: -r[0])
             fits = starts.distinct([(-w, c) for w, c in fits], self.allan.tau, self.dt)
         return [c for _, c in fits[:max(n_starts, 1)]] + [list(c) for c in self.extra_starts]
 

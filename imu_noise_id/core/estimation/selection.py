@@ -13,6 +13,7 @@ from ..allan.slopes import rolloff_end
 from ..diagnostics.av_signatures import flicker_level
 from ..errors import InputError
 from ..noise.components import Component
+from ..noise.digital import SensorFilter
 from ..noise.modelspec import parse_structure
 from ..quality import interpolate_missing
 from . import screen, starts, whittle
@@ -22,6 +23,8 @@ from .search import add_intervals
 
 #: Default candidate structures of :func:`select_model` (RR / QN added when the AV suggests them).
 DEFAULT_CANDIDATES: tuple[str, ...] = ("WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM")
+#: The candidate for the sensor's digital low-pass.
+DLPF_CANDIDATE = "WN+DLPF+RW"
 
 
 @dataclass
@@ -52,7 +55,7 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
     if tau.size >= 4 and flicker_level(tau, avar - avar[0] * tau[0] / tau) is not None:
         cands.append("WN+BI+RW")
     if rolloff_end(allan):
-        cands.append("WN+DLPF+RW")
+        cands.append(DLPF_CANDIDATE)
     if tau.size >= 4:
         slope_hi = np.polyfit(np.log(tau[-3:]), np.log(avar[-3:]), 1)[0]
         slope_lo = np.polyfit(np.log(tau[:3]), np.log(avar[:3]), 1)[0]
@@ -66,14 +69,17 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
 def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, *, criterion: str = "bic",
                  drift: str | None = "em", options: FitOptions | None = None,
                  allan: AllanResult | None = None,
-                 extra_starts: dict[str, list[Component]] | None = None) -> SelectionResult:
+                 extra_starts: dict[str, list[Component]] | None = None,
+                 sensor_filter: SensorFilter | None = None) -> SelectionResult:
     """Fit every candidate structure and rank them by BIC (or AIC).
 
     ``options.uncertainty`` applies to the winner only. ``allan``: the record's AV (one column), the start of every
     candidate without RR (those with RR: the detrended record's AV). ``extra_starts``: a further start per candidate
-    (e.g. its GMWM fit). From :data:`.screen.MIN_SAMPLES` samples (BIC only) each next candidate is first fitted on the
-    screen's statistics against the best so far (:mod:`.screen`) and not fitted exactly when it cannot come within
-    :data:`.screen.MARGIN`; its row says ``screened`` with that ΔBIC.
+    (e.g. its GMWM fit). ``sensor_filter``: what the user knows of the sensor's digital low-pass; the default candidates
+    then include WN+DLPF+RW, its DLPF started there (:class:`~.model.NoiseModel`). From :data:`.screen.MIN_SAMPLES`
+    samples (BIC only) each next candidate is first fitted on the screen's statistics against the best so far
+    (:mod:`.screen`) and not fitted exactly when it cannot come within :data:`.screen.MARGIN`; its row says ``screened``
+    with that ΔBIC.
     """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
@@ -83,6 +89,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     allans = {False: allan if allan is not None else starts.allan_of(interpolate_missing(y), dt), True: None}
     periodograms: dict[bool, whittle.BandedPeriodogram | None] = {False: None, True: None}  # the same, computed once
     cands = list(candidates) if candidates else suggest_candidates(allans[False])
+    if sensor_filter is not None and not candidates and DLPF_CANDIDATE not in cands:
+        cands.append(DLPF_CANDIDATE)
     fits: dict[str, FitResult] = {}
     errors: dict[str, str] = {}
     search = replace(options, uncertainty=False)
@@ -98,7 +106,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         try:
             has_rr = "RR" in parse_structure(spec)
             model = NoiseModel(y, dt, spec, drift=drift, allan=allans[has_rr], periodogram=periodograms[has_rr],
-                               starts=[extra_starts[spec]] if extra_starts and spec in extra_starts else None)
+                               starts=[extra_starts[spec]] if extra_starts and spec in extra_starts else None,
+                               sensor_filter=sensor_filter)
             if reference is not None and statistics is not None:
                 verdict = screen.screen(reference, model.starting_values(1, True)[0], statistics)
                 if not verdict.worth_exact_fit:

@@ -19,6 +19,7 @@ from ..errors import InputError
 from ..noise import units
 from ..noise.components import BI, DLPF, GM, LPF, MA, OSC, QN, RR, RW, WN, Component, total_allan_variance
 from ..noise.digital import ORDERS as DLPF_ORDERS
+from ..noise.digital import SensorFilter
 from ..noise.flicker import PLATEAU, band_for_record
 
 #: The starting-value fit uses the AV at averaging factors m ≤ this fraction of the record.
@@ -203,10 +204,11 @@ def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
 DLPF_FLOOR_START = 0.1
 
 
-def filter_orders(components: list[Component]) -> list[list[Component]]:
+def filter_orders(components: list[Component], known: SensorFilter | None = None) -> list[list[Component]]:
     """``components`` with each DLPF at every order of :data:`~imu_noise_id.core.noise.digital.ORDERS` (its noise
     density and cutoff kept), one list per combination, and each white noise beside it at least
-    :data:`DLPF_FLOOR_START` of its density; ``[components]`` without a DLPF.
+    :data:`DLPF_FLOOR_START` of its density; ``[components]`` without a DLPF. ``known``: the user's sensor filter,
+    whose cutoff replaces the DLPF's and whose order, when given, is the only one tried.
 
     The order is a structure value no likelihood search moves: the starts' Whittle fits
     (:meth:`.model.NoiseModel.starting_values`) choose it, the roll-off's steepness near the Nyquist frequency telling
@@ -218,9 +220,11 @@ def filter_orders(components: list[Component]) -> list[list[Component]]:
         return [list(components)]
     floor = DLPF_FLOOR_START * max(c.noise_density for c in dlpfs)
     out = [[replace(c, noise_density=max(c.noise_density, floor)) if isinstance(c, WN) else c for c in components]]
+    orders = DLPF_ORDERS if known is None else known.orders
     for i, c in enumerate(components):
         if isinstance(c, DLPF):
-            out = [[*v[:i], replace(c, order=order), *v[i + 1:]] for v in out for order in DLPF_ORDERS]
+            start = c if known is None else replace(c, cutoff=known.cutoff)
+            out = [[*v[:i], replace(start, order=order), *v[i + 1:]] for v in out for order in orders]
     return out
 
 

@@ -182,3 +182,38 @@ class DLPF(Component):
             gap(hi)) else hi)
         b0 = float(_design(order, x)[0][0])
         return cls(math.sqrt(max(float(q[0, 0]), 0.0) * dt) / b0, x / dt, order)
+
+
+@dataclass(frozen=True)
+class SensorFilter:
+    """What the user knows of the sensor's digital low-pass (its configuration, from the datasheet and the driver):
+    the −3 dB cutoff [Hz] and, when known, the order.
+
+    A model fit that has a DLPF starts it at ``cutoff`` (still estimated) and tries only ``order`` when given
+    (:attr:`orders`; otherwise every order of :data:`ORDERS`); the model selection offers a DLPF whether or not the
+    Allan variance shows the roll-off.
+    """
+
+    cutoff: float
+    order: int | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.cutoff) and self.cutoff > 0):
+            raise ValueError(f"the sensor filter's cutoff must be a finite number of Hz > 0, got {self.cutoff!r}")
+        if self.order is not None and self.order not in ORDERS:
+            raise ValueError(f"the sensor filter's order must be one of {ORDERS}, got {self.order!r}")
+
+    def __str__(self) -> str:
+        """The command line's form, ``HZ[:ORDER]``."""
+        return f"{self.cutoff:g}" + ("" if self.order is None else f":{self.order}")
+
+    @property
+    def orders(self) -> tuple[int, ...]:
+        """The orders a fit tries."""
+        return ORDERS if self.order is None else (self.order,)
+
+    def check_rate(self, dt: float) -> None:
+        """ValueError unless the cutoff lies below the Nyquist frequency 1/(2 dt) of a record at period ``dt`` [s]."""
+        if not self.cutoff * dt < 0.5:
+            raise ValueError(f"the sensor filter's cutoff {self.cutoff:g} Hz is not below the record's Nyquist "
+                             f"frequency {0.5 / dt:g} Hz")

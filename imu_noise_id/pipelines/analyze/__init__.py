@@ -144,6 +144,7 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
     result = AnalysisResult(static)
     check_horizon(static, options.horizon_s)
     if options.models.enabled:
+        options.models.check_rate(static.dt)
         _model_stages(imu, temperature, options, result, on_axis)
     result.overbounds = overbounds(static, result.finals, options.horizon_s)
     for axis, final in result.finals.items():

@@ -22,6 +22,7 @@ from ...core.estimation.gmwm_select import GmwmSelection, select_gmwm
 from ...core.estimation.model import FitOptions, NoiseModel
 from ...core.estimation.results import FitResult
 from ...core.estimation.selection import SelectionResult, select_model
+from ...core.noise.digital import SensorFilter
 from ...core.noise.modelspec import parse_structure
 
 #: ``model`` values that are not a structure.
@@ -56,19 +57,33 @@ class AxisModel:
 
 @dataclass
 class ModelStage:
-    """What the model stage was asked to do."""
+    """What the model stage was asked to do: ``model`` (``auto``, ``none`` or a structure), the fit's ``options``,
+    the ramp's ``drift``, the ``estimator`` and the GMWM's options, and ``sensor_filter``: what the user knows of the
+    sensor's digital low-pass (the EM's starts, :class:`~imu_noise_id.core.estimation.model.NoiseModel`)."""
 
     model: str = AUTO
     options: FitOptions = field(default_factory=FitOptions)
     drift: str | None = "em"
     estimator: str = "auto"
     gmwm: GmwmOptions = field(default_factory=GmwmOptions)
+    sensor_filter: SensorFilter | None = None
 
     def __post_init__(self) -> None:
         if self.model not in (AUTO, NONE):
             parse_structure(self.model)  # a bad spec is refused before any data is read or fitted
         if self.estimator not in ESTIMATORS:
             raise InputError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {self.estimator!r}")
+
+    def check_rate(self, dt: float) -> None:
+        """InputError, before any fit, when the sensor filter's cutoff is not below the Nyquist frequency of a record
+        at period ``dt`` [s]."""
+        if self.sensor_filter is None:
+            return
+        try:
+            self.sensor_filter.check_rate(dt)
+        except ValueError as exc:
+            raise InputError(f"--sensor-filter: {exc}: give the cutoff the sensor is configured with, or leave the "
+                             "option out and let the data show the roll-off") from None
 
     @property
     def enabled(self) -> bool:
@@ -105,12 +120,13 @@ def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: All
         starts = ({k: list(f.components) for k, f in gm_sel.fits.items()} if gm_sel is not None
                   else {stage.model: list(gm.components)} if gm is not None else None)
         if stage.model == AUTO:
-            sel = select_model(y, dt, drift=stage.drift, options=stage.options, allan=allan, extra_starts=starts)
+            sel = select_model(y, dt, drift=stage.drift, options=stage.options, allan=allan, extra_starts=starts,
+                               sensor_filter=stage.sensor_filter)
             em, em_sel = sel.best, sel
         else:
             detrended = "RR" in parse_structure(stage.model)  # its starting values need the detrended record's AV
             model = NoiseModel(y, dt, stage.model, drift=stage.drift, allan=None if detrended else allan,
-                               starts=list(starts.values()) if starts else None)
+                               starts=list(starts.values()) if starts else None, sensor_filter=stage.sensor_filter)
             em, em_sel = model.fit(options=stage.options), None
         return AxisModel(em, em_sel, gm, gm_sel, compare(em, gm) if gm is not None else None, note)
     except InputError as exc:
