@@ -5,15 +5,45 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..allan import allan_variance, choose_m
+from ..allan import choose_m
 from ..noise.components import Component, simulate_sum
+
+#: At averaging factor m a simulation's AV sums every max(1, m // TERMS_PER_FACTOR)-th term of the overlapping sum.
+TERMS_PER_FACTOR = 8
+
+
+def thinned_allan_variance(y: np.ndarray, dt: float, m: np.ndarray) -> np.ndarray:
+    """Overlapping Allan variance [u²] of rate samples ``y`` [u] at period ``dt`` [s] and averaging factors ``m``,
+    paper 000 eq. (2), σ²(mτ₀) = Σ_i (x_{i+2m} − 2x_{i+m} + x_i)² / (2 (m dt)² · #terms) with x the phase, but over
+    every s-th start i only, s = max(1, m // :data:`TERMS_PER_FACTOR`).
+
+    Terms that far apart overlap by seven eighths of their span and more, so the thinned sum keeps nearly all of the
+    fully overlapping estimator's precision at an eighth of its cost per long factor: a simulation's AV on the
+    analysis grid takes about a third of the time (its curves are drawn, never tested)."""
+    x = np.empty(y.size + 1)
+    x[0] = 0.0
+    np.cumsum(np.asarray(y, dtype=float) - float(np.mean(y)), out=x[1:])
+    x *= dt
+    out = np.empty(np.asarray(m).size)
+    buffer = np.empty(x.size)
+    for k, factor in enumerate(np.asarray(m, dtype=np.int64)):
+        f = int(factor)
+        step = max(1, f // TERMS_PER_FACTOR)
+        end = x.size - 2 * f
+        d = buffer[: (end + step - 1) // step]
+        np.multiply(x[f: f + end: step], -2.0, out=d)
+        d += x[:end:step]
+        d += x[2 * f: 2 * f + end: step]
+        out[k] = float(np.einsum("i,i->", d, d)) / (2.0 * (f * dt) ** 2 * d.size)
+    return out
 
 
 def allan_band(components: list[Component], dt: float, n: int, tau: np.ndarray | None = None, *, n_sim: int = 20,
                seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """AVs of ``n_sim`` simulations of ``components`` (n samples at ``dt`` [s]): (tau [s], avar [u²] (n_sim, len(tau)));
-    ``tau`` defaults to :func:`~imu_noise_id.core.allan.choose_m`'s grid, given values rounded to multiples of dt."""
+    """AVs of ``n_sim`` simulations of ``components`` (n samples at ``dt`` [s]) by :func:`thinned_allan_variance`:
+    (tau [s], avar [u²] (n_sim, len(tau))); ``tau`` defaults to :func:`~imu_noise_id.core.allan.choose_m`'s grid,
+    given values rounded to multiples of dt."""
     m = choose_m(n) if tau is None else np.unique(np.maximum(np.round(np.asarray(tau, float) / dt), 1))
     rng = np.random.default_rng(seed)
-    rows = [allan_variance(simulate_sum(components, n, dt, rng), dt, m=m).variance[:, 0] for _ in range(n_sim)]
+    rows = [thinned_allan_variance(simulate_sum(components, n, dt, rng), dt, m) for _ in range(n_sim)]
     return m * dt, np.array(rows)
