@@ -12,7 +12,7 @@ from scipy import signal
 from imu_noise_id.core.estimation import kalibr
 from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
 from imu_noise_id.core.estimation.results import FitResult
-from imu_noise_id.core.noise.components import LPF, OSC, WN, simulate_sum, total_allan_variance
+from imu_noise_id.core.noise.components import LPF, OSC, RW, WN, simulate_sum, total_allan_variance
 
 DT = 0.01
 WHITE = WN(3.5e-3)
@@ -120,11 +120,13 @@ def test_a_short_record_gives_k_as_a_bound_at_or_above_the_truth_and_says_so():
     assert "K <" in printed and "K not identified by this 10 min record" in printed
 
 
-def test_the_allan_reading_that_stands_in_for_k_says_so_with_its_tau_range(tmp_path):
-    """A final model without a random walk gives the Allan-slope K in imu.yaml; its source says it stands in and the
-    τ range it was read over, never silently."""
+def test_a_final_model_without_a_walk_gives_the_datas_long_tau_bound(tmp_path):
+    """A final model without a random walk gives as K the largest walk the data's long-τ AV supports (method
+    ``bound``, interval [0, bound]) with the τ range it was read over; the Allan-slope reading stays beside it as
+    ``*_allan``, never in its place."""
     import yaml
 
+    from imu_noise_id.core.allan.rw_bound import random_walk_bound
     from imu_noise_id.core.axes import AXES
     from imu_noise_id.core.simulation.static import simulate_static_imu
     from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
@@ -134,7 +136,31 @@ def test_the_allan_reading_that_stands_in_for_k_says_so_with_its_tau_range(tmp_p
     result = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN"), loop=False, jobs=1))
     write_analysis(result, tmp_path, rostopic="/imu/data", meta={})
     doc = yaml.safe_load((tmp_path / "imu.yaml").read_text())
-    for method, source in zip(doc["gyroscope_random_walk_method_xyz"], doc["gyroscope_random_walk_source_xyz"],
-                              strict=True):
-        assert method.startswith("allan_")
-        assert "given instead: the Allan" in source and "read over tau" in source
+    for i, axis in enumerate(("gyro_x", "gyro_y", "gyro_z")):
+        bound = random_walk_bound(result.static.allan.column(i), tau_min=30.0).value
+        assert doc["gyroscope_random_walk_xyz"][i] == pytest.approx(bound, rel=1e-5)
+        assert doc["gyroscope_random_walk_ci_xyz"][i] == [0.0, pytest.approx(bound, rel=1e-5)]
+        assert doc["gyroscope_random_walk_method_xyz"][i] == "bound"
+        source = doc["gyroscope_random_walk_source_xyz"][i]
+        assert "bounded by the data" in source and "at tau 31.6–150 s" in source
+        assert result.finals[axis].random_walk.method == "bound"
+
+
+def test_beside_a_gauss_markov_the_walk_is_bounded_not_read_from_the_bump():
+    """20 min at 100 Hz of WN + GM (τ 20 s) + RW 2e-5, fitted as WN+GM (what the selection took on such records):
+    K is given as a bound at or above the walk; the Allan-slope line through the GM's bump, pasted before as a point
+    reading, is 4× the walk and its interval excludes it."""
+    from imu_noise_id.core.allan import allan_variance
+    from imu_noise_id.core.allan.slopes import fit_axis_slopes
+    from imu_noise_id.core.estimation.model import fit_model
+    from imu_noise_id.core.noise.components import GM, simulate_sum
+    from imu_noise_id.pipelines.analyze.final import final_model
+
+    dt = 0.01
+    y = simulate_sum([WN(1.7e-4), GM(tau=20.0, sigma=3e-4), RW(2e-5)], 120_000, dt, np.random.default_rng(4))
+    allan = allan_variance(y, dt)
+    k = final_model(fit_model(y, dt, "WN+GM"), None, allan).random_walk
+    assert k.method == "bound" and k.ci95 == (0.0, k.value)
+    assert k.value >= 2e-5
+    slope = fit_axis_slopes(allan).random_walk
+    assert slope.ci[0] > 2e-5  # the reading it replaces

@@ -89,8 +89,9 @@ def short_for_walk_lines(finals: dict[str, FinalModel], static: StaticAnalysis |
         if bounded:
             smallest = walk_crossing_tau(n, 1.0) / (record / 3.0)  # K whose walk crosses at a third of the record
             lines.append(f"{axis:8s} K not identified by this {_duration(record)} record (its interval reaches "
-                         f"zero): a record identifies walks well above 3*sqrt(3)*N/T = {_fmt(smallest)} here, each "
-                         f"tenfold smaller walk needs a tenfold longer record; given: K <= {_fmt(k)} ({method})")
+                         "zero, or the final model has no walk): a record identifies walks well above "
+                         f"3*sqrt(3)*N/T = {_fmt(smallest)} here, each tenfold smaller walk needs a tenfold longer "
+                         f"record; given: K <= {_fmt(k)} ({method})")
         else:
             lines.append(f"{axis:8s} too short for K: the walk of {_fmt(k)} crosses the white-noise floor at tau = "
                          f"{_duration(crossing)}, beyond a third of this {_duration(record)} record; record "

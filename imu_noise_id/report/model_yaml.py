@@ -95,10 +95,12 @@ def final_to_dict(final: FinalModel) -> dict:
     fitted = fit_to_dict(final.fit)
     return {
         "source": final.source, "model": final.model, "components": fitted["components"],
-        **{name: {"value": None if v.value is None else num(v.value), "ci95": interval(v.ci95), "source": v.source}
+        **{name: {"value": None if v.value is None else num(v.value), "ci95": interval(v.ci95), "method": v.method,
+                  "source": v.source}
            for name, v in (("noise_density", final.noise_density), ("random_walk", final.random_walk))},
         **({} if final.model_values is None else {"unresolved": final.unresolved, "model_values": {
-            name: {"value": None if v.value is None else num(v.value), "ci95": interval(v.ci95), "source": v.source}
+            name: {"value": None if v.value is None else num(v.value), "ci95": interval(v.ci95), "method": v.method,
+                   "source": v.source}
             for name, v in zip(("noise_density", "random_walk"), final.model_values, strict=True)}}),
         "noise_stddev_per_sample": num(final.noise_stddev_per_sample),
         "random_walk_long_tau_bound": {
