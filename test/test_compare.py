@@ -168,3 +168,45 @@ def test_a_reference_from_another_rate_is_refused_with_what_differs():
     assert statuses["Reference watch (gyro)"].level == ERROR
     assert "100 Hz" in statuses["Reference watch (gyro)"].message and "200 Hz" in statuses[
         "Reference watch (gyro)"].message
+
+
+def _spec_watch(with_reference: bool):
+    from imu_noise_id.pipelines.online.watch import ReferenceWatch
+
+    refs = _watch().references if with_reference else None
+    return ReferenceWatch(refs, 200.0, "calibration" if with_reference else "", ratio=1.5, false_alarms_per_hour=0.1,
+                          limits={"gyro": 1.6e-3}, limits_source="spec.yaml")
+
+
+@pytest.mark.parametrize("with_reference", [True, False])
+def test_the_online_watch_errs_when_an_axis_is_beyond_the_spec(with_reference):
+    """A gyro noise-density limit of 1.6e-3 (the reference is 1e-3): gyro_z at 2× the reference from minute two on is
+    beyond it, an ERROR naming the axis, its ratio to the limit and since when, within a minute; at 1.5× (below the
+    limit) the status is no ERROR, with or without the reference (without it the limit alone is watched); the
+    accelerometer, without a limit, stays OK."""
+    from imu_noise_id.pipelines.online import ERROR, OK
+
+    ident = _standing_identifier(_spec_watch(with_reference), 2.0)
+    statuses = {s.name: s for s in ident.diagnostics(0.0, 1.0)}
+    gyro = statuses["Reference watch (gyro)"]
+    assert gyro.level == ERROR and "gyro_z noise beyond the spec" in gyro.message
+    assert float(gyro.values["gyro_z_spec_ratio"]) == pytest.approx(2.0 / 1.6, rel=0.1)
+    assert 220.0 <= ident.watch.beyond_spec()["gyro_z"].alarm.time_s <= 280.0
+    assert set(ident.watch.beyond_spec()) == {"gyro_z"}
+    assert statuses["Reference watch (accel)"].level == OK
+    below = {s.name: s for s in _standing_identifier(_spec_watch(with_reference), 1.5).diagnostics(0.0, 1.0)}
+    assert below["Reference watch (gyro)"].level != ERROR
+    assert not below["Reference watch (gyro)"].message.count("beyond the spec")
+
+
+def test_a_spec_file_is_read_or_refused_with_its_name(tmp_path):
+    from imu_noise_id.core.errors import InputError
+    from imu_noise_id.report.spec import read_spec
+
+    good = tmp_path / "spec.yaml"
+    good.write_text("gyro: {noise_density: 3.0e-4, random_walk: 4.0e-5}\naccel: {noise_density: 2.0e-3}\n")
+    assert read_spec(good) == {"gyro": {"noise_density": 3e-4, "random_walk": 4e-5}, "accel": {"noise_density": 2e-3}}
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("gyro: {noise: 3.0e-4}\n")
+    with pytest.raises(InputError, match=r"spec '.*bad\.yaml': expected"):
+        read_spec(bad, option="spec")

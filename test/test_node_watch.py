@@ -35,9 +35,10 @@ def reference_dir(tmp_path_factory):
     return out
 
 
-def _run(reference: str, monkeypatch, ros_env, seconds: float = 30.0) -> tuple[list[DiagnosticArray], list]:
-    """The node in this process with ``reference``, fed ``seconds`` of a standing IMU at 100 Hz (gyro_z's noise ×2
-    over the second half); the /diagnostics arrays it published and what a late ~/health subscriber got."""
+def _run(reference: str, monkeypatch, ros_env, seconds: float = 30.0,
+         spec: str = "") -> tuple[list[DiagnosticArray], list]:
+    """The node in this process with ``reference`` and ``spec``, fed ``seconds`` of a standing IMU at 100 Hz (gyro_z's
+    noise ×2 over the second half); the /diagnostics arrays it published and what a late ~/health subscriber got."""
     from imu_noise_id.ros.node import ImuNoiseIdNode
 
     for key, value in {**ros_env, "ROS_DOMAIN_ID": str(domain_id(10, 99))}.items():
@@ -48,6 +49,7 @@ def _run(reference: str, monkeypatch, ros_env, seconds: float = 30.0) -> tuple[l
     try:
         node = ImuNoiseIdNode(context=context, parameter_overrides=[
             Parameter("reference", Parameter.Type.STRING, reference),
+            Parameter("spec", Parameter.Type.STRING, spec),
             Parameter("diagnostics_period", Parameter.Type.DOUBLE, 0.2),
             Parameter("hypotheses.enabled", Parameter.Type.BOOL, False)])
         peer = rclpy.create_node("watch_test_peer", context=context)
@@ -118,3 +120,16 @@ def test_an_unreadable_reference_is_reported_and_the_node_runs_on(tmp_path, monk
     diagnostics, _ = _run(str(tmp_path / "nowhere"), monkeypatch, ros_env, seconds=3.0)
     level, message = _latest(diagnostics)["Reference watch (gyro)"]
     assert level == 2 and "nowhere does not exist" in message
+
+
+def test_the_node_errs_when_a_gyro_is_beyond_its_datasheet_limit(reference_dir, tmp_path, monkeypatch, ros_env):
+    """With a gyro noise-density limit of 2.5e-4 (the reference's 1.7e-4 is within it), gyro_z at twice its reference
+    is beyond it: the gyro's status is ERROR, naming the axis; the accelerometer, without a limit, is not."""
+    spec = tmp_path / "spec.yaml"
+    spec.write_text("gyro: {noise_density: 2.5e-4}\n")
+    diagnostics, _ = _run(str(reference_dir), monkeypatch, ros_env, seconds=20.0, spec=str(spec))
+    statuses = _latest(diagnostics)
+    level, message = statuses["Reference watch (gyro)"]
+    assert level == 2 and "gyro_z noise beyond the spec" in message, message  # ERROR
+    assert statuses["Reference watch (accel)"][0] == 0, statuses["Reference watch (accel)"]
+

@@ -45,24 +45,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _spec(path: Path | None) -> dict | None:
-    import yaml
+    from ..report.spec import read_spec
 
-    from ..core.errors import InputError
-
-    if path is None:
-        return None
-    try:
-        doc = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as exc:
-        raise InputError(f"--spec {str(path)!r}: cannot read it ({exc})") from None
-    ok = isinstance(doc, dict) and all(
-        k in ("gyro", "accel") and isinstance(v, dict) and all(
-            p in ("noise_density", "random_walk", "bias_instability") and isinstance(x, int | float) and x > 0
-            for p, x in v.items()) for k, v in doc.items())
-    if not ok:
-        raise InputError(f"--spec {str(path)!r}: expected {{gyro: {{noise_density: …, random_walk: …, "
-                         "bias_instability: …}, accel: {…}}} with positive numbers in SI units")
-    return doc
+    return None if path is None else read_spec(path)
 
 
 def run(args: argparse.Namespace) -> int:

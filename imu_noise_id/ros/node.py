@@ -35,6 +35,7 @@ from ..pipelines.online import PARAMETERS, OnlineConfig, OnlineIdentifier
 from ..pipelines.online.config import ParamSpec
 from ..pipelines.online.watch import ReferenceWatch
 from ..report.reference import read_reference
+from ..report.spec import read_spec
 from ..resources import read_hypotheses_file
 from .messages import labelled_layout
 
@@ -134,17 +135,22 @@ class ImuNoiseIdNode(Node):
             self.get_logger().warning(stale)
 
     def _reference_watch(self, config: OnlineConfig) -> ReferenceWatch | None:
-        """The watch against ``reference`` (None when empty); an unreadable reference is logged and reported on
-        /diagnostics (ERROR), the node runs on."""
-        if not config.reference:
+        """The watch against ``reference`` and the noise-density limits of ``spec`` (None when both are empty); an
+        unreadable reference or spec is logged and reported on /diagnostics (ERROR), the node runs on."""
+        if not config.reference and not config.spec:
             return None
         options = {"ratio": config.watch_ratio, "false_alarms_per_hour": config.watch_false_alarms_per_hour}
         try:
-            ref = read_reference(config.reference)
+            spec = read_spec(config.spec, option="spec") if config.spec else {}
+            ref = read_reference(config.reference) if config.reference else None
         except InputError as exc:
-            self.get_logger().error(f"reference: {exc}")
+            self.get_logger().error(str(exc))
             return ReferenceWatch(None, math.nan, config.reference, error=str(exc), **options)
-        return ReferenceWatch(ref.axes, ref.rate_hz, str(ref.source), **options)
+        limits = {sensor: v["noise_density"] for sensor, v in spec.items() if "noise_density" in v}
+        if ref is None:
+            return ReferenceWatch(None, math.nan, "", limits=limits, limits_source=config.spec, **options)
+        return ReferenceWatch(ref.axes, ref.rate_hz, str(ref.source), limits=limits, limits_source=config.spec,
+                              **options)
 
     def stale_imu_remap(self) -> str:
         """A warning when ``-r imu:=TOPIC`` (the IMU input's old name) remaps to a topic the node does not listen

@@ -71,6 +71,12 @@ class AxisReference:
                                                               "used")
 
 
+    def difference_variance_at(self, noise_density: float, dt: float) -> float:
+        """E[(y_{t+1} − y_t)²] [u²] of this reference scaled to the density ``noise_density`` [u/√Hz]: the reference
+        model's shape (its filter, its lines) at another level — what a specification's limit means for this axis."""
+        return self.difference_variance(dt)[0] * (noise_density / self.noise_density) ** 2
+
+
 @dataclass(frozen=True)
 class AxisComparison:
     """One axis's outcome: the noise-level test, the significant bias step and new line (None without), notes."""

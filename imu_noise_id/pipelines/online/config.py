@@ -234,6 +234,10 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "it (exact averaged models)", "Hz", 0.01, 1000.0, runtime=False),
     ParamSpec("reference", "", "results folder (or its imu.yaml) of an analyze of this IMU: while stationary, each "
               "axis's noise density is watched against it (empty: no watch)", runtime=False),
+    ParamSpec("spec", "", "datasheet limits, YAML as batch --spec reads ({gyro: {noise_density: …}, accel: {…}}, SI): "
+              "while stationary, an axis whose noise density is beyond its sensor's noise_density limit turns the "
+              "sensor's watch status ERROR (with a reference its model's shape, else white noise; empty: none)",
+              runtime=False),
     ParamSpec("watch.ratio", 1.5, "noise-density ratio (live/reference, either way) the reference watch is tuned to",
               "", 1.01, 100.0, runtime=False),
     ParamSpec("watch.false_alarms_per_hour", 0.1, "false alarms per hour of stationary data the reference watch "
@@ -324,6 +328,7 @@ class OnlineConfig:
     hypotheses_file: str
     hypotheses_bank_rate: float
     reference: str
+    spec: str
     watch_ratio: float
     watch_false_alarms_per_hour: float
     executor: str

@@ -1,33 +1,53 @@
-"""The online watch of an IMU against its own reference (an earlier ``analyze`` of this unit): the stationary
-samples run the noise-level CUSUMs of :class:`~imu_noise_id.core.watch.sequential.SequentialNoiseWatch`, and each
-sensor's status is OK (every axis within its reference), WARN (an axis's density left it: by how much and since
-when) or ERROR (the reference cannot be used: unreadable, or made at another rate). The watch starts once the IMU's
-period is known."""
+"""The online watch of an IMU against its own reference (an earlier ``analyze`` of this unit) and its datasheet limits:
+the stationary samples run the noise-level CUSUMs of :class:`~imu_noise_id.core.watch.sequential.SequentialNoiseWatch`
+against the reference (both ways) and, where the specification limits a sensor's noise density, against that limit
+(upwards only). Each sensor's status is OK (every axis within its reference and limit), WARN (an axis's density left
+its reference: by how much and since when), or ERROR (an axis's density is beyond the specification, or the watch
+cannot run: the reference unreadable or made at another rate). The watch starts once the IMU's period is known.
+
+Against the limit the CUSUM tests v₀ = the reference's difference variance scaled to the limit
+(:meth:`~imu_noise_id.core.watch.compare.AxisReference.difference_variance_at`) against v₁ = :data:`SPEC_RATIO`² v₀:
+it alarms, at the watch's false-alarm rate, once the density is a few per cent beyond the limit. Without a reference
+the limit's white noise is the shape (a sensor's own low-pass lowers its difference variance below that, so the
+limit is then judged late, never early)."""
 
 from __future__ import annotations
+
+import math
 
 from ...core.axes import ACCEL_AXES, AXES, GYRO_AXES
 from ...core.watch.compare import AxisReference, rate_mismatch
 from ...core.watch.sequential import AxisWatch, SequentialNoiseWatch
 from .status import ERROR, OK, WARN, DiagnosticStatus
 
+#: Density ratio (live / limit) the specification's CUSUM is tuned to.
+SPEC_RATIO = 1.1
+_SENSORS = (("gyro", GYRO_AXES), ("accel", ACCEL_AXES))
+
 
 class ReferenceWatch:
-    """The watch of every axis against ``references`` (by axis) made at ``rate_hz`` [Hz] from ``source``; with
-    ``error`` (the reference could not be read) it only reports that."""
+    """The watch of every axis against ``references`` (by axis) made at ``rate_hz`` [Hz] from ``source``, and against
+    ``limits`` (noise density [u/√Hz] per sensor, "gyro"/"accel", from ``limits_source``); with ``error`` (the
+    reference or the limits could not be read) it only reports that. ``references`` None with ``limits``: the limits
+    alone (their white noise as the reference shape, at any rate)."""
 
     def __init__(self, references: dict[str, AxisReference] | None, rate_hz: float, source: str, *, ratio: float,
-                 false_alarms_per_hour: float, error: str | None = None) -> None:
-        self.references, self.rate_hz, self.source = references or {}, rate_hz, source
+                 false_alarms_per_hour: float, error: str | None = None, limits: dict[str, float] | None = None,
+                 limits_source: str = "") -> None:
+        self.references, self.rate_hz, self.source = references, rate_hz, source
         self.ratio, self.false_alarms_per_hour = ratio, false_alarms_per_hour
+        self.limits, self.limits_source = dict(limits or {}), limits_source
         self.refused = error
         self.watch: SequentialNoiseWatch | None = None
+        self.spec_watch: SequentialNoiseWatch | None = None
+        self._unlimited: list[bool] = []  # per axis (AXES order): its sensor has no limit
 
-    def add(self, t: float, sample, period: float | None) -> None:
-        """A stationary sample (AXES order) at stamp ``t`` [s], the IMU's period [s] (None while unknown)."""
-        if self.refused is not None or period is None:
-            return
-        if self.watch is None:
+    def _limit(self, axis: str) -> float | None:
+        return next((self.limits.get(sensor) for sensor, axes in _SENSORS if axis in axes), None)
+
+    def _start(self, period: float) -> None:
+        """Both watches at the IMU's ``period`` [s] (the reference's rate checked first)."""
+        if self.references is not None:
             self.refused = rate_mismatch(1.0 / period, self.rate_hz, self.source)
             if self.refused is not None:
                 return
@@ -38,40 +58,93 @@ class ReferenceWatch:
                 intervals.append(interval)
             self.watch = SequentialNoiseWatch(v, intervals, period, ratio=self.ratio,
                                               false_alarms_per_hour=self.false_alarms_per_hour)
-        self.watch.add(t, sample)
+        if self.limits:
+            v_spec = []
+            for axis in AXES:
+                limit = self._limit(axis)
+                shape = self.references[axis] if self.references is not None else AxisReference(
+                    limit or 1.0, (math.nan, math.nan))
+                v_spec.append(math.inf if limit is None else shape.difference_variance_at(limit, period))
+            finite = [v if math.isfinite(v) else 1.0 for v in v_spec]
+            # the interval (0, v): the upward CUSUM only (an axis quieter than its limit is no finding)
+            self.spec_watch = SequentialNoiseWatch(finite, [(0.0, v) for v in finite], period, ratio=SPEC_RATIO,
+                                                   false_alarms_per_hour=self.false_alarms_per_hour)
+            self._unlimited = [not math.isfinite(v) for v in v_spec]
+
+    def add(self, t: float, sample, period: float | None) -> None:
+        """A stationary sample (AXES order) at stamp ``t`` [s], the IMU's period [s] (None while unknown)."""
+        if self.refused is not None or period is None:
+            return
+        if self.watch is None and self.spec_watch is None:
+            self._start(period)
+            if self.refused is not None:
+                return
+        for watch in (self.watch, self.spec_watch):
+            if watch is not None:
+                watch.add(t, sample)
 
     def break_chain(self) -> None:
-        if self.watch is not None:
-            self.watch.break_chain()
+        for watch in (self.watch, self.spec_watch):
+            if watch is not None:
+                watch.break_chain()
 
     def axes(self) -> dict[str, AxisWatch]:
-        """Every axis's state (empty before the watch started)."""
+        """Every axis's state against its reference (empty before the watch started or without a reference)."""
         return {} if self.watch is None else {axis: self.watch.axis(i) for i, axis in enumerate(AXES)}
+
+    def beyond_spec(self) -> dict[str, AxisWatch]:
+        """The axes whose density the specification's CUSUM found beyond its limit, their state against it."""
+        if self.spec_watch is None:
+            return {}
+        out = {}
+        for i, axis in enumerate(AXES):
+            state = self.spec_watch.axis(i)
+            if not self._unlimited[i] and state.alarm is not None:
+                out[axis] = state
+        return out
 
     def statuses(self) -> list[DiagnosticStatus]:
         """One status per sensor (module docstring)."""
         out = []
-        states = self.axes()
-        for sensor, axes in (("gyro", GYRO_AXES), ("accel", ACCEL_AXES)):
+        states, beyond = self.axes(), self.beyond_spec()
+        sources = {"reference": self.source} if self.references is not None else {}
+        if self.limits:
+            sources["spec"] = self.limits_source
+        for sensor, axes in _SENSORS:
             name = f"Reference watch ({sensor})"
             if self.refused is not None:
-                out.append(DiagnosticStatus(name, ERROR, f"not watching: {self.refused}", {"reference": self.source}))
+                out.append(DiagnosticStatus(name, ERROR, f"not watching: {self.refused}", dict(sources)))
                 continue
-            if not states:
-                out.append(DiagnosticStatus(name, OK, "waiting for stationary samples", {"reference": self.source}))
+            if self.watch is None and self.spec_watch is None:
+                out.append(DiagnosticStatus(name, OK, "waiting for stationary samples", dict(sources)))
                 continue
-            values = {"reference": self.source, "pairs": str(states[axes[0]].pairs)}
-            alarms = []
+            values = dict(sources)
+            watch = self.watch or self.spec_watch
+            values["pairs"] = str(watch.pairs)
+            alarms, errors = [], []
             for axis in axes:
-                s = states[axis]
-                values[f"{axis}_density_ratio"] = f"{s.ratio:.3g}"
-                if s.alarm is not None:
-                    values[f"{axis}_since"] = f"{s.alarm.since_s:.3f}"
-                    alarms.append(f"{axis} noise {s.alarm.direction} ({s.ratio:.3g}× the reference) since stamp "
-                                  f"{s.alarm.since_s:.1f} s")
-            if alarms:
+                if axis in states:
+                    s = states[axis]
+                    values[f"{axis}_density_ratio"] = f"{s.ratio:.3g}"
+                    if s.alarm is not None:
+                        values[f"{axis}_since"] = f"{s.alarm.since_s:.3f}"
+                        alarms.append(f"{axis} noise {s.alarm.direction} ({s.ratio:.3g}× the reference) since stamp "
+                                      f"{s.alarm.since_s:.1f} s")
+                limit = self._limit(axis)
+                if limit is not None and self.spec_watch is not None:
+                    spec_state = self.spec_watch.axis(AXES.index(axis))
+                    values[f"{axis}_spec_ratio"] = f"{spec_state.ratio:.3g}"
+                    if axis in beyond:
+                        values[f"{axis}_beyond_spec_since"] = f"{beyond[axis].alarm.since_s:.3f}"
+                        errors.append(f"{axis} noise beyond the spec ({spec_state.ratio:.3g}× its limit "
+                                      f"{limit:.3g}) since stamp {beyond[axis].alarm.since_s:.1f} s")
+            if errors:
+                out.append(DiagnosticStatus(name, ERROR, "; ".join(errors + alarms), values))
+            elif alarms:
                 out.append(DiagnosticStatus(name, WARN, "; ".join(alarms), values))
-            else:
+            elif self.watch is not None:
                 out.append(DiagnosticStatus(name, OK, "within the reference (density ratio " + ", ".join(
                     f"{states[a].ratio:.3g}" for a in axes) + ")", values))
+            else:
+                out.append(DiagnosticStatus(name, OK, "within the spec", values))
         return out
