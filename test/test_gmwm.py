@@ -207,3 +207,37 @@ def test_the_analytic_jacobian_of_the_moments_equals_finite_differences(truth):
     profile = _Profile(problem, -1e-4, 4096, dt, theta)
     numeric = approx_derivative(lambda t: profile.residuals(t, -3e-4), theta, method="3-point")
     np.testing.assert_allclose(profile.jacobian(theta, -3e-4), numeric, rtol=0, atol=1e-6 * np.abs(numeric).max())
+
+
+def test_an_indefinite_weight_matrix_is_projected_not_a_crash():
+    """A covariance whose correlations are indefinite (smallest eigenvalue −0.13 of 5.5, as the model covariance came
+    out on 3 h at 400 Hz) gives a whitening matrix W with Wᵀ W positive definite, and a positive definite V is left
+    as it is (W V Wᵀ = I)."""
+    from imu_noise_id.core.estimation.gmwm_engine import _inverse_cholesky
+
+    rng = np.random.default_rng(3)
+    q, _ = np.linalg.qr(rng.standard_normal((6, 6)))
+    corr = (q * np.array([-0.13, 0.02, 0.5, 1.0, 1.5, 3.11])) @ q.T
+    corr /= np.sqrt(np.outer(np.diag(corr), np.diag(corr)))
+    scales = np.logspace(-8, -2, 6)
+    v = corr * np.outer(scales, scales)
+    assert np.linalg.eigvalsh(corr).min() < 0
+    w = _inverse_cholesky(v)
+    assert np.all(np.isfinite(w)) and np.linalg.eigvalsh(w.T @ w).min() > 0
+    good = np.cov(rng.standard_normal((6, 50))) * np.outer(scales, scales)
+    np.testing.assert_allclose(_inverse_cholesky(good) @ good @ _inverse_cholesky(good).T, np.eye(6), atol=1e-8)
+
+
+def test_three_hours_at_400_hz_with_a_slow_gm_is_fitted():
+    """3 h at 400 Hz, WN + GM (τ 300 s) + RW: the default analyze's estimator there (the GMWM, beyond 4·10⁶ samples)
+    ends with a model; its model covariance's correlations were indefinite, and the weight's Cholesky factorisation
+    raised (a traceback from analyze)."""
+    from imu_noise_id.core.estimation.gmwm import GmwmOptions, prepare
+    from imu_noise_id.core.estimation.gmwm_select import select_gmwm
+    from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
+
+    dt = 0.0025
+    y = simulate_sum([WN(1.7e-4), GM(tau=300.0, sigma=2e-5), RW(2e-5)], 4_320_000, dt, np.random.default_rng(1))
+    wv, slope = prepare(y, dt, GmwmOptions())
+    selection = select_gmwm(None, dt, options=GmwmOptions(), wv=wv, slope=slope)
+    assert "RW" in selection.best.model

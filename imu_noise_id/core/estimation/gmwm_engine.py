@@ -116,15 +116,28 @@ class Weights:
         return self.whiten[k].T @ self.whiten[k]
 
 
+#: Smallest eigenvalue, relative to the largest, of the correlation matrix a weight is built from.
+EIGENVALUE_FLOOR = 1e-10
+
+
 def _inverse_cholesky(v: np.ndarray) -> np.ndarray:
-    """L⁻¹ with V = L Lᵀ, through the correlation matrix (V spans many orders of magnitude); a near-singular V gets
-    a ridge of 1e-10 on its correlations."""
+    """L⁻¹ with V = L Lᵀ, through the correlation matrix (V spans many orders of magnitude). A correlation matrix
+    that is not positive definite — near-singular, or indefinite where the model covariance's summation
+    (:func:`~imu_noise_id.core.wavelet.covariance.wv_covariance`) is approximate, as on records of 10⁶–10⁷ samples
+    with a long-τ GM beside a random walk — is first projected onto the positive definite ones: its eigenvalues
+    clipped at :data:`EIGENVALUE_FLOOR` of the largest, the diagonal scaled back to one (Higham 2002's projection,
+    one step). Any positive definite weight keeps the GMWM consistent (Guerrier et al. 2013); only its efficiency
+    depends on V being the estimates' covariance."""
     d = np.sqrt(np.diag(v))
     corr = v / np.outer(d, d)
     try:
         chol = linalg.cholesky(corr, lower=True)
     except linalg.LinAlgError:
-        chol = linalg.cholesky(corr + 1e-10 * np.eye(d.size), lower=True)
+        w, vec = np.linalg.eigh(0.5 * (corr + corr.T))
+        w = np.maximum(w, EIGENVALUE_FLOOR * max(float(w.max()), 1e-300))
+        fixed = (vec * w) @ vec.T
+        scale = np.sqrt(np.diag(fixed))
+        chol = linalg.cholesky(fixed / np.outer(scale, scale), lower=True)
     return linalg.solve_triangular(chol, np.eye(d.size), lower=True) / d[None, :]
 
 
