@@ -20,7 +20,7 @@ from ..core.axes import ImuSeries, OdometrySeries, ScalarSeries
 from ..core.errors import InputError
 from ..core.quality import IMU_MAX_ABS, repair_time_series
 from .errors import BagError
-from .stream import Progress, TopicStream, read_topics
+from .stream import BeforeDecoding, Progress, TopicStream, read_topics
 from .topics import IMU_TYPE, ODOM_TYPE, TEMPERATURE_TYPE, reason
 
 
@@ -153,15 +153,17 @@ def read_odometry(path: str | Path, topic: str | None = None) -> OdometrySeries:
 
 
 def read_static(path: str | Path, topic: str | None = None, temperature_topic: str | None = None,
-                progress: Progress | None = None, *, rate_hz: float | None = None) -> BagContents:
+                progress: Progress | None = None, *, rate_hz: float | None = None,
+                before_decoding: BeforeDecoding | None = None) -> BagContents:
     """What a static analysis reads in one pass: the IMU series and, where present, the temperature [°C]. ``path`` may
-    be an ``.npz`` with ``t`` [s] (or ``fs_hz``), ``gyro`` [rad/s] (N, 3), ``accel`` [m/s²] (N, 3)."""
+    be an ``.npz`` with ``t`` [s] (or ``fs_hz``), ``gyro`` [rad/s] (N, 3), ``accel`` [m/s²] (N, 3).
+    ``before_decoding``: see :func:`~.stream.read_topics` (a bag only)."""
     p = Path(path).expanduser()
     if p.suffix == ".npz":
         imu = read_npz(p, rate_hz)
         return BagContents(path=p, imu=imu, notes=[f"{imu.topic}: {note}" for note in imu.notes])
     wanted = {IMU_TYPE: (topic, True), TEMPERATURE_TYPE: (temperature_topic, temperature_topic is not None)}
-    bag, results, notes = read_topics(p, wanted, progress, True, rate_hz)
+    bag, results, notes = read_topics(p, wanted, progress, True, rate_hz, before_decoding=before_decoding)
     return BagContents(
         path=bag, imu=_imu(results[IMU_TYPE]),
         temperature=_temperature(results[TEMPERATURE_TYPE]) if TEMPERATURE_TYPE in results else None,

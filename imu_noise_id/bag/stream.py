@@ -38,6 +38,10 @@ Progress = Callable[[int, int], None]
 _STAMP = {"sec": ("header.stamp.sec",), "nsec": ("header.stamp.nanosec",)}
 
 
+#: ``before_decoding(msgtype, topic, message count, bag span [s] or None)``: see :func:`read_topics`.
+BeforeDecoding = Callable[[str, str, int, float | None], None]
+
+
 def _xyz(prefix: str, names: str = "xyz") -> tuple[str, ...]:
     return tuple(f"{prefix}.{c}" for c in names)
 
@@ -203,9 +207,13 @@ def read_topics(
     progress: Progress | None,
     fast: bool,
     rate_hz: float | None = None,
+    *,
+    before_decoding: BeforeDecoding | None = None,
 ) -> tuple[Path, dict[str, tuple[np.ndarray, dict[str, np.ndarray], list[str], TopicStream]], list[str]]:
     """Read the topics of the types in ``wanted`` (msgtype → (topic or None, required)) in one pass; ``rate_hz`` the
-    IMU's declared rate; an unusable optional topic is left out with a note."""
+    IMU's declared rate; an unusable optional topic is left out with a note. ``before_decoding(msgtype, topic, count,
+    span_s)`` is called for each topic read, with its message count and the bag's time span [s] (None where the
+    reader has none), before anything is decoded or allocated: it may refuse the bag by raising."""
     bag = Path(path).expanduser()
     notes: list[str] = []
     with open_bag(bag) as reader:
@@ -225,6 +233,9 @@ def read_topics(
                     raise BagError(f"topic {name!r} in {where} has no messages: record it, or choose another topic")
                 notes.append(f"{name}: no messages")
                 continue
+            if before_decoding is not None:
+                duration_ns = getattr(reader, "duration", None)
+                before_decoding(msgtype, name, count, None if not duration_ns else duration_ns * 1e-9)
             stream = TopicStream(reader, msgtype, name, count, fast)
             streams[msgtype] = stream
             for connection in reader.topics[name].connections:

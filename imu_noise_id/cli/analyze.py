@@ -40,8 +40,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Read, analyse, write, report. Input problems raise InputError (exit 2)."""
     from ..bag.reader import read_static
+    from ..bag.topics import IMU_TYPE
     from ..core.axes import AXES
-    from ..pipelines.analyze import analyze
+    from ..pipelines.analyze import analyze, worker_processes
     from ..report.analysis import write_analysis
     from ..report.console import (
         comparison_table,
@@ -52,11 +53,21 @@ def run(args: argparse.Namespace) -> int:
         record_length_lines,
         summary_table,
     )
+    from .memory import available_bytes, check_fits
     from .progress import TextProgress
 
     options = analysis_options(args)
+
+    def fits_in_memory(msgtype: str, topic: str, count: int, bag_span_s: float | None) -> None:
+        """Refuse a record this machine cannot analyse, before it is decoded (:mod:`.memory`)."""
+        if msgtype == IMU_TYPE and options.models.enabled:
+            jobs = worker_processes(options.jobs, count, len(AXES))
+            check_fits(topic, count, bag_span_s, span=options.span, workers=jobs if jobs > 1 else 0,
+                       available=available_bytes())
+
     with TextProgress(f"reading {args.bag.name}") as progress:
-        recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
+        recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate,
+                                before_decoding=fits_in_memory)
     allan = TextProgress("Allan-family variances")
     stage = "model selection" if args.model == "auto" else f"fitting {args.model}"
     models = TextProgress(stage + (" and closed loop" if options.loop else ""), unit="axes")

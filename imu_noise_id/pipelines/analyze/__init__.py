@@ -163,7 +163,7 @@ def _model_stages(imu: ImuSeries, temperature: ScalarSeries | None, options: Ana
     static = result.static
     loop = _imu_loop(imu, temperature, options, result.warnings) if options.loop else None
     context = _AxisContext(imu, loop, options, static)
-    for axis, outcome in _each_axis(context, _jobs(options.jobs, static.n, len(static.axes))):
+    for axis, outcome in _each_axis(context, worker_processes(options.jobs, static.n, len(static.axes))):
         result.warnings += [w for w in outcome.warnings if w not in result.warnings]
         if outcome.loop is not None:
             result.loops[axis] = outcome.loop
@@ -230,7 +230,7 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     return _AxisOutcome(model, loop_result, final, band, warnings)
 
 
-def _jobs(asked: int, n: int, axes: int) -> int:
+def worker_processes(asked: int, n: int, axes: int) -> int:
     """Worker processes for ``axes`` axes of ``n`` samples when ``asked`` (:class:`AnalyzeOptions`); 1 = none."""
     if asked == 0:
         return min(len(os.sched_getaffinity(0)), axes) if n >= PARALLEL_MIN_SAMPLES else 1
@@ -263,4 +263,4 @@ def _each_axis(context: _AxisContext, jobs: int) -> Iterator[tuple[str, _AxisOut
 
 
 __all__ = ["AUTO", "DEFAULT_HORIZON_S", "AnalysisResult", "AnalyzeOptions", "AxisOverbound", "FinalModel",
-           "ModelStage", "StaticAnalysis", "analyze"]
+           "ModelStage", "StaticAnalysis", "analyze", "worker_processes"]

@@ -1,0 +1,74 @@
+"""Whether this machine has the memory an ``analyze`` of a record needs, asked before the bag is decoded.
+
+The need is modelled from the default ``analyze`` of 3 h at 400 Hz (4.32·10⁶ samples per axis, the GMWM's regime,
+where records are long enough for memory to matter; ``docs/results/bench_analyze_time_3h.txt``): its main process
+peaked at 891 MiB and the process tree at 1473 MiB with two workers, i.e. :data:`PROCESS_BYTES` per process
+(interpreter and imports) plus :data:`MAIN_BYTES_PER_SAMPLE` per message read in the main process (the decoded record
+and the Allan stage) and :data:`WORKER_BYTES_PER_SAMPLE` per analysed sample in each worker. What is available is
+Linux's ``MemAvailable`` (``/proc/meminfo``), or less where a cgroup limits the process (``memory.max`` −
+``memory.current``). A record is refused only when the need is beyond what is available; the message says how much
+it needs and the ``--span`` that fits.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from ..core.errors import InputError
+
+#: RSS [bytes] of one process with the package imported (interpreter, numpy, scipy, rosbags).
+PROCESS_BYTES = 130 * 2**20
+#: Peak RSS [bytes] of the main process per IMU message read, over its own (891 MiB − 130 MiB for 4.32·10⁶).
+MAIN_BYTES_PER_SAMPLE = 185
+#: Peak RSS [bytes] of one worker per sample analysed, over its own ((1473 − 891) MiB / 2 − 130 MiB for 4.32·10⁶).
+WORKER_BYTES_PER_SAMPLE = 39
+
+
+def available_bytes(meminfo: Path = Path("/proc/meminfo"), cgroup: Path = Path("/sys/fs/cgroup")) -> float | None:
+    """Memory [bytes] a new allocation can get: ``MemAvailable``, or the cgroup's room where smaller; None where the
+    system says neither (not Linux)."""
+    room = math.inf
+    try:
+        for line in meminfo.read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                room = float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    try:
+        limit = (cgroup / "memory.max").read_text().strip()
+        if limit != "max":
+            room = min(room, float(limit) - float((cgroup / "memory.current").read_text().strip()))
+    except (OSError, ValueError):
+        pass
+    return None if math.isinf(room) else room
+
+
+def needed_bytes(messages: int, analysed: int, workers: int) -> float:
+    """Peak memory [bytes] of an analysis of ``analysed`` of a bag's ``messages`` IMU samples with ``workers`` worker
+    processes (0: all in the main process, which then also holds the fits: one worker's share)."""
+    return ((1 + workers) * PROCESS_BYTES + messages * MAIN_BYTES_PER_SAMPLE
+            + analysed * WORKER_BYTES_PER_SAMPLE * max(workers, 1))
+
+
+def check_fits(topic: str, messages: int, bag_span_s: float | None, *, span: tuple[float, float] | None,
+               workers: int, available: float | None) -> None:
+    """InputError when analysing ``topic``'s ``messages`` samples (over ``bag_span_s`` seconds; the ``span``
+    [start, end) seconds of them when given) with ``workers`` worker processes needs more than ``available`` bytes;
+    the message gives the need and the ``--span`` length that fits."""
+    if available is None or messages <= 0:
+        return
+    rate = messages / bag_span_s if bag_span_s else None
+    analysed = messages
+    if span is not None and rate is not None:
+        analysed = min(messages, int(max(0.0, min(span[1], bag_span_s) - span[0]) * rate) + 1)
+    need = needed_bytes(messages, analysed, workers)
+    if need <= available:
+        return
+    room = available - needed_bytes(messages, 0, workers)
+    fitting = room / (WORKER_BYTES_PER_SAMPLE * max(workers, 1))
+    advice = (f"analyse a part of it (--span 0:{fitting / rate:.0f} fits, seconds from the first sample)"
+              if rate is not None and fitting >= 1.0 else "split the bag into shorter parts")
+    raise InputError(f"{topic}: analysing {analysed} samples per axis of {messages} needs about "
+                     f"{need / 2**30:.1f} GiB of memory, more than the {available / 2**30:.1f} GiB available here: "
+                     f"{advice}, use --jobs 1 (fewer processes), or run it on a machine with more memory")
