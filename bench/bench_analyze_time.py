@@ -7,6 +7,12 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --baseline ../baseline            # 1 h at 400 Hz (issue 10)
     .venv/bin/python bench/bench_analyze_time.py --rates 200 400                     # issue 11's timings
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --jobs 1 0               # one process vs one per core
+    .venv/bin/python bench/bench_analyze_time.py --duration 10800                     # 3 h at 400 Hz (the GMWM)
+    .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400         # 24 h at 200 Hz
+
+The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
+screen on statistics of fixed size, then 3 h at 400 Hz and 24 h at 200 Hz (this checkout alone: the one before it
+raised out of the GMWM on the 3 h record).
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
 checkout. Printed: per rate, source and ``--jobs`` value, wall time, CPU time (user + system of the analyze process

@@ -1,7 +1,7 @@
 """Whether this machine has the memory an ``analyze`` of a record needs, asked before the bag is decoded.
 
 The need is modelled from the default ``analyze`` of 3 h at 400 Hz (4.32·10⁶ samples per axis, the GMWM's regime,
-where records are long enough for memory to matter; ``docs/results/bench_analyze_time_3h.txt``): its main process
+where records are long enough for memory to matter; ``docs/results/bench_analyze_time.txt``): its main process
 peaked at 891 MiB and the process tree at 1473 MiB with two workers, i.e. :data:`PROCESS_BYTES` per process
 (interpreter and imports) plus :data:`MAIN_BYTES_PER_SAMPLE` per message read in the main process (the decoded record
 and the Allan stage) and :data:`WORKER_BYTES_PER_SAMPLE` per analysed sample in each worker. What is available is
