@@ -11,8 +11,7 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400         # 24 h at 200 Hz
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
-screen on statistics of fixed size, then 3 h at 400 Hz and 24 h at 200 Hz (this checkout alone: the one before it
-raised out of the GMWM on the 3 h record).
+screen on statistics of fixed size, then 3 h at 400 Hz and 24 h at 200 Hz (this checkout alone).
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
 checkout. Printed: per rate, source and ``--jobs`` value, wall time, CPU time (user + system of the analyze process
