@@ -111,6 +111,15 @@ def test_the_command_says_within_degraded_or_refused(reference_dir, tmp_path, ca
     assert main(["compare", str(tmp_path / "noisier"), "--reference", str(out)]) == 1
     printed = capsys.readouterr().out
     assert "DEGRADED: gyro_z" in printed and "noise up" in printed
+    # against a datasheet limit of 2.2e-4 (the reference's 1.7e-4 within it): the noisier gyro_z (2.55e-4 from
+    # minute 5) is beyond it, the unchanged recording is not
+    spec = tmp_path / "spec.yaml"
+    spec.write_text("gyro: {noise_density: 2.2e-4}\n")
+    assert main(["compare", str(tmp_path / "same"), "--reference", str(out), "--spec", str(spec)]) == 0
+    assert "BEYOND THE SPEC" not in capsys.readouterr().out
+    assert main(["compare", str(tmp_path / "noisier"), "--reference", str(out), "--spec", str(spec)]) == 1
+    beyond = [row for row in capsys.readouterr().out.splitlines() if "BEYOND THE SPEC" in row]
+    assert len(beyond) == 1 and beyond[0].startswith("gyro_z")
     fast = simulate_static_imu(model, 200.0, 300.0, seed=54)
     write_bag(tmp_path / "fast", fast)
     assert main(["compare", str(tmp_path / "fast"), "--reference", str(out)]) == 2

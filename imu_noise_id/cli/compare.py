@@ -34,6 +34,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "1.5)")
     parser.add_argument("--false-alarms-per-hour", type=float, default=0.1, metavar="L",
                         help="false alarms per hour of data each test allows (default 0.1)")
+    parser.add_argument("--spec", type=Path, default=None, metavar="FILE",
+                        help="datasheet limits, YAML as batch --spec reads ({gyro: {noise_density: …}, accel: {…}}, "
+                             "SI): an axis whose noise density is beyond its sensor's limit is degraded too")
     parser.set_defaults(run=run)
 
 
@@ -54,17 +57,20 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_bag
     from ..pipelines.compare import compare
     from ..report.reference import read_reference
+    from ..report.spec import read_spec
 
     if not args.ratio > 1.0 or not args.false_alarms_per_hour > 0:
         from ..core.errors import InputError
         raise InputError("--ratio must be > 1 and --false-alarms-per-hour > 0")
     reference = read_reference(args.reference)
+    spec = read_spec(args.spec) if args.spec is not None else {}
+    limits = {sensor: v["noise_density"] for sensor, v in spec.items() if "noise_density" in v}
     with TextProgress(f"reading {args.bag.name}") as progress:
         imu = read_bag(args.bag, imu_topic=args.topic, progress=progress, rate_hz=args.rate).imu
     if args.span is not None:
         imu = imu.between(*args.span)
     result = compare(imu, reference.axes, reference.rate_hz, reference.topic, ratio=args.ratio,
-                     false_alarms_per_hour=args.false_alarms_per_hour)
+                     false_alarms_per_hour=args.false_alarms_per_hour, limits=limits)
     print(f"{args.bag} ({result.duration_s:.0f} s) against {reference.source}:")
     for note in result.notes + [n for c in result.axes.values() for n in c.notes]:
         print(f"note: {note}")

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..core.axes import ImuSeries
+from ..core.axes import GYRO_AXES, ImuSeries
 from ..core.errors import InputError
 from ..core.stillness import static_check
 from ..core.watch.compare import AxisComparison, AxisReference, compare_axis, rate_mismatch
@@ -32,8 +32,10 @@ class Comparison:
 
 def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float, topic: str | None = None, *,
             ratio: float = DEFAULT_RATIO,
-            false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> Comparison:
-    """Test ``imu`` against ``references`` made at ``rate_hz`` [Hz] from ``topic``.
+            false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
+            limits: dict[str, float] | None = None) -> Comparison:
+    """Test ``imu`` against ``references`` made at ``rate_hz`` [Hz] from ``topic`` and, per sensor ("gyro", "accel"),
+    against the noise-density limits of a specification ``limits`` [u/√Hz].
 
     Raises
     ------
@@ -57,7 +59,9 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
     axes = {}
     for axis, ref in references.items():
         try:
-            axes[axis] = compare_axis(imu.axis(axis), dt, ref, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour)
+            sensor = "gyro" if axis in GYRO_AXES else "accel"
+            axes[axis] = compare_axis(imu.axis(axis), dt, ref, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour,
+                                      limit=(limits or {}).get(sensor))
         except ValueError as exc:
             raise InputError(f"compare: {axis}: {exc}") from None
     return Comparison(axes, float(imu.t[-1] - imu.t[0]), notes)

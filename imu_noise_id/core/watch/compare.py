@@ -27,7 +27,7 @@ from ..diagnostics import detectors as det
 from ..diagnostics.whitening import WhiteningFilter
 from ..noise.base import Component
 from ..noise.components import WN, total_allan_variance
-from .noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO, NoiseLevel, watch_noise_level
+from .noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO, NoiseLevel, beyond_limit, watch_noise_level
 
 #: Largest relative difference between a recording's rate and its reference's.
 RATE_TOLERANCE = 0.02
@@ -79,17 +79,23 @@ class AxisReference:
 
 @dataclass(frozen=True)
 class AxisComparison:
-    """One axis's outcome: the noise-level test, the significant bias step and new line (None without), notes."""
+    """One axis's outcome: the noise-level test, the significant bias step and new line (None without), notes, and the
+    test against a specification's noise-density limit (None without one; its ratio is live / limit)."""
 
     noise: NoiseLevel
     step: det.Finding | None
     line: det.Finding | None
     alpha: float
     notes: list[str] = field(default_factory=list)
+    limit: NoiseLevel | None = None
+
+    @property
+    def beyond_spec(self) -> bool:
+        return self.limit is not None and self.limit.alarm is not None
 
     @property
     def degraded(self) -> bool:
-        return self.noise.alarm is not None or self.step is not None or self.line is not None
+        return self.noise.alarm is not None or self.step is not None or self.line is not None or self.beyond_spec
 
     def findings(self) -> list[str]:
         """What differs from the reference, in words (empty when within)."""
@@ -99,6 +105,9 @@ class AxisComparison:
             out.append(f"noise {'up' if a.direction == 'up' else 'down'}: density {self.noise.ratio:.3g}× the "
                        f"reference [{self.noise.ratio_ci[0]:.3g}, {self.noise.ratio_ci[1]:.3g}] since "
                        f"{a.since_s:.1f} s (alarm at {a.time_s:.1f} s)")
+        if self.beyond_spec:
+            out.append(f"BEYOND THE SPEC: density {self.limit.ratio:.3g}× its limit [{self.limit.ratio_ci[0]:.3g}, "
+                       f"{self.limit.ratio_ci[1]:.3g}] since {self.limit.alarm.since_s:.1f} s")
         if self.step is not None:
             p = self.step.params
             out.append(f"bias step of {p['size']:.3g} at {p['time']:.1f} s")
@@ -128,8 +137,11 @@ def _new_line(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float
 
 
 def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: float = DEFAULT_RATIO,
-                 false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> AxisComparison:
-    """The three tests of the module docstring on samples ``y`` [u] at period ``dt`` [s].
+                 false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
+                 limit: float | None = None) -> AxisComparison:
+    """The three tests of the module docstring on samples ``y`` [u] at period ``dt`` [s], and with ``limit`` (a
+    specification's noise density [u/√Hz]) the upward CUSUM against it
+    (:func:`~.noise_level.beyond_limit`, the reference model's shape at the limit's level).
 
     Raises
     ------
@@ -147,4 +159,6 @@ def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: f
     e[: min(10, e.size // 100)] = np.nan  # the filter's start-up
     step = det.detect_step(e, dt, whitening, alpha=alpha)
     line = _new_line(e, dt, whitening, alpha, reference.known_lines)
-    return AxisComparison(noise, step if step.significant else None, line, alpha, [note] if note else [])
+    beyond = None if limit is None else beyond_limit(y, dt, reference.difference_variance_at(limit, dt),
+                                                     false_alarms_per_hour=false_alarms_per_hour)
+    return AxisComparison(noise, step if step.significant else None, line, alpha, [note] if note else [], beyond)

@@ -111,8 +111,9 @@ def _ratio(d: np.ndarray, v_ref: float) -> tuple[float, tuple[float, float]]:
 
 def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[float, float], *,
                       ratio: float = DEFAULT_RATIO,
-                      false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> NoiseLevel:
-    """Both CUSUMs of the module docstring on samples ``y`` [u] at period ``dt`` [s].
+                      false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
+                      directions_of: tuple[str, ...] = ("up", "down")) -> NoiseLevel:
+    """Both CUSUMs of the module docstring (those of ``directions_of``) on samples ``y`` [u] at period ``dt`` [s].
 
     Parameters
     ----------
@@ -137,6 +138,8 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
     d2 = d * d
     alarms = []
     for direction, a, b in directions(v_ref, v_interval, ratio):
+        if direction not in directions_of:
+            continue
         found = _cusum_alarm(a + b * d2, h)
         if found is not None:
             alarms.append(LevelAlarm(direction, float(index[found[0]] * dt), float(index[found[1]] * dt)))
@@ -144,3 +147,17 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
     since = d if alarm is None else d[index * dt >= alarm.since_s]
     value, ci = _ratio(since if since.size >= 100 else d, v_ref)
     return NoiseLevel(value, ci, alarm, h, int(d.size))
+
+
+#: Density ratio (live / limit) the test against a specification's limit is tuned to.
+LIMIT_RATIO = 1.1
+
+
+def beyond_limit(y: np.ndarray, dt: float, v_limit: float, *, ratio: float = LIMIT_RATIO,
+                 false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> NoiseLevel:
+    """The upward CUSUM alone against a limit: v₀ = ``v_limit`` [u²] (a specification's noise density as E[(y_{t+1} −
+    y_t)²]), v₁ = ``ratio``² v₀, on samples ``y`` [u] at period ``dt`` [s]. The outcome's ratio is live / limit (in
+    density); an alarm says the axis is beyond the limit. ValueError as :func:`watch_noise_level`."""
+    return watch_noise_level(y, dt, v_limit, (v_limit, v_limit), ratio=ratio,
+                             false_alarms_per_hour=false_alarms_per_hour, directions_of=("up",))
+

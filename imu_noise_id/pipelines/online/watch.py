@@ -6,10 +6,10 @@ its reference: by how much and since when), or ERROR (an axis's density is beyon
 cannot run: the reference unreadable or made at another rate). The watch starts once the IMU's period is known.
 
 Against the limit the CUSUM tests v₀ = the reference's difference variance scaled to the limit
-(:meth:`~imu_noise_id.core.watch.compare.AxisReference.difference_variance_at`) against v₁ = :data:`SPEC_RATIO`² v₀:
-it alarms, at the watch's false-alarm rate, once the density is a few per cent beyond the limit. Without a reference
-the limit's white noise is the shape (a sensor's own low-pass lowers its difference variance below that, so the
-limit is then judged late, never early)."""
+(:meth:`~imu_noise_id.core.watch.compare.AxisReference.difference_variance_at`) against v₁ =
+:data:`~imu_noise_id.core.watch.noise_level.LIMIT_RATIO`² v₀: it alarms, at the watch's false-alarm rate, once the
+density is a few per cent beyond the limit. Without a reference the limit's white noise is the shape (a sensor's own
+low-pass lowers its difference variance below that, so the limit is then judged late, never early)."""
 
 from __future__ import annotations
 
@@ -17,11 +17,10 @@ import math
 
 from ...core.axes import ACCEL_AXES, AXES, GYRO_AXES
 from ...core.watch.compare import AxisReference, rate_mismatch
+from ...core.watch.noise_level import LIMIT_RATIO
 from ...core.watch.sequential import AxisWatch, SequentialNoiseWatch
 from .status import ERROR, OK, WARN, DiagnosticStatus
 
-#: Density ratio (live / limit) the specification's CUSUM is tuned to.
-SPEC_RATIO = 1.1
 _SENSORS = (("gyro", GYRO_AXES), ("accel", ACCEL_AXES))
 
 
@@ -67,7 +66,7 @@ class ReferenceWatch:
                 v_spec.append(math.inf if limit is None else shape.difference_variance_at(limit, period))
             finite = [v if math.isfinite(v) else 1.0 for v in v_spec]
             # the interval (0, v): the upward CUSUM only (an axis quieter than its limit is no finding)
-            self.spec_watch = SequentialNoiseWatch(finite, [(0.0, v) for v in finite], period, ratio=SPEC_RATIO,
+            self.spec_watch = SequentialNoiseWatch(finite, [(0.0, v) for v in finite], period, ratio=LIMIT_RATIO,
                                                    false_alarms_per_hour=self.false_alarms_per_hour)
             self._unlimited = [not math.isfinite(v) for v in v_spec]
 
