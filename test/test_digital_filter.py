@@ -95,6 +95,7 @@ def test_the_selection_fits_a_second_order_dlpf_and_pastes_its_passband_level():
     assert n_hat.ci95[0] <= passband <= n_hat.ci95[1]
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")  # the intervals' trial points overflowed onto the console
 @pytest.mark.parametrize(("order", "rate", "cutoff"), [(1, 200.0, 12.0), (3, 200.0, 12.0), (4, 200.0, 12.0),
                                                       (4, 200.0, 40.0), (4, 400.0, 100.0)])
 def test_the_fit_takes_the_filters_order(order, rate, cutoff):

@@ -76,10 +76,11 @@ def _near_zero(par: mle.Parameterisation, res: mle.MLEResult, k: int, y: np.ndar
     th = res.theta.copy()
     th[k] -= math.log(1e3)
     try:
-        ll = kalman.loglik(par.to_model(th, res.model), y, z).loglik
+        with np.errstate(over="ignore", invalid="ignore"):  # a point that far may overflow: then ℓ is not finite
+            ll = kalman.loglik(par.to_model(th, res.model), y, z).loglik
     except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
         return False
-    return res.loglik - ll < mle.LR_DROP_95
+    return math.isfinite(ll) and res.loglik - ll < mle.LR_DROP_95
 
 
 def _ramp_regressor(model: ss.StateSpace) -> int | None:
