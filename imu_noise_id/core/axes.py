@@ -16,6 +16,16 @@ ACCEL_AXES: tuple[str, ...] = ("accel_x", "accel_y", "accel_z")
 AXES: tuple[str, ...] = GYRO_AXES + ACCEL_AXES
 
 UNITS: dict[str, str] = {**dict.fromkeys(GYRO_AXES, "rad/s"), **dict.fromkeys(ACCEL_AXES, "m/s^2")}
+#: Each sensor's name ("gyro", "accel") and its axes.
+SENSORS: tuple[tuple[str, tuple[str, ...]], ...] = (("gyro", GYRO_AXES), ("accel", ACCEL_AXES))
+
+
+def sensor_of(axis: str) -> str:
+    """The sensor ("gyro" or "accel") of ``axis``; ValueError if not one of :data:`AXES`."""
+    for sensor, axes in SENSORS:
+        if axis in axes:
+            return sensor
+    raise ValueError(f"unknown axis {axis!r}: expected one of {', '.join(AXES)}")
 
 
 def axis_index(name: str) -> int:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..core.axes import GYRO_AXES, ImuSeries
+from ..core.axes import ImuSeries, sensor_of
 from ..core.errors import InputError
 from ..core.stillness import static_check
 from ..core.watch.compare import AxisComparison, AxisReference, compare_axis, rate_mismatch
@@ -59,9 +59,8 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
     axes = {}
     for axis, ref in references.items():
         try:
-            sensor = "gyro" if axis in GYRO_AXES else "accel"
             axes[axis] = compare_axis(imu.axis(axis), dt, ref, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour,
-                                      limit=(limits or {}).get(sensor))
+                                      limit=(limits or {}).get(sensor_of(axis)))
         except ValueError as exc:
             raise InputError(f"compare: {axis}: {exc}") from None
     return Comparison(axes, float(imu.t[-1] - imu.t[0]), notes)

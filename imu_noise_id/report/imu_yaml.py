@@ -12,7 +12,7 @@ from pathlib import Path
 
 import yaml
 
-from ..core.axes import ACCEL_AXES, GYRO_AXES
+from ..core.axes import SENSORS, sensor_of
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.overbound import AxisOverbound
 from ..pipelines.analyze.static import StaticAnalysis, kalibr_parameters
@@ -21,13 +21,12 @@ from .numbers import num
 #: How the one number per sensor that Kalibr wants is made from the three axes.
 KALIBR_COMBINE = "max"
 _PREFIX = {"gyro": "gyroscope", "accel": "accelerometer"}
-_SENSORS = (("gyro", GYRO_AXES), ("accel", ACCEL_AXES))
 
 
 def axis_key(axis: str, parameter: str) -> str:
     """The imu.yaml key of ``parameter`` for ``axis``'s sensor, e.g. ``gyroscope_noise_density`` for gyro_z (its
     per-axis lists add ``_xyz``)."""
-    return f"{_PREFIX['gyro' if axis in GYRO_AXES else 'accel']}_{parameter}"
+    return f"{_PREFIX[sensor_of(axis)]}_{parameter}"
 
 
 def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
@@ -39,7 +38,7 @@ def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
         doc["update_rate_trusted"] = result.period.trusted
     doc["rostopic"] = rostopic
     doc["confidence_level"] = result.allan.confidence
-    for sensor, axes in _SENSORS:
+    for sensor, axes in SENSORS:
         for parameter in ("noise_density", "random_walk"):
             key = f"{_PREFIX[sensor]}_{parameter}"
             comps = [getattr(result.slopes[a], parameter) for a in axes]
@@ -60,7 +59,7 @@ def add_final_values(doc: dict, finals: dict[str, FinalModel], result: StaticAna
     per-sample standard deviation of the high-frequency noise. Where the Allan-slope reading stands in (``result``
     given), ``<key>_source_xyz`` says so with the τ range it was read over.
     """
-    for sensor, axes in _SENSORS:
+    for sensor, axes in SENSORS:
         if not all(a in finals for a in axes):
             continue
         for parameter in ("noise_density", "random_walk"):
@@ -122,7 +121,7 @@ def overbound_dict(overbounds: dict[str, AxisOverbound]) -> dict:
     out: dict = {"horizon_s": num(first.horizon_s), "tau_range_s": [num(first.tau_range[0]), num(first.tau_range[1])],
                  "covers": first.covers.split(" (")[0]}
     summary = []
-    for sensor, axes in _SENSORS:
+    for sensor, axes in SENSORS:
         obs = [overbounds[a] for a in axes if a in overbounds]
         if len(obs) != len(axes):
             continue

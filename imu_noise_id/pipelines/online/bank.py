@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ...core.axes import AXES, GYRO_AXES
+from ...core.axes import AXES, sensor_of
 from ...core.hypotheses.axis import AxisIdentifier
 from ...core.hypotheses.config import hypothesis_set_factory
 from .events import EventLog
@@ -128,8 +128,7 @@ class BankFeed:
         banks = []
         examples = []
         for axis in AXES:
-            sensor = "gyro" if axis in GYRO_AXES else "accel"
-            factory, warmup = hypothesis_set_factory(self._data, dt, sensor, self._source)
+            factory, warmup = hypothesis_set_factory(self._data, dt, sensor_of(axis), self._source)
 
             def make(wn_estimate: float | None, factory: Any = factory) -> Any:
                 return dataclasses.replace(factory(wn_estimate), block=block)

@@ -15,13 +15,11 @@ from __future__ import annotations
 
 import math
 
-from ...core.axes import ACCEL_AXES, AXES, GYRO_AXES
+from ...core.axes import AXES, SENSORS, sensor_of
 from ...core.watch.compare import AxisReference, rate_mismatch
 from ...core.watch.noise_level import LIMIT_RATIO
 from ...core.watch.sequential import AxisWatch, SequentialNoiseWatch
 from .status import ERROR, OK, WARN, DiagnosticStatus
-
-_SENSORS = (("gyro", GYRO_AXES), ("accel", ACCEL_AXES))
 
 
 class ReferenceWatch:
@@ -39,10 +37,6 @@ class ReferenceWatch:
         self.refused = error
         self.watch: SequentialNoiseWatch | None = None
         self.spec_watch: SequentialNoiseWatch | None = None
-        self._unlimited: list[bool] = []  # per axis (AXES order): its sensor has no limit
-
-    def _limit(self, axis: str) -> float | None:
-        return next((self.limits.get(sensor) for sensor, axes in _SENSORS if axis in axes), None)
 
     def _start(self, period: float) -> None:
         """Both watches at the IMU's ``period`` [s] (the reference's rate checked first)."""
@@ -60,15 +54,16 @@ class ReferenceWatch:
         if self.limits:
             v_spec = []
             for axis in AXES:
-                limit = self._limit(axis)
+                limit = self.limits.get(sensor_of(axis))
+                if limit is None:  # a sensor without a limit: its CUSUMs run, and are never read (beyond_spec)
+                    v_spec.append(1.0)
+                    continue
                 shape = self.references[axis] if self.references is not None else AxisReference(
-                    limit or 1.0, (math.nan, math.nan))
-                v_spec.append(math.inf if limit is None else shape.difference_variance_at(limit, period))
-            finite = [v if math.isfinite(v) else 1.0 for v in v_spec]
+                    limit, (math.nan, math.nan))
+                v_spec.append(shape.difference_variance_at(limit, period))
             # the interval (0, v): the upward CUSUM only (an axis quieter than its limit is no finding)
-            self.spec_watch = SequentialNoiseWatch(finite, [(0.0, v) for v in finite], period, ratio=LIMIT_RATIO,
+            self.spec_watch = SequentialNoiseWatch(v_spec, [(0.0, v) for v in v_spec], period, ratio=LIMIT_RATIO,
                                                    false_alarms_per_hour=self.false_alarms_per_hour)
-            self._unlimited = [not math.isfinite(v) for v in v_spec]
 
     def add(self, t: float, sample, period: float | None) -> None:
         """A stationary sample (AXES order) at stamp ``t`` [s], the IMU's period [s] (None while unknown)."""
@@ -98,7 +93,7 @@ class ReferenceWatch:
         out = {}
         for i, axis in enumerate(AXES):
             state = self.spec_watch.axis(i)
-            if not self._unlimited[i] and state.alarm is not None:
+            if sensor_of(axis) in self.limits and state.alarm is not None:
                 out[axis] = state
         return out
 
@@ -109,7 +104,7 @@ class ReferenceWatch:
         sources = {"reference": self.source} if self.references is not None else {}
         if self.limits:
             sources["spec"] = self.limits_source
-        for sensor, axes in _SENSORS:
+        for sensor, axes in SENSORS:
             name = f"Reference watch ({sensor})"
             if self.refused is not None:
                 out.append(DiagnosticStatus(name, ERROR, f"not watching: {self.refused}", dict(sources)))
@@ -129,7 +124,7 @@ class ReferenceWatch:
                         values[f"{axis}_since"] = f"{s.alarm.since_s:.3f}"
                         alarms.append(f"{axis} noise {s.alarm.direction} ({s.ratio:.3g}× the reference) since stamp "
                                       f"{s.alarm.since_s:.1f} s")
-                limit = self._limit(axis)
+                limit = self.limits.get(sensor_of(axis))
                 if limit is not None and self.spec_watch is not None:
                     spec_state = self.spec_watch.axis(AXES.index(axis))
                     values[f"{axis}_spec_ratio"] = f"{spec_state.ratio:.3g}"
