@@ -57,14 +57,13 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_bag
     from ..pipelines.compare import compare
     from ..report.reference import read_reference
-    from ..report.spec import read_spec
+    from ..report.spec import noise_density_limits, read_spec
 
     if not args.ratio > 1.0 or not args.false_alarms_per_hour > 0:
         from ..core.errors import InputError
         raise InputError("--ratio must be > 1 and --false-alarms-per-hour > 0")
     reference = read_reference(args.reference)
-    spec = read_spec(args.spec) if args.spec is not None else {}
-    limits = {sensor: v["noise_density"] for sensor, v in spec.items() if "noise_density" in v}
+    limits = noise_density_limits(read_spec(args.spec)) if args.spec is not None else {}
     with TextProgress(f"reading {args.bag.name}") as progress:
         imu = read_bag(args.bag, imu_topic=args.topic, progress=progress, rate_hz=args.rate).imu
     if args.span is not None:

@@ -41,3 +41,9 @@ def read_spec(path: str | Path, option: str = "--spec") -> Spec:
         raise InputError(f"{option} {str(path)!r}: expected {{gyro: {{noise_density: …, random_walk: …, "
                          "bias_instability: …}, accel: {…}}} with positive numbers in SI units")
     return {sensor: {p: float(x) for p, x in limits.items()} for sensor, limits in doc.items()}
+
+
+def noise_density_limits(spec: Spec) -> dict[str, float]:
+    """The ``noise_density`` limit [u/√Hz] of each sensor the specification gives one for (what the watch and
+    ``compare`` test)."""
+    return {sensor: limits["noise_density"] for sensor, limits in spec.items() if "noise_density" in limits}

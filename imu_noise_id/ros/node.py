@@ -35,7 +35,7 @@ from ..pipelines.online import PARAMETERS, OnlineConfig, OnlineIdentifier
 from ..pipelines.online.config import ParamSpec
 from ..pipelines.online.watch import ReferenceWatch
 from ..report.reference import read_reference
-from ..report.spec import read_spec
+from ..report.spec import noise_density_limits, read_spec
 from ..resources import read_hypotheses_file
 from .messages import labelled_layout
 
@@ -141,12 +141,11 @@ class ImuNoiseIdNode(Node):
             return None
         options = {"ratio": config.watch_ratio, "false_alarms_per_hour": config.watch_false_alarms_per_hour}
         try:
-            spec = read_spec(config.spec, option="spec") if config.spec else {}
+            limits = noise_density_limits(read_spec(config.spec, option="spec")) if config.spec else {}
             ref = read_reference(config.reference) if config.reference else None
         except InputError as exc:
             self.get_logger().error(str(exc))
             return ReferenceWatch(None, math.nan, config.reference, error=str(exc), **options)
-        limits = {sensor: v["noise_density"] for sensor, v in spec.items() if "noise_density" in v}
         if ref is None:
             return ReferenceWatch(None, math.nan, "", limits=limits, limits_source=config.spec, **options)
         return ReferenceWatch(ref.axes, ref.rate_hz, str(ref.source), limits=limits, limits_source=config.spec,

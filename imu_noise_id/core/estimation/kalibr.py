@@ -5,7 +5,9 @@ paper 000).
   :func:`~..noise.resonant.filter_memory_limit`), each N_i the sampled zero-frequency density
   √(dt·Σ_j R(j)) (:meth:`~.Component.zero_frequency_density`); narrow OSCs, GMs, slow LPFs, BI and sinusoids never
   enter. Interval by the delta method.
-- **K** [u/s/√Hz]: the RW's density with its interval, or *not identifiable* (None) without an RW.
+- **K** [u/s/√Hz]: the RW's density with its interval, or *not identifiable* (None) without an RW; where the record
+  does not identify it, a bound (:func:`unidentified_as_bound`: its interval reaches zero; :func:`unmodelled_as_bound`:
+  no RW in the model, the data's long-τ bound).
 - **Per-sample variance** [u²] at dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt) + R_DLPF(0) + σ²_OSC (short-memory
   OSCs).
 
@@ -19,6 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..allan.rw_bound import RandomWalkBound
 from ..noise.base import Component
 from ..noise.components import DLPF, LPF, MA, OSC, RW, WN
 from ..noise.modelspec import parameter_labels
@@ -212,6 +215,24 @@ def unidentified_as_bound(k: KalibrValue) -> KalibrValue:
     return KalibrValue(hi, (0.0, hi), f"{k.source}; not identified by this record: its 95 % interval [0, {hi:.3g}] "
                                       f"reaches zero (the fitted {k.value:.3g} is one of the values it allows), the "
                                       "upper end given", method="bound")
+
+
+def unmodelled_as_bound(k: KalibrValue, bound: RandomWalkBound) -> KalibrValue:
+    """K of a final model without a random walk (``k.value`` None): the largest K the data's long-τ AV supports
+    (:func:`~imu_noise_id.core.allan.rw_bound.random_walk_bound`, simultaneous over its estimates), method ``bound``,
+    interval (0, bound); ``k`` itself where the model has a walk or there is no bound.
+
+    Every component adds Allan variance, so AV(τ) ≥ K²τ/3 whatever else the record holds: the bound holds the true walk
+    at its level whatever the structure (a Gauss–Markov process or flicker noise the model took instead of the walk
+    only loosens it). The Allan-slope line drawn through such a record's long τ is a point reading of the same AV that
+    a bias process bends (4× the walk beside a GM of τ 20 s in 20 min); it stays in imu.yaml as ``*_allan``."""
+    if k.value is not None or not (math.isfinite(bound.value) and bound.value > 0):
+        return k
+    return KalibrValue(
+        bound.value, (0.0, bound.value),
+        f"{k.source}; bounded by the data: the largest walk the Allan variance at tau {bound.tau_range[0]:.3g}–"
+        f"{bound.tau_range[1]:.3g} s supports ({100 * bound.level:.0f} %, simultaneous over {bound.estimates} "
+        "estimates), the upper end given", method="bound")
 
 
 def walk_crossing_tau(noise_density: float, random_walk: float) -> float:

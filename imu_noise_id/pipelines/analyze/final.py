@@ -75,7 +75,8 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
     tau_max = fit.n * fit.dt / 10.0
     supported = allan.tau <= tau_max
     bound = random_walk_bound(allan, tau_min=tau_max)
-    k, n = walk_from_bound(kalibr.unidentified_as_bound(kalibr.random_walk(fit)), bound), kalibr.noise_density(fit)
+    k = kalibr.unmodelled_as_bound(kalibr.unidentified_as_bound(kalibr.random_walk(fit)), bound)
+    n = kalibr.noise_density(fit)
     if k.method == "model" and bound.exceeded_by(k.value):
         k = replace(k, source=f"{k.source}; {bound.excess(k.value)}; a longer record tells them apart")
     if short is not None:
@@ -87,20 +88,3 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
                       bias_instability_allan=bias_instability_from_allan(allan.tau[supported],
                                                                          allan.variance[supported, 0]))
 
-
-def walk_from_bound(k: kalibr.KalibrValue, bound: RandomWalkBound) -> kalibr.KalibrValue:
-    """K of a final model without a random walk (``k.value`` None): the largest K the data's long-τ AV supports
-    (:func:`~imu_noise_id.core.allan.rw_bound.random_walk_bound`, simultaneous over its estimates), method ``bound``,
-    interval (0, bound); ``k`` itself where the model has a walk or there is no bound.
-
-    Every component adds Allan variance, so AV(τ) ≥ K²τ/3 whatever else the record holds: the bound holds the true walk
-    at its level whatever the structure (a Gauss–Markov process or flicker noise the model took instead of the walk
-    only loosens it). The Allan-slope line drawn through such a record's long τ is a point reading of the same AV that
-    a bias process bends (4× the walk beside a GM of τ 20 s in 20 min); it stays in imu.yaml as ``*_allan``."""
-    if k.value is not None or not (math.isfinite(bound.value) and bound.value > 0):
-        return k
-    return kalibr.KalibrValue(
-        bound.value, (0.0, bound.value),
-        f"{k.source}; bounded by the data: the largest walk the Allan variance at tau {bound.tau_range[0]:.3g}–"
-        f"{bound.tau_range[1]:.3g} s supports ({100 * bound.level:.0f} %, simultaneous over {bound.estimates} "
-        "estimates), the upper end given", method="bound")
