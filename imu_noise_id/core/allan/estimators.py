@@ -176,7 +176,7 @@ def _as_columns(y: np.ndarray, dt: float, kind: Kind) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------------------------- estimators
-def _phase(y: np.ndarray, dt: float) -> np.ndarray:
+def phase(y: np.ndarray, dt: float) -> np.ndarray:
     """Phase x (N+1,) of one rate column: x_0 = 0, x_i = dt·Σ_{j<i}(y_j − ȳ) (mean removed for precision)."""
     x = np.empty(y.shape[0] + 1)
     x[0] = 0.0
@@ -212,7 +212,7 @@ def _difference_sums(x: np.ndarray, m_list: np.ndarray, order: int) -> np.ndarra
 def second_differences(y: np.ndarray, dt: float, m_list: np.ndarray) -> Iterator[tuple[int, np.ndarray]]:
     """(m, x_{i+2m} − 2x_{i+m} + x_i for i = 0..N−2m) per m, x the phase of ``y`` [u·s]: the AV's terms (paper 000
     eq. 2) and, / (2m·dt), the Haar MODWT coefficients. Each array is a view of one reused buffer."""
-    x = _phase(np.asarray(y, dtype=float), dt)
+    x = phase(np.asarray(y, dtype=float), dt)
     buffers = [np.empty(x.size) for _ in range(2)]
     for m in m_list:
         yield int(m), _lagged_difference(x, int(m), 2, buffers)
@@ -311,7 +311,7 @@ def allan_family(
     n = y.shape[0]
     m_arr = _resolve_m(n, dt, kind, tau=tau, m=m, per_decade=per_decade)
     # One axis at a time: memory stays at a few rows of N values whatever the number of axes.
-    sums = np.stack([_SUMS[kind](_phase(y[:, j], dt), m_arr) for j in range(y.shape[1])], axis=1)
+    sums = np.stack([_SUMS[kind](phase(y[:, j], dt), m_arr) for j in range(y.shape[1])], axis=1)
     variance = _normalise(kind, sums, m_arr[:, None], n, dt)
     tau_arr = m_arr * dt
     if alpha is None:

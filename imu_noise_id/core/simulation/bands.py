@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..allan import choose_m
+from ..allan.estimators import phase
 from ..noise.components import Component, simulate_sum
 
 #: At averaging factor m a simulation's AV sums every max(1, m // TERMS_PER_FACTOR)-th term of the overlapping sum.
@@ -20,10 +21,7 @@ def thinned_allan_variance(y: np.ndarray, dt: float, m: np.ndarray) -> np.ndarra
     Terms that far apart overlap by seven eighths of their span and more, so the thinned sum keeps nearly all of the
     fully overlapping estimator's precision at an eighth of its cost per long factor: a simulation's AV on the
     analysis grid takes about a third of the time (its curves are drawn, never tested)."""
-    x = np.empty(y.size + 1)
-    x[0] = 0.0
-    np.cumsum(np.asarray(y, dtype=float) - float(np.mean(y)), out=x[1:])
-    x *= dt
+    x = phase(np.asarray(y, dtype=float), dt)
     out = np.empty(np.asarray(m).size)
     buffer = np.empty(x.size)
     for k, factor in enumerate(np.asarray(m, dtype=np.int64)):
