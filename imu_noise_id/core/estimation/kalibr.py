@@ -225,7 +225,7 @@ def unmodelled_as_bound(k: KalibrValue, bound: RandomWalkBound) -> KalibrValue:
     Every component adds Allan variance, so AV(τ) ≥ K²τ/3 whatever else the record holds: the bound holds the true walk
     at its level whatever the structure (a Gauss–Markov process or flicker noise the model took instead of the walk
     only loosens it). The Allan-slope line drawn through such a record's long τ is a point reading of the same AV that
-    a bias process bends (4× the walk beside a GM of τ 20 s in 20 min); it stays in imu.yaml as ``*_allan``."""
+    a bias process bends (its interval can exclude the walk); it stays in imu.yaml as ``*_allan``."""
     if k.value is not None or not (math.isfinite(bound.value) and bound.value > 0):
         return k
     return KalibrValue(
