@@ -1,11 +1,8 @@
-"""The sensor's averaging filter (MA): part of the white noise through a two-tap moving average (beyond papers
-000/002; reasons: docs/em.md, "Why the components …").
+"""The sensor's averaging filter (MA): white noise through a two-tap moving average (beyond papers 000/002;
+reasons: docs/em.md, "Why the components …"; derivation: docs/noise.md).
 
-e_k white of variance σ², y_k = e_k + e_{k−1} beside the white noise: an MA(1) with lag-1 correlation in [0, ½].
-Parameter: passband density N [u/√Hz], N² = 4σ²dt (PSD at f → 0), per-sample variance 2σ² = N²/(2dt).
-S(f) = N² cos²(πf·dt); R(0) = 2σ², R(dt) = σ², 0 beyond; AV(m·dt) = (4m − 3)σ²/m² exactly (block sums
-S(m) = (4m − 2)σ², AV = (4S(m) − S(2m))/(2m²)). Block (as QN's): states [e_k, e_{k−1}], Φ = [[0, 0], [1, 0]],
-Q = diag(σ², 0) (first element free: the EM's M-step updates it), H = [1, 1].
+y_k = e_k + e_{k−1}, e_k white of variance σ²; passband density N [u/√Hz], N² = 4σ²dt. S(f) = N² cos²(πf·dt),
+AV(m·dt) = (4m − 3)σ²/m². Block as QN's: Φ = [[0, 0], [1, 0]], Q = diag(σ², 0) (first element free), H = [1, 1].
 """
 
 from __future__ import annotations

@@ -86,12 +86,9 @@ class Component(ABC):
         """Two-sided power spectral density [u²/Hz] at frequencies f [Hz] (dt [s] matters for QN only)."""
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """Generalised covariance K(u) [u²] of the partial sums x_k = y_0 + … + y_{k−1} of the sampled component at
-        integer lags u (beyond papers 000/002).
-
-        For filters c, d annihilating polynomials of degree ≤ 1, Cov(Σ_a c_a x_{p_a}, Σ_b d_b x_{q_b}) =
-        Σ_a Σ_b c_a d_b K(q_b − p_a); K is defined up to an even polynomial α + β u². Stationary components:
-        K(u) = −½ Var(y_1 + … + y_|u|); AV(m·dt) = (6K(0) − 8K(m) + 2K(2m))/(2m²).
+        """Generalised covariance K(u) [u²] of the partial sums x_k = y_0 + … + y_{k−1} at integer lags u (beyond
+        papers 000/002; definition: docs/noise.md). Stationary components: K(u) = −½ Var(y_1 + … + y_|u|);
+        AV(m·dt) = (6K(0) − 8K(m) + 2K(2m))/(2m²).
         """
         raise NotImplementedError(f"{self.name} has no sum covariance")
 

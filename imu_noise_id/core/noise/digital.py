@@ -1,22 +1,11 @@
-"""The sensor's digital low-pass (DLPF): white noise of passband density N through a Butterworth filter of order n
-designed by the bilinear transform at the sampling rate, as MEMS parts apply it on chip (beyond papers 000/002).
+"""The sensor's digital low-pass (DLPF): white noise of passband density N through an order-n Butterworth filter
+designed by the bilinear transform at the sampling rate (beyond papers 000/002; derivation: docs/noise.md).
 
-w_k white of variance σ² = N²/dt, y = H(z) w with H = B(z)/A(z) = ``scipy.signal.butter(n, f_c, fs=1/dt)``:
-H(1) = 1, so the two-sided PSD at 0 Hz is σ²·dt = N² exactly, and S(f) = N²|H(e^{i2πf dt})|² — zero at the
-Nyquist frequency (the bilinear transform's zeros at z = −1), which no sampled continuous-time filter (LPF, OSC)
-reproduces. Parameters: N [u/√Hz] and f_c [Hz] (the −3 dB frequency, 0 < f_c < 1/(2 dt)); the order n is a
-structure value (``DLPF(1e-3, 12, order=4)`` in a spec) that no likelihood search moves: a fit's starts take the
-order whose Whittle fit is best (:func:`imu_noise_id.core.estimation.starts.filter_orders`).
-
-Block (direct form II, n + 1 states, no feed-through): the bilinear transform puts every zero at z = −1, so
-B(z) = b₀(1 + z⁻¹)ⁿ; with s_k = b₀w_k − Σ_i a_i s_{k−i}, y_k = Σ_{i=0..n} C(n, i) s_{k−i}: states [s_k … s_{k−n}],
-Φ the companion matrix of A, Q = diag(b₀²σ², 0 …) (its first element free: the EM's M-step updates it; f_c by the
-quasi-Newton search), H the binomial coefficients C(n, i) — independent of the parameters, as the state-space
-engines expect of H.
-
-Autocovariance R(j) = σ² Σ_k h_k h_{k+j} from the impulse response h (run until it has decayed below 10⁻¹⁴ of
-its peak); S(m) = Var(y_1 + … + y_m) = m R(0) + 2 Σ_{j<m} (m − j) R(j), exact up to the response's length J and
-m(R(0) + 2 Σ R) − 2 Σ j R(j) beyond it; AV(m·dt) = (4 S(m) − S(2m))/(2m²).
+y = H(z) w, w white of variance σ² = N²/dt, H = ``scipy.signal.butter(n, f_c, fs=1/dt)``: S(f) = N²|H(e^{i2πf dt})|²,
+S(0) = N², zero at Nyquist. Parameters N [u/√Hz] and f_c [Hz] (−3 dB, 0 < f_c < 1/(2 dt)); the order n is a
+structure value (``DLPF(1e-3, 12, order=4)``), never estimated. Block: direct form II, states [s_k … s_{k−n}],
+Φ the companion matrix of A, Q = diag(b₀²σ², 0 …) (first element free), H = binomial coefficients C(n, i).
+AV(m·dt) = (4 S(m) − S(2m))/(2m²) with S(m) from R(j) = σ² Σ_k h_k h_{k+j} (impulse response h).
 """
 
 from __future__ import annotations
@@ -34,7 +23,7 @@ from .base import Component, StateBlock, as_freq, as_tau
 
 #: Orders a DLPF may have.
 ORDERS = (1, 2, 3, 4)
-#: The impulse response is run until it stays below this share of its peak.
+#: Relative level [–] below which the impulse response counts as decayed ...
 DECAY = 1e-14
 #: ... and for at most this many samples.
 MAX_RESPONSE = 1 << 20
@@ -169,8 +158,7 @@ class DLPF(Component):
 
     @classmethod
     def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> DLPF:
-        """The DLPF whose companion matrix is ``phi``: f_c solved from its first coefficient a₁ (monotonic in f_c for
-        a Butterworth), N = √(Q₀₀·dt)/b₀."""
+        """The DLPF whose companion matrix is ``phi``: f_c from its coefficient a₁, N = √(Q₀₀·dt)/b₀."""
         order = phi.shape[0] - 1
         a1 = -float(phi[0, 0])
 
@@ -186,12 +174,10 @@ class DLPF(Component):
 
 @dataclass(frozen=True)
 class SensorFilter:
-    """What the user knows of the sensor's digital low-pass (its configuration, from the datasheet and the driver):
-    the −3 dB cutoff [Hz] and, when known, the order.
+    """The sensor's digital low-pass as configured (datasheet, driver): −3 dB cutoff [Hz] and, if known, the order.
 
-    A model fit that has a DLPF starts it at ``cutoff`` (still estimated) and tries only ``order`` when given
-    (:attr:`orders`; otherwise every order of :data:`ORDERS`); the model selection offers a DLPF whether or not the
-    Allan variance shows the roll-off.
+    A fit with a DLPF starts it at ``cutoff`` (still estimated) and tries only ``order`` if given, else every
+    order of :data:`ORDERS`.
     """
 
     cutoff: float
@@ -213,7 +199,7 @@ class SensorFilter:
         return ORDERS if self.order is None else (self.order,)
 
     def check_rate(self, dt: float) -> None:
-        """ValueError unless the cutoff lies below the Nyquist frequency 1/(2 dt) of a record at period ``dt`` [s]."""
+        """ValueError unless the cutoff lies below the Nyquist frequency 1/(2 dt) at period ``dt`` [s]."""
         if not self.cutoff * dt < 0.5:
             raise ValueError(f"the sensor filter's cutoff {self.cutoff:g} Hz is not below the record's Nyquist "
                              f"frequency {0.5 / dt:g} Hz")

@@ -1,14 +1,9 @@
-"""Bias instability (flicker noise) as a state-space component: a ladder of first-order Gauss–Markov processes.
+"""Bias instability (flicker noise) as a ladder of first-order Gauss–Markov processes (beyond papers 000/002).
 
-IEEE Std 952 (annex C): two-sided PSD S(f) = B²/(2π f) between two corners, AV plateau (2 ln 2/π)·B² ≈ (0.664 B)².
-Beyond papers 000/002. GMs with τ_i = τ_min·ρ^i (i = 0 … M−1, ρ = (τ_max/τ_min)^(1/(M−1))) and equal variances
-σ² = B² ln ρ / π approximate it (Keshner 1982, Proc. IEEE 70(3)):
-
-    Σ_i 2σ²τ_i/(1 + (2πfτ_i)²) ≈ σ²/(2 f ln ρ) = B²/(2π f)   for 1/(2πτ_max) ≪ f ≪ 1/(2πτ_min),
-
-ripple ≈ 4·e^{−π²/ln ρ} (8e-4 at :data:`PER_DECADE` = 2). The band is structure, set from the record
-(:func:`band_for_record`); only B is estimated (quasi-Newton on the exact likelihood). Exact discretisation of
-every GM; AV of the sampled ladder (:mod:`imu_noise_id.core.noise.sampled`).
+IEEE Std 952 (annex C): S(f) = B²/(2π f) between two corners, AV plateau (2 ln 2/π)·B². GMs with
+τ_i = τ_min·ρ^i (i = 0 … M−1, ρ = (τ_max/τ_min)^(1/(M−1))), equal variances σ² = B² ln ρ / π (Keshner 1982,
+Proc. IEEE 70(3)): Σ_i 2σ²τ_i/(1 + (2πfτ_i)²) ≈ B²/(2π f) for 1/(2πτ_max) ≪ f ≪ 1/(2πτ_min), ripple ≈ 4·e^{−π²/ln ρ}.
+The band is structure (:func:`band_for_record`); only B is estimated. Details: docs/noise.md.
 """
 
 from __future__ import annotations
@@ -24,17 +19,16 @@ from . import units
 from .base import Component, StateBlock, as_freq, as_tau
 from .sampled import block_sum_variance, sampled_allan_variance
 
-#: Correlation times per decade of the ladder (the ripple about 1/f falls fast with it; the cost grows with it).
+#: Correlation times per decade of the ladder.
 PER_DECADE = 2
 #: Allan-variance plateau of flicker noise over B²: 2 ln 2 / π (IEEE Std 952, annex C).
 PLATEAU = 2.0 * math.log(2.0) / math.pi
-#: The shortest correlation time of a fitted ladder, in samples (below it the white noise hides any flicker).
+#: Shortest correlation time of a fitted ladder [samples].
 TAU_MIN_SAMPLES = 10.0
 
 
 def band_for_record(n: int, dt: float) -> tuple[float, float]:
-    """The band [τ_min, τ_max] [s] for ``n`` samples at ``dt`` [s]: :data:`TAU_MIN_SAMPLES` samples to the record
-    length."""
+    """The band [τ_min, τ_max] [s] for ``n`` samples at ``dt`` [s]: :data:`TAU_MIN_SAMPLES` samples to the record."""
     tau_min = TAU_MIN_SAMPLES * dt
     return tau_min, max(n * dt, 10.0 * tau_min)
 

@@ -25,8 +25,7 @@ CANONICAL_ORDER: tuple[str, ...] = ("WN", "LPF", "DLPF", "MA", "QN", "BI", "GM",
 
 
 def gauss_markov_fastest_first(components: list[Component]) -> list[Component]:
-    """``components`` with the GMs, in the places they hold, by increasing τ (GM1 the fastest), so that labels are
-    independent of the order a search found them in."""
+    """``components`` with the GMs, in the places they hold, sorted by increasing τ (GM1 the fastest)."""
     gms = iter(sorted((c for c in components if c.name == "GM"), key=lambda c: c.params()["tau"]))
     return [next(gms) if c.name == "GM" else c for c in components]
 

@@ -1,17 +1,12 @@
 """The sensor's first-order low-pass (LPF) and a narrow-band stochastic oscillation (OSC); beyond papers 000/002.
 
-LPF: x' = −ω_c x + ω_c w, ω_c = 2π f_c, w white of two-sided PSD N²: S(f) = N²/(1 + (f/f_c)²), **N the
-continuous passband density**; a GM with τ = 1/ω_c, σ² = π N² f_c (the per-sample variance); the samples' 0 Hz
-density is N·√((x/2)·coth(x/2)), x = 2π f_c dt (:meth:`LPF.zero_frequency_density`).
+LPF: x' = −ω_c x + ω_c w, ω_c = 2π f_c, w white of two-sided PSD N² (**N the continuous passband density**):
+S(f) = N²/(1 + (f/f_c)²); a GM with τ = 1/ω_c, σ² = π N² f_c.
 
-OSC: x'' + 2ζω₀x' + ω₀²x = w, w of two-sided PSD q = 4ζω₀³σ²; ``frequency`` f₀ [Hz], ``bandwidth``
-B = 2ζf₀ [Hz] (half-power width), ``sigma`` σ [u]. S(f) = q/((ω₀² − ω²)² + (2ζω₀ω)²); for ζ < 1, a = ζω₀,
-ω_d = ω₀√(1 − ζ²): R(u) = σ² e^{−a|u|}(cos ω_d u + (a/ω_d) sin ω_d|u|) = Re(c e^{su}), c = σ²(1 − ia/ω_d),
-s = −a + iω_d. State [x, x'/ω₀] (P∞ = σ² I), H = [1, 0], exact discretisation (Van Loan). AV of the sampled
-process (:mod:`imu_noise_id.core.noise.sampled`).
-
-Both are fitted by the quasi-Newton search on the exact likelihood (:mod:`imu_noise_id.core.estimation.mle`),
-not the EM's M-step. Reasons for the models and constants: docs/em.md, "Why the components …".
+OSC: x'' + 2ζω₀x' + ω₀²x = w, w of two-sided PSD q = 4ζω₀³σ²; f₀ [Hz], half-power bandwidth B = 2ζf₀ [Hz], σ [u].
+R(u) = Re(c e^{su}), c = σ²(1 − ia/ω_d), s = −a + iω_d (a = ζω₀, ω_d = ω₀√(1 − ζ²)). State [x, x'/ω₀], H = [1, 0],
+exact discretisation (Van Loan). Both: AV of the sampled process (:mod:`.sampled`), fitted by the quasi-Newton
+search, not the EM's M-step. Reasons: docs/em.md, "Why the components …".
 """
 
 from __future__ import annotations
@@ -29,7 +24,7 @@ from .sampled import block_sum_variance, sampled_allan_variance, zero_frequency_
 
 #: The sensor's own filter has a memory below this many sampling periods ...
 FILTER_MAX_TAU_SAMPLES = 5
-#: ... or below this many seconds, whatever the rate (white at τ = 1 s, where IEEE Std 952 and Kalibr read N).
+#: ... or below this many seconds [s], whatever the rate.
 FILTER_MAX_TAU_S = 0.05
 
 
@@ -41,7 +36,7 @@ def filter_memory_limit(dt: float) -> float:
 
 #: Largest damping ratio of an OSC (ζ < 1: a resonance, not two real poles).
 MAX_DAMPING = 0.95
-#: Damping ratio of a second-order Butterworth low-pass, 1/√2: the flattest passband without a peak.
+#: Damping ratio of a second-order Butterworth low-pass, 1/√2.
 BUTTERWORTH_DAMPING = 1.0 / math.sqrt(2.0)
 
 
@@ -51,8 +46,7 @@ def _positive(name: str, value: float) -> float:
 
 @dataclass(frozen=True)
 class LPF(Component):
-    """White noise of passband density N [u/√Hz] through a first-order low-pass of cutoff f_c [Hz] (module docstring).
-    """
+    """White noise of passband density N [u/√Hz] through a first-order low-pass of cutoff f_c [Hz]."""
 
     noise_density: float
     cutoff: float
@@ -101,8 +95,7 @@ class LPF(Component):
         return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
 
     def zero_frequency_density(self, dt: float) -> float:
-        """N·√((x/2)·coth(x/2)), x = 2π f_c dt: the sampled AR(1)'s σ² dt (1 + φ)/(1 − φ), φ = e^{−x} (aliasing raises
-        it above N near Nyquist)."""
+        """N·√((x/2)·coth(x/2)), x = 2π f_c dt: the sampled AR(1)'s √(σ² dt (1 + φ)/(1 − φ)), φ = e^{−x}."""
         return math.sqrt(zero_frequency_psd(self.sigma**2, -1.0 / self.tau, dt))
 
     def per_sample(self, dt: float) -> dict[str, float]:
@@ -181,8 +174,7 @@ class OSC(Component):
         return e * np.array([[c + a / wd * s, w0 / wd * s], [-w0 / wd * s, c - a / wd * s]])
 
     def process_noise(self, dt: float) -> np.ndarray:
-        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state by Van Loan's matrix exponential (no cancellation for
-        Q ≪ P∞)."""
+        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state (Van Loan's matrix exponential)."""
         w0, a = self.omega0, self.damping * self.omega0
         A = np.array([[0.0, w0], [-w0, -2.0 * a]])
         W = np.diag([0.0, 4.0 * a * self.sigma**2])  # drive of x'/ω₀: q/ω₀² with q = 4ζω₀³σ²

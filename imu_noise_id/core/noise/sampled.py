@@ -1,12 +1,8 @@
 """Allan variance of a *sampled* stationary process whose autocovariance is a sum of damped exponentials (beyond
-papers 000/002: the estimator reads the samples' AV, which differs from the continuous process's by tens of per
-cent at τ ≈ dt for a memory of a sample or two).
+papers 000/002; reasons: docs/noise.md).
 
-With R(j) = Re(c·z^j), z = e^{s·dt} (GM: c = σ², s = −1/τ; OSC: c = σ²(1 − i a/ω_d), s = −a + iω_d):
-
-    S(m) = Re(c·(m + 2 g(m))),     g(m) = Σ_{j=1}^{m−1} (m − j) z^j = z (m(1 − z) − (1 − z^m)) / (1 − z)²,
-    AV(m·dt) = (4 S(m) − S(2m)) / (2 m²),
-
+R(j) = Re(c·z^j), z = e^{s·dt} (GM: c = σ², s = −1/τ; OSC: c = σ²(1 − i a/ω_d), s = −a + iω_d):
+S(m) = Re(c·(m + 2 g(m))), g(m) = z (m(1 − z) − (1 − z^m)) / (1 − z)², AV(m·dt) = (4 S(m) − S(2m)) / (2 m²);
 g(m) by its series m(m−1)/2 + w(m³ − m)/6 + w² m²(m² − 1)/24 (w = s·dt) where m|w| < :data:`SERIES_LIMIT`.
 """
 

@@ -1,13 +1,9 @@
 """The least-squares slope of a record and its exact variance under a noise model (beyond papers 000/002).
 
-ω̂ = Σ w_i y_i, w_i = (i − ī)/(dt·S), ī = (N−1)/2, S = N(N² − 1)/12; on the partial sums x_k, ω̂ = Σ_k c_k x_k,
-c_k = α·(ī, −1, …, −1, ī), α = 1/(dt·S), which annihilates degree ≤ 1, so with the components' generalised
-covariances K(u) (:meth:`~.base.Component.sum_covariance`)
+ω̂ = Σ_k c_k x_k on the partial sums x_k, c_k = α·(ī, −1, …, −1, ī), α = 1/(dt·S), ī = (N−1)/2, S = N(N² − 1)/12;
+with the components' generalised covariances K(u) (:meth:`~.base.Component.sum_covariance`), exactly:
 
-    Var ω̂ = α² [ (2ī² + N − 1)·K(0) − 2 Σ_{h=1}^{N−1} h·K(h) + 2 ī²·K(N) ],          (1)
-
-exact for the sampled components. Σ h·K(h) in closed form for WN, QN, RW and GM; other components lag by lag up
-to :data:`TAIL_DECAYS` decay times and in closed form beyond (O(N)).
+    Var ω̂ = α² [ (2ī² + N − 1)·K(0) − 2 Σ_{h=1}^{N−1} h·K(h) + 2 ī²·K(N) ].          (1)
 """
 
 from __future__ import annotations
@@ -19,7 +15,7 @@ import numpy as np
 from . import units
 from .base import Component
 
-#: Lags evaluated per chunk in eq. (1) (bounds the memory on records of 10⁷ samples and more).
+#: Lags evaluated per chunk in eq. (1) (bounds the memory).
 CHUNK = 1 << 20
 #: Beyond this many of a stationary component's longest decay times its K(h) is summed in closed form.
 TAIL_DECAYS = 40.0
@@ -70,8 +66,8 @@ def _closed_form(comp: Component, n: int, dt: float) -> tuple[float, float] | No
 
 
 def _lag_sums(comp: Component, n: int, dt: float) -> tuple[float, float]:
-    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one stationary component: lag by lag up to :data:`TAIL_DECAYS` decay times, in
-    closed form beyond (K linear in h there)."""
+    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one stationary component: lag by lag up to :data:`TAIL_DECAYS` decay times,
+    closed form beyond."""
     m = n - 1
     h0 = int(min(m, max(8, math.ceil(TAIL_DECAYS * comp.memory(dt)[0] / dt))))
     total = 0.0

@@ -109,12 +109,9 @@ def covariance_from_density(noise_density: float | np.ndarray, rate_hz: float) -
 
 
 def step_noise_std(density: float, step_s: float, weight: float = 1.0) -> float:
-    """The white-rate std σ [u] a discrete filter must be given for white noise of ``density`` (u/√Hz, or u/s/√Hz for
-    a bias random walk): σ = density / √(weight · step).
-
-    The filter adds ``weight``·(step·σ)² per step of ``step_s`` [s]; the truth adds density²·step. ``weight`` = 1:
-    one input sample per step (PX4 EKF2 ``covariance.cpp``, VINS' bias blocks); ½: the mid-point rule's two
-    half-weighted samples (VINS' ``V = ½·dt`` blocks).
+    """The white-rate std σ [u] a discrete filter needs for white noise of ``density`` (u/√Hz, or u/s/√Hz for a
+    bias random walk): σ = density / √(weight · step), ``step_s`` [s]. ``weight`` = 1: one input sample per step
+    (PX4 EKF2, VINS' bias blocks); ½: the mid-point rule's two half-weighted samples (VINS' ``V = ½·dt`` blocks).
     """
     return _check_positive("density", density) / math.sqrt(
         _check_positive("weight", weight, False) * _check_positive("step_s", step_s, False))
