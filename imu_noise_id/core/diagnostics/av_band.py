@@ -1,19 +1,11 @@
-"""The data's Allan-variance band under the null "the model holds", with the estimator's exact EDF for the model.
+"""The data's Allan-variance band under the null "the model holds", with the estimator's exact EDF for the model
+(beyond the papers: NIST SP1065 and paper 000 section 2 take the EDF from the local slope; reasons: docs/loop.md).
 
-Beyond the papers: the textbook band (NIST SP1065, paper 000 section 2) takes the EDF from the local power-law
-slope; here it is the model's own (reasons: docs/loop.md, "Residuals and error measures").
-
-For a Gaussian model whose partial sums x_k = y_0 + … + y_{k−1} have generalised covariance K(u)
-(:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`), the overlapping AV at m samples,
-AV_hat = (1/2M) Σ_k d_k², M = N − 2m + 1, d_k = (x_{k+2m} − 2x_{k+m} + x_k)/m, has lag-l covariance
-
-    c(l) = [6K(l) − 4K(l − m) − 4K(l + m) + K(l − 2m) + K(l + 2m)] / m²
-
-and, with a mean μ = ω·m·dt of d_k from a rate ramp ω,
-
-    E[AV_hat] = (c(0) + μ²)/2,    Var(AV_hat) = (1/4M²) Σ_{|l|<M} (M − |l|) (2c(l)² + 4μ² c(l)),
-
-exact at finite N; ν = 2 E²/Var. The band is the χ²_ν interval (NIST SP1065 eq. 45).
+With generalised covariance K(u) of the partial sums (:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`)
+and d_k = (x_{k+2m} − 2x_{k+m} + x_k)/m, the overlapping AV at m samples, AV_hat = (1/2M) Σ_k d_k², M = N − 2m + 1,
+has lag-l covariance c(l) = [6K(l) − 4K(l − m) − 4K(l + m) + K(l − 2m) + K(l + 2m)] / m²; with a ramp's mean
+μ = ω·m·dt of d_k, E[AV_hat] = (c(0) + μ²)/2, Var(AV_hat) = (1/4M²) Σ_{|l|<M} (M − |l|) (2c(l)² + 4μ² c(l)), exact;
+ν = 2 E²/Var. The band is the χ²_ν interval (NIST SP1065 eq. 45).
 """
 
 from __future__ import annotations
@@ -30,8 +22,7 @@ _V = (1.0, -4.0, 6.0, -4.0, 1.0)
 
 def model_av_edf(components: list[Component], m: np.ndarray, n: int, dt: float) -> np.ndarray:
     """EDF of the overlapping AV estimates at averaging factors ``m`` of an ``n``-sample record of the Gaussian model
-    ``components`` sampled at ``dt`` [s] (module docstring). Memoryless components (WN, QN, MA, RW) are summed only
-    to lag 2m + 1, beyond which their c(l) = 0 (avoids rounding noise from K ~ |u|³)."""
+    ``components`` sampled at ``dt`` [s] (module docstring)."""
     m = np.asarray(m, dtype=np.int64)
     stochastic = [c for c in components if not isinstance(c, RR)]
     slope = sum(abs(c.slope) for c in components if isinstance(c, RR))

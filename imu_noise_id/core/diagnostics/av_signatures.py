@@ -49,14 +49,12 @@ def gm_beside_walk(tau: np.ndarray, excess: np.ndarray, sd: np.ndarray) -> tuple
     return best[1], best[2], best[3]
 
 
-#: A long-τ deficit's GM and walk are fitted to the data's AV beyond white noise from this fraction of the τ where
-#: the deficit begins (a GM's AV bends away from a random walk's within a decade below its τ_c) to the longest τ.
+#: A long-τ deficit's GM and walk are fitted from this fraction of the τ where the deficit begins to the longest τ.
 DEFICIT_REACH = 0.1
 
 
 #: A flat AV excess: over at least FLAT_DECADES of τ, a smooth (quadratic in log-log) fit of it varies by at most a
-#: factor FLAT_RATIO. Flicker noise's AV is within 10 % of its plateau over a decade well inside its band; a GM
-#: bump varies by 1.5× over the decade centred on its peak and more over any other.
+#: factor FLAT_RATIO.
 FLAT_DECADES, FLAT_RATIO = 1.0, 1.3
 
 
@@ -90,7 +88,7 @@ def _with_flicker(finding: Finding, tau: np.ndarray, excess: np.ndarray) -> list
     return [flicker, finding]
 
 
-#: A band of AV excess is read as a random walk or ramp only if it ends beyond this fraction of the longest τ.
+#: A band of AV excess is read as RW or RR only if it ends beyond this fraction of the longest τ.
 LAST_DECADE = 0.1
 
 
@@ -98,22 +96,18 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
                          av_model: np.ndarray, *, av_white: np.ndarray | None = None,
                          alpha: float = ALPHA) -> list[Finding]:
     """Bands of τ where the data's AV is significantly above (or, at long τ, below) the model's, each traced to a
-    component.
+    component (reasons: docs/loop.md, "Why the detectors …").
 
     z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) (sd from the 95 % CI); excess where z_τ > z* = Φ⁻¹(1 − α/M) over the
-    M τ (Bonferroni). Each contiguous band is classified by position and the log-log slope of AV_data − AV_model:
+    M τ (Bonferroni). Each contiguous band, by position and log-log slope of AV_data − AV_model:
 
-    * at the shortest τ with slope < −1.5 (ADEV −1) → QN, Q from 3Q²/τ²;
-    * growing without an interior peak and ending in the last decade of τ (:data:`LAST_DECADE`) → RR if slope > 1.5
-      (AV ω²τ²/2), else RW (AV K²τ/3);
-    * otherwise a bump → GM, (τ_c, σ) fitted to the excess (GM AV peaks near τ ≈ 1.9 τ_c); when flat over a decade
-      also BI (beyond the papers: :mod:`imu_noise_id.core.noise.flicker`), B² = median excess / (2 ln 2/π).
+    * at the shortest τ with slope < −1.5 → QN, Q from 3Q²/τ²;
+    * growing, ending in the last decade of τ (:data:`LAST_DECADE`) → RR if slope > 1.5 (ω²τ²/2), else RW (K²τ/3);
+    * otherwise a bump → GM, (τ_c, σ) fitted to the excess; when flat, also BI, B² = median excess / (2 ln 2/π).
 
-    A significant *deficit* (z_τ < −z*) in the last decade, the model above the data at every longer τ → GM with
-    (τ_c, σ) and K fitted together to the data's AV beyond the white part ``av_white`` (default the WN line through
-    the first τ) from :data:`DEFICIT_REACH` of the deficit's start (:func:`gm_beside_walk`; K in ``random_walk``),
-    and BI beside it when flat. The longest τ need not be significant themselves. Rationale: docs/loop.md,
-    "Why the detectors …".
+    A significant *deficit* (z_τ < −z*) in the last decade, the model above the data at every longer τ → GM and K
+    (in ``random_walk``) fitted together to the data's AV beyond ``av_white`` (default: the WN line through the
+    first τ) from :data:`DEFICIT_REACH` of the deficit's start (:func:`gm_beside_walk`), and BI beside it when flat.
     """
     tau = np.asarray(tau, dtype=float)
     av_data = np.asarray(av_data, dtype=float)

@@ -1,8 +1,7 @@
 """χ² acceptance bounds of the normalised innovation squared (NIS), the package's one consistency bound.
 
 The NIS νᵀS⁻¹ν of a consistent Kalman filter's update with ``dof`` components is χ²(dof); the sum of ``n``
-independent ones χ²(n·dof). Used by the node's filter status, :class:`~.monitor.InnovationMonitor`, the CMKF
-replay and gate (:mod:`imu_noise_id.core.cmkf.gate`) and ``cmkf.png``.
+independent ones χ²(n·dof).
 """
 
 from __future__ import annotations

@@ -73,10 +73,8 @@ def norm_log10_sf(z: float) -> float:
 
 # --------------------------------------------------------------------------------------------- outliers
 def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA, only: np.ndarray | None = None) -> Finding:
-    """Spikes: robust z_t = (e_t − median)/(1.4826·MAD) beyond z* = Φ⁻¹(1 − α/(2n)) (Bonferroni).
-
-    Every sample beyond z* is in ``indices``. ``only`` restricts the statistic to given samples.
-    """
+    """Spikes: robust z_t = (e_t − median)/(1.4826·MAD) beyond z* = Φ⁻¹(1 − α/(2n)) (Bonferroni), all in ``indices``;
+    ``only`` restricts the statistic to given samples."""
     e = np.asarray(e, dtype=float)
     ok = np.isfinite(e)
     n = int(ok.sum())
@@ -108,21 +106,15 @@ def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA, only: np.ndarray | N
 # --------------------------------------------------------------------------------------------- sinusoid
 def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
                     f_min: float | None = None) -> Finding:
-    """A narrow line: the periodogram peak of e over its local median floor (:func:`spectral_peaks`).
-
-    Threshold s* = −ln(1 − (1 − α)^{1/M}) over the M searched bins; a significant line's frequency is refined and
-    its amplitude and phase are the score test's GLS estimates.
-    """
+    """A narrow line: the periodogram peak of e over its local median floor (:func:`spectral_peaks`), significant
+    above s* = −ln(1 − (1 − α)^{1/M}) over the M searched bins; frequency refined, amplitude and phase by GLS."""
     return _sinusoid(e, dt, whitening, spectral_peaks(e, dt, f_min=f_min), alpha=alpha)
 
 
 def detect_sinusoids(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
                      f_min: float | None = None) -> list[Finding]:
     """:func:`detect_sinusoid`'s finding, then every other line significant at family-wise level α
-    (:func:`spectral_lines`), strongest first.
-
-    Beyond the papers: paper 000's loop adds one effect per step; here all significant lines are found at once.
-    """
+    (:func:`spectral_lines`), strongest first (beyond the papers: all lines in one step)."""
     return [_sinusoid(e, dt, whitening, line, alpha=alpha) for line in spectral_lines(e, dt, alpha=alpha, f_min=f_min)]
 
 
@@ -207,11 +199,9 @@ def detect_ramp(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: 
 
 # ------------------------------------------------------------------------------------------------ steps
 def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np.ndarray:
-    """Score statistics T_k of a level shift at every sample k (NaN outside [min_segment, n − min_segment]).
-
-    One FFT cross-correlation for all k, the whitened constant s projected out:
-    T_k = (c_k − c_0 a_k/‖s‖²) / √(‖s_{0..n−k−1}‖² − a_k²/‖s‖²), c = e ⋆ s, a = s ⋆ s.
-    """
+    """Score statistics T_k of a level shift at every sample k (NaN outside [min_segment, n − min_segment]), the
+    whitened constant s projected out: T_k = (c_k − c_0 a_k/‖s‖²) / √(‖s_{0..n−k−1}‖² − a_k²/‖s‖²), c = e ⋆ s,
+    a = s ⋆ s."""
     e = np.nan_to_num(np.asarray(e, dtype=float), nan=0.0)
     n = e.size
     s = whitening.whiten(np.ones(n))
@@ -257,10 +247,8 @@ def detect_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: 
 
 # ------------------------------------------------------------------------------------ serial correlation
 def detect_correlation(e: np.ndarray, dt: float, *, alpha: float = ALPHA, lags: int = 20) -> Finding:
-    """Serially correlated innovations → a Gauss–Markov process; Ljung–Box over ``lags`` lags.
-
-    Starts: τ ≈ dt·Σ_k ρ_k/ρ_1 (ACF summed while above 2/√n), σ share √ρ_1.
-    """
+    """Serially correlated innovations → a GM; Ljung–Box over ``lags`` lags. Starts: τ ≈ dt·Σ_k ρ_k/ρ_1 (ACF summed
+    while above 2/√n), σ share √ρ_1."""
     lb = ljung_box(e, lags)
     n = int(np.isfinite(e).sum())
     rho = acf(e, min(n // 4, 5000))

@@ -1,10 +1,8 @@
-"""Shape of a spectral line found in the residuals: a sinusoid (SIN) or a narrow-band oscillation (OSC).
-
-Beyond the papers. :func:`line_shape` measures the excess power over the local floor of the residual's
-periodogram around a line: power-weighted median f₀, interquartile range B (a Lorentzian's half-power bandwidth,
-:class:`~imu_noise_id.core.noise.resonant.OSC`), total σ² = 2/n Σ excess, and the share within ±2 bins of the peak
-(*concentration*; a fixed sinusoid puts ≥ 81 % within ±1 bin, ≥ 90 % within ±2). A SIN at concentration ≥
-:data:`SIN_CONCENTRATION`, an OSC otherwise. Also the pooled (broad-line), harmonic and innovation-hump searches.
+"""Shape of a spectral line found in the residuals: a sinusoid (SIN) or a narrow-band oscillation (OSC); beyond
+the papers. :func:`line_shape` measures the excess power over the local floor of the periodogram around a line:
+power-weighted median f₀, interquartile range B (an OSC's half-power bandwidth), σ² = 2/n Σ excess, and the share
+within ±2 bins of the peak (*concentration*): SIN at ≥ :data:`SIN_CONCENTRATION`, else OSC. Also the pooled
+(broad-line), harmonic and innovation-hump searches.
 """
 
 from __future__ import annotations
@@ -66,9 +64,8 @@ def line_shape(residual: np.ndarray, dt: float, frequency: float, *, resolution:
 
     Floor: median periodogram beyond the largest window (±:data:`WINDOW_FRACTION` of the frequency), / ln 2. The
     window starts at ±:data:`MIN_HALF_BINS` bins and doubles while its new ring holds excess above :data:`RING_Z` sd.
-    ``resolution``: periodogram bins per pooled bin of the search that found the line; the largest window is then at
-    least half that search's floor span (±:data:`POOLED_FLOOR_HALF_WIDTH` pooled bins) but within ±50 % of the
-    frequency, and the window starts at one pooled bin (docs/loop.md, "Why the detectors …").
+    ``resolution`` > 1 (periodogram bins per pooled bin of the search that found it): the window starts at one pooled
+    bin and reaches at least half of ±:data:`POOLED_FLOOR_HALF_WIDTH` pooled bins, within ±50 % of the frequency.
     """
     freqs, power = periodogram(residual, dt)
     n = int(np.asarray(residual).size)
@@ -155,11 +152,7 @@ HUMP_DIP = 0.5
 
 def humps(x: np.ndarray, r: int) -> np.ndarray:
     """Which pooled statistics ``x`` (r·pooled/floor, index k ↔ k pooled bins) stand on a hump: some bin in [k/2, k)
-    has an excess x − r below :data:`HUMP_DIP` of x[k] − r (never the first bin).
-
-    Beyond the papers: a rise toward 0 Hz (a slow bias misfit) is not a line; resonances with Q < 1 are left to
-    the low-pass and bias components.
-    """
+    has an excess x − r below :data:`HUMP_DIP` of x[k] − r (never the first bin). Reasons: docs/loop.md."""
     m = x.size
     out = np.zeros(m, dtype=bool)
     if m < 2:
@@ -188,12 +181,10 @@ def pooled_line_statistic(e: np.ndarray, dt: float, frequency: float, resolution
 
 
 def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float, exclude: tuple[float, ...] = ()) -> Finding:
-    """A line too wide for one bin: the innovations' periodogram pooled over r bins against its running median.
-
-    r·pooled/floor ~ Gamma(r, 1) under white innovations, the floor's lognormal error (:func:`_floor_error`)
-    integrated by Gauss–Hermite quadrature; Bonferroni over every pooled bin at every resolution; only bins on a
-    hump (:func:`humps`) are searched. ``exclude``: frequencies [Hz] of lines found otherwise, whose pooled bins
-    (±1) are skipped. Beyond the papers (the single-bin search misses a line spread over tens of bins).
+    """A line too wide for one bin (beyond the papers): the innovations' periodogram pooled over r bins against its
+    running median; r·pooled/floor ~ Gamma(r, 1) under white innovations, the floor's lognormal error
+    (:func:`_floor_error`) integrated by Gauss–Hermite quadrature; Bonferroni over every pooled bin at every
+    resolution; humps only (:func:`humps`). ``exclude``: frequencies [Hz] of known lines (pooled bins ±1 skipped).
     """
     freqs, power = periodogram(e, dt)
     best: tuple[float, float, float, float, int] | None = None  # (log10 p, statistic, threshold, f, r)
@@ -224,11 +215,9 @@ HARMONIC_MAX = 6
 
 
 def harmonics(e: np.ndarray, dt: float, frequency: float, bandwidth: float, *, alpha: float) -> list[float]:
-    """Frequencies [Hz] of the significant harmonics k·f₀ (k = 2 … :data:`HARMONIC_MAX`, below 0.98 Nyquist) of a line.
-
-    Around each k·f₀ the window ±max(2 bins, 2k·B) is searched for the largest corrected single-line statistic;
-    significant above s* = −ln(1 − (1 − α)^{1/M}), M the bins searched around all harmonics.
-    """
+    """Frequencies [Hz] of the significant harmonics k·f₀ (k = 2 … :data:`HARMONIC_MAX`, below 0.98 Nyquist) of a line:
+    the largest single-line statistic within ±max(2 bins, 2k·B) of k·f₀ above s* = −ln(1 − (1 − α)^{1/M}), M the
+    bins searched around all harmonics."""
     freqs, power = periodogram(e, dt)
     df = freqs[1] - freqs[0]
     half_width = min(FLOOR_HALF_WIDTH, max(8, freqs.size // 8))
@@ -281,11 +270,9 @@ class InnovationHump:
 
 
 def detect_innovation_hump(e: np.ndarray, dt: float, *, alpha: float, bands: int = HUMP_BANDS) -> InnovationHump:
-    """A resonance wider than the broad-line search's floor window: the innovations' periodogram averaged over
-    ``bands`` equal bands from 0 Hz to Nyquist against the median band.
-
-    A band's mean of r ordinates over the median follows Gamma(r)/r (median error √(π/2)/√(r·bands) integrated as
-    in :func:`detect_broad_line`), Bonferroni over the bands; humps only (:func:`humps`). Beyond the papers.
+    """A resonance wider than the broad-line search's floor window (beyond the papers): the innovations'
+    periodogram averaged over ``bands`` equal bands from 0 Hz to Nyquist against the median band; a band's mean of
+    r ordinates over it ~ Gamma(r)/r, Bonferroni over the bands, humps only (:func:`humps`).
     """
     freqs, power = periodogram(e, dt)
     r = freqs.size // bands

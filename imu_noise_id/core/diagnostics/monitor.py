@@ -1,14 +1,8 @@
 """Streaming residual diagnostics for an online filter: windowed Ljung–Box and NIS on its innovations.
 
-The offline loop's statistics (:mod:`.residuals`) on the last ``window`` innovations of a ring buffer::
-
-    monitor = InnovationMonitor(window=2000, lags=10, alpha=0.001)
-    for nu, s in stream:                    # innovation ν_k [u] and its predicted variance S_k [u²]
-        monitor.update(nu, s)
-        if monitor.ready and k % 200 == 0:
-            status = monitor.status()
-
-``update`` is O(1), ``status`` O(window·log window); vector innovations go in as NIS (:meth:`update_nis`).
+The offline loop's statistics (:mod:`.residuals`) on the last ``window`` innovations of a ring buffer: feed
+``update(nu, s)`` (innovation ν_k [u], predicted variance S_k [u²]; vectors as NIS via :meth:`update_nis`), read
+``status()`` once ``ready``. ``update`` is O(1), ``status`` O(window·log window).
 """
 
 from __future__ import annotations

@@ -49,10 +49,8 @@ def acf(e: np.ndarray, nlags: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class LjungBox:
-    """Ljung–Box test (Ljung & Box 1978): Q = n(n+2) Σ_{k=1}^{h} ρ_k²/(n − k) ~ χ²_h under i.i.d. residuals.
-
-    Attributes: ``q`` (Q), ``lags`` (h), ``p_value`` (P(χ²_h ≥ q)), ``worst_lag`` and ``worst_rho`` (the largest |ρ_k|).
-    """
+    """Ljung–Box test (Ljung & Box 1978): Q = n(n+2) Σ_{k=1}^{h} ρ_k²/(n − k) ~ χ²_h under i.i.d. residuals;
+    ``q`` (Q), ``lags`` (h), ``p_value`` (P(χ²_h ≥ q)), ``worst_lag`` and ``worst_rho`` (the largest |ρ_k|)."""
 
     q: float
     lags: int
@@ -190,10 +188,7 @@ def spectral_lines(e: np.ndarray, dt: float, *, alpha: float, f_min: float | Non
                    half_width: int = FLOOR_HALF_WIDTH) -> list[SpectralPeak]:
     """The largest line (:func:`spectral_peaks`, significant or not), then every other line above the level-``alpha``
     bound of the largest of the M bins (:func:`max_exponential_threshold`), strongest first; bins within
-    :data:`LINE_SEPARATION_BINS` of a stronger line belong to it.
-
-    Beyond the papers: all lines at once, each significant on its own at family-wise level α.
-    """
+    :data:`LINE_SEPARATION_BINS` of a stronger line belong to it (beyond the papers)."""
     freqs, power, ratio, m, half_width = _line_ratios(e, dt, f_min, half_width)
     threshold = max_exponential_threshold(m, alpha)
     top = int(np.argmax(ratio))

@@ -1,13 +1,10 @@
-"""Steady-state innovation (whitening) filter of a fitted noise model, for score tests of missing regressors.
+"""Steady-state innovation (whitening) filter of a fitted noise model, for score tests of missing regressors
+(beyond the papers, which fit stochastic components only).
 
-A fitted linear-Gaussian model (paper 000 eqs. 4–5) turns the data into standardised innovations e_t, i.i.d.
-N(0, 1) if it holds; a candidate regressor x_t passed through the same filter gives x̃_t, and
-
-    b = Σ e_t x̃_t / Σ x̃_t²,        T = Σ e_t x̃_t / √(Σ x̃_t²)  ~ N(0, 1) under "x is not in the data"
-
-(GLS with state-space errors, de Jong 1991). Beyond the papers, which fit stochastic components only.
-Steady-state gain: exact after the transient, approximate near missing samples (dropped from the sums).
-Deterministic states (RR's integrator) are left out.
+A fitted model (paper 000 eqs. 4–5) turns the data into standardised innovations e_t, i.i.d. N(0, 1) if it holds;
+a regressor x_t through the same filter gives x̃_t, b = Σ e_t x̃_t / Σ x̃_t², T = Σ e_t x̃_t / √(Σ x̃_t²) ~ N(0, 1)
+under "x is not in the data" (GLS with state-space errors, de Jong 1991). Steady-state gain: approximate near
+missing samples (dropped from the sums). Deterministic states (RR's integrator) are left out.
 """
 
 from __future__ import annotations
@@ -39,16 +36,12 @@ def _system(components: list[Component], dt: float) -> tuple[np.ndarray, np.ndar
     return phi, q, h, r
 
 
-#: Floor of the white-noise variance R the filter uses, as a fraction of the state noise seen at the output in one
-#: step (h Q hᵀ); it raises the innovation variance by ≲ √(δ · h Q hᵀ) (docs/loop.md, "Why the detectors …").
+#: Floor of the white-noise variance R the filter uses, as a fraction of h Q hᵀ (reasons: docs/loop.md).
 R_FLOOR = 1e-9
 
 
 def _filter_r(q: np.ndarray, h: np.ndarray, r: float) -> float:
-    """R raised to :data:`R_FLOOR` · h Q hᵀ (the trace of Q if no state noise reaches the output in one step).
-
-    Beyond the papers: keeps the Riccati solvers conditioned when a fitted white noise went to ~0.
-    """
+    """R raised to :data:`R_FLOOR` · h Q hᵀ (the trace of Q if no state noise reaches the output in one step)."""
     seen = float(h @ q @ h) or float(np.trace(q))
     return max(r, R_FLOOR * seen)
 
@@ -119,8 +112,7 @@ class ScoreTest:
 
 
 def _kept(ok: np.ndarray) -> slice | np.ndarray:
-    """The finite samples as a slice when they are one run (the usual case: the filter's start-up removed), else the
-    mask; a slice takes views, not copies, of every column."""
+    """The finite samples as a slice when they are one run, else the mask."""
     idx = np.flatnonzero(ok)
     if idx.size and idx[-1] - idx[0] + 1 == idx.size:
         return slice(int(idx[0]), int(idx[-1]) + 1)
@@ -129,8 +121,7 @@ def _kept(ok: np.ndarray) -> slice | np.ndarray:
 
 @dataclass(frozen=True)
 class ScoreBasis:
-    """Standardised innovations and whitened nuisance columns, prepared once for many score tests against them (a
-    line's frequency refined over many trial regressors).
+    """Standardised innovations and whitened nuisance columns, prepared once for many score tests against them.
 
     Attributes
     ----------
@@ -151,9 +142,8 @@ class ScoreBasis:
         return cls(e[kept], kept, z)
 
     def test(self, x_white: np.ndarray) -> ScoreTest:
-        """The score test of the whitened regressor columns ``x_white`` (N, k): the sums e'X̃ and X̃'X̃ with X̃ the
-        columns less their projection on the nuisance, from cross-products (no (N, k) temporaries for one nuisance
-        column: X̃'X̃ = X'X − X'z z'X / z'z, X̃'e = X'e − X'z z'e / z'z)."""
+        """The score test of the whitened regressor columns ``x_white`` (N, k), less their projection on the nuisance
+        (X̃'X̃ = X'X − X'z z'X / z'z, X̃'e = X'e − X'z z'e / z'z)."""
         from .residuals import chi2_log10_sf
 
         x = np.asarray(x_white, dtype=float).reshape(x_white.shape[0], -1)[self.kept]
