@@ -207,11 +207,9 @@ STEEP_SLOPE = -1.25
 def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str, y: np.ndarray | None = None,
                    m: np.ndarray | None = None) -> np.ndarray:
     """Noise exponent α per τ and axis: α = −μ − 1 rounded, μ from :func:`local_slopes`, clipped to
-    :func:`alpha_range`.
-
-    With rate samples ``y`` (N, k) and factors ``m``, α is read from the lag-1 autocorrelation (:func:`lag1_alpha`)
-    where μ < :data:`STEEP_SLOPE` (AV, HV, TV), once per run of such τ at its shortest τ; else μ = −2 maps to α = 2.
-    α is then made non-increasing in τ (running minimum). A single τ gives α = 0.
+    :func:`alpha_range`; with rate samples ``y`` (N, k) and factors ``m``, from :func:`lag1_alpha` where
+    μ < :data:`STEEP_SLOPE` (AV, HV, TV), once per run of such τ, else μ = −2 maps to α = 2. Made non-increasing
+    in τ (running minimum); a single τ gives α = 0.
     """
     variance = np.asarray(variance, dtype=float)
     lo, hi = alpha_range(kind)
@@ -241,16 +239,14 @@ def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str, y: np.ndarr
     return alpha.astype(int)
 
 
-#: Fewest averages the lag-1 autocorrelation needs (Riley & Greenhall 2004 use it from about 30 points).
+#: Fewest averages the lag-1 autocorrelation needs.
 LAG1_MIN_POINTS = 30
 
 
 def lag1_alpha(y: np.ndarray, m: int, d_max: int = 2) -> float | None:
-    """Noise exponent α at averaging factor m from the lag-1 autocorrelation (Riley & Greenhall 2004, frequency data).
-
-    The non-overlapping m-averages, a line removed, are differenced d = 0, 1, … (≤ ``d_max``) times until
-    δ = r₁/(1 + r₁) < 0.25; α = −2(δ + d). None with fewer than :data:`LAG1_MIN_POINTS` averages.
-    """
+    """Noise exponent α at averaging factor m from the lag-1 autocorrelation (Riley & Greenhall 2004, frequency data):
+    the non-overlapping m-averages, a line removed, differenced d = 0, 1, … (≤ ``d_max``) times until
+    δ = r₁/(1 + r₁) < 0.25; α = −2(δ + d). None with fewer than :data:`LAG1_MIN_POINTS` averages."""
     k = y.size // m
     if k < LAG1_MIN_POINTS:
         return None

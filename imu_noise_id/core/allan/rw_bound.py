@@ -4,8 +4,8 @@ AV(τ) ≥ K²τ/3 at every τ for any model holding a random walk K (AVs of ind
 AV_hat·ν/AV read as χ²_ν (NIST SP1065 eq. 45, ν a random walk's EDF), U(τ) = AV_hat(τ)·ν/χ²_ν(q) lies below
 AV(τ) with probability q; with q = (1 − level)/M over the M estimates at τ ≥ τ_min (Bonferroni),
 K ≤ min_τ √(3·U(τ)/τ) holds jointly with probability ≥ ``level``. The data's evidence against a given K is the
-p-value min(1, M·min_τ F_ν(ν·AV_hat(τ)/(K²τ/3))). Beyond the papers (IEEE Std 952 gives no bound); reasons:
-docs/analysis.md, "Why the slope rules …".
+p-value min(1, M·min_τ F_ν(ν·AV_hat(τ)/(K²τ/3))). Beyond the papers; reasons: docs/analysis.md, "Why the slope
+rules …".
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from ..noise.units import random_walk_at_allan_variance
 from .edf import edf_of
 from .estimators import AllanResult
 
-#: By default the bound reads the AV from a tenth of the record on (where the loop's AV stops judging a model).
+#: Default shortest τ the bound reads, as a fraction of the record length.
 RECORD_FRACTION = 0.1
 
 

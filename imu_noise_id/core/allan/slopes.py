@@ -10,19 +10,16 @@ random walk   (RW)     +1    K²τ/3                       K = ADEV of the line 
 rate ramp     (RR)     +2    R²τ²/2                      R [u/s]
 =====================  ====  ==========================  =====================================================
 
-Rules (docs/analysis.md, "Noise parameters from the slopes", with their reasons):
+Rules (docs/analysis.md, "Noise parameters from the slopes"; reasons: "Why the slope rules …"):
 
-1. **Lines.** c ≥ 0 of AV(τ) ≈ Σ_j c_j τ^μ_j fitted together over all τ (IEEE Std 952 annex C), minimising
-   Σ_i ρ(√(ν_i/2)·log(model_i/AV_i)), ν the EDF, ρ Huber's loss (:data:`HUBER_K`). WN and RW always; QN, BI, RR
-   where the curve is significantly above WN + RW (:func:`select_lines`).
+1. **Lines.** c ≥ 0 of AV(τ) ≈ Σ_j c_j τ^μ_j fitted over all τ (IEEE Std 952 annex C), minimising
+   Σ_i ρ(√(ν_i/2)·log(model_i/AV_i)), ν the EDF, ρ Huber's loss; WN, RW always, QN, BI, RR if significant.
 2. **Region.** Where a line is at least :data:`DOMINANCE` of the fitted sum; QN, BI, RR need two τ of it.
-3. **Interval.** The χ² interval of the region's point with the largest ν·s² (s the line's share), divided by
-   s, widened in log by the fit's disagreement with that point when outside it; approximate.
-4. **No region.** For WN or RW the upper bound N² ≤ τ·AV_hi(τ), K² ≤ 3·AV_hi(τ)/τ, minimum over τ
-   (``method="upper_bound"``).
-5. **The sensor's low-pass** (beyond IEEE Std 952). A start flatter than white noise that ends in its −1 slope
-   (:func:`rolloff_end`) is left out when the shortest-τ AV lies below the white-noise line; rules 1–4 read
-   from there (``AxisSlopes.rolloff_tau``).
+3. **Interval.** The χ² interval of the region's point with the largest ν·s² (s the line's share), / s, widened in
+   log by the fit's disagreement with that point when outside it (approximate).
+4. **No region.** WN, RW: upper bounds N² ≤ τ·AV_hi(τ), K² ≤ 3·AV_hi(τ)/τ, minimum over τ (``method="upper_bound"``).
+5. **Sensor low-pass** (beyond IEEE Std 952): a roll-off ending in the −1 slope (:func:`rolloff_end`) below the
+   white-noise line is left out; rules 1–4 read from ``AxisSlopes.rolloff_tau`` on.
 """
 
 from __future__ import annotations
@@ -48,11 +45,11 @@ HUBER_K = 2.5
 #: Rule 5: a local AV slope within this of white noise's −1 (or steeper) may end the low-pass roll-off ...
 SLOPE_TOLERANCE = 0.1
 #: ... when at least this many τ remain to read the lines from, and the slopes of this many steps from there on
-#: are no steeper than −1 by more than the tolerance on average (single AV estimates wander on short records).
+#: are no steeper than −1 by more than the tolerance on average.
 ROLLOFF_MIN_POINTS = 8
 ROLLOFF_WHITE_STEPS = 3
 #: The roll-off is the sensor filter's only if it ends within this many of the longest memory a sensor filter has
-#: (:func:`~imu_noise_id.core.noise.resonant.filter_memory_limit`); slower, it is a bias process over white noise.
+#: (:func:`~imu_noise_id.core.noise.resonant.filter_memory_limit`).
 ROLLOFF_MAX_MEMORIES = 40
 #: B = ADEV_min / BIAS_INSTABILITY_FACTOR (IEEE Std 952, flicker floor).
 BIAS_INSTABILITY_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
@@ -124,11 +121,9 @@ _MUS = np.array([mu for mu, _ in _LINES.values()])
 #: The components always fitted (Kalibr's model); QN, BI and RR are added when significant.
 BASE = ("WN", "RW")
 EXTRAS = ("QN", "BI", "RR")
-#: QN is tested where its line is at least this fraction of the sum (it acts only at the shortest τ, where the AV
-#: is the most precise: a quantisation too weak to dominate anywhere still biases N if left out).
+#: QN is tested where its line is at least this fraction of the sum.
 QN_TEST_SHARE = 0.1
-#: An extra line is also kept when the fit with it leaves the curve's confidence intervals at this many τ fewer than
-#: WN + RW (reasons: docs/analysis.md, "Why the slope rules …").
+#: An extra line is also kept when the fit with it leaves the AV's intervals at this many τ fewer than WN + RW.
 MENDED_MIN = 6
 
 

@@ -1,8 +1,7 @@
 """Theoretical wavelet variance of a component model and the covariance of the WV estimates across scales.
 
-ν²_j(θ) = AV(τ_j)/2 of the sampled components (GMWM eq. 3's ν(θ), exact at the sampling period). Beyond the
-papers (which estimate the covariance from the data or by bootstrap): for a Gaussian model, with K(u) the partial
-sums' generalised covariance (:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`),
+ν²_j(θ) = AV(τ_j)/2 of the sampled components (GMWM eq. 3's ν(θ)). Beyond the papers, for a Gaussian model, with
+K(u) the partial sums' generalised covariance (:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`),
 
     γ_ij(k) = Cov(W_{i,t}, W_{j,t+k}) = Σ_{a,b=0}^{2} c_a c_b K(k + a m_i − b m_j) / (4 m_i m_j),  c = (1, −2, 1),
     Cov(ν̂²_i, ν̂²_j) = 2 Σ_k n_ij(k) γ_ij(k)² / (M_i M_j)  (+ 4 μ_i μ_j Σ_k n_ij(k) γ_ij(k) / (M_i M_j) with a ramp)

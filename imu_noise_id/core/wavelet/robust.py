@@ -6,9 +6,8 @@ Victoria-Feser & Xu (arXiv 2001.04214), with Tukey's biweight w_c(r) = (1 − (r
     (1/M_j) Σ_t χ_c(W_{j,t} / ν_j) = 0,   χ_c(r) = w_c(r)·(r² − κ_c),   κ_c = E[w_c(Z) Z²] / E[w_c(Z)],
 
 Fisher-consistent at the normal, solved by Newton steps from the biweight S-scale (breakdown 50 %). Efficiency
-relative to mean(W²): e²/(2 Var χ_c(Z)), e = E[χ'_c(Z) Z]. Beyond the papers: influence vanishing beyond c·ν
-(theirs is bounded but non-zero), and the Gaussian covariance from the Hermite expansion
-Cov(χ(r), χ(r')) = Σ_{k even} a_k² ρ^k / k!, a_k = E[χ_c(Z) He_k(Z)], a_2 = e (:mod:`.covariance`).
+relative to mean(W²): e²/(2 Var χ_c(Z)), e = E[χ'_c(Z) Z]. Beyond the papers: influence zero beyond c·ν; Gaussian
+covariance Cov(χ(r), χ(r')) = Σ_{k even} a_k² ρ^k / k!, a_k = E[χ_c(Z) He_k(Z)], a_2 = e (:mod:`.covariance`).
 """
 
 from __future__ import annotations
@@ -151,11 +150,7 @@ HAMPEL_HALF_WINDOW, HAMPEL_THRESHOLD = 3, 6.5
 def hampel_clean(y: np.ndarray, half_window: int = HAMPEL_HALF_WINDOW,
                  threshold: float = HAMPEL_THRESHOLD) -> tuple[np.ndarray, np.ndarray]:
     """``y`` with isolated outliers replaced by the running median of 2h + 1 samples, and their mask (beyond the
-    papers; the Hampel identifier: more than ``threshold`` × 1.4826·MAD from the running median).
-
-    One spike moves 2m coefficients at scale m, which no scale-wise estimator resists; the robust WV drops the
-    coefficients touching flagged samples, or at scales where too few remain uses the cleaned record (docs/gmwm.md).
-    """
+    papers; Hampel identifier: more than ``threshold`` × 1.4826·MAD from the running median; reasons: docs/gmwm.md)."""
     y = np.asarray(y, dtype=float)
     h = int(half_window)
     bad = np.zeros(y.size, bool)

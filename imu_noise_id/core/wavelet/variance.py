@@ -23,7 +23,7 @@ from ..constants import CONFIDENCE_95
 from ..errors import InputError
 from .robust import DEFAULT_EFFICIENCY, BiweightScale, hampel_clean
 
-#: Default longest scale: m_J ≤ this fraction of the record (2m_J ≤ N/4: each estimate spans ≥ 4 disjoint pairs).
+#: Default longest scale: m_J ≤ this fraction of the record.
 DEFAULT_MAX_FRACTION = 1.0 / 8.0
 #: Fewest scales a fit may use.
 MIN_SCALES = 3
