@@ -15,11 +15,10 @@ import numpy as np
 from .axes import AXES, GYRO_AXES, ImuSeries
 from .constants import STANDARD_GRAVITY
 
-#: |mean specific force| may differ from standard gravity by this much without comment [m/s²] (local gravity spans
-#: 9.78–9.83 m/s²); a larger difference within :data:`GRAVITY_SCALE_TOLERANCE` is noted (scale or bias error).
+#: |mean specific force| may differ from standard gravity by this much without a note [m/s²].
 GRAVITY_TOLERANCE = 0.3
 #: Relative difference of |mean specific force| from gravity beyond which the record is not a static IMU reading
-#: gravity in m/s² (gravity removed, g units, or strong motion); consumer accelerometers err by a few % at most.
+#: gravity in m/s².
 GRAVITY_SCALE_TOLERANCE = 0.10
 #: Standard deviation of 1 s means above which a gyro axis is rotating rather than drifting [rad/s] (≈0.6 °/s).
 GYRO_BLOCK_STD_MAX = 0.01
@@ -31,20 +30,18 @@ BLOCK_S = 1.0
 
 #: Motion bursts: the spread of the samples is measured in windows of this length [s] …
 BURST_WINDOW_S = 0.25
-#: … as the mean square deviation from the window's median of all but this share of its samples (the largest
-#: deviations: a few spikes in a window are outliers, not motion) …
+#: … as the mean square deviation from the window's median of all but this share of its samples (the largest) …
 BURST_TRIM = 0.1
 #: … and a burst is a stretch of at least :data:`BURST_MIN_S` [s] whose windows all spread this many times more
-#: than the record's median window on some axis (measured thresholds: docs/bags.md, "Static check").
+#: than the record's median window on some axis.
 BURST_RATIO = 25.0
 BURST_MIN_S = 0.5
 #: The still stretch suggested in place of a record with bursts keeps this far [s] from them.
 STILL_MARGIN_S = 1.0
 #: At most this many bursts are listed one by one in the flag.
 MAX_LISTED_BURSTS = 10
-#: A record that moves for much of its length (a robot that stands, drives and stands): the longest stretch of at
-#: least :data:`QUIET_MIN_S` [s] whose :data:`BLOCK_S` means stay within this many times the block tests' limits of
-#: each other, on every axis, and that passes those tests, is suggested as its still stretch (:func:`quiet_span`).
+#: The longest stretch of at least :data:`QUIET_MIN_S` [s] whose :data:`BLOCK_S` means stay within this many times
+#: the block tests' limits of each other, on every axis, and that passes those tests is the still stretch.
 QUIET_RANGE = 2.0
 QUIET_MIN_S = 10.0
 

@@ -34,7 +34,7 @@ LATTICE_FRACTION = 0.95
 MAX_LOST = 0.5
 #: The regression's lag is this fraction of the record (in messages).
 LAG_FRACTION = 0.1
-#: Pairs of stamps each estimate looks at, at most (evenly spread over longer records: bounded time and memory).
+#: Pairs of stamps each estimate looks at, at most (evenly spread over longer records).
 MAX_PAIRS = 200_000
 #: The fix named whenever the stamps cannot be trusted.
 RATE_HINT = "pass --rate HZ with the sensor's configured output rate"

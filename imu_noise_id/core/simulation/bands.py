@@ -16,11 +16,8 @@ TERMS_PER_FACTOR = 8
 def thinned_allan_variance(y: np.ndarray, dt: float, m: np.ndarray) -> np.ndarray:
     """Overlapping Allan variance [u²] of rate samples ``y`` [u] at period ``dt`` [s] and averaging factors ``m``,
     paper 000 eq. (2), σ²(mτ₀) = Σ_i (x_{i+2m} − 2x_{i+m} + x_i)² / (2 (m dt)² · #terms) with x the phase, but over
-    every s-th start i only, s = max(1, m // :data:`TERMS_PER_FACTOR`).
-
-    Terms that far apart overlap by seven eighths of their span and more, so the thinned sum keeps nearly all of the
-    fully overlapping estimator's precision at an eighth of its cost per long factor: a simulation's AV on the
-    analysis grid takes about a third of the time (its curves are drawn, never tested)."""
+    every s-th start i only, s = max(1, m // :data:`TERMS_PER_FACTOR`);
+    reasons: docs/analysis.md, "Why simulations thin …"."""
     x = phase(np.asarray(y, dtype=float), dt)
     out = np.empty(np.asarray(m).size)
     buffer = np.empty(x.size)
