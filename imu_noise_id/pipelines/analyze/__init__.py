@@ -35,8 +35,7 @@ from .static import StaticAnalysis, analyze_static
 
 #: Simulations of each final model drawn as its band.
 BAND_SIMULATIONS = 20
-#: With ``jobs=0`` (automatic) a record of fewer samples per axis runs its axes in this process: a worker's start
-#: (≈ 1–2 s of imports) would be a good part of such an axis's time.
+#: With ``jobs=0`` (automatic) a record of fewer samples per axis runs its axes in this process.
 PARALLEL_MIN_SAMPLES = 100_000
 
 Progress = Callable[[int, int], None]

@@ -29,9 +29,7 @@ from ...core.noise.modelspec import parse_structure
 AUTO, NONE = "auto", "none"
 #: ``estimator`` values.
 ESTIMATORS = ("auto", "em", "gmwm", "both")
-#: Above this many samples per axis ``estimator = "auto"`` uses the GMWM: the default EM analysis (model selection
-#: and closed loop, 6 axes) then takes more than about ten minutes and over a GiB on this project's 2-core machine
-#: (docs/gmwm.md, ``estimator``).
+#: Above this many samples per axis ``estimator = "auto"`` uses the GMWM (reasons: docs/gmwm.md, ``estimator``).
 EM_MAX_SAMPLES = 4_000_000
 
 

@@ -2,10 +2,9 @@
 
 Unresolved: the loop's verdict failed (:attr:`~imu_noise_id.pipelines.loop.LoopResult.passed`), or N disagrees with the
 AV's white-noise line (:func:`~imu_noise_id.core.allan.slopes.fit_axis_slopes`: 95 % intervals disjoint and values more
-than :data:`PASSBAND_FACTOR` apart). An unresolved axis gives as N and K its data overbound's values
+than :data:`PASSBAND_FACTOR` apart). An unresolved axis gives its data overbound's N and K
 (:func:`~.overbound.data_overbound`) as upper bounds, interval (0, value), method ``unresolved``, the reason in its
-source; the model's own values stay in ``model.yaml``. Why: docs/analysis.md, "Why an unresolved axis pastes its
-overbound".
+source; ``model.yaml`` keeps the model's own. Reasons: docs/analysis.md, "Why an unresolved axis …".
 """
 
 from __future__ import annotations

@@ -23,8 +23,7 @@ from ...core.timing import SamplePeriod
 MIN_SAMPLES = 100
 #: Relative spread of the sampling intervals tolerated before the analysis warns about timing.
 JITTER_WARN = 0.05
-#: Fraction of the sensor's samples missing (dropped or lost) above which the analysis warns that time-dependent
-#: terms are distorted.
+#: Fraction of the sensor's samples missing above which the analysis warns that time-dependent terms are distorted.
 MISSING_WARN = 0.01
 
 
