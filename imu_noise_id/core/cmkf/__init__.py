@@ -1,2 +1,1 @@
-"""Covariance matching Kalman filter (paper 004): the paper's filter per axis and its robot generalisation
-(the paper's two-axis turntable filter written out literally is a test reference: ``test/reference_cmkf.py``)."""
+"""Covariance matching Kalman filter (paper 004) per axis and on a robot (paper's filter: test/reference_cmkf.py)."""

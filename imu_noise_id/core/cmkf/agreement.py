@@ -1,9 +1,7 @@
-"""Do the IMU and the odometry agree on each axis? The likely cause behind an inconsistent CMKF (beyond paper 004).
+"""Per-axis agreement of the IMU and odometry changes: the likely cause of an inconsistent CMKF (beyond paper 004).
 
-Per IMU axis, the least-squares slope of the odometry's change on the IMU-integrated change over the same
-interval (velocity for the accelerometer, rotation for the gyro): near −1 or far from 1 on an excited axis means
-**frames** (mirrored odometry frame, wrong mounting rotation); near 1 with a mean NIS off its dof means
-**covariance scale**. :func:`likely_cause` puts it in one sentence.
+Slope of the odometry's change on the IMU-integrated one per interval (velocity, rotation); on an excited axis near −1
+or far from 1: **frames**; near 1 with the mean NIS off its dof: **covariance scale** (:func:`likely_cause`).
 """
 
 from __future__ import annotations

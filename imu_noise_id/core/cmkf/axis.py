@@ -1,5 +1,4 @@
-"""Paper 004's CMKF for ``n`` independent axes sharing one time base, state ``[r, v, b]`` per axis (the paper's
-filter is block diagonal; n = 2 for the paper, 3 for the robot, 2·runs for the Monte Carlo).
+"""Paper 004's CMKF for ``n`` independent axes on one time base, state ``[r, v, b]`` per axis (block diagonal).
 
 Per axis and interval of length T::
 
@@ -8,9 +7,8 @@ Per axis and interval of length T::
     K = P⁻ Hᵀ (H P⁻ Hᵀ + R)⁻¹,  x̂⁺ = x̂⁻ + K (z − H x̂⁻)                  (24)–(25)
     P⁺ = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ                               (27) Joseph form
 
-then :mod:`.stacked` (28–35) and the Ŝ_v check (``pd_check``). Modes: ``"pos_vel"`` (eq. 8,
-H = [[1,0,0],[0,1,0]]) and ``"vel"`` (H = [1, 0] on the observable [v, b], M_o = [[1, −β_v], [1, 0]]).
-"""
+then :mod:`.stacked` (28–35) and the Ŝ_v check (``pd_check``). Modes: ``"pos_vel"`` (eq. 8, H = [[1,0,0],[0,1,0]])
+and ``"vel"`` (H = [1, 0] on the observable [v, b], M_o = [[1, −β_v], [1, 0]])."""
 
 from __future__ import annotations
 
@@ -25,14 +23,13 @@ PD_CHECKS = ("joint", "per_axis", "se_floor")
 
 
 class AxisCmkf:
-    """Batched per-axis CMKF (paper 004), a :class:`~.protocol.CmkfFilter`.
+    """Batched per-axis CMKF (paper 004), a :class:`~.protocol.CmkfFilter`; ValueError on invalid arguments.
 
     Parameters
     ----------
     n_axes : number of axes; s_v0 : initial Ŝ_v (scalar or (n,)) [m²/s³]; mode : ``"pos_vel"`` or ``"vel"``.
-    pd_check : ``"joint"`` (paper: all axes, or groups of ``pd_group``), ``"per_axis"`` (last positive value per
-        axis) or ``"se_floor"`` (:meth:`~.matching.MatchingLeastSquares.working`).
-    min_samples : stacked samples before the estimate replaces ``s_v0``.
+    pd_check : ``"joint"`` (paper; all axes, or groups of ``pd_group``), ``"per_axis"`` (last positive value per axis)
+        or ``"se_floor"`` (:meth:`~.matching.MatchingLeastSquares.working`); min_samples : stacked samples before use.
     """
 
     def __init__(
@@ -107,8 +104,7 @@ class AxisCmkf:
         self.initialised = True
 
     def predict(self, x_pred: np.ndarray, interval: ImuInterval) -> None:
-        """Covariance over ``interval`` (eq. 23) to the already propagated ``x_pred`` (known input U = x_pred − F̂ x̂⁺,
-        eq. 17); one call per measurement epoch."""
+        """Covariance over ``interval`` (eq. 23) to the propagated ``x_pred`` (n, 3); U = x_pred − F̂ x̂⁺ (eq. 17)."""
         Phi = interval.Phi
         U = np.asarray(x_pred, dtype=float) - self.x @ Phi.T
         self.P = self.predicted_P(interval)
@@ -123,8 +119,7 @@ class AxisCmkf:
         return P
 
     def nis(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """NIS per axis of the update with ``z`` (n, m), ``R`` (n, m, m), without updating (NaN everywhere when an
-        innovation covariance is not positive definite)."""
+        """NIS per axis of the update with ``z`` (n, m), ``R`` (n, m, m), not applied (NaN if an S is not PD)."""
         z = np.asarray(z, dtype=float).reshape(self.n, self.m)
         S = self.H @ self.P @ self.H.T + np.asarray(R, dtype=float).reshape(self.n, self.m, self.m)
         if not _all_positive_definite(S):
@@ -133,8 +128,7 @@ class AxisCmkf:
         return np.einsum("ni,ni->n", nu, np.linalg.solve(S, nu[:, :, None])[:, :, 0])
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
-        """Joseph-form update (eqs. 24–27) with ``z`` (n, m), ``R`` (n, m, m) and one estimator step (none across a gap:
-        ``new_chain``); NIS per axis."""
+        """Joseph update (24)–(27) with ``z`` (n, m), ``R`` (n, m, m), a stacked step unless ``new_chain``; NIS (n,)."""
         z = np.asarray(z, dtype=float).reshape(self.n, self.m)
         R = np.asarray(R, dtype=float).reshape(self.n, self.m, self.m)
         H = self.H

@@ -1,5 +1,4 @@
-"""The robot CMKF's parameters: the one place their defaults are written (read by :class:`~.robot.RobotCmkf`, the
-node's ``cmkf.*`` and ``nis.window`` parameters, ``imu-noise-id cmkf`` and the replay's ``cmkf.yaml``)."""
+"""The robot CMKF's parameters, the one place their defaults are written (node, ``imu-noise-id cmkf``, replay)."""
 
 from __future__ import annotations
 
@@ -22,20 +21,16 @@ class CmkfConfig:
     ----------
     imu_rotation_xyzw : orientation of the IMU frame in the base frame (``C_bi``), ROS quaternion order.
     measurement : ``"twist"`` (body velocity; wheel odometry) or ``"pose_twist"`` (position and body velocity, eq. 8).
-    accel_bias_tau, accel_bias_sigma : bias time constant [s] and steady-state σ [m/s²] (eqs. 3–7, known).
-    s_v0 : initial Ŝ_v [m²/s³] (paper: 2e-6).
-    gyro_bias_tau, gyro_bias_sigma, s_g0 : the same for the gyro [s], [rad/s], [rad²/s].
-    velocity_noise_std, position_noise_std, angular_velocity_noise_std : odometry noise overrides [m/s], [m],
-        [rad/s]; None: the message covariance, ``default_*`` when missing or all zeros (REP-145).
+    accel_bias_tau, accel_bias_sigma, s_v0 : bias time constant [s], steady-state σ [m/s²] (eqs. 3–7), initial Ŝ_v
+        [m²/s³]; gyro_bias_tau, gyro_bias_sigma, s_g0 : the same for the gyro [s], [rad/s], [rad²/s].
+    velocity_noise_std, position_noise_std, angular_velocity_noise_std : odometry noise [m/s], [m], [rad/s]; None:
+        the message covariance, ``default_*`` when missing or all zeros (REP-145).
     gravity : [m/s²]; gravity_source : ``"odometry"`` (its orientation, propagated with the gyro) or ``"imu"``.
     max_odom_gap, max_imu_gap : [s] beyond which the stacked chain restarts / position and velocity re-initialise.
-    late_odom_tolerance : the stamp merger's latency allowance [s] (:class:`~.stream.CmkfStream`).
-    min_odom_interval : odometry closer than this to the last update is dropped [s].
-    pd_check : the Ŝ_v, Ŝ_g the filters run with: ``"se_floor"`` (:meth:`~.matching.MatchingLeastSquares.working`,
-        beyond the paper), ``"per_axis"`` or ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used.
-    nis_window : updates averaged in ``CmkfEstimate.nis_accel_mean`` (the node's ``nis.window``).
-    nis_gate_probability : innovation gate of both filters (beyond the paper, :mod:`.gate`): an update whose NIS
-        exceeds the ``1 − p`` quantile of χ²(dof) is rejected; 0: no gate.
+    late_odom_tolerance : stamp merger latency [s]; min_odom_interval : odometry closer to the last update dropped [s].
+    pd_check : Ŝ_v, Ŝ_g in use: ``"se_floor"`` (:meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` or
+        ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used; nis_window : updates in the NIS mean.
+    nis_gate_probability : χ² tail p of the innovation gate (:mod:`.gate`): NIS above its ``1 − p`` quantile rejected.
     """
 
     imu_rotation_xyzw: tuple[float, float, float, float] = rot.IDENTITY

@@ -25,18 +25,14 @@ class CmkfEstimate:
     ----------
     t : time of the estimate [s] (last processed stamp).
     status : ``no_data``, ``no_imu``, ``imu_only``, ``unobserved`` (no odometry update within ``max_odom_gap``, or no
-        IMU within ``max_imu_gap``), ``converging`` (< ``min_samples`` stacked samples), ``tracking`` or
-        ``inconsistent`` (:attr:`consistency` is ``inconsistent``).
+        IMU within ``max_imu_gap``), ``converging`` (< ``min_samples``), ``tracking`` or ``inconsistent``.
     observed : an odometry update within ``max_odom_gap`` and the IMU alive.
     accel_bias, accel_bias_std : [m/s²] per axis (0 ± σ_ss before the first update).
-    S_v : the working Ŝ_v [m²/s³] (not an estimate to report); S_v_ls : the least-squares value (may be ≤ 0);
-        accel_ls : (S_v_ls, standard error, dof), behind :attr:`accel_psd` and :attr:`accel_noise_density`.
+    S_v : the working Ŝ_v [m²/s³] (not an estimate); S_v_ls : least squares (may be ≤ 0); accel_ls : (S_v_ls, se, dof).
     gyro_bias, gyro_bias_std, S_g, S_g_ls, gyro_ls : the same for the gyro [rad/s], [rad²/s].
-    nis_accel, nis_accel_dof, nis_accel_mean : last accelerometer update's NIS (also when gated), its dof, the mean
-        over the accepted ones among the last ``nis_window``; nis_gyro, nis_gyro_dof, nis_gyro_mean : the gyro's.
-    gated : whether the last odometry message's (accelerometer, gyro) update was gated.
-    consistency, consistency_reason : the worse verdict of the two NIS windows (:data:`CONSISTENCY_ORDER`) and, unless
-        consistent, the numbers and likely cause.
+    nis_accel, nis_accel_dof, nis_accel_mean : last NIS (also when gated), its dof, mean over the accepted ones of the
+        last ``nis_window``; nis_gyro, nis_gyro_dof, nis_gyro_mean : the gyro's; gated : (accelerometer, gyro) gated.
+    consistency, consistency_reason : the worse verdict of the two NIS windows (:data:`CONSISTENCY_ORDER`) and why.
     n_stacked : stacked samples in the S_v estimate; counters : messages used, dropped and gated, by reason.
     """
 
@@ -87,8 +83,7 @@ class CmkfEstimate:
 
 
 def worst_filter(verdicts: Sequence[str], means: Sequence[float], dofs: Sequence[int]) -> int:
-    """The filter with the most severe verdict; among equals, the one whose mean NIS is furthest from its dof (by
-    ratio)."""
+    """The filter with the most severe verdict; among equals, the mean NIS furthest from its dof (by ratio)."""
     def severity(i: int) -> tuple[int, float]:
         ratio = means[i] / dofs[i]
         return (CONSISTENCY_ORDER.index(verdicts[i]),

@@ -1,13 +1,8 @@
-"""Paper 004's CMKF for velocity-only measurements in plain-float algebra (the robot's hot path): the equations and
-interface of :class:`~.axis.AxisCmkf` in mode ``"vel"`` (tested equal), on the observable [v, b] (r carried).
-
-With H = [1, 0], F̂ = [[1, −β_v], [0, φ]], Q_a = S_v [[T, 0], [0, 0]]:
-
-- propagation (23): P_vv ← P_vv − 2β_v P_vb + β_v² P_bb + Ŝ_v T, P_vb ← φ (P_vb − β_v P_bb), P_bb ← φ² P_bb + q_b;
-- Joseph update (27), s = P_vv + R, K = [P_vv, P_vb]/s;
-- stacked estimator (28)–(35): M_o⁻¹ = [[0, 1], [−1/β_v, 1/β_v]], D = T_k a₁a₁ᵀ + T_{k−1} a₂a₂ᵀ with
-  a₁ = −M_o,k⁻¹[:, 0], a₂ = F̂_{k−1} M_o,k−1⁻¹[:, 0] − e_v, Cov(𝒲) = q_b e_b e_bᵀ, ⟨Cov(ℰ), D⟩ = Σ_j R_j E_jᵀ D E_j.
-"""
+"""Paper 004's CMKF for velocity-only measurements in plain floats (the robot's hot path): :class:`~.axis.AxisCmkf`
+in mode ``"vel"`` (tested equal) on the observable [v, b] (r carried). H = [1, 0], F̂ = [[1, −β_v], [0, φ]],
+Q_a = S_v [[T, 0], [0, 0]]: propagation (23), Joseph update (27), stacked estimator (28)–(35) with
+M_o⁻¹ = [[0, 1], [−1/β_v, 1/β_v]], D = T_k a₁a₁ᵀ + T_{k−1} a₂a₂ᵀ, a₁ = −M_o,k⁻¹[:, 0],
+a₂ = F̂_{k−1} M_o,k−1⁻¹[:, 0] − e_v, Cov(𝒲) = q_b e_b e_bᵀ, ⟨Cov(ℰ), D⟩ = Σ_j R_j E_jᵀ D E_j."""
 
 from __future__ import annotations
 
@@ -45,9 +40,8 @@ class VelocityAxisCmkf:
 
     Parameters
     ----------
-    n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³]; pd_check : ``"se_floor"``
-        (:meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` or ``"joint"`` (last positive value);
-    min_samples : stacked samples before the estimate replaces ``s_v0``.
+    n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³] (ValueError unless > 0); pd_check : ``"se_floor"``,
+    ``"per_axis"`` or ``"joint"``; min_samples : stacked samples before the estimate replaces ``s_v0``.
     """
 
     m = 1
@@ -160,8 +154,8 @@ class VelocityAxisCmkf:
         return np.array(out)
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
-        """Joseph-form update (24)–(27) and one estimator step; NIS per axis. Beyond the paper: where s = P_vv + R ≤ 0
-        the update is skipped (``skipped``), NaN returned, the chain restarted."""
+        """Joseph update (24)–(27) and one estimator step; NIS per axis. Where s = P_vv + R ≤ 0: skipped (``skipped``),
+        NaN, chain restarted."""
         n = self.n
         z = [float(z[i][0]) for i in range(n)]
         R = [float(R[i][0][0]) for i in range(n)]
@@ -238,8 +232,7 @@ class VelocityAxisCmkf:
         return True
 
     def _accept(self) -> None:
-        """The Ŝ_v used: the least squares floored at its standard error (``se_floor``), or the last positive estimate.
-        """
+        """The Ŝ_v used: least squares floored at its standard error (``se_floor``), or the last positive estimate."""
         if self.count < self.min_samples or self.matching.den <= 0.0:
             return
         if self.pd_check == "se_floor":

@@ -1,11 +1,6 @@
-"""Innovation gate of the robot CMKF's filters and the window of NIS values its consistency is judged on (beyond
-paper 004, whose filter uses every measurement; reasons: docs/cmkf.md, "Innovation gate").
-
-An update whose NIS exceeds the ``1 − p`` quantile of χ²(dof)
-(:func:`~imu_noise_id.core.diagnostics.consistency.nis_gate`) is rejected; after :data:`GATE_PATIENCE` rejections in
-a row the next is accepted whatever its NIS, and rejections count toward the consistency verdict
-(:class:`NisWindow`, :func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict`).
-"""
+"""Innovation gate of the robot CMKF's filters and the NIS window of its consistency verdict (beyond paper 004;
+reasons: docs/cmkf.md, "Innovation gate"): an update whose NIS exceeds the ``1 − p`` quantile of χ²(dof) is rejected,
+unless :data:`GATE_PATIENCE` were in a row; rejections count toward the verdict (:class:`NisWindow`)."""
 
 from __future__ import annotations
 

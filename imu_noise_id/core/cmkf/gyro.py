@@ -1,14 +1,8 @@
-"""Gyro-bias filter analogous to paper 004's CMKF (beyond the paper, which leaves the gyro to future work).
+"""Gyro-bias filter analogous to paper 004's CMKF (beyond the paper; derivation: docs/cmkf.md, "Gyro").
 
-Per IMU axis (cf. eqs. 3–4, 9, 12; S_g the ARW PSD [rad²/s])::
-
-    ω̃ = ω + b_g + n_g,   ḃ_g = −b_g/τ_g + w_g,   y_k = ∫ ω̃ dt − Δθ_odo,k,
-    y_k / T_k = b_{g,k} + e_k,   Var(e_k) = S_g / T_k + R_k / T_k²
-
-A scalar Joseph-form filter per axis (eq. 27). Covariance matching (cf. eqs. 28–35): d_k = y_k/T_k −
-φ_k y_{k−1}/T_{k−1} has E[d_k²] = q_k + S_g D_k + R_k/T_k² + φ_k² R_{k−1}/T_{k−1}² − 2φ_k c_k,
-D_k = 1/T_k + φ_k²/T_{k−1}, c_k = Cov(e_k/T_k, e_{k−1}/T_{k−1}) (¼ Var ω_{k−1} for the twist trapezoid);
-Ŝ_g = Σ (d² − q − R-terms + 2φc) D_k / Σ D_k² (standard error: :mod:`.matching`).
+Per IMU axis (cf. eqs. 3–4, 9, 12, 27–35; S_g the ARW PSD [rad²/s]): y_k = ∫ ω̃ dt − Δθ_odo,k, y_k / T_k = b_{g,k}
++ e_k, Var(e_k) = S_g / T_k + R_k / T_k²; a scalar Joseph-form filter; Ŝ_g = Σ (d² − q − R-terms + 2φc) D_k / Σ D_k²
+with d_k = y_k/T_k − φ_k y_{k−1}/T_{k−1}, D_k = 1/T_k + φ_k²/T_{k−1}, c_k = Cov(e_k/T_k, e_{k−1}/T_{k−1}).
 """
 
 from __future__ import annotations
@@ -21,14 +15,12 @@ from .matching import MatchingLeastSquares
 
 
 class GyroBiasFilter:
-    """Per-axis gyro-bias Kalman filter with a covariance-matching estimate of the angle-random-walk PSD (plain floats;
-    the names of :class:`~.protocol.CmkfFilter`).
+    """Per-axis gyro-bias Kalman filter with a covariance-matching Ŝ_g (plain floats, :class:`~.protocol.CmkfFilter`).
 
     Parameters
     ----------
     tau : bias time constant [s]; sigma : steady-state bias σ [rad/s]; s_g0 : initial S_g [rad²/s]; min_samples :
-    stacked samples before Ŝ_g replaces ``s_g0``; pd_check : ``"se_floor"``
-    (:meth:`~.matching.MatchingLeastSquares.working`) or anything else for the last positive value.
+    stacked samples before Ŝ_g replaces ``s_g0``; pd_check : ``"se_floor"`` or else the last positive value.
     """
 
     def __init__(self, tau: float, sigma: float, s_g0: float, min_samples: int = 10, pd_check: str = "se_floor"
@@ -111,8 +103,7 @@ class GyroBiasFilter:
         return total
 
     def coast(self) -> None:
-        """The pending interval without a measurement (a rejected update): the bias is only predicted; no matching step
-        spans it."""
+        """A rejected update: the bias is only predicted over the pending interval; no matching step spans it."""
         phi, q = self._prior()
         for i in range(3):
             self.bias[i] *= phi
@@ -120,8 +111,8 @@ class GyroBiasFilter:
         self._prev = None
 
     def update(self, z: list[float], R: list[float], shared: list[float] | None = None) -> float:
-        """Update with ``z`` (3) = Δθ̃ − Δθ_odo [rad], ``R`` (3) = Var Δθ_odo [rad²] and ``shared`` (3) = the covariance
-        of Δθ_odo/T with the previous interval's [rad²/s²]; returns the NIS summed over the axes (3 dof)."""
+        """Update with ``z`` = Δθ̃ − Δθ_odo [rad], ``R`` = Var Δθ_odo [rad²], ``shared`` its rate's covariance with the
+        previous interval's [rad²/s²] (3 each); NIS summed over the axes (3 dof)."""
         T = self._T
         phi, q = self._prior()
         meas = [zi / T for zi in z]

@@ -1,16 +1,10 @@
-"""The IMU side of the robot CMKF: per-sample propagation (paper 004 eqs. 13–16) and the interval it forms.
-
-Frames ``n`` (odometry, z up), ``b`` (base), ``i`` (IMU). ``f̃ = f + b + n`` (gravity included); with
-v = C_in v_n (lever arm neglected): v̇ = f + g_i − ω × v, ṙ = v − ω × r, g_i = C_in [0, 0, −g], ḃ_i = −b_i/τ + w_i
-(eqs. 3–4). Per sample: u = f̃ + g_i − ω̂ × v̂ (ω̂ = ω̃ − b̂_g, known input), v ← v + (u − b̂) dt, b̂ ← φ b̂,
-Δp_n ← Δp_n + C_ni (v dt + ½ (u − b̂) dt²). The samples between two epochs form one interval of T = Σ dt_j
-(β_j = Π_{l<j} φ_l, m_j the mid-time of sample j)::
+"""The IMU side of the robot CMKF: per-sample propagation (paper 004 eqs. 3–4, 13–16; frames and model: docs/cmkf.md,
+"From the table to a robot") and the interval of T = Σ dt_j it forms, eqs. (13)–(16), (22) accumulated exactly
+(β_j = Π_{l<j} φ_l, m_j the mid-time of sample j; one sample gives eq. 17, :func:`~.axis.paper_interval`)::
 
     F̂ = [[1, T, −(T·Σβ_j dt_j − Σβ_j dt_j m_j)], [0, 1, −Σβ_j dt_j], [0, 0, Π φ_j]]
     Q_a = S_v · [[T³ − 2T Σdt m + Σdt m², T² − Σdt m, 0], [T² − Σdt m, T, 0], [0, 0, 0]]
     q_b = (1 − (Π φ_j)²) σ_ss²  (bias drive lumped at the end: O(q_b T))
-
-exactly eqs. (13)–(16), (22) accumulated; one sample gives eq. (17) (:func:`~.axis.paper_interval`).
 """
 
 from __future__ import annotations
@@ -27,9 +21,8 @@ from .stacked import Interval
 
 @dataclass(frozen=True)
 class ImuInterval:
-    """One interval between two epochs, shared by all axes (eqs. 17, 22–23): ``T`` [s]; ``Bp``, ``Bv`` (F̂[0, 2] = −Bp,
-    F̂[1, 2] = −Bv); ``phi`` = Π φ_j (eq. 7); ``Qrr``, ``Qrv`` position variance and position–velocity covariance for
-    unit PSD (velocity variance T); ``qb`` bias-drive variance (eq. 7) [m²/s⁴]."""
+    """One interval (eqs. 17, 22–23): ``T`` [s]; F̂[0, 2] = −``Bp``, F̂[1, 2] = −``Bv``; ``phi`` = Π φ_j; ``Qrr``, ``Qrv``
+    for unit PSD (velocity variance T); ``qb`` bias-drive variance (eq. 7) [m²/s⁴]."""
 
     T: float
     Bp: float
@@ -55,14 +48,12 @@ class ImuInterval:
 
 
 class ImuPropagation:
-    """The accelerometer filter's state between two epochs, propagated per IMU sample (plain floats): r̂, v̂, b̂ per
-    axis, Δp_n (with ``track_position``), the interval's gyro increment ∫ω̃ dt, the orientation q_ni and the sums
-    behind :meth:`interval`.
+    """The accelerometer filter's state between two epochs per IMU sample (plain floats): r̂, v̂, b̂, Δp_n (with
+    ``track_position``), the gyro increment ∫ω̃ dt, q_ni and the sums behind :meth:`interval`.
 
     Parameters
     ----------
-    gravity : [m/s²]; bias_tau, bias_sigma : accelerometer bias time constant [s] and steady-state σ [m/s²];
-    track_position : accumulate the displacement.
+    gravity : [m/s²]; bias_tau, bias_sigma : accelerometer bias time constant [s] and steady-state σ [m/s²].
     """
 
     def __init__(self, gravity: float, bias_tau: float, bias_sigma: float, track_position: bool) -> None:

@@ -1,9 +1,7 @@
-"""The covariance-matching least squares of paper 004 (eq. 35), streaming, with a standard error.
+"""Streaming covariance-matching least squares of paper 004 (eq. 35) with a standard error (beyond the paper).
 
-Per axis Ŝ = Σ_k q_k / Σ_k w_k, q_k = ⟨𝒵_k𝒵_kᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩_F, w_k = ⟨D_k, D_k⟩_F (:mod:`.stacked`;
-scalar d_k for :mod:`.gyro`). Beyond the paper: Var(Ŝ) ≈ J/(J − 1) · Σ_j (Q_j − Ŝ W_j)² / (Σ_j W_j)² over J
-completed blocks of :data:`BLOCK` epochs (a cluster-robust sandwich; the q_k depend over a few epochs only),
-J − 1 degrees of freedom, Student's t intervals (:mod:`.psd`).
+Ŝ = Σ_k q_k / Σ_k w_k per axis (:mod:`.stacked`, :mod:`.gyro`); Var(Ŝ) ≈ J/(J − 1) · Σ_j (Q_j − Ŝ W_j)² / (Σ_j W_j)²
+over J blocks of :data:`BLOCK` epochs, J − 1 dof (docs/cmkf.md, "Uncertainty of S_v and S_g").
 """
 
 from __future__ import annotations
@@ -15,7 +13,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.stats import t as student_t
 
-#: Epochs per block of the sandwich variance (the products are dependent over two epochs at most).
+#: Epochs per block of the sandwich variance.
 BLOCK = 64
 
 
@@ -92,11 +90,8 @@ class MatchingLeastSquares:
         return np.array(out)
 
     def working(self, current: Sequence[float], prior: Sequence[float]) -> tuple[list[float], int]:
-        """The PSD a filter should run with per axis (beyond paper 004, which keeps the last positive estimate) and the
-        number of axes on which ``current`` or ``prior`` was kept.
-
-        ``max(Ŝ, se)`` while the 95 % interval Ŝ ± t·se reaches above 0; where its upper end is ≤ 0 (the data contradict
-        the noise model), ``prior``; before two blocks, the last positive value (``current``). Reasons: docs/cmkf.md."""
+        """PSD per axis a filter runs with (beyond paper 004; docs/cmkf.md) and the number of axes kept: ``max(Ŝ, se)``
+        while Ŝ + t·se > 0, else ``prior``; before two blocks, the last positive value (``current``)."""
         den = self.den
         if self.count == 0 or den <= 0.0:
             return list(current), self.n

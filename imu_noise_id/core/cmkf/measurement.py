@@ -1,14 +1,7 @@
-"""The odometry side of the robot CMKF: a nav_msgs/Odometry message → measurements per IMU axis (paper 004 eq. 8
-on a robot; frames as in :mod:`.interval`, C_ni = C_nb C_bi).
-
-- twist (:class:`TwistMeasurement`): z_v = C_ibᵀ v_b (twist in ``child_frame_id``, REP-105);
-- pose_twist (:class:`PoseTwistMeasurement`): also z_r = C_in (p_n − p_anchor), with the prior
-  r̂⁻_k = C_in,k (C_ni,k−1 r̂⁺_{k−1} + Δp_n).
-
-R: the per-axis diagonal of the rotated message covariance (or a parameter; ``default_*`` when unknown). The gyro
-filter's measurement: the odometry's rotation C_ibᵀ ½(ω_b,k−1 + ω_b,k) T, or the relative rotation of
-consecutive orientations.
-"""
+"""The odometry side of the robot CMKF: nav_msgs/Odometry → measurements per IMU axis (paper 004 eq. 8 on a robot;
+frames as in :mod:`.interval`): twist z_v = C_ibᵀ v_b (REP-105); pose_twist also z_r = C_in (p_n − p_anchor), prior
+r̂⁻_k = C_in,k (C_ni,k−1 r̂⁺_{k−1} + Δp_n); R the rotated covariance's diagonal (or a parameter). Gyro
+measurement: C_ibᵀ ½(ω_b,k−1 + ω_b,k) T, or the rotation between consecutive orientations."""
 
 from __future__ import annotations
 
@@ -36,8 +29,7 @@ def _rotate(rows: tuple[tuple[float, float, float], ...], v: list[float]) -> lis
 
 
 class _CovDiag:
-    """Per-axis diagonal of C Σ Cᵀ for a 3×3 block of a 6×6 message covariance, cached on (Σ, C); None when unknown
-    (all zeros, −1 first, NaN)."""
+    """Per-axis diag(C Σ Cᵀ) of a 3×3 block of a 6×6 covariance, cached; None when unknown (zeros, −1, NaN)."""
 
     def __init__(self, block: slice) -> None:
         self.block = block
@@ -58,8 +50,7 @@ class _CovDiag:
 
 
 class TwistMeasurement:
-    """Body velocity per IMU axis (m = 1), for wheel odometry. ``config``: noise overrides and defaults; ``C_ib``:
-    base → IMU rotation."""
+    """Body velocity per IMU axis (m = 1); ``config``: noise overrides and defaults; ``C_ib``: base → IMU rotation."""
 
     m = 1
 
@@ -76,9 +67,8 @@ class TwistMeasurement:
 
     @staticmethod
     def values(fields: dict[str, object]) -> tuple[dict[str, list[float] | None], rot.Quat | None, bool] | None:
-        """The message's vectors as float lists, its unit quaternion, and whether an orientation was given but unusable
-        (all-zero or non-finite: REP-145's "no orientation"; the field is then None). None if another field is NaN/inf
-        or malformed."""
+        """Float lists, unit quaternion and whether an orientation was unusable (REP-145 zero or non-finite: then None);
+        None if another field is NaN/inf or malformed."""
         vals = {k: None if a is None else _as_floats(a) for k, a in fields.items()}
         if any(a is not None and len(a) != FIELDS[k] for k, a in vals.items()):
             return None
@@ -126,9 +116,8 @@ class TwistMeasurement:
     def rotation_increment(self, vals: dict[str, list[float] | None], q_nb: rot.Quat | None,
                            twist_cov: np.ndarray | None, T: float, new_chain: bool
                            ) -> tuple[list[float], list[float], list[float]] | None:
-        """The odometry's rotation over the interval ``T`` in IMU axes [rad], its variance [rad²] and the covariance of
-        its mean rate with the previous interval's [rad²/s²] (¼ Var ω_{k−1} for the trapezoid, 0 for orientation
-        differences); None when it cannot be formed."""
+        """Odometry rotation over ``T`` in IMU axes [rad], its variance [rad²], covariance of its rate with the previous
+        interval's [rad²/s²] (¼ Var ω_{k−1}, trapezoid; 0, orientations); None when it cannot be formed."""
         cfg = self.config
         if vals["angular_velocity"] is not None:
             w_now = _rotate(self._C_ib_rows, vals["angular_velocity"])

@@ -15,15 +15,13 @@ Item = TypeVar("Item")
 
 #: How an odometry message reached its place in the merged stream.
 IN_ORDER, LATE, TOO_LATE = 0, 1, 2
-#: [s] when the newest odometry is this far from the newest IMU sample, the IMU counts as silent and the
-#: odometry's stamps move the merge on.
+#: [s] newest odometry this far from the newest IMU stamp: IMU silent, odometry moves the merge.
 IMU_SILENT = 1.0
 
 
 class StampMerger(Generic[Item]):
-    """IMU and odometry messages in, in arrival order (each stream in its own stamp order); out in stamp order,
-    ``latency`` [s, header time] behind the newest IMU stamp, as ``(t, is_odometry, item, order)`` with ``order``
-    :data:`IN_ORDER`, :data:`LATE` (odometry put back in order) or :data:`TOO_LATE`."""
+    """IMU and odometry in arrival order (each in stamp order), out in stamp order ``latency`` [s] behind the newest IMU
+    stamp as ``(t, is_odometry, item, order)``, ``order`` :data:`IN_ORDER`, :data:`LATE` or :data:`TOO_LATE`."""
 
     def __init__(self, latency: float = 0.0) -> None:
         self.latency = float(latency)

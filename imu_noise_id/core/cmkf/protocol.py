@@ -1,5 +1,4 @@
-"""What the robot CMKF needs from an accelerometer filter: one interface (filterpy's naming) for
-:class:`~.axis.AxisCmkf` and :class:`~.fast_vel.VelocityAxisCmkf`."""
+"""The robot CMKF's accelerometer filter interface (filterpy's names): ``AxisCmkf``, ``VelocityAxisCmkf``."""
 
 from __future__ import annotations
 
@@ -16,13 +15,11 @@ class CmkfFilter(Protocol):
 
     Attributes
     ----------
-    n, m : axes, and measurement components per axis (1: velocity, 2: position and velocity).
-    initialised : whether :meth:`initialise` was called.
+    n, m : axes, and measurement components per axis (1: velocity, 2: position and velocity); initialised.
     x, P : (n, 3) state ``[r, v, b]`` and (n, 3, 3) covariance (r carried and NaN in P where not estimated).
     y, S : innovations (n, m) and covariances (n, m, m) of the last update.
     S_used, S_ls : (n,) Ŝ_v in use and the latest least-squares one [m²/s³]; matching : the least squares.
-    count, rejected, skipped, skipped_stacked : stacked samples; estimates refused; updates and stacked steps
-    skipped.
+    count, rejected, skipped, skipped_stacked : stacked samples, estimates refused, updates and stacked steps skipped.
     """
 
     n: int
@@ -65,5 +62,4 @@ class CmkfFilter(Protocol):
         """NIS per axis that :meth:`update` would have now, without updating (for :mod:`.gate`)."""
 
     def update(self, z: np.ndarray, R: np.ndarray, new_chain: bool = False) -> np.ndarray:
-        """Joseph update (24)–(27) with ``z`` (n, m) and ``R`` (n, m, m), then one stacked-estimator step (none
-        across a gap: ``new_chain``); returns the NIS per axis (NaN when the update had to be skipped)."""
+        """Joseph update (24)–(27), ``z`` (n, m), ``R`` (n, m, m), a stacked step unless ``new_chain``; NIS (n,)/NaN."""

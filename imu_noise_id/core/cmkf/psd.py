@@ -1,9 +1,6 @@
-"""What the covariance matching says about a noise PSD (S_v or S_g): an estimate with its interval, or a bound.
-
-Per axis, with Ŝ ± t·se the 95 % interval (Student's t on ``dof``; lower end clipped at 0): **identified** (above
-0; density √Ŝ), **not identifiable** (contains 0; only the bound Ŝ + t·se), **negative** (upper end ≤ 0: the
-model's noise terms exceed the data's), **unknown** (fewer than two blocks). Never the filter's working value.
-"""
+"""What the covariance matching says about a noise PSD (S_v or S_g) per axis, from the 95 % interval Ŝ ± t·se:
+**identified** (above 0; density √Ŝ), **not identifiable** (contains 0; the bound Ŝ + t·se), **negative** (upper
+end ≤ 0), **unknown** (fewer than two blocks). Never the filter's working value."""
 
 from __future__ import annotations
 
@@ -18,8 +15,7 @@ VERDICTS = ("identified", "not_identifiable", "negative", "unknown")
 
 @dataclass(frozen=True)
 class PsdEstimate:
-    """One sensor's PSD per axis ([m²/s³] for S_v, [rad²/s] for S_g): ``value``, ``se`` (3,) and ``dof``; ``ci95`` (3,
-    2) (NaN when unknown); ``upper95`` (3,) the bound; ``verdict`` per axis from :data:`VERDICTS`."""
+    """PSD per axis ([m²/s³] S_v, [rad²/s] S_g): ``value``, ``se``, ``dof``, ``ci95`` (3, 2), ``upper95``, verdicts."""
 
     value: np.ndarray
     se: np.ndarray

@@ -1,13 +1,7 @@
-"""Paper 004's CMKF on a robot: three IMU axes, a rotated IMU, gravity, odometry slower than the IMU (streaming API:
-docs/cmkf.md; :class:`~.stream.CmkfStream` merges the two topics in stamp order).
-
-Composed of :class:`~.interval.ImuPropagation` (eqs. 13–17, 22–23), :mod:`.measurement` (eq. 8 on a robot), the
-accelerometer :class:`~.protocol.CmkfFilter` (24)–(35) and :class:`~.gyro.GyroBiasFilter`. For a sensor that does
-not rotate, one IMU sample per epoch, gravity on z, position + velocity measured, the x and y filters are exactly
-eqs. (13)–(17), (23)–(35) (tested against ``PaperCmkf`` in ``test/reference_cmkf.py``). Unusable input
-(non-increasing stamps, NaN/inf, late or degenerate odometry) is dropped and counted; gaps beyond ``max_odom_gap`` /
-``max_imu_gap`` restart the chain / the position and velocity.
-"""
+"""Paper 004's CMKF on a robot: rotated IMU, gravity, odometry slower than the IMU (docs/cmkf.md). Composed of
+:class:`~.interval.ImuPropagation` (eqs. 13–17, 22–23), :mod:`.measurement` (eq. 8), the accelerometer
+:class:`~.protocol.CmkfFilter` (24)–(35) and :class:`~.gyro.GyroBiasFilter`. Unusable input is dropped and counted;
+gaps beyond ``max_odom_gap`` / ``max_imu_gap`` restart the chain / the position and velocity."""
 
 from __future__ import annotations
 
@@ -34,8 +28,7 @@ COUNTERS = ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "o
 
 
 def default_filter(config: CmkfConfig) -> CmkfFilter:
-    """The accelerometer filter for ``config.measurement``: :class:`VelocityAxisCmkf` for twist, :class:`AxisCmkf` for
-    position and velocity."""
+    """The accelerometer filter: :class:`VelocityAxisCmkf` for twist, :class:`AxisCmkf` for pose_twist."""
     if config.measurement == "twist":
         return VelocityAxisCmkf(3, config.s_v0, pd_check=config.pd_check, min_samples=config.min_samples)
     return AxisCmkf(3, config.s_v0, mode="pos_vel", pd_check=config.pd_check, min_samples=config.min_samples)
@@ -46,14 +39,12 @@ class RobotCmkf:
 
     Parameters
     ----------
-    config : the parameters (validated here).
-    accel_filter : the accelerometer filter (3 axes); default :func:`default_filter`.
+    config : the parameters (validated: ValueError); accel_filter : 3 axes, default :func:`default_filter`.
 
     Attributes
     ----------
-    filter, gyro : the accelerometer and gyro-bias filters (``y``, ``S`` of the last update; :attr:`last_update`
-        says which the last odometry message updated).
-    counters : messages used and dropped, by reason (:data:`COUNTERS`).
+    filter, gyro : the two filters (``y``, ``S`` of their last update; :attr:`last_update`: which ones it was).
+    counters : messages used and dropped by reason (:data:`COUNTERS`).
     """
 
     def __init__(self, config: CmkfConfig | None = None, accel_filter: CmkfFilter | None = None) -> None:
@@ -91,8 +82,7 @@ class RobotCmkf:
         self._v_post = [0.0, 0.0, 0.0]  # velocity after the last update
 
     def new_time_line(self) -> None:
-        """The input stamps restarted: forget times and the interval in progress, keep the estimates (biases, S_v and
-        S_g least squares, consistency windows); position and velocity restart from the next odometry."""
+        """Input stamps restarted: forget times and the interval, keep the estimates; r, v restart at next odometry."""
         self._t_imu = self._t_odom = self._t_state = self._t_update = None
         self._last_imu = None
         self._reinit = True
@@ -163,9 +153,8 @@ class RobotCmkf:
         twist_cov: np.ndarray | None = None,
         late: bool = False,
     ) -> bool:
-        """One nav_msgs/Odometry message (pose in the odom frame, twist in ``child_frame_id``, REP-105; 6×6 row-major
-        covariances, all zeros = unknown; ``late``: put back in stamp order by a :class:`~.merge.StampMerger`). True if
-        it updated (or initialised) the filter."""
+        """One nav_msgs/Odometry message (REP-105; 6×6 row-major covariances, zeros = unknown; ``late``: reordered by a
+        :class:`~.merge.StampMerger`). True if it updated (or initialised) the filter."""
         t = float(t)
         self.last_update = (False, False)
         self.last_gated = (False, False)
@@ -233,8 +222,7 @@ class RobotCmkf:
         imu.reset_interval()
 
     def _update(self, t: float, z: list | np.ndarray, R: list | np.ndarray, new_chain: bool) -> None:
-        """Predict the accelerometer filter to the epoch (eq. 23) and update it (24)–(35), unless the gate
-        (:mod:`.gate`) rejects it: then position and velocity restart from the measurement, the bias is kept."""
+        """Predict (eq. 23) and update (24)–(35) the accelerometer filter; when gated (:mod:`.gate`) r, v restart."""
         f, imu = self.filter, self.imu
         skipped_before = (f.skipped, f.skipped_stacked)
         velocity = ([float(row[-1]) for row in z], [float(r[-1][-1]) for r in R])
@@ -269,8 +257,7 @@ class RobotCmkf:
 
     def _initialise(self, t: float, z: list | np.ndarray, R: list | np.ndarray,
                     bias: tuple[list[float], np.ndarray] | None = None) -> None:
-        """(Re-)initialise r, v from the measurement; keep the bias and its (grown) variance if known, or take ``bias``
-        = (value, variance) per axis."""
+        """(Re-)initialise r, v from the measurement; keep the bias and its grown variance, or take ``bias``."""
         cfg = self.config
         if bias is not None:
             b0, Pbb = bias

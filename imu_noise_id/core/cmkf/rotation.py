@@ -61,10 +61,7 @@ def to_rotvec(q: Quat) -> np.ndarray:
 
 
 def from_ypr(yaw: float, pitch: float, roll: float) -> Quat:
-    """Quaternion of ``Rz(yaw) Ry(pitch) Rx(roll)``.
-
-    This is the argument order of ``static_transform_publisher x y z yaw pitch roll parent child``.
-    """
+    """Quaternion of ``Rz(yaw) Ry(pitch) Rx(roll)`` (``static_transform_publisher x y z yaw pitch roll``'s order)."""
     qz = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
     qy = (0.0, math.sin(pitch / 2), 0.0, math.cos(pitch / 2))
     qx = (math.sin(roll / 2), 0.0, 0.0, math.cos(roll / 2))

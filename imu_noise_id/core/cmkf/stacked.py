@@ -1,17 +1,13 @@
-"""Stacked-measurement covariance estimator of paper 004 (Moghe, Zanetti, Akella), eqs. (28)–(35).
-
-One accelerometer axis, state ``x = [r, v, b]``: x_k = F̂ x_{k-1} + U_{k-1} − ν_{k-1} + Λ w_{k-1} (28),
-z_k = H x_k + η_k (8); ν the velocity random walk's effect, Cov ν = S_v·Qa1 (paper: Qa1 = T Ĝ Ĝᵀ), w the bias
-drive (q_b, eq. 7), η ~ R. With M_o = [H F̂; H], M_v = [H; 0], M_w = [H Λ; 0] (re-derived; derivation and the
-paper's index slips: docs/cmkf.md, ``papers/README.md``)::
+"""Stacked-measurement covariance estimator of paper 004 (Moghe, Zanetti, Akella), eqs. (28)–(35), one axis,
+state ``x = [r, v, b]``; M_o = [H F̂; H], M_v = [H; 0], M_w = [H Λ; 0] (re-derived; derivation and the paper's
+index slips: docs/cmkf.md, ``papers/README.md``)::
 
     𝒵_k = M_o† Y_k − F̂ M_o† Y_{k-1} − U_{k-2}                                                   (33)
         = [M_o† M_w] w_{k-1} + [Λ − F̂ M_o† M_w] w_{k-2} + A₁ ν_{k-1} + A₂ ν_{k-2} + E₁ η_k + E₂ η_{k-1} + E₃ η_{k-2}
     A₁ = −M_o† M_v,  A₂ = F̂ M_o† M_v − I,  E₁ = M_o†[I; 0],  E₂ = M_o†[0; I] − F̂ M_o†[I; 0],  E₃ = −F̂ M_o†[0; I]
 
-Cov(𝒵) = Cov(𝒲) + S_v D + Cov(ℰ), D = A₁ Qa1 A₁ᵀ + A₂ Qa1 A₂ᵀ (eq. 34), and
-Ŝ_v = Σ ⟨𝒵𝒵ᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩_F / Σ ⟨D_k, D_k⟩_F (eq. 35; the uncentred second moment; beyond the
-paper, matrices may change between intervals — equal to the paper's formula when constant).
+Cov(𝒵) = Cov(𝒲) + S_v D + Cov(ℰ), D = A₁ Qa1 A₁ᵀ + A₂ Qa1 A₂ᵀ (34); Ŝ_v = Σ ⟨𝒵𝒵ᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩_F /
+Σ ⟨D_k, D_k⟩_F (35; uncentred; matrices may change between intervals).
 """
 
 from __future__ import annotations
@@ -26,8 +22,8 @@ from .matching import MatchingLeastSquares
 
 @dataclass(frozen=True)
 class Interval:
-    """One propagation interval's contribution, shared by all axes: ``Phi`` (d, d) F̂ (bias input folded in, eq. 17),
-    ``Qa1`` (d, d) covariance of ν for S_v = 1 [m²/s³], ``qb`` bias-drive variance (eq. 7) [m²/s⁴]."""
+    """One interval, shared by all axes: ``Phi`` F̂ (d, d) (eq. 17), ``Qa1`` Cov ν for S_v = 1, ``qb`` (eq. 7) [m²/s⁴].
+    """
 
     Phi: np.ndarray
     Qa1: np.ndarray
@@ -44,14 +40,12 @@ class _Epoch:
 
 
 class StackedSvEstimator:
-    """Recursive least-squares S_v per axis from stacked measurements (eqs. 28–35).
+    """Recursive least-squares S_v per axis from stacked measurements (eqs. 28–35); :meth:`add_epoch` at every epoch.
 
     Parameters
     ----------
     n_axes : axes sharing the interval matrices; H : (m, d) measurement matrix of one axis on the (sub-)state;
     bias_index : index of the bias in the (sub-)state (``Λ = e_bias``).
-
-    Call :meth:`add_epoch` at every measurement epoch; ``interval=None`` starts a new chain (first epoch, after a gap).
     """
 
     def __init__(self, n_axes: int, H: np.ndarray, bias_index: int) -> None:
@@ -82,8 +76,8 @@ class StackedSvEstimator:
         return self.matching.estimate
 
     def add_epoch(self, z: np.ndarray, R: np.ndarray, interval: Interval | None, U: np.ndarray | None) -> bool:
-        """Add epoch k (``z`` (n, m), ``R`` (n, m, m), the ``interval`` k-1 → k or None, ``U`` (n, d) = x̂⁻_k − F̂
-        x̂⁺_{k-1}); True when a stacked sample 𝒵_k was accumulated."""
+        """Add epoch k: ``z`` (n, m), ``R`` (n, m, m), ``interval`` k-1 → k (None: new chain), ``U`` (n, d) = x̂⁻_k − F̂
+        x̂⁺_{k-1}; True when a stacked sample 𝒵_k was accumulated."""
         Mo_pinv = None if interval is None else _pinv_full_rank(np.vstack([self.H @ interval.Phi, self.H]))
         if interval is not None and Mo_pinv is None:
             self.skipped += 1

@@ -25,8 +25,7 @@ class CmkfStream:
     Parameters
     ----------
     config : the filter's parameters (``late_odom_tolerance``: the merger's latency [s]).
-    on_odometry : called as ``on_odometry(t, order)`` after every released odometry message (``order``:
-        :data:`~.merge.IN_ORDER`, :data:`~.merge.LATE` or :data:`~.merge.TOO_LATE`, the last not given to the filter).
+    on_odometry : ``on_odometry(t, order)`` after every released odometry message (``order`` from :mod:`.merge`).
 
     Attributes: ``cmkf`` (the filter), ``merger`` (its ``latency`` may be changed at any time).
     """
@@ -38,8 +37,7 @@ class CmkfStream:
         self._on_odometry = on_odometry
 
     def process_imu(self, t: float, gyro: Any, accel: Any, orientation_xyzw: Any = None) -> bool:
-        """Queue one IMU message (:meth:`RobotCmkf.process_imu`) and process what is due; True if an odometry message
-        processed now updated the filter."""
+        """Queue one IMU message (:meth:`RobotCmkf.process_imu`), process what is due; True if odometry updated."""
         self.merger.push_imu(float(t), (gyro, accel, orientation_xyzw))
         return self._process(self.merger.ready())
 
@@ -53,9 +51,8 @@ class CmkfStream:
         return self._process(self.merger.flush())
 
     def new_time_line(self) -> bool:
-        """The stamps restarted: process the queue, then the filter forgets its times
-        (:meth:`RobotCmkf.new_time_line`) and
-        the merger starts afresh; True if a queued odometry message updated the filter."""
+        """The stamps restarted: process the queue, the filter forgets its times (:meth:`RobotCmkf.new_time_line`), the
+        merger starts afresh; True if a queued odometry message updated the filter."""
         updated = self.flush()
         self.cmkf.new_time_line()
         self.merger = StampMerger(self.merger.latency)
@@ -84,8 +81,8 @@ class CmkfStream:
 
 def feed_recording(cmkf: RobotCmkf, imu: ImuSeries, odom: OdometrySeries | None,
                    imu_orientation_xyzw: np.ndarray | None = None) -> Iterator[bool]:
-    """Feed recorded series to ``cmkf`` in stamp order; yields after every odometry message whether it updated. Fields
-    of ``odom`` may be None; a NaN row of ``imu_orientation_xyzw`` (N, 4) is passed as None."""
+    """Feed recorded series to ``cmkf`` in stamp order, yielding per odometry message whether it updated (None fields
+    allowed; NaN rows of ``imu_orientation_xyzw`` (N, 4) pass as None)."""
     ti = np.asarray(imu.t, dtype=float)
     times = ti.tolist()
     rows = np.column_stack([imu.gyro, imu.accel]).tolist()

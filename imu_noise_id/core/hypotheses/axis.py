@@ -1,6 +1,5 @@
-"""One IMU axis through the hypothesis bank: the mean of the first ``warmup`` seconds is subtracted from every
-sample (so ``bias_sigma`` only covers what is left) and gives the white-noise estimate for ``auto`` ranges; then
-the bank. Used by the node and ``imu-noise-id identify``."""
+"""One IMU axis through the hypothesis bank after removing the mean of the first ``warmup`` seconds (which also gives
+the white-noise estimate for ``auto`` ranges); used by the node and ``imu-noise-id identify``."""
 
 from __future__ import annotations
 
@@ -16,16 +15,13 @@ from .model import HypothesisSet
 
 
 class AxisIdentifier:
-    """Warm-up mean removal followed by a :class:`HypothesisBank`.
+    """Warm-up mean removal followed by a :class:`HypothesisBank`; InputError on invalid arguments.
 
     Parameters
     ----------
-    hypotheses : HypothesisSet, or a function white-noise estimate [u/√Hz] → HypothesisSet
-        (:func:`.config.hypothesis_set_factory`), called once the warm-up is complete.
-    warmup_s : float
-        Duration [s] whose mean is removed (0: none; at least 3 samples when > 0).
-    dt : float
-        Input sampling period [s] (required with a function).
+    hypotheses : HypothesisSet, or white-noise estimate [u/√Hz] → HypothesisSet (:func:`.config.hypothesis_set_factory`)
+    warmup_s : duration [s] whose mean is removed (0: none; at least 3 samples when > 0)
+    dt : input sampling period [s] (required with a function)
     """
 
     def __init__(self, hypotheses: HypothesisSet | Callable[[float | None], HypothesisSet], warmup_s: float = 1.0,
@@ -92,9 +88,8 @@ class AxisIdentifier:
 def identify_offline(y: np.ndarray, hypotheses: HypothesisSet | Callable[[float | None], HypothesisSet],
                      warmup_s: float, dt: float, *, refine: int = 0,
                      record_every: int = 1) -> tuple[BankResult, AxisIdentifier, int]:
-    """Batch identification of one raw axis with up to ``refine`` grid-refinement passes
-    (:func:`~imu_noise_id.core.hypotheses.model.refine_hypothesis_set`, stopping when no range changes by more than
-    1 %); returns the last result, its identifier and the passes run."""
+    """Batch identification of one raw axis with up to ``refine`` passes of :func:`.model.refine_hypothesis_set` (stops
+    when no range moves by > 1 %); returns the last result, its identifier and the passes run."""
     from .model import refine_hypothesis_set
 
     ident = AxisIdentifier(hypotheses, warmup_s, dt)

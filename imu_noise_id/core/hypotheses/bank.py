@@ -1,12 +1,5 @@
-"""Recursive Bayesian hypothesis bank (paper 002 section 2): streaming ``step`` and batch ``run``, one code path.
-
->>> bank = HypothesisBank(hypothesis_set)
->>> snap = bank.step(y)            # one error sample (the node, per axis)
->>> result = bank.run(y_array)     # many samples; continues from where step() left off
-
-``run(y)`` equals ``step`` on every sample. :meth:`HypothesisBank.gap` declares missed input samples: the filters
-predict over them (no likelihood terms), an incomplete averaging block is dropped.
-"""
+"""Recursive Bayesian hypothesis bank (paper 002 section 2): streaming ``step`` and batch ``run`` (equal to ``step``
+on every sample); ``gap`` declares missed samples (filters predict; an incomplete averaging block is dropped)."""
 
 from __future__ import annotations
 
@@ -27,9 +20,8 @@ class HypothesisEstimate:
 
     Attributes
     ----------
-    probability : Pr(H = h_k | Y_i) (eq. 10)
+    probability : Pr(H = h_k | Y_i) (eq. 10); rsd : theta_std / theta
     theta, theta_std : posterior mean θ̂^k and std by parameter name, continuous-time units
-    rsd : theta_std / theta
     not_identifiable : parameter → lower bound, for parameters the record cannot resolve (:mod:`.identifiable`)
     """
 
@@ -41,8 +33,7 @@ class HypothesisEstimate:
 
 
 def probabilities_of(log_prob: np.ndarray) -> np.ndarray:
-    """Probabilities from log-probabilities normalised to 0 along the last axis: exponentiated, divided by their sum and
-    clipped to [0, 1]."""
+    """Normalised exponentials of log-probabilities along the last axis, clipped to [0, 1] (docs/hypotheses.md)."""
     lp = np.asarray(log_prob, dtype=float)
     p = np.exp(lp - np.max(lp, axis=-1, keepdims=True))
     return np.clip(p / np.sum(p, axis=-1, keepdims=True), 0.0, 1.0)
@@ -54,13 +45,10 @@ class BankSnapshot:
 
     Attributes
     ----------
-    n_updates : bank samples processed (block averages when averaging)
-    t : time of the latest update [s], gaps included
-    probabilities : hypothesis name → posterior probability
+    n_updates : bank samples processed (block averages); t : time of the latest update [s], gaps included
+    probabilities : name → posterior probability; hypotheses : name → :class:`HypothesisEstimate`
     decision : the most probable hypothesis of ``decision_probabilities`` once it reaches γ, else None
-    hypotheses : hypothesis name → :class:`HypothesisEstimate`
-    long_memory : GM hypotheses the data cannot tell from their RW twin (:mod:`.identifiable`)
-    decision_probabilities : ``probabilities`` with each such GM merged into its RW twin
+    long_memory : GM hypotheses the data cannot tell from their RW twin; decision_probabilities : with them merged
     """
 
     n_updates: int
@@ -78,12 +66,8 @@ class BankResult:
 
     Attributes
     ----------
-    t : (N,) update times [s]
-    probabilities : (N, K) posterior probabilities, columns in ``names`` order
-    theta : dict name → (N, p_k) parameter estimates
-    theta_std : dict name → (N, p_k) posterior standard deviations
-    parameter_names : dict name → tuple of parameter names
-    final : BankSnapshot after the last sample
+    t : (N,) update times [s]; probabilities : (N, K), columns in ``names`` order; final : snapshot after the last
+    theta, theta_std : name → (N, p_k) estimates and posterior stds; parameter_names : name → its parameter names
     """
 
     names: tuple[str, ...]
@@ -97,8 +81,8 @@ class BankResult:
 
     @property
     def decision_time(self) -> float | None:
-        """Time [s] from which ``final.decision`` (its probability with the merged long-memory hypotheses) stayed at or
-        above γ; ``final.t`` when only the last update reached it; None exactly when ``final.decision`` is None."""
+        """Time [s] from which ``final.decision`` (merged probability) stayed ≥ γ; ``final.t`` when only the last update
+        reached it; None exactly when ``final.decision`` is None."""
         decision = self.final.decision
         if decision is None:
             return None
@@ -114,10 +98,8 @@ class HypothesisBank:
 
     Parameters
     ----------
-    hypothesis_set : HypothesisSet
-        Hypotheses, priors, grids, γ, block averaging.
-    chunk : int
-        Bank samples per vectorised block in :meth:`run` (memory ∝ chunk × filters; docs/hypotheses.md, "Speed").
+    hypothesis_set : hypotheses, priors, grids, γ, block averaging
+    chunk : bank samples per vectorised block in :meth:`run` (memory ∝ chunk × filters)
     """
 
     def __init__(self, hypothesis_set: HypothesisSet, chunk: int = 64) -> None:
@@ -181,8 +163,7 @@ class HypothesisBank:
         return self.snapshot()
 
     def run(self, y: np.ndarray, record_every: int = 1) -> BankResult:
-        """Feed an array of input samples; probabilities and estimates after every ``record_every``-th bank update
-        (counted from :meth:`reset`, so rows match :meth:`step`)."""
+        """Feed input samples; results after every ``record_every``-th bank update (counted from :meth:`reset`)."""
         arr = check_samples(y, "input samples").ravel()
         if arr.size == 0:
             raise InputError("no input samples given to the hypothesis bank")
@@ -265,8 +246,7 @@ class HypothesisBank:
         )
 
     def state_estimates(self) -> dict[str, dict[str, tuple[float, float]]]:
-        """Per hypothesis, the mixture state estimates (eq. 13) and stds (eq. 14) [u] by state name (``bias``, ``RW``,
-        ``GM``, …)."""
+        """Per hypothesis, mixture state estimates and stds (eqs. 13–14) [u] by state name (``bias``, ``RW``, …)."""
         out = {}
         for k, (mean, cov) in enumerate(self._filters.state_mixture(0)):
             std = np.sqrt(np.maximum(np.diag(cov), 0.0))

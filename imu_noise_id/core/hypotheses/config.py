@@ -1,6 +1,4 @@
-"""Hypothesis sets from their parsed YAML mapping (format: ``config/hypotheses_default.yaml``):
-:func:`hypothesis_set_from_dict` → :class:`~imu_noise_id.core.hypotheses.HypothesisSet`, InputError naming the offending
-key."""
+"""Hypothesis sets from their parsed YAML (``config/hypotheses_default.yaml``); InputError naming the offending key."""
 
 from __future__ import annotations
 
@@ -35,8 +33,7 @@ class NeedsDataError(InputError):
 
 
 def white_noise_estimate(y: np.ndarray, dt: float) -> float:
-    """White-noise density [u/√Hz] from first differences, √(var(Δy)/2 · dt) (AV at τ₀,
-    :class:`~imu_noise_id.core.white_noise.FirstDifferences`); centres ``auto`` ranges."""
+    """White-noise density [u/√Hz] √(var(Δy)/2 · dt) (AV at τ₀, ``FirstDifferences``); centres ``auto`` ranges."""
     y = np.asarray(y, dtype=float).ravel()
     if y.size < 3 or not np.all(np.isfinite(y)):
         raise InputError("need at least 3 finite warm-up samples to estimate the white noise for an 'auto' range")
@@ -159,8 +156,7 @@ def hypothesis_set_from_dict(data: dict[str, Any], dt: float, sensor: str | None
 
 def hypothesis_set_factory(data: dict[str, Any], dt: float, sensor: str | None = None,
                            source: str = "hypotheses") -> tuple[Callable[[float | None], HypothesisSet], float]:
-    """A function white-noise estimate → hypothesis set (checked once now) and the warm-up [s], for
-    :class:`~imu_noise_id.core.hypotheses.axis.AxisIdentifier`."""
+    """A function white-noise estimate → hypothesis set (checked now) and the warm-up [s], for ``AxisIdentifier``."""
     try:
         _, warmup = hypothesis_set_from_dict(data, dt, sensor, source, None)
     except NeedsDataError:

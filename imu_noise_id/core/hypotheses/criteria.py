@@ -1,11 +1,6 @@
-"""Performance criteria of the identification (paper 002 section 3) by Monte Carlo, and the section 4 cases.
-
-Each of L trials draws the true hypothesis from the prior and θ uniformly from the prior ranges, simulates and
-runs the bank (all trials of a batch as streams of one :class:`.kernel.FilterBank`). Per recorded time: the real
-(eq. 15) and calculated (eq. 18, 1 − Pr of the *most probable* hypothesis) identification-error probabilities,
-the literal reading of eq. 18 (1 − Pr(true), ``error_probability_calculated_true``), real and calculated
-parameter error variances (eqs. 17, 19) and RSDs (eq. 20).
-"""
+"""Performance criteria of the identification (paper 002 section 3) by Monte Carlo, and the section 4 cases: per
+trial the true hypothesis from the prior, θ uniform over the ranges; real (eq. 15) and calculated (eq. 18, 1 − Pr of
+the most probable; ``_true``: 1 − Pr(true)) error probabilities, parameter error variances (17, 19), RSDs (20)."""
 
 from __future__ import annotations
 
@@ -30,12 +25,10 @@ class CriteriaResult:
 
     Attributes
     ----------
-    t : (R,) times [s] of the recorded updates
-    error_probability_real, error_probability_calculated : (R,) eqs. (15) and (18)
+    t : (R,) times [s]; error_probability_real, error_probability_calculated : (R,) eqs. (15), (18)
     error_probability_calculated_true : (R,) mean of 1 − Pr(true hypothesis)
     rsd_real, rsd_calculated : ``"<hypothesis>:<parameter>"`` → (R,) eq. (20) from eqs. (17) / (19)
-    decided, decided_wrong : (R,) fraction of trials with a decision (max Pr ≥ γ), and with a wrong one
-    true_counts : hypothesis → trials in which it was true
+    decided, decided_wrong : (R,) fraction of trials with a decision (max Pr ≥ γ), and a wrong one; true_counts
     """
 
     case: str
@@ -55,11 +48,10 @@ class CriteriaResult:
 
 def paper_case(case: int, dt: float = 1.0, grid: dict[str, int] | None = None, bias_sigma: float = 1.0,
                gamma: float = 0.8) -> HypothesisSet:
-    """The hypothesis set of paper 002 section 4, case 1, 2 or 3: RW (eq. 21) vs GM (eq. 22) with a bias, eq. (23).
+    """Paper 002 section 4, case 1, 2 or 3: RW (eq. 21) vs GM (eq. 22) with a bias, eq. (23); InputError otherwise.
 
-    Paper values per sample: σ_w ∈ [0.04, 0.15] u, τ_m ∈ [1, 25] min, σ_m ∈ [0.5, 1.5] u, σ_v = 0 / 0.5 u / ∈ [0.25, 1]
-    u (cases 1–3); random_walk = σ_w/√Δt, noise_density = σ_v·√Δt. ``grid``: sizes by parameter (log grids); defaults
-    256 and 32 × 32 (cases 1–2), 64, 12 × 12 and 12 (case 3). Bias prior N(0, bias_sigma²) (not in the paper)."""
+    Per sample σ_w ∈ [0.04, 0.15] u, τ_m ∈ [1, 25] min, σ_m ∈ [0.5, 1.5] u, σ_v = 0 / 0.5 u / ∈ [0.25, 1] u
+    (random_walk = σ_w/√Δt, noise_density = σ_v·√Δt); ``grid``: log-grid sizes; bias ~ N(0, bias_sigma²)."""
     if case not in (1, 2, 3):
         raise InputError(f"paper 002 has cases 1, 2 and 3, got {case!r}")
     sizes = {"random_walk": 256, "tau": 32, "sigma": 32, "noise_density": 8}
@@ -97,8 +89,7 @@ def true_components(hyp: Hypothesis, theta: np.ndarray) -> list[Component]:
 
 def simulate_trial(hset: HypothesisSet, k: int, theta: np.ndarray, n_samples: int,
                    rng: np.random.Generator) -> np.ndarray:
-    """``n_samples`` inputs (rate 1/dt) of hypothesis k with θ and a N(0, bias_sigma²) bias; RW from 0, GM stationary.
-    """
+    """``n_samples`` inputs of hypothesis k with θ and a N(0, bias_sigma²) bias; RW from 0, GM stationary."""
     y = np.full(n_samples, rng.standard_normal() * hset.bias_sigma)
     for comp in true_components(hset.hypotheses[k], theta):
         y += comp.simulate(n_samples, hset.dt, rng)
@@ -124,9 +115,8 @@ def record_indices(n_updates: int, n_points: int = 200) -> np.ndarray:
 def run_criteria(hset: HypothesisSet, duration_s: float, trials: int, *, seed: int | None = 0,
                  record: np.ndarray | None = None, trial_batch: int = 50, case: str = "",
                  progress: Callable[[int, int], None] | None = None) -> CriteriaResult:
-    """Monte-Carlo performance criteria of the bank on ``hset`` over ``duration_s`` [s] (section 3): at ``record``
-    update numbers (default :func:`record_indices`), ``trial_batch`` trials per vectorised bank, ``progress(done,
-    total)`` in trial-records."""
+    """Monte-Carlo criteria of the bank on ``hset`` over ``duration_s`` [s] at ``record`` update numbers,
+    ``trial_batch`` trials per bank, ``progress(done, total)``; InputError on too few trials or bad records."""
     if trials < 2:
         raise InputError(f"the Monte Carlo needs at least 2 trials, got {trials}")
     n_updates = round(duration_s / hset.bank_dt)

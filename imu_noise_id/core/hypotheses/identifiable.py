@@ -1,10 +1,6 @@
-"""Hypotheses the record at hand cannot tell apart (beyond paper 002).
-
-Over a span T ≪ τ a GM (φ = e^{−Δt/τ}) has the increments of a RW of density σ√(2/τ). When the posterior
-probability that τ > :data:`LONG_TAU_FRACTION` of the span seen is at least ½, the GM hypothesis is
-indistinguishable from its RW twin: τ is reported as not identifiable, τ > its :data:`LOWER_QUANTILE` quantile,
-and the decision uses the pair's merged probability, named after the RW.
-"""
+"""Hypotheses the record cannot tell apart (beyond paper 002; reasons: docs/hypotheses.md): a GM whose τ exceeds
+:data:`LONG_TAU_FRACTION` of the span seen with probability ≥ ½ is its RW twin (density σ√(2/τ)) there: τ is
+reported as > its :data:`LOWER_QUANTILE` quantile, the decision uses the pair's merged probability (named RW)."""
 
 from __future__ import annotations
 
@@ -23,8 +19,8 @@ LOWER_QUANTILE = 0.05
 
 @dataclass(frozen=True)
 class LongMemory:
-    """A GM hypothesis whose τ the record cannot resolve: ``hypothesis``, its RW ``twin`` (or None),
-    ``tau_lower_bound`` [s], ``record_s`` (span seen [s]), ``probability_long`` (Pr τ > LONG_TAU_FRACTION·record_s)."""
+    """A GM hypothesis whose τ the record cannot resolve: ``hypothesis``, its RW ``twin`` (or None), ``tau_lower_bound``
+    [s], ``record_s`` [s], ``probability_long`` (Pr τ > LONG_TAU_FRACTION·record_s)."""
 
     hypothesis: str
     twin: str | None
@@ -76,8 +72,7 @@ def _quantile(edges: np.ndarray, mass: np.ndarray, q: float, log: bool) -> float
 
 
 def long_memory(hset: HypothesisSet, log_weights: list[np.ndarray], record_s: float) -> list[LongMemory]:
-    """The GM hypotheses whose τ the span ``record_s`` [s] of data cannot resolve (module docstring);
-    ``log_weights[k]``: hypothesis k's grid log weights log μ₀ + c (M_k,)."""
+    """The GM hypotheses whose τ ``record_s`` [s] cannot resolve; ``log_weights[k]``: log μ₀ + c (M_k,) of each."""
     out = []
     for hyp, lj in zip(hset.hypotheses, log_weights, strict=True):
         if "GM.tau" not in hyp.parameter_names or not record_s > 0:

@@ -1,12 +1,7 @@
-"""The vectorised Kalman-filter bank and the posterior over hypotheses and grid points (paper 002 eqs. 4–14).
-
-Each grid point of each hypothesis is one filter; all F filters and ``L`` data streams (Monte-Carlo trials;
-L = 1 for the node) advance in one array step. The data-independent covariance recursion (eqs. 5–6, 8) runs
-once for all streams and stops once the gains settle (``HypothesisSet.gain_tolerance``). The posterior weight of
-point j of hypothesis k is μ_0^{kj} exp(c_i^{kj}), c the cumulative log-likelihood (eq. 9), normalised by
-log-sum-exp (eqs. 10–12), so any block length gives the same numbers. Only Λ (eq. 8) is inverted, never R
-(zero measurement noise, case 1).
-"""
+"""The vectorised Kalman-filter bank and the posterior over hypotheses and grid points (paper 002 eqs. 4–14): one
+filter per grid point, all F filters and ``L`` streams in one array step; the data-independent recursion (eqs. 5–6,
+8) once for all streams, frozen when the gains settle (``gain_tolerance``); weights μ_0 exp(c) (eq. 9) normalised by
+log-sum-exp (eqs. 10–12). Only Λ (eq. 8) is inverted, never R (zero measurement noise, case 1)."""
 
 from __future__ import annotations
 
@@ -26,14 +21,8 @@ _FREEZE_CHECK_EVERY = 16
 
 @dataclass
 class Posterior:
-    """Posterior quantities after each sample of a block (leading axes (T, L)).
-
-    Attributes
-    ----------
-    log_prob : (T, L, K) log Pr(H = h_k | Y_i) (eq. 10)
-    theta_mean : list over k of (T, L, p_k) θ̂^k_i (eq. 13)
-    theta_var : list over k of (T, L, p_k) diagonal of P^θk_i (eq. 14)
-    """
+    """Posterior after each sample of a block (leading axes (T, L)): ``log_prob`` (T, L, K) (eq. 10); ``theta_mean``,
+    ``theta_var`` per k (T, L, p_k), θ̂^k_i (eq. 13) and the diagonal of P^θk_i (eq. 14)."""
 
     log_prob: np.ndarray
     theta_mean: list[np.ndarray]
@@ -41,14 +30,8 @@ class Posterior:
 
 
 class FilterBank:
-    """State of the F Kalman filters for L data streams (see the module docstring).
-
-    Attributes
-    ----------
-    x : (n, L, F) state estimates x̂_i^{kj} (eq. 4)
-    c : (L, F) cumulative log-likelihoods
-    P : (n², F) covariance P_i^{kj} (vec, eq. 6), shared by the streams
-    """
+    """State of the F Kalman filters for L data streams: ``x`` (n, L, F) x̂_i^{kj} (eq. 4), ``c`` (L, F) cumulative
+    log-likelihoods, ``P`` (n², F) P_i^{kj} (vec, eq. 6) shared by the streams."""
 
     def __init__(self, model: BankModel, n_streams: int = 1, gain_tolerance: float = 1e-10) -> None:
         self.model = model
@@ -112,8 +95,8 @@ class FilterBank:
 
     # -- data-dependent part ---------------------------------------------------------------------------
     def advance(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Run eqs. (4)–(8) over a block ``y`` (T, L); returns innovations λ (T, L, F) (eq. 7) and their variances Λ
-        (T, F) (eq. 8). FloatingPointError if some Λ ≤ 0."""
+        """Eqs. (4)–(8) over ``y`` (T, L): innovations λ (T, L, F) (eq. 7), variances Λ (T, F) (eq. 8);
+        FloatingPointError if some Λ ≤ 0."""
         T = y.shape[0]
         F = self.model.n_filters
         lam = np.empty((T, self.n_streams, F))
@@ -179,8 +162,7 @@ class FilterBank:
         return ell
 
     def evaluate(self, c: np.ndarray) -> Posterior:
-        """Eqs. (10)–(14) from cumulative log-likelihoods c (R, L, F): probabilities, θ̂ and variances per row;
-        parameters resolved below one cell get sub-cell summaries (:mod:`.subcell`, beyond the paper)."""
+        """Eqs. (10)–(14) from c (R, L, F) per row; parameters resolved below one cell: :mod:`.subcell` (beyond)."""
         m = self.model
         lead = c.shape[:-1]
         lj = c + m.log_mu0
@@ -230,7 +212,7 @@ class FilterBank:
 
 
 def _sum_leading(a: np.ndarray) -> np.ndarray:
-    """``a.sum(axis=0)`` for a short leading axis, as a chain of adds (the same order; fewer calls for n ≤ 3)."""
+    """``a.sum(axis=0)`` as a chain of adds (same order; fewer calls for short axes)."""
     out = a[0] + a[1] if a.shape[0] > 1 else a[0].copy()
     for row in a[2:]:
         out += row

@@ -1,20 +1,8 @@
-"""Hypotheses about a sensor's error model and their point-mass parameter grids (paper 002, sections 2 and 4).
-
-A hypothesis is a constant bias plus dynamic components (RW, GM) plus optional WN, with a uniform prior range per
-unknown parameter (paper 002 eq. 3; eqs. 21–23). Parameters are continuous-time (``RW.random_walk``
-[u/s/√Hz], ``GM.tau`` [s], ``GM.sigma`` [u], ``WN.noise_density`` [u/√Hz]); paper 002's per-sample σ_w, σ_m,
-σ_v are ``random_walk·√Δt``, ``sigma`` and ``noise_density/√Δt``.
-
-Beyond the paper: **grid cells** (each range cut into ``n`` linear or log cells; the point is the cell's centre,
-its prior weight the cell's width, so both spacings represent the uniform prior) and **block averaging**
-(``block = m``: the exact model of m-sample averages, :func:`averaged_dynamic_block`, states end value e_j and
-block mean a_j per dynamic component)::
-
-    e_j = φ^m e_{j−1} + d_j,      a_j = c e_{j−1} + u_j,      c = (1/m) Σ_{i=1..m} φ^i,
-    d_j = Σ_l φ^{m−l} w_l,        u_j = Σ_l g_l w_l,           g_l = (1/m) Σ_{i=l..m} φ^{i−l},
-
-w_l ~ N(0, q), Q = q·[[Σα², Σαg], [Σαg, Σg²]] (α_l = φ^{m−l}), H = [0, 1]; white noise averages to σ²_v/m.
-"""
+"""Hypotheses about a sensor's error model and their point-mass grids (paper 002 eqs. 3, 21–23): a constant bias,
+dynamic RW/GM components and optional WN, a uniform prior range per unknown parameter. Continuous-time parameters
+(``RW.random_walk`` [u/s/√Hz], ``GM.tau`` [s], ``GM.sigma`` [u], ``WN.noise_density`` [u/√Hz]); paper 002's
+per-sample σ_w, σ_m, σ_v are ``random_walk·√Δt``, ``sigma``, ``noise_density/√Δt``. Beyond the paper
+(docs/hypotheses.md): grid cells weighted by width, and block averaging (:func:`averaged_dynamic_block`)."""
 
 from __future__ import annotations
 
@@ -40,16 +28,13 @@ DYNAMIC_COMPONENTS: tuple[str, ...] = ("RW", "GM")
 
 @dataclass(frozen=True)
 class ParameterPrior:
-    """Uniform prior range of one parameter and its grid (paper 002 eq. 3).
+    """Uniform prior range of one parameter and its grid (paper 002 eq. 3); InputError when invalid.
 
     Attributes
     ----------
-    name : ``"<COMPONENT>.<parameter>"``, e.g. ``"GM.tau"``
-    low, high : the prior range, continuous-time units (``low == high``: known)
-    n : grid cells (1 when known)
-    spacing : ``"linear"`` or ``"log"``
-    grid_low, grid_high : optional sub-range covered by the grid (:func:`refine_hypothesis_set`); the cells'
-        weights stay fractions of the whole range
+    name : ``"<COMPONENT>.<parameter>"``; low, high : the range, continuous-time units (equal: known)
+    n : grid cells (1 when known); spacing : ``"linear"`` or ``"log"``
+    grid_low, grid_high : optional sub-range of the grid (:func:`refine_hypothesis_set`); weights: whole-range fractions
     """
 
     name: str
@@ -107,14 +92,12 @@ class ParameterPrior:
 
 @dataclass(frozen=True)
 class Hypothesis:
-    """One error-model structure h_k with the priors of its parameters θ^k.
+    """One error-model structure h_k with the priors of its parameters θ^k; InputError when invalid.
 
     Attributes
     ----------
-    components : names from ``RW``, ``GM``, ``WN``, each at most once (a bias state is always added, paper 002
-        eqs. 21–22; without ``WN`` the measurement noise is zero, case 1)
-    priors : one :class:`ParameterPrior` per parameter (:data:`COMPONENT_PARAMETERS`)
-    probability : prior Pr(H = h_k) (normalised over the set)
+    components : from ``RW``, ``GM``, ``WN``, each at most once, plus a bias state (eqs. 21–22; no ``WN``: R = 0)
+    priors : one :class:`ParameterPrior` per parameter; probability : prior Pr(H = h_k) (normalised over the set)
     name : label (default the canonical structure name, e.g. ``"WN+RW"``)
     """
 
@@ -156,8 +139,7 @@ class Hypothesis:
         return sum(c in DYNAMIC_COMPONENTS for c in self.components) + 1
 
     def grid(self) -> tuple[np.ndarray, np.ndarray]:
-        """Point-mass grid θ^{kj} (M_k, p) and prior weights μ_0^{kj} (M_k,) (paper 002 eq. 3), summing to 1 or to the
-        refined sub-box's prior mass."""
+        """Grid θ^{kj} (M_k, p) and prior weights μ_0^{kj} (M_k,) (eq. 3), summing to 1 or to a refined box's mass."""
         cells = [p.cells() for p in self.priors]
         points = np.array(list(itertools.product(*[c[0] for c in cells])), dtype=float)
         weights = np.array([math.prod(w) for w in itertools.product(*[c[1] for c in cells])], dtype=float)
@@ -166,17 +148,14 @@ class Hypothesis:
 
 @dataclass(frozen=True)
 class HypothesisSet:
-    """The competing hypotheses and the bank's settings.
+    """The competing hypotheses and the bank's settings; InputError when invalid.
 
     Attributes
     ----------
-    hypotheses : tuple of :class:`Hypothesis`
-    dt : sampling period of the input samples [s]
+    hypotheses : tuple of :class:`Hypothesis`; dt : input sampling period [s]; block : samples per bank sample
     gamma : decision threshold γ on the largest posterior probability (paper 002 section 2)
-    block : input samples averaged into one bank sample (1 = none)
-    bias_sigma : prior std of the constant-bias state [u] (mean 0)
-    gain_tolerance : the Riccati iteration stops once no gain or relative innovation variance changes by more
-        than this in a step (0 = never)
+    bias_sigma : prior std of the constant bias [u]; gain_tolerance : the Riccati iteration stops once no gain or
+        relative innovation variance changes by more than this in a step (0 = never)
     """
 
     hypotheses: tuple[Hypothesis, ...]
@@ -215,8 +194,11 @@ class HypothesisSet:
 
 
 def averaged_dynamic_block(phi: float, q: float, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """Exact (Φ, Q) of x_k = φ x_{k−1} + w_k (var w = q) seen through m-averages, states (e_j, a_j) (module
-    docstring); ``phi = 1`` is the random walk."""
+    """Exact (Φ, Q) of x_k = φ x_{k−1} + w_k (var w = q) through m-sample averages, states (e_j, a_j); φ = 1: RW::
+
+        e_j = φ^m e_{j−1} + d_j,  a_j = c e_{j−1} + u_j,  c = (1/m) Σ_{i=1..m} φ^i,  g_l = (1/m) Σ_{i=l..m} φ^{i−l},
+        Q = q·[[Σα², Σαg], [Σαg, Σg²]],  α_l = φ^{m−l},  H = [0, 1];  white noise averages to σ²_v/m.
+    """
     lags = np.arange(m)  # l' = m − l = 0..m−1
     alpha = phi ** lags[::-1]  # α_l = φ^{m−l}, l = 1..m
     powers = phi ** np.arange(m)  # φ^0..φ^{m−1}
@@ -230,10 +212,9 @@ def averaged_dynamic_block(phi: float, q: float, m: int) -> tuple[np.ndarray, np
 
 @dataclass(frozen=True)
 class BankModel:
-    """State-space matrices of every filter of the bank, stacked, filter index last (padded states stay zero):
-    ``phi_kron`` (n², n², F) = Φ ⊗ Φ, ``q`` (n², F) = vec Q, ``h`` (n, F), ``hh`` (n², F) = vec hhᵀ, ``phi`` (n, n, F),
-    ``r`` (F,), ``p0`` (n², F); ``slices[k]`` hypothesis k's filters, ``theta[k]`` (M_k, p_k), ``log_mu0`` (F,),
-    ``log_prior`` (K,)."""
+    """Every filter's matrices stacked, filter index last (padded states zero): ``phi_kron`` (n², n², F) = Φ ⊗ Φ, ``q``
+    (n², F), ``h`` (n, F), ``hh`` (n², F), ``phi`` (n, n, F), ``r``, ``p0``; ``slices[k]``, ``theta[k]`` (M_k, p_k),
+    ``log_mu0`` (F,), ``log_prior`` (K,)."""
 
     n: int
     phi: np.ndarray
@@ -320,12 +301,8 @@ def build_bank_model(hset: HypothesisSet) -> BankModel:
 
 def refine_hypothesis_set(hset: HypothesisSet, theta: dict[str, dict[str, float]],
                           theta_std: dict[str, dict[str, float]], n_sigma: float = 6.0) -> HypothesisSet:
-    """Grid refinement (beyond paper 002): every unknown parameter's grid re-centred on its posterior.
-
-    New range θ̂ ± max(n_sigma·std, 1 cell) (log grids: θ̂ ·/÷ exp(max(n_sigma·std/θ̂, 1 log cell))), clipped to the
-    prior range, same number of cells; weights stay fractions of the prior range, so hypothesis probabilities keep
-    the original priors while the likelihood outside the box is negligible.
-    """
+    """Grid refinement (beyond paper 002): each unknown parameter's grid re-centred on θ̂ ± max(n_sigma·std, 1 cell)
+    (log grids: ·/÷ exp(max(n_sigma·std/θ̂, 1 log cell))), clipped to the prior range, same cells, weights as before."""
     new_h = []
     for hyp in hset.hypotheses:
         priors = []

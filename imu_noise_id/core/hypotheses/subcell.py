@@ -1,12 +1,6 @@
-"""Posterior mean and variance of a parameter the point-mass grid cannot resolve (beyond paper 002 eqs. 13–14,
-whose grid mean and variance collapse to one cell; docs/hypotheses.md).
-
-Along a parameter whose grid posterior spreads over less than one cell, each grid line is read by the Taylor
-model of its log weights around the maximum (five-point fourth-order differences; a parabola at the edge): the
-cubic's maximum and curvature give the line's mean and variance in u (log θ or θ; Laplace), mixed over lines by
-their masses. Parameters collapsed together are read jointly (Newton step, covariance −H⁻¹). A maximum at the
-grid's edge keeps its point-mass summary plus δ²/12. Per row, so streaming and batch agree.
-"""
+"""Posterior mean and variance of a parameter the grid cannot resolve (beyond paper 002 eqs. 13–14; method and
+reasons: docs/hypotheses.md, "Sub-cell posteriors"): a Laplace reading of the log weights' local cubic per grid
+line, mixed by line masses; jointly collapsed parameters via −H⁻¹; an edge maximum: point mass + δ²/12."""
 
 from __future__ import annotations
 
@@ -17,13 +11,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class GridAxes:
-    """The product grid of one hypothesis (its :meth:`~.model.Hypothesis.grid` order, last parameter fastest).
-
-    Attributes
-    ----------
-    shape : cells per parameter
-    u0, step : the grid coordinate u of the first cell and the spacing δ, per parameter (u = log θ on log grids)
-    log : whether the parameter's grid is log-spaced
+    """The product grid of one hypothesis (:meth:`~.model.Hypothesis.grid` order, last parameter fastest): ``shape``
+    (cells per parameter), ``u0``, ``step`` (grid coordinate u of the first cell, δ; u = log θ on log grids), ``log``.
     """
 
     shape: tuple[int, ...]
@@ -120,8 +109,7 @@ def _plane_laplace(L: np.ndarray, dims: tuple[int, ...]) -> tuple[np.ndarray, np
 
 
 def refine(lj: np.ndarray, axes: GridAxes, mean: np.ndarray, var: np.ndarray) -> None:
-    """Replace in place the summaries ``mean``, ``var`` (…, p) of parameters resolved below one cell by the sub-cell
-    ones; ``lj`` (…, M) the hypothesis' log weights log μ₀ + c."""
+    """Replace in place ``mean``, ``var`` (…, p) of parameters resolved below one cell; ``lj`` (…, M) log μ₀ + c."""
     lead = lj.shape[:-1]
     k = len(lead)
     L = lj.reshape(*lead, *axes.shape)

@@ -1,9 +1,6 @@
 """Shared pieces of the Kalman engines: inputs ("columns"), results, and the GLS profile of the mean parameters.
-
-Column 0 is the data (measurement y − Z·b, state input u, initial mean μ); the others are the filter's responses
-to each free mean parameter (b, u, μ), so e(β) = e₀ + Σ_c β_c·r_c and GLS gives their MLE in closed form (a
-profile likelihood; beyond paper 000, which updates u and μ by EM).
-"""
+Column 0 is the data; the others are the filter's responses r_c to each free mean parameter (b, u, μ), so
+e(β) = e₀ + Σ_c β_c·r_c (beyond paper 000; docs/em.md, "Why the Kalman engines are built as they are")."""
 
 from __future__ import annotations
 
@@ -24,9 +21,7 @@ class Columns:
 
     Attributes
     ----------
-    y : (m, N) measurement input per column (NaN in column 0 marks missing samples for all)
-    g : (p, m) constant state input per column (u for the data)
-    m0 : (p, m) initial state mean per column (μ for the data)
+    y, g, m0 : (m, N) measurement input, (p, m) state input, (p, m) initial mean per column (NaN in y[0]: missing)
     names : ``'data'``, then ``'b:<regressor>'``, ``'u:<state>'``, ``'mu:<state>'``
     omega : (m,) ω [rad/sample] of declared sinusoidal regressor columns, NaN for the others (:mod:`.harmonic`)
     """
@@ -54,13 +49,9 @@ class SmootherStats:
 
     Attributes
     ----------
-    xs : (p, N) smoothed means x_t^N
-    sum_p : Σ_{t=1}^{N} P_t^N
-    p_first, p_last : P_1^N and P_N^N
-    sum_lag : Σ_{t=2}^{N} P_{t,t−1}^N
-    sum_p_obs : Σ over observed t of P_t^N
+    xs : (p, N) smoothed means x_t^N; sum_p : Σ_{t=1}^{N} P_t^N; p_first, p_last : P_1^N, P_N^N
+    sum_lag : Σ_{t=2}^{N} P_{t,t−1}^N; sum_p_obs : Σ over observed t of P_t^N; observed : (N,) bool
     loglik : exact log-likelihood at the model's current parameters
-    observed : (N,) bool
     """
 
     xs: np.ndarray

@@ -1,13 +1,11 @@
-"""Regressor columns that are pure sinusoids: recognised once, their steady-state filter response in closed form.
+"""Regressor columns that are pure sinusoids: their steady-state filter response in closed form (beyond the papers;
+docs/em.md, "SIN terms"). For x_{t+1} = A x_t + g·y_t (x_0 = 0, A = Φ(I − K H), g = ΦK), y_t = Re(ζ_0 e^{jωt}),
+(e^{jω} I − A) v = g:
 
-Beyond the papers. For the steady filter x_{t+1} = A x_t + g·y_t (x_0 = 0, A = Φ(I − K H), g = ΦK) and an input
-y_t = Re(ζ_0 e^{jωt}), with (e^{jω} I − A) v = g:
+    H x_t = Re(Hv)·y_t − Im(Hv)·ŷ_t − H A^t Re(v ζ_0),        ŷ_t = (cos ω·y_t − y_{t+1}) / sin ω,
 
-    H x_t = Re(Hv)·y_t − Im(Hv)·ŷ_t − H A^t Re(v ζ_0),        ŷ_t = (cos ω·y_t − y_{t+1}) / sin ω.
-
-The free response (last term) is filtered only while ρ(A)^t ≥ :data:`FREE_RESPONSE_FLOOR`
-(:func:`.steady._sinusoid_output`). Only columns checked by :func:`sinusoid_omega` when built, declared in
-:attr:`~.statespace.StateSpace.sinusoid_omega` and passing :func:`obeys` are treated so. Speed: docs/em.md, "SIN terms".
+the free response (last term) while ρ(A)^t ≥ :data:`FREE_RESPONSE_FLOOR`; only columns declared in
+:attr:`~.statespace.StateSpace.sinusoid_omega` and passing :func:`obeys`.
 """
 
 from __future__ import annotations
@@ -16,8 +14,7 @@ import math
 
 import numpy as np
 
-#: A column is a sinusoid when the recurrence y_{t+1} + y_{t−1} = 2 cos ω·y_t holds at every sample to this
-#: fraction of its largest value (the rounding of sin(ωt) at phases up to ~1e8 rad is far below it).
+#: Relative tolerance of y_{t+1} + y_{t−1} = 2 cos ω·y_t at every sample for a column to be a sinusoid.
 RECURRENCE_TOL = 1e-7
 #: Frequencies this close to 0 or π (rad per sample) are not treated in closed form: ŷ divides by sin ω.
 MIN_SIN = 1e-6

@@ -16,7 +16,7 @@ PSD_TOLERANCE = 1e-8
 
 def _covariance(P: np.ndarray) -> np.ndarray:
     """``P`` when it is a covariance to rounding (symmetric, eigenvalues ≥ −:data:`PSD_TOLERANCE` × the largest), else
-    InputError (variances many decades apart can converge to a matrix with a large negative eigenvalue)."""
+    InputError (docs/em.md, "Why the Riccati solvers guard as they do")."""
     w = np.linalg.eigvalsh(P)
     if not (np.all(np.isfinite(w)) and w[0] >= -PSD_TOLERANCE * max(abs(w[-1]), abs(w[0]))):
         raise InputError("the steady-state prediction covariance is not positive semi-definite in double precision "
@@ -55,11 +55,8 @@ def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess:
 def steady_prediction_covariance(
     phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, *, guess: np.ndarray | None = None
 ) -> np.ndarray:
-    """Steady-state prediction covariance P̄: P = Φ P (I + G P)⁻¹ Φᵀ + Q, G = Hᵀ R⁻¹ H.
-
-    Solved by the structure-preserving doubling algorithm; with ``guess`` (P̄ of a nearby model) Newton's method
-    first (:func:`_newton_dare`); where the doubling's I + G X is singular to rounding, the generalised Schur method
-    (:func:`_schur_dare`).
+    """Steady-state prediction covariance P̄: P = Φ P (I + G P)⁻¹ Φᵀ + Q, G = Hᵀ R⁻¹ H (structure-preserving doubling;
+    Newton first from ``guess``; generalised Schur where I + G X is singular; docs/em.md, "Why the Riccati solvers …").
 
     Raises
     ------
@@ -132,17 +129,13 @@ def _stein_sum(A: np.ndarray, W: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class SteadyCovarianceSensitivity:
-    """First-order change of tr(W P̄) with the model matrices: tr(W dP̄) = ⟨G_Φ, dΦ⟩ + ⟨G_Q, dQ⟩ + g_h·dh + g_r·dr.
-
-    Differentiating P̄ = Φ P_u Φᵀ + Q, P_u = P̄ − S K Kᵀ (K = P̄ hᵀ/S, S = h P̄ hᵀ + r) at the optimal gain gives
-    dP̄ = A dP̄ Aᵀ + F, A = Φ(I − K h), F = dΦ P_u Φᵀ + Φ P_u dΦᵀ + dQ + Φ dP_u|ₕ,ᵣ Φᵀ,
-    dP_u|ₕ,ᵣ = K Kᵀ dr − (I − K h) P̄ dhᵀ Kᵀ − K dh P̄ (I − K h)ᵀ; the adjoint M = Aᵀ M A + W (:func:`_stein_sum`;
-    Giles 2008, Anderson & Moore 1979 §4.4) gives tr(M F). With N = Φᵀ M Φ:
+    """First-order change of tr(W P̄) with the model matrices: tr(W dP̄) = ⟨G_Φ, dΦ⟩ + ⟨G_Q, dQ⟩ + g_h·dh + g_r·dr,
+    with the adjoint M = Aᵀ M A + W (:func:`_stein_sum`; Giles 2008, Anderson & Moore 1979 §4.4; derivation:
+    docs/em.md), A = Φ(I − K h), P_u = P̄ − S K Kᵀ, N = Φᵀ M Φ::
 
         G_Φ = 2 M Φ P_u,   G_Q = M,   g_r = Kᵀ N K,   g_h = −2 P̄ (I − K h)ᵀ N K.
 
-    Used for the initial-state term of the log-likelihood's gradient (Fisher's identity,
-    :class:`imu_noise_id.core.estimation.em.MatrixScore`).
+    For the initial-state term of the log-likelihood's gradient (:class:`imu_noise_id.core.estimation.em.MatrixScore`).
     """
 
     g_phi: np.ndarray

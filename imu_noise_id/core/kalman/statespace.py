@@ -1,14 +1,11 @@
-"""Linear-Gaussian state-space model of one sensor axis, assembled from error components.
-
-Paper 000 (Stebler et al. 2011), eqs. (4)–(5)::
+"""Linear-Gaussian state-space model of one sensor axis from error components, paper 000 (Stebler et al. 2011)
+eqs. (4)–(5)::
 
     x_{t+1} = Φ x_t + w_t + u,          w_t ~ N(0, Q)
     y_t     = H x_t + bᵀ z_t + v_t,     v_t ~ N(0, R),      x_1 ~ N(μ, Σ)
 
-Each θ-matrix is ``vec(M) = f + D·m`` over its free elements (paper 000 eqs. 7–9; :meth:`StateSpace.design`).
-Beyond the paper: measurement regressors z_t (bias, ramp ``t·dt``, sinusoids, temperature, steps) with
-coefficients b estimated by GLS; and ``sigma_mode="steady"`` (default) sets Σ to the steady-state prediction
-covariance P̄, making the filter time-invariant (:mod:`.steady`); ``"fixed"`` keeps the paper's fixed Σ (§3.3).
+θ-matrices ``vec(M) = f + D·m`` (eqs. 7–9). Beyond the paper: regressors z_t (bias, ramp ``t·dt``, sinusoids,
+temperature, steps) with b by GLS; ``sigma_mode="steady"`` (default) Σ = P̄ (:mod:`.steady`), ``"fixed"`` (§3.3).
 """
 
 from __future__ import annotations
@@ -45,15 +42,11 @@ class StateSpace:
     Attributes
     ----------
     phi, q, sigma : (p, p) transition, process-noise covariance, Σ (used when ``sigma_mode='fixed'``)
-    h, u, mu : (p,) measurement row H, state input u, initial mean μ
-    r : measurement-noise variance R per sample
-    b : (k,) coefficients of the regressors z_t (names in ``regressors``: ``bias``, ``ramp``, then the caller's)
-    *_free : bool masks of the same shapes (free = estimated)
-    dt : sampling period [s]
-    blocks : the components' :class:`BlockInfo`, in the order given
-    sigma_mode : ``'steady'`` (Σ = P̄ of θ) or ``'fixed'``
-    sinusoid_omega : empty, or per regressor its ω [rad/sample] when its column is a pure sinusoid in every record
-        (NaN otherwise; :func:`.harmonic.sinusoid_omega`), computed in closed form by the steady engine
+    h, u, mu : (p,) measurement row H, state input u, initial mean μ; r : measurement-noise variance per sample
+    b : (k,) coefficients of the regressors z_t (``regressors``: ``bias``, ``ramp``, then the caller's)
+    *_free : bool masks of the same shapes (free = estimated); dt : sampling period [s]; blocks : :class:`BlockInfo`
+    sigma_mode : ``'steady'`` (Σ = P̄ of θ) or ``'fixed'``; sinusoid_omega : empty, or ω [rad/sample] per regressor
+        when a pure sinusoid in every record (NaN otherwise; :func:`.harmonic.sinusoid_omega`)
     """
 
     phi: np.ndarray
@@ -212,21 +205,14 @@ def from_components(
 
     Parameters
     ----------
-    components
-        At least a WN; at most one WN, QN, RW, RR, LPF, MA, BI.
-    dt
-        Sampling period [s].
-    intercept
-        Add the constant bias as a regressor column of ones (coefficient ``bias`` [u]).
-    ramp
-        Where an RR goes: ``'measurement'`` (regressor ``t·dt``, coefficient ω [u/s]) or ``'state'`` (paper 000 §4:
-        input u = ω·dt into the RW state, or the first GM's as in §4.2).
-    exog_names
-        Names of the caller's regressor columns (after ``bias`` and ``ramp``).
-    sigma_mode
-        ``'steady'`` or ``'fixed'`` (module docstring; fixed: stationary Σ for GM, QN, 1e-12·R for RW).
-    sinusoid_omega
-        Empty, or ω [rad/sample] (NaN: not a sinusoid) of every regressor column.
+    components : at least a WN; at most one WN, QN, RW, RR, LPF, MA, BI
+    dt : sampling period [s]
+    intercept : add the constant bias as a regressor column of ones (coefficient ``bias`` [u])
+    ramp : RR as ``'measurement'`` (regressor ``t·dt``, ω [u/s]) or ``'state'`` (paper 000 §4: u = ω·dt into the RW
+        state, or the first GM's as in §4.2)
+    exog_names : names of the caller's regressor columns (after ``bias`` and ``ramp``)
+    sigma_mode : ``'steady'`` or ``'fixed'`` (stationary Σ for GM, QN, 1e-12·R for RW)
+    sinusoid_omega : empty, or ω [rad/sample] (NaN: not a sinusoid) of every regressor column
 
     Raises
     ------
@@ -323,8 +309,7 @@ def _ramp(model: StateSpace, blk: BlockInfo) -> RR:
 
 
 def ramp_components(model: StateSpace) -> dict[int, RR]:
-    """The RR components of ``model`` by block position (for
-    :meth:`~imu_noise_id.core.estimation.mle.Parameterisation.to_components`)."""
+    """The RR components of ``model`` by block position (for ``Parameterisation.to_components``)."""
     return {k: _ramp(model, blk) for k, blk in enumerate(model.blocks) if blk.name == "RR"}
 
 

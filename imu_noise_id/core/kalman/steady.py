@@ -1,16 +1,12 @@
-"""Fast Kalman engine for time-invariant models in steady state: the filter and smoother as IIR filters.
-
-With Σ = P̄ (``sigma_mode == 'steady'``) the Riccati recursion of paper 000's appendix is at its fixed point from
-the first sample; K, F and the smoother gain J are constant, so
+"""Fast Kalman engine for time-invariant models in steady state (Σ = P̄, paper 000 appendix at its fixed point; no
+missing samples): constant K, F, J, so filter and smoother are IIR filters (``scipy.signal.lfilter``) in the modal
+or real Schur basis of A (or J) (:func:`decoupled_basis`; reasons: docs/em.md, "Why the Kalman engines …")
 
     predicted state  x_{t+1} = A x_t + ΦK y_t + u,        A = Φ(I − K H)          (forward, causal)
     smoothed state   x_{t−1}^N = J x_t^N + (x_{t−1}^{t−1} − J x_t^{t−1})          (backward, anti-causal)
 
-run as ``scipy.signal.lfilter`` sections in the real modal basis of A (or J) where its condition number is below
-:data:`MODAL_MAX_COND`, else the real Schur basis (blocks driven by the later ones they couple to).
-Smoothed covariances follow P_{t−1}^N = J P_t^N Jᵀ + (P_f − J P̄ Jᵀ); their sum and P_1^N come from binary
-doubling (:func:`affine_power_sum`); P_{t,t−1}^N = P_t^N Jᵀ (de Jong 1989). No missing samples (the exact engine
-takes those). Declared sinusoidal regressor columns are computed in closed form (:mod:`.harmonic`).
+P_{t−1}^N = J P_t^N Jᵀ + (P_f − J P̄ Jᵀ), summed by :func:`affine_power_sum`; P_{t,t−1}^N = P_t^N Jᵀ (de Jong
+1989). Declared sinusoidal regressor columns in closed form (:mod:`.harmonic`).
 """
 
 from __future__ import annotations
@@ -139,8 +135,7 @@ def _rotate(M: np.ndarray, x: np.ndarray) -> np.ndarray:
     return (M @ x.reshape(x.shape[0], -1)).reshape(M.shape[0], *x.shape[1:])
 
 
-#: Largest condition number of the real modal basis used instead of the Schur basis: rounding errors of the states
-#: grow by at most this factor over the plain recursion's (≈ 1e-10 relative in double precision).
+#: Largest condition number of the real modal basis used instead of the Schur basis.
 MODAL_MAX_COND = 1e6
 
 
@@ -198,9 +193,8 @@ def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
     return _rotate(b.u, _run_modes(b.t, _rotate(b.u_inv, c), b.u_inv @ x0))
 
 
-#: Sinusoidal columns are computed in closed form when their free responses (over the samples where they have not
-#: died out: p single-block runs in the modal basis, min(k, p) columns through every block in the Schur basis) cost
-#: less than this share of filtering the k columns themselves through every block.
+#: Sinusoidal columns go in closed form when their free responses cost less than this share of
+#: filtering the columns through every block.
 CLOSED_FORM_SHARE = 0.5
 
 

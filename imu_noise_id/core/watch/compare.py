@@ -1,19 +1,8 @@
-"""One axis of a recording against its reference (an earlier analysis of this unit, or of the fleet's typical one).
-
-Three tests, each at a stated false-alarm rate:
-
-* the white-noise level, sequentially (:mod:`.noise_level`: Page's CUSUM on pair differences, both ways);
-* a bias step inside the record: the level-shift score scan of the innovations under the reference model
-  (:func:`~imu_noise_id.core.diagnostics.detectors.detect_step`, Bonferroni over the scanned samples);
-* a new spectral line: the periodogram search of the same innovations
-  (:func:`~imu_noise_id.core.diagnostics.detectors.detect_sinusoids`) from :data:`LINE_MIN_FREQUENCY` up, lines the
-  reference models as sinusoid regressors (``known_lines``) left out. Lines the reference's components hold (OSC)
-  are whitened by them.
-
-The innovations are those of the reference's final model (its components, at the record's period), the record's
-first sample subtracted (the bias of another unit or another day is no fault). Without components the reference is
-white noise of its density N. The step and line tests run at α = min(0.01, λ·T) for λ false alarms per hour and a
-record of T hours.
+"""One axis of a recording against its reference (an earlier analysis of this unit, or the fleet's typical one; docs/
+analysis.md, "Compare against a reference"): the white-noise level (:mod:`.noise_level`, both ways), a bias step
+(``detect_step``, Bonferroni over the samples) and a new line (``detect_sinusoids`` from :data:`LINE_MIN_FREQUENCY`,
+``known_lines`` left out) in the innovations of the reference's final model (first sample subtracted; without
+components white noise of density N), at α = min(0.01, λ·T) for λ false alarms per hour and T hours of record.
 """
 
 from __future__ import annotations
@@ -35,8 +24,7 @@ RATE_TOLERANCE = 0.02
 DEFAULT_TOLERANCE = 0.10
 #: Lines within this many frequency bins of a known line are the known line.
 KNOWN_LINE_BINS = 3
-#: Lowest frequency [Hz] searched for a new line: below it, wander is the noise model's (its long-τ AV), not a
-#: vibration.
+#: Lowest frequency [Hz] searched for a new line (below it: the noise model's long-τ wander).
 LINE_MIN_FREQUENCY = 0.1
 
 
@@ -46,9 +34,8 @@ class AxisReference:
 
     Attributes
     ----------
-    noise_density : N [u/√Hz] and ``noise_density_ci`` its 95 % interval ((nan, nan) or a zero lower end: none)
-    components : the reference's final model, or None (white noise of density N)
-    known_lines : frequencies [Hz] the reference removed as sinusoid regressors
+    noise_density, noise_density_ci : N [u/√Hz] and its 95 % interval ((nan, nan) or a zero lower end: none)
+    components : the reference's final model, or None (white noise of density N); known_lines : regressor lines [Hz]
     """
 
     noise_density: float
@@ -72,8 +59,7 @@ class AxisReference:
 
 
     def difference_variance_at(self, noise_density: float, dt: float) -> float:
-        """E[(y_{t+1} − y_t)²] [u²] of this reference scaled to the density ``noise_density`` [u/√Hz]: the reference
-        model's shape (its filter, its lines) at another level — what a specification's limit means for this axis."""
+        """E[(y_{t+1} − y_t)²] [u²] of this reference's model scaled to the density ``noise_density`` [u/√Hz]."""
         return self.difference_variance(dt)[0] * (noise_density / self.noise_density) ** 2
 
 
@@ -139,14 +125,12 @@ def _new_line(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float
 def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: float = DEFAULT_RATIO,
                  false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
                  limit: float | None = None) -> AxisComparison:
-    """The three tests of the module docstring on samples ``y`` [u] at period ``dt`` [s], and with ``limit`` (a
-    specification's noise density [u/√Hz]) the upward CUSUM against it
-    (:func:`~.noise_level.beyond_limit`, the reference model's shape at the limit's level).
+    """The module's tests on ``y`` [u] at period ``dt`` [s]; with ``limit`` [u/√Hz] also ``noise_level.beyond_limit``.
 
     Raises
     ------
     ValueError
-        Too short a record for the tests (fewer than 200 samples) or a reference without noise.
+        Fewer than 200 samples, or a reference without noise.
     """
     y = np.asarray(y, dtype=float)
     v, interval, note = reference.difference_variance(dt)

@@ -1,20 +1,12 @@
-"""Sequential test of an axis's white-noise level against its reference: Page's CUSUM on pair differences.
-
-The record is cut into disjoint pairs of samples and each pair's difference d_k = y_{2k+1} − y_{2k} taken: the
-bias and any slow process cancel, and for the sensor's high-frequency noise the d_k are independent (disjoint
-pairs), zero-mean Gaussian of variance v = E[(y_{t+1} − y_t)²] = 2·AV(τ = dt) (the Allan variance at the sampling
-period). Under the reference, v lies in [v_lo, v_hi] (its interval); a degradation multiplies the noise density by
-a factor ρ, v by ρ².
-
-Each direction runs Page's CUSUM (Page 1954; Basseville & Nikiforov 1993, eq. 2.2.9) of the log-likelihood ratio
-of v₁ against v₀,
+"""Sequential test of an axis's white-noise level against its reference: Page's CUSUM on disjoint pair differences
+d_k = y_{2k+1} − y_{2k} (bias and slow processes cancel; independent, variance v = 2·AV(τ = dt), in [v_lo, v_hi]
+under the reference, × ρ² when the density is × ρ). Per direction (up: v₀ = v_hi, v₁ = ρ² v_ref; down: v₀ = v_lo,
+v₁ = v_ref/ρ²; Page 1954; Basseville & Nikiforov 1993, eq. 2.2.9)
 
     s_k = ½ ln(v₀/v₁) + ½ d_k² (1/v₀ − 1/v₁),    S_k = max(0, S_{k−1} + s_k),
 
-up: v₀ = v_hi, v₁ = ρ² v_ref; down: v₀ = v_lo, v₁ = v_ref/ρ². It alarms when S_k > h. The false alarms are bounded
-by Lorden's inequality on the mean run length to a false alarm, ARL₀ ≥ e^h (Basseville & Nikiforov eq. 5.2.73): h =
-ln(3600 · r / λ) for λ false alarms per hour at r increments per second keeps the rate at or below λ for any
-noise level inside the reference's interval. The detection delay is about h / KL(v₁‖v₀) increments.
+alarm at S_k > h = ln(3600 · r / λ): Lorden's ARL₀ ≥ e^h (eq. 5.2.73) bounds the false alarms to λ per hour at r
+increments per second inside the reference's interval. Delay ≈ h / KL(v₁‖v₀) increments.
 """
 
 from __future__ import annotations
@@ -47,11 +39,8 @@ class NoiseLevel:
 
     Attributes
     ----------
-    ratio, ratio_ci : live / reference noise density over the record (or since the alarm's change) and its 95 %
-        interval (χ² of the pair differences)
-    alarm : the first alarm, or None
-    threshold : h
-    increments : pair differences tested
+    ratio, ratio_ci : live / reference density (since the alarm's change) and its 95 % χ² interval
+    alarm : the first alarm, or None; threshold : h; increments : pair differences tested
     """
 
     ratio: float
@@ -113,13 +102,12 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
                       ratio: float = DEFAULT_RATIO,
                       false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
                       directions_of: tuple[str, ...] = ("up", "down")) -> NoiseLevel:
-    """Both CUSUMs of the module docstring (those of ``directions_of``) on samples ``y`` [u] at period ``dt`` [s].
+    """Both CUSUMs (those of ``directions_of``) on samples ``y`` [u] at period ``dt`` [s].
 
     Parameters
     ----------
     v_ref, v_interval : the reference's E[(y_{t+1} − y_t)²] [u²] and its interval (v_lo, v_hi)
-    ratio : the density ratio ρ > 1 the test is tuned to (both ways)
-    false_alarms_per_hour : λ, per direction
+    ratio : the density ratio ρ > 1 the test is tuned to (both ways); false_alarms_per_hour : λ, per direction
 
     Raises
     ------

@@ -1,7 +1,6 @@
-"""The noise-level CUSUMs of :mod:`.noise_level` run sample by sample (the online node's watch): consecutive samples
-pair up, each pair's difference moves both CUSUMs of every axis, and an alarm stays with the time it fired and the
-time its CUSUM last left zero (where the change began). The live ratio is the exponentially weighted mean of
-d²/v_ref over ``window`` seconds of pairs, square-rooted."""
+"""The CUSUMs of :mod:`.noise_level` sample by sample (the node's watch): each pair's difference moves both CUSUMs
+of every axis; an alarm keeps its time and where the change began. Live ratio: √ of the exponentially weighted mean
+of d²/v_ref over ``window`` seconds."""
 
 from __future__ import annotations
 

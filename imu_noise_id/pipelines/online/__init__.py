@@ -1,7 +1,4 @@
-"""Online identification, one message at a time: the ROS-free logic behind ``imu_noise_id_node``
-(:class:`OnlineIdentifier`, :mod:`.identifier`), with :mod:`.config`, :mod:`.inputs`, :mod:`.stamps`,
-:mod:`.cmkf_feed`, :mod:`.innovations`, :mod:`.stationarity`, :mod:`.noise`, :mod:`.bank`, :mod:`.status`,
-:mod:`.events` and :mod:`.results`."""
+"""Online identification, one message at a time: the ROS-free logic behind ``imu_noise_id_node`` (``.identifier``)."""
 
 from .config import PARAMETERS, OnlineConfig
 from .identifier import OnlineIdentifier

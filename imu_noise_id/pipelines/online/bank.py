@@ -1,10 +1,5 @@
-"""The hypothesis bank of the online identification (paper 002), fed in batches with stationary samples.
-
-Per axis an :class:`~imu_noise_id.core.hypotheses.axis.AxisIdentifier`; stationary samples are queued per
-uninterrupted stretch, pauses declared with ``gap``. Gyro axes keep the first stretch's warm-up offset;
-accelerometer axes remove each stretch's own warm-up mean (and add the first's back), so an attitude change never
-looks like a bias random walk.
-"""
+"""The online hypothesis bank (paper 002): an ``AxisIdentifier`` per axis fed batches of stationary stretches, pauses
+as ``gap``; gyro axes keep the first warm-up offset, accelerometer stretches remove their own (docs/node.md)."""
 
 from __future__ import annotations
 
@@ -33,8 +28,7 @@ class _Stretch:
     accel_offset: np.ndarray | None = None
 
 
-#: A decision made at probability ≥ γ is kept until its probability falls below γ − this (or another hypothesis
-#: reaches γ): without it a posterior hovering at γ flaps between decided and undecided.
+#: A decision made at p ≥ γ is kept until p < γ − this (or another hypothesis reaches γ).
 DECISION_HYSTERESIS = 0.1
 
 
@@ -50,18 +44,12 @@ def held_decision(previous: str | None, probabilities: Mapping[str, float], gamm
 
 
 class BankFeed:
-    """The per-axis banks and the queue of stationary samples they have not seen.
+    """The per-axis banks and the queue of stationary samples they have not seen; InputError on an invalid set.
 
     Parameters
     ----------
     data, source : the parsed hypothesis-set mapping and its origin (checked for both sensors now).
-    bank_rate : rate of the bank's samples [Hz] (``hypotheses.bank_rate``; IMU samples block-averaged to it).
-    events : where decision changes are reported.
-
-    Raises
-    ------
-    InputError
-        If the hypothesis set is invalid.
+    bank_rate : rate of the bank's samples [Hz] (IMU samples block-averaged to it); events : decision changes go there.
     """
 
     def __init__(self, data: Mapping[str, Any], source: str, bank_rate: float, events: EventLog) -> None:
@@ -96,8 +84,7 @@ class BankFeed:
             self._stretches[-1].closed = True
 
     def feed(self, rate: float) -> bool:
-        """Feed the queued stretches to the banks (created at the first call with the IMU ``rate`` [Hz]); False
-        when there was nothing to do."""
+        """Feed the queue to the banks (created at the first call at IMU ``rate`` [Hz]); False when nothing to do."""
         if not self._stretches or not math.isfinite(rate):
             return False
         if self._banks is None:
@@ -208,8 +195,8 @@ class BankFeed:
         return HypothesesReport(names, probs, decision, updates, tuple(notes), held, since, gamma)
 
     def theta(self) -> dict[str, np.ndarray]:
-        """Parameter → (6,) θ̂ of each axis's most probable hypothesis (after merging a long-memory GM into its RW
-        twin); NaN where it has no such parameter or the record cannot resolve it."""
+        """Parameter → (6,) θ̂ of each axis's most probable hypothesis (long-memory GM merged into its RW twin); NaN
+        where absent or unresolved."""
         if self._banks is None:
             return {}
         theta = {p: np.full(6, math.nan) for p in self.parameters}

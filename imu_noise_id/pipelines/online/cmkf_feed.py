@@ -1,7 +1,5 @@
-"""The CMKF of the online identification (paper 004 on a robot) behind a
-:class:`~imu_noise_id.core.cmkf.stream.CmkfStream` (IMU held ``cmkf.input_latency`` seconds so that odometry is
-processed in stamp order; later odometry is counted and unused), restarted and reported on any error; its
-innovations go to :class:`~.innovations.InnovationChecks`."""
+"""The online CMKF (paper 004 on a robot) behind a ``CmkfStream`` (IMU held ``cmkf.input_latency`` seconds for stamp
+order; later odometry counted, unused), restarted on any error; innovations to ``InnovationChecks``."""
 
 from __future__ import annotations
 
@@ -20,9 +18,8 @@ from .innovations import InnovationChecks
 class CmkfFeed:
     """The CMKF behind its stamp merger, its latest estimate, and the checks of its innovations.
 
-    Attributes: ``estimate``; ``gyro_bias``, ``accel_bias`` (3,) used by the corrected samples and the stationarity
-    (0 before the first odometry update); ``errors`` (restarts), ``too_late`` (odometry later than the latency);
-    ``innovations``. InputError if the ``cmkf.*`` or ``innovations.*`` parameters are invalid.
+    Attributes: ``estimate``; ``gyro_bias``, ``accel_bias`` (3,) (0 before the first odometry update); ``errors``
+    (restarts), ``too_late``; ``innovations``. InputError if ``cmkf.*`` or ``innovations.*`` are invalid.
     """
 
     def __init__(self, config: OnlineConfig, events: EventLog) -> None:
@@ -51,8 +48,7 @@ class CmkfFeed:
         return self._feed(self.stream.process_imu, t, gyro, accel, orientation_xyzw)
 
     def odometry(self, t: float, **fields: Any) -> bool:
-        """One accepted odometry message (keywords of ``RobotCmkf.process_odometry``); True when the estimate changed.
-        """
+        """One accepted odometry message (``RobotCmkf.process_odometry`` keywords); True when the estimate changed."""
         return self._feed(self.stream.process_odometry, t, **fields)
 
     def new_time_line(self) -> None:

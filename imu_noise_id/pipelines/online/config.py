@@ -1,9 +1,6 @@
-"""Parameters of ``imu_noise_id_node``: names, defaults, ranges, units, validation. :data:`PARAMETERS` is the single
-source (ROS ParameterDescriptors, ``config/imu_noise_id.yaml`` kept in sync by a test, :class:`OnlineConfig`
-validation). The CMKF's tunables are declared once, in :data:`CMKF_TUNABLES`: each names a
-:class:`~imu_noise_id.core.cmkf.config.CmkfConfig` field, whose type and default it takes, with its description,
-unit and range; the node's ``cmkf.*`` and ``nis.window`` parameters, the options of ``imu-noise-id cmkf`` and
-:func:`cmkf_config` are made from it."""
+"""Parameters of ``imu_noise_id_node`` (names, defaults, ranges, units, validation): :data:`PARAMETERS` is the single
+source; the CMKF's tunables, in :data:`CMKF_TUNABLES`, take type and default from ``CmkfConfig`` fields and make the
+``cmkf.*`` and ``nis.window`` parameters, the ``imu-noise-id cmkf`` options and :func:`cmkf_config`."""
 
 from __future__ import annotations
 
@@ -277,9 +274,8 @@ def _validated(values: dict[str, Any]) -> dict[str, Any]:
 
 @dataclass(frozen=True, init=False)
 class OnlineConfig:
-    """Validated parameter values, one field per parameter of :data:`PARAMETERS` (its name with dots replaced by
-    ``_``; the defaults and ranges are there). ``OnlineConfig(values)``: ``values`` (by parameter name) over the
-    defaults; InputError for an unknown name or an invalid value."""
+    """Validated values, one field per parameter of :data:`PARAMETERS` (dots → ``_``); ``OnlineConfig(values)``: by
+    name over the defaults; InputError for an unknown name or an invalid value."""
 
     stationary_max_linear_speed: float
     stationary_max_angular_speed: float
@@ -360,9 +356,8 @@ if [f.name for f in dataclasses.fields(OnlineConfig)] != [p.attr for p in PARAME
 
 
 def cmkf_config(config: OnlineConfig) -> CmkfConfig:
-    """The CMKF's parameters from ``cmkf.*`` and ``nis.window`` (:data:`CMKF_TUNABLES`: 0 noise std: from the
-    messages; ``cmkf.input_latency`` is ``late_odom_tolerance``); InputError naming the parameter of an invalid
-    combination."""
+    """The CMKF's parameters from ``cmkf.*`` and ``nis.window`` (0 noise std: from the messages; ``cmkf.input_latency``:
+    ``late_odom_tolerance``); InputError naming the parameter of an invalid combination."""
     cmkf = CmkfConfig(**{t.field: t.value(getattr(config, t.spec().attr)) for t in CMKF_TUNABLES
                          if t.parameter is not None})
     try:

@@ -6,8 +6,7 @@ from collections import deque
 
 
 class EventLog:
-    """Events ``(key, message)`` for the node's rate-limited log, and counts per key of the current diagnostics
-    period (the ``Time stamps`` and ``Filter consistency`` statuses list them)."""
+    """Events ``(key, message)`` for the node's rate-limited log, and per-key counts of the diagnostics period."""
 
     def __init__(self) -> None:
         self._events: deque[tuple[str, str]] = deque(maxlen=100)

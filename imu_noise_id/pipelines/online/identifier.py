@@ -1,14 +1,8 @@
-"""The online identification composed of its parts: what happens with every message, and what comes out.
-
-Per IMU sample: (1) :class:`~.inputs.Input` checks values and stamps (rejects counted; a message after a jump in
-the stamps waits for the next; a gap ends the stationary stretch; a restarted time line forgets nothing), and
-:class:`~.inputs.SaturationCheck` flags full-scale samples; (2) :class:`~.cmkf_feed.CmkfFeed` gets it
-``cmkf.input_latency`` later, in stamp order with the odometry; (3) :class:`~.stationarity.StationaryGate`
-(hysteresis, guard delay); (4) stationary samples out of the guard go to :class:`~.noise.StationaryNoise`,
-:class:`~.bank.BankFeed` and, with a reference, :class:`~.watch.ReferenceWatch`; (5) the sample comes back bias-
-corrected with covariance N²·f (None while unknown). Odometry goes to the stationarity and the CMKF. Plain numbers
-in, dataclasses out (the node only converts).
-"""
+"""The online identification composed of its parts (docs/node.md, "What happens per message"): per IMU sample
+:class:`~.inputs.Input` value and stamp checks and :class:`~.inputs.SaturationCheck`, then :class:`~.cmkf_feed.CmkfFeed`
+(in stamp order with the odometry), :class:`~.stationarity.StationaryGate`, and for stationary samples
+:class:`~.noise.StationaryNoise`, :class:`~.bank.BankFeed`, :class:`~.watch.ReferenceWatch`; out comes the
+bias-corrected sample with covariance N²·f. Plain numbers in, dataclasses out."""
 
 from __future__ import annotations
 
@@ -50,15 +44,13 @@ class OnlineIdentifier:
 
     Parameters
     ----------
-    config : validated parameters (:data:`~.config.PARAMETERS`).
-    hypotheses : the parsed hypothesis-set mapping and its source name; None: no hypothesis bank.
-    watch : the watch against this IMU's reference (:mod:`.watch`), fed the stationary samples; None: no watch.
+    config : validated parameters; hypotheses : (mapping, source) of the hypothesis set, or None (no bank);
+    watch : the :mod:`.watch` against this IMU's reference, or None.
 
     Attributes
     ----------
-    imu, odom, temperature : the inputs; cmkf_feed, stationarity, noise, bank : the parts (bank None without
-    hypotheses); processing_time, identification_time : callback and bank-batch times; restarts : new time lines of
-    the IMU stamps; last_imu_t : stamp of the last IMU sample.
+    imu, odom, temperature : the inputs; cmkf_feed, stationarity, noise, bank : the parts; processing_time,
+    identification_time : callback and bank-batch times; restarts : new IMU time lines; last_imu_t : last IMU stamp.
 
     Raises
     ------
@@ -113,9 +105,8 @@ class OnlineIdentifier:
         orientation_xyzw: tuple[float, float, float, float] | None = None, source: Any = None,
     ) -> list[CorrectedImu]:
         """One IMU message: stamp ``t`` [s], angular rate [rad/s], specific force [m/s²]; ``orientation_xyzw`` for
-        the CMKF with ``cmkf.gravity_source: imu``; ``source`` comes back in the corrected sample. Returns the
-        bias-corrected samples released, in stamp order: usually itself; none when rejected or held after a jump; the
-        held one and itself when it confirmed the jump."""
+        ``cmkf.gravity_source: imu``; ``source`` returned with the sample. Returns the bias-corrected samples released,
+        in stamp order (none when rejected or held after a jump; the held one first when this one confirmed it)."""
         sample = np.array((*gyro, *accel), dtype=float)
         # The offline reader's physical limits (|ω| ≤ 1e3 rad/s, |a| ≤ 1e4 m/s²): one absurd sample must not
         # become a bias that lasts for the filters' correlation time.
@@ -162,7 +153,7 @@ class OnlineIdentifier:
         return self._corrected(t, sample, source)
 
     def _new_time_line(self) -> None:
-        """The stamps went back and on (a restarted source): a gap of unknown length; nothing estimated is forgotten."""
+        """Stamps went back and on (a restarted source): a gap of unknown length; no estimate is forgotten."""
         self._end_stationary()
         self.stationarity.interrupt()
         self.cmkf_feed.new_time_line()
@@ -232,8 +223,7 @@ class OnlineIdentifier:
                             (float(accel[0]), float(accel[1]), float(accel[2])), gyro_var, accel_var, source)
 
     def _refresh_variance(self) -> None:
-        """Cache the covariance written into the corrected samples (every 100 IMU samples and by
-        :meth:`update_identification`)."""
+        """Cache the corrected samples' covariance (every 100 IMU samples and in :meth:`update_identification`)."""
         variance, _ = self._covariance()
         if variance is None:
             self._variance_cache = (None, None)
@@ -246,8 +236,7 @@ class OnlineIdentifier:
                                      lambda: self.cmkf_feed.estimate)
 
     def update_identification(self) -> None:
-        """Feed the queued stationary samples to the banks in a batch and refresh the CMKF status (at ``publish_rate``).
-        """
+        """Feed the queued stationary samples to the banks and refresh the CMKF status (at ``publish_rate``)."""
         self._variance_cache = None
         self.cmkf_feed.refresh()
         if self.bank is None:
@@ -292,8 +281,7 @@ class OnlineIdentifier:
         )
 
     def diagnostics(self, wall_now: float, window_s: float) -> list[DiagnosticStatus]:
-        """Statuses per function at steady-clock time ``wall_now`` over the last ``window_s`` seconds; resets the
-        per-window counters."""
+        """Statuses at steady-clock ``wall_now`` over the last ``window_s`` seconds; resets the per-window counters."""
         cfg = self.config
         feed = self.cmkf_feed
         est = self.estimates()

@@ -1,7 +1,5 @@
-"""Whiteness and consistency of the online filters' innovations: after every odometry update the CMKF's (per IMU axis
-and measurement component) and the gyro-bias filter's standardised innovations go to one
-:class:`~imu_noise_id.core.diagnostics.monitor.InnovationMonitor` per channel; the ``Filter innovations`` status
-names the failing channel."""
+"""Whiteness and consistency of the online filters' standardised innovations: one ``InnovationMonitor`` per CMKF
+axis and component and per gyro axis; the ``Filter innovations`` status names the failing channel."""
 
 from __future__ import annotations
 

@@ -34,9 +34,7 @@ class Input:
 
     Parameters
     ----------
-    what : the stream's name in events and counts (``imu``, ``odom``, ``temperature``).
-    config : the gap factor and the backward-reset count of the stamp checks.
-    events : where rejected messages and stamp problems are reported.
+    what : ``imu``, ``odom`` or ``temperature``; config : gap factor, backward-reset count; events : problems go there.
     """
 
     def __init__(self, what: str, config: OnlineConfig, events: EventLog) -> None:
@@ -53,10 +51,8 @@ class Input:
 
     def receive(self, t: float, finite: bool, frame_id: str, wall_time: float | None, nonfinite: str, *,
                 payload: Any = None) -> list[tuple[str, Any]]:
-        """Book-keeping and checks of one message stamped ``t`` [s] arriving at ``wall_time`` (steady clock);
-        ``finite``: its values are finite and plausible (``nonfinite`` names what is not); ``payload``: kept for
-        processing. Returns ``(verdict, payload)`` pairs to process now, in stamp order (none when rejected or held;
-        the held one first when this one confirmed its jump)."""
+        """Checks of one message stamped ``t`` [s] at ``wall_time`` (steady clock); ``finite``: its values are usable
+        (``nonfinite`` names what is not). ``(verdict, payload)`` pairs to process now, in stamp order."""
         what, stats = self.what, self.stats
         stats.received += 1
         stats.window_received += 1
@@ -133,8 +129,7 @@ class SaturationCheck:
         self._floor = [self.FLOOR[0]] * 3 + [self.FLOOR[1]] * 3
 
     def check(self, sample: Sequence[float]) -> list[str]:
-        """The axes (names of :data:`~imu_noise_id.core.axes.AXES`) on which this sample is saturated (plain
-        floats: this runs for every IMU message)."""
+        """The :data:`~imu_noise_id.core.axes.AXES` names on which this sample is saturated (plain floats)."""
         out = []
         extreme, hits = self._extreme, self._hits
         for i in range(6):

@@ -1,7 +1,5 @@
-"""The white-noise density per axis from the stationary samples (AV at τ₀,
-:class:`~imu_noise_id.core.white_noise.FirstDifferences`) and the corrected IMU's variance N²·f: from this density
-after ``noise.min_samples`` differences, else from a tracking CMKF's Ŝ (its 95 % upper end where not
-identifiable), else unknown."""
+"""White-noise density per axis from stationary samples (AV at τ₀, ``FirstDifferences``) and the corrected IMU's
+variance N²·f: from it after ``noise.min_samples``, else from a tracking CMKF's Ŝ (or 95 % upper end), else none."""
 
 from __future__ import annotations
 

@@ -11,8 +11,7 @@ import numpy as np
 
 @dataclass
 class CorrectedImu:
-    """One bias-corrected IMU sample; variances N²·f per axis, or None while unknown; ``source``: what the caller gave.
-    """
+    """One bias-corrected IMU sample; variances N²·f per axis (None while unknown); ``source`` as the caller gave it."""
 
     t: float
     gyro: tuple[float, float, float]
@@ -28,16 +27,12 @@ class Estimates:
 
     Attributes
     ----------
-    t : header stamp of the last IMU sample used [s]
-    cmkf_status : the CMKF's status (``no_data``, ``imu_only``, ``unobserved``, ``converging``, ``tracking``)
+    t : last IMU stamp [s]; cmkf_status : the CMKF's status; imu_rate : nominal [Hz]; stationary : now
     gyro_bias, gyro_bias_std, accel_bias, accel_bias_std : (3,) [rad/s], [m/s²] (NaN before the first odometry update)
-    noise_density, noise_density_rstd, noise_samples : (6,) white-noise density [u/√Hz] from stationary samples (NaN
-        before ``noise.min_samples``), its relative std, the differences used
-    psd, psd_se, psd_upper : (6,) Ŝ_g [rad²/s] and Ŝ_v [m²/s³] where identified, standard error, 95 % upper end where
-        not identifiable (NaN elsewhere)
-    covariance, covariance_source : (6,) N²·f [u²] of ``~/imu_corrected`` and its source (``stationary``, ``cmkf``,
-        ``none``)
-    imu_rate : nominal IMU rate [Hz]; stationary : stationary now
+    noise_density, noise_density_rstd, noise_samples : (6,) stationary white-noise density [u/√Hz] (NaN before
+        ``noise.min_samples``), its relative std, the differences used
+    psd, psd_se, psd_upper : (6,) Ŝ_g [rad²/s], Ŝ_v [m²/s³] where identified, standard error, 95 % upper end where not
+    covariance, covariance_source : (6,) N²·f [u²] of ``~/imu_corrected`` and its source (``stationary``, ``cmkf``, …)
     bank_theta : parameter → (6,) θ̂ of each axis's most probable hypothesis (NaN where absent)
     """
 
@@ -66,10 +61,7 @@ class Estimates:
     )
 
     def noise_table(self) -> tuple[tuple[str, ...], np.ndarray]:
-        """Column labels and the (6, columns) table of ``~/noise`` (rows in AXES order).
-
-        Columns: :attr:`NOISE_FIELDS`, then ``bank_<parameter>`` per parameter of the hypothesis set.
-        """
+        """Labels (:attr:`NOISE_FIELDS`, then ``bank_<parameter>``) and the (6, columns) table of ``~/noise``."""
         fields = self.NOISE_FIELDS + tuple(f"bank_{name}" for name in self.bank_theta)
         table = np.full((6, len(fields)), math.nan)
         table[:, 0] = self.noise_density
@@ -95,12 +87,9 @@ def _nan6() -> np.ndarray:
 
 @dataclass
 class HypothesesReport:
-    """Posterior probabilities per axis (rows, AXES order) and hypothesis (columns, ``names`` order; NaN without a
-    bank).
-
-    ``decision``: index of the decided hypothesis (−1: none); ``updates``: bank samples; ``notes``: hypotheses the
-    data cannot tell apart; ``decision_probability`` (with merged long-memory GMs), ``decision_time`` [s], ``gamma``.
-    """
+    """Posterior probabilities per axis (rows) and hypothesis (``names`` columns; NaN without a bank); ``decision``
+    index (−1: none), ``updates``, ``notes`` (indistinguishable pairs), ``decision_probability``, ``decision_time`` [s],
+    ``gamma``."""
 
     names: tuple[str, ...]
     probabilities: np.ndarray

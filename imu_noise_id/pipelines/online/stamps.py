@@ -1,13 +1,8 @@
-"""Header-stamp checks of one input stream (:class:`StampChecker`), against the stream's own history:
-
-- **rate**: trimmed mean of the mean intervals of the last :data:`SUBWINDOWS` blocks of :data:`SUBWINDOW`
-  accepted messages (bursts give the mean rate; one gap does not move it); known after :data:`LEARN` intervals;
-- **gap**: an interval longer than ``gap_factor`` × the period; the message is *held* until the next: a later
-  stamp confirms it (``gap``), one back on the old time line makes it an ``outlier``; :data:`RELEARN_COUNT`
-  nearly equal gaps in a row are a new rate (``relearn``);
-- **backward**: rejected; ``backward_reset_count`` in a row at about the stream's rate are a ``restart``;
-- ``duplicate`` and ``bad_stamp`` (zero or not finite) are rejected.
-"""
+"""Header-stamp checks of one input stream against its own history (:class:`StampChecker`; docs/node.md): **rate**,
+trimmed mean of the mean intervals of :data:`SUBWINDOWS` blocks of :data:`SUBWINDOW` messages, known after
+:data:`LEARN`; **gap**, an interval > ``gap_factor`` × the period: held until the next stamp confirms it (``gap``)
+or returns (``outlier``), :data:`RELEARN_COUNT` equal gaps a new rate (``relearn``); **backward**, rejected, but
+``backward_reset_count`` in a row at the stream's rate are a ``restart``; ``duplicate``, ``bad_stamp`` rejected."""
 
 from __future__ import annotations
 

@@ -15,13 +15,10 @@ from .config import OnlineConfig
 
 @dataclass
 class StationarityDetector:
-    """Stationary / moving decision with hysteresis.
-
-    IMU "still": exponentially weighted (time constant ``window``) std of every gyro axis below ``max_gyro_std``, of
-    every accelerometer axis below ``max_accel_std``, and the mean rate minus the gyro bias below ``max_gyro_rate``.
-    Fresh odometry (within ``odom_timeout``) "still": speeds below their thresholds; without it the IMU decides alone
-    unless ``require_odometry``. Stationary after ``enter_delay`` seconds of "still"; moving at the first contrary
-    sample."""
+    """Stationary / moving with hysteresis: IMU "still" when the weighted (``window``) std per gyro / accelerometer axis
+    is below ``max_gyro_std`` / ``max_accel_std`` and |mean rate − gyro bias| below ``max_gyro_rate``; fresh odometry
+    "still" below its speed thresholds (absent: IMU alone unless ``require_odometry``); stationary after ``enter_delay``
+    seconds of "still", moving at the first contrary sample."""
 
     config: OnlineConfig
     stationary: bool = False
@@ -93,12 +90,7 @@ class StationarityDetector:
 
 
 class StationaryGate:
-    """:class:`StationarityDetector` followed by the guard delay line (see the module docstring).
-
-    Attributes
-    ----------
-    detector : the decision; transitions : number of changes between stationary and moving.
-    """
+    """:class:`StationarityDetector` followed by the guard delay line; attributes ``detector``, ``transitions``."""
 
     def __init__(self, config: OnlineConfig) -> None:
         self.detector = StationarityDetector(config)

@@ -1,8 +1,5 @@
-"""Diagnostics of the online identification: levels, the status record and one function per status.
-
-Each function turns the state of one part into a :class:`DiagnosticStatus` (the node publishes them on
-``/diagnostics`` as ``<node>: <name>``); the composing identifier calls them once per diagnostics period.
-"""
+"""Diagnostics of the online identification: levels, :class:`DiagnosticStatus` and one function per status, called
+once per diagnostics period (published on ``/diagnostics`` as ``<node>: <name>``)."""
 
 from __future__ import annotations
 

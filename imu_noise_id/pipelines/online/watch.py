@@ -1,15 +1,8 @@
-"""The online watch of an IMU against its own reference (an earlier ``analyze`` of this unit) and its datasheet limits:
-the stationary samples run the noise-level CUSUMs of :class:`~imu_noise_id.core.watch.sequential.SequentialNoiseWatch`
-against the reference (both ways) and, where the specification limits a sensor's noise density, against that limit
-(upwards only). Each sensor's status is OK (every axis within its reference and limit), WARN (an axis's density left
-its reference: by how much and since when), or ERROR (an axis's density is beyond the specification, or the watch
-cannot run: the reference unreadable or made at another rate). The watch starts once the IMU's period is known.
-
-Against the limit the CUSUM tests v₀ = the reference's difference variance scaled to the limit
-(:meth:`~imu_noise_id.core.watch.compare.AxisReference.difference_variance_at`) against v₁ =
-:data:`~imu_noise_id.core.watch.noise_level.LIMIT_RATIO`² v₀: it alarms, at the watch's false-alarm rate, once the
-density is a few per cent beyond the limit. Without a reference the limit's white noise is the shape (a sensor's own
-low-pass lowers its difference variance below that, so the limit is then judged late, never early)."""
+"""The online watch of an IMU against its reference (an earlier ``analyze``) and datasheet limits (docs/node.md):
+stationary samples run ``SequentialNoiseWatch`` CUSUMs against the reference (both ways) and each sensor's density
+limit (upwards, v₀ = the reference's shape at the limit, v₁ = ``LIMIT_RATIO``² v₀; without a reference white
+noise). Status per sensor: OK, WARN (left its reference: how much, since when), ERROR (beyond the spec, or the
+watch cannot run). It starts once the IMU's period is known."""
 
 from __future__ import annotations
 
