@@ -2,26 +2,17 @@
 
 E-step: Kalman smoother with lag-one covariance (:mod:`.kalman`), reduced to the sums the M-step needs.
 M-step: the constrained closed-form updates of §3.3 for u, μ, Φ, H, Q, R, each matrix written
-``vec(M) = f + D·m`` (eqs. 7–9), applied one after the other with the latest values of the others (an ECM
-sequence of conditional maximisations, so each step still cannot decrease the expected complete-data
-log-likelihood). Σ stays fixed as the paper advises (§3.3).
+``vec(M) = f + D·m`` (eqs. 7–9), applied in sequence (ECM). Σ stays fixed (§3.3).
 
-Beyond the paper (and why):
+Beyond the paper:
 
-* Measurement regressors b (bias, ramp, exog) get the closed-form update of a linear regression on
-  ``y_t − H x_t^N``, like H's update (the paper has u only).
-* The Q update's S uses ``Φ x̄ uᵀ + u x̄ᵀ Φᵀ``; paper 000 prints ``Φ x_{t−1}^N uᵀ Φᵀ`` in the term before last,
-  a slip (expanding E[(x_t − Φx_{t−1} − u)(…)ᵀ] gives the form used here).
-* With ``StateSpace.sigma_mode == 'steady'`` Σ is the steady-state prediction covariance of the current θ (so
-  the fast engine applies). The M-step does not account for Σ's dependence on θ: the iteration is then a
-  generalised EM whose ascent holds up to that O(1) term (vs O(N) for the rest); ``sigma_mode='fixed'`` is the
-  paper's exact EM, monotone to rounding (tested).
-* Free diagonal transition elements are kept in (1e-12, 1 − 1e-12) and free process-noise variances above a
-  tiny floor, so that a Gauss–Markov block stays a stationary GM process and Q stays invertible.
-* :class:`MatrixScore` differentiates the expected complete-data log-likelihood with respect to Φ, Q and R in
-  closed form from one E-step (its x_1 term by the DARE's adjoint, :class:`InitialTermGradient`); by Fisher's
-  identity that is the gradient of the exact log-likelihood, which the quasi-Newton finish in
-  :mod:`imu_noise_id.core.estimation.search` uses.
+* Measurement regressors b (bias, ramp, exog): closed-form regression on ``y_t − H x_t^N``, like H's update.
+* The Q update's S uses ``Φ x̄ uᵀ + u x̄ᵀ Φᵀ`` (paper 000 prints ``Φ x_{t−1}^N uᵀ Φᵀ``; the expansion gives this).
+* ``sigma_mode == 'steady'``: Σ = P̄(θ), and the M-step ignores Σ's dependence on θ (a generalised EM, ascent up to
+  an O(1) term); ``sigma_mode='fixed'`` is the paper's exact EM.
+* Free diagonal Φ elements are kept in (1e-12, 1 − 1e-12), free Q variances above :data:`Q_FLOOR_REL`·R.
+* :class:`MatrixScore`: the exact log-likelihood's gradient in Φ, Q, R by Fisher's identity, for the quasi-Newton
+  finish (:mod:`imu_noise_id.core.estimation.search`).
 """
 
 from __future__ import annotations
@@ -185,25 +176,20 @@ def transition_residual(s: Sums, phi: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class MatrixScore:
-    """The exact log-likelihood's gradient with respect to the model matrices Φ, Q and R at the E-step's θ_E, by
-    Fisher's identity (beyond paper 000, which maximises Q by EM alone): ∂ℓ/∂θ = ∂Q(θ | θ_E)/∂θ at θ = θ_E, Q the
-    expected complete-data log-likelihood of paper 000 §3.3,
+    """The exact log-likelihood's gradient in Φ, Q and R at the E-step's θ_E by Fisher's identity (beyond paper
+    000): ∂ℓ/∂θ = ∂Q(θ | θ_E)/∂θ at θ = θ_E, Q the expected complete-data log-likelihood of paper 000 §3.3,
 
         Q = −½(N_obs ln 2πR + W/R) − ½((N−1) ln det Q + tr(Q⁻¹ S(Φ, u))) − ½(ln det Σ + tr(Σ⁻¹ E₁))
 
-    (W the measurement sum of squares, :func:`_measurement_sse`; S the transition residual,
-    :func:`transition_residual`; E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ]). Its derivatives are closed forms in the E-step sums:
+    (W: :func:`_measurement_sse`; S: :func:`transition_residual`; E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ]), whence
 
         ∂Q/∂R = −½(N_obs/R − W/R²),   ∂Q/∂Q = −½((N−1) Q⁻¹ − Q⁻¹ S Q⁻¹),   ∂Q/∂Φ = Q⁻¹ C,
 
-    with C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ] (dS = −C dΦᵀ − dΦ Cᵀ), over the states of non-zero process
-    noise (the others' complete-data density is degenerate and does not depend on the free parameters). In steady
-    mode the x_1 term depends on θ through Σ = P̄(θ); its share is the DARE's adjoint
-    (:class:`InitialTermGradient`), so no Riccati solve is needed per direction. The inner products
-    ⟨G_Φ, dΦ⟩ + ⟨G_Q, dQ⟩ + g_R dR (:meth:`directional`) then give ∂ℓ/∂ϑ for any parameter ϑ from the change of
-    its component's block alone (:meth:`~imu_noise_id.core.estimation.mle.Parameterisation.block_derivative`):
-    one smoother pass and a few p × p products per gradient, where differences of Q itself rebuilt the whole
-    model twice per parameter. H is not a function of the components' parameters and is held fixed.
+    C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ], over the states of non-zero process noise. In steady mode the
+    x_1 term's share comes from the DARE's adjoint (:class:`InitialTermGradient`). :meth:`directional` gives ∂ℓ/∂ϑ
+    from a parameter's change of its own block
+    (:meth:`~imu_noise_id.core.estimation.mle.Parameterisation.block_derivative`). H is held fixed. Raises ValueError
+    (in :meth:`at`) when R is zero. Reasons: docs/em.md, "Algorithm" 5.
     """
 
     g_phi: np.ndarray
@@ -240,14 +226,11 @@ class MatrixScore:
 
 @dataclass(frozen=True)
 class InitialTermGradient:
-    """The x_1 term of Q to first order in the model matrices around θ_E, for :class:`MatrixScore` (beyond paper
-    000, whose Σ is fixed).
+    """The x_1 term of Q to first order in the model matrices around θ_E, for :class:`MatrixScore` (beyond paper 000).
 
-    With Σ = P̄(θ) (steady mode) the x_1 term −½(log det Σ + tr(Σ⁻¹E₁)), E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ] over the
-    states with Σ_ii > 0, changes with θ through the DARE; its derivative is tr(W dΣ) with
-    W = −½(Σ⁻¹ − Σ⁻¹E₁Σ⁻¹), and tr(W dP̄) is linear in the model matrices' change
-    (:class:`~imu_noise_id.core.kalman.riccati.SteadyCovarianceSensitivity`). In fixed mode Σ does not depend on θ
-    and the term has no gradient (``sensitivity`` None).
+    Steady mode: the term −½(log det Σ + tr(Σ⁻¹E₁)) over the states with Σ_ii > 0 has derivative tr(W dP̄),
+    W = −½(Σ⁻¹ − Σ⁻¹E₁Σ⁻¹) (:class:`~imu_noise_id.core.kalman.riccati.SteadyCovarianceSensitivity`). Fixed mode:
+    ``sensitivity`` None (no gradient).
     """
 
     sensitivity: riccati.SteadyCovarianceSensitivity | None

@@ -121,13 +121,10 @@ EIGENVALUE_FLOOR = 1e-10
 
 
 def _inverse_cholesky(v: np.ndarray) -> np.ndarray:
-    """L⁻¹ with V = L Lᵀ, through the correlation matrix (V spans many orders of magnitude). A correlation matrix
-    that is not positive definite — near-singular, or indefinite where the model covariance's summation
-    (:func:`~imu_noise_id.core.wavelet.covariance.wv_covariance`) is approximate, as on records of 10⁶–10⁷ samples
-    with a long-τ GM beside a random walk — is first projected onto the positive definite ones: its eigenvalues
-    clipped at :data:`EIGENVALUE_FLOOR` of the largest, the diagonal scaled back to one (Higham 2002's projection,
-    one step). Any positive definite weight keeps the GMWM consistent (Guerrier et al. 2013); only its efficiency
-    depends on V being the estimates' covariance."""
+    """L⁻¹ with V = L Lᵀ, through the correlation matrix. A correlation matrix that is not positive definite is first
+    projected onto the positive definite ones (Higham 2002, one step): eigenvalues clipped at
+    :data:`EIGENVALUE_FLOOR` of the largest, the diagonal scaled back to one. Reasons: docs/gmwm.md, "The covariance
+    of the WV estimates"."""
     d = np.sqrt(np.diag(v))
     corr = v / np.outer(d, d)
     try:

@@ -220,12 +220,7 @@ def unidentified_as_bound(k: KalibrValue) -> KalibrValue:
 def unmodelled_as_bound(k: KalibrValue, bound: RandomWalkBound) -> KalibrValue:
     """K of a final model without a random walk (``k.value`` None): the largest K the data's long-τ AV supports
     (:func:`~imu_noise_id.core.allan.rw_bound.random_walk_bound`, simultaneous over its estimates), method ``bound``,
-    interval (0, bound); ``k`` itself where the model has a walk or there is no bound.
-
-    Every component adds Allan variance, so AV(τ) ≥ K²τ/3 whatever else the record holds: the bound holds the true walk
-    at its level whatever the structure (a Gauss–Markov process or flicker noise the model took instead of the walk
-    only loosens it). The Allan-slope line drawn through such a record's long τ is a point reading of the same AV that
-    a bias process bends (its interval can exclude the walk); it stays in imu.yaml as ``*_allan``."""
+    interval (0, bound); ``k`` itself where the model has a walk or there is no bound. Reasons: docs/loop.md, "K"."""
     if k.value is not None or not (math.isfinite(bound.value) and bound.value > 0):
         return k
     return KalibrValue(

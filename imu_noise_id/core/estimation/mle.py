@@ -1,20 +1,11 @@
 """Maximum-likelihood finish, standard errors and information for component models (beyond paper 000).
 
-EM converges slowly near the optimum (paper 000 §3.5 and §5: "very long convergence time"). After a few EM
-iterations this module maximises the exact log-likelihood directly with L-BFGS-B, in log-parameters
-ϑ = log(continuous-time parameter) of each stochastic component (noise density, random walk, GM τ and σ, QN Q),
-so positivity holds by construction. The mean parameters (bias, ramp slope, exog coefficients, u, μ) are
-profiled out by GLS inside the likelihood (:func:`imu_noise_id.core.kalman.loglik`).
-
-The gradient is exact and cheap: by Fisher's identity ∂ℓ/∂ϑ = ∂Q(ϑ | ϑ_E)/∂ϑ at ϑ = ϑ_E, with Q the EM's
-expected complete-data log-likelihood, from one smoother pass. Its derivatives in the model matrices Φ, Q, R are
-closed forms in the E-step sums (:class:`imu_noise_id.core.estimation.em.MatrixScore`; the x_1 term's, whose
-Σ = P̄(ϑ), from the DARE's adjoint, one Stein sum per gradient), and each log-parameter moves only its own
-component's block, whose change is taken by central differences of that block alone.
-
-Standard errors (paper 000 §3.4): the observed information is minus a numerical Hessian of ℓ (central
-differences of the exact gradient); for positive parameters the 95 % interval is exp(ϑ̂ ± 1.96·se_ϑ) and the
-physical standard error the delta-method value·se_ϑ.
+L-BFGS-B on the exact log-likelihood after a few EM iterations, in log-parameters ϑ = log(continuous-time parameter)
+of each stochastic component; the mean parameters (bias, ramp, exog, u, μ) profiled by GLS
+(:func:`imu_noise_id.core.kalman.loglik`). Gradient by Fisher's identity from one smoother pass
+(:class:`imu_noise_id.core.estimation.em.MatrixScore`), each log-parameter through its own component's block.
+Standard errors (paper 000 §3.4): observed information = minus the Hessian of ℓ (differences of the exact gradient);
+95 % interval exp(ϑ̂ ± 1.96·se_ϑ), physical se by the delta method. Reasons: docs/em.md, "Algorithm" 5–6.
 """
 
 from __future__ import annotations
@@ -35,12 +26,10 @@ from ..noise.components import RR, Component
 from . import em
 from .differences import derivative_in_domain, stepped
 
-#: Above this length a record with missing samples is searched (and its intervals profiled) gap-filled: the exact
-#: engine needed for the gaps is a Python loop (:mod:`.search`, :mod:`.uncertainty`).
+#: Above this length a record with missing samples is searched (and its intervals profiled) gap-filled.
 FILL_FIRST_MIN_SAMPLES = 20_000
 
-#: Metric information −∂²ℓ/∂ϑ_k² below which :func:`maximise` holds log-parameter k at its start: changing the
-#: parameter e-fold then changes ℓ by less than 5e-4 (the parameter sits at the ~0 boundary).
+#: Metric information −∂²ℓ/∂ϑ_k² below which :func:`maximise` holds log-parameter k at its start (ℓ flat in it).
 FLAT_INFORMATION = 1e-3
 
 
@@ -48,8 +37,7 @@ def physical_bounds(n_total: int, dt: float) -> dict[str, tuple[float, float]]:
     """Physical ranges of the parameters searched, for a record of ``n_total`` samples at period ``dt`` [s].
 
     GM τ from one sample to 100 records; OSC and LPF frequencies between the record's resolution and the Nyquist
-    frequency; an OSC at least two resolution bins wide (a narrower line is a sinusoid of fixed frequency and phase,
-    a SIN regressor, not a random process the record can resolve).
+    frequency; an OSC at least two resolution bins wide (narrower: a SIN regressor).
     """
     span = n_total * dt
     nyquist = 0.5 / dt
@@ -190,25 +178,15 @@ def maximise(
     ``bounds`` maps a parameter name (``tau``, ``frequency``, ``bandwidth``, ``cutoff``) to its physical range.
 
     ``metric``: an approximation of the information −∂²ℓ/∂ϑ² (e.g. the Whittle one). When given, the search
-    runs in η = Lᵀ(ϑ − ϑ₀) with L Lᵀ = metric, where the Hessian is close to the identity and L-BFGS needs a
-    handful of iterations; an out-of-range point is scored at its projection onto the box plus a quadratic
-    pull back into it (beyond the paper: a parameter on its bound, e.g. an OSC bandwidth at the record's
-    resolution, then no longer stalls the search over the others, as a flat 1e10 wall did), and it stops
-    when every |∂ℓ/∂η| < 0.05 (less than ~1e-3 of log-likelihood left to gain). Without it, when every
+    runs in η = Lᵀ(ϑ − ϑ₀) with L Lᵀ = metric; an out-of-range point is scored at its projection onto the box plus
+    a quadratic pull back into it (beyond the paper); it stops when every |∂ℓ/∂η| < 0.05. Without it, when every
     |∂ℓ/∂ϑ| < ``grad_tol``.
 
-    ``metric_at``: the metric at another point (e.g. the Whittle information of a state space's components). When
-    the search stops other than on its gradient test (its iteration limit, or ℓ no longer rising while the
-    gradient is not yet small: the start's metric no longer describes the likelihood where the search got to), it
-    runs once more from its end with the metric recomputed there (beyond the paper; from starts a factor e^±1.5
-    off, this took two of four searches that ended more than 1.92 short to the maximum,
-    ``bench/studies/probe_fit_from_off_starts.py``).
+    ``metric_at``: the metric at another point. When the search stops other than on its gradient test (iteration
+    limit, or ℓ no longer rising), it runs once more from its end with the metric recomputed there (beyond the paper).
 
-    Boundary (beyond the paper): a parameter whose metric information is below ``FLAT_INFORMATION`` (e.g. a
-    random walk the start already puts at ~0, where ℓ is flat in its log) is held at its start value and the
-    search runs over the others. Left free, its log would drift towards −∞ along a flat, numerically noisy
-    direction (the Fisher-identity gradient of a vanishing Q entry is a difference of nearly equal sums), and
-    L-BFGS would spend its iterations there without gaining likelihood.
+    A parameter whose metric information is below :data:`FLAT_INFORMATION` is held at its start value (beyond the
+    paper). Reasons: docs/em.md, "Algorithm" 5.
     """
     from ..kalman.statespace import to_components
 
@@ -280,8 +258,8 @@ def observed_information(
 ) -> np.ndarray:
     """−∂²ℓ/∂ϑ∂ϑᵀ by finite differences of the exact gradient (symmetrised).
 
-    Forward differences (k + 1 smoother passes; error O(step) ≈ 1e-3 relative, immaterial for standard errors)
-    or, with ``central``, central ones (2k passes, O(step²)). Where a step leaves a component's domain (an OSC
+    Forward differences (k + 1 smoother passes, error O(step)) or, with ``central``, central ones (2k passes,
+    O(step²)). Where a step leaves a component's domain (an OSC
     fitted at its largest damping, a step beyond it raising ValueError) the difference is taken on the other
     side; a parameter that can step neither way gets a NaN column (not identified).
     """
@@ -304,11 +282,9 @@ MAX_INFORMATION = 1e100
 def covariance_from_information(info: np.ndarray) -> tuple[np.ndarray, bool]:
     """Inverse of the observed information and whether it is positive definite.
 
-    When it is not (typically a variance driven to ~0 at the boundary: that component is not supported by the
-    data), the parameters loading most on the non-positive directions are removed one at a time until the rest
-    is positive definite; the removed ones get infinite variance (interval (0, ∞)), the others the inverse of
-    their (conditional) block. Parameters whose information is not finite or absurd (beyond
-    :data:`MAX_INFORMATION`: a finite-difference step through a likelihood that overflowed near a boundary) are
+    When it is not, the parameters loading most on the non-positive directions are removed one at a time until the
+    rest is positive definite; the removed ones get infinite variance (interval (0, ∞)), the others the inverse of
+    their (conditional) block. Parameters whose information is not finite or beyond :data:`MAX_INFORMATION` are
     removed first.
     """
     k = info.shape[0]

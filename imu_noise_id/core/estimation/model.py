@@ -1,23 +1,13 @@
-"""The noise model of one axis: a component structure on one record, as statsmodels' ``MLEModel`` is a model on data.
+"""The noise model of one axis: a component structure on one record (as statsmodels' ``MLEModel``).
 
-:class:`NoiseModel` holds the record (samples ``y`` [u] at period ``dt`` [s], NaN = missing), the structure
-(components such as ``WN+GM+RW+RR``), the measurement regressors ``z`` (a constant bias, the ramp of an RR
-component and the caller's exog columns: sinusoids, temperature, steps) and the drift treatment. The columns that
-are pure sinusoids (a SIN term's) are recognised once, checked at every sample, and declared to the state space,
-whose steady Kalman engine then computes their response in closed form (:mod:`..kalman.harmonic`). It answers
+:class:`NoiseModel` holds the record (``y`` [u] at period ``dt`` [s], NaN = missing), the structure (e.g.
+``WN+GM+RW+RR``), the measurement regressors ``z`` (bias, an RR's ramp, the caller's exog columns; pure sinusoids are
+declared to the state space for :mod:`..kalman.harmonic`) and the drift treatment. It gives the state space (paper 000
+eqs. 4–9, :meth:`NoiseModel.statespace`), the exact log-likelihood with the means profiled by GLS
+(:meth:`NoiseModel.loglik`), Allan/Whittle multi-starts (§3.5(i); beyond it: several GM placements) and the fit
+(:meth:`NoiseModel.fit`: EM then quasi-Newton, :mod:`.search`, :mod:`.uncertainty`) as a :class:`~.results.FitResult`.
 
-* :meth:`NoiseModel.statespace` — the state-space form of given components (paper 000 eqs. 4–9);
-* :meth:`NoiseModel.loglik` — the exact log-likelihood of given components, mean parameters profiled by GLS;
-* :meth:`NoiseModel.starting_values` — multi-start initial values from the Allan variance refined by the Whittle
-  likelihood (paper 000 §3.5(i) asks for AV-based initial values; beyond it: several GM placements);
-* :meth:`NoiseModel.fit` — constrained EM then quasi-Newton on the exact likelihood, intervals, advice
-  (:mod:`.search`, :mod:`.uncertainty`), returning a :class:`~.results.FitResult`.
-
-Model selection (:mod:`.selection`) and the closed loop share this object: they build one per candidate and call
-``fit``; nothing inspects a function signature.
-
-Drift (paper 000 §3.5(iii)): with RR in the structure, ``drift='em'`` estimates the ramp jointly (a regressor
-``t·dt`` whose coefficient is the slope, profiled in the likelihood and updated in closed form in the EM);
+Drift (paper 000 §3.5(iii)), with RR in the structure: ``drift='em'`` estimates the slope jointly (regressor ``t·dt``);
 ``drift='ls'`` removes a least-squares line first and re-estimates bias and slope by GLS with the fitted noise model.
 """
 
@@ -56,10 +46,8 @@ class FitOptions:
     n_starts
         Number of distinct starting values tried (best likelihood kept).
     em_iter, em_tol
-        EM iterations before the quasi-Newton finish, and the §3.5(ii) stopping threshold. A few EM steps are
-        robust first steps from any start; the convergence itself is left to the quasi-Newton finish, which needs
-        far fewer likelihood evaluations than EM's linear convergence (``polish=False`` and a large ``em_iter``
-        give the paper's pure EM).
+        EM iterations before the quasi-Newton finish, and the §3.5(ii) stopping threshold (``polish=False`` and a
+        large ``em_iter`` give the paper's pure EM).
     polish
         Finish with L-BFGS-B on the exact likelihood (``False``: EM only, as in the paper).
     spectral_init

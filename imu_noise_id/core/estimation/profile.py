@@ -1,20 +1,16 @@
 """Adjusted profile-likelihood intervals, where the observed information cannot be trusted (beyond paper 000 §3.4).
 
-The profile likelihood (Cox & Hinkley 1974 §9.3; Venzon & Moolgavkar 1988)
-
-    ℓ_p(v) = max over ϑ_{−k} of ℓ(ϑ_k = v, ϑ_{−k})        (means b by GLS inside ℓ)
-
-adjusted for the estimated bias and ramp (Cox & Reid 1987, eq. 4; the restricted likelihood of Patterson & Thompson
-1971, cf. Tunnicliffe Wilson 1989):
+Profile likelihood (Cox & Hinkley 1974 §9.3; Venzon & Moolgavkar 1988) ℓ_p(v) = max over ϑ_{−k} of ℓ(ϑ_k = v, ϑ_{−k})
+(means b by GLS inside ℓ), adjusted for the estimated bias and ramp (Cox & Reid 1987, eq. 4; the restricted
+likelihood of Patterson & Thompson 1971, cf. Tunnicliffe Wilson 1989):
 
     ℓ_A(v) = ℓ_p(v) − ½ log det(Zᵀ V⁻¹ Z)(v) = ℓ_p(v) + ½ log det cov(b̂)(v),
 
-the adjustment evaluated at the ML profile's argmax; the interval is {v : ℓ_A(v) ≥ max ℓ_A − 1.92}, lower end 0 where 0
-cannot be excluded; point estimates stay paper 000's ML ones. Search: :mod:`.profile_search` on the signed root
-r(v) = √(2(max ℓ_A − ℓ_A(v))); each ℓ_p(v) by L-BFGS-B over the others, interior log-parameters whitened by their
-information block, zero-boundary ones linearly as K/s with a floor :data:`ZERO_FLOOR`·s, unidentified ones in their log
-within their physical range; the ramp slope profiled with its regressor fixed. Why: docs/em.md, "Why the intervals,
-starts and Kalibr numbers are computed as they are".
+the adjustment at the ML profile's argmax; interval {v : ℓ_A(v) ≥ max ℓ_A − 1.92}, lower end 0 where 0 cannot be
+excluded; point estimates stay the ML ones. Search: :mod:`.profile_search`; interior log-parameters whitened by their
+information block, zero-boundary ones linearly as K/s (floor :data:`ZERO_FLOOR`·s), unidentified ones in their log
+within their physical range; the ramp slope with its regressor fixed.
+Reasons: docs/em.md, "Why the intervals, starts and Kalibr numbers are computed as they are".
 """
 
 from __future__ import annotations
@@ -171,8 +167,7 @@ class Profiler:
 
     def adjustment_gradient(self, base: StateSpace) -> np.ndarray:
         """∂(½ log det cov b̂)/∂ϑ at the estimate (with the means ``base`` leaves free), by forward differences of
-        0.05 (log units): the adjustment varies over many standard errors of ϑ, so one gradient serves every
-        profile point."""
+        0.05 (log units); one gradient serves every profile point."""
         key = tuple(bool(f) for f in base.b_free)
         if key not in self._grad_c:
             c0 = self.adjustment(self.theta, base)
