@@ -11,17 +11,10 @@ with the autocovariance
     γ_D(h) = K((h−2)L) − 4 K((h−1)L) + 6 K(hL) − 4 K((h+1)L) + K((h+2)L),
 
 where K is the components' generalised covariance of the partial sums (:meth:`~imu_noise_id.core.noise.base.Component.
-sum_covariance`, exact for the *sampled* components, the one the wavelet variance uses; the filter [1, −4, 6, −4, 1]
-annihilates the polynomial K is defined up to). The Gaussian log-likelihood of the D_k is computed exactly from the
-Cholesky factor of their Toeplitz covariance, O(M³) whatever N: one evaluation takes a millisecond for a record of any
-length.
-
-What it is for (beyond the papers): the block sums keep everything below the blocks' frequency 1/(L·dt) — random walk,
-flicker noise, Gauss–Markov processes of long τ — and fold the fast components into their white floor. A structure
-that differs from another by a long-τ effect is told apart there as well as by the full record's likelihood, and at
-a cost independent of N (:mod:`.screen` asks it, beside the banded Whittle likelihood, whether a speculative effect
-can pay for its exact refit). The banded Whittle likelihood cannot stand in for it: a Gauss–Markov process whose
-corner lies within the record's lowest Fourier frequencies is read there through the taper's leakage.
+sum_covariance`, exact for the *sampled* components; the filter [1, −4, 6, −4, 1] annihilates the polynomial K is
+defined up to). The Gaussian log-likelihood of the D_k is exact, by the Cholesky factor of their Toeplitz covariance,
+O(M³) whatever N. Beyond the papers; used by :mod:`.screen` (reasons: docs/em.md, "Why the maximum-likelihood search
+and its statistics are built as they are").
 """
 
 from __future__ import annotations
@@ -43,9 +36,8 @@ from .whittle import with_log_parameters
 MAX_BLOCKS = 256
 #: Fewest blocks for a statistic worth its name.
 MIN_BLOCKS = 32
-#: Component types whose parameters the block sums estimate; the others (the sensor's filters, resonances,
-#: quantisation) keep their values: their share of the block sums is a white floor that the white noise's level
-#: absorbs.
+#: Component types whose parameters the block sums estimate; the others (filters, resonances, quantisation) keep
+#: their values.
 SLOW_TYPES = (WN, RW, GM, BI)
 
 

@@ -1,23 +1,12 @@
 """Is a candidate structure worth its exact fit? Its likelihood gain on two statistics of fixed size.
 
-An exact fit of a long record costs tens of likelihood passes over every sample (seconds each at 10⁶ samples). A
-candidate that cannot lower the BIC is found out for milliseconds to a second on two statistics whose size does not
-grow with the record, each computed once per record:
-
-* the banded Whittle likelihood of the differences (:mod:`.whittle`), which reads every frequency but the record's
-  lowest few (the Hann taper's leakage blurs those): the short-memory part, a GM of short τ;
-* the exact likelihood of the block sums (:mod:`.block_sums`), which reads every frequency below the blocks' own,
-  the lowest included: random walk, flicker noise, a GM of long τ.
-
-The gain of the candidate over the current structure is the larger of the two, each fitted from the candidate's
-start and from it with the current structure's values restored (a start may restart the random walk small), and,
-since an added GM's τ is what a start gets most wrong (a GM started at a tenth of the record converges at 0.8 s on
-flicker noise), from each with that τ moved down decade by decade to :data:`SHORTEST_TAU_SAMPLES` samples. The
-candidate goes on to its exact fit when the BIC it would reach, −2·gain + Δk·ln N, is below :data:`MARGIN`: a
-structure the data do not hold gains about nothing (ΔBIC ≈ Δk·ln N, 25–35 for a GM), one they do gains far more than
-the margin allows for the statistics' shortfall against the full likelihood (each reads one band of frequencies).
-
-Beyond the papers; the rule and its measurements: ``docs/em.md`` ("Screening on statistics of fixed size").
+Beyond the papers. The statistics, each computed once per record: the banded Whittle likelihood of the differences
+(:mod:`.whittle`; every frequency but the record's lowest few) and the exact likelihood of the block sums
+(:mod:`.block_sums`; every frequency below the blocks' own). The gain over the current structure is the larger of the
+two, each fitted from the candidate's start, from it with the current structure's values restored, and from each with
+an added GM's τ moved down decade by decade to :data:`SHORTEST_TAU_SAMPLES` samples. The candidate goes on to its exact
+fit when −2·gain + Δk·ln N < :data:`MARGIN`. The rule and its measurements: docs/em.md, "Screening on statistics of
+fixed size".
 """
 
 from __future__ import annotations
@@ -31,7 +20,7 @@ import numpy as np
 from ..noise.components import GM, Component
 from . import block_sums, mle, whittle
 
-#: Screen ΔBIC below which a candidate is fitted exactly (units of −2 ln L; a GM costs 2·ln N, 24–33).
+#: Screen ΔBIC below which a candidate is fitted exactly (units of −2 ln L).
 MARGIN = 10.0
 #: Shortest GM τ [samples] a screen starts from.
 SHORTEST_TAU_SAMPLES = 5.0

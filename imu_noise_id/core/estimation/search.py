@@ -1,14 +1,10 @@
 """The maximum-likelihood search of a :class:`~.model.NoiseModel`: constrained EM (paper 000 §3) then quasi-Newton.
 
-Per start (:meth:`~.model.NoiseModel.starting_values`), ``em_iter`` EM iterations (:mod:`.em`) then L-BFGS-B on
-the exact likelihood (:mod:`.mle`; beyond the paper: EM's slow convergence, §3.5 and §5); the best likelihood wins.
-Mean parameters (bias, ramp, exog) come from the GLS profile at the optimum; standard errors, intervals and the
-recording-length advice from :mod:`.uncertainty`. When the profile-likelihood search of the intervals meets a
-higher likelihood than the search's maximum, the search runs once more from there (beyond the paper).
-
-Long records with missing samples are searched on the gap-filled record with the fast (steady-state) engine
-(beyond the paper; the exact engine is a Python loop); likelihood, means, innovations and intervals are then those
-of the record with its gaps.
+Per start (:meth:`~.model.NoiseModel.starting_values`), ``em_iter`` EM iterations (:mod:`.em`) then L-BFGS-B on the
+exact likelihood (:mod:`.mle`; beyond the paper); the best likelihood wins. Means from the GLS profile at the optimum;
+standard errors, intervals and advice from :mod:`.uncertainty`; a higher likelihood met by the intervals' profile search
+restarts the search from there (beyond the paper). Long records with missing samples are searched gap-filled
+(:data:`.mle.FILL_FIRST_MIN_SAMPLES`); likelihood, means, innovations and intervals are those of the record with gaps.
 """
 
 from __future__ import annotations
@@ -72,8 +68,7 @@ def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options
 def _mean_parameters(model: NoiseModel, fitted: ss.StateSpace, prof: kalman.ProfileResult,
                      comps: list[Component]) -> dict[str, dict]:
     """Bias, ramp and exog coefficients with their GLS standard errors; with ``drift='ls'`` the line's slope is
-    re-estimated by GLS on the original record with the fitted noise model (the OLS error assumes white residuals
-    and is far too small with RW/GM noise), and appended to ``comps`` as RR."""
+    re-estimated by GLS on the original record with the fitted noise model, and appended to ``comps`` as RR."""
     coef: dict[str, dict] = {}
     for name, value, var in zip(prof.names, prof.beta, np.diag(prof.beta_cov), strict=True):
         s_b = math.sqrt(max(float(var), 0.0))
@@ -162,9 +157,8 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
 def _with_intervals(model: NoiseModel, result: FitResult, options: FitOptions,
                     search_of: Callable[[list[Component]], _Search]) -> FitResult:
     """``result`` with its intervals (:func:`.uncertainty.add_uncertainty`). When their profile search met a higher
-    likelihood than the search's maximum (a ridge the starts missed, e.g. a GM turning into a random walk, or a
-    random walk every start left at its zero boundary, where ℓ is flat in log K), the search runs again from there
-    (on ``search_of`` that start), once, and the better fit gets the intervals."""
+    likelihood than the search's maximum, the search runs again from there (on ``search_of`` that start), once, and
+    the better fit gets the intervals."""
     add_uncertainty(result, options.target_precision)
     start = result.better_start
     if start is None:
@@ -195,8 +189,7 @@ def add_intervals(model: NoiseModel, result: FitResult, options: FitOptions) -> 
 def _fastest_first(model: NoiseModel, fitted: ss.StateSpace) -> ss.StateSpace:
     """``fitted`` with its Gauss–Markov blocks by increasing τ (:func:`.modelspec.gauss_markov_fastest_first`), so
     that the labels GM1, GM2 … of the result, its intervals and its information name the same process on every
-    record (the likelihood is symmetric in their order; beyond paper 000, which fits one GM). The same model:
-    the blocks are rebuilt from the components, the mean parameters copied."""
+    record (beyond paper 000, which fits one GM). The same model: blocks rebuilt from the components, means copied."""
     comps = ss.to_components(fitted)
     ordered = gauss_markov_fastest_first(comps)
     if all(a is b for a, b in zip(comps, ordered, strict=True)):

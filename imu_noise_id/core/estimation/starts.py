@@ -208,13 +208,9 @@ def filter_orders(components: list[Component], known: SensorFilter | None = None
     """``components`` with each DLPF at every order of :data:`~imu_noise_id.core.noise.digital.ORDERS` (its noise
     density and cutoff kept), one list per combination, and each white noise beside it at least
     :data:`DLPF_FLOOR_START` of its density; ``[components]`` without a DLPF. ``known``: the user's sensor filter,
-    whose cutoff replaces the DLPF's and whose order, when given, is the only one tried.
-
-    The order is a structure value no likelihood search moves: the starts' Whittle fits
-    (:meth:`.model.NoiseModel.starting_values`) choose it, the roll-off's steepness near the Nyquist frequency telling
-    the orders apart. They can only where the white floor after the filter starts visible: an AV fit that put it at
-    ~0 (the filter's own white level absorbing it) left the Whittle likelihood flat in its log, and the filter alone
-    then took the floor with its cutoff at the Nyquist frequency."""
+    whose cutoff replaces the DLPF's and whose order, when given, is the only one tried. The order is chosen by the
+    starts' Whittle fits (:meth:`.model.NoiseModel.starting_values`); no likelihood search moves it (reasons:
+    docs/em.md, "Why the intervals, starts and Kalibr numbers are computed as they are")."""
     dlpfs = [c for c in components if isinstance(c, DLPF)]
     if not dlpfs:
         return [list(components)]

@@ -32,9 +32,8 @@ WALD_MAX_SE_LOG = 1.0
 #: signed root within 1.96 − 0.15 … 1.96 + 0.25: a quadratic log-likelihood gives exactly 1.92).
 WALD_DROP_RANGE = (0.5 * (Z95 - 0.15) ** 2, 0.5 * (Z95 + 0.25) ** 2)
 #: Likelihood evaluations × samples the profile intervals of one fit may spend (about a minute at 0.3 µs per sample
-#: and evaluation; 1 h at 100 Hz fits within it, at 10⁷ samples it allows about 20 evaluations). A parameter whose
-#: profile would start beyond it gets the interval of :func:`_beyond_budget`, its ``ci95_method`` ending in
-#: :data:`BUDGET_SPENT`.
+#: and evaluation). A parameter whose profile would start beyond it gets the interval of :func:`_beyond_budget`, its
+#: ``ci95_method`` ending in :data:`BUDGET_SPENT`.
 PROFILE_BUDGET = 2e8
 
 

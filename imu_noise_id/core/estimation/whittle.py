@@ -7,11 +7,10 @@ two-sided spectral density per sample, at angular frequency ω = 2πf·dt and wi
     WN  σ²_WN·c(ω)          RW  σ²_RW          QN  σ²_QN·c(ω)²
     GM  σ²_drive·c(ω) / (1 − 2φ cos ω + φ²)
 
-Whittle's log-likelihood −Σ_j [log S(ω_j) + I(ω_j)/S(ω_j)] over the Fourier frequencies (I the periodogram) is
-asymptotically equivalent to the exact one. The periodogram is computed once (one FFT) and pooled into
-log-spaced frequency bands (S is nearly constant within a band), so each evaluation costs O(bands), not O(N):
-the optimisation over the log-parameters takes milliseconds even for 10⁷ samples. Its optimum starts the EM and
-the exact-likelihood finish close to the maximum, which is what makes the whole fit fast.
+Whittle's log-likelihood −Σ_j [log S(ω_j) + I(ω_j)/S(ω_j)] over the Fourier frequencies (I the periodogram),
+asymptotically equivalent to the exact one; the periodogram (one FFT) is pooled into log-spaced bands, so an
+evaluation costs O(bands), not O(N). Reasons: docs/em.md, "Why the maximum-likelihood search and its statistics are
+built as they are".
 """
 
 from __future__ import annotations
@@ -40,11 +39,7 @@ def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02,
     """Tapered periodogram I(ω_j) = |Σ_t w_t Δy_t e^{−iω_j t}|²/Σ_t w_t² of the demeaned differences,
     j = 1…⌊(M−1)/2⌋, the lowest ``n_single`` frequencies kept single, the rest pooled in bands of width ratio·ω,
     except in the ``fine`` intervals (ω_lo, ω_hi) [rad/sample], where the frequencies stay single (around a
-    narrow line, whose shape a band would hide: an OSC's frequency and bandwidth).
-
-    The Hann taper w matters: the spectrum of Δy spans many decades (white noise differenced is ∝ ω² at low
-    frequency), and the untapered periodogram's leakage (≈ 2σ²_WN/M at every frequency) would swamp the
-    low-frequency band where RW and long-τ GM live.
+    narrow line, whose shape a band would hide: an OSC's frequency and bandwidth). w: the Hann taper.
     """
     d = np.diff(np.asarray(y, dtype=float))
     d = d - d.mean()
@@ -109,10 +104,8 @@ def difference_spectrum(components: list[Component], omega: np.ndarray, dt: floa
 
 def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndarray) -> np.ndarray:
     """Spectral density per sample of y_k = h x_k, x_{k+1} = Φ x_k + w_k, var w = Q, at angular frequencies ω:
-    S(ω) = h G Q Gᴴ hᵀ with G = (e^{iω} I − Φ)⁻¹ (any stable block, e.g. LPF, OSC).
-
-    h G is formed without a linear solve per frequency where the block allows: a diagonal Φ (GM ladders, LPF)
-    divides, a 2 × 2 one (OSC, MA) takes the adjugate, h G = h adj(zI − Φ) / det(zI − Φ); larger blocks solve.
+    S(ω) = h G Q Gᴴ hᵀ with G = (e^{iω} I − Φ)⁻¹ (any stable block, e.g. LPF, OSC; diagonal and 2 × 2 Φ in closed
+    form, h G = h adj(zI − Φ) / det(zI − Φ)).
     """
     z = np.exp(1j * np.asarray(omega))
     n = phi.shape[0]
@@ -180,15 +173,8 @@ def whittle_information(components: list[Component], y: np.ndarray, dt: float,
     """The expected (Fisher) information of the banded Whittle log-likelihood in the log-parameters (non-RR
     components in order, as :class:`imu_noise_id.core.estimation.mle.Parameterisation`): Σ_b n_b ∂ln S_b/∂ϑ ·
     ∂ln S_b/∂ϑᵀ over the bands b of n_b Fourier frequencies, the derivatives of the log-spectrum by central
-    differences. It preconditions the exact-likelihood quasi-Newton finish (:func:`.mle.maximise`).
-
-    Beyond the papers. Positive semi-definite at every start: a parameter the spectrum does not feel has ~0
-    information (held at its start by the finish), one it does has a positive diagonal. The observed Hessian of
-    the Whittle likelihood used before is indefinite away from its maximum; at a loop's start it gave a parameter
-    that mattered a negative diagonal, read as flat and held, and the finish stopped after one evaluation, 15–250
-    below the maximum in log-likelihood on 10 min of white noise and a random walk started a decade off
-    (``test_whittle.py``; ``bench/studies/probe_fit_from_off_starts.py``: 17 of 60 such fits ended more than 1.92
-    short, 2 now).
+    differences. It preconditions the exact-likelihood quasi-Newton finish (:func:`.mle.maximise`). Beyond the
+    papers; positive semi-definite at every start (reasons: docs/em.md, "Algorithm" 5, "The finish's metric").
     """
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(components) if not isinstance(c, RR) for k in c.parameter_names]
