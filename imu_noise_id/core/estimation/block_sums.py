@@ -47,14 +47,10 @@ class BlockSums:
 
     Attributes
     ----------
-    d : (M − 1,) array
-        D_k [u·samples] (sums, not means: the scale does not change likelihood differences).
-    block : int
-        Samples per block, L.
-    dt : float
-        Sampling period [s].
-    n : int
-        Samples of the record.
+    d : (M − 1,) array — D_k [u·samples] (sums, not means)
+    block : int — samples per block, L
+    dt : float — sampling period [s]
+    n : int — samples of the record
     """
 
     d: np.ndarray

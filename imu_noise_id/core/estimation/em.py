@@ -257,16 +257,11 @@ class EMResult:
 
     Attributes
     ----------
-    model : StateSpace
-        The last iterate.
-    loglik : list[float]
-        Exact log-likelihood at each iterate θ⁽⁰⁾, θ⁽¹⁾, … (from the E-steps; the last entry is the final model's).
-    n_iter : int
-        Number of M-steps done.
-    converged : bool
-        Whether the relative stopping rule was met.
-    diverged : bool
-        Whether an update made the model degenerate (no steady-state filter); the last good iterate is kept.
+    model : StateSpace — the last iterate
+    loglik : list[float] — exact log-likelihood at each iterate θ⁽⁰⁾, θ⁽¹⁾, … (the last entry is the final model's)
+    n_iter : int — M-steps done
+    converged : bool — whether the relative stopping rule was met
+    diverged : bool — whether an update made the model degenerate (no steady-state filter; the last good iterate kept)
     """
 
     model: StateSpace
@@ -297,21 +292,19 @@ def run_em(
 
     Parameters
     ----------
-    model
-        Initial θ⁽⁰⁾ with its free masks.
-    y, z
-        Signal (NaN = missing) and measurement regressors (N, k).
-    max_iter, tol, c
-        Iteration cap, threshold ε and constant c of the stopping rule.
-    engine
-        Kalman engine (``'auto'``, ``'steady'``, ``'exact'``).
-    initial
-        Smoother statistics of ``model`` on (y, z) when the caller already has them (e.g. from
-        :func:`imu_noise_id.core.kalman.profile_and_smooth`): the first E-step is then not repeated.
-    final_estep
-        ``False``: after the ``max_iter``-th M-step return the model without the E-step that would score it
-        (for a caller that evaluates it anyway, e.g. the quasi-Newton finish); its log-likelihood is then not
-        in ``loglik`` and a divergence of that last update is not detected here.
+    model : initial θ⁽⁰⁾ with its free masks
+    y, z : signal (N,) (NaN = missing) and measurement regressors (N, k)
+    max_iter, tol, c : iteration cap, threshold ε and constant c of the stopping rule
+    engine : Kalman engine (``'auto'``, ``'steady'``, ``'exact'``)
+    initial : smoother statistics of ``model`` on (y, z) when the caller has them
+        (:func:`imu_noise_id.core.kalman.profile_and_smooth`): the first E-step is not repeated
+    final_estep : ``False``: the model of the ``max_iter``-th M-step is returned unscored (not in ``loglik``, a
+        divergence of that update not detected)
+
+    Raises
+    ------
+    InputError
+        Bad data or regressors, or ``max_iter`` < 0.
     """
     y, z = check_data(y, z, model.n_regressors)
     if max_iter < 0:

@@ -43,20 +43,13 @@ class FitOptions:
 
     Attributes
     ----------
-    n_starts
-        Number of distinct starting values tried (best likelihood kept).
-    em_iter, em_tol
-        EM iterations before the quasi-Newton finish, and the §3.5(ii) stopping threshold (``polish=False`` and a
-        large ``em_iter`` give the paper's pure EM).
-    polish
-        Finish with L-BFGS-B on the exact likelihood (``False``: EM only, as in the paper).
-    spectral_init
-        Refine the AV-fit starts by the Whittle likelihood of the differences (:mod:`.whittle`) before ranking
-        them, and precondition the quasi-Newton finish with the Whittle information (fast; beyond the paper).
-    uncertainty
-        Compute the observed information, standard errors, intervals and the record-length advice.
-    target_precision
-        Relative 95 % half-width for the recording-length advice (0.10 = ±10 %).
+    n_starts : distinct starting values tried (best likelihood kept)
+    em_iter, em_tol : EM iterations before the quasi-Newton finish; the §3.5(ii) stopping threshold
+    polish : finish with L-BFGS-B on the exact likelihood (``False`` with a large ``em_iter``: the paper's pure EM)
+    spectral_init : refine the AV-fit starts by the Whittle likelihood (:mod:`.whittle`) and precondition the finish
+        with the Whittle information (beyond the paper)
+    uncertainty : compute the observed information, standard errors, intervals and the record-length advice
+    target_precision : relative 95 % half-width for the recording-length advice (0.10 = ±10 %)
     """
 
     n_starts: int = 3
@@ -111,35 +104,23 @@ class NoiseModel:
 
     Parameters
     ----------
-    y
-        Samples [u] at period ``dt`` [s]; NaN = missing.
-    structure
-        ``'WN+GM+RW+RR'``, a spec with values (``'WN(2e-4)+RW(3e-6)'``, used as the initial value) or a list of
-        components (ditto).
-    exog, exog_names
-        (N, k) deterministic regressors of the measurement equation y_t = H x_t + B z_t + v_t and their names;
-        B is estimated (GLS in the likelihood, closed form in the EM). Must be finite everywhere.
-    drift
-        With RR in the structure: ``'em'`` (joint) or ``'ls'`` (least-squares line removed first); ``None``
-        forbids RR.
-    allan
-        The Allan variance (one column) of :meth:`detrended` — the record itself, or with its least-squares line
-        removed when the fitted structure has RR — when the caller has it: the starting values are fitted to it
-        instead of computing it again.
-    starts
-        Further starting values tried after the Allan-variance ones (e.g. the GMWM fit of the same structure,
-        :mod:`.gmwm`); ignored when they do not match the structure.
-    periodogram
-        The banded periodogram (:func:`.whittle.banded_periodogram`) of :meth:`detrended` when the caller has it
-        (e.g. a model selection, for every candidate of the same detrending): not computed again.
-    sensor_filter
-        What the user knows of the sensor's digital low-pass: a DLPF in the structure starts at its cutoff and
-        order (:func:`.starts.filter_orders`). InputError when its cutoff is not below the Nyquist frequency.
+    y, dt : samples [u] (NaN = missing) at period ``dt`` [s]
+    structure : ``'WN+GM+RW+RR'``, a spec with values (``'WN(2e-4)+RW(3e-6)'``, the initial value) or components
+    exog, exog_names : (N, k) regressors of y_t = H x_t + B z_t + v_t and their names; B estimated (GLS in the
+        likelihood, closed form in the EM); finite everywhere
+    drift : with RR: ``'em'`` (joint) or ``'ls'`` (least-squares line removed first); ``None`` forbids RR
+    allan : the AV (one column) of :meth:`detrended` when the caller has it (the starts are fitted to it)
+    starts : further starting values after the AV ones (e.g. the GMWM fit); ignored when not of the structure
+    periodogram : the banded periodogram (:func:`.whittle.banded_periodogram`) of :meth:`detrended`, when the caller
+        has it
+    sensor_filter : the sensor's known digital low-pass: a DLPF in the structure starts at its cutoff and order
+        (:func:`.starts.filter_orders`)
 
     Raises
     ------
     InputError
-        Bad signal, unidentifiable structure, bad exog, or too few samples for the number of parameters.
+        Bad signal, unidentifiable structure, bad exog, too few samples for the number of parameters, or a
+        ``sensor_filter`` cutoff not below the Nyquist frequency.
     """
 
     def __init__(self, y: np.ndarray, dt: float, structure: str | list[Component], *, exog: np.ndarray | None = None,

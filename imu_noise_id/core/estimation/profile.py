@@ -75,16 +75,12 @@ class Profiler:
 
     Attributes
     ----------
-    par, theta, model, y, z, ll_max
-        The fit: parameterisation, log-parameters at the maximum, the state space there, the record, ℓ̂.
-    info
-        Observed information −∂²ℓ/∂ϑ² at the maximum (for whitening and the first steps).
-    lo, hi
-        Physical range of each log-parameter (GM τ, OSC/LPF frequencies; ±inf elsewhere).
-    zero
-        Parameters at the zero boundary → their scale s (conditional upper end).
-    flat
-        Parameters the information does not determine (searched in their log).
+    par, theta, model, y, z, ll_max — the fit: parameterisation, log-parameters at the maximum, its state space, the
+        record, ℓ̂
+    info — observed information −∂²ℓ/∂ϑ² at the maximum (for whitening and the first steps)
+    lo, hi — physical range of each log-parameter (GM τ, OSC/LPF frequencies; ±inf elsewhere)
+    zero — parameters at the zero boundary → their scale s (conditional upper end)
+    flat — parameters the information does not determine (searched in their log)
     """
 
     par: mle.Parameterisation

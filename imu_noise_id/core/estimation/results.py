@@ -36,34 +36,21 @@ class FitResult:
 
     Attributes
     ----------
-    model : str
-        Canonical structure name (``modelspec.model_name``), e.g. ``WN+GM+RW``.
-    components : list[Component]
-        Fitted components, continuous-time units (RR's slope included when the structure has RR).
-    exog_coef : dict[str, dict]
-        Mean parameters ``bias`` [u], ``ramp`` [u/s], the caller's exog coefficients; each ``{value, se, ci95}``.
-    se, ci95 : dict[str, ...]
-        Standard error (inverse information; inf where undetermined) and 95 % interval of every component parameter,
-        keyed ``WN.noise_density``, ``GM2.tau`` …, physical units; intervals Wald in log space or profile likelihood
-        (:mod:`.uncertainty`; lower end 0, upper inf where the data do not bound them).
-    ci95_method : dict[str, str]
-        ``wald``, ``profile`` or ``gls`` (a mean parameter's GLS interval).
-    loglik, aic, bic : float
-        Exact maximised log-likelihood; AIC = 2k − 2ℓ, BIC = k·ln(n) − 2ℓ, k all free parameters.
-    n, dt : int, float
-        Observed (non-NaN) samples; sampling period [s].
-    n_iter, converged
-        EM iterations of the winning start; whether the quasi-Newton finish converged.
-    record_length : RecordLengthAdvice | None
-        How long to record for the target precision.
-    information_ok : bool
-        Whether the observed information was positive definite.
-    profile_evaluations : int
-        Log-likelihood evaluations of the profile intervals.
-    better_loglik, better_start
-        A higher log-likelihood the profile search met and its components, else None.
-    log_covariance, covariance_labels
-        Log-parameter covariance (inverse observed information) and labels, for the delta method.
+    model : str — canonical structure name (``modelspec.model_name``), e.g. ``WN+GM+RW``
+    components : list[Component] — fitted components, continuous-time units (RR's slope included with RR)
+    exog_coef : dict[str, dict] — ``bias`` [u], ``ramp`` [u/s], the exog coefficients; each ``{value, se, ci95}``
+    se, ci95 : dict[str, ...] — standard error (inverse information; inf where undetermined) and 95 % interval of every
+        component parameter, keyed ``WN.noise_density``, ``GM2.tau`` …, physical units; Wald in log space or profile
+        likelihood (:mod:`.uncertainty`; lower end 0, upper inf where the data do not bound them)
+    ci95_method : dict[str, str] — ``wald``, ``profile`` or ``gls`` (a mean parameter's GLS interval)
+    loglik, aic, bic : float — exact maximised ℓ; AIC = 2k − 2ℓ, BIC = k·ln(n) − 2ℓ, k all free parameters
+    n, dt : int, float — observed (non-NaN) samples; sampling period [s]
+    n_iter, converged — EM iterations of the winning start; whether the quasi-Newton finish converged
+    record_length : RecordLengthAdvice | None — how long to record for the target precision
+    information_ok : bool — whether the observed information was positive definite
+    profile_evaluations : int — log-likelihood evaluations of the profile intervals
+    better_loglik, better_start — a higher log-likelihood the profile search met and its components, else None
+    log_covariance, covariance_labels — log-parameter covariance (inverse observed information) and labels
     """
 
     model: str

@@ -67,14 +67,10 @@ class Screen:
 
     Attributes
     ----------
-    gain : float
-        The candidate's best log-likelihood gain over the current structure, on either statistic.
-    statistic : str
-        Which statistic gave it ("whittle" or "block sums").
-    extra_parameters : int
-        Parameters the candidate adds (negative: removes).
-    penalty : float
-        The full record's BIC penalty per parameter, ln N.
+    gain : float — the candidate's best log-likelihood gain over the current structure, on either statistic
+    statistic : str — which statistic gave it ("whittle" or "block sums")
+    extra_parameters : int — parameters the candidate adds (negative: removes)
+    penalty : float — the full record's BIC penalty per parameter, ln N
     """
 
     gain: float
