@@ -1,8 +1,5 @@
-"""Finite differences that stay inside the components' domains.
-
-A log-parameter step can leave a component's domain: an OSC fitted at its largest damping
-(:data:`~imu_noise_id.core.noise.resonant.MAX_DAMPING`) raises ValueError a step beyond it. The derivative is then
-taken on the side that stays inside — what an optimum on that boundary needs for its gradient and information.
+"""Finite differences that stay inside the components' domains: where a log-parameter step leaves one (ValueError,
+e.g. an OSC at :data:`~imu_noise_id.core.noise.resonant.MAX_DAMPING`), the derivative is taken on the other side.
 """
 
 from __future__ import annotations

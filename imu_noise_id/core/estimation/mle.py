@@ -259,9 +259,8 @@ def observed_information(
     """−∂²ℓ/∂ϑ∂ϑᵀ by finite differences of the exact gradient (symmetrised).
 
     Forward differences (k + 1 smoother passes, error O(step)) or, with ``central``, central ones (2k passes,
-    O(step²)). Where a step leaves a component's domain (an OSC
-    fitted at its largest damping, a step beyond it raising ValueError) the difference is taken on the other
-    side; a parameter that can step neither way gets a NaN column (not identified).
+    O(step²)); one-sided at a component's domain edge (:mod:`.differences`); a parameter that can step neither way
+    gets a NaN column (not identified).
     """
     k = theta.size
     hess = np.empty((k, k))

@@ -1,11 +1,9 @@
 """The search along one parameter's profile likelihood: its maximum and each end of the 95 % interval.
 
-Given ``profile_at(v, starts)`` → (ℓ_A(v), argmax), the adjusted profile log-likelihood at v maximised over the
-other parameters from the best of ``starts`` (:class:`.profile.Profiler`), :func:`centre` finds the maximum from
-points around the estimate and a parabola through them, and :func:`end` each end on the signed root
-r(v) = √(2(max ℓ_A − ℓ_A(v))), nearly linear in |v − centre| when ℓ is nearly quadratic: outward by secant steps
-until r passes 1.96, then regula falsi (Illinois) until |r − 1.96| < :data:`R_TOL` (the module docstring of
-:mod:`.profile` gives the whole method and its references).
+Given :data:`ProfileAt` (:class:`.profile.Profiler`), :func:`centre` finds the maximum from points around the estimate
+and a parabola through them, :func:`end` each end on the signed root r(v) = √(2(max ℓ_A − ℓ_A(v))): outward by secant
+steps until r passes 1.96, then regula falsi (Illinois) until |r − 1.96| < :data:`R_TOL` (method and references:
+:mod:`.profile`).
 """
 
 from __future__ import annotations

@@ -3,8 +3,8 @@
 A first-order GM of correlation time τ below :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit` is, to the
 likelihood, the same state-space block as the LPF of cutoff f_c = 1/(2πτ)
 (:class:`~imu_noise_id.core.noise.resonant.LPF`) with passband density N = σ√(2τ). :func:`gm_as_filter` renames the
-component and its parameters, nothing else (likelihood, state space and innovations unchanged). Why: docs/loop.md, "The
-loop's rules" 1.
+component and its parameters, nothing else (likelihood, state space and innovations unchanged). Reasons: docs/em.md,
+"Why the intervals, starts and Kalibr numbers are computed as they are"; docs/loop.md, "The loop's rules" 1.
 """
 
 from __future__ import annotations
