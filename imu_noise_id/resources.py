@@ -1,18 +1,11 @@
 """Files shipped with the package and user configuration files: found and parsed here, for the node and the CLI.
 
-The default files (:data:`NODE_PARAMETERS`, :data:`DEFAULT_HYPOTHESES`) live once in ``config/`` at the top of the
-source tree; ``setup.py`` installs them into ``<prefix>/share/imu_noise_id/config/``. :func:`packaged_config`
-returns the first copy found in, in order:
-
-1. ``config/`` beside the package directory when ``package.xml`` is there too (checkout, editable install,
-   ``colcon build --symlink-install``);
-2. ``<prefix>/share/imu_noise_id/config/``, ``<prefix>`` the installation prefix of the imported package (venv,
-   ``--user``, ``--prefix``, colcon install);
-3. ``sys.prefix/share/imu_noise_id/config/``;
-4. the package's ament share directory, when ``ament_index_python`` imports and ``AMENT_PREFIX_PATH`` holds it.
-
-Without the file it raises :class:`~.core.errors.InputError` naming the file, every folder searched and the fix
-(reinstall, run from a checkout, or give the file explicitly).
+The default files (:data:`NODE_PARAMETERS`, :data:`DEFAULT_HYPOTHESES`) live in the source tree's ``config/``,
+installed into ``<prefix>/share/imu_noise_id/config/``. :func:`packaged_config` returns the first copy found in:
+1. ``config/`` beside the package directory with ``package.xml`` (checkout, editable or symlink install);
+2. ``<prefix>/share/imu_noise_id/config/``, ``<prefix>`` the imported package's installation prefix;
+3. ``sys.prefix/share/imu_noise_id/config/``; 4. the ament share directory (``ament_index_python``).
+Else :class:`~.core.errors.InputError` naming the file, every folder searched and the fix.
 """
 
 from __future__ import annotations

@@ -1,12 +1,6 @@
-"""Vectorised decoding of serialised ROS messages (CDR or ROS 1) with numpy at fixed byte offsets.
-
-A flat type (fixed-size primitives and arrays, strings) has one byte layout per set of string lengths.
-:class:`FlatDecoder` flattens the type's definition as stored in the bag into leaves, groups raw messages by
-length, takes each group's layout from its first message (CDR: aligned from the end of the 4-byte encapsulation
-header; ROS 1: packed), checks with numpy that every message shares header and string lengths (up to
-:data:`MAX_LAYOUTS_PER_LENGTH` layouts per length) and reads each leaf through a strided view; the rest goes to
-the full deserialiser, so values always equal it.
-"""
+"""Vectorised decoding of serialised ROS messages (CDR or ROS 1) with numpy at fixed byte offsets: a flat type's
+messages grouped by layout and read through strided views, the rest fully deserialised, so values always equal the
+full deserialiser's (how: docs/bags.md, "How the fast path works")."""
 
 from __future__ import annotations
 
@@ -104,7 +98,7 @@ class FlatDecoder:
     ----------
     fielddefs, msgtype : the bag typestore's definitions and the type, e.g. ``'sensor_msgs/msg/Imu'``
     outputs : output name → leaf paths filling its columns, e.g. ``{'gyro': ('angular_velocity.x', …)}``; an array
-        leaf fills ``count`` columns, an element (``'orientation_covariance[0]'``) one; the caller gives the arrays
+        leaf fills ``count`` columns, an element (``'orientation_covariance[0]'``) one
     strings : string leaf paths whose first value is wanted, e.g. ``('header.frame_id',)``
     ros1 : ROS 1 serialisation instead of CDR
     deserialize : the full deserialiser ``(raw, msgtype) -> message`` for what numpy cannot take

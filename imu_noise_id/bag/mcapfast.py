@@ -1,6 +1,5 @@
-"""Faster raw message iteration over indexed rosbag2 mcap files (same messages, same order as rosbags): when the
-chunks do not overlap in time they are read one after the other and their records walked with
-``struct.unpack_from`` (rosbags' ``decompress`` and CRC); otherwise ``AnyReader.messages``."""
+"""Faster raw message iteration over indexed rosbag2 mcap files (same messages, same order as rosbags) when the
+chunks do not overlap in time; otherwise ``AnyReader.messages`` (docs/bags.md, "Why the mcap fast path exists")."""
 
 from __future__ import annotations
 

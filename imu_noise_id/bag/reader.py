@@ -1,9 +1,6 @@
-"""Read IMU, odometry and temperature series from ROS 1 ``.bag``, rosbag2 sqlite3 and mcap bags (rosbags'
-``AnyReader``, no ROS install) into the dataclasses of :mod:`imu_noise_id.core.axes`, timed by header stamps.
-
-One pass over the chosen topics (:mod:`.stream`; opening and topics: :mod:`.topics`). Problems raise
-:class:`~.errors.BagError` (bag, topic, what to do) or are repaired with a note (docs/bags.md).
-"""
+"""Read IMU, odometry and temperature series from ROS 1 ``.bag``, rosbag2 sqlite3 and mcap bags into the
+dataclasses of :mod:`imu_noise_id.core.axes`, timed by header stamps, in one pass (:mod:`.stream`, :mod:`.topics`).
+Problems raise :class:`~.errors.BagError` or are repaired with a note (docs/bags.md)."""
 
 
 from __future__ import annotations
@@ -135,10 +132,8 @@ def read_bag(
 
 def read_imu(path: str | Path, topic: str | None = None, progress: Progress | None = None, *,
              rate_hz: float | None = None) -> ImuSeries:
-    """The sensor_msgs/Imu series of ``topic`` (or of the bag's only Imu topic); repairs are in ``.notes``.
-
-    ``path`` may also be an ``.npz`` (see :func:`read_static`); ``rate_hz`` as in :func:`read_bag`.
-    """
+    """The sensor_msgs/Imu series of ``topic`` (or the bag's only one; repairs in ``.notes``); ``path`` may be an
+    ``.npz`` (:func:`read_static`); ``rate_hz`` as in :func:`read_bag`."""
     p = Path(path).expanduser()
     if p.suffix == ".npz":
         return read_npz(p, rate_hz)

@@ -1,11 +1,6 @@
-"""Reading what is complete in a truncated bag, and saying what was lost.
-
-rosbags opens a bag through its index, so a cut file yields nothing. The scanners walk the file from its start
-and keep every complete record: mcap chunks and records (:mod:`.scan_mcap`), ROS 1 chunks (:mod:`.scan_ros1`),
-sqlite3 table leaf pages and WAL frames (:mod:`.scan_sqlite`). :func:`salvage` returns a :class:`SalvagedReader`
-(the part of ``AnyReader`` the decoder uses) whose :attr:`~SalvagedReader.note` says what was read and lost
-(exact with a surviving ``metadata.yaml``, else estimated from the bytes).
-"""
+"""Reading what is complete in a truncated bag (scanned from its start: :mod:`.scan_mcap`, :mod:`.scan_ros1`,
+:mod:`.scan_sqlite`), and saying what was lost: :func:`salvage` returns a :class:`SalvagedReader` whose
+:attr:`~SalvagedReader.note` says so (exact with ``metadata.yaml``, else estimated; docs/bags.md, "Damaged …")."""
 
 from __future__ import annotations
 

@@ -1,9 +1,6 @@
-"""Scanning an mcap file from its start for complete records (no summary needed), for :mod:`.salvage`.
-
-MCAP (https://mcap.dev/spec): magic, then ``opcode (u8), length (u64), content`` records; used: Schema (0x03),
-Channel (0x04), Message (0x05), Chunk (0x06) and DataEnd (0x0F). A chunk is used when all its bytes are there and
-its CRC matches; the chunk the cut falls in, for its complete records, when uncompressed.
-"""
+"""Scanning an mcap file (https://mcap.dev/spec) from its start for complete records, for :mod:`.salvage`: Schema,
+Channel, Message, Chunk and DataEnd records; a chunk when whole with its CRC matching, the cut one's complete
+records when uncompressed."""
 
 from __future__ import annotations
 
@@ -67,8 +64,7 @@ def _records(buf: bytes) -> list[tuple[int, bytes]]:
 
 
 def _chunk_data(rec: bytes, partial: bool = False) -> bytes | None:
-    """A chunk record's uncompressed records, or None when damaged; ``partial``: the file ends inside it (uncompressed).
-    """
+    """A chunk record's uncompressed records, or None when damaged; ``partial``: the file ends inside it."""
     from rosbags.rosbag2.storage_mcap import decompress
 
     try:

@@ -1,8 +1,6 @@
-"""Scanning a ROS 1 bag (format 2.0) from its start for complete chunks (no index needed), for :mod:`.salvage`.
-
-Format (http://wiki.ros.org/Bags/Format/2.0): ``#ROSBAG V2.0``, then ``header length (u32), header, data length (u32),
-data`` records, ``op``: 0x03 bag header, 0x05 chunk, 0x04 index data, 0x07 connection, 0x02 message data, 0x06 chunk
-info. A chunk is used when complete and decompressing to its size; the cut one's complete records when uncompressed."""
+"""Scanning a ROS 1 bag (http://wiki.ros.org/Bags/Format/2.0) from its start for complete chunks, for
+:mod:`.salvage`: a chunk when complete and decompressing to its size; the cut one's complete records when
+uncompressed."""
 
 from __future__ import annotations
 

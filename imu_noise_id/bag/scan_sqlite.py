@@ -1,10 +1,6 @@
-"""Scanning a rosbag2 sqlite3 file page by page for its rows (no intact B-tree needed), for :mod:`.salvage`.
-
-SQLite's file format (https://www.sqlite.org/fileformat2.html): table leaf pages (type 0x0D) of cells ``payload
-size, rowid, payload`` (with overflow chains), payloads as records; a write-ahead log's newer page images are read
-too (rosbags ignores them). rosbag2 rows are recognised by their columns: ``messages (id, topic_id, timestamp,
-data)``, ``topics (id, name, type, …)``, ``message_definitions (id, topic_type, encoding, …)``.
-"""
+"""Scanning a rosbag2 sqlite3 file (https://www.sqlite.org/fileformat2.html) page by page for its rows, for
+:mod:`.salvage`: table leaf pages and a write-ahead log's newer page images; rosbag2 rows recognised by their columns
+(``messages``, ``topics``, ``message_definitions``)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,5 @@
-"""Streaming decode of the chosen topics in one pass: batches of :data:`BATCH` raw messages (mcap via
-:mod:`.mcapfast` where chunks do not overlap), decoded by :mod:`.fastdecode` into arrays preallocated from the
-message counts, then repaired (:func:`imu_noise_id.core.quality.repair_time_series`) with a note per repair."""
+"""Streaming decode of the chosen topics in one pass: batches of :data:`BATCH` raw messages decoded by
+:mod:`.fastdecode` into arrays preallocated from the message counts, then repaired with a note per repair."""
 
 from __future__ import annotations
 
@@ -70,8 +69,8 @@ _STRINGS: dict[str, tuple[str, ...]] = {
     ODOM_TYPE: ("header.frame_id", "child_frame_id"),
     TEMPERATURE_TYPE: (),
 }
-#: Outputs decoded batch by batch into temporaries and consumed by :meth:`TopicStream.add`: the covariance flag is
-#: not kept, the orientation only from the first batch that provides one (no memory for IMUs that give none).
+#: Outputs decoded into per-batch temporaries for :meth:`TopicStream.add` (covariance flag not kept; orientation
+#: allocated at the first batch that provides one).
 _TRANSIENT: dict[str, frozenset[str]] = {IMU_TYPE: frozenset({"orientation_cov0", "orientation_xyzw"})}
 #: Largest plausible magnitude per output (None: no limit), see repair_time_series.
 _MAX_ABS = {"gyro": IMU_MAX_ABS[0], "accel": IMU_MAX_ABS[1]}

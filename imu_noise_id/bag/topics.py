@@ -1,7 +1,5 @@
-"""Opening a bag (ROS 1 ``.bag``, rosbag2 sqlite3 or mcap) and choosing the topics to read.
-
-Every failure becomes a :class:`~.errors.BagError` naming the bag and the topic and saying what to do.
-"""
+"""Opening a bag (ROS 1 ``.bag``, rosbag2 sqlite3 or mcap) and choosing the topics to read; every failure is a
+:class:`~.errors.BagError` naming the bag and the topic and saying what to do."""
 
 from __future__ import annotations
 
@@ -67,7 +65,7 @@ def open_bag(path: str | Path) -> Iterator[Any]:
 
 
 def _has_wal(bag: Path) -> bool:
-    """Whether a sqlite3 bag has a write-ahead log with frames beside it (rosbags would ignore them)."""
+    """Whether a sqlite3 bag has a write-ahead log with frames beside it."""
     files = [bag] if bag.is_file() else sorted(bag.glob("*.db3")) if bag.is_dir() else []
     return any(f.suffix == ".db3" and (w := f.with_name(f.name + "-wal")).is_file() and w.stat().st_size > 32
                for f in files)

@@ -1,9 +1,5 @@
-"""Write IMU (and optionally odometry and temperature) series into a rosbag2 bag (mcap or sqlite3).
-
-Flat messages serialised to little-endian CDR with numpy (:func:`encode_cdr`, equal to rosbags'
-``serialize_cdr``); header stamps are ``t`` rounded to the nanosecond, receive times the running maximum of the
-header stamps unless given.
-"""
+"""Write IMU (and optionally odometry and temperature) series into a rosbag2 bag (mcap or sqlite3), serialised to
+little-endian CDR with numpy (:func:`encode_cdr`, equal to rosbags' ``serialize_cdr``)."""
 
 from __future__ import annotations
 
@@ -22,7 +18,7 @@ from .topics import IMU_TYPE, ODOM_TYPE, TEMPERATURE_TYPE
 #: Messages serialised at a time (bounded memory for long series).
 CHUNK = 65536
 
-#: REP-145: element 0 of a covariance = -1 means "this field is not provided" (simulated IMUs give no orientation).
+#: REP-145: element 0 of a covariance = -1 means "this field is not provided" (no orientation is written).
 ORIENTATION_NOT_PROVIDED = -1.0
 
 
@@ -48,10 +44,9 @@ def encode_cdr(
     values: Mapping[str, np.ndarray],
     strings: Mapping[str, str],
 ) -> tuple[np.ndarray, int]:
-    """Serialise ``n`` flat messages to little-endian CDR: (n, length) uint8 rows and the length.
-
-    ``values``: leaf path → (n,) or (n, count) array (missing leaves zero); ``strings``: string leaf → value (the same
-    in every message; missing ones empty)."""
+    """Serialise ``n`` flat messages to little-endian CDR: (n, length) uint8 rows and the length. ``values``: leaf
+    path → (n,) or (n, count) array (missing: 0); ``strings``: string leaf → its value in every message (missing: "").
+    """
     leaves = flatten(fielddefs, msgtype)
     n = next(iter(values.values())).shape[0]
     encoded = {leaf.path: strings.get(leaf.path, "").encode() for leaf in leaves if leaf.kind == "string"}

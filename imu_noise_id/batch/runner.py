@@ -1,11 +1,5 @@
-"""Submitting the units to a Dask cluster and gathering the fleet table.
-
-No home-made scheduler, queue or pool: ``dask.distributed`` runs the units (one task each, worker processes with a
-memory limit, a killed worker's tasks rescheduled by the scheduler) and :func:`dask.distributed.as_completed`
-reports them as they finish. Every unit gets the same :class:`~.units.BatchOptions` (``analyze``'s options; a
-dataclass, pickled to the workers as it is). A unit whose outputs are already on disk with the same content hash
-(bag bytes, topic, every option) is not submitted again, so an interrupted batch resumes where it stopped.
-"""
+"""Submitting the units to a Dask cluster (one task each, the same :class:`~.units.BatchOptions`) and gathering the
+fleet table; a unit whose outputs are on disk with the same content hash is not submitted again (docs/batch.md)."""
 
 from __future__ import annotations
 
@@ -50,10 +44,8 @@ class BatchResult:
 
 
 def open_client(scheduler: str | None = None, workers: int = 2, memory_limit: str = "4GiB"):
-    """A Dask client: to ``scheduler`` (``tcp://HOST:PORT``) if given, else to a new local cluster of ``workers``
-    single-threaded worker processes (scheduler, workers and their HTTP endpoints bound to 127.0.0.1), each limited
-    to ``memory_limit`` (a worker over it is restarted and its unit rerun or failed, so a long bag cannot take the
-    machine down)."""
+    """A Dask client: to ``scheduler`` (``tcp://HOST:PORT``) if given, else to a new local cluster on 127.0.0.1 of
+    ``workers`` single-threaded worker processes, each limited to ``memory_limit``."""
     from dask.distributed import Client, LocalCluster
 
     if scheduler:

@@ -1,11 +1,6 @@
-"""One unit of work on a Dask worker: read the bag, run ``analyze``, write its outputs atomically, return rows.
-
-A unit never raises: a failure becomes its outcome (status ``failed`` and the error's one-line message), so that
-the batch goes on. It runs with the batch's :class:`~.units.BatchOptions` (``analyze``'s options, the same object on
-every worker). Its outputs land in ``OUT/<unit name>/`` exactly as ``analyze`` writes them, plus
-``unit.json`` (the content hash, the options and the fleet-table rows): they are written into a temporary folder
-beside it and renamed into place, so an interrupted unit leaves no half-written folder and a rerun with the same
-inputs and options finds the finished one.
+"""One unit of work on a Dask worker: read the bag, run ``analyze`` with the :class:`~.units.BatchOptions`, write
+``OUT/<unit name>/`` as ``analyze`` does plus ``unit.json`` (content hash, options, fleet rows) via a temporary folder
+renamed into place, return the rows. Never raises: a failure is the outcome ``failed`` with its one-line message.
 """
 
 from __future__ import annotations

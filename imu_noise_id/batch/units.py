@@ -24,8 +24,7 @@ class BatchOptions:
 
     Attributes
     ----------
-    analysis : the analysis (its ``jobs`` is set to 1: the cluster runs the units side by side, and a Dask worker
-        process, daemonic, may not start processes of its own; the axes of a unit run one after another)
+    analysis : the analysis (``jobs`` set to 1: a unit's axes run one after another in its worker)
     rate : the declared sample rate [Hz] (``--rate``), or None: estimated from the stamps
     overbound_exports : also write the overbound's exports (``--overbound``)
     """
@@ -109,11 +108,8 @@ def read_manifest(path: Path) -> list[tuple[str, list[str] | None]]:
 
 
 def discover_units(inputs: list[str], topics: list[str] | None, manifest: Path | None = None) -> list[Unit]:
-    """The units of ``inputs`` (paths or globs) and the manifest's entries.
-
-    ``topics``: None or ``["all"]`` = every IMU topic of each bag (a bag that cannot be listed still becomes one
-    unit, which will fail with the reader's message); otherwise those topics, in every bag.
-    """
+    """The units of ``inputs`` (paths or globs) and the manifest's entries; ``topics`` None or ``["all"]``: every IMU
+    topic of each bag (an unlistable bag is one unit, failing with the reader's message), else those in every bag."""
     entries = [(p, None) for p in inputs] + (read_manifest(manifest) if manifest is not None else [])
     if not entries:
         raise InputError("no bags given: pass BAG_OR_GLOB arguments or --manifest FILE")

@@ -1,7 +1,7 @@
 """``imu-noise-id`` command line: one module per subcommand, each with ``register(subparsers)``.
 
 Exit codes: 0 success, 2 usage or input error (one message on stderr, no traceback), 1 internal error. Shared
-options (``--out`` defaults, ``--topic``, ``--axis``, model specs) are spelt once in :mod:`.options`.
+options: :mod:`.options`.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ def check_output_dir(path: Path) -> None:
 
 
 def print_notes(notes: list[str]) -> None:
-    """The reader's repair and timing notes on stderr, one ``note:`` line each (the result files keep them too)."""
+    """The reader's repair and timing notes on stderr, one ``note:`` line each."""
     for note in notes:
         print(f"note: {note}", file=sys.stderr)
 

@@ -1,8 +1,5 @@
-"""``imu-noise-id analyze BAG``: offline noise analysis of a static IMU recording.
-
-Parses the options, reads the bag once (IMU and temperature), runs :func:`imu_noise_id.pipelines.analyze.analyze`
-and writes its result with :func:`imu_noise_id.report.analysis.write_analysis`.
-"""
+"""``imu-noise-id analyze BAG``: offline noise analysis of a static IMU recording (one read of the bag,
+:func:`imu_noise_id.pipelines.analyze.analyze`, :func:`imu_noise_id.report.analysis.write_analysis`)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,5 @@
-"""``imu-noise-id batch BAG_OR_GLOB…``: ``analyze`` over many bags and IMU topics on Dask, with a fleet table.
-
-Parses the options and calls :mod:`imu_noise_id.batch` (units, a local or remote Dask cluster) and
-:mod:`imu_noise_id.report.fleet` (table and report).
-"""
+"""``imu-noise-id batch BAG_OR_GLOB…``: ``analyze`` over many bags and IMU topics on Dask (:mod:`imu_noise_id.batch`),
+with a fleet table and report (:mod:`imu_noise_id.report.fleet`)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""``imu-noise-id compare``: a static recording against a reference analysis (its calibration, or the fleet's
-typical unit), one table and one exit code: 0 within, 1 degraded, 2 input error."""
+"""``imu-noise-id compare``: a static recording against a reference analysis, one table and one exit code: 0 within,
+1 degraded, 2 input error."""
 
 from __future__ import annotations
 

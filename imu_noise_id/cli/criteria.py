@@ -9,7 +9,7 @@ from typing import Any
 from . import results_folder
 from .options import add_out
 
-#: Bounds that keep a run within a machine's memory and a day (the paper's cases use 500 trials of 2000 s).
+#: Largest trials and samples per trial a run may ask for (memory and time).
 MAX_TRIALS = 100_000
 MAX_SAMPLES = 1e7
 

@@ -1,7 +1,5 @@
-"""``imu-noise-id export DIR_OR_IMU_YAML --format …``: the filters' exports from an analysis's ``imu.yaml``.
-
-Reads only our own ``imu.yaml`` (never the bag) and writes with :mod:`imu_noise_id.report.exports`.
-"""
+"""``imu-noise-id export DIR_OR_IMU_YAML --format …``: the filters' exports (:mod:`imu_noise_id.report.exports`) from
+an analysis's ``imu.yaml`` alone (never the bag)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""``imu-noise-id loop BAG``: the closed loop (fit → residual diagnosis → add the missing effect → refit) on
-chosen axes of a static recording; writes ``DIR/model.yaml`` (``loop:`` per axis) and ``DIR/report.html``."""
+"""``imu-noise-id loop BAG``: the closed loop on chosen axes of a static recording; writes ``DIR/model.yaml``
+(``loop:`` per axis) and ``DIR/report.html``."""
 
 from __future__ import annotations
 
@@ -9,8 +9,7 @@ from pathlib import Path
 from . import add_rate_option, print_notes, results_folder
 from .options import add_axis, add_out, add_topic, model_spec
 
-#: The effects the loop adds, named in its help (the parser is built without importing the loop itself;
-#: ``test_cli_style`` holds this to the loop's STATE_EFFECTS, EXOG_EFFECTS and CLEANING_EFFECTS).
+#: The effects the loop adds, for its help (equal to the loop's STATE/EXOG/CLEANING_EFFECTS: ``test_cli_style``).
 LOOP_EFFECTS = ("GM", "RW", "RR", "QN", "OSC", "LPF", "MA", "BI", "SIN", "TEMP", "STEP", "OUTLIERS")
 
 

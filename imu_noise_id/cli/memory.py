@@ -1,13 +1,9 @@
 """Whether this machine has the memory an ``analyze`` of a record needs, asked before the bag is decoded.
 
-The need is modelled from the default ``analyze`` of 3 h at 400 Hz (4.32·10⁶ samples per axis, the GMWM's regime,
-where records are long enough for memory to matter; ``docs/results/bench_analyze_time.txt``): its main process
-peaked at 891 MiB and the process tree at 1473 MiB with two workers, i.e. :data:`PROCESS_BYTES` per process
-(interpreter and imports) plus :data:`MAIN_BYTES_PER_SAMPLE` per message read in the main process (the decoded record
-and the Allan stage) and :data:`WORKER_BYTES_PER_SAMPLE` per analysed sample in each worker. What is available is
-Linux's ``MemAvailable`` (``/proc/meminfo``), or less where a cgroup limits the process (``memory.max`` −
-``memory.current``). A record is refused only when the need is beyond what is available; the message says how much
-it needs and the ``--span`` that fits.
+Need: :data:`PROCESS_BYTES` per process plus :data:`MAIN_BYTES_PER_SAMPLE` per message read (main process) and
+:data:`WORKER_BYTES_PER_SAMPLE` per analysed sample (each worker); measured: docs/analysis.md, "Quick use". Available:
+``MemAvailable`` (``/proc/meminfo``), or a cgroup's ``memory.max`` − ``memory.current`` where smaller. A record is
+refused only when the need exceeds it; the message gives the need and the ``--span`` that fits.
 """
 
 from __future__ import annotations
@@ -19,9 +15,9 @@ from ..core.errors import InputError
 
 #: RSS [bytes] of one process with the package imported (interpreter, numpy, scipy, rosbags).
 PROCESS_BYTES = 130 * 2**20
-#: Peak RSS [bytes] of the main process per IMU message read, over its own (891 MiB − 130 MiB for 4.32·10⁶).
+#: Peak RSS [bytes] of the main process per IMU message read, over :data:`PROCESS_BYTES`.
 MAIN_BYTES_PER_SAMPLE = 185
-#: Peak RSS [bytes] of one worker per sample analysed, over its own ((1473 − 891) MiB / 2 − 130 MiB for 4.32·10⁶).
+#: Peak RSS [bytes] of one worker per sample analysed, over :data:`PROCESS_BYTES`.
 WORKER_BYTES_PER_SAMPLE = 39
 
 

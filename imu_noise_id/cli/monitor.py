@@ -1,8 +1,5 @@
-"""``imu-noise-id monitor``: a live terminal view of a running ``imu_noise_id_node`` (topic monitoring without rqt).
-
-The arguments are parsed here; the view is :mod:`imu_noise_id.ros.monitor`. ``--once`` waits for the outputs and
-prints one snapshot (for scripts and tests).
-"""
+"""``imu-noise-id monitor``: a live terminal view of a running ``imu_noise_id_node`` (:mod:`imu_noise_id.ros.monitor`);
+``--once`` waits for the outputs and prints one snapshot."""
 
 from __future__ import annotations
 

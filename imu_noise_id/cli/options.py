@@ -1,14 +1,7 @@
-"""The options the subcommands share, with one spelling and one meaning each.
-
-- ``--out DIR``: defaults to ``<BAG stem>_<command>`` in the current directory (``imu_noise_id_<command>`` without
-  one bag: ``criteria``, ``batch``) (:func:`default_out`).
-- ``--topic T``: the sensor_msgs/Imu topic (older spellings stay as hidden aliases).
-- ``--axis AXIS[,AXIS…]``: repeatable and/or a comma list; default all six axes (:func:`parse_axes`).
-- ``--model`` / ``--start``: model specs checked while the command line is parsed (:func:`model_spec`).
-- The analysis options of ``analyze`` and ``batch`` (``--model``, ``--estimator``, ``--horizon``, ``--span``, …):
-  added by :func:`add_analysis_options`, turned into one
-  :class:`~imu_noise_id.pipelines.analyze.AnalyzeOptions` by :func:`analysis_options`.
-"""
+"""The options the subcommands share, with one spelling and one meaning each: ``--out DIR`` (:func:`default_out`),
+``--topic T`` (older spellings hidden aliases), ``--axis`` (:func:`parse_axes`; default all six), model specs
+(:func:`model_spec`) and the analysis options of ``analyze`` and ``batch`` (:func:`add_analysis_options`,
+:func:`analysis_options`)."""
 
 from __future__ import annotations
 
@@ -145,9 +138,8 @@ sensor_filter_spec.__name__ = "sensor filter"  # argparse names the type in its 
 
 
 def add_analysis_options(p: argparse.ArgumentParser, *, jobs: bool = True) -> None:
-    """The options of one analysis (``analyze``; ``batch`` runs every unit with them): the Allan stage, the model
-    stage, the loop, the overbound and its exports; ``jobs``: also ``--jobs`` (``batch`` runs its units side by side
-    on its Dask workers instead, each unit's axes one after another). :func:`analysis_options` reads them back."""
+    """The options of one analysis (``analyze``, ``batch``): Allan stage, model stage, loop, overbound and its
+    exports; ``jobs``: also ``--jobs``. :func:`analysis_options` reads them back."""
     p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
     p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
     p.add_argument(

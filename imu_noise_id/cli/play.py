@@ -1,7 +1,5 @@
-"""``imu-noise-id play BAG``: publish a bag's Imu, Odometry and Temperature messages with their original timing.
-
-The arguments are parsed here; the playing is :func:`imu_noise_id.ros.play.play_bag`.
-"""
+"""``imu-noise-id play BAG``: publish a bag's Imu, Odometry and Temperature messages with their original timing
+(:func:`imu_noise_id.ros.play.play_bag`)."""
 
 from __future__ import annotations
 

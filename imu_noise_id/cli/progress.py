@@ -1,8 +1,5 @@
-"""A small text progress bar on stderr for long operations (drawn only when stderr is a terminal).
-
-Every command that runs more than a few seconds shows one (reading the bag, the stages that follow); lines the
-command prints meanwhile go through :meth:`TextProgress.echo`, which clears the bar first so the two never mix.
-"""
+"""A small text progress bar on stderr for long operations (drawn only when stderr is a terminal); lines printed
+meanwhile go through :meth:`TextProgress.echo`, which clears the bar first."""
 
 from __future__ import annotations
 
@@ -19,8 +16,7 @@ class TextProgress:
     """Callable ``progress(done, total)`` drawing ``label [#####.....]  45 % (9/20 units) 12 s, ~15 s left``.
 
     Draws at most every ``interval`` seconds; :meth:`close` ends the line. Does nothing when ``stream`` is not a
-    TTY (pipes, CI logs), so logs stay clean. The time left is extrapolated from the rate so far; before the first
-    unit is done the bar says when it will be known.
+    TTY. The time left is extrapolated from the rate so far.
     """
 
     def __init__(self, label: str, stream: TextIO | None = None, width: int = 30, interval: float = 0.2,

@@ -16,9 +16,8 @@ def _unit(text: str) -> str:
 
 
 def component_syntax() -> str:
-    """Every component of the registry (``COMPONENT_TYPES``) with its parameters and units, e.g.
-    ``GM(tau=[s], sigma=[u])``; optional fixed parameters in brackets. Written from the registry so that the help
-    cannot go stale."""
+    """Every component of ``COMPONENT_TYPES`` with its parameters and units, e.g. ``GM(tau=[s], sigma=[u])``;
+    optional fixed parameters in brackets."""
     out = []
     for name, cls in COMPONENT_TYPES.items():
         units = cls.parameter_units

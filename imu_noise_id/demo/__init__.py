@@ -1,15 +1,8 @@
 """``python -m imu_noise_id.demo --out DIR`` (``make demo``): the package on a simulated IMU with known noise.
 
-The demo is a set of parts (:data:`PARTS`), each a function ``part(context) -> None`` that reads and extends a
-shared :class:`DemoContext` (options, every part's results and output paths):
-
-* offline: simulate a static IMU with known white-noise and random-walk densities, write it as a rosbag2 (mcap)
-  bag, run ``imu-noise-id analyze`` on it (Allan family, EM model selection, closed loop) and print the truth
-  next to the Allan-slope and EM estimates;
-* loop: the closed loop on a bag holding effects the starting model does not declare
-  (:mod:`imu_noise_id.demo.loop`);
-* online: the node on a simulated robot that stands, drives and stands, watched live with the monitor view
-  (:mod:`imu_noise_id.demo.online`).
+Parts (:data:`PARTS`), each ``part(context) -> None`` reading and extending a shared :class:`DemoContext`: offline
+(a simulated static bag analysed, truth printed beside the estimates), loop (:mod:`imu_noise_id.demo.loop`) and
+online (the node on a simulated robot, :mod:`imu_noise_id.demo.online`).
 """
 
 from __future__ import annotations

@@ -1,10 +1,8 @@
 """Demo of the closed loop on a simulated bag with effects the starting model does not declare.
 
-``python -m imu_noise_id.demo.loop --out DIR`` (or :func:`run_loop_demo` from ``make demo``): simulates a
-static IMU whose gyro_z holds an extra Gauss–Markov process, accel_x a 0.5 Hz sine, accel_y a wandering 7 Hz
-vibration (a narrow-band oscillation, OSC) and accel_z the sensor's own 15 Hz low-pass filter (LPF) on its white
-noise; writes it as a rosbag2 (mcap) bag, reads it back, and runs the loop from ``WN+RW`` on gyro_x (clean) and
-those four axes. Writes ``DIR/loop_demo_bag/``, ``DIR/model.yaml`` and ``DIR/report.html``.
+``python -m imu_noise_id.demo.loop --out DIR`` (or :func:`run_loop_demo`): the bag of :func:`simulate_demo_bag`,
+the loop from ``WN+RW`` on gyro_x (clean) and the four axes with effects. Writes ``DIR/loop_demo_bag/``,
+``DIR/model.yaml`` and ``DIR/report.html``.
 """
 
 from __future__ import annotations
@@ -41,8 +39,7 @@ def simulate_demo_bag(path: Path, *, seed: int = 7, duration_s: float = 300.0, r
 
 
 def truth_table(results: dict) -> str:
-    """Per demo axis: the simulated model (WN+RW plus the effect inserted), the loop's final model, whether it holds
-    the inserted effect and what else it added or dropped against the truth."""
+    """Per demo axis: the simulated model, the loop's final one, whether it holds the inserted effect, what else."""
     lines = [f"{'axis':8s} {'simulated':14s} {'final model':22s} found  against the truth"]
     for axis, loop in results.items():
         truth = ["WN", *filter(None, [INSERTED[axis]]), "RW"] if axis != "accel_z" else ["LPF", "RW"]

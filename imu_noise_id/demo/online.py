@@ -1,15 +1,9 @@
 """The online demo: a simulated robot bag played into ``imu_noise_id_node``, watched live, compared with the truth.
 
-``python -m imu_noise_id.demo.online [--out DIR] [--rate X]`` (``make demo`` calls :func:`run_demo`):
-
-1. simulate a robot that stands, drives and stands again (:func:`~imu_noise_id.core.simulation.robot.simulate_robot`
-   with the :class:`~imu_noise_id.core.simulation.robot.StopAndGo` profile; known biases and noise densities) and
-   write it as a rosbag2 bag;
-2. start the node as its own process with ``config/imu_noise_id.yaml``;
-3. play the bag (``imu-noise-id play``) and show the monitor view while the estimates converge;
-4. print the final estimates next to the simulation's truth.
-
-Every process keeps DDS on 127.0.0.1 (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``).
+``python -m imu_noise_id.demo.online [--out DIR] [--rate X]`` (:func:`run_demo`): 1. simulate a robot that stands,
+drives and stands (:func:`~imu_noise_id.core.simulation.robot.simulate_robot`, ``StopAndGo``) into a rosbag2 bag;
+2. start the node with ``config/imu_noise_id.yaml``; 3. play the bag and show the monitor view; 4. print the final
+estimates next to the truth. DDS stays on 127.0.0.1 (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``).
 """
 
 from __future__ import annotations
@@ -86,11 +80,8 @@ def run_demo(out: Path | None = None, rate: float = 2.0, seed: int = 7) -> int:
 
 
 def online_part(ctx: object) -> None:
-    """The online demo as a part of ``python -m imu_noise_id.demo`` (:data:`imu_noise_id.demo.PARTS`).
-
-    Uses ``ctx.out`` and ``ctx.seed``; stores the node's final outputs (a
-    :class:`~imu_noise_id.ros.monitor.MonitorState`) in ``ctx.results["online"]`` and the bag in ``ctx.outputs``.
-    """
+    """The online demo as a part of :data:`imu_noise_id.demo.PARTS`: uses ``ctx.out`` and ``ctx.seed``; the node's
+    final ``MonitorState`` goes to ``ctx.results["online"]``, the bag to ``ctx.outputs``."""
     print("\n== online: the node on a simulated robot (stand, drive, stand), watched live ==")
     state = watch_demo(Path(ctx.out) / "online", 2.0, int(ctx.seed))
     ctx.results["online"] = state

@@ -1,6 +1,5 @@
-"""Where a closed loop's final model lies against the data's 95 % Allan band, from the z-scores and simultaneous
-bound of :func:`~imu_noise_id.pipelines.loop.rules.av_inside_band`: :meth:`AvBandClaim.sentence` is the one
-sentence ``report.html``, ``model.yaml`` (``loop_verdict``) and the console print."""
+"""Where a closed loop's final model lies against the data's 95 % Allan band (``loop.rules.av_inside_band``), as the
+one sentence (:meth:`AvBandClaim.sentence`) of ``report.html``, ``model.yaml`` (``loop_verdict``) and the console."""
 
 from __future__ import annotations
 
@@ -44,9 +43,8 @@ class AvBandClaim:
         return "τ = " + ", ".join(f"{lo:.3g} s" if lo == hi else f"{lo:.3g}–{hi:.3g} s" for lo, hi in self.outside)
 
     def sentence(self) -> str:
-        """The one sentence of the claim, e.g. "The final model's Allan variance lies outside the data's 95 % band
-        (simultaneous over τ) at τ = 12.8–327 s (6 of 14 τ) and inside it elsewhere (largest relative AV error 45 %)."
-        """
+        """The claim's sentence (e.g. "The final model's Allan variance lies outside the data's 95 % band (simultaneous
+        over τ) at τ = 12.8–327 s (6 of 14 τ) and inside it elsewhere (largest relative AV error 45 %).")."""
         band = f"the data's {100 * self.level:.0f} % band (simultaneous over τ)"
         err = (f"largest relative AV error {100 * self.max_rel_av_error:.0f} %"
                if math.isfinite(self.max_rel_av_error) else "no relative AV error")

@@ -1,6 +1,5 @@
-"""Offline replay of the online CMKF (:class:`~imu_noise_id.core.cmkf.robot.RobotCmkf`) over recorded arrays, fed in
-stamp order by :func:`~imu_noise_id.core.cmkf.stream.feed_recording` as in the node; the estimate recorded after
-every odometry message."""
+"""Offline replay of the online CMKF (``RobotCmkf``) over recorded arrays, fed in stamp order as in the node
+(``cmkf.stream.feed_recording``); the estimate recorded after every odometry message."""
 
 from __future__ import annotations
 
@@ -22,16 +21,15 @@ from ..core.diagnostics.consistency import nis_bounds, nis_verdict
 from ..core.errors import InputError
 from ..core.timing import sampling_period
 
-#: Per-axis values recorded over time: name → how to read it from a :class:`CmkfEstimate` (``S_v_in_filter``:
-#: the working value the filter uses; ``S_v``, ``S_v_se``: the least squares and its standard error).
+#: Per-axis values recorded over time: name → reader of a :class:`CmkfEstimate` (``S_v_in_filter``: the filter's
+#: working value; ``S_v``, ``S_v_se``: the least squares and its standard error).
 SERIES_FIELDS: dict[str, Callable[[CmkfEstimate], np.ndarray]] = {
     "accel_bias": lambda e: e.accel_bias, "accel_bias_std": lambda e: e.accel_bias_std,
     "S_v_in_filter": lambda e: e.S_v, "S_v": lambda e: e.accel_ls[0], "S_v_se": lambda e: e.accel_ls[1],
     "gyro_bias": lambda e: e.gyro_bias, "gyro_bias_std": lambda e: e.gyro_bias_std,
     "S_g_in_filter": lambda e: e.S_g, "S_g": lambda e: e.gyro_ls[0], "S_g_se": lambda e: e.gyro_ls[1],
 }
-#: Per-axis series derived from those once the replay is done (:func:`~imu_noise_id.core.cmkf.psd.density_series`):
-#: √S where identified, and the upper end of the 95 % interval where not identifiable.
+#: Per-axis series derived after the replay (``cmkf.psd.density_series``): √S, or the 95 % upper end if unidentified.
 DENSITY_FIELDS = ("accel_noise_density", "accel_noise_density_upper", "gyro_noise_density",
                   "gyro_noise_density_upper")
 
@@ -61,8 +59,7 @@ class CmkfReplayResult:
 
 
 def _rate(t: np.ndarray) -> float:
-    """Rate [Hz] of a stream by the package's one sampling rule, to 6 significant digits as people read it (nan for
-    fewer than two usable stamps)."""
+    """Rate [Hz] of a stream by the package's sampling rule, 6 significant digits (nan below two usable stamps)."""
     try:
         return float(f"{1.0 / sampling_period(t):.6g}")
     except InputError:

@@ -1,10 +1,5 @@
-"""``compare`` as one pipeline: a static recording and a reference in, one :class:`Comparison` out.
-
-Every axis is tested against the reference's (:func:`~imu_noise_id.core.watch.compare.compare_axis`: noise level by
-CUSUM, bias step, new line); the recording must be static (:func:`~imu_noise_id.core.stillness.static_check`) and
-at the reference's rate (:func:`~imu_noise_id.core.watch.compare.rate_mismatch`), else it is refused with what
-differs.
-"""
+"""``compare`` as one pipeline: a static recording at the reference's rate and a reference in, one :class:`Comparison`
+out (per axis :func:`~imu_noise_id.core.watch.compare.compare_axis`: noise level by CUSUM, bias step, new line)."""
 
 from __future__ import annotations
 
@@ -34,8 +29,8 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
             ratio: float = DEFAULT_RATIO,
             false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
             limits: dict[str, float] | None = None) -> Comparison:
-    """Test ``imu`` against ``references`` made at ``rate_hz`` [Hz] from ``topic`` and, per sensor ("gyro", "accel"),
-    against the noise-density limits of a specification ``limits`` [u/√Hz].
+    """Test ``imu`` against ``references`` made at ``rate_hz`` [Hz] from ``topic`` and against ``limits``
+    (sensor "gyro"/"accel" → noise-density limit [u/√Hz]).
 
     Raises
     ------

@@ -1,6 +1,5 @@
-"""``identify``: the hypothesis bank (paper 002) over the axes of a static recording, per axis with its sensor's
-hypothesis set, the warm-up offset removed and optional grid refinement
-(:func:`~imu_noise_id.core.hypotheses.axis.identify_offline`)."""
+"""``identify``: the hypothesis bank (paper 002) per axis of a static recording with its sensor's hypothesis set,
+warm-up offset removed, optional grid refinement (:func:`~imu_noise_id.core.hypotheses.axis.identify_offline`)."""
 
 from __future__ import annotations
 
@@ -52,8 +51,7 @@ class Identification:
 
 def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], source: str,
              refine: int = 0, *, progress: Callable[[int, int], None] | None = None) -> Identification:
-    """Run the bank on each axis of ``series`` with ``refine`` grid-refinement passes; ``progress(done, total)`` after
-    each axis."""
+    """Run the bank on each axis of ``series`` with ``refine`` refinement passes; ``progress(done, total)`` per axis."""
     if len(series) < 2:
         raise InputError(f"{series.topic or 'the IMU series'} has {len(series)} sample(s): need a recording")
     if refine < 0:

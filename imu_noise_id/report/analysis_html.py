@@ -1,7 +1,5 @@
-"""The one self-contained ``report.html`` of an analysis (figures embedded as base64 PNG, no network), written from the
-:class:`~imu_noise_id.pipelines.analyze.AnalysisResult` (nothing recomputed but the figures): the data, the numbers
-users paste, an Allan panel per axis, the model selection, record length, the GMWM, the loop's steps and the overbound.
-"""
+"""The self-contained ``report.html`` of an analysis (base64 PNG figures) from the ``AnalysisResult``: the data, the
+numbers users paste, Allan panels, model selection, record length, GMWM, loop steps and overbound."""
 
 from __future__ import annotations
 

@@ -68,11 +68,9 @@ def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = N
 
 
 def short_for_walk_lines(finals: dict[str, FinalModel], static: StaticAnalysis | None = None) -> list[str]:
-    """Per axis whose record is too short for K — K given as a bound (its interval reaches zero, or the final model
-    has no random walk and the Allan slope gives a bound), or the walk crossing the white-noise floor beyond a third of
-    the record (:func:`~imu_noise_id.core.estimation.kalibr.walk_crossing_tau`) —: that τ, the record length that
-    would identify a walk as large as the value given (three times that τ) and what was given meanwhile. ``static``:
-    the Allan stage, whose slope reading of K is what an axis without a random walk in its final model gives."""
+    """Per axis too short for K (K a bound, or the walk crossing the white-noise floor beyond a third of the record,
+    ``kalibr.walk_crossing_tau``): that τ, the record length identifying such a walk (3τ) and what was given.
+    ``static``: the Allan stage (its slope reading of K for an axis whose final model has no random walk)."""
     lines = []
     for axis, f in finals.items():
         n, k, method = f.noise_density.value, f.random_walk.value, f.random_walk.method

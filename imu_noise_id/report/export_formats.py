@@ -1,16 +1,7 @@
-"""One renderer per consumer: an ``imu.yaml`` content in, the consumer's file text out, in its units and convention,
-under a comment header stating the source, the convention and the formula (N [u/√Hz], K [u/s/√Hz] of ``imu.yaml``; f its
-``update_rate`` [Hz]; P the PX4 EKF step [s]):
-
-- Kalibr, OpenVINS (Kalibr IMU chain, block-indented for OpenCV's ``cv::FileStorage``), ORB-SLAM3: continuous-time
-  N, K;
-- VINS-Mono / VINS-Fusion (``integration_base.h``): per IMU step, acc_n = N·√(2f), acc_w = K·√f
-  (:func:`~imu_noise_id.core.noise.units.step_noise_std`, weights ½ and 1), ``g_norm`` standard gravity;
-- GTSAM (``PreintegrationCombinedParams``): covariances I·N², I·K² with each sensor's Kalibr value;
-- PX4 EKF2 (``EKF/covariance.cpp``): EKF2_*_NOISE = N/√P, EKF2_*_B_NOISE = K/√P;
-- REP-145 driver: the per-sample standard deviation at the driver's rate (``/**: ros__parameters:``).
-
-Where each convention was read and why: docs/analysis.md, "Exports".
+"""One renderer per consumer: ``imu.yaml`` content in (N [u/√Hz], K [u/s/√Hz], f its ``update_rate`` [Hz]), the
+consumer's file text out under a header stating source, convention and formula: Kalibr, OpenVINS, ORB-SLAM3
+continuous-time N, K; VINS acc_n = N·√(2f), acc_w = K·√f; GTSAM I·N², I·K²; PX4 EKF2 N/√P, K/√P (P the EKF step
+[s]); REP-145 the per-sample standard deviation. Sources of each convention: docs/analysis.md, "Exports".
 """
 
 from __future__ import annotations
@@ -36,7 +27,7 @@ ROS_PARAMETER_NODE = "/**"
 
 
 class _IndentedSequences(yaml.SafeDumper):
-    """PyYAML's safe dumper with block sequences indented under their key (OpenCV's FileStorage needs that)."""
+    """PyYAML's safe dumper with block sequences indented under their key (as OpenCV's FileStorage reads them)."""
 
     def increase_indent(self, flow: bool = False, indentless: bool = False) -> None:
         return super().increase_indent(flow, False)

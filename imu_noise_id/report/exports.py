@@ -1,10 +1,5 @@
-"""Exports of the noise figures for the filters people run, each in its own units and conventions.
-
-Every export is rendered by :mod:`.export_formats` from ``imu.yaml``'s numbers (:mod:`.imu_yaml`: the final models'
-values, max over each sensor's axes) or, with ``overbound=True``, from its ``overbound:`` section
-(:func:`overbound_doc`). Formats (:data:`FORMATS`): ``kalibr``, ``openvins``, ``vins``, ``orbslam3``, ``gtsam``,
-``px4``, ``rep145``; files and conventions: docs/analysis.md, "Exports".
-"""
+"""Exports of the noise figures (:data:`FORMATS`) for the filters people run, rendered by :mod:`.export_formats` from
+``imu.yaml``'s numbers or its ``overbound:`` section (:func:`overbound_doc`); files: docs/analysis.md, "Exports"."""
 
 from __future__ import annotations
 
@@ -22,7 +17,7 @@ FORMATS = {"openvins": ("kalibr_imu_chain.yaml", fmt.openvins), "vins": ("vins_i
            "orbslam3": ("orbslam3_imu.yaml", fmt.orbslam3), "gtsam": ("gtsam_imu.yaml", fmt.gtsam),
            "px4": ("px4_ekf2.params", fmt.px4), "rep145": ("rep145_driver_params.yaml", fmt.rep145),
            "kalibr": ("kalibr_imu.yaml", fmt.kalibr)}
-#: Where ``--overbound`` exports go, inside the exports folder (same file names: what the consumers expect).
+#: Where ``--overbound`` exports go, inside the exports folder (same file names).
 OVERBOUND_DIR = "overbound"
 
 

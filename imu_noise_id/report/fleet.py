@@ -1,8 +1,5 @@
-"""The fleet table (CSV and Parquet: one row per unit and axis) and the fleet report (HTML, self-contained).
-
-Outliers and the specification verdicts are computed by :mod:`imu_noise_id.core.fleet`; files are written to a
-temporary name and renamed, so a reader never sees half a table.
-"""
+"""The fleet table (CSV and Parquet: one row per unit and axis) and the fleet report (HTML, self-contained), each
+written to a temporary name and renamed; outliers and spec verdicts from :mod:`imu_noise_id.core.fleet`."""
 
 from __future__ import annotations
 

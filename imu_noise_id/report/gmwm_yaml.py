@@ -1,7 +1,6 @@
-"""Serialise GMWM results and the EM-vs-GMWM comparison for ``model.yaml``: a GMWM fit is written like an EM fit
-(:func:`.model_yaml.fit_to_dict`; ``loglik``, ``aic``, ``bic`` null) plus ``moments:`` (J-test, misfitting τ,
-interval methods, wavelet variance, spikes replaced) and ``candidates`` (WIC ranking); with both estimators
-``gmwm:`` (the GMWM's entry) and ``agreement:`` (schema: docs/gmwm.md, "``model.yaml`` additions")."""
+"""Serialise GMWM results and the EM-vs-GMWM comparison for ``model.yaml``: a GMWM fit like an EM fit plus
+``moments:`` (J-test, misfitting τ, interval methods, wavelet variance, spikes replaced) and ``candidates`` (WIC);
+with both estimators ``gmwm:`` and ``agreement:`` (schema: docs/gmwm.md, "``model.yaml`` additions")."""
 
 from __future__ import annotations
 

@@ -1,9 +1,6 @@
-"""``imu.yaml``: the numbers users paste into Kalibr-style configs, written once from an analysis result.
-
-The four Kalibr keys are the max over the sensor's three axes. With a model stage they come from each axis's
-final model (:mod:`imu_noise_id.pipelines.analyze.final`: passband N, RW's K, intervals of those very numbers),
-the Allan-slope readings staying beside them as ``<key>_allan_xyz``/``<key>_allan``; without it, from the Allan
-slopes. Units are SI and stated in the header comment, with the convention of every key.
+"""``imu.yaml``: the numbers users paste into Kalibr-style configs (SI units, stated in its header), written once
+from an analysis result. The Kalibr keys are the max over the sensor's axes: the final models' values
+(:func:`add_final_values`) with a model stage, else the Allan slopes'.
 """
 
 from __future__ import annotations
@@ -51,13 +48,11 @@ def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
 def add_final_values(doc: dict, finals: dict[str, FinalModel], result: StaticAnalysis | None = None) -> None:
     """Put the final models' numbers into the Kalibr keys and their per-axis lists, in place.
 
-    Per sensor with a final model on all three axes: ``<key>_xyz``, ``<key>_ci_xyz``, ``<key>_method_xyz`` the final
-    values, intervals and sources (``model``; ``allan_slope``/``allan_upper_bound`` for a random walk the model lacks;
-    ``unresolved``, the overbound's value and (0, value), for an axis :mod:`imu_noise_id.pipelines.analyze.resolution`
-    does not trust); the Kalibr key their max; the Allan-slope values moved to ``<key>_allan_xyz`` (with
-    ``_allan_ci_xyz``, ``_allan_method_xyz``) and ``<key>_allan``; ``<prefix>_noise_stddev_per_sample_xyz`` the
-    per-sample standard deviation of the high-frequency noise. Where the Allan-slope reading stands in (``result``
-    given), ``<key>_source_xyz`` says so with the τ range it was read over.
+    Per sensor with a final model on all three axes: ``<key>_xyz``, ``<key>_ci_xyz``, ``<key>_method_xyz`` (``model``,
+    ``allan_slope``/``allan_upper_bound`` for a missing random walk, ``unresolved``: the overbound's value and
+    (0, value)); the Kalibr key their max; the Allan-slope values moved to ``<key>_allan[_ci|_method]_xyz`` and
+    ``<key>_allan``; ``<prefix>_noise_stddev_per_sample_xyz``; with ``result``, ``<key>_source_xyz`` where the
+    Allan-slope reading stands in, with its τ range.
     """
     for sensor, axes in SENSORS:
         if not all(a in finals for a in axes):

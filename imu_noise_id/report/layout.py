@@ -1,6 +1,5 @@
-"""Fixed figure margins in inches instead of matplotlib's tight or constrained layout (reasons: docs/analysis.md,
-"Why the figures are drawn as they are"); margins sized once hold at any figure size
-(``test/test_report_layout.py``)."""
+"""Fixed figure margins in inches instead of matplotlib's tight or constrained layout (docs/analysis.md, "Why the
+figures are drawn as they are")."""
 
 from __future__ import annotations
 

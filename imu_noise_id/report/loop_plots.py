@@ -1,7 +1,5 @@
-"""Figures of the closed loop: Allan deviation of data vs model before/after a step, residual ACF and PSD.
-
-Each function returns PNG bytes (for embedding in ``report.html``) and can also save to a file.
-"""
+"""Figures of the closed loop as PNG bytes (optionally also saved): Allan deviation of data vs model before/after a
+step, residual ACF and PSD."""
 
 from __future__ import annotations
 

@@ -1,12 +1,6 @@
-"""Serialise identification results to ``model.yaml``, one entry per axis (``gyro_x`` … ``accel_z``).
-
-Keys (documented in docs/em.md "``model.yaml``", docs/gmwm.md "``model.yaml`` additions", docs/loop.md
-"Outputs"): ``model``, ``estimator``, ``n``, ``dt`` [s], ``unit``; ``components`` (continuous-time values with
-``se``, ``ci95`` and per-sample values); ``mean`` (bias [u], ramp [u/s], regressors); ``loglik``, ``aic``,
-``bic`` (full precision; null for a GMWM fit), ``n_params``, ``converged``, ``short_of_maximum``; ``candidates``;
-``record_length``; ``moments``, ``gmwm``, ``agreement`` (:mod:`.gmwm_yaml`); ``note``; ``loop``, ``loop_verdict``
-(:mod:`.loop_yaml`); ``final`` (what imu.yaml's numbers come from: N, K, per-sample noise, bias instability).
-"""
+"""Serialise identification results to ``model.yaml``, one entry per axis (``gyro_x`` … ``accel_z``); keys and
+units: docs/em.md "``model.yaml``", docs/gmwm.md "``model.yaml`` additions" (:mod:`.gmwm_yaml`), docs/loop.md
+"Outputs" (:mod:`.loop_yaml`); ``loglik``, ``aic``, ``bic`` at full precision, null for a GMWM fit."""
 
 from __future__ import annotations
 

@@ -14,8 +14,7 @@ def num(x: float) -> float:
     return x if not math.isfinite(x) else float(f"{x:.{DIGITS}g}")
 
 
-#: Keys written at full precision: log-likelihoods and the criteria built from them differ in the 7th digit or
-#: later between candidates fitted to a million samples, and a reader must be able to check the selection.
+#: Keys written at full precision (log-likelihoods and criteria built from them; why: docs/em.md).
 FULL_PRECISION = frozenset({"loglik", "aic", "bic", "delta_bic", "delta_aic"})
 
 

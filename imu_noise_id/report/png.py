@@ -1,9 +1,5 @@
-"""Every report figure leaves through here: written as PNG (to a file or to bytes) and closed.
-
-Log axes spanning a decade or more get minor ticks at 2 and 5 of each decade only (:data:`LOG_MINOR_SUBS`), and
-powers of ten as plain text (10⁻³, 2×10⁻³) instead of mathtext (:data:`PLAIN_POWERS`); reasons: docs/analysis.md,
-"Why the figures are drawn as they are".
-"""
+"""Every report figure leaves through here: written as PNG (to a file or to bytes) and closed; log axes thinned
+(:data:`LOG_MINOR_SUBS`) and labelled in plain text (:data:`PLAIN_POWERS`; docs/analysis.md, "Why the figures …")."""
 
 from __future__ import annotations
 

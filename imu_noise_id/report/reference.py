@@ -1,6 +1,5 @@
-"""Reading an ``analyze`` results folder back as a reference for ``compare``: ``imu.yaml`` (per-axis N with its
-interval, the rate and topic) and, where present, ``model.yaml`` (each axis's final components and the sinusoid
-regressors its loop removed)."""
+"""An ``analyze`` results folder read back as ``compare``'s reference: ``imu.yaml`` (per-axis N, interval, rate,
+topic) and, where present, ``model.yaml`` (final components, the loop's sinusoid regressors)."""
 
 from __future__ import annotations
 

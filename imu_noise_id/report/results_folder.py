@@ -1,12 +1,8 @@
 """Results folders written atomically, every file stamped with the run that wrote it, nothing stale left beside it.
 
-A command writes into a hidden staging folder inside ``--out`` (:class:`ResultsFolder`); once all files are
-written they are stamped (:func:`stamp`) and renamed into place, so an interrupted run leaves the folder as it was.
-The manifest (:data:`MANIFEST`) lists the runs whose files it holds; a new run removes what it supersedes (a run of
-the same command, on another bag or topic, or some of whose files it rewrites); other commands' runs on the same
-bag and topic stay; unaccounted files with this package's names are renamed ``NAME.stale``. The
-:class:`RunRecord` goes into each file its own way: a ``run:`` mapping (package YAML and JSON), a
-``# imu-noise-id run: {…}`` line (CSV, exports), ``<meta name="imu-noise-id-run">`` (HTML), a ``tEXt`` chunk (PNG).
+Staging, stamping (:func:`stamp`: :class:`RunRecord` as ``run:``, a ``# imu-noise-id run:`` line, a ``<meta>`` or a
+PNG ``tEXt`` chunk), the manifest (:data:`MANIFEST`), what a run supersedes and ``NAME.stale``: docs/analysis.md,
+"Results folders".
 """
 
 from __future__ import annotations
@@ -28,8 +24,7 @@ import yaml
 MANIFEST = "imu_noise_id_runs.yaml"
 #: Prefix of the staging folders inside a results folder.
 STAGING = ".imu_noise_id_partial-"
-#: Names (glob patterns) the commands write: a file matching one that no manifest accounts for, and that is
-#: recognisably this package's (:data:`SIGNATURES`, or a figure beside such a file), is marked stale.
+#: Names (glob patterns) the commands write; unaccounted files matching one that are this package's are marked stale.
 KNOWN_OUTPUTS = ("imu.yaml", "model.yaml", "report.html", "allan.csv", "hadamard.csv", "total.csv", "modified.csv",
                  "allan.png", "allan_model.png", "hypotheses.yaml", "hypotheses_probabilities.csv",
                  "hypotheses_probabilities.png", "cmkf.yaml", "cmkf.csv", "cmkf.png", "criteria.json",

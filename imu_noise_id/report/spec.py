@@ -3,8 +3,7 @@
     gyro: {noise_density: 3.0e-4, random_walk: 4.0e-5, bias_instability: 1.0e-4}
     accel: {noise_density: 2.0e-3}
 
-(``noise_density`` [u/√Hz], ``random_walk`` [u/s/√Hz], ``bias_instability`` [u]; every key optional). ``batch --spec``
-judges the fleet by it, the node's ``spec`` parameter its live noise density."""
+(``noise_density`` [u/√Hz], ``random_walk`` [u/s/√Hz], ``bias_instability`` [u]; every key optional)."""
 
 from __future__ import annotations
 
@@ -44,6 +43,5 @@ def read_spec(path: str | Path, option: str = "--spec") -> Spec:
 
 
 def noise_density_limits(spec: Spec) -> dict[str, float]:
-    """The ``noise_density`` limit [u/√Hz] of each sensor the specification gives one for (what the watch and
-    ``compare`` test)."""
+    """The ``noise_density`` limit [u/√Hz] of each sensor the specification gives one for."""
     return {sensor: limits["noise_density"] for sensor, limits in spec.items() if "noise_density" in limits}

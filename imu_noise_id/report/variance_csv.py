@@ -1,8 +1,5 @@
-"""The Allan-family variances as CSV files: ``allan.csv`` (+ ``hadamard.csv``, ``total.csv``, ``modified.csv``).
-
-Units are SI and stated in ``#`` header lines: τ [s], variances in squared signal units, χ² intervals and the
-equivalent degrees of freedom.
-"""
+"""The Allan-family variances as CSV files (``allan.csv``, ``hadamard.csv``, ``total.csv``, ``modified.csv``), SI
+units stated in ``#`` header lines: τ [s], variances [u²], χ² intervals, equivalent degrees of freedom."""
 
 from __future__ import annotations
 

@@ -1,3 +1,2 @@
-"""The rclpy adapters (everything that imports rclpy or ROS message types): the node (:mod:`.node`), its table
-layouts (:mod:`.messages`), ``imu-noise-id play`` (:mod:`.play`) and ``monitor`` (:mod:`.monitor`), and
-launch-free helpers (:mod:`.launch`)."""
+"""The rclpy adapters (everything that imports rclpy or ROS message types): :mod:`.node`, :mod:`.messages`,
+:mod:`.play`, :mod:`.monitor`, :mod:`.launch`."""

@@ -11,10 +11,7 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 def labelled_layout(msg: Float64MultiArray, rows_name: str, rows: tuple[str, ...], cols_name: str,
                     cols: tuple[str, ...]) -> None:
-    """Fill ``msg.layout`` of a row-major ``len(rows)`` × ``len(cols)`` table.
-
-    Each dimension's label is ``"<name>:<label 1>,<label 2>,…"``, e.g. ``"axis:gyro_x,gyro_y,…"``.
-    """
+    """Fill ``msg.layout`` of a row-major ``len(rows)`` × ``len(cols)`` table (labels: module docstring)."""
     msg.layout.dim = [
         MultiArrayDimension(label=f"{rows_name}:{','.join(rows)}", size=len(rows), stride=len(rows) * len(cols)),
         MultiArrayDimension(label=f"{cols_name}:{','.join(cols)}", size=len(cols), stride=len(cols)),

@@ -1,9 +1,6 @@
-"""A live terminal view of a running ``imu_noise_id_node`` (``imu-noise-id monitor``; topic monitoring without rqt).
-
-:class:`Listener` subscribes to the node's ``~/gyro_bias``, ``~/accel_bias``, ``~/noise``, ``~/hypotheses`` and to
-``/diagnostics`` (only the node's own statuses); :func:`watch` redraws one screen in place with ANSI escapes (no
-curses), :func:`snapshot` waits for the outputs and prints one screen. Rendering is a pure function of
-:class:`MonitorState` (:func:`render`), tested without ROS.
+"""A live terminal view of a running ``imu_noise_id_node`` (``imu-noise-id monitor``): :class:`Listener` subscribes
+to its outputs and its ``/diagnostics`` statuses; :func:`watch` redraws in place (ANSI), :func:`snapshot` prints one
+screen; :func:`render` is a pure function of :class:`MonitorState`.
 """
 
 from __future__ import annotations
@@ -192,8 +189,7 @@ def snapshot(node: object, listener: Listener, timeout: float) -> None:
 
 
 def silence_message(state: MonitorState, timeout: float) -> str:
-    """Why a snapshot has no outputs: the node is not heard at all, or it is (its diagnostics arrive) but has
-    published no estimates, which it does only after its first accepted IMU message."""
+    """Why a snapshot has no outputs: the node is not heard, or is heard but has accepted no IMU message yet."""
     if not state.diagnostics:
         return (f"no outputs from node {state.node} within {timeout:g} s: is it running (and with "
                 "ROS_AUTOMATIC_DISCOVERY_RANGE/ROS_DOMAIN_ID like this shell)?")

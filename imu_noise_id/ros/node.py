@@ -1,9 +1,6 @@
-"""``imu_noise_id_node``: the rclpy adapter around :class:`imu_noise_id.pipelines.online.OnlineIdentifier` (running
-it, topics, parameters, diagnostics: docs/node.md).
-
-Inputs are the relative names :data:`IMU_INPUT`, :data:`ODOM_INPUT` and :data:`TEMPERATURE_INPUT`. This module
-only converts messages to numbers and back and reads the hypothesis-set file. Estimation uses the header stamps
-only; the housekeeping timers run on the steady clock (``use_sim_time`` without ``/clock`` works).
+"""``imu_noise_id_node``: the rclpy adapter around :class:`imu_noise_id.pipelines.online.OnlineIdentifier`
+(docs/node.md). Inputs: :data:`IMU_INPUT`, :data:`ODOM_INPUT`, :data:`TEMPERATURE_INPUT` (relative names).
+Estimation uses the header stamps only; housekeeping timers run on the steady clock.
 """
 
 from __future__ import annotations
@@ -40,8 +37,7 @@ from ..resources import read_hypotheses_file
 from .messages import labelled_layout
 
 NODE_NAME = "imu_noise_id_node"
-#: The IMU input, relative to the node's namespace: REP-145's name for a driver's sensor_msgs/Imu with orientation
-#: (``imu/data_raw`` carries the same rates and accelerations without it: ``-r imu/data:=imu/data_raw``).
+#: The IMU input, relative to the node's namespace (REP-145's name; ``-r imu/data:=imu/data_raw`` for the raw one).
 IMU_INPUT = "imu/data"
 ODOM_INPUT = "odom"
 TEMPERATURE_INPUT = "imu/temperature"
@@ -153,7 +149,7 @@ class ImuNoiseIdNode(Node):
 
     def stale_imu_remap(self) -> str:
         """A warning when ``-r imu:=TOPIC`` (the IMU input's old name) remaps to a topic the node does not listen
-        on (a remap of a name no subscription uses is ignored silently by ROS), else ``""``."""
+        on, else ``""``."""
         old = self.resolve_topic_name(OLD_IMU_INPUT)
         listening = self.resolve_topic_name(IMU_INPUT)
         if old == self.resolve_topic_name(OLD_IMU_INPUT, only_expand=True) or old == listening:
@@ -163,9 +159,8 @@ class ImuNoiseIdNode(Node):
 
     # -- parameters -------------------------------------------------------------------------------------------------
     def _accept_integer_overrides(self) -> None:
-        """``-p publish_rate:=20`` means 20.0: integer overrides of floating-point parameters become doubles (rclpy
-        would refuse them as the wrong type); overrides that name no parameter of this node are warned about (a
-        misspelled ``stationary.windw`` would otherwise be ignored silently)."""
+        """Integer overrides of floating-point parameters become doubles (``-p publish_rate:=20`` means 20.0);
+        overrides that name no parameter of this node are warned about (docs/node.md, "Why …")."""
         floats = {spec.name for spec in PARAMETERS if type(spec.default) is float}
         known = {spec.name for spec in PARAMETERS} | {"use_sim_time"}
         overrides = self._parameter_overrides  # rclpy keeps the --ros-args / params-file values here
@@ -179,8 +174,7 @@ class ImuNoiseIdNode(Node):
 
     @staticmethod
     def _integers_as_doubles(params: list[Parameter]) -> list[Parameter]:
-        """``ros2 param set /imu_noise_id_node gap_factor 12`` sends an integer: it means 12.0 (rclpy would refuse
-        it as the wrong type), as ``-p gap_factor:=12`` does at start-up."""
+        """Integers set at runtime for floating-point parameters as doubles (``gap_factor 12`` means 12.0)."""
         floats = {spec.name for spec in PARAMETERS if type(spec.default) is float}
         return [Parameter(p.name, Parameter.Type.DOUBLE, float(p.value))
                 if p.name in floats and p.type_ == Parameter.Type.INTEGER else p for p in params]
@@ -297,9 +291,8 @@ class ImuNoiseIdNode(Node):
             json.dump(summary, f, indent=1)
 
     def _send(self, publisher: Publisher, msg: Any) -> None:
-        """Publish ``msg``; once the node is shutting down, quietly not: a callback that is running when Ctrl-C
-        shuts the context down ends instead of raising out of the executor (the context is asked only then, not on
-        every publish of the IMU-rate path)."""
+        """Publish ``msg``; once the context is shut down (Ctrl-C during a callback), quietly not (docs/node.md,
+        "Why …")."""
         try:
             publisher.publish(msg)
         except RuntimeError:  # rclpy's RCLError: "publisher's context is invalid"
@@ -390,8 +383,7 @@ def _usage() -> str:
 
 
 def _executor(kind: str) -> Any:
-    """The EventsExecutor (about twice the message throughput) when asked for and available, else
-    the SingleThreadedExecutor."""
+    """The EventsExecutor when asked for and available, else the SingleThreadedExecutor."""
     if kind == "events":
         try:
             from rclpy.experimental import EventsExecutor

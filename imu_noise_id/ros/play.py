@@ -1,10 +1,6 @@
-"""Publish a bag's Imu, Odometry and Temperature messages with their original timing (``imu-noise-id play``).
-
-pip-only ROS 2 installs have no ``ros2 bag play``; this is the small part of it the node's tests and demos need.
-Messages are published in bag (receive) time order, unchanged (header stamps included), on their recorded topic
-names, paced by the bag's receive times divided by the rate. rosbag2 messages are forwarded as their CDR bytes;
-ROS 1 messages are converted. Publishers are reliable with a deep queue, so best-effort (sensor-data) and reliable
-subscribers both receive them.
+"""Publish a bag's Imu, Odometry and Temperature messages with their original timing (``imu-noise-id play``): in
+receive-time order, unchanged, on their recorded topics, paced by receive time / rate; rosbag2 messages as their CDR
+bytes, ROS 1 ones converted; reliable publishers with a deep queue (docs/node.md, "``imu-noise-id play`` …").
 """
 
 from __future__ import annotations
@@ -55,10 +51,8 @@ def play_bag(bag: Path, *, rate: float = 1.0, loop: bool = False, topics: list[s
 
 
 def load_messages(bag: Path, topics: list[str] | None) -> list[tuple[int, str, str, Any]]:
-    """(receive time [ns], topic, type, data) of the played messages, in bag order.
-
-    ``data`` is the CDR bytes for rosbag2 bags and the deserialised (rosbags) message for ROS 1 bags, whose
-    types differ (``std_msgs/Header.seq``) and are converted with :func:`to_rclpy` before publishing.
+    """(receive time [ns], topic, type, data) of the played messages, in bag order; ``data``: CDR bytes (rosbag2) or
+    the rosbags message (ROS 1, converted by :func:`to_rclpy` before publishing).
 
     Raises
     ------
@@ -107,10 +101,8 @@ def message_class(msgtype: str) -> type:
 
 
 def to_rclpy(src: Any, cls: type) -> Any:
-    """An rclpy message of class ``cls`` with the fields of a deserialised rosbags message (ROS 1 or ROS 2).
-
-    Fields the ROS 2 type does not have (``Header.seq`` of ROS 1) are left out.
-    """
+    """An rclpy message of class ``cls`` with the fields of a rosbags message (fields ROS 2 lacks, e.g. ROS 1's
+    ``Header.seq``, left out)."""
     import numpy as np
 
     msg = cls()

@@ -18,8 +18,7 @@ from .state import Diagnosis, LoopState, Trial
 from .steps import AxisLoop, _canonical
 from .trials import long_tau_flicker, long_tau_walk
 
-#: Components re-selection may drop: those that absorb what the model lacks (an RW the short-term predictability
-#: of an oscillation, a GM the sensor's low-pass); lines and the low-pass were each added on their own evidence.
+#: Components re-selection may drop (those that absorb what the model lacks: docs/loop.md, "The loop's rules" 5).
 DROPPABLE = ("RW", "GM", "QN", "RR")
 #: The sensor's first-order filters, which a second-order low-pass (an OSC of short memory) may make redundant.
 FIRST_ORDER = ("LPF", "MA")
@@ -75,9 +74,8 @@ def second_order_start(fitted: list[Component], lpf: LPF) -> list[Component]:
 
 def swap_start_filter(loop: AxisLoop, state: LoopState,
                       diag: Diagnosis) -> tuple[Trial, LoopState, Diagnosis] | None:
-    """The start's LPF tried as a second-order low-pass (:func:`second_order_start`) by the rules of :func:`try_move`
-    (no BIC tie: it adds a parameter): (trial, state, diagnosis), the start's where the refit failed; None without an
-    LPF."""
+    """The start's LPF tried as a second-order low-pass (:func:`second_order_start`; :func:`try_move`, no BIC tie):
+    (trial, state, diagnosis), the start's where the refit failed; None without an LPF."""
     lpf = next((c for c in diag.fit.components if isinstance(c, LPF)), None)
     if lpf is None:
         return None

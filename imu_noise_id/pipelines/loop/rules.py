@@ -12,8 +12,7 @@ from ...core.constants import CONFIDENCE_95
 from ...core.diagnostics.residuals import av_misfit_z
 from .state import Diagnosis
 
-#: "Do no harm": a step may raise the RMS of the AV misfit z-scores (model vs data, in sd of the AV estimates) by
-#: at most this much.
+#: "Do no harm": the most a step may raise the RMS AV misfit z (model vs data, in sd of the AV estimates).
 AV_Z_TOLERANCE = 1.0
 
 
@@ -24,8 +23,8 @@ def av_rms_z(diag: Diagnosis) -> float:
     return float(np.sqrt(np.mean(z**2))) if z.size else 0.0
 
 
-#: A BIC difference below this is no strong evidence either way (Kass & Raftery 1995, J. Am. Stat. Assoc. 90:
-#: ΔBIC 2–6 "positive", above 6 "strong"): between models of no more parameters, the AV then decides.
+#: BIC tie below this (Kass & Raftery 1995, JASA 90: ΔBIC > 6 "strong"); between models of no more parameters the AV
+#: then decides.
 BIC_TIE = 6.0
 #: How much a tie-breaking move must lower the RMS AV misfit z: twice what do-no-harm lets a step raise it.
 AV_Z_GAIN = 2.0 * AV_Z_TOLERANCE
@@ -54,8 +53,8 @@ def practically_negligible(diag: Diagnosis, level: float = CONFIDENCE_95) -> boo
 
 
 def av_inside_band(diag: Diagnosis, level: float = CONFIDENCE_95) -> bool:
-    """Whether the model's AV lies inside the data's ``level`` band at every τ, Bonferroni over the J
-    octaves spanned: |z_τ| ≤ Φ⁻¹(1 − (1 − level)/(2J)) (AV estimates an octave apart are nearly independent)."""
+    """Whether the model's AV lies inside the data's ``level`` band at every τ, Bonferroni over the J octaves
+    spanned: |z_τ| ≤ Φ⁻¹(1 − (1 − level)/(2J))."""
     z, ok, bound = simultaneous_z(diag, level)
     return bool(ok.any() and np.max(np.abs(z[ok])) <= bound)
 

@@ -1,5 +1,4 @@
-"""Running the closed loop on one axis or on the axes of an IMU recording (rules:
-:mod:`imu_noise_id.pipelines.loop`)."""
+"""Running the closed loop on one axis or on an IMU recording's axes (rules: :mod:`imu_noise_id.pipelines.loop`)."""
 
 from __future__ import annotations
 
@@ -58,10 +57,8 @@ def run_closed_loop(
         Sensor temperature [°C] at the sample times (:func:`align_temperature`); enables ``TEMP``.
     max_steps, max_candidates : int
         At most this many effects added; candidates refitted per step.
-    alpha : float
-        Level of every detector.
-    lags : int
-        Ljung–Box lags.
+    alpha, lags : float, int
+        Level of every detector; Ljung–Box lags.
     outliers : {"impute", "missing"}
         How flagged outliers are removed.
     axis : str, optional
@@ -169,11 +166,9 @@ def run_closed_loop(
 
 
 def final_intervals(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
-    """``step`` (the loop's last) with its fit's 95 % intervals
-    (:func:`~imu_noise_id.core.estimation.relabel.with_uncertainty`) and a note ("" unless refitted). Beyond the papers:
-    where the intervals' profile search met a higher likelihood
-    (:attr:`~imu_noise_id.core.estimation.results.FitResult.short_of_maximum`), the structure is refitted from there and
-    diagnosed once, and the step's BIC, residuals and AV are the refit's."""
+    """``step`` with its fit's 95 % intervals (:func:`~imu_noise_id.core.estimation.relabel.with_uncertainty`) and a
+    note ("" unless refitted). Beyond the papers: where the intervals' search met a higher likelihood
+    (``short_of_maximum``) the structure is refitted from there and diagnosed once; the step is then the refit's."""
     fit = with_uncertainty(step.diagnosis.fit)
     as_it_is = replace(step, diagnosis=replace(step.diagnosis, fit=fit)), ""
     if fit.short_of_maximum is None or fit.better_start is None:
@@ -207,8 +202,7 @@ def align_temperature(t_samples: np.ndarray, t_temperature: np.ndarray, temperat
 
 
 class ImuLoop:
-    """The closed loop on the axes of one IMU recording at its own rate, one axis at a time (``analyze`` and ``loop``);
-    the temperature topic is aligned with the IMU stamps once.
+    """The closed loop on the axes of one IMU recording at its own rate, one axis at a time; temperature aligned once.
 
     Parameters
     ----------

@@ -70,8 +70,7 @@ class LoopState:
     init: list[Component] | None = None
 
     def with_components(self, components: list[Component]) -> LoopState:
-        """This state's regressors and removed samples (copied) with the stochastic structure of ``components``,
-        which start its fit."""
+        """This state's regressors and removed samples (copied) with ``components`` as structure and fit start."""
         return LoopState(structure=[c.name for c in components], exog_terms=list(self.exog_terms),
                          flagged=self.flagged.copy(), imputed=self.imputed.copy(), init=list(components))
 

@@ -75,9 +75,8 @@ class AxisLoop:
         return screen.Statistics.of(interpolate_missing(self.y), self.dt)
 
     def screen_reference(self, state: LoopState, diag: Diagnosis) -> screen.Reference | None:
-        """The fit of ``diag`` on the screening statistics, or None where moves are not screened: fewer than
-        :data:`~imu_noise_id.core.estimation.screen.MIN_SAMPLES` samples, or regressors or removed samples in
-        ``state``."""
+        """The fit of ``diag`` on the screening statistics; None below ``screen.MIN_SAMPLES`` samples or with
+        regressors or removed samples in ``state``."""
         if self.n < screen.MIN_SAMPLES or state.exog_terms or state.flagged.size:
             return None
         return screen.Reference.fit(list(diag.fit.components), self.statistics)
@@ -164,10 +163,9 @@ class AxisLoop:
 
     def line_findings(self, sin: det.Finding, e: np.ndarray, residual: np.ndarray,
                       others: list[det.Finding] | tuple[det.Finding, ...] = ()) -> list[det.Finding]:
-        """A significant line as its SIN and OSC findings (with its harmonic family or :meth:`line_group`); the shape
-        (:func:`~imu_noise_id.core.diagnostics.lines.line_shape`) orders them, the look-alike first, and gives the OSC's
-        f₀, bandwidth and σ; outside :data:`DECISIVE_SHARE` only the look-alike is offered. ``others``: the weaker
-        significant narrow lines."""
+        """A significant line as its SIN and OSC findings (harmonic family or :meth:`line_group`), ordered by its shape
+        (``lines.line_shape``: look-alike first, the OSC's f₀, bandwidth, σ); outside :data:`DECISIVE_SHARE` only the
+        look-alike. ``others``: the weaker significant narrow lines."""
         shape = line_shape(residual, self.dt, sin.params["frequency"], resolution=int(sin.params.get("resolution", 1)))
         evidence = f"{sin.evidence}; {shape.reason}"
         bandwidth = min(shape.bandwidth, MAX_DAMPING * shape.frequency)  # ζ ≤ MAX_DAMPING / 2
@@ -189,11 +187,9 @@ class AxisLoop:
 
     def line_group(self, first: det.Finding, family: list[det.Finding], others: list[det.Finding] | tuple[
             det.Finding, ...], residual: np.ndarray) -> list[det.Finding]:
-        """The strongest line, its harmonics and every other significant narrow line whose shape is a sinusoid's beyond
-        doubt (:data:`DECISIVE_SHARE`), as one finding in place of the harmonic family; [] when no other line qualifies.
-        Each is significant on its own at the family-wise level
-        (:func:`~imu_noise_id.core.diagnostics.detectors.detect_sinusoids`). Beyond the papers (docs/loop.md, "Many
-        narrow lines in one step")."""
+        """The strongest line, its harmonics and every other significant narrow line (family-wise level,
+        ``detectors.detect_sinusoids``) that is a sinusoid beyond doubt (:data:`DECISIVE_SHARE`), as one finding; []
+        when no other line qualifies. Beyond the papers (docs/loop.md, "Many narrow lines in one step")."""
         members = list(family[0].members) if family else [first]
         resolution = 1.0 / (self.n * self.dt)
         near = resolution * (LINE_SEPARATION_BINS + 1)
@@ -265,9 +261,8 @@ class AxisLoop:
         return sorted([*best.values(), *gms], key=lambda f: f.log10_p)
 
     def as_filter(self, f: det.Finding, state: LoopState) -> list[det.Finding]:
-        """A GM finding with τ below :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit` (not a long-τ
-        deficit's) as the sensor's own filter: an LPF and an MA finding, each unless the model has it. Reasons:
-        docs/loop.md, "The loop's rules" 2."""
+        """A GM finding (not a long-τ deficit's) with τ below ``resonant.filter_memory_limit`` as the sensor's own
+        filter: an LPF and an MA finding, each unless the model has it (docs/loop.md, "The loop's rules" 2)."""
         tau = f.params.get("tau")
         missing = [k for k in ("LPF", "MA") if k not in state.structure]
         if tau is None or tau >= filter_memory_limit(self.dt) or not missing or f.params.get("deficit"):

@@ -61,10 +61,8 @@ def shared_power_start(start: list[Component], fitted: list[Component]) -> list[
 
 def attempt(loop: AxisLoop, diag: Diagnosis, state: LoopState,
             f: det.Finding) -> tuple[list[Trial], Diagnosis | None, LoopState, det.Finding]:
-    """Add ``f``'s effect to ``state`` and judge it (:func:`attempt_once`); a broad line's resonance refused or kept
-    only in part is tried again from :func:`wide_start`, the better kept
-    (:func:`~imu_noise_id.pipelines.loop.rules.better`). Returns (trials, kept diagnosis or None, its state, the finding
-    it was kept for)."""
+    """Add ``f``'s effect and judge it (:func:`attempt_once`; a broad line's resonance refused or kept in part again
+    from :func:`wide_start`, the better kept). Returns (trials, kept diagnosis or None, its state, finding kept for)."""
     outcome = attempt_once(loop, diag, loop.extend(state, f, diag), f)
     kept_partly = outcome[1] is not None and outcome[0][-1].partly
     wide = wide_start(loop, f) if (outcome[1] is None or kept_partly) and broad_resonance(f) else None
@@ -95,8 +93,7 @@ def attempt_once(loop: AxisLoop, diag: Diagnosis, new_state: LoopState,
         (new_diag if ok else None), new_state
 
 
-#: A broad line's resonance that leaves the line above its threshold is kept when it lowers the BIC by at least
-#: this much (Kass & Raftery 1995: ΔBIC > 10 "very strong"), the AV misfit and the line's statistic.
+#: BIC decrease that keeps a resonance explaining a broad line in part (Kass & Raftery 1995: > 10 "very strong").
 PARTLY_BIC_GAIN = 10.0
 
 
@@ -104,7 +101,7 @@ def partly_explained(loop: AxisLoop, f: det.Finding, before: Diagnosis, after: D
     """Whether ``after`` explains the broad line ``f`` in part: ``before``'s AV leaves the data's band
     (:func:`~imu_noise_id.pipelines.loop.rules.av_inside_band`) and ``after`` lowers the BIC by :data:`PARTLY_BIC_GAIN`
     or more, the RMS AV misfit z and the line's pooled statistic (still above its threshold and half). Beyond the papers
-    (paper 000's loop keeps an effect only when its evidence is gone; docs/loop.md, "The loop's rules" 4)."""
+    (docs/loop.md, "The loop's rules" 4)."""
     gain = before.errors.bic - after.errors.bic
     if (not broad_resonance(f) or av_inside_band(before) or gain < PARTLY_BIC_GAIN
             or av_rms_z(after) >= av_rms_z(before)):
@@ -115,8 +112,7 @@ def partly_explained(loop: AxisLoop, f: det.Finding, before: Diagnosis, after: D
                 "outside its band before)" if ok else "")
 
 
-#: A refused broad-line resonance is started again with a bandwidth of this many pooled bins of its search (a fifth
-#: of its running-median floor's window; docs/loop.md, "Why the loop's moves are built as they are").
+#: Bandwidth [pooled bins] a refused broad-line resonance is restarted with (docs/loop.md, "Why the loop's moves …").
 WIDE_START_POOLED_BINS = 16
 
 
@@ -187,12 +183,11 @@ def _one_partly(loop: AxisLoop, diag: Diagnosis, one_state: LoopState, one_diag:
 
 def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
              trials: list[Trial]) -> tuple[float, LoopState, Diagnosis, det.Finding] | None:
-    """The bounded joint search when one-at-a-time is stuck, each move kept by the BIC and do-no-harm rules alone and
-    the best returned: a GM at a tenth of the record and BI, each with the random walk restarted small; a broad
-    resonance on an innovation hump (:func:`hump_resonance`); BI replaced by a GM and an RW
-    (:func:`flicker_as_gm_and_walk`). On a long record each move but the hump's is first screened
-    (:func:`~imu_noise_id.core.estimation.screen.screen`, :meth:`.AxisLoop.screen_reference`) and refused unrefitted
-    when it cannot lower the BIC there. Beyond the papers (docs/loop.md, "The loop's rules" 6)."""
+    """The bounded joint search when one-at-a-time is stuck (moves judged by the BIC and do-no-harm rules alone, the
+    best returned): a GM at a tenth of the record and BI, the RW restarted small; :func:`hump_resonance`;
+    :func:`flicker_as_gm_and_walk`. On a long record each move but the hump's is screened first
+    (:meth:`.AxisLoop.screen_reference`) and refused unrefitted if it cannot lower the BIC there. Beyond the papers
+    (docs/loop.md, "The loop's rules" 6)."""
     span = loop.n * loop.dt
     level = long_tau_level(diag)
     proposals = [("GM", {"tau": span / 10.0, "sigma": math.sqrt(level / 0.38)})]
