@@ -287,14 +287,41 @@ def test_analysis_reports_progress_per_estimator():
     assert calls == [(1, 4), (2, 4), (3, 4), (4, 4)]
 
 
-def test_axes_in_worker_processes_give_the_same_result():
+def test_mapped_recording_reads_back_the_same_arrays_read_only_and_pickles_small(tmp_path):
+    """The worker processes' recording (:class:`~imu_noise_id.pipelines.analyze.mapped.MappedImu`): the same arrays and
+    metadata as the recording written, read-only (a worker cannot change what the others read), and a pickle whose
+    size does not grow with the record (the arrays are not sent)."""
+    import pickle
+
+    from imu_noise_id.pipelines.analyze.mapped import MappedImu
+
+    sizes = []
+    for seconds in (10.0, 1000.0):
+        imu = simulate_static_imu(_model(), 100.0, seconds, seed=3)
+        folder = tmp_path / ("short" if seconds < 100.0 else "long_")
+        folder.mkdir()
+        mapped = MappedImu.write(imu, folder)
+        back = mapped.open()
+        for name in ("t", "gyro", "accel"):
+            assert np.array_equal(getattr(back, name), getattr(imu, name))
+            assert not getattr(back, name).flags.writeable
+        assert (back.topic, back.frame_id, back.notes, back.dt) == (imu.topic, imu.frame_id, imu.notes, imu.dt)
+        with pytest.raises(ValueError):
+            back.axis("gyro_x")[0] = 0.0
+        sizes.append(len(pickle.dumps(mapped)))
+    assert sizes[1] == sizes[0] < 4096
+
+
+def test_axes_in_worker_processes_give_the_same_result(tmp_path, monkeypatch):
     """``jobs=2`` runs each axis's model stage, loop, final model and band in two worker processes (alive while the
-    axes come back, in axis order) and returns what one process computes, number for number; a bad ``jobs`` is an
-    InputError."""
+    axes come back, in axis order) and returns what one process computes, number for number, leaving no temporary
+    folder of the mapped recording behind; a bad ``jobs`` is an InputError."""
     import multiprocessing
+    import tempfile
 
     from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
 
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     imu = simulate_static_imu(_model(), 100.0, 20.0, seed=7)
     results, workers = {}, {}
     for jobs in (1, 2):
@@ -314,5 +341,6 @@ def test_axes_in_worker_processes_give_the_same_result():
         assert one.finals[axis].noise_density == two.finals[axis].noise_density
         assert [s.model for s in one.loops[axis].steps] == [s.model for s in two.loops[axis].steps]
         assert np.array_equal(one.bands[axis][1], two.bands[axis][1])
+    assert list(tmp_path.iterdir()) == []
     with pytest.raises(InputError, match="--jobs"):
         AnalyzeOptions(jobs=-1)

@@ -5,9 +5,9 @@ selection by BIC with the constrained EM, starts fitted to stage 1's AV, or the 
 loop (:mod:`imu_noise_id.pipelines.loop`) from each axis's selected EM fit at the recording's own rate (not for GMWM
 fits); 4. the final model (:mod:`.final`); 5. the simulation band of each final model; 6. the overbound
 (:mod:`.overbound`); 7. the resolution (:mod:`.resolution`: an unresolved axis gives its data overbound's N and K as
-upper bounds). Stages 2–5 of one axis run in worker processes on long records (``AnalyzeOptions.jobs``), the results in
-axis order and the same as serially. The report layer (:mod:`imu_noise_id.report.analysis`) writes the files from the
-result.
+upper bounds). Stages 2–5 of one axis run in worker processes on long records (``AnalyzeOptions.jobs``), which read
+the recording from memory-mapped files (:mod:`.mapped`), the results in axis order and the same as serially. The
+report layer (:mod:`imu_noise_id.report.analysis`) writes the files from the result.
 """
 
 from __future__ import annotations
@@ -15,8 +15,10 @@ from __future__ import annotations
 import math
 import multiprocessing
 import os
+import tempfile
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -28,6 +30,7 @@ from ...core.estimation.uncertainty import PROFILE_BUDGET
 from ...core.simulation.bands import allan_band
 from ..loop import ImuLoop, LoopResult
 from .final import FinalModel, final_model
+from .mapped import MappedImu
 from .models import AUTO, AxisModel, ModelStage, fit_axis
 from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, data_overbound, overbounds
 from .resolution import resolved, unresolved_reason
@@ -240,8 +243,10 @@ def worker_processes(asked: int, n: int, axes: int) -> int:
 _WORKER_CONTEXT: list[_AxisContext] = []
 
 
-def _set_worker_context(context: _AxisContext) -> None:
-    _WORKER_CONTEXT[:] = [context]
+def _set_worker_context(context: _AxisContext, recording: MappedImu) -> None:
+    """Install ``context`` in this worker with the recording mapped from ``recording``'s files (not sent)."""
+    imu = recording.open()
+    _WORKER_CONTEXT[:] = [replace(context, imu=imu, loop=context.loop.on(imu) if context.loop is not None else None)]
 
 
 def _worker_axis(axis: str) -> _AxisOutcome:
@@ -250,15 +255,20 @@ def _worker_axis(axis: str) -> _AxisOutcome:
 
 def _each_axis(context: _AxisContext, jobs: int) -> Iterator[tuple[str, _AxisOutcome]]:
     """(axis, its outcome) in axis order, here or from ``jobs`` "spawn" worker processes (the context sent to each
-    once); the workers stop after the last axis or the first error (an axis's InputError raised here)."""
+    once, the recording's arrays mapped from files in a temporary folder removed afterwards); the workers stop after the
+    last axis or the first error (an axis's InputError raised here)."""
     axes = list(context.static.axes)
     if jobs <= 1:
         for axis in axes:
             yield axis, _axis_stages(context, axis)
         return
-    with multiprocessing.get_context("spawn").Pool(jobs, initializer=_set_worker_context,
-                                                   initargs=(context,)) as pool:
-        yield from zip(axes, pool.imap(_worker_axis, axes), strict=True)
+    with tempfile.TemporaryDirectory(prefix="imu_noise_id_") as folder:
+        recording = MappedImu.write(context.imu, Path(folder))
+        sent = replace(context, imu=recording.series,
+                       loop=context.loop.on(recording.series) if context.loop is not None else None)
+        with multiprocessing.get_context("spawn").Pool(jobs, initializer=_set_worker_context,
+                                                       initargs=(sent, recording)) as pool:
+            yield from zip(axes, pool.imap(_worker_axis, axes), strict=True)
 
 
 __all__ = ["AUTO", "DEFAULT_HORIZON_S", "AnalysisResult", "AnalyzeOptions", "AxisOverbound", "FinalModel",

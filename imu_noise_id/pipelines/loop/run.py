@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 from dataclasses import replace
 from typing import Any
 
@@ -221,6 +222,13 @@ class ImuLoop:
         if temperature is not None:
             self.temperature = align_temperature(imu.t, temperature.t, temperature.value)
         self.loop_kwargs = loop_kwargs
+
+    def on(self, imu: ImuSeries) -> ImuLoop:
+        """This loop (its settings and aligned temperature) over ``imu``, the same recording held elsewhere (e.g.
+        mapped from files)."""
+        loop = copy.copy(self)
+        loop.imu = imu
+        return loop
 
     def run(self, axis: str, start: str | FitResult) -> LoopResult:
         """The loop on ``axis`` from ``start``: a structure, or a fit of the axis (then step 0 as it is)."""
