@@ -15,9 +15,10 @@ screen on statistics of fixed size, then 3 h at 400 Hz and 24 h at 200 Hz (this 
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
 checkout. Printed: per rate, source and ``--jobs`` value, wall time, CPU time (user + system of the analyze process
-and of the worker processes it reaped) and peak memory: the largest RSS of one process and the largest sum of the
-RSS of the analyze process and its workers (sampled every 0.1 s). Each checkout runs without the BLAS thread-count
-variables in its environment, as from a user's shell.
+and of the worker processes it reaped) and peak memory: the largest RSS of one process and the largest sums of the
+RSS and of the PSS (shared pages split among the processes mapping them) of the analyze process and its workers
+(sampled every 0.1 s), the PSS also as a multiple of the decoded arrays (stamps and six axes, float64). Each
+checkout runs without the BLAS thread-count variables in its environment, as from a user's shell.
 """
 
 from __future__ import annotations
@@ -37,21 +38,25 @@ from checkouts import check_imports_own_package  # bench/checkouts.py, beside th
 ROOT = Path(__file__).resolve().parents[1]
 #: Left out of the environment the checkouts run in (:func:`_user_environment`).
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+#: The decoded recording per sample: the stamp and six axes, float64 [bytes].
+DECODED_BYTES_PER_SAMPLE = 7 * 8
 MODEL = "gyro: WN(1.7e-4)+GM(tau=300, sigma=2e-5)+RW(2e-5); accel: WN(2e-3)+RW(3e-4)"
 
 
-def _tree_rss(pid: int) -> int:
-    """RSS [bytes] of process ``pid`` and all its descendants (0 once it is gone)."""
+def _tree_memory(pid: int) -> tuple[int, int]:
+    """(summed RSS, summed PSS) [bytes] of process ``pid`` and all its descendants ((0, 0) once it is gone). The PSS
+    splits each shared page among the processes that map it: a file all workers map counts once, not once each."""
     try:
         root = psutil.Process(pid)
         procs = [root, *root.children(recursive=True)]
     except psutil.Error:
-        return 0
-    total = 0
+        return 0, 0
+    rss = pss = 0
     for proc in procs:
         with contextlib.suppress(psutil.Error):
-            total += proc.memory_info().rss
-    return total
+            info = proc.memory_full_info()
+            rss, pss = rss + info.rss, pss + info.pss
+    return rss, pss
 
 
 def _user_environment() -> dict[str, str]:
@@ -60,8 +65,9 @@ def _user_environment() -> dict[str, str]:
     return {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
 
 
-def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None) -> tuple[float, float, float, float]:
-    """(wall [s], CPU [s], peak RSS of one process [MiB], peak summed RSS of the process tree [MiB]) of
+def run_analyze(source: Path, bag: Path, out: Path,
+                jobs: int | None = None) -> tuple[float, float, float, float, float]:
+    """(wall [s], CPU [s], peak RSS of one process, peak summed RSS and PSS of the process tree [MiB]) of
     ``python -m imu_noise_id analyze`` run in ``source`` (with ``--jobs`` when given), after checking that it imports
     the package of ``source``."""
     check_imports_own_package(source, "analyze")
@@ -70,18 +76,19 @@ def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None) -> 
     start = time.perf_counter()
     proc = subprocess.Popen(cmd + ([] if jobs is None else ["--jobs", str(jobs)]), cwd=source,
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    tree = 0
+    tree_rss = tree_pss = 0
     while True:
         pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
         if pid:
             break
-        tree = max(tree, _tree_rss(proc.pid))
+        rss, pss = _tree_memory(proc.pid)
+        tree_rss, tree_pss = max(tree_rss, rss), max(tree_pss, pss)
         time.sleep(0.1)
     wall = time.perf_counter() - start
     proc.returncode = os.waitstatus_to_exitcode(status)
     if proc.returncode != 0:
         raise SystemExit(f"analyze from {source} failed:\n{proc.stderr.read()}")
-    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, tree / 2.0**20
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, tree_rss / 2.0**20, tree_pss / 2.0**20
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -104,13 +111,16 @@ def main(argv: list[str] | None = None) -> int:
             subprocess.run([sys.executable, "-m", "imu_noise_id", "simulate", "--model", MODEL, "--rate", str(rate),
                             "--duration", str(args.duration), "--out", str(bag), "--seed", "1"], check=True,
                            stdout=subprocess.DEVNULL, env=dict(os.environ, PYTHONPATH=str(ROOT)), cwd=ROOT)
-            print(f"\n{args.duration:g} s at {rate:g} Hz ({int(args.duration * rate)} samples per axis):")
+            n = int(args.duration * rate)
+            arrays = n * DECODED_BYTES_PER_SAMPLE / 2.0**20
+            print(f"\n{args.duration:g} s at {rate:g} Hz ({n} samples per axis; decoded arrays {arrays:.0f} MiB):")
             times = {}
             for name, source, jobs in sources:
-                wall, cpu, rss, tree = run_analyze(source, bag, Path(tmp) / f"out_{len(times)}", jobs)
+                wall, cpu, rss, tree_rss, tree_pss = run_analyze(source, bag, Path(tmp) / f"out_{len(times)}", jobs)
                 times[name] = wall
-                print(f"  {name:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB "
-                      f"(process tree {tree:7.0f} MiB)", flush=True)
+                print(f"  {name:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB; process tree: "
+                      f"RSS {tree_rss:7.0f} MiB, PSS {tree_pss:7.0f} MiB = {tree_pss / arrays:.1f}× the arrays",
+                      flush=True)
             first = sources[0][0]
             for name, _, _ in sources[1:]:
                 print(f"  {name}: {times[name] / times[first]:.2f}× the wall time of {first}")
