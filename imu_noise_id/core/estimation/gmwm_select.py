@@ -5,8 +5,9 @@ WIC = J(θ̃_k) + 2·tr(Ω A H⁻¹ Aᵀ Ω V) (:mod:`.gmwm_engine`, asymptotic 
 for all candidates, the V(θ̂) of the full model (of each component type the largest count any candidate has, e.g.
 WN+2GM+RW; if it cannot be fitted, the candidate with the best J-test p-value). Candidates:
 :func:`.selection.suggest_candidates`; each reported fit is its own efficient fit, intervals for the winner only. Beyond
-the paper: WICs within :data:`WIC_TIE` (relative) tie, won by the fewest parameters (docs/gmwm.md, "Why the GMWM's
-engine and selection are built as they are").
+the paper: WICs within :data:`WIC_TIE` (relative) tie, and so does the structure a tied one is over the record
+(:func:`walk_look_alike`), won by the fewest parameters (docs/gmwm.md, "Why the GMWM's engine and selection are built
+as they are").
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 
 from ..allan import AllanResult
 from ..errors import InputError
+from ..noise.components import GM, Component
 from ..noise.modelspec import parameter_labels, parse_structure, structure_name
 from ..wavelet.variance import WaveletVariance
 from . import gmwm_engine as eng
@@ -46,6 +48,15 @@ def full_structure(candidates: list[str]) -> str:
         for name, count in Counter(parse_structure(spec)).items():
             most[name] = max(most[name], count)
     return structure_name([n for n, c in most.items() for _ in range(c)])
+
+
+def walk_look_alike(components: list[Component], span_s: float) -> str:
+    """The structure ``components`` are over a record of ``span_s`` [s]: each GM slower than the record (τ > span) taken
+    as the random walk it is there (one RW for all of them and a fitted RW)."""
+    names = [c.name for c in components if not (isinstance(c, GM) and c.tau > span_s)]
+    if len(names) < len(components) and "RW" not in names:
+        names.append("RW")
+    return structure_name(names)
 
 
 def select_gmwm(y, dt: float, candidates: list[str] | None = None, *, options: GmwmOptions | None = None,
@@ -81,6 +92,8 @@ def select_gmwm(y, dt: float, candidates: list[str] | None = None, *, options: G
         wic[spec] = best.objective + eng.infer(problem, best, list(weights.covariance)).optimism
     low = min(wic.values())
     tied = [spec for spec in wic if wic[spec] - low <= WIC_TIE * max(1.0, abs(low))]
+    alike = {walk_look_alike(ests[spec].components, wv.n * wv.dt) for spec in tied}
+    tied += [spec for spec in wic if spec not in tied and structure_name(parse_structure(spec)) in alike]
     best_spec = min(tied, key=lambda spec: len(parameter_labels(ests[spec].components)))
     fits = {spec: dress(est, n=wv.n, dt=wv.dt, options=options, slope=slope,
                         uncertainty=spec == best_spec) for spec, est in ests.items()}
