@@ -2,7 +2,7 @@
 
 Usage (``make bench`` runs the default set)::
 
-    .venv/bin/python bench/run_all.py            # the issues' speed/memory goals (about 15–20 min)
+    .venv/bin/python bench/run_all.py            # the issues' speed/memory goals (about 30 min; ../baseline)
     .venv/bin/python bench/run_all.py --long     # also the Monte-Carlo paper reproductions (hours)
     .venv/bin/python bench/run_all.py --studies  # also the studies of bench/studies/ that docs/ quotes (hours)
     .venv/bin/python bench/run_all.py --list     # what would run
@@ -24,6 +24,8 @@ from pathlib import Path
 BENCH = Path(__file__).resolve().parent
 RESULTS = BENCH.parent / "docs" / "results"
 
+#: Stands for ``--baseline``'s checkout in a job's arguments: the speed claims are measured side by side with it.
+BASELINE = "<baseline>"
 #: (script and arguments, output file in docs/results): the issues' "bench/ prints …" goals. One output file per
 #: script, named after it; a script run several ways writes its runs one after another into that file.
 GOALS: list[tuple[list[str], str]] = [
@@ -36,7 +38,9 @@ GOALS: list[tuple[list[str], str]] = [
     (["bench_cmkf.py"], "bench_cmkf.txt"),
     (["bench_node.py"], "bench_node.txt"),
     (["bench_node.py", "--executor", "single_threaded"], "bench_node.txt"),
-    (["bench_analyze_time.py", "--rates", "200", "400"], "bench_analyze_time.txt"),
+    (["bench_analyze_time.py", "--baseline", BASELINE], "bench_analyze_time.txt"),
+    (["bench_analyze_time.py", "--duration", "10800"], "bench_analyze_time.txt"),
+    (["bench_analyze_time.py", "--rates", "200", "--duration", "86400"], "bench_analyze_time.txt"),
     (["bench_screen.py", "--seeds", "1", "2"], "bench_screen.txt"),
     (["bench_batch.py"], "bench_batch.txt"),
     (["bench_figures.py"], "bench_figures.txt"),
@@ -64,8 +68,6 @@ LONG: list[tuple[list[str], str]] = [
     (["loop_measured.py", "--samples", "100000", "--mtig-samples", "100000"], "loop_measured.txt"),
     (["loop_measured.py", "--axes", "gyro_x,gyro_y", "--samples", "0"], "loop_measured.txt"),
     (["bench_rw_bound.py"], "bench_rw_bound.txt"),
-    (["bench_analyze_time.py", "--duration", "10800"], "bench_analyze_time.txt"),
-    (["bench_analyze_time.py", "--rates", "200", "--duration", "86400"], "bench_analyze_time.txt"),
     (["bench_measured_passband.py", "--adis-runs", "1", "2", "3", "4", "5", "6", "--adis-samples", "30000"],
      "bench_measured_passband.txt"),
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
@@ -102,6 +104,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--list", action="store_true", help="only list what would run")
     parser.add_argument("--only", nargs="+", metavar="SCRIPT",
                         help="run only these scripts (e.g. bench_allan.py bench_bags.py bench_analyze_memory.py)")
+    parser.add_argument("--baseline", type=Path, default=BENCH.parents[1] / "baseline",
+                        help="the checkout the speed goals compare with, side by side (default ../baseline; e.g. "
+                             "git worktree add ../baseline 880642c, the checkout before the screen on statistics of "
+                             "fixed size); without it the outputs that need it are left as they are")
     args = parser.parse_args(argv)
     jobs = GOALS + (LONG if args.long else []) + (STUDIES if args.studies else [])
     if args.only:
@@ -110,7 +116,12 @@ def main(argv: list[str] | None = None) -> int:
     env.setdefault("ROS_LOG_DIR", "/tmp/imu_noise_id_ros_log")
     failed = []
     written: set[str] = set()  # outputs begun in this run: a script's later runs append to its file
-    for script, out in jobs:
+    unmeasured = {out for script, out in jobs if BASELINE in script and not args.baseline.is_dir()}
+    for out in sorted(unmeasured):
+        print(f"== docs/results/{out} left as it is: no baseline checkout at {args.baseline} (--baseline DIR)")
+    jobs = [(script, out) for script, out in jobs if out not in unmeasured]
+    for arguments, out in jobs:
+        script = [str(args.baseline) if arg == BASELINE else arg for arg in arguments]
         line = f"python bench/{' '.join(script)} {'>>' if out in written else '>'} docs/results/{out}"
         if args.list:
             written.add(out)
