@@ -63,6 +63,39 @@ def test_a_noise_density_up_by_half_is_found_within_a_minute():
     assert held >= 16
 
 
+def test_a_lone_spike_is_not_a_noisier_sensor():
+    """One sample 12 σ off (a glitch, as measured records hold) moved the upward CUSUM by b·d² ≈ 45 > h at once: a
+    "noise up" alarm with the density ratio at 1.00. Each increment's d² now counts at most SPIKE_Z² v_hi, so a lone
+    spike is absorbed; a real ×1.5 step is still found (the test above) and a burst of spikes still alarms."""
+    v = 2 * N**2 / DT
+    band = (2 * (0.99 * N) ** 2 / DT, 2 * (1.01 * N) ** 2 / DT)
+    y = _record(11)
+    y[60_001] += 12.0 * math.sqrt(v)
+    level = watch_noise_level(y, DT, v, band)
+    assert level.alarm is None and level.ratio == pytest.approx(1.0, abs=0.02)
+    burst = _record(11)
+    burst[60_001:60_201:2] += 12.0 * math.sqrt(v)  # 100 glitches in 2 s
+    assert watch_noise_level(burst, DT, v, band).alarm.direction == "up"
+
+
+def test_a_measured_record_against_its_own_level_is_not_degraded(shared_data):
+    """ADIS16405 run 1, the accelerometers' first 300 s against their own pair-difference variance (the mean of d²,
+    ±3 %): no sustained change. Before, accel_y alarmed "noise up" at 299 s on one 7.4 σ glitch (now absorbed by
+    the cap: no alarm) and accel_z at 3.3 s on a 12.8 σ one; accel_z's burst of three 4.5–7.1 σ differences at
+    6.8 s still fires the CUSUM, and the ratio since then (≈ 1.00) shows it was a transient."""
+    accel = np.load(shared_data / "adis16405_static" / "adis16405_run1.npz")["accel"][:30_000]
+    levels = []
+    for j in range(3):
+        d = accel[1::2, j] - accel[0::2, j]
+        v = float(np.mean(d * d))
+        levels.append(watch_noise_level(accel[:, j], DT, v, (0.97 * v, 1.03 * v)))
+    assert not any(level.sustained for level in levels)
+    assert levels[1].alarm is None
+    burst = levels[2].alarm
+    assert burst is not None and burst.direction == "up" and 6.5 < burst.since_s < 7.0
+    assert levels[2].ratio_ci[0] < 1.03 ** 0.5
+
+
 def test_a_noise_density_down_is_found_too():
     y = _record(7)
     n = y.size

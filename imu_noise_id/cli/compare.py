@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     result = compare(imu, reference.axes, reference.rate_hz, reference.topic, ratio=args.ratio,
                      false_alarms_per_hour=args.false_alarms_per_hour, limits=limits)
     print(f"{args.bag} ({result.duration_s:.0f} s) against {reference.source}:")
-    for note in result.notes + [n for c in result.axes.values() for n in c.notes]:
+    for note in result.notes + [f"{axis}: {n}" for axis, c in result.axes.items() for n in c.notes]:
         print(f"note: {note}")
     print(table(result, reference))
     degraded = result.degraded

@@ -77,17 +77,17 @@ class AxisComparison:
 
     @property
     def beyond_spec(self) -> bool:
-        return self.limit is not None and self.limit.alarm is not None
+        return self.limit is not None and self.limit.sustained
 
     @property
     def degraded(self) -> bool:
-        return self.noise.alarm is not None or self.step is not None or self.line is not None or self.beyond_spec
+        return self.noise.sustained or self.step is not None or self.line is not None or self.beyond_spec
 
     def findings(self) -> list[str]:
         """What differs from the reference, in words (empty when within)."""
         out = []
         a = self.noise.alarm
-        if a is not None:
+        if a is not None and self.noise.sustained:
             out.append(f"noise {'up' if a.direction == 'up' else 'down'}: density {self.noise.ratio:.3g}× the "
                        f"reference [{self.noise.ratio_ci[0]:.3g}, {self.noise.ratio_ci[1]:.3g}] since "
                        f"{a.since_s:.1f} s (alarm at {a.time_s:.1f} s)")
@@ -145,4 +145,11 @@ def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: f
     line = _new_line(e, dt, whitening, alpha, reference.known_lines)
     beyond = None if limit is None else beyond_limit(y, dt, reference.difference_variance_at(limit, dt),
                                                      false_alarms_per_hour=false_alarms_per_hour)
-    return AxisComparison(noise, step if step.significant else None, line, alpha, [note] if note else [], beyond)
+    notes = [note] if note else []
+    for level, what in ((noise, "the reference"), (beyond, "its limit")):
+        if level is not None and level.alarm is not None and not level.sustained:
+            notes.append(f"a transient of {level.alarm.direction}ward noise at {level.alarm.since_s:.1f}–"
+                         f"{level.alarm.time_s:.1f} s (CUSUM alarm) that the level since then does not hold "
+                         f"({level.ratio:.3g}× {what} [{level.ratio_ci[0]:.3g}, {level.ratio_ci[1]:.3g}]): not "
+                         "counted as degraded")
+    return AxisComparison(noise, step if step.significant else None, line, alpha, notes, beyond)

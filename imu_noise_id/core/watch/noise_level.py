@@ -6,7 +6,10 @@ v₁ = v_ref/ρ²; Page 1954; Basseville & Nikiforov 1993, eq. 2.2.9)
     s_k = ½ ln(v₀/v₁) + ½ d_k² (1/v₀ − 1/v₁),    S_k = max(0, S_{k−1} + s_k),
 
 alarm at S_k > h = ln(3600 · r / λ): Lorden's ARL₀ ≥ e^h (eq. 5.2.73) bounds the false alarms to λ per hour at r
-increments per second inside the reference's interval. Delay ≈ h / KL(v₁‖v₀) increments.
+increments per second inside the reference's interval. Delay ≈ h / KL(v₁‖v₀) increments. Beyond the references: the
+upward test counts d_k² at most :data:`SPIKE_Z`² v₀ (a lone glitch is not a noisier sensor; the capped increments are
+never larger, so the bound holds). Reasons: docs/analysis.md, "Why the noise-level test caps a pair and
+confirms an alarm".
 """
 
 from __future__ import annotations
@@ -21,6 +24,8 @@ from scipy import stats
 DEFAULT_RATIO = 1.5
 #: False alarms per hour of data the threshold allows (per axis and direction).
 DEFAULT_FALSE_ALARMS_PER_HOUR = 0.1
+#: The upward CUSUM counts a pair's d² at most this many sd of the reference, squared (6e-5 of increments beyond).
+SPIKE_Z = 4.0
 
 
 @dataclass(frozen=True)
@@ -41,6 +46,7 @@ class NoiseLevel:
     ----------
     ratio, ratio_ci : live / reference density (since the alarm's change) and its 95 % χ² interval
     alarm : the first alarm, or None; threshold : h; increments : pair differences tested
+    reference_ci : the reference's interval as density ratios (√(v_lo/v_ref), √(v_hi/v_ref))
     """
 
     ratio: float
@@ -48,6 +54,18 @@ class NoiseLevel:
     alarm: LevelAlarm | None
     threshold: float
     increments: int
+    reference_ci: tuple[float, float] = (1.0, 1.0)
+
+    @property
+    def sustained(self) -> bool:
+        """An alarm the level since its change confirms: the ratio's interval since then lies beyond the reference's
+        (above it upward, below it downward). An alarm it does not confirm was a transient (a burst of raised noise,
+        a knock) that the CUSUM saw but the record's level since then does not hold."""
+        if self.alarm is None:
+            return False
+        if self.alarm.direction == "up":
+            return self.ratio_ci[0] > self.reference_ci[1]
+        return self.ratio_ci[1] < self.reference_ci[0]
 
 
 def threshold(false_alarms_per_hour: float, increments_per_s: float) -> float:
@@ -57,14 +75,16 @@ def threshold(false_alarms_per_hour: float, increments_per_s: float) -> float:
     return math.log(max(3600.0 * increments_per_s / false_alarms_per_hour, math.e))
 
 
-def directions(v_ref: float, v_interval: tuple[float, float], ratio: float) -> list[tuple[str, float, float]]:
-    """(direction, a, b) of each CUSUM, its increment s = a + b·d² (module docstring); a direction whose change lies
-    inside the reference's interval is left out (nothing to tell apart)."""
+def directions(v_ref: float, v_interval: tuple[float, float],
+               ratio: float) -> list[tuple[str, float, float, float]]:
+    """(direction, a, b, cap) of each CUSUM, its increment s = a + b·min(d², cap) (module docstring; cap = SPIKE_Z² v₀
+    upward, ∞ downward); a direction whose change lies inside the reference's interval is left out."""
     v_lo, v_hi = v_interval
     out = []
     for direction, v0, v1 in (("up", v_hi, ratio**2 * v_ref), ("down", v_lo, v_ref / ratio**2)):
         if (direction == "up" and v1 > v0) or (direction == "down" and v1 < v0):
-            out.append((direction, 0.5 * math.log(v0 / v1), 0.5 * (1.0 / v0 - 1.0 / v1)))
+            cap = SPIKE_Z**2 * v0 if direction == "up" else math.inf
+            out.append((direction, 0.5 * math.log(v0 / v1), 0.5 * (1.0 / v0 - 1.0 / v1), cap))
     return out
 
 
@@ -125,16 +145,16 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
     h = threshold(false_alarms_per_hour, 0.5 / dt)
     d2 = d * d
     alarms = []
-    for direction, a, b in directions(v_ref, v_interval, ratio):
+    for direction, a, b, cap in directions(v_ref, v_interval, ratio):
         if direction not in directions_of:
             continue
-        found = _cusum_alarm(a + b * d2, h)
+        found = _cusum_alarm(a + b * np.minimum(d2, cap), h)
         if found is not None:
             alarms.append(LevelAlarm(direction, float(index[found[0]] * dt), float(index[found[1]] * dt)))
     alarm = min(alarms, key=lambda a: a.time_s) if alarms else None
     since = d if alarm is None else d[index * dt >= alarm.since_s]
     value, ci = _ratio(since if since.size >= 100 else d, v_ref)
-    return NoiseLevel(value, ci, alarm, h, int(d.size))
+    return NoiseLevel(value, ci, alarm, h, int(d.size), (math.sqrt(v_lo / v_ref), math.sqrt(v_hi / v_ref)))
 
 
 #: Density ratio (live / limit) the test against a specification's limit is tuned to.

@@ -36,10 +36,11 @@ class SequentialNoiseWatch:
         self.h = threshold(false_alarms_per_hour, 0.5 / period)
         self.a = np.full((k, 2), -np.inf)
         self.b = np.zeros((k, 2))
+        self.cap = np.full((k, 2), np.inf)
         for i in range(k):
-            for direction, a, b in directions(float(self.v_ref[i]), intervals[i], ratio):
+            for direction, a, b, cap in directions(float(self.v_ref[i]), intervals[i], ratio):
                 j = 0 if direction == "up" else 1
-                self.a[i, j], self.b[i, j] = a, b
+                self.a[i, j], self.b[i, j], self.cap[i, j] = a, b, cap
         self.s = np.zeros((k, 2))
         self.left_zero = np.full((k, 2), math.nan)
         self.alarms: list[LevelAlarm | None] = [None] * k
@@ -56,7 +57,7 @@ class SequentialNoiseWatch:
         t0, first = self._pending
         self._pending = None
         d2 = (np.asarray(sample, dtype=float) - first) ** 2
-        s = np.maximum(self.s + self.a + self.b * d2[:, None], 0.0)
+        s = np.maximum(self.s + self.a + self.b * np.minimum(d2[:, None], self.cap), 0.0)
         leaving = (self.s == 0.0) & (s > 0.0)
         self.left_zero[leaving] = t0
         self.s = s
