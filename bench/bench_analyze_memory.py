@@ -46,7 +46,7 @@ def main() -> None:
         bag, n = make_bag(Path(tmp), args.rate, args.duration, "mcap")
         arrays = n * 7 * 8
         prelude = ("import imu_noise_id.cli.analyze, imu_noise_id.bag.reader, imu_noise_id.pipelines.analyze.static, "
-                   "imu_noise_id.report.outputs, imu_noise_id.report.plots")
+                   "imu_noise_id.report.analysis, imu_noise_id.report.plots")
         base, _, _ = peak_rss_of([sys.executable, "-c", prelude + "; import time; time.sleep(0.2)"], env)
         runs = {}
         for label, extra in VARIANTS.items():
