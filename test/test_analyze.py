@@ -315,26 +315,31 @@ def test_mapped_recording_reads_back_the_same_arrays_read_only_and_pickles_small
 def test_axes_in_worker_processes_give_the_same_result(tmp_path, monkeypatch):
     """``jobs=2`` runs each axis's model stage, loop, final model and band in two worker processes (alive while the
     axes come back, in axis order) and returns what one process computes, number for number, leaving no temporary
-    folder of the mapped recording behind; a bad ``jobs`` is an InputError."""
+    folder of the mapped recording behind; so does a recording given already in files (the command line's, read by
+    this process too, read-only); a bad ``jobs`` is an InputError."""
     import multiprocessing
     import tempfile
 
-    from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
+    from imu_noise_id.pipelines.analyze import AnalyzeOptions, MappedImu, ModelStage, analyze
 
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     imu = simulate_static_imu(_model(), 100.0, 20.0, seed=7)
+    (tmp_path.parent / "mapped").mkdir()
+    given = MappedImu.write(imu, tmp_path.parent / "mapped")
     results, workers = {}, {}
-    for jobs in (1, 2):
+    for jobs, recording in ((1, imu), (2, imu), (3, given)):
         seen: list[tuple[str, int]] = []
-        results[jobs] = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+RW"), jobs=jobs),
+        results[jobs] = analyze(recording, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+RW"),
+                                                                  jobs=min(jobs, 2)),
                                 on_axis=lambda axis, fit, loop, seen=seen: seen.append(
                                     (axis, len(multiprocessing.active_children()))))
         workers[jobs] = seen
     assert [a for a, _ in workers[2]] == list(AXES)
     assert min(k for _, k in workers[2]) == 2 and max(k for _, k in workers[1]) == 0
     one, two = results[1], results[2]
-    assert one.warnings == two.warnings
+    assert one.warnings == two.warnings == results[3].warnings
     for axis in AXES:
+        assert results[3].finals[axis].fit.loglik == one.finals[axis].fit.loglik
         assert [c.params() for c in one.finals[axis].fit.components] == \
             [c.params() for c in two.finals[axis].fit.components]
         assert one.finals[axis].fit.loglik == two.finals[axis].fit.loglik

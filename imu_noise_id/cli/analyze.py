@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
+from dataclasses import replace
 from pathlib import Path
 
 from . import add_rate_option, results_folder
@@ -39,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_static
     from ..bag.topics import IMU_TYPE
     from ..core.axes import AXES
-    from ..pipelines.analyze import analyze, worker_processes
+    from ..pipelines.analyze import MappedImu, analyze, worker_processes
     from ..report.analysis import write_analysis
     from ..report.console import (
         comparison_table,
@@ -84,8 +86,13 @@ def run(args: argparse.Namespace) -> int:
             models.echo(loop_line(axis, loop, fit.model))
         models(len(done), n_axes)
 
-    with allan, models:
-        result = analyze(recording.imu, recording.temperature, options, progress=allan_progress, on_axis=on_axis)
+    with allan, models, tempfile.TemporaryDirectory(prefix="imu_noise_id_") as mapped:
+        imu = recording.imu
+        if options.span is None and worker_processes(options.jobs, len(imu), n_axes) > 1:
+            # the workers and this process read one copy from files; the decoded arrays are let go
+            imu = MappedImu.write(imu, Path(mapped))
+            recording = replace(recording, imu=imu.series)
+        result = analyze(imu, recording.temperature, options, progress=allan_progress, on_axis=on_axis)
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model,

@@ -12,6 +12,7 @@ report layer (:mod:`imu_noise_id.report.analysis`) writes the files from the res
 
 from __future__ import annotations
 
+import contextlib
 import math
 import multiprocessing
 import os
@@ -118,14 +119,15 @@ def _imu_loop(imu: ImuSeries, temperature: ScalarSeries | None, options: Analyze
         return ImuLoop(imu, None, intervals=True)
 
 
-def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: AnalyzeOptions | None = None, *,
-            progress: Progress | None = None, on_axis: OnAxis | None = None) -> AnalysisResult:
+def analyze(imu: ImuSeries | MappedImu, temperature: ScalarSeries | None = None, options: AnalyzeOptions | None = None,
+            *, progress: Progress | None = None, on_axis: OnAxis | None = None) -> AnalysisResult:
     """Run the stages of the module docstring on a static recording.
 
     Parameters
     ----------
     imu
-        The six axes (rad/s, m/s²), repaired (the reader's notes in ``imu.notes``).
+        The six axes (rad/s, m/s²), repaired (the reader's notes in ``imu.notes``); or a recording already in files
+        (:class:`.mapped.MappedImu`), which this process and its workers then read without a private copy.
     temperature
         The sensor temperature, if any (enables the loop's TEMP test).
     options
@@ -139,15 +141,18 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
         Input a user can fix (too short, not static, constant axis, …), the message saying what to do.
     """
     options = options or AnalyzeOptions()
+    recording = imu if isinstance(imu, MappedImu) else None
+    if recording is not None:
+        imu = recording.open()
     if options.span is not None:
-        imu = imu.between(*options.span)
+        imu, recording = imu.between(*options.span), None
     static = analyze_static(imu, kinds=options.kinds, per_decade=options.per_decade, confidence=options.confidence,
                             allow_motion=options.allow_motion, progress=progress)
     result = AnalysisResult(static)
     check_horizon(static, options.horizon_s)
     if options.models.enabled:
         options.models.check_rate(static.dt)
-        _model_stages(imu, temperature, options, result, on_axis)
+        _model_stages(imu, temperature, options, result, on_axis, recording=recording)
     result.overbounds = overbounds(static, result.finals, options.horizon_s)
     for axis, final in result.finals.items():
         why = unresolved_reason(final, result.loops.get(axis), static.slopes[axis].noise_density)
@@ -159,13 +164,14 @@ def analyze(imu: ImuSeries, temperature: ScalarSeries | None = None, options: An
 
 
 def _model_stages(imu: ImuSeries, temperature: ScalarSeries | None, options: AnalyzeOptions, result: AnalysisResult,
-                  on_axis: OnAxis | None) -> None:
+                  on_axis: OnAxis | None, *, recording: MappedImu | None = None) -> None:
     """Stages 2–5 of the module docstring, into ``result``: each axis by :func:`_axis_stages`, in worker processes
-    when ``options.jobs`` asks for them, the results taken in axis order."""
+    when ``options.jobs`` asks for them (reading ``recording``'s files when given, ``imu`` mapped from them), the
+    results taken in axis order."""
     static = result.static
     loop = _imu_loop(imu, temperature, options, result.warnings) if options.loop else None
     context = _AxisContext(imu, loop, options, static)
-    for axis, outcome in _each_axis(context, worker_processes(options.jobs, static.n, len(static.axes))):
+    for axis, outcome in _each_axis(context, worker_processes(options.jobs, static.n, len(static.axes)), recording):
         result.warnings += [w for w in outcome.warnings if w not in result.warnings]
         if outcome.loop is not None:
             result.loops[axis] = outcome.loop
@@ -253,23 +259,26 @@ def _worker_axis(axis: str) -> _AxisOutcome:
     return _axis_stages(_WORKER_CONTEXT[0], axis)
 
 
-def _each_axis(context: _AxisContext, jobs: int) -> Iterator[tuple[str, _AxisOutcome]]:
+def _each_axis(context: _AxisContext, jobs: int,
+               recording: MappedImu | None = None) -> Iterator[tuple[str, _AxisOutcome]]:
     """(axis, its outcome) in axis order, here or from ``jobs`` "spawn" worker processes (the context sent to each
-    once, the recording's arrays mapped from files in a temporary folder removed afterwards); the workers stop after the
-    last axis or the first error (an axis's InputError raised here)."""
+    once, the recording's arrays mapped from ``recording``'s files, or from files written into a temporary folder
+    removed afterwards); the workers stop after the last axis or the first error (an axis's InputError raised here)."""
     axes = list(context.static.axes)
     if jobs <= 1:
         for axis in axes:
             yield axis, _axis_stages(context, axis)
         return
-    with tempfile.TemporaryDirectory(prefix="imu_noise_id_") as folder:
-        recording = MappedImu.write(context.imu, Path(folder))
+    with contextlib.ExitStack() as stack:
+        if recording is None:
+            recording = MappedImu.write(context.imu, Path(stack.enter_context(
+                tempfile.TemporaryDirectory(prefix="imu_noise_id_"))))
         sent = replace(context, imu=recording.series,
                        loop=context.loop.on(recording.series) if context.loop is not None else None)
-        with multiprocessing.get_context("spawn").Pool(jobs, initializer=_set_worker_context,
-                                                       initargs=(sent, recording)) as pool:
-            yield from zip(axes, pool.imap(_worker_axis, axes), strict=True)
+        pool = stack.enter_context(multiprocessing.get_context("spawn").Pool(
+            jobs, initializer=_set_worker_context, initargs=(sent, recording)))
+        yield from zip(axes, pool.imap(_worker_axis, axes), strict=True)
 
 
 __all__ = ["AUTO", "DEFAULT_HORIZON_S", "AnalysisResult", "AnalyzeOptions", "AxisOverbound", "FinalModel",
-           "ModelStage", "StaticAnalysis", "analyze", "worker_processes"]
+           "MappedImu", "ModelStage", "StaticAnalysis", "analyze", "worker_processes"]
