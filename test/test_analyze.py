@@ -349,3 +349,22 @@ def test_axes_in_worker_processes_give_the_same_result(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(InputError, match="--jobs"):
         AnalyzeOptions(jobs=-1)
+
+
+def test_without_room_for_the_recording_files_the_analysis_runs_on_copies(tmp_path, monkeypatch, capsys):
+    """Where the temporary folder has no room for the recording's files (a full disk), a parallel ``analyze`` says so
+    once and runs as before the mapping, each worker sent a copy: exit 0, the same numbers as one process."""
+    from imu_noise_id.pipelines.analyze import PARALLEL_MIN_SAMPLES, MappedImu
+
+    def no_room(imu, folder):
+        raise OSError(28, "No space left on device")
+
+    imu = simulate_static_imu(_model(), 100.0, PARALLEL_MIN_SAMPLES / 100.0, seed=9)
+    bag = write_bag(tmp_path / "bag", imu)
+    one = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+RW"), loop=False, jobs=1))
+    monkeypatch.setattr(MappedImu, "write", staticmethod(no_room))
+    two = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+RW"), loop=False, jobs=2))
+    assert [one.finals[a].fit.loglik for a in AXES] == [two.finals[a].fit.loglik for a in AXES]
+    assert main(["analyze", str(bag), "--out", str(tmp_path / "out"), "--model", "WN+RW", "--no-loop"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("note: the recording stays in memory") == 1 and "Traceback" not in err

@@ -90,8 +90,14 @@ def run(args: argparse.Namespace) -> int:
         imu = recording.imu
         if options.span is None and worker_processes(options.jobs, len(imu), n_axes) > 1:
             # the workers and this process read one copy from files; the decoded arrays are let go
-            imu = MappedImu.write(imu, Path(mapped))
-            recording = replace(recording, imu=imu.series)
+            try:
+                imu = MappedImu.write(imu, Path(mapped))
+            except OSError as exc:
+                print(f"note: the recording stays in memory, one copy per process: it could not be written to "
+                      f"{mapped} ({exc.strerror or exc}); set TMPDIR to a folder with room to save memory",
+                      file=sys.stderr)
+            else:
+                recording = replace(recording, imu=imu.series)
         result = analyze(imu, recording.temperature, options, progress=allan_progress, on_axis=on_axis)
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)

@@ -249,8 +249,12 @@ def worker_processes(asked: int, n: int, axes: int) -> int:
 _WORKER_CONTEXT: list[_AxisContext] = []
 
 
-def _set_worker_context(context: _AxisContext, recording: MappedImu) -> None:
-    """Install ``context`` in this worker with the recording mapped from ``recording``'s files (not sent)."""
+def _set_worker_context(context: _AxisContext, recording: MappedImu | None) -> None:
+    """Install ``context`` in this worker with the recording mapped from ``recording``'s files (not sent), or as sent
+    (None)."""
+    if recording is None:
+        _WORKER_CONTEXT[:] = [context]
+        return
     imu = recording.open()
     _WORKER_CONTEXT[:] = [replace(context, imu=imu, loop=context.loop.on(imu) if context.loop is not None else None)]
 
@@ -263,7 +267,8 @@ def _each_axis(context: _AxisContext, jobs: int,
                recording: MappedImu | None = None) -> Iterator[tuple[str, _AxisOutcome]]:
     """(axis, its outcome) in axis order, here or from ``jobs`` "spawn" worker processes (the context sent to each
     once, the recording's arrays mapped from ``recording``'s files, or from files written into a temporary folder
-    removed afterwards); the workers stop after the last axis or the first error (an axis's InputError raised here)."""
+    removed afterwards, or sent with it where they cannot be written); the workers stop after the last axis or the first
+    error (an axis's InputError raised here)."""
     axes = list(context.static.axes)
     if jobs <= 1:
         for axis in axes:
@@ -271,10 +276,11 @@ def _each_axis(context: _AxisContext, jobs: int,
         return
     with contextlib.ExitStack() as stack:
         if recording is None:
-            recording = MappedImu.write(context.imu, Path(stack.enter_context(
-                tempfile.TemporaryDirectory(prefix="imu_noise_id_"))))
-        sent = replace(context, imu=recording.series,
-                       loop=context.loop.on(recording.series) if context.loop is not None else None)
+            with contextlib.suppress(OSError):  # no room for the files: each worker gets a copy, as before
+                recording = MappedImu.write(context.imu, Path(stack.enter_context(
+                    tempfile.TemporaryDirectory(prefix="imu_noise_id_"))))
+        sent = context if recording is None else replace(
+            context, imu=recording.series, loop=context.loop.on(recording.series) if context.loop is not None else None)
         pool = stack.enter_context(multiprocessing.get_context("spawn").Pool(
             jobs, initializer=_set_worker_context, initargs=(sent, recording)))
         yield from zip(axes, pool.imap(_worker_axis, axes), strict=True)
