@@ -80,18 +80,3 @@ def test_the_osc_start_frequencies_are_the_strongest_lines_strongest_first():
     found = osc_start_frequencies(banded_periodogram(y), dt, 2)
     assert len(found) == 2  # not the weak 2.1 Hz line
     assert found[0] == pytest.approx(0.8, rel=0.03) and found[1] == pytest.approx(1.3, rel=0.03)
-
-
-def test_only_lines_narrower_than_the_bands_get_single_frequencies():
-    """The Whittle metric's periodogram stays banded (its size fixed, not growing with the record) around a broad line,
-    which its 2 % bands resolve; a narrow line gets single frequencies around it. A broad OSC (18.5 Hz, 21.6 Hz wide,
-    as the loop fits on a measured accelerometer) had a window of ±20 bandwidths: the whole axis, 149 999 frequencies
-    of 300 000 samples, and the metric cost 0.7 s per evaluation."""
-    from imu_noise_id.core.estimation.search import _line_windows
-
-    y = simulate_sum([WN(1e-3)], 300_000, DT, np.random.default_rng(2))
-    banded = banded_periodogram(y).omega.size
-    sizes = {name: banded_periodogram(y, fine=_line_windows([[WN(1e-3), line]], DT)).omega.size
-             for name, line in (("broad", OSC(18.5, 21.6, 2e-2)), ("narrow", OSC(0.56, 8e-4, 7e-3)))}
-    assert sizes["broad"] == banded < 2000
-    assert banded + 50 < sizes["narrow"] < banded + 200

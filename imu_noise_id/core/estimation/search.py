@@ -89,19 +89,13 @@ def _mean_parameters(model: NoiseModel, fitted: ss.StateSpace, prof: kalman.Prof
     return coef
 
 
-#: An OSC at least this fraction of its frequency wide is resolved by the banded periodogram's bands (2 % of the
-#: frequency wide: five or more across its bandwidth) and gets no window of single frequencies.
-BANDED_LINE_WIDTH = 0.1
-
-
 def _line_windows(start_values: list[list[Component]], dt: float) -> list[tuple[float, float]]:
-    """Angular-frequency windows [rad/sample] around every starting OSC line narrower than :data:`BANDED_LINE_WIDTH` of
-    its frequency, where the Whittle metric needs the periodogram unbanded: ±max(20 bandwidths, 2 % of the
-    frequency)."""
+    """Angular-frequency windows [rad/sample] around every starting OSC line, where the Whittle metric needs the
+    periodogram unbanded: ±max(20 bandwidths, 2 % of the frequency)."""
     out = []
     for start in start_values:
         for c in start:
-            if c.name == "OSC" and c.params()["bandwidth"] < BANDED_LINE_WIDTH * c.params()["frequency"]:
+            if c.name == "OSC":
                 half = max(20.0 * c.params()["bandwidth"], 0.02 * c.params()["frequency"])
                 f_lo, f_hi = max(c.params()["frequency"] - half, 0.0), c.params()["frequency"] + half
                 out.append((2.0 * math.pi * f_lo * dt, 2.0 * math.pi * f_hi * dt))
