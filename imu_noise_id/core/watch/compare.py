@@ -87,7 +87,7 @@ class AxisComparison:
         """What differs from the reference, in words (empty when within)."""
         out = []
         a = self.noise.alarm
-        if a is not None and self.noise.sustained:
+        if self.noise.sustained:  # an alarm the level since it holds
             out.append(f"noise {'up' if a.direction == 'up' else 'down'}: density {self.noise.ratio:.3g}× the "
                        f"reference [{self.noise.ratio_ci[0]:.3g}, {self.noise.ratio_ci[1]:.3g}] since "
                        f"{a.since_s:.1f} s (alarm at {a.time_s:.1f} s)")
