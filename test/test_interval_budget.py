@@ -51,3 +51,15 @@ def test_past_the_budget_each_interval_says_what_it_is(record, within, monkeypat
             assert (lo, hi) == pytest.approx(wald)
         elif how.startswith("conditional"):
             assert lo == 0.0 and values[lab] < hi < math.inf
+
+
+def test_a_profile_stops_at_the_budget_instead_of_running_past_it(record, within, monkeypatch):
+    # A budget the first profile alone would pass: before the cap, a profile that started within the budget ran to
+    # its end (hundreds of evaluations at 10^6 samples).
+    cap = 40
+    monkeypatch.setattr(uncertainty, "PROFILE_BUDGET", cap * N)
+    assert within.profile_evaluations > 10 * cap
+    fit = NoiseModel(record, DT, "WN+GM+RW+RR").fit()
+    # the searches stop at the cap; the single evaluations around them (boundary checks, scored starts) are few
+    assert fit.profile_evaluations <= 2 * cap
+    assert fit.beyond_budget

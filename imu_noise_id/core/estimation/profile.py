@@ -69,6 +69,10 @@ def adjusted(prof: ProfileResult) -> float:
     return float(prof.loglik + 0.5 * logdet) if sign > 0 else -math.inf
 
 
+class BudgetSpentError(Exception):
+    """A profile would spend more likelihood evaluations than its :attr:`Profiler.max_eval`."""
+
+
 @dataclass
 class Profiler:
     """Adjusted profile likelihood of a fit's log-parameters (and ramp slope) on its record.
@@ -81,6 +85,7 @@ class Profiler:
     lo, hi — physical range of each log-parameter (GM τ, OSC/LPF frequencies; ±inf elsewhere)
     zero — parameters at the zero boundary → their scale s (conditional upper end)
     flat — parameters the information does not determine (searched in their log)
+    max_eval — the evaluations all profiles may spend: past it a profile stops with :class:`BudgetSpentError`
     """
 
     par: mle.Parameterisation
@@ -95,6 +100,7 @@ class Profiler:
     zero: dict[int, float] = field(default_factory=dict)
     flat: set[int] = field(default_factory=set)
     n_eval: int = 0
+    max_eval: float = math.inf
     better: tuple[float, np.ndarray] | None = None  # (ℓ, ϑ) above the fit's maximum, when met
 
     def __post_init__(self) -> None:
@@ -250,6 +256,8 @@ class Profiler:
         def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
             th, inside = theta_of(x)
             self.n_eval += 1
+            if self.n_eval > self.max_eval:
+                raise BudgetSpentError
             try:
                 ll, g, _, prof = mle.loglik_grad_profile(self.par, th, base, self.y, self.z, data=self.data)
             except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError

@@ -21,7 +21,7 @@ from ..noise.components import RR, Component
 from ..noise.modelspec import parameter_labels
 from ..quality import interpolate_missing
 from . import mle
-from .profile import Profiler
+from .profile import BudgetSpentError, Profiler
 from .quantiles import Z95
 from .results import BUDGET_SPENT, FitResult, RecordLengthAdvice
 
@@ -31,10 +31,10 @@ WALD_MAX_SE_LOG = 1.0
 #: The Wald interval stands when ℓ at both its ends on the quadratic trace is this far below the maximum (the
 #: signed root within 1.96 − 0.15 … 1.96 + 0.25: a quadratic log-likelihood gives exactly 1.92).
 WALD_DROP_RANGE = (0.5 * (Z95 - 0.15) ** 2, 0.5 * (Z95 + 0.25) ** 2)
-#: Likelihood evaluations × samples the profile intervals of one fit may spend (about a minute at 0.3 µs per sample
-#: and evaluation). A parameter whose profile would start beyond it gets the interval of :func:`_beyond_budget`, its
+#: Likelihood evaluations × samples the profile intervals of one fit may spend (about 20 s at 0.3 µs per sample and
+#: evaluation). A parameter whose profile would pass it gets the interval of :func:`_beyond_budget`, its
 #: ``ci95_method`` ending in :data:`BUDGET_SPENT`.
-PROFILE_BUDGET = 2e8
+PROFILE_BUDGET = 6e7
 
 
 def _beyond_budget(v: float, s_log: float, conditional_end: float | None) -> tuple[tuple[float, float], str]:
@@ -110,9 +110,10 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
         # Profiles need hundreds of evaluations: on a long record with gaps they run on the gap-filled record
         # (the fast engine), an approximation the intervals of such records carry.
         y_fill = interpolate_missing(y)
-        prof = Profiler(par, theta, model_ss, y_fill, z, kalman.loglik(model_ss, y_fill, z).loglik, info, lo, hi)
+        prof = Profiler(par, theta, model_ss, y_fill, z, kalman.loglik(model_ss, y_fill, z).loglik, info, lo, hi,
+                        max_eval=PROFILE_BUDGET / np.size(y))
     else:
-        prof = Profiler(par, theta, model_ss, y, z, fit.loglik, info, lo, hi)
+        prof = Profiler(par, theta, model_ss, y, z, fit.loglik, info, lo, hi, max_eval=PROFILE_BUDGET / np.size(y))
     res = mle.MLEResult(theta, model_ss, fit.loglik, 0, fit.converged, "")
     near_zero = [k for k in range(k_noise) if _near_zero(par, res, k, y, z)]
     # An amplitude (a density, a σ) near 0 is at the boundary; a time or frequency (with a physical range) that
@@ -120,7 +121,10 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     zero = [k for k in near_zero if par.entries[k][1] not in bounds]
     prof.zero = {k: prof.conditional_scale(k) for k in zero}
     prof.flat = ({k for k in range(k_noise) if not np.isfinite(cov[k, k])} | set(near_zero)) - set(zero)
-    a_hat = prof.best_at_estimate()
+    try:
+        a_hat = prof.best_at_estimate()
+    except BudgetSpentError:
+        a_hat = prof.evaluate(theta)[1]
 
     def spent() -> bool:
         return prof.n_eval * np.size(y) >= PROFILE_BUDGET
@@ -130,13 +134,21 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
         s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
         fit.se[lab] = v * s_log
         interior = k not in prof.zero and k not in prof.flat
-        if interior and s_log <= WALD_MAX_SE_LOG and prof.wald_holds(k, cov, a_hat, WALD_DROP_RANGE):
+        try:
+            wald = interior and s_log <= WALD_MAX_SE_LOG and prof.wald_holds(k, cov, a_hat, WALD_DROP_RANGE)
+        except BudgetSpentError:  # checking the Wald interval's ends spends the budget too
+            wald = False
+        if wald:
             fit.ci95[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
             fit.ci95_method[lab] = "wald"
-        elif spent():
-            fit.ci95[lab], fit.ci95_method[lab] = _beyond_budget(v, s_log, prof.zero.get(k))
         else:
-            lo_k, hi_k = prof.interval(k, cov)
+            try:
+                if spent():
+                    raise BudgetSpentError
+                lo_k, hi_k = prof.interval(k, cov)
+            except BudgetSpentError:
+                fit.ci95[lab], fit.ci95_method[lab] = _beyond_budget(v, s_log, prof.zero.get(k))
+                continue
             fit.ci95[lab] = (math.exp(lo_k) if math.isfinite(lo_k) else 0.0,
                              math.exp(hi_k) if math.isfinite(hi_k) else math.inf)
             fit.ci95_method[lab] = "profile"
@@ -148,9 +160,12 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
         if (prof.zero or prof.flat) and spent():
             fit.ci95_method[rr_lab] = f"gls, {BUDGET_SPENT}"
         elif prof.zero or prof.flat:  # the GLS interval holds the noise parameters; a boundary RW trades with the ramp
-            ramp["ci95"] = prof.slope_interval(j, ramp["value"], ramp["se"])
-            fit.ci95[rr_lab] = ramp["ci95"]
-            fit.ci95_method[rr_lab] = "profile"
+            try:
+                ramp["ci95"] = prof.slope_interval(j, ramp["value"], ramp["se"])
+                fit.ci95[rr_lab] = ramp["ci95"]
+                fit.ci95_method[rr_lab] = "profile"
+            except BudgetSpentError:
+                fit.ci95_method[rr_lab] = f"gls, {BUDGET_SPENT}"
     fit.profile_evaluations = prof.n_eval
     if prof.better is not None:
         fit.better_loglik = prof.better[0]
