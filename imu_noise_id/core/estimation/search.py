@@ -89,19 +89,6 @@ def _mean_parameters(model: NoiseModel, fitted: ss.StateSpace, prof: kalman.Prof
     return coef
 
 
-def _line_windows(start_values: list[list[Component]], dt: float) -> list[tuple[float, float]]:
-    """Angular-frequency windows [rad/sample] around every starting OSC line, where the Whittle metric needs the
-    periodogram unbanded: ±max(20 bandwidths, 2 % of the frequency)."""
-    out = []
-    for start in start_values:
-        for c in start:
-            if c.name == "OSC":
-                half = max(20.0 * c.params()["bandwidth"], 0.02 * c.params()["frequency"])
-                f_lo, f_hi = max(c.params()["frequency"] - half, 0.0), c.params()["frequency"] + half
-                out.append((2.0 * math.pi * f_lo * dt, 2.0 * math.pi * f_hi * dt))
-    return out
-
-
 @dataclass(frozen=True)
 class _Search:
     """What every start of one fit is searched on: the record (gap-filled when ``fill_first``) and the Whittle
@@ -117,7 +104,7 @@ def _search_of(model: NoiseModel, options: FitOptions, start_values: list[list[C
     """The :class:`_Search` of ``model`` from ``start_values``: the periodogram unbanded around their OSC lines."""
     bp = periodogram
     if bp is not None and any(c.name == "OSC" for s in start_values for c in s):
-        bp = whittle.banded_periodogram(y_av, fine=_line_windows(start_values, model.dt))
+        bp = whittle.banded_periodogram(y_av, fine=whittle.line_windows(start_values, model.dt))
     fill_first = model.n_obs < model.n_total and model.n_total > mle.FILL_FIRST_MIN_SAMPLES and options.polish
     y_search = interpolate_missing(model.y) if fill_first else model.y
     metric_of = (functools.partial(whittle.whittle_information, y=y_av, dt=model.dt, periodogram=bp)

@@ -34,13 +34,17 @@ class BandedPeriodogram:
     power: np.ndarray
 
 
-def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02,
-                       fine: list[tuple[float, float]] = ()) -> BandedPeriodogram:
-    """Tapered periodogram I(ω_j) = |Σ_t w_t Δy_t e^{−iω_j t}|²/Σ_t w_t² of the demeaned differences,
-    j = 1…⌊(M−1)/2⌋, the lowest ``n_single`` frequencies kept single, the rest pooled in bands of width ratio·ω,
-    except in the ``fine`` intervals (ω_lo, ω_hi) [rad/sample], where the frequencies stay single (around a
-    narrow line, whose shape a band would hide: an OSC's frequency and bandwidth). w: the Hann taper.
-    """
+@dataclass(frozen=True)
+class TaperedPeriodogram:
+    """Periodogram of Δy at every Fourier frequency ω_j = 2πj/M, j = 1…⌊(M−1)/2⌋ [rad/sample] (M differences)."""
+
+    omega: np.ndarray
+    power: np.ndarray
+    m: int
+
+
+def tapered_periodogram(y: np.ndarray) -> TaperedPeriodogram:
+    """I(ω_j) = |Σ_t w_t Δy_t e^{−iω_j t}|²/Σ_t w_t² of the demeaned differences of ``y`` (w: the Hann taper)."""
     d = np.diff(np.asarray(y, dtype=float))
     d = d - d.mean()
     m = d.size
@@ -49,9 +53,16 @@ def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02,
         raise InputError("too few samples for a spectral initial value")
     taper = np.hanning(m)
     spec = np.fft.rfft(d * taper)
-    j = np.arange(1, jmax + 1)
     per = (spec[1: jmax + 1].real ** 2 + spec[1: jmax + 1].imag ** 2) / float(taper @ taper)
-    omega = 2.0 * math.pi * j / m
+    return TaperedPeriodogram(2.0 * math.pi * np.arange(1, jmax + 1) / m, per, m)
+
+
+def pooled(tp: TaperedPeriodogram, n_single: int = 256, ratio: float = 1.02,
+           fine: list[tuple[float, float]] | tuple = ()) -> BandedPeriodogram:
+    """``tp`` with its lowest ``n_single`` frequencies kept single and the rest pooled in bands of width ratio·ω,
+    except in the ``fine`` intervals (ω_lo, ω_hi) [rad/sample], where the frequencies stay single (around a narrow
+    line, whose shape a band would hide: an OSC's frequency and bandwidth)."""
+    m, jmax = tp.m, tp.omega.size
     single = np.zeros(jmax + 2, bool)
     single[: n_single + 1] = True
     for lo, hi in fine:
@@ -62,11 +73,30 @@ def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02,
         edges.append(min(e + 1 if single[e + 1] else max(e + 1, int(e * ratio)), jmax))
     edges = np.array(edges)
     counts = np.diff(edges)
-    csum = np.concatenate([[0.0], np.cumsum(per)])
-    wsum = np.concatenate([[0.0], np.cumsum(omega)])
+    csum = np.concatenate([[0.0], np.cumsum(tp.power)])
+    wsum = np.concatenate([[0.0], np.cumsum(tp.omega)])
     power = csum[edges[1:]] - csum[edges[:-1]]
     centre = (wsum[edges[1:]] - wsum[edges[:-1]]) / counts
     return BandedPeriodogram(centre, counts.astype(float), power)
+
+
+def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02,
+                       fine: list[tuple[float, float]] | tuple = ()) -> BandedPeriodogram:
+    """:func:`pooled` of the :func:`tapered_periodogram` of ``y``."""
+    return pooled(tapered_periodogram(y), n_single, ratio, fine)
+
+
+def line_windows(starts: list[list[Component]], dt: float) -> list[tuple[float, float]]:
+    """Angular-frequency windows [rad/sample] around every OSC line of ``starts``, where a Whittle likelihood needs
+    the periodogram unbanded: ±max(20 bandwidths, 2 % of the frequency)."""
+    out = []
+    for start in starts:
+        for c in start:
+            if c.name == "OSC":
+                half = max(20.0 * c.params()["bandwidth"], 0.02 * c.params()["frequency"])
+                f_lo, f_hi = max(c.params()["frequency"] - half, 0.0), c.params()["frequency"] + half
+                out.append((2.0 * math.pi * f_lo * dt, 2.0 * math.pi * f_hi * dt))
+    return out
 
 
 def osc_start_frequencies(bp: BandedPeriodogram, dt: float, count: int, half_window: int = 12) -> list[float]:

@@ -97,6 +97,10 @@ def run_closed_loop(
     if start_fit is not None and (start_fit.record is None or start_fit.n != int(np.isfinite(y).sum())):
         raise InputError("closed loop: the starting fit must be a fit of this record that keeps its data")
     state = LoopState(structure=parse_structure(start_fit.model if start_fit is not None else start))
+    if start_fit is not None and loop.on_composite:
+        # the moves are judged against the start fitted as they are (on the composite likelihood)
+        state.init = list(start_fit.components)
+        start_fit = None
     diag = loop.diagnose(state, start_fit)
     steps = [LoopStep(0, state.name(), None, None, None, state, diag, [])]
     swapped = swap_start_filter(loop, state, diag) if max_steps > 0 else None
@@ -149,6 +153,9 @@ def run_closed_loop(
         steps.append(LoopStep(len(steps), state.name(), added, f.evidence, f, state, diag, drop_trials,
                               tuple(replaced + dropped)))
     note = ""
+    if loop.on_composite and len(steps) > 1:
+        steps[-1] = exact_finish(loop, steps[-1])
+        diag = steps[-1].diagnosis
     if intervals and len(steps) > 1:
         steps[-1], note = final_intervals(loop, steps[-1])
         diag = steps[-1].diagnosis
@@ -164,6 +171,20 @@ def run_closed_loop(
     remaining = [f for f in diag.findings if f.significant]
     return LoopResult(axis=axis, dt=float(dt), n=y.size, steps=steps, passed=passed, verdict=verdict,
                       remaining=remaining, av_inside_band=inside, max_rel_av_error=worst, note=note)
+
+
+def exact_finish(loop: AxisLoop, step: LoopStep) -> LoopStep:
+    """``step`` refitted on the exact likelihood from its composite-likelihood fit and diagnosed again (the search's
+    fits are the composite likelihood's, :meth:`.AxisLoop.fit_state`); as it is when the refit fails or does not
+    gain."""
+    state = step.state.with_components(list(step.diagnosis.fit.components))
+    try:
+        diag = loop.diagnose(state, exact=True)
+    except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
+        return step
+    if diag.fit.loglik <= step.diagnosis.fit.loglik:
+        return step
+    return replace(step, state=state, diagnosis=diag)
 
 
 def final_intervals(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:

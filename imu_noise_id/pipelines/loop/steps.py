@@ -22,7 +22,7 @@ from ...core.diagnostics.lines import (
 from ...core.diagnostics.residuals import LINE_SEPARATION_BINS, av_misfit_z, line_statistic, residual_errors
 from ...core.diagnostics.spectra import residual_spectra
 from ...core.diagnostics.whitening import WhiteningFilter
-from ...core.estimation import screen
+from ...core.estimation import composite, screen
 from ...core.estimation.model import FitOptions, NoiseModel
 from ...core.estimation.relabel import gm_as_filter
 from ...core.estimation.results import FitResult
@@ -45,6 +45,10 @@ def _canonical(components: list[Component]) -> list[Component]:
     order = {name: i for i, name in enumerate(CANONICAL_ORDER)}
     return sorted(components, key=lambda c: order.get(c.name, len(order)))
 
+
+#: Records of this many samples or more have their moves fitted on the composite likelihood
+#: (:meth:`AxisLoop.fit_state`).
+COMPOSITE_MIN_SAMPLES = screen.MIN_SAMPLES
 
 #: Line concentrations outside this range decide SIN (above) or OSC (below) alone; inside it both are tried.
 DECISIVE_SHARE = (0.2, 0.9)
@@ -69,6 +73,38 @@ class AxisLoop:
         d = np.diff(y[np.isfinite(y)])
         self.white_floor = 1e-3 * math.sqrt(max(float(np.var(d)) / 2.0, 1e-300) * dt)
 
+    @property
+    def on_composite(self) -> bool:
+        """Whether this record's moves are fitted on the composite likelihood of fixed size (:meth:`fit_state`)."""
+        return self.n >= COMPOSITE_MIN_SAMPLES
+
+    @functools.cached_property
+    def composite_statistics(self) -> composite.CompositeStatistics:
+        """The record's composite-likelihood statistics (:mod:`~imu_noise_id.core.estimation.composite`), once."""
+        return composite.CompositeStatistics.of(self.y, self.dt)
+
+    def fit_state(self, model: NoiseModel, state: LoopState, *, exact: bool = False) -> FitResult:
+        """The fit of ``state`` (``model`` its record and regressors) from ``state.init`` (None: the estimator's
+        starts). On a record of :data:`COMPOSITE_MIN_SAMPLES` samples or more, unless ``exact``: the maximiser of the
+        composite likelihood (:func:`~imu_noise_id.core.estimation.composite.fit`; of the record with the regressors,
+        at their GLS values from the start, removed) evaluated once on the exact likelihood, means by GLS; else the
+        exact maximum-likelihood fit. Beyond the papers (docs/em.md, "Searching long records on a likelihood of fixed
+        size")."""
+        if exact or not self.on_composite:
+            # The loop compares fits; intervals are the model selection's job.
+            return model.fit(state.init, FitOptions(uncertainty=False))
+        at_values = FitOptions(em_iter=0, polish=False, uncertainty=False, spectral_init=False)
+        starts = [state.init] if state.init is not None else model.starting_values(FitOptions().n_starts, True)
+        stats = self.composite_statistics
+        if state.exog_terms or state.flagged.size:
+            first = model.fit(starts[0], at_values)
+            names = list(model.exog_names)
+            coef = np.array([float(first.exog_coef[name]["value"]) for name in names])
+            stats = composite.CompositeStatistics.of(model.y - model.z[:, -len(names):] @ coef if names else model.y,
+                                                     self.dt)
+        fits = [composite.fit(start, stats, model.parameter_bounds) for start in starts]
+        return model.fit(max(fits, key=lambda f: f[0])[1], at_values)
+
     @functools.cached_property
     def statistics(self) -> screen.Statistics:
         """The record's screening statistics (:mod:`~imu_noise_id.core.estimation.screen`), computed once."""
@@ -91,16 +127,16 @@ class AxisLoop:
             start += c.shape[1]
         return (np.hstack(cols) if cols else None), names, slices
 
-    def diagnose(self, state: LoopState, fit: FitResult | None = None) -> Diagnosis:
-        """Fit ``state`` (unless ``fit``, already fitted to this record and state, is given) and diagnose it."""
+    def diagnose(self, state: LoopState, fit: FitResult | None = None, *, exact: bool = False) -> Diagnosis:
+        """Fit ``state`` (:meth:`fit_state`, ``exact`` or not; unless ``fit``, already fitted to this record and state,
+        is given) and diagnose it."""
         y = self.y.copy()
         if state.flagged.size:
             y[state.flagged] = np.nan if self.outliers == "missing" else state.imputed
         exog, exog_names, slices = self.exog(state)
         if fit is None:
-            # The loop compares fits; intervals are the model selection's job.
             model = NoiseModel(y, self.dt, structure_name(state.structure), exog=exog, exog_names=exog_names)
-            fit = model.fit(state.init, FitOptions(uncertainty=False))
+            fit = self.fit_state(model, state, exact=exact)
         fit = gm_as_filter(fit)
         state.structure = [c.name for c in fit.components if c.name != "RR" or "RR" in state.structure]
         coef = _coef(fit, exog_names)
