@@ -17,6 +17,7 @@ docs/em.md, "Searching long records on a likelihood of fixed size").
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 
@@ -80,16 +81,15 @@ def fit(start: list[Component], stats: CompositeStatistics,
     whitened ones, which can cross into a lower mode), the better kept; (ℓ_c, fitted components)."""
     bp = whittle.pooled(stats.spectrum, fine=whittle.line_windows([start], stats.dt))
     climbs = [_climb(start, stats, bounds)]
-    try:
+    with contextlib.suppress(ValueError):  # the Whittle climb left the components' domain: the start's climb only
         climbs.append(_climb(whittle.whittle_fit(start, np.empty(0), stats.dt, bp, bounds)[1], stats, bounds))
-    except ValueError:
-        pass
     return max(climbs, key=lambda c: c[0])
 
 
 def _climb(start: list[Component], stats: CompositeStatistics,
            bounds: dict[str, tuple[float, float]]) -> tuple[float, list[Component]]:
-    """ℓ_c climbed from ``start`` (:func:`fit`); ``start`` itself when no step gains. L-BFGS-B in η = Lᵀ(ϑ − ϑ₀), L Lᵀ the Whittle information at the start
+    """ℓ_c climbed from ``start`` (:func:`fit`); ``start`` itself when no step gains. L-BFGS-B in η = Lᵀ(ϑ − ϑ₀),
+    L Lᵀ the Whittle information at the start
     (:func:`.whittle.whittle_information`), a point outside the box scored at its projection plus a quadratic pull
     (as :func:`.mle.maximise`)."""
     bp = stats.bands(start)
