@@ -108,6 +108,11 @@ class Profiler:
         self._zeros = np.where(np.isnan(self.y), np.nan, 0.0)
         self._grad_c: dict[tuple[bool, ...], np.ndarray] = {}
 
+    @property
+    def spent(self) -> bool:
+        """Whether the evaluations so far have reached :attr:`max_eval`."""
+        return self.n_eval >= self.max_eval
+
     # -- ℓ at one point ------------------------------------------------------------------------------------
     def evaluate(self, theta: np.ndarray, base: StateSpace | None = None) -> tuple[float, float]:
         """(ℓ, ℓ_A) at ϑ with the means of ``base`` (default: the fit's); −inf outside the filter's domain."""
@@ -254,10 +259,10 @@ class Profiler:
         best: list = [-math.inf, start, -math.inf]  # ℓ_A, ϑ, ℓ
 
         def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
+            if self.spent:
+                raise BudgetSpentError
             th, inside = theta_of(x)
             self.n_eval += 1
-            if self.n_eval > self.max_eval:
-                raise BudgetSpentError
             try:
                 ll, g, _, prof = mle.loglik_grad_profile(self.par, th, base, self.y, self.z, data=self.data)
             except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError

@@ -126,9 +126,6 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     except BudgetSpentError:
         a_hat = prof.evaluate(theta)[1]
 
-    def spent() -> bool:
-        return prof.n_eval * np.size(y) >= PROFILE_BUDGET
-
     for k, lab in enumerate(noise_labels):
         v = float(np.exp(theta[k]))
         s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
@@ -143,7 +140,7 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
             fit.ci95_method[lab] = "wald"
         else:
             try:
-                if spent():
+                if prof.spent:
                     raise BudgetSpentError
                 lo_k, hi_k = prof.interval(k, cov)
             except BudgetSpentError:
@@ -157,7 +154,7 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     if j is not None and rr_lab is not None and "ramp" in fit.exog_coef:
         ramp = fit.exog_coef["ramp"]
         fit.ci95_method[rr_lab] = "gls"
-        if (prof.zero or prof.flat) and spent():
+        if (prof.zero or prof.flat) and prof.spent:
             fit.ci95_method[rr_lab] = f"gls, {BUDGET_SPENT}"
         elif prof.zero or prof.flat:  # the GLS interval holds the noise parameters; a boundary RW trades with the ramp
             try:

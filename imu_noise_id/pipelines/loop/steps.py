@@ -97,11 +97,11 @@ class AxisLoop:
         starts = [state.init] if state.init is not None else model.starting_values(FitOptions().n_starts, True)
         stats = self.composite_statistics
         if state.exog_terms or state.flagged.size:
-            first = model.fit(starts[0], at_values)
-            names = list(model.exog_names)
-            coef = np.array([float(first.exog_coef[name]["value"]) for name in names])
-            stats = composite.CompositeStatistics.of(model.y - model.z[:, -len(names):] @ coef if names else model.y,
-                                                     self.dt)
+            residual = model.y
+            if model.exog_names:
+                names = list(model.exog_names)
+                residual = model.y - model.z[:, -len(names):] @ _coef(model.fit(starts[0], at_values), names)
+            stats = composite.CompositeStatistics.of(residual, self.dt)
         fits = [composite.fit(start, stats, model.parameter_bounds) for start in starts]
         return model.fit(max(fits, key=lambda f: f[0])[1], at_values)
 
