@@ -17,6 +17,7 @@ from imu_noise_id.core.estimation.whittle import (
 )
 from imu_noise_id.core.noise.components import GM, LPF, MA, OSC, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import BI
+from imu_noise_id.core.noise.resonant import MAX_DAMPING
 
 DT = 0.01
 
@@ -69,6 +70,19 @@ def test_the_whittle_metric_is_positive_semidefinite_at_any_start(start):
     info = whittle_information(start, y, DT)
     assert np.allclose(info, info.T)
     assert np.min(np.linalg.eigvalsh(info)) >= -1e-9 * np.max(np.abs(info))
+
+
+def test_the_whittle_metric_steps_one_sided_at_a_resonance_at_its_damping_limit():
+    """The composite likelihood's maximiser can leave a broad resonance at MAX_DAMPING; the metric's central step in
+    its frequency left the domain (ValueError) and the exact finish from there failed ("no start of the fit gave a
+    valid likelihood"), so the loop kept the composite fit without saying so."""
+    edge = OSC(frequency=20.0, bandwidth=2.0 * MAX_DAMPING * 20.0 * (1.0 - 1e-6), sigma=2e-3)
+    start = [WN(1e-3), edge]
+    y = simulate_sum(start, 20_000, DT, np.random.default_rng(2))
+    info = whittle_information(start, y, DT)
+    assert np.all(np.isfinite(info)) and np.all(np.diag(info) > 0)
+    fit = NoiseModel(y, DT, "WN+OSC").fit(start, FitOptions(uncertainty=False))
+    assert np.isfinite(fit.loglik)
 
 
 def test_the_osc_start_frequencies_are_the_strongest_lines_strongest_first():

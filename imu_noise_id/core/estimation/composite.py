@@ -82,8 +82,16 @@ def fit(start: list[Component], stats: CompositeStatistics,
     bp = whittle.pooled(stats.spectrum, fine=whittle.line_windows([start], stats.dt))
     climbs = [_climb(start, stats, bounds)]
     with contextlib.suppress(ValueError):  # the Whittle climb left the components' domain: the start's climb only
-        climbs.append(_climb(whittle.whittle_fit(start, np.empty(0), stats.dt, bp, bounds)[1], stats, bounds))
+        moved = whittle.whittle_fit(start, np.empty(0), stats.dt, bp, bounds)[1]
+        if not _same_point(moved, start):  # else its climb would repeat the start's
+            climbs.append(_climb(moved, stats, bounds))
     return max(climbs, key=lambda c: c[0])
+
+
+def _same_point(a: list[Component], b: list[Component], tol: float = 1e-3) -> bool:
+    """Whether every parameter of ``a`` is within a relative ``tol`` of ``b``'s (same structure)."""
+    return all(math.isclose(pa[k], pb[k], rel_tol=tol) for ca, cb in zip(a, b, strict=True)
+               for pa, pb in [(ca.params(), cb.params())] for k in pa)
 
 
 def _climb(start: list[Component], stats: CompositeStatistics,
@@ -100,7 +108,8 @@ def _climb(start: list[Component], stats: CompositeStatistics,
     lo = np.array([math.log(bounds[k][0]) if k in bounds else -np.inf for _, k in keys])
     hi = np.array([math.log(bounds[k][1]) if k in bounds else np.inf for _, k in keys])
     x0 = np.clip(x0, lo, hi)
-    info = whittle.whittle_information(start, np.empty(0), stats.dt, whittle.pooled(stats.spectrum))
+    info = whittle.whittle_information(start, np.empty(0), stats.dt,
+                                       whittle.pooled(stats.spectrum, fine=whittle.line_windows([start], stats.dt)))
     w, v = np.linalg.eigh(0.5 * (info + info.T))
     w = np.maximum(w, 1e-6 * max(float(np.max(w)), 1e-300))
     transform = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ info T = I

@@ -4,8 +4,8 @@ Standard errors from the inverse observed information in the log-parameters (:fu
 intervals in log space, or (beyond the paper) profile intervals (:mod:`.profile`): for every parameter when the
 information is not positive definite or one sits at its zero boundary (a thousandfold smaller value lowers ℓ by less
 than 1.92); for one parameter when its log-se exceeds :data:`WALD_MAX_SE_LOG` or ℓ at its Wald ends is not within
-:data:`WALD_DROP_RANGE` of 1.92 below the maximum. At most :data:`PROFILE_BUDGET` sample-evaluations per fit, then Wald
-(or the conditional upper end), the method saying so. Advice: the per-sample information scaled.
+:data:`WALD_DROP_RANGE` of 1.92 below the maximum. At most :data:`PROFILE_BUDGET` sample-state evaluations per fit,
+then Wald (or the conditional upper end), the method saying so. Advice: the per-sample information scaled.
 """
 
 from __future__ import annotations
@@ -31,10 +31,16 @@ WALD_MAX_SE_LOG = 1.0
 #: The Wald interval stands when ℓ at both its ends on the quadratic trace is this far below the maximum (the
 #: signed root within 1.96 − 0.15 … 1.96 + 0.25: a quadratic log-likelihood gives exactly 1.92).
 WALD_DROP_RANGE = (0.5 * (Z95 - 0.15) ** 2, 0.5 * (Z95 + 0.25) ** 2)
-#: Likelihood evaluations × samples the profile intervals of one fit may spend (about 20 s at 0.3 µs per sample and
-#: evaluation). A parameter whose profile would pass it gets the interval of :func:`_beyond_budget`, its
-#: ``ci95_method`` ending in :data:`BUDGET_SPENT`.
-PROFILE_BUDGET = 6e7
+#: Likelihood evaluations × samples × states the profile intervals of one fit may spend (:func:`profile_evaluations`;
+#: about 15 s at 0.02–0.03 µs per sample and state of one evaluation). A parameter whose profile would pass it gets the
+#: interval of :func:`_beyond_budget`, its ``ci95_method`` ending in :data:`BUDGET_SPENT`.
+PROFILE_BUDGET = 6e8
+
+
+def profile_evaluations(n: int, states: int) -> float:
+    """The exact likelihood evaluations :data:`PROFILE_BUDGET` allows a fit of ``n`` samples whose state space has
+    ``states`` states (an evaluation's cost grows with both)."""
+    return PROFILE_BUDGET / (max(int(n), 1) * max(int(states), 1))
 
 
 def _beyond_budget(v: float, s_log: float, conditional_end: float | None) -> tuple[tuple[float, float], str]:
@@ -106,14 +112,15 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     fit.log_covariance, fit.covariance_labels = cov[:k_noise, :k_noise].copy(), tuple(noise_labels)
     bounds = mle.physical_bounds(np.size(y), fit.dt)
     lo, hi = par.log_bounds(bounds)
+    max_eval = profile_evaluations(np.size(y), model_ss.phi.shape[0])
     if np.isnan(y).any() and y.size > mle.FILL_FIRST_MIN_SAMPLES:
         # Profiles need hundreds of evaluations: on a long record with gaps they run on the gap-filled record
         # (the fast engine), an approximation the intervals of such records carry.
         y_fill = interpolate_missing(y)
         prof = Profiler(par, theta, model_ss, y_fill, z, kalman.loglik(model_ss, y_fill, z).loglik, info, lo, hi,
-                        max_eval=PROFILE_BUDGET / np.size(y))
+                        max_eval=max_eval)
     else:
-        prof = Profiler(par, theta, model_ss, y, z, fit.loglik, info, lo, hi, max_eval=PROFILE_BUDGET / np.size(y))
+        prof = Profiler(par, theta, model_ss, y, z, fit.loglik, info, lo, hi, max_eval=max_eval)
     res = mle.MLEResult(theta, model_ss, fit.loglik, 0, fit.converged, "")
     near_zero = [k for k in range(k_noise) if _near_zero(par, res, k, y, z)]
     # An amplitude (a density, a σ) near 0 is at the boundary; a time or frequency (with a physical range) that

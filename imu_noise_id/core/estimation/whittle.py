@@ -15,6 +15,7 @@ built as they are".
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -23,6 +24,7 @@ from scipy.optimize import minimize
 
 from ..errors import InputError
 from ..noise.components import GM, QN, RR, RW, WN, Component
+from .differences import derivative_in_domain, stepped
 
 
 @dataclass(frozen=True)
@@ -57,20 +59,41 @@ def tapered_periodogram(y: np.ndarray) -> TaperedPeriodogram:
     return TaperedPeriodogram(2.0 * math.pi * np.arange(1, jmax + 1) / m, per, m)
 
 
+@dataclass(frozen=True)
+class LineWindow:
+    """An interval (``lo``, ``hi``) [rad/sample] around a line of centre ``centre`` and bandwidth ``bandwidth``
+    [rad/sample], where :func:`pooled` follows the line's shape."""
+
+    lo: float
+    hi: float
+    centre: float
+    bandwidth: float
+
+
+#: Inside a line's window a band spans at most this share of its distance from the line's centre, or of the line's
+#: bandwidth nearer the centre (at least one frequency): the log-spectrum changes by a few per cent across a band.
+LINE_BAND_SHARE = 1.0 / 16.0
+
+
 def pooled(tp: TaperedPeriodogram, n_single: int = 256, ratio: float = 1.02,
-           fine: list[tuple[float, float]] | tuple = ()) -> BandedPeriodogram:
+           fine: list[LineWindow] | tuple = ()) -> BandedPeriodogram:
     """``tp`` with its lowest ``n_single`` frequencies kept single and the rest pooled in bands of width ratio·ω,
-    except in the ``fine`` intervals (ω_lo, ω_hi) [rad/sample], where the frequencies stay single (around a narrow
-    line, whose shape a band would hide: an OSC's frequency and bandwidth)."""
+    except in the ``fine`` windows, where a band spans at most :data:`LINE_BAND_SHARE` of max(bandwidth, distance from
+    the line's centre), at least one frequency (around a line, whose shape a wide band would hide: an OSC's frequency
+    and bandwidth; O(log(window / bandwidth)) bands per line instead of every frequency)."""
     m, jmax = tp.m, tp.omega.size
-    single = np.zeros(jmax + 2, bool)
-    single[: n_single + 1] = True
-    for lo, hi in fine:
-        single[max(int(lo * m / (2.0 * math.pi)) - 1, 0): min(int(hi * m / (2.0 * math.pi)) + 2, jmax + 2)] = True
+    step = 2.0 * math.pi / m
+    cap = np.full(jmax + 2, jmax + 2, dtype=np.int64)
+    cap[: n_single + 1] = 1
+    for w in fine:
+        j0, j1 = max(int(w.lo / step) - 1, 0), min(int(w.hi / step) + 2, jmax + 2)
+        omega = np.arange(j0, j1) * step
+        width = LINE_BAND_SHARE * np.maximum(w.bandwidth, np.abs(omega - w.centre)) / step
+        cap[j0:j1] = np.minimum(cap[j0:j1], np.maximum(width.astype(np.int64), 1))
     edges = [0]
     while edges[-1] < jmax:
         e = edges[-1]
-        edges.append(min(e + 1 if single[e + 1] else max(e + 1, int(e * ratio)), jmax))
+        edges.append(min(e + 1 + min(max(0, int(e * ratio) - e - 1), int(cap[e + 1]) - 1), jmax))
     edges = np.array(edges)
     counts = np.diff(edges)
     csum = np.concatenate([[0.0], np.cumsum(tp.power)])
@@ -81,21 +104,23 @@ def pooled(tp: TaperedPeriodogram, n_single: int = 256, ratio: float = 1.02,
 
 
 def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02,
-                       fine: list[tuple[float, float]] | tuple = ()) -> BandedPeriodogram:
+                       fine: list[LineWindow] | tuple = ()) -> BandedPeriodogram:
     """:func:`pooled` of the :func:`tapered_periodogram` of ``y``."""
     return pooled(tapered_periodogram(y), n_single, ratio, fine)
 
 
-def line_windows(starts: list[list[Component]], dt: float) -> list[tuple[float, float]]:
-    """Angular-frequency windows [rad/sample] around every OSC line of ``starts``, where a Whittle likelihood needs
-    the periodogram unbanded: ±max(20 bandwidths, 2 % of the frequency)."""
+def line_windows(starts: list[list[Component]], dt: float) -> list[LineWindow]:
+    """Windows around every OSC line of ``starts``, where a Whittle likelihood needs the periodogram at the line's
+    scale (:func:`pooled`): ±max(20 bandwidths, 2 % of the frequency)."""
     out = []
     for start in starts:
         for c in start:
             if c.name == "OSC":
-                half = max(20.0 * c.params()["bandwidth"], 0.02 * c.params()["frequency"])
-                f_lo, f_hi = max(c.params()["frequency"] - half, 0.0), c.params()["frequency"] + half
-                out.append((2.0 * math.pi * f_lo * dt, 2.0 * math.pi * f_hi * dt))
+                f0, b = c.params()["frequency"], c.params()["bandwidth"]
+                half = max(20.0 * b, 0.02 * f0)
+                f_lo, f_hi = max(f0 - half, 0.0), f0 + half
+                to_omega = 2.0 * math.pi * dt
+                out.append(LineWindow(f_lo * to_omega, f_hi * to_omega, f0 * to_omega, b * to_omega))
     return out
 
 
@@ -203,8 +228,9 @@ def whittle_information(components: list[Component], y: np.ndarray, dt: float,
     """The expected (Fisher) information of the banded Whittle log-likelihood in the log-parameters (non-RR
     components in order, as :class:`imu_noise_id.core.estimation.mle.Parameterisation`): Σ_b n_b ∂ln S_b/∂ϑ ·
     ∂ln S_b/∂ϑᵀ over the bands b of n_b Fourier frequencies, the derivatives of the log-spectrum by central
-    differences. It preconditions the exact-likelihood quasi-Newton finish (:func:`.mle.maximise`). Beyond the
-    papers; positive semi-definite at every start (reasons: docs/em.md, "Algorithm" 5, "The finish's metric").
+    differences (one-sided at a component's domain edge, :mod:`.differences`; zero where neither step is inside). It
+    preconditions the exact-likelihood quasi-Newton finish (:func:`.mle.maximise`). Beyond the papers; positive
+    semi-definite at every start (reasons: docs/em.md, "Algorithm" 5, "The finish's metric").
     """
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(components) if not isinstance(c, RR) for k in c.parameter_names]
@@ -213,6 +239,8 @@ def whittle_information(components: list[Component], y: np.ndarray, dt: float,
     def log_spectrum(x: np.ndarray) -> np.ndarray:
         return np.log(difference_spectrum(with_log_parameters(components, keys, x), bp.omega, dt))
 
-    jac = np.column_stack([(log_spectrum(x0 + e) - log_spectrum(x0 - e)) / (2.0 * step)
-                           for e in np.eye(x0.size) * step])
+    at_start = functools.cache(lambda: log_spectrum(x0))
+    columns = [derivative_in_domain(lambda h, j=j: log_spectrum(stepped(x0, j, h)), step, at_start)
+               for j in range(x0.size)]
+    jac = np.column_stack([np.zeros(bp.omega.size) if d is None else d for d in columns])
     return (jac * bp.count[:, None]).T @ jac

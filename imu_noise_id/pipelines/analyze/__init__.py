@@ -228,7 +228,7 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     if final.fit.beyond_budget:
         cut = ", ".join(f"{lab} ({how})" for lab, how in final.fit.beyond_budget.items())
         warnings.append(f"{axis}: the final fit's profile intervals stopped at their budget "
-                        f"({PROFILE_BUDGET:.0e} sample-evaluations); these got other intervals: {cut}")
+                        f"({PROFILE_BUDGET:.0e} sample-state evaluations); these got other intervals: {cut}")
     if final.random_walk_above_bound:
         k = final.random_walk.value
         warnings.append(f"{axis}: the final random walk {k:.3g} is {final.random_walk_bound.excess(k)}; record "

@@ -154,10 +154,11 @@ def run_closed_loop(
                               tuple(replaced + dropped)))
     note = ""
     if loop.on_composite and len(steps) > 1:
-        steps[-1] = exact_finish(loop, steps[-1])
+        steps[-1], note = exact_finish(loop, steps[-1])
         diag = steps[-1].diagnosis
     if intervals and len(steps) > 1:
-        steps[-1], note = final_intervals(loop, steps[-1])
+        steps[-1], interval_note = final_intervals(loop, steps[-1])
+        note = "; ".join(filter(None, [note, interval_note]))
         diag = steps[-1].diagnosis
     inside, worst = av_inside_band(diag), max_relative_av_error(diag)
     if not passed and practically_negligible(diag):
@@ -173,18 +174,18 @@ def run_closed_loop(
                       remaining=remaining, av_inside_band=inside, max_rel_av_error=worst, note=note)
 
 
-def exact_finish(loop: AxisLoop, step: LoopStep) -> LoopStep:
+def exact_finish(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
     """``step`` refitted on the exact likelihood from its composite-likelihood fit and diagnosed again (the search's
-    fits are the composite likelihood's, :meth:`.AxisLoop.fit_state`); as it is when the refit fails or does not
-    gain."""
+    fits are the composite likelihood's, :meth:`.AxisLoop.fit_state`), and a note ("" unless the refit failed or did
+    not gain: the step is then as it is, its values the composite likelihood's maximiser's)."""
     state = step.state.with_components(list(step.diagnosis.fit.components))
     try:
         diag = loop.diagnose(state, exact=True)
-    except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
-        return step
+    except (ValueError, np.linalg.LinAlgError) as exc:  # InputError is a ValueError
+        return step, f"the final fit is the composite likelihood's maximiser: its exact refit failed ({exc})"
     if diag.fit.loglik <= step.diagnosis.fit.loglik:
-        return step
-    return replace(step, state=state, diagnosis=diag)
+        return step, ""
+    return replace(step, state=state, diagnosis=diag), ""
 
 
 def final_intervals(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
@@ -197,7 +198,7 @@ def final_intervals(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
         return as_it_is
     state = step.state.with_components(fit.better_start)
     try:
-        diag = loop.diagnose(state)
+        diag = loop.diagnose(state, exact=True)
     except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
         return as_it_is
     gain = diag.fit.loglik - step.diagnosis.fit.loglik
