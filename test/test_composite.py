@@ -11,7 +11,6 @@ from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 from imu_noise_id.core.noise.resonant import OSC
 from imu_noise_id.pipelines.loop import run_closed_loop
-from imu_noise_id.pipelines.loop.steps import COMPOSITE_MIN_SAMPLES
 
 DT = 0.01
 TRUTH = [WN(2e-3), GM(tau=5.0, sigma=2e-3), RW(2e-5)]
@@ -41,7 +40,7 @@ def test_its_maximum_is_near_the_exact_one(record):
 
 def test_the_loop_on_a_long_record_adds_the_missing_line_and_ends_at_the_exact_maximum():
     truth = [WN(2e-3), OSC(frequency=2.0, bandwidth=0.05, sigma=2e-3), RW(2e-5)]
-    y = simulate_sum(truth, COMPOSITE_MIN_SAMPLES + 10_000, DT, np.random.default_rng(3))
+    y = simulate_sum(truth, composite.MIN_SAMPLES + 10_000, DT, np.random.default_rng(3))
     result = run_closed_loop(y, DT, "WN+RW")
     final = result.final.diagnosis.fit
     assert "OSC" in final.model
@@ -49,3 +48,17 @@ def test_the_loop_on_a_long_record_adds_the_missing_line_and_ends_at_the_exact_m
     assert osc.frequency == pytest.approx(2.0, rel=0.01)
     exact = NoiseModel(y, DT, final.model).fit(list(final.components), FitOptions(uncertainty=False))
     assert final.loglik == pytest.approx(exact.loglik, abs=0.5)
+
+
+def test_model_selection_on_a_long_record_searches_on_it_and_fits_the_winner_exactly(record):
+    from imu_noise_id.core.estimation.selection import select_model
+
+    sel = select_model(record, DT, candidates=["WN+RW", "WN+GM", "WN+GM+RW"], options=FitOptions(uncertainty=False))
+    assert sel.best.model == "WN+GM+RW"
+    # the winner is at the exact maximum: an exact fit from the estimator's own starts does no better
+    exact = NoiseModel(record, DT, "WN+GM+RW").fit(None, FitOptions(uncertainty=False))
+    assert sel.best.loglik == pytest.approx(exact.loglik, abs=0.5)
+    rows = {r["model"]: r for r in sel.table}
+    assert "likelihood" not in rows["WN+GM+RW"]
+    assert all(rows[m].get("likelihood", "").startswith("exact, at the composite") for m in rows
+               if m != "WN+GM+RW" and "bic" in rows[m])

@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import minimize
@@ -27,6 +28,14 @@ from scipy.optimize import minimize
 from ..noise.components import RR, Component
 from ..quality import interpolate_missing
 from . import block_sums, whittle
+
+if TYPE_CHECKING:
+    from .model import NoiseModel
+    from .results import FitResult
+
+#: Records of this many samples or more are searched on ℓ_c (:func:`fit_model`): the model selection's candidates and
+#: the closed loop's moves.
+MIN_SAMPLES = 250_000
 
 
 @dataclass(frozen=True)
@@ -86,6 +95,18 @@ def fit(start: list[Component], stats: CompositeStatistics,
         if not _same_point(moved, start):  # else its climb would repeat the start's
             climbs.append(_climb(moved, stats, bounds))
     return max(climbs, key=lambda c: c[0])
+
+
+def fit_model(model: NoiseModel, starts: list[list[Component]], stats: CompositeStatistics) -> FitResult:
+    """The fit of ``model`` at the maximiser of ℓ_c (:func:`fit`, from each of ``starts``, the best kept) on
+    ``stats`` (the record's, or of the record with its regressors removed), evaluated once on the exact likelihood:
+    its log-likelihood, BIC and innovations are exact at those values, the means GLS there; no EM or quasi-Newton step
+    on the exact likelihood, no intervals. InputError (a ValueError) when no start can be evaluated."""
+    from .model import FitOptions  # model imports the searches this module serves
+
+    fits = [fit(start, stats, model.parameter_bounds) for start in starts]
+    at_values = FitOptions(em_iter=0, polish=False, uncertainty=False, spectral_init=False)
+    return model.fit(max(fits, key=lambda f: f[0])[1], at_values)
 
 
 def _same_point(a: list[Component], b: list[Component], tol: float = 1e-3) -> bool:

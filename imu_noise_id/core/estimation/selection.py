@@ -16,7 +16,7 @@ from ..noise.components import Component
 from ..noise.digital import SensorFilter
 from ..noise.modelspec import parse_structure
 from ..quality import interpolate_missing
-from . import screen, starts, whittle
+from . import composite, screen, starts, whittle
 from .model import FitOptions, NoiseModel, check_signal
 from .results import FitResult
 from .search import add_intervals
@@ -78,8 +78,11 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     (e.g. its GMWM fit). ``sensor_filter``: what the user knows of the sensor's digital low-pass; the default candidates
     then include WN+DLPF+RW, its DLPF started there (:class:`~.model.NoiseModel`). From :data:`.screen.MIN_SAMPLES`
     samples (BIC only) each next candidate is first fitted on the screen's statistics against the best so far
-    (:mod:`.screen`) and not fitted exactly when it cannot come within :data:`.screen.MARGIN`; its row says ``screened``
-    with that ΔBIC.
+    (:mod:`.screen`) and not fitted when it cannot come within :data:`.screen.MARGIN`; its row says ``screened``
+    with that ΔBIC. From :data:`.composite.MIN_SAMPLES` samples a candidate is fitted at the composite likelihood's
+    maximiser from its starts and evaluated once on the exact likelihood (:func:`.composite.fit_model`; its row's
+    ``likelihood`` says so), and the winner alone is then fitted on the exact likelihood from there. Beyond the papers
+    (docs/em.md, "Searching long records on a likelihood of fixed size").
     """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
@@ -100,6 +103,7 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     statistics = screen.Statistics.of(interpolate_missing(y), dt) if screening else None
     if statistics is not None:  # its periodogram is that of the record the candidates without RR start from
         periodograms[False] = statistics.periodogram
+    composite_stats = composite.CompositeStatistics.of(y, dt) if y.size >= composite.MIN_SAMPLES else None
     reference: screen.Reference | None = None
     screened: dict[str, screen.Screen] = {}
     for spec in cands:
@@ -114,7 +118,11 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
                     screened[spec] = verdict
                     allans[has_rr], periodograms[has_rr] = model.allan, model.banded_periodogram()
                     continue
-            fit = model.fit(options=search)
+            if composite_stats is not None:
+                fit = composite.fit_model(model, model.starting_values(search.n_starts, search.spectral_init),
+                                          composite_stats)
+            else:
+                fit = model.fit(options=search)
             allans[has_rr] = model.allan
             if search.spectral_init:
                 periodograms[has_rr] = model.banded_periodogram()
@@ -133,6 +141,9 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         fits[spec] = fit
     if best_key is None or best_model is None:
         raise InputError("no candidate model could be fitted: " + "; ".join(f"{k}: {v}" for k, v in errors.items()))
+    if composite_stats is not None:  # the winner's exact fit, from its composite maximiser
+        exact = best_model.fit(list(fits[best_key].components), search)
+        fits[best_key] = exact if exact.loglik > fits[best_key].loglik else fits[best_key]
     if options.uncertainty:  # before the table: searched again, the winner's likelihood can only rise
         fits[best_key] = add_intervals(best_model, fits[best_key], options)
     bic_min = min(f.bic for f in fits.values())
@@ -147,6 +158,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
                 "delta_bic": f.bic - bic_min, "delta_aic": f.aic - aic_min,
                 "weight_bic": math.exp(-0.5 * (f.bic - bic_min)) / wsum, "converged": f.converged,
             })
+            if composite_stats is not None and spec != best_key:
+                table[-1]["likelihood"] = "exact, at the composite likelihood's maximiser"
         elif spec in screened:
             table.append({"model": spec, "screened": screened[spec].describe(),
                           "delta_bic_screen": screened[spec].delta_bic})

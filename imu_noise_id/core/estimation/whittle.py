@@ -183,7 +183,7 @@ def with_log_parameters(components: list[Component], keys: list[tuple[int, str]]
     searches over log-parameters; ValueError where a value is out of its component's range)."""
     params = [dict(c.params()) for c in components]
     for (i, name), v in zip(keys, x, strict=True):
-        params[i][name] = float(np.exp(v))
+        params[i][name] = math.exp(v) if v < 700.0 else math.inf  # beyond exp's range: the component refuses it
     return [type(c)(**p) for c, p in zip(components, params, strict=True)]
 
 

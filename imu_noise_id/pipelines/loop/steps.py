@@ -46,10 +46,6 @@ def _canonical(components: list[Component]) -> list[Component]:
     return sorted(components, key=lambda c: order.get(c.name, len(order)))
 
 
-#: Records of this many samples or more have their moves fitted on the composite likelihood
-#: (:meth:`AxisLoop.fit_state`).
-COMPOSITE_MIN_SAMPLES = screen.MIN_SAMPLES
-
 #: Line concentrations outside this range decide SIN (above) or OSC (below) alone; inside it both are tried.
 DECISIVE_SHARE = (0.2, 0.9)
 
@@ -76,7 +72,7 @@ class AxisLoop:
     @property
     def on_composite(self) -> bool:
         """Whether this record's moves are fitted on the composite likelihood of fixed size (:meth:`fit_state`)."""
-        return self.n >= COMPOSITE_MIN_SAMPLES
+        return self.n >= composite.MIN_SAMPLES
 
     @functools.cached_property
     def composite_statistics(self) -> composite.CompositeStatistics:
@@ -85,7 +81,7 @@ class AxisLoop:
 
     def fit_state(self, model: NoiseModel, state: LoopState, *, exact: bool = False) -> FitResult:
         """The fit of ``state`` (``model`` its record and regressors) from ``state.init`` (None: the estimator's
-        starts). On a record of :data:`COMPOSITE_MIN_SAMPLES` samples or more, unless ``exact``: the maximiser of the
+        starts). On a record of ``composite.MIN_SAMPLES`` samples or more, unless ``exact``: the maximiser of the
         composite likelihood (:func:`~imu_noise_id.core.estimation.composite.fit`; of the record with the regressors,
         at their GLS values from the start, removed) evaluated once on the exact likelihood, means by GLS; else the
         exact maximum-likelihood fit. Beyond the papers (docs/em.md, "Searching long records on a likelihood of fixed
@@ -93,17 +89,17 @@ class AxisLoop:
         if exact or not self.on_composite:
             # The loop compares fits; intervals are the model selection's job.
             return model.fit(state.init, FitOptions(uncertainty=False))
-        at_values = FitOptions(em_iter=0, polish=False, uncertainty=False, spectral_init=False)
         starts = [state.init] if state.init is not None else model.starting_values(FitOptions().n_starts, True)
         stats = self.composite_statistics
         if state.exog_terms or state.flagged.size:
             residual = model.y
             if model.exog_names:
                 names = list(model.exog_names)
-                residual = model.y - model.z[:, -len(names):] @ _coef(model.fit(starts[0], at_values), names)
+                at_start = model.fit(starts[0], FitOptions(em_iter=0, polish=False, uncertainty=False,
+                                                           spectral_init=False))
+                residual = model.y - model.z[:, -len(names):] @ _coef(at_start, names)
             stats = composite.CompositeStatistics.of(residual, self.dt)
-        fits = [composite.fit(start, stats, model.parameter_bounds) for start in starts]
-        return model.fit(max(fits, key=lambda f: f[0])[1], at_values)
+        return composite.fit_model(model, starts, stats)
 
     @functools.cached_property
     def statistics(self) -> screen.Statistics:
