@@ -322,3 +322,46 @@ def test_the_score_at_a_white_noise_of_exactly_zero_is_a_domain_error():
     zero = ss.from_components([WN(0.0), DLPF(1e-3, 12.0)], dt)
     with pytest.raises(ValueError, match="white-noise variance is zero"):
         em.MatrixScore.at(zero, sums)
+
+
+def test_a_fit_at_given_values_is_scored_by_one_filter_pass(monkeypatch):
+    """em_iter=0 without the polish: the start's values, the means at their GLS estimate, the exact log-likelihood
+    the smoother's pass (the EM's first E-step) gives there; and no smoother pass is spent on it."""
+    y = simulate_sum([WN(1e-3), GM(tau=2.0, sigma=1e-3), RW(2e-5)], 20_000, 0.01, np.random.default_rng(4)) + 0.3
+    values = [WN(1.1e-3), GM(tau=2.5, sigma=0.9e-3), RW(3e-5)]
+    model = NoiseModel(y, 0.01, "WN+GM+RW")
+    expected = kalman.profile_and_smooth(model.statespace(values), y, model.z)[0].loglik
+
+    def no_smoother(*args, **kwargs):
+        raise AssertionError("a smoother pass at given values")
+
+    monkeypatch.setattr(kalman, "profile_and_smooth", no_smoother)
+    fit = model.fit(values, FitOptions(em_iter=0, polish=False, uncertainty=False, spectral_init=False))
+    assert fit.loglik == pytest.approx(expected, rel=1e-10)
+    for got, given in zip(fit.components, values, strict=True):
+        assert got.params() == pytest.approx(given.params(), rel=1e-9)
+    assert fit.exog_coef["bias"]["value"] == pytest.approx(0.3, abs=0.05)
+
+
+@pytest.mark.parametrize("missing", [False, True])
+def test_a_fit_keeps_the_innovations_of_its_last_filter_pass(monkeypatch, missing):
+    """The standardized innovations a fit returns are those of a fresh filter pass of its model over its record
+    (means applied, not profiled), and returning them costs no pass."""
+    rng = np.random.default_rng(11)
+    n, dt = 3000, 0.1
+    sinus = np.sin(2 * np.pi * 0.3 * dt * np.arange(n))
+    y = simulate_sum([WN(0.05), GM(tau=5.0, sigma=0.1), RW(1e-3)], n, dt, rng) + 0.3 + 0.08 * sinus
+    if missing:
+        y[[50, 51, 700]] = np.nan
+    fit = fit_model(y, dt, "WN+GM+RW", exog=sinus, exog_names=["s"], options=FitOptions(n_starts=1, uncertainty=False))
+    fresh = kalman.loglik(fit.statespace, *fit.record, profile_mean=False)
+    expected = fresh.innovations / np.sqrt(fresh.variances)
+
+    def no_pass(*args, **kwargs):
+        raise AssertionError("a filter pass for innovations the fit had")
+
+    monkeypatch.setattr(kalman, "loglik", no_pass)
+    got = fit.standardized_innovations()
+    assert np.array_equal(np.isnan(got), np.isnan(expected))
+    np.testing.assert_allclose(got[~np.isnan(got)], expected[~np.isnan(expected)], rtol=0, atol=1e-10)
+    assert fit.without_data().standardized is None

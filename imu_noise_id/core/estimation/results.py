@@ -51,6 +51,9 @@ class FitResult:
     profile_evaluations : int — log-likelihood evaluations of the profile intervals
     better_loglik, better_start — a higher log-likelihood the profile search met and its components, else None
     log_covariance, covariance_labels — log-parameter covariance (inverse observed information) and labels
+    statespace, record — the fitted state-space model and the (samples, regressors) it was fitted to
+    standardized — the record's one-step innovations / √(their variance) at the fit, as the fit's last filter pass
+        gave them (None: computed when asked, :meth:`standardized_innovations`)
     """
 
     model: str
@@ -78,6 +81,7 @@ class FitResult:
     covariance_labels: tuple[str, ...] = ()
     statespace: StateSpace | None = field(default=None, repr=False)
     record: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+    standardized: np.ndarray | None = field(default=None, repr=False)
     #: Which estimator produced the numbers: ``em`` (maximum likelihood) or ``gmwm`` (:mod:`.gmwm`).
     estimator: str = "em"
 
@@ -98,12 +102,15 @@ class FitResult:
     def without_data(self) -> FitResult:
         """This result without the record it was fitted to (samples and regressors, N floats each), for keeping
         many results. :meth:`standardized_innovations` needs the record and raises on the copy."""
-        return replace(self, record=None)
+        return replace(self, record=None, standardized=None)
 
     def standardized_innovations(self) -> np.ndarray:
-        """One-step innovations / √(their variance), NaN where the sample was missing."""
+        """One-step innovations / √(their variance), NaN where the sample was missing (a copy of ``standardized``
+        when the fit kept them, else one filter pass over the record)."""
         if self.statespace is None or self.record is None:
             raise InputError("this FitResult holds no data to compute innovations from")
+        if self.standardized is not None:
+            return self.standardized.copy()
         y, z = self.record
         res = kalman.loglik(self.statespace, y, z, profile_mean=False)
         return res.innovations / np.sqrt(res.variances)

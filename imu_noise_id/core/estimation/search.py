@@ -36,11 +36,17 @@ def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options
                metric_of: Callable[[list[Component]], np.ndarray] | None) -> tuple[mle.MLEResult, int]:
     """EM iterations then the quasi-Newton finish from one start, preconditioned by ``metric_of`` the start's
     components (the Whittle information) and again at its end if it stalled (:func:`.mle.maximise`); (result, EM
-    iterations)."""
-    metric = metric_of(start) if metric_of is not None else None
-    metric_at = (lambda fitted: metric_of(ss.to_components(fitted))) if metric_of is not None else None
+    iterations). With neither (``em_iter=0``, no polish): the start's values with the means at their GLS estimate,
+    scored by one filter pass (no smoother pass: there is no E-step to feed)."""
     z = model.z
     state = model.statespace(start)
+    if options.em_iter == 0 and not options.polish:
+        prof = kalman.loglik(state, y, z)
+        fitted = kalman.apply_beta(state, prof)
+        theta = mle.Parameterisation.of(start).to_theta(ss.to_components(fitted))
+        return mle.MLEResult(theta, fitted, prof.loglik, 0, False, "at the start's values", prof), 0
+    metric = metric_of(start) if metric_of is not None else None
+    metric_at = (lambda fitted: metric_of(ss.to_components(fitted))) if metric_of is not None else None
     _, state, stats = kalman.profile_and_smooth(state, y, z)  # GLS means and the first E-step in one pass
     par = mle.Parameterisation.of(start)
     em_iter, em_tol = options.em_iter, options.em_tol
@@ -208,5 +214,13 @@ def _result(model: NoiseModel, best: tuple[mle.MLEResult, int], lls: list[float]
         model=model_name(comps), components=comps, exog_coef=exog_coef, se=se, ci95=ci, loglik=ll,
         aic=2 * k - 2 * ll, bic=k * math.log(model.n_obs) - 2 * ll, n=model.n_obs, dt=model.dt, n_iter=n_iter,
         converged=res.converged, n_eval=res.n_eval, n_params=k, starts=lls, statespace=fitted,
-        record=(model.y, model.z),
+        record=(model.y, model.z), standardized=_standardized(prof, model.y.size),
     )
+
+
+def _standardized(prof: kalman.ProfileResult, n: int) -> np.ndarray | None:
+    """The standardized innovations of ``prof`` (at its GLS means: those of the fitted model with its means
+    applied), None when it kept no innovations of all ``n`` samples."""
+    if prof.innovations.shape != (n,) or prof.variances.shape != (n,):
+        return None
+    return prof.innovations / np.sqrt(prof.variances)

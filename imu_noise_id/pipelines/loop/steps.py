@@ -148,7 +148,8 @@ class AxisLoop:
         # The AV's confidence intervals under the null "the model holds", with the estimator's exact variance for
         # the fitted model (a power-law EDF misjudges τ where a line dominates; core/diagnostics/av_band.py).
         av_ci = model_av_band(av_data, list(fit.components), m, filled.size, self.dt)
-        e = np.asarray(fit.standardized_innovations(), dtype=float).copy()
+        e = np.asarray(fit.standardized_innovations(), dtype=float)
+        fit = replace(fit, standardized=None)  # kept once, as the diagnosis's innovations
         e[: min(10, e.size // 100)] = np.nan  # start-up transient of the filter
         whitening = WhiteningFilter.from_components(list(fit.components), self.dt)
         k = state.flagged.size
