@@ -8,10 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation import uncertainty
+from imu_noise_id.core.estimation import mle, uncertainty
 from imu_noise_id.core.estimation.model import NoiseModel
+from imu_noise_id.core.estimation.profile import BudgetSpentError, Profiler
 from imu_noise_id.core.estimation.quantiles import Z95
 from imu_noise_id.core.estimation.results import BUDGET_SPENT
+from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 
 # A GM whose τ is not small against the record beside a random walk the record can hardly tell from 0 and a ramp:
@@ -70,3 +72,35 @@ def test_the_budget_allows_fewer_evaluations_to_a_model_of_more_states():
     # 10^6 samples spent 91 evaluations, 60 s, and every parameter still got a budget-spent interval.
     assert uncertainty.profile_evaluations(10**6, 23) * 23 == pytest.approx(uncertainty.profile_evaluations(10**6, 1))
     assert uncertainty.profile_evaluations(10**6, 23) < 30
+
+
+@pytest.fixture(scope="module")
+def profiler_of(within):
+    """A fresh :class:`Profiler` of ``within`` (as add_uncertainty builds it) with ``max_eval`` evaluations, and the
+    Wald covariance."""
+    (y, z), model = within.record, within.statespace
+    comps = ss.to_components(model)
+    par = mle.Parameterisation.of(comps)
+    theta = par.to_theta(comps)
+    info = mle.observed_information(par, theta, model, y, z)
+    cov, _ = mle.covariance_from_information(info)
+    lo, hi = par.log_bounds(mle.physical_bounds(y.size, DT))
+
+    def make(max_eval: float) -> Profiler:
+        return Profiler(par, theta, model, y, z, within.loglik, info, lo, hi, max_eval=max_eval)
+
+    return make, cov
+
+
+def test_a_profile_that_cannot_finish_within_the_budget_left_is_not_begun(profiler_of):
+    # On a long record a profile begun with too little budget left spent its evaluations (seconds each) and was
+    # stopped anyway, its parameter getting the budget-spent interval all the same.
+    make, cov = profiler_of
+    k = 0  # the white noise: interior, well determined
+    roomy = make(math.inf)
+    roomy.interval(k, cov)
+    assert roomy.n_eval > 0
+    short = make(roomy.maximise_cost(len(roomy.starts_near(roomy.theta))))  # one inner maximisation's worth
+    with pytest.raises(BudgetSpentError):
+        short.interval(k, cov)
+    assert short.n_eval == 0

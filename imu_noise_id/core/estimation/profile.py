@@ -39,6 +39,8 @@ BETTER_BY = 0.05
 MAX_WHITENED = 20.0
 #: Drop of ℓ at which an inner maximisation counts as failed (an evaluation outside the filter's domain).
 FAILED_DROP = 1e3
+#: Likelihood evaluations one inner maximisation's L-BFGS-B may spend (its ``maxfun``).
+MAX_FUN = 12
 
 
 
@@ -85,7 +87,8 @@ class Profiler:
     lo, hi — physical range of each log-parameter (GM τ, OSC/LPF frequencies; ±inf elsewhere)
     zero — parameters at the zero boundary → their scale s (conditional upper end)
     flat — parameters the information does not determine (searched in their log)
-    max_eval — the evaluations all profiles may spend: past it a profile stops with :class:`BudgetSpentError`
+    max_eval — the evaluations all profiles may spend: a step that could pass it at its worst is not begun, and
+        one that does pass it stops (:class:`BudgetSpentError` either way)
     """
 
     par: mle.Parameterisation
@@ -112,6 +115,20 @@ class Profiler:
     def spent(self) -> bool:
         """Whether the evaluations so far have reached :attr:`max_eval`."""
         return self.n_eval >= self.max_eval
+
+    def afford(self, evaluations: float) -> None:
+        """Raise :class:`BudgetSpentError` unless ``evaluations`` more stay within :attr:`max_eval`: a step is begun
+        only when it can finish at its worst, not stopped half-way with its evaluations lost."""
+        if self.n_eval + evaluations > self.max_eval:
+            raise BudgetSpentError
+
+    def maximise_cost(self, n_starts: int, base: StateSpace | None = None) -> int:
+        """The most evaluations :meth:`maximise` from ``n_starts`` starts can spend: scoring the starts, the
+        adjustment's gradient unless kept, its value and zero-boundary slopes at the start, :data:`MAX_FUN` L-BFGS-B
+        evaluations and the start's own when none succeeded."""
+        base = base or self.model
+        gradient = 0 if tuple(bool(f) for f in base.b_free) in self._grad_c else self.theta.size + 1
+        return (n_starts if n_starts > 1 else 0) + gradient + 1 + len(self.zero) + MAX_FUN + 1
 
     # -- ℓ at one point ------------------------------------------------------------------------------------
     def evaluate(self, theta: np.ndarray, base: StateSpace | None = None) -> tuple[float, float]:
@@ -194,13 +211,15 @@ class Profiler:
         step = Z95 * cov[:, k] / math.sqrt(cov[k, k])
         step = np.where(np.isfinite(step), step, 0.0)
         loose = set(self.zero) | self.flat
+        ladder = [(s, j) for s in self.fallback_starts()[1:] for j in self.zero if s[j] != self.theta[j]]
+        if loose:  # two inner maximisations (two plain evaluations otherwise, checked whatever the budget)
+            self.afford(2 * self.maximise_cost(1 + len(ladder)))
         for sign in (-1.0, 1.0):
             th = self.theta + sign * step
             if np.any(th < self.lo) or np.any(th > self.hi):
                 return False
             if loose:
-                starts = [th] + [np.where(np.arange(th.size) == j, s[j], th) for s in self.fallback_starts()[1:]
-                                 for j in self.zero if s[j] != self.theta[j]]
+                starts = [th] + [np.where(np.arange(th.size) == j, s[j], th) for s, j in ladder]
                 a = self.maximise(starts, set(range(th.size)) - loose, self.model)[0]
             else:
                 a = self.evaluate(th)[1]
@@ -226,6 +245,7 @@ class Profiler:
         start for zero-boundary ones (there it changes fast). ℓ_A itself is exact at every point evaluated.
         """
         starts = distinct(starts)
+        self.afford(self.maximise_cost(len(starts), base))
         scored = [(self.evaluate(t, base), t) for t in starts] if len(starts) > 1 else []
         start = max(scored, key=lambda p: p[0][1])[1] if scored else starts[0]
         free = [j for j in range(self.theta.size) if j not in fixed]
@@ -280,7 +300,7 @@ class Profiler:
         bounds = [tuple(None if b is None or not math.isfinite(b) else b for b in pair) for pair in bounds]
         if free and math.isfinite(c0):
             minimize(fun, x0, jac=True, method="L-BFGS-B", bounds=bounds,
-                     options={"maxiter": 10, "maxfun": 12, "ftol": 1e-9, "gtol": 3e-2, "maxcor": 10})
+                     options={"maxiter": 10, "maxfun": MAX_FUN, "ftol": 1e-9, "gtol": 3e-2, "maxcor": 10})
         if not math.isfinite(best[0]):
             ll, a = self.evaluate(start, base)
             best[:] = [a, start, ll]
@@ -309,6 +329,8 @@ class Profiler:
         def predict(step: float) -> list[np.ndarray]:
             return self.starts_near(np.clip(theta_hat + col * step, self.lo, self.hi))
 
+        # its centre's two points and a point at each end, at the least
+        self.afford(1 + 4 * self.maximise_cost(len(self.starts_near(theta_hat))))
         room = {d: min(MAX_LOG_DISTANCE, abs(b - v_hat)) if math.isfinite(b) else MAX_LOG_DISTANCE
                 for d, b in ((-1.0, self.lo[k]), (1.0, self.hi[k]))}
         a_hat = self.evaluate(theta_hat)[1]
@@ -352,6 +374,7 @@ class Profiler:
             return self.maximise(starts, set(), base_at(v))
 
         scale = max(se, 1e-300)
+        self.afford(1 + 4 * self.maximise_cost(len(self.fallback_starts()), base_at(value)))
         a_hat = self.evaluate(self.theta, base_at(value))[1]
         pts = centre(profile_at, value, a_hat, self.theta, [-Z95 * scale, Z95 * scale],
                           predict=lambda _: self.fallback_starts(), parabola=True)
