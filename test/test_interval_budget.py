@@ -96,7 +96,7 @@ def test_a_profile_that_cannot_finish_within_the_budget_left_is_not_begun(profil
     # On a long record a profile begun with too little budget left spent its evaluations (seconds each) and was
     # stopped anyway, its parameter getting the budget-spent interval all the same.
     make, cov = profiler_of
-    k = 0  # the white noise: interior, well determined
+    k = 2  # the GM's σ: interior, well determined
     roomy = make(math.inf)
     roomy.interval(k, cov)
     assert roomy.n_eval > 0

@@ -79,10 +79,11 @@ class Parameterisation:
         return lo, hi
 
     def to_components(self, theta: np.ndarray, model: StateSpace | None = None) -> list[Component]:
-        """Components at ϑ; RR slopes are taken from ``model`` (its profiled value) when given."""
+        """Components at ϑ; RR slopes are taken from ``model`` (its profiled value) when given. A log-parameter
+        beyond float range gives inf (the component then refuses it), not an overflow warning."""
         params = [dict(c.params()) for c in self.template]
         for (i, name), v in zip(self.entries, theta, strict=True):
-            params[i][name] = float(np.exp(v))
+            params[i][name] = math.exp(v) if v < 700.0 else math.inf
         out: list[Component] = [type(c)(**p) for c, p in zip(self.template, params, strict=True)]
         if model is not None and any(isinstance(c, RR) for c in out):
             from ..kalman.statespace import ramp_components
@@ -136,7 +137,7 @@ def loglik_grad_profile(
     of ``step``)."""
     components = par.to_components(theta, base)
     prof, model, stats = kalman.profile_and_smooth(with_components(base, components), y, z)
-    score = em.MatrixScore.at(model, em.sums_from_stats(stats, data or em.DataSums.of(y, z)))
+    score = em.MatrixScore.at(model, em.sums_from_stats(stats, data or em.DataSums.of(y, z)), stats)
     grad = np.empty(theta.size)
     for k in range(theta.size):
         i = par.entries[k][0]
