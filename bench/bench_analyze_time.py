@@ -9,22 +9,27 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --jobs 1 0               # one process vs one per core
     .venv/bin/python bench/bench_analyze_time.py --duration 10800                     # 3 h at 400 Hz (the GMWM)
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400         # 24 h at 200 Hz
+    .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1800   # a measured record
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
 screen on statistics of fixed size, then 3 h at 400 Hz and 24 h at 200 Hz (this checkout alone).
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
-checkout. Printed: per rate, source and ``--jobs`` value, wall time, CPU time (user + system of the analyze process
-and of the worker processes it reaped) and peak memory: the largest RSS of one process and the largest sums of the
-RSS and of the PSS (shared pages split among the processes mapping them) of the analyze process and its workers
-(sampled every 0.1 s), the PSS also as a multiple of the decoded arrays (stamps and six axes, float64). Each
-checkout runs without the BLAS thread-count variables in its environment, as from a user's shell.
+checkout; with ``--adis RUN``, the whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at 100
+Hz, ``bench/adis.py``) instead. A checkout still running after ``--timeout`` seconds is stopped and printed as such
+(the checkout before the composite search needs hours on a measured record). Printed: per rate, source and ``--jobs``
+value, wall time, CPU time (user + system of the analyze process and of the worker processes it reaped) and peak
+memory: the largest RSS of one process and the largest sums of the RSS and of the PSS (shared pages split among the
+processes mapping them) of the analyze process and its workers (sampled every 0.1 s), the PSS also as a multiple of
+the decoded arrays (stamps and six axes, float64). Each checkout runs without the BLAS thread-count variables in its
+environment, as from a user's shell.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import os
 import subprocess
 import sys
@@ -32,8 +37,13 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 import psutil
+from adis import DATA, load_run  # bench/adis.py, beside this script
 from checkouts import check_imports_own_package  # bench/checkouts.py, beside this script
+
+from imu_noise_id.bag.writer import write_bag
+from imu_noise_id.core.axes import ImuSeries
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Left out of the environment the checkouts run in (:func:`_user_environment`).
@@ -59,17 +69,36 @@ def _tree_memory(pid: int) -> tuple[int, int]:
     return rss, pss
 
 
+def _stop_tree(pid: int) -> None:
+    """Kill process ``pid`` and its descendants (the analyze process and its workers)."""
+    with contextlib.suppress(psutil.Error):
+        root = psutil.Process(pid)
+        for proc in [*root.children(recursive=True), root]:
+            with contextlib.suppress(psutil.Error):
+                proc.kill()
+
+
+def _adis_bag(run: int, path: Path) -> int:
+    """Write ADIS16405 static run ``run`` as a rosbag2 mcap bag at ``path``; its samples per axis."""
+    if not DATA.is_dir():
+        raise SystemExit(f"no data at {DATA}")
+    data, dt = load_run(run)
+    t = dt * np.arange(data.shape[0])
+    write_bag(path, ImuSeries(t=t, gyro=data[:, :3], accel=data[:, 3:], frame_id="imu", topic="/imu/data"))
+    return data.shape[0]
+
+
 def _user_environment() -> dict[str, str]:
     """This process's environment without the BLAS thread-count variables (``make`` sets one): each checkout runs
     with what a user's shell gives it, and sets its own threads or not."""
     return {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
 
 
-def run_analyze(source: Path, bag: Path, out: Path,
-                jobs: int | None = None) -> tuple[float, float, float, float, float]:
+def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None,
+                timeout: float = math.inf) -> tuple[float, float, float, float, float] | None:
     """(wall [s], CPU [s], peak RSS of one process, peak summed RSS and PSS of the process tree [MiB]) of
     ``python -m imu_noise_id analyze`` run in ``source`` (with ``--jobs`` when given), after checking that it imports
-    the package of ``source``."""
+    the package of ``source``; None when it was stopped after ``timeout`` seconds."""
     check_imports_own_package(source, "analyze")
     env = dict(_user_environment(), PYTHONPATH=str(source))
     cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out)]
@@ -83,6 +112,10 @@ def run_analyze(source: Path, bag: Path, out: Path,
             break
         rss, pss = _tree_memory(proc.pid)
         tree_rss, tree_pss = max(tree_rss, rss), max(tree_pss, pss)
+        if time.perf_counter() - start > timeout:
+            _stop_tree(proc.pid)
+            proc.wait()
+            return None
         time.sleep(0.1)
     wall = time.perf_counter() - start
     proc.returncode = os.waitstatus_to_exitcode(status)
@@ -99,6 +132,10 @@ def main(argv: list[str] | None = None) -> int:
                         help="another checkout to time side by side (repeatable)")
     parser.add_argument("--jobs", type=int, nargs="+", default=None,
                         help="time this checkout with each of these --jobs values (default: its default only)")
+    parser.add_argument("--adis", type=int, default=None, metavar="RUN",
+                        help="analyze the whole ADIS16405 static run RUN (1-6) instead of a simulated bag")
+    parser.add_argument("--timeout", type=float, default=math.inf,
+                        help="stop a checkout still running after this many seconds")
     args = parser.parse_args(argv)
     mine = [("this checkout", None)] if args.jobs is None else [(f"this checkout, --jobs {j}", j) for j in args.jobs]
     sources = [(name, ROOT, jobs) for name, jobs in mine] + [(f"baseline {p}", p.resolve(), None)
@@ -106,24 +143,37 @@ def main(argv: list[str] | None = None) -> int:
     print(f"analyze, default options, no BLAS thread-count variable set; {os.cpu_count()} CPUs; load average before: "
           f"{os.getloadavg()[0]:.2f}")
     with tempfile.TemporaryDirectory() as tmp:
-        for rate in args.rates:
+        for rate in [100.0] if args.adis else args.rates:
             bag = Path(tmp) / f"static_{rate:g}hz"
-            subprocess.run([sys.executable, "-m", "imu_noise_id", "simulate", "--model", MODEL, "--rate", str(rate),
-                            "--duration", str(args.duration), "--out", str(bag), "--seed", "1"], check=True,
-                           stdout=subprocess.DEVNULL, env=dict(os.environ, PYTHONPATH=str(ROOT)), cwd=ROOT)
-            n = int(args.duration * rate)
+            if args.adis:
+                n = _adis_bag(args.adis, bag)
+                what = f"ADIS16405 run {args.adis}, whole record"
+            else:
+                subprocess.run([sys.executable, "-m", "imu_noise_id", "simulate", "--model", MODEL, "--rate",
+                                str(rate), "--duration", str(args.duration), "--out", str(bag), "--seed", "1"],
+                               check=True, stdout=subprocess.DEVNULL, env=dict(os.environ, PYTHONPATH=str(ROOT)),
+                               cwd=ROOT)
+                n = int(args.duration * rate)
+                what = f"{args.duration:g} s at {rate:g} Hz"
             arrays = n * DECODED_BYTES_PER_SAMPLE / 2.0**20
-            print(f"\n{args.duration:g} s at {rate:g} Hz ({n} samples per axis; decoded arrays {arrays:.0f} MiB):")
+            print(f"\n{what} ({n} samples per axis; decoded arrays {arrays:.0f} MiB):")
             times = {}
             for name, source, jobs in sources:
-                wall, cpu, rss, tree_rss, tree_pss = run_analyze(source, bag, Path(tmp) / f"out_{len(times)}", jobs)
+                measured = run_analyze(source, bag, Path(tmp) / f"out_{len(times)}", jobs, args.timeout)
+                if measured is None:
+                    times[name] = math.inf
+                    print(f"  {name:40s} stopped after {args.timeout:.0f} s, not finished", flush=True)
+                    continue
+                wall, cpu, rss, tree_rss, tree_pss = measured
                 times[name] = wall
                 print(f"  {name:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB; process tree: "
                       f"RSS {tree_rss:7.0f} MiB, PSS {tree_pss:7.0f} MiB = {tree_pss / arrays:.1f}× the arrays",
                       flush=True)
             first = sources[0][0]
             for name, _, _ in sources[1:]:
-                print(f"  {name}: {times[name] / times[first]:.2f}× the wall time of {first}")
+                ratio = times[name] / times[first]
+                print(f"  {name}: {'more than ' if math.isinf(times[name]) else ''}"
+                      f"{min(ratio, args.timeout / times[first]):.2f}× the wall time of {first}")
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0
 
