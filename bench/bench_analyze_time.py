@@ -9,7 +9,7 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --jobs 1 0               # one process vs one per core
     .venv/bin/python bench/bench_analyze_time.py --duration 10800                     # 3 h at 400 Hz (the GMWM)
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400         # 24 h at 200 Hz
-    .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1800   # a measured record
+    .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1200   # a measured record
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
 screen on statistics of fixed size, then 3 h at 400 Hz and 24 h at 200 Hz (this checkout alone).

@@ -79,7 +79,7 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_loop_effects.py", "--clean", "10", "--minutes", "1440", "--rate", "10",
       "--cases", "gm", "osc+gm", "clean", "bi"], "bench_loop_effects.txt"),
     (["bench_adis_analysis.py"], "bench_adis_analysis.txt"),
-    (["bench_analyze_time.py", "--adis", "1", "--baseline", BASELINE, "--timeout", "1800"],
+    (["bench_analyze_time.py", "--adis", "1", "--baseline", BASELINE, "--timeout", "1200"],
      "bench_analyze_time_adis.txt"),
     (["bench_overbound.py"], "bench_overbound.txt"),
     (["bench_gmwm_speed.py"], "bench_gmwm_speed.txt"),
