@@ -368,3 +368,15 @@ def test_without_room_for_the_recording_files_the_analysis_runs_on_copies(tmp_pa
     assert main(["analyze", str(bag), "--out", str(tmp_path / "out"), "--model", "WN+RW", "--no-loop"]) == 0
     err = capsys.readouterr().err
     assert err.count("note: the recording stays in memory") == 1 and "Traceback" not in err
+
+
+def test_the_finished_loops_hold_no_record_of_the_samples():
+    """A finished loop keeps each step's innovations, AVs and findings, not the samples and regressors its fits were
+    fitted to: returned from the workers and kept for six axes, those were (1 + regressors) × N floats per step."""
+    imu = simulate_static_imu(_model(), 100.0, 20.0, seed=7)
+    result = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+RW")))
+    assert set(result.loops) == set(AXES)
+    for loop in result.loops.values():
+        for step in loop.steps:
+            assert step.diagnosis.fit.record is None and step.diagnosis.fit.standardized is None
+            assert step.diagnosis.innovations.size == loop.n

@@ -235,7 +235,9 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
                         "longer before trusting K")
     band = allan_band(final.fit.components, static.dt, static.n, static.allan.tau, n_sim=BAND_SIMULATIONS,
                       seed=index)
-    return _AxisOutcome(model, loop_result, final, band, warnings)
+    # the loop's fits keep no record past here: sent back from a worker and kept for six axes, a step's samples and
+    # regressors took (1 + regressors) × N floats each
+    return _AxisOutcome(model, loop_result.without_data() if loop_result is not None else None, final, band, warnings)
 
 
 def worker_processes(asked: int, n: int, axes: int) -> int:

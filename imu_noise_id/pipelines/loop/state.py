@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -154,3 +154,10 @@ class LoopResult:
     @property
     def final(self) -> LoopStep:
         return self.steps[-1]
+
+    def without_data(self) -> LoopResult:
+        """This result with each step's fit holding no record (:meth:`FitResult.without_data`: the samples and
+        regressors, (1 + regressors) × N floats per step); the innovations, AVs and findings stay. For keeping or
+        sending a finished loop: what needs the record (refits, intervals) is done."""
+        steps = [replace(s, diagnosis=replace(s.diagnosis, fit=s.diagnosis.fit.without_data())) for s in self.steps]
+        return replace(self, steps=steps)
