@@ -46,17 +46,21 @@ class AxisReference:
     def model(self, dt: float) -> list[Component]:
         return list(self.components) if self.components else [WN(self.noise_density)]
 
-    def difference_variance(self, dt: float) -> tuple[float, tuple[float, float], str]:
-        """E[(y_{t+1} − y_t)²] = 2·AV(dt) [u²] of the reference model, its interval (N's relative interval, squared,
-        or ±:data:`DEFAULT_TOLERANCE` in N when it has none) and a note saying which."""
-        v = 2.0 * float(total_allan_variance(self.model(dt), np.array([dt]), dt)[0])
+    def density_interval(self) -> tuple[tuple[float, float], str]:
+        """N's 95 % interval [u/√Hz], or ±:data:`DEFAULT_TOLERANCE` of N when it has none, and a note saying which."""
         lo, hi = self.noise_density_ci
         if math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= self.noise_density <= hi:
-            return v, (v * (lo / self.noise_density) ** 2, v * (hi / self.noise_density) ** 2), ""
+            return (lo, hi), ""
         tol = DEFAULT_TOLERANCE
-        return v, (v * (1 - tol) ** 2, v * (1 + tol) ** 2), (f"the reference's N has no interval: ±{100 * tol:g} % "
-                                                              "used")
+        return ((1 - tol) * self.noise_density, (1 + tol) * self.noise_density), (
+            f"the reference's N has no interval: ±{100 * tol:g} % used")
 
+    def difference_variance(self, dt: float) -> tuple[float, tuple[float, float], str]:
+        """E[(y_{t+1} − y_t)²] = 2·AV(dt) [u²] of the reference model, its interval (N's relative interval, squared;
+        :meth:`density_interval`) and that method's note."""
+        v = 2.0 * float(total_allan_variance(self.model(dt), np.array([dt]), dt)[0])
+        (lo, hi), note = self.density_interval()
+        return v, (v * (lo / self.noise_density) ** 2, v * (hi / self.noise_density) ** 2), note
 
     def difference_variance_at(self, noise_density: float, dt: float) -> float:
         """E[(y_{t+1} − y_t)²] [u²] of this reference's model scaled to the density ``noise_density`` [u/√Hz]."""
@@ -113,13 +117,26 @@ def rate_mismatch(rate_hz: float, reference_rate_hz: float, source: str) -> str 
             "analysis of a recording at the same rate")
 
 
-def _new_line(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,
-              known: tuple[float, ...]) -> det.Finding | None:
+def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,
+                  known: tuple[float, ...]) -> tuple[det.Finding | None, det.Finding | None]:
+    """The significant bias step and new line (None without) in ``y`` [u] at period ``dt`` [s], each at level
+    ``alpha``, in the innovations of ``whitening`` (the reference's model; first sample subtracted, its first samples
+    the filter's start-up left out, the level's GLS estimate removed); lines within :data:`KNOWN_LINE_BINS` of a
+    ``known`` frequency [Hz] are not new."""
+    first = y[np.isfinite(y)][0]
+    e = whitening.whiten(np.nan_to_num(y - first, nan=0.0))
+    # The first sample is the level only to its noise: that error leaves the filter as the whitened constant's
+    # response, a transient of the filter's memory (seconds), low-frequency power a short window takes for a line.
+    # Its GLS coefficient is removed (the score tests hold the constant as a nuisance column anyway).
+    constant = whitening.whiten(np.ones(e.size))
+    e = e - constant * (float(constant @ e) / float(constant @ constant))
+    e[: min(10, e.size // 100)] = np.nan  # the filter's start-up
+    step = det.detect_step(e, dt, whitening, alpha=alpha)
     near = KNOWN_LINE_BINS / (e.size * dt)
     for line in det.detect_sinusoids(e, dt, whitening, alpha=alpha, f_min=LINE_MIN_FREQUENCY):
         if line.significant and all(abs(line.params["frequency"] - f) > near for f in known):
-            return line
-    return None
+            return (step if step.significant else None), line
+    return (step if step.significant else None), None
 
 
 def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: float = DEFAULT_RATIO,
@@ -138,11 +155,7 @@ def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: f
     hours = y.size * dt / 3600.0
     alpha = min(det.ALPHA, false_alarms_per_hour * hours)
     whitening = WhiteningFilter.from_components(reference.model(dt), dt)
-    first = y[np.isfinite(y)][0]
-    e = whitening.whiten(np.nan_to_num(y - first, nan=0.0))
-    e[: min(10, e.size // 100)] = np.nan  # the filter's start-up
-    step = det.detect_step(e, dt, whitening, alpha=alpha)
-    line = _new_line(e, dt, whitening, alpha, reference.known_lines)
+    step, line = step_and_line(y, dt, whitening, alpha, reference.known_lines)
     beyond = None if limit is None else beyond_limit(y, dt, reference.difference_variance_at(limit, dt),
                                                      false_alarms_per_hour=false_alarms_per_hour)
     notes = [note] if note else []
@@ -152,4 +165,4 @@ def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: f
                          f"{level.alarm.time_s:.1f} s (CUSUM alarm) that the level since then does not hold "
                          f"({level.ratio:.3g}× {what} [{level.ratio_ci[0]:.3g}, {level.ratio_ci[1]:.3g}]): not "
                          "counted as degraded")
-    return AxisComparison(noise, step if step.significant else None, line, alpha, notes, beyond)
+    return AxisComparison(noise, step, line, alpha, notes, beyond)
