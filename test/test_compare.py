@@ -268,3 +268,49 @@ def test_the_new_line_test_holds_its_level_on_short_windows():
         found += step_and_line(y, DT, whitening, 0.01, ())[1] is not None
     assert found <= 6
 
+
+def test_the_windowed_checks_find_a_bias_step_and_a_new_line_within_a_minute():
+    """The node's sliding-window tests (one axis; the change at 600 s): a step of 10 × the per-sample noise's tenth
+    is found by 660 s and dated within 5 s; a 30 Hz line a fifth of the per-sample σ is found by 660 s at its
+    frequency; the unchanged axis raises nothing in 20 min."""
+    from imu_noise_id.core.watch.windowed import WindowedChecks
+
+    n = int(MINUTES * 60 / DT)
+    t = np.arange(n) * DT
+    sigma = N / math.sqrt(DT)
+    faults = {"step": (t >= 600.0) * 10 * 0.1 * sigma,
+              "line": (t >= 600.0) * 0.2 * sigma * np.sin(2 * math.pi * 30.0 * t), None: 0.0 * t}
+    for kind, fault in faults.items():
+        y = _record(21) + fault
+        checks = WindowedChecks([REFERENCE], DT, false_alarms_per_hour=0.1)
+        for k in range(n if kind is None else int(660 / DT)):
+            checks.add(float(t[k]), y[k: k + 1])
+        found = checks.findings[0]
+        if kind is None:
+            assert found == {} and checks.tests >= 110
+            continue
+        assert set(found) == {kind}, found
+        assert found[kind].time_s <= 660.0
+        if kind == "step":
+            assert abs(found[kind].since_s - 600.0) < 5.0 and found[kind].value == pytest.approx(sigma, rel=0.3)
+        else:
+            assert found[kind].value == pytest.approx(30.0, abs=0.05)
+
+
+def test_in_motion_the_cmkfs_density_interval_is_held_against_the_reference():
+    """The CMKF's density interval (its innovations, while moving) beyond 1.5× the reference's interval is a WARN
+    naming the axis and the interval as ratios; one overlapping the reference's, or not identified (NaN), is not."""
+    from imu_noise_id.pipelines.online import OK, WARN
+
+    watch = _watch()
+    ci = np.array([[0.97e-3, 1.05e-3]] * 3 + [[0.9e-2, 1.1e-2]] * 3)
+    ci[2] = (1.6e-3, 1.9e-3)  # gyro_z: 1.6–1.9× a reference of 1e-3 (0.98–1.02e-3)
+    ci[4] = (math.nan, math.nan)
+    assert set(watch.in_motion(ci)) == {"gyro_z"}
+    assert watch.in_motion(ci)["gyro_z"] == pytest.approx((1.6, 1.9))
+    statuses = {s.name: s for s in watch.statuses(ci)}
+    assert statuses["Reference watch (gyro)"].level == WARN and "gyro_z in motion" in statuses[
+        "Reference watch (gyro)"].message
+    ci[2] = (1.2e-3, 1.9e-3)  # overlaps 1.5 × 1.02e-3
+    assert watch.in_motion(ci) == {}
+    assert {s.name: s for s in watch.statuses(ci)}["Reference watch (accel)"].level == OK

@@ -280,6 +280,13 @@ class OnlineIdentifier:
             bank_theta={} if self.bank is None else self.bank.theta(),
         )
 
+    def _cmkf_density_ci(self) -> np.ndarray | None:
+        """(6, 2) the CMKF's 95 % density intervals [u/√Hz] (NaN where not identified), or None before it runs."""
+        est = self.cmkf_feed.estimate
+        if est.status in ("no_data", "no_imu", "imu_only") or not self.cmkf_feed.cmkf.filter.initialised:
+            return None
+        return np.vstack([est.gyro_psd.density_ci95(), est.accel_psd.density_ci95()])
+
     def diagnostics(self, wall_now: float, window_s: float) -> list[DiagnosticStatus]:
         """Statuses at steady-clock ``wall_now`` over the last ``window_s`` seconds; resets the per-window counters."""
         cfg = self.config
@@ -307,7 +314,7 @@ class OnlineIdentifier:
                               [] if self.bank is None else self.bank.decision_changes),
             range_status(cfg, est),
             processing_status(self.processing_time, self.identification_time),
-            *(self.watch.statuses() if self.watch is not None else []),
+            *(self.watch.statuses(self._cmkf_density_ci()) if self.watch is not None else []),
         ]
         for source in (self.imu, self.odom, self.temperature):
             source.stats.window_received = 0

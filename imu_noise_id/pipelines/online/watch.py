@@ -1,17 +1,22 @@
 """The online watch of an IMU against its reference (an earlier ``analyze``) and datasheet limits (docs/node.md):
-stationary samples run ``SequentialNoiseWatch`` CUSUMs against the reference (both ways) and each sensor's density
-limit (upwards, v₀ = the reference's shape at the limit, v₁ = ``LIMIT_RATIO``² v₀; without a reference white
-noise). Status per sensor: OK, WARN (left its reference: how much, since when), ERROR (beyond the spec, or the
-watch cannot run). It starts once the IMU's period is known."""
+stationary samples run ``SequentialNoiseWatch`` CUSUMs against the reference (both ways), its bias-step and new-line
+tests on a sliding window (``WindowedChecks``), and each sensor's density limit (upwards, v₀ = the reference's shape
+at the limit, v₁ = ``LIMIT_RATIO``² v₀; without a reference white noise); in motion the CMKF's density intervals are
+held against the reference's. Status per sensor: OK, WARN (left its reference: how much, since when; a bias step, a
+new line; in motion beyond it), ERROR (beyond the spec, or the watch cannot run). It starts once the IMU's period is
+known."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ...core.axes import AXES, SENSORS, sensor_of
 from ...core.watch.compare import AxisReference, rate_mismatch
 from ...core.watch.noise_level import LIMIT_RATIO
 from ...core.watch.sequential import AxisWatch, SequentialNoiseWatch
+from ...core.watch.windowed import WindowedChecks, WindowFinding
 from .status import ERROR, OK, WARN, DiagnosticStatus
 
 
@@ -30,6 +35,7 @@ class ReferenceWatch:
         self.refused = error
         self.watch: SequentialNoiseWatch | None = None
         self.spec_watch: SequentialNoiseWatch | None = None
+        self.windowed: WindowedChecks | None = None
 
     def _start(self, period: float) -> None:
         """Both watches at the IMU's ``period`` [s] (the reference's rate checked first)."""
@@ -44,6 +50,8 @@ class ReferenceWatch:
                 intervals.append(interval)
             self.watch = SequentialNoiseWatch(v, intervals, period, ratio=self.ratio,
                                               false_alarms_per_hour=self.false_alarms_per_hour)
+            self.windowed = WindowedChecks([self.references[axis] for axis in AXES], period,
+                                           false_alarms_per_hour=self.false_alarms_per_hour)
         if self.limits:
             v_spec = []
             for axis in AXES:
@@ -66,14 +74,35 @@ class ReferenceWatch:
             self._start(period)
             if self.refused is not None:
                 return
-        for watch in (self.watch, self.spec_watch):
+        for watch in (self.watch, self.spec_watch, self.windowed):
             if watch is not None:
                 watch.add(t, sample)
 
     def break_chain(self) -> None:
-        for watch in (self.watch, self.spec_watch):
+        for watch in (self.watch, self.spec_watch, self.windowed):
             if watch is not None:
                 watch.break_chain()
+
+    def in_motion(self, density_ci: np.ndarray) -> dict[str, tuple[float, float]]:
+        """The axes whose density interval from the CMKF's innovations ``density_ci`` ((6, 2) [u/√Hz], AXES order;
+        NaN where not identified) lies beyond the reference's interval by more than ``ratio`` (either way), with that
+        interval as ratios to the reference's N. Not latched: it follows the CMKF's estimate, which in motion also
+        holds what the platform adds (vibration), so it is a warning, never a spec ERROR."""
+        if self.references is None or self.refused is not None:
+            return {}
+        out = {}
+        for axis, (lo, hi) in zip(AXES, np.asarray(density_ci, dtype=float), strict=True):
+            reference = self.references[axis]
+            (ref_lo, ref_hi), _ = reference.density_interval()
+            if np.isfinite(lo) and np.isfinite(hi) and (lo > self.ratio * ref_hi or hi < ref_lo / self.ratio):
+                out[axis] = (lo / reference.noise_density, hi / reference.noise_density)
+        return out
+
+    def changes(self) -> dict[str, dict[str, WindowFinding]]:
+        """The bias steps and new lines found per axis ({"step": …, "line": …}; axes without one left out)."""
+        if self.windowed is None:
+            return {}
+        return {axis: found for axis, found in zip(AXES, self.windowed.findings, strict=True) if found}
 
     def axes(self) -> dict[str, AxisWatch]:
         """Every axis's state against its reference (empty before the watch started or without a reference)."""
@@ -90,10 +119,12 @@ class ReferenceWatch:
                 out[axis] = state
         return out
 
-    def statuses(self) -> list[DiagnosticStatus]:
-        """One status per sensor (module docstring)."""
+    def statuses(self, cmkf_density_ci: np.ndarray | None = None) -> list[DiagnosticStatus]:
+        """One status per sensor (module docstring); with ``cmkf_density_ci`` ((6, 2) [u/√Hz], the CMKF's density
+        intervals) also :meth:`in_motion`'s axes, as WARN."""
         out = []
-        states, beyond = self.axes(), self.beyond_spec()
+        states, beyond, changes = self.axes(), self.beyond_spec(), self.changes()
+        moving = {} if cmkf_density_ci is None else self.in_motion(cmkf_density_ci)
         sources = {"reference": self.source} if self.references is not None else {}
         if self.limits:
             sources["spec"] = self.limits_source
@@ -102,12 +133,13 @@ class ReferenceWatch:
             if self.refused is not None:
                 out.append(DiagnosticStatus(name, ERROR, f"not watching: {self.refused}", dict(sources)))
                 continue
-            if self.watch is None and self.spec_watch is None:
+            started = self.watch is not None or self.spec_watch is not None
+            if not started and not any(axis in moving for axis in axes):
                 out.append(DiagnosticStatus(name, OK, "waiting for stationary samples", dict(sources)))
                 continue
             values = dict(sources)
-            watch = self.watch or self.spec_watch
-            values["pairs"] = str(watch.pairs)
+            if started:
+                values["pairs"] = str((self.watch or self.spec_watch).pairs)
             alarms, errors = [], []
             for axis in axes:
                 if axis in states:
@@ -117,6 +149,20 @@ class ReferenceWatch:
                         values[f"{axis}_since"] = f"{s.alarm.since_s:.3f}"
                         alarms.append(f"{axis} noise {s.alarm.direction} ({s.ratio:.3g}× the reference) since stamp "
                                       f"{s.alarm.since_s:.1f} s")
+                step, line = changes.get(axis, {}).get("step"), changes.get(axis, {}).get("line")
+                if step is not None:
+                    values[f"{axis}_bias_step"] = f"{step.value:.3g}"
+                    values[f"{axis}_bias_step_since"] = f"{step.since_s:.3f}"
+                    alarms.append(f"{axis} bias step of {step.value:.3g} at stamp {step.since_s:.1f} s")
+                if line is not None:
+                    values[f"{axis}_new_line_hz"] = f"{line.value:.5g}"
+                    alarms.append(f"{axis} new line at {line.value:.4g} Hz (amplitude {line.amplitude:.3g}) by stamp "
+                                  f"{line.time_s:.1f} s")
+                if axis in moving:
+                    lo, hi = moving[axis]
+                    values[f"{axis}_motion_density_ratio"] = f"{lo:.3g}..{hi:.3g}"
+                    alarms.append(f"{axis} in motion: the CMKF's density is [{lo:.3g}, {hi:.3g}]× the reference "
+                                  "(its innovations; platform vibration included)")
                 limit = self.limits.get(sensor_of(axis))
                 if limit is not None and self.spec_watch is not None:
                     spec_state = self.spec_watch.axis(AXES.index(axis))

@@ -1,0 +1,104 @@
+"""The bias-step and new-line tests of :mod:`.compare` on a sliding window of stationary samples (the node's watch).
+
+Every ``every_s`` seconds of stationary data each axis is tested once (the axes in turn, one per tick, so that no
+sample waits for more than one axis's test) on its last ``window_s`` seconds of contiguous stationary samples, each
+test at level α = λ · ``every_s`` / 3600: by the union bound over the 3600 / ``every_s`` tests of an hour, at most λ
+false alarms per hour per axis and test. A change is visible while both of its sides are in the window, so a step is
+found within ``every_s`` plus the samples its size needs after it, and a new line once enough of its cycles are in
+(docs/analysis.md, "Compare against a reference"). Motion or a gap breaks the window: a step across motion is not a
+step here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..diagnostics.whitening import WhiteningFilter
+from .compare import AxisReference, step_and_line
+
+#: Seconds of contiguous stationary samples each test looks at.
+DEFAULT_WINDOW_S = 120.0
+#: Seconds of stationary data between two tests of one axis.
+DEFAULT_EVERY_S = 10.0
+#: Fewest seconds of contiguous stationary samples a test runs on.
+MIN_WINDOW_S = 30.0
+
+
+@dataclass(frozen=True)
+class WindowFinding:
+    """A test's first significant finding on one axis: ``kind`` "step" or "line", ``value`` (the step's size [u] or
+    the line's frequency [Hz]), ``amplitude`` (the line's [u]; the step's size again), ``since_s`` (the step's stamp,
+    or the window's first stamp for a line) and ``time_s`` (the stamp of the test that found it) [s]."""
+
+    kind: str
+    value: float
+    amplitude: float
+    since_s: float
+    time_s: float
+
+
+class WindowedChecks:
+    """:func:`.compare.step_and_line` per axis on the last ``window_s`` [s] of stationary samples at ``period`` [s]
+    against ``references`` (one per axis, the samples' order), at λ = ``false_alarms_per_hour`` per axis and test."""
+
+    def __init__(self, references: list[AxisReference], period: float, *, false_alarms_per_hour: float,
+                 window_s: float = DEFAULT_WINDOW_S, every_s: float = DEFAULT_EVERY_S) -> None:
+        if not (false_alarms_per_hour > 0 and window_s >= MIN_WINDOW_S and every_s > 0):
+            raise ValueError(f"windowed checks need λ > 0, a window of ≥ {MIN_WINDOW_S:g} s and a positive period "
+                             f"between tests, got {false_alarms_per_hour!r}, {window_s!r}, {every_s!r}")
+        self.period = period
+        self.references = references
+        self.whitening = [WhiteningFilter.from_components(r.model(period), period) for r in references]
+        self.alpha = false_alarms_per_hour * every_s / 3600.0
+        k = len(references)
+        self.capacity = round(window_s / period)
+        self.samples = np.zeros((self.capacity, k))
+        self.stamps = np.zeros(self.capacity)
+        self.count = 0  # contiguous stationary samples held (≤ capacity)
+        self.next_slot = 0
+        self.tick = max(1, round(every_s / period / k))
+        self.since_tick = 0
+        self.next_axis = 0
+        self.minimum = round(MIN_WINDOW_S / period)
+        self.findings: list[dict[str, WindowFinding]] = [{} for _ in range(k)]
+        self.tests = 0
+
+    def add(self, t: float, sample: np.ndarray) -> None:
+        """A stationary sample at stamp ``t`` [s] (axes in the references' order)."""
+        self.samples[self.next_slot] = sample
+        self.stamps[self.next_slot] = t
+        self.next_slot = (self.next_slot + 1) % self.capacity
+        self.count = min(self.count + 1, self.capacity)
+        self.since_tick += 1
+        if self.since_tick >= self.tick and self.count >= self.minimum:
+            self.since_tick = 0
+            self._test(self.next_axis)
+            self.next_axis = (self.next_axis + 1) % len(self.references)
+
+    def break_chain(self) -> None:
+        """Motion or a gap: the window starts again."""
+        self.count = 0
+        self.since_tick = 0
+
+    def _window(self) -> tuple[np.ndarray, np.ndarray]:
+        order = (np.arange(self.next_slot - self.count, self.next_slot)) % self.capacity
+        return self.stamps[order], self.samples[order]
+
+    def _test(self, i: int) -> None:
+        stamps, samples = self._window()
+        self.tests += 1
+        held = self.findings[i]
+        if "step" in held and "line" in held:
+            return
+        step, line = step_and_line(samples[:, i], self.period, self.whitening[i], self.alpha,
+                                   self.references[i].known_lines)
+        now = float(stamps[-1])
+        if step is not None and "step" not in held:
+            size = float(step.params["size"])
+            held["step"] = WindowFinding("step", size, size, float(stamps[int(step.params["index"])]), now)
+        if line is not None and "line" not in held:
+            held["line"] = WindowFinding("line", float(line.params["frequency"]),
+                                         float(line.params.get("amplitude", math.nan)), float(stamps[0]), now)
