@@ -33,7 +33,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="noise-density ratio (live/reference, either way) the level test is tuned to (default "
                              "1.5)")
     parser.add_argument("--false-alarms-per-hour", type=float, default=0.1, metavar="L",
-                        help="false alarms per hour of data each test allows (default 0.1)")
+                        help="false alarms per hour of data the whole unit allows, shared among its axes and "
+                             "tests (default 0.1)")
     parser.add_argument("--spec", type=Path, default=None, metavar="FILE",
                         help="datasheet limits, YAML as batch --spec reads ({gyro: {noise_density: …}, accel: {…}}, "
                              "SI): an axis whose noise density is beyond its sensor's limit is degraded too")
@@ -75,6 +76,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: {note}")
     print(table(result, reference))
     degraded = result.degraded
-    print(f"{'DEGRADED: ' + ', '.join(degraded) if degraded else 'within the reference'} (each test at "
-          f"{args.false_alarms_per_hour:g} false alarms per hour)")
+    print(f"{'DEGRADED: ' + ', '.join(degraded) if degraded else 'within the reference'} (at "
+          f"{args.false_alarms_per_hour:g} false alarms per hour for the unit)")
     return 1 if degraded else 0

@@ -9,7 +9,7 @@ from ..core.axes import ImuSeries, sensor_of
 from ..core.errors import InputError
 from ..core.stillness import static_check
 from ..core.watch.compare import AxisComparison, AxisReference, compare_axis, rate_mismatch
-from ..core.watch.noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO
+from ..core.watch.noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO, per_test
 
 
 @dataclass(frozen=True)
@@ -30,7 +30,8 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
             false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
             limits: dict[str, float] | None = None) -> Comparison:
     """Test ``imu`` against ``references`` made at ``rate_hz`` [Hz] from ``topic`` and against ``limits``
-    (sensor "gyro"/"accel" → noise-density limit [u/√Hz]).
+    (sensor "gyro"/"accel" → noise-density limit [u/√Hz]), at ``false_alarms_per_hour`` for the whole unit (shared
+    among its axes and tests, ``noise_level.per_test``).
 
     Raises
     ------
@@ -52,9 +53,10 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
     if topic and imu.topic and topic != imu.topic:
         notes.append(f"the reference was made from {topic}, this recording is {imu.topic}")
     axes = {}
+    each = per_test(false_alarms_per_hour, len(references))
     for axis, ref in references.items():
         try:
-            axes[axis] = compare_axis(imu.axis(axis), dt, ref, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour,
+            axes[axis] = compare_axis(imu.axis(axis), dt, ref, ratio=ratio, false_alarms_per_hour=each,
                                       limit=(limits or {}).get(sensor_of(axis)))
         except ValueError as exc:
             raise InputError(f"compare: {axis}: {exc}") from None

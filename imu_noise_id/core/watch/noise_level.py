@@ -22,7 +22,8 @@ from scipy import stats
 
 #: Noise-density ratio the test is tuned to detect (live / reference, either way).
 DEFAULT_RATIO = 1.5
-#: False alarms per hour of data the threshold allows (per axis and direction).
+#: False alarms per hour of data by default: here per test of one axis; the pipelines give it for a whole unit and
+#: share it (:func:`per_test`).
 DEFAULT_FALSE_ALARMS_PER_HOUR = 0.1
 #: The upward CUSUM counts a pair's d² at most this many sd of the reference, squared (6e-5 of increments beyond).
 SPIKE_Z = 4.0
@@ -155,6 +156,17 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
     since = d if alarm is None else d[index * dt >= alarm.since_s]
     value, ci = _ratio(since if since.size >= 100 else d, v_ref)
     return NoiseLevel(value, ci, alarm, h, int(d.size), (math.sqrt(v_lo / v_ref), math.sqrt(v_hi / v_ref)))
+
+
+#: The tests each axis runs (noise up, noise down, bias step, new line, the specification's limit).
+TESTS_PER_AXIS = 5
+
+
+def per_test(false_alarms_per_hour: float, axes: int) -> float:
+    """λ [1/h] of one test of one axis when a unit's ``false_alarms_per_hour`` is shared evenly among its ``axes``
+    axes and :data:`TESTS_PER_AXIS` tests each: by the union bound the unit then raises at most that many false alarms
+    per hour of data, whichever axis and test raise them."""
+    return false_alarms_per_hour / (axes * TESTS_PER_AXIS)
 
 
 #: Density ratio (live / limit) the test against a specification's limit is tuned to.

@@ -42,7 +42,8 @@ class WindowFinding:
 
 class WindowedChecks:
     """:func:`.compare.step_and_line` per axis on the last ``window_s`` [s] of stationary samples at ``period`` [s]
-    against ``references`` (one per axis, the samples' order), at λ = ``false_alarms_per_hour`` per axis and test."""
+    against ``references`` (one per axis, the samples' order), at λ = ``false_alarms_per_hour`` per axis and test
+    (:func:`.noise_level.per_test` of a unit's)."""
 
     def __init__(self, references: list[AxisReference], period: float, *, false_alarms_per_hour: float,
                  window_s: float = DEFAULT_WINDOW_S, every_s: float = DEFAULT_EVERY_S) -> None:

@@ -238,7 +238,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec("watch.ratio", 1.5, "noise-density ratio (live/reference, either way) the reference watch is tuned to",
               "", 1.01, 100.0, runtime=False),
     ParamSpec("watch.false_alarms_per_hour", 0.1, "false alarms per hour of stationary data the reference watch "
-              "allows per axis and direction", "1/h", 1e-9, 3600.0, runtime=False),
+              "allows the whole IMU (shared among its six axes and their tests)", "1/h", 1e-9, 3600.0, runtime=False),
     ParamSpec("executor", "events", "rclpy executor: events (rclpy.experimental.EventsExecutor, about twice the "
               "message throughput) or single_threaded", runtime=False, choices=("events", "single_threaded")),
     ParamSpec("stats_file", "", "when set, every callback's processing time is kept and a JSON summary "

@@ -14,7 +14,7 @@ import numpy as np
 
 from ...core.axes import AXES, SENSORS, sensor_of
 from ...core.watch.compare import AxisReference, rate_mismatch
-from ...core.watch.noise_level import LIMIT_RATIO
+from ...core.watch.noise_level import LIMIT_RATIO, per_test
 from ...core.watch.sequential import AxisWatch, SequentialNoiseWatch
 from ...core.watch.windowed import WindowedChecks, WindowFinding
 from .status import ERROR, OK, WARN, DiagnosticStatus
@@ -22,15 +22,17 @@ from .status import ERROR, OK, WARN, DiagnosticStatus
 
 class ReferenceWatch:
     """The watch of every axis against ``references`` (by axis) made at ``rate_hz`` [Hz] from ``source``, and against
-    ``limits`` (noise density [u/√Hz] per sensor, "gyro"/"accel", from ``limits_source``); with ``error`` (the
-    reference or the limits could not be read) it only reports that. ``references`` None with ``limits``: the limits
-    alone (their white noise as the reference shape, at any rate)."""
+    ``limits`` (noise density [u/√Hz] per sensor, "gyro"/"accel", from ``limits_source``), at
+    ``false_alarms_per_hour`` for the whole IMU (shared among its axes and tests, ``noise_level.per_test``); with
+    ``error`` (the reference or the limits could not be read) it only reports that. ``references`` None with
+    ``limits``: the limits alone (their white noise as the reference shape, at any rate)."""
 
     def __init__(self, references: dict[str, AxisReference] | None, rate_hz: float, source: str, *, ratio: float,
                  false_alarms_per_hour: float, error: str | None = None, limits: dict[str, float] | None = None,
                  limits_source: str = "") -> None:
         self.references, self.rate_hz, self.source = references, rate_hz, source
-        self.ratio, self.false_alarms_per_hour = ratio, false_alarms_per_hour
+        self.ratio = ratio
+        self.false_alarms_per_hour = per_test(false_alarms_per_hour, len(AXES))  # of one test of one axis
         self.limits, self.limits_source = dict(limits or {}), limits_source
         self.refused = error
         self.watch: SequentialNoiseWatch | None = None
