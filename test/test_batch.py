@@ -157,3 +157,36 @@ def test_a_unit_long_enough_for_parallel_axes_runs_in_its_dask_worker(client, tm
     units = discover_units([str(tmp_path / "long" / "*")], None)
     result = run_batch(units, AnalyzeOptions(models=ModelStage("WN"), loop=False), tmp_path / "out", client)
     assert [o.status for o in result.outcomes] == ["ok"], [o.error for o in result.outcomes]
+
+
+def test_a_unit_noisier_than_its_spec_late_in_the_record_fails_by_compares_test(tmp_path):
+    """gyro_z's density rises 1.6× for the last 80 s of 240 s: its fitted N over the whole record (≈ 1.18e-3) is
+    within a 1.3e-3 limit, so the verdict on N alone passed it; the upward CUSUM of ``compare --spec`` (run in the
+    unit with ``BatchOptions.limits``) holds it beyond the limit from the change on, and the fleet verdict fails with
+    since when. The other gyros stay within."""
+    import numpy as np
+
+    from imu_noise_id.bag.writer import write_bag
+    from imu_noise_id.batch.unit import run_unit
+    from imu_noise_id.batch.units import Unit
+    from imu_noise_id.core.axes import AXES, GYRO_AXES, ImuSeries
+    from imu_noise_id.core.noise.components import RW, WN
+    from imu_noise_id.core.simulation.static import simulate_static_imu
+    from imu_noise_id.report.fleet import annotate
+
+    model = {a: [WN(1e-3), RW(1e-5)] if a in GYRO_AXES else [WN(2e-3), RW(1e-4)] for a in AXES}
+    imu = simulate_static_imu(model, 100.0, 240.0, seed=5)
+    gyro = imu.gyro.copy()
+    late = imu.t - imu.t[0] >= 160.0
+    gyro[late, 2] += np.random.default_rng(6).standard_normal(int(late.sum())) * 1e-3 * 10.0 * np.sqrt(1.6**2 - 1)
+    write_bag(tmp_path / "unit", ImuSeries(imu.t, gyro, imu.accel, imu.frame_id, "/imu/data"))
+    options = dataclasses.replace(OPTIONS, limits={"gyro": 1.3e-3})
+    outcome = run_unit(Unit(tmp_path / "unit", None, "unit"), options, str(tmp_path / "out"))
+    assert outcome.status == "ok", outcome.error
+    rows = {r["axis"]: r for r in annotate(outcome.rows, {"gyro": {"noise_density": 1.3e-3}})}
+    assert rows["gyro_z"]["noise_density"] < 1.3e-3  # N alone would pass
+    assert rows["gyro_z"]["spec"].startswith("fail (noise_density beyond the limit from")
+    assert 150.0 <= rows["gyro_z"]["noise_beyond_spec_since_s"] <= 185.0
+    assert rows["gyro_z"]["noise_spec_ratio"] > 1.1
+    assert rows["gyro_x"]["spec"] == "pass" and rows["gyro_x"]["noise_beyond_spec_since_s"] is None
+    assert "noise_spec_ratio" not in rows["accel_x"]

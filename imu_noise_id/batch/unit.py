@@ -39,8 +39,10 @@ def _num(x: float | None) -> float | None:
     return None if x is None or not math.isfinite(x) else float(x)
 
 
-def fleet_rows(unit: Unit, result, warnings: list[str]) -> list[dict]:
-    """One row per axis: the Kalibr numbers with intervals (final model, else the Allan slopes), B, the loop."""
+def fleet_rows(unit: Unit, result, warnings: list[str], beyond: dict | None = None) -> list[dict]:
+    """One row per axis: the Kalibr numbers with intervals (final model, else the Allan slopes), B, the loop, and
+    ``beyond`` (axis → NoiseLevel of the test against the spec's limit): the density over the limit and, when the test
+    holds the axis beyond it, since when [s]."""
     rows = []
     for axis in result.static.axes:
         row = {"bag": str(unit.bag), "topic": result.static.topic, "unit": unit.name, "axis": axis,
@@ -63,6 +65,10 @@ def fleet_rows(unit: Unit, result, warnings: list[str]) -> list[dict]:
                     "bias_instability_lo": None, "bias_instability_hi": None, "source": "Allan slopes"}
         loop = result.loops.get(axis)
         row |= {"loop_verdict": loop.verdict if loop else "", "loop_passed": bool(loop.passed) if loop else None}
+        level = (beyond or {}).get(axis)
+        if level is not None:
+            row |= {"noise_spec_ratio": _num(level.ratio),
+                    "noise_beyond_spec_since_s": level.alarm.since_s if level.sustained else None}
         rows.append(row)
     return rows
 
@@ -100,6 +106,27 @@ def _title(unit: Unit) -> str:
     return f"IMU noise analysis: {unit.bag.name}" + (f" {unit.topic}" if several else "")
 
 
+def _beyond_spec(imu, result, options: BatchOptions) -> dict:
+    """The test against the spec's limits (``BatchOptions.limits``) with each axis's own analysis as the shape: its
+    pasted N and final model (white noise of the Allan N without one)."""
+    from ..core.watch.compare import AxisReference
+    from ..pipelines.compare import beyond_spec
+
+    if not options.limits:
+        return {}
+    if options.analysis.span is not None:
+        imu = imu.between(*options.analysis.span)
+    own = {}
+    for axis in result.static.axes:
+        final = result.finals.get(axis)
+        if final is not None:
+            own[axis] = AxisReference(final.noise_density.value, final.noise_density.ci95, final.fit.components)
+        else:
+            n = result.static.slopes[axis].noise_density
+            own[axis] = AxisReference(n.value, n.ci)
+    return beyond_spec(imu, result.static.dt, own, options.limits)
+
+
 def run_unit(unit: Unit, options: BatchOptions, out_root: str) -> UnitOutcome:
     """Analyse one unit (module docstring). Runs on a Dask worker; never raises."""
     from ..bag.reader import read_static
@@ -127,7 +154,7 @@ def run_unit(unit: Unit, options: BatchOptions, out_root: str) -> UnitOutcome:
             stamp(path, path.relative_to(tmp).as_posix(), record)
         warnings = list(result.static.warnings) + list(result.warnings)
         outcome = UnitOutcome(unit.name, str(unit.bag), recording.imu.topic, "ok", key,
-                              fleet_rows(unit, result, warnings))
+                              fleet_rows(unit, result, warnings, _beyond_spec(recording.imu, result, options)))
         outcome.seconds = time.perf_counter() - start
         (tmp / MARKER).write_text(json.dumps({**asdict(outcome), "options": options.as_dict()}, indent=1))
         _replace_folder(tmp, out / unit.name)

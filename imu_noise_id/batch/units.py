@@ -27,11 +27,14 @@ class BatchOptions:
     analysis : the analysis (``jobs`` set to 1: a unit's axes run one after another in its worker)
     rate : the declared sample rate [Hz] (``--rate``), or None: estimated from the stamps
     overbound_exports : also write the overbound's exports (``--overbound``)
+    limits : noise-density limits [u/√Hz] per sensor ("gyro", "accel") from ``--spec``: each axis is tested against
+        its sensor's as ``compare --spec`` does (:func:`~imu_noise_id.pipelines.compare.beyond_spec`); None: not
     """
 
     analysis: AnalyzeOptions = field(default_factory=AnalyzeOptions)
     rate: float | None = None
     overbound_exports: bool = False
+    limits: dict[str, float] | None = None
 
     def __post_init__(self) -> None:
         if self.analysis.jobs != 1:

@@ -53,14 +53,16 @@ def run(args: argparse.Namespace) -> int:
     from ..core.errors import InputError
     from ..core.timing import check_declared_rate
     from ..report.fleet import annotate, write_fleet_report, write_tables
+    from ..report.spec import noise_density_limits
     from .progress import TextProgress
 
     if args.workers < 1:
         raise InputError(f"--workers must be >= 1, got {args.workers}")
     if args.rate is not None:  # before a cluster starts, as each unit's reader would
         check_declared_rate(args.rate)
-    options = BatchOptions(analysis_options(args, jobs=1), rate=args.rate, overbound_exports=args.overbound)
     spec = _spec(args.spec)
+    options = BatchOptions(analysis_options(args, jobs=1), rate=args.rate, overbound_exports=args.overbound,
+                           limits=noise_density_limits(spec) if spec else None)
     units = discover_units(list(args.inputs), list(args.topic), args.manifest)
     where = args.scheduler or f"a local cluster of {args.workers} workers on 127.0.0.1"
     print(f"{len(units)} units on {where}", flush=True)

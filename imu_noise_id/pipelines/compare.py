@@ -9,7 +9,7 @@ from ..core.axes import ImuSeries, sensor_of
 from ..core.errors import InputError
 from ..core.stillness import static_check
 from ..core.watch.compare import AxisComparison, AxisReference, compare_axis, rate_mismatch
-from ..core.watch.noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO, per_test
+from ..core.watch.noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO, NoiseLevel, beyond_limit, per_test
 
 
 @dataclass(frozen=True)
@@ -61,3 +61,17 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
         except ValueError as exc:
             raise InputError(f"compare: {axis}: {exc}") from None
     return Comparison(axes, float(imu.t[-1] - imu.t[0]), notes)
+
+
+
+def beyond_spec(imu: ImuSeries, dt: float, own: dict[str, AxisReference], limits: dict[str, float], *,
+                false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> dict[str, NoiseLevel]:
+    """``compare --spec``'s test of a unit without a reference (``batch --spec``): per axis of ``imu`` at period
+    ``dt`` [s] whose sensor has a noise-density limit in ``limits`` [u/√Hz], the upward CUSUM against it
+    (``noise_level.beyond_limit``) with the shape of the axis's own analysis ``own[axis]`` (its N and final model;
+    white noise without components) scaled to the limit, at ``false_alarms_per_hour`` for the unit (``per_test``).
+    An outcome's ``sustained`` says the axis is beyond the limit."""
+    each = per_test(false_alarms_per_hour, len(own))
+    return {axis: beyond_limit(imu.axis(axis), dt, reference.difference_variance_at(limits[sensor_of(axis)], dt),
+                               false_alarms_per_hour=each)
+            for axis, reference in own.items() if sensor_of(axis) in limits}

@@ -22,7 +22,7 @@ COLUMNS = ("unit", "bag", "topic", "axis", "status", "error", "model", "noise_de
            "noise_density_hi", "random_walk", "random_walk_lo", "random_walk_hi", "bias_instability",
            "bias_instability_lo", "bias_instability_hi", "source", "loop_passed", "loop_verdict", "rate_hz",
            "duration_s", "warnings", "noise_density_z", "random_walk_z", "bias_instability_z", "outlier",
-           "spec", "spec_margin")
+           "spec", "spec_margin", "noise_spec_ratio", "noise_beyond_spec_since_s")
 
 
 def annotate(rows: list[dict], spec: dict | None) -> list[dict]:
@@ -39,6 +39,10 @@ def annotate(rows: list[dict], spec: dict | None) -> list[dict]:
         r["outlier"] = ",".join(flagged)
         limits = (spec or {}).get((r.get("axis") or "").split("_")[0], {})
         verdicts = [(p, *spec_verdict(r.get(p), r.get(f"{p}_hi"), float(limit))) for p, limit in limits.items()]
+        if r.get("noise_beyond_spec_since_s") is not None:  # the sequential test (compare --spec) holds it beyond
+            verdicts.append(("noise_density beyond the limit from "
+                             f"{r['noise_beyond_spec_since_s']:.0f} s, {r['noise_spec_ratio']:.3g}× it", "fail",
+                             math.nan))
         if verdicts:
             order = {"fail": 0, "undecided": 1, "missing": 2, "pass": 3}
             worst = min(verdicts, key=lambda v: order[v[1]])
@@ -65,7 +69,8 @@ def write_tables(rows: list[dict], out: Path) -> list[Path]:
     writer.writerows({c: r.get(c) for c in COLUMNS} for r in rows)
     csv_path = _atomic(out / "fleet.csv", buf.getvalue().encode())
     table = pa.table({c: pa.array([r.get(c) for r in rows], type=pa.float64() if c.endswith(
-        ("density", "_lo", "_hi", "_walk", "instability", "_z", "margin", "rate_hz", "duration_s")) else pa.string())
+        ("density", "_lo", "_hi", "_walk", "instability", "_z", "margin", "rate_hz", "duration_s", "_ratio",
+         "_since_s")) else pa.string())
         if c not in ("loop_passed",) else pa.array([r.get(c) for r in rows], type=pa.bool_()) for c in COLUMNS})
     sink = pa.BufferOutputStream()
     pq.write_table(table, sink)
