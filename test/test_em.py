@@ -322,7 +322,7 @@ def test_the_score_at_a_white_noise_of_exactly_zero_is_a_domain_error():
     sums = em.sums_from_stats(stats, em.DataSums.of(y, z))
     zero = ss.from_components([WN(0.0), DLPF(1e-3, 12.0)], dt)
     with pytest.raises(ValueError, match="white-noise variance is zero"):
-        em.MatrixScore.at(zero, sums)
+        em.MatrixScore.at(zero, sums, stats)
 
 
 def test_a_fit_at_given_values_is_scored_by_one_filter_pass(monkeypatch):

@@ -213,9 +213,9 @@ class MatrixScore:
     g_r: float
 
     @classmethod
-    def at(cls, model: StateSpace, s: Sums, stats: kalman.SmootherStats | None = None) -> MatrixScore:
+    def at(cls, model: StateSpace, s: Sums, stats: kalman.SmootherStats) -> MatrixScore:
         """The gradient at θ_E's ``model`` from its E-step sums ``s`` (class docstring); S and C from the smoother's
-        output ``stats`` (:func:`transition_terms`) when given, else from the sums."""
+        output ``stats`` (:func:`transition_terms`: differences of the sums cancel for a random walk)."""
         r = float(model.r)
         if not r * r > 0.0:  # a white noise driven to (numerically) zero beside a filter that carries it: no score
             raise ValueError("the white-noise variance is zero: the likelihood's gradient is not defined there")
@@ -226,11 +226,7 @@ class MatrixScore:
         if np.any(nz):
             q_inv = np.zeros((p, p))
             q_inv[np.ix_(nz, nz)] = np.linalg.inv(model.q[np.ix_(nz, nz)])
-            if stats is not None:
-                S, cross = transition_terms(stats, model.phi, model.u)
-            else:
-                S = transition_residual(s, model.phi, model.u)
-                cross = s.s10 - model.phi @ s.s00 - np.outer(model.u, s.x_prev)
+            S, cross = transition_terms(stats, model.phi, model.u)
             g_phi = q_inv @ cross
             g_q = -0.5 * ((s.n - 1) * q_inv - q_inv @ S @ q_inv)
         initial = InitialTermGradient.at(model, s).sensitivity

@@ -25,6 +25,7 @@ from ..kalman.statespace import StateSpace, state_span, with_components
 from ..noise.components import RR, Component
 from . import em
 from .differences import derivative_in_domain, stepped
+from .whittle import with_log_parameters
 
 #: Above this length a record with missing samples is searched (and its intervals profiled) gap-filled.
 FILL_FIRST_MIN_SAMPLES = 20_000
@@ -81,10 +82,7 @@ class Parameterisation:
     def to_components(self, theta: np.ndarray, model: StateSpace | None = None) -> list[Component]:
         """Components at ϑ; RR slopes are taken from ``model`` (its profiled value) when given. A log-parameter
         beyond float range gives inf (the component then refuses it), not an overflow warning."""
-        params = [dict(c.params()) for c in self.template]
-        for (i, name), v in zip(self.entries, theta, strict=True):
-            params[i][name] = math.exp(v) if v < 700.0 else math.inf
-        out: list[Component] = [type(c)(**p) for c, p in zip(self.template, params, strict=True)]
+        out = with_log_parameters(self.template, list(self.entries), theta)
         if model is not None and any(isinstance(c, RR) for c in out):
             from ..kalman.statespace import ramp_components
 

@@ -40,15 +40,15 @@ def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options
     scored by one filter pass (no smoother pass: there is no E-step to feed)."""
     z = model.z
     state = model.statespace(start)
+    par = mle.Parameterisation.of(start)
     if options.em_iter == 0 and not options.polish:
         prof = kalman.loglik(state, y, z)
         fitted = kalman.apply_beta(state, prof)
-        theta = mle.Parameterisation.of(start).to_theta(ss.to_components(fitted))
+        theta = par.to_theta(ss.to_components(fitted))
         return mle.MLEResult(theta, fitted, prof.loglik, 0, False, "at the start's values", prof), 0
     metric = metric_of(start) if metric_of is not None else None
     metric_at = (lambda fitted: metric_of(ss.to_components(fitted))) if metric_of is not None else None
     _, state, stats = kalman.profile_and_smooth(state, y, z)  # GLS means and the first E-step in one pass
-    par = mle.Parameterisation.of(start)
     em_iter, em_tol = options.em_iter, options.em_tol
     if options.polish:
         # The last EM iterate is scored by the quasi-Newton finish's first evaluation: no E-step for it here.
