@@ -161,8 +161,9 @@ def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: f
     notes = [note] if note else []
     for level, what in ((noise, "the reference"), (beyond, "its limit")):
         if level is not None and level.alarm is not None and not level.sustained:
+            short = f", short of {level.least_change:.3g}×" if level.least_change > 1.0 else ""
             notes.append(f"a transient of {level.alarm.direction}ward noise at {level.alarm.since_s:.1f}–"
                          f"{level.alarm.time_s:.1f} s (CUSUM alarm) that the level since then does not hold "
-                         f"({level.ratio:.3g}× {what} [{level.ratio_ci[0]:.3g}, {level.ratio_ci[1]:.3g}]): not "
-                         "counted as degraded")
+                         f"({level.ratio:.3g}× {what} [{level.ratio_ci[0]:.3g}, {level.ratio_ci[1]:.3g}]{short}): "
+                         "not counted as degraded")
     return AxisComparison(noise, step, line, alpha, notes, beyond)

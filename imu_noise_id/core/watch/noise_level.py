@@ -48,6 +48,7 @@ class NoiseLevel:
     ratio, ratio_ci : live / reference density (since the alarm's change) and its 95 % χ² interval
     alarm : the first alarm, or None; threshold : h; increments : pair differences tested
     reference_ci : the reference's interval as density ratios (√(v_lo/v_ref), √(v_hi/v_ref))
+    least_change : the density ratio (≥ 1) a confirmed change reaches at least, either way
     """
 
     ratio: float
@@ -56,17 +57,19 @@ class NoiseLevel:
     threshold: float
     increments: int
     reference_ci: tuple[float, float] = (1.0, 1.0)
+    least_change: float = 1.0
 
     @property
     def sustained(self) -> bool:
         """An alarm the level since its change confirms: the ratio's interval since then lies beyond the reference's
-        (above it upward, below it downward). An alarm it does not confirm was a transient (a burst of raised noise,
-        a knock) that the CUSUM saw but the record's level since then does not hold."""
+        (above it upward, below it downward) and the ratio itself beyond ``least_change`` (its inverse downward). An
+        alarm it does not confirm was a transient (a burst of raised noise, a knock) that the CUSUM saw but the
+        record's level since then does not hold."""
         if self.alarm is None:
             return False
         if self.alarm.direction == "up":
-            return self.ratio_ci[0] > self.reference_ci[1]
-        return self.ratio_ci[1] < self.reference_ci[0]
+            return self.ratio_ci[0] > self.reference_ci[1] and self.ratio >= self.least_change
+        return self.ratio_ci[1] < self.reference_ci[0] and self.ratio <= 1.0 / self.least_change
 
 
 def threshold(false_alarms_per_hour: float, increments_per_s: float) -> float:
@@ -122,13 +125,17 @@ def _ratio(d: np.ndarray, v_ref: float) -> tuple[float, tuple[float, float]]:
 def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[float, float], *,
                       ratio: float = DEFAULT_RATIO,
                       false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
-                      directions_of: tuple[str, ...] = ("up", "down")) -> NoiseLevel:
+                      directions_of: tuple[str, ...] = ("up", "down"),
+                      least_change: float | None = None) -> NoiseLevel:
     """Both CUSUMs (those of ``directions_of``) on samples ``y`` [u] at period ``dt`` [s].
 
     Parameters
     ----------
     v_ref, v_interval : the reference's E[(y_{t+1} − y_t)²] [u²] and its interval (v_lo, v_hi)
     ratio : the density ratio ρ > 1 the test is tuned to (both ways); false_alarms_per_hour : λ, per direction
+    least_change : the ratio a confirmed alarm's level reaches (:attr:`NoiseLevel.sustained`); None: √ρ, half way
+        (in log) to the change the test is tuned to: runs of one unit differ by a few per cent, beyond a reference's
+        narrow interval, which alone would confirm any alarm a knock raised
 
     Raises
     ------
@@ -155,7 +162,8 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
     alarm = min(alarms, key=lambda a: a.time_s) if alarms else None
     since = d if alarm is None else d[index * dt >= alarm.since_s]
     value, ci = _ratio(since if since.size >= 100 else d, v_ref)
-    return NoiseLevel(value, ci, alarm, h, int(d.size), (math.sqrt(v_lo / v_ref), math.sqrt(v_hi / v_ref)))
+    return NoiseLevel(value, ci, alarm, h, int(d.size), (math.sqrt(v_lo / v_ref), math.sqrt(v_hi / v_ref)),
+                      math.sqrt(ratio) if least_change is None else least_change)
 
 
 #: The tests each axis runs (noise up, noise down, bias step, new line, the specification's limit).
@@ -177,7 +185,8 @@ def beyond_limit(y: np.ndarray, dt: float, v_limit: float, *, ratio: float = LIM
                  false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> NoiseLevel:
     """The upward CUSUM alone against a limit: v₀ = ``v_limit`` [u²] (a specification's noise density as E[(y_{t+1} −
     y_t)²]), v₁ = ``ratio``² v₀, on samples ``y`` [u] at period ``dt`` [s]. The outcome's ratio is live / limit (in
-    density); an alarm says the axis is beyond the limit. ValueError as :func:`watch_noise_level`."""
+    density); a sustained alarm says the axis is beyond the limit (any amount: the limit is a hard number).
+    ValueError as :func:`watch_noise_level`."""
     return watch_noise_level(y, dt, v_limit, (v_limit, v_limit), ratio=ratio,
-                             false_alarms_per_hour=false_alarms_per_hour, directions_of=("up",))
+                             false_alarms_per_hour=false_alarms_per_hour, directions_of=("up",), least_change=1.0)
 
