@@ -353,3 +353,33 @@ def test_a_knock_on_a_unit_two_percent_noisier_than_a_narrow_reference_is_a_tran
     c = compare_axis(y, DT, tight)
     assert c.noise.alarm is not None and c.noise.ratio_ci[0] > 1.005  # the alarm, and the level beyond the interval
     assert not c.degraded and any("transient" in n and "short of 1.22×" in n for n in c.notes)
+
+
+def test_the_online_watch_confirms_an_alarm_by_the_level_since_it():
+    """Online as offline: a knock (20 glitches of 8 sd on gyro_z in 0.2 s) fires the upward CUSUM, and the level since
+    then (1.0×) leaves the status OK with the transient named; a density ×1.5 two minutes later turns it WARN within
+    60 s, dated by its own alarm (the knock's was dropped as a transient and the CUSUM started again). Before, the
+    knock's alarm alone was a latched WARN."""
+    from imu_noise_id.pipelines.online import OK, WARN
+
+    watch = _watch()
+    rng = np.random.default_rng(12)
+    scale = np.array([1e-3, 1e-3, 1e-3, 1e-2, 1e-2, 1e-2]) / math.sqrt(0.005)
+    statuses = {}
+    for k in range(int(600 / 0.005)):
+        t = k * 0.005
+        y = rng.standard_normal(6) * scale
+        if 60.0 <= t < 60.2 and k % 2:
+            y[2] += 8.0 * scale[2] * math.sqrt(2)
+        if t >= 300.0:
+            y[2] *= 1.5
+        watch.add(t, y, 0.005)
+        if k == int(240 / 0.005):
+            statuses = {s.name: s for s in watch.statuses()}
+    gyro = statuses["Reference watch (gyro)"]
+    assert gyro.level == OK and "gyro_z: a transient of upward noise at stamp 60" in gyro.message, gyro.message
+    after = {s.name: s for s in watch.statuses()}["Reference watch (gyro)"]
+    assert after.level == WARN and "gyro_z noise up" in after.message
+    state = watch.axes()["gyro_z"]
+    assert state.transient.since_s < 61.0 and abs(state.alarm.since_s - 300.0) < 5.0
+    assert 300.0 <= state.confirmed_s <= 360.0 and state.since_ratio == pytest.approx(1.5, rel=0.1)

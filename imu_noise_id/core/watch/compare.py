@@ -16,7 +16,14 @@ from ..diagnostics import detectors as det
 from ..diagnostics.whitening import WhiteningFilter
 from ..noise.base import Component
 from ..noise.components import WN, total_allan_variance
-from .noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO, NoiseLevel, beyond_limit, watch_noise_level
+from .noise_level import (
+    DEFAULT_FALSE_ALARMS_PER_HOUR,
+    DEFAULT_RATIO,
+    SPIKE_Z,
+    NoiseLevel,
+    beyond_limit,
+    watch_noise_level,
+)
 
 #: Largest relative difference between a recording's rate and its reference's.
 RATE_TOLERANCE = 0.02
@@ -121,8 +128,8 @@ def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: f
                   known: tuple[float, ...]) -> tuple[det.Finding | None, det.Finding | None]:
     """The significant bias step and new line (None without) in ``y`` [u] at period ``dt`` [s], each at level
     ``alpha``, in the innovations of ``whitening`` (the reference's model; first sample subtracted, its first samples
-    the filter's start-up left out, the level's GLS estimate removed); lines within :data:`KNOWN_LINE_BINS` of a
-    ``known`` frequency [Hz] are not new."""
+    the filter's start-up left out, the level's GLS estimate removed, clipped at ±``SPIKE_Z``); lines within
+    :data:`KNOWN_LINE_BINS` of a ``known`` frequency [Hz] are not new."""
     first = y[np.isfinite(y)][0]
     e = whitening.whiten(np.nan_to_num(y - first, nan=0.0))
     # The first sample is the level only to its noise: that error leaves the filter as the whitened constant's
@@ -130,6 +137,10 @@ def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: f
     # Its GLS coefficient is removed (the score tests hold the constant as a nuisance column anyway).
     constant = whitening.whiten(np.ones(e.size))
     e = e - constant * (float(constant @ e) / float(constant @ constant))
+    # A knock's burst of glitches is no step and no line: under a model with a random walk a step's signature is the
+    # innovations just after it, where a burst's are too. Innovations beyond ±SPIKE_Z (standardised; 6e-5 of an
+    # unchanged Gaussian sensor's) count as SPIKE_Z, as the noise level's pairs do.
+    e = np.clip(e, -SPIKE_Z, SPIKE_Z)
     e[: min(10, e.size // 100)] = np.nan  # the filter's start-up
     step = det.detect_step(e, dt, whitening, alpha=alpha)
     near = KNOWN_LINE_BINS / (e.size * dt)

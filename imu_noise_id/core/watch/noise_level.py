@@ -114,12 +114,16 @@ def _cusum_alarm(llr: np.ndarray, h: float) -> tuple[int, int] | None:
     return k, (int(zeros[-1]) + 1 if zeros.size else 0)
 
 
+def ratio_interval(mean_d2: float, n: int, v_ref: float) -> tuple[float, tuple[float, float]]:
+    """Live / reference density √(mean_d2 / v_ref) from the mean ``mean_d2`` of ``n`` pair differences' d² [u²] and its
+    95 % χ² interval."""
+    lo, hi = stats.chi2.ppf([0.975, 0.025], n)
+    return math.sqrt(mean_d2 / v_ref), (math.sqrt(mean_d2 * n / lo / v_ref), math.sqrt(mean_d2 * n / hi / v_ref))
+
+
 def _ratio(d: np.ndarray, v_ref: float) -> tuple[float, tuple[float, float]]:
     """Live / reference density from the mean of d² and its 95 % χ² interval."""
-    n = d.size
-    mean = float(np.mean(d * d))
-    lo, hi = stats.chi2.ppf([0.975, 0.025], n)
-    return math.sqrt(mean / v_ref), (math.sqrt(mean * n / lo / v_ref), math.sqrt(mean * n / hi / v_ref))
+    return ratio_interval(float(np.mean(d * d)), d.size, v_ref)
 
 
 def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[float, float], *,

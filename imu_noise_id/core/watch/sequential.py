@@ -1,6 +1,9 @@
 """The CUSUMs of :mod:`.noise_level` sample by sample (the node's watch): each pair's difference moves both CUSUMs
-of every axis; an alarm keeps its time and where the change began. Live ratio: √ of the exponentially weighted mean
-of d²/v_ref over ``window`` seconds."""
+of every axis; an alarm keeps its time and where the change began, and is confirmed as :attr:`.NoiseLevel.sustained`
+confirms one offline, by the level of the :data:`CONFIRM_MIN_PAIRS` pairs after the alarm (each d² at most the
+upward CUSUM's cap). One that level does not confirm was a transient (a knock): it is kept as the axis's last
+transient and the axis's CUSUMs start again, so that a later change is dated and confirmed by itself. Live ratio:
+√ of the exponentially weighted mean of d²/v_ref over ``window`` seconds."""
 
 from __future__ import annotations
 
@@ -9,30 +12,46 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .noise_level import LevelAlarm, directions, threshold
+from .noise_level import LevelAlarm, NoiseLevel, directions, ratio_interval, threshold
 
 #: Time constant [s] of the live ratio's average.
 DEFAULT_WINDOW_S = 60.0
+#: Pairs after an alarm whose level confirms it or finds it a transient (a knock's burst is a small part of them).
+CONFIRM_MIN_PAIRS = 1000
 
 
 @dataclass(frozen=True)
 class AxisWatch:
-    """One axis now: the live/reference density ratio (NaN before a pair), pairs seen and the first alarm (or None)."""
+    """One axis now: the live/reference density ratio (NaN before a pair), pairs seen, the first alarm (or None), the
+    stamp [s] when the level after it confirmed it (None: not yet), that level's ratio (NaN without an alarm), and
+    the last alarm that level found a transient (None without) with its level's ratio."""
 
     ratio: float
     pairs: int
     alarm: LevelAlarm | None
+    confirmed_s: float | None = None
+    since_ratio: float = math.nan
+    transient: LevelAlarm | None = None
+    transient_ratio: float = math.nan
 
 
 class SequentialNoiseWatch:
     """Both CUSUMs per axis against references of E[(y_{t+1} − y_t)²] ``v_ref`` (k,) [u²] and their intervals
-    ``intervals`` ((lo, hi) per axis), for samples at period ``period`` [s]; ``ratio`` and ``false_alarms_per_hour``
-    as in :func:`~.noise_level.watch_noise_level`."""
+    ``intervals`` ((lo, hi) per axis), for samples at period ``period`` [s]; ``ratio``, ``false_alarms_per_hour`` and
+    ``least_change`` as in :func:`~.noise_level.watch_noise_level`."""
 
     def __init__(self, v_ref: np.ndarray, intervals: list[tuple[float, float]], period: float, *, ratio: float,
-                 false_alarms_per_hour: float, window_s: float = DEFAULT_WINDOW_S) -> None:
+                 false_alarms_per_hour: float, window_s: float = DEFAULT_WINDOW_S,
+                 least_change: float | None = None) -> None:
         self.v_ref = np.asarray(v_ref, dtype=float)
         k = self.v_ref.size
+        self.reference_ci = [(math.sqrt(lo / v), math.sqrt(hi / v)) for (lo, hi), v in zip(intervals, self.v_ref,
+                                                                                              strict=True)]
+        self.least_change = math.sqrt(ratio) if least_change is None else least_change
+        self.since_d2 = np.zeros(k)
+        self.since_n = np.zeros(k, dtype=int)
+        self.confirmed_s: list[float | None] = [None] * k
+        self.transients: list[tuple[LevelAlarm, float] | None] = [None] * k
         self.h = threshold(false_alarms_per_hour, 0.5 / period)
         self.a = np.full((k, 2), -np.inf)
         self.b = np.zeros((k, 2))
@@ -64,6 +83,20 @@ class SequentialNoiseWatch:
         for i, j in zip(*np.nonzero(s > self.h), strict=True):
             if self.alarms[i] is None:
                 self.alarms[i] = LevelAlarm("up" if j == 0 else "down", float(t), float(self.left_zero[i, j]))
+        alarmed = np.array([a is not None for a in self.alarms])
+        if alarmed.any():
+            pending = alarmed & np.array([c is None for c in self.confirmed_s])
+            self.since_d2[pending] += np.minimum(d2, self.cap[:, 0])[pending]  # a glitch counts as the CUSUM counts it
+            self.since_n[pending] += 1
+            for i in np.flatnonzero(pending & (self.since_n == CONFIRM_MIN_PAIRS)):
+                level = self._level(i)
+                if level.sustained:
+                    self.confirmed_s[i] = float(t)
+                else:  # a transient: kept, and the axis watched afresh
+                    self.transients[i] = (self.alarms[i], level.ratio)
+                    self.alarms[i] = None
+                    self.s[i] = 0.0
+                    self.since_d2[i], self.since_n[i] = 0.0, 0
         weight = 1.0 - math.exp(-2.0 * max(t - t0, 0.0) / self.window_s) if self.pairs else 1.0
         current = d2 / self.v_ref
         self.mean_ratio2 = np.where(np.isnan(self.mean_ratio2), current,
@@ -74,5 +107,14 @@ class SequentialNoiseWatch:
         """Motion or a gap: no pair across it."""
         self._pending = None
 
+    def _level(self, i: int) -> NoiseLevel:
+        """Axis ``i``'s alarm with the level of the pairs since it (the offline test's outcome, for its rule)."""
+        ratio, ci = ratio_interval(self.since_d2[i] / self.since_n[i], int(self.since_n[i]), self.v_ref[i])
+        return NoiseLevel(ratio, ci, self.alarms[i], self.h, int(self.since_n[i]), self.reference_ci[i],
+                          self.least_change)
+
     def axis(self, i: int) -> AxisWatch:
-        return AxisWatch(math.sqrt(self.mean_ratio2[i]) if self.pairs else math.nan, self.pairs, self.alarms[i])
+        since = math.sqrt(self.since_d2[i] / self.since_n[i] / self.v_ref[i]) if self.since_n[i] else math.nan
+        transient, transient_ratio = self.transients[i] or (None, math.nan)
+        return AxisWatch(math.sqrt(self.mean_ratio2[i]) if self.pairs else math.nan, self.pairs, self.alarms[i],
+                         self.confirmed_s[i], since, transient, transient_ratio)

@@ -66,7 +66,7 @@ class ReferenceWatch:
                 v_spec.append(shape.difference_variance_at(limit, period))
             # the interval (0, v): the upward CUSUM only (an axis quieter than its limit is no finding)
             self.spec_watch = SequentialNoiseWatch(v_spec, [(0.0, v) for v in v_spec], period, ratio=LIMIT_RATIO,
-                                                   false_alarms_per_hour=self.false_alarms_per_hour)
+                                                   false_alarms_per_hour=self.false_alarms_per_hour, least_change=1.0)
 
     def add(self, t: float, sample, period: float | None) -> None:
         """A stationary sample (AXES order) at stamp ``t`` [s], the IMU's period [s] (None while unknown)."""
@@ -111,13 +111,14 @@ class ReferenceWatch:
         return {} if self.watch is None else {axis: self.watch.axis(i) for i, axis in enumerate(AXES)}
 
     def beyond_spec(self) -> dict[str, AxisWatch]:
-        """The axes whose density the specification's CUSUM found beyond its limit, their state against it."""
+        """The axes whose density the specification's CUSUM found beyond its limit (the level since confirming it),
+        their state against it."""
         if self.spec_watch is None:
             return {}
         out = {}
         for i, axis in enumerate(AXES):
             state = self.spec_watch.axis(i)
-            if sensor_of(axis) in self.limits and state.alarm is not None:
+            if sensor_of(axis) in self.limits and state.confirmed_s is not None:
                 out[axis] = state
         return out
 
@@ -142,15 +143,19 @@ class ReferenceWatch:
             values = dict(sources)
             if started:
                 values["pairs"] = str((self.watch or self.spec_watch).pairs)
-            alarms, errors = [], []
+            alarms, errors, transients = [], [], []
             for axis in axes:
                 if axis in states:
                     s = states[axis]
                     values[f"{axis}_density_ratio"] = f"{s.ratio:.3g}"
-                    if s.alarm is not None:
+                    if s.confirmed_s is not None:
                         values[f"{axis}_since"] = f"{s.alarm.since_s:.3f}"
-                        alarms.append(f"{axis} noise {s.alarm.direction} ({s.ratio:.3g}× the reference) since stamp "
-                                      f"{s.alarm.since_s:.1f} s")
+                        alarms.append(f"{axis} noise {s.alarm.direction} ({s.since_ratio:.3g}× the reference since "
+                                      f"then) since stamp {s.alarm.since_s:.1f} s")
+                    if s.transient is not None:
+                        values[f"{axis}_transient_at"] = f"{s.transient.since_s:.3f}"
+                        transients.append(f"{axis}: a transient of {s.transient.direction}ward noise at stamp "
+                                          f"{s.transient.since_s:.1f} s, the level after it {s.transient_ratio:.3g}×")
                 step, line = changes.get(axis, {}).get("step"), changes.get(axis, {}).get("line")
                 if step is not None:
                     values[f"{axis}_bias_step"] = f"{step.value:.3g}"
@@ -179,7 +184,7 @@ class ReferenceWatch:
                 out.append(DiagnosticStatus(name, WARN, "; ".join(alarms), values))
             elif self.watch is not None:
                 out.append(DiagnosticStatus(name, OK, "within the reference (density ratio " + ", ".join(
-                    f"{states[a].ratio:.3g}" for a in axes) + ")", values))
+                    f"{states[a].ratio:.3g}" for a in axes) + ")" + "".join(f"; {t}" for t in transients), values))
             else:
                 out.append(DiagnosticStatus(name, OK, "within the spec", values))
         return out
