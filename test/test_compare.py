@@ -383,3 +383,15 @@ def test_the_online_watch_confirms_an_alarm_by_the_level_since_it():
     state = watch.axes()["gyro_z"]
     assert state.transient.since_s < 61.0 and abs(state.alarm.since_s - 300.0) < 5.0
     assert 300.0 <= state.confirmed_s <= 360.0 and state.since_ratio == pytest.approx(1.5, rel=0.1)
+
+
+def test_a_reference_from_another_topic_is_refused_unless_asked_for(reference_dir, tmp_path, capsys):
+    """The reference was made from /imu/data; a recording of /imu_rear/data is another IMU's: exit 2 naming both and
+    what to pass; with --other-topic it is compared, the note saying so."""
+    out, model = reference_dir
+    write_bag(tmp_path / "rear", simulate_static_imu(model, 100.0, 300.0, seed=55), imu_topic="/imu_rear/data")
+    assert main(["compare", str(tmp_path / "rear"), "--reference", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "/imu/data" in err and "/imu_rear/data" in err and "--other-topic" in err and "Traceback" not in err
+    assert main(["compare", str(tmp_path / "rear"), "--reference", str(out), "--other-topic"]) == 0
+    assert "note: the reference was made from /imu/data" in capsys.readouterr().out

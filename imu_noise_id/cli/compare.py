@@ -35,6 +35,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--false-alarms-per-hour", type=float, default=0.1, metavar="L",
                         help="false alarms per hour of data the whole unit allows, shared among its axes and "
                              "tests (default 0.1)")
+    parser.add_argument("--other-topic", action="store_true",
+                        help="compare against a reference made from another topic (another IMU, e.g. the fleet's "
+                             "typical unit); without it that is refused")
     parser.add_argument("--spec", type=Path, default=None, metavar="FILE",
                         help="datasheet limits, YAML as batch --spec reads ({gyro: {noise_density: …}, accel: {…}}, "
                              "SI): an axis whose noise density is beyond its sensor's limit is degraded too")
@@ -70,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     if args.span is not None:
         imu = imu.between(*args.span)
     result = compare(imu, reference.axes, reference.rate_hz, reference.topic, ratio=args.ratio,
-                     false_alarms_per_hour=args.false_alarms_per_hour, limits=limits)
+                     false_alarms_per_hour=args.false_alarms_per_hour, limits=limits, other_topic=args.other_topic)
     print(f"{args.bag} ({result.duration_s:.0f} s) against {reference.source}:")
     for note in result.notes + [f"{axis}: {n}" for axis, c in result.axes.items() for n in c.notes]:
         print(f"note: {note}")

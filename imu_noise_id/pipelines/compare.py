@@ -28,15 +28,17 @@ class Comparison:
 def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float, topic: str | None = None, *,
             ratio: float = DEFAULT_RATIO,
             false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
-            limits: dict[str, float] | None = None) -> Comparison:
+            limits: dict[str, float] | None = None, other_topic: bool = False) -> Comparison:
     """Test ``imu`` against ``references`` made at ``rate_hz`` [Hz] from ``topic`` and against ``limits``
     (sensor "gyro"/"accel" → noise-density limit [u/√Hz]), at ``false_alarms_per_hour`` for the whole unit (shared
-    among its axes and tests, ``noise_level.per_test``).
+    among its axes and tests, ``noise_level.per_test``); ``other_topic``: a reference made from another topic (another
+    IMU, e.g. the fleet's typical unit) is taken, with a note.
 
     Raises
     ------
     InputError
-        Another rate than the reference's, a recording that is not static, or one too short for the tests.
+        Another rate than the reference's, another topic (without ``other_topic``), a recording that is not static,
+        or one too short for the tests.
     """
     period = imu.sample_period()
     if period.refusal is not None:
@@ -51,7 +53,11 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
                          "still part with --span START:END")
     notes = []
     if topic and imu.topic and topic != imu.topic:
-        notes.append(f"the reference was made from {topic}, this recording is {imu.topic}")
+        if not other_topic:
+            raise InputError(f"compare: the reference was made from {topic}, this recording is {imu.topic}: another "
+                             f"IMU's (pass --topic {topic} if the bag has it, or --other-topic to compare against "
+                             "another unit, e.g. the fleet's typical one)")
+        notes.append(f"the reference was made from {topic}, this recording is {imu.topic} (--other-topic)")
     axes = {}
     each = per_test(false_alarms_per_hour, len(references))
     for axis, ref in references.items():
