@@ -395,3 +395,29 @@ def test_a_reference_from_another_topic_is_refused_unless_asked_for(reference_di
     assert "/imu/data" in err and "/imu_rear/data" in err and "--other-topic" in err and "Traceback" not in err
     assert main(["compare", str(tmp_path / "rear"), "--reference", str(out), "--other-topic"]) == 0
     assert "note: the reference was made from /imu/data" in capsys.readouterr().out
+
+
+def test_a_doubled_random_walk_is_found_at_longer_tau_where_the_white_noise_does_not_move():
+    """WN 3e-5 + RW 1e-4 at 100 Hz for 30 min, the random walk doubled from minute 10: the white-noise level (τ = dt)
+    stays within, the Allan deviation at 1 s rises (≈ 1.8×): offline compare degrades the axis there and dates the
+    change; online the watch at τ = 1 s confirms it within 5 min. The unchanged record is within."""
+    from imu_noise_id.core.watch.allan_watch import AllanWatch
+
+    model = [WN(3e-5), RW(1e-4)]
+    reference = AxisReference(3e-5, (2.97e-5, 3.03e-5), model)
+    n = int(30 * 60 / DT)
+    rng = np.random.default_rng(41)
+    y = simulate_sum([WN(3e-5)], n, DT, rng)
+    walk = np.cumsum(rng.standard_normal(n) * 1e-4 * math.sqrt(DT) * np.where(np.arange(n) >= n // 3, 2.0, 1.0))
+    c = compare_axis(y + walk, DT, reference)
+    assert not c.noise.sustained and c.line is None  # (a walk twice the reference's may also pass for a step)
+    level = c.allan[1.0]
+    assert level.sustained and level.alarm.direction == "up" and 1.5 < level.ratio < 2.2
+    assert 540.0 <= level.alarm.since_s <= 700.0 and c.degraded
+    unchanged = compare_axis(y + np.cumsum(rng.standard_normal(n) * 1e-4 * math.sqrt(DT)), DT, reference)
+    assert not unchanged.degraded, unchanged.findings()
+    watch = AllanWatch([reference], DT, ratio=1.5, false_alarms_per_hour=0.1 / 54)
+    for k in range(n):
+        watch.add(k * DT, (y + walk)[k: k + 1])
+    state = watch.axis(0)[1.0]
+    assert state.confirmed_s is not None and 600.0 <= state.confirmed_s <= 900.0

@@ -16,6 +16,7 @@ from ..diagnostics import detectors as det
 from ..diagnostics.whitening import WhiteningFilter
 from ..noise.base import Component
 from ..noise.components import WN, total_allan_variance
+from .allan_watch import DEFAULT_TAUS, watch_allan
 from .noise_level import (
     DEFAULT_FALSE_ALARMS_PER_HOUR,
     DEFAULT_RATIO,
@@ -77,7 +78,9 @@ class AxisReference:
 @dataclass(frozen=True)
 class AxisComparison:
     """One axis's outcome: the noise-level test, the significant bias step and new line (None without), notes, and the
-    test against a specification's noise-density limit (None without one; its ratio is live / limit)."""
+    test against a specification's noise-density limit (None without one; its ratio is live / limit), and the same
+    level test at longer τ (``allan``: τ [s] → outcome, its ratio in Allan deviation; a τ without enough data left
+    out)."""
 
     noise: NoiseLevel
     step: det.Finding | None
@@ -85,6 +88,7 @@ class AxisComparison:
     alpha: float
     notes: list[str] = field(default_factory=list)
     limit: NoiseLevel | None = None
+    allan: dict[float, NoiseLevel] = field(default_factory=dict)
 
     @property
     def beyond_spec(self) -> bool:
@@ -92,7 +96,8 @@ class AxisComparison:
 
     @property
     def degraded(self) -> bool:
-        return self.noise.sustained or self.step is not None or self.line is not None or self.beyond_spec
+        return (self.noise.sustained or self.step is not None or self.line is not None or self.beyond_spec
+                or any(level.sustained for level in self.allan.values()))
 
     def findings(self) -> list[str]:
         """What differs from the reference, in words (empty when within)."""
@@ -102,6 +107,10 @@ class AxisComparison:
             out.append(f"noise {'up' if a.direction == 'up' else 'down'}: density {self.noise.ratio:.3g}× the "
                        f"reference [{self.noise.ratio_ci[0]:.3g}, {self.noise.ratio_ci[1]:.3g}] since "
                        f"{a.since_s:.1f} s (alarm at {a.time_s:.1f} s)")
+        for tau, level in self.allan.items():
+            if level.sustained:
+                out.append(f"Allan deviation at {tau:g} s {level.alarm.direction}: {level.ratio:.3g}× the reference "
+                           f"[{level.ratio_ci[0]:.3g}, {level.ratio_ci[1]:.3g}] since {level.alarm.since_s:.1f} s")
         if self.beyond_spec:
             out.append(f"BEYOND THE SPEC: density {self.limit.ratio:.3g}× its limit [{self.limit.ratio_ci[0]:.3g}, "
                        f"{self.limit.ratio_ci[1]:.3g}] since {self.limit.alarm.since_s:.1f} s")
@@ -153,7 +162,8 @@ def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: f
 def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: float = DEFAULT_RATIO,
                  false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
                  limit: float | None = None) -> AxisComparison:
-    """The module's tests on ``y`` [u] at period ``dt`` [s]; with ``limit`` [u/√Hz] also ``noise_level.beyond_limit``.
+    """The module's tests on ``y`` [u] at period ``dt`` [s] (the level also at the τ of ``allan_watch.DEFAULT_TAUS``
+    the record holds enough clusters of); with ``limit`` [u/√Hz] also ``noise_level.beyond_limit``.
 
     Raises
     ------
@@ -169,12 +179,19 @@ def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: f
     step, line = step_and_line(y, dt, whitening, alpha, reference.known_lines)
     beyond = None if limit is None else beyond_limit(y, dt, reference.difference_variance_at(limit, dt),
                                                      false_alarms_per_hour=false_alarms_per_hour)
+    allan = {}
+    for tau in DEFAULT_TAUS:
+        level = watch_allan(y, dt, reference, tau, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour)
+        if level is not None:
+            allan[tau] = level
     notes = [note] if note else []
-    for level, what in ((noise, "the reference"), (beyond, "its limit")):
+    tests = [(noise, "noise", "the reference"), (beyond, "noise", "its limit")]
+    tests += [(level, f"Allan deviation at {tau:g} s", "the reference") for tau, level in allan.items()]
+    for level, quantity, what in tests:
         if level is not None and level.alarm is not None and not level.sustained:
             short = f", short of {level.least_change:.3g}×" if level.least_change > 1.0 else ""
-            notes.append(f"a transient of {level.alarm.direction}ward noise at {level.alarm.since_s:.1f}–"
+            notes.append(f"a transient of {level.alarm.direction}ward {quantity} at {level.alarm.since_s:.1f}–"
                          f"{level.alarm.time_s:.1f} s (CUSUM alarm) that the level since then does not hold "
                          f"({level.ratio:.3g}× {what} [{level.ratio_ci[0]:.3g}, {level.ratio_ci[1]:.3g}]{short}): "
                          "not counted as degraded")
-    return AxisComparison(noise, step, line, alpha, notes, beyond)
+    return AxisComparison(noise, step, line, alpha, notes, beyond, allan)

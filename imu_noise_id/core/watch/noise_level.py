@@ -130,7 +130,7 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
                       ratio: float = DEFAULT_RATIO,
                       false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
                       directions_of: tuple[str, ...] = ("up", "down"),
-                      least_change: float | None = None) -> NoiseLevel:
+                      least_change: float | None = None, min_pairs: int = 100) -> NoiseLevel:
     """Both CUSUMs (those of ``directions_of``) on samples ``y`` [u] at period ``dt`` [s].
 
     Parameters
@@ -140,11 +140,12 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
     least_change : the ratio a confirmed alarm's level reaches (:attr:`NoiseLevel.sustained`); None: √ρ, half way
         (in log) to the change the test is tuned to: runs of one unit differ by a few per cent, beyond a reference's
         narrow interval, which alone would confirm any alarm a knock raised
+    min_pairs : the fewest pair differences the test runs on, and the level since an alarm rests on
 
     Raises
     ------
     ValueError
-        Fewer than 100 pair differences, a non-positive reference, or ρ ≤ 1.
+        Fewer than ``min_pairs`` pair differences, a non-positive reference, or ρ ≤ 1.
     """
     if not ratio > 1.0:
         raise ValueError(f"the ratio to detect must be > 1, got {ratio!r}")
@@ -152,8 +153,8 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
     if not (0 < v_lo <= v_ref <= v_hi):
         raise ValueError(f"reference variance {v_ref!r} must be positive and inside its interval {v_interval!r}")
     d, index = pair_differences(y)
-    if d.size < 100:
-        raise ValueError(f"{d.size} pair differences are too few for the noise-level test (100 or more)")
+    if d.size < min_pairs:
+        raise ValueError(f"{d.size} pair differences are too few for the noise-level test ({min_pairs} or more)")
     h = threshold(false_alarms_per_hour, 0.5 / dt)
     d2 = d * d
     alarms = []
@@ -165,13 +166,14 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
             alarms.append(LevelAlarm(direction, float(index[found[0]] * dt), float(index[found[1]] * dt)))
     alarm = min(alarms, key=lambda a: a.time_s) if alarms else None
     since = d if alarm is None else d[index * dt >= alarm.since_s]
-    value, ci = _ratio(since if since.size >= 100 else d, v_ref)
+    value, ci = _ratio(since if since.size >= min_pairs else d, v_ref)
     return NoiseLevel(value, ci, alarm, h, int(d.size), (math.sqrt(v_lo / v_ref), math.sqrt(v_hi / v_ref)),
                       math.sqrt(ratio) if least_change is None else least_change)
 
 
-#: The tests each axis runs (noise up, noise down, bias step, new line, the specification's limit).
-TESTS_PER_AXIS = 5
+#: The tests each axis runs: noise up and down, bias step, new line, the specification's limit, and the Allan
+#: variance up and down at each of ``allan_watch.DEFAULT_TAUS`` (two).
+TESTS_PER_AXIS = 9
 
 
 def per_test(false_alarms_per_hour: float, axes: int) -> float:

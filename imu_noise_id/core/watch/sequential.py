@@ -1,6 +1,6 @@
 """The CUSUMs of :mod:`.noise_level` sample by sample (the node's watch): each pair's difference moves both CUSUMs
 of every axis; an alarm keeps its time and where the change began, and is confirmed as :attr:`.NoiseLevel.sustained`
-confirms one offline, by the level of the :data:`CONFIRM_MIN_PAIRS` pairs after the alarm (each d² at most the
+confirms one offline, by the level of the ``confirm_pairs`` pairs after the alarm (each d² at most the
 upward CUSUM's cap). One that level does not confirm was a transient (a knock): it is kept as the axis's last
 transient and the axis's CUSUMs start again, so that a later change is dated and confirmed by itself. Live ratio:
 √ of the exponentially weighted mean of d²/v_ref over ``window`` seconds."""
@@ -16,7 +16,8 @@ from .noise_level import LevelAlarm, NoiseLevel, directions, ratio_interval, thr
 
 #: Time constant [s] of the live ratio's average.
 DEFAULT_WINDOW_S = 60.0
-#: Pairs after an alarm whose level confirms it or finds it a transient (a knock's burst is a small part of them).
+#: Pairs after an alarm whose level confirms it or finds it a transient (a knock's burst is a small part of them),
+#: by default.
 CONFIRM_MIN_PAIRS = 1000
 
 
@@ -38,11 +39,12 @@ class AxisWatch:
 class SequentialNoiseWatch:
     """Both CUSUMs per axis against references of E[(y_{t+1} − y_t)²] ``v_ref`` (k,) [u²] and their intervals
     ``intervals`` ((lo, hi) per axis), for samples at period ``period`` [s]; ``ratio``, ``false_alarms_per_hour`` and
-    ``least_change`` as in :func:`~.noise_level.watch_noise_level`."""
+    ``least_change`` as in :func:`~.noise_level.watch_noise_level`; ``confirm_pairs`` after an alarm confirm it or
+    find it a transient."""
 
     def __init__(self, v_ref: np.ndarray, intervals: list[tuple[float, float]], period: float, *, ratio: float,
                  false_alarms_per_hour: float, window_s: float = DEFAULT_WINDOW_S,
-                 least_change: float | None = None) -> None:
+                 least_change: float | None = None, confirm_pairs: int = CONFIRM_MIN_PAIRS) -> None:
         self.v_ref = np.asarray(v_ref, dtype=float)
         k = self.v_ref.size
         self.reference_ci = [(math.sqrt(lo / v), math.sqrt(hi / v)) for (lo, hi), v in zip(intervals, self.v_ref,
@@ -51,6 +53,7 @@ class SequentialNoiseWatch:
         self.since_d2 = np.zeros(k)
         self.since_n = np.zeros(k, dtype=int)
         self.confirmed_s: list[float | None] = [None] * k
+        self.confirm_pairs = confirm_pairs
         self.transients: list[tuple[LevelAlarm, float] | None] = [None] * k
         self.h = threshold(false_alarms_per_hour, 0.5 / period)
         self.a = np.full((k, 2), -np.inf)
@@ -88,7 +91,7 @@ class SequentialNoiseWatch:
             pending = alarmed & np.array([c is None for c in self.confirmed_s])
             self.since_d2[pending] += np.minimum(d2, self.cap[:, 0])[pending]  # a glitch counts as the CUSUM counts it
             self.since_n[pending] += 1
-            for i in np.flatnonzero(pending & (self.since_n == CONFIRM_MIN_PAIRS)):
+            for i in np.flatnonzero(pending & (self.since_n == self.confirm_pairs)):
                 level = self._level(i)
                 if level.sustained:
                     self.confirmed_s[i] = float(t)

@@ -1,6 +1,7 @@
 """The online watch of an IMU against its reference (an earlier ``analyze``) and datasheet limits (docs/node.md):
-stationary samples run ``SequentialNoiseWatch`` CUSUMs against the reference (both ways), its bias-step and new-line
-tests on a sliding window (``WindowedChecks``), and each sensor's density limit (upwards, v₀ = the reference's shape
+stationary samples run ``SequentialNoiseWatch`` CUSUMs against the reference (both ways; ``AllanWatch``: the same at
+τ = 1 and 10 s), its bias-step and new-line tests on a sliding window (``WindowedChecks``), and each sensor's density
+limit (upwards, v₀ = the reference's shape
 at the limit, v₁ = ``LIMIT_RATIO``² v₀; without a reference white noise); in motion the CMKF's density intervals are
 held against the reference's. Status per sensor: OK, WARN (left its reference: how much, since when; a bias step, a
 new line; in motion beyond it), ERROR (beyond the spec, or the watch cannot run). It starts once the IMU's period is
@@ -13,6 +14,7 @@ import math
 import numpy as np
 
 from ...core.axes import AXES, SENSORS, sensor_of
+from ...core.watch.allan_watch import AllanWatch
 from ...core.watch.compare import AxisReference, rate_mismatch
 from ...core.watch.noise_level import LIMIT_RATIO, per_test
 from ...core.watch.sequential import AxisWatch, SequentialNoiseWatch
@@ -38,6 +40,7 @@ class ReferenceWatch:
         self.watch: SequentialNoiseWatch | None = None
         self.spec_watch: SequentialNoiseWatch | None = None
         self.windowed: WindowedChecks | None = None
+        self.allan: AllanWatch | None = None
 
     def _start(self, period: float) -> None:
         """Both watches at the IMU's ``period`` [s] (the reference's rate checked first)."""
@@ -54,6 +57,8 @@ class ReferenceWatch:
                                               false_alarms_per_hour=self.false_alarms_per_hour)
             self.windowed = WindowedChecks([self.references[axis] for axis in AXES], period,
                                            false_alarms_per_hour=self.false_alarms_per_hour)
+            self.allan = AllanWatch([self.references[axis] for axis in AXES], period, ratio=self.ratio,
+                                    false_alarms_per_hour=self.false_alarms_per_hour)
         if self.limits:
             v_spec = []
             for axis in AXES:
@@ -76,12 +81,12 @@ class ReferenceWatch:
             self._start(period)
             if self.refused is not None:
                 return
-        for watch in (self.watch, self.spec_watch, self.windowed):
+        for watch in (self.watch, self.spec_watch, self.windowed, self.allan):
             if watch is not None:
                 watch.add(t, sample)
 
     def break_chain(self) -> None:
-        for watch in (self.watch, self.spec_watch, self.windowed):
+        for watch in (self.watch, self.spec_watch, self.windowed, self.allan):
             if watch is not None:
                 watch.break_chain()
 
@@ -156,6 +161,16 @@ class ReferenceWatch:
                         values[f"{axis}_transient_at"] = f"{s.transient.since_s:.3f}"
                         transients.append(f"{axis}: a transient of {s.transient.direction}ward noise at stamp "
                                           f"{s.transient.since_s:.1f} s, the level after it {s.transient_ratio:.3g}×")
+                for tau, state in ({} if self.allan is None else self.allan.axis(AXES.index(axis))).items():
+                    key = f"{axis}_adev_ratio_tau{tau:g}s"
+                    values[key] = f"{state.ratio:.3g}"
+                    if state.confirmed_s is not None:
+                        alarms.append(f"{axis} Allan deviation at {tau:g} s {state.alarm.direction} "
+                                      f"({state.since_ratio:.3g}× the reference since then) since stamp "
+                                      f"{state.alarm.since_s:.1f} s")
+                    if state.transient is not None:
+                        transients.append(f"{axis}: a transient of {state.transient.direction}ward Allan deviation "
+                                          f"at {tau:g} s at stamp {state.transient.since_s:.1f} s")
                 step, line = changes.get(axis, {}).get("step"), changes.get(axis, {}).get("line")
                 if step is not None:
                     values[f"{axis}_bias_step"] = f"{step.value:.3g}"
