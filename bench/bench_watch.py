@@ -57,7 +57,7 @@ MODEL = {a: GYRO if a in GYRO_AXES else ACCEL for a in AXES}
 FAULTS = ("density x1.5", "bias step 5 B", "bias step 10 B", "30 Hz line 0.1 sigma", "30 Hz line 0.2 sigma")
 KIND = {"density x1.5": "noise", "bias step 5 B": "step", "bias step 10 B": "step", "30 Hz line 0.1 sigma": "line",
         "30 Hz line 0.2 sigma": "line"}
-FALSE_ALARMS_PER_HOUR = 0.1  # the node's and compare's default, per axis and test
+FALSE_ALARMS_PER_HOUR = 0.1  # the node's and compare's default, for the whole unit
 
 
 def reference_folder(out: Path) -> tuple[Reference, float]:
