@@ -170,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
                       f"RSS {tree_rss:7.0f} MiB, PSS {tree_pss:7.0f} MiB = {tree_pss / arrays:.1f}× the arrays",
                       flush=True)
             first = sources[0][0]
-            for name, _, _ in sources[1:]:
+            for name, _, _ in sources[1:] if math.isfinite(times[first]) else []:  # no ratio to a stopped run
                 ratio = times[name] / times[first]
                 print(f"  {name}: {'more than ' if math.isinf(times[name]) else ''}"
                       f"{min(ratio, args.timeout / times[first]):.2f}× the wall time of {first}")
