@@ -69,7 +69,6 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
     return Comparison(axes, float(imu.t[-1] - imu.t[0]), notes)
 
 
-
 def beyond_spec(imu: ImuSeries, dt: float, own: dict[str, AxisReference], limits: dict[str, float], *,
                 false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> dict[str, NoiseLevel]:
     """``compare --spec``'s test of a unit without a reference (``batch --spec``): per axis of ``imu`` at period

@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..noise.components import total_allan_variance
 from .noise_level import NoiseLevel, watch_noise_level
 from .sequential import AxisWatch, SequentialNoiseWatch
 
@@ -32,7 +31,7 @@ MIN_PAIRS = 50
 
 def reference_av(reference: AxisReference, tau: float, dt: float) -> tuple[float, tuple[float, float]]:
     """2·AV(τ) [u²] of the reference's model at period ``dt`` and its interval (±:data:`AV_TOLERANCE` in deviation)."""
-    v = 2.0 * float(total_allan_variance(reference.model(dt), np.array([tau]), dt)[0])
+    v = reference.pair_variance(tau, dt)
     return v, (v * (1.0 - AV_TOLERANCE) ** 2, v * (1.0 + AV_TOLERANCE) ** 2)
 
 

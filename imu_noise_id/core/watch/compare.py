@@ -63,10 +63,15 @@ class AxisReference:
         return ((1 - tol) * self.noise_density, (1 + tol) * self.noise_density), (
             f"the reference's N has no interval: ±{100 * tol:g} % used")
 
+    def pair_variance(self, tau: float, dt: float) -> float:
+        """2·AV(τ) [u²] of the reference model at period ``dt`` [s]: the variance of the difference of two consecutive
+        τ-means (τ = dt: of two consecutive samples)."""
+        return 2.0 * float(total_allan_variance(self.model(dt), np.array([tau]), dt)[0])
+
     def difference_variance(self, dt: float) -> tuple[float, tuple[float, float], str]:
         """E[(y_{t+1} − y_t)²] = 2·AV(dt) [u²] of the reference model, its interval (N's relative interval, squared;
         :meth:`density_interval`) and that method's note."""
-        v = 2.0 * float(total_allan_variance(self.model(dt), np.array([dt]), dt)[0])
+        v = self.pair_variance(dt, dt)
         (lo, hi), note = self.density_interval()
         return v, (v * (lo / self.noise_density) ** 2, v * (hi / self.noise_density) ** 2), note
 

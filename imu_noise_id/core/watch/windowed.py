@@ -84,17 +84,18 @@ class WindowedChecks:
         self.count = 0
         self.since_tick = 0
 
-    def _window(self) -> tuple[np.ndarray, np.ndarray]:
+    def _window(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """The window's stamps and axis ``i``'s samples, oldest first."""
         order = (np.arange(self.next_slot - self.count, self.next_slot)) % self.capacity
-        return self.stamps[order], self.samples[order]
+        return self.stamps[order], self.samples[order, i]
 
     def _test(self, i: int) -> None:
-        stamps, samples = self._window()
+        stamps, samples = self._window(i)
         self.tests += 1
         held = self.findings[i]
         if "step" in held and "line" in held:
             return
-        step, line = step_and_line(samples[:, i], self.period, self.whitening[i], self.alpha,
+        step, line = step_and_line(samples, self.period, self.whitening[i], self.alpha,
                                    self.references[i].known_lines)
         now = float(stamps[-1])
         if step is not None and "step" not in held:

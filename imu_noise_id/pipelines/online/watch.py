@@ -1,11 +1,10 @@
 """The online watch of an IMU against its reference (an earlier ``analyze``) and datasheet limits (docs/node.md):
 stationary samples run ``SequentialNoiseWatch`` CUSUMs against the reference (both ways; ``AllanWatch``: the same at
 τ = 1 and 10 s), its bias-step and new-line tests on a sliding window (``WindowedChecks``), and each sensor's density
-limit (upwards, v₀ = the reference's shape
-at the limit, v₁ = ``LIMIT_RATIO``² v₀; without a reference white noise); in motion the CMKF's density intervals are
-held against the reference's. Status per sensor: OK, WARN (left its reference: how much, since when; a bias step, a
-new line; in motion beyond it), ERROR (beyond the spec, or the watch cannot run). It starts once the IMU's period is
-known."""
+limit (upwards, v₀ = the reference's shape at the limit, v₁ = ``LIMIT_RATIO``² v₀; without a reference white
+noise); in motion the CMKF's density intervals are held against the reference's. Status per sensor: OK, WARN (left
+its reference: how much, since when; a bias step, a new line; in motion beyond it), ERROR (beyond the spec, or the
+watch cannot run). It starts once the IMU's period is known."""
 
 from __future__ import annotations
 
