@@ -6,10 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation import composite, mle
+from imu_noise_id.core.estimation import composite, mle, whittle
 from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
-from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
-from imu_noise_id.core.noise.resonant import OSC
+from imu_noise_id.core.noise.components import COMPONENT_TYPES, GM, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.flicker import BI
+from imu_noise_id.core.noise.resonant import LPF, OSC
 from imu_noise_id.pipelines.loop import run_closed_loop
 
 DT = 0.01
@@ -19,6 +20,39 @@ TRUTH = [WN(2e-3), GM(tau=5.0, sigma=2e-3), RW(2e-5)]
 @pytest.fixture(scope="module")
 def record() -> np.ndarray:
     return simulate_sum(TRUTH, 400_000, DT, np.random.default_rng(7))
+
+
+def test_its_gradient_is_the_derivative_of_the_likelihood(record):
+    # every kind of parameter: scales (exact) and shapes (differences of one component), against central differences
+    # of ℓ_c itself
+    stats = composite.CompositeStatistics.of(record, DT)
+    start = [WN(2.5e-3), LPF(1e-3, 8.0), BI(5e-5, 1.0, 3000.0), GM(tau=3.0, sigma=1.5e-3),
+             OSC(frequency=0.5, bandwidth=0.03, sigma=5e-4), RW(3e-5), QN(1e-6)]
+    bp = stats.bands(start)
+    keys = [(i, k) for i, c in enumerate(start) for k in c.parameter_names]
+    x = np.log([start[i].params()[k] for i, k in keys])
+    ll, grad = composite.loglik_and_gradient(start, keys, x, stats, bp)
+    assert ll == pytest.approx(composite.loglik(start, stats, bp), rel=1e-12)
+    for j, key in enumerate(keys):
+        h = np.zeros(x.size)
+        h[j] = 1e-5
+        up, down = (composite.loglik(whittle.with_log_parameters(start, keys, x + s * h), stats, bp) for s in (1, -1))
+        assert grad[j] == pytest.approx((up - down) / 2e-5, rel=1e-3, abs=0.05), key
+
+
+@pytest.mark.parametrize("name", sorted(set(COMPONENT_TYPES) - {"RR"}))
+def test_every_component_scales_with_the_square_of_its_scale(name):
+    # the composite gradient's exact derivative in a component's scale_name rests on this
+    cls = COMPONENT_TYPES[name]
+    example = {"WN": WN(1e-3), "QN": QN(1e-4), "RW": RW(1e-5), "GM": GM(tau=2.0, sigma=1e-3),
+               "LPF": LPF(1e-3, 5.0), "OSC": OSC(frequency=2.0, bandwidth=0.2, sigma=1e-3), "BI": BI(1e-4)}
+    c = example.get(name) or cls(**{k: 1e-3 if k == cls.scale_name else 10.0 for k in cls.parameter_names})
+    twice = type(c)(**{**c.params(), **{k: v for k, v in vars(c).items() if k in cls.fixed_names},
+                       cls.scale_name: 2.0 * c.params()[cls.scale_name]})
+    lags = np.arange(0, 50, dtype=float) * 7
+    assert twice.sum_covariance(lags, DT) == pytest.approx(4.0 * c.sum_covariance(lags, DT), rel=1e-12)
+    assert twice.psd(np.array([0.1, 1.0, 10.0]), DT) == pytest.approx(4.0 * c.psd(np.array([0.1, 1.0, 10.0]), DT))
+    assert RR.scale_name is None
 
 
 def test_its_maximum_is_near_the_exact_one(record):

@@ -23,7 +23,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import cholesky, solve_triangular, toeplitz
+from scipy.linalg import cho_factor, cho_solve, cholesky, solve_triangular, toeplitz
 from scipy.optimize import minimize
 
 from ..errors import InputError
@@ -77,20 +77,20 @@ def block_sums(y: np.ndarray, dt: float, max_blocks: int = MAX_BLOCKS) -> BlockS
     return BlockSums(d - d.mean(), block, float(dt), int(y.size))
 
 
-def _sum_lags(block: int, lags: int) -> np.ndarray:
+def sum_lags(block: int, lags: int) -> np.ndarray:
     """The lags [samples] at which γ_D(0 … lags − 1) reads K: (−2 … lags + 1)·L."""
     return np.arange(-2, lags + 2, dtype=float) * block
 
 
-def _from_sum_covariance(k: np.ndarray) -> np.ndarray:
-    """γ_D(h) from K at :func:`_sum_lags` (the filter [1, −4, 6, −4, 1] of the module docstring)."""
+def from_sum_covariance(k: np.ndarray) -> np.ndarray:
+    """γ_D(h) from K at :func:`sum_lags` (the filter [1, −4, 6, −4, 1] of the module docstring)."""
     return k[:-4] - 4.0 * k[1:-3] + 6.0 * k[2:-2] - 4.0 * k[3:-1] + k[4:]
 
 
 def autocovariance(components: list[Component], block: int, dt: float, lags: int) -> np.ndarray:
     """γ_D(h), h = 0 … lags − 1, of the differences of block sums of ``block`` samples (module docstring)."""
-    h = _sum_lags(block, lags)
-    return _from_sum_covariance(np.sum([c.sum_covariance(h, dt) for c in components], axis=0))
+    h = sum_lags(block, lags)
+    return from_sum_covariance(np.sum([c.sum_covariance(h, dt) for c in components], axis=0))
 
 
 def toeplitz_loglik(gamma: np.ndarray, x: np.ndarray) -> float:
@@ -104,6 +104,22 @@ def toeplitz_loglik(gamma: np.ndarray, x: np.ndarray) -> float:
     return -0.5 * (2.0 * float(np.log(np.diag(factor)).sum()) + float(z @ z) + x.size * math.log(2.0 * math.pi))
 
 
+def toeplitz_loglik_and_gradient(gamma: np.ndarray, x: np.ndarray) -> tuple[float, np.ndarray] | None:
+    """:func:`toeplitz_loglik` and its gradient in ``gamma``: ∂ℓ/∂γ(h) = ½ tr[(Σ⁻¹xxᵀΣ⁻¹ − Σ⁻¹) T_h], T_h the
+    symmetric Toeplitz basis matrix of lag h (ones where |i − j| = h); None where Σ is not positive definite."""
+    try:
+        factor = cho_factor(toeplitz(gamma), lower=True, check_finite=False)
+    except np.linalg.LinAlgError:
+        return None
+    m = x.size
+    inverse = cho_solve(factor, np.eye(m), check_finite=False)
+    alpha = inverse @ x
+    ll = -0.5 * (2.0 * float(np.log(np.diag(factor[0])).sum()) + float(x @ alpha) + m * math.log(2.0 * math.pi))
+    a = np.outer(alpha, alpha) - inverse
+    lag = np.abs(np.subtract.outer(np.arange(m), np.arange(m)))
+    return ll, 0.5 * np.bincount(lag.ravel(), weights=a.ravel(), minlength=m)
+
+
 def loglik(components: list[Component], sums: BlockSums) -> float:
     """Exact log-likelihood of the block sums' differences under ``components``."""
     return toeplitz_loglik(autocovariance(components, sums.block, sums.dt, sums.d.size), sums.d)
@@ -113,7 +129,7 @@ def fit(start: list[Component], sums: BlockSums) -> tuple[float, list[Component]
     """Maximise :func:`loglik` over the log-parameters of the components of :data:`SLOW_TYPES` (Gauss–Markov τ
     between dt/2 and 100 records), the others held; (log-likelihood, fitted components)."""
     keys = [(i, name) for i, c in enumerate(start) if isinstance(c, SLOW_TYPES) for name in c.parameter_names]
-    lags = _sum_lags(sums.block, sums.d.size)
+    lags = sum_lags(sums.block, sums.d.size)
     held_k = sum((c.sum_covariance(lags, sums.dt) for c in start if not isinstance(c, SLOW_TYPES)), np.zeros(lags.size))
     x0 = np.log([start[i].params()[name] for i, name in keys])
     tau_range = (math.log(sums.dt / 2.0), math.log(100.0 * sums.n * sums.dt))
@@ -126,7 +142,7 @@ def fit(start: list[Component], sums: BlockSums) -> tuple[float, list[Component]
         except ValueError:
             return 1e300
         k = held_k + sum(c.sum_covariance(lags, sums.dt) for c in comps if isinstance(c, SLOW_TYPES))
-        ll = toeplitz_loglik(_from_sum_covariance(k), sums.d)
+        ll = toeplitz_loglik(from_sum_covariance(k), sums.d)
         return -ll if math.isfinite(ll) else 1e300
 
     if not keys:

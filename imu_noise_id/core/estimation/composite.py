@@ -28,6 +28,7 @@ from scipy.optimize import minimize
 from ..noise.components import RR, Component
 from ..quality import interpolate_missing
 from . import block_sums, whittle
+from .differences import derivative_in_domain
 
 if TYPE_CHECKING:
     from .model import NoiseModel
@@ -120,7 +121,7 @@ def _climb(start: list[Component], stats: CompositeStatistics,
     """ℓ_c climbed from ``start`` (:func:`fit`); ``start`` itself when no step gains. L-BFGS-B in η = Lᵀ(ϑ − ϑ₀),
     L Lᵀ the Whittle information at the start
     (:func:`.whittle.whittle_information`), a point outside the box scored at its projection plus a quadratic pull
-    (as :func:`.mle.maximise`)."""
+    (as :func:`.mle.maximise`), with the gradient of :func:`loglik_and_gradient`."""
     bp = stats.bands(start)
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
     if not keys:
@@ -134,23 +135,105 @@ def _climb(start: list[Component], stats: CompositeStatistics,
     w, v = np.linalg.eigh(0.5 * (info + info.T))
     w = np.maximum(w, 1e-6 * max(float(np.max(w)), 1e-300))
     transform = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ info T = I
+    outside = (1e10, np.zeros(x0.size))
+    memo: dict = {}
 
-    def negll(eta: np.ndarray) -> float:
+    def negll(eta: np.ndarray) -> tuple[float, np.ndarray]:
         raw = x0 + transform @ eta
         x = np.clip(raw, lo, hi)
         try:
-            ll = loglik(whittle.with_log_parameters(start, keys, x), stats, bp)
+            ll, grad = loglik_and_gradient(start, keys, x, stats, bp, memo=memo)
         except ValueError:
-            return 1e10
-        return -ll + 0.5 * float((raw - x) @ (raw - x)) if math.isfinite(ll) else 1e10
+            return outside
+        if not math.isfinite(ll):
+            return outside
+        pull = raw - x  # ∂x/∂raw is 0 where clipped, 1 inside
+        return -ll + 0.5 * float(pull @ pull), transform.T @ (np.where(pull == 0.0, -grad, 0.0) + pull)
 
-    first = negll(np.zeros(x0.size))
+    first = negll(np.zeros(x0.size))[0]
     if first >= 1e10:
         return -math.inf, list(start)
     # searched relative to the start's value: L-BFGS-B's stopping rule is relative to |ℓ_c| (~N), not to its changes
-    res = minimize(lambda eta: negll(eta) - first, np.zeros(x0.size), method="L-BFGS-B",
-                   options={"maxiter": 500, "ftol": 1e-15, "gtol": 0.05, "eps": 1e-5})
+    res = minimize(lambda eta: _shifted(negll(eta), first), np.zeros(x0.size), jac=True, method="L-BFGS-B",
+                   options={"maxiter": 500, "ftol": 1e-15, "gtol": 0.05})
     if res.fun >= 0.0:
         return -first, list(start)
     x = np.clip(x0 + transform @ res.x, lo, hi)
     return -float(first + res.fun), whittle.with_log_parameters(start, keys, x)
+
+
+def _shifted(value_gradient: tuple[float, np.ndarray], by: float) -> tuple[float, np.ndarray]:
+    return value_gradient[0] - by, value_gradient[1]
+
+
+#: Step [log-parameter] of the central differences of one component's spectrum and sum covariance.
+DIFFERENCE_STEP = 1e-4
+
+
+def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]], x: np.ndarray,
+                        stats: CompositeStatistics, bp: whittle.BandedPeriodogram, *,
+                        memo: dict | None = None) -> tuple[float, np.ndarray]:
+    """ℓ_c (:func:`loglik` on ``bp``) of ``components`` with the log-parameters ``keys`` set to ``x``
+    (:func:`.whittle.with_log_parameters`), and its gradient in ``x``.
+
+    ℓ_c depends on the parameters only through the difference spectrum S_Δ(ω_b) = Σ_c S_c(ω_b) and the block sums'
+    autocovariance γ_D(h) = Σ_c γ_c(h), each a sum over components, so by the chain rule
+
+        ∂ℓ_c/∂ϑ_j = Σ_b n_b (Ī_b/S_Δ − 1)/S_Δ · ∂S_c/∂ϑ_j  +  ½ Σ_h tr[(Σ⁻¹DDᵀΣ⁻¹ − Σ⁻¹) T_h] ∂γ_c/∂ϑ_j
+
+    (c the component of ϑ_j, Σ the block sums' Toeplitz covariance, T_h its h-th Toeplitz basis matrix). ∂/∂ϑ of a
+    component's :attr:`~..noise.base.Component.scale_name` is 2·(S_c, γ_c); its other parameters by central differences
+    of :data:`DIFFERENCE_STEP` of that component alone (one-sided at its domain's edge, :mod:`.differences`). An
+    evaluation and its gradient cost about two evaluations, where forward differences of ℓ_c cost one per parameter.
+    ``memo`` (one dict per ``bp``, kept by the caller across evaluations) holds (S_c, γ_c) of the components whose only
+    parameter is their scale, by their fixed values, rescaled by the scale's square (a flicker ladder's are the
+    costliest). ValueError where ``x`` is outside a component's domain;
+    (−inf, zeros) where S_Δ ≤ 0 or Σ is not positive definite.
+    """
+    current = whittle.with_log_parameters(components, keys, x)
+    lags = block_sums.sum_lags(stats.sums.block, stats.sums.d.size)
+    memo = {} if memo is None else memo
+
+    def computed(c: Component) -> tuple[np.ndarray, np.ndarray]:
+        return (whittle.difference_spectrum([c], bp.omega, stats.dt),
+                block_sums.from_sum_covariance(c.sum_covariance(lags, stats.dt)))
+
+    def parts(c: Component) -> tuple[np.ndarray, np.ndarray]:
+        if c.parameter_names != (c.scale_name,):  # its shape moves too: memo entries would pile up
+            return computed(c)
+        values = c.params()
+        scale = values.pop(c.scale_name)
+        key = (type(c), tuple(sorted(values.items())))
+        if key not in memo:
+            memo[key] = scale, computed(c)
+        at, (s_c, g_c) = memo[key]
+        ratio = (scale / at) ** 2
+        return s_c * ratio, g_c * ratio
+
+    each = [parts(c) for c in current]
+    s = np.sum([p[0] for p in each], axis=0)
+    gamma = np.sum([p[1] for p in each], axis=0)
+    if not np.all(s > 0):
+        return -math.inf, np.zeros(x.size)
+    whittle_ll = -float(np.sum(bp.count * np.log(s) + bp.power / s))
+    blocks = block_sums.toeplitz_loglik_and_gradient(gamma, stats.sums.d)
+    if blocks is None:
+        return -math.inf, np.zeros(x.size)
+    block_ll, d_gamma = blocks
+    d_s = (bp.power / s - bp.count) / s
+    grad = np.empty(x.size)
+    for j, (i, name) in enumerate(keys):
+        if name == current[i].scale_name:
+            ds_j, dg_j = 2.0 * each[i][0], 2.0 * each[i][1]
+        else:
+            def moved(h: float, i: int = i, name: str = name, at: float = float(x[j])) -> np.ndarray:
+                return np.concatenate(parts(whittle.with_log_parameters([current[i]], [(0, name)],
+                                                                         np.array([at + h]))[0]))
+
+            d = derivative_in_domain(moved, DIFFERENCE_STEP, lambda i=i: np.concatenate(each[i]))
+            if d is None:
+                grad[j] = 0.0
+                continue
+            ds_j, dg_j = d[: s.size], d[s.size:]
+        grad[j] = float(d_s @ ds_j) + float(d_gamma @ dg_j)
+    return whittle_ll + block_ll, grad

@@ -25,6 +25,7 @@ class MA(Component):
 
     name: ClassVar[str] = "MA"
     parameter_names: ClassVar[tuple[str, ...]] = ("noise_density",)
+    scale_name: ClassVar[str | None] = "noise_density"
     parameter_units: ClassVar[dict[str, str]] = {"noise_density": "u/sqrt(Hz)"}
 
     def __post_init__(self) -> None:

@@ -68,6 +68,9 @@ class Component(ABC):
     parameter_units: ClassVar[dict[str, str]]
     #: Structure values a spec may give after the parameters, never estimated (e.g. a flicker ladder's band).
     fixed_names: ClassVar[tuple[str, ...]] = ()
+    #: The parameter whose square every second moment of the component (covariance, PSD, AV, sum covariance) is
+    #: proportional to; None for a deterministic component.
+    scale_name: ClassVar[str | None] = None
 
     @abstractmethod
     def simulate(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:

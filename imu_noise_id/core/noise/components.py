@@ -35,6 +35,7 @@ class WN(Component):
 
     name: ClassVar[str] = "WN"
     parameter_names: ClassVar[tuple[str, ...]] = ("noise_density",)
+    scale_name: ClassVar[str | None] = "noise_density"
     parameter_units: ClassVar[dict[str, str]] = {"noise_density": "u/sqrt(Hz)"}
 
     def __post_init__(self) -> None:
@@ -83,6 +84,7 @@ class QN(Component):
 
     name: ClassVar[str] = "QN"
     parameter_names: ClassVar[tuple[str, ...]] = ("Q",)
+    scale_name: ClassVar[str | None] = "Q"
     parameter_units: ClassVar[dict[str, str]] = {"Q": "u*s"}
 
     def __post_init__(self) -> None:
@@ -134,6 +136,7 @@ class RW(Component):
 
     name: ClassVar[str] = "RW"
     parameter_names: ClassVar[tuple[str, ...]] = ("random_walk",)
+    scale_name: ClassVar[str | None] = "random_walk"
     parameter_units: ClassVar[dict[str, str]] = {"random_walk": "u/s/sqrt(Hz)"}
 
     def __post_init__(self) -> None:
@@ -186,6 +189,7 @@ class GM(Component):
 
     name: ClassVar[str] = "GM"
     parameter_names: ClassVar[tuple[str, ...]] = ("tau", "sigma")
+    scale_name: ClassVar[str | None] = "sigma"
     parameter_units: ClassVar[dict[str, str]] = {"tau": "s", "sigma": "u"}
 
     def __post_init__(self) -> None:

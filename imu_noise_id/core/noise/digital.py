@@ -61,6 +61,7 @@ class DLPF(Component):
 
     name: ClassVar[str] = "DLPF"
     parameter_names: ClassVar[tuple[str, ...]] = ("noise_density", "cutoff")
+    scale_name: ClassVar[str | None] = "noise_density"
     parameter_units: ClassVar[dict[str, str]] = {"noise_density": "u/sqrt(Hz)", "cutoff": "Hz"}
     fixed_names: ClassVar[tuple[str, ...]] = ("order",)
 

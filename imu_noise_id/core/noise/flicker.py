@@ -17,7 +17,7 @@ from scipy.signal import lfilter
 
 from . import units
 from .base import Component, StateBlock, as_freq, as_tau
-from .sampled import block_sum_variance, sampled_allan_variance
+from .sampled import real_poles_sum_variance, sampled_allan_variance
 
 #: Correlation times per decade of the ladder.
 PER_DECADE = 2
@@ -51,6 +51,7 @@ class BI(Component):
 
     name: ClassVar[str] = "BI"
     parameter_names: ClassVar[tuple[str, ...]] = ("bias_instability",)
+    scale_name: ClassVar[str | None] = "bias_instability"
     parameter_units: ClassVar[dict[str, str]] = {"bias_instability": "u", "tau_min": "s", "tau_max": "s"}
     #: Structure values a spec may give after the parameters (the band), not estimated.
     fixed_names: ClassVar[tuple[str, ...]] = ("tau_min", "tau_max")
@@ -99,7 +100,7 @@ class BI(Component):
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
         """K(u) = −½ Var(y_1 + … + y_|u|) of the ladder: the sum over its GMs (:mod:`.sampled`)."""
         u = np.abs(np.asarray(lag, dtype=float))
-        return -0.5 * sum(block_sum_variance(self.sigma2_each, -1.0 / t, u, dt) for t in self.taus)
+        return -0.5 * real_poles_sum_variance(self.sigma2_each, -1.0 / self.taus, u, dt)
 
     def memory(self, dt: float) -> tuple[float, float, float]:
         taus = self.taus

@@ -53,6 +53,7 @@ class LPF(Component):
 
     name: ClassVar[str] = "LPF"
     parameter_names: ClassVar[tuple[str, ...]] = ("noise_density", "cutoff")
+    scale_name: ClassVar[str | None] = "noise_density"
     parameter_units: ClassVar[dict[str, str]] = {"noise_density": "u/sqrt(Hz)", "cutoff": "Hz"}
 
     def __post_init__(self) -> None:
@@ -131,6 +132,7 @@ class OSC(Component):
 
     name: ClassVar[str] = "OSC"
     parameter_names: ClassVar[tuple[str, ...]] = ("frequency", "bandwidth", "sigma")
+    scale_name: ClassVar[str | None] = "sigma"
     parameter_units: ClassVar[dict[str, str]] = {"frequency": "Hz", "bandwidth": "Hz", "sigma": "u"}
 
     def __post_init__(self) -> None:

@@ -26,8 +26,17 @@ def _g(m: np.ndarray, w: np.ndarray) -> np.ndarray:
     mw = m * w
     with np.errstate(divide="ignore", invalid="ignore"):
         closed = (1.0 - one_minus_z) * (m * one_minus_z + np.expm1(mw)) / one_minus_z**2
+    return _series_where_small(closed, m, w, mw)
+
+
+def _series_where_small(closed: np.ndarray, m: np.ndarray, w: np.ndarray | float, mw: np.ndarray) -> np.ndarray:
+    """``closed`` with the series of g(m) where m·|w| < :data:`SERIES_LIMIT` (evaluated there only)."""
     small = np.abs(mw) < SERIES_LIMIT
-    return np.where(small, _series(m, w), closed) if small.any() else closed
+    if not small.any():
+        return closed
+    out = np.array(np.broadcast_to(closed, mw.shape))
+    out[small] = _series(np.broadcast_to(m, mw.shape)[small], np.broadcast_to(w, mw.shape)[small])
+    return out
 
 
 def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau: np.ndarray,
@@ -80,10 +89,17 @@ def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.n
     return np.real(complex(c) * (k + 2.0 * _g(k, w)))
 
 
+def real_poles_sum_variance(c: float, s: np.ndarray, k: np.ndarray, dt: float) -> np.ndarray:
+    """Σ_j S_j(k) [u²]: :func:`block_sum_variance` summed over processes of one weight ``c`` [u²] and real poles ``s``
+    [1/s] (a flicker ladder), in one broadcast."""
+    k = np.asarray(k, dtype=float)
+    w = (np.asarray(s, dtype=float) * dt).reshape(-1, *([1] * k.ndim))
+    return c * np.sum(k + 2.0 * _g_real(k, w), axis=0)
+
+
 def _g_real(m: np.ndarray, w: float | np.ndarray) -> np.ndarray:
     """:func:`_g` for real w < 0 (a float, or an array broadcasting against m)."""
     mw = m * w
     one_minus_z = -np.expm1(w)
     closed = (1.0 - one_minus_z) * (m * one_minus_z + np.expm1(mw)) / one_minus_z**2
-    small = np.abs(mw) < SERIES_LIMIT
-    return np.where(small, _series(m, w), closed) if small.any() else closed
+    return _series_where_small(closed, m, w, mw)
