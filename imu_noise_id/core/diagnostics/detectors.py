@@ -12,6 +12,7 @@ import numpy as np
 from scipy import optimize, stats
 from scipy.fft import next_fast_len
 
+from .local_dft import LocalDft
 from .residuals import (
     SpectralPeak,
     acf,
@@ -136,16 +137,20 @@ def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: Spectr
         cols = np.column_stack([np.sin(2 * math.pi * f * t), np.cos(2 * math.pi * f * t)])
         return basis.test(whitening.whiten(cols))
 
-    # The frequency refined to a small fraction of a bin by maximising the score statistic within ±1 bin of the
-    # peak: a line of fixed frequency removed at the bin's frequency leaves a residual line behind (the phase
-    # drifts by π·δf·T across the record), which the loop would otherwise model a second time.
+    # The frequency refined to a small fraction of a bin within ±1 bin of the peak: a line of fixed frequency removed
+    # at the bin's frequency leaves a residual line behind (the phase drifts by π·δf·T across the record), which the
+    # loop would otherwise model a second time. Located on |Σ e_k e^{−2πif t_k}|², which away from the filter's
+    # start-up is the score statistic of the whitened columns up to an f-independent factor (whitening maps a sinusoid
+    # of frequency f to a linear combination of its sine and cosine, which leaves the statistic unchanged); the
+    # statistic itself then decides between the located frequency and the peak's.
     resolution = 1.0 / (t.size * dt)
     upper = min(peak.frequency + resolution, 0.5 / dt - resolution)
     lower = min(max(peak.frequency - resolution, resolution), upper)  # a peak in the Nyquist bin: the last bin
-    best = optimize.minimize_scalar(lambda f: -test_at(f).statistic, method="bounded", bounds=(lower, upper),
+    local = LocalDft.of(e, dt, 0.5 * (lower + upper))
+    best = optimize.minimize_scalar(lambda f: -abs(local.at(f)) ** 2, method="bounded", bounds=(lower, upper),
                                     options={"xatol": 1e-3 * resolution})
     start = min(peak.frequency, upper)
-    frequency = float(best.x) if -best.fun > test_at(start).statistic else start
+    frequency = float(best.x) if test_at(float(best.x)).statistic > test_at(start).statistic else start
     st = test_at(frequency)
     amplitude = float(np.hypot(*st.coef))
     return Finding(
