@@ -10,6 +10,8 @@ has lag-l covariance c(l) = [6K(l) − 4K(l − m) − 4K(l + m) + K(l − 2m) +
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..allan import chi2_interval
@@ -20,35 +22,55 @@ from ..noise.components import RR, Component
 _V = (1.0, -4.0, 6.0, -4.0, 1.0)
 
 
+#: Decay times beyond which a stationary component's autocovariance is below e⁻⁴⁰ of its variance: the K of its
+#: partial sums is linear in the lag from there on (to that precision).
+MEMORY_REACH = 40.0
+
+
 def model_av_edf(components: list[Component], m: np.ndarray, n: int, dt: float) -> np.ndarray:
     """EDF of the overlapping AV estimates at averaging factors ``m`` of an ``n``-sample record of the Gaussian model
-    ``components`` sampled at ``dt`` [s] (module docstring)."""
+    ``components`` sampled at ``dt`` [s] (module docstring). The K of a component of finite memory T > 0 (its
+    :meth:`~imu_noise_id.core.noise.base.Component.memory`) is computed up to :data:`MEMORY_REACH`·T/dt and continued
+    linearly from there, where its exponentials would be below e⁻⁴⁰; a component of memory 0 is read at the lags
+    near 0 where its c(l) is not 0."""
     m = np.asarray(m, dtype=np.int64)
     stochastic = [c for c in components if not isinstance(c, RR)]
     slope = sum(abs(c.slope) for c in components if isinstance(c, RR))
-    lags = np.arange(n + 1, dtype=float)
     long_memory, short_memory = [], []
     for c in stochastic:
         (long_memory if c.memory(dt)[0] > 0 else short_memory).append(c)
-    k_long = np.sum([c.sum_covariance(lags, dt) for c in long_memory], axis=0) if long_memory else None
+    k_long = np.sum([_sum_covariance(c, n + 1, dt) for c in long_memory], axis=0) if long_memory else None
+    ell = np.arange(n + 1)
     edf = np.empty(m.size)
     for i, mi in enumerate(m):
         count = n - 2 * int(mi) + 1
-        ell = np.arange(count)
-        c = np.zeros(count)
-        if k_long is not None:
-            c += _difference_covariance(k_long, ell, int(mi))
+        c = _difference_covariance(k_long, ell[:count], int(mi)) if k_long is not None else np.zeros(count)
+        # uncorrelated beyond a sample or two: c(l) = 0 from l = 2m + 2, K read near 0 (no cancellation of a walk's
+        # cubic K at long lags)
         near = ell[: min(count, 2 * int(mi) + 2)]
         for comp in short_memory:
             k_short = comp.sum_covariance(np.arange(near.size + 2 * int(mi) + 1, dtype=float), dt)
             c[: near.size] += _difference_covariance(k_short, near, int(mi))
         mu = slope * float(mi) * dt
-        weight = (count - ell).astype(float)
+        weight = (count - ell[:count]).astype(float)
         weight[1:] *= 2.0  # l and −l
         var = float(np.sum(weight * (2.0 * c**2 + 4.0 * mu * mu * c))) / (4.0 * count * count)
         mean = 0.5 * (float(c[0]) + mu * mu)
         edf[i] = 2.0 * mean * mean / var if var > 0 else np.inf
     return edf
+
+
+def _sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
+    """K(0 … size − 1) of ``c``; beyond :data:`MEMORY_REACH` decay times of a component with finite memory > 0, the
+    line through its last two computed values (:func:`model_av_edf`)."""
+    memory = c.memory(dt)[0]
+    reach = math.ceil(MEMORY_REACH * memory / dt) + 2 if 0.0 < memory < math.inf else size
+    if reach >= size:
+        return c.sum_covariance(np.arange(size, dtype=float), dt)
+    k = np.empty(size)
+    k[:reach] = c.sum_covariance(np.arange(reach, dtype=float), dt)
+    k[reach:] = k[reach - 1] + (k[reach - 1] - k[reach - 2]) * np.arange(1, size - reach + 1)
+    return k
 
 
 def _difference_covariance(k: np.ndarray, ell: np.ndarray, m: int) -> np.ndarray:
