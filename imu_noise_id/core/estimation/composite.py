@@ -184,7 +184,7 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
     (c the component of ϑ_j, Σ the block sums' Toeplitz covariance, T_h its h-th Toeplitz basis matrix). ∂/∂ϑ of a
     component's :attr:`~..noise.base.Component.scale_name` is 2·(S_c, γ_c); its other parameters by central differences
     of :data:`DIFFERENCE_STEP` of that component alone (one-sided at its domain's edge, :mod:`.differences`). An
-    evaluation and its gradient cost about two evaluations, where forward differences of ℓ_c cost one per parameter.
+    evaluation and its gradient cost about four evaluations, where forward differences of ℓ_c cost one per parameter.
     ``memo`` (one dict per ``bp``, kept by the caller across evaluations) holds (S_c, γ_c) of the components whose only
     parameter is their scale, by their fixed values, rescaled by the scale's square (a flicker ladder's are the
     costliest). ValueError where ``x`` is outside a component's domain;
@@ -199,10 +199,10 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
                 block_sums.from_sum_covariance(c.sum_covariance(lags, stats.dt)))
 
     def parts(c: Component) -> tuple[np.ndarray, np.ndarray]:
-        if c.parameter_names != (c.scale_name,):  # its shape moves too: memo entries would pile up
-            return computed(c)
         values = c.params()
-        scale = values.pop(c.scale_name)
+        scale = values.pop(c.scale_name) if c.scale_name else 0.0
+        if c.parameter_names != (c.scale_name,) or not scale > 0.0:  # its shape moves: entries would pile up
+            return computed(c)
         key = (type(c), tuple(sorted(values.items())))
         if key not in memo:
             memo[key] = scale, computed(c)
