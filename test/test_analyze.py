@@ -380,3 +380,23 @@ def test_the_finished_loops_hold_no_record_of_the_samples():
         for step in loop.steps:
             assert step.diagnosis.fit.record is None and step.diagnosis.fit.standardized is None
             assert step.diagnosis.innovations.size == loop.n
+
+
+def test_on_a_long_record_a_winner_the_loop_keeps_is_fitted_exactly_with_intervals():
+    # 280 000 samples per axis: the selection searches on the composite likelihood and its winner waits for the loop
+    # (analyze.models.finish_axis); the loop adds nothing to WN + RW, so the winner is finished: the exact maximum,
+    # with intervals
+    from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+    from imu_noise_id.pipelines.analyze import _axis_stages, _AxisContext
+    from imu_noise_id.pipelines.loop import ImuLoop
+
+    imu = simulate_static_imu(_model(), 200.0, 1400.0, seed=7)
+    static = analyze_static(imu, kinds=("allan",))
+    context = _AxisContext(imu, ImuLoop(imu, intervals=True), AnalyzeOptions(jobs=1), static)
+    outcome = _axis_stages(context, "gyro_x")
+    assert len(outcome.loop.steps) == 1
+    assert not outcome.model.selection.unfinished
+    fit = outcome.final.fit
+    assert fit.model == "WN+RW" and set(fit.ci95) >= {"WN.noise_density", "RW.random_walk"}
+    exact = NoiseModel(imu.axis("gyro_x"), imu.dt, "WN+RW").fit(None, FitOptions(uncertainty=False))
+    assert fit.loglik == pytest.approx(exact.loglik, abs=0.5)

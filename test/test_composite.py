@@ -96,3 +96,26 @@ def test_model_selection_on_a_long_record_searches_on_it_and_fits_the_winner_exa
     assert "likelihood" not in rows["WN+GM+RW"]
     assert all(rows[m].get("likelihood", "").startswith("exact, at the composite") for m in rows
                if m != "WN+GM+RW" and "bic" in rows[m])
+
+
+def test_a_selection_left_unfinished_is_finished_as_it_would_have_been(record):
+    # analyze leaves the winner at the composite maximiser while its closed loop may replace it, and finishes it only
+    # when the loop keeps it: the finished selection is the one select_model gives at once
+    from imu_noise_id.core.estimation.selection import finish_winner, select_model
+
+    options = FitOptions()
+    cands = ["WN+RW", "WN+GM", "WN+GM+RW"]
+    left = select_model(record, DT, candidates=cands, options=options, finish=False)
+    assert left.unfinished and not left.best.ci95
+    assert {r["model"]: r for r in left.table}["WN+GM+RW"]["likelihood"].startswith("exact, at the composite")
+    done = finish_winner(left, NoiseModel(record, DT, left.best_key), options)
+    at_once = select_model(record, DT, candidates=cands, options=options)
+    assert not done.unfinished and done.best.ci95
+    assert done.best.loglik == pytest.approx(at_once.best.loglik, abs=1e-6)
+    assert done.best.ci95.keys() == at_once.best.ci95.keys()
+    for name, interval in at_once.best.ci95.items():
+        assert done.best.ci95[name] == pytest.approx(interval, rel=1e-6), name
+    assert [r.keys() for r in done.table] == [r.keys() for r in at_once.table]
+    for got, want in zip(done.table, at_once.table, strict=True):
+        for key, value in want.items():
+            assert got[key] == (pytest.approx(value, rel=1e-9) if isinstance(value, float) else value), key

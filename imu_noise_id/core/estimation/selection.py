@@ -34,12 +34,20 @@ class SelectionResult:
     best: FitResult
     table: list[dict]  # per candidate: model, loglik, k, aic, bic, delta_bic, weight_bic, delta_aic, error
     fits: dict[str, FitResult]
+    #: The winner is still at its composite likelihood's maximiser, without intervals (:func:`select_model` with
+    #: ``finish=False``; :func:`finish_winner` finishes it).
+    unfinished: bool = False
 
     def without_data(self) -> SelectionResult:
         """The selection with every fit's record dropped (see :meth:`FitResult.without_data`)."""
         fits = {k: f.without_data() for k, f in self.fits.items()}
         best = next((fits[k] for k, f in self.fits.items() if f is self.best), self.best.without_data())
-        return SelectionResult(best, self.table, fits)
+        return SelectionResult(best, self.table, fits, self.unfinished)
+
+    @property
+    def best_key(self) -> str:
+        """The winner's key in :attr:`fits`."""
+        return next(k for k, f in self.fits.items() if f is self.best)
 
 
 def suggest_candidates(allan: AllanResult) -> list[str]:
@@ -70,7 +78,7 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
                  drift: str | None = "em", options: FitOptions | None = None,
                  allan: AllanResult | None = None,
                  extra_starts: dict[str, list[Component]] | None = None,
-                 sensor_filter: SensorFilter | None = None) -> SelectionResult:
+                 sensor_filter: SensorFilter | None = None, finish: bool = True) -> SelectionResult:
     """Fit every candidate structure and rank them by BIC (or AIC).
 
     ``options.uncertainty`` applies to the winner only. ``allan``: the record's AV (one column), the start of every
@@ -81,8 +89,10 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     (:mod:`.screen`) and not fitted when it cannot come within :data:`.screen.MARGIN`; its row says ``screened``
     with that ΔBIC. From :data:`.composite.MIN_SAMPLES` samples a candidate is fitted at the composite likelihood's
     maximiser from its starts and evaluated once on the exact likelihood (:func:`.composite.fit_model`; its row's
-    ``likelihood`` says so), and the winner alone is then fitted on the exact likelihood from there. Beyond the papers
-    (docs/em.md, "Searching long records on a likelihood of fixed size").
+    ``likelihood`` says so), and the winner alone is then fitted on the exact likelihood from there (with ``finish``
+    False, not yet: its exact fit and intervals are left to :func:`finish_winner`, for a caller that may replace the
+    winner, as the closed loop does). Beyond the papers (docs/em.md, "Searching long records on a likelihood of fixed
+    size").
     """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
@@ -141,29 +151,55 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         fits[spec] = fit
     if best_key is None or best_model is None:
         raise InputError("no candidate model could be fitted: " + "; ".join(f"{k}: {v}" for k, v in errors.items()))
-    if composite_stats is not None:  # the winner's exact fit, from its composite maximiser
-        exact = best_model.fit(list(fits[best_key].components), search)
-        fits[best_key] = exact if exact.loglik > fits[best_key].loglik else fits[best_key]
-    if options.uncertainty:  # before the table: searched again, the winner's likelihood can only rise
+    unfinished = composite_stats is not None and not finish
+    if composite_stats is not None and finish:
+        fits[best_key] = _finished(best_model, fits[best_key], options)
+    elif options.uncertainty and not unfinished:  # before the table: searched again, the likelihood can only rise
         fits[best_key] = add_intervals(best_model, fits[best_key], options)
+    others = [{"model": spec, "screened": screened[spec].describe(), "delta_bic_screen": screened[spec].delta_bic}
+              if spec in screened else {"model": spec, "error": errors[spec]}
+              for spec in cands if spec not in fits]
+    at_composite = ({k for k in fits if k != best_key or unfinished} if composite_stats is not None else set())
+    return SelectionResult(fits[best_key], _table(fits, others, criterion, at_composite), fits, unfinished)
+
+
+#: A selection table row's ``likelihood`` when its fit is the composite likelihood's maximiser.
+AT_COMPOSITE_MAXIMUM = "exact, at the composite likelihood's maximiser"
+
+
+def _finished(model: NoiseModel, fit: FitResult, options: FitOptions) -> FitResult:
+    """``fit`` (a composite likelihood's maximiser) fitted on the exact likelihood from there, kept when it gains,
+    with its intervals when ``options.uncertainty``."""
+    exact = model.fit(list(fit.components), replace(options, uncertainty=False))
+    fit = exact if exact.loglik > fit.loglik else fit
+    return add_intervals(model, fit, options) if options.uncertainty else fit
+
+
+def _table(fits: dict[str, FitResult], others: list[dict], criterion: str, at_composite: set[str]) -> list[dict]:
+    """The selection's table: a row per fit (likelihood, criteria, differences to the best, BIC weight; ``likelihood``
+    :data:`AT_COMPOSITE_MAXIMUM` for the keys in ``at_composite``), then the ``others`` (screened, failed), sorted by
+    ``criterion``."""
     bic_min = min(f.bic for f in fits.values())
     aic_min = min(f.aic for f in fits.values())
     wsum = sum(math.exp(-0.5 * (f.bic - bic_min)) for f in fits.values())
-    table = []
-    for spec in cands:
-        if spec in fits:
-            f = fits[spec]
-            table.append({
-                "model": f.model, "loglik": f.loglik, "k": f.n_params, "aic": f.aic, "bic": f.bic,
-                "delta_bic": f.bic - bic_min, "delta_aic": f.aic - aic_min,
-                "weight_bic": math.exp(-0.5 * (f.bic - bic_min)) / wsum, "converged": f.converged,
-            })
-            if composite_stats is not None and spec != best_key:
-                table[-1]["likelihood"] = "exact, at the composite likelihood's maximiser"
-        elif spec in screened:
-            table.append({"model": spec, "screened": screened[spec].describe(),
-                          "delta_bic_screen": screened[spec].delta_bic})
-        else:
-            table.append({"model": spec, "error": errors[spec]})
-    table.sort(key=lambda r: r.get(criterion, math.inf))
-    return SelectionResult(fits[best_key], table, fits)
+    rows = []
+    for key, f in fits.items():
+        rows.append({"model": f.model, "loglik": f.loglik, "k": f.n_params, "aic": f.aic, "bic": f.bic,
+                     "delta_bic": f.bic - bic_min, "delta_aic": f.aic - aic_min,
+                     "weight_bic": math.exp(-0.5 * (f.bic - bic_min)) / wsum, "converged": f.converged})
+        if key in at_composite:
+            rows[-1]["likelihood"] = AT_COMPOSITE_MAXIMUM
+    return sorted(rows + others, key=lambda r: r.get(criterion, math.inf))
+
+
+def finish_winner(selection: SelectionResult, model: NoiseModel, options: FitOptions,
+                  criterion: str = "bic") -> SelectionResult:
+    """A selection made with ``finish=False`` (:func:`select_model`) as it would have been with ``finish``: its winner
+    fitted on the exact likelihood of ``model`` (the winner's structure over the same record) from its composite
+    maximiser, with intervals when ``options.uncertainty``, and the table ranked again. Unchanged when finished."""
+    if not selection.unfinished:
+        return selection
+    key = selection.best_key
+    fits = {**selection.fits, key: _finished(model, selection.best, options)}
+    others = [row for row in selection.table if "loglik" not in row]
+    return SelectionResult(fits[key], _table(fits, others, criterion, set(fits) - {key}), fits)

@@ -32,7 +32,7 @@ from ...core.simulation.bands import allan_band
 from ..loop import ImuLoop, LoopResult
 from .final import FinalModel, final_model
 from .mapped import MappedImu
-from .models import AUTO, AxisModel, ModelStage, fit_axis
+from .models import AUTO, AxisModel, ModelStage, finish_axis, fit_axis
 from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, data_overbound, overbounds
 from .resolution import resolved, unresolved_reason
 from .static import StaticAnalysis, analyze_static
@@ -209,7 +209,9 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     static, options, loop = context.static, context.options, context.loop
     index = list(static.axes).index(axis)
     column = static.allan.column(index)
-    model = fit_axis(context.imu, axis, options.models, static.dt, column)
+    # with the loop, a winner found on the composite likelihood is finished (exact fit, intervals) only if the loop
+    # keeps it: the loop's final fit gets its own
+    model = fit_axis(context.imu, axis, options.models, static.dt, column, finish=loop is None)
     fit = model.fit
     warnings = [] if model.note is None else [f"{axis}: {model.note}"]
     loop_result = None
@@ -221,6 +223,9 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
             loop_result = loop.run(axis, fit)
         except InputError as exc:
             warnings.append(f"closed loop skipped: {exc}")
+    if loop_result is None or len(loop_result.steps) == 1:
+        model = finish_axis(model, context.imu, axis, options.models, static.dt, allan=column)
+        fit = model.fit
     final = final_model(fit, loop_result, column)
     if final.fit.short_of_maximum is not None:
         warnings.append(f"{axis}: the final fit is {final.fit.short_of_maximum:.3g} below a log-likelihood its "

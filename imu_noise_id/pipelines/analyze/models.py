@@ -21,7 +21,7 @@ from ...core.estimation.gmwm import GmwmFit, GmwmOptions, fit_gmwm, prepare
 from ...core.estimation.gmwm_select import GmwmSelection, select_gmwm
 from ...core.estimation.model import FitOptions, NoiseModel
 from ...core.estimation.results import FitResult
-from ...core.estimation.selection import SelectionResult, select_model
+from ...core.estimation.selection import SelectionResult, finish_winner, select_model
 from ...core.noise.digital import SensorFilter
 from ...core.noise.modelspec import parse_structure
 
@@ -106,9 +106,12 @@ def _gmwm_axis(y, dt: float, stage: ModelStage, allan: AllanResult | None) -> tu
     return fit_gmwm(None, dt, stage.model, options=stage.gmwm, wv=wv, slope=slope), None
 
 
-def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: AllanResult | None = None) -> AxisModel:
+def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: AllanResult | None = None, *,
+             finish: bool = True) -> AxisModel:
     """Select or fit the model of one axis (InputError names the axis); ``allan``: the axis's Allan variance
-    when the caller has it (the starting values are fitted to it)."""
+    when the caller has it (the starting values are fitted to it). ``finish`` False: a selection on the composite
+    likelihood leaves its winner there, without intervals (:func:`finish_axis` finishes it), for a caller whose closed
+    loop may replace it; not with the GMWM beside it (the two are compared at once)."""
     y = imu.axis(axis)
     try:
         estimator, note = stage.resolve(y.size)
@@ -119,7 +122,7 @@ def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: All
                   else {stage.model: list(gm.components)} if gm is not None else None)
         if stage.model == AUTO:
             sel = select_model(y, dt, drift=stage.drift, options=stage.options, allan=allan, extra_starts=starts,
-                               sensor_filter=stage.sensor_filter)
+                               sensor_filter=stage.sensor_filter, finish=finish or gm is not None)
             em, em_sel = sel.best, sel
         else:
             detrended = "RR" in parse_structure(stage.model)  # its starting values need the detrended record's AV
@@ -129,6 +132,25 @@ def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: All
         return AxisModel(em, em_sel, gm, gm_sel, compare(em, gm) if gm is not None else None, note)
     except InputError as exc:
         raise InputError(f"{axis}: {exc}") from None
+
+
+def finish_axis(model: AxisModel, imu: ImuSeries, axis: str, stage: ModelStage, dt: float, *,
+                allan: AllanResult | None = None) -> AxisModel:
+    """``model`` (of :func:`fit_axis` with ``finish`` False) with its selection's winner fitted on the exact likelihood
+    and given its intervals (:func:`~imu_noise_id.core.estimation.selection.finish_winner`); unchanged when there is
+    nothing to finish."""
+    if model.selection is None or not model.selection.unfinished:
+        return model
+    structure = model.selection.best_key
+    y = imu.axis(axis)
+    try:
+        noise_model = NoiseModel(y, dt, structure, drift=stage.drift,
+                                 allan=None if "RR" in parse_structure(structure) else allan,
+                                 sensor_filter=stage.sensor_filter)
+        selection = finish_winner(model.selection, noise_model, stage.options)
+    except InputError as exc:
+        raise InputError(f"{axis}: {exc}") from None
+    return replace(model, fit=selection.best, selection=selection)
 
 
 def fit_axes(imu: ImuSeries, axes: list[str], stage: ModelStage, dt: float,
