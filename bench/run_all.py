@@ -91,16 +91,17 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_gmwm_pooled.py"], "bench_gmwm_pooled.txt"),
 ]
 
-#: Studies in bench/studies/ whose outputs README.md quotes (``--studies``; outputs in docs/results/studies/): one-off
-#: questions, not regression numbers. The side-by-side studies (``--baseline DIR``: bench_sensor_filter,
-#: bench_steady_engine, bench_loop_measured_time) need another checkout and are run by hand (their docstrings give
-#: the command). The other studies keep no output: docs/ states what each found and names the script that
-#: reproduces it (``loop_trace.py RUN AXIS``, ``probe_*.py``, ``profile_loop_measured.py``); as is
-#: bench/bench_av_band.py's check of the model AV band (docs/loop.md).
+#: Studies in bench/studies/ whose outputs README.md or docs/ quote (``--studies``; outputs in docs/results/studies/):
+#: one-off questions, not regression numbers. The side-by-side studies (``--baseline DIR``: bench_sensor_filter,
+#: bench_steady_engine, bench_loop_measured_time) need another checkout and are run by hand (their docstrings give the
+#: command). The other studies keep no output: docs/ states what each found and names the script that reproduces it
+#: (``loop_trace.py RUN AXIS``, ``probe_*.py``, ``profile_loop_measured.py``); as is bench/bench_av_band.py's check of
+#: the model AV band (docs/loop.md).
 STUDIES: list[tuple[list[str], str]] = [
     (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "studies/probe_k_information.txt"),
     (["studies/bench_sin_regressors.py"], "studies/bench_sin_regressors.txt"),
     (["studies/bench_motion_bursts.py"], "studies/bench_motion_bursts.txt"),
+    (["studies/composite_gap.py"], "studies/composite_gap.txt"),
 ]
 
 
