@@ -150,8 +150,7 @@ def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: Spectr
     best = optimize.minimize_scalar(lambda f: -abs(local.at(f)) ** 2, method="bounded", bounds=(lower, upper),
                                     options={"xatol": 1e-3 * resolution})
     start = min(peak.frequency, upper)
-    frequency = float(best.x) if test_at(float(best.x)).statistic > test_at(start).statistic else start
-    st = test_at(frequency)
+    frequency, st = max(((f, test_at(f)) for f in (start, float(best.x))), key=lambda pair: pair[1].statistic)
     amplitude = float(np.hypot(*st.coef))
     return Finding(
         effect="SIN", detector="periodogram", statistic=peak.statistic, threshold=s_star, log10_p=peak.log10_p,

@@ -72,7 +72,7 @@ def _whittle_part(components: list[Component], bp: whittle.BandedPeriodogram, dt
     s = whittle.difference_spectrum(components, bp.omega, dt)
     if not np.all(s > 0):
         return -math.inf
-    return -float(np.sum(bp.count * np.log(s) + bp.power / s))
+    return whittle.whittle_loglik(s, bp)
 
 
 def loglik(components: list[Component], stats: CompositeStatistics,
@@ -215,7 +215,7 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
     gamma = np.sum([p[1] for p in each], axis=0)
     if not np.all(s > 0):
         return -math.inf, np.zeros(x.size)
-    whittle_ll = -float(np.sum(bp.count * np.log(s) + bp.power / s))
+    whittle_ll = whittle.whittle_loglik(s, bp)
     blocks = block_sums.toeplitz_loglik_and_gradient(gamma, stats.sums.d)
     if blocks is None:
         return -math.inf, np.zeros(x.size)

@@ -157,6 +157,12 @@ def difference_spectrum(components: list[Component], omega: np.ndarray, dt: floa
     return s
 
 
+def whittle_loglik(s: np.ndarray, bp: BandedPeriodogram) -> float:
+    """The banded Whittle log-likelihood −Σ_b [n_b ln S_b + P_b/S_b] (up to a constant) of the spectrum ``s`` at
+    ``bp``'s bands (P_b the band's summed periodogram; ``s`` > 0)."""
+    return -float(np.sum(bp.count * np.log(s) + bp.power / s))
+
+
 def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndarray) -> np.ndarray:
     """Spectral density per sample of y_k = h x_k, x_{k+1} = Φ x_k + w_k, var w = Q, at angular frequencies ω:
     S(ω) = h G Q Gᴴ hᵀ with G = (e^{iω} I − Φ)⁻¹ (any stable block, e.g. LPF, OSC; diagonal and 2 × 2 Φ in closed
@@ -209,7 +215,7 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
             return 1e300
         if not np.all(s > 0):
             return 1e300
-        return float(np.sum(bp.count * np.log(s) + bp.power / s))
+        return -whittle_loglik(s, bp)
 
     ranges = bounds or {"tau": (dt / 2.0, 100.0 * t_total)}
     box = []

@@ -63,7 +63,7 @@ def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau
 
         def sums(k: np.ndarray) -> np.ndarray:
             if real:
-                return (c.real * (k + 2.0 * _g_real(k, w.real))).sum(axis=0)
+                return real_poles_sum_variance(c.real.ravel(), np.real(np.ravel(s)), k, dt)
             return np.real(c * (k + 2.0 * _g(k, w))).sum(axis=0)
     else:
         def sums(k: np.ndarray) -> np.ndarray:
@@ -89,12 +89,16 @@ def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.n
     return np.real(complex(c) * (k + 2.0 * _g(k, w)))
 
 
-def real_poles_sum_variance(c: float, s: np.ndarray, k: np.ndarray, dt: float) -> np.ndarray:
-    """Σ_j S_j(k) [u²]: :func:`block_sum_variance` summed over processes of one weight ``c`` [u²] and real poles ``s``
-    [1/s] (a flicker ladder), in one broadcast."""
+def real_poles_sum_variance(c: float | np.ndarray, s: np.ndarray, k: np.ndarray, dt: float) -> np.ndarray:
+    """Σ_j S_j(k) [u²]: :func:`block_sum_variance` summed over processes of real poles ``s`` [1/s] and weights ``c``
+    [u²] (one for all, as in a flicker ladder, or one per pole), in one broadcast."""
     k = np.asarray(k, dtype=float)
-    w = (np.asarray(s, dtype=float) * dt).reshape(-1, *([1] * k.ndim))
-    return c * np.sum(k + 2.0 * _g_real(k, w), axis=0)
+    rows = (-1, *([1] * k.ndim))
+    w = (np.asarray(s, dtype=float) * dt).reshape(rows)
+    c = np.asarray(c, dtype=float)
+    if c.ndim == 0:
+        return float(c) * np.sum(k + 2.0 * _g_real(k, w), axis=0)
+    return np.sum(c.reshape(rows) * (k + 2.0 * _g_real(k, w)), axis=0)
 
 
 def _g_real(m: np.ndarray, w: float | np.ndarray) -> np.ndarray:
