@@ -9,7 +9,7 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --jobs 1 0               # one process vs one per core
     .venv/bin/python bench/bench_analyze_time.py --duration 10800                     # 3 h at 400 Hz (the GMWM)
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400         # 24 h at 200 Hz
-    .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1200   # a measured record
+    .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1200 --numbers  # measured
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
 screen on statistics of fixed size, then 3 h at 400 Hz and 24 h at 200 Hz (this checkout alone).
@@ -21,8 +21,8 @@ Hz, ``bench/adis.py``) instead. A checkout still running after ``--timeout`` sec
 value, wall time, CPU time (user + system of the analyze process and of the worker processes it reaped) and peak
 memory: the largest RSS of one process and the largest sums of the RSS and of the PSS (shared pages split among the
 processes mapping them) of the analyze process and its workers (sampled every 0.1 s), the PSS also as a multiple of
-the decoded arrays (stamps and six axes, float64). Each checkout runs without the BLAS thread-count variables in its
-environment, as from a user's shell.
+the decoded arrays (stamps and six axes, float64); with ``--numbers``, the N and K each checkout's ``imu.yaml`` gives
+per axis. Each checkout runs without the BLAS thread-count variables in its environment, as from a user's shell.
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 import psutil
+import yaml
 from adis import DATA, load_run  # bench/adis.py, beside this script
 from checkouts import check_imports_own_package  # bench/checkouts.py, beside this script
 
@@ -124,6 +125,22 @@ def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None,
     return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, tree_rss / 2.0**20, tree_pss / 2.0**20
 
 
+def pasted_numbers(out: Path) -> list[str]:
+    """Per sensor, the N and K that ``imu.yaml`` of the analyze results folder ``out`` gives per axis: value, 95 %
+    interval and method (so that a faster checkout shows whether the numbers users paste moved)."""
+    doc = yaml.safe_load(next(out.rglob("imu.yaml")).read_text())
+    lines = []
+    for sensor in ("gyroscope", "accelerometer"):
+        for quantity in ("noise_density", "random_walk"):
+            key = f"{sensor}_{quantity}"
+            if f"{key}_xyz" not in doc:
+                continue
+            cells = [f"{v:.4g} [{lo:.3g}, {hi:.3g}] {how}" for v, (lo, hi), how in
+                     zip(doc[f"{key}_xyz"], doc[f"{key}_ci_xyz"], doc[f"{key}_method_xyz"], strict=True)]
+            lines.append(f"      {key:28s} x, y, z: {'; '.join(cells)}")
+    return lines
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rates", type=float, nargs="+", default=[400.0], help="IMU rates [Hz] (default 400)")
@@ -136,6 +153,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="analyze the whole ADIS16405 static run RUN (1-6) instead of a simulated bag")
     parser.add_argument("--timeout", type=float, default=math.inf,
                         help="stop a checkout still running after this many seconds")
+    parser.add_argument("--numbers", action="store_true",
+                        help="print each checkout's N and K as imu.yaml gives them (value, 95 %% interval, method)")
     args = parser.parse_args(argv)
     mine = [("this checkout", None)] if args.jobs is None else [(f"this checkout, --jobs {j}", j) for j in args.jobs]
     sources = [(name, ROOT, jobs) for name, jobs in mine] + [(f"baseline {p}", p.resolve(), None)
@@ -159,7 +178,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"\n{what} ({n} samples per axis; decoded arrays {arrays:.0f} MiB):")
             times = {}
             for name, source, jobs in sources:
-                measured = run_analyze(source, bag, Path(tmp) / f"out_{len(times)}", jobs, args.timeout)
+                out = Path(tmp) / f"out_{len(times)}"
+                measured = run_analyze(source, bag, out, jobs, args.timeout)
                 if measured is None:
                     times[name] = math.inf
                     print(f"  {name:40s} stopped after {args.timeout:.0f} s, not finished", flush=True)
@@ -169,6 +189,8 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"  {name:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB; process tree: "
                       f"RSS {tree_rss:7.0f} MiB, PSS {tree_pss:7.0f} MiB = {tree_pss / arrays:.1f}× the arrays",
                       flush=True)
+                if args.numbers:
+                    print("\n".join(pasted_numbers(out)), flush=True)
             first = sources[0][0]
             for name, _, _ in sources[1:] if math.isfinite(times[first]) else []:  # no ratio to a stopped run
                 ratio = times[name] / times[first]

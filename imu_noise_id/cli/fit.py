@@ -77,6 +77,8 @@ def run(args: argparse.Namespace) -> int:
         def on_fit(axis: str, fit) -> None:
             fitted.append(axis)
             progress.echo(fit_line(axis, fit))
+            if fit.budget_stop is not None:
+                progress.echo(f"{axis}: {fit.budget_stop_text()}")
             if fit.beyond_budget:
                 progress.echo(f"{axis}: profile budget spent; other intervals for "
                               + ", ".join(f"{lab} ({how})" for lab, how in fit.beyond_budget.items()))

@@ -10,6 +10,7 @@ import yaml
 
 from ..core.axes import UNITS
 from ..core.estimation.gmwm import GmwmFit
+from ..core.estimation.mle import RECENT_EVALUATIONS
 from ..core.estimation.results import FitResult
 from ..core.estimation.selection import SelectionResult
 from ..core.noise.modelspec import parameter_labels
@@ -66,6 +67,9 @@ def fit_to_dict(fit: FitResult, axis: str | None = None, selection: SelectionRes
     })
     if fit.short_of_maximum is not None:
         out["short_of_maximum"] = num(fit.short_of_maximum)
+    if fit.budget_stop is not None:
+        out["finish_stopped_at_budget"] = {"evaluations": int(fit.n_eval), "loglik_rise_last": num(fit.budget_stop),
+                                           "over_evaluations": RECENT_EVALUATIONS}
     if isinstance(fit, GmwmFit):
         out["moments"] = gmwm_details(fit)
     if selection is not None:

@@ -157,6 +157,15 @@ class MLEResult:
     converged: bool
     message: str
     profile: ProfileResult | None = None  # the GLS profile at ``model`` on the data searched, when kept
+    #: ℓ's rise over the last :data:`RECENT_EVALUATIONS` evaluations when ``max_eval`` stopped the search, else None
+    budget_stop: float | None = None
+
+
+#: Evaluations over which a search stopped by its budget reports how fast ℓ still rose.
+RECENT_EVALUATIONS = 5
+#: A search stopped by its budget whose ℓ rose by less than this over its last :data:`RECENT_EVALUATIONS` evaluations
+#: had stalled at its maximum (to this precision of ℓ; its gradient test aside) and is not reported as stopped short.
+STALLED_RISE = 1e-2
 
 
 def maximise(
@@ -171,6 +180,7 @@ def maximise(
     grad_tol: float = 1e-2,
     metric: np.ndarray | None = None,
     metric_at: Callable[[StateSpace], np.ndarray] | None = None,
+    max_eval: int | None = None,
 ) -> MLEResult:
     """L-BFGS(-B) on the exact profile log-likelihood from ``base`` (e.g. the last EM iterate).
 
@@ -186,6 +196,10 @@ def maximise(
 
     A parameter whose metric information is below :data:`FLAT_INFORMATION` is held at its start value (beyond the
     paper). Reasons: docs/em.md, "Algorithm" 5.
+
+    ``max_eval``: at most this many evaluations (each ℓ with its gradient, restart included); when it stops the search
+    before its gradient test while ℓ still rose (by :data:`STALLED_RISE` or more), ``budget_stop`` is how much ℓ rose
+    over the last :data:`RECENT_EVALUATIONS` of them.
     """
     from ..kalman.statespace import to_components
 
@@ -196,7 +210,7 @@ def maximise(
         if bounds and name in bounds:
             lo[k], hi[k] = math.log(bounds[name][0]), math.log(bounds[name][1])
             theta0[k] = min(max(theta0[k], lo[k]), hi[k])
-    state = {"n": 0, "best": (-np.inf, None, None, None)}
+    state = {"n": 0, "best": (-np.inf, None, None, None), "trace": []}
     y, z = check_data(y, z, base.n_regressors)
     data = em.DataSums.of(y, z)
     scale = max(float(np.sum(np.isfinite(y))), 1.0)
@@ -225,6 +239,7 @@ def maximise(
             return 1e10, np.zeros_like(eta)
         if ll > state["best"][0]:
             state["best"] = (ll, theta.copy(), model, prof)
+        state["trace"].append(state["best"][0])
         # The likelihood at the projection onto the box, plus a quadratic pull back into it: continuous, so a
         # parameter resting on its bound (an OSC as narrow as the record resolves) does not stall the others.
         g_inside = np.where(outside == 0.0, g, 0.0)
@@ -232,23 +247,30 @@ def maximise(
 
     # With the metric, |∂ℓ/∂η| ≈ √(2 × the gain a Newton step would still bring): 0.05 ⇒ < ~1e-3 left.
     gtol = (0.05 if metric is not None else grad_tol) / scale
-    res = minimize(fun, np.zeros(T.shape[1]), jac=True, method="L-BFGS-B",
-                   options={"maxiter": max_iter, "ftol": 1e-15, "gtol": gtol, "maxcor": 20})
+    options = {"maxiter": max_iter, "ftol": 1e-15, "gtol": gtol, "maxcor": 20}
+    if max_eval is not None:
+        options["maxfun"] = max(int(max_eval), 1)
+    res = minimize(fun, np.zeros(T.shape[1]), jac=True, method="L-BFGS-B", options=options)
     ll, theta, model, prof = state["best"]
     if theta is None:
         raise InputError("the likelihood could not be evaluated at any parameter value tried")
-    result = MLEResult(theta, model, ll, state["n"], bool(res.success), str(res.message), prof)
-    if metric_at is None or metric is None or float(np.max(np.abs(res.jac), initial=0.0)) <= gtol:
+    converged = float(np.max(np.abs(res.jac), initial=0.0)) <= gtol
+    left = None if max_eval is None else max_eval - state["n"]
+    trace = state["trace"]
+    rise = float(trace[-1] - trace[max(len(trace) - 1 - RECENT_EVALUATIONS, 0)])
+    budget_stop = None if converged or left is None or left > 0 or rise < STALLED_RISE else rise
+    result = MLEResult(theta, model, ll, state["n"], bool(res.success), str(res.message), prof, budget_stop)
+    if metric_at is None or metric is None or converged or (left is not None and left <= 0):
         return result
     try:
         again = maximise(par, model, y, z, max_iter=max_iter, bounds_width=bounds_width, bounds=bounds,
-                         grad_tol=grad_tol, metric=metric_at(model))
+                         grad_tol=grad_tol, metric=metric_at(model), max_eval=left)
     except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
         return result
     if again.loglik <= result.loglik:
-        return result
+        return replace(result, n_eval=result.n_eval + again.n_eval, budget_stop=again.budget_stop)
     return MLEResult(again.theta, again.model, again.loglik, result.n_eval + again.n_eval, again.converged,
-                     again.message, again.profile)
+                     again.message, again.profile, again.budget_stop)
 
 
 def observed_information(

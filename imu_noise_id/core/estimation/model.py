@@ -29,7 +29,7 @@ from ..noise.modelspec import parse_model, parse_structure
 from ..quality import interpolate_missing
 from . import mle, starts, whittle
 from .results import FitResult
-from .search import fit_noise_model
+from .search import FINISH_BUDGET, fit_noise_model
 
 #: Smallest number of observed samples accepted, and per free parameter.
 MIN_SAMPLES, MIN_SAMPLES_PER_PARAMETER = 100, 20
@@ -50,6 +50,8 @@ class FitOptions:
         with the Whittle information (beyond the paper)
     uncertainty : compute the observed information, standard errors, intervals and the record-length advice
     target_precision : relative 95 % half-width for the recording-length advice (0.10 = ±10 %)
+    finish_budget : sample-state evaluations the quasi-Newton finish of one start may spend
+        (:func:`.search.finish_evaluations`); None: no bound
     """
 
     n_starts: int = 3
@@ -59,6 +61,7 @@ class FitOptions:
     spectral_init: bool = True
     uncertainty: bool = True
     target_precision: float = 0.10
+    finish_budget: float | None = FINISH_BUDGET
 
     def __post_init__(self) -> None:
         if not 0 < self.target_precision < 1:

@@ -10,7 +10,7 @@ from .. import kalman
 from ..errors import InputError
 from ..kalman.statespace import StateSpace
 from ..noise.components import Component, total_allan_variance
-from .mle import LR_DROP_95
+from .mle import LR_DROP_95, RECENT_EVALUATIONS
 
 #: The end of a ``ci95_method`` given where the profile budget was spent (:mod:`.uncertainty`).
 BUDGET_SPENT = "profile budget spent"
@@ -46,6 +46,9 @@ class FitResult:
     loglik, aic, bic : float — exact maximised ℓ; AIC = 2k − 2ℓ, BIC = k·ln(n) − 2ℓ, k all free parameters
     n, dt : int, float — observed (non-NaN) samples; sampling period [s]
     n_iter, converged — EM iterations of the winning start; whether the quasi-Newton finish converged
+    n_eval, budget_stop — the finish's exact likelihood evaluations; when its budget stopped it
+        (:data:`.search.FINISH_BUDGET`), how much ℓ rose over its last :data:`.mle.RECENT_EVALUATIONS` (the values are
+        short of the maximum by about that much or more), else None
     record_length : RecordLengthAdvice | None — how long to record for the target precision
     information_ok : bool — whether the observed information was positive definite
     profile_evaluations : int — log-likelihood evaluations of the profile intervals
@@ -84,6 +87,7 @@ class FitResult:
     standardized: np.ndarray | None = field(default=None, repr=False)
     #: Which estimator produced the numbers: ``em`` (maximum likelihood) or ``gmwm`` (:mod:`.gmwm`).
     estimator: str = "em"
+    budget_stop: float | None = None
 
     @property
     def beyond_budget(self) -> dict[str, str]:
@@ -98,6 +102,15 @@ class FitResult:
         if self.better_loglik is None or self.better_loglik - self.loglik <= LR_DROP_95:
             return None
         return float(self.better_loglik - self.loglik)
+
+    def budget_stop_text(self) -> str | None:
+        """What a stop of the finish at its evaluation budget means for this fit, in words; None when it converged or
+        stopped otherwise."""
+        if self.budget_stop is None:
+            return None
+        return (f"the exact maximum-likelihood finish stopped at its budget after {self.n_eval} evaluations, the "
+                f"log-likelihood still rising by {self.budget_stop:.3g} over the last {RECENT_EVALUATIONS}: the values "
+                "and intervals are near the maximum, not at it")
 
     def without_data(self) -> FitResult:
         """This result without the record it was fitted to (samples and regressors, N floats each), for keeping

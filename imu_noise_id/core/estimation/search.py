@@ -30,6 +30,19 @@ from .uncertainty import Z95, add_uncertainty
 if TYPE_CHECKING:
     from .model import FitOptions, NoiseModel
 
+#: Exact likelihood evaluations × samples × states the quasi-Newton finish of one start may spend (about 30 s at
+#: 0.1 µs per sample and state of an evaluation with its gradient; :func:`finish_evaluations`).
+FINISH_BUDGET = 3e8
+#: The finish's evaluations whatever the budget (a record so long that fewer would be allowed still gets these).
+MIN_FINISH_EVALUATIONS = 10
+
+
+def finish_evaluations(budget: float | None, n: int, states: int) -> int | None:
+    """The evaluations (ℓ with its gradient) ``budget`` sample-state evaluations allow the finish on ``n`` samples of a
+    model with ``states`` states, at least :data:`MIN_FINISH_EVALUATIONS`; None without a budget."""
+    if budget is None:
+        return None
+    return max(MIN_FINISH_EVALUATIONS, int(budget / (max(int(n), 1) * max(int(states), 1))))
 
 
 def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options: FitOptions,
@@ -54,7 +67,8 @@ def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options
         # The last EM iterate is scored by the quasi-Newton finish's first evaluation: no E-step for it here.
         run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats, final_estep=False)
         finish = functools.partial(mle.maximise, par, y=y, z=z, bounds=model.parameter_bounds, metric=metric,
-                                   metric_at=metric_at)
+                                   metric_at=metric_at,
+                                   max_eval=finish_evaluations(options.finish_budget, y.size, state.phi.shape[0]))
         try:
             res = finish(run.model)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
@@ -214,7 +228,7 @@ def _result(model: NoiseModel, best: tuple[mle.MLEResult, int], lls: list[float]
         model=model_name(comps), components=comps, exog_coef=exog_coef, se=se, ci95=ci, loglik=ll,
         aic=2 * k - 2 * ll, bic=k * math.log(model.n_obs) - 2 * ll, n=model.n_obs, dt=model.dt, n_iter=n_iter,
         converged=res.converged, n_eval=res.n_eval, n_params=k, starts=lls, statespace=fitted,
-        record=(model.y, model.z), standardized=_standardized(prof, model.y.size),
+        record=(model.y, model.z), standardized=_standardized(prof, model.y.size), budget_stop=res.budget_stop,
     )
 
 

@@ -5,7 +5,9 @@ intervals in log space, or (beyond the paper) profile intervals (:mod:`.profile`
 information is not positive definite or one sits at its zero boundary (a thousandfold smaller value lowers ℓ by less
 than 1.92); for one parameter when its log-se exceeds :data:`WALD_MAX_SE_LOG` or ℓ at its Wald ends is not within
 :data:`WALD_DROP_RANGE` of 1.92 below the maximum. At most :data:`PROFILE_BUDGET` sample-state evaluations per fit,
-then Wald (or the conditional upper end), the method saying so. Advice: the per-sample information scaled.
+then Wald (or the conditional upper end), the method saying so. Beyond :data:`INFORMATION_BUDGET` the information is
+Whittle's expected one instead of the observed one, the Wald method saying so. Advice: the per-sample information
+scaled.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from ..kalman import statespace as ss
 from ..noise.components import RR, Component
 from ..noise.modelspec import parameter_labels
 from ..quality import interpolate_missing
-from . import mle
+from . import mle, whittle
 from .profile import BudgetSpentError, Profiler
 from .quantiles import Z95
 from .results import BUDGET_SPENT, FitResult, RecordLengthAdvice
@@ -35,6 +37,13 @@ WALD_DROP_RANGE = (0.5 * (Z95 - 0.15) ** 2, 0.5 * (Z95 + 0.25) ** 2)
 #: about 15 s at 0.02–0.03 µs per sample and state of one evaluation). A parameter whose profile would pass it gets the
 #: interval of :func:`_beyond_budget`, its ``ci95_method`` ending in :data:`BUDGET_SPENT`.
 PROFILE_BUDGET = 6e8
+#: Exact gradient passes × samples × states the observed information may spend (k + 1 passes for k parameters; about
+#: 15 s at 0.1 µs per sample and state of a pass). Past it the information is Whittle's expected one
+#: (:func:`.whittle.fisher_information`, no pass over the data) and every Wald interval's method says so
+#: (:data:`WHITTLE_WALD`).
+INFORMATION_BUDGET = 1.5e8
+#: The method of a Wald interval from Whittle's expected information instead of the observed one.
+WHITTLE_WALD = "wald (whittle information)"
 
 
 def profile_evaluations(n: int, states: int) -> float:
@@ -43,12 +52,24 @@ def profile_evaluations(n: int, states: int) -> float:
     return PROFILE_BUDGET / (max(int(n), 1) * max(int(states), 1))
 
 
-def _beyond_budget(v: float, s_log: float, conditional_end: float | None) -> tuple[tuple[float, float], str]:
+def information(par: mle.Parameterisation, theta: np.ndarray, model: ss.StateSpace, y: np.ndarray, z: np.ndarray, *,
+                n: int, dt: float) -> tuple[np.ndarray, str]:
+    """The information −∂²ℓ/∂ϑ∂ϑᵀ of a fit in its log-parameters ϑ and the name of its Wald intervals: the observed
+    information (:func:`.mle.observed_information`, ``"wald"``) within :data:`INFORMATION_BUDGET`, else Whittle's
+    expected information of ``n`` samples at period ``dt`` [s] (:func:`.whittle.fisher_information`,
+    :data:`WHITTLE_WALD`)."""
+    if (theta.size + 1) * np.size(y) * model.phi.shape[0] <= INFORMATION_BUDGET:
+        return mle.observed_information(par, theta, model, y, z), "wald"
+    return whittle.fisher_information(par.to_components(theta, model), n, dt), WHITTLE_WALD
+
+
+def _beyond_budget(v: float, s_log: float, conditional_end: float | None,
+                   wald: str = "wald") -> tuple[tuple[float, float], str]:
     """The interval of a parameter whose profile the budget no longer allows, and its method: the Wald interval in
-    log space where the information has one, else for a zero-boundary parameter (0, its conditional upper end) —
-    the others held, narrower than the profile's —, else (0, ∞)."""
+    log space (its method ``wald``) where the information has one, else for a zero-boundary parameter (0, its
+    conditional upper end) — the others held, narrower than the profile's —, else (0, ∞)."""
     if math.isfinite(s_log):
-        return (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log)), f"wald, {BUDGET_SPENT}"
+        return (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log)), f"{wald}, {BUDGET_SPENT}"
     if conditional_end is not None:
         return (0.0, float(conditional_end)), f"conditional, {BUDGET_SPENT}"
     return (0.0, math.inf), f"not bounded, {BUDGET_SPENT}"
@@ -106,7 +127,7 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     par = mle.Parameterisation.of(comps_ss)
     theta = par.to_theta(comps_ss)
     noise_labels = [lab for i, _, lab in parameter_labels(comps_ss) if not isinstance(comps_ss[i], RR)]
-    info = mle.observed_information(par, theta, model_ss, y, z)
+    info, wald_method = information(par, theta, model_ss, y, z, n=fit.n, dt=fit.dt)
     cov, fit.information_ok = mle.covariance_from_information(info)
     k_noise = len(noise_labels)
     fit.log_covariance, fit.covariance_labels = cov[:k_noise, :k_noise].copy(), tuple(noise_labels)
@@ -144,14 +165,14 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
             wald = False
         if wald:
             fit.ci95[lab] = (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log))
-            fit.ci95_method[lab] = "wald"
+            fit.ci95_method[lab] = wald_method
         else:
             try:
                 if prof.spent:
                     raise BudgetSpentError
                 lo_k, hi_k = prof.interval(k, cov)
             except BudgetSpentError:
-                fit.ci95[lab], fit.ci95_method[lab] = _beyond_budget(v, s_log, prof.zero.get(k))
+                fit.ci95[lab], fit.ci95_method[lab] = _beyond_budget(v, s_log, prof.zero.get(k), wald_method)
                 continue
             fit.ci95[lab] = (math.exp(lo_k) if math.isfinite(lo_k) else 0.0,
                              math.exp(hi_k) if math.isfinite(hi_k) else math.inf)

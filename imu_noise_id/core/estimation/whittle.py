@@ -250,3 +250,20 @@ def whittle_information(components: list[Component], y: np.ndarray, dt: float,
                for j in range(x0.size)]
     jac = np.column_stack([np.zeros(bp.omega.size) if d is None else d for d in columns])
     return (jac * bp.count[:, None]).T @ jac
+
+
+def fisher_information(components: list[Component], n: int, dt: float) -> np.ndarray:
+    """The expected information of the Whittle likelihood of ``n`` samples' differences in the log-parameters
+    (:func:`whittle_information` on the Fourier frequencies of ``n − 1`` differences, pooled in bands as
+    :func:`pooled` pools them, finely around the components' OSC lines): Whittle's asymptotic Fisher information of
+    the exact likelihood, from the model alone (no pass over the data; P. Whittle, "Estimation and information in
+    stationary time series", Ark. Mat. 2, 1953: Σ_j ∇ln S(ω_j) ∇ln S(ω_j)ᵀ over the positive Fourier frequencies). Its
+    inverse is the asymptotic covariance when the model holds; where it does not, it differs from
+    the observed information, both approximations to the estimator's sandwich covariance."""
+    m = int(n) - 1
+    jmax = (m - 1) // 2
+    if jmax < 8:
+        raise InputError("too few samples for a spectral information")
+    omega = 2.0 * math.pi * np.arange(1, jmax + 1) / m
+    grid = pooled(TaperedPeriodogram(omega, np.zeros(jmax), m), fine=line_windows([components], dt))
+    return whittle_information(components, np.empty(0), dt, periodogram=grid)

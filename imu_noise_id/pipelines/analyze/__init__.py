@@ -230,6 +230,8 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     if final.fit.short_of_maximum is not None:
         warnings.append(f"{axis}: the final fit is {final.fit.short_of_maximum:.3g} below a log-likelihood its "
                         "intervals' search met: its values and intervals are not the maximum's")
+    if final.fit.budget_stop is not None:
+        warnings.append(f"{axis}: {final.fit.budget_stop_text()}")
     if final.fit.beyond_budget:
         cut = ", ".join(f"{lab} ({how})" for lab, how in final.fit.beyond_budget.items())
         warnings.append(f"{axis}: the final fit's profile intervals stopped at their budget "

@@ -72,6 +72,8 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
     if short is not None:
         source += (f"; not at the likelihood's maximum: its intervals' search met a log-likelihood {short:.3g} "
                    "higher, so the values and intervals are not the maximum's")
+    if fit.budget_stop is not None:
+        source += f"; {fit.budget_stop_text()}"
     tau_max = fit.n * fit.dt / 10.0
     supported = allan.tau <= tau_max
     bound = random_walk_bound(allan, tau_min=tau_max)
@@ -79,7 +81,7 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
     n = kalibr.noise_density(fit)
     if k.method == "model" and bound.exceeded_by(k.value):
         k = replace(k, source=f"{k.source}; {bound.excess(k.value)}; a longer record tells them apart")
-    if short is not None:
+    if short is not None or fit.budget_stop is not None:
         k, n = (replace(v, source=f"{v.source}; the fit is not at the likelihood's maximum") for v in (k, n))
     return FinalModel(fit=fit.without_data(), source=source, model=name, noise_density=n,
                       random_walk=k, random_walk_bound=bound,

@@ -176,8 +176,9 @@ def run_closed_loop(
 
 def exact_finish(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
     """``step`` refitted on the exact likelihood from its composite-likelihood fit and diagnosed again (the search's
-    fits are the composite likelihood's, :meth:`.AxisLoop.fit_state`), and a note ("" unless the refit failed or did
-    not gain: the step is then as it is, its values the composite likelihood's maximiser's)."""
+    fits are the composite likelihood's, :meth:`.AxisLoop.fit_state`), and a note ("" unless the refit failed, did
+    not gain — the step is then as it is, its values the composite likelihood's maximiser's — or stopped at its
+    evaluation budget, :attr:`~imu_noise_id.core.estimation.results.FitResult.budget_stop`)."""
     state = step.state.with_components(list(step.diagnosis.fit.components))
     try:
         diag = loop.diagnose(state, exact=True)
@@ -185,7 +186,7 @@ def exact_finish(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
         return step, f"the final fit is the composite likelihood's maximiser: its exact refit failed ({exc})"
     if diag.fit.loglik <= step.diagnosis.fit.loglik:
         return step, ""
-    return replace(step, state=state, diagnosis=diag), ""
+    return replace(step, state=state, diagnosis=diag), diag.fit.budget_stop_text() or ""
 
 
 def final_intervals(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
