@@ -61,3 +61,26 @@ def test_band_holds_its_level_where_a_narrow_line_dominates():
     assert np.mean(np.abs(np.array(z_model)) > 1.96) == pytest.approx(0.05, abs=0.03)
     line = (m * DT >= 0.18) & (m * DT <= 1.0)
     assert np.all(sd_textbook[line] > 3.0), sd_textbook[line]
+
+
+def test_a_flicker_ladder_edf_from_its_unit_scale_memo_equals_the_direct_one(monkeypatch):
+    # A loop diagnoses many fits of one ladder: its K at unit scale is computed once and scaled; K and the EDF must be
+    # those computed from the component itself, at every scale.
+    from imu_noise_id.core.diagnostics import av_band
+    from imu_noise_id.core.noise.flicker import BI
+
+    n, dt = 20_000, 0.01
+    m = np.array([1, 4, 16, 64, 256, 1024])
+    av_band._unit_sum_covariance.cache_clear()
+    scales = (1e-4, 3e-3)
+    memo = {}
+    for b in scales:
+        ladder = BI(b, tau_min=0.1, tau_max=200.0)
+        direct = np.asarray(av_band._computed_sum_covariance(ladder, n + 1, dt))
+        assert av_band._sum_covariance(ladder, n + 1, dt) == pytest.approx(direct, rel=1e-12, abs=0.0)
+        memo[b] = model_av_edf([WN(1e-3), ladder], m, n, dt)
+    assert av_band._unit_sum_covariance.cache_info().currsize == 1  # both scales share the unit ladder
+    monkeypatch.setattr(av_band, "_sum_covariance", av_band._computed_sum_covariance)
+    for b in scales:
+        assert memo[b] == pytest.approx(model_av_edf([WN(1e-3), BI(b, tau_min=0.1, tau_max=200.0)], m, n, dt),
+                                        rel=1e-12)

@@ -10,6 +10,7 @@ has lag-l covariance c(l) = [6K(l) − 4K(l − m) − 4K(l + m) + K(l − 2m) +
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -61,6 +62,28 @@ def model_av_edf(components: list[Component], m: np.ndarray, n: int, dt: float) 
 
 
 def _sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
+    """K(0 … size − 1) of ``c`` (:func:`_computed_sum_covariance`); of a component whose only parameter is its scale
+    (:attr:`~imu_noise_id.core.noise.base.Component.scale_name`, e.g. a flicker ladder), K at unit scale computed once
+    per structure and length (:func:`_unit_sum_covariance`) times the scale's square: a loop diagnoses many fits of one
+    ladder, whose K over every lag of a long record is the costliest part of its EDF."""
+    params = c.params()
+    scale = params.pop(c.scale_name) if c.scale_name else 0.0
+    if c.parameter_names != (c.scale_name,) or not scale > 0.0:
+        return _computed_sum_covariance(c, size, dt)
+    return scale**2 * _unit_sum_covariance(type(c), tuple(sorted(params.items())), size, dt)
+
+
+@functools.lru_cache(maxsize=4)
+def _unit_sum_covariance(kind: type[Component], fixed: tuple[tuple[str, float], ...], size: int,
+                         dt: float) -> np.ndarray:
+    """:func:`_computed_sum_covariance` of the scale-only component ``kind`` at scale 1 with its ``fixed`` values
+    (read-only: shared by every caller)."""
+    k = _computed_sum_covariance(kind(**{kind.scale_name: 1.0}, **dict(fixed)), size, dt)
+    k.flags.writeable = False
+    return k
+
+
+def _computed_sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
     """K(0 … size − 1) of ``c``; beyond :data:`MEMORY_REACH` decay times of a component with finite memory > 0, the
     line through its last two computed values (:func:`model_av_edf`)."""
     memory = c.memory(dt)[0]
