@@ -1,7 +1,10 @@
 """Whether this machine has the memory an ``analyze`` of a record needs, asked before the bag is decoded.
 
-Need: :data:`PROCESS_BYTES` per process plus :data:`MAIN_BYTES_PER_SAMPLE` per message read (main process) and
-:data:`WORKER_BYTES_PER_SAMPLE` per analysed sample (each worker); measured: docs/analysis.md, "Quick use". Available:
+Need: :data:`PROCESS_BYTES` per process plus :data:`MAIN_BYTES_PER_SAMPLE` per message read (main process) and, per
+analysed sample in each worker, :data:`EM_WORKER_BYTES_PER_SAMPLE` up to the EM's length
+(:data:`~imu_noise_id.pipelines.analyze.models.EM_MAX_SAMPLES`, where the closed loop's smoother passes hold the
+model's states for every sample) or :data:`WORKER_BYTES_PER_SAMPLE` beyond it (the GMWM); measured: docs/analysis.md,
+"Quick use". Available:
 ``MemAvailable`` (``/proc/meminfo``), or a cgroup's ``memory.max`` − ``memory.current`` where smaller. A record is
 refused only when the need exceeds it; the message gives the need and the ``--span`` that fits.
 """
@@ -12,13 +15,18 @@ import math
 from pathlib import Path
 
 from ..core.errors import InputError
+from ..pipelines.analyze.models import EM_MAX_SAMPLES
 
 #: RSS [bytes] of one process with the package imported (interpreter, numpy, scipy, rosbags).
 PROCESS_BYTES = 130 * 2**20
 #: Peak RSS [bytes] of the main process per IMU message read, over :data:`PROCESS_BYTES`.
 MAIN_BYTES_PER_SAMPLE = 185
-#: Peak RSS [bytes] of one worker per sample analysed, over :data:`PROCESS_BYTES`.
+#: Peak RSS [bytes] of one worker per sample analysed by the GMWM (beyond the EM's length), over
+#: :data:`PROCESS_BYTES`.
 WORKER_BYTES_PER_SAMPLE = 39
+#: Peak RSS [bytes] of one worker per sample analysed by the EM and the closed loop, over :data:`PROCESS_BYTES`: a whole
+#: measured record whose loop reached 25 states (its smoother passes hold every state for every sample).
+EM_WORKER_BYTES_PER_SAMPLE = 1830
 
 
 def available_bytes(meminfo: Path = Path("/proc/meminfo"), cgroup: Path = Path("/sys/fs/cgroup")) -> float | None:
@@ -44,7 +52,22 @@ def needed_bytes(messages: int, analysed: int, workers: int) -> float:
     """Peak memory [bytes] of an analysis of ``analysed`` of a bag's ``messages`` IMU samples with ``workers`` worker
     processes (0: all in the main process, which then also holds the fits: one worker's share)."""
     return ((1 + workers) * PROCESS_BYTES + messages * MAIN_BYTES_PER_SAMPLE
-            + analysed * WORKER_BYTES_PER_SAMPLE * max(workers, 1))
+            + analysed * worker_bytes_per_sample(analysed) * max(workers, 1))
+
+
+def worker_bytes_per_sample(analysed: int) -> int:
+    """A worker's peak memory [bytes] per sample of an axis of ``analysed`` samples (the EM's up to its length, the
+    GMWM's beyond, as ``--estimator auto`` chooses)."""
+    return EM_WORKER_BYTES_PER_SAMPLE if analysed <= EM_MAX_SAMPLES else WORKER_BYTES_PER_SAMPLE
+
+
+def _largest_fitting(room: float, workers: int, messages: int) -> float:
+    """The most samples per axis (of a record of ``messages``) whose workers' need fits in ``room`` [bytes]: beyond
+    the EM's length at the GMWM's cost when the record and the room both reach there, else at the EM's."""
+    gmwm = min(room / (WORKER_BYTES_PER_SAMPLE * max(workers, 1)), messages)
+    if gmwm > EM_MAX_SAMPLES:
+        return gmwm
+    return min(room / (EM_WORKER_BYTES_PER_SAMPLE * max(workers, 1)), EM_MAX_SAMPLES)
 
 
 def check_fits(topic: str, messages: int, bag_span_s: float | None, *, span: tuple[float, float] | None,
@@ -62,7 +85,7 @@ def check_fits(topic: str, messages: int, bag_span_s: float | None, *, span: tup
     if need <= available:
         return
     room = available - needed_bytes(messages, 0, workers)
-    fitting = room / (WORKER_BYTES_PER_SAMPLE * max(workers, 1))
+    fitting = _largest_fitting(room, workers, messages)
     advice = (f"analyse a part of it (--span 0:{fitting / rate:.0f} fits, seconds from the first sample)"
               if rate is not None and fitting >= 1.0 else "split the bag into shorter parts")
     raise InputError(f"{topic}: analysing {analysed} samples per axis of {messages} needs about "
