@@ -66,11 +66,11 @@ def _sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
     (:attr:`~imu_noise_id.core.noise.base.Component.scale_name`, e.g. a flicker ladder), K at unit scale computed once
     per structure and length (:func:`_unit_sum_covariance`) times the scale's square: a loop diagnoses many fits of one
     ladder, whose K over every lag of a long record is the costliest part of its EDF."""
-    params = c.params()
-    scale = params.pop(c.scale_name) if c.scale_name else 0.0
-    if c.parameter_names != (c.scale_name,) or not scale > 0.0:
+    split = c.scale_only()
+    if split is None:
         return _computed_sum_covariance(c, size, dt)
-    return scale**2 * _unit_sum_covariance(type(c), tuple(sorted(params.items())), size, dt)
+    scale, fixed = split
+    return scale**2 * _unit_sum_covariance(type(c), fixed, size, dt)
 
 
 @functools.lru_cache(maxsize=4)

@@ -199,11 +199,11 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
                 block_sums.from_sum_covariance(c.sum_covariance(lags, stats.dt)))
 
     def parts(c: Component) -> tuple[np.ndarray, np.ndarray]:
-        values = c.params()
-        scale = values.pop(c.scale_name) if c.scale_name else 0.0
-        if c.parameter_names != (c.scale_name,) or not scale > 0.0:  # its shape moves: entries would pile up
+        split = c.scale_only()
+        if split is None:  # its shape moves: entries would pile up
             return computed(c)
-        key = (type(c), tuple(sorted(values.items())))
+        scale, fixed = split
+        key = (type(c), fixed)
         if key not in memo:
             memo[key] = scale, computed(c)
         at, (s_c, g_c) = memo[key]

@@ -161,6 +161,12 @@ class MLEResult:
     budget_stop: float | None = None
 
 
+def evaluations_within(budget: float, n: int, states: int) -> float:
+    """The exact likelihood evaluations a ``budget`` of evaluations × samples × states allows on ``n`` samples of a
+    model with ``states`` states (an evaluation's cost grows with both)."""
+    return budget / (max(int(n), 1) * max(int(states), 1))
+
+
 #: Evaluations over which a search stopped by its budget reports how fast ℓ still rose.
 RECENT_EVALUATIONS = 5
 #: A search stopped by its budget whose ℓ rose by less than this over its last :data:`RECENT_EVALUATIONS` evaluations

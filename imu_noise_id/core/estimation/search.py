@@ -42,7 +42,7 @@ def finish_evaluations(budget: float | None, n: int, states: int) -> int | None:
     model with ``states`` states, at least :data:`MIN_FINISH_EVALUATIONS`; None without a budget."""
     if budget is None:
         return None
-    return max(MIN_FINISH_EVALUATIONS, int(budget / (max(int(n), 1) * max(int(states), 1))))
+    return max(MIN_FINISH_EVALUATIONS, int(mle.evaluations_within(budget, n, states)))
 
 
 def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options: FitOptions,

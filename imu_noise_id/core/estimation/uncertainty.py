@@ -49,7 +49,7 @@ WHITTLE_WALD = "wald (whittle information)"
 def profile_evaluations(n: int, states: int) -> float:
     """The exact likelihood evaluations :data:`PROFILE_BUDGET` allows a fit of ``n`` samples whose state space has
     ``states`` states (an evaluation's cost grows with both)."""
-    return PROFILE_BUDGET / (max(int(n), 1) * max(int(states), 1))
+    return mle.evaluations_within(PROFILE_BUDGET, n, states)
 
 
 def information(par: mle.Parameterisation, theta: np.ndarray, model: ss.StateSpace, y: np.ndarray, z: np.ndarray, *,
@@ -58,7 +58,7 @@ def information(par: mle.Parameterisation, theta: np.ndarray, model: ss.StateSpa
     information (:func:`.mle.observed_information`, ``"wald"``) within :data:`INFORMATION_BUDGET`, else Whittle's
     expected information of ``n`` samples at period ``dt`` [s] (:func:`.whittle.fisher_information`,
     :data:`WHITTLE_WALD`)."""
-    if (theta.size + 1) * np.size(y) * model.phi.shape[0] <= INFORMATION_BUDGET:
+    if theta.size + 1 <= mle.evaluations_within(INFORMATION_BUDGET, np.size(y), model.phi.shape[0]):
         return mle.observed_information(par, theta, model, y, z), "wald"
     return whittle.fisher_information(par.to_components(theta, model), n, dt), WHITTLE_WALD
 

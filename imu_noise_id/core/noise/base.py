@@ -126,6 +126,15 @@ class Component(ABC):
         # on a short record with many OSCs went into it
         return {f.name: float(getattr(self, f.name)) for f in fields(self)}  # type: ignore[arg-type]
 
+    def scale_only(self) -> tuple[float, tuple[tuple[str, float], ...]] | None:
+        """(scale, the other values by name, sorted) of a component whose only parameter is its :attr:`scale_name`, at
+        a scale > 0: its second moments are then those at scale 1 times the scale's square. None otherwise."""
+        values = self.params()
+        scale = values.pop(self.scale_name) if self.scale_name else 0.0
+        if self.parameter_names != (self.scale_name,) or not scale > 0.0:
+            return None
+        return scale, tuple(sorted(values.items()))
+
     def __str__(self) -> str:
         inner = ", ".join(f"{k}={v:.6g}" for k, v in self.params().items())
         return f"{self.name}({inner})"
