@@ -136,10 +136,11 @@ def test_a_changed_option_reruns_a_unit_and_unchanged_ones_resume(bag, client, t
 #: What legitimately differs between analyze's and batch's files for one bag, removed before comparing:
 #: the run record each file is stamped with (run id, command, argv, the options as each command records them,
 #: start and finish times): the ``run:`` block of imu.yaml and model.yaml, the ``# imu-noise-id run:`` line of CSV
-#: files and exports, the ``imu-noise-id-run`` meta element of report.html;
+#: files and exports, the ``imu-noise-id-run`` meta element and the visible run paragraph of report.html;
 RUN_BLOCK = re.compile(r"^run:\n(?:[ -].*\n)*", re.MULTILINE)
 RUN_LINE = re.compile(r"^# imu-noise-id run: .*\n", re.MULTILINE)
 RUN_META = re.compile(r'<meta name="imu-noise-id-run" content="[^"]*">')
+RUN_FOOTER = re.compile(r"<p class=small id=run>Written by imu-noise-id [^<]*</p>")
 #: and the name of the command that wrote them: model.yaml's ``meta: command:``, report.html's run table cell.
 COMMAND = (re.compile(r"^  command: (analyze|batch)$", re.MULTILINE), re.compile(r"<td class=l>(analyze|batch)</td>"))
 #: Files only one of them writes: analyze's results-folder manifest, batch's unit marker (hash, options, rows).
@@ -147,7 +148,7 @@ OWN_FILES = {"imu_noise_id_runs.yaml", "unit.json"}
 
 
 def _normalised(text: str) -> str:
-    for pattern in (RUN_BLOCK, RUN_LINE, RUN_META, *COMMAND):
+    for pattern in (RUN_BLOCK, RUN_LINE, RUN_META, RUN_FOOTER, *COMMAND):
         text = pattern.sub("", text)
     return text
 

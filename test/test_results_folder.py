@@ -88,6 +88,18 @@ def test_every_file_of_every_command_records_its_run(golden_run):
     assert _run_of(folders["analyze"] / "imu.yaml")["options"]["model"] == "auto"
 
 
+def test_a_report_shows_the_time_of_its_run_record_and_no_clock_of_its_own(golden_run):
+    """The report's visible time came from the moment it was rendered: two runs of one bag that finished either side
+    of a minute boundary wrote reports differing in more than their run records (a batch and an analyze of one bag
+    compared unequal on CI). The reader sees the run's command, id and times, as the run record holds them."""
+    report = golden_run["analyze_imu.yaml"].parent / "report.html"
+    text, run = report.read_text(), _run_of(report)
+    footer = (f"Written by imu-noise-id analyze, run {run['id']}, started {run['started']}, "
+              f"finished {run['finished']}.")
+    assert footer in text
+    assert " UTC" not in text.replace(footer, "")
+
+
 def test_another_bag_with_other_options_leaves_nothing_of_the_first_run(analyzed, two_bags, capsys):
     out, _ = analyzed
     before = _files(out)

@@ -3,7 +3,6 @@ numbers users paste, Allan panels, model selection, record length, GMWM, loop st
 
 from __future__ import annotations
 
-import datetime as _dt
 import html
 from pathlib import Path
 
@@ -181,7 +180,6 @@ def _gmwm_section(result: AnalysisResult) -> str:
 
 def render_analysis_report(result: AnalysisResult, meta: dict, title: str) -> str:
     """The HTML text of the analysis report (module docstring)."""
-    when = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     parts = [_data_section(result, meta)]
     if result.finals:
         parts += [_numbers_section(result), _overbound_section(result), _allan_section(result),
@@ -197,7 +195,7 @@ def render_analysis_report(result: AnalysisResult, meta: dict, title: str) -> st
                                                              ("loop", "closed loop")))
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
             f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>"
-            f"<p class=small>imu-noise-id analyze, {when}. {nav}</p>{''.join(parts)}</body></html>")
+            f"<p class=small>{nav}</p>{''.join(parts)}</body></html>")
 
 
 def write_analysis_report(path: str | Path, result: AnalysisResult, meta: dict, title: str) -> Path:

@@ -72,6 +72,16 @@ def _png_text(data: bytes, key: str, text: str) -> bytes:
     return data[:ihdr_end] + chunk + data[ihdr_end:]
 
 
+def _with_run_footer(text: str, record: dict) -> str:
+    """``text`` (HTML) with the run's command, id and times shown as its last paragraph: the time a reader sees is
+    the run record's, not the moment a writer rendered the page."""
+    footer = (f"<p class=small id=run>Written by imu-noise-id {html.escape(str(record.get('command')))}, "
+              f"run {html.escape(str(record.get('id')))}, started {html.escape(str(record.get('started')))}, "
+              f"finished {html.escape(str(record.get('finished')))}.</p>")
+    at = text.rfind("</body>")
+    return text[:at] + footer + text[at:] if at >= 0 else text + footer
+
+
 def stamp(path: Path, relative: str, record: dict) -> None:
     """Put ``record`` into the file ``path`` (named ``relative`` in the results folder) in its format's way."""
     line = json.dumps(record, separators=(",", ":"))
@@ -86,6 +96,7 @@ def stamp(path: Path, relative: str, record: dict) -> None:
         meta = f'<meta name="imu-noise-id-run" content="{html.escape(line)}">'
         at = text.find("<head>")
         text = text[: at + 6] + meta + text[at + 6 :] if at >= 0 else meta + text
+        text = _with_run_footer(text, record)
     elif suffix in (".yaml", ".yml") and relative in OWN_YAML:
         lines = text.splitlines(keepends=True)
         head = 0
