@@ -12,7 +12,7 @@ the profile search met a higher likelihood than the fit's.
 
 ``WN+GM+RW+RR`` is issue 12's case: a GM whose τ (100 s) is not small against the record (1 h) beside a random walk
 the record can hardly tell from 0 and a ramp; the Hessian is then unreliable (RW at its boundary) and the intervals
-are profile-likelihood ones adjusted for the estimated bias and ramp (:mod:`imu_noise_id.core.estimation.profile`).
+are profile-likelihood ones adjusted for the estimated bias and ramp (:mod:`imu_noise_id.core.estimation.em.profile`).
 It runs at 10 Hz by default (36 000 samples: the GM, RW and ramp live below 0.01 Hz, the same at 100 Hz; 10× the
 samples cost 4–5× the time); ``--mix WN+GM+RW+RR@100Hz`` runs the same truth at 100 Hz.
 """
@@ -26,7 +26,7 @@ from collections import Counter
 
 import numpy as np
 
-from imu_noise_id.core.estimation.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
 from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.noise.modelspec import parameter_labels
 

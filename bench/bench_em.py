@@ -18,7 +18,7 @@ import warnings
 import numpy as np
 
 from imu_noise_id.core import kalman
-from imu_noise_id.core.estimation.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 

@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 CODE = """
 import json, time
 import numpy as np
-from imu_noise_id.core.estimation.model import NoiseModel
+from imu_noise_id.core.estimation.em.model import NoiseModel
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 y = simulate_sum([WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-5), RR(1e-6)], {n}, 0.01, np.random.default_rng(1)) + 2e-3
 start = time.perf_counter()

@@ -22,8 +22,8 @@ import time
 import numpy as np
 
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.estimation.gmwm import fit_gmwm
-from imu_noise_id.core.estimation.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.gmwm.fit import fit_gmwm
 from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.noise.modelspec import parameter_labels
 

@@ -3,7 +3,7 @@
 Run:  nice -n 10 python bench/bench_gmwm_pooled.py   (needs ../shared/data; output docs/results/bench_gmwm_pooled.txt)
 
 Per axis: the structure is the WIC winner on run 1 (the EM's candidate set); every run is fitted on its own and the
-six together (one θ, :mod:`imu_noise_id.core.estimation.gmwm_pool`), the compatibility statistic
+six together (one θ, :mod:`imu_noise_id.core.estimation.gmwm.pool`), the compatibility statistic
 C = J_pooled − Σ J_k with its χ²((K − 1)·p) p-value says whether the runs share one model (5 % level), the pooled
 J-test whether the model fits at all. Printed: the pooled parameters with 95 % intervals beside each run's, and the
 ratio of the pooled interval's width to the narrowest single-run one (log scale).
@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from imu_noise_id.core.estimation.gmwm import GmwmOptions, prepare
-from imu_noise_id.core.estimation.gmwm_pool import fit_pooled
-from imu_noise_id.core.estimation.gmwm_select import select_gmwm
+from imu_noise_id.core.estimation.gmwm.fit import GmwmOptions, prepare
+from imu_noise_id.core.estimation.gmwm.pool import fit_pooled
+from imu_noise_id.core.estimation.gmwm.select import select_gmwm
 from imu_noise_id.core.noise.modelspec import parameter_labels
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "adis16405_static"

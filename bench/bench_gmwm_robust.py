@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from imu_noise_id.core.estimation.gmwm import GmwmOptions, fit_gmwm
-from imu_noise_id.core.estimation.gmwm_select import select_gmwm
-from imu_noise_id.core.estimation.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.gmwm.fit import GmwmOptions, fit_gmwm
+from imu_noise_id.core.estimation.gmwm.select import select_gmwm
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 from imu_noise_id.core.noise.modelspec import parameter_labels
 
@@ -80,7 +80,7 @@ def mtig() -> None:
     if not path.is_file():
         print("\n== 2. MTi-G: ../shared/data absent, skipped ==")
         return
-    from imu_noise_id.core.estimation.relabel import with_uncertainty
+    from imu_noise_id.core.estimation.em.relabel import with_uncertainty
     from imu_noise_id.pipelines.loop import run_closed_loop
 
     y = np.load(path)["gyro_x"].astype(float)

@@ -29,9 +29,9 @@ import time
 
 import numpy as np
 
-from imu_noise_id.core.estimation.gmwm import fit_gmwm
-from imu_noise_id.core.estimation.model import fit_model
-from imu_noise_id.core.estimation.selection import select_model
+from imu_noise_id.core.estimation.em.model import fit_model
+from imu_noise_id.core.estimation.em.selection import select_model
+from imu_noise_id.core.estimation.gmwm.fit import fit_gmwm
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 from imu_noise_id.core.wavelet.variance import wavelet_variance
 
@@ -132,7 +132,7 @@ def em_threshold() -> None:
 
 
 def gmwm_start() -> None:
-    from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+    from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 
     n = 10**6
     print(f"\n== 4. EM from the Allan starts vs from the GMWM fit, {n} samples, WN+GM+RW ==")

@@ -26,7 +26,7 @@ Each case simulates ``--minutes`` at 100 Hz and runs the loop from WN+RW:
 
 Printed per case: how often the right kind was chosen (OSC vs SIN, LPF found, nothing added on clean data), the
 errors of f₀, bandwidth, σ, cutoff, B, and of N (passband: the truth is the simulated components' N as sampled,
-:func:`~imu_noise_id.core.estimation.kalibr.passband_density`, which a low-pass near the Nyquist frequency
+:func:`~imu_noise_id.core.estimation.readouts.kalibr.passband_density`, which a low-pass near the Nyquist frequency
 raises above its continuous density) and K of the final model, against the issue's targets (f₀
 2 %, bandwidth ±30 %, σ ±20 %, cutoff 20 %, SIN vs OSC ≥ 95 %, N 10 %, K 35 %, clean ≤ 1 in 30), and how often
 the 95 % intervals of N and K that a user pastes hold the truth (where the final model has that component).
@@ -41,8 +41,8 @@ from pathlib import Path
 
 import numpy as np
 
-from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.relabel import with_uncertainty
+from imu_noise_id.core.estimation.em.relabel import with_uncertainty
+from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import BI, GM, LPF, MA, OSC, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import band_for_record
 from imu_noise_id.pipelines.loop import run_closed_loop

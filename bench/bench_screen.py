@@ -4,7 +4,7 @@ For simulated 1 h, 100 Hz records (360 000 samples; clean WN + RW, a GM of 2 s, 
 noise strong and weak), the closed loop's joint-search moves from a WN + RW fit — a GM at a tenth of the record and
 flicker noise at the long-τ level, the random walk restarted small — are fitted exactly (from the move's start and
 from the estimator's own starts, the better kept, as the loop's refit does) and screened
-(:func:`imu_noise_id.core.estimation.screen.screen`). Printed per record and move: the exact log-likelihood gain and
+(:func:`imu_noise_id.core.estimation.em.screen.screen`). Printed per record and move: the exact log-likelihood gain and
 ΔBIC, the screen's gain, which statistic gave it, its ΔBIC and verdict, the seconds each took; a MISS where the exact
 fit lowers the BIC and the screen refuses the move. Also the banded Whittle likelihood from the move's own start
 alone, the screen this one replaces::
@@ -20,8 +20,8 @@ import time
 
 import numpy as np
 
-from imu_noise_id.core.estimation import screen
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em import screen
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import BI, band_for_record
 

@@ -35,8 +35,8 @@ from scipy import signal
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.allan.rw_bound import random_walk_bound
 from imu_noise_id.core.axes import AXES
-from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.relabel import gm_as_filter, with_uncertainty
+from imu_noise_id.core.estimation.em.relabel import gm_as_filter, with_uncertainty
+from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import COMPONENT_TYPES, LPF, MA, OSC, RW, WN
 from imu_noise_id.pipelines.loop import run_closed_loop
 from imu_noise_id.pipelines.loop.rules import av_rms_z

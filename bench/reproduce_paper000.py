@@ -32,8 +32,8 @@ from scipy.signal import lfilter
 
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.estimation import em, mle
-from imu_noise_id.core.estimation.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.em import em, mle
+from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, RR, RW, WN
 

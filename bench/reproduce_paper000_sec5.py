@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.estimation.model import FitOptions, fit_model
-from imu_noise_id.core.estimation.selection import select_model
+from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.em.selection import select_model
 from imu_noise_id.core.simulation.bands import allan_band
 from imu_noise_id.report.plots_model import save_allan_overlay
 

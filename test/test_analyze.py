@@ -210,7 +210,7 @@ def test_cli_analyze_end_to_end(golden_run):
     assert "How long to record" in printed and "Overbound" in printed
     # the overbound (analyze --overbound): above the data's upper 95 % bound (allan.csv) and the final model's AV
     # at every τ of its range, with the exports of its values
-    from imu_noise_id.core.estimation.overbound import WnRwOverbound
+    from imu_noise_id.core.estimation.readouts.overbound import WnRwOverbound
     from imu_noise_id.core.noise.components import COMPONENT_TYPES
 
     lines = (out / "allan.csv").read_text().splitlines()
@@ -386,7 +386,7 @@ def test_on_a_long_record_a_winner_the_loop_keeps_is_fitted_exactly_with_interva
     # 280 000 samples per axis: the selection searches on the composite likelihood and its winner waits for the loop
     # (analyze.models.finish_axis); the loop adds nothing to WN + RW, so the winner is finished: the exact maximum,
     # with intervals
-    from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+    from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
     from imu_noise_id.pipelines.analyze import _axis_stages, _AxisContext
     from imu_noise_id.pipelines.loop import ImuLoop
 

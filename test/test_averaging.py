@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.model import NoiseModel
+from imu_noise_id.core.estimation.em.model import NoiseModel
+from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import LPF, MA, RW, WN, simulate_sum
 from imu_noise_id.core.noise.modelspec import parse_model
 from imu_noise_id.pipelines.loop import run_closed_loop

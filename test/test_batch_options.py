@@ -18,7 +18,7 @@ from imu_noise_id.batch import BatchOptions, Unit, open_client
 from imu_noise_id.batch.units import content_hash
 from imu_noise_id.cli import build_parser, main
 from imu_noise_id.cli.options import analysis_options
-from imu_noise_id.core.estimation.gmwm import GmwmOptions
+from imu_noise_id.core.estimation.gmwm.fit import GmwmOptions
 from imu_noise_id.core.noise.digital import SensorFilter
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage
 

@@ -10,7 +10,7 @@ from scipy.linalg import toeplitz
 from scipy.stats import multivariate_normal
 
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.estimation import block_sums as bs
+from imu_noise_id.core.estimation.em import block_sums as bs
 from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import BI
 from imu_noise_id.core.noise.resonant import LPF

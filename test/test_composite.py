@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation import composite, mle, whittle
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em import composite, mle, whittle
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.noise.components import COMPONENT_TYPES, GM, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import BI
 from imu_noise_id.core.noise.resonant import LPF, OSC
@@ -85,7 +85,7 @@ def test_the_loop_on_a_long_record_adds_the_missing_line_and_ends_at_the_exact_m
 
 
 def test_model_selection_on_a_long_record_searches_on_it_and_fits_the_winner_exactly(record):
-    from imu_noise_id.core.estimation.selection import select_model
+    from imu_noise_id.core.estimation.em.selection import select_model
 
     sel = select_model(record, DT, candidates=["WN+RW", "WN+GM", "WN+GM+RW"], options=FitOptions(uncertainty=False))
     assert sel.best.model == "WN+GM+RW"
@@ -101,7 +101,7 @@ def test_model_selection_on_a_long_record_searches_on_it_and_fits_the_winner_exa
 def test_a_selection_left_unfinished_is_finished_as_it_would_have_been(record):
     # analyze leaves the winner at the composite maximiser while its closed loop may replace it, and finishes it only
     # when the loop keeps it: the finished selection is the one select_model gives at once
-    from imu_noise_id.core.estimation.selection import finish_winner, select_model
+    from imu_noise_id.core.estimation.em.selection import finish_winner, select_model
 
     options = FitOptions()
     cands = ["WN+RW", "WN+GM", "WN+GM+RW"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from imu_noise_id.core.estimation.model import fit_model
+from imu_noise_id.core.estimation.em.model import fit_model
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 from imu_noise_id.pipelines.loop import run_closed_loop
 from imu_noise_id.report.console import loop_line, record_length_lines

@@ -14,9 +14,9 @@ from imu_noise_id.cli import main
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
-from imu_noise_id.core.estimation.selection import select_model, suggest_candidates
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em.selection import select_model, suggest_candidates
+from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
 from imu_noise_id.core.noise.digital import DLPF, SensorFilter
 from imu_noise_id.core.noise.modelspec import parse_model

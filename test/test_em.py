@@ -9,10 +9,10 @@ import pytest
 
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.estimation import em, mle
-from imu_noise_id.core.estimation.differences import stepped
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel, fit_model
-from imu_noise_id.core.estimation.selection import select_model
+from imu_noise_id.core.estimation.em import em, mle
+from imu_noise_id.core.estimation.em.differences import stepped
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel, fit_model
+from imu_noise_id.core.estimation.em.selection import select_model
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, LPF, OSC, QN, RR, RW, WN, simulate_sum
 
@@ -228,7 +228,7 @@ def test_a_parameter_resting_on_its_bound_does_not_stall_the_others():
     # An OSC narrower than the two resolution bins the search allows rests on that floor, with the likelihood
     # pulling it outward. Out-of-range points scored as a flat 1e10 wall stopped L-BFGS at its start (ADIS16405
     # run 1 accel_x: every refit after the 0.565 Hz line returned its start, 311 log-likelihood below the optimum).
-    from imu_noise_id.core.estimation.model import NoiseModel
+    from imu_noise_id.core.estimation.em.model import NoiseModel
 
     y = simulate_sum([WN(2e-3), OSC(1.0, 0.002, 5e-3)], 20_000, 0.01, np.random.default_rng(3))
     model = NoiseModel(y, 0.01, "WN+OSC")
@@ -261,7 +261,7 @@ def test_fit_recovers_an_oscillation_and_a_low_pass(truth, spec):
 def test_covariance_from_information_survives_a_non_finite_row():
     """A NaN in the observed information (a likelihood that overflowed near a boundary) made eigh raise
     LinAlgError inside analyze's model selection; the parameter is now reported as not identified."""
-    from imu_noise_id.core.estimation.mle import covariance_from_information
+    from imu_noise_id.core.estimation.em.mle import covariance_from_information
 
     cov, ok = covariance_from_information(np.array([[4.0, np.nan], [np.nan, np.nan]]))
     assert not ok and cov[0, 0] == pytest.approx(0.25) and cov[1, 1] == np.inf

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
 from imu_noise_id.pipelines.analyze.final import final_model
 from imu_noise_id.pipelines.loop.run import final_intervals

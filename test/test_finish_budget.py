@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.estimation import search
-from imu_noise_id.core.estimation.mle import RECENT_EVALUATIONS
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em import search
+from imu_noise_id.core.estimation.em.mle import RECENT_EVALUATIONS
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 from imu_noise_id.pipelines.analyze.final import final_model
 from imu_noise_id.report.model_yaml import fit_to_dict

@@ -45,8 +45,8 @@ def test_fit_errors_exit_2(tmp_path, capsys):
 
 
 def test_allan_band_and_overlay_figure(tmp_path):
-    from imu_noise_id.core.estimation import kalibr
-    from imu_noise_id.core.estimation.model import FitOptions, fit_model
+    from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
+    from imu_noise_id.core.estimation.readouts import kalibr
     from imu_noise_id.core.noise.components import GM, WN, simulate_sum
     from imu_noise_id.core.simulation.bands import allan_band
     from imu_noise_id.report.plots_model import save_allan_overlay

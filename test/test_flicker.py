@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation.instability import bias_instability
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.readouts.instability import bias_instability
 from imu_noise_id.core.noise.components import BI, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import PLATEAU, band_for_record, ladder_taus
 from imu_noise_id.core.noise.modelspec import ModelSpecError, model_name, parse_model
@@ -99,7 +99,7 @@ def test_model_selection_offers_flicker_where_the_allan_variance_has_a_plateau(s
     """WN+BI+RW joins the candidates when the AV above the white-noise line is flat (within 1.3×) over a decade; a
     GM bump, a random walk or white noise alone never look like that."""
     from imu_noise_id.core.allan import allan_variance
-    from imu_noise_id.core.estimation.selection import suggest_candidates
+    from imu_noise_id.core.estimation.em.selection import suggest_candidates
 
     y = simulate_sum(parse_model(spec), 120000, DT, np.random.default_rng(0))
     assert ("WN+BI+RW" in suggest_candidates(allan_variance(y, DT))) is offered

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.estimation.gmwm import GmwmOptions, fit_gmwm
+from imu_noise_id.core.estimation.gmwm.fit import GmwmOptions, fit_gmwm
 from imu_noise_id.core.noise.averaging import MA
 from imu_noise_id.core.noise.components import GM, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import BI
@@ -103,7 +103,7 @@ def test_gmwm_refuses_what_it_cannot_fit():
 
 
 def test_wic_selects_the_true_structure_among_the_em_candidates():
-    from imu_noise_id.core.estimation.gmwm_select import full_structure, select_gmwm
+    from imu_noise_id.core.estimation.gmwm.select import full_structure, select_gmwm
 
     assert full_structure(["WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM"]) == "WN+2GM+RW"
     y = simulate_sum([WN(1e-3), GM(2.0, 5e-4), RW(6e-5)], 300_000, DT, np.random.default_rng(3))
@@ -118,7 +118,7 @@ def test_wic_tie_of_nested_structures_goes_to_the_fewest_parameters():
     """A GM the data do not hold is fitted onto its bound beside the random walk: WN+GM+RW and WN+RW then have the
     same WIC up to rounding, and the tie is the simpler structure's, on every seed and whatever the library
     versions' last digits (before the rule the winner was WN+GM+RW on some machines, by 1e-12)."""
-    from imu_noise_id.core.estimation.gmwm_select import WIC_TIE, select_gmwm
+    from imu_noise_id.core.estimation.gmwm.select import WIC_TIE, select_gmwm
 
     ties = 0
     for seed in (4, 5, 6):
@@ -137,7 +137,7 @@ def test_gm_slower_than_the_record_is_the_random_walk_it_looks_like():
     2e-5 relative (beyond the rounding tie; which one an optimizer reaches depends on the machine): a GM slower than the
     record is a random walk over it, so the selection names the random walk's structure, and every structure in the
     tie, the look-alike included, is listed as tied."""
-    from imu_noise_id.core.estimation.gmwm_select import select_gmwm, walk_look_alike
+    from imu_noise_id.core.estimation.gmwm.select import select_gmwm, walk_look_alike
 
     y = simulate_sum([WN(1e-3), RW(5e-5)], 300_000, DT, np.random.default_rng(9))
     sel = select_gmwm(y, DT)
@@ -151,7 +151,7 @@ def test_gm_slower_than_the_record_is_the_random_walk_it_looks_like():
 
 
 def test_pooled_fit_is_tighter_and_the_compatibility_test_separates_replicates():
-    from imu_noise_id.core.estimation.gmwm_pool import fit_pooled
+    from imu_noise_id.core.estimation.gmwm.pool import fit_pooled
 
     truth = [WN(1e-3), GM(2.0, 5e-4), RW(6e-5)]
     records = [(simulate_sum(truth, 150_000, DT, np.random.default_rng(s)), DT) for s in range(3)]
@@ -186,8 +186,8 @@ def test_gmwm_ramp_is_the_least_squares_slope_with_its_variance_under_the_fitted
 
 def test_em_and_gmwm_compare_a_negative_ramp_on_the_linear_scale():
     """A slope has a sign and may be 0: magnitudes in log scale misjudged an interval across 0 as a positive one."""
-    from imu_noise_id.core.estimation.agreement import compare
-    from imu_noise_id.core.estimation.model import FitOptions, fit_model
+    from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
+    from imu_noise_id.core.estimation.readouts.agreement import compare
 
     y = simulate_sum([WN(0.3), RW(0.002), RR(-3e-4)], 4096, 1.0, np.random.default_rng(11))
     em, gm = fit_model(y, 1.0, "WN+RW+RR", options=FitOptions(n_starts=1)), fit_gmwm(y, 1.0, "WN+RW+RR")
@@ -211,8 +211,8 @@ def test_the_analytic_jacobian_of_the_moments_equals_finite_differences(truth):
     slope term's of the ramp profile, against a three-point finite difference of the whole residual vector."""
     from scipy.optimize._numdiff import approx_derivative
 
-    from imu_noise_id.core.estimation import gmwm_engine as eng
-    from imu_noise_id.core.estimation.gmwm_ramp import _Profile
+    from imu_noise_id.core.estimation.gmwm import engine as eng
+    from imu_noise_id.core.estimation.gmwm.ramp import _Profile
     from imu_noise_id.core.wavelet.variance import wavelet_variance
 
     dt = 0.01 if truth[1].name != "GM" else 1.0
@@ -231,7 +231,7 @@ def test_an_indefinite_weight_matrix_is_projected_not_a_crash():
     """A covariance whose correlations are indefinite (smallest eigenvalue −0.13 of 5.5, as the model covariance came
     out on 3 h at 400 Hz) gives a whitening matrix W with Wᵀ W positive definite, and a positive definite V is left
     as it is (W V Wᵀ = I)."""
-    from imu_noise_id.core.estimation.gmwm_engine import _inverse_cholesky
+    from imu_noise_id.core.estimation.gmwm.engine import _inverse_cholesky
 
     rng = np.random.default_rng(3)
     q, _ = np.linalg.qr(rng.standard_normal((6, 6)))
@@ -250,8 +250,8 @@ def test_three_hours_at_400_hz_with_a_slow_gm_is_fitted():
     """3 h at 400 Hz, WN + GM (τ 300 s) + RW: the default analyze's estimator there (the GMWM, beyond 4·10⁶ samples)
     ends with a model; its model covariance's correlations were indefinite, and the weight's Cholesky factorisation
     raised (a traceback from analyze)."""
-    from imu_noise_id.core.estimation.gmwm import GmwmOptions, prepare
-    from imu_noise_id.core.estimation.gmwm_select import select_gmwm
+    from imu_noise_id.core.estimation.gmwm.fit import GmwmOptions, prepare
+    from imu_noise_id.core.estimation.gmwm.select import select_gmwm
     from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 
     dt = 0.0025

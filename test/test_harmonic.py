@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core import kalman
-from imu_noise_id.core.estimation.model import NoiseModel
+from imu_noise_id.core.estimation.em.model import NoiseModel
 from imu_noise_id.core.kalman import harmonic, steady
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import BI, GM, RW, WN, simulate_sum

@@ -9,8 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation import mle, uncertainty, whittle
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em import mle, uncertainty, whittle
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, OSC, RW, WN, simulate_sum
 

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation.instability import (
+from imu_noise_id.core.estimation.em.model import fit_model
+from imu_noise_id.core.estimation.em.results import FitResult
+from imu_noise_id.core.estimation.readouts.instability import (
     FLICKER_FACTOR,
     bias_instability,
     bias_instability_from_allan,
 )
-from imu_noise_id.core.estimation.model import fit_model
-from imu_noise_id.core.estimation.results import FitResult
 from imu_noise_id.core.noise.components import GM, OSC, RW, WN, simulate_sum, total_allan_variance
 
 DT = 0.01

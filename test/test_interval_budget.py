@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation import mle, uncertainty
-from imu_noise_id.core.estimation.model import NoiseModel
-from imu_noise_id.core.estimation.profile import BudgetSpentError, Profiler
-from imu_noise_id.core.estimation.quantiles import Z95
-from imu_noise_id.core.estimation.results import BUDGET_SPENT
+from imu_noise_id.core.estimation.em import mle, uncertainty
+from imu_noise_id.core.estimation.em.model import NoiseModel
+from imu_noise_id.core.estimation.em.profile import BudgetSpentError, Profiler
+from imu_noise_id.core.estimation.em.results import BUDGET_SPENT
+from imu_noise_id.core.estimation.readouts.quantiles import Z95
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 

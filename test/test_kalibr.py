@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
-from imu_noise_id.core.estimation.results import FitResult
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em.results import FitResult
+from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import LPF, OSC, RW, WN, simulate_sum, total_allan_variance
 
 DT = 0.01
@@ -89,7 +89,7 @@ def test_a_walk_the_record_does_not_identify_is_given_as_its_upper_end():
     """K whose 95 % interval reaches zero is given as that interval's upper end, method ``bound``, interval (0, it):
     on 10 min at 200 Hz of WN (1e-3) + RW (1e-5) the fits gave K = 1e-7 and 1e-10 on two axes — 100× below the
     truth, not a bound."""
-    from imu_noise_id.core.estimation.kalibr import KalibrValue, unidentified_as_bound
+    from imu_noise_id.core.estimation.readouts.kalibr import KalibrValue, unidentified_as_bound
 
     low = unidentified_as_bound(KalibrValue(1.0e-10, (0.0, 1.5e-5), "RW"))
     assert (low.value, low.ci95, low.method) == (1.5e-5, (0.0, 1.5e-5), "bound") and "reaches zero" in low.source
@@ -152,7 +152,7 @@ def test_beside_a_gauss_markov_the_walk_is_bounded_not_read_from_the_bump():
     reading, is 4× the walk and its interval excludes it."""
     from imu_noise_id.core.allan import allan_variance
     from imu_noise_id.core.allan.slopes import fit_axis_slopes
-    from imu_noise_id.core.estimation.model import fit_model
+    from imu_noise_id.core.estimation.em.model import fit_model
     from imu_noise_id.core.noise.components import GM, simulate_sum
     from imu_noise_id.pipelines.analyze.final import final_model
 

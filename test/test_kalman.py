@@ -9,7 +9,7 @@ import pytest
 
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.estimation import mle
+from imu_noise_id.core.estimation.em import mle
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.kalman.riccati import SteadyCovarianceSensitivity, steady_prediction_covariance
 from imu_noise_id.core.noise.components import GM, OSC, QN, RR, RW, WN, simulate_sum

@@ -19,8 +19,8 @@ from imu_noise_id.core.diagnostics.lines import (
     line_shape,
 )
 from imu_noise_id.core.diagnostics.residuals import spectral_peaks
-from imu_noise_id.core.estimation.relabel import gm_as_filter
-from imu_noise_id.core.estimation.results import FitResult
+from imu_noise_id.core.estimation.em.relabel import gm_as_filter
+from imu_noise_id.core.estimation.em.results import FitResult
 from imu_noise_id.core.noise.components import GM, LPF, MA, OSC, RW, WN, simulate_sum, total_allan_variance
 from imu_noise_id.core.noise.flicker import BI, band_for_record
 from imu_noise_id.pipelines.loop import LoopState, run_closed_loop
@@ -538,8 +538,8 @@ def test_a_second_order_filter_read_as_a_first_order_low_pass_is_swapped_for_one
     place. On a sensor filtering 90 % of its passband density through a second-order low-pass (f₀ = 10 Hz, ζ =
     0.75, 3 min) the swap lowers the BIC, finds the corner and the damping, and N's interval holds the truth. A
     first-order filter keeps its LPF (the OSC's extra parameter does not pay)."""
-    from imu_noise_id.core.estimation import kalibr
-    from imu_noise_id.core.estimation.relabel import with_uncertainty
+    from imu_noise_id.core.estimation.em.relabel import with_uncertainty
+    from imu_noise_id.core.estimation.readouts import kalibr
 
     n = 18_000
     second = [WN(1e-3 * math.sqrt(1 - 0.9**2)), OSC.low_pass(0.9e-3, 10.0, 0.75), RW(3e-5)]
@@ -575,7 +575,7 @@ def test_the_starts_low_pass_is_tried_as_a_second_order_one():
     """A start from the model selection whose short-memory GM is read as the sensor's LPF gets the same order
     check: on the second-order record of the test above, WN + GM + RW fitted as analyze's selection does becomes
     the loop's step 0 (WN + LPF + RW), and its first step swaps the LPF for the second-order low-pass."""
-    from imu_noise_id.core.estimation.model import FitOptions, fit_model
+    from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
 
     truth = [WN(1e-3 * math.sqrt(1 - 0.9**2)), OSC.low_pass(0.9e-3, 10.0, 0.75), RW(3e-5)]
     y = simulate_sum(truth, 18_000, DT, np.random.default_rng(1))

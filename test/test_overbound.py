@@ -8,7 +8,7 @@ import yaml
 from scipy.optimize import linprog
 
 from imu_noise_id.core.errors import InputError
-from imu_noise_id.core.estimation.overbound import overbound_wn_rw
+from imu_noise_id.core.estimation.readouts.overbound import overbound_wn_rw
 from imu_noise_id.core.noise.components import GM, RW, WN, total_allan_variance
 
 DT = 0.01

@@ -9,9 +9,9 @@ import pytest
 from scipy.optimize import minimize
 
 from imu_noise_id.core import kalman
-from imu_noise_id.core.estimation import mle
-from imu_noise_id.core.estimation.model import FitOptions, fit_model
-from imu_noise_id.core.estimation.profile import adjusted
+from imu_noise_id.core.estimation.em import mle
+from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.em.profile import adjusted
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 
@@ -86,7 +86,7 @@ def test_repeated_starts_are_evaluated_once_and_the_intervals_do_not_change():
     """A profile point of a zero-boundary parameter gets a ladder of starts in that parameter, which the point's
     value then overwrites: every rung is the same start. Screening each repeat cost a likelihood evaluation (393
     instead of 343 on bench_em's 1 h record); the intervals are the same without the repeats."""
-    from imu_noise_id.core.estimation import profile
+    from imu_noise_id.core.estimation.em import profile
 
     y = simulate_sum([WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-6), RR(1e-6)], 20_000, 0.1,
                      np.random.default_rng(3)) + 2e-3

@@ -13,7 +13,7 @@ from scipy import signal
 
 from imu_noise_id.core.allan.slopes import SlopeComponent
 from imu_noise_id.core.axes import AXES, GYRO_AXES
-from imu_noise_id.core.estimation.kalibr import KalibrValue
+from imu_noise_id.core.estimation.readouts.kalibr import KalibrValue
 from imu_noise_id.core.noise.components import RW, WN
 from imu_noise_id.core.simulation.static import simulate_static_imu
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze

@@ -54,7 +54,7 @@ def test_a_record_without_long_tau_estimates_has_no_bound():
 
 def _bounded_wander_and_random_walk():
     """The bounded wander above and a true random walk, each with its AV and the final model of its WN+RW fit."""
-    from imu_noise_id.core.estimation.model import NoiseModel
+    from imu_noise_id.core.estimation.em.model import NoiseModel
     from imu_noise_id.pipelines.analyze.final import final_model
 
     t = np.arange(N) * DT

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation import screen
+from imu_noise_id.core.estimation.em import screen
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import BI, band_for_record
 
@@ -73,7 +73,7 @@ def test_the_loop_screens_its_joint_search_on_a_long_record_and_keeps_it_exact_o
 
 
 def test_model_selection_on_a_long_record_fits_exactly_only_what_can_win():
-    from imu_noise_id.core.estimation.selection import select_model
+    from imu_noise_id.core.estimation.em.selection import select_model
 
     y = simulate_sum([WN(1.7e-4), GM(2.0, 3e-4), RW(2e-5)], N, DT, np.random.default_rng(2))
     sel = select_model(y, DT)

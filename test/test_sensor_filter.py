@@ -16,9 +16,9 @@ from scipy import signal
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.allan.slopes import fit_axis_slopes
 from imu_noise_id.core.axes import ImuSeries
-from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.relabel import gm_as_filter
-from imu_noise_id.core.estimation.results import FitResult
+from imu_noise_id.core.estimation.em.relabel import gm_as_filter
+from imu_noise_id.core.estimation.em.results import FitResult
+from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import GM, LPF, QN, RW, WN, simulate_sum
 from imu_noise_id.core.noise.resonant import filter_memory_limit
 from imu_noise_id.pipelines.analyze.final import final_model

@@ -7,7 +7,7 @@ import pytest
 from scipy.optimize import approx_fprime
 
 from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.estimation.starts import _Curve, _LogAvCurve, fit_allan
+from imu_noise_id.core.estimation.em.starts import _Curve, _LogAvCurve, fit_allan
 from imu_noise_id.core.noise.components import BI, GM, LPF, MA, OSC, QN, RR, RW, WN, simulate_sum
 from imu_noise_id.core.noise.flicker import band_for_record
 

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from scipy.linalg import solve_discrete_lyapunov
 
-from imu_noise_id.core.estimation.mle import LR_DROP_95
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
-from imu_noise_id.core.estimation.whittle import (
+from imu_noise_id.core.estimation.em.mle import LR_DROP_95
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em.whittle import (
     banded_periodogram,
     block_spectrum,
     osc_start_frequencies,

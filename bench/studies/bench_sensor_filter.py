@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its 
 import numpy as np
 from checkouts import run_in_checkout  # bench/checkouts.py
 
-from imu_noise_id.core.estimation import kalibr
+from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import LPF, RW, WN, simulate_sum
 
 ROOT = Path(__file__).resolve().parents[2]

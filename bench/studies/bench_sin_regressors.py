@@ -27,8 +27,8 @@ import time
 
 import numpy as np
 
-from imu_noise_id.core.estimation import mle
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em import mle
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.kalman import harmonic
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
 from imu_noise_id.pipelines.loop.run import run_closed_loop

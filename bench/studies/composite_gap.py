@@ -24,8 +24,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its 
 from adis import data_missing, load_run  # bench/adis.py
 
 from imu_noise_id.core.axes import AXES
-from imu_noise_id.core.estimation import composite, mle
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em import composite, mle
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.pipelines.loop import run_closed_loop
 
 

@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from imu_noise_id.core.estimation.mle import LR_DROP_95
-from imu_noise_id.core.estimation.model import FitOptions, NoiseModel
+from imu_noise_id.core.estimation.em.mle import LR_DROP_95
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.noise.components import GM, RW, WN, Component, simulate_sum
 from imu_noise_id.core.noise.resonant import LPF, OSC
 

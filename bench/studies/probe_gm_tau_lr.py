@@ -9,7 +9,7 @@ Run:  nice -n 10 python bench/studies/probe_gm_tau_lr.py   (prints its findings;
 
 For four records of bench_coverage.py's WN+GM+RW+RR (seeds 1001 and 1030, whose fits lie near or below the true
 τ = 100 s; 1027 and 1052, on the long-τ branch with K ≈ 0), the fit's adjusted-profile machinery
-(:class:`imu_noise_id.core.estimation.profile.Profiler`, captured when the fit profiles GM τ) is reused on
+(:class:`imu_noise_id.core.estimation.em.profile.Profiler`, captured when the fit profiles GM τ) is reused on
 ``--boot`` records simulated from the estimate. In each, W* = 2(max ℓ_A − max ℓ_A at τ = τ̂) with both
 maximisations started at the estimate only ("local"), or the free one from five starts (τ̂·3^{0,±1} with K at its
 zero-boundary scale s and at s·e⁻⁸) and the held one from the estimate and the same K values ("five starts").
@@ -25,9 +25,9 @@ import time
 
 import numpy as np
 
-import imu_noise_id.core.estimation.uncertainty as uncertainty
-from imu_noise_id.core.estimation.model import FitOptions, fit_model
-from imu_noise_id.core.estimation.profile import Profiler
+import imu_noise_id.core.estimation.em.uncertainty as uncertainty
+from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.em.profile import Profiler
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 
 TRUTH = [WN(1e-3), GM(tau=100.0, sigma=3e-4), RW(1e-5), RR(1e-7)]

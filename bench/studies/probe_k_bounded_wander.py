@@ -28,9 +28,9 @@ import numpy as np
 from bench_loop_effects import DT, K_TRUE, probe_arguments, simulate
 from scipy.optimize import minimize
 
-from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.relabel import with_uncertainty
-from imu_noise_id.core.estimation.whittle import banded_periodogram, difference_spectrum
+from imu_noise_id.core.estimation.em.relabel import with_uncertainty
+from imu_noise_id.core.estimation.em.whittle import banded_periodogram, difference_spectrum
+from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import GM, RW, Component
 from imu_noise_id.core.quality import interpolate_missing
 from imu_noise_id.pipelines.loop import run_closed_loop

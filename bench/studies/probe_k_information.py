@@ -39,8 +39,8 @@ from bench_loop_effects import DT, GMS, K_TRUE, N_TRUE, simulate
 from scipy.optimize import minimize
 from scipy.stats import ncx2, norm
 
-from imu_noise_id.core.estimation.mle import Parameterisation
-from imu_noise_id.core.estimation.whittle import difference_spectrum
+from imu_noise_id.core.estimation.em.mle import Parameterisation
+from imu_noise_id.core.estimation.em.whittle import difference_spectrum
 from imu_noise_id.core.noise.components import GM, RW, WN, Component
 
 #: |K̂/K − 1| ≤ this is issue 11's target.

@@ -19,8 +19,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its 
 
 from bench_loop_effects import DT, K_TRUE, N_TRUE, probe_arguments, simulate
 
-from imu_noise_id.core.estimation import kalibr
-from imu_noise_id.core.estimation.relabel import with_uncertainty
+from imu_noise_id.core.estimation.em.relabel import with_uncertainty
+from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import RW, WN
 from imu_noise_id.pipelines.loop import run_closed_loop
 from imu_noise_id.pipelines.loop.state import Diagnosis

@@ -23,7 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its 
 
 from bench_loop_effects import DT, K_TRUE, N_TRUE, simulate
 
-from imu_noise_id.core.estimation.model import FitOptions, fit_model
+from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
 from imu_noise_id.core.noise.components import GM, RW, WN
 
 GM_TRUE = GM(tau=60.0, sigma=2e-3)

@@ -51,8 +51,8 @@ def run(args: argparse.Namespace) -> int:
     """Check the options, read the bag, fit each axis (progress on stderr), write model.yaml, print the advice."""
     from ..bag.reader import read_static
     from ..core.errors import InputError
-    from ..core.estimation.gmwm import GmwmOptions
-    from ..core.estimation.model import FitOptions
+    from ..core.estimation.em.model import FitOptions
+    from ..core.estimation.gmwm.fit import GmwmOptions
     from ..pipelines.analyze.models import ModelStage, fit_axes
     from ..report.console import fit_line, record_length_lines
     from ..report.model_yaml import write_model_yaml

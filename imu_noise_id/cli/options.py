@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from ..core.axes import AXES
 from ..core.errors import InputError
-from ..core.estimation.overbound import DEFAULT_HORIZON_S
+from ..core.estimation.readouts.overbound import DEFAULT_HORIZON_S
 from ..core.noise.digital import SensorFilter
 
 if TYPE_CHECKING:
@@ -199,7 +199,7 @@ def analysis_options(args: argparse.Namespace, *, jobs: int | None = None) -> An
     InputError
         A value out of range (``--horizon``, ``--confidence``, ``--per-decade``, ``--jobs``).
     """
-    from ..core.estimation.gmwm import GmwmOptions
+    from ..core.estimation.gmwm.fit import GmwmOptions
     from ..pipelines.analyze import AnalyzeOptions, ModelStage
 
     return AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,

@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 
 from ..core.axes import UNITS
-from ..core.estimation.kalibr import walk_crossing_tau
-from ..core.estimation.results import FitResult
+from ..core.estimation.em.results import FitResult
+from ..core.estimation.readouts.kalibr import walk_crossing_tau
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
 from ..pipelines.analyze.overbound import AxisOverbound

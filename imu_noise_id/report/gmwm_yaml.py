@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.estimation.agreement import MISFIT_Z, Comparison
-from ..core.estimation.gmwm import GmwmFit
-from ..core.estimation.gmwm_select import GmwmSelection
+from ..core.estimation.gmwm.fit import GmwmFit
+from ..core.estimation.gmwm.select import GmwmSelection
+from ..core.estimation.readouts.agreement import MISFIT_Z, Comparison
 from .numbers import num
 
 

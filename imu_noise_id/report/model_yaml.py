@@ -9,10 +9,10 @@ from pathlib import Path
 import yaml
 
 from ..core.axes import UNITS
-from ..core.estimation.gmwm import GmwmFit
-from ..core.estimation.mle import RECENT_EVALUATIONS
-from ..core.estimation.results import FitResult
-from ..core.estimation.selection import SelectionResult
+from ..core.estimation.em.mle import RECENT_EVALUATIONS
+from ..core.estimation.em.results import FitResult
+from ..core.estimation.em.selection import SelectionResult
+from ..core.estimation.gmwm.fit import GmwmFit
 from ..core.noise.modelspec import parameter_labels
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel

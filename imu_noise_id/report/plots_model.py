@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.estimation.results import FitResult
+from ..core.estimation.em.results import FitResult
 from .layout import fix_margins
 from .png import png_bytes, write_png
 

@@ -1,4 +1,3 @@
-"""Batch estimation of stochastic error models (paper 000 and beyond): the constrained EM (:mod:`.em`), the
-exact-likelihood finish and intervals (:mod:`.mle`, :mod:`.uncertainty`, :mod:`.profile`), Whittle and Allan starts
-(:mod:`.whittle`, :mod:`.starts`), one structure's fit (:mod:`.model`), model selection (:mod:`.selection`), the GMWM
-(:mod:`.gmwm`) and the numbers users paste (:mod:`.kalibr`, :mod:`.instability`, :mod:`.overbound`)."""
+"""Batch estimation of stochastic error models: the constrained EM with its exact-likelihood finish, intervals and
+model selection (:mod:`.em`), the GMWM (:mod:`.gmwm`) and the numbers users read off a fitted model
+(:mod:`.readouts`)."""

@@ -135,7 +135,7 @@ class SteadyCovarianceSensitivity:
 
         G_Φ = 2 M Φ P_u,   G_Q = M,   g_r = Kᵀ N K,   g_h = −2 P̄ (I − K h)ᵀ N K.
 
-    For the initial-state term of the log-likelihood's gradient (:class:`imu_noise_id.core.estimation.em.MatrixScore`).
+    For the initial-state term of the log-likelihood's gradient (:class:`~..estimation.em.em.MatrixScore`).
     """
 
     g_phi: np.ndarray

@@ -1,4 +1,4 @@
-"""Haar wavelet variance, the moments the GMWM fits (:mod:`imu_noise_id.core.estimation.gmwm`): the WV at dyadic
+"""Haar wavelet variance, the moments the GMWM fits (:mod:`imu_noise_id.core.estimation.gmwm.fit`): the WV at dyadic
 scales (:mod:`.variance`), its robust M-estimator (:mod:`.robust`) and the model-based covariance
 (:mod:`.covariance`)."""
 

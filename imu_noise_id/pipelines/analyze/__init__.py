@@ -26,8 +26,8 @@ import numpy as np
 from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS
 from ...core.axes import ImuSeries, ScalarSeries
 from ...core.errors import InputError
-from ...core.estimation.results import FitResult
-from ...core.estimation.uncertainty import PROFILE_BUDGET
+from ...core.estimation.em.results import FitResult
+from ...core.estimation.em.uncertainty import PROFILE_BUDGET
 from ...core.simulation.bands import allan_band
 from ..loop import ImuLoop, LoopResult
 from .final import FinalModel, final_model

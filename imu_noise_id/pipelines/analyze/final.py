@@ -1,8 +1,8 @@
 """The final model of each axis, which the numbers users paste come from: the loop's last step when the loop changed the
 model, else the selection (a short-memory GM read as the sensor's low-pass,
-:func:`~imu_noise_id.core.estimation.relabel.gm_as_filter`). From it N, K (or "not identifiable") and the per-sample
-high-frequency variance (:mod:`imu_noise_id.core.estimation.kalibr`; lines, filter shape, GMs and regressors kept out),
-and the bias instability from the model and the data's AV (:mod:`imu_noise_id.core.estimation.instability`); a K above
+:func:`~imu_noise_id.core.estimation.em.relabel.gm_as_filter`). From it N, K (or "not identifiable") and the per-sample
+high-frequency variance (:mod:`~..estimation.readouts.kalibr`; lines, filter shape, GMs and regressors kept out),
+and the bias instability from the model and the data's AV (:mod:`~..estimation.readouts.instability`); a K above
 the data's long-τ bound (:mod:`imu_noise_id.core.allan.rw_bound`) is flagged in its source."""
 
 from __future__ import annotations
@@ -12,10 +12,10 @@ from dataclasses import dataclass, replace
 
 from ...core.allan import AllanResult
 from ...core.allan.rw_bound import RandomWalkBound, random_walk_bound
-from ...core.estimation import kalibr
-from ...core.estimation.instability import BiasInstability, bias_instability, bias_instability_from_allan
-from ...core.estimation.relabel import gm_as_filter, with_uncertainty
-from ...core.estimation.results import FitResult
+from ...core.estimation.em.relabel import gm_as_filter, with_uncertainty
+from ...core.estimation.em.results import FitResult
+from ...core.estimation.readouts import kalibr
+from ...core.estimation.readouts.instability import BiasInstability, bias_instability, bias_instability_from_allan
 from ..loop import LoopResult
 
 
@@ -58,7 +58,7 @@ class FinalModel:
 def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResult) -> FinalModel:
     """The final model of one axis from its model-stage fit, its loop and its AV (module docstring): intervals computed
     here unless the loop gave them (:func:`~imu_noise_id.pipelines.loop.run.final_intervals`); a fit short of the
-    maximum (:attr:`~imu_noise_id.core.estimation.results.FitResult.short_of_maximum`) says so in its sources; B read
+    maximum (:attr:`~imu_noise_id.core.estimation.em.results.FitResult.short_of_maximum`) says so in its sources; B read
     over τ up to a tenth of the record."""
     if loop is None or len(loop.steps) == 1:
         fit = gm_as_filter(model_fit)

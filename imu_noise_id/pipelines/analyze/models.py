@@ -1,10 +1,10 @@
 """The model stage of ``analyze`` and ``fit``: one error model per axis by maximum likelihood (paper 000's constrained
-EM and beyond), by the GMWM (:mod:`imu_noise_id.core.estimation.gmwm`), or both.
+EM and beyond), by the GMWM (:mod:`~imu_noise_id.core.estimation.gmwm.fit`), or both.
 
-``model = "auto"`` ranks the candidate structures by BIC (:func:`~imu_noise_id.core.estimation.selection.select_model`)
-or WIC (:func:`~imu_noise_id.core.estimation.gmwm_select.select_gmwm`); a structure (``"WN+GM+RW"``) is fitted as given.
+``model = "auto"`` ranks the candidate structures by BIC (:func:`~..estimation.em.selection.select_model`)
+or WIC (:func:`~imu_noise_id.core.estimation.gmwm.select.select_gmwm`); a structure (``"WN+GM+RW"``) is fitted as given.
 ``estimator``: ``em``; ``gmwm``; ``both`` (the GMWM's fits one more EM start, the EM's fit the model, the two compared
-by :mod:`imu_noise_id.core.estimation.agreement`); ``auto`` (the EM up to :data:`EM_MAX_SAMPLES` samples per axis, the
+by :mod:`~..estimation.readouts.agreement`); ``auto`` (the EM up to :data:`EM_MAX_SAMPLES` samples per axis, the
 GMWM beyond, with a note).
 """
 
@@ -16,12 +16,12 @@ from dataclasses import dataclass, field, replace
 from ...core.allan import AllanResult
 from ...core.axes import ImuSeries
 from ...core.errors import InputError
-from ...core.estimation.agreement import Comparison, compare
-from ...core.estimation.gmwm import GmwmFit, GmwmOptions, fit_gmwm, prepare
-from ...core.estimation.gmwm_select import GmwmSelection, select_gmwm
-from ...core.estimation.model import FitOptions, NoiseModel
-from ...core.estimation.results import FitResult
-from ...core.estimation.selection import SelectionResult, finish_winner, select_model
+from ...core.estimation.em.model import FitOptions, NoiseModel
+from ...core.estimation.em.results import FitResult
+from ...core.estimation.em.selection import SelectionResult, finish_winner, select_model
+from ...core.estimation.gmwm.fit import GmwmFit, GmwmOptions, fit_gmwm, prepare
+from ...core.estimation.gmwm.select import GmwmSelection, select_gmwm
+from ...core.estimation.readouts.agreement import Comparison, compare
 from ...core.noise.digital import SensorFilter
 from ...core.noise.modelspec import parse_structure
 
@@ -57,7 +57,7 @@ class AxisModel:
 class ModelStage:
     """What the model stage was asked to do: ``model`` (``auto``, ``none`` or a structure), the fit's ``options``,
     the ramp's ``drift``, the ``estimator`` and the GMWM's options, and ``sensor_filter``: what the user knows of the
-    sensor's digital low-pass (the EM's starts, :class:`~imu_noise_id.core.estimation.model.NoiseModel`)."""
+    sensor's digital low-pass (the EM's starts, :class:`~imu_noise_id.core.estimation.em.model.NoiseModel`)."""
 
     model: str = AUTO
     options: FitOptions = field(default_factory=FitOptions)
@@ -137,7 +137,7 @@ def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: All
 def finish_axis(model: AxisModel, imu: ImuSeries, axis: str, stage: ModelStage, dt: float, *,
                 allan: AllanResult | None = None) -> AxisModel:
     """``model`` (of :func:`fit_axis` with ``finish`` False) with its selection's winner fitted on the exact likelihood
-    and given its intervals (:func:`~imu_noise_id.core.estimation.selection.finish_winner`); unchanged when there is
+    and given its intervals (:func:`~imu_noise_id.core.estimation.em.selection.finish_winner`); unchanged when there is
     nothing to finish."""
     if model.selection is None or not model.selection.unfinished:
         return model

@@ -1,7 +1,7 @@
 """The overbound stage of ``analyze``: per axis, the smallest Kalibr WN+RW whose AV covers, at each τ of the Allan grid
-from the sampling period to a horizon (default :data:`~imu_noise_id.core.estimation.overbound.DEFAULT_HORIZON_S`), the
+from the sampling period to a horizon (default :data:`~..estimation.readouts.overbound.DEFAULT_HORIZON_S`), the
 larger of the data's upper confidence bound and the final model's AV (all components), and is not below ``imu.yaml``'s
-per-axis N and K (inflation factors ≥ 1). The LP: :mod:`imu_noise_id.core.estimation.overbound`."""
+per-axis N and K (inflation factors ≥ 1). The LP: :mod:`~imu_noise_id.core.estimation.readouts.overbound`."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ...core.errors import InputError
-from ...core.estimation.overbound import DEFAULT_HORIZON_S, WnRwOverbound, overbound_wn_rw
+from ...core.estimation.readouts.overbound import DEFAULT_HORIZON_S, WnRwOverbound, overbound_wn_rw
 from .final import FinalModel
 from .static import StaticAnalysis
 

@@ -13,7 +13,7 @@ import math
 from dataclasses import replace
 
 from ...core.allan.slopes import SlopeComponent
-from ...core.estimation.kalibr import KalibrValue
+from ...core.estimation.readouts.kalibr import KalibrValue
 from ..loop import LoopResult
 from .final import FinalModel
 from .overbound import AxisOverbound

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...core.diagnostics import detectors as det
 from ...core.errors import InputError
-from ...core.estimation.kalibr import is_short_memory_osc
+from ...core.estimation.readouts.kalibr import is_short_memory_osc
 from ...core.noise.base import Component
 from ...core.noise.components import WN
 from ...core.noise.resonant import LPF, OSC
@@ -30,7 +30,7 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
     """Re-selection's moves, as (label, components): drop each :data:`DROPPABLE` component but ``added``; swap an RW for
     BI started from the long-τ AV; right after a GM, swap BI back for an RW of the same level; right after an LPF, swap
     it for a second-order low-pass (:func:`second_order_start`); right after an OSC of short memory
-    (:func:`~imu_noise_id.core.estimation.kalibr.is_short_memory_osc`), drop each :data:`FIRST_ORDER` filter.
+    (:func:`~imu_noise_id.core.estimation.readouts.kalibr.is_short_memory_osc`), drop each :data:`FIRST_ORDER` filter.
     ``swapped``: swaps already made in this re-selection, never undone. Beyond the papers (reasons: docs/loop.md, "Why
     the loop's moves …")."""
     fitted = list(diag.fit.components)

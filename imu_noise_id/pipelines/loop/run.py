@@ -11,8 +11,8 @@ import numpy as np
 from ...core.axes import AXES, ImuSeries, ScalarSeries
 from ...core.diagnostics import detectors as det
 from ...core.errors import InputError
-from ...core.estimation.relabel import with_uncertainty
-from ...core.estimation.results import FitResult
+from ...core.estimation.em.relabel import with_uncertainty
+from ...core.estimation.em.results import FitResult
 from ...core.noise.modelspec import parse_structure
 from .reselection import reselect, swap_start_filter
 from .rules import (
@@ -178,7 +178,7 @@ def exact_finish(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
     """``step`` refitted on the exact likelihood from its composite-likelihood fit and diagnosed again (the search's
     fits are the composite likelihood's, :meth:`.AxisLoop.fit_state`), and a note ("" unless the refit failed, did
     not gain — the step is then as it is, its values the composite likelihood's maximiser's — or stopped at its
-    evaluation budget, :attr:`~imu_noise_id.core.estimation.results.FitResult.budget_stop`)."""
+    evaluation budget, :attr:`~imu_noise_id.core.estimation.em.results.FitResult.budget_stop`)."""
     state = step.state.with_components(list(step.diagnosis.fit.components))
     try:
         diag = loop.diagnose(state, exact=True)
@@ -190,7 +190,7 @@ def exact_finish(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
 
 
 def final_intervals(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
-    """``step`` with its fit's 95 % intervals (:func:`~imu_noise_id.core.estimation.relabel.with_uncertainty`) and a
+    """``step`` with its fit's 95 % intervals (:func:`~imu_noise_id.core.estimation.em.relabel.with_uncertainty`) and a
     note ("" unless refitted). Beyond the papers: where the intervals' search met a higher likelihood
     (``short_of_maximum``) the structure is refitted from there and diagnosed once; the step is then the refit's."""
     fit = with_uncertainty(step.diagnosis.fit)

@@ -11,7 +11,7 @@ from ...core.diagnostics import detectors as det
 from ...core.diagnostics.residuals import ResidualErrors
 from ...core.diagnostics.spectra import ResidualSpectra
 from ...core.diagnostics.whitening import WhiteningFilter
-from ...core.estimation.results import FitResult
+from ...core.estimation.em.results import FitResult
 from ...core.noise.components import Component
 from ...core.noise.modelspec import structure_name
 

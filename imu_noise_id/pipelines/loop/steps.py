@@ -22,10 +22,10 @@ from ...core.diagnostics.lines import (
 from ...core.diagnostics.residuals import LINE_SEPARATION_BINS, av_misfit_z, line_statistic, residual_errors
 from ...core.diagnostics.spectra import residual_spectra
 from ...core.diagnostics.whitening import WhiteningFilter
-from ...core.estimation import composite, screen
-from ...core.estimation.model import FitOptions, NoiseModel
-from ...core.estimation.relabel import gm_as_filter
-from ...core.estimation.results import FitResult
+from ...core.estimation.em import composite, screen
+from ...core.estimation.em.model import FitOptions, NoiseModel
+from ...core.estimation.em.relabel import gm_as_filter
+from ...core.estimation.em.results import FitResult
 from ...core.noise.components import BI, GM, MA, QN, RR, RW, WN, Component, total_allan_variance
 from ...core.noise.flicker import band_for_record
 from ...core.noise.modelspec import CANONICAL_ORDER, structure_name
@@ -76,13 +76,13 @@ class AxisLoop:
 
     @functools.cached_property
     def composite_statistics(self) -> composite.CompositeStatistics:
-        """The record's composite-likelihood statistics (:mod:`~imu_noise_id.core.estimation.composite`), once."""
+        """The record's composite-likelihood statistics (:mod:`~imu_noise_id.core.estimation.em.composite`), once."""
         return composite.CompositeStatistics.of(self.y, self.dt)
 
     def fit_state(self, model: NoiseModel, state: LoopState, *, exact: bool = False) -> FitResult:
         """The fit of ``state`` (``model`` its record and regressors) from ``state.init`` (None: the estimator's
         starts). On a record of ``composite.MIN_SAMPLES`` samples or more, unless ``exact``: the maximiser of the
-        composite likelihood (:func:`~imu_noise_id.core.estimation.composite.fit`; of the record with the regressors,
+        composite likelihood (:func:`~imu_noise_id.core.estimation.em.composite.fit`; of the record with the regressors,
         at their GLS values from the start, removed) evaluated once on the exact likelihood, means by GLS; else the
         exact maximum-likelihood fit. Beyond the papers (docs/em.md, "Searching long records on a likelihood of fixed
         size")."""
@@ -103,7 +103,7 @@ class AxisLoop:
 
     @functools.cached_property
     def statistics(self) -> screen.Statistics:
-        """The record's screening statistics (:mod:`~imu_noise_id.core.estimation.screen`), computed once."""
+        """The record's screening statistics (:mod:`~imu_noise_id.core.estimation.em.screen`), computed once."""
         return screen.Statistics.of(interpolate_missing(self.y), self.dt)
 
     def screen_reference(self, state: LoopState, diag: Diagnosis) -> screen.Reference | None:

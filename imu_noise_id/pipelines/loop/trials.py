@@ -12,7 +12,7 @@ from ...core.diagnostics import detectors as det
 from ...core.diagnostics.av_signatures import fit_gm_to_excess
 from ...core.diagnostics.lines import detect_innovation_hump
 from ...core.errors import InputError
-from ...core.estimation import screen
+from ...core.estimation.em import screen
 from ...core.noise.base import Component
 from ...core.noise.components import GM, RW, total_allan_variance
 from ...core.noise.flicker import BI, PLATEAU, band_for_record

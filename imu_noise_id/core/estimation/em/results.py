@@ -6,10 +6,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .. import kalman
-from ..errors import InputError
-from ..kalman.statespace import StateSpace
-from ..noise.components import Component, total_allan_variance
+from ... import kalman
+from ...errors import InputError
+from ...kalman.statespace import StateSpace
+from ...noise.components import Component, total_allan_variance
 from .mle import LR_DROP_95, RECENT_EVALUATIONS
 
 #: The end of a ``ci95_method`` given where the profile budget was spent (:mod:`.uncertainty`).

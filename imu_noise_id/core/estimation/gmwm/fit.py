@@ -17,21 +17,21 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import InputError
-from ..kalman import statespace as ss
-from ..noise.components import COMPONENT_TYPES, RR, Component, simulate_sum
-from ..noise.modelspec import CANONICAL_ORDER, gauss_markov_fastest_first, model_name
-from ..noise.trend import ls_slope
-from ..quality import interpolate_missing
-from ..wavelet.robust import DEFAULT_EFFICIENCY
-from ..wavelet.variance import DEFAULT_MAX_FRACTION, WaveletVariance, wavelet_variance
-from . import gmwm_engine as eng
-from .gmwm_ramp import fit_ramp
-from .model import check_signal, parse_structure_or_components
-from .quantiles import Z95
-from .results import FitResult
-from .starts import fit_allan
-from .uncertainty import _record_length
+from ...errors import InputError
+from ...kalman import statespace as ss
+from ...noise.components import COMPONENT_TYPES, RR, Component, simulate_sum
+from ...noise.modelspec import CANONICAL_ORDER, gauss_markov_fastest_first, model_name
+from ...noise.trend import ls_slope
+from ...quality import interpolate_missing
+from ...wavelet.robust import DEFAULT_EFFICIENCY
+from ...wavelet.variance import DEFAULT_MAX_FRACTION, WaveletVariance, wavelet_variance
+from ..em.model import check_signal, parse_structure_or_components
+from ..em.results import FitResult
+from ..em.starts import fit_allan
+from ..em.uncertainty import _record_length
+from ..readouts.quantiles import Z95
+from . import engine as eng
+from .ramp import fit_ramp
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ...errors import InputError
 
 #: Default end of the τ range [s] (it starts at the sampling period): the time scales of a VIO / GNSS-INS filter
 #: between aiding updates and the bias drift it must follow, from a fraction of a second to minutes.
@@ -57,7 +57,7 @@ class WnRwOverbound:
 
 def _basis(tau: np.ndarray, dt: float) -> np.ndarray:
     """(T, 2): the Allan variances of unit WN and unit RW at ``tau``."""
-    from ..noise.components import RW, WN  # scipy.signal behind it: not imported with the CLI's defaults
+    from ...noise.components import RW, WN  # scipy.signal behind it: not imported with the CLI's defaults
 
     return np.column_stack([WN(1.0).allan_variance(tau, dt), RW(1.0).allan_variance(tau, dt)])
 

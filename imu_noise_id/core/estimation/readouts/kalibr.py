@@ -21,14 +21,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..allan.rw_bound import RandomWalkBound
-from ..noise.base import Component
-from ..noise.components import DLPF, LPF, MA, OSC, RW, WN
-from ..noise.modelspec import parameter_labels
-from ..noise.resonant import filter_memory_limit
-from .differences import derivative_in_domain
+from ...allan.rw_bound import RandomWalkBound
+from ...noise.base import Component
+from ...noise.components import DLPF, LPF, MA, OSC, RW, WN
+from ...noise.modelspec import parameter_labels
+from ...noise.resonant import filter_memory_limit
+from ..em.differences import derivative_in_domain
+from ..em.results import FitResult
 from .quantiles import Z95
-from .results import FitResult
 
 #: Log-parameter step of the passband densities' gradients.
 GRADIENT_STEP = 1e-6

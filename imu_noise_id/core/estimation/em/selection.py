@@ -8,14 +8,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..allan import AllanResult
-from ..allan.slopes import rolloff_end
-from ..diagnostics.av_signatures import flicker_level
-from ..errors import InputError
-from ..noise.components import Component
-from ..noise.digital import SensorFilter
-from ..noise.modelspec import parse_structure
-from ..quality import interpolate_missing
+from ...allan import AllanResult
+from ...allan.slopes import rolloff_end
+from ...diagnostics.av_signatures import flicker_level
+from ...errors import InputError
+from ...noise.components import Component
+from ...noise.digital import SensorFilter
+from ...noise.modelspec import parse_structure
+from ...quality import interpolate_missing
 from . import composite, screen, starts, whittle
 from .model import FitOptions, NoiseModel, check_signal
 from .results import FitResult

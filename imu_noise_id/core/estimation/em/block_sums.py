@@ -26,10 +26,10 @@ import numpy as np
 from scipy.linalg import cho_factor, cho_solve, cholesky, solve_triangular, toeplitz
 from scipy.optimize import minimize
 
-from ..errors import InputError
-from ..noise.components import GM, RW, WN, Component
-from ..noise.flicker import BI
-from ..quality import interpolate_missing
+from ...errors import InputError
+from ...noise.components import GM, RW, WN, Component
+from ...noise.flicker import BI
+from ...quality import interpolate_missing
 from .whittle import with_log_parameters
 
 #: Most blocks a record is cut into (an evaluation is O(M³)).

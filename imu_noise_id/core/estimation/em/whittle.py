@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from ..errors import InputError
-from ..noise.components import GM, QN, RR, RW, WN, Component
+from ...errors import InputError
+from ...noise.components import GM, QN, RR, RW, WN, Component
 from .differences import derivative_in_domain, stepped
 
 
@@ -232,7 +232,7 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
 def whittle_information(components: list[Component], y: np.ndarray, dt: float,
                         periodogram: BandedPeriodogram | None = None, step: float = 1e-3) -> np.ndarray:
     """The expected (Fisher) information of the banded Whittle log-likelihood in the log-parameters (non-RR
-    components in order, as :class:`imu_noise_id.core.estimation.mle.Parameterisation`): Σ_b n_b ∂ln S_b/∂ϑ ·
+    components in order, as :class:`imu_noise_id.core.estimation.em.mle.Parameterisation`): Σ_b n_b ∂ln S_b/∂ϑ ·
     ∂ln S_b/∂ϑᵀ over the bands b of n_b Fourier frequencies, the derivatives of the log-spectrum by central
     differences (one-sided at a component's domain edge, :mod:`.differences`; zero where neither step is inside). It
     preconditions the exact-likelihood quasi-Newton finish (:func:`.mle.maximise`). Beyond the papers; positive

@@ -19,13 +19,13 @@ import numpy as np
 from scipy import linalg
 from scipy.optimize import least_squares
 
-from ..noise.components import Component
-from ..noise.modelspec import parameter_labels
-from ..wavelet.covariance import theoretical_wv, wv_covariance
-from ..wavelet.variance import WaveletVariance
-from .differences import derivative_in_domain, stepped
-from .mle import covariance_from_information, physical_bounds
-from .quantiles import CHI2_95
+from ...noise.components import Component
+from ...noise.modelspec import parameter_labels
+from ...wavelet.covariance import theoretical_wv, wv_covariance
+from ...wavelet.variance import WaveletVariance
+from ..em.differences import derivative_in_domain, stepped
+from ..em.mle import covariance_from_information, physical_bounds
+from ..readouts.quantiles import CHI2_95
 
 #: Parameters whose value scales a component's variance (may be indistinguishable from 0).
 AMPLITUDES = frozenset({"noise_density", "random_walk", "sigma", "Q", "slope"})

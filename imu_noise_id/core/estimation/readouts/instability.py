@@ -15,10 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..noise.components import Component, total_allan_variance
-from ..noise.modelspec import parameter_labels
+from ...noise.components import Component, total_allan_variance
+from ...noise.modelspec import parameter_labels
+from ..em.results import FitResult
 from .kalibr import is_short_memory_osc
-from .results import FitResult
 
 #: σ_min = FLICKER_FACTOR · B (IEEE Std 952: √(2 ln 2 / π)).
 FLICKER_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)

@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq, least_squares, minimize_scalar
 
-from ..noise.trend import ls_slope_variance
-from . import gmwm_engine as eng
-from .quantiles import CHI2_95, Z95
+from ...noise.trend import ls_slope_variance
+from ..readouts.quantiles import CHI2_95, Z95
+from . import engine as eng
 
 #: Bracketing steps outward from the centre (in units of the plug-in standard error √V(θ̂)) before giving up.
 MAX_STEPS = 12

@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .quantiles import Z95
+from ..readouts.quantiles import Z95
 
 #: Each end is accepted when |r − Z95| is below this (an interval of 94.4–95.6 % nominal level).
 R_TOL = 0.05

@@ -17,12 +17,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .. import kalman
-from ..errors import InputError
-from ..kalman import statespace as ss
-from ..noise.components import RR, Component
-from ..noise.modelspec import gauss_markov_fastest_first, model_name, parameter_labels
-from ..quality import interpolate_missing
+from ... import kalman
+from ...errors import InputError
+from ...kalman import statespace as ss
+from ...noise.components import RR, Component
+from ...noise.modelspec import gauss_markov_fastest_first, model_name, parameter_labels
+from ...quality import interpolate_missing
 from . import em, mle, whittle
 from .results import FitResult
 from .uncertainty import Z95, add_uncertainty

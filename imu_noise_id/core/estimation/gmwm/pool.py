@@ -18,13 +18,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
-from ..errors import InputError
-from ..kalman import statespace as ss
-from ..noise.components import Component
-from ..wavelet.variance import WaveletVariance
-from . import gmwm_engine as eng
-from .gmwm import GmwmFit, GmwmOptions, dress, estimate, fit_gmwm, prepare, starting_values
-from .model import parse_structure_or_components
+from ...errors import InputError
+from ...kalman import statespace as ss
+from ...noise.components import Component
+from ...wavelet.variance import WaveletVariance
+from ..em.model import parse_structure_or_components
+from . import engine as eng
+from .fit import GmwmFit, GmwmOptions, dress, estimate, fit_gmwm, prepare, starting_values
 
 #: Level of the compatibility test.
 COMPATIBILITY_ALPHA = 0.05

@@ -25,8 +25,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.optimize import minimize
 
-from ..noise.components import RR, Component
-from ..quality import interpolate_missing
+from ...noise.components import RR, Component
+from ...quality import interpolate_missing
 from . import block_sums, whittle
 from .differences import derivative_in_domain
 

@@ -18,15 +18,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import kalman
-from ..allan import AllanResult
-from ..errors import InputError
-from ..kalman import harmonic
-from ..kalman import statespace as ss
-from ..noise.components import COMPONENT_TYPES, Component
-from ..noise.digital import SensorFilter
-from ..noise.modelspec import parse_model, parse_structure
-from ..quality import interpolate_missing
+from ... import kalman
+from ...allan import AllanResult
+from ...errors import InputError
+from ...kalman import harmonic
+from ...kalman import statespace as ss
+from ...noise.components import COMPONENT_TYPES, Component
+from ...noise.digital import SensorFilter
+from ...noise.modelspec import parse_model, parse_structure
+from ...quality import interpolate_missing
 from . import mle, starts, whittle
 from .results import FitResult
 from .search import FINISH_BUDGET, fit_noise_model

@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..noise.modelspec import parameter_labels
+from ...noise.modelspec import parameter_labels
+from ..em.results import FitResult
 from . import kalibr
 from .quantiles import Z95
-from .results import FitResult
 
 #: A GMWM scale whose standardised residual exceeds this misfits.
 MISFIT_Z = 2.0

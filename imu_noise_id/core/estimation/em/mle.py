@@ -3,7 +3,7 @@
 L-BFGS-B on the exact log-likelihood after a few EM iterations, in log-parameters ϑ = log(continuous-time parameter)
 of each stochastic component; the mean parameters (bias, ramp, exog, u, μ) profiled by GLS
 (:func:`imu_noise_id.core.kalman.loglik`). Gradient by Fisher's identity from one smoother pass
-(:class:`imu_noise_id.core.estimation.em.MatrixScore`), each log-parameter through its own component's block.
+(:class:`imu_noise_id.core.estimation.em.em.MatrixScore`), each log-parameter through its own component's block.
 Standard errors (paper 000 §3.4): observed information = minus the Hessian of ℓ (differences of the exact gradient);
 95 % interval exp(ϑ̂ ± 1.96·se_ϑ), physical se by the delta method. Reasons: docs/em.md, "Algorithm" 5–6.
 """
@@ -18,11 +18,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import minimize
 
-from .. import kalman
-from ..errors import InputError
-from ..kalman.common import ProfileResult, check_data
-from ..kalman.statespace import StateSpace, state_span, with_components
-from ..noise.components import RR, Component
+from ... import kalman
+from ...errors import InputError
+from ...kalman.common import ProfileResult, check_data
+from ...kalman.statespace import StateSpace, state_span, with_components
+from ...noise.components import RR, Component
 from . import em
 from .differences import derivative_in_domain, stepped
 from .whittle import with_log_parameters
@@ -84,7 +84,7 @@ class Parameterisation:
         beyond float range gives inf (the component then refuses it), not an overflow warning."""
         out = with_log_parameters(self.template, list(self.entries), theta)
         if model is not None and any(isinstance(c, RR) for c in out):
-            from ..kalman.statespace import ramp_components
+            from ...kalman.statespace import ramp_components
 
             # only the RR blocks: every block converted back (an OSC's eigenvalues, a ladder's) at each step of the
             # gradient's finite differences was work thrown away
@@ -130,7 +130,7 @@ def loglik_grad_profile(
     step: float = 1e-6, data: em.DataSums | None = None,
 ) -> tuple[float, np.ndarray, StateSpace, ProfileResult]:
     """:func:`loglik_and_grad` and the GLS profile itself (β̂, its covariance): the gradient is the log-likelihood's
-    gradient in the model matrices (:class:`~imu_noise_id.core.estimation.em.MatrixScore`, one smoother pass)
+    gradient in the model matrices (:class:`~imu_noise_id.core.estimation.em.em.MatrixScore`, one smoother pass)
     along each log-parameter's change of its own block (:meth:`Parameterisation.block_derivative`, differences
     of ``step``)."""
     components = par.to_components(theta, base)
@@ -207,7 +207,7 @@ def maximise(
     before its gradient test while ℓ still rose (by :data:`STALLED_RISE` or more), ``budget_stop`` is how much ℓ rose
     over the last :data:`RECENT_EVALUATIONS` of them.
     """
-    from ..kalman.statespace import to_components
+    from ...kalman.statespace import to_components
 
     theta0 = par.to_theta(to_components(base))
     lo = theta0 - bounds_width

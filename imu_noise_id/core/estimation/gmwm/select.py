@@ -15,14 +15,14 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass
 
-from ..allan import AllanResult
-from ..errors import InputError
-from ..noise.components import GM, Component
-from ..noise.modelspec import parameter_labels, parse_structure, structure_name
-from ..wavelet.variance import WaveletVariance
-from . import gmwm_engine as eng
-from .gmwm import Estimate, GmwmFit, GmwmOptions, dress, estimate_structure, prepare
-from .selection import suggest_candidates
+from ...allan import AllanResult
+from ...errors import InputError
+from ...noise.components import GM, Component
+from ...noise.modelspec import parameter_labels, parse_structure, structure_name
+from ...wavelet.variance import WaveletVariance
+from ..em.selection import suggest_candidates
+from . import engine as eng
+from .fit import Estimate, GmwmFit, GmwmOptions, dress, estimate_structure, prepare
 
 #: Relative WIC difference within which two candidates are one tie (:func:`select_gmwm`).
 WIC_TIE = 1e-6

@@ -14,12 +14,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..errors import InputError
-from ..kalman.statespace import to_components
-from ..noise.components import GM
-from ..noise.modelspec import structure_name
-from ..noise.resonant import LPF, filter_memory_limit
-from .quantiles import Z95
+from ...errors import InputError
+from ...kalman.statespace import to_components
+from ...noise.components import GM
+from ...noise.modelspec import structure_name
+from ...noise.resonant import LPF, filter_memory_limit
+from ..readouts.quantiles import Z95
 from .results import FitResult
 from .uncertainty import add_uncertainty
 
@@ -68,7 +68,7 @@ def gm_as_filter(fit: FitResult) -> FitResult:
 
 
 def with_uncertainty(fit: FitResult) -> FitResult:
-    """:func:`~imu_noise_id.core.estimation.uncertainty.add_uncertainty` of a fit that may hold a renamed LPF: intervals
+    """:func:`.uncertainty.add_uncertainty` of a fit that may hold a renamed LPF: intervals
     computed on the GM block, then the renaming (and covariance) applied again (:func:`gm_as_filter`)."""
     if fit.statespace is None:
         raise InputError("this FitResult holds no state space to compute its uncertainty from")

@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..noise.components import GM, Component
+from ...noise.components import GM, Component
 from . import block_sums, mle, whittle
 
 #: Screen ΔBIC below which a candidate is fitted exactly (units of −2 ln L).

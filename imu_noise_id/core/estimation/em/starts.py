@@ -14,13 +14,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..allan import AllanResult, allan_variance
-from ..errors import InputError
-from ..noise import units
-from ..noise.components import BI, DLPF, GM, LPF, MA, OSC, QN, RR, RW, WN, Component, total_allan_variance
-from ..noise.digital import ORDERS as DLPF_ORDERS
-from ..noise.digital import SensorFilter
-from ..noise.flicker import PLATEAU, band_for_record
+from ...allan import AllanResult, allan_variance
+from ...errors import InputError
+from ...noise import units
+from ...noise.components import BI, DLPF, GM, LPF, MA, OSC, QN, RR, RW, WN, Component, total_allan_variance
+from ...noise.digital import ORDERS as DLPF_ORDERS
+from ...noise.digital import SensorFilter
+from ...noise.flicker import PLATEAU, band_for_record
 
 #: The starting-value fit uses the AV at averaging factors m ≤ this fraction of the record.
 MAX_FRACTION = 0.25

@@ -16,15 +16,15 @@ import math
 
 import numpy as np
 
-from .. import kalman
-from ..errors import InputError
-from ..kalman import statespace as ss
-from ..noise.components import RR, Component
-from ..noise.modelspec import parameter_labels
-from ..quality import interpolate_missing
+from ... import kalman
+from ...errors import InputError
+from ...kalman import statespace as ss
+from ...noise.components import RR, Component
+from ...noise.modelspec import parameter_labels
+from ...quality import interpolate_missing
+from ..readouts.quantiles import Z95
 from . import mle, whittle
 from .profile import BudgetSpentError, Profiler
-from .quantiles import Z95
 from .results import BUDGET_SPENT, FitResult, RecordLengthAdvice
 
 #: Above this standard error in log space (a 95 % Wald interval wider than ×7 each way) the Wald interval is

@@ -12,7 +12,7 @@ Beyond the paper:
   an O(1) term); ``sigma_mode='fixed'`` is the paper's exact EM.
 * Free diagonal Φ elements are kept in (1e-12, 1 − 1e-12), free Q variances above :data:`Q_FLOOR_REL`·R.
 * :class:`MatrixScore`: the exact log-likelihood's gradient in Φ, Q, R by Fisher's identity, for the quasi-Newton
-  finish (:mod:`imu_noise_id.core.estimation.search`).
+  finish (:mod:`imu_noise_id.core.estimation.em.search`).
 """
 
 from __future__ import annotations
@@ -21,12 +21,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import kalman
-from ..errors import InputError
-from ..kalman import riccati
-from ..kalman.common import check_data
-from ..kalman.statespace import StateSpace
-from ..noise.components import PHI_RANGE
+from ... import kalman
+from ...errors import InputError
+from ...kalman import riccati
+from ...kalman.common import check_data
+from ...kalman.statespace import StateSpace
+from ...noise.components import PHI_RANGE
 
 #: Floor of free process-noise variances relative to R (keeps Q invertible in the Φ and u updates).
 Q_FLOOR_REL = 1e-20
@@ -204,7 +204,7 @@ class MatrixScore:
     C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ], over the states of non-zero process noise. In steady mode the
     x_1 term's share comes from the DARE's adjoint (:class:`InitialTermGradient`). :meth:`directional` gives ∂ℓ/∂ϑ
     from a parameter's change of its own block
-    (:meth:`~imu_noise_id.core.estimation.mle.Parameterisation.block_derivative`). H is held fixed. Raises ValueError
+    (:meth:`~imu_noise_id.core.estimation.em.mle.Parameterisation.block_derivative`). H is held fixed. Raises ValueError
     (in :meth:`at`) when R is zero. Reasons: docs/em.md, "Algorithm" 5.
     """
 

@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize
 
-from .. import kalman
-from ..kalman.common import ProfileResult
-from ..kalman.statespace import StateSpace
+from ... import kalman
+from ...kalman.common import ProfileResult
+from ...kalman.statespace import StateSpace
 from . import em, mle
 from .profile_search import Z95, centre, end
 
