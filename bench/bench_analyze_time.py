@@ -16,7 +16,7 @@ screen on statistics of fixed size, then 3 h at 400 Hz and 24 h at 200 Hz (this 
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
 checkout; with ``--adis RUN``, the whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at 100
-Hz, ``bench/adis.py``) instead. A checkout still running after ``--timeout`` seconds is stopped and printed as such
+Hz, ``bench/common.py``) instead. A checkout still running after ``--timeout`` seconds is stopped and printed as such
 (the checkout before the composite search needs hours on a measured record). Printed: per rate, source and ``--jobs``
 value, wall time, CPU time (user + system of the analyze process and of the worker processes it reaped) and peak
 memory: the largest RSS of one process and the largest sums of the RSS and of the PSS (shared pages split among the
@@ -40,8 +40,7 @@ from pathlib import Path
 import numpy as np
 import psutil
 import yaml
-from adis import DATA, load_run  # bench/adis.py, beside this script
-from checkouts import check_imports_own_package  # bench/checkouts.py, beside this script
+from common import ADIS_DATA, check_imports_own_package, load_adis_run  # bench/common.py, beside this script
 
 from imu_noise_id.bag.writer import write_bag
 from imu_noise_id.core.axes import ImuSeries
@@ -81,9 +80,9 @@ def _stop_tree(pid: int) -> None:
 
 def _adis_bag(run: int, path: Path) -> int:
     """Write ADIS16405 static run ``run`` as a rosbag2 mcap bag at ``path``; its samples per axis."""
-    if not DATA.is_dir():
-        raise SystemExit(f"no data at {DATA}")
-    data, dt = load_run(run)
+    if not ADIS_DATA.is_dir():
+        raise SystemExit(f"no data at {ADIS_DATA}")
+    data, dt = load_adis_run(run)
     t = dt * np.arange(data.shape[0])
     write_bag(path, ImuSeries(t=t, gyro=data[:, :3], accel=data[:, 3:], frame_id="imu", topic="/imu/data"))
     return data.shape[0]

@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from adis import data_missing, load_run  # bench/adis.py, beside this script
+from common import adis_data_missing, load_adis_run  # bench/common.py, beside this script
 
 from imu_noise_id.bag.writer import write_bag
 from imu_noise_id.cli import main as cli
@@ -32,7 +32,7 @@ from imu_noise_id.core.axes import ImuSeries
 
 def write_run(run: int, seconds: float, folder: Path) -> Path:
     """Run ``run``'s first ``seconds`` as a bag in ``folder``."""
-    data, dt = load_run(run)
+    data, dt = load_adis_run(run)
     data = data[: round(seconds / dt)]
     t = dt * np.arange(data.shape[0])
     return write_bag(folder / f"run{run}", ImuSeries(t, data[:, :3], data[:, 3:], "imu_link", "/imu/data"))
@@ -44,7 +44,7 @@ def main() -> int:
     parser.add_argument("--reference", type=Path, default=None)
     parser.add_argument("--out", type=Path, default=None, help="write the output there (default: stdout)")
     args = parser.parse_args()
-    if data_missing():
+    if adis_data_missing():
         return 2
     lines = [f"# bench/bench_compare_adis.py --seconds {args.seconds:g}"]
     with tempfile.TemporaryDirectory() as tmp:

@@ -1,7 +1,7 @@
 """Wall time of one structure's fit with its intervals (``imu-noise-id fit --model WN+GM+RW+RR``), side by side.
 
 Each record length is fitted by every checkout given, one after the other in the same run, each in its own process
-(``checkouts.run_in_checkout``, one BLAS thread)::
+(``common.run_in_checkout``, one BLAS thread)::
 
     .venv/bin/python bench/bench_fit_time.py --samples 360000 --baseline ../baseline
     .venv/bin/python bench/bench_fit_time.py --samples 10000000
@@ -20,7 +20,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from checkouts import run_in_checkout  # bench/checkouts.py, beside this script
+from common import run_in_checkout  # bench/common.py, beside this script
 
 ROOT = Path(__file__).resolve().parents[1]
 

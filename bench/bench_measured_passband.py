@@ -5,11 +5,11 @@ Usage (from the repository root)::
 
     PYTHONPATH=$PWD .venv/bin/python bench/bench_measured_passband.py [--adis-runs 1 2 …] [--adis-samples N]
 
-Records: the rest phases of the three BROAD trials (a consumer module at 285.7 Hz, 28–42 s; ``bench/broad.py``) and,
-with ``--adis-runs``, the first ``--adis-samples`` samples of those ADIS16405 runs (100 Hz; ``bench/adis.py``). Each
+Records: the rest phases of the three BROAD trials (a consumer module at 285.7 Hz, 28–42 s; ``bench/common.py``) and,
+with ``--adis-runs``, the first ``--adis-samples`` samples of those ADIS16405 runs (100 Hz; ``bench/common.py``). Each
 runs the default ``analyze`` pipeline (model selection, closed loop, final model, the resolution of an untrusted one)
 in this process. Printed per axis: the final model, N and its method, the data's passband level (the median Welch PSD
-over 1–6 Hz, ``loop_measured.data_passband_level``, which shares nothing with the fit) and their ratio; then how many
+over 1–6 Hz, ``common.data_passband_level``, which shares nothing with the fit) and their ratio; then how many
 axes paste an N below half the level (the goal: none). Needs ``../shared/data`` (third-party data, not in the
 repository).
 """
@@ -21,10 +21,7 @@ import sys
 import time
 
 import numpy as np
-from adis import data_missing, load_run  # bench/adis.py, beside this script
-from broad import DATA as BROAD_DATA  # bench/broad.py
-from broad import load_rest
-from loop_measured import data_passband_level  # bench/loop_measured.py
+from common import BROAD_DATA, adis_data_missing, data_passband_level, load_adis_run, load_broad_rest  # bench/common.py
 
 from imu_noise_id.core.axes import AXES, ImuSeries
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, analyze
@@ -58,16 +55,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--adis-runs", type=int, nargs="*", default=[])
     ap.add_argument("--adis-samples", type=int, default=100_000)
     args = ap.parse_args(argv)
-    if not BROAD_DATA.exists() or (args.adis_runs and data_missing()):
+    if not BROAD_DATA.exists() or (args.adis_runs and adis_data_missing()):
         print("../shared/data is not here: nothing to run")
         return 0
     print(f"# bench/bench_measured_passband.py {' '.join(sys.argv[1:])}")
     ratios = []
     for trial in BROAD_TRIALS:
-        data, dt = load_rest(trial)
+        data, dt = load_broad_rest(trial)
         ratios += run_record(f"BROAD {trial} rest", data, dt)
     for run in args.adis_runs:
-        y, dt = load_run(run, args.adis_samples)
+        y, dt = load_adis_run(run, args.adis_samples)
         ratios += run_record(f"ADIS16405 run {run}", y, dt)
     r = np.array([x for _, x in ratios])
     print(f"axes: {r.size}; N below half the passband level: {int(np.sum(r < 0.5))}; within 10 % of it: "

@@ -19,7 +19,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-from loop_measured import long_tau_rw_bounds  # bench/loop_measured.py, beside this script
+from common import long_tau_rw_bounds  # bench/common.py, beside this script
 
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 

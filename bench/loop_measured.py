@@ -29,11 +29,16 @@ import time
 from pathlib import Path
 
 import numpy as np
-from adis import DATA, data_missing, load_run  # bench/adis.py, beside this script
-from scipy import signal
+from common import (  # bench/common.py, beside this script
+    LONG_TAU,
+    PASSBAND_HZ,
+    SHARED_DATA,
+    adis_data_missing,
+    data_passband_level,
+    load_adis_run,
+    long_tau_rw_bounds,
+)
 
-from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.allan.rw_bound import random_walk_bound
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.estimation.em.relabel import gm_as_filter, with_uncertainty
 from imu_noise_id.core.estimation.readouts import kalibr
@@ -43,54 +48,8 @@ from imu_noise_id.pipelines.loop.rules import av_rms_z
 
 #: The ≈0.5 Hz disturbance's frequency per run, from the data's README.
 DISTURBANCE_HZ = {1: 0.565, 2: 0.565, 3: 0.54, 4: 0.535, 5: 0.47, 6: 0.565}
-
-
-#: The long-τ random-walk bounds use the AV at τ ≥ this [s] (a tenth of the 10⁴ s records; ≥ 100 s of the 1000 s ones).
-LONG_TAU = 100.0
-
-
-def long_tau_rw_bounds(y: np.ndarray, dt: float, random_walk: float | None = None,
-                       tau_min: float = LONG_TAU) -> dict[str, float]:
-    """The largest RW density [u/s/√Hz] the long-τ AV supports, from the AV at the M octaves τ ≥ ``tau_min`` [s].
-
-    ``rw_bound``: the point bound min_τ √(3·AV_hat(τ)/τ). A minimum over estimates of a few degrees of freedom each
-    (one at τ = N/2), biased low: a random walk equal to the truth exceeds it in most records.
-
-    ``rw_bound95_pointwise``: min_τ of √(3·U(τ)/τ) with U(τ) the one-sided 95 % upper confidence limit of AV(τ)
-    (χ² with the EDF of a random walk, the null K²τ/3). A minimum over M pointwise 95 % limits is not a 95 % bound:
-    a true K exceeds it with probability up to M·5 %.
-
-    ``rw_bound95``: :func:`~imu_noise_id.core.allan.rw_bound.random_walk_bound` (what ``analyze`` flags a final K
-    by): each limit at the level 1 − 5 %/M (Bonferroni), so that the true K exceeds it with probability ≤ 5 %. The
-    summary judges a fitted random walk by it.
-
-    ``rw_p``: how strongly the long-τ AV argues against the fitted ``random_walk`` (its Bonferroni p-value,
-    :meth:`~imu_noise_id.core.allan.rw_bound.RandomWalkBound.p_value`; 1 for none): the summary also judges the
-    accelerometers' random walks as one family (18 tests at 5 % each reject ≈ 0.9 true values).
-    """
-    av = allan_variance(y, dt, confidence=0.90, alpha=-2)
-    far = av.tau >= tau_min
-    if not far.any():
-        return {"rw_bound": math.nan, "rw_bound95_pointwise": math.nan, "rw_bound95": math.nan, "rw_p": 1.0}
-    bound = random_walk_bound(av, tau_min=tau_min)
-    return {"rw_bound": float(np.min(np.sqrt(3.0 * av.variance[far, 0] / av.tau[far]))),
-            "rw_bound95_pointwise": float(np.min(np.sqrt(3.0 * av.ci_high[far, 0] / av.tau[far]))),
-            "rw_bound95": bound.value, "rw_p": bound.p_value(random_walk) if random_walk else 1.0}
-
-
-#: The band [Hz] of the data's passband level: above the ≈ 0.5 Hz disturbance, below the ≈ 10 Hz vibration line
-#: and the sensor's filter (the median over the band steps over narrower lines).
-PASSBAND_HZ = (1.0, 6.0)
 #: A fitted N within this fraction of the data's passband level counts as agreeing with it.
 N_TOLERANCE = 0.10
-
-
-def data_passband_level(y: np.ndarray, dt: float) -> float:
-    """The data's white-noise level √S [u/√Hz] (two-sided S, the convention of N): the median over
-    :data:`PASSBAND_HZ` of the Welch PSD (4096-sample segments, one-sided, halved)."""
-    f, p = signal.welch(y - np.mean(y), fs=1.0 / dt, nperseg=4096)
-    band = (f >= PASSBAND_HZ[0]) & (f <= PASSBAND_HZ[1])
-    return math.sqrt(float(np.median(p[band])) / 2.0)
 
 
 def _commit() -> str:
@@ -227,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--summarise-only", action="store_true",
                     help="with --resume: summarise the axes OUT.jsonl holds and fit none (a partial table)")
     args = ap.parse_args(argv)
-    if data_missing():
+    if adis_data_missing():
         return 2
     lines = [f"# bench/loop_measured.py --runs {args.runs} --axes {args.axes} --samples {args.samples} "
              f"(start WN+RW, full 100 Hz) at commit {_commit()}"]
@@ -237,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
         done = {(r["run"], r["axis"]): _from_json(r) for r in map(json.loads, log.read_text().splitlines())}
     results = []
     for run in (int(r) for r in args.runs.split(",") if r):
-        data, dt = load_run(run, args.samples)
+        data, dt = load_adis_run(run, args.samples)
         for axis in args.axes.split(","):
             res = done.get((run, axis))
             if res is None and args.summarise_only:
@@ -254,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
         lines += ["", *summary(results)]
     res = done.get((0, "gyro_x"))
     if args.mtig_samples and (res is not None or not args.summarise_only):
-        d = np.load(DATA.parent / "mtig_gyro_x_contaminated" / "mtig_cont_gyro_x.npz")
+        d = np.load(SHARED_DATA / "mtig_gyro_x_contaminated" / "mtig_cont_gyro_x.npz")
         y = np.asarray(d["gyro_x"], dtype=float)[: args.mtig_samples]
         dt = 1.0 / float(d["fs_hz"])
         if res is None:  # logged as run 0

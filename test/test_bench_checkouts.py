@@ -1,4 +1,4 @@
-"""The side-by-side benches time the checkout they are given (bench/checkouts.py)."""
+"""The side-by-side benches time the checkout they are given (bench/common.py)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "bench"))
 
-from checkouts import check_imports_own_package, run_in_checkout  # noqa: E402
+from common import check_imports_own_package, run_in_checkout  # noqa: E402
 
 
 def _copy_of_package(tmp_path: Path) -> Path:

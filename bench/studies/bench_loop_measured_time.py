@@ -1,7 +1,7 @@
 """CPU time of the closed loop on measured axes, this checkout against other checkouts side by side.
 
 An axis is ``RUN:AXIS`` of the ADIS16405 static runs or ``broadTRIAL:AXIS`` of a BROAD trial's rest before its
-motion (a consumer module's short record, ``bench/broad.py``). Each axis (its first ``--samples`` samples) runs the
+motion (a consumer module's short record, ``bench/common.py``). Each axis (its first ``--samples`` samples) runs the
 loop from WN+RW once per source tree, the trees in alternation
 and each in its own process with ``OPENBLAS_NUM_THREADS=1``, so that a speed claim is a ratio measured side by side
 in one run. Printed per axis and tree: the process's CPU time, the final model, its log-likelihood (full
@@ -24,8 +24,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
-from adis import data_missing  # bench/adis.py
-from checkouts import run_in_checkout  # bench/checkouts.py
+from common import adis_data_missing, run_in_checkout  # bench/common.py
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -33,7 +32,7 @@ ROOT = Path(__file__).resolve().parents[2]
 ONE_AXIS = """
 import json, sys
 sys.path.insert(0, {bench!r})
-from {loader_module} import {loader}
+from common import {loader}
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.pipelines.loop.run import run_closed_loop
 data, dt = {loader}({run}, {samples})
@@ -47,9 +46,8 @@ def run_axis(source: Path, record: str, axis: str, samples: int) -> tuple[float,
     """(CPU [s] of the child, its JSON line) of the loop on one axis of ``record`` (an ADIS16405 run's number or
     ``broadTRIAL``) with ``source``'s package."""
     broad = record.startswith("broad")
-    code = ONE_AXIS.format(bench=str(ROOT / "bench"), loader_module="broad" if broad else "adis",
-                           loader="load_rest" if broad else "load_run", run=int(record.removeprefix("broad")),
-                           samples=samples, axis=axis)
+    code = ONE_AXIS.format(bench=str(ROOT / "bench"), loader="load_broad_rest" if broad else "load_adis_run",
+                           run=int(record.removeprefix("broad")), samples=samples, axis=axis)
     return run_in_checkout(source, code, f"the loop on {record} {axis}")
 
 
@@ -60,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", type=int, default=100_000, help="first samples of each run (default 10^5)")
     parser.add_argument("--baseline", type=Path, action="append", default=[], help="another checkout (repeatable)")
     args = parser.parse_args(argv)
-    if data_missing():
+    if adis_data_missing():
         return 2
     sources = [("this checkout", ROOT), *[(f"baseline {p}", p.resolve()) for p in args.baseline]]
     print(f"# bench/studies/bench_loop_measured_time.py --samples {args.samples}; {os.cpu_count()} CPUs; load average "

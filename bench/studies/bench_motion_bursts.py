@@ -3,13 +3,14 @@ motion_bursts`) reads on the real recordings of ``../shared/data``.
 
 Usage (from the repository root)::
 
-    PYTHONPATH=$PWD python bench/studies/bench_motion_bursts.py > docs/results/studies/bench_motion_bursts.txt
+    PYTHONPATH=$PWD python bench/studies/bench_motion_bursts.py
 
 Per record and axis: the largest spread ratio any burst-long stretch (:data:`~imu_noise_id.core.stillness.
 BURST_MIN_S`) holds in all its windows (the statistic :data:`~imu_noise_id.core.stillness.BURST_RATIO` is compared
 with), then the static check's bursts and the still stretch it suggests. Records: the six ADIS16405 static runs
 (2.8 h each), the MTi-G gyro (1.4 h, one axis) and the BROAD trials' rest phases, as the data's ``movement`` flag
-cuts them and 2 s farther from the motion (the flag lags the motion's start by 0.1–1.3 s).
+cuts them and 2 s farther from the motion (the flag lags the motion's start by 0.1–1.3 s). What it found is in
+docs/bags.md (Static check); it keeps no output.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
 import numpy as np
-from broad import MOTION_MARGIN_S  # bench/broad.py
+from common import MOTION_MARGIN_S  # bench/common.py
 from numpy.lib.stride_tricks import sliding_window_view
 
 from imu_noise_id.core.axes import AXES, ImuSeries

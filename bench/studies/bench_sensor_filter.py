@@ -3,7 +3,7 @@
 A MEMS part's DLPF (5–40 Hz, first order here) on its noise behind a white floor, at 200 Hz, 400 Hz and 1 kHz: a
 memory of 1–32 samples. Each record runs ``analyze``'s stages for one axis — the model selection (with intervals),
 the closed loop from its winner, the final model — and the Allan-slope reading, in each source tree's own process
-(``bench/checkouts.py``: one BLAS thread, the tree's package checked), on the same samples (simulated once here,
+(``bench/common.py``: one BLAS thread, the tree's package checked), on the same samples (simulated once here,
 passed as a file). Printed per record and tree: the final model, N's error against the truth (the simulated
 components' density as sampled, ``kalibr.passband_density``), whether N's 95 % interval holds it, the Allan-slope
 N's error and method, and the CPU time; then a summary per tree::
@@ -28,7 +28,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
 import numpy as np
-from checkouts import run_in_checkout  # bench/checkouts.py
+from common import run_in_checkout  # bench/common.py
 
 from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import LPF, RW, WN, simulate_sum

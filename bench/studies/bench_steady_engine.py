@@ -30,7 +30,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
-from checkouts import run_in_checkout  # bench/checkouts.py
+from common import run_in_checkout  # bench/common.py
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -21,7 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
-from adis import data_missing, load_run  # bench/adis.py
+from common import adis_data_missing, load_adis_run  # bench/common.py
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.estimation.em import composite, mle
@@ -34,9 +34,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--run", type=int, default=1)
     parser.add_argument("--axes", nargs="+", default=["gyro_z", "accel_x"], choices=AXES)
     args = parser.parse_args(argv)
-    if data_missing():
+    if adis_data_missing():
         return 2
-    data, dt = load_run(args.run, 0)
+    data, dt = load_adis_run(args.run, 0)
     for i, axis in enumerate(args.axes):
         if i:
             print()

@@ -20,7 +20,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
-from adis import data_missing, load_run  # bench/adis.py
+from common import adis_data_missing, load_adis_run  # bench/common.py
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.diagnostics.residuals import av_misfit_z
@@ -31,7 +31,7 @@ from imu_noise_id.pipelines.loop.rules import av_rms_z
 def trace(run: int, axis: str, samples: int, *, script: str = "bench/studies/loop_trace.py") -> list[str]:
     """The loop from WN+RW on ``axis`` of ADIS16405 run ``run`` (its first ``samples``), traced by :func:`describe`
     under a header naming ``script``, the arguments and the time."""
-    data, dt = load_run(run, samples)
+    data, dt = load_adis_run(run, samples)
     start = time.perf_counter()
     r = run_closed_loop(data[:, AXES.index(axis)], dt, "WN+RW", axis=axis)
     return [f"# {script} {run} {axis} --samples {samples}: {time.perf_counter() - start:.0f} s", *describe(r)]
@@ -66,7 +66,7 @@ def main(argv: list[str] | None = None, *, script: str = "bench/studies/loop_tra
     ap.add_argument("--samples", type=int, default=100000, help="first N samples (0 = all)")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    if data_missing():
+    if adis_data_missing():
         return 2
     text = "\n".join(trace(args.run, args.axis, args.samples, script=script)) + "\n"
     print(text, end="")

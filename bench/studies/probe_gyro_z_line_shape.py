@@ -21,7 +21,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
 import numpy as np
-from adis import data_missing, load_run  # bench/adis.py
+from common import adis_data_missing, load_adis_run  # bench/common.py
 from scipy import signal
 
 from imu_noise_id.core.axes import AXES
@@ -38,7 +38,7 @@ LAGS = 8
 
 def probe(run: int, axis: str, samples: int) -> list[str]:
     """The final model of ``axis`` of run ``run`` and its spectral misfit (module docstring)."""
-    data, dt = load_run(run, samples)
+    data, dt = load_adis_run(run, samples)
     y = data[:, AXES.index(axis)]
     last = run_closed_loop(y, dt, "WN+RW", axis=axis).final
     final = last.diagnosis
@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--samples", type=int, default=100000, help="first N samples (0 = all)")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    if data_missing():
+    if adis_data_missing():
         return 2
     lines = [f"# bench/studies/probe_gyro_z_line_shape.py --runs {args.runs} --axis {args.axis} "
              f"--samples {args.samples}"]

@@ -17,7 +17,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
-from adis import data_missing, load_run  # bench/adis.py
+from common import adis_data_missing, load_adis_run  # bench/common.py
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.core.diagnostics.lines import detect_innovation_hump
@@ -27,7 +27,7 @@ from imu_noise_id.pipelines.loop.trials import hump_resonance
 
 
 def probe(run: int, axis: str, samples: int) -> str:
-    data, dt = load_run(run, samples)
+    data, dt = load_adis_run(run, samples)
     loop = AxisLoop(data[:, AXES.index(axis)], dt, None, alpha=0.01, lags=20, outliers="impute")
     diag = loop.diagnose(LoopState(structure=["WN", "RW"]))
     hump = detect_innovation_hump(diag.innovations, dt, alpha=0.01)
@@ -43,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--samples", type=int, default=100000, help="first N samples (0 = all)")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    if data_missing():
+    if adis_data_missing():
         return 2
     lines = [f"# bench/studies/probe_innovation_hump.py --axes {args.axes} --samples {args.samples}"]
     for pair in args.axes.split(","):

@@ -21,7 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
 
-from adis import data_missing, load_run  # bench/adis.py
+from common import adis_data_missing, load_adis_run  # bench/common.py
 
 from imu_noise_id.core.axes import AXES
 from imu_noise_id.pipelines.loop import run_closed_loop
@@ -44,9 +44,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--stats", default="loop.prof", help="where the raw cProfile statistics go")
     parser.add_argument("--top", type=int, default=45, help="functions printed")
     args = parser.parse_args(argv)
-    if data_missing():
+    if adis_data_missing():
         return 2
-    data, dt = load_run(args.run, args.samples)
+    data, dt = load_adis_run(args.run, args.samples)
     y = data[:, AXES.index(args.axis)]
     signal.signal(signal.SIGALRM, _stop)
     profiler = cProfile.Profile()

@@ -2,7 +2,7 @@
 
 Usage (from the repository root)::
 
-    PYTHONPATH=$PWD python bench/bench_av_band.py [--seeds 40] [--out FILE]
+    PYTHONPATH=$PWD python bench/studies/bench_av_band.py [--seeds 40] [--out FILE]
 
 Simulates ``--seeds`` records of 1000 s at 100 Hz of an ADIS16405-like accelerometer model (WN + the 0.565 Hz line
 + a 10.8 Hz vibration), computes the Allan variance at the loop's τ and the misfit z-scores against the true model
@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
         z_textbook.append(av_misfit_z(data, (av.ci_low[:, 0], av.ci_high[:, 0]), av_model))
     z_model, z_textbook = np.array(z_model), np.array(z_textbook)
     edf = model_av_edf(MODEL, m, N, DT)
-    lines = [f"# bench/bench_av_band.py --seeds {args.seeds}: {N} samples at {1 / DT:g} Hz, model "
+    lines = [f"# bench/studies/bench_av_band.py --seeds {args.seeds}: {N} samples at {1 / DT:g} Hz, model "
              + " + ".join(f"{c.name}({', '.join(f'{k} {v:g}' for k, v in c.params().items())})" for c in MODEL),
              "    tau [s]   EDF textbook   EDF model   sd z textbook   sd z model   outside textbook   outside model"]
     for k, t in enumerate(m * DT):

@@ -5,13 +5,13 @@ White noise of passband density N = 10⁻³ through a digital Butterworth low-pa
 (the ADC's) and a random walk K = 2·10⁻⁵. Each record runs ``analyze``'s stages for one axis — the model selection (with
 intervals), the closed loop from its winner, the final model and, where the checkout has it, the resolution of an
 untrusted model (``unresolved``: the overbound of the data's Allan bound) — in each source tree's own process
-(``bench/checkouts.py``), on the same samples. Printed per record and tree: the final model, the pasted N's error
+(``bench/common.py``), on the same samples. Printed per record and tree: the final model, the pasted N's error
 against the passband level √(N² + floor²), its method, whether its interval holds the level, whether K's interval holds
 the truth, and the CPU time; then per tree: pasted N within 3 % of the passband level, never below half of it, K's
 interval coverage::
 
     git worktree add ../baseline <commit>
-    .venv/bin/python bench/bench_dlpf.py --baseline ../baseline
+    .venv/bin/python bench/studies/bench_dlpf.py --baseline ../baseline
 """
 
 from __future__ import annotations
@@ -20,16 +20,19 @@ import argparse
 import math
 import os
 import re
+import sys
 import tempfile
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
+
 import numpy as np
-from checkouts import run_in_checkout  # bench/checkouts.py, beside this script
+from common import run_in_checkout  # bench/common.py
 from scipy import signal
 
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 N_TRUE, FLOOR, K_TRUE = 1e-3, 1e-4, 2e-5
 #: (rate [Hz], cutoff [Hz]) cells; each is run at every order.
 CELLS = ((200.0, 5.0), (200.0, 12.0), (200.0, 20.0), (200.0, 40.0), (400.0, 100.0), (1000.0, 100.0))
@@ -105,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
     done = _done(args.resume) if args.resume else {}
     sources = [("this checkout", ROOT), *[(f"baseline {p}", p.resolve()) for p in args.baseline]]
     passband = math.hypot(N_TRUE, FLOOR)
-    print(f"# bench/bench_dlpf.py --seeds {args.seeds} --minutes {args.minutes:g} --orders "
+    print(f"# bench/studies/bench_dlpf.py --seeds {args.seeds} --minutes {args.minutes:g} --orders "
           f"{' '.join(map(str, args.orders))}; {os.cpu_count()} CPUs; load average before {os.getloadavg()[0]:.2f}")
     if args.resume:
         print(f"# records printed by an earlier run ({args.resume.name}) are taken from it, not run again")
