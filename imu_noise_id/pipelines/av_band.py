@@ -15,16 +15,10 @@ from .loop.rules import simultaneous_z
 
 @dataclass(frozen=True)
 class AvBandClaim:
-    """The final model's AV against the data's band.
-
-    Attributes
-    ----------
-    level : the band's coverage (0.95), simultaneous over τ (Bonferroni over the octaves spanned)
-    inside : the model's AV is inside the band at every τ compared (the loop's ``av_inside_band``)
-    outside : τ ranges [s] (runs of neighbouring grid τ) where it lies outside
-    n_tau, n_outside : τ compared (finite z-score), and of them outside the band
-    max_rel_av_error : largest |AV_model / AV_data − 1| over τ
-    """
+    """The final model's AV against the data's band: ``level`` its coverage (0.95), simultaneous over τ (Bonferroni
+    over the octaves spanned); ``inside``: at every τ compared (the loop's ``av_inside_band``); ``outside``: τ ranges
+    [s] (runs of neighbouring grid τ) outside it; ``n_tau``, ``n_outside``: τ compared (finite z-score), and of them
+    outside; ``max_rel_av_error``: largest |AV_model / AV_data − 1| over τ."""
 
     level: float
     inside: bool
@@ -34,8 +28,7 @@ class AvBandClaim:
     max_rel_av_error: float
 
     def where(self) -> str:
-        """Where the model is outside the band, in words: ``"every τ"``, ``"τ = 12.8–327 s"`` (ranges joined by
-        commas), or ``""`` when it is inside everywhere."""
+        """Where it is outside the band: ``"every τ"``, ``"τ = 12.8–327 s"`` (ranges joined by ", "), else ``""``."""
         if self.inside or self.n_tau == 0:
             return ""
         if self.n_outside == self.n_tau:
@@ -43,8 +36,8 @@ class AvBandClaim:
         return "τ = " + ", ".join(f"{lo:.3g} s" if lo == hi else f"{lo:.3g}–{hi:.3g} s" for lo, hi in self.outside)
 
     def sentence(self) -> str:
-        """The claim's sentence (e.g. "The final model's Allan variance lies outside the data's 95 % band (simultaneous
-        over τ) at τ = 12.8–327 s (6 of 14 τ) and inside it elsewhere (largest relative AV error 45 %).")."""
+        """The claim's sentence ("The final model's Allan variance lies outside the data's 95 % band (simultaneous over
+        τ) at τ = 12.8–327 s (6 of 14 τ) and inside it elsewhere (largest relative AV error 45 %).")."""
         band = f"the data's {100 * self.level:.0f} % band (simultaneous over τ)"
         err = (f"largest relative AV error {100 * self.max_rel_av_error:.0f} %"
                if math.isfinite(self.max_rel_av_error) else "no relative AV error")
@@ -58,8 +51,7 @@ class AvBandClaim:
                 f"{self.n_tau} τ) and inside it elsewhere ({err}).")
 
     def as_dict(self) -> dict:
-        """``av_outside_band_tau`` ([[lo, hi], …] [s]; [] when inside) and ``av_band`` (:meth:`sentence`) for
-        ``loop_verdict``."""
+        """``loop_verdict``'s ``av_outside_band_tau`` ([[lo, hi], …] [s]; [] inside), ``av_band`` (:meth:`sentence`)."""
         return {"av_outside_band_tau": [[float(f"{lo:.4g}"), float(f"{hi:.4g}")] for lo, hi in self.outside],
                 "av_band": self.sentence()}
 

@@ -32,14 +32,8 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
     """Test ``imu`` against ``references`` made at ``rate_hz`` [Hz] from ``topic`` and against ``limits``
     (sensor "gyro"/"accel" → noise-density limit [u/√Hz]), at ``false_alarms_per_hour`` for the whole unit (shared
     among its axes and tests, ``noise_level.per_test``); ``other_topic``: a reference made from another topic (another
-    IMU, e.g. the fleet's typical unit) is taken, with a note.
-
-    Raises
-    ------
-    InputError
-        Another rate than the reference's, another topic (without ``other_topic``), a recording that is not static,
-        or one too short for the tests.
-    """
+    IMU, e.g. the fleet's typical unit) is taken, with a note. InputError for another rate than the reference's,
+    another topic (without ``other_topic``), a recording that is not static or one too short for the tests."""
     period = imu.sample_period()
     if period.refusal is not None:
         raise InputError(f"compare: {period.refusal}")
@@ -71,11 +65,10 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
 
 def beyond_spec(imu: ImuSeries, dt: float, own: dict[str, AxisReference], limits: dict[str, float], *,
                 false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> dict[str, NoiseLevel]:
-    """``compare --spec``'s test of a unit without a reference (``batch --spec``): per axis of ``imu`` at period
-    ``dt`` [s] whose sensor has a noise-density limit in ``limits`` [u/√Hz], the upward CUSUM against it
-    (``noise_level.beyond_limit``) with the shape of the axis's own analysis ``own[axis]`` (its N and final model;
-    white noise without components) scaled to the limit, at ``false_alarms_per_hour`` for the unit (``per_test``).
-    An outcome's ``sustained`` says the axis is beyond the limit."""
+    """``compare --spec`` (``batch --spec``), a unit without a reference: per axis of ``imu`` at period ``dt`` [s] whose
+    sensor has a noise-density limit in ``limits`` [u/√Hz], the upward CUSUM against it (``noise_level.beyond_limit``)
+    with the shape of the axis's own analysis ``own[axis]`` (N and final model; white noise without components) scaled
+    to the limit, at ``false_alarms_per_hour`` for the unit (``per_test``); ``sustained``: beyond the limit."""
     each = per_test(false_alarms_per_hour, len(own))
     return {axis: beyond_limit(imu.axis(axis), dt, reference.difference_variance_at(limits[sensor_of(axis)], dt),
                                false_alarms_per_hour=each)

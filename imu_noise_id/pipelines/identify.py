@@ -19,15 +19,10 @@ MAX_ROWS = 2000
 
 @dataclass
 class AxisIdentification:
-    """The bank's outcome on one axis.
-
-    Attributes
-    ----------
-    result : the bank's probabilities and estimates over time (every ``record_every``-th block)
-    offset : warm-up mean removed [u]; wn_estimate : white-noise density of the warm-up [u/√Hz] (None: not needed)
-    hset : the hypothesis set of the last pass; warmup : warm-up duration [s]
-    states : per hypothesis, its state estimates (mean, std); passes : grid-refinement passes run
-    """
+    """The bank's outcome on one axis: ``result`` its probabilities and estimates over time (every ``record_every``-th
+    block); ``offset`` the warm-up mean removed [u]; ``hset`` the last pass's hypothesis set; ``warmup`` [s];
+    ``wn_estimate`` the warm-up's white-noise density [u/√Hz] (None: not needed); ``states`` per hypothesis its state
+    estimates (mean, std) [u]; ``passes`` the passes run (1 + grid refinements)."""
 
     result: BankResult
     offset: float
@@ -40,8 +35,7 @@ class AxisIdentification:
 
 @dataclass
 class Identification:
-    """``identify`` on several axes: the hypothesis file it used, the sampling period [s], each axis, and the
-    input's notes (repairs and timing, as the reader made them)."""
+    """``identify`` on several axes: hypothesis file used, sampling period [s], each axis, the reader's input notes."""
 
     source: str
     dt: float

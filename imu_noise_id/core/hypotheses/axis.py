@@ -15,14 +15,10 @@ from .model import HypothesisSet
 
 
 class AxisIdentifier:
-    """Warm-up mean removal followed by a :class:`HypothesisBank`; InputError on invalid arguments.
-
-    Parameters
-    ----------
-    hypotheses : HypothesisSet, or white-noise estimate [u/√Hz] → HypothesisSet (:func:`.config.hypothesis_set_factory`)
-    warmup_s : duration [s] whose mean is removed (0: none; at least 3 samples when > 0)
-    dt : input sampling period [s] (required with a function)
-    """
+    """Warm-up mean removal followed by a :class:`HypothesisBank`: ``hypotheses`` a HypothesisSet, or white-noise
+    estimate [u/√Hz] → HypothesisSet (:func:`.config.hypothesis_set_factory`); ``warmup_s`` [s] whose mean is removed
+    (0: none; at least 3 samples when > 0); ``dt`` input sampling period [s] (required with a function). InputError
+    on invalid arguments."""
 
     def __init__(self, hypotheses: HypothesisSet | Callable[[float | None], HypothesisSet], warmup_s: float = 1.0,
                  dt: float | None = None) -> None:

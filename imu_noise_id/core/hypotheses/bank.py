@@ -16,14 +16,9 @@ from .model import BankModel, HypothesisSet, build_bank_model
 
 @dataclass(frozen=True)
 class HypothesisEstimate:
-    """Estimates under one hypothesis h_k (paper 002 eqs. 13–14).
-
-    Attributes
-    ----------
-    probability : Pr(H = h_k | Y_i) (eq. 10); rsd : theta_std / theta
-    theta, theta_std : posterior mean θ̂^k and std by parameter name, continuous-time units
-    not_identifiable : parameter → lower bound, for parameters the record cannot resolve (:mod:`.identifiable`)
-    """
+    """Estimates under one hypothesis h_k (paper 002 eqs. 13–14): ``probability`` Pr(H = h_k | Y_i) (eq. 10);
+    ``theta``, ``theta_std`` posterior mean θ̂^k and std by parameter name, continuous-time units; ``rsd`` theta_std /
+    theta; ``not_identifiable`` parameter → lower bound, where the record cannot resolve it (:mod:`.identifiable`)."""
 
     probability: float
     theta: dict[str, float]
@@ -41,15 +36,10 @@ def probabilities_of(log_prob: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class BankSnapshot:
-    """The bank after its latest update.
-
-    Attributes
-    ----------
-    n_updates : bank samples processed (block averages); t : time of the latest update [s], gaps included
-    probabilities : name → posterior probability; hypotheses : name → :class:`HypothesisEstimate`
-    decision : the most probable hypothesis of ``decision_probabilities`` once it reaches γ, else None
-    long_memory : GM hypotheses the data cannot tell from their RW twin; decision_probabilities : with them merged
-    """
+    """The bank after its latest update: ``n_updates`` bank samples processed (block averages); ``t`` its time [s],
+    gaps included; ``probabilities`` name → posterior probability; ``hypotheses`` name → :class:`HypothesisEstimate`;
+    ``long_memory`` the GM hypotheses the data cannot tell from their RW twin; ``decision_probabilities`` those merged;
+    ``decision`` the most probable hypothesis of ``decision_probabilities`` once it reaches γ, else None."""
 
     n_updates: int
     t: float
@@ -62,13 +52,9 @@ class BankSnapshot:
 
 @dataclass
 class BankResult:
-    """Time series of a batch run.
-
-    Attributes
-    ----------
-    t : (N,) update times [s]; probabilities : (N, K), columns in ``names`` order; final : snapshot after the last
-    theta, theta_std : name → (N, p_k) estimates and posterior stds; parameter_names : name → its parameter names
-    """
+    """Time series of a batch run: ``t`` (N,) update times [s]; ``probabilities`` (N, K), columns in ``names`` order;
+    ``theta``, ``theta_std`` name → (N, p_k) estimates and posterior stds; ``parameter_names`` name → its parameters'
+    names; ``final`` the snapshot after the last update; ``gamma`` the decision threshold γ."""
 
     names: tuple[str, ...]
     t: np.ndarray
@@ -94,13 +80,8 @@ class BankResult:
 
 
 class HypothesisBank:
-    """Bank of Kalman filters over the point-mass grids of competing hypotheses (paper 002 eqs. 3–14).
-
-    Parameters
-    ----------
-    hypothesis_set : hypotheses, priors, grids, γ, block averaging
-    chunk : bank samples per vectorised block in :meth:`run` (memory ∝ chunk × filters)
-    """
+    """Bank of Kalman filters over the point-mass grids of the hypotheses of ``hypothesis_set`` (paper 002 eqs. 3–14);
+    ``chunk``: bank samples per vectorised block in :meth:`run` (memory ∝ chunk × filters)."""
 
     def __init__(self, hypothesis_set: HypothesisSet, chunk: int = 64) -> None:
         self.hset = hypothesis_set

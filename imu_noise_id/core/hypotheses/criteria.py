@@ -21,15 +21,11 @@ _MAX_BLOCK = 16
 
 @dataclass
 class CriteriaResult:
-    """Performance criteria over time (paper 002 eqs. 15, 17–20).
-
-    Attributes
-    ----------
-    t : (R,) times [s]; error_probability_real, error_probability_calculated : (R,) eqs. (15), (18)
-    error_probability_calculated_true : (R,) mean of 1 − Pr(true hypothesis)
-    rsd_real, rsd_calculated : ``"<hypothesis>:<parameter>"`` → (R,) eq. (20) from eqs. (17) / (19)
-    decided, decided_wrong : (R,) fraction of trials with a decision (max Pr ≥ γ), and a wrong one; true_counts
-    """
+    """Performance criteria over time (paper 002 eqs. 15, 17–20): ``t`` (R,) times [s]; ``error_probability_real``,
+    ``error_probability_calculated`` (R,) eqs. (15), (18); ``error_probability_calculated_true`` (R,) mean of
+    1 − Pr(true hypothesis); ``rsd_real``, ``rsd_calculated`` ``"<hypothesis>:<parameter>"`` → (R,) eq. (20) from eqs.
+    (17) / (19); ``decided``, ``decided_wrong`` (R,) fraction of trials with a decision (max Pr ≥ γ), and with a wrong
+    one; ``true_counts`` hypothesis → trials it was true in."""
 
     case: str
     trials: int

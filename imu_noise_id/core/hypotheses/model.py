@@ -1,8 +1,8 @@
 """Hypotheses about a sensor's error model and their point-mass grids (paper 002 eqs. 3, 21–23): a constant bias,
 dynamic RW/GM components and optional WN, a uniform prior range per unknown parameter. Continuous-time parameters
-(``RW.random_walk`` [u/s/√Hz], ``GM.tau`` [s], ``GM.sigma`` [u], ``WN.noise_density`` [u/√Hz]); paper 002's
-per-sample σ_w, σ_m, σ_v are ``random_walk·√Δt``, ``sigma``, ``noise_density/√Δt``. Beyond the paper
-(docs/hypotheses.md): grid cells weighted by width, and block averaging (:func:`averaged_dynamic_block`)."""
+(``RW.random_walk`` [u/s/√Hz], ``GM.tau`` [s], ``GM.sigma`` [u], ``WN.noise_density`` [u/√Hz]; paper 002's σ_w, σ_m,
+σ_v per sample are ``random_walk·√Δt``, ``sigma``, ``noise_density/√Δt``). Beyond the paper: cells weighted by width,
+block averaging (:func:`averaged_dynamic_block`); why: docs/hypotheses.md, "How it works"."""
 
 from __future__ import annotations
 
@@ -28,14 +28,10 @@ DYNAMIC_COMPONENTS: tuple[str, ...] = ("RW", "GM")
 
 @dataclass(frozen=True)
 class ParameterPrior:
-    """Uniform prior range of one parameter and its grid (paper 002 eq. 3); InputError when invalid.
-
-    Attributes
-    ----------
-    name : ``"<COMPONENT>.<parameter>"``; low, high : the range, continuous-time units (equal: known)
-    n : grid cells (1 when known); spacing : ``"linear"`` or ``"log"``
-    grid_low, grid_high : optional sub-range of the grid (:func:`refine_hypothesis_set`); weights: whole-range fractions
-    """
+    """Uniform prior range of one parameter and its grid (paper 002 eq. 3); InputError when invalid. ``name``
+    ``"<COMPONENT>.<parameter>"``; ``low``, ``high`` the range, continuous-time units (equal: known); ``n`` grid cells
+    (1 when known); ``spacing`` ``"linear"`` or ``"log"``; ``grid_low``, ``grid_high`` an optional sub-range of the grid
+    (:func:`refine_hypothesis_set`), its weights still fractions of the whole range."""
 
     name: str
     low: float
@@ -92,14 +88,10 @@ class ParameterPrior:
 
 @dataclass(frozen=True)
 class Hypothesis:
-    """One error-model structure h_k with the priors of its parameters θ^k; InputError when invalid.
-
-    Attributes
-    ----------
-    components : from ``RW``, ``GM``, ``WN``, each at most once, plus a bias state (eqs. 21–22; no ``WN``: R = 0)
-    priors : one :class:`ParameterPrior` per parameter; probability : prior Pr(H = h_k) (normalised over the set)
-    name : label (default the canonical structure name, e.g. ``"WN+RW"``)
-    """
+    """One error-model structure h_k with the priors of its parameters θ^k; InputError when invalid. ``components``
+    from ``RW``, ``GM``, ``WN``, each at most once, plus a bias state (eqs. 21–22; no ``WN``: R = 0); ``priors`` one
+    :class:`ParameterPrior` per parameter; ``probability`` prior Pr(H = h_k) (normalised over the set); ``name`` its
+    label (default the canonical structure name, e.g. ``"WN+RW"``)."""
 
     components: tuple[str, ...]
     priors: tuple[ParameterPrior, ...]
@@ -148,15 +140,11 @@ class Hypothesis:
 
 @dataclass(frozen=True)
 class HypothesisSet:
-    """The competing hypotheses and the bank's settings; InputError when invalid.
-
-    Attributes
-    ----------
-    hypotheses : tuple of :class:`Hypothesis`; dt : input sampling period [s]; block : samples per bank sample
-    gamma : decision threshold γ on the largest posterior probability (paper 002 section 2)
-    bias_sigma : prior std of the constant bias [u]; gain_tolerance : the Riccati iteration stops once no gain or
-        relative innovation variance changes by more than this in a step (0 = never)
-    """
+    """The competing hypotheses and the bank's settings; InputError when invalid. ``hypotheses`` the
+    :class:`Hypothesis` tuple; ``dt`` input sampling period [s]; ``block`` input samples per bank sample; ``gamma``
+    decision threshold γ on the largest posterior probability (paper 002 section 2); ``bias_sigma`` prior std of the
+    constant bias [u]; ``gain_tolerance`` the Riccati iteration stops once no gain or relative innovation variance
+    changes by more than this in a step (0 = never)."""
 
     hypotheses: tuple[Hypothesis, ...]
     dt: float

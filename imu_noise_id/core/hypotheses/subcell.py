@@ -12,8 +12,7 @@ import numpy as np
 @dataclass(frozen=True)
 class GridAxes:
     """The product grid of one hypothesis (:meth:`~.model.Hypothesis.grid` order, last parameter fastest): ``shape``
-    (cells per parameter), ``u0``, ``step`` (grid coordinate u of the first cell, δ; u = log θ on log grids), ``log``.
-    """
+    (cells each), ``u0``, ``step`` (grid coordinate u of the first cell, δ; u = log θ on log grids), ``log``."""
 
     shape: tuple[int, ...]
     u0: np.ndarray
@@ -45,8 +44,7 @@ class GridAxes:
 
 
 def _plane_laplace(L: np.ndarray, dims: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per sub-grid along ``dims`` of log weights L: position of the maximum (…, c) [cells], covariance (…, c, c)
-    [cells²] and log mass (…) (module docstring)."""
+    """Per sub-grid along ``dims`` of log weights L: argmax (…, c), covariance (…, c, c) in cells, log mass (…)."""
     c = len(dims)
     moved = np.moveaxis(L, dims, tuple(range(L.ndim - c, L.ndim)))
     shape = moved.shape[-c:]

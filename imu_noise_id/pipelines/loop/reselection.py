@@ -1,5 +1,5 @@
-"""Re-selection after a loop step: dropping what an addition made redundant, swapping a random walk and flicker noise
-for one another, and a first-order low-pass for a second-order one (also tried on the start)."""
+"""Re-selection after a loop step: drops, RW ↔ BI swaps, an LPF swapped for a second-order low-pass (also on the
+start). Beyond the papers; why: docs/loop.md, "Why the loop's moves …"."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from .state import Diagnosis, LoopState, Trial
 from .steps import AxisLoop, _canonical
 from .trials import long_tau_flicker, long_tau_walk
 
-#: Components re-selection may drop (those that absorb what the model lacks: docs/loop.md, "The loop's rules" 5).
+#: Components re-selection may drop, those that absorb what the model lacks (docs/loop.md, "The loop's rules" 5).
 DROPPABLE = ("RW", "GM", "QN", "RR")
 #: The sensor's first-order filters, which a second-order low-pass (an OSC of short memory) may make redundant.
 FIRST_ORDER = ("LPF", "MA")
@@ -31,8 +31,7 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
     BI started from the long-τ AV; right after a GM, swap BI back for an RW of the same level; right after an LPF, swap
     it for a second-order low-pass (:func:`second_order_start`); right after an OSC of short memory
     (:func:`~imu_noise_id.core.estimation.readouts.kalibr.is_short_memory_osc`), drop each :data:`FIRST_ORDER` filter.
-    ``swapped``: swaps already made in this re-selection, never undone. Beyond the papers (reasons: docs/loop.md, "Why
-    the loop's moves …")."""
+    ``swapped``: swaps already made in this re-selection, never undone."""
     fitted = list(diag.fit.components)
     moves: list[tuple[str, list[Component]]] = []
     if len(fitted) < 2:
@@ -54,15 +53,13 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
     return moves
 
 
-#: Share of the passband density a second-order low-pass put in a first-order one's place leaves white at its start.
+#: Least white share of a second-order low-pass start's passband density (docs/loop.md, "Why the loop's moves …").
 SECOND_ORDER_WHITE_SHARE = 0.5
 
 
 def second_order_start(fitted: list[Component], lpf: LPF) -> list[Component]:
-    """The fitted components with the first-order low-pass ``lpf`` replaced by a Butterworth OSC
-    (:meth:`~imu_noise_id.core.noise.resonant.OSC.low_pass`) at its cutoff, the passband density √(N_WN² + N_LPF²) kept
-    and at least :data:`SECOND_ORDER_WHITE_SHARE` of it white. Beyond the papers (docs/loop.md, "Why the loop's moves
-    …")."""
+    """The fitted components with the LPF ``lpf`` replaced by a Butterworth OSC (:meth:`.OSC.low_pass`) at its cutoff,
+    the passband density √(N_WN² + N_LPF²) kept, ≥ :data:`SECOND_ORDER_WHITE_SHARE` of it white. Beyond the papers."""
     white = next((c for c in fitted if isinstance(c, WN)), None)
     n_white = white.noise_density if white is not None else 0.0
     passband = math.hypot(n_white, lpf.noise_density)
@@ -87,9 +84,8 @@ def swap_start_filter(loop: AxisLoop, state: LoopState,
 
 def try_move(loop: AxisLoop, diag: Diagnosis, new_state: LoopState, label: str, *,
              evidence: str | None = None) -> tuple[Trial, Diagnosis | None]:
-    """Fit and judge one re-selection move ``label`` ("drop RW", "swap LPF (for OSC)" …) against ``diag``
-    (:func:`judge`, with the BIC tie for a move that adds no parameter): the trial and the new diagnosis (None when the
-    refit failed)."""
+    """Fit and judge one re-selection move ``label`` ("drop RW" …) against ``diag`` (:func:`judge`, with the BIC tie
+    for a move that adds no parameter): the trial and the new diagnosis (None when the refit failed)."""
     finding = det.Finding(effect=label.split(" ", 1)[1], detector="reselection", statistic=0.0, threshold=0.0,
                           log10_p=0.0, level=0.0, params={}, evidence=evidence or label)
     try:

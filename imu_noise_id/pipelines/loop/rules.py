@@ -1,5 +1,4 @@
-"""The loop's rules for judging one fitted model against another: the AV misfit, do no harm, the BIC tie,
-the simultaneous AV band and practical significance."""
+"""The loop's judgement of one fit against another: AV misfit, do no harm, BIC tie, AV band, practical significance."""
 
 from __future__ import annotations
 
@@ -23,8 +22,7 @@ def av_rms_z(diag: Diagnosis) -> float:
     return float(np.sqrt(np.mean(z**2))) if z.size else 0.0
 
 
-#: BIC tie below this (Kass & Raftery 1995, JASA 90: ΔBIC > 6 "strong"); between models of no more parameters the AV
-#: then decides.
+#: BIC tie below this (Kass & Raftery 1995, JASA 90: ΔBIC > 6 "strong"); the AV then decides (``judge``, ``better``).
 BIC_TIE = 6.0
 #: How much a tie-breaking move must lower the RMS AV misfit z: twice what do-no-harm lets a step raise it.
 AV_Z_GAIN = 2.0 * AV_Z_TOLERANCE

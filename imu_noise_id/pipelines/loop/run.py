@@ -48,22 +48,16 @@ def run_closed_loop(
 
     Parameters
     ----------
-    y : (N,) array
-        Samples of one axis [u] (rad/s or m/s²) at period ``dt``; NaN = missing.
-    dt : float
-        Sampling period [s].
+    y, dt : (N,) array, float
+        Samples of one axis [u] (rad/s or m/s²), NaN = missing; their sampling period [s].
     start : str or FitResult
         Starting structure (``"WN+RW"``), or a fit of this very record (kept as step 0, not refitted).
     temperature : (N,) array, optional
         Sensor temperature [°C] at the sample times (:func:`align_temperature`); enables ``TEMP``.
-    max_steps, max_candidates : int
-        At most this many effects added; candidates refitted per step.
-    alpha, lags : float, int
-        Level of every detector; Ljung–Box lags.
-    outliers : {"impute", "missing"}
-        How flagged outliers are removed.
-    axis : str, optional
-        Axis name, for the report.
+    max_steps, max_candidates, alpha, lags : int, int, float, int
+        Effects added at most; candidates refitted per step; level of every detector; Ljung–Box lags.
+    outliers, axis : {"impute", "missing"}, str or None
+        How flagged outliers are removed; the axis's name, for the report.
     intervals : bool
         Give the final fit its 95 % intervals (:func:`final_intervals`) when an effect was added.
 
@@ -175,10 +169,9 @@ def run_closed_loop(
 
 
 def exact_finish(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:
-    """``step`` refitted on the exact likelihood from its composite-likelihood fit and diagnosed again (the search's
-    fits are the composite likelihood's, :meth:`.AxisLoop.fit_state`), and a note ("" unless the refit failed, did
-    not gain — the step is then as it is, its values the composite likelihood's maximiser's — or stopped at its
-    evaluation budget, :attr:`~imu_noise_id.core.estimation.em.results.FitResult.budget_stop`)."""
+    """``step`` (fitted on the composite likelihood, :meth:`.AxisLoop.fit_state`) refitted on the exact one and
+    diagnosed again, and a note: "" unless the refit failed or did not gain (``step`` then returned as it is) or
+    stopped at its budget (:attr:`~imu_noise_id.core.estimation.em.results.FitResult.budget_stop`)."""
     state = step.state.with_components(list(step.diagnosis.fit.components))
     try:
         diag = loop.diagnose(state, exact=True)
@@ -226,17 +219,8 @@ def align_temperature(t_samples: np.ndarray, t_temperature: np.ndarray, temperat
 
 
 class ImuLoop:
-    """The closed loop on the axes of one IMU recording at its own rate, one axis at a time; temperature aligned once.
-
-    Parameters
-    ----------
-    imu : ImuSeries
-        The recording (its ``dt`` is the sampling period).
-    temperature : ScalarSeries, optional
-        The bag's temperature topic (enables ``TEMP``).
-    loop_kwargs
-        Passed to :func:`run_closed_loop`.
-    """
+    """The closed loop on the axes of the recording ``imu`` at its own period ``imu.dt``, one axis at a time; the bag's
+    ``temperature`` topic (enables ``TEMP``) aligned once; ``loop_kwargs`` passed to :func:`run_closed_loop`."""
 
     def __init__(self, imu: ImuSeries, temperature: ScalarSeries | None = None, **loop_kwargs: Any) -> None:
         self.imu = imu
@@ -247,8 +231,7 @@ class ImuLoop:
         self.loop_kwargs = loop_kwargs
 
     def on(self, imu: ImuSeries) -> ImuLoop:
-        """This loop (its settings and aligned temperature) over ``imu``, the same recording held elsewhere (e.g.
-        mapped from files)."""
+        """This loop (settings, aligned temperature) over ``imu``, the same recording held elsewhere (e.g. mapped)."""
         loop = copy.copy(self)
         loop.imu = imu
         return loop

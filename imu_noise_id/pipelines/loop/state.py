@@ -23,15 +23,8 @@ CLEANING_EFFECTS = ("OUTLIERS",)
 
 @dataclass(frozen=True)
 class ExogTerm:
-    """A deterministic regressor of the measurement equation.
-
-    Attributes
-    ----------
-    effect : str
-        ``SIN``, ``TEMP`` or ``STEP``.
-    params : dict
-        ``frequency`` [Hz] (SIN) or ``index`` (STEP, first sample after the shift); nothing for TEMP.
-    """
+    """A deterministic regressor of the measurement equation: ``effect`` ``SIN``, ``TEMP`` or ``STEP``; ``params``
+    ``frequency`` [Hz] (SIN), ``index`` (first sample after the shift) and ``time`` [s] (STEP), nothing (TEMP)."""
 
     effect: str
     params: dict[str, float]
@@ -118,8 +111,7 @@ class Trial:
 
 @dataclass
 class LoopStep:
-    """One accepted step of the loop (step 0 is the starting model). ``dropped``: what re-selection removed after
-    the addition, a swapped component as ``"RW (for BI)"``."""
+    """An accepted loop step (0: the start); ``dropped``: what re-selection then removed (a swap: ``"RW (for BI)"``)."""
 
     index: int
     model: str
@@ -156,8 +148,7 @@ class LoopResult:
         return self.steps[-1]
 
     def without_data(self) -> LoopResult:
-        """This result with each step's fit holding no record (:meth:`FitResult.without_data`: the samples and
-        regressors, (1 + regressors) × N floats per step); the innovations, AVs and findings stay. For keeping or
-        sending a finished loop: what needs the record (refits, intervals) is done."""
+        """This result with each step's fit holding no record (:meth:`FitResult.without_data`, (1 + regressors) × N
+        floats per step), for keeping or sending a finished loop; the innovations, AVs and findings stay."""
         steps = [replace(s, diagnosis=replace(s.diagnosis, fit=s.diagnosis.fit.without_data())) for s in self.steps]
         return replace(self, steps=steps)

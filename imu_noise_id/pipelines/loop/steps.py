@@ -56,8 +56,7 @@ def _coef(fit: FitResult, names: list[str]) -> np.ndarray:
 
 
 class AxisLoop:
-    """One axis's record with the loop's settings: fits and diagnoses a :class:`LoopState`, proposes, adds and
-    judges candidate effects (the rules of :mod:`imu_noise_id.pipelines.loop`)."""
+    """An axis's record with the loop's settings: fits and diagnoses a :class:`LoopState`, adds and judges effects."""
 
     def __init__(self, y: np.ndarray, dt: float, temperature: np.ndarray | None, *, alpha: float, lags: int,
                  outliers: str) -> None:
@@ -65,7 +64,7 @@ class AxisLoop:
         self.alpha, self.lags = alpha, lags
         self.n_observed = int(np.isfinite(y).sum())
         self.n = y.size
-        # A white noise driven to ~0 by a fit (beside a low-pass) cannot restart a refit: its floor as a start.
+        # the floor a white noise a fit drove to ~0 restarts from (docs/loop.md, "Why the loop's moves …")
         d = np.diff(y[np.isfinite(y)])
         self.white_floor = 1e-3 * math.sqrt(max(float(np.var(d)) / 2.0, 1e-300) * dt)
 
@@ -81,11 +80,9 @@ class AxisLoop:
 
     def fit_state(self, model: NoiseModel, state: LoopState, *, exact: bool = False) -> FitResult:
         """The fit of ``state`` (``model`` its record and regressors) from ``state.init`` (None: the estimator's
-        starts). On a record of ``composite.MIN_SAMPLES`` samples or more, unless ``exact``: the maximiser of the
-        composite likelihood (:func:`~imu_noise_id.core.estimation.em.composite.fit`; of the record with the regressors,
-        at their GLS values from the start, removed) evaluated once on the exact likelihood, means by GLS; else the
-        exact maximum-likelihood fit. Beyond the papers (docs/em.md, "Searching long records on a likelihood of fixed
-        size")."""
+        starts): unless ``exact``, from ``composite.MIN_SAMPLES`` samples on, the composite likelihood's maximiser
+        (:func:`.composite.fit`, the regressors at their GLS values from the start removed) evaluated once on the exact
+        likelihood, means by GLS; else the exact ML fit. Beyond the papers (docs/em.md, "Searching long records …")."""
         if exact or not self.on_composite:
             # The loop compares fits; intervals are the model selection's job.
             return model.fit(state.init, FitOptions(uncertainty=False))
@@ -124,8 +121,7 @@ class AxisLoop:
         return (np.hstack(cols) if cols else None), names, slices
 
     def diagnose(self, state: LoopState, fit: FitResult | None = None, *, exact: bool = False) -> Diagnosis:
-        """Fit ``state`` (:meth:`fit_state`, ``exact`` or not; unless ``fit``, already fitted to this record and state,
-        is given) and diagnose it."""
+        """Fit ``state`` (:meth:`fit_state`, ``exact`` or not) unless its ``fit`` on this record is given; diagnose."""
         y = self.y.copy()
         if state.flagged.size:
             y[state.flagged] = np.nan if self.outliers == "missing" else state.imputed
@@ -140,13 +136,12 @@ class AxisLoop:
                        for i, (t, s) in enumerate(zip(state.exog_terms, slices, strict=True))}
         residual_data = y - (exog @ coef if exog is not None else 0.0)
         filled = interpolate_missing(residual_data)
-        # τ up to a tenth of the record, where each AV estimate still has ≳ 10 degrees of freedom.
+        # τ up to a tenth of the record (docs/loop.md, "Residuals and error measures")
         m = choose_m(self.n, "allan", m_max=max(2, self.n // 10))
         av_model = np.asarray(fit.theoretical_allan_variance(m * self.dt), dtype=float)
         av = allan_variance(filled, self.dt, m=m, alpha=0)
         av_data = av.variance[:, 0]
-        # The AV's confidence intervals under the null "the model holds", with the estimator's exact variance for
-        # the fitted model (a power-law EDF misjudges τ where a line dominates; core/diagnostics/av_band.py).
+        # the AV's intervals under the fitted model, with its exact EDF (docs/loop.md, "Residuals and error measures")
         av_ci = model_av_band(av_data, list(fit.components), m, filled.size, self.dt)
         e = np.asarray(fit.standardized_innovations(), dtype=float)
         fit = replace(fit, standardized=None)  # kept once, as the diagnosis's innovations
@@ -265,9 +260,8 @@ class AxisLoop:
                         evidence=f"{line.evidence}; with its harmonics: {line.effect} at {listed} Hz")]
 
     def candidates(self, diag: Diagnosis, state: LoopState) -> list[det.Finding]:
-        """Significant findings that can be added, ranked by p-value: the most significant per effect, GM candidates of
-        distinct τ bands and narrow and broad lines kept apart; Ljung–Box evidence merges into the strongest GM band or
-        stands alone."""
+        """Significant addable findings by p-value: the most significant per effect, GM candidates of distinct τ bands
+        and narrow and broad lines kept apart; Ljung–Box evidence merged into the strongest GM band, or alone."""
         best: dict[str, det.Finding] = {}
         gms: list[det.Finding] = []
         lb: det.Finding | None = None

@@ -1,5 +1,5 @@
 """The moves a loop step tries and judges: adding a finding's effect (a cluster of two resonances for a broad line) and
-the bounded joint search; the long-τ starts they and re-selection (:mod:`.reselection`) share."""
+the bounded joint search; the long-τ starts they and re-selection share. Why: docs/loop.md, "Why the loop's moves …"."""
 
 from __future__ import annotations
 
@@ -48,8 +48,7 @@ def refit(loop: AxisLoop, diag: Diagnosis, new_state: LoopState) -> Diagnosis:
 
 def shared_power_start(start: list[Component], fitted: list[Component]) -> list[Component] | None:
     """``start`` with each new resonance whose band overlaps a fitted resonance's (centres closer than the wider
-    bandwidth) and that resonance both started at σ/√2; None when no new resonance overlaps one. Reasons: docs/loop.md,
-    "Why the loop's moves …"."""
+    bandwidth) and that resonance both started at σ/√2; None when no new resonance overlaps one."""
     oscs = [(i, c) for i, c in enumerate(start) if isinstance(c, OSC)]
     overlapping = [(i, j) for i, new in oscs if new not in fitted for j, old in oscs
                    if old in fitted and abs(new.frequency - old.frequency) < max(new.bandwidth, old.bandwidth)]
@@ -98,10 +97,9 @@ PARTLY_BIC_GAIN = 10.0
 
 
 def partly_explained(loop: AxisLoop, f: det.Finding, before: Diagnosis, after: Diagnosis) -> tuple[bool, str]:
-    """Whether ``after`` explains the broad line ``f`` in part: ``before``'s AV leaves the data's band
-    (:func:`~imu_noise_id.pipelines.loop.rules.av_inside_band`) and ``after`` lowers the BIC by :data:`PARTLY_BIC_GAIN`
-    or more, the RMS AV misfit z and the line's pooled statistic (still above its threshold and half). Beyond the papers
-    (docs/loop.md, "The loop's rules" 4)."""
+    """Whether ``after`` explains the broad line ``f`` in part, and why: ``before``'s AV leaves the data's band
+    (:func:`.rules.av_inside_band`) and ``after`` lowers the BIC by :data:`PARTLY_BIC_GAIN` or more, the RMS AV misfit
+    z and the line's pooled statistic (still above its threshold and half). Beyond the papers."""
     gain = before.errors.bic - after.errors.bic
     if (not broad_resonance(f) or av_inside_band(before) or gain < PARTLY_BIC_GAIN
             or av_rms_z(after) >= av_rms_z(before)):
@@ -117,9 +115,8 @@ WIDE_START_POOLED_BINS = 16
 
 
 def wide_start(loop: AxisLoop, f: det.Finding) -> det.Finding | None:
-    """``f`` started at the pooled search's scale: bandwidth :data:`WIDE_START_POOLED_BINS` pooled bins (at most half
-    the line's frequency) when its measured bandwidth is narrower; None otherwise. Beyond the papers (docs/loop.md, "Why
-    the loop's moves …")."""
+    """``f`` restarted at the pooled search's scale: a bandwidth [Hz] of :data:`WIDE_START_POOLED_BINS` pooled bins (at
+    most half the line's frequency), σ² scaled with it, when its measured bandwidth is narrower; else None."""
     resolution = f.params.get("resolution")
     frequency, bandwidth = f.params.get("frequency"), f.params.get("bandwidth")
     if not resolution or not frequency or bandwidth is None:
@@ -143,7 +140,7 @@ def attempt_cluster(loop: AxisLoop, diag: Diagnosis, one_state: LoopState, one_d
                      one_why: str) -> tuple[list[Trial], Diagnosis | None, LoopState]:
     """A broad line one resonance lowered the BIC for but did not explain: the strongest resonance left in the one-OSC
     fit's residuals added beside it, the pair judged as one step (BIC below before and below the one-OSC fit, AV no
-    worse, ``f``'s evidence gone). Beyond the papers (paper 000 adds one effect per step)."""
+    worse, ``f``'s evidence gone). Beyond paper 000, which adds one effect per step."""
     partners = [g for g in one_diag.findings if g.significant and g.effect == "OSC" and not g.members]
     one_trial = Trial(f, one_state.name(), one_diag.errors.bic, False,
                       f"{one_why}" + ("; a cluster of two tried next" if partners else ""))
@@ -186,8 +183,7 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
     """The bounded joint search when one-at-a-time is stuck (moves judged by the BIC and do-no-harm rules alone, the
     best returned): a GM at a tenth of the record and BI, the RW restarted small; :func:`hump_resonance`;
     :func:`flicker_as_gm_and_walk`. On a long record each move but the hump's is screened first
-    (:meth:`.AxisLoop.screen_reference`) and refused unrefitted if it cannot lower the BIC there. Beyond the papers
-    (docs/loop.md, "The loop's rules" 6)."""
+    (:meth:`.AxisLoop.screen_reference`) and refused unrefitted if it cannot lower the BIC there. Beyond the papers."""
     span = loop.n * loop.dt
     level = long_tau_level(diag)
     proposals = [("GM", {"tau": span / 10.0, "sigma": math.sqrt(level / 0.38)})]
@@ -233,10 +229,9 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
 
 def hump_resonance(loop: AxisLoop, diag: Diagnosis) -> det.Finding | None:
     """An OSC finding where the innovations hold a significant hump
-    (:func:`~imu_noise_id.core.diagnostics.lines.detect_innovation_hump`): f₀ the hump's centre, B its half-height width
-    (at most :data:`~imu_noise_id.core.noise.resonant.MAX_DAMPING`·f₀), σ² = 2 Σ (ratio − 1)·S_model(f)·Δf over its
-    bands (two-sided PSDs); None without a hump or when it is wider than its centre frequency (Q < 1). Beyond the papers
-    (docs/loop.md, "Why the loop's moves …")."""
+    (:func:`~imu_noise_id.core.diagnostics.lines.detect_innovation_hump`): f₀ its centre [Hz], B its half-height width
+    (≤ ``MAX_DAMPING``·f₀), σ² = 2 Σ (ratio − 1)·S_model(f)·Δf over its bands (two-sided PSDs); None without a hump or
+    when it is wider than f₀ (Q < 1). Beyond the papers."""
     hump = detect_innovation_hump(diag.innovations, loop.dt, alpha=loop.alpha)
     if not hump.finding.significant or hump.bandwidth > hump.frequency:
         return None
@@ -251,9 +246,8 @@ def hump_resonance(loop: AxisLoop, diag: Diagnosis) -> det.Finding | None:
 
 def flicker_as_gm_and_walk(loop: AxisLoop, diag: Diagnosis) -> list[Component] | None:
     """The fitted components with BI replaced by a GM (from the AV the flicker carries short of the last decade,
-    :func:`~imu_noise_id.core.diagnostics.av_signatures.fit_gm_to_excess`) and an RW (from :func:`long_tau_level`), when
-    the model has BI and neither; None otherwise or when the flicker carries AV at fewer than two τ. Beyond the papers
-    (docs/loop.md, "The loop's rules" 6)."""
+    :func:`~imu_noise_id.core.diagnostics.av_signatures.fit_gm_to_excess`) and an RW (:func:`long_tau_walk`) when the
+    model has BI and neither; None otherwise or when the flicker carries AV at fewer than two τ. Beyond the papers."""
     fitted = list(diag.fit.components)
     names = {c.name for c in fitted}
     if "BI" not in names or "RW" in names or "GM" in names or not diag.tau.size:
@@ -283,8 +277,7 @@ def long_tau(diag: Diagnosis) -> float:
 
 
 def long_tau_walk(diag: Diagnosis) -> RW:
-    """The random walk whose AV is the data's long-τ level at its τ (:func:`long_tau_level`, :func:`long_tau`): the
-    start of a random walk put back in flicker noise's place."""
+    """The RW whose AV at :func:`long_tau` is :func:`long_tau_level`: a random walk's start in flicker noise's place."""
     return RW(random_walk_at_allan_variance(max(long_tau_level(diag), 1e-30), long_tau(diag)))
 
 
