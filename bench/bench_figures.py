@@ -53,7 +53,7 @@ def _write(result, folder: Path, variant: str) -> float:
     png.PLAIN_POWERS = variant == "now"
     try:
         start = time.process_time()
-        analysis.write_analysis(result, folder, rostopic="/imu", meta={"source": "bench"})
+        analysis.write_analysis(result, folder, meta={"source": "bench"})
         return time.process_time() - start
     finally:
         png.LOG_MINOR_SUBS = THINNED

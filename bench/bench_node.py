@@ -84,7 +84,7 @@ def reference(work: Path) -> Path:
     imu = simulate_static_imu(model, 1000.0, 120.0, seed=3)
     out = work / "reference"
     write_analysis(analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN"), loop=False, jobs=1)),
-                   out, rostopic="/imu/data", meta={})
+                   out, meta={})
     return out
 
 

@@ -64,7 +64,7 @@ def reference_folder(out: Path) -> tuple[Reference, float]:
     """The calibration record analyzed by the default analyze, written and read back; gyro_z's bias instability B
     [rad/s] from its imu.yaml."""
     calibration = simulate_static_imu(MODEL, RATE_HZ, MINUTES * 60.0, seed=10_000)
-    write_analysis(analyze(calibration, options=AnalyzeOptions()), out, rostopic="/imu/data", meta={})
+    write_analysis(analyze(calibration, options=AnalyzeOptions()), out, meta={})
     imu_yaml = yaml.safe_load((out / "imu.yaml").read_text())
     return read_reference(out), float(imu_yaml["gyroscope_bias_instability_xyz"][2])
 

@@ -19,7 +19,8 @@ from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.noise.components import RW, WN
 from imu_noise_id.core.simulation.static import simulate_static_imu
 from imu_noise_id.pipelines.analyze import AnalysisResult, AnalyzeOptions, ModelStage, analyze
-from imu_noise_id.pipelines.analyze.static import NotStaticError, analyze_static, kalibr_parameters
+from imu_noise_id.pipelines.analyze.numbers import pasted_numbers
+from imu_noise_id.pipelines.analyze.static import NotStaticError, analyze_static
 from imu_noise_id.report.analysis import write_analysis
 from imu_noise_id.report.console import summary_table
 
@@ -60,20 +61,20 @@ def test_done_when_recovers_known_noise(hour_result):
 
 
 def test_kalibr_numbers_are_the_max_over_axes(hour_result):
-    k = kalibr_parameters(hour_result)
-    assert k["gyroscope_noise_density"] == max(hour_result.slopes[a].noise_density.value for a in GYRO_AXES)
-    assert k["accelerometer_random_walk"] == pytest.approx(ACCEL_K, rel=0.25)
+    numbers = pasted_numbers(hour_result, {})
+    assert numbers.sensor("gyro").noise_density == max(hour_result.slopes[a].noise_density.value for a in GYRO_AXES)
+    assert numbers.sensor("accel").random_walk == pytest.approx(ACCEL_K, rel=0.25)
 
 
 def test_outputs_files_units_and_values(hour_result, tmp_path):
-    paths = write_analysis(AnalysisResult(hour_result), tmp_path, rostopic="/imu/data", meta={})
+    paths = write_analysis(AnalysisResult(hour_result), tmp_path, meta={})
     assert set(paths) == {"imu.yaml", "allan.csv", "allan.png", "exports/kalibr_imu_chain.yaml",
                           "exports/orbslam3_imu.yaml", "exports/rep145_driver_params.yaml", "exports/kalibr_imu.yaml",
                           "exports/vins_imu.yaml", "exports/gtsam_imu.yaml", "exports/px4_ekf2.params"}
     text = (tmp_path / "imu.yaml").read_text()
     assert "rad/s/sqrt(Hz)" in text and "m/s^3/sqrt(Hz)" in text  # units stated in the comment header
     doc = yaml.safe_load(text)
-    assert doc["rostopic"] == "/imu/data" and doc["update_rate"] == pytest.approx(200.0)
+    assert doc["rostopic"] == hour_result.topic and doc["update_rate"] == pytest.approx(200.0)
     for key in ("accelerometer_noise_density", "accelerometer_random_walk", "gyroscope_noise_density",
                 "gyroscope_random_walk"):
         assert doc[key] == pytest.approx(max(doc[f"{key}_xyz"]), rel=1e-5)

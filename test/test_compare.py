@@ -124,10 +124,10 @@ def test_a_bias_step_and_a_new_line_are_found_where_they_are():
 def reference_dir(tmp_path_factory):
     """An analysis of a 10 min, 100 Hz recording of the unit (WN + RW, the structure given: the test is compare's)."""
     model = {a: [WN(1.7e-4), RW(2e-5)] if a in GYRO_AXES else [WN(2e-3), RW(3e-4)] for a in AXES}
-    imu = simulate_static_imu(model, 100.0, 600.0, seed=51)
+    imu = replace(simulate_static_imu(model, 100.0, 600.0, seed=51), topic="/imu/data")  # the topic the bags have
     result = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+RW"), loop=False, jobs=1))
     out = tmp_path_factory.mktemp("reference")
-    write_analysis(result, out, rostopic="/imu/data", meta={})
+    write_analysis(result, out, meta={})
     return out, model
 
 
@@ -330,7 +330,7 @@ def test_a_measured_unit_against_an_analysis_of_another_run_says_what_differs(sh
     data's README: on all three in every run) is a line the reference's model does not hold, so each accelerometer
     is degraded by "new line at 0.567 Hz" and nothing else; exit 1, and the last line names exactly those axes."""
     result = analyze(_adis_run(shared_data, 2), options=AnalyzeOptions(kinds=("allan",), loop=False, jobs=1))
-    write_analysis(result, tmp_path / "run2", rostopic="/imu/data", meta={})
+    write_analysis(result, tmp_path / "run2", meta={})
     write_bag(tmp_path / "run1", _adis_run(shared_data, 1))
     assert main(["compare", str(tmp_path / "run1"), "--reference", str(tmp_path / "run2")]) == 1
     rows = {line.split()[0]: line for line in capsys.readouterr().out.splitlines() if line.split()[:1]

@@ -26,6 +26,7 @@ from test_exports import DOC
 
 from imu_noise_id.cli import main
 from imu_noise_id.report.exports import write_exports
+from imu_noise_id.report.imu_yaml import parse_imu_yaml
 
 G = 9.80665  # [m/s²]
 
@@ -171,7 +172,7 @@ def test_gtsam_bias_covariance_never_pins_an_unidentified_bias(tmp_path):
     # the accelerometer's y random walk not identified, its Allan reading ~0: GTSAM would hold that bias constant
     doc = {**DOC, "accelerometer_random_walk_xyz": [3.0e-4, 1.0e-10, 2.5e-4],
            "accelerometer_random_walk_method_xyz": ["model", "allan_slope", "model"]}
-    path = write_exports(doc, tmp_path, ("gtsam",))[0]
+    path = write_exports(parse_imu_yaml(doc), tmp_path, ("gtsam",))[0]
     gt = _pyyaml(path)
     for key, sensor in (("biasAccCovariance", "accelerometer"), ("biasOmegaCovariance", "gyroscope")):
         np.testing.assert_allclose(np.array(gt[key]), np.eye(3) * doc[f"{sensor}_random_walk"] ** 2, rtol=1e-6, atol=0)

@@ -16,6 +16,7 @@ import yaml
 from imu_noise_id.cli import main
 from imu_noise_id.report.export_formats import px4_period
 from imu_noise_id.report.exports import FORMATS, write_exports
+from imu_noise_id.report.imu_yaml import parse_imu_yaml
 
 #: An imu.yaml as analyze writes it (values of a 200 Hz MEMS IMU, the accelerometer's RW not identified).
 DOC = {"gyroscope_noise_density": 1.7e-4, "gyroscope_random_walk": 2.0e-5, "accelerometer_noise_density": 2.0e-3,
@@ -36,7 +37,7 @@ def _load(path):
 
 
 def test_openvins_is_kalibrs_imu_chain_with_continuous_densities(tmp_path):
-    text, doc = _load(write_exports(DOC, tmp_path, ("openvins",))[0])
+    text, doc = _load(write_exports(parse_imu_yaml(DOC), tmp_path, ("openvins",))[0])
     # OpenVINS' kalibr_imu_chain.yaml example: %YAML:1.0, imu0 with T_i_b, the four densities, model, rostopic,
     # time_offset, update_rate
     assert text.startswith("%YAML:1.0\n")
@@ -50,19 +51,19 @@ def test_openvins_is_kalibrs_imu_chain_with_continuous_densities(tmp_path):
 
 
 def test_orbslam3_settings_are_continuous_time(tmp_path):
-    text, doc = _load(write_exports(DOC, tmp_path, ("orbslam3",))[0])
+    text, doc = _load(write_exports(parse_imu_yaml(DOC), tmp_path, ("orbslam3",))[0])
     assert doc == {"IMU.NoiseGyro": 1.7e-4, "IMU.NoiseAcc": 2.0e-3, "IMU.GyroWalk": 2.0e-5, "IMU.AccWalk": 3.0e-4,
                    "IMU.Frequency": 200.0}
     assert text.startswith("%YAML:1.0\n") and "Fragment:" in text and "IMU.T_b_c1" in text
 
 
 def test_rep145_driver_parameters_are_per_sample_stddevs(tmp_path):
-    _, doc = _load(write_exports(DOC, tmp_path, ("rep145",))[0])
+    _, doc = _load(write_exports(parse_imu_yaml(DOC), tmp_path, ("rep145",))[0])
     # a ROS 2 parameter file: the /** node (every node), its ros__parameters
     assert doc == {"/**": {"ros__parameters": {"angular_velocity_stddev": 2.4e-3, "linear_acceleration_stddev": 0.022}}}
     # An Allan-only imu.yaml has no per-sample values: white noise sampled at the rate, σ = N·√f.
     allan_only = {k: v for k, v in DOC.items() if "per_sample" not in k}
-    _, doc = _load(write_exports(allan_only, tmp_path / "a", ("rep145",))[0])
+    _, doc = _load(write_exports(parse_imu_yaml(allan_only), tmp_path / "a", ("rep145",))[0])
     assert doc["/**"]["ros__parameters"]["angular_velocity_stddev"] == pytest.approx(1.7e-4 * math.sqrt(200.0))
 
 
@@ -77,7 +78,7 @@ def test_export_command(tmp_path, capsys):
 
 
 def test_kalibr_is_kalibrs_own_imu_yaml(tmp_path):
-    text, doc = _load(write_exports(DOC, tmp_path, ("kalibr",))[0])
+    text, doc = _load(write_exports(parse_imu_yaml(DOC), tmp_path, ("kalibr",))[0])
     # Kalibr's ImuParameters (kalibr_common/ConfigReader.py) reads exactly these six keys and refuses <= 0
     assert set(doc) == {"accelerometer_noise_density", "accelerometer_random_walk", "gyroscope_noise_density",
                         "gyroscope_random_walk", "rostopic", "update_rate"}
@@ -91,7 +92,7 @@ def test_kalibr_is_kalibrs_own_imu_yaml(tmp_path):
 
 
 def test_vins_values_give_the_true_variances_through_vins_propagation(tmp_path):
-    text, doc = _load(write_exports(DOC, tmp_path, ("vins",))[0])
+    text, doc = _load(write_exports(parse_imu_yaml(DOC), tmp_path, ("vins",))[0])
     assert text.startswith("%YAML:1.0\n")
     assert list(doc) == ["acc_n", "gyr_n", "acc_w", "gyr_w", "g_norm"]  # VINS' euroc_config.yaml keys
     assert doc["g_norm"] == 9.80665 and "Fragment:" in text
@@ -116,7 +117,7 @@ def test_vins_values_give_the_true_variances_through_vins_propagation(tmp_path):
 
 
 def test_gtsam_covariances_are_continuous_densities_squared_per_sensor(tmp_path):
-    text, doc = _load(write_exports(DOC, tmp_path, ("gtsam",))[0])
+    text, doc = _load(write_exports(parse_imu_yaml(DOC), tmp_path, ("gtsam",))[0])
     # the members of PreintegrationCombinedParams (CombinedImuFactorsExample: p->accelerometerCovariance = I·σ², …)
     assert set(doc) == {"accelerometerCovariance", "gyroscopeCovariance", "biasAccCovariance", "biasOmegaCovariance",
                         "integrationCovariance", "biasAccOmegaInt"}
@@ -144,7 +145,7 @@ def _qgc_params(text):
 
 
 def test_px4_parameters_give_the_true_variances_through_ekf2_prediction(tmp_path):
-    text = write_exports(DOC, tmp_path, ("px4",))[0].read_text()
+    text = write_exports(parse_imu_yaml(DOC), tmp_path, ("px4",))[0].read_text()
     assert "# Vehicle-Id Component-Id Name Value Type" in text
     params = _qgc_params(text)
     assert set(params) == {"EKF2_GYR_NOISE", "EKF2_ACC_NOISE", "EKF2_GYR_B_NOISE", "EKF2_ACC_B_NOISE"}
@@ -161,12 +162,13 @@ def test_px4_parameters_give_the_true_variances_through_ekf2_prediction(tmp_path
     assert params["EKF2_GYR_NOISE"][0] == pytest.approx(1.7e-4 / math.sqrt(0.01))
     assert "outside PX4's documented range" not in text
     # an accelerometer quieter than PX4's documented minimum of EKF2_ACC_NOISE (0.01 m/s^2) is flagged
-    quiet = write_exports({**DOC, "accelerometer_noise_density": 5e-5}, tmp_path / "q", ("px4",))[0].read_text()
+    quiet_doc = parse_imu_yaml({**DOC, "accelerometer_noise_density": 5e-5})
+    quiet = write_exports(quiet_doc, tmp_path / "q", ("px4",))[0].read_text()
     assert "EKF2_ACC_NOISE = 0.0005 lies outside PX4's documented range [0.01, 1]" in quiet
 
 
 def test_every_format_states_its_convention_and_origin(tmp_path):
-    for path in write_exports(DOC, tmp_path):
+    for path in write_exports(parse_imu_yaml(DOC), tmp_path):
         text = path.read_text()
         assert "Convention:" in text and "/imu0 at 200 Hz" in text, path.name
     assert {p.name for p in tmp_path.iterdir()} == {name for name, _ in FORMATS.values()}
@@ -176,7 +178,8 @@ def test_overbound_exports_use_the_overbound_section(tmp_path):
     ob = {"gyroscope_noise_density": 3.4e-4, "gyroscope_random_walk": 8.0e-5, "accelerometer_noise_density": 4.0e-3,
           "accelerometer_random_walk": 9.0e-4, "gyroscope_noise_density_xyz": [3.4e-4, 3.0e-4, 3.1e-4],
           "tau_range_s": [0.005, 100.0], "inflation_summary": "N x1.8-2.0, K x4.0-4.4"}
-    paths = write_exports({**DOC, "overbound": ob}, tmp_path, ("kalibr", "gtsam", "rep145"), overbound=True)
+    paths = write_exports(parse_imu_yaml({**DOC, "overbound": ob}), tmp_path, ("kalibr", "gtsam", "rep145"),
+                          overbound=True)
     assert all(p.parent == tmp_path / "overbound" for p in paths)
     text, doc = _load(paths[0])
     assert doc["gyroscope_noise_density"] == 3.4e-4 and doc["accelerometer_random_walk"] == 9.0e-4
@@ -186,7 +189,7 @@ def test_overbound_exports_use_the_overbound_section(tmp_path):
     _, rep = _load(paths[2])  # no low-pass in a WN+RW: N*sqrt(f)
     assert rep["/**"]["ros__parameters"]["angular_velocity_stddev"] == pytest.approx(3.4e-4 * math.sqrt(200.0))
     with pytest.raises(Exception, match="no 'overbound:' section"):
-        write_exports(DOC, tmp_path, ("kalibr",), overbound=True)
+        write_exports(parse_imu_yaml(DOC), tmp_path, ("kalibr",), overbound=True)
 
 
 def test_export_command_formats_and_overbound(tmp_path, capsys):

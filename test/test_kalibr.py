@@ -134,7 +134,7 @@ def test_a_final_model_without_a_walk_gives_the_datas_long_tau_bound(tmp_path):
 
     imu = simulate_static_imu({a: [WN(1e-3)] for a in AXES}, 100.0, 300.0, seed=9)
     result = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN"), loop=False, jobs=1))
-    write_analysis(result, tmp_path, rostopic="/imu/data", meta={})
+    write_analysis(result, tmp_path, meta={})
     doc = yaml.safe_load((tmp_path / "imu.yaml").read_text())
     for i, axis in enumerate(("gyro_x", "gyro_y", "gyro_z")):
         bound = random_walk_bound(result.static.allan.column(i), tau_min=30.0).value

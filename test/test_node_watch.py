@@ -31,7 +31,7 @@ def reference_dir(tmp_path_factory):
     imu = simulate_static_imu(MODEL, 100.0, 300.0, seed=61)
     result = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+RW"), loop=False, jobs=1))
     out = tmp_path_factory.mktemp("reference")
-    write_analysis(result, out, rostopic="/imu/data", meta={})
+    write_analysis(result, out, meta={})
     return out
 
 

@@ -159,8 +159,9 @@ def test_export_takes_comma_lists_of_formats(tmp_path):
 
 def test_px4_params_are_written_with_seven_significant_digits(tmp_path):
     from imu_noise_id.report.exports import write_exports
+    from imu_noise_id.report.imu_yaml import parse_imu_yaml
 
-    text = write_exports(EXPORT_DOC, tmp_path, ("px4",))[0].read_text()
+    text = write_exports(parse_imu_yaml(EXPORT_DOC), tmp_path, ("px4",))[0].read_text()
     rows = {line.split("\t")[2]: line.split("\t")[3] for line in text.splitlines() if not line.startswith("#")}
     assert rows["EKF2_ACC_NOISE"] == "0.020017"  # N / sqrt(10 ms), not 0.020016999999999997 nor 18 decimals
     for value in rows.values():

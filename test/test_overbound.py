@@ -98,7 +98,7 @@ def allan_only(tmp_path_factory):
     result = analyze(simulate_static_imu(model, 100.0, 600.0, seed=3), None,
                      AnalyzeOptions(models=ModelStage("none"), horizon_s=50.0))
     out = tmp_path_factory.mktemp("allan_only")
-    write_analysis(result, out, rostopic="/imu", meta={}, overbound_exports=True)
+    write_analysis(result, out, meta={}, overbound_exports=True)
     return result, out
 
 

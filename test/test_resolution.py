@@ -65,7 +65,7 @@ def filtered(tmp_path_factory):
     imu = replace(imu, accel=accel)
     result = analyze(imu, options=AnalyzeOptions(models=ModelStage("WN+GM"), jobs=1))
     out = tmp_path_factory.mktemp("filtered")
-    write_analysis(result, out, rostopic="/imu/data", meta={})
+    write_analysis(result, out, meta={})
     return result, out
 
 

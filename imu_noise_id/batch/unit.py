@@ -40,7 +40,7 @@ def _num(x: float | None) -> float | None:
 
 
 def fleet_rows(unit: Unit, result, warnings: list[str], beyond: dict | None = None) -> list[dict]:
-    """One row per axis: the Kalibr numbers with intervals (final model, else the Allan slopes), B, the loop, and
+    """One row per axis: imu.yaml's per-axis N and K with intervals and methods (``result.numbers``), B, the loop, and
     ``beyond`` (axis → NoiseLevel of the test against the spec's limit): the density over the limit and, when the test
     holds the axis beyond it, since when [s]."""
     rows = []
@@ -48,21 +48,20 @@ def fleet_rows(unit: Unit, result, warnings: list[str], beyond: dict | None = No
         row = {"bag": str(unit.bag), "topic": result.static.topic, "unit": unit.name, "axis": axis,
                "status": "ok", "error": "", "rate_hz": _num(num(result.static.rate_hz)),
                "duration_s": _num(result.static.duration_s), "warnings": " | ".join(warnings)}
+        pasted = result.numbers.axis(axis)
+        n, k = pasted.noise_density, pasted.random_walk
+        row |= {"noise_density": _num(n.value), "noise_density_lo": _num(n.ci95[0]),
+                "noise_density_hi": _num(n.ci95[1]), "noise_density_method": n.method,
+                "random_walk": _num(k.value), "random_walk_lo": _num(k.ci95[0]), "random_walk_hi": _num(k.ci95[1]),
+                "random_walk_method": k.method}
         final = result.finals.get(axis)
         if final is not None:
-            n, k, b = final.noise_density, final.random_walk, final.bias_instability
-            row |= {"model": final.model, "noise_density": _num(n.value), "noise_density_lo": _num(n.ci95[0]),
-                    "noise_density_hi": _num(n.ci95[1]), "random_walk": _num(k.value),
-                    "random_walk_lo": _num(k.ci95[0]), "random_walk_hi": _num(k.ci95[1]),
-                    "bias_instability": _num(b.value), "bias_instability_lo": _num(b.ci95[0]),
+            b = final.bias_instability
+            row |= {"model": final.model, "bias_instability": _num(b.value), "bias_instability_lo": _num(b.ci95[0]),
                     "bias_instability_hi": _num(b.ci95[1]), "source": final.source}
         else:
-            s = result.static.slopes[axis]
-            row |= {"model": "allan", "noise_density": _num(s.noise_density.value),
-                    "noise_density_lo": _num(s.noise_density.ci[0]), "noise_density_hi": _num(s.noise_density.ci[1]),
-                    "random_walk": _num(s.random_walk.value), "random_walk_lo": _num(s.random_walk.ci[0]),
-                    "random_walk_hi": _num(s.random_walk.ci[1]), "bias_instability": None,
-                    "bias_instability_lo": None, "bias_instability_hi": None, "source": "Allan slopes"}
+            row |= {"model": "allan", "bias_instability": None, "bias_instability_lo": None,
+                    "bias_instability_hi": None, "source": "Allan slopes"}
         loop = result.loops.get(axis)
         row |= {"loop_verdict": loop.verdict if loop else "", "loop_passed": bool(loop.passed) if loop else None}
         level = (beyond or {}).get(axis)
@@ -146,7 +145,7 @@ def run_unit(unit: Unit, options: BatchOptions, out_root: str) -> UnitOutcome:
         models = options.analysis.models
         meta = {"source": str(unit.bag), "topic": recording.imu.topic, "command": "batch", "model": models.model,
                 "estimator": models.estimator, "notes": recording.notes}
-        write_analysis(result, tmp, rostopic=recording.imu.topic, meta=meta, title=_title(unit),
+        write_analysis(result, tmp, meta=meta, title=_title(unit),
                        overbound_exports=options.overbound_exports)
         record = RunRecord(command="batch", argv=[], source=str(unit.bag), topic=recording.imu.topic,
                            options=options.as_dict(), started=started, finished=now(), completed=True).as_dict()

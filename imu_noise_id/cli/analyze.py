@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
             "estimator": args.estimator, "notes": recording.notes}
     folder = results_folder(args, str(args.bag), recording.imu.topic)
     with folder as staging:
-        paths = write_analysis(result, staging, rostopic=recording.imu.topic, meta=meta,
+        paths = write_analysis(result, staging, meta=meta,
                                title=f"IMU noise analysis: {args.bag.name}", overbound_exports=args.overbound)
     folder.report()
     print(summary_table(result.static), flush=True)

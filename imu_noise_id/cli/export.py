@@ -1,5 +1,5 @@
 """``imu-noise-id export DIR_OR_IMU_YAML --format …``: the filters' exports (:mod:`imu_noise_id.report.exports`) from
-an analysis's ``imu.yaml`` alone (never the bag)."""
+an analysis's ``imu.yaml`` alone (never the bag), parsed once into its numbers."""
 
 from __future__ import annotations
 
@@ -56,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
 
     from ..core.errors import InputError
     from ..report.exports import write_exports
+    from ..report.imu_yaml import parse_imu_yaml
     from ..report.results_folder import RunRecord, now, options_of, stamp
 
     formats = parse_formats(args.format)
@@ -67,9 +68,10 @@ def run(args: argparse.Namespace) -> int:
             from None
     if not isinstance(doc, dict):
         raise InputError(f"{str(path)!r} is not an imu.yaml written by imu-noise-id analyze")
-    record = RunRecord(command="export", argv=list(args.argv), source=str(path), topic=doc.get("rostopic"),
+    numbers = parse_imu_yaml(doc, str(path))
+    record = RunRecord(command="export", argv=list(args.argv), source=str(path), topic=numbers.topic,
                        options=options_of(args), started=args.started, finished=now(), completed=True)
-    for p in write_exports(doc, args.out or path.parent / "exports", formats, overbound=args.overbound):
+    for p in write_exports(numbers, args.out or path.parent / "exports", formats, overbound=args.overbound):
         stamp(p, p.name, record.as_dict())
         print(p)
     return 0

@@ -17,7 +17,7 @@ from .plots_model import save_allan_overlay
 from .variance_csv import write_variance_csvs
 
 
-def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str, meta: dict,
+def write_analysis(result: AnalysisResult, out_dir: str | Path, *, meta: dict,
                    title: str = "IMU noise analysis", overbound_exports: bool = False) -> dict[str, Path]:
     """Write every output of ``result`` into ``out_dir`` (created); returns the paths by file name.
 
@@ -26,13 +26,13 @@ def write_analysis(result: AnalysisResult, out_dir: str | Path, *, rostopic: str
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     static = result.static
-    doc = imu_doc(static, result.finals, rostopic, result.overbounds)
+    doc = imu_doc(result.numbers)
     doc["warnings"] = [*static.warnings, *result.warnings]
     paths = {"imu.yaml": write_imu_yaml(out / "imu.yaml", static, doc, bool(result.finals))}
-    for p in write_exports(doc, out / "exports"):
+    for p in write_exports(result.numbers, out / "exports"):
         paths[f"exports/{p.name}"] = p
     if overbound_exports:
-        for p in write_exports(doc, out / "exports", overbound=True):
+        for p in write_exports(result.numbers, out / "exports", overbound=True):
             paths[f"exports/{p.parent.name}/{p.name}"] = p
     for p in write_variance_csvs(static.variances, static.axes, out):
         paths[p.name] = p

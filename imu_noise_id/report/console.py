@@ -10,6 +10,7 @@ from ..core.estimation.em.results import FitResult
 from ..core.estimation.readouts.kalibr import walk_crossing_tau
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
+from ..pipelines.analyze.numbers import axis_readings
 from ..pipelines.analyze.overbound import AxisOverbound
 from ..pipelines.analyze.static import StaticAnalysis
 from ..pipelines.av_band import av_band_claim
@@ -74,9 +75,9 @@ def short_for_walk_lines(finals: dict[str, FinalModel], static: StaticAnalysis |
     lines = []
     for axis, f in finals.items():
         n, k, method = f.noise_density.value, f.random_walk.value, f.random_walk.method
-        if k is None and static is not None and axis in static.slopes:
-            walk = static.slopes[axis].random_walk
-            k, method = walk.value, ("Allan-slope bound" if walk.method == "upper_bound" else "Allan slope")
+        if k is None and static is not None and axis in static.slopes:  # what imu.yaml pastes instead
+            walk = axis_readings(static, axis, f)[1]
+            k, method = walk.value, ("Allan-slope bound" if walk.method == "allan_upper_bound" else "Allan slope")
         if not n or not k:
             continue
         record = f.fit.n * f.fit.dt

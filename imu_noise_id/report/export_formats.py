@@ -1,17 +1,17 @@
-"""One renderer per consumer: ``imu.yaml`` content in (N [u/√Hz], K [u/s/√Hz], f its ``update_rate`` [Hz]), the
-consumer's file text out under a header stating source, convention and formula: Kalibr, OpenVINS, ORB-SLAM3
-continuous-time N, K; VINS acc_n = N·√(2f), acc_w = K·√f; GTSAM I·N², I·K²; PX4 EKF2 N/√P, K/√P (P the EKF step
-[s]); REP-145 the per-sample standard deviation. Sources of each convention: docs/analysis.md, "Exports".
+"""One renderer per consumer: the analysis's numbers in (:class:`~..pipelines.analyze.numbers.PastedNumbers`: N
+[u/√Hz], K [u/s/√Hz], f the update rate [Hz]), the consumer's file text out under a header stating source, convention
+and formula: Kalibr, OpenVINS, ORB-SLAM3 continuous-time N, K; VINS acc_n = N·√(2f), acc_w = K·√f; GTSAM I·N², I·K²;
+PX4 EKF2 N/√P, K/√P (P the EKF step [s]); REP-145 the per-sample standard deviation. Sources of each convention:
+docs/analysis.md, "Exports".
 """
 
 from __future__ import annotations
-
-import math
 
 import yaml
 
 from ..core.constants import STANDARD_GRAVITY
 from ..core.noise.units import step_noise_std
+from ..pipelines.analyze.numbers import PastedNumbers
 from .numbers import num
 
 _SENSORS = (("gyroscope", "gyro"), ("accelerometer", "acc"))
@@ -33,24 +33,23 @@ class _IndentedSequences(yaml.SafeDumper):
         return super().increase_indent(flow, False)
 
 
-def _origin(doc: dict) -> list[str]:
-    lines = [f"Written by imu-noise-id from {doc.get('rostopic', '?')} at {float(doc['update_rate']):g} Hz."]
-    ob = doc.get("overbound_of")
+def _origin(numbers: PastedNumbers) -> list[str]:
+    lines = [f"Written by imu-noise-id from {numbers.topic or '?'} at {numbers.rate_hz:g} Hz."]
+    ob = numbers.values_of
     if ob:
         lines.append(f"OVERBOUND values (imu.yaml 'overbound:'): {ob}")
     else:
         lines.append("Values: imu.yaml's Kalibr keys (each sensor's max over x, y, z of the final models' values).")
-    methods = sorted({m for key in ("gyroscope_random_walk_method_xyz", "accelerometer_random_walk_method_xyz")
-                      for m in doc.get(key, []) if m != "model"})
+    methods = numbers.random_walk_methods()
     if methods and not ob:
         lines.append("Note: some random walks are not identifiable from the record: Allan-slope reading or bound "
                      f"used ({', '.join(methods)}).")
     return lines
 
 
-def header(doc: dict, *convention: str, prefix: str = "# ") -> str:
+def header(numbers: PastedNumbers, *convention: str, prefix: str = "# ") -> str:
     """The comment lines of a file: origin, convention, formula."""
-    return "".join(f"{prefix}{line}\n" for line in [*_origin(doc), *convention])
+    return "".join(f"{prefix}{line}\n" for line in [*_origin(numbers), *convention])
 
 
 def _yaml_number(value: float) -> str:
@@ -58,69 +57,75 @@ def _yaml_number(value: float) -> str:
     return yaml.safe_dump(float(f"{value:.6g}")).splitlines()[0]
 
 
-def _n(doc: dict, sensor: str) -> float:
-    return float(doc[f"{sensor}_noise_density"])
+_SENSOR_OF = {"gyroscope": "gyro", "accelerometer": "accel"}
 
 
-def _k(doc: dict, sensor: str) -> float:
-    return float(doc[f"{sensor}_random_walk"])
+def _n(numbers: PastedNumbers, sensor: str) -> float:
+    """Kalibr's N of ``sensor`` (``gyroscope`` or ``accelerometer``)."""
+    return numbers.sensor(_SENSOR_OF[sensor]).noise_density
 
 
-def kalibr(doc: dict) -> str:
+def _k(numbers: PastedNumbers, sensor: str) -> float:
+    """Kalibr's K of ``sensor``."""
+    return numbers.sensor(_SENSOR_OF[sensor]).random_walk
+
+
+def kalibr(numbers: PastedNumbers) -> str:
     """Kalibr's own ``imu.yaml`` (the six keys its ``ImuParameters`` reads)."""
     body = ""
     for sensor, unit, walk_unit in (("accelerometer", "m/s^2", "m/s^3"), ("gyroscope", "rad/s", "rad/s^2")):
-        body += (f"{sensor}_noise_density: {_yaml_number(_n(doc, sensor))}  # [{unit}/sqrt(Hz)] noise density "
+        body += (f"{sensor}_noise_density: {_yaml_number(_n(numbers, sensor))}  # [{unit}/sqrt(Hz)] noise density "
                  "(continuous-time)\n"
-                 f"{sensor}_random_walk: {_yaml_number(_k(doc, sensor))}  # [{walk_unit}/sqrt(Hz)] bias random "
+                 f"{sensor}_random_walk: {_yaml_number(_k(numbers, sensor))}  # [{walk_unit}/sqrt(Hz)] bias random "
                  "walk\n")
-    body += (f"rostopic: {doc.get('rostopic', '/imu0')}\n"
-             f"update_rate: {_yaml_number(float(doc['update_rate']))}  # [Hz] Kalibr discretises "
+    body += (f"rostopic: {numbers.topic or '/imu0'}\n"
+             f"update_rate: {_yaml_number(numbers.rate_hz)}  # [Hz] Kalibr discretises "
              "sigma_d = N*sqrt(update_rate)\n")
-    return header(doc, "Convention: Kalibr's, continuous-time N [u/sqrt(Hz)] and K [u/s/sqrt(Hz)]; Kalibr refuses "
-                       "values <= 0.") + body
+    return header(numbers, "Convention: Kalibr's, continuous-time N [u/sqrt(Hz)] and K [u/s/sqrt(Hz)]; Kalibr "
+                           "refuses values <= 0.") + body
 
 
-def openvins(doc: dict) -> str:
+def openvins(numbers: PastedNumbers) -> str:
     """OpenVINS / Kalibr IMU chain (continuous-time densities) that OpenCV's ``cv::FileStorage`` reads key by key:
     ``T_i_b`` a sequence of four rows of four numbers, block-indented under its key."""
     imu0 = {"T_i_b": [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-            **{f"{s}_{p}": float(doc[f"{s}_{p}"]) for s in ("accelerometer", "gyroscope")
+            **{f"{s}_{p}": getattr(numbers.sensor(_SENSOR_OF[s]), p) for s in ("accelerometer", "gyroscope")
                for p in ("noise_density", "random_walk")},
-            "model": "kalibr", "rostopic": str(doc.get("rostopic", "/imu0")), "time_offset": 0.0,
-            "update_rate": float(doc["update_rate"])}
+            "model": "kalibr", "rostopic": numbers.topic or "/imu0", "time_offset": 0.0,
+            "update_rate": numbers.rate_hz}
     body = yaml.dump({"imu0": imu0}, Dumper=_IndentedSequences, sort_keys=False, default_flow_style=None)
-    return "%YAML:1.0\n" + header(doc, "Convention: continuous-time noise densities N [u/sqrt(Hz)] and bias random "
-                                       "walks K [u/s/sqrt(Hz)], as Kalibr; T_i_b identity (set your extrinsics)") + body
+    return "%YAML:1.0\n" + header(numbers, "Convention: continuous-time noise densities N [u/sqrt(Hz)] and bias "
+                                           "random walks K [u/s/sqrt(Hz)], as Kalibr; T_i_b identity (set your "
+                                           "extrinsics)") + body
 
 
-def orbslam3(doc: dict) -> str:
+def orbslam3(numbers: PastedNumbers) -> str:
     """ORB-SLAM3 IMU settings (continuous-time; ORB-SLAM3 scales by sqrt(IMU.Frequency)), every value a real number;
     a fragment: the header names the keys (``IMU.T_b_c1``) that must come from the user's settings file."""
-    body = {"IMU.NoiseGyro": _n(doc, "gyroscope"), "IMU.NoiseAcc": _n(doc, "accelerometer"),
-            "IMU.GyroWalk": _k(doc, "gyroscope"), "IMU.AccWalk": _k(doc, "accelerometer"),
-            "IMU.Frequency": float(doc["update_rate"])}
+    body = {"IMU.NoiseGyro": _n(numbers, "gyroscope"), "IMU.NoiseAcc": _n(numbers, "accelerometer"),
+            "IMU.GyroWalk": _k(numbers, "gyroscope"), "IMU.AccWalk": _k(numbers, "accelerometer"),
+            "IMU.Frequency": numbers.rate_hz}
     return "%YAML:1.0\n" + header(
-        doc, "Convention: continuous-time: NoiseGyro/NoiseAcc in rad/s/sqrt(Hz), m/s^2/sqrt(Hz); GyroWalk/AccWalk in "
-             "rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)",
+        numbers, "Convention: continuous-time: NoiseGyro/NoiseAcc in rad/s/sqrt(Hz), m/s^2/sqrt(Hz); GyroWalk/AccWalk "
+                 "in rad/s^2/sqrt(Hz), m/s^3/sqrt(Hz)",
         "Fragment: merge these keys into your ORB-SLAM3 settings file; IMU.T_b_c1 (the 4x4 opencv-matrix from "
         "camera 1 to the IMU body, from your camera-IMU calibration) and the camera keys must come from it.") + \
         yaml.safe_dump(body, sort_keys=False)
 
 
-def vins(doc: dict) -> str:
+def vins(numbers: PastedNumbers) -> str:
     """VINS-Mono / VINS-Fusion ``acc_n``, ``gyr_n``, ``acc_w``, ``gyr_w`` (per-IMU-step standard deviations) and
     ``g_norm`` (standard gravity); a fragment of the VINS config, as its header says."""
-    f = float(doc["update_rate"])
+    f = numbers.rate_hz
     values = {}
     for sensor, short in (("accelerometer", "acc"), ("gyroscope", "gyr")):
-        values[f"{short}_n"] = step_noise_std(_n(doc, sensor), 1.0 / f, VINS_NOISE_WEIGHT)
+        values[f"{short}_n"] = step_noise_std(_n(numbers, sensor), 1.0 / f, VINS_NOISE_WEIGHT)
     for sensor, short in (("accelerometer", "acc"), ("gyroscope", "gyr")):
-        values[f"{short}_w"] = step_noise_std(_k(doc, sensor), 1.0 / f, VINS_WALK_WEIGHT)
+        values[f"{short}_w"] = step_noise_std(_k(numbers, sensor), 1.0 / f, VINS_WALK_WEIGHT)
     body = "".join(f"{k}: {_yaml_number(v)}\n" for k, v in values.items())
     body += f"g_norm: {_yaml_number(STANDARD_GRAVITY)}  # [m/s^2] standard gravity: set your local value\n"
     return "%YAML:1.0\n" + header(
-        doc, "Convention: VINS propagates per IMU step dt = 1/update_rate (integration_base.h): the mid-point step "
+        numbers, "Convention: VINS propagates per IMU step dt = 1/update_rate (integration_base.h): the mid-point step "
              "adds (dt/2)^2*acc_n^2 for each of its two samples, the bias dt^2*acc_w^2.",
         f"Formula: acc_n = N*sqrt(2*f), acc_w = K*sqrt(f), f = {f:g} Hz (same for gyr_*), so that the propagated "
         "variances grow as N^2*t and K^2*t.",
@@ -135,19 +140,19 @@ def _diag(value: float) -> list[list[float]]:
     return [[num(value**2) if i == j else 0.0 for j in range(3)] for i in range(3)]
 
 
-def gtsam(doc: dict) -> str:
+def gtsam(numbers: PastedNumbers) -> str:
     """GTSAM ``PreintegrationCombinedParams`` members (continuous-time covariances, densities squared): I·N², I·K² with
     each sensor's Kalibr value (max over its axes) on every axis, never an axis's own (docs/analysis.md, "Exports")."""
-    body = {"accelerometerCovariance": _diag(_n(doc, "accelerometer")),
-            "gyroscopeCovariance": _diag(_n(doc, "gyroscope")),
-            "biasAccCovariance": _diag(_k(doc, "accelerometer")),
-            "biasOmegaCovariance": _diag(_k(doc, "gyroscope")),
+    body = {"accelerometerCovariance": _diag(_n(numbers, "accelerometer")),
+            "gyroscopeCovariance": _diag(_n(numbers, "gyroscope")),
+            "biasAccCovariance": _diag(_k(numbers, "accelerometer")),
+            "biasOmegaCovariance": _diag(_k(numbers, "gyroscope")),
             "integrationCovariance": None, "biasAccOmegaInt": None}
     return header(
-        doc, "Convention: GTSAM's continuous-time 'covariances' = densities squared, the sensor's value (max over x, "
-             "y, z) on each axis of the diagonal: accelerometerCovariance = I*N^2 [(m/s^2)^2/Hz], "
-             "gyroscopeCovariance [(rad/s)^2/Hz] (GTSAM divides by dt), biasAccCovariance = I*K^2 [(m/s^3)^2/Hz], "
-             "biasOmegaCovariance [(rad/s^2)^2/Hz] (GTSAM multiplies by dt).",
+        numbers, "Convention: GTSAM's continuous-time 'covariances' = densities squared, the sensor's value (max over "
+                 "x, y, z) on each axis of the diagonal: accelerometerCovariance = I*N^2 [(m/s^2)^2/Hz], "
+                 "gyroscopeCovariance [(rad/s)^2/Hz] (GTSAM divides by dt), biasAccCovariance = I*K^2 "
+                 "[(m/s^3)^2/Hz], biasOmegaCovariance [(rad/s^2)^2/Hz] (GTSAM multiplies by dt).",
         "Not the per-axis values of imu.yaml's *_xyz: where an axis's random walk is not identifiable its value can "
         "be ~0, and that bias covariance would hold the bias constant; the sensor's value is used on every axis.",
         "integrationCovariance (integration error) and biasAccOmegaInt (uncertainty of the initial bias; GTSAM 4.3 "
@@ -163,17 +168,17 @@ def px4_period(rate_hz: float) -> float:
     return max(1, round(PX4_PREDICT_PERIOD_S * rate_hz)) / rate_hz
 
 
-def px4(doc: dict) -> str:
+def px4(numbers: PastedNumbers) -> str:
     """PX4 EKF2 noise parameters as a QGroundControl ``.params`` file (tab-separated, MAV_PARAM_TYPE 9 = float)."""
-    period = px4_period(float(doc["update_rate"]))
-    values = {"EKF2_ACC_B_NOISE": step_noise_std(_k(doc, "accelerometer"), period),
-              "EKF2_ACC_NOISE": step_noise_std(_n(doc, "accelerometer"), period),
-              "EKF2_GYR_B_NOISE": step_noise_std(_k(doc, "gyroscope"), period),
-              "EKF2_GYR_NOISE": step_noise_std(_n(doc, "gyroscope"), period)}
+    period = px4_period(numbers.rate_hz)
+    values = {"EKF2_ACC_B_NOISE": step_noise_std(_k(numbers, "accelerometer"), period),
+              "EKF2_ACC_NOISE": step_noise_std(_n(numbers, "accelerometer"), period),
+              "EKF2_GYR_B_NOISE": step_noise_std(_k(numbers, "gyroscope"), period),
+              "EKF2_GYR_NOISE": step_noise_std(_n(numbers, "gyroscope"), period)}
     notes = [f"Note: {name} = {v:.3g} lies outside PX4's documented range [{lo:g}, {hi:g}]"
              for name, v in values.items() for lo, hi in [PX4_LIMITS[name]] if not lo <= v <= hi]
     head = header(
-        doc, f"Convention: PX4 EKF2 adds sq(P*EKF2_GYR_NOISE) per prediction step of P = {period * 1e3:g} ms "
+        numbers, f"Convention: PX4 EKF2 adds sq(P*EKF2_GYR_NOISE) per prediction step of P = {period * 1e3:g} ms "
              f"(EKF2_PREDICT_US default {PX4_PREDICT_PERIOD_S * 1e6:g} us as whole IMU periods) "
              "(EKF/covariance.cpp).",
         "Formula: EKF2_*_NOISE = N/sqrt(P) [rad/s, m/s^2], EKF2_*_B_NOISE = K/sqrt(P) [rad/s^2, m/s^3]; for another "
@@ -182,18 +187,15 @@ def px4(doc: dict) -> str:
     return "# Onboard parameters for Vehicle 1\n#\n" + head + "#\n# Vehicle-Id Component-Id Name Value Type\n" + rows
 
 
-def rep145(doc: dict) -> str:
+def rep145(numbers: PastedNumbers) -> str:
     """REP-145 driver parameters: per-sample standard deviations at the driver's rate, as a ROS 2 parameter file
     (``/**: ros__parameters:``, which every node reads)."""
     per_sample = {}
-    for sensor, name in (("gyroscope", "angular_velocity_stddev"), ("accelerometer", "linear_acceleration_stddev")):
-        values = doc.get(f"{sensor}_noise_stddev_per_sample_xyz")
-        if values is None:  # Allan-only analysis or an overbound: white noise sampled at the rate
-            values = [_n(doc, sensor) * math.sqrt(float(doc["update_rate"]))]
-        per_sample[name] = float(max(values))
-    return header(doc, "Convention: per-sample standard deviation at update_rate (rad/s, m/s^2): sqrt of the "
-                       "sensor_msgs/Imu covariance diagonal; includes the sensor's own low-pass, not N*sqrt(rate) "
-                       "(an overbound or an Allan-only analysis has no low-pass: N*sqrt(rate))",
+    for sensor, name in (("gyro", "angular_velocity_stddev"), ("accel", "linear_acceleration_stddev")):
+        per_sample[name] = float(numbers.sensor(sensor).noise_stddev_per_sample(numbers.rate_hz))
+    return header(numbers, "Convention: per-sample standard deviation at update_rate (rad/s, m/s^2): sqrt of the "
+                           "sensor_msgs/Imu covariance diagonal; includes the sensor's own low-pass, not N*sqrt(rate) "
+                           "(an overbound or an Allan-only analysis has no low-pass: N*sqrt(rate))",
                   f"ROS 2 parameter file: {ROS_PARAMETER_NODE} gives every node these parameters; put your driver's "
                   "node name there to give them to it alone.") + \
         yaml.safe_dump({ROS_PARAMETER_NODE: {"ros__parameters": per_sample}}, sort_keys=False)

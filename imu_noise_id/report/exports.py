@@ -1,17 +1,16 @@
 """Exports of the noise figures (:data:`FORMATS`) for the filters people run, rendered by :mod:`.export_formats` from
-``imu.yaml``'s numbers or its ``overbound:`` section (:func:`overbound_doc`); files: docs/analysis.md, "Exports"."""
+the analysis's numbers or their overbound; files: docs/analysis.md, "Exports"."""
 
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
-from ..core.constants import CONFIDENCE_95
 from ..core.errors import InputError
+from ..pipelines.analyze.numbers import PastedNumbers
 from . import export_formats as fmt
-
-REQUIRED = ("gyroscope_noise_density", "gyroscope_random_walk", "accelerometer_noise_density",
-            "accelerometer_random_walk", "update_rate")
+from .numbers import num
 
 FORMATS = {"openvins": ("kalibr_imu_chain.yaml", fmt.openvins), "vins": ("vins_imu.yaml", fmt.vins),
            "orbslam3": ("orbslam3_imu.yaml", fmt.orbslam3), "gtsam": ("gtsam_imu.yaml", fmt.gtsam),
@@ -21,48 +20,36 @@ FORMATS = {"openvins": ("kalibr_imu_chain.yaml", fmt.openvins), "vins": ("vins_i
 OVERBOUND_DIR = "overbound"
 
 
-def overbound_doc(doc: dict) -> dict:
-    """``doc`` with its Kalibr keys and per-axis values replaced by its ``overbound:`` section's, the per-sample
-    standard deviations dropped (a WN + RW has no low-pass: REP-145 then uses N·√f) and ``overbound_of`` saying what the
-    values are; InputError without an ``overbound:`` section."""
-    ob = doc.get("overbound")
-    if not isinstance(ob, dict) or not all(isinstance(ob.get(k), int | float) for k in REQUIRED[:4]):
-        raise InputError("imu.yaml has no 'overbound:' section with the four Kalibr numbers: rerun imu-noise-id "
-                         "analyze (it writes one) to export the overbound")
-    out = {k: v for k, v in doc.items() if "per_sample" not in k and not k.endswith("_method_xyz")}
-    for key in REQUIRED[:4]:
-        out[key] = ob[key]
-        if f"{key}_xyz" in ob:
-            out[f"{key}_xyz"] = ob[f"{key}_xyz"]
-    lo, hi = ob.get("tau_range_s", [float("nan")] * 2)
-    level = float(doc.get("confidence_level", CONFIDENCE_95))
-    out["overbound_of"] = (f"the smallest WN+RW whose Allan variance lies above the data's upper "
-                           f"{100 * level:g} % bound and the final model's AV at "
-                           f"every tau in [{lo:g}, {hi:g}] s, not below the fitted values; inflation over them: "
-                           f"{ob.get('inflation_summary', 'see imu.yaml')}")
-    return out
+def _as_in_imu_yaml(numbers: PastedNumbers) -> PastedNumbers:
+    """``numbers`` to the digits ``imu.yaml`` holds them (:func:`~.numbers.num`): an analysis's exports and those
+    ``export`` writes from its ``imu.yaml`` agree to the digit."""
+    sensors = {}
+    for name, s in numbers.sensors.items():
+        axes = tuple(a if a.model is None else
+                     replace(a, model=replace(a.model, noise_stddev_per_sample=num(a.model.noise_stddev_per_sample)))
+                     for a in s.axes)
+        sensors[name] = replace(s, noise_density=num(s.noise_density), random_walk=num(s.random_walk), axes=axes)
+    return replace(numbers, rate_hz=num(numbers.rate_hz), sensors=sensors)
 
 
-def write_exports(doc: dict, out_dir: Path, formats: tuple[str, ...] = tuple(FORMATS), *,
+def write_exports(numbers: PastedNumbers, out_dir: Path, formats: tuple[str, ...] = tuple(FORMATS), *,
                   overbound: bool = False) -> list[Path]:
-    """Write the ``formats`` from the ``imu.yaml`` content ``doc`` into ``out_dir`` (temporary name, then rename); with
-    ``overbound``, the overbound's values into ``out_dir/overbound/``. InputError when ``doc`` lacks a number an export
-    needs (or the overbound section) or a format is unknown."""
-    missing = [k for k in REQUIRED if not isinstance(doc.get(k), int | float)]
-    if missing:
-        raise InputError(f"imu.yaml lacks {', '.join(missing)}: rerun imu-noise-id analyze")
+    """Write the ``formats`` of the analysis's ``numbers`` into ``out_dir`` (temporary name, then rename); with
+    ``overbound``, the overbound's values (:meth:`PastedNumbers.overbound_values`) into ``out_dir/overbound/``.
+    InputError when a format is unknown or, with ``overbound``, the numbers have no overbound."""
     unknown = [name for name in formats if name not in FORMATS]
     if unknown:
         raise InputError(f"--format {unknown[0]!r}: choose from {', '.join(FORMATS)} or all")
     if overbound:
-        doc, out_dir = overbound_doc(doc), out_dir / OVERBOUND_DIR
+        numbers, out_dir = numbers.overbound_values(), out_dir / OVERBOUND_DIR
+    numbers = _as_in_imu_yaml(numbers)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for name in formats:
         filename, render = FORMATS[name]
         path = out_dir / filename
         tmp = path.with_name(f".{filename}.tmp")
-        tmp.write_text(render(doc))
+        tmp.write_text(render(numbers))
         os.replace(tmp, path)
         paths.append(path)
     return paths

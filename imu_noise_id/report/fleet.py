@@ -19,7 +19,8 @@ from .png import png_bytes
 
 PARAMETERS = ("noise_density", "random_walk", "bias_instability")
 COLUMNS = ("unit", "bag", "topic", "axis", "status", "error", "model", "noise_density", "noise_density_lo",
-           "noise_density_hi", "random_walk", "random_walk_lo", "random_walk_hi", "bias_instability",
+           "noise_density_hi", "noise_density_method", "random_walk", "random_walk_lo", "random_walk_hi",
+           "random_walk_method", "bias_instability",
            "bias_instability_lo", "bias_instability_hi", "source", "loop_passed", "loop_verdict", "rate_hz",
            "duration_s", "warnings", "noise_density_z", "random_walk_z", "bias_instability_z", "outlier",
            "spec", "spec_margin", "noise_spec_ratio", "noise_beyond_spec_since_s")

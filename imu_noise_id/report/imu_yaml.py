@@ -1,141 +1,102 @@
-"""``imu.yaml``: the numbers users paste into Kalibr-style configs (SI units, stated in its header), written once
-from an analysis result. The Kalibr keys are the max over the sensor's axes: the final models' values
-(:func:`add_final_values`) with a model stage, else the Allan slopes'.
-"""
+"""``imu.yaml``: the analysis's :class:`~imu_noise_id.pipelines.analyze.numbers.PastedNumbers` in Kalibr's keys
+and per-axis lists (SI units, stated in its header), and parsed back into them (:func:`parse_imu_yaml`)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import yaml
 
-from ..core.axes import SENSORS, sensor_of
-from ..pipelines.analyze.final import FinalModel
-from ..pipelines.analyze.overbound import AxisOverbound
-from ..pipelines.analyze.static import StaticAnalysis, kalibr_parameters
+from ..core.axes import SENSORS
+from ..core.constants import CONFIDENCE_95
+from ..core.errors import InputError
+from ..pipelines.analyze.numbers import (
+    KALIBR_COMBINE,
+    KALIBR_PREFIX,
+    AxisNumbers,
+    ModelReadings,
+    OverboundAxis,
+    OverboundNumbers,
+    PastedNumbers,
+    Reading,
+    SensorNumbers,
+)
+from ..pipelines.analyze.static import StaticAnalysis
 from .numbers import num
 
-#: How the one number per sensor that Kalibr wants is made from the three axes.
-KALIBR_COMBINE = "max"
-_PREFIX = {"gyro": "gyroscope", "accel": "accelerometer"}
+
+def _pair(ci: tuple[float, float]) -> list[float]:
+    return [num(ci[0]), num(ci[1])]
 
 
-def axis_key(axis: str, parameter: str) -> str:
-    """The imu.yaml key of ``parameter`` for ``axis``'s sensor, e.g. ``gyroscope_noise_density`` for gyro_z (its
-    per-axis lists add ``_xyz``)."""
-    return f"{_PREFIX[sensor_of(axis)]}_{parameter}"
-
-
-def kalibr_dict(result: StaticAnalysis, rostopic: str) -> dict:
-    """Kalibr ``imu.yaml`` content from the Allan slopes: its six keys plus per-axis values, CIs and methods."""
-    doc: dict = {k: num(v) for k, v in kalibr_parameters(result, KALIBR_COMBINE).items()}
-    doc["update_rate"] = num(result.rate_hz)
-    if result.period is not None:
-        doc["update_rate_source"] = result.period.describe()
-        doc["update_rate_trusted"] = result.period.trusted
-    doc["rostopic"] = rostopic
-    doc["confidence_level"] = result.allan.confidence
-    for sensor, axes in SENSORS:
-        for parameter in ("noise_density", "random_walk"):
-            key = f"{_PREFIX[sensor]}_{parameter}"
-            comps = [getattr(result.slopes[a], parameter) for a in axes]
-            doc[f"{key}_xyz"] = [num(c.value) for c in comps]
-            doc[f"{key}_ci_xyz"] = [[num(c.ci[0]), num(c.ci[1])] for c in comps]
-            doc[f"{key}_method_xyz"] = [c.method for c in comps]
+def _kalibr_keys(numbers: PastedNumbers) -> dict:
+    """The four Kalibr keys (accelerometer first, as Kalibr's own file lists them)."""
+    doc: dict = {}
+    for sensor in ("accel", "gyro"):
+        if sensor in numbers.sensors:
+            s = numbers.sensors[sensor]
+            doc[f"{s.prefix}_noise_density"] = num(s.noise_density)
+            doc[f"{s.prefix}_random_walk"] = num(s.random_walk)
     return doc
 
 
-def add_final_values(doc: dict, finals: dict[str, FinalModel], result: StaticAnalysis | None = None) -> None:
-    """Put the final models' numbers into the Kalibr keys and their per-axis lists, in place.
-
-    Per sensor with a final model on all three axes: ``<key>_xyz``, ``<key>_ci_xyz``, ``<key>_method_xyz`` (``model``,
-    ``allan_slope``/``allan_upper_bound`` for a missing random walk, ``unresolved``: the overbound's value and
-    (0, value)); the Kalibr key their max; the Allan-slope values moved to ``<key>_allan[_ci|_method]_xyz`` and
-    ``<key>_allan``; ``<prefix>_noise_stddev_per_sample_xyz``; with ``result``, ``<key>_source_xyz`` where the
-    Allan-slope reading stands in, with its τ range.
-    """
-    for sensor, axes in SENSORS:
-        if not all(a in finals for a in axes):
-            continue
-        for parameter in ("noise_density", "random_walk"):
-            key = f"{_PREFIX[sensor]}_{parameter}"
-            for suffix in ("", "_ci", "_method"):
-                doc[f"{key}_allan{suffix}_xyz"] = doc.pop(f"{key}{suffix}_xyz")
-            doc[f"{key}_allan"] = doc[key]
-            values, cis, methods, sources = [], [], [], []
-            for i, axis in enumerate(axes):
-                v = getattr(finals[axis], parameter)
-                if v.value is not None:
-                    values.append(v.value)
-                    cis.append([num(v.ci95[0]), num(v.ci95[1])])
-                    methods.append(v.method)
-                    sources.append(v.source)
-                else:  # not identifiable from the record: the Allan-slope reading (a bound when not reached)
-                    values.append(doc[f"{key}_allan_xyz"][i])
-                    cis.append(list(doc[f"{key}_allan_ci_xyz"][i]))
-                    bound = doc[f"{key}_allan_method_xyz"][i] == "upper_bound"
-                    methods.append("allan_" + ("upper_bound" if bound else "slope"))
-                    sources.append(f"{v.source}; given instead: {_allan_reading(result, axis, parameter, bound)}")
-            doc[key] = num(max(values))
-            doc[f"{key}_xyz"] = [num(v) for v in values]
-            doc[f"{key}_ci_xyz"] = cis
-            doc[f"{key}_method_xyz"] = methods
-            doc[f"{key}_source_xyz"] = sources
-        doc[f"{_PREFIX[sensor]}_noise_stddev_per_sample_xyz"] = [num(finals[a].noise_stddev_per_sample) for a in axes]
-        key = f"{_PREFIX[sensor]}_bias_instability"
-        model_b = [finals[a].bias_instability for a in axes]
-        doc[f"{key}_xyz"] = [num(b.value) for b in model_b]
-        doc[f"{key}_ci_xyz"] = [[num(b.ci95[0]), num(b.ci95[1])] for b in model_b]
-        doc[f"{key}_method_xyz"] = ["model_minimum" if b.reached else "model_upper_bound" for b in model_b]
-        doc[f"{key}_tau_xyz"] = [num(b.tau_at_minimum) for b in model_b]
-        allan_b = [finals[a].bias_instability_allan for a in axes]
-        doc[f"{key}_allan_xyz"] = [num(b.value) for b in allan_b]
-        doc[f"{key}_allan_method_xyz"] = ["allan_minimum" if b.reached else "allan_upper_bound" for b in allan_b]
-        doc[f"{_PREFIX[sensor]}_final_model_xyz"] = [finals[a].model for a in axes]
+def _sensor_keys(s: SensorNumbers) -> dict:
+    """A sensor's per-axis keys: values, intervals, methods (and with final models sources, the Allan-slope readings
+    beside them, the per-sample σ, the bias instability and the model names)."""
+    doc: dict = {}
+    for parameter in ("noise_density", "random_walk"):
+        key = f"{s.prefix}_{parameter}"
+        readings = [a.reading(parameter) for a in s.axes]
+        if s.from_models:
+            allan = [getattr(a, f"allan_{parameter}") for a in s.axes]
+            doc[f"{key}_allan_xyz"] = [num(r.value) for r in allan]
+            doc[f"{key}_allan_ci_xyz"] = [_pair(r.ci95) for r in allan]
+            doc[f"{key}_allan_method_xyz"] = [r.method for r in allan]
+            doc[f"{key}_allan"] = num(getattr(s, f"allan_{parameter}"))
+        doc[f"{key}_xyz"] = [num(r.value) for r in readings]
+        doc[f"{key}_ci_xyz"] = [_pair(r.ci95) for r in readings]
+        doc[f"{key}_method_xyz"] = [r.method for r in readings]
+        if s.from_models:
+            doc[f"{key}_source_xyz"] = [r.source for r in readings]
+    if not s.from_models:
+        return doc
+    models = [a.model for a in s.axes]
+    doc[f"{s.prefix}_noise_stddev_per_sample_xyz"] = [num(m.noise_stddev_per_sample) for m in models]
+    key = f"{s.prefix}_bias_instability"
+    doc[f"{key}_xyz"] = [num(m.bias_instability.value) for m in models]
+    doc[f"{key}_ci_xyz"] = [_pair(m.bias_instability.ci95) for m in models]
+    doc[f"{key}_method_xyz"] = ["model_minimum" if m.bias_instability.reached else "model_upper_bound" for m in models]
+    doc[f"{key}_tau_xyz"] = [num(m.bias_instability.tau_at_minimum) for m in models]
+    doc[f"{key}_allan_xyz"] = [num(m.bias_instability_allan.value) for m in models]
+    doc[f"{key}_allan_method_xyz"] = ["allan_minimum" if m.bias_instability_allan.reached else "allan_upper_bound"
+                                      for m in models]
+    doc[f"{s.prefix}_final_model_xyz"] = [m.name for m in models]
+    return doc
 
 
-def _allan_reading(result: StaticAnalysis | None, axis: str, parameter: str, bound: bool) -> str:
-    """The Allan-slope reading standing in for a model value, in words, with the τ range it was read over."""
-    what = ("the Allan variance's upper bound (its slope line not reached in this record)" if bound
-            else "the Allan-slope reading (its slope line)")
-    if result is None or axis not in result.slopes:
-        return what
-    lo, hi = getattr(result.slopes[axis], parameter).tau_range
-    return f"{what}, read over tau {lo:.3g}–{hi:.3g} s"
-
-
-def _range(values: list[float]) -> str:
-    lo, hi = min(values), max(values)
-    return f"x{lo:.3g}" if f"{lo:.3g}" == f"{hi:.3g}" else f"x{lo:.3g}-{hi:.3g}"
-
-
-def overbound_dict(overbounds: dict[str, AxisOverbound]) -> dict:
+def overbound_dict(ob: OverboundNumbers) -> dict:
     """The ``overbound:`` section: per sensor the Kalibr numbers (max over axes), per axis the values, the τ range,
     the binding τ and the inflation factors over imu.yaml's per-axis values."""
-    first = next(iter(overbounds.values()))
-    out: dict = {"horizon_s": num(first.horizon_s), "tau_range_s": [num(first.tau_range[0]), num(first.tau_range[1])],
-                 "covers": first.covers.split(" (")[0]}
-    summary = []
-    for sensor, axes in SENSORS:
-        obs = [overbounds[a] for a in axes if a in overbounds]
-        if len(obs) != len(axes):
-            continue
-        for parameter in ("noise_density", "random_walk"):
-            key = f"{_PREFIX[sensor]}_{parameter}"
-            out[key] = num(max(getattr(o, parameter) for o in obs))
-            out[f"{key}_xyz"] = [num(getattr(o, parameter)) for o in obs]
-        summary.append(f"{sensor} N {_range([o.inflation_noise_density for o in obs])}, "
-                       f"K {_range([o.inflation_random_walk for o in obs])}")
-    out["inflation_summary"] = "; ".join(summary)
+    out: dict = {"horizon_s": num(ob.horizon_s), "tau_range_s": [num(ob.tau_range_s[0]), num(ob.tau_range_s[1])],
+                 "covers": ob.covers}
+    for sensor, (n, k) in ob.sensors.items():
+        prefix = KALIBR_PREFIX[sensor]
+        axes = [a for s, axes in SENSORS if s == sensor for a in axes]
+        out[f"{prefix}_noise_density"] = num(n)
+        out[f"{prefix}_noise_density_xyz"] = [num(ob.axes[a].noise_density) for a in axes]
+        out[f"{prefix}_random_walk"] = num(k)
+        out[f"{prefix}_random_walk_xyz"] = [num(ob.axes[a].random_walk) for a in axes]
+    out["inflation_summary"] = ob.inflation_summary
     out["axes"] = {axis: {"noise_density": num(o.noise_density), "random_walk": num(o.random_walk),
                           "inflation_noise_density": num(o.inflation_noise_density),
                           "inflation_random_walk": num(o.inflation_random_walk),
-                          "tau_range_s": [num(o.tau_range[0]), num(o.tau_range[1])],
-                          "binding_tau_s": [num(t) for t in o.bound.binding_tau],
-                          "at_fitted_value": {"noise_density": o.bound.at_floor[0],
-                                              "random_walk": o.bound.at_floor[1]},
-                          "inflated_over": o.reference_source, "covers": o.covers}
-                   for axis, o in overbounds.items()}
+                          "tau_range_s": [num(o.tau_range_s[0]), num(o.tau_range_s[1])],
+                          "binding_tau_s": [num(t) for t in o.binding_tau_s],
+                          "at_fitted_value": {"noise_density": o.at_fitted_value[0],
+                                              "random_walk": o.at_fitted_value[1]},
+                          "inflated_over": o.inflated_over, "covers": o.covers}
+                   for axis, o in ob.axes.items()}
     return out
 
 
@@ -192,13 +153,20 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
     return lines
 
 
-def imu_doc(result: StaticAnalysis, finals: dict[str, FinalModel], rostopic: str,
-            overbounds: dict[str, AxisOverbound] | None = None) -> dict:
-    """The content of ``imu.yaml`` (see the module docstring); with ``overbounds`` its ``overbound:`` section."""
-    doc = kalibr_dict(result, rostopic)
-    add_final_values(doc, finals, result)
-    if overbounds:
-        doc["overbound"] = overbound_dict(overbounds)
+def imu_doc(numbers: PastedNumbers) -> dict:
+    """The content of ``imu.yaml`` (module docstring) from the analysis's numbers, with its ``overbound:`` section
+    when they have one."""
+    doc = _kalibr_keys(numbers)
+    doc["update_rate"] = num(numbers.rate_hz)
+    if numbers.rate_source is not None:
+        doc["update_rate_source"] = numbers.rate_source
+        doc["update_rate_trusted"] = numbers.rate_trusted
+    doc["rostopic"] = numbers.topic
+    doc["confidence_level"] = numbers.confidence
+    for s in numbers.sensors.values():
+        doc |= _sensor_keys(s)
+    if numbers.overbound is not None:
+        doc["overbound"] = overbound_dict(numbers.overbound)
     return doc
 
 
@@ -207,3 +175,74 @@ def write_imu_yaml(path: Path, result: StaticAnalysis, doc: dict, with_models: b
     text = "\n".join(header(result, with_models)) + "\n"
     path.write_text(text + yaml.safe_dump(doc, sort_keys=False, default_flow_style=None))
     return path
+
+
+def _number(doc: dict, key: str, where: str) -> float:
+    value = doc.get(key)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InputError(f"{where} lacks {key} (a number): rerun imu-noise-id analyze")
+    return float(value)
+
+
+def _listed(doc: dict, key: str) -> list | None:
+    value = doc.get(key)
+    return value if isinstance(value, list) and len(value) == 3 else None
+
+
+def _axes_of(doc: dict, sensor: str, prefix: str) -> tuple[AxisNumbers, ...]:
+    """The per-axis readings of a sensor where imu.yaml lists its values (a hand-written file may give the Kalibr
+    keys alone); intervals, methods and sources where listed (else NaN, ``""``, None)."""
+    lists = {}
+    for parameter in ("noise_density", "random_walk"):
+        key = f"{prefix}_{parameter}"
+        values = _listed(doc, f"{key}_xyz")
+        if values is None:
+            return ()
+        cis = _listed(doc, f"{key}_ci_xyz") or [[math.nan, math.nan]] * 3
+        methods = _listed(doc, f"{key}_method_xyz") or [""] * 3
+        sources = _listed(doc, f"{key}_source_xyz") or [None] * 3
+        lists[parameter] = [Reading(float(v), (float(c[0]), float(c[1])), str(m), s)
+                            for v, c, m, s in zip(values, cis, methods, sources, strict=True)]
+    per_sample = _listed(doc, f"{prefix}_noise_stddev_per_sample_xyz")
+    names = _listed(doc, f"{prefix}_final_model_xyz") or [""] * 3
+    out = []
+    for i, axis in enumerate(dict(SENSORS)[sensor]):
+        model = None if per_sample is None else ModelReadings(str(names[i]), float(per_sample[i]))
+        out.append(AxisNumbers(axis, lists["noise_density"][i], lists["random_walk"][i], model=model))
+    return tuple(out)
+
+
+def _overbound_of(doc: dict) -> OverboundNumbers | None:
+    ob = doc.get("overbound")
+    if not isinstance(ob, dict):
+        return None
+    sensors, axes = {}, {}
+    for sensor, prefix in KALIBR_PREFIX.items():
+        n, k = ob.get(f"{prefix}_noise_density"), ob.get(f"{prefix}_random_walk")
+        if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in (n, k)):
+            return None
+        sensors[sensor] = (float(n), float(k))
+        n_xyz, k_xyz = ob.get(f"{prefix}_noise_density_xyz"), ob.get(f"{prefix}_random_walk_xyz")
+        if isinstance(n_xyz, list) and isinstance(k_xyz, list):
+            for axis, n_a, k_a in zip(dict(SENSORS)[sensor], n_xyz, k_xyz, strict=False):
+                axes[axis] = OverboundAxis(float(n_a), float(k_a), math.nan, math.nan, (math.nan, math.nan))
+    lo, hi = ob.get("tau_range_s", [math.nan, math.nan])
+    return OverboundNumbers(sensors, float(ob.get("horizon_s", math.nan)), (float(lo), float(hi)),
+                            str(ob.get("covers", "")), str(ob.get("inflation_summary", "")), axes)
+
+
+def parse_imu_yaml(doc: dict, where: str = "imu.yaml") -> PastedNumbers:
+    """The numbers of an ``imu.yaml`` (as :func:`imu_doc` writes it, or hand-written with the four Kalibr keys and
+    ``update_rate`` alone). Raises InputError naming ``where`` and the missing key."""
+    rate = _number(doc, "update_rate", where)
+    sensors = {}
+    for sensor, prefix in KALIBR_PREFIX.items():
+        n = _number(doc, f"{prefix}_noise_density", where)
+        k = _number(doc, f"{prefix}_random_walk", where)
+        axes = _axes_of(doc, sensor, prefix)
+        sensors[sensor] = SensorNumbers(sensor, n, k, axes, bool(axes) and f"{prefix}_source_xyz" in doc)
+    confidence = doc.get("confidence_level", CONFIDENCE_95)
+    topic = doc.get("rostopic")
+    return PastedNumbers(rate, None if topic is None else str(topic), {s: sensors[s] for s in ("gyro", "accel")},
+                         float(confidence) if isinstance(confidence, int | float) else CONFIDENCE_95,
+                         overbound=_overbound_of(doc))

@@ -19,6 +19,7 @@ import os
 import tempfile
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +34,7 @@ from ..loop import ImuLoop, LoopResult
 from .final import FinalModel, final_model
 from .mapped import MappedImu
 from .models import AUTO, AxisModel, ModelStage, finish_axis, fit_axis
+from .numbers import PastedNumbers, pasted_numbers
 from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, data_overbound, overbounds
 from .resolution import resolved, unresolved_reason
 from .static import StaticAnalysis, analyze_static
@@ -93,7 +95,8 @@ class AnalyzeOptions:
 class AnalysisResult:
     """What ``analyze`` found, per stage (per-axis dictionaries keyed by axis name): ``static`` (Allan stage),
     ``models`` (fits and selections, without records), ``loops`` (empty without the loop), ``finals`` (final model and
-    Kalibr numbers), ``bands`` ((τ [s], simulated AVs (n_sim, T) [u²])), ``overbounds``, ``warnings``."""
+    Kalibr numbers), ``bands`` ((τ [s], simulated AVs (n_sim, T) [u²])), ``overbounds``, ``warnings``; ``numbers``
+    (what users paste)"""
 
     static: StaticAnalysis
     models: dict[str, AxisModel] = field(default_factory=dict)
@@ -107,6 +110,12 @@ class AnalysisResult:
     def fits(self) -> dict:
         """The model stage's fit of every axis."""
         return {axis: m.fit for axis, m in self.models.items()}
+
+    @cached_property
+    def numbers(self) -> PastedNumbers:
+        """The numbers to paste (:func:`.numbers.pasted_numbers`), built once from the stages' results when first
+        read, after the last stage: every writer renders these."""
+        return pasted_numbers(self.static, self.finals, self.overbounds)
 
 
 def _imu_loop(imu: ImuSeries, temperature: ScalarSeries | None, options: AnalyzeOptions,

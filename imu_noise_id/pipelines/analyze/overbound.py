@@ -13,6 +13,7 @@ import numpy as np
 from ...core.errors import InputError
 from ...core.estimation.readouts.overbound import DEFAULT_HORIZON_S, WnRwOverbound, overbound_wn_rw
 from .final import FinalModel
+from .numbers import axis_readings
 from .static import StaticAnalysis
 
 
@@ -61,14 +62,13 @@ class AxisOverbound:
 
 
 def _references(static: StaticAnalysis, axis: str, final: FinalModel | None) -> tuple[float, float, str]:
-    slopes = static.slopes[axis]
+    """The per-axis N and K imu.yaml pastes (:func:`.numbers.axis_readings`) and where they come from, in words."""
+    n, k = axis_readings(static, axis, final)
     if final is None:
-        return slopes.noise_density.value, slopes.random_walk.value, "Allan slopes"
-    n = final.noise_density.value if final.noise_density.value is not None else slopes.noise_density.value
-    k, source = final.random_walk.value, "final model"
-    if k is None:
-        k, source = slopes.random_walk.value, "final model (N), Allan slope (K: the model has no random walk)"
-    return n, k, source
+        return n.value, k.value, "Allan slopes"
+    if final.random_walk.value is None:
+        return n.value, k.value, "final model (N), Allan slope (K: the model has no random walk)"
+    return n.value, k.value, "final model"
 
 
 def check_horizon(static: StaticAnalysis, horizon_s: float) -> None:

@@ -76,17 +76,6 @@ class StaticAnalysis:
         """Sampling rate [Hz]."""
         return 1.0 / self.dt
 
-    def sensor_value(self, sensor: str, parameter: str, combine: str = "max") -> float:
-        """One number per sensor for Kalibr: ``combine`` ("max" or "rms") of ``parameter`` ("noise_density" or
-        "random_walk") over the three axes of ``sensor`` ("gyro" or "accel")."""
-        names = GYRO_AXES if sensor == "gyro" else ACCEL_AXES
-        values = np.array([getattr(self.slopes[a], parameter).value for a in names])
-        if combine == "max":
-            return float(values.max())
-        if combine == "rms":
-            return float(np.sqrt(np.mean(values**2)))
-        raise ValueError(f"combine must be 'max' or 'rms', got {combine!r}")
-
 
 def missing_samples(t: np.ndarray, dt: float) -> int:
     """Samples a sensor at period ``dt`` produced between the first and last stamps that ``t`` lacks."""
@@ -218,14 +207,4 @@ def analyze_static(
         axes=AXES, n=n, dt=dt, duration_s=duration, topic=imu.topic, variances=variances, slopes=slopes,
         warnings=warnings, period=period, missing=missing,
     )
-
-
-def kalibr_parameters(result: StaticAnalysis, combine: str = "max") -> dict[str, float]:
-    """Kalibr's four noise numbers [SI] from per-axis values combined by ``combine`` over each sensor's axes."""
-    return {
-        "accelerometer_noise_density": result.sensor_value("accel", "noise_density", combine),
-        "accelerometer_random_walk": result.sensor_value("accel", "random_walk", combine),
-        "gyroscope_noise_density": result.sensor_value("gyro", "noise_density", combine),
-        "gyroscope_random_walk": result.sensor_value("gyro", "random_walk", combine),
-    }
 

@@ -1,0 +1,85 @@
+"""The numbers users paste are built once (``AnalysisResult.numbers``) and every output renders that one object:
+``imu.yaml``, the exports, the fleet table, and ``export``'s exports from ``imu.yaml`` parsed back.
+
+Before, ``imu.yaml`` put the Allan-slope reading where a final model had no random walk value while the fleet table
+gave no K for that axis, and ``export DIR`` re-derived the Kalibr numbers from string-keyed lists."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from imu_noise_id.batch.unit import fleet_rows
+from imu_noise_id.batch.units import Unit
+from imu_noise_id.core.axes import AXES, GYRO_AXES
+from imu_noise_id.core.noise.components import RW, WN
+from imu_noise_id.core.simulation.static import simulate_static_imu
+from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
+from imu_noise_id.report.analysis import write_analysis
+from imu_noise_id.report.exports import FORMATS, write_exports
+from imu_noise_id.report.imu_yaml import parse_imu_yaml
+
+#: gyros WN + RW, accelerometers WN + RW; fitted as WN alone, so no final model holds a random walk and K is the
+#: long-τ Allan variance's bound
+MODEL = {a: [WN(1.7e-4), RW(2e-5)] if a in GYRO_AXES else [WN(2e-3), RW(3e-4)] for a in AXES}
+
+
+@pytest.fixture(scope="module")
+def analysed(tmp_path_factory):
+    imu = simulate_static_imu(MODEL, 100.0, 300.0, seed=71)
+    result = analyze(imu, options=AnalyzeOptions(kinds=("allan",), models=ModelStage("WN"), loop=False, jobs=1))
+    out = tmp_path_factory.mktemp("analysis")
+    write_analysis(result, out, meta={}, overbound_exports=True)
+    return result, out
+
+
+def test_a_walk_the_final_model_lacks_is_the_same_number_in_imu_yaml_and_the_fleet_table(analysed):
+    result, out = analysed
+    doc = yaml.safe_load((out / "imu.yaml").read_text())
+    rows = {r["axis"]: r for r in fleet_rows(Unit(Path("bag"), None, "bag"), result, [])}
+    for sensor, prefix in (("gyro", "gyroscope"), ("accel", "accelerometer")):
+        axes = [a for a in AXES if a.startswith(sensor)]
+        methods = doc[f"{prefix}_random_walk_method_xyz"]
+        assert set(methods) == {"bound"}  # the model has no RW: the largest walk the long-τ AV supports
+        for i, axis in enumerate(axes):
+            assert rows[axis]["random_walk"] == pytest.approx(doc[f"{prefix}_random_walk_xyz"][i], rel=1e-5)
+            assert rows[axis]["random_walk_method"] == methods[i]
+            assert rows[axis]["noise_density"] == pytest.approx(doc[f"{prefix}_noise_density_xyz"][i], rel=1e-5)
+            assert rows[axis]["random_walk"] == pytest.approx(result.finals[axis].random_walk.value, rel=1e-5)
+        assert doc[f"{prefix}_random_walk"] == pytest.approx(max(doc[f"{prefix}_random_walk_xyz"]), rel=1e-5)
+
+
+def test_export_from_imu_yaml_gives_the_files_analyze_wrote(analysed, tmp_path):
+    """imu.yaml parsed back (as ``export DIR`` does) renders every export, and the overbound's, as analyze did."""
+    _, out = analysed
+    numbers = parse_imu_yaml(yaml.safe_load((out / "imu.yaml").read_text()))
+    for overbound in (False, True):
+        for path in write_exports(numbers, tmp_path, tuple(FORMATS), overbound=overbound):
+            written = (out / "exports" / path.relative_to(tmp_path)).read_text()
+            own = "\n".join(ln for ln in written.splitlines() if not ln.startswith("# imu-noise-id run:"))
+            assert path.read_text().rstrip("\n") == own.rstrip("\n"), path.name
+
+
+def test_parsed_numbers_hold_what_was_written(analysed):
+    result, out = analysed
+    parsed = parse_imu_yaml(yaml.safe_load((out / "imu.yaml").read_text()))
+    for sensor in ("gyro", "accel"):
+        built, read = result.numbers.sensor(sensor), parsed.sensor(sensor)
+        assert read.noise_density == pytest.approx(built.noise_density, rel=1e-5)
+        assert read.random_walk == pytest.approx(built.random_walk, rel=1e-5)
+        for a, b in zip(built.axes, read.axes, strict=True):
+            assert (a.axis, a.random_walk.method, a.random_walk.source) == (b.axis, b.random_walk.method,
+                                                                          b.random_walk.source)
+            np.testing.assert_allclose(b.random_walk.ci95, a.random_walk.ci95, rtol=1e-5)
+    assert parsed.overbound.sensors.keys() == {"gyro", "accel"}
+
+
+def test_an_imu_yaml_without_a_kalibr_number_is_refused_naming_it():
+    from imu_noise_id.core.errors import InputError
+
+    with pytest.raises(InputError, match=r"imu\.yaml lacks gyroscope_random_walk"):
+        parse_imu_yaml({"update_rate": 200.0, "gyroscope_noise_density": 1e-4, "accelerometer_noise_density": 1e-3,
+                        "accelerometer_random_walk": 1e-4})
