@@ -1,5 +1,4 @@
-"""Axis names (``gyro_x gyro_y gyro_z accel_x accel_y accel_z``, sensor frame, rad/s and m/s², REP-103/REP-145) and
-the IMU time-series containers shared by every layer."""
+"""Axis names (``gyro_x`` … ``accel_z``; rad/s and m/s², REP-103/REP-145) and the IMU time-series containers."""
 
 from __future__ import annotations
 
@@ -42,14 +41,9 @@ class ImuSeries:
 
     Attributes
     ----------
-    t : (N,) sample times [s] (header stamps when read from a bag)
-    gyro : (N, 3) angular rate [rad/s]
-    accel : (N, 3) specific force [m/s²] (gravity included)
-    frame_id, topic : frame of the samples; where they came from
-    notes : what was repaired or is worth knowing
-    orientation_xyzw : (N, 4) the sensor's own orientation (x, y, z, w as published; NaN rows where not provided,
-        REP-145, or unusable), or None when no sample provides one
-    period : the reader's :class:`~imu_noise_id.core.timing.SamplePeriod`, or None (estimated from ``t`` when needed)
+    t : (N,) sample times [s]; gyro : (N, 3) rate [rad/s]; accel : (N, 3) specific force [m/s²] (gravity included)
+    frame_id, topic, notes; orientation_xyzw : (N, 4) the sensor's orientation (NaN rows: none, REP-145), or None
+    period : the reader's :class:`~.timing.SamplePeriod`, or None (estimated from ``t``)
     """
 
     t: np.ndarray
@@ -87,7 +81,7 @@ class ImuSeries:
 
     @property
     def dt(self) -> float:
-        """Sampling period [s] (:meth:`sample_period`); InputError when the stamps cannot give it."""
+        """Sampling period [s]; InputError when the stamps cannot give it."""
         return self.sample_period().require()
 
     @property
@@ -96,9 +90,8 @@ class ImuSeries:
         return 1.0 / self.dt
 
     def between(self, start_s: float, end_s: float) -> ImuSeries:
-        """The samples from ``start_s`` to ``end_s`` [s] after the first one (both included; ``end_s`` may be inf), with
-        a note saying which part they are; the period estimate is kept. InputError for an empty, reversed or one-sample
-        span."""
+        """Samples from ``start_s`` to ``end_s`` [s] after the first (both included, ``end_s`` may be inf) with a
+        note; InputError for an empty, reversed or one-sample span."""
         elapsed = self.t - self.t[0]
         if not (math.isfinite(start_s) and 0.0 <= start_s < end_s):
             raise InputError(f"{self.topic or 'input'}: span {start_s:g}:{end_s:g} s must be two times [s] from "
@@ -135,17 +128,8 @@ class ScalarSeries:
 
 @dataclass
 class OdometrySeries:
-    """nav_msgs/Odometry samples.
-
-    Attributes
-    ----------
-    t : (M,) header stamps [s]
-    position : (M, 3) [m] in ``frame_id`` (the odom frame)
-    orientation_xyzw : (M, 4) unit quaternion of ``child_frame_id`` in ``frame_id``
-    linear_velocity : (M, 3) [m/s] in ``child_frame_id`` (REP-105 twist convention)
-    angular_velocity : (M, 3) [rad/s] in ``child_frame_id``
-    pose_covariance, twist_covariance : (M, 6, 6) as published
-    """
+    """nav_msgs/Odometry: ``t`` (M,) [s], ``position`` (M, 3) [m], ``orientation_xyzw`` (M, 4), ``linear_velocity``
+    [m/s], ``angular_velocity`` [rad/s] (M, 3) in ``child_frame_id`` (REP-105), covariances (M, 6, 6)."""
 
     t: np.ndarray
     position: np.ndarray

@@ -1,7 +1,4 @@
-"""Fleet statistics: the modified z-score of Iglewicz & Hoaglin (1993), z = 0.6745·(x − median)/MAD on log values
-(|z| > :data:`OUTLIER_Z` flags; nothing with fewer than :data:`MIN_UNITS` units or MAD 0), and pass/fail against a
-specification (largest allowed value per sensor, e.g. ``{"gyro": {"noise_density": 3e-4}}``: pass when the 95 %
-interval's upper end is below, undecided when only the value is)."""
+"""Fleet statistics: modified z-scores (Iglewicz & Hoaglin 1993) and pass/fail against a specification's limits."""
 
 from __future__ import annotations
 
@@ -16,7 +13,7 @@ MIN_UNITS = 5
 
 
 def modified_z(values: np.ndarray) -> np.ndarray:
-    """Modified z-scores of positive values on a log scale (NaN where a value is missing or not positive)."""
+    """z = 0.6745·(x − median)/MAD of log values (NaN: missing or ≤ 0; all NaN below :data:`MIN_UNITS` or at MAD 0)."""
     v = np.asarray(values, dtype=float)
     out = np.full(v.shape, np.nan)
     ok = np.isfinite(v) & (v > 0)
@@ -32,7 +29,8 @@ def modified_z(values: np.ndarray) -> np.ndarray:
 
 
 def spec_verdict(value: float | None, ci_high: float | None, limit: float) -> tuple[str, float]:
-    """(``pass`` | ``fail`` | ``undecided`` | ``missing``, margin spec/value − 1) of one value against its limit."""
+    """(``pass`` (``ci_high`` below ``limit``), ``undecided`` (only the value below), ``fail`` or ``missing``; margin
+    limit/value − 1)."""
     if value is None or not math.isfinite(value) or value <= 0:
         return "missing", math.nan
     margin = limit / value - 1.0

@@ -1,12 +1,4 @@
-"""Checks and documented repairs of sampled time series (pure numpy; shared by the bag reader and the node).
-
-:func:`repair_time_series`, in order, each counted in the :class:`QualityReport`: (1) drop samples with a NaN/±inf
-time or value, or a magnitude beyond ``max_abs`` (more than :data:`MAX_IMPLAUSIBLE_FRACTION` raise); (2) drop zero
-stamps among clock times (> :data:`ZERO_STAMP_CLOCK_S`) and stamps :data:`GLITCH_PERIODS` periods away from both
-agreeing neighbours; (3) sort when stamps go backwards; (4) drop repeated stamps; (5) estimate the period
-(:func:`imu_noise_id.core.timing.estimate_period`); (6) report (not fill) gaps longer than ``gap_factor`` × the
-period. Stillness: :mod:`.stillness`.
-"""
+"""Checks and documented repairs of sampled time series (pure numpy; docs/bags.md, "Repairs")."""
 
 from __future__ import annotations
 
@@ -33,23 +25,15 @@ MAX_LISTED_GAPS = 10
 
 
 class QualityError(InputError):
-    """The series cannot be repaired into something usable (e.g. no finite sample, fewer than two samples)."""
+    """The series cannot be repaired into something usable."""
 
 
 @dataclass
 class QualityReport:
-    """What :func:`repair_time_series` found and did.
-
-    Attributes
-    ----------
-    n_input, n_output : samples before and after the repairs
-    n_nonfinite, n_implausible, n_zero_stamps, n_glitches, n_duplicates : samples dropped by each rule
-    n_backwards : places where the stamp decreased (sorted if > 0)
-    period : the :class:`~.timing.SamplePeriod` after the repairs (None before it is estimated)
-    positions : (n_output,) each kept sample's position among the input samples
-    gaps : (start [s], length [s], estimated missing samples) of every gap, in time order
-    t0 : first stamp after the repairs [s] (gap times in notes are relative to it)
-    """
+    """What :func:`repair_time_series` found and did: ``n_input``, ``n_output`` samples; ``n_nonfinite``,
+    ``n_implausible``, ``n_zero_stamps``, ``n_glitches``, ``n_duplicates`` dropped by each rule; ``n_backwards``
+    (sorted if > 0); the ``period``; ``positions`` (n_output,) of the kept samples; ``gaps`` (start [s], length [s],
+    missing samples); ``t0`` [s]."""
 
     n_input: int
     n_output: int = 0
@@ -83,7 +67,7 @@ class QualityReport:
             f"period {self.dt:.4g} s")
 
     def notes(self, what: str = "samples") -> list[str]:
-        """Human-readable notes, one per finding (empty when the series was clean)."""
+        """Human-readable notes, one per finding."""
         notes: list[str] = []
         if self.n_nonfinite:
             notes.append(f"dropped {self.n_nonfinite} of {self.n_input} {what} with NaN/inf time or values")
@@ -128,8 +112,8 @@ def _take(columns: list[np.ndarray], keep: np.ndarray) -> list[np.ndarray]:
 
 def find_gaps(t: np.ndarray, period: SamplePeriod | float, gap_factor: float = GAP_FACTOR
               ) -> list[tuple[float, float, int]]:
-    """Intervals of sorted stamps ``t`` longer than ``gap_factor`` × the period (bursty stamps: × their 99th-percentile
-    interval): (start [s], length [s], missing samples)."""
+    """Intervals of sorted stamps ``t`` longer than ``gap_factor`` × the period (bursty stamps: × their
+    99th-percentile interval): (start [s], length [s], missing samples)."""
     dt = period.value if isinstance(period, SamplePeriod) else float(period)
     if t.shape[0] < 2 or not dt > 0:
         return []
@@ -141,8 +125,7 @@ def find_gaps(t: np.ndarray, period: SamplePeriod | float, gap_factor: float = G
 
 
 def _glitches(t: np.ndarray) -> np.ndarray:
-    """Samples (message order) more than :data:`GLITCH_PERIODS` periods from both neighbours, which agree within a tenth
-    of that."""
+    """Samples more than :data:`GLITCH_PERIODS` periods from both neighbours, which agree."""
     bad = np.zeros(t.shape[0], dtype=bool)
     if t.shape[0] < 3:
         return bad
@@ -172,25 +155,12 @@ def repair_time_series(
 
     Parameters
     ----------
-    t : (N,) stamps [s]
-    data : (N, ...) array, or a sequence of such arrays (e.g. gyro and accel)
-    gap_factor : an interval longer than ``gap_factor`` × the period is a gap
-    min_samples : fewer valid samples raise :class:`QualityError`
-    max_abs : per data array, the largest plausible magnitude (None: no limit), e.g. :data:`IMU_MAX_ABS`
-    receive : (N,) the bag's receive times [s], or None
-    declared_hz : the rate the user declares (``--rate``), or None
+    t : (N,) stamps [s]; data : (N, ...) array or a sequence of them; receive : (N,) receive times [s] or None
+    gap_factor, min_samples, declared_hz : gap threshold (× period), fewest kept samples, ``--rate``
+    max_abs : per data array the largest plausible magnitude (None: no limit), e.g. :data:`IMU_MAX_ABS`
 
-    Returns
-    -------
-    t, data, report
-        Repaired copies (or the inputs when nothing changed; ``data`` in the form given) and the report.
-
-    Raises
-    ------
-    QualityError
-        Fewer than ``min_samples`` remain, or more than :data:`MAX_IMPLAUSIBLE_FRACTION` exceed ``max_abs``.
-    InputError
-        A declared rate that is not a positive number.
+    Returns repaired (t, data, report), the inputs when nothing changed. Raises QualityError below ``min_samples`` or
+    beyond :data:`MAX_IMPLAUSIBLE_FRACTION` implausible, InputError on a bad declared rate.
     """
     t = np.asarray(t, dtype=float)
     columns, single = _as_columns(data)
@@ -274,7 +244,7 @@ def repair_time_series(
 
 
 def interpolate_missing(y: np.ndarray) -> np.ndarray:
-    """``y`` with NaN samples linearly interpolated (held at the ends); ``y`` itself when nothing is missing."""
+    """``y`` with NaN samples interpolated linearly (held at the ends)."""
     bad = ~np.isfinite(y)
     if not bad.any():
         return y

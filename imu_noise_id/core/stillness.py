@@ -1,10 +1,4 @@
-"""Whether a recording is from a still sensor, judged by what motion does (for the static noise analyses).
-
-:func:`static_check` flags data that is clearly not static: gravity not read, block means of a second that wander,
-and moments of motion in an otherwise still record (:func:`motion_bursts`, with the longest still stretch between
-them, :func:`still_span`, or, in a record that moves for most of its length, its longest quiet stretch,
-:func:`quiet_span`). Pure numpy, like :mod:`.quality`, whose repairs come first.
-"""
+"""Whether a recording is from a still sensor, judged by what motion does (docs/bags.md, "Static check")."""
 
 from __future__ import annotations
 
@@ -48,14 +42,7 @@ QUIET_MIN_S = 10.0
 
 @dataclass(frozen=True)
 class MotionBurst:
-    """A stretch where the samples spread far wider than over the rest of the record (:func:`motion_bursts`).
-
-    Attributes
-    ----------
-    start_s, end_s : the stamps of its first and last sample, from the first sample's [s]
-    axes : the axes that burst
-    ratio : the largest sustained spread ratio over those axes (the smallest window ratio of the burst's windows)
-    """
+    """A stretch of far wider spread: ``start_s``, ``end_s`` [s from the first sample], ``axes``, ``ratio``."""
 
     start_s: float
     end_s: float
@@ -65,9 +52,7 @@ class MotionBurst:
 
 @dataclass
 class StaticCheck:
-    """What :func:`static_check` found: ``flags`` (reasons the record is not static), ``notes`` (worth knowing), the
-    motion ``bursts`` and the ``still_span`` to analyse instead (start, end [s] from the first sample; between bursts
-    or, without them, :func:`quiet_span`; None when there is none)."""
+    """:func:`static_check`'s ``flags``, ``notes``, ``bursts`` and ``still_span`` (start, end [s]) or None."""
 
     flags: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
@@ -80,7 +65,6 @@ class StaticCheck:
 
 
 def _windows(x: np.ndarray, width: int) -> np.ndarray:
-    """Consecutive windows of ``width`` samples of a 1-D array, shape (m, width) (a strided view; the rest left out)."""
     m = x.shape[0] // width
     return x[: m * width].reshape(m, width)
 
@@ -92,8 +76,7 @@ def burst_window(dt: float) -> tuple[int, int]:
 
 
 def spread_ratios(x: np.ndarray, dt: float) -> np.ndarray:
-    """Per :func:`burst_window` window of ``x``: the mean square deviation from the window's median of all but the
-    :data:`BURST_TRIM` share deviating most, over its median over the windows; zeros when that median is 0."""
+    """Per burst window: trimmed mean square deviation from its median over the windows' median (0 if 0)."""
     width = burst_window(dt)[0]
     windows = _windows(x, width)
     m = windows.shape[0]
@@ -105,15 +88,12 @@ def spread_ratios(x: np.ndarray, dt: float) -> np.ndarray:
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(first, last + 1) of every run of True in ``mask``."""
     edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
     return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
 
 
 def motion_bursts(imu: ImuSeries, dt: float) -> list[MotionBurst]:
-    """Stretches of at least :data:`BURST_MIN_S` where on some axis every window's spread is :data:`BURST_RATIO` or more
-    times the median window's (:func:`spread_ratios`); overlapping stretches of several axes are one burst. ``dt``: the
-    sampling period [s]."""
+    """Stretches ≥ :data:`BURST_MIN_S` whose windows spread ≥ :data:`BURST_RATIO` × the median on some axis."""
     width, needed = burst_window(dt)
     if len(imu) // width < 2 * needed:
         return []
@@ -135,8 +115,7 @@ def motion_bursts(imu: ImuSeries, dt: float) -> list[MotionBurst]:
 
 
 def still_span(bursts: list[MotionBurst], duration_s: float) -> tuple[float, float] | None:
-    """The longest stretch of a record of ``duration_s`` [s] between ``bursts``, :data:`STILL_MARGIN_S` away from
-    them (not from the record's ends); None without bursts or when no stretch is left."""
+    """The longest stretch of ``duration_s`` [s] between ``bursts``, :data:`STILL_MARGIN_S` from them; None if none."""
     if not bursts:
         return None
     edges = [0.0, *[x for b in bursts for x in (b.start_s - STILL_MARGIN_S, b.end_s + STILL_MARGIN_S)], duration_s]
@@ -145,9 +124,8 @@ def still_span(bursts: list[MotionBurst], duration_s: float) -> tuple[float, flo
 
 
 def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY) -> tuple[float, float] | None:
-    """The longest stretch (start, end [s] from the first sample) of at least :data:`QUIET_MIN_S` over which every
-    axis's and |accel|'s :data:`BLOCK_S` means stay within :data:`QUIET_RANGE` × the block tests' limits of each other
-    and which passes those tests, less a block and :data:`STILL_MARGIN_S` at an end next to motion; None without one."""
+    """The longest still stretch (start, end [s]) of ≥ :data:`QUIET_MIN_S` by the block tests within
+    :data:`QUIET_RANGE`, off motion by a block and :data:`STILL_MARGIN_S`; or None."""
     n = len(imu)
     per_block = max(round(BLOCK_S / dt), 1)
     if n // per_block < 2:
@@ -172,7 +150,6 @@ def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY) -> 
 
 
 def _block_flags(imu: ImuSeries, dt: float, gravity: float) -> list[str]:
-    """The gravity and block-mean flags of :func:`static_check` (its first two tests)."""
     flags = []
     g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
     if abs(g_mean - gravity) > GRAVITY_SCALE_TOLERANCE * gravity:
@@ -201,14 +178,9 @@ def _block_flags(imu: ImuSeries, dt: float, gravity: float) -> list[str]:
 
 
 def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STANDARD_GRAVITY) -> StaticCheck:
-    """Whether ``imu`` looks like a static recording, judged by what motion does (thresholds: the module constants).
-
-    Flags: |mean(accel)| off ``gravity`` by more than :data:`GRAVITY_SCALE_TOLERANCE` (relative; beyond
-    :data:`GRAVITY_TOLERANCE` only a note); the std of :data:`BLOCK_S` block means above :data:`GYRO_BLOCK_STD_MAX`
-    (gyro) or :data:`ACCEL_BLOCK_STD_MAX` (accel, and |accel|); motion bursts (:func:`motion_bursts`, with
-    :func:`still_span`); without bursts, a flagged record's :func:`quiet_span`. The noise's own colour (a DLPF) is
-    not tested. Heuristics for *clearly* non-static data.
-    """
+    """Flags of a clearly non-static ``imu``: |mean accel| beyond :data:`GRAVITY_SCALE_TOLERANCE` of ``gravity``
+    (beyond :data:`GRAVITY_TOLERANCE`: a note), 1 s means wandering (:data:`GYRO_BLOCK_STD_MAX`,
+    :data:`ACCEL_BLOCK_STD_MAX`), motion bursts; the still or quiet span."""
     n = len(imu)
     if n < 20:
         return StaticCheck([f"only {n} samples: too short to check that the IMU was static"])

@@ -1,16 +1,7 @@
-"""The sampling period of a series of stamps: one rule for every reader, pipeline and command.
-
-Header stamps are not always sample times (host-stamped bursts, holes left by dropped messages). Estimates
-(docs/bags.md, "The sample period"): ``median_interval`` (neighbouring messages), ``index_regression`` (median of
-lag-k slopes of stamp on message position, k a tenth of the record), ``span_count`` (reported only),
-``receive_regression`` (on the bag's receive times) and ``declared`` (``--rate HZ``).
-
-Rule (:func:`estimate_period`): a declared rate wins (warned if the stamps disagree by more than :data:`AGREE`).
-Stamps are *bursty* when more than :data:`BURST_FRACTION` of the neighbouring intervals are shorter than half the
-regression period: regular stamps give the median interval, bursty ones the index regression with a warning, and
-are refused (:attr:`SamplePeriod.refusal`) when the receive times disagree by more than :data:`AGREE`. A rate
-changing between the halves by more than :data:`HALVES_AGREE` is warned about.
-"""
+"""The sampling period of a series of stamps, one rule for every reader and command (docs/bags.md, "The sample
+period"): a declared rate wins; regular stamps give the median neighbour interval, bursty ones (over
+:data:`BURST_FRACTION` under half the period) the index regression, refused if the receive times disagree beyond
+:data:`AGREE`; halves differing beyond :data:`HALVES_AGREE` warned."""
 
 from __future__ import annotations
 
@@ -42,17 +33,9 @@ RATE_HINT = "pass --rate HZ with the sensor's configured output rate"
 
 @dataclass(frozen=True)
 class SamplePeriod:
-    """The sampling period chosen for a series, how, and what the other estimates said.
-
-    Attributes
-    ----------
-    value : the period used [s] (the best estimate even when ``refusal`` is set)
-    source : ``median_interval``, ``index_regression`` or ``declared``
-    estimates : every estimate computed, name → period [s]
-    bursty : individual stamps are not sample times (host stamping, transport batching)
-    warnings, notes : what the user must know; worth knowing
-    refusal : why no period can be trusted (then :meth:`require` raises), or None
-    """
+    """The period ``value`` [s] chosen (the best estimate even with a ``refusal``), its ``source``
+    (``median_interval``, ``index_regression``, ``declared``), all ``estimates`` (name → [s]), ``bursty`` (stamps are
+    not sample times), ``warnings``, ``notes`` and ``refusal`` (why no period can be trusted, or None)."""
 
     value: float
     source: str
@@ -69,7 +52,7 @@ class SamplePeriod:
 
     @property
     def trusted(self) -> bool:
-        """The stamps gave the period without doubt (no warning, no refusal) or it was declared."""
+        """No warning and no refusal (or declared)."""
         return self.refusal is None and not self.warnings
 
     def require(self) -> float:
@@ -79,7 +62,7 @@ class SamplePeriod:
         return self.value
 
     def describe(self) -> str:
-        """One line: the rate, its source and the other estimates, e.g. for ``imu.yaml`` and the console."""
+        """One line: the rate, its source and the other estimates."""
         names = {"median_interval": "median stamp interval", "index_regression": "regression of stamp on message "
                  "index", "span_count": "span/count", "receive_regression": "bag receive times",
                  "declared": "declared (--rate)"}
@@ -100,13 +83,12 @@ def _check(t: np.ndarray) -> np.ndarray:
 
 
 def _starts(n: int, span: int) -> np.ndarray:
-    """At most :data:`MAX_PAIRS` evenly spread start indices of pairs ``(i, i + span)`` in ``n`` samples."""
     count = n - span
     return np.arange(0, count, max(1, count // MAX_PAIRS))
 
 
 def _lag_slope(t: np.ndarray, index: np.ndarray) -> float:
-    """Robust slope of ``t`` on ``index``: median of the lag-k slopes, k = :data:`LAG_FRACTION` of the record."""
+    """Median of the lag-k slopes of ``t`` on ``index``, k = :data:`LAG_FRACTION` of the record."""
     n = t.shape[0]
     k = max(1, int(n * LAG_FRACTION))
     i = _starts(n, k)
@@ -118,7 +100,6 @@ def _lag_slope(t: np.ndarray, index: np.ndarray) -> float:
 
 
 def _neighbour_intervals(t: np.ndarray, index: np.ndarray) -> np.ndarray:
-    """Intervals between stamps of neighbouring messages (at most :data:`MAX_PAIRS`, evenly spread)."""
     i = _starts(t.shape[0], 1)
     d = t[i + 1] - t[i]
     steps = index[i + 1] - index[i]
@@ -127,8 +108,7 @@ def _neighbour_intervals(t: np.ndarray, index: np.ndarray) -> np.ndarray:
 
 
 def _lattice(intervals: np.ndarray) -> tuple[float, bool]:
-    """(period, whether the intervals are whole multiples of a step within :data:`LATTICE_TOLERANCE`): on the lattice
-    the median single step, off it the median interval."""
+    """(period, whether the intervals are whole multiples of a step within :data:`LATTICE_TOLERANCE`)."""
     step = float(np.quantile(intervals, 0.1))
     if not step > 0:
         return float(np.median(intervals)), False
@@ -165,20 +145,9 @@ def estimate_period(
     receive: np.ndarray | None = None,
     declared_hz: float | None = None,
 ) -> SamplePeriod:
-    """The sampling period of sorted stamps ``t`` [s] by the module docstring's rule.
-
-    Parameters
-    ----------
-    t : (N,) sorted stamps [s] of the samples used (after repairs)
-    index : (N,) each sample's position among the recorded messages (default 0 … N−1)
-    receive : (N,) the bag's receive times [s], or None
-    declared_hz : the rate the user declares (``--rate``), or None
-
-    Raises
-    ------
-    InputError
-        Fewer than two stamps, non-finite or non-increasing stamps, or a declared rate that is not positive finite.
-    """
+    """The period of sorted stamps ``t`` [s] (module docstring), with each sample's message ``index`` (N,), bag
+    ``receive`` times [s] and ``declared_hz``; InputError on fewer than two or non-increasing stamps or a bad
+    declared rate."""
     t = _check(t)
     index = np.arange(t.shape[0]) if index is None else np.asarray(index)
     intervals = _neighbour_intervals(t, index)

@@ -1,9 +1,5 @@
-"""White-noise density from first differences: the Allan variance at τ₀ = Δt, streaming or batch.
-
-σ² = ½ Var(y_{k+1} − y_k) (IEEE Std 952), N = √(σ²·Δt) (:func:`imu_noise_id.core.noise.units.white_noise_density`);
-bias removed, slow drifts attenuated, RW/GM increments inflate it by q/2 per sample. :class:`FirstDifferences`
-serves whole arrays and the online node (which never differences across a pause: :meth:`break_chain`).
-"""
+"""White-noise density from first differences, streaming or batch: σ² = ½ Var(y_{k+1} − y_k) (the AV at Δt, IEEE Std
+952), N = √(σ²·Δt); bias removed, RW/GM increments add q/2; no difference across a pause (``break_chain``)."""
 
 from __future__ import annotations
 
@@ -25,7 +21,7 @@ class FirstDifferences:
         self._prev_t = 0.0
 
     def add(self, t: float, sample: np.ndarray) -> None:
-        """One sample (``channels`` values) at time ``t`` [s], differenced with the previous one of the chain."""
+        """One sample (``channels`` values) at time ``t`` [s], differenced with the chain's previous one."""
         prev = self._prev
         if prev is not None:
             d = sample - prev
@@ -37,7 +33,7 @@ class FirstDifferences:
         self._prev_t = t
 
     def add_series(self, y: np.ndarray) -> None:
-        """Consecutive samples, shape (k,) for one channel or (k, channels), as one chain of their own."""
+        """Consecutive samples (k,) or (k, channels) as a chain of their own."""
         d = np.diff(np.asarray(y, dtype=float).reshape(len(y), self.channels), axis=0)
         self._sum += d.sum(axis=0)
         self._sum_sq += (d * d).sum(axis=0)
@@ -49,19 +45,18 @@ class FirstDifferences:
         self._prev = None
 
     def variance(self) -> np.ndarray:
-        """Centred sample variance of the differences per channel (NaN before the first difference)."""
+        """Centred variance of the differences per channel (NaN before the first)."""
         if self.n == 0:
             return np.full(self.channels, math.nan)
         mean = self._sum / self.n
         return np.maximum(self._sum_sq / self.n - mean * mean, 0.0)
 
     def density(self, dt: float | None = None) -> np.ndarray:
-        """N = √(Var(d)/2 · Δt) per channel [u/√Hz]; ``dt`` [s], or None for the mean span of the stamped differences.
-        """
+        """N = √(Var(d)/2 · Δt) [u/√Hz] per channel; ``dt`` [s], or None for the stamped differences' mean span."""
         if dt is None:
             dt = self.sum_dt / self.n if self.n else math.nan
         return np.sqrt(0.5 * self.variance() * dt)
 
     def relative_std(self) -> float:
-        """Approximate relative std of N for Gaussian white noise: √(3/n)/2 (var σ̂² ≈ 3σ⁴/n)."""
+        """Approximate relative std √(3/n)/2 of N for Gaussian white noise."""
         return math.sqrt(3.0 / self.n) / 2.0 if self.n else math.nan

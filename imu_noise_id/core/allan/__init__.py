@@ -1,5 +1,4 @@
-"""The Allan family: AV, HV, TV and MDEV with χ² confidence intervals (:mod:`.estimators`, :mod:`.edf`), noise
-parameters read off the AV slopes (:mod:`.slopes`) and the random-walk bound (:mod:`.rw_bound`)."""
+"""The Allan family with χ² intervals, slope parameters and the random-walk bound (docs/analysis.md)."""
 
 from .edf import chi2_interval, edf_greenhall, edf_total, identify_alpha, local_slopes
 from .estimators import (

@@ -1,15 +1,7 @@
-"""Equivalent degrees of freedom (EDF) and χ² confidence intervals of the Allan-family estimators.
-
-The estimate times ``edf / variance`` is χ²_edf (NIST SP1065 section 5.3); the EDF depends on the noise type
-S_y(f) ∝ f^α at that τ:
-
-* AV, HV, MAV: Greenhall's algorithm (Greenhall & Riley, PTTI 2003, eqs. 7–10, tables 1–3), d = 2 or 3, exact
-  sums for J ≤ 100 terms, the table asymptotics (cases 1–4) otherwise;
-* TV: edf = b·N/m − c (NIST SP1065 table 11) for α = 0, −1, −2; for α = 1, 2 the overlapping AV's EDF.
-
-α is an assumption: by default α = −μ − 1 from the local log-log slope μ (:func:`identify_alpha`), the lag-1
-autocorrelation deciding where the slope says phase noise (:func:`lag1_alpha`); ``alpha=`` fixes it.
-"""
+"""Equivalent degrees of freedom (EDF) and χ² intervals of the Allan-family estimators: estimate × edf / variance ~
+χ²_edf (NIST SP1065 sec. 5.3), the EDF by the noise type S_y(f) ∝ f^α at that τ: AV, HV, MAV by Greenhall & Riley
+(PTTI 2003, eqs. 7–10, tables 1–3; exact sums for J ≤ 100 terms, the asymptotics of cases 1–4 otherwise); TV edf =
+b·N/m − c (NIST SP1065 table 11) for α = 0, −1, −2, else the AV's. α from :func:`identify_alpha` unless given."""
 
 from __future__ import annotations
 
@@ -84,21 +76,9 @@ def _basic_sum(J: int, M: float, S: float, F: float, *, alpha: int, d: int) -> f
 def edf_greenhall(
     alpha: int, d: int, m: int, n_phase: int, *, overlapping: bool = True, modified: bool = False
 ) -> float:
-    """EDF of a d-th difference variance (Greenhall & Riley 2003, cases 1–4).
-
-    Parameters
-    ----------
-    alpha : int
-        Noise exponent of S_y(f) ∝ f^α, −4..2, with α + 2d > 1.
-    d : int
-        1, 2 (Allan, modified Allan) or 3 (Hadamard).
-    m : int
-        Averaging factor.
-    n_phase : int
-        Phase points (N rate samples give N + 1).
-    overlapping, modified : bool
-        Stride 1 (S = m) or m (S = 1); phase averaged over m samples (F = 1).
-    """
+    """EDF of a d-th difference variance (Greenhall & Riley 2003, cases 1–4): S_y ∝ f^``alpha`` (−4..2, with α + 2d >
+    1), ``d`` 1, 2 (AV, MAV) or 3 (HV), factor ``m``, ``n_phase`` = N + 1; ``overlapping``: stride 1; ``modified``:
+    phase averaged over m."""
     if alpha + 2 * d <= 1:
         raise ValueError(f"Greenhall EDF needs alpha + 2d > 1, got alpha={alpha}, d={d}")
     F = 1.0 if modified else float(m)
@@ -155,8 +135,7 @@ _TOTVAR_BC = {0: (1.50, 0.0), -1: (1.17, 0.22), -2: (0.93, 0.36)}  # NIST SP1065
 
 
 def edf_total(alpha: int, m: int, n: int) -> float:
-    """EDF of the total variance at τ = m·dt from n samples: b·n/m − c (NIST SP1065 table 11); for α = 1, 2 the
-    overlapping AV's."""
+    """EDF of the TV at τ = m·dt from n samples: b·n/m − c (NIST SP1065 table 11); α = 1, 2: the overlapping AV's."""
     if alpha in _TOTVAR_BC:
         b, c = _TOTVAR_BC[alpha]
         return b * n / m - c
@@ -179,8 +158,8 @@ SLOPE_HALF_WINDOW = 2
 
 
 def local_slopes(tau: np.ndarray, variance: np.ndarray, half_window: int = SLOPE_HALF_WINDOW) -> np.ndarray:
-    """Least-squares slope of log σ² vs log τ over ±``half_window`` neighbouring τ, per column of ``variance`` (T,) or
-    (T, k); non-positive values ignored, NaN with fewer than two usable points."""
+    """Least-squares slope of log σ² on log τ over ±``half_window`` τ per column; NaN with fewer than two positive
+    values."""
     v = np.asarray(variance, dtype=float)
     v2 = v[:, None] if v.ndim == 1 else v
     lt = np.log(np.asarray(tau, dtype=float))
@@ -206,11 +185,8 @@ STEEP_SLOPE = -1.25
 
 def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str, y: np.ndarray | None = None,
                    m: np.ndarray | None = None) -> np.ndarray:
-    """Noise exponent α per τ and axis: α = −μ − 1 rounded, μ from :func:`local_slopes`, clipped to
-    :func:`alpha_range`; with rate samples ``y`` (N, k) and factors ``m``, from :func:`lag1_alpha` where
-    μ < :data:`STEEP_SLOPE` (AV, HV, TV), once per run of such τ, else μ = −2 maps to α = 2. Made non-increasing
-    in τ (running minimum); a single τ gives α = 0.
-    """
+    """α per τ and axis: −μ − 1 rounded (μ: :func:`local_slopes`), clipped; where μ < :data:`STEEP_SLOPE` and ``y``,
+    ``m`` given, :func:`lag1_alpha` once per run; non-increasing in τ."""
     variance = np.asarray(variance, dtype=float)
     lo, hi = alpha_range(kind)
     if tau.size < 2:
@@ -225,9 +201,7 @@ def identify_alpha(tau: np.ndarray, variance: np.ndarray, kind: str, y: np.ndarr
             mu2 = mu[:, None] if mu.ndim == 1 else mu
             a2 = alpha[:, None] if alpha.ndim == 1 else alpha
             for j in range(mu2.shape[1]):
-                # One estimate per run of steep τ, at its shortest τ (the most averages, the most precise r₁):
-                # the noise type does not change inside the run, and r₁ from a few dozen averages would
-                # often read white phase noise as flicker.
+                # one estimate per run of steep τ, at its shortest τ (why: docs/analysis.md, intervals)
                 steep = mu2[:, j] < STEEP_SLOPE
                 starts = np.flatnonzero(steep & ~np.concatenate([[False], steep[:-1]]))
                 for i0 in starts:
@@ -244,9 +218,8 @@ LAG1_MIN_POINTS = 30
 
 
 def lag1_alpha(y: np.ndarray, m: int, d_max: int = 2) -> float | None:
-    """Noise exponent α at averaging factor m from the lag-1 autocorrelation (Riley & Greenhall 2004, frequency data):
-    the non-overlapping m-averages, a line removed, differenced d = 0, 1, … (≤ ``d_max``) times until
-    δ = r₁/(1 + r₁) < 0.25; α = −2(δ + d). None with fewer than :data:`LAG1_MIN_POINTS` averages."""
+    """α at factor m from the lag-1 autocorrelation of the m-averages (Riley & Greenhall 2004): α = −2(δ + d), δ =
+    r₁/(1 + r₁) < 0.25 after d differences; None below :data:`LAG1_MIN_POINTS` averages."""
     k = y.size // m
     if k < LAG1_MIN_POINTS:
         return None

@@ -1,15 +1,12 @@
-"""Allan-family variances of rate samples y (gyro rad/s, accel m/s²) over τ = m·dt, vectorised over axes.
-
-With the phase x_0 = 0, x_i = dt·Σ_{j<i} (y_j − ȳ), i = 0..N:
+"""Allan-family variances of rate samples y [u] over τ = m·dt, by axis; phase x_0 = 0, x_i = dt·Σ_{j<i} (y_j − ȳ):
 
 * ``allan``    AV(m)  = Σ_i (x_{i+2m} − 2x_{i+m} + x_i)² / (2 τ² (N − 2m + 1))         (paper 000 eq. 2)
 * ``hadamard`` HV(m)  = Σ_i (x_{i+3m} − 3x_{i+2m} + 3x_{i+m} − x_i)² / (6 τ² (N − 3m + 1)) (paper 000 sec. 2)
-* ``total``    TV(m)  = Σ_{i=1}^{N−1} (x*_{i−m} − 2x_i + x*_{i+m})² / (2 τ² (N − 1)), x* the phase reflected
-  oddly at both ends (paper 000 sec. 2; NIST SP1065 eq. 25)
+* ``total``    TV(m)  = Σ_{i=1}^{N−1} (x*_{i−m} − 2x_i + x*_{i+m})² / (2 τ² (N − 1)), x* the phase reflected oddly at
+  both ends (paper 000 sec. 2; NIST SP1065 eq. 25)
 * ``modified`` MAV(m) = Σ_j (Σ_{i=j}^{j+m−1} x_{i+2m} − 2x_{i+m} + x_i)² / (2 m² τ² (N − 3m + 2)) (SP1065 eq. 14)
 
-O(N) per τ; equal to allantools' ``oadev``, ``ohdev``, ``totdev``, ``mdev`` (``data_type="freq"``). Intervals:
-:mod:`.edf`."""
+O(N) per τ; equal to allantools' ``oadev``, ``ohdev``, ``totdev``, ``mdev`` (``data_type="freq"``)."""
 
 from __future__ import annotations
 
@@ -39,15 +36,9 @@ class AllanResult:
 
     Attributes
     ----------
-    kind : {"allan", "hadamard", "total", "modified"}
-    dt : sampling period [s]
-    n : samples per axis used
-    m, tau : (T,) averaging factors and times τ = m·dt [s]
-    variance : (T, k) the estimate [u²] (u = rad/s or m/s²)
-    ci_low, ci_high : (T, k) two-sided ``confidence`` χ² interval with ``edf`` degrees of freedom
-    edf : (T, k) equivalent degrees of freedom
-    alpha : (T, k) power-law exponent (S_y ∝ f^α) assumed for the EDF
-    confidence : the intervals' level
+    kind : {"allan", "hadamard", "total", "modified"}; dt : sampling period [s]; n : samples per axis used
+    m, tau : (T,) averaging factors and times τ = m·dt [s]; variance : (T, k) the estimate [u²]
+    ci_low, ci_high, edf, alpha : (T, k) ``confidence`` χ² interval, its EDF and the exponent α (S_y ∝ f^α) assumed
     """
 
     kind: str
@@ -94,13 +85,8 @@ def max_m(n: int, kind: Kind) -> int:
 def choose_m(
     n: int, kind: Kind = "allan", per_decade: int = DEFAULT_PER_DECADE, m_max: int | None = None
 ) -> np.ndarray:
-    """Log-spaced unique factors 1 ≤ m ≤ ``m_max`` (default :func:`max_m`, always included), ~``per_decade`` a decade.
-
-    Raises
-    ------
-    InputError
-        If the series is too short for m = 1, or ``per_decade`` < 1.
-    """
+    """Log-spaced factors 1 ≤ m ≤ ``m_max`` (default and always: :func:`max_m`), ~``per_decade`` a decade; InputError
+    if none."""
     limit = max_m(n, kind)
     if limit < 1:
         raise InputError(f"{n} samples are too few for the {kind} variance: need at least {_min_samples(kind)}")
@@ -204,14 +190,12 @@ def _lagged_difference(x: np.ndarray, m: int, order: int, buffers: list[np.ndarr
 
 
 def _difference_sums(x: np.ndarray, m_list: np.ndarray, order: int) -> np.ndarray:
-    """Σ (Δ_m^order x)² per m, for one phase row x (order 2: Allan, order 3: Hadamard)."""
     buffers = [np.empty(x.size) for _ in range(order)]
     return np.array([_sum_sq(_lagged_difference(x, int(m), order, buffers)) for m in m_list])
 
 
 def second_differences(y: np.ndarray, dt: float, m_list: np.ndarray) -> Iterator[tuple[int, np.ndarray]]:
-    """(m, x_{i+2m} − 2x_{i+m} + x_i for i = 0..N−2m) per m, x the phase of ``y`` [u·s]: the AV's terms (paper 000
-    eq. 2) and, / (2m·dt), the Haar MODWT coefficients. Each array is a view of one reused buffer."""
+    """(m, x_{i+2m} − 2x_{i+m} + x_i) per m, x the phase [u·s]: the AV's terms (paper 000 eq. 2), one reused buffer."""
     x = phase(np.asarray(y, dtype=float), dt)
     buffers = [np.empty(x.size) for _ in range(2)]
     for m in m_list:
@@ -219,17 +203,14 @@ def second_differences(y: np.ndarray, dt: float, m_list: np.ndarray) -> Iterator
 
 
 def _allan_sums(x: np.ndarray, m_list: np.ndarray) -> np.ndarray:
-    """Σ (x_{i+2m} − 2x_{i+m} + x_i)² per m, for one phase row x."""
     return _difference_sums(x, m_list, 2)
 
 
 def _hadamard_sums(x: np.ndarray, m_list: np.ndarray) -> np.ndarray:
-    """Σ (x_{i+3m} − 3x_{i+2m} + 3x_{i+m} − x_i)² per m, for one phase row x."""
     return _difference_sums(x, m_list, 3)
 
 
 def _modified_sums(x: np.ndarray, m_list: np.ndarray) -> np.ndarray:
-    """Σ_j (Σ_{i=j}^{j+m−1} x_{i+2m} − 2x_{i+m} + x_i)² per m (moving sum through a cumulative sum)."""
     buffers = [np.empty(x.size) for _ in range(2)]
     cs = np.empty(x.size + 1)
     out = np.empty(m_list.size)
@@ -243,7 +224,6 @@ def _modified_sums(x: np.ndarray, m_list: np.ndarray) -> np.ndarray:
 
 
 def _total_sums(x: np.ndarray, m_list: np.ndarray) -> np.ndarray:
-    """Σ_{i=1}^{N−1} (x*_{i−m} − 2x_i + x*_{i+m})² per m, x* the phase reflected at both ends."""
     n1 = x.size  # N + 1 phase points, indices 0..N
     pad = int(m_list[-1])
     left = 2.0 * x[0] - x[pad:0:-1]  # x*_{-pad} .. x*_{-1}
@@ -285,27 +265,15 @@ def allan_family(
     confidence: float = DEFAULT_CONFIDENCE,
     alpha: int | np.ndarray | None = None,
 ) -> AllanResult:
-    """Allan-family variance ``kind`` of rate samples with χ² confidence intervals.
+    """Allan-family variance ``kind`` (module docstring) of rate samples, with χ² confidence intervals.
 
     Parameters
     ----------
-    y : ndarray, shape (N,) or (N, k)
-        Rate samples (rad/s, m/s², …) at constant period ``dt``; one column per axis.
-    dt : float
-        Sampling period [s].
-    kind : {"allan", "hadamard", "total", "modified"}
-        The estimator (module docstring).
-    tau, m : array_like, optional
-        Averaging times [s] (rounded to m = τ/dt) or factors, at most one; default :func:`choose_m`.
-    confidence : float
-        Two-sided level of the χ² interval.
-    alpha : int or array (T, k), optional
-        Noise exponent for the EDF; default :func:`identify_alpha`.
+    y : (N,) or (N, k) rate samples [u] at constant period ``dt`` [s], one column per axis
+    tau, m : averaging times [s] (rounded to m = τ/dt) or factors, at most one; default :func:`choose_m`
+    confidence : the intervals' two-sided level; alpha : int or (T, k) EDF noise exponent (default: identified)
 
-    Raises
-    ------
-    InputError
-        Too few samples, NaN/inf samples, bad dt, τ outside [dt, longest τ].
+    Raises InputError on too few or non-finite samples, a bad dt, or τ outside [dt, longest τ].
     """
     y = _as_columns(y, dt, kind)
     n = y.shape[0]
@@ -336,8 +304,7 @@ def allan_family(
 
 
 def stack_axes(results: list[AllanResult]) -> AllanResult:
-    """Join same-kind results computed on different axes into one (T, Σk) result; ValueError if kind, dt, n, m or
-    confidence differ."""
+    """Same-kind results of different axes as one (T, Σk) result; ValueError if kind, dt, n, m or confidence differ."""
     first = results[0]
     for r in results[1:]:
         if (r.kind, r.dt, r.n, r.confidence) != (first.kind, first.dt, first.n, first.confidence) or not np.array_equal(

@@ -1,12 +1,7 @@
-"""The largest random walk a record's long-τ Allan variance supports: a simultaneous upper confidence bound.
-
-AV(τ) ≥ K²τ/3 at every τ for any model holding a random walk K (AVs of independent components add). With
-AV_hat·ν/AV read as χ²_ν (NIST SP1065 eq. 45, ν a random walk's EDF), U(τ) = AV_hat(τ)·ν/χ²_ν(q) lies below
-AV(τ) with probability q; with q = (1 − level)/M over the M estimates at τ ≥ τ_min (Bonferroni),
-K ≤ min_τ √(3·U(τ)/τ) holds jointly with probability ≥ ``level``. The data's evidence against a given K is the
-p-value min(1, M·min_τ F_ν(ν·AV_hat(τ)/(K²τ/3))). Beyond the papers; reasons: docs/analysis.md, "Why the slope
-rules …".
-"""
+"""The largest random walk K [u/s/√Hz] a record's long-τ AV supports, as a simultaneous upper bound. AV(τ) ≥ K²τ/3
+for any model with a random walk K; with AV_hat·ν/AV ~ χ²_ν (NIST SP1065 eq. 45, ν a random walk's EDF), U(τ) =
+AV_hat(τ)·ν/χ²_ν(q), q = (1 − level)/M over the M estimates at τ ≥ τ_min (Bonferroni): K ≤ min_τ √(3·U(τ)/τ) jointly
+with probability ≥ ``level``; a K's p-value min(1, M·min_τ F_ν(ν·AV_hat/(K²τ/3))). Why: docs/analysis.md."""
 
 from __future__ import annotations
 
@@ -27,16 +22,9 @@ RECORD_FRACTION = 0.1
 
 @dataclass(frozen=True)
 class RandomWalkBound:
-    """The largest random-walk density K [u/s/√Hz] the long-τ AV supports (module docstring).
-
-    Attributes
-    ----------
-    value : the bound [u/s/√Hz]; nan without an AV estimate at τ ≥ ``tau_range[0]``
-    level : its confidence level, simultaneous over the :attr:`estimates` AV estimates
-    tau_range : the τ [s] read (first, last)
-    tau_at_minimum : the τ [s] where the bound is attained
-    tau, variance, edf : the AV estimates read: τ [s], AV [u²] and a random walk's EDF
-    """
+    """The bound ``value`` [u/s/√Hz] (nan without estimates) at simultaneous ``level``, read over ``tau_range``
+    (first, last) [s], attained at ``tau_at_minimum`` [s], from the AV estimates ``tau`` [s], ``variance`` [u²],
+    ``edf``."""
 
     value: float
     level: float
@@ -63,7 +51,7 @@ class RandomWalkBound:
         return random_walk is not None and math.isfinite(self.value) and random_walk > self.value
 
     def excess(self, random_walk: float) -> str:
-        """What a K above the bound means, in words (the bound, its τ, the p-value)."""
+        """What a K above the bound means, in words."""
         return (f"above what the data's AV at τ = {self.tau_range[0]:.3g}–{self.tau_range[1]:.3g} s supports "
                 f"({self.value:.3g} at {100 * self.level:.0f} %, p = {self.p_value(random_walk):.2g} over "
                 f"{self.estimates} estimates): a bounded wander fits this record as well")
@@ -71,8 +59,8 @@ class RandomWalkBound:
 
 def random_walk_bound(res: AllanResult, axis: int = 0, *, tau_min: float | None = None,
                       level: float = CONFIDENCE_95) -> RandomWalkBound:
-    """The simultaneous ``level`` upper bound on K from column ``axis`` of an Allan-variance result at
-    τ ≥ ``tau_min`` [s] (default :data:`RECORD_FRACTION` of the record), module docstring."""
+    """The ``level`` bound from column ``axis`` at τ ≥ ``tau_min`` [s] (default :data:`RECORD_FRACTION` of the
+    record)."""
     if res.kind != "allan":
         raise ValueError(f"random_walk_bound: the Allan variance is needed, got {res.kind!r}")
     start = RECORD_FRACTION * res.n * res.dt if tau_min is None else float(tau_min)

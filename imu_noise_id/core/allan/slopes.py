@@ -1,26 +1,6 @@
-"""Noise parameters read off an Allan-variance curve by its characteristic slopes (IEEE Std 952, Kalibr).
-
-=====================  ====  ==========================  =====================================================
-component              μ     AV(τ)                       parameter read off the line
-=====================  ====  ==========================  =====================================================
-quantisation  (QN)     −2    3Q²/τ²                      Q [u·s]
-white noise   (WN)     −1    N²/τ                        N = ADEV of the line at τ = 1 s [u/√Hz]
-bias instability (BI)   0    (2 ln2/π)·B²                B = ADEV of the flat line / 0.664 [u]
-random walk   (RW)     +1    K²τ/3                       K = ADEV of the line at τ = 3 s [u/s/√Hz]
-rate ramp     (RR)     +2    R²τ²/2                      R [u/s]
-=====================  ====  ==========================  =====================================================
-
-Rules (docs/analysis.md, "Noise parameters from the slopes"; reasons: "Why the slope rules …"):
-
-1. **Lines.** c ≥ 0 of AV(τ) ≈ Σ_j c_j τ^μ_j fitted over all τ (IEEE Std 952 annex C), minimising
-   Σ_i ρ(√(ν_i/2)·log(model_i/AV_i)), ν the EDF, ρ Huber's loss; WN, RW always, QN, BI, RR if significant.
-2. **Region.** Where a line is at least :data:`DOMINANCE` of the fitted sum; QN, BI, RR need two τ of it.
-3. **Interval.** The χ² interval of the region's point with the largest ν·s² (s the line's share), / s, widened in
-   log by the fit's disagreement with that point when outside it (approximate).
-4. **No region.** WN, RW: upper bounds N² ≤ τ·AV_hi(τ), K² ≤ 3·AV_hi(τ)/τ, minimum over τ (``method="upper_bound"``).
-5. **Sensor low-pass** (beyond IEEE Std 952): a roll-off ending in the −1 slope (:func:`rolloff_end`) below the
-   white-noise line is left out; rules 1–4 read from ``AxisSlopes.rolloff_tau`` on.
-"""
+"""Noise parameters read off an AV curve by its slopes (IEEE Std 952 annex C, Kalibr): QN μ = −2, 3Q²/τ², Q [u·s]; WN
+−1, N²/τ, N [u/√Hz]; BI 0, (2 ln 2/π)·B², B [u]; RW +1, K²τ/3, K [u/s/√Hz]; RR +2, R²τ²/2, R [u/s]. Rules 1–5:
+docs/analysis.md, "Noise parameters from the slopes"."""
 
 from __future__ import annotations
 
@@ -57,19 +37,9 @@ BIAS_INSTABILITY_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
 @dataclass(frozen=True)
 class SlopeComponent:
-    """One Allan-slope parameter of one axis.
-
-    Attributes
-    ----------
-    name : {"QN", "WN", "BI", "RW", "RR"}
-    slope : the line's slope μ in AV (ADEV: μ/2)
-    coefficient : c in AV(τ) = c·τ^μ [u²·s^(−μ)]
-    value : Q [u·s], N [u/√Hz], B [u], K [u/s/√Hz] or R [u/s]
-    ci : its confidence interval (rule 3); (0, value) for an upper bound (rule 4)
-    method : {"fit", "upper_bound"}
-    tau_range : the τ [s] fitted on (or where the bound was attained)
-    n_points : AV points used
-    """
+    """One Allan-slope parameter of one axis: ``name`` (QN, WN, BI, RW, RR), ``slope`` μ in AV, ``coefficient`` c of
+    c·τ^μ [u²·s^(−μ)], ``value`` (Q [u·s], N [u/√Hz], B [u], K [u/s/√Hz] or R [u/s]) with its ``ci`` ((0, value) for
+    a bound), ``method`` ("fit" or "upper_bound"), ``tau_range`` [s], ``n_points``."""
 
     name: str
     slope: float
@@ -87,8 +57,7 @@ class SlopeComponent:
 
 @dataclass(frozen=True)
 class AxisSlopes:
-    """Slope parameters of one axis (QN, BI, RR None without a region); ``rolloff_tau``: the τ [s] they were read
-    from when the shortest τ show the sensor's low-pass (rule 5)."""
+    """Slope parameters of one axis (QN, BI, RR None without a region), read from ``rolloff_tau`` [s] on."""
 
     noise_density: SlopeComponent
     random_walk: SlopeComponent
@@ -128,8 +97,7 @@ MENDED_MIN = 6
 
 
 def fit_lines(tau: np.ndarray, variance: np.ndarray, edf: np.ndarray, names: tuple[str, ...] = _NAMES) -> np.ndarray:
-    """Non-negative coefficients (QN, WN, BI, RW, RR order; c = 0 for lines not in ``names``) of AV(τ) ≈ Σ_j c_j τ^μ_j
-    fitted to one axis's ``tau``, ``variance``, ``edf`` (rule 1)."""
+    """c ≥ 0 (order QN, WN, BI, RW, RR; 0 outside ``names``) of AV ≈ Σ c_j τ^μ_j on one axis (rule 1)."""
     use = np.array([n in names for n in _NAMES])
     basis = tau[:, None] ** _MUS[None, use]
     ok = np.isfinite(variance) & (variance > 0) & (edf > 0)
@@ -176,12 +144,7 @@ def _region(j: int, coef: np.ndarray, tau: np.ndarray, share: float = DOMINANCE)
 
 
 def select_lines(res: AllanResult, axis: int) -> np.ndarray:
-    """Coefficients of WN, RW plus the extras (QN, BI, RR) the data need (rule 1).
-
-    An extra is kept when it has a region (QN: where it is at least :data:`QN_TEST_SHARE` of the sum) and either the
-    AV's lower confidence limit lies above the base model at two or more τ of it, or the fit with it leaves the AV's
-    interval at :data:`MENDED_MIN` fewer τ than the base model.
-    """
+    """Coefficients of WN, RW and the extras (QN, BI, RR) with a region of ≥ 2 τ that the AV needs (rule 1)."""
     tau, av, edf = res.tau, res.variance[:, axis], res.edf[:, axis]
     lo, hi = res.ci_low[:, axis], res.ci_high[:, axis]
     base = fit_lines(tau, av, edf, BASE)
@@ -214,9 +177,7 @@ def _component(name: str, coef: np.ndarray, region: np.ndarray, res: AllanResult
     av = res.variance[i, axis]
     c_lo = max(1.0 + (res.ci_low[i, axis] / av - 1.0) / share[k], 0.0)
     c_hi = 1.0 + (res.ci_high[i, axis] / av - 1.0) / share[k]
-    # Widen by the disagreement between the fitted line and that point's own coefficient (in log, quadrature)
-    # when the point's own interval does not hold the fitted line: a misfit, not the sampling noise the
-    # interval already describes (the fit pools the region's points and is, if anything, more precise).
+    # widened by the misfit of that point's own coefficient, in log, in quadrature (rule 3)
     others = lines[k].sum() - lines[k, j]
     own = (av - others) / res.tau[i] ** mu
     if own > 0 and c_lo > 0 and not c_lo <= coefficient / own <= c_hi:
@@ -239,13 +200,7 @@ def _upper_bound(name: str, res: AllanResult, axis: int) -> SlopeComponent:
 
 
 def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float) -> int:
-    """Where a start flatter than white noise ends in it (:func:`rolloff_end`), 0 where none does.
-
-    With s_i = Δln AV/Δln τ before the curve's minimum (beyond its first peak): the first j after an
-    s > −1 + 2·:data:`SLOPE_TOLERANCE` with s_j within :data:`SLOPE_TOLERANCE` of −1 or steeper, the next
-    :data:`ROLLOFF_WHITE_STEPS` slopes no steeper than −1 − tolerance on average, no later than
-    :data:`ROLLOFF_MAX_MEMORIES` filter memories, :data:`ROLLOFF_MIN_POINTS` τ left.
-    """
+    """Where a start flatter than white noise ends in its −1 slope (rule 5 and its constants), 0 if nowhere."""
     ok = np.isfinite(av) & (av > 0)
     # the curve's minimum beyond its first peak (a strong low-pass can put the global minimum at the shortest τ)
     early = np.flatnonzero(ok & (tau <= ROLLOFF_MAX_MEMORIES * filter_memory_limit(dt)))
@@ -265,9 +220,7 @@ def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float) -> int:
 
 
 def rolloff_end(res: AllanResult, axis: int = 0) -> int:
-    """Index of the first τ beyond the sensor's low-pass roll-off (rule 5), 0 when none: the candidate
-    (:func:`_rolloff_candidate`) counts when the shortest-τ AV's upper limit lies below the lower limit of the
-    white-noise line of WN + RW fitted from there."""
+    """First τ index beyond the sensor's low-pass roll-off (rule 5), 0 if none."""
     j = _rolloff_candidate(res.tau, res.variance[:, axis], res.dt)
     if not j:
         return 0

@@ -1,12 +1,11 @@
-"""The data's Allan-variance band under the null "the model holds", with the estimator's exact EDF for the model
-(beyond the papers: NIST SP1065 and paper 000 section 2 take the EDF from the local slope; reasons: docs/loop.md).
+"""The data's AV band under the null "the model holds", with the estimator's exact EDF for the model (NIST SP1065 and
+paper 000 sec. 2 take it from the local slope; why: docs/diagnostics.md).
 
-With generalised covariance K(u) of the partial sums (:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`)
-and d_k = (x_{k+2m} − 2x_{k+m} + x_k)/m, the overlapping AV at m samples, AV_hat = (1/2M) Σ_k d_k², M = N − 2m + 1,
-has lag-l covariance c(l) = [6K(l) − 4K(l − m) − 4K(l + m) + K(l − 2m) + K(l + 2m)] / m²; with a ramp's mean
-μ = ω·m·dt of d_k, E[AV_hat] = (c(0) + μ²)/2, Var(AV_hat) = (1/4M²) Σ_{|l|<M} (M − |l|) (2c(l)² + 4μ² c(l)), exact;
-ν = 2 E²/Var. The band is the χ²_ν interval (NIST SP1065 eq. 45).
-"""
+With K(u) the partial sums' generalised covariance (:meth:`~..noise.base.Component.sum_covariance`) and d_k =
+(x_{k+2m} − 2x_{k+m} + x_k)/m, the overlapping AV_hat = (1/2M) Σ_k d_k², M = N − 2m + 1, has lag-l covariance c(l) =
+[6K(l) − 4K(l − m) − 4K(l + m) + K(l − 2m) + K(l + 2m)]/m²; with a ramp's mean μ = ω·m·dt of d_k, E[AV_hat] = (c(0) +
+μ²)/2, Var(AV_hat) = (1/4M²) Σ_{|l|<M} (M − |l|)(2c(l)² + 4μ²c(l)); ν = 2E²/Var, the band the χ²_ν interval (SP1065
+eq. 45)."""
 
 from __future__ import annotations
 
@@ -29,11 +28,8 @@ MEMORY_REACH = 40.0
 
 
 def model_av_edf(components: list[Component], m: np.ndarray, n: int, dt: float) -> np.ndarray:
-    """EDF of the overlapping AV estimates at averaging factors ``m`` of an ``n``-sample record of the Gaussian model
-    ``components`` sampled at ``dt`` [s] (module docstring). The K of a component of finite memory T > 0 (its
-    :meth:`~imu_noise_id.core.noise.base.Component.memory`) is computed up to :data:`MEMORY_REACH`·T/dt and continued
-    linearly from there, where its exponentials would be below e⁻⁴⁰; a component of memory 0 is read at the lags
-    near 0 where its c(l) is not 0."""
+    """EDF of the overlapping AV at factors ``m`` of ``n`` samples at ``dt`` [s] of the Gaussian model
+    ``components``."""
     m = np.asarray(m, dtype=np.int64)
     stochastic = [c for c in components if not isinstance(c, RR)]
     slope = sum(abs(c.slope) for c in components if isinstance(c, RR))
@@ -62,10 +58,7 @@ def model_av_edf(components: list[Component], m: np.ndarray, n: int, dt: float) 
 
 
 def _sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
-    """K(0 … size − 1) of ``c`` (:func:`_computed_sum_covariance`); of a component whose only parameter is its scale
-    (:attr:`~imu_noise_id.core.noise.base.Component.scale_name`, e.g. a flicker ladder), K at unit scale computed once
-    per structure and length (:func:`_unit_sum_covariance`) times the scale's square: a loop diagnoses many fits of one
-    ladder, whose K over every lag of a long record is the costliest part of its EDF."""
+    """K(0 … size − 1) of ``c``; of a scale-only component, its unit-scale K (cached) times the scale²."""
     split = c.scale_only()
     if split is None:
         return _computed_sum_covariance(c, size, dt)
@@ -76,16 +69,14 @@ def _sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
 @functools.lru_cache(maxsize=4)
 def _unit_sum_covariance(kind: type[Component], fixed: tuple[tuple[str, float], ...], size: int,
                          dt: float) -> np.ndarray:
-    """:func:`_computed_sum_covariance` of the scale-only component ``kind`` at scale 1 with its ``fixed`` values
-    (read-only: shared by every caller)."""
+    """K of the scale-only component ``kind`` at scale 1 with its ``fixed`` values (read-only, shared)."""
     k = _computed_sum_covariance(kind(**{kind.scale_name: 1.0}, **dict(fixed)), size, dt)
     k.flags.writeable = False
     return k
 
 
 def _computed_sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
-    """K(0 … size − 1) of ``c``; beyond :data:`MEMORY_REACH` decay times of a component with finite memory > 0, the
-    line through its last two computed values (:func:`model_av_edf`)."""
+    """K(0 … size − 1) of ``c``, linear beyond :data:`MEMORY_REACH` decay times of a finite memory > 0."""
     memory = c.memory(dt)[0]
     reach = math.ceil(MEMORY_REACH * memory / dt) + 2 if 0.0 < memory < math.inf else size
     if reach >= size:
@@ -97,7 +88,7 @@ def _computed_sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
 
 
 def _difference_covariance(k: np.ndarray, ell: np.ndarray, m: int) -> np.ndarray:
-    """c(l) at lags ``ell`` from K at 0, 1, 2, … (``k``, even) for m-sample means (module docstring)."""
+    """c(l) at lags ``ell`` from ``k`` = K(0, 1, …) (even) for m-sample means."""
     size = ell.size
     head = min(size, 2 * m)
     c = np.empty(size)
@@ -109,7 +100,6 @@ def _difference_covariance(k: np.ndarray, ell: np.ndarray, m: int) -> np.ndarray
 
 def model_av_band(av_data: np.ndarray, components: list[Component], m: np.ndarray, n: int, dt: float, *,
                   confidence: float = CONFIDENCE_95) -> tuple[np.ndarray, np.ndarray]:
-    """The (low, high) ``confidence`` interval [u²] of ``av_data`` at ``m`` with the EDF of :func:`model_av_edf`
-    (NIST SP1065 eq. 45)."""
+    """(low, high) ``confidence`` interval [u²] of ``av_data`` with :func:`model_av_edf`'s EDF (SP1065 eq. 45)."""
     edf = np.maximum(model_av_edf(components, m, n, dt), 1.0)
     return chi2_interval(np.asarray(av_data, dtype=float), edf, confidence)

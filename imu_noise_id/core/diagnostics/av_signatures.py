@@ -1,6 +1,4 @@
-"""Allan-variance signatures of a fitted model's misfit: bands of τ where the data's AV leaves the model's
-confidence band, each traced to the missing component (GM, BI, RW, RR, QN); findings are
-:class:`~.detectors.Finding` (signature table in :mod:`.detectors`)."""
+"""AV signatures of a model's misfit, each traced to the missing component (GM, BI, RW, RR, QN) as a Finding."""
 
 from __future__ import annotations
 
@@ -17,7 +15,7 @@ from .residuals import av_misfit_z
 
 
 def fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]:
-    """GM (τ_c, σ) whose AV best fits a positive AV excess in log space (grid over τ_c, σ² in closed form)."""
+    """GM (τ_c [s], σ [u]) whose AV best fits a positive AV excess in log space."""
     best = (math.inf, float(tau[0]), 0.0)
     log_ex = np.log(excess)
     for tc in np.geomspace(tau[0] / 2, tau[-1] * 3, 80):
@@ -31,8 +29,8 @@ def fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]
 
 
 def gm_beside_walk(tau: np.ndarray, excess: np.ndarray, sd: np.ndarray) -> tuple[float, float, float]:
-    """GM (τ_c, σ) and random walk K whose AVs together best fit a positive AV excess: grid over τ_c, (σ², K²) ≥ 0 by
-    weighted least squares, judged in log space with each τ weighted by ``sd`` (the spread of its log excess)."""
+    """GM (τ_c, σ) and random walk K whose AVs together best fit a positive AV excess (log space, weighted by
+    ``sd``)."""
     best = (math.inf, float(tau[0]), 0.0, 0.0)
     walk = tau / 3.0  # the random walk's AV per unit K²
     weight = 1.0 / (sd * excess)
@@ -59,8 +57,7 @@ FLAT_DECADES, FLAT_RATIO = 1.0, 1.3
 
 
 def flicker_level(tau: np.ndarray, excess: np.ndarray) -> float | None:
-    """Bias instability B [u] of an AV excess with a plateau (2 ln 2/π)·B² (IEEE Std 952): the flattest
-    :data:`FLAT_DECADES` window whose quadratic log-log fit varies by at most :data:`FLAT_RATIO`; None if none."""
+    """B [u] of an AV excess with a plateau (2 ln 2/π)·B² (IEEE Std 952) over :data:`FLAT_DECADES`; None if none."""
     best: tuple[float, float] | None = None
     for i in range(tau.size):
         window = (tau >= tau[i]) & (tau <= tau[i] * 10.0**FLAT_DECADES * 1.0001)
@@ -75,7 +72,7 @@ def flicker_level(tau: np.ndarray, excess: np.ndarray) -> float | None:
 
 
 def _with_flicker(finding: Finding, tau: np.ndarray, excess: np.ndarray) -> list[Finding]:
-    """``finding`` (a GM) and, when the excess is flat over a decade or more, a BI finding ranked just before it."""
+    """``finding`` (a GM) and, when the excess is flat over a decade, a BI finding ranked just before it."""
     level = flicker_level(tau, excess)
     if level is None:
         return [finding]
@@ -95,20 +92,10 @@ LAST_DECADE = 0.1
 def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
                          av_model: np.ndarray, *, av_white: np.ndarray | None = None,
                          alpha: float = ALPHA) -> list[Finding]:
-    """Bands of τ where the data's AV is significantly above (or, at long τ, below) the model's, each traced to a
-    component (reasons: docs/loop.md, "Why the detectors …").
-
-    z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) (sd from the 95 % CI); excess where z_τ > z* = Φ⁻¹(1 − α/M) over the
-    M τ (Bonferroni). Each contiguous band, by position and log-log slope of AV_data − AV_model:
-
-    * at the shortest τ with slope < −1.5 → QN, Q from 3Q²/τ²;
-    * growing, ending in the last decade of τ (:data:`LAST_DECADE`) → RR if slope > 1.5 (ω²τ²/2), else RW (K²τ/3);
-    * otherwise a bump → GM, (τ_c, σ) fitted to the excess; when flat, also BI, B² = median excess / (2 ln 2/π).
-
-    A significant *deficit* (z_τ < −z*) in the last decade, the model above the data at every longer τ → GM and K
-    (in ``random_walk``) fitted together to the data's AV beyond ``av_white`` (default: the WN line through the
-    first τ) from :data:`DEFICIT_REACH` of the deficit's start (:func:`gm_beside_walk`), and BI beside it when flat.
-    """
+    """Bands of τ where the data's AV is significantly above (or at long τ below) the model's, each traced to a
+    component: z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) beyond Φ⁻¹(1 − α/M) (Bonferroni); by position and slope of
+    the excess QN (shortest τ, < −1.5), RR (> 1.5) or RW (to the last decade), else GM (and BI when flat); a long-τ
+    deficit → GM and K above ``av_white``. Rules: docs/loop.md."""
     tau = np.asarray(tau, dtype=float)
     av_data = np.asarray(av_data, dtype=float)
     av_model = np.asarray(av_model, dtype=float)

@@ -1,8 +1,4 @@
-"""χ² acceptance bounds of the normalised innovation squared (NIS), the package's one consistency bound.
-
-The NIS νᵀS⁻¹ν of a consistent Kalman filter's update with ``dof`` components is χ²(dof); the sum of ``n``
-independent ones χ²(n·dof).
-"""
+"""χ² bounds of the normalised innovation squared νᵀS⁻¹ν, χ²(dof) per update of a consistent filter."""
 
 from __future__ import annotations
 
@@ -14,8 +10,8 @@ from scipy.stats import chi2
 
 @lru_cache(maxsize=1024)
 def nis_bounds(dof: int, n: int = 1, alpha: float = 0.05) -> tuple[float, float]:
-    """Two-sided ``1 − alpha`` acceptance interval of the mean of ``n`` NIS values of ``dof`` each:
-    ``(χ²_{α/2}(n·dof)/n, χ²_{1−α/2}(n·dof)/n)``; ValueError if ``dof`` or ``n`` < 1 or ``alpha`` ∉ (0, 1)."""
+    """``1 − alpha`` interval (χ²_{α/2}(n·dof)/n, χ²_{1−α/2}(n·dof)/n) of the mean of ``n`` NIS of ``dof`` each;
+    ValueError on bad arguments."""
     if dof < 1 or n < 1:
         raise ValueError(f"dof and n must be >= 1, got dof={dof}, n={n}")
     if not 0.0 < alpha < 1.0:
@@ -25,8 +21,8 @@ def nis_bounds(dof: int, n: int = 1, alpha: float = 0.05) -> tuple[float, float]
 
 
 def nis_gate(dof: int, probability: float) -> float:
-    """The NIS above which one update of ``dof`` components is rejected: the ``1 − probability`` quantile of χ²(dof)
-    (1e-6, 3 dof: 30.7); ``probability = 0`` gives ``inf``; ValueError if ``dof`` < 1 or ``probability`` ∉ [0, 0.5)."""
+    """NIS rejecting one update of ``dof`` components: χ²(dof)'s ``1 − probability`` quantile (0: inf); ValueError on
+    bad arguments."""
     if dof < 1:
         raise ValueError(f"dof must be >= 1, got {dof}")
     if not 0.0 <= probability < 0.5:
@@ -41,9 +37,8 @@ INCONSISTENT_GATED_SHARE = 0.25
 
 
 def nis_verdict(mean: float, dof: int, n: int, gated_share: float = 0.0) -> str:
-    """Consistency from the mean of ``n`` NIS values of ``dof`` each and the share of gated updates: ``"unknown"``
-    (n < 10), ``"inconsistent"`` (mean beyond :data:`INCONSISTENT_FACTOR` × dof either way, or more than
-    :data:`INCONSISTENT_GATED_SHARE` gated), ``"marginal"`` (outside the 95 % bounds) or ``"consistent"``."""
+    """``"unknown"`` (n < 10), ``"inconsistent"`` (mean beyond :data:`INCONSISTENT_FACTOR` × dof either way, or more
+    than :data:`INCONSISTENT_GATED_SHARE` gated), ``"marginal"`` (outside the 95 % bounds) or ``"consistent"``."""
     if gated_share > INCONSISTENT_GATED_SHARE:
         return "inconsistent"
     if n < 10 or not math.isfinite(mean):

@@ -1,7 +1,4 @@
-"""Detectors that trace a residual signature of a fitted model to the effect it lacks (GM, BI, RW, RR, QN, SIN, TEMP,
-STEP, OUTLIERS), each a :class:`Finding` at level α (default 0.01) under the null "the fitted model is the data's
-model" (e_t i.i.d. N(0, 1)); score tests whiten through :class:`.whitening.WhiteningFilter`. The signature table
-is in docs/loop.md, "Detectors"."""
+"""Detectors tracing a residual signature to the effect a model lacks, as :class:`Finding` at level α (docs/loop.md)."""
 
 from __future__ import annotations
 
@@ -35,15 +32,10 @@ class Finding:
 
     Attributes
     ----------
-    effect : ``GM``, ``RW``, ``RR``, ``QN``, ``SIN``, ``TEMP``, ``STEP``, ``OUTLIERS`` (and the loop's others)
-    detector : the test (``av_band``, ``ljung_box``, ``ramp_score``, ``periodogram``, ``temperature_score``, …)
-    statistic, threshold : the statistic and the value it must exceed at ``level`` (α)
-    log10_p : log10 of the multiplicity-corrected p-value (ranks findings)
-    params : initial values, SI (``tau`` [s], ``sigma`` [u], ``random_walk`` [u/s/√Hz], ``slope`` [u/s],
-        ``Q`` [u·s], ``frequency`` [Hz], ``amplitude`` [u], ``coefficient`` [u/°C], ``index``, ``time`` [s], …)
-    evidence : one line saying what was seen
-    indices : samples concerned (outliers), else empty
-    members : a family added in one step (a line and its harmonics), else empty
+    effect : ``GM``, ``RW``, ``RR``, ``QN``, ``SIN``, ``TEMP``, ``STEP``, ``OUTLIERS``, …; detector : the test's name
+    statistic, threshold : the statistic and what it must exceed at ``level`` α; log10_p : multiplicity-corrected
+    params : initial values, SI (``tau`` [s], ``sigma`` [u], ``frequency`` [Hz], ``coefficient`` [u/°C], …)
+    evidence : one line of what was seen; indices : samples concerned (outliers); members : a family added at once
     """
 
     effect: str
@@ -63,7 +55,7 @@ class Finding:
 
 
 def bonferroni_log10_p(log10_p_single: float, m: int) -> float:
-    """log₁₀ of the Bonferroni-corrected p-value of the most extreme of ``m`` tests (capped at p = 1)."""
+    """log₁₀ of the Bonferroni p-value of the most extreme of ``m`` tests (capped at p = 1)."""
     return min(0.0, log10_p_single + math.log10(max(m, 1)))
 
 
@@ -74,8 +66,8 @@ def norm_log10_sf(z: float) -> float:
 
 # --------------------------------------------------------------------------------------------- outliers
 def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA, only: np.ndarray | None = None) -> Finding:
-    """Spikes: robust z_t = (e_t − median)/(1.4826·MAD) beyond z* = Φ⁻¹(1 − α/(2n)) (Bonferroni), all in ``indices``;
-    ``only`` restricts the statistic to given samples."""
+    """Spikes: robust z_t = (e_t − median)/(1.4826·MAD) beyond Φ⁻¹(1 − α/(2n)), all in ``indices``; ``only``: samples
+    tested."""
     e = np.asarray(e, dtype=float)
     ok = np.isfinite(e)
     n = int(ok.sum())
@@ -107,21 +99,19 @@ def detect_outliers(e: np.ndarray, *, alpha: float = ALPHA, only: np.ndarray | N
 # --------------------------------------------------------------------------------------------- sinusoid
 def detect_sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
                     f_min: float | None = None) -> Finding:
-    """A narrow line: the periodogram peak of e over its local median floor (:func:`spectral_peaks`), significant
-    above s* = −ln(1 − (1 − α)^{1/M}) over the M searched bins; frequency refined, amplitude and phase by GLS."""
+    """A narrow line: periodogram peak over its median floor above s* = −ln(1 − (1 − α)^{1/M}); f refined, amplitude
+    by GLS."""
     return _sinusoid(e, dt, whitening, spectral_peaks(e, dt, f_min=f_min), alpha=alpha)
 
 
 def detect_sinusoids(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
                      f_min: float | None = None) -> list[Finding]:
-    """:func:`detect_sinusoid`'s finding, then every other line significant at family-wise level α
-    (:func:`spectral_lines`), strongest first (beyond the papers: all lines in one step)."""
+    """:func:`detect_sinusoid`'s finding, then every other line significant at family-wise level α, strongest first."""
     return [_sinusoid(e, dt, whitening, line, alpha=alpha) for line in spectral_lines(e, dt, alpha=alpha, f_min=f_min)]
 
 
 def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: SpectralPeak, *, alpha: float) -> Finding:
-    """The finding of ``peak`` against the maximum-of-M-bins threshold; a line's frequency refined, amplitude and phase
-    from the score test."""
+    """The finding of ``peak``; a line's frequency refined, amplitude and phase from the score test."""
     s_star = max_exponential_threshold(peak.n_bins, alpha)
     if peak.statistic <= s_star:  # no line: nothing to refine or size (each score test whitens two columns)
         return Finding(effect="SIN", detector="periodogram", statistic=peak.statistic, threshold=s_star,
@@ -137,12 +127,7 @@ def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: Spectr
         cols = np.column_stack([np.sin(2 * math.pi * f * t), np.cos(2 * math.pi * f * t)])
         return basis.test(whitening.whiten(cols))
 
-    # The frequency refined to a small fraction of a bin within ±1 bin of the peak: a line of fixed frequency removed
-    # at the bin's frequency leaves a residual line behind (the phase drifts by π·δf·T across the record), which the
-    # loop would otherwise model a second time. Located on |Σ e_k e^{−2πif t_k}|², which away from the filter's
-    # start-up is the score statistic of the whitened columns up to an f-independent factor (whitening maps a sinusoid
-    # of frequency f to a linear combination of its sine and cosine, which leaves the statistic unchanged); the
-    # statistic itself then decides between the located frequency and the peak's.
+    # frequency refined within ±1 bin on |Σ e_k e^{−2πif t_k}|² (why: docs/diagnostics.md, "Why lines are refined …")
     resolution = 1.0 / (t.size * dt)
     upper = min(peak.frequency + resolution, 0.5 / dt - resolution)
     lower = min(max(peak.frequency - resolution, resolution), upper)  # a peak in the Nyquist bin: the last bin
@@ -165,7 +150,7 @@ def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: Spectr
 # ------------------------------------------------------------------------------------------ temperature
 def detect_temperature(e: np.ndarray, temperature: np.ndarray, whitening: WhiteningFilter, *,
                        alpha: float = ALPHA) -> Finding:
-    """Score test of a thermal bias coefficient: e against the whitened ``temperature`` [°C] at the IMU times."""
+    """Score test of a thermal bias coefficient [u/°C]: e against the whitened ``temperature`` [°C]."""
     temp = np.asarray(temperature, dtype=float)
     if temp.shape != np.asarray(e).shape or not np.all(np.isfinite(temp)):
         raise ValueError("temperature must be finite and sampled at the IMU times (same length as the data)")
@@ -203,9 +188,8 @@ def detect_ramp(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: 
 
 # ------------------------------------------------------------------------------------------------ steps
 def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np.ndarray:
-    """Score statistics T_k of a level shift at every sample k (NaN outside [min_segment, n − min_segment]), the
-    whitened constant s projected out: T_k = (c_k − c_0 a_k/‖s‖²) / √(‖s_{0..n−k−1}‖² − a_k²/‖s‖²), c = e ⋆ s,
-    a = s ⋆ s."""
+    """Score statistics T_k of a level shift at every k (NaN outside [min_segment, n − min_segment]), the whitened
+    constant s projected out: T_k = (c_k − c_0 a_k/‖s‖²)/√(‖s_{0..n−k−1}‖² − a_k²/‖s‖²), c = e ⋆ s, a = s ⋆ s."""
     e = np.nan_to_num(np.asarray(e, dtype=float), nan=0.0)
     n = e.size
     s = whitening.whiten(np.ones(n))
@@ -226,7 +210,7 @@ def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np
 
 def detect_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
                 min_segment: int | None = None) -> Finding:
-    """A bias step: max_k |T_k| of :func:`step_scan`, Bonferroni over k; size is the GLS coefficient at the best k."""
+    """A bias step: max_k |T_k| of :func:`step_scan`, Bonferroni over k; size the GLS coefficient at the best k."""
     e = np.asarray(e, dtype=float)
     n = e.size
     m = max(20, n // 200) if min_segment is None else int(min_segment)
@@ -251,8 +235,7 @@ def detect_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: 
 
 # ------------------------------------------------------------------------------------ serial correlation
 def detect_correlation(e: np.ndarray, dt: float, *, alpha: float = ALPHA, lags: int = 20) -> Finding:
-    """Serially correlated innovations → a GM; Ljung–Box over ``lags`` lags. Starts: τ ≈ dt·Σ_k ρ_k/ρ_1 (ACF summed
-    while above 2/√n), σ share √ρ_1."""
+    """Correlated innovations → GM: Ljung–Box over ``lags``; starts τ ≈ dt·Σ_k ρ_k/ρ_1 (ρ > 2/√n), σ share √ρ_1."""
     lb = ljung_box(e, lags)
     n = int(np.isfinite(e).sum())
     rho = acf(e, min(n // 4, 5000))

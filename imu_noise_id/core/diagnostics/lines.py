@@ -1,9 +1,4 @@
-"""Shape of a spectral line found in the residuals: a sinusoid (SIN) or a narrow-band oscillation (OSC); beyond
-the papers. :func:`line_shape` measures the excess power over the local floor of the periodogram around a line:
-power-weighted median f₀, interquartile range B (an OSC's half-power bandwidth), σ² = 2/n Σ excess, and the share
-within ±2 bins of the peak (*concentration*): SIN at ≥ :data:`SIN_CONCENTRATION`, else OSC. Also the pooled
-(broad-line), harmonic and innovation-hump searches.
-"""
+"""Shape of a residual line (SIN or OSC) and the broad-line, harmonic and hump searches (docs/loop.md)."""
 
 from __future__ import annotations
 
@@ -27,16 +22,9 @@ RING_Z = 3.0
 
 @dataclass(frozen=True)
 class LineShape:
-    """A line's measured shape (module docstring).
-
-    Attributes
-    ----------
-    frequency : power-weighted median frequency of the excess [Hz]
-    bandwidth : interquartile range of the excess power [Hz] (≥ two periodogram bins)
-    sigma : standard deviation of the line's process [u]
-    concentration : share of the excess within ±2 bins of the peak
-    resolution : periodogram bin width 1/(n·dt) [Hz]
-    """
+    """A line's excess over the periodogram floor: ``frequency`` (weighted median) [Hz], ``bandwidth`` (IQR, ≥ 2
+    bins) [Hz], ``sigma`` [u] (σ² = 2/n Σ excess), ``concentration`` (share within ±2 bins), ``resolution`` 1/(n·dt)
+    [Hz]."""
 
     frequency: float
     bandwidth: float
@@ -46,7 +34,7 @@ class LineShape:
 
     @property
     def kind(self) -> str:
-        """``"SIN"`` or ``"OSC"`` by the concentration rule of the module docstring."""
+        """``"SIN"`` at concentration ≥ :data:`SIN_CONCENTRATION`, else ``"OSC"``."""
         return "SIN" if self.concentration >= SIN_CONCENTRATION else "OSC"
 
     @property
@@ -60,13 +48,10 @@ class LineShape:
 
 
 def line_shape(residual: np.ndarray, dt: float, frequency: float, *, resolution: int = 1) -> LineShape:
-    """Measure the line near ``frequency`` [Hz] in ``residual`` (data units, finite) sampled at ``dt`` [s].
-
-    Floor: median periodogram beyond the largest window (±:data:`WINDOW_FRACTION` of the frequency), / ln 2. The
-    window starts at ±:data:`MIN_HALF_BINS` bins and doubles while its new ring holds excess above :data:`RING_Z` sd.
-    ``resolution`` > 1 (periodogram bins per pooled bin of the search that found it): the window starts at one pooled
-    bin and reaches at least half of ±:data:`POOLED_FLOOR_HALF_WIDTH` pooled bins, within ±50 % of the frequency.
-    """
+    """The line near ``frequency`` [Hz] in ``residual`` (finite, at ``dt`` [s]): floor the median periodogram beyond
+    ±:data:`WINDOW_FRACTION` of the frequency, / ln 2; window from ±:data:`MIN_HALF_BINS` bins, doubled while its
+    ring holds excess above :data:`RING_Z` sd. ``resolution`` > 1 (bins per pooled bin): window from one pooled bin
+    to at least half of ±:data:`POOLED_FLOOR_HALF_WIDTH` pooled bins, within ±50 % of the frequency."""
     freqs, power = periodogram(residual, dt)
     n = int(np.asarray(residual).size)
     df = 1.0 / (n * dt)
@@ -108,30 +93,28 @@ _WEIGHTS = _WEIGHTS / _WEIGHTS.sum()
 
 
 def _log_sf(x: float, r: int, v: float) -> float:
-    """ln P(X·e^{vZ} > x), X ~ Gamma(r, 1), Z ~ N(0, 1): the Gamma tail with a lognormal error of the floor."""
+    """ln P(X·e^{vZ} > x), X ~ Gamma(r, 1), Z ~ N(0, 1)."""
     terms = stats.gamma.logsf(x * np.exp(v * _NODES), r) + np.log(_WEIGHTS)
     return float(np.logaddexp.reduce(terms))
 
 
 def _floor_error(r: int) -> float:
-    """Relative sd of the running-median floor of K = 2·HW + 1 ordinates of relative sd 1/√r: ≈ √(π/2)/√(rK)."""
+    """Relative sd ≈ √(π/2)/√(rK) of the running median of K = 2·HW + 1 ordinates of relative sd 1/√r."""
     return math.sqrt(math.pi / 2.0 / (r * (2 * POOLED_FLOOR_HALF_WIDTH + 1)))
 
 
 def _pool(power: np.ndarray, freqs: np.ndarray, r: int) -> tuple[np.ndarray, np.ndarray]:
-    """(centre frequencies, means) of the periodogram over consecutive groups of r bins (a partial last one dropped)."""
     m = freqs.size // r
     return freqs[: m * r].reshape(m, r).mean(axis=1), power[: m * r].reshape(m, r).mean(axis=1)
 
 
 def _gamma_scaled(pooled: np.ndarray, floor: np.ndarray | float, r: int) -> np.ndarray:
-    """r·pooled/floor, the floor scaled to the Gamma(r)/r mean: Gamma(r, 1) under white innovations."""
     scale = stats.gamma.median(r) / r
     return r * pooled / np.maximum(np.asarray(floor) / scale, np.finfo(float).tiny)
 
 
 def _gamma_test(x: float, r: int, v: float, alpha: float, tests: int) -> tuple[float, float]:
-    """(log10 p, level-α threshold) of the max of ``tests`` Gamma(r, 1) statistics, floor error ``v``; Bonferroni."""
+    """(log10 p, level-α threshold) of the max of ``tests`` Gamma(r, 1) statistics with floor error ``v``."""
     log10_p = min(0.0, _log_sf(x, r, v) / math.log(10.0) + math.log10(tests))
     target = math.log(alpha / tests)
     threshold = float(optimize.brentq(lambda c: _log_sf(c, r, v) - target, r, 100.0 * r + 1000.0))
@@ -139,7 +122,6 @@ def _gamma_test(x: float, r: int, v: float, alpha: float, tests: int) -> tuple[f
 
 
 def _pooled(power: np.ndarray, freqs: np.ndarray, r: int) -> tuple[np.ndarray, np.ndarray]:
-    """(centre frequencies, Gamma(r)-scaled statistics r·pooled/floor) of the periodogram pooled over r bins."""
     centre, pooled = _pool(power, freqs, r)
     floor = ndimage.median_filter(pooled, size=2 * POOLED_FLOOR_HALF_WIDTH + 1, mode="reflect")
     return centre, _gamma_scaled(pooled, floor, r)
@@ -151,8 +133,8 @@ HUMP_DIP = 0.5
 
 
 def humps(x: np.ndarray, r: int) -> np.ndarray:
-    """Which pooled statistics ``x`` (r·pooled/floor, index k ↔ k pooled bins) stand on a hump: some bin in [k/2, k)
-    has an excess x − r below :data:`HUMP_DIP` of x[k] − r (never the first bin). Reasons: docs/loop.md."""
+    """Which pooled statistics ``x`` stand on a hump: an excess below :data:`HUMP_DIP` × (x[k] − r) somewhere in
+    [k/2, k)."""
     m = x.size
     out = np.zeros(m, dtype=bool)
     if m < 2:
@@ -181,11 +163,8 @@ def pooled_line_statistic(e: np.ndarray, dt: float, frequency: float, resolution
 
 
 def detect_broad_line(e: np.ndarray, dt: float, *, alpha: float, exclude: tuple[float, ...] = ()) -> Finding:
-    """A line too wide for one bin (beyond the papers): the innovations' periodogram pooled over r bins against its
-    running median; r·pooled/floor ~ Gamma(r, 1) under white innovations, the floor's lognormal error
-    (:func:`_floor_error`) integrated by Gauss–Hermite quadrature; Bonferroni over every pooled bin at every
-    resolution; humps only (:func:`humps`). ``exclude``: frequencies [Hz] of known lines (pooled bins ±1 skipped).
-    """
+    """A line too wide for one bin: the periodogram pooled over r bins vs its running median, Gamma(r, 1) with the
+    floor's lognormal error; Bonferroni, humps only."""
     freqs, power = periodogram(e, dt)
     best: tuple[float, float, float, float, int] | None = None  # (log10 p, statistic, threshold, f, r)
     usable = [r for r in POOLED_RESOLUTIONS if freqs.size // r >= 4 * POOLED_FLOOR_HALF_WIDTH]
@@ -215,9 +194,8 @@ HARMONIC_MAX = 6
 
 
 def harmonics(e: np.ndarray, dt: float, frequency: float, bandwidth: float, *, alpha: float) -> list[float]:
-    """Frequencies [Hz] of the significant harmonics k·f₀ (k = 2 … :data:`HARMONIC_MAX`, below 0.98 Nyquist) of a line:
-    the largest single-line statistic within ±max(2 bins, 2k·B) of k·f₀ above s* = −ln(1 − (1 − α)^{1/M}), M the
-    bins searched around all harmonics."""
+    """Significant harmonics k·f₀ [Hz] (k = 2 … :data:`HARMONIC_MAX`): the largest line within ±max(2 bins, 2k·B)
+    above s*."""
     freqs, power = periodogram(e, dt)
     df = freqs[1] - freqs[0]
     half_width = min(FLOOR_HALF_WIDTH, max(8, freqs.size // 8))
@@ -252,15 +230,8 @@ HUMP_SMOOTH = 5
 
 @dataclass(frozen=True)
 class InnovationHump:
-    """A broad hump of the standardised innovations' spectrum over its level (:func:`detect_innovation_hump`).
-
-    Attributes
-    ----------
-    finding : the verdict (effect ``OSC``, detector ``innovation_hump``; f₀ and B in ``params``)
-    frequency : excess-weighted centre of the hump's bands [Hz]
-    bandwidth : width of the bands whose smoothed excess is at least half the peak's [Hz]
-    band_frequency, ratio : the hump's bands' centres [Hz] and smoothed mean ordinate over the level
-    """
+    """A broad hump of the innovations' spectrum: ``finding`` (OSC), centre ``frequency`` and half-excess
+    ``bandwidth`` [Hz], its bands' ``band_frequency`` [Hz] and ``ratio``."""
 
     finding: Finding
     frequency: float
@@ -270,10 +241,8 @@ class InnovationHump:
 
 
 def detect_innovation_hump(e: np.ndarray, dt: float, *, alpha: float, bands: int = HUMP_BANDS) -> InnovationHump:
-    """A resonance wider than the broad-line search's floor window (beyond the papers): the innovations'
-    periodogram averaged over ``bands`` equal bands from 0 Hz to Nyquist against the median band; a band's mean of
-    r ordinates over it ~ Gamma(r)/r, Bonferroni over the bands, humps only (:func:`humps`).
-    """
+    """A resonance wider than the broad-line floor: band means of the periodogram against their median (Gamma(r)/r),
+    Bonferroni, humps only."""
     freqs, power = periodogram(e, dt)
     r = freqs.size // bands
     if r < 16 or bands < 8:

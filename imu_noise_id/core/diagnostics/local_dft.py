@@ -1,14 +1,9 @@
-"""The Fourier sum of a record at frequencies near one frequency, each in O(blocks) after one O(N) pass.
-
-D(f₀ + δ) = Σ_k x_k e^{−2πi(f₀+δ)k·dt}. With u_k = x_k e^{−2πi f₀ k·dt} cut into B blocks of L samples (k = jL + r)
+"""The Fourier sum D(f) = Σ_k x_k e^{−2πif k·dt} near one frequency f₀, each in O(blocks) after one O(N) pass (why:
+docs/diagnostics.md). With u_k = x_k e^{−2πi f₀ k·dt} in B blocks of L samples (k = jL + r)
 
     D(f₀ + δ) = Σ_j e^{−2πiδ jL·dt} Σ_{p=0}^{P−1} (−2πiδ·dt)^p / p! · M_p[j],    M_p[j] = Σ_r u_{jL+r} r^p,
 
-the Taylor series of e^{−2πiδ r·dt} truncated after P terms; for |δ| ≤ :attr:`LocalDft.reach` its error is below
-(2π|δ|(L − 1)·dt)^P / P! · Σ|x_k| ≤ 10⁻¹² Σ|x_k|. Used to locate a spectral line's frequency between Fourier frequencies
-(:func:`.detectors.detect_sinusoid`), where evaluating the sum over every sample at each trial frequency dominated the
-loop's diagnosis of long records.
-"""
+with error ≤ (2π|δ|(L − 1)·dt)^P / P! · Σ|x_k| ≤ 10⁻¹² Σ|x_k| for |δ| ≤ :attr:`LocalDft.reach`."""
 
 from __future__ import annotations
 
@@ -25,16 +20,8 @@ TERMS = 4
 
 @dataclass(frozen=True)
 class LocalDft:
-    """The moments M_p[j] of a record demodulated at ``frequency`` f₀ [Hz] (module docstring).
-
-    Attributes
-    ----------
-    frequency : f₀ [Hz]
-    dt : sampling period [s]
-    n : samples of the record
-    block : samples per block, L
-    moments : (TERMS, B) complex array, M_p[j]
-    """
+    """The moments M_p[j] (``moments``, (TERMS, B) complex) of a record of ``n`` samples at ``dt`` [s] demodulated at
+    ``frequency`` f₀ [Hz], ``block`` = L samples per block."""
 
     frequency: float
     dt: float
@@ -44,7 +31,7 @@ class LocalDft:
 
     @classmethod
     def of(cls, x: np.ndarray, dt: float, frequency: float) -> LocalDft:
-        """The moments of ``x`` (NaN samples count as 0) at ``frequency`` [Hz] and period ``dt`` [s]."""
+        """The moments of ``x`` (NaN as 0) at ``frequency`` [Hz] and period ``dt`` [s]."""
         x = np.nan_to_num(np.asarray(x, dtype=float))
         n = x.size
         block = max(1, math.ceil(n / BLOCKS))
@@ -58,14 +45,14 @@ class LocalDft:
 
     @property
     def reach(self) -> float:
-        """The largest |δ| [Hz] whose truncation error is ≤ 10⁻¹² Σ|x_k| (module docstring)."""
+        """The largest |δ| [Hz] whose truncation error is ≤ 10⁻¹² Σ|x_k|."""
         if self.block == 1:  # r = 0 only: the series is exact
             return math.inf
         limit = (1e-12 * math.factorial(TERMS)) ** (1.0 / TERMS)
         return limit / (2.0 * math.pi * (self.block - 1) * self.dt)
 
     def at(self, frequency: float) -> complex:
-        """D(``frequency``) (module docstring); ValueError beyond :attr:`reach` of f₀."""
+        """D(``frequency``); ValueError beyond :attr:`reach` of f₀."""
         delta = frequency - self.frequency
         if abs(delta) > self.reach:
             raise ValueError(f"{frequency} Hz is beyond the reach ({self.reach:.3g} Hz) of {self.frequency} Hz")

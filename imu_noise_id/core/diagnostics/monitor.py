@@ -1,9 +1,5 @@
-"""Streaming residual diagnostics for an online filter: windowed Ljung–Box and NIS on its innovations.
-
-The offline loop's statistics (:mod:`.residuals`) on the last ``window`` innovations of a ring buffer: feed
-``update(nu, s)`` (innovation ν_k [u], predicted variance S_k [u²]; vectors as NIS via :meth:`update_nis`), read
-``status()`` once ``ready``. ``update`` is O(1), ``status`` O(window·log window).
-"""
+"""Streaming Ljung–Box and NIS on an online filter's last ``window`` innovations (docs/loop.md): update O(1), status
+O(w·log w)."""
 
 from __future__ import annotations
 
@@ -18,9 +14,8 @@ from .residuals import ljung_box
 
 @dataclass(frozen=True)
 class MonitorStatus:
-    """Verdict on the window: ``ok`` (neither test rejects at ``alpha``), ``ljung_box_p`` (NaN if too few samples),
-    ``worst_lag``/``worst_rho`` (largest autocorrelation), ``nis_mean`` (mean ν²/S, 1 when consistent) and its
-    ``nis_interval`` (:func:`.consistency.nis_bounds`), ``n`` innovations, ``message`` for ``/diagnostics``."""
+    """The window's verdict: ``ok``, ``ljung_box_p``, ``worst_lag``, ``worst_rho``, ``nis_mean``, ``nis_interval``,
+    ``n``, ``message``."""
 
     ok: bool
     ljung_box_p: float
@@ -33,8 +28,8 @@ class MonitorStatus:
 
 
 class InnovationMonitor:
-    """Ring buffer of the last ``window`` (≥ 50) standardised innovations, tested by Ljung–Box over ``lags`` and by NIS,
-    each at level ``alpha``."""
+    """Ring buffer of the last ``window`` (≥ 50) standardised innovations; Ljung–Box over ``lags`` and NIS at
+    ``alpha``."""
 
     def __init__(self, window: int = 2000, lags: int = 10, alpha: float = 1e-3) -> None:
         if window < 50:
@@ -63,7 +58,7 @@ class InnovationMonitor:
         self._count += 1
 
     def update_nis(self, nis: float, dim: int) -> None:
-        """Add a vector innovation's NIS νᵀS⁻¹ν of dimension ``dim`` (NIS test only; whiteness needs scalars)."""
+        """Add a vector innovation's NIS νᵀS⁻¹ν of dimension ``dim`` (NIS test only)."""
         if not (nis >= 0 and math.isfinite(nis)) or dim < 1:
             raise ValueError("NIS must be finite and >= 0 and dim >= 1")
         i = self._count % self.window
@@ -79,7 +74,7 @@ class InnovationMonitor:
         return np.concatenate([a[i:], a[:i]])
 
     def status(self) -> MonitorStatus:
-        """Test the innovations in the window (needs at least ``4·lags`` of them)."""
+        """Test the window (at least ``4·lags`` innovations)."""
         n = min(self._count, self.window)
         if n < 4 * self.lags:
             raise ValueError(f"only {n} innovations buffered; need {4 * self.lags}")

@@ -1,10 +1,6 @@
-"""Residual statistics of a fitted noise model: whiteness, spectral lines and Allan-variance misfit.
-
-Standardised innovations e_t = ν_t/√S_t of a correct model are i.i.d. N(0, 1) (paper 000 appendix, paper 002
-eq. 7): :func:`ljung_box` tests their serial correlation, :func:`spectral_peaks` narrow lines. :func:`av_misfit`
-and :func:`av_misfit_z` compare the data's AV with the model's (paper 000 section 2). Arrays only; NaN = missing
-(dropped, or set to zero after centring for ACF and periodogram).
-"""
+"""Residual statistics of a fitted noise model: whiteness, spectral lines and Allan-variance misfit. Standardised
+innovations e_t = ν_t/√S_t of a correct model are i.i.d. N(0, 1) (paper 000 appendix, paper 002 eq. 7); AV misfit as
+paper 000 sec. 2. NaN = missing (dropped, or 0 after centring)."""
 
 from __future__ import annotations
 
@@ -36,7 +32,7 @@ def _finite_centred(e: np.ndarray, name: str = "innovations") -> tuple[np.ndarra
 
 
 def acf(e: np.ndarray, nlags: int) -> np.ndarray:
-    """Sample autocorrelation ρ_1..ρ_nlags (NaN = missing) by FFT: ρ_k = Σ_t ẽ_t ẽ_{t+k} / Σ_t ẽ_t², ẽ centred."""
+    """Sample autocorrelation ρ_1..ρ_nlags by FFT: ρ_k = Σ_t ẽ_t ẽ_{t+k} / Σ_t ẽ_t², ẽ centred."""
     x, _ = _finite_centred(e)
     nlags = int(nlags)
     if not 1 <= nlags < x.size:
@@ -49,8 +45,8 @@ def acf(e: np.ndarray, nlags: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class LjungBox:
-    """Ljung–Box test (Ljung & Box 1978): Q = n(n+2) Σ_{k=1}^{h} ρ_k²/(n − k) ~ χ²_h under i.i.d. residuals;
-    ``q`` (Q), ``lags`` (h), ``p_value`` (P(χ²_h ≥ q)), ``worst_lag`` and ``worst_rho`` (the largest |ρ_k|)."""
+    """Ljung–Box (Ljung & Box 1978): ``q`` = n(n+2) Σ_{k≤h} ρ_k²/(n − k) ~ χ²_h, ``lags`` h, ``p_value``,
+    ``worst_lag``, ``worst_rho``."""
 
     q: float
     lags: int
@@ -72,17 +68,8 @@ def ljung_box(e: np.ndarray, lags: int = 20) -> LjungBox:
 
 @dataclass(frozen=True)
 class SpectralPeak:
-    """Largest narrow line of a periodogram relative to its local median floor.
-
-    Attributes
-    ----------
-    frequency : [Hz], refined by a parabola through the log periodogram
-    bin : its periodogram bin
-    ratio : peak power / local median power
-    statistic : s = ratio·ln 2, corrected for the floor's error: Exp(1) per bin under white residuals
-    log10_p : log10 of 1 − (1 − e^{−s})^M over the M searched bins (Fisher's g form)
-    n_bins : M
-    """
+    """Largest narrow periodogram line over its local median: ``frequency`` [Hz], ``bin``, ``ratio``, ``statistic`` s
+    = ratio·ln 2 (floor-corrected, Exp(1)), ``log10_p`` of 1 − (1 − e^{−s})^M, ``n_bins`` M."""
 
     frequency: float
     bin: int
@@ -93,8 +80,7 @@ class SpectralPeak:
 
 
 def chi2_log10_sf(q: float, dof: int) -> float:
-    """log10 P(χ²_dof ≥ q), finite far in the tail (Γ(k/2, q/2)/Γ(k/2) ≈ (q/2)^{k/2−1} e^{−q/2}/Γ(k/2) where scipy
-    underflows)."""
+    """log10 P(χ²_dof ≥ q), finite far in the tail (asymptotic form where scipy underflows)."""
     value = float(stats.chi2.logsf(q, dof))
     if math.isfinite(value):
         return value / math.log(10.0)
@@ -103,7 +89,7 @@ def chi2_log10_sf(q: float, dof: int) -> float:
 
 
 def max_exponential_log10_p(statistic: float, m: int) -> float:
-    """log10 P(max of m i.i.d. Exp(1) ≥ statistic) = log10(1 − (1 − e^{−s})^m), stable for large s."""
+    """log10 P(max of m i.i.d. Exp(1) ≥ s) = log10(1 − (1 − e^{−s})^m)."""
     q = math.exp(-statistic) if statistic < 700 else 0.0
     if q == 0.0 or m * q < 1e-10:
         return (math.log(m) - statistic) / math.log(10.0)
@@ -111,7 +97,7 @@ def max_exponential_log10_p(statistic: float, m: int) -> float:
 
 
 def periodogram(e: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """One-sided raw periodogram I_k = |Σ e_t e^{−2πikt/n}|²/n at f_k = k/(n·dt), k = 1..⌊(n−1)/2⌋."""
+    """One-sided periodogram I_k = |Σ e_t e^{−2πikt/n}|²/n at f_k = k/(n·dt), k = 1..⌊(n−1)/2⌋."""
     x, _ = _finite_centred(e)
     n = x.size
     spec = np.abs(np.fft.rfft(x)) ** 2 / n
@@ -154,7 +140,6 @@ def _line_ratios(e: np.ndarray, dt: float, f_min: float | None,
 
 def _peak_at(k: int, freqs: np.ndarray, power: np.ndarray, ratio: np.ndarray, *, m: int,
              half_width: int) -> SpectralPeak:
-    """The line at bin index ``k``, its frequency refined by a parabola through the log periodogram."""
     stat = floor_corrected(float(ratio[k] * math.log(2.0)), half_width)
     freq = float(freqs[k])
     if 0 < k < freqs.size - 1 and power[k - 1] > 0 and power[k + 1] > 0:
@@ -168,9 +153,8 @@ def _peak_at(k: int, freqs: np.ndarray, power: np.ndarray, ratio: np.ndarray, *,
 
 def spectral_peaks(e: np.ndarray, dt: float, *, f_min: float | None = None,
                    half_width: int = FLOOR_HALF_WIDTH) -> SpectralPeak:
-    """The largest line of the periodogram of ``e`` (NaN = missing) at period ``dt`` [s] against its running median
-    over ±``half_width`` bins, from ``f_min`` [Hz] (default 4 / record length). For standardised innovations the
-    ordinate at f is the score (LM) statistic of a sinusoid missing at f."""
+    """The largest periodogram line of ``e`` at ``dt`` [s] over its ±``half_width``-bin running median, from
+    ``f_min`` [Hz] (default 4 / length)."""
     freqs, power, ratio, m, half_width = _line_ratios(e, dt, f_min, half_width)
     return _peak_at(int(np.argmax(ratio)), freqs, power, ratio, m=m, half_width=half_width)
 
@@ -180,15 +164,14 @@ LINE_SEPARATION_BINS = 3
 
 
 def max_exponential_threshold(m: int, alpha: float) -> float:
-    """The value the maximum of ``m`` i.i.d. Exp(1) exceeds with probability ``alpha``: −ln(1 − (1 − α)^{1/m})."""
+    """−ln(1 − (1 − α)^{1/m}): exceeded by the maximum of ``m`` i.i.d. Exp(1) with probability ``alpha``."""
     return float(-math.log(-math.expm1(math.log1p(-alpha) / m)))
 
 
 def spectral_lines(e: np.ndarray, dt: float, *, alpha: float, f_min: float | None = None,
                    half_width: int = FLOOR_HALF_WIDTH) -> list[SpectralPeak]:
-    """The largest line (:func:`spectral_peaks`, significant or not), then every other line above the level-``alpha``
-    bound of the largest of the M bins (:func:`max_exponential_threshold`), strongest first; bins within
-    :data:`LINE_SEPARATION_BINS` of a stronger line belong to it (beyond the papers)."""
+    """The largest line, then every other above the level-``alpha`` bound of the max of M bins, strongest first; bins
+    within :data:`LINE_SEPARATION_BINS` of a stronger line are its."""
     freqs, power, ratio, m, half_width = _line_ratios(e, dt, f_min, half_width)
     threshold = max_exponential_threshold(m, alpha)
     top = int(np.argmax(ratio))
@@ -221,7 +204,7 @@ def av_misfit(av_data: np.ndarray, av_model: np.ndarray) -> float:
 
 
 def log_av_sd(av_ci: tuple[np.ndarray, np.ndarray], level: float = CONFIDENCE_95) -> np.ndarray:
-    """sd of ln AV_hat from its (lo, hi) interval at ``level``: (ln hi − ln lo)/(2z) (χ²_ν: ≈ √(2/ν))."""
+    """sd of ln AV_hat from its (lo, hi) interval at ``level``: (ln hi − ln lo)/(2z)."""
     lo, hi = (np.asarray(a, dtype=float) for a in av_ci)
     if np.any(lo <= 0) or np.any(hi <= lo):
         raise ValueError("AV confidence intervals must satisfy 0 < lo < hi")
@@ -231,15 +214,14 @@ def log_av_sd(av_ci: tuple[np.ndarray, np.ndarray], level: float = CONFIDENCE_95
 
 def av_misfit_z(av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray,
                 level: float = CONFIDENCE_95) -> np.ndarray:
-    """Per-τ standardised misfit z_τ = ln(AV_data / AV_model) / sd(ln AV_hat), ≈ N(0, 1) if the model holds."""
+    """z_τ = ln(AV_data/AV_model)/sd(ln AV_hat), ≈ N(0, 1) if the model holds."""
     return np.log(np.asarray(av_data, float) / np.asarray(av_model, float)) / log_av_sd(av_ci, level)
 
 
 @dataclass(frozen=True)
 class ResidualErrors:
-    """The loop's error measures for one fit (docs/loop.md): ``loglik``, ``bic``, ``av_misfit`` (RMS over τ of
-    log10(AV_data/AV_model)), ``ljung_box_p``/``_q`` over ``ljung_box_lags``, ``peak_ratio`` and ``peak_frequency``
-    [Hz] of the largest periodogram line over its local median."""
+    """A fit's error measures (docs/loop.md): ``loglik``, ``bic``, ``av_misfit``, ``ljung_box_p``/``_q``/``_lags``,
+    ``peak_ratio``, ``peak_frequency`` [Hz]."""
 
     loglik: float
     bic: float

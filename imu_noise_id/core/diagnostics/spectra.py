@@ -1,5 +1,4 @@
-"""Autocorrelation and PSD of a fit's standardised innovations, for the report's residual plots (white: ρ_k within
-±1.96/√n, one-sided PSD flat at 2·dt [1/Hz])."""
+"""ACF and Welch PSD of standardised innovations (white: |ρ_k| < 1.96/√n, PSD 2·dt [1/Hz])."""
 
 from __future__ import annotations
 

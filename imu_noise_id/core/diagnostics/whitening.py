@@ -1,11 +1,7 @@
-"""Steady-state innovation (whitening) filter of a fitted noise model, for score tests of missing regressors
-(beyond the papers, which fit stochastic components only).
-
-A fitted model (paper 000 eqs. 4–5) turns the data into standardised innovations e_t, i.i.d. N(0, 1) if it holds;
-a regressor x_t through the same filter gives x̃_t, b = Σ e_t x̃_t / Σ x̃_t², T = Σ e_t x̃_t / √(Σ x̃_t²) ~ N(0, 1)
-under "x is not in the data" (GLS with state-space errors, de Jong 1991). Steady-state gain: approximate near
-missing samples (dropped from the sums). Deterministic states (RR's integrator) are left out.
-"""
+"""Steady-state innovation (whitening) filter of a fitted model (paper 000 eqs. 4–5) for score tests of missing
+regressors: e_t i.i.d. N(0, 1) if the model holds; a regressor through the same filter x̃_t, b = Σ e_t x̃_t / Σ
+x̃_t², T = Σ e_t x̃_t / √(Σ x̃_t²) ~ N(0, 1) (GLS with state-space errors, de Jong 1991). Approximate near missing
+samples (dropped); RR's states left out."""
 
 from __future__ import annotations
 
@@ -21,7 +17,6 @@ from ..noise.components import Component
 
 
 def _stochastic_blocks(components: list[Component], dt: float) -> list:
-    """The state blocks of the components that have states (RR's integrator left out)."""
     return [b for b in (c.block(dt) for c in components if c.name not in ("RR", "WN")) if b.n_states > 0]
 
 
@@ -41,15 +36,13 @@ R_FLOOR = 1e-9
 
 
 def _filter_r(q: np.ndarray, h: np.ndarray, r: float) -> float:
-    """R raised to :data:`R_FLOOR` · h Q hᵀ (the trace of Q if no state noise reaches the output in one step)."""
+    """R raised to :data:`R_FLOOR` · h Q hᵀ (trace of Q if no state noise reaches the output in one step)."""
     seen = float(h @ q @ h) or float(np.trace(q))
     return max(r, R_FLOOR * seen)
 
 
 def _steady_state_p(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
-    """Predicted-state covariance P of the DARE: doubling
-    (:func:`~imu_noise_id.core.kalman.statespace.steady_prediction_covariance`), scipy's solver as fallback;
-    ValueError if neither converges."""
+    """P of the DARE (scipy's solver as fallback); ValueError if neither converges."""
     try:
         return steady_prediction_covariance(phi, q, h, r)
     except (InputError, np.linalg.LinAlgError):
@@ -66,8 +59,7 @@ def _steady_state_p(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> 
 
 @dataclass(frozen=True)
 class WhiteningFilter:
-    """The fitted model's steady-state innovation filter: ``sos`` (second-order sections of x → x̃ = x_t − H x̂_{t|t−1},
-    for :func:`scipy.signal.sosfilt`) and ``innovation_variance`` S = H P Hᵀ + R [u²]."""
+    """Steady-state innovation filter x → x̃ = x_t − H x̂_{t|t−1} as ``sos``, ``innovation_variance`` S [u²]."""
 
     sos: np.ndarray
     innovation_variance: float
@@ -87,9 +79,7 @@ class WhiteningFilter:
             raise ValueError("model has a non-positive innovation variance")
         k = phi @ p @ h / s  # predictor gain
         a = phi - np.outer(k, h)
-        # x → x̃ is 1 − h (zI − A)⁻¹ k = det(zI − Φ) / det(zI − A) (matrix determinant lemma, A + k h = Φ): its zeros
-        # are the eigenvalues of Φ, taken block by block (exact for a GM, RW or flicker ladder, where a generic
-        # invariant-zero computation loses the clustered zeros near 1 and the filter blows up), gain 1.
+        # x → x̃ = det(zI − Φ) / det(zI − A), zeros block by block (docs/diagnostics.md, "Why the whitening filter …")
         zeros = np.concatenate([np.linalg.eigvals(b.phi) for b in _stochastic_blocks(list(components), dt)])
         return cls(sos=signal.zpk2sos(zeros, np.linalg.eigvals(a), 1.0), innovation_variance=s)
 
@@ -101,8 +91,7 @@ class WhiteningFilter:
 
 @dataclass(frozen=True)
 class ScoreTest:
-    """Score (LM) test of adding k regressor columns: ``statistic`` e'X̃(X̃'X̃)⁻¹X̃'e ~ χ²_k under H0, ``dof`` k,
-    ``log10_p``, ``coef`` and ``se`` (GLS one-step coefficients [u per regressor unit] and standard errors)."""
+    """Score test of k columns: ``statistic`` e'X̃(X̃'X̃)⁻¹X̃'e ~ χ²_k, ``dof``, ``log10_p``, GLS ``coef``, ``se``."""
 
     statistic: float
     dof: int
@@ -112,7 +101,6 @@ class ScoreTest:
 
 
 def _kept(ok: np.ndarray) -> slice | np.ndarray:
-    """The finite samples as a slice when they are one run, else the mask."""
     idx = np.flatnonzero(ok)
     if idx.size and idx[-1] - idx[0] + 1 == idx.size:
         return slice(int(idx[0]), int(idx[-1]) + 1)
@@ -121,14 +109,8 @@ def _kept(ok: np.ndarray) -> slice | np.ndarray:
 
 @dataclass(frozen=True)
 class ScoreBasis:
-    """Standardised innovations and whitened nuisance columns, prepared once for many score tests against them.
-
-    Attributes
-    ----------
-    e : the finite innovations
-    kept : which samples they are (slice or mask)
-    z : the whitened nuisance columns at those samples (n, j), or None
-    """
+    """Finite innovations ``e`` (at ``kept``) and whitened nuisance columns ``z`` (n, j) or None, for many score
+    tests."""
 
     e: np.ndarray
     kept: slice | np.ndarray
@@ -142,8 +124,7 @@ class ScoreBasis:
         return cls(e[kept], kept, z)
 
     def test(self, x_white: np.ndarray) -> ScoreTest:
-        """The score test of the whitened regressor columns ``x_white`` (N, k), less their projection on the nuisance
-        (X̃'X̃ = X'X − X'z z'X / z'z, X̃'e = X'e − X'z z'e / z'z)."""
+        """Score test of whitened columns ``x_white`` (N, k) less their projection on the nuisance."""
         from .residuals import chi2_log10_sf
 
         x = np.asarray(x_white, dtype=float).reshape(x_white.shape[0], -1)[self.kept]
@@ -168,6 +149,5 @@ class ScoreBasis:
 
 
 def score_test(e: np.ndarray, x_white: np.ndarray, nuisance_white: np.ndarray | None = None) -> ScoreTest:
-    """Score test of whitened regressors ``x_white`` against standardised innovations ``e`` (NaN = missing), with the
-    whitened ``nuisance_white`` columns (e.g. the constant) projected out first (:class:`ScoreBasis`)."""
+    """Score test of whitened ``x_white`` against innovations ``e`` (NaN: missing), ``nuisance_white`` projected out."""
     return ScoreBasis.of(e, nuisance_white).test(x_white)

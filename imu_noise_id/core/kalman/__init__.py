@@ -1,6 +1,4 @@
-"""Kalman filtering and smoothing for :class:`~imu_noise_id.core.kalman.statespace.StateSpace` models: the exact
-time-varying engine (:mod:`.exact`, paper 000 appendix; any Σ, missing samples) and the steady-state one
-(:mod:`.steady`; Σ = P̄, no missing samples), picked by ``engine='auto'``."""
+"""Kalman filter and smoother of :class:`~.statespace.StateSpace` models: exact or steady-state (``engine``)."""
 
 from __future__ import annotations
 
@@ -41,8 +39,7 @@ def loglik(
     model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, profile_mean: bool = True,
     engine: str = "auto",
 ) -> ProfileResult:
-    """Exact log-likelihood (prediction-error decomposition) of y under ``model``; with ``profile_mean`` the free mean
-    parameters (b, u, μ) at their closed-form GLS estimate. NaN samples are missing."""
+    """Exact log-likelihood of y (NaN: missing); ``profile_mean``: free b, u, μ at their GLS estimate."""
     y, z = check_data(y, z, model.n_regressors)
     cols = build_columns(model, y, z, profile_mean)
     inn = _engine(model, y, engine).innovations(model, cols)

@@ -1,6 +1,4 @@
-"""Shared pieces of the Kalman engines: inputs ("columns"), results, and the GLS profile of the mean parameters.
-Column 0 is the data; the others are the filter's responses r_c to each free mean parameter (b, u, μ), so
-e(β) = e₀ + Σ_c β_c·r_c (beyond paper 000; docs/em.md, "Why the Kalman engines are built as they are")."""
+"""Kalman engines' inputs, results and GLS profile: column 0 the data, the others responses to b, u, μ (docs/em.md)."""
 
 from __future__ import annotations
 
@@ -17,14 +15,9 @@ LOG_2PI = math.log(2.0 * math.pi)
 
 @dataclass
 class Columns:
-    """Inputs of a multi-column filter run.
-
-    Attributes
-    ----------
-    y, g, m0 : (m, N) measurement input, (p, m) state input, (p, m) initial mean per column (NaN in y[0]: missing)
-    names : ``'data'``, then ``'b:<regressor>'``, ``'u:<state>'``, ``'mu:<state>'``
-    omega : (m,) ω [rad/sample] of declared sinusoidal regressor columns, NaN for the others (:mod:`.harmonic`)
-    """
+    """Inputs of a multi-column run: ``y`` (m, N) measurement input (NaN in y[0]: missing), ``g``, ``m0`` (p, m)
+    state input and initial mean, ``names`` (``'data'``, ``'b:<regressor>'``, ``'u:<state>'``, ``'mu:<state>'``),
+    ``omega`` (m,) ω [rad/sample] of sinusoidal columns (NaN otherwise)."""
 
     y: np.ndarray
     g: np.ndarray
@@ -45,14 +38,8 @@ class InnovationResult:
 
 @dataclass
 class SmootherStats:
-    """What the M-step needs from the E-step (paper 000 §3.3 and appendix), without per-time covariances.
-
-    Attributes
-    ----------
-    xs : (p, N) smoothed means x_t^N; sum_p : Σ_{t=1}^{N} P_t^N; p_first, p_last : P_1^N, P_N^N
-    sum_lag : Σ_{t=2}^{N} P_{t,t−1}^N; sum_p_obs : Σ over observed t of P_t^N; observed : (N,) bool
-    loglik : exact log-likelihood at the model's current parameters
-    """
+    """M-step inputs (paper 000 §3.3, appendix): ``xs`` (p, N) x_t^N, ``sum_p`` Σ P_t^N, ``p_first``, ``p_last``,
+    ``sum_lag`` Σ P_{t,t−1}^N, ``sum_p_obs``, ``loglik``, ``observed``."""
 
     xs: np.ndarray
     sum_p: np.ndarray
@@ -65,7 +52,7 @@ class SmootherStats:
 
 
 def check_data(y: np.ndarray, z: np.ndarray | None, n_regressors: int) -> tuple[np.ndarray, np.ndarray]:
-    """Validated float arrays (y (N,), Z (N, k)); NaN in y means missing, inf anywhere is an error."""
+    """Validated y (N,) (NaN: missing) and Z (N, k); InputError on inf or a bad shape."""
     y = np.asarray(y, dtype=float).ravel()
     if np.any(np.isinf(y)):
         raise InputError("the signal contains infinite values; remove them or mark them as NaN (missing)")
@@ -128,8 +115,7 @@ class ProfileResult:
 
 
 def profile(inn: InnovationResult, names: list[str], keep_innovations: bool = True) -> ProfileResult:
-    """GLS of the innovations on the regressor responses and the exact Gaussian log-likelihood at the optimum:
-    β̂ minimises Σ_t e_t(β)²/F_t, e(β) = e₀ + Σ_c β_c r_c."""
+    """GLS β̂ minimising Σ_t e_t(β)²/F_t, e(β) = e₀ + Σ_c β_c r_c, and the exact Gaussian log-likelihood there."""
     obs = inn.observed
     all_obs = bool(np.all(obs))
     E = inn.e if all_obs else inn.e[:, obs]

@@ -1,5 +1,4 @@
-"""Exact (time-varying) Kalman filter and RTS smoother with the lag-one covariance (paper 000, appendix): any Σ,
-missing samples (NaN → prediction only); per-time covariances stored. The yardstick for :mod:`.steady`."""
+"""Exact Kalman filter and RTS smoother with lag-one covariance (paper 000 appendix): any Σ, NaN missing."""
 
 from __future__ import annotations
 
@@ -10,7 +9,6 @@ from .statespace import StateSpace
 
 
 def _forward(model: StateSpace, cols: Columns):
-    """Forward filter on all columns; returns per-time predicted/filtered means and covariances."""
     phi, q, h, r = model.phi, model.q, model.h, float(model.r)
     m, n = cols.y.shape
     ycols = cols.y.T
@@ -48,9 +46,7 @@ def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
 
 
 def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
-    """E-step statistics of the data column (column 0): RTS smoother and lag-one covariance (paper 000 appendix).
-
-    Backward pass, t = N, …, 2 (1-based)::
+    """E-step statistics of the data column: RTS smoother and lag-one covariance (paper 000 appendix), t = N … 2::
 
         J_{t−1} = P_{t−1}^{t−1} Φᵀ (P_t^{t−1})⁻¹
         x_{t−1}^N = x_{t−1}^{t−1} + J_{t−1}(x_t^N − x_t^{t−1})

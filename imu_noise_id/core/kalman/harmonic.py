@@ -1,12 +1,10 @@
-"""Regressor columns that are pure sinusoids: their steady-state filter response in closed form (beyond the papers;
-docs/em.md, "SIN terms"). For x_{t+1} = A x_t + g·y_t (x_0 = 0, A = Φ(I − K H), g = ΦK), y_t = Re(ζ_0 e^{jωt}),
-(e^{jω} I − A) v = g:
+"""Pure-sinusoid regressor columns: their steady-state filter response in closed form (docs/em.md, "SIN terms"). For
+x_{t+1} = A x_t + g·y_t (x_0 = 0, A = Φ(I − K H), g = ΦK), y_t = Re(ζ_0 e^{jωt}), (e^{jω} I − A) v = g:
 
     H x_t = Re(Hv)·y_t − Im(Hv)·ŷ_t − H A^t Re(v ζ_0),        ŷ_t = (cos ω·y_t − y_{t+1}) / sin ω,
 
-the free response (last term) while ρ(A)^t ≥ :data:`FREE_RESPONSE_FLOOR`; only columns declared in
-:attr:`~.statespace.StateSpace.sinusoid_omega` and passing :func:`obeys`.
-"""
+the free response (last term) while ρ(A)^t ≥ :data:`FREE_RESPONSE_FLOOR`; for columns declared in
+:attr:`~.statespace.StateSpace.sinusoid_omega` that pass :func:`obeys`."""
 
 from __future__ import annotations
 
@@ -25,8 +23,7 @@ FREE_RESPONSE_FLOOR = 1e-22
 
 
 def sinusoid_omega(column: np.ndarray) -> float:
-    """ω ∈ (0, π) [rad/sample] when ``column`` is a·cos ωt + b·sin ωt at every sample (to :data:`RECURRENCE_TOL`), else
-    NaN; cos ω from a least-squares fit of the recurrence via 1 − cos ω (second differences)."""
+    """ω ∈ (0, π) [rad/sample] if ``column`` is a·cos ωt + b·sin ωt to :data:`RECURRENCE_TOL`, else NaN."""
     z = np.asarray(column, dtype=float)
     if z.ndim != 1 or z.size < 8 or not np.all(np.isfinite(z)):
         return math.nan
@@ -45,7 +42,7 @@ def sinusoid_omega(column: np.ndarray) -> float:
 
 
 def obeys(column: np.ndarray, omega: float) -> bool:
-    """Whether ``column`` obeys ω's recurrence around its second, middle and last-but-one samples (a spot check)."""
+    """Whether ``column`` obeys ω's recurrence at its second, middle and last-but-one samples."""
     n = column.size
     if n < 8 or math.sin(omega) <= MIN_SIN:
         return False
@@ -66,7 +63,7 @@ def quadrature(y: np.ndarray, omega: float) -> np.ndarray:
 
 
 def usable(poles: np.ndarray, omega: float) -> bool:
-    """Whether no pole of the filter (the eigenvalues of A) lies within :data:`MIN_POLE_DISTANCE` of e^{jω}."""
+    """No filter pole (eigenvalue of A) within :data:`MIN_POLE_DISTANCE` of e^{jω}."""
     return bool(np.all(np.abs(np.exp(1j * omega) - poles) > MIN_POLE_DISTANCE))
 
 
@@ -82,8 +79,8 @@ def free_response_length(poles: np.ndarray, n: int) -> int:
 
 def steady_parts(a: np.ndarray, g: np.ndarray, h: np.ndarray, y: np.ndarray, omega: np.ndarray, *,
                  rows: np.ndarray, out: np.ndarray) -> np.ndarray:
-    """Write Re(Hv)·y − Im(Hv)·ŷ of each sinusoidal column ``y[r]`` (r in ``rows``, ω ``omega[r]``) into ``out[r]``;
-    return the free responses' initial states Re(v ζ_0) (p, len(rows)). A (p, p), g = ΦK (p,), H (p,)."""
+    """Re(Hv)·y − Im(Hv)·ŷ of the sinusoidal columns ``y[rows]`` into ``out[rows]``; returns Re(v ζ_0) (p,
+    len(rows))."""
     p = a.shape[0]
     start = np.zeros((p, rows.size))
     for i, r in enumerate(rows):

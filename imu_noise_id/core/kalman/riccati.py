@@ -1,5 +1,4 @@
-"""The steady-state prediction covariance P̄ of a Kalman filter (discrete algebraic Riccati equation, DARE), for
-Σ = P̄ (``sigma_mode == 'steady'``) and the diagnostics' whitening filter."""
+"""Steady-state prediction covariance P̄ (DARE) for Σ = P̄ and the whitening filter; why: docs/em.md."""
 
 from __future__ import annotations
 
@@ -15,8 +14,7 @@ PSD_TOLERANCE = 1e-8
 
 
 def _covariance(P: np.ndarray) -> np.ndarray:
-    """``P`` when it is a covariance to rounding (symmetric, eigenvalues ≥ −:data:`PSD_TOLERANCE` × the largest), else
-    InputError (docs/em.md, "Why the Riccati solvers guard as they do")."""
+    """``P`` if a covariance to rounding (eigenvalues ≥ −:data:`PSD_TOLERANCE` × the largest), else InputError."""
     w = np.linalg.eigvalsh(P)
     if not (np.all(np.isfinite(w)) and w[0] >= -PSD_TOLERANCE * max(abs(w[-1]), abs(w[0]))):
         raise InputError("the steady-state prediction covariance is not positive semi-definite in double precision "
@@ -25,10 +23,8 @@ def _covariance(P: np.ndarray) -> np.ndarray:
 
 
 def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess: np.ndarray) -> np.ndarray | None:
-    """P̄ by Newton's method on the DARE (Hewer 1971) from ``guess``; None unless it converges in a few steps.
-
-    With L = Φ P hᵀ / (h P hᵀ + r), the next P solves P = A P Aᵀ + Q + r L Lᵀ, A = Φ − L h (Kronecker form).
-    """
+    """P̄ by Newton's method from ``guess`` (Hewer 1971): P = A P Aᵀ + Q + r L Lᵀ, A = Φ − L h, L = Φ P hᵀ/(h P hᵀ +
+    r); None unless it converges in a few steps."""
     p = phi.shape[0]
     if guess.shape != (p, p) or not np.all(np.isfinite(guess)):
         return None
@@ -44,8 +40,7 @@ def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess:
         P_new = 0.5 * (P_new + P_new.T)
         if not np.all(np.isfinite(P_new)):
             return None
-        # Quadratic convergence: a step of relative size ≤ 1e-10 leaves an error ~1e-20, i.e. at the rounding
-        # floor of the Kronecker solve (~1e-13 with poles near 1), where the doubling's 1e-14 test cannot be met.
+        # quadratic convergence: a 1e-10 step leaves ~1e-20, below the Kronecker solve's rounding floor
         if np.max(np.abs(P_new - P)) <= 1e-10 * np.max(np.abs(P_new)):
             return P_new
         P = P_new
@@ -55,14 +50,8 @@ def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess:
 def steady_prediction_covariance(
     phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, *, guess: np.ndarray | None = None
 ) -> np.ndarray:
-    """Steady-state prediction covariance P̄: P = Φ P (I + G P)⁻¹ Φᵀ + Q, G = Hᵀ R⁻¹ H (structure-preserving doubling;
-    Newton first from ``guess``; generalised Schur where I + G X is singular; docs/em.md, "Why the Riccati solvers …").
-
-    Raises
-    ------
-    InputError
-        If R ≤ 0, the iteration does not converge (a non-detectable model) or the result is not a covariance.
-    """
+    """P̄: P = Φ P (I + G P)⁻¹ Φᵀ + Q, G = Hᵀ R⁻¹ H (Newton from ``guess``, doubling, generalised Schur); InputError
+    if R ≤ 0, undetectable, or no covariance."""
     p = phi.shape[0]
     if p == 0:
         return np.zeros((0, 0))
@@ -79,7 +68,7 @@ def steady_prediction_covariance(
 
 
 def _doubling_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
-    """P̄ by the structure-preserving doubling algorithm; LinAlgError when I + G X is singular in double precision."""
+    """P̄ by structure-preserving doubling; LinAlgError when I + G X is singular in double precision."""
     p = phi.shape[0]
     eye = np.eye(p)
     A = phi.T.copy()
@@ -114,8 +103,7 @@ STEIN_DOUBLINGS = 64
 
 
 def _stein_sum(A: np.ndarray, W: np.ndarray) -> np.ndarray:
-    """M = Σ_{j≥0} Aʲᵀ W Aʲ (M = Aᵀ M A + W, A stable) by doubling, M ← M + A_kᵀ M A_k, A_k ← A_k², until the increment
-    is below 1e-16 of M (at most :data:`STEIN_DOUBLINGS`); no linear solve (stays exact for poles near 1)."""
+    """M = Σ_{j≥0} Aʲᵀ W Aʲ (M = Aᵀ M A + W, A stable) by doubling, to 1e-16 of M, no linear solve."""
     M = 0.5 * (W + W.T)
     Ak = A
     for _ in range(STEIN_DOUBLINGS):
@@ -129,13 +117,12 @@ def _stein_sum(A: np.ndarray, W: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class SteadyCovarianceSensitivity:
-    """First-order change of tr(W P̄) with the model matrices: tr(W dP̄) = ⟨G_Φ, dΦ⟩ + ⟨G_Q, dQ⟩ + g_h·dh + g_r·dr,
-    with the adjoint M = Aᵀ M A + W (:func:`_stein_sum`; Giles 2008, Anderson & Moore 1979 §4.4; derivation:
-    docs/em.md), A = Φ(I − K h), P_u = P̄ − S K Kᵀ, N = Φᵀ M Φ::
+    """First-order change of tr(W P̄): ⟨G_Φ, dΦ⟩ + ⟨G_Q, dQ⟩ + g_h·dh + g_r·dr, with the adjoint M = Aᵀ M A + W (Giles
+    2008; Anderson & Moore 1979 §4.4; derivation: docs/em.md), A = Φ(I − K h), P_u = P̄ − S K Kᵀ, N = Φᵀ M Φ::
 
         G_Φ = 2 M Φ P_u,   G_Q = M,   g_r = Kᵀ N K,   g_h = −2 P̄ (I − K h)ᵀ N K.
 
-    For the initial-state term of the log-likelihood's gradient (:class:`~..estimation.em.em.MatrixScore`).
+    For the initial-state term of the gradient (:class:`~..estimation.em.em.MatrixScore`).
     """
 
     g_phi: np.ndarray
@@ -146,7 +133,7 @@ class SteadyCovarianceSensitivity:
     @classmethod
     def of(cls, phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, *, P: np.ndarray,
            W: np.ndarray) -> SteadyCovarianceSensitivity:
-        """The sensitivity of tr(W P̄) at P̄ = ``P`` (the DARE's solution for Φ, Q, h, r; W symmetric)."""
+        """The sensitivity at P̄ = ``P`` (the DARE's solution for Φ, Q, h, r; W symmetric)."""
         s = float(h @ P @ h) + r
         K = P @ h / s
         P_u = P - s * np.outer(K, K)

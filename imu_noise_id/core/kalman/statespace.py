@@ -1,12 +1,10 @@
-"""Linear-Gaussian state-space model of one sensor axis from error components, paper 000 (Stebler et al. 2011)
-eqs. (4)–(5)::
+"""Linear-Gaussian state-space model of one sensor axis from error components, paper 000 (Stebler et al. 2011) eqs.
+(4)–(5)::
 
     x_{t+1} = Φ x_t + w_t + u,          w_t ~ N(0, Q)
     y_t     = H x_t + bᵀ z_t + v_t,     v_t ~ N(0, R),      x_1 ~ N(μ, Σ)
 
-θ-matrices ``vec(M) = f + D·m`` (eqs. 7–9). Beyond the paper: regressors z_t (bias, ramp ``t·dt``, sinusoids,
-temperature, steps) with b by GLS; ``sigma_mode="steady"`` (default) Σ = P̄ (:mod:`.steady`), ``"fixed"`` (§3.3).
-"""
+θ-matrices ``vec(M) = f + D·m`` (eqs. 7–9); beyond the paper, regressors z_t (b by GLS) and Σ = P̄ (:mod:`.steady`)."""
 
 from __future__ import annotations
 
@@ -25,9 +23,7 @@ MATRIX_NAMES: tuple[str, ...] = ("u", "mu", "phi", "h", "q", "r", "b")
 
 @dataclass(frozen=True)
 class BlockInfo:
-    """Where a component lives in the assembled model: ``name`` (``WN``, ``QN``, ``RW``, ``GM``, ``RR``, …), its
-    ``states``, the index of its ``regressor`` in b (RR in measurement mode) and the ``input_state`` its u = ω·dt
-    enters (RR in state mode), else None."""
+    """Where a component lives: ``name``, ``states``, ``regressor`` (index in b) or ``input_state`` (RR's u)."""
 
     name: str
     states: tuple[int, ...] = ()
@@ -41,12 +37,10 @@ class StateSpace:
 
     Attributes
     ----------
-    phi, q, sigma : (p, p) transition, process-noise covariance, Σ (used when ``sigma_mode='fixed'``)
-    h, u, mu : (p,) measurement row H, state input u, initial mean μ; r : measurement-noise variance per sample
-    b : (k,) coefficients of the regressors z_t (``regressors``: ``bias``, ``ramp``, then the caller's)
-    *_free : bool masks of the same shapes (free = estimated); dt : sampling period [s]; blocks : :class:`BlockInfo`
-    sigma_mode : ``'steady'`` (Σ = P̄ of θ) or ``'fixed'``; sinusoid_omega : empty, or ω [rad/sample] per regressor
-        when a pure sinusoid in every record (NaN otherwise; :func:`.harmonic.sinusoid_omega`)
+    phi, q, sigma : (p, p) Φ, Q, Σ (used when ``sigma_mode='fixed'``); h, u, mu : (p,) H, u, μ; r : R per sample
+    b : (k,) coefficients of the regressors z_t (``regressors``); *_free : bool masks (True: estimated); dt : period [s]
+    blocks : :class:`BlockInfo`; sigma_mode : ``'steady'`` (Σ = P̄) or ``'fixed'``; sinusoid_omega : ω [rad/sample] per
+        regressor (NaN: not a sinusoid), or empty
     """
 
     phi: np.ndarray
@@ -80,7 +74,7 @@ class StateSpace:
         return int(self.b.shape[0])
 
     def copy(self, **changes) -> StateSpace:
-        """A deep copy with some attributes replaced (P̄ carried only as the start of the copy's Riccati solve)."""
+        """A deep copy with some attributes replaced (P̄ kept only as the start of its Riccati solve)."""
         fields = {
             k: (np.array(v, copy=True) if isinstance(v, np.ndarray) else v)
             for k, v in self.__dict__.items() if k != "_steady_cache"
@@ -129,7 +123,7 @@ class StateSpace:
 
     # -- initial-state covariance -------------------------------------------------------------------------
     def steady_prediction_covariance(self) -> np.ndarray:
-        """P̄: fixed point of the prediction Riccati recursion P = Φ(P − PHᵀF⁻¹HP)Φᵀ + Q, F = HPHᵀ + R."""
+        """P̄, the fixed point of P = Φ(P − PHᵀF⁻¹HP)Φᵀ + Q, F = HPHᵀ + R (cached)."""
         key = (self.phi.tobytes(), self.q.tobytes(), self.h.tobytes(), float(self.r))
         cached = self._steady_cache.get("value")
         if cached is None or cached[0] != key:
@@ -140,7 +134,7 @@ class StateSpace:
         return self._steady_cache["value"][1]
 
     def initial_covariance(self) -> np.ndarray:
-        """Σ = cov(x_1) before y_1 is seen: P̄ in ``'steady'`` mode, the stored Σ in ``'fixed'`` mode."""
+        """Σ = cov(x_1): P̄ in ``'steady'`` mode, the stored Σ in ``'fixed'`` mode."""
         return self.steady_prediction_covariance() if self.sigma_mode == "steady" else self.sigma
 
     def check(self) -> None:
@@ -158,7 +152,7 @@ class StateSpace:
 
 
 def _fixed_initial_covariance(blk: StateBlock, r: float) -> np.ndarray:
-    """Σ of a block in ``'fixed'`` mode: stationary covariance when stable (GM, QN, LPF, OSC), else 1e-12·R (RW)."""
+    """Σ of a block in ``'fixed'`` mode: its stationary covariance when stable, else 1e-12·R (RW)."""
     if np.max(np.abs(np.linalg.eigvals(blk.phi))) < 1.0:
         n = blk.n_states
         p = np.linalg.solve(np.eye(n * n) - np.kron(blk.phi, blk.phi), blk.q.ravel()).reshape(n, n)
@@ -167,8 +161,7 @@ def _fixed_initial_covariance(blk: StateBlock, r: float) -> np.ndarray:
 
 
 def validate_structure(names: list[str]) -> None:
-    """Raise InputError unless the structure is identifiable: exactly one WN; at most one QN, RW, RR, LPF, DLPF, MA,
-    BI."""
+    """InputError unless the structure is identifiable: one WN; at most one QN, RW, RR, LPF, DLPF, MA, BI."""
     if names.count("WN") != 1:
         raise InputError(f"model {'+'.join(names) or '(empty)'} needs exactly one WN component (white noise)")
     for single in ("QN", "RW", "RR", "LPF", "DLPF", "MA", "BI"):
@@ -178,7 +171,7 @@ def validate_structure(names: list[str]) -> None:
 
 @functools.lru_cache(maxsize=256)
 def component_block(component: Component, dt: float) -> StateBlock:
-    """``component.block(dt)``, cached (components are frozen and equal by value); the arrays are shared, read-only."""
+    """``component.block(dt)``, cached (components are frozen); the arrays are shared and read-only."""
     block = component.block(dt)
     for value in vars(block).values():
         if isinstance(value, np.ndarray):
@@ -201,23 +194,15 @@ def from_components(
     sigma_mode: str = "steady",
     sinusoid_omega: tuple[float, ...] = (),
 ) -> StateSpace:
-    """Assemble Φ, Q, H, R, u, μ, Σ, b and their free masks from components (paper 000 eqs. 4–9).
+    """Φ, Q, H, R, u, μ, Σ, b and their free masks from components (paper 000 eqs. 4–9).
 
     Parameters
     ----------
-    components : at least a WN; at most one WN, QN, RW, RR, LPF, MA, BI
-    dt : sampling period [s]
-    intercept : add the constant bias as a regressor column of ones (coefficient ``bias`` [u])
-    ramp : RR as ``'measurement'`` (regressor ``t·dt``, ω [u/s]) or ``'state'`` (paper 000 §4: u = ω·dt into the RW
-        state, or the first GM's as in §4.2)
-    exog_names : names of the caller's regressor columns (after ``bias`` and ``ramp``)
-    sigma_mode : ``'steady'`` or ``'fixed'`` (stationary Σ for GM, QN, 1e-12·R for RW)
-    sinusoid_omega : empty, or ω [rad/sample] (NaN: not a sinusoid) of every regressor column
+    components : one WN; at most one QN, RW, RR, LPF, DLPF, MA, BI; dt : sampling period [s]; intercept : a bias column
+    ramp : RR as ``'measurement'`` (regressor ``t·dt``) or ``'state'`` (u = ω·dt into the RW or first GM state, §4.2)
+    exog_names : further regressor columns; sigma_mode : ``'steady'`` or ``'fixed'``; sinusoid_omega : see StateSpace
 
-    Raises
-    ------
-    InputError
-        On a structure the estimator cannot identify or an unknown ``ramp``.
+    Raises InputError on an unidentifiable structure or an unknown ``ramp`` or ``sigma_mode``.
     """
     validate_structure([c.name for c in components])
     if ramp not in ("measurement", "state"):
@@ -282,7 +267,7 @@ def from_components(
 
 
 def with_components(model: StateSpace, components: list[Component]) -> StateSpace:
-    """A copy of ``model`` whose Φ, Q, R (and RR slope) take the values of ``components`` (same structure and order)."""
+    """A copy of ``model`` with Φ, Q, R (and RR's slope) from ``components`` (same structure and order)."""
     if [c.name for c in components] != [blk.name for blk in model.blocks]:
         raise InputError("components do not match the model's structure")
     out = model.copy()
@@ -303,7 +288,6 @@ def with_components(model: StateSpace, components: list[Component]) -> StateSpac
 
 
 def _ramp(model: StateSpace, blk: BlockInfo) -> RR:
-    """The RR component of block ``blk`` (its slope [u/s] as the model holds it: a regressor's b or a state's u)."""
     slope = model.b[blk.regressor] if blk.regressor is not None else model.u[blk.input_state] / model.dt
     return RR(float(slope))
 

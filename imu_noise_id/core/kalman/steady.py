@@ -1,13 +1,11 @@
 """Fast Kalman engine for time-invariant models in steady state (Σ = P̄, paper 000 appendix at its fixed point; no
-missing samples): constant K, F, J, so filter and smoother are IIR filters (``scipy.signal.lfilter``) in the modal
-or real Schur basis of A (or J) (:func:`decoupled_basis`; reasons: docs/em.md, "Why the Kalman engines …")
+missing samples): constant K, F, J make filter and smoother IIR filters in the modal or real Schur basis
+(:func:`decoupled_basis`; why: docs/em.md, "Why the Kalman engines …")
 
     predicted state  x_{t+1} = A x_t + ΦK y_t + u,        A = Φ(I − K H)          (forward, causal)
     smoothed state   x_{t−1}^N = J x_t^N + (x_{t−1}^{t−1} − J x_t^{t−1})          (backward, anti-causal)
 
-P_{t−1}^N = J P_t^N Jᵀ + (P_f − J P̄ Jᵀ), summed by :func:`affine_power_sum`; P_{t,t−1}^N = P_t^N Jᵀ (de Jong
-1989). Declared sinusoidal regressor columns in closed form (:mod:`.harmonic`).
-"""
+P_{t−1}^N = J P_t^N Jᵀ + (P_f − J P̄ Jᵀ) (:func:`affine_power_sum`); P_{t,t−1}^N = P_t^N Jᵀ (de Jong 1989)."""
 
 from __future__ import annotations
 
@@ -27,7 +25,7 @@ from .statespace import StateSpace
 
 @dataclass(frozen=True)
 class SteadyGains:
-    """Constant gains of the steady-state filter and smoother."""
+    """Constant gains: ``p_pred`` P̄, ``p_filt`` P_t^t, ``k`` K, ``f`` F, ``a`` Φ(I − K H), ``j`` P_f Φᵀ P̄⁻¹."""
 
     p_pred: np.ndarray  # P̄ = P_t^{t−1}
     p_filt: np.ndarray  # P_t^t
@@ -54,7 +52,6 @@ def gains(model: StateSpace) -> SteadyGains:
 
 
 def _blocks(T: np.ndarray) -> list[slice]:
-    """The diagonal blocks of a real quasi-triangular Schur factor: 1×1 (real eigenvalue) or 2×2 (a complex pair)."""
     p = T.shape[0]
     out, i = [], 0
     while i < p:
@@ -65,13 +62,11 @@ def _blocks(T: np.ndarray) -> list[slice]:
 
 
 def _strictly_proper(num: tuple[float, ...], den: list[float], d: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """Output t (t = 0 … N−1) of the strictly proper filter num/den (num[0] = 0) on d' = [w0, d_0, …, d_{N−2}] along the
-    last axis; w0 enters as the initial delay state (w0·num[1], w0·num[2]), not as a prepended copy."""
+    """Strictly proper filter num/den (num[0] = 0) along the last axis of d, w0 as the initial delay state."""
     return lfilter(num, den, d, axis=-1, zi=np.multiply.outer(w0, num[1:]))[0]
 
 
 def _accumulate(terms: Iterable[np.ndarray]) -> np.ndarray:
-    """Σ of the arrays ``terms`` in their order, in place into the first one (no array per partial sum)."""
     it = iter(terms)
     out = next(it)
     for term in it:
@@ -80,15 +75,13 @@ def _accumulate(terms: Iterable[np.ndarray]) -> np.ndarray:
 
 
 def _characteristic(B: np.ndarray) -> list[float]:
-    """det(zI − B) of a 1×1 or 2×2 block as the coefficients [1, a_1(, a_2)] of the filters' common denominator."""
     if B.shape[0] == 1:
         return [1.0, -B[0, 0]]
     return [1.0, -(B[0, 0] + B[1, 1]), B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]]
 
 
 def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) -> None:
-    """x_0 = w0, x_{t+1} = B x_t + d_t for one 1×1 or 2×2 block B into ``out``; d, out (s, m, N), w0 (s, m). Numerators
-    the rows of adj(zI − B), denominator det(zI − B) (:func:`_strictly_proper`)."""
+    """x_0 = w0, x_{t+1} = B x_t + d_t for one 1×1 or 2×2 block into ``out``; d, out (s, m, N), w0 (s, m)."""
     den = _characteristic(B)
     if B.shape[0] == 1:
         out[...] = _strictly_proper((0.0, 1.0), den, d, w0)
@@ -100,7 +93,7 @@ def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) ->
 
 
 def _block_output(B: np.ndarray, c: np.ndarray, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """c·x_t (m, N) of :func:`_run_block`'s recursion without storing its states: numerator c·adj(zI − B)."""
+    """c·x_t (m, N) of :func:`_run_block`'s recursion without its states (numerator c·adj(zI − B))."""
     den = _characteristic(B)
     if B.shape[0] == 1:
         out = _strictly_proper((0.0, 1.0), den, d[0], w0[0])
@@ -111,8 +104,7 @@ def _block_output(B: np.ndarray, c: np.ndarray, d: np.ndarray, w0: np.ndarray) -
 
 
 def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """w[:, :, 0] = w0, w[:, :, t+1] = T w[:, :, t] + cw[:, :, t] (p, m, N), T real quasi-triangular: one block at a
-    time (:func:`_run_block`), last first, each driven by the states it couples to."""
+    """w_0 = w0, w_{t+1} = T w_t + cw_t (p, m, N) for quasi-triangular T, block by block from the last."""
     w = np.empty_like(cw)
     for blk in reversed(_blocks(T)):
         drive = cw[blk]
@@ -124,14 +116,12 @@ def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
 
 
 def _driven(gain: np.ndarray, y: np.ndarray, const: np.ndarray) -> np.ndarray:
-    """The inputs gain_i·y_{c,t} + const_{i,c} (s, m, N) of the states fed by columns y (m, N)."""
     d = gain[:, None, None] * y[None]
     d += const[:, :, None]
     return d
 
 
 def _rotate(M: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """M applied to the first axis of x (p, m, N): one matrix product."""
     return (M @ x.reshape(x.shape[0], -1)).reshape(M.shape[0], *x.shape[1:])
 
 
@@ -150,8 +140,7 @@ class Basis:
 
 
 def _modal_basis(A: np.ndarray) -> Basis | None:
-    """The real modal basis of A (1×1 blocks for real eigenvalues, [[a, b], [−b, a]] for a ± ib) when its condition
-    number is below :data:`MODAL_MAX_COND`, else None (e.g. a nearly defective A)."""
+    """The real modal basis of A when its condition number is below :data:`MODAL_MAX_COND`, else None."""
     lam, vec = np.linalg.eig(A)
     if not (np.all(np.isfinite(lam)) and np.all(np.isfinite(vec))):
         return None
@@ -177,7 +166,7 @@ def _modal_basis(A: np.ndarray) -> Basis | None:
 
 
 def decoupled_basis(A: np.ndarray) -> Basis:
-    """The basis the filters run in (module docstring): modal where well conditioned, else real Schur."""
+    """The basis the filters run in: modal where well conditioned, else real Schur."""
     modal = _modal_basis(A)
     if modal is not None:
         return modal
@@ -186,7 +175,7 @@ def decoupled_basis(A: np.ndarray) -> Basis:
 
 
 def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
-    """x_0 = x0, x_{t+1} = A x_t + c_t; c (p, m, N), x0 (p, m); x with c's shape, in :func:`decoupled_basis`."""
+    """x_0 = x0, x_{t+1} = A x_t + c_t for c (p, m, N), x0 (p, m), in :func:`decoupled_basis`."""
     if c.shape[0] == 0:
         return np.zeros_like(c)
     b = decoupled_basis(A)
@@ -199,8 +188,7 @@ CLOSED_FORM_SHARE = 0.5
 
 
 def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple[np.ndarray, Basis | None]:
-    """H x_t^{t−1} for every column (m, N) and the basis used (None without states); declared sinusoidal columns in
-    closed form where cheaper (:data:`CLOSED_FORM_SHARE`)."""
+    """H x_t^{t−1} (m, N) of every column (sinusoids in closed form where cheaper) and the basis (None: no states)."""
     p = model.n_states
     m, n = cols.y.shape
     if p == 0:
@@ -225,8 +213,7 @@ def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple
 
 def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, *, u: np.ndarray,
                      m0: np.ndarray) -> np.ndarray:
-    """H x_t^{t−1} (m, N) of columns with measurement inputs y (m, N), state inputs u (p, m), initial means m0 (p, m),
-    filtered in basis b."""
+    """H x_t^{t−1} (m, N) of columns with inputs y (m, N), u (p, m) and initial means m0 (p, m)."""
     p = model.n_states
     m, n = y.shape
     gain_w = b.u_inv @ (model.phi @ g.k)
@@ -242,8 +229,7 @@ def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray,
 
 def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns, *, rows: np.ndarray,
                      out: np.ndarray, length: int) -> None:
-    """Write H x_t^{t−1} of the sinusoidal columns ``rows`` (x_0 = 0, at ``cols.omega``) into ``out[rows]`` in closed
-    form (:mod:`.harmonic`): the steady response minus its initial state's free response over ``length`` samples."""
+    """H x_t^{t−1} of sinusoidal columns into ``out[rows]``: steady response less the free response."""
     p, k = model.n_states, rows.size
     start = harmonic.steady_parts(g.a, model.phi @ g.k, model.h, cols.y, cols.omega, rows=rows, out=out)
     if b.modal:
@@ -257,8 +243,7 @@ def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns,
 
 
 def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
-    """R (p, length), R[j, t] = (H U)_blk T_blk^t e_j per modal state j; the free response from w_0 = U⁻¹x_0 is w_0ᵀR.
-    """
+    """R (p, length), R[j, t] = (H U)_blk T_blk^t e_j; the free response from w_0 = U⁻¹x_0 is w_0ᵀR."""
     out = np.empty((b.t.shape[0], length))
     for blk in _blocks(b.t):
         s = blk.stop - blk.start
@@ -268,8 +253,7 @@ def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
 
 def _predicted_states(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
                       m0: np.ndarray) -> np.ndarray:
-    """Predicted states x_t^{t−1} (p, N) of one column: measurement input y (N,), state input u (p,), initial mean m0
-    (p,)."""
+    """x_t^{t−1} (p, N) of one column: inputs y (N,), u (p,), initial mean m0 (p,)."""
     c = _driven(b.u_inv @ (model.phi @ g.k), y[None, :], (b.u_inv @ u)[:, None])
     return b.u @ _run_modes(b.t, c, (b.u_inv @ m0)[:, None])[:, 0, :]
 
@@ -283,7 +267,7 @@ def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
 
 
 def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Σ_{k=0}^{n−1} T^k(P0) and T^{n−1}(P0) for T(P) = J P Jᵀ + C, by binary doubling on p × p matrices (O(p³ log n)).
+    """Σ_{k=0}^{n−1} T^k(P0) and T^{n−1}(P0) for T(P) = J P Jᵀ + C by binary doubling (O(p³ log n)).
 
     With X_k(P) = Σ_{j<k} J^j P J^jᵀ, M_j = J^j C J^jᵀ, W_k = Σ_{j<k} j·M_j:
 
@@ -316,7 +300,7 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
 
 
 def _smooth_from_forward(model: StateSpace, g: SteadyGains, xp: np.ndarray, e: np.ndarray) -> SmootherStats:
-    """Backward pass and covariance sums from the predicted states xp (p, N) and innovations e (N,)."""
+    """Backward pass and covariance sums from predicted states xp (p, N) and innovations e (N,)."""
     n, p = e.size, model.n_states
     xf = np.multiply.outer(g.k, e)
     xf += xp
@@ -342,7 +326,7 @@ def _smooth_from_forward(model: StateSpace, g: SteadyGains, xp: np.ndarray, e: n
 
 
 def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
-    """E-step statistics of the data column (column 0) with constant gains (see the module docstring)."""
+    """E-step statistics of the data column (column 0) with constant gains."""
     g = gains(model)
     y = cols.y[0]
     if model.n_states == 0:
@@ -352,8 +336,7 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
 
 
 def profile_and_smooth(model: StateSpace, cols: Columns) -> tuple[ProfileResult, SmootherStats]:
-    """GLS profile of the free mean parameters and the smoother at their estimate: one forward pass of every column,
-    one of the combined column at β̂, then the backward pass."""
+    """GLS profile of the free mean parameters and the smoother at their estimate."""
     g = gains(model)
     hx, b = _predicted_output(model, g, cols)
     n = cols.y.shape[1]

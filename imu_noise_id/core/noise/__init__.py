@@ -1,2 +1,1 @@
-"""The stochastic error components of an inertial sensor (:mod:`.components` and siblings), their units
-(:mod:`.units`) and the model-spec vocabulary (:mod:`.modelspec`)."""
+"""Stochastic error components of an inertial sensor, their units and model specs (docs/noise.md)."""

@@ -1,9 +1,6 @@
-"""The sensor's averaging filter (MA): white noise through a two-tap moving average (beyond papers 000/002;
-reasons: docs/em.md, "Why the components …"; derivation: docs/noise.md).
-
-y_k = e_k + e_{k−1}, e_k white of variance σ²; passband density N [u/√Hz], N² = 4σ²dt. S(f) = N² cos²(πf·dt),
-AV(m·dt) = (4m − 3)σ²/m². Block as QN's: Φ = [[0, 0], [1, 0]], Q = diag(σ², 0) (first element free), H = [1, 1].
-"""
+"""The sensor's averaging filter (MA), white noise through a two-tap moving average (docs/noise.md): y_k = e_k +
+e_{k−1}, var(e) = σ², density N [u/√Hz], N² = 4σ²dt; S(f) = N² cos²(πf·dt), AV(m·dt) = (4m − 3)σ²/m²; block as QN's,
+Q = diag(σ², 0) (first element free), H = [1, 1]."""
 
 from __future__ import annotations
 
@@ -19,7 +16,7 @@ from .base import Component, StateBlock, as_freq, as_tau
 
 @dataclass(frozen=True)
 class MA(Component):
-    """A two-tap moving average of white noise of passband density N [u/√Hz] (module docstring)."""
+    """A two-tap moving average of white noise of passband density N [u/√Hz]."""
 
     noise_density: float
 
@@ -54,12 +51,12 @@ class MA(Component):
         return self.noise_density**2 * np.cos(math.pi * as_freq(f) * dt) ** 2
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """K(u) = −½ S(|u|), S(m) = (4m − 2)σ² for m ≥ 1 and 0 at 0 (module docstring)."""
+        """K(u) = −½ S(|u|), S(m) = (4m − 2)σ² for m ≥ 1, 0 at 0."""
         u = np.abs(np.asarray(lag, dtype=float))
         return np.where(u > 0, -(2.0 * u - 1.0) * self.sigma2(dt), 0.0)
 
     def zero_frequency_density(self, dt: float) -> float:
-        """N exactly: dt·(R(0) + 2R(dt)) = dt·4σ² = N²."""
+        """N exactly: dt·(R(0) + 2R(dt)) = 4σ²dt = N²."""
         return self.noise_density
 
     def per_sample(self, dt: float) -> dict[str, float]:

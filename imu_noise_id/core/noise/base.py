@@ -1,4 +1,4 @@
-"""The component protocol: what every stochastic error component of :mod:`.components` provides."""
+"""The component protocol: what every stochastic error component provides (docs/noise.md)."""
 
 from __future__ import annotations
 
@@ -12,17 +12,9 @@ import numpy as np
 
 @dataclass(frozen=True)
 class StateBlock:
-    """One component's part of the state-space model (paper 000 eqs. 4–5):
-    x_{t+1} = Φ x_t + w_t + u, w_t ~ N(0, Q); y_t = H x_t + v_t, v_t ~ N(0, R).
-
-    Attributes
-    ----------
-    phi, q : (p, p) transition and process-noise covariance of the block's p states
-    h : (p,) the block's columns of H
-    r : its share of R (white noise only)
-    u : (p,) deterministic input per step (rate ramp)
-    phi_free, q_free, u_free, r_free : which elements the estimator may change (paper 000 eq. 7)
-    """
+    """One component's part of the state-space model, paper 000 eqs. 4–5: x_{t+1} = Φ x_t + w_t + u, w_t ~ N(0, Q);
+    y_t = H x_t + v_t, v_t ~ N(0, R). ``phi``, ``q`` (p, p); ``h``, ``u`` (p,) (u: input per step); ``r`` its share
+    of R (WN only); ``*_free``: elements the estimator may change (paper 000 eq. 7)."""
 
     phi: np.ndarray
     q: np.ndarray
@@ -40,7 +32,6 @@ class StateBlock:
 
 
 def _finite_positive(x: np.ndarray) -> bool:
-    """Every element finite and > 0 (two reductions: a NaN fails ``min() > 0``, an infinity ``isfinite(max())``)."""
     return x.size == 0 or bool(x.min() > 0.0 and math.isfinite(x.max()))
 
 
@@ -59,7 +50,7 @@ def as_freq(f: np.ndarray | float) -> np.ndarray:
 
 
 class Component(ABC):
-    """Base class of the stochastic error components (see the module docstring)."""
+    """Base class of the stochastic error components."""
 
     name: ClassVar[str]
     #: Names of the continuous-time parameters, in the order positional spec values are read.
@@ -86,23 +77,20 @@ class Component(ABC):
 
     @abstractmethod
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
-        """Two-sided power spectral density [u²/Hz] at frequencies f [Hz] (dt [s] matters for QN only)."""
+        """Two-sided PSD [u²/Hz] at frequencies f [Hz] (dt [s] matters for sampled components)."""
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """Generalised covariance K(u) [u²] of the partial sums x_k = y_0 + … + y_{k−1} at integer lags u (beyond
-        papers 000/002; definition: docs/noise.md). Stationary components: K(u) = −½ Var(y_1 + … + y_|u|);
-        AV(m·dt) = (6K(0) − 8K(m) + 2K(2m))/(2m²).
-        """
+        """Generalised covariance K(u) [u²] of the partial sums x_k = y_0 + … + y_{k−1} at integer lags u
+        (docs/noise.md); stationary: K(u) = −½ Var(y_1 + … + y_|u|), AV(m·dt) = (6K(0) − 8K(m) + 2K(2m))/(2m²)."""
         raise NotImplementedError(f"{self.name} has no sum covariance")
 
     def zero_frequency_density(self, dt: float) -> float:
-        """√(dt·Σ_j R(j)) [u/√Hz]: the two-sided PSD at 0 Hz of the component sampled at dt (its AV → N²/τ beyond its
-        memory); for components white at low frequency."""
+        """√(dt·Σ_j R(j)) [u/√Hz], the two-sided PSD at 0 Hz of the sampled component (AV → N²/τ beyond its memory);
+        components white at low frequency only."""
         raise NotImplementedError(f"{self.name} is not white at low frequency")
 
     def memory(self, dt: float) -> tuple[float, float, float]:
-        """(longest and shortest decay time [s] of the autocovariance, shortest period [s] of its oscillation); (0, 0,
-        inf) for components uncorrelated beyond a sample or two (WN, QN, MA, RW, RR)."""
+        """(longest, shortest autocovariance decay time, shortest oscillation period) [s]; (0, 0, inf): memoryless."""
         return 0.0, 0.0, math.inf
 
     @abstractmethod
@@ -116,19 +104,17 @@ class Component(ABC):
 
     @classmethod
     def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> Component:
-        """Inverse of :meth:`block` for components with states: the component with transition ``phi`` and process noise
-        ``q`` at period ``dt`` [s]."""
+        """Inverse of :meth:`block`: the component with transition ``phi`` and process noise ``q`` at ``dt`` [s]."""
         raise NotImplementedError(f"{cls.name} has no state block to convert back from")
 
     def params(self) -> dict[str, float]:
         """Continuous-time parameters by name."""
-        # fields() and getattr, not asdict(): asdict deep-copies, a third of the gradient's finite-difference steps
-        # on a short record with many OSCs went into it
+        # not asdict(), which deep-copies (docs/noise.md, "Why the component protocol …")
         return {f.name: float(getattr(self, f.name)) for f in fields(self)}  # type: ignore[arg-type]
 
     def scale_only(self) -> tuple[float, tuple[tuple[str, float], ...]] | None:
-        """(scale, the other values by name, sorted) of a component whose only parameter is its :attr:`scale_name`, at
-        a scale > 0: its second moments are then those at scale 1 times the scale's square. None otherwise."""
+        """(scale > 0, the other values by name) when :attr:`scale_name` is the only parameter (moments ∝ scale²),
+        else None."""
         values = self.params()
         scale = values.pop(self.scale_name) if self.scale_name else 0.0
         if self.parameter_names != (self.scale_name,) or not scale > 0.0:

@@ -1,10 +1,6 @@
-"""Stochastic error components of an inertial sensor (WN, QN, RW, GM, RR; LPF, OSC, BI, MA in sibling modules).
-
-Each is a frozen dataclass of **continuous-time** parameters with ``simulate(n, dt, rng)``, ``block(dt)`` (its
-state-space block, paper 000 eqs. 4–5 and 7–9), ``allan_variance(tau, dt)`` [u²] of the sampled process,
-``psd(f, dt)`` (two-sided [u²/Hz], IEEE Std 952: AV(τ) = 4∫₀^∞ S(f) sin⁴(πfτ)/(πfτ)² df) and
-``per_sample``/``from_per_sample`` (paper 000's notation). New types register in :data:`COMPONENT_TYPES`.
-"""
+"""Stochastic error components WN, QN, RW, GM, RR (LPF, DLPF, OSC, BI, MA: sibling modules), frozen dataclasses of
+continuous-time parameters with simulation, state block (paper 000 eqs. 4–5, 7–9), AV [u²] of the sampled process,
+two-sided PSD [u²/Hz] (IEEE Std 952: AV(τ) = 4∫₀^∞ S(f) sin⁴(πfτ)/(πfτ)² df) and per-sample values (paper 000)."""
 
 from __future__ import annotations
 
@@ -73,12 +69,9 @@ class WN(Component):
 
 @dataclass(frozen=True)
 class QN(Component):
-    """Quantisation noise of an integrating sensor, Q [u·s] (IEEE Std 952).
-
-    e_k = (ε_k − ε_{k−1})/dt, var(ε) = Q² (uniform on ±√3·Q when simulated); AV(τ) = 3Q²/τ² at τ = m·dt;
-    S(f) = (4Q²/dt)·sin²(πf·dt). Block: states [ε_k/dt, ε_{k−1}/dt], Φ = [[0, 0], [1, 0]], Q = diag(Q²/dt², 0)
-    (first element free), H = [1, −1].
-    """
+    """Quantisation noise Q [u·s] of an integrating sensor (IEEE Std 952): e_k = (ε_k − ε_{k−1})/dt, var(ε) = Q²
+    (uniform on ±√3·Q when simulated); AV(τ) = 3Q²/τ², S(f) = (4Q²/dt)·sin²(πf·dt). Block: states [ε_k/dt,
+    ε_{k−1}/dt], Φ = [[0, 0], [1, 0]], Q = diag(Q²/dt², 0) (first element free), H = [1, −1]."""
 
     Q: float
 
@@ -112,7 +105,7 @@ class QN(Component):
         return 4.0 * self.Q**2 * np.sin(math.pi * as_freq(f) * dt) ** 2 / dt
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """K(u) = −Q²/dt² for u ≠ 0, 0 at u = 0 (the sum telescopes to (ε_u − ε_0)/dt)."""
+        """K(u) = −Q²/dt² for u ≠ 0, 0 at u = 0."""
         return np.where(np.asarray(lag) != 0, -units.quantization_sigma2(self.Q, dt), 0.0)
 
     def per_sample(self, dt: float) -> dict[str, float]:
@@ -129,8 +122,7 @@ class QN(Component):
 
 @dataclass(frozen=True)
 class RW(Component):
-    """Random walk (rate / bias random walk), density K [u/s/√Hz]: var(w) = K²·dt, sampled AV K²τ/3 + K²dt²/(6τ), S(f) =
-    K²/(2πf)²."""
+    """Random walk, density K [u/s/√Hz]: var(w) = K²·dt, sampled AV K²τ/3 + K²dt²/(6τ), S(f) = K²/(2πf)²."""
 
     random_walk: float
 
@@ -178,11 +170,8 @@ class RW(Component):
 
 @dataclass(frozen=True)
 class GM(Component):
-    """First-order Gauss–Markov process, correlation time τ [s], stationary std σ [u].
-
-    φ = exp(−dt/τ), var(w) = σ²(1 − φ²) (paper 002 eq. 22; paper 000's Euler form φ ≈ 1 − β·dt, β = 1/τ);
-    S(f) = 2σ²τ_c/(1 + (2πfτ_c)²).
-    """
+    """First-order Gauss–Markov, correlation time τ [s], stationary std σ [u]: φ = exp(−dt/τ), var(w) = σ²(1 − φ²)
+    (paper 002 eq. 22; paper 000: φ ≈ 1 − β·dt, β = 1/τ); S(f) = 2σ²τ/(1 + (2πfτ)²)."""
 
     tau: float
     sigma: float
@@ -212,7 +201,7 @@ class GM(Component):
         )
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        """AV of the sampled process, R(j) = σ² e^{−j·dt/τ} (:mod:`imu_noise_id.core.noise.sampled`)."""
+        """AV of the sampled process, R(j) = σ² e^{−j·dt/τ} (:mod:`.sampled`)."""
         return sampled_allan_variance(self.sigma**2, -1.0 / self.tau, as_tau(tau), dt)
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
@@ -220,7 +209,7 @@ class GM(Component):
         return 2.0 * self.sigma**2 * self.tau / (1.0 + (2.0 * math.pi * f * self.tau) ** 2)
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """K(u) = −½ Var(y_1 + … + y_|u|), R(j) = σ² e^{−j·dt/τ} (:mod:`imu_noise_id.core.noise.sampled`)."""
+        """K(u) = −½ Var(y_1 + … + y_|u|), R(j) = σ² e^{−j·dt/τ}."""
         return -0.5 * block_sum_variance(self.sigma**2, -1.0 / self.tau, np.abs(np.asarray(lag, dtype=float)), dt)
 
     def memory(self, dt: float) -> tuple[float, float, float]:
@@ -247,8 +236,8 @@ class GM(Component):
 
 @dataclass(frozen=True)
 class RR(Component):
-    """Rate ramp with slope ω [u/s]: y_k = ω·k·dt, AV(τ) = ω²τ²/2, S(f) = ω²/(2πf)³. Block: an integrator (Φ = 1,
-    Q = 0, H = 1) driven by u = ω·dt (paper 000 sections 4.1–4.3)."""
+    """Rate ramp of slope ω [u/s]: y_k = ω·k·dt, AV(τ) = ω²τ²/2, S(f) = ω²/(2πf)³; block an integrator (Φ = 1, Q = 0,
+    H = 1) driven by u = ω·dt (paper 000 sec. 4.1–4.3)."""
 
     slope: float
 
@@ -294,7 +283,7 @@ COMPONENT_TYPES: dict[str, type[Component]] = {c.name: c for c in (WN, QN, RW, G
 
 
 def total_allan_variance(components: list[Component], tau: np.ndarray, dt: float) -> np.ndarray:
-    """Theoretical AV of a sum of independent components (AVs add)."""
+    """AV [u²] of a sum of independent components (AVs add)."""
     tau = as_tau(tau)
     return np.sum([c.allan_variance(tau, dt) for c in components], axis=0) if components else np.zeros_like(tau)
 

@@ -1,12 +1,8 @@
-"""The sensor's digital low-pass (DLPF): white noise of passband density N through an order-n Butterworth filter
-designed by the bilinear transform at the sampling rate (beyond papers 000/002; derivation: docs/noise.md).
-
-y = H(z) w, w white of variance σ² = N²/dt, H = ``scipy.signal.butter(n, f_c, fs=1/dt)``: S(f) = N²|H(e^{i2πf dt})|²,
-S(0) = N², zero at Nyquist. Parameters N [u/√Hz] and f_c [Hz] (−3 dB, 0 < f_c < 1/(2 dt)); the order n is a
-structure value (``DLPF(1e-3, 12, order=4)``), never estimated. Block: direct form II, states [s_k … s_{k−n}],
-Φ the companion matrix of A, Q = diag(b₀²σ², 0 …) (first element free), H = binomial coefficients C(n, i).
-AV(m·dt) = (4 S(m) − S(2m))/(2m²) with S(m) from R(j) = σ² Σ_k h_k h_{k+j} (impulse response h).
-"""
+"""The sensor's digital low-pass (DLPF): white noise (density N [u/√Hz], σ² = N²/dt) through an order-n Butterworth
+designed by the bilinear transform at the sampling rate, H = ``scipy.signal.butter(n, f_c, fs=1/dt)``
+(docs/noise.md): S(f) = N²|H(e^{i2πf dt})|², zero at Nyquist; f_c [Hz] the −3 dB cutoff < 1/(2 dt); n structure.
+Block: direct form II, Φ the companion matrix, Q = diag(b₀²σ², 0 …) (first element free), H = C(n, i); AV(m·dt) = (4
+S(m) − S(2m))/(2m²), R(j) = σ² Σ_k h_k h_{k+j}."""
 
 from __future__ import annotations
 
@@ -31,14 +27,14 @@ MAX_RESPONSE = 1 << 20
 
 @functools.lru_cache(maxsize=256)
 def _design(order: int, cutoff_per_sample: float) -> tuple[np.ndarray, np.ndarray]:
-    """(b, a) of the Butterworth low-pass of ``order`` at ``cutoff_per_sample`` = f_c·dt (< ½)."""
+    """(b, a) of the Butterworth low-pass of ``order`` at f_c·dt (< ½)."""
     b, a = signal.butter(order, 2.0 * cutoff_per_sample)
     return np.asarray(b, dtype=float), np.asarray(a, dtype=float)
 
 
 @functools.lru_cache(maxsize=64)
 def _covariance(order: int, cutoff_per_sample: float) -> np.ndarray:
-    """R(j)/σ² for j = 0 … J−1 (module docstring)."""
+    """R(j)/σ² for j = 0 … J−1, J the impulse response's length."""
     b, a = _design(order, cutoff_per_sample)
     radius = max(float(np.max(np.abs(np.roots(a)))), 1e-3)
     length = int(min(MAX_RESPONSE, max(64, math.ceil(math.log(DECAY) / math.log(radius)) + 4 * order)))
@@ -52,8 +48,7 @@ def _covariance(order: int, cutoff_per_sample: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class DLPF(Component):
-    """White noise of passband density N [u/√Hz] through an n-th order digital Butterworth low-pass at f_c [Hz]
-    (module docstring)."""
+    """White noise of passband density N [u/√Hz] through an n-th order digital Butterworth low-pass at f_c [Hz]."""
 
     noise_density: float
     cutoff: float
@@ -113,7 +108,7 @@ class DLPF(Component):
         return np.where(j < r.size, r[np.minimum(j, r.size - 1)], 0.0)
 
     def block_sum_variance(self, m: np.ndarray, dt: float) -> np.ndarray:
-        """S(m) = Var(y_1 + … + y_m) [u²] at integer m ≥ 0 (module docstring)."""
+        """S(m) = Var(y_1 + … + y_m) [u²] at integer m ≥ 0."""
         r = _covariance(self.order, self._per_sample(dt)) * self.sigma2(dt)
         j = np.arange(r.size)
         # S(m) = m R0 + 2 Σ_{j=1}^{m−1} (m − j) R(j) = m (R0 + 2 C1(m)) − 2 C2(m), C1, C2 the prefix sums of R, jR
@@ -128,7 +123,7 @@ class DLPF(Component):
         return (4.0 * self.block_sum_variance(m, dt) - self.block_sum_variance(2.0 * m, dt)) / (2.0 * m * m)
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """K(u) = −½ S(|u|) (the base class's convention for stationary components)."""
+        """K(u) = −½ S(|u|)."""
         return -0.5 * self.block_sum_variance(np.abs(np.asarray(lag, dtype=float)), dt)
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
@@ -159,7 +154,7 @@ class DLPF(Component):
 
     @classmethod
     def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> DLPF:
-        """The DLPF whose companion matrix is ``phi``: f_c from its coefficient a₁, N = √(Q₀₀·dt)/b₀."""
+        """The DLPF of companion matrix ``phi``: f_c from a₁, N = √(Q₀₀·dt)/b₀."""
         order = phi.shape[0] - 1
         a1 = -float(phi[0, 0])
 
@@ -175,11 +170,8 @@ class DLPF(Component):
 
 @dataclass(frozen=True)
 class SensorFilter:
-    """The sensor's digital low-pass as configured (datasheet, driver): −3 dB cutoff [Hz] and, if known, the order.
-
-    A fit with a DLPF starts it at ``cutoff`` (still estimated) and tries only ``order`` if given, else every
-    order of :data:`ORDERS`.
-    """
+    """The sensor's configured low-pass: −3 dB ``cutoff`` [Hz] and, if known, ``order`` (a fit tries only it, else
+    :data:`ORDERS`)."""
 
     cutoff: float
     order: int | None = None
@@ -200,7 +192,7 @@ class SensorFilter:
         return ORDERS if self.order is None else (self.order,)
 
     def check_rate(self, dt: float) -> None:
-        """ValueError unless the cutoff lies below the Nyquist frequency 1/(2 dt) at period ``dt`` [s]."""
+        """ValueError unless the cutoff is below the Nyquist frequency 1/(2 dt), ``dt`` [s]."""
         if not self.cutoff * dt < 0.5:
             raise ValueError(f"the sensor filter's cutoff {self.cutoff:g} Hz is not below the record's Nyquist "
                              f"frequency {0.5 / dt:g} Hz")

@@ -1,10 +1,7 @@
-"""Bias instability (flicker noise) as a ladder of first-order Gauss–Markov processes (beyond papers 000/002).
-
-IEEE Std 952 (annex C): S(f) = B²/(2π f) between two corners, AV plateau (2 ln 2/π)·B². GMs with
-τ_i = τ_min·ρ^i (i = 0 … M−1, ρ = (τ_max/τ_min)^(1/(M−1))), equal variances σ² = B² ln ρ / π (Keshner 1982,
-Proc. IEEE 70(3)): Σ_i 2σ²τ_i/(1 + (2πfτ_i)²) ≈ B²/(2π f) for 1/(2πτ_max) ≪ f ≪ 1/(2πτ_min), ripple ≈ 4·e^{−π²/ln ρ}.
-The band is structure (:func:`band_for_record`); only B is estimated. Details: docs/noise.md.
-"""
+"""Bias instability (flicker noise) as a ladder of first-order GMs (docs/noise.md): IEEE Std 952 annex C S(f) =
+B²/(2πf), AV plateau (2 ln 2/π)·B²; τ_i = τ_min·ρ^i (i < M), equal variances σ² = B² ln ρ/π (Keshner 1982, Proc. IEEE
+70(3)) give Σ_i 2σ²τ_i/(1 + (2πfτ_i)²) ≈ B²/(2πf) for 1/(2πτ_max) ≪ f ≪ 1/(2πτ_min), ripple ≈ 4·e^{−π²/ln ρ}. The
+band is structure (:func:`band_for_record`); only B is estimated."""
 
 from __future__ import annotations
 
@@ -42,8 +39,8 @@ def ladder_taus(tau_min: float, tau_max: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class BI(Component):
-    """Flicker (1/f) rate noise of bias instability B [u] over the band [τ_min, τ_max] [s] (module docstring): PSD
-    ≈ B²/(2π f) inside the band, AV ≈ (2 ln 2/π)·B² on its plateau."""
+    """Flicker rate noise of bias instability B [u] over [τ_min, τ_max] [s]: PSD ≈ B²/(2πf), AV plateau ≈ (2 ln
+    2/π)·B²."""
 
     bias_instability: float
     tau_min: float = 1.0
@@ -70,7 +67,7 @@ class BI(Component):
 
     @property
     def sigma2_each(self) -> float:
-        """Stationary variance of every GM of the ladder, B² ln ρ / π [u²] (module docstring)."""
+        """Stationary variance B² ln ρ/π [u²] of every GM of the ladder."""
         taus = self.taus
         return self.bias_instability**2 * math.log(taus[1] / taus[0]) / math.pi
 
@@ -98,7 +95,7 @@ class BI(Component):
         return sampled_allan_variance(np.full(taus.size, self.sigma2_each), -1.0 / taus, as_tau(tau), dt)
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """K(u) = −½ Var(y_1 + … + y_|u|) of the ladder: the sum over its GMs (:mod:`.sampled`)."""
+        """K(u) of the ladder: the sum over its GMs (:mod:`.sampled`)."""
         u = np.abs(np.asarray(lag, dtype=float))
         return -0.5 * real_poles_sum_variance(self.sigma2_each, -1.0 / self.taus, u, dt)
 
@@ -118,7 +115,7 @@ class BI(Component):
 
     @classmethod
     def from_per_sample(cls, dt: float, **values: float) -> BI:
-        """From the per-GM variance ``sigma2_each`` and the band's ``phi_min``/``phi_max`` (:meth:`per_sample`)."""
+        """From ``sigma2_each`` and the band's ``phi_min``, ``phi_max`` (:meth:`per_sample`)."""
         tau_min, tau_max = -dt / math.log(values["phi_min"]), -dt / math.log(values["phi_max"])
         rho = ladder_taus(tau_min, tau_max)
         return cls(math.sqrt(values["sigma2_each"] * math.pi / math.log(rho[1] / rho[0])), tau_min, tau_max)

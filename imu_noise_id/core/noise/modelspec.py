@@ -1,16 +1,10 @@
-"""Model spec strings: ``WN+GM+RW+RR``, ``WN+2GM``, and the same with parameter values.
+"""Model spec strings such as ``WN+2GM`` or ``WN(2e-4)+GM(tau=300, sigma=5e-5)`` (whitespace ignored)::
 
-Grammar (whitespace ignored)::
+    spec := term ("+" term)*;   term := [count] NAME ["(" args ")"]
+    args := value ("," value)*  |  key "=" value ("," key "=" value)*
 
-    spec      := term ("+" term)*
-    term      := [count] NAME ["(" args ")"]
-    args      := value ("," value)*  |  key "=" value ("," key "=" value)*
-
-``NAME`` is a key of :data:`~.components.COMPONENT_TYPES`; positional values follow its ``parameter_names``
-(continuous-time units, :mod:`.units`), e.g. ``WN(2e-4)+GM(tau=300, sigma=5e-5)`` or
-``WN(2e-4)+BI(bias_instability=3e-5, tau_min=0.1, tau_max=3600)``. An IMU model: ``gyro: SPEC; accel: SPEC``
-(or per axis ``gyro_z: SPEC``), or one SPEC for all six axes.
-"""
+NAME is a key of :data:`~.components.COMPONENT_TYPES`, positional values follow its ``parameter_names`` (units:
+:mod:`.units`). An IMU model: ``gyro: SPEC; accel: SPEC`` (per axis ``gyro_z: SPEC``), or one SPEC for all six axes."""
 
 from __future__ import annotations
 
@@ -102,8 +96,7 @@ def _parse_args(cls: type[Component], args: str, spec: str) -> dict[str, float]:
 
 
 def parse_model(spec: str) -> list[Component]:
-    """Components with their parameters, e.g. ``'WN(2e-4)+GM(tau=300,sigma=5e-5)'``; ModelSpecError naming the offending
-    term."""
+    """Components with their parameters, e.g. ``'WN(2e-4)+GM(tau=300,sigma=5e-5)'``; ModelSpecError naming the term."""
     components: list[Component] = []
     for term in _split_terms(spec):
         count, name, args = _parse_term(term, spec)
@@ -134,8 +127,7 @@ def model_name(components: list[Component]) -> str:
 
 
 def parse_imu_model(text: str) -> dict[str, list[Component]]:
-    """Per-axis components from ``'gyro: SPEC; accel: SPEC'`` (an axis key such as ``gyro_z`` overrides its group), or
-    one SPEC for all axes."""
+    """Per-axis components from ``'gyro: SPEC; accel: SPEC'`` (axis keys override their group), or one SPEC for all."""
     if ":" not in text:
         components = parse_model(text)
         return {axis: list(components) for axis in AXES}
@@ -158,8 +150,7 @@ def parse_imu_model(text: str) -> dict[str, list[Component]]:
 
 
 def parameter_labels(components: list[Component]) -> list[tuple[int, str, str]]:
-    """(component index, parameter, label) with labels such as ``WN.noise_density``, ``GM2.tau`` (repeated types
-    numbered in order)."""
+    """(component index, parameter, label), labels such as ``WN.noise_density``, ``GM2.tau`` (repeats numbered)."""
     names = [c.name for c in components]
     out = []
     seen: dict[str, int] = {}

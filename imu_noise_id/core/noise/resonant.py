@@ -1,13 +1,7 @@
-"""The sensor's first-order low-pass (LPF) and a narrow-band stochastic oscillation (OSC); beyond papers 000/002.
-
-LPF: x' = −ω_c x + ω_c w, ω_c = 2π f_c, w white of two-sided PSD N² (**N the continuous passband density**):
-S(f) = N²/(1 + (f/f_c)²); a GM with τ = 1/ω_c, σ² = π N² f_c.
-
-OSC: x'' + 2ζω₀x' + ω₀²x = w, w of two-sided PSD q = 4ζω₀³σ²; f₀ [Hz], half-power bandwidth B = 2ζf₀ [Hz], σ [u].
-R(u) = Re(c e^{su}), c = σ²(1 − ia/ω_d), s = −a + iω_d (a = ζω₀, ω_d = ω₀√(1 − ζ²)). State [x, x'/ω₀], H = [1, 0],
-exact discretisation (Van Loan). Both: AV of the sampled process (:mod:`.sampled`), fitted by the quasi-Newton
-search, not the EM's M-step. Reasons: docs/em.md, "Why the components …".
-"""
+"""The sensor's first-order low-pass (LPF) and a narrow-band stochastic oscillation (OSC); docs/noise.md. LPF: x' =
+−ω_c x + ω_c w, ω_c = 2πf_c, PSD(w) = N²: S(f) = N²/(1 + (f/f_c)²), the GM of τ = 1/ω_c, σ² = πN²f_c. OSC: x'' +
+2ζω₀x' + ω₀²x = w, PSD q = 4ζω₀³σ²; f₀, B = 2ζf₀ [Hz], σ [u]; R(u) = Re(c e^{su}), c = σ²(1 − ia/ω_d), s = −a + iω_d
+(a = ζω₀, ω_d = ω₀√(1 − ζ²)); state [x, x'/ω₀], H = [1, 0], exact discretisation (Van Loan)."""
 
 from __future__ import annotations
 
@@ -29,8 +23,8 @@ FILTER_MAX_TAU_S = 0.05
 
 
 def filter_memory_limit(dt: float) -> float:
-    """Longest memory [s] a component may have to count as the sensor's own filter at period ``dt`` [s]:
-    max(:data:`FILTER_MAX_TAU_SAMPLES`·dt, :data:`FILTER_MAX_TAU_S`)."""
+    """Longest memory [s] of the sensor's own filter: max(:data:`FILTER_MAX_TAU_SAMPLES`·dt,
+    :data:`FILTER_MAX_TAU_S`)."""
     return max(FILTER_MAX_TAU_SAMPLES * dt, FILTER_MAX_TAU_S)
 
 
@@ -67,7 +61,7 @@ class LPF(Component):
 
     @property
     def sigma(self) -> float:
-        """Stationary standard deviation √(π N² f_c) [u]: the per-sample standard deviation."""
+        """Stationary (per-sample) std √(πN²f_c) [u]."""
         return self.noise_density * math.sqrt(math.pi * self.cutoff)
 
     def _gm(self):
@@ -96,7 +90,7 @@ class LPF(Component):
         return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
 
     def zero_frequency_density(self, dt: float) -> float:
-        """N·√((x/2)·coth(x/2)), x = 2π f_c dt: the sampled AR(1)'s √(σ² dt (1 + φ)/(1 − φ)), φ = e^{−x}."""
+        """N·√((x/2)·coth(x/2)), x = 2πf_c dt: the sampled AR(1)'s √(σ² dt (1 + φ)/(1 − φ))."""
         return math.sqrt(zero_frequency_psd(self.sigma**2, -1.0 / self.tau, dt))
 
     def per_sample(self, dt: float) -> dict[str, float]:
@@ -110,7 +104,7 @@ class LPF(Component):
 
     @classmethod
     def from_gm(cls, tau: float, sigma: float) -> LPF:
-        """The LPF that is the first-order GM process (τ [s], σ [u])."""
+        """The LPF that is the GM (τ [s], σ [u])."""
         cutoff = 1.0 / (2.0 * math.pi * tau)
         return cls(sigma / math.sqrt(math.pi * cutoff), cutoff)
 
@@ -124,7 +118,7 @@ class LPF(Component):
 
 @dataclass(frozen=True)
 class OSC(Component):
-    """Narrow-band stochastic oscillation: f₀ [Hz], half-power bandwidth B [Hz], stationary σ [u] (see module)."""
+    """Narrow-band stochastic oscillation: f₀ [Hz], half-power bandwidth B [Hz], stationary σ [u] (module docstring)."""
 
     frequency: float
     bandwidth: float
@@ -154,12 +148,11 @@ class OSC(Component):
         return self.bandwidth / (2.0 * self.frequency)
 
     def _poles(self) -> tuple[float, float]:
-        """(a, ω_d): decay rate ζω₀ [1/s] and damped angular frequency ω₀√(1 − ζ²) [rad/s]."""
+        """(a, ω_d): decay rate ζω₀ [1/s], damped angular frequency ω₀√(1 − ζ²) [rad/s]."""
         z = self.damping
         return z * self.omega0, self.omega0 * math.sqrt(1.0 - z * z)
 
     def _autocovariance(self) -> tuple[complex, complex]:
-        """(c, s) of R(u) = Re(c e^{su}) (module docstring): c = σ²(1 − ia/ω_d), s = −a + iω_d."""
         a, wd = self._poles()
         return self.sigma**2 * complex(1.0, -a / wd), complex(-a, wd)
 
@@ -176,7 +169,7 @@ class OSC(Component):
         return e * np.array([[c + a / wd * s, w0 / wd * s], [-w0 / wd * s, c - a / wd * s]])
 
     def process_noise(self, dt: float) -> np.ndarray:
-        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state (Van Loan's matrix exponential)."""
+        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state (Van Loan)."""
         w0, a = self.omega0, self.damping * self.omega0
         A = np.array([[0.0, w0], [-w0, -2.0 * a]])
         W = np.diag([0.0, 4.0 * a * self.sigma**2])  # drive of x'/ω₀: q/ω₀² with q = 4ζω₀³σ²
@@ -220,11 +213,11 @@ class OSC(Component):
         return out + free
 
     def allan_variance(self, tau: np.ndarray | float, dt: float) -> np.ndarray:
-        """AV of the sampled process (:mod:`imu_noise_id.core.noise.sampled`, R(u) = Re(c e^{su}))."""
+        """AV of the sampled process, R(u) = Re(c e^{su}) (:mod:`.sampled`)."""
         return sampled_allan_variance(*self._autocovariance(), as_tau(tau), dt)
 
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
-        """K(u) = −½ Var(y_1 + … + y_|u|) from R(u) = Re(c e^{su}) (module docstring)."""
+        """K(u) = −½ Var(y_1 + … + y_|u|) from R(u) = Re(c e^{su})."""
         u = np.abs(np.asarray(lag, dtype=float))
         return -0.5 * block_sum_variance(*self._autocovariance(), u, dt)
 
@@ -239,8 +232,7 @@ class OSC(Component):
         return q / ((w0 * w0 - w * w) ** 2 + (2.0 * z * w0 * w) ** 2)
 
     def zero_frequency_density(self, dt: float) -> float:
-        """√(dt·Σ_j R(j)) of the sampled oscillation (:func:`~.sampled.zero_frequency_psd`); continuous limit
-        S(0) = σ² B/(π f₀²)."""
+        """√(dt·Σ_j R(j)) of the sampled oscillation; continuous limit S(0) = σ²B/(πf₀²)."""
         return math.sqrt(max(zero_frequency_psd(*self._autocovariance(), dt), 0.0))
 
     def per_sample(self, dt: float) -> dict[str, float]:
@@ -249,19 +241,19 @@ class OSC(Component):
 
     @classmethod
     def low_pass(cls, noise_density: float, corner: float, damping: float = BUTTERWORTH_DAMPING) -> OSC:
-        """White noise of passband density N [u/√Hz] through a second-order low-pass of corner f₀ [Hz], damping ζ: the
-        OSC with B = 2ζf₀, σ = N f₀ √(π/B) (S(0) = N²); default ζ = 1/√2 (Butterworth)."""
+        """White noise of density N [u/√Hz] through a second-order low-pass of corner f₀ [Hz] and damping ζ (default
+        1/√2, Butterworth): B = 2ζf₀, σ = N f₀ √(π/B), S(0) = N²."""
         bandwidth = 2.0 * damping * corner
         return cls(corner, bandwidth, noise_density * corner * math.sqrt(math.pi / bandwidth))
 
     @classmethod
     def from_per_sample(cls, dt: float, **values: float) -> OSC:
-        """From the per-sample pole ρ e^{±iθ} (ρ = e^{−a dt}, θ = ω_d dt) and σ²."""
+        """From the pole ρ e^{±iθ} per sample (ρ = e^{−a dt}, θ = ω_d dt) and σ²."""
         return cls.from_poles(-math.log(values["rho"]) / dt, values["theta"] / dt, math.sqrt(values["sigma2"]))
 
     @classmethod
     def from_poles(cls, a: float, wd: float, sigma: float) -> OSC:
-        """From the decay rate a = ζω₀ [1/s], the damped angular frequency ω_d [rad/s] and σ [u]."""
+        """From a = ζω₀ [1/s], ω_d [rad/s] and σ [u]."""
         w0 = math.hypot(a, wd)
         z = a / w0
         f0 = w0 / (2.0 * math.pi)

@@ -1,10 +1,7 @@
-"""Allan variance of a *sampled* stationary process whose autocovariance is a sum of damped exponentials (beyond
-papers 000/002; reasons: docs/noise.md).
-
-R(j) = Re(c·z^j), z = e^{s·dt} (GM: c = σ², s = −1/τ; OSC: c = σ²(1 − i a/ω_d), s = −a + iω_d):
-S(m) = Re(c·(m + 2 g(m))), g(m) = z (m(1 − z) − (1 − z^m)) / (1 − z)², AV(m·dt) = (4 S(m) − S(2m)) / (2 m²);
-g(m) by its series m(m−1)/2 + w(m³ − m)/6 + w² m²(m² − 1)/24 (w = s·dt) where m|w| < :data:`SERIES_LIMIT`.
-"""
+"""AV of a sampled stationary process whose autocovariance is a sum of damped exponentials (docs/noise.md): R(j) =
+Re(c·z^j), z = e^{s·dt} (GM: c = σ², s = −1/τ; OSC: c = σ²(1 − ia/ω_d), s = −a + iω_d), S(m) = Re(c·(m + 2 g(m))),
+g(m) = z (m(1 − z) − (1 − z^m))/(1 − z)², AV(m·dt) = (4 S(m) − S(2m))/(2m²); g by its series where m|w| <
+:data:`SERIES_LIMIT` (w = s·dt)."""
 
 from __future__ import annotations
 
@@ -15,12 +12,12 @@ SERIES_LIMIT = 1e-3
 
 
 def _series(m: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """g(m) from its series in w (module docstring), for m·|w| < :data:`SERIES_LIMIT`."""
+    """g(m) from its series in w, m·|w| < :data:`SERIES_LIMIT`."""
     return m * (m - 1.0) / 2.0 + w * (m**3 - m) / 6.0 + w * w * m * m * (m * m - 1.0) / 24.0
 
 
 def _g(m: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """g(m) = Σ_{j=1}^{m−1} (m − j) e^{jw} (module docstring), closed form or series; ``w`` broadcasts against m."""
+    """g(m) = Σ_{j=1}^{m−1} (m − j) e^{jw}, closed form or series; ``w`` broadcasts against m."""
     w = np.asarray(w, dtype=complex)
     one_minus_z = -np.expm1(w)  # per pole; broadcast against m below
     mw = m * w
@@ -30,7 +27,6 @@ def _g(m: np.ndarray, w: np.ndarray) -> np.ndarray:
 
 
 def _series_where_small(closed: np.ndarray, m: np.ndarray, w: np.ndarray | float, mw: np.ndarray) -> np.ndarray:
-    """``closed`` with the series of g(m) where m·|w| < :data:`SERIES_LIMIT` (evaluated there only)."""
     small = np.abs(mw) < SERIES_LIMIT
     if not small.any():
         return closed
@@ -41,19 +37,8 @@ def _series_where_small(closed: np.ndarray, m: np.ndarray, w: np.ndarray | float
 
 def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau: np.ndarray,
                            dt: float) -> np.ndarray:
-    """AV [u²] at ``tau`` [s] of the process sampled at ``dt`` [s] with R(u) = Re(c e^{s u}) (module docstring).
-
-    Parameters
-    ----------
-    c : complex, or (k,) array
-        Autocovariance weight [u²] (R(0) = Re c).
-    s : complex, or (k,) array
-        Pole [1/s], Re s < 0; with arrays, the AV of the sum of the k processes.
-    tau : array
-        Averaging times [s] (τ/dt samples averaged).
-    dt : float
-        Sampling period [s].
-    """
+    """AV [u²] at ``tau`` [s] of the process sampled at ``dt`` [s] with R(u) = Re(c e^{su}), c [u²], Re s < 0 [1/s];
+    arrays (k,): the sum of k processes."""
     m = np.asarray(tau, dtype=float) / dt
     c = np.asarray(c, dtype=complex)
     if c.ndim:  # one row per process, summed; real poles (a flicker ladder) in real arithmetic
@@ -73,15 +58,13 @@ def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau
 
 
 def zero_frequency_psd(c: complex, s: complex, dt: float) -> float:
-    """dt·Σ_j R(j) = dt·Re(c (1 + z)/(1 − z)), z = e^{s·dt}: the two-sided PSD [u²/Hz] at 0 Hz of the sampled process.
-    """
+    """dt·Σ_j R(j) = dt·Re(c (1 + z)/(1 − z)), z = e^{s·dt}: the sampled process's two-sided PSD [u²/Hz] at 0 Hz."""
     z = np.exp(complex(s) * dt)
     return float(dt * np.real(complex(c) * (1.0 + z) / (1.0 - z)))
 
 
 def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.ndarray:
-    """S(k) = Var(y_1 + … + y_k) [u²] of the sampled process with R(u) = Re(c e^{s u}) for k ≥ 0 (S(0) = 0); a real pole
-    in real arithmetic."""
+    """S(k) = Var(y_1 + … + y_k) [u²] for R(u) = Re(c e^{su}), k ≥ 0 (S(0) = 0)."""
     k = np.asarray(k, dtype=float)
     w = complex(s) * dt
     if w.imag == 0.0 and complex(c).imag == 0.0:
@@ -90,8 +73,7 @@ def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.n
 
 
 def real_poles_sum_variance(c: float | np.ndarray, s: np.ndarray, k: np.ndarray, dt: float) -> np.ndarray:
-    """Σ_j S_j(k) [u²]: :func:`block_sum_variance` summed over processes of real poles ``s`` [1/s] and weights ``c``
-    [u²] (one for all, as in a flicker ladder, or one per pole), in one broadcast."""
+    """Σ_j S_j(k) [u²] over real poles ``s`` [1/s] with weights ``c`` [u²] (one, or one per pole)."""
     k = np.asarray(k, dtype=float)
     rows = (-1, *([1] * k.ndim))
     w = (np.asarray(s, dtype=float) * dt).reshape(rows)

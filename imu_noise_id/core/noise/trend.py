@@ -1,7 +1,6 @@
-"""The least-squares slope of a record and its exact variance under a noise model (beyond papers 000/002).
-
-ω̂ = Σ_k c_k x_k on the partial sums x_k, c_k = α·(ī, −1, …, −1, ī), α = 1/(dt·S), ī = (N−1)/2, S = N(N² − 1)/12;
-with the components' generalised covariances K(u) (:meth:`~.base.Component.sum_covariance`), exactly:
+"""The least-squares slope of a record and its exact variance under a noise model: ω̂ = Σ_k c_k x_k on the partial sums,
+c_k = α·(ī, −1, …, −1, ī), α = 1/(dt·S), ī = (N−1)/2, S = N(N² − 1)/12, K(u) the generalised covariances
+(:meth:`~.base.Component.sum_covariance`):
 
     Var ω̂ = α² [ (2ī² + N − 1)·K(0) − 2 Σ_{h=1}^{N−1} h·K(h) + 2 ī²·K(N) ].          (1)
 """
@@ -31,7 +30,6 @@ def ls_slope(y: np.ndarray, dt: float) -> float:
 
 
 def _power_sums(m: int) -> tuple[float, float, float]:
-    """Σ_{h=1}^{m} h, h², h⁴."""
     s1 = m * (m + 1) / 2.0
     s2 = m * (m + 1) * (2 * m + 1) / 6.0
     s4 = m * (m + 1) * (2 * m + 1) * (3.0 * m * m + 3 * m - 1) / 30.0
@@ -39,7 +37,7 @@ def _power_sums(m: int) -> tuple[float, float, float]:
 
 
 def _closed_form(comp: Component, n: int, dt: float) -> tuple[float, float] | None:
-    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one component in closed form, or None (module docstring)."""
+    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of a WN, QN, RW or GM in closed form, or None."""
     m = n - 1
     s1, s2, s4 = _power_sums(m)
     p = comp.params()
@@ -66,8 +64,7 @@ def _closed_form(comp: Component, n: int, dt: float) -> tuple[float, float] | No
 
 
 def _lag_sums(comp: Component, n: int, dt: float) -> tuple[float, float]:
-    """(Σ_{h=1}^{N−1} h·K(h), K(N)) of one stationary component: lag by lag up to :data:`TAIL_DECAYS` decay times,
-    closed form beyond."""
+    """(Σ_{h=1}^{N−1} h·K(h), K(N)): lag by lag up to :data:`TAIL_DECAYS` decay times, closed form beyond."""
     m = n - 1
     h0 = int(min(m, max(8, math.ceil(TAIL_DECAYS * comp.memory(dt)[0] / dt))))
     total = 0.0

@@ -1,20 +1,16 @@
 """Exact conversions between continuous-time noise parameters and per-sample values (the one place they live).
 
-Continuous-time densities are ``noise_density`` and ``random_walk``; per-sample variances carry ``sigma2_`` and
-depend on ``dt`` [s]. For a signal in unit ``u`` (rad/s or m/s²):
+==========================  ================  ===========================================================
+quantity (u: rad/s, m/s²)   unit              per-sample value at period ``dt`` [s]
+==========================  ================  ===========================================================
+white noise density N       u/√Hz             σ²_WN = N²/dt                            (Kalibr: σ_d = N/√dt)
+random-walk density K       u/s/√Hz           σ²_RW = K²·dt                            (Kalibr: σ_bd = K·√dt)
+Gauss–Markov τ, σ           s, u              φ = exp(−dt/τ), σ²_drive = σ²(1 − φ²)
+rate ramp ω                 u/s               ω·dt
+quantisation Q              u·s               σ²_QN = Q²/dt² (variance of ε_k/dt)
+==========================  ================  ===========================================================
 
-========================  =====================  ==============================================
-quantity                  unit                   per-sample value for period ``dt``
-========================  =====================  ==============================================
-white noise density N     u/√Hz  (= u·√s)        σ²_WN = N² / dt              (Kalibr: σ_d = N/√dt)
-random-walk density K     u/s/√Hz (= u/√s)       σ²_RW = K² · dt              (Kalibr: σ_bd = K·√dt)
-Gauss–Markov τ, σ         s, u                   φ = exp(−dt/τ), σ²_drive = σ²(1 − φ²)
-rate ramp ω               u/s                    ω·dt per sample
-quantisation Q            u·s                    σ²_QN = Q²/dt² (variance of ε_k/dt)
-========================  =====================  ==============================================
-
-Paper 000 (Stebler et al. 2011) uses the Euler form 1 − βΔt, 2βσ²_GM: :func:`gm_to_paper000`.
-"""
+Paper 000 (Stebler et al. 2011) uses the Euler form 1 − βΔt, 2βσ²_GM (:func:`gm_to_paper000`)."""
 
 from __future__ import annotations
 
@@ -55,14 +51,14 @@ def random_walk_density(sigma2_per_sample: float, dt: float) -> float:
 
 
 def random_walk_at_allan_variance(allan_variance: float | np.ndarray, tau: float | np.ndarray) -> float | np.ndarray:
-    """K = √(3·AV/τ) [u/s/√Hz] of the random walk whose AV K²τ/3 (IEEE Std 952 Table C.2) equals ``allan_variance``
-    [u²] at ``tau`` [s]; element-wise."""
+    """K = √(3·AV/τ) [u/s/√Hz]: the random walk whose AV K²τ/3 (IEEE Std 952 table C.2) is ``allan_variance`` at
+    ``tau``."""
     k = np.sqrt(3.0 * np.asarray(allan_variance, dtype=float) / np.asarray(tau, dtype=float))
     return float(k) if k.ndim == 0 else k
 
 
 def gm_phi(tau: float, dt: float) -> float:
-    """Exact transition φ = exp(−dt/τ) of a first-order Gauss–Markov process with correlation time τ [s]."""
+    """Exact transition φ = exp(−dt/τ) of a GM with correlation time τ [s]."""
     return math.exp(-_check_positive("dt", dt, False) / _check_positive("tau", tau, False))
 
 
@@ -99,7 +95,7 @@ def ramp_per_sample(slope: float, dt: float) -> float:
 
 
 def quantization_sigma2(q: float, dt: float) -> float:
-    """Variance Q²/dt² of one quantisation error term ε_k/dt of the rate (see :class:`~.components.QN`)."""
+    """Variance Q²/dt² of one quantisation term ε_k/dt (:class:`~.components.QN`)."""
     return _check_positive("Q", q) ** 2 / _check_positive("dt", dt, False) ** 2
 
 
@@ -109,10 +105,8 @@ def covariance_from_density(noise_density: float | np.ndarray, rate_hz: float) -
 
 
 def step_noise_std(density: float, step_s: float, weight: float = 1.0) -> float:
-    """The white-rate std σ [u] a discrete filter needs for white noise of ``density`` (u/√Hz, or u/s/√Hz for a
-    bias random walk): σ = density / √(weight · step), ``step_s`` [s]. ``weight`` = 1: one input sample per step
-    (PX4 EKF2, VINS' bias blocks); ½: the mid-point rule's two half-weighted samples (VINS' ``V = ½·dt`` blocks).
-    """
+    """σ = density / √(weight · step) [u]: the white-rate std a discrete filter needs for ``density`` at ``step_s``
+    [s]; ``weight`` 1: one input sample per step (PX4 EKF2, VINS' bias blocks), ½: the mid-point rule (VINS)."""
     return _check_positive("density", density) / math.sqrt(
         _check_positive("weight", weight, False) * _check_positive("step_s", step_s, False))
 

@@ -1,5 +1,5 @@
-"""Allan variances of simulations of a fitted model: the band a record's AV should fall in if the model is right
-(paper 000 figs. 4, 6, 7 draw the record's AV, thick, against the AVs of simulations of the fitted model, thin)."""
+"""AVs of simulations of a fitted model: the band a record's AV falls in if the model holds (paper 000 figs. 4, 6,
+7)."""
 
 from __future__ import annotations
 
@@ -14,10 +14,8 @@ TERMS_PER_FACTOR = 8
 
 
 def thinned_allan_variance(y: np.ndarray, dt: float, m: np.ndarray) -> np.ndarray:
-    """Overlapping Allan variance [u²] of rate samples ``y`` [u] at period ``dt`` [s] and averaging factors ``m``,
-    paper 000 eq. (2), σ²(mτ₀) = Σ_i (x_{i+2m} − 2x_{i+m} + x_i)² / (2 (m dt)² · #terms) with x the phase, but over
-    every s-th start i only, s = max(1, m // :data:`TERMS_PER_FACTOR`);
-    reasons: docs/analysis.md, "Why simulations thin …"."""
+    """Overlapping AV [u²] of ``y`` [u] at ``dt`` [s] and factors ``m`` (paper 000 eq. 2) over every s-th start only,
+    s = max(1, m // :data:`TERMS_PER_FACTOR`); why: docs/analysis.md, "Why simulations thin …"."""
     x = phase(np.asarray(y, dtype=float), dt)
     out = np.empty(np.asarray(m).size)
     buffer = np.empty(x.size)
@@ -35,9 +33,8 @@ def thinned_allan_variance(y: np.ndarray, dt: float, m: np.ndarray) -> np.ndarra
 
 def allan_band(components: list[Component], dt: float, n: int, tau: np.ndarray | None = None, *, n_sim: int = 20,
                seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """AVs of ``n_sim`` simulations of ``components`` (n samples at ``dt`` [s]) by :func:`thinned_allan_variance`:
-    (tau [s], avar [u²] (n_sim, len(tau))); ``tau`` defaults to :func:`~imu_noise_id.core.allan.choose_m`'s grid,
-    given values rounded to multiples of dt."""
+    """(τ [s], AV [u²] (n_sim, len(τ))) of ``n_sim`` simulations of n samples at ``dt`` [s]; ``tau`` rounded to
+    multiples of ``dt``, default the :func:`~..allan.choose_m` grid."""
     m = choose_m(n) if tau is None else np.unique(np.maximum(np.round(np.asarray(tau, float) / dt), 1))
     rng = np.random.default_rng(seed)
     rows = [thinned_allan_variance(simulate_sum(components, n, dt, rng), dt, m) for _ in range(n_sim)]

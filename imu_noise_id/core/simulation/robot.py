@@ -1,12 +1,7 @@
-"""Simulated ground robot with a rotated IMU and wheel-odometry-like messages (truth for the CMKF, the node, the demo).
-
-Flat ground (z up), forward speed s(t) and yaw rate ω(t) from a motion profile (:class:`Weaving`,
-:class:`StopAndGo`), no side slip: a_b = [ṡ, s ω, 0], f_b = a_b + [0, 0, g], rate [0, 0, ω]. The IMU (mounted with
-C_bi) reports the *average* of the true specific force and rate over its period (paper 004 eq. 10; a grid
-``substeps`` times finer) plus the :class:`RobotSensors` errors: constant biases, white noise of PSD S_v [m²/s³]
-and S_g [rad²/s] (per-sample σ = √(S/Δt)), optional bias random walks. Odometry: true body velocity and yaw
-rate with white noise, yaw orientation, position integrated on the fine grid.
-"""
+"""Simulated ground robot with a rotated IMU and wheel odometry (truth for the CMKF, the node, the demo): flat
+ground, speed s(t) and yaw rate ω(t) of a :class:`Motion`, no side slip, f_b = [ṡ, s ω, g], rate [0, 0, ω]; the IMU
+(C_bi) reports their means over its period (paper 004 eq. 10; ``substeps`` finer grid) plus :class:`RobotSensors`
+errors; odometry: true velocity and yaw rate with white noise, yaw, integrated position."""
 
 from __future__ import annotations
 
@@ -47,7 +42,7 @@ class Motion(Protocol):
     """A motion profile: forward speed and yaw rate over time (from the start of the run) and the heading."""
 
     def speeds(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Forward speed ``s`` [m/s], its derivative [m/s²] and the yaw rate ``ω`` [rad/s] at times ``t`` [s]."""
+        """Forward speed ``s`` [m/s], its derivative [m/s²] and yaw rate ``ω`` [rad/s] at times ``t`` [s]."""
 
     def yaw_on_grid(self, grid: np.ndarray, yaw_rate: np.ndarray) -> np.ndarray:
         """Heading [rad] on the fine time grid, given the yaw rate on it."""
@@ -75,7 +70,6 @@ class Weaving:
         return s, sdot, w
 
     def _yaw(self, t: np.ndarray) -> np.ndarray:
-        """The closed-form integral of ω."""
         return (-self.w1 * self.p1 / (2 * np.pi) * np.cos(2 * np.pi * t / self.p1)
                 - self.w2 * self.p2 / (2 * np.pi) * np.cos(2 * np.pi * t / self.p2))
 
@@ -88,8 +82,7 @@ class Weaving:
 
 @dataclass(frozen=True)
 class StopAndGo:
-    """Stand ``stand_before`` s, drive ``drive`` s (speed up to ``speed`` [m/s], yaw rate up to ``yaw_rate`` [rad/s] of
-    period ``yaw_period`` [s], both under a sin² window), stand for the rest."""
+    """Stand ``stand_before`` s, drive ``drive`` s (``speed`` [m/s], ``yaw_rate`` [rad/s], sin² window), stand."""
 
     stand_before: float = 20.0
     drive: float = 30.0
@@ -121,15 +114,10 @@ class RobotSensors:
 
     Attributes
     ----------
-    accel_bias, gyro_bias : constant biases per IMU axis [m/s²], [rad/s].
-    S_v, S_g : white-noise PSD of the accelerometer [m²/s³] and the gyro [rad²/s].
-    accel_random_walk, gyro_random_walk : bias random-walk densities [m/s³/√Hz], [rad/s²/√Hz] (0: none).
+    accel_bias, gyro_bias : constant biases [m/s²], [rad/s]; S_v, S_g : white-noise PSD [m²/s³], [rad²/s] (σ = √(S/Δt))
+    accel_random_walk, gyro_random_walk : bias random walks [m/s³/√Hz], [rad/s²/√Hz] (0: none)
     velocity_noise_std, angular_velocity_noise_std, position_noise_std : odometry white noise [m/s], [rad/s], [m]
-        (0: exact); the twist covariance declares the first two.
-    pose_variance : (position [m²], orientation [rad²]) declared; None: (``position_noise_std``², 1e-6).
-    imu_rotation_xyzw : orientation of the IMU in the base frame (``C_bi``); None: yaw −90°, roll 90° (the IMU's y axis
-        up).
-    noise_order : the sensor whose white noise is drawn first (a seeded run depends on it).
+    pose_variance : declared (position [m²], orientation [rad²]); imu_rotation_xyzw : C_bi; noise_order : draw order
     """
 
     accel_bias: tuple[float, float, float] = (0.05, -0.08, 0.03)
@@ -158,14 +146,8 @@ def simulate_robot(
     substeps: int = 10,
     gravity: float = STANDARD_GRAVITY,
 ) -> RobotRun:
-    """Simulate ``duration`` seconds (module docstring), stamps from ``t0`` [s]; ``motion`` defaults to
-    :class:`Weaving`, ``sensors`` to :class:`RobotSensors`.
-
-    Raises
-    ------
-    ValueError
-        On non-positive rates, ``substeps < 1``, an unknown ``noise_order`` or fewer than two IMU samples.
-    """
+    """``duration`` s from ``t0`` [s] of ``motion`` (:class:`Weaving`) with ``sensors``; ValueError on bad rates or
+    ``substeps``, an unknown ``noise_order`` or fewer than two IMU samples."""
     motion = motion or Weaving()
     sensors = sensors or RobotSensors()
     if not (imu_rate > 0 and odom_rate > 0 and substeps >= 1):
@@ -228,12 +210,11 @@ def simulate_robot(
 
 
 def _whole_nanoseconds(t: np.ndarray) -> np.ndarray:
-    """Stamps rounded to integer nanoseconds, as a bag stores them (so coinciding stamps are equal floats)."""
     return np.round(t * 1e9) / 1e9
 
 
 def replay_arrays(filt: RobotCmkf, run: RobotRun) -> list[CmkfEstimate]:
-    """Feed a :class:`RobotRun` to a robot CMKF in stamp order; returns the estimate after each odometry message."""
+    """Feed a :class:`RobotRun` to a robot CMKF in stamp order; the estimate after each odometry message."""
     imu = ImuSeries(run.imu_t, run.gyro, run.accel)
     odom = OdometrySeries(run.odom_t, run.position, run.orientation_xyzw, run.linear_velocity, run.angular_velocity,
                           run.pose_cov, run.twist_cov)

@@ -20,9 +20,8 @@ def simulate_static_imu(
     t0: float = 0.0,
     frame_id: str = "imu_link",
 ) -> ImuSeries:
-    """Samples of a static, level IMU whose errors follow ``model`` (axis name → components); accel z also reads
-    +``gravity``. Axes in :data:`~.axes.AXES` order from one generator (a seed reproduces the data). ValueError on a
-    non-positive rate or duration, fewer than two samples, or a missing axis."""
+    """Static level IMU with errors of ``model`` (axis → components), accel z + ``gravity``, one generator;
+    ValueError on a non-positive rate or duration, fewer than two samples or a missing axis."""
     if not (np.isfinite(rate_hz) and rate_hz > 0):
         raise ValueError(f"rate must be > 0 Hz, got {rate_hz!r}")
     if not (np.isfinite(duration_s) and duration_s > 0):

@@ -1,13 +1,6 @@
-"""The noise-level test at longer τ: the Allan variance at a few cluster times against the reference's model.
-
-The means of consecutive clusters of τ seconds form a series at period τ whose disjoint pair differences have
-variance 2·AV(τ) (the Allan variance's definition, IEEE Std 952); on it run the CUSUMs of :mod:`.noise_level` (and
-online :class:`~.sequential.SequentialNoiseWatch`), with v_ref = 2·AV_model(τ) of the reference's final model. The
-reference carries no interval at τ: its AV is taken within ±:data:`AV_TOLERANCE` in deviation. A change in the random
-walk or the bias instability (a loose mount, temperature, ageing) shows here where the white-noise level at τ = dt
-does not move. A test needs :data:`MIN_PAIRS` pairs of clusters: τ = 10 s needs 1000 s of stationary data
-(docs/analysis.md, "Compare against a reference").
-"""
+"""The noise-level CUSUMs on τ-cluster means (pair differences of variance 2·AV(τ), IEEE Std 952) against
+2·AV_model(τ) of the reference within ±:data:`AV_TOLERANCE` (deviation), from :data:`MIN_PAIRS` pairs
+(docs/analysis.md)."""
 
 from __future__ import annotations
 
@@ -30,7 +23,7 @@ MIN_PAIRS = 50
 
 
 def reference_av(reference: AxisReference, tau: float, dt: float) -> tuple[float, tuple[float, float]]:
-    """2·AV(τ) [u²] of the reference's model at period ``dt`` and its interval (±:data:`AV_TOLERANCE` in deviation)."""
+    """2·AV(τ) [u²] of the reference's model at ``dt`` [s] and its ±:data:`AV_TOLERANCE` (deviation) interval."""
     v = reference.pair_variance(tau, dt)
     return v, (v * (1.0 - AV_TOLERANCE) ** 2, v * (1.0 + AV_TOLERANCE) ** 2)
 
@@ -43,9 +36,8 @@ def cluster_means(y: np.ndarray, m: int) -> np.ndarray:
 
 def watch_allan(y: np.ndarray, dt: float, reference: AxisReference, tau: float, *, ratio: float,
                 false_alarms_per_hour: float) -> NoiseLevel | None:
-    """:func:`.noise_level.watch_noise_level` on the τ-cluster means of ``y`` [u] at period ``dt`` [s] against the
-    reference's 2·AV(τ); ``ratio`` is then in Allan deviation. None when the record holds fewer than
-    :data:`MIN_PAIRS` pairs of clusters."""
+    """:func:`.noise_level.watch_noise_level` on the τ-cluster means against 2·AV(τ); None below :data:`MIN_PAIRS`
+    pairs."""
     m = max(1, round(tau / dt))
     means = cluster_means(y, m)
     if means.size < 2 * MIN_PAIRS:
@@ -56,8 +48,7 @@ def watch_allan(y: np.ndarray, dt: float, reference: AxisReference, tau: float, 
 
 
 class AllanWatch:
-    """Online: per τ a :class:`~.sequential.SequentialNoiseWatch` fed the τ-cluster means of the stationary samples
-    (at ``period`` [s], axes in ``references``' order); motion or a gap breaks the clusters."""
+    """Online: a :class:`~.sequential.SequentialNoiseWatch` per τ of the τ-cluster means at ``period`` [s]."""
 
     def __init__(self, references: list[AxisReference], period: float, *, ratio: float,
                  false_alarms_per_hour: float, taus: tuple[float, ...] = DEFAULT_TAUS) -> None:

@@ -1,9 +1,5 @@
-"""One axis of a recording against its reference (an earlier analysis of this unit, or the fleet's typical one; docs/
-analysis.md, "Compare against a reference"): the white-noise level (:mod:`.noise_level`, both ways), a bias step
-(``detect_step``, Bonferroni over the samples) and a new line (``detect_sinusoids`` from :data:`LINE_MIN_FREQUENCY`,
-``known_lines`` left out) in the innovations of the reference's final model (first sample subtracted; without
-components white noise of density N), at α = min(0.01, λ·T) for λ false alarms per hour and T hours of record.
-"""
+"""One axis of a recording against its reference (docs/analysis.md, "Compare against a reference"): noise level both
+ways, bias step and new line in the reference model's innovations, each at α = min(0.01, λ·T) for T hours."""
 
 from __future__ import annotations
 
@@ -38,13 +34,8 @@ LINE_MIN_FREQUENCY = 0.1
 
 @dataclass(frozen=True)
 class AxisReference:
-    """What one axis should look like.
-
-    Attributes
-    ----------
-    noise_density, noise_density_ci : N [u/√Hz] and its 95 % interval ((nan, nan) or a zero lower end: none)
-    components : the reference's final model, or None (white noise of density N); known_lines : regressor lines [Hz]
-    """
+    """An axis's reference: N [u/√Hz] and its 95 % interval ((nan, nan): none), final model (None: WN), known lines
+    [Hz]."""
 
     noise_density: float
     noise_density_ci: tuple[float, float]
@@ -55,7 +46,7 @@ class AxisReference:
         return list(self.components) if self.components else [WN(self.noise_density)]
 
     def density_interval(self) -> tuple[tuple[float, float], str]:
-        """N's 95 % interval [u/√Hz], or ±:data:`DEFAULT_TOLERANCE` of N when it has none, and a note saying which."""
+        """N's 95 % interval [u/√Hz] (±:data:`DEFAULT_TOLERANCE` without one) and a note saying which."""
         lo, hi = self.noise_density_ci
         if math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= self.noise_density <= hi:
             return (lo, hi), ""
@@ -64,28 +55,24 @@ class AxisReference:
             f"the reference's N has no interval: ±{100 * tol:g} % used")
 
     def pair_variance(self, tau: float, dt: float) -> float:
-        """2·AV(τ) [u²] of the reference model at period ``dt`` [s]: the variance of the difference of two consecutive
-        τ-means (τ = dt: of two consecutive samples)."""
+        """2·AV(τ) [u²] of the reference model at ``dt`` [s]: variance of consecutive τ-means' difference."""
         return 2.0 * float(total_allan_variance(self.model(dt), np.array([tau]), dt)[0])
 
     def difference_variance(self, dt: float) -> tuple[float, tuple[float, float], str]:
-        """E[(y_{t+1} − y_t)²] = 2·AV(dt) [u²] of the reference model, its interval (N's relative interval, squared;
-        :meth:`density_interval`) and that method's note."""
+        """E[(y_{t+1} − y_t)²] = 2·AV(dt) [u²] of the reference, its interval (from N's) and note."""
         v = self.pair_variance(dt, dt)
         (lo, hi), note = self.density_interval()
         return v, (v * (lo / self.noise_density) ** 2, v * (hi / self.noise_density) ** 2), note
 
     def difference_variance_at(self, noise_density: float, dt: float) -> float:
-        """E[(y_{t+1} − y_t)²] [u²] of this reference's model scaled to the density ``noise_density`` [u/√Hz]."""
+        """E[(y_{t+1} − y_t)²] [u²] of the reference model scaled to density ``noise_density`` [u/√Hz]."""
         return self.difference_variance(dt)[0] * (noise_density / self.noise_density) ** 2
 
 
 @dataclass(frozen=True)
 class AxisComparison:
-    """One axis's outcome: the noise-level test, the significant bias step and new line (None without), notes, and the
-    test against a specification's noise-density limit (None without one; its ratio is live / limit), and the same
-    level test at longer τ (``allan``: τ [s] → outcome, its ratio in Allan deviation; a τ without enough data left
-    out)."""
+    """An axis's outcome: ``noise``, ``step``, ``line``, ``notes``, the spec ``limit`` test, ``allan`` (τ [s] → level
+    test)."""
 
     noise: NoiseLevel
     step: det.Finding | None
@@ -129,8 +116,7 @@ class AxisComparison:
 
 
 def rate_mismatch(rate_hz: float, reference_rate_hz: float, source: str) -> str | None:
-    """Why a recording at ``rate_hz`` cannot be compared with a reference made at ``reference_rate_hz`` (from
-    ``source``), or None within :data:`RATE_TOLERANCE`: densities per sample and the sensor's filter depend on it."""
+    """Why a recording at ``rate_hz`` cannot be compared with a reference at ``reference_rate_hz``, or None."""
     if abs(rate_hz - reference_rate_hz) <= RATE_TOLERANCE * reference_rate_hz:
         return None
     made = f"the reference {source}" if source else "the reference"
@@ -140,20 +126,14 @@ def rate_mismatch(rate_hz: float, reference_rate_hz: float, source: str) -> str 
 
 def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,
                   known: tuple[float, ...]) -> tuple[det.Finding | None, det.Finding | None]:
-    """The significant bias step and new line (None without) in ``y`` [u] at period ``dt`` [s], each at level
-    ``alpha``, in the innovations of ``whitening`` (the reference's model; first sample subtracted, its first samples
-    the filter's start-up left out, the level's GLS estimate removed, clipped at ±``SPIKE_Z``); lines within
-    :data:`KNOWN_LINE_BINS` of a ``known`` frequency [Hz] are not new."""
+    """The significant bias step and new line (or None) in ``y`` [u] at ``dt`` [s] at level ``alpha``, in the
+    reference's innovations; lines within :data:`KNOWN_LINE_BINS` of ``known`` [Hz] are not new."""
     first = y[np.isfinite(y)][0]
     e = whitening.whiten(np.nan_to_num(y - first, nan=0.0))
-    # The first sample is the level only to its noise: that error leaves the filter as the whitened constant's
-    # response, a transient of the filter's memory (seconds), low-frequency power a short window takes for a line.
-    # Its GLS coefficient is removed (the score tests hold the constant as a nuisance column anyway).
+    # the level's GLS coefficient removed (why: docs/analysis.md, "Why the step and line tests remove the level first")
     constant = whitening.whiten(np.ones(e.size))
     e = e - constant * (float(constant @ e) / float(constant @ constant))
-    # A knock's burst of glitches is no step and no line: under a model with a random walk a step's signature is the
-    # innovations just after it, where a burst's are too. Innovations beyond ±SPIKE_Z (standardised; 6e-5 of an
-    # unchanged Gaussian sensor's) count as SPIKE_Z, as the noise level's pairs do.
+    # clipped as the noise level's pairs are (why: docs/analysis.md, "Why the noise-level test caps a pair …")
     e = np.clip(e, -SPIKE_Z, SPIKE_Z)
     e[: min(10, e.size // 100)] = np.nan  # the filter's start-up
     step = det.detect_step(e, dt, whitening, alpha=alpha)
@@ -167,14 +147,8 @@ def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: f
 def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: float = DEFAULT_RATIO,
                  false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
                  limit: float | None = None) -> AxisComparison:
-    """The module's tests on ``y`` [u] at period ``dt`` [s] (the level also at the τ of ``allan_watch.DEFAULT_TAUS``
-    the record holds enough clusters of); with ``limit`` [u/√Hz] also ``noise_level.beyond_limit``.
-
-    Raises
-    ------
-    ValueError
-        Fewer than 200 samples, or a reference without noise.
-    """
+    """The module's tests on ``y`` [u] at ``dt`` [s], also at ``allan_watch.DEFAULT_TAUS`` and against ``limit``
+    [u/√Hz]; ValueError on fewer than 200 samples or a noiseless reference."""
     y = np.asarray(y, dtype=float)
     v, interval, note = reference.difference_variance(dt)
     noise = watch_noise_level(y, dt, v, interval, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour)

@@ -1,16 +1,11 @@
-"""Sequential test of an axis's white-noise level against its reference: Page's CUSUM on disjoint pair differences
-d_k = y_{2k+1} − y_{2k} (bias and slow processes cancel; independent, variance v = 2·AV(τ = dt), in [v_lo, v_hi]
-under the reference, × ρ² when the density is × ρ). Per direction (up: v₀ = v_hi, v₁ = ρ² v_ref; down: v₀ = v_lo,
-v₁ = v_ref/ρ²; Page 1954; Basseville & Nikiforov 1993, eq. 2.2.9)
+"""Sequential test of an axis's white-noise level against its reference: Page's CUSUM (Page 1954; Basseville & Nikiforov
+1993, eq. 2.2.9) on disjoint pair differences d_k = y_{2k+1} − y_{2k} (variance v = 2·AV(dt) ∈ [v_lo, v_hi]), per
+direction (up: v₀ = v_hi, v₁ = ρ² v_ref; down: v₀ = v_lo, v₁ = v_ref/ρ²)
 
     s_k = ½ ln(v₀/v₁) + ½ d_k² (1/v₀ − 1/v₁),    S_k = max(0, S_{k−1} + s_k),
 
-alarm at S_k > h = ln(3600 · r / λ): Lorden's ARL₀ ≥ e^h (eq. 5.2.73) bounds the false alarms to λ per hour at r
-increments per second inside the reference's interval. Delay ≈ h / KL(v₁‖v₀) increments. Beyond the references: the
-upward test counts d_k² at most :data:`SPIKE_Z`² v₀ (a lone glitch is not a noisier sensor; the capped increments are
-never larger, so the bound holds). Reasons: docs/analysis.md, "Why the noise-level test caps a pair and
-confirms an alarm".
-"""
+alarm at S_k > h = ln(3600·r/λ): Lorden's ARL₀ ≥ e^h (eq. 5.2.73), ≤ λ false alarms per hour at r pairs per second.
+Upward d_k² is capped at :data:`SPIKE_Z`² v₀. Why: docs/analysis.md."""
 
 from __future__ import annotations
 
@@ -31,8 +26,7 @@ SPIKE_Z = 4.0
 
 @dataclass(frozen=True)
 class LevelAlarm:
-    """A CUSUM alarm: ``direction`` "up" (noisier) or "down"; ``time_s`` when it fired and ``since_s`` where the
-    change began (the last time the CUSUM was at zero before it), both from the record's start [s]."""
+    """A CUSUM alarm: ``direction`` "up" or "down", ``time_s`` fired, ``since_s`` the CUSUM's last zero before [s]."""
 
     direction: str
     time_s: float
@@ -41,15 +35,9 @@ class LevelAlarm:
 
 @dataclass(frozen=True)
 class NoiseLevel:
-    """The test's outcome on one axis.
-
-    Attributes
-    ----------
-    ratio, ratio_ci : live / reference density (since the alarm's change) and its 95 % χ² interval
-    alarm : the first alarm, or None; threshold : h; increments : pair differences tested
-    reference_ci : the reference's interval as density ratios (√(v_lo/v_ref), √(v_hi/v_ref))
-    least_change : the density ratio (≥ 1) a confirmed change reaches at least, either way
-    """
+    """The test's outcome on one axis: live / reference density ``ratio`` (since the alarm's change) and its 95 %
+    ``ratio_ci``, the first ``alarm`` (or None), ``threshold`` h, ``increments`` tested, ``reference_ci`` (the
+    reference's interval as density ratios) and ``least_change`` (the ratio ≥ 1 a confirmed change reaches)."""
 
     ratio: float
     ratio_ci: tuple[float, float]
@@ -61,10 +49,7 @@ class NoiseLevel:
 
     @property
     def sustained(self) -> bool:
-        """An alarm the level since its change confirms: the ratio's interval since then lies beyond the reference's
-        (above it upward, below it downward) and the ratio itself beyond ``least_change`` (its inverse downward). An
-        alarm it does not confirm was a transient (a burst of raised noise, a knock) that the CUSUM saw but the
-        record's level since then does not hold."""
+        """An alarm the level since its change confirms (beyond the reference's interval and ``least_change``)."""
         if self.alarm is None:
             return False
         if self.alarm.direction == "up":
@@ -81,8 +66,8 @@ def threshold(false_alarms_per_hour: float, increments_per_s: float) -> float:
 
 def directions(v_ref: float, v_interval: tuple[float, float],
                ratio: float) -> list[tuple[str, float, float, float]]:
-    """(direction, a, b, cap) of each CUSUM, its increment s = a + b·min(d², cap) (module docstring; cap = SPIKE_Z² v₀
-    upward, ∞ downward); a direction whose change lies inside the reference's interval is left out."""
+    """(direction, a, b, cap) per CUSUM, increment a + b·min(d², cap); a change inside the reference's interval is
+    left out."""
     v_lo, v_hi = v_interval
     out = []
     for direction, v0, v1 in (("up", v_hi, ratio**2 * v_ref), ("down", v_lo, v_ref / ratio**2)):
@@ -102,8 +87,7 @@ def pair_differences(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _cusum_alarm(llr: np.ndarray, h: float) -> tuple[int, int] | None:
-    """(alarm index, change index) of Page's CUSUM on the increments ``llr``: S_k = X_k − min(0, min_{j≤k} X_j)
-    with X the cumulative sum (the recursion's closed form); None without an alarm."""
+    """(alarm index, change index) of Page's CUSUM on ``llr``, S_k = X_k − min(0, min_{j≤k} X_j); None without alarm."""
     x = np.cumsum(llr)
     s = x - np.minimum(np.minimum.accumulate(x), 0.0)
     over = np.flatnonzero(s > h)
@@ -115,14 +99,12 @@ def _cusum_alarm(llr: np.ndarray, h: float) -> tuple[int, int] | None:
 
 
 def ratio_interval(mean_d2: float, n: int, v_ref: float) -> tuple[float, tuple[float, float]]:
-    """Live / reference density √(mean_d2 / v_ref) from the mean ``mean_d2`` of ``n`` pair differences' d² [u²] and its
-    95 % χ² interval."""
+    """√(mean_d2 / v_ref) from the mean d² [u²] of ``n`` pair differences, and its 95 % χ² interval."""
     lo, hi = stats.chi2.ppf([0.975, 0.025], n)
     return math.sqrt(mean_d2 / v_ref), (math.sqrt(mean_d2 * n / lo / v_ref), math.sqrt(mean_d2 * n / hi / v_ref))
 
 
 def _ratio(d: np.ndarray, v_ref: float) -> tuple[float, tuple[float, float]]:
-    """Live / reference density from the mean of d² and its 95 % χ² interval."""
     return ratio_interval(float(np.mean(d * d)), d.size, v_ref)
 
 
@@ -131,22 +113,10 @@ def watch_noise_level(y: np.ndarray, dt: float, v_ref: float, v_interval: tuple[
                       false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR,
                       directions_of: tuple[str, ...] = ("up", "down"),
                       least_change: float | None = None, min_pairs: int = 100) -> NoiseLevel:
-    """Both CUSUMs (those of ``directions_of``) on samples ``y`` [u] at period ``dt`` [s].
-
-    Parameters
-    ----------
-    v_ref, v_interval : the reference's E[(y_{t+1} − y_t)²] [u²] and its interval (v_lo, v_hi)
-    ratio : the density ratio ρ > 1 the test is tuned to (both ways); false_alarms_per_hour : λ, per direction
-    least_change : the ratio a confirmed alarm's level reaches (:attr:`NoiseLevel.sustained`); None: √ρ, half way
-        (in log) to the change the test is tuned to: runs of one unit differ by a few per cent, beyond a reference's
-        narrow interval, which alone would confirm any alarm a knock raised
-    min_pairs : the fewest pair differences the test runs on, and the level since an alarm rests on
-
-    Raises
-    ------
-    ValueError
-        Fewer than ``min_pairs`` pair differences, a non-positive reference, or ρ ≤ 1.
-    """
+    """Both CUSUMs (those of ``directions_of``) on ``y`` [u] at ``dt`` [s] against the reference's E[(y_{t+1} −
+    y_t)²] ``v_ref`` [u²] within ``v_interval``, tuned to a density ``ratio`` ρ > 1, λ = ``false_alarms_per_hour``
+    per direction, confirmed at ``least_change`` (None: √ρ) on ≥ ``min_pairs`` pairs. ValueError on too few pairs, a
+    bad reference or ρ ≤ 1."""
     if not ratio > 1.0:
         raise ValueError(f"the ratio to detect must be > 1, got {ratio!r}")
     v_lo, v_hi = v_interval
@@ -177,9 +147,7 @@ TESTS_PER_AXIS = 9
 
 
 def per_test(false_alarms_per_hour: float, axes: int) -> float:
-    """λ [1/h] of one test of one axis when a unit's ``false_alarms_per_hour`` is shared evenly among its ``axes``
-    axes and :data:`TESTS_PER_AXIS` tests each: by the union bound the unit then raises at most that many false alarms
-    per hour of data, whichever axis and test raise them."""
+    """λ [1/h] per test of one axis: ``false_alarms_per_hour`` shared among ``axes`` × :data:`TESTS_PER_AXIS` tests."""
     return false_alarms_per_hour / (axes * TESTS_PER_AXIS)
 
 
@@ -189,10 +157,8 @@ LIMIT_RATIO = 1.1
 
 def beyond_limit(y: np.ndarray, dt: float, v_limit: float, *, ratio: float = LIMIT_RATIO,
                  false_alarms_per_hour: float = DEFAULT_FALSE_ALARMS_PER_HOUR) -> NoiseLevel:
-    """The upward CUSUM alone against a limit: v₀ = ``v_limit`` [u²] (a specification's noise density as E[(y_{t+1} −
-    y_t)²]), v₁ = ``ratio``² v₀, on samples ``y`` [u] at period ``dt`` [s]. The outcome's ratio is live / limit (in
-    density); a sustained alarm says the axis is beyond the limit (any amount: the limit is a hard number).
-    ValueError as :func:`watch_noise_level`."""
+    """The upward CUSUM alone on ``y`` [u] at ``dt`` [s] against v₀ = ``v_limit`` [u²] (a spec's density), v₁ =
+    ``ratio``² v₀; ratio live / limit. ValueError as :func:`watch_noise_level`."""
     return watch_noise_level(y, dt, v_limit, (v_limit, v_limit), ratio=ratio,
                              false_alarms_per_hour=false_alarms_per_hour, directions_of=("up",), least_change=1.0)
 

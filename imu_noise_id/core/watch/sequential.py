@@ -1,9 +1,5 @@
-"""The CUSUMs of :mod:`.noise_level` sample by sample (the node's watch): each pair's difference moves both CUSUMs
-of every axis; an alarm keeps its time and where the change began, and is confirmed as :attr:`.NoiseLevel.sustained`
-confirms one offline, by the level of the ``confirm_pairs`` pairs after the alarm (each d² at most the
-upward CUSUM's cap). One that level does not confirm was a transient (a knock): it is kept as the axis's last
-transient and the axis's CUSUMs start again, so that a later change is dated and confirmed by itself. Live ratio:
-√ of the exponentially weighted mean of d²/v_ref over ``window`` seconds."""
+"""The CUSUMs of :mod:`.noise_level` sample by sample (the node's watch): an alarm confirmed by the level of the next
+``confirm_pairs`` pairs, else a transient and the CUSUMs restart; live ratio over ``window`` s."""
 
 from __future__ import annotations
 
@@ -23,9 +19,8 @@ CONFIRM_MIN_PAIRS = 1000
 
 @dataclass(frozen=True)
 class AxisWatch:
-    """One axis now: the live/reference density ratio (NaN before a pair), pairs seen, the first alarm (or None), the
-    stamp [s] when the level after it confirmed it (None: not yet), that level's ratio (NaN without an alarm), and
-    the last alarm that level found a transient (None without) with its level's ratio."""
+    """One axis now: ``ratio`` (NaN before a pair), ``pairs``, ``alarm``, ``confirmed_s`` [s], ``since_ratio``,
+    ``transient``."""
 
     ratio: float
     pairs: int
@@ -37,10 +32,8 @@ class AxisWatch:
 
 
 class SequentialNoiseWatch:
-    """Both CUSUMs per axis against references of E[(y_{t+1} − y_t)²] ``v_ref`` (k,) [u²] and their intervals
-    ``intervals`` ((lo, hi) per axis), for samples at period ``period`` [s]; ``ratio``, ``false_alarms_per_hour`` and
-    ``least_change`` as in :func:`~.noise_level.watch_noise_level`; ``confirm_pairs`` after an alarm confirm it or
-    find it a transient."""
+    """Both CUSUMs per axis against ``v_ref`` (k,) [u²] within ``intervals``, at ``period`` [s] (as
+    watch_noise_level)."""
 
     def __init__(self, v_ref: np.ndarray, intervals: list[tuple[float, float]], period: float, *, ratio: float,
                  false_alarms_per_hour: float, window_s: float = DEFAULT_WINDOW_S,
@@ -111,7 +104,6 @@ class SequentialNoiseWatch:
         self._pending = None
 
     def _level(self, i: int) -> NoiseLevel:
-        """Axis ``i``'s alarm with the level of the pairs since it (the offline test's outcome, for its rule)."""
         ratio, ci = ratio_interval(self.since_d2[i] / self.since_n[i], int(self.since_n[i]), self.v_ref[i])
         return NoiseLevel(ratio, ci, self.alarms[i], self.h, int(self.since_n[i]), self.reference_ci[i],
                           self.least_change)

@@ -1,13 +1,5 @@
-"""The bias-step and new-line tests of :mod:`.compare` on a sliding window of stationary samples (the node's watch).
-
-Every ``every_s`` seconds of stationary data each axis is tested once (the axes in turn, one per tick, so that no
-sample waits for more than one axis's test) on its last ``window_s`` seconds of contiguous stationary samples, each
-test at level α = λ · ``every_s`` / 3600: by the union bound over the 3600 / ``every_s`` tests of an hour, at most λ
-false alarms per hour per axis and test. A change is visible while both of its sides are in the window, so a step is
-found within ``every_s`` plus the samples its size needs after it, and a new line once enough of its cycles are in
-(docs/analysis.md, "Compare against a reference"). Motion or a gap breaks the window: a step across motion is not a
-step here.
-"""
+"""The step and line tests of :mod:`.compare` on the last ``window_s`` s of stationary samples, one axis every
+``every_s`` s, at α = λ · ``every_s`` / 3600 (union bound); motion restarts the window."""
 
 from __future__ import annotations
 
@@ -29,9 +21,7 @@ MIN_WINDOW_S = 30.0
 
 @dataclass(frozen=True)
 class WindowFinding:
-    """A test's first significant finding on one axis: ``kind`` "step" or "line", ``value`` (the step's size [u] or
-    the line's frequency [Hz]), ``amplitude`` (the line's [u]; the step's size again), ``since_s`` (the step's stamp,
-    or the window's first stamp for a line) and ``time_s`` (the stamp of the test that found it) [s]."""
+    """A first finding: ``kind`` step/line, ``value`` ([u] or [Hz]), ``amplitude`` [u], ``since_s``, ``time_s`` [s]."""
 
     kind: str
     value: float
@@ -41,9 +31,8 @@ class WindowFinding:
 
 
 class WindowedChecks:
-    """:func:`.compare.step_and_line` per axis on the last ``window_s`` [s] of stationary samples at ``period`` [s]
-    against ``references`` (one per axis, the samples' order), at λ = ``false_alarms_per_hour`` per axis and test
-    (:func:`.noise_level.per_test` of a unit's)."""
+    """:func:`.compare.step_and_line` on the last ``window_s`` [s] of stationary samples at ``period`` [s], λ per
+    axis and test."""
 
     def __init__(self, references: list[AxisReference], period: float, *, false_alarms_per_hour: float,
                  window_s: float = DEFAULT_WINDOW_S, every_s: float = DEFAULT_EVERY_S) -> None:
@@ -85,7 +74,6 @@ class WindowedChecks:
         self.since_tick = 0
 
     def _window(self, i: int) -> tuple[np.ndarray, np.ndarray]:
-        """The window's stamps and axis ``i``'s samples, oldest first."""
         order = (np.arange(self.next_slot - self.count, self.next_slot)) % self.capacity
         return self.stamps[order], self.samples[order, i]
 

@@ -1,6 +1,5 @@
-"""Haar wavelet variance, the moments the GMWM fits (:mod:`imu_noise_id.core.estimation.gmwm.fit`): the WV at dyadic
-scales (:mod:`.variance`), its robust M-estimator (:mod:`.robust`) and the model-based covariance
-(:mod:`.covariance`)."""
+"""Haar wavelet variance, the moments the GMWM (:mod:`imu_noise_id.core.estimation.gmwm.fit`) fits: classical,
+robust, and its model-based covariance."""
 
 from .covariance import theoretical_wv, wv_covariance
 from .robust import BiweightScale, hampel_clean

@@ -1,14 +1,12 @@
-"""Theoretical wavelet variance of a component model and the covariance of the WV estimates across scales.
-
-ν²_j(θ) = AV(τ_j)/2 of the sampled components (GMWM eq. 3's ν(θ)). Beyond the papers, for a Gaussian model, with
-K(u) the partial sums' generalised covariance (:meth:`~imu_noise_id.core.noise.base.Component.sum_covariance`),
+"""Theoretical WV of a component model and the covariance of the WV estimates across scales: ν²_j(θ) = AV(τ_j)/2 of the
+sampled components (GMWM eq. 3's ν(θ)), and for a Gaussian model, K(u) the partial sums' generalised covariance
+(:meth:`~..noise.base.Component.sum_covariance`),
 
     γ_ij(k) = Cov(W_{i,t}, W_{j,t+k}) = Σ_{a,b=0}^{2} c_a c_b K(k + a m_i − b m_j) / (4 m_i m_j),  c = (1, −2, 1),
     Cov(ν̂²_i, ν̂²_j) = 2 Σ_k n_ij(k) γ_ij(k)² / (M_i M_j)  (+ 4 μ_i μ_j Σ_k n_ij(k) γ_ij(k) / (M_i M_j) with a ramp)
 
-(Serroukh, Walden & Percival 2000 for one level), n_ij(k) the pairs inside the record, μ_j = ω·dt·m_j/2. For the robust
-WV, γ² becomes ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), scaled by (2/e)² (:mod:`.robust`). The lag sum is a trapezoid
-on a grid dense near γ's nine kinks (:data:`PIECE_POINTS` per piece; exact where the grid is every integer)."""
+(Serroukh, Walden & Percival 2000 for one level), n_ij(k) the pairs in the record, μ_j = ω·dt·m_j/2; robust WV: γ² →
+ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), × (2/e)². Lag sum: trapezoid, dense near γ's kinks."""
 
 from __future__ import annotations
 
@@ -36,8 +34,7 @@ def theoretical_wv(components: list[Component], tau: np.ndarray, dt: float) -> n
 
 
 def _offsets(length: int, cap: float, fine: float) -> np.ndarray:
-    """Offsets 0..length from a kink: steps ``cap``, refined near the kink (memory of ``fine`` samples) by steps growing
-    geometrically from max(1, fine/4)."""
+    """Offsets 0..length from a kink: steps ``cap``, near the kink steps growing geometrically from max(1, fine/4)."""
     step = max(1, int(cap))
     # The first lags are always taken one by one: a component whose K jumps at u = 0 (QN, MA) puts an isolated value
     # at the kink itself, which must weigh one lag, not a whole step.
@@ -53,8 +50,7 @@ def _offsets(length: int, cap: float, fine: float) -> np.ndarray:
 
 def _lag_grid(m_i: int, m_j: int, n: int, *, margin: int, period: float,
               fine: float) -> tuple[np.ndarray, np.ndarray]:
-    """Integer lags and trapezoid weights for Σ_k f(k) over k ∈ [−2m_i − margin, 2m_j + margin] ∩ (−n, n) (module
-    docstring; lengths in samples)."""
+    """Integer lags and trapezoid weights over [−2m_i − margin, 2m_j + margin] ∩ (−n, n)."""
     lo, hi = max(-2 * m_i - margin, -(n - 1)), min(2 * m_j + margin, n - 1)
     kinks = {b * m_j - a * m_i for a in range(3) for b in range(3)}
     nodes = sorted({lo, hi, *(k for k in kinks if lo < k < hi)})
@@ -76,7 +72,7 @@ def _lag_grid(m_i: int, m_j: int, n: int, *, margin: int, period: float,
 
 
 def _pair_counts(k: np.ndarray, m_i: int, m_j: int, n: int) -> np.ndarray:
-    """n_ij(k): coefficient pairs (s, s + k) with W_{i,s} and W_{j,s+k} both inside the record."""
+    """n_ij(k): pairs (s, s + k) with W_{i,s} and W_{j,s+k} inside the record."""
     top = np.minimum(n - 1, n - 1 - k)
     bottom = np.maximum(2 * m_i - 1, 2 * m_j - 1 - k)
     return np.maximum(top - bottom + 1, 0).astype(float)
@@ -84,7 +80,6 @@ def _pair_counts(k: np.ndarray, m_i: int, m_j: int, n: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Plan:
-    """The lag grids of every pair of scales, concatenated (lags, weights × pair counts, m_i, m_j, pair starts)."""
 
     k: np.ndarray
     weight: np.ndarray
@@ -109,14 +104,13 @@ def _plan(m: tuple[int, ...], n: int, margin: int, period: float, fine: float) -
 
 
 def _bucket(x: float) -> float:
-    """x rounded up to a power of two (plans are shared between nearby models)."""
     return 0.0 if x <= 0 else (math.inf if not math.isfinite(x) else 2.0 ** math.ceil(math.log2(x)))
 
 
 def wv_covariance(components: list[Component], m: np.ndarray, n: int, dt: float, *,
                   scale: BiweightScale | None = None) -> np.ndarray:
-    """(J, J) covariance [u⁴] of the WV estimates at factors ``m`` of an n-sample record of the Gaussian model
-    ``components`` (module docstring); with ``scale``, of the robust estimator."""
+    """(J, J) covariance [u⁴] of the WV estimates at ``m`` for n samples of the Gaussian model; ``scale``: of the
+    robust WV."""
     m = np.asarray(m, dtype=np.int64)
     comps = list(components)
     stochastic = [c for c in comps if not isinstance(c, RR)]

@@ -1,14 +1,11 @@
-"""Robust wavelet variance: a bounded-influence M-estimator of one level's coefficient variance.
-
-After Guerrier, Molinari & Victoria-Feser (Austrian J. Statistics 43, 2014) and Guerrier, Molinari,
-Victoria-Feser & Xu (arXiv 2001.04214), with Tukey's biweight w_c(r) = (1 − (r/c)²)² (|r| < c):
+"""Robust wavelet variance, a bounded-influence M-estimator of one level's coefficient variance (Guerrier, Molinari &
+Victoria-Feser, Austrian J. Statistics 43, 2014; Guerrier, Molinari, Victoria-Feser & Xu, arXiv 2001.04214), Tukey's
+biweight w_c(r) = (1 − (r/c)²)², |r| < c:
 
     (1/M_j) Σ_t χ_c(W_{j,t} / ν_j) = 0,   χ_c(r) = w_c(r)·(r² − κ_c),   κ_c = E[w_c(Z) Z²] / E[w_c(Z)],
 
-Fisher-consistent at the normal, solved by Newton steps from the biweight S-scale (breakdown 50 %). Efficiency
-relative to mean(W²): e²/(2 Var χ_c(Z)), e = E[χ'_c(Z) Z]. Beyond the papers: influence zero beyond c·ν; Gaussian
-covariance Cov(χ(r), χ(r')) = Σ_{k even} a_k² ρ^k / k!, a_k = E[χ_c(Z) He_k(Z)], a_2 = e (:mod:`.covariance`).
-"""
+from the biweight S-scale (breakdown 50 %); efficiency e²/(2 Var χ_c(Z)), e = E[χ'_c(Z) Z]; Gaussian covariance Σ_{k
+even} a_k² ρ^k/k!, a_k = E[χ_c(Z) He_k(Z)] (docs/gmwm.md)."""
 
 from __future__ import annotations
 
@@ -49,7 +46,7 @@ START_SAMPLE = 100_000
 
 
 def _s_scale(w: np.ndarray, log_nu: float, iterations: int = 30) -> float:
-    """log of the biweight S-scale: mean ρ(w/s) = ½, ρ(r) = 1 − (1 − (r/c)²)³ capped at 1 (safeguarded Newton)."""
+    """log of the biweight S-scale: mean ρ(w/s) = ½, ρ(r) = 1 − (1 − (r/c)²)³ capped at 1."""
     lo, hi = -math.inf, math.inf
     c2 = S_SCALE_C * S_SCALE_C
     for _ in range(iterations):
@@ -69,8 +66,8 @@ def _s_scale(w: np.ndarray, log_nu: float, iterations: int = 30) -> float:
 
 @dataclass(frozen=True)
 class BiweightScale:
-    """The biweight M-estimator of the variance at tuning constant ``c`` [ν] (module docstring): ``kappa`` κ_c, ``e``
-    = a_2, ``efficiency``, ``hermite`` a_k²/k! for :data:`HERMITE_ORDERS` (the last with the remainder)."""
+    """The biweight M-estimator at tuning constant ``c`` [ν]: ``kappa`` κ_c, ``e`` = a_2, ``efficiency``, ``hermite``
+    a_k²/k!."""
 
     c: float
     kappa: float
@@ -84,14 +81,14 @@ class BiweightScale:
 
     @classmethod
     def for_efficiency(cls, efficiency: float) -> BiweightScale:
-        """The estimator whose efficiency at the normal is ``efficiency`` (in [0.05, 0.99])."""
+        """The estimator of ``efficiency`` at the normal (in [0.05, 0.99])."""
         if not 0.05 <= efficiency <= 0.99:
             raise InputError(f"robust efficiency must lie in [0.05, 0.99], got {efficiency}")
         c = optimize.brentq(lambda c: _biweight(c).efficiency - efficiency, 1.0, 60.0, xtol=1e-10)
         return cls.of(c)
 
     def solve(self, w: np.ndarray, *, tol: float = 1e-8, max_iter: int = 40) -> float:
-        """ν̂² solving mean χ_c(w/ν) = 0: Newton steps in log ν from the S-scale, kept within their bracket."""
+        """ν̂² solving mean χ_c(w/ν) = 0 by bracketed Newton steps in log ν from the S-scale."""
         w = np.abs(np.asarray(w, dtype=float))
         if w.size == 0 or not np.any(w > 0):
             raise InputError("the robust wavelet variance needs non-zero wavelet coefficients")
@@ -149,8 +146,8 @@ HAMPEL_HALF_WINDOW, HAMPEL_THRESHOLD = 3, 6.5
 
 def hampel_clean(y: np.ndarray, half_window: int = HAMPEL_HALF_WINDOW,
                  threshold: float = HAMPEL_THRESHOLD) -> tuple[np.ndarray, np.ndarray]:
-    """``y`` with isolated outliers replaced by the running median of 2h + 1 samples, and their mask (beyond the
-    papers; Hampel identifier: more than ``threshold`` × 1.4826·MAD from the running median; reasons: docs/gmwm.md)."""
+    """(``y`` with isolated outliers replaced by the running median of 2h + 1 samples, their mask); outliers lie
+    beyond ``threshold`` × 1.4826·MAD from it (Hampel)."""
     y = np.asarray(y, dtype=float)
     h = int(half_window)
     bad = np.zeros(y.size, bool)

@@ -1,15 +1,9 @@
-"""Haar MODWT wavelet variance of one axis at the dyadic scales, classical or robust, with per-scale intervals.
-
-GMWM (Guerrier, Skaloud, Stebler & Victoria-Feser, JASA 108, 2013) with the MODWT (Percival & Walden 2000): at
-τ_j = m_j·dt, m_j = 2^{j−1},
-
-    W_{j,t} = (x_{t+2m} − 2x_{t+m} + x_t) / (2m·dt),   x the phase (:mod:`..allan.estimators`),
-
-so ν²_j = AV(τ_j)/2 and the classical estimator over M_j = N − 2m_j + 1 coefficients (GMWM eq. 2) is half the
-maximal-overlap AV (paper 000 eq. 2), with half its χ² intervals (:mod:`..allan.edf`). ``robust=True``: the
-biweight M-estimator (:mod:`.robust`) after :func:`.robust.hampel_clean`, intervals with the EDF scaled by its
-efficiency (beyond the papers). Covariance across scales: :mod:`.covariance`.
-"""
+"""Haar MODWT wavelet variance of one axis at dyadic scales, classical or robust, with per-scale intervals: GMWM
+(Guerrier, Skaloud, Stebler & Victoria-Feser, JASA 108, 2013) with the MODWT (Percival & Walden 2000), τ_j = m_j·dt,
+m_j = 2^{j−1}, W_{j,t} = (x_{t+2m} − 2x_{t+m} + x_t)/(2m·dt) (x the phase): ν²_j = AV(τ_j)/2, the classical estimator
+over M_j = N − 2m_j + 1 coefficients (GMWM eq. 2) half the maximal-overlap AV (paper 000 eq. 2) with half its χ²
+intervals; ``robust``: the biweight M-estimator (:mod:`.robust`) after :func:`.robust.hampel_clean`, EDF × its
+efficiency."""
 
 from __future__ import annotations
 
@@ -33,16 +27,9 @@ MIN_CLEAN_SHARE = 0.25
 
 @dataclass(frozen=True)
 class WaveletVariance:
-    """The Haar WV of one axis at J dyadic scales.
-
-    Attributes
-    ----------
-    dt : sampling period [s]; n : samples
-    m : (J,) averaging factors 2^{j−1} (τ_j = m_j·dt)
-    nu2 : (J,) WV estimates [u²]; ci_low, ci_high : their 95 % intervals; edf : the intervals' degrees of freedom
-    robust : whether ``nu2`` is the robust WV; scale : its M-estimator (None when classical)
-    n_replaced : samples replaced as isolated spikes before the robust WV
-    """
+    """The Haar WV of one axis at J dyadic scales: ``dt`` [s], ``n`` samples, ``m`` (J,) factors 2^{j−1}, ``nu2``
+    (J,) estimates [u²] with 95 % ``ci_low``, ``ci_high`` and ``edf``, ``robust`` and its ``scale`` M-estimator (or
+    None), ``n_replaced`` spikes replaced first."""
 
     dt: float
     n: int
@@ -62,11 +49,11 @@ class WaveletVariance:
 
     @property
     def n_coefficients(self) -> np.ndarray:
-        """M_j = N − 2m_j + 1 coefficients per scale (those not touching the record's ends)."""
+        """M_j = N − 2m_j + 1 coefficients per scale."""
         return self.n - 2 * self.m + 1
 
     def as_allan(self) -> AllanResult:
-        """The same numbers as a one-column Allan variance (2ν², for code that reads an AV, e.g. starting values)."""
+        """The same numbers as a one-column AV (2ν²)."""
         col = lambda a: 2.0 * np.asarray(a, dtype=float)[:, None]  # noqa: E731
         return AllanResult(kind="allan", dt=self.dt, n=self.n, m=self.m, tau=self.tau, variance=col(self.nu2),
                            ci_low=col(self.ci_low), ci_high=col(self.ci_high), edf=self.edf[:, None],
@@ -91,19 +78,8 @@ def dyadic_m(n: int, max_fraction: float = DEFAULT_MAX_FRACTION) -> np.ndarray:
 
 def wavelet_variance(y: np.ndarray, dt: float, *, robust: bool = False, efficiency: float = DEFAULT_EFFICIENCY,
                      max_fraction: float = DEFAULT_MAX_FRACTION, m: np.ndarray | None = None) -> WaveletVariance:
-    """Haar MODWT wavelet variance of one axis (module docstring).
-
-    Parameters
-    ----------
-    y : (N,) finite rate samples [u] at period ``dt`` [s].
-    robust : the biweight M-estimator of asymptotic ``efficiency`` instead of mean(W²).
-    max_fraction : longest scale m_J ≤ max_fraction·N (:func:`dyadic_m`); or the factors ``m`` directly.
-
-    Raises
-    ------
-    InputError
-        Not 1-D, not finite, too short, constant.
-    """
+    """Haar MODWT WV of finite rate samples ``y`` (N,) [u] at ``dt`` [s], scales to ``max_fraction``·N or factors
+    ``m``; ``robust``: the biweight M-estimator of ``efficiency``. InputError on bad or constant samples."""
     y = np.asarray(y, dtype=float)
     if y.ndim != 1:
         raise InputError(f"the wavelet variance takes one axis (1-D samples), got shape {y.shape}")
