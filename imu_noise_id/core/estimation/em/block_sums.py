@@ -1,21 +1,12 @@
-"""Exact likelihood of a record's block sums under the aggregated model: a statistic of fixed size for the long-τ part.
+"""Exact likelihood of a record's block sums: a statistic of fixed size for the long-τ part (beyond the papers).
 
-The record y_0 … y_{N−1} is cut into M blocks of L samples (M ≤ :data:`MAX_BLOCKS`); with the partial sums
-x_k = y_0 + … + y_{k−1}, the differences of the block sums
-
-    D_k = x_{(k+2)L} − 2 x_{(k+1)L} + x_{kL},    k = 0 … M − 2,
-
-are stationary for every component (a bias cancels, a ramp leaves a constant, removed with the mean) and Gaussian
-with the autocovariance
+With M ≤ :data:`MAX_BLOCKS` blocks of L samples and partial sums x_k = y_0 + … + y_{k−1}, the differences
+D_k = x_{(k+2)L} − 2 x_{(k+1)L} + x_{kL} (k = 0 … M − 2) are stationary and Gaussian with autocovariance
 
     γ_D(h) = K((h−2)L) − 4 K((h−1)L) + 6 K(hL) − 4 K((h+1)L) + K((h+2)L),
 
-where K is the components' generalised covariance of the partial sums (:meth:`~imu_noise_id.core.noise.base.Component.
-sum_covariance`, exact for the *sampled* components; the filter [1, −4, 6, −4, 1] annihilates the polynomial K is
-defined up to). The Gaussian log-likelihood of the D_k is exact, by the Cholesky factor of their Toeplitz covariance,
-O(M³) whatever N. Beyond the papers; used by :mod:`.screen` (reasons: docs/em.md, "Why the maximum-likelihood search
-and its statistics are built as they are").
-"""
+K the components' generalised covariance of the partial sums (``Component.sum_covariance``, exact for the sampled
+components). Their log-likelihood is exact by the Cholesky factor of the Toeplitz covariance, O(M³) whatever N."""
 
 from __future__ import annotations
 
@@ -43,15 +34,7 @@ SLOW_TYPES = (WN, RW, GM, BI)
 
 @dataclass(frozen=True)
 class BlockSums:
-    """The differences of a record's block sums, demeaned (module docstring).
-
-    Attributes
-    ----------
-    d : (M − 1,) array — D_k [u·samples] (sums, not means)
-    block : int — samples per block, L
-    dt : float — sampling period [s]
-    n : int — samples of the record
-    """
+    """Demeaned differences of block sums: ``d`` (M − 1,) [u·samples], ``block`` L, ``dt`` [s], ``n`` samples."""
 
     d: np.ndarray
     block: int
@@ -60,13 +43,7 @@ class BlockSums:
 
 
 def block_sums(y: np.ndarray, dt: float, max_blocks: int = MAX_BLOCKS) -> BlockSums:
-    """The :class:`BlockSums` of one axis (NaN samples interpolated; a tail shorter than a block dropped).
-
-    Raises
-    ------
-    InputError
-        Fewer samples than :data:`MIN_BLOCKS` blocks of one sample.
-    """
+    """:class:`BlockSums` of one axis (NaN interpolated); InputError below :data:`MIN_BLOCKS` blocks."""
     y = interpolate_missing(np.asarray(y, dtype=float))
     block = max(1, math.ceil(y.size / max_blocks))
     m = y.size // block
@@ -126,8 +103,7 @@ def loglik(components: list[Component], sums: BlockSums) -> float:
 
 
 def fit(start: list[Component], sums: BlockSums) -> tuple[float, list[Component]]:
-    """Maximise :func:`loglik` over the log-parameters of the components of :data:`SLOW_TYPES` (Gauss–Markov τ
-    between dt/2 and 100 records), the others held; (log-likelihood, fitted components)."""
+    """(log-likelihood, components) maximised over :data:`SLOW_TYPES`' log-parameters (GM τ ∈ [dt/2, 100 records])."""
     keys = [(i, name) for i, c in enumerate(start) if isinstance(c, SLOW_TYPES) for name in c.parameter_names]
     lags = sum_lags(sums.block, sums.d.size)
     held_k = sum((c.sum_covariance(lags, sums.dt) for c in start if not isinstance(c, SLOW_TYPES)), np.zeros(lags.size))

@@ -1,19 +1,10 @@
-"""A likelihood of fixed size for long records: the banded Whittle likelihood above the block sums' band plus the
-exact likelihood of the block sums.
+"""A likelihood of fixed size for long records (beyond the papers): the record's frequencies split at the block sums'
+Nyquist frequency π/L [rad/sample], the exact likelihood of the block sums below (:mod:`.block_sums`), the banded
+Whittle likelihood of the tapered differences above (:mod:`.whittle`, single around the start's OSC lines):
 
-Beyond the papers. The record's frequencies are split at the block sums' Nyquist frequency π/L [rad/sample] (L samples
-per block, :mod:`.block_sums`): below it the exact Gaussian likelihood of the differences of the block sums (every
-component through its sum covariance, the random walk, flicker noise and GMs of long τ told apart as by the full
-likelihood), above it the Whittle likelihood of the tapered periodogram of the differences (:mod:`.whittle`), pooled in
-log-spaced bands and kept single around the start's OSC lines:
+    ℓ_c(θ) = −Σ_{b: ω_b > π/L} n_b [ln S_Δ(ω_b; θ) + Ī_b / S_Δ(ω_b; θ)] + ℓ_blocks(θ),
 
-    ℓ_c(θ) = −Σ_{b: ω_b > π/L} n_b [ln S_Δ(ω_b; θ) + Ī_b / S_Δ(ω_b; θ)] + ℓ_blocks(θ)
-
-(S_Δ the exact spectrum of the sampled model's differences, Ī_b the band's mean periodogram). Each evaluation costs
-O(bands + M³) whatever N; the statistics are computed once per record in one O(N log N) pass. Its maximiser starts the
-exact likelihood's finish close to its maximum, and the closed loop searches on it (reasons and measurements:
-docs/em.md, "Searching long records on a likelihood of fixed size").
-"""
+S_Δ the sampled model's difference spectrum, Ī_b a band's mean periodogram; O(bands + M³) per evaluation."""
 
 from __future__ import annotations
 
@@ -41,8 +32,7 @@ MIN_SAMPLES = 250_000
 
 @dataclass(frozen=True)
 class CompositeStatistics:
-    """The record's tapered periodogram of differences and block sums (computed once), its period ``dt`` [s] and
-    length ``n``."""
+    """The record's tapered periodogram of differences and block sums, its period ``dt`` [s] and length ``n``."""
 
     spectrum: whittle.TaperedPeriodogram
     sums: block_sums.BlockSums
@@ -61,8 +51,7 @@ class CompositeStatistics:
         return math.pi / self.sums.block
 
     def bands(self, start: list[Component]) -> whittle.BandedPeriodogram:
-        """The Whittle part's bands above :attr:`split`, single around ``start``'s OSC lines
-        (:func:`.whittle.line_windows`)."""
+        """The Whittle part's bands above :attr:`split`, single around ``start``'s OSC lines."""
         bp = whittle.pooled(self.spectrum, fine=whittle.line_windows([start], self.dt))
         above = bp.omega > self.split
         return whittle.BandedPeriodogram(bp.omega[above], bp.count[above], bp.power[above])
@@ -77,18 +66,15 @@ def _whittle_part(components: list[Component], bp: whittle.BandedPeriodogram, dt
 
 def loglik(components: list[Component], stats: CompositeStatistics,
            bp: whittle.BandedPeriodogram | None = None) -> float:
-    """ℓ_c of ``components`` (module docstring; up to a constant), on ``bp`` (default :meth:`CompositeStatistics.
-    bands` of ``components``)."""
+    """ℓ_c of ``components`` (up to a constant) on ``bp`` (default: :meth:`CompositeStatistics.bands`)."""
     bp = bp if bp is not None else stats.bands(components)
     return _whittle_part(components, bp, stats.dt) + block_sums.loglik(components, stats.sums)
 
 
 def fit(start: list[Component], stats: CompositeStatistics,
         bounds: dict[str, tuple[float, float]]) -> tuple[float, list[Component]]:
-    """Maximise ℓ_c over the log-parameters of ``start``'s stochastic components (RR held) within the physical
-    ``bounds`` (:func:`.mle.physical_bounds`): climbed from ``start`` and from the banded Whittle likelihood's maximiser
-    from it (:func:`.whittle.whittle_fit`, whose plain steps leave a start far from the maximum better than the
-    whitened ones, which can cross into a lower mode), the better kept; (ℓ_c, fitted components)."""
+    """(ℓ_c, fitted components) maximised over the log-parameters (RR held) within ``bounds``, climbed from ``start``
+    and from the banded Whittle maximiser from it, the better kept."""
     bp = whittle.pooled(stats.spectrum, fine=whittle.line_windows([start], stats.dt))
     climbs = [_climb(start, stats, bounds)]
     with contextlib.suppress(ValueError):  # the Whittle climb left the components' domain: the start's climb only
@@ -99,10 +85,8 @@ def fit(start: list[Component], stats: CompositeStatistics,
 
 
 def fit_model(model: NoiseModel, starts: list[list[Component]], stats: CompositeStatistics) -> FitResult:
-    """The fit of ``model`` at the maximiser of ℓ_c (:func:`fit`, from each of ``starts``, the best kept) on
-    ``stats`` (the record's, or of the record with its regressors removed), evaluated once on the exact likelihood:
-    its log-likelihood, BIC and innovations are exact at those values, the means GLS there; no EM or quasi-Newton step
-    on the exact likelihood, no intervals. InputError (a ValueError) when no start can be evaluated."""
+    """``model`` fitted at ℓ_c's maximiser (best of ``starts``) and scored once on the exact likelihood: exact ℓ, BIC
+    and innovations at those values, GLS means, no intervals. InputError when no start can be evaluated."""
     from .model import FitOptions  # model imports the searches this module serves
 
     fits = [fit(start, stats, model.parameter_bounds) for start in starts]
@@ -118,10 +102,8 @@ def _same_point(a: list[Component], b: list[Component], tol: float = 1e-3) -> bo
 
 def _climb(start: list[Component], stats: CompositeStatistics,
            bounds: dict[str, tuple[float, float]]) -> tuple[float, list[Component]]:
-    """ℓ_c climbed from ``start`` (:func:`fit`); ``start`` itself when no step gains. L-BFGS-B in η = Lᵀ(ϑ − ϑ₀),
-    L Lᵀ the Whittle information at the start
-    (:func:`.whittle.whittle_information`), a point outside the box scored at its projection plus a quadratic pull
-    (as :func:`.mle.maximise`), with the gradient of :func:`loglik_and_gradient`."""
+    """ℓ_c climbed from ``start`` (``start`` itself when no step gains): L-BFGS-B in η = Lᵀ(ϑ − ϑ₀), L Lᵀ the start's
+    Whittle information, a point outside the box scored at its projection plus a quadratic pull."""
     bp = stats.bands(start)
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
     if not keys:
@@ -173,23 +155,16 @@ DIFFERENCE_STEP = 1e-4
 def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]], x: np.ndarray,
                         stats: CompositeStatistics, bp: whittle.BandedPeriodogram, *,
                         memo: dict | None = None) -> tuple[float, np.ndarray]:
-    """ℓ_c (:func:`loglik` on ``bp``) of ``components`` with the log-parameters ``keys`` set to ``x``
-    (:func:`.whittle.with_log_parameters`), and its gradient in ``x``.
+    """ℓ_c with the log-parameters ``keys`` set to ``x``, and its gradient in ``x``.
 
-    ℓ_c depends on the parameters only through the difference spectrum S_Δ(ω_b) = Σ_c S_c(ω_b) and the block sums'
-    autocovariance γ_D(h) = Σ_c γ_c(h), each a sum over components, so by the chain rule
+    By the chain rule through S_Δ = Σ_c S_c and γ_D = Σ_c γ_c (c the component of ϑ_j, Σ the block sums' Toeplitz
+    covariance, T_h its lag-h basis matrix):
 
-        ∂ℓ_c/∂ϑ_j = Σ_b n_b (Ī_b/S_Δ − 1)/S_Δ · ∂S_c/∂ϑ_j  +  ½ Σ_h tr[(Σ⁻¹DDᵀΣ⁻¹ − Σ⁻¹) T_h] ∂γ_c/∂ϑ_j
+        ∂ℓ_c/∂ϑ_j = Σ_b n_b (Ī_b/S_Δ − 1)/S_Δ · ∂S_c/∂ϑ_j  +  ½ Σ_h tr[(Σ⁻¹DDᵀΣ⁻¹ − Σ⁻¹) T_h] ∂γ_c/∂ϑ_j,
 
-    (c the component of ϑ_j, Σ the block sums' Toeplitz covariance, T_h its h-th Toeplitz basis matrix). ∂/∂ϑ of a
-    component's :attr:`~..noise.base.Component.scale_name` is 2·(S_c, γ_c); its other parameters by central differences
-    of :data:`DIFFERENCE_STEP` of that component alone (one-sided at its domain's edge, :mod:`.differences`). An
-    evaluation and its gradient cost about four evaluations, where forward differences of ℓ_c cost one per parameter.
-    ``memo`` (one dict per ``bp``, kept by the caller across evaluations) holds (S_c, γ_c) of the components whose only
-    parameter is their scale, by their fixed values, rescaled by the scale's square (a flicker ladder's are the
-    costliest). ValueError where ``x`` is outside a component's domain;
-    (−inf, zeros) where S_Δ ≤ 0 or Σ is not positive definite.
-    """
+    exact (2·(S_c, γ_c)) for a component's scale, by central differences of :data:`DIFFERENCE_STEP` otherwise.
+    ``memo`` (one dict per ``bp``) caches scale-only components at unit scale. ValueError outside a domain;
+    (−inf, zeros) where S_Δ ≤ 0 or Σ is not positive definite."""
     current = whittle.with_log_parameters(components, keys, x)
     lags = block_sums.sum_lags(stats.sums.block, stats.sums.d.size)
     memo = {} if memo is None else memo

@@ -1,6 +1,4 @@
-"""Finite differences that stay inside the components' domains: where a log-parameter step leaves one (ValueError,
-e.g. an OSC at :data:`~imu_noise_id.core.noise.resonant.MAX_DAMPING`), the derivative is taken on the other side.
-"""
+"""Finite differences that stay inside the components' domains (one-sided where a step raises ValueError)."""
 
 from __future__ import annotations
 
@@ -13,8 +11,8 @@ def derivative_in_domain(
     shifted: Callable[[float], np.ndarray | float], step: float, at_zero: Callable[[], np.ndarray | float], *,
     central: bool = True,
 ) -> np.ndarray | None:
-    """d/dh of ``shifted(h)`` at h = 0 by a central (or, ``central=False``, forward) difference of ``step``; a
-    one-sided difference against ``at_zero()`` where a step raises ValueError; None when both steps do."""
+    """d/dh of ``shifted(h)`` at 0 by a central (``central=False``: forward) difference of ``step``; one-sided
+    against ``at_zero()`` where a step raises ValueError; None when both do."""
     values = {}
     for h in (step, -step):
         if values and not central:  # the forward step stayed inside

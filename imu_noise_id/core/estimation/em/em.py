@@ -1,19 +1,7 @@
-"""Constrained EM algorithm for state-space error models (paper 000, Stebler et al. 2011, §3).
-
-E-step: Kalman smoother with lag-one covariance (:mod:`.kalman`), reduced to the sums the M-step needs.
-M-step: the constrained closed-form updates of §3.3 for u, μ, Φ, H, Q, R, each matrix written
-``vec(M) = f + D·m`` (eqs. 7–9), applied in sequence (ECM). Σ stays fixed (§3.3).
-
-Beyond the paper:
-
-* Measurement regressors b (bias, ramp, exog): closed-form regression on ``y_t − H x_t^N``, like H's update.
-* The Q update's S uses ``Φ x̄ uᵀ + u x̄ᵀ Φᵀ`` (paper 000 prints ``Φ x_{t−1}^N uᵀ Φᵀ``; the expansion gives this).
-* ``sigma_mode == 'steady'``: Σ = P̄(θ), and the M-step ignores Σ's dependence on θ (a generalised EM, ascent up to
-  an O(1) term); ``sigma_mode='fixed'`` is the paper's exact EM.
-* Free diagonal Φ elements are kept in (1e-12, 1 − 1e-12), free Q variances above :data:`Q_FLOOR_REL`·R.
-* :class:`MatrixScore`: the exact log-likelihood's gradient in Φ, Q, R by Fisher's identity, for the quasi-Newton
-  finish (:mod:`imu_noise_id.core.estimation.em.search`).
-"""
+"""Constrained EM for state-space error models (paper 000, Stebler et al. 2011, §3): E-step by the Kalman smoother
+(:class:`Sums`), M-step by the closed-form updates of §3.3 for u, μ, Φ, H, Q, R with vec(M) = f + D·m (eqs. 7–9), in
+sequence (ECM), Σ fixed. Beyond the paper: regressors b updated like H; the Q update's S with Φ x̄ uᵀ + u x̄ᵀ Φᵀ (the
+paper prints Φ x_{t−1}^N uᵀ Φᵀ); Σ = P̄(θ) in steady mode (a generalised EM); the gradient :class:`MatrixScore`."""
 
 from __future__ import annotations
 
@@ -119,7 +107,8 @@ def _measurement_sse(model: StateSpace, s: Sums) -> float:
 
 
 def mstep(model: StateSpace, s: Sums) -> StateSpace:
-    """One sweep of the constrained updates of paper 000 §3.3 (u, μ, Φ, H, Q, then b and R)."""
+    """One sweep of the constrained updates of paper 000 §3.3 (u, μ, Φ, H, Q, then b and R); free diagonal Φ clipped
+    to ``PHI_RANGE``, free Q variances ≥ :data:`Q_FLOOR_REL`·R."""
     m = model.copy()
     n1 = s.n - 1
     p = m.n_states
@@ -175,12 +164,8 @@ def transition_residual(s: Sums, phi: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 def transition_terms(st: kalman.SmootherStats, phi: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """S(Φ, u) of :func:`transition_residual` and C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ] from the smoother's
-    output itself: the means' part from the increments d_t = x_t^N − Φ x_{t−1}^N − u (S = Σ d dᵀ + covariance part,
-    C = Σ d x_{t−1}ᵀ + covariance part), not as differences of the sums of x xᵀ. The same numbers in exact arithmetic;
-    in floating point the sums' differences cancel: for a random walk S ~ N·q against Σ x xᵀ ~ N·(the walk's level)²,
-    and the score's (N−1)/q − S/q² then carried an error growing with N (±0.5 in ∂ℓ/∂ ln K at 10⁷ samples, a
-    negative observed information for K; beyond paper 000, whose EM needs S only to O(1/N))."""
+    """S(Φ, u) of :func:`transition_residual` and C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ], the means' part
+    from the smoothed increments x_t^N − Φ x_{t−1}^N − u, not from differences of sums (docs/em.md, "Why: EM")."""
     X = st.xs
     prev = X[:, :-1]
     d = X[:, 1:] - phi @ prev - u[:, None]
@@ -192,21 +177,14 @@ def transition_terms(st: kalman.SmootherStats, phi: np.ndarray, u: np.ndarray) -
 
 @dataclass(frozen=True)
 class MatrixScore:
-    """The exact log-likelihood's gradient in Φ, Q and R at the E-step's θ_E by Fisher's identity (beyond paper
-    000): ∂ℓ/∂θ = ∂Q(θ | θ_E)/∂θ at θ = θ_E, Q the expected complete-data log-likelihood of paper 000 §3.3,
+    """Gradient of the exact log-likelihood in Φ, Q, R at the E-step's θ_E by Fisher's identity (beyond paper 000):
+    ∂ℓ/∂θ = ∂Q(θ | θ_E)/∂θ at θ_E, with Q the expected complete-data log-likelihood of §3.3,
 
-        Q = −½(N_obs ln 2πR + W/R) − ½((N−1) ln det Q + tr(Q⁻¹ S(Φ, u))) − ½(ln det Σ + tr(Σ⁻¹ E₁))
+        Q = −½(N_obs ln 2πR + W/R) − ½((N−1) ln det Q + tr(Q⁻¹ S(Φ, u))) − ½(ln det Σ + tr(Σ⁻¹ E₁)),
+        ∂Q/∂R = −½(N_obs/R − W/R²),   ∂Q/∂Q = −½((N−1) Q⁻¹ − Q⁻¹ S Q⁻¹),   ∂Q/∂Φ = Q⁻¹ C
 
-    (W: :func:`_measurement_sse`; S: :func:`transition_residual`; E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ]), whence
-
-        ∂Q/∂R = −½(N_obs/R − W/R²),   ∂Q/∂Q = −½((N−1) Q⁻¹ − Q⁻¹ S Q⁻¹),   ∂Q/∂Φ = Q⁻¹ C,
-
-    C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ], over the states of non-zero process noise. In steady mode the
-    x_1 term's share comes from the DARE's adjoint (:class:`InitialTermGradient`). :meth:`directional` gives ∂ℓ/∂ϑ
-    from a parameter's change of its own block
-    (:meth:`~imu_noise_id.core.estimation.em.mle.Parameterisation.block_derivative`). H is held fixed. Raises ValueError
-    (in :meth:`at`) when R is zero. Reasons: docs/em.md, "Algorithm" 5.
-    """
+    (W: :func:`_measurement_sse`; S, C: :func:`transition_terms`; E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ], its steady-mode share
+    by :class:`InitialTermGradient`). H is held fixed."""
 
     g_phi: np.ndarray
     g_q: np.ndarray
@@ -214,8 +192,7 @@ class MatrixScore:
 
     @classmethod
     def at(cls, model: StateSpace, s: Sums, stats: kalman.SmootherStats) -> MatrixScore:
-        """The gradient at θ_E's ``model`` from its E-step sums ``s`` (class docstring); S and C from the smoother's
-        output ``stats`` (:func:`transition_terms`: differences of the sums cancel for a random walk)."""
+        """The gradient at θ_E's ``model`` from its E-step sums and smoother output; ValueError when R = 0."""
         r = float(model.r)
         if not r * r > 0.0:  # a white noise driven to (numerically) zero beside a filter that carries it: no score
             raise ValueError("the white-noise variance is zero: the likelihood's gradient is not defined there")
@@ -242,12 +219,9 @@ class MatrixScore:
 
 @dataclass(frozen=True)
 class InitialTermGradient:
-    """The x_1 term of Q to first order in the model matrices around θ_E, for :class:`MatrixScore` (beyond paper 000).
-
-    Steady mode: the term −½(log det Σ + tr(Σ⁻¹E₁)) over the states with Σ_ii > 0 has derivative tr(W dP̄),
-    W = −½(Σ⁻¹ − Σ⁻¹E₁Σ⁻¹) (:class:`~imu_noise_id.core.kalman.riccati.SteadyCovarianceSensitivity`). Fixed mode:
-    ``sensitivity`` None (no gradient).
-    """
+    """The x_1 term −½(log det Σ + tr(Σ⁻¹E₁)) of Q to first order around θ_E: in steady mode tr(W dP̄) with
+    W = −½(Σ⁻¹ − Σ⁻¹E₁Σ⁻¹) (:class:`~imu_noise_id.core.kalman.riccati.SteadyCovarianceSensitivity`); None in fixed
+    mode."""
 
     sensitivity: riccati.SteadyCovarianceSensitivity | None
 
@@ -269,16 +243,9 @@ class InitialTermGradient:
 
 @dataclass
 class EMResult:
-    """Outcome of :func:`run_em`.
-
-    Attributes
-    ----------
-    model : StateSpace — the last iterate
-    loglik : list[float] — exact log-likelihood at each iterate θ⁽⁰⁾, θ⁽¹⁾, … (the last entry is the final model's)
-    n_iter : int — M-steps done
-    converged : bool — whether the relative stopping rule was met
-    diverged : bool — whether an update made the model degenerate (no steady-state filter; the last good iterate kept)
-    """
+    """Outcome of :func:`run_em`: the last iterate ``model``; ``loglik``, the exact log-likelihood at θ⁽⁰⁾, θ⁽¹⁾, …
+    (the last entry the final model's); ``n_iter`` M-steps; ``converged`` (stopping rule met); ``diverged`` (an
+    update left the filter's domain, the last good iterate kept)."""
 
     model: StateSpace
     loglik: list[float] = field(default_factory=list)
@@ -304,23 +271,17 @@ def run_em(
     initial: kalman.SmootherStats | None = None,
     final_estep: bool = True,
 ) -> EMResult:
-    """Iterate E- and M-steps until the relative stopping rule of §3.5(ii) falls below ``tol``.
+    """Iterate E- and M-steps until the relative change of §3.5(ii) is below ``tol``; InputError on bad data or
+    ``max_iter`` < 0.
 
     Parameters
     ----------
     model : initial θ⁽⁰⁾ with its free masks
-    y, z : signal (N,) (NaN = missing) and measurement regressors (N, k)
+    y, z : signal (N,) [u] (NaN = missing) and measurement regressors (N, k)
     max_iter, tol, c : iteration cap, threshold ε and constant c of the stopping rule
     engine : Kalman engine (``'auto'``, ``'steady'``, ``'exact'``)
-    initial : smoother statistics of ``model`` on (y, z) when the caller has them
-        (:func:`imu_noise_id.core.kalman.profile_and_smooth`): the first E-step is not repeated
-    final_estep : ``False``: the model of the ``max_iter``-th M-step is returned unscored (not in ``loglik``, a
-        divergence of that update not detected)
-
-    Raises
-    ------
-    InputError
-        Bad data or regressors, or ``max_iter`` < 0.
+    initial : smoother statistics of ``model`` on (y, z), when the caller has them (first E-step skipped)
+    final_estep : ``False``: the ``max_iter``-th M-step's model is returned unscored (divergence not detected)
     """
     y, z = check_data(y, z, model.n_regressors)
     if max_iter < 0:

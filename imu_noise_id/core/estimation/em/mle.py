@@ -1,12 +1,8 @@
-"""Maximum-likelihood finish, standard errors and information for component models (beyond paper 000).
-
-L-BFGS-B on the exact log-likelihood after a few EM iterations, in log-parameters ϑ = log(continuous-time parameter)
-of each stochastic component; the mean parameters (bias, ramp, exog, u, μ) profiled by GLS
-(:func:`imu_noise_id.core.kalman.loglik`). Gradient by Fisher's identity from one smoother pass
-(:class:`imu_noise_id.core.estimation.em.em.MatrixScore`), each log-parameter through its own component's block.
-Standard errors (paper 000 §3.4): observed information = minus the Hessian of ℓ (differences of the exact gradient);
-95 % interval exp(ϑ̂ ± 1.96·se_ϑ), physical se by the delta method. Reasons: docs/em.md, "Algorithm" 5–6.
-"""
+"""Quasi-Newton maximum-likelihood finish and information of component models (beyond paper 000; standard errors as
+§3.4): L-BFGS-B on the exact log-likelihood in ϑ = log(continuous-time parameters) of the stochastic components, the
+mean parameters (bias, ramp, exog, u, μ) profiled by GLS; gradient by Fisher's identity from one smoother pass
+(:class:`~.em.MatrixScore`); observed information from differences of that gradient, 95 % intervals
+exp(ϑ̂ ± 1.96·se_ϑ), physical se by the delta method."""
 
 from __future__ import annotations
 
@@ -35,11 +31,8 @@ FLAT_INFORMATION = 1e-3
 
 
 def physical_bounds(n_total: int, dt: float) -> dict[str, tuple[float, float]]:
-    """Physical ranges of the parameters searched, for a record of ``n_total`` samples at period ``dt`` [s].
-
-    GM τ from one sample to 100 records; OSC and LPF frequencies between the record's resolution and the Nyquist
-    frequency; an OSC at least two resolution bins wide (narrower: a SIN regressor).
-    """
+    """Ranges searched on ``n_total`` samples at period ``dt`` [s]: GM τ [s] from dt to 100 records; OSC and LPF
+    frequencies [Hz] from the record's resolution to Nyquist; OSC bandwidth [Hz] at least two resolution bins."""
     span = n_total * dt
     nyquist = 0.5 / dt
     return {"tau": (dt, 100.0 * span), "frequency": (1.0 / span, nyquist), "bandwidth": (2.0 / span, nyquist),
@@ -80,14 +73,13 @@ class Parameterisation:
         return lo, hi
 
     def to_components(self, theta: np.ndarray, model: StateSpace | None = None) -> list[Component]:
-        """Components at ϑ; RR slopes are taken from ``model`` (its profiled value) when given. A log-parameter
-        beyond float range gives inf (the component then refuses it), not an overflow warning."""
+        """Components at ϑ (a log-parameter beyond float range gives inf, which the component refuses); RR slopes
+        from ``model``'s profiled value when given."""
         out = with_log_parameters(self.template, list(self.entries), theta)
         if model is not None and any(isinstance(c, RR) for c in out):
             from ...kalman.statespace import ramp_components
 
-            # only the RR blocks: every block converted back (an OSC's eigenvalues, a ladder's) at each step of the
-            # gradient's finite differences was work thrown away
+            # only the RR blocks (docs/em.md, "Why: the maximum-likelihood finish")
             fitted = ramp_components(model)
             out = [fitted[k] if isinstance(c, RR) else c for k, c in enumerate(out)]
         return out
@@ -99,9 +91,8 @@ class Parameterisation:
 
     def block_derivative(self, component: Component, theta: np.ndarray, k: int, dt: float,
                          step: float) -> tuple[np.ndarray, np.ndarray, float] | None:
-        """∂(Φ, Q, R)/∂ϑ_k of the block of ``component`` (the one log-parameter k belongs to, at ϑ = ``theta``) by
-        central differences of ``step`` (one-sided at a domain's edge, :func:`derivative_in_domain`): its Φ and Q
-        block and R (white noise only); None when no step stays inside the component's domain."""
+        """∂(Φ, Q, R)/∂ϑ_k of the block of ``component`` (the one ϑ_k belongs to) by central differences of ``step``
+        (one-sided at a domain edge, :func:`.differences.derivative_in_domain`); None when no step stays inside."""
         name = self.entries[k][1]
 
         def matrices(h: float) -> np.ndarray:
@@ -129,10 +120,9 @@ def loglik_grad_profile(
     par: Parameterisation, theta: np.ndarray, base: StateSpace, y: np.ndarray, z: np.ndarray, *,
     step: float = 1e-6, data: em.DataSums | None = None,
 ) -> tuple[float, np.ndarray, StateSpace, ProfileResult]:
-    """:func:`loglik_and_grad` and the GLS profile itself (β̂, its covariance): the gradient is the log-likelihood's
-    gradient in the model matrices (:class:`~imu_noise_id.core.estimation.em.em.MatrixScore`, one smoother pass)
-    along each log-parameter's change of its own block (:meth:`Parameterisation.block_derivative`, differences
-    of ``step``)."""
+    """:func:`loglik_and_grad` and the GLS profile (β̂, its covariance): the gradient is :class:`~.em.MatrixScore`
+    (one smoother pass) along each log-parameter's change of its own block
+    (:meth:`Parameterisation.block_derivative`)."""
     components = par.to_components(theta, base)
     prof, model, stats = kalman.profile_and_smooth(with_components(base, components), y, z)
     score = em.MatrixScore.at(model, em.sums_from_stats(stats, data or em.DataSums.of(y, z)), stats)
@@ -162,8 +152,7 @@ class MLEResult:
 
 
 def evaluations_within(budget: float, n: int, states: int) -> float:
-    """The exact likelihood evaluations a ``budget`` of evaluations × samples × states allows on ``n`` samples of a
-    model with ``states`` states (an evaluation's cost grows with both)."""
+    """Evaluations a ``budget`` of evaluations × samples × states allows on ``n`` samples and ``states`` states."""
     return budget / (max(int(n), 1) * max(int(states), 1))
 
 
@@ -190,22 +179,18 @@ def maximise(
 ) -> MLEResult:
     """L-BFGS(-B) on the exact profile log-likelihood from ``base`` (e.g. the last EM iterate).
 
-    ``bounds`` maps a parameter name (``tau``, ``frequency``, ``bandwidth``, ``cutoff``) to its physical range.
-
-    ``metric``: an approximation of the information −∂²ℓ/∂ϑ² (e.g. the Whittle one). When given, the search
-    runs in η = Lᵀ(ϑ − ϑ₀) with L Lᵀ = metric; an out-of-range point is scored at its projection onto the box plus
-    a quadratic pull back into it (beyond the paper); it stops when every |∂ℓ/∂η| < 0.05. Without it, when every
-    |∂ℓ/∂ϑ| < ``grad_tol``.
-
-    ``metric_at``: the metric at another point. When the search stops other than on its gradient test (iteration
-    limit, or ℓ no longer rising), it runs once more from its end with the metric recomputed there (beyond the paper).
-
-    A parameter whose metric information is below :data:`FLAT_INFORMATION` is held at its start value (beyond the
-    paper). Reasons: docs/em.md, "Algorithm" 5.
-
-    ``max_eval``: at most this many evaluations (each ℓ with its gradient, restart included); when it stops the search
-    before its gradient test while ℓ still rose (by :data:`STALLED_RISE` or more), ``budget_stop`` is how much ℓ rose
-    over the last :data:`RECENT_EVALUATIONS` of them.
+    Parameters
+    ----------
+    bounds : physical range per parameter name (``tau``, ``frequency``, ``bandwidth``, ``cutoff``);
+        others ±``bounds_width``
+    grad_tol : stop when every |∂ℓ/∂ϑ| < grad_tol (without ``metric``)
+    metric : approximate information −∂²ℓ/∂ϑ² (the Whittle one): the search runs in η = Lᵀ(ϑ − ϑ₀), L Lᵀ = metric, stops
+        when every |∂ℓ/∂η| < 0.05, scores a point outside the box at its projection plus a quadratic pull, and holds
+        parameters whose information is below :data:`FLAT_INFORMATION` at their start
+    metric_at : the metric at another point: a search stopped other than by its gradient test runs once more from its
+        end with the metric recomputed there
+    max_eval : most evaluations (ℓ with gradient, restart included); when it stops the search while ℓ still rose by
+        :data:`STALLED_RISE` or more, ``budget_stop`` is ℓ's rise over the last :data:`RECENT_EVALUATIONS`
     """
     from ...kalman.statespace import to_components
 
@@ -283,12 +268,8 @@ def observed_information(
     par: Parameterisation, theta: np.ndarray, model: StateSpace, y: np.ndarray, z: np.ndarray, *,
     step: float = 1e-3, central: bool = False,
 ) -> np.ndarray:
-    """−∂²ℓ/∂ϑ∂ϑᵀ by finite differences of the exact gradient (symmetrised).
-
-    Forward differences (k + 1 smoother passes, error O(step)) or, with ``central``, central ones (2k passes,
-    O(step²)); one-sided at a component's domain edge (:mod:`.differences`); a parameter that can step neither way
-    gets a NaN column (not identified).
-    """
+    """−∂²ℓ/∂ϑ∂ϑᵀ by forward (k + 1 passes, error O(step)) or, with ``central``, central differences (2k passes) of
+    the exact gradient, symmetrised; one-sided at a domain edge, a NaN column where no step is possible."""
     k = theta.size
     hess = np.empty((k, k))
     y, z = check_data(y, z, model.n_regressors)
@@ -306,13 +287,9 @@ MAX_INFORMATION = 1e100
 
 
 def covariance_from_information(info: np.ndarray) -> tuple[np.ndarray, bool]:
-    """Inverse of the observed information and whether it is positive definite.
-
-    When it is not, the parameters loading most on the non-positive directions are removed one at a time until the
-    rest is positive definite; the removed ones get infinite variance (interval (0, ∞)), the others the inverse of
-    their (conditional) block. Parameters whose information is not finite or beyond :data:`MAX_INFORMATION` are
-    removed first.
-    """
+    """(inverse of ``info``, whether it is positive definite). Otherwise parameters with non-finite information or
+    above :data:`MAX_INFORMATION`, then those loading most on non-positive directions, are removed until the rest is
+    positive definite; removed ones get infinite variance, the others the inverse of their conditional block."""
     k = info.shape[0]
     with np.errstate(invalid="ignore"):
         bad = ~(np.isfinite(info) & (np.abs(info) < MAX_INFORMATION))

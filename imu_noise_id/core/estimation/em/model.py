@@ -1,15 +1,7 @@
-"""The noise model of one axis: a component structure on one record (as statsmodels' ``MLEModel``).
-
-:class:`NoiseModel` holds the record (``y`` [u] at period ``dt`` [s], NaN = missing), the structure (e.g.
-``WN+GM+RW+RR``), the measurement regressors ``z`` (bias, an RR's ramp, the caller's exog columns; pure sinusoids are
-declared to the state space for :mod:`..kalman.harmonic`) and the drift treatment. It gives the state space (paper 000
-eqs. 4–9, :meth:`NoiseModel.statespace`), the exact log-likelihood with the means profiled by GLS
-(:meth:`NoiseModel.loglik`), Allan/Whittle multi-starts (§3.5(i); beyond it: several GM placements) and the fit
-(:meth:`NoiseModel.fit`: EM then quasi-Newton, :mod:`.search`, :mod:`.uncertainty`) as a :class:`~.results.FitResult`.
-
-Drift (paper 000 §3.5(iii)), with RR in the structure: ``drift='em'`` estimates the slope jointly (regressor ``t·dt``);
-``drift='ls'`` removes a least-squares line first and re-estimates bias and slope by GLS with the fitted noise model.
-"""
+"""The noise model of one axis: a component structure on one record (as statsmodels' ``MLEModel``), giving its state
+space (paper 000 eqs. 4–9), exact log-likelihood with GLS means, Allan/Whittle starts (§3.5(i)) and fit (EM then
+quasi-Newton, :mod:`.search`). Drift with RR (§3.5(iii)): ``'em'`` estimates the slope jointly (regressor t·dt),
+``'ls'`` removes a least-squares line first and re-estimates bias and slope by GLS with the fitted noise model."""
 
 from __future__ import annotations
 
@@ -44,14 +36,13 @@ class FitOptions:
     Attributes
     ----------
     n_starts : distinct starting values tried (best likelihood kept)
-    em_iter, em_tol : EM iterations before the quasi-Newton finish; the §3.5(ii) stopping threshold
-    polish : finish with L-BFGS-B on the exact likelihood (``False`` with a large ``em_iter``: the paper's pure EM)
-    spectral_init : refine the AV-fit starts by the Whittle likelihood (:mod:`.whittle`) and precondition the finish
-        with the Whittle information (beyond the paper)
-    uncertainty : compute the observed information, standard errors, intervals and the record-length advice
-    target_precision : relative 95 % half-width for the recording-length advice (0.10 = ±10 %)
-    finish_budget : sample-state evaluations the quasi-Newton finish of one start may spend
-        (:func:`.search.finish_evaluations`); None: no bound
+    em_iter, em_tol : EM iterations before the quasi-Newton finish; the §3.5(ii) threshold
+    polish : finish by L-BFGS-B on the exact likelihood (``False`` with a large ``em_iter``: the paper's pure EM)
+    spectral_init : Whittle-refined starts and Whittle-preconditioned finish (beyond the paper)
+    uncertainty : compute information, standard errors, intervals and record-length advice
+    target_precision : relative 95 % half-width of the record-length advice (0.10 = ±10 %)
+    finish_budget : sample-state evaluations of one start's finish (:func:`.search.finish_evaluations`); None: no
+        bound
     """
 
     n_starts: int = 3
@@ -103,27 +94,18 @@ def parse_structure_or_components(structure: str | list[Component]) -> tuple[lis
 
 
 class NoiseModel:
-    """A noise structure on one record (see the module docstring).
+    """A noise structure on one record; InputError on a bad signal, structure or exog, too few samples per parameter, or
+    a filter cutoff not below Nyquist.
 
     Parameters
     ----------
     y, dt : samples [u] (NaN = missing) at period ``dt`` [s]
-    structure : ``'WN+GM+RW+RR'``, a spec with values (``'WN(2e-4)+RW(3e-6)'``, the initial value) or components
-    exog, exog_names : (N, k) regressors of y_t = H x_t + B z_t + v_t and their names; B estimated (GLS in the
-        likelihood, closed form in the EM); finite everywhere
-    drift : with RR: ``'em'`` (joint) or ``'ls'`` (least-squares line removed first); ``None`` forbids RR
-    allan : the AV (one column) of :meth:`detrended` when the caller has it (the starts are fitted to it)
-    starts : further starting values after the AV ones (e.g. the GMWM fit); ignored when not of the structure
-    periodogram : the banded periodogram (:func:`.whittle.banded_periodogram`) of :meth:`detrended`, when the caller
-        has it
-    sensor_filter : the sensor's known digital low-pass: a DLPF in the structure starts at its cutoff and order
-        (:func:`.starts.filter_orders`)
-
-    Raises
-    ------
-    InputError
-        Bad signal, unidentifiable structure, bad exog, too few samples for the number of parameters, or a
-        ``sensor_filter`` cutoff not below the Nyquist frequency.
+    structure : ``'WN+GM+RW+RR'``, a spec with values (``'WN(2e-4)+RW(3e-6)'``, the start) or components
+    exog, exog_names : (N, k) finite regressors of y_t = H x_t + B z_t + v_t and their names (B by GLS / in the EM)
+    drift : with RR, ``'em'`` (joint) or ``'ls'`` (line removed first); ``None`` forbids RR
+    allan, periodogram : the AV (one column) and banded periodogram of :meth:`detrended`, when the caller has them
+    starts : further starting values (e.g. the GMWM fit); those not of the structure are ignored
+    sensor_filter : the sensor's known digital low-pass: a DLPF starts at its cutoff and order
     """
 
     def __init__(self, y: np.ndarray, dt: float, structure: str | list[Component], *, exog: np.ndarray | None = None,
@@ -221,8 +203,7 @@ class NoiseModel:
 
     # -- starting values ------------------------------------------------------------------------------------
     def detrended(self) -> np.ndarray:
-        """The gap-filled record, with a least-squares line removed when the fitted structure has RR (the AV and
-        the periodogram of the starting values must not see the ramp)."""
+        """The gap-filled record, less a least-squares line when the structure has RR (the starts' input)."""
         y_av = interpolate_missing(self.y)
         if "RR" in self.fit_names:
             A = np.column_stack([np.ones(self.n_total), self.t])
@@ -237,9 +218,8 @@ class NoiseModel:
 
     def starting_values(self, n_starts: int, spectral: bool,
                         periodogram: whittle.BandedPeriodogram | None = None) -> list[list[Component]]:
-        """The given components, or up to ``n_starts`` distinct starts from the AV fit (Whittle-refined, a DLPF at
-        the order whose Whittle fit is best, :func:`.starts.filter_orders`; order 2 without ``spectral``), then the
-        caller's further starts."""
+        """The given components, or up to ``n_starts`` distinct AV-fit starts (Whittle-refined, a DLPF at its best
+        order, :func:`.starts.filter_orders`; order 2 without ``spectral``), then the caller's further starts."""
         if self.given is not None:
             return [list(self.given)]
         y_av = self.detrended()

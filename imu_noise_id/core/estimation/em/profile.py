@@ -1,17 +1,14 @@
-"""Adjusted profile-likelihood intervals, where the observed information cannot be trusted (beyond paper 000 §3.4).
+"""Adjusted profile-likelihood intervals where the observed information cannot be trusted (beyond paper 000 §3.4).
 
-Profile likelihood (Cox & Hinkley 1974 §9.3; Venzon & Moolgavkar 1988) ℓ_p(v) = max over ϑ_{−k} of ℓ(ϑ_k = v, ϑ_{−k})
-(means b by GLS inside ℓ), adjusted for the estimated bias and ramp (Cox & Reid 1987, eq. 4; the restricted
-likelihood of Patterson & Thompson 1971, cf. Tunnicliffe Wilson 1989):
+Profile likelihood (Cox & Hinkley 1974 §9.3; Venzon & Moolgavkar 1988) ℓ_p(v) = max over ϑ_{−k} of ℓ(ϑ_k = v, ϑ_{−k}),
+adjusted for the GLS-estimated bias and ramp (Cox & Reid 1987, eq. 4; restricted likelihood of Patterson & Thompson
+1971, cf. Tunnicliffe Wilson 1989):
 
-    ℓ_A(v) = ℓ_p(v) − ½ log det(Zᵀ V⁻¹ Z)(v) = ℓ_p(v) + ½ log det cov(b̂)(v),
+    ℓ_A(v) = ℓ_p(v) − ½ log det(Zᵀ V⁻¹ Z)(v) = ℓ_p(v) + ½ log det cov(b̂)(v);
 
-the adjustment at the ML profile's argmax; interval {v : ℓ_A(v) ≥ max ℓ_A − 1.92}, lower end 0 where 0 cannot be
-excluded; point estimates stay the ML ones. Search: :mod:`.profile_search`; interior log-parameters whitened by their
-information block, zero-boundary ones linearly as K/s (floor :data:`ZERO_FLOOR`·s), unidentified ones in their log
-within their physical range; the ramp slope with its regressor fixed.
-Reasons: docs/em.md, "Why the intervals, starts and Kalibr numbers are computed as they are".
-"""
+the adjustment at ℓ_p's argmax; interval {v : ℓ_A(v) ≥ max ℓ_A − 1.92}, lower end 0 where 0 cannot be excluded; point
+estimates stay the ML ones. Searched by :mod:`.profile_search`: interior log-parameters whitened by their
+information, zero-boundary ones linearly as K/s, undetermined ones in their log within their physical range."""
 
 from __future__ import annotations
 
@@ -54,8 +51,7 @@ def whitening(info: np.ndarray) -> np.ndarray:
 
 
 def distinct(starts: list[np.ndarray]) -> list[np.ndarray]:
-    """``starts`` without exact repeats, in order. A profile point of a zero-boundary parameter gets its ladder
-    starts with that parameter then overwritten by the point's value: the whole ladder collapses onto one start."""
+    """``starts`` without exact repeats, in order."""
     out: list[np.ndarray] = []
     for s in starts:
         if not any(np.array_equal(s, t) for t in out):
@@ -64,7 +60,7 @@ def distinct(starts: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def adjusted(prof: ProfileResult) -> float:
-    """ℓ + ½ log det cov(b̂): the log-likelihood adjusted for the GLS-estimated means (module docstring)."""
+    """ℓ + ½ log det cov(b̂): the log-likelihood adjusted for the GLS-estimated means."""
     if prof.beta_cov.size == 0:
         return float(prof.loglik)
     sign, logdet = np.linalg.slogdet(prof.beta_cov)
@@ -81,14 +77,12 @@ class Profiler:
 
     Attributes
     ----------
-    par, theta, model, y, z, ll_max — the fit: parameterisation, log-parameters at the maximum, its state space, the
-        record, ℓ̂
-    info — observed information −∂²ℓ/∂ϑ² at the maximum (for whitening and the first steps)
-    lo, hi — physical range of each log-parameter (GM τ, OSC/LPF frequencies; ±inf elsewhere)
-    zero — parameters at the zero boundary → their scale s (conditional upper end)
-    flat — parameters the information does not determine (searched in their log)
-    max_eval — the evaluations all profiles may spend: a step that could pass it at its worst is not begun, and
-        one that does pass it stops (:class:`BudgetSpentError` either way)
+    par, theta, model, y, z, ll_max : the fit: parameterisation, ϑ̂, state space, record, ℓ̂
+    info : observed information −∂²ℓ/∂ϑ² at ϑ̂ (whitening and first steps)
+    lo, hi : physical range of each log-parameter (±inf where none)
+    zero : zero-boundary parameters → their conditional upper end s
+    flat : parameters the information does not determine (searched in their log)
+    max_eval : evaluations all profiles may spend (:meth:`afford`; :class:`BudgetSpentError` beyond)
     """
 
     par: mle.Parameterisation
@@ -117,15 +111,12 @@ class Profiler:
         return self.n_eval >= self.max_eval
 
     def afford(self, evaluations: float) -> None:
-        """Raise :class:`BudgetSpentError` unless ``evaluations`` more stay within :attr:`max_eval`: a step is begun
-        only when it can finish at its worst, not stopped half-way with its evaluations lost."""
+        """Raise :class:`BudgetSpentError` unless ``evaluations`` more stay within :attr:`max_eval`."""
         if self.n_eval + evaluations > self.max_eval:
             raise BudgetSpentError
 
     def maximise_cost(self, n_starts: int, base: StateSpace | None = None) -> int:
-        """The most evaluations :meth:`maximise` from ``n_starts`` starts can spend: scoring the starts, the
-        adjustment's gradient unless kept, its value and zero-boundary slopes at the start, :data:`MAX_FUN` L-BFGS-B
-        evaluations and the start's own when none succeeded."""
+        """Most evaluations :meth:`maximise` from ``n_starts`` starts can spend."""
         base = base or self.model
         gradient = 0 if tuple(bool(f) for f in base.b_free) in self._grad_c else self.theta.size + 1
         return (n_starts if n_starts > 1 else 0) + gradient + 1 + len(self.zero) + MAX_FUN + 1
@@ -141,8 +132,8 @@ class Profiler:
         return float(prof.loglik), adjusted(prof)
 
     def conditional_scale(self, k: int) -> float:
-        """The conditional upper 95 % end of a zero-boundary parameter (the others held, ℓ down by 1.92), to 10 %:
-        bracketed going up from ϑ̂_k in e²-fold steps, then bisected in log."""
+        """Conditional upper 95 % end of a zero-boundary parameter (others held, ℓ down by 1.92), to 10 %: bracketed
+        in e²-fold steps up from ϑ̂_k, then bisected in log."""
         th = self.theta.copy()
         inside = float(self.theta[k])
         for step in range(1, int(MAX_LOG_DISTANCE / 2) + 1):
@@ -165,9 +156,7 @@ class Profiler:
         return self.with_ladder(self.theta)
 
     def with_ladder(self, theta: np.ndarray) -> list[np.ndarray]:
-        """``theta``, and ``theta`` with each zero-boundary parameter at s·e^m for each m of :data:`ZERO_LADDER` (one
-        evaluation each): a profile that trades with a zero-boundary parameter may peak on another branch (docs/em.md,
-        "Interval coverage")."""
+        """``theta``, and ``theta`` with each zero-boundary parameter at s·e^m for m in :data:`ZERO_LADDER`."""
         out = [theta]
         for j, scale in self.zero.items():
             for m in ZERO_LADDER:
@@ -190,8 +179,7 @@ class Profiler:
         return adjusted(prof) - float(prof.loglik)
 
     def adjustment_gradient(self, base: StateSpace) -> np.ndarray:
-        """∂(½ log det cov b̂)/∂ϑ at the estimate (with the means ``base`` leaves free), by forward differences of
-        0.05 (log units); one gradient serves every profile point."""
+        """∂(½ log det cov b̂)/∂ϑ at ϑ̂ (means free as in ``base``), forward differences of 0.05; cached per mask."""
         key = tuple(bool(f) for f in base.b_free)
         if key not in self._grad_c:
             c0 = self.adjustment(self.theta, base)
@@ -204,10 +192,9 @@ class Profiler:
         return self._grad_c[key]
 
     def wald_holds(self, k: int, cov: np.ndarray, a_hat: float, drop_range: tuple[float, float]) -> bool:
-        """Whether ℓ_A at the two Wald ends of log-parameter k — the interior others on the quadratic trace
-        ϑ̂ + Σ_{·k}/Σ_kk·(ϑ_k − ϑ̂_k), the zero-boundary and undetermined ones re-maximised — lies ``drop_range``
-        below ``a_hat``, its maximum at the estimate (ℓ quadratic, the adjustment immaterial, no trade with a
-        boundary parameter)."""
+        """Whether ℓ_A at both Wald ends of log-parameter k (interior others on the trace
+        ϑ̂ + Σ_{·k}/Σ_kk·(ϑ_k − ϑ̂_k), the zero-boundary and undetermined ones re-maximised) lies ``drop_range``
+        below ``a_hat``."""
         step = Z95 * cov[:, k] / math.sqrt(cov[k, k])
         step = np.where(np.isfinite(step), step, 0.0)
         loose = set(self.zero) | self.flat
@@ -237,13 +224,8 @@ class Profiler:
         return a_hat
 
     def maximise(self, starts: list[np.ndarray], fixed: set[int], base: StateSpace) -> tuple[float, np.ndarray]:
-        """max of ℓ_A over the log-parameters but those in ``fixed`` (held at their start values), from the best
-        of ``starts``; (ℓ_A at the argmax, argmax).
-
-        L-BFGS-B on ℓ plus the adjustment linearised at the start: its gradient at the estimate
-        (:meth:`adjustment_gradient`) for interior and undetermined parameters, by a forward difference at the
-        start for zero-boundary ones (there it changes fast). ℓ_A itself is exact at every point evaluated.
-        """
+        """(ℓ_A at the argmax, argmax) over the log-parameters not in ``fixed`` (held at their start), from the best
+        of ``starts``: L-BFGS-B on ℓ plus the adjustment linearised at the start, ℓ_A exact at each point."""
         starts = distinct(starts)
         self.afford(self.maximise_cost(len(starts), base))
         scored = [(self.evaluate(t, base), t) for t in starts] if len(starts) > 1 else []
@@ -311,8 +293,8 @@ class Profiler:
 
     # -- a log-parameter ------------------------------------------------------------------------------------
     def interval(self, k: int, cov: np.ndarray) -> tuple[float, float]:
-        """95 % adjusted-profile interval (lo, hi) of log-parameter k (−inf: 0 cannot be excluded; +inf: the data
-        do not bound it). ``cov``: the Wald covariance (its column k predicts the trace's first points)."""
+        """95 % adjusted-profile interval (lo, hi) of log-parameter k (−inf: 0 not excluded; +inf: unbounded);
+        ``cov`` the Wald covariance, whose column k predicts the trace's first points."""
         theta_hat, v_hat = self.theta, float(self.theta[k])
         var = cov[k, k]
         col = cov[:, k] / var if math.isfinite(var) and var > 0 else np.zeros(theta_hat.size)
@@ -360,8 +342,7 @@ class Profiler:
 
     # -- the ramp slope -------------------------------------------------------------------------------------
     def slope_interval(self, regressor: int, value: float, se: float) -> tuple[float, float]:
-        """95 % adjusted-profile interval of the ramp slope (measurement regressor ``regressor``, GLS estimate
-        ``value``, GLS standard error ``se`` given the noise parameters)."""
+        """95 % adjusted-profile interval [u/s] of the ramp slope (regressor index, GLS value and se)."""
         fixed = self.model.copy()
         fixed.b_free[regressor] = False
 

@@ -1,10 +1,6 @@
-"""The search along one parameter's profile likelihood: its maximum and each end of the 95 % interval.
-
-Given :data:`ProfileAt` (:class:`.profile.Profiler`), :func:`centre` finds the maximum from points around the estimate
-and a parabola through them, :func:`end` each end on the signed root r(v) = √(2(max ℓ_A − ℓ_A(v))): outward by secant
-steps until r passes 1.96, then regula falsi (Illinois) until |r − 1.96| < :data:`R_TOL` (method and references:
-:mod:`.profile`).
-"""
+"""The search along one parameter's profile likelihood (:mod:`.profile`): :func:`centre` finds its maximum from
+points around the estimate and a parabola, :func:`end` each end of the 95 % interval on the signed root
+r(v) = √(2(max ℓ_A − ℓ_A(v))): secant steps outward until r passes 1.96, then Illinois regula falsi to :data:`R_TOL`."""
 
 from __future__ import annotations
 
@@ -30,9 +26,8 @@ ProfileAt = Callable[[float, list[np.ndarray]], tuple[float, np.ndarray]]
 
 def centre(profile_at: ProfileAt, v_hat: float, a_hat: float, theta_hat: np.ndarray, steps: list[float], *,
            predict: Callable[[float], list[np.ndarray]], parabola: bool) -> list[tuple[float, float, np.ndarray]]:
-    """Profile points (v, ℓ_A, argmax) at ``v_hat`` (ℓ_A ``a_hat``, argmax ``theta_hat``: the estimate) and
-    ``v_hat + step`` for each step (starts from ``predict(step)``), plus the vertex of the parabola through them when
-    ``parabola`` and it lies among them: the max of ℓ_A is the best of these."""
+    """Profile points (v, ℓ_A, argmax) at the estimate and at ``v_hat + step`` for each step (starts
+    ``predict(step)``), plus, with ``parabola``, the vertex of the parabola through them when it lies inside."""
     pts = [(v_hat, a_hat, theta_hat)]
     for step in steps:
         a, th = profile_at(v_hat + step, predict(step))
@@ -50,12 +45,9 @@ def centre(profile_at: ProfileAt, v_hat: float, a_hat: float, theta_hat: np.ndar
 
 def end(profile_at: ProfileAt, starts_near: Callable[[np.ndarray], list[np.ndarray]],
         pts_all: list[tuple[float, float, np.ndarray]], direction: float, *, first: float, limit: float) -> float:
-    """The end of the 95 % interval in ``direction`` (±1) from the best of ``pts_all`` (the centre).
-
-    ``starts_near(θ)``: the starts of a profile point whose argmax is predicted at θ; ``pts_all``: profile points
-    (v, ℓ_A, argmax) known so far; ``first``: the first distance tried when no known point lies that way;
-    ``limit``: the largest distance (±inf beyond it: the data do not bound the parameter that way).
-    """
+    """End of the 95 % interval in ``direction`` (±1) from the best of ``pts_all`` (v, ℓ_A, argmax); ±inf when not
+    reached within ``limit`` (distance). ``starts_near(θ)``: starts of a point whose argmax is predicted at θ;
+    ``first``: the first distance tried when no known point lies that way."""
     v_c, a_max, th_c = max(pts_all, key=lambda p: p[1])
 
     def root(a: float) -> float:

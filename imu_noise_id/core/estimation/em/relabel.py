@@ -1,11 +1,6 @@
-"""A fitted Gauss–Markov process of short memory is the sensor's own low-pass filter (LPF; beyond paper 000).
-
-A first-order GM of correlation time τ below :func:`~imu_noise_id.core.noise.resonant.filter_memory_limit` is, to the
-likelihood, the same state-space block as the LPF of cutoff f_c = 1/(2πτ)
-(:class:`~imu_noise_id.core.noise.resonant.LPF`) with passband density N = σ√(2τ). :func:`gm_as_filter` renames the
-component and its parameters, nothing else (likelihood, state space and innovations unchanged). Reasons: docs/em.md,
-"Why the intervals, starts and Kalibr numbers are computed as they are"; docs/loop.md, "The loop's rules" 1.
-"""
+"""A fitted GM of short memory as the sensor's low-pass (beyond paper 000): a GM of τ below
+:func:`~imu_noise_id.core.noise.resonant.filter_memory_limit` is, to the likelihood, the LPF of cutoff f_c = 1/(2πτ)
+[Hz] and passband density N = σ√(2τ); only names change (docs/em.md, "Why: starts"; docs/loop.md, rule 1)."""
 
 from __future__ import annotations
 
@@ -25,13 +20,9 @@ from .uncertainty import add_uncertainty
 
 
 def gm_as_filter(fit: FitResult) -> FitResult:
-    """``fit`` with its shortest GM renamed LPF when τ < :func:`~..noise.resonant.filter_memory_limit` and the model
-    has no LPF.
-
-    The cutoff's interval is the τ interval mapped through f_c = 1/(2πτ). When the fit holds its log-parameter
-    covariance, it is carried to (ln N, ln f_c) by the linear map ln N = ln σ + ½ ln τ + ½ ln 2,
-    ln f_c = −ln τ − ln 2π, and the noise density gets its Wald interval and standard error from it.
-    """
+    """``fit`` with its shortest GM renamed LPF when τ < ``filter_memory_limit(dt)`` and no LPF is present: the
+    cutoff's interval is τ's through f_c = 1/(2πτ); the log covariance is carried by ln N = ln σ + ½ ln τ + ½ ln 2,
+    ln f_c = −ln τ − ln 2π, giving N a Wald interval and se."""
     gms = [(i, c) for i, c in enumerate(fit.components) if isinstance(c, GM)]
     if not gms or any(isinstance(c, LPF) for c in fit.components):
         return fit
@@ -68,8 +59,7 @@ def gm_as_filter(fit: FitResult) -> FitResult:
 
 
 def with_uncertainty(fit: FitResult) -> FitResult:
-    """:func:`.uncertainty.add_uncertainty` of a fit that may hold a renamed LPF: intervals
-    computed on the GM block, then the renaming (and covariance) applied again (:func:`gm_as_filter`)."""
+    """:func:`.uncertainty.add_uncertainty` on the GM block, then :func:`gm_as_filter` again."""
     if fit.statespace is None:
         raise InputError("this FitResult holds no state space to compute its uncertainty from")
     raw = to_components(fit.statespace)

@@ -18,9 +18,8 @@ BUDGET_SPENT = "profile budget spent"
 
 @dataclass
 class RecordLengthAdvice:
-    """Recording length needed per parameter for a target relative precision: ``needed_s[label]`` [s] where 1.96·se (log
-    space) shrinks to ``target``, assuming se ∝ 1/√T; ``reliable[label]`` False for GM parameters with T < 20·τ_c (they
-    improve more slowly: the figure is a lower bound)."""
+    """Record length per parameter for a target precision: ``needed_s[label]`` [s] where 1.96·se (log space) reaches
+    ``target``, assuming se ∝ 1/√T; ``reliable[label]`` False for GM parameters with T < 20·τ (a lower bound there)."""
 
     target: float
     level: str
@@ -32,31 +31,23 @@ class RecordLengthAdvice:
 
 @dataclass
 class FitResult:
-    """Identified model of one axis (continuous-time components and their uncertainty).
+    """Identified model of one axis: continuous-time components and their uncertainty.
 
     Attributes
     ----------
-    model : str — canonical structure name (``modelspec.model_name``), e.g. ``WN+GM+RW``
-    components : list[Component] — fitted components, continuous-time units (RR's slope included with RR)
-    exog_coef : dict[str, dict] — ``bias`` [u], ``ramp`` [u/s], the exog coefficients; each ``{value, se, ci95}``
-    se, ci95 : dict[str, ...] — standard error (inverse information; inf where undetermined) and 95 % interval of every
-        component parameter, keyed ``WN.noise_density``, ``GM2.tau`` …, physical units; Wald in log space or profile
-        likelihood (:mod:`.uncertainty`; lower end 0, upper inf where the data do not bound them)
-    ci95_method : dict[str, str] — ``wald``, ``profile`` or ``gls`` (a mean parameter's GLS interval)
-    loglik, aic, bic : float — exact maximised ℓ; AIC = 2k − 2ℓ, BIC = k·ln(n) − 2ℓ, k all free parameters
-    n, dt : int, float — observed (non-NaN) samples; sampling period [s]
-    n_iter, converged — EM iterations of the winning start; whether the quasi-Newton finish converged
-    n_eval, budget_stop — the finish's exact likelihood evaluations; when its budget stopped it
-        (:data:`.search.FINISH_BUDGET`), how much ℓ rose over its last :data:`.mle.RECENT_EVALUATIONS` (the values are
-        short of the maximum by about that much or more), else None
-    record_length : RecordLengthAdvice | None — how long to record for the target precision
-    information_ok : bool — whether the observed information was positive definite
-    profile_evaluations : int — log-likelihood evaluations of the profile intervals
-    better_loglik, better_start — a higher log-likelihood the profile search met and its components, else None
-    log_covariance, covariance_labels — log-parameter covariance (inverse observed information) and labels
-    statespace, record — the fitted state-space model and the (samples, regressors) it was fitted to
-    standardized — the record's one-step innovations / √(their variance) at the fit, as the fit's last filter pass
-        gave them (None: computed when asked, :meth:`standardized_innovations`)
+    model, components : canonical structure name (``WN+GM+RW``); fitted components, continuous-time units (RR included)
+    exog_coef : ``bias`` [u], ``ramp`` [u/s] and exog coefficients, each ``{value, se, ci95}``
+    se, ci95, ci95_method : per parameter label (``WN.noise_density``, ``GM2.tau`` …), physical units: standard error
+        (inf where undetermined), 95 % interval (lower end 0, upper inf where unbounded) and
+        ``wald``/``profile``/``gls``
+    loglik, aic, bic, n_params : exact maximised ℓ; 2k − 2ℓ; k·ln(n) − 2ℓ; k, all free parameters
+    n, dt : observed (non-NaN) samples; sampling period [s]
+    n_iter, converged, n_eval : EM iterations of the winning start; finish converged; its likelihood evaluations
+    budget_stop : ℓ's rise over the finish's last :data:`.mle.RECENT_EVALUATIONS` when its budget stopped it, else None
+    record_length, information_ok : :class:`RecordLengthAdvice`; observed information positive definite
+    profile_evaluations, better_loglik, better_start : profile evaluations; a higher ℓ they met and its components
+    log_covariance, covariance_labels : log-parameter covariance (inverse information) and its labels
+    statespace, record, standardized : fitted state space; (samples, regressors) fitted; standardised innovations
     """
 
     model: str
@@ -91,21 +82,18 @@ class FitResult:
 
     @property
     def beyond_budget(self) -> dict[str, str]:
-        """The parameters whose profile interval the budget did not allow (:data:`.uncertainty.PROFILE_BUDGET`),
-        with the method of the interval they got instead (label → ``ci95_method``)."""
+        """Label → ``ci95_method`` of the parameters whose profile :data:`.uncertainty.PROFILE_BUDGET` did not allow."""
         return {lab: how for lab, how in self.ci95_method.items() if how.endswith(BUDGET_SPENT)}
 
     @property
     def short_of_maximum(self) -> float | None:
-        """How far ``loglik`` lies below ``better_loglik`` when by more than ½·χ²₁(0.95) = 1.92 (the fit is not at the
-        maximum and its intervals are not the maximum's); None otherwise."""
+        """``better_loglik − loglik`` when above 1.92 = ½·χ²₁(0.95) (not at the maximum), else None."""
         if self.better_loglik is None or self.better_loglik - self.loglik <= LR_DROP_95:
             return None
         return float(self.better_loglik - self.loglik)
 
     def budget_stop_text(self) -> str | None:
-        """What a stop of the finish at its evaluation budget means for this fit, in words; None when it converged or
-        stopped otherwise."""
+        """The finish's budget stop in words; None when it converged or stopped otherwise."""
         if self.budget_stop is None:
             return None
         return (f"the exact maximum-likelihood finish stopped at its budget after {self.n_eval} evaluations, the "
@@ -113,13 +101,11 @@ class FitResult:
                 "and intervals are near the maximum, not at it")
 
     def without_data(self) -> FitResult:
-        """This result without the record it was fitted to (samples and regressors, N floats each), for keeping
-        many results. :meth:`standardized_innovations` needs the record and raises on the copy."""
+        """This result without its record (for keeping many); :meth:`standardized_innovations` then raises."""
         return replace(self, record=None, standardized=None)
 
     def standardized_innovations(self) -> np.ndarray:
-        """One-step innovations / √(their variance), NaN where the sample was missing (a copy of ``standardized``
-        when the fit kept them, else one filter pass over the record)."""
+        """One-step innovations / √(their variance), NaN where missing (``standardized`` or one filter pass)."""
         if self.statespace is None or self.record is None:
             raise InputError("this FitResult holds no data to compute innovations from")
         if self.standardized is not None:

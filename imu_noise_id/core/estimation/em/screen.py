@@ -1,13 +1,7 @@
-"""Is a candidate structure worth its exact fit? Its likelihood gain on two statistics of fixed size.
-
-Beyond the papers. The statistics, each computed once per record: the banded Whittle likelihood of the differences
-(:mod:`.whittle`; every frequency but the record's lowest few) and the exact likelihood of the block sums
-(:mod:`.block_sums`; every frequency below the blocks' own). The gain over the current structure is the larger of the
-two, each fitted from the candidate's start, from it with the current structure's values restored, and from each with
-an added GM's τ moved down decade by decade to :data:`SHORTEST_TAU_SAMPLES` samples. The candidate goes on to its exact
-fit when −2·gain + Δk·ln N < :data:`MARGIN`. The rule and its measurements: docs/em.md, "Screening on statistics of
-fixed size".
-"""
+"""Whether a candidate structure is worth its exact fit, from its likelihood gain on two statistics of fixed size
+(beyond the papers): the banded Whittle likelihood (:mod:`.whittle`) and the block sums' exact likelihood
+(:mod:`.block_sums`). The gain is the larger of the two over a few starts (:func:`_starts`); the candidate goes on
+when −2·gain + Δk·ln N < :data:`MARGIN` (docs/em.md, "Screening on statistics of fixed size")."""
 
 from __future__ import annotations
 
@@ -63,15 +57,8 @@ class Reference:
 
 @dataclass(frozen=True)
 class Screen:
-    """What the statistics say of a candidate against the current structure.
-
-    Attributes
-    ----------
-    gain : float — the candidate's best log-likelihood gain over the current structure, on either statistic
-    statistic : str — which statistic gave it ("whittle" or "block sums")
-    extra_parameters : int — parameters the candidate adds (negative: removes)
-    penalty : float — the full record's BIC penalty per parameter, ln N
-    """
+    """A candidate's best log-likelihood ``gain`` over the current structure, the ``statistic`` that gave it
+    (``"whittle"``/``"block sums"``), its ``extra_parameters`` (negative: fewer) and ``penalty`` ln N."""
 
     gain: float
     statistic: str
@@ -98,8 +85,7 @@ def _n_parameters(components: list[Component]) -> int:
 
 
 def _restored(candidate: list[Component], current: list[Component]) -> list[Component]:
-    """The candidate with each component the current structure has of the same type (in order) at its current value
-    (a start may restart one, e.g. a random walk restarted small beside a new bias process)."""
+    """``candidate`` with each component the current structure has of its type (in order) at its current value."""
     pool = {name: [c for c in current if c.name == name] for name in {c.name for c in current}}
     return [pool[c.name].pop(0) if pool.get(c.name) else c for c in candidate]
 
@@ -123,8 +109,8 @@ def _starts(candidate: list[Component], current: list[Component], dt: float) -> 
 
 
 def screen(reference: Reference, candidate: list[Component], stats: Statistics) -> Screen:
-    """The statistics' verdict on ``candidate`` (its starting components) against ``reference`` (module docstring).
-    A candidate that nests the current structure is never credited with a loss."""
+    """The statistics' verdict on ``candidate`` (starting components) against ``reference``; a candidate nesting the
+    current structure is never credited with a loss."""
     best_gain, best_stat = -math.inf, "whittle"
     block_span = stats.sums.block * stats.dt
     known = set(reference.components)

@@ -1,11 +1,7 @@
-"""The maximum-likelihood search of a :class:`~.model.NoiseModel`: constrained EM (paper 000 §3) then quasi-Newton.
-
-Per start (:meth:`~.model.NoiseModel.starting_values`), ``em_iter`` EM iterations (:mod:`.em`) then L-BFGS-B on the
-exact likelihood (:mod:`.mle`; beyond the paper); the best likelihood wins. Means from the GLS profile at the optimum;
-standard errors, intervals and advice from :mod:`.uncertainty`; a higher likelihood met by the intervals' profile search
-restarts the search from there (beyond the paper). Long records with missing samples are searched gap-filled
-(:data:`.mle.FILL_FIRST_MIN_SAMPLES`); likelihood, means, innovations and intervals are those of the record with gaps.
-"""
+"""Maximum-likelihood search of a :class:`~.model.NoiseModel`: per start, ``em_iter`` EM iterations (paper 000 §3)
+then L-BFGS-B on the exact likelihood (:mod:`.mle`, beyond the paper), best likelihood kept; GLS means, intervals
+(:mod:`.uncertainty`) and a restart from any higher likelihood the profiles meet. Long records with gaps are searched
+gap-filled (:data:`.mle.FILL_FIRST_MIN_SAMPLES`) and scored with their gaps."""
 
 from __future__ import annotations
 
@@ -30,16 +26,14 @@ from .uncertainty import Z95, add_uncertainty
 if TYPE_CHECKING:
     from .model import FitOptions, NoiseModel
 
-#: Exact likelihood evaluations × samples × states the quasi-Newton finish of one start may spend (about 30 s at
-#: 0.1 µs per sample and state of an evaluation with its gradient; :func:`finish_evaluations`).
+#: Evaluations (with gradient) × samples × states one start's finish may spend, about 30 s (:func:`finish_evaluations`).
 FINISH_BUDGET = 3e8
 #: The finish's evaluations whatever the budget (a record so long that fewer would be allowed still gets these).
 MIN_FINISH_EVALUATIONS = 10
 
 
 def finish_evaluations(budget: float | None, n: int, states: int) -> int | None:
-    """The evaluations (ℓ with its gradient) ``budget`` sample-state evaluations allow the finish on ``n`` samples of a
-    model with ``states`` states, at least :data:`MIN_FINISH_EVALUATIONS`; None without a budget."""
+    """:func:`.mle.evaluations_within` ``budget``, at least :data:`MIN_FINISH_EVALUATIONS`; None without a budget."""
     if budget is None:
         return None
     return max(MIN_FINISH_EVALUATIONS, int(mle.evaluations_within(budget, n, states)))
@@ -47,10 +41,8 @@ def finish_evaluations(budget: float | None, n: int, states: int) -> int | None:
 
 def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options: FitOptions,
                metric_of: Callable[[list[Component]], np.ndarray] | None) -> tuple[mle.MLEResult, int]:
-    """EM iterations then the quasi-Newton finish from one start, preconditioned by ``metric_of`` the start's
-    components (the Whittle information) and again at its end if it stalled (:func:`.mle.maximise`); (result, EM
-    iterations). With neither (``em_iter=0``, no polish): the start's values with the means at their GLS estimate,
-    scored by one filter pass (no smoother pass: there is no E-step to feed)."""
+    """(result, EM iterations) of EM then the finish from one start, preconditioned by ``metric_of``; with neither
+    (``em_iter=0``, no polish) the start scored by one filter pass with GLS means."""
     z = model.z
     state = model.statespace(start)
     par = mle.Parameterisation.of(start)
@@ -87,8 +79,7 @@ def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options
 
 def _mean_parameters(model: NoiseModel, fitted: ss.StateSpace, prof: kalman.ProfileResult,
                      comps: list[Component]) -> dict[str, dict]:
-    """Bias, ramp and exog coefficients with their GLS standard errors; with ``drift='ls'`` the line's slope is
-    re-estimated by GLS on the original record with the fitted noise model, and appended to ``comps`` as RR."""
+    """Bias, ramp, exog coefficients with GLS se; with ``drift='ls'`` the slope by GLS, appended to ``comps`` as RR."""
     coef: dict[str, dict] = {}
     for name, value, var in zip(prof.names, prof.beta, np.diag(prof.beta_cov), strict=True):
         s_b = math.sqrt(max(float(var), 0.0))
@@ -111,8 +102,7 @@ def _mean_parameters(model: NoiseModel, fitted: ss.StateSpace, prof: kalman.Prof
 
 @dataclass(frozen=True)
 class _Search:
-    """What every start of one fit is searched on: the record (gap-filled when ``fill_first``) and the Whittle
-    metric of a start's components (None without the spectral start)."""
+    """What every start of one fit is searched on: the record (gap-filled if ``fill_first``) and the Whittle metric."""
 
     y: np.ndarray
     fill_first: bool
@@ -121,7 +111,7 @@ class _Search:
 
 def _search_of(model: NoiseModel, options: FitOptions, start_values: list[list[Component]],
                periodogram: whittle.BandedPeriodogram | None, y_av: np.ndarray) -> _Search:
-    """The :class:`_Search` of ``model`` from ``start_values``: the periodogram unbanded around their OSC lines."""
+    """The :class:`_Search` of ``model`` (periodogram unbanded around the starts' OSC lines)."""
     bp = periodogram
     if bp is not None and any(c.name == "OSC" for s in start_values for c in s):
         bp = whittle.banded_periodogram(y_av, fine=whittle.line_windows(start_values, model.dt))
@@ -133,7 +123,7 @@ def _search_of(model: NoiseModel, options: FitOptions, start_values: list[list[C
 
 
 def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: FitOptions) -> FitResult:
-    """Maximum-likelihood fit of ``model`` (see the module docstring)."""
+    """Maximum-likelihood fit of ``model`` (module docstring); InputError when no start gives a likelihood."""
     if init is not None:
         if [c.name for c in init] != model.names:
             raise InputError("init components do not match the structure")
@@ -163,9 +153,7 @@ def fit_noise_model(model: NoiseModel, init: list[Component] | None, options: Fi
 
 def _with_intervals(model: NoiseModel, result: FitResult, options: FitOptions,
                     search_of: Callable[[list[Component]], _Search]) -> FitResult:
-    """``result`` with its intervals (:func:`.uncertainty.add_uncertainty`). When their profile search met a higher
-    likelihood than the search's maximum, the search runs again from there (on ``search_of`` that start), once, and
-    the better fit gets the intervals."""
+    """``result`` with intervals; searched again once from a higher likelihood their profiles met, the better kept."""
     add_uncertainty(result, options.target_precision)
     start = result.better_start
     if start is None:
@@ -182,9 +170,7 @@ def _with_intervals(model: NoiseModel, result: FitResult, options: FitOptions,
 
 
 def add_intervals(model: NoiseModel, result: FitResult, options: FitOptions) -> FitResult:
-    """Intervals of a fit of ``model`` made without them (``options.uncertainty`` off, e.g. a model selection's
-    winner), searched again from a higher likelihood their profile search meets, as :func:`fit_noise_model`
-    does (:func:`_with_intervals`)."""
+    """Intervals of a fit made without them, as :func:`fit_noise_model` adds them."""
 
     def search_of(start: list[Component]) -> _Search:
         bp = model.banded_periodogram() if options.spectral_init else None
@@ -194,9 +180,7 @@ def add_intervals(model: NoiseModel, result: FitResult, options: FitOptions) -> 
 
 
 def _fastest_first(model: NoiseModel, fitted: ss.StateSpace) -> ss.StateSpace:
-    """``fitted`` with its Gauss–Markov blocks by increasing τ (:func:`.modelspec.gauss_markov_fastest_first`), so
-    that the labels GM1, GM2 … of the result, its intervals and its information name the same process on every
-    record (beyond paper 000, which fits one GM). The same model: blocks rebuilt from the components, means copied."""
+    """``fitted`` with its GM blocks by increasing τ, GM1 the fastest on every record (beyond paper 000)."""
     comps = ss.to_components(fitted)
     ordered = gauss_markov_fastest_first(comps)
     if all(a is b for a, b in zip(comps, ordered, strict=True)):
@@ -233,8 +217,7 @@ def _result(model: NoiseModel, best: tuple[mle.MLEResult, int], lls: list[float]
 
 
 def _standardized(prof: kalman.ProfileResult, n: int) -> np.ndarray | None:
-    """The standardized innovations of ``prof`` (at its GLS means: those of the fitted model with its means
-    applied), None when it kept no innovations of all ``n`` samples."""
+    """Standardised innovations of ``prof`` at its GLS means; None when it kept none for all ``n`` samples."""
     if prof.innovations.shape != (n,) or prof.variances.shape != (n,):
         return None
     return prof.innovations / np.sqrt(prof.variances)

@@ -1,5 +1,5 @@
-"""Model selection of one axis: every candidate structure fitted (:class:`~.model.NoiseModel`), ranked by BIC (ΔBIC,
-Schwarz weights); intervals and recording-length advice for the winner only (:func:`.search.add_intervals`)."""
+"""Model selection of one axis: every candidate structure fitted, ranked by BIC (ΔBIC, Schwarz weights); intervals
+and record-length advice for the winner only."""
 
 from __future__ import annotations
 
@@ -51,11 +51,9 @@ class SelectionResult:
 
 
 def suggest_candidates(allan: AllanResult) -> list[str]:
-    """Default candidates plus RR when the AV (one column, up to τ = N·dt/4) rises like τ² at its long-τ end, QN
-    when it falls like τ⁻² at its short-τ end, WN+BI+RW (flicker noise) when the AV above the white-noise line
-    through its first τ is flat over a decade of τ or more (the closed loop's rule,
-    :func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`), WN+DLPF+RW (the sensor's digital low-pass,
-    its order chosen by the starts, :func:`~.starts.filter_orders`) when the AV's shortest τ show its roll-off
+    """:data:`DEFAULT_CANDIDATES` plus, from the AV (one column, τ ≤ N·dt/4): RR variants when it rises like τ² at
+    long τ, QN variants when it falls like τ⁻² at short τ, WN+BI+RW when flat over a decade above the white-noise
+    line (:func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`), WN+DLPF+RW at a low-pass roll-off
     (:func:`~imu_noise_id.core.allan.slopes.rolloff_end`)."""
     cands = list(DEFAULT_CANDIDATES)
     keep = allan.m <= starts.MAX_FRACTION * allan.n
@@ -79,20 +77,21 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
                  allan: AllanResult | None = None,
                  extra_starts: dict[str, list[Component]] | None = None,
                  sensor_filter: SensorFilter | None = None, finish: bool = True) -> SelectionResult:
-    """Fit every candidate structure and rank them by BIC (or AIC).
+    """Fit every candidate structure and rank them by ``criterion`` (``'bic'`` or ``'aic'``).
 
-    ``options.uncertainty`` applies to the winner only. ``allan``: the record's AV (one column), the start of every
-    candidate without RR (those with RR: the detrended record's AV). ``extra_starts``: a further start per candidate
-    (e.g. its GMWM fit). ``sensor_filter``: what the user knows of the sensor's digital low-pass; the default candidates
-    then include WN+DLPF+RW, its DLPF started there (:class:`~.model.NoiseModel`). From :data:`.screen.MIN_SAMPLES`
-    samples (BIC only) each next candidate is first fitted on the screen's statistics against the best so far
-    (:mod:`.screen`) and not fitted when it cannot come within :data:`.screen.MARGIN`; its row says ``screened``
-    with that ΔBIC. From :data:`.composite.MIN_SAMPLES` samples a candidate is fitted at the composite likelihood's
-    maximiser from its starts and evaluated once on the exact likelihood (:func:`.composite.fit_model`; its row's
-    ``likelihood`` says so), and the winner alone is then fitted on the exact likelihood from there (with ``finish``
-    False, not yet: its exact fit and intervals are left to :func:`finish_winner`, for a caller that may replace the
-    winner, as the closed loop does). Beyond the papers (docs/em.md, "Searching long records on a likelihood of fixed
-    size").
+    Parameters
+    ----------
+    options : fit options; ``uncertainty`` applies to the winner only
+    allan : the record's AV (one column): the start of candidates without RR
+    extra_starts : a further start per candidate (e.g. its GMWM fit)
+    sensor_filter : the sensor's known digital low-pass: WN+DLPF+RW joins the default candidates, started there
+    finish : False leaves a long record's winner at its composite maximiser for :func:`finish_winner`
+
+    From :data:`.screen.MIN_SAMPLES` samples (BIC) a candidate that cannot come within :data:`.screen.MARGIN` of the
+        best
+    is not fitted (row ``screened``); from :data:`.composite.MIN_SAMPLES` candidates are fitted at the composite
+    likelihood's maximiser and scored once exactly (row ``likelihood``), the winner then fitted exactly (beyond the
+    papers; docs/em.md, "Searching long records on a likelihood of fixed size"). InputError when no candidate fits.
     """
     if criterion not in ("bic", "aic"):
         raise InputError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
@@ -168,17 +167,15 @@ AT_COMPOSITE_MAXIMUM = "exact, at the composite likelihood's maximiser"
 
 
 def _finished(model: NoiseModel, fit: FitResult, options: FitOptions) -> FitResult:
-    """``fit`` (a composite likelihood's maximiser) fitted on the exact likelihood from there, kept when it gains,
-    with its intervals when ``options.uncertainty``."""
+    """``fit`` refitted exactly from its composite maximiser (kept if better), with intervals if asked."""
     exact = model.fit(list(fit.components), replace(options, uncertainty=False))
     fit = exact if exact.loglik > fit.loglik else fit
     return add_intervals(model, fit, options) if options.uncertainty else fit
 
 
 def _table(fits: dict[str, FitResult], others: list[dict], criterion: str, at_composite: set[str]) -> list[dict]:
-    """The selection's table: a row per fit (likelihood, criteria, differences to the best, BIC weight; ``likelihood``
-    :data:`AT_COMPOSITE_MAXIMUM` for the keys in ``at_composite``), then the ``others`` (screened, failed), sorted by
-    ``criterion``."""
+    """Rows per fit (likelihood, criteria, differences to the best, BIC weight; ``likelihood``
+    :data:`AT_COMPOSITE_MAXIMUM` for ``at_composite``), then ``others``, sorted by ``criterion``."""
     bic_min = min(f.bic for f in fits.values())
     aic_min = min(f.aic for f in fits.values())
     wsum = sum(math.exp(-0.5 * (f.bic - bic_min)) for f in fits.values())
@@ -194,9 +191,8 @@ def _table(fits: dict[str, FitResult], others: list[dict], criterion: str, at_co
 
 def finish_winner(selection: SelectionResult, model: NoiseModel, options: FitOptions,
                   criterion: str = "bic") -> SelectionResult:
-    """A selection made with ``finish=False`` (:func:`select_model`) as it would have been with ``finish``: its winner
-    fitted on the exact likelihood of ``model`` (the winner's structure over the same record) from its composite
-    maximiser, with intervals when ``options.uncertainty``, and the table ranked again. Unchanged when finished."""
+    """A ``finish=False`` selection finished: its winner fitted on ``model``'s exact likelihood from the composite
+    maximiser (intervals when ``options.uncertainty``), the table ranked again; unchanged when finished."""
     if not selection.unfinished:
         return selection
     key = selection.best_key

@@ -1,10 +1,6 @@
-"""Initial values for the EM from the Allan variance (paper 000 §3.5(i)).
-
-Beyond the paper: the structure's theoretical AV (:meth:`~.components.Component.allan_variance`, summed) is fitted to
-the empirical AV (one column of :class:`~imu_noise_id.core.allan.AllanResult`, τ ≤ N·dt/4) by least squares in log
-space, each τ weighted by √(N/m), from several GM τ placements; the distinct solutions, best first, are the likelihood
-fit's multi-start values.
-"""
+"""Initial values from the Allan variance (paper 000 §3.5(i); beyond it): the structure's theoretical AV fitted to
+the empirical one (τ ≤ N·dt/4) by least squares in log space, weighted by √(N/m), from several GM τ placements; the
+distinct solutions, best first, are the multi-start values."""
 
 from __future__ import annotations
 
@@ -43,7 +39,7 @@ class _Curve:
 
 
 def allan_of(y: np.ndarray, dt: float) -> AllanResult:
-    """The AV of a gap-filled record on the analysis grid, for callers that have none yet (a standalone fit)."""
+    """AV of a gap-filled record on the analysis grid."""
     return allan_variance(np.asarray(y, dtype=float), dt)
 
 
@@ -115,9 +111,8 @@ _SHAPE_STEP = 1e-6
 
 
 class _LogAvCurve:
-    """The weighted log-AV misfit r(x) = (ln Σ_c AV_c(τ) − ln AV_hat(τ))·√(N/m) of a structure in its parameters' logs,
-    with its Jacobian: ∂r/∂ln a = 2·AV_c/Σ AV·√(N/m) for amplitudes, one forward difference of its own component's AV
-    for :data:`_SHAPE` parameters (GM τ, LPF cutoff); one AV evaluation per component serves r and J."""
+    """Weighted log-AV misfit r(x) = (ln Σ_c AV_c(τ) − ln AV_hat(τ))·√(N/m) in the parameters' logs, and its Jacobian
+    (2·AV_c/Σ AV·√(N/m) for amplitudes, a forward difference of the own AV for :data:`_SHAPE` ones)."""
 
     def __init__(self, start: list[Component], keys: list[tuple[int, str]], av: _Curve, dt: float) -> None:
         self.start, self.keys, self.av, self.dt = start, keys, av, dt
@@ -159,9 +154,8 @@ class _LogAvCurve:
 
 def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
               osc_frequencies: list[float] | None = None) -> list[tuple[float, list[Component]]]:
-    """Least-squares fits of the structure's theoretical AV to ``allan`` (one column) in log space, lowest cost first.
-    RR stays at slope 0 (the caller detrends); an OSC's frequency (``osc_frequencies``, else a quarter of the sampling
-    rate) and bandwidth are held."""
+    """(cost, components) of least-squares fits of the structure's AV to ``allan`` (one column) in log space, best
+    first; RR at slope 0 (the caller detrends); OSC frequency (``osc_frequencies``, else fs/4) and bandwidth held."""
     av = _Curve.of(allan)
     fit_idx = [i for i, n in enumerate(names) if n != "RR"]
     t_lo = max(3.0 * dt, av.tau[0])
@@ -180,9 +174,7 @@ def fit_allan(names: list[str], allan: AllanResult, dt: float, n_grid: int = 4,
             elif name == "cutoff":
                 lo[k], hi[k] = math.log(0.2 / (av.tau[-1])), math.log(0.5 / dt)
             else:
-                # Explicit ~0 boundary: the AV of a component scales with its amplitude²; below the amplitude
-                # where it is < AV_FLOOR of the measured AV at every τ it changes no residual, and trf would
-                # otherwise spend its iterations walking down that flat direction.
+                # explicit ~0 boundary: AV ∝ amplitude², at most AV_FLOOR of the data's (docs/em.md, "Why: starts")
                 with np.errstate(divide="ignore"):
                     ratio = float(np.min(av.avar / start[i].allan_variance(av.tau, dt)))
                 if math.isfinite(ratio) and ratio > 0:
@@ -205,12 +197,10 @@ DLPF_FLOOR_START = 0.1
 
 
 def filter_orders(components: list[Component], known: SensorFilter | None = None) -> list[list[Component]]:
-    """``components`` with each DLPF at every order of :data:`~imu_noise_id.core.noise.digital.ORDERS` (its noise
-    density and cutoff kept), one list per combination, and each white noise beside it at least
-    :data:`DLPF_FLOOR_START` of its density; ``[components]`` without a DLPF. ``known``: the user's sensor filter,
-    whose cutoff replaces the DLPF's and whose order, when given, is the only one tried. The order is chosen by the
-    starts' Whittle fits (:meth:`.model.NoiseModel.starting_values`); no likelihood search moves it (reasons:
-    docs/em.md, "Why the intervals, starts and Kalibr numbers are computed as they are")."""
+    """``components`` with each DLPF at every order of ``ORDERS`` (density and cutoff kept), one list per
+    combination, each white noise beside it at ≥ :data:`DLPF_FLOOR_START` of its density; ``known`` (the user's
+    filter) sets the cutoff and, when given, the only order. The starts' Whittle fits choose (docs/em.md, "Why:
+    starts")."""
     dlpfs = [c for c in components if isinstance(c, DLPF)]
     if not dlpfs:
         return [list(components)]
@@ -226,8 +216,7 @@ def filter_orders(components: list[Component], known: SensorFilter | None = None
 
 def distinct(results: list[tuple[float, list[Component]]], tau: np.ndarray, dt: float,
              rel: float = 0.1) -> list[tuple[float, list[Component]]]:
-    """Drop solutions whose theoretical AV is within ``rel`` of a better one's at every τ (the same fit for
-    practical purposes, e.g. differing only in a negligible random walk)."""
+    """``results`` without those whose theoretical AV is within ``rel`` of a better one's at every τ."""
     kept: list[tuple[float, list[Component]]] = []
     curves: list[np.ndarray] = []
     for cost, comps in results:

@@ -1,14 +1,8 @@
-"""Uncertainty of a fit: standard errors and 95 % intervals (paper 000 §3.4), and how long to record.
-
-Standard errors from the inverse observed information in the log-parameters (:func:`.mle.observed_information`); Wald
-intervals in log space, or (beyond the paper) profile intervals (:mod:`.profile`): for every parameter when the
-information is not positive definite or one sits at its zero boundary (a thousandfold smaller value lowers ℓ by less
-than 1.92); for one parameter when its log-se exceeds :data:`WALD_MAX_SE_LOG` or ℓ at its Wald ends is not within
-:data:`WALD_DROP_RANGE` of 1.92 below the maximum. At most :data:`PROFILE_BUDGET` sample-state evaluations per fit,
-then Wald (or the conditional upper end), the method saying so. Beyond :data:`INFORMATION_BUDGET` the information is
-Whittle's expected one instead of the observed one, the Wald method saying so. Advice: the per-sample information
-scaled.
-"""
+"""Standard errors, 95 % intervals (paper 000 §3.4) and record-length advice of a fit: Wald in log space from the
+inverse observed information, or profile intervals (:mod:`.profile`, beyond the paper) for every parameter when the
+information is not positive definite or one is at its zero boundary, else for those whose log-se exceeds
+:data:`WALD_MAX_SE_LOG` or whose Wald ends are outside :data:`WALD_DROP_RANGE`. Past :data:`PROFILE_BUDGET` or
+:data:`INFORMATION_BUDGET` the fallback is named in ``ci95_method``."""
 
 from __future__ import annotations
 
@@ -33,31 +27,25 @@ WALD_MAX_SE_LOG = 1.0
 #: The Wald interval stands when ℓ at both its ends on the quadratic trace is this far below the maximum (the
 #: signed root within 1.96 − 0.15 … 1.96 + 0.25: a quadratic log-likelihood gives exactly 1.92).
 WALD_DROP_RANGE = (0.5 * (Z95 - 0.15) ** 2, 0.5 * (Z95 + 0.25) ** 2)
-#: Likelihood evaluations × samples × states the profile intervals of one fit may spend (:func:`profile_evaluations`;
-#: about 15 s at 0.02–0.03 µs per sample and state of one evaluation). A parameter whose profile would pass it gets the
-#: interval of :func:`_beyond_budget`, its ``ci95_method`` ending in :data:`BUDGET_SPENT`.
+#: Likelihood evaluations × samples × states the profile intervals of one fit may spend, about 15 s; past it a parameter
+#: gets :func:`_beyond_budget`'s interval, its ``ci95_method`` ending in :data:`BUDGET_SPENT`.
 PROFILE_BUDGET = 6e8
-#: Exact gradient passes × samples × states the observed information may spend (k + 1 passes for k parameters; about
-#: 15 s at 0.1 µs per sample and state of a pass). Past it the information is Whittle's expected one
-#: (:func:`.whittle.fisher_information`, no pass over the data) and every Wald interval's method says so
-#: (:data:`WHITTLE_WALD`).
+#: Gradient passes (k + 1) × samples × states the observed information may spend, about 15 s; past it Whittle's
+#: expected information (:func:`.whittle.fisher_information`), the Wald method :data:`WHITTLE_WALD`.
 INFORMATION_BUDGET = 1.5e8
 #: The method of a Wald interval from Whittle's expected information instead of the observed one.
 WHITTLE_WALD = "wald (whittle information)"
 
 
 def profile_evaluations(n: int, states: int) -> float:
-    """The exact likelihood evaluations :data:`PROFILE_BUDGET` allows a fit of ``n`` samples whose state space has
-    ``states`` states (an evaluation's cost grows with both)."""
+    """Exact-likelihood evaluations :data:`PROFILE_BUDGET` allows on ``n`` samples and ``states`` states."""
     return mle.evaluations_within(PROFILE_BUDGET, n, states)
 
 
 def information(par: mle.Parameterisation, theta: np.ndarray, model: ss.StateSpace, y: np.ndarray, z: np.ndarray, *,
                 n: int, dt: float) -> tuple[np.ndarray, str]:
-    """The information −∂²ℓ/∂ϑ∂ϑᵀ of a fit in its log-parameters ϑ and the name of its Wald intervals: the observed
-    information (:func:`.mle.observed_information`, ``"wald"``) within :data:`INFORMATION_BUDGET`, else Whittle's
-    expected information of ``n`` samples at period ``dt`` [s] (:func:`.whittle.fisher_information`,
-    :data:`WHITTLE_WALD`)."""
+    """(−∂²ℓ/∂ϑ∂ϑᵀ, Wald method name): the observed information (``"wald"``) within :data:`INFORMATION_BUDGET`, else
+    Whittle's expected information of ``n`` samples at ``dt`` [s] (:data:`WHITTLE_WALD`)."""
     if theta.size + 1 <= mle.evaluations_within(INFORMATION_BUDGET, np.size(y), model.phi.shape[0]):
         return mle.observed_information(par, theta, model, y, z), "wald"
     return whittle.fisher_information(par.to_components(theta, model), n, dt), WHITTLE_WALD
@@ -65,9 +53,8 @@ def information(par: mle.Parameterisation, theta: np.ndarray, model: ss.StateSpa
 
 def _beyond_budget(v: float, s_log: float, conditional_end: float | None,
                    wald: str = "wald") -> tuple[tuple[float, float], str]:
-    """The interval of a parameter whose profile the budget no longer allows, and its method: the Wald interval in
-    log space (its method ``wald``) where the information has one, else for a zero-boundary parameter (0, its
-    conditional upper end) — the others held, narrower than the profile's —, else (0, ∞)."""
+    """(interval, method) once the budget is spent: Wald in log space where the information has one, else (0,
+    conditional upper end) for a zero-boundary parameter, else (0, ∞)."""
     if math.isfinite(s_log):
         return (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log)), f"{wald}, {BUDGET_SPENT}"
     if conditional_end is not None:
@@ -78,7 +65,7 @@ def _beyond_budget(v: float, s_log: float, conditional_end: float | None,
 def _record_length(
     labels: list[str], cov: np.ndarray, comps: list[Component], n: int, dt: float, *, target: float
 ) -> RecordLengthAdvice:
-    """Per-sample information = observed information / N, so se(T) = se(T_now)·√(T_now/T)."""
+    """Advice from the per-sample information: se(T) = se(T_now)·√(T_now/T)."""
     t_now = n * dt
     needed, half, reliable = {}, {}, {}
     for k, lab in enumerate(labels):
@@ -97,8 +84,7 @@ def _record_length(
 
 
 def _near_zero(par: mle.Parameterisation, res: mle.MLEResult, k: int, y: np.ndarray, z: np.ndarray) -> bool:
-    """Whether shrinking parameter k a thousandfold lowers ℓ by less than the 95 % LR threshold (the data
-    cannot tell it from 0, so a Wald interval in log space would be wrongly narrow)."""
+    """Whether shrinking parameter k a thousandfold lowers ℓ by less than 1.92 (not distinguishable from 0)."""
     th = res.theta.copy()
     th[k] -= math.log(1e3)
     try:
@@ -118,8 +104,8 @@ def _ramp_regressor(model: ss.StateSpace) -> int | None:
 
 
 def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult:
-    """Standard errors, 95 % intervals (§3.4, profile likelihood where the Hessian fails: module docstring) and
-    the recording-length advice of a fit, in place. ``fit.ci95_method`` says which interval each parameter got."""
+    """Standard errors, 95 % intervals and record-length advice of ``fit``, in place (module docstring);
+    ``fit.ci95_method`` names each interval's method. InputError when the fit holds no data."""
     if fit.statespace is None or fit.record is None:
         raise InputError("this FitResult holds no data to compute its uncertainty from")
     (y, z), model_ss = fit.record, fit.statespace

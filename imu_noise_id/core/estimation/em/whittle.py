@@ -1,17 +1,11 @@
-"""Whittle (frequency-domain) approximate likelihood of the differenced signal, for fast initial values.
+"""Whittle (frequency-domain) likelihood of the differenced signal, for starting values and metrics (beyond paper 000,
+§3.5(i)). Δy_t = y_t − y_{t−1} is stationary with two-sided spectral density per sample, at ω = 2πf·dt [rad/sample] and
+c(ω) = 2 − 2cos ω:
 
-Beyond paper 000 (§3.5(i) asks for good initial values). The first difference Δy_t = y_t − y_{t−1} of a sum of
-components is stationary (the bias disappears, a ramp becomes a constant, removed with the mean), with exact
-two-sided spectral density per sample, at angular frequency ω = 2πf·dt and with c(ω) = 2 − 2cos ω:
+    WN  σ²_WN·c(ω)      RW  σ²_RW      QN  σ²_QN·c(ω)²      GM  σ²_drive·c(ω) / (1 − 2φ cos ω + φ²)
 
-    WN  σ²_WN·c(ω)          RW  σ²_RW          QN  σ²_QN·c(ω)²
-    GM  σ²_drive·c(ω) / (1 − 2φ cos ω + φ²)
-
-Whittle's log-likelihood −Σ_j [log S(ω_j) + I(ω_j)/S(ω_j)] over the Fourier frequencies (I the periodogram),
-asymptotically equivalent to the exact one; the periodogram (one FFT) is pooled into log-spaced bands, so an
-evaluation costs O(bands), not O(N). Reasons: docs/em.md, "Why the maximum-likelihood search and its statistics are
-built as they are".
-"""
+Whittle's log-likelihood −Σ_j [log S(ω_j) + I(ω_j)/S(ω_j)] over the Fourier frequencies, the Hann-tapered periodogram
+pooled in log-spaced bands: O(bands) per evaluation."""
 
 from __future__ import annotations
 
@@ -29,7 +23,7 @@ from .differences import derivative_in_domain, stepped
 
 @dataclass(frozen=True)
 class BandedPeriodogram:
-    """Periodogram of Δy pooled in bands: centre ω, number of Fourier frequencies, summed periodogram."""
+    """Periodogram of Δy in bands: centre ω [rad/sample], Fourier frequencies per band, summed periodogram."""
 
     omega: np.ndarray
     count: np.ndarray
@@ -61,8 +55,7 @@ def tapered_periodogram(y: np.ndarray) -> TaperedPeriodogram:
 
 @dataclass(frozen=True)
 class LineWindow:
-    """An interval (``lo``, ``hi``) [rad/sample] around a line of centre ``centre`` and bandwidth ``bandwidth``
-    [rad/sample], where :func:`pooled` follows the line's shape."""
+    """Where :func:`pooled` follows a line's shape: ``lo``, ``hi``, ``centre``, ``bandwidth`` [rad/sample]."""
 
     lo: float
     hi: float
@@ -77,10 +70,8 @@ LINE_BAND_SHARE = 1.0 / 16.0
 
 def pooled(tp: TaperedPeriodogram, n_single: int = 256, ratio: float = 1.02,
            fine: list[LineWindow] | tuple = ()) -> BandedPeriodogram:
-    """``tp`` with its lowest ``n_single`` frequencies kept single and the rest pooled in bands of width ratio·ω,
-    except in the ``fine`` windows, where a band spans at most :data:`LINE_BAND_SHARE` of max(bandwidth, distance from
-    the line's centre), at least one frequency (around a line, whose shape a wide band would hide: an OSC's frequency
-    and bandwidth; O(log(window / bandwidth)) bands per line instead of every frequency)."""
+    """``tp`` with its lowest ``n_single`` frequencies single and the rest in bands of width ratio·ω; inside ``fine``
+    windows a band spans at most :data:`LINE_BAND_SHARE` of max(bandwidth, distance from the centre), ≥ 1 frequency."""
     m, jmax = tp.m, tp.omega.size
     step = 2.0 * math.pi / m
     cap = np.full(jmax + 2, jmax + 2, dtype=np.int64)
@@ -110,8 +101,7 @@ def banded_periodogram(y: np.ndarray, n_single: int = 256, ratio: float = 1.02,
 
 
 def line_windows(starts: list[list[Component]], dt: float) -> list[LineWindow]:
-    """Windows around every OSC line of ``starts``, where a Whittle likelihood needs the periodogram at the line's
-    scale (:func:`pooled`): ±max(20 bandwidths, 2 % of the frequency)."""
+    """Windows ±max(20 bandwidths, 2 % of the frequency) around every OSC line of ``starts``."""
     out = []
     for start in starts:
         for c in start:
@@ -125,8 +115,7 @@ def line_windows(starts: list[list[Component]], dt: float) -> list[LineWindow]:
 
 
 def osc_start_frequencies(bp: BandedPeriodogram, dt: float, count: int, half_window: int = 12) -> list[float]:
-    """Frequencies [Hz] of the ``count`` strongest lines of a banded periodogram: local maxima of the mean power per
-    band over its running median (±``half_window`` bands), strongest first (starting values of OSC components)."""
+    """Frequencies [Hz] of the ``count`` strongest peaks of band power over its running median, strongest first."""
     mean = bp.power / bp.count
     k = np.arange(mean.size)
     floor = np.array([np.median(mean[max(0, i - half_window): i + half_window + 1]) for i in k])
@@ -137,7 +126,7 @@ def osc_start_frequencies(bp: BandedPeriodogram, dt: float, count: int, half_win
 
 
 def difference_spectrum(components: list[Component], omega: np.ndarray, dt: float) -> np.ndarray:
-    """Spectral density per sample of Δy for the components (RR only shifts the mean: no contribution)."""
+    """Spectral density per sample of Δy for ``components`` at ω [rad/sample] (RR contributes nothing)."""
     c = 2.0 - 2.0 * np.cos(omega)
     s = np.zeros_like(omega)
     for comp in components:
@@ -158,16 +147,13 @@ def difference_spectrum(components: list[Component], omega: np.ndarray, dt: floa
 
 
 def whittle_loglik(s: np.ndarray, bp: BandedPeriodogram) -> float:
-    """The banded Whittle log-likelihood −Σ_b [n_b ln S_b + P_b/S_b] (up to a constant) of the spectrum ``s`` at
-    ``bp``'s bands (P_b the band's summed periodogram; ``s`` > 0)."""
+    """Banded Whittle log-likelihood −Σ_b [n_b ln S_b + P_b/S_b] (up to a constant), P_b a band's summed periodogram."""
     return -float(np.sum(bp.count * np.log(s) + bp.power / s))
 
 
 def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndarray) -> np.ndarray:
-    """Spectral density per sample of y_k = h x_k, x_{k+1} = Φ x_k + w_k, var w = Q, at angular frequencies ω:
-    S(ω) = h G Q Gᴴ hᵀ with G = (e^{iω} I − Φ)⁻¹ (any stable block, e.g. LPF, OSC; diagonal and 2 × 2 Φ in closed
-    form, h G = h adj(zI − Φ) / det(zI − Φ)).
-    """
+    """Spectral density per sample of y_k = h x_k, x_{k+1} = Φ x_k + w_k, var w = Q: S(ω) = h G Q Gᴴ hᵀ, G = (e^{iω}
+    I − Φ)⁻¹ (closed form for diagonal and 2 × 2 Φ)."""
     z = np.exp(1j * np.asarray(omega))
     n = phi.shape[0]
     if np.count_nonzero(phi - np.diag(np.diag(phi))) == 0:  # (zI − Φ)⁻¹ is diagonal
@@ -185,8 +171,7 @@ def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndar
 
 def with_log_parameters(components: list[Component], keys: list[tuple[int, str]],
                         x: np.ndarray) -> list[Component]:
-    """``components`` with parameter ``keys[j]`` = (component index, parameter name) set to exp(x[j]) (the
-    searches over log-parameters; ValueError where a value is out of its component's range)."""
+    """``components`` with parameter ``keys[j]`` = (index, name) set to exp(x[j]); ValueError outside its range."""
     params = [dict(c.params()) for c in components]
     for (i, name), v in zip(keys, x, strict=True):
         params[i][name] = math.exp(v) if v < 700.0 else math.inf  # beyond exp's range: the component refuses it
@@ -195,11 +180,8 @@ def with_log_parameters(components: list[Component], keys: list[tuple[int, str]]
 
 def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: BandedPeriodogram | None = None,
                 bounds: dict[str, tuple[float, float]] | None = None) -> tuple[float, list[Component]]:
-    """Maximise the banded Whittle likelihood of Δy over the log-parameters from ``start``.
-
-    Returns (Whittle log-likelihood up to a constant, fitted components; RR slopes left as in ``start``).
-    ``bounds`` maps parameter names to their physical range (default: GM τ from dt/2 to 100 records).
-    """
+    """(Whittle log-likelihood up to a constant, fitted components) maximised over the log-parameters from ``start``
+    (RR held); ``bounds``: physical range per parameter name (default GM τ from dt/2 to 100 records)."""
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([start[i].params()[k] for i, k in keys])
@@ -231,13 +213,9 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
 
 def whittle_information(components: list[Component], y: np.ndarray, dt: float,
                         periodogram: BandedPeriodogram | None = None, step: float = 1e-3) -> np.ndarray:
-    """The expected (Fisher) information of the banded Whittle log-likelihood in the log-parameters (non-RR
-    components in order, as :class:`imu_noise_id.core.estimation.em.mle.Parameterisation`): Σ_b n_b ∂ln S_b/∂ϑ ·
-    ∂ln S_b/∂ϑᵀ over the bands b of n_b Fourier frequencies, the derivatives of the log-spectrum by central
-    differences (one-sided at a component's domain edge, :mod:`.differences`; zero where neither step is inside). It
-    preconditions the exact-likelihood quasi-Newton finish (:func:`.mle.maximise`). Beyond the papers; positive
-    semi-definite at every start (reasons: docs/em.md, "Algorithm" 5, "The finish's metric").
-    """
+    """Expected (Fisher) information of the banded Whittle likelihood in the log-parameters (as
+    :class:`~.mle.Parameterisation`): Σ_b n_b ∂ln S_b/∂ϑ ∂ln S_b/∂ϑᵀ, derivatives by central differences (zero where
+    no step is inside a domain). Positive semi-definite; the finish's metric (:func:`.mle.maximise`)."""
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(components) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([components[i].params()[k] for i, k in keys])
@@ -253,13 +231,9 @@ def whittle_information(components: list[Component], y: np.ndarray, dt: float,
 
 
 def fisher_information(components: list[Component], n: int, dt: float) -> np.ndarray:
-    """The expected information of the Whittle likelihood of ``n`` samples' differences in the log-parameters
-    (:func:`whittle_information` on the Fourier frequencies of ``n − 1`` differences, pooled in bands as
-    :func:`pooled` pools them, finely around the components' OSC lines): Whittle's asymptotic Fisher information of
-    the exact likelihood, from the model alone (no pass over the data; P. Whittle, "Estimation and information in
-    stationary time series", Ark. Mat. 2, 1953: Σ_j ∇ln S(ω_j) ∇ln S(ω_j)ᵀ over the positive Fourier frequencies). Its
-    inverse is the asymptotic covariance when the model holds; where it does not, it differs from
-    the observed information, both approximations to the estimator's sandwich covariance."""
+    """Whittle's asymptotic Fisher information of ``n`` samples in the log-parameters, from the model alone
+    (P. Whittle, Ark. Mat. 2, 1953: Σ_j ∇ln S(ω_j) ∇ln S(ω_j)ᵀ over the positive Fourier frequencies of the n − 1
+    differences, pooled as :func:`pooled`, finely around OSC lines)."""
     m = int(n) - 1
     jmax = (m - 1) // 2
     if jmax < 8:

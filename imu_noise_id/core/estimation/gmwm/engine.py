@@ -1,13 +1,11 @@
-"""The GMWM's numerical engine over one or several records (GMWM: Guerrier et al., JASA 108, 2013; several records: the
-MGMWM of Bakalli et al., "Multi-signal approaches for repeated sampling schemes in inertial sensor calibration").
+"""The GMWM's numerical engine over one or several records (GMWM: Guerrier et al., JASA 108, 2013; several records:
+MGMWM, Bakalli et al., "Multi-signal approaches for repeated sampling schemes in inertial sensor calibration"):
 
     θ̂ = argmin_θ Σ_k (ν̂_k − ν_k(θ))ᵀ Ω_k (ν̂_k − ν_k(θ))                             (GMWM eq. 3)
 
-over log-parameters θ (beyond the paper). With A_k = ∂ν_k/∂θᵀ, H = Σ A_kᵀΩ_kA_k, S = Σ A_kᵀΩ_kV_kΩ_kA_k the covariance
-is Ξ = H⁻¹ S H⁻¹ (GMWM Proposition 2; H⁻¹ when Ω_k = V_k⁻¹). At the efficient weight the minimum is Hansen's
-J-statistic, χ²(Σ J_k − p), and the profiled objective's rise is χ²₁ (Newey & West 1987), giving profile intervals. WIC
-penalty: 2 Σ tr(Ω_k A_k H⁻¹ A_kᵀ Ω_k V_k) (Guerrier et al. 2015), 2p at the efficient weight.
-"""
+over log-parameters θ. With A_k = ∂ν_k/∂θᵀ, H = Σ A_kᵀΩ_kA_k, S = Σ A_kᵀΩ_kV_kΩ_kA_k: Ξ = H⁻¹ S H⁻¹ (GMWM Proposition
+2); at the efficient weight the minimum is Hansen's J, χ²(Σ J_k − p), and the profiled objective's rise is χ²₁ (Newey
+& West 1987). WIC penalty 2 Σ tr(Ω_k A_k H⁻¹ A_kᵀ Ω_k V_k) (Guerrier et al. 2015), 2p when efficient."""
 
 from __future__ import annotations
 
@@ -63,9 +61,8 @@ class Parameters:
         return [type(c)(**kw) for c, kw in zip(self.template, params, strict=True)]
 
     def bounds(self, theta0: np.ndarray, runs: list[Moments]) -> tuple[np.ndarray, np.ndarray]:
-        """Search box: physical ranges for τ and frequencies (:func:`.mle.physical_bounds`); ±30 e-folds around the
-        start for amplitudes, the lower end raised to where the component's WV is below :data:`WV_FLOOR` of the data's
-        at every scale (beyond the paper, as :func:`.starts.fit_allan`)."""
+        """Search box: physical ranges for τ and frequencies (:func:`physical_bounds`); amplitudes ±30 e-folds, the
+        lower end raised to where the component's WV is below :data:`WV_FLOOR` of the data's at every scale."""
         n, dt = max(r.wv.n for r in runs), runs[0].wv.dt
         phys = physical_bounds(n, dt)
         lo, hi = theta0 - AMPLITUDE_WIDTH, theta0 + AMPLITUDE_WIDTH
@@ -107,8 +104,7 @@ class Weights:
 
     @classmethod
     def diagonal(cls, runs: list[Moments]) -> Weights:
-        """The first step's weight: each scale's variance 2ν̂²/edf (χ² law; the gmwm package's "fast" choice),
-        correlations ignored."""
+        """First-step weight: each scale's variance 2ν̂²/edf (χ² law; the gmwm package's "fast" choice)."""
         covs = [np.diag(2.0 * run.wv.nu2**2 / run.wv.edf) for run in runs]
         return cls(tuple(np.diag(1.0 / np.sqrt(np.diag(v))) for v in covs), tuple(covs))
 
@@ -121,10 +117,8 @@ EIGENVALUE_FLOOR = 1e-10
 
 
 def _inverse_cholesky(v: np.ndarray) -> np.ndarray:
-    """L⁻¹ with V = L Lᵀ, through the correlation matrix. A correlation matrix that is not positive definite is first
-    projected onto the positive definite ones (Higham 2002, one step): eigenvalues clipped at
-    :data:`EIGENVALUE_FLOOR` of the largest, the diagonal scaled back to one. Reasons: docs/gmwm.md, "The covariance
-    of the WV estimates"."""
+    """L⁻¹ with V = L Lᵀ, through the correlation matrix; one not positive definite is first projected (Higham 2002,
+    one step: eigenvalues clipped at :data:`EIGENVALUE_FLOOR` of the largest, unit diagonal restored)."""
     d = np.sqrt(np.diag(v))
     corr = v / np.outer(d, d)
     try:
@@ -173,8 +167,7 @@ class Problem:
                                for run, w in zip(self.runs, self.weights.whiten, strict=True)])
 
     def residual_jacobian(self, theta: np.ndarray) -> np.ndarray:
-        """∂r/∂θᵀ of :meth:`residuals`: −L_k⁻¹A_k stacked (:func:`jacobian`); zero where θ leaves a component's domain
-        (the residuals are constant there)."""
+        """−L_k⁻¹A_k stacked (:func:`jacobian`); zero where θ leaves a component's domain."""
         try:
             return -np.vstack([w @ jacobian(self.par, theta, run)
                                for run, w in zip(self.runs, self.weights.whiten, strict=True)])
@@ -187,8 +180,7 @@ class Problem:
 
     def minimise(self, theta0: np.ndarray, free: np.ndarray | None = None,
                  box: tuple[np.ndarray, np.ndarray] | None = None, tol: float = 1e-10) -> Minimum:
-        """Trust-region least squares on the whitened residuals; ``free``: the entries searched (the others held at
-        ``theta0``); ``box``: another search box; ``tol``: relative tolerance (a profile needs less)."""
+        """Trust-region least squares of the whitened residuals over the ``free`` entries (others held) in ``box``."""
         lo, hi = box or self.box
         free = np.ones(theta0.size, bool) if free is None else free
         base = np.clip(theta0, lo + 1e-9, hi - 1e-9)
@@ -219,10 +211,8 @@ class Problem:
 
 def log_gradient(par: Parameters, theta: np.ndarray, of_component: Callable[[Component], np.ndarray | float],
                  step: float = 1e-5) -> np.ndarray:
-    """∂/∂θᵀ of Σ_c f(c) at θ, for f additive over independent components and scaling with each amplitude's square (a
-    WV, the LS slope's variance): (…, p). ∂f/∂ln a = 2f(c) exactly for amplitudes (:data:`AMPLITUDES`); other parameters
-    by a central difference of their own component's f (one-sided at a domain edge). ValueError when θ leaves a
-    component's domain."""
+    """∂/∂θᵀ (…, p) of Σ_c f(c), f additive over components and ∝ each amplitude² (a WV, the LS slope's variance):
+    2f(c) for amplitudes, central differences of the own component's f otherwise; ValueError outside a domain."""
     comps = par.to_components(theta)
     parts = [np.asarray(of_component(c), dtype=float) for c in comps]
     out = np.zeros((*parts[0].shape, theta.size))
@@ -238,22 +228,21 @@ def log_gradient(par: Parameters, theta: np.ndarray, of_component: Callable[[Com
 
 
 def jacobian(par: Parameters, theta: np.ndarray, run: Moments) -> np.ndarray:
-    """A = ∂ν/∂θᵀ (J × p) in the log-parameters (:func:`log_gradient` of the components' WVs); ValueError when θ leaves
-    a component's domain."""
+    """A = ∂ν/∂θᵀ (J × p) in the log-parameters; ValueError outside a domain."""
     return log_gradient(par, theta, lambda c: run.model([c]))
 
 
 @dataclass(frozen=True)
 class Inference:
-    """Sandwich covariance and goodness of fit at a minimum (module docstring).
+    """Sandwich covariance and goodness of fit at a minimum.
 
     Attributes
     ----------
-    covariance : Ξ of the log-parameters (inf on the diagonal of parameters the moments do not identify)
-    identified : whether H was positive definite with no parameter on its search bound
-    j_statistic, dof, p_value : the minimum, its degrees of freedom Σ J_k − p and P(χ² > J)
-    optimism : the WIC penalty 2 Σ tr(Ω_k A_k H⁻¹ A_kᵀ Ω_k V_k)
-    residual_z : per record, (ν̂ − ν(θ̂)) / sd of that residual (which scales misfit)
+    covariance : Ξ of the log-parameters (inf on the diagonal of unidentified parameters)
+    identified : H positive definite with no parameter on its bound
+    j_statistic, dof, p_value : the minimum, Σ J_k − p and P(χ² > J)
+    optimism : WIC penalty 2 Σ tr(Ω_k A_k H⁻¹ A_kᵀ Ω_k V_k)
+    residual_z : per record, (ν̂ − ν(θ̂)) / sd of that residual
     """
 
     covariance: np.ndarray
@@ -266,7 +255,7 @@ class Inference:
 
 
 def infer(problem: Problem, best: Minimum, covariances: list[np.ndarray]) -> Inference:
-    """Ξ = H⁻¹SH⁻¹ with Ω from the problem's weights and V_k = ``covariances`` (at θ̂), the J-test, the residual z."""
+    """Ξ = H⁻¹SH⁻¹ (V_k = ``covariances`` at θ̂), the J-test and the residual z."""
     from scipy.stats import chi2
 
     par, runs, weights = problem.par, problem.runs, problem.weights
@@ -301,8 +290,7 @@ def infer(problem: Problem, best: Minimum, covariances: list[np.ndarray]) -> Inf
 def profile_interval(problem: Problem, best: Minimum, k: int, *, lower: bool = True, first_step: float = 0.25,
                      max_span: float = 40.0) -> tuple[float, float]:
     """95 % profile interval of log-parameter k: where the objective, minimised over the others, rises by
-    :data:`CHI2_95`. Each end is bracketed by doubling steps (0.25, 0.5, 1, … e-folds) and refined by bisection; an
-    end not reached within ``max_span`` e-folds is ∓inf (lower end skipped with ``lower=False``)."""
+    :data:`CHI2_95`; bracketed in doubling steps from ``first_step``, bisected; ∓inf beyond ``max_span`` e-folds."""
     ends = []
     for direction in (-1.0, 1.0):
         if direction < 0 and not lower:
@@ -326,8 +314,7 @@ def profile_interval(problem: Problem, best: Minimum, k: int, *, lower: bool = T
 
 
 def near_zero(problem: Problem, best: Minimum, k: int) -> bool:
-    """Whether amplitude k shrunk a thousandfold (the others re-fitted) raises the objective by less than
-    :data:`CHI2_95`: the moments cannot tell it from 0."""
+    """Whether amplitude k shrunk a thousandfold raises the profiled objective by less than :data:`CHI2_95`."""
     if problem.par.entries[k][1] not in AMPLITUDES:
         return False
     value = best.theta[k] - math.log(1e3)

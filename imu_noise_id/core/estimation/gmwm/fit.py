@@ -1,14 +1,10 @@
-"""The Generalized Method of Wavelet Moments (GMWM): a stochastic error model fitted to the wavelet variance.
+"""Generalized Method of Wavelet Moments (GMWM; Guerrier, Skaloud, Stebler & Victoria-Feser, JASA 108, 2013).
 
-Guerrier, Skaloud, Stebler & Victoria-Feser, JASA 108 (2013) ("GMWM"): θ̂ = argmin (ν̂ − ν(θ))ᵀ Ω (ν̂ − ν(θ)) (GMWM
-eq. 3), ν̂ the Haar WV (:mod:`imu_noise_id.core.wavelet`, GMWM eq. 2), robust WV with ``robust=True`` (RGMWM; Guerrier,
-Molinari & Victoria-Feser 2014). Steps: Allan starts (:func:`.starts.fit_allan`, 2ν̂ = AV); Ω₁ = diag(edf_j/2ν̂_j²);
-efficient Ω₂ = V(θ̂₁)⁻¹ with V the exact Gaussian WV covariance (:mod:`imu_noise_id.core.wavelet.covariance`; beyond the
-paper, which estimates V); inference by :mod:`.gmwm_engine` (sandwich, GMWM Proposition 2; Wald or profile intervals,
-J-statistic, WIC penalty); optional parametric bootstrap. An RR's slope comes from :mod:`.gmwm_ramp` (beyond the paper).
-The result is a :class:`~.results.FitResult` (``estimator = "gmwm"``, ``loglik``/``aic``/``bic`` NaN) with
-:class:`GmwmFit`. Details: docs/gmwm.md, "The estimator".
-"""
+θ̂ = argmin (ν̂ − ν(θ))ᵀ Ω (ν̂ − ν(θ)) (GMWM eq. 3), ν̂ the Haar WV (GMWM eq. 2) or, with ``robust``, the robust WV
+(RGMWM; Guerrier, Molinari & Victoria-Feser 2014). Steps: (1) Allan starts (2ν̂ = AV); (2) Ω₁ = diag(edf_j/2ν̂_j²);
+(3) Ω₂ = V(θ̂₁)⁻¹, V the exact Gaussian WV covariance (beyond the paper); (4) inference by :mod:`.engine` (sandwich,
+GMWM Proposition 2), optionally a parametric bootstrap; an RR's slope from :mod:`.ramp`. Returns :class:`GmwmFit`
+(``estimator = "gmwm"``, ``loglik``/``aic``/``bic`` NaN)."""
 
 from __future__ import annotations
 
@@ -36,17 +32,9 @@ from .ramp import fit_ramp
 
 @dataclass(frozen=True)
 class GmwmOptions:
-    """How :func:`fit_gmwm` estimates.
-
-    Attributes
-    ----------
-    robust, efficiency : fit the robust WV (biweight M-estimator of that Gaussian efficiency) instead of the classical
-    max_fraction : longest scale used, m_J ≤ max_fraction·N
-    n_starts : Allan-variance starting values tried in the first step
-    bootstrap : parametric-bootstrap replicates for the intervals (0: asymptotic intervals only)
-    seed : of the bootstrap simulations
-    target_precision : relative 95 % half-width of the recording-length advice
-    """
+    """How :func:`fit_gmwm` estimates: ``robust`` WV (biweight M-estimator of Gaussian ``efficiency``), scales up to
+    ``max_fraction``·N, ``n_starts`` Allan starts, ``bootstrap`` parametric-bootstrap replicates (0: asymptotic
+    intervals) with ``seed``, ``target_precision`` the relative 95 % half-width of the record-length advice."""
 
     robust: bool = False
     efficiency: float = DEFAULT_EFFICIENCY
@@ -63,15 +51,14 @@ class GmwmOptions:
 
 @dataclass
 class GmwmFit(FitResult):
-    """A GMWM fit: a :class:`FitResult` plus the wavelet moments and their fit (module docstring).
+    """A GMWM fit: :class:`FitResult` plus the wavelet moments.
 
     Attributes
     ----------
-    wv : the WV fitted (classical or robust)
-    wv_model, wv_covariance : ν(θ̂) and V(θ̂) at the WV's scales
-    j_statistic, dof, p_value : the J-test of the model (χ² with ``dof`` degrees of freedom when it is right)
-    residual_z : (ν̂ − ν(θ̂)) / sd per scale: |z| > 2 marks the τ that misfit
-    wic_penalty : 2·tr(Ω A H⁻¹ Aᵀ Ω V) (WIC = ``j_statistic`` + ``wic_penalty`` under the fit's own weight)
+    wv, wv_model, wv_covariance : the WV fitted (classical or robust); ν(θ̂) and V(θ̂) at its scales
+    j_statistic, dof, p_value : J-test of the model (χ² with ``dof`` degrees of freedom when it holds)
+    residual_z : (ν̂ − ν(θ̂)) / sd per scale (|z| > 2: misfit)
+    wic_penalty : 2·tr(Ω A H⁻¹ Aᵀ Ω V) (WIC = J + penalty under the fit's own weight)
     interval_method : per parameter label, how its interval was obtained
     """
 
@@ -93,7 +80,7 @@ def canonical_order(components: list[Component]) -> list[Component]:
 
 
 def _with_ramp_start(components: list[Component], wv: WaveletVariance) -> list[Component]:
-    """RR's start: the slope whose WV (ω·τ/2)² makes up the excess of the longest scale over the other components."""
+    """RR's start: the slope whose WV (ω·τ/2)² makes up the longest scale's excess over the other components."""
     if not any(isinstance(c, RR) for c in components):
         return components
     others = [c for c in components if not isinstance(c, RR)]
@@ -110,7 +97,7 @@ def starting_values(names: list[str], wv: WaveletVariance, n_starts: int) -> lis
 
 @dataclass
 class Estimate:
-    """The efficient GMWM estimate of one structure on one or several records, before it is dressed as a result."""
+    """The efficient GMWM estimate of one structure on one or several records, before :func:`dress`."""
 
     problem: eng.Problem
     best: eng.Minimum
@@ -124,7 +111,7 @@ class Estimate:
 
 
 def estimate(runs: list[eng.Moments], starts: list[list[Component]]) -> Estimate:
-    """Steps 2–4 of the module docstring on the records ``runs`` (one θ for all of them)."""
+    """Steps 2–4 on the records ``runs`` (one θ for all); InputError without starts."""
     if not starts:
         raise InputError("no starting values for the GMWM fit")
     par = eng.Parameters.of(canonical_order(starts[0]))
@@ -150,7 +137,8 @@ def estimate(runs: list[eng.Moments], starts: list[list[Component]]) -> Estimate
 
 
 def intervals(est: Estimate) -> tuple[dict[str, float], dict[str, tuple[float, float]], dict[str, str]]:
-    """Standard errors, 95 % intervals and how each was obtained (step 4 of the module docstring)."""
+    """(se, 95 % interval, method) per parameter: Wald in log space, or the objective's profile (χ²₁) where the
+    log-sd exceeds ``WALD_MAX_SE_LOG``, the amplitude is indistinguishable from 0 or at its bound."""
     se, ci, how = {}, {}, {}
     cov = est.inference.covariance
     for k, lab in enumerate(est.problem.par.labels):
@@ -191,9 +179,8 @@ def _bootstrap(est: Estimate, options: GmwmOptions, slope: float | None) -> dict
 
 def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope: float | None = None,
           uncertainty: bool = True) -> GmwmFit:
-    """The :class:`GmwmFit` of an :class:`Estimate` (intervals, bootstrap and advice unless ``uncertainty`` is False).
-    ``slope``: the record's least-squares slope [u/s] for an RR's slope and interval (:mod:`.gmwm_ramp`); None keeps the
-    WV's |ω|."""
+    """The :class:`GmwmFit` of ``est`` (intervals, bootstrap and advice unless not ``uncertainty``); ``slope``: the
+    record's least-squares slope [u/s] for an RR (:mod:`.ramp`), None keeps the WV's |ω|."""
     se, ci, how = intervals(est) if uncertainty else ({}, {}, {})
     if options.bootstrap and uncertainty:
         for lab, values in _bootstrap(est, options, slope).items():
@@ -249,20 +236,15 @@ def estimate_structure(wv: WaveletVariance, structure: str | list[Component], *,
 def fit_gmwm(y: np.ndarray | None, dt: float, structure: str | list[Component], *,
              options: GmwmOptions | None = None, init: list[Component] | None = None,
              wv: WaveletVariance | None = None, slope: float | None = None) -> GmwmFit:
-    """GMWM fit of one structure to one axis (module docstring).
+    """GMWM fit of one structure to one axis; InputError on a bad signal or structure, too few scales for the
+    parameters, or no start that fits.
 
     Parameters
     ----------
-    y : samples [u] at period ``dt`` [s] (NaN = missing, filled by interpolation), or None when ``wv`` is given
-    structure : ``'WN+GM+RW'``, a spec with values or components (then used as the start)
-    init : starting components (instead of the Allan-variance starts)
-    wv : the record's WV when the caller has it (``y`` is then not read); ``slope`` then gives its least-squares
-        slope [u/s] (:func:`prepare`), reported for an RR
-
-    Raises
-    ------
-    InputError
-        Bad signal or structure, too few scales for the parameters, no start could be fitted.
+    y : samples [u] at period ``dt`` [s] (NaN filled by interpolation), or None with ``wv``
+    structure : ``'WN+GM+RW'``, a spec with values or components (then the start)
+    init : starting components instead of the Allan starts
+    wv, slope : the record's WV and least-squares slope [u/s] (:func:`prepare`), when the caller has them
     """
     options = options or GmwmOptions()
     if wv is None:

@@ -1,14 +1,9 @@
-"""Pooled GMWM over several recordings of one sensor, with a test that they share one model (MGMWM-style).
+"""Pooled GMWM over several records of one sensor with a test that they share one model (MGMWM; Bakalli, Guerrier et
+al., "Multi-signal approaches for repeated sampling schemes in inertial sensor calibration"): θ̂ = argmin Σ_k
+(ν̂_k − ν_k(θ))ᵀ Ω_k (ν̂_k − ν_k(θ)). Compatibility at the 5 % level (beyond the paper, after Hansen's J-test), Ω_k held
+fixed:
 
-Bakalli, Guerrier et al. ("Multi-signal approaches for repeated sampling schemes in inertial sensor calibration"):
-θ̂ = argmin Σ_k (ν̂_k − ν_k(θ))ᵀ Ω_k (ν̂_k − ν_k(θ)) (:mod:`.gmwm_engine`; each record its own length and period).
-Compatibility (beyond the paper, after Hansen's J-test), the pooled fit's efficient Ω_k held fixed:
-
-    C = J_pooled(θ̂) − Σ_k J_k(θ̂_k) = Σ_k [J_k(θ̂) − J_k(θ̂_k)] ~ χ²((K − 1)·p)   under "one θ for all replicates",
-
-each term showing how much record k disagrees; the pooled J, χ²(Σ J_k − p), tests one θ and the model together. Verdict
-at the 5 % level.
-"""
+    C = J_pooled(θ̂) − Σ_k J_k(θ̂_k) = Σ_k [J_k(θ̂) − J_k(θ̂_k)] ~ χ²((K − 1)·p)."""
 
 from __future__ import annotations
 
@@ -32,17 +27,15 @@ COMPATIBILITY_ALPHA = 0.05
 
 @dataclass
 class PooledFit:
-    """One structure fitted to K records of one sensor.
+    """One structure fitted to K records.
 
     Attributes
     ----------
-    fit : the pooled fit (one θ; ``n`` the total samples; its ``wv``/``residual_z`` are the first record's)
-    runs : each record's own GMWM fit of the structure
-    j_statistic, dof, p_value : the pooled J-test
-    compatibility : C, its degrees of freedom (K − 1)·p, its p-value
-    compatible : p-value ≥ :data:`COMPATIBILITY_ALPHA`
-    residual_z : per record, the standardised WV residuals of the pooled fit
-    run_rise : per record, J_k(θ̂_pooled) − J_k(θ̂_k): its share of C (the records that disagree most stand out)
+    fit : the pooled fit (one θ; ``n`` total samples; ``wv``/``residual_z`` of the first record)
+    runs : each record's own fit
+    j_statistic, dof, p_value : the pooled J-test, χ²(Σ J_k − p)
+    compatibility, compatibility_dof, compatibility_p : C, (K − 1)·p and its p-value
+    residual_z, run_rise : per record, the pooled fit's standardised WV residuals and J_k(θ̂) − J_k(θ̂_k)
     """
 
     fit: GmwmFit
@@ -63,13 +56,8 @@ class PooledFit:
 
 def fit_pooled(records: list[tuple[np.ndarray, float]] | list[WaveletVariance], structure: str | list[Component], *,
                options: GmwmOptions | None = None) -> PooledFit:
-    """Pooled GMWM fit of ``structure`` to ``records`` ((samples, dt) pairs or their WVs) and the compatibility test.
-
-    Raises
-    ------
-    InputError
-        Fewer than two records, a bad record or structure.
-    """
+    """Pooled fit of ``structure`` to ``records`` ((samples, dt) pairs or WVs) and the compatibility test; InputError
+    with fewer than two records or a bad record or structure."""
     options = options or GmwmOptions()
     if len(records) < 2:
         raise InputError(f"pooling needs at least two records of the sensor, got {len(records)}")

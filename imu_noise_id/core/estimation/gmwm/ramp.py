@@ -1,16 +1,10 @@
-"""The ramp of a GMWM fit: the wavelet moments joined with the record's least-squares slope (beyond the papers).
-
-An RR's slope ω enters the Haar WV squared, (ω·τ/2)². The record's least-squares slope ω̂ has E ω̂ = ω, Var ω̂ = V(θ)
-(:func:`imu_noise_id.core.noise.trend.ls_slope_variance`, exact) and, for Gaussian noise, is uncorrelated with every WV
-estimate. The GMM objective over both (GMWM eq. 3 plus one term), continuously updated in V, the WV's ramp term a
-nuisance magnitude a:
+"""The ramp of a GMWM fit (beyond the papers): an RR's slope ω enters the Haar WV as (ω·τ/2)²; the record's
+least-squares slope ω̂ has E ω̂ = ω, Var ω̂ = V(θ) (:func:`~imu_noise_id.core.noise.trend.ls_slope_variance`) and is
+uncorrelated with the WV for Gaussian noise. GMWM eq. 3 plus one term, a the WV's ramp magnitude:
 
     J(θ, a, ω) = (ν̂ − ν(θ, a))ᵀ Ω (ν̂ − ν(θ, a)) + (ω̂ − ω)² / V(θ).                   (1)
 
-The slope is the minimiser of J_p(v) = min_{θ,a} J(θ, a, v), its 95 % interval {v : J_p(v) − min J_p ≤ χ²₁,₀.₉₅} (the
-distance-metric statistic); the other parameters stay the WV fit's. Why: docs/gmwm.md, "The ramp" and "Accuracy against
-the EM".
-"""
+The slope minimises J_p(v) = min_{θ,a} J(θ, a, v); its 95 % interval is {v : J_p(v) − min J_p ≤ χ²₁,₀.₉₅}."""
 
 from __future__ import annotations
 
@@ -54,9 +48,8 @@ class _Profile:
         return np.append(self.problem.residuals(theta), slope_term)
 
     def jacobian(self, theta: np.ndarray, v: float) -> np.ndarray:
-        """∂/∂θᵀ of :meth:`residuals`: the WV rows of :meth:`.gmwm_engine.Problem.residual_jacobian`, and the slope
-        term's −(ω̂ − v)/(2V^{3/2})·∂V/∂θ, with ∂V/∂θ from :func:`.gmwm_engine.log_gradient` (V = Σ_c V_c over the
-        noise components, each scaling with its amplitude's square)."""
+        """∂/∂θᵀ of :meth:`residuals`: the WV rows of :meth:`.engine.Problem.residual_jacobian` and the slope
+        term's −(ω̂ − v)/(2V^{3/2})·∂V/∂θ (:func:`.engine.log_gradient`)."""
         row = np.zeros(theta.size)
         try:
             var = ls_slope_variance(self.problem.par.to_components(theta), self.n, self.dt)
@@ -79,8 +72,7 @@ class _Profile:
 
 
 def fit_ramp(problem: eng.Problem, theta: np.ndarray, ls_slope: float, n: int, dt: float) -> RampFit:
-    """The slope of the RR in ``problem`` at the WV fit ``theta``, from eq. (1) with the record's least-squares
-    slope ``ls_slope`` [u/s] of ``n`` samples at ``dt`` [s] (module docstring)."""
+    """RR slope at the WV fit ``theta`` by eq. (1), ``ls_slope`` [u/s] from ``n`` samples at ``dt`` [s]."""
     prof = _Profile(problem, ls_slope, n, dt, theta.copy())
     sd = math.sqrt(ls_slope_variance(problem.par.to_components(theta), n, dt))
     best = minimize_scalar(prof, bounds=(ls_slope - 4.0 * sd, ls_slope + 4.0 * sd), method="bounded",

@@ -1,14 +1,9 @@
-"""GMWM model selection by the wavelet information criterion (WIC) over the EM selection's candidates.
-
-Guerrier, Stebler, Skaloud & Victoria-Feser ("Wavelet information criterion", 2015; gmwm's ``rank.models``):
-WIC = J(θ̃_k) + 2·tr(Ω A H⁻¹ Aᵀ Ω V) (:mod:`.gmwm_engine`, asymptotic optimism; 2p_k when Ω = V⁻¹) under one weight Ω
-for all candidates, the V(θ̂) of the full model (of each component type the largest count any candidate has, e.g.
-WN+2GM+RW; if it cannot be fitted, the candidate with the best J-test p-value). Candidates:
-:func:`.selection.suggest_candidates`; each reported fit is its own efficient fit, intervals for the winner only. Beyond
-the paper: WICs within :data:`WIC_TIE` (relative) tie, and so does the structure a tied one is over the record
-(:func:`walk_look_alike`), won by the fewest parameters (docs/gmwm.md, "Why the GMWM's engine and selection are built
-as they are").
-"""
+"""GMWM model selection by the wavelet information criterion (Guerrier, Stebler, Skaloud & Victoria-Feser 2015;
+gmwm's ``rank.models``): WIC = J(θ̃_k) + 2·tr(Ω A H⁻¹ Aᵀ Ω V) under one weight Ω for all candidates, V(θ̂) of the
+structure nesting them (:func:`full_structure`; if it fails, the candidate with the best J-test p). Candidates from
+the EM selection's :func:`suggest_candidates`; intervals for the winner only. Beyond the paper: WICs within
+:data:`WIC_TIE` tie, with each tied fit's :func:`walk_look_alike`; the fewest parameters win (docs/gmwm.md, "Why:
+model selection by WIC")."""
 
 from __future__ import annotations
 
@@ -30,10 +25,8 @@ WIC_TIE = 1e-6
 
 @dataclass
 class GmwmSelection:
-    """WIC ranking of one axis: the winner, the table (best first) and every fit.
-
-    ``table`` rows: model, k (parameters), wic, delta_wic, j_statistic, dof, p_value (the candidate's own J-test),
-    or model and error."""
+    """WIC ranking of one axis: winner, table (best first; model, k, wic, delta_wic, j_statistic, dof, p_value, or
+    model and error), every fit, and the reference structure of the weight."""
 
     best: GmwmFit
     table: list[dict]
@@ -51,8 +44,7 @@ def full_structure(candidates: list[str]) -> str:
 
 
 def walk_look_alike(components: list[Component], span_s: float) -> str:
-    """The structure ``components`` are over a record of ``span_s`` [s]: each GM slower than the record (τ > span) taken
-    as the random walk it is there (one RW for all of them and a fitted RW)."""
+    """The structure ``components`` are over a record of ``span_s`` [s]: GMs with τ > span as one random walk."""
     names = [c.name for c in components if not (isinstance(c, GM) and c.tau > span_s)]
     if len(names) < len(components) and "RW" not in names:
         names.append("RW")
@@ -62,9 +54,8 @@ def walk_look_alike(components: list[Component], span_s: float) -> str:
 def select_gmwm(y, dt: float, candidates: list[str] | None = None, *, options: GmwmOptions | None = None,
                 allan: AllanResult | None = None, wv: WaveletVariance | None = None,
                 slope: float | None = None) -> GmwmSelection:
-    """Fit every candidate by GMWM and rank them by WIC (module docstring). ``allan``: the record's AV (one column)
-    for the candidate list when the caller has it; ``wv`` (with ``slope``, its least-squares slope): the record's
-    WV (``y`` unused)."""
+    """Fit every candidate by GMWM and rank them by WIC. ``allan``: the record's AV for the candidate list; ``wv``
+    and ``slope``: the record's WV and least-squares slope [u/s] (``y`` then unused)."""
     options = options or GmwmOptions()
     if wv is None:
         wv, slope = prepare(y, dt, options)

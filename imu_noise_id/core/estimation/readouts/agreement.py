@@ -1,11 +1,7 @@
-"""EM and GMWM side by side: does each parameter agree between the two estimators (beyond the papers)?
-
-Per parameter, 95 % intervals (lo, hi) as log-scale sd s = ln(hi/lo)/(2·1.96), z = ln(θ_GMWM/θ_EM)/√(s_EM² + s_GMWM²),
-agree when |z| ≤ 1.96 (conservative: the two estimates are positively correlated). A ramp's signed slope is compared
-linearly, s = (hi − lo)/(2·1.96). Without a finite interval on either side: "undetermined". Different structures: the
-Kalibr N and K (:mod:`.kalibr`) are compared. The GMWM's |z| > 2 WV residuals say which τ misfit (docs/gmwm.md,
-"Agreement with the EM").
-"""
+"""EM and GMWM compared parameter by parameter (beyond the papers): from 95 % intervals s = ln(hi/lo)/(2·1.96),
+z = ln(θ_GMWM/θ_EM)/√(s_EM² + s_GMWM²), agree when |z| ≤ 1.96; a ramp's signed slope linearly,
+s = (hi − lo)/(2·1.96); "undetermined" without finite intervals. Different structures: Kalibr's N and K compared.
+GMWM scales with |z| > :data:`MISFIT_Z` are listed as misfit."""
 
 from __future__ import annotations
 
@@ -88,9 +84,7 @@ def _row(quantity: str, em: float, em_ci, gm: float, gm_ci, *, linear: bool = Fa
 
 
 def _keyed(fit: FitResult) -> dict[tuple[str, int, str], tuple[str, float, tuple[float, float]]]:
-    """(type, rank, parameter) → (label, value, interval), magnitudes but for the ramp's signed slope: components of
-    a type ranked by GM τ (or order), so that two fits whose GMs are listed in different orders are matched by
-    correlation time."""
+    """(type, rank by τ, parameter) → (label, value, interval); magnitudes except the ramp's signed slope."""
     ranked: dict[int, int] = {}
     for name in {c.name for c in fit.components}:
         same = [i for i, c in enumerate(fit.components) if c.name == name]
@@ -108,7 +102,7 @@ def _keyed(fit: FitResult) -> dict[tuple[str, int, str], tuple[str, float, tuple
 
 
 def compare(em: FitResult, gmwm: FitResult) -> Comparison:
-    """Compare an EM and a GMWM fit of one axis (module docstring); ``gmwm`` a :class:`~.gmwm.GmwmFit`."""
+    """Compare an EM and a GMWM fit (:class:`~..gmwm.fit.GmwmFit`) of one axis."""
     rows = []
     if em.model == gmwm.model:
         mine, theirs = _keyed(em), _keyed(gmwm)

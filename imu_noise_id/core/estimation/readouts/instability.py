@@ -1,12 +1,9 @@
-"""Bias instability B — the datasheet number — from a fitted model, with its interval, and from the AV.
+"""Bias instability B [u] from a fitted model, with its interval, and from the AV.
 
-IEEE Std 952: σ_min = √(2 ln 2/π)·B ≈ 0.664 B on the flat bottom of the Allan deviation. From the model (beyond the
-papers): B = min_τ σ_model(τ)/0.664 over τ up to a tenth of the record, narrow OSCs and regressors left out,
-short-memory OSCs (:func:`~.kalibr.is_short_memory_osc`) kept; an upper bound (``reached = False``) when σ_model still
-falls at the longest τ. With a BI component (:mod:`imu_noise_id.core.noise.flicker`), B is its parameter with the fit's
-interval. Otherwise the interval: log-parameters drawn from N(θ̂, Σ) (Σ the inverse observed information; unidentified
-parameters held), B recomputed, the 2.5/97.5 % quantiles.
-"""
+IEEE Std 952: σ_min = √(2 ln 2/π)·B ≈ 0.664 B on the Allan deviation's flat bottom. From the model (beyond the
+papers): B = min_τ σ_model(τ)/0.664 over τ ≤ ``tau_max``, narrow OSCs and regressors left out; an upper bound
+(``reached = False``) when σ_model still falls there. With a BI component B is its parameter. Interval: 2.5/97.5 %
+quantiles of B over log-parameters drawn from N(θ̂, Σ) (unidentified ones held)."""
 
 from __future__ import annotations
 
@@ -51,7 +48,7 @@ def _minimum(components: list[Component], dt: float, tau: np.ndarray) -> tuple[f
 
 
 def bias_instability(fit: FitResult, tau_max: float, *, seed: int = 0) -> BiasInstability:
-    """B from ``fit`` over τ ∈ [dt, ``tau_max``] [s] (module docstring)."""
+    """B from ``fit`` over τ ∈ [dt, ``tau_max``] [s]."""
     tau = _tau_grid(fit.dt, tau_max)
     flicker = next((c for c in fit.components if c.name == "BI"), None)
     if flicker is not None:
@@ -98,8 +95,7 @@ def _interval(fit: FitResult, tau: np.ndarray, seed: int) -> tuple[float, float]
 
 
 def bias_instability_from_allan(tau: np.ndarray, avar: np.ndarray) -> BiasInstability:
-    """The classic reading from an estimated Allan variance: min σ(τ) / 0.664 (no interval: the minimum of a noisy
-    curve is biased low; the model's reading is the one with an interval)."""
+    """min σ(τ)/0.664 of an estimated AV, without interval."""
     ok = np.isfinite(avar) & (avar > 0)
     adev = np.sqrt(avar[ok])
     k = int(np.argmin(adev))

@@ -1,18 +1,9 @@
-"""The numbers users paste (Kalibr's noise density N and random walk K) from a fitted model, with 95 % intervals (beyond
-paper 000).
+"""Kalibr's noise density N and random walk K from a fitted model, with 95 % intervals (beyond paper 000).
 
-- **N** [u/√Hz] = √(Σ N_i²) over WN, LPF, DLPF, MA and short-memory OSCs (:func:`is_short_memory_osc`; memory below
-  :func:`~..noise.resonant.filter_memory_limit`), each N_i the sampled zero-frequency density
-  √(dt·Σ_j R(j)) (:meth:`~.Component.zero_frequency_density`); narrow OSCs, GMs, slow LPFs, BI and sinusoids never
-  enter. Interval by the delta method.
-- **K** [u/s/√Hz]: the RW's density with its interval, or *not identifiable* (None) without an RW; where the record
-  does not identify it, a bound (:func:`unidentified_as_bound`: its interval reaches zero; :func:`unmodelled_as_bound`:
-  no RW in the model, the data's long-τ bound).
-- **Per-sample variance** [u²] at dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt) + R_DLPF(0) + σ²_OSC (short-memory
-  OSCs).
-
-Why: docs/em.md, "Why the intervals, starts and Kalibr numbers are computed as they are".
-"""
+- N [u/√Hz] = √(Σ N_i²) over WN, LPF, DLPF, MA and short-memory OSCs, each at its sampled zero-frequency density
+  √(dt·Σ_j R(j)); GMs, slow filters, narrow OSCs, BI and sinusoids never enter. Interval by the delta method.
+- K [u/s/√Hz]: the RW's density with its interval; None without an RW; a bound where the record does not identify it.
+- Per-sample variance [u²]: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt) + R_DLPF(0) + σ²_OSC (short-memory OSCs)."""
 
 from __future__ import annotations
 
@@ -38,17 +29,10 @@ NEGLIGIBLE_SHARE = 1e-6
 
 @dataclass(frozen=True)
 class KalibrValue:
-    """One Kalibr number of one axis.
-
-    Attributes
-    ----------
-    value : the number [u/√Hz or u/s/√Hz]; None when not identifiable from the record
-    ci95 : its 95 % interval (lo, hi); (nan, nan) when the fit holds no uncertainty
-    source : which components it comes from, in words
-    method : ``model`` (the fitted components' value), ``bound`` (not identified by the record: the upper end of its
-        interval, ``ci95`` (0, value)) or ``unresolved`` (the model is not trusted for it: the value is an upper
-        bound, the axis's overbound, and ``ci95`` is (0, value))
-    """
+    """One Kalibr number of one axis: ``value`` [u/√Hz] or [u/s/√Hz] (None: not identifiable), its 95 % interval
+    ``ci95`` ((nan, nan) without uncertainty), its ``source`` in words, and ``method``: ``model``, ``bound`` (not
+    identified: the interval's upper end, ``ci95`` (0, value)) or ``unresolved`` (the axis's overbound as upper
+    bound, ``ci95`` (0, value))."""
 
     value: float | None
     ci95: tuple[float, float]
@@ -72,15 +56,12 @@ def _log_cov(fit: FitResult, labels: list[str]) -> np.ndarray | None:
 
 
 def is_short_memory_osc(c: Component, dt: float) -> bool:
-    """Whether ``c`` is an OSC with envelope decay time 1/(ζω₀) = 1/(πB) below
-    :func:`~..noise.resonant.filter_memory_limit` (the sensor's second-order low-pass or a broad resonance: white below
-    its corner, part of N); a longer one is a line or a wander, kept out of N."""
+    """Whether ``c`` is an OSC of decay time 1/(πB) below ``filter_memory_limit(dt)`` (white below its corner: in N)."""
     return isinstance(c, OSC) and c.memory(dt)[0] < filter_memory_limit(dt)
 
 
 def is_slow_lpf(c: Component, dt: float) -> bool:
-    """Whether ``c`` is an LPF whose memory 1/(2πf_c) is at or beyond :func:`~..noise.resonant.filter_memory_limit`: a
-    GM by another name, kept out of N."""
+    """Whether ``c`` is an LPF/DLPF of memory 1/(2πf_c) ≥ ``filter_memory_limit(dt)`` (a GM in effect: not in N)."""
     return isinstance(c, (LPF, DLPF)) and c.memory(dt)[0] >= filter_memory_limit(dt)
 
 
@@ -91,16 +72,13 @@ def enters_n(c: Component, dt: float) -> bool:
 
 
 def passband_density(components: list[Component], dt: float) -> float | None:
-    """N's value [u/√Hz] from components alone (None without white noise): √(Σ N_i²) over those that
-    :func:`enter N <enters_n>`, each at its zero-frequency density as sampled at ``dt`` [s]."""
+    """N [u/√Hz] from components alone: √(Σ N_i²) over those entering N, sampled at ``dt`` [s]; None without any."""
     parts = [c.zero_frequency_density(dt) for c in components if enters_n(c, dt)]
     return math.sqrt(sum(d * d for d in parts)) if parts else None
 
 
 def _passband_part(c: Component, dt: float) -> tuple[float, dict[str, float]] | None:
-    """(density [u/√Hz], ∂ln density/∂ln parameter) of a component that enters N, else None: the sampled zero-frequency
-    density (:meth:`~.Component.zero_frequency_density`) and its central-difference log-gradient (one-sided at an OSC's
-    damping bound, :func:`~.differences.derivative_in_domain`)."""
+    """(sampled zero-frequency density [u/√Hz], ∂ln density/∂ln parameter) of a component entering N, else None."""
     if not enters_n(c, dt):
         return None
     density = c.zero_frequency_density(dt)
@@ -190,8 +168,7 @@ def random_walk(fit: FitResult) -> KalibrValue:
 
 
 def per_sample_noise_variance(fit: FitResult) -> float:
-    """Variance per sample [u²] of the high-frequency noise at the fit's dt: N_WN²/dt + π N_LPF² f_c + N_MA²/(2 dt)
-    + R_DLPF(0) + σ² of each short-memory OSC (module docstring)."""
+    """Variance per sample [u²] of the high-frequency noise at the fit's dt (module docstring)."""
     total = 0.0
     for c in fit.components:
         if isinstance(c, WN):
@@ -206,9 +183,7 @@ def per_sample_noise_variance(fit: FitResult) -> float:
 
 
 def unidentified_as_bound(k: KalibrValue) -> KalibrValue:
-    """``k`` as it is when its 95 % interval excludes zero; else (the record does not identify the walk: any K from 0
-    to the upper end fits) the upper end, method ``bound``, interval (0, upper end) — never a point estimate below what
-    the data allow."""
+    """``k`` when its 95 % interval excludes zero, else its upper end as a ``bound`` with interval (0, upper end)."""
     if k.value is None or not (k.ci95[0] <= 0.0 and math.isfinite(k.ci95[1]) and k.ci95[1] > 0.0):
         return k
     hi = float(k.ci95[1])
@@ -218,9 +193,8 @@ def unidentified_as_bound(k: KalibrValue) -> KalibrValue:
 
 
 def unmodelled_as_bound(k: KalibrValue, bound: RandomWalkBound) -> KalibrValue:
-    """K of a final model without a random walk (``k.value`` None): the largest K the data's long-τ AV supports
-    (:func:`~imu_noise_id.core.allan.rw_bound.random_walk_bound`, simultaneous over its estimates), method ``bound``,
-    interval (0, bound); ``k`` itself where the model has a walk or there is no bound. Reasons: docs/loop.md, "K"."""
+    """K of a model without RW (``k.value`` None): the largest K the data's long-τ AV supports
+    (:func:`~imu_noise_id.core.allan.rw_bound.random_walk_bound`), method ``bound``, interval (0, bound); else ``k``."""
     if k.value is not None or not (math.isfinite(bound.value) and bound.value > 0):
         return k
     return KalibrValue(
@@ -231,6 +205,5 @@ def unmodelled_as_bound(k: KalibrValue, bound: RandomWalkBound) -> KalibrValue:
 
 
 def walk_crossing_tau(noise_density: float, random_walk: float) -> float:
-    """τ [s] where a random walk's Allan variance K²τ/3 crosses white noise's N²/τ: √3·N/K (IEEE Std 952's lines;
-    N [u/√Hz], K [u/s/√Hz]); inf without a walk. A record shorter than three times it cannot identify K."""
+    """τ [s] = √3·N/K where the RW's AV K²τ/3 meets the white noise's N²/τ (IEEE Std 952); inf without a walk."""
     return math.sqrt(3.0) * noise_density / random_walk if random_walk > 0 else math.inf

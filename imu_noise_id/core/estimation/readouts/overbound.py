@@ -1,17 +1,11 @@
-"""The smallest white noise + random walk (Kalibr's N and K) whose Allan variance lies above a given bound (beyond the
-papers: the computed "inflate my noise ×10").
+"""The smallest white noise + random walk (Kalibr's N and K) whose Allan variance covers a bound (beyond the papers).
 
-Over the τ_i a filter cares about, with b_i the bound (the data's upper 95 % Allan bound and the final model's AV), find
-a = N² ≥ 0, c = K² ≥ 0 with
+Over τ_i with bounds b_i, find a = N² ≥ 0, c = K² ≥ 0 with
 
-    AV_WN+RW(τ_i) = a·g(τ_i) + c·h(τ_i) ≥ b_i    for every i,
+    AV_WN+RW(τ_i) = a·g(τ_i) + c·h(τ_i) ≥ b_i    for every i,   g = 1/τ,  h = τ/3 + dt²/(6τ)
 
-g = 1/τ, h = τ/3 + dt²/(6τ) (the sampled WN and RW AVs, :meth:`~imu_noise_id.core.noise.components.WN.allan_variance`,
-:meth:`~imu_noise_id.core.noise.components.RW.allan_variance`), minimising the mean ratio Σ_i AV_WN+RW(τ_i)/b_i: a
-two-variable linear programme solved exactly at a vertex; the AV touches the bound at the binding τ. Optional floors
-N ≥ N₀, K ≥ K₀ (the fitted values: factors ≥ 1, no random walk dropped for a short τ range) are two more constraints.
-Why this objective: docs/analysis.md, "Overbound (the honest ×10)".
-"""
+(the sampled WN and RW AVs) minimising the mean ratio Σ_i AV_WN+RW(τ_i)/b_i: a two-variable linear programme solved
+exactly at a vertex; optional floors N ≥ N₀, K ≥ K₀. Why: docs/analysis.md, "Overbound (the honest ×10)"."""
 
 from __future__ import annotations
 
@@ -22,8 +16,7 @@ import numpy as np
 
 from ...errors import InputError
 
-#: Default end of the τ range [s] (it starts at the sampling period): the time scales of a VIO / GNSS-INS filter
-#: between aiding updates and the bias drift it must follow, from a fraction of a second to minutes.
+#: Default end of the τ range [s] (which starts at dt): a VIO / GNSS-INS filter's scales up to its bias drift.
 DEFAULT_HORIZON_S = 100.0
 #: A vertex is feasible when every constraint holds to this relative tolerance (rounding of the 2×2 solve).
 FEASIBLE_RTOL = 1e-9
@@ -33,16 +26,9 @@ BINDING_RTOL = 1e-6
 
 @dataclass(frozen=True)
 class WnRwOverbound:
-    """The overbound of one axis.
-
-    Attributes
-    ----------
-    noise_density : N [u/√Hz]
-    random_walk : K [u/s/√Hz] (0 when white noise alone covers the bound)
-    binding_tau : the τ [s] where the overbound's AV touches the bound
-    at_floor : (N at its floor, K at its floor)
-    mean_ratio : the objective: mean over the τ grid of AV_overbound / bound (≥ 1)
-    """
+    """The overbound of one axis: ``noise_density`` N [u/√Hz], ``random_walk`` K [u/s/√Hz] (0 when white noise covers
+    the bound), ``binding_tau`` [s] where its AV touches the bound, ``at_floor`` (N, K at their floors) and
+    ``mean_ratio`` (mean AV / bound, ≥ 1)."""
 
     noise_density: float
     random_walk: float
@@ -77,19 +63,15 @@ def _vertices(G: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def overbound_wn_rw(tau: np.ndarray, bound: np.ndarray, dt: float,
                     floor: tuple[float, float] = (0.0, 0.0)) -> WnRwOverbound:
-    """The WN + RW of least mean ratio whose AV is ≥ ``bound`` at every ``tau`` (module docstring).
+    """The WN + RW of least mean ratio whose AV is ≥ ``bound`` at every ``tau``; InputError without τ or with a bound
+    not positive and finite.
 
     Parameters
     ----------
-    tau : averaging times [s] (the τ range the filter cares about)
-    bound : the AV [u²] to cover at each τ (positive, finite)
+    tau : averaging times [s]
+    bound : AV [u²] to cover at each τ (positive, finite)
     dt : sampling period [s]
-    floor : (N₀ [u/√Hz], K₀ [u/s/√Hz]) the result is not below (default: none)
-
-    Raises
-    ------
-    InputError
-        No τ, or a bound not positive and finite.
+    floor : (N₀ [u/√Hz], K₀ [u/s/√Hz]) the result is not below
     """
     tau = np.asarray(tau, dtype=float)
     bound = np.asarray(bound, dtype=float)
