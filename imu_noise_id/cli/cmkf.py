@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 from pathlib import Path
 
-from ..core.cmkf.config import CmkfConfig
 from ..core.errors import InputError
-from ..pipelines.online.config import CMKF_TUNABLES, CmkfTunable
+from ..pipelines.online.config import CMKF_TUNABLES, CmkfTunable, tuned_config
 from . import results_folder
 from .options import add_out, add_topic
 
@@ -97,12 +97,8 @@ def run(args: argparse.Namespace) -> int:
     from ..bag.reader import read_bag
     from ..pipelines.cmkf_replay import DENSITY_FIELDS, SERIES_FIELDS, replay, to_yaml_dict
 
-    config = CmkfConfig(imu_rotation_xyzw=imu_rotation(args.imu_rotation),
-                        **{t.field: t.value(getattr(args, t.field)) for t in OPTIONS})
-    try:
-        config.validate()
-    except ValueError as exc:
-        raise InputError(f"parameter: {exc}") from None
+    config = tuned_config(OPTIONS, lambda t: getattr(args, t.field), "parameter",
+                          imu_rotation_xyzw=imu_rotation(args.imu_rotation))
     from .progress import TextProgress
 
     with TextProgress(f"reading {args.bag.name}") as progress:
@@ -115,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
             f"--gravity-from imu: the Imu messages of {contents.imu.topic!r} in {args.bag} provide no orientation "
             "(orientation_covariance[0] = -1 or a zero quaternion): use --gravity-from odom"
         )
-    config.gravity_source = "imu" if gravity_from == "imu" else "odometry"
+    config = dataclasses.replace(config, gravity_source="imu" if gravity_from == "imu" else "odometry")
     with TextProgress("CMKF replay", unit="odometry messages") as progress:
         result = replay(contents.imu, contents.odom, config, imu_orientation if gravity_from == "imu" else None,
                         progress=progress)
@@ -125,6 +121,9 @@ def run(args: argparse.Namespace) -> int:
                      "before the first)")
     if result.final.n_stacked == 0:
         notes.append("no stacked sample: S_v and S_g not estimated (odometry too short or not overlapping the IMU)")
+    if result.cmkf_errors:
+        notes.append(f"the CMKF failed {result.cmkf_errors} time(s) and was restarted, as the node does: the estimates "
+                     "are of the messages after the last restart")
     data = to_yaml_dict(result, notes)
     data["filter"]["bag"] = str(args.bag)
     names = [*SERIES_FIELDS, *DENSITY_FIELDS]

@@ -1,5 +1,6 @@
-"""Offline replay of the online CMKF (``RobotCmkf``) over recorded arrays, fed in stamp order as in the node
-(``cmkf.stream.feed_recording``); the estimate recorded after every odometry message."""
+"""Offline replay of a recording through the node's :class:`~.online.OnlineIdentifier` (docs/cmkf.md, "Why the replay
+is the node's identifier"): IMU and odometry in stamp order, the CMKF's estimate recorded after every odometry message
+it processed, the whole run judged as the node judges its windows (:func:`~imu_noise_id.core.cmkf.estimate.judge`)."""
 
 from __future__ import annotations
 
@@ -13,13 +14,16 @@ import numpy as np
 from ..core.axes import ImuSeries, OdometrySeries
 from ..core.cmkf.agreement import AxisAgreement, likely_cause
 from ..core.cmkf.config import CmkfConfig
-from ..core.cmkf.estimate import worst_filter
+from ..core.cmkf.estimate import RUNNING, judge, running_status
+from ..core.cmkf.gate import NisWindow
+from ..core.cmkf.merge import stamp_order
 from ..core.cmkf.psd import PsdEstimate, density_series
-from ..core.cmkf.robot import CmkfEstimate, RobotCmkf
-from ..core.cmkf.stream import feed_recording
-from ..core.diagnostics.consistency import nis_bounds, nis_verdict
+from ..core.cmkf.robot import CmkfEstimate
+from ..core.cmkf.stream import orientation_rows
+from ..core.diagnostics.consistency import nis_bounds
 from ..core.errors import InputError
 from ..core.timing import sampling_period
+from .online import OnlineIdentifier
 
 #: Per-axis values recorded over time: name → reader of a :class:`CmkfEstimate` (``S_v_in_filter``: the filter's
 #: working value; ``S_v``, ``S_v_se``: the least squares and its standard error).
@@ -32,16 +36,21 @@ SERIES_FIELDS: dict[str, Callable[[CmkfEstimate], np.ndarray]] = {
 #: Per-axis series derived after the replay (``cmkf.psd.density_series``): √S, or the 95 % upper end if unidentified.
 DENSITY_FIELDS = ("accel_noise_density", "accel_noise_density_upper", "gyro_noise_density",
                   "gyro_noise_density_upper")
+#: Share of the first updates the whole-run verdict leaves out (the filter converging).
+RUN_SKIP = 0.2
 
 
 @dataclass
 class CmkfReplayResult:
-    """Estimates after every odometry message, the final estimate and what the filter knew.
+    """Estimates after every odometry message the CMKF processed, the final estimate and what the filter knew.
 
-    Attributes ---------- t : (M,) odometry stamps [s]; series : field → (M, 3) (:data:`SERIES_FIELDS`,
-        :data:`DENSITY_FIELDS`) nis_accel, nis_gyro : (M,) NIS of each update (also gated ones; NaN without update);
-    gated_accel, gated_gyro : (M,) status : (M,) status strings; final : the last estimate; config : the filter's
-    parameters agreement : per-axis IMU/odometry agreement checks; gates : the NIS gates; info : rates, frames, timing
+    Attributes
+    ----------
+    t : (M,) stamps of those odometry messages [s]; series : field → (M, 3) (:data:`SERIES_FIELDS`,
+        :data:`DENSITY_FIELDS`); nis_accel, nis_gyro : (M,) NIS of each update (also gated ones; NaN without update);
+        gated_accel, gated_gyro : (M,); status : (M,) status strings.
+    final : the last estimate; config : the filter's parameters; agreement : per-axis IMU/odometry agreement checks;
+    gates : the NIS gates; info : rates, frames, timing; cmkf_errors : times the CMKF failed and was restarted.
     """
 
     t: np.ndarray
@@ -56,6 +65,7 @@ class CmkfReplayResult:
     agreement: tuple[AxisAgreement, AxisAgreement]
     gates: tuple[float, float]
     info: dict[str, object] = field(default_factory=dict)
+    cmkf_errors: int = 0
 
 
 def _rate(t: np.ndarray) -> float:
@@ -66,6 +76,32 @@ def _rate(t: np.ndarray) -> float:
         return math.nan
 
 
+class _Recorder:
+    """What the identifier's CMKF reports after each odometry message (:class:`CmkfReplayResult`'s series)."""
+
+    def __init__(self) -> None:
+        self.identifier: OnlineIdentifier | None = None
+        self.t: list[float] = []
+        self.series: dict[str, list[np.ndarray]] = {name: [] for name in SERIES_FIELDS}
+        self.dof: list[tuple[int, int]] = []
+        self.nis: list[tuple[float, float]] = []
+        self.gated: list[tuple[bool, bool]] = []
+        self.status: list[str] = []
+
+    def __call__(self, t: float, updated: bool) -> None:
+        cmkf = self.identifier.cmkf_feed.cmkf
+        est = cmkf.estimate()
+        self.t.append(t)
+        for name, read in SERIES_FIELDS.items():
+            self.series[name].append(read(est))
+        self.dof.append((est.accel_ls[2], est.gyro_ls[2]))
+        # the NIS of a filter that updated or was gated now: what its NIS window took (none at a (re-)initialisation)
+        self.nis.append(tuple(nis if updated and (used or gated) else math.nan for nis, used, gated in
+                              zip((est.nis_accel, est.nis_gyro), cmkf.last_update, est.gated, strict=True)))
+        self.gated.append(est.gated)
+        self.status.append(est.status)
+
+
 def replay(
     imu: ImuSeries,
     odom: OdometrySeries | None,
@@ -73,30 +109,69 @@ def replay(
     imu_orientation_xyzw: np.ndarray | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> CmkfReplayResult:
-    """Run :class:`RobotCmkf` over ``imu`` and ``odom`` (None: IMU only); fields of ``odom`` may be None;
-    ``imu_orientation_xyzw`` (N, 4) is used for gravity only with ``gravity_source == "imu"`` (NaN rows passed as
-    None); ``progress(done, total)`` after every odometry message."""
+    """Feed ``imu`` and ``odom`` (None: IMU only) in stamp order to an :class:`OnlineIdentifier` whose CMKF runs with
+    ``config``, then end the input (:meth:`OnlineIdentifier.finish`); odometry fields but the linear velocity may be
+    None (not recorded). ``imu_orientation_xyzw`` (N, 4): each IMU message's orientation (NaN rows: none), used with
+    ``gravity_source == "imu"``; ``progress(done, total)`` after every odometry message."""
     config = config or CmkfConfig()
-    filt = RobotCmkf(config)
+    record = _Recorder()
+    ident = record.identifier = OnlineIdentifier(cmkf=config, on_cmkf_odometry=record)
+    t_start = time.perf_counter()
+    _feed(ident, imu, odom, imu_orientation_xyzw, progress)
+    ident.finish()
+    info = _info(imu, odom, time.perf_counter() - t_start)
+    series = {name: np.array(v).reshape(-1, 3) for name, v in record.series.items()}
+    dofs = np.array(record.dof, dtype=int).reshape(-1, 2)
+    for k, sensor, psd in ((0, "accel", "S_v"), (1, "gyro", "S_g")):
+        series[f"{sensor}_noise_density"], series[f"{sensor}_noise_density_upper"] = density_series(
+            series[psd], series[f"{psd}_se"], dofs[:, k:k + 1])
+    nis = np.array(record.nis, dtype=float).reshape(-1, 2)
+    gated = np.array(record.gated, dtype=bool).reshape(-1, 2)
+    cmkf = ident.cmkf_feed.cmkf
+    return CmkfReplayResult(np.array(record.t, dtype=float), series, nis[:, 0], nis[:, 1], gated[:, 0], gated[:, 1],
+                            record.status, cmkf.estimate(), config, cmkf.agreement,
+                            (cmkf.gates[0].threshold, cmkf.gates[1].threshold), info, ident.cmkf_feed.errors)
+
+
+def _feed(ident: OnlineIdentifier, imu: ImuSeries, odom: OdometrySeries | None,
+          imu_orientation_xyzw: np.ndarray | None, progress: Callable[[int, int], None] | None) -> None:
+    """Every message to ``ident`` in stamp order (IMU first on equal stamps), as the node's callbacks hand them."""
+    times, rows = np.asarray(imu.t, dtype=float).tolist(), np.column_stack([imu.gyro, imu.accel]).tolist()
+    quats = orientation_rows(imu_orientation_xyzw)
+    odom_t = [] if odom is None else np.asarray(odom.t, dtype=float).tolist()
+    if odom is not None:
+        linear = odom.linear_velocity.tolist()
+        angular, position, orientation = (_rows(a, list) for a in (odom.angular_velocity, odom.position,
+                                                                   odom.orientation_xyzw))
+        pose_cov, twist_cov = (_rows(a, np.asarray) for a in (odom.pose_covariance, odom.twist_covariance))
+    done = 0
+    for is_odometry, k in stamp_order(np.array(times), np.array(odom_t)):
+        if is_odometry:
+            ident.process_odometry(odom_t[k], linear[k], angular(k), odom.child_frame_id, position=position(k),
+                                   orientation_xyzw=orientation(k), pose_covariance=pose_cov(k),
+                                   twist_covariance=twist_cov(k))
+            done += 1
+            if progress is not None:
+                progress(done, len(odom_t))
+        else:
+            row = rows[k]
+            ident.process_imu(times[k], row[0:3], row[3:6], imu.frame_id,
+                              orientation_xyzw=None if quats is None else quats[k])
+
+
+def _rows(a: np.ndarray | None, kind: Callable) -> Callable[[int], object]:
+    """Row ``k`` of a recorded field as ``kind`` (a list, or an array view), or None for a field not recorded."""
+    if a is None:
+        return lambda k: None
+    rows = a.tolist() if kind is list else np.asarray(a)
+    return rows.__getitem__
+
+
+def _info(imu: ImuSeries, odom: OdometrySeries | None, elapsed: float) -> dict[str, object]:
+    """What the replay knew of its inputs (topics, frames, rates [Hz], duration [s]) and its own speed."""
     ti = np.asarray(imu.t, dtype=float)
     to = np.asarray(odom.t, dtype=float) if odom is not None else np.zeros(0)
-    rec = {name: [] for name in SERIES_FIELDS}
-    dof, nis_a, nis_g, gated, status = [], [], [], [], []
-    t_start = time.perf_counter()
-    for k, updated in enumerate(feed_recording(filt, imu, odom, imu_orientation_xyzw), start=1):
-        if progress is not None:
-            progress(k, to.size)
-        est = filt.estimate()
-        for name, read in SERIES_FIELDS.items():
-            rec[name].append(read(est))
-        dof.append((est.accel_ls[2], est.gyro_ls[2]))
-        nis_a.append(est.nis_accel if updated else math.nan)
-        nis_g.append(est.nis_gyro if updated and (filt.last_update[1] or est.gated[1]) else math.nan)
-        gated.append(est.gated)
-        status.append(est.status)
-    elapsed = time.perf_counter() - t_start
-    final = filt.estimate()
-    info: dict[str, object] = {
+    return {
         "imu_topic": imu.topic, "imu_frame": imu.frame_id, "imu_samples": int(ti.size), "imu_rate_hz": _rate(ti),
         "odom_topic": odom.topic if odom is not None else None,
         "odom_frame": odom.frame_id if odom is not None else None,
@@ -105,37 +180,37 @@ def replay(
         "duration_s": float(max(ti[-1], to[-1] if to.size else ti[-1]) - min(ti[0], to[0] if to.size else ti[0])),
         "replay_seconds": elapsed, "imu_samples_per_second": ti.size / elapsed if elapsed > 0 else math.inf,
     }
-    series = {name: np.array(v).reshape(-1, 3) for name, v in rec.items()}
-    dofs = np.array(dof, dtype=int).reshape(-1, 2)
-    for k, sensor, psd in ((0, "accel", "S_v"), (1, "gyro", "S_g")):
-        series[f"{sensor}_noise_density"], series[f"{sensor}_noise_density_upper"] = density_series(
-            series[psd], series[f"{psd}_se"], dofs[:, k:k + 1])
-    gated_arr = np.array(gated, dtype=bool).reshape(-1, 2)
-    return CmkfReplayResult(to, series, np.array(nis_a), np.array(nis_g), gated_arr[:, 0], gated_arr[:, 1], status,
-                            final, config, filt.agreement, (filt.gates[0].threshold, filt.gates[1].threshold), info)
 
 
-def nis_summary(nis: np.ndarray, dof: int, gated: np.ndarray | None = None,
-                skip_fraction: float = 0.2) -> dict[str, float]:
-    """NIS of a replay after the first ``skip_fraction`` of the updates: mean of the accepted ones, share inside the
-    χ²(dof) 95 % bounds, number and share gated, and :func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict`."""
+def run_window(nis: np.ndarray, dof: int, gated: np.ndarray | None = None,
+               skip_fraction: float = RUN_SKIP) -> tuple[NisWindow, np.ndarray, np.ndarray]:
+    """The updates of a replay after the first ``skip_fraction`` of them as one :class:`NisWindow` (the node's
+    windows hold its last ``nis_window``), with their NIS and gated flags ((K,) each; updates without NIS left out)."""
     gated = np.zeros(nis.shape, dtype=bool) if gated is None else np.asarray(gated, dtype=bool)
     keep = np.isfinite(nis) | gated
     x, g = nis[keep], gated[keep]
     start = int(skip_fraction * x.size)
     x, g = x[start:], g[start:]
-    accepted = x[~g]
-    if x.size == 0:
-        return {"mean": math.nan, "dof": dof, "share_in_95": math.nan, "n": 0, "gated": 0, "gated_share": 0.0,
+    window = NisWindow(dof, None)
+    for value, rejected in zip(x.tolist(), g.tolist(), strict=True):
+        window.add(value, rejected)
+    return window, x, g
+
+
+def nis_summary(nis: np.ndarray, dof: int, gated: np.ndarray | None = None,
+                skip_fraction: float = RUN_SKIP) -> dict[str, float]:
+    """:func:`run_window` of a replay's NIS: mean of the accepted updates, share inside the χ²(dof) 95 % bounds,
+    number and share gated, and the window's verdict."""
+    return _summary(*run_window(nis, dof, gated, skip_fraction))
+
+
+def _summary(window: NisWindow, x: np.ndarray, g: np.ndarray) -> dict[str, float]:
+    if not window.updates:
+        return {"mean": math.nan, "dof": window.dof, "share_in_95": math.nan, "n": 0, "gated": 0, "gated_share": 0.0,
                 "verdict": "unknown"}
-    lo, hi = nis_bounds(dof)
-    mean = float(accepted.mean()) if accepted.size else math.nan
-    share = float(g.mean())
-    return {"mean": mean, "dof": dof, "share_in_95": float(np.mean((x >= lo) & (x <= hi) & ~g)), "n": int(x.size),
-            "gated": int(g.sum()), "gated_share": share,
-            "verdict": nis_verdict(mean, dof, int(accepted.size), share)}
-
-
+    lo, hi = nis_bounds(window.dof)
+    return {"mean": window.mean, "dof": window.dof, "share_in_95": float(np.mean((x >= lo) & (x <= hi) & ~g)),
+            "n": window.updates, "gated": window.gated, "gated_share": window.gated_share, "verdict": window.verdict()}
 def _xyz(a: np.ndarray) -> dict[str, float | None]:
     return {k: (float(v) if math.isfinite(v) else None) for k, v in zip("xyz", a, strict=True)}
 
@@ -160,21 +235,23 @@ def psd_section(psd: PsdEstimate, prefix: str, density: str, in_filter: np.ndarr
 
 
 def consistency_summary(result: CmkfReplayResult) -> dict[str, object]:
-    """The replay's consistency verdict over the whole run (the worse of the two filters) and its likely cause."""
+    """The whole run's consistency: :func:`~imu_noise_id.core.cmkf.estimate.judge` of the two filters'
+    :func:`run_window` (the node's verdict over the whole run), their summaries, and the likely cause."""
     e = result.final
-    accel = nis_summary(result.nis_accel, e.nis_accel_dof, result.gated_accel)
-    gyro = nis_summary(result.nis_gyro, e.nis_gyro_dof, result.gated_gyro)
-    pair = (accel, gyro)
-    worst = pair[worst_filter([s["verdict"] for s in pair], [s["mean"] for s in pair], [s["dof"] for s in pair])]
+    runs = (run_window(result.nis_accel, e.nis_accel_dof, result.gated_accel),
+            run_window(result.nis_gyro, e.nis_gyro_dof, result.gated_gyro))
+    verdict, worst = judge([window for window, _, _ in runs])
+    accel, gyro = (_summary(*run) for run in runs)
     reason = ""
-    if worst["verdict"] in ("marginal", "inconsistent"):
-        generic = likely_cause(worst["mean"] / worst["dof"], result.agreement)
+    if verdict in ("marginal", "inconsistent"):
+        window = runs[worst][0]
+        generic = likely_cause(window.mean / window.dof, result.agreement)
         counted = counter_cause(e)
         cause = f"{counted}. Other possible causes: {generic}" if counted else generic
         reason = (f"accelerometer NIS mean {accel['mean']:.3g} for {accel['dof']} dof ({accel['gated']} updates "
                   f"gated), gyro NIS mean {gyro['mean']:.3g} for {gyro['dof']} dof ({gyro['gated']} gated). Likely "
                   f"cause: {cause}")
-    return {"verdict": worst["verdict"], "reason": reason, "accel": accel, "gyro": gyro}
+    return {"verdict": verdict, "reason": reason, "accel": accel, "gyro": gyro}
 
 
 def counter_cause(e: CmkfEstimate) -> str:
@@ -196,14 +273,12 @@ def counter_cause(e: CmkfEstimate) -> str:
 
 
 def replay_status(result: CmkfReplayResult, verdict: str) -> str:
-    """The final status with the consistency judged over the whole run (``inconsistent`` instead of
-    converging/tracking when the run's verdict is)."""
+    """The final status with the consistency judged over the whole run (``verdict``), by the node's rule
+    (:func:`~imu_noise_id.core.cmkf.estimate.running_status`)."""
     status = result.final.status
-    if status not in ("converging", "tracking", "inconsistent"):
+    if status not in RUNNING:
         return status
-    if verdict == "inconsistent":
-        return "inconsistent"
-    return "converging" if result.final.n_stacked < result.config.min_samples else "tracking"
+    return running_status(result.final.n_stacked, result.config.min_samples, verdict)
 
 
 def summary_lines(result: CmkfReplayResult) -> list[str]:

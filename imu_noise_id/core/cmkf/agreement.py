@@ -1,8 +1,5 @@
-"""Per-axis agreement of the IMU and odometry changes: the likely cause of an inconsistent CMKF (beyond paper 004).
-
-Slope of the odometry's change on the IMU-integrated one per interval (velocity, rotation); on an excited axis near −1
-or far from 1: **frames**; near 1 with the mean NIS off its dof: **covariance scale** (:func:`likely_cause`).
-"""
+"""Per-axis agreement of the IMU and odometry changes, and the likely cause of an inconsistent CMKF it tells
+(:func:`likely_cause`; beyond paper 004, docs/cmkf.md "Consistency")."""
 
 from __future__ import annotations
 

@@ -1,14 +1,6 @@
-"""Paper 004's CMKF for ``n`` independent axes on one time base, state ``[r, v, b]`` per axis (block diagonal).
-
-Per axis and interval of length T::
-
-    x̂⁻ = F̂ x̂⁺ + U,   F̂ = [[1, T, −β_p], [0, 1, −β_v], [0, 0, φ]]     (17); one IMU sample: β_p = T²/2, β_v = T
-    P⁻ = F̂ P F̂ᵀ + Ŝ_v Qa1 + q_b Λ Λᵀ                                   (23), Q̂_a = Ŝ_v Qa1
-    K = P⁻ Hᵀ (H P⁻ Hᵀ + R)⁻¹,  x̂⁺ = x̂⁻ + K (z − H x̂⁻)                  (24)–(25)
-    P⁺ = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ                               (27) Joseph form
-
-then :mod:`.stacked` (28–35) and the Ŝ_v check (``pd_check``). Modes: ``"pos_vel"`` (eq. 8, H = [[1,0,0],[0,1,0]])
-and ``"vel"`` (H = [1, 0] on the observable [v, b], M_o = [[1, −β_v], [1, 0]])."""
+"""Paper 004's CMKF for ``n`` independent axes on one time base, state ``[r, v, b]`` per axis (block diagonal):
+x̂⁻ = F̂ x̂⁺ + U (17), P⁻ = F̂ P F̂ᵀ + Ŝ_v Qa1 + q_b ΛΛᵀ (23), Joseph update (24)–(27), :mod:`.stacked` (28)–(35) and
+the Ŝ_v check; H of ``"pos_vel"`` (eq. 8) or ``"vel"`` (velocity, on the observable [v, b]; docs/cmkf.md)."""
 
 from __future__ import annotations
 
@@ -23,14 +15,9 @@ PD_CHECKS = ("joint", "per_axis", "se_floor")
 
 
 class AxisCmkf:
-    """Batched per-axis CMKF (paper 004), a :class:`~.protocol.CmkfFilter`; ValueError on invalid arguments.
-
-    Parameters
-    ----------
-    n_axes : number of axes; s_v0 : initial Ŝ_v (scalar or (n,)) [m²/s³]; mode : ``"pos_vel"`` or ``"vel"``.
-    pd_check : ``"joint"`` (paper; all axes, or groups of ``pd_group``), ``"per_axis"`` (last positive value per axis)
-        or ``"se_floor"`` (:meth:`~.matching.MatchingLeastSquares.working`); min_samples : stacked samples before use.
-    """
+    """Batched per-axis CMKF, a :class:`~.protocol.CmkfFilter`: ``n_axes``, initial Ŝ_v ``s_v0`` (scalar or (n,))
+    [m²/s³], ``mode`` ``"pos_vel"`` or ``"vel"``, ``pd_check`` ``"joint"`` (paper; all axes or groups of ``pd_group``),
+    ``"per_axis"`` or ``"se_floor"``, ``min_samples`` before Ŝ_v is used; ValueError on invalid arguments."""
 
     def __init__(
         self,
@@ -77,26 +64,21 @@ class AxisCmkf:
 
     @property
     def skipped_stacked(self) -> int:
-        """Stacked-estimator steps skipped on a degenerate interval (M_o not invertible)."""
         return self.estimator.skipped
 
     @property
     def count(self) -> int:
-        """Stacked samples in the S_v estimate."""
         return self.estimator.count
 
     @property
     def matching(self) -> MatchingLeastSquares:
-        """The least squares behind :attr:`S_ls` (with its standard error)."""
         return self.estimator.matching
 
     @property
     def S_ls(self) -> np.ndarray:
-        """Latest least-squares Ŝ_v per axis [m²/s³] (NaN before the first stacked sample)."""
         return self.estimator.estimate
 
     def initialise(self, x0: np.ndarray, P0: np.ndarray) -> None:
-        """Set x̂₀ (n, 3) and P₀ (n, 3, 3); starts a new chain for the stacked estimator."""
         self.x = np.array(x0, dtype=float).reshape(self.n, 3)
         self.P = np.array(P0, dtype=float).reshape(self.n, 3, 3)
         self._pending = None
@@ -112,7 +94,6 @@ class AxisCmkf:
         self._pending = (interval, U)
 
     def predicted_P(self, interval: ImuInterval) -> np.ndarray:
-        """P⁻ after ``interval`` without changing the filter (for reporting between updates)."""
         Phi = interval.Phi
         P = Phi @ self.P @ Phi.T + self.S_used[:, None, None] * interval.Qa1
         P[:, 2, 2] += interval.qb

@@ -15,22 +15,18 @@ PD_CHECKS = ("se_floor", "per_axis", "joint")
 
 @dataclass
 class CmkfConfig:
-    """Parameters of :class:`~.robot.RobotCmkf` (SI units).
+    """Parameters of :class:`~.robot.RobotCmkf` (SI units; what each one does: docs/cmkf.md).
 
     Attributes
     ----------
     imu_rotation_xyzw : orientation of the IMU frame in the base frame (``C_bi``), ROS quaternion order.
-    measurement : ``"twist"`` (body velocity; wheel odometry) or ``"pose_twist"`` (position and body velocity, eq. 8).
     accel_bias_tau, accel_bias_sigma, s_v0 : bias time constant [s], steady-state σ [m/s²] (eqs. 3–7), initial Ŝ_v
         [m²/s³]; gyro_bias_tau, gyro_bias_sigma, s_g0 : the same for the gyro [s], [rad/s], [rad²/s].
     velocity_noise_std, position_noise_std, angular_velocity_noise_std : odometry noise [m/s], [m], [rad/s]; None:
         the message covariance, ``default_*`` when missing or all zeros (REP-145).
-    gravity : [m/s²]; gravity_source : ``"odometry"`` (its orientation, propagated with the gyro) or ``"imu"``.
-    max_odom_gap, max_imu_gap : [s] beyond which the stacked chain restarts / position and velocity re-initialise.
     late_odom_tolerance : stamp merger latency [s]; min_odom_interval : odometry closer to the last update dropped [s].
-    pd_check : Ŝ_v, Ŝ_g in use: ``"se_floor"`` (:meth:`~.matching.MatchingLeastSquares.working`), ``"per_axis"`` or
-        ``"joint"`` (paper); min_samples : stacked samples before Ŝ_v is used; nis_window : updates in the NIS mean.
-    nis_gate_probability : χ² tail p of the innovation gate (:mod:`.gate`): NIS above its ``1 − p`` quantile rejected.
+    pd_check : Ŝ_v, Ŝ_g in use (:meth:`~.matching.MatchingLeastSquares.working`, or the last positive per axis or
+        jointly); min_samples : stacked samples before Ŝ_v is used; nis_gate_probability : χ² tail of :mod:`.gate`.
     """
 
     imu_rotation_xyzw: tuple[float, float, float, float] = rot.IDENTITY

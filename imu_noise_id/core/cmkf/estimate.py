@@ -1,4 +1,4 @@
-"""What the robot CMKF reports (:class:`CmkfEstimate`) and how its consistency verdict is formed."""
+"""What the robot CMKF reports (:class:`CmkfEstimate`) and the consistency verdict of its NIS windows."""
 
 from __future__ import annotations
 
@@ -19,21 +19,17 @@ CONSISTENCY_ORDER = ("unknown", "consistent", "marginal", "inconsistent")
 
 @dataclass
 class CmkfEstimate:
-    """What :meth:`~.robot.RobotCmkf.estimate` returns (IMU frame, SI units).
+    """What :meth:`~.robot.RobotCmkf.estimate` returns (IMU frame, SI units; docs/cmkf.md, "Streaming API").
 
     Attributes
     ----------
-    t : time of the estimate [s] (last processed stamp).
-    status : ``no_data``, ``no_imu``, ``imu_only``, ``unobserved`` (no odometry update within ``max_odom_gap``, or no
-        IMU within ``max_imu_gap``), ``converging`` (< ``min_samples``), ``tracking`` or ``inconsistent``.
-    observed : an odometry update within ``max_odom_gap`` and the IMU alive.
-    accel_bias, accel_bias_std : [m/s²] per axis (0 ± σ_ss before the first update).
-    S_v : the working Ŝ_v [m²/s³] (not an estimate); S_v_ls : least squares (may be ≤ 0); accel_ls : (S_v_ls, se, dof).
-    gyro_bias, gyro_bias_std, S_g, S_g_ls, gyro_ls : the same for the gyro [rad/s], [rad²/s].
-    nis_accel, nis_accel_dof, nis_accel_mean : last NIS (also when gated), its dof, mean over the accepted ones of the
-        last ``nis_window``; nis_gyro, nis_gyro_dof, nis_gyro_mean : the gyro's; gated : (accelerometer, gyro) gated.
-    consistency, consistency_reason : the worse verdict of the two NIS windows (:data:`CONSISTENCY_ORDER`) and why.
-    n_stacked : stacked samples in the S_v estimate; counters : messages used, dropped and gated, by reason.
+    t : last processed stamp [s]; status : :func:`running_status`, or ``no_data``, ``no_imu``, ``imu_only``,
+        ``unobserved``; observed : an odometry update within ``max_odom_gap`` and the IMU alive.
+    accel_bias, accel_bias_std : [m/s²]; S_v : the working Ŝ_v [m²/s³]; S_v_ls, accel_ls : least squares (may be
+        ≤ 0) and (S_v_ls, se, dof); gyro_bias, gyro_bias_std, S_g, S_g_ls, gyro_ls : the gyro's [rad/s], [rad²/s].
+    nis_accel, nis_accel_dof, nis_accel_mean, nis_gyro, nis_gyro_dof, nis_gyro_mean : last NIS (also when gated), dof,
+        mean of the window; gated : (accelerometer, gyro) gated; consistency, consistency_reason : :func:`consistency`.
+    n_stacked : stacked samples in Ŝ_v; counters : messages used, dropped and gated, by reason.
     """
 
     t: float
@@ -82,20 +78,22 @@ class CmkfEstimate:
         return self.gyro_psd.density()
 
 
-def worst_filter(verdicts: Sequence[str], means: Sequence[float], dofs: Sequence[int]) -> int:
-    """The filter with the most severe verdict; among equals, the mean NIS furthest from its dof (by ratio)."""
+def judge(windows: Sequence[NisWindow]) -> tuple[str, int]:
+    """The most severe verdict of the (accelerometer, gyro) windows and its filter's index; among equal verdicts the
+    mean NIS furthest from its dof (by ratio). The node's windows and the replay's whole run."""
+    verdicts = [w.verdict() for w in windows]
+
     def severity(i: int) -> tuple[int, float]:
-        ratio = means[i] / dofs[i]
+        ratio = windows[i].mean / windows[i].dof
         return (CONSISTENCY_ORDER.index(verdicts[i]),
                 abs(math.log(ratio)) if math.isfinite(ratio) and ratio > 0 else math.inf)
-    return max(range(len(verdicts)), key=severity)
+    worst = max(range(len(windows)), key=severity)
+    return verdicts[worst], worst
 
 
 def consistency(windows: Sequence[NisWindow], checks: Sequence[AxisAgreement]) -> tuple[str, str]:
-    """The worse verdict of the (accelerometer, gyro) NIS windows and, unless consistent, the reason."""
-    verdicts = [w.verdict() for w in windows]
-    worst = worst_filter(verdicts, [w.mean for w in windows], [w.dof for w in windows])
-    verdict = verdicts[worst]
+    """:func:`judge` of the (accelerometer, gyro) windows and, unless consistent, the reason with the likely cause."""
+    verdict, worst = judge(windows)
     if verdict not in ("marginal", "inconsistent"):
         return verdict, ""
     parts = []
@@ -104,3 +102,15 @@ def consistency(windows: Sequence[NisWindow], checks: Sequence[AxisAgreement]) -
                      + (f", {100 * w.gated_share:.0f} % gated" if w.gated_share else ""))
     window = windows[worst]
     return verdict, "; ".join(parts) + ". Likely cause: " + likely_cause(window.mean / window.dof, checks)
+
+
+#: The statuses of an observed filter (:func:`running_status`).
+RUNNING = ("converging", "tracking", "inconsistent")
+
+
+def running_status(n_stacked: int, min_samples: int, verdict: str) -> str:
+    """Status of an observed filter with ``n_stacked`` stacked samples and consistency ``verdict``: ``inconsistent``,
+    ``converging`` (fewer than ``min_samples``) or ``tracking``."""
+    if verdict == "inconsistent":
+        return "inconsistent"
+    return "converging" if n_stacked < min_samples else "tracking"

@@ -1,8 +1,6 @@
 """Paper 004's CMKF for velocity-only measurements in plain floats (the robot's hot path): :class:`~.axis.AxisCmkf`
-in mode ``"vel"`` (tested equal) on the observable [v, b] (r carried). H = [1, 0], F̂ = [[1, −β_v], [0, φ]],
-Q_a = S_v [[T, 0], [0, 0]]: propagation (23), Joseph update (27), stacked estimator (28)–(35) with
-M_o⁻¹ = [[0, 1], [−1/β_v, 1/β_v]], D = T_k a₁a₁ᵀ + T_{k−1} a₂a₂ᵀ, a₁ = −M_o,k⁻¹[:, 0],
-a₂ = F̂_{k−1} M_o,k−1⁻¹[:, 0] − e_v, Cov(𝒲) = q_b e_b e_bᵀ, ⟨Cov(ℰ), D⟩ = Σ_j R_j E_jᵀ D E_j."""
+in mode ``"vel"`` written out (tested equal) on the observable [v, b] (r carried): H = [1, 0], F̂ = [[1, −β_v], [0, φ]],
+propagation (23), Joseph update (27), stacked estimator (28)–(35) with M_o⁻¹ = [[0, 1], [−1/β_v, 1/β_v]]."""
 
 from __future__ import annotations
 
@@ -36,13 +34,8 @@ class _Epoch:
 
 
 class VelocityAxisCmkf:
-    """Velocity-measurement CMKF for ``n`` axes (a :class:`~.protocol.CmkfFilter` with m = 1).
-
-    Parameters
-    ----------
-    n_axes : number of axes; s_v0 : initial Ŝ_v [m²/s³] (ValueError unless > 0); pd_check : ``"se_floor"``,
-    ``"per_axis"`` or ``"joint"``; min_samples : stacked samples before the estimate replaces ``s_v0``.
-    """
+    """Velocity-measurement CMKF (a :class:`~.protocol.CmkfFilter` with m = 1) of ``n_axes``, initial Ŝ_v ``s_v0``
+    [m²/s³] (ValueError unless > 0), ``pd_check``, ``min_samples`` before it uses Ŝ_v."""
 
     m = 1
 
@@ -72,7 +65,7 @@ class VelocityAxisCmkf:
 
     # -- state ---------------------------------------------------------------------------------------------------
     def initialise(self, x0: np.ndarray, P0: np.ndarray) -> None:
-        """Set x̂₀ (n, 3) and the ``[v, b]`` block of P₀ (n, 3, 3); starts a new chain."""
+        """Set x̂₀ (n, 3) and the ``[v, b]`` block of P₀ (n, 3, 3) (``r`` carried, not estimated); a new chain."""
         x0 = np.asarray(x0, dtype=float).reshape(self.n, 3)
         P0 = np.asarray(P0, dtype=float).reshape(self.n, 3, 3)
         self._r, self._v, self._b = (col.tolist() for col in x0.T)
@@ -83,37 +76,30 @@ class VelocityAxisCmkf:
 
     @property
     def x(self) -> np.ndarray:
-        """(n, 3) state ``[r, v, b]`` per axis (``r`` as given, not estimated)."""
         return np.array([self._r, self._v, self._b]).T
 
     @property
     def P(self) -> np.ndarray:
-        """(n, 3, 3) covariance; the ``r`` row and column are NaN (not estimated)."""
         return self._covariance(self._pvv, self._pvb, self._pbb)
 
     @property
     def y(self) -> np.ndarray:
-        """(n, 1) innovations of the last update."""
         return np.array(self._nu)[:, None]
 
     @property
     def S(self) -> np.ndarray:
-        """(n, 1, 1) innovation variances of the last update."""
         return np.array(self._s)[:, None, None]
 
     @property
     def S_used(self) -> np.ndarray:
-        """Ŝ_v in use per axis [m²/s³]."""
         return np.array(self._S)
 
     @property
     def count(self) -> int:
-        """Stacked samples in the S_v estimate."""
         return self.matching.count
 
     @property
     def S_ls(self) -> np.ndarray:
-        """Latest least-squares Ŝ_v (NaN before the first stacked sample)."""
         return self.matching.estimate
 
     def _covariance(self, pvv: list[float], pvb: list[float], pbb: list[float]) -> np.ndarray:
@@ -130,7 +116,6 @@ class VelocityAxisCmkf:
                 [beta * beta * pbb[i] + qb for i in range(self.n)])
 
     def predicted_P(self, interval: ImuInterval) -> np.ndarray:
-        """P⁻ after ``interval`` without changing the filter (for reporting between updates)."""
         return self._covariance(*self._propagated(interval))
 
     # -- filter --------------------------------------------------------------------------------------------------
@@ -192,7 +177,7 @@ class VelocityAxisCmkf:
         return np.array(nis)
 
     def _stack(self) -> bool:
-        """Eqs. (28)–(35) for the last three epochs (see module docstring)."""
+        """Eqs. (28)–(35) for the last three epochs: D = T_k a₁a₁ᵀ + T_{k−1} a₂a₂ᵀ, Cov(𝒲) = q_b e_b e_bᵀ."""
         if len(self._chain) < 3:
             return False
         e2, e1, e0 = self._chain

@@ -1,6 +1,5 @@
-"""Innovation gate of the robot CMKF's filters and the NIS window of its consistency verdict (beyond paper 004;
-reasons: docs/cmkf.md, "Innovation gate"): an update whose NIS exceeds the ``1 − p`` quantile of χ²(dof) is rejected,
-unless :data:`GATE_PATIENCE` were in a row; rejections count toward the verdict (:class:`NisWindow`)."""
+"""Innovation gate of the robot CMKF's filters (χ², :data:`GATE_PATIENCE`) and the NIS window of its consistency
+verdict (beyond paper 004; docs/cmkf.md, "Innovation gate")."""
 
 from __future__ import annotations
 
@@ -36,9 +35,9 @@ class InnovationGate:
 
 
 class NisWindow:
-    """The last ``size`` updates of one filter (``dof`` each): NIS of the accepted ones and which were gated."""
+    """The last ``size`` updates (None: every one) of one filter (``dof`` each): the accepted ones' NIS, the gated."""
 
-    def __init__(self, dof: int, size: int) -> None:
+    def __init__(self, dof: int, size: int | None) -> None:
         self.dof = int(dof)
         self._nis: deque[float] = deque(maxlen=size)
         self._gated: deque[bool] = deque(maxlen=size)
@@ -60,6 +59,16 @@ class NisWindow:
         return len(self._nis)
 
     @property
+    def updates(self) -> int:
+        """Updates in the window, gated ones included."""
+        return len(self._gated)
+
+    @property
+    def gated(self) -> int:
+        """Gated updates in the window."""
+        return sum(self._gated)
+
+    @property
     def mean(self) -> float:
         """Mean NIS of the accepted updates in the window (NaN when none)."""
         return self._sum / len(self._nis) if self._nis else math.nan
@@ -67,7 +76,7 @@ class NisWindow:
     @property
     def gated_share(self) -> float:
         """Share of the window's updates rejected by the gate."""
-        return sum(self._gated) / len(self._gated) if self._gated else 0.0
+        return self.gated / len(self._gated) if self._gated else 0.0
 
     def verdict(self) -> str:
         """:func:`~imu_noise_id.core.diagnostics.consistency.nis_verdict` of the window."""

@@ -1,9 +1,6 @@
-"""Gyro-bias filter analogous to paper 004's CMKF (beyond the paper; derivation: docs/cmkf.md, "Gyro").
-
-Per IMU axis (cf. eqs. 3–4, 9, 12, 27–35; S_g the ARW PSD [rad²/s]): y_k = ∫ ω̃ dt − Δθ_odo,k, y_k / T_k = b_{g,k}
-+ e_k, Var(e_k) = S_g / T_k + R_k / T_k²; a scalar Joseph-form filter; Ŝ_g = Σ (d² − q − R-terms + 2φc) D_k / Σ D_k²
-with d_k = y_k/T_k − φ_k y_{k−1}/T_{k−1}, D_k = 1/T_k + φ_k²/T_{k−1}, c_k = Cov(e_k/T_k, e_{k−1}/T_{k−1}).
-"""
+"""Gyro-bias filter analogous to paper 004's CMKF (beyond the paper; model and derivation: docs/cmkf.md, "Gyro"): per
+IMU axis y_k/T_k = b_k + e_k, Var e_k = S_g/T_k + R_k/T_k², a scalar Joseph-form filter (27) and a covariance-matching
+Ŝ_g [rad²/s] of d_k = y_k/T_k − φ y_{k−1}/T_{k−1} (cf. eqs. 28–35)."""
 
 from __future__ import annotations
 
@@ -15,13 +12,9 @@ from .matching import MatchingLeastSquares
 
 
 class GyroBiasFilter:
-    """Per-axis gyro-bias Kalman filter with a covariance-matching Ŝ_g (plain floats, :class:`~.protocol.CmkfFilter`).
-
-    Parameters
-    ----------
-    tau : bias time constant [s]; sigma : steady-state bias σ [rad/s]; s_g0 : initial S_g [rad²/s]; min_samples :
-    stacked samples before Ŝ_g replaces ``s_g0``; pd_check : ``"se_floor"`` or else the last positive value.
-    """
+    """Per-axis gyro-bias filter (plain floats, the :class:`~.protocol.CmkfFilter` names): bias time constant ``tau``
+    [s], steady-state σ ``sigma`` [rad/s], initial S_g ``s_g0`` [rad²/s], ``min_samples`` before Ŝ_g is used,
+    ``pd_check`` ``"se_floor"`` or else the last positive value. ``x``, ``P``: bias [rad/s], variance [rad²/s²]."""
 
     def __init__(self, tau: float, sigma: float, s_g0: float, min_samples: int = 10, pd_check: str = "se_floor"
                  ) -> None:
@@ -41,37 +34,30 @@ class GyroBiasFilter:
 
     @property
     def x(self) -> np.ndarray:
-        """Bias estimate per axis [rad/s]."""
         return np.array(self.bias)
 
     @property
     def P(self) -> np.ndarray:
-        """Bias variance per axis [rad²/s²]."""
         return np.array(self.var)
 
     @property
     def y(self) -> np.ndarray:
-        """Innovations of the last update per axis [rad/s]."""
         return np.array(self._nu)
 
     @property
     def S(self) -> np.ndarray:
-        """Innovation variances of the last update per axis [rad²/s²]."""
         return np.array(self._s)
 
     @property
     def S_used(self) -> np.ndarray:
-        """S_g in use per axis [rad²/s]."""
         return np.array(self._S)
 
     @property
     def count(self) -> int:
-        """Stacked samples in the S_g estimate."""
         return self.matching.count
 
     @property
     def S_ls(self) -> np.ndarray:
-        """Latest least-squares S_g [rad²/s] (NaN before the first stacked sample)."""
         return self.matching.estimate
 
     def reset_chain(self) -> None:

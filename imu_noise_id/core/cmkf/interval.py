@@ -1,11 +1,6 @@
-"""The IMU side of the robot CMKF: per-sample propagation (paper 004 eqs. 3–4, 13–16; frames and model: docs/cmkf.md,
-"From the table to a robot") and the interval of T = Σ dt_j it forms, eqs. (13)–(16), (22) accumulated exactly
-(β_j = Π_{l<j} φ_l, m_j the mid-time of sample j; one sample gives eq. 17, :func:`~.axis.paper_interval`)::
-
-    F̂ = [[1, T, −(T·Σβ_j dt_j − Σβ_j dt_j m_j)], [0, 1, −Σβ_j dt_j], [0, 0, Π φ_j]]
-    Q_a = S_v · [[T³ − 2T Σdt m + Σdt m², T² − Σdt m, 0], [T² − Σdt m, T, 0], [0, 0, 0]]
-    q_b = (1 − (Π φ_j)²) σ_ss²  (bias drive lumped at the end: O(q_b T))
-"""
+"""The IMU side of the robot CMKF: per-sample propagation (paper 004 eqs. 3–4, 13–16) and the interval of
+T = Σ dt_j it forms, eqs. (13)–(16), (22) accumulated exactly into F̂, Q_a, q_b (docs/cmkf.md, "From the table to a
+robot"; one sample gives eq. 17, :func:`~.axis.paper_interval`)."""
 
 from __future__ import annotations
 
@@ -22,7 +17,7 @@ from .stacked import Interval
 @dataclass(frozen=True)
 class ImuInterval:
     """One interval (eqs. 17, 22–23): ``T`` [s]; F̂[0, 2] = −``Bp``, F̂[1, 2] = −``Bv``; ``phi`` = Π φ_j; ``Qrr``, ``Qrv``
-    for unit PSD (velocity variance T); ``qb`` bias-drive variance (eq. 7) [m²/s⁴]."""
+    of Q_a for S_v = 1 (velocity variance T); ``qb`` bias-drive variance (eq. 7) [m²/s⁴]."""
 
     T: float
     Bp: float
@@ -48,13 +43,9 @@ class ImuInterval:
 
 
 class ImuPropagation:
-    """The accelerometer filter's state between two epochs per IMU sample (plain floats): r̂, v̂, b̂, Δp_n (with
-    ``track_position``), the gyro increment ∫ω̃ dt, q_ni and the sums behind :meth:`interval`.
-
-    Parameters
-    ----------
-    gravity : [m/s²]; bias_tau, bias_sigma : accelerometer bias time constant [s] and steady-state σ [m/s²].
-    """
+    """The accelerometer filter's state between two epochs, per IMU sample (plain floats): r̂, v̂, b̂, Δp_n (with
+    ``track_position``), ∫ω̃ dt, q_ni and the sums of :meth:`interval`; ``gravity`` [m/s²], ``bias_tau`` [s],
+    ``bias_sigma`` [m/s²] of the accelerometer bias."""
 
     def __init__(self, gravity: float, bias_tau: float, bias_sigma: float, track_position: bool) -> None:
         self._g = gravity

@@ -1,8 +1,5 @@
-"""Streaming covariance-matching least squares of paper 004 (eq. 35) with a standard error (beyond the paper).
-
-Ŝ = Σ_k q_k / Σ_k w_k per axis (:mod:`.stacked`, :mod:`.gyro`); Var(Ŝ) ≈ J/(J − 1) · Σ_j (Q_j − Ŝ W_j)² / (Σ_j W_j)²
-over J blocks of :data:`BLOCK` epochs, J − 1 dof (docs/cmkf.md, "Uncertainty of S_v and S_g").
-"""
+"""Streaming covariance-matching least squares of paper 004 (eq. 35), Ŝ = Σ_k q_k / Σ_k w_k per axis, with the block
+sandwich standard error over blocks of :data:`BLOCK` epochs (beyond the paper; docs/cmkf.md, "Uncertainty of S_v")."""
 
 from __future__ import annotations
 
@@ -79,7 +76,7 @@ class MatchingLeastSquares:
 
     @property
     def standard_error(self) -> np.ndarray:
-        """Standard error of Ŝ per axis (NaN before two completed blocks); see the module docstring."""
+        """Standard error of Ŝ per axis, J/(J − 1) · Σ_j (Q_j − Ŝ W_j)² / (Σ_j W_j)² over J blocks (NaN below two)."""
         J = self.blocks
         if J < 2 or self._wc <= 0.0:
             return np.full(self.n, np.nan)

@@ -1,7 +1,6 @@
 """The odometry side of the robot CMKF: nav_msgs/Odometry → measurements per IMU axis (paper 004 eq. 8 on a robot;
-frames as in :mod:`.interval`): twist z_v = C_ibᵀ v_b (REP-105); pose_twist also z_r = C_in (p_n − p_anchor), prior
-r̂⁻_k = C_in,k (C_ni,k−1 r̂⁺_{k−1} + Δp_n); R the rotated covariance's diagonal (or a parameter). Gyro
-measurement: C_ibᵀ ½(ω_b,k−1 + ω_b,k) T, or the rotation between consecutive orientations."""
+docs/cmkf.md, "From the table to a robot"): twist z_v = C_ibᵀ v_b (REP-105), pose_twist also z_r = C_in (p_n −
+p_anchor); R the rotated covariance's diagonal (or a parameter); the gyro filter's rotation over an interval."""
 
 from __future__ import annotations
 

@@ -12,15 +12,11 @@ from .matching import MatchingLeastSquares
 
 class CmkfFilter(Protocol):
     """Paper 004's CMKF for ``n`` axes: propagation (17), (23), Joseph update (24)–(27), S_v estimate (28)–(35).
-
-    Attributes
-    ----------
-    n, m : axes, and measurement components per axis (1: velocity, 2: position and velocity); initialised.
-    x, P : (n, 3) state ``[r, v, b]`` and (n, 3, 3) covariance (r carried and NaN in P where not estimated).
-    y, S : innovations (n, m) and covariances (n, m, m) of the last update.
-    S_used, S_ls : (n,) Ŝ_v in use and the latest least-squares one [m²/s³]; matching : the least squares.
-    count, rejected, skipped, skipped_stacked : stacked samples, estimates refused, updates and stacked steps skipped.
-    """
+    ``m``: measurement components per axis (1: velocity, 2: position and velocity); ``x``, ``P``: (n, 3) state
+    ``[r, v, b]`` and (n, 3, 3) covariance (r carried and NaN in P where not estimated); ``y``, ``S``: innovations
+    (n, m) and covariances (n, m, m) of the last update; ``S_used``, ``S_ls``: (n,) Ŝ_v in use and the least-squares
+    one [m²/s³] of ``matching``; ``count``, ``rejected``, ``skipped``, ``skipped_stacked``: stacked samples, estimates
+    refused, updates and stacked steps skipped."""
 
     n: int
     m: int

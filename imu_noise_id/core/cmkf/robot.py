@@ -13,7 +13,7 @@ from . import rotation as rot
 from .agreement import AxisAgreement
 from .axis import AxisCmkf
 from .config import CmkfConfig
-from .estimate import CmkfEstimate, consistency
+from .estimate import CmkfEstimate, consistency, running_status
 from .fast_vel import VelocityAxisCmkf
 from .gate import InnovationGate, NisWindow
 from .gyro import GyroBiasFilter
@@ -332,6 +332,7 @@ class RobotCmkf:
             and (self._t_state - self._t_update) <= cfg.max_odom_gap
             and (t - self._t_imu) <= cfg.max_imu_gap  # an IMU that stopped while odometry goes on observes nothing
         )
+        verdict, reason = consistency(self.nis_windows, self.agreement)
         if self._t_imu is None and self._t_odom is None:
             status = "no_data"
         elif self._t_imu is None:
@@ -340,13 +341,8 @@ class RobotCmkf:
             status = "imu_only"
         elif not observed:
             status = "unobserved"
-        elif f.count < cfg.min_samples:
-            status = "converging"
         else:
-            status = "tracking"
-        verdict, reason = consistency(self.nis_windows, self.agreement)
-        if verdict == "inconsistent" and status in ("converging", "tracking"):
-            status = "inconsistent"
+            status = running_status(f.count, cfg.min_samples, verdict)
         if f.initialised:
             bias = np.array(self.imu.b)
             bias_std = np.sqrt(self._bias_var())

@@ -1,14 +1,6 @@
-"""Stacked-measurement covariance estimator of paper 004 (Moghe, Zanetti, Akella), eqs. (28)–(35), one axis,
-state ``x = [r, v, b]``; M_o = [H F̂; H], M_v = [H; 0], M_w = [H Λ; 0] (re-derived; derivation and the paper's
-index slips: docs/cmkf.md, ``papers/README.md``)::
-
-    𝒵_k = M_o† Y_k − F̂ M_o† Y_{k-1} − U_{k-2}                                                   (33)
-        = [M_o† M_w] w_{k-1} + [Λ − F̂ M_o† M_w] w_{k-2} + A₁ ν_{k-1} + A₂ ν_{k-2} + E₁ η_k + E₂ η_{k-1} + E₃ η_{k-2}
-    A₁ = −M_o† M_v,  A₂ = F̂ M_o† M_v − I,  E₁ = M_o†[I; 0],  E₂ = M_o†[0; I] − F̂ M_o†[I; 0],  E₃ = −F̂ M_o†[0; I]
-
-Cov(𝒵) = Cov(𝒲) + S_v D + Cov(ℰ), D = A₁ Qa1 A₁ᵀ + A₂ Qa1 A₂ᵀ (34); Ŝ_v = Σ ⟨𝒵𝒵ᵀ − Cov(𝒲_k) − Cov(ℰ_k), D_k⟩_F /
-Σ ⟨D_k, D_k⟩_F (35; uncentred; matrices may change between intervals).
-"""
+"""Stacked-measurement covariance estimator of paper 004 (Moghe, Zanetti, Akella), eqs. (28)–(35), per axis of
+state ``[r, v, b]``: 𝒵_k (33), Cov(𝒵) = Cov(𝒲) + S_v D + Cov(ℰ) (34), Ŝ_v = Σ ⟨𝒵𝒵ᵀ − Cov(𝒲) − Cov(ℰ), D⟩_F /
+Σ ⟨D, D⟩_F (35) with the interval's own matrices (A₁, A₂, E₁–E₃ re-derived: docs/cmkf.md, "A₁, A₂ of eq. (35)")."""
 
 from __future__ import annotations
 
@@ -22,8 +14,7 @@ from .matching import MatchingLeastSquares
 
 @dataclass(frozen=True)
 class Interval:
-    """One interval, shared by all axes: ``Phi`` F̂ (d, d) (eq. 17), ``Qa1`` Cov ν for S_v = 1, ``qb`` (eq. 7) [m²/s⁴].
-    """
+    """One interval shared by all axes: ``Phi`` F̂ (d, d) (eq. 17), ``Qa1`` Cov ν for S_v = 1, ``qb`` (eq. 7) [m²/s⁴]."""
 
     Phi: np.ndarray
     Qa1: np.ndarray
@@ -40,13 +31,8 @@ class _Epoch:
 
 
 class StackedSvEstimator:
-    """Recursive least-squares S_v per axis from stacked measurements (eqs. 28–35); :meth:`add_epoch` at every epoch.
-
-    Parameters
-    ----------
-    n_axes : axes sharing the interval matrices; H : (m, d) measurement matrix of one axis on the (sub-)state;
-    bias_index : index of the bias in the (sub-)state (``Λ = e_bias``).
-    """
+    """Recursive least-squares S_v (eqs. 28–35) of ``n_axes`` sharing the interval matrices, ``H`` (m, d) of one axis
+    on the (sub-)state, the bias at ``bias_index`` (``Λ = e_bias``); :meth:`add_epoch` at every epoch."""
 
     def __init__(self, n_axes: int, H: np.ndarray, bias_index: int) -> None:
         self.n_axes = int(n_axes)
@@ -67,12 +53,11 @@ class StackedSvEstimator:
 
     @property
     def count(self) -> int:
-        """Stacked samples accumulated."""
         return self.matching.count
 
     @property
     def estimate(self) -> np.ndarray:
-        """Current least-squares Ŝ_v per axis [m²/s³] (NaN before the first stacked sample)."""
+        """Least-squares Ŝ_v per axis [m²/s³] (NaN before the first stacked sample)."""
         return self.matching.estimate
 
     def add_epoch(self, z: np.ndarray, R: np.ndarray, interval: Interval | None, U: np.ndarray | None) -> bool:

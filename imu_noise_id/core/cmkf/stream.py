@@ -1,5 +1,5 @@
-"""The robot CMKF fed in stamp order: live messages through a :class:`~.merge.StampMerger` (:class:`CmkfStream`), or
-whole recordings (:func:`feed_recording`, :func:`~.merge.stamp_order`)."""
+"""The robot CMKF fed in stamp order: live messages through a :class:`~.merge.StampMerger` (:class:`CmkfStream`),
+or whole recordings straight to the filter (:func:`feed_recording`, for the simulated runs)."""
 
 from __future__ import annotations
 
@@ -20,18 +20,13 @@ ODOMETRY_FIELDS = (("position", "position"), ("orientation_xyzw", "orientation_x
 
 
 class CmkfStream:
-    """A :class:`RobotCmkf` behind a :class:`StampMerger`: messages in arrival order, processed in stamp order.
-
-    Parameters
-    ----------
-    config : the filter's parameters (``late_odom_tolerance``: the merger's latency [s]).
-    on_odometry : ``on_odometry(t, order)`` after every released odometry message (``order`` from :mod:`.merge`).
-
-    Attributes: ``cmkf`` (the filter), ``merger`` (its ``latency`` may be changed at any time).
-    """
+    """A :class:`RobotCmkf` (``cmkf``) behind a :class:`StampMerger` (``merger``, its ``latency`` =
+    ``late_odom_tolerance`` [s], changeable): messages in arrival order, processed in stamp order.
+    ``on_odometry(t, order, updated)`` after every released odometry message (``order`` from :mod:`.merge`;
+    ``updated``: :meth:`RobotCmkf.process_odometry`'s result, False for :data:`~.merge.TOO_LATE`)."""
 
     def __init__(self, config: CmkfConfig | None = None,
-                 on_odometry: Callable[[float, int], None] | None = None) -> None:
+                 on_odometry: Callable[[float, int, bool], None] | None = None) -> None:
         self.cmkf = RobotCmkf(config)
         self.merger: StampMerger[Any] = StampMerger(self.cmkf.config.late_odom_tolerance)
         self._on_odometry = on_odometry
@@ -51,8 +46,8 @@ class CmkfStream:
         return self._process(self.merger.flush())
 
     def new_time_line(self) -> bool:
-        """The stamps restarted: process the queue, the filter forgets its times (:meth:`RobotCmkf.new_time_line`), the
-        merger starts afresh; True if a queued odometry message updated the filter."""
+        """The stamps restarted: the queue processed, the filter's times forgotten (:meth:`RobotCmkf.new_time_line`),
+        a new merger; True if a queued odometry message updated the filter."""
         updated = self.flush()
         self.cmkf.new_time_line()
         self.merger = StampMerger(self.merger.latency)
@@ -72,24 +67,21 @@ class CmkfStream:
             if not is_odometry:
                 self.cmkf.process_imu(t, *item)
                 continue
-            if order != TOO_LATE:
-                updated |= self.cmkf.process_odometry(t, late=order == LATE, **item)
+            used = order != TOO_LATE and self.cmkf.process_odometry(t, late=order == LATE, **item)
+            updated |= used
             if self._on_odometry is not None:
-                self._on_odometry(t, order)
+                self._on_odometry(t, order, used)
         return updated
 
 
 def feed_recording(cmkf: RobotCmkf, imu: ImuSeries, odom: OdometrySeries | None,
                    imu_orientation_xyzw: np.ndarray | None = None) -> Iterator[bool]:
     """Feed recorded series to ``cmkf`` in stamp order, yielding per odometry message whether it updated (None fields
-    allowed; NaN rows of ``imu_orientation_xyzw`` (N, 4) pass as None)."""
+    allowed; ``imu_orientation_xyzw`` as :func:`orientation_rows`)."""
     ti = np.asarray(imu.t, dtype=float)
     times = ti.tolist()
     rows = np.column_stack([imu.gyro, imu.accel]).tolist()
-    quats = None
-    if imu_orientation_xyzw is not None:
-        q = np.asarray(imu_orientation_xyzw, dtype=float)
-        quats = [row if ok else None for row, ok in zip(q.tolist(), np.isfinite(q).all(axis=1).tolist(), strict=True)]
+    quats = orientation_rows(imu_orientation_xyzw)
     to = np.zeros(0) if odom is None else np.asarray(odom.t, dtype=float)
     fields = [] if odom is None else [(key, getattr(odom, name)) for key, name in ODOMETRY_FIELDS]
     for is_odometry, k in stamp_order(ti, to):
@@ -98,3 +90,12 @@ def feed_recording(cmkf: RobotCmkf, imu: ImuSeries, odom: OdometrySeries | None,
         else:
             row = rows[k]
             cmkf.process_imu(times[k], row[0:3], row[3:6], None if quats is None else quats[k])
+
+
+def orientation_rows(orientation_xyzw: np.ndarray | None) -> list[list[float] | None] | None:
+    """Per IMU sample its orientation ``[x, y, z, w]`` from (N, 4) ``orientation_xyzw``; None where a row is not finite
+    (the message provides none)."""
+    if orientation_xyzw is None:
+        return None
+    q = np.asarray(orientation_xyzw, dtype=float)
+    return [row if ok else None for row, ok in zip(q.tolist(), np.isfinite(q).all(axis=1).tolist(), strict=True)]

@@ -3,10 +3,12 @@ order; later odometry counted, unused), restarted on any error; innovations to `
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from ...core.cmkf.config import CmkfConfig
 from ...core.cmkf.merge import TOO_LATE
 from ...core.cmkf.robot import CmkfEstimate, RobotCmkf
 from ...core.cmkf.stream import CmkfStream
@@ -18,14 +20,22 @@ from .innovations import InnovationChecks
 class CmkfFeed:
     """The CMKF behind its stamp merger, its latest estimate, and the checks of its innovations.
 
+    Parameters
+    ----------
+    config : ``cmkf.*`` and ``innovations.*`` (InputError if invalid); events : gated updates, errors go there.
+    cmkf : the CMKF's parameters instead of ``config``'s ``cmkf.*`` and ``nis.window`` (the replay's: every field).
+    on_odometry : ``on_odometry(t, updated)`` after every odometry message the merger released to the CMKF.
+
     Attributes: ``estimate``; ``gyro_bias``, ``accel_bias`` (3,) (0 before the first odometry update); ``errors``
-    (restarts), ``too_late``; ``innovations``. InputError if ``cmkf.*`` or ``innovations.*`` are invalid.
+    (restarts), ``too_late``; ``innovations``.
     """
 
-    def __init__(self, config: OnlineConfig, events: EventLog) -> None:
-        self._config = cmkf_config(config)
+    def __init__(self, config: OnlineConfig, events: EventLog, cmkf: CmkfConfig | None = None,
+                 on_odometry: Callable[[float, bool], None] | None = None) -> None:
+        self._config = cmkf or cmkf_config(config)
         self._innovation_parameters = (config.innovations_window, config.innovations_lags, config.innovations_alpha)
         self._events = events
+        self._listener = on_odometry
         self.stream = CmkfStream(self._config, on_odometry=self._on_odometry)
         self.innovations = InnovationChecks(*self._innovation_parameters, self.cmkf.filter.m)
         self._estimate: CmkfEstimate | None = None
@@ -54,6 +64,10 @@ class CmkfFeed:
     def new_time_line(self) -> None:
         """The stamps of an input restarted: the filter forgets its times and keeps its estimates."""
         self._feed(self.stream.new_time_line)
+
+    def flush(self) -> None:
+        """The end of the input: every message the merger holds goes to the CMKF."""
+        self._feed(self.stream.flush)
 
     @property
     def estimate(self) -> CmkfEstimate:
@@ -84,7 +98,7 @@ class CmkfFeed:
                 self.accel_bias = np.array(cmkf.imu.b)
         return updated
 
-    def _on_odometry(self, t: float, order: int) -> None:
+    def _on_odometry(self, t: float, order: int, updated: bool) -> None:
         if order == TOO_LATE:  # the CMKF has propagated past it: not used
             self.too_late += 1
             self._events.count("odom_too_late")
@@ -100,3 +114,5 @@ class CmkfFeed:
                     self._events.event(key, f"CMKF: {what} update at t = {t:.6f} s rejected by the innovation gate "
                                        f"(NIS {nis:.3g} > {gate.threshold:.3g}): a bump, a saturated or corrupted "
                                        "sample, wheel slip; the bias is kept")
+        if self._listener is not None:
+            self._listener(t, updated)

@@ -1,6 +1,7 @@
 """Parameters of ``imu_noise_id_node`` (names, defaults, ranges, units, validation): :data:`PARAMETERS` is the single
 source; the CMKF's tunables, in :data:`CMKF_TUNABLES`, take type and default from ``CmkfConfig`` fields and make the
-``cmkf.*`` and ``nis.window`` parameters, the ``imu-noise-id cmkf`` options and :func:`cmkf_config`."""
+``cmkf.*`` and ``nis.window`` parameters and the ``imu-noise-id cmkf`` options; :func:`tuned_config` makes the
+``CmkfConfig`` of either (:func:`cmkf_config` the node's)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import dataclasses
 import math
 import types
 import typing
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -355,13 +357,20 @@ if [f.name for f in dataclasses.fields(OnlineConfig)] != [p.attr for p in PARAME
     raise ImportError("OnlineConfig's fields must be PARAMETERS' attribute names, in their order")
 
 
-def cmkf_config(config: OnlineConfig) -> CmkfConfig:
-    """The CMKF's parameters from ``cmkf.*`` and ``nis.window`` (0 noise std: from the messages; ``cmkf.input_latency``:
-    ``late_odom_tolerance``); InputError naming the parameter of an invalid combination."""
-    cmkf = CmkfConfig(**{t.field: t.value(getattr(config, t.spec().attr)) for t in CMKF_TUNABLES
-                         if t.parameter is not None})
+def tuned_config(tunables: Iterable[CmkfTunable], value: Callable[[CmkfTunable], Any], what: str,
+                 **fields: Any) -> CmkfConfig:
+    """A validated :class:`CmkfConfig`: each tunable's field from ``value(tunable)`` (a parameter's or option's value,
+    :meth:`CmkfTunable.value`), ``fields`` as given, the rest the defaults; InputError ``"{what}: <reason>"``."""
+    cmkf = CmkfConfig(**{t.field: t.value(value(t)) for t in tunables}, **fields)
     try:
         cmkf.validate()
     except ValueError as exc:
-        raise InputError(f"parameter cmkf.*: {exc}") from None
+        raise InputError(f"{what}: {exc}") from None
     return cmkf
+
+
+def cmkf_config(config: OnlineConfig) -> CmkfConfig:
+    """The CMKF's parameters from ``cmkf.*`` and ``nis.window`` (0 noise std: from the messages; ``cmkf.input_latency``:
+    ``late_odom_tolerance``); InputError naming the parameter of an invalid combination."""
+    return tuned_config((t for t in CMKF_TUNABLES if t.parameter is not None),
+                        lambda t: getattr(config, t.spec().attr), "parameter cmkf.*")

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
 from ...core.axes import AXES
+from ...core.cmkf.config import CmkfConfig
 from ...core.quality import IMU_MAX_ABS
 from .bank import BankFeed
 from .cmkf_feed import CmkfFeed
@@ -45,7 +46,9 @@ class OnlineIdentifier:
     Parameters
     ----------
     config : validated parameters; hypotheses : (mapping, source) of the hypothesis set, or None (no bank);
-    watch : the :mod:`.watch` against this IMU's reference, or None.
+    watch : the :mod:`.watch` against this IMU's reference, or None; cmkf : the CMKF's parameters instead of those of
+    ``config``'s ``cmkf.*`` and ``nis.window`` (the replay's); on_cmkf_odometry : ``on_cmkf_odometry(t, updated)``
+    after every odometry message the CMKF processed (the replay records its estimate there).
 
     Attributes
     ----------
@@ -59,9 +62,12 @@ class OnlineIdentifier:
     """
 
     def __init__(self, config: OnlineConfig | None = None,
-                 hypotheses: tuple[Mapping[str, Any], str] | None = None, watch: ReferenceWatch | None = None) -> None:
+                 hypotheses: tuple[Mapping[str, Any], str] | None = None, watch: ReferenceWatch | None = None, *,
+                 cmkf: CmkfConfig | None = None,
+                 on_cmkf_odometry: Callable[[float, bool], None] | None = None) -> None:
         self.config = config = config or OnlineConfig()
         self._hypotheses = hypotheses
+        self._cmkf, self._on_cmkf_odometry = cmkf, on_cmkf_odometry
         self.watch = watch
         self.events = EventLog()
         self.imu = Input("imu", config, self.events)
@@ -77,7 +83,7 @@ class OnlineIdentifier:
     def _start_estimation(self) -> None:
         """The estimators, empty."""
         config = self.config
-        self.cmkf_feed = CmkfFeed(config, self.events)
+        self.cmkf_feed = CmkfFeed(config, self.events, self._cmkf, self._on_cmkf_odometry)
         self.stationarity = StationaryGate(config)
         self.noise = StationaryNoise()
         self.bank = None if self._hypotheses is None else BankFeed(*self._hypotheses, config.hypotheses_bank_rate,
@@ -138,7 +144,7 @@ class OnlineIdentifier:
         if self.imu.stats.accepted % 100 == 0:
             self._variance_cache = None
         self.last_imu_t = t
-        if self.config.cmkf_gravity_source != "imu":
+        if self.cmkf_feed.cmkf.config.gravity_source != "imu":
             orientation_xyzw = None
         self.cmkf_feed.imu(t, gyro, accel, orientation_xyzw)
         ended, released = self.stationarity.update(t, sample, self.cmkf_feed.gyro_bias)
@@ -177,15 +183,18 @@ class OnlineIdentifier:
             self.watch.break_chain()
 
     def process_odometry(
-        self, t: float, linear_velocity: tuple[float, float, float], angular_velocity: tuple[float, float, float],
-        frame_id: str = "", wall_time: float | None = None, *,
+        self, t: float, linear_velocity: tuple[float, float, float],
+        angular_velocity: tuple[float, float, float] | None, frame_id: str = "", wall_time: float | None = None, *,
         position: tuple[float, float, float] | None = None,
         orientation_xyzw: tuple[float, float, float, float] | None = None,
         pose_covariance: np.ndarray | None = None, twist_covariance: np.ndarray | None = None,
     ) -> bool:
-        """One odometry message (pose in the odom frame, twist in the child frame); False when rejected."""
-        v = np.array((*linear_velocity, *angular_velocity), dtype=float)
-        fields = {"position": position, "orientation_xyzw": orientation_xyzw,
+        """One odometry message (pose in the odom frame, twist in the child frame; ``angular_velocity`` None: not
+        measured, a recording's: the stationarity judges the linear speed alone); False when rejected."""
+        measured = angular_velocity is not None
+        v = np.array((*linear_velocity, *(angular_velocity if measured else (0.0, 0.0, 0.0))), dtype=float)
+        fields = {"angular_velocity": v[3:] if measured else None, "position": position,
+                  "orientation_xyzw": orientation_xyzw,
                   "pose_cov": None if pose_covariance is None else np.array(pose_covariance, dtype=float),
                   "twist_cov": None if twist_covariance is None else np.array(twist_covariance, dtype=float)}
         before = self.odom.stats.accepted
@@ -201,7 +210,7 @@ class OnlineIdentifier:
             detector.odom_t = None
             self.cmkf_feed.new_time_line()
         detector.update_odometry(t, math.sqrt(float(v[:3] @ v[:3])), math.sqrt(float(v[3:] @ v[3:])))
-        self.cmkf_feed.odometry(t, linear_velocity=v[:3], angular_velocity=v[3:], **fields)
+        self.cmkf_feed.odometry(t, linear_velocity=v[:3], **fields)
 
     def process_temperature(self, t: float, celsius: float, frame_id: str = "",
                             wall_time: float | None = None) -> bool:
@@ -211,6 +220,10 @@ class OnlineIdentifier:
         for _, value in released:
             self.temperature_celsius = value
         return bool(released) or self.temperature.stamps.held == t
+
+    def finish(self) -> None:
+        """The end of the input (a recording's): the messages the CMKF's stamp merger still holds are processed."""
+        self.cmkf_feed.flush()
 
     # -- outputs ----------------------------------------------------------------------------------------------------
     def _corrected(self, t: float, sample: np.ndarray, source: Any = None) -> CorrectedImu:
