@@ -9,8 +9,9 @@
     PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --fig4 100 \
         | tee -a docs/results/bench_bank.txt
 
-Writes docs/results/criteria_case{1,2,3}.json and docs/figures/hypotheses_*.png; the criteria at the recorded times
-(beside the paper's) it prints, as lines and as a Markdown table.
+Writes docs/results/criteria_cases.json (the three cases' ``criteria.json`` documents keyed by case, "1" to "3")
+and docs/figures/hypotheses_*.png; the criteria at the recorded times (beside the paper's) it prints, as lines and
+as a Markdown table.
 """
 
 from __future__ import annotations
@@ -149,7 +150,7 @@ def allan_vs_bank(dt: float, duration: float) -> None:
 def reproduction(trials: int, dt: float, duration: float, tag: str = "") -> None:
     from imu_noise_id.report.hypotheses_plots import plot_criteria
 
-    results = []
+    results, documents = [], {}
     rows = ["| case | paper | t [s] | error real (eq. 15) | error calc. (eq. 18) | decided (≥ γ) | "
             + "RSD real / calc. (eqs. 17, 19, 20) |", "|---|---|---|---|---|---|---|"]
     for case in (1, 2, 3):
@@ -160,7 +161,8 @@ def reproduction(trials: int, dt: float, duration: float, tag: str = "") -> None
         results.append(r)
         print(f"\ncase {case}: {trials} trials, {r.settings['n_filters']} filters, dt {dt} s, {duration:.0f} s: "
               f"wall time {wall:.1f} s")
-        (RESULTS / f"criteria_case{case}{tag}.json").write_text(json.dumps(criteria_document(r)))
+        documents[str(case)] = criteria_document(r)
+        (RESULTS / f"criteria_cases{tag}.json").write_text(json.dumps(documents))  # after each case: kept if cut
         plot_criteria([r], FIGURES / f"hypotheses_case{case}{tag}.png", f"paper 002 case {case}, L = {trials}")
         shown = sorted({int(np.argmin(np.abs(r.t - x))) for x in (dt, 3 * dt, 10.0, 100.0, 1000.0, duration)})
         for i in shown:
@@ -247,14 +249,15 @@ def real_data() -> None:
 
 
 def replot() -> None:
-    """Redraw the criteria figures from the saved docs/results/criteria_case*.json."""
+    """Redraw the criteria figures from the saved docs/results/criteria_cases.json."""
     from types import SimpleNamespace
 
     from imu_noise_id.report.hypotheses_plots import plot_criteria
 
     results = []
+    documents = json.loads((RESULTS / "criteria_cases.json").read_text())
     for case in (1, 2, 3):
-        d = json.loads((RESULTS / f"criteria_case{case}.json").read_text())
+        d = documents[str(case)]
         r = SimpleNamespace(
             case=str(d["case"]), t=np.array(d["t"]),
             error_probability_real=np.array(d["error_probability"]["real"]),

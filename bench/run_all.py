@@ -5,7 +5,7 @@ Usage (``make bench`` runs the default set)::
     .venv/bin/python bench/run_all.py            # the issues' speed/memory goals (about 30 min; ../baseline)
     .venv/bin/python bench/run_all.py --long     # also the Monte-Carlo paper reproductions (hours)
     .venv/bin/python bench/run_all.py --studies  # also the studies of bench/studies/ that docs/ quotes (hours)
-    .venv/bin/python bench/run_all.py --list     # what would run, and the side-by-side studies run by hand
+    .venv/bin/python bench/run_all.py --list     # what would run
     .venv/bin/python bench/run_all.py --only bench_allan.py bench_bags.py bench_analyze_memory.py   # issue 2's three
 
 Benchmarks are not tests: they print numbers, they do not assert them. Each script can also be run alone
@@ -100,17 +100,6 @@ STUDIES: list[tuple[list[str], str]] = [
     (["studies/composite_gap.py"], "studies/composite_gap.txt"),
 ]
 
-#: Stands for the checkout a side-by-side study compares with, which its output's header names.
-CHECKOUT = "<checkout>"
-#: The side-by-side studies whose outputs docs/ quotes, each measured against its own earlier checkout (not
-#: ``--baseline``'s): run by hand, with the arguments their outputs' headers give; ``--list`` prints them, nothing here
-#: runs them.
-BY_HAND: list[tuple[list[str], str]] = [
-    (["studies/bench_sensor_filter.py", "--baseline", CHECKOUT], "studies/bench_sensor_filter.txt"),
-    (["studies/bench_steady_engine.py", "--baseline", CHECKOUT], "studies/bench_steady_engine.txt"),
-    (["studies/bench_loop_measured_time.py", "--baseline", CHECKOUT], "studies/bench_loop_measured_time.txt"),
-]
-
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -158,9 +147,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"== exit {proc.returncode} after {time.perf_counter() - start:.0f} s", flush=True)
         if proc.returncode != 0:
             failed.append(script[0])
-    if args.list:
-        for arguments, out in BY_HAND:
-            print(f"by hand: python bench/{' '.join(arguments)} > docs/results/{out}")
     if failed:
         print(f"failed: {', '.join(failed)} (their outputs in docs/results/ say why)")
     return 1 if failed else 0

@@ -12,7 +12,8 @@ package is checked to be the one imported)::
     .venv/bin/python bench/studies/bench_loop_measured_time.py --baseline ../baseline --axes 1:accel_x broad10:gyro_x
 
 Needs ``../shared/data/adis16405_static`` and, for the BROAD axes, ``../shared/data/broad_trials`` (third-party
-data, not in the repository).
+data, not in the repository). What it found is in docs/loop.md (Limitations) and docs/em.md (Algorithm,
+5. Quasi-Newton finish); it keeps no output.
 """
 
 from __future__ import annotations
