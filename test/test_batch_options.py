@@ -18,6 +18,7 @@ from imu_noise_id.batch import BatchOptions, Unit, open_client
 from imu_noise_id.batch.units import content_hash
 from imu_noise_id.cli import build_parser, main
 from imu_noise_id.cli.options import analysis_options
+from imu_noise_id.core.estimation.em.model import FitOptions
 from imu_noise_id.core.estimation.gmwm.fit import GmwmOptions
 from imu_noise_id.core.noise.digital import SensorFilter
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage
@@ -184,3 +185,34 @@ def test_one_bag_through_analyze_and_batch_gives_the_same_files(bag, client, tmp
         a, b = (direct / name).read_text(), (unit / name).read_text()
         assert _normalised(a) == _normalised(b), name
         assert a != _normalised(a), f"{name}: no run record removed"  # every file is stamped with its run
+
+
+#: Options ``fit`` and ``loop`` spell or default their own way (the model is required by ``fit`` and the start of
+#: ``loop``; ``fit`` offers the two estimators its single fit can be, ``em`` by default), beside those only
+#: ``analyze`` and ``batch`` have (the Allan stage's grid, the overbound, --no-loop) and ``fit``'s lack of a loop.
+OWN = {"fit": ("--model", "--estimator", "--per-decade", "--confidence", "--horizon", "--overbound", "--no-loop",
+               "--temperature-topic", "--alpha", "--max-steps"),
+       "loop": ("--model", "--estimator", "--per-decade", "--confidence", "--horizon", "--overbound", "--no-loop")}
+
+
+def test_fit_and_loop_are_analyze_with_stages_selected_and_share_its_options():
+    commands = _subparsers()
+    analyze = _actions(commands["analyze"])
+    for command, own in OWN.items():
+        actions = _actions(commands[command])
+        for name, a in analyze.items():
+            if name in ("bag", "--out") or name in own:  # --out: each command's default folder name
+                continue
+            b = actions.get(name)
+            assert b is not None, f"{command} lacks {name}"
+            for attr in ("dest", "default", "help", "choices", "metavar"):
+                assert getattr(a, attr) == getattr(b, attr), (command, name, attr)
+    fit = analysis_options(build_parser().parse_args(["fit", "b.mcap", "--model", "WN+GM", "--axis", "gyro_z",
+                                                      "--starts", "2", "--span", "5:295"]))
+    assert fit == AnalyzeOptions(kinds=("allan",), models=ModelStage("WN+GM", FitOptions(n_starts=2),
+                                                                     estimator="em", gmwm=GmwmOptions(n_starts=2)),
+                                 axes=("gyro_z",), loop=False, finals=False, span=(5.0, 295.0))
+    loop = analysis_options(build_parser().parse_args(["loop", "b.mcap", "--start", "WN", "--axes", "gyro_x",
+                                                       "--alpha", "0.05", "--max-steps", "2"]))
+    assert loop == AnalyzeOptions(models=ModelStage("WN", estimator="em"), axes=("gyro_x",), loop=True,
+                                  loop_alpha=0.05, loop_max_steps=2)

@@ -58,7 +58,8 @@ def test_loop_command_on_a_bag(tmp_path, capsys):
     n = 6000
     rng = np.random.default_rng(4)
     gyro = np.column_stack([simulate_sum([WN(1e-3)], n, DT, rng) for _ in range(3)])
-    write_bag(tmp_path / "bag", ImuSeries(t=np.arange(n) * DT, gyro=gyro, accel=np.zeros((n, 3)) + 1.0))
+    accel = np.column_stack([simulate_sum([WN(2e-3)], n, DT, rng) for _ in range(3)]) + np.array([0.0, 0.0, 9.81])
+    write_bag(tmp_path / "bag", ImuSeries(t=np.arange(n) * DT, gyro=gyro, accel=accel))
     out = tmp_path / "out"
     assert main(["loop", str(tmp_path / "bag"), "--axes", "gyro_x", "--start", "WN", "--out", str(out)]) == 0
     assert "residuals pass" in capsys.readouterr().out

@@ -139,7 +139,8 @@ def run_unit(unit: Unit, options: BatchOptions, out_root: str) -> UnitOutcome:
     key = ""
     try:
         key = content_hash(unit, options)
-        recording = read_static(unit.bag, topic=unit.topic, rate_hz=options.rate)
+        recording = read_static(unit.bag, topic=unit.topic, temperature_topic=options.temperature_topic,
+                                rate_hz=options.rate)
         result = analyze(recording.imu, recording.temperature, options.analysis)
         tmp = out / f".{unit.name}.tmp-{uuid.uuid4().hex[:8]}"
         models = options.analysis.models

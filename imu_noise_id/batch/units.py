@@ -26,6 +26,7 @@ class BatchOptions:
     ----------
     analysis : the analysis (``jobs`` set to 1: a unit's axes run one after another in its worker)
     rate : the declared sample rate [Hz] (``--rate``), or None: estimated from the stamps
+    temperature_topic : the sensor_msgs/Temperature topic of the loop's thermal test (None: a bag's only one)
     overbound_exports : also write the overbound's exports (``--overbound``)
     limits : noise-density limits [u/√Hz] per sensor ("gyro", "accel") from ``--spec``: each axis is tested against
         its sensor's as ``compare --spec`` does (:func:`~imu_noise_id.pipelines.compare.beyond_spec`); None: not
@@ -33,6 +34,7 @@ class BatchOptions:
 
     analysis: AnalyzeOptions = field(default_factory=AnalyzeOptions)
     rate: float | None = None
+    temperature_topic: str | None = None
     overbound_exports: bool = False
     limits: dict[str, float] | None = None
 

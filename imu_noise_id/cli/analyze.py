@@ -6,11 +6,19 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import add_rate_option, results_folder
 from .options import add_analysis_options, add_out, add_topic, analysis_options
+from .progress import TextProgress
+
+if TYPE_CHECKING:
+    from ..core.estimation.em.results import FitResult
+    from ..pipelines.analyze import AnalyzeOptions
+    from ..pipelines.loop import LoopResult
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -32,45 +40,39 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_topic(p)
     add_out(p, "analyze")
     add_rate_option(p)
-    add_analysis_options(p)
+    add_analysis_options(p, "analyze")
     p.set_defaults(run=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    """Read, analyse, write, report. Input problems raise InputError (exit 2)."""
+def run_analysis(args: argparse.Namespace, options: AnalyzeOptions,
+                 on_axis: Callable[[str, FitResult, LoopResult | None, TextProgress], None]) -> tuple:
+    """The one runner of ``analyze``, ``batch``'s units aside, ``fit`` and ``loop``: refuse a record this machine
+    cannot analyse before it is decoded (:mod:`.memory`), read the bag once, run
+    :func:`~imu_noise_id.pipelines.analyze.analyze` with ``options`` (progress on stderr; the workers read the
+    recording from files), print its warnings. ``on_axis(axis, fit, loop, bar)`` as each axis is done. Returns the
+    bag's contents and the :class:`~imu_noise_id.pipelines.analyze.AnalysisResult`."""
     from ..bag.reader import read_static
     from ..bag.topics import IMU_TYPE
-    from ..core.axes import AXES
     from ..pipelines.analyze import MappedImu, analyze, worker_processes
-    from ..report.analysis import write_analysis
-    from ..report.console import (
-        comparison_table,
-        final_table,
-        fit_line,
-        loop_line,
-        overbound_lines,
-        record_length_lines,
-        summary_table,
-    )
     from .memory import available_bytes, check_fits
-    from .progress import TextProgress
 
-    options = analysis_options(args)
+    n_axes = len(options.axes)
 
     def fits_in_memory(msgtype: str, topic: str, count: int, bag_span_s: float | None) -> None:
-        """Refuse a record this machine cannot analyse, before it is decoded (:mod:`.memory`)."""
         if msgtype == IMU_TYPE and options.models.enabled:
-            jobs = worker_processes(options.jobs, count, len(AXES))
+            jobs = worker_processes(options.jobs, count, n_axes)
             check_fits(topic, count, bag_span_s, span=options.span, workers=jobs if jobs > 1 else 0,
                        available=available_bytes())
 
-    with TextProgress(f"reading {args.bag.name}") as progress:
-        recording = read_static(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate,
-                                before_decoding=fits_in_memory)
+    with TextProgress(f"reading {Path(args.bag).name}") as progress:
+        recording = read_static(args.bag, topic=args.topic, temperature_topic=getattr(args, "temperature_topic", None),
+                                progress=progress, rate_hz=args.rate, before_decoding=fits_in_memory)
     allan = TextProgress("Allan-family variances")
-    stage = "model selection" if args.model == "auto" else f"fitting {args.model}"
-    models = TextProgress(stage + (" and closed loop" if options.loop else ""), unit="axes")
-    n_axes = len(AXES)
+    model = options.models.model
+    stage = "model selection" if model == "auto" else f"fitting {model}"
+    if options.loop and options.models.enabled:
+        stage = f"closed loop from {model}" if args.command == "loop" else f"{stage} and closed loop"
+    models = TextProgress(stage, unit="axes")
     done: list[str] = []
 
     def allan_progress(k: int, total: int) -> None:
@@ -79,11 +81,9 @@ def run(args: argparse.Namespace) -> int:
             allan.close()
             models(0, n_axes)
 
-    def on_axis(axis: str, fit, loop) -> None:
+    def axis_done(axis: str, fit: FitResult, loop: LoopResult | None) -> None:
         done.append(axis)
-        models.echo(fit_line(axis, fit))
-        if loop is not None:
-            models.echo(loop_line(axis, loop, fit.model))
+        on_axis(axis, fit, loop, models)
         models(len(done), n_axes)
 
     with allan, models, tempfile.TemporaryDirectory(prefix="imu_noise_id_") as mapped:
@@ -98,17 +98,45 @@ def run(args: argparse.Namespace) -> int:
                       file=sys.stderr)
             else:
                 recording = replace(recording, imu=imu.series)
-        result = analyze(imu, recording.temperature, options, progress=allan_progress, on_axis=on_axis)
+        result = analyze(imu, recording.temperature, options, progress=allan_progress, on_axis=axis_done)
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)
-    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": "analyze", "model": args.model,
-            "estimator": args.estimator, "notes": recording.notes}
+    return recording, result
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read, analyse, write, report (``analyze``, and ``loop``: the same with the model given and the loop's table).
+    Input problems raise InputError (exit 2)."""
+    from ..report.analysis import write_analysis
+    from ..report.console import (
+        comparison_table,
+        final_table,
+        fit_line,
+        loop_line,
+        loop_table,
+        overbound_lines,
+        record_length_lines,
+        summary_table,
+    )
+
+    options = analysis_options(args)
+
+    def on_axis(axis: str, fit: FitResult, loop: LoopResult | None, bar: TextProgress) -> None:
+        bar.echo(fit_line(axis, fit))
+        if loop is not None:
+            bar.echo(loop_line(axis, loop, fit.model))
+
+    recording, result = run_analysis(args, options, on_axis)
+    meta = {"source": str(args.bag), "topic": recording.imu.topic, "command": args.command, "model": args.model,
+            "estimator": options.models.estimator, "notes": recording.notes}
     folder = results_folder(args, str(args.bag), recording.imu.topic)
     with folder as staging:
-        paths = write_analysis(result, staging, meta=meta,
-                               title=f"IMU noise analysis: {args.bag.name}", overbound_exports=args.overbound)
+        paths = write_analysis(result, staging, meta=meta, title=f"IMU noise analysis: {Path(args.bag).name}",
+                               overbound_exports=getattr(args, "overbound", False))
     folder.report()
     print(summary_table(result.static), flush=True)
+    if result.loops and args.command == "loop":
+        print(loop_table(result.loops), flush=True)
     if result.finals:
         print(final_table(result.finals, result.static), flush=True)
     if any(m.comparison is not None for m in result.models.values()):

@@ -37,7 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--memory-limit", default="4GiB", help="local cluster: memory limit per worker (default: 4GiB)")
     p.add_argument("--scheduler", help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
     add_rate_option(p)
-    add_analysis_options(p, jobs=False)
+    add_analysis_options(p, "batch")
     p.set_defaults(run=run)
 
 
@@ -61,7 +61,8 @@ def run(args: argparse.Namespace) -> int:
     if args.rate is not None:  # before a cluster starts, as each unit's reader would
         check_declared_rate(args.rate)
     spec = _spec(args.spec)
-    options = BatchOptions(analysis_options(args, jobs=1), rate=args.rate, overbound_exports=args.overbound,
+    options = BatchOptions(analysis_options(args, jobs=1), rate=args.rate, temperature_topic=args.temperature_topic,
+                           overbound_exports=args.overbound,
                            limits=noise_density_limits(spec) if spec else None)
     units = discover_units(list(args.inputs), list(args.topic), args.manifest)
     where = args.scheduler or f"a local cluster of {args.workers} workers on 127.0.0.1"

@@ -1,7 +1,7 @@
 """The options the subcommands share, with one spelling and one meaning each: ``--out DIR`` (:func:`default_out`),
 ``--topic T`` (older spellings hidden aliases), ``--axis`` (:func:`parse_axes`; default all six), model specs
-(:func:`model_spec`) and the analysis options of ``analyze`` and ``batch`` (:func:`add_analysis_options`,
-:func:`analysis_options`)."""
+(:func:`model_spec`) and the options of one analysis for ``analyze``, ``batch``, ``fit`` and ``loop``
+(:func:`add_analysis_options`, :func:`analysis_options`)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ..core.allan import DEFAULT_CONFIDENCE, KINDS
 from ..core.axes import AXES
 from ..core.errors import InputError
+from ..core.estimation.em.model import FitOptions
+from ..core.estimation.gmwm.fit import GmwmOptions
 from ..core.estimation.readouts.overbound import DEFAULT_HORIZON_S
 from ..core.noise.digital import SensorFilter
 
@@ -137,23 +140,37 @@ def sensor_filter_spec(text: str) -> SensorFilter:
 sensor_filter_spec.__name__ = "sensor filter"  # argparse names the type in its message
 
 
-def add_analysis_options(p: argparse.ArgumentParser, *, jobs: bool = True) -> None:
-    """The options of one analysis (``analyze``, ``batch``): Allan stage, model stage, loop, overbound and its
-    exports; ``jobs``: also ``--jobs``. :func:`analysis_options` reads them back."""
-    p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
-    p.add_argument("--confidence", type=float, default=0.95, help="confidence level of the intervals (default: 0.95)")
-    p.add_argument(
-        "--model", default="auto", type=model_spec("auto", "none"),
-        help="EM model fit per axis after the Allan stage: 'auto' (default: BIC over the default candidates), a "
-        "structure such as 'WN+GM+RW', or 'none' (Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
-        "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
-    )
-    p.add_argument(
-        "--estimator", choices=("auto", "em", "gmwm", "both"), default="auto",
-        help="model estimator: 'em' (maximum likelihood), 'gmwm' (wavelet variance; no closed loop), 'both' (GMWM, "
-        "then EM from its estimates, compared parameter by parameter) or 'auto' (default: EM, GMWM on records too "
-        "long for the EM, with a warning)",
-    )
+#: The commands that run one analysis (:func:`add_analysis_options`): ``fit`` is its model stage alone, ``loop`` the
+#: model stage from a given start and the closed loop, ``batch`` ``analyze`` on many bags.
+ANALYSIS_COMMANDS = ("analyze", "batch", "fit", "loop")
+
+
+def _model_stage_options(p: argparse.ArgumentParser, command: str) -> None:
+    """The model stage's options: structure, estimator, the fits' and the GMWM's settings, the sensor's filter."""
+    if command == "fit":
+        p.add_argument("--model", required=True, type=model_spec("auto"),
+                       help="structure, e.g. 'WN+GM+RW+RR' or 'WN+2GM'; 'auto' ranks the default candidates by BIC")
+    elif command == "loop":
+        p.add_argument("--start", dest="model", default="WN+RW", type=model_spec(),
+                       help="starting model structure (default: WN+RW)")
+    else:
+        p.add_argument(
+            "--model", default="auto", type=model_spec("auto", "none"),
+            help="EM model fit per axis after the Allan stage: 'auto' (default: BIC over the default candidates), a "
+            "structure such as 'WN+GM+RW', or 'none' (Allan only). Writes DIR/model.yaml and DIR/allan_model.png "
+            "and puts the model's noise density / random walk into imu.yaml (Allan values kept as *_allan)",
+        )
+    if command == "fit":
+        p.add_argument("--estimator", "--method", dest="estimator", choices=("em", "gmwm"), default="em",
+                       help="estimator: maximum likelihood by EM (em, default) or the GMWM on the wavelet variance "
+                       "(gmwm)")
+    elif command != "loop":
+        p.add_argument(
+            "--estimator", choices=("auto", "em", "gmwm", "both"), default="auto",
+            help="model estimator: 'em' (maximum likelihood), 'gmwm' (wavelet variance; no closed loop), 'both' "
+            "(GMWM, then EM from its estimates, compared parameter by parameter) or 'auto' (default: EM, GMWM on "
+            "records too long for the EM, with a warning)",
+        )
     p.add_argument("--robust", action="store_true",
                    help="GMWM: fit the robust wavelet variance (bounded influence; for records with outliers)")
     p.add_argument(
@@ -161,6 +178,47 @@ def add_analysis_options(p: argparse.ArgumentParser, *, jobs: bool = True) -> No
         help="the sensor's digital low-pass as configured (datasheet and driver): its -3 dB cutoff [Hz] and, when "
         "known, its Butterworth order 1-4, e.g. 42 or 42:2. The model selection then offers WN+DLPF+RW with the "
         "filter started there (the cutoff is still estimated; without ORDER the data choose it)")
+    p.add_argument("--drift", choices=("em", "ls"), default="em",
+                   help="with RR: estimate the ramp jointly (em, default) or remove a least-squares line first (ls)")
+    p.add_argument("--starts", type=int, default=FitOptions.n_starts,
+                   help=f"Allan-variance initial values tried per fit (default {FitOptions.n_starts})")
+    p.add_argument("--target-precision", type=float, default=FitOptions.target_precision,
+                   help="relative 95 %% half-width for the recording-length advice (default "
+                   f"{FitOptions.target_precision:g})")
+    p.add_argument("--efficiency", type=float, default=GmwmOptions.efficiency,
+                   help="GMWM --robust: Gaussian efficiency of the robust estimator (default "
+                   f"{GmwmOptions.efficiency:g})")
+    p.add_argument("--bootstrap", type=int, default=GmwmOptions.bootstrap, metavar="N",
+                   help="GMWM: intervals from N parametric-bootstrap records instead of the asymptotic ones")
+
+
+def _loop_options(p: argparse.ArgumentParser, command: str) -> None:
+    """The closed loop's options."""
+    if command in ("analyze", "batch"):
+        p.add_argument(
+            "--no-loop", action="store_true",
+            help="skip the closed loop that follows the model fit (residual diagnosis: adds missing GM/RW/RR/QN, "
+            "sinusoids, temperature, steps, outliers one at a time while BIC improves; writes a 'loop:' list per "
+            "axis into model.yaml and DIR/report.html). It runs by default unless --model none",
+        )
+    p.add_argument("--temperature-topic", default=None, metavar="T",
+                   help="sensor_msgs/Temperature topic for the loop's thermal-bias test (default: the bag's only one)")
+    p.add_argument("--alpha", type=float, default=None,
+                   help="level of every detector of the closed loop (default: the loop's, 0.01)")
+    p.add_argument("--max-steps", type=int, default=None,
+                   help="most effects the closed loop adds per axis (default: the loop's; docs/loop.md)")
+
+
+def add_analysis_options(p: argparse.ArgumentParser, command: str = "analyze") -> None:
+    """The options of one analysis, for ``command`` (:data:`ANALYSIS_COMMANDS`): the Allan stage, the model stage,
+    the axes, the loop, the overbound and its exports, ``--jobs``; each command shows those of its stages, with one
+    spelling, default and help. :func:`analysis_options` reads them back."""
+    if command in ("analyze", "batch"):
+        p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
+        p.add_argument("--confidence", type=float, default=0.95,
+                       help="confidence level of the intervals (default: 0.95)")
+    _model_stage_options(p, command)
+    add_axis(p, aliases=("--axes",) if command == "loop" else ())
     p.add_argument(
         "--allow-motion", action="store_true",
         help="analyse even if the static check finds motion (its findings become warnings)",
@@ -169,20 +227,17 @@ def add_analysis_options(p: argparse.ArgumentParser, *, jobs: bool = True) -> No
         "--span", type=span_spec, default=None, metavar="START:END",
         help="analyse only the samples from START to END seconds after the first one (START: or :END for the "
         "rest), e.g. the still stretch the static check suggests around a moment of motion")
-    p.add_argument(
-        "--horizon", type=float, default=DEFAULT_HORIZON_S, metavar="S",
-        help="longest time scale [s] the overbound must cover: the smallest WN+RW whose Allan variance lies above "
-        "the data's upper bound and the final model from the sampling period to S (imu.yaml 'overbound:', "
-        f"report.html; default {DEFAULT_HORIZON_S:g})")
-    p.add_argument("--overbound", action="store_true",
-                   help="also write the exports of the overbound's values into DIR/exports/overbound/")
-    p.add_argument(
-        "--no-loop", action="store_true",
-        help="skip the closed loop that follows the model fit (residual diagnosis: adds missing GM/RW/RR/QN, "
-        "sinusoids, temperature, steps, outliers one at a time while BIC improves; writes a 'loop:' list per "
-        "axis into model.yaml and DIR/report.html). It runs by default unless --model none",
-    )
-    if jobs:
+    if command in ("analyze", "batch"):
+        p.add_argument(
+            "--horizon", type=float, default=DEFAULT_HORIZON_S, metavar="S",
+            help="longest time scale [s] the overbound must cover: the smallest WN+RW whose Allan variance lies "
+            "above the data's upper bound and the final model from the sampling period to S (imu.yaml "
+            f"'overbound:', report.html; default {DEFAULT_HORIZON_S:g})")
+        p.add_argument("--overbound", action="store_true",
+                       help="also write the exports of the overbound's values into DIR/exports/overbound/")
+    if command != "fit":
+        _loop_options(p, command)
+    if command != "batch":
         p.add_argument(
             "--jobs", type=int, default=0, metavar="N",
             help="worker processes for the per-axis model stage and loop, one axis each (default 0: one per "
@@ -192,18 +247,31 @@ def add_analysis_options(p: argparse.ArgumentParser, *, jobs: bool = True) -> No
 
 def analysis_options(args: argparse.Namespace, *, jobs: int | None = None) -> AnalyzeOptions:
     """The :class:`~imu_noise_id.pipelines.analyze.AnalyzeOptions` of the options :func:`add_analysis_options`
-    added (``jobs``: instead of ``--jobs``). ``--overbound`` is not among them: it says which files are written.
+    added for ``args.command`` (``jobs``: instead of ``--jobs``): ``fit`` selects the model stage alone (Allan stage
+    for the starts, no loop, no final model), ``loop`` the model stage from ``--start`` by the EM and the loop.
+    ``--overbound`` is not among them: it says which files are written.
 
     Raises
     ------
     InputError
-        A value out of range (``--horizon``, ``--confidence``, ``--per-decade``, ``--jobs``).
+        A value out of range (``--horizon``, ``--confidence``, ``--per-decade``, ``--jobs``, ``--starts``,
+        ``--bootstrap``, ``--alpha``, ``--max-steps``, ``--axis``).
     """
-    from ..core.estimation.gmwm.fit import GmwmOptions
     from ..pipelines.analyze import AnalyzeOptions, ModelStage
 
-    return AnalyzeOptions(per_decade=args.per_decade, confidence=args.confidence, allow_motion=args.allow_motion,
-                          models=ModelStage(args.model, estimator=args.estimator, gmwm=GmwmOptions(robust=args.robust),
-                                            sensor_filter=args.sensor_filter),
-                          loop=not args.no_loop, horizon_s=args.horizon, jobs=args.jobs if jobs is None else jobs,
-                          span=args.span)
+    if args.starts < 1 or args.bootstrap < 0:
+        raise InputError(f"--starts must be >= 1 and --bootstrap >= 0, got {args.starts}, {args.bootstrap}")
+    command = getattr(args, "command", "analyze")
+    fit = command == "fit"
+    gmwm = GmwmOptions(robust=args.robust, efficiency=args.efficiency, n_starts=args.starts, bootstrap=args.bootstrap,
+                       target_precision=args.target_precision)
+    stage = ModelStage(args.model, FitOptions(n_starts=args.starts, target_precision=args.target_precision),
+                       args.drift, estimator=getattr(args, "estimator", "em"), gmwm=gmwm,
+                       sensor_filter=args.sensor_filter)
+    return AnalyzeOptions(kinds=("allan",) if fit else KINDS, per_decade=getattr(args, "per_decade", 8),
+                          confidence=getattr(args, "confidence", DEFAULT_CONFIDENCE), allow_motion=args.allow_motion,
+                          models=stage, axes=tuple(parse_axes(args.axis)),
+                          loop=not (fit or getattr(args, "no_loop", False)), loop_alpha=getattr(args, "alpha", None),
+                          loop_max_steps=getattr(args, "max_steps", None), finals=not fit,
+                          horizon_s=getattr(args, "horizon", DEFAULT_HORIZON_S),
+                          jobs=args.jobs if jobs is None else jobs, span=args.span)

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS
-from ...core.axes import ImuSeries, ScalarSeries
+from ...core.axes import AXES, ImuSeries, ScalarSeries
 from ...core.errors import InputError
 from ...core.estimation.em.results import FitResult
 from ...core.estimation.em.uncertainty import PROFILE_BUDGET
@@ -59,8 +59,14 @@ class AnalyzeOptions:
         Allan stage: variances computed, averaging times per decade, interval level, analyse a moving record.
     models
         Model stage (``models.model == "none"``: Allan only, no loop).
-    loop
-        Run the closed loop after the model stage.
+    axes
+        The axes stages 2–7 run on (the Allan stage runs on all six).
+    loop, loop_alpha, loop_max_steps
+        Run the closed loop after the model stage; its detectors' level and most effects added per axis (None: the
+        loop's defaults, :func:`~imu_noise_id.pipelines.loop.run.run_closed_loop`).
+    finals
+        Run stages 4–7 (final model, band, overbound, resolution); False: the model stage (and loop) only, as
+        ``fit`` asks.
     horizon_s
         End of the overbound's τ range [s] (it starts at the sampling period).
     jobs
@@ -75,7 +81,11 @@ class AnalyzeOptions:
     confidence: float = DEFAULT_CONFIDENCE
     allow_motion: bool = False
     models: ModelStage = field(default_factory=ModelStage)
+    axes: tuple[str, ...] = AXES
     loop: bool = True
+    loop_alpha: float | None = None
+    loop_max_steps: int | None = None
+    finals: bool = True
     horizon_s: float = DEFAULT_HORIZON_S
     jobs: int = 0
     span: tuple[float, float] | None = None
@@ -89,6 +99,19 @@ class AnalyzeOptions:
             raise InputError(f"--confidence must lie in (0, 1), got {self.confidence}")
         if self.per_decade < 1:
             raise InputError(f"--per-decade must be >= 1, got {self.per_decade}")
+        unknown = [a for a in self.axes if a not in AXES]
+        if unknown or not self.axes:
+            raise InputError(f"--axis {unknown[0] if unknown else ''!r}: use {', '.join(AXES)}")
+        if self.loop_alpha is not None and not 0.0 < self.loop_alpha < 1.0:
+            raise InputError(f"--alpha must lie in (0, 1), got {self.loop_alpha}")
+        if self.loop_max_steps is not None and self.loop_max_steps < 0:
+            raise InputError(f"--max-steps must be >= 0, got {self.loop_max_steps}")
+
+    @property
+    def loop_settings(self) -> dict:
+        """The loop's settings that differ from its defaults (keyword arguments of the loop)."""
+        settings = {"alpha": self.loop_alpha, "max_steps": self.loop_max_steps}
+        return {k: v for k, v in settings.items() if v is not None}
 
 
 @dataclass
@@ -122,10 +145,10 @@ def _imu_loop(imu: ImuSeries, temperature: ScalarSeries | None, options: Analyze
               warnings: list[str]) -> ImuLoop:
     """The loop over the recording; without the temperature (and a warning saying why) if it is unusable."""
     try:
-        return ImuLoop(imu, temperature, intervals=True)
+        return ImuLoop(imu, temperature, intervals=True, **options.loop_settings)
     except InputError as exc:
         warnings.append(f"closed loop without temperature: {exc}")
-        return ImuLoop(imu, None, intervals=True)
+        return ImuLoop(imu, None, intervals=True, **options.loop_settings)
 
 
 def analyze(imu: ImuSeries | MappedImu, temperature: ScalarSeries | None = None, options: AnalyzeOptions | None = None,
@@ -162,6 +185,8 @@ def analyze(imu: ImuSeries | MappedImu, temperature: ScalarSeries | None = None,
     if options.models.enabled:
         options.models.check_rate(static.dt)
         _model_stages(imu, temperature, options, result, on_axis, recording=recording)
+    if not options.finals:
+        return result
     result.overbounds = overbounds(static, result.finals, options.horizon_s)
     for axis, final in result.finals.items():
         why = unresolved_reason(final, result.loops.get(axis), static.slopes[axis].noise_density)
@@ -180,15 +205,16 @@ def _model_stages(imu: ImuSeries, temperature: ScalarSeries | None, options: Ana
     static = result.static
     loop = _imu_loop(imu, temperature, options, result.warnings) if options.loop else None
     context = _AxisContext(imu, loop, options, static)
-    for axis, outcome in _each_axis(context, worker_processes(options.jobs, static.n, len(static.axes)), recording):
+    for axis, outcome in _each_axis(context, worker_processes(options.jobs, static.n, len(options.axes)), recording):
         result.warnings += [w for w in outcome.warnings if w not in result.warnings]
         if outcome.loop is not None:
             result.loops[axis] = outcome.loop
-        result.finals[axis] = outcome.final
+        if outcome.final is not None:
+            result.finals[axis] = outcome.final
+            result.bands[axis] = outcome.band
         if on_axis is not None:
             on_axis(axis, outcome.model.fit, outcome.loop)
         result.models[axis] = outcome.model.without_data()
-        result.bands[axis] = outcome.band
 
 
 @dataclass(frozen=True)
@@ -204,12 +230,12 @@ class _AxisContext:
 @dataclass(frozen=True)
 class _AxisOutcome:
     """Stages 2–5 of one axis: the model stage (with its record), the loop (or None), the final model, the
-    simulation band (τ [s], AVs (n_sim, T) [u²]) and the warnings."""
+    simulation band (τ [s], AVs (n_sim, T) [u²]) (both None without stages 4–7) and the warnings."""
 
     model: AxisModel
     loop: LoopResult | None
-    final: FinalModel
-    band: tuple[np.ndarray, np.ndarray]
+    final: FinalModel | None
+    band: tuple[np.ndarray, np.ndarray] | None
     warnings: list[str]
 
 
@@ -235,6 +261,9 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     if loop_result is None or len(loop_result.steps) == 1:
         model = finish_axis(model, context.imu, axis, options.models, static.dt, allan=column)
         fit = model.fit
+    if not options.finals:
+        return _AxisOutcome(model, loop_result.without_data() if loop_result is not None else None, None, None,
+                            warnings)
     final = final_model(fit, loop_result, column)
     if final.fit.short_of_maximum is not None:
         warnings.append(f"{axis}: the final fit is {final.fit.short_of_maximum:.3g} below a log-likelihood its "
@@ -287,7 +316,7 @@ def _each_axis(context: _AxisContext, jobs: int,
     once, the recording's arrays mapped from ``recording``'s files, or from files written into a temporary folder
     removed afterwards, or sent with it where they cannot be written); the workers stop after the last axis or the first
     error (an axis's InputError raised here)."""
-    axes = list(context.static.axes)
+    axes = [a for a in context.static.axes if a in context.options.axes]
     if jobs <= 1:
         for axis in axes:
             yield axis, _axis_stages(context, axis)
