@@ -83,3 +83,17 @@ def test_an_imu_yaml_without_a_kalibr_number_is_refused_naming_it():
     with pytest.raises(InputError, match=r"imu\.yaml lacks gyroscope_random_walk"):
         parse_imu_yaml({"update_rate": 200.0, "gyroscope_noise_density": 1e-4, "accelerometer_noise_density": 1e-3,
                         "accelerometer_random_walk": 1e-4})
+
+
+def test_the_console_prints_the_numbers_imu_yaml_pastes(analysed):
+    from imu_noise_id.report.console import final_table
+
+    result, out = analysed
+    doc = yaml.safe_load((out / "imu.yaml").read_text())
+    lines: dict[str, str] = {}
+    for line in final_table(result.finals, result.static, result.numbers).splitlines()[1:]:
+        lines.setdefault(line.split()[0], line)  # an axis's row comes before its notes
+    for sensor, prefix in (("gyro", "gyroscope"), ("accel", "accelerometer")):
+        for i, axis in enumerate(a for a in AXES if a.startswith(sensor)):
+            k = doc[f"{prefix}_random_walk_xyz"][i]
+            assert f"K <{k:.3e} [0.000e+00, {k:.3e}]" in lines[axis], lines[axis]  # a bound, as imu.yaml says

@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     if result.loops and args.command == "loop":
         print(loop_table(result.loops), flush=True)
     if result.finals:
-        print(final_table(result.finals, result.static), flush=True)
+        print(final_table(result.finals, result.static, result.numbers), flush=True)
     if any(m.comparison is not None for m in result.models.values()):
         print(comparison_table(result.models), flush=True)
     finals = {axis: final.fit for axis, final in result.finals.items()} or result.fits

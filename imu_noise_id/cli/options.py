@@ -11,7 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..core.allan import DEFAULT_CONFIDENCE, KINDS
+from ..core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS
 from ..core.axes import AXES
 from ..core.errors import InputError
 from ..core.estimation.em.model import FitOptions
@@ -214,9 +214,10 @@ def add_analysis_options(p: argparse.ArgumentParser, command: str = "analyze") -
     the axes, the loop, the overbound and its exports, ``--jobs``; each command shows those of its stages, with one
     spelling, default and help. :func:`analysis_options` reads them back."""
     if command in ("analyze", "batch"):
-        p.add_argument("--per-decade", type=int, default=8, help="averaging times per decade of tau (default: 8)")
-        p.add_argument("--confidence", type=float, default=0.95,
-                       help="confidence level of the intervals (default: 0.95)")
+        p.add_argument("--per-decade", type=int, default=DEFAULT_PER_DECADE,
+                       help=f"averaging times per decade of tau (default: {DEFAULT_PER_DECADE})")
+        p.add_argument("--confidence", type=float, default=DEFAULT_CONFIDENCE,
+                       help=f"confidence level of the intervals (default: {DEFAULT_CONFIDENCE:g})")
     _model_stage_options(p, command)
     add_axis(p, aliases=("--axes",) if command == "loop" else ())
     p.add_argument(
@@ -268,7 +269,8 @@ def analysis_options(args: argparse.Namespace, *, jobs: int | None = None) -> An
     stage = ModelStage(args.model, FitOptions(n_starts=args.starts, target_precision=args.target_precision),
                        args.drift, estimator=getattr(args, "estimator", "em"), gmwm=gmwm,
                        sensor_filter=args.sensor_filter)
-    return AnalyzeOptions(kinds=("allan",) if fit else KINDS, per_decade=getattr(args, "per_decade", 8),
+    return AnalyzeOptions(kinds=("allan",) if fit else KINDS,
+                          per_decade=getattr(args, "per_decade", DEFAULT_PER_DECADE),
                           confidence=getattr(args, "confidence", DEFAULT_CONFIDENCE), allow_motion=args.allow_motion,
                           models=stage, axes=tuple(parse_axes(args.axis)),
                           loop=not (fit or getattr(args, "no_loop", False)), loop_alpha=getattr(args, "alpha", None),

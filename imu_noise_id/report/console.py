@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import math
 
-from ..core.axes import UNITS
+from ..core.axes import AXES, UNITS
 from ..core.estimation.em.results import FitResult
 from ..core.estimation.readouts.kalibr import walk_crossing_tau
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
-from ..pipelines.analyze.numbers import axis_readings
+from ..pipelines.analyze.numbers import PastedNumbers, axis_readings
 from ..pipelines.analyze.overbound import AxisOverbound
 from ..pipelines.analyze.static import StaticAnalysis
 from ..pipelines.av_band import av_band_claim
@@ -48,16 +48,31 @@ def summary_table(result: StaticAnalysis) -> str:
     return "\n".join(lines)
 
 
-def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = None) -> str:
-    """Per axis the final model, N and K with 95 % intervals (imu.yaml's Kalibr numbers); below, each K above what
-    the long-τ AV supports, with its source's reason."""
+#: The methods whose value is an upper bound (its interval (0, value)).
+UPPER_BOUND_METHODS = ("bound", "unresolved", "allan_upper_bound", "upper_bound")
+
+
+def _reading_text(value: float | None, ci95: tuple[float, float], method: str) -> str:
+    """A value with its interval, '<' before an upper bound, the method named where the Allan slopes stand in."""
+    if value is None:
+        return "not identifiable (see imu.yaml *_allan)"
+    mark = "<" if method in UPPER_BOUND_METHODS else ""
+    named = f" ({method})" if method.startswith("allan") else ""
+    return f"{mark}{_fmt(value)} [{_fmt(ci95[0])}, {_fmt(ci95[1])}]{named}"
+
+
+def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = None,
+                numbers: PastedNumbers | None = None) -> str:
+    """Per axis the final model, N and K with 95 % intervals as imu.yaml pastes them (``numbers``, the analysis's;
+    without them the final models' own values); below, each K above what the long-τ AV supports, with its source's
+    reason."""
     lines = ["Final models (imu.yaml's numbers; N = passband white noise, K = random walk, B = bias instability, "
              "'<' an upper bound; 95 % intervals):"]
     for axis, f in finals.items():
-        n, k = f.noise_density, f.random_walk
-        n_text = "n/a" if n.value is None else f"{_fmt(n.value)} [{_fmt(n.ci95[0])}, {_fmt(n.ci95[1])}]"
-        k_text = ("not identifiable (see imu.yaml *_allan)" if k.value is None
-                  else f"{'<' if k.method != 'model' else ''}{_fmt(k.value)} [{_fmt(k.ci95[0])}, {_fmt(k.ci95[1])}]")
+        pasted = numbers.axis(axis) if numbers is not None and axis in AXES else None
+        n, k = (pasted.noise_density, pasted.random_walk) if pasted is not None else (f.noise_density, f.random_walk)
+        n_text = _reading_text(n.value, n.ci95, n.method) if n.value is not None else "n/a"
+        k_text = _reading_text(k.value, k.ci95, k.method)
         b = f.bias_instability
         b_text = ("" if b.reached else "<") + f"{_fmt(b.value)} [{_fmt(b.ci95[0])}, {_fmt(b.ci95[1])}]"
         lines.append(f"{axis:8s} {f.model:22s} N {n_text:34s} K {k_text:34s} B {b_text}")
