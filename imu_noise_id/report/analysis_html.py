@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.axes import UNITS
+from ..core.axes import AXES, UNITS
 from ..pipelines.analyze import AnalysisResult
 from .html import STYLE, fmt, img_tag, loop_axis_section
 from .plots_model import allan_panel_png
@@ -41,11 +41,15 @@ def _numbers_section(result: AnalysisResult) -> str:
             "<th>K [u/s/√Hz], 95 %</th><th>bias instability B [u], 95 %</th><th>per-sample σ [u]</th>"
             "<th>Allan N</th><th>Allan K</th><th>Allan B</th></tr>")
     rows = []
+    numbers = getattr(result, "numbers", None)  # the numbers imu.yaml pastes (AnalysisResult.numbers)
     for axis, f in result.finals.items():
         slopes = result.static.slopes[axis]
         b = f.bias_instability
-        k_text = _ci(f.random_walk.value, f.random_walk.ci95) if f.random_walk.value is not None else \
-            "not identifiable (no RW in the final model)"
+        pasted = numbers.axis(axis) if numbers is not None and axis in AXES else None
+        k = pasted.random_walk if pasted is not None else f.random_walk
+        k_text = _ci(k.value, k.ci95) if k.value is not None else "not identifiable (no RW in the final model)"
+        if k.method.startswith("allan"):
+            k_text = f"{k_text} ({k.method}: the final model has no random walk)"
         if f.random_walk_above_bound:
             k_text = f"{k_text} — above the long-τ AV's bound {fmt(f.random_walk_bound.value)}"
         rows.append(
