@@ -13,7 +13,7 @@ from imu_noise_id.cli import main
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
 from imu_noise_id.pipelines.loop import run_closed_loop
-from imu_noise_id.report.html import write_loop_report
+from imu_noise_id.report.html import loop_axis_section
 from imu_noise_id.report.model_yaml import write_model_yaml
 
 DT = 0.01
@@ -46,7 +46,7 @@ def test_model_yaml_gets_loop_steps(tmp_path, sine_result):
 
 
 def test_report_html_is_self_contained(tmp_path, sine_result):
-    text = write_loop_report(tmp_path / "report.html", {"gyro_z": sine_result}).read_text()
+    text = loop_axis_section("gyro_z", sine_result)
     assert text.count("data:image/png;base64,") == 3  # Allan before/after + ACF/PSD of both steps
     assert "src=\"http" not in text and "WN+SIN" in text and "deterministic regressor" in text
     assert "dropped RW" in text

@@ -42,11 +42,11 @@ def test_the_band_claim_says_where_the_model_leaves_the_band(partly_outside):
 def test_report_model_yaml_and_console_give_the_same_band_sentence(tmp_path, partly_outside):
     from imu_noise_id.pipelines.av_band import av_band_claim
     from imu_noise_id.report.console import loop_line, loop_table
-    from imu_noise_id.report.html import render_loop_report
+    from imu_noise_id.report.html import loop_axis_section
     from imu_noise_id.report.model_yaml import write_model_yaml
 
     sentence = av_band_claim(partly_outside).sentence()
-    html_text = render_loop_report({"gyro_z": partly_outside})
+    html_text = loop_axis_section("gyro_z", partly_outside)
     assert sentence in html_text.replace("&#x27;", "'")
     assert "at every τ" not in html_text
     doc = yaml.safe_load(write_model_yaml(tmp_path / "model.yaml", {}, {"gyro_z": partly_outside},

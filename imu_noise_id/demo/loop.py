@@ -1,8 +1,8 @@
 """Demo of the closed loop on a simulated bag with effects the starting model does not declare.
 
 ``python -m imu_noise_id.demo.loop --out DIR`` (or :func:`run_loop_demo`): the bag of :func:`simulate_demo_bag`,
-the loop from ``WN+RW`` on gyro_x (clean) and the four axes with effects. Writes ``DIR/loop_demo_bag/``,
-``DIR/model.yaml`` and ``DIR/report.html``.
+the loop from ``WN+RW`` on gyro_x (clean) and the four axes with effects. Writes ``DIR/loop_demo_bag/`` and the
+analysis's files (``DIR/model.yaml``, ``DIR/report.html``, …).
 """
 
 from __future__ import annotations
@@ -52,26 +52,27 @@ def truth_table(results: dict) -> str:
 
 
 def run_loop_demo(out: str | Path, *, seed: int = 7) -> dict:
-    """Simulate, write and read the bag, run the loop on :data:`DEMO_AXES`, write model.yaml and report.html."""
+    """Simulate, write and read the bag, analyse :data:`DEMO_AXES` from ``WN+RW`` with the closed loop (``analyze``
+    with the model given, as the ``loop`` command runs it), write its files (model.yaml, report.html, …); returns the
+    loops by axis."""
     from ..bag.reader import read_static
-    from ..pipelines.loop import ImuLoop
+    from ..pipelines.analyze import AnalyzeOptions, ModelStage, analyze
+    from ..report.analysis import write_analysis
     from ..report.console import loop_table
-    from ..report.html import write_loop_report
-    from ..report.model_yaml import write_model_yaml
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     bag = simulate_demo_bag(out / "loop_demo_bag", seed=seed)
     recording = read_static(bag)
-    loop = ImuLoop(recording.imu, recording.temperature)
-    results = {axis: loop.run(axis, "WN+RW") for axis in DEMO_AXES}
-    write_model_yaml(out / "model.yaml", {}, results, {"source": str(bag), "command": "loop demo", "start": "WN+RW"})
-    write_loop_report(out / "report.html", results, title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz sine "
-                      "(accel_x), 7 Hz wandering vibration (accel_y), 15 Hz low-pass (accel_z)")
-    print(loop_table(results))
-    print(truth_table(results))
+    options = AnalyzeOptions(models=ModelStage("WN+RW", estimator="em"), axes=DEMO_AXES)
+    result = analyze(recording.imu, recording.temperature, options)
+    write_analysis(result, out, meta={"source": str(bag), "command": "loop demo", "model": "WN+RW"},
+                   title="closed-loop demo: undeclared GM (gyro_z), 0.5 Hz sine (accel_x), 7 Hz wandering vibration "
+                   "(accel_y), 15 Hz low-pass (accel_z)")
+    print(loop_table(result.loops))
+    print(truth_table(result.loops))
     print(f"demo bag, model.yaml and report.html in {out}/")
-    return results
+    return result.loops
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..core.axes import AXES, UNITS
 from ..pipelines.analyze import AnalysisResult
-from .html import STYLE, fmt, img_tag, loop_axis_section
+from .html import LOOP_INTRO, STYLE, fmt, img_tag, loop_axis_section
 from .plots_model import allan_panel_png
 
 
@@ -191,7 +191,7 @@ def render_analysis_report(result: AnalysisResult, meta: dict, title: str) -> st
     if any(m.gmwm is not None for m in result.models.values()):
         parts.append(_gmwm_section(result))
     if result.loops:
-        parts.append("<h2 id=loop>Closed loop</h2>")
+        parts.append(f"<h2 id=loop>Closed loop</h2>{LOOP_INTRO}")
         parts += [loop_axis_section(axis, r) for axis, r in result.loops.items()]
     nav = " · ".join(f"<a href='#{a}'>{t}</a>" for a, t in (("data", "data"), ("numbers", "numbers"),
                                                              ("overbound", "overbound"), ("allan", "Allan"),

@@ -1,11 +1,11 @@
-"""Self-contained ``report.html`` of the closed loop: per axis, each step with the effect added, the evidence,
-the errors before and after, the Allan plots before/after and the residual ACF/PSD (PNG embedded as base64)."""
+"""The closed loop's part of ``report.html`` (:mod:`.analysis_html`): per axis, each step with the effect added, the
+evidence, the errors before and after, the Allan plots before/after and the residual ACF/PSD (PNG embedded as
+base64); the style every report shares."""
 
 from __future__ import annotations
 
 import base64
 import html
-from pathlib import Path
 
 from ..core.axes import UNITS
 from ..pipelines.av_band import av_band_claim
@@ -31,6 +31,17 @@ def img_tag(png: bytes, alt: str) -> str:
 
 def fmt(x: float, spec: str = ".4g") -> str:
     return format(float(x), spec)
+
+
+#: What the loop does and what its error measures are, in front of its axes' sections.
+LOOP_INTRO = ("<p>Each step fits the model, tests its residuals (standardised one-step innovations and the Allan "
+              "variance against the model's) with the detectors of missing effects, adds the most significant effect "
+              "that lowers the BIC and removes its evidence, and refits. SIN, TEMP and STEP enter as deterministic "
+              "regressors of the measurement equation, OUTLIERS as data cleaning (flagged samples replaced by the "
+              "model's one-step prediction); GM, RW, RR and QN are state-space components. Error measures: "
+              "log-likelihood and BIC (comparable across steps), AV misfit = RMS of log10(AV_data/AV_model) over τ, "
+              "Ljung–Box p-value of the standardised innovations (20 lags), and the largest periodogram line of the "
+              "innovations over its local median.</p>")
 
 
 def loop_axis_section(axis: str, result: LoopResult) -> str:
@@ -79,27 +90,3 @@ def loop_axis_section(axis: str, result: LoopResult) -> str:
             out.append(img_tag(residual_acf_psd(s, f"{axis} step {s.index}: {s.model}"),
                             f"residual ACF and PSD, step {s.index}"))
     return "\n".join(out)
-
-
-def render_loop_report(results: dict[str, LoopResult], title: str = "imu_noise_id closed loop") -> str:
-    """The HTML text of the report."""
-    intro = ("<p>Each step fits the model, tests its residuals (standardised one-step innovations and the Allan "
-             "variance against the model's) with the detectors of missing effects, adds the most significant effect "
-             "that lowers the BIC and removes its evidence, and refits. SIN, TEMP and STEP enter as deterministic "
-             "regressors of the measurement equation, OUTLIERS as data cleaning (flagged samples replaced by the "
-             "model's one-step prediction); GM, RW, RR and QN are state-space components. Error measures: "
-             "log-likelihood and BIC (comparable across steps), AV misfit = RMS of log10(AV_data/AV_model) over τ, "
-             "Ljung–Box p-value of the standardised innovations (20 lags), and the largest periodogram line of the "
-             "innovations over its local median.</p>")
-    body = "\n".join(loop_axis_section(axis, r) for axis, r in results.items())
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-            f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>{intro}{body}</body></html>")
-
-
-def write_loop_report(path: str | Path, results: dict[str, LoopResult], title: str = "imu_noise_id closed loop"
-                      ) -> Path:
-    """Write the self-contained report (figures embedded)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(render_loop_report(results, title), encoding="utf-8")
-    return path
