@@ -92,25 +92,25 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
 
 
-def motion_bursts(imu: ImuSeries, dt: float) -> list[MotionBurst]:
-    """Stretches ≥ :data:`BURST_MIN_S` whose windows spread ≥ :data:`BURST_RATIO` × the median on some axis."""
+def motion_bursts(imu: ImuSeries, dt: float, axes: tuple[str, ...] = AXES) -> list[MotionBurst]:
+    """Stretches ≥ :data:`BURST_MIN_S` whose windows spread ≥ :data:`BURST_RATIO` × the median on one of ``axes``."""
     width, needed = burst_window(dt)
     if len(imu) // width < 2 * needed:
         return []
-    ratio = np.array([spread_ratios(imu.axis(name), dt) for name in AXES])
+    ratio = np.array([spread_ratios(imu.axis(name), dt) for name in axes])
     m = ratio.shape[1]
-    bursting = np.zeros((len(AXES), m), bool)
-    for i in range(len(AXES)):
+    bursting = np.zeros((len(axes), m), bool)
+    for i in range(len(axes)):
         for a, b in _runs(ratio[i] >= BURST_RATIO):
             if b - a >= needed:
                 bursting[i, a:b] = True
     out = []
     for a, b in _runs(bursting.any(axis=0)):
-        axes = tuple(name for i, name in enumerate(AXES) if bursting[i, a:b].any())
-        sustained = max(float(np.min(ratio[i, a:b][bursting[i, a:b]])) for i in range(len(AXES))
+        moved = tuple(name for i, name in enumerate(axes) if bursting[i, a:b].any())
+        sustained = max(float(np.min(ratio[i, a:b][bursting[i, a:b]])) for i in range(len(axes))
                         if bursting[i, a:b].any())
         elapsed = imu.t[[a * width, b * width - 1]] - imu.t[0]  # the stamps: the times a span selects by
-        out.append(MotionBurst(float(elapsed[0]), float(elapsed[1]), axes, sustained))
+        out.append(MotionBurst(float(elapsed[0]), float(elapsed[1]), moved, sustained))
     return out
 
 
@@ -123,17 +123,19 @@ def still_span(bursts: list[MotionBurst], duration_s: float) -> tuple[float, flo
     return max(spans, key=lambda span: span[1] - span[0]) if spans else None
 
 
-def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY) -> tuple[float, float] | None:
+def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY,
+               axes: tuple[str, ...] = AXES) -> tuple[float, float] | None:
     """The longest still stretch (start, end [s]) of ≥ :data:`QUIET_MIN_S` by the block tests within
     :data:`QUIET_RANGE`, off motion by a block and :data:`STILL_MARGIN_S`; or None."""
     n = len(imu)
     per_block = max(round(BLOCK_S / dt), 1)
     if n // per_block < 2:
         return None
-    means = np.array([_windows(imu.axis(name), per_block).mean(axis=1) for name in AXES]
-                     + [_windows(np.linalg.norm(imu.accel, axis=1), per_block).mean(axis=1)])
+    accel = any(name not in GYRO_AXES for name in axes)
+    means = np.array([_windows(imu.axis(name), per_block).mean(axis=1) for name in axes]
+                     + ([_windows(np.linalg.norm(imu.accel, axis=1), per_block).mean(axis=1)] if accel else []))
     limits = QUIET_RANGE * np.array([GYRO_BLOCK_STD_MAX if name in GYRO_AXES else ACCEL_BLOCK_STD_MAX
-                                     for name in AXES] + [ACCEL_BLOCK_STD_MAX])[:, None]
+                                     for name in axes] + ([ACCEL_BLOCK_STD_MAX] if accel else []))[:, None]
     best, lo = (0, 0), 0
     for hi in range(means.shape[1]):
         while np.any(np.ptp(means[:, lo:hi + 1], axis=1, keepdims=True) > limits):
@@ -144,15 +146,16 @@ def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY) -> 
     # a motion's onset hides in the last block that still passed: keep a block and the margin away from it
     start += (STILL_MARGIN_S + BLOCK_S) if best[0] > 0 else 0.0
     end -= (STILL_MARGIN_S + BLOCK_S) if best[1] < means.shape[1] else 0.0
-    if end - start < QUIET_MIN_S or _block_flags(imu.between(start, end), dt, gravity):
+    if end - start < QUIET_MIN_S or _block_flags(imu.between(start, end), dt, gravity, axes):
         return None
     return start, end
 
 
-def _block_flags(imu: ImuSeries, dt: float, gravity: float) -> list[str]:
+def _block_flags(imu: ImuSeries, dt: float, gravity: float, axes: tuple[str, ...] = AXES) -> list[str]:
     flags = []
+    accel = any(name not in GYRO_AXES for name in axes)  # the gravity and |accel| tests need the accelerometer
     g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
-    if abs(g_mean - gravity) > GRAVITY_SCALE_TOLERANCE * gravity:
+    if accel and abs(g_mean - gravity) > GRAVITY_SCALE_TOLERANCE * gravity:
         flags.append(
             f"|mean accel| = {g_mean:.3f} m/s² but a static IMU reads gravity ≈ {gravity:.3f} m/s² (tolerance "
             f"{100 * GRAVITY_SCALE_TOLERANCE:g} %): the IMU moves, its accel is not in m/s², or gravity was removed"
@@ -160,7 +163,7 @@ def _block_flags(imu: ImuSeries, dt: float, gravity: float) -> list[str]:
     n = len(imu)
     per_block = min(max(round(BLOCK_S / dt), 1), n // 10)
     # One axis at a time (strided views, no (N, 6) copy): a few N-sized temporaries at most.
-    for name in AXES:
+    for name in axes:
         limit, unit = (GYRO_BLOCK_STD_MAX, "rad/s") if name in GYRO_AXES else (ACCEL_BLOCK_STD_MAX, "m/s²")
         block_std = float(_windows(imu.axis(name), per_block).mean(axis=1).std())
         if block_std > limit:
@@ -168,7 +171,7 @@ def _block_flags(imu: ImuSeries, dt: float, gravity: float) -> list[str]:
                 f"{name}: the {per_block * dt:.3g} s means vary with std {block_std:.3g} {unit} "
                 f"(> {limit} {unit}): the IMU rotates, moves or tilts"
             )
-    norm_std = float(_windows(np.linalg.norm(imu.accel, axis=1), per_block).mean(axis=1).std())
+    norm_std = float(_windows(np.linalg.norm(imu.accel, axis=1), per_block).mean(axis=1).std()) if accel else 0.0
     if norm_std > ACCEL_BLOCK_STD_MAX:
         flags.append(
             f"|accel|: the {per_block * dt:.3g} s means vary with std {norm_std:.3g} m/s² (> {ACCEL_BLOCK_STD_MAX} "
@@ -177,23 +180,25 @@ def _block_flags(imu: ImuSeries, dt: float, gravity: float) -> list[str]:
     return flags
 
 
-def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STANDARD_GRAVITY) -> StaticCheck:
-    """Flags of a clearly non-static ``imu``: |mean accel| beyond :data:`GRAVITY_SCALE_TOLERANCE` of ``gravity``
+def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STANDARD_GRAVITY,
+                 axes: tuple[str, ...] = AXES) -> StaticCheck:
+    """Flags of a clearly non-static ``imu`` judged on ``axes`` (the gravity and |accel| tests only with an
+    accelerometer axis among them): |mean accel| beyond :data:`GRAVITY_SCALE_TOLERANCE` of ``gravity``
     (beyond :data:`GRAVITY_TOLERANCE`: a note), 1 s means wandering (:data:`GYRO_BLOCK_STD_MAX`,
     :data:`ACCEL_BLOCK_STD_MAX`), motion bursts; the still or quiet span."""
     n = len(imu)
     if n < 20:
         return StaticCheck([f"only {n} samples: too short to check that the IMU was static"])
     dt = imu.dt if dt is None else dt
-    out = StaticCheck(flags=_block_flags(imu, dt, gravity))
+    out = StaticCheck(flags=_block_flags(imu, dt, gravity, axes))
     g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
     off = g_mean - gravity
-    if GRAVITY_TOLERANCE < abs(off) <= GRAVITY_SCALE_TOLERANCE * gravity:
+    if any(a not in GYRO_AXES for a in axes) and GRAVITY_TOLERANCE < abs(off) <= GRAVITY_SCALE_TOLERANCE * gravity:
         out.notes.append(
             f"|mean accel| = {g_mean:.3f} m/s² is {100 * off / gravity:+.1f} % from standard gravity: the "
             "accelerometer's scale or bias is uncalibrated (not a sign of motion)"
         )
-    out.bursts = motion_bursts(imu, dt)
+    out.bursts = motion_bursts(imu, dt, axes)
     if out.bursts:
         listed = ", ".join(f"{b.start_s:.1f}–{b.end_s:.1f} s ({', '.join(b.axes)}; {b.ratio:.0f}×)"
                            for b in out.bursts[:MAX_LISTED_BURSTS])
@@ -205,5 +210,5 @@ def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STAND
         )
         out.still_span = still_span(out.bursts, float(imu.t[-1] - imu.t[0]))
     elif out.flags:
-        out.still_span = quiet_span(imu, dt, gravity)
+        out.still_span = quiet_span(imu, dt, gravity, axes)
     return out

@@ -19,7 +19,8 @@ from .variance_csv import write_variance_csvs
 
 def write_analysis(result: AnalysisResult, out_dir: str | Path, *, meta: dict,
                    title: str = "IMU noise analysis", overbound_exports: bool = False) -> dict[str, Path]:
-    """Write every output of ``result`` into ``out_dir`` (created); returns the paths by file name.
+    """Write every output of ``result`` into ``out_dir`` (created); returns the paths by file name. The exports need
+    both sensors' numbers: an analysis of one sensor writes none (its warnings say so).
 
     ``overbound_exports``: also the exports of the overbound's values (``exports/overbound/``).
     """
@@ -29,11 +30,12 @@ def write_analysis(result: AnalysisResult, out_dir: str | Path, *, meta: dict,
     doc = imu_doc(result.numbers)
     doc["warnings"] = [*static.warnings, *result.warnings]
     paths = {"imu.yaml": write_imu_yaml(out / "imu.yaml", static, doc, bool(result.finals))}
-    for p in write_exports(result.numbers, out / "exports"):
-        paths[f"exports/{p.name}"] = p
-    if overbound_exports:
-        for p in write_exports(result.numbers, out / "exports", overbound=True):
-            paths[f"exports/{p.parent.name}/{p.name}"] = p
+    if set(result.numbers.sensors) == {"gyro", "accel"}:  # every filter's file needs both sensors' numbers
+        for p in write_exports(result.numbers, out / "exports"):
+            paths[f"exports/{p.name}"] = p
+        if overbound_exports:
+            for p in write_exports(result.numbers, out / "exports", overbound=True):
+                paths[f"exports/{p.parent.name}/{p.name}"] = p
     for p in write_variance_csvs(static.variances, static.axes, out):
         paths[p.name] = p
     paths["allan.png"] = plot_allan_deviation(static, out / "allan.png")

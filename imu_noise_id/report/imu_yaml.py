@@ -235,6 +235,10 @@ def parse_imu_yaml(doc: dict, where: str = "imu.yaml") -> PastedNumbers:
     """The numbers of an ``imu.yaml`` (as :func:`imu_doc` writes it, or hand-written with the four Kalibr keys and
     ``update_rate`` alone). Raises InputError naming ``where`` and the missing key."""
     rate = _number(doc, "update_rate", where)
+    held = [prefix for prefix in KALIBR_PREFIX.values() if f"{prefix}_noise_density" in doc]
+    if len(held) == 1:
+        raise InputError(f"{where} holds the {held[0]}'s numbers alone (an analysis of one sensor, --axis): the "
+                         "filters' files need both sensors' numbers; analyse both to export them")
     sensors = {}
     for sensor, prefix in KALIBR_PREFIX.items():
         n = _number(doc, f"{prefix}_noise_density", where)

@@ -26,7 +26,7 @@ def plot_allan_deviation(result: StaticAnalysis, path: Path) -> Path:
     tau = res.tau
     fig, panels = plt.subplots(1, 2, figsize=(12, 4.8))
     for panel, axes, title in ((panels[0], GYRO_AXES, "Gyroscope"), (panels[1], ACCEL_AXES, "Accelerometer")):
-        for name in axes:
+        for name in (a for a in axes if a in result.axes):  # a sensor left out of the analysis: its panel empty
             j = result.axes.index(name)
             colour = _COLOURS[name[-1]]
             panel.fill_between(tau, np.sqrt(res.ci_low[:, j]), np.sqrt(res.ci_high[:, j]), color=colour, alpha=0.15,
@@ -47,6 +47,9 @@ def plot_allan_deviation(result: StaticAnalysis, path: Path) -> Path:
         panel.set_xlabel("averaging time τ [s]")
         panel.set_ylabel(f"Allan deviation [{unit}]")
         panel.grid(True, which="both", alpha=0.3)
+        if not any(a in result.axes for a in axes):
+            panel.text(0.5, 0.5, "not analysed (--axis)", transform=panel.transAxes, ha="center", va="center")
+            continue
         panel.legend(title="dashed: slope lines; ▼ N at 1 s, ▲ K at 3 s", fontsize=8, title_fontsize=8)
     fix_margins(fig)
     return write_png(fig, path, dpi=90)

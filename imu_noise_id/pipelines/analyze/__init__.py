@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS
-from ...core.axes import AXES, ImuSeries, ScalarSeries
+from ...core.axes import AXES, SENSORS, ImuSeries, ScalarSeries
 from ...core.errors import InputError
 from ...core.estimation.em.results import FitResult
 from ...core.estimation.em.uncertainty import PROFILE_BUDGET
@@ -60,7 +60,7 @@ class AnalyzeOptions:
     models
         Model stage (``models.model == "none"``: Allan only, no loop).
     axes
-        The axes stages 2–7 run on (the Allan stage runs on all six).
+        The axes stages 2–7 run on; the Allan stage runs on every axis of their sensors (:attr:`sensors`).
     loop, loop_alpha, loop_max_steps
         Run the closed loop after the model stage; its detectors' level and most effects added per axis (None: the
         loop's defaults, :func:`~imu_noise_id.pipelines.loop.run.run_closed_loop`).
@@ -106,6 +106,11 @@ class AnalyzeOptions:
             raise InputError(f"--alpha must lie in (0, 1), got {self.loop_alpha}")
         if self.loop_max_steps is not None and self.loop_max_steps < 0:
             raise InputError(f"--max-steps must be >= 0, got {self.loop_max_steps}")
+
+    @property
+    def sensors(self) -> tuple[str, ...]:
+        """The sensors holding one of :attr:`axes`: the Allan stage analyses all their axes, and only theirs."""
+        return tuple(sensor for sensor, names in SENSORS if any(a in self.axes for a in names))
 
     @property
     def loop_settings(self) -> dict:
@@ -179,8 +184,11 @@ def analyze(imu: ImuSeries | MappedImu, temperature: ScalarSeries | None = None,
     if options.span is not None:
         imu, recording = imu.between(*options.span), None
     static = analyze_static(imu, kinds=options.kinds, per_decade=options.per_decade, confidence=options.confidence,
-                            allow_motion=options.allow_motion, progress=progress)
+                            allow_motion=options.allow_motion, progress=progress, sensors=options.sensors)
     result = AnalysisResult(static)
+    if options.finals and len(options.sensors) < len(SENSORS):
+        result.warnings.append(f"only the {' and '.join(options.sensors)} analysed (--axis): no filter exports, which "
+                               "need both sensors' numbers")
     check_horizon(static, options.horizon_s)
     if options.models.enabled:
         options.models.check_rate(static.dt)

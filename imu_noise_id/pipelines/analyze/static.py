@@ -14,7 +14,7 @@ import numpy as np
 
 from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS, AllanResult, allan_family, stack_axes
 from ...core.allan.slopes import AxisSlopes, fit_axis_slopes
-from ...core.axes import ACCEL_AXES, AXES, GYRO_AXES, ImuSeries
+from ...core.axes import ACCEL_AXES, GYRO_AXES, ImuSeries
 from ...core.errors import InputError
 from ...core.stillness import static_check
 from ...core.timing import SamplePeriod
@@ -136,6 +136,7 @@ def analyze_static(
     confidence: float = DEFAULT_CONFIDENCE,
     allow_motion: bool = False,
     progress: Callable[[int, int], None] | None = None,
+    sensors: tuple[str, ...] = ("gyro", "accel"),
 ) -> StaticAnalysis:
     """Allan-family variances and Allan-slope noise parameters of a static IMU recording.
 
@@ -153,6 +154,9 @@ def analyze_static(
         Analyse even if the static check fails (its reasons become warnings).
     progress : callable, optional
         Called as ``progress(done, total)`` after each estimator.
+    sensors : tuple of str
+        The sensors analysed ("gyro", "accel"): the result holds their axes only, and the static check judges them
+        alone (a gyro-only unit whose driver fills the accelerometer with zeros is analysed with ``("gyro",)``).
 
     Raises
     ------
@@ -167,18 +171,27 @@ def analyze_static(
     finite = np.isfinite(imu.t).all() and np.isfinite(imu.gyro).all() and np.isfinite(imu.accel).all()
     if not finite:
         raise InputError(f"{imu.topic or 'input'}: NaN/inf in the IMU samples or stamps; repair or drop them first")
-    for block, names in ((imu.gyro, GYRO_AXES), (imu.accel, ACCEL_AXES)):
+    unknown = [s for s in sensors if s not in ("gyro", "accel")]
+    if unknown or not sensors:
+        raise ValueError(f"sensors must be among 'gyro', 'accel', got {sensors!r}")
+    blocks = [(sensor, block, names) for sensor, block, names in (("gyro", imu.gyro, GYRO_AXES),
+                                                                  ("accel", imu.accel, ACCEL_AXES))
+              if sensor in sensors]
+    for sensor, block, names in blocks:
         for name, column in zip(names, block.T, strict=True):
             if np.ptp(column) == 0:
+                others = [s for s in ("gyro", "accel") if s != sensor]
                 raise InputError(
                     f"{imu.topic or 'input'}: {name} is constant ({column[0]:g}) over all {n} samples: the driver "
-                    "does not publish this axis or the sensor is saturated; no noise can be identified"
+                    "does not publish this axis or the sensor is saturated; no noise can be identified from it. "
+                    f"To analyse the {others[0]} alone: --axis {others[0]}"
                 )
+    axes = tuple(a for _, _, names in blocks for a in names)
     period = imu.sample_period()
     dt = period.require()
     timing, missing = _timing_warnings(imu, period)
     warnings = list(imu.notes) + timing
-    check = static_check(imu, dt)
+    check = static_check(imu, dt, axes=axes)
     if check.flags and not allow_motion:
         still = "" if check.still_span is None else (
             "; or analyse its longest still stretch alone: span=({0:.1f}, {1:.1f}) (CLI: --span {0:.1f}:{1:.1f})"
@@ -193,18 +206,17 @@ def analyze_static(
     # Gyro and accel separately: no (N, 6) copy of the samples (peak memory, see docs/analysis.md).
     variances = {}
     for step, kind in enumerate(wanted):
-        blocks = [allan_family(block, dt, kind, per_decade=per_decade, confidence=confidence)
-                  for block in (imu.gyro, imu.accel)]
-        variances[kind] = stack_axes(blocks)
+        variances[kind] = stack_axes([allan_family(block, dt, kind, per_decade=per_decade, confidence=confidence)
+                                      for _, block, _ in blocks])
         if progress is not None:
             progress(step + 1, len(wanted))
     duration = n * dt
     slopes = {}
-    for j, name in enumerate(AXES):
+    for j, name in enumerate(axes):
         slopes[name] = fit_axis_slopes(variances["allan"], j)
         warnings += _slope_warnings(name, slopes[name], duration)
     return StaticAnalysis(
-        axes=AXES, n=n, dt=dt, duration_s=duration, topic=imu.topic, variances=variances, slopes=slopes,
+        axes=axes, n=n, dt=dt, duration_s=duration, topic=imu.topic, variances=variances, slopes=slopes,
         warnings=warnings, period=period, missing=missing,
     )
 
