@@ -20,6 +20,7 @@ from imu_noise_id.core.estimation.em.relabel import gm_as_filter
 from imu_noise_id.core.estimation.em.results import FitResult
 from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.noise.components import GM, LPF, QN, RW, WN, simulate_sum
+from imu_noise_id.core.noise.digital import DLPF as DLPF_TYPE
 from imu_noise_id.core.noise.resonant import filter_memory_limit
 from imu_noise_id.pipelines.analyze.final import final_model
 from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
@@ -123,3 +124,16 @@ def test_a_second_order_dlpf_on_a_short_record_is_read_beyond_its_roll_off():
 def test_a_curve_without_a_low_pass_is_read_whole(components):
     y = simulate_sum(components, 200_000, 0.01, np.random.default_rng(1))
     assert fit_axis_slopes(allan_variance(y, 0.01)).rolloff_tau is None
+
+
+@pytest.mark.parametrize("order", [1, 2, 4])
+def test_a_sensor_filter_is_judged_by_its_cutoff_whatever_its_order(order):
+    """A Butterworth low-pass at 5 Hz is the sensor's filter at any order: its memory 1/(2π f_c) = 32 ms is below the
+    50 ms limit. A 4th-order one's slowest pole decays over 83 ms, and judged by that the fit's DLPF (cutoff and order
+    right) was left out of N: N was the 10× smaller floor behind it, and the axis ended unresolved."""
+    dt = 1.0 / 200.0
+    lowpass = DLPF_TYPE(noise_density=1e-3, cutoff=5.0, order=order)
+    assert kalibr.enters_n(lowpass, dt) and not kalibr.is_slow_lpf(lowpass, dt)
+    assert kalibr.passband_density([WN(1e-4), lowpass], dt) == pytest.approx(math.hypot(1e-3, 1e-4), rel=0.02)
+    slow = DLPF_TYPE(noise_density=1e-3, cutoff=2.0, order=order)  # 80 ms: a bias process's memory, out of N
+    assert kalibr.is_slow_lpf(slow, dt) and not kalibr.enters_n(slow, dt)
