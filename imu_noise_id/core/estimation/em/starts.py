@@ -216,12 +216,15 @@ def filter_orders(components: list[Component], known: SensorFilter | None = None
 
 def distinct(results: list[tuple[float, list[Component]]], tau: np.ndarray, dt: float,
              rel: float = 0.1) -> list[tuple[float, list[Component]]]:
-    """``results`` without those whose theoretical AV is within ``rel`` of a better one's at every τ."""
+    """``results`` without those whose theoretical AV is within ``rel`` of a better one's at every τ and whose DLPFs
+    have the same orders: filters of different orders, which the AV barely tells apart (their roll-offs differ above
+    the cutoff), stay for the exact likelihood to choose between."""
     kept: list[tuple[float, list[Component]]] = []
-    curves: list[np.ndarray] = []
+    curves: list[tuple[tuple[int, ...], np.ndarray]] = []
     for cost, comps in results:
+        orders = tuple(int(c.order) for c in comps if isinstance(c, DLPF))
         curve = np.log(total_allan_variance([c for c in comps if not isinstance(c, RR)], tau, dt))
-        if all(np.max(np.abs(curve - other)) > math.log1p(rel) for other in curves):
+        if all(o != orders or np.max(np.abs(curve - other)) > math.log1p(rel) for o, other in curves):
             kept.append((cost, comps))
-            curves.append(curve)
+            curves.append((orders, curve))
     return kept
