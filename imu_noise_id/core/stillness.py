@@ -131,7 +131,7 @@ def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY,
     per_block = max(round(BLOCK_S / dt), 1)
     if n // per_block < 2:
         return None
-    accel = any(name not in GYRO_AXES for name in axes)
+    accel = _has_accelerometer(axes)
     means = np.array([_windows(imu.axis(name), per_block).mean(axis=1) for name in axes]
                      + ([_windows(np.linalg.norm(imu.accel, axis=1), per_block).mean(axis=1)] if accel else []))
     limits = QUIET_RANGE * np.array([GYRO_BLOCK_STD_MAX if name in GYRO_AXES else ACCEL_BLOCK_STD_MAX
@@ -151,9 +151,14 @@ def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY,
     return start, end
 
 
+def _has_accelerometer(axes: tuple[str, ...]) -> bool:
+    """Whether ``axes`` hold an accelerometer axis (the gravity and |accel| tests need one)."""
+    return any(name not in GYRO_AXES for name in axes)
+
+
 def _block_flags(imu: ImuSeries, dt: float, gravity: float, axes: tuple[str, ...] = AXES) -> list[str]:
     flags = []
-    accel = any(name not in GYRO_AXES for name in axes)  # the gravity and |accel| tests need the accelerometer
+    accel = _has_accelerometer(axes)  # the gravity and |accel| tests need the accelerometer
     g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
     if accel and abs(g_mean - gravity) > GRAVITY_SCALE_TOLERANCE * gravity:
         flags.append(
@@ -193,7 +198,7 @@ def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STAND
     out = StaticCheck(flags=_block_flags(imu, dt, gravity, axes))
     g_mean = float(np.linalg.norm(imu.accel.mean(axis=0)))
     off = g_mean - gravity
-    if any(a not in GYRO_AXES for a in axes) and GRAVITY_TOLERANCE < abs(off) <= GRAVITY_SCALE_TOLERANCE * gravity:
+    if _has_accelerometer(axes) and GRAVITY_TOLERANCE < abs(off) <= GRAVITY_SCALE_TOLERANCE * gravity:
         out.notes.append(
             f"|mean accel| = {g_mean:.3f} m/s² is {100 * off / gravity:+.1f} % from standard gravity: the "
             "accelerometer's scale or bias is uncalibrated (not a sign of motion)"
