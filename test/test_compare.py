@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+import yaml
 
 from imu_noise_id.bag.writer import write_bag
 from imu_noise_id.cli import main
@@ -421,3 +422,18 @@ def test_a_doubled_random_walk_is_found_at_longer_tau_where_the_white_noise_does
         watch.add(k * DT, (y + walk)[k: k + 1])
     state = watch.axis(0)[1.0]
     assert state.confirmed_s is not None and 600.0 <= state.confirmed_s <= 900.0
+
+
+def test_a_reference_needs_only_its_per_axis_noise_densities_and_rate(tmp_path):
+    """compare reads what it compares against: per-axis N (and their intervals), the rate, the topic. Reading the
+    reference through the exports' parser had demanded the four Kalibr numbers and per-axis random walks too, and
+    refused such a file as having "no per-axis" densities though it held them."""
+    from imu_noise_id.report.reference import read_reference
+
+    doc = {"update_rate": 100.0, "rostopic": "/imu/data",
+           "gyroscope_noise_density_xyz": [1.7e-4, 1.8e-4, 1.6e-4],
+           "accelerometer_noise_density_xyz": [2.0e-3, 2.1e-3, 1.9e-3]}
+    (tmp_path / "imu.yaml").write_text(yaml.safe_dump(doc))
+    reference = read_reference(tmp_path)
+    assert reference.rate_hz == 100.0 and reference.topic == "/imu/data"
+    assert [reference.axes[a].noise_density for a in AXES] == [1.7e-4, 1.8e-4, 1.6e-4, 2.0e-3, 2.1e-3, 1.9e-3]

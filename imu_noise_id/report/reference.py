@@ -1,9 +1,10 @@
-"""An ``analyze`` results folder read back as ``compare``'s reference: ``imu.yaml`` (its numbers,
-:func:`~.imu_yaml.parse_imu_yaml`: per-axis N, interval, rate, topic) and, where present, ``model.yaml`` (final
+"""An ``analyze`` results folder read back as ``compare``'s reference: ``imu.yaml`` (per-axis N, interval, rate,
+topic: what the reference needs, not the exports' four Kalibr numbers) and, where present, ``model.yaml`` (final
 components, the loop's sinusoid regressors)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,7 +16,6 @@ from ..core.noise.base import Component
 from ..core.noise.components import COMPONENT_TYPES
 from ..core.watch.compare import AxisReference
 from ..pipelines.analyze.numbers import KALIBR_PREFIX
-from .imu_yaml import parse_imu_yaml
 
 
 @dataclass(frozen=True)
@@ -70,24 +70,22 @@ def read_reference(path: str | Path) -> Reference:
     if not path.exists():
         raise InputError(f"reference: {path} does not exist: give the folder `analyze` wrote (or its imu.yaml)")
     folder = path if path.is_dir() else path.parent
-    where = folder / "imu.yaml"
-    imu = _load(where)
-    rate = imu.get("update_rate")
-    if not isinstance(rate, (int, float)) or not rate > 0:
-        raise InputError(f"reference: {where} has no update_rate")
-    try:
-        numbers = parse_imu_yaml(imu, f"reference: {where}")
-    except InputError:
-        numbers = None
+    imu = _load(folder / "imu.yaml")
     model = _load(folder / "model.yaml").get("axes", {}) if (folder / "model.yaml").exists() else {}
     axes = {}
     for axis in AXES:
-        reading = numbers.axis(axis) if numbers is not None else None
-        if reading is None:
-            key = f"{KALIBR_PREFIX[sensor_of(axis)]}_noise_density"
-            raise InputError(f"reference: {where} has no per-axis {key}_xyz: give the folder `analyze` wrote")
+        key = f"{KALIBR_PREFIX[sensor_of(axis)]}_noise_density"
+        i = AXES.index(axis) % 3
+        try:
+            value = float(imu[f"{key}_xyz"][i])
+            ci = tuple(float(v) for v in imu.get(f"{key}_ci_xyz", [[math.nan, math.nan]] * 3)[i])
+        except (KeyError, IndexError, TypeError, ValueError):
+            raise InputError(f"reference: {folder / 'imu.yaml'} has no per-axis {key}_xyz: give the folder "
+                             "`analyze` wrote") from None
         entry = model.get(axis, {})
         components = _components(entry["final"]) if "final" in entry else None
-        axes[axis] = AxisReference(reading.noise_density.value, reading.noise_density.ci95, components,
-                                   _known_lines(entry))
-    return Reference(axes, float(rate), numbers.topic, folder)
+        axes[axis] = AxisReference(value, ci, components, _known_lines(entry))
+    rate = imu.get("update_rate")
+    if not isinstance(rate, (int, float)) or not rate > 0:
+        raise InputError(f"reference: {folder / 'imu.yaml'} has no update_rate")
+    return Reference(axes, float(rate), imu.get("rostopic"), folder)
