@@ -41,7 +41,7 @@ def _numbers_section(result: AnalysisResult) -> str:
             "<th>K [u/s/√Hz], 95 %</th><th>bias instability B [u], 95 %</th><th>per-sample σ [u]</th>"
             "<th>Allan N</th><th>Allan K</th><th>Allan B</th></tr>")
     rows = []
-    numbers = getattr(result, "numbers", None)  # the numbers imu.yaml pastes (AnalysisResult.numbers)
+    numbers = result.numbers  # what imu.yaml pastes (None: only the final models are known)
     for axis, f in result.finals.items():
         slopes = result.static.slopes[axis]
         b = f.bias_instability
