@@ -92,8 +92,9 @@ LONG: list[tuple[list[str], str]] = [
 ]
 
 #: Studies in bench/studies/ whose outputs README.md or docs/ quote (``--studies``; outputs in docs/results/studies/):
-#: one-off questions, not regression numbers. The other studies keep no output: docs/ states what each found and names
-#: the script that reproduces it (git keeps its last output).
+#: one-off questions, not regression numbers. The side-by-side studies against an old checkout (bench_dlpf,
+#: bench_sensor_filter, bench_steady_engine, bench_loop_measured_time) are run by hand, their last outputs kept beside
+#: these; the other studies keep no output: docs/ states what each found and names the script that reproduces it.
 STUDIES: list[tuple[list[str], str]] = [
     (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "studies/probe_k_information.txt"),
     (["studies/bench_sin_regressors.py"], "studies/bench_sin_regressors.txt"),
