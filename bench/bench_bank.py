@@ -1,13 +1,13 @@
 """Hypothesis-bank benchmark: throughput, the paper 002 section 4 reproduction (L trials), Allan variance vs bank.
 
-    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-reproduction | tee docs/results/bench_bank_throughput.txt
-    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --trials 500 --skip-throughput | tee docs/results/bench_bank.txt
-    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --dt-sweep 100 \
-        | tee -a docs/results/bench_bank.txt   # which Δt did the paper use? (docs/hypotheses.md)
-    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --default-set --real \
-        | tee -a docs/results/bench_bank.txt
-    PYTHONPATH=. nice -n 10 python bench/bench_bank.py --skip-throughput --skip-reproduction --fig4 100 \
-        | tee -a docs/results/bench_bank.txt
+    python bench/bench_bank.py --skip-reproduction            # throughput and the Allan-variance comparison
+    python bench/bench_bank.py --trials 500 --skip-throughput # the reproduction
+    python bench/bench_bank.py --skip-throughput --skip-reproduction --dt-sweep 100   # which Δt did the paper use?
+    python bench/bench_bank.py --skip-throughput --skip-reproduction --default-set --real
+    python bench/bench_bank.py --skip-throughput --skip-reproduction --fig4 100
+
+``bench/run_all.py`` runs each as one section of docs/results/bench_bank.txt (the first with the default set, the
+others with ``--long``).
 
 Writes docs/results/criteria_cases.json (the three cases' ``criteria.json`` documents keyed by case, "1" to "3")
 and docs/figures/hypotheses_*.png; the criteria at the recorded times (beside the paper's) it prints, as lines and

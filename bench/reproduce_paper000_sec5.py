@@ -1,7 +1,7 @@
 """Paper 000 §5 on measured data: two GMs + WN fitted to the ADIS16405 accelerometers (run 1, 1e6 samples at
 100 Hz), with the Allan-deviation overlay of the fit and 20 simulations of it (as paper 000 fig. 7).
 
-Run:  nice -n 10 python bench/reproduce_paper000_sec5.py   (output in docs/results/reproduce_paper000_sec5.txt and
+Run:  nice -n 10 python bench/reproduce_paper000_sec5.py   (output in docs/results/reproduce_paper000.txt and
 docs/figures/paper000_sec5_adis_accel.png). The paper used an IMAR-FSAS (tactical grade), this is an industrial
 MEMS IMU: the numbers are not comparable, the method is.
 """

@@ -10,6 +10,11 @@ Usage (``make bench`` runs the default set)::
 
 Benchmarks are not tests: they print numbers, they do not assert them. Each script can also be run alone
 (its docstring gives the command). Scripts that need ``../shared/data`` say so and stop when it is absent.
+
+An output file holds one section per run, each headed by its command line (``# python bench/SCRIPT ARGS``, a
+side-by-side run's checkout written ``<baseline>``). A rerun replaces the sections of the runs it made and keeps the
+others as they are, so that one file can hold a benchmark's quick and long runs, and several scripts' runs on one
+question.
 """
 
 from __future__ import annotations
@@ -27,16 +32,15 @@ RESULTS = BENCH.parent / "docs" / "results"
 #: Stands for ``--baseline``'s checkout in a job's arguments: the speed claims are measured side by side with it.
 BASELINE = "<baseline>"
 #: (script and arguments, output file in docs/results): the issues' "bench/ prints …" goals. One output file per
-#: script, named after it; a script run several ways writes its runs one after another into that file.
+#: script, named after it; a script run several ways writes its runs as sections of that file.
 GOALS: list[tuple[list[str], str]] = [
     (["bench_allan.py"], "bench_allan.txt"),
     (["bench_bags.py"], "bench_bags.txt"),
     (["bench_analyze_memory.py"], "bench_analyze_memory.txt"),
     (["bench_em.py"], "bench_em.txt"),
     (["bench_em.py", "--quick"], "bench_em.txt"),
-    (["bench_bank.py", "--skip-reproduction"], "bench_bank_throughput.txt"),
+    (["bench_bank.py", "--skip-reproduction"], "bench_bank.txt"),
     (["bench_cmkf.py"], "bench_cmkf.txt"),
-    (["bench_node.py"], "bench_node.txt"),
     (["bench_node.py", "--executor", "single_threaded"], "bench_node.txt"),
     (["bench_node.py", "--duration", "150", "--watch"], "bench_node.txt"),
     (["bench_analyze_time.py", "--baseline", BASELINE], "bench_analyze_time.txt"),
@@ -58,7 +62,7 @@ LONG: list[tuple[list[str], str]] = [
     (["reproduce_paper000.py", "--case", "4.1", "--runs", "200"], "reproduce_paper000.txt"),
     (["reproduce_paper000.py", "--case", "4.2", "--runs", "200"], "reproduce_paper000.txt"),
     (["reproduce_paper000.py", "--case", "4.3", "--runs", "200"], "reproduce_paper000.txt"),
-    (["reproduce_paper000_sec5.py"], "reproduce_paper000_sec5.txt"),
+    (["reproduce_paper000_sec5.py"], "reproduce_paper000.txt"),
     (["bench_coverage.py", "--runs", "100"], "bench_coverage.txt"),
     (["bench_allan_fit.py"], "bench_allan_fit.txt"),
     (["bench_allan_fit.py", "--runs", "30", "--duration", "600"], "bench_allan_fit.txt"),
@@ -82,8 +86,8 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_loop_effects.py", "--clean", "10", "--minutes", "1440", "--rate", "10",
       "--cases", "gm", "osc+gm", "clean", "bi"], "bench_loop_effects.txt"),
     (["bench_adis_analysis.py"], "bench_adis_analysis.txt"),
-    (["bench_analyze_time.py", "--adis", "1", "--baseline", BASELINE, "--timeout", "1200"],
-     "bench_analyze_time_adis.txt"),
+    (["bench_analyze_time.py", "--adis", "1", "--baseline", BASELINE, "--timeout", "1200", "--numbers"],
+     "bench_analyze_time.txt"),
     (["bench_overbound.py"], "bench_overbound.txt"),
     (["bench_gmwm_speed.py"], "bench_gmwm_speed.txt"),
     (["bench_gmwm_accuracy.py"], "bench_gmwm_accuracy.txt"),
@@ -92,14 +96,48 @@ LONG: list[tuple[list[str], str]] = [
 ]
 
 #: Studies in bench/studies/ whose outputs README.md or docs/ quote (``--studies``; outputs in docs/results/studies/):
-#: one-off questions, not regression numbers. The side-by-side studies against an old checkout (bench_dlpf,
-#: bench_sensor_filter, bench_steady_engine, bench_loop_measured_time) are run by hand, their last outputs kept beside
-#: these; the other studies keep no output: docs/ states what each found and names the script that reproduces it.
+#: one-off questions, not regression numbers. The side-by-side studies against an old checkout are run by hand, their
+#: last outputs kept as sections of studies/sensor_filter.txt (bench_sensor_filter, bench_dlpf) and
+#: studies/steady_engine.txt (bench_steady_engine, bench_loop_measured_time); the other studies keep no output: docs/
+#: states what each found and names the script that reproduces it.
 STUDIES: list[tuple[list[str], str]] = [
     (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "studies/probe_k_information.txt"),
     (["studies/bench_sin_regressors.py"], "studies/bench_sin_regressors.txt"),
     (["studies/composite_gap.py"], "studies/composite_gap.txt"),
 ]
+
+
+def section_header(arguments: list[str]) -> str:
+    """The line that heads a run's section in its output file: ``# python bench/SCRIPT ARGS``."""
+    return f"# python bench/{' '.join(arguments)}"
+
+
+def split_sections(text: str) -> tuple[str, dict[str, str]]:
+    """A results file as (its text before the first section, {header: the section's text, header line included})."""
+    preamble, sections, header = [], {}, None
+    for line in text.splitlines(keepends=True):
+        if line.startswith("# python bench/"):
+            header = line.rstrip("\n")
+            sections[header] = line
+        elif header is None:
+            preamble.append(line)
+        else:
+            sections[header] += line
+    return "".join(preamble), sections
+
+
+def replace_section(path: Path, header: str, section: str) -> None:
+    """Write ``section`` into ``path`` in place of the section headed ``header`` (appended if it has none).
+
+    The text before the file's first section (a note on all of them) is kept; a file with no section at all is
+    replaced.
+    """
+    preamble, sections = split_sections(path.read_text() if path.exists() else "")
+    if not sections:  # a file without sections is one earlier run's whole output
+        preamble = ""
+    sections[header] = section
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n\n".join(text.strip("\n") for text in [preamble, *sections.values()] if text.strip()) + "\n")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -120,31 +158,28 @@ def main(argv: list[str] | None = None) -> int:
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env.setdefault("ROS_LOG_DIR", "/tmp/imu_noise_id_ros_log")
     failed = []
-    written: set[str] = set()  # outputs begun in this run: a script's later runs append to its file
-    unmeasured = {out for script, out in jobs if BASELINE in script and not args.baseline.is_dir()}
-    for out in sorted(unmeasured):
-        print(f"== docs/results/{out} left as it is: no baseline checkout at {args.baseline} (--baseline DIR)")
-    jobs = [(script, out) for script, out in jobs if out not in unmeasured]
+    if not args.baseline.is_dir():
+        for arguments, out in jobs:
+            if BASELINE in arguments:
+                print(f"== {section_header(arguments)[2:]}: its section of docs/results/{out} left as it is, no "
+                      f"baseline checkout at {args.baseline} (--baseline DIR)")
+        jobs = [(arguments, out) for arguments, out in jobs if BASELINE not in arguments]
     for arguments, out in jobs:
-        script = [str(args.baseline) if arg == BASELINE else arg for arg in arguments]
-        line = f"python bench/{' '.join(script)} {'>>' if out in written else '>'} docs/results/{out}"
+        header = section_header(arguments)
         if args.list:
-            written.add(out)
-            print(line)
+            print(f"{header[2:]}  -> docs/results/{out}")
             continue
-        print(f"== {line}", flush=True)
+        script = [str(args.baseline) if arg == BASELINE else arg for arg in arguments]
+        print(f"== {header[2:]}  -> docs/results/{out}", flush=True)
         start = time.perf_counter()
-        with (RESULTS / out).open("a" if out in written else "w") as fh:
-            if out in written:
-                fh.write("\n")
-            written.add(out)
-            fh.write(f"# python bench/{' '.join(script)}\n")
-            proc = subprocess.Popen([sys.executable, str(BENCH / script[0]), *script[1:]], stdout=subprocess.PIPE,
-                                    stderr=subprocess.STDOUT, env=env, cwd=BENCH.parent, text=True)
-            for text in proc.stdout:  # printed here and kept in docs/results
-                print(text, end="", flush=True)
-                fh.write(text)
-            proc.wait()
+        lines = [header + "\n"]
+        proc = subprocess.Popen([sys.executable, str(BENCH / script[0]), *script[1:]], stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, env=env, cwd=BENCH.parent, text=True)
+        for text in proc.stdout:  # printed here and kept in docs/results
+            print(text, end="", flush=True)
+            lines.append(text)
+        proc.wait()
+        replace_section(RESULTS / out, header, "".join(lines))
         print(f"== exit {proc.returncode} after {time.perf_counter() - start:.0f} s", flush=True)
         if proc.returncode != 0:
             failed.append(script[0])

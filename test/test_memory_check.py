@@ -53,7 +53,7 @@ def test_analyze_refuses_before_decoding_and_leaves_no_folder(tmp_path, capsys, 
 
 def test_the_need_of_a_record_the_loop_analyses_covers_a_measured_one():
     # A whole ADIS16405 run (10^6 samples per axis at 100 Hz, two workers): the process tree peaked at 3859 MiB of
-    # PSS (docs/results/bench_analyze_time_adis.txt), where the model of GMWM-length records had said 0.6 GiB: the
+    # PSS (docs/results/bench_analyze_time.txt), where the model of GMWM-length records had said 0.6 GiB: the
     # loop's smoother passes hold every state of its models (up to 25 there) for every sample.
     need = memory.needed_bytes(10**6, 10**6, 2)
     assert 3859 * 2**20 <= need <= 2 * 3859 * 2**20
