@@ -17,7 +17,14 @@ from imu_noise_id.core.estimation.readouts.kalibr import KalibrValue
 from imu_noise_id.core.noise.components import RW, WN
 from imu_noise_id.core.simulation.static import simulate_static_imu
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
-from imu_noise_id.pipelines.analyze.resolution import PASSBAND_FACTOR, passband_disagreement
+from imu_noise_id.pipelines.analyze.overbound import data_overbound
+from imu_noise_id.pipelines.analyze.resolution import (
+    PASSBAND_FACTOR,
+    passband_confirms,
+    passband_disagreement,
+    resolved,
+    unresolved_reason,
+)
 from imu_noise_id.report.analysis import write_analysis
 from imu_noise_id.report.console import final_table
 
@@ -99,3 +106,42 @@ def test_resolved_axes_keep_their_model_values(filtered):
             assert result.finals[axis].unresolved is None
             assert doc["gyroscope_noise_density_method_xyz"][i] == "model"
             assert result.finals[axis].noise_density.value == pytest.approx(1.7e-4, rel=0.05)
+
+
+@pytest.mark.parametrize(("n", "reading", "confirms"), [
+    (1.02e-3, _reading(1.0e-3, (0.97e-3, 1.03e-3)), True),
+    (1.04e-3, _reading(1.0e-3, (0.97e-3, 1.03e-3)), False),  # outside the line's interval, though within the factor
+    (5e-5, _reading(8e-5, (0.0, 8e-5), method="upper_bound"), False),  # a bound reads no level
+    (None, _reading(1.0e-3, (0.97e-3, 1.03e-3)), False),
+])
+def test_the_white_noise_line_confirms_an_n_inside_its_interval(n, reading, confirms):
+    assert passband_confirms(KalibrValue(n, (math.nan, math.nan), "WN"), reading) is confirms
+
+
+def test_a_failed_verdict_keeps_an_n_the_data_confirm_and_gives_the_overbound_k(filtered):
+    """A right structure whose verdict fails (as one τ outside a 95 % band does on some records by chance) keeps the
+    model's N where the white-noise line, read without the model, confirms it; K is the overbound's, unresolved."""
+    result, _ = filtered
+    axis = next(a for a in GYRO_AXES if result.loops[a].passed)
+    final, static = result.finals[axis], result.static
+    reading = static.slopes[axis].noise_density
+    assert passband_confirms(final.noise_density, reading)
+    failed = replace(result.loops[axis], passed=False, verdict="AV misfit left unexplained (at one τ)")
+    why = unresolved_reason(final, failed, reading)
+    assert why is not None and why.noise_density_kept
+    given = resolved(final, why, data_overbound(static, axis), reading)
+    assert given.noise_density.method == "model"
+    assert given.noise_density.value == final.noise_density.value
+    assert given.noise_density.ci95 == final.noise_density.ci95
+    assert "white-noise line" in given.noise_density.source
+    assert given.random_walk.method == "unresolved"
+    assert given.random_walk.value == data_overbound(static, axis).random_walk
+    assert given.model_values == (final.noise_density, final.random_walk)
+    assert f"{axis:8s} K unresolved" in final_table({axis: given})
+
+
+def test_an_n_far_from_the_line_is_not_kept_whatever_the_verdict(filtered):
+    result, _ = filtered
+    final = result.finals["accel_y"]
+    assert final.noise_density.method == "unresolved"  # the model's N 10⁶ below the passband is not confirmed
+    assert not passband_confirms(final.model_values[0], result.static.slopes["accel_y"].noise_density)

@@ -4,10 +4,11 @@ Stages, each run once on data in memory: 1. the Allan stage (:mod:`.static`); 2.
 selection by BIC with the constrained EM, starts fitted to stage 1's AV, or the GMWM by WIC, or both); 3. the closed
 loop (:mod:`imu_noise_id.pipelines.loop`) from each axis's selected EM fit at the recording's own rate (not for GMWM
 fits); 4. the final model (:mod:`.final`); 5. the simulation band of each final model; 6. the overbound
-(:mod:`.overbound`); 7. the resolution (:mod:`.resolution`: an unresolved axis gives its data overbound's N and K as
-upper bounds). Stages 2–5 of one axis run in worker processes on long records (``AnalyzeOptions.jobs``), which read
-the recording from memory-mapped files (:mod:`.mapped`), the results in axis order and the same as serially. The
-report layer (:mod:`imu_noise_id.report.analysis`) writes the files from the result.
+(:mod:`.overbound`); 7. the resolution (:mod:`.resolution`: an unresolved axis gives its data overbound's K, and its
+N unless the data confirm the model's, as upper bounds). Stages 2–5 of one axis run in worker processes on long
+records (``AnalyzeOptions.jobs``), which read the recording from memory-mapped files (:mod:`.mapped`), the results in
+axis order and the same as serially. The report layer (:mod:`imu_noise_id.report.analysis`) writes the files from the
+result.
 """
 
 from __future__ import annotations
@@ -197,11 +198,22 @@ def analyze(imu: ImuSeries | MappedImu, temperature: ScalarSeries | None = None,
         return result
     result.overbounds = overbounds(static, result.finals, options.horizon_s)
     for axis, final in result.finals.items():
-        why = unresolved_reason(final, result.loops.get(axis), static.slopes[axis].noise_density)
-        if why is not None:
-            result.overbounds[axis] = data_overbound(static, axis, options.horizon_s)
-            result.finals[axis] = resolved(final, why, result.overbounds[axis])
-            result.warnings.append(f"{axis}: N and K unresolved, the overbound's values given (upper bounds): {why}")
+        reading = static.slopes[axis].noise_density
+        why = unresolved_reason(final, result.loops.get(axis), reading)
+        if why is None:
+            continue
+        overbound = data_overbound(static, axis, options.horizon_s)
+        result.finals[axis] = resolved(final, why, overbound, reading)
+        if why.noise_density_kept:
+            overbound = replace(overbound, reference_noise_density=final.noise_density.value,
+                                reference_source="final model (N, confirmed by the data's white-noise line); this "
+                                                 "overbound (K: the final model is unresolved)")
+            result.warnings.append(f"{axis}: K unresolved, the overbound's K given (an upper bound); N is the "
+                                   f"model's, inside the data's white-noise line's interval: {why.reason}")
+        else:
+            result.warnings.append(f"{axis}: N and K unresolved, the overbound's values given (upper bounds): "
+                                   f"{why.reason}")
+        result.overbounds[axis] = overbound
     return result
 
 

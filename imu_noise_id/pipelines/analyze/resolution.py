@@ -1,16 +1,19 @@
 """Whether an axis's final model may give its N and K, and what is given where it may not.
 
-Unresolved: the loop's verdict failed (:attr:`~imu_noise_id.pipelines.loop.LoopResult.passed`), or N disagrees with the
-AV's white-noise line (:func:`~imu_noise_id.core.allan.slopes.fit_axis_slopes`: 95 % intervals disjoint and values more
-than :data:`PASSBAND_FACTOR` apart). An unresolved axis gives its data overbound's N and K
-(:func:`~.overbound.data_overbound`) as upper bounds, interval (0, value), method ``unresolved``, the reason in its
-source; ``model.yaml`` keeps the model's own. Reasons: docs/analysis.md, "Why an unresolved axis …".
+Unresolved: the loop's verdict failed (:attr:`~imu_noise_id.pipelines.loop.LoopResult.passed`), or N disagrees with
+the AV's white-noise line (:func:`~imu_noise_id.core.allan.slopes.fit_axis_slopes`: 95 % intervals disjoint and values
+more than :data:`PASSBAND_FACTOR` apart). An unresolved axis gives its data overbound's K
+(:func:`~.overbound.data_overbound`) as an upper bound, interval (0, value), method ``unresolved``, the reason in its
+source; it gives the overbound's N the same way unless the verdict alone failed and the model's N lies inside the
+white-noise line's 95 % interval (:func:`passband_confirms`: the data read N without the model's structure, so N keeps
+the model's value and interval, its source saying why). ``model.yaml`` keeps the model's own. Reasons:
+docs/analysis.md, "Why an unresolved axis …".
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 from ...core.allan.slopes import SlopeComponent
 from ...core.estimation.readouts.kalibr import KalibrValue
@@ -38,21 +41,41 @@ def passband_disagreement(n: KalibrValue, reading: SlopeComponent) -> str | None
             "intervals")
 
 
-def unresolved_reason(final: FinalModel, loop: LoopResult | None, reading: SlopeComponent) -> str | None:
-    """Why ``final`` may not give N and K (module docstring), or None when it may."""
-    reasons = []
-    if loop is not None and not loop.passed:
-        reasons.append(f"the closed loop's verdict failed ({loop.verdict})")
+def passband_confirms(n: KalibrValue, reading: SlopeComponent) -> bool:
+    """Whether the model's N [u/√Hz] lies inside the white-noise line's 95 % interval ``reading`` (a reading, not an
+    upper bound)."""
+    lo, hi = reading.ci
+    return (n.value is not None and reading.method != "upper_bound" and 0.0 < lo <= hi
+            and lo <= n.value <= hi)
+
+
+@dataclass(frozen=True)
+class Unresolved:
+    """Why an axis's final model may not give K (and N, unless ``noise_density_kept``): module docstring."""
+
+    reason: str
+    noise_density_kept: bool
+
+
+def unresolved_reason(final: FinalModel, loop: LoopResult | None, reading: SlopeComponent) -> Unresolved | None:
+    """Why ``final`` may not give its K and perhaps N (module docstring), or None when it may give both."""
+    failed = loop is not None and not loop.passed
     disagreement = passband_disagreement(final.noise_density, reading)
+    reasons = [f"the closed loop's verdict failed ({loop.verdict})"] if failed else []
     if disagreement is not None:
         reasons.append(disagreement)
-    return "; ".join(reasons) or None
+    if not reasons:
+        return None
+    return Unresolved("; ".join(reasons), disagreement is None and passband_confirms(final.noise_density, reading))
 
 
-def resolved(final: FinalModel, reason: str | None, overbound: AxisOverbound) -> FinalModel:
-    """``final`` as it is when ``reason`` is None, else with N and K its overbound's values (module docstring)."""
-    if reason is None:
+def resolved(final: FinalModel, unresolved: Unresolved | None, overbound: AxisOverbound,
+             reading: SlopeComponent) -> FinalModel:
+    """``final`` as it is when ``unresolved`` is None, else with K (and N unless kept) its overbound's values
+    (module docstring); ``reading`` is the white-noise line a kept N was checked against."""
+    if unresolved is None:
         return final
+    reason = unresolved.reason
 
     def bound(value: KalibrValue, upper: float, name: str) -> KalibrValue:
         model = "none" if value.value is None else f"{value.value:.3g}"
@@ -60,7 +83,15 @@ def resolved(final: FinalModel, reason: str | None, overbound: AxisOverbound) ->
                                                 f"over τ {overbound.tau_range[0]:.3g}–{overbound.tau_range[1]:.3g} s; "
                                                 f"the model's {model} is in model.yaml)", method="unresolved")
 
-    return replace(final, noise_density=bound(final.noise_density, overbound.noise_density, "N"),
-                   random_walk=bound(final.random_walk, overbound.random_walk, "K"), unresolved=reason,
-                   model_values=(final.noise_density, final.random_walk),
-                   source=f"{final.source}; N and K unresolved: {reason}")
+    n = final.noise_density
+    if unresolved.noise_density_kept:
+        n = replace(n, source=f"{n.source}; the model is unresolved ({reason}), but its N lies inside the data's "
+                              f"white-noise line {reading.value:.3g} [{reading.ci[0]:.3g}, {reading.ci[1]:.3g}], "
+                              "read without the model's structure")
+        what = "K unresolved (N confirmed by the data's white-noise line)"
+    else:
+        n = bound(n, overbound.noise_density, "N")
+        what = "N and K unresolved"
+    return replace(final, noise_density=n, random_walk=bound(final.random_walk, overbound.random_walk, "K"),
+                   unresolved=reason, model_values=(final.noise_density, final.random_walk),
+                   source=f"{final.source}; {what}: {reason}")
