@@ -12,6 +12,7 @@ from scipy import linalg, signal
 
 from imu_noise_id.cli import main
 from imu_noise_id.core.allan import allan_variance
+from imu_noise_id.core.allan.slopes import fit_axis_slopes, rises_early
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
@@ -175,3 +176,26 @@ def test_starts_with_filters_of_other_orders_are_kept_though_their_allan_varianc
     assert np.max(np.abs(curves[0] - curves[1])) < 0.04 and np.max(np.abs(curves[2] - curves[1])) < 0.04
     kept = starts.distinct([(0.0, third), (1.0, fourth), (2.0, fourth_again)], tau, dt)
     assert [c for _, c in kept] == [third, fourth]  # the same order within 10 % at every τ: one start
+
+
+def test_a_slow_filter_over_a_white_floor_is_offered_the_dlpf():
+    """A second-order Butterworth at 5 Hz sampled at 1 kHz, a white floor of a tenth after it: the AV falls on the
+    floor's line, rises over the filter's hump and leaves it more slowly than white noise; the rise offers
+    WN+DLPF+RW, which the selection then prefers to the GM that took the hump, and the Allan slopes read N past the
+    hump (not on the floor's line). White noise with a walk, with flicker or with quantisation offers no DLPF."""
+    rate, n = 1000.0, 120_000
+    rng = np.random.default_rng(52)
+    w = rng.standard_normal(n + 4000) * 1e-3 * math.sqrt(rate)
+    floor = simulate_sum([WN(1e-4), RW(2e-5)], n, 1.0 / rate, rng)
+    y = signal.sosfilt(signal.butter(2, 5.0, fs=rate, output="sos"), w)[4000:] + floor
+    av = allan_variance(y, 1.0 / rate)
+    assert rises_early(av)
+    assert "WN+DLPF+RW" in suggest_candidates(av)
+    reading = fit_axis_slopes(av).noise_density  # read past the hump, not on the floor's line before it
+    assert reading.value == pytest.approx(math.hypot(1e-3, 1e-4), rel=0.1)  # the floor's line is 10× lower
+    best = select_model(y, 1.0 / rate, options=FitOptions(uncertainty=False)).best
+    assert any(isinstance(c, DLPF) for c in best.components)
+    assert kalibr.noise_density(best).value == pytest.approx(math.hypot(1e-3, 1e-4), rel=0.03)
+    for spec in ("WN(1e-3)+RW(2e-5)", "WN(2e-3)+BI(2e-3, 0.1, 1200)", "WN(1e-3)+QN(1e-5)+RW(2e-5)"):
+        plain = simulate_sum(parse_model(spec), n, 1.0 / rate, rng)
+        assert not rises_early(allan_variance(plain, 1.0 / rate)), spec

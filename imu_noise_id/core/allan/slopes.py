@@ -199,8 +199,9 @@ def _upper_bound(name: str, res: AllanResult, axis: int) -> SlopeComponent:
     return SlopeComponent(name, mu, coefficient, value, (0.0, value), "upper_bound", (t, t), 1)
 
 
-def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float) -> int:
-    """Where a start flatter than white noise ends in its −1 slope (rule 5 and its constants), 0 if nowhere."""
+def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float, *, white_after: bool = True) -> int:
+    """Where a start flatter than white noise ends in its −1 slope (rule 5 and its constants), 0 if nowhere; without
+    ``white_after``, the slopes after that end need not average −1 (a hump's slow descent into the white line)."""
     ok = np.isfinite(av) & (av > 0)
     # the curve's minimum beyond its first peak (a strong low-pass can put the global minimum at the shortest τ)
     early = np.flatnonzero(ok & (tau <= ROLLOFF_MAX_MEMORIES * filter_memory_limit(dt)))
@@ -215,13 +216,14 @@ def _rolloff_candidate(tau: np.ndarray, av: np.ndarray, dt: float) -> int:
         return 0
     j = int(ends[0])
     fits = tau.size - j >= ROLLOFF_MIN_POINTS and tau[j] <= ROLLOFF_MAX_MEMORIES * filter_memory_limit(dt)
-    white = float(np.mean(slope[j: j + ROLLOFF_WHITE_STEPS])) >= -1.0 - SLOPE_TOLERANCE
+    white = not white_after or float(np.mean(slope[j: j + ROLLOFF_WHITE_STEPS])) >= -1.0 - SLOPE_TOLERANCE
     return j if fits and white else 0
 
 
 def rolloff_end(res: AllanResult, axis: int = 0) -> int:
-    """First τ index beyond the sensor's low-pass roll-off (rule 5), 0 if none."""
-    j = _rolloff_candidate(res.tau, res.variance[:, axis], res.dt)
+    """First τ index beyond the sensor's low-pass roll-off (rule 5), 0 if none; where the AV rises within the τ a
+    roll-off reaches (:func:`rises_early`), the end of the hump's descent to the −1 slope, however it continues."""
+    j = _rolloff_candidate(res.tau, res.variance[:, axis], res.dt, white_after=not rises_early(res, axis))
     if not j:
         return 0
     rest = res.from_index(j)
@@ -231,6 +233,20 @@ def rolloff_end(res: AllanResult, axis: int = 0) -> int:
         return 0
     n_low = _component("WN", base, region, rest, axis).ci[0]
     return j if res.ci_high[0, axis] < n_low**2 / res.tau[0] else 0
+
+
+def rises_early(res: AllanResult, axis: int = 0) -> bool:
+    """Whether the AV rises significantly within the τ a sensor filter's roll-off reaches (τ ≤
+    :data:`ROLLOFF_MAX_MEMORIES` · ``filter_memory_limit(dt)``): some τ_a < τ_b there with the lower bound at τ_b above
+    the upper bound at τ_a. White noise, quantisation and flicker never rise; a filtered white noise beside a white
+    floor after the filter does (its roll-off a hump over the floor's −1 line, which rule 5 may not read)."""
+    early = np.flatnonzero(res.tau <= ROLLOFF_MAX_MEMORIES * filter_memory_limit(res.dt))
+    low, high = res.ci_low[early, axis], res.ci_high[early, axis]
+    ok = np.isfinite(low) & np.isfinite(high)
+    if ok.sum() < 2:
+        return False
+    low, high = low[ok], high[ok]
+    return bool(np.any(low[1:] > np.minimum.accumulate(high)[:-1]))
 
 
 def fit_axis_slopes(res: AllanResult, axis: int = 0) -> AxisSlopes:

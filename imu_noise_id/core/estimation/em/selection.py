@@ -9,7 +9,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ...allan import AllanResult
-from ...allan.slopes import rolloff_end
+from ...allan.slopes import rises_early, rolloff_end
 from ...diagnostics.av_signatures import flicker_level
 from ...errors import InputError
 from ...noise.components import Component
@@ -54,13 +54,14 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
     """:data:`DEFAULT_CANDIDATES` plus, from the AV (one column, τ ≤ N·dt/4): RR variants when it rises like τ² at
     long τ, QN variants when it falls like τ⁻² at short τ, WN+BI+RW when flat over a decade above the white-noise
     line (:func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`), WN+DLPF+RW at a low-pass roll-off
-    (:func:`~imu_noise_id.core.allan.slopes.rolloff_end`)."""
+    (:func:`~imu_noise_id.core.allan.slopes.rolloff_end`) or a rise within the τ a roll-off reaches
+    (:func:`~imu_noise_id.core.allan.slopes.rises_early`)."""
     cands = list(DEFAULT_CANDIDATES)
     keep = allan.m <= starts.MAX_FRACTION * allan.n
     tau, avar = allan.tau[keep], allan.variance[keep, 0]
     if tau.size >= 4 and flicker_level(tau, avar - avar[0] * tau[0] / tau) is not None:
         cands.append("WN+BI+RW")
-    if rolloff_end(allan):
+    if rolloff_end(allan) or rises_early(allan):
         cands.append(DLPF_CANDIDATE)
     if tau.size >= 4:
         slope_hi = np.polyfit(np.log(tau[-3:]), np.log(avar[-3:]), 1)[0]
