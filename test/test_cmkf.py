@@ -655,3 +655,27 @@ def test_simulated_stamps_are_whole_nanoseconds_and_meet_where_the_rates_divide(
     run = simulate_robot(30.0, np.random.default_rng(0), odom_rate=20.0)
     assert set(run.odom_t.tolist()) <= set(run.imu_t.tolist())
     np.testing.assert_array_equal(np.round(run.imu_t * 1e9) / 1e9, run.imu_t)
+
+
+def test_imu_samples_without_a_valid_orientation_are_kept_with_gravity_from_the_imu():
+    """Gravity from the IMU's orientation, but the messages carry none (an all-zero quaternion, as drivers publish
+    beside orientation_covariance[0] = −1): every sample is still used, with gravity from the propagated orientation
+    as if no orientation had been passed, and the invalid ones are counted (they were dropped as non-finite)."""
+    run = _short_run()
+    ests = {}
+    for given in ((0.0, 0.0, 0.0, 0.0), None):
+        f = RobotCmkf(CmkfConfig(imu_rotation_xyzw=run.imu_rotation_xyzw, gravity_source="imu"))
+        events = sorted([(t, 0, i) for i, t in enumerate(run.imu_t)] + [(t, 1, j) for j, t in enumerate(run.odom_t)])
+        for _, kind, i in events:
+            if kind == 0:
+                assert f.process_imu(run.imu_t[i], run.gyro[i], run.accel[i], orientation_xyzw=given)
+            else:
+                f.process_odometry(run.odom_t[i], orientation_xyzw=run.orientation_xyzw[i],
+                                   linear_velocity=run.linear_velocity[i], angular_velocity=run.angular_velocity[i],
+                                   twist_cov=run.twist_cov[i])
+        ests[given is None] = f.estimate()
+    invalid, absent = ests[False], ests[True]
+    assert invalid.counters["imu"] == absent.counters["imu"] == len(run.imu_t)
+    assert invalid.counters["imu_orientation_invalid"] == len(run.imu_t) and invalid.counters["imu_dropped_nan"] == 0
+    np.testing.assert_array_equal(invalid.accel_bias, absent.accel_bias)
+    assert invalid.status == "tracking"

@@ -69,6 +69,14 @@ def _stamp_seconds(stamp: Any) -> float:
     return stamp.sec + stamp.nanosec * 1e-9
 
 
+def imu_orientation(msg: Imu) -> tuple[float, float, float, float] | None:
+    """The message's orientation (x, y, z, w), or None where it has none: orientation_covariance[0] = −1 (REP 145)."""
+    if msg.orientation_covariance[0] == -1.0:
+        return None
+    q = msg.orientation
+    return (q.x, q.y, q.z, q.w)
+
+
 class ImuNoiseIdNode(Node):
     """The online identification node (see the module docstring and ``docs/node.md``).
 
@@ -199,10 +207,9 @@ class ImuNoiseIdNode(Node):
             w = msg.angular_velocity
             a = msg.linear_acceleration
             frame = msg.header.frame_id
-            q = msg.orientation
             released = self.identifier.process_imu(
                 _stamp_seconds(msg.header.stamp), (w.x, w.y, w.z), (a.x, a.y, a.z), frame, time.monotonic(),
-                orientation_xyzw=(q.x, q.y, q.z, q.w), source=msg)
+                orientation_xyzw=imu_orientation(msg), source=msg)
             self._imu_frame = frame
             for out in released:  # usually this message; a held one first after a jump in the stamps
                 corrected = out.source

@@ -24,7 +24,7 @@ from .protocol import CmkfFilter
 COUNTERS = ("imu", "odom", "updates", "imu_dropped_stamp", "imu_dropped_nan", "odom_dropped_stamp",
             "odom_dropped_nan", "odom_dropped_missing", "odom_dropped_late", "odom_dropped_interval", "odom_late",
             "odom_without_imu", "odom_gaps", "imu_gaps", "skipped_updates", "skipped_stacked", "gated_accel",
-            "gated_gyro", "odom_dropped_orientation", "odom_orientation_invalid")
+            "gated_gyro", "odom_dropped_orientation", "odom_orientation_invalid", "imu_orientation_invalid")
 
 
 def default_filter(config: CmkfConfig) -> CmkfFilter:
@@ -100,7 +100,8 @@ class RobotCmkf:
         orientation_xyzw: tuple[float, float, float, float] | np.ndarray | None = None,
     ) -> bool:
         """Propagate with one IMU sample (stamp ``t`` [s], ``gyro`` [rad/s], ``accel`` [m/s²] with gravity) held over
-        (t_prev, t]; ``orientation_xyzw`` used for gravity when ``gravity_source == "imu"``. False if dropped."""
+        (t_prev, t]; ``orientation_xyzw`` used for gravity when ``gravity_source == "imu"`` (one that is all-zero or
+        not finite is counted and ignored, the sample kept). False if dropped."""
         try:
             t = float(t)
             wx, wy, wz = (float(v) for v in gyro)
@@ -116,9 +117,8 @@ class RobotCmkf:
         if orientation_xyzw is not None and self.config.gravity_source == "imu":
             try:
                 self._q_ni_imu = rot.normalise(orientation_xyzw)
-            except ValueError:
-                self.counters["imu_dropped_nan"] += 1
-                return False
+            except ValueError:  # all-zero or not finite: gravity from the last valid one, else the propagated one
+                self.counters["imu_orientation_invalid"] += 1
         self.counters["imu"] += 1
         self._t_imu = t
         self._last_imu = (wx, wy, wz, fx, fy, fz)
