@@ -6,9 +6,9 @@ import pytest
 
 pytest.importorskip("rclpy")
 
-from sensor_msgs.msg import Imu  # noqa: E402
+from sensor_msgs.msg import Imu
 
-from imu_noise_id.ros.node import imu_orientation  # noqa: E402
+from imu_noise_id.ros.node import imu_orientation
 
 
 def test_a_message_without_orientation_gives_none_and_one_with_it_its_quaternion():
