@@ -22,6 +22,7 @@ from imu_noise_id.pipelines.analyze.resolution import (
     PASSBAND_FACTOR,
     passband_confirms,
     passband_disagreement,
+    resolve_axis,
     resolved,
     unresolved_reason,
 )
@@ -73,11 +74,11 @@ def filtered(tmp_path_factory):
     result = analyze(imu, options=AnalyzeOptions(models=ModelStage("WN+GM"), jobs=1))
     out = tmp_path_factory.mktemp("filtered")
     write_analysis(result, out, meta={})
-    return result, out
+    return result, out, imu
 
 
 def test_a_failed_verdict_pastes_the_overbound_as_unresolved(filtered):
-    result, out = filtered
+    result, out, _ = filtered
     final = result.finals["accel_y"]
     assert not result.loops["accel_y"].passed
     assert final.unresolved is not None and "verdict failed" in final.unresolved
@@ -99,7 +100,7 @@ def test_a_failed_verdict_pastes_the_overbound_as_unresolved(filtered):
 
 
 def test_resolved_axes_keep_their_model_values(filtered):
-    result, out = filtered
+    result, out, _ = filtered
     doc = yaml.safe_load((out / "imu.yaml").read_text())
     for i, axis in enumerate(GYRO_AXES):
         if result.loops[axis].passed:
@@ -121,7 +122,7 @@ def test_the_white_noise_line_confirms_an_n_inside_its_interval(n, reading, conf
 def test_a_failed_verdict_keeps_an_n_the_data_confirm_and_gives_the_overbound_k(filtered):
     """A right structure whose verdict fails (as one τ outside a 95 % band does on some records by chance) keeps the
     model's N where the white-noise line, read without the model, confirms it; K is the overbound's, unresolved."""
-    result, _ = filtered
+    result, _, _ = filtered
     axis = next(a for a in GYRO_AXES if result.loops[a].passed)
     final, static = result.finals[axis], result.static
     reading = static.slopes[axis].noise_density
@@ -129,7 +130,7 @@ def test_a_failed_verdict_keeps_an_n_the_data_confirm_and_gives_the_overbound_k(
     failed = replace(result.loops[axis], passed=False, verdict="AV misfit left unexplained (at one τ)")
     why = unresolved_reason(final, failed, reading)
     assert why is not None and why.noise_density_kept
-    given = resolved(final, why, data_overbound(static, axis), reading)
+    given = resolved(final, why, data_overbound(static, axis))
     assert given.noise_density.method == "model"
     assert given.noise_density.value == final.noise_density.value
     assert given.noise_density.ci95 == final.noise_density.ci95
@@ -141,7 +142,22 @@ def test_a_failed_verdict_keeps_an_n_the_data_confirm_and_gives_the_overbound_k(
 
 
 def test_an_n_far_from_the_line_is_not_kept_whatever_the_verdict(filtered):
-    result, _ = filtered
+    result, _, _ = filtered
     final = result.finals["accel_y"]
     assert final.noise_density.method == "unresolved"  # the model's N 10⁶ below the passband is not confirmed
     assert not passband_confirms(final.model_values[0], result.static.slopes["accel_y"].noise_density)
+
+
+def test_the_analysis_confirms_a_kept_n_by_the_records_spectrum(filtered):
+    """What analyze runs on a failed verdict: the passband level read from the record's spectrum, in the band the
+    model's white noise dominates, confirms the right N; the warning and the source name it."""
+    result, _, imu = filtered
+    axis = next(a for a in GYRO_AXES if result.loops[a].passed)
+    failed = replace(result.loops[axis], passed=False, verdict="AV misfit left unexplained (at one τ)")
+    given, overbound, warning = resolve_axis(result.finals[axis], failed, result.static, axis, imu.axis(axis),
+                                             horizon_s=100.0)
+    assert given.noise_density.method == "model" and given.random_walk.method == "unresolved"
+    assert "record's spectrum" in given.noise_density.source and "K unresolved" in warning
+    assert overbound.reference_noise_density == given.noise_density.value
+    assert resolve_axis(result.finals[axis], result.loops[axis], result.static, axis, imu.axis(axis),
+                        horizon_s=100.0) is None

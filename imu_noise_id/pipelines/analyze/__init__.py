@@ -36,8 +36,8 @@ from .final import FinalModel, final_model
 from .mapped import MappedImu
 from .models import AUTO, AxisModel, ModelStage, finish_axis, fit_axis
 from .numbers import PastedNumbers, pasted_numbers
-from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, data_overbound, overbounds
-from .resolution import resolved, unresolved_reason
+from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, overbounds
+from .resolution import resolve_axis
 from .static import StaticAnalysis, analyze_static
 
 #: Simulations of each final model drawn as its band.
@@ -198,22 +198,11 @@ def analyze(imu: ImuSeries | MappedImu, temperature: ScalarSeries | None = None,
         return result
     result.overbounds = overbounds(static, result.finals, options.horizon_s)
     for axis, final in result.finals.items():
-        reading = static.slopes[axis].noise_density
-        why = unresolved_reason(final, result.loops.get(axis), reading)
-        if why is None:
-            continue
-        overbound = data_overbound(static, axis, options.horizon_s)
-        result.finals[axis] = resolved(final, why, overbound, reading)
-        if why.noise_density_kept:
-            overbound = replace(overbound, reference_noise_density=final.noise_density.value,
-                                reference_source="final model (N, confirmed by the data's white-noise line); this "
-                                                 "overbound (K: the final model is unresolved)")
-            result.warnings.append(f"{axis}: K unresolved, the overbound's K given (an upper bound); N is the "
-                                   f"model's, inside the data's white-noise line's interval: {why.reason}")
-        else:
-            result.warnings.append(f"{axis}: N and K unresolved, the overbound's values given (upper bounds): "
-                                   f"{why.reason}")
-        result.overbounds[axis] = overbound
+        resolution = resolve_axis(final, result.loops.get(axis), static, axis, imu.axis(axis),
+                                  horizon_s=options.horizon_s)
+        if resolution is not None:
+            result.finals[axis], result.overbounds[axis], warning = resolution
+            result.warnings.append(warning)
     return result
 
 

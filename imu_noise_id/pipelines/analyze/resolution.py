@@ -5,9 +5,10 @@ the AV's white-noise line (:func:`~imu_noise_id.core.allan.slopes.fit_axis_slope
 more than :data:`PASSBAND_FACTOR` apart). An unresolved axis gives its data overbound's K
 (:func:`~.overbound.data_overbound`) as an upper bound, interval (0, value), method ``unresolved``, the reason in its
 source; it gives the overbound's N the same way unless the verdict alone failed and the model's N lies inside the
-white-noise line's 95 % interval (:func:`passband_confirms`: the data read N without the model's structure, so N keeps
-the model's value and interval, its source saying why). ``model.yaml`` keeps the model's own. Reasons:
-docs/analysis.md, "Why an unresolved axis …".
+95 % interval of the data's passband level (:func:`~imu_noise_id.core.estimation.readouts.passband.passband_level`,
+the record's spectrum in the band the model's white noise and filter dominate; the white-noise line where the band is
+too narrow): N then keeps the model's value and interval, its source saying why. ``model.yaml`` keeps the model's own.
+Reasons: docs/analysis.md, "Why an unresolved axis …".
 """
 
 from __future__ import annotations
@@ -15,11 +16,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from ...core.allan.slopes import SlopeComponent
 from ...core.estimation.readouts.kalibr import KalibrValue
+from ...core.estimation.readouts.passband import PassbandLevel, passband_level
 from ..loop import LoopResult
 from .final import FinalModel
-from .overbound import AxisOverbound
+from .overbound import AxisOverbound, data_overbound
+from .static import StaticAnalysis
 
 #: N and the data's passband reading disagree when their intervals are disjoint and their ratio exceeds this.
 PASSBAND_FACTOR = 2.0
@@ -41,24 +46,33 @@ def passband_disagreement(n: KalibrValue, reading: SlopeComponent) -> str | None
             "intervals")
 
 
-def passband_confirms(n: KalibrValue, reading: SlopeComponent) -> bool:
-    """Whether the model's N [u/√Hz] lies inside the white-noise line's 95 % interval ``reading`` (a reading, not an
-    upper bound)."""
-    lo, hi = reading.ci
-    return (n.value is not None and reading.method != "upper_bound" and 0.0 < lo <= hi
-            and lo <= n.value <= hi)
+def passband_confirms(n: KalibrValue, level: SlopeComponent | PassbandLevel) -> bool:
+    """Whether the model's N [u/√Hz] lies inside the 95 % interval of the data's ``level`` (a reading, not an upper
+    bound)."""
+    lo, hi = level.ci
+    return n.value is not None and level.method != "upper_bound" and 0.0 < lo <= hi and lo <= n.value <= hi
+
+
+def _describe(level: SlopeComponent | PassbandLevel) -> str:
+    if isinstance(level, PassbandLevel):
+        return f"passband level ({level.describe()})"
+    return f"white-noise line {level.value:.3g} [{level.ci[0]:.3g}, {level.ci[1]:.3g}]"
 
 
 @dataclass(frozen=True)
 class Unresolved:
-    """Why an axis's final model may not give K (and N, unless ``noise_density_kept``): module docstring."""
+    """Why an axis's final model may not give K (and N, unless ``noise_density_kept``, confirmed by ``level``):
+    module docstring."""
 
     reason: str
     noise_density_kept: bool
+    level: SlopeComponent | PassbandLevel | None = None
 
 
-def unresolved_reason(final: FinalModel, loop: LoopResult | None, reading: SlopeComponent) -> Unresolved | None:
-    """Why ``final`` may not give its K and perhaps N (module docstring), or None when it may give both."""
+def unresolved_reason(final: FinalModel, loop: LoopResult | None, reading: SlopeComponent,
+                      level: PassbandLevel | None = None) -> Unresolved | None:
+    """Why ``final`` may not give its K and perhaps N (module docstring), or None when it may give both; ``reading``
+    is the AV's white-noise line, ``level`` the spectrum's passband level (the line confirms N without it)."""
     failed = loop is not None and not loop.passed
     disagreement = passband_disagreement(final.noise_density, reading)
     reasons = [f"the closed loop's verdict failed ({loop.verdict})"] if failed else []
@@ -66,13 +80,14 @@ def unresolved_reason(final: FinalModel, loop: LoopResult | None, reading: Slope
         reasons.append(disagreement)
     if not reasons:
         return None
-    return Unresolved("; ".join(reasons), disagreement is None and passband_confirms(final.noise_density, reading))
+    confirm = level if level is not None else reading
+    kept = disagreement is None and passband_confirms(final.noise_density, confirm)
+    return Unresolved("; ".join(reasons), kept, confirm if kept else None)
 
 
-def resolved(final: FinalModel, unresolved: Unresolved | None, overbound: AxisOverbound,
-             reading: SlopeComponent) -> FinalModel:
+def resolved(final: FinalModel, unresolved: Unresolved | None, overbound: AxisOverbound) -> FinalModel:
     """``final`` as it is when ``unresolved`` is None, else with K (and N unless kept) its overbound's values
-    (module docstring); ``reading`` is the white-noise line a kept N was checked against."""
+    (module docstring)."""
     if unresolved is None:
         return final
     reason = unresolved.reason
@@ -86,12 +101,33 @@ def resolved(final: FinalModel, unresolved: Unresolved | None, overbound: AxisOv
     n = final.noise_density
     if unresolved.noise_density_kept:
         n = replace(n, source=f"{n.source}; the model is unresolved ({reason}), but its N lies inside the data's "
-                              f"white-noise line {reading.value:.3g} [{reading.ci[0]:.3g}, {reading.ci[1]:.3g}], "
-                              "read without the model's structure")
-        what = "K unresolved (N confirmed by the data's white-noise line)"
+                              f"{_describe(unresolved.level)}, read without the model's structure")
+        what = "K unresolved (N confirmed by the data's passband level)"
     else:
         n = bound(n, overbound.noise_density, "N")
         what = "N and K unresolved"
     return replace(final, noise_density=n, random_walk=bound(final.random_walk, overbound.random_walk, "K"),
                    unresolved=reason, model_values=(final.noise_density, final.random_walk),
                    source=f"{final.source}; {what}: {reason}")
+
+
+def resolve_axis(final: FinalModel, loop: LoopResult | None, static: StaticAnalysis, axis: str, y: np.ndarray, *,
+                 horizon_s: float) -> tuple[FinalModel, AxisOverbound, str] | None:
+    """The resolution of ``axis`` (module docstring; ``y`` its samples [u], ``horizon_s`` the overbound's [s]): None
+    when its final model gives N and K, else (the final model with the values given, the data overbound they come
+    from, the warning)."""
+    reading = static.slopes[axis].noise_density
+    level = passband_level(y, static.dt, list(final.fit.components)) if loop is not None and not loop.passed else None
+    why = unresolved_reason(final, loop, reading, level)
+    if why is None:
+        return None
+    overbound = data_overbound(static, axis, horizon_s)
+    given = resolved(final, why, overbound)
+    if not why.noise_density_kept:
+        return given, overbound, (f"{axis}: N and K unresolved, the overbound's values given (upper bounds): "
+                                  f"{why.reason}")
+    overbound = replace(overbound, reference_noise_density=final.noise_density.value,
+                        reference_source="final model (N, confirmed by the data's passband level); this overbound (K: "
+                                         "the final model is unresolved)")
+    return given, overbound, (f"{axis}: K unresolved, the overbound's K given (an upper bound); N is the model's, "
+                              f"inside the data's {_describe(why.level)}: {why.reason}")
