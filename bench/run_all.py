@@ -93,13 +93,16 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_gmwm_accuracy.py"], "bench_gmwm_accuracy.txt"),
     (["bench_gmwm_robust.py"], "bench_gmwm_robust.txt"),
     (["bench_gmwm_pooled.py"], "bench_gmwm_pooled.txt"),
+    (["bench_dlpf.py", "--rates", "200", "--seeds", "1"], "bench_dlpf.txt"),
+    (["bench_dlpf.py", "--rates", "400", "--seeds", "1"], "bench_dlpf.txt"),
+    (["bench_dlpf.py", "--rates", "1000", "--seeds", "1"], "bench_dlpf.txt"),
 ]
 
 #: Studies in bench/studies/ whose outputs README.md or docs/ quote (``--studies``; outputs in docs/results/studies/):
 #: one-off questions, not regression numbers. The side-by-side studies against an old checkout are run by hand, their
-#: last outputs kept as sections of studies/sensor_filter.txt (bench_sensor_filter, bench_dlpf) and
-#: studies/steady_engine.txt (bench_steady_engine, bench_loop_measured_time); the other studies keep no output: docs/
-#: states what each found and names the script that reproduces it.
+#: last outputs kept as studies/bench_sensor_filter.txt and as the sections of studies/steady_engine.txt
+#: (bench_steady_engine, bench_loop_measured_time); the other studies keep no output: docs/ states what each found
+#: and names the script that reproduces it.
 STUDIES: list[tuple[list[str], str]] = [
     (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "studies/probe_k_information.txt"),
     (["studies/bench_sin_regressors.py"], "studies/bench_sin_regressors.txt"),

@@ -14,7 +14,7 @@ N's error and method, and the CPU time; then a summary per tree::
 The truth per record: N = 1.5·10⁻⁴ u/√Hz through the DLPF (cutoff log-uniform in 5–40 Hz), a white floor of
 5–20 % of it, K = 2·10⁻⁵ u/s/√Hz; ``--minutes`` of data (default 5) per record. What it found is in docs/loop.md
 (The loop's rules, rule 1) and docs/analysis.md (Noise parameters from the slopes, rule 5); its last output is
-docs/results/studies/sensor_filter.txt.
+docs/results/studies/bench_sensor_filter.txt.
 """
 
 from __future__ import annotations
