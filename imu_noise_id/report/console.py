@@ -79,8 +79,8 @@ def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = N
     lines += [f"{axis:8s} K flagged: {f.random_walk.source}" for axis, f in finals.items() if f.random_walk_above_bound]
     lines += [f"{axis:8s} N and K unresolved (upper bounds: the overbound's): {f.unresolved}"
               if f.noise_density.method == "unresolved" else
-              f"{axis:8s} K unresolved (an upper bound: the overbound's; N the model's, inside the data's white-noise "
-              f"line's interval): {f.unresolved}"
+              f"{axis:8s} K unresolved (an upper bound: the overbound's; N the model's, inside the interval of the "
+              f"data's passband level): {f.unresolved}"
               for axis, f in finals.items() if f.unresolved]
     lines += short_for_walk_lines(finals, static)
     return "\n".join(lines)

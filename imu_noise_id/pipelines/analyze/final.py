@@ -34,7 +34,7 @@ class FinalModel:
     bias_instability, bias_instability_allan : B [u] from the model (with interval) and from the data's AV
     random_walk_bound : the largest K the AV at τ ≥ a tenth of the record supports (95 %, simultaneous)
     unresolved : why the model is not trusted (:mod:`.resolution`), else None; then ``random_walk`` is the
-        overbound's, ``noise_density`` too unless the data's white-noise line confirms the model's (its method then
+        overbound's, ``noise_density`` too unless the data's passband level confirms the model's (its method then
         stays ``model``), and ``model_values`` the model's (N, K)
     """
 
