@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import Generic, TypeVar
 
 import numpy as np
 
@@ -74,13 +76,34 @@ class LoopState:
         return structure_name(names)
 
 
+T = TypeVar("T")
+
+
+class Deferred(Generic[T]):
+    """A value computed by ``compute()`` on first use and kept (copies of its holder share it); pickled as the value."""
+
+    def __init__(self, compute: Callable[[], T]) -> None:
+        self._compute: Callable[[], T] | None = compute
+        self._value: T | None = None
+
+    def __call__(self) -> T:
+        if self._compute is not None:
+            self._value, self._compute = self._compute(), None
+        return self._value  # type: ignore[return-value]
+
+    def __getstate__(self) -> dict[str, object]:
+        return {"_compute": None, "_value": self()}
+
+
 @dataclass
 class Diagnosis:
-    """A fit with its residuals, error measures and detector findings."""
+    """A fit with its residuals, error measures and detector findings. ``detected`` runs the detectors on first use
+    of :attr:`findings`, ``residual_spectra`` on first use of :attr:`spectra`: the loop judges a candidate by its BIC,
+    AV and targeted statistic alone, so a refused candidate's residuals never go through every detector."""
 
     fit: FitResult
     errors: ResidualErrors
-    findings: list[det.Finding]
+    detected: Deferred[list[det.Finding]]
     innovations: np.ndarray
     tau: np.ndarray
     av_data: np.ndarray
@@ -88,7 +111,17 @@ class Diagnosis:
     av_model: np.ndarray
     exog_values: dict[str, dict[str, float]]
     whitening: WhiteningFilter
-    spectra: ResidualSpectra
+    residual_spectra: Deferred[ResidualSpectra]
+
+    @property
+    def spectra(self) -> ResidualSpectra:
+        """The innovations' spectra for the report (computed once, :attr:`residual_spectra`)."""
+        return self.residual_spectra()
+
+    @property
+    def findings(self) -> list[det.Finding]:
+        """Every detector's finding on the innovations (computed once, :attr:`detected`)."""
+        return self.detected()
 
     @property
     def innovation_variance(self) -> float:

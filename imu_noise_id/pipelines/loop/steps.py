@@ -31,7 +31,7 @@ from ...core.noise.flicker import band_for_record
 from ...core.noise.modelspec import CANONICAL_ORDER, structure_name
 from ...core.noise.resonant import LPF, MAX_DAMPING, OSC, filter_memory_limit
 from ...core.quality import interpolate_missing
-from .state import STATE_EFFECTS, Diagnosis, ExogTerm, LoopState
+from .state import STATE_EFFECTS, Deferred, Diagnosis, ExogTerm, LoopState
 
 
 def _restarted_walk(fitted: float, f: det.Finding) -> float:
@@ -158,22 +158,26 @@ class AxisLoop:
                                  lags=self.lags)
         white = [c for c in fit.components if c.name in ("WN", "QN")]
         av_white = total_allan_variance(white, av.tau, self.dt) if white else None
-        findings = self.detect(e, whitening, state, filled, tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model,
-                               av_white=av_white)
-        return Diagnosis(fit=fit, errors=errors, findings=findings, innovations=e, tau=av.tau, av_data=av_data,
+        detected = Deferred(functools.partial(
+            self.detect, e, whitening, tuple(state.structure), tuple(t.effect for t in state.exog_terms), filled,
+            tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model, av_white=av_white))
+        return Diagnosis(fit=fit, errors=errors, detected=detected, innovations=e, tau=av.tau, av_data=av_data,
                          av_ci=av_ci, av_model=av_model, exog_values=exog_values,
-                         whitening=whitening, spectra=residual_spectra(e, self.dt))
+                         whitening=whitening,
+                         residual_spectra=Deferred(functools.partial(residual_spectra, e, self.dt)))
 
-    def detect(self, e: np.ndarray, whitening: WhiteningFilter, state: LoopState, residual: np.ndarray, *,
-               tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_model: np.ndarray,
-               av_white: np.ndarray | None) -> list[det.Finding]:
+    def detect(self, e: np.ndarray, whitening: WhiteningFilter, structure: tuple[str, ...], regressors: tuple[str, ...],
+               residual: np.ndarray, *, tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
+               av_model: np.ndarray, av_white: np.ndarray | None) -> list[det.Finding]:
+        """Every detector on the standardized innovations ``e`` of a fit of ``structure`` with the regressor effects
+        ``regressors`` (``residual``: the data less the regressors, gaps filled; the AV readings at ``tau``)."""
         a = self.alpha
         found = [det.detect_outliers(e, alpha=a), *self.detect_line(e, whitening, residual),
                  det.detect_step(e, self.dt, whitening, alpha=a), det.detect_correlation(e, self.dt, alpha=a,
                                                                                         lags=self.lags)]
-        if "RR" not in state.structure:
+        if "RR" not in structure:
             found.append(det.detect_ramp(e, self.dt, whitening, alpha=a))
-        if self.temperature is not None and not any(t.effect == "TEMP" for t in state.exog_terms):
+        if self.temperature is not None and "TEMP" not in regressors:
             found.append(det.detect_temperature(e, self.temperature, whitening, alpha=a))
         found += detect_av_signatures(tau, av_data, av_ci, av_model, av_white=av_white, alpha=a)
         return found
