@@ -221,6 +221,24 @@ def test_osc_block_is_the_exact_discretisation_of_a_stationary_oscillator():
         assert back.params()[key] == pytest.approx(value, rel=1e-9)
 
 
+@pytest.mark.parametrize("osc", [OSC(0.5, 0.05, 6e-3), OSC(3.0, 0.6, 1e-3), OSC(1e-3, 5e-4, 1.0),
+                                 OSC(0.4, 2e-5, 2.0), OSC(45.0, 30.0, 1e-2), OSC(49.0, 1e-3, 1.0)], ids=str)
+def test_osc_process_noise_is_the_van_loan_integral(osc: OSC):
+    """The closed-form Q equals ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ by Van Loan's matrix exponential (an independent
+    computation), from slow and narrow lines to wide ones near the Nyquist frequency."""
+    from scipy.linalg import expm
+
+    w0, a = osc.omega0, osc.damping * osc.omega0
+    generator = np.array([[0.0, w0], [-w0, -2.0 * a]])
+    m = np.zeros((4, 4))
+    m[:2, :2], m[:2, 2:], m[2:, 2:] = -generator, np.diag([0.0, 4.0 * a * osc.sigma**2]), generator.T
+    e = expm(m * DT)
+    van_loan = e[2:, 2:].T @ e[:2, 2:]
+    q = osc.process_noise(DT)
+    np.testing.assert_allclose(q, 0.5 * (van_loan + van_loan.T), rtol=0, atol=1e-12 * np.abs(van_loan).max())
+    np.testing.assert_allclose(osc.block(DT).phi, e[2:, 2:].T, rtol=0, atol=1e-13)
+
+
 def test_osc_simulation_has_its_variance_and_its_line():
     osc = OSC(2.0, 0.2, 1e-2)
     y = np.concatenate([osc.simulate(100_000, DT, np.random.default_rng(s)) for s in range(8)])

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from scipy import linalg, signal
+from scipy import signal
 
 from . import units
 from .base import Component, StateBlock, as_freq, as_tau
@@ -169,16 +169,20 @@ class OSC(Component):
         return e * np.array([[c + a / wd * s, w0 / wd * s], [-w0 / wd * s, c - a / wd * s]])
 
     def process_noise(self, dt: float) -> np.ndarray:
-        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state (Van Loan)."""
-        w0, a = self.omega0, self.damping * self.omega0
-        A = np.array([[0.0, w0], [-w0, -2.0 * a]])
-        W = np.diag([0.0, 4.0 * a * self.sigma**2])  # drive of x'/ω₀: q/ω₀² with q = 4ζω₀³σ²
-        M = np.zeros((4, 4))
-        M[:2, :2], M[:2, 2:], M[2:, 2:] = -A, W, A.T
-        E = linalg.expm(M * dt)
-        phi = E[2:, 2:].T
-        q = phi @ E[:2, 2:]
-        return 0.5 * (q + q.T)
+        """Q = ∫₀^dt e^{Aτ} B q Bᵀ e^{Aᵀτ} dτ of the scaled state, in closed form: the discretisation is exact and the
+        state stationary with P∞ = σ² I, so Q = P∞ − Φ P∞ Φᵀ = σ² (I − Φ Φᵀ). With a, ω_d of :meth:`_poles`,
+        r = a/ω_d, w = ω₀/ω_d, θ = ω_d dt and E = e^{−2a dt} (1 − E by expm1, no cancellation for a dt ≪ 1):
+        Q₁₁ = σ² [1 − E − 2E r sinθ (cosθ + r sinθ)], Q₂₂ = σ² [1 − E + 2E r sinθ (cosθ − r sinθ)],
+        Q₁₂ = 2σ² E r w sin²θ."""
+        a, wd = self._poles()
+        r, w, theta = a / wd, self.omega0 / wd, wd * dt
+        c, s = math.cos(theta), math.sin(theta)
+        e, one_minus_e = math.exp(-2.0 * a * dt), -math.expm1(-2.0 * a * dt)
+        var = self.sigma**2
+        q11 = one_minus_e - 2.0 * e * r * s * (c + r * s)
+        q22 = one_minus_e + 2.0 * e * r * s * (c - r * s)
+        q12 = 2.0 * e * r * w * s * s
+        return var * np.array([[q11, q12], [q12, q22]])
 
     def block(self, dt: float) -> StateBlock:
         if self.frequency >= 0.5 / _positive("dt", dt):
