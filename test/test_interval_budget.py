@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.estimation.em import mle, uncertainty
-from imu_noise_id.core.estimation.em.model import NoiseModel
+from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.estimation.em.profile import BudgetSpentError, Profiler
-from imu_noise_id.core.estimation.em.results import BUDGET_SPENT
+from imu_noise_id.core.estimation.em.results import BUDGET_SPENT, FitResult
 from imu_noise_id.core.estimation.readouts.quantiles import Z95
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
@@ -104,3 +104,39 @@ def test_a_profile_that_cannot_finish_within_the_budget_left_is_not_begun(profil
     with pytest.raises(BudgetSpentError):
         short.interval(k, cov)
     assert short.n_eval == 0
+
+
+# Every parameter interior and well determined: each interval is a Wald interval once its two-point check passes.
+INTERIOR = [WN(1e-3), GM(tau=0.5, sigma=2e-3), RW(3e-4)]
+INTERIOR_DT, INTERIOR_N = 0.01, 20_000
+
+
+@pytest.fixture(scope="module")
+def interior_record() -> np.ndarray:
+    return simulate_sum(INTERIOR, INTERIOR_N, INTERIOR_DT, np.random.default_rng(8))
+
+
+def _fit_within(record: np.ndarray, evaluations: int, monkeypatch: pytest.MonkeyPatch) -> FitResult:
+    point = NoiseModel(record, INTERIOR_DT, "WN+GM+RW").fit(options=FitOptions(uncertainty=False))
+    states = point.statespace.phi.shape[0]
+    monkeypatch.setattr(uncertainty, "PROFILE_BUDGET", evaluations * INTERIOR_N * states)
+    return NoiseModel(record, INTERIOR_DT, "WN+GM+RW").fit()
+
+
+def test_past_the_budget_a_wald_check_spends_nothing(interior_record, monkeypatch):
+    # Each two-point Wald check was made whatever the budget: 44 exact passes, 31 s of a whole measured axis's final
+    # intervals, where a failed check could only end in the same Wald interval, marked as the budget's.
+    unlimited = NoiseModel(interior_record, INTERIOR_DT, "WN+GM+RW").fit()
+    assert set(unlimited.ci95_method.values()) == {"wald"}
+    spent = _fit_within(interior_record, 0, monkeypatch)
+    assert spent.profile_evaluations <= 1  # ℓ at the estimate, nothing after it
+    assert all(how == f"wald, {BUDGET_SPENT}" for how in spent.ci95_method.values())
+    assert spent.ci95 == unlimited.ci95 and list(spent.ci95) == list(unlimited.ci95)
+
+
+def test_the_budget_checks_the_pasted_parameters_first(interior_record, monkeypatch):
+    # ℓ at the estimate and two checks of two points: N and K, not the GM that comes before K in the labels.
+    fit = _fit_within(interior_record, 5, monkeypatch)
+    assert fit.ci95_method["WN.noise_density"] == "wald" and fit.ci95_method["RW.random_walk"] == "wald"
+    assert fit.ci95_method["GM.tau"] == fit.ci95_method["GM.sigma"] == f"wald, {BUDGET_SPENT}"
+    assert list(fit.ci95_method) == ["WN.noise_density", "GM.tau", "GM.sigma", "RW.random_walk"]

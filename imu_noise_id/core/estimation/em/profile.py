@@ -199,8 +199,7 @@ class Profiler:
         step = np.where(np.isfinite(step), step, 0.0)
         loose = set(self.zero) | self.flat
         ladder = [(s, j) for s in self.fallback_starts()[1:] for j in self.zero if s[j] != self.theta[j]]
-        if loose:  # two inner maximisations (two plain evaluations otherwise, checked whatever the budget)
-            self.afford(2 * self.maximise_cost(1 + len(ladder)))
+        self.afford(2 * self.maximise_cost(1 + len(ladder)) if loose else 2)  # two inner maximisations or two points
         for sign in (-1.0, 1.0):
             th = self.theta + sign * step
             if np.any(th < self.lo) or np.any(th > self.hi):

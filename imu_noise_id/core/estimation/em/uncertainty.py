@@ -51,6 +51,17 @@ def information(par: mle.Parameterisation, theta: np.ndarray, model: ss.StateSpa
     return whittle.fisher_information(par.to_components(theta, model), n, dt), WHITTLE_WALD
 
 
+#: Components whose parameters get their intervals first, while the profile budget lasts: the white noise and the
+#: random walk, whose N and K users paste into their filters.
+PASTED_FIRST = ("WN", "RW")
+
+
+def checked_first(labels: list[str]) -> list[int]:
+    """Indices of ``labels`` (``WN.noise_density`` …) in the order their intervals spend the profile budget:
+    :data:`PASTED_FIRST` components' parameters, then the others, each in the labels' order."""
+    return sorted(range(len(labels)), key=lambda k: (labels[k].split(".")[0] not in PASTED_FIRST, k))
+
+
 def _beyond_budget(v: float, s_log: float, conditional_end: float | None,
                    wald: str = "wald") -> tuple[tuple[float, float], str]:
     """(interval, method) once the budget is spent: Wald in log space where the information has one, else (0,
@@ -140,7 +151,8 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     except BudgetSpentError:
         a_hat = prof.evaluate(theta)[1]
 
-    for k, lab in enumerate(noise_labels):
+    for k in checked_first(noise_labels):
+        lab = noise_labels[k]
         v = float(np.exp(theta[k]))
         s_log = math.sqrt(cov[k, k]) if np.isfinite(cov[k, k]) else math.inf
         fit.se[lab] = v * s_log
@@ -163,6 +175,9 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
             fit.ci95[lab] = (math.exp(lo_k) if math.isfinite(lo_k) else 0.0,
                              math.exp(hi_k) if math.isfinite(hi_k) else math.inf)
             fit.ci95_method[lab] = "profile"
+    for table in (fit.se, fit.ci95, fit.ci95_method):  # back in the labels' order
+        for lab in noise_labels:
+            table[lab] = table.pop(lab)
     j = _ramp_regressor(model_ss)
     rr_lab = next((lab for i, _, lab in parameter_labels(comps_ss) if isinstance(comps_ss[i], RR)), None)
     if j is not None and rr_lab is not None and "ramp" in fit.exog_coef:
