@@ -73,14 +73,57 @@ def test_a_flicker_ladder_edf_from_its_unit_scale_memo_equals_the_direct_one(mon
     m = np.array([1, 4, 16, 64, 256, 1024])
     av_band._unit_sum_covariance.cache_clear()
     scales = (1e-4, 3e-3)
-    memo = {}
     for b in scales:
         ladder = BI(b, tau_min=0.1, tau_max=200.0)
         direct = np.asarray(av_band._computed_sum_covariance(ladder, n + 1, dt))
         assert av_band._sum_covariance(ladder, n + 1, dt) == pytest.approx(direct, rel=1e-12, abs=0.0)
-        memo[b] = model_av_edf([WN(1e-3), ladder], m, n, dt)
+    av_band._unit_sum_covariance.cache_clear()
+    memo = {b: model_av_edf([WN(1e-3), BI(b, tau_min=0.1, tau_max=200.0)], m, n, dt) for b in scales}
     assert av_band._unit_sum_covariance.cache_info().currsize == 1  # both scales share the unit ladder
     monkeypatch.setattr(av_band, "_sum_covariance", av_band._computed_sum_covariance)
     for b in scales:
         assert memo[b] == pytest.approx(model_av_edf([WN(1e-3), BI(b, tau_min=0.1, tau_max=200.0)], m, n, dt),
                                         rel=1e-12)
+
+
+def _brute_force_edf(components: list, m: int, n: int, dt: float) -> float:
+    """EDF of the overlapping AV from the autocovariance R(u) alone (no closed forms): d_k's weights w (−1/m on m
+    samples, +1/m on the next m), c(l) = Σ_ab w_a w_b R(l + b − a) at every lag, and Var = (1/4M²) Σ_|l|<M (M − |l|)
+    2c(l)²."""
+    lags = np.arange(n + 2 * m, dtype=float)
+    r = np.zeros(lags.size)
+    for comp in components:
+        s = comp.sum_covariance(np.arange(lags.size + 2, dtype=float), dt)  # K(u) = −½ S(u): R(j) = ΔS(j)/2 − ΔS(j−1)/2
+        var = -2.0 * s
+        r[0] += var[1]
+        r[1:] += 0.5 * (var[2: lags.size + 1] - 2.0 * var[1: lags.size] + var[: lags.size - 1])
+    w = np.concatenate([np.full(m, -1.0 / m), np.full(m, 1.0 / m)])
+    count = n - 2 * m + 1
+    offsets = np.arange(-(2 * m - 1), 2 * m)
+    kernel = np.correlate(w, w, mode="full")  # Σ_a w_a w_{a+o} for o = −(2m−1) … 2m−1
+    c = np.array([np.sum(kernel * r[np.abs(ell + offsets)]) for ell in range(count)])
+    weight = (count - np.arange(count)).astype(float)
+    weight[1:] *= 2.0
+    var_av = float(np.sum(weight * 2.0 * c**2)) / (4.0 * count * count)
+    return 2.0 * (0.5 * c[0]) ** 2 / var_av
+
+
+@pytest.mark.parametrize("name", ["flicker, lines, averaging", "slow line and slow GM", "low-pass and walk"])
+def test_the_edf_in_closed_form_equals_the_sum_over_every_lag(name):
+    # Past 2m + its reach only exponential terms correlate the differences, summed as geometric series: the EDF must
+    # be the one summed over every lag from the autocovariance.
+    from imu_noise_id.core.noise.averaging import MA
+    from imu_noise_id.core.noise.components import GM
+    from imu_noise_id.core.noise.flicker import BI
+    from imu_noise_id.core.noise.resonant import LPF, OSC
+
+    n, dt = 4000, 0.01
+    components = {
+        "flicker, lines, averaging": [WN(7e-4), MA(5e-4), BI(1e-4, tau_min=0.02, tau_max=40.0),
+                                      OSC(0.5, 0.01, 1e-3), OSC(7.0, 0.14, 1e-3)],
+        "slow line and slow GM": [WN(1e-3), OSC(0.05, 0.02, 1e-3), GM(tau=500.0, sigma=1e-3)],
+        "low-pass and walk": [WN(1e-3), LPF(2e-3, 5.0), RW(1e-4)],
+    }[name]
+    for m in (1, 3, 10, 40, 200):
+        expected = _brute_force_edf(components, m, n, dt)
+        assert model_av_edf(components, np.array([m]), n, dt)[0] == pytest.approx(expected, rel=1e-7)

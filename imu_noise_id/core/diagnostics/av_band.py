@@ -17,6 +17,7 @@ import numpy as np
 from ..allan import chi2_interval
 from ..constants import CONFIDENCE_95
 from ..noise.components import RR, Component
+from ..noise.sampled import lag_weighted_sum
 
 #: v_j for j = −2 … 2: the autocorrelation of the second difference (1, −2, 1).
 _V = (1.0, -4.0, 6.0, -4.0, 1.0)
@@ -29,32 +30,83 @@ MEMORY_REACH = 40.0
 
 def model_av_edf(components: list[Component], m: np.ndarray, n: int, dt: float) -> np.ndarray:
     """EDF of the overlapping AV at factors ``m`` of ``n`` samples at ``dt`` [s] of the Gaussian model
-    ``components``."""
+    ``components``.
+
+    c(l) is summed directly over the lags where a component without :meth:`~..noise.base.Component.exponential_terms`
+    still correlates d_k (l < 2m + its reach: white noise, a walk and a moving average end at 2m + 2, a digital
+    low-pass :data:`MEMORY_REACH` decay times later). Beyond, only exponential terms R(u) = Re Σ_j c_j e^{s_j u} remain,
+    and with z_j = e^{s_j dt}, l' = l − 2m + 1:
+
+        c(l) = Σ_j Re(Γ_j z_j^{l'}),  Γ_j = −c_j (1 − z_j^m)⁴ / (m² (1 − z_j)²),
+
+    so Σ_l (M − l) c(l) and Σ_l (M − l) c(l)² are geometric sums in closed form (:func:`_tail_sums`): O(J²) per m for
+    J terms instead of O(N). Beyond the papers."""
     m = np.asarray(m, dtype=np.int64)
     stochastic = [c for c in components if not isinstance(c, RR)]
     slope = sum(abs(c.slope) for c in components if isinstance(c, RR))
-    long_memory, short_memory = [], []
+    exponential, finite, short_memory = [], [], []
     for c in stochastic:
-        (long_memory if c.memory(dt)[0] > 0 else short_memory).append(c)
-    k_long = np.sum([_sum_covariance(c, n + 1, dt) for c in long_memory], axis=0) if long_memory else None
-    ell = np.arange(n + 1)
+        if c.exponential_terms() is not None:
+            exponential.append(c)
+        elif c.memory(dt)[0] > 0:
+            finite.append(c)
+        else:
+            short_memory.append(c)
+    reach = max([2, *(_reach(c, n + 1, dt) for c in finite)])
+    terms = [c.exponential_terms() for c in exponential]
+    weights = np.concatenate([t[0] for t in terms]) if terms else np.zeros(0, complex)
+    poles = np.concatenate([t[1] for t in terms]) * dt if terms else np.zeros(0, complex)
+    direct = [min(n - 2 * int(mi) + 1, 2 * int(mi) + reach) for mi in m]
+    size = min(n + 1, max((d + 2 * int(mi) + 1 for d, mi in zip(direct, m, strict=True)), default=1))
+    long_memory = exponential + finite
+    k_long = np.sum([_sum_covariance(c, size, dt) for c in long_memory], axis=0) if long_memory else None
     edf = np.empty(m.size)
-    for i, mi in enumerate(m):
-        count = n - 2 * int(mi) + 1
-        c = _difference_covariance(k_long, ell[:count], int(mi)) if k_long is not None else np.zeros(count)
+    for i, mi in enumerate(int(v) for v in m):
+        count = n - 2 * mi + 1
+        ell = np.arange(direct[i])
+        c = _difference_covariance(k_long, ell, mi) if k_long is not None else np.zeros(ell.size)
         # uncorrelated beyond a sample or two: c(l) = 0 from l = 2m + 2, K read near 0 (no cancellation of a walk's
         # cubic K at long lags)
-        near = ell[: min(count, 2 * int(mi) + 2)]
+        near = ell[: min(ell.size, 2 * mi + 2)]
         for comp in short_memory:
-            k_short = comp.sum_covariance(np.arange(near.size + 2 * int(mi) + 1, dtype=float), dt)
-            c[: near.size] += _difference_covariance(k_short, near, int(mi))
+            k_short = comp.sum_covariance(np.arange(near.size + 2 * mi + 1, dtype=float), dt)
+            c[: near.size] += _difference_covariance(k_short, near, mi)
         mu = slope * float(mi) * dt
-        weight = (count - ell[:count]).astype(float)
+        weight = (count - ell).astype(float)
         weight[1:] *= 2.0  # l and −l
-        var = float(np.sum(weight * (2.0 * c**2 + 4.0 * mu * mu * c))) / (4.0 * count * count)
+        total = float(np.sum(weight * (2.0 * c**2 + 4.0 * mu * mu * c)))
+        if count > ell.size and poles.size:
+            linear, square = _tail_sums(weights, poles, mi, count, ell.size)
+            total += 2.0 * (2.0 * square + 4.0 * mu * mu * linear)  # l and −l
+        var = total / (4.0 * count * count)
         mean = 0.5 * (float(c[0]) + mu * mu)
         edf[i] = 2.0 * mean * mean / var if var > 0 else np.inf
     return edf
+
+
+def _tail_sums(weights: np.ndarray, poles: np.ndarray, m: int, count: int, first: int) -> tuple[float, float]:
+    """(Σ (M − l) c(l), Σ (M − l) c(l)²) over l = ``first`` … M − 1 (``first`` ≥ 2m, M = ``count``) for c(l) =
+    Σ_j Re(Γ_j e^{w_j l'}), l' = l − 2m + 1, w_j = ``poles`` [per sample], Γ_j of :func:`model_av_edf`. With
+    T(w) = Σ_{l'=a}^{J−1} (J − l') e^{l'w} = e^{aw} (J − a + g(J − a, w)), g of
+    :func:`~..noise.sampled.lag_weighted_sum`, a the first l', J = M − 2m + 1: Σ (M − l) c(l) = Σ_j Re Γ_j T(w_j) and
+    Σ (M − l) c(l)² = ½ Σ_jk Re[Γ_j Γ_k T(w_j + w_k) + Γ_j Γ̄_k T(w_j + w̄_k)]."""
+    gamma = -weights * np.expm1(m * poles) ** 4 / (float(m) ** 2 * np.expm1(poles) ** 2)
+    a = first - 2 * m + 1
+    length = float(count - 2 * m + 1 - a)
+
+    def t(w: np.ndarray) -> np.ndarray:
+        return np.exp(a * w) * (length + lag_weighted_sum(np.array(length), w))
+
+    linear = float(np.sum(np.real(gamma * t(poles))))
+    same = gamma[:, None] * gamma[None, :] * t(poles[:, None] + poles[None, :])
+    conjugate = gamma[:, None] * np.conj(gamma)[None, :] * t(poles[:, None] + np.conj(poles)[None, :])
+    return linear, 0.5 * float(np.sum(np.real(same + conjugate)))
+
+
+def _reach(c: Component, size: int, dt: float) -> int:
+    """Lags after which ``c``'s K is linear (:data:`MEMORY_REACH` decay times), at most ``size``."""
+    memory = c.memory(dt)[0]
+    return min(size, math.ceil(MEMORY_REACH * memory / dt) + 2) if 0.0 < memory < math.inf else size
 
 
 def _sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
@@ -77,8 +129,7 @@ def _unit_sum_covariance(kind: type[Component], fixed: tuple[tuple[str, float], 
 
 def _computed_sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
     """K(0 … size − 1) of ``c``, linear beyond :data:`MEMORY_REACH` decay times of a finite memory > 0."""
-    memory = c.memory(dt)[0]
-    reach = math.ceil(MEMORY_REACH * memory / dt) + 2 if 0.0 < memory < math.inf else size
+    reach = _reach(c, size, dt)
     if reach >= size:
         return c.sum_covariance(np.arange(size, dtype=float), dt)
     k = np.empty(size)

@@ -93,6 +93,11 @@ class Component(ABC):
         """(longest, shortest autocovariance decay time, shortest oscillation period) [s]; (0, 0, inf): memoryless."""
         return 0.0, 0.0, math.inf
 
+    def exponential_terms(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(c [u²], s [1/s]), complex arrays with R(u) = Re Σ_j c_j e^{s_j u} at every lag u ≥ 0 of the sampled
+        process (docs/noise.md); None where the autocovariance is not such a sum."""
+        return None
+
     @abstractmethod
     def per_sample(self, dt: float) -> dict[str, float]:
         """Per-sample values in paper 000's notation for sampling period dt [s]."""

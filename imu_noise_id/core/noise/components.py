@@ -215,6 +215,10 @@ class GM(Component):
     def memory(self, dt: float) -> tuple[float, float, float]:
         return self.tau, self.tau, math.inf
 
+    def exponential_terms(self) -> tuple[np.ndarray, np.ndarray]:
+        """R(u) = σ² e^{−u/τ}."""
+        return np.array([self.sigma**2], dtype=complex), np.array([-1.0 / self.tau], dtype=complex)
+
     def per_sample(self, dt: float) -> dict[str, float]:
         return {
             **units.gm_to_paper000(self.tau, self.sigma),

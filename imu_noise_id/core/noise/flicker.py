@@ -103,6 +103,11 @@ class BI(Component):
         taus = self.taus
         return float(taus[-1]), float(taus[0]), math.inf
 
+    def exponential_terms(self) -> tuple[np.ndarray, np.ndarray]:
+        """R(u) = Σ_j σ²_each e^{−u/τ_j} over the ladder's GMs."""
+        taus = self.taus
+        return np.full(taus.size, self.sigma2_each, dtype=complex), (-1.0 / taus).astype(complex)
+
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         w = 2.0 * math.pi * as_freq(f)[..., None]
         taus = self.taus

@@ -86,6 +86,10 @@ class LPF(Component):
     def memory(self, dt: float) -> tuple[float, float, float]:
         return self.tau, self.tau, math.inf
 
+    def exponential_terms(self) -> tuple[np.ndarray, np.ndarray]:
+        """Its GM's (:meth:`from_gm`)."""
+        return self._gm().exponential_terms()
+
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
 
@@ -228,6 +232,11 @@ class OSC(Component):
     def memory(self, dt: float) -> tuple[float, float, float]:
         a, wd = self._poles()
         return 1.0 / a, 1.0 / a, 2.0 * math.pi / wd
+
+    def exponential_terms(self) -> tuple[np.ndarray, np.ndarray]:
+        """R(u) = Re(c e^{su}) (:meth:`_autocovariance`)."""
+        c, s = self._autocovariance()
+        return np.array([c]), np.array([s])
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         w = 2.0 * math.pi * as_freq(f)

@@ -16,7 +16,7 @@ def _series(m: np.ndarray, w: np.ndarray) -> np.ndarray:
     return m * (m - 1.0) / 2.0 + w * (m**3 - m) / 6.0 + w * w * m * m * (m * m - 1.0) / 24.0
 
 
-def _g(m: np.ndarray, w: np.ndarray) -> np.ndarray:
+def lag_weighted_sum(m: np.ndarray, w: np.ndarray) -> np.ndarray:
     """g(m) = Σ_{j=1}^{m−1} (m − j) e^{jw}, closed form or series; ``w`` broadcasts against m."""
     w = np.asarray(w, dtype=complex)
     one_minus_z = -np.expm1(w)  # per pole; broadcast against m below
@@ -49,7 +49,7 @@ def sampled_allan_variance(c: complex | np.ndarray, s: complex | np.ndarray, tau
         def sums(k: np.ndarray) -> np.ndarray:
             if real:
                 return real_poles_sum_variance(c.real.ravel(), np.real(np.ravel(s)), k, dt)
-            return np.real(c * (k + 2.0 * _g(k, w))).sum(axis=0)
+            return np.real(c * (k + 2.0 * lag_weighted_sum(k, w))).sum(axis=0)
     else:
         def sums(k: np.ndarray) -> np.ndarray:
             return block_sum_variance(complex(c), complex(s), k, dt)
@@ -69,7 +69,7 @@ def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.n
     w = complex(s) * dt
     if w.imag == 0.0 and complex(c).imag == 0.0:
         return complex(c).real * (k + 2.0 * _g_real(k, w.real))
-    return np.real(complex(c) * (k + 2.0 * _g(k, w)))
+    return np.real(complex(c) * (k + 2.0 * lag_weighted_sum(k, w)))
 
 
 def real_poles_sum_variance(c: float | np.ndarray, s: np.ndarray, k: np.ndarray, dt: float) -> np.ndarray:
@@ -84,7 +84,7 @@ def real_poles_sum_variance(c: float | np.ndarray, s: np.ndarray, k: np.ndarray,
 
 
 def _g_real(m: np.ndarray, w: float | np.ndarray) -> np.ndarray:
-    """:func:`_g` for real w < 0 (a float, or an array broadcasting against m)."""
+    """:func:`lag_weighted_sum` for real w < 0 (a float, or an array broadcasting against m)."""
     mw = m * w
     one_minus_z = -np.expm1(w)
     closed = (1.0 - one_minus_z) * (m * one_minus_z + np.expm1(mw)) / one_minus_z**2
