@@ -3,11 +3,13 @@ parameter gets the Wald interval or its conditional upper end, and its method sa
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
 import pytest
 
+from imu_noise_id.core import kalman
 from imu_noise_id.core.estimation.em import mle, uncertainty
 from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.estimation.em.profile import BudgetSpentError, Profiler
@@ -15,6 +17,8 @@ from imu_noise_id.core.estimation.em.results import BUDGET_SPENT, FitResult
 from imu_noise_id.core.estimation.readouts.quantiles import Z95
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.modelspec import parameter_labels
+from imu_noise_id.core.noise.resonant import LPF, OSC
 
 # A GM whose τ is not small against the record beside a random walk the record can hardly tell from 0 and a ramp:
 # the case whose intervals need profiles (bench_coverage's WN+GM+RW+RR, 1 h at 10 Hz).
@@ -140,3 +144,51 @@ def test_the_budget_checks_the_pasted_parameters_first(interior_record, monkeypa
     assert fit.ci95_method["WN.noise_density"] == "wald" and fit.ci95_method["RW.random_walk"] == "wald"
     assert fit.ci95_method["GM.tau"] == fit.ci95_method["GM.sigma"] == f"wald, {BUDGET_SPENT}"
     assert list(fit.ci95_method) == ["WN.noise_density", "GM.tau", "GM.sigma", "RW.random_walk"]
+
+
+# A record long enough to screen (the threshold lowered for speed): a white noise and a low-pass far from 0, and a
+# random walk the record can hardly tell from 0, whose drop the banded Whittle likelihood overstates (its lowest bands).
+SCREENED = [WN(1e-3), LPF(2e-3, 10.0), RW(1e-5)]
+
+
+@pytest.fixture(scope="module")
+def screened_fit() -> FitResult:
+    y = simulate_sum(SCREENED, 20_000, INTERIOR_DT, np.random.default_rng(1))
+    return NoiseModel(y, INTERIOR_DT, "WN+LPF+RW").fit(list(SCREENED), FitOptions(uncertainty=False))
+
+
+def test_the_near_zero_screen_spares_only_exact_checks_that_would_find_the_parameter_away_from_0(screened_fit,
+                                                                                              monkeypatch):
+    monkeypatch.setattr(uncertainty, "NEAR_ZERO_SCREEN_SAMPLES", 10_000)
+    (y, z), model = screened_fit.record, screened_fit.statespace
+    comps = ss.to_components(model)
+    par = mle.Parameterisation.of(comps)
+    theta = par.to_theta(comps)
+    labels = [lab for i, _, lab in parameter_labels(comps) if not isinstance(comps[i], RR)]
+    away = uncertainty.away_from_zero(par, theta, model, (y, z), INTERIOR_DT, count=len(labels))
+    assert {labels[k] for k in away} == {"WN.noise_density", "LPF.noise_density", "LPF.cutoff"}
+    for k in away:  # each exact check it spares would have found a drop ten times the check's 1.92 or more
+        shrunk = theta.copy()
+        shrunk[k] -= math.log(1e3)
+        assert screened_fit.loglik - kalman.loglik(par.to_model(shrunk, model), y, z).loglik > 10 * mle.LR_DROP_95
+
+
+def test_the_near_zero_screen_leaves_the_intervals_as_the_exact_checks_give_them(screened_fit, monkeypatch):
+    with_checks = uncertainty.add_uncertainty(copy.deepcopy(screened_fit))
+    monkeypatch.setattr(uncertainty, "NEAR_ZERO_SCREEN_SAMPLES", 10_000)
+    screened = uncertainty.add_uncertainty(copy.deepcopy(screened_fit))
+    assert screened.ci95 == with_checks.ci95 and screened.ci95_method == with_checks.ci95_method
+
+
+def test_the_near_zero_screen_leaves_walks_flicker_and_slow_processes_to_the_exact_check():
+    # The two likelihoods part at the lowest frequencies: a thousandfold shrink lowered the banded Whittle
+    # log-likelihood by 135 and the exact one by 2.9 for a random walk (300k samples of WN+GM+RW+RR), by 56 and 0 for
+    # flicker (300k samples of WN+MA+BI+4OSC).
+    from imu_noise_id.core.noise.flicker import BI
+
+    record_s = 3000.0
+    fast = [WN(1e-3), LPF(1e-3, 10.0), OSC(3.0, 0.01, 1e-3), OSC(0.5, 0.005, 1e-3)]
+    slow = [RW(1e-5), BI(1e-4, tau_min=0.1, tau_max=300.0), GM(tau=30.0, sigma=1e-3), LPF(1e-3, 0.01),
+            OSC(0.03, 0.001, 1e-3), OSC(0.5, 0.03, 1e-3)]
+    assert all(uncertainty._screenable(c, INTERIOR_DT, record_s) for c in fast)
+    assert not any(uncertainty._screenable(c, INTERIOR_DT, record_s) for c in slow)

@@ -15,6 +15,7 @@ from ...errors import InputError
 from ...kalman import statespace as ss
 from ...noise.components import RR, Component
 from ...noise.modelspec import parameter_labels
+from ...noise.resonant import OSC
 from ...quality import interpolate_missing
 from ..readouts.quantiles import Z95
 from . import mle, whittle
@@ -94,6 +95,69 @@ def _record_length(
     return RecordLengthAdvice(target, "95 % two-sided, relative half-width", t_now, needed, half, reliable)
 
 
+#: Records of this many samples or more (where each exact check is a pass over every sample) screen the near-zero
+#: checks on the banded Whittle likelihood first (:func:`away_from_zero`).
+NEAR_ZERO_SCREEN_SAMPLES = 250_000
+#: Whittle log-likelihood drop beyond which a parameter shrunk a thousandfold is away from 0 without its exact check:
+#: 26 times the check's 1.92.
+NEAR_ZERO_SCREEN_DROP = 50.0
+#: Only parameters of components whose memory is below this share of the record are screened: the two likelihoods
+#: part far at the lowest frequencies, where the exact one's bias and ramp take a share of a slow component's power
+#: (a random walk's drop 135 by Whittle, 2.9 exact; docs/em.md).
+NEAR_ZERO_SCREEN_MEMORY = 1e-3
+#: ... and lines whose window lies above this many cycles per record (their drops agreed within 20 on weak lines).
+NEAR_ZERO_SCREEN_LOWEST = 100.0
+
+
+def away_from_zero(par: mle.Parameterisation, theta: np.ndarray, model: ss.StateSpace,
+                   record: tuple[np.ndarray, np.ndarray], dt: float, *, count: int) -> set[int]:
+    """Indices k < ``count`` of the log-parameters ``theta`` of components far from the record's lowest frequencies
+    (:func:`_screenable`) whose thousandfold shrink lowers the banded Whittle
+    log-likelihood (:func:`.whittle.whittle_loglik`, single frequencies around the model's lines) by more than
+    :data:`NEAR_ZERO_SCREEN_DROP`: not near 0, no exact pass needed. The periodogram is of ``record``'s y [u] less its
+    regressors z at their values in ``model``, at ``dt`` [s]. Empty below :data:`NEAR_ZERO_SCREEN_SAMPLES` samples or
+    with missing samples. Beyond the papers."""
+    y, z = record
+    if y.size < NEAR_ZERO_SCREEN_SAMPLES or np.isnan(y).any():
+        return set()
+    comps = par.to_components(theta, model)
+    screened = [k for k in range(count) if _screenable(comps[par.entries[k][0]], dt, y.size * dt)]
+    if not screened:
+        return set()
+    noise = y - z @ model.b if z.shape[1] else y
+    bp = whittle.banded_periodogram(noise, fine=whittle.line_windows([comps], dt))
+
+    def loglik(components: list[Component]) -> float:
+        spectrum = whittle.difference_spectrum(components, bp.omega, dt)
+        return whittle.whittle_loglik(spectrum, bp) if np.all(spectrum > 0) else -math.inf
+
+    at_estimate = loglik(comps)
+    away = set()
+    for k in screened:
+        shrunk = theta.copy()
+        shrunk[k] -= math.log(1e3)
+        try:
+            drop = at_estimate - loglik(par.to_components(shrunk, model))
+        except ValueError:  # outside a component's domain: left to the exact check
+            continue
+        if drop > NEAR_ZERO_SCREEN_DROP:
+            away.add(k)
+    return away
+
+
+def _screenable(c: Component, dt: float, record_s: float) -> bool:
+    """Whether ``c`` is white at low frequency (:meth:`~...noise.base.Component.zero_frequency_density`: not a walk,
+    not flicker) and either has a memory below :data:`NEAR_ZERO_SCREEN_MEMORY` of the record ``record_s`` [s] or is a
+    line whose Whittle window (±20 bandwidths) lies above :data:`NEAR_ZERO_SCREEN_LOWEST` cycles per record."""
+    try:
+        c.zero_frequency_density(dt)
+    except NotImplementedError:
+        return False
+    if isinstance(c, OSC):
+        return c.frequency - 20.0 * c.bandwidth > NEAR_ZERO_SCREEN_LOWEST / record_s
+    return c.memory(dt)[0] < NEAR_ZERO_SCREEN_MEMORY * record_s
+
+
 def _near_zero(par: mle.Parameterisation, res: mle.MLEResult, k: int, y: np.ndarray, z: np.ndarray) -> bool:
     """Whether shrinking parameter k a thousandfold lowers ℓ by less than 1.92 (not distinguishable from 0)."""
     th = res.theta.copy()
@@ -140,7 +204,8 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     else:
         prof = Profiler(par, theta, model_ss, y, z, fit.loglik, info, lo, hi, max_eval=max_eval)
     res = mle.MLEResult(theta, model_ss, fit.loglik, 0, fit.converged, "")
-    near_zero = [k for k in range(k_noise) if _near_zero(par, res, k, y, z)]
+    away = away_from_zero(par, theta, model_ss, (y, z), fit.dt, count=k_noise)
+    near_zero = [k for k in range(k_noise) if k not in away and _near_zero(par, res, k, y, z)]
     # An amplitude (a density, a σ) near 0 is at the boundary; a time or frequency (with a physical range) that
     # cannot be told from 0 is merely undetermined.
     zero = [k for k in near_zero if par.entries[k][1] not in bounds]
