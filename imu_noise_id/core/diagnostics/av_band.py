@@ -44,16 +44,16 @@ def model_av_edf(components: list[Component], m: np.ndarray, n: int, dt: float) 
     m = np.asarray(m, dtype=np.int64)
     stochastic = [c for c in components if not isinstance(c, RR)]
     slope = sum(abs(c.slope) for c in components if isinstance(c, RR))
-    exponential, finite, short_memory = [], [], []
+    exponential, terms, finite, short_memory = [], [], [], []
     for c in stochastic:
-        if c.exponential_terms() is not None:
+        if (its_terms := c.exponential_terms()) is not None:
             exponential.append(c)
+            terms.append(its_terms)
         elif c.memory(dt)[0] > 0:
             finite.append(c)
         else:
             short_memory.append(c)
     reach = max([2, *(_reach(c, n + 1, dt) for c in finite)])
-    terms = [c.exponential_terms() for c in exponential]
     weights = np.concatenate([t[0] for t in terms]) if terms else np.zeros(0, complex)
     poles = np.concatenate([t[1] for t in terms]) * dt if terms else np.zeros(0, complex)
     direct = [min(n - 2 * int(mi) + 1, 2 * int(mi) + reach) for mi in m]

@@ -57,18 +57,11 @@ class CompositeStatistics:
         return whittle.BandedPeriodogram(bp.omega[above], bp.count[above], bp.power[above])
 
 
-def _whittle_part(components: list[Component], bp: whittle.BandedPeriodogram, dt: float) -> float:
-    s = whittle.difference_spectrum(components, bp.omega, dt)
-    if not np.all(s > 0):
-        return -math.inf
-    return whittle.whittle_loglik(s, bp)
-
-
 def loglik(components: list[Component], stats: CompositeStatistics,
            bp: whittle.BandedPeriodogram | None = None) -> float:
     """ℓ_c of ``components`` (up to a constant) on ``bp`` (default: :meth:`CompositeStatistics.bands`)."""
     bp = bp if bp is not None else stats.bands(components)
-    return _whittle_part(components, bp, stats.dt) + block_sums.loglik(components, stats.sums)
+    return whittle.components_loglik(components, bp, stats.dt) + block_sums.loglik(components, stats.sums)
 
 
 def fit(start: list[Component], stats: CompositeStatistics,

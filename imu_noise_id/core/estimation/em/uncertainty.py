@@ -95,6 +95,8 @@ def _record_length(
     return RecordLengthAdvice(target, "95 % two-sided, relative half-width", t_now, needed, half, reliable)
 
 
+#: The zero-boundary check's shrink: a parameter this many times smaller that costs less than 1.92 in ℓ is near 0.
+NEAR_ZERO_SHRINK = 1e3
 #: Records of this many samples or more (where each exact check is a pass over every sample) screen the near-zero
 #: checks on the banded Whittle likelihood first (:func:`away_from_zero`).
 NEAR_ZERO_SCREEN_SAMPLES = 250_000
@@ -127,17 +129,13 @@ def away_from_zero(par: mle.Parameterisation, theta: np.ndarray, model: ss.State
     noise = y - z @ model.b if z.shape[1] else y
     bp = whittle.banded_periodogram(noise, fine=whittle.line_windows([comps], dt))
 
-    def loglik(components: list[Component]) -> float:
-        spectrum = whittle.difference_spectrum(components, bp.omega, dt)
-        return whittle.whittle_loglik(spectrum, bp) if np.all(spectrum > 0) else -math.inf
-
-    at_estimate = loglik(comps)
+    at_estimate = whittle.components_loglik(comps, bp, dt)
     away = set()
     for k in screened:
         shrunk = theta.copy()
-        shrunk[k] -= math.log(1e3)
+        shrunk[k] -= math.log(NEAR_ZERO_SHRINK)
         try:
-            drop = at_estimate - loglik(par.to_components(shrunk, model))
+            drop = at_estimate - whittle.components_loglik(par.to_components(shrunk, model), bp, dt)
         except ValueError:  # outside a component's domain: left to the exact check
             continue
         if drop > NEAR_ZERO_SCREEN_DROP:
@@ -159,9 +157,10 @@ def _screenable(c: Component, dt: float, record_s: float) -> bool:
 
 
 def _near_zero(par: mle.Parameterisation, res: mle.MLEResult, k: int, y: np.ndarray, z: np.ndarray) -> bool:
-    """Whether shrinking parameter k a thousandfold lowers ℓ by less than 1.92 (not distinguishable from 0)."""
+    """Whether shrinking parameter k :data:`NEAR_ZERO_SHRINK`-fold lowers ℓ by less than 1.92 (not distinguishable
+    from 0)."""
     th = res.theta.copy()
-    th[k] -= math.log(1e3)
+    th[k] -= math.log(NEAR_ZERO_SHRINK)
     try:
         with np.errstate(over="ignore", invalid="ignore"):  # a point that far may overflow: then ℓ is not finite
             ll = kalman.loglik(par.to_model(th, res.model), y, z).loglik

@@ -151,6 +151,12 @@ def whittle_loglik(s: np.ndarray, bp: BandedPeriodogram) -> float:
     return -float(np.sum(bp.count * np.log(s) + bp.power / s))
 
 
+def components_loglik(components: list[Component], bp: BandedPeriodogram, dt: float) -> float:
+    """:func:`whittle_loglik` of ``components``' :func:`difference_spectrum` on ``bp``; −inf where S_Δ ≤ 0."""
+    s = difference_spectrum(components, bp.omega, dt)
+    return whittle_loglik(s, bp) if np.all(s > 0) else -math.inf
+
+
 def block_spectrum(phi: np.ndarray, q: np.ndarray, h: np.ndarray, omega: np.ndarray) -> np.ndarray:
     """Spectral density per sample of y_k = h x_k, x_{k+1} = Φ x_k + w_k, var w = Q: S(ω) = h G Q Gᴴ hᵀ, G = (e^{iω}
     I − Φ)⁻¹ (closed form for diagonal and 2 × 2 Φ)."""
@@ -192,12 +198,10 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
 
     def negll(x: np.ndarray) -> float:
         try:
-            s = difference_spectrum(build(x), bp.omega, dt)
+            ll = components_loglik(build(x), bp, dt)
         except ValueError:
             return 1e300
-        if not np.all(s > 0):
-            return 1e300
-        return -whittle_loglik(s, bp)
+        return 1e300 if ll == -math.inf else -ll
 
     ranges = bounds or {"tau": (dt / 2.0, 100.0 * t_total)}
     box = []
