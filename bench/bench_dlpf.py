@@ -28,7 +28,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from common import run_in_checkout  # bench/common.py, beside this script
+from common import ONE_AXIS_STAGES, run_in_checkout  # bench/common.py, beside this script
 from scipy import signal
 
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
@@ -44,40 +44,7 @@ VARIANTS = {"RW": ([RW(K_TRUE)], K_TRUE), "GM+RW": ([GM(tau=20.0, sigma=3e-4), R
             "none": ([], 0.0)}
 
 #: Run in each source tree on one record: one axis through analyze's stages, one JSON line.
-ONE_RECORD = """
-import json, math
-import numpy as np
-from imu_noise_id.core.axes import ImuSeries
-from imu_noise_id.pipelines.analyze.final import final_model
-from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
-from imu_noise_id.pipelines.analyze.static import analyze_static
-from imu_noise_id.pipelines.loop import ImuLoop
-y = np.load({path!r})
-dt = {dt!r}
-data = np.column_stack([y] * 6)
-imu = ImuSeries(np.arange(y.size) * dt, data[:, :3], data[:, 3:])
-static = analyze_static(imu, kinds=("allan",), allow_motion=True)
-allan = static.allan.column(0)
-model = fit_axis(imu, "gyro_x", ModelStage(), dt, allan)
-loop = ImuLoop(imu, None, intervals=True).run("gyro_x", model.fit)
-final = final_model(model.fit, loop, allan)
-n_before = None
-try:
-    from imu_noise_id.pipelines.analyze.overbound import DEFAULT_HORIZON_S
-    from imu_noise_id.pipelines.analyze.resolution import resolve_axis
-    resolution = resolve_axis(final, loop, static, "gyro_x", y, horizon_s=DEFAULT_HORIZON_S)
-    if resolution is not None:
-        final, overbound, _ = resolution
-        if final.noise_density.method != "unresolved":
-            n_before = overbound.noise_density  # what the rule giving the overbound's N and K pasted
-except ImportError:  # a checkout before resolve_axis: the overbound's N and K where the model is not trusted
-    from imu_noise_id.pipelines.analyze.overbound import data_overbound
-    from imu_noise_id.pipelines.analyze.resolution import resolved, unresolved_reason
-    why = unresolved_reason(final, loop, static.slopes["gyro_x"].noise_density)
-    if why is not None:
-        final = resolved(final, why, data_overbound(static, "gyro_x"))
-from imu_noise_id.pipelines.analyze.numbers import axis_readings
-n, k = axis_readings(static, "gyro_x", final)  # as imu.yaml pastes them
+ONE_RECORD = ONE_AXIS_STAGES + """
 print(json.dumps({{"model": final.model, "n": n.value, "n_ci": n.ci95, "n_method": n.method, "k": k.value,
                   "k_ci": k.ci95, "k_method": k.method, "passed": loop.passed, "n_before": n_before}}))
 """

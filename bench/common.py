@@ -119,6 +119,51 @@ def long_tau_rw_bounds(y: np.ndarray, dt: float, random_walk: float | None = Non
 _PACKAGE = "\nimport imu_noise_id as _pkg\nprint(json.dumps({'package': _pkg.__file__}))\n"
 
 
+#: Code that runs ``analyze``'s stages for one axis in a checkout (:func:`run_in_checkout`): the samples ``y`` saved at
+#: ``{path}`` with period ``{dt}`` as gyro_x, through the Allan stage, the model selection (with intervals), the closed
+#: loop from its winner, the final model and, where the checkout has it, the resolution of an untrusted model. It
+#: leaves ``static``, ``loop``, ``final`` and ``n``, ``k``: the N and K readings ``imu.yaml`` pastes, and ``n_before``:
+#: the overbound's N where a failed verdict kept the model's N. A bench appends its own JSON line (braces doubled).
+ONE_AXIS_STAGES = """
+import json, math
+import numpy as np
+from imu_noise_id.core.axes import ImuSeries
+from imu_noise_id.pipelines.analyze.final import final_model
+from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
+from imu_noise_id.pipelines.analyze.static import analyze_static
+from imu_noise_id.pipelines.loop import ImuLoop
+y = np.load({path!r})
+dt = {dt!r}
+data = np.column_stack([y] * 6)
+imu = ImuSeries(np.arange(y.size) * dt, data[:, :3], data[:, 3:])
+static = analyze_static(imu, kinds=("allan",), allow_motion=True)
+allan = static.allan.column(0)
+model = fit_axis(imu, "gyro_x", ModelStage(), dt, allan)
+loop = ImuLoop(imu, None, intervals=True).run("gyro_x", model.fit)
+try:
+    final = final_model(model.fit, loop, allan, model.selection)
+except TypeError:  # a checkout before the selection's structures read K
+    final = final_model(model.fit, loop, allan)
+n_before = None
+try:
+    from imu_noise_id.pipelines.analyze.overbound import DEFAULT_HORIZON_S
+    from imu_noise_id.pipelines.analyze.resolution import resolve_axis
+    resolution = resolve_axis(final, loop, static, "gyro_x", y, horizon_s=DEFAULT_HORIZON_S)
+    if resolution is not None:
+        final, overbound, _ = resolution
+        if final.noise_density.method != "unresolved":
+            n_before = overbound.noise_density  # what the rule giving the overbound's N and K pasted
+except ImportError:  # a checkout before resolve_axis: the overbound's N and K where the model is not trusted
+    from imu_noise_id.pipelines.analyze.overbound import data_overbound
+    from imu_noise_id.pipelines.analyze.resolution import resolved, unresolved_reason
+    why = unresolved_reason(final, loop, static.slopes["gyro_x"].noise_density)
+    if why is not None:
+        final = resolved(final, why, data_overbound(static, "gyro_x"))
+from imu_noise_id.pipelines.analyze.numbers import axis_readings
+n, k = axis_readings(static, "gyro_x", final)  # as imu.yaml pastes them
+"""
+
+
 def run_in_checkout(source: Path, code: str, what: str) -> tuple[float, dict]:
     """(CPU [s] of the child, the JSON object its code printed on the line before the last) of ``python -c code``
     run in ``source`` (PYTHONPATH too, one BLAS thread); SystemExit naming ``what`` if it fails or imported another

@@ -53,6 +53,8 @@ GOALS: list[tuple[list[str], str]] = [
     (["bench_figures.py"], "bench_figures.txt"),
 ]
 
+#: The random-walk bench's cells run by ``--long`` (its oscillation cell costs minutes per record: run alone).
+RANDOM_WALK_CELLS = ["WN+GM20+RW", "WN+RW", "WN+GM100+RW", "WN+BI+RW"]
 #: Long Monte-Carlo reproductions and measured-data benchmarks (``--long``).
 LONG: list[tuple[list[str], str]] = [
     (["bench_bank.py", "--trials", "500", "--skip-throughput"], "bench_bank.txt"),
@@ -75,6 +77,9 @@ LONG: list[tuple[list[str], str]] = [
     (["loop_measured.py", "--samples", "100000", "--mtig-samples", "100000"], "loop_measured.txt"),
     (["loop_measured.py", "--axes", "gyro_x,gyro_y", "--samples", "0"], "loop_measured.txt"),
     (["bench_rw_bound.py"], "bench_rw_bound.txt"),
+    (["bench_random_walk.py", "--minutes", "20", "--cells", *RANDOM_WALK_CELLS, "--baseline", BASELINE],
+     "bench_random_walk.txt"),
+    (["bench_random_walk.py", "--minutes", "60", "--cells", *RANDOM_WALK_CELLS], "bench_random_walk.txt"),
     (["bench_watch.py"], "bench_watch.txt"),
     (["bench_compare_adis.py"], "bench_compare_adis.txt"),
     (["bench_measured_passband.py", "--adis-runs", "1", "2", "3", "4", "5", "6", "--adis-samples", "30000"],

@@ -77,6 +77,8 @@ def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = N
         b_text = ("" if b.reached else "<") + f"{_fmt(b.value)} [{_fmt(b.ci95[0])}, {_fmt(b.ci95[1])}]"
         lines.append(f"{axis:8s} {f.model:22s} N {n_text:34s} K {k_text:34s} B {b_text}")
     lines += [f"{axis:8s} K flagged: {f.random_walk.source}" for axis, f in finals.items() if f.random_walk_above_bound]
+    lines += [f"{axis:8s} K's interval spans the structures the data cannot tell apart: "
+              + "; ".join(r.describe() for r in f.walk_readings) for axis, f in finals.items() if f.walk_readings]
     lines += [f"{axis:8s} N and K unresolved (upper bounds: the overbound's): {f.unresolved}"
               if f.noise_density.method == "unresolved" else
               f"{axis:8s} K unresolved (an upper bound: the overbound's; N the model's, inside the interval of the "
@@ -106,7 +108,8 @@ def short_for_walk_lines(finals: dict[str, FinalModel], static: StaticAnalysis |
         if bounded:
             smallest = walk_crossing_tau(n, 1.0) / (record / 3.0)  # K whose walk crosses at a third of the record
             lines.append(f"{axis:8s} K not identified by this {_duration(record)} record (its interval reaches "
-                         "zero, or the final model has no walk): a record identifies walks well above "
+                         "zero, the final model has no walk, or structures the data cannot tell apart read it "
+                         "otherwise): a record identifies walks well above "
                          f"3*sqrt(3)*N/T = {_fmt(smallest)} here, each tenfold smaller walk needs a tenfold longer "
                          f"record; given: K <= {_fmt(k)} ({method})")
         else:

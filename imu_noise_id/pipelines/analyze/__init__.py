@@ -273,7 +273,7 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     if not options.finals:
         return _AxisOutcome(model, loop_result.without_data() if loop_result is not None else None, None, None,
                             warnings)
-    final = final_model(fit, loop_result, column)
+    final = final_model(fit, loop_result, column, model.selection)
     if final.fit.short_of_maximum is not None:
         warnings.append(f"{axis}: the final fit is {final.fit.short_of_maximum:.3g} below a log-likelihood its "
                         "intervals' search met: its values and intervals are not the maximum's")

@@ -93,7 +93,8 @@ def resolved(final: FinalModel, unresolved: Unresolved | None, overbound: AxisOv
     reason = unresolved.reason
 
     def bound(value: KalibrValue, upper: float, name: str) -> KalibrValue:
-        model = "none" if value.value is None else f"{value.value:.3g}"
+        model = ("none" if value.value is None else f"{value.value:.3g}"
+                 + (" (an upper bound)" if value.method == "bound" else ""))
         return KalibrValue(upper, (0.0, upper), f"unresolved: {reason}; given: the overbound's {name} (an upper bound "
                                                 f"over τ {overbound.tau_range[0]:.3g}–{overbound.tau_range[1]:.3g} s; "
                                                 f"the model's {model} is in model.yaml)", method="unresolved")

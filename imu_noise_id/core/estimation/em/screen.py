@@ -36,10 +36,14 @@ class Statistics:
         """Both statistics of one axis ``y`` [u] (gap-filled) at period ``dt`` [s]."""
         return cls(whittle.banded_periodogram(y), block_sums.block_sums(y, dt), float(dt), int(y.size))
 
+    def whittle_fit(self, start: list[Component]) -> tuple[float, list[Component]]:
+        """(banded Whittle log-likelihood, components) maximised from ``start`` (the estimator's physical bounds)."""
+        bounds = mle.physical_bounds(self.n, self.dt)
+        return whittle.whittle_fit(start, np.empty(0), self.dt, self.periodogram, bounds)
+
     def whittle_loglik(self, start: list[Component]) -> float:
         """The banded Whittle log-likelihood maximised from ``start`` (the estimator's physical bounds)."""
-        bounds = mle.physical_bounds(self.n, self.dt)
-        return whittle.whittle_fit(start, np.empty(0), self.dt, self.periodogram, bounds)[0]
+        return self.whittle_fit(start)[0]
 
 
 @dataclass(frozen=True)
@@ -58,17 +62,24 @@ class Reference:
 @dataclass(frozen=True)
 class Screen:
     """A candidate's best log-likelihood ``gain`` over the current structure, the ``statistic`` that gave it
-    (``"whittle"``/``"block sums"``), its ``extra_parameters`` (negative: fewer) and ``penalty`` ln N."""
+    (``"whittle"``/``"block sums"``), its ``extra_parameters`` (negative: fewer), ``penalty`` ln N and the
+    ``components`` fitted there."""
 
     gain: float
     statistic: str
     extra_parameters: int
     penalty: float
+    components: tuple[Component, ...] = ()
 
     @property
     def delta_bic(self) -> float:
         """The BIC change the statistics say the candidate could reach."""
         return -2.0 * self.gain + self.extra_parameters * self.penalty
+
+    @property
+    def delta_aic(self) -> float:
+        """The AIC change the statistics say the candidate could reach."""
+        return -2.0 * self.gain + 2.0 * self.extra_parameters
 
     @property
     def worth_exact_fit(self) -> bool:
@@ -111,17 +122,18 @@ def _starts(candidate: list[Component], current: list[Component], dt: float) -> 
 def screen(reference: Reference, candidate: list[Component], stats: Statistics) -> Screen:
     """The statistics' verdict on ``candidate`` (starting components) against ``reference``; a candidate nesting the
     current structure is never credited with a loss."""
-    best_gain, best_stat = -math.inf, "whittle"
+    best_gain, best_stat, best_fit = -math.inf, "whittle", list(candidate)
     block_span = stats.sums.block * stats.dt
     known = set(reference.components)
     for start in _starts(candidate, reference.components, stats.dt):
-        w = stats.whittle_loglik(start)
+        w, fitted = stats.whittle_fit(start)
         if w - reference.whittle_loglik > best_gain:
-            best_gain, best_stat = w - reference.whittle_loglik, "whittle"
+            best_gain, best_stat, best_fit = w - reference.whittle_loglik, "whittle", fitted
         if all(c.tau >= block_span for c in start if isinstance(c, GM) and c not in known):
-            b, _ = block_sums.fit(start, stats.sums)
+            b, fitted = block_sums.fit(start, stats.sums)
             if b - reference.block_loglik > best_gain:
-                best_gain, best_stat = b - reference.block_loglik, "block sums"
+                best_gain, best_stat, best_fit = b - reference.block_loglik, "block sums", fitted
     nests = not Counter(c.name for c in reference.components) - Counter(c.name for c in candidate)
     return Screen(max(best_gain, 0.0) if nests else best_gain, best_stat,
-                  _n_parameters(candidate) - _n_parameters(reference.components), math.log(stats.n))
+                  _n_parameters(candidate) - _n_parameters(reference.components), math.log(stats.n),
+                  tuple(best_fit))

@@ -4,7 +4,7 @@ and record-length advice for the winner only."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -37,12 +37,15 @@ class SelectionResult:
     #: The winner is still at its composite likelihood's maximiser, without intervals (:func:`select_model` with
     #: ``finish=False``; :func:`finish_winner` finishes it).
     unfinished: bool = False
+    #: Per candidate screened out on the statistics of fixed size: the fitted structure it was screened against and
+    #: its screen (gain, components fitted there).
+    screened: dict[str, tuple[str, screen.Screen]] = field(default_factory=dict)
 
     def without_data(self) -> SelectionResult:
         """The selection with every fit's record dropped (see :meth:`FitResult.without_data`)."""
         fits = {k: f.without_data() for k, f in self.fits.items()}
         best = next((fits[k] for k, f in self.fits.items() if f is self.best), self.best.without_data())
-        return SelectionResult(best, self.table, fits, self.unfinished)
+        return SelectionResult(best, self.table, fits, self.unfinished, self.screened)
 
     @property
     def best_key(self) -> str:
@@ -115,7 +118,7 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         periodograms[False] = statistics.periodogram
     composite_stats = composite.CompositeStatistics.of(y, dt) if y.size >= composite.MIN_SAMPLES else None
     reference: screen.Reference | None = None
-    screened: dict[str, screen.Screen] = {}
+    screened: dict[str, tuple[str, screen.Screen]] = {}
     for spec in cands:
         try:
             has_rr = "RR" in parse_structure(spec)
@@ -125,7 +128,7 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
             if reference is not None and statistics is not None:
                 verdict = screen.screen(reference, model.starting_values(1, True)[0], statistics)
                 if not verdict.worth_exact_fit:
-                    screened[spec] = verdict
+                    screened[spec] = (best_key, verdict)
                     allans[has_rr], periodograms[has_rr] = model.allan, model.banded_periodogram()
                     continue
             if composite_stats is not None:
@@ -156,11 +159,11 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         fits[best_key] = _finished(best_model, fits[best_key], options)
     elif options.uncertainty and not unfinished:  # before the table: searched again, the likelihood can only rise
         fits[best_key] = add_intervals(best_model, fits[best_key], options)
-    others = [{"model": spec, "screened": screened[spec].describe(), "delta_bic_screen": screened[spec].delta_bic}
+    others = [{"model": spec, "screened": screened[spec][1].describe(), "delta_bic_screen": screened[spec][1].delta_bic}
               if spec in screened else {"model": spec, "error": errors[spec]}
               for spec in cands if spec not in fits]
     at_composite = ({k for k in fits if k != best_key or unfinished} if composite_stats is not None else set())
-    return SelectionResult(fits[best_key], _table(fits, others, criterion, at_composite), fits, unfinished)
+    return SelectionResult(fits[best_key], _table(fits, others, criterion, at_composite), fits, unfinished, screened)
 
 
 #: A selection table row's ``likelihood`` when its fit is the composite likelihood's maximiser.
@@ -199,4 +202,5 @@ def finish_winner(selection: SelectionResult, model: NoiseModel, options: FitOpt
     key = selection.best_key
     fits = {**selection.fits, key: _finished(model, selection.best, options)}
     others = [row for row in selection.table if "loglik" not in row]
-    return SelectionResult(fits[key], _table(fits, others, criterion, set(fits) - {key}), fits)
+    return SelectionResult(fits[key], _table(fits, others, criterion, set(fits) - {key}), fits,
+                           screened=selection.screened)

@@ -1,0 +1,147 @@
+"""The random walk K under model uncertainty: what the structures the data cannot tell apart say about K.
+
+A selection's candidates are fitted to one record; those within Occam's window on either information criterion (a
+weight at least :data:`OCCAM_RATIO` of the best's: ΔBIC or ΔAIC ≤ 2 ln 20, Madigan & Raftery 1994; Burnham &
+Anderson 2002, §2.9) are the structures the data cannot tell apart. Each gives its reading of K over the record
+(:func:`record_walk`): its RW's density, with every GM slower than the record taken as a walk (K² = 2σ²/τ: above its
+corner 1/(2πτ), where all the record's frequencies lie, a GM's spectrum is a walk's), or 0 when it has neither (a GM
+that explains the long-τ AV instead of a walk), with a 95 % Wald interval from Whittle's Fisher information of the
+record's length (:func:`walk_interval`: no pass over the data). K's interval is the union (hull) of the final
+model's interval and theirs (:func:`over_structures`); where it reaches zero (a structure within the evidence has no
+walk) K is given as its upper end, method ``bound``, as a K whose own interval reaches zero is
+(:func:`~.kalibr.unidentified_as_bound`). Why: docs/analysis.md, "Why K's interval spans the structures the data
+cannot tell apart".
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import InputError
+from ...noise.base import Component
+from ...noise.components import GM, RW
+from ..em import mle, whittle
+from ..em.selection import SelectionResult
+from .kalibr import KalibrValue
+from .quantiles import Z95
+
+#: A structure is within the evidence when its BIC or AIC weight is at least this ratio of the best's.
+OCCAM_RATIO = 1.0 / 20.0
+#: The largest ΔBIC or ΔAIC within :data:`OCCAM_RATIO` (2 ln 20 ≈ 5.99).
+OCCAM_DELTA = -2.0 * math.log(OCCAM_RATIO)
+
+
+@dataclass(frozen=True)
+class WalkReading:
+    """One structure's reading of K: its name, ΔBIC and ΔAIC to the best, K over the record [u/s/√Hz] (0: no walk)
+    and its 95 % interval (None where the information does not determine one)."""
+
+    structure: str
+    delta_bic: float
+    delta_aic: float
+    random_walk: float
+    ci95: tuple[float, float] | None
+
+    @property
+    def span(self) -> tuple[float, float]:
+        """The interval, or (K, K) where it is not determined."""
+        return self.ci95 if self.ci95 is not None else (self.random_walk, self.random_walk)
+
+    def describe(self) -> str:
+        """``WN+GM (BIC +3.8, AIC +0.8 over the best): no walk over the record`` or ``… K 4.86e-05 [3.5e-05,
+        6.8e-05]`` (plain ASCII: it is written into YAML)."""
+        if self.random_walk == 0.0:
+            k = "no walk over the record"
+        elif self.ci95 is None:
+            k = f"K {self.random_walk:.3g} (its interval not determined)"
+        else:
+            k = f"K {self.random_walk:.3g} [{self.ci95[0]:.3g}, {self.ci95[1]:.3g}]"
+        return f"{self.structure} (BIC {self.delta_bic:+.1f}, AIC {self.delta_aic:+.1f} over the best): {k}"
+
+
+def _walk_terms(components: list[Component], span_s: float) -> dict[tuple[int, str], float]:
+    """Per log-parameter of ``components`` (component index, name), ∂(K²)/∂ln(parameter) of :func:`record_walk`."""
+    terms: dict[tuple[int, str], float] = {}
+    for i, c in enumerate(components):
+        if isinstance(c, RW):
+            terms[(i, "random_walk")] = 2.0 * c.random_walk**2
+        elif isinstance(c, GM) and c.tau > span_s:
+            terms[(i, "sigma")] = 4.0 * c.sigma**2 / c.tau
+            terms[(i, "tau")] = -2.0 * c.sigma**2 / c.tau
+    return terms
+
+
+def record_walk(components: list[Component], span_s: float) -> float:
+    """K [u/s/√Hz] of ``components`` over a record of ``span_s`` [s]: √(K_RW² + Σ 2σ²/τ over GMs with τ > span)."""
+    k2 = sum(c.random_walk**2 for c in components if isinstance(c, RW))
+    k2 += sum(2.0 * c.sigma**2 / c.tau for c in components if isinstance(c, GM) and c.tau > span_s)
+    return math.sqrt(k2)
+
+
+def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float, float] | None:
+    """95 % Wald interval of :func:`record_walk` over ``n`` samples at ``dt`` [s], on ln K, by the delta method from
+    Whittle's Fisher information of ``n`` samples (:func:`~..em.whittle.fisher_information`); (0, 0) without a
+    walk, None where the information leaves K undetermined."""
+    span = n * dt
+    k = record_walk(components, span)
+    terms = _walk_terms(components, span)
+    if k == 0.0:
+        return (0.0, 0.0)
+    entries = mle.Parameterisation.of(components).entries
+    gradient = np.array([terms.get(e, 0.0) / (2.0 * k * k) for e in entries])  # ∂ln K/∂ln(parameter)
+    try:
+        cov, _ = mle.covariance_from_information(whittle.fisher_information(components, n, dt))
+    except (InputError, np.linalg.LinAlgError):
+        return None
+    used = gradient != 0.0
+    with np.errstate(invalid="ignore"):
+        var = float(gradient[used] @ cov[np.ix_(used, used)] @ gradient[used])
+    if not (math.isfinite(var) and var >= 0.0):
+        return None
+    sd = math.sqrt(var)
+    return (k * math.exp(-Z95 * sd), k * math.exp(Z95 * sd))
+
+
+def plausible_walks(selection: SelectionResult, n: int, dt: float) -> list[WalkReading]:
+    """The readings of K (:func:`record_walk`, :func:`walk_interval`) of the selection's structures other than its
+    winner (whose K has its own interval) within Occam's window on BIC or AIC (:data:`OCCAM_DELTA`), of a record of
+    ``n`` samples at ``dt`` [s], best BIC first: its converged fits, and its candidates screened out on the statistics
+    of fixed size (:mod:`..em.screen`) at the components and likelihood gain the screen found (their criteria those of
+    the structure they were screened against plus the screen's). ΔBIC and ΔAIC are to the best of all of them."""
+    winner = selection.best_key
+    rows = {r["model"]: r for r in selection.table if "loglik" in r}
+    found = [(spec, r["bic"], r["aic"], list(selection.fits[spec].components))
+             for spec, r in rows.items() if spec in selection.fits and r.get("converged", True)]
+    found += [(spec, rows[against]["bic"] + verdict.delta_bic, rows[against]["aic"] + verdict.delta_aic,
+               list(verdict.components))
+              for spec, (against, verdict) in selection.screened.items() if against in rows and verdict.components]
+    if not found:
+        return []
+    bic_min, aic_min = min(f[1] for f in found), min(f[2] for f in found)
+    return [WalkReading(spec, bic - bic_min, aic - aic_min, record_walk(components, n * dt),
+                        walk_interval(components, n, dt))
+            for spec, bic, aic, components in sorted(found, key=lambda f: f[1])
+            if spec != winner and min(bic - bic_min, aic - aic_min) <= OCCAM_DELTA]
+
+
+def over_structures(k: KalibrValue, readings: list[WalkReading]) -> KalibrValue:
+    """``k`` with its interval the hull of its own and every reading's; unchanged when they all lie inside it or
+    ``k`` is not a model's value with a finite interval. Where the hull reaches zero: its upper end, method
+    ``bound``, interval (0, upper end). The source names every structure read."""
+    lo, hi = k.ci95
+    if not readings or k.method != "model" or k.value is None or not (math.isfinite(lo) and math.isfinite(hi)):
+        return k
+    lo_all = min(lo, *(r.span[0] for r in readings))
+    hi_all = max(hi, *(r.span[1] for r in readings))
+    if lo_all >= lo and hi_all <= hi:
+        return k
+    told = "; ".join(r.describe() for r in readings)
+    if lo_all <= 0.0:
+        return KalibrValue(hi_all, (0.0, hi_all), f"{k.source}; the data cannot tell apart {told}: K lies in [0, "
+                                                  f"{hi_all:.3g}] (the final model's own interval [{lo:.3g}, "
+                                                  f"{hi:.3g}]), the upper end given", method="bound")
+    return KalibrValue(k.value, (lo_all, hi_all), f"{k.source}; its interval spans the structures the data cannot "
+                                                  f"tell apart ({told}; the final model's own [{lo:.3g}, {hi:.3g}])")

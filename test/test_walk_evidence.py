@@ -1,0 +1,143 @@
+"""K under model uncertainty (core/estimation/readouts/walk_evidence.py): the structures the data cannot tell apart
+each read K; a final K whose interval misses one of their readings is given as their bound."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core.allan import allan_variance
+from imu_noise_id.core.estimation.em.model import NoiseModel
+from imu_noise_id.core.estimation.em.screen import Screen
+from imu_noise_id.core.estimation.em.selection import SelectionResult, select_model
+from imu_noise_id.core.estimation.readouts import kalibr
+from imu_noise_id.core.estimation.readouts.kalibr import KalibrValue
+from imu_noise_id.core.estimation.readouts.walk_evidence import (
+    OCCAM_DELTA,
+    WalkReading,
+    over_structures,
+    plausible_walks,
+    record_walk,
+    walk_interval,
+)
+from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
+from imu_noise_id.pipelines.analyze.final import final_model
+
+DT = 1.0 / 200.0
+K_TRUE = 2e-5
+
+
+def test_record_walk_counts_a_gm_slower_than_the_record_as_a_walk() -> None:
+    span = 1000.0
+    slow, fast = GM(tau=4000.0, sigma=1e-3), GM(tau=20.0, sigma=1e-3)
+    assert record_walk([WN(1e-3), RW(3e-5)], span) == pytest.approx(3e-5, rel=1e-12)
+    assert record_walk([WN(1e-3), fast], span) == 0.0
+    # above its corner the GM's two-sided density (2 sigma^2/tau) / (omega^2 + 1/tau^2) is a walk's K^2/omega^2 with
+    # K^2 = 2 sigma^2/tau; a GM slower than the record shows only frequencies above its corner
+    assert record_walk([WN(1e-3), slow, RW(3e-5)], span) == pytest.approx(math.hypot(3e-5, math.sqrt(2e-6 / 4000.0)))
+
+
+def test_readings_inside_the_interval_leave_k_as_it_is() -> None:
+    k = KalibrValue(2e-5, (1.5e-5, 2.7e-5), "RW")
+    readings = [WalkReading("WN+RW", 0.0, 1.0, 2e-5, (1.5e-5, 2.7e-5)),
+                WalkReading("WN+GM+RW", 4.0, 0.0, 1.8e-5, (1.6e-5, 2.6e-5))]
+    assert over_structures(k, readings) is k
+
+
+def test_the_interval_spans_every_reading() -> None:
+    k = KalibrValue(3.8e-5, (2.8e-5, 5.3e-5), "RW")
+    readings = [WalkReading("WN+RW", 0.0, 2.3, 3.8e-5, (2.8e-5, 5.1e-5)),
+                WalkReading("WN+GM+RW", 4.0, 0.0, 2.9e-5, (1.9e-5, 4.2e-5))]
+    spanned = over_structures(k, readings)
+    assert spanned.method == "model" and spanned.value == 3.8e-5 and spanned.ci95 == (1.9e-5, 5.3e-5)
+    assert "WN+GM+RW (BIC +4.0, AIC +0.0 over the best): K 2.9e-05 [1.9e-05, 4.2e-05]" in spanned.source
+
+
+def test_a_structure_without_a_walk_makes_k_the_upper_end() -> None:
+    k = KalibrValue(4.9e-5, (3.5e-5, 6.8e-5), "RW")
+    readings = [WalkReading("WN+RW", 0.0, 7.4, 4.9e-5, (3.5e-5, 6.8e-5)),
+                WalkReading("WN+GM", 3.8, 0.8, 0.0, (0.0, 0.0)),
+                WalkReading("WN+GM+RW", 9.0, 0.0, 2.1e-5, (0.9e-5, 7.5e-5))]
+    bound = over_structures(k, readings)
+    assert bound.method == "bound" and bound.value == 7.5e-5 and bound.ci95 == (0.0, 7.5e-5)
+    assert "WN+GM (BIC +3.8, AIC +0.8 over the best): no walk over the record" in bound.source
+    # an upper bound already (not identified, or no walk in the model) stays what it is
+    already = KalibrValue(6.8e-5, (0.0, 6.8e-5), "RW", method="bound")
+    assert over_structures(already, readings) is already
+
+
+def test_the_wald_interval_of_a_walk_agrees_with_the_fits_own() -> None:
+    """Whittle's expected information of the record's length, without the data, against the fit's interval from the
+    exact likelihood (its observed information or profile)."""
+    n = int(1200 / DT)
+    y = simulate_sum([WN(5e-4), RW(K_TRUE)], n, DT, np.random.default_rng(11))
+    fit = NoiseModel(y, DT, "WN+RW").fit()
+    profile = kalibr.random_walk(fit).ci95
+    wald = walk_interval(list(fit.components), n, DT)
+    assert fit.ci95_method["RW.random_walk"] in ("wald", "profile")
+    assert wald == pytest.approx(profile, rel=0.1)
+    assert walk_interval([WN(5e-4), GM(tau=20.0, sigma=1e-4)], n, DT) == (0.0, 0.0)
+
+
+@pytest.fixture(scope="module")
+def gm_beside_walk() -> tuple[np.ndarray, object]:
+    """20 min at 200 Hz of WN + a GM (tau 20 s) + RW, the GM's AV peak the walk's AV at 100 s: the selection's winner
+    WN+RW reads K 2.4x the truth with an interval above it, WN+GM (no walk) is within ΔBIC 6."""
+    n = int(1200 / DT)
+    gm = GM(tau=20.0, sigma=1.8703719e-4)
+    y = simulate_sum([WN(5e-4), gm, RW(K_TRUE)], n, DT, np.random.default_rng([1, 20, 0]))
+    return y, select_model(y, DT, ["WN+RW", "WN+GM", "WN+GM+RW"], allan=allan_variance(y, DT))
+
+
+def test_structures_within_the_evidence_are_read(gm_beside_walk) -> None:
+    _, selection = gm_beside_walk
+    readings = {r.structure: r for r in plausible_walks(selection, int(1200 / DT), DT)}
+    assert selection.best.model == "WN+RW"
+    assert "WN+GM" in readings and readings["WN+GM"].random_walk == 0.0
+    assert "WN+RW" not in readings  # the winner's K has its own interval
+    assert all(min(r.delta_bic, r.delta_aic) <= OCCAM_DELTA for r in readings.values())
+
+
+def test_the_final_k_beside_an_unseen_gm_is_a_bound_that_holds_the_truth(gm_beside_walk) -> None:
+    """The bug: the winner's K (2.4x the truth, its interval above it) was pasted as a model value."""
+    y, selection = gm_beside_walk
+    allan = allan_variance(y, DT)
+    alone = final_model(selection.best, None, allan).random_walk
+    assert alone.method == "model" and alone.ci95[0] > K_TRUE  # without the other structures: confidently wrong
+    final = final_model(selection.best, None, allan, selection)
+    k = final.random_walk
+    assert k.method == "bound" and k.ci95[0] == 0.0 and k.value >= alone.ci95[1]
+    assert k.ci95[0] <= K_TRUE <= k.ci95[1]
+    assert "WN+GM" in {r.structure for r in final.walk_readings} and "cannot tell apart" in k.source
+
+
+def test_a_clear_walk_stays_a_model_value() -> None:
+    n = int(1200 / DT)
+    y = simulate_sum([WN(5e-4), RW(1e-4)], n, DT, np.random.default_rng(5))
+    allan = allan_variance(y, DT)
+    selection = select_model(y, DT, ["WN+RW", "WN+GM", "WN+GM+RW"], allan=allan)
+    final = final_model(selection.best, None, allan, selection)
+    assert final.random_walk.method == "model" and final.walk_readings == ()
+    assert final.random_walk.ci95[0] <= 1e-4 <= final.random_walk.ci95[1]
+
+
+def test_a_candidate_screened_out_is_read_at_the_screens_fit() -> None:
+    """A long record's candidate screened out on the statistics of fixed size (never fitted exactly) is read at the
+    components the screen fitted; ΔAIC and ΔBIC are taken to the best of all structures, screened ones included."""
+    n, dt = 720_000, 1.0 / 200.0
+    winner = SimpleNamespace(components=(WN(5e-4), RW(4.8e-5)))
+    no_walk = SimpleNamespace(components=(WN(5e-4), GM(tau=300.0, sigma=3e-4)))
+    table = [{"model": "WN+RW", "loglik": 0.0, "bic": 0.0, "aic": 0.0, "converged": True},
+             {"model": "WN+GM", "loglik": 2.0, "bic": 9.5, "aic": -2.0, "converged": True}]
+    gm_walk = (WN(5e-4), GM(tau=20.0, sigma=2e-4), RW(2e-5))
+    verdict = Screen(gain=10.0, statistic="block sums", extra_parameters=2, penalty=math.log(n), components=gm_walk)
+    selection = SelectionResult(winner, table, {"WN+RW": winner, "WN+GM": no_walk},
+                                screened={"WN+GM+RW": ("WN+RW", verdict)})
+    readings = {r.structure: r for r in plausible_walks(selection, n, dt)}
+    assert set(readings) == {"WN+GM+RW"}  # WN+GM lies ΔAIC 14 from the screened structure's −16
+    screened = readings["WN+GM+RW"]
+    assert screened.delta_aic == 0.0 and screened.delta_bic == pytest.approx(2 * math.log(n) - 20.0)
+    assert screened.random_walk == pytest.approx(2e-5) and screened.ci95[0] < 2e-5 < screened.ci95[1]
