@@ -140,9 +140,10 @@ static = analyze_static(imu, kinds=("allan",), allow_motion=True)
 allan = static.allan.column(0)
 model = fit_axis(imu, "gyro_x", ModelStage(), dt, allan)
 loop = ImuLoop(imu, None, intervals=True).run("gyro_x", model.fit)
-try:
+import inspect
+if "selection" in inspect.signature(final_model).parameters:
     final = final_model(model.fit, loop, allan, model.selection)
-except TypeError:  # a checkout before the selection's structures read K
+else:  # a checkout before the selection's structures read K
     final = final_model(model.fit, loop, allan)
 n_before = None
 try:

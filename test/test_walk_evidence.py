@@ -128,8 +128,8 @@ def test_a_candidate_screened_out_is_read_at_the_screens_fit() -> None:
     """A long record's candidate screened out on the statistics of fixed size (never fitted exactly) is read at the
     components the screen fitted; ΔAIC and ΔBIC are taken to the best of all structures, screened ones included."""
     n, dt = 720_000, 1.0 / 200.0
-    winner = SimpleNamespace(components=(WN(5e-4), RW(4.8e-5)))
-    no_walk = SimpleNamespace(components=(WN(5e-4), GM(tau=300.0, sigma=3e-4)))
+    winner = SimpleNamespace(components=(WN(5e-4), RW(4.8e-5)), bic=0.0, aic=0.0, converged=True)
+    no_walk = SimpleNamespace(components=(WN(5e-4), GM(tau=300.0, sigma=3e-4)), bic=9.5, aic=-2.0, converged=True)
     table = [{"model": "WN+RW", "loglik": 0.0, "bic": 0.0, "aic": 0.0, "converged": True},
              {"model": "WN+GM", "loglik": 2.0, "bic": 9.5, "aic": -2.0, "converged": True}]
     gm_walk = (WN(5e-4), GM(tau=20.0, sigma=2e-4), RW(2e-5))

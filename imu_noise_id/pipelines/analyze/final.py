@@ -9,6 +9,7 @@ the readings of the selection's structures within the evidence (:mod:`~..estimat
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
 from ...core.allan import AllanResult
@@ -67,7 +68,7 @@ class FinalModel:
         return self.random_walk.method == "model" and self.random_walk_bound.exceeded_by(self.random_walk.value)
 
 
-def _walk_carriers(components: tuple[Component, ...] | list[Component]) -> list[str]:
+def _walk_carriers(components: Iterable[Component]) -> list[str]:
     return sorted(c.name for c in components if c.name in WALK_CARRIERS)
 
 
@@ -100,7 +101,8 @@ def final_model(model_fit: FitResult, loop: LoopResult | None, allan: AllanResul
     n = kalibr.noise_density(fit)
     loop_changed_walk = (loop is not None and len(loop.steps) > 1
                          and _walk_carriers(fit.components) != _walk_carriers(model_fit.components))
-    plausible = ([] if selection is None or loop_changed_walk
+    # the readings (each a Fisher information of the record's length) only where they can widen K
+    plausible = ([] if selection is None or loop_changed_walk or not walk_evidence.spannable(k)
                  else walk_evidence.plausible_walks(selection, fit.n, fit.dt))
     spanned = walk_evidence.over_structures(k, plausible)
     readings, k = (tuple(plausible) if spanned is not k else ()), spanned

@@ -62,13 +62,20 @@ class WalkReading:
         return f"{self.structure} (BIC {self.delta_bic:+.1f}, AIC {self.delta_aic:+.1f} over the best): {k}"
 
 
+def _walk_carriers(components: list[Component], span_s: float) -> list[tuple[int, RW | GM]]:
+    """(index, component) of each component that is a walk over a record of ``span_s`` [s]: an RW, or a GM slower
+    than the record."""
+    return [(i, c) for i, c in enumerate(components)
+            if isinstance(c, RW) or (isinstance(c, GM) and c.tau > span_s)]
+
+
 def _walk_terms(components: list[Component], span_s: float) -> dict[tuple[int, str], float]:
     """Per log-parameter of ``components`` (component index, name), ∂(K²)/∂ln(parameter) of :func:`record_walk`."""
     terms: dict[tuple[int, str], float] = {}
-    for i, c in enumerate(components):
+    for i, c in _walk_carriers(components, span_s):
         if isinstance(c, RW):
             terms[(i, "random_walk")] = 2.0 * c.random_walk**2
-        elif isinstance(c, GM) and c.tau > span_s:
+        else:
             terms[(i, "sigma")] = 4.0 * c.sigma**2 / c.tau
             terms[(i, "tau")] = -2.0 * c.sigma**2 / c.tau
     return terms
@@ -76,9 +83,8 @@ def _walk_terms(components: list[Component], span_s: float) -> dict[tuple[int, s
 
 def record_walk(components: list[Component], span_s: float) -> float:
     """K [u/s/√Hz] of ``components`` over a record of ``span_s`` [s]: √(K_RW² + Σ 2σ²/τ over GMs with τ > span)."""
-    k2 = sum(c.random_walk**2 for c in components if isinstance(c, RW))
-    k2 += sum(2.0 * c.sigma**2 / c.tau for c in components if isinstance(c, GM) and c.tau > span_s)
-    return math.sqrt(k2)
+    return math.sqrt(sum(c.random_walk**2 if isinstance(c, RW) else 2.0 * c.sigma**2 / c.tau
+                         for _, c in _walk_carriers(components, span_s)))
 
 
 def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float, float] | None:
@@ -87,9 +93,9 @@ def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float
     walk, None where the information leaves K undetermined."""
     span = n * dt
     k = record_walk(components, span)
-    terms = _walk_terms(components, span)
     if k == 0.0:
         return (0.0, 0.0)
+    terms = _walk_terms(components, span)
     entries = mle.Parameterisation.of(components).entries
     gradient = np.array([terms.get(e, 0.0) / (2.0 * k * k) for e in entries])  # ∂ln K/∂ln(parameter)
     try:
@@ -112,12 +118,11 @@ def plausible_walks(selection: SelectionResult, n: int, dt: float) -> list[WalkR
     of fixed size (:mod:`..em.screen`) at the components and likelihood gain the screen found (their criteria those of
     the structure they were screened against plus the screen's). ΔBIC and ΔAIC are to the best of all of them."""
     winner = selection.best_key
-    rows = {r["model"]: r for r in selection.table if "loglik" in r}
-    found = [(spec, r["bic"], r["aic"], list(selection.fits[spec].components))
-             for spec, r in rows.items() if spec in selection.fits and r.get("converged", True)]
-    found += [(spec, rows[against]["bic"] + verdict.delta_bic, rows[against]["aic"] + verdict.delta_aic,
+    fits = {spec: f for spec, f in selection.fits.items() if f.converged}
+    found = [(spec, f.bic, f.aic, list(f.components)) for spec, f in fits.items()]
+    found += [(spec, fits[against].bic + verdict.delta_bic, fits[against].aic + verdict.delta_aic,
                list(verdict.components))
-              for spec, (against, verdict) in selection.screened.items() if against in rows and verdict.components]
+              for spec, (against, verdict) in selection.screened.items() if against in fits and verdict.components]
     if not found:
         return []
     bic_min, aic_min = min(f[1] for f in found), min(f[2] for f in found)
@@ -127,12 +132,17 @@ def plausible_walks(selection: SelectionResult, n: int, dt: float) -> list[WalkR
             if spec != winner and min(bic - bic_min, aic - aic_min) <= OCCAM_DELTA]
 
 
+def spannable(k: KalibrValue) -> bool:
+    """Whether :func:`over_structures` can widen ``k``: a model's value with a finite interval (a bound stays one)."""
+    return k.method == "model" and k.value is not None and all(math.isfinite(v) for v in k.ci95)
+
+
 def over_structures(k: KalibrValue, readings: list[WalkReading]) -> KalibrValue:
     """``k`` with its interval the hull of its own and every reading's; unchanged when they all lie inside it or
-    ``k`` is not a model's value with a finite interval. Where the hull reaches zero: its upper end, method
-    ``bound``, interval (0, upper end). The source names every structure read."""
+    ``k`` is not :func:`spannable`. Where the hull reaches zero: its upper end, method ``bound``, interval (0, upper
+    end). The source names every structure read."""
     lo, hi = k.ci95
-    if not readings or k.method != "model" or k.value is None or not (math.isfinite(lo) and math.isfinite(hi)):
+    if not readings or not spannable(k):
         return k
     lo_all = min(lo, *(r.span[0] for r in readings))
     hi_all = max(hi, *(r.span[1] for r in readings))
