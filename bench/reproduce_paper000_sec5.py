@@ -51,7 +51,7 @@ def main() -> None:
                   f"{'' if rl.reliable[lab] else '  (lower bound: record not ≫ τ)'}")
         av = allan_variance(y, dt)
         band = allan_band(fit.components, fit.dt, y.size, av.tau, n_sim=20, seed=k)
-        panels.append({"tau": av.tau, "avar": av.variance[:, 0], "fit": fit, "band": band, "unit": "m/s²",
+        panels.append({"tau": av.tau, "avar": av.variance[:, 0], "fit": fit, "simulations": band, "unit": "m/s²",
                        "label": f"ADIS16405 {axis}", "title": f"{axis}: WN+2GM"})
     print("\nBIC ranking on accel_y (default candidates + what the AV suggests):")
     sel = select_model(accel[:, 1], dt, options=FitOptions(n_starts=2, uncertainty=False))

@@ -346,7 +346,7 @@ def test_axes_in_worker_processes_give_the_same_result(tmp_path, monkeypatch):
         assert one.finals[axis].fit.loglik == two.finals[axis].fit.loglik
         assert one.finals[axis].noise_density == two.finals[axis].noise_density
         assert [s.model for s in one.loops[axis].steps] == [s.model for s in two.loops[axis].steps]
-        assert np.array_equal(one.bands[axis][1], two.bands[axis][1])
+        assert np.array_equal(one.bands[axis].high, two.bands[axis].high)
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(InputError, match="--jobs"):
         AnalyzeOptions(jobs=-1)

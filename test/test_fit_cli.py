@@ -64,7 +64,7 @@ def test_allan_band_and_overlay_figure(tmp_path):
 
     av = allan_variance(y, 0.01)
     out = save_allan_overlay(tmp_path / "f.png", [{"tau": av.tau, "avar": av.variance[:, 0], "fit": fit,
-                                                   "band": (tau, band)}])
+                                                   "simulations": (tau, band)}])
     assert out.exists() and out.stat().st_size < 300_000
 
 

@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 
 import numpy as np
+from scipy import stats
 
 from ..allan import chi2_interval
 from ..constants import CONFIDENCE_95
-from ..noise.components import RR, Component
+from ..noise.components import RR, Component, total_allan_variance
 from ..noise.sampled import lag_weighted_sum
 
 #: v_j for j = −2 … 2: the autocorrelation of the second difference (1, −2, 1).
@@ -154,3 +156,30 @@ def model_av_band(av_data: np.ndarray, components: list[Component], m: np.ndarra
     """(low, high) ``confidence`` interval [u²] of ``av_data`` with :func:`model_av_edf`'s EDF (SP1065 eq. 45)."""
     edf = np.maximum(model_av_edf(components, m, n, dt), 1.0)
     return chi2_interval(np.asarray(av_data, dtype=float), edf, confidence)
+
+
+@dataclass(frozen=True)
+class ModelAvRange:
+    """Where a record's overlapping AV falls with probability ``confidence`` if the model holds: at ``tau`` [s] the
+    model's AV ``av`` [u²] and the range ``low`` … ``high`` [u²] (:func:`model_av_range`)."""
+
+    tau: np.ndarray
+    av: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    confidence: float
+
+
+def model_av_range(components: list[Component], m: np.ndarray, n: int, dt: float, *,
+                   confidence: float = CONFIDENCE_95) -> ModelAvRange:
+    """The ``confidence`` range of the overlapping AV of ``n`` samples at ``dt`` [s] and factors ``m`` under the
+    model ``components``: AV_hat ~ AV·χ²_ν/ν with ν :func:`model_av_edf`'s EDF (SP1065 eq. 45 read forwards), so
+    low, high = AV·χ²_ν((1 ∓ c)/2)/ν. The closed form of the band paper 000 figs. 4, 6, 7 draw from simulations of
+    the fitted model; why: docs/diagnostics.md, "Why the figures' model band is closed-form"."""
+    m = np.asarray(m, dtype=np.int64)
+    tau = m * dt
+    av = total_allan_variance(components, tau, dt)
+    edf = np.maximum(model_av_edf(components, m, n, dt), 1.0)
+    low = av * stats.chi2.ppf(0.5 - confidence / 2.0, edf) / edf
+    high = av * stats.chi2.ppf(0.5 + confidence / 2.0, edf) / edf
+    return ModelAvRange(tau, av, low, high, confidence)

@@ -3,7 +3,7 @@
 Stages, each run once on data in memory: 1. the Allan stage (:mod:`.static`); 2. the model stage (:mod:`.models`:
 selection by BIC with the constrained EM, starts fitted to stage 1's AV, or the GMWM by WIC, or both); 3. the closed
 loop (:mod:`imu_noise_id.pipelines.loop`) from each axis's selected EM fit at the recording's own rate (not for GMWM
-fits); 4. the final model (:mod:`.final`); 5. the simulation band of each final model; 6. the overbound
+fits); 4. the final model (:mod:`.final`); 5. the AV range of each final model; 6. the overbound
 (:mod:`.overbound`); 7. the resolution (:mod:`.resolution`: an unresolved axis gives its data overbound's K, and its
 N unless the data confirm the model's, as upper bounds). Stages 2–5 of one axis run in worker processes on long
 records (``AnalyzeOptions.jobs``), which read the recording from memory-mapped files (:mod:`.mapped`), the results in
@@ -27,10 +27,10 @@ import numpy as np
 
 from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS
 from ...core.axes import AXES, SENSORS, ImuSeries, ScalarSeries
+from ...core.diagnostics.av_band import ModelAvRange, model_av_range
 from ...core.errors import InputError
 from ...core.estimation.em.results import FitResult
 from ...core.estimation.em.uncertainty import PROFILE_BUDGET
-from ...core.simulation.bands import allan_band
 from ..loop import ImuLoop, LoopResult
 from .final import FinalModel, final_model
 from .mapped import MappedImu
@@ -40,8 +40,6 @@ from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, overboun
 from .resolution import resolve_axis
 from .static import StaticAnalysis, analyze_static
 
-#: Simulations of each final model drawn as its band.
-BAND_SIMULATIONS = 20
 #: With ``jobs=0`` (automatic) a record of fewer samples per axis runs its axes in this process.
 PARALLEL_MIN_SAMPLES = 100_000
 
@@ -124,14 +122,14 @@ class AnalyzeOptions:
 class AnalysisResult:
     """What ``analyze`` found, per stage (per-axis dictionaries keyed by axis name): ``static`` (Allan stage),
     ``models`` (fits and selections, without records), ``loops`` (empty without the loop), ``finals`` (final model and
-    Kalibr numbers), ``bands`` ((τ [s], simulated AVs (n_sim, T) [u²])), ``overbounds``, ``warnings``; ``numbers``
-    (what users paste)"""
+    Kalibr numbers), ``bands`` (the final model's AV range, :class:`~..core.diagnostics.av_band.ModelAvRange`),
+    ``overbounds``, ``warnings``; ``numbers`` (what users paste)"""
 
     static: StaticAnalysis
     models: dict[str, AxisModel] = field(default_factory=dict)
     loops: dict[str, LoopResult] = field(default_factory=dict)
     finals: dict[str, FinalModel] = field(default_factory=dict)
-    bands: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    bands: dict[str, ModelAvRange] = field(default_factory=dict)
     overbounds: dict[str, AxisOverbound] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
 
@@ -239,17 +237,17 @@ class _AxisContext:
 @dataclass(frozen=True)
 class _AxisOutcome:
     """Stages 2–5 of one axis: the model stage (with its record), the loop (or None), the final model, the
-    simulation band (τ [s], AVs (n_sim, T) [u²]) (both None without stages 4–7) and the warnings."""
+    AV range at the Allan stage's τ (both None without stages 4–7) and the warnings."""
 
     model: AxisModel
     loop: LoopResult | None
     final: FinalModel | None
-    band: tuple[np.ndarray, np.ndarray] | None
+    band: ModelAvRange | None
     warnings: list[str]
 
 
 def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
-    """Model stage, closed loop, final model and simulation band of one axis (stages 2–5)."""
+    """Model stage, closed loop, final model and its AV range of one axis (stages 2–5)."""
     static, options, loop = context.static, context.options, context.loop
     index = list(static.axes).index(axis)
     column = static.allan.column(index)
@@ -287,8 +285,8 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
         k = final.random_walk.value
         warnings.append(f"{axis}: the final random walk {k:.3g} is {final.random_walk_bound.excess(k)}; record "
                         "longer before trusting K")
-    band = allan_band(final.fit.components, static.dt, static.n, static.allan.tau, n_sim=BAND_SIMULATIONS,
-                      seed=index)
+    m = np.round(static.allan.tau / static.dt).astype(np.int64)
+    band = model_av_range(list(final.fit.components), m, static.n, static.dt)
     # the loop's fits keep no record past here: sent back from a worker and kept for six axes, a step's samples and
     # regressors took (1 + regressors) × N floats each
     return _AxisOutcome(model, loop_result.without_data() if loop_result is not None else None, final, band, warnings)
