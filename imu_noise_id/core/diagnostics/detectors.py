@@ -19,6 +19,7 @@ from .residuals import (
     spectral_lines,
     spectral_peaks,
 )
+from .scan_tail import StepScanTail
 from .whitening import ScoreBasis, ScoreTest, WhiteningFilter, score_test
 
 #: Default significance level of every detector.
@@ -209,27 +210,38 @@ def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np
 
 
 def detect_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: float = ALPHA,
-                min_segment: int | None = None) -> Finding:
-    """A bias step: max_k |T_k| of :func:`step_scan`, Bonferroni over k; size the GLS coefficient at the best k."""
+                min_segment: int | None = None, tail: StepScanTail | None = None) -> Finding:
+    """A bias step: max_k |T_k| of :func:`step_scan`, its p-value Bonferroni over k or, with ``tail`` (the scan's
+    :class:`~.scan_tail.StepScanTail` for these samples and filter), from the scan's own correlation (Siegmund's
+    approximation); size the GLS coefficient at the best k."""
     e = np.asarray(e, dtype=float)
     n = e.size
     m = max(20, n // 200) if min_segment is None else int(min_segment)
     if n < 4 * m:
         raise ValueError(f"detect_step: {n} samples are too few for segments of {m}")
+    if tail is not None and (tail.n, tail.min_segment) != (n, m):
+        raise ValueError(f"detect_step: a tail of {tail.n} samples and segments of {tail.min_segment} for a scan of "
+                         f"{n} and {m}")
     t_k = step_scan(e, whitening, m)
     k = int(np.nanargmax(np.abs(t_k)))
     t_max = float(abs(t_k[k]))
     n_scan = int(np.isfinite(t_k).sum())
-    z_star = float(stats.norm.isf(alpha / (2 * n_scan)))
+    if tail is None:
+        z_star = float(stats.norm.isf(alpha / (2 * n_scan)))
+        log10_p = bonferroni_log10_p(norm_log10_sf(t_max) + math.log10(2.0), n_scan)
+        multiplicity = f"Bonferroni over {n_scan} positions"
+    else:
+        z_star = tail.threshold(alpha)
+        log10_p = math.log10(max(tail.sf(t_max), 1e-300))
+        multiplicity = f"the maximum over {n_scan} correlated positions"
     step = (np.arange(n) >= k).astype(float)
     st = score_test(e, whitening.whiten(step), whitening.whiten(np.ones(n)))
     size = float(st.coef[0])
     return Finding(
-        effect="STEP", detector="step_scan", statistic=t_max, threshold=z_star,
-        log10_p=bonferroni_log10_p(norm_log10_sf(t_max) + math.log10(2.0), n_scan), level=alpha,
+        effect="STEP", detector="step_scan", statistic=t_max, threshold=z_star, log10_p=log10_p, level=alpha,
         params={"index": float(k), "time": k * dt, "size": size, "size_se": float(st.se[0])},
         evidence=f"level shift of {size:.3g} at t = {k * dt:.6g} s (sample {k}): |T| = {t_max:.1f} "
-                 f"(threshold {z_star:.2f}, Bonferroni over {n_scan} positions)",
+                 f"(threshold {z_star:.2f}, {multiplicity})",
     )
 
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..diagnostics import detectors as det
+from ..diagnostics.scan_tail import StepScanTail
 from ..diagnostics.whitening import WhiteningFilter
 from ..noise.base import Component
 from ..noise.components import WN, total_allan_variance
@@ -124,10 +125,9 @@ def rate_mismatch(rate_hz: float, reference_rate_hz: float, source: str) -> str 
             "analysis of a recording at the same rate")
 
 
-def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,
-                  known: tuple[float, ...]) -> tuple[det.Finding | None, det.Finding | None]:
-    """The significant bias step and new line (or None) in ``y`` [u] at ``dt`` [s] at level ``alpha``, in the
-    reference's innovations; lines within :data:`KNOWN_LINE_BINS` of ``known`` [Hz] are not new."""
+def reference_innovations(y: np.ndarray, whitening: WhiteningFilter) -> np.ndarray:
+    """The standardized innovations of ``y`` [u] under the reference's model (``whitening``), its level's GLS
+    coefficient removed, clipped at ±:data:`~.noise_level.SPIKE_Z` and NaN over the filter's start-up."""
     first = y[np.isfinite(y)][0]
     e = whitening.whiten(np.nan_to_num(y - first, nan=0.0))
     # the level's GLS coefficient removed (why: docs/analysis.md, "Why the step and line tests remove the level first")
@@ -136,12 +136,39 @@ def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: f
     # clipped as the noise level's pairs are (why: docs/analysis.md, "Why the noise-level test caps a pair …")
     e = np.clip(e, -SPIKE_Z, SPIKE_Z)
     e[: min(10, e.size // 100)] = np.nan  # the filter's start-up
-    step = det.detect_step(e, dt, whitening, alpha=alpha)
+    return e
+
+
+def bias_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float, *,
+              tails: dict[int, StepScanTail] | None = None) -> det.Finding | None:
+    """The significant bias step (or None) in the innovations ``e`` (:func:`reference_innovations`) at ``dt`` [s] at
+    level ``alpha``, the maximum over positions judged by the scan's own correlation
+    (:class:`~..diagnostics.scan_tail.StepScanTail`; why: docs/analysis.md, "Why the watch's step test reads the scan's
+    own correlation"), kept in ``tails`` by the number of samples when given (one filter per dictionary)."""
+    tails = {} if tails is None else tails
+    if e.size not in tails:
+        tails[e.size] = StepScanTail.of(whitening, e.size, max(20, e.size // 200))
+    tail = tails[e.size]
+    step = det.detect_step(e, dt, whitening, alpha=alpha, min_segment=tail.min_segment, tail=tail)
+    return step if step.significant else None
+
+
+def new_line(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,
+             known: tuple[float, ...]) -> det.Finding | None:
+    """The strongest significant line (or None) in the innovations ``e`` at ``dt`` [s] at level ``alpha`` from
+    :data:`LINE_MIN_FREQUENCY` up; lines within :data:`KNOWN_LINE_BINS` of ``known`` [Hz] are not new."""
     near = KNOWN_LINE_BINS / (e.size * dt)
     for line in det.detect_sinusoids(e, dt, whitening, alpha=alpha, f_min=LINE_MIN_FREQUENCY):
         if line.significant and all(abs(line.params["frequency"] - f) > near for f in known):
-            return (step if step.significant else None), line
-    return (step if step.significant else None), None
+            return line
+    return None
+
+
+def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,
+                  known: tuple[float, ...]) -> tuple[det.Finding | None, det.Finding | None]:
+    """:func:`bias_step` and :func:`new_line` in ``y`` [u]'s :func:`reference_innovations`, each at ``alpha``."""
+    e = reference_innovations(y, whitening)
+    return bias_step(e, dt, whitening, alpha), new_line(e, dt, whitening, alpha, known)
 
 
 def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: float = DEFAULT_RATIO,

@@ -1,5 +1,6 @@
 """The step and line tests of :mod:`.compare` on the last ``window_s`` s of stationary samples, one axis every
-``every_s`` s, at α = λ · ``every_s`` / 3600 (union bound); motion restarts the window."""
+``every_s`` s, at α = λ · ``every_s`` / 3600 (union bound; the line test at α/2 on the window and α/2 on its last
+half, which a line that began within it fills twice as densely); motion restarts the window."""
 
 from __future__ import annotations
 
@@ -8,8 +9,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..diagnostics.scan_tail import StepScanTail
 from ..diagnostics.whitening import WhiteningFilter
-from .compare import AxisReference, step_and_line
+from .compare import AxisReference, bias_step, new_line, reference_innovations
 
 #: Seconds of contiguous stationary samples each test looks at.
 DEFAULT_WINDOW_S = 120.0
@@ -31,8 +33,8 @@ class WindowFinding:
 
 
 class WindowedChecks:
-    """:func:`.compare.step_and_line` on the last ``window_s`` [s] of stationary samples at ``period`` [s], λ per
-    axis and test."""
+    """:mod:`.compare`'s step and line tests on the last ``window_s`` [s] of stationary samples at ``period`` [s], λ per
+    axis and test (module docstring)."""
 
     def __init__(self, references: list[AxisReference], period: float, *, false_alarms_per_hour: float,
                  window_s: float = DEFAULT_WINDOW_S, every_s: float = DEFAULT_EVERY_S) -> None:
@@ -42,6 +44,8 @@ class WindowedChecks:
         self.period = period
         self.references = references
         self.whitening = [WhiteningFilter.from_components(r.model(period), period) for r in references]
+        # per axis, the step scan's tail on a full window (a filling one's is computed afresh, not kept)
+        self.tails: list[dict[int, StepScanTail]] = [{} for _ in references]
         self.alpha = false_alarms_per_hour * every_s / 3600.0
         k = len(references)
         self.capacity = round(window_s / period)
@@ -83,12 +87,23 @@ class WindowedChecks:
         held = self.findings[i]
         if "step" in held and "line" in held:
             return
-        step, line = step_and_line(samples, self.period, self.whitening[i], self.alpha,
-                                   self.references[i].known_lines)
-        now = float(stamps[-1])
-        if step is not None and "step" not in held:
-            size = float(step.params["size"])
-            held["step"] = WindowFinding("step", size, size, float(stamps[int(step.params["index"])]), now)
-        if line is not None and "line" not in held:
+        whitening, now = self.whitening[i], float(stamps[-1])
+        e = reference_innovations(samples, whitening)
+        if "step" not in held:
+            step = bias_step(e, self.period, whitening, self.alpha,
+                             tails=self.tails[i] if self.count == self.capacity else None)
+            if step is not None:
+                size = float(step.params["size"])
+                held["step"] = WindowFinding("step", size, size, float(stamps[int(step.params["index"])]), now)
+        if "line" in held:
+            return
+        known = self.references[i].known_lines
+        line, since = new_line(e, self.period, whitening, self.alpha / 2.0, known), float(stamps[0])
+        half = samples.size // 2
+        if line is None and half >= self.minimum:
+            line = new_line(reference_innovations(samples[-half:], whitening), self.period, whitening,
+                            self.alpha / 2.0, known)
+            since = float(stamps[-half])
+        if line is not None:
             held["line"] = WindowFinding("line", float(line.params["frequency"]),
-                                         float(line.params.get("amplitude", math.nan)), float(stamps[0]), now)
+                                         float(line.params.get("amplitude", math.nan)), since, now)
