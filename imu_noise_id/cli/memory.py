@@ -26,7 +26,7 @@ MAIN_BYTES_PER_SAMPLE = 185
 WORKER_BYTES_PER_SAMPLE = 39
 #: Peak RSS [bytes] of one worker per sample analysed by the EM and the closed loop, over :data:`PROCESS_BYTES`: a whole
 #: measured record whose loop reached 25 states (its smoother passes hold every state for every sample).
-EM_WORKER_BYTES_PER_SAMPLE = 1830
+EM_WORKER_BYTES_PER_SAMPLE = 1870
 
 
 def available_bytes(meminfo: Path = Path("/proc/meminfo"), cgroup: Path = Path("/sys/fs/cgroup")) -> float | None:
@@ -86,8 +86,10 @@ def check_fits(topic: str, messages: int, bag_span_s: float | None, *, span: tup
         return
     room = available - needed_bytes(messages, 0, workers)
     fitting = _largest_fitting(room, workers, messages)
-    advice = (f"analyse a part of it (--span 0:{fitting / rate:.0f} fits, seconds from the first sample)"
-              if rate is not None and fitting >= 1.0 else "split the bag into shorter parts")
+    # whole seconds rounded down, less the sample a span's end adds (check_fits counts it)
+    seconds = math.floor((fitting - 1.0) / rate) if rate is not None else 0
+    advice = (f"analyse a part of it (--span 0:{seconds} fits, seconds from the first sample)"
+              if seconds >= 1 else "split the bag into shorter parts")
     raise InputError(f"{topic}: analysing {analysed} samples per axis of {messages} needs about "
                      f"{need / 2**30:.1f} GiB of memory, more than the {available / 2**30:.1f} GiB available here: "
                      f"{advice}, use --jobs 1 (fewer processes), or run it on a machine with more memory")
