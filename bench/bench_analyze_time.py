@@ -8,11 +8,12 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --rates 200 400                     # issue 11's timings
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --jobs 1 0               # one process vs one per core
     .venv/bin/python bench/bench_analyze_time.py --duration 10800                     # 3 h at 400 Hz (the GMWM)
-    .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400         # 24 h at 200 Hz
+    .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400 --baseline ../baseline  # 24 h, 200 Hz
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1200 --numbers  # measured
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
-screen on statistics of fixed size, then 3 h at 400 Hz and 24 h at 200 Hz (this checkout alone).
+screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run and 24 h at 200 Hz side by
+side with the checkout before the final models' AV range in closed form.
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
 checkout; with ``--adis RUN``, the whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at 100
