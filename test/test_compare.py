@@ -14,7 +14,7 @@ import yaml
 from imu_noise_id.bag.writer import write_bag
 from imu_noise_id.cli import main
 from imu_noise_id.core.axes import AXES, GYRO_AXES
-from imu_noise_id.core.noise.components import RW, WN, simulate_sum
+from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 from imu_noise_id.core.simulation.static import simulate_static_imu
 from imu_noise_id.core.watch.compare import AxisReference, compare_axis
 from imu_noise_id.core.watch.noise_level import threshold, watch_noise_level
@@ -271,6 +271,27 @@ def test_the_new_line_test_holds_its_level_on_short_windows():
     assert found <= 6
 
 
+def test_the_step_test_allows_the_walk_the_reference_cannot_exclude():
+    """A calibration record pins the slow wander down loosely: a reference whose K is 0.6× the unit's, beside a GM it
+    did not find, made the step scan (judged by its own correlation) fire on 6 of 40 unchanged 5-min records at α = 1 %.
+    Whitened with K at its interval's upper end (1.2× the truth here), none; the model without an interval is kept, and
+    a model without a walk gets one at K's bound."""
+    from imu_noise_id.core.diagnostics.whitening import WhiteningFilter
+    from imu_noise_id.core.watch.compare import step_and_line
+
+    truth = [WN(N), GM(tau=30.0, sigma=1.5e-4), RW(K)]
+    ref = AxisReference(N, (0.99 * N, 1.01 * N), [WN(N), RW(0.6 * K)], (), (0.0, 1.2 * K))
+    assert ref.step_model(DT) == [WN(N), RW(1.2 * K)]
+    assert replace(ref, random_walk_ci=None).step_model(DT) == ref.model(DT)
+    assert replace(ref, components=[WN(N)]).step_model(DT) == [WN(N), RW(1.2 * K)]
+    found = {}
+    for name, model in (("fitted", ref.model(DT)), ("allowed", ref.step_model(DT))):
+        whitening = WhiteningFilter.from_components(model, DT)
+        found[name] = sum(step_and_line(simulate_sum(truth, int(300 / DT), DT, np.random.default_rng(seed)), DT,
+                                        whitening, 0.01, ())[0] is not None for seed in range(40))
+    assert found["fitted"] >= 4 and found["allowed"] <= 1, found
+
+
 def test_the_windowed_checks_find_a_bias_step_and_a_new_line_within_a_minute():
     """The node's sliding-window tests (one axis; the change at 600 s): a step of 10 × the per-sample noise's tenth
     is found by 660 s and dated within 5 s; a 30 Hz line a fifth of the per-sample σ is found by 660 s at its
@@ -461,3 +482,10 @@ def test_a_reference_needs_only_its_per_axis_noise_densities_and_rate(tmp_path):
     reference = read_reference(tmp_path)
     assert reference.rate_hz == 100.0 and reference.topic == "/imu/data"
     assert [reference.axes[a].noise_density for a in AXES] == [1.7e-4, 1.8e-4, 1.6e-4, 2.0e-3, 2.1e-3, 1.9e-3]
+    assert all(reference.axes[a].random_walk_ci is None for a in AXES)
+    # K's interval, where imu.yaml gives one, bounds the wander the step test allows
+    doc["gyroscope_random_walk_ci_xyz"] = [[0.0, 3e-5], [1e-5, 2e-5], [0.0, None]]
+    (tmp_path / "imu.yaml").write_text(yaml.safe_dump(doc))
+    axes = read_reference(tmp_path).axes
+    assert axes["gyro_x"].random_walk_ci == (0.0, 3e-5) and axes["gyro_y"].random_walk_ci == (1e-5, 2e-5)
+    assert axes["gyro_z"].random_walk_ci is None and axes["accel_x"].random_walk_ci is None

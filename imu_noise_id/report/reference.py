@@ -58,6 +58,15 @@ def _known_lines(axis_entry: dict) -> tuple[float, ...]:
     return tuple(float(v["frequency"]) for k, v in regressors.items() if k.startswith("SIN") and "frequency" in v)
 
 
+def _random_walk_ci(imu: dict, axis: str) -> tuple[float, float] | None:
+    """K's 95 % interval [u/s/√Hz] of ``axis`` in ``imu`` (imu.yaml), None where it gives none."""
+    try:
+        lo, hi = (float(v) for v in imu[f"{KALIBR_PREFIX[sensor_of(axis)]}_random_walk_ci_xyz"][AXES.index(axis) % 3])
+    except (KeyError, IndexError, TypeError, ValueError):
+        return None
+    return (lo, hi) if math.isfinite(hi) else None
+
+
 def read_reference(path: str | Path) -> Reference:
     """The reference in ``path`` (a results folder, or its ``imu.yaml``).
 
@@ -84,7 +93,7 @@ def read_reference(path: str | Path) -> Reference:
                              "`analyze` wrote") from None
         entry = model.get(axis, {})
         components = _components(entry["final"]) if "final" in entry else None
-        axes[axis] = AxisReference(value, ci, components, _known_lines(entry))
+        axes[axis] = AxisReference(value, ci, components, _known_lines(entry), _random_walk_ci(imu, axis))
     rate = imu.get("update_rate")
     if not isinstance(rate, (int, float)) or not rate > 0:
         raise InputError(f"reference: {folder / 'imu.yaml'} has no update_rate")

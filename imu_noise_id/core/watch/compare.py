@@ -12,7 +12,7 @@ from ..diagnostics import detectors as det
 from ..diagnostics.scan_tail import StepScanTail
 from ..diagnostics.whitening import WhiteningFilter
 from ..noise.base import Component
-from ..noise.components import WN, total_allan_variance
+from ..noise.components import RW, WN, total_allan_variance
 from .allan_watch import DEFAULT_TAUS, watch_allan
 from .noise_level import (
     DEFAULT_FALSE_ALARMS_PER_HOUR,
@@ -36,15 +36,30 @@ LINE_MIN_FREQUENCY = 0.1
 @dataclass(frozen=True)
 class AxisReference:
     """An axis's reference: N [u/√Hz] and its 95 % interval ((nan, nan): none), final model (None: WN), known lines
-    [Hz]."""
+    [Hz], K's 95 % interval [u/s/√Hz] (None: none given)."""
 
     noise_density: float
     noise_density_ci: tuple[float, float]
     components: list[Component] | None = None
     known_lines: tuple[float, ...] = ()
+    random_walk_ci: tuple[float, float] | None = None
 
     def model(self, dt: float) -> list[Component]:
         return list(self.components) if self.components else [WN(self.noise_density)]
+
+    def step_model(self, dt: float) -> list[Component]:
+        """The model the step and line tests whiten with: :meth:`model` with its random walk at the upper end of K's
+        interval (one added there where the model has none and the end is above 0), the most slow wander the
+        reference allows, so that a walk the calibration record underestimated is not taken for steps; why:
+        docs/analysis.md, "Why the watch's step test reads the scan's own correlation"."""
+        model = self.model(dt)
+        high = self.random_walk_ci[1] if self.random_walk_ci is not None else math.nan
+        if not (math.isfinite(high) and high > 0.0):
+            return model
+        walks = [c for c in model if isinstance(c, RW)]
+        if not walks:
+            return [*model, RW(high)]
+        return [RW(max(high, c.random_walk)) if isinstance(c, RW) else c for c in model]
 
     def density_interval(self) -> tuple[tuple[float, float], str]:
         """N's 95 % interval [u/√Hz] (±:data:`DEFAULT_TOLERANCE` without one) and a note saying which."""
@@ -181,7 +196,7 @@ def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: f
     noise = watch_noise_level(y, dt, v, interval, ratio=ratio, false_alarms_per_hour=false_alarms_per_hour)
     hours = y.size * dt / 3600.0
     alpha = min(det.ALPHA, false_alarms_per_hour * hours)
-    whitening = WhiteningFilter.from_components(reference.model(dt), dt)
+    whitening = WhiteningFilter.from_components(reference.step_model(dt), dt)
     step, line = step_and_line(y, dt, whitening, alpha, reference.known_lines)
     beyond = None if limit is None else beyond_limit(y, dt, reference.difference_variance_at(limit, dt),
                                                      false_alarms_per_hour=false_alarms_per_hour)

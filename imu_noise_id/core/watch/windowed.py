@@ -43,7 +43,7 @@ class WindowedChecks:
                              f"between tests, got {false_alarms_per_hour!r}, {window_s!r}, {every_s!r}")
         self.period = period
         self.references = references
-        self.whitening = [WhiteningFilter.from_components(r.model(period), period) for r in references]
+        self.whitening = [WhiteningFilter.from_components(r.step_model(period), period) for r in references]
         # per axis, the step scan's tail on a full window (a filling one's is computed afresh, not kept)
         self.tails: list[dict[int, StepScanTail]] = [{} for _ in references]
         self.alpha = false_alarms_per_hour * every_s / 3600.0
