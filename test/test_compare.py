@@ -4,7 +4,6 @@ exit codes and the refusals."""
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import replace
 
 import numpy as np
@@ -368,8 +367,9 @@ def test_a_measured_unit_against_an_analysis_of_another_run_says_what_differs(sh
     """ADIS16405 run 1 (300 s) against an analyze of run 2 (300 s, model selection without the loop), through the
     command: the gyros are within (density 0.9–1.1× the reference's); the accelerometers' 0.57 Hz disturbance (the
     data's README: on all three in every run) is a line the reference's model does not hold, so each accelerometer
-    is degraded by "new line at 0.567 Hz", accel_y also by its level drop at 6.5 s, and nothing else; exit 1, and the
-    last line names exactly those axes."""
+    is degraded by "new line at 0.567 Hz" and nothing else (accel_y's level drop at 6.5 s, block means +0.0025 before
+    and −0.0166 after, sd 0.002, is not called a step against the wander K's upper end allows); exit 1, and the last
+    line names exactly those axes."""
     result = analyze(_adis_run(shared_data, 2), options=AnalyzeOptions(kinds=("allan",), loop=False, jobs=1))
     write_analysis(result, tmp_path / "run2", meta={})
     write_bag(tmp_path / "run1", _adis_run(shared_data, 1))
@@ -378,13 +378,8 @@ def test_a_measured_unit_against_an_analysis_of_another_run_says_what_differs(sh
             and line.split()[0] in (*AXES, "DEGRADED:")}
     for axis in GYRO_AXES:
         assert rows[axis].endswith("within") and 0.9 < float(rows[axis].split()[2]) < 1.1, rows[axis]
-    for axis in ("accel_x", "accel_z"):
+    for axis in ("accel_x", "accel_y", "accel_z"):
         assert "DEGRADED: new line at 0.56" in rows[axis] and "step" not in rows[axis] and "noise" not in rows[axis]
-    # accel_y's level drops by ~0.017 m/s² at 6.5 s (means of 4–6.5 s and 6.5–10 s: +0.0025 and −0.0166, sd 0.002
-    # each; the data's README: warm-up and level shifts): found since the step's maximum reads the scan's correlation
-    assert "DEGRADED: bias step of" in rows["accel_y"] and "new line at 0.56" in rows["accel_y"]
-    size, at = re.search(r"bias step of (\S+) at (\S+) s", rows["accel_y"]).groups()
-    assert -0.025 < float(size) < -0.012 and 5.0 < float(at) < 8.0, rows["accel_y"]
     assert rows["DEGRADED:"].startswith("DEGRADED: accel_x, accel_y, accel_z (")
 
 
