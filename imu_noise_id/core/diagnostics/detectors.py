@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import optimize, stats
-from scipy.fft import next_fast_len
 
 from .local_dft import LocalDft
 from .residuals import (
@@ -19,7 +18,7 @@ from .residuals import (
     spectral_lines,
     spectral_peaks,
 )
-from .scan_tail import StepScanTail
+from .scan_tail import ShiftedStep, StepScanTail
 from .whitening import ScoreBasis, ScoreTest, WhiteningFilter, score_test
 
 #: Default significance level of every detector.
@@ -193,13 +192,9 @@ def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np
     constant s projected out: T_k = (c_k − c_0 a_k/‖s‖²)/√(‖s_{0..n−k−1}‖² − a_k²/‖s‖²), c = e ⋆ s, a = s ⋆ s."""
     e = np.nan_to_num(np.asarray(e, dtype=float), nan=0.0)
     n = e.size
-    s = whitening.whiten(np.ones(n))
-    size = next_fast_len(2 * n - 1, real=True)  # zero padding: the linear, not circular, correlation
-    fs = np.fft.rfft(s, size)
-    c = np.fft.irfft(np.fft.rfft(e, size) * np.conj(fs), size)[:n]
-    a = np.fft.irfft(fs * np.conj(fs), size)[:n]
-    s2 = float(s @ s)
-    tail = np.cumsum(s**2)[::-1]  # tail[k] = Σ_{j < n−k} s_j²  (cumsum reversed: index k ↔ n−k−1)
+    shifted = ShiftedStep.of(whitening.whiten(np.ones(n)))
+    a, s2, tail = shifted.a, shifted.s2, shifted.tail
+    c = np.fft.irfft(np.fft.rfft(e, shifted.size) * np.conj(shifted.fs), shifted.size)[:n]
     num = c - c[0] * a / s2
     den = tail - a**2 / s2
     out = np.full(n, np.nan)

@@ -3,12 +3,13 @@
 For a standardized Gaussian scan T_k whose neighbours correlate as ρ_k = Corr(T_k, T_{k+1}) = 1 − θ_k (θ_k small:
 locally an Ornstein–Uhlenbeck process), Siegmund's approximation with the discrete overshoot correction ν is
 
-    P(max_k |T_k| > b) ≈ 2 b φ(b) Σ_k θ_k ν(b √(2 θ_k)),
+    P(max_k |T_k| > b) ≈ 2 Φ̄(b) + 2 b φ(b) Σ_k θ_k ν(b √(2 θ_k)),
     ν(x) ≈ (2/x)(Φ(x/2) − ½) / ((x/2) Φ(x/2) + φ(x/2))
 
 (James, James & Siegmund 1987, Biometrika 74, 71–83, for the change-point scan of white noise; Siegmund & Yakir 2007,
-*The Statistics of Gene Mapping*, ch. 4, for ν). It falls to Bonferroni's 2 Φ̄(b) per position where neighbours are
-nearly independent (θ_k → 1), and is far below it where a position's statistic is shared by its neighbours, as a step
+*The Statistics of Gene Mapping*, ch. 4, for ν; the first position's own tail 2 Φ̄(b) added, the whole capped at
+Bonferroni's). It falls to Bonferroni's 2 Φ̄(b) per position where neighbours are nearly independent (θ_k → 1),
+and is far below it where a position's statistic is shared by its neighbours, as a step
 seen through a whitening filter with a slow pole is. Why: docs/analysis.md, "Why the watch's step test reads the
 scan's own correlation"."""
 
@@ -32,6 +33,28 @@ def overshoot(x: np.ndarray) -> np.ndarray:
                                                                     + stats.norm.pdf(half)), 1.0)
 
 
+@dataclass(frozen=True)
+class ShiftedStep:
+    """The whitened constant ``s`` (N,) against its shifts x_k (s delayed by k samples, zero before): the FFT ``fs`` of
+    ``s`` zero-padded to ``size`` (a linear, not circular, correlation), a_k = ⟨x_k, s⟩ (``a``), ‖s‖² (``s2``) and
+    ‖x_k‖² = Σ_{j < N−k} s_j² (``tail``)."""
+
+    fs: np.ndarray
+    size: int
+    a: np.ndarray
+    s2: float
+    tail: np.ndarray
+
+    @classmethod
+    def of(cls, s: np.ndarray) -> ShiftedStep:
+        s = np.asarray(s, dtype=float)
+        n = s.size
+        size = next_fast_len(2 * n - 1, real=True)
+        fs = np.fft.rfft(s, size)
+        a = np.fft.irfft(fs * np.conj(fs), size)[:n]
+        return cls(fs, size, a, float(s @ s), np.cumsum(s**2)[::-1])  # tail[k]: cumsum reversed, k ↔ N−k−1
+
+
 def step_scan_neighbour_correlation(s: np.ndarray, min_segment: int) -> np.ndarray:
     """ρ_k = Corr(T_k, T_{k+1}) of :func:`~.detectors.step_scan`'s statistics for the whitened constant ``s`` (N,),
     at k = ``min_segment`` … N − ``min_segment`` − 2: with x_k the step at k seen through the filter (s shifted by k)
@@ -39,14 +62,11 @@ def step_scan_neighbour_correlation(s: np.ndarray, min_segment: int) -> np.ndarr
     ⟨x_k, x_{k+1}⟩ = Σ_{j < N−k−1} s_j s_{j+1}."""
     s = np.asarray(s, dtype=float)
     n = s.size
-    size = next_fast_len(2 * n - 1, real=True)
-    fs = np.fft.rfft(s, size)
-    a = np.fft.irfft(fs * np.conj(fs), size)[:n]  # a_k = ⟨x_k, s⟩
-    s2 = float(s @ s)
-    tail = np.cumsum(s**2)[::-1]  # ‖x_k‖²
+    shifted = ShiftedStep.of(s)
+    a, s2 = shifted.a, shifted.s2
     lag_one = np.concatenate([np.cumsum(s[:-1] * s[1:])[::-1], [0.0]])  # ⟨x_k, x_{k+1}⟩, index k
     k = np.arange(min_segment, n - min_segment - 1)
-    norm2 = tail - a**2 / s2
+    norm2 = shifted.tail - a**2 / s2
     cross = lag_one[k] - a[k] * a[k + 1] / s2
     return cross / np.sqrt(np.maximum(norm2[k] * norm2[k + 1], 1e-300))
 

@@ -56,8 +56,7 @@ class AxisReference:
         high = self.random_walk_ci[1] if self.random_walk_ci is not None else math.nan
         if not (math.isfinite(high) and high > 0.0):
             return model
-        walks = [c for c in model if isinstance(c, RW)]
-        if not walks:
+        if not any(isinstance(c, RW) for c in model):
             return [*model, RW(high)]
         return [RW(max(high, c.random_walk)) if isinstance(c, RW) else c for c in model]
 

@@ -23,8 +23,6 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 
-import numpy as np
-
 from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS
 from ...core.axes import AXES, SENSORS, ImuSeries, ScalarSeries
 from ...core.diagnostics.av_band import ModelAvRange, model_av_range
@@ -285,8 +283,7 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
         k = final.random_walk.value
         warnings.append(f"{axis}: the final random walk {k:.3g} is {final.random_walk_bound.excess(k)}; record "
                         "longer before trusting K")
-    m = np.round(static.allan.tau / static.dt).astype(np.int64)
-    band = model_av_range(list(final.fit.components), m, static.n, static.dt)
+    band = model_av_range(list(final.fit.components), static.allan.m, static.n, static.dt)
     # the loop's fits keep no record past here: sent back from a worker and kept for six axes, a step's samples and
     # regressors took (1 + regressors) × N floats each
     return _AxisOutcome(model, loop_result.without_data() if loop_result is not None else None, final, band, warnings)
