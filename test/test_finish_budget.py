@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.allan import allan_variance
-from imu_noise_id.core.estimation.em import search
+from imu_noise_id.core.estimation.em import mle, search
 from imu_noise_id.core.estimation.em.mle import RECENT_EVALUATIONS
 from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
@@ -61,3 +61,25 @@ def test_the_final_model_of_a_stopped_fit_is_flagged_with_its_pasted_numbers(rec
     assert "finish stopped at its budget" in final.source
     for value in (final.noise_density, final.random_walk):
         assert "not at the likelihood's maximum" in value.source
+
+
+def test_a_refinement_from_the_maximum_stops_once_the_likelihood_stalls(record, unbounded):
+    # a gradient test that cannot be met (as a misspecified model's metric may make it): without the stall rule the
+    # finish spends its iterations on rounding; with it, it stops RECENT_EVALUATIONS evaluations after ℓ stopped rising
+    model = NoiseModel(record, DT, "WN+GM+RW")
+    base = model.statespace(unbounded.components)
+    par = mle.Parameterisation.of(unbounded.components)
+    kwargs = {"y": record, "z": model.z, "grad_tol": 1e-12, "max_iter": 60}
+    plain = mle.maximise(par, base, **kwargs)
+    refined = mle.maximise(par, base, stop_stalled=True, **kwargs)
+    assert refined.message.startswith("stalled") and not refined.converged and refined.budget_stop is None
+    assert refined.n_eval < plain.n_eval
+    assert refined.n_eval <= 2 * (RECENT_EVALUATIONS + 1)
+    assert plain.loglik - refined.loglik < mle.STALLED_RISE
+    assert refined.loglik >= unbounded.loglik - 1e-6
+
+
+def test_a_refit_with_the_stall_rule_is_the_fit_without_it_where_the_gradient_test_ends_it(record, unbounded):
+    fit = NoiseModel(record, DT, "WN+GM+RW").fit(FAR, FitOptions(finish_budget=None, stop_stalled=True,
+                                                                 **NO_INTERVALS))
+    assert fit.loglik == pytest.approx(unbounded.loglik, abs=1e-6)

@@ -82,7 +82,10 @@ class AxisLoop:
         """The fit of ``state`` (``model`` its record and regressors) from ``state.init`` (None: the estimator's
         starts): unless ``exact``, from ``composite.MIN_SAMPLES`` samples on, the composite likelihood's maximiser
         (:func:`.composite.fit`, the regressors at their GLS values from the start removed) evaluated once on the exact
-        likelihood, means by GLS; else the exact ML fit. Beyond the papers (docs/em.md, "Searching long records …")."""
+        likelihood, means by GLS; else the exact ML fit (with ``exact``, a refinement of ``state.init``: the finish
+        alone, stopped once the likelihood stalls). Beyond the papers (docs/em.md, "Searching long records …")."""
+        if exact and state.init is not None:
+            return model.fit(state.init, FitOptions(uncertainty=False, em_iter=0, stop_stalled=True))
         if exact or not self.on_composite:
             # The loop compares fits; intervals are the model selection's job.
             return model.fit(state.init, FitOptions(uncertainty=False))

@@ -163,6 +163,10 @@ RECENT_EVALUATIONS = 5
 STALLED_RISE = 1e-2
 
 
+class _StalledError(Exception):
+    """ℓ rose by less than :data:`STALLED_RISE` over the last :data:`RECENT_EVALUATIONS` evaluations."""
+
+
 def maximise(
     par: Parameterisation,
     base: StateSpace,
@@ -176,6 +180,7 @@ def maximise(
     metric: np.ndarray | None = None,
     metric_at: Callable[[StateSpace], np.ndarray] | None = None,
     max_eval: int | None = None,
+    stop_stalled: bool = False,
 ) -> MLEResult:
     """L-BFGS(-B) on the exact profile log-likelihood from ``base`` (e.g. the last EM iterate).
 
@@ -191,6 +196,10 @@ def maximise(
         end with the metric recomputed there
     max_eval : most evaluations (ℓ with gradient, restart included); when it stops the search while ℓ still rose by
         :data:`STALLED_RISE` or more, ``budget_stop`` is ℓ's rise over the last :data:`RECENT_EVALUATIONS`
+    stop_stalled : also stop once ℓ rose by less than :data:`STALLED_RISE` over the last
+        :data:`RECENT_EVALUATIONS` evaluations (a refinement from a start already close to the maximum: the gradient
+        test of a misspecified model's metric may not be met where ℓ no longer rises); the result is then not
+        ``converged``, its message says "stalled", and no restart with ``metric_at`` follows
     """
     from ...kalman.statespace import to_components
 
@@ -230,7 +239,11 @@ def maximise(
             return 1e10, np.zeros_like(eta)
         if ll > state["best"][0]:
             state["best"] = (ll, theta.copy(), model, prof)
-        state["trace"].append(state["best"][0])
+        trace = state["trace"]
+        trace.append(state["best"][0])
+        if (stop_stalled and len(trace) > RECENT_EVALUATIONS
+                and trace[-1] - trace[-1 - RECENT_EVALUATIONS] < STALLED_RISE):
+            raise _StalledError
         # The likelihood at the projection onto the box, plus a quadratic pull back into it: continuous, so a
         # parameter resting on its bound (an OSC as narrow as the record resolves) does not stall the others.
         g_inside = np.where(outside == 0.0, g, 0.0)
@@ -241,10 +254,17 @@ def maximise(
     options = {"maxiter": max_iter, "ftol": 1e-15, "gtol": gtol, "maxcor": 20}
     if max_eval is not None:
         options["maxfun"] = max(int(max_eval), 1)
-    res = minimize(fun, np.zeros(T.shape[1]), jac=True, method="L-BFGS-B", options=options)
+    try:
+        res = minimize(fun, np.zeros(T.shape[1]), jac=True, method="L-BFGS-B", options=options)
+    except _StalledError:
+        res = None
     ll, theta, model, prof = state["best"]
     if theta is None:
         raise InputError("the likelihood could not be evaluated at any parameter value tried")
+    if res is None:
+        message = (f"stalled: the log-likelihood rose by less than {STALLED_RISE:g} over the last "
+                   f"{RECENT_EVALUATIONS} evaluations")
+        return MLEResult(theta, model, ll, state["n"], False, message, prof, None)
     converged = float(np.max(np.abs(res.jac), initial=0.0)) <= gtol
     left = None if max_eval is None else max_eval - state["n"]
     trace = state["trace"]

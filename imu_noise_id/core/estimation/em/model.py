@@ -43,6 +43,8 @@ class FitOptions:
     target_precision : relative 95 % half-width of the record-length advice (0.10 = ±10 %)
     finish_budget : sample-state evaluations of one start's finish (:func:`.search.finish_evaluations`); None: no
         bound
+    stop_stalled : the finish also stops once the log-likelihood stalls (:func:`.mle.maximise`): for a refit from a
+        start already close to the maximum
     """
 
     n_starts: int = 3
@@ -53,6 +55,7 @@ class FitOptions:
     uncertainty: bool = True
     target_precision: float = 0.10
     finish_budget: float | None = FINISH_BUDGET
+    stop_stalled: bool = False
 
     def __post_init__(self) -> None:
         if not 0 < self.target_precision < 1:

@@ -41,8 +41,9 @@ def finish_evaluations(budget: float | None, n: int, states: int) -> int | None:
 
 def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options: FitOptions,
                metric_of: Callable[[list[Component]], np.ndarray] | None) -> tuple[mle.MLEResult, int]:
-    """(result, EM iterations) of EM then the finish from one start, preconditioned by ``metric_of``; with neither
-    (``em_iter=0``, no polish) the start scored by one filter pass with GLS means."""
+    """(result, EM iterations) of EM then the finish from one start, preconditioned by ``metric_of``; with
+    ``em_iter=0`` the finish alone; with neither (``em_iter=0``, no polish) the start scored by one filter pass with
+    GLS means."""
     z = model.z
     state = model.statespace(start)
     par = mle.Parameterisation.of(start)
@@ -53,14 +54,16 @@ def _one_start(model: NoiseModel, start: list[Component], y: np.ndarray, options
         return mle.MLEResult(theta, fitted, prof.loglik, 0, False, "at the start's values", prof), 0
     metric = metric_of(start) if metric_of is not None else None
     metric_at = (lambda fitted: metric_of(ss.to_components(fitted))) if metric_of is not None else None
+    finish = functools.partial(mle.maximise, par, y=y, z=z, bounds=model.parameter_bounds, metric=metric,
+                               metric_at=metric_at, stop_stalled=options.stop_stalled,
+                               max_eval=finish_evaluations(options.finish_budget, y.size, state.phi.shape[0]))
+    if options.em_iter == 0:  # the finish alone, from the start with its GLS means (one filter pass, no smoother)
+        return finish(kalman.apply_beta(state, kalman.loglik(state, y, z))), 0
     _, state, stats = kalman.profile_and_smooth(state, y, z)  # GLS means and the first E-step in one pass
     em_iter, em_tol = options.em_iter, options.em_tol
     if options.polish:
         # The last EM iterate is scored by the quasi-Newton finish's first evaluation: no E-step for it here.
         run = em.run_em(state, y, z, max_iter=em_iter, tol=em_tol, initial=stats, final_estep=False)
-        finish = functools.partial(mle.maximise, par, y=y, z=z, bounds=model.parameter_bounds, metric=metric,
-                                   metric_at=metric_at,
-                                   max_eval=finish_evaluations(options.finish_budget, y.size, state.phi.shape[0]))
         try:
             res = finish(run.model)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
