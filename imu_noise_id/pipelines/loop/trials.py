@@ -35,11 +35,13 @@ def added_name(before: list[str], after: list[str], effect: str) -> str:
 
 def refit(loop: AxisLoop, diag: Diagnosis, new_state: LoopState) -> Diagnosis:
     """Fit and diagnose ``new_state``; when the warm start lost likelihood against a model it nests, refit with the
-    line's power shared (:func:`shared_power_start`) and from the estimator's own starts, the best kept."""
+    line's power shared (:func:`shared_power_start`) and, on a record fitted exactly (not on the composite
+    likelihood, whose fit climbs from a second start of its own), from the estimator's own starts, the best kept."""
     new_diag = loop.diagnose(new_state)
     if new_diag.errors.loglik < diag.errors.loglik and new_state.init is not None:
         shared = shared_power_start(new_state.init, diag.fit.components)
-        for init in ([shared] if shared is not None else []) + [None]:
+        own = [] if loop.on_composite else [None]
+        for init in ([shared] if shared is not None else []) + own:
             new_state.init = init
             retry = loop.diagnose(new_state)
             new_diag = retry if retry.errors.loglik > new_diag.errors.loglik else new_diag
