@@ -284,8 +284,8 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
         warnings.append(f"{axis}: the final random walk {k:.3g} is {final.random_walk_bound.excess(k)}; record "
                         "longer before trusting K")
     band = model_av_range(list(final.fit.components), static.allan.m, static.n, static.dt)
-    # the loop's steps keep no samples past here: sent back from a worker and kept for six axes, a step's record,
-    # regressors and innovations took (2 + regressors) × N floats each
+    # the loop's fits keep no record past here: sent back from a worker and kept for six axes, a step's samples and
+    # regressors took (1 + regressors) × N floats each
     return _AxisOutcome(model, loop_result.without_data() if loop_result is not None else None, final, band, warnings)
 
 

@@ -91,13 +91,6 @@ class Deferred(Generic[T]):
             self._value, self._compute = self._compute(), None
         return self._value  # type: ignore[return-value]
 
-    @classmethod
-    def of(cls, value: T) -> Deferred[T]:
-        """A value already computed."""
-        held: Deferred[T] = cls(lambda: value)
-        held()
-        return held
-
     def __getstate__(self) -> dict[str, object]:
         return {"_compute": None, "_value": self()}
 
@@ -129,13 +122,6 @@ class Diagnosis:
     def findings(self) -> list[det.Finding]:
         """Every detector's finding on the innovations (computed once, :attr:`detected`)."""
         return self.detected()
-
-    def without_data(self) -> Diagnosis:
-        """This diagnosis with its findings and residual spectra computed and kept, its fit holding no record and no
-        innovations (an empty array)."""
-        findings, spectra = self.findings, self.spectra
-        return replace(self, fit=self.fit.without_data(), innovations=np.zeros(0), detected=Deferred.of(findings),
-                       residual_spectra=Deferred.of(spectra))
 
     @property
     def innovation_variance(self) -> float:
@@ -196,6 +182,6 @@ class LoopResult:
 
     def without_data(self) -> LoopResult:
         """This result with each step's fit holding no record (:meth:`FitResult.without_data`, (1 + regressors) × N
-        floats per step) and its diagnosis no innovations (N floats per step), for keeping or sending a finished loop:
-        each step's findings and residual spectra are computed first and kept, as are the AVs."""
-        return replace(self, steps=[replace(s, diagnosis=s.diagnosis.without_data()) for s in self.steps])
+        floats per step), for keeping or sending a finished loop; the innovations, AVs and findings stay."""
+        steps = [replace(s, diagnosis=replace(s.diagnosis, fit=s.diagnosis.fit.without_data())) for s in self.steps]
+        return replace(self, steps=steps)
