@@ -163,6 +163,12 @@ RECENT_EVALUATIONS = 5
 STALLED_RISE = 1e-2
 
 
+def _recent_rise(trace: list[float]) -> float:
+    """ℓ's rise over the last :data:`RECENT_EVALUATIONS` evaluations of ``trace`` (the best ℓ after each), or over all
+    of them when fewer."""
+    return float(trace[-1] - trace[max(len(trace) - 1 - RECENT_EVALUATIONS, 0)])
+
+
 class _StalledError(Exception):
     """ℓ rose by less than :data:`STALLED_RISE` over the last :data:`RECENT_EVALUATIONS` evaluations."""
 
@@ -241,8 +247,7 @@ def maximise(
             state["best"] = (ll, theta.copy(), model, prof)
         trace = state["trace"]
         trace.append(state["best"][0])
-        if (stop_stalled and len(trace) > RECENT_EVALUATIONS
-                and trace[-1] - trace[-1 - RECENT_EVALUATIONS] < STALLED_RISE):
+        if stop_stalled and len(trace) > RECENT_EVALUATIONS and _recent_rise(trace) < STALLED_RISE:
             raise _StalledError
         # The likelihood at the projection onto the box, plus a quadratic pull back into it: continuous, so a
         # parameter resting on its bound (an OSC as narrow as the record resolves) does not stall the others.
@@ -267,8 +272,7 @@ def maximise(
         return MLEResult(theta, model, ll, state["n"], False, message, prof, None)
     converged = float(np.max(np.abs(res.jac), initial=0.0)) <= gtol
     left = None if max_eval is None else max_eval - state["n"]
-    trace = state["trace"]
-    rise = float(trace[-1] - trace[max(len(trace) - 1 - RECENT_EVALUATIONS, 0)])
+    rise = _recent_rise(state["trace"])
     budget_stop = None if converged or left is None or left > 0 or rise < STALLED_RISE else rise
     result = MLEResult(theta, model, ll, state["n"], bool(res.success), str(res.message), prof, budget_stop)
     if metric_at is None or metric is None or converged or (left is not None and left <= 0):
