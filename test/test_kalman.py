@@ -215,6 +215,31 @@ def test_the_initial_state_as_the_filters_delay_state_gives_the_prepended_run_bi
         np.testing.assert_array_equal(steady._strictly_proper(num, den, d, w0), prepended)
 
 
+def test_a_blocks_output_filtered_once_per_row_equals_its_recursion():
+    """:func:`steady._driven_block` (one filter of the shared input per output row, the constants' step responses
+    from the block's all-pole one) against x_0 = w0, x_{t+1} = B x_t + gain·y_t + const, rows c·x_t: for a 1×1 and
+    a 2×2 block over several columns, with and without constant inputs and initial states."""
+    from imu_noise_id.core.kalman import steady
+
+    rng = np.random.default_rng(12)
+    n, m = 300, 3
+    blocks = (np.array([[0.97]]), np.array([[0.95, 0.2], [-0.2, 0.95]]))
+    for B in blocks:
+        s = B.shape[0]
+        for constant in (False, True):
+            gain, y = rng.standard_normal(s), rng.standard_normal((m, n))
+            const = rng.standard_normal((s, m)) * np.array([0.0, 1.0, -2.0]) * constant
+            w0 = rng.standard_normal((s, m))
+            c = rng.standard_normal((2, s))
+            x = np.empty((s, m, n))
+            x[:, :, 0] = w0
+            for t in range(n - 1):
+                x[:, :, t + 1] = B @ x[:, :, t] + gain[:, None] * y[:, t] + const
+            expected = np.einsum("rs,smn->rmn", c, x)
+            out = steady._driven_block(B, c, gain, y, const=const, w0=w0)
+            np.testing.assert_allclose(out, expected, rtol=1e-10, atol=1e-10 * np.max(np.abs(expected)))
+
+
 def test_a_nearly_defective_transition_runs_in_the_schur_basis():
     from imu_noise_id.core.kalman import steady
 

@@ -103,6 +103,46 @@ def _block_output(B: np.ndarray, c: np.ndarray, d: np.ndarray, w0: np.ndarray) -
     return _accumulate(_strictly_proper(num[k], den, d[k], w0[k]) for k in range(2))
 
 
+def _adjugate_numerators(B: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """(r, s, 3): per row of ``c`` (r, s) and state k of a 1×1 or 2×2 block B, the strictly proper numerator of
+    c·adj(zI − B)·e_k in powers of z⁻¹ (denominator :func:`_characteristic`; a 1×1 block's third tap 0)."""
+    if B.shape[0] == 1:
+        return np.stack([np.zeros_like(c[:, 0]), c[:, 0], np.zeros_like(c[:, 0])], axis=-1)[:, None, :]
+    return np.stack([
+        np.stack([np.zeros(c.shape[0]), c[:, 0], c[:, 1] * B[1, 0] - c[:, 0] * B[1, 1]], axis=-1),
+        np.stack([np.zeros(c.shape[0]), c[:, 1], c[:, 0] * B[0, 1] - c[:, 1] * B[0, 0]], axis=-1)], axis=1)
+
+
+def _driven_block(B: np.ndarray, c: np.ndarray, gain: np.ndarray, y: np.ndarray, *, const: np.ndarray,
+                  w0: np.ndarray) -> np.ndarray:
+    """c·x_t (r, m, N) for rows c (r, s) of one block's recursion x_0 = w0, x_{t+1} = B x_t + gain·y_t + const,
+    y (m, N), const and w0 (s, m). Every state's input is a multiple of y plus a constant, so by linearity each row is
+    one filter of y with numerator Σ_k gain_k·num_k (not one per state), its initial delay states Σ_k w0_k·num_k, plus
+    the constants' step responses from the block's all-pole step response q = lfilter(1, den, 1) shifted by each
+    tap; a 1×1 block filters its input directly."""
+    den = _characteristic(B)
+    nums = _adjugate_numerators(B, c)
+    m, n = y.shape
+    if B.shape[0] == 1:
+        d = gain[0] * y + const[0][:, None] if np.any(const) else y
+        scale = 1.0 if np.any(const) else gain[0]
+        return np.stack([lfilter(scale * num[0, :2], den, d, axis=-1, zi=np.multiply.outer(w0[0], num[0, 1:2]))[0]
+                         for num in nums])
+    out = np.empty((nums.shape[0], m, n))
+    q = None
+    for r, num in enumerate(nums):
+        out[r] = lfilter(gain @ num, den, y, axis=-1, zi=w0.T @ num[:, 1:])[0]
+        num_c = const.T @ num  # (m, 3): the constants' numerators per column
+        rows = np.flatnonzero(np.any(num_c != 0.0, axis=1))
+        if not rows.size:
+            continue
+        if q is None:
+            q = lfilter([1.0], den, np.ones(n))
+        for tap in range(1, num_c.shape[1]):
+            out[r, rows, tap:] += num_c[rows, tap, None] * q[: n - tap]
+    return out
+
+
 def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
     """w_0 = w0, w_{t+1} = T w_t + cw_t (p, m, N) for quasi-triangular T, block by block from the last."""
     w = np.empty_like(cw)
@@ -223,7 +263,7 @@ def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray,
         return (hu @ w.reshape(p, -1)).reshape(m, n)
     out = np.zeros((m, n))
     for blk in _blocks(b.t):
-        out += _block_output(b.t[blk, blk], hu[blk], _driven(gain_w[blk], y, g_w[blk]), w0[blk])
+        out += _driven_block(b.t[blk, blk], hu[blk][None, :], gain_w[blk], y, const=g_w[blk], w0=w0[blk])[0]
     return out
 
 
@@ -254,8 +294,15 @@ def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
 def _predicted_states(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
                       m0: np.ndarray) -> np.ndarray:
     """x_t^{t−1} (p, N) of one column: inputs y (N,), u (p,), initial mean m0 (p,)."""
-    c = _driven(b.u_inv @ (model.phi @ g.k), y[None, :], (b.u_inv @ u)[:, None])
-    return b.u @ _run_modes(b.t, c, (b.u_inv @ m0)[:, None])[:, 0, :]
+    gain_w, g_w, w0 = b.u_inv @ (model.phi @ g.k), (b.u_inv @ u)[:, None], (b.u_inv @ m0)[:, None]
+    if not b.modal:
+        return b.u @ _run_modes(b.t, _driven(gain_w, y[None, :], g_w), w0)[:, 0, :]
+    w = np.empty((b.t.shape[0], y.size))
+    for blk in _blocks(b.t):  # each state of a block: its row of adj(zI − B)
+        size = blk.stop - blk.start
+        w[blk] = _driven_block(b.t[blk, blk], np.eye(size), gain_w[blk], y[None, :], const=g_w[blk],
+                               w0=w0[blk])[:, 0]
+    return b.u @ w
 
 
 def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
