@@ -14,7 +14,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..core.errors import InputError
-from . import blas_threads  # noqa: F401  (before .options, which loads numpy)
+from . import (
+    blas_threads,  # noqa: F401  (before .options, which loads numpy)
+    heap,  # noqa: F401  (freed arrays reused in this process and the ones it starts)
+)
 from .options import resolve_out
 
 if TYPE_CHECKING:
