@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-from imu_noise_id.cli.heap import VARIABLES
+from imu_noise_id.heap import VARIABLES
 
 pytestmark = pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="the setting is glibc's")
 
@@ -61,3 +61,34 @@ def test_without_the_command_line_glibc_maps_them(tmp_path):
 def test_an_explicit_setting_wins(tmp_path):
     mapped = _mapped(tmp_path, "import imu_noise_id.cli", MALLOC_MMAP_MAX_="65536")
     assert mapped["main"] >= ARRAY_BYTES and mapped["worker"] >= ARRAY_BYTES
+
+
+#: The heap's size [bytes] with a freed 64 MiB array kept, then after handing it back.
+RELEASE = """
+import ctypes, json
+import numpy as np
+import imu_noise_id.cli
+from imu_noise_id.heap import release_freed_memory
+
+class Info(ctypes.Structure):
+    _fields_ = [(n, ctypes.c_size_t) for n in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks",
+                                               "fsmblks", "uordblks", "fordblks", "keepcost")]
+
+libc = ctypes.CDLL(None)
+libc.mallinfo2.restype = Info
+a = np.ones(8 * 2**20)
+del a
+kept = libc.mallinfo2().fordblks
+released = release_freed_memory()
+print(json.dumps({"kept": kept, "released": released, "after": libc.mallinfo2().fordblks}))
+"""
+
+
+def test_freed_arrays_stay_in_the_heap_until_handed_back(tmp_path):
+    path = tmp_path / "release.py"
+    path.write_text(RELEASE)
+    env = {k: v for k, v in os.environ.items() if k not in VARIABLES}
+    out = json.loads(subprocess.run([sys.executable, str(path)], env=env, check=True, capture_output=True, text=True,
+                                    timeout=120).stdout)
+    assert out["kept"] >= ARRAY_BYTES
+    assert out["released"] and out["after"] < out["kept"] - ARRAY_BYTES // 2

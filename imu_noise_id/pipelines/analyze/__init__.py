@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 
+from ... import heap
 from ...core.allan import DEFAULT_CONFIDENCE, DEFAULT_PER_DECADE, KINDS
 from ...core.axes import AXES, SENSORS, ImuSeries, ScalarSeries
 from ...core.diagnostics.av_band import ModelAvRange, model_av_range
@@ -311,7 +312,15 @@ def _set_worker_context(context: _AxisContext, recording: MappedImu | None) -> N
 
 
 def _worker_axis(axis: str) -> _AxisOutcome:
-    return _axis_stages(_WORKER_CONTEXT[0], axis)
+    return _released(_WORKER_CONTEXT[0], axis)
+
+
+def _released(context: _AxisContext, axis: str) -> _AxisOutcome:
+    """:func:`_axis_stages`, then the memory its temporaries freed handed back (:func:`.heap.release_freed_memory`)."""
+    try:
+        return _axis_stages(context, axis)
+    finally:
+        heap.release_freed_memory()
 
 
 def _each_axis(context: _AxisContext, jobs: int,
@@ -323,7 +332,7 @@ def _each_axis(context: _AxisContext, jobs: int,
     axes = [a for a in context.static.axes if a in context.options.axes]
     if jobs <= 1:
         for axis in axes:
-            yield axis, _axis_stages(context, axis)
+            yield axis, _released(context, axis)
         return
     with contextlib.ExitStack() as stack:
         if recording is None:
