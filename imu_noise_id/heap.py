@@ -4,13 +4,12 @@ numpy's arrays of a long record (the smoother's states: states × samples double
 freed several times per likelihood evaluation. glibc serves every block above its mmap threshold (at most 32 MB) with
 a fresh ``mmap`` and returns it with ``munmap``, so each one is paid again in page faults and zeroed pages.
 :func:`keep_freed_memory` keeps such blocks in the heap for reuse: ``mallopt(M_MMAP_MAX, 0)`` (no block served by
-``mmap``) and ``mallopt(M_TRIM_THRESHOLD, TRIM_THRESHOLD)`` (the heap's free top kept up to that size) in this
-process, and the same as ``MALLOC_MMAP_MAX_`` / ``MALLOC_TRIM_THRESHOLD_`` in the environment the processes it starts
-inherit (``analyze --jobs`` workers, Dask workers) unless the environment gives them (an explicit value wins).
-:func:`release_freed_memory` (``malloc_trim(0)``) hands the freed memory back to the system, e.g. after an axis, so a
-process does not stay at its peak while it works on the next. Threads other than a process's main thread allocate
-from their own arenas, which fall back to ``mmap`` for such blocks as before. Both do nothing without glibc. Why and
-what it buys: ``docs/em.md`` ("Freed arrays reused, not mapped afresh").
+``mmap``) and ``mallopt(M_TRIM_THRESHOLD, TRIM_THRESHOLD)`` (the heap's free top kept up to that size), unless the
+environment gives ``MALLOC_MMAP_MAX_`` / ``MALLOC_TRIM_THRESHOLD_`` (an explicit value wins).
+:func:`release_freed_memory` (``malloc_trim(0)``) hands the freed memory back to the system after the unit of work.
+Only the calling thread's arena gains: other threads allocate from their own arenas, which map such blocks as before.
+Both do nothing without glibc. Why, and where ``analyze`` uses them: ``docs/em.md`` ("Freed arrays reused, not mapped
+afresh").
 """
 
 from __future__ import annotations
@@ -24,7 +23,7 @@ M_TRIM_THRESHOLD = -1
 M_MMAP_MAX = -4
 #: Largest free top of the heap kept [bytes] (``mallopt`` takes an int).
 TRIM_THRESHOLD = 2**31 - 1
-#: The environment variables glibc reads at a process's start, and their values.
+#: The environment variables glibc reads at a process's start, and the values used without them.
 VARIABLES: dict[str, str] = {"MALLOC_MMAP_MAX_": "0", "MALLOC_TRIM_THRESHOLD_": str(TRIM_THRESHOLD)}
 
 
@@ -35,14 +34,13 @@ def _glibc() -> ctypes.CDLL | None:
 
 
 def keep_freed_memory() -> bool:
-    """Set both ``mallopt`` parameters in this process and the variables for its children; whether glibc took them."""
+    """Set both ``mallopt`` parameters in this process (the environment's values where it gives them); whether glibc
+    took them."""
     libc = _glibc()
     if libc is None:
         return False
-    for name, value in VARIABLES.items():
-        os.environ.setdefault(name, value)
-    mmap_max = int(os.environ["MALLOC_MMAP_MAX_"])
-    trim = min(int(os.environ["MALLOC_TRIM_THRESHOLD_"]), TRIM_THRESHOLD)
+    mmap_max = int(os.environ.get("MALLOC_MMAP_MAX_", VARIABLES["MALLOC_MMAP_MAX_"]))
+    trim = min(int(os.environ.get("MALLOC_TRIM_THRESHOLD_", VARIABLES["MALLOC_TRIM_THRESHOLD_"])), TRIM_THRESHOLD)
     return bool(libc.mallopt(M_MMAP_MAX, mmap_max)) and bool(libc.mallopt(M_TRIM_THRESHOLD, trim))
 
 

@@ -13,15 +13,12 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .. import heap
 from ..core.errors import InputError
 from . import blas_threads  # noqa: F401  (before .options, which loads numpy)
 from .options import resolve_out
 
 if TYPE_CHECKING:
     from ..report.results_folder import ResultsFolder
-
-heap.keep_freed_memory()  # freed arrays reused in this process and the ones it starts (docs/em.md)
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
 COMMANDS: tuple[str, ...] = (

@@ -303,7 +303,8 @@ _WORKER_CONTEXT: list[_AxisContext] = []
 
 def _set_worker_context(context: _AxisContext, recording: MappedImu | None) -> None:
     """Install ``context`` in this worker with the recording mapped from ``recording``'s files (not sent), or as sent
-    (None)."""
+    (None); the worker keeps its freed arrays for reuse (:func:`.heap.keep_freed_memory`)."""
+    heap.keep_freed_memory()
     if recording is None:
         _WORKER_CONTEXT[:] = [context]
         return
@@ -328,9 +329,11 @@ def _each_axis(context: _AxisContext, jobs: int,
     """(axis, its outcome) in axis order, here or from ``jobs`` "spawn" worker processes (the context sent to each
     once, the recording's arrays mapped from ``recording``'s files, or from files written into a temporary folder
     removed afterwards, or sent with it where they cannot be written); the workers stop after the last axis or the first
-    error (an axis's InputError raised here)."""
+    error (an axis's InputError raised here). Each process doing axis work keeps its freed arrays for reuse and hands
+    them back after each axis (:mod:`...heap`; why: docs/em.md, "Freed arrays reused, not mapped afresh")."""
     axes = [a for a in context.static.axes if a in context.options.axes]
     if jobs <= 1:
+        heap.keep_freed_memory()
         for axis in axes:
             yield axis, _released(context, axis)
         return
