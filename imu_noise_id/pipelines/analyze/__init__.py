@@ -303,13 +303,26 @@ _WORKER_CONTEXT: list[_AxisContext] = []
 
 def _set_worker_context(context: _AxisContext, recording: MappedImu | None) -> None:
     """Install ``context`` in this worker with the recording mapped from ``recording``'s files (not sent), or as sent
-    (None); the worker keeps its freed arrays for reuse (:func:`.heap.keep_freed_memory`)."""
-    heap.keep_freed_memory()
+    (None); the worker keeps its freed arrays for reuse where that pays (:func:`_keep_freed_memory`)."""
+    _keep_freed_memory(context.static.n)
     if recording is None:
         _WORKER_CONTEXT[:] = [context]
         return
     imu = recording.open()
     _WORKER_CONTEXT[:] = [replace(context, imu=imu, loop=context.loop.on(imu) if context.loop is not None else None)]
+
+
+#: Most samples per axis of a record whose axis work keeps its freed arrays for reuse (a state row of 64 MiB).
+REUSE_MAX_SAMPLES = 2**23
+
+
+def _keep_freed_memory(n: int) -> None:
+    """:func:`.heap.keep_freed_memory` in this process for a record of ``n`` samples per axis up to
+    :data:`REUSE_MAX_SAMPLES`: beyond it the loop searches on statistics of fixed size and its few exact passes gain
+    little, while blocks of a state row and more leave holes the process tree's peak memory pays for (docs/em.md,
+    "Freed arrays reused, not mapped afresh")."""
+    if n <= REUSE_MAX_SAMPLES:
+        heap.keep_freed_memory()
 
 
 def _worker_axis(axis: str) -> _AxisOutcome:
@@ -333,7 +346,7 @@ def _each_axis(context: _AxisContext, jobs: int,
     them back after each axis (:mod:`...heap`; why: docs/em.md, "Freed arrays reused, not mapped afresh")."""
     axes = [a for a in context.static.axes if a in context.options.axes]
     if jobs <= 1:
-        heap.keep_freed_memory()
+        _keep_freed_memory(context.static.n)
         for axis in axes:
             yield axis, _released(context, axis)
         return
