@@ -8,7 +8,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from ... import heap
 from ...core.allan import allan_variance, choose_m
 from ...core.diagnostics import detectors as det
 from ...core.diagnostics.av_band import model_av_band
@@ -125,15 +124,7 @@ class AxisLoop:
         return (np.hstack(cols) if cols else None), names, slices
 
     def diagnose(self, state: LoopState, fit: FitResult | None = None, *, exact: bool = False) -> Diagnosis:
-        """Fit ``state`` (:meth:`fit_state`, ``exact`` or not) unless its ``fit`` on this record is given; diagnose.
-        The memory its passes freed is handed back after (:func:`...heap.release_freed_memory`: reused within one
-        diagnosis, not held beyond it)."""
-        try:
-            return self._diagnosed(state, fit, exact=exact)
-        finally:
-            heap.release_freed_memory()
-
-    def _diagnosed(self, state: LoopState, fit: FitResult | None, *, exact: bool) -> Diagnosis:
+        """Fit ``state`` (:meth:`fit_state`, ``exact`` or not) unless its ``fit`` on this record is given; diagnose."""
         y = self.y.copy()
         if state.flagged.size:
             y[state.flagged] = np.nan if self.outliers == "missing" else state.imputed
