@@ -12,6 +12,7 @@ import sys
 import pytest
 
 from imu_noise_id.heap import VARIABLES
+from imu_noise_id.pipelines.analyze import REUSE_MAX_SAMPLES
 
 pytestmark = pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="the setting is glibc's")
 
@@ -39,9 +40,9 @@ print(json.dumps({{"kept": kept, "mapped": mapped, "free": free, "released": rel
 ARRAY_BYTES = 64 * 2**20
 
 
-def _probe(tmp_path, keep: bool, **extra: str) -> dict:
+def _probe(tmp_path, keep: bool | str, **extra: str) -> dict:
     path = tmp_path / "probe.py"
-    path.write_text(PROBE.format(keep="keep_freed_memory()" if keep else "False"))
+    path.write_text(PROBE.format(keep=keep if isinstance(keep, str) else "keep_freed_memory()" if keep else "False"))
     env = {k: v for k, v in os.environ.items() if k not in VARIABLES} | extra
     return json.loads(subprocess.run([sys.executable, str(path)], env=env, check=True, capture_output=True,
                                      text=True, timeout=120).stdout)
@@ -61,3 +62,10 @@ def test_without_it_glibc_maps_the_array_and_unmaps_it_on_free(tmp_path):
 def test_an_explicit_setting_wins(tmp_path):
     out = _probe(tmp_path, keep=True, MALLOC_MMAP_MAX_="65536")
     assert out["mapped"] >= ARRAY_BYTES
+
+
+@pytest.mark.parametrize("n, reused", [(REUSE_MAX_SAMPLES, True), (REUSE_MAX_SAMPLES + 1, False)])
+def test_analyze_keeps_them_only_on_records_up_to_its_limit(tmp_path, n, reused):
+    """``analyze``'s axis work keeps freed arrays for a record of up to ``REUSE_MAX_SAMPLES`` per axis only."""
+    out = _probe(tmp_path, f"__import__('imu_noise_id.pipelines.analyze', fromlist=['_'])._keep_freed_memory({n})")
+    assert (out["mapped"] < ARRAY_BYTES) == reused
