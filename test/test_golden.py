@@ -56,6 +56,12 @@ LOGLIK_KEYS = {"loglik", "aic", "bic", "delta_aic", "delta_bic", "loglik_diffuse
 #: trial's "BIC … → …; AV misfit z … → …") and the loop's band sentence (its largest relative AV error in whole per
 #: cent): their words are compared exactly, their numbers to :data:`LOGLIK_ABS`.
 TEXT_KEYS = {"reason", "av_band"}
+#: Free-text keys of ``imu.yaml`` saying where a pasted value comes from (per axis, ``…_source_xyz``): their words are
+#: compared exactly, a BIC or AIC difference to :data:`LOGLIK_ABS`, a reading the text itself calls undetermined ("K …
+#: (its interval not determined)": a point of a flat ridge, module docstring) not at all, other numbers to
+#: :data:`FIT_REL`.
+SOURCE_SUFFIX = "_source_xyz"
+UNDETERMINED = " (its interval not determined)"
 NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 #: Keys holding numbers from the likelihood's curvature or from draws of it, and the overbound (it touches the final
 #: model's Allan variance, which moves with the fit over the flat parts of the likelihood).
@@ -140,6 +146,9 @@ def differences(got: object, want: object, where: str = "", tol: Tolerance = Tol
         return []
     if isinstance(want, str) and isinstance(got, str) and fitted and where.rsplit("/", 1)[-1] in TEXT_KEYS:
         return [] if _same_text(got, want, tol) else [f"{where}: {got!r}, expected {want!r}"]
+    if isinstance(want, str) and isinstance(got, str) and fitted and \
+            where.rsplit("/", 1)[-1].split("[", maxsplit=1)[0].endswith(SOURCE_SUFFIX):
+        return [] if _same_source_text(got, want) else [f"{where}: {got!r}, expected {want!r}"]
     if isinstance(want, bool) or not isinstance(want, int | float) or not isinstance(got, int | float):
         return [] if got == want else \
             [f"{where}: {got!r}, expected {want!r}"]
@@ -156,6 +165,20 @@ def _same_text(got: str, want: str, tol: Tolerance) -> bool:
         return False
     pairs = zip(map(float, NUMBER.findall(got)), map(float, NUMBER.findall(want)), strict=True)
     return all(math.isclose(g, w, rel_tol=tol.rel, abs_tol=tol.abs) for g, w in pairs)
+
+
+def _same_source_text(got: str, want: str) -> bool:
+    """Whether two source texts agree (:data:`SOURCE_SUFFIX`): the same words, numbers as that comment says."""
+    if NUMBER.split(got) != NUMBER.split(want):
+        return False
+    for g, w in zip(NUMBER.finditer(got), NUMBER.finditer(want), strict=True):
+        if want.startswith(UNDETERMINED, w.end()):
+            continue
+        log_scale = want[: w.start()].rstrip(" +").endswith(("BIC", "AIC"))
+        tol = {"rel_tol": 0.0, "abs_tol": LOGLIK_ABS} if log_scale else {"rel_tol": FIT_REL, "abs_tol": ABS}
+        if not math.isclose(float(g.group()), float(w.group()), **tol):
+            return False
+    return True
 
 
 @pytest.mark.parametrize("name", ["analyze_imu.yaml", "analyze_model.yaml", "fit_model.yaml", "cmkf.yaml",
@@ -227,3 +250,12 @@ def test_free_text_numbers_compare_at_loglik_resolution():
                        want, fitted=True)
     assert differences(with_reason("joint search: BIC -298917.5 → -298895.7 (better); AV misfit z 0.7 → 0.7"),
                        want, fitted=True)
+
+
+def test_a_source_text_compares_its_words_and_its_determined_numbers():
+    want = ("RW; the data cannot tell apart WN+GM (BIC +1.2, AIC +0.0 over the best): no walk; WN+GM+RW (BIC +12.2): "
+            "K 4.81e-08 (its interval not determined); K lies in [0, 0.000632]")
+    assert _same_source_text(want.replace("4.81e-08", "6.64e-08").replace("+12.2", "+12.9"), want)
+    assert not _same_source_text(want.replace("0.000632", "0.000700"), want)
+    assert not _same_source_text(want.replace("+12.2", "+14.0"), want)
+    assert not _same_source_text(want.replace("no walk", "a walk"), want)
