@@ -92,17 +92,6 @@ def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) ->
                              for c in range(2) if adj[r][c][2] != 0 or c == r)
 
 
-def _block_output(B: np.ndarray, c: np.ndarray, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """c·x_t (m, N) of :func:`_run_block`'s recursion without its states (numerator c·adj(zI − B))."""
-    den = _characteristic(B)
-    if B.shape[0] == 1:
-        out = _strictly_proper((0.0, 1.0), den, d[0], w0[0])
-        out *= c[0]
-        return out
-    num = ((0.0, c[0], c[1] * B[1, 0] - c[0] * B[1, 1]), (0.0, c[1], c[0] * B[0, 1] - c[1] * B[0, 0]))
-    return _accumulate(_strictly_proper(num[k], den, d[k], w0[k]) for k in range(2))
-
-
 def _adjugate_numerators(B: np.ndarray, c: np.ndarray) -> np.ndarray:
     """(r, s, 3): per row of ``c`` (r, s) and state k of a 1×1 or 2×2 block B, the strictly proper numerator of
     c·adj(zI − B)·e_k in powers of z⁻¹ (denominator :func:`_characteristic`; a 1×1 block's third tap 0)."""
@@ -124,8 +113,7 @@ def _driven_block(B: np.ndarray, c: np.ndarray, gain: np.ndarray, y: np.ndarray,
     nums = _adjugate_numerators(B, c)
     m, n = y.shape
     if B.shape[0] == 1:
-        d = gain[0] * y + const[0][:, None] if np.any(const) else y
-        scale = 1.0 if np.any(const) else gain[0]
+        d, scale = (gain[0] * y + const[0][:, None], 1.0) if np.any(const) else (y, gain[0])
         return np.stack([lfilter(scale * num[0, :2], den, d, axis=-1, zi=np.multiply.outer(w0[0], num[0, 1:2]))[0]
                          for num in nums])
     out = np.empty((nums.shape[0], m, n))
@@ -287,7 +275,8 @@ def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
     out = np.empty((b.t.shape[0], length))
     for blk in _blocks(b.t):
         s = blk.stop - blk.start
-        out[blk] = _block_output(b.t[blk, blk], hu[blk], np.zeros((s, s, length)), np.eye(s))
+        out[blk] = _driven_block(b.t[blk, blk], hu[blk][None, :], np.zeros(s), np.zeros((s, length)),
+                                 const=np.zeros((s, s)), w0=np.eye(s))[0]
     return out
 
 
