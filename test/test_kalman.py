@@ -246,13 +246,31 @@ def test_a_nearly_defective_transition_runs_in_the_schur_basis():
     jordan = np.array([[0.9, 1.0], [0.0, 0.9 + 1e-12]])
     assert not steady.decoupled_basis(jordan).modal
     assert steady.decoupled_basis(np.diag([0.5, 0.9])).modal
-    c = np.random.default_rng(1).standard_normal((2, 1, 50))
-    x = steady.lti_states(jordan, c, np.ones((2, 1)))
-    ref = np.empty_like(c)
-    ref[:, :, 0] = 1.0
-    for k in range(49):
-        ref[:, :, k + 1] = jordan @ ref[:, :, k] + c[:, :, k]
-    np.testing.assert_allclose(x, ref, rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("a", [
+    np.array([[0.9, 1.0], [0.0, 0.9 + 1e-12]]),  # nearly defective: the Schur basis
+    np.array([[0.95, 0.2, 0.1], [-0.2, 0.95, 0.0], [0.0, 0.0, 0.97]]),  # a complex pair and a real pole: modal
+])
+def test_the_smoothers_adjoint_in_either_basis_equals_its_backward_recursion(a):
+    """:func:`steady._adjoint_modes` against r_{t−1} = Hᵀe_t/F + Aᵀr_t, r_{N−1} = 0, run plainly backwards."""
+    from types import SimpleNamespace
+
+    from imu_noise_id.core.kalman import steady
+
+    p, n = a.shape[0], 60
+    rng = np.random.default_rng(2)
+    model, gains = SimpleNamespace(h=rng.standard_normal(p)), SimpleNamespace(f=0.7)
+    e = rng.standard_normal(n)
+    expected = np.zeros((p, n))  # column t: r_{t−1}
+    r = np.zeros(p)
+    for t in range(n - 1, -1, -1):
+        r = model.h * e[t] / gains.f + a.T @ r
+        expected[:, t] = r
+    basis = steady.decoupled_basis(a)
+    sigma, v_first = steady._adjoint_modes(model, gains, basis, e)
+    v = np.column_stack([v_first, sigma[:, :0:-1]])
+    np.testing.assert_allclose(basis.u_inv.T @ v, expected, rtol=1e-9, atol=1e-12 * np.max(np.abs(expected)))
 
 
 def test_a_model_without_a_steady_filter_in_double_precision_is_refused_without_numpy_warnings():

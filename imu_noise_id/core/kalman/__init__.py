@@ -37,13 +37,14 @@ def _engine(model: StateSpace, y: np.ndarray, engine: str):
 
 def loglik(
     model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, profile_mean: bool = True,
-    engine: str = "auto",
+    engine: str = "auto", innovations: bool = True,
 ) -> ProfileResult:
-    """Exact log-likelihood of y (NaN: missing); ``profile_mean``: free b, u, μ at their GLS estimate."""
+    """Exact log-likelihood of y (NaN: missing); ``profile_mean``: free b, u, μ at their GLS estimate;
+    ``innovations``: keep the innovations at the estimate (else the result's are empty: one pass less)."""
     y, z = check_data(y, z, model.n_regressors)
     cols = build_columns(model, y, z, profile_mean)
     inn = _engine(model, y, engine).innovations(model, cols)
-    return profile(inn, cols.names)
+    return profile(inn, cols.names, keep_innovations=innovations)
 
 
 def profile_and_smooth(

@@ -54,7 +54,7 @@ class SmootherStats:
 def check_data(y: np.ndarray, z: np.ndarray | None, n_regressors: int) -> tuple[np.ndarray, np.ndarray]:
     """Validated y (N,) (NaN: missing) and Z (N, k); InputError on inf or a bad shape."""
     y = np.asarray(y, dtype=float).ravel()
-    if np.any(np.isinf(y)):
+    if not math.isfinite(float(np.sum(y))) and np.any(np.isinf(y)):  # a finite sum: no inf (nor NaN) in y
         raise InputError("the signal contains infinite values; remove them or mark them as NaN (missing)")
     if z is None:
         z = np.zeros((y.size, 0))
@@ -63,7 +63,7 @@ def check_data(y: np.ndarray, z: np.ndarray | None, n_regressors: int) -> tuple[
         z = z[:, None]
     if z.shape != (y.size, n_regressors):
         raise InputError(f"regressors must have shape ({y.size}, {n_regressors}), got {z.shape}")
-    if not np.all(np.isfinite(z)):
+    if not math.isfinite(float(np.sum(z))) and not np.all(np.isfinite(z)):  # a finite sum: every entry finite
         raise InputError("regressors (exog) must be finite everywhere, also where the signal is missing")
     return y, z
 
@@ -78,8 +78,12 @@ def build_columns(model: StateSpace, y: np.ndarray, z: np.ndarray, profile: bool
     u0 = np.where(model.u_free, 0.0, model.u) if profile else model.u
     mu0 = np.where(model.mu_free, 0.0, model.mu) if profile else model.mu
     m = 1 + free_b.size + free_u.size + free_mu.size
-    ycols = np.zeros((m, y.size))
-    ycols[0] = y - z @ b_fixed if z.shape[1] else y
+    ycols = np.empty((m, y.size))
+    if z.shape[1] and np.any(b_fixed):
+        np.subtract(y, z @ b_fixed, out=ycols[0])
+    else:
+        ycols[0] = y
+    ycols[1 + free_b.size:] = 0.0
     g, m0 = np.zeros((p, m)), np.zeros((p, m))
     g[:, 0], m0[:, 0] = u0, mu0
     names = ["data"]
@@ -87,7 +91,7 @@ def build_columns(model: StateSpace, y: np.ndarray, z: np.ndarray, profile: bool
     declared = model.sinusoid_omega or (math.nan,) * model.n_regressors
     c = 1
     for j in free_b:
-        ycols[c] = -z[:, j]
+        np.negative(z[:, j], out=ycols[c])
         names.append(f"b:{model.regressors[j]}")
         omega[c] = declared[j]
         c += 1

@@ -3,7 +3,7 @@ missing samples): constant K, F, J make filter and smoother IIR filters in the m
 (:func:`decoupled_basis`; why: docs/em.md, "Why the Kalman engines …")
 
     predicted state  x_{t+1} = A x_t + ΦK y_t + u,        A = Φ(I − K H)          (forward, causal)
-    smoothed state   x_{t−1}^N = J x_t^N + (x_{t−1}^{t−1} − J x_t^{t−1})          (backward, anti-causal)
+    smoothed state   x_t^N = x_t^{t−1} + P̄ r_{t−1},  r_{t−1} = Hᵀ e_t / F + Aᵀ r_t   (backward, anti-causal)
 
 P_{t−1}^N = J P_t^N Jᵀ + (P_f − J P̄ Jᵀ) (:func:`affine_power_sum`); P_{t,t−1}^N = P_t^N Jᵀ (de Jong 1989)."""
 
@@ -114,8 +114,9 @@ def _driven_block(B: np.ndarray, c: np.ndarray, gain: np.ndarray, y: np.ndarray,
     m, n = y.shape
     if B.shape[0] == 1:
         d, scale = (gain[0] * y + const[0][:, None], 1.0) if np.any(const) else (y, gain[0])
-        return np.stack([lfilter(scale * num[0, :2], den, d, axis=-1, zi=np.multiply.outer(w0[0], num[0, 1:2]))[0]
-                         for num in nums])
+        rows = [lfilter(scale * num[0, :2], den, d, axis=-1, zi=np.multiply.outer(w0[0], num[0, 1:2]))[0]
+                for num in nums]
+        return rows[0][None] if len(rows) == 1 else np.stack(rows)
     out = np.empty((nums.shape[0], m, n))
     q = None
     for r, num in enumerate(nums):
@@ -147,10 +148,6 @@ def _driven(gain: np.ndarray, y: np.ndarray, const: np.ndarray) -> np.ndarray:
     d = gain[:, None, None] * y[None]
     d += const[:, :, None]
     return d
-
-
-def _rotate(M: np.ndarray, x: np.ndarray) -> np.ndarray:
-    return (M @ x.reshape(x.shape[0], -1)).reshape(M.shape[0], *x.shape[1:])
 
 
 #: Largest condition number of the real modal basis used instead of the Schur basis.
@@ -202,14 +199,6 @@ def decoupled_basis(A: np.ndarray) -> Basis:
     return Basis(T, U, U.T, False)
 
 
-def lti_states(A: np.ndarray, c: np.ndarray, x0: np.ndarray) -> np.ndarray:
-    """x_0 = x0, x_{t+1} = A x_t + c_t for c (p, m, N), x0 (p, m), in :func:`decoupled_basis`."""
-    if c.shape[0] == 0:
-        return np.zeros_like(c)
-    b = decoupled_basis(A)
-    return _rotate(b.u, _run_modes(b.t, _rotate(b.u_inv, c), b.u_inv @ x0))
-
-
 #: Sinusoidal columns go in closed form when their free responses cost less than this share of
 #: filtering the columns through every block.
 CLOSED_FORM_SHARE = 0.5
@@ -249,10 +238,9 @@ def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray,
     if not b.modal:
         w = _run_modes(b.t, _driven(gain_w, y, g_w), w0)
         return (hu @ w.reshape(p, -1)).reshape(m, n)
-    out = np.zeros((m, n))
-    for blk in _blocks(b.t):
-        out += _driven_block(b.t[blk, blk], hu[blk][None, :], gain_w[blk], y, const=g_w[blk], w0=w0[blk])[0]
-    return out
+    outputs = (_driven_block(b.t[blk, blk], hu[blk][None, :], gain_w[blk], y, const=g_w[blk], w0=w0[blk])[0]
+               for blk in _blocks(b.t))
+    return _accumulate(outputs)
 
 
 def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns, *, rows: np.ndarray,
@@ -280,18 +268,45 @@ def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
     return out
 
 
-def _predicted_states(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
-                      m0: np.ndarray) -> np.ndarray:
-    """x_t^{t−1} (p, N) of one column: inputs y (N,), u (p,), initial mean m0 (p,)."""
+def _predicted_modes(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
+                     m0: np.ndarray) -> np.ndarray:
+    """w_t = U⁻¹ x_t^{t−1} (p, N), the predicted states of one column in the basis ``b``: inputs y (N,), u (p,),
+    initial mean m0 (p,)."""
     gain_w, g_w, w0 = b.u_inv @ (model.phi @ g.k), (b.u_inv @ u)[:, None], (b.u_inv @ m0)[:, None]
     if not b.modal:
-        return b.u @ _run_modes(b.t, _driven(gain_w, y[None, :], g_w), w0)[:, 0, :]
+        return _run_modes(b.t, _driven(gain_w, y[None, :], g_w), w0)[:, 0, :]
     w = np.empty((b.t.shape[0], y.size))
     for blk in _blocks(b.t):  # each state of a block: its row of adj(zI − B)
         size = blk.stop - blk.start
         w[blk] = _driven_block(b.t[blk, blk], np.eye(size), gain_w[blk], y[None, :], const=g_w[blk],
                                w0=w0[blk])[:, 0]
-    return b.u @ w
+    return w
+
+
+def _adjoint_modes(model: StateSpace, g: SteadyGains, b: Basis, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The smoother's adjoint r in the basis ``b``, driven by the innovations e (N,) alone, in reversed time.
+
+    Bryson–Frazier / de Jong (1989) in steady state (Durbin & Koopman 2012, eq. 4.44 with L_t = A):
+
+        r_{t−1} = Hᵀ e_t / F + Aᵀ r_t,   r_{N−1} = 0,        x_t^N = x_t^{t−1} + P̄ r_{t−1}.
+
+    With v = Uᵀ r (Aᵀ = U⁻ᵀ Tᵀ Uᵀ) the recursion runs block by block through Tᵀ, one filter of e per block row;
+    reversed in time, σ_0 = 0 and σ_{k+1} = Tᵀ σ_k + Uᵀ Hᵀ e_{N−1−k} / F, so v_t = σ_{N−t}. Returns (σ (p, N) as
+    σ_0 … σ_{N−1}, σ_N = v_0); ``U⁻ᵀ v_t`` is r_{t−1}."""
+    p, n = b.t.shape[0], e.size
+    gain = b.u.T @ model.h / g.f
+    tt = b.t.T
+    e_rev = e[::-1][None, :]
+    zero = np.zeros((p, 1))
+    if b.modal:
+        sigma = np.empty((p, n))
+        for blk in _blocks(b.t):
+            size = blk.stop - blk.start
+            sigma[blk] = _driven_block(tt[blk, blk], np.eye(size), gain[blk], e_rev, const=zero[blk],
+                                       w0=zero[blk])[:, 0]
+    else:  # Tᵀ is lower quasi-triangular: run it with the states' order reversed (upper again)
+        sigma = _run_modes(tt[::-1, ::-1], _driven(gain[::-1], e_rev, zero), zero)[::-1, 0, :]
+    return sigma, tt @ sigma[:, -1] + gain * e[0]
 
 
 def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
@@ -299,7 +314,7 @@ def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
     g = gains(model)
     hx, _ = _predicted_output(model, g, cols)
     n = cols.y.shape[1]
-    return InnovationResult(cols.y - hx, np.full(n, g.f), np.ones(n, bool), constant_f=True)
+    return InnovationResult(np.subtract(cols.y, hx, out=hx), np.full(n, g.f), np.ones(n, bool), constant_f=True)
 
 
 def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -335,17 +350,19 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
     return 0.5 * (total + total.T), 0.5 * (last + last.T)
 
 
-def _smooth_from_forward(model: StateSpace, g: SteadyGains, xp: np.ndarray, e: np.ndarray) -> SmootherStats:
-    """Backward pass and covariance sums from predicted states xp (p, N) and innovations e (N,)."""
-    n, p = e.size, model.n_states
-    xf = np.multiply.outer(g.k, e)
-    xf += xp
-    # Backward pass in reversed time: s_0 = x_N^N (= filtered), s_{k+1} = J s_k + a_{N−2−k},
-    # a_t = x_t^t − J x_{t+1}^t, written reversed straight into the pass's input.
-    c = np.empty((p, 1, n))
-    np.subtract(xf[:, -2::-1], (g.j @ xp[:, 1:])[:, ::-1], out=c[:, 0, :-1])
-    c[:, 0, -1] = 0.0
-    xs = np.ascontiguousarray(lti_states(g.j, c, xf[:, -1:])[:, 0, ::-1])
+def _smoothed(model: StateSpace, g: SteadyGains, b: Basis | None, w: np.ndarray, e: np.ndarray) -> SmootherStats:
+    """Smoothed states and covariance sums from the predicted states w (p, N) in the basis ``b`` and the
+    innovations e (N,): x_t^N = U w_t + P̄ U⁻ᵀ v_t (:func:`_adjoint_modes`), two p × p products over the record."""
+    n = e.size
+    if b is None:
+        xs = np.zeros((0, n))
+    else:
+        xs = b.u @ w
+        sigma, v_first = _adjoint_modes(model, g, b, e)
+        back = g.p_pred @ b.u_inv.T
+        reversed_part = back @ sigma
+        xs[:, 1:] += reversed_part[:, :0:-1]
+        xs[:, 0] += back @ v_first
     J = g.j
     const = g.p_filt - J @ g.p_pred @ J.T
     with np.errstate(over="ignore", invalid="ignore"):
@@ -366,9 +383,10 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     g = gains(model)
     y = cols.y[0]
     if model.n_states == 0:
-        return _smooth_from_forward(model, g, np.zeros((0, y.size)), y.copy())
-    xp = _predicted_states(model, g, decoupled_basis(g.a), y, cols.g[:, 0], m0=cols.m0[:, 0])
-    return _smooth_from_forward(model, g, xp, y - model.h @ xp)
+        return _smoothed(model, g, None, np.zeros((0, y.size)), y.copy())
+    b = decoupled_basis(g.a)
+    w = _predicted_modes(model, g, b, y, cols.g[:, 0], m0=cols.m0[:, 0])
+    return _smoothed(model, g, b, w, y - (model.h @ b.u) @ w)
 
 
 def profile_and_smooth(model: StateSpace, cols: Columns) -> tuple[ProfileResult, SmootherStats]:
@@ -376,9 +394,10 @@ def profile_and_smooth(model: StateSpace, cols: Columns) -> tuple[ProfileResult,
     g = gains(model)
     hx, b = _predicted_output(model, g, cols)
     n = cols.y.shape[1]
-    prof = profile(InnovationResult(cols.y - hx, np.full(n, g.f), np.ones(n, bool), constant_f=True), cols.names)
+    prof = profile(InnovationResult(np.subtract(cols.y, hx, out=hx), np.full(n, g.f), np.ones(n, bool),
+                                    constant_f=True), cols.names)
     if b is None:
-        return prof, _smooth_from_forward(model, g, np.zeros((0, n)), prof.innovations)
+        return prof, _smoothed(model, g, None, np.zeros((0, n)), prof.innovations)
     weights = np.concatenate([[1.0], prof.beta])
-    xp = _predicted_states(model, g, b, weights @ cols.y, cols.g @ weights, m0=cols.m0 @ weights)
-    return prof, _smooth_from_forward(model, g, xp, prof.innovations)
+    w = _predicted_modes(model, g, b, weights @ cols.y, cols.g @ weights, m0=cols.m0 @ weights)
+    return prof, _smoothed(model, g, b, w, prof.innovations)

@@ -202,7 +202,7 @@ class NoiseModel:
 
     def loglik(self, components: list[Component]) -> float:
         """Exact log-likelihood of ``components`` on the record, mean parameters at their GLS estimate."""
-        return float(kalman.loglik(self.statespace(components), self.y, self.z).loglik)
+        return float(kalman.loglik(self.statespace(components), self.y, self.z, innovations=False).loglik)
 
     # -- starting values ------------------------------------------------------------------------------------
     def detrended(self) -> np.ndarray:

@@ -126,7 +126,7 @@ class Profiler:
         """(ℓ, ℓ_A) at ϑ with the means of ``base`` (default: the fit's); −inf outside the filter's domain."""
         self.n_eval += 1
         try:
-            prof = kalman.loglik(self.par.to_model(theta, base or self.model), self.y, self.z)
+            prof = kalman.loglik(self.par.to_model(theta, base or self.model), self.y, self.z, innovations=False)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             return -math.inf, -math.inf
         return float(prof.loglik), adjusted(prof)
@@ -173,7 +173,7 @@ class Profiler:
         """½ log det cov(b̂) at ϑ: a function of ϑ alone (the regressor columns filtered, the data column zero)."""
         self.n_eval += 1
         try:
-            prof = kalman.loglik(self.par.to_model(theta, base), self._zeros, self.z)
+            prof = kalman.loglik(self.par.to_model(theta, base), self._zeros, self.z, innovations=False)
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             return -math.inf
         return adjusted(prof) - float(prof.loglik)

@@ -163,7 +163,7 @@ def _near_zero(par: mle.Parameterisation, res: mle.MLEResult, k: int, y: np.ndar
     th[k] -= math.log(NEAR_ZERO_SHRINK)
     try:
         with np.errstate(over="ignore", invalid="ignore"):  # a point that far may overflow: then ℓ is not finite
-            ll = kalman.loglik(par.to_model(th, res.model), y, z).loglik
+            ll = kalman.loglik(par.to_model(th, res.model), y, z, innovations=False).loglik
     except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
         return False
     return math.isfinite(ll) and res.loglik - ll < mle.LR_DROP_95
