@@ -111,16 +111,17 @@ def _driven_block(B: np.ndarray, c: np.ndarray, gain: np.ndarray, y: np.ndarray,
     tap; a 1×1 block filters its input directly."""
     den = _characteristic(B)
     nums = _adjugate_numerators(B, c)
-    m, n = y.shape
+    n = y.shape[1]
     if B.shape[0] == 1:
         d, scale = (gain[0] * y + const[0][:, None], 1.0) if np.any(const) else (y, gain[0])
         rows = [lfilter(scale * num[0, :2], den, d, axis=-1, zi=np.multiply.outer(w0[0], num[0, 1:2]))[0]
                 for num in nums]
         return rows[0][None] if len(rows) == 1 else np.stack(rows)
-    out = np.empty((nums.shape[0], m, n))
+    outputs = []
     q = None
-    for r, num in enumerate(nums):
-        out[r] = lfilter(gain @ num, den, y, axis=-1, zi=w0.T @ num[:, 1:])[0]
+    for num in nums:
+        out = lfilter(gain @ num, den, y, axis=-1, zi=w0.T @ num[:, 1:])[0]
+        outputs.append(out)
         num_c = const.T @ num  # (m, 3): the constants' numerators per column
         rows = np.flatnonzero(np.any(num_c != 0.0, axis=1))
         if not rows.size:
@@ -128,8 +129,8 @@ def _driven_block(B: np.ndarray, c: np.ndarray, gain: np.ndarray, y: np.ndarray,
         if q is None:
             q = lfilter([1.0], den, np.ones(n))
         for tap in range(1, num_c.shape[1]):
-            out[r, rows, tap:] += num_c[rows, tap, None] * q[: n - tap]
-    return out
+            out[rows, tap:] += num_c[rows, tap, None] * q[: n - tap]
+    return outputs[0][None] if len(outputs) == 1 else np.stack(outputs)
 
 
 def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
@@ -351,8 +352,9 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
 
 
 def _smoothed(model: StateSpace, g: SteadyGains, b: Basis | None, w: np.ndarray, e: np.ndarray) -> SmootherStats:
-    """Smoothed states and covariance sums from the predicted states w (p, N) in the basis ``b`` and the
-    innovations e (N,): x_t^N = U w_t + P̄ U⁻ᵀ v_t (:func:`_adjoint_modes`), two p × p products over the record."""
+    """Smoothed states and covariance sums from the predicted states w (p, N) in the basis ``b`` (overwritten: its
+    memory holds the adjoint's part) and the innovations e (N,): x_t^N = U w_t + P̄ U⁻ᵀ v_t (:func:`_adjoint_modes`),
+    two p × p products over the record."""
     n = e.size
     if b is None:
         xs = np.zeros((0, n))
@@ -360,7 +362,7 @@ def _smoothed(model: StateSpace, g: SteadyGains, b: Basis | None, w: np.ndarray,
         xs = b.u @ w
         sigma, v_first = _adjoint_modes(model, g, b, e)
         back = g.p_pred @ b.u_inv.T
-        reversed_part = back @ sigma
+        reversed_part = np.matmul(back, sigma, out=w)  # w's memory, no longer needed
         xs[:, 1:] += reversed_part[:, :0:-1]
         xs[:, 0] += back @ v_first
     J = g.j
