@@ -64,6 +64,17 @@ def test_acf_matches_direct_sum():
     assert np.allclose(acf(x, 5), direct, atol=1e-12)
 
 
+def test_acf_lag_by_lag_and_by_fft_agree():
+    from imu_noise_id.core.diagnostics import residuals
+
+    x = np.random.default_rng(3).standard_normal(3000)
+    x[::7] = np.nan
+    x[1:] += 0.6 * np.nan_to_num(x[:-1])
+    few = acf(x, residuals.DIRECT_MAX_LAGS)
+    many = acf(x, residuals.DIRECT_MAX_LAGS + 1)
+    np.testing.assert_allclose(few, many[:-1], rtol=1e-12, atol=1e-14)
+
+
 def test_chi2_tail_is_finite_and_matches_scipy_where_scipy_works():
     from scipy import stats
 

@@ -31,12 +31,19 @@ def _finite_centred(e: np.ndarray, name: str = "innovations") -> tuple[np.ndarra
     return out, n
 
 
+#: Up to this many lags the autocorrelation is summed lag by lag (nlags dot products), beyond it by FFT.
+DIRECT_MAX_LAGS = 64
+
+
 def acf(e: np.ndarray, nlags: int) -> np.ndarray:
-    """Sample autocorrelation ρ_1..ρ_nlags by FFT: ρ_k = Σ_t ẽ_t ẽ_{t+k} / Σ_t ẽ_t², ẽ centred."""
+    """Sample autocorrelation ρ_1..ρ_nlags: ρ_k = Σ_t ẽ_t ẽ_{t+k} / Σ_t ẽ_t², ẽ centred; lag by lag up to
+    :data:`DIRECT_MAX_LAGS` lags, else by FFT."""
     x, _ = _finite_centred(e)
     nlags = int(nlags)
     if not 1 <= nlags < x.size:
         raise ValueError(f"nlags must be in [1, {x.size - 1}], got {nlags}")
+    if nlags <= DIRECT_MAX_LAGS:
+        return np.array([np.dot(x[:-k], x[k:]) for k in range(1, nlags + 1)]) / np.dot(x, x)
     size = next_fast_len(2 * x.size - 1, real=True)  # zero padding: the linear, not circular, correlation
     spec = np.fft.rfft(x, size)
     r = np.fft.irfft(spec * np.conj(spec), size)[: nlags + 1]
