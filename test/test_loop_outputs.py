@@ -52,6 +52,24 @@ def test_report_html_is_self_contained(tmp_path, sine_result):
     assert "dropped RW" in text
 
 
+def test_a_step_between_two_others_has_its_residual_figure_drawn_once(monkeypatch, sine_result):
+    """Steps 0 → 1 → 2: step 1's residuals show in both pairs, one drawing (the figure costs a spectrum and a PNG)."""
+    import dataclasses
+
+    from imu_noise_id.report import html as report_html
+
+    first, second = sine_result.steps
+    three = dataclasses.replace(sine_result, steps=[first, second, dataclasses.replace(second, index=2)])
+    drawn = []
+    draw = report_html.residual_acf_psd
+    monkeypatch.setattr(report_html, "residual_acf_psd",
+                        lambda step, title: drawn.append(step.index) or draw(step, title))
+    text = loop_axis_section("gyro_z", three)
+    assert sorted(drawn) == [0, 1, 2]
+    assert text.count("data:image/png;base64,") == 2 + 4  # two Allan figures, each pair's two residual figures
+    assert text.count('alt="residual ACF and PSD, step 1"') == 2
+
+
 def test_loop_command_on_a_bag(tmp_path, capsys):
     from imu_noise_id.bag.writer import write_bag
 

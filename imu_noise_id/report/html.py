@@ -82,11 +82,14 @@ def loop_axis_section(axis: str, result: LoopResult) -> str:
         out.append(f"<details><summary>Candidates tried and not kept ({len(rejected)})</summary><ul>{items}</ul>"
                    "</details>")
     pairs = list(zip(result.steps[:-1], result.steps[1:], strict=False)) or [(result.steps[0], None)]
+    residuals: dict[int, str] = {}  # a step between two others shows its residuals in both pairs: drawn once
     for before, after in pairs:
         label = f"{axis}: step {before.index}" + (f" → {after.index} (+{after.added})" if after else "")
         out.append(f"<h3>{html.escape(label)}</h3>")
         out.append(img_tag(allan_before_after(before, after, unit, label), f"Allan deviation {label}"))
         for s in (before, after) if after else (before,):
-            out.append(img_tag(residual_acf_psd(s, f"{axis} step {s.index}: {s.model}"),
-                            f"residual ACF and PSD, step {s.index}"))
+            if s.index not in residuals:
+                residuals[s.index] = img_tag(residual_acf_psd(s, f"{axis} step {s.index}: {s.model}"),
+                                             f"residual ACF and PSD, step {s.index}")
+            out.append(residuals[s.index])
     return "\n".join(out)
