@@ -386,3 +386,25 @@ def test_the_observed_information_of_a_long_walk_agrees_with_the_likelihood_curv
     ll = [kalman.loglik(par.to_model(stepped(theta, k, s), state), yy, z).loglik for s in (-h, 0.0, h)]
     curvature = -(ll[0] - 2.0 * ll[1] + ll[2]) / h**2
     assert info[k, k] == pytest.approx(curvature, rel=0.01)
+
+
+def test_the_transition_terms_block_by_block_equal_the_dense_products():
+    """em.transition_terms forms Φ x_{t−1} per diagonal block of Φ; against S, C from the dense Φ on smoothed states."""
+    rng = np.random.default_rng(4)
+    phi = np.zeros((5, 5))
+    phi[0, 0] = 0.99
+    phi[1:3, 1:3] = [[0.9, 0.3], [-0.3, 0.9]]
+    phi[3:5, 3:5] = [[0.5, 0.0], [0.2, 0.7]]  # a lower-triangular pair: one block of two
+    assert em.diagonal_blocks(phi) == [slice(0, 1), slice(1, 3), slice(3, 5)]
+    assert em.diagonal_blocks(np.ones((3, 3))) == [slice(0, 3)]
+    assert em.diagonal_blocks(np.eye(3)) == [slice(0, 1), slice(1, 2), slice(2, 3)]
+    n, u = 400, rng.standard_normal(5) * 0.1
+    xs = rng.standard_normal((5, n))
+    sum_p, p_first, sum_lag = (np.diag(rng.uniform(1.0, 2.0, 5)) for _ in range(3))
+    stats = kalman.SmootherStats(xs, sum_p, p_first, np.eye(5), sum_lag, sum_p, 0.0, np.ones(n, bool))
+    S, C = em.transition_terms(stats, phi, u)
+    d = xs[:, 1:] - phi @ xs[:, :-1] - u[:, None]
+    p_next, p_prev = sum_p - p_first, sum_p - np.eye(5)
+    np.testing.assert_allclose(S, d @ d.T + p_next - sum_lag @ phi.T - phi @ sum_lag.T + phi @ p_prev @ phi.T,
+                               rtol=1e-12)
+    np.testing.assert_allclose(C, d @ xs[:, :-1].T + sum_lag - phi @ p_prev, rtol=1e-12)

@@ -163,12 +163,26 @@ def transition_residual(s: Sums, phi: np.ndarray, u: np.ndarray) -> np.ndarray:
             + np.outer(phi @ s.x_prev, u) + np.outer(u, phi @ s.x_prev) + n1 * np.outer(u, u))
 
 
+def diagonal_blocks(m: np.ndarray) -> list[slice]:
+    """The finest contiguous diagonal blocks of the square ``m`` outside which it is zero."""
+    p = m.shape[0]
+    coupled = m != 0.0
+    out, start = [], 0
+    for k in range(1, p + 1):
+        if k == p or not (np.any(coupled[start:k, k:]) or np.any(coupled[k:, start:k])):
+            out.append(slice(start, k))
+            start = k
+    return out
+
+
 def transition_terms(st: kalman.SmootherStats, phi: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """S(Φ, u) of :func:`transition_residual` and C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ], the means' part
     from the smoothed increments x_t^N − Φ x_{t−1}^N − u, not from differences of sums (docs/em.md, "Why: EM")."""
     X = st.xs
     prev = X[:, :-1]
-    d = X[:, 1:] - phi @ prev - u[:, None]
+    d = X[:, 1:] - u[:, None]
+    for span in diagonal_blocks(phi):  # Φ x_{t−1} block by block: Φ is block-diagonal, one block per component
+        d[span] -= phi[span, span] @ prev[span]
     p_next, p_prev = st.sum_p - st.p_first, st.sum_p - st.p_last
     S = d @ d.T + p_next - st.sum_lag @ phi.T - phi @ st.sum_lag.T + phi @ p_prev @ phi.T
     C = d @ prev.T + st.sum_lag - phi @ p_prev
