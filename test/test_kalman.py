@@ -236,7 +236,7 @@ def test_a_blocks_output_filtered_once_per_row_equals_its_recursion():
             for t in range(n - 1):
                 x[:, :, t + 1] = B @ x[:, :, t] + gain[:, None] * y[:, t] + const
             expected = np.einsum("rs,smn->rmn", c, x)
-            out = steady._driven_block(B, c, gain, y, const=const, w0=w0)
+            out = np.array(steady._driven_block(B, c, gain, y, const=const, w0=w0))
             np.testing.assert_allclose(out, expected, rtol=1e-10, atol=1e-10 * np.max(np.abs(expected)))
 
 

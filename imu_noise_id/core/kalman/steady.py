@@ -103,20 +103,19 @@ def _adjugate_numerators(B: np.ndarray, c: np.ndarray) -> np.ndarray:
 
 
 def _driven_block(B: np.ndarray, c: np.ndarray, gain: np.ndarray, y: np.ndarray, *, const: np.ndarray,
-                  w0: np.ndarray) -> np.ndarray:
-    """c·x_t (r, m, N) for rows c (r, s) of one block's recursion x_0 = w0, x_{t+1} = B x_t + gain·y_t + const,
-    y (m, N), const and w0 (s, m). Every state's input is a multiple of y plus a constant, so by linearity each row is
-    one filter of y with numerator Σ_k gain_k·num_k (not one per state), its initial delay states Σ_k w0_k·num_k, plus
-    the constants' step responses from the block's all-pole step response q = lfilter(1, den, 1) shifted by each
-    tap; a 1×1 block filters its input directly."""
+                  w0: np.ndarray) -> list[np.ndarray]:
+    """c·x_t, one (m, N) array per row of c (r, s), of one block's recursion x_0 = w0,
+    x_{t+1} = B x_t + gain·y_t + const, y (m, N), const and w0 (s, m). Every state's input is a multiple of y plus a
+    constant, so by linearity each row is one filter of y with numerator Σ_k gain_k·num_k (not one per state), its
+    initial delay states Σ_k w0_k·num_k, plus the constants' step responses from the block's all-pole step response
+    q = lfilter(1, den, 1) shifted by each tap; a 1×1 block filters its input directly."""
     den = _characteristic(B)
     nums = _adjugate_numerators(B, c)
     n = y.shape[1]
     if B.shape[0] == 1:
         d, scale = (gain[0] * y + const[0][:, None], 1.0) if np.any(const) else (y, gain[0])
-        rows = [lfilter(scale * num[0, :2], den, d, axis=-1, zi=np.multiply.outer(w0[0], num[0, 1:2]))[0]
+        return [lfilter(scale * num[0, :2], den, d, axis=-1, zi=np.multiply.outer(w0[0], num[0, 1:2]))[0]
                 for num in nums]
-        return rows[0][None] if len(rows) == 1 else np.stack(rows)
     outputs = []
     q = None
     for num in nums:
@@ -130,25 +129,23 @@ def _driven_block(B: np.ndarray, c: np.ndarray, gain: np.ndarray, y: np.ndarray,
             q = lfilter([1.0], den, np.ones(n))
         for tap in range(1, num_c.shape[1]):
             out[rows, tap:] += num_c[rows, tap, None] * q[: n - tap]
-    return outputs[0][None] if len(outputs) == 1 else np.stack(outputs)
+    return outputs
 
 
-def _run_modes(T: np.ndarray, cw: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """w_0 = w0, w_{t+1} = T w_t + cw_t (p, m, N) for quasi-triangular T, block by block from the last."""
-    w = np.empty_like(cw)
+def _run_modes(T: np.ndarray, gain: np.ndarray, y: np.ndarray, const: np.ndarray, w0: np.ndarray) -> np.ndarray:
+    """w_0 = w0, w_{t+1} = T w_t + gain·y_t + const (p, m, N) for quasi-triangular T, block by block from the last;
+    y (m, N), gain (p,), const and w0 (p, m). Each block's input is built when its turn comes (not p × m × N at
+    once)."""
+    m, n = y.shape
+    w = np.empty((T.shape[0], m, n))
     for blk in reversed(_blocks(T)):
-        drive = cw[blk]
+        drive = gain[blk, None, None] * y[None]
+        drive += const[blk, :, None]
         later = slice(blk.stop, T.shape[0])
         if later.start < later.stop and np.any(T[blk, later]):
-            drive = drive + np.tensordot(T[blk, later], w[later], axes=1)
+            drive += np.tensordot(T[blk, later], w[later], axes=1)
         _run_block(T[blk, blk], drive, w0[blk], out=w[blk])
     return w
-
-
-def _driven(gain: np.ndarray, y: np.ndarray, const: np.ndarray) -> np.ndarray:
-    d = gain[:, None, None] * y[None]
-    d += const[:, :, None]
-    return d
 
 
 #: Largest condition number of the real modal basis used instead of the Schur basis.
@@ -237,7 +234,7 @@ def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray,
     gain_w = b.u_inv @ (model.phi @ g.k)
     g_w, w0, hu = b.u_inv @ u, b.u_inv @ m0, model.h @ b.u
     if not b.modal:
-        w = _run_modes(b.t, _driven(gain_w, y, g_w), w0)
+        w = _run_modes(b.t, gain_w, y, g_w, w0)
         return (hu @ w.reshape(p, -1)).reshape(m, n)
     outputs = (_driven_block(b.t[blk, blk], hu[blk][None, :], gain_w[blk], y, const=g_w[blk], w0=w0[blk])[0]
                for blk in _blocks(b.t))
@@ -275,12 +272,13 @@ def _predicted_modes(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray,
     initial mean m0 (p,)."""
     gain_w, g_w, w0 = b.u_inv @ (model.phi @ g.k), (b.u_inv @ u)[:, None], (b.u_inv @ m0)[:, None]
     if not b.modal:
-        return _run_modes(b.t, _driven(gain_w, y[None, :], g_w), w0)[:, 0, :]
+        return _run_modes(b.t, gain_w, y[None, :], g_w, w0)[:, 0, :]
     w = np.empty((b.t.shape[0], y.size))
     for blk in _blocks(b.t):  # each state of a block: its row of adj(zI − B)
         size = blk.stop - blk.start
-        w[blk] = _driven_block(b.t[blk, blk], np.eye(size), gain_w[blk], y[None, :], const=g_w[blk],
-                               w0=w0[blk])[:, 0]
+        rows = _driven_block(b.t[blk, blk], np.eye(size), gain_w[blk], y[None, :], const=g_w[blk], w0=w0[blk])
+        for r, row in enumerate(rows):
+            w[blk.start + r] = row[0]
     return w
 
 
@@ -303,10 +301,11 @@ def _adjoint_modes(model: StateSpace, g: SteadyGains, b: Basis, e: np.ndarray) -
         sigma = np.empty((p, n))
         for blk in _blocks(b.t):
             size = blk.stop - blk.start
-            sigma[blk] = _driven_block(tt[blk, blk], np.eye(size), gain[blk], e_rev, const=zero[blk],
-                                       w0=zero[blk])[:, 0]
+            rows = _driven_block(tt[blk, blk], np.eye(size), gain[blk], e_rev, const=zero[blk], w0=zero[blk])
+            for r, row in enumerate(rows):
+                sigma[blk.start + r] = row[0]
     else:  # Tᵀ is lower quasi-triangular: run it with the states' order reversed (upper again)
-        sigma = _run_modes(tt[::-1, ::-1], _driven(gain[::-1], e_rev, zero), zero)[::-1, 0, :]
+        sigma = _run_modes(tt[::-1, ::-1], gain[::-1], e_rev, zero, zero)[::-1, 0, :]
     return sigma, tt @ sigma[:, -1] + gain * e[0]
 
 
