@@ -126,7 +126,7 @@ def test_missing_samples_are_skipped_not_filled():
 @pytest.mark.parametrize("rel_step", [1e-6, 0.3])
 def test_newton_riccati_from_a_nearby_model_equals_doubling(name, rel_step):
     # A copy solves its DARE by Newton from the original's P̄; it must agree with the doubling from scratch to
-    # the ~1e-13 relative rounding floor of the Kronecker solve (1e-11 leaves margin for poles near 1).
+    # the ~1e-13 relative rounding floor of its Stein sums (1e-11 leaves margin for poles near 1).
     model = ss.from_components(MIXES[name], 1.0)
     model.steady_prediction_covariance()
     comps = [c if isinstance(c, RR) else type(c)(**{k: v * (1 + rel_step) for k, v in c.params().items()})

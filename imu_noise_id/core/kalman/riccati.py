@@ -24,23 +24,23 @@ def _covariance(P: np.ndarray) -> np.ndarray:
 
 def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess: np.ndarray) -> np.ndarray | None:
     """P̄ by Newton's method from ``guess`` (Hewer 1971): P = A P Aᵀ + Q + r L Lᵀ, A = Φ − L h, L = Φ P hᵀ/(h P hᵀ +
-    r); None unless it converges in a few steps."""
+    r), each step's Stein equation summed by doubling (:func:`_stein_sum`, O(p³) per doubling, not the p² × p²
+    Kronecker solve); None unless it converges in a few steps."""
     p = phi.shape[0]
     if guess.shape != (p, p) or not np.all(np.isfinite(guess)):
         return None
     P = guess
-    eye = np.eye(p * p)
     for _ in range(6):
         gain = phi @ P @ h / (float(h @ P @ h) + r)
         A = phi - np.outer(gain, h)
         if np.max(np.abs(np.linalg.eigvals(A))) > 1.0 + 1e-12:  # not stabilising: Newton may go astray
             return None
         C = q + r * np.outer(gain, gain)
-        P_new = np.linalg.solve(eye - np.kron(A, A), C.ravel()).reshape(p, p)
-        P_new = 0.5 * (P_new + P_new.T)
+        with np.errstate(over="ignore", invalid="ignore"):  # a pole on the unit circle: no finite sum, None below
+            P_new = _stein_sum(A.T, C)  # Σ_j Aʲ C Aʲᵀ: P = A P Aᵀ + C
         if not np.all(np.isfinite(P_new)):
             return None
-        # quadratic convergence: a 1e-10 step leaves ~1e-20, below the Kronecker solve's rounding floor
+        # quadratic convergence: a 1e-10 step leaves ~1e-20, below the Stein sum's rounding floor
         if np.max(np.abs(P_new - P)) <= 1e-10 * np.max(np.abs(P_new)):
             return P_new
         P = P_new
