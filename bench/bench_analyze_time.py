@@ -10,20 +10,23 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --duration 10800                     # 3 h at 400 Hz (the GMWM)
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400 --baseline ../baseline  # 24 h, 200 Hz
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1200 --numbers  # measured
+    .venv/bin/python bench/bench_analyze_time.py --adis 1 2 3 4 5 6 --allow-motion --timeout 1200   # all six runs
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
 screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run and 24 h at 200 Hz side by
 side with the checkout before the final models' AV range in closed form.
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
-checkout; with ``--adis RUN``, the whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at 100
-Hz, ``bench/common.py``) instead. A checkout still running after ``--timeout`` seconds is stopped and printed as such
-(the checkout before the composite search needs hours on a measured record). Printed: per rate, source and ``--jobs``
-value, wall time, CPU time (user + system of the analyze process and of the worker processes it reaped) and peak
-memory: the largest RSS of one process and the largest sums of the RSS and of the PSS (shared pages split among the
-processes mapping them) of the analyze process and its workers (sampled every 0.1 s), the PSS also as a multiple of
-the decoded arrays (stamps and six axes, float64); with ``--numbers``, the N and K each checkout's ``imu.yaml`` gives
-per axis. Each checkout runs without the BLAS thread-count variables in its environment, as from a user's shell.
+checkout; with ``--adis RUN …``, each whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at
+100 Hz, ``bench/common.py``) instead, and with several runs each checkout's total wall time over them (run 4 holds
+motion bursts the static check refuses: ``--allow-motion`` passes that option to every run). A checkout still running
+after ``--timeout`` seconds is stopped and printed as such (the checkout before the composite search needs hours on a
+measured record). Printed: per rate, source and ``--jobs`` value, wall time, CPU time (user + system of the analyze
+process and of the worker processes it reaped) and peak memory: the largest RSS of one process and the largest sums
+of the RSS and of the PSS (shared pages split among the processes mapping them) of the analyze process and its
+workers (sampled every 0.1 s), the PSS also as a multiple of the decoded arrays (stamps and six axes, float64); with
+``--numbers``, the N and K each checkout's ``imu.yaml`` gives per axis. Each checkout runs without the BLAS
+thread-count variables in its environment, as from a user's shell.
 """
 
 from __future__ import annotations
@@ -95,14 +98,15 @@ def _user_environment() -> dict[str, str]:
     return {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
 
 
-def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None,
-                timeout: float = math.inf) -> tuple[float, float, float, float, float] | None:
+def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None, timeout: float = math.inf,
+                extra: tuple[str, ...] = ()) -> tuple[float, float, float, float, float] | None:
     """(wall [s], CPU [s], peak RSS of one process, peak summed RSS and PSS of the process tree [MiB]) of
-    ``python -m imu_noise_id analyze`` run in ``source`` (with ``--jobs`` when given), after checking that it imports
+    ``python -m imu_noise_id analyze`` run in ``source`` (with ``--jobs`` when given, and ``extra`` options), after
+    checking that it imports
     the package of ``source``; None when it was stopped after ``timeout`` seconds."""
     check_imports_own_package(source, "analyze")
     env = dict(_user_environment(), PYTHONPATH=str(source))
-    cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out)]
+    cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out), *extra]
     start = time.perf_counter()
     proc = subprocess.Popen(cmd + ([] if jobs is None else ["--jobs", str(jobs)]), cwd=source,
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -149,8 +153,11 @@ def main(argv: list[str] | None = None) -> int:
                         help="another checkout to time side by side (repeatable)")
     parser.add_argument("--jobs", type=int, nargs="+", default=None,
                         help="time this checkout with each of these --jobs values (default: its default only)")
-    parser.add_argument("--adis", type=int, default=None, metavar="RUN",
-                        help="analyze the whole ADIS16405 static run RUN (1-6) instead of a simulated bag")
+    parser.add_argument("--adis", type=int, nargs="+", default=None, metavar="RUN",
+                        help="analyze the whole ADIS16405 static runs RUN … (1-6) instead of a simulated bag; with "
+                             "several, each checkout's total wall time over them too")
+    parser.add_argument("--allow-motion", action="store_true",
+                        help="pass --allow-motion to analyze (run 4 holds motion bursts the static check refuses)")
     parser.add_argument("--timeout", type=float, default=math.inf,
                         help="stop a checkout still running after this many seconds")
     parser.add_argument("--numbers", action="store_true",
@@ -161,12 +168,14 @@ def main(argv: list[str] | None = None) -> int:
                                                               for p in args.baseline]
     print(f"analyze, default options, no BLAS thread-count variable set; {os.cpu_count()} CPUs; load average before: "
           f"{os.getloadavg()[0]:.2f}")
+    extra = ("--allow-motion",) if args.allow_motion else ()
+    totals: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for rate in [100.0] if args.adis else args.rates:
-            bag = Path(tmp) / f"static_{rate:g}hz"
-            if args.adis:
-                n = _adis_bag(args.adis, bag)
-                what = f"ADIS16405 run {args.adis}, whole record"
+        for rate, run in [(100.0, r) for r in args.adis] if args.adis else [(r, None) for r in args.rates]:
+            bag = Path(tmp) / (f"adis_run{run}" if run else f"static_{rate:g}hz")
+            if run:
+                n = _adis_bag(run, bag)
+                what = f"ADIS16405 run {run}, whole record"
             else:
                 subprocess.run([sys.executable, "-m", "imu_noise_id", "simulate", "--model", MODEL, "--rate",
                                 str(rate), "--duration", str(args.duration), "--out", str(bag), "--seed", "1"],
@@ -179,13 +188,14 @@ def main(argv: list[str] | None = None) -> int:
             times = {}
             for name, source, jobs in sources:
                 out = Path(tmp) / f"out_{len(times)}"
-                measured = run_analyze(source, bag, out, jobs, args.timeout)
+                measured = run_analyze(source, bag, out, jobs, args.timeout, extra)
                 if measured is None:
                     times[name] = math.inf
                     print(f"  {name:40s} stopped after {args.timeout:.0f} s, not finished", flush=True)
                     continue
                 wall, cpu, rss, tree_rss, tree_pss = measured
                 times[name] = wall
+                totals[name] = totals.get(name, 0.0) + wall
                 print(f"  {name:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB; process tree: "
                       f"RSS {tree_rss:7.0f} MiB, PSS {tree_pss:7.0f} MiB = {tree_pss / arrays:.1f}× the arrays",
                       flush=True)
@@ -196,6 +206,10 @@ def main(argv: list[str] | None = None) -> int:
                 ratio = times[name] / times[first]
                 print(f"  {name}: {'more than ' if math.isinf(times[name]) else ''}"
                       f"{min(ratio, args.timeout / times[first]):.2f}× the wall time of {first}")
+    if args.adis and len(args.adis) > 1:
+        print(f"\nall {len(args.adis)} runs, {6 * len(args.adis)} axes:")
+        for name, total in totals.items():
+            print(f"  {name:40s} wall {total:7.1f} s = {total / 60:.1f} min in total")
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0
 

@@ -94,6 +94,8 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_adis_analysis.py"], "bench_adis_analysis.txt"),
     (["bench_analyze_time.py", "--adis", "1", "--baseline", BASELINE, "--timeout", "1200", "--numbers"],
      "bench_analyze_time.txt"),
+    (["bench_analyze_time.py", "--adis", "1", "2", "3", "4", "5", "6", "--allow-motion", "--timeout", "1200"],
+     "bench_analyze_time.txt"),
     (["bench_overbound.py"], "bench_overbound.txt"),
     (["bench_gmwm_speed.py"], "bench_gmwm_speed.txt"),
     (["bench_gmwm_accuracy.py"], "bench_gmwm_accuracy.txt"),
