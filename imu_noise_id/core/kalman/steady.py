@@ -266,20 +266,27 @@ def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
     return out
 
 
+def _block_states(T: np.ndarray, gain: np.ndarray, y: np.ndarray, const: np.ndarray, w0: np.ndarray, *,
+                  modal: bool) -> np.ndarray:
+    """w (p, N) of w_0 = w0, w_{t+1} = T w_t + gain·y_t + const for one input y (N,), const and w0 (p, 1): block by
+    block with each state one row of adj(zI − B) where T is block-diagonal (``modal``), else :func:`_run_modes`."""
+    if not modal:
+        return _run_modes(T, gain, y[None, :], const, w0)[:, 0, :]
+    w = np.empty((T.shape[0], y.size))
+    for blk in _blocks(T):
+        size = blk.stop - blk.start
+        rows = _driven_block(T[blk, blk], np.eye(size), gain[blk], y[None, :], const=const[blk], w0=w0[blk])
+        for r, row in enumerate(rows):
+            w[blk.start + r] = row[0]
+    return w
+
+
 def _predicted_modes(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
                      m0: np.ndarray) -> np.ndarray:
     """w_t = U⁻¹ x_t^{t−1} (p, N), the predicted states of one column in the basis ``b``: inputs y (N,), u (p,),
     initial mean m0 (p,)."""
     gain_w, g_w, w0 = b.u_inv @ (model.phi @ g.k), (b.u_inv @ u)[:, None], (b.u_inv @ m0)[:, None]
-    if not b.modal:
-        return _run_modes(b.t, gain_w, y[None, :], g_w, w0)[:, 0, :]
-    w = np.empty((b.t.shape[0], y.size))
-    for blk in _blocks(b.t):  # each state of a block: its row of adj(zI − B)
-        size = blk.stop - blk.start
-        rows = _driven_block(b.t[blk, blk], np.eye(size), gain_w[blk], y[None, :], const=g_w[blk], w0=w0[blk])
-        for r, row in enumerate(rows):
-            w[blk.start + r] = row[0]
-    return w
+    return _block_states(b.t, gain_w, y, g_w, w0, modal=b.modal)
 
 
 def _adjoint_modes(model: StateSpace, g: SteadyGains, b: Basis, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -292,29 +299,27 @@ def _adjoint_modes(model: StateSpace, g: SteadyGains, b: Basis, e: np.ndarray) -
     With v = Uᵀ r (Aᵀ = U⁻ᵀ Tᵀ Uᵀ) the recursion runs block by block through Tᵀ, one filter of e per block row;
     reversed in time, σ_0 = 0 and σ_{k+1} = Tᵀ σ_k + Uᵀ Hᵀ e_{N−1−k} / F, so v_t = σ_{N−t}. Returns (σ (p, N) as
     σ_0 … σ_{N−1}, σ_N = v_0); ``U⁻ᵀ v_t`` is r_{t−1}."""
-    p, n = b.t.shape[0], e.size
     gain = b.u.T @ model.h / g.f
     tt = b.t.T
-    e_rev = e[::-1][None, :]
-    zero = np.zeros((p, 1))
+    zero = np.zeros((tt.shape[0], 1))
     if b.modal:
-        sigma = np.empty((p, n))
-        for blk in _blocks(b.t):
-            size = blk.stop - blk.start
-            rows = _driven_block(tt[blk, blk], np.eye(size), gain[blk], e_rev, const=zero[blk], w0=zero[blk])
-            for r, row in enumerate(rows):
-                sigma[blk.start + r] = row[0]
+        sigma = _block_states(tt, gain, e[::-1], zero, zero, modal=True)
     else:  # Tᵀ is lower quasi-triangular: run it with the states' order reversed (upper again)
-        sigma = _run_modes(tt[::-1, ::-1], gain[::-1], e_rev, zero, zero)[::-1, 0, :]
+        sigma = _block_states(tt[::-1, ::-1], gain[::-1], e[::-1], zero, zero, modal=False)[::-1]
     return sigma, tt @ sigma[:, -1] + gain * e[0]
+
+
+def _innovations(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple[InnovationResult, Basis | None]:
+    """Every column's innovations (their constant variance F) and the basis the filters ran in (None: no states)."""
+    hx, b = _predicted_output(model, g, cols)
+    n = cols.y.shape[1]
+    e = np.subtract(cols.y, hx, out=hx)
+    return InnovationResult(e, np.full(n, g.f), np.ones(n, bool), constant_f=True), b
 
 
 def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
     """Innovations and their (constant) variance for every column; no missing samples allowed."""
-    g = gains(model)
-    hx, _ = _predicted_output(model, g, cols)
-    n = cols.y.shape[1]
-    return InnovationResult(np.subtract(cols.y, hx, out=hx), np.full(n, g.f), np.ones(n, bool), constant_f=True)
+    return _innovations(model, gains(model), cols)[0]
 
 
 def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -393,12 +398,10 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
 def profile_and_smooth(model: StateSpace, cols: Columns) -> tuple[ProfileResult, SmootherStats]:
     """GLS profile of the free mean parameters and the smoother at their estimate."""
     g = gains(model)
-    hx, b = _predicted_output(model, g, cols)
-    n = cols.y.shape[1]
-    prof = profile(InnovationResult(np.subtract(cols.y, hx, out=hx), np.full(n, g.f), np.ones(n, bool),
-                                    constant_f=True), cols.names)
+    inn, b = _innovations(model, g, cols)
+    prof = profile(inn, cols.names)
     if b is None:
-        return prof, _smoothed(model, g, None, np.zeros((0, n)), prof.innovations)
+        return prof, _smoothed(model, g, None, np.zeros((0, cols.y.shape[1])), prof.innovations)
     weights = np.concatenate([[1.0], prof.beta])
     w = _predicted_modes(model, g, b, weights @ cols.y, cols.g @ weights, m0=cols.m0 @ weights)
     return prof, _smoothed(model, g, b, w, prof.innovations)
