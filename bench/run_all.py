@@ -76,7 +76,7 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_cmkf_intervals.py"], "bench_cmkf_intervals.txt"),
     (["bench_node_husky.py"], "bench_node_husky.txt"),
     (["loop_measured.py", "--samples", "100000", "--mtig-samples", "100000"], "loop_measured.txt"),
-    (["loop_measured.py", "--axes", "gyro_x,gyro_y", "--samples", "0"], "loop_measured.txt"),
+    (["loop_measured.py", "--samples", "0"], "loop_measured.txt"),
     (["bench_rw_bound.py"], "bench_rw_bound.txt"),
     (["bench_random_walk.py", "--minutes", "20", "--cells", *RANDOM_WALK_CELLS, "--baseline", BASELINE],
      "bench_random_walk.txt"),
