@@ -146,10 +146,12 @@ def run_closed_loop(
         state, diag, dropped, drop_trials = reselect(loop, state, diag, added=added)
         steps.append(LoopStep(len(steps), state.name(), added, f.evidence, f, state, diag, drop_trials,
                               tuple(replaced + dropped)))
-    note = ""
+    note, finish_gain = "", None
     if loop.on_composite and len(steps) > 1:
+        composite_loglik = diag.fit.loglik
         steps[-1], note = exact_finish(loop, steps[-1])
         diag = steps[-1].diagnosis
+        finish_gain = float(diag.fit.loglik - composite_loglik)
     if intervals and len(steps) > 1:
         steps[-1], interval_note = final_intervals(loop, steps[-1])
         note = "; ".join(filter(None, [note, interval_note]))
@@ -165,7 +167,8 @@ def run_closed_loop(
     passed, verdict = with_av_misfit(passed, verdict, diag)
     remaining = [f for f in diag.findings if f.significant]
     return LoopResult(axis=axis, dt=float(dt), n=y.size, steps=steps, passed=passed, verdict=verdict,
-                      remaining=remaining, av_inside_band=inside, max_rel_av_error=worst, note=note)
+                      remaining=remaining, av_inside_band=inside, max_rel_av_error=worst, note=note,
+                      finish_gain=finish_gain)
 
 
 def exact_finish(loop: AxisLoop, step: LoopStep) -> tuple[LoopStep, str]:

@@ -163,7 +163,9 @@ class LoopStep:
 
 @dataclass
 class LoopResult:
-    """The loop on one axis: its steps, the final verdict and what remains unexplained."""
+    """The loop on one axis: its steps, the final verdict and what remains unexplained. ``finish_gain``: how far
+    the exact likelihood's maximum lay above the final model's composite-likelihood fit, ℓ's rise in the exact finish
+    (0 when it gained nothing; None without a finish: a record fitted exactly, or no step added)."""
 
     axis: str | None
     dt: float
@@ -175,6 +177,7 @@ class LoopResult:
     av_inside_band: bool = False
     max_rel_av_error: float = float("nan")
     note: str = ""
+    finish_gain: float | None = None
 
     @property
     def final(self) -> LoopStep:
