@@ -20,6 +20,7 @@ from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
 from imu_noise_id.pipelines.analyze.overbound import data_overbound
 from imu_noise_id.pipelines.analyze.resolution import (
     PASSBAND_FACTOR,
+    PASSBAND_TOLERANCE,
     passband_confirms,
     passband_disagreement,
     resolve_axis,
@@ -112,6 +113,8 @@ def test_resolved_axes_keep_their_model_values(filtered):
 @pytest.mark.parametrize(("n", "reading", "confirms"), [
     (1.02e-3, _reading(1.0e-3, (0.97e-3, 1.03e-3)), True),
     (1.04e-3, _reading(1.0e-3, (0.97e-3, 1.03e-3)), False),  # outside the line's interval, though within the factor
+    (1.025e-3, _reading(1.0e-3, (0.995e-3, 1.005e-3)), True),  # a long record's narrow interval: within the tolerance
+    (0.965e-3, _reading(1.0e-3, (0.995e-3, 1.005e-3)), False),  # beyond the tolerance
     (5e-5, _reading(8e-5, (0.0, 8e-5), method="upper_bound"), False),  # a bound reads no level
     (None, _reading(1.0e-3, (0.97e-3, 1.03e-3)), False),
 ])
@@ -139,6 +142,27 @@ def test_a_failed_verdict_keeps_an_n_the_data_confirm_and_gives_the_overbound_k(
     assert given.random_walk.value == data_overbound(static, axis).random_walk
     assert given.model_values == (final.noise_density, final.random_walk)
     assert f"{axis:8s} K unresolved" in final_table({axis: given})
+
+
+def test_an_n_a_few_percent_off_a_narrow_level_is_kept_with_an_interval_spanning_both(filtered):
+    """On a whole record the data's passband level is read to a fraction of a percent, and a model whose verdict
+    fails (its N 2.5 % off, as on whole ADIS16405 accelerometer axes) pasted the overbound's N, 1.5–1.7× the level:
+    within :data:`PASSBAND_TOLERANCE` the model's N is kept, its interval the hull of its own and the level's."""
+    assert 0.025 <= PASSBAND_TOLERANCE < 0.05  # the two cases below lie on either side of it
+    result, _, _ = filtered
+    axis = next(a for a in GYRO_AXES if result.loops[a].passed)
+    final, static = result.finals[axis], result.static
+    n = final.noise_density
+    level = _reading(n.value / 1.025, (n.value / 1.03, n.value / 1.02))  # the model 2.5 % above, outside the interval
+    failed = replace(result.loops[axis], passed=False, verdict="stopped after 8 added effects")
+    why = unresolved_reason(final, failed, level)
+    assert why is not None and why.noise_density_kept
+    given = resolved(final, why, data_overbound(static, axis)).noise_density
+    assert given.method == "model" and given.value == n.value
+    assert given.ci95[0] <= level.ci[0] and given.ci95[1] >= n.ci95[1] and given.ci95[0] <= level.value
+    assert "within 2.5 % of the data's white-noise line" in given.source and "spans both" in given.source
+    far = _reading(n.value / 1.05, (n.value / 1.055, n.value / 1.045))  # 5 % off: the overbound stands
+    assert not unresolved_reason(final, failed, far).noise_density_kept
 
 
 def test_an_n_far_from_the_line_is_not_kept_whatever_the_verdict(filtered):

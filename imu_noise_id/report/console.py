@@ -81,8 +81,8 @@ def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = N
               + "; ".join(r.describe() for r in f.walk_readings) for axis, f in finals.items() if f.walk_readings]
     lines += [f"{axis:8s} N and K unresolved (upper bounds: the overbound's): {f.unresolved}"
               if f.noise_density.method == "unresolved" else
-              f"{axis:8s} K unresolved (an upper bound: the overbound's; N the model's, inside the interval of the "
-              f"data's passband level): {f.unresolved}"
+              f"{axis:8s} K unresolved (an upper bound: the overbound's; N the model's, confirmed by the data's "
+              f"passband level): {f.unresolved}"
               for axis, f in finals.items() if f.unresolved]
     lines += short_for_walk_lines(finals, static)
     return "\n".join(lines)

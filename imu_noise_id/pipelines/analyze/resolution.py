@@ -7,7 +7,8 @@ more than :data:`PASSBAND_FACTOR` apart). An unresolved axis gives its data over
 source; it gives the overbound's N the same way unless the verdict alone failed and the model's N lies inside the
 95 % interval of the data's passband level (:func:`~imu_noise_id.core.estimation.readouts.passband.passband_level`,
 the record's spectrum in the band the model's white noise and filter dominate; the white-noise line where the band is
-too narrow): N then keeps the model's value and interval, its source saying why. ``model.yaml`` keeps the model's own.
+too narrow) or within :data:`PASSBAND_TOLERANCE` of it: N then keeps the model's value and interval (widened to span
+the level's when outside it), its source saying why. ``model.yaml`` keeps the model's own.
 Reasons: docs/analysis.md, "Why an unresolved axis …".
 """
 
@@ -46,11 +47,33 @@ def passband_disagreement(n: KalibrValue, reading: SlopeComponent) -> str | None
             "intervals")
 
 
+#: A model's N within this relative distance of the data's passband level is confirmed by it though outside the
+#: level's interval: on long records that interval is a fraction of a percent wide, narrower than a misspecified
+#: model's N can come (docs/analysis.md, "Why an unresolved axis …"); the N pasted then spans the level.
+PASSBAND_TOLERANCE = 0.03
+
+
 def passband_confirms(n: KalibrValue, level: SlopeComponent | PassbandLevel) -> bool:
     """Whether the model's N [u/√Hz] lies inside the 95 % interval of the data's ``level`` (a reading, not an upper
-    bound)."""
+    bound) or within :data:`PASSBAND_TOLERANCE` of its value."""
     lo, hi = level.ci
-    return n.value is not None and level.method != "upper_bound" and 0.0 < lo <= hi and lo <= n.value <= hi
+    if n.value is None or level.method == "upper_bound" or not 0.0 < lo <= hi:
+        return False
+    return lo <= n.value <= hi or abs(n.value / level.value - 1.0) <= PASSBAND_TOLERANCE
+
+
+def _kept(n: KalibrValue, level: SlopeComponent | PassbandLevel, reason: str) -> KalibrValue:
+    """The model's N confirmed by ``level`` (:func:`passband_confirms`) as pasted: its value and interval when it lies
+    inside the level's interval, else its value with the hull of both intervals; the source saying why."""
+    lo, hi = level.ci
+    if lo <= n.value <= hi:
+        return replace(n, source=f"{n.source}; the model is unresolved ({reason}), but its N lies inside the data's "
+                                 f"{_describe(level)}, read without the model's structure")
+    ends = [v for v in n.ci95 if not math.isnan(v)]
+    return replace(n, ci95=(min([lo, *ends]), max([hi, *ends])),
+                   source=f"{n.source}; the model is unresolved ({reason}), but its N lies within "
+                          f"{100 * abs(n.value / level.value - 1.0):.1f} % of the data's {_describe(level)}, read "
+                          "without the model's structure (the interval given spans both)")
 
 
 def _describe(level: SlopeComponent | PassbandLevel) -> str:
@@ -101,8 +124,7 @@ def resolved(final: FinalModel, unresolved: Unresolved | None, overbound: AxisOv
 
     n = final.noise_density
     if unresolved.noise_density_kept:
-        n = replace(n, source=f"{n.source}; the model is unresolved ({reason}), but its N lies inside the data's "
-                              f"{_describe(unresolved.level)}, read without the model's structure")
+        n = _kept(n, unresolved.level, reason)
         what = "K unresolved (N confirmed by the data's passband level)"
     else:
         n = bound(n, overbound.noise_density, "N")
@@ -131,4 +153,4 @@ def resolve_axis(final: FinalModel, loop: LoopResult | None, static: StaticAnaly
                         reference_source="final model (N, confirmed by the data's passband level); this overbound (K: "
                                          "the final model is unresolved)")
     return given, overbound, (f"{axis}: K unresolved, the overbound's K given (an upper bound); N is the model's, "
-                              f"inside the data's {_describe(why.level)}: {why.reason}")
+                              f"confirmed by the data's {_describe(why.level)}: {why.reason}")
