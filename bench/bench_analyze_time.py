@@ -14,7 +14,8 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
 screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run and 24 h at 200 Hz side by
-side with the checkout before the final models' AV range in closed form.
+side with the checkout before the final models' AV range in closed form, and all six ADIS16405 runs (this checkout
+alone).
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
 checkout; with ``--adis RUN …``, each whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at
@@ -102,8 +103,7 @@ def run_analyze(source: Path, bag: Path, out: Path, jobs: int | None = None, tim
                 extra: tuple[str, ...] = ()) -> tuple[float, float, float, float, float] | None:
     """(wall [s], CPU [s], peak RSS of one process, peak summed RSS and PSS of the process tree [MiB]) of
     ``python -m imu_noise_id analyze`` run in ``source`` (with ``--jobs`` when given, and ``extra`` options), after
-    checking that it imports
-    the package of ``source``; None when it was stopped after ``timeout`` seconds."""
+    checking that it imports the package of ``source``; None when it was stopped after ``timeout`` seconds."""
     check_imports_own_package(source, "analyze")
     env = dict(_user_environment(), PYTHONPATH=str(source))
     cmd = [sys.executable, "-m", "imu_noise_id", "analyze", str(bag), "--out", str(out), *extra]

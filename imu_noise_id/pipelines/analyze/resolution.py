@@ -67,13 +67,14 @@ def _kept(n: KalibrValue, level: SlopeComponent | PassbandLevel, reason: str) ->
     inside the level's interval, else its value with the hull of both intervals; the source saying why."""
     lo, hi = level.ci
     if lo <= n.value <= hi:
-        return replace(n, source=f"{n.source}; the model is unresolved ({reason}), but its N lies inside the data's "
-                                 f"{_describe(level)}, read without the model's structure")
-    ends = [v for v in n.ci95 if not math.isnan(v)]
-    return replace(n, ci95=(min([lo, *ends]), max([hi, *ends])),
-                   source=f"{n.source}; the model is unresolved ({reason}), but its N lies within "
-                          f"{100 * abs(n.value / level.value - 1.0):.1f} % of the data's {_describe(level)}, read "
-                          "without the model's structure (the interval given spans both)")
+        ci, where, spans = n.ci95, f"inside the data's {_describe(level)}", ""
+    else:
+        ends = [v for v in n.ci95 if not math.isnan(v)]
+        ci = (min([lo, *ends]), max([hi, *ends]))
+        where = f"within {100 * abs(n.value / level.value - 1.0):.1f} % of the data's {_describe(level)}"
+        spans = " (the interval given spans both)"
+    return replace(n, ci95=ci, source=f"{n.source}; the model is unresolved ({reason}), but its N lies {where}, read "
+                                      f"without the model's structure{spans}")
 
 
 def _describe(level: SlopeComponent | PassbandLevel) -> str:
