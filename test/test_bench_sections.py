@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import re
 from pathlib import Path
 
 RUN_ALL = Path(__file__).resolve().parents[1] / "bench" / "run_all.py"
@@ -41,3 +42,13 @@ def test_every_run_of_run_all_has_a_section_in_its_output():
     for arguments, out in run_all.GOALS + run_all.LONG + run_all.STUDIES:
         _, sections = run_all.split_sections((run_all.RESULTS / out).read_text())
         assert run_all.section_header(arguments) in sections, (out, arguments)
+
+
+def test_the_results_folder_keeps_one_latest_output_per_benchmark_under_a_stable_name():
+    """docs/results/ holds at most 40 files, none named after a commit or a date (git keeps the history)."""
+    run_all = _run_all()
+    files = [p for p in run_all.RESULTS.rglob("*") if p.is_file()]
+    assert len(files) <= 40, sorted(p.name for p in files)
+    dated = [p.name for p in files if re.search(r"(^|[_.-])([0-9a-f]{7,40}|\d{4}-\d{2}-\d{2}|before|after)([_.-]|$)",
+                                                 p.name)]
+    assert not dated, dated

@@ -13,7 +13,7 @@ package is checked to be the one imported)::
 
 Needs ``../shared/data/adis16405_static`` and, for the BROAD axes, ``../shared/data/broad_trials`` (third-party
 data, not in the repository). What it found is in docs/loop.md (Limitations) and docs/em.md (Algorithm,
-5. Quasi-Newton finish); its last output is docs/results/studies/steady_engine.txt.
+5. Quasi-Newton finish); its last output is docs/results/studies/likelihood_speed.txt.
 """
 
 from __future__ import annotations

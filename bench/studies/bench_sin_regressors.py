@@ -1,7 +1,7 @@
 """Cost of the SIN terms: sinusoidal regressor columns in closed form vs filtered, side by side in one run.
 
-Run:  python bench/studies/bench_sin_regressors.py [--quick]  (the repo keeps its output in
-docs/results/studies/bench_sin_regressors.txt).
+Run:  python bench/studies/bench_sin_regressors.py [--quick]  (the repo keeps its output as a
+section of docs/results/studies/likelihood_speed.txt, beside the other likelihood-speed studies).
 
 A SIN term is two regressor columns; the GLS profile inside every likelihood evaluation used to filter each like
 the data, so a consumer module's dozen narrow lines made every evaluation about four times dearer

@@ -18,7 +18,7 @@ The models: an ADIS16405 gyro's loop model (WN+MA+BI+2OSC+RW, 14 states: a flick
 8.7 Hz resonance) and the Kalibr-like WN+GM+RW, each with the bias as a regressor, on a simulated record of white
 noise and a random walk at 100 Hz; in the modal basis (the default where it is well conditioned) and in the Schur
 basis (forced by ``MODAL_MAX_COND = 0``). What it found is in docs/em.md (Algorithm, 1. Kalman engines) and
-docs/loop.md (Limitations); its last output is docs/results/studies/steady_engine.txt.
+docs/loop.md (Limitations); its last output is docs/results/studies/likelihood_speed.txt.
 """
 
 from __future__ import annotations
