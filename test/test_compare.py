@@ -15,8 +15,9 @@ from imu_noise_id.cli import main
 from imu_noise_id.core.axes import AXES, GYRO_AXES
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
 from imu_noise_id.core.simulation.static import simulate_static_imu
-from imu_noise_id.core.watch.compare import AxisReference, compare_axis
-from imu_noise_id.core.watch.noise_level import threshold, watch_noise_level
+from imu_noise_id.core.watch.axis_reference import AxisReference
+from imu_noise_id.core.watch.compare import compare_axis
+from imu_noise_id.core.watch.noise_level import per_test, threshold, watch_noise_level
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
 from imu_noise_id.report.analysis import write_analysis
 
@@ -260,7 +261,7 @@ def test_the_new_line_test_holds_its_level_on_short_windows():
     first sample is the level only to its noise, and that error left the whitening filter as a transient of low
     frequency that the periodogram took for a line. With the level's GLS estimate removed, ≤ 3 % of 200 windows."""
     from imu_noise_id.core.diagnostics.whitening import WhiteningFilter
-    from imu_noise_id.core.watch.compare import step_and_line
+    from imu_noise_id.core.watch.innovation_tests import step_and_line
 
     whitening = WhiteningFilter.from_components(TRUTH, DT)
     found = 0
@@ -276,7 +277,7 @@ def test_the_step_test_allows_the_walk_the_reference_cannot_exclude():
     Whitened with K at its interval's upper end (1.2× the truth here), none; the model without an interval is kept, and
     a model without a walk gets one at K's bound."""
     from imu_noise_id.core.diagnostics.whitening import WhiteningFilter
-    from imu_noise_id.core.watch.compare import step_and_line
+    from imu_noise_id.core.watch.innovation_tests import step_and_line
 
     truth = [WN(N), GM(tau=30.0, sigma=1.5e-4), RW(K)]
     ref = AxisReference(N, (0.99 * N, 1.01 * N), [WN(N), RW(0.6 * K)], (), (0.0, 1.2 * K))
@@ -336,6 +337,47 @@ def test_the_windowed_line_test_reads_the_windows_last_half_where_a_new_line_fil
     assert line.time_s <= 660.0 and line.since_s >= line.time_s - 60.5, line
 
 
+def test_a_knock_at_a_windows_edge_is_not_a_bias_step():
+    """A knock (20 glitches of 6 sd in 0.4 s at 300 s) on an unchanged axis: as the node's window slides past it, the
+    knock sits at the window's first samples, where a segment of a few tenths of a second held it and read as a step
+    of −12 sd (window ending at 420 s). A step's segments now last at least ``MIN_STEP_SEGMENT_S`` each: no finding
+    in 20 min; a true step of 10 × the per-sample σ's tenth is still found and dated within 5 s."""
+    from imu_noise_id.core.watch.windowed import WindowedChecks
+
+    n = int(MINUTES * 60 / DT)
+    t = np.arange(n) * DT
+    y = _record(31)
+    y[30_001:30_041:2] += 6.0 * N / math.sqrt(DT) * math.sqrt(2)
+    each = per_test(0.1, len(AXES))  # the unit's default λ, one axis's test
+    checks = WindowedChecks([REFERENCE], DT, false_alarms_per_hour=each)
+    for k in range(n):
+        checks.add(float(t[k]), y[k: k + 1])
+    assert checks.findings[0] == {}, checks.findings[0]
+    stepped = y + (t >= 600.0) * N / math.sqrt(DT)
+    checks = WindowedChecks([REFERENCE], DT, false_alarms_per_hour=each)
+    for k in range(int(660 / DT)):
+        checks.add(float(t[k]), stepped[k: k + 1])
+    assert abs(checks.findings[0]["step"].since_s - 600.0) < 5.0, checks.findings[0]
+
+
+def test_compare_finds_a_line_in_the_records_last_minute_as_the_node_would():
+    """A 30 Hz line of a fifth of the per-sample σ in the last 60 s of an 11-min record: the whole record's
+    periodogram dilutes it below its threshold, the node's windows (last 60 s of the last one) do not; compare runs
+    both and finds it at its frequency, dated from the window's last half."""
+    from imu_noise_id.core.diagnostics.whitening import WhiteningFilter
+    from imu_noise_id.core.watch.innovation_tests import step_and_line
+
+    t = np.arange(int(660 / DT)) * DT
+    sigma = N / math.sqrt(DT)
+    y = _record(21)[: t.size] + (t >= 600.0) * 0.2 * sigma * np.sin(2 * math.pi * 30.0 * t)
+    whitening = WhiteningFilter.from_components(REFERENCE.step_model(DT), DT)
+    assert step_and_line(y, DT, whitening, 0.1 * 660 / 3600, ())[1] is None  # the whole record alone, even at 2λT
+    c = compare_axis(y, DT, REFERENCE)
+    assert c.line is not None and c.line.params["frequency"] == pytest.approx(30.0, abs=0.05)
+    assert c.line.params["since"] >= 590.0 and c.step is None and c.degraded
+    assert "new line at 30 Hz" in c.findings()[0] and "in the window ending at 6" in c.findings()[0], c.findings()
+
+
 def test_in_motion_the_cmkfs_density_interval_is_held_against_the_reference():
     """The CMKF's density interval (its innovations, while moving) beyond 1.5× the reference's interval is a WARN
     naming the axis and the interval as ratios; one overlapping the reference's, or not identified (NaN), is not."""
@@ -365,11 +407,13 @@ def _adis_run(shared_data, run: int, seconds: float = 300.0):
 
 def test_a_measured_unit_against_an_analysis_of_another_run_says_what_differs(shared_data, tmp_path, capsys):
     """ADIS16405 run 1 (300 s) against an analyze of run 2 (300 s, model selection without the loop), through the
-    command: the gyros are within (density 0.9–1.1× the reference's); the accelerometers' 0.57 Hz disturbance (the
-    data's README: on all three in every run) is a line the reference's model does not hold, so each accelerometer
-    is degraded by "new line at 0.567 Hz" and nothing else (accel_y's level drop at 6.5 s, block means +0.0025 before
-    and −0.0166 after, sd 0.002, is not called a step against the wander K's upper end allows); exit 1, and the last
-    line names exactly those axes."""
+    command: every density is 0.9–1.1× the reference's; gyro_x and gyro_y are within; the accelerometers' 0.57 Hz
+    disturbance (the data's README: on all three in every run) is a line the reference's model does not hold, so each
+    accelerometer is degraded by "new line at 0.567 Hz" and nothing else (accel_y's level drop at 6.5 s, block means
+    +0.0025 before and −0.0166 after, sd 0.002, is not called a step against the wander K's upper end allows); so is
+    gyro_z by the 17–22 Hz line every gyro_z carries (docs/loop.md), which wanders over the record and shows in the
+    node's windows (compare runs them too) but not in the whole record's periodogram; exit 1, and the last line names
+    exactly those axes."""
     result = analyze(_adis_run(shared_data, 2), options=AnalyzeOptions(kinds=("allan",), loop=False, jobs=1))
     write_analysis(result, tmp_path / "run2", meta={})
     write_bag(tmp_path / "run1", _adis_run(shared_data, 1))
@@ -377,10 +421,13 @@ def test_a_measured_unit_against_an_analysis_of_another_run_says_what_differs(sh
     rows = {line.split()[0]: line for line in capsys.readouterr().out.splitlines() if line.split()[:1]
             and line.split()[0] in (*AXES, "DEGRADED:")}
     for axis in GYRO_AXES:
-        assert rows[axis].endswith("within") and 0.9 < float(rows[axis].split()[2]) < 1.1, rows[axis]
+        assert 0.9 < float(rows[axis].split()[2]) < 1.1, rows[axis]
+    assert rows["gyro_x"].endswith("within") and rows["gyro_y"].endswith("within")
+    line = float(rows["gyro_z"].split("DEGRADED: new line at ")[1].split()[0])
+    assert 17.0 < line < 23.0 and "step" not in rows["gyro_z"] and "noise" not in rows["gyro_z"], rows["gyro_z"]
     for axis in ("accel_x", "accel_y", "accel_z"):
         assert "DEGRADED: new line at 0.56" in rows[axis] and "step" not in rows[axis] and "noise" not in rows[axis]
-    assert rows["DEGRADED:"].startswith("DEGRADED: accel_x, accel_y, accel_z (")
+    assert rows["DEGRADED:"].startswith("DEGRADED: gyro_z, accel_x, accel_y, accel_z (")
 
 
 def test_a_knock_on_a_unit_two_percent_noisier_than_a_narrow_reference_is_a_transient():

@@ -108,7 +108,7 @@ def _title(unit: Unit) -> str:
 def _beyond_spec(imu, result, options: BatchOptions) -> dict:
     """The test against the spec's limits (``BatchOptions.limits``) with each axis's own analysis as the shape: its
     pasted N and final model (white noise of the Allan N without one)."""
-    from ..core.watch.compare import AxisReference
+    from ..core.watch.axis_reference import AxisReference
     from ..pipelines.compare import beyond_spec
 
     if not options.limits:

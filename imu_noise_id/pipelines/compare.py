@@ -8,7 +8,8 @@ from dataclasses import dataclass, field
 from ..core.axes import ImuSeries, sensor_of
 from ..core.errors import InputError
 from ..core.stillness import static_check
-from ..core.watch.compare import AxisComparison, AxisReference, compare_axis, rate_mismatch
+from ..core.watch.axis_reference import AxisReference, rate_mismatch
+from ..core.watch.compare import AxisComparison, compare_axis
 from ..core.watch.noise_level import DEFAULT_FALSE_ALARMS_PER_HOUR, DEFAULT_RATIO, NoiseLevel, beyond_limit, per_test
 
 

@@ -14,7 +14,7 @@ from ..core.axes import AXES, sensor_of
 from ..core.errors import InputError
 from ..core.noise.base import Component
 from ..core.noise.components import COMPONENT_TYPES
-from ..core.watch.compare import AxisReference
+from ..core.watch.axis_reference import AxisReference
 from ..pipelines.analyze.numbers import KALIBR_PREFIX
 
 

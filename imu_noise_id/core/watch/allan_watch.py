@@ -12,7 +12,7 @@ from .noise_level import NoiseLevel, watch_noise_level
 from .sequential import AxisWatch, SequentialNoiseWatch
 
 if TYPE_CHECKING:
-    from .compare import AxisReference
+    from .axis_reference import AxisReference
 
 #: Cluster times [s] the Allan variance is watched at (those with ≥ :data:`MIN_PAIRS` pairs in the data).
 DEFAULT_TAUS = (1.0, 10.0)

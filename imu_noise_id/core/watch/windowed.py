@@ -1,17 +1,21 @@
 """The step and line tests of :mod:`.compare` on the last ``window_s`` s of stationary samples, one axis every
 ``every_s`` s, at α = λ · ``every_s`` / 3600 (union bound; the line test at α/2 on the window and α/2 on its last
-half, which a line that began within it fills twice as densely); motion restarts the window."""
+half, which a line that began within it fills twice as densely); motion restarts the window. The node runs them
+sample by sample (:class:`WindowedChecks`); ``compare`` runs the same windows over a recording
+(:func:`scan_windows`)."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..diagnostics import detectors as det
 from ..diagnostics.scan_tail import StepScanTail
 from ..diagnostics.whitening import WhiteningFilter
-from .compare import AxisReference, bias_step, new_line, reference_innovations
+from .axis_reference import AxisReference
+from .innovation_tests import bias_step, new_line, reference_innovations
 
 #: Seconds of contiguous stationary samples each test looks at.
 DEFAULT_WINDOW_S = 120.0
@@ -30,6 +34,60 @@ class WindowFinding:
     amplitude: float
     since_s: float
     time_s: float
+
+
+def window_tests(stamps: np.ndarray, samples: np.ndarray, period: float, whitening: WhiteningFilter, *,
+                 alpha: float, known: tuple[float, ...], kinds: set[str],
+                 tails: dict[int, StepScanTail] | None = None) -> dict[str, det.Finding]:
+    """One window's tests (module docstring) on ``samples`` [u] at ``stamps`` [s] and ``period`` [s] under
+    ``whitening`` (the reference's ``step_model``), those of ``kinds`` ("step", "line") only, at level ``alpha``:
+    per kind its significant finding, its ``time`` param (step) the stamp of the step, a line's ``since`` param
+    [s] the stamp from which the samples it was found in begin; ``tails``: :func:`~.compare.bias_step`'s cache."""
+    e = reference_innovations(samples, whitening)
+    out = {}
+    if "step" in kinds:
+        step = bias_step(e, period, whitening, alpha, tails=tails)
+        if step is not None:
+            out["step"] = replace(step, params={**step.params, "time": float(stamps[int(step.params["index"])])})
+    if "line" in kinds:
+        line, since = new_line(e, period, whitening, alpha / 2.0, known), float(stamps[0])
+        half = samples.size // 2
+        if line is None and half >= round(MIN_WINDOW_S / period):
+            line = new_line(reference_innovations(samples[-half:], whitening), period, whitening, alpha / 2.0, known)
+            since = float(stamps[-half])
+        if line is not None:
+            out["line"] = replace(line, params={**line.params, "since": since})
+    return out
+
+
+def scan_windows(y: np.ndarray, dt: float, reference: AxisReference, *, false_alarms_per_hour: float,
+                 window_s: float = DEFAULT_WINDOW_S, every_s: float = DEFAULT_EVERY_S) -> dict[str, det.Finding]:
+    """The node's windowed tests over a static recording ``y`` [u] at ``dt`` [s]: the window of the last
+    ``window_s`` s (fewer at the start, at least :data:`MIN_WINDOW_S`) ending every ``every_s`` s and at the last
+    sample, each at α = ``false_alarms_per_hour`` · ``every_s`` / 3600. The windows number at most T / ``every_s``
+    for T seconds of data, so by the union bound the scan raises at most ``false_alarms_per_hour`` false alarms per
+    hour. Per kind ("step", "line") the first window's finding, stamped from the first sample (0 s); its
+    ``window_end`` param [s] the end of the window that found it."""
+    y = np.asarray(y, dtype=float)
+    capacity, minimum, every = round(window_s / dt), round(MIN_WINDOW_S / dt), max(1, round(every_s / dt))
+    ends = list(range(minimum, y.size + 1, every))
+    if ends and ends[-1] != y.size:
+        ends.append(y.size)
+    whitening = WhiteningFilter.from_components(reference.step_model(dt), dt)
+    alpha = false_alarms_per_hour * every_s / 3600.0
+    stamps = np.arange(y.size) * dt
+    tails: dict[int, StepScanTail] = {}
+    found: dict[str, det.Finding] = {}
+    for end in ends:
+        kinds = {"step", "line"} - found.keys()
+        if not kinds:
+            break
+        start = max(0, end - capacity)
+        new = window_tests(stamps[start:end], y[start:end], dt, whitening, alpha=alpha, known=reference.known_lines,
+                           kinds=kinds, tails=tails if end - start == capacity else None)
+        for kind, finding in new.items():
+            found[kind] = replace(finding, params={**finding.params, "window_end": float(stamps[end - 1])})
+    return found
 
 
 class WindowedChecks:
@@ -87,23 +145,14 @@ class WindowedChecks:
         held = self.findings[i]
         if "step" in held and "line" in held:
             return
-        whitening, now = self.whitening[i], float(stamps[-1])
-        e = reference_innovations(samples, whitening)
-        if "step" not in held:
-            step = bias_step(e, self.period, whitening, self.alpha,
-                             tails=self.tails[i] if self.count == self.capacity else None)
-            if step is not None:
-                size = float(step.params["size"])
-                held["step"] = WindowFinding("step", size, size, float(stamps[int(step.params["index"])]), now)
-        if "line" in held:
-            return
-        known = self.references[i].known_lines
-        line, since = new_line(e, self.period, whitening, self.alpha / 2.0, known), float(stamps[0])
-        half = samples.size // 2
-        if line is None and half >= self.minimum:
-            line = new_line(reference_innovations(samples[-half:], whitening), self.period, whitening,
-                            self.alpha / 2.0, known)
-            since = float(stamps[-half])
-        if line is not None:
-            held["line"] = WindowFinding("line", float(line.params["frequency"]),
-                                         float(line.params.get("amplitude", math.nan)), since, now)
+        now = float(stamps[-1])
+        new = window_tests(stamps, samples, self.period, self.whitening[i], alpha=self.alpha,
+                           known=self.references[i].known_lines, kinds={"step", "line"} - held.keys(),
+                           tails=self.tails[i] if self.count == self.capacity else None)
+        if "step" in new:
+            size = float(new["step"].params["size"])
+            held["step"] = WindowFinding("step", size, size, new["step"].params["time"], now)
+        if "line" in new:
+            p = new["line"].params
+            held["line"] = WindowFinding("line", float(p["frequency"]), float(p.get("amplitude", math.nan)),
+                                         p["since"], now)

@@ -14,7 +14,7 @@ import numpy as np
 
 from ...core.axes import AXES, SENSORS, sensor_of
 from ...core.watch.allan_watch import AllanWatch
-from ...core.watch.compare import AxisReference, rate_mismatch
+from ...core.watch.axis_reference import AxisReference, rate_mismatch
 from ...core.watch.noise_level import LIMIT_RATIO, per_test
 from ...core.watch.sequential import AxisWatch, SequentialNoiseWatch
 from ...core.watch.windowed import WindowedChecks, WindowFinding
