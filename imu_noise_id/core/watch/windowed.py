@@ -1,4 +1,4 @@
-"""The step and line tests of :mod:`.compare` on the last ``window_s`` s of stationary samples, one axis every
+"""The step and line tests of :mod:`.innovation_tests` on the last ``window_s`` s of stationary samples, one axis every
 ``every_s`` s, at α = λ · ``every_s`` / 3600 (union bound; the line test at α/2 on the window and α/2 on its last
 half, which a line that began within it fills twice as densely); motion restarts the window. The node runs them
 sample by sample (:class:`WindowedChecks`); ``compare`` runs the same windows over a recording
@@ -42,7 +42,8 @@ def window_tests(stamps: np.ndarray, samples: np.ndarray, period: float, whiteni
     """One window's tests (module docstring) on ``samples`` [u] at ``stamps`` [s] and ``period`` [s] under
     ``whitening`` (the reference's ``step_model``), those of ``kinds`` ("step", "line") only, at level ``alpha``:
     per kind its significant finding, its ``time`` param (step) the stamp of the step, a line's ``since`` param
-    [s] the stamp from which the samples it was found in begin; ``tails``: :func:`~.compare.bias_step`'s cache."""
+    [s] the stamp from which the samples it was found in begin; ``tails``: :func:`~.innovation_tests.bias_step`'s
+    cache."""
     e = reference_innovations(samples, whitening)
     out = {}
     if "step" in kinds:
@@ -91,8 +92,8 @@ def scan_windows(y: np.ndarray, dt: float, reference: AxisReference, *, false_al
 
 
 class WindowedChecks:
-    """:mod:`.compare`'s step and line tests on the last ``window_s`` [s] of stationary samples at ``period`` [s], λ per
-    axis and test (module docstring)."""
+    """:mod:`.innovation_tests`' step and line tests on the last ``window_s`` [s] of stationary samples at ``period``
+    [s], λ per axis and test (module docstring), sample by sample (:func:`window_tests` each time)."""
 
     def __init__(self, references: list[AxisReference], period: float, *, false_alarms_per_hour: float,
                  window_s: float = DEFAULT_WINDOW_S, every_s: float = DEFAULT_EVERY_S) -> None:
