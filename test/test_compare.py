@@ -378,6 +378,29 @@ def test_compare_finds_a_line_in_the_records_last_minute_as_the_node_would():
     assert "new line at 30 Hz" in c.findings()[0] and "in the window ending at 6" in c.findings()[0], c.findings()
 
 
+def test_a_line_inside_the_references_resonance_is_not_new():
+    """A reference whose model holds a resonance (OSC at 20 Hz, 2 Hz wide) and a unit whose vibration sits as a narrow
+    line at 21.5 Hz (an environmental line moves from one recording to the next): compare and the node's windows take
+    it for the reference's resonance (before, "new line at 21.5 Hz"); the same line at 30 Hz is new to both."""
+    from imu_noise_id.core.noise.resonant import OSC
+    from imu_noise_id.core.watch.windowed import WindowedChecks
+
+    sigma = N / math.sqrt(DT)
+    reference = AxisReference(N, (0.99 * N, 1.01 * N), [WN(N), OSC(frequency=20.0, bandwidth=2.0, sigma=0.5 * sigma),
+                                                        RW(K)])
+    (band,) = reference.resonance_bands(DT)
+    assert band == pytest.approx((15.0, 25.0))
+    t = np.arange(int(MINUTES * 60 / DT)) * DT
+    for frequency, new in ((21.5, False), (30.0, True)):
+        y = _record(21) + 0.5 * sigma * math.sqrt(2) * np.sin(2 * math.pi * frequency * t + 0.3)
+        c = compare_axis(y, DT, reference)
+        assert (c.line is not None) == new, c.findings()
+        checks = WindowedChecks([reference], DT, false_alarms_per_hour=per_test(0.1, len(AXES)))
+        for k in range(int(300 / DT)):
+            checks.add(float(t[k]), y[k: k + 1])
+        assert ("line" in checks.findings[0]) == new, checks.findings[0]
+
+
 def test_in_motion_the_cmkfs_density_interval_is_held_against_the_reference():
     """The CMKF's density interval (its innovations, while moving) beyond 1.5× the reference's interval is a WARN
     naming the axis and the interval as ratios; one overlapping the reference's, or not identified (NaN), is not."""

@@ -8,13 +8,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..estimation.readouts.kalibr import is_short_memory_osc
 from ..noise.base import Component
 from ..noise.components import RW, WN, total_allan_variance
+from ..noise.resonant import OSC
 
 #: Largest relative difference between a recording's rate and its reference's.
 RATE_TOLERANCE = 0.02
 #: Relative tolerance of a reference density given without a usable interval (±10 %).
 DEFAULT_TOLERANCE = 0.10
+#: Shift of a resonance's frequency, relative to it, within which a line is still the reference's resonance: an
+#: environmental vibration moves from one recording to the next (docs/analysis.md, "Why a line inside the
+#: reference's resonance is not new").
+RESONANCE_SHIFT = 0.2
 
 
 @dataclass(frozen=True)
@@ -43,6 +49,14 @@ class AxisReference:
         if not any(isinstance(c, RW) for c in model):
             return [*model, RW(high)]
         return [RW(max(high, c.random_walk)) if isinstance(c, RW) else c for c in model]
+
+    def resonance_bands(self, dt: float) -> tuple[tuple[float, float], ...]:
+        """The bands [Hz] of the final model's resonances at ``dt`` [s] (each OSC but those of short memory, which
+        are the sensor's filter): f₀ ± (B/2 + :data:`RESONANCE_SHIFT`·f₀) for a resonance at f₀ of half-power bandwidth
+        B. A line inside one is the reference's resonance, not a new line."""
+        return tuple((c.frequency - half, c.frequency + half) for c in self.components or ()
+                     if isinstance(c, OSC) and not is_short_memory_osc(c, dt)
+                     for half in (c.bandwidth / 2.0 + RESONANCE_SHIFT * c.frequency,))
 
     def density_interval(self) -> tuple[tuple[float, float], str]:
         """N's 95 % interval [u/√Hz] (±:data:`DEFAULT_TOLERANCE` without one) and a note saying which."""

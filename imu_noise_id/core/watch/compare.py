@@ -93,7 +93,7 @@ def compare_axis(y: np.ndarray, dt: float, reference: AxisReference, *, ratio: f
     hours = y.size * dt / 3600.0
     alpha = min(det.ALPHA, false_alarms_per_hour / 2.0 * hours)
     whitening = WhiteningFilter.from_components(reference.step_model(dt), dt)
-    step, line = step_and_line(y, dt, whitening, alpha, reference.known_lines)
+    step, line = step_and_line(y, dt, whitening, alpha, reference.known_lines, bands=reference.resonance_bands(dt))
     windows = scan_windows(y, dt, reference, false_alarms_per_hour=false_alarms_per_hour / 2.0)
     step, line = step or windows.get("step"), line or windows.get("line")
     beyond = None if limit is None else beyond_limit(y, dt, reference.difference_variance_at(limit, dt),

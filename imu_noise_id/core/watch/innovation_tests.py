@@ -52,22 +52,26 @@ def bias_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float
     return step if step.significant else None
 
 
-def new_line(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,
-             known: tuple[float, ...]) -> det.Finding | None:
+def new_line(e: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float, known: tuple[float, ...], *,
+             bands: tuple[tuple[float, float], ...] = ()) -> det.Finding | None:
     """The strongest significant line (or None) in the innovations ``e`` at ``dt`` [s] at level ``alpha`` from
     :data:`LINE_MIN_FREQUENCY` or :data:`LINE_MIN_CYCLES` over the samples' span up, whichever is higher; lines
-    within :data:`KNOWN_LINE_BINS` of ``known`` [Hz] are not new."""
+    within :data:`KNOWN_LINE_BINS` of ``known`` [Hz] or inside one of ``bands`` ((low, high) [Hz], the reference's
+    resonances) are not new."""
     span = e.size * dt
     near = KNOWN_LINE_BINS / span
     lowest = max(LINE_MIN_FREQUENCY, LINE_MIN_CYCLES / span)
     for line in det.detect_sinusoids(e, dt, whitening, alpha=alpha, f_min=lowest):
-        if line.significant and all(abs(line.params["frequency"] - f) > near for f in known):
+        f = line.params["frequency"]
+        if (line.significant and all(abs(f - k) > near for k in known)
+                and not any(low <= f <= high for low, high in bands)):
             return line
     return None
 
 
-def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float,
-                  known: tuple[float, ...]) -> tuple[det.Finding | None, det.Finding | None]:
-    """:func:`bias_step` and :func:`new_line` in ``y`` [u]'s :func:`reference_innovations`, each at ``alpha``."""
+def step_and_line(y: np.ndarray, dt: float, whitening: WhiteningFilter, alpha: float, known: tuple[float, ...], *,
+                  bands: tuple[tuple[float, float], ...] = ()) -> tuple[det.Finding | None, det.Finding | None]:
+    """:func:`bias_step` and :func:`new_line` (``known`` lines and resonance ``bands`` not new) in ``y`` [u]'s
+    :func:`reference_innovations`, each at ``alpha``."""
     e = reference_innovations(y, whitening)
-    return bias_step(e, dt, whitening, alpha), new_line(e, dt, whitening, alpha, known)
+    return bias_step(e, dt, whitening, alpha), new_line(e, dt, whitening, alpha, known, bands=bands)

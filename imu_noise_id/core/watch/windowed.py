@@ -37,10 +37,11 @@ class WindowFinding:
 
 
 def window_tests(stamps: np.ndarray, samples: np.ndarray, period: float, whitening: WhiteningFilter, *,
-                 alpha: float, known: tuple[float, ...], kinds: set[str],
+                 alpha: float, known: tuple[float, ...], bands: tuple[tuple[float, float], ...], kinds: set[str],
                  tails: dict[int, StepScanTail] | None = None) -> dict[str, det.Finding]:
     """One window's tests (module docstring) on ``samples`` [u] at ``stamps`` [s] and ``period`` [s] under
-    ``whitening`` (the reference's ``step_model``), those of ``kinds`` ("step", "line") only, at level ``alpha``:
+    ``whitening`` (the reference's ``step_model``), those of ``kinds`` ("step", "line") only, at level ``alpha``,
+    ``known`` lines and resonance ``bands`` [Hz] not new (:func:`~.innovation_tests.new_line`):
     per kind its significant finding, its ``time`` param (step) the stamp of the step, a line's ``since`` param
     [s] the stamp from which the samples it was found in begin; ``tails``: :func:`~.innovation_tests.bias_step`'s
     cache."""
@@ -51,10 +52,11 @@ def window_tests(stamps: np.ndarray, samples: np.ndarray, period: float, whiteni
         if step is not None:
             out["step"] = replace(step, params={**step.params, "time": float(stamps[int(step.params["index"])])})
     if "line" in kinds:
-        line, since = new_line(e, period, whitening, alpha / 2.0, known), float(stamps[0])
+        line, since = new_line(e, period, whitening, alpha / 2.0, known, bands=bands), float(stamps[0])
         half = samples.size // 2
         if line is None and half >= round(MIN_WINDOW_S / period):
-            line = new_line(reference_innovations(samples[-half:], whitening), period, whitening, alpha / 2.0, known)
+            line = new_line(reference_innovations(samples[-half:], whitening), period, whitening, alpha / 2.0, known,
+                            bands=bands)
             since = float(stamps[-half])
         if line is not None:
             out["line"] = replace(line, params={**line.params, "since": since})
@@ -75,6 +77,7 @@ def scan_windows(y: np.ndarray, dt: float, reference: AxisReference, *, false_al
     if ends and ends[-1] != y.size:
         ends.append(y.size)
     whitening = WhiteningFilter.from_components(reference.step_model(dt), dt)
+    bands = reference.resonance_bands(dt)
     alpha = false_alarms_per_hour * every_s / 3600.0
     stamps = np.arange(y.size) * dt
     tails: dict[int, StepScanTail] = {}
@@ -85,7 +88,7 @@ def scan_windows(y: np.ndarray, dt: float, reference: AxisReference, *, false_al
             break
         start = max(0, end - capacity)
         new = window_tests(stamps[start:end], y[start:end], dt, whitening, alpha=alpha, known=reference.known_lines,
-                           kinds=kinds, tails=tails if end - start == capacity else None)
+                           bands=bands, kinds=kinds, tails=tails if end - start == capacity else None)
         for kind, finding in new.items():
             found[kind] = replace(finding, params={**finding.params, "window_end": float(stamps[end - 1])})
     return found
@@ -103,6 +106,7 @@ class WindowedChecks:
         self.period = period
         self.references = references
         self.whitening = [WhiteningFilter.from_components(r.step_model(period), period) for r in references]
+        self.bands = [r.resonance_bands(period) for r in references]
         # per axis, the step scan's tail on a full window (a filling one's is computed afresh, not kept)
         self.tails: list[dict[int, StepScanTail]] = [{} for _ in references]
         self.alpha = false_alarms_per_hour * every_s / 3600.0
@@ -148,7 +152,8 @@ class WindowedChecks:
             return
         now = float(stamps[-1])
         new = window_tests(stamps, samples, self.period, self.whitening[i], alpha=self.alpha,
-                           known=self.references[i].known_lines, kinds={"step", "line"} - held.keys(),
+                           known=self.references[i].known_lines, bands=self.bands[i],
+                           kinds={"step", "line"} - held.keys(),
                            tails=self.tails[i] if self.count == self.capacity else None)
         if "step" in new:
             size = float(new["step"].params["size"])
