@@ -42,6 +42,8 @@ ORDERS = (1, 2, 4)
 #: What lies beside the filtered white noise and its floor: the slow part of each record, and its K [u/s/√Hz].
 VARIANTS = {"RW": ([RW(K_TRUE)], K_TRUE), "GM+RW": ([GM(tau=20.0, sigma=3e-4), RW(K_TRUE)], K_TRUE),
             "none": ([], 0.0)}
+#: Seed offset between variants, so that no two variants of a cell share their white noise.
+VARIANT_SEED_STRIDE = 104_729
 
 #: Run in each source tree on one record: one axis through analyze's stages, one JSON line.
 ONE_RECORD = ONE_AXIS_STAGES + """
@@ -105,8 +107,9 @@ def main(argv: list[str] | None = None) -> int:
             k_true = VARIANTS[variant][1]
             for order in args.orders:
                 for seed in range(args.first_seed, args.first_seed + args.seeds):
-                    y, dt = simulate(rate, cutoff, order, args.minutes, 7919 * order + int(rate + cutoff) + seed,
-                                     variant)
+                    # each variant its own draw (the first variant's as before): three cells, three records
+                    y, dt = simulate(rate, cutoff, order, args.minutes, 7919 * order + int(rate + cutoff) + seed
+                                     + VARIANT_SEED_STRIDE * list(VARIANTS).index(variant), variant)
                     path = str(Path(tmp) / "record.npy")
                     np.save(path, y)
                     for name, source in sources:
