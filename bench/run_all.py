@@ -115,6 +115,7 @@ STUDIES: list[tuple[list[str], str]] = [
     (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "studies/probe_k_information.txt"),
     (["studies/bench_sin_regressors.py"], "studies/likelihood_speed.txt"),
     (["studies/composite_gap.py"], "studies/composite_gap.txt"),
+    (["studies/watch_power_bound.py"], "bench_watch.txt"),
 ]
 
 
