@@ -96,6 +96,29 @@ def test_the_selection_fits_a_second_order_dlpf_and_pastes_its_passband_level():
     assert n_hat.ci95[0] <= passband <= n_hat.ci95[1]
 
 
+def test_k_behind_a_filter_spans_the_reading_of_a_gm_beside_the_walk():
+    """5 min at 200 Hz through a 2nd-order Butterworth at 5 Hz, with a GM (τ 20 s, σ 3e-4) and a walk K = 2e-5: the
+    filter rules out every unfiltered candidate (ΔBIC > 2000), and WN+DLPF+RW read the GM's wander as a walk,
+    K ≈ 7e-5 with an interval above the truth. The selection now also fits WN+DLPF+GM+RW (the GM found, K ≈ 0,
+    within ΔAIC 2 ln 20 of the winner), and K's interval, spanning its reading, holds the truth."""
+    from imu_noise_id.core.estimation.readouts.walk_evidence import over_structures, plausible_walks
+    from imu_noise_id.core.noise.components import GM
+
+    rng = np.random.default_rng(120_772)  # bench_dlpf's record of this cell
+    n = 60_000
+    w = rng.standard_normal(n + 1800) * 1e-3 / math.sqrt(DT)
+    y = signal.sosfilt(signal.butter(2, 5.0, fs=1.0 / DT, output="sos"), w)[1800:]
+    y = y + simulate_sum([WN(1e-4), GM(tau=20.0, sigma=3e-4), RW(2e-5)], n, DT, rng)
+    selection = select_model(y, DT, allan=allan_variance(y, DT))
+    assert selection.best.model == "WN+DLPF+RW"
+    own = kalibr.random_walk(selection.best)
+    assert own.method == "model" and own.ci95[0] > 2e-5  # the winner alone: above the truth
+    readings = plausible_walks(selection, n, DT)
+    assert "WN+DLPF+GM+RW" in [r.structure for r in readings]
+    k = over_structures(own, readings)
+    assert k.ci95[0] < 2e-5 <= k.ci95[1] and "WN+DLPF+GM+RW" in k.source, (k, own)
+
+
 @pytest.mark.filterwarnings("error::RuntimeWarning")  # the intervals' trial points overflowed onto the console
 @pytest.mark.parametrize(("order", "rate", "cutoff"), [(1, 200.0, 12.0), (3, 200.0, 12.0), (4, 200.0, 12.0),
                                                       (4, 200.0, 20.0), (4, 200.0, 40.0), (4, 400.0, 100.0)])

@@ -176,8 +176,8 @@ def _model_stage_options(p: argparse.ArgumentParser, command: str) -> None:
     p.add_argument(
         "--sensor-filter", type=sensor_filter_spec, default=None, metavar="HZ[:ORDER]",
         help="the sensor's digital low-pass as configured (datasheet and driver): its -3 dB cutoff [Hz] and, when "
-        "known, its Butterworth order 1-4, e.g. 42 or 42:2. The model selection then offers WN+DLPF+RW with the "
-        "filter started there (the cutoff is still estimated; without ORDER the data choose it)")
+        "known, its Butterworth order 1-4, e.g. 42 or 42:2. The model selection then offers WN+DLPF+RW and "
+        "WN+DLPF+GM+RW with the filter started there (the cutoff is still estimated; without ORDER the data choose it)")
     p.add_argument("--drift", choices=("em", "ls"), default="em",
                    help="with RR: estimate the ramp jointly (em, default) or remove a least-squares line first (ls)")
     p.add_argument("--starts", type=int, default=FitOptions.n_starts,

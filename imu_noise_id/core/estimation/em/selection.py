@@ -23,8 +23,11 @@ from .search import add_intervals
 
 #: Default candidate structures of :func:`select_model` (RR / QN added when the AV suggests them).
 DEFAULT_CANDIDATES: tuple[str, ...] = ("WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM")
-#: The candidate for the sensor's digital low-pass.
-DLPF_CANDIDATE = "WN+DLPF+RW"
+#: The candidates for the sensor's digital low-pass: with a walk, and with a GM beside it, the filtered twin of
+#: WN+GM+RW, so that a record whose filter rules out every unfiltered structure still offers the two readings of its
+#: long-τ wander that K's interval must span (docs/analysis.md, "Why K's interval spans the structures the data
+#: cannot tell apart").
+DLPF_CANDIDATES: tuple[str, ...] = ("WN+DLPF+RW", "WN+DLPF+GM+RW")
 
 
 @dataclass
@@ -56,8 +59,8 @@ class SelectionResult:
 def suggest_candidates(allan: AllanResult) -> list[str]:
     """:data:`DEFAULT_CANDIDATES` plus, from the AV (one column, τ ≤ N·dt/4): RR variants when it rises like τ² at
     long τ, QN variants when it falls like τ⁻² at short τ, WN+BI+RW when flat over a decade above the white-noise
-    line (:func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`), WN+DLPF+RW at a low-pass roll-off
-    (:func:`~imu_noise_id.core.allan.slopes.rolloff_end`) or a rise within the τ a roll-off reaches
+    line (:func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`), :data:`DLPF_CANDIDATES` at a low-pass
+    roll-off (:func:`~imu_noise_id.core.allan.slopes.rolloff_end`) or a rise within the τ a roll-off reaches
     (:func:`~imu_noise_id.core.allan.slopes.rises_early`)."""
     cands = list(DEFAULT_CANDIDATES)
     keep = allan.m <= starts.MAX_FRACTION * allan.n
@@ -65,7 +68,7 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
     if tau.size >= 4 and flicker_level(tau, avar - avar[0] * tau[0] / tau) is not None:
         cands.append("WN+BI+RW")
     if rolloff_end(allan) or rises_early(allan):
-        cands.append(DLPF_CANDIDATE)
+        cands += DLPF_CANDIDATES
     if tau.size >= 4:
         slope_hi = np.polyfit(np.log(tau[-3:]), np.log(avar[-3:]), 1)[0]
         slope_lo = np.polyfit(np.log(tau[:3]), np.log(avar[:3]), 1)[0]
@@ -88,7 +91,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     options : fit options; ``uncertainty`` applies to the winner only
     allan : the record's AV (one column): the start of candidates without RR
     extra_starts : a further start per candidate (e.g. its GMWM fit)
-    sensor_filter : the sensor's known digital low-pass: WN+DLPF+RW joins the default candidates, started there
+    sensor_filter : the sensor's known digital low-pass: :data:`DLPF_CANDIDATES` join the default candidates,
+        started there
     finish : False leaves a long record's winner at its composite maximiser for :func:`finish_winner`
 
     From :data:`.screen.MIN_SAMPLES` samples (BIC) a candidate that cannot come within :data:`.screen.MARGIN` of the
@@ -105,8 +109,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     allans = {False: allan if allan is not None else starts.allan_of(interpolate_missing(y), dt), True: None}
     periodograms: dict[bool, whittle.BandedPeriodogram | None] = {False: None, True: None}  # the same, computed once
     cands = list(candidates) if candidates else suggest_candidates(allans[False])
-    if sensor_filter is not None and not candidates and DLPF_CANDIDATE not in cands:
-        cands.append(DLPF_CANDIDATE)
+    if sensor_filter is not None and not candidates:
+        cands += [spec for spec in DLPF_CANDIDATES if spec not in cands]
     fits: dict[str, FitResult] = {}
     errors: dict[str, str] = {}
     search = replace(options, uncertainty=False)
