@@ -96,24 +96,30 @@ def test_the_selection_fits_a_second_order_dlpf_and_pastes_its_passband_level():
     assert n_hat.ci95[0] <= passband <= n_hat.ci95[1]
 
 
-def test_k_behind_a_filter_spans_the_reading_of_a_gm_beside_the_walk():
-    """5 min at 200 Hz through a 2nd-order Butterworth at 5 Hz, with a GM (τ 20 s, σ 3e-4) and a walk K = 2e-5: the
-    filter rules out every unfiltered candidate (ΔBIC > 2000), and WN+DLPF+RW read the GM's wander as a walk,
-    K ≈ 7e-5 with an interval above the truth. The selection now also fits WN+DLPF+GM+RW (the GM found, K ≈ 0,
-    within ΔAIC 2 ln 20 of the winner), and K's interval, spanning its reading, holds the truth."""
+@pytest.mark.parametrize(("rate", "cutoff", "order", "seed"), [(200.0, 5.0, 2, 120_772), (400.0, 20.0, 1, 113_068)])
+def test_k_behind_a_filter_spans_the_reading_of_a_gm_beside_the_walk(rate, cutoff, order, seed):
+    """5 min through a Butterworth low-pass (bench_dlpf's records of these cells), with a GM (τ 20 s, σ 3e-4) and a
+    walk K = 2e-5: the filter rules out every unfiltered candidate (ΔBIC > 2000), and WN+DLPF+RW reads the GM's
+    wander as a walk, K ≈ 3× the truth with an interval above it. The selection now also fits WN+DLPF+GM+RW, started
+    from WN+DLPF+RW's fit with its walk split into a slow GM (its AV-fit starts, at 400 Hz, climbed to a GM of 7 ms
+    1.9 log-likelihood units lower); it finds the GM with K ≈ 0 within ΔAIC 2 ln 20 of the winner, and K's interval,
+    spanning its reading, holds the truth."""
     from imu_noise_id.core.estimation.readouts.walk_evidence import over_structures, plausible_walks
     from imu_noise_id.core.noise.components import GM
 
-    rng = np.random.default_rng(120_772)  # bench_dlpf's record of this cell
-    n = 60_000
-    w = rng.standard_normal(n + 1800) * 1e-3 / math.sqrt(DT)
-    y = signal.sosfilt(signal.butter(2, 5.0, fs=1.0 / DT, output="sos"), w)[1800:]
-    y = y + simulate_sum([WN(1e-4), GM(tau=20.0, sigma=3e-4), RW(2e-5)], n, DT, rng)
-    selection = select_model(y, DT, allan=allan_variance(y, DT))
+    dt = 1.0 / rate
+    rng = np.random.default_rng(seed)
+    n, warm = int(300 * rate), int(20 * rate / cutoff) + 1000
+    w = rng.standard_normal(n + warm) * 1e-3 / math.sqrt(dt)
+    y = signal.sosfilt(signal.butter(order, cutoff, fs=rate, output="sos"), w)[warm:]
+    y = y + simulate_sum([WN(1e-4), GM(tau=20.0, sigma=3e-4), RW(2e-5)], n, dt, rng)
+    selection = select_model(y, dt, allan=allan_variance(y, dt))
     assert selection.best.model == "WN+DLPF+RW"
     own = kalibr.random_walk(selection.best)
     assert own.method == "model" and own.ci95[0] > 2e-5  # the winner alone: above the truth
-    readings = plausible_walks(selection, n, DT)
+    beside = selection.fits["WN+DLPF+GM+RW"]
+    assert next(c.tau for c in beside.components if isinstance(c, GM)) > 10.0  # the slow mode
+    readings = plausible_walks(selection, n, dt)
     assert "WN+DLPF+GM+RW" in [r.structure for r in readings]
     k = over_structures(own, readings)
     assert k.ci95[0] < 2e-5 <= k.ci95[1] and "WN+DLPF+GM+RW" in k.source, (k, own)

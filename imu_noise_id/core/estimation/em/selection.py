@@ -28,6 +28,9 @@ DEFAULT_CANDIDATES: tuple[str, ...] = ("WN+RW", "WN+GM", "WN+GM+RW", "WN+2GM")
 #: long-τ wander that K's interval must span (docs/analysis.md, "Why K's interval spans the structures the data
 #: cannot tell apart").
 DLPF_CANDIDATES: tuple[str, ...] = ("WN+DLPF+RW", "WN+DLPF+GM+RW")
+#: Candidates also started from an earlier candidate's fit with its walk split into a GM and a smaller walk
+#: (:func:`.starts.walk_split`), by the candidate they start from.
+SPLIT_FROM = {"WN+DLPF+GM+RW": "WN+DLPF+RW"}
 
 
 @dataclass
@@ -90,7 +93,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     ----------
     options : fit options; ``uncertainty`` applies to the winner only
     allan : the record's AV (one column): the start of candidates without RR
-    extra_starts : a further start per candidate (e.g. its GMWM fit)
+    extra_starts : a further start per candidate (e.g. its GMWM fit); a candidate of :data:`SPLIT_FROM` is also
+        started from the fit it names, its walk split (:func:`.starts.walk_split`)
     sensor_filter : the sensor's known digital low-pass: :data:`DLPF_CANDIDATES` join the default candidates,
         started there
     finish : False leaves a long record's winner at its composite maximiser for :func:`finish_winner`
@@ -126,9 +130,12 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
     for spec in cands:
         try:
             has_rr = "RR" in parse_structure(spec)
+            further = [extra_starts[spec]] if extra_starts and spec in extra_starts else []
+            if SPLIT_FROM.get(spec) in fits:
+                split = starts.walk_split(list(fits[SPLIT_FROM[spec]].components), y.size * dt)
+                further += [split] if split is not None else []
             model = NoiseModel(y, dt, spec, drift=drift, allan=allans[has_rr], periodogram=periodograms[has_rr],
-                               starts=[extra_starts[spec]] if extra_starts and spec in extra_starts else None,
-                               sensor_filter=sensor_filter)
+                               starts=further or None, sensor_filter=sensor_filter)
             if reference is not None and statistics is not None:
                 verdict = screen.screen(reference, model.starting_values(1, True)[0], statistics)
                 if not verdict.worth_exact_fit:

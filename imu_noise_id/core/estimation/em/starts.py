@@ -228,3 +228,25 @@ def distinct(results: list[tuple[float, list[Component]]], tau: np.ndarray, dt: 
             kept.append((cost, comps))
             curves.append((orders, curve))
     return kept
+
+
+#: The GM a walk is split into starts at this fraction of the record's span.
+SPLIT_GM_SPAN_FRACTION = 0.1
+#: The walk left beside it starts at this fraction of the walk's K.
+SPLIT_WALK_SHARE = 0.1
+
+
+def walk_split(components: list[Component], span_s: float) -> list[Component] | None:
+    """``components`` (a fit with one RW) with its walk K split into a GM of τ = :data:`SPLIT_GM_SPAN_FRACTION` ×
+    ``span_s`` [s] whose spectrum above its corner is the walk's (σ = K·√(τ/2): K² = 2σ²/τ) and an RW of
+    :data:`SPLIT_WALK_SHARE` × K, in canonical order; None without exactly one RW. The start of the same structure
+    with a GM beside the walk, from the fit without it, in the slow mode the AV-fit starts miss beside a DLPF: there
+    the AV fit spends the GM on the filter's roll-off, and the likelihood climbs from it to a GM of a few
+    milliseconds (docs/em.md, "Why: starts")."""
+    walks = [c for c in components if isinstance(c, RW)]
+    if len(walks) != 1 or walks[0].random_walk <= 0.0:
+        return None
+    k = walks[0].random_walk
+    tau = SPLIT_GM_SPAN_FRACTION * span_s
+    rest = [c for c in components if not isinstance(c, RW)]
+    return [*rest, GM(tau=tau, sigma=k * math.sqrt(tau / 2.0)), RW(SPLIT_WALK_SHARE * k)]
