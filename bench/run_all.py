@@ -185,8 +185,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"== {header[2:]}  -> docs/results/{out}", flush=True)
         start = time.perf_counter()
         lines = [header + "\n"]
+        # stdout is the section; stderr (progress, warnings, a traceback) goes to the console only
         proc = subprocess.Popen([sys.executable, str(BENCH / script[0]), *script[1:]], stdout=subprocess.PIPE,
-                                stderr=subprocess.STDOUT, env=env, cwd=BENCH.parent, text=True)
+                                env=env, cwd=BENCH.parent, text=True)
         for text in proc.stdout:  # printed here and kept in docs/results
             print(text, end="", flush=True)
             lines.append(text)
@@ -196,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
         if proc.returncode != 0:
             failed.append(script[0])
     if failed:
-        print(f"failed: {', '.join(failed)} (their outputs in docs/results/ say why)")
+        print(f"failed: {', '.join(failed)} (their errors are printed above)")
     return 1 if failed else 0
 
 

@@ -52,3 +52,15 @@ def test_the_results_folder_keeps_one_latest_output_per_benchmark_under_a_stable
     dated = [p.name for p in files if re.search(r"(^|[_.-])([0-9a-f]{7,40}|\d{4}-\d{2}-\d{2}|before|after)([_.-]|$)",
                                                  p.name)]
     assert not dated, dated
+
+
+def test_a_runs_section_holds_its_standard_output_and_not_its_progress_on_stderr(tmp_path, monkeypatch, capsys):
+    """A benchmark's progress lines and warnings (stderr, unbuffered) went into its committed output ahead of its
+    results (stdout, flushed at the end): the section now holds stdout only, stderr is shown on the console."""
+    run_all = _run_all()
+    (tmp_path / "x.py").write_text("import sys\nprint('result')\nprint('progress', file=sys.stderr)\n")
+    monkeypatch.setattr(run_all, "BENCH", tmp_path)
+    monkeypatch.setattr(run_all, "RESULTS", tmp_path / "results")
+    monkeypatch.setattr(run_all, "GOALS", [(["x.py"], "x.txt")])
+    assert run_all.main(["--only", "x.py", "--baseline", str(tmp_path)]) == 0
+    assert (tmp_path / "results" / "x.txt").read_text() == "# python bench/x.py\nresult\n"
