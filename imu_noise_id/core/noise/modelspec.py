@@ -114,6 +114,13 @@ def parse_model(spec: str) -> list[Component]:
     return components
 
 
+def canonical(components: list[Component]) -> list[Component]:
+    """``components`` sorted into :data:`CANONICAL_ORDER` (stable: same-named components keep their order; names
+    outside it last)."""
+    order = {name: i for i, name in enumerate(CANONICAL_ORDER)}
+    return sorted(components, key=lambda c: order.get(c.name, len(order)))
+
+
 def structure_name(names: list[str]) -> str:
     """Canonical model name: ``['GM', 'WN', 'GM', 'RW']`` → ``'WN+2GM+RW'``."""
     counts = {n: names.count(n) for n in dict.fromkeys(names)}

@@ -12,10 +12,11 @@ from ...core.errors import InputError
 from ...core.estimation.readouts.kalibr import is_short_memory_osc
 from ...core.noise.base import Component
 from ...core.noise.components import WN
+from ...core.noise.modelspec import canonical
 from ...core.noise.resonant import LPF, OSC
 from .rules import better, judge
 from .state import Diagnosis, LoopState, Trial
-from .steps import AxisLoop, _canonical
+from .steps import AxisLoop
 from .trials import long_tau_flicker, long_tau_walk
 
 #: Components re-selection may drop, those that absorb what the model lacks (docs/loop.md, "The loop's rules" 5).
@@ -46,10 +47,10 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
         if isinstance(c, LPF) and "LPF" in new:
             moves.append(("swap LPF (for OSC)", second_order_start(fitted, c)))
         if c.name == "RW" and c.name != added and "BI" not in names and "BI (for RW)" not in swapped:
-            moves.append(("swap RW (for BI)", _canonical([*rest, long_tau_flicker(loop, diag)])))
+            moves.append(("swap RW (for BI)", canonical([*rest, long_tau_flicker(loop, diag)])))
         if (c.name == "BI" and "GM" in new and "RW" not in names and "RW (for BI)" not in swapped
                 and diag.tau.size):
-            moves.append(("swap BI (for RW)", _canonical([*rest, long_tau_walk(diag)])))
+            moves.append(("swap BI (for RW)", canonical([*rest, long_tau_walk(diag)])))
     return moves
 
 
@@ -66,7 +67,7 @@ def second_order_start(fitted: list[Component], lpf: LPF) -> list[Component]:
     n_white = max(n_white, SECOND_ORDER_WHITE_SHARE * passband)
     filtered = OSC.low_pass(math.sqrt(passband**2 - n_white**2), lpf.cutoff)
     rest = [c for c in fitted if c is not lpf and c is not white]
-    return _canonical([WN(n_white), filtered, *rest])
+    return canonical([WN(n_white), filtered, *rest])
 
 
 def swap_start_filter(loop: AxisLoop, state: LoopState,

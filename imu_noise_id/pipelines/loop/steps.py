@@ -28,7 +28,7 @@ from ...core.estimation.em.relabel import gm_as_filter
 from ...core.estimation.em.results import FitResult
 from ...core.noise.components import BI, GM, MA, QN, RR, RW, WN, Component, total_allan_variance
 from ...core.noise.flicker import band_for_record
-from ...core.noise.modelspec import CANONICAL_ORDER, structure_name
+from ...core.noise.modelspec import canonical, structure_name
 from ...core.noise.resonant import LPF, MAX_DAMPING, OSC, filter_memory_limit
 from ...core.quality import interpolate_missing
 from .state import STATE_EFFECTS, Deferred, Diagnosis, ExogTerm, LoopState
@@ -39,11 +39,6 @@ def _restarted_walk(fitted: float, f: det.Finding) -> float:
     below the fitted (an AV deficit finding's joint GM + RW fit), else 1 % of the fitted."""
     left = f.params.get("random_walk")
     return float(left) if left is not None and 0.0 < left < fitted else fitted * 1e-2
-
-
-def _canonical(components: list[Component]) -> list[Component]:
-    order = {name: i for i, name in enumerate(CANONICAL_ORDER)}
-    return sorted(components, key=lambda c: order.get(c.name, len(order)))
 
 
 #: Line concentrations outside this range decide SIN (above) or OSC (below) alone; inside it both are tried.
@@ -329,8 +324,8 @@ class AxisLoop:
                 # left of it, or small.
                 fitted = [type(c)(_restarted_walk(c.params()["random_walk"], f)) if c.name == "RW" else c
                           for c in fitted]
-            new.structure = [c.name for c in _canonical([*fitted, self.component(f, diag)])]
-            new.init = _canonical([*fitted, self.component(f, diag)])
+            new.structure = [c.name for c in canonical([*fitted, self.component(f, diag)])]
+            new.init = canonical([*fitted, self.component(f, diag)])
         elif f.effect == "SIN":
             new.exog_terms.append(ExogTerm("SIN", {"frequency": f.params["frequency"]}))
         elif f.effect == "TEMP":

@@ -16,11 +16,12 @@ from ...core.estimation.em import screen
 from ...core.noise.base import Component
 from ...core.noise.components import GM, RW, total_allan_variance
 from ...core.noise.flicker import BI, PLATEAU, band_for_record
+from ...core.noise.modelspec import canonical
 from ...core.noise.resonant import MAX_DAMPING, OSC
 from ...core.noise.units import random_walk_at_allan_variance
 from .rules import av_inside_band, av_rms_z, better, judge
 from .state import Diagnosis, LoopState, Trial
-from .steps import AxisLoop, _canonical
+from .steps import AxisLoop
 
 
 def added_name(before: list[str], after: list[str], effect: str) -> str:
@@ -260,7 +261,7 @@ def flicker_as_gm_and_walk(loop: AxisLoop, diag: Diagnosis) -> list[Component] |
     if int(use.sum()) < 2:
         return None
     tau, sigma = fit_gm_to_excess(diag.tau[use], carried[use])
-    return _canonical([*rest, GM(tau=max(tau, 2.0 * loop.dt), sigma=sigma), long_tau_walk(diag)])
+    return canonical([*rest, GM(tau=max(tau, 2.0 * loop.dt), sigma=sigma), long_tau_walk(diag)])
 
 
 def _last_decade(diag: Diagnosis) -> np.ndarray:

@@ -17,6 +17,7 @@ from ...noise.components import BI, DLPF, GM, LPF, MA, OSC, QN, RR, RW, WN, Comp
 from ...noise.digital import ORDERS as DLPF_ORDERS
 from ...noise.digital import SensorFilter
 from ...noise.flicker import PLATEAU, band_for_record
+from ...noise.modelspec import canonical
 
 #: The starting-value fit uses the AV at averaging factors m ≤ this fraction of the record.
 MAX_FRACTION = 0.25
@@ -249,4 +250,4 @@ def walk_split(components: list[Component], span_s: float) -> list[Component] | 
     k = walks[0].random_walk
     tau = SPLIT_GM_SPAN_FRACTION * span_s
     rest = [c for c in components if not isinstance(c, RW)]
-    return [*rest, GM(tau=tau, sigma=k * math.sqrt(tau / 2.0)), RW(SPLIT_WALK_SHARE * k)]
+    return canonical([*rest, GM(tau=tau, sigma=k * math.sqrt(tau / 2.0)), RW(SPLIT_WALK_SHARE * k)])
