@@ -33,6 +33,7 @@ import numpy as np
 from scipy import stats
 
 from imu_noise_id.core.diagnostics.whitening import WhiteningFilter
+from imu_noise_id.core.estimation.readouts.instability import bias_instability_from_allan
 from imu_noise_id.core.noise.components import GM, RW, WN, total_allan_variance
 from imu_noise_id.core.watch.innovation_tests import LINE_MIN_CYCLES
 from imu_noise_id.core.watch.noise_level import TESTS_PER_AXIS
@@ -48,12 +49,6 @@ SHARES = (("watch's even split", 1.0 / (AXES * TESTS_PER_AXIS)), ("one axis's wh
           ("the unit's whole budget", 1.0))
 
 
-def bias_instability(model, dt: float) -> float:
-    """B [u/s]: the model's Allan deviation minimum / 0.664 (IEEE Std 952)."""
-    taus = np.logspace(math.log10(dt), 4, 400)
-    return math.sqrt(float(total_allan_variance(model, taus, dt).min())) / 0.664
-
-
 def step_signature(model, dt: float) -> float:
     """‖s‖ of a unit step after :data:`BEFORE_S` s, :data:`WITHIN_S` s of it, under ``model`` (module docstring)."""
     whitening = WhiteningFilter.from_components(model, dt)
@@ -65,7 +60,8 @@ def step_signature(model, dt: float) -> float:
 
 def main() -> None:
     dt = 1.0 / RATE_HZ
-    b = bias_instability(TRUTH, dt)
+    taus = np.logspace(math.log10(dt), 4, 400)
+    b = bias_instability_from_allan(taus, total_allan_variance(TRUTH, taus, dt)).value  # IEEE 952: ADEV min / 0.664
     norm = step_signature(TRUTH, dt)
     sigma = TRUTH[0].noise_density / math.sqrt(dt)
     n = round(WITHIN_S / dt)
