@@ -19,7 +19,6 @@ from scipy.optimize import minimize
 from ...noise.components import RR, Component
 from ...quality import interpolate_missing
 from . import block_sums, whittle
-from .differences import derivative_in_domain
 
 if TYPE_CHECKING:
     from .model import NoiseModel
@@ -111,13 +110,13 @@ def _climb(start: list[Component], stats: CompositeStatistics,
     w = np.maximum(w, 1e-6 * max(float(np.max(w)), 1e-300))
     transform = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ info T = I
     outside = (1e10, np.zeros(x0.size))
-    memo: dict = {}
+    parts = statistics_parts(stats, bp)
 
     def negll(eta: np.ndarray) -> tuple[float, np.ndarray]:
         raw = x0 + transform @ eta
         x = np.clip(raw, lo, hi)
         try:
-            ll, grad = loglik_and_gradient(start, keys, x, stats, bp, memo=memo)
+            ll, grad = loglik_and_gradient(start, keys, x, stats, bp, parts=parts)
         except ValueError:
             return outside
         if not math.isfinite(ll):
@@ -141,13 +140,9 @@ def _shifted(value_gradient: tuple[float, np.ndarray], by: float) -> tuple[float
     return value_gradient[0] - by, value_gradient[1]
 
 
-#: Step [log-parameter] of the central differences of one component's spectrum and sum covariance.
-DIFFERENCE_STEP = 1e-4
-
-
 def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]], x: np.ndarray,
                         stats: CompositeStatistics, bp: whittle.BandedPeriodogram, *,
-                        memo: dict | None = None) -> tuple[float, np.ndarray]:
+                        parts: whittle.ComponentParts | None = None) -> tuple[float, np.ndarray]:
     """ℓ_c with the log-parameters ``keys`` set to ``x``, and its gradient in ``x``.
 
     By the chain rule through S_Δ = Σ_c S_c and γ_D = Σ_c γ_c (c the component of ϑ_j, Σ the block sums' Toeplitz
@@ -155,32 +150,14 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
 
         ∂ℓ_c/∂ϑ_j = Σ_b n_b (Ī_b/S_Δ − 1)/S_Δ · ∂S_c/∂ϑ_j  +  ½ Σ_h tr[(Σ⁻¹DDᵀΣ⁻¹ − Σ⁻¹) T_h] ∂γ_c/∂ϑ_j,
 
-    exact (2·(S_c, γ_c)) for a component's scale, by central differences of :data:`DIFFERENCE_STEP` otherwise.
-    ``memo`` (one dict per ``bp``) caches scale-only components at unit scale. ValueError outside a domain;
-    (−inf, zeros) where S_Δ ≤ 0 or Σ is not positive definite."""
+    each component's (S_c, γ_c) stacked as its part (:meth:`.whittle.ComponentParts.gradient`; ``parts``: one per
+    ``bp``, :func:`statistics_parts`). ValueError outside a domain; (−inf, zeros) where S_Δ ≤ 0 or Σ is not positive
+    definite."""
     current = whittle.with_log_parameters(components, keys, x)
-    lags = block_sums.sum_lags(stats.sums.block, stats.sums.d.size)
-    memo = {} if memo is None else memo
-
-    def computed(c: Component) -> tuple[np.ndarray, np.ndarray]:
-        return (whittle.difference_spectrum([c], bp.omega, stats.dt),
-                block_sums.from_sum_covariance(c.sum_covariance(lags, stats.dt)))
-
-    def parts(c: Component) -> tuple[np.ndarray, np.ndarray]:
-        split = c.scale_only()
-        if split is None:  # its shape moves: entries would pile up
-            return computed(c)
-        scale, fixed = split
-        key = (type(c), fixed)
-        if key not in memo:
-            memo[key] = scale, computed(c)
-        at, (s_c, g_c) = memo[key]
-        ratio = (scale / at) ** 2
-        return s_c * ratio, g_c * ratio
-
+    parts = parts if parts is not None else statistics_parts(stats, bp)
     each = [parts(c) for c in current]
-    s = np.sum([p[0] for p in each], axis=0)
-    gamma = np.sum([p[1] for p in each], axis=0)
+    total = np.sum(each, axis=0)
+    s, gamma = total[: bp.omega.size], total[bp.omega.size:]
     if not np.all(s > 0):
         return -math.inf, np.zeros(x.size)
     whittle_ll = whittle.whittle_loglik(s, bp)
@@ -188,20 +165,14 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
     if blocks is None:
         return -math.inf, np.zeros(x.size)
     block_ll, d_gamma = blocks
-    d_s = (bp.power / s - bp.count) / s
-    grad = np.empty(x.size)
-    for j, (i, name) in enumerate(keys):
-        if name == current[i].scale_name:
-            ds_j, dg_j = 2.0 * each[i][0], 2.0 * each[i][1]
-        else:
-            def moved(h: float, i: int = i, name: str = name, at: float = float(x[j])) -> np.ndarray:
-                return np.concatenate(parts(whittle.with_log_parameters([current[i]], [(0, name)],
-                                                                         np.array([at + h]))[0]))
+    weights = np.concatenate([(bp.power / s - bp.count) / s, d_gamma])
+    return whittle_ll + block_ll, parts.gradient(current, keys, x, each, weights)
 
-            d = derivative_in_domain(moved, DIFFERENCE_STEP, lambda i=i: np.concatenate(each[i]))
-            if d is None:
-                grad[j] = 0.0
-                continue
-            ds_j, dg_j = d[: s.size], d[s.size:]
-        grad[j] = float(d_s @ ds_j) + float(d_gamma @ dg_j)
-    return whittle_ll + block_ll, grad
+
+def statistics_parts(stats: CompositeStatistics, bp: whittle.BandedPeriodogram) -> whittle.ComponentParts:
+    """Each component's share of ℓ_c's statistics: its difference spectrum on ``bp`` and its block sums'
+    autocovariance, stacked."""
+    lags = block_sums.sum_lags(stats.sums.block, stats.sums.d.size)
+    return whittle.ComponentParts(lambda c: np.concatenate([
+        whittle.difference_spectrum([c], bp.omega, stats.dt),
+        block_sums.from_sum_covariance(c.sum_covariance(lags, stats.dt))]))

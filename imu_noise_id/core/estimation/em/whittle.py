@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import minimize
@@ -184,24 +185,80 @@ def with_log_parameters(components: list[Component], keys: list[tuple[int, str]]
     return [type(c)(**p) for c, p in zip(components, params, strict=True)]
 
 
+#: Step [log-parameter] of the central differences of one component's share of a likelihood's statistics.
+DIFFERENCE_STEP = 1e-4
+
+
+@dataclass
+class ComponentParts:
+    """One component's share of a likelihood's statistics (``computed(c)``, an array additive over components), a
+    scale-only component's computed once per shape at one scale and rescaled by scale² (kept per instance: one per set
+    of frequencies or lags)."""
+
+    computed: Callable[[Component], np.ndarray]
+    memo: dict = field(default_factory=dict)
+
+    def __call__(self, c: Component) -> np.ndarray:
+        split = c.scale_only()
+        if split is None:  # its shape moves: entries would pile up
+            return self.computed(c)
+        scale, fixed = split
+        key = (type(c), fixed)
+        if key not in self.memo:
+            self.memo[key] = scale, self.computed(c)
+        at, part = self.memo[key]
+        return part * (scale / at) ** 2
+
+    def gradient(self, current: list[Component], keys: list[tuple[int, str]], x: np.ndarray, each: list[np.ndarray],
+                 weights: np.ndarray) -> np.ndarray:
+        """∂/∂x_j of a likelihood whose derivative in the summed parts Σ_c part(c) is ``weights``, for the
+        log-parameters ``keys`` at ``x`` (``current`` the components there, ``each`` their parts): by the chain rule
+        through the one component c of x_j, exact (2·part(c)) for a component's scale, by central differences of
+        :data:`DIFFERENCE_STEP` otherwise (zero where no step stays inside the component's domain)."""
+        grad = np.empty(x.size)
+        for j, (i, name) in enumerate(keys):
+            if name == current[i].scale_name:
+                grad[j] = 2.0 * float(weights @ each[i])
+                continue
+
+            def moved(h: float, i: int = i, name: str = name, at: float = float(x[j])) -> np.ndarray:
+                return self(with_log_parameters([current[i]], [(0, name)], np.array([at + h]))[0])
+
+            d = derivative_in_domain(moved, DIFFERENCE_STEP, lambda i=i: each[i])
+            grad[j] = 0.0 if d is None else float(weights @ d)
+        return grad
+
+
+def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]], x: np.ndarray,
+                        bp: BandedPeriodogram, parts: ComponentParts) -> tuple[float, np.ndarray]:
+    """:func:`components_loglik` with the log-parameters ``keys`` set to ``x``, and its gradient in ``x``:
+    ∂ℓ/∂ϑ_j = Σ_b (P_b/S_b − n_b)/S_b · ∂S_c/∂ϑ_j (:meth:`ComponentParts.gradient`, ``parts`` the components'
+    :func:`difference_spectrum` on ``bp``). ValueError outside a domain; (−inf, zeros) where S_Δ ≤ 0."""
+    current = with_log_parameters(components, keys, x)
+    each = [parts(c) for c in current]
+    s = np.sum(each, axis=0)
+    if not np.all(s > 0):
+        return -math.inf, np.zeros(x.size)
+    return whittle_loglik(s, bp), parts.gradient(current, keys, x, each, (bp.power / s - bp.count) / s)
+
+
 def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: BandedPeriodogram | None = None,
                 bounds: dict[str, tuple[float, float]] | None = None) -> tuple[float, list[Component]]:
     """(Whittle log-likelihood up to a constant, fitted components) maximised over the log-parameters from ``start``
-    (RR held); ``bounds``: physical range per parameter name (default GM τ from dt/2 to 100 records)."""
+    (RR held) by L-BFGS-B with :func:`loglik_and_gradient`; ``bounds``: physical range per parameter name (default
+    GM τ from dt/2 to 100 records)."""
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([start[i].params()[k] for i, k in keys])
     t_total = y.size * dt
+    parts = ComponentParts(lambda c: difference_spectrum([c], bp.omega, dt))
 
-    def build(x: np.ndarray) -> list[Component]:
-        return with_log_parameters(start, keys, x)
-
-    def negll(x: np.ndarray) -> float:
+    def negll(x: np.ndarray) -> tuple[float, np.ndarray]:
         try:
-            ll = components_loglik(build(x), bp, dt)
+            ll, grad = loglik_and_gradient(start, keys, x, bp, parts)
         except ValueError:
-            return 1e300
-        return 1e300 if ll == -math.inf else -ll
+            return 1e300, np.zeros(x.size)
+        return (1e300, np.zeros(x.size)) if ll == -math.inf else (-ll, -grad)
 
     ranges = bounds or {"tau": (dt / 2.0, 100.0 * t_total)}
     box = []
@@ -211,8 +268,8 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
         else:
             box.append((v - 30.0, v + 30.0))
     x0 = np.clip(x0, [b[0] for b in box], [b[1] for b in box])
-    res = minimize(negll, x0, method="L-BFGS-B", bounds=box, options={"maxiter": 500})
-    return -float(res.fun), build(res.x)
+    res = minimize(negll, x0, jac=True, method="L-BFGS-B", bounds=box, options={"maxiter": 500})
+    return -float(res.fun), with_log_parameters(start, keys, res.x)
 
 
 def whittle_information(components: list[Component], y: np.ndarray, dt: float,
