@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...core.allan import allan_variance, choose_m
+from ...core.allan import AllanResult, allan_variance, choose_m
 from ...core.diagnostics import detectors as det
 from ...core.diagnostics.av_band import model_av_band
 from ...core.diagnostics.av_signatures import detect_av_signatures
@@ -132,12 +132,11 @@ class AxisLoop:
         coef = _coef(fit, exog_names)
         exog_values = {f"{t.effect}{i + 1}": t.describe(coef[s])
                        for i, (t, s) in enumerate(zip(state.exog_terms, slices, strict=True))}
-        residual_data = y - (exog @ coef if exog is not None else 0.0)
-        filled = interpolate_missing(residual_data)
-        # τ up to a tenth of the record (docs/loop.md, "Residuals and error measures")
-        m = choose_m(self.n, "allan", m_max=max(2, self.n // 10))
+        as_recorded = exog is None and not state.flagged.size
+        filled = self.filled if as_recorded else interpolate_missing(y - (exog @ coef if exog is not None else 0.0))
+        av = self.record_allan if as_recorded else self.allan(filled)
+        m = self.av_factors
         av_model = np.asarray(fit.theoretical_allan_variance(m * self.dt), dtype=float)
-        av = allan_variance(filled, self.dt, m=m, alpha=0)
         av_data = av.variance[:, 0]
         # the AV's intervals under the fitted model, with its exact EDF (docs/loop.md, "Residuals and error measures")
         av_ci = model_av_band(av_data, list(fit.components), m, filled.size, self.dt)
@@ -163,6 +162,29 @@ class AxisLoop:
                          av_ci=av_ci, av_model=av_model, exog_values=exog_values,
                          whitening=whitening,
                          residual_spectra=Deferred(functools.partial(residual_spectra, e, self.dt)))
+
+    @functools.cached_property
+    def av_factors(self) -> np.ndarray:
+        """The averaging factors m of the diagnoses' AV: τ = m·dt up to a tenth of the record (docs/loop.md,
+        "Residuals and error measures")."""
+        return choose_m(self.n, "allan", m_max=max(2, self.n // 10))
+
+    def allan(self, filled: np.ndarray) -> AllanResult:
+        """The overlapping AV at :attr:`av_factors` of a residual ``filled`` (its missing samples interpolated)."""
+        return allan_variance(filled, self.dt, m=self.av_factors, alpha=0)
+
+    @functools.cached_property
+    def filled(self) -> np.ndarray:
+        """The record with its missing samples interpolated, a read-only copy: the residual of every state without
+        regressors or removed samples, shared by their diagnoses."""
+        filled = np.array(interpolate_missing(self.y), dtype=float)
+        filled.flags.writeable = False
+        return filled
+
+    @functools.cached_property
+    def record_allan(self) -> AllanResult:
+        """:meth:`allan` of :attr:`filled`, computed once for the diagnoses that share it."""
+        return self.allan(self.filled)
 
     def detect(self, e: np.ndarray, whitening: WhiteningFilter, structure: tuple[str, ...], regressors: tuple[str, ...],
                residual: np.ndarray, *, tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
