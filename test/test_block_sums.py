@@ -95,3 +95,22 @@ def test_fit_maximises_and_recovers_the_long_tau_parameters():
     assert ll >= bs.loglik(truth, sums) - 1e-6 and ll >= bs.loglik(start, sums)
     assert fitted[2].bias_instability == pytest.approx(1e-4, rel=0.35)
     assert fitted[1] == start[1] and fitted[2].tau_min == 0.2  # held; the band is structure, not a parameter
+
+
+@pytest.mark.parametrize("memory", [0.7, 12.0, 200.0])
+def test_toeplitz_gradient_is_the_trace_formula_written_out(memory):
+    # ½ tr[(Σ⁻¹xxᵀΣ⁻¹ − Σ⁻¹) T_h] with Σ⁻¹ formed densely and T_h summed entry by entry, and ℓ against scipy's
+    # Gaussian density; the long memory makes Σ ill-conditioned (cond ~ 1e5)
+    rng = np.random.default_rng(3)
+    m = 60
+    gamma = np.exp(-np.arange(m) / memory)
+    gamma[0] += 1e-4
+    cov = toeplitz(gamma)
+    x = rng.multivariate_normal(np.zeros(m), cov)
+    ll, grad = bs.toeplitz_loglik_and_gradient(gamma, x)
+    assert ll == pytest.approx(multivariate_normal(cov=cov).logpdf(x), rel=1e-10)
+    inverse = np.linalg.inv(cov)
+    a = np.outer(inverse @ x, inverse @ x) - inverse
+    expected = [0.5 * sum(a[i, j] for i in range(m) for j in range(m) if abs(i - j) == h) for h in range(m)]
+    assert grad == pytest.approx(expected, rel=1e-7, abs=1e-9 * np.abs(expected).max())
+    assert bs.toeplitz_loglik_and_gradient(np.array([1.0, 2.0, 0.0]), x[:3]) is None  # not positive definite
