@@ -141,14 +141,25 @@ def _computed_sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
 
 
 def _difference_covariance(k: np.ndarray, ell: np.ndarray, m: int) -> np.ndarray:
-    """c(l) at lags ``ell`` from ``k`` = K(0, 1, …) (even) for m-sample means."""
+    """c(l) at lags ``ell`` = 0, 1, … (an ``arange``) from ``k`` = K(0, 1, …) (even) for m-sample means."""
     size = ell.size
     head = min(size, 2 * m)
     c = np.empty(size)
-    c[:head] = sum(v * k[np.abs(ell[:head] + j * m)] for v, j in zip(_V, range(-2, 3), strict=True))
+    c[:head] = sum(v * _even_window(k, j * m, head) for v, j in zip(_V, range(-2, 3), strict=True))
     if size > head:
         c[head:] = sum(v * k[head + j * m: size + j * m] for v, j in zip(_V, range(-2, 3), strict=True))
     return c / float(m) ** 2
+
+
+def _even_window(k: np.ndarray, shift: int, size: int) -> np.ndarray:
+    """K(|l + shift|) for l = 0 … size − 1 from ``k`` = K(0, 1, …), K even: slices, no index array."""
+    if shift >= 0:
+        return k[shift: shift + size]
+    back = min(size, -shift)  # l < −shift: K(−shift − l), descending
+    window = np.empty(size)
+    window[:back] = k[-shift - back + 1: -shift + 1][::-1]
+    window[back:] = k[: size - back]
+    return window
 
 
 def model_av_band(av_data: np.ndarray, components: list[Component], m: np.ndarray, n: int, dt: float, *,
