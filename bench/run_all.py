@@ -113,6 +113,7 @@ LONG: list[tuple[list[str], str]] = [
 #: keep no output: docs/ states what each found and names the script that reproduces it.
 STUDIES: list[tuple[list[str], str]] = [
     (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "studies/probe_k_information.txt"),
+    (["studies/random_walk_bound.py"], "studies/probe_k_information.txt"),
     (["studies/bench_sin_regressors.py"], "studies/likelihood_speed.txt"),
     (["studies/composite_gap.py"], "studies/composite_gap.txt"),
     (["studies/watch_power_bound.py"], "bench_watch.txt"),

@@ -53,16 +53,18 @@ def fourier_omega(n: int) -> np.ndarray:
     return 2.0 * math.pi * np.arange(1, (m - 1) // 2 + 1) / m
 
 
-def fisher_information(components: list[Component], omega: np.ndarray, step: float = 1e-5) -> np.ndarray:
-    """Σ_k g_k g_kᵀ with g_k = ∂ln S(ω_k)/∂θ in the log-parameters (central differences of ln S)."""
+def fisher_information(components: list[Component], omega: np.ndarray, step: float = 1e-5,
+                       dt: float = DT) -> np.ndarray:
+    """Σ_k g_k g_kᵀ with g_k = ∂ln S(ω_k)/∂θ in the log-parameters (central differences of ln S) at period ``dt``
+    [s]."""
     par = Parameterisation.of(components)
     x0 = par.to_theta(components)
     grads = []
     for j in range(x0.size):
         e = np.zeros_like(x0)
         e[j] = step
-        up = np.log(difference_spectrum(par.to_components(x0 + e), omega, DT))
-        down = np.log(difference_spectrum(par.to_components(x0 - e), omega, DT))
+        up = np.log(difference_spectrum(par.to_components(x0 + e), omega, dt))
+        down = np.log(difference_spectrum(par.to_components(x0 - e), omega, dt))
         grads.append((up - down) / (2.0 * step))
     g = np.array(grads)
     return g @ g.T
