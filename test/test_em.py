@@ -389,7 +389,8 @@ def test_the_observed_information_of_a_long_walk_agrees_with_the_likelihood_curv
 
 
 def test_the_transition_terms_block_by_block_equal_the_dense_products():
-    """em.transition_terms forms Φ x_{t−1} per diagonal block of Φ; against S, C from the dense Φ on smoothed states."""
+    """em.transition_terms forms a span's block of S, C with Φ x_{t−1} per diagonal block of Φ; against the blocks of
+    S, C from the dense Φ on smoothed states."""
     rng = np.random.default_rng(4)
     phi = np.zeros((5, 5))
     phi[0, 0] = 0.99
@@ -402,9 +403,12 @@ def test_the_transition_terms_block_by_block_equal_the_dense_products():
     xs = rng.standard_normal((5, n))
     sum_p, p_first, sum_lag = (np.diag(rng.uniform(1.0, 2.0, 5)) for _ in range(3))
     stats = kalman.SmootherStats(xs, sum_p, p_first, np.eye(5), sum_lag, sum_p, 0.0, np.ones(n, bool))
-    S, C = em.transition_terms(stats, phi, u)
     d = xs[:, 1:] - phi @ xs[:, :-1] - u[:, None]
     p_next, p_prev = sum_p - p_first, sum_p - np.eye(5)
-    np.testing.assert_allclose(S, d @ d.T + p_next - sum_lag @ phi.T - phi @ sum_lag.T + phi @ p_prev @ phi.T,
-                               rtol=1e-12)
-    np.testing.assert_allclose(C, d @ xs[:, :-1].T + sum_lag - phi @ p_prev, rtol=1e-12)
+    dense_s = d @ d.T + p_next - sum_lag @ phi.T - phi @ sum_lag.T + phi @ p_prev @ phi.T
+    dense_c = d @ xs[:, :-1].T + sum_lag - phi @ p_prev
+    # a component's span (the gradient's unit), one holding two of Φ's blocks, and the whole state
+    for span in [slice(0, 1), slice(1, 3), slice(3, 5), slice(1, 5), slice(0, 5)]:
+        S, C = em.transition_terms(stats, phi, u, span)
+        np.testing.assert_allclose(S, dense_s[span, span], rtol=1e-12)
+        np.testing.assert_allclose(C, dense_c[span, span], rtol=1e-12)

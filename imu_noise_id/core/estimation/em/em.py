@@ -13,7 +13,7 @@ from ... import kalman
 from ...errors import InputError
 from ...kalman import riccati
 from ...kalman.common import check_data
-from ...kalman.statespace import StateSpace
+from ...kalman.statespace import StateSpace, state_span
 from ...noise.components import PHI_RANGE
 
 #: Floor of free process-noise variances relative to R (keeps Q invertible in the Φ and u updates).
@@ -175,18 +175,30 @@ def diagonal_blocks(m: np.ndarray) -> list[slice]:
     return out
 
 
-def transition_terms(st: kalman.SmootherStats, phi: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """S(Φ, u) of :func:`transition_residual` and C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ], the means' part
-    from the smoothed increments x_t^N − Φ x_{t−1}^N − u, not from differences of sums (docs/em.md, "Why: EM")."""
-    X = st.xs
+def transition_terms(st: kalman.SmootherStats, phi: np.ndarray, u: np.ndarray,
+                     span: slice) -> tuple[np.ndarray, np.ndarray]:
+    """The diagonal block on the states ``span`` of S(Φ, u) of :func:`transition_residual` and of
+    C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ], the means' part from the smoothed increments
+    x_t^N − Φ x_{t−1}^N − u, not from differences of sums (docs/em.md, "Why: EM"). Φ must not couple ``span`` to the
+    other states (a component's block): then the block needs that block's states alone, O(|span|² N)."""
+    X = st.xs[span]
     prev = X[:, :-1]
-    d = X[:, 1:] - u[:, None]
-    for span in diagonal_blocks(phi):  # Φ x_{t−1} block by block: Φ is block-diagonal, one block per component
-        d[span] -= phi[span, span] @ prev[span]
-    p_next, p_prev = st.sum_p - st.p_first, st.sum_p - st.p_last
-    S = d @ d.T + p_next - st.sum_lag @ phi.T - phi @ st.sum_lag.T + phi @ p_prev @ phi.T
-    C = d @ prev.T + st.sum_lag - phi @ p_prev
+    d = X[:, 1:] - u[span, None]
+    phi_b = phi[span, span]
+    for sub in diagonal_blocks(phi_b):  # Φ x_{t−1} block by block within the component (a ladder's diagonal Φ)
+        d[sub] -= phi_b[sub, sub] @ prev[sub]
+    lag = st.sum_lag[span, span]
+    p_next = (st.sum_p - st.p_first)[span, span]
+    p_prev = (st.sum_p - st.p_last)[span, span]
+    S = d @ d.T + p_next - lag @ phi_b.T - phi_b @ lag.T + phi_b @ p_prev @ phi_b.T
+    C = d @ prev.T + lag - phi_b @ p_prev
     return S, C
+
+
+def _component_spans(model: StateSpace) -> list[slice]:
+    """The states of each component of ``model`` with states (all states as one span for a model without blocks)."""
+    spans = [state_span(b.states) for b in model.blocks if b.states]
+    return spans or [slice(0, model.n_states)]
 
 
 @dataclass(frozen=True)
@@ -198,7 +210,9 @@ class MatrixScore:
         ∂Q/∂R = −½(N_obs/R − W/R²),   ∂Q/∂Q = −½((N−1) Q⁻¹ − Q⁻¹ S Q⁻¹),   ∂Q/∂Φ = Q⁻¹ C
 
     (W: :func:`_measurement_sse`; S, C: :func:`transition_terms`; E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ], its steady-mode share
-    by :class:`InitialTermGradient`). H is held fixed."""
+    by :class:`InitialTermGradient`). H is held fixed. Φ and Q are block-diagonal by component, and a parameter moves
+    its own component's block only: the transition terms are computed on those blocks (:meth:`directional` reads
+    nothing else), zero between components."""
 
     g_phi: np.ndarray
     g_q: np.ndarray
@@ -217,9 +231,11 @@ class MatrixScore:
         if np.any(nz):
             q_inv = np.zeros((p, p))
             q_inv[np.ix_(nz, nz)] = np.linalg.inv(model.q[np.ix_(nz, nz)])
-            S, cross = transition_terms(stats, model.phi, model.u)
-            g_phi = q_inv @ cross
-            g_q = -0.5 * ((s.n - 1) * q_inv - q_inv @ S @ q_inv)
+            for span in _component_spans(model):  # Φ and Q are block-diagonal by component
+                S, cross = transition_terms(stats, model.phi, model.u, span)
+                q_b = q_inv[span, span]
+                g_phi[span, span] = q_b @ cross
+                g_q[span, span] = -0.5 * ((s.n - 1) * q_b - q_b @ S @ q_b)
         initial = InitialTermGradient.at(model, s).sensitivity
         if initial is not None:
             g_phi, g_q, g_r = g_phi + initial.g_phi, g_q + initial.g_q, g_r + initial.g_r
