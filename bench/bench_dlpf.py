@@ -16,6 +16,7 @@ kept the model's N, the overbound's N that the rule before pasted is printed bes
     .venv/bin/python bench/bench_dlpf.py --rates 400 --seeds 1
     .venv/bin/python bench/bench_dlpf.py --rates 1000 --seeds 1
     .venv/bin/python bench/bench_dlpf.py --rates 400 --baseline ../baseline   # side by side with another checkout
+    .venv/bin/python bench/bench_dlpf.py --rates 1000 --cutoffs 5 --orders 2 --variants RW --seeds 10   # one cell
 """
 
 from __future__ import annotations
@@ -85,6 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--minutes", type=float, default=5.0)
     ap.add_argument("--orders", type=int, nargs="+", default=list(ORDERS))
     ap.add_argument("--rates", type=float, nargs="+", default=list(RATES))
+    ap.add_argument("--cutoffs", type=float, nargs="+", default=list(CUTOFFS), help="only these cells' cutoffs [Hz]")
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--baseline", type=Path, action="append", default=[], help="another checkout (repeatable)")
     ap.add_argument("--resume", type=Path, default=None,
@@ -103,7 +105,8 @@ def main(argv: list[str] | None = None) -> int:
           f"the passband level sqrt(N^2 + floor^2) = {passband:.4g}")
     rows: dict[str, list[dict]] = {name: [] for name, _ in sources}
     with tempfile.TemporaryDirectory() as tmp:
-        for (rate, cutoff), variant in ((c, v) for c in CELLS if c[0] in args.rates for v in args.variants):
+        for (rate, cutoff), variant in ((c, v) for c in CELLS if c[0] in args.rates and c[1] in args.cutoffs
+                                        for v in args.variants):
             k_true = VARIANTS[variant][1]
             for order in args.orders:
                 for seed in range(args.first_seed, args.first_seed + args.seeds):
@@ -138,6 +141,9 @@ def main(argv: list[str] | None = None) -> int:
               f"passband level) on {sum(x['kept'] for x in r)}; N's interval holds it on "
               f"{sum(x['n_held'] for x in r)}; "
               f"K's interval holds the truth on {sum(x['k_held'] for x in r)}")
+        errors = np.array([x["err"] for x in r])
+        print(f"  N's error against the passband level over these {errors.size} records: mean "
+              f"{100 * errors.mean():+.2f} %, sd {100 * errors.std(ddof=1) if errors.size > 1 else math.nan:.2f} %")
         cells = sorted({x["cell"] for x in r if "cell" in x})
         short = [c for c in cells if sum(x["k_held"] for x in r if x.get("cell") == c)
                  < 0.9 * sum(x.get("cell") == c for x in r)]
