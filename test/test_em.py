@@ -319,10 +319,9 @@ def test_the_score_at_a_white_noise_of_exactly_zero_is_a_domain_error():
     model = ss.from_components([WN(1e-4), DLPF(1e-3, 12.0)], dt)
     z = np.ones((y.size, 1))
     _, _, stats = kalman.profile_and_smooth(model, y, z)
-    sums = em.sums_from_stats(stats, em.DataSums.of(y, z))
     zero = ss.from_components([WN(0.0), DLPF(1e-3, 12.0)], dt)
     with pytest.raises(ValueError, match="white-noise variance is zero"):
-        em.MatrixScore.at(zero, sums, stats)
+        em.MatrixScore.at(zero, stats, em.DataSums.of(y, z))
 
 
 def test_a_fit_at_given_values_is_scored_by_one_filter_pass(monkeypatch):
@@ -412,3 +411,18 @@ def test_the_transition_terms_block_by_block_equal_the_dense_products():
         S, C = em.transition_terms(stats, phi, u, span)
         np.testing.assert_allclose(S, dense_s[span, span], rtol=1e-12)
         np.testing.assert_allclose(C, dense_c[span, span], rtol=1e-12)
+
+
+def test_the_scores_measurement_sse_from_the_smoothed_residuals_equals_the_e_step_sums():
+    """MatrixScore's W formed sample by sample (em.smoothed_measurement_sse) against the M-step's expansion in the
+    E-step sums (em._measurement_sse), with gaps in the record and a bias and ramp among the regressors."""
+    dt = 0.01
+    y = simulate_sum([WN(1e-3), GM(tau=2.0, sigma=1e-3), RW(1e-5)], 4000, dt, np.random.default_rng(5))
+    y[100:140] = np.nan
+    model = ss.from_components([WN(1e-3), GM(tau=2.0, sigma=1e-3), RW(1e-5)], dt)
+    z = np.column_stack([np.ones(y.size), dt * np.arange(y.size)])
+    model.b = np.array([3e-4, -2e-5])
+    stats = kalman.smooth(model, y, z)
+    data = em.DataSums.of(y, z)
+    assert em.smoothed_measurement_sse(model, stats, data) == pytest.approx(
+        em._measurement_sse(model, em.sums_from_stats(stats, data)), rel=1e-9)

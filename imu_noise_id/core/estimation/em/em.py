@@ -106,6 +106,15 @@ def _measurement_sse(model: StateSpace, s: Sums) -> float:
     )
 
 
+def smoothed_measurement_sse(model: StateSpace, stats: kalman.SmootherStats, data: DataSums) -> float:
+    """:func:`_measurement_sse` from the smoother's output: Σ_obs (y_t − H x_t^N − b z_t)² + H (Σ_obs P_t^N) Hᵀ, the
+    residuals formed sample by sample (O(pN), no p × p sums of x_t^N x_t^{Nᵀ} and no cancellation between them)."""
+    h = model.h
+    fitted = h @ stats.xs if data.all_observed else h @ stats.xs[:, data.observed]
+    residual = data.y_obs - fitted - model.b @ data.zt_obs
+    return float(residual @ residual + h @ stats.sum_p_obs @ h)
+
+
 def mstep(model: StateSpace, s: Sums) -> StateSpace:
     """One sweep of the constrained updates of paper 000 §3.3 (u, μ, Φ, H, Q, then b and R); free diagonal Φ clipped
     to ``PHI_RANGE``, free Q variances ≥ :data:`Q_FLOOR_REL`·R."""
@@ -219,12 +228,13 @@ class MatrixScore:
     g_r: float
 
     @classmethod
-    def at(cls, model: StateSpace, s: Sums, stats: kalman.SmootherStats) -> MatrixScore:
-        """The gradient at θ_E's ``model`` from its E-step sums and smoother output; ValueError when R = 0."""
+    def at(cls, model: StateSpace, stats: kalman.SmootherStats, data: DataSums) -> MatrixScore:
+        """The gradient at θ_E's ``model`` from its smoother output ``stats`` on ``data``; ValueError when R = 0."""
         r = float(model.r)
         if not r * r > 0.0:  # a white noise driven to (numerically) zero beside a filter that carries it: no score
             raise ValueError("the white-noise variance is zero: the likelihood's gradient is not defined there")
-        g_r = -0.5 * (s.n_obs / r - _measurement_sse(model, s) / r**2)
+        n_obs = data.y_obs.size
+        g_r = -0.5 * (n_obs / r - smoothed_measurement_sse(model, stats, data) / r**2)
         p = model.n_states
         g_phi, g_q = np.zeros((p, p)), np.zeros((p, p))
         nz = np.diag(model.q) > 0
@@ -235,8 +245,8 @@ class MatrixScore:
                 S, cross = transition_terms(stats, model.phi, model.u, span)
                 q_b = q_inv[span, span]
                 g_phi[span, span] = q_b @ cross
-                g_q[span, span] = -0.5 * ((s.n - 1) * q_b - q_b @ S @ q_b)
-        initial = InitialTermGradient.at(model, s).sensitivity
+                g_q[span, span] = -0.5 * ((stats.xs.shape[1] - 1) * q_b - q_b @ S @ q_b)
+        initial = InitialTermGradient.at(model, stats.xs[:, 0], stats.p_first).sensitivity
         if initial is not None:
             g_phi, g_q, g_r = g_phi + initial.g_phi, g_q + initial.g_q, g_r + initial.g_r
         return cls(g_phi, g_q, g_r)
@@ -256,14 +266,14 @@ class InitialTermGradient:
     sensitivity: riccati.SteadyCovarianceSensitivity | None
 
     @classmethod
-    def at(cls, model: StateSpace, s: Sums) -> InitialTermGradient:
-        """The linearisation at θ_E's ``model`` with its E-step sums ``s``."""
+    def at(cls, model: StateSpace, x1: np.ndarray, p1: np.ndarray) -> InitialTermGradient:
+        """The linearisation at θ_E's ``model`` with its smoothed first state ``x1`` = x_1^N and ``p1`` = P_1^N."""
         if model.n_states == 0 or model.sigma_mode != "steady":
             return cls(None)
         sigma = model.initial_covariance()
-        d1 = s.x1 - model.mu
+        d1 = x1 - model.mu
         nz = np.diag(sigma) > 0
-        e1 = (s.p1 + np.outer(d1, d1))[np.ix_(nz, nz)]
+        e1 = (p1 + np.outer(d1, d1))[np.ix_(nz, nz)]
         W = np.zeros_like(sigma)
         if np.any(nz):
             inv = np.linalg.inv(sigma[np.ix_(nz, nz)])

@@ -125,7 +125,7 @@ def loglik_grad_profile(
     (:meth:`Parameterisation.block_derivative`)."""
     components = par.to_components(theta, base)
     prof, model, stats = kalman.profile_and_smooth(with_components(base, components), y, z)
-    score = em.MatrixScore.at(model, em.sums_from_stats(stats, data or em.DataSums.of(y, z)), stats)
+    score = em.MatrixScore.at(model, stats, data or em.DataSums.of(y, z))
     grad = np.empty(theta.size)
     for k in range(theta.size):
         i = par.entries[k][0]
