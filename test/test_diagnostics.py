@@ -440,3 +440,21 @@ def test_a_line_refined_past_the_nyquist_frequency_is_sized_in_the_last_bin():
                         log10_p=-300.0, n_bins=n // 2)
     found = _sinusoid(e, dt, WhiteningFilter.from_components([WN(1.0)], dt), peak, alpha=0.01)
     assert found.significant and found.params["frequency"] <= 0.5 / dt
+
+
+def test_the_whitened_constant_is_the_whitened_ones_kept_per_length():
+    """Every score test projects out the whitened bias; the filter whitens it once per length (read-only), keeps the
+    latest few lengths, and a copy made for one set of detectors starts without the original's."""
+    from dataclasses import replace
+
+    from imu_noise_id.core.diagnostics import whitening as wh
+
+    filt = WhiteningFilter.from_components([WN(1e-3), GM(tau=2.0, sigma=1e-3), RW(1e-5)], 0.01)
+    constant = filt.whitened_constant(5000)
+    np.testing.assert_array_equal(constant, filt.whiten(np.ones(5000)))
+    assert filt.whitened_constant(5000) is constant and not constant.flags.writeable
+    copy = replace(filt)
+    assert copy.whitened_constant(5000) is not constant
+    for n in range(100, 100 + wh.CONSTANTS_KEPT):
+        filt.whitened_constant(n)
+    assert len(filt._constants) == wh.CONSTANTS_KEPT and 5000 not in filt._constants

@@ -121,7 +121,7 @@ def _sinusoid(e: np.ndarray, dt: float, whitening: WhiteningFilter, peak: Spectr
                                 f"median floor at {peak.frequency:.5g} Hz (threshold {s_star / math.log(2):.1f}× "
                                 f"over {peak.n_bins} bins)")
     t = np.arange(np.asarray(e).size) * dt
-    basis = ScoreBasis.of(e, whitening.whiten(np.ones(t.size)))
+    basis = ScoreBasis.of(e, whitening.whitened_constant(t.size))
 
     def test_at(f: float) -> ScoreTest:
         cols = np.column_stack([np.sin(2 * math.pi * f * t), np.cos(2 * math.pi * f * t)])
@@ -157,7 +157,7 @@ def detect_temperature(e: np.ndarray, temperature: np.ndarray, whitening: Whiten
     if np.ptp(temp) <= 0:
         raise ValueError("temperature is constant: no thermal coefficient can be identified")
     x = temp - temp.mean()
-    st = score_test(e, whitening.whiten(x), whitening.whiten(np.ones(x.size)))
+    st = score_test(e, whitening.whiten(x), whitening.whitened_constant(x.size))
     z_star = float(stats.norm.isf(alpha / 2))
     t_abs = math.sqrt(st.statistic)
     coef = float(st.coef[0])
@@ -174,7 +174,7 @@ def detect_ramp(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: 
     """A rate ramp (drift): score test of a whitened ramp regressor t, the constant a nuisance."""
     n = np.asarray(e).size
     t = np.arange(n) * dt
-    st = score_test(e, whitening.whiten(t - t.mean()), whitening.whiten(np.ones(n)))
+    st = score_test(e, whitening.whiten(t - t.mean()), whitening.whitened_constant(n))
     z_star = float(stats.norm.isf(alpha / 2))
     t_abs = math.sqrt(st.statistic)
     slope = float(st.coef[0])
@@ -192,7 +192,7 @@ def step_scan(e: np.ndarray, whitening: WhiteningFilter, min_segment: int) -> np
     constant s projected out: T_k = (c_k − c_0 a_k/‖s‖²)/√(‖s_{0..n−k−1}‖² − a_k²/‖s‖²), c = e ⋆ s, a = s ⋆ s."""
     e = np.nan_to_num(np.asarray(e, dtype=float), nan=0.0)
     n = e.size
-    shifted = ShiftedStep.of(whitening.whiten(np.ones(n)))
+    shifted = ShiftedStep.of(whitening.whitened_constant(n))
     a, s2, tail = shifted.a, shifted.s2, shifted.tail
     c = np.fft.irfft(np.fft.rfft(e, shifted.size) * np.conj(shifted.fs), shifted.size)[:n]
     num = c - c[0] * a / s2
@@ -230,7 +230,7 @@ def detect_step(e: np.ndarray, dt: float, whitening: WhiteningFilter, *, alpha: 
         log10_p = math.log10(max(tail.sf(t_max), 1e-300))
         multiplicity = f"the maximum over {n_scan} correlated positions"
     step = (np.arange(n) >= k).astype(float)
-    st = score_test(e, whitening.whiten(step), whitening.whiten(np.ones(n)))
+    st = score_test(e, whitening.whiten(step), whitening.whitened_constant(n))
     size = float(st.coef[0])
     return Finding(
         effect="STEP", detector="step_scan", statistic=t_max, threshold=z_star, log10_p=log10_p, level=alpha,

@@ -103,7 +103,7 @@ class StepScanTail:
     @classmethod
     def of(cls, whitening: WhiteningFilter, n: int, min_segment: int) -> StepScanTail:
         """The tail for ``n`` samples whitened by ``whitening``."""
-        rho = step_scan_neighbour_correlation(whitening.whiten(np.ones(n)), min_segment)
+        rho = step_scan_neighbour_correlation(whitening.whitened_constant(n), min_segment)
         return cls(int(n), int(min_segment), rho)
 
     def sf(self, b: float) -> float:

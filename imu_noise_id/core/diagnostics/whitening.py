@@ -6,7 +6,7 @@ samples (dropped); RR's states left out."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import linalg, signal
@@ -57,12 +57,19 @@ def _steady_state_p(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> 
     return p * scale
 
 
+#: Lengths whose whitened constant a :class:`WhiteningFilter` keeps (the record's, or the watch's few window lengths).
+CONSTANTS_KEPT = 4
+
+
 @dataclass(frozen=True)
 class WhiteningFilter:
     """Steady-state innovation filter x → x̃ = x_t − H x̂_{t|t−1} as ``sos``, ``innovation_variance`` S [u²]."""
 
     sos: np.ndarray
     innovation_variance: float
+    #: :meth:`whitened_constant` by length, the latest :data:`CONSTANTS_KEPT` (a copy made by ``dataclasses.replace``
+    #: starts empty)
+    _constants: dict[int, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def from_components(cls, components: list[Component], dt: float) -> WhiteningFilter:
@@ -87,6 +94,17 @@ class WhiteningFilter:
         """Standardised innovations x̃ / √S of regressor column(s) ``x`` ((N,) or (N, k)), zero initial state."""
         x = np.asarray(x, dtype=float)
         return signal.sosfilt(self.sos, x, axis=0) / math.sqrt(self.innovation_variance)
+
+    def whitened_constant(self, n: int) -> np.ndarray:
+        """:meth:`whiten` of ``n`` ones (the bias every score test projects out), computed once per length and kept
+        for the latest :data:`CONSTANTS_KEPT` lengths (read-only, shared by the tests that ask for it)."""
+        if n not in self._constants:
+            if len(self._constants) >= CONSTANTS_KEPT:
+                del self._constants[next(iter(self._constants))]
+            constant = self.whiten(np.ones(n))
+            constant.flags.writeable = False
+            self._constants[n] = constant
+        return self._constants[n]
 
 
 @dataclass(frozen=True)

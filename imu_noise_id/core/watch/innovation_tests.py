@@ -30,7 +30,7 @@ def reference_innovations(y: np.ndarray, whitening: WhiteningFilter) -> np.ndarr
     first = y[np.isfinite(y)][0]
     e = whitening.whiten(np.nan_to_num(y - first, nan=0.0))
     # the level's GLS coefficient removed (why: docs/analysis.md, "Why the step and line tests remove the level first")
-    constant = whitening.whiten(np.ones(e.size))
+    constant = whitening.whitened_constant(e.size)
     e = e - constant * (float(constant @ e) / float(constant @ constant))
     # clipped as the noise level's pairs are (why: docs/analysis.md, "Why the noise-level test caps a pair …")
     e = np.clip(e, -SPIKE_Z, SPIKE_Z)

@@ -192,6 +192,7 @@ class AxisLoop:
         """Every detector on the standardized innovations ``e`` of a fit of ``structure`` with the regressor effects
         ``regressors`` (``residual``: the data less the regressors, gaps filled; the AV readings at ``tau``)."""
         a = self.alpha
+        whitening = replace(whitening)  # its whitened constant kept for these detectors only, not with the diagnosis
         found = [det.detect_outliers(e, alpha=a), *self.detect_line(e, whitening, residual),
                  det.detect_step(e, self.dt, whitening, alpha=a), det.detect_correlation(e, self.dt, alpha=a,
                                                                                         lags=self.lags)]
