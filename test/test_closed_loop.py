@@ -5,13 +5,16 @@ nothing (false-alarm rate measured over seeded runs). Records are short (200 s a
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from imu_noise_id.core.diagnostics import detectors as det
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.noise.components import GM, RR, RW, WN, simulate_sum
 from imu_noise_id.pipelines.loop import align_temperature, run_closed_loop
+from imu_noise_id.pipelines.loop.steps import AxisLoop
 
 DT = 0.01
 N = 20000
@@ -143,3 +146,20 @@ def test_bad_input():
         run_closed_loop(np.zeros(2000), DT, START, temperature=np.zeros(10))
     with pytest.raises(InputError, match="increasing"):
         align_temperature(np.arange(3.0), np.array([0.0, 0.0]), np.array([1.0, 2.0]))
+
+
+def test_no_diagnosis_keeps_a_whitened_constant():
+    """The score tests' whitened constant (N floats) is kept by the filter that whitened it; the loop's detectors and
+    its re-measure of a step's evidence work on copies, so no step's diagnosis carries one into the loop's result."""
+    y = _base(5)
+    y[12000:] += 4e-3
+    r = run_closed_loop(y, DT, START)
+    assert _added(r) == ["STEP"]
+    assert all(not s.diagnosis.whitening._constants for s in r.steps)
+    # the re-measure of a finding's evidence (a trial's, or a kept step's) leaves the diagnosis's filter as it was
+    diag = r.final.diagnosis
+    loop = AxisLoop(y, DT, None, alpha=det.ALPHA, lags=20, outliers="impute")
+    copy = replace(diag.whitening)
+    for f in (det.detect_ramp(diag.innovations, DT, copy), det.detect_step(diag.innovations, DT, copy)):
+        loop.targeted_statistic(f, diag)
+    assert not diag.whitening._constants

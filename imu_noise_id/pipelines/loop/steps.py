@@ -99,7 +99,7 @@ class AxisLoop:
     @functools.cached_property
     def statistics(self) -> screen.Statistics:
         """The record's screening statistics (:mod:`~imu_noise_id.core.estimation.em.screen`), computed once."""
-        return screen.Statistics.of(interpolate_missing(self.y), self.dt)
+        return screen.Statistics.of(self.filled, self.dt)
 
     def screen_reference(self, state: LoopState, diag: Diagnosis) -> screen.Reference | None:
         """The fit of ``diag`` on the screening statistics; None below ``screen.MIN_SAMPLES`` samples or with
@@ -394,7 +394,7 @@ class AxisLoop:
     def targeted_statistic(self, f: det.Finding, diag: Diagnosis) -> float:
         """The statistic of the signature ``f`` targeted, re-measured at the same place on the new residuals (a
         whole-record test, and the joint search's innovation hump, run again)."""
-        e, w = diag.innovations, diag.whitening
+        e, w = diag.innovations, replace(diag.whitening)  # as in detect: no whitened constant kept with the diagnosis
         rerun = {
             "temperature_score": lambda: det.detect_temperature(e, self.temperature, w, alpha=f.level),
             "ramp_score": lambda: det.detect_ramp(e, self.dt, w, alpha=f.level),
