@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from imu_noise_id.core.allan import allan_variance
+from imu_noise_id.core.estimation.em import screen
 from imu_noise_id.core.estimation.em.model import NoiseModel
 from imu_noise_id.core.estimation.em.screen import Screen
 from imu_noise_id.core.estimation.em.selection import SelectionResult, select_model
@@ -141,3 +142,24 @@ def test_a_candidate_screened_out_is_read_at_the_screens_fit() -> None:
     screened = readings["WN+GM+RW"]
     assert screened.delta_aic == 0.0 and screened.delta_bic == pytest.approx(2 * math.log(n) - 20.0)
     assert screened.random_walk == pytest.approx(2e-5) and screened.ci95[0] < 2e-5 < screened.ci95[1]
+
+
+def test_a_screened_candidate_reads_k_relative_to_the_statistics_reading_of_its_reference() -> None:
+    """1 h of WN + RW at 200 Hz: the banded periodogram reads the walk at 1.7x the exact fit's K (3.32e-5 against
+    1.93e-5), and WN+GM+RW screened from the selection's start gains nothing over WN+RW there; read at the screen's
+    own K it widened the pasted K's interval to 2x the truth, a difference between statistics, not structures."""
+    n, dt = 720_000, 1.0 / 200.0
+    y = simulate_sum([WN(5e-4), RW(K_TRUE)], n, dt, np.random.default_rng([0, 60, 2]))
+    exact = (WN(5.0047e-4), RW(1.9277e-5))  # the exact WN+RW fit of this record
+    stats = screen.Statistics.of(y, dt)
+    reference = screen.Reference.fit(list(exact), stats)
+    start = [WN(5.0036e-4), GM(tau=6.886e-3, sigma=5.40e-5), RW(3.318e-5)]  # the selection's start for WN+GM+RW
+    verdict = screen.screen(reference, start, stats)
+    assert record_walk(list(verdict.components), n * dt) > 1.5 * 1.9277e-5  # the statistic's own reading
+    winner = SimpleNamespace(components=exact, bic=0.0, aic=0.0, converged=True)
+    table = [{"model": "WN+RW", "loglik": 0.0, "bic": 0.0, "aic": 0.0, "converged": True}]
+    selection = SelectionResult(winner, table, {"WN+RW": winner}, screened={"WN+GM+RW": ("WN+RW", verdict)})
+    (reading,) = plausible_walks(selection, n, dt)
+    assert reading.structure == "WN+GM+RW" and reading.delta_aic <= OCCAM_DELTA
+    assert reading.random_walk == pytest.approx(1.9277e-5, rel=0.05)
+    assert reading.ci95[0] < K_TRUE < reading.ci95[1] < 1.5 * K_TRUE

@@ -41,35 +41,40 @@ class Statistics:
         bounds = mle.physical_bounds(self.n, self.dt)
         return whittle.whittle_fit(start, np.empty(0), self.dt, self.periodogram, bounds)
 
-    def whittle_loglik(self, start: list[Component]) -> float:
-        """The banded Whittle log-likelihood maximised from ``start`` (the estimator's physical bounds)."""
-        return self.whittle_fit(start)[0]
-
 
 @dataclass(frozen=True)
 class Reference:
-    """The current structure fitted to both statistics (shared by every candidate screened against it)."""
+    """The current structure fitted to both statistics (shared by every candidate screened against it): its
+    (exactly fitted) ``components``, and per statistic the maximised log-likelihood and the components there."""
 
     components: list[Component]
     whittle_loglik: float
     block_loglik: float
+    whittle_components: tuple[Component, ...] = ()
+    block_components: tuple[Component, ...] = ()
 
     @classmethod
     def fit(cls, components: list[Component], stats: Statistics) -> Reference:
-        return cls(list(components), stats.whittle_loglik(components), block_sums.fit(components, stats.sums)[0])
+        whittle_loglik, at_whittle = stats.whittle_fit(components)
+        block_loglik, at_blocks = block_sums.fit(components, stats.sums)
+        return cls(list(components), whittle_loglik, block_loglik, tuple(at_whittle), tuple(at_blocks))
 
 
 @dataclass(frozen=True)
 class Screen:
     """A candidate's best log-likelihood ``gain`` over the current structure, the ``statistic`` that gave it
-    (``"whittle"``/``"block sums"``), its ``extra_parameters`` (negative: fewer), ``penalty`` ln N and the
-    ``components`` fitted there."""
+    (``"whittle"``/``"block sums"``), its ``extra_parameters`` (negative: fewer), ``penalty`` ln N, the
+    ``components`` fitted there and the current structure's components fitted on that statistic
+    (``reference_components``: what the statistic reads where the exact fit reads the current structure's own; a
+    parameter the statistic reads poorly, e.g. K on the banded periodogram, is read off the candidate relative to
+    it)."""
 
     gain: float
     statistic: str
     extra_parameters: int
     penalty: float
     components: tuple[Component, ...] = ()
+    reference_components: tuple[Component, ...] = ()
 
     @property
     def delta_bic(self) -> float:
@@ -134,6 +139,7 @@ def screen(reference: Reference, candidate: list[Component], stats: Statistics) 
             if b - reference.block_loglik > best_gain:
                 best_gain, best_stat, best_fit = b - reference.block_loglik, "block sums", fitted
     nests = not Counter(c.name for c in reference.components) - Counter(c.name for c in candidate)
+    at_reference = reference.whittle_components if best_stat == "whittle" else reference.block_components
     return Screen(max(best_gain, 0.0) if nests else best_gain, best_stat,
                   _n_parameters(candidate) - _n_parameters(reference.components), math.log(stats.n),
-                  tuple(best_fit))
+                  tuple(best_fit), at_reference)

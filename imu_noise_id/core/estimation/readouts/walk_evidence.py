@@ -111,25 +111,42 @@ def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float
     return (k * math.exp(-Z95 * sd), k * math.exp(Z95 * sd))
 
 
+def _statistic_walk_scale(exact: list[Component], on_statistic: tuple[Component, ...], span_s: float) -> float:
+    """How much the exact fit's K exceeds what a statistic of fixed size reads for the same structure
+    (:func:`record_walk` of ``exact`` over that of ``on_statistic``, the structure fitted on the statistic); 1 where
+    either has no walk or the statistic's fit is not known."""
+    k_exact, k_statistic = record_walk(exact, span_s), record_walk(list(on_statistic), span_s)
+    return k_exact / k_statistic if k_exact > 0.0 and k_statistic > 0.0 else 1.0
+
+
 def plausible_walks(selection: SelectionResult, n: int, dt: float) -> list[WalkReading]:
     """The readings of K (:func:`record_walk`, :func:`walk_interval`) of the selection's structures other than its
     winner (whose K has its own interval) within Occam's window on BIC or AIC (:data:`OCCAM_DELTA`), of a record of
     ``n`` samples at ``dt`` [s], best BIC first: its converged fits, and its candidates screened out on the statistics
     of fixed size (:mod:`..em.screen`) at the components and likelihood gain the screen found (their criteria those of
-    the structure they were screened against plus the screen's). ΔBIC and ΔAIC are to the best of all of them."""
+    the structure they were screened against plus the screen's). A screened candidate's K (and interval) is read
+    relative to the statistic's reading of the structure it was screened against (:func:`_statistic_walk_scale`): a
+    statistic of fixed size reads K less well than the exact fit, and its absolute K would put its own error into
+    the interval as if it were a difference between the structures. ΔBIC and ΔAIC are to the best of all."""
     winner = selection.best_key
+    span = n * dt
     fits = {spec: f for spec, f in selection.fits.items() if f.converged}
-    found = [(spec, f.bic, f.aic, list(f.components)) for spec, f in fits.items()]
+    found = [(spec, f.bic, f.aic, list(f.components), 1.0) for spec, f in fits.items()]
     found += [(spec, fits[against].bic + verdict.delta_bic, fits[against].aic + verdict.delta_aic,
-               list(verdict.components))
+               list(verdict.components),
+               _statistic_walk_scale(list(fits[against].components), verdict.reference_components, span))
               for spec, (against, verdict) in selection.screened.items() if against in fits and verdict.components]
     if not found:
         return []
     bic_min, aic_min = min(f[1] for f in found), min(f[2] for f in found)
-    return [WalkReading(spec, bic - bic_min, aic - aic_min, record_walk(components, n * dt),
-                        walk_interval(components, n, dt))
-            for spec, bic, aic, components in sorted(found, key=lambda f: f[1])
-            if spec != winner and min(bic - bic_min, aic - aic_min) <= OCCAM_DELTA]
+    readings = []
+    for spec, bic, aic, components, scale in sorted(found, key=lambda f: f[1]):
+        if spec == winner or min(bic - bic_min, aic - aic_min) > OCCAM_DELTA:
+            continue
+        ci = walk_interval(components, n, dt)
+        readings.append(WalkReading(spec, bic - bic_min, aic - aic_min, scale * record_walk(components, span),
+                                    None if ci is None else (scale * ci[0], scale * ci[1])))
+    return readings
 
 
 def spannable(k: KalibrValue) -> bool:
