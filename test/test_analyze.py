@@ -401,3 +401,25 @@ def test_on_a_long_record_a_winner_the_loop_keeps_is_fitted_exactly_with_interva
     assert fit.model == "WN+RW" and set(fit.ci95) >= {"WN.noise_density", "RW.random_walk"}
     exact = NoiseModel(imu.axis("gyro_x"), imu.dt, "WN+RW").fit(None, FitOptions(uncertainty=False))
     assert fit.loglik == pytest.approx(exact.loglik, abs=0.5)
+
+
+def test_a_sensor_analysed_on_some_axes_pastes_each_modelled_axis_from_its_model():
+    """Two of three gyro axes analysed (``--axes``); gyro_z holds a GM (τ 2 s) beside a walk barely seen in 300 s.
+    The Allan +1/2 slope read through the GM's bump gave K 100x the truth, pasted as a ``fit`` in place of the final
+    model's reading for the whole sensor; now each modelled axis pastes its model's N and K and the axis left out its
+    Allan-slope reading, marked as standing in."""
+    from imu_noise_id.core.noise.components import GM
+
+    model = _model() | {"gyro_z": [WN(1e-3), GM(tau=2.0, sigma=3e-3), RW(GYRO_K)]}
+    imu = simulate_static_imu(model, 100.0, 300.0, seed=7)
+    result = analyze(imu, None, AnalyzeOptions(axes=("gyro_x", "gyro_z"), loop=False))
+    gyro = result.numbers.sensor("gyro")
+    readings = {a.axis: a for a in gyro.axes}
+    for axis in ("gyro_x", "gyro_z"):
+        final = result.finals[axis]
+        assert readings[axis].random_walk.value == final.random_walk.value, axis
+        assert readings[axis].random_walk.method == final.random_walk.method, axis
+    assert readings["gyro_z"].random_walk.value != result.static.slopes["gyro_z"].random_walk.value
+    assert readings["gyro_y"].random_walk.method in ("allan_slope", "allan_upper_bound")
+    assert "not analysed with a model" in readings["gyro_y"].random_walk.source
+    assert gyro.random_walk == max(a.random_walk.value for a in gyro.axes)

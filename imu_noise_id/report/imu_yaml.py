@@ -57,7 +57,7 @@ def _sensor_keys(s: SensorNumbers) -> dict:
         doc[f"{key}_xyz"] = [num(r.value) for r in readings]
         doc[f"{key}_ci_xyz"] = [_pair(r.ci95) for r in readings]
         doc[f"{key}_method_xyz"] = [r.method for r in readings]
-        if s.from_models:
+        if s.from_models or any(r.source for r in readings):
             doc[f"{key}_source_xyz"] = [r.source for r in readings]
     if not s.from_models:
         return doc
@@ -130,7 +130,8 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
             "# *_method_xyz: model; or bound: the record does not identify the walk (K's 95 % interval reaches zero,",
             "# or the final model has no random walk and the value is the largest walk the long-tau Allan variance",
             "# supports): the upper end, interval [0, value]; allan_slope / allan_upper_bound only where neither",
-            "# exists; or unresolved: the final model is not trusted",
+            "# exists or the axis was not analysed with a model (*_source_xyz says which); or unresolved: the final",
+            "# model is not trusted",
             "# (the closed loop's verdict failed, or its N disagrees with the data's passband level; *_source_xyz",
             "# says which): the value is the axis's overbound (an upper bound, below), its interval [0, value].",
             "# The Allan-slope readings are in *_allan_xyz and *_allan.",

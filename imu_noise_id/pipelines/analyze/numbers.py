@@ -236,9 +236,28 @@ def _axis(static: StaticAnalysis, axis: str, final: FinalModel | None) -> AxisNu
     return AxisNumbers(axis, n, k, _allan(static, axis, "noise_density"), _allan(static, axis, "random_walk"), model)
 
 
+def _not_modelled(static: StaticAnalysis, axis: str, parameter: str) -> Reading:
+    """The Allan-slope reading of an axis analysed without a model beside axes that have one, marked as standing in."""
+    allan = _allan(static, axis, parameter)
+    method = "allan_upper_bound" if allan.method == "upper_bound" else "allan_slope"
+    return Reading(allan.value, allan.ci95, method, f"this axis was not analysed with a model (not among the analysed "
+                                                    f"axes); given instead: {_allan_in_words(static, axis, parameter)}")
+
+
+def _partly_modelled(static: StaticAnalysis, axis: str, final: FinalModel | None) -> AxisNumbers:
+    """One axis of a sensor only some of whose axes have final models: the model's N and K where it has one (an
+    Allan slope never replaces a likelihood reading), else the Allan slopes', marked (:func:`_not_modelled`)."""
+    if final is not None:
+        return AxisNumbers(axis, *axis_readings(static, axis, final))
+    return AxisNumbers(axis, _not_modelled(static, axis, "noise_density"), _not_modelled(static, axis, "random_walk"))
+
+
 def _sensor(static: StaticAnalysis, sensor: str, axes: tuple[str, ...], finals: dict[str, FinalModel]) -> SensorNumbers:
     from_models = all(a in finals for a in axes)
-    numbers = tuple(_axis(static, a, finals.get(a) if from_models else None) for a in axes)
+    if from_models or not any(a in finals for a in axes):
+        numbers = tuple(_axis(static, a, finals.get(a)) for a in axes)
+    else:
+        numbers = tuple(_partly_modelled(static, a, finals.get(a)) for a in axes)
     n = _combined([a.noise_density.value for a in numbers])
     k = _combined([a.random_walk.value for a in numbers])
     if not from_models:
@@ -276,7 +295,8 @@ def _overbound(overbounds: dict[str, AxisOverbound]) -> OverboundNumbers | None:
 def pasted_numbers(static: StaticAnalysis, finals: dict[str, FinalModel],
                    overbounds: dict[str, AxisOverbound] | None = None, topic: str | None = None) -> PastedNumbers:
     """The numbers to paste from the Allan stage ``static``, the final models ``finals`` (per axis; a sensor's numbers
-    come from them when all its axes have one) and the ``overbounds``; ``topic`` defaults to the recording's."""
+    come from them when all its axes have one, each axis's N and K from its own where only some have one) and the
+    ``overbounds``; ``topic`` defaults to the recording's."""
     sensors = {sensor: _sensor(static, sensor, axes, finals) for sensor, axes in SENSORS
                if all(a in static.slopes for a in axes)}
     period = static.period
