@@ -228,7 +228,7 @@ def _av_diag(bic: float, ratio: float) -> SimpleNamespace:
     """A diagnosis whose model AV is ``ratio`` × the data's at every τ (±10 % intervals)."""
     data = np.full(8, 1e-6)
     return SimpleNamespace(errors=SimpleNamespace(bic=bic), av_data=data, av_ci=(0.9 * data, 1.1 * data),
-                           av_model=ratio * data)
+                           av_model=ratio * data, fit=SimpleNamespace(components=[WN(1e-3)], n=10_000, dt=0.01))
 
 
 def test_a_bic_tie_between_equal_size_models_is_broken_by_the_av():
@@ -585,3 +585,26 @@ def test_the_starts_low_pass_is_tried_as_a_second_order_one():
     assert result.steps[1].dropped == ("LPF (for OSC)",) and "OSC" in result.final.model
     osc = next(c for c in result.final.diagnosis.fit.components if isinstance(c, OSC))
     assert osc.frequency == pytest.approx(10.0, rel=0.05)
+
+
+def _walk_diag(bic: float, components: list, ratio: float = 1.0) -> SimpleNamespace:
+    """:func:`_av_diag` of a fit of ``components`` to 1 h at 200 Hz."""
+    diag = _av_diag(bic, ratio)
+    diag.fit = SimpleNamespace(components=components, n=720_000, dt=0.005)
+    return diag
+
+
+def test_a_move_that_takes_k_outside_its_interval_needs_strong_evidence():
+    """Do no harm to K: 1 h of WN + RW identifies K to about ±20 %; dropping the walk (or a GM taking most of it) on a
+    BIC lower by 3 is refused, kept on a BIC lower by 7 (Kass & Raftery's "strong") or when the AV says K was wrong."""
+    walk = [WN(5e-4), RW(2e-5)]
+    before = _walk_diag(0.0, walk)
+    assert not judge(before, _walk_diag(-3.0, [WN(5e-4)]))[0]
+    ok, why = judge(before, _walk_diag(-3.0, [WN(5e-4), GM(tau=300.0, sigma=2e-4), RW(5e-6)]))
+    assert not ok and "leaves its interval" in why
+    assert judge(before, _walk_diag(-7.0, [WN(5e-4)]))[0]
+    assert judge(_walk_diag(0.0, walk, ratio=3.0), _walk_diag(-3.0, [WN(5e-4)], ratio=1.05))[0]
+    assert judge(before, _walk_diag(-1.0, [WN(5e-4), RW(2.1e-5)]))[0]  # K inside its interval: the BIC alone
+    assert judge(_walk_diag(0.0, [WN(5e-4)]), _walk_diag(-1.0, walk))[0]  # no walk before: nothing to harm
+    unidentified = [WN(2e-2), RW(2e-5)]  # a walk 1 h barely sees below this white noise
+    assert judge(_walk_diag(0.0, unidentified), _walk_diag(-1.0, [WN(2e-2)]))[0]

@@ -163,3 +163,11 @@ def test_a_screened_candidate_reads_k_relative_to_the_statistics_reading_of_its_
     assert reading.structure == "WN+GM+RW" and reading.delta_aic <= OCCAM_DELTA
     assert reading.random_walk == pytest.approx(1.9277e-5, rel=0.05)
     assert reading.ci95[0] < K_TRUE < reading.ci95[1] < 1.5 * K_TRUE
+
+
+def test_an_interval_wider_than_any_order_of_magnitude_is_undetermined() -> None:
+    """200 s of a GM of 2 s beside a walk 100x weaker than its short-term drift: sd(ln K) ≈ 360, whose e^(±1.96 sd)
+    overflowed; such a walk has no determined interval."""
+    components = [WN(9.95e-4), GM(tau=2.09, sigma=2.83e-3), RW(7.15e-6)]
+    assert walk_interval(components, 20_000, 0.01) is None
+    assert walk_interval([WN(5e-4), RW(2e-5)], 720_000, 0.005) is not None

@@ -9,6 +9,7 @@ from scipy import stats
 
 from ...core.constants import CONFIDENCE_95
 from ...core.diagnostics.residuals import av_misfit_z
+from ...core.estimation.readouts.walk_evidence import record_walk, walk_interval
 from .state import Diagnosis
 
 #: "Do no harm": the most a step may raise the RMS AV misfit z (model vs data, in sd of the AV estimates).
@@ -72,17 +73,41 @@ def with_av_misfit(passed: bool, verdict: str, diag: Diagnosis) -> tuple[bool, s
                    f"data's 95 % band (largest relative AV error {100 * max_relative_av_error(diag):.0f} %)")
 
 
-def judge(before: Diagnosis, after: Diagnosis, *, tie: bool = False) -> tuple[bool, str]:
+def walk_moved(before: Diagnosis, after: Diagnosis) -> tuple[float, float, float] | None:
+    """(K after, interval before) when ``after``'s random walk over the record (:func:`.walk_evidence.record_walk`)
+    lies outside ``before``'s 95 % interval (:func:`.walk_evidence.walk_interval`, from Whittle's Fisher information of
+    the record's length); None when it lies inside or ``before``'s walk is not identified: none, an interval not
+    determined, or one that reaches zero on the linear scale, K(1 ± 1.96 sd(ln K)) (ln(hi/lo) = 2·1.96·sd(ln K) ≥ 2)."""
+    fit = before.fit
+    ci = walk_interval(list(fit.components), fit.n, fit.dt)
+    if ci is None or ci[0] <= 0.0 or math.log(ci[1] / ci[0]) >= 2.0:
+        return None
+    k = record_walk(list(after.fit.components), fit.n * fit.dt)
+    return None if ci[0] <= k <= ci[1] else (k, ci[0], ci[1])
+
+
+def judge(before: Diagnosis, after: Diagnosis, *, tie: bool = False, guard_walk: bool = True) -> tuple[bool, str]:
     """The BIC and do-no-harm rules: kept when the BIC is lower and the RMS AV misfit z rises by at most
     :data:`AV_Z_TOLERANCE`. With ``tie`` (a move adding no parameter), a BIC worse by less than :data:`BIC_TIE` is kept
-    when the RMS AV misfit z falls by :data:`AV_Z_GAIN` or more. Returns (kept, reason)."""
+    when the RMS AV misfit z falls by :data:`AV_Z_GAIN` or more. Do no harm to K (beyond the papers; ``guard_walk``,
+    for additions and drops, not for swaps of the walk for what the record cannot tell from it): a move that takes the
+    random walk outside ``before``'s 95 % interval (:func:`walk_moved`; a dropped walk included) is kept only with
+    strong evidence, a BIC lower by :data:`BIC_TIE` or more or the AV misfit z lower by :data:`AV_Z_GAIN`: the
+    evidence a component needs to leave is that it needed to enter, and K is the number users paste. Returns (kept,
+    reason)."""
     improved = after.errors.bic < before.errors.bic
     z0, z1 = av_rms_z(before), av_rms_z(after)
     no_harm = z1 <= z0 + AV_Z_TOLERANCE
+    av_gain = z1 <= z0 - AV_Z_GAIN
     why = (f"BIC {before.errors.bic:.1f} → {after.errors.bic:.1f} ({'better' if improved else 'not better'}); "
            f"AV misfit z {z0:.1f} → {z1:.1f}{'' if no_harm else ' (worse)'}")
-    if tie and not improved and after.errors.bic - before.errors.bic < BIC_TIE and z1 <= z0 - AV_Z_GAIN:
+    if tie and not improved and after.errors.bic - before.errors.bic < BIC_TIE and av_gain:
         return True, why + f"; a BIC tie (within {BIC_TIE:g}) that the AV breaks"
+    moved = walk_moved(before, after) if guard_walk and improved and no_harm else None
+    if moved is not None and before.errors.bic - after.errors.bic < BIC_TIE and not av_gain:
+        k, lo, hi = moved
+        return False, why + (f"; K {k:.3g} leaves its interval [{lo:.3g}, {hi:.3g}] on less than strong evidence "
+                             f"(BIC lower by less than {BIC_TIE:g}, AV misfit z not lower by {AV_Z_GAIN:g})")
     return improved and no_harm, why
 
 

@@ -32,6 +32,8 @@ from .quantiles import Z95
 OCCAM_RATIO = 1.0 / 20.0
 #: The largest ΔBIC or ΔAIC within :data:`OCCAM_RATIO` (2 ln 20 ≈ 5.99).
 OCCAM_DELTA = -2.0 * math.log(OCCAM_RATIO)
+#: Widest half-width of ln K's interval held determined (e^±100: K known to no order of magnitude at all).
+MAX_LOG_HALF_WIDTH = 100.0
 
 
 @dataclass(frozen=True)
@@ -90,7 +92,8 @@ def record_walk(components: list[Component], span_s: float) -> float:
 def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float, float] | None:
     """95 % Wald interval of :func:`record_walk` over ``n`` samples at ``dt`` [s], on ln K, by the delta method from
     Whittle's Fisher information of ``n`` samples (:func:`~..em.whittle.fisher_information`); (0, 0) without a
-    walk, None where the information leaves K undetermined."""
+    walk, None where the information leaves K undetermined (singular, or a half-width on ln K beyond
+    :data:`MAX_LOG_HALF_WIDTH`)."""
     span = n * dt
     k = record_walk(components, span)
     if k == 0.0:
@@ -105,7 +108,7 @@ def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float
     used = gradient != 0.0
     with np.errstate(invalid="ignore"):
         var = float(gradient[used] @ cov[np.ix_(used, used)] @ gradient[used])
-    if not (math.isfinite(var) and var >= 0.0):
+    if not (math.isfinite(var) and 0.0 <= Z95 * math.sqrt(var) <= MAX_LOG_HALF_WIDTH):
         return None
     sd = math.sqrt(var)
     return (k * math.exp(-Z95 * sd), k * math.exp(Z95 * sd))
