@@ -594,17 +594,19 @@ def _walk_diag(bic: float, components: list, ratio: float = 1.0) -> SimpleNamesp
     return diag
 
 
-def test_a_move_that_takes_k_outside_its_interval_needs_strong_evidence():
-    """Do no harm to K: 1 h of WN + RW identifies K to about ±20 %; dropping the walk (or a GM taking most of it) on a
-    BIC lower by 3 is refused, kept on a BIC lower by 7 (Kass & Raftery's "strong") or when the AV says K was wrong."""
+def test_a_drop_that_takes_k_outside_its_interval_needs_strong_evidence():
+    """Do no harm to K: 1 h of WN + RW identifies K to about ±20 %; dropping the walk (also beside a GM of 20 s) on a
+    BIC lower by 3 is refused, kept on a BIC lower by 7 (Kass & Raftery's "strong") or
+    when the AV says K was wrong. An addition is not guarded: the K it moves from assumed what it adds was absent."""
     walk = [WN(5e-4), RW(2e-5)]
     before = _walk_diag(0.0, walk)
-    assert not judge(before, _walk_diag(-3.0, [WN(5e-4)]))[0]
-    ok, why = judge(before, _walk_diag(-3.0, [WN(5e-4), GM(tau=300.0, sigma=2e-4), RW(5e-6)]))
+    assert not judge(before, _walk_diag(-3.0, [WN(5e-4)]), guard_walk=True)[0]
+    ok, why = judge(_walk_diag(0.0, [WN(5e-4), GM(tau=20.0, sigma=2e-4), RW(2e-5)]),
+                    _walk_diag(-3.0, [WN(5e-4), GM(tau=20.0, sigma=2e-4)]), guard_walk=True)
     assert not ok and "leaves its interval" in why
-    assert judge(before, _walk_diag(-7.0, [WN(5e-4)]))[0]
-    assert judge(_walk_diag(0.0, walk, ratio=3.0), _walk_diag(-3.0, [WN(5e-4)], ratio=1.05))[0]
-    assert judge(before, _walk_diag(-1.0, [WN(5e-4), RW(2.1e-5)]))[0]  # K inside its interval: the BIC alone
-    assert judge(_walk_diag(0.0, [WN(5e-4)]), _walk_diag(-1.0, walk))[0]  # no walk before: nothing to harm
+    assert judge(before, _walk_diag(-7.0, [WN(5e-4)]), guard_walk=True)[0]
+    assert judge(_walk_diag(0.0, walk, ratio=3.0), _walk_diag(-3.0, [WN(5e-4)], ratio=1.05), guard_walk=True)[0]
+    assert judge(before, _walk_diag(-1.0, [WN(5e-4), RW(2.1e-5)]), guard_walk=True)[0]  # K inside its interval
+    assert judge(before, _walk_diag(-3.0, [WN(5e-4), GM(tau=300.0, sigma=2e-4), RW(5e-6)]))[0]  # an addition
     unidentified = [WN(2e-2), RW(2e-5)]  # a walk 1 h barely sees below this white noise
-    assert judge(_walk_diag(0.0, unidentified), _walk_diag(-1.0, [WN(2e-2)]))[0]
+    assert judge(_walk_diag(0.0, unidentified), _walk_diag(-1.0, [WN(2e-2)]), guard_walk=True)[0]

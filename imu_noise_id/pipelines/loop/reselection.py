@@ -86,7 +86,7 @@ def swap_start_filter(loop: AxisLoop, state: LoopState,
 def try_move(loop: AxisLoop, diag: Diagnosis, new_state: LoopState, label: str, *,
              evidence: str | None = None) -> tuple[Trial, Diagnosis | None]:
     """Fit and judge one re-selection move ``label`` ("drop RW" …) against ``diag`` (:func:`judge`, with the BIC tie
-    for a move that adds no parameter, K guarded but for a swap): the trial and the new diagnosis (None when the refit
+    for a move that adds no parameter, K guarded for a drop): the trial and the new diagnosis (None when the refit
     failed)."""
     finding = det.Finding(effect=label.split(" ", 1)[1], detector="reselection", statistic=0.0, threshold=0.0,
                           log10_p=0.0, level=0.0, params={}, evidence=evidence or label)
@@ -95,7 +95,7 @@ def try_move(loop: AxisLoop, diag: Diagnosis, new_state: LoopState, label: str, 
     except (InputError, ValueError, np.linalg.LinAlgError) as exc:
         return Trial(finding, new_state.name(), None, False, f"{label}: refit failed: {exc}"), None
     ok, why = judge(diag, new_diag, tie=new_diag.fit.n_params <= diag.fit.n_params,
-                    guard_walk=not label.startswith("swap"))
+                    guard_walk=label.startswith("drop"))
     return Trial(finding, new_state.name(), new_diag.errors.bic, ok, f"{label}: {why}"), new_diag
 
 

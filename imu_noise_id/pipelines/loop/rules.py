@@ -86,15 +86,14 @@ def walk_moved(before: Diagnosis, after: Diagnosis) -> tuple[float, float, float
     return None if ci[0] <= k <= ci[1] else (k, ci[0], ci[1])
 
 
-def judge(before: Diagnosis, after: Diagnosis, *, tie: bool = False, guard_walk: bool = True) -> tuple[bool, str]:
+def judge(before: Diagnosis, after: Diagnosis, *, tie: bool = False, guard_walk: bool = False) -> tuple[bool, str]:
     """The BIC and do-no-harm rules: kept when the BIC is lower and the RMS AV misfit z rises by at most
     :data:`AV_Z_TOLERANCE`. With ``tie`` (a move adding no parameter), a BIC worse by less than :data:`BIC_TIE` is kept
-    when the RMS AV misfit z falls by :data:`AV_Z_GAIN` or more. Do no harm to K (beyond the papers; ``guard_walk``,
-    for additions and drops, not for swaps of the walk for what the record cannot tell from it): a move that takes the
-    random walk outside ``before``'s 95 % interval (:func:`walk_moved`; a dropped walk included) is kept only with
-    strong evidence, a BIC lower by :data:`BIC_TIE` or more or the AV misfit z lower by :data:`AV_Z_GAIN`: the
-    evidence a component needs to leave is that it needed to enter, and K is the number users paste. Returns (kept,
-    reason)."""
+    when the RMS AV misfit z falls by :data:`AV_Z_GAIN` or more. With ``guard_walk`` (re-selection's drops; beyond the
+    papers), do no harm to K: a drop that takes the random walk outside ``before``'s 95 % interval
+    (:func:`walk_moved`) is kept only on strong evidence, a BIC lower by :data:`BIC_TIE` or more or the AV misfit z
+    lower by :data:`AV_Z_GAIN`. Additions are not guarded: the K they move away from is conditional on a structure
+    that lacked what they add (docs/loop.md, "The loop's rules" 4). Returns (kept, reason)."""
     improved = after.errors.bic < before.errors.bic
     z0, z1 = av_rms_z(before), av_rms_z(after)
     no_harm = z1 <= z0 + AV_Z_TOLERANCE
