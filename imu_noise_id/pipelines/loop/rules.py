@@ -93,7 +93,7 @@ def judge(before: Diagnosis, after: Diagnosis, *, tie: bool = False, guard_walk:
     papers), do no harm to K: a drop that takes the random walk outside ``before``'s 95 % interval
     (:func:`walk_moved`) is kept only on strong evidence, a BIC lower by :data:`BIC_TIE` or more or the AV misfit z
     lower by :data:`AV_Z_GAIN`. Additions are not guarded: the K they move away from is conditional on a structure
-    that lacked what they add (docs/loop.md, "The loop's rules" 4). Returns (kept, reason)."""
+    that lacked what they add (docs/loop.md, "The loop's rules" 5). Returns (kept, reason)."""
     improved = after.errors.bic < before.errors.bic
     z0, z1 = av_rms_z(before), av_rms_z(after)
     no_harm = z1 <= z0 + AV_Z_TOLERANCE
