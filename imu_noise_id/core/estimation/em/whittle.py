@@ -242,18 +242,11 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
     return whittle_loglik(s, bp), parts.gradient(current, keys, x, each, (bp.power / s - bp.count) / s)
 
 
-#: Largest |∂ℓ/∂η| at which :func:`whittle_fit` stops (η: log-parameters, or these in units of their Fisher
-#: information, where it leaves about 1e-3 of ℓ to a Newton step).
-FIT_GRADIENT_TOLERANCE = 0.05
-
-
 def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: BandedPeriodogram | None = None,
                 bounds: dict[str, tuple[float, float]] | None = None) -> tuple[float, list[Component]]:
     """(Whittle log-likelihood up to a constant, fitted components) maximised over the log-parameters from ``start``
-    (RR held) by L-BFGS-B with :func:`loglik_and_gradient`, relative to the start's value, stopping at
-    :data:`FIT_GRADIENT_TOLERANCE`; a climb that ends within its first iteration is redone scaled by the start's
-    Whittle information (:func:`whittle_information`), the better kept (the start where neither is better);
-    ``bounds``: physical range per parameter name (default GM τ from dt/2 to 100 records)."""
+    (RR held) by L-BFGS-B with :func:`loglik_and_gradient`; ``bounds``: physical range per parameter name (default
+    GM τ from dt/2 to 100 records)."""
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([start[i].params()[k] for i, k in keys])
@@ -275,31 +268,8 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
         else:
             box.append((v - 30.0, v + 30.0))
     x0 = np.clip(x0, [b[0] for b in box], [b[1] for b in box])
-    first = negll(x0)[0]
-    if first >= 1e300:
-        return -math.inf, with_log_parameters(start, keys, x0)
-    # Climbed relative to the start's value (L-BFGS-B's stopping rule is relative to |ℓ| ~ N: it stopped short of the
-    # maximum in ln K of a walk that shows in a few frequencies). Unscaled, the first step is the whole gradient (~N for
-    # the white noise) and may land on the box's corners, where a resonance is not defined, and stall there: a climb
-    # that ends within its first iteration is redone in units of the start's Fisher information per log-parameter
-    # (x = x0 + η/√I_jj), the better kept.
-    def climb(scale: np.ndarray) -> tuple[float, np.ndarray, int]:
-        def shifted(eta: np.ndarray) -> tuple[float, np.ndarray]:
-            value, gradient = negll(x0 + eta / scale)
-            return value - first, gradient / scale
-
-        eta_box = [((lo - x) * k, (hi - x) * k) for (lo, hi), x, k in zip(box, x0, scale, strict=True)]
-        res = minimize(shifted, np.zeros(x0.size), jac=True, method="L-BFGS-B", bounds=eta_box,
-                       options={"maxiter": 500, "ftol": 1e-15, "gtol": FIT_GRADIENT_TOLERANCE})
-        return (float(res.fun), x0 + res.x / scale, int(res.nit)) if res.fun < 0.0 else (0.0, x0, int(res.nit))
-
-    value, x, iterations = climb(np.ones(x0.size))
-    if iterations <= 1:
-        information = np.diag(whittle_information(with_log_parameters(start, keys, x0), np.empty(0), dt,
-                                                  periodogram=bp))
-        scaled = climb(np.sqrt(np.where(information > 0.0, information, 1.0)))
-        value, x = min((value, x), scaled[:2], key=lambda vx: vx[0])
-    return -(first + value), with_log_parameters(start, keys, x)
+    res = minimize(negll, x0, jac=True, method="L-BFGS-B", bounds=box, options={"maxiter": 500})
+    return -float(res.fun), with_log_parameters(start, keys, res.x)
 
 
 def whittle_information(components: list[Component], y: np.ndarray, dt: float,
