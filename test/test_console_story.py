@@ -38,3 +38,10 @@ def test_the_loop_demo_prints_its_final_models_against_what_was_simulated():
     assert rows[0] == ["gyro_x", "WN+RW", "WN+RW", "-", "as", "simulated"]
     assert rows[1] == ["gyro_z", "WN+GM+RW", "WN+GM", "yes", "−RW"]
     assert rows[2] == ["accel_z", "LPF+RW", "WN+LPF+RR", "yes", "+WN", "+RR", "−RW"]
+    # a walk the final model lacks is shown with the K pasted in its place, against the simulated one
+    from imu_noise_id.pipelines.analyze.numbers import Reading
+
+    walks = {"gyro_z": Reading(9.7e-4, (0.0, 9.7e-4), "bound"), "accel_z": Reading(1e-5, (0.0, 1e-5), "bound")}
+    rows = truth_table({"gyro_z": final("WN+GM"), "accel_z": final("WN+LPF")}, walks).splitlines()[1:]
+    assert rows[0].endswith("−RW (K pasted as bound 0.00097 ≥ the simulated 2e-05)")
+    assert rows[1].endswith("+WN −RW (K pasted as bound 1e-05 < the simulated 4e-05)")
