@@ -119,6 +119,7 @@ STUDIES: list[tuple[list[str], str]] = [
     (["studies/random_walk_bound.py"], "studies/probe_k_information.txt"),
     (["studies/bench_sin_regressors.py"], "studies/likelihood_speed.txt"),
     (["studies/composite_gap.py"], "studies/composite_gap.txt"),
+    (["studies/whittle_shortfall.py", "--run", "1", "--axis", "gyro_x"], "studies/composite_gap.txt"),
     (["studies/watch_power_bound.py"], "bench_watch.txt"),
 ]
 

@@ -37,9 +37,10 @@ class Statistics:
         return cls(whittle.banded_periodogram(y), block_sums.block_sums(y, dt), float(dt), int(y.size))
 
     def whittle_fit(self, start: list[Component]) -> tuple[float, list[Component]]:
-        """(banded Whittle log-likelihood, components) maximised from ``start`` (the estimator's physical bounds)."""
+        """(banded Whittle log-likelihood, components) maximised from ``start`` (the estimator's physical bounds), to
+        the maximum: a screen's gain is a difference of two such values."""
         bounds = mle.physical_bounds(self.n, self.dt)
-        return whittle.whittle_fit(start, np.empty(0), self.dt, self.periodogram, bounds)
+        return whittle.whittle_fit(start, np.empty(0), self.dt, self.periodogram, bounds, to_maximum=True)
 
 
 @dataclass(frozen=True)
