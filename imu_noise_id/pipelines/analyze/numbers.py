@@ -208,15 +208,20 @@ def _allan_in_words(static: StaticAnalysis, axis: str, parameter: str) -> str:
     return f"{what}, read over tau {lo:.3g}–{hi:.3g} s"
 
 
+def _allan_standing_in(static: StaticAnalysis, axis: str, parameter: str, why: str) -> Reading:
+    """The Allan-slope reading standing in for a model value, as ``allan_slope`` / ``allan_upper_bound``, its source
+    ``why`` and the τ range it was read over."""
+    allan = _allan(static, axis, parameter)
+    method = "allan_upper_bound" if allan.method == "upper_bound" else "allan_slope"
+    return Reading(allan.value, allan.ci95, method, f"{why}; given instead: {_allan_in_words(static, axis, parameter)}")
+
+
 def _from_model(static: StaticAnalysis, axis: str, final: FinalModel, parameter: str) -> Reading:
     """The final model's value, or where the model has none (not identifiable) the Allan-slope reading, marked."""
     v = getattr(final, parameter)
     if v.value is not None:
         return Reading(v.value, (v.ci95[0], v.ci95[1]), v.method, v.source)
-    allan = _allan(static, axis, parameter)
-    method = "allan_upper_bound" if allan.method == "upper_bound" else "allan_slope"
-    return Reading(allan.value, allan.ci95, method,
-                   f"{v.source}; given instead: {_allan_in_words(static, axis, parameter)}")
+    return _allan_standing_in(static, axis, parameter, v.source)
 
 
 def axis_readings(static: StaticAnalysis, axis: str, final: FinalModel | None) -> tuple[Reading, Reading]:
@@ -236,20 +241,17 @@ def _axis(static: StaticAnalysis, axis: str, final: FinalModel | None) -> AxisNu
     return AxisNumbers(axis, n, k, _allan(static, axis, "noise_density"), _allan(static, axis, "random_walk"), model)
 
 
-def _not_modelled(static: StaticAnalysis, axis: str, parameter: str) -> Reading:
-    """The Allan-slope reading of an axis analysed without a model beside axes that have one, marked as standing in."""
-    allan = _allan(static, axis, parameter)
-    method = "allan_upper_bound" if allan.method == "upper_bound" else "allan_slope"
-    return Reading(allan.value, allan.ci95, method, f"this axis was not analysed with a model (not among the analysed "
-                                                    f"axes); given instead: {_allan_in_words(static, axis, parameter)}")
+#: Why an axis of a partly modelled sensor gives its Allan-slope readings.
+NOT_MODELLED = "this axis was not analysed with a model (not among the analysed axes)"
 
 
 def _partly_modelled(static: StaticAnalysis, axis: str, final: FinalModel | None) -> AxisNumbers:
     """One axis of a sensor only some of whose axes have final models: the model's N and K where it has one (an
-    Allan slope never replaces a likelihood reading), else the Allan slopes', marked (:func:`_not_modelled`)."""
+    Allan slope never replaces a likelihood reading), else the Allan slopes', marked (:func:`_allan_standing_in`)."""
     if final is not None:
         return AxisNumbers(axis, *axis_readings(static, axis, final))
-    return AxisNumbers(axis, _not_modelled(static, axis, "noise_density"), _not_modelled(static, axis, "random_walk"))
+    return AxisNumbers(axis, *(_allan_standing_in(static, axis, p, NOT_MODELLED)
+                               for p in ("noise_density", "random_walk")))
 
 
 def _sensor(static: StaticAnalysis, sensor: str, axes: tuple[str, ...], finals: dict[str, FinalModel]) -> SensorNumbers:
