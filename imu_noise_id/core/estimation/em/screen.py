@@ -51,8 +51,8 @@ class Reference:
     components: list[Component]
     whittle_loglik: float
     block_loglik: float
-    whittle_components: tuple[Component, ...] = ()
-    block_components: tuple[Component, ...] = ()
+    whittle_components: tuple[Component, ...]
+    block_components: tuple[Component, ...]
 
     @classmethod
     def fit(cls, components: list[Component], stats: Statistics) -> Reference:
