@@ -40,7 +40,7 @@ def test_a_clean_record_refuses_the_joint_search_moves(seed):
 
 def test_flicker_noise_passes_a_gm_started_at_a_tenth_of_the_record():
     """The case a banded-Whittle screen from the move's own start fails: the exact fit takes the GM to τ ≈ 0.8 s
-    (log-likelihood gain ≈ 40), while from τ = 360 s the Whittle likelihood gains 1.8 and the block sums 0.8."""
+    (log-likelihood gain ≈ 40), while from τ = 360 s the Whittle likelihood gains 2.8 and the block sums 0.8."""
     verdicts = _verdicts([WN(1.7e-4), BI(1e-4, *band_for_record(N, DT)), RW(2e-5)], 1)
     assert verdicts["GM"].worth_exact_fit and verdicts["GM"].gain > 20.0
     assert verdicts["BI"].worth_exact_fit and verdicts["BI"].gain > 20.0
@@ -48,7 +48,7 @@ def test_flicker_noise_passes_a_gm_started_at_a_tenth_of_the_record():
 
 def test_a_short_gm_is_seen_by_the_whittle_likelihood_and_a_long_one_by_the_block_sums():
     """A GM of 2 s gains 269 exactly (bench_screen); one of 120 s (σ 1e-3) gains 6.9 exactly, which the block sums
-    read (8.0) where the Whittle likelihood from the move's start reads 1.8: a long-τ GM is what 1 h can barely
+    read (8.0) where the Whittle likelihood from the move's start reads 4.4: a long-τ GM is what 1 h can barely
     show, and the BIC refuses it either way."""
     short = _verdicts([WN(1.7e-4), GM(2.0, 3e-4), RW(2e-5)], 1)["GM"]
     assert short.worth_exact_fit and short.statistic == "whittle" and short.gain > 200.0
