@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -62,30 +63,68 @@ class Reference:
 
 
 @dataclass(frozen=True)
-class Screen:
-    """A candidate's best log-likelihood ``gain`` over the current structure, the ``statistic`` that gave it
-    (``"whittle"``/``"block sums"``), its ``extra_parameters`` (negative: fewer), ``penalty`` ln N, the
-    ``components`` fitted there and the current structure's components fitted on that statistic
+class Maximum:
+    """A candidate's maximum on one statistic (``"whittle"``/``"block sums"``): its log-likelihood ``gain`` over the
+    current structure there, the ``components`` there and the current structure's components fitted on that statistic
     (``reference_components``: what the statistic reads where the exact fit reads the current structure's own; a
     parameter the statistic reads poorly, e.g. K on the banded periodogram, is read off the candidate relative to
     it)."""
 
-    gain: float
     statistic: str
+    gain: float
+    components: tuple[Component, ...]
+    reference_components: tuple[Component, ...]
+
+
+@dataclass(frozen=True)
+class Screen:
+    """A candidate's ``maxima`` on the statistics (one per statistic fitted, the largest gain first), its
+    ``extra_parameters`` (negative: fewer) over the current structure, ``penalty`` ln N and whether it ``nests`` the
+    current structure (then never credited with a loss). The verdict reads the best maximum; each maximum is also a
+    reading of the structure in its own right: the two statistics see different frequencies (the banded periodogram
+    the short τ, the block sums the long τ) and may each find a different mode of the same structure."""
+
+    maxima: tuple[Maximum, ...]
     extra_parameters: int
     penalty: float
-    components: tuple[Component, ...] = ()
-    reference_components: tuple[Component, ...] = ()
+    nests: bool = False
+
+    def credited(self, maximum: Maximum) -> float:
+        """The log-likelihood gain ``maximum`` credits the candidate with (not below 0 when it :attr:`nests`)."""
+        return max(maximum.gain, 0.0) if self.nests else maximum.gain
+
+    @property
+    def gain(self) -> float:
+        """The best maximum's :meth:`credited` gain."""
+        return self.credited(self.maxima[0])
+
+    @property
+    def statistic(self) -> str:
+        """The statistic of the best maximum."""
+        return self.maxima[0].statistic
+
+    @property
+    def components(self) -> tuple[Component, ...]:
+        """The components at the best maximum."""
+        return self.maxima[0].components
+
+    def delta_bic_at(self, maximum: Maximum) -> float:
+        """The BIC change ``maximum`` says the candidate could reach."""
+        return -2.0 * self.credited(maximum) + self.extra_parameters * self.penalty
+
+    def delta_aic_at(self, maximum: Maximum) -> float:
+        """The AIC change ``maximum`` says the candidate could reach."""
+        return -2.0 * self.credited(maximum) + 2.0 * self.extra_parameters
 
     @property
     def delta_bic(self) -> float:
         """The BIC change the statistics say the candidate could reach."""
-        return -2.0 * self.gain + self.extra_parameters * self.penalty
+        return self.delta_bic_at(self.maxima[0])
 
     @property
     def delta_aic(self) -> float:
         """The AIC change the statistics say the candidate could reach."""
-        return -2.0 * self.gain + 2.0 * self.extra_parameters
+        return self.delta_aic_at(self.maxima[0])
 
     @property
     def worth_exact_fit(self) -> bool:
@@ -125,22 +164,25 @@ def _starts(candidate: list[Component], current: list[Component], dt: float) -> 
     return out
 
 
-def screen(reference: Reference, candidate: list[Component], stats: Statistics) -> Screen:
-    """The statistics' verdict on ``candidate`` (starting components) against ``reference``; a candidate nesting the
-    current structure is never credited with a loss."""
-    best_gain, best_stat, best_fit = -math.inf, "whittle", list(candidate)
+def screen(reference: Reference, candidate: list[Component], stats: Statistics,
+           others: Sequence[list[Component]] = ()) -> Screen:
+    """The statistics' verdict on ``candidate`` (starting components, and :func:`_starts` around them) and on the
+    same structure's ``others`` starts (each as given: e.g. the exact fit's further AV-fit starts, whose modes the
+    first start's shorter GMs do not reach) against ``reference``: each statistic's maximum over the starts."""
     block_span = stats.sums.block * stats.dt
     known = set(reference.components)
-    for start in _starts(candidate, reference.components, stats.dt):
-        w, fitted = stats.whittle_fit(start)
-        if w - reference.whittle_loglik > best_gain:
-            best_gain, best_stat, best_fit = w - reference.whittle_loglik, "whittle", fitted
+    best: dict[str, tuple[float, list[Component]]] = {}
+    for start in [*_starts(candidate, reference.components, stats.dt), *map(list, others)]:
+        fits = [("whittle", *stats.whittle_fit(start))]
         if all(c.tau >= block_span for c in start if isinstance(c, GM) and c not in known):
-            b, fitted = block_sums.fit(start, stats.sums)
-            if b - reference.block_loglik > best_gain:
-                best_gain, best_stat, best_fit = b - reference.block_loglik, "block sums", fitted
+            fits.append(("block sums", *block_sums.fit(start, stats.sums)))
+        for statistic, loglik, fitted in fits:
+            gain = loglik - (reference.whittle_loglik if statistic == "whittle" else reference.block_loglik)
+            if statistic not in best or gain > best[statistic][0]:
+                best[statistic] = (gain, fitted)
+    at_reference = {"whittle": reference.whittle_components, "block sums": reference.block_components}
+    maxima = sorted((Maximum(statistic, gain, tuple(fitted), at_reference[statistic])
+                     for statistic, (gain, fitted) in best.items()), key=lambda m: -m.gain)
     nests = not Counter(c.name for c in reference.components) - Counter(c.name for c in candidate)
-    at_reference = reference.whittle_components if best_stat == "whittle" else reference.block_components
-    return Screen(max(best_gain, 0.0) if nests else best_gain, best_stat,
-                  _n_parameters(candidate) - _n_parameters(reference.components), math.log(stats.n),
-                  tuple(best_fit), at_reference)
+    return Screen(tuple(maxima), _n_parameters(candidate) - _n_parameters(reference.components), math.log(stats.n),
+                  nests)

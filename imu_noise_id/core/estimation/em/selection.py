@@ -137,7 +137,8 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
             model = NoiseModel(y, dt, spec, drift=drift, allan=allans[has_rr], periodogram=periodograms[has_rr],
                                starts=further or None, sensor_filter=sensor_filter)
             if reference is not None and statistics is not None:
-                verdict = screen.screen(reference, model.starting_values(1, True)[0], statistics)
+                first, *others = model.starting_values(search.n_starts, True)
+                verdict = screen.screen(reference, first, statistics, others)
                 if not verdict.worth_exact_fit:
                     screened[spec] = (best_key, verdict)
                     allans[has_rr], periodograms[has_rr] = model.allan, model.banded_periodogram()

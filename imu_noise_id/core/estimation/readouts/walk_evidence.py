@@ -25,6 +25,7 @@ from ...noise.base import Component
 from ...noise.components import GM, RW
 from ..em import mle, whittle
 from ..em.selection import SelectionResult
+from ..em.uncertainty import WALD_MAX_SE_LOG
 from .kalibr import KalibrValue
 from .quantiles import Z95
 
@@ -32,8 +33,10 @@ from .quantiles import Z95
 OCCAM_RATIO = 1.0 / 20.0
 #: The largest ΔBIC or ΔAIC within :data:`OCCAM_RATIO` (2 ln 20 ≈ 5.99).
 OCCAM_DELTA = -2.0 * math.log(OCCAM_RATIO)
-#: Widest half-width of ln K's interval held determined (e^±100: K known to no order of magnitude at all).
-MAX_LOG_HALF_WIDTH = 100.0
+#: Largest standard error of ln K whose Wald interval is held determined: the fits' own rule
+#: (:data:`~..em.uncertainty.WALD_MAX_SE_LOG`, an interval wider than ×7 each way), which replaces such an interval
+#: by a profile; a reading has no pass over the data for one.
+MAX_LOG_SE = WALD_MAX_SE_LOG
 
 
 @dataclass(frozen=True)
@@ -92,8 +95,8 @@ def record_walk(components: list[Component], span_s: float) -> float:
 def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float, float] | None:
     """95 % Wald interval of :func:`record_walk` over ``n`` samples at ``dt`` [s], on ln K, by the delta method from
     Whittle's Fisher information of ``n`` samples (:func:`~..em.whittle.fisher_information`); (0, 0) without a
-    walk, None where the information leaves K undetermined (singular, or a half-width on ln K beyond
-    :data:`MAX_LOG_HALF_WIDTH`)."""
+    walk, None where the information leaves K undetermined (singular, or sd(ln K) above :data:`MAX_LOG_SE`: a slow GM
+    beside a walk it outweighs reads K to no order of magnitude, e^(±1.96 sd) up to 10²⁷-fold)."""
     span = n * dt
     k = record_walk(components, span)
     if k == 0.0:
@@ -108,7 +111,7 @@ def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float
     used = gradient != 0.0
     with np.errstate(invalid="ignore"):
         var = float(gradient[used] @ cov[np.ix_(used, used)] @ gradient[used])
-    if not (math.isfinite(var) and 0.0 <= Z95 * math.sqrt(var) <= MAX_LOG_HALF_WIDTH):
+    if not (math.isfinite(var) and 0.0 <= var <= MAX_LOG_SE**2):
         return None
     sd = math.sqrt(var)
     return (k * math.exp(-Z95 * sd), k * math.exp(Z95 * sd))
@@ -126,19 +129,22 @@ def plausible_walks(selection: SelectionResult, n: int, dt: float) -> list[WalkR
     """The readings of K (:func:`record_walk`, :func:`walk_interval`) of the selection's structures other than its
     winner (whose K has its own interval) within Occam's window on BIC or AIC (:data:`OCCAM_DELTA`), of a record of
     ``n`` samples at ``dt`` [s], best BIC first: its converged fits, and its candidates screened out on the statistics
-    of fixed size (:mod:`..em.screen`) at the components and likelihood gain the screen found (their criteria those of
-    the structure they were screened against plus the screen's). A screened candidate's K (and interval) is read
-    relative to the statistic's reading of the structure it was screened against (:func:`_statistic_walk_scale`): a
-    statistic of fixed size reads K less well than the exact fit, and its absolute K would put its own error into
-    the interval as if it were a difference between the structures. ΔBIC and ΔAIC are to the best of all."""
+    of fixed size (:mod:`..em.screen`) at the components and likelihood gain of each statistic's maximum (their
+    criteria those of the structure they were screened against plus the screen's; the block sums may find a slow GM
+    the banded periodogram does not see, a mode that reads K differently). A screened candidate's K (and interval)
+    is read relative to the statistic's reading of the structure it was screened against
+    (:func:`_statistic_walk_scale`): a statistic of fixed size reads K less well than the exact fit, and its absolute
+    K would put its own error into the interval as if it were a difference between the structures. ΔBIC and ΔAIC are
+    to the best of all."""
     winner = selection.best_key
     span = n * dt
     fits = {spec: f for spec, f in selection.fits.items() if f.converged}
     found = [(spec, f.bic, f.aic, list(f.components), 1.0) for spec, f in fits.items()]
-    found += [(spec, fits[against].bic + verdict.delta_bic, fits[against].aic + verdict.delta_aic,
-               list(verdict.components),
-               _statistic_walk_scale(list(fits[against].components), verdict.reference_components, span))
-              for spec, (against, verdict) in selection.screened.items() if against in fits and verdict.components]
+    found += [(spec if i == 0 else f"{spec} at its {m.statistic} maximum", fits[against].bic + verdict.delta_bic_at(m),
+               fits[against].aic + verdict.delta_aic_at(m), list(m.components),
+               _statistic_walk_scale(list(fits[against].components), m.reference_components, span))
+              for spec, (against, verdict) in selection.screened.items() if against in fits
+              for i, m in enumerate(verdict.maxima) if m.components]
     if not found:
         return []
     bic_min, aic_min = min(f[1] for f in found), min(f[2] for f in found)
