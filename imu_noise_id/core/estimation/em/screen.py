@@ -1,7 +1,8 @@
 """Whether a candidate structure is worth its exact fit, from its likelihood gain on two statistics of fixed size
 (beyond the papers): the banded Whittle likelihood (:mod:`.whittle`) and the block sums' exact likelihood
-(:mod:`.block_sums`). The gain is the larger of the two over a few starts (:func:`_starts`); the candidate goes on
-when −2·gain + Δk·ln N < :data:`MARGIN` (docs/em.md, "Screening on statistics of fixed size")."""
+(:mod:`.block_sums`). The gain is the larger of the two over a few starts (:func:`_starts`, and the structure's
+further starts); the candidate goes on when −2·gain + Δk·ln N < :data:`MARGIN` (docs/em.md, "Screening on statistics
+of fixed size"). Each statistic's maximum is kept (:class:`Maximum`): a reading of the structure in its own right."""
 
 from __future__ import annotations
 
