@@ -255,7 +255,8 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
     whose parameters show in few frequencies short of its maximum (on a measured axis a tenth of the climbs by more
     than one unit, some by hundreds); ``to_maximum`` climbs on from there relative to the value reached, until
     |∂ℓ/∂ln ϑ| < :data:`MAXIMUM_GRADIENT_TOLERANCE`: for values compared across structures, where a start's
-    good-enough is not."""
+    good-enough is not. A climb that stays at its start is redone in units of the start's information
+    (:func:`_scaled_climb`)."""
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([start[i].params()[k] for i, k in keys])
@@ -278,18 +279,41 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
             box.append((v - 30.0, v + 30.0))
     x0 = np.clip(x0, [b[0] for b in box], [b[1] for b in box])
     res = minimize(negll, x0, jac=True, method="L-BFGS-B", bounds=box, options={"maxiter": 500})
-    if not to_maximum or res.fun >= 1e300:
-        return -float(res.fun), with_log_parameters(start, keys, res.x)
-    reached = float(res.fun)
+    x_reached, reached = res.x, float(res.fun)
+    if np.array_equal(res.x, x0) and reached < 1e300:  # stalled at its start: redone in units of its information
+        x_reached, reached = _scaled_climb(negll, x0, box, whittle_information(
+            with_log_parameters(start, keys, x0), np.empty(0), dt, periodogram=bp), (x_reached, reached))
+    if not to_maximum or reached >= 1e300:
+        return -reached, with_log_parameters(start, keys, x_reached)
 
     def from_reached(x: np.ndarray) -> tuple[float, np.ndarray]:
         value, gradient = negll(x)
         return value - reached, gradient
 
-    on = minimize(from_reached, res.x, jac=True, method="L-BFGS-B", bounds=box,
+    on = minimize(from_reached, x_reached, jac=True, method="L-BFGS-B", bounds=box,
                   options={"maxiter": 500, "ftol": 1e-15, "gtol": MAXIMUM_GRADIENT_TOLERANCE})
-    x = on.x if on.fun < 0.0 else res.x
+    x = on.x if on.fun < 0.0 else x_reached
     return -(reached + min(float(on.fun), 0.0)), with_log_parameters(start, keys, x)
+
+
+def _scaled_climb(negll: Callable[[np.ndarray], tuple[float, np.ndarray]], x0: np.ndarray,
+                  box: list[tuple[float, float]], information: np.ndarray,
+                  unscaled: tuple[np.ndarray, float]) -> tuple[np.ndarray, float]:
+    """(x, −ℓ) of L-BFGS-B on ``negll`` from ``x0`` in units of the start's Fisher information per log-parameter
+    (x = x0 + η/√I_jj, within ``box``), or ``unscaled`` (x, −ℓ) where that is no better. Unscaled, the first step is
+    the whole gradient (~N in the white noise's log-density) and may reach the box's corners, where a resonance is not
+    defined (bandwidth above its frequency), and L-BFGS-B stops at the start."""
+    diagonal = np.diag(information)
+    scale = np.sqrt(np.where(diagonal > 0.0, diagonal, 1.0))
+
+    def in_units(eta: np.ndarray) -> tuple[float, np.ndarray]:
+        value, gradient = negll(x0 + eta / scale)
+        return value, gradient / scale
+
+    eta_box = [((lo - x) * k, (hi - x) * k) for (lo, hi), x, k in zip(box, x0, scale, strict=True)]
+    res = minimize(in_units, np.zeros(x0.size), jac=True, method="L-BFGS-B", bounds=eta_box,
+                   options={"maxiter": 500})
+    return (x0 + res.x / scale, float(res.fun)) if res.fun < unscaled[1] else unscaled
 
 
 def whittle_information(components: list[Component], y: np.ndarray, dt: float,
