@@ -610,3 +610,29 @@ def test_a_drop_that_takes_k_outside_its_interval_needs_strong_evidence():
     assert judge(before, _walk_diag(-3.0, [WN(5e-4), GM(tau=300.0, sigma=2e-4), RW(5e-6)]))[0]  # an addition
     unidentified = [WN(2e-2), RW(2e-5)]  # a walk 1 h barely sees below this white noise
     assert judge(_walk_diag(0.0, unidentified), _walk_diag(-1.0, [WN(2e-2)]), guard_walk=True)[0]
+
+
+def test_a_drop_that_fits_better_than_its_parent_refits_the_parent_first():
+    """A parent fit stopped short of its maximum (here: left at a start whose walk is 10x too strong) made every
+    move look better: WN+GM fitted without the walk lay far above it, and re-selection swapped the walk for flicker
+    noise (WN+BI+GM; on 20 min of WN + RW + a 0.5 Hz line the fit that added the line lay 536 below its own fit
+    without the walk, and the walk ended as a step and flicker noise). Re-selection now refits the parent from its
+    best nested fit first, and the walk stays, near the truth."""
+    from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
+    from imu_noise_id.pipelines.loop.reselection import reselect
+
+    n, k_true = 30_000, 3e-4
+    y = simulate_sum([WN(1e-3), GM(tau=2.0, sigma=3e-3), RW(k_true)], n, DT, np.random.default_rng(3))
+    loop = AxisLoop(y, DT, None, alpha=0.01, lags=20, outliers="impute")
+    start = [WN(1e-3), GM(tau=2.0, sigma=3e-3), RW(10 * k_true)]
+    short = NoiseModel(y, DT, "WN+GM+RW").fit(start, FitOptions(uncertainty=False, em_iter=0, polish=False))
+    state = LoopState(["WN", "GM", "RW"], init=start)
+    diag = loop.diagnose(state, short)
+    without_walk = loop.diagnose(state.with_components([WN(1e-3), GM(tau=2.0, sigma=3e-3)]))
+    assert without_walk.fit.loglik > diag.fit.loglik + 10.0  # the nested structure "fits better"
+    _, final, dropped, trials = reselect(loop, state, diag, added="GM")
+    assert any(t.finding.effect == "refit" and t.accepted for t in trials)
+    assert final.fit.loglik >= without_walk.fit.loglik
+    assert "RW" not in dropped
+    (walk,) = [c for c in final.fit.components if isinstance(c, RW)]
+    assert 0.5 < walk.random_walk / k_true < 2.0
