@@ -17,6 +17,7 @@ and 3 h) and the median N error. The oscillation cell's records take minutes eac
 
     .venv/bin/python bench/bench_random_walk.py --minutes 20 --baseline ../baseline   # side by side
     .venv/bin/python bench/bench_random_walk.py --minutes 60 --cells WN+RW WN+GM20+RW
+    .venv/bin/python bench/bench_random_walk.py --minutes 20 --cells WN+OSC+RW --seeds 10 --first-seed 10  # half
 """
 
 from __future__ import annotations
@@ -86,6 +87,8 @@ def summary(rows: list[dict]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20, help="records per cell")
+    ap.add_argument("--first-seed", type=int, default=0, help="the first record's seed (to split a cell's records "
+                                                                   "over processes)")
     ap.add_argument("--minutes", type=float, default=20.0)
     ap.add_argument("--cells", nargs="+", default=list(CELLS), choices=list(CELLS))
     ap.add_argument("--baseline", type=Path, action="append", default=[], help="another checkout (repeatable)")
@@ -93,8 +96,9 @@ def main(argv: list[str] | None = None) -> int:
     sources = [("this checkout", ROOT), *[(f"baseline {p}", p.resolve()) for p in args.baseline]]
     dt = 1.0 / RATE_HZ
     n = int(args.minutes * 60 * RATE_HZ)
-    print(f"# bench/bench_random_walk.py --seeds {args.seeds} --minutes {args.minutes:g} --cells "
-          f"{' '.join(args.cells)}; {os.cpu_count()} CPUs; load average before {os.getloadavg()[0]:.2f}")
+    print(f"# bench/bench_random_walk.py --seeds {args.seeds} --first-seed {args.first_seed} --minutes "
+          f"{args.minutes:g} --cells {' '.join(args.cells)}; {os.cpu_count()} CPUs; load average before "
+          f"{os.getloadavg()[0]:.2f}")
     print(f"# truth: N = {N_TRUE:g}, K = {K_TRUE:g} at {RATE_HZ:g} Hz; per cell beside them: "
           + "; ".join(f"{c}: {'+'.join(repr(x) for x in components(c, n, dt)[1:-1]) or 'nothing'}"
                       for c in args.cells))
@@ -102,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         path = str(Path(tmp) / "record.npy")
         for cell in args.cells:
-            for seed in range(args.seeds):
+            for seed in range(args.first_seed, args.first_seed + args.seeds):
                 rng = np.random.default_rng([CELLS.index(cell), int(args.minutes), seed])
                 np.save(path, simulate_sum(components(cell, n, dt), n, dt, rng))
                 for name, source in sources:
