@@ -82,6 +82,8 @@ LONG: list[tuple[list[str], str]] = [
      "bench_random_walk.txt"),
     (["bench_random_walk.py", "--minutes", "60", "--cells", *RANDOM_WALK_CELLS, "--baseline", BASELINE],
      "bench_random_walk.txt"),
+    (["bench_random_walk.py", "--minutes", "180", "--cells", *RANDOM_WALK_CELLS, "--baseline", BASELINE],
+     "bench_random_walk.txt"),
     (["bench_watch.py"], "bench_watch.txt"),
     (["bench_compare_adis.py"], "bench_compare_adis.txt"),
     (["bench_measured_passband.py", "--adis-runs", "1", "2", "3", "4", "5", "6", "--adis-samples", "30000"],
