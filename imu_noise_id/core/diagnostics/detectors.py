@@ -53,6 +53,13 @@ class Finding:
     def significant(self) -> bool:
         return bool(self.statistic > self.threshold)
 
+    @classmethod
+    def proposed(cls, effect: str, detector: str, evidence: str, params: dict[str, float] | None = None) -> Finding:
+        """A candidate the loop proposes itself (a re-selection move, a joint-search start): no statistic tested
+        (statistic, threshold, log10_p and level 0), ``params`` its initial values."""
+        return cls(effect=effect, detector=detector, statistic=0.0, threshold=0.0, log10_p=0.0, level=0.0,
+                   params=dict(params or {}), evidence=evidence)
+
 
 def bonferroni_log10_p(log10_p_single: float, m: int) -> float:
     """log₁₀ of the Bonferroni p-value of the most extreme of ``m`` tests (capped at p = 1)."""

@@ -89,8 +89,7 @@ def try_move(loop: AxisLoop, diag: Diagnosis, new_state: LoopState, label: str, 
     """Fit and judge one re-selection move ``label`` ("drop RW" …) against ``diag`` (:func:`judge`, with the BIC tie
     for a move that adds no parameter, K guarded for a drop): the trial and the new diagnosis (None when the refit
     failed)."""
-    finding = det.Finding(effect=label.split(" ", 1)[1], detector="reselection", statistic=0.0, threshold=0.0,
-                          log10_p=0.0, level=0.0, params={}, evidence=evidence or label)
+    finding = det.Finding.proposed(label.split(" ", 1)[1], "reselection", evidence or label)
     try:
         new_diag = loop.diagnose(new_state)
     except (InputError, ValueError, np.linalg.LinAlgError) as exc:
@@ -123,8 +122,7 @@ def climb_from_nested(loop: AxisLoop, state: LoopState, diag: Diagnosis, nested:
     scale = getattr(dropped, dropped.scale_name)
     start = canonical([*nested.fit.components, replace(dropped, **{dropped.scale_name: RESTORED_SHARE * scale})])
     new_state = state.with_components(start)
-    finding = det.Finding(effect="refit", detector="reselection", statistic=0.0, threshold=0.0, log10_p=0.0,
-                          level=0.0, params={}, evidence=f"{state.name()} refitted from its nested fit")
+    finding = det.Finding.proposed("refit", "reselection", f"{state.name()} refitted from its nested fit")
     try:
         new_diag = loop.diagnose(new_state)
     except (InputError, ValueError, np.linalg.LinAlgError):  # InputError is a ValueError

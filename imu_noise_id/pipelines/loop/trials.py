@@ -195,9 +195,9 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
     tries: list[tuple[det.Finding, LoopState]] = []
     for effect, params in proposals:
         start = ", ".join(f"{k} {v:.3g}" for k, v in params.items())
-        finding = det.Finding(effect=effect, detector="joint_search", statistic=0.0, threshold=0.0, log10_p=0.0,
-                              level=0.0, params={**params, "deficit": 1.0},
-                              evidence=f"joint search: {effect} added ({start}), the random walk restarted small")
+        finding = det.Finding.proposed(effect, "joint_search",
+                                       f"joint search: {effect} added ({start}), the random walk restarted small",
+                                       {**params, "deficit": 1.0})
         tries.append((finding, loop.extend(state, finding, diag)))
     hump = hump_resonance(loop, diag)
     if hump is not None:
@@ -205,10 +205,10 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
     joint = flicker_as_gm_and_walk(loop, diag)
     if joint is not None:
         gm, walk = (next(c for c in joint if isinstance(c, kind)) for kind in (GM, RW))
-        finding = det.Finding(effect="GM+RW", detector="joint_search", statistic=0.0, threshold=0.0, log10_p=0.0,
-                              level=0.0, params={"tau": gm.tau, "sigma": gm.sigma, "random_walk": walk.random_walk},
-                              evidence=f"joint search: flicker noise (BI) replaced by a GM (τ {gm.tau:.3g} s, σ "
-                                       f"{gm.sigma:.3g}) and a random walk (K {walk.random_walk:.3g})")
+        finding = det.Finding.proposed("GM+RW", "joint_search",
+                                       f"joint search: flicker noise (BI) replaced by a GM (τ {gm.tau:.3g} s, σ "
+                                       f"{gm.sigma:.3g}) and a random walk (K {walk.random_walk:.3g})",
+                                       {"tau": gm.tau, "sigma": gm.sigma, "random_walk": walk.random_walk})
         tries.append((finding, state.with_components(joint)))
     best: tuple[float, LoopState, Diagnosis, det.Finding] | None = None
     reference = loop.screen_reference(state, diag)
