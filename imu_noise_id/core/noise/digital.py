@@ -1,8 +1,8 @@
 """The sensor's digital low-pass (DLPF): white noise (density N [u/√Hz], σ² = N²/dt) through an order-n Butterworth
 designed by the bilinear transform at the sampling rate, H = ``scipy.signal.butter(n, f_c, fs=1/dt)``
 (docs/noise.md): S(f) = N²|H(e^{i2πf dt})|², zero at Nyquist; f_c [Hz] the −3 dB cutoff < 1/(2 dt); n structure.
-Block: direct form II, Φ the companion matrix, Q = diag(b₀²σ², 0 …) (first element free), H = C(n, i); AV(m·dt) = (4
-S(m) − S(2m))/(2m²), R(j) = σ² Σ_k h_k h_{k+j}."""
+Block: the direct form II in difference coordinates (:func:`_difference_realisation`), Q = diag(b₀²σ², 0 …) (first
+element free); AV(m·dt) = (4 S(m) − S(2m))/(2m²), R(j) = σ² Σ_k h_k h_{k+j}."""
 
 from __future__ import annotations
 
@@ -44,6 +44,44 @@ def _covariance(order: int, cutoff_per_sample: float) -> np.ndarray:
     size = 1 << math.ceil(math.log2(2 * length))
     spectrum = np.fft.rfft(h, size)
     return np.fft.irfft(spectrum * np.conj(spectrum), size)[:length]
+
+
+@functools.lru_cache(maxsize=256)
+def _difference_realisation(order: int, cutoff_per_sample: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """(Φ, h, b₀) of the order-n Butterworth at f_c·dt on the direct form II's signal w (w_t = b₀e_t − Σ a_i w_{t−i},
+    y_t = Σ_i C(n, i) w_{t−i}) in difference coordinates: x⁰_t = Δⁿw_t, x^{k}_t = Δ^{k−1}w_{t−1} (k = 1 … n),
+    Δ = 1 − z⁻¹.
+
+    The Butterworth's poles z_k = 1 + λŝ_k (λ = 2 tan(π f_c dt), the prewarped analog cutoff per sample;
+    ŝ_k = p_k/(1 − λp_k/2) with p_k the normalised prototype's poles, all of order one) give
+    a(z⁻¹) = Π(1 − z_k z⁻¹) = Π(z_k Δ − λŝ_k) = Σ_j α_j Δʲ with α_j of order λ^{n−j}, exactly, where the
+    coefficients a_i are O(1) and cancel to O(λⁿ). With D_j(t) = D_n(t) + Σ_{i=j}^{n−1} D_i(t−1):
+
+        x⁰_{t+1} = b₀e_{t+1} − Σ_i β_i (x⁰_t + Σ_{m≥i} x^{m+1}_t),  β_i = Σ_{j≤i} α_j,
+        x^{k}_{t+1} = x⁰_t + Σ_{i≥k−1} x^{i+1}_t,   y_t = Σ_j C(n, j) 2^{n−j} (−1)ʲ D_j(t).
+
+    Only state 0's row depends on f_c and only state 0 is driven (the EM's M-step and the score assume both), H is
+    parameter-free (as for the direct form II, which it is a fixed similarity of), and the states are differences of
+    the order of λʲ, not lagged values agreeing to 1 − O(λ²) that make the Riccati equation singular in double
+    precision at low f_c dt (the δ-operator's argument, Middleton & Goodwin 1990)."""
+    n = order
+    lam = 2.0 * math.tan(math.pi * cutoff_per_sample)
+    prototype = -np.exp(1j * math.pi * np.arange(-n + 1, n, 2) / (2 * n))
+    s_hat = prototype / (1.0 - 0.5 * lam * prototype)
+    alpha = np.ones(1, dtype=complex)  # ascending powers of Δ
+    for s_k in s_hat:
+        alpha = np.convolve(alpha, [-lam * s_k, 1.0 + lam * s_k])
+    beta = np.cumsum(np.real(alpha))[:n]
+    b0 = float(np.real(np.prod(-s_hat))) * (0.5 * lam) ** n
+    phi = np.zeros((n + 1, n + 1))
+    phi[0, 0] = -float(np.sum(beta))
+    phi[0, 1:] = -np.cumsum(beta)
+    for k in range(1, n + 1):
+        phi[k, 0] = 1.0
+        phi[k, k:] = 1.0
+    weights = np.array([math.comb(n, j) * 2.0 ** (n - j) * (-1.0) ** j for j in range(n + 1)])
+    h = np.concatenate([[float(np.sum(weights))], np.cumsum(weights[:n])])
+    return phi, h, b0
 
 
 @dataclass(frozen=True)
@@ -88,18 +126,15 @@ class DLPF(Component):
         return signal.lfilter(b, a, w)[warm:]
 
     def block(self, dt: float) -> StateBlock:
-        b, a = self.coefficients(dt)
+        """The block of :func:`_difference_realisation` (Q's first element b₀²σ², free)."""
+        phi, h, b0 = _difference_realisation(self.order, self._per_sample(dt))
         p = self.order + 1
-        phi = np.zeros((p, p))
-        phi[0, : self.order] = -a[1:]
-        phi[1:, :-1] = np.eye(p - 1)
         q = np.zeros((p, p))
-        q[0, 0] = b[0] ** 2 * self.sigma2(dt)
+        q[0, 0] = b0**2 * self.sigma2(dt)
         q_free = np.zeros((p, p), bool)
         q_free[0, 0] = True
-        h = np.array([math.comb(self.order, i) for i in range(p)], dtype=float)
-        return StateBlock(phi=phi, q=q, h=h, u=np.zeros(p), phi_free=np.zeros((p, p), bool), q_free=q_free,
-                          u_free=np.zeros(p, bool))
+        return StateBlock(phi=phi.copy(), q=q, h=h.copy(), u=np.zeros(p), phi_free=np.zeros((p, p), bool),
+                          q_free=q_free, u_free=np.zeros(p, bool))
 
     def autocovariance(self, lags: np.ndarray, dt: float) -> np.ndarray:
         """R(j) [u²] at integer lags (0 beyond the response's length)."""
@@ -154,17 +189,17 @@ class DLPF(Component):
 
     @classmethod
     def from_block(cls, phi: np.ndarray, q: np.ndarray, dt: float) -> DLPF:
-        """The DLPF of companion matrix ``phi``: f_c from a₁, N = √(Q₀₀·dt)/b₀."""
+        """The DLPF of the block of :meth:`block`: f_c from Φ₀₀ (monotone in f_c), N = √(Q₀₀·dt)/b₀."""
         order = phi.shape[0] - 1
-        a1 = -float(phi[0, 0])
+        target = float(phi[0, 0])
 
         def gap(x: float) -> float:
-            return float(_design(order, x)[1][1]) - a1
+            return float(_difference_realisation(order, x)[0][0, 0]) - target
 
         lo, hi = 1e-9, 0.5 - 1e-9
-        x = optimize.brentq(gap, lo, hi, xtol=1e-14) if gap(lo) * gap(hi) < 0 else (lo if abs(gap(lo)) < abs(
+        x = optimize.brentq(gap, lo, hi, xtol=1e-15) if gap(lo) * gap(hi) < 0 else (lo if abs(gap(lo)) < abs(
             gap(hi)) else hi)
-        b0 = float(_design(order, x)[0][0])
+        b0 = _difference_realisation(order, x)[2]
         return cls(math.sqrt(max(float(q[0, 0]), 0.0) * dt) / b0, x / dt, order)
 
 
