@@ -12,8 +12,9 @@ reading) over the truth, its method and 95 % interval, whether the interval hold
 per cell and tree: the share of seeds whose pasted K's interval holds the truth (the target: ≥ 90 %), among the
 pasted bounds (``bound``, ``unresolved``, ``allan_upper_bound``, ``overbound``) the share at or above the truth
 (≥ 95 %), the seeds whose K lies below the truth by more than its interval says, the median |ln(K̂/K)| (≤ 0.25 at 1 h
-and 3 h) and the median N error. The oscillation cell's records take minutes each (the loop adds the line);
-``run_all.py --long`` runs the others::
+and 3 h) and the median N error; a record ``analyze`` stops on (its InputError) is printed as such and counts as a
+miss. The oscillation cell's records take minutes each (the loop adds the line); ``run_all.py --long`` runs the
+others::
 
     .venv/bin/python bench/bench_random_walk.py --minutes 20 --baseline ../baseline   # side by side
     .venv/bin/python bench/bench_random_walk.py --minutes 60 --cells WN+RW WN+GM20+RW
@@ -72,16 +73,18 @@ def components(cell: str, n: int, dt: float) -> list:
 
 
 def summary(rows: list[dict]) -> str:
-    """One cell's line for one tree (module docstring)."""
-    held = sum(r["k_ci"][0] <= K_TRUE <= r["k_ci"][1] for r in rows)
-    bounds = [r for r in rows if r["k_method"] in BOUND_METHODS]
+    """One cell's line for one tree (module docstring); a record ``analyze`` stopped on counts as a miss."""
+    done = [r for r in rows if "stopped" not in r]
+    held = sum(r["k_ci"][0] <= K_TRUE <= r["k_ci"][1] for r in done)
+    bounds = [r for r in done if r["k_method"] in BOUND_METHODS]
     above = sum(r["k"] >= K_TRUE for r in bounds)
-    below = sum(r["k_ci"][1] < K_TRUE for r in rows)
-    log_err = statistics.median(abs(math.log(r["k"] / K_TRUE)) for r in rows)
-    n_err = statistics.median(r["n"] / N_TRUE - 1.0 for r in rows)
+    below = sum(r["k_ci"][1] < K_TRUE for r in done)
+    log_err = statistics.median(abs(math.log(r["k"] / K_TRUE)) for r in done) if done else math.nan
+    n_err = statistics.median(r["n"] / N_TRUE - 1.0 for r in done) if done else math.nan
+    stopped = f"; analyze stopped on {len(rows) - len(done)}" if len(done) < len(rows) else ""
     return (f"K's interval holds the truth {held}/{len(rows)} ({100 * held / len(rows):.0f} %); bounds at or above it "
             f"{above}/{len(bounds)}; below it beyond the interval {below}; median |ln(K/K_true)| {log_err:.3f}; "
-            f"median N error {100 * n_err:+.2f} %")
+            f"median N error {100 * n_err:+.2f} %{stopped}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -110,8 +113,12 @@ def main(argv: list[str] | None = None) -> int:
                 rng = np.random.default_rng([CELLS.index(cell), int(args.minutes), seed])
                 np.save(path, simulate_sum(components(cell, n, dt), n, dt, rng))
                 for name, source in sources:
-                    cpu, out = run_in_checkout(source, ONE_RECORD.format(path=path, dt=dt), "one record")
+                    cpu, out = run_in_checkout(source, ONE_RECORD.format(path=path, dt=dt), "one record", stops=True)
                     rows.setdefault((cell, name), []).append(out)
+                    if "stopped" in out:
+                        print(f"{cell:12s} seed {seed:2d} {name:28s} analyze stopped: {out['stopped']}  "
+                              f"CPU {cpu:5.1f} s", flush=True)
+                        continue
                     lo, hi = out["k_ci"]
                     print(f"{cell:12s} seed {seed:2d} {name:28s} {out['model']:22s} K/K_true {out['k'] / K_TRUE:7.3f} "
                           f"({out['k_method']}, interval [{lo / K_TRUE:.3f}, {hi / K_TRUE:.3f}], holds: "

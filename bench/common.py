@@ -165,10 +165,15 @@ n, k = axis_readings(static, "gyro_x", final)  # as imu.yaml pastes them
 """
 
 
-def run_in_checkout(source: Path, code: str, what: str) -> tuple[float, dict]:
+#: How a child's last line of stderr begins when the package stopped it on its input.
+INPUT_ERROR = "imu_noise_id.core.errors.InputError:"
+
+
+def run_in_checkout(source: Path, code: str, what: str, *, stops: bool = False) -> tuple[float, dict]:
     """(CPU [s] of the child, the JSON object its code printed on the line before the last) of ``python -c code``
     run in ``source`` (PYTHONPATH too, one BLAS thread); SystemExit naming ``what`` if it fails or imported another
-    checkout's package.
+    checkout's package. ``stops``: a child stopped by the package's InputError (what a user would read) is a result,
+    ``{"stopped": its message}``, not a failure of the bench.
 
     The child runs with PYTHONPATH and the working directory both set to ``source``: ``python -m`` and ``-c`` put
     the working directory before PYTHONPATH, so run from the repository root every checkout would import the root's
@@ -180,13 +185,16 @@ def run_in_checkout(source: Path, code: str, what: str) -> tuple[float, dict]:
     done = subprocess.run([sys.executable, "-c", code + _PACKAGE], env=env, cwd=source, capture_output=True,
                           text=True, check=False)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     if done.returncode != 0:
+        last = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else ""
+        if stops and last.startswith(INPUT_ERROR):
+            return cpu, {"stopped": last.removeprefix(INPUT_ERROR).strip()}
         raise SystemExit(f"{what} from {source} failed:\n{done.stderr}")
     *_, result, package = done.stdout.strip().splitlines()
     package = json.loads(package)["package"]
     if not Path(package).is_relative_to(source):
         raise SystemExit(f"run from {source}, {what} imported {package}")
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return cpu, json.loads(result)
 
 

@@ -64,7 +64,10 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
     long τ, QN variants when it falls like τ⁻² at short τ, WN+BI+RW when flat over a decade above the white-noise
     line (:func:`~imu_noise_id.core.diagnostics.av_signatures.flicker_level`), :data:`DLPF_CANDIDATES` at a low-pass
     roll-off (:func:`~imu_noise_id.core.allan.slopes.rolloff_end`) or a rise within the τ a roll-off reaches
-    (:func:`~imu_noise_id.core.allan.slopes.rises_early`)."""
+    (:func:`~imu_noise_id.core.allan.slopes.rises_early`); WN+BI+RW last on every record of
+    :data:`.screen.MIN_SAMPLES` samples or more, where the screen judges it before any fit: a flicker below the walk
+    shows no plateau, and without it the walk's readings are a GM's and a walk's, K read high in a narrow interval
+    (docs/analysis.md, "Why K's interval spans the structures the data cannot tell apart")."""
     cands = list(DEFAULT_CANDIDATES)
     keep = allan.m <= starts.MAX_FRACTION * allan.n
     tau, avar = allan.tau[keep], allan.variance[keep, 0]
@@ -79,6 +82,8 @@ def suggest_candidates(allan: AllanResult) -> list[str]:
             cands += ["WN+RW+RR", "WN+GM+RW+RR"]
         if slope_lo < -1.4:
             cands += ["WN+QN+RW", "WN+QN+GM"]
+    if "WN+BI+RW" not in cands and allan.n >= screen.MIN_SAMPLES:
+        cands.append("WN+BI+RW")
     return cands
 
 
