@@ -99,6 +99,20 @@ def test_a_walk_the_record_does_not_identify_is_given_as_its_upper_end():
     assert unidentified_as_bound(none) is none
 
 
+def test_a_walk_whose_interval_has_no_upper_end_takes_the_datas_bound():
+    """K fitted beside a line with the interval [0, inf) (an oscillation record of the random-walk bench) was pasted as
+    a model value: neither end bounds it. It takes the data's long-tau bound, as a model without a walk does."""
+    from imu_noise_id.core.allan.rw_bound import RandomWalkBound
+    from imu_noise_id.core.estimation.readouts.kalibr import KalibrValue, unidentified_as_bound, unmodelled_as_bound
+
+    bound = RandomWalkBound(3e-5, 0.95, (120.0, 300.0), 200.0)
+    open_ended = unidentified_as_bound(KalibrValue(2.5e-5, (0.0, math.inf), "RW"))
+    k = unmodelled_as_bound(open_ended, bound)
+    assert (k.value, k.ci95, k.method) == (3e-5, (0.0, 3e-5), "bound") and "not identified" in k.source
+    finite = KalibrValue(2.5e-5, (1e-5, 4e-5), "RW")
+    assert unmodelled_as_bound(finite, bound) is finite
+
+
 def test_a_short_record_gives_k_as_a_bound_at_or_above_the_truth_and_says_so():
     from imu_noise_id.core.allan import allan_variance
     from imu_noise_id.core.axes import ImuSeries

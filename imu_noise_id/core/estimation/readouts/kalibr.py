@@ -197,13 +197,17 @@ def unidentified_as_bound(k: KalibrValue) -> KalibrValue:
 
 
 def unmodelled_as_bound(k: KalibrValue, bound: RandomWalkBound) -> KalibrValue:
-    """K of a model without RW (``k.value`` None): the largest K the data's long-τ AV supports
+    """K of a model without RW (``k.value`` None), or whose 95 % interval reaches zero without a finite upper end (the
+    fit bounds it on neither side): the largest K the data's long-τ AV supports
     (:func:`~imu_noise_id.core.allan.rw_bound.random_walk_bound`), method ``bound``, interval (0, bound); else ``k``."""
-    if k.value is not None or not (math.isfinite(bound.value) and bound.value > 0):
+    unbounded = k.value is not None and k.ci95[0] <= 0.0 and not math.isfinite(k.ci95[1])
+    if not (k.value is None or unbounded) or not (math.isfinite(bound.value) and bound.value > 0):
         return k
+    fitted = (f"; not identified by this record: the fitted {k.value:.3g} has the interval [0, {k.ci95[1]:.3g}]"
+              if unbounded else "")
     return KalibrValue(
         bound.value, (0.0, bound.value),
-        f"{k.source}; bounded by the data: the largest walk the Allan variance at tau {bound.tau_range[0]:.3g}–"
+        f"{k.source}{fitted}; bounded by the data: the largest walk the Allan variance at tau {bound.tau_range[0]:.3g}–"
         f"{bound.tau_range[1]:.3g} s supports ({100 * bound.level:.0f} %, simultaneous over {bound.estimates} "
         "estimates), the upper end given", method="bound")
 
