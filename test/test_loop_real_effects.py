@@ -636,3 +636,22 @@ def test_a_drop_that_fits_better_than_its_parent_refits_the_parent_first():
     assert "RW" not in dropped
     (walk,) = [c for c in final.fit.components if isinstance(c, RW)]
     assert 0.5 < walk.random_walk / k_true < 2.0
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_a_digital_low_pass_that_stood_for_a_line_goes_once_the_line_is_modelled(seed):
+    """WN + a 0.5 Hz line + RW (bench_random_walk's oscillation cell, 5 min at 200 Hz): the selection, which offers no
+    resonance, reads the line as a 4th-order DLPF at 0.6 Hz; the loop then adds the OSC, the DLPF's density falls
+    ~15× — and the DLPF stayed in every final model (re-selection never dropped a filter), beside the line it had
+    stood for. It now goes: the final model is WN+OSC, the line where the truth put it, N the truth's."""
+    dt = 0.005
+    truth = [WN(5e-4), OSC(frequency=0.5, bandwidth=0.02, sigma=2e-3), RW(2e-5)]
+    y = simulate_sum(truth, 60_000, dt, np.random.default_rng(seed))
+    result = run_closed_loop(y, dt, "WN+DLPF+RW", max_steps=1)
+    assert result.steps[0].diagnosis.fit.model.startswith("WN+DLPF")
+    final = result.final.diagnosis.fit
+    assert not any(c.name == "DLPF" for c in final.components), final.model
+    oscs = [c for c in final.components if isinstance(c, OSC)]
+    assert len(oscs) == 1 and oscs[0].frequency == pytest.approx(0.5, rel=0.01)
+    white = next(c for c in final.components if isinstance(c, WN))
+    assert white.noise_density == pytest.approx(5e-4, rel=0.01)

@@ -26,10 +26,10 @@ from imu_noise_id.pipelines.loop.steps import AxisLoop
 LOOP_MOVES = reselection.moves
 
 
-def moves_with_gm_swap(loop: AxisLoop, diag: Diagnosis, added: str,
-                       swapped: tuple[str, ...] = ()) -> list[tuple[str, list[Component]]]:
+def moves_with_gm_swap(loop: AxisLoop, diag: Diagnosis, added: str, swapped: tuple[str, ...] = (),
+                       before: list[Component] | None = None) -> list[tuple[str, list[Component]]]:
     """:func:`reselection.moves` plus "swap RW (for GM)"."""
-    out = LOOP_MOVES(loop, diag, added, swapped)
+    out = LOOP_MOVES(loop, diag, added, swapped, before)
     fitted = list(diag.fit.components)
     if added == "RW" or any(c.name == "GM" for c in fitted):
         return out

@@ -13,6 +13,7 @@ from ...core.errors import InputError
 from ...core.estimation.readouts.kalibr import is_short_memory_osc
 from ...core.noise.base import Component
 from ...core.noise.components import WN
+from ...core.noise.digital import DLPF
 from ...core.noise.modelspec import canonical
 from ...core.noise.resonant import LPF, OSC
 from .rules import better, judge
@@ -24,16 +25,20 @@ from .trials import long_tau_flicker, long_tau_walk
 DROPPABLE = ("RW", "GM", "QN", "RR")
 #: The sensor's first-order filters, which a second-order low-pass (an OSC of short memory) may make redundant.
 FIRST_ORDER = ("LPF", "MA")
+#: A DLPF whose passband density an added resonance cut by at least this factor stood for that line (docs/loop.md,
+#: "The loop's rules" 5): re-selection then tries dropping it.
+LINE_TOOK_FILTER = 2.0
 
 
 
-def moves(loop: AxisLoop, diag: Diagnosis, added: str,
-          swapped: tuple[str, ...] = ()) -> list[tuple[str, list[Component]]]:
+def moves(loop: AxisLoop, diag: Diagnosis, added: str, swapped: tuple[str, ...] = (),
+          before: list[Component] | None = None) -> list[tuple[str, list[Component]]]:
     """Re-selection's moves, as (label, components): drop each :data:`DROPPABLE` component but ``added``; swap an RW for
     BI started from the long-τ AV; right after a GM, swap BI back for an RW of the same level; right after an LPF, swap
     it for a second-order low-pass (:func:`second_order_start`); right after an OSC of short memory
-    (:func:`~imu_noise_id.core.estimation.readouts.kalibr.is_short_memory_osc`), drop each :data:`FIRST_ORDER` filter.
-    ``swapped``: swaps already made in this re-selection, never undone."""
+    (:func:`~imu_noise_id.core.estimation.readouts.kalibr.is_short_memory_osc`), drop each :data:`FIRST_ORDER` filter;
+    right after an OSC, drop a DLPF whose passband density fell by :data:`LINE_TOOK_FILTER` or more from ``before``
+    (the fit before the addition). ``swapped``: swaps already made in this re-selection, never undone."""
     fitted = list(diag.fit.components)
     moves: list[tuple[str, list[Component]]] = []
     if len(fitted) < 2:
@@ -47,12 +52,21 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str,
             moves.append((f"drop {c.name}", rest))
         if isinstance(c, LPF) and "LPF" in new:
             moves.append(("swap LPF (for OSC)", second_order_start(fitted, c)))
+        if isinstance(c, DLPF) and "OSC" in new and _line_took(c, before):
+            moves.append(("drop DLPF", rest))
         if c.name == "RW" and c.name != added and "BI" not in names and "BI (for RW)" not in swapped:
             moves.append(("swap RW (for BI)", canonical([*rest, long_tau_flicker(loop, diag)])))
         if (c.name == "BI" and "GM" in new and "RW" not in names and "RW (for BI)" not in swapped
                 and diag.tau.size):
             moves.append(("swap BI (for RW)", canonical([*rest, long_tau_walk(diag)])))
     return moves
+
+
+def _line_took(dlpf: DLPF, before: list[Component] | None) -> bool:
+    """Whether ``before`` (the fit before an addition) held a DLPF of a passband density at least
+    :data:`LINE_TOOK_FILTER` times ``dlpf``'s: the resonance just added took the power the filter stood for."""
+    previous = [c for c in before or () if isinstance(c, DLPF)]
+    return len(previous) == 1 and previous[0].noise_density >= LINE_TOOK_FILTER * dlpf.noise_density
 
 
 #: Least white share of a second-order low-pass start's passband density (docs/loop.md, "Why the loop's moves …").
@@ -147,12 +161,13 @@ def _dropped(diag: Diagnosis, components: list[Component]) -> Component | None:
     return missing[0] if len(missing) == 1 else None
 
 
-def reselect(loop: AxisLoop, state: LoopState, diag: Diagnosis,
-              added: str) -> tuple[LoopState, Diagnosis, list[str], list[Trial]]:
-    """Re-selection after an addition: every move of :func:`moves` fitted (:func:`try_move`), the best kept
-    (:func:`better`), repeated while one is kept. Where a drop fits better than the current fit, the current structure
-    is first refitted from the best such drop (:func:`climb_from_nested`, at most :data:`MAX_CLIMBS` times) and the
-    moves are tried again against that refit. Returns (state, diagnosis, dropped labels, trials)."""
+def reselect(loop: AxisLoop, state: LoopState, diag: Diagnosis, added: str,
+             before: list[Component] | None = None) -> tuple[LoopState, Diagnosis, list[str], list[Trial]]:
+    """Re-selection after an addition (``before``: the fit's components before it): every move of :func:`moves`
+    fitted (:func:`try_move`), the best kept (:func:`better`), repeated while one is kept. Where a drop fits better
+    than the current fit, the current structure is first refitted from the best such drop (:func:`climb_from_nested`,
+    at most :data:`MAX_CLIMBS` times) and the moves are tried again against that refit. Returns (state, diagnosis,
+    dropped labels, trials)."""
     dropped: list[str] = []
     trials: list[Trial] = []
     climbs = 0
@@ -160,7 +175,7 @@ def reselect(loop: AxisLoop, state: LoopState, diag: Diagnosis,
         best: tuple[LoopState, Diagnosis, str] | None = None
         tried: list[Trial] = []
         nested: list[tuple[Diagnosis, Component]] = []
-        for label, components in moves(loop, diag, added, tuple(dropped)):
+        for label, components in moves(loop, diag, added, tuple(dropped), before):
             new_state = state.with_components(components)
             trial, new_diag = try_move(loop, diag, new_state, label)
             tried.append(trial)

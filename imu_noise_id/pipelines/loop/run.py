@@ -137,13 +137,13 @@ def run_closed_loop(
             else:
                 verdict = "nothing improves: no candidate lowered the BIC with its evidence gone and the AV no worse"
             break
-        previous = list(state.structure)
+        previous, before = list(state.structure), list(diag.fit.components)
         _, state, diag, f = best
         steps[-1].trials += trials
         added = added_name(previous, state.structure, f.effect)
         # what the step itself replaced (the joint search's flicker noise for a GM and a random walk)
         replaced = [f"{name} (for {added})" for name in added_name(state.structure, previous, "").split("+") if name]
-        state, diag, dropped, drop_trials = reselect(loop, state, diag, added=added)
+        state, diag, dropped, drop_trials = reselect(loop, state, diag, added=added, before=before)
         steps.append(LoopStep(len(steps), state.name(), added, f.evidence, f, state, diag, drop_trials,
                               tuple(replaced + dropped)))
     note, finish_gain = "", None
