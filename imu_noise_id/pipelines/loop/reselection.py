@@ -30,7 +30,6 @@ FIRST_ORDER = ("LPF", "MA")
 LINE_TOOK_FILTER = 2.0
 
 
-
 def moves(loop: AxisLoop, diag: Diagnosis, added: str, swapped: tuple[str, ...] = (),
           before: list[Component] | None = None) -> list[tuple[str, list[Component]]]:
     """Re-selection's moves, as (label, components): drop each :data:`DROPPABLE` component but ``added``; swap an RW for

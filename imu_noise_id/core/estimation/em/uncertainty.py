@@ -65,12 +65,13 @@ def checked_first(labels: list[str]) -> list[int]:
 
 def _beyond_budget(v: float, s_log: float, conditional_end: float | None,
                    wald: str = "wald") -> tuple[tuple[float, float], str]:
-    """(interval, method) once the budget is spent: Wald in log space where the information has one, else (0,
-    conditional upper end) for a zero-boundary parameter, else (0, ∞)."""
-    if math.isfinite(s_log):
-        return (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log)), f"{wald}, {BUDGET_SPENT}"
+    """(interval, method) once the budget is spent: (0, conditional upper end) for a zero-boundary parameter
+    (``conditional_end`` given: the likelihood cannot tell it from 0, and a Wald interval in log space never reaches
+    0), else Wald in log space where the information has one, else (0, ∞)."""
     if conditional_end is not None:
         return (0.0, float(conditional_end)), f"conditional, {BUDGET_SPENT}"
+    if math.isfinite(s_log):
+        return (v * math.exp(-Z95 * s_log), v * math.exp(Z95 * s_log)), f"{wald}, {BUDGET_SPENT}"
     return (0.0, math.inf), f"not bounded, {BUDGET_SPENT}"
 
 
