@@ -642,7 +642,7 @@ def test_a_drop_that_fits_better_than_its_parent_refits_the_parent_first():
 def test_a_digital_low_pass_that_stood_for_a_line_goes_once_the_line_is_modelled(seed):
     """WN + a 0.5 Hz line + RW (bench_random_walk's oscillation cell, 5 min at 200 Hz): the selection, which offers no
     resonance, reads the line as a 4th-order DLPF at 0.6 Hz; the loop then adds the OSC, the DLPF's density falls
-    ~15× — and the DLPF stayed in every final model (re-selection never dropped a filter), beside the line it had
+    ~15× — and the DLPF stayed in every final model (re-selection never dropped a DLPF), beside the line it had
     stood for. It now goes: the final model is WN+OSC, the line where the truth put it, N the truth's."""
     dt = 0.005
     truth = [WN(5e-4), OSC(frequency=0.5, bandwidth=0.02, sigma=2e-3), RW(2e-5)]

@@ -47,12 +47,12 @@ def moves(loop: AxisLoop, diag: Diagnosis, added: str, swapped: tuple[str, ...] 
     second_order = "OSC" in new and any(is_short_memory_osc(c, loop.dt) for c in fitted)
     for i, c in enumerate(fitted):
         rest = [d for j, d in enumerate(fitted) if j != i]
-        if (c.name in DROPPABLE or (c.name in FIRST_ORDER and second_order)) and c.name != added:
+        redundant_filter = ((c.name in FIRST_ORDER and second_order)
+                            or (isinstance(c, DLPF) and "OSC" in new and _line_took(c, before)))
+        if (c.name in DROPPABLE or redundant_filter) and c.name != added:
             moves.append((f"drop {c.name}", rest))
         if isinstance(c, LPF) and "LPF" in new:
             moves.append(("swap LPF (for OSC)", second_order_start(fitted, c)))
-        if isinstance(c, DLPF) and "OSC" in new and _line_took(c, before):
-            moves.append(("drop DLPF", rest))
         if c.name == "RW" and c.name != added and "BI" not in names and "BI (for RW)" not in swapped:
             moves.append(("swap RW (for BI)", canonical([*rest, long_tau_flicker(loop, diag)])))
         if (c.name == "BI" and "GM" in new and "RW" not in names and "RW (for BI)" not in swapped
