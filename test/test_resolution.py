@@ -50,7 +50,7 @@ def test_passband_disagreement_needs_disjoint_intervals_and_the_factor(n, ci, di
     why = passband_disagreement(KalibrValue(n, ci, "WN"), reading)
     assert (why is not None) is disagrees
     if disagrees:
-        assert f"{n / 1e-3:.3g} times the data's passband level" in why
+        assert f"{n / 1e-3:.3g} times the data's white-noise line" in why
 
 
 def test_an_upper_bound_reading_disagrees_only_with_an_n_above_it():
@@ -185,3 +185,28 @@ def test_the_analysis_confirms_a_kept_n_by_the_records_spectrum(filtered):
     assert overbound.reference_noise_density == given.noise_density.value
     assert resolve_axis(result.finals[axis], result.loops[axis], result.static, axis, imu.axis(axis),
                         horizon_s=100.0) is None
+
+
+def test_a_white_noise_line_read_off_the_floor_after_the_filter_is_no_disagreement_the_spectrum_refutes(filtered):
+    """Behind a sensor's low-pass with a white floor after it, the AV holds two white-noise lines: the floor's at the
+    shortest τ and the passband's beyond the filter's roll-off; where the roll-off ends too slowly for the slope
+    reader (a 2nd-order 5 Hz filter at 1 kHz, on some records), its line is the floor's, ~10× below the passband.
+    The model's N, which the record's spectrum confirms, does not disagree with the data then: the passband level
+    decides wherever it reads, the AV line only where it does not."""
+    result, _, imu = filtered
+    axis = next(a for a in GYRO_AXES if result.loops[a].passed)
+    final, static = result.finals[axis], result.static
+    n = final.noise_density.value
+    floor = _reading(n / 11.7, (n / 12.6, n / 10.9))  # disjoint from the model's N and 11.7× below it
+    assert passband_disagreement(final.noise_density, floor) is not None
+    slopes = replace(static.slopes[axis], noise_density=floor)
+    on_floor = replace(static, slopes={**static.slopes, axis: slopes})
+    assert resolve_axis(final, result.loops[axis], on_floor, axis, imu.axis(axis), horizon_s=100.0) is None
+    failed = replace(result.loops[axis], passed=False, verdict="AV misfit left unexplained (at one τ)")
+    given, _, warning = resolve_axis(final, failed, on_floor, axis, imu.axis(axis), horizon_s=100.0)
+    assert given.noise_density.method == "model" and given.noise_density.value == n
+    assert "record's spectrum" in given.noise_density.source and "K unresolved" in warning
+    # a model N the spectrum refutes still disagrees, whatever the line
+    low = replace(final, noise_density=replace(final.noise_density, value=n / 3, ci95=(n / 3.1, n / 2.9)))
+    given, _, warning = resolve_axis(low, result.loops[axis], on_floor, axis, imu.axis(axis), horizon_s=100.0)
+    assert given.noise_density.method == "unresolved" and "record's spectrum" in warning

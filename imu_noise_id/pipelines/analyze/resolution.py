@@ -1,15 +1,15 @@
 """Whether an axis's final model may give its N and K, and what is given where it may not.
 
 Unresolved: the loop's verdict failed (:attr:`~imu_noise_id.pipelines.loop.LoopResult.passed`), or N disagrees with
-the AV's white-noise line (:func:`~imu_noise_id.core.allan.slopes.fit_axis_slopes`: 95 % intervals disjoint and values
-more than :data:`PASSBAND_FACTOR` apart). An unresolved axis gives its data overbound's K
-(:func:`~.overbound.data_overbound`) as an upper bound, interval (0, value), method ``unresolved``, the reason in its
-source; it gives the overbound's N the same way unless the verdict alone failed and the model's N lies inside the
-95 % interval of the data's passband level (:func:`~imu_noise_id.core.estimation.readouts.passband.passband_level`,
-the record's spectrum in the band the model's white noise and filter dominate; the white-noise line where the band is
-too narrow) or within :data:`PASSBAND_TOLERANCE` of it: N then keeps the model's value and interval (widened to span
-the level's when outside it), its source saying why. ``model.yaml`` keeps the model's own.
-Reasons: docs/analysis.md, "Why an unresolved axis …".
+the data's passband level (:func:`passband_disagreement`: 95 % intervals disjoint and values more than
+:data:`PASSBAND_FACTOR` apart). The level is the record's spectrum in the band the model's white noise and filter
+dominate (:func:`~imu_noise_id.core.estimation.readouts.passband.passband_level`); the AV's white-noise line
+(:func:`~imu_noise_id.core.allan.slopes.fit_axis_slopes`) stands in where that band is too narrow. An unresolved axis
+gives its data overbound's K (:func:`~.overbound.data_overbound`) as an upper bound, interval (0, value), method
+``unresolved``, the reason in its source; it gives the overbound's N the same way unless the verdict alone failed and
+the model's N lies inside the 95 % interval of the data's passband level or within :data:`PASSBAND_TOLERANCE` of it:
+N then keeps the model's value and interval (widened to span the level's when outside it), its source saying why.
+``model.yaml`` keeps the model's own. Reasons: docs/analysis.md, "Why an unresolved axis …".
 """
 
 from __future__ import annotations
@@ -31,9 +31,10 @@ from .static import StaticAnalysis
 PASSBAND_FACTOR = 2.0
 
 
-def passband_disagreement(n: KalibrValue, reading: SlopeComponent) -> str | None:
-    """Why the model's N [u/√Hz] disagrees with the Allan-slope ``reading`` (module docstring), or None; an upper-bound
-    reading (interval (0, value)) disagrees only with an N above it."""
+def passband_disagreement(n: KalibrValue, reading: SlopeComponent | PassbandLevel) -> str | None:
+    """Why the model's N [u/√Hz] disagrees with the data's ``reading`` (module docstring: the passband level, or the
+    Allan-slope white-noise line), or None; an upper-bound reading (interval (0, value)) disagrees only with an N above
+    it."""
     if n.value is None or not reading.value > 0:
         return None
     lo, hi = (n.value if math.isnan(v) else v for v in n.ci95)  # no interval: the value itself
@@ -42,9 +43,8 @@ def passband_disagreement(n: KalibrValue, reading: SlopeComponent) -> str | None
     above = lo > r_hi and n.value > PASSBAND_FACTOR * reading.value
     if not (below or above):
         return None
-    return (f"its N {n.value:.3g} ({n.source}) is {n.value / reading.value:.3g} times the data's passband level "
-            f"{reading.value:.3g} [{r_lo:.3g}, {r_hi:.3g}] (the Allan variance's white-noise line), outside both "
-            "intervals")
+    return (f"its N {n.value:.3g} ({n.source}) is {n.value / reading.value:.3g} times the data's "
+            f"{_describe(reading)}, outside both intervals")
 
 
 #: A model's N within this relative distance of the data's passband level is confirmed by it though outside the
@@ -80,7 +80,9 @@ def _kept(n: KalibrValue, level: SlopeComponent | PassbandLevel, reason: str) ->
 def _describe(level: SlopeComponent | PassbandLevel) -> str:
     if isinstance(level, PassbandLevel):
         return f"passband level ({level.describe()})"
-    return f"white-noise line {level.value:.3g} [{level.ci[0]:.3g}, {level.ci[1]:.3g}]"
+    if level.method == "upper_bound":
+        return f"white-noise line, an upper bound {level.value:.3g} (the Allan variance's)"
+    return f"white-noise line {level.value:.3g} [{level.ci[0]:.3g}, {level.ci[1]:.3g}] (the Allan variance's)"
 
 
 @dataclass(frozen=True)
@@ -96,15 +98,15 @@ class Unresolved:
 def unresolved_reason(final: FinalModel, loop: LoopResult | None, reading: SlopeComponent,
                       level: PassbandLevel | None = None) -> Unresolved | None:
     """Why ``final`` may not give its K and perhaps N (module docstring), or None when it may give both; ``reading``
-    is the AV's white-noise line, ``level`` the spectrum's passband level (the line confirms N without it)."""
+    is the AV's white-noise line, ``level`` the spectrum's passband level (the line judges N without it)."""
     failed = loop is not None and not loop.passed
-    disagreement = passband_disagreement(final.noise_density, reading)
+    confirm = level if level is not None else reading
+    disagreement = passband_disagreement(final.noise_density, confirm)
     reasons = [f"the closed loop's verdict failed ({loop.verdict})"] if failed else []
     if disagreement is not None:
         reasons.append(disagreement)
     if not reasons:
         return None
-    confirm = level if level is not None else reading
     kept = disagreement is None and passband_confirms(final.noise_density, confirm)
     return Unresolved("; ".join(reasons), kept, confirm if kept else None)
 
@@ -141,7 +143,7 @@ def resolve_axis(final: FinalModel, loop: LoopResult | None, static: StaticAnaly
     when its final model gives N and K, else (the final model with the values given, the data overbound they come
     from, the warning)."""
     reading = static.slopes[axis].noise_density
-    level = passband_level(y, static.dt, list(final.fit.components)) if loop is not None and not loop.passed else None
+    level = passband_level(y, static.dt, list(final.fit.components))
     why = unresolved_reason(final, loop, reading, level)
     if why is None:
         return None
