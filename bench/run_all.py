@@ -108,6 +108,8 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_dlpf.py", "--rates", "1000", "--seeds", "1"], "bench_dlpf.txt"),
     (["bench_dlpf.py", "--rates", "1000", "--cutoffs", "5", "--orders", "2", "--variants", "RW", "--seeds", "10"],
      "bench_dlpf.txt"),
+    (["bench_dlpf.py", "--rates", "200", "--cutoffs", "20", "--orders", "2", "--variants", "RW", "--seeds", "10"],
+     "bench_dlpf.txt"),
 ]
 
 #: Studies in bench/studies/ whose outputs README.md or docs/ quote (``--studies``; outputs in docs/results/studies/):
