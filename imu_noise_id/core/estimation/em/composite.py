@@ -18,7 +18,7 @@ from scipy.optimize import minimize
 
 from ...noise.components import RR, Component
 from ...quality import interpolate_missing
-from . import block_sums, whittle
+from . import block_sums, exponential_parts, whittle
 
 if TYPE_CHECKING:
     from .model import NoiseModel
@@ -173,6 +173,17 @@ def statistics_parts(stats: CompositeStatistics, bp: whittle.BandedPeriodogram) 
     """Each component's share of ℓ_c's statistics: its difference spectrum on ``bp`` and its block sums'
     autocovariance, stacked."""
     lags = block_sums.sum_lags(stats.sums.block, stats.sums.d.size)
+
+    factors = [lambda w: exponential_parts.difference_spectrum_factor(w, bp.omega),
+               lambda w: exponential_parts.sum_covariance_factor(w, lags)]
+
+    def derivatives(c: Component) -> dict[str, np.ndarray] | None:
+        found = exponential_parts.shape_derivatives(c, stats.dt, factors)
+        if found is None:
+            return None
+        spectrum, sums = found
+        return {name: np.concatenate([spectrum[name], block_sums.from_sum_covariance(sums[name])]) for name in spectrum}
+
     return whittle.ComponentParts(lambda c: np.concatenate([
         whittle.difference_spectrum([c], bp.omega, stats.dt),
-        block_sums.from_sum_covariance(c.sum_covariance(lags, stats.dt))]))
+        block_sums.from_sum_covariance(c.sum_covariance(lags, stats.dt))]), derivatives)

@@ -19,6 +19,7 @@ from scipy.optimize import minimize
 
 from ...errors import InputError
 from ...noise.components import GM, QN, RR, RW, WN, Component
+from . import exponential_parts
 from .differences import derivative_in_domain, stepped
 
 
@@ -193,9 +194,11 @@ DIFFERENCE_STEP = 1e-4
 class ComponentParts:
     """One component's share of a likelihood's statistics (``computed(c)``, an array additive over components), a
     scale-only component's computed once per shape at one scale and rescaled by scale² (kept per instance: one per set
-    of frequencies or lags)."""
+    of frequencies or lags); ``derivatives(c)``, where given, its ∂/∂ln ϑ per shape parameter name, or None where it
+    has none in closed form (:mod:`.exponential_parts`)."""
 
     computed: Callable[[Component], np.ndarray]
+    derivatives: Callable[[Component], dict[str, np.ndarray] | None] | None = None
     memo: dict = field(default_factory=dict)
 
     def __call__(self, c: Component) -> np.ndarray:
@@ -213,13 +216,21 @@ class ComponentParts:
                  weights: np.ndarray) -> np.ndarray:
         """∂/∂x_j of a likelihood whose derivative in the summed parts Σ_c part(c) is ``weights``, for the
         log-parameters ``keys`` at ``x`` (``current`` the components there, ``each`` their parts): by the chain rule
-        through the one component c of x_j, exact (2·part(c)) for a component's scale, by central differences of
-        :data:`DIFFERENCE_STEP` otherwise (zero where no step stays inside the component's domain)."""
+        through the one component c of x_j, exact (2·part(c)) for a component's scale, from ``derivatives`` where it
+        gives one, by central differences of :data:`DIFFERENCE_STEP` otherwise (zero where no step stays inside the
+        component's domain)."""
         grad = np.empty(x.size)
+        closed: dict[int, dict[str, np.ndarray] | None] = {}
         for j, (i, name) in enumerate(keys):
             if name == current[i].scale_name:
                 grad[j] = 2.0 * float(weights @ each[i])
                 continue
+            if self.derivatives is not None:
+                if i not in closed:
+                    closed[i] = self.derivatives(current[i])
+                if closed[i] is not None and name in closed[i]:
+                    grad[j] = float(weights @ closed[i][name])
+                    continue
 
             def moved(h: float, i: int = i, name: str = name, at: float = float(x[j])) -> np.ndarray:
                 return self(with_log_parameters([current[i]], [(0, name)], np.array([at + h]))[0])
@@ -227,6 +238,18 @@ class ComponentParts:
             d = derivative_in_domain(moved, DIFFERENCE_STEP, lambda i=i: each[i])
             grad[j] = 0.0 if d is None else float(weights @ d)
         return grad
+
+
+def spectrum_derivatives(omega: np.ndarray, dt: float) -> Callable[[Component], dict[str, np.ndarray] | None]:
+    """A component's closed-form shape derivatives of its :func:`difference_spectrum` at ``omega`` [rad/sample]
+    (:func:`.exponential_parts.shape_derivatives`), for :class:`ComponentParts`."""
+    factors = [lambda w: exponential_parts.difference_spectrum_factor(w, omega)]
+
+    def derivatives(c: Component) -> dict[str, np.ndarray] | None:
+        found = exponential_parts.shape_derivatives(c, dt, factors)
+        return None if found is None else found[0]
+
+    return derivatives
 
 
 def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]], x: np.ndarray,
@@ -261,7 +284,7 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([start[i].params()[k] for i, k in keys])
     t_total = y.size * dt
-    parts = ComponentParts(lambda c: difference_spectrum([c], bp.omega, dt))
+    parts = ComponentParts(lambda c: difference_spectrum([c], bp.omega, dt), spectrum_derivatives(bp.omega, dt))
 
     def negll(x: np.ndarray) -> tuple[float, np.ndarray]:
         try:

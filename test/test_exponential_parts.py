@@ -1,0 +1,102 @@
+"""Closed-form shape derivatives of the fixed-size likelihoods' statistics for components whose autocovariance is a sum
+of damped exponentials (core/estimation/em/exponential_parts.py), against the statistics themselves."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from imu_noise_id.core.estimation.em import block_sums, composite, exponential_parts, whittle
+from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
+from imu_noise_id.core.noise.digital import DLPF
+from imu_noise_id.core.noise.flicker import BI
+from imu_noise_id.core.noise.resonant import LPF, MAX_DAMPING, OSC
+
+DT = 0.01
+SHAPED = [GM(tau=3.0, sigma=1.5e-3), GM(tau=2e4, sigma=1e-3), LPF(1e-3, 8.0), OSC(frequency=0.5, bandwidth=0.03,
+          sigma=5e-4), OSC(frequency=12.0, bandwidth=4.0, sigma=1e-3), OSC(frequency=0.05, bandwidth=1e-4, sigma=1e-3)]
+
+
+def _moved(component, name: str, h: float):
+    return type(component)(**{**component.params(), name: component.params()[name] * math.exp(h)})
+
+
+@pytest.mark.parametrize("w", [-1e-7, -3e-5, -1e-6 + 1e-5j, -1e-4 + 0.03j, -1e-3, -0.01 + 0.5j, -0.2, -1.0 + 2.0j])
+def test_the_block_sums_factor_derivative_is_the_lag_weighted_sum_of_its_lags(w):
+    """g'(m) = Σ_{j<m} j (m − j) e^{jw}, summed directly, on both sides of the series limit."""
+    lags = np.array([0.0, 1.0, 2.0, 3.0, 7.0, 40.0, 100.0, 500.0, 2000.0, 20000.0])
+    _, derivative = exponential_parts.sum_covariance_factor(np.array([w]), lags)
+    for m, d in zip(lags.astype(int), derivative[0], strict=True):
+        j = np.arange(1, m, dtype=float)
+        direct = complex(np.sum(j * (m - j) * np.exp(j * w)))
+        assert abs(-d - direct) <= 1e-8 * abs(direct) + 1e-12, m
+
+
+@pytest.mark.parametrize("component", SHAPED, ids=repr)
+def test_the_factors_give_the_statistics_of_the_component(component):
+    omega = np.linspace(0.01, math.pi - 0.01, 300)
+    lags = block_sums.sum_lags(64, 20)
+    c, s = (np.asarray(v, dtype=complex) for v in component.exponential_terms())
+    spectrum = np.real(np.sum(c[:, None] * exponential_parts.difference_spectrum_factor(s * DT, omega)[0], axis=0))
+    assert spectrum == pytest.approx(whittle.difference_spectrum([component], omega, DT), rel=1e-9)
+    sums = np.real(np.sum(c[:, None] * exponential_parts.sum_covariance_factor(s * DT, lags)[0], axis=0))
+    assert sums == pytest.approx(component.sum_covariance(lags, DT), rel=1e-9, abs=1e-12 * np.max(np.abs(sums)))
+
+
+@pytest.mark.parametrize("component", SHAPED, ids=repr)
+def test_the_shape_derivatives_are_those_of_the_statistics(component):
+    """Against central differences of the statistics themselves (the rule they replace), every shape parameter."""
+    omega = np.linspace(0.005, math.pi - 0.005, 500)
+    lags = block_sums.sum_lags(64, 30)
+    spectrum, sums = exponential_parts.shape_derivatives(component, DT, [
+        lambda w: exponential_parts.difference_spectrum_factor(w, omega),
+        lambda w: exponential_parts.sum_covariance_factor(w, lags)])
+    names = [n for n in component.parameter_names if n != component.scale_name]
+    assert sorted(spectrum) == sorted(sums) == sorted(names)
+    for name in names:
+        h = 1e-5
+        up, down = _moved(component, name, h), _moved(component, name, -h)
+        d_spectrum = (whittle.difference_spectrum([up], omega, DT) - whittle.difference_spectrum([down], omega, DT)) / (
+            2 * h)
+        d_sums = (up.sum_covariance(lags, DT) - down.sum_covariance(lags, DT)) / (2 * h)
+        assert spectrum[name] == pytest.approx(d_spectrum, rel=1e-5, abs=1e-6 * np.max(np.abs(d_spectrum))), name
+        assert sums[name] == pytest.approx(d_sums, rel=1e-5, abs=1e-6 * np.max(np.abs(d_sums))), name
+
+
+def test_components_without_exponential_terms_or_shape_have_no_closed_form():
+    omega = np.linspace(0.01, 3.0, 50)
+    derivatives = whittle.spectrum_derivatives(omega, DT)
+    assert derivatives(DLPF(1e-3, 5.0, 2)) is None
+    assert derivatives(BI(5e-5, 1.0, 300.0)) == {}
+
+
+def test_a_step_outside_the_domain_leaves_the_parameter_to_the_differences():
+    # at the damping limit a wider bandwidth is refused: no closed form, the likelihood's one-sided differences rule
+    edge = OSC(frequency=1.0, bandwidth=2.0 * MAX_DAMPING * (1.0 - 1e-7), sigma=1e-3)
+    with pytest.raises(ValueError):
+        _moved(edge, "bandwidth", exponential_parts.STEP)
+    assert exponential_parts.term_derivatives(edge, DT) is None
+    assert exponential_parts.term_derivatives(OSC(frequency=1.0, bandwidth=0.5, sigma=1e-3), DT) is not None
+
+
+def test_the_whittle_and_composite_gradients_agree_with_and_without_the_closed_forms():
+    y = simulate_sum([WN(2e-3), GM(tau=5.0, sigma=2e-3), RW(2e-5)], 300_000, DT, np.random.default_rng(3))
+    stats = composite.CompositeStatistics.of(y, DT)
+    start = [WN(2.5e-3), LPF(1e-3, 8.0), GM(tau=3.0, sigma=1.5e-3), OSC(frequency=0.5, bandwidth=0.03, sigma=5e-4),
+             RW(3e-5)]
+    bp = stats.bands(start)
+    keys = [(i, k) for i, c in enumerate(start) for k in c.parameter_names]
+    x = np.log([start[i].params()[k] for i, k in keys])
+    closed = composite.statistics_parts(stats, bp)
+    plain = whittle.ComponentParts(closed.computed)
+    ll, grad = composite.loglik_and_gradient(start, keys, x, stats, bp, parts=closed)
+    ll_plain, grad_plain = composite.loglik_and_gradient(start, keys, x, stats, bp, parts=plain)
+    assert ll == ll_plain
+    assert grad == pytest.approx(grad_plain, rel=1e-4, abs=1e-3)
+    spectrum_parts = whittle.ComponentParts(lambda c: whittle.difference_spectrum([c], bp.omega, DT),
+                                            whittle.spectrum_derivatives(bp.omega, DT))
+    _, grad_w = whittle.loglik_and_gradient(start, keys, x, bp, spectrum_parts)
+    _, grad_w_plain = whittle.loglik_and_gradient(start, keys, x, bp, whittle.ComponentParts(spectrum_parts.computed))
+    assert grad_w == pytest.approx(grad_w_plain, rel=1e-4, abs=1e-3)
