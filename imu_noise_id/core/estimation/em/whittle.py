@@ -9,7 +9,6 @@ pooled in log-spaced bands: O(bands) per evaluation."""
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -20,7 +19,7 @@ from scipy.optimize import minimize
 from ...errors import InputError
 from ...noise.components import GM, QN, RR, RW, WN, Component
 from . import exponential_parts
-from .differences import derivative_in_domain, stepped
+from .differences import derivative_in_domain
 
 
 @dataclass(frozen=True)
@@ -212,32 +211,36 @@ class ComponentParts:
         at, part = self.memo[key]
         return part * (scale / at) ** 2
 
-    def gradient(self, current: list[Component], keys: list[tuple[int, str]], x: np.ndarray, each: list[np.ndarray],
-                 weights: np.ndarray) -> np.ndarray:
-        """∂/∂x_j of a likelihood whose derivative in the summed parts Σ_c part(c) is ``weights``, for the
-        log-parameters ``keys`` at ``x`` (``current`` the components there, ``each`` their parts): by the chain rule
-        through the one component c of x_j, exact (2·part(c)) for a component's scale, from ``derivatives`` where it
-        gives one, by central differences of :data:`DIFFERENCE_STEP` otherwise (zero where no step stays inside the
-        component's domain)."""
-        grad = np.empty(x.size)
+    def columns(self, current: list[Component], keys: list[tuple[int, str]], x: np.ndarray,
+                each: list[np.ndarray]) -> list[np.ndarray | None]:
+        """∂(Σ_c part(c))/∂x_j for the log-parameters ``keys`` at ``x`` (``current`` the components there, ``each``
+        their parts): through the one component c of x_j, exact (2·part(c)) for a component's scale, from
+        ``derivatives`` where it gives one, by central differences of :data:`DIFFERENCE_STEP` otherwise (None where no
+        step stays inside the component's domain)."""
+        out: list[np.ndarray | None] = []
         closed: dict[int, dict[str, np.ndarray] | None] = {}
         for j, (i, name) in enumerate(keys):
             if name == current[i].scale_name:
-                grad[j] = 2.0 * float(weights @ each[i])
+                out.append(2.0 * each[i])
                 continue
             if self.derivatives is not None:
                 if i not in closed:
                     closed[i] = self.derivatives(current[i])
                 if closed[i] is not None and name in closed[i]:
-                    grad[j] = float(weights @ closed[i][name])
+                    out.append(closed[i][name])
                     continue
 
             def moved(h: float, i: int = i, name: str = name, at: float = float(x[j])) -> np.ndarray:
                 return self(with_log_parameters([current[i]], [(0, name)], np.array([at + h]))[0])
 
-            d = derivative_in_domain(moved, DIFFERENCE_STEP, lambda i=i: each[i])
-            grad[j] = 0.0 if d is None else float(weights @ d)
-        return grad
+            out.append(derivative_in_domain(moved, DIFFERENCE_STEP, lambda i=i: each[i]))
+        return out
+
+    def gradient(self, current: list[Component], keys: list[tuple[int, str]], x: np.ndarray, each: list[np.ndarray],
+                 weights: np.ndarray) -> np.ndarray:
+        """∂/∂x_j of a likelihood whose derivative in the summed parts Σ_c part(c) is ``weights``, by the chain rule
+        through :meth:`columns` (zero where a column is None)."""
+        return np.array([0.0 if d is None else float(weights @ d) for d in self.columns(current, keys, x, each)])
 
 
 def spectrum_derivatives(omega: np.ndarray, dt: float) -> Callable[[Component], dict[str, np.ndarray] | None]:
@@ -340,21 +343,20 @@ def _scaled_climb(negll: Callable[[np.ndarray], tuple[float, np.ndarray]], x0: n
 
 
 def whittle_information(components: list[Component], y: np.ndarray, dt: float,
-                        periodogram: BandedPeriodogram | None = None, step: float = 1e-3) -> np.ndarray:
+                        periodogram: BandedPeriodogram | None = None) -> np.ndarray:
     """Expected (Fisher) information of the banded Whittle likelihood in the log-parameters (as
-    :class:`~.mle.Parameterisation`): Σ_b n_b ∂ln S_b/∂ϑ ∂ln S_b/∂ϑᵀ, derivatives by central differences (zero where
-    no step is inside a domain). Positive semi-definite; the finish's metric (:func:`.mle.maximise`)."""
+    :class:`~.mle.Parameterisation`): Σ_b n_b ∂ln S_b/∂ϑ ∂ln S_b/∂ϑᵀ, ∂S/∂ϑ through the one component of ϑ
+    (:meth:`ComponentParts.columns`: exact in a scale, closed form for exponential terms, central differences
+    otherwise; zero where no step is inside a domain). Positive semi-definite; the finish's metric
+    (:func:`.mle.maximise`)."""
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(components) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([components[i].params()[k] for i, k in keys])
-
-    def log_spectrum(x: np.ndarray) -> np.ndarray:
-        return np.log(difference_spectrum(with_log_parameters(components, keys, x), bp.omega, dt))
-
-    at_start = functools.cache(lambda: log_spectrum(x0))
-    columns = [derivative_in_domain(lambda h, j=j: log_spectrum(stepped(x0, j, h)), step, at_start)
-               for j in range(x0.size)]
-    jac = np.column_stack([np.zeros(bp.omega.size) if d is None else d for d in columns])
+    parts = ComponentParts(lambda c: difference_spectrum([c], bp.omega, dt), spectrum_derivatives(bp.omega, dt))
+    each = [parts(c) for c in components]
+    s = np.sum(each, axis=0)
+    jac = np.column_stack([np.zeros(bp.omega.size) if d is None else d / s
+                           for d in parts.columns(components, keys, x0, each)])
     return (jac * bp.count[:, None]).T @ jac
 
 
