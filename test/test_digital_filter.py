@@ -18,10 +18,8 @@ from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.estimation.em.selection import select_model, suggest_candidates
-from imu_noise_id.core.estimation.em.whittle import block_spectrum
 from imu_noise_id.core.estimation.readouts import kalibr
 from imu_noise_id.core.kalman.statespace import from_components
-from imu_noise_id.core.noise import digital
 from imu_noise_id.core.noise.components import RW, WN, simulate_sum
 from imu_noise_id.core.noise.digital import DLPF, SensorFilter
 from imu_noise_id.core.noise.modelspec import parse_model
@@ -48,27 +46,6 @@ def test_the_block_is_the_filter(order):
     assert back.order == order
     assert back.noise_density == pytest.approx(2e-3, rel=1e-9) and back.cutoff == pytest.approx(15.0, rel=1e-9)
 
-
-
-@pytest.mark.parametrize("order", [1, 2, 3, 4])
-@pytest.mark.parametrize("cutoff_per_sample", [2e-4, 5e-3, 0.06, 0.2, 0.45])
-def test_the_closed_form_design_is_scipys_butterworth(order, cutoff_per_sample):
-    """(b, a) from the prewarped bilinear poles equal scipy.signal.butter's; the spectrum per sample from those poles
-    equals the block's (the difference realisation, solved per frequency) and σ²|H|² by scipy's freqz."""
-    b, a = signal.butter(order, 2.0 * cutoff_per_sample)
-    ours_b, ours_a = digital._design(order, cutoff_per_sample)
-    assert ours_a == pytest.approx(a, rel=1e-9, abs=1e-12)
-    assert ours_b == pytest.approx(b, rel=1e-9, abs=1e-15 * np.max(np.abs(b)))
-    c = DLPF(1e-3, cutoff_per_sample / DT, order)
-    omega = np.linspace(1e-4, math.pi - 1e-3, 400)
-    blk = c.block(DT)
-    from_block = block_spectrum(blk.phi, blk.q, blk.h, omega)
-    spectrum = c.sampled_spectrum(omega, DT)
-    assert spectrum == pytest.approx(from_block, rel=1e-7, abs=1e-12 * np.max(from_block))
-    if cutoff_per_sample < 1e-3:
-        return  # the direct form's coefficients cancel to O(λⁿ): freqz loses the digits the poles keep
-    _, response = signal.freqz(b, a, worN=omega)
-    assert spectrum == pytest.approx(c.sigma2(DT) * np.abs(response) ** 2, rel=1e-6, abs=1e-12 * np.max(spectrum))
 
 def test_the_steady_engine_runs_a_low_cutoff_filter_as_the_exact_engine_does():
     """A fourth-order DLPF at 0.59 Hz beside a walk at 200 Hz (a fit the selection reached on a record with a 0.5 Hz

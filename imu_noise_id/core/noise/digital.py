@@ -26,31 +26,17 @@ MAX_RESPONSE = 1 << 20
 
 
 @functools.lru_cache(maxsize=256)
-def _poles(order: int, cutoff_per_sample: float) -> tuple[float, np.ndarray, float]:
-    """(λ, ŝ_k, b₀) of the order-n Butterworth low-pass at f_c·dt (< ½) by the bilinear transform prewarped at f_c:
-    λ = 2 tan(π f_c dt), poles z_k = 1 + λŝ_k, ŝ_k = p_k/(1 − λp_k/2) (p_k the normalised analog prototype's poles),
-    n zeros at z = −1 and the gain b₀ = Π(−ŝ_k)(λ/2)ⁿ of unit gain at 0 Hz: H(z) = b₀(1 + z⁻¹)ⁿ/Π(1 − z_k z⁻¹), as
-    ``scipy.signal.butter`` designs it."""
-    lam = 2.0 * math.tan(math.pi * cutoff_per_sample)
-    prototype = -np.exp(1j * math.pi * np.arange(-order + 1, order, 2) / (2 * order))
-    s_hat = prototype / (1.0 - 0.5 * lam * prototype)
-    return lam, s_hat, float(np.real(np.prod(-s_hat))) * (0.5 * lam) ** order
-
-
-@functools.lru_cache(maxsize=256)
 def _design(order: int, cutoff_per_sample: float) -> tuple[np.ndarray, np.ndarray]:
-    """(b, a) of the Butterworth low-pass of ``order`` at f_c·dt (< ½) (:func:`_poles`)."""
-    lam, s_hat, b0 = _poles(order, cutoff_per_sample)
-    b = b0 * np.array([math.comb(order, i) for i in range(order + 1)], dtype=float)
-    return b, np.real(np.poly(1.0 + lam * s_hat))
+    """(b, a) of the Butterworth low-pass of ``order`` at f_c·dt (< ½)."""
+    b, a = signal.butter(order, 2.0 * cutoff_per_sample)
+    return np.asarray(b, dtype=float), np.asarray(a, dtype=float)
 
 
 @functools.lru_cache(maxsize=64)
 def _covariance(order: int, cutoff_per_sample: float) -> np.ndarray:
     """R(j)/σ² for j = 0 … J−1, J the impulse response's length."""
     b, a = _design(order, cutoff_per_sample)
-    lam, s_hat, _ = _poles(order, cutoff_per_sample)
-    radius = max(float(np.max(np.abs(1.0 + lam * s_hat))), 1e-3)
+    radius = max(float(np.max(np.abs(np.roots(a)))), 1e-3)
     length = int(min(MAX_RESPONSE, max(64, math.ceil(math.log(DECAY) / math.log(radius)) + 4 * order)))
     impulse = np.zeros(length)
     impulse[0] = 1.0
@@ -79,11 +65,14 @@ def _difference_realisation(order: int, cutoff_per_sample: float) -> tuple[np.nd
     the order of λʲ, not lagged values agreeing to 1 − O(λ²) that make the Riccati equation singular in double
     precision at low f_c dt (the δ-operator's argument, Middleton & Goodwin 1990)."""
     n = order
-    lam, s_hat, b0 = _poles(order, cutoff_per_sample)
+    lam = 2.0 * math.tan(math.pi * cutoff_per_sample)
+    prototype = -np.exp(1j * math.pi * np.arange(-n + 1, n, 2) / (2 * n))
+    s_hat = prototype / (1.0 - 0.5 * lam * prototype)
     alpha = np.ones(1, dtype=complex)  # ascending powers of Δ
     for s_k in s_hat:
         alpha = np.convolve(alpha, [-lam * s_k, 1.0 + lam * s_k])
     beta = np.cumsum(np.real(alpha))[:n]
+    b0 = float(np.real(np.prod(-s_hat))) * (0.5 * lam) ** n
     phi = np.zeros((n + 1, n + 1))
     phi[0, 0] = -float(np.sum(beta))
     phi[0, 1:] = -np.cumsum(beta)
@@ -171,17 +160,6 @@ class DLPF(Component):
     def sum_covariance(self, lag: np.ndarray, dt: float) -> np.ndarray:
         """K(u) = −½ S(|u|)."""
         return -0.5 * self.block_sum_variance(np.abs(np.asarray(lag, dtype=float)), dt)
-
-    def sampled_spectrum(self, omega: np.ndarray, dt: float) -> np.ndarray:
-        """Spectral density per sample [u²] of the sampled output at ``omega`` [rad/sample], σ²|H(e^{iω})|²
-        (:func:`_poles`), each pole's factor 1 − z_k e^{−iω} = (1 − e^{−iω}) − λŝ_k e^{−iω} computed without the
-        cancellation of z_k ≈ 1 at low f_c·dt."""
-        lam, s_hat, b0 = _poles(self.order, self._per_sample(dt))
-        omega = np.asarray(omega, dtype=float)
-        back = np.exp(-1j * omega)
-        factors = -np.expm1(-1j * omega)[:, None] - lam * s_hat[None, :] * back[:, None]
-        gain = b0**2 * (2.0 + 2.0 * np.cos(omega)) ** self.order / np.prod(np.abs(factors) ** 2, axis=1)
-        return self.sigma2(dt) * gain
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         b, a = self.coefficients(dt)
