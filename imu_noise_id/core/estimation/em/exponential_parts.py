@@ -11,9 +11,8 @@ With w = s·dt and z = e^w, each statistic is Re Σ_k c_k F(w_k), F holomorphic 
   ∂F/∂w = −g'(m), g'(m) = Σ_{j=1}^{m−1} j (m − j) e^{jw}, in closed form or, where m|w| is small, by its series.
 
 A log-parameter ϑ of the component moves (c_k, w_k) only: ∂/∂ϑ Re Σ c_k F(w_k) = Re Σ [∂c_k/∂ϑ F(w_k) + c_k F'(w_k)
-∂w_k/∂ϑ], the scalars' derivatives by central differences of :data:`STEP` (they cost two constructions of the
-component, where differencing the statistics costs two evaluations of them). Beyond the papers: the likelihoods'
-gradients were central differences of the whole statistics per shape parameter.
+∂w_k/∂ϑ], the scalars' derivatives by central differences of :data:`STEP` (two constructions of the component, where
+differencing the statistics themselves costs two evaluations of them per shape parameter). Beyond the papers.
 """
 
 from __future__ import annotations
