@@ -149,6 +149,9 @@ n_before = None
 try:
     from imu_noise_id.pipelines.analyze.overbound import DEFAULT_HORIZON_S
     from imu_noise_id.pipelines.analyze.resolution import resolve_axis
+    if "level" in inspect.signature(resolve_axis).parameters:  # the level read where the record is
+        from imu_noise_id.core.estimation.readouts.passband import passband_level
+        y = passband_level(y, dt, list(final.fit.components))
     resolution = resolve_axis(final, loop, static, "gyro_x", y, horizon_s=DEFAULT_HORIZON_S)
     if resolution is not None:
         final, overbound, _ = resolution

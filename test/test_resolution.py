@@ -14,6 +14,7 @@ from scipy import signal
 from imu_noise_id.core.allan.slopes import SlopeComponent
 from imu_noise_id.core.axes import AXES, GYRO_AXES
 from imu_noise_id.core.estimation.readouts.kalibr import KalibrValue
+from imu_noise_id.core.estimation.readouts.passband import PassbandLevel, passband_level
 from imu_noise_id.core.noise.components import RW, WN
 from imu_noise_id.core.simulation.static import simulate_static_imu
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage, analyze
@@ -32,6 +33,11 @@ from imu_noise_id.report.console import final_table
 
 RATE = 200.0
 PASSBAND = 1e-3  # m/s²/√Hz, the white noise's density before the sensor's second-order low-pass
+
+
+def _level(result, imu, axis: str) -> PassbandLevel | None:
+    """The record's passband level in the final model's band, as analyze reads it for the resolution."""
+    return passband_level(imu.axis(axis), result.static.dt, list(result.finals[axis].fit.components))
 
 
 def _reading(value: float, ci: tuple[float, float], method: str = "fit") -> SlopeComponent:
@@ -178,13 +184,12 @@ def test_the_analysis_confirms_a_kept_n_by_the_records_spectrum(filtered):
     result, _, imu = filtered
     axis = next(a for a in GYRO_AXES if result.loops[a].passed)
     failed = replace(result.loops[axis], passed=False, verdict="AV misfit left unexplained (at one τ)")
-    given, overbound, warning = resolve_axis(result.finals[axis], failed, result.static, axis, imu.axis(axis),
-                                             horizon_s=100.0)
+    level = _level(result, imu, axis)
+    given, overbound, warning = resolve_axis(result.finals[axis], failed, result.static, axis, level, horizon_s=100.0)
     assert given.noise_density.method == "model" and given.random_walk.method == "unresolved"
     assert "record's spectrum" in given.noise_density.source and "K unresolved" in warning
     assert overbound.reference_noise_density == given.noise_density.value
-    assert resolve_axis(result.finals[axis], result.loops[axis], result.static, axis, imu.axis(axis),
-                        horizon_s=100.0) is None
+    assert resolve_axis(result.finals[axis], result.loops[axis], result.static, axis, level, horizon_s=100.0) is None
 
 
 def test_a_white_noise_line_read_off_the_floor_after_the_filter_is_no_disagreement_the_spectrum_refutes(filtered):
@@ -201,12 +206,13 @@ def test_a_white_noise_line_read_off_the_floor_after_the_filter_is_no_disagreeme
     assert passband_disagreement(final.noise_density, floor) is not None
     slopes = replace(static.slopes[axis], noise_density=floor)
     on_floor = replace(static, slopes={**static.slopes, axis: slopes})
-    assert resolve_axis(final, result.loops[axis], on_floor, axis, imu.axis(axis), horizon_s=100.0) is None
+    level = _level(result, imu, axis)
+    assert resolve_axis(final, result.loops[axis], on_floor, axis, level, horizon_s=100.0) is None
     failed = replace(result.loops[axis], passed=False, verdict="AV misfit left unexplained (at one τ)")
-    given, _, warning = resolve_axis(final, failed, on_floor, axis, imu.axis(axis), horizon_s=100.0)
+    given, _, warning = resolve_axis(final, failed, on_floor, axis, level, horizon_s=100.0)
     assert given.noise_density.method == "model" and given.noise_density.value == n
     assert "record's spectrum" in given.noise_density.source and "K unresolved" in warning
     # a model N the spectrum refutes still disagrees, whatever the line
     low = replace(final, noise_density=replace(final.noise_density, value=n / 3, ci95=(n / 3.1, n / 2.9)))
-    given, _, warning = resolve_axis(low, result.loops[axis], on_floor, axis, imu.axis(axis), horizon_s=100.0)
+    given, _, warning = resolve_axis(low, result.loops[axis], on_floor, axis, level, horizon_s=100.0)
     assert given.noise_density.method == "unresolved" and "record's spectrum" in warning

@@ -30,6 +30,7 @@ from ...core.diagnostics.av_band import ModelAvRange, model_av_range
 from ...core.errors import InputError
 from ...core.estimation.em.results import FitResult
 from ...core.estimation.em.uncertainty import PROFILE_BUDGET
+from ...core.estimation.readouts.passband import PassbandLevel, passband_level
 from ..loop import ImuLoop, LoopResult
 from .final import FinalModel, final_model
 from .mapped import MappedImu
@@ -122,7 +123,9 @@ class AnalysisResult:
     """What ``analyze`` found, per stage (per-axis dictionaries keyed by axis name): ``static`` (Allan stage),
     ``models`` (fits and selections, without records), ``loops`` (empty without the loop), ``finals`` (final model and
     Kalibr numbers), ``bands`` (the final model's AV range, :class:`~..core.diagnostics.av_band.ModelAvRange`),
-    ``overbounds``, ``warnings``; ``numbers`` (what users paste)"""
+    ``overbounds``, ``levels`` (the record's passband level in each final model's band, or None where it holds too
+    few bins: :func:`~..core.estimation.readouts.passband.passband_level`, what the resolution judges N by),
+    ``warnings``; ``numbers`` (what users paste)"""
 
     static: StaticAnalysis
     models: dict[str, AxisModel] = field(default_factory=dict)
@@ -130,6 +133,7 @@ class AnalysisResult:
     finals: dict[str, FinalModel] = field(default_factory=dict)
     bands: dict[str, ModelAvRange] = field(default_factory=dict)
     overbounds: dict[str, AxisOverbound] = field(default_factory=dict)
+    levels: dict[str, PassbandLevel | None] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
 
     @property
@@ -195,7 +199,7 @@ def analyze(imu: ImuSeries | MappedImu, temperature: ScalarSeries | None = None,
         return result
     result.overbounds = overbounds(static, result.finals, options.horizon_s)
     for axis, final in result.finals.items():
-        resolution = resolve_axis(final, result.loops.get(axis), static, axis, imu.axis(axis),
+        resolution = resolve_axis(final, result.loops.get(axis), static, axis, result.levels[axis],
                                   horizon_s=options.horizon_s)
         if resolution is not None:
             result.finals[axis], result.overbounds[axis], warning = resolution
@@ -218,6 +222,7 @@ def _model_stages(imu: ImuSeries, temperature: ScalarSeries | None, options: Ana
         if outcome.final is not None:
             result.finals[axis] = outcome.final
             result.bands[axis] = outcome.band
+            result.levels[axis] = outcome.level
         if on_axis is not None:
             on_axis(axis, outcome.model.fit, outcome.loop)
         result.models[axis] = outcome.model.without_data()
@@ -236,13 +241,15 @@ class _AxisContext:
 @dataclass(frozen=True)
 class _AxisOutcome:
     """Stages 2–5 of one axis: the model stage (with its record), the loop (or None), the final model, the
-    AV range at the Allan stage's τ (both None without stages 4–7) and the warnings."""
+    AV range at the Allan stage's τ (both None without stages 4–7), the warnings and the record's passband level in
+    the final model's band (:attr:`AnalysisResult.levels`; read here, where the worker holds the record)."""
 
     model: AxisModel
     loop: LoopResult | None
     final: FinalModel | None
     band: ModelAvRange | None
     warnings: list[str]
+    level: PassbandLevel | None = None
 
 
 def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
@@ -285,9 +292,11 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
         warnings.append(f"{axis}: the final random walk {k:.3g} is {final.random_walk_bound.excess(k)}; record "
                         "longer before trusting K")
     band = model_av_range(list(final.fit.components), static.allan.m, static.n, static.dt)
+    level = passband_level(context.imu.axis(axis), static.dt, list(final.fit.components))
     # the loop's fits keep no record past here: sent back from a worker and kept for six axes, a step's samples and
     # regressors took (1 + regressors) × N floats each
-    return _AxisOutcome(model, loop_result.without_data() if loop_result is not None else None, final, band, warnings)
+    return _AxisOutcome(model, loop_result.without_data() if loop_result is not None else None, final, band, warnings,
+                        level)
 
 
 def worker_processes(asked: int, n: int, axes: int) -> int:

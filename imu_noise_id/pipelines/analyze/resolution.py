@@ -17,11 +17,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 from ...core.allan.slopes import SlopeComponent
 from ...core.estimation.readouts.kalibr import KalibrValue
-from ...core.estimation.readouts.passband import PassbandLevel, passband_level
+from ...core.estimation.readouts.passband import PassbandLevel
 from ..loop import LoopResult
 from .final import FinalModel
 from .overbound import AxisOverbound, data_overbound
@@ -137,14 +135,12 @@ def resolved(final: FinalModel, unresolved: Unresolved | None, overbound: AxisOv
                    source=f"{final.source}; {what}: {reason}")
 
 
-def resolve_axis(final: FinalModel, loop: LoopResult | None, static: StaticAnalysis, axis: str, y: np.ndarray, *,
-                 horizon_s: float) -> tuple[FinalModel, AxisOverbound, str] | None:
-    """The resolution of ``axis`` (module docstring; ``y`` its samples [u], ``horizon_s`` the overbound's [s]): None
-    when its final model gives N and K, else (the final model with the values given, the data overbound they come
-    from, the warning)."""
-    reading = static.slopes[axis].noise_density
-    level = passband_level(y, static.dt, list(final.fit.components))
-    why = unresolved_reason(final, loop, reading, level)
+def resolve_axis(final: FinalModel, loop: LoopResult | None, static: StaticAnalysis, axis: str,
+                 level: PassbandLevel | None, *, horizon_s: float) -> tuple[FinalModel, AxisOverbound, str] | None:
+    """The resolution of ``axis`` (module docstring; ``level`` the record's ``passband_level`` in ``final``'s band,
+    ``horizon_s`` the overbound's [s]): None when its final model gives N and K, else (the final model with the values
+    given, the data overbound they come from, the warning)."""
+    why = unresolved_reason(final, loop, static.slopes[axis].noise_density, level)
     if why is None:
         return None
     overbound = data_overbound(static, axis, horizon_s)

@@ -27,8 +27,6 @@ from ...noise.sampled import SERIES_LIMIT, lag_weighted_sum
 
 #: Step [log-parameter] of the central differences of the exponential terms (c_k, w_k).
 STEP = 1e-5
-
-
 #: Per parameter name, (∂c/∂ln ϑ, ∂w/∂ln ϑ) of the exponential terms.
 TermDerivatives = dict[str, tuple[np.ndarray, np.ndarray]]
 
@@ -108,7 +106,6 @@ def part_derivatives(c: np.ndarray, moved: TermDerivatives,
     f, df = factor
     return {name: np.real(np.sum(dc[:, None] * f + c[:, None] * df * dw[:, None], axis=0))
             for name, (dc, dw) in moved.items()}
-
 
 
 #: A statistic's (F, ∂F/∂w) for the terms' w (k,): e.g. :func:`difference_spectrum_factor` at given frequencies.
