@@ -8,8 +8,10 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from imu_noise_id.core.allan import allan_variance
+from imu_noise_id.core.diagnostics import detectors as det
 from imu_noise_id.core.diagnostics.lines import (
     HUMP_DIP,
     SIN_CONCENTRATION,
@@ -27,10 +29,12 @@ from imu_noise_id.pipelines.loop import LoopState, run_closed_loop
 from imu_noise_id.pipelines.loop.rules import av_inside_band, judge
 from imu_noise_id.pipelines.loop.steps import AxisLoop
 from imu_noise_id.pipelines.loop.trials import (
+    BAND_LR_LEVEL,
     WIDE_START_POOLED_BINS,
     added_name,
     attempt,
     attempt_cluster,
+    band_cleared,
     partly_explained,
     refit,
     wide_start,
@@ -610,6 +614,46 @@ def test_a_drop_that_takes_k_outside_its_interval_needs_strong_evidence():
     assert judge(before, _walk_diag(-3.0, [WN(5e-4), GM(tau=300.0, sigma=2e-4), RW(5e-6)]))[0]  # an addition
     unidentified = [WN(2e-2), RW(2e-5)]  # a walk 1 h barely sees below this white noise
     assert judge(_walk_diag(0.0, unidentified), _walk_diag(-1.0, [WN(2e-2)]), guard_walk=True)[0]
+
+
+def _band_diag(loglik: float, ratio: float, n_params: int) -> SimpleNamespace:
+    """:func:`_av_diag` at 8 τ of 1–128 s with the exact ℓ and the parameter count of its fit."""
+    diag = _av_diag(0.0, ratio)
+    diag.tau, diag.errors.loglik, diag.fit.n_params = np.geomspace(1.0, 128.0, 8), loglik, n_params
+    return diag
+
+
+def test_an_addition_the_bic_refuses_clears_the_av_bands_rejection_on_its_likelihood_ratio():
+    """The rule's conditions one by one: the AV band's GM finding, the AV from outside its band to inside, and
+    2Δℓ at least χ²_2's 0.999 quantile (13.8); any one missing, the BIC's refusal stands."""
+    finding = det.Finding(effect="GM", detector="av_band", statistic=4.4, threshold=3.5, level=0.01, log10_p=-3.0,
+                          params={}, evidence="")
+    before = _band_diag(0.0, 2.6, 2)
+    need = stats.chi2.isf(BAND_LR_LEVEL, 2)
+    assert band_cleared(finding, before, _band_diag(0.5 * need + 0.1, 1.05, 4))[0]
+    assert not band_cleared(finding, before, _band_diag(0.5 * need - 0.1, 1.05, 4))[0]  # 2Δℓ short of 13.8
+    assert not band_cleared(finding, before, _band_diag(10.0, 1.6, 4))[0]  # the AV still outside its band
+    assert not band_cleared(finding, _band_diag(0.0, 1.05, 2), _band_diag(10.0, 1.0, 4))[0]  # no rejection to clear
+    other = det.Finding(effect="GM", detector="correlation", statistic=4.4, threshold=3.5, level=0.01, log10_p=-3.0,
+                        params={}, evidence="")
+    assert not band_cleared(other, before, _band_diag(10.0, 1.05, 4))[0]
+
+
+def test_a_gm_the_walk_stood_for_on_an_hour_is_added_where_the_bic_refused_it():
+    """The bug: 1 h at 200 Hz of WN + GM(τ 20 s, its AV bump the walk's AV at 100 s) + RW (bench_random_walk's
+    WN+GM20+RW cell, seed 12). WN+RW puts its walk 2.5x the truth through the GM's bump, its AV 2.6x the data's at
+    τ = 360 s; WN+GM+RW clears the AV band (2Δℓ = 19.9) but its BIC is 7 higher (the 27 of two parameters at
+    720 000 samples): refused, the loop ended on WN+RW with its verdict failed. Kept by the band's rule, K is read
+    beside the GM within its interval."""
+    dt, n = 0.005, 720_000
+    truth = [WN(5e-4), GM(tau=20.0, sigma=1.8703719495822196e-4), RW(2e-5)]
+    y = simulate_sum(truth, n, dt, np.random.default_rng([1, 60, 12]))
+    r = run_closed_loop(y, dt, "WN+RW")
+    assert r.steps[1].added == "GM"
+    assert any(t.accepted and "rejection cleared" in t.reason for t in r.steps[0].trials)
+    assert r.passed
+    (walk,) = [c for c in r.final.diagnosis.fit.components if isinstance(c, RW)]
+    assert 0.5 * 2e-5 < walk.random_walk < 2.0 * 2e-5
 
 
 def test_a_drop_that_fits_better_than_its_parent_refits_the_parent_first():
