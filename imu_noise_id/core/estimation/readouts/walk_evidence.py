@@ -3,11 +3,9 @@
 A selection's candidates are fitted to one record; those within Occam's window on either information criterion (a
 weight at least :data:`OCCAM_RATIO` of the best's: ΔBIC or ΔAIC ≤ 2 ln 20, Madigan & Raftery 1994; Burnham &
 Anderson 2002, §2.9) are the structures the data cannot tell apart. Each gives its reading of K over the record
-(:func:`record_walk`): its RW's density, with every GM whose corner 1/(2πτ) lies below the record's lowest
-frequency 1/T taken as a walk (K² = 2σ²/τ: above its corner a GM's spectrum is a walk's, so over every frequency the
-record holds it reads as one: τ > T/(2π), :func:`walk_like`), or 0 when it has neither (a GM whose corner lies inside
-the record's band: it explains the long-τ AV instead of a walk), with a 95 % Wald interval from Whittle's Fisher
-information of the
+(:func:`record_walk`): its RW's density, with every GM slower than the record taken as a walk (K² = 2σ²/τ: above its
+corner 1/(2πτ), where all the record's frequencies lie, a GM's spectrum is a walk's), or 0 when it has neither (a GM
+that explains the long-τ AV instead of a walk), with a 95 % Wald interval from Whittle's Fisher information of the
 record's length (:func:`walk_interval`: no pass over the data). K's interval is the union (hull) of the final
 model's interval and theirs (:func:`over_structures`); where it reaches zero (a structure within the evidence has no
 walk) K is given as its upper end, method ``bound``, as a K whose own interval reaches zero is
@@ -69,18 +67,11 @@ class WalkReading:
         return f"{self.structure} (BIC {self.delta_bic:+.1f}, AIC {self.delta_aic:+.1f} over the best): {k}"
 
 
-def walk_like(gm: GM, span_s: float) -> bool:
-    """Whether ``gm`` is a walk over a record of ``span_s`` [s]: its corner 1/(2πτ) lies below the record's lowest
-    frequency 1/span (τ > span/(2π)), above which its density (2σ²/τ)/(ω² + 1/τ²) is a walk's K²/ω² with K² = 2σ²/τ
-    to within a factor 2 at the lowest frequency and 1/(1 + (span/(2πkτ))²) at the k-th."""
-    return gm.tau > span_s / (2.0 * math.pi)
-
-
 def _walk_carriers(components: list[Component], span_s: float) -> list[tuple[int, RW | GM]]:
-    """(index, component) of each component that is a walk over a record of ``span_s`` [s]: an RW, or a GM that is
-    :func:`walk_like` over it."""
+    """(index, component) of each component that is a walk over a record of ``span_s`` [s]: an RW, or a GM slower
+    than the record."""
     return [(i, c) for i, c in enumerate(components)
-            if isinstance(c, RW) or (isinstance(c, GM) and walk_like(c, span_s))]
+            if isinstance(c, RW) or (isinstance(c, GM) and c.tau > span_s)]
 
 
 def _walk_terms(components: list[Component], span_s: float) -> dict[tuple[int, str], float]:
@@ -96,7 +87,7 @@ def _walk_terms(components: list[Component], span_s: float) -> dict[tuple[int, s
 
 
 def record_walk(components: list[Component], span_s: float) -> float:
-    """K [u/s/√Hz] of ``components`` over a record of ``span_s`` [s]: √(K_RW² + Σ 2σ²/τ over GMs with τ > span/(2π))."""
+    """K [u/s/√Hz] of ``components`` over a record of ``span_s`` [s]: √(K_RW² + Σ 2σ²/τ over GMs with τ > span)."""
     return math.sqrt(sum(c.random_walk**2 if isinstance(c, RW) else 2.0 * c.sigma**2 / c.tau
                          for _, c in _walk_carriers(components, span_s)))
 
