@@ -89,6 +89,8 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_measured_passband.py", "--adis-runs", "1", "2", "3", "4", "5", "6", "--adis-samples", "30000"],
      "bench_measured_passband.txt"),
     (["bench_loop_effects.py"], "bench_loop_effects.txt"),
+    (["bench_loop_effects.py", "--cases", "clean", "gm", "osc+gm", "bi", "osc+fast_gm", "osc+clear_gm"],
+     "bench_loop_effects.txt"),
     (["bench_loop_effects.py", "--minutes", "120", "--cases", "osc+gm", "bi"], "bench_loop_effects.txt"),
     (["bench_loop_effects.py", "--clean", "10", "--minutes", "120", "--rate", "10",
       "--cases", "osc+gm", "gm", "osc+fast_gm", "osc+clear_gm", "clean"], "bench_loop_effects.txt"),
