@@ -67,7 +67,7 @@ def test_the_shape_derivatives_are_those_of_the_statistics(component):
 
 def test_components_without_exponential_terms_or_shape_have_no_closed_form():
     omega = np.linspace(0.01, 3.0, 50)
-    derivatives = whittle.spectrum_derivatives(omega, DT)
+    derivatives = whittle.spectrum_parts(omega, DT).derivatives
     assert derivatives(DLPF(1e-3, 5.0, 2)) is None
     assert derivatives(BI(5e-5, 1.0, 300.0)) == {}
 
@@ -95,8 +95,7 @@ def test_the_whittle_and_composite_gradients_agree_with_and_without_the_closed_f
     ll_plain, grad_plain = composite.loglik_and_gradient(start, keys, x, stats, bp, parts=plain)
     assert ll == ll_plain
     assert grad == pytest.approx(grad_plain, rel=1e-4, abs=1e-3)
-    spectrum_parts = whittle.ComponentParts(lambda c: whittle.difference_spectrum([c], bp.omega, DT),
-                                            whittle.spectrum_derivatives(bp.omega, DT))
+    spectrum_parts = whittle.spectrum_parts(bp.omega, DT)
     _, grad_w = whittle.loglik_and_gradient(start, keys, x, bp, spectrum_parts)
     _, grad_w_plain = whittle.loglik_and_gradient(start, keys, x, bp, whittle.ComponentParts(spectrum_parts.computed))
     assert grad_w == pytest.approx(grad_w_plain, rel=1e-4, abs=1e-3)

@@ -243,16 +243,16 @@ class ComponentParts:
         return np.array([0.0 if d is None else float(weights @ d) for d in self.columns(current, keys, x, each)])
 
 
-def spectrum_derivatives(omega: np.ndarray, dt: float) -> Callable[[Component], dict[str, np.ndarray] | None]:
-    """A component's closed-form shape derivatives of its :func:`difference_spectrum` at ``omega`` [rad/sample]
-    (:func:`.exponential_parts.shape_derivatives`), for :class:`ComponentParts`."""
+def spectrum_parts(omega: np.ndarray, dt: float) -> ComponentParts:
+    """Each component's :func:`difference_spectrum` at ``omega`` [rad/sample], with its closed-form shape derivatives
+    there (:func:`.exponential_parts.shape_derivatives`): the parts of the banded Whittle likelihood."""
     factors = [lambda w: exponential_parts.difference_spectrum_factor(w, omega)]
 
     def derivatives(c: Component) -> dict[str, np.ndarray] | None:
         found = exponential_parts.shape_derivatives(c, dt, factors)
         return None if found is None else found[0]
 
-    return derivatives
+    return ComponentParts(lambda c: difference_spectrum([c], omega, dt), derivatives)
 
 
 def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]], x: np.ndarray,
@@ -287,7 +287,7 @@ def whittle_fit(start: list[Component], y: np.ndarray, dt: float, periodogram: B
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([start[i].params()[k] for i, k in keys])
     t_total = y.size * dt
-    parts = ComponentParts(lambda c: difference_spectrum([c], bp.omega, dt), spectrum_derivatives(bp.omega, dt))
+    parts = spectrum_parts(bp.omega, dt)
 
     def negll(x: np.ndarray) -> tuple[float, np.ndarray]:
         try:
@@ -352,7 +352,7 @@ def whittle_information(components: list[Component], y: np.ndarray, dt: float,
     bp = periodogram or banded_periodogram(y)
     keys = [(i, k) for i, c in enumerate(components) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([components[i].params()[k] for i, k in keys])
-    parts = ComponentParts(lambda c: difference_spectrum([c], bp.omega, dt), spectrum_derivatives(bp.omega, dt))
+    parts = spectrum_parts(bp.omega, dt)
     each = [parts(c) for c in components]
     s = np.sum(each, axis=0)
     jac = np.column_stack([np.zeros(bp.omega.size) if d is None else d / s
