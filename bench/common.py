@@ -149,10 +149,11 @@ n_before = None
 try:
     from imu_noise_id.pipelines.analyze.overbound import DEFAULT_HORIZON_S
     from imu_noise_id.pipelines.analyze.resolution import resolve_axis
-    if "level" in inspect.signature(resolve_axis).parameters:  # the level read where the record is
+    judged_by = y  # a checkout before the level was read in the axis's worker takes the record itself
+    if "level" in inspect.signature(resolve_axis).parameters:
         from imu_noise_id.core.estimation.readouts.passband import passband_level
-        y = passband_level(y, dt, list(final.fit.components))
-    resolution = resolve_axis(final, loop, static, "gyro_x", y, horizon_s=DEFAULT_HORIZON_S)
+        judged_by = passband_level(y, dt, list(final.fit.components))
+    resolution = resolve_axis(final, loop, static, "gyro_x", judged_by, horizon_s=DEFAULT_HORIZON_S)
     if resolution is not None:
         final, overbound, _ = resolution
         if final.noise_density.method != "unresolved":
