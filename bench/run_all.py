@@ -101,8 +101,6 @@ LONG: list[tuple[list[str], str]] = [
      "bench_analyze_time.txt"),
     (["bench_analyze_time.py", "--adis", "1", "2", "3", "4", "5", "6", "--allow-motion", "--timeout", "1200"],
      "bench_analyze_time.txt"),
-    (["bench_analyze_time.py", "--adis", "1", "--adis-seconds", "1000", "--baseline", BASELINE, "--numbers"],
-     "bench_analyze_time.txt"),
     (["bench_overbound.py"], "bench_overbound.txt"),
     (["bench_gmwm_speed.py"], "bench_gmwm_speed.txt"),
     (["bench_gmwm_accuracy.py"], "bench_gmwm_accuracy.txt"),

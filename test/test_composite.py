@@ -121,25 +121,3 @@ def test_a_selection_left_unfinished_is_finished_as_it_would_have_been(record):
     for got, want in zip(done.table, at_once.table, strict=True):
         for key, value in want.items():
             assert got[key] == (pytest.approx(value, rel=1e-9) if isinstance(value, float) else value), key
-
-
-def test_a_short_records_winner_waits_for_its_intervals_alone():
-    # below composite.MIN_SAMPLES the candidates are fitted exactly: finish=False leaves only the winner's intervals
-    # (which a closed loop that replaces the winner never needs), and finish_winner adds them without refitting, as
-    # select_model gives them at once
-    from imu_noise_id.core.estimation.em.selection import finish_winner, select_model
-
-    short = simulate_sum([WN(2e-4), GM(5.0, 3e-4), RW(2e-5)], 60_000, DT, np.random.default_rng(3))
-    assert short.size < composite.MIN_SAMPLES
-    options = FitOptions()
-    cands = ["WN+RW", "WN+GM+RW"]
-    left = select_model(short, DT, candidates=cands, options=options, finish=False)
-    assert left.unfinished and not left.on_composite and not left.best.ci95
-    done = finish_winner(left, NoiseModel(short, DT, left.best_key), options)
-    at_once = select_model(short, DT, candidates=cands, options=options)
-    assert not done.unfinished and done.best.ci95
-    assert done.best.loglik == pytest.approx(at_once.best.loglik, abs=1e-6)
-    assert done.best.ci95.keys() == at_once.best.ci95.keys()
-    for name, interval in at_once.best.ci95.items():
-        assert done.best.ci95[name] == pytest.approx(interval, rel=1e-6), name
-    assert done.table == at_once.table

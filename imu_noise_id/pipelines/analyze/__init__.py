@@ -257,8 +257,8 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     static, options, loop = context.static, context.options, context.loop
     index = list(static.axes).index(axis)
     column = static.allan.column(index)
-    # with the loop, the winner is finished (its intervals; found on the composite likelihood, first its exact fit)
-    # only if the loop keeps it: the loop's final fit gets its own
+    # with the loop, a winner found on the composite likelihood is finished (exact fit, intervals) only if the loop
+    # keeps it: the loop's final fit gets its own
     model = fit_axis(context.imu, axis, options.models, static.dt, column, finish=loop is None)
     fit = model.fit
     warnings = [] if model.note is None else [f"{axis}: {model.note}"]

@@ -109,9 +109,9 @@ def _gmwm_axis(y, dt: float, stage: ModelStage, allan: AllanResult | None) -> tu
 def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: AllanResult | None = None, *,
              finish: bool = True) -> AxisModel:
     """Select or fit the model of one axis (InputError names the axis); ``allan``: the axis's Allan variance
-    when the caller has it (the starting values are fitted to it). ``finish`` False: a selection leaves its winner
-    without intervals, on the composite likelihood also at its maximiser there (:func:`finish_axis` finishes it), for
-    a caller whose closed loop may replace it; not with the GMWM beside it (the two are compared at once)."""
+    when the caller has it (the starting values are fitted to it). ``finish`` False: a selection on the composite
+    likelihood leaves its winner there, without intervals (:func:`finish_axis` finishes it), for a caller whose closed
+    loop may replace it; not with the GMWM beside it (the two are compared at once)."""
     y = imu.axis(axis)
     try:
         estimator, note = stage.resolve(y.size)
@@ -136,9 +136,9 @@ def fit_axis(imu: ImuSeries, axis: str, stage: ModelStage, dt: float, allan: All
 
 def finish_axis(model: AxisModel, imu: ImuSeries, axis: str, stage: ModelStage, dt: float, *,
                 allan: AllanResult | None = None) -> AxisModel:
-    """``model`` (of :func:`fit_axis` with ``finish`` False) with its selection's winner given its intervals, one
-    found on the composite likelihood first fitted on the exact one
-    (:func:`~imu_noise_id.core.estimation.em.selection.finish_winner`); unchanged when there is nothing to finish."""
+    """``model`` (of :func:`fit_axis` with ``finish`` False) with its selection's winner fitted on the exact likelihood
+    and given its intervals (:func:`~imu_noise_id.core.estimation.em.selection.finish_winner`); unchanged when there is
+    nothing to finish."""
     if model.selection is None or not model.selection.unfinished:
         return model
     structure = model.selection.best_key

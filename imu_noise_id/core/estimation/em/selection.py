@@ -40,21 +40,18 @@ class SelectionResult:
     best: FitResult
     table: list[dict]  # per candidate: model, loglik, k, aic, bic, delta_bic, weight_bic, delta_aic, error
     fits: dict[str, FitResult]
-    #: The winner still lacks its finish (:func:`select_model` with ``finish=False``; :func:`finish_winner` finishes
-    #: it): its intervals and, when :attr:`on_composite`, its exact fit from the composite likelihood's maximiser.
+    #: The winner is still at its composite likelihood's maximiser, without intervals (:func:`select_model` with
+    #: ``finish=False``; :func:`finish_winner` finishes it).
     unfinished: bool = False
     #: Per candidate screened out on the statistics of fixed size: the fitted structure it was screened against and
     #: its screen (gain, components fitted there).
     screened: dict[str, tuple[str, screen.Screen]] = field(default_factory=dict)
-    #: Whether the candidates were fitted at the composite likelihood's maximiser (records of
-    #: :data:`.composite.MIN_SAMPLES` samples or more), each scored once on the exact likelihood.
-    on_composite: bool = False
 
     def without_data(self) -> SelectionResult:
         """The selection with every fit's record dropped (see :meth:`FitResult.without_data`)."""
         fits = {k: f.without_data() for k, f in self.fits.items()}
         best = next((fits[k] for k, f in self.fits.items() if f is self.best), self.best.without_data())
-        return SelectionResult(best, self.table, fits, self.unfinished, self.screened, self.on_composite)
+        return SelectionResult(best, self.table, fits, self.unfinished, self.screened)
 
     @property
     def best_key(self) -> str:
@@ -105,8 +102,7 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         started from the fit it names, its walk split (:func:`.starts.walk_split`)
     sensor_filter : the sensor's known digital low-pass: :data:`DLPF_CANDIDATES` join the default candidates,
         started there
-    finish : False leaves the winner without intervals, a long record's also at its composite maximiser, for
-        :func:`finish_winner` (a caller whose closed loop may replace the winner pays for neither unless it stays)
+    finish : False leaves a long record's winner at its composite maximiser for :func:`finish_winner`
 
     From :data:`.screen.MIN_SAMPLES` samples (BIC) a candidate that cannot come within :data:`.screen.MARGIN` of the
         best
@@ -175,28 +171,26 @@ def select_model(y: np.ndarray, dt: float, candidates: list[str] | None = None, 
         fits[spec] = fit
     if best_key is None or best_model is None:
         raise InputError("no candidate model could be fitted: " + "; ".join(f"{k}: {v}" for k, v in errors.items()))
-    on_composite = composite_stats is not None
-    unfinished = not finish and (on_composite or options.uncertainty)
-    if finish:  # before the table: searched again, the likelihood can only rise
-        fits[best_key] = _finished(best_model, fits[best_key], options, refit=on_composite)
+    unfinished = composite_stats is not None and not finish
+    if composite_stats is not None and finish:
+        fits[best_key] = _finished(best_model, fits[best_key], options)
+    elif options.uncertainty and not unfinished:  # before the table: searched again, the likelihood can only rise
+        fits[best_key] = add_intervals(best_model, fits[best_key], options)
     others = [{"model": spec, "screened": screened[spec][1].describe(), "delta_bic_screen": screened[spec][1].delta_bic}
               if spec in screened else {"model": spec, "error": errors[spec]}
               for spec in cands if spec not in fits]
-    at_composite = {k for k in fits if k != best_key or unfinished} if on_composite else set()
-    return SelectionResult(fits[best_key], _table(fits, others, criterion, at_composite), fits, unfinished, screened,
-                           on_composite)
+    at_composite = ({k for k in fits if k != best_key or unfinished} if composite_stats is not None else set())
+    return SelectionResult(fits[best_key], _table(fits, others, criterion, at_composite), fits, unfinished, screened)
 
 
 #: A selection table row's ``likelihood`` when its fit is the composite likelihood's maximiser.
 AT_COMPOSITE_MAXIMUM = "exact, at the composite likelihood's maximiser"
 
 
-def _finished(model: NoiseModel, fit: FitResult, options: FitOptions, *, refit: bool) -> FitResult:
-    """``fit`` with intervals if asked; with ``refit``, first fitted exactly from its composite maximiser (kept if
-    better)."""
-    if refit:
-        exact = model.fit(list(fit.components), replace(options, uncertainty=False))
-        fit = exact if exact.loglik > fit.loglik else fit
+def _finished(model: NoiseModel, fit: FitResult, options: FitOptions) -> FitResult:
+    """``fit`` refitted exactly from its composite maximiser (kept if better), with intervals if asked."""
+    exact = model.fit(list(fit.components), replace(options, uncertainty=False))
+    fit = exact if exact.loglik > fit.loglik else fit
     return add_intervals(model, fit, options) if options.uncertainty else fit
 
 
@@ -218,14 +212,12 @@ def _table(fits: dict[str, FitResult], others: list[dict], criterion: str, at_co
 
 def finish_winner(selection: SelectionResult, model: NoiseModel, options: FitOptions,
                   criterion: str = "bic") -> SelectionResult:
-    """A ``finish=False`` selection finished: its winner given intervals when ``options.uncertainty``, on the
-    composite likelihood first fitted on ``model``'s exact likelihood from the composite maximiser, the table ranked
-    again; unchanged when finished."""
+    """A ``finish=False`` selection finished: its winner fitted on ``model``'s exact likelihood from the composite
+    maximiser (intervals when ``options.uncertainty``), the table ranked again; unchanged when finished."""
     if not selection.unfinished:
         return selection
     key = selection.best_key
-    fits = {**selection.fits, key: _finished(model, selection.best, options, refit=selection.on_composite)}
+    fits = {**selection.fits, key: _finished(model, selection.best, options)}
     others = [row for row in selection.table if "loglik" not in row]
-    at_composite = set(fits) - {key} if selection.on_composite else set()
-    return SelectionResult(fits[key], _table(fits, others, criterion, at_composite), fits,
-                           screened=selection.screened, on_composite=selection.on_composite)
+    return SelectionResult(fits[key], _table(fits, others, criterion, set(fits) - {key}), fits,
+                           screened=selection.screened)
