@@ -273,18 +273,27 @@ def test_the_smoothers_adjoint_in_either_basis_equals_its_backward_recursion(a):
     np.testing.assert_allclose(basis.u_inv.T @ v, expected, rtol=1e-9, atol=1e-12 * np.max(np.abs(expected)))
 
 
-def test_a_model_without_a_steady_filter_in_double_precision_is_refused_without_numpy_warnings():
+def test_where_the_doubling_ends_off_a_covariance_the_schur_method_solves_the_riccati_equation():
     """A GM of σ 305 beside a white noise of 8e-8 per sample (an optimiser's trial step reaches such ratios): the
-    Riccati iteration ended on a P̄ with an eigenvalue of −5e12, whose log-likelihood was finite and meaningless.
-    The estimators take InputError as outside the domain (EM keeps its last good iterate)."""
+    doubling ends on a P̄ with an eigenvalue of about −10¹³ (refused, before, as a model without a steady filter). The
+    generalised Schur method's P̄ is a covariance that solves the DARE, and the steady engine's log-likelihood equals
+    the exact engine's, which runs the Riccati recursion from there, without numpy warnings."""
     y, z = np.random.default_rng(0).standard_normal(5000) * 1e-3, np.ones((5000, 1))
     model = ss.from_components([WN(7.62916e-06), GM(tau=7.8895e+06, sigma=305.336),
                                 OSC(frequency=0.161392, bandwidth=0.114937, sigma=6.63899e-05), RW(4.40886e-10)],
                                0.01, ramp="measurement", intercept=True, exog_names=())
+    phi, q, h, r = model.phi, model.q, model.h, float(model.r)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        with pytest.raises(InputError, match="not positive semi-definite"):
-            kalman.loglik(model, y, z)
+        P = steady_prediction_covariance(phi, q, h, r)
+        steady_ll = kalman.loglik(model, y, z, engine="steady").loglik
+        exact_ll = kalman.loglik(model, y, z, engine="exact").loglik
+    w = np.linalg.eigvalsh(P)
+    assert w[0] >= -1e-8 * w[-1]
+    gain = phi @ P @ h
+    residual = phi @ P @ phi.T + q - np.outer(gain, gain) / (float(h @ P @ h) + r) - P
+    assert np.max(np.abs(residual)) <= 1e-8 * np.max(np.abs(P))
+    assert steady_ll == pytest.approx(exact_ll, rel=1e-9)
 
 
 def test_the_smoother_sums_of_a_nearly_exactly_observed_state_are_finite_without_numpy_warnings():

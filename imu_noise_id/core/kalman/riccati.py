@@ -50,8 +50,9 @@ def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess:
 def steady_prediction_covariance(
     phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, *, guess: np.ndarray | None = None
 ) -> np.ndarray:
-    """P̄: P = Φ P (I + G P)⁻¹ Φᵀ + Q, G = Hᵀ R⁻¹ H (Newton from ``guess``, doubling, generalised Schur); InputError
-    if R ≤ 0, undetectable, or no covariance."""
+    """P̄: P = Φ P (I + G P)⁻¹ Φᵀ + Q, G = Hᵀ R⁻¹ H (Newton from ``guess``, doubling, and the generalised Schur method
+    where the doubling fails or ends off a covariance to rounding); InputError if R ≤ 0, undetectable, or no
+    covariance."""
     p = phi.shape[0]
     if p == 0:
         return np.zeros((0, 0))
@@ -63,7 +64,7 @@ def steady_prediction_covariance(
             return _covariance(P)
     try:
         return _covariance(_doubling_dare(phi, q, h, float(r)))
-    except np.linalg.LinAlgError:
+    except (np.linalg.LinAlgError, InputError):  # I + G X singular, no convergence, or a P̄ off a covariance
         return _covariance(_schur_dare(phi, q, h, float(r)))
 
 
