@@ -91,8 +91,9 @@ def test_husky_bag_replays_clean_through_the_node(shared_data, ros_env, tmp_path
                 statuses[s.name[len(NODE) + 2:]] = (s.level[0], s.message, {kv.key: kv.value for kv in s.values})
     received = int(statuses["IMU input"][2]["received"])
     assert received >= 0.99 * IMU_MESSAGES
-    # Odometry arrives at 200 Hz here; a node starved of CPU (load 6 on 2 cores) lost up to 2.2 % of it from its
-    # subscription queue, never IMU messages' 1 %.
+    # Odometry arrives at 200 Hz here; a node starved of CPU (load 6 on 2 cores) lost up to 2.2 % of it from a
+    # subscription queue of 100 (4 % once, on a slower machine), never IMU messages' 1 % from theirs of 1000; the
+    # odometry's queue is now as deep.
     assert int(statuses["Odometry input"][2]["received"]) >= 0.97 * ODOM_MESSAGES
     # Clean: no dropped stamps, no CMKF failures, no exceptions in the node's log.
     stamps = statuses["Time stamps"][2]

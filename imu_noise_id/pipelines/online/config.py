@@ -247,7 +247,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
               "(percentiles) is written to this file at shutdown (for bench/bench_node.py)", runtime=False),
     ParamSpec("imu_queue_depth", 1000, "subscription queue depth of the IMU topic (sensor-data QoS)",
               "messages", 100, 100000, runtime=False),
-    ParamSpec("odom_queue_depth", 100, "subscription queue depth of the odometry and temperature topics",
+    ParamSpec("odom_queue_depth", 1000, "subscription queue depth of the odometry and temperature topics",
               "messages", 1, 100000, runtime=False),
 )
 
