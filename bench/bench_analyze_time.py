@@ -11,6 +11,7 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400 --baseline ../baseline  # 24 h, 200 Hz
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1200 --numbers  # measured
     .venv/bin/python bench/bench_analyze_time.py --adis 1 2 3 4 5 6 --allow-motion --timeout 1200   # all six runs
+    .venv/bin/python bench/bench_analyze_time.py --adis 1 --adis-seconds 1000 --baseline ../baseline --numbers  # 10⁵
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
 screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run and 24 h at 200 Hz side by
@@ -18,16 +19,16 @@ side with the checkout before the final models' AV range in closed form, and all
 alone).
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
-checkout; with ``--adis RUN …``, each whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at
-100 Hz, ``bench/common.py``) instead, and with several runs each checkout's total wall time over them (run 4 holds
-motion bursts the static check refuses: ``--allow-motion`` passes that option to every run). A checkout still running
-after ``--timeout`` seconds is stopped and printed as such (the checkout before the composite search needs hours on a
-measured record). Printed: per rate, source and ``--jobs`` value, wall time, CPU time (user + system of the analyze
-process and of the worker processes it reaped) and peak memory: the largest RSS of one process and the largest sums
-of the RSS and of the PSS (shared pages split among the processes mapping them) of the analyze process and its
-workers (sampled every :data:`MEMORY_SAMPLE_PERIOD` s), the PSS also as a multiple of the decoded arrays (stamps
-and six axes, float64); with ``--numbers``, the N and K each checkout's ``imu.yaml`` gives per axis. Each checkout
-runs without the BLAS thread-count variables in its environment, as from a user's shell.
+checkout; with ``--adis RUN …``, each whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at 100
+Hz, ``bench/common.py``; its first ``--adis-seconds`` only when given) instead, and with several runs each checkout's
+total wall time over them (run 4 holds motion bursts the static check refuses: ``--allow-motion`` passes that option to
+every run). A checkout still running after ``--timeout`` seconds is stopped and printed as such (the checkout before the
+composite search needs hours on a measured record). Printed: per rate, source and ``--jobs`` value, wall time, CPU time
+(user + system of the analyze process and of the worker processes it reaped) and peak memory: the largest RSS of one
+process and the largest sums of the RSS and of the PSS (shared pages split among the processes mapping them) of the
+analyze process and its workers (sampled every :data:`MEMORY_SAMPLE_PERIOD` s), the PSS also as a multiple of the
+decoded arrays (stamps and six axes, float64); with ``--numbers``, the N and K each checkout's ``imu.yaml`` gives per
+axis. Each checkout runs without the BLAS thread-count variables in its environment, as from a user's shell.
 """
 
 from __future__ import annotations
@@ -83,11 +84,13 @@ def _stop_tree(pid: int) -> None:
                 proc.kill()
 
 
-def _adis_bag(run: int, path: Path) -> int:
-    """Write ADIS16405 static run ``run`` as a rosbag2 mcap bag at ``path``; its samples per axis."""
+def _adis_bag(run: int, path: Path, seconds: float = 0.0) -> int:
+    """Write ADIS16405 static run ``run`` (its first ``seconds`` when non-zero) as a rosbag2 mcap bag at ``path``; its
+    samples per axis."""
     if not ADIS_DATA.is_dir():
         raise SystemExit(f"no data at {ADIS_DATA}")
     data, dt = load_adis_run(run)
+    data = data[: round(seconds / dt)] if seconds else data
     t = dt * np.arange(data.shape[0])
     write_bag(path, ImuSeries(t=t, gyro=data[:, :3], accel=data[:, 3:], frame_id="imu", topic="/imu/data"))
     return data.shape[0]
@@ -168,6 +171,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--adis", type=int, nargs="+", default=None, metavar="RUN",
                         help="analyze the whole ADIS16405 static runs RUN … (1-6) instead of a simulated bag; with "
                              "several, each checkout's total wall time over them too")
+    parser.add_argument("--adis-seconds", type=float, default=0.0, metavar="S",
+                        help="with --adis, the first S seconds of each run (default: the whole record)")
     parser.add_argument("--allow-motion", action="store_true",
                         help="pass --allow-motion to analyze (run 4 holds motion bursts the static check refuses)")
     parser.add_argument("--timeout", type=float, default=math.inf,
@@ -186,8 +191,9 @@ def main(argv: list[str] | None = None) -> int:
         for rate, run in [(100.0, r) for r in args.adis] if args.adis else [(r, None) for r in args.rates]:
             bag = Path(tmp) / (f"adis_run{run}" if run else f"static_{rate:g}hz")
             if run:
-                n = _adis_bag(run, bag)
-                what = f"ADIS16405 run {run}, whole record"
+                n = _adis_bag(run, bag, args.adis_seconds)
+                what = f"ADIS16405 run {run}, " + (f"first {args.adis_seconds:g} s" if args.adis_seconds else
+                                                   "whole record")
             else:
                 subprocess.run([sys.executable, "-m", "imu_noise_id", "simulate", "--model", MODEL, "--rate",
                                 str(rate), "--duration", str(args.duration), "--out", str(bag), "--seed", "1"],
