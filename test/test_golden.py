@@ -58,11 +58,16 @@ LOGLIK_KEYS = {"loglik", "aic", "bic", "delta_aic", "delta_bic", "loglik_diffuse
 TEXT_KEYS = {"reason", "av_band"}
 #: Free-text keys of ``imu.yaml`` saying where a pasted value comes from (per axis, ``…_source_xyz``): their words are
 #: compared exactly, a BIC or AIC difference to :data:`LOGLIK_ABS`, a reading the text itself calls undetermined ("K …
-#: (its interval not determined)": a point of a flat ridge, module docstring) not at all, other numbers to
-#: :data:`FIT_REL`.
+#: (its interval not determined)": a point of a flat ridge, module docstring) not at all, a reading with its interval
+#: ("K 1.79e-05 [3.99e-06, 8.03e-05]") to :data:`SE_FRACTION` of the standard error of ln K the interval implies, the
+#: ends of an interval to :data:`CURVATURE_REL`, other numbers to :data:`FIT_REL`.
 SOURCE_SUFFIX = "_source_xyz"
 UNDETERMINED = " (its interval not determined)"
 NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+#: A reading's interval right after its value: `` [lo, hi]``.
+READING_INTERVAL = re.compile(rf" \[({NUMBER.pattern}), ({NUMBER.pattern})\]")
+#: The normal quantile of a 95 % interval (a reading's interval spans ±Z95 standard errors of ln K).
+Z95 = 1.959964
 #: Keys holding numbers from the likelihood's curvature or from draws of it, and the overbound (it touches the final
 #: model's Allan variance, which moves with the fit over the flat parts of the likelihood).
 CURVATURE_KEYS = ("se", "ci95", "record_length", "weight_bic", "information_ok", "_ci_xyz", "bias_instability",
@@ -174,8 +179,17 @@ def _same_source_text(got: str, want: str) -> bool:
     for g, w in zip(NUMBER.finditer(got), NUMBER.finditer(want), strict=True):
         if want.startswith(UNDETERMINED, w.end()):
             continue
-        log_scale = want[: w.start()].rstrip(" +").endswith(("BIC", "AIC"))
-        tol = {"rel_tol": 0.0, "abs_tol": LOGLIK_ABS} if log_scale else {"rel_tol": FIT_REL, "abs_tol": ABS}
+        before = want[: w.start()]
+        interval = READING_INTERVAL.match(want, w.end())
+        if before.rstrip(" +").endswith(("BIC", "AIC")):
+            tol = {"rel_tol": 0.0, "abs_tol": LOGLIK_ABS}
+        elif interval and 0.0 < float(interval[1]) < float(interval[2]):
+            se_log = math.log(float(interval[2]) / float(interval[1])) / (2.0 * Z95)
+            tol = {"rel_tol": max(FIT_REL, SE_FRACTION * se_log), "abs_tol": ABS}
+        elif before.rfind("[") > before.rfind("]"):
+            tol = {"rel_tol": CURVATURE_REL, "abs_tol": ABS}
+        else:
+            tol = {"rel_tol": FIT_REL, "abs_tol": ABS}
         if not math.isclose(float(g.group()), float(w.group()), **tol):
             return False
     return True
@@ -259,3 +273,14 @@ def test_a_source_text_compares_its_words_and_its_determined_numbers():
     assert not _same_source_text(want.replace("0.000632", "0.000700"), want)
     assert not _same_source_text(want.replace("+12.2", "+14.0"), want)
     assert not _same_source_text(want.replace("no walk", "a walk"), want)
+
+
+def test_a_source_texts_reading_with_an_interval_compares_to_its_own_resolution():
+    """A reading K 1.79e-05 [3.99e-06, 8.03e-05] has sd(ln K) 0.77: its value may move by a quarter of that (19 %),
+    its interval's ends by :data:`CURVATURE_REL`; a well-determined reading's value stays at :data:`FIT_REL`."""
+    want = "RW; spans (WN+GM+RW (BIC +20.9): K 1.79e-05 [3.99e-06, 8.03e-05]; the own [9.92e-06, 5.32e-05])"
+    assert _same_source_text(want.replace("1.79e-05 [3.99e-06, 8.03e-05]", "1.77e-05 [3.92e-06, 8.01e-05]"), want)
+    assert not _same_source_text(want.replace("1.79e-05", "1.30e-05"), want)
+    assert not _same_source_text(want.replace("3.99e-06", "3.60e-06"), want)
+    narrow = "RW; spans (WN+GM+RW (BIC +20.9): K 1.79e-05 [1.78e-05, 1.80e-05])"
+    assert not _same_source_text(narrow.replace("1.79e-05 [", "1.77e-05 ["), narrow)

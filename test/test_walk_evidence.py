@@ -22,6 +22,7 @@ from imu_noise_id.core.estimation.readouts.walk_evidence import (
     over_structures,
     plausible_walks,
     record_walk,
+    visible_components,
     walk_interval,
 )
 from imu_noise_id.core.noise.components import GM, RW, WN, simulate_sum
@@ -82,6 +83,22 @@ def test_the_wald_interval_of_a_walk_agrees_with_the_fits_own() -> None:
     assert fit.ci95_method["RW.random_walk"] in ("wald", "profile")
     assert wald == pytest.approx(profile, rel=0.1)
     assert walk_interval([WN(5e-4), GM(tau=20.0, sigma=1e-4)], n, DT) == (0.0, 0.0)
+
+
+def test_a_component_the_fit_collapsed_enters_no_reading() -> None:
+    """The bug: a WN+GM+RW fit whose GM collapsed (tau 0.01 s, sigma 2.6e-9 beside a white noise of 1e-3) read K with
+    an interval on one machine and "not determined" on another (the GM's information ~1e-22 of the white noise's,
+    its null space left to rounding); a walk collapsed to 3e-10 was read as K 3e-10 on one and as no walk on the
+    other. Such components hold under a millionth of the spectrum at every frequency of the record and are dropped;
+    a GM and a walk the record shows are kept."""
+    n, dt = 60_000, 0.01
+    collapsed_gm = GM(tau=0.01, sigma=2.6e-9)
+    assert visible_components([WN(1e-3), collapsed_gm, RW(2.15e-5)], n, dt) == [WN(1e-3), RW(2.15e-5)]
+    assert walk_interval([WN(1e-3), collapsed_gm, RW(2.15e-5)], n, dt) == walk_interval([WN(1e-3), RW(2.15e-5)], n,
+                                                                                        dt)
+    assert walk_interval([WN(1e-3), GM(tau=20.0, sigma=2e-3), RW(3e-10)], n, dt) == (0.0, 0.0)
+    shown = [WN(1e-3), GM(tau=20.0, sigma=1e-4), RW(2e-6)]  # each above a millionth somewhere in 600 s
+    assert visible_components(shown, n, dt) == shown
 
 
 @pytest.fixture(scope="module")

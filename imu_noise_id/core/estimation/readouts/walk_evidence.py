@@ -1,16 +1,19 @@
 """The random walk K under model uncertainty: what the structures the data cannot tell apart say about K.
 
-A selection's candidates are fitted to one record; those within Occam's window on either information criterion (a
-weight at least :data:`OCCAM_RATIO` of the best's: ΔBIC or ΔAIC ≤ 2 ln 20, Madigan & Raftery 1994; Burnham &
-Anderson 2002, §2.9) are the structures the data cannot tell apart. Each gives its reading of K over the record
-(:func:`record_walk`): its RW's density, with every GM slower than the record taken as a walk (K² = 2σ²/τ: above its
-corner 1/(2πτ), where all the record's frequencies lie, a GM's spectrum is a walk's), or 0 when it has neither (a GM
-that explains the long-τ AV instead of a walk), with a 95 % Wald interval from Whittle's Fisher information of the
-record's length (:func:`walk_interval`: no pass over the data). K's interval is the union (hull) of the final
-model's interval and theirs (:func:`over_structures`); where it reaches zero (a structure within the evidence has no
-walk) K is given as its upper end, method ``bound``, as a K whose own interval reaches zero is
-(:func:`~.kalibr.unidentified_as_bound`). Why: docs/analysis.md, "Why K's interval spans the structures the data
-cannot tell apart".
+A selection's candidates are fitted to one record; those within Occam's window on either information criterion (a weight
+at least :data:`OCCAM_RATIO` of the best's: ΔBIC or ΔAIC ≤ 2 ln 20, Madigan & Raftery 1994; Burnham & Anderson 2002,
+§2.9) are the structures the data cannot tell apart. Each gives its reading of K over the record (:func:`record_walk`):
+its RW's density, with every GM slower than the record taken as a walk (K² = 2σ²/τ: above its corner 1/(2πτ), where all
+the record's frequencies lie, a GM's spectrum is a walk's), or 0 when it has neither (a GM that explains the long-τ AV
+instead of a walk), with a 95 % Wald interval from Whittle's Fisher information of the record's length
+(:func:`walk_interval`: no pass over the data). A walk or GM whose share of the model's spectrum is below
+:data:`VISIBLE_SHARE` at every frequency of the record (a component the fit collapsed, e.g. a GM of τ 0.01 s and σ 3e-9
+beside a white noise of 1e-3) enters no reading (:func:`visible_components`): its parameters have no information, and
+the reading would depend on how the machine's rounding treats that null space. K's interval is the union (hull) of the
+final model's interval and theirs (:func:`over_structures`); where it reaches zero (a structure within the evidence has
+no walk) K is given as its upper end, method ``bound``, as a K whose own interval reaches zero is
+(:func:`~.kalibr.unidentified_as_bound`). Why: docs/analysis.md, "Why K's interval spans the structures the data cannot
+tell apart".
 """
 
 from __future__ import annotations
@@ -37,6 +40,12 @@ OCCAM_DELTA = -2.0 * math.log(OCCAM_RATIO)
 #: (:data:`~..em.uncertainty.WALD_MAX_SE_LOG`, an interval wider than ×7 each way), which replaces such an interval
 #: by a profile; a reading has no pass over the data for one.
 MAX_LOG_SE = WALD_MAX_SE_LOG
+#: Largest share of the model's spectrum a walk or GM may hold at every frequency of a record and still be held
+#: collapsed (:func:`visible_components`): Whittle's information of such a component is at most n·share²/2, below
+#: 10⁻² for any record up to 10¹⁰ samples.
+VISIBLE_SHARE = 1e-6
+#: Log-spaced frequencies of the record's band on which a component's share is read (walks and GMs are smooth).
+SHARE_GRID = 256
 
 
 @dataclass(frozen=True)
@@ -67,6 +76,24 @@ class WalkReading:
         return f"{self.structure} (BIC {self.delta_bic:+.1f}, AIC {self.delta_aic:+.1f} over the best): {k}"
 
 
+def visible_components(components: list[Component], n: int, dt: float) -> list[Component]:
+    """``components`` without each RW or GM whose share of the model's spectrum of differences
+    (:func:`~..em.whittle.difference_spectrum`) stays below :data:`VISIBLE_SHARE` at every frequency of a record of
+    ``n`` samples at ``dt`` [s] (:data:`SHARE_GRID` log-spaced from 2π/(n − 1) to π rad/sample)."""
+    omega = np.geomspace(2.0 * math.pi / max(int(n) - 1, 2), math.pi, SHARE_GRID)
+    parts = [whittle.difference_spectrum([c], omega, dt) for c in components]
+    total = np.sum(parts, axis=0)
+    if not np.all(total > 0.0):
+        return list(components)
+    return [c for c, part in zip(components, parts, strict=True)
+            if not isinstance(c, RW | GM) or np.max(part / total) >= VISIBLE_SHARE]
+
+
+def _structure(components: list[Component]) -> tuple[str, ...]:
+    """The component types of ``components``, in order (``("WN", "RW")``)."""
+    return tuple(type(c).__name__ for c in components)
+
+
 def _walk_carriers(components: list[Component], span_s: float) -> list[tuple[int, RW | GM]]:
     """(index, component) of each component that is a walk over a record of ``span_s`` [s]: an RW, or a GM slower
     than the record."""
@@ -93,11 +120,13 @@ def record_walk(components: list[Component], span_s: float) -> float:
 
 
 def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float, float] | None:
-    """95 % Wald interval of :func:`record_walk` over ``n`` samples at ``dt`` [s], on ln K, by the delta method from
-    Whittle's Fisher information of ``n`` samples (:func:`~..em.whittle.fisher_information`); (0, 0) without a
-    walk, None where the information leaves K undetermined (singular, or sd(ln K) above :data:`MAX_LOG_SE`: a slow GM
-    beside a walk it outweighs reads K to no order of magnitude, e^(±1.96 sd) up to 10²⁷-fold)."""
+    """95 % Wald interval of :func:`record_walk` of the :func:`visible_components` over ``n`` samples at ``dt`` [s],
+    on ln K, by the delta method from Whittle's Fisher information of ``n`` samples
+    (:func:`~..em.whittle.fisher_information`); (0, 0) without a visible walk, None where the information leaves K
+    undetermined (singular, or sd(ln K) above :data:`MAX_LOG_SE`: a slow GM beside a walk it outweighs reads K to no
+    order of magnitude, e^(±1.96 sd) up to 10²⁷-fold)."""
     span = n * dt
+    components = visible_components(components, n, dt)
     k = record_walk(components, span)
     if k == 0.0:
         return (0.0, 0.0)
@@ -126,16 +155,16 @@ def _statistic_walk_scale(exact: list[Component], on_statistic: tuple[Component,
 
 
 def plausible_walks(selection: SelectionResult, n: int, dt: float) -> list[WalkReading]:
-    """The readings of K (:func:`record_walk`, :func:`walk_interval`) of the selection's structures other than its
-    winner (whose K has its own interval) within Occam's window on BIC or AIC (:data:`OCCAM_DELTA`), of a record of
-    ``n`` samples at ``dt`` [s], best BIC first: its converged fits, and its candidates screened out on the statistics
-    of fixed size (:mod:`..em.screen`) at the components and likelihood gain of each statistic's maximum (their
-    criteria those of the structure they were screened against plus the screen's; the block sums may find a slow GM
-    the banded periodogram does not see, a mode that reads K differently). A screened candidate's K (and interval)
-    is read relative to the statistic's reading of the structure it was screened against
-    (:func:`_statistic_walk_scale`): a statistic of fixed size reads K less well than the exact fit, and its absolute
-    K would put its own error into the interval as if it were a difference between the structures. ΔBIC and ΔAIC are
-    to the best of all."""
+    """The readings of K (:func:`record_walk` of the :func:`visible_components`, :func:`walk_interval`) of the
+    selection's structures other than its winner (whose K has its own interval; a structure whose visible components are
+    the winner's is the winner) within Occam's window on BIC or AIC (:data:`OCCAM_DELTA`), of a record of ``n`` samples
+    at ``dt`` [s], best BIC first: its converged fits, and its candidates screened out on the statistics of fixed size
+    (:mod:`..em.screen`) at the components and likelihood gain of each statistic's maximum (their criteria those of the
+    structure they were screened against plus the screen's; the block sums may find a slow GM the banded periodogram
+    does not see, a mode that reads K differently). A screened candidate's K (and interval) is read relative to the
+    statistic's reading of the structure it was screened against (:func:`_statistic_walk_scale`): a statistic of fixed
+    size reads K less well than the exact fit, and its absolute K would put its own error into the interval as if it
+    were a difference between the structures. ΔBIC and ΔAIC are to the best of all."""
     winner = selection.best_key
     span = n * dt
     fits = {spec: f for spec, f in selection.fits.items() if f.converged}
@@ -148,12 +177,15 @@ def plausible_walks(selection: SelectionResult, n: int, dt: float) -> list[WalkR
     if not found:
         return []
     bic_min, aic_min = min(f[1] for f in found), min(f[2] for f in found)
+    winner_structure = _structure(visible_components(list(selection.best.components), n, dt))
     readings = []
     for spec, bic, aic, components, scale in sorted(found, key=lambda f: f[1]):
-        if spec == winner or min(bic - bic_min, aic - aic_min) > OCCAM_DELTA:
+        visible = visible_components(components, n, dt)
+        if spec == winner or _structure(visible) == winner_structure or min(bic - bic_min, aic - aic_min) > OCCAM_DELTA:
             continue
-        ci = walk_interval(components, n, dt)
-        readings.append(WalkReading(spec, bic - bic_min, aic - aic_min, scale * record_walk(components, span),
+        ci = walk_interval(visible, n, dt)
+        k = record_walk(visible, span)
+        readings.append(WalkReading(spec, bic - bic_min, aic - aic_min, scale * k,
                                     None if ci is None else (scale * ci[0], scale * ci[1])))
     return readings
 
