@@ -41,8 +41,8 @@ OCCAM_DELTA = -2.0 * math.log(OCCAM_RATIO)
 #: by a profile; a reading has no pass over the data for one.
 MAX_LOG_SE = WALD_MAX_SE_LOG
 #: Largest share of the model's spectrum a walk or GM may hold at every frequency of a record and still be held
-#: collapsed (:func:`visible_components`): Whittle's information of such a component is at most n·share²/2, below
-#: 10⁻² for any record up to 10¹⁰ samples.
+#: collapsed (:func:`visible_components`): Whittle's information of such a component is of order n·share², 10⁻² at
+#: 10¹⁰ samples.
 VISIBLE_SHARE = 1e-6
 #: Log-spaced frequencies of the record's band on which a component's share is read (walks and GMs are smooth).
 SHARE_GRID = 256
