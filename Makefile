@@ -52,7 +52,7 @@ test: setup lint
 	  > $$ros_log 2>&1 & ros=$$!; \
 	echo "tests marked ros: running beside the others (their output follows at the end)"; \
 	TEST_DDS_SHARES=$$shares TEST_DDS_SHARE=0 nice -n 19 $(PY) -m pytest -q -n $(TEST_WORKERS) --dist worksteal \
-	  -m "not ros"; others=$$?; \
+	  --durations=25 -m "not ros"; others=$$?; \
 	wait $$ros; ros_status=$$?; echo "-- tests marked ros:"; cat $$ros_log; rm -f $$ros_log; \
 	echo "make test: $$(( $$(date +%s) - start )) s wall"; \
 	test $$others = 0 -a $$ros_status = 0
