@@ -12,6 +12,7 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1200 --numbers  # measured
     .venv/bin/python bench/bench_analyze_time.py --adis 1 2 3 4 5 6 --allow-motion --timeout 1200   # all six runs
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --adis-seconds 1000 --baseline ../baseline --numbers  # 10⁵
+    .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --repeats 3   # with the spread
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
 screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run and 24 h at 200 Hz side by
@@ -28,7 +29,10 @@ composite search needs hours on a measured record). Printed: per rate, source an
 process and the largest sums of the RSS and of the PSS (shared pages split among the processes mapping them) of the
 analyze process and its workers (sampled every :data:`MEMORY_SAMPLE_PERIOD` s), the PSS also as a multiple of the
 decoded arrays (stamps and six axes, float64); with ``--numbers``, the N and K each checkout's ``imu.yaml`` gives per
-axis. Each checkout runs without the BLAS thread-count variables in its environment, as from a user's shell.
+axis. Each checkout runs without the BLAS thread-count variables in its environment, as from a user's shell. With
+``--repeats R`` the checkouts take turns R times on each bag (A B A B …, so that a drift of the machine's speed falls on
+both) and each is summarised by its median wall time and range, the ratio by the median of the turns' ratios and its
+range: a difference within that range is not one this run can tell from the machine's spread.
 """
 
 from __future__ import annotations
@@ -160,6 +164,26 @@ def pasted_numbers(out: Path) -> list[str]:
     return lines
 
 
+def _ratio_lines(turns: list[dict[str, float]], names: list[str], timeout: float) -> list[str]:
+    """Each other checkout's wall time as a multiple of the first's (``names[0]``), from the turns' wall times [s]
+    (inf: stopped at ``timeout``); with several turns, each checkout's median and range first, and the ratio as the
+    median of the turns' ratios with their range."""
+    first, lines = names[0], []
+    if len(turns) > 1:
+        for name in names:
+            walls = sorted(t[name] for t in turns)
+            lines.append(f"  {name:40s} wall median {float(np.median(walls)):7.1f} s over {len(walls)} turns "
+                         f"(range {walls[0]:.1f}–{walls[-1]:.1f} s)")
+    for name in names[1:]:
+        ratios = sorted(min(t[name], timeout) / t[first] for t in turns if math.isfinite(t[first]))
+        if not ratios:  # no ratio to a stopped run
+            continue
+        more = "more than " if any(math.isinf(t[name]) for t in turns) else ""
+        spread = f" (turns {ratios[0]:.2f}–{ratios[-1]:.2f}×)" if len(ratios) > 1 else ""
+        lines.append(f"  {name}: {more}{float(np.median(ratios)):.2f}× the wall time of {first}{spread}")
+    return lines
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rates", type=float, nargs="+", default=[400.0], help="IMU rates [Hz] (default 400)")
@@ -177,6 +201,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="pass --allow-motion to analyze (run 4 holds motion bursts the static check refuses)")
     parser.add_argument("--timeout", type=float, default=math.inf,
                         help="stop a checkout still running after this many seconds")
+    parser.add_argument("--repeats", type=int, default=1, metavar="R",
+                        help="run the checkouts in turn R times on each bag and print the spread (default 1)")
     parser.add_argument("--numbers", action="store_true",
                         help="print each checkout's N and K as imu.yaml gives them (value, 95 %% interval, method)")
     args = parser.parse_args(argv)
@@ -203,27 +229,27 @@ def main(argv: list[str] | None = None) -> int:
                 what = f"{args.duration:g} s at {rate:g} Hz"
             arrays = n * DECODED_BYTES_PER_SAMPLE / 2.0**20
             print(f"\n{what} ({n} samples per axis; decoded arrays {arrays:.0f} MiB):")
-            times = {}
-            for name, source, jobs in sources:
-                out = Path(tmp) / f"out_{len(times)}"
-                measured = run_analyze(source, bag, out, jobs, args.timeout, extra)
-                if measured is None:
-                    times[name] = math.inf
-                    print(f"  {name:40s} stopped after {args.timeout:.0f} s, not finished", flush=True)
-                    continue
-                wall, cpu, rss, tree_rss, tree_pss = measured
-                times[name] = wall
-                totals[name] = totals.get(name, 0.0) + wall
-                print(f"  {name:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB; process tree: "
-                      f"RSS {tree_rss:7.0f} MiB, PSS {tree_pss:7.0f} MiB = {tree_pss / arrays:.1f}× the arrays",
-                      flush=True)
-                if args.numbers:
-                    print("\n".join(pasted_numbers(out)), flush=True)
-            first = sources[0][0]
-            for name, _, _ in sources[1:] if math.isfinite(times[first]) else []:  # no ratio to a stopped run
-                ratio = times[name] / times[first]
-                print(f"  {name}: {'more than ' if math.isinf(times[name]) else ''}"
-                      f"{min(ratio, args.timeout / times[first]):.2f}× the wall time of {first}")
+            turns: list[dict[str, float]] = []
+            for turn in range(args.repeats):
+                times = {}
+                for name, source, jobs in sources:
+                    out = Path(tmp) / f"out_{turn}_{len(times)}"
+                    label = name if args.repeats == 1 else f"{name}, turn {turn + 1}"
+                    measured = run_analyze(source, bag, out, jobs, args.timeout, extra)
+                    if measured is None:
+                        times[name] = math.inf
+                        print(f"  {label:40s} stopped after {args.timeout:.0f} s, not finished", flush=True)
+                        continue
+                    wall, cpu, rss, tree_rss, tree_pss = measured
+                    times[name] = wall
+                    totals[name] = totals.get(name, 0.0) + wall / args.repeats
+                    print(f"  {label:40s} wall {wall:7.1f} s   CPU {cpu:7.1f} s   peak RSS {rss:7.0f} MiB; process "
+                          f"tree: RSS {tree_rss:7.0f} MiB, PSS {tree_pss:7.0f} MiB = {tree_pss / arrays:.1f}× the "
+                          "arrays", flush=True)
+                    if args.numbers:
+                        print("\n".join(pasted_numbers(out)), flush=True)
+                turns.append(times)
+            print("\n".join(_ratio_lines(turns, [name for name, _, _ in sources], args.timeout)), flush=True)
     if args.adis and len(args.adis) > 1:
         print(f"\nall {len(args.adis)} runs, {6 * len(args.adis)} axes:")
         for name, total in totals.items():
