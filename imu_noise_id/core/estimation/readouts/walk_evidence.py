@@ -180,8 +180,10 @@ def plausible_walks(selection: SelectionResult, n: int, dt: float) -> list[WalkR
     winner_structure = _structure(visible_components(list(selection.best.components), n, dt))
     readings = []
     for spec, bic, aic, components, scale in sorted(found, key=lambda f: f[1]):
+        if spec == winner or min(bic - bic_min, aic - aic_min) > OCCAM_DELTA:
+            continue
         visible = visible_components(components, n, dt)
-        if spec == winner or _structure(visible) == winner_structure or min(bic - bic_min, aic - aic_min) > OCCAM_DELTA:
+        if _structure(visible) == winner_structure:
             continue
         ci = walk_interval(visible, n, dt)
         k = record_walk(visible, span)
