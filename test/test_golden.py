@@ -27,6 +27,8 @@ from pathlib import Path
 import pytest
 from golden_run import generate, load
 
+from imu_noise_id.core.estimation.readouts.quantiles import Z95
+
 GOLDEN = Path(__file__).resolve().parent / "golden"
 #: Relative tolerance of numbers ("to rounding": the files hold 6 significant digits in places).
 REL = 2e-5
@@ -66,8 +68,6 @@ UNDETERMINED = " (its interval not determined)"
 NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 #: A reading's interval right after its value: `` [lo, hi]``.
 READING_INTERVAL = re.compile(rf" \[({NUMBER.pattern}), ({NUMBER.pattern})\]")
-#: The normal quantile of a 95 % interval (a reading's interval spans ±Z95 standard errors of ln K).
-Z95 = 1.959964
 #: Keys holding numbers from the likelihood's curvature or from draws of it, and the overbound (it touches the final
 #: model's Allan variance, which moves with the fit over the flat parts of the likelihood).
 CURVATURE_KEYS = ("se", "ci95", "record_length", "weight_bic", "information_ok", "_ci_xyz", "bias_instability",
