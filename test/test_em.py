@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -99,6 +100,42 @@ def test_fisher_identity_gradient_matches_finite_differences(case):
     # narrow lines' frequencies
     num = [(4.0 * difference(k, 5e-5) - difference(k, 1e-4)) / 3.0 for k in range(theta.size)]
     np.testing.assert_allclose(grad, num, rtol=1e-8, atol=2e-7)
+
+
+@pytest.mark.parametrize(("slow_gm", "walk"), [(False, 1e-11), (False, 1e-12), (True, 1e-12), (True, 2.5e-16)])
+def test_the_score_at_a_collapsed_walk_equals_differences_of_the_likelihood(slow_gm, walk):
+    """A fit's climb passes walks driven to ~0 (a record without a walk), also beside a GM as slow as a walk (τ 100
+    records; the golden run's profile intervals met K 2.5e-16 there), where ℓ is flat in K. The score gave 1e38 in
+    every entry at K = 1e-11 beside a GM of 1 s, −2e15 along ln K at 1e-12 (the GM's entries 30 % off), and 1e135
+    beside the slow GM: P̄ truncated at the GM's scale, the x₁ term's adjoint summed over a pole 10⁻¹⁵ from 1, the
+    transition terms' rounding growing as √(r/q). Every entry now equals differences of the exact likelihood."""
+    dt = 0.01
+    if slow_gm:
+        y = simulate_sum([WN(1e-3), RW(2e-5)], 60000, dt, np.random.default_rng(5))
+        gm = GM(tau=60000.0, sigma=4.5e-3)
+    else:
+        y = simulate_sum([WN(1e-3), GM(tau=1.0, sigma=1e-3)], 5000, dt, np.random.default_rng(3))
+        gm = GM(tau=1.0, sigma=1e-3)
+    z = np.ones((y.size, 1))
+    comps = [WN(1e-3), gm, RW(walk)]
+    model = ss.from_components(comps, dt)
+    par = mle.Parameterisation.of(comps)
+    theta = par.to_theta(comps)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _, grad, _ = mle.loglik_and_grad(par, theta, model, y, z)
+
+    def difference(k: int, h: float) -> float:
+        up, down = theta.copy(), theta.copy()
+        up[k] += h
+        down[k] -= h
+        return (kalman.loglik(par.to_model(up, model), y, z).loglik
+                - kalman.loglik(par.to_model(down, model), y, z).loglik) / (2.0 * h)
+
+    numeric = [(4.0 * difference(k, 5e-5) - difference(k, 1e-4)) / 3.0 for k in range(theta.size)]  # Richardson
+    # beside the slow GM the score and the differences differ by ~3e-4 relative in the GM's τ whatever the walk (as at
+    # K = 1e-4, where nothing collapses)
+    np.testing.assert_allclose(grad, numeric, rtol=1e-3 if slow_gm else 1e-5, atol=1e-4)
 
 
 def test_ci_coverage_wn_gm():

@@ -164,6 +164,24 @@ def test_the_steady_covariance_sensitivity_equals_finite_differences_of_the_doub
     gradient = {"phi": sensitivity.g_phi, "q": sensitivity.g_q, "h": sensitivity.g_h, "r": sensitivity.g_r}[direction]
     assert np.vdot(gradient, step) == pytest.approx(numeric, rel=1e-5)
 
+@pytest.mark.parametrize("walk", [1e-8, 1e-11, 1e-13])
+def test_a_walk_far_below_the_other_states_is_solved_to_its_own_scale(walk):
+    """A random walk driven far below a GM and a white noise (a walk the fit collapsed, 100 Hz): the DARE holds entry by
+    entry to the scale of the entries' own states, from scratch and by Newton from a nearby P̄. The Stein sums stopped
+    when an increment fell below 1e-16 of the largest entry of the sum, the GM's; a walk of 1e-11 then got P̄ 2e-21
+    where it is ~√(q r) = 1e-14, its gain was wrong and the score's terms for it overflowed to 1e38."""
+    model = ss.from_components([WN(1e-3), GM(tau=1.0, sigma=1e-3), RW(walk)], 0.01)
+    phi, q, h, r = model.phi, model.q, model.h, float(model.r)
+    scratch = steady_prediction_covariance(phi, q, h, r)
+    newton = steady_prediction_covariance(phi, q, h, r, guess=scratch * 1.01)
+    for P in (scratch, newton):
+        gain = phi @ P @ h
+        residual = phi @ P @ phi.T + q - np.outer(gain, gain) / (float(h @ P @ h) + r) - P
+        own_scale = np.sqrt(np.outer(np.diag(P), np.diag(P)))
+        assert np.all(np.abs(residual) <= 1e-8 * own_scale)
+    assert np.sqrt(q[1, 1] * r) / 2 < scratch[1, 1] < 2 * np.sqrt(q[1, 1] * r)
+
+
 def test_modal_and_schur_bases_give_the_exact_recursion():
     """The steady engine's two bases (block-diagonal modal where well conditioned, Schur otherwise) against the exact
     time-varying recursion, on a model with a flicker ladder, two oscillators and regressor columns."""

@@ -40,8 +40,9 @@ def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess:
             P_new = _stein_sum(A.T, C)  # Σ_j Aʲ C Aʲᵀ: P = A P Aᵀ + C
         if not np.all(np.isfinite(P_new)):
             return None
-        # quadratic convergence: a 1e-10 step leaves ~1e-20, below the Stein sum's rounding floor
-        if np.max(np.abs(P_new - P)) <= 1e-10 * np.max(np.abs(P_new)):
+        # quadratic convergence: a 1e-10 step leaves ~1e-20, below the Stein sum's rounding floor; each entry to
+        # its own states' scale (a walk driven far below the other states is not converged by theirs)
+        if np.all(np.abs(P_new - P) <= 1e-10 * own_scale(P_new)):
             return P_new
         P = P_new
     return None
@@ -83,7 +84,7 @@ def _doubling_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> n
         X_new = 0.5 * (X_new + X_new.T)
         if not np.all(np.isfinite(X_new)):
             break
-        if np.max(np.abs(X_new - X)) <= 1e-14 * np.max(np.abs(X_new)):
+        if np.all(np.abs(X_new - X) <= 1e-14 * own_scale(X_new)):
             return X_new
         X = X_new
     raise InputError("the steady-state Riccati iteration did not converge; the model parameters are degenerate")
@@ -103,17 +104,31 @@ def _schur_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.n
 STEIN_DOUBLINGS = 64
 
 
+def own_scale(M: np.ndarray) -> np.ndarray:
+    """Each entry's own scale: max(√|M_ii M_jj|, |M_ij|). Relative to it, an entry of a state far smaller than the
+    others (a walk the fit drove to ~0 beside a GM) is judged at its own precision, not at the largest entry's."""
+    d = np.sqrt(np.abs(np.diag(M)))
+    return np.maximum(np.outer(d, d), np.abs(M))
+
+
 def _stein_sum(A: np.ndarray, W: np.ndarray) -> np.ndarray:
-    """M = Σ_{j≥0} Aʲᵀ W Aʲ (M = Aᵀ M A + W, A stable) by doubling, to 1e-16 of M, no linear solve."""
+    """M = Σ_{j≥0} Aʲᵀ W Aʲ (M = Aᵀ M A + W, A stable) by doubling until every increment is below 1e-16 of its entry's
+    :func:`own_scale`, no linear solve. Stopped at 1e-16 of the largest entry instead, the slow pole of a walk
+    driven 10⁻¹¹ below a GM summed 2¹¹ of its ~10¹⁰ terms (P̄ 2·10⁻²¹ where it is 10⁻¹⁴)."""
     M = 0.5 * (W + W.T)
     Ak = A
     for _ in range(STEIN_DOUBLINGS):
         increment = Ak.T @ M @ Ak
         M = M + 0.5 * (increment + increment.T)
-        if not np.max(np.abs(increment)) > 1e-16 * np.max(np.abs(M)):
+        if not np.any(np.abs(increment) > 1e-16 * own_scale(M)):
             break
         Ak = Ak @ Ak
     return M
+
+
+#: Least distance of the closed loop's poles from the unit circle at which :class:`SteadyCovarianceSensitivity` is
+#: computed (its adjoint sum has ~1/gap terms).
+UNIT_POLE_GAP = 1e-12
 
 
 @dataclass(frozen=True)
@@ -133,12 +148,16 @@ class SteadyCovarianceSensitivity:
 
     @classmethod
     def of(cls, phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, *, P: np.ndarray,
-           W: np.ndarray) -> SteadyCovarianceSensitivity:
-        """The sensitivity at P̄ = ``P`` (the DARE's solution for Φ, Q, h, r; W symmetric)."""
+           W: np.ndarray) -> SteadyCovarianceSensitivity | None:
+        """The sensitivity at P̄ = ``P`` (the DARE's solution for Φ, Q, h, r; W symmetric); None where the closed
+        loop A has a pole within :data:`UNIT_POLE_GAP` of the unit circle: the adjoint sum then has more than
+        10¹² terms, and a walk driven to ~0 beside a GM as slow as a walk gave entries of 10¹⁶⁰ or overflowed."""
         s = float(h @ P @ h) + r
         K = P @ h / s
         P_u = P - s * np.outer(K, K)
         A = phi - np.outer(phi @ K, h)
+        if A.size and not np.max(np.abs(np.linalg.eigvals(A))) < 1.0 - UNIT_POLE_GAP:
+            return None
         M = _stein_sum(A, W)
         N = phi.T @ M @ phi
         NK = N @ K

@@ -185,23 +185,31 @@ def diagonal_blocks(m: np.ndarray) -> list[slice]:
 
 
 def transition_terms(st: kalman.SmootherStats, phi: np.ndarray, u: np.ndarray,
-                     span: slice) -> tuple[np.ndarray, np.ndarray]:
+                     span: slice) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The diagonal block on the states ``span`` of S(Φ, u) of :func:`transition_residual` and of
     C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ], the means' part from the smoothed increments
-    x_t^N − Φ x_{t−1}^N − u, not from differences of sums (docs/em.md, "Why: EM"). Φ must not couple ``span`` to the
-    other states (a component's block): then the block needs that block's states alone, O(|span|² N)."""
+    x_t^N − Φ x_{t−1}^N − u, not from differences of sums (docs/em.md, "Why: EM"), and the scales of their rounding
+    (the sums of the terms' magnitudes, ε × these: a walk driven to ~0 leaves S ≈ (N − 1)q as a difference of terms
+    ~P̄ ≈ √(q r)). Φ must not couple ``span`` to the other states (a component's block): then the block needs that
+    block's states alone, O(|span|² N)."""
     X = st.xs[span]
     prev = X[:, :-1]
     d = X[:, 1:] - u[span, None]
+    d_scale = np.abs(X[:, 1:]) + np.abs(u[span, None])
     phi_b = phi[span, span]
     for sub in diagonal_blocks(phi_b):  # Φ x_{t−1} block by block within the component (a ladder's diagonal Φ)
         d[sub] -= phi_b[sub, sub] @ prev[sub]
+        d_scale[sub] += np.abs(phi_b[sub, sub]) @ np.abs(prev[sub])
     lag = st.sum_lag[span, span]
     p_next = (st.sum_p - st.p_first)[span, span]
     p_prev = (st.sum_p - st.p_last)[span, span]
     S = d @ d.T + p_next - lag @ phi_b.T - phi_b @ lag.T + phi_b @ p_prev @ phi_b.T
     C = d @ prev.T + lag - phi_b @ p_prev
-    return S, C
+    a_phi, a_lag, a_prev = np.abs(phi_b), np.abs(lag), np.abs(p_prev)
+    S_scale = (2.0 * np.abs(d) @ d_scale.T + np.abs(p_next) + a_lag @ a_phi.T + a_phi @ a_lag.T
+               + a_phi @ a_prev @ a_phi.T)
+    C_scale = d_scale @ np.abs(prev).T + a_lag + a_phi @ a_prev
+    return S, C, S_scale, C_scale
 
 
 def _component_spans(model: StateSpace) -> list[slice]:
@@ -226,6 +234,11 @@ class MatrixScore:
     g_phi: np.ndarray
     g_q: np.ndarray
     g_r: float
+    #: The x₁ term where its adjoint is not computed (:class:`DifferencedInitialTerm`), else None (in the g's or none)
+    initial: DifferencedInitialTerm | None = None
+    #: Rounding scales of g_phi and g_q's transition parts: ε|Q⁻¹| C_scale and ½ε|Q⁻¹| S_scale |Q⁻¹|
+    rounding_phi: np.ndarray | None = None
+    rounding_q: np.ndarray | None = None
 
     @classmethod
     def at(cls, model: StateSpace, stats: kalman.SmootherStats, data: DataSums) -> MatrixScore:
@@ -237,33 +250,49 @@ class MatrixScore:
         g_r = -0.5 * (n_obs / r - smoothed_measurement_sse(model, stats, data) / r**2)
         p = model.n_states
         g_phi, g_q = np.zeros((p, p)), np.zeros((p, p))
+        round_phi, round_q = np.zeros((p, p)), np.zeros((p, p))
         nz = np.diag(model.q) > 0
         if np.any(nz):
             q_inv = np.zeros((p, p))
             q_inv[np.ix_(nz, nz)] = np.linalg.inv(model.q[np.ix_(nz, nz)])
+            eps = np.finfo(float).eps
             for span in _component_spans(model):  # Φ and Q are block-diagonal by component
-                S, cross = transition_terms(stats, model.phi, model.u, span)
+                S, cross, S_scale, C_scale = transition_terms(stats, model.phi, model.u, span)
                 q_b = q_inv[span, span]
                 g_phi[span, span] = q_b @ cross
                 g_q[span, span] = -0.5 * ((stats.xs.shape[1] - 1) * q_b - q_b @ S @ q_b)
-        initial = InitialTermGradient.at(model, stats.xs[:, 0], stats.p_first).sensitivity
-        if initial is not None:
-            g_phi, g_q, g_r = g_phi + initial.g_phi, g_q + initial.g_q, g_r + initial.g_r
-        return cls(g_phi, g_q, g_r)
+                round_phi[span, span] = eps * np.abs(q_b) @ C_scale
+                round_q[span, span] = 0.5 * eps * np.abs(q_b) @ S_scale @ np.abs(q_b)
+        initial = InitialTermGradient.at(model, stats.xs[:, 0], stats.p_first)
+        if initial.sensitivity is not None:
+            sens = initial.sensitivity
+            g_phi, g_q, g_r = g_phi + sens.g_phi, g_q + sens.g_q, g_r + sens.g_r
+        return cls(g_phi, g_q, g_r, initial.differenced, round_phi, round_q)
 
     def directional(self, states: slice, dphi: np.ndarray, dq: np.ndarray, dr: float) -> float:
         """∂ℓ along a change dΦ, dQ of the block on ``states`` (the rest of Φ, Q unchanged) and dR."""
-        return float(np.vdot(self.g_phi[states, states], dphi) + np.vdot(self.g_q[states, states], dq)
-                     + self.g_r * dr)
+        out = float(np.vdot(self.g_phi[states, states], dphi) + np.vdot(self.g_q[states, states], dq)
+                    + self.g_r * dr)
+        return out + (self.initial.directional(states, dphi, dq, dr) if self.initial is not None else 0.0)
+
+    def rounding(self, states: slice, dphi: np.ndarray, dq: np.ndarray) -> float:
+        """A scale of the rounding in :meth:`directional` along dΦ, dQ of the block on ``states``: its transition
+        terms' (:func:`transition_terms`), which grow as √(r/q) where a block's drive q is driven to ~0."""
+        if self.rounding_phi is None or self.rounding_q is None:
+            return 0.0
+        return float(np.vdot(self.rounding_phi[states, states], np.abs(dphi))
+                     + np.vdot(self.rounding_q[states, states], np.abs(dq)))
 
 
 @dataclass(frozen=True)
 class InitialTermGradient:
     """The x_1 term −½(log det Σ + tr(Σ⁻¹E₁)) of Q to first order around θ_E: in steady mode tr(W dP̄) with
-    W = −½(Σ⁻¹ − Σ⁻¹E₁Σ⁻¹) (:class:`~imu_noise_id.core.kalman.riccati.SteadyCovarianceSensitivity`); None in fixed
-    mode."""
+    W = −½(Σ⁻¹ − Σ⁻¹E₁Σ⁻¹) (:class:`~imu_noise_id.core.kalman.riccati.SteadyCovarianceSensitivity`), or, where the
+    closed loop has a pole within :data:`~imu_noise_id.core.kalman.riccati.UNIT_POLE_GAP` of 1 (a walk driven to ~0),
+    :class:`DifferencedInitialTerm` (``differenced``); both None in fixed mode."""
 
     sensitivity: riccati.SteadyCovarianceSensitivity | None
+    differenced: DifferencedInitialTerm | None = None
 
     @classmethod
     def at(cls, model: StateSpace, x1: np.ndarray, p1: np.ndarray) -> InitialTermGradient:
@@ -273,12 +302,53 @@ class InitialTermGradient:
         sigma = model.initial_covariance()
         d1 = x1 - model.mu
         nz = np.diag(sigma) > 0
-        e1 = (p1 + np.outer(d1, d1))[np.ix_(nz, nz)]
+        e1 = p1 + np.outer(d1, d1)
         W = np.zeros_like(sigma)
         if np.any(nz):
             inv = np.linalg.inv(sigma[np.ix_(nz, nz)])
-            W[np.ix_(nz, nz)] = -0.5 * (inv - inv @ e1 @ inv)  # symmetrised by the Stein sum
-        return cls(riccati.SteadyCovarianceSensitivity.of(model.phi, model.q, model.h, float(model.r), P=sigma, W=W))
+            W[np.ix_(nz, nz)] = -0.5 * (inv - inv @ e1[np.ix_(nz, nz)] @ inv)  # symmetrised by the Stein sum
+        sensitivity = riccati.SteadyCovarianceSensitivity.of(model.phi, model.q, model.h, float(model.r), P=sigma, W=W)
+        if sensitivity is not None or not np.any(nz):
+            return cls(sensitivity)
+        return cls(None, DifferencedInitialTerm(model.phi, model.q, model.h, float(model.r), sigma, e1, nz))
+
+
+#: Step [in the log-parameters] of :class:`DifferencedInitialTerm`'s central differences.
+INITIAL_TERM_STEP = 1e-4
+
+
+@dataclass(frozen=True)
+class DifferencedInitialTerm:
+    """The x_1 term T = −½(log det Σ + tr(Σ⁻¹E₁)) on the states ``nz`` with E₁ held, its directional derivative by
+    central differences of :data:`INITIAL_TERM_STEP` along (dΦ, dQ, dR), Σ = P̄ re-solved from ``sigma`` (Newton,
+    :func:`~imu_noise_id.core.kalman.riccati.steady_prediction_covariance`). Where the closed loop has a pole within
+    10⁻¹² of 1 the adjoint sum of :class:`InitialTermGradient` has ~10¹² terms; beside a GM as slow as a walk (τ 100
+    records) its entries reached 10¹⁶⁰. Two Riccati solves per direction, O(p³) each, none over the samples."""
+
+    phi: np.ndarray
+    q: np.ndarray
+    h: np.ndarray
+    r: float
+    sigma: np.ndarray
+    e1: np.ndarray
+    nz: np.ndarray
+
+    def value(self, sigma: np.ndarray) -> float:
+        """T at Σ = ``sigma``."""
+        s = sigma[np.ix_(self.nz, self.nz)]
+        _, logdet = np.linalg.slogdet(s)
+        return -0.5 * (logdet + float(np.trace(np.linalg.solve(s, self.e1[np.ix_(self.nz, self.nz)]))))
+
+    def directional(self, states: slice, dphi: np.ndarray, dq: np.ndarray, dr: float) -> float:
+        """∂T along dΦ, dQ of the block on ``states`` and dR (per unit log-parameter)."""
+        ends = []
+        for t in (INITIAL_TERM_STEP, -INITIAL_TERM_STEP):
+            phi, q = self.phi.copy(), self.q.copy()
+            phi[states, states] += t * dphi
+            q[states, states] += t * dq
+            P = riccati.steady_prediction_covariance(phi, q, self.h, self.r + t * dr, guess=self.sigma)
+            ends.append(self.value(P))
+        return (ends[0] - ends[1]) / (2.0 * INITIAL_TERM_STEP)
 
 
 @dataclass

@@ -122,7 +122,10 @@ def loglik_grad_profile(
 ) -> tuple[float, np.ndarray, StateSpace, ProfileResult]:
     """:func:`loglik_and_grad` and the GLS profile (β̂, its covariance): the gradient is :class:`~.em.MatrixScore`
     (one smoother pass) along each log-parameter's change of its own block
-    (:meth:`Parameterisation.block_derivative`)."""
+    (:meth:`Parameterisation.block_derivative`), or central differences of ℓ (:data:`DIFFERENCE_STEP`, two filter
+    passes) along a log-parameter whose score's rounding (:meth:`~.em.MatrixScore.rounding`) exceeds
+    :data:`SCORE_ROUNDING_TOL`: a block driven to ~0, where the score's transition terms are differences of terms
+    ~√(q r) that leave ~q (a walk of 1e-12 beside a GM as slow as a walk: 2·10³ where ℓ is flat)."""
     components = par.to_components(theta, base)
     prof, model, stats = kalman.profile_and_smooth(with_components(base, components), y, z)
     score = em.MatrixScore.at(model, stats, data or em.DataSums.of(y, z))
@@ -132,8 +135,29 @@ def loglik_grad_profile(
         change = par.block_derivative(components[i], theta, k, model.dt, step)
         if change is None:
             raise ValueError(f"no step of {step:g} around log-parameter {k} stays inside the components' domains")
-        grad[k] = score.directional(state_span(model.blocks[i].states), *change)
+        states = state_span(model.blocks[i].states)
+        if score.rounding(states, *change[:2]) > SCORE_ROUNDING_TOL:
+            grad[k] = _loglik_difference(par, theta, k, base, y=y, z=z)
+        else:
+            grad[k] = score.directional(states, *change)
     return prof.loglik, grad, model, prof
+
+
+#: Largest rounding scale [ℓ per unit log-parameter] at which the score's entry is used, not ℓ's differences.
+SCORE_ROUNDING_TOL = 1e-2
+#: Step [log-parameter] of the central differences of ℓ where the score's rounding is too large.
+DIFFERENCE_STEP = 1e-4
+
+
+def _loglik_difference(par: Parameterisation, theta: np.ndarray, k: int, base: StateSpace, *, y: np.ndarray,
+                       z: np.ndarray) -> float:
+    """∂ℓ/∂ϑ_k by central differences of :data:`DIFFERENCE_STEP` of the exact log-likelihood."""
+    ends = []
+    for h in (DIFFERENCE_STEP, -DIFFERENCE_STEP):
+        moved = theta.copy()
+        moved[k] += h
+        ends.append(kalman.loglik(par.to_model(moved, base), y, z, innovations=False).loglik)
+    return (ends[0] - ends[1]) / (2.0 * DIFFERENCE_STEP)
 
 
 @dataclass
