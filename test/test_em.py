@@ -445,7 +445,7 @@ def test_the_transition_terms_block_by_block_equal_the_dense_products():
     dense_c = d @ xs[:, :-1].T + sum_lag - phi @ p_prev
     # a component's span (the gradient's unit), one holding two of Φ's blocks, and the whole state
     for span in [slice(0, 1), slice(1, 3), slice(3, 5), slice(1, 5), slice(0, 5)]:
-        S, C = em.transition_terms(stats, phi, u, span)
+        S, C, _, _ = em.transition_terms(stats, phi, u, span)
         np.testing.assert_allclose(S, dense_s[span, span], rtol=1e-12)
         np.testing.assert_allclose(C, dense_c[span, span], rtol=1e-12)
 

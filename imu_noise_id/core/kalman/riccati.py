@@ -9,6 +9,8 @@ from scipy.linalg import solve_discrete_are
 
 from ..errors import InputError
 
+#: Machine epsilon of float64.
+EPS = float(np.finfo(float).eps)
 #: Most negative eigenvalue of P̄, relative to its largest, still taken for rounding of a covariance.
 PSD_TOLERANCE = 1e-8
 
@@ -33,16 +35,18 @@ def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess:
     for _ in range(6):
         gain = phi @ P @ h / (float(h @ P @ h) + r)
         A = phi - np.outer(gain, h)
-        if np.max(np.abs(np.linalg.eigvals(A))) > 1.0 + 1e-12:  # not stabilising: Newton may go astray
+        rho = float(np.max(np.abs(np.linalg.eigvals(A))))
+        if rho > 1.0 + 1e-12:  # not stabilising: Newton may go astray
             return None
         C = q + r * np.outer(gain, gain)
         with np.errstate(over="ignore", invalid="ignore"):  # a pole on the unit circle: no finite sum, None below
             P_new = _stein_sum(A.T, C)  # Σ_j Aʲ C Aʲᵀ: P = A P Aᵀ + C
         if not np.all(np.isfinite(P_new)):
             return None
-        # quadratic convergence: a 1e-10 step leaves ~1e-20, below the Stein sum's rounding floor; each entry to
-        # its own states' scale (a walk driven far below the other states is not converged by theirs)
-        if np.all(np.abs(P_new - P) <= 1e-10 * own_scale(P_new)):
+        # quadratic convergence: a 1e-10 step leaves ~1e-20, below the Stein sum's rounding floor; and each state's
+        # variance to 1e-6 of itself (a walk driven far below the others is not converged by their scale), or to
+        # its rounding, which grows as ε/(1 − ρ) as the closed loop's pole nears 1 (1e-5 at 1 − 10⁻¹¹)
+        if converged(P_new - P, P_new, 1e-10, max(1e-6, 1e3 * EPS / max(1.0 - rho, EPS))):
             return P_new
         P = P_new
     return None
@@ -84,7 +88,7 @@ def _doubling_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> n
         X_new = 0.5 * (X_new + X_new.T)
         if not np.all(np.isfinite(X_new)):
             break
-        if np.all(np.abs(X_new - X) <= 1e-14 * own_scale(X_new)):
+        if converged(X_new - X, X_new, 1e-14, 1e-12):
             return X_new
         X = X_new
     raise InputError("the steady-state Riccati iteration did not converge; the model parameters are degenerate")
@@ -104,23 +108,25 @@ def _schur_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.n
 STEIN_DOUBLINGS = 64
 
 
-def own_scale(M: np.ndarray) -> np.ndarray:
-    """Each entry's own scale: max(√|M_ii M_jj|, |M_ij|). Relative to it, an entry of a state far smaller than the
-    others (a walk the fit drove to ~0 beside a GM) is judged at its own precision, not at the largest entry's."""
-    d = np.sqrt(np.abs(np.diag(M)))
-    return np.maximum(np.outer(d, d), np.abs(M))
+def converged(change: np.ndarray, M: np.ndarray, overall: float, own: float) -> bool:
+    """Whether ``change`` is below ``overall`` of M's largest entry and each diagonal entry's change below ``own`` of
+    that entry: the second judges a state far smaller than the others (a walk the fit drove to ~0 beside a GM) at its
+    own scale, not the largest's. For a covariance's change the diagonal bounds the rest (|c_ij| ≤ √(c_ii c_jj))."""
+    return bool(np.max(np.abs(change)) <= overall * np.max(np.abs(M))
+                and np.all(np.abs(np.diagonal(change)) <= own * np.abs(np.diagonal(M))))
 
 
 def _stein_sum(A: np.ndarray, W: np.ndarray) -> np.ndarray:
-    """M = Σ_{j≥0} Aʲᵀ W Aʲ (M = Aᵀ M A + W, A stable) by doubling until every increment is below 1e-16 of its entry's
-    :func:`own_scale`, no linear solve. Stopped at 1e-16 of the largest entry instead, the slow pole of a walk
-    driven 10⁻¹¹ below a GM summed 2¹¹ of its ~10¹⁰ terms (P̄ 2·10⁻²¹ where it is 10⁻¹⁴)."""
+    """M = Σ_{j≥0} Aʲᵀ W Aʲ (M = Aᵀ M A + W, A stable) by doubling until an increment is :func:`converged` to 1e-16,
+    of the largest entry and of each diagonal entry's own; no linear solve. Stopped at 1e-16 of the largest entry
+    alone, the slow pole of a walk driven 10⁻¹¹ below a GM summed 2¹¹ of its ~10¹⁰ terms (P̄ 2·10⁻²¹ where it is
+    10⁻¹⁴)."""
     M = 0.5 * (W + W.T)
     Ak = A
     for _ in range(STEIN_DOUBLINGS):
         increment = Ak.T @ M @ Ak
         M = M + 0.5 * (increment + increment.T)
-        if not np.any(np.abs(increment) > 1e-16 * own_scale(M)):
+        if converged(increment, M, 1e-16, 1e-16):
             break
         Ak = Ak @ Ak
     return M
@@ -150,16 +156,20 @@ class SteadyCovarianceSensitivity:
     def of(cls, phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, *, P: np.ndarray,
            W: np.ndarray) -> SteadyCovarianceSensitivity | None:
         """The sensitivity at P̄ = ``P`` (the DARE's solution for Φ, Q, h, r; W symmetric); None where the closed
-        loop A has a pole within :data:`UNIT_POLE_GAP` of the unit circle: the adjoint sum then has more than
-        10¹² terms, and a walk driven to ~0 beside a GM as slow as a walk gave entries of 10¹⁶⁰ or overflowed."""
+        loop A has a pole within :data:`UNIT_POLE_GAP` of the unit circle (the adjoint sum then has more than 10¹²
+        terms, and a walk driven to ~0 beside a GM as slow as a walk gave entries of 10¹⁶⁰) or an entry is not
+        finite (a W from a P̄ with entries near zero overflows the sum)."""
         s = float(h @ P @ h) + r
         K = P @ h / s
         P_u = P - s * np.outer(K, K)
         A = phi - np.outer(phi @ K, h)
         if A.size and not np.max(np.abs(np.linalg.eigvals(A))) < 1.0 - UNIT_POLE_GAP:
             return None
-        M = _stein_sum(A, W)
-        N = phi.T @ M @ phi
-        NK = N @ K
-        closed = np.eye(h.size) - np.outer(K, h)
-        return cls(g_phi=2.0 * M @ phi @ P_u, g_q=M, g_h=-2.0 * P @ closed.T @ NK, g_r=float(K @ NK))
+        with np.errstate(over="ignore", invalid="ignore"):  # not finite: None below
+            M = _stein_sum(A, W)
+            N = phi.T @ M @ phi
+            NK = N @ K
+            closed = np.eye(h.size) - np.outer(K, h)
+            out = cls(g_phi=2.0 * M @ phi @ P_u, g_q=M, g_h=-2.0 * P @ closed.T @ NK, g_r=float(K @ NK))
+        finite = all(np.all(np.isfinite(v)) for v in (out.g_phi, out.g_q, out.g_h, out.g_r))
+        return out if finite else None

@@ -259,10 +259,12 @@ class MatrixScore:
             for span in _component_spans(model):  # Φ and Q are block-diagonal by component
                 S, cross, S_scale, C_scale = transition_terms(stats, model.phi, model.u, span)
                 q_b = q_inv[span, span]
-                g_phi[span, span] = q_b @ cross
-                g_q[span, span] = -0.5 * ((stats.xs.shape[1] - 1) * q_b - q_b @ S @ q_b)
-                round_phi[span, span] = eps * np.abs(q_b) @ C_scale
-                round_q[span, span] = 0.5 * eps * np.abs(q_b) @ S_scale @ np.abs(q_b)
+                # a drive near zero overflows these; its rounding then reads inf or NaN and ℓ's differences stand in
+                with np.errstate(over="ignore", invalid="ignore"):
+                    g_phi[span, span] = q_b @ cross
+                    g_q[span, span] = -0.5 * ((stats.xs.shape[1] - 1) * q_b - q_b @ S @ q_b)
+                    round_phi[span, span] = eps * np.abs(q_b) @ C_scale
+                    round_q[span, span] = 0.5 * eps * np.abs(q_b) @ S_scale @ np.abs(q_b)
         initial = InitialTermGradient.at(model, stats.xs[:, 0], stats.p_first)
         if initial.sensitivity is not None:
             sens = initial.sensitivity
@@ -280,8 +282,9 @@ class MatrixScore:
         terms' (:func:`transition_terms`), which grow as √(r/q) where a block's drive q is driven to ~0."""
         if self.rounding_phi is None or self.rounding_q is None:
             return 0.0
-        return float(np.vdot(self.rounding_phi[states, states], np.abs(dphi))
-                     + np.vdot(self.rounding_q[states, states], np.abs(dq)))
+        with np.errstate(invalid="ignore"):  # an overflowed scale times a zero change: NaN, read as too large
+            return float(np.vdot(self.rounding_phi[states, states], np.abs(dphi))
+                         + np.vdot(self.rounding_q[states, states], np.abs(dq)))
 
 
 @dataclass(frozen=True)
@@ -306,7 +309,8 @@ class InitialTermGradient:
         W = np.zeros_like(sigma)
         if np.any(nz):
             inv = np.linalg.inv(sigma[np.ix_(nz, nz)])
-            W[np.ix_(nz, nz)] = -0.5 * (inv - inv @ e1[np.ix_(nz, nz)] @ inv)  # symmetrised by the Stein sum
+            with np.errstate(over="ignore", invalid="ignore"):  # Σ near singular: the sensitivity reads None
+                W[np.ix_(nz, nz)] = -0.5 * (inv - inv @ e1[np.ix_(nz, nz)] @ inv)  # symmetrised by the Stein sum
         sensitivity = riccati.SteadyCovarianceSensitivity.of(model.phi, model.q, model.h, float(model.r), P=sigma, W=W)
         if sensitivity is not None or not np.any(nz):
             return cls(sensitivity)
@@ -320,8 +324,9 @@ INITIAL_TERM_STEP = 1e-4
 @dataclass(frozen=True)
 class DifferencedInitialTerm:
     """The x_1 term T = −½(log det Σ + tr(Σ⁻¹E₁)) on the states ``nz`` with E₁ held, its directional derivative by
-    central differences of :data:`INITIAL_TERM_STEP` along (dΦ, dQ, dR), Σ = P̄ re-solved from ``sigma`` (Newton,
-    :func:`~imu_noise_id.core.kalman.riccati.steady_prediction_covariance`). Where the closed loop has a pole within
+    central differences of :data:`INITIAL_TERM_STEP` along (dΦ, dQ, dR), Σ = P̄ re-solved by the doubling
+    (:func:`~imu_noise_id.core.kalman.riccati.steady_prediction_covariance`; Newton's Stein sums diverge at a pole
+    that close to 1). Where the closed loop has a pole within
     10⁻¹² of 1 the adjoint sum of :class:`InitialTermGradient` has ~10¹² terms; beside a GM as slow as a walk (τ 100
     records) its entries reached 10¹⁶⁰. Two Riccati solves per direction, O(p³) each, none over the samples."""
 
@@ -346,7 +351,7 @@ class DifferencedInitialTerm:
             phi, q = self.phi.copy(), self.q.copy()
             phi[states, states] += t * dphi
             q[states, states] += t * dq
-            P = riccati.steady_prediction_covariance(phi, q, self.h, self.r + t * dr, guess=self.sigma)
+            P = riccati.steady_prediction_covariance(phi, q, self.h, self.r + t * dr)  # Newton fails at a pole ≈ 1
             ends.append(self.value(P))
         return (ends[0] - ends[1]) / (2.0 * INITIAL_TERM_STEP)
 
