@@ -63,6 +63,20 @@ def test_fixed_elements_stay_fixed():
     assert np.array_equal(after.sigma, before.sigma)  # Σ is never updated (paper 000 §3.3)
 
 
+def _richardson_gradient(par: mle.Parameterisation, theta: np.ndarray, model, y: np.ndarray,
+                         z: np.ndarray) -> list[float]:
+    """∂ℓ/∂ϑ of the exact likelihood by central differences of h = 5e-5 and 1e-4 extrapolated (Richardson): O(h⁴)."""
+
+    def difference(k: int, h: float) -> float:
+        up, down = theta.copy(), theta.copy()
+        up[k] += h
+        down[k] -= h
+        return (kalman.loglik(par.to_model(up, model), y, z).loglik
+                - kalman.loglik(par.to_model(down, model), y, z).loglik) / (2.0 * h)
+
+    return [(4.0 * difference(k, 5e-5) - difference(k, 1e-4)) / 3.0 for k in range(theta.size)]
+
+
 @pytest.mark.parametrize("case", ["paper 4.3", "OSC", "lines"])
 def test_fisher_identity_gradient_matches_finite_differences(case):
     # The gradient in the model matrices (em.MatrixScore: closed forms in the E-step sums, the x_1 term's share
@@ -88,17 +102,9 @@ def test_fisher_identity_gradient_matches_finite_differences(case):
     par = mle.Parameterisation.of(comps)
     theta = par.to_theta(comps)
     _, grad, _ = mle.loglik_and_grad(par, theta, model, y, z)
-
-    def difference(k: int, h: float) -> float:
-        up, down = theta.copy(), theta.copy()
-        up[k] += h
-        down[k] -= h
-        return (kalman.loglik(par.to_model(up, model), y, z).loglik
-                - kalman.loglik(par.to_model(down, model), y, z).loglik) / (2.0 * h)
-
     # central differences extrapolated (Richardson): an O(h⁴) error, where one of h = 1e-5 is off by 1e-5 on the
     # narrow lines' frequencies
-    num = [(4.0 * difference(k, 5e-5) - difference(k, 1e-4)) / 3.0 for k in range(theta.size)]
+    num = _richardson_gradient(par, theta, model, y, z)
     np.testing.assert_allclose(grad, num, rtol=1e-8, atol=2e-7)
 
 
@@ -125,14 +131,7 @@ def test_the_score_at_a_collapsed_walk_equals_differences_of_the_likelihood(slow
         warnings.simplefilter("error")
         _, grad, _ = mle.loglik_and_grad(par, theta, model, y, z)
 
-    def difference(k: int, h: float) -> float:
-        up, down = theta.copy(), theta.copy()
-        up[k] += h
-        down[k] -= h
-        return (kalman.loglik(par.to_model(up, model), y, z).loglik
-                - kalman.loglik(par.to_model(down, model), y, z).loglik) / (2.0 * h)
-
-    numeric = [(4.0 * difference(k, 5e-5) - difference(k, 1e-4)) / 3.0 for k in range(theta.size)]  # Richardson
+    numeric = _richardson_gradient(par, theta, model, y, z)
     # beside the slow GM the score and the differences differ by ~3e-4 relative in the GM's τ whatever the walk (as at
     # K = 1e-4, where nothing collapses)
     np.testing.assert_allclose(grad, numeric, rtol=1e-3 if slow_gm else 1e-5, atol=1e-4)
