@@ -195,20 +195,21 @@ def transition_terms(st: kalman.SmootherStats, phi: np.ndarray, u: np.ndarray,
     X = st.xs[span]
     prev = X[:, :-1]
     d = X[:, 1:] - u[span, None]
-    d_scale = np.abs(X[:, 1:]) + np.abs(u[span, None])
     phi_b = phi[span, span]
     for sub in diagonal_blocks(phi_b):  # Φ x_{t−1} block by block within the component (a ladder's diagonal Φ)
         d[sub] -= phi_b[sub, sub] @ prev[sub]
-        d_scale[sub] += np.abs(phi_b[sub, sub]) @ np.abs(prev[sub])
     lag = st.sum_lag[span, span]
     p_next = (st.sum_p - st.p_first)[span, span]
     p_prev = (st.sum_p - st.p_last)[span, span]
     S = d @ d.T + p_next - lag @ phi_b.T - phi_b @ lag.T + phi_b @ p_prev @ phi_b.T
     C = d @ prev.T + lag - phi_b @ p_prev
+    # the increments' rounding bounded by each state's largest |x| (two passes, no products over the samples)
     a_phi, a_lag, a_prev = np.abs(phi_b), np.abs(lag), np.abs(p_prev)
-    S_scale = (2.0 * np.abs(d) @ d_scale.T + np.abs(p_next) + a_lag @ a_phi.T + a_phi @ a_lag.T
-               + a_phi @ a_prev @ a_phi.T)
-    C_scale = d_scale @ np.abs(prev).T + a_lag + a_phi @ a_prev
+    x_max = np.max(np.abs(X), axis=1)
+    d_max = x_max + np.abs(u[span]) + a_phi @ x_max
+    S_scale = (2.0 * np.outer(np.sum(np.abs(d), axis=1), d_max) + np.abs(p_next) + a_lag @ a_phi.T
+               + a_phi @ a_lag.T + a_phi @ a_prev @ a_phi.T)
+    C_scale = prev.shape[1] * np.outer(d_max, x_max) + a_lag + a_phi @ a_prev
     return S, C, S_scale, C_scale
 
 
