@@ -167,9 +167,9 @@ def test_the_steady_covariance_sensitivity_equals_finite_differences_of_the_doub
 @pytest.mark.parametrize("walk", [1e-8, 1e-11, 1e-13])
 def test_a_walk_far_below_the_other_states_is_solved_to_its_own_scale(walk):
     """A random walk driven far below a GM and a white noise (a walk the fit collapsed, 100 Hz): the DARE holds entry by
-    entry to the scale of the entries' own states, from scratch and by Newton from a nearby P̄. The Stein sums stopped
-    when an increment fell below 1e-16 of the largest entry of the sum, the GM's; a walk of 1e-11 then got P̄ 2e-21
-    where it is ~√(q r) = 1e-14, its gain was wrong and the score's terms for it overflowed to 1e38."""
+    entry to the scale of the entries' own states, from scratch and by Newton from a nearby P̄. The doubling and the
+    sums stopped on the largest entry's scale, the GM's; a walk of 1e-11 then got P̄ 2e-21 where it is
+    ~√(q r) = 1e-14, its gain was wrong and the score overflowed to 1e38."""
     model = ss.from_components([WN(1e-3), GM(tau=1.0, sigma=1e-3), RW(walk)], 0.01)
     phi, q, h, r = model.phi, model.q, model.h, float(model.r)
     scratch = steady_prediction_covariance(phi, q, h, r)

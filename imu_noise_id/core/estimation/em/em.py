@@ -327,9 +327,9 @@ class DifferencedInitialTerm:
     """The x_1 term T = −½(log det Σ + tr(Σ⁻¹E₁)) on the states ``nz`` with E₁ held, its directional derivative by
     central differences of :data:`INITIAL_TERM_STEP` along (dΦ, dQ, dR), Σ = P̄ re-solved by the doubling
     (:func:`~imu_noise_id.core.kalman.riccati.steady_prediction_covariance`; Newton's Stein sums diverge at a pole
-    that close to 1). Where the closed loop has a pole within
-    10⁻¹² of 1 the adjoint sum of :class:`InitialTermGradient` has ~10¹² terms; beside a GM as slow as a walk (τ 100
-    records) its entries reached 10¹⁶⁰. Two Riccati solves per direction, O(p³) each, none over the samples."""
+    that close to 1). Where the closed loop has a pole within 10⁻¹² of 1 the adjoint sum of
+    :class:`InitialTermGradient` has ~10¹² terms; beside a GM as slow as a walk (τ 100 records) its entries reached
+    10¹⁶⁰. Two Riccati solves per direction, O(p³) each, none over the samples."""
 
     phi: np.ndarray
     q: np.ndarray
