@@ -164,6 +164,7 @@ def test_the_steady_covariance_sensitivity_equals_finite_differences_of_the_doub
     gradient = {"phi": sensitivity.g_phi, "q": sensitivity.g_q, "h": sensitivity.g_h, "r": sensitivity.g_r}[direction]
     assert np.vdot(gradient, step) == pytest.approx(numeric, rel=1e-5)
 
+
 @pytest.mark.parametrize("walk", [1e-8, 1e-11, 1e-13])
 def test_a_walk_far_below_the_other_states_is_solved_to_its_own_scale(walk):
     """A random walk driven far below a GM and a white noise (a walk the fit collapsed, 100 Hz): the DARE holds entry by
@@ -177,8 +178,8 @@ def test_a_walk_far_below_the_other_states_is_solved_to_its_own_scale(walk):
     for P in (scratch, newton):
         gain = phi @ P @ h
         residual = phi @ P @ phi.T + q - np.outer(gain, gain) / (float(h @ P @ h) + r) - P
-        own_scale = np.sqrt(np.outer(np.diag(P), np.diag(P)))
-        assert np.all(np.abs(residual) <= 1e-8 * own_scale)
+        states_scale = np.sqrt(np.outer(np.diag(P), np.diag(P)))
+        assert np.all(np.abs(residual) <= 1e-8 * states_scale)
     assert np.sqrt(q[1, 1] * r) / 2 < scratch[1, 1] < 2 * np.sqrt(q[1, 1] * r)
 
 

@@ -33,6 +33,8 @@ from imu_noise_id.report.console import final_table
 
 RATE = 200.0
 PASSBAND = 1e-3  # m/s²/√Hz, the white noise's density before the sensor's second-order low-pass
+#: The gyro axis the fixture analyses: it stands for the axes whose loop passes (accel_y is the filtered one).
+PASSING = "gyro_x"
 
 
 def _level(result, imu, axis: str) -> PassbandLevel | None:
@@ -65,6 +67,12 @@ def test_an_upper_bound_reading_disagrees_only_with_an_n_above_it():
     assert passband_disagreement(KalibrValue(PASSBAND_FACTOR * 1e-4, (1.9e-4, 2.1e-4), "WN"), bound) is not None
 
 
+def _passing(result) -> str:
+    """:data:`PASSING`, whose loop the tests below take to have passed."""
+    assert result.loops[PASSING].passed
+    return PASSING
+
+
 @pytest.fixture(scope="module")
 def filtered(tmp_path_factory):
     """5 min at 200 Hz: accel_y's white noise through a digital 2nd-order Butterworth low-pass at 12 Hz (a consumer
@@ -78,8 +86,7 @@ def filtered(tmp_path_factory):
     accel = imu.accel.copy()
     accel[:, 1] = signal.sosfilt(signal.butter(2, 12.0, fs=RATE, output="sos"), white)[2000:]
     imu = replace(imu, accel=accel)
-    # gyro_x stands for the axes whose loop passes, accel_y is the filtered one (the other axes add nothing here)
-    result = analyze(imu, options=AnalyzeOptions(models=ModelStage("WN+GM"), jobs=1, axes=("gyro_x", "accel_y")))
+    result = analyze(imu, options=AnalyzeOptions(models=ModelStage("WN+GM"), jobs=1, axes=(PASSING, "accel_y")))
     out = tmp_path_factory.mktemp("filtered")
     write_analysis(result, out, meta={})
     return result, out, imu
@@ -110,10 +117,10 @@ def test_a_failed_verdict_pastes_the_overbound_as_unresolved(filtered):
 def test_resolved_axes_keep_their_model_values(filtered):
     result, out, _ = filtered
     doc = yaml.safe_load((out / "imu.yaml").read_text())
-    assert result.loops["gyro_x"].passed
-    assert result.finals["gyro_x"].unresolved is None
-    assert doc["gyroscope_noise_density_method_xyz"][0] == "model"
-    assert result.finals["gyro_x"].noise_density.value == pytest.approx(1.7e-4, rel=0.05)
+    axis = _passing(result)
+    assert result.finals[axis].unresolved is None
+    assert doc["gyroscope_noise_density_method_xyz"][GYRO_AXES.index(axis)] == "model"
+    assert result.finals[axis].noise_density.value == pytest.approx(1.7e-4, rel=0.05)
 
 
 @pytest.mark.parametrize(("n", "reading", "confirms"), [
@@ -132,7 +139,7 @@ def test_a_failed_verdict_keeps_an_n_the_data_confirm_and_gives_the_overbound_k(
     """A right structure whose verdict fails (as one τ outside a 95 % band does on some records by chance) keeps the
     model's N where the white-noise line, read without the model, confirms it; K is the overbound's, unresolved."""
     result, _, _ = filtered
-    axis = next(a for a in GYRO_AXES if a in result.loops and result.loops[a].passed)
+    axis = _passing(result)
     final, static = result.finals[axis], result.static
     reading = static.slopes[axis].noise_density
     assert passband_confirms(final.noise_density, reading)
@@ -156,7 +163,7 @@ def test_an_n_a_few_percent_off_a_narrow_level_is_kept_with_an_interval_spanning
     within :data:`PASSBAND_TOLERANCE` the model's N is kept, its interval the hull of its own and the level's."""
     assert 0.025 <= PASSBAND_TOLERANCE < 0.05  # the two cases below lie on either side of it
     result, _, _ = filtered
-    axis = next(a for a in GYRO_AXES if a in result.loops and result.loops[a].passed)
+    axis = _passing(result)
     final, static = result.finals[axis], result.static
     n = final.noise_density
     level = _reading(n.value / 1.025, (n.value / 1.03, n.value / 1.02))  # the model 2.5 % above, outside the interval
@@ -182,7 +189,7 @@ def test_the_analysis_confirms_a_kept_n_by_the_records_spectrum(filtered):
     """What analyze runs on a failed verdict: the passband level read from the record's spectrum, in the band the
     model's white noise dominates, confirms the right N; the warning and the source name it."""
     result, _, imu = filtered
-    axis = next(a for a in GYRO_AXES if a in result.loops and result.loops[a].passed)
+    axis = _passing(result)
     failed = replace(result.loops[axis], passed=False, verdict="AV misfit left unexplained (at one τ)")
     level = _level(result, imu, axis)
     given, overbound, warning = resolve_axis(result.finals[axis], failed, result.static, axis, level, horizon_s=100.0)
@@ -199,7 +206,7 @@ def test_a_white_noise_line_read_off_the_floor_after_the_filter_is_no_disagreeme
     The model's N, which the record's spectrum confirms, does not disagree with the data then: the passband level
     decides wherever it reads, the AV line only where it does not."""
     result, _, imu = filtered
-    axis = next(a for a in GYRO_AXES if a in result.loops and result.loops[a].passed)
+    axis = _passing(result)
     final, static = result.finals[axis], result.static
     n = final.noise_density.value
     floor = _reading(n / 11.7, (n / 12.6, n / 10.9))  # disjoint from the model's N and 11.7× below it

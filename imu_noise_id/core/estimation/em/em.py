@@ -256,7 +256,6 @@ class MatrixScore:
         if np.any(nz):
             q_inv = np.zeros((p, p))
             q_inv[np.ix_(nz, nz)] = np.linalg.inv(model.q[np.ix_(nz, nz)])
-            eps = np.finfo(float).eps
             for span in _component_spans(model):  # Φ and Q are block-diagonal by component
                 S, cross, S_scale, C_scale = transition_terms(stats, model.phi, model.u, span)
                 q_b = q_inv[span, span]
@@ -264,8 +263,8 @@ class MatrixScore:
                 with np.errstate(over="ignore", invalid="ignore"):
                     g_phi[span, span] = q_b @ cross
                     g_q[span, span] = -0.5 * ((stats.xs.shape[1] - 1) * q_b - q_b @ S @ q_b)
-                    round_phi[span, span] = eps * np.abs(q_b) @ C_scale
-                    round_q[span, span] = 0.5 * eps * np.abs(q_b) @ S_scale @ np.abs(q_b)
+                    round_phi[span, span] = riccati.EPS * np.abs(q_b) @ C_scale
+                    round_q[span, span] = 0.5 * riccati.EPS * np.abs(q_b) @ S_scale @ np.abs(q_b)
         initial = InitialTermGradient.at(model, stats.xs[:, 0], stats.p_first)
         if initial.sensitivity is not None:
             sens = initial.sensitivity
