@@ -137,6 +137,29 @@ def test_the_score_at_a_collapsed_walk_equals_differences_of_the_likelihood(slow
     np.testing.assert_allclose(grad, numeric, rtol=1e-3 if slow_gm else 1e-5, atol=1e-4)
 
 
+def test_the_score_beside_a_narrow_resonance_over_a_long_record_equals_differences_of_the_likelihood(monkeypatch):
+    """A resonance of 1 mHz width at 100 Hz (a measured gyro's 0.56 Hz disturbance) drives its states by q ≈ 1.3e-4 of
+    their variance. The transition terms of E-step sums left the score's OSC entries ~0.1 off on 10⁶ samples (their
+    S − (N − 1)Q a difference of terms the states' size), and the observed information from differences of that score
+    5× too large in the OSC's width and σ (intervals √5 too narrow). The disturbance smoother's sums
+    (kalman.DisturbanceSums) hold no such difference: the score itself, with no forward difference of ℓ standing
+    in, equals differences of the exact likelihood."""
+
+    def no_difference(*args, **kwargs):
+        raise AssertionError("a forward difference of the likelihood stood in for the score")
+
+    monkeypatch.setattr(mle, "_loglik_difference", no_difference)
+    dt = 0.01
+    comps = [WN(5e-4), OSC(frequency=0.56, bandwidth=1e-3, sigma=8e-5)]
+    y = simulate_sum(comps, 300_000, dt, np.random.default_rng(8))
+    z = np.ones((y.size, 1))
+    model = ss.from_components(comps, dt)
+    par = mle.Parameterisation.of(comps)
+    theta = par.to_theta(comps)
+    _, grad, _ = mle.loglik_and_grad(par, theta, model, y, z)
+    np.testing.assert_allclose(grad, _richardson_gradient(par, theta, model, y, z), rtol=1e-6, atol=1e-4)
+
+
 def test_ci_coverage_wn_gm():
     # 40 seeded records of WN+GM; the 95 % intervals must contain the truth in >= 85 % of them per parameter
     # (binomial(40, 0.95) falls below 34 with probability ~1 %; a broken CI shows far lower coverage).
@@ -423,30 +446,35 @@ def test_the_observed_information_of_a_long_walk_agrees_with_the_likelihood_curv
     assert info[k, k] == pytest.approx(curvature, rel=0.01)
 
 
-def test_the_transition_terms_block_by_block_equal_the_dense_products():
-    """em.transition_terms forms a span's block of S, C with Φ x_{t−1} per diagonal block of Φ; against the blocks of
-    S, C from the dense Φ on smoothed states."""
-    rng = np.random.default_rng(4)
-    phi = np.zeros((5, 5))
-    phi[0, 0] = 0.99
-    phi[1:3, 1:3] = [[0.9, 0.3], [-0.3, 0.9]]
-    phi[3:5, 3:5] = [[0.5, 0.0], [0.2, 0.7]]  # a lower-triangular pair: one block of two
-    assert em.diagonal_blocks(phi) == [slice(0, 1), slice(1, 3), slice(3, 5)]
-    assert em.diagonal_blocks(np.ones((3, 3))) == [slice(0, 3)]
-    assert em.diagonal_blocks(np.eye(3)) == [slice(0, 1), slice(1, 2), slice(2, 3)]
-    n, u = 400, rng.standard_normal(5) * 0.1
-    xs = rng.standard_normal((5, n))
-    sum_p, p_first, sum_lag = (np.diag(rng.uniform(1.0, 2.0, 5)) for _ in range(3))
-    stats = kalman.SmootherStats(xs, sum_p, p_first, np.eye(5), sum_lag, sum_p, 0.0, np.ones(n, bool))
-    d = xs[:, 1:] - phi @ xs[:, :-1] - u[:, None]
-    p_next, p_prev = sum_p - p_first, sum_p - np.eye(5)
-    dense_s = d @ d.T + p_next - sum_lag @ phi.T - phi @ sum_lag.T + phi @ p_prev @ phi.T
-    dense_c = d @ xs[:, :-1].T + sum_lag - phi @ p_prev
-    # a component's span (the gradient's unit), one holding two of Φ's blocks, and the whole state
-    for span in [slice(0, 1), slice(1, 3), slice(3, 5), slice(1, 5), slice(0, 5)]:
-        S, C, _, _ = em.transition_terms(stats, phi, u, span)
-        np.testing.assert_allclose(S, dense_s[span, span], rtol=1e-12)
-        np.testing.assert_allclose(C, dense_c[span, span], rtol=1e-12)
+def test_the_steady_engines_disturbance_sums_equal_the_exact_smoothers():
+    """kalman.DisturbanceSums of the steady engine (the adjoint's modes summed as matrix products, N_t's sum by
+    doubling) against the exact engine's step-by-step recursion of r_t and N_t, on a model in steady mode (both
+    then run the same filter) with an oscillator's 2 × 2 block, a GM and a walk."""
+    dt = 0.01
+    comps = [WN(1e-3), OSC(frequency=2.0, bandwidth=0.3, sigma=1e-3), GM(tau=2.0, sigma=1e-3), RW(1e-5)]
+    y = simulate_sum(comps, 3000, dt, np.random.default_rng(6))
+    model = ss.from_components(comps, dt)
+    z = np.ones((y.size, 1))
+    fast = kalman.smooth(model, y, z, engine="steady").disturbances
+    slow = kalman.smooth(model, y, z, engine="exact").disturbances
+    for name in ("rr", "rx", "n", "nlp"):
+        a, b = getattr(fast, name), getattr(slow, name)
+        np.testing.assert_allclose(a, b, rtol=1e-7, atol=1e-9 * np.max(np.abs(b)), err_msg=name)
+
+
+def test_the_score_with_gaps_in_the_record_equals_differences_of_the_likelihood():
+    """With missing samples the exact engine's adjoint (r_{t−1} = Φᵀ r_t across a gap) gives the score."""
+    dt = 0.01
+    comps = [WN(1e-3), GM(tau=2.0, sigma=1e-3), RW(1e-5)]
+    y = simulate_sum(comps, 2000, dt, np.random.default_rng(7))
+    y[300:340] = np.nan
+    y[1500] = np.nan
+    z = np.ones((y.size, 1))
+    model = ss.from_components(comps, dt)
+    par = mle.Parameterisation.of(comps)
+    theta = par.to_theta(comps)
+    _, grad, _ = mle.loglik_and_grad(par, theta, model, y, z)
+    np.testing.assert_allclose(grad, _richardson_gradient(par, theta, model, y, z), rtol=1e-6, atol=1e-5)
 
 
 def test_the_scores_measurement_sse_from_the_smoothed_residuals_equals_the_e_step_sums():

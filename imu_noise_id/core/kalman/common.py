@@ -36,10 +36,32 @@ class InnovationResult:
     constant_f: bool = False  # F_t is the same at every t (steady engine)
 
 
+@dataclass(frozen=True)
+class DisturbanceSums:
+    """Sums over the state disturbances η_t = x_{t+1} − Φ x_t − u, t = 1 … N − 1, of the smoother's adjoint r_t
+    (E[η_t | y] = Q r_t) and its variance N_t (Durbin & Koopman 2012, eqs. 4.38, 4.42, 4.69; Koopman & Shephard 1992):
+    ``rr`` Σ r_t r_tᵀ, ``rx`` Σ r_t (x_t^N)ᵀ, ``n`` Σ N_t and ``nlp`` Σ N_t L_t P_t (L_t = Φ(I − K_t H), P_t the
+    predicted covariance; L_t P_t = Φ P_t^t). The score in Φ and Q is then Σ r_t (x_t^N)ᵀ − Σ N_t L_t P_t and
+    ½ Σ (r_t r_tᵀ − N_t), with no difference of terms of the states' size (docs/em.md, "The score from the
+    disturbance smoother")."""
+
+    rr: np.ndarray
+    rx: np.ndarray
+    n: np.ndarray
+    nlp: np.ndarray
+
+    @classmethod
+    def none(cls, p: int) -> DisturbanceSums:
+        """The empty sums of a record of one sample (no disturbance) with ``p`` states."""
+        zero = np.zeros((p, p))
+        return cls(zero, zero.copy(), zero.copy(), zero.copy())
+
+
 @dataclass
 class SmootherStats:
     """M-step inputs (paper 000 §3.3, appendix): ``xs`` (p, N) x_t^N, ``sum_p`` Σ P_t^N, ``p_first``, ``p_last``,
-    ``sum_lag`` Σ P_{t,t−1}^N, ``sum_p_obs``, ``loglik``, ``observed``."""
+    ``sum_lag`` Σ P_{t,t−1}^N, ``sum_p_obs``, ``loglik``, ``observed``; ``disturbances`` the adjoint's sums for
+    the score (:class:`DisturbanceSums`)."""
 
     xs: np.ndarray
     sum_p: np.ndarray
@@ -49,6 +71,7 @@ class SmootherStats:
     sum_p_obs: np.ndarray
     loglik: float
     observed: np.ndarray
+    disturbances: DisturbanceSums
 
 
 def check_data(y: np.ndarray, z: np.ndarray | None, n_regressors: int) -> tuple[np.ndarray, np.ndarray]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import LOG_2PI, Columns, InnovationResult, SmootherStats
+from .common import LOG_2PI, Columns, DisturbanceSums, InnovationResult, SmootherStats
 from .statespace import StateSpace
 
 
@@ -66,9 +66,11 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     sum_p = Ps.copy()
     sum_p_obs = Ps.copy() if obs[-1] else np.zeros((p, p))
     J = np.empty((n, p, p))
+    adjoint = _Adjoint(phi, h, p)
     for t in range(n - 1, 0, -1):
         J[t - 1] = np.linalg.solve(Pp[t].T, (Pf[t - 1] @ phi.T).T).T
         xs[t - 1] = xf[t - 1] + J[t - 1] @ (xs[t] - xp[t])
+        adjoint.step(inn.e[0, t], inn.f[t], K[t], observed=obs[t], x=xs[t - 1], p_filt=Pf[t - 1])
         Ps = Pf[t - 1] + J[t - 1] @ (Ps - Pp[t]) @ J[t - 1].T
         Ps = 0.5 * (Ps + Ps.T)
         sum_p += Ps
@@ -85,4 +87,35 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     fo = inn.f[obs]
     eo = inn.e[0, obs]
     loglik = -0.5 * float(np.sum(LOG_2PI + np.log(fo) + eo * eo / fo))
-    return SmootherStats(np.ascontiguousarray(xs.T), sum_p, p_first, Pf[-1].copy(), sum_lag, sum_p_obs, loglik, obs)
+    return SmootherStats(np.ascontiguousarray(xs.T), sum_p, p_first, Pf[-1].copy(), sum_lag, sum_p_obs, loglik, obs,
+                         adjoint.sums())
+
+
+class _Adjoint:
+    """The smoother's adjoint backwards in time and its sums (:class:`~.common.DisturbanceSums`; Durbin & Koopman 2012,
+    eqs. 4.38, 4.42): r_{t−1} = Hᵀ e_t / F_t + L_tᵀ r_t, N_{t−1} = Hᵀ H / F_t + L_tᵀ N_t L_t with L_t = Φ(I − K_t H)
+    at an observed sample, r_{t−1} = Φᵀ r_t, N_{t−1} = Φᵀ N_t Φ at a missing one; r_{N−1} = 0, N_{N−1} = 0."""
+
+    def __init__(self, phi: np.ndarray, h: np.ndarray, p: int) -> None:
+        self.phi, self.h = phi, h
+        self.r, self.n_t = np.zeros(p), np.zeros((p, p))
+        self.rr, self.rx, self.n, self.nlp = (np.zeros((p, p)) for _ in range(4))
+
+    def step(self, e: float, f: float, k: np.ndarray, *, observed: bool, x: np.ndarray, p_filt: np.ndarray) -> None:
+        """From r_t, N_t to r_{t−1}, N_{t−1} with sample t's innovation ``e``, its variance ``f`` and filter gain
+        ``k``; adds disturbance t − 1's terms, its smoothed state ``x`` = x_{t−1}^N and ``p_filt`` = P_{t−1}^{t−1}."""
+        if observed:
+            L = self.phi - np.outer(self.phi @ k, self.h)
+            self.r = self.h * (e / f) + L.T @ self.r
+            self.n_t = np.outer(self.h, self.h) / f + L.T @ self.n_t @ L
+        else:
+            self.r = self.phi.T @ self.r
+            self.n_t = self.phi.T @ self.n_t @ self.phi
+        self.rr += np.outer(self.r, self.r)
+        self.rx += np.outer(self.r, x)
+        self.n += self.n_t
+        self.nlp += self.n_t @ self.phi @ p_filt
+
+    def sums(self) -> DisturbanceSums:
+        """The sums over the disturbances stepped through."""
+        return DisturbanceSums(self.rr, self.rx, 0.5 * (self.n + self.n.T), self.nlp)

@@ -19,7 +19,7 @@ from scipy.signal import lfilter
 
 from ..errors import InputError
 from . import harmonic
-from .common import LOG_2PI, Columns, InnovationResult, ProfileResult, SmootherStats, profile
+from .common import LOG_2PI, Columns, DisturbanceSums, InnovationResult, ProfileResult, SmootherStats, profile
 from .statespace import StateSpace
 
 
@@ -360,6 +360,7 @@ def _smoothed(model: StateSpace, g: SteadyGains, b: Basis | None, w: np.ndarray,
     memory holds the adjoint's part) and the innovations e (N,): x_t^N = U w_t + P̄ U⁻ᵀ v_t (:func:`_adjoint_modes`),
     two p × p products over the record."""
     n = e.size
+    disturbances = DisturbanceSums.none(0)
     if b is None:
         xs = np.zeros((0, n))
     else:
@@ -369,6 +370,7 @@ def _smoothed(model: StateSpace, g: SteadyGains, b: Basis | None, w: np.ndarray,
         reversed_part = np.matmul(back, sigma, out=w)  # w's memory, no longer needed
         xs[:, 1:] += reversed_part[:, :0:-1]
         xs[:, 0] += back @ v_first
+        disturbances = _disturbance_sums(model, g, b, sigma, xs)
     J = g.j
     const = g.p_filt - J @ g.p_pred @ J.T
     with np.errstate(over="ignore", invalid="ignore"):
@@ -380,8 +382,26 @@ def _smoothed(model: StateSpace, g: SteadyGains, b: Basis | None, w: np.ndarray,
     sum_lag = (sum_p - p_first) @ J.T
     loglik = -0.5 * (n * (LOG_2PI + np.log(g.f)) + float(e @ e) / g.f)
     return SmootherStats(
-        xs, sum_p, p_first, g.p_filt.copy(), sum_lag, sum_p.copy(), float(loglik), np.ones(n, bool),
+        xs, sum_p, p_first, g.p_filt.copy(), sum_lag, sum_p.copy(), float(loglik), np.ones(n, bool), disturbances,
     )
+
+
+def _disturbance_sums(model: StateSpace, g: SteadyGains, b: Basis, sigma: np.ndarray,
+                      xs: np.ndarray) -> DisturbanceSums:
+    """:class:`~.common.DisturbanceSums` from the adjoint in the basis ``b`` (σ of :func:`_adjoint_modes`; in 0-based
+    time r_t = U⁻ᵀ σ_{N−1−t} for the disturbances t = 0 … N − 2) and the smoothed states ``xs``; N_t by
+    N_{t−1} = Hᵀ H / F + Aᵀ N_t A from N_{N−1} = 0 (Durbin & Koopman 2012, eq. 4.42), summed by
+    :func:`affine_power_sum`; L P̄ = Φ P_f. Two p × p products over the record."""
+    n = xs.shape[1]
+    if n < 2:
+        return DisturbanceSums.none(xs.shape[0])
+    ahead = sigma[:, 1:]  # σ_1 … σ_{N−1}: r_{N−2} … r_0
+    rr = b.u_inv.T @ (ahead @ ahead.T) @ b.u_inv
+    rx = b.u_inv.T @ (sigma[:, :0:-1] @ xs[:, :-1].T)
+    info = np.outer(model.h, model.h) / g.f
+    with np.errstate(over="ignore", invalid="ignore"):  # overflowed sums read as NaN by the score's users
+        n_sum, _ = affine_power_sum(g.a.T, info, info, n - 1)
+    return DisturbanceSums(0.5 * (rr + rr.T), rx, n_sum, n_sum @ (model.phi @ g.p_filt))
 
 
 def smooth(model: StateSpace, cols: Columns) -> SmootherStats:

@@ -172,47 +172,6 @@ def transition_residual(s: Sums, phi: np.ndarray, u: np.ndarray) -> np.ndarray:
             + np.outer(phi @ s.x_prev, u) + np.outer(u, phi @ s.x_prev) + n1 * np.outer(u, u))
 
 
-def diagonal_blocks(m: np.ndarray) -> list[slice]:
-    """The finest contiguous diagonal blocks of the square ``m`` outside which it is zero."""
-    p = m.shape[0]
-    coupled = m != 0.0
-    out, start = [], 0
-    for k in range(1, p + 1):
-        if k == p or not (np.any(coupled[start:k, k:]) or np.any(coupled[k:, start:k])):
-            out.append(slice(start, k))
-            start = k
-    return out
-
-
-def transition_terms(st: kalman.SmootherStats, phi: np.ndarray, u: np.ndarray,
-                     span: slice) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The diagonal block on the states ``span`` of S(Φ, u) of :func:`transition_residual` and of
-    C = Σ_{t=2}^N E[(x_t − Φ x_{t−1} − u) x_{t−1}ᵀ], the means' part from the smoothed increments
-    x_t^N − Φ x_{t−1}^N − u, not from differences of sums (docs/em.md, "Why: EM"), and the scales of their rounding
-    (the sums of the terms' magnitudes, ε × these: a walk driven to ~0 leaves S ≈ (N − 1)q as a difference of terms
-    ~P̄ ≈ √(q r)). Φ must not couple ``span`` to the other states (a component's block): then the block needs that
-    block's states alone, O(|span|² N)."""
-    X = st.xs[span]
-    prev = X[:, :-1]
-    d = X[:, 1:] - u[span, None]
-    phi_b = phi[span, span]
-    for sub in diagonal_blocks(phi_b):  # Φ x_{t−1} block by block within the component (a ladder's diagonal Φ)
-        d[sub] -= phi_b[sub, sub] @ prev[sub]
-    lag = st.sum_lag[span, span]
-    p_next = (st.sum_p - st.p_first)[span, span]
-    p_prev = (st.sum_p - st.p_last)[span, span]
-    S = d @ d.T + p_next - lag @ phi_b.T - phi_b @ lag.T + phi_b @ p_prev @ phi_b.T
-    C = d @ prev.T + lag - phi_b @ p_prev
-    # the increments' rounding bounded by each state's largest |x| (two passes, no products over the samples)
-    a_phi, a_lag, a_prev = np.abs(phi_b), np.abs(lag), np.abs(p_prev)
-    x_max = np.max(np.abs(X), axis=1)
-    d_max = x_max + np.abs(u[span]) + a_phi @ x_max
-    S_scale = (2.0 * np.outer(np.sum(np.abs(d), axis=1), d_max) + np.abs(p_next) + a_lag @ a_phi.T
-               + a_phi @ a_lag.T + a_phi @ a_prev @ a_phi.T)
-    C_scale = prev.shape[1] * np.outer(d_max, x_max) + a_lag + a_phi @ a_prev
-    return S, C, S_scale, C_scale
-
-
 def _component_spans(model: StateSpace) -> list[slice]:
     """The states of each component of ``model`` with states (all states as one span for a model without blocks)."""
     spans = [state_span(b.states) for b in model.blocks if b.states]
@@ -225,25 +184,24 @@ class MatrixScore:
     ∂ℓ/∂θ = ∂Q(θ | θ_E)/∂θ at θ_E, with Q the expected complete-data log-likelihood of §3.3,
 
         Q = −½(N_obs ln 2πR + W/R) − ½((N−1) ln det Q + tr(Q⁻¹ S(Φ, u))) − ½(ln det Σ + tr(Σ⁻¹ E₁)),
-        ∂Q/∂R = −½(N_obs/R − W/R²),   ∂Q/∂Q = −½((N−1) Q⁻¹ − Q⁻¹ S Q⁻¹),   ∂Q/∂Φ = Q⁻¹ C
+        ∂Q/∂R = −½(N_obs/R − W/R²),   ∂Q/∂Q = ½ Σ_t (r_t r_tᵀ − N_t),   ∂Q/∂Φ = Σ_t (r_t (x_t^N)ᵀ − N_t L_t P_t)
 
-    (W: :func:`_measurement_sse`; S, C: :func:`transition_terms`; E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ], its steady-mode share
-    by :class:`InitialTermGradient`). H is held fixed. Φ and Q are block-diagonal by component, and a parameter moves
-    its own component's block only: the transition terms are computed on those blocks (:meth:`directional` reads
-    nothing else), zero between components."""
+    (W: :func:`_measurement_sse`; the Φ and Q terms, −½((N−1)Q⁻¹ − Q⁻¹ S Q⁻¹) and Q⁻¹ C with C = Σ E[η_t x_tᵀ],
+    in the disturbance smoother's form of :class:`~imu_noise_id.core.kalman.common.DisturbanceSums`, E[η_t | y] = Q r_t
+    (Koopman & Shephard 1992); E₁ = E[(x_1 − μ)(x_1 − μ)ᵀ], its steady-mode share by :class:`InitialTermGradient`).
+    H is held fixed. Φ and Q are block-diagonal by component, and a parameter moves its own component's block only:
+    :meth:`directional` reads those blocks, zero between components."""
 
     g_phi: np.ndarray
     g_q: np.ndarray
     g_r: float
     #: The x₁ term where its adjoint is not computed (:class:`DifferencedInitialTerm`), else None (in the g's or none)
     initial: DifferencedInitialTerm | None = None
-    #: Rounding scales of g_phi and g_q's transition parts: ε|Q⁻¹| C_scale and ½ε|Q⁻¹| S_scale |Q⁻¹|
-    rounding_phi: np.ndarray | None = None
-    rounding_q: np.ndarray | None = None
 
     @classmethod
     def at(cls, model: StateSpace, stats: kalman.SmootherStats, data: DataSums) -> MatrixScore:
-        """The gradient at θ_E's ``model`` from its smoother output ``stats`` on ``data``; ValueError when R = 0."""
+        """The gradient at θ_E's ``model`` from its smoother output ``stats`` on ``data``; ValueError when R = 0.
+        Entries whose sums overflowed (a drive near zero) are NaN."""
         r = float(model.r)
         if not r * r > 0.0:  # a white noise driven to (numerically) zero beside a filter that carries it: no score
             raise ValueError("the white-noise variance is zero: the likelihood's gradient is not defined there")
@@ -251,40 +209,22 @@ class MatrixScore:
         g_r = -0.5 * (n_obs / r - smoothed_measurement_sse(model, stats, data) / r**2)
         p = model.n_states
         g_phi, g_q = np.zeros((p, p)), np.zeros((p, p))
-        round_phi, round_q = np.zeros((p, p)), np.zeros((p, p))
-        nz = np.diag(model.q) > 0
-        if np.any(nz):
-            q_inv = np.zeros((p, p))
-            q_inv[np.ix_(nz, nz)] = np.linalg.inv(model.q[np.ix_(nz, nz)])
-            for span in _component_spans(model):  # Φ and Q are block-diagonal by component
-                S, cross, S_scale, C_scale = transition_terms(stats, model.phi, model.u, span)
-                q_b = q_inv[span, span]
-                # a drive near zero overflows these; its rounding then reads inf or NaN and ℓ's differences stand in
-                with np.errstate(over="ignore", invalid="ignore"):
-                    g_phi[span, span] = q_b @ cross
-                    g_q[span, span] = -0.5 * ((stats.xs.shape[1] - 1) * q_b - q_b @ S @ q_b)
-                    round_phi[span, span] = riccati.EPS * np.abs(q_b) @ C_scale
-                    round_q[span, span] = 0.5 * riccati.EPS * np.abs(q_b) @ S_scale @ np.abs(q_b)
+        sums = stats.disturbances
+        with np.errstate(over="ignore", invalid="ignore"):
+            full_phi, full_q = sums.rx - sums.nlp, 0.5 * (sums.rr - sums.n)
+        for span in _component_spans(model) if p else []:  # Φ and Q are block-diagonal by component
+            g_phi[span, span], g_q[span, span] = full_phi[span, span], full_q[span, span]
         initial = InitialTermGradient.at(model, stats.xs[:, 0], stats.p_first)
         if initial.sensitivity is not None:
             sens = initial.sensitivity
             g_phi, g_q, g_r = g_phi + sens.g_phi, g_q + sens.g_q, g_r + sens.g_r
-        return cls(g_phi, g_q, g_r, initial.differenced, round_phi, round_q)
+        return cls(g_phi, g_q, g_r, initial.differenced)
 
     def directional(self, states: slice, dphi: np.ndarray, dq: np.ndarray, dr: float) -> float:
         """∂ℓ along a change dΦ, dQ of the block on ``states`` (the rest of Φ, Q unchanged) and dR."""
         out = float(np.vdot(self.g_phi[states, states], dphi) + np.vdot(self.g_q[states, states], dq)
                     + self.g_r * dr)
         return out + (self.initial.directional(states, dphi, dq, dr) if self.initial is not None else 0.0)
-
-    def rounding(self, states: slice, dphi: np.ndarray, dq: np.ndarray) -> float:
-        """A scale of the rounding in :meth:`directional` along dΦ, dQ of the block on ``states``: its transition
-        terms' (:func:`transition_terms`), which grow as √(r/q) where a block's drive q is driven to ~0."""
-        if self.rounding_phi is None or self.rounding_q is None:
-            return 0.0
-        with np.errstate(invalid="ignore"):  # an overflowed scale times a zero change: NaN, read as too large
-            return float(np.vdot(self.rounding_phi[states, states], np.abs(dphi))
-                         + np.vdot(self.rounding_q[states, states], np.abs(dq)))
 
 
 @dataclass(frozen=True)

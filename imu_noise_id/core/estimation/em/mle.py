@@ -123,9 +123,8 @@ def loglik_grad_profile(
     """:func:`loglik_and_grad` and the GLS profile (β̂, its covariance): the gradient is :class:`~.em.MatrixScore`
     (one smoother pass) along each log-parameter's change of its own block
     (:meth:`Parameterisation.block_derivative`), or a forward difference of ℓ (:data:`DIFFERENCE_STEP`, one filter
-    pass) along a log-parameter whose score's rounding (:meth:`~.em.MatrixScore.rounding`) exceeds
-    :data:`SCORE_ROUNDING_TOL`: a block driven to ~0, where the score's transition terms are differences of terms
-    ~√(q r) that leave ~q (a walk of 1e-12 beside a GM as slow as a walk: 2·10³ where ℓ is flat)."""
+    pass) along a log-parameter whose score entry is not finite (the smoother's sums overflowed at a drive near
+    zero)."""
     components = par.to_components(theta, base)
     prof, model, stats = kalman.profile_and_smooth(with_components(base, components), y, z)
     score = em.MatrixScore.at(model, stats, data or em.DataSums.of(y, z))
@@ -135,17 +134,14 @@ def loglik_grad_profile(
         change = par.block_derivative(components[i], theta, k, model.dt, step)
         if change is None:
             raise ValueError(f"no step of {step:g} around log-parameter {k} stays inside the components' domains")
-        states = state_span(model.blocks[i].states)
-        if not score.rounding(states, *change[:2]) <= SCORE_ROUNDING_TOL:  # NaN too: an overflowed term
+        with np.errstate(invalid="ignore"):  # an overflowed entry times a zero change: NaN, read as not finite
+            grad[k] = score.directional(state_span(model.blocks[i].states), *change)
+        if not math.isfinite(grad[k]):
             grad[k] = _loglik_difference(par, theta, k, base, prof.loglik, y=y, z=z)
-        else:
-            grad[k] = score.directional(states, *change)
     return prof.loglik, grad, model, prof
 
 
-#: Largest rounding scale [ℓ per unit log-parameter] at which the score's entry is used, not ℓ's differences.
-SCORE_ROUNDING_TOL = 1e-2
-#: Step [log-parameter] of the forward differences of ℓ where the score's rounding is too large.
+#: Step [log-parameter] of the forward differences of ℓ where the score's entry is not finite.
 DIFFERENCE_STEP = 1e-4
 
 
