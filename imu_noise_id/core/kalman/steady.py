@@ -397,11 +397,26 @@ def _disturbance_sums(model: StateSpace, g: SteadyGains, b: Basis, sigma: np.nda
         return DisturbanceSums.none(xs.shape[0])
     ahead = sigma[:, 1:]  # σ_1 … σ_{N−1}: r_{N−2} … r_0
     rr = b.u_inv.T @ (ahead @ ahead.T) @ b.u_inv
-    rx = b.u_inv.T @ (sigma[:, :0:-1] @ xs[:, :-1].T)
+    rx = b.u_inv.T @ _reversed_products(sigma, xs)
     info = np.outer(model.h, model.h) / g.f
     with np.errstate(over="ignore", invalid="ignore"):  # overflowed sums read as NaN by the score's users
         n_sum, _ = affine_power_sum(g.a.T, info, info, n - 1)
     return DisturbanceSums(0.5 * (rr + rr.T), rx, n_sum, n_sum @ (model.phi @ g.p_filt))
+
+
+#: Samples per chunk of :func:`_reversed_products` (a copy of p × this many floats at a time).
+REVERSED_CHUNK = 1 << 16
+
+
+def _reversed_products(sigma: np.ndarray, xs: np.ndarray) -> np.ndarray:
+    """Σ_{t=0}^{N−2} σ_{N−1−t} x_tᵀ for σ, x (p, N), chunk by chunk: a reversed view is not a BLAS operand, and
+    reversing the whole of σ would copy p × N floats."""
+    n = xs.shape[1]
+    out = np.zeros((sigma.shape[0], xs.shape[0]))
+    for start in range(0, n - 1, REVERSED_CHUNK):
+        end = min(start + REVERSED_CHUNK, n - 1)
+        out += np.ascontiguousarray(sigma[:, n - end:n - start][:, ::-1]) @ xs[:, start:end].T
+    return out
 
 
 def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
