@@ -16,6 +16,7 @@ from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.allan.slopes import fit_axis_slopes, rises_early
 from imu_noise_id.core.axes import ImuSeries
 from imu_noise_id.core.errors import InputError
+from imu_noise_id.core.estimation.em import whittle
 from imu_noise_id.core.estimation.em.model import FitOptions, NoiseModel
 from imu_noise_id.core.estimation.em.selection import select_model, suggest_candidates
 from imu_noise_id.core.estimation.readouts import kalibr
@@ -45,6 +46,28 @@ def test_the_block_is_the_filter(order):
     back = DLPF.from_block(block.phi, block.q, DT)
     assert back.order == order
     assert back.noise_density == pytest.approx(2e-3, rel=1e-9) and back.cutoff == pytest.approx(15.0, rel=1e-9)
+
+
+@pytest.mark.parametrize("order", [1, 2, 3, 4])
+@pytest.mark.parametrize("cutoff", [0.05, 15.0, 90.0])
+def test_the_sample_spectrum_is_the_bilinear_butterworths(order, cutoff):
+    """DLPF.sample_spectrum (the poles' factored form the Whittle likelihood reads) against the bilinear Butterworth's
+    magnitude in closed form, σ²/(1 + (tan(ω/2)/tan(ω_c/2))²ⁿ), from a cutoff 2·10⁻⁴ of the rate to 0.45 of it; at
+    15 Hz also against the block's spectrum h (zI − Φ)⁻¹ Q (…)ᴴ hᵀ solved per frequency and scipy's freqz of the
+    design, where the spectrum is above 1e-12 of its largest value (both lose relative precision towards Nyquist,
+    and at low cutoffs the design's coefficients cancel: 1e-4 off at 0.05 Hz, order 4)."""
+    c = DLPF(2e-3, cutoff, order)
+    omega = np.linspace(1e-5, math.pi - 1e-3, 3000)
+    direct = c.sample_spectrum(omega, DT)
+    ratio = np.tan(0.5 * omega) / math.tan(math.pi * cutoff * DT)
+    np.testing.assert_allclose(direct, c.sigma2(DT) / (1.0 + ratio ** (2 * order)), rtol=1e-10)
+    if cutoff == 15.0:
+        block = c.block(DT)
+        by_block = whittle.block_spectrum(block.phi, block.q, block.h, omega)
+        by_design = c.psd(omega / (2.0 * math.pi * DT), DT) / DT
+        shown = direct > 1e-12 * direct.max()
+        np.testing.assert_allclose(direct[shown], by_block[shown], rtol=1e-8)
+        np.testing.assert_allclose(direct[shown], by_design[shown], rtol=1e-8)
 
 
 def test_the_steady_engine_runs_a_low_cutoff_filter_as_the_exact_engine_does():

@@ -47,6 +47,16 @@ def _covariance(order: int, cutoff_per_sample: float) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=256)
+def _poles(order: int, cutoff_per_sample: float) -> tuple[float, np.ndarray, float]:
+    """(λ, ŝ, b₀) of the order-n Butterworth at f_c·dt: λ = 2 tan(π f_c dt), the poles z_k = 1 + λŝ_k with
+    ŝ_k = p_k/(1 − λp_k/2) (p_k the normalised prototype's), b₀ the numerator's gain, b(z⁻¹) = b₀(1 + z⁻¹)ⁿ."""
+    lam = 2.0 * math.tan(math.pi * cutoff_per_sample)
+    prototype = -np.exp(1j * math.pi * np.arange(-order + 1, order, 2) / (2 * order))
+    s_hat = prototype / (1.0 - 0.5 * lam * prototype)
+    return lam, s_hat, float(np.real(np.prod(-s_hat))) * (0.5 * lam) ** order
+
+
+@functools.lru_cache(maxsize=256)
 def _difference_realisation(order: int, cutoff_per_sample: float) -> tuple[np.ndarray, np.ndarray, float]:
     """(Φ, h, b₀) of the order-n Butterworth at f_c·dt on the direct form II's signal w (w_t = b₀e_t − Σ a_i w_{t−i},
     y_t = Σ_i C(n, i) w_{t−i}) in difference coordinates: x⁰_t = Δⁿw_t, x^{k}_t = Δ^{k−1}w_{t−1} (k = 1 … n),
@@ -65,14 +75,11 @@ def _difference_realisation(order: int, cutoff_per_sample: float) -> tuple[np.nd
     the order of λʲ, not lagged values agreeing to 1 − O(λ²) that make the Riccati equation singular in double
     precision at low f_c dt (the δ-operator's argument, Middleton & Goodwin 1990)."""
     n = order
-    lam = 2.0 * math.tan(math.pi * cutoff_per_sample)
-    prototype = -np.exp(1j * math.pi * np.arange(-n + 1, n, 2) / (2 * n))
-    s_hat = prototype / (1.0 - 0.5 * lam * prototype)
+    lam, s_hat, b0 = _poles(order, cutoff_per_sample)
     alpha = np.ones(1, dtype=complex)  # ascending powers of Δ
     for s_k in s_hat:
         alpha = np.convolve(alpha, [-lam * s_k, 1.0 + lam * s_k])
     beta = np.cumsum(np.real(alpha))[:n]
-    b0 = float(np.real(np.prod(-s_hat))) * (0.5 * lam) ** n
     phi = np.zeros((n + 1, n + 1))
     phi[0, 0] = -float(np.sum(beta))
     phi[0, 1:] = -np.cumsum(beta)
@@ -135,6 +142,21 @@ class DLPF(Component):
         q_free[0, 0] = True
         return StateBlock(phi=phi.copy(), q=q, h=h.copy(), u=np.zeros(p), phi_free=np.zeros((p, p), bool),
                           q_free=q_free, u_free=np.zeros(p, bool))
+
+    def sample_spectrum(self, omega: np.ndarray, dt: float) -> np.ndarray:
+        """Spectral density per sample σ²|H(e^{iω})|² [u²] at ω [rad/sample], from the factored form
+        |b₀|²|1 + e^{−iω}|²ⁿ / Π_k |z_k Δ − λŝ_k|² with Δ = 1 − e^{−iω} = 2 sin²(ω/2) + i sin ω and
+        |1 + e^{−iω}|² = 4 cos²(ω/2) (:func:`_poles`): no cancellation of the coefficients a_i near ω = 0 (where
+        |a| = O(λⁿ)) nor of the numerator near Nyquist, O(n) per frequency."""
+        lam, s_hat, b0 = _poles(self.order, self._per_sample(dt))
+        omega = np.asarray(omega, dtype=float)
+        half = np.sin(0.5 * omega)
+        delta = 2.0 * half * half + 1j * np.sin(omega)
+        den = np.ones_like(omega)
+        for s_k in s_hat:
+            den = den * np.abs((1.0 + lam * s_k) * delta - lam * s_k) ** 2
+        num = (2.0 * np.cos(0.5 * omega)) ** (2 * self.order)
+        return self.sigma2(dt) * b0 * b0 * num / den
 
     def autocovariance(self, lags: np.ndarray, dt: float) -> np.ndarray:
         """R(j) [u²] at integer lags (0 beyond the response's length)."""

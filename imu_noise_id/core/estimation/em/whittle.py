@@ -18,6 +18,7 @@ from scipy.optimize import minimize
 
 from ...errors import InputError
 from ...noise.components import GM, QN, RR, RW, WN, Component
+from ...noise.digital import DLPF
 from . import exponential_parts
 from .differences import derivative_in_domain
 
@@ -141,6 +142,8 @@ def difference_spectrum(components: list[Component], omega: np.ndarray, dt: floa
             ps = comp.per_sample(dt)
             phi = ps["phi"]
             s += ps["sigma2_drive"] * c / (1.0 - 2.0 * phi * np.cos(omega) + phi * phi)
+        elif isinstance(comp, DLPF):  # its block is 5 × 5 at order 4: a solve per frequency
+            s += comp.sample_spectrum(omega, dt) * c
         elif not isinstance(comp, RR):
             blk = comp.block(dt)
             s += block_spectrum(blk.phi, blk.q, blk.h, omega) * c
