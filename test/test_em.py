@@ -77,6 +77,18 @@ def _richardson_gradient(par: mle.Parameterisation, theta: np.ndarray, model, y:
     return [(4.0 * difference(k, 5e-5) - difference(k, 1e-4)) / 3.0 for k in range(theta.size)]
 
 
+def _score_and_differences(comps: list, y: np.ndarray, dt: float,
+                           z: np.ndarray | None = None) -> tuple[np.ndarray, list[float]]:
+    """The score (mle.loglik_and_grad) at ``comps`` on ``y`` (regressors ``z``, default a bias) and
+    :func:`_richardson_gradient` there."""
+    z = np.ones((y.size, 1)) if z is None else z
+    model = ss.from_components(comps, dt)
+    par = mle.Parameterisation.of(comps)
+    theta = par.to_theta(comps)
+    _, grad, _ = mle.loglik_and_grad(par, theta, model, y, z)
+    return grad, _richardson_gradient(par, theta, model, y, z)
+
+
 @pytest.mark.parametrize("case", ["paper 4.3", "OSC", "lines"])
 def test_fisher_identity_gradient_matches_finite_differences(case):
     # The gradient in the model matrices (em.MatrixScore: closed forms in the E-step sums, the x_1 term's share
@@ -97,14 +109,9 @@ def test_fisher_identity_gradient_matches_finite_differences(case):
     else:
         _, y = _paper_43_data(n=500, seed=4)
         comps = [WN(0.4), GM(tau=30.0, sigma=0.3), RW(0.02), RR(0.0)]
-    model = ss.from_components(comps, dt)
-    z = np.column_stack([np.ones(y.size), np.arange(y.size)])
-    par = mle.Parameterisation.of(comps)
-    theta = par.to_theta(comps)
-    _, grad, _ = mle.loglik_and_grad(par, theta, model, y, z)
     # central differences extrapolated (Richardson): an O(h⁴) error, where one of h = 1e-5 is off by 1e-5 on the
     # narrow lines' frequencies
-    num = _richardson_gradient(par, theta, model, y, z)
+    grad, num = _score_and_differences(comps, y, dt, z=np.column_stack([np.ones(y.size), np.arange(y.size)]))
     np.testing.assert_allclose(grad, num, rtol=1e-8, atol=2e-7)
 
 
@@ -152,12 +159,7 @@ def test_the_score_beside_a_narrow_resonance_over_a_long_record_equals_differenc
     dt = 0.01
     comps = [WN(5e-4), OSC(frequency=0.56, bandwidth=1e-3, sigma=8e-5)]
     y = simulate_sum(comps, 300_000, dt, np.random.default_rng(8))
-    z = np.ones((y.size, 1))
-    model = ss.from_components(comps, dt)
-    par = mle.Parameterisation.of(comps)
-    theta = par.to_theta(comps)
-    _, grad, _ = mle.loglik_and_grad(par, theta, model, y, z)
-    np.testing.assert_allclose(grad, _richardson_gradient(par, theta, model, y, z), rtol=1e-6, atol=1e-4)
+    np.testing.assert_allclose(*_score_and_differences(comps, y, dt), rtol=1e-6, atol=1e-4)
 
 
 def test_ci_coverage_wn_gm():
@@ -469,12 +471,7 @@ def test_the_score_with_gaps_in_the_record_equals_differences_of_the_likelihood(
     y = simulate_sum(comps, 2000, dt, np.random.default_rng(7))
     y[300:340] = np.nan
     y[1500] = np.nan
-    z = np.ones((y.size, 1))
-    model = ss.from_components(comps, dt)
-    par = mle.Parameterisation.of(comps)
-    theta = par.to_theta(comps)
-    _, grad, _ = mle.loglik_and_grad(par, theta, model, y, z)
-    np.testing.assert_allclose(grad, _richardson_gradient(par, theta, model, y, z), rtol=1e-6, atol=1e-5)
+    np.testing.assert_allclose(*_score_and_differences(comps, y, dt), rtol=1e-6, atol=1e-5)
 
 
 def test_the_scores_measurement_sse_from_the_smoothed_residuals_equals_the_e_step_sums():
