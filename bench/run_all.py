@@ -97,7 +97,7 @@ LONG: list[tuple[list[str], str]] = [
     (["bench_loop_effects.py", "--clean", "10", "--minutes", "1440", "--rate", "10",
       "--cases", "gm", "osc+gm", "clean", "bi"], "bench_loop_effects.txt"),
     (["bench_adis_analysis.py"], "bench_adis_analysis.txt"),
-    (["bench_analyze_time.py", "--adis", "1", "--baseline", BASELINE, "--timeout", "1200", "--numbers"],
+    (["bench_analyze_time.py", "--adis", "1", "--baseline", BASELINE, "--timeout", "1500", "--numbers"],
      "bench_analyze_time.txt"),
     (["bench_analyze_time.py", "--adis", "1", "2", "3", "4", "5", "6", "--allow-motion", "--timeout", "1200"],
      "bench_analyze_time.txt"),
