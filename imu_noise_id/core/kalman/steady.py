@@ -358,7 +358,7 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
 def _smoothed(model: StateSpace, g: SteadyGains, b: Basis | None, w: np.ndarray, e: np.ndarray) -> SmootherStats:
     """Smoothed states and covariance sums from the predicted states w (p, N) in the basis ``b`` (overwritten: its
     memory holds the adjoint's part) and the innovations e (N,): x_t^N = U w_t + P̄ U⁻ᵀ v_t (:func:`_adjoint_modes`),
-    two p × p products over the record."""
+    two p × p products over the record, and two more for the score's sums (:func:`_disturbance_sums`)."""
     n = e.size
     disturbances = DisturbanceSums.none(0)
     if b is None:
