@@ -212,7 +212,7 @@ class MatrixScore:
         sums = stats.disturbances
         with np.errstate(over="ignore", invalid="ignore"):
             full_phi, full_q = sums.rx - sums.nlp, 0.5 * (sums.rr - sums.n)
-        for span in _component_spans(model) if p else []:  # Φ and Q are block-diagonal by component
+        for span in _component_spans(model):  # Φ and Q are block-diagonal by component
             g_phi[span, span], g_q[span, span] = full_phi[span, span], full_q[span, span]
         initial = InitialTermGradient.at(model, stats.xs[:, 0], stats.p_first)
         if initial.sensitivity is not None:
