@@ -53,9 +53,10 @@ def test_the_block_is_the_filter(order):
 def test_the_sample_spectrum_is_the_bilinear_butterworths(order, cutoff):
     """DLPF.sample_spectrum (the poles' factored form the Whittle likelihood reads) against the bilinear Butterworth's
     magnitude in closed form, σ²/(1 + (tan(ω/2)/tan(ω_c/2))²ⁿ), from a cutoff 2·10⁻⁴ of the rate to 0.45 of it; at
-    15 Hz also against the block's spectrum h (zI − Φ)⁻¹ Q (…)ᴴ hᵀ solved per frequency and scipy's freqz of the
-    design, where the spectrum is above 1e-12 of its largest value (both lose relative precision towards Nyquist,
-    and at low cutoffs the design's coefficients cancel: 1e-4 off at 0.05 Hz, order 4)."""
+    15 Hz also against the block's spectrum h (zI − Φ)⁻¹ Q (…)ᴴ hᵀ solved per frequency and scipy's freqz of
+    scipy's design (DLPF.psd is this spectrum times dt), where the spectrum is above 1e-12 of its largest value
+    (both lose relative precision towards Nyquist, and at low cutoffs the design's coefficients cancel: 1e-4 off at
+    0.05 Hz, order 4)."""
     c = DLPF(2e-3, cutoff, order)
     omega = np.linspace(1e-5, math.pi - 1e-3, 3000)
     direct = c.sample_spectrum(omega, DT)
@@ -64,7 +65,8 @@ def test_the_sample_spectrum_is_the_bilinear_butterworths(order, cutoff):
     if cutoff == 15.0:
         block = c.block(DT)
         by_block = whittle.block_spectrum(block.phi, block.q, block.h, omega)
-        by_design = c.psd(omega / (2.0 * math.pi * DT), DT) / DT
+        b, a = signal.butter(order, cutoff, fs=1.0 / DT)
+        by_design = c.sigma2(DT) * np.abs(signal.freqz(b, a, worN=omega)[1]) ** 2
         shown = direct > 1e-12 * direct.max()
         np.testing.assert_allclose(direct[shown], by_block[shown], rtol=1e-8)
         np.testing.assert_allclose(direct[shown], by_design[shown], rtol=1e-8)

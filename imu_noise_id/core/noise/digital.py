@@ -184,9 +184,8 @@ class DLPF(Component):
         return -0.5 * self.block_sum_variance(np.abs(np.asarray(lag, dtype=float)), dt)
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
-        b, a = self.coefficients(dt)
-        _, response = signal.freqz(b, a, worN=2.0 * math.pi * as_freq(f) * dt)
-        return self.noise_density**2 * np.abs(response) ** 2
+        """N²|H(e^{i2πf dt})|² = dt × :meth:`sample_spectrum`."""
+        return dt * self.sample_spectrum(2.0 * math.pi * as_freq(f) * dt, dt)
 
     def zero_frequency_density(self, dt: float) -> float:
         """N exactly (H(1) = 1)."""
