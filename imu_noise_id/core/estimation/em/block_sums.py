@@ -60,8 +60,9 @@ def sum_lags(block: int, lags: int) -> np.ndarray:
 
 
 def from_sum_covariance(k: np.ndarray) -> np.ndarray:
-    """γ_D(h) from K at :func:`sum_lags` (the filter [1, −4, 6, −4, 1] of the module docstring)."""
-    return k[:-4] - 4.0 * k[1:-3] + 6.0 * k[2:-2] - 4.0 * k[3:-1] + k[4:]
+    """γ_D(h) from K at :func:`sum_lags` (the filter [1, −4, 6, −4, 1] of the module docstring), along the last
+    axis."""
+    return k[..., :-4] - 4.0 * k[..., 1:-3] + 6.0 * k[..., 2:-2] - 4.0 * k[..., 3:-1] + k[..., 4:]
 
 
 def autocovariance(components: list[Component], block: int, dt: float, lags: int) -> np.ndarray:

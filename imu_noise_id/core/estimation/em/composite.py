@@ -155,8 +155,8 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
     definite."""
     current = whittle.with_log_parameters(components, keys, x)
     parts = parts if parts is not None else statistics_parts(stats, bp)
-    each = [parts(c) for c in current]
-    total = np.sum(each, axis=0)
+    shares = parts.evaluate(current)
+    total = shares.total
     s, gamma = total[: bp.omega.size], total[bp.omega.size:]
     if not np.all(s > 0):
         return -math.inf, np.zeros(x.size)
@@ -166,24 +166,25 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
         return -math.inf, np.zeros(x.size)
     block_ll, d_gamma = blocks
     weights = np.concatenate([(bp.power / s - bp.count) / s, d_gamma])
-    return whittle_ll + block_ll, parts.gradient(current, keys, x, each, weights)
+    return whittle_ll + block_ll, parts.gradient(current, keys, x, shares, weights)
 
 
 def statistics_parts(stats: CompositeStatistics, bp: whittle.BandedPeriodogram) -> whittle.ComponentParts:
     """Each component's share of ℓ_c's statistics: its difference spectrum on ``bp`` and its block sums'
-    autocovariance, stacked."""
+    autocovariance, stacked; those with exponential terms with their closed-form shape derivatives
+    (:func:`.exponential_parts.closed_parts`)."""
     lags = block_sums.sum_lags(stats.sums.block, stats.sums.d.size)
 
     factors = [lambda w: exponential_parts.difference_spectrum_factor(w, bp.omega),
                lambda w: exponential_parts.sum_covariance_factor(w, lags)]
 
-    def derivatives(c: Component) -> dict[str, np.ndarray] | None:
-        found = exponential_parts.shape_derivatives(c, stats.dt, factors)
-        if found is None:
-            return None
-        spectrum, sums = found
-        return {name: np.concatenate([spectrum[name], block_sums.from_sum_covariance(sums[name])]) for name in spectrum}
+    def combine(shares: list[np.ndarray]) -> np.ndarray:
+        spectrum, sums = shares
+        return np.concatenate([spectrum, block_sums.from_sum_covariance(sums)], axis=-1)
+
+    def closed(components: list[Component]) -> whittle.ClosedParts:
+        return exponential_parts.closed_parts(components, stats.dt, factors, combine)
 
     return whittle.ComponentParts(lambda c: np.concatenate([
         whittle.difference_spectrum([c], bp.omega, stats.dt),
-        block_sums.from_sum_covariance(c.sum_covariance(lags, stats.dt))]), derivatives)
+        block_sums.from_sum_covariance(c.sum_covariance(lags, stats.dt))]), closed)

@@ -12,13 +12,17 @@ With w = s·dt and z = e^w, each statistic is Re Σ_k c_k F(w_k), F holomorphic 
 
 A log-parameter ϑ of the component moves (c_k, w_k) only: ∂/∂ϑ Re Σ c_k F(w_k) = Re Σ [∂c_k/∂ϑ F(w_k) + c_k F'(w_k)
 ∂w_k/∂ϑ], the scalars' derivatives by central differences of :data:`STEP` (two constructions of the component, where
-differencing the statistics themselves costs two evaluations of them per shape parameter). Beyond the papers.
+differencing the statistics themselves costs two evaluations of them per shape parameter). The shares themselves are
+Re Σ c_k F(w_k) too: :func:`closed_parts` stacks every component's terms and evaluates each statistic's (F, ∂F/∂w)
+once for all of them, the shares and their derivatives then two matrix products (not a dozen small array operations
+per component and evaluation). Beyond the papers.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -99,24 +103,73 @@ def sum_covariance_factor(w: np.ndarray, lags: np.ndarray) -> tuple[np.ndarray, 
     return -0.5 * (m + 2.0 * g), -derivative
 
 
-def part_derivatives(c: np.ndarray, moved: TermDerivatives,
-                     factor: tuple[np.ndarray, np.ndarray]) -> dict[str, np.ndarray]:
-    """∂/∂ln ϑ of Re Σ_k c_k F(w_k) per parameter name of ``moved`` (from :func:`term_derivatives`), ``factor`` the
-    (F, ∂F/∂w) of its statistic (k, n)."""
-    f, df = factor
-    return {name: np.real(np.sum(dc[:, None] * f + c[:, None] * df * dw[:, None], axis=0))
-            for name, (dc, dw) in moved.items()}
-
-
 #: A statistic's (F, ∂F/∂w) for the terms' w (k,): e.g. :func:`difference_spectrum_factor` at given frequencies.
 Factor = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
-def shape_derivatives(component: Component, dt: float, factors: list[Factor]) -> list[dict[str, np.ndarray]] | None:
-    """Per statistic of ``factors``, ∂/∂ln ϑ of ``component``'s share per shape parameter name (module docstring);
-    None without exponential terms or where a step leaves the component's domain."""
-    terms = term_derivatives(component, dt)
+@dataclass(frozen=True)
+class StackedTerms:
+    """The exponential terms of several components side by side, so that each statistic's factor is evaluated once
+    for all of them: row r of ``values`` holds c_k [u²] on the terms of component ``owners[r]`` (0 elsewhere); row r
+    of ``d_c`` and ``d_w`` holds ∂c_k/∂ln ϑ and c_k·∂w_k/∂ln ϑ of ``shapes[r]`` = (component index, parameter name)
+    on its component's terms; ``w`` the terms' s·dt (k,)."""
+
+    owners: tuple[int, ...]
+    values: np.ndarray
+    shapes: tuple[tuple[int, str], ...]
+    d_c: np.ndarray
+    d_w: np.ndarray
+    w: np.ndarray
+
+    @classmethod
+    def of(cls, components: list[Component], dt: float) -> StackedTerms | None:
+        """The terms of those ``components`` with a shape parameter and exponential terms whose steps stay in their
+        domain (:func:`term_derivatives`); None where there are none."""
+        found = []
+        for i, component in enumerate(components):
+            if component.scale_only() is None:  # a scale-only share is computed once per shape and rescaled
+                terms = term_derivatives(component, dt)
+                if terms is not None:
+                    found.append((i, terms))
+        if not found:
+            return None
+        sizes = [c.size for _, (c, _, _) in found]
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+        values = np.zeros((len(found), offsets[-1]), dtype=complex)
+        rows_c, rows_w, shapes = [], [], []
+        for r, (i, (c, _, moved)) in enumerate(found):
+            span = slice(offsets[r], offsets[r + 1])
+            values[r, span] = c
+            for name, (dc, dw) in moved.items():
+                row_c, row_w = np.zeros(offsets[-1], dtype=complex), np.zeros(offsets[-1], dtype=complex)
+                row_c[span], row_w[span] = dc, c * dw
+                rows_c.append(row_c)
+                rows_w.append(row_w)
+                shapes.append((i, name))
+        width = offsets[-1]
+        return cls(tuple(i for i, _ in found), values, tuple(shapes), np.array(rows_c).reshape(-1, width),
+                   np.array(rows_w).reshape(-1, width), np.concatenate([w for _, (_, w, _) in found]))
+
+    def evaluate(self, factor: Factor) -> tuple[np.ndarray, np.ndarray]:
+        """(each owner's share Re Σ_k c_k F(w_k), (owners, n); each shape's ∂/∂ln ϑ of it, (shapes, n)) of one
+        statistic (module docstring)."""
+        f, df = factor(self.w)
+        return np.real(self.values @ f), np.real(self.d_c @ f + self.d_w @ df)
+
+
+def closed_parts(components: list[Component], dt: float, factors: list[Factor],
+                 combine: Callable[[list[np.ndarray]], np.ndarray]) -> tuple[dict[int, np.ndarray],
+                                                                             dict[int, dict[str, np.ndarray]]]:
+    """({component index: its share}, {component index: {shape parameter name: ∂share/∂ln ϑ}}) of those
+    ``components`` :meth:`StackedTerms.of` takes, each share the per-statistic arrays of ``factors`` joined by
+    ``combine`` along their last axis (e.g. concatenated); both empty where none has such terms."""
+    terms = StackedTerms.of(components, dt)
     if terms is None:
-        return None
-    c, w, moved = terms
-    return [part_derivatives(c, moved, factor(w)) for factor in factors]
+        return {}, {}
+    evaluated = [terms.evaluate(factor) for factor in factors]
+    shares = combine([share for share, _ in evaluated])
+    derivatives = combine([d for _, d in evaluated])
+    by_shape: dict[int, dict[str, np.ndarray]] = {}
+    for (i, name), d in zip(terms.shapes, derivatives, strict=True):
+        by_shape.setdefault(i, {})[name] = d
+    return dict(zip(terms.owners, shares, strict=True)), by_shape

@@ -192,15 +192,33 @@ def with_log_parameters(components: list[Component], keys: list[tuple[int, str]]
 DIFFERENCE_STEP = 1e-4
 
 
+#: Per component index, its share of a likelihood's statistics, and its ∂share/∂ln ϑ per shape parameter name.
+ClosedParts = tuple[dict[int, np.ndarray], dict[int, dict[str, np.ndarray]]]
+
+
+@dataclass(frozen=True)
+class Shares:
+    """Each component's share of a likelihood's statistics (``each``, in the components' order) and the closed-form
+    ∂share/∂ln ϑ of those that have them (``shapes``: component index → shape parameter name → array)."""
+
+    each: list[np.ndarray]
+    shapes: dict[int, dict[str, np.ndarray]]
+
+    @property
+    def total(self) -> np.ndarray:
+        """The statistics of the sum of the components: Σ of the shares."""
+        return np.sum(self.each, axis=0)
+
+
 @dataclass
 class ComponentParts:
     """One component's share of a likelihood's statistics (``computed(c)``, an array additive over components), a
     scale-only component's computed once per shape at one scale and rescaled by scale² (kept per instance: one per set
-    of frequencies or lags); ``derivatives(c)``, where given, its ∂/∂ln ϑ per shape parameter name, or None where it
-    has none in closed form (:mod:`.exponential_parts`)."""
+    of frequencies or lags); ``closed(components)``, where given, the shares and shape derivatives in closed form of
+    those components that have them (:func:`.exponential_parts.closed_parts`), all at once."""
 
     computed: Callable[[Component], np.ndarray]
-    derivatives: Callable[[Component], dict[str, np.ndarray] | None] | None = None
+    closed: Callable[[list[Component]], ClosedParts] | None = None
     memo: dict = field(default_factory=dict)
 
     def __call__(self, c: Component) -> np.ndarray:
@@ -214,48 +232,49 @@ class ComponentParts:
         at, part = self.memo[key]
         return part * (scale / at) ** 2
 
+    def evaluate(self, current: list[Component]) -> Shares:
+        """The :class:`Shares` of ``current``: closed-form where :attr:`closed` gives them, else by ``self(c)``."""
+        found, shapes = self.closed(current) if self.closed is not None else ({}, {})
+        return Shares([found[i] if i in found else self(c) for i, c in enumerate(current)], shapes)
+
     def columns(self, current: list[Component], keys: list[tuple[int, str]], x: np.ndarray,
-                each: list[np.ndarray]) -> list[np.ndarray | None]:
-        """∂(Σ_c part(c))/∂x_j for the log-parameters ``keys`` at ``x`` (``current`` the components there, ``each``
-        their parts): through the one component c of x_j, exact (2·part(c)) for a component's scale, from
-        ``derivatives`` where it gives one, by central differences of :data:`DIFFERENCE_STEP` otherwise (None where no
-        step stays inside the component's domain)."""
+                shares: Shares) -> list[np.ndarray | None]:
+        """∂(Σ_c part(c))/∂x_j for the log-parameters ``keys`` at ``x`` (``current`` the components there, ``shares``
+        their :meth:`evaluate`): through the one component c of x_j, exact (2·part(c)) for a component's scale, the
+        closed form where ``shares`` holds one, by central differences of :data:`DIFFERENCE_STEP` otherwise (None
+        where no step stays inside the component's domain)."""
         out: list[np.ndarray | None] = []
-        closed: dict[int, dict[str, np.ndarray] | None] = {}
         for j, (i, name) in enumerate(keys):
             if name == current[i].scale_name:
-                out.append(2.0 * each[i])
+                out.append(2.0 * shares.each[i])
                 continue
-            if self.derivatives is not None:
-                if i not in closed:
-                    closed[i] = self.derivatives(current[i])
-                if closed[i] is not None and name in closed[i]:
-                    out.append(closed[i][name])
-                    continue
+            if name in shares.shapes.get(i, {}):
+                out.append(shares.shapes[i][name])
+                continue
 
             def moved(h: float, i: int = i, name: str = name, at: float = float(x[j])) -> np.ndarray:
                 return self(with_log_parameters([current[i]], [(0, name)], np.array([at + h]))[0])
 
-            out.append(derivative_in_domain(moved, DIFFERENCE_STEP, lambda i=i: each[i]))
+            out.append(derivative_in_domain(moved, DIFFERENCE_STEP, lambda i=i: shares.each[i]))
         return out
 
-    def gradient(self, current: list[Component], keys: list[tuple[int, str]], x: np.ndarray, each: list[np.ndarray],
+    def gradient(self, current: list[Component], keys: list[tuple[int, str]], x: np.ndarray, shares: Shares,
                  weights: np.ndarray) -> np.ndarray:
         """∂/∂x_j of a likelihood whose derivative in the summed parts Σ_c part(c) is ``weights``, by the chain rule
         through :meth:`columns` (zero where a column is None)."""
-        return np.array([0.0 if d is None else float(weights @ d) for d in self.columns(current, keys, x, each)])
+        return np.array([0.0 if d is None else float(weights @ d) for d in self.columns(current, keys, x, shares)])
 
 
 def spectrum_parts(omega: np.ndarray, dt: float) -> ComponentParts:
-    """Each component's :func:`difference_spectrum` at ``omega`` [rad/sample], with its closed-form shape derivatives
-    there (:func:`.exponential_parts.shape_derivatives`): the parts of the banded Whittle likelihood."""
+    """Each component's :func:`difference_spectrum` at ``omega`` [rad/sample], those with exponential terms with their
+    closed-form shape derivatives there (:func:`.exponential_parts.closed_parts`): the parts of the banded Whittle
+    likelihood."""
     factors = [lambda w: exponential_parts.difference_spectrum_factor(w, omega)]
 
-    def derivatives(c: Component) -> dict[str, np.ndarray] | None:
-        found = exponential_parts.shape_derivatives(c, dt, factors)
-        return None if found is None else found[0]
+    def closed(components: list[Component]) -> ClosedParts:
+        return exponential_parts.closed_parts(components, dt, factors, lambda shares: shares[0])
 
-    return ComponentParts(lambda c: difference_spectrum([c], omega, dt), derivatives)
+    return ComponentParts(lambda c: difference_spectrum([c], omega, dt), closed)
 
 
 def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]], x: np.ndarray,
@@ -264,11 +283,11 @@ def loglik_and_gradient(components: list[Component], keys: list[tuple[int, str]]
     ∂ℓ/∂ϑ_j = Σ_b (P_b/S_b − n_b)/S_b · ∂S_c/∂ϑ_j (:meth:`ComponentParts.gradient`, ``parts`` the components'
     :func:`difference_spectrum` on ``bp``). ValueError outside a domain; (−inf, zeros) where S_Δ ≤ 0."""
     current = with_log_parameters(components, keys, x)
-    each = [parts(c) for c in current]
-    s = np.sum(each, axis=0)
+    shares = parts.evaluate(current)
+    s = shares.total
     if not np.all(s > 0):
         return -math.inf, np.zeros(x.size)
-    return whittle_loglik(s, bp), parts.gradient(current, keys, x, each, (bp.power / s - bp.count) / s)
+    return whittle_loglik(s, bp), parts.gradient(current, keys, x, shares, (bp.power / s - bp.count) / s)
 
 
 #: Largest |∂ℓ/∂ln ϑ| at which :func:`whittle_fit`'s climb ``to_maximum`` stops.
@@ -356,10 +375,10 @@ def whittle_information(components: list[Component], y: np.ndarray, dt: float,
     keys = [(i, k) for i, c in enumerate(components) if not isinstance(c, RR) for k in c.parameter_names]
     x0 = np.log([components[i].params()[k] for i, k in keys])
     parts = spectrum_parts(bp.omega, dt)
-    each = [parts(c) for c in components]
-    s = np.sum(each, axis=0)
+    shares = parts.evaluate(components)
+    s = shares.total
     jac = np.column_stack([np.zeros(bp.omega.size) if d is None else d / s
-                           for d in parts.columns(components, keys, x0, each)])
+                           for d in parts.columns(components, keys, x0, shares)])
     return (jac * bp.count[:, None]).T @ jac
 
 
