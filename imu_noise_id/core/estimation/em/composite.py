@@ -49,9 +49,15 @@ class CompositeStatistics:
         """The block sums' Nyquist frequency π/L [rad/sample]: the Whittle part reads the bands above it."""
         return math.pi / self.sums.block
 
-    def bands(self, start: list[Component]) -> whittle.BandedPeriodogram:
-        """The Whittle part's bands above :attr:`split`, single around ``start``'s OSC lines."""
-        bp = whittle.pooled(self.spectrum, fine=whittle.line_windows([start], self.dt))
+    def pooled(self, start: list[Component]) -> whittle.BandedPeriodogram:
+        """The whole periodogram in bands, single around ``start``'s OSC lines (:func:`.whittle.pooled`)."""
+        return whittle.pooled(self.spectrum, fine=whittle.line_windows([start], self.dt))
+
+    def bands(self, start: list[Component],
+              pooled: whittle.BandedPeriodogram | None = None) -> whittle.BandedPeriodogram:
+        """The Whittle part's bands above :attr:`split`, single around ``start``'s OSC lines: those of ``pooled``
+        (default: :meth:`pooled` of ``start``)."""
+        bp = pooled if pooled is not None else self.pooled(start)
         above = bp.omega > self.split
         return whittle.BandedPeriodogram(bp.omega[above], bp.count[above], bp.power[above])
 
@@ -67,8 +73,8 @@ def fit(start: list[Component], stats: CompositeStatistics,
         bounds: dict[str, tuple[float, float]]) -> tuple[float, list[Component]]:
     """(ℓ_c, fitted components) maximised over the log-parameters (RR held) within ``bounds``, climbed from ``start``
     and from the banded Whittle maximiser from it, the better kept."""
-    bp = whittle.pooled(stats.spectrum, fine=whittle.line_windows([start], stats.dt))
-    climbs = [_climb(start, stats, bounds)]
+    bp = stats.pooled(start)
+    climbs = [_climb(start, stats, bounds, bp)]
     with contextlib.suppress(ValueError):  # the Whittle climb left the components' domain: the start's climb only
         moved = whittle.whittle_fit(start, np.empty(0), stats.dt, bp, bounds)[1]
         if not _same_point(moved, start):  # else its climb would repeat the start's
@@ -92,11 +98,13 @@ def _same_point(a: list[Component], b: list[Component], tol: float = 1e-3) -> bo
                for pa, pb in [(ca.params(), cb.params())] for k in pa)
 
 
-def _climb(start: list[Component], stats: CompositeStatistics,
-           bounds: dict[str, tuple[float, float]]) -> tuple[float, list[Component]]:
+def _climb(start: list[Component], stats: CompositeStatistics, bounds: dict[str, tuple[float, float]],
+           pooled: whittle.BandedPeriodogram | None = None) -> tuple[float, list[Component]]:
     """ℓ_c climbed from ``start`` (``start`` itself when no step gains): L-BFGS-B in η = Lᵀ(ϑ − ϑ₀), L Lᵀ the start's
-    Whittle information, a point outside the box scored at its projection plus a quadratic pull."""
-    bp = stats.bands(start)
+    Whittle information, a point outside the box scored at its projection plus a quadratic pull; ``pooled``:
+    :meth:`CompositeStatistics.pooled` of ``start`` where already computed."""
+    pooled = pooled if pooled is not None else stats.pooled(start)
+    bp = stats.bands(start, pooled)
     keys = [(i, k) for i, c in enumerate(start) if not isinstance(c, RR) for k in c.parameter_names]
     if not keys:
         return loglik(start, stats, bp), list(start)
@@ -104,8 +112,7 @@ def _climb(start: list[Component], stats: CompositeStatistics,
     lo = np.array([math.log(bounds[k][0]) if k in bounds else -np.inf for _, k in keys])
     hi = np.array([math.log(bounds[k][1]) if k in bounds else np.inf for _, k in keys])
     x0 = np.clip(x0, lo, hi)
-    info = whittle.whittle_information(start, np.empty(0), stats.dt,
-                                       whittle.pooled(stats.spectrum, fine=whittle.line_windows([start], stats.dt)))
+    info = whittle.whittle_information(start, np.empty(0), stats.dt, pooled)
     w, v = np.linalg.eigh(0.5 * (info + info.T))
     w = np.maximum(w, 1e-6 * max(float(np.max(w)), 1e-300))
     transform = v / np.sqrt(w)  # ϑ = ϑ₀ + T η  ⇒  Tᵀ info T = I

@@ -9,6 +9,7 @@ pooled in log-spaced bands: O(bands) per evaluation."""
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -39,6 +40,11 @@ class TaperedPeriodogram:
     omega: np.ndarray
     power: np.ndarray
     m: int
+
+    @functools.cached_property
+    def cumulative(self) -> tuple[np.ndarray, np.ndarray]:
+        """(Σ_{i<j} power_i, Σ_{i<j} ω_i) for j = 0 … len: any band's sums by two lookups (:func:`pooled`), once."""
+        return (np.concatenate([[0.0], np.cumsum(self.power)]), np.concatenate([[0.0], np.cumsum(self.omega)]))
 
 
 def tapered_periodogram(y: np.ndarray) -> TaperedPeriodogram:
@@ -89,8 +95,7 @@ def pooled(tp: TaperedPeriodogram, n_single: int = 256, ratio: float = 1.02,
         edges.append(min(e + 1 + min(max(0, int(e * ratio) - e - 1), int(cap[e + 1]) - 1), jmax))
     edges = np.array(edges)
     counts = np.diff(edges)
-    csum = np.concatenate([[0.0], np.cumsum(tp.power)])
-    wsum = np.concatenate([[0.0], np.cumsum(tp.omega)])
+    csum, wsum = tp.cumulative
     power = csum[edges[1:]] - csum[edges[:-1]]
     centre = (wsum[edges[1:]] - wsum[edges[:-1]]) / counts
     return BandedPeriodogram(centre, counts.astype(float), power)
