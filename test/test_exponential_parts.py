@@ -86,13 +86,30 @@ def test_components_without_exponential_terms_or_shape_have_no_closed_form():
     assert closed([DLPF(1e-3, 5.0, 2), BI(5e-5, 1.0, 300.0), WN(1e-3)]) == ({}, {})
 
 
-def test_a_step_outside_the_domain_leaves_the_parameter_to_the_differences():
-    # at the damping limit a wider bandwidth is refused: no closed form, the likelihood's one-sided differences rule
-    edge = OSC(frequency=1.0, bandwidth=2.0 * MAX_DAMPING * (1.0 - 1e-7), sigma=1e-3)
+@pytest.mark.parametrize("component", SHAPED, ids=repr)
+def test_the_terms_closed_derivatives_are_their_differences(component):
+    """exponential_term_derivatives against central differences of exponential_terms, every shape parameter."""
+    closed = component.exponential_term_derivatives()
+    names = [n for n in component.parameter_names if n != component.scale_name]
+    assert sorted(closed) == sorted(names)
+    for name in names:
+        h = 1e-6
+        (c_up, s_up), (c_down, s_down) = (_moved(component, name, step).exponential_terms() for step in (h, -h))
+        dc, ds = closed[name]
+        assert np.abs(dc - (c_up - c_down) / (2 * h)) <= 1e-6 * np.abs(c_up) + 1e-300, name
+        assert np.abs(ds - (s_up - s_down) / (2 * h)) <= 1e-6 * np.abs(s_up), name
+
+
+def test_at_the_damping_limit_the_closed_form_is_the_derivative_from_inside():
+    # a wider line is refused there; the closed form is the limit of the one-sided differences of the statistics
+    edge = OSC(frequency=1.0, bandwidth=2.0 * MAX_DAMPING * (1.0 - 1e-9), sigma=1e-3)
     with pytest.raises(ValueError):
-        _moved(edge, "bandwidth", exponential_parts.STEP)
-    assert exponential_parts.term_derivatives(edge, DT) is None
-    assert exponential_parts.term_derivatives(OSC(frequency=1.0, bandwidth=0.5, sigma=1e-3), DT) is not None
+        _moved(edge, "bandwidth", 1e-6)
+    omega = np.linspace(0.01, math.pi - 0.01, 200)
+    spectrum = whittle.spectrum_parts(omega, DT).closed([edge])[1][0]["bandwidth"]
+    inside = [whittle.difference_spectrum([_moved(edge, "bandwidth", -h)], omega, DT) for h in (1e-5, 2e-5)]
+    one_sided = (3 * whittle.difference_spectrum([edge], omega, DT) - 4 * inside[0] + inside[1]) / (2 * 1e-5)
+    assert spectrum == pytest.approx(one_sided, rel=1e-5, abs=1e-6 * np.max(np.abs(one_sided)))
 
 
 def test_the_whittle_and_composite_gradients_agree_with_and_without_the_closed_forms():

@@ -98,6 +98,12 @@ class Component(ABC):
         process (docs/noise.md); None where the autocovariance is not such a sum."""
         return None
 
+    def exponential_term_derivatives(self) -> dict[str, tuple[np.ndarray, np.ndarray]] | None:
+        """Per shape parameter (every parameter but :attr:`scale_name`), (∂c/∂ln ϑ [u²], ∂s/∂ln ϑ [1/s]) of
+        :meth:`exponential_terms` in closed form; None where not given (the statistics' own differences then stand
+        in)."""
+        return None
+
     @abstractmethod
     def per_sample(self, dt: float) -> dict[str, float]:
         """Per-sample values in paper 000's notation for sampling period dt [s]."""

@@ -219,6 +219,10 @@ class GM(Component):
         """R(u) = σ² e^{−u/τ}."""
         return np.array([self.sigma**2], dtype=complex), np.array([-1.0 / self.tau], dtype=complex)
 
+    def exponential_term_derivatives(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """c = σ² does not move with τ; ∂s/∂ln τ = 1/τ."""
+        return {"tau": (np.zeros(1, dtype=complex), np.array([1.0 / self.tau], dtype=complex))}
+
     def per_sample(self, dt: float) -> dict[str, float]:
         return {
             **units.gm_to_paper000(self.tau, self.sigma),

@@ -90,6 +90,11 @@ class LPF(Component):
         """Its GM's (:meth:`from_gm`)."""
         return self._gm().exponential_terms()
 
+    def exponential_term_derivatives(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """c = πN²f_c and s = −2πf_c are both ∝ f_c: ∂/∂ln f_c of each is itself."""
+        c, s = self.exponential_terms()
+        return {"cutoff": (c, s)}
+
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         return self.noise_density**2 / (1.0 + (as_freq(f) / self.cutoff) ** 2)
 
@@ -237,6 +242,17 @@ class OSC(Component):
         """R(u) = Re(c e^{su}) (:meth:`_autocovariance`)."""
         c, s = self._autocovariance()
         return np.array([c]), np.array([s])
+
+    def exponential_term_derivatives(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """With a = πB and ω_d² = ω₀² − a² (:meth:`_poles`), c = σ²(1 − i a/ω_d), s = −a + iω_d:
+        ∂ω_d/∂ln f₀ = ω₀²/ω_d, ∂ω_d/∂ln B = −a²/ω_d, ∂a/∂ln B = a, so ∂s/∂ln f₀ = iω₀²/ω_d, ∂c/∂ln f₀ =
+        iσ² a ω₀²/ω_d³, ∂s/∂ln B = −a − i a²/ω_d, ∂c/∂ln B = −iσ² (a/ω_d + a³/ω_d³); at :data:`MAX_DAMPING` too,
+        as the limit from inside the domain."""
+        a, wd = self._poles()
+        w0 = self.omega0
+        var = self.sigma**2
+        return {"frequency": (np.array([1j * var * a * w0 * w0 / wd**3]), np.array([1j * w0 * w0 / wd])),
+                "bandwidth": (np.array([-1j * var * (a / wd + a**3 / wd**3)]), np.array([complex(-a, -a * a / wd)]))}
 
     def psd(self, f: np.ndarray | float, dt: float) -> np.ndarray:
         w = 2.0 * math.pi * as_freq(f)

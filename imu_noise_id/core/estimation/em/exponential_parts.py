@@ -11,8 +11,8 @@ With w = s·dt and z = e^w, each statistic is Re Σ_k c_k F(w_k), F holomorphic 
   ∂F/∂w = −g'(m), g'(m) = Σ_{j=1}^{m−1} j (m − j) e^{jw}, in closed form or, where m|w| is small, by its series.
 
 A log-parameter ϑ of the component moves (c_k, w_k) only: ∂/∂ϑ Re Σ c_k F(w_k) = Re Σ [∂c_k/∂ϑ F(w_k) + c_k F'(w_k)
-∂w_k/∂ϑ], the scalars' derivatives by central differences of :data:`STEP` (two constructions of the component, where
-differencing the statistics themselves costs two evaluations of them per shape parameter). The shares themselves are
+∂w_k/∂ϑ], the scalars' derivatives in closed form from the component
+(:meth:`~...noise.base.Component.exponential_term_derivatives`). The shares themselves are
 Re Σ c_k F(w_k) too: :func:`closed_parts` stacks every component's terms and evaluates each statistic's (F, ∂F/∂w)
 once for all of them, the shares and their derivatives then two matrix products (not a dozen small array operations
 per component and evaluation). Beyond the papers.
@@ -20,7 +20,6 @@ per component and evaluation). Beyond the papers.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -29,35 +28,21 @@ import numpy as np
 from ...noise.base import Component
 from ...noise.sampled import SERIES_LIMIT, lag_weighted_sum
 
-#: Step [log-parameter] of the central differences of the exponential terms (c_k, w_k).
-STEP = 1e-5
 #: Per parameter name, (∂c/∂ln ϑ, ∂w/∂ln ϑ) of the exponential terms.
 TermDerivatives = dict[str, tuple[np.ndarray, np.ndarray]]
 
 
-def term_derivatives(component: Component, dt: float,
-                     step: float = STEP) -> tuple[np.ndarray, np.ndarray, TermDerivatives] | None:
-    """(c, w, {name: (∂c/∂ln ϑ, ∂w/∂ln ϑ)}) of ``component``'s exponential terms (c [u²], w = s·dt) for each
-    parameter but its scale; None where it has no such terms or a step leaves its domain."""
+def term_derivatives(component: Component, dt: float) -> tuple[np.ndarray, np.ndarray, TermDerivatives] | None:
+    """(c, w, {name: (∂c/∂ln ϑ, ∂w/∂ln ϑ)}) of ``component``'s exponential terms (c [u²], w = s·dt) for each shape
+    parameter (:meth:`~...noise.base.Component.exponential_term_derivatives`); None where it has no such terms or
+    their derivatives are not in closed form."""
     terms = component.exponential_terms()
-    if terms is None:
+    closed = component.exponential_term_derivatives() if terms is not None else None
+    if closed is None:
         return None
     c, s = (np.asarray(v, dtype=complex) for v in terms)
-    params = component.params()
-    moved = {}
-    for name in component.parameter_names:
-        if name == component.scale_name:
-            continue
-        ends = []
-        for h in (step, -step):
-            try:
-                ch, sh = type(component)(**{**params, name: params[name] * math.exp(h)}).exponential_terms()
-            except ValueError:
-                return None
-            ends.append((np.asarray(ch, dtype=complex), np.asarray(sh, dtype=complex)))
-        (c_up, s_up), (c_down, s_down) = ends
-        moved[name] = ((c_up - c_down) / (2.0 * step), (s_up - s_down) * dt / (2.0 * step))
-    return c, s * dt, moved
+    return c, s * dt, {name: (np.asarray(dc, dtype=complex), np.asarray(ds, dtype=complex) * dt)
+                       for name, (dc, ds) in closed.items()}
 
 
 def difference_spectrum_factor(w: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
