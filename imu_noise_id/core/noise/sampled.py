@@ -9,6 +9,23 @@ import numpy as np
 
 #: Below this m·|s·dt| the series of g(m) is used (its truncation error is ≈ (m|w|)³ relative).
 SERIES_LIMIT = 1e-3
+#: Below this |x| :func:`complex_expm1` calls numpy's expm1; above it e^x − 1 loses no more than a digit to the
+#: subtraction.
+EXPM1_BELOW = 0.1
+
+
+def complex_expm1(x: np.ndarray) -> np.ndarray:
+    """e^x − 1 of a complex array, accurate near 0: numpy's expm1 where |x| < :data:`EXPM1_BELOW`, elsewhere exp less
+    1 (numpy's complex expm1 takes twice the time of its exp)."""
+    x = np.asarray(x, dtype=complex)
+    if x.ndim == 0:
+        return np.expm1(x)
+    out = np.exp(x)
+    out -= 1.0
+    near = np.abs(x) < EXPM1_BELOW
+    if near.any():
+        out[near] = np.expm1(x[near])
+    return out
 
 
 def _series(m: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -22,7 +39,7 @@ def lag_weighted_sum(m: np.ndarray, w: np.ndarray) -> np.ndarray:
     one_minus_z = -np.expm1(w)  # per pole; broadcast against m below
     mw = m * w
     with np.errstate(divide="ignore", invalid="ignore"):
-        closed = (1.0 - one_minus_z) * (m * one_minus_z + np.expm1(mw)) / one_minus_z**2
+        closed = (1.0 - one_minus_z) * (m * one_minus_z + complex_expm1(mw)) / one_minus_z**2
     return _series_where_small(closed, m, w, mw)
 
 
