@@ -189,7 +189,7 @@ def statistics_parts(stats: CompositeStatistics, bp: whittle.BandedPeriodogram) 
         spectrum, sums = shares
         return np.concatenate([spectrum, block_sums.from_sum_covariance(sums)], axis=-1)
 
-    def closed(components: list[Component]) -> whittle.ClosedParts:
+    def closed(components: list[Component]) -> exponential_parts.ClosedParts:
         return exponential_parts.closed_parts(components, stats.dt, factors, combine)
 
     return whittle.ComponentParts(lambda c: np.concatenate([

@@ -108,8 +108,8 @@ class StackedTerms:
 
     @classmethod
     def of(cls, components: list[Component], dt: float) -> StackedTerms | None:
-        """The terms of those ``components`` with a shape parameter and exponential terms whose steps stay in their
-        domain (:func:`term_derivatives`); None where there are none."""
+        """The terms of those ``components`` with a shape parameter and exponential terms whose derivatives are in
+        closed form (:func:`term_derivatives`); None where there are none."""
         found = []
         for i, component in enumerate(components):
             if component.scale_only() is None:  # a scale-only share is computed once per shape and rescaled
@@ -142,9 +142,12 @@ class StackedTerms:
         return np.real(self.values @ f), np.real(self.d_c @ f + self.d_w @ df)
 
 
+#: Per component index, its share of a likelihood's statistics, and its ∂share/∂ln ϑ per shape parameter name.
+ClosedParts = tuple[dict[int, np.ndarray], dict[int, dict[str, np.ndarray]]]
+
+
 def closed_parts(components: list[Component], dt: float, factors: list[Factor],
-                 combine: Callable[[list[np.ndarray]], np.ndarray]) -> tuple[dict[int, np.ndarray],
-                                                                             dict[int, dict[str, np.ndarray]]]:
+                 combine: Callable[[list[np.ndarray]], np.ndarray]) -> ClosedParts:
     """({component index: its share}, {component index: {shape parameter name: ∂share/∂ln ϑ}}) of those
     ``components`` :meth:`StackedTerms.of` takes, each share the per-statistic arrays of ``factors`` joined by
     ``combine`` along their last axis (e.g. concatenated); both empty where none has such terms."""

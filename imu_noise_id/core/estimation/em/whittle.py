@@ -197,10 +197,6 @@ def with_log_parameters(components: list[Component], keys: list[tuple[int, str]]
 DIFFERENCE_STEP = 1e-4
 
 
-#: Per component index, its share of a likelihood's statistics, and its ∂share/∂ln ϑ per shape parameter name.
-ClosedParts = tuple[dict[int, np.ndarray], dict[int, dict[str, np.ndarray]]]
-
-
 @dataclass(frozen=True)
 class Shares:
     """Each component's share of a likelihood's statistics (``each``, in the components' order) and the closed-form
@@ -223,7 +219,7 @@ class ComponentParts:
     those components that have them (:func:`.exponential_parts.closed_parts`), all at once."""
 
     computed: Callable[[Component], np.ndarray]
-    closed: Callable[[list[Component]], ClosedParts] | None = None
+    closed: Callable[[list[Component]], exponential_parts.ClosedParts] | None = None
     memo: dict = field(default_factory=dict)
 
     def __call__(self, c: Component) -> np.ndarray:
@@ -276,7 +272,7 @@ def spectrum_parts(omega: np.ndarray, dt: float) -> ComponentParts:
     likelihood."""
     factors = [lambda w: exponential_parts.difference_spectrum_factor(w, omega)]
 
-    def closed(components: list[Component]) -> ClosedParts:
+    def closed(components: list[Component]) -> exponential_parts.ClosedParts:
         return exponential_parts.closed_parts(components, dt, factors, lambda shares: shares[0])
 
     return ComponentParts(lambda c: difference_spectrum([c], omega, dt), closed)
