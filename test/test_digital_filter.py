@@ -49,6 +49,16 @@ def test_the_block_is_the_filter(order):
 
 
 @pytest.mark.parametrize("order", [1, 2, 3, 4])
+@pytest.mark.parametrize("cutoff", [0.025, 0.5, 15.0, 32.8, 45.0])
+def test_the_design_is_scipys_butterworth(order, cutoff):
+    """DLPF.coefficients (built from the poles) is scipy.signal.butter's design at the sampling rate."""
+    b, a = DLPF(2e-3, cutoff, order).coefficients(DT)
+    b_scipy, a_scipy = signal.butter(order, cutoff, fs=1.0 / DT)
+    np.testing.assert_allclose(b, b_scipy, rtol=1e-12, atol=1e-14 * np.max(np.abs(b_scipy)))
+    np.testing.assert_allclose(a, a_scipy, rtol=1e-12, atol=1e-14)
+
+
+@pytest.mark.parametrize("order", [1, 2, 3, 4])
 @pytest.mark.parametrize("cutoff", [0.05, 15.0, 90.0])
 def test_the_sample_spectrum_is_the_bilinear_butterworths(order, cutoff):
     """DLPF.sample_spectrum (the poles' factored form the Whittle likelihood reads) against the bilinear Butterworth's

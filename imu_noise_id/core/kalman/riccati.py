@@ -81,11 +81,12 @@ def _doubling_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> n
     G = np.outer(h, h) / r
     X = q.copy()
     for _ in range(500):
-        W = np.linalg.solve(eye + G @ X, A)  # (I + G X)⁻¹ A
-        X_new = X + A.T @ X @ W
-        G = G + A @ np.linalg.solve(eye + G @ X, G) @ A.T
-        A = A @ W
-        X_new = 0.5 * (X_new + X_new.T)
+        with np.errstate(over="ignore", invalid="ignore"):  # a diverging iteration: not finite, stopped below
+            W = np.linalg.solve(eye + G @ X, A)  # (I + G X)⁻¹ A
+            X_new = X + A.T @ X @ W
+            G = G + A @ np.linalg.solve(eye + G @ X, G) @ A.T
+            A = A @ W
+            X_new = 0.5 * (X_new + X_new.T)
         if not np.all(np.isfinite(X_new)):
             break
         if converged(X_new - X, X_new, 1e-14, 1e-12):

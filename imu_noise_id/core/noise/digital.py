@@ -27,16 +27,20 @@ MAX_RESPONSE = 1 << 20
 
 @functools.lru_cache(maxsize=256)
 def _design(order: int, cutoff_per_sample: float) -> tuple[np.ndarray, np.ndarray]:
-    """(b, a) of the Butterworth low-pass of ``order`` at f_c·dt (< ½)."""
-    b, a = signal.butter(order, 2.0 * cutoff_per_sample)
-    return np.asarray(b, dtype=float), np.asarray(a, dtype=float)
+    """(b, a) of the Butterworth low-pass of ``order`` at f_c·dt (< ½), as ``scipy.signal.butter`` designs it (n zeros
+    at z = −1, the bilinear transform's poles, unit gain at DC), from :func:`_poles`: b = b₀(1 + z⁻¹)ⁿ,
+    a = Π(1 − z_k z⁻¹) (a third of butter's time, which a climb over f_c spends at every step)."""
+    lam, s_hat, b0 = _poles(order, cutoff_per_sample)
+    b = b0 * np.array([math.comb(order, k) for k in range(order + 1)], dtype=float)
+    return b, np.real(np.poly(1.0 + lam * s_hat))
 
 
 @functools.lru_cache(maxsize=64)
 def _covariance(order: int, cutoff_per_sample: float) -> np.ndarray:
     """R(j)/σ² for j = 0 … J−1, J the impulse response's length."""
     b, a = _design(order, cutoff_per_sample)
-    radius = max(float(np.max(np.abs(np.roots(a)))), 1e-3)
+    lam, s_hat, _ = _poles(order, cutoff_per_sample)
+    radius = max(float(np.max(np.abs(1.0 + lam * s_hat))), 1e-3)
     length = int(min(MAX_RESPONSE, max(64, math.ceil(math.log(DECAY) / math.log(radius)) + 4 * order)))
     impulse = np.zeros(length)
     impulse[0] = 1.0
