@@ -30,17 +30,16 @@ def _design(order: int, cutoff_per_sample: float) -> tuple[np.ndarray, np.ndarra
     """(b, a) of the Butterworth low-pass of ``order`` at f_c·dt (< ½), as ``scipy.signal.butter`` designs it (n zeros
     at z = −1, the bilinear transform's poles, unit gain at DC), from :func:`_poles`: b = b₀(1 + z⁻¹)ⁿ,
     a = Π(1 − z_k z⁻¹) (a third of butter's time, which a climb over f_c spends at every step)."""
-    lam, s_hat, b0 = _poles(order, cutoff_per_sample)
+    _, _, b0 = _poles(order, cutoff_per_sample)
     b = b0 * np.array([math.comb(order, k) for k in range(order + 1)], dtype=float)
-    return b, np.real(np.poly(1.0 + lam * s_hat))
+    return b, np.real(np.poly(_z_poles(order, cutoff_per_sample)))
 
 
 @functools.lru_cache(maxsize=64)
 def _covariance(order: int, cutoff_per_sample: float) -> np.ndarray:
     """R(j)/σ² for j = 0 … J−1, J the impulse response's length."""
     b, a = _design(order, cutoff_per_sample)
-    lam, s_hat, _ = _poles(order, cutoff_per_sample)
-    radius = max(float(np.max(np.abs(1.0 + lam * s_hat))), 1e-3)
+    radius = max(float(np.max(np.abs(_z_poles(order, cutoff_per_sample)))), 1e-3)
     length = int(min(MAX_RESPONSE, max(64, math.ceil(math.log(DECAY) / math.log(radius)) + 4 * order)))
     impulse = np.zeros(length)
     impulse[0] = 1.0
@@ -58,6 +57,12 @@ def _poles(order: int, cutoff_per_sample: float) -> tuple[float, np.ndarray, flo
     prototype = -np.exp(1j * math.pi * np.arange(-order + 1, order, 2) / (2 * order))
     s_hat = prototype / (1.0 - 0.5 * lam * prototype)
     return lam, s_hat, float(np.real(np.prod(-s_hat))) * (0.5 * lam) ** order
+
+
+def _z_poles(order: int, cutoff_per_sample: float) -> np.ndarray:
+    """The Butterworth's poles z_k = 1 + λŝ_k in the z-plane (:func:`_poles`)."""
+    lam, s_hat, _ = _poles(order, cutoff_per_sample)
+    return 1.0 + lam * s_hat
 
 
 @functools.lru_cache(maxsize=256)
@@ -196,8 +201,7 @@ class DLPF(Component):
         return self.noise_density
 
     def memory(self, dt: float) -> tuple[float, float, float]:
-        _, a = self.coefficients(dt)
-        poles = np.roots(a)
+        poles = _z_poles(self.order, self._per_sample(dt))
         decay = -dt / np.log(np.maximum(np.abs(poles), 1e-300))
         angle = np.abs(np.angle(poles))
         period = float(2.0 * math.pi * dt / np.max(angle)) if np.max(angle) > 0 else math.inf
