@@ -38,7 +38,8 @@ def test_columns_that_are_not_sinusoids_are_not_recognised():
     t = DT * np.arange(n)
     rng = np.random.default_rng(3)
     others = {
-        "bias": np.ones(n), "ramp": t, "step": (np.arange(n) >= n // 3).astype(float), "zeros": np.zeros(n),
+        "step": (np.arange(n) >= n // 3).astype(float), "zeros": np.zeros(n),
+        "ramp with a bend": np.where(t < 100.0, t, 100.0 + 1.001 * (t - 100.0)),
         "noise": rng.standard_normal(n), "temperature": 20.0 + 0.1 * np.cumsum(rng.standard_normal(n)) * DT,
         "amplitude modulated": (1.0 + 0.1 * t / t[-1]) * np.sin(2 * math.pi * 2.0 * t),
         "chirp": np.sin(2 * math.pi * (2.0 + 0.01 * t) * t),
@@ -49,15 +50,30 @@ def test_columns_that_are_not_sinusoids_are_not_recognised():
         assert math.isnan(harmonic.sinusoid_omega(column)), name
 
 
+def test_constants_and_ramps_are_declared_at_omega_zero():
+    """y_{t+1} + y_{t−1} = 2y_t (the recurrence at ω = 0) holds exactly for the lines c₀ + c₁t and for nothing else;
+    a line is checked at every sample, not only by its local second differences (a slow arc is not a line)."""
+    n = 50_000
+    t = DT * np.arange(n)
+    for column in (np.ones(n), -np.ones(n), t, 20.0 - 0.3 * t, t - t.mean()):
+        assert harmonic.sinusoid_omega(column) == 0.0
+        assert harmonic.obeys(column, 0.0)
+    arc = np.cos(1e-5 * np.arange(n))  # second differences 1e-10, 0.012 off the line through its ends
+    assert harmonic.sinusoid_omega(arc) == pytest.approx(1e-5, rel=1e-6) and not harmonic.obeys(arc, 0.0)
+    assert not harmonic.obeys(np.zeros(n), 0.0)
+    assert harmonic.affine_coefficients(20.0 - 0.3 * t) == pytest.approx((20.0, -0.3 * DT), rel=1e-12)
+
+
 def test_the_noise_model_declares_its_sinusoid_columns_and_nothing_else():
     n = 20_000
     t = DT * np.arange(n)
-    exog = np.column_stack([_sin_cos([1.7], n), 20.0 + 0.01 * t])
+    exog = np.column_stack([_sin_cos([1.7], n), 20.0 + 0.01 * t + 1e-5 * t**2])
     y = np.random.default_rng(0).standard_normal(n)
     model = NoiseModel(y, DT, "WN+RW+RR", exog=exog, exog_names=["s", "c", "temp"])
     omega = 2 * math.pi * 1.7 * DT
     declared = model.statespace(model.starting_values(1, False)[0]).sinusoid_omega
-    assert [math.isnan(w) for w in declared] == [True, True, False, False, True]  # bias, ramp, s, c, temp
+    assert [math.isnan(w) for w in declared] == [False, False, False, False, True]  # bias, ramp, s, c, temp
+    assert declared[:2] == (0.0, 0.0)
     assert declared[2] == pytest.approx(omega, rel=1e-9) and declared[3] == pytest.approx(omega, rel=1e-9)
 
 
@@ -100,7 +116,7 @@ def test_the_closed_form_response_equals_the_filter(name, schur):
     y = simulate_sum(comps, n, DT, np.random.default_rng(11)) + 0.2 + exog @ np.linspace(-1e-2, 1e-2, exog.shape[1])
     z = np.asfortranarray(np.column_stack([np.ones(n), exog]))
     omega = tuple(harmonic.sinusoid_omega(c) for c in z.T)
-    assert sum(math.isfinite(w) for w in omega) == 2 * len(freqs)
+    assert sum(w > 0.0 for w in omega) == 2 * len(freqs) and omega[0] == 0.0
     names = [f"{k}{i}" for i in range(len(freqs)) for k in ("s", "c")]
     declared = ss.from_components(comps, DT, exog_names=names, sinusoid_omega=omega)
     plain = declared.copy(sinusoid_omega=())
@@ -169,3 +185,63 @@ def test_a_sinusoid_declared_for_a_different_number_of_regressors_is_refused():
 
     with pytest.raises(InputError, match="sinusoid_omega"):
         ss.from_components([WN(1e-3), RW(1e-4)], DT, exog_names=["s"], sinusoid_omega=(0.1,))
+
+
+AFFINE_CASES = {
+    "a walk at its zero boundary (a pole 1e-4 from 1)": [WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(1e-7)],
+    "narrow OSC and a fast GM (complex and real modes)": [WN(2e-3), OSC(frequency=0.5, bandwidth=0.002, sigma=1e-2),
+                                                          GM(tau=0.05, sigma=1e-3)],
+    "flicker ladder and a low-pass": [WN(2e-3), LPF(noise_density=2e-3, cutoff=20.0), BI(1e-4, 0.1, 600.0)],
+}
+
+
+@pytest.mark.parametrize("schur", [False, True])
+@pytest.mark.parametrize("name", list(AFFINE_CASES))
+def test_the_bias_and_the_ramp_in_closed_form_equal_the_filter(name, schur):
+    """The bias and ramp columns (declared at ω = 0) from the step response and its running sum: the GLS means,
+    their covariance, the innovations and the smoothed states as when both columns are filtered."""
+    comps = AFFINE_CASES[name]
+    n = 60_000
+    t = DT * np.arange(n)
+    y = simulate_sum(comps, n, DT, np.random.default_rng(5)) + 0.2 + 3e-5 * t
+    z = np.asfortranarray(np.column_stack([np.ones(n), t]))
+    omega = tuple(harmonic.sinusoid_omega(c) for c in z.T)
+    assert omega == (0.0, 0.0)
+    declared = ss.from_components(comps, DT, exog_names=["ramp"], sinusoid_omega=omega)
+    plain = declared.copy(sinusoid_omega=())
+    affine_rows: list[int] = []
+    with pytest.MonkeyPatch.context() as mp:
+        if schur:
+            mp.setattr(steady, "MODAL_MAX_COND", 0.0)
+        spied = steady._affine_output
+
+        def spy(*args, rows, **kwargs):
+            affine_rows.extend(rows.tolist())
+            return spied(*args, rows=rows, **kwargs)
+
+        mp.setattr(steady, "_affine_output", spy)
+        got, _, got_stats = kalman.profile_and_smooth(declared, y, z)
+        assert affine_rows == [1, 2]
+        want, _, want_stats = kalman.profile_and_smooth(plain, y, z)
+    assert got.loglik == pytest.approx(want.loglik, abs=1e-7)
+    np.testing.assert_allclose(got.beta, want.beta, rtol=1e-8)
+    np.testing.assert_allclose(got.beta_cov, want.beta_cov, rtol=1e-7)
+    np.testing.assert_allclose(got.innovations, want.innovations, atol=1e-10 * float(np.max(np.abs(want.innovations))))
+    np.testing.assert_allclose(got_stats.xs, want_stats.xs, atol=1e-10 * float(np.max(np.abs(want_stats.xs))))
+
+
+def test_the_step_response_in_closed_form_is_the_recursion():
+    """s_t of x_{t+1} = A x_t + ΦK from x_0 = 0 in the modal basis, against the recursion run sample by sample."""
+    model = ss.from_components([WN(2e-3), OSC(frequency=3.0, bandwidth=0.5, sigma=1e-2), GM(tau=2.0, sigma=1e-3),
+                                RW(1e-5)], DT)
+    g = steady.gains(model)
+    b = steady.decoupled_basis(g.a)
+    assert b.modal
+    n = 5000
+    got = steady._step_response(model, g, b, n)
+    x, want = np.zeros(model.n_states), np.empty(n)
+    drive = model.phi @ g.k
+    for i in range(n):
+        want[i] = model.h @ x
+        x = g.a @ x + drive
+    np.testing.assert_allclose(got, want, rtol=1e-11, atol=1e-13 * float(np.max(np.abs(want))))

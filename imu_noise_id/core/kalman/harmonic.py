@@ -4,7 +4,10 @@ x_{t+1} = A x_t + g·y_t (x_0 = 0, A = Φ(I − K H), g = ΦK), y_t = Re(ζ_0 e^
     H x_t = Re(Hv)·y_t − Im(Hv)·ŷ_t − H A^t Re(v ζ_0),        ŷ_t = (cos ω·y_t − y_{t+1}) / sin ω,
 
 the free response (last term) while ρ(A)^t ≥ :data:`FREE_RESPONSE_FLOOR`; for columns declared in
-:attr:`~.statespace.StateSpace.sinusoid_omega` that pass :func:`obeys`."""
+:attr:`~.statespace.StateSpace.sinusoid_omega` that pass :func:`obeys`. At ω = 0 the recurrence
+y_{t+1} + y_{t−1} = 2 cos ω·y_t holds for the affine columns y_t = c₀ + c₁t (a bias, a ramp): declared with ω = 0, their
+response is c₀·s_t + c₁·Σ_{u<t} s_u, s the step response of the filter (:func:`affine_coefficients`; the engine's
+``_affine_output``)."""
 
 from __future__ import annotations
 
@@ -22,11 +25,29 @@ MIN_POLE_DISTANCE = 1e-7
 FREE_RESPONSE_FLOOR = 1e-22
 
 
+def affine_coefficients(column: np.ndarray) -> tuple[float, float]:
+    """(c₀, c₁) of the line y_t = c₀ + c₁·t [per sample] through the first and last samples of ``column``."""
+    return float(column[0]), float(column[-1] - column[0]) / (column.size - 1)
+
+
+def _is_affine(z: np.ndarray) -> bool:
+    """Whether z is c₀ + c₁·t to :data:`RECURRENCE_TOL` of max |z| at every sample (and not all zero)."""
+    scale = float(np.max(np.abs(z)))
+    c0, c1 = affine_coefficients(z)
+    line = np.arange(z.size, dtype=float)
+    line *= c1
+    line += c0
+    return scale > 0.0 and float(np.max(np.abs(z - line))) <= RECURRENCE_TOL * scale
+
+
 def sinusoid_omega(column: np.ndarray) -> float:
-    """ω ∈ (0, π) [rad/sample] if ``column`` is a·cos ωt + b·sin ωt to :data:`RECURRENCE_TOL`, else NaN."""
+    """ω ∈ (0, π) [rad/sample] if ``column`` is a·cos ωt + b·sin ωt to :data:`RECURRENCE_TOL`; 0 if it is affine,
+    c₀ + c₁·t to :data:`RECURRENCE_TOL` at every sample (the recurrence's solutions at ω = 0); else NaN."""
     z = np.asarray(column, dtype=float)
     if z.ndim != 1 or z.size < 8 or not np.all(np.isfinite(z)):
         return math.nan
+    if _is_affine(z):
+        return 0.0
     mid, second = z[1:-1], z[2:] - 2.0 * z[1:-1] + z[:-2]
     energy = float(mid @ mid)
     if energy == 0.0:
@@ -42,11 +63,16 @@ def sinusoid_omega(column: np.ndarray) -> float:
 
 
 def obeys(column: np.ndarray, omega: float) -> bool:
-    """Whether ``column`` obeys ω's recurrence at its second, middle and last-but-one samples."""
+    """Whether ``column`` obeys ω's recurrence at its second, middle and last-but-one samples (at ω = 0: lies on
+    the line through its ends there)."""
     n = column.size
+    centres = np.array([1, n // 2, n - 2])
+    if n >= 8 and omega == 0.0:
+        c0, c1 = affine_coefficients(column)
+        scale = max(abs(float(column[0])), abs(float(column[-1])), float(np.max(np.abs(column[centres]))))
+        return bool(scale > 0.0 and np.all(np.abs(column[centres] - (c0 + c1 * centres)) <= RECURRENCE_TOL * scale))
     if n < 8 or math.sin(omega) <= MIN_SIN:
         return False
-    centres = np.array([1, n // 2, n - 2])
     before, here, after = column[centres - 1], column[centres], column[centres + 1]
     residual = np.abs(after + before - 2.0 * math.cos(omega) * here)
     scale = float(np.max(np.abs(np.concatenate([before, here, after]))))

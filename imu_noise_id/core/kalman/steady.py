@@ -203,7 +203,8 @@ CLOSED_FORM_SHARE = 0.5
 
 
 def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple[np.ndarray, Basis | None]:
-    """H x_t^{t−1} (m, N) of every column (sinusoids in closed form where cheaper) and the basis (None: no states)."""
+    """H x_t^{t−1} (m, N) of every column (affine columns and, where cheaper, sinusoids in closed form) and the basis
+    (None: no states)."""
     p = model.n_states
     m, n = cols.y.shape
     if p == 0:
@@ -214,15 +215,20 @@ def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple
     closed = np.zeros(m, bool)
     closed[declared] = [harmonic.obeys(cols.y[c], cols.omega[c]) and harmonic.usable(poles, cols.omega[c])
                         for c in declared]
+    affine = closed & (cols.omega == 0.0)  # one step response serves them all: always cheaper than filtering
+    closed &= ~affine
     k, n_blocks = int(closed.sum()), len(_blocks(b.t))
     length = harmonic.free_response_length(poles, n) if k else n
     free_cost = p * length if b.modal else min(k, p) * length * n_blocks  # one block over one column: 1 per sample
-    if not k or free_cost >= CLOSED_FORM_SHARE * k * n * n_blocks:  # the free responses would cost what they save
-        return _filtered_output(model, g, b, cols.y, u=cols.g, m0=cols.m0), b
+    if k and free_cost >= CLOSED_FORM_SHARE * k * n * n_blocks:  # the free responses would cost what they save
+        closed[:] = False
     out = np.empty((m, n))
-    plain = np.flatnonzero(~closed)
+    plain = np.flatnonzero(~closed & ~affine)
     out[plain] = _filtered_output(model, g, b, cols.y[plain], u=cols.g[:, plain], m0=cols.m0[:, plain])
-    _sinusoid_output(model, g, b, cols, rows=np.flatnonzero(closed), out=out, length=length)
+    if np.any(affine):
+        _affine_output(model, g, b, cols.y, rows=np.flatnonzero(affine), out=out)
+    if np.any(closed):
+        _sinusoid_output(model, g, b, cols, rows=np.flatnonzero(closed), out=out, length=length)
     return out, b
 
 
@@ -254,6 +260,63 @@ def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns,
         free = start.T @ _filtered_output(model, g, b, np.zeros((p, length)), u=np.zeros((p, p)), m0=np.eye(p))
     for i, r in enumerate(rows):
         out[r, :length] -= free[i]
+
+
+def _affine_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, *, rows: np.ndarray,
+                   out: np.ndarray) -> None:
+    """H x_t^{t−1} of the affine columns y_t = c₀ + c₁t (:func:`.harmonic.affine_coefficients`; no input u, no
+    initial mean) into ``out[rows]``: c₀·s_t + c₁·Σ_{u<t} s_u, s the step response (:func:`_step_response`), since
+    t = Σ_{u≥1} 1[t ≥ u] and the filter is linear and time-invariant."""
+    step = _step_response(model, g, b, y.shape[1])
+    summed = None
+    for r in rows:
+        c0, c1 = harmonic.affine_coefficients(y[r])
+        np.multiply(step, c0, out=out[r])
+        if c1 != 0.0:
+            if summed is None:
+                summed = np.empty_like(step)
+                summed[0] = 0.0
+                np.cumsum(step[:-1], out=summed[1:])
+            out[r] += c1 * summed
+
+
+def _step_response(model: StateSpace, g: SteadyGains, b: Basis, n: int) -> np.ndarray:
+    """s_t = H x_t (N,) of x_{t+1} = A x_t + ΦK, x_0 = 0. In the modal basis in closed form, mode by mode: with
+    μ the mode's eigenvalue (a 2 × 2 block [[a, β], [−β, a]] acts on w₀ + j w₁ as μ = a − jβ) and γ, η its input and
+    output weights, s_t = Σ Re(κ (1 − μ^t)), κ = η γ / (1 − μ), μ^t kept while |μ|^t ≥
+    :data:`~.harmonic.FREE_RESPONSE_FLOOR` (:func:`_powers`); in the Schur basis a filtered column of ones."""
+    gain_w = b.u_inv @ (model.phi @ g.k)
+    if not b.modal:
+        p = model.n_states
+        return _filtered_output(model, g, b, np.ones((1, n)), u=np.zeros((p, 1)), m0=np.zeros((p, 1)))[0]
+    hu = model.h @ b.u
+    parts = []
+    for blk in _blocks(b.t):
+        i = blk.start
+        if blk.stop - i == 1:
+            mu, gamma, eta = complex(b.t[i, i]), complex(gain_w[i]), complex(hu[i])
+        else:
+            mu = complex(b.t[i, i], -b.t[i, i + 1])
+            gamma, eta = complex(gain_w[i], gain_w[i + 1]), complex(hu[i], -hu[i + 1])
+        parts.append((mu, eta * gamma / (1.0 - mu)))
+    out = np.full(n, sum(kappa.real for _, kappa in parts))
+    for mu, kappa in parts:
+        length = harmonic.free_response_length(np.array([mu]), n)
+        if mu.imag == 0.0:
+            out[:length] -= kappa.real * _powers(mu.real, length)
+        else:
+            power = _powers(mu, length)
+            out[:length] -= kappa.real * power.real - kappa.imag * power.imag
+    return out
+
+
+def _powers(mu: float | complex, length: int) -> np.ndarray:
+    """μ^t for t = 0 … length − 1 as the outer product of μ^(w·i) and μ^j, w = ⌈√length⌉: one product per sample (a
+    power is a few ulps; a recursion would add one rounding per step)."""
+    width = math.isqrt(max(length - 1, 0)) + 1
+    fine = np.power(mu, np.arange(width, dtype=float))
+    coarse = np.power(mu, width * np.arange(-(-length // width), dtype=float))
+    return np.multiply.outer(coarse, fine).ravel()[:length]
 
 
 def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
