@@ -10,6 +10,7 @@ import pytest
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.estimation.em import mle
+from imu_noise_id.core.kalman import common, riccati
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.kalman.riccati import SteadyCovarianceSensitivity, steady_prediction_covariance
 from imu_noise_id.core.noise.components import GM, OSC, QN, RR, RW, WN, simulate_sum
@@ -349,3 +350,25 @@ def test_new_values_give_the_model_assembled_afresh_and_the_ramp_stays_the_profi
     for got, want in zip(par.to_components(theta, profiled)[:-1], moved[:-1], strict=True):
         assert got.params() == pytest.approx(want.params(), rel=1e-12)
     assert ss.ramp_components(profiled) == {5: ss.to_components(profiled)[5]}
+
+
+@pytest.mark.parametrize("m", [1, 2, 4, 5, 7])
+def test_the_gram_matrix_of_innovation_columns_is_the_product(m):
+    rows = np.random.default_rng(m).standard_normal((m, 10_001))
+    got = common.gram(rows)
+    np.testing.assert_allclose(got, rows @ rows.T, rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(got, got.T)
+
+
+@pytest.mark.parametrize("a", [[[0.99993]], [[0.999, 50.0], [0.0, 0.9]], [[0.9995, 0.01], [-0.01, 0.9995]]])
+def test_the_stein_sum_judged_from_its_spectral_radius_is_the_sum(a):
+    """A slow pole, a non-normal pair (a transient of 50× before the decay) and a slow rotation: the sum whose
+    increments are judged only from the doubling the spectral radius allows equals the one judged at every doubling,
+    and solves M = Aᵀ M A + W."""
+    A = np.array(a)
+    W = np.eye(A.shape[0]) + 0.3 * np.ones_like(A)
+    rho = float(np.max(np.abs(np.linalg.eigvals(A))))
+    got = riccati._stein_sum(A, W, rho=rho)
+    want = riccati._stein_sum(A, W)
+    np.testing.assert_allclose(got, want, rtol=1e-14)
+    np.testing.assert_allclose(A.T @ got @ A + W, got, rtol=1e-11)

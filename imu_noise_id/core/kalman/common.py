@@ -141,6 +141,23 @@ class ProfileResult:
     variances: np.ndarray  # (N,)
 
 
+#: Up to this many columns :func:`gram` takes one dot product per pair: OpenBLAS's product of a few long rows with
+#: their transpose takes 2–3 times as long (0.6 vs 1.6 ms for two rows of 360k samples, 1.6 vs 3.8 ms for three).
+GRAM_BY_ROWS = 4
+
+
+def gram(rows: np.ndarray) -> np.ndarray:
+    """rows·rowsᵀ (m, m) of ``rows`` (m, N)."""
+    m = rows.shape[0]
+    if m > GRAM_BY_ROWS:
+        return rows @ rows.T
+    out = np.empty((m, m))
+    for i in range(m):
+        for j in range(i, m):
+            out[i, j] = out[j, i] = rows[i] @ rows[j]
+    return out
+
+
 def profile(inn: InnovationResult, names: list[str], keep_innovations: bool = True) -> ProfileResult:
     """GLS β̂ minimising Σ_t e_t(β)²/F_t, e(β) = e₀ + Σ_c β_c r_c, and the exact Gaussian log-likelihood there."""
     obs = inn.observed
@@ -148,12 +165,12 @@ def profile(inn: InnovationResult, names: list[str], keep_innovations: bool = Tr
     E = inn.e if all_obs else inn.e[:, obs]
     if inn.constant_f:
         f0 = float(inn.f[0])
-        G = (E @ E.T) / f0
+        G = gram(E) / f0
         sum_log_f = E.shape[1] * np.log(f0)
     else:
         f = inn.f if all_obs else inn.f[obs]
         Ew = E / np.sqrt(f)
-        G = Ew @ Ew.T
+        G = gram(Ew)
         sum_log_f = float(np.sum(np.log(f)))
     k = E.shape[0] - 1
     if k:
