@@ -101,3 +101,40 @@ def test_repeated_starts_are_evaluated_once_and_the_intervals_do_not_change():
     assert fits["distinct"].ci95_method["RW.random_walk"] == "profile"  # the RW sits at its zero boundary
     assert fits["distinct"].ci95 == fits["repeated"].ci95
     assert fits["distinct"].profile_evaluations < fits["repeated"].profile_evaluations
+
+
+def test_a_held_slope_from_the_pass_with_every_mean_free_is_the_pass_with_it_held():
+    """ℓ is quadratic in the means: ℓ and ℓ_A with the ramp's slope held at v, read from one pass with every mean
+    free, equal a pass with the slope held, at several ϑ and v; the slope interval is the same as when every start is
+    scored by its own pass, for fewer evaluations."""
+    from imu_noise_id.core.estimation.em import profile
+
+    y = simulate_sum([WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-6), RR(1e-6)], 20_000, 0.1,
+                     np.random.default_rng(3)) + 2e-3
+    fit = fit_model(y, 0.1, "WN+GM+RW+RR", options=FitOptions(n_starts=1))
+    (yy, z), model = fit.record, fit.statespace
+    comps = ss.to_components(model)
+    par = mle.Parameterisation.of(comps)
+    theta = par.to_theta(comps)
+    j = model.regressors.index("ramp")
+    prof = profile.Profiler(par, theta, model, yy, z, fit.loglik, np.eye(theta.size), np.full(theta.size, -np.inf),
+                            np.full(theta.size, np.inf))
+    for th in (theta, theta + np.linspace(-0.3, 0.3, theta.size)):
+        for v in (-1e-5, 1e-6, 4e-6):
+            held = model.copy()
+            held.b_free[j], held.b[j] = False, v
+            assert prof.held_mean(j, v)(th) == pytest.approx(prof.evaluate(th, held), abs=1e-6)
+    def one_pass_each(self, j, v):
+        held = self.model.copy()
+        held.b_free[j], held.b[j] = False, v
+        return lambda th: self.evaluate(th, held)
+
+    fits = {}
+    for label, closed in (("held", True), ("passes", False)):
+        with pytest.MonkeyPatch.context() as mp:
+            if not closed:
+                mp.setattr(profile.Profiler, "held_mean", one_pass_each)
+            fits[label] = fit_model(y, 0.1, "WN+GM+RW+RR", options=FitOptions(n_starts=1))
+    assert fits["held"].ci95_method["RR.slope"] == "profile"
+    np.testing.assert_allclose(fits["held"].ci95["RR.slope"], fits["passes"].ci95["RR.slope"], rtol=1e-6)
+    assert fits["held"].profile_evaluations < fits["passes"].profile_evaluations

@@ -13,6 +13,7 @@ information, zero-boundary ones linearly as K/s, undetermined ones in their log 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -104,6 +105,7 @@ class Profiler:
         self.data = em.DataSums.of(self.y, self.z)
         self._zeros = np.where(np.isnan(self.y), np.nan, 0.0)
         self._grad_c: dict[tuple[bool, ...], np.ndarray] = {}
+        self._means_free: dict[bytes, ProfileResult | None] = {}
 
     @property
     def spent(self) -> bool:
@@ -130,6 +132,35 @@ class Profiler:
         except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
             return -math.inf, -math.inf
         return float(prof.loglik), adjusted(prof)
+
+    def held_mean(self, regressor: int, value: float) -> Callable[[np.ndarray], tuple[float, float]]:
+        """(ℓ, ℓ_A) at ϑ with the mean of ``regressor`` held at ``value``, from the pass at ϑ with every mean free
+        (one per ϑ, kept for every value): ℓ is quadratic in the means (GLS), so with β̂, C their estimate and
+        covariance ℓ(v) = ℓ̂ − ½(v − β̂_j)²/C_jj, and the other means' covariance given β_j has
+        ½ log det = ½(log det C − log C_jj)."""
+        name = f"b:{self.model.regressors[regressor]}"
+
+        def at(theta: np.ndarray) -> tuple[float, float]:
+            key = theta.tobytes()
+            if key not in self._means_free:
+                self.n_eval += 1
+                try:
+                    self._means_free[key] = kalman.loglik(self.par.to_model(theta, self.model), self.y, self.z,
+                                                          innovations=False)
+                except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
+                    self._means_free[key] = None
+            prof = self._means_free[key]
+            if prof is None:
+                return -math.inf, -math.inf
+            j = prof.names.index(name)
+            c_jj = float(prof.beta_cov[j, j])
+            sign, logdet = np.linalg.slogdet(prof.beta_cov)
+            if not (c_jj > 0.0 and sign > 0):
+                return -math.inf, -math.inf
+            ll = float(prof.loglik) - 0.5 * (value - float(prof.beta[j])) ** 2 / c_jj
+            return ll, ll + 0.5 * (logdet - math.log(c_jj))
+
+        return at
 
     def conditional_scale(self, k: int) -> float:
         """Conditional upper 95 % end of a zero-boundary parameter (others held, ℓ down by 1.92), to 10 %: bracketed
@@ -222,12 +253,25 @@ class Profiler:
                                              self.model)[0])
         return a_hat
 
-    def maximise(self, starts: list[np.ndarray], fixed: set[int], base: StateSpace) -> tuple[float, np.ndarray]:
+    def maximise(self, starts: list[np.ndarray], fixed: set[int], base: StateSpace, *,
+                 score: Callable[[np.ndarray], tuple[float, float]] | None = None) -> tuple[float, np.ndarray]:
         """(ℓ_A at the argmax, argmax) over the log-parameters not in ``fixed`` (held at their start), from the best
-        of ``starts``: L-BFGS-B on ℓ plus the adjustment linearised at the start, ℓ_A exact at each point."""
+        of ``starts``: L-BFGS-B on ℓ plus the adjustment linearised at the start, ℓ_A exact at each point.
+        ``score(ϑ)`` → (ℓ, ℓ_A) at ``base``'s means, for the starts and the adjustment (default :meth:`evaluate`;
+        :meth:`held_mean` where ``base`` holds a mean)."""
         starts = distinct(starts)
         self.afford(self.maximise_cost(len(starts), base))
-        scored = [(self.evaluate(t, base), t) for t in starts] if len(starts) > 1 else []
+        if score is None:
+            def adjustment(theta: np.ndarray) -> float:
+                return self.adjustment(theta, base)
+
+            def score(theta: np.ndarray) -> tuple[float, float]:
+                return self.evaluate(theta, base)
+        else:
+            def adjustment(theta: np.ndarray) -> float:
+                ll, a = score(theta)
+                return a - ll if math.isfinite(ll) else -math.inf
+        scored = [(score(t), t) for t in starts] if len(starts) > 1 else []
         start = max(scored, key=lambda p: p[0][1])[1] if scored else starts[0]
         free = [j for j in range(self.theta.size) if j not in fixed]
         zero = [j for j in free if j in self.zero]
@@ -250,12 +294,12 @@ class Profiler:
                              np.clip(np.exp(start[zero]) / s, ZERO_FLOOR, ZERO_CAP) if nz else np.zeros(0),
                              np.zeros(len(flat))])
         grad_theta = self.adjustment_gradient(base)
-        c0 = self.adjustment(theta_of(x0)[0], base)
+        c0 = adjustment(theta_of(x0)[0])
         grad_c = np.concatenate([T.T @ grad_theta[inner], np.zeros(nz), grad_theta[flat]])
         for i in range(ni, ni + nz):
             xp = x0.copy()
             xp[i] += 0.05 * max(x0[i], 0.1)
-            grad_c[i] = (self.adjustment(theta_of(xp)[0], base) - c0) / (xp[i] - x0[i])
+            grad_c[i] = (adjustment(theta_of(xp)[0]) - c0) / (xp[i] - x0[i])
         grad_c = np.where(np.isfinite(grad_c), grad_c, 0.0)
         best: list = [-math.inf, start, -math.inf]  # ℓ_A, ϑ, ℓ
 
@@ -283,7 +327,7 @@ class Profiler:
             minimize(fun, x0, jac=True, method="L-BFGS-B", bounds=bounds,
                      options={"maxiter": 10, "maxfun": MAX_FUN, "ftol": 1e-9, "gtol": 3e-2, "maxcor": 10})
         if not math.isfinite(best[0]):
-            ll, a = self.evaluate(start, base)
+            ll, a = score(start)
             best[:] = [a, start, ll]
         a, th, ll = best
         if ll > self.ll_max + BETTER_BY and (self.better is None or ll > self.better[0]):
@@ -341,7 +385,8 @@ class Profiler:
 
     # -- the ramp slope -------------------------------------------------------------------------------------
     def slope_interval(self, regressor: int, value: float, se: float) -> tuple[float, float]:
-        """95 % adjusted-profile interval [u/s] of the ramp slope (regressor index, GLS value and se)."""
+        """95 % adjusted-profile interval [u/s] of the ramp slope (regressor index, GLS value and se); the starts
+        scored and the adjustment by :meth:`held_mean` (one pass per ϑ for every slope tried)."""
         fixed = self.model.copy()
         fixed.b_free[regressor] = False
 
@@ -351,11 +396,11 @@ class Profiler:
             return base
 
         def profile_at(v: float, starts: list[np.ndarray]) -> tuple[float, np.ndarray]:
-            return self.maximise(starts, set(), base_at(v))
+            return self.maximise(starts, set(), base_at(v), score=self.held_mean(regressor, v))
 
         scale = max(se, 1e-300)
         self.afford(1 + 4 * self.maximise_cost(len(self.fallback_starts()), base_at(value)))
-        a_hat = self.evaluate(self.theta, base_at(value))[1]
+        a_hat = self.held_mean(regressor, value)(self.theta)[1]
         pts = centre(profile_at, value, a_hat, self.theta, [-Z95 * scale, Z95 * scale],
                           predict=lambda _: self.fallback_starts(), parabola=True)
         return (end(profile_at, self.starts_near, pts, -1.0, first=Z95 * scale, limit=1e6 * scale),
