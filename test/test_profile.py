@@ -138,3 +138,33 @@ def test_a_held_slope_from_the_pass_with_every_mean_free_is_the_pass_with_it_hel
     assert fits["held"].ci95_method["RR.slope"] == "profile"
     np.testing.assert_allclose(fits["held"].ci95["RR.slope"], fits["passes"].ci95["RR.slope"], rtol=1e-6)
     assert fits["held"].profile_evaluations < fits["passes"].profile_evaluations
+
+
+def test_a_scored_start_gives_its_adjustment_without_another_pass():
+    """½ log det cov(b̂) does not depend on the data: ℓ_A − ℓ of a start's scoring pass is the adjustment a pass on
+    zeros gives, so the inner maximisation takes it from there and spends one pass fewer."""
+    from imu_noise_id.core.estimation.em import profile
+
+    y = simulate_sum([WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-6), RR(1e-6)], 20_000, 0.1,
+                     np.random.default_rng(3)) + 2e-3
+    fit = fit_model(y, 0.1, "WN+GM+RW+RR", options=FitOptions(n_starts=1))
+    (yy, z), model = fit.record, fit.statespace
+    comps = ss.to_components(model)
+    par = mle.Parameterisation.of(comps)
+    theta = par.to_theta(comps)
+    k_rw = next(j for j, (i, _) in enumerate(par.entries) if par.template[i].name == "RW")
+    prof = profile.Profiler(par, theta, model, yy, z, fit.loglik, np.eye(theta.size), np.full(theta.size, -np.inf),
+                            np.full(theta.size, np.inf))
+    for th in (theta, theta + 0.2):
+        ll, a = prof.evaluate(th, model)
+        assert a - ll == pytest.approx(prof.adjustment(th, model), abs=1e-9)
+    prof.zero = {k_rw: 1e-4}
+    zeros_passes = []
+    with pytest.MonkeyPatch.context() as mp:
+        counted = profile.Profiler.adjustment
+        mp.setattr(profile.Profiler, "adjustment",
+                   lambda self, th, base: zeros_passes.append(1) or counted(self, th, base))
+        starts = prof.with_ladder(theta)
+        prof.maximise(starts, set(range(theta.size)) - {k_rw}, model)
+    # the adjustment's gradient at the estimate (1 + k passes, once per mask) and the RW's step: not the start's
+    assert len(zeros_passes) == 1 + theta.size + 1

@@ -263,7 +263,9 @@ class Profiler:
         self.afford(self.maximise_cost(len(starts), base))
         if score is None:
             def adjustment(theta: np.ndarray) -> float:
-                return self.adjustment(theta, base)
+                # a scored start's pass holds it already (ℓ_A − ℓ does not depend on the data)
+                ll, a = next((p for p, t in scored if np.allclose(theta, t, rtol=0.0, atol=1e-12)), (-math.inf, 0.0))
+                return a - ll if math.isfinite(ll) else self.adjustment(theta, base)
 
             def score(theta: np.ndarray) -> tuple[float, float]:
                 return self.evaluate(theta, base)
