@@ -40,7 +40,7 @@ class StateSpace:
     phi, q, sigma : (p, p) Φ, Q, Σ (used when ``sigma_mode='fixed'``); h, u, mu : (p,) H, u, μ; r : R per sample
     b : (k,) coefficients of the regressors z_t (``regressors``); *_free : bool masks (True: estimated); dt : period [s]
     blocks : :class:`BlockInfo`; sigma_mode : ``'steady'`` (Σ = P̄) or ``'fixed'``; sinusoid_omega : ω [rad/sample] per
-        regressor (NaN: not a sinusoid), or empty
+        regressor (NaN: not a sinusoid; 0: a line c₀ + c₁t, :func:`.harmonic.sinusoid_omega`), or empty
     """
 
     phi: np.ndarray

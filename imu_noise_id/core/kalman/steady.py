@@ -222,8 +222,12 @@ def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple
     free_cost = p * length if b.modal else min(k, p) * length * n_blocks  # one block over one column: 1 per sample
     if k and free_cost >= CLOSED_FORM_SHARE * k * n * n_blocks:  # the free responses would cost what they save
         closed[:] = False
+    if not np.any(closed | affine):
+        return _filtered_output(model, g, b, cols.y, u=cols.g, m0=cols.m0), b
     out = np.empty((m, n))
     plain = np.flatnonzero(~closed & ~affine)
+    if plain.size and plain[-1] - plain[0] == plain.size - 1:  # consecutive rows (the data's): a view, not a copy
+        plain = slice(int(plain[0]), int(plain[-1]) + 1)
     out[plain] = _filtered_output(model, g, b, cols.y[plain], u=cols.g[:, plain], m0=cols.m0[:, plain])
     if np.any(affine):
         _affine_output(model, g, b, cols.y, rows=np.flatnonzero(affine), out=out)

@@ -105,7 +105,7 @@ class Profiler:
         self.data = em.DataSums.of(self.y, self.z)
         self._zeros = np.where(np.isnan(self.y), np.nan, 0.0)
         self._grad_c: dict[tuple[bool, ...], np.ndarray] = {}
-        self._means_free: dict[bytes, ProfileResult | None] = {}
+        self._means_free: dict[bytes, tuple[float, float, float, float]] = {}
 
     @property
     def spent(self) -> bool:
@@ -135,32 +135,35 @@ class Profiler:
 
     def held_mean(self, regressor: int, value: float) -> Callable[[np.ndarray], tuple[float, float]]:
         """(ℓ, ℓ_A) at ϑ with the mean of ``regressor`` held at ``value``, from the pass at ϑ with every mean free
-        (one per ϑ, kept for every value): ℓ is quadratic in the means (GLS), so with β̂, C their estimate and
-        covariance ℓ(v) = ℓ̂ − ½(v − β̂_j)²/C_jj, and the other means' covariance given β_j has
+        (one per ϑ, its four numbers kept for every value): ℓ is quadratic in the means (GLS), so with β̂, C their
+        estimate and covariance ℓ(v) = ℓ̂ − ½(v − β̂_j)²/C_jj, and the other means' covariance given β_j has
         ½ log det = ½(log det C − log C_jj)."""
         name = f"b:{self.model.regressors[regressor]}"
 
         def at(theta: np.ndarray) -> tuple[float, float]:
             key = theta.tobytes()
             if key not in self._means_free:
-                self.n_eval += 1
-                try:
-                    self._means_free[key] = kalman.loglik(self.par.to_model(theta, self.model), self.y, self.z,
-                                                          innovations=False)
-                except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
-                    self._means_free[key] = None
-            prof = self._means_free[key]
-            if prof is None:
+                self._means_free[key] = self._means_free_pass(theta, name)
+            ll_hat, beta, c_jj, logdet = self._means_free[key]
+            if not (c_jj > 0.0 and math.isfinite(logdet)):
                 return -math.inf, -math.inf
-            j = prof.names.index(name)
-            c_jj = float(prof.beta_cov[j, j])
-            sign, logdet = np.linalg.slogdet(prof.beta_cov)
-            if not (c_jj > 0.0 and sign > 0):
-                return -math.inf, -math.inf
-            ll = float(prof.loglik) - 0.5 * (value - float(prof.beta[j])) ** 2 / c_jj
+            ll = ll_hat - 0.5 * (value - beta) ** 2 / c_jj
             return ll, ll + 0.5 * (logdet - math.log(c_jj))
 
         return at
+
+    def _means_free_pass(self, theta: np.ndarray, name: str) -> tuple[float, float, float, float]:
+        """(ℓ̂, β̂ and C of mean ``name``, log det C) at ϑ with every mean free; (−inf, 0, 0, −inf) outside the
+        filter's domain or where C is not positive definite."""
+        self.n_eval += 1
+        try:
+            prof = kalman.loglik(self.par.to_model(theta, self.model), self.y, self.z, innovations=False)
+        except (ValueError, np.linalg.LinAlgError):  # InputError is a ValueError
+            return -math.inf, 0.0, 0.0, -math.inf
+        j = prof.names.index(name)
+        sign, logdet = np.linalg.slogdet(prof.beta_cov)
+        return (float(prof.loglik), float(prof.beta[j]), float(prof.beta_cov[j, j]),
+                float(logdet) if sign > 0 else -math.inf)
 
     def conditional_scale(self, k: int) -> float:
         """Conditional upper 95 % end of a zero-boundary parameter (others held, ℓ down by 1.92), to 10 %: bracketed
