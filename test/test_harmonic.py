@@ -78,20 +78,20 @@ def test_the_noise_model_declares_its_sinusoid_columns_and_nothing_else():
 
 
 @contextlib.contextmanager
-def _closed_form_spy(schur: bool):
-    """The rows the steady engine computes in closed form, listed while the block runs (in the Schur basis when
-    ``schur``: every model falls back to it)."""
+def _closed_form_spy(schur: bool, closed_form: str = "_sinusoid_output"):
+    """The rows the steady engine computes by its function ``closed_form`` (the sinusoids' or the lines'), listed
+    while the block runs (in the Schur basis when ``schur``: every model falls back to it)."""
     closed_rows: list[int] = []
     with pytest.MonkeyPatch.context() as mp:
         if schur:
             mp.setattr(steady, "MODAL_MAX_COND", 0.0)
-        spied = steady._sinusoid_output
+        spied = getattr(steady, closed_form)
 
         def spy(*args, rows, **kwargs):
             closed_rows.extend(rows.tolist())
             return spied(*args, rows=rows, **kwargs)
 
-        mp.setattr(steady, "_sinusoid_output", spy)
+        mp.setattr(steady, closed_form, spy)
         yield closed_rows
 
 
@@ -209,17 +209,7 @@ def test_the_bias_and_the_ramp_in_closed_form_equal_the_filter(name, schur):
     assert omega == (0.0, 0.0)
     declared = ss.from_components(comps, DT, exog_names=["ramp"], sinusoid_omega=omega)
     plain = declared.copy(sinusoid_omega=())
-    affine_rows: list[int] = []
-    with pytest.MonkeyPatch.context() as mp:
-        if schur:
-            mp.setattr(steady, "MODAL_MAX_COND", 0.0)
-        spied = steady._affine_output
-
-        def spy(*args, rows, **kwargs):
-            affine_rows.extend(rows.tolist())
-            return spied(*args, rows=rows, **kwargs)
-
-        mp.setattr(steady, "_affine_output", spy)
+    with _closed_form_spy(schur, "_affine_output") as affine_rows:
         got, _, got_stats = kalman.profile_and_smooth(declared, y, z)
         assert affine_rows == [1, 2]
         want, _, want_stats = kalman.profile_and_smooth(plain, y, z)

@@ -9,7 +9,7 @@ import pytest
 from scipy.optimize import minimize
 
 from imu_noise_id.core import kalman
-from imu_noise_id.core.estimation.em import mle
+from imu_noise_id.core.estimation.em import mle, profile
 from imu_noise_id.core.estimation.em.model import FitOptions, fit_model
 from imu_noise_id.core.estimation.em.profile import adjusted
 from imu_noise_id.core.kalman import statespace as ss
@@ -86,8 +86,6 @@ def test_repeated_starts_are_evaluated_once_and_the_intervals_do_not_change():
     """A profile point of a zero-boundary parameter gets a ladder of starts in that parameter, which the point's
     value then overwrites: every rung is the same start. Screening each repeat cost a likelihood evaluation (393
     instead of 343 on bench_em's 1 h record); the intervals are the same without the repeats."""
-    from imu_noise_id.core.estimation.em import profile
-
     y = simulate_sum([WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-6), RR(1e-6)], 20_000, 0.1,
                      np.random.default_rng(3)) + 2e-3
     repeated = [np.array([1.0, 2.0]), np.array([1.0, 2.0]), np.array([1.0, 3.0]), np.array([1.0, 2.0])]
@@ -103,12 +101,9 @@ def test_repeated_starts_are_evaluated_once_and_the_intervals_do_not_change():
     assert fits["distinct"].profile_evaluations < fits["repeated"].profile_evaluations
 
 
-def test_a_held_slope_from_the_pass_with_every_mean_free_is_the_pass_with_it_held():
-    """ℓ is quadratic in the means: ℓ and ℓ_A with the ramp's slope held at v, read from one pass with every mean
-    free, equal a pass with the slope held, at several ϑ and v; the slope interval is the same as when every start is
-    scored by its own pass, for fewer evaluations."""
-    from imu_noise_id.core.estimation.em import profile
-
+def _ramp_fit_profiler():
+    """(record, fit, parameterisation, ϑ̂, a Profiler of the fit with unit information and no bounds) of WN+GM+RW+RR
+    fitted to 20 000 samples of it with the RW near 0."""
     y = simulate_sum([WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-6), RR(1e-6)], 20_000, 0.1,
                      np.random.default_rng(3)) + 2e-3
     fit = fit_model(y, 0.1, "WN+GM+RW+RR", options=FitOptions(n_starts=1))
@@ -116,14 +111,25 @@ def test_a_held_slope_from_the_pass_with_every_mean_free_is_the_pass_with_it_hel
     comps = ss.to_components(model)
     par = mle.Parameterisation.of(comps)
     theta = par.to_theta(comps)
+    k = theta.size
+    return y, fit, par, theta, profile.Profiler(par, theta, model, yy, z, fit.loglik, np.eye(k), np.full(k, -np.inf),
+                                                np.full(k, np.inf))
+
+
+def test_a_held_slope_from_the_pass_with_every_mean_free_is_the_pass_with_it_held():
+    """ℓ is quadratic in the means: ℓ and ℓ_A with the ramp's slope held at v, read from one pass with every mean
+    free, equal a pass with the slope held, at several ϑ and v; the slope interval is the same as when every start is
+    scored by its own pass, for fewer evaluations."""
+    y, fit, _, theta, prof = _ramp_fit_profiler()
+    model = fit.statespace
     j = model.regressors.index("ramp")
-    prof = profile.Profiler(par, theta, model, yy, z, fit.loglik, np.eye(theta.size), np.full(theta.size, -np.inf),
-                            np.full(theta.size, np.inf))
     for th in (theta, theta + np.linspace(-0.3, 0.3, theta.size)):
         for v in (-1e-5, 1e-6, 4e-6):
             held = model.copy()
             held.b_free[j], held.b[j] = False, v
             assert prof.held_mean(j, v)(th) == pytest.approx(prof.evaluate(th, held), abs=1e-6)
+    # what is kept per ϑ is four numbers, not the pass's arrays (N floats each)
+    assert all(np.ndim(x) == 0 for kept in prof._means_free.values() for x in kept)
     def one_pass_each(self, j, v):
         held = self.model.copy()
         held.b_free[j], held.b[j] = False, v
@@ -143,18 +149,9 @@ def test_a_held_slope_from_the_pass_with_every_mean_free_is_the_pass_with_it_hel
 def test_a_scored_start_gives_its_adjustment_without_another_pass():
     """½ log det cov(b̂) does not depend on the data: ℓ_A − ℓ of a start's scoring pass is the adjustment a pass on
     zeros gives, so the inner maximisation takes it from there and spends one pass fewer."""
-    from imu_noise_id.core.estimation.em import profile
-
-    y = simulate_sum([WN(1e-3), GM(tau=5.0, sigma=1e-3), RW(3e-6), RR(1e-6)], 20_000, 0.1,
-                     np.random.default_rng(3)) + 2e-3
-    fit = fit_model(y, 0.1, "WN+GM+RW+RR", options=FitOptions(n_starts=1))
-    (yy, z), model = fit.record, fit.statespace
-    comps = ss.to_components(model)
-    par = mle.Parameterisation.of(comps)
-    theta = par.to_theta(comps)
+    _, fit, par, theta, prof = _ramp_fit_profiler()
+    model = fit.statespace
     k_rw = next(j for j, (i, _) in enumerate(par.entries) if par.template[i].name == "RW")
-    prof = profile.Profiler(par, theta, model, yy, z, fit.loglik, np.eye(theta.size), np.full(theta.size, -np.inf),
-                            np.full(theta.size, np.inf))
     for th in (theta, theta + 0.2):
         ll, a = prof.evaluate(th, model)
         assert a - ll == pytest.approx(prof.adjustment(th, model), abs=1e-9)
