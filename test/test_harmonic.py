@@ -11,7 +11,7 @@ import pytest
 
 from imu_noise_id.core import kalman
 from imu_noise_id.core.estimation.em.model import NoiseModel
-from imu_noise_id.core.kalman import harmonic, steady
+from imu_noise_id.core.kalman import basis, harmonic, steady
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.noise.components import BI, GM, RW, WN, simulate_sum
 from imu_noise_id.core.noise.resonant import LPF, OSC
@@ -84,7 +84,7 @@ def _closed_form_spy(schur: bool, closed_form: str = "_sinusoid_output"):
     closed_rows: list[int] = []
     with pytest.MonkeyPatch.context() as mp:
         if schur:
-            mp.setattr(steady, "MODAL_MAX_COND", 0.0)
+            mp.setattr(basis, "MODAL_MAX_COND", 0.0)
         spied = getattr(steady, closed_form)
 
         def spy(*args, rows, **kwargs):

@@ -10,7 +10,7 @@ import pytest
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.estimation.em import mle
-from imu_noise_id.core.kalman import common, riccati
+from imu_noise_id.core.kalman import basis, common, riccati
 from imu_noise_id.core.kalman import statespace as ss
 from imu_noise_id.core.kalman.riccati import SteadyCovarianceSensitivity, steady_prediction_covariance
 from imu_noise_id.core.noise.components import GM, OSC, QN, RR, RW, WN, simulate_sum
@@ -205,9 +205,9 @@ def test_modal_and_schur_bases_give_the_exact_recursion():
     exact = kalman.loglik(model, y, z, engine="exact")
     fitted = kalman.apply_beta(model, exact)
     s_exact = kalman.smooth(fitted, y, z, engine="exact")
-    for max_cond in (steady.MODAL_MAX_COND, 0.0):  # 0: every model falls back to the Schur basis
+    for max_cond in (basis.MODAL_MAX_COND, 0.0):  # 0: every model falls back to the Schur basis
         with pytest.MonkeyPatch.context() as mp:
-            mp.setattr(steady, "MODAL_MAX_COND", max_cond)
+            mp.setattr(basis, "MODAL_MAX_COND", max_cond)
             prof, _, stats = kalman.profile_and_smooth(model, y, z, engine="steady")
             s_fast = kalman.smooth(fitted, y, z, engine="steady")
         assert prof.loglik == pytest.approx(exact.loglik, abs=1e-7)
@@ -287,10 +287,10 @@ def test_the_smoothers_adjoint_in_either_basis_equals_its_backward_recursion(a):
     for t in range(n - 1, -1, -1):
         r = model.h * e[t] / gains.f + a.T @ r
         expected[:, t] = r
-    basis = steady.decoupled_basis(a)
-    sigma, v_first = steady._adjoint_modes(model, gains, basis, e)
+    decoupled = steady.decoupled_basis(a)
+    sigma, v_first = steady._adjoint_modes(model, gains, decoupled, e)
     v = np.column_stack([v_first, sigma[:, :0:-1]])
-    np.testing.assert_allclose(basis.u_inv.T @ v, expected, rtol=1e-9, atol=1e-12 * np.max(np.abs(expected)))
+    np.testing.assert_allclose(decoupled.u_inv.T @ v, expected, rtol=1e-9, atol=1e-12 * np.max(np.abs(expected)))
 
 
 def test_where_the_doubling_ends_off_a_covariance_the_schur_method_solves_the_riccati_equation():

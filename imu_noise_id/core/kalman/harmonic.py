@@ -119,3 +119,26 @@ def steady_parts(a: np.ndarray, g: np.ndarray, h: np.ndarray, y: np.ndarray, ome
         y_hat *= hv.imag
         out[r] -= y_hat
     return start
+
+
+def step_response(modes: list[tuple[complex, complex]], n: int) -> np.ndarray:
+    """s_t = Σ Re(κ (1 − μ^t)) for t = 0 … n − 1 over ``modes`` (μ, κ), each μ^t kept while |μ|^t ≥
+    :data:`FREE_RESPONSE_FLOOR` (:func:`powers`): the step response of a filter in its modal form."""
+    out = np.full(n, sum(kappa.real for _, kappa in modes))
+    for mu, kappa in modes:
+        length = free_response_length(np.array([mu]), n)
+        if mu.imag == 0.0:
+            out[:length] -= kappa.real * powers(mu.real, length)
+        else:
+            power = powers(mu, length)
+            out[:length] -= kappa.real * power.real - kappa.imag * power.imag
+    return out
+
+
+def powers(mu: float | complex, length: int) -> np.ndarray:
+    """μ^t for t = 0 … length − 1 as the outer product of μ^(w·i) and μ^j, w = ⌈√length⌉: one product per sample (a
+    power is a few ulps; a recursion would add one rounding per step)."""
+    width = math.isqrt(max(length - 1, 0)) + 1
+    fine = np.power(mu, np.arange(width, dtype=float))
+    coarse = np.power(mu, width * np.arange(-(-length // width), dtype=float))
+    return np.multiply.outer(coarse, fine).ravel()[:length]

@@ -1,6 +1,6 @@
 """Fast Kalman engine for time-invariant models in steady state (Σ = P̄, paper 000 appendix at its fixed point; no
 missing samples): constant K, F, J make filter and smoother IIR filters in the modal or real Schur basis
-(:func:`decoupled_basis`; why: docs/em.md, "Why the Kalman engines …")
+(:func:`.basis.decoupled_basis`; why: docs/em.md, "Why the Kalman engines …")
 
     predicted state  x_{t+1} = A x_t + ΦK y_t + u,        A = Φ(I − K H)          (forward, causal)
     smoothed state   x_t^N = x_t^{t−1} + P̄ r_{t−1},  r_{t−1} = Hᵀ e_t / F + Aᵀ r_t   (backward, anti-causal)
@@ -14,11 +14,11 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import schur
 from scipy.signal import lfilter
 
 from ..errors import InputError
 from . import harmonic
+from .basis import Basis, blocks, decoupled_basis
 from .common import LOG_2PI, Columns, DisturbanceSums, InnovationResult, ProfileResult, SmootherStats, profile
 from .statespace import StateSpace
 
@@ -49,16 +49,6 @@ def gains(model: StateSpace) -> SteadyGains:
     a = model.phi @ (np.eye(model.n_states) - np.outer(k, h))
     j = np.linalg.lstsq(P.T, (Pf @ model.phi.T).T, rcond=None)[0].T
     return SteadyGains(P, Pf, k, f, a, j)
-
-
-def _blocks(T: np.ndarray) -> list[slice]:
-    p = T.shape[0]
-    out, i = [], 0
-    while i < p:
-        size = 2 if i + 1 < p and T[i + 1, i] != 0 else 1
-        out.append(slice(i, i + size))
-        i += size
-    return out
 
 
 def _strictly_proper(num: tuple[float, ...], den: list[float], d: np.ndarray, w0: np.ndarray) -> np.ndarray:
@@ -138,7 +128,7 @@ def _run_modes(T: np.ndarray, gain: np.ndarray, y: np.ndarray, const: np.ndarray
     once)."""
     m, n = y.shape
     w = np.empty((T.shape[0], m, n))
-    for blk in reversed(_blocks(T)):
+    for blk in reversed(blocks(T)):
         drive = gain[blk, None, None] * y[None]
         drive += const[blk, :, None]
         later = slice(blk.stop, T.shape[0])
@@ -146,55 +136,6 @@ def _run_modes(T: np.ndarray, gain: np.ndarray, y: np.ndarray, const: np.ndarray
             drive += np.tensordot(T[blk, later], w[later], axes=1)
         _run_block(T[blk, blk], drive, w0[blk], out=w[blk])
     return w
-
-
-#: Largest condition number of the real modal basis used instead of the Schur basis.
-MODAL_MAX_COND = 1e6
-
-
-@dataclass(frozen=True)
-class Basis:
-    """A = U T U⁻¹ with T real quasi-triangular (Schur, U orthogonal) or block-diagonal (``modal``)."""
-
-    t: np.ndarray
-    u: np.ndarray
-    u_inv: np.ndarray
-    modal: bool
-
-
-def _modal_basis(A: np.ndarray) -> Basis | None:
-    """The real modal basis of A when its condition number is below :data:`MODAL_MAX_COND`, else None."""
-    lam, vec = np.linalg.eig(A)
-    if not (np.all(np.isfinite(lam)) and np.all(np.isfinite(vec))):
-        return None
-    p = A.shape[0]
-    cols, t = [], np.zeros((p, p))
-    i = 0
-    while i < p:
-        if lam[i].imag == 0.0:
-            t[i, i] = lam[i].real
-            cols.append(vec[:, i].real)
-            i += 1
-            continue
-        if i + 1 >= p or lam[i + 1] != np.conj(lam[i]):
-            return None
-        a, b = lam[i].real, lam[i].imag
-        t[i: i + 2, i: i + 2] = [[a, b], [-b, a]]
-        cols += [vec[:, i].real, vec[:, i].imag]
-        i += 2
-    u = np.column_stack(cols)
-    if np.linalg.cond(u) > MODAL_MAX_COND:
-        return None
-    return Basis(t, u, np.linalg.inv(u), True)
-
-
-def decoupled_basis(A: np.ndarray) -> Basis:
-    """The basis the filters run in: modal where well conditioned, else real Schur."""
-    modal = _modal_basis(A)
-    if modal is not None:
-        return modal
-    T, U = schur(A, output="real")
-    return Basis(T, U, U.T, False)
 
 
 #: Sinusoidal columns go in closed form when their free responses cost less than this share of
@@ -217,7 +158,7 @@ def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple
                         for c in declared]
     affine = closed & (cols.omega == 0.0)  # one step response serves them all: always cheaper than filtering
     closed &= ~affine
-    k, n_blocks = int(closed.sum()), len(_blocks(b.t))
+    k, n_blocks = int(closed.sum()), len(blocks(b.t))
     length = harmonic.free_response_length(poles, n) if k else n
     free_cost = p * length if b.modal else min(k, p) * length * n_blocks  # one block over one column: 1 per sample
     if k and free_cost >= CLOSED_FORM_SHARE * k * n * n_blocks:  # the free responses would cost what they save
@@ -247,7 +188,7 @@ def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray,
         w = _run_modes(b.t, gain_w, y, g_w, w0)
         return (hu @ w.reshape(p, -1)).reshape(m, n)
     outputs = (_driven_block(b.t[blk, blk], hu[blk][None, :], gain_w[blk], y, const=g_w[blk], w0=w0[blk])[0]
-               for blk in _blocks(b.t))
+               for blk in blocks(b.t))
     return _accumulate(outputs)
 
 
@@ -285,48 +226,31 @@ def _affine_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, *
 
 
 def _step_response(model: StateSpace, g: SteadyGains, b: Basis, n: int) -> np.ndarray:
-    """s_t = H x_t (N,) of x_{t+1} = A x_t + ΦK, x_0 = 0. In the modal basis in closed form, mode by mode: with
-    μ the mode's eigenvalue (a 2 × 2 block [[a, β], [−β, a]] acts on w₀ + j w₁ as μ = a − jβ) and γ, η its input and
-    output weights, s_t = Σ Re(κ (1 − μ^t)), κ = η γ / (1 − μ), μ^t kept while |μ|^t ≥
-    :data:`~.harmonic.FREE_RESPONSE_FLOOR` (:func:`_powers`); in the Schur basis a filtered column of ones."""
+    """s_t = H x_t (N,) of x_{t+1} = A x_t + ΦK, x_0 = 0: in the modal basis in closed form from each mode's
+    eigenvalue μ and weight κ (a 2 × 2 block [[a, β], [−β, a]] acts on w₀ + j w₁ as μ = a − jβ; κ = η γ / (1 − μ) with
+    γ, η its input and output weights; :func:`.harmonic.step_response`); in the Schur basis a filtered column of
+    ones."""
     gain_w = b.u_inv @ (model.phi @ g.k)
     if not b.modal:
         p = model.n_states
         return _filtered_output(model, g, b, np.ones((1, n)), u=np.zeros((p, 1)), m0=np.zeros((p, 1)))[0]
     hu = model.h @ b.u
-    parts = []
-    for blk in _blocks(b.t):
+    modes = []
+    for blk in blocks(b.t):
         i = blk.start
         if blk.stop - i == 1:
             mu, gamma, eta = complex(b.t[i, i]), complex(gain_w[i]), complex(hu[i])
         else:
             mu = complex(b.t[i, i], -b.t[i, i + 1])
             gamma, eta = complex(gain_w[i], gain_w[i + 1]), complex(hu[i], -hu[i + 1])
-        parts.append((mu, eta * gamma / (1.0 - mu)))
-    out = np.full(n, sum(kappa.real for _, kappa in parts))
-    for mu, kappa in parts:
-        length = harmonic.free_response_length(np.array([mu]), n)
-        if mu.imag == 0.0:
-            out[:length] -= kappa.real * _powers(mu.real, length)
-        else:
-            power = _powers(mu, length)
-            out[:length] -= kappa.real * power.real - kappa.imag * power.imag
-    return out
-
-
-def _powers(mu: float | complex, length: int) -> np.ndarray:
-    """μ^t for t = 0 … length − 1 as the outer product of μ^(w·i) and μ^j, w = ⌈√length⌉: one product per sample (a
-    power is a few ulps; a recursion would add one rounding per step)."""
-    width = math.isqrt(max(length - 1, 0)) + 1
-    fine = np.power(mu, np.arange(width, dtype=float))
-    coarse = np.power(mu, width * np.arange(-(-length // width), dtype=float))
-    return np.multiply.outer(coarse, fine).ravel()[:length]
+        modes.append((mu, eta * gamma / (1.0 - mu)))
+    return harmonic.step_response(modes, n)
 
 
 def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
     """R (p, length), R[j, t] = (H U)_blk T_blk^t e_j; the free response from w_0 = U⁻¹x_0 is w_0ᵀR."""
     out = np.empty((b.t.shape[0], length))
-    for blk in _blocks(b.t):
+    for blk in blocks(b.t):
         s = blk.stop - blk.start
         out[blk] = _driven_block(b.t[blk, blk], hu[blk][None, :], np.zeros(s), np.zeros((s, length)),
                                  const=np.zeros((s, s)), w0=np.eye(s))[0]
@@ -340,7 +264,7 @@ def _block_states(T: np.ndarray, gain: np.ndarray, y: np.ndarray, const: np.ndar
     if not modal:
         return _run_modes(T, gain, y[None, :], const, w0)[:, 0, :]
     w = np.empty((T.shape[0], y.size))
-    for blk in _blocks(T):
+    for blk in blocks(T):
         size = blk.stop - blk.start
         rows = _driven_block(T[blk, blk], np.eye(size), gain[blk], y[None, :], const=const[blk], w0=w0[blk])
         for r, row in enumerate(rows):
