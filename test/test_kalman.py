@@ -372,3 +372,49 @@ def test_the_stein_sum_judged_from_its_spectral_radius_is_the_sum(a):
     want = riccati._stein_sum(A, W)
     np.testing.assert_allclose(got, want, rtol=1e-14)
     np.testing.assert_allclose(A.T @ got @ A + W, got, rtol=1e-11)
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 64, 1001])
+def test_the_affine_power_sums_are_the_sums_of_the_recursion(n):
+    """Σ_{k<n} T^k(P0) and T^{n−1}(P0) for T(P) = J P Jᵀ + C, from the doubling, equal the recursion run n times (a
+    non-normal J with a slow pole, as a smoother gain beside a walk)."""
+    from imu_noise_id.core.kalman.steady import affine_power_sum
+
+    J = np.array([[0.999, 0.3], [0.0, 0.6]])
+    C = np.array([[0.5, 0.1], [0.1, 0.2]])
+    P0 = np.array([[2.0, -0.4], [-0.4, 1.0]])
+    p, total = P0, np.zeros_like(P0)
+    for k in range(n):
+        total += p
+        if k < n - 1:
+            p = J @ p @ J.T + C
+    got_total, got_last = affine_power_sum(J, C, P0, n)
+    np.testing.assert_allclose(got_total, total, rtol=1e-11)
+    np.testing.assert_allclose(got_last, p, rtol=1e-11)
+
+
+@pytest.mark.parametrize("first", [0.0, None])
+def test_a_data_column_of_zeros_is_not_filtered_and_its_pass_is_the_recursions(first):
+    """The adjustment's passes run the model on a data column of zeros: the steady engine leaves it unfiltered (its
+    output is zero) and the pass equals the exact recursion's; a data column that only starts at zero is filtered."""
+    from imu_noise_id.core.kalman import steady
+
+    model, y, z = _data(MIXES["WN+GM+RW+RR"], 4000)
+    data = np.zeros_like(y) if first is not None else y.copy()
+    data[0] = 0.0
+    filtered: list[np.ndarray] = []
+    spied = steady._filtered_output
+
+    def spy(*args, **kwargs):
+        filtered.append(np.asarray(args[3]).copy())
+        return spied(*args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(steady, "_filtered_output", spy)
+        got = kalman.loglik(model, data, z)
+    assert all(np.any(rows, axis=1).all() for rows in filtered)
+    assert sum(rows.shape[0] for rows in filtered) == (2 if first is not None else 3)  # the bias and ramp columns
+    want = kalman.loglik(model, data, z, engine="exact")
+    assert got.loglik == pytest.approx(want.loglik, rel=1e-9)
+    np.testing.assert_allclose(got.beta, want.beta, rtol=1e-7, atol=1e-12)
+    np.testing.assert_allclose(got.beta_cov, want.beta_cov, rtol=1e-7)

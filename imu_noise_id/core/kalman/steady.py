@@ -163,13 +163,18 @@ def _predicted_output(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple
     free_cost = p * length if b.modal else min(k, p) * length * n_blocks  # one block over one column: 1 per sample
     if k and free_cost >= CLOSED_FORM_SHARE * k * n * n_blocks:  # the free responses would cost what they save
         closed[:] = False
-    if not np.any(closed | affine):
+    # a column of zeros without input or initial mean (the data's in a pass for the adjustment alone) stays zero
+    zero = ~closed & ~affine & ~np.any(cols.g, axis=0) & ~np.any(cols.m0, axis=0)
+    zero[zero] = [cols.y[r, 0] == 0.0 and not np.any(cols.y[r]) for r in np.flatnonzero(zero)]
+    if not np.any(closed | affine | zero):
         return _filtered_output(model, g, b, cols.y, u=cols.g, m0=cols.m0), b
     out = np.empty((m, n))
-    plain = np.flatnonzero(~closed & ~affine)
-    if plain.size and plain[-1] - plain[0] == plain.size - 1:  # consecutive rows (the data's): a view, not a copy
-        plain = slice(int(plain[0]), int(plain[-1]) + 1)
-    out[plain] = _filtered_output(model, g, b, cols.y[plain], u=cols.g[:, plain], m0=cols.m0[:, plain])
+    out[zero] = 0.0
+    rows = np.flatnonzero(~closed & ~affine & ~zero)
+    if rows.size:
+        # consecutive rows (the data's): a view, not a copy
+        plain = slice(int(rows[0]), int(rows[-1]) + 1) if rows[-1] - rows[0] == rows.size - 1 else rows
+        out[plain] = _filtered_output(model, g, b, cols.y[plain], u=cols.g[:, plain], m0=cols.m0[:, plain])
     if np.any(affine):
         _affine_output(model, g, b, cols.y, rows=np.flatnonzero(affine), out=out)
     if np.any(closed):
@@ -320,7 +325,7 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
 
         Σ_{k<n} T^k(P0) = X_n(P0) + (n − 1)·X_n(C) − W_n,        T^{n−1}(P0) = J^{n−1} P0 J^{n−1}ᵀ + X_{n−1}(C),
 
-    combining as A_{a+b} = A_a A_b, X_{a+b} = X_a + A_a X_b A_aᵀ, W_{a+b} = W_a + A_a (W_b + a·X_b) A_aᵀ.
+    combining as A_{a+b} = A_a A_b, X_{a+b} = X_a + A_a X_b A_aᵀ, W_{a+b} = W_a + A_a (W_b + a·X_b) A_aᵀ; n ≥ 1.
     """
 
     def combine(first, second):
@@ -339,8 +344,9 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
                 step = combine(step, step)
         return result
 
-    _, _, xp, xc, w = power(n)
-    _, a_last, _, xc_last, _ = power(n - 1)
+    head = power(n - 1)  # the sums to n follow from those to n − 1 by one more step (not a second doubling)
+    _, a_last, _, xc_last, _ = head
+    _, _, xp, xc, w = combine(head, (1, J, P0, C, np.zeros_like(J)))
     total = xp + (n - 1) * xc - w
     last = a_last @ P0 @ a_last.T + xc_last
     return 0.5 * (total + total.T), 0.5 * (last + last.T)
