@@ -40,7 +40,10 @@ ONE_TREE = """
 import hashlib, json, time
 import numpy as np
 from imu_noise_id.core import kalman
-from imu_noise_id.core.estimation import em
+try:  # the E-step's module (the estimation package's em.py itself in older checkouts)
+    from imu_noise_id.core.estimation.em import em
+except ImportError:
+    from imu_noise_id.core.estimation import em
 from imu_noise_id.core.kalman import steady
 try:  # where the modal basis's condition bound lives (steady.py itself in older checkouts)
     from imu_noise_id.core.kalman import basis as bases
