@@ -528,8 +528,9 @@ def test_a_doubled_random_walk_is_found_at_longer_tau_where_the_white_noise_does
     unchanged = compare_axis(y + np.cumsum(rng.standard_normal(n) * 1e-4 * math.sqrt(DT)), DT, reference)
     assert not unchanged.degraded, unchanged.findings()
     watch = AllanWatch([reference], DT, ratio=1.5, false_alarms_per_hour=0.1 / 54)
+    changed = (y + walk)[:, None]
     for k in range(n):
-        watch.add(k * DT, (y + walk)[k: k + 1])
+        watch.add(k * DT, changed[k])
     state = watch.axis(0)[1.0]
     assert state.confirmed_s is not None and 600.0 <= state.confirmed_s <= 900.0
 
