@@ -140,6 +140,34 @@ def test_newton_riccati_from_a_nearby_model_equals_doubling(name, rel_step):
 
 
 
+@pytest.mark.parametrize("walk_scale", [1e3, 1.0 + 1e-3])
+def test_newton_riccati_from_a_guess_decades_away_gives_way_to_the_doubling_after_one_step(walk_scale):
+    """A warm start whose walk variance is decades off (a fit's start, a profile point): Newton's steps only about
+    halve the error there (19 steps), so after a first step that moves a variance by more than NEWTON_FAR it stops
+    and the doubling solves; from a nearby guess Newton finishes alone. P̄ is the doubling's either way."""
+    model = ss.from_components([WN(0.3), GM(tau=20.0, sigma=0.5), RW(1e-6)], 1.0)
+    reference = steady_prediction_covariance(model.phi, model.q, model.h, model.r)
+    guess = reference.copy()
+    guess[-1, -1] *= walk_scale
+    calls = {"_stein_sum": 0, "_doubling_dare": 0}
+
+    def counted(name):
+        plain = getattr(riccati, name)
+
+        def spy(*args, **kwargs):
+            calls[name] += 1
+            return plain(*args, **kwargs)
+        return spy
+
+    with pytest.MonkeyPatch.context() as mp:
+        for name in calls:
+            mp.setattr(riccati, name, counted(name))
+        got = steady_prediction_covariance(model.phi, model.q, model.h, model.r, guess=guess)
+    far = walk_scale > 2.0
+    assert calls["_doubling_dare"] == int(far) and (calls["_stein_sum"] == 1 or not far)
+    np.testing.assert_allclose(got, reference, rtol=0, atol=1e-11 * np.max(np.abs(reference)))
+
+
 @pytest.mark.parametrize("direction", ["phi", "q", "h", "r"])
 def test_the_steady_covariance_sensitivity_equals_finite_differences_of_the_doubling(direction):
     # tr(W dP̄) from the adjoint Stein solve against central differences of P̄ solved from scratch by the doubling
