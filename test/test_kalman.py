@@ -133,10 +133,35 @@ def test_newton_riccati_from_a_nearby_model_equals_doubling(name, rel_step):
     comps = [c if isinstance(c, RR) else type(c)(**{k: v * (1 + rel_step) for k, v in c.params().items()})
              for c in MIXES[name]]
     moved = ss.with_components(model, comps)
-    assert moved._steady_cache.get("guess") is not None  # the warm start is actually used
     reference = steady_prediction_covariance(moved.phi, moved.q, moved.h, moved.r)
-    np.testing.assert_allclose(moved.steady_prediction_covariance(), reference, rtol=0,
-                               atol=1e-11 * np.max(np.abs(reference)))
+    guesses = []
+    with pytest.MonkeyPatch.context() as mp:
+        solve = ss.steady_prediction_covariance
+        mp.setattr(ss, "steady_prediction_covariance",
+                   lambda *args, guess=None: guesses.append(guess) or solve(*args, guess=guess))
+        got = moved.steady_prediction_covariance()
+    assert len(guesses) == 1 and guesses[0] is not None  # the warm start is actually used
+    np.testing.assert_allclose(got, reference, rtol=0, atol=1e-11 * np.max(np.abs(reference)))
+
+
+def test_a_copy_with_other_means_keeps_the_riccati_solution():
+    """The GLS profile returns the model with its means: the same Φ, Q, H, R, so P̄ is not solved again (it had been,
+    by a Newton step, for every gradient's initial-state term); a copy with another Q is solved, from P̄."""
+    model = ss.from_components(MIXES["WN+GM+RW+RR"], 1.0)
+    solved = model.steady_prediction_covariance()
+    calls = []
+    with pytest.MonkeyPatch.context() as mp:
+        solve = ss.steady_prediction_covariance
+        mp.setattr(ss, "steady_prediction_covariance",
+                   lambda *args, guess=None: calls.append(guess) or solve(*args, guess=guess))
+        same = model.copy(b=model.b + 1.0, mu=model.mu + 2.0).steady_prediction_covariance()
+        assert not calls
+        np.testing.assert_array_equal(same, solved)
+        assert same is not solved  # a copy: neither model's P̄ changes with the other's
+        other = model.copy(q=2.0 * model.q).steady_prediction_covariance()
+    assert len(calls) == 1 and calls[0] is not None
+    np.testing.assert_allclose(other, steady_prediction_covariance(model.phi, 2.0 * model.q, model.h, model.r),
+                               rtol=0, atol=1e-11 * np.max(np.abs(other)))
 
 
 

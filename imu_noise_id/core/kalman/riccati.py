@@ -185,10 +185,11 @@ class SteadyCovarianceSensitivity:
         K = P @ h / s
         P_u = P - s * np.outer(K, K)
         A = phi - np.outer(phi @ K, h)
-        if A.size and not np.max(np.abs(np.linalg.eigvals(A))) < 1.0 - UNIT_POLE_GAP:
+        rho = float(np.abs(np.linalg.eigvals(A)).max()) if A.size else 0.0
+        if not rho < 1.0 - UNIT_POLE_GAP:
             return None
         with np.errstate(over="ignore", invalid="ignore"):  # not finite: None below
-            M = _stein_sum(A, W)
+            M = _stein_sum(A, W, rho=rho)
             N = phi.T @ M @ phi
             NK = N @ K
             closed = np.eye(h.size) - np.outer(K, h)

@@ -74,15 +74,19 @@ class StateSpace:
         return int(self.b.shape[0])
 
     def copy(self, **changes) -> StateSpace:
-        """A deep copy with some attributes replaced (P̄ kept only as the start of its Riccati solve)."""
+        """A deep copy with some attributes replaced; P̄ kept with the Φ, Q, H, R it solves (reused while the copy's
+        are the same, e.g. where only the means changed; else the start of its Riccati solve)."""
         fields = {
             k: (np.array(v, copy=True) if isinstance(v, np.ndarray) else v)
             for k, v in self.__dict__.items() if k != "_steady_cache"
         }
         fields.update(changes)
         cached = self._steady_cache.get("value")
-        guess = cached[1] if cached is not None else self._steady_cache.get("guess")
-        fields["_steady_cache"] = {"guess": guess} if guess is not None else {}
+        if cached is not None:
+            fields["_steady_cache"] = {"value": (cached[0], cached[1].copy())}
+        else:
+            guess = self._steady_cache.get("guess")
+            fields["_steady_cache"] = {"guess": guess} if guess is not None else {}
         return replace(self, **fields)
 
     # -- vec(M) = f + D·m (paper 000 eqs. 7–9) -------------------------------------------------------------
