@@ -45,6 +45,8 @@ GOALS: list[tuple[list[str], str]] = [
     (["bench_node.py", "--duration", "150", "--watch"], "bench_node.txt"),
     (["bench_analyze_time.py", "--baseline", BASELINE], "bench_analyze_time.txt"),
     (["bench_analyze_time.py", "--duration", "10800"], "bench_analyze_time.txt"),
+    (["bench_analyze_time.py", "--rates", "100", "--duration", "660", "--repeats", "3", "--numbers", "--baseline",
+      BASELINE], "bench_analyze_time.txt"),
     (["bench_analyze_time.py", "--rates", "200", "--duration", "86400", "--baseline", BASELINE],
      "bench_analyze_time.txt"),
     (["bench_fit_time.py", "--samples", "360000", "--baseline", BASELINE], "bench_fit_time.txt"),
