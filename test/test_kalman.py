@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import warnings
 
 import numpy as np
@@ -123,6 +124,17 @@ def test_missing_samples_are_skipped_not_filled():
         kalman.loglik(model, y_bad, z)
 
 
+@contextlib.contextmanager
+def _riccati_solves():
+    """The guess of every Riccati solve a StateSpace asks for while the block runs, listed."""
+    guesses: list[np.ndarray | None] = []
+    solve = ss.steady_prediction_covariance
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(ss, "steady_prediction_covariance",
+                   lambda *args, guess=None: guesses.append(guess) or solve(*args, guess=guess))
+        yield guesses
+
+
 @pytest.mark.parametrize("name", list(MIXES))
 @pytest.mark.parametrize("rel_step", [1e-6, 0.3])
 def test_newton_riccati_from_a_nearby_model_equals_doubling(name, rel_step):
@@ -134,11 +146,7 @@ def test_newton_riccati_from_a_nearby_model_equals_doubling(name, rel_step):
              for c in MIXES[name]]
     moved = ss.with_components(model, comps)
     reference = steady_prediction_covariance(moved.phi, moved.q, moved.h, moved.r)
-    guesses = []
-    with pytest.MonkeyPatch.context() as mp:
-        solve = ss.steady_prediction_covariance
-        mp.setattr(ss, "steady_prediction_covariance",
-                   lambda *args, guess=None: guesses.append(guess) or solve(*args, guess=guess))
+    with _riccati_solves() as guesses:
         got = moved.steady_prediction_covariance()
     assert len(guesses) == 1 and guesses[0] is not None  # the warm start is actually used
     np.testing.assert_allclose(got, reference, rtol=0, atol=1e-11 * np.max(np.abs(reference)))
@@ -149,11 +157,7 @@ def test_a_copy_with_other_means_keeps_the_riccati_solution():
     by a Newton step, for every gradient's initial-state term); a copy with another Q is solved, from P̄."""
     model = ss.from_components(MIXES["WN+GM+RW+RR"], 1.0)
     solved = model.steady_prediction_covariance()
-    calls = []
-    with pytest.MonkeyPatch.context() as mp:
-        solve = ss.steady_prediction_covariance
-        mp.setattr(ss, "steady_prediction_covariance",
-                   lambda *args, guess=None: calls.append(guess) or solve(*args, guess=guess))
+    with _riccati_solves() as calls:
         same = model.copy(b=model.b + 1.0, mu=model.mu + 2.0).steady_prediction_covariance()
         assert not calls
         np.testing.assert_array_equal(same, solved)

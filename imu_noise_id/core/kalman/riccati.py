@@ -27,7 +27,7 @@ def _covariance(P: np.ndarray) -> np.ndarray:
 
 #: A first Newton step that changes a state's variance by more than this share of the new value starts from a guess
 #: too far for Newton's few steps: far from P̄ its steps only about halve the error (14–21 steps where a fit's starts and
-#: profile points moved a walk's variance by decades), and the doubling costs fewer than six.
+#: profile points moved a walk's variance by decades), and the doubling costs about as much as six of them.
 NEWTON_FAR = 0.5
 
 
@@ -54,9 +54,10 @@ def _newton_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float, guess:
         # quadratic convergence: a 1e-10 step leaves ~1e-20, below the Stein sum's rounding floor; and each state's
         # variance to 1e-6 of itself (a walk driven far below the others is not converged by their scale), or to
         # its rounding, which grows as ε/(1 − ρ) as the closed loop's pole nears 1 (1e-5 at 1 − 10⁻¹¹)
-        if converged(P_new - P, P_new, 1e-10, max(1e-6, 1e3 * EPS / max(1.0 - rho, EPS))):
+        change = P_new - P
+        if converged(change, P_new, 1e-10, max(1e-6, 1e3 * EPS / max(1.0 - rho, EPS))):
             return P_new
-        if step == 0 and np.any(np.abs(np.diagonal(P_new - P)) > NEWTON_FAR * np.abs(np.diagonal(P_new))):
+        if step == 0 and np.any(np.abs(np.diagonal(change)) > NEWTON_FAR * np.abs(np.diagonal(P_new))):
             return None
         P = P_new
     return None

@@ -332,10 +332,12 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
         (ka, Aa, Xpa, Xca, Wa), (kb, Ab, Xpb, Xcb, Wb) = first, second
         return (ka + kb, Aa @ Ab, Xpa + Aa @ Xpb @ Aa.T, Xca + Aa @ Xcb @ Aa.T, Wa + Aa @ (Wb + ka * Xcb) @ Aa.T)
 
+    zero = np.zeros_like(J)
+    one = (1, J, P0, C, zero)  # the sums over a single term
+
     def power(k):
-        zero = np.zeros_like(J)
         result = (0, np.eye(J.shape[0]), zero, zero, zero)
-        step = (1, J, P0, C, zero)
+        step = one
         while k:
             if k & 1:
                 result = combine(result, step)
@@ -346,7 +348,7 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
 
     head = power(n - 1)  # the sums to n follow from those to n − 1 by one more step (not a second doubling)
     _, a_last, _, xc_last, _ = head
-    _, _, xp, xc, w = combine(head, (1, J, P0, C, np.zeros_like(J)))
+    _, _, xp, xc, w = combine(head, one)
     total = xp + (n - 1) * xc - w
     last = a_last @ P0 @ a_last.T + xc_last
     return 0.5 * (total + total.T), 0.5 * (last + last.T)
