@@ -17,6 +17,9 @@ R_TOL = 0.05
 MAX_POINTS = 12
 #: Outward steps that raise the signed root by less than this (the profile is flat) jump to the end of the range.
 FLAT_PROGRESS = 0.1
+#: An outward step from a point whose signed root is this close below Z95 goes where the secant puts Z95 (it is then
+#: accurate to a fraction of the gap); from further inside it goes at least 1.25× further, to bracket the end.
+SECANT_TRUSTED = 0.25
 
 #: One profile point: (distance from the centre, signed root r, argmax of the other parameters).
 Point = tuple[float, float, np.ndarray]
@@ -62,6 +65,11 @@ def end(profile_at: ProfileAt, starts_near: Callable[[np.ndarray], list[np.ndarr
             inside = [d, r - Z95]
         elif outside is None:
             outside = [d, min(r - Z95, 10.0 * Z95)]
+    for d, r, _ in known:  # a point already on the end (the first that is not inside)
+        if abs(r - Z95) < R_TOL:
+            return v_c + direction * d
+        if r > Z95:
+            break
     last_moved = 0  # which end the previous step replaced (−1 inside, +1 outside)
     d = min(max(first, 1e-12), limit) if len(pts) == 1 else None
     for _ in range(MAX_POINTS):
@@ -74,7 +82,8 @@ def end(profile_at: ProfileAt, starts_near: Callable[[np.ndarray], list[np.ndarr
                     d = limit
                 else:
                     grow = d0 + (Z95 - r0) * (d1 - d0) / (r1 - r0) if r1 > r0 else math.inf
-                    d = min(max(grow, 1.25 * d1), 4.0 * d1, limit)
+                    least = d1 * (1.0 + 1e-3) if Z95 - r1 < SECANT_TRUSTED else 1.25 * d1
+                    d = min(max(grow, least), 4.0 * d1, limit)
         else:
             if outside[0] - inside[0] < 1e-3 * outside[0]:
                 break
