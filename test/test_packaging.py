@@ -124,8 +124,11 @@ def test_a_wheel_installed_by_pip_finds_the_default_config_files(tmp_path):
     venv = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], timeout=120, check=True)
     python = venv / "bin" / "python"
+    # pip asks the new venv's interpreter what it holds: a PYTHONPATH reaching a checkout would show the package as
+    # installed already, and pip would install nothing
+    clean = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     proc = subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install", "--no-deps", "--no-index",
-                           "-q", str(wheel)], capture_output=True, text=True, timeout=300, check=False)
+                           "-q", str(wheel)], capture_output=True, text=True, timeout=300, check=False, env=clean)
     assert proc.returncode == 0, proc.stderr
     share = venv / "share" / PACKAGE / "config"
     assert sorted(p.name for p in share.glob("*.yaml")) == CONFIGS
