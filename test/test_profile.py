@@ -165,32 +165,3 @@ def test_a_scored_start_gives_its_adjustment_without_another_pass():
         prof.maximise(starts, set(range(theta.size)) - {k_rw}, model)
     # the adjustment's gradient at the estimate (1 + k passes, once per mask) and the RW's step: not the start's
     assert len(zeros_passes) == 1 + theta.size + 1
-
-
-def test_a_wald_check_re_maximises_a_boundary_parameter_from_two_starts_to_what_the_ladder_finds():
-    """At each Wald end the zero-boundary random walk is re-maximised from the trace's point and from the estimate's
-    own argmax (two scored starts, not the six of the ladder): ℓ_A there is what the whole ladder finds, to 0.05 (the
-    inner search's own precision; the drops the check accepts span 0.8)."""
-    _, fit, par, theta, prof = _ramp_fit_profiler()
-    k_rw = next(j for j, (i, _) in enumerate(par.entries) if par.template[i].name == "RW")
-    k_wn = next(j for j, (i, _) in enumerate(par.entries) if par.template[i].name == "WN")
-    prof.zero = {k_rw: prof.conditional_scale(k_rw)}
-    a_hat = prof.best_at_estimate()
-    assert prof.loose_argmax is not None
-    calls = []
-    with pytest.MonkeyPatch.context() as mp:
-        inner = profile.Profiler.maximise
-
-        def spy(self, starts, fixed, base, **kw):
-            out = inner(self, starts, fixed, base, **kw)
-            calls.append((starts, fixed, out[0]))
-            return out
-
-        mp.setattr(profile.Profiler, "maximise", spy)
-        cov = np.diag(np.full(theta.size, 0.04))
-        prof.wald_holds(k_wn, cov, a_hat, (-math.inf, math.inf))  # both ends, whatever their drop
-    assert len(calls) == 2
-    for starts, fixed, a in calls:
-        assert len(starts) == 2
-        ladder = [np.where(np.arange(theta.size) == k_rw, s[k_rw], starts[0]) for s in prof.fallback_starts()]
-        assert a == pytest.approx(prof.maximise([starts[0], *ladder], fixed, fit.statespace)[0], abs=0.05)

@@ -100,8 +100,6 @@ class Profiler:
     n_eval: int = 0
     max_eval: float = math.inf
     better: tuple[float, np.ndarray] | None = None  # (ℓ, ϑ) above the fit's maximum, when met
-    #: ϑ̂ with the zero-boundary and undetermined parameters at ℓ_A's argmax (:meth:`best_at_estimate`), once found.
-    loose_argmax: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.data = em.DataSums.of(self.y, self.z)
@@ -230,23 +228,19 @@ class Profiler:
     def wald_holds(self, k: int, cov: np.ndarray, a_hat: float, drop_range: tuple[float, float]) -> bool:
         """Whether ℓ_A at both Wald ends of log-parameter k (interior others on the trace
         ϑ̂ + Σ_{·k}/Σ_kk·(ϑ_k − ϑ̂_k), the zero-boundary and undetermined ones re-maximised) lies ``drop_range``
-        below ``a_hat``. The re-maximisation starts from the trace's point and from it with those parameters at
-        :attr:`loose_argmax`, not from the ladder (:meth:`with_ladder`): a mode both miss only lowers ℓ_A at the end,
-        and a drop beyond ``drop_range`` leaves the interval to the profile, which searches the ladder."""
+        below ``a_hat``."""
         step = Z95 * cov[:, k] / math.sqrt(cov[k, k])
         step = np.where(np.isfinite(step), step, 0.0)
-        loose = sorted(set(self.zero) | self.flat)
-        self.afford(2 * self.maximise_cost(2) if loose else 2)  # two inner maximisations or two points
+        loose = set(self.zero) | self.flat
+        ladder = [(s, j) for s in self.fallback_starts()[1:] for j in self.zero if s[j] != self.theta[j]]
+        self.afford(2 * self.maximise_cost(1 + len(ladder)) if loose else 2)  # two inner maximisations or two points
         for sign in (-1.0, 1.0):
             th = self.theta + sign * step
             if np.any(th < self.lo) or np.any(th > self.hi):
                 return False
             if loose:
-                starts = [th]
-                if self.loose_argmax is not None:
-                    starts.append(th.copy())
-                    starts[-1][loose] = self.loose_argmax[loose]
-                a = self.maximise(starts, set(range(th.size)) - set(loose), self.model)[0]
+                starts = [th] + [np.where(np.arange(th.size) == j, s[j], th) for s, j in ladder]
+                a = self.maximise(starts, set(range(th.size)) - loose, self.model)[0]
             else:
                 a = self.evaluate(th)[1]
             if not drop_range[0] <= a_hat - a <= drop_range[1]:
@@ -258,9 +252,8 @@ class Profiler:
         a_hat = self.evaluate(self.theta)[1]
         loose = set(self.zero) | self.flat
         if loose:
-            a, th = self.maximise(self.fallback_starts(), set(range(self.theta.size)) - loose, self.model)
-            self.loose_argmax = th.copy() if a > a_hat else self.theta.copy()
-            a_hat = max(a_hat, a)
+            a_hat = max(a_hat, self.maximise(self.fallback_starts(), set(range(self.theta.size)) - loose,
+                                             self.model)[0])
         return a_hat
 
     def maximise(self, starts: list[np.ndarray], fixed: set[int], base: StateSpace, *,
