@@ -165,3 +165,40 @@ def test_a_scored_start_gives_its_adjustment_without_another_pass():
         prof.maximise(starts, set(range(theta.size)) - {k_rw}, model)
     # the adjustment's gradient at the estimate (1 + k passes, once per mask) and the RW's step: not the start's
     assert len(zeros_passes) == 1 + theta.size + 1
+
+
+def test_the_curvature_along_a_ladders_rungs_is_the_parabolas():
+    """rung_curvature: −ℓ_A'' of a parabola through the best rung and its neighbours, exactly; NaN where the best rung
+    is the last on either side or ℓ_A does not bend there."""
+    rungs = [(x, 3.0 - 2.5 * (x - 0.7) ** 2) for x in (0.05, 0.14, 0.37, 1.0, 2.7)]
+    assert profile.rung_curvature(rungs) == pytest.approx(5.0)
+    assert profile.rung_curvature(list(reversed(rungs))) == pytest.approx(5.0)
+    assert math.isnan(profile.rung_curvature([(x, -x) for x in (0.1, 0.4, 1.0)]))  # best at the first rung
+    assert math.isnan(profile.rung_curvature([(x, x) for x in (0.1, 0.4, 1.0)]))  # best at the last
+    assert math.isnan(profile.rung_curvature([(0.1, 1.0), (0.4, 1.0), (1.0, 1.0)]))
+
+
+def test_a_boundary_parameters_search_coordinate_is_scaled_by_the_curvature_along_its_rungs():
+    """L-BFGS-B's first step assumes a unit Hessian; K/s of a zero-boundary parameter has −ℓ_A'' of 15–25 where a long
+    record pins K down (docs/em.md), and that step overshot tenfold. The coordinate handed to it is K/s·√c, c the
+    curvature of ℓ_A along the scored starts' rungs (computed here from passes of our own): its bounds and start say
+    so."""
+    _, fit, par, theta, prof = _ramp_fit_profiler()
+    k_rw = next(j for j, (i, _) in enumerate(par.entries) if par.template[i].name == "RW")
+    s = prof.conditional_scale(k_rw)
+    prof.zero = {k_rw: s}
+    model = fit.statespace
+    start = theta + 0.05
+    rungs = [(math.exp(t[k_rw]) / s, prof.evaluate(t, model)[1]) for t in prof.with_ladder(start)]
+    best = max(rungs, key=lambda p: p[1])[0]
+    c = profile.rung_curvature(rungs)
+    assert c > 0
+    seen = []
+    with pytest.MonkeyPatch.context() as mp:
+        inner = profile.minimize
+        mp.setattr(profile, "minimize", lambda fun, x0, **kw: seen.append((x0, kw["bounds"])) or inner(fun, x0, **kw))
+        prof.maximise(prof.with_ladder(start), set(range(theta.size)) - {k_rw}, model)
+    (x0, bounds), = seen
+    w = math.sqrt(c)
+    assert x0[0] == pytest.approx(best * w)
+    assert bounds[0] == pytest.approx((profile.ZERO_FLOOR * w, profile.ZERO_CAP * w))

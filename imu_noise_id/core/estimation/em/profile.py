@@ -8,7 +8,8 @@ adjusted for the GLS-estimated bias and ramp (Cox & Reid 1987, eq. 4; restricted
 
 the adjustment at ℓ_p's argmax; interval {v : ℓ_A(v) ≥ max ℓ_A − 1.92}, lower end 0 where 0 cannot be excluded; point
 estimates stay the ML ones. Searched by :mod:`.profile_search`: interior log-parameters whitened by their
-information, zero-boundary ones linearly as K/s, undetermined ones in their log within their physical range."""
+information, zero-boundary ones linearly as K/s (scaled by ℓ_A's curvature along the ladder of starts), undetermined
+ones in their log within their physical range."""
 
 from __future__ import annotations
 
@@ -49,6 +50,22 @@ def whitening(info: np.ndarray) -> np.ndarray:
     w, v = np.linalg.eigh(0.5 * (info + info.T))
     w = np.maximum(w, 1e-8 * max(float(np.max(w)), 1e-300))
     return v / np.sqrt(w)
+
+
+def rung_curvature(points: list[tuple[float, float]]) -> float:
+    """−d²ℓ_A/dx² at the best of ``points`` (x, ℓ_A): the second divided difference through it and its neighbours in
+    x; NaN where it has no neighbour on one side or ℓ_A does not bend there."""
+    pts = sorted(p for p in points if math.isfinite(p[1]))
+    if len(pts) < 3:
+        return math.nan
+    b = max(range(len(pts)), key=lambda i: pts[i][1])
+    if b in (0, len(pts) - 1):
+        return math.nan
+    (x0, a0), (x1, a1), (x2, a2) = pts[b - 1:b + 2]
+    if not x0 < x1 < x2:
+        return math.nan
+    second = 2.0 * ((a2 - a1) / (x2 - x1) - (a1 - a0) / (x1 - x0)) / (x2 - x0)
+    return -second if second < 0 else math.nan
 
 
 def distinct(starts: list[np.ndarray]) -> list[np.ndarray]:
@@ -283,7 +300,12 @@ class Profiler:
         flat = [j for j in free if j in self.flat and j not in self.zero]
         inner = [j for j in free if j not in zero and j not in flat]
         T = whitening(self.info[np.ix_(inner, inner)])
-        s = np.array([self.zero[j] for j in zero])
+        # each zero-boundary coordinate K/s scaled by √(−ℓ_A'') along the scored starts' rungs on it (those that differ
+        # from the start there alone): L-BFGS-B's first step, a unit-Hessian one, is then a Newton step there
+        rungs = [[(math.exp(t[j]) / self.zero[j], a) for (_, a), t in scored
+                  if np.array_equal(np.delete(t, j), np.delete(start, j))] for j in zero]
+        scale = np.array([math.sqrt(c) if (c := rung_curvature(r)) > 0 else 1.0 for r in rungs])
+        s = np.array([self.zero[j] for j in zero]) / scale
         ni, nz = len(inner), len(zero)
         start = np.where(np.isin(np.arange(start.size), zero), start, np.clip(start, self.lo, self.hi))
 
@@ -296,7 +318,8 @@ class Profiler:
             return th, raw == th[inner]
 
         x0 = np.concatenate([np.zeros(ni),
-                             np.clip(np.exp(start[zero]) / s, ZERO_FLOOR, ZERO_CAP) if nz else np.zeros(0),
+                             np.clip(np.exp(start[zero]) / s, ZERO_FLOOR * scale, ZERO_CAP * scale) if nz
+                             else np.zeros(0),
                              np.zeros(len(flat))])
         grad_theta = self.adjustment_gradient(base)
         c0 = adjustment(theta_of(x0)[0])
@@ -325,7 +348,7 @@ class Profiler:
             grad = np.concatenate([T.T @ (g[inner] * inside), g[zero] / x[ni:ni + nz], g[flat]]) + grad_c
             return self.ll_max - ll - float(grad_c @ (x - x0)), -grad
 
-        bounds = ([(-MAX_WHITENED, MAX_WHITENED)] * ni + [(ZERO_FLOOR, ZERO_CAP)] * nz
+        bounds = ([(-MAX_WHITENED, MAX_WHITENED)] * ni + [(ZERO_FLOOR * w, ZERO_CAP * w) for w in scale]
                   + [(self.lo[j] - start[j], self.hi[j] - start[j]) for j in flat])
         bounds = [tuple(None if b is None or not math.isfinite(b) else b for b in pair) for pair in bounds]
         if free and math.isfinite(c0):
