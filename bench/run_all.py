@@ -119,12 +119,14 @@ LONG: list[tuple[list[str], str]] = [
 #: Studies in bench/studies/ whose outputs README.md or docs/ quote (``--studies``; outputs in docs/results/studies/):
 #: one-off questions, not regression numbers. The side-by-side studies against an old checkout are run by hand, their
 #: last outputs kept as studies/bench_sensor_filter.txt and as sections of studies/likelihood_speed.txt
-#: (bench_steady_engine, bench_loop_measured_time; bench_sin_regressors' run below writes a third); the other studies
-#: keep no output: docs/ states what each found and names the script that reproduces it.
+#: (bench_steady_engine, bench_loop_measured_time; bench_sin_regressors' and probe_inner_scaling's runs below write a
+#: third and a fourth); the other studies keep no output: docs/ states what each found and names the script that
+#: reproduces it.
 STUDIES: list[tuple[list[str], str]] = [
     (["studies/probe_k_information.py", "--seeds", "3", "--minutes", "20", "120"], "studies/probe_k_information.txt"),
     (["studies/random_walk_bound.py"], "studies/probe_k_information.txt"),
     (["studies/bench_sin_regressors.py"], "studies/likelihood_speed.txt"),
+    (["studies/probe_inner_scaling.py"], "studies/likelihood_speed.txt"),
     (["studies/composite_gap.py"], "studies/composite_gap.txt"),
     (["studies/whittle_shortfall.py", "--run", "1", "--axis", "gyro_x"], "studies/composite_gap.txt"),
     (["studies/watch_power_bound.py"], "bench_watch.txt"),

@@ -2,7 +2,8 @@
 profile intervals' inner maximisations (docs/em.md, "A zero-boundary parameter searched linearly").
 
 Run:  PYTHONPATH=$PWD nice -n 10 python bench/studies/probe_inner_scaling.py [--long-seeds 2] [--short-seeds 8]
-(output: docs/results/studies/probe_inner_scaling.txt; about five minutes on a 2-core machine)
+(about five minutes on a 2-core machine; ``run_all.py --studies`` keeps its output as a section of
+docs/results/studies/likelihood_speed.txt)
 
 ``fit_model`` with intervals on WN+GM+RW+RR records: ``long``, 360 000 samples at 100 Hz of issue 46's T5 truth
 (GM τ 5 s, RW 3e-5, a ramp; bench_fit_time's record); ``short``, 36 000 samples at 10 Hz of bench_coverage's
@@ -81,13 +82,9 @@ def main() -> None:
     root = Path(__file__).resolve().parents[2]
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=root,
                             check=False).stdout.strip()
-    lines = [f"# python bench/studies/probe_inner_scaling.py --long-seeds {args.long_seeds} --short-seeds "
-             f"{args.short_seeds}", f"# at {commit or 'unknown'}, one process, one BLAS thread",
-             compare("long", args.long_seeds), compare("short", args.short_seeds)]
-    text = "\n".join(lines) + "\n"
-    print(text, end="")
-    out = root / "docs" / "results" / "studies" / "probe_inner_scaling.txt"
-    out.write_text(text, encoding="utf-8")
+    print(f"# at {commit or 'unknown'}, one process, one BLAS thread")
+    print(compare("long", args.long_seeds))
+    print(compare("short", args.short_seeds))
 
 
 if __name__ == "__main__":
