@@ -303,9 +303,13 @@ class Profiler:
         # each zero-boundary coordinate K/s scaled by √(−ℓ_A'') along the scored starts' rungs on it (those that differ
         # from the start there alone) where that exceeds 1: L-BFGS-B's first step, a unit-Hessian one, is then a
         # Newton step there instead of an overshoot (a flatter ℓ_A keeps K/s: its unit step falls short, not beyond)
-        rungs = [[(math.exp(t[j]) / self.zero[j], a) for (_, a), t in scored
-                  if np.array_equal(np.delete(t, j), np.delete(start, j))] for j in zero]
-        scale = np.array([math.sqrt(c) if (c := rung_curvature(r)) > 1.0 else 1.0 for r in rungs])
+        scale = np.ones(len(zero))
+        for i, j in enumerate(zero):
+            others = np.delete(start, j)
+            rungs = [(math.exp(t[j]) / self.zero[j], a) for (_, a), t in scored
+                     if np.array_equal(np.delete(t, j), others)]
+            if (c := rung_curvature(rungs)) > 1.0:
+                scale[i] = math.sqrt(c)
         s = np.array([self.zero[j] for j in zero]) / scale
         ni, nz = len(inner), len(zero)
         start = np.where(np.isin(np.arange(start.size), zero), start, np.clip(start, self.lo, self.hi))

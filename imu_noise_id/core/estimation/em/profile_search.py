@@ -61,15 +61,12 @@ def end(profile_at: ProfileAt, starts_near: Callable[[np.ndarray], list[np.ndarr
     inside: list[float] = [0.0, -Z95]  # Illinois regula falsi on f = r − Z95: [distance, f] with f < 0 …
     outside: list[float] | None = None  # … and with f > 0 once bracketed
     for d, r, _ in known:
+        if outside is None and abs(r - Z95) < R_TOL:  # a point already on the end, before any beyond it
+            return v_c + direction * d
         if r < Z95:
             inside = [d, r - Z95]
         elif outside is None:
             outside = [d, min(r - Z95, 10.0 * Z95)]
-    for d, r, _ in known:  # a point already on the end (the first that is not inside)
-        if abs(r - Z95) < R_TOL:
-            return v_c + direction * d
-        if r > Z95:
-            break
     last_moved = 0  # which end the previous step replaced (−1 inside, +1 outside)
     d = min(max(first, 1e-12), limit) if len(pts) == 1 else None
     for _ in range(MAX_POINTS):
