@@ -179,35 +179,37 @@ def test_the_curvature_along_a_ladders_rungs_is_the_parabolas():
 
 
 def test_a_boundary_parameters_search_coordinate_is_scaled_by_the_curvature_along_its_rungs():
-    """L-BFGS-B's first step assumes a unit Hessian; K/s of a zero-boundary parameter has −ℓ_A'' of 15–25 where a long
-    record pins K down (docs/em.md), and that step overshot tenfold. The coordinate handed to it is K/s·√c, c the
-    curvature of ℓ_A along the scored starts' rungs (computed here from passes of our own), where c > 1: its bounds
-    and start say so."""
+    """L-BFGS-B's first step assumes a unit Hessian; where a long record pins K down, −ℓ_A'' of a zero-boundary
+    parameter's K/s is far above 1 and that step overshot (docs/em.md). The coordinate handed to it is K/s·√c, c the
+    curvature of ℓ_A along the scored starts' rungs (computed here from passes of our own), where c > 1; below 1 it is
+    K/s as before. Its start and bounds say so."""
     _, fit, par, theta, prof = _ramp_fit_profiler()
     k_rw = next(j for j, (i, _) in enumerate(par.entries) if par.template[i].name == "RW")
     s = prof.conditional_scale(k_rw)
-    prof.zero = {k_rw: s}
     model = fit.statespace
     start = theta + 0.05
-    rungs = [(math.exp(t[k_rw]) / s, prof.evaluate(t, model)[1]) for t in prof.with_ladder(start)]
-    best = max(rungs, key=lambda p: p[1])[0]
+    inner = profile.minimize
+
+    def handed(scale: float) -> tuple[list[tuple[float, float]], float, tuple[float, float]]:
+        """(the rungs' (K/scale, ℓ_A), and the start and bounds of K's coordinate handed to L-BFGS-B) with the
+        boundary parameter's scale at ``scale``."""
+        prof.zero = {k_rw: scale}
+        rungs = [(math.exp(t[k_rw]) / scale, prof.evaluate(t, model)[1]) for t in prof.with_ladder(start)]
+        seen = []
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(profile, "minimize",
+                       lambda fun, x0, **kw: seen.append((x0, kw["bounds"])) or inner(fun, x0, **kw))
+            prof.maximise(prof.with_ladder(start), set(range(theta.size)) - {k_rw}, model)
+        (x0, bounds), = seen
+        return rungs, x0[0], bounds[0]
+
+    rungs, x0, bounds = handed(s)
     c = profile.rung_curvature(rungs)
     assert c > 1.0  # scaled only where ℓ_A bends faster than the unit Hessian L-BFGS-B starts from
-    seen = []
-    with pytest.MonkeyPatch.context() as mp:
-        inner = profile.minimize
-        mp.setattr(profile, "minimize", lambda fun, x0, **kw: seen.append((x0, kw["bounds"])) or inner(fun, x0, **kw))
-        prof.maximise(prof.with_ladder(start), set(range(theta.size)) - {k_rw}, model)
-    (x0, bounds), = seen
     w = math.sqrt(c)
-    assert x0[0] == pytest.approx(best * w)
-    assert bounds[0] == pytest.approx((profile.ZERO_FLOOR * w, profile.ZERO_CAP * w))
+    assert x0 == pytest.approx(max(rungs, key=lambda p: p[1])[0] * w)
+    assert bounds == pytest.approx((profile.ZERO_FLOOR * w, profile.ZERO_CAP * w))
     # measured against two thirds of the scale, ℓ_A bends 4/9 as fast in K/s: below 1, K/s is left as it is
-    prof.zero = {k_rw: s / 1.5}
-    rungs = [(math.exp(t[k_rw]) / (s / 1.5), prof.evaluate(t, model)[1]) for t in prof.with_ladder(start)]
+    rungs, _, bounds = handed(s / 1.5)
     assert profile.rung_curvature(rungs) < 1.0
-    seen.clear()
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(profile, "minimize", lambda fun, x0, **kw: seen.append((x0, kw["bounds"])) or inner(fun, x0, **kw))
-        prof.maximise(prof.with_ladder(start), set(range(theta.size)) - {k_rw}, model)
-    assert seen[0][1][0] == pytest.approx((profile.ZERO_FLOOR, profile.ZERO_CAP))
+    assert bounds == pytest.approx((profile.ZERO_FLOOR, profile.ZERO_CAP))
