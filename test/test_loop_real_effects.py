@@ -656,6 +656,24 @@ def test_a_gm_the_walk_stood_for_on_an_hour_is_added_where_the_bic_refused_it():
     assert 0.5 * 2e-5 < walk.random_walk < 2.0 * 2e-5
 
 
+def test_an_av_outside_the_verdicts_band_is_searched_on_below_the_detectors_own_level():
+    """The bug: the same cell, seed 13. WN+RW's AV leaves the data's 95 % band (170 % too high at long τ, the verdict's
+    test) but no τ reaches the AV detector's own threshold (Bonferroni over every τ at 1 %), so no finding and the
+    joint search's GM at a tenth of the record was screened out: the loop ended on WN+RW, "AV misfit left
+    unexplained", K 2.8x the truth. The joint search now tries the AV signatures at the verdict's band: the GM is kept
+    by the band's rule (2Δℓ ≈ 15 ≥ 13.8) and K is read beside it within a factor 1.5."""
+    dt, n = 0.005, 720_000
+    truth = [WN(5e-4), GM(tau=20.0, sigma=1.8703719495822196e-4), RW(2e-5)]
+    y = simulate_sum(truth, n, dt, np.random.default_rng([1, 60, 13]))
+    r = run_closed_loop(y, dt, "WN+RW")
+    assert r.steps[1].added == "GM"
+    assert any(t.accepted and "rejection cleared" in t.reason and "av_band" in t.reason for t in r.steps[0].trials)
+    assert r.passed and r.av_inside_band
+    (gm,) = [c for c in r.final.diagnosis.fit.components if isinstance(c, GM)]
+    (walk,) = [c for c in r.final.diagnosis.fit.components if isinstance(c, RW)]
+    assert 10.0 < gm.tau < 40.0 and 2e-5 / 1.5 < walk.random_walk < 1.5 * 2e-5
+
+
 def test_a_drop_that_fits_better_than_its_parent_refits_the_parent_first():
     """A parent fit stopped short of its maximum (here: left at a start whose walk is 10x too strong) made every
     move look better: WN+GM fitted without the walk lay far above it, and re-selection swapped the walk for flicker

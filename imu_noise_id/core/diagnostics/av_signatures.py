@@ -91,11 +91,11 @@ LAST_DECADE = 0.1
 
 def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
                          av_model: np.ndarray, *, av_white: np.ndarray | None = None,
-                         alpha: float = ALPHA) -> list[Finding]:
+                         alpha: float = ALPHA, threshold: float | None = None) -> list[Finding]:
     """Bands of τ where the data's AV is significantly above (or at long τ below) the model's, each traced to a
-    component: z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) beyond Φ⁻¹(1 − α/M) (Bonferroni); by position and slope of
-    the excess QN (shortest τ, < −1.5), RR (> 1.5) or RW (to the last decade), else GM (and BI when flat); a long-τ
-    deficit → GM and K above ``av_white``. Rules: docs/loop.md."""
+    component: z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) beyond ``threshold`` (default Φ⁻¹(1 − α/M), Bonferroni over
+    the M τ); by position and slope of the excess QN (shortest τ, < −1.5), RR (> 1.5) or RW (to the last decade), else
+    GM (and BI when flat); a long-τ deficit → GM and K above ``av_white``. Rules: docs/loop.md."""
     tau = np.asarray(tau, dtype=float)
     av_data = np.asarray(av_data, dtype=float)
     av_model = np.asarray(av_model, dtype=float)
@@ -103,7 +103,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
     if m < 3 or av_data.shape != tau.shape or av_model.shape != tau.shape:
         raise ValueError("detect_av_signatures: need ≥ 3 τ with matching AV arrays")
     z = av_misfit_z(av_data, av_ci, av_model)
-    z_star = float(stats.norm.isf(alpha / m))
+    z_star = float(stats.norm.isf(alpha / m)) if threshold is None else float(threshold)
     findings: list[Finding] = []
     deficit = np.flatnonzero(z < -z_star)
     if deficit.size and tau[deficit[-1]] >= LAST_DECADE * tau[-1] and np.all(z[deficit[-1]:] < 0):

@@ -9,8 +9,9 @@ from dataclasses import replace
 import numpy as np
 from scipy import stats
 
+from ...core.constants import CONFIDENCE_95
 from ...core.diagnostics import detectors as det
-from ...core.diagnostics.av_signatures import fit_gm_to_excess
+from ...core.diagnostics.av_signatures import detect_av_signatures, fit_gm_to_excess
 from ...core.diagnostics.lines import detect_innovation_hump
 from ...core.errors import InputError
 from ...core.estimation.em import screen
@@ -20,7 +21,7 @@ from ...core.noise.flicker import BI, PLATEAU, band_for_record
 from ...core.noise.modelspec import canonical
 from ...core.noise.resonant import MAX_DAMPING, OSC
 from ...core.noise.units import random_walk_at_allan_variance
-from .rules import av_inside_band, av_rms_z, better, judge
+from .rules import av_inside_band, av_rms_z, better, judge, simultaneous_z
 from .state import Diagnosis, LoopState, Trial
 from .steps import AxisLoop
 
@@ -219,7 +220,9 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
     """The bounded joint search when one-at-a-time is stuck (moves judged by the BIC and do-no-harm rules alone, the
     best returned): a GM at a tenth of the record and BI, the RW restarted small; :func:`hump_resonance`;
     :func:`flicker_as_gm_and_walk`. On a long record each move but the hump's is screened first
-    (:meth:`.AxisLoop.screen_reference`) and refused unrefitted if it cannot lower the BIC there. Beyond the papers."""
+    (:meth:`.AxisLoop.screen_reference`) and refused unrefitted if it cannot lower the BIC there. Then the AV
+    signatures at the verdict's band (:func:`band_findings`), each attempted as a detector's finding is
+    (:func:`attempt_once`: the BIC, or the band's rejection cleared). Beyond the papers."""
     span = loop.n * loop.dt
     level = long_tau_level(diag)
     proposals = [("GM", {"tau": span / 10.0, "sigma": math.sqrt(level / 0.38)})]
@@ -260,7 +263,32 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
         trials.append(Trial(finding, new_state.name(), new_diag.errors.bic, ok, f"joint search: {why}"))
         if ok and (best is None or new_diag.errors.bic < best[0]):
             best = (new_diag.errors.bic, new_state, new_diag, finding)
+    for finding in band_findings(loop, diag, state):
+        tried, kept, kept_state = attempt_once(loop, diag, loop.extend(state, finding, diag), finding)
+        trials += tried
+        if kept is not None and (best is None or kept.errors.bic < best[0]):
+            best = (kept.errors.bic, kept_state, kept, finding)
     return best
+
+
+def band_findings(loop: AxisLoop, diag: Diagnosis, state: LoopState) -> list[det.Finding]:
+    """The AV signatures (:func:`~imu_noise_id.core.diagnostics.av_signatures.detect_av_signatures`) beyond the data's
+    95 % simultaneous band, the one the verdict reads (:func:`.rules.av_inside_band`), where ``diag``'s AV leaves it:
+    the addable ones below the detector's own threshold (Bonferroni over every τ at the loop's α, whose findings the
+    step's candidates held already); [] when the AV lies inside the band or the band is no wider than that threshold.
+    A final AV outside the band is a residual the loop searches on before its verdict says so (docs/loop.md, "The
+    loop's rules" 4). Beyond the papers."""
+    if av_inside_band(diag):
+        return []
+    bound = simultaneous_z(diag, CONFIDENCE_95)[2]
+    own = float(stats.norm.isf(loop.alpha / diag.tau.size))
+    if bound >= own:
+        return []
+    white = [c for c in diag.fit.components if c.name in ("WN", "QN")]
+    av_white = total_allan_variance(white, diag.tau, loop.dt) if white else None
+    found = detect_av_signatures(diag.tau, diag.av_data, diag.av_ci, diag.av_model, av_white=av_white,
+                                 alpha=loop.alpha, threshold=bound)
+    return [f for f in found if f.significant and f.statistic <= own and loop.addable(f, state)]
 
 
 def hump_resonance(loop: AxisLoop, diag: Diagnosis) -> det.Finding | None:
