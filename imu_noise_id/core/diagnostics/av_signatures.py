@@ -85,6 +85,11 @@ def _with_flicker(finding: Finding, tau: np.ndarray, excess: np.ndarray) -> list
     return [flicker, finding]
 
 
+def signature_threshold(m: int, alpha: float = ALPHA) -> float:
+    """Φ⁻¹(1 − α/m): the |z| beyond which one of ``m`` τ counts, family-wise level α (Bonferroni over the m τ)."""
+    return float(stats.norm.isf(alpha / m))
+
+
 #: A band of AV excess is read as RW or RR only if it ends beyond this fraction of the longest τ.
 LAST_DECADE = 0.1
 
@@ -93,7 +98,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
                          av_model: np.ndarray, *, av_white: np.ndarray | None = None,
                          alpha: float = ALPHA, threshold: float | None = None) -> list[Finding]:
     """Bands of τ where the data's AV is significantly above (or at long τ below) the model's, each traced to a
-    component: z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) beyond ``threshold`` (default Φ⁻¹(1 − α/M), Bonferroni over
+    component: z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) beyond ``threshold`` (default :func:`signature_threshold` of
     the M τ); by position and slope of the excess QN (shortest τ, < −1.5), RR (> 1.5) or RW (to the last decade), else
     GM (and BI when flat); a long-τ deficit → GM and K above ``av_white``. Rules: docs/loop.md."""
     tau = np.asarray(tau, dtype=float)
@@ -103,7 +108,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
     if m < 3 or av_data.shape != tau.shape or av_model.shape != tau.shape:
         raise ValueError("detect_av_signatures: need ≥ 3 τ with matching AV arrays")
     z = av_misfit_z(av_data, av_ci, av_model)
-    z_star = float(stats.norm.isf(alpha / m)) if threshold is None else float(threshold)
+    z_star = signature_threshold(m, alpha) if threshold is None else float(threshold)
     findings: list[Finding] = []
     deficit = np.flatnonzero(z < -z_star)
     if deficit.size and tau[deficit[-1]] >= LAST_DECADE * tau[-1] and np.all(z[deficit[-1]:] < 0):

@@ -50,6 +50,14 @@ def _coef(fit: FitResult, names: list[str]) -> np.ndarray:
     return np.array([float(fit.exog_coef[name]["value"]) for name in names])
 
 
+def white_allan_variance(components: list[Component], tau: np.ndarray, dt: float) -> np.ndarray | None:
+    """AV [u²] at ``tau`` [s] of the white parts (WN, QN) of ``components`` at ``dt`` [s]: the level a long-τ deficit's
+    excess is read above (:func:`~imu_noise_id.core.diagnostics.av_signatures.detect_av_signatures`); None without
+    one."""
+    white = [c for c in components if c.name in ("WN", "QN")]
+    return total_allan_variance(white, tau, dt) if white else None
+
+
 class AxisLoop:
     """An axis's record with the loop's settings: fits and diagnoses a :class:`LoopState`, adds and judges effects."""
 
@@ -153,8 +161,7 @@ class AxisLoop:
         bic = -2.0 * loglik + (fit.n_params + k + searched) * math.log(self.n_observed)
         errors = residual_errors(e, self.dt, loglik=loglik, bic=bic, av_data=av_data, av_model=av_model,
                                  lags=self.lags)
-        white = [c for c in fit.components if c.name in ("WN", "QN")]
-        av_white = total_allan_variance(white, av.tau, self.dt) if white else None
+        av_white = white_allan_variance(list(fit.components), av.tau, self.dt)
         detected = Deferred(functools.partial(
             self.detect, e, whitening, tuple(state.structure), tuple(t.effect for t in state.exog_terms), filled,
             tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model, av_white=av_white))

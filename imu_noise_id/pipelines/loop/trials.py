@@ -11,7 +11,7 @@ from scipy import stats
 
 from ...core.constants import CONFIDENCE_95
 from ...core.diagnostics import detectors as det
-from ...core.diagnostics.av_signatures import detect_av_signatures, fit_gm_to_excess
+from ...core.diagnostics.av_signatures import detect_av_signatures, fit_gm_to_excess, signature_threshold
 from ...core.diagnostics.lines import detect_innovation_hump
 from ...core.errors import InputError
 from ...core.estimation.em import screen
@@ -23,7 +23,7 @@ from ...core.noise.resonant import MAX_DAMPING, OSC
 from ...core.noise.units import random_walk_at_allan_variance
 from .rules import av_inside_band, av_rms_z, better, judge, simultaneous_z
 from .state import Diagnosis, LoopState, Trial
-from .steps import AxisLoop
+from .steps import AxisLoop, white_allan_variance
 
 
 def added_name(before: list[str], after: list[str], effect: str) -> str:
@@ -281,12 +281,11 @@ def band_findings(loop: AxisLoop, diag: Diagnosis, state: LoopState) -> list[det
     if av_inside_band(diag):
         return []
     bound = simultaneous_z(diag, CONFIDENCE_95)[2]
-    own = float(stats.norm.isf(loop.alpha / diag.tau.size))
+    own = signature_threshold(diag.tau.size, loop.alpha)
     if bound >= own:
         return []
-    white = [c for c in diag.fit.components if c.name in ("WN", "QN")]
-    av_white = total_allan_variance(white, diag.tau, loop.dt) if white else None
-    found = detect_av_signatures(diag.tau, diag.av_data, diag.av_ci, diag.av_model, av_white=av_white,
+    found = detect_av_signatures(diag.tau, diag.av_data, diag.av_ci, diag.av_model,
+                                 av_white=white_allan_variance(list(diag.fit.components), diag.tau, loop.dt),
                                  alpha=loop.alpha, threshold=bound)
     return [f for f in found if f.significant and f.statistic <= own and loop.addable(f, state)]
 
