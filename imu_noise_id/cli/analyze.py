@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import tempfile
 from collections.abc import Callable
@@ -132,7 +133,8 @@ def run(args: argparse.Namespace) -> int:
     folder = results_folder(args, str(args.bag), recording.imu.topic)
     with folder as staging:
         paths = write_analysis(result, staging, meta=meta, title=f"IMU noise analysis: {Path(args.bag).name}",
-                               overbound_exports=getattr(args, "overbound", False))
+                               overbound_exports=getattr(args, "overbound", False),
+                               processes=options.jobs or len(os.sched_getaffinity(0)))
     folder.report()
     print(summary_table(result.static), flush=True)
     if result.loops and args.command == "loop":

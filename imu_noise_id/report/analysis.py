@@ -4,12 +4,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 from ..core.axes import UNITS
 from ..pipelines.analyze import AnalysisResult
-from .analysis_html import write_analysis_report
+from .analysis_html import assemble_report, report_sections
 from .exports import write_exports
+from .forked import run_tasks
 from .imu_yaml import imu_doc, write_imu_yaml
 from .model_yaml import write_model_yaml
 from .plots import plot_allan_deviation
@@ -18,11 +21,13 @@ from .variance_csv import write_variance_csvs
 
 
 def write_analysis(result: AnalysisResult, out_dir: str | Path, *, meta: dict,
-                   title: str = "IMU noise analysis", overbound_exports: bool = False) -> dict[str, Path]:
+                   title: str = "IMU noise analysis", overbound_exports: bool = False,
+                   processes: int = 1) -> dict[str, Path]:
     """Write every output of ``result`` into ``out_dir`` (created); returns the paths by file name. The exports need
     both sensors' numbers: an analysis of one sensor writes none (its warnings say so).
 
-    ``overbound_exports``: also the exports of the overbound's values (``exports/overbound/``).
+    ``overbound_exports``: also the exports of the overbound's values (``exports/overbound/``). ``processes``: how
+    many processes may draw the figures side by side (:func:`~.forked.run_tasks`; the files are the same).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -38,17 +43,24 @@ def write_analysis(result: AnalysisResult, out_dir: str | Path, *, meta: dict,
                 paths[f"exports/{p.parent.name}/{p.name}"] = p
     for p in write_variance_csvs(static.variances, static.axes, out):
         paths[p.name] = p
-    paths["allan.png"] = plot_allan_deviation(static, out / "allan.png")
+    tasks: list[Callable[[], object]] = [partial(plot_allan_deviation, static, out / "allan.png")]
+    if result.models:
+        tasks += [partial(save_allan_overlay, out / "allan_model.png", _panels(result),
+                          title="Allan deviation vs final models"), *report_sections(result, meta)]
+    drawn = run_tasks(tasks, processes)  # the figures are most of the writing: drawn side by side
+    paths["allan.png"] = drawn[0]
     if not result.models:
         return paths
     paths["model.yaml"] = write_model_yaml(out / "model.yaml", result.models, result.loops, meta, result.finals)
-    allan = static.allan
-    panels = []
-    for axis, final in result.finals.items():
-        j = static.axes.index(axis)
-        panels.append({"tau": allan.tau, "avar": allan.variance[:, j], "fit": final.fit, "band": result.bands[axis],
-                       "unit": UNITS.get(axis, "u"), "label": axis, "title": f"{axis}: {final.model}"})
-    paths["allan_model.png"] = save_allan_overlay(out / "allan_model.png", panels,
-                                                  title="Allan deviation vs final models")
-    paths["report.html"] = write_analysis_report(out / "report.html", result, meta, title)
+    paths["allan_model.png"] = drawn[1]
+    paths["report.html"] = out / "report.html"
+    paths["report.html"].write_text(assemble_report(drawn[2:], title), encoding="utf-8")
     return paths
+
+
+def _panels(result: AnalysisResult) -> list[dict]:
+    """The panels of ``allan_model.png``: per axis with a final model, the data's AV, its band and the model."""
+    allan = result.static.allan
+    return [{"tau": allan.tau, "avar": allan.variance[:, result.static.axes.index(axis)], "fit": final.fit,
+             "band": result.bands[axis], "unit": UNITS.get(axis, "u"), "label": axis, "title": f"{axis}: {final.model}"}
+            for axis, final in result.finals.items()]

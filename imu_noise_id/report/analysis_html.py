@@ -1,10 +1,12 @@
 """The self-contained ``report.html`` of an analysis (base64 PNG figures) from the ``AnalysisResult``: the data, the
-numbers users paste, Allan panels, model selection, record length, GMWM, loop steps and overbound."""
+numbers users paste, Allan panels, model selection, record length, GMWM, loop steps and overbound; its sections are
+independent tasks (:func:`report_sections`), joined by :func:`assemble_report`."""
 
 from __future__ import annotations
 
 import html
-from pathlib import Path
+from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 
@@ -102,23 +104,22 @@ def _overbound_section(result: AnalysisResult) -> str:
     return f"<h2 id=overbound>Overbound (the honest ×10)</h2>{note}<table>{head}{rows}</table>"
 
 
-def _allan_section(result: AnalysisResult) -> str:
+def _allan_panel(result: AnalysisResult, axis: str) -> str:
+    """The Allan panel of ``axis`` (data, band, final model, slopes, overbound) as an embedded PNG."""
     s = result.static
-    out = ["<h2 id=allan>Allan deviation per axis</h2>"]
-    for axis, f in result.finals.items():
-        j = s.axes.index(axis)
-        lines = {c.name: (c.slope, c.coefficient) for c in s.slopes[axis].components()}
-        ob = result.overbounds.get(axis)
-        overbound = None
-        if ob is not None:
-            t = np.exp(np.linspace(np.log(ob.tau_range[0]), np.log(ob.tau_range[1]), 100))
-            overbound = (t, ob.allan_variance(t, s.dt), f"overbound WN+RW (N ×{ob.inflation_noise_density:.3g}, "
-                                                        f"K ×{ob.inflation_random_walk:.3g})")
-        png = allan_panel_png(s.allan.tau, s.allan.variance[:, j], (s.allan.ci_low[:, j], s.allan.ci_high[:, j]),
-                              f.fit, band=result.bands.get(axis), lines=lines, unit=UNITS.get(axis, "u"),
-                              title=f"{axis}: final model {f.model}", overbound=overbound)
-        out.append(img_tag(png, f"Allan deviation of {axis}"))
-    return "\n".join(out)
+    f = result.finals[axis]
+    j = s.axes.index(axis)
+    lines = {c.name: (c.slope, c.coefficient) for c in s.slopes[axis].components()}
+    ob = result.overbounds.get(axis)
+    overbound = None
+    if ob is not None:
+        t = np.exp(np.linspace(np.log(ob.tau_range[0]), np.log(ob.tau_range[1]), 100))
+        overbound = (t, ob.allan_variance(t, s.dt), f"overbound WN+RW (N ×{ob.inflation_noise_density:.3g}, "
+                                                    f"K ×{ob.inflation_random_walk:.3g})")
+    png = allan_panel_png(s.allan.tau, s.allan.variance[:, j], (s.allan.ci_low[:, j], s.allan.ci_high[:, j]),
+                          f.fit, band=result.bands.get(axis), lines=lines, unit=UNITS.get(axis, "u"),
+                          title=f"{axis}: final model {f.model}", overbound=overbound)
+    return img_tag(png, f"Allan deviation of {axis}")
 
 
 def _selection_section(result: AnalysisResult) -> str:
@@ -182,28 +183,32 @@ def _gmwm_section(result: AnalysisResult) -> str:
     return "\n".join(out)
 
 
-def render_analysis_report(result: AnalysisResult, meta: dict, title: str) -> str:
-    """The HTML text of the analysis report (module docstring)."""
-    parts = [_data_section(result, meta)]
+def report_sections(result: AnalysisResult, meta: dict) -> list[Callable[[], str]]:
+    """The sections of ``report.html`` in order, each a task that returns its HTML (figures embedded) from
+    ``result`` and ``meta`` alone: the data, the numbers, the overbound, one Allan panel per axis, the selection, the
+    GMWM and one closed-loop section per axis, so that :func:`~.forked.run_tasks` can draw the figures side by
+    side. :func:`assemble_report` joins what they return."""
+    tasks: list[Callable[[], str]] = [partial(_data_section, result, meta)]
     if result.finals:
-        parts += [_numbers_section(result), _overbound_section(result), _allan_section(result),
-                  _selection_section(result)]
+        tasks += [partial(_numbers_section, result), partial(_overbound_section, result),
+                  partial(str, "<h2 id=allan>Allan deviation per axis</h2>"),
+                  *(partial(_allan_panel, result, axis) for axis in result.finals),
+                  partial(_selection_section, result)]
     if any(m.gmwm is not None for m in result.models.values()):
-        parts.append(_gmwm_section(result))
+        tasks.append(partial(_gmwm_section, result))
     if result.loops:
-        parts.append(f"<h2 id=loop>Closed loop</h2>{LOOP_INTRO}")
-        parts += [loop_axis_section(axis, r) for axis, r in result.loops.items()]
+        tasks.append(partial(str, f"<h2 id=loop>Closed loop</h2>{LOOP_INTRO}"))
+        tasks += [partial(loop_axis_section, axis, r) for axis, r in result.loops.items()]
+    return tasks
+
+
+def assemble_report(sections: list[str], title: str) -> str:
+    """The HTML text of the analysis report (module docstring) from its sections' HTML (:func:`report_sections`)."""
     nav = " · ".join(f"<a href='#{a}'>{t}</a>" for a, t in (("data", "data"), ("numbers", "numbers"),
                                                              ("overbound", "overbound"), ("allan", "Allan"),
                                                              ("selection", "selection"), ("gmwm", "GMWM"),
                                                              ("loop", "closed loop")))
+    body = "\n".join(sections)
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
             f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>"
-            f"<p class=small>{nav}</p>{''.join(parts)}</body></html>")
-
-
-def write_analysis_report(path: str | Path, result: AnalysisResult, meta: dict, title: str) -> Path:
-    """Write the self-contained report (figures embedded)."""
-    path = Path(path)
-    path.write_text(render_analysis_report(result, meta, title), encoding="utf-8")
-    return path
+            f"<p class=small>{nav}</p>{body}</body></html>")
