@@ -1,9 +1,13 @@
 """The report's figures drawn side by side in forked processes (``report/forked.py``): the same files as drawn in turn,
-in order, errors raised here, and no fork from a process that runs another thread."""
+in order, errors raised here, no fork from a process that runs another thread, and Ctrl-C during the drawing ends
+the run cleanly."""
 
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
+import sys
 import threading
 import time
 from functools import partial
@@ -11,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from imu_noise_id.bag.writer import write_bag
 from imu_noise_id.core.noise.modelspec import parse_imu_model
 from imu_noise_id.core.simulation.static import simulate_static_imu
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, analyze
@@ -64,3 +69,46 @@ def test_the_files_drawn_side_by_side_are_those_drawn_in_turn(tmp_path):
     assert set(in_turn) == set(side_by_side) and {"report.html", "allan.png", "allan_model.png"} <= set(in_turn)
     for name, path in in_turn.items():
         assert Path(path).read_bytes() == Path(side_by_side[name]).read_bytes(), name
+
+
+#: Run in a session of its own by the Ctrl-C test: analyze with its Allan panels held until the test interrupts it.
+_HELD_DRAWING = """
+import pathlib, sys, time
+import imu_noise_id.report.analysis_html as report
+def held(result, axis):
+    pathlib.Path({mark!r}).touch()
+    time.sleep(120)
+report._allan_panel = held
+from imu_noise_id.cli import main
+sys.exit(main(["analyze", {bag!r}, "--model", "WN+RW", "--no-loop", "--jobs", "2", "--out", {out!r}]))
+"""
+
+
+@pytest.mark.skipif(not can_fork(), reason="this platform or process cannot fork safely")
+def test_ctrl_c_while_the_figures_are_drawn_leaves_no_folder_no_process_and_no_traceback(tmp_path):
+    imu = simulate_static_imu(parse_imu_model("gyro: WN(1e-3)+RW(2e-5); accel: WN(2e-3)+RW(3e-4)"), 50.0, 40.0,
+                              seed=3)
+    bag = write_bag(tmp_path / "bag", imu)
+    mark, out = tmp_path / "drawing", tmp_path / "out"
+    child = subprocess.Popen([sys.executable, "-c", _HELD_DRAWING.format(mark=str(mark), bag=str(bag), out=str(out))],
+                             start_new_session=True, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not mark.exists():
+            assert child.poll() is None and time.monotonic() < deadline, "the drawing never started"
+            time.sleep(0.1)
+        os.killpg(child.pid, signal.SIGINT)  # as a terminal's Ctrl-C: every process of the group
+        assert child.wait(timeout=60) == 130
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+    assert "Traceback" not in child.stderr.read()
+    assert not out.exists() or not [p for p in out.rglob("*") if p.is_file()]
+    deadline = time.monotonic() + 10
+    while True:  # the drawing processes are gone with their caller
+        try:
+            os.killpg(child.pid, 0)
+        except ProcessLookupError:
+            break
+        assert time.monotonic() < deadline, "a drawing process outlived its caller"
+        time.sleep(0.1)

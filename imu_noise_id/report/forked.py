@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import gc
 import multiprocessing
+import signal
 import threading
 from collections.abc import Callable, Sequence
 from typing import TypeVar
@@ -25,6 +26,11 @@ _TASKS: list[Callable[[], object]] = []
 
 def _run(index: int) -> object:
     return _TASKS[index]()
+
+
+def _leave_interrupts_to_the_caller() -> None:
+    """A worker's start: Ctrl-C (sent to the whole process group) is the caller's to handle; it stops the workers."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def can_fork() -> bool:
@@ -45,7 +51,8 @@ def run_tasks(tasks: Sequence[Callable[[], T]], processes: int) -> list[T]:
         :func:`can_fork` is False, they run here in turn. Tasks are handed out one at a time in order, so a
         process that finishes early takes the next.
 
-    An exception raised by a task is raised here.
+    An exception raised by a task is raised here. Ctrl-C is this process's alone: the workers ignore it and are
+    stopped when it leaves (so a user sees no worker's traceback).
     """
     workers = min(processes, len(tasks))
     if workers < 2 or not can_fork():
@@ -53,7 +60,7 @@ def run_tasks(tasks: Sequence[Callable[[], T]], processes: int) -> list[T]:
     _TASKS[:] = tasks
     gc.freeze()  # the collector in a child would write to every object it inherited, copying their pages
     try:
-        with multiprocessing.get_context("fork").Pool(workers) as pool:
+        with multiprocessing.get_context("fork").Pool(workers, _leave_interrupts_to_the_caller) as pool:
             return pool.map(_run, range(len(tasks)), chunksize=1)
     finally:
         gc.unfreeze()
