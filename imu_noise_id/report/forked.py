@@ -6,7 +6,8 @@ processes at once. The processes are forked: each inherits the result (and matpl
 instead of receiving a pickled copy of arrays of the record's length, and returns only what it rendered (a path, an
 HTML string). Forking is safe only from a process running one thread (a lock another thread holds at the fork stays
 held in the child): with more threads (a Dask worker, a node) or where the platform does not fork, the tasks run here
-one after the other, with the same results. Why: docs/analysis.md, "Why the report's figures are drawn side by side".
+one after the other, with the same results. Why and what it saves: docs/analysis.md, "Why the figures are drawn
+as they are", "Drawn side by side".
 """
 
 from __future__ import annotations
