@@ -1,6 +1,6 @@
 """The report's figures drawn side by side in forked processes (``report/forked.py``): the same files as drawn in turn,
-in order, errors raised here, no fork from a process that runs another thread, and Ctrl-C during the drawing ends
-the run cleanly."""
+in order, errors raised here (a killed process too), no fork from a process that runs another thread, and Ctrl-C
+during the drawing ends the run cleanly."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import subprocess
 import sys
 import threading
 import time
+from concurrent.futures.process import BrokenProcessPool
 from functools import partial
 from pathlib import Path
 
@@ -112,3 +113,15 @@ def test_ctrl_c_while_the_figures_are_drawn_leaves_no_folder_no_process_and_no_t
             break
         assert time.monotonic() < deadline, "a drawing process outlived its caller"
         time.sleep(0.1)
+
+
+def _killed() -> None:
+    os.kill(os.getpid(), signal.SIGKILL)  # as the kernel's out-of-memory killer would
+
+
+@pytest.mark.skipif(not can_fork(), reason="this platform or process cannot fork safely")
+def test_a_drawing_process_killed_is_an_error_not_a_wait_without_end():
+    start = time.monotonic()
+    with pytest.raises(BrokenProcessPool):
+        run_tasks([partial(_pid_after, 0, 0.0), _killed, partial(_pid_after, 2, 0.0)], processes=2)
+    assert time.monotonic() - start < 30

@@ -17,6 +17,7 @@ import multiprocessing
 import signal
 import threading
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from typing import TypeVar
 
 T = TypeVar("T")
@@ -52,17 +53,24 @@ def run_tasks(tasks: Sequence[Callable[[], T]], processes: int) -> list[T]:
         :func:`can_fork` is False, they run here in turn. Tasks are handed out one at a time in order, so a
         process that finishes early takes the next.
 
-    An exception raised by a task is raised here. Ctrl-C is this process's alone: the workers ignore it and are
-    stopped when it leaves (so a user sees no worker's traceback).
+    An exception raised by a task is raised here, and so is the loss of a process (killed, out of memory:
+    ``BrokenProcessPool``) instead of a wait without end. Ctrl-C is this process's alone: the workers ignore it and
+    are stopped when it leaves (so a user sees no worker's traceback).
     """
     workers = min(processes, len(tasks))
     if workers < 2 or not can_fork():
         return [task() for task in tasks]
     _TASKS[:] = tasks
+    others = set(multiprocessing.active_children())
     gc.freeze()  # the collector in a child would write to every object it inherited, copying their pages
+    executor = ProcessPoolExecutor(workers, multiprocessing.get_context("fork"), _leave_interrupts_to_the_caller)
     try:
-        with multiprocessing.get_context("fork").Pool(workers, _leave_interrupts_to_the_caller) as pool:
-            return pool.map(_run, range(len(tasks)), chunksize=1)
+        return list(executor.map(_run, range(len(tasks))))
+    except BaseException:
+        for process in set(multiprocessing.active_children()) - others:  # its workers, busy or idle
+            process.terminate()
+        raise
     finally:
+        executor.shutdown(wait=True, cancel_futures=True)
         gc.unfreeze()
         _TASKS.clear()
