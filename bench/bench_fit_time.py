@@ -6,8 +6,8 @@ Each record length is fitted by every checkout given, one after the other in the
     .venv/bin/python bench/bench_fit_time.py --samples 360000 --baseline ../baseline
     .venv/bin/python bench/bench_fit_time.py --samples 10000000
 
-The committed output holds these two runs: 1 h side by side with the checkout before the search on statistics of
-fixed size, then 27.8 h by this checkout alone (the checkout before takes over an hour there).
+The committed output holds these two runs: 1 h side by side with the checkout before the profile end search's two
+changes, then 27.8 h by this checkout alone; each section's second line names its checkouts.
 
 The record: WN(1e-3) + GM(τ 5 s, σ 1e-3) + RW(3e-5) + RR(1e-6) at 100 Hz (``bench_em``'s truth), simulated in the
 child from a fixed seed (not timed). Timed: ``NoiseModel(y, dt, "WN+GM+RW+RR").fit()``, the point estimate with its

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Iterable
 from dataclasses import replace
 
 import numpy as np
@@ -50,7 +51,7 @@ def _coef(fit: FitResult, names: list[str]) -> np.ndarray:
     return np.array([float(fit.exog_coef[name]["value"]) for name in names])
 
 
-def white_allan_variance(components: list[Component], tau: np.ndarray, dt: float) -> np.ndarray | None:
+def white_allan_variance(components: Iterable[Component], tau: np.ndarray, dt: float) -> np.ndarray | None:
     """AV [u²] at ``tau`` [s] of the white parts (WN, QN) of ``components`` at ``dt`` [s]: the level a long-τ deficit's
     excess is read above (:func:`~imu_noise_id.core.diagnostics.av_signatures.detect_av_signatures`); None without
     one."""
@@ -161,7 +162,7 @@ class AxisLoop:
         bic = -2.0 * loglik + (fit.n_params + k + searched) * math.log(self.n_observed)
         errors = residual_errors(e, self.dt, loglik=loglik, bic=bic, av_data=av_data, av_model=av_model,
                                  lags=self.lags)
-        av_white = white_allan_variance(list(fit.components), av.tau, self.dt)
+        av_white = white_allan_variance(fit.components, av.tau, self.dt)
         detected = Deferred(functools.partial(
             self.detect, e, whitening, tuple(state.structure), tuple(t.effect for t in state.exog_terms), filled,
             tau=av.tau, av_data=av_data, av_ci=av_ci, av_model=av_model, av_white=av_white))

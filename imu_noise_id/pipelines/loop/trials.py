@@ -285,7 +285,7 @@ def band_findings(loop: AxisLoop, diag: Diagnosis, state: LoopState) -> list[det
     if bound >= own:
         return []
     found = detect_av_signatures(diag.tau, diag.av_data, diag.av_ci, diag.av_model,
-                                 av_white=white_allan_variance(list(diag.fit.components), diag.tau, loop.dt),
+                                 av_white=white_allan_variance(diag.fit.components, diag.tau, loop.dt),
                                  alpha=loop.alpha, threshold=bound)
     return [f for f in found if f.significant and f.statistic <= own and loop.addable(f, state)]
 
