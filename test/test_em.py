@@ -485,5 +485,5 @@ def test_the_scores_measurement_sse_from_the_smoothed_residuals_equals_the_e_ste
     model.b = np.array([3e-4, -2e-5])
     stats = kalman.smooth(model, y, z)
     data = em.DataSums.of(y, z)
-    assert em.smoothed_measurement_sse(model, stats, data) == pytest.approx(
+    assert em.smoothed_measurement_sse(model, stats) == pytest.approx(
         em._measurement_sse(model, em.sums_from_stats(stats, data)), rel=1e-9)

@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
+from kalman_checks import assert_state_sums_close
 
 from imu_noise_id.core import kalman
 from imu_noise_id.core.errors import InputError
@@ -73,9 +74,10 @@ def test_fast_path_equals_exact_recursion(name):
     fitted = kalman.apply_beta(model, r_fast)
     s_exact = kalman.smooth(fitted, y, z, engine="exact")
     s_fast = kalman.smooth(fitted, y, z, engine="steady")
-    for key in ("xs", "sum_p", "p_first", "p_last", "sum_lag"):
+    for key in ("sum_p", "p_first", "p_last", "sum_lag"):
         a, b = getattr(s_exact, key), getattr(s_fast, key)
         np.testing.assert_allclose(b, a, rtol=1e-8, atol=1e-10 * np.max(np.abs(a)), err_msg=key)
+    assert_state_sums_close(s_fast.states, s_exact.states, y, z, rtol=1e-8, atol_rel=1e-10)
     assert s_fast.loglik == pytest.approx(s_exact.loglik, abs=1e-8)
 
 
@@ -241,9 +243,17 @@ def test_a_walk_far_below_the_other_states_is_solved_to_its_own_scale(walk):
     assert np.sqrt(q[1, 1] * r) / 2 < scratch[1, 1] < 2 * np.sqrt(q[1, 1] * r)
 
 
-def test_modal_and_schur_bases_give_the_exact_recursion():
+#: The steady smoother's span settings: the record whole, or in spans of ~400 samples (the last shorter) reduced in
+#: blocks of 256 (a block cut short at each span's end).
+SPANS = {"whole": {}, "in spans": {"WHOLE_FLOATS": 0, "SPAN_FLOATS": 5000, "REDUCE_BLOCK": 256}}
+
+
+@pytest.mark.parametrize("spans", list(SPANS))
+def test_modal_and_schur_bases_give_the_exact_recursion(spans):
     """The steady engine's two bases (block-diagonal modal where well conditioned, Schur otherwise) against the exact
-    time-varying recursion, on a model with a flicker ladder, two oscillators and regressor columns."""
+    time-varying recursion, on a model with a flicker ladder, two oscillators and regressor columns; the record
+    smoothed whole and in spans (:func:`~imu_noise_id.core.kalman.steady._sweep`: the states of each span computed
+    again from the state it starts in, the adjoint carried across the seams), the adjoint's sums too."""
     from imu_noise_id.core.kalman import steady
     from imu_noise_id.core.noise.components import BI
     from imu_noise_id.core.noise.resonant import LPF, OSC
@@ -265,14 +275,47 @@ def test_modal_and_schur_bases_give_the_exact_recursion():
     for max_cond in (basis.MODAL_MAX_COND, 0.0):  # 0: every model falls back to the Schur basis
         with pytest.MonkeyPatch.context() as mp:
             mp.setattr(basis, "MODAL_MAX_COND", max_cond)
+            for name, value in SPANS[spans].items():
+                mp.setattr(steady, name, value)
             prof, _, stats = kalman.profile_and_smooth(model, y, z, engine="steady")
             s_fast = kalman.smooth(fitted, y, z, engine="steady")
         assert prof.loglik == pytest.approx(exact.loglik, abs=1e-7)
         np.testing.assert_allclose(prof.beta, exact.beta, rtol=1e-8)
         for s in (stats, s_fast):
-            for key in ("xs", "sum_p", "sum_lag"):
+            for key in ("sum_p", "sum_lag"):
                 a, b = getattr(s_exact, key), getattr(s, key)
                 np.testing.assert_allclose(b, a, rtol=1e-7, atol=1e-9 * np.max(np.abs(a)), err_msg=key)
+            assert_state_sums_close(s.states, s_exact.states, y, z, rtol=1e-7, atol_rel=1e-9)
+        assert s_fast.loglik == pytest.approx(s_exact.loglik, abs=1e-7)
+        for key in ("rr", "rx", "n", "nlp"):
+            a, b = getattr(s_exact.disturbances, key), getattr(s_fast.disturbances, key)
+            np.testing.assert_allclose(b, a, rtol=1e-7, atol=1e-9 * np.max(np.abs(a)), err_msg=key)
+
+
+def test_the_steady_smoothers_memory_does_not_grow_with_states_times_samples(monkeypatch):
+    """Past :data:`~imu_noise_id.core.kalman.steady.WHOLE_FLOATS` the smoother holds p × span arrays, not p × N: on
+    300 000 samples its peak (tracemalloc, the score's smoother) with 17 states exceeds that with 5 by less than a
+    quarter of one 12 × N array (held whole, the difference is 60 MB, two such arrays). The test lowers the threshold
+    to this record's size."""
+    import tracemalloc
+
+    from imu_noise_id.core.kalman import steady
+    from imu_noise_id.core.noise.resonant import OSC
+
+    dt, n = 0.01, 300_000
+    monkeypatch.setattr(steady, "WHOLE_FLOATS", 1 << 20)
+    y = simulate_sum([WN(1e-3), RW(1e-5)], n, dt, np.random.default_rng(3))
+    z = np.ones((n, 1))
+    peaks = []
+    for oscillators in (1, 7):
+        comps = [WN(1e-3), *(OSC(frequency=1.0 + 3 * k, bandwidth=0.5, sigma=1e-4) for k in range(oscillators)),
+                 GM(tau=5.0, sigma=1e-4), RW(1e-5)]
+        model = ss.from_components(comps, dt, exog_names=[])
+        tracemalloc.start()
+        kalman.profile_and_smooth(model, y, z, moments=False)
+        peaks.append(tracemalloc.get_traced_memory()[1])
+        tracemalloc.stop()
+    assert peaks[1] - peaks[0] < 0.25 * 12 * n * 8
 
 
 def test_the_initial_state_as_the_filters_delay_state_gives_the_prepended_run_bit_for_bit():
@@ -330,7 +373,8 @@ def test_a_nearly_defective_transition_runs_in_the_schur_basis():
     np.array([[0.95, 0.2, 0.1], [-0.2, 0.95, 0.0], [0.0, 0.0, 0.97]]),  # a complex pair and a real pole: modal
 ])
 def test_the_smoothers_adjoint_in_either_basis_equals_its_backward_recursion(a):
-    """:func:`steady._adjoint_modes` against r_{t−1} = Hᵀe_t/F + Aᵀr_t, r_{N−1} = 0, run plainly backwards."""
+    """:func:`steady._adjoint_span` run over spans from the record's end (each from the state the later one ended in)
+    against r_{t−1} = Hᵀe_t/F + Aᵀr_t, r_{N−1} = 0, run plainly backwards."""
     from types import SimpleNamespace
 
     from imu_noise_id.core.kalman import steady
@@ -345,8 +389,12 @@ def test_the_smoothers_adjoint_in_either_basis_equals_its_backward_recursion(a):
         r = model.h * e[t] / gains.f + a.T @ r
         expected[:, t] = r
     decoupled = steady.decoupled_basis(a)
-    sigma, v_first = steady._adjoint_modes(model, gains, decoupled, e)
-    v = np.column_stack([v_first, sigma[:, :0:-1]])
+    v = np.empty((p, n))  # column t: v_t = σ_{N−t}
+    sigma = np.zeros(p)
+    for s, stop in ((41, 60), (17, 41), (0, 17)):
+        span, sigma = steady._adjoint_span(model, gains, decoupled, e[s:stop], sigma)
+        v[:, s] = sigma
+        v[:, s + 1:stop] = span[:, :0:-1]
     np.testing.assert_allclose(decoupled.u_inv.T @ v, expected, rtol=1e-9, atol=1e-12 * np.max(np.abs(expected)))
 
 

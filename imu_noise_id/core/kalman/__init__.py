@@ -11,6 +11,7 @@ from .common import (
     InnovationResult,
     ProfileResult,
     SmootherStats,
+    StateSums,
     apply_beta,
     build_columns,
     check_data,
@@ -19,8 +20,8 @@ from .common import (
 from .statespace import StateSpace
 
 __all__ = [
-    "Columns", "InnovationResult", "ProfileResult", "SmootherStats", "apply_beta", "loglik", "profile_and_smooth",
-    "smooth",
+    "Columns", "InnovationResult", "ProfileResult", "SmootherStats", "StateSums", "apply_beta", "loglik",
+    "profile_and_smooth", "smooth",
 ]
 
 ENGINES = ("auto", "steady", "exact")
@@ -48,22 +49,23 @@ def loglik(
 
 
 def profile_and_smooth(
-    model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, engine: str = "auto"
+    model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, engine: str = "auto", moments: bool = True,
 ) -> tuple[ProfileResult, StateSpace, SmootherStats]:
-    """:func:`loglik` with the mean parameters profiled, the model at their estimate, and its E-step statistics."""
+    """:func:`loglik` with the mean parameters profiled, the model at their estimate, and its E-step statistics
+    (``moments``: with the p × p sums of the smoothed means the M-step needs and the score does not)."""
     y, z = check_data(y, z, model.n_regressors)
     cols = build_columns(model, y, z, True)
     eng = _engine(model, y, engine)
     if eng is steady:
-        prof, stats = steady.profile_and_smooth(model, cols)
+        prof, stats = steady.profile_and_smooth(model, cols, y, z, moments=moments)
         return prof, apply_beta(model, prof), stats
     prof = profile(eng.innovations(model, cols), cols.names)
     fitted = apply_beta(model, prof)
-    return prof, fitted, eng.smooth(fitted, build_columns(fitted, y, z, False))
+    return prof, fitted, eng.smooth(fitted, build_columns(fitted, y, z, False), y, z, moments=moments)
 
 
 def smooth(model: StateSpace, y: np.ndarray, z: np.ndarray | None = None, *, engine: str = "auto") -> SmootherStats:
-    """E-step: smoothed means and the summed covariances the M-step needs, at the model's current parameters."""
+    """E-step: the sums of the smoothed means and covariances the M-step needs, at the model's current parameters."""
     y, z = check_data(y, z, model.n_regressors)
     cols = build_columns(model, y, z, profile=False)
-    return _engine(model, y, engine).smooth(model, cols)
+    return _engine(model, y, engine).smooth(model, cols, y, z)

@@ -57,13 +57,64 @@ class DisturbanceSums:
         return cls(zero, zero.copy(), zero.copy(), zero.copy())
 
 
+@dataclass(frozen=True)
+class StateSums:
+    """Sums over the smoothed means x_t^N (t = 0 … N − 1) that the M-step and the score use (paper 000 §3.3), in place
+    of the p × N means themselves: ``gram`` Σ x_t x_tᵀ, ``gram_obs`` the same over the observed samples, ``lag``
+    Σ_{t≥1} x_t x_{t−1}ᵀ (these three None where only the score's sums were asked for: O(p²N) that the score does not
+    use), ``total`` Σ x_t, ``first`` x_0, ``last`` x_{N−1}, ``y_cross`` Σ_obs y_t x_t (p,), ``z_cross`` Σ_obs z_t x_tᵀ
+    (k, p) and ``residual_sse`` Σ_obs (d_t − H x_t)², d = y − z b the column the smoother ran on (the data at the
+    model's regression coefficients)."""
+
+    gram: np.ndarray | None
+    gram_obs: np.ndarray | None
+    lag: np.ndarray | None
+    total: np.ndarray
+    first: np.ndarray
+    last: np.ndarray
+    y_cross: np.ndarray
+    z_cross: np.ndarray
+    residual_sse: float
+
+    @classmethod
+    def of(cls, xs: np.ndarray, *, y: np.ndarray, z: np.ndarray, d: np.ndarray, h: np.ndarray,
+           observed: np.ndarray | None = None, moments: bool = True) -> StateSums:
+        """The sums of the means ``xs`` (p, L) of one span of samples: the data y (L,), regressors z (L, k), the
+        column d (L,) the smoother ran on, H (p,); ``observed`` (L,) bool, None where every sample is; ``moments``:
+        the p × p sums too."""
+        p = xs.shape[0]
+        if observed is None:
+            xo, yo, zo, do = xs, y, z, d
+        else:
+            xo, yo, zo, do = xs[:, observed], y[observed], z[observed], d[observed]
+        gram = gram_obs = lag = None
+        if moments:
+            gram = xs @ xs.T
+            gram_obs = gram if observed is None else xo @ xo.T
+            lag = xs[:, 1:] @ xs[:, :-1].T
+        residual = do - h @ xo
+        first, last = (xs[:, 0].copy(), xs[:, -1].copy()) if xs.shape[1] else (np.zeros(p), np.zeros(p))
+        return cls(gram, gram_obs, lag, xs.sum(axis=1), first, last, xo @ yo, zo.T @ xo.T, float(residual @ residual))
+
+    @classmethod
+    def joined(cls, earlier: StateSums, later: StateSums) -> StateSums:
+        """The sums over two adjacent spans, ``earlier`` ending where ``later`` begins (the lag term across the seam
+        x_first(later) x_last(earlier)ᵀ added)."""
+        moments = earlier.gram is not None and later.gram is not None
+        return cls(earlier.gram + later.gram if moments else None,
+                   earlier.gram_obs + later.gram_obs if moments else None,
+                   earlier.lag + later.lag + np.outer(later.first, earlier.last) if moments else None,
+                   earlier.total + later.total, earlier.first, later.last, earlier.y_cross + later.y_cross,
+                   earlier.z_cross + later.z_cross, earlier.residual_sse + later.residual_sse)
+
+
 @dataclass
 class SmootherStats:
-    """M-step inputs (paper 000 §3.3, appendix): ``xs`` (p, N) x_t^N, ``sum_p`` Σ P_t^N, ``p_first``, ``p_last``,
-    ``sum_lag`` Σ P_{t,t−1}^N, ``sum_p_obs``, ``loglik``, ``observed``; ``disturbances`` the adjoint's sums for
-    the score (:class:`DisturbanceSums`)."""
+    """M-step inputs (paper 000 §3.3, appendix): ``states`` the sums of x_t^N (:class:`StateSums`), ``sum_p``
+    Σ P_t^N, ``p_first``, ``p_last``, ``sum_lag`` Σ P_{t,t−1}^N, ``sum_p_obs``, ``loglik``, ``observed``;
+    ``disturbances`` the adjoint's sums for the score (:class:`DisturbanceSums`)."""
 
-    xs: np.ndarray
+    states: StateSums
     sum_p: np.ndarray
     p_first: np.ndarray
     p_last: np.ndarray

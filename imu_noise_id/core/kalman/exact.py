@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import LOG_2PI, Columns, DisturbanceSums, InnovationResult, SmootherStats
+from .common import LOG_2PI, Columns, DisturbanceSums, InnovationResult, SmootherStats, StateSums
 from .statespace import StateSpace
 
 
@@ -45,8 +45,11 @@ def innovations(model: StateSpace, cols: Columns) -> InnovationResult:
     return _forward(model, cols)[-1]
 
 
-def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
-    """E-step statistics of the data column: RTS smoother and lag-one covariance (paper 000 appendix), t = N … 2::
+def smooth(model: StateSpace, cols: Columns, y: np.ndarray, z: np.ndarray, *,
+           moments: bool = True) -> SmootherStats:
+    """E-step statistics of the data column (its means' sums against the data y (N,) and regressors z (N, k):
+    :class:`~.common.StateSums`, the p × p sums with ``moments``): RTS smoother and lag-one covariance (paper 000
+    appendix), t = N … 2::
 
         J_{t−1} = P_{t−1}^{t−1} Φᵀ (P_t^{t−1})⁻¹
         x_{t−1}^N = x_{t−1}^{t−1} + J_{t−1}(x_t^N − x_t^{t−1})
@@ -87,8 +90,8 @@ def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
     fo = inn.f[obs]
     eo = inn.e[0, obs]
     loglik = -0.5 * float(np.sum(LOG_2PI + np.log(fo) + eo * eo / fo))
-    return SmootherStats(np.ascontiguousarray(xs.T), sum_p, p_first, Pf[-1].copy(), sum_lag, sum_p_obs, loglik, obs,
-                         adjoint.sums())
+    states = StateSums.of(np.ascontiguousarray(xs.T), y=y, z=z, d=cols.y[0], h=h, observed=obs, moments=moments)
+    return SmootherStats(states, sum_p, p_first, Pf[-1].copy(), sum_lag, sum_p_obs, loglik, obs, adjoint.sums())
 
 
 class _Adjoint:

@@ -19,7 +19,16 @@ from scipy.signal import lfilter
 from ..errors import InputError
 from . import harmonic
 from .basis import Basis, blocks, decoupled_basis
-from .common import LOG_2PI, Columns, DisturbanceSums, InnovationResult, ProfileResult, SmootherStats, profile
+from .common import (
+    LOG_2PI,
+    Columns,
+    DisturbanceSums,
+    InnovationResult,
+    ProfileResult,
+    SmootherStats,
+    StateSums,
+    profile,
+)
 from .statespace import StateSpace
 
 
@@ -277,34 +286,6 @@ def _block_states(T: np.ndarray, gain: np.ndarray, y: np.ndarray, const: np.ndar
     return w
 
 
-def _predicted_modes(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray, u: np.ndarray, *,
-                     m0: np.ndarray) -> np.ndarray:
-    """w_t = U⁻¹ x_t^{t−1} (p, N), the predicted states of one column in the basis ``b``: inputs y (N,), u (p,),
-    initial mean m0 (p,)."""
-    gain_w, g_w, w0 = b.u_inv @ (model.phi @ g.k), (b.u_inv @ u)[:, None], (b.u_inv @ m0)[:, None]
-    return _block_states(b.t, gain_w, y, g_w, w0, modal=b.modal)
-
-
-def _adjoint_modes(model: StateSpace, g: SteadyGains, b: Basis, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The smoother's adjoint r in the basis ``b``, driven by the innovations e (N,) alone, in reversed time.
-
-    Bryson–Frazier / de Jong (1989) in steady state (Durbin & Koopman 2012, eq. 4.44 with L_t = A):
-
-        r_{t−1} = Hᵀ e_t / F + Aᵀ r_t,   r_{N−1} = 0,        x_t^N = x_t^{t−1} + P̄ r_{t−1}.
-
-    With v = Uᵀ r (Aᵀ = U⁻ᵀ Tᵀ Uᵀ) the recursion runs block by block through Tᵀ, one filter of e per block row;
-    reversed in time, σ_0 = 0 and σ_{k+1} = Tᵀ σ_k + Uᵀ Hᵀ e_{N−1−k} / F, so v_t = σ_{N−t}. Returns (σ (p, N) as
-    σ_0 … σ_{N−1}, σ_N = v_0); ``U⁻ᵀ v_t`` is r_{t−1}."""
-    gain = b.u.T @ model.h / g.f
-    tt = b.t.T
-    zero = np.zeros((tt.shape[0], 1))
-    if b.modal:
-        sigma = _block_states(tt, gain, e[::-1], zero, zero, modal=True)
-    else:  # Tᵀ is lower quasi-triangular: run it with the states' order reversed (upper again)
-        sigma = _block_states(tt[::-1, ::-1], gain[::-1], e[::-1], zero, zero, modal=False)[::-1]
-    return sigma, tt @ sigma[:, -1] + gain * e[0]
-
-
 def _innovations(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple[InnovationResult, Basis | None]:
     """Every column's innovations (their constant variance F) and the basis the filters ran in (None: no states)."""
     hx, b = _predicted_output(model, g, cols)
@@ -354,22 +335,154 @@ def affine_power_sum(J: np.ndarray, C: np.ndarray, P0: np.ndarray, n: int) -> tu
     return 0.5 * (total + total.T), 0.5 * (last + last.T)
 
 
-def _smoothed(model: StateSpace, g: SteadyGains, b: Basis | None, w: np.ndarray, e: np.ndarray) -> SmootherStats:
-    """Smoothed states and covariance sums from the predicted states w (p, N) in the basis ``b`` (overwritten: its
-    memory holds the adjoint's part) and the innovations e (N,): x_t^N = U w_t + P̄ U⁻ᵀ v_t (:func:`_adjoint_modes`),
-    two p × p products over the record, and two more for the score's sums (:func:`_disturbance_sums`)."""
+#: Largest p × N the smoother holds whole: up to it the sweep is one span (its memory a few p × N arrays, 256 MiB
+#: each at this size), beyond it spans of :data:`SPAN_FLOATS` whose forward filter runs twice (:func:`_sweep`): the
+#: memory stops growing with N (10–15 % more time at 10⁶ samples, less time over 24 h; docs/em.md, "Why the Kalman
+#: engines are built as they are").
+WHOLE_FLOATS = 1 << 25
+#: Floats of one p × L span where the record is longer than :data:`WHOLE_FLOATS` allows (8 MiB).
+SPAN_FLOATS = 1 << 20
+
+
+def span_length(p: int, n: int) -> int:
+    """Samples per span of the smoother's sweep over ``n`` samples of ``p`` states (:data:`WHOLE_FLOATS`,
+    :data:`SPAN_FLOATS`)."""
+    return n if p * n <= WHOLE_FLOATS else max(1, SPAN_FLOATS // p)
+
+
+@dataclass(frozen=True)
+class _Forward:
+    """The predicted states' recursion w_{t+1} = T w_t + gain·d_t + const in the basis ``b``, d the column the
+    smoother runs on."""
+
+    b: Basis
+    gain: np.ndarray  # U⁻¹ Φ K (p,)
+    const: np.ndarray  # U⁻¹ u (p, 1)
+
+    def run(self, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
+        """w (p, L) over the span d (L,) from its first state w0 (p,)."""
+        return _block_states(self.b.t, self.gain, d, self.const, w0[:, None], modal=self.b.modal)
+
+    def after(self, w: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """The state after the span whose states are w and inputs d."""
+        return self.b.t @ w[:, -1] + self.gain * d[-1] + self.const[:, 0]
+
+
+def _adjoint_span(model: StateSpace, g: SteadyGains, b: Basis, e: np.ndarray,
+                  sigma0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The smoother's adjoint in the basis ``b`` over one span of reversed time, driven by the innovations alone.
+
+    Bryson–Frazier / de Jong (1989) in steady state (Durbin & Koopman 2012, eq. 4.44 with L_t = A):
+
+        r_{t−1} = Hᵀ e_t / F + Aᵀ r_t,   r_{N−1} = 0,        x_t^N = x_t^{t−1} + P̄ r_{t−1}.
+
+    With v = Uᵀ r (Aᵀ = U⁻ᵀ Tᵀ Uᵀ) the recursion runs block by block through Tᵀ, one filter of e per block row;
+    reversed in time, σ_0 = 0 and σ_{k+1} = Tᵀ σ_k + Uᵀ Hᵀ e_{N−1−k} / F, so v_t = σ_{N−t} and U⁻ᵀ v_t is r_{t−1}.
+    ``e`` (L,) are the span's innovations e_s … e_{s+L−1} in time order and ``sigma0`` (p,) is σ_{N−s−L} (0 for the
+    record's last span); returns (σ_{N−s−L} … σ_{N−s−1} (p, L), σ_{N−s}: the next span's ``sigma0``, v_0 after the
+    first)."""
+    gain = b.u.T @ model.h / g.f
+    tt = b.t.T
+    zero = np.zeros((tt.shape[0], 1))
+    if b.modal:
+        sigma = _block_states(tt, gain, e[::-1], zero, sigma0[:, None], modal=True)
+    else:  # Tᵀ is lower quasi-triangular: run it with the states' order reversed (upper again)
+        sigma = _block_states(tt[::-1, ::-1], gain[::-1], e[::-1], zero, sigma0[::-1, None], modal=False)[::-1]
+    return sigma, tt @ sigma[:, -1] + gain * e[0]
+
+
+def _sweep(model: StateSpace, g: SteadyGains, forward: _Forward, d: np.ndarray, *, e: np.ndarray | None,
+           w_first: np.ndarray, y: np.ndarray, z: np.ndarray,
+           moments: bool) -> tuple[StateSums, DisturbanceSums, np.ndarray]:
+    """The smoothed means' sums (:class:`~.common.StateSums`), the adjoint's sums (:func:`_disturbance_sums`) and the
+    innovations, in spans of :func:`span_length` samples. Forward: each span's predicted states w from the state it
+    starts in (``w_first`` at t = 0), its innovations e = d − H U w when ``e`` is None, the state it ends in. Backward
+    from the last span: its w again from its first state (one span: kept), its adjoint σ (:func:`_adjoint_span`),
+    then its means and their sums block by block (:func:`_reduce_span`). A record of several spans costs one forward
+    pass more; the memory is then a few p × span arrays beside the N-length vectors, whatever N."""
+    b = forward.b
+    n = d.size
+    length = span_length(model.n_states, n)
+    spans = [(s, min(s + length, n)) for s in range(0, n, length)]
+    given = e is not None
+    if not given:
+        e = np.empty(n)
+    hu = model.h @ b.u
+    firsts, kept, w0 = [], None, w_first
+    for s, stop in spans:
+        w = forward.run(d[s:stop], w0)
+        if not given:
+            np.subtract(d[s:stop], hu @ w, out=e[s:stop])
+        kept = w if len(spans) == 1 else None
+        firsts.append(w0)
+        w0 = forward.after(w, d[s:stop])
+    p = model.n_states
+    sums = _AdjointSums(np.zeros((p, p)), np.zeros((p, p)), g.p_pred @ b.u_inv.T)
+    sigma, states = np.zeros(p), None
+    for (s, stop), w_start in zip(reversed(spans), reversed(firsts), strict=True):
+        w = kept if kept is not None else forward.run(d[s:stop], w_start)
+        adjoint, sigma = _adjoint_span(model, g, b, e[s:stop], sigma)  # σ_{N−stop} … σ_{N−s−1}; σ_{N−s}
+        sums.rr += adjoint @ adjoint.T  # σ_0 = 0 adds nothing
+        part = _reduce_span(model, b, w, adjoint, after=sigma, sums=sums, y=y[s:stop], z=z[s:stop], d=d[s:stop],
+                            moments=moments)
+        states = part if states is None else StateSums.joined(part, states)
+    return states, _disturbance_sums(model, g, b, rr=sums.rr, rx=sums.rx, n=n), e
+
+
+@dataclass
+class _AdjointSums:
+    """The adjoint's sums in the basis, Σ σ_k σ_kᵀ and Σ σ_{N−1−t} x_tᵀ, and P̄ U⁻ᵀ (σ's share of the means)."""
+
+    rr: np.ndarray
+    rx: np.ndarray
+    back: np.ndarray
+
+
+#: Samples per block of :func:`_reduce_span` (a few p × block arrays stay in cache).
+REDUCE_BLOCK = 1 << 14
+
+
+def _reduce_span(model: StateSpace, b: Basis, w: np.ndarray, adjoint: np.ndarray, *, after: np.ndarray,
+                 sums: _AdjointSums, y: np.ndarray, z: np.ndarray, d: np.ndarray, moments: bool) -> StateSums:
+    """One span's means x_t^N = U w_t + P̄ U⁻ᵀ σ_{N−t} and their sums (:class:`~.common.StateSums`), adding
+    Σ σ_{N−1−t} x_tᵀ to ``sums.rx``, block by block of :data:`REDUCE_BLOCK` samples: w (p, L) the span's predicted
+    states, ``adjoint`` (p, L) its σ_{N−s−L} … σ_{N−s−1} (:func:`_adjoint_span`), ``after`` σ_{N−s}; y, z, d the
+    span's. Each block reverses its σ into a contiguous copy (a reversed view is no BLAS operand)."""
+    length = w.shape[1]
+    states = None
+    for first in range(0, length, REDUCE_BLOCK):
+        last = min(first + REDUCE_BLOCK, length)  # times s + first … s + last − 1
+        lo, hi = length - last, length - first  # their σ_{N−t} and σ_{N−1−t}: adjoint columns lo … hi
+        ext = adjoint[:, lo:hi + 1] if hi < length else np.column_stack([adjoint[:, lo:], after])
+        ext = np.ascontiguousarray(ext[:, ::-1])  # column i: σ_{N−t} at t = s + first + i
+        xs = b.u @ w[:, first:last]
+        xs += sums.back @ ext[:, :-1]
+        sums.rx += ext[:, 1:] @ xs.T  # σ_{N−1−t} x_tᵀ (t = N − 1 meets σ_0 = 0)
+        part = StateSums.of(xs, y=y[first:last], z=z[first:last], d=d[first:last], h=model.h, moments=moments)
+        states = part if states is None else StateSums.joined(states, part)
+    return states
+
+
+def _disturbance_sums(model: StateSpace, g: SteadyGains, b: Basis, *, rr: np.ndarray, rx: np.ndarray,
+                      n: int) -> DisturbanceSums:
+    """:class:`~.common.DisturbanceSums` from the adjoint's sums in the basis ``b`` (``rr`` Σ σ_k σ_kᵀ, ``rx``
+    Σ σ_{N−1−t} x_tᵀ of :func:`_sweep`; r_t = U⁻ᵀ σ_{N−1−t} for the disturbances t = 0 … N − 2); N_t by
+    N_{t−1} = Hᵀ H / F + Aᵀ N_t A from N_{N−1} = 0 (Durbin & Koopman 2012, eq. 4.42), summed by
+    :func:`affine_power_sum`; L P̄ = Φ P_f."""
+    if n < 2:
+        return DisturbanceSums.none(model.n_states)
+    rr = b.u_inv.T @ rr @ b.u_inv
+    info = np.outer(model.h, model.h) / g.f
+    with np.errstate(over="ignore", invalid="ignore"):  # overflowed sums read as NaN by the score's users
+        n_sum, _ = affine_power_sum(g.a.T, info, info, n - 1)
+    return DisturbanceSums(0.5 * (rr + rr.T), b.u_inv.T @ rx, n_sum, n_sum @ (model.phi @ g.p_filt))
+
+
+def _smoothed(model: StateSpace, g: SteadyGains, states: StateSums, disturbances: DisturbanceSums,
+              e: np.ndarray) -> SmootherStats:
+    """The smoother's statistics from its means' and adjoint's sums and the innovations e (N,): the covariance sums in
+    closed form (:func:`affine_power_sum`; P_{t,t−1}^N = P_t^N Jᵀ)."""
     n = e.size
-    disturbances = DisturbanceSums.none(0)
-    if b is None:
-        xs = np.zeros((0, n))
-    else:
-        xs = b.u @ w
-        sigma, v_first = _adjoint_modes(model, g, b, e)
-        back = g.p_pred @ b.u_inv.T
-        reversed_part = np.matmul(back, sigma, out=w)  # w's memory, no longer needed
-        xs[:, 1:] += reversed_part[:, :0:-1]
-        xs[:, 0] += back @ v_first
-        disturbances = _disturbance_sums(model, g, b, sigma, xs)
     J = g.j
     const = g.p_filt - J @ g.p_pred @ J.T
     with np.errstate(over="ignore", invalid="ignore"):
@@ -381,61 +494,39 @@ def _smoothed(model: StateSpace, g: SteadyGains, b: Basis | None, w: np.ndarray,
     sum_lag = (sum_p - p_first) @ J.T
     loglik = -0.5 * (n * (LOG_2PI + np.log(g.f)) + float(e @ e) / g.f)
     return SmootherStats(
-        xs, sum_p, p_first, g.p_filt.copy(), sum_lag, sum_p.copy(), float(loglik), np.ones(n, bool), disturbances,
+        states, sum_p, p_first, g.p_filt.copy(), sum_lag, sum_p.copy(), float(loglik), np.ones(n, bool), disturbances,
     )
 
 
-def _disturbance_sums(model: StateSpace, g: SteadyGains, b: Basis, sigma: np.ndarray,
-                      xs: np.ndarray) -> DisturbanceSums:
-    """:class:`~.common.DisturbanceSums` from the adjoint in the basis ``b`` (σ of :func:`_adjoint_modes`; in 0-based
-    time r_t = U⁻ᵀ σ_{N−1−t} for the disturbances t = 0 … N − 2) and the smoothed states ``xs``; N_t by
-    N_{t−1} = Hᵀ H / F + Aᵀ N_t A from N_{N−1} = 0 (Durbin & Koopman 2012, eq. 4.42), summed by
-    :func:`affine_power_sum`; L P̄ = Φ P_f. Two p × p products over the record."""
-    n = xs.shape[1]
-    if n < 2:
-        return DisturbanceSums.none(xs.shape[0])
-    ahead = sigma[:, 1:]  # σ_1 … σ_{N−1}: r_{N−2} … r_0
-    rr = b.u_inv.T @ (ahead @ ahead.T) @ b.u_inv
-    rx = b.u_inv.T @ _reversed_products(sigma, xs)
-    info = np.outer(model.h, model.h) / g.f
-    with np.errstate(over="ignore", invalid="ignore"):  # overflowed sums read as NaN by the score's users
-        n_sum, _ = affine_power_sum(g.a.T, info, info, n - 1)
-    return DisturbanceSums(0.5 * (rr + rr.T), rx, n_sum, n_sum @ (model.phi @ g.p_filt))
+def _smooth_column(model: StateSpace, g: SteadyGains, b: Basis | None, d: np.ndarray, *, e: np.ndarray | None,
+                   u: np.ndarray, m0: np.ndarray, y: np.ndarray, z: np.ndarray, moments: bool) -> SmootherStats:
+    """The statistics of the column d (N,) the smoother runs on in the basis ``b`` (None: no states; input u (p,),
+    initial mean m0 (p,); its innovations ``e``, or None to form them), summed against the data y and regressors z
+    (N, k), the p × p sums with ``moments``."""
+    if b is None:
+        states = StateSums.of(np.zeros((0, d.size)), y=y, z=z, d=d, h=model.h, moments=moments)
+        return _smoothed(model, g, states, DisturbanceSums.none(0), d.copy() if e is None else e)
+    forward = _Forward(b, b.u_inv @ (model.phi @ g.k), (b.u_inv @ u)[:, None])
+    states, disturbances, e = _sweep(model, g, forward, d, e=e, w_first=b.u_inv @ m0, y=y, z=z, moments=moments)
+    return _smoothed(model, g, states, disturbances, e)
 
 
-#: Samples per chunk of :func:`_reversed_products` (a copy of p × this many floats at a time).
-REVERSED_CHUNK = 1 << 16
-
-
-def _reversed_products(sigma: np.ndarray, xs: np.ndarray) -> np.ndarray:
-    """Σ_{t=0}^{N−2} σ_{N−1−t} x_tᵀ for σ, x (p, N), chunk by chunk: a reversed view is not a BLAS operand, and
-    reversing the whole of σ would copy p × N floats."""
-    n = xs.shape[1]
-    out = np.zeros((sigma.shape[0], xs.shape[0]))
-    for start in range(0, n - 1, REVERSED_CHUNK):
-        end = min(start + REVERSED_CHUNK, n - 1)
-        out += np.ascontiguousarray(sigma[:, n - end:n - start][:, ::-1]) @ xs[:, start:end].T
-    return out
-
-
-def smooth(model: StateSpace, cols: Columns) -> SmootherStats:
-    """E-step statistics of the data column (column 0) with constant gains."""
+def smooth(model: StateSpace, cols: Columns, y: np.ndarray, z: np.ndarray, *, moments: bool = True) -> SmootherStats:
+    """E-step statistics of the data column (column 0) with constant gains, its means summed against the data y (N,)
+    and regressors z (N, k) (:class:`~.common.StateSums`; the p × p sums with ``moments``)."""
     g = gains(model)
-    y = cols.y[0]
-    if model.n_states == 0:
-        return _smoothed(model, g, None, np.zeros((0, y.size)), y.copy())
-    b = decoupled_basis(g.a)
-    w = _predicted_modes(model, g, b, y, cols.g[:, 0], m0=cols.m0[:, 0])
-    return _smoothed(model, g, b, w, y - (model.h @ b.u) @ w)
+    b = decoupled_basis(g.a) if model.n_states else None
+    return _smooth_column(model, g, b, cols.y[0], e=None, u=cols.g[:, 0], m0=cols.m0[:, 0], y=y, z=z,
+                          moments=moments)
 
 
-def profile_and_smooth(model: StateSpace, cols: Columns) -> tuple[ProfileResult, SmootherStats]:
-    """GLS profile of the free mean parameters and the smoother at their estimate."""
+def profile_and_smooth(model: StateSpace, cols: Columns, y: np.ndarray, z: np.ndarray, *,
+                       moments: bool = True) -> tuple[ProfileResult, SmootherStats]:
+    """GLS profile of the free mean parameters and the smoother at their estimate (its means summed against y, z;
+    the p × p sums with ``moments``)."""
     g = gains(model)
     inn, b = _innovations(model, g, cols)
     prof = profile(inn, cols.names)
-    if b is None:
-        return prof, _smoothed(model, g, None, np.zeros((0, cols.y.shape[1])), prof.innovations)
     weights = np.concatenate([[1.0], prof.beta])
-    w = _predicted_modes(model, g, b, weights @ cols.y, cols.g @ weights, m0=cols.m0 @ weights)
-    return prof, _smoothed(model, g, b, w, prof.innovations)
+    return prof, _smooth_column(model, g, b, weights @ cols.y, e=prof.innovations, u=cols.g @ weights,
+                                m0=cols.m0 @ weights, y=y, z=z, moments=moments)

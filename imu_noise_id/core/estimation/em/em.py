@@ -64,23 +64,18 @@ class DataSums:
 
 
 def sums_from_stats(st: kalman.SmootherStats, data: DataSums) -> Sums:
-    """Reduce smoother output to :class:`Sums` (paper 000 §3.3: P̃_t = P_t^N + x_t^N x_t^{Nᵀ})."""
-    X = st.xs  # (p, N)
-    xx = X @ X.T
-    s11 = xx - np.outer(X[:, 0], X[:, 0]) + st.sum_p - st.p_first
-    s00 = xx - np.outer(X[:, -1], X[:, -1]) + st.sum_p - st.p_last
-    s10 = X[:, 1:] @ X[:, :-1].T + st.sum_lag
-    xsum = X.sum(axis=1)
-    if data.all_observed:
-        xo = X
-        pt_obs = xx + st.sum_p
-    else:
-        xo = X[:, data.observed]
-        pt_obs = xo @ xo.T + st.sum_p_obs
+    """Reduce smoother output to :class:`Sums` (paper 000 §3.3: P̃_t = P_t^N + x_t^N x_t^{Nᵀ}); ValueError if it ran
+    without the p × p sums (``moments=False``)."""
+    x = st.states
+    if x.gram is None or x.gram_obs is None or x.lag is None:
+        raise ValueError("the smoother ran without the p x p sums of its means (moments=False): no M-step from it")
+    s11 = x.gram - np.outer(x.first, x.first) + st.sum_p - st.p_first
+    s00 = x.gram - np.outer(x.last, x.last) + st.sum_p - st.p_last
     return Sums(
-        n=X.shape[1], n_obs=data.y_obs.size, s11=s11, s00=s00, s10=s10, x_next=xsum - X[:, 0],
-        x_prev=xsum - X[:, -1], x1=X[:, 0].copy(), p1=st.p_first, pt_obs=pt_obs, yx_obs=xo @ data.y_obs,
-        zx_obs=data.zt_obs @ xo.T, zz_obs=data.zz, zy_obs=data.zy, yy_obs=data.yy, loglik=st.loglik,
+        n=st.observed.size, n_obs=data.y_obs.size, s11=s11, s00=s00, s10=x.lag + st.sum_lag,
+        x_next=x.total - x.first, x_prev=x.total - x.last, x1=x.first.copy(), p1=st.p_first,
+        pt_obs=x.gram_obs + st.sum_p_obs, yx_obs=x.y_cross, zx_obs=x.z_cross, zz_obs=data.zz, zy_obs=data.zy,
+        yy_obs=data.yy, loglik=st.loglik,
     )
 
 
@@ -106,13 +101,12 @@ def _measurement_sse(model: StateSpace, s: Sums) -> float:
     )
 
 
-def smoothed_measurement_sse(model: StateSpace, stats: kalman.SmootherStats, data: DataSums) -> float:
+def smoothed_measurement_sse(model: StateSpace, stats: kalman.SmootherStats) -> float:
     """:func:`_measurement_sse` from the smoother's output: Σ_obs (y_t − H x_t^N − b z_t)² + H (Σ_obs P_t^N) Hᵀ, the
-    residuals formed sample by sample (O(pN), no p × p sums of x_t^N x_t^{Nᵀ} and no cancellation between them)."""
+    residuals formed sample by sample by the smoother (:attr:`~..kalman.StateSums.residual_sse`, at the model's b;
+    O(pN), no p × p sums of x_t^N x_t^{Nᵀ} and no cancellation between them)."""
     h = model.h
-    fitted = h @ stats.xs if data.all_observed else h @ stats.xs[:, data.observed]
-    residual = data.y_obs - fitted - model.b @ data.zt_obs
-    return float(residual @ residual + h @ stats.sum_p_obs @ h)
+    return float(stats.states.residual_sse + h @ stats.sum_p_obs @ h)
 
 
 def mstep(model: StateSpace, s: Sums) -> StateSpace:
@@ -206,7 +200,7 @@ class MatrixScore:
         if not r * r > 0.0:  # a white noise driven to (numerically) zero beside a filter that carries it: no score
             raise ValueError("the white-noise variance is zero: the likelihood's gradient is not defined there")
         n_obs = data.y_obs.size
-        g_r = -0.5 * (n_obs / r - smoothed_measurement_sse(model, stats, data) / r**2)
+        g_r = -0.5 * (n_obs / r - smoothed_measurement_sse(model, stats) / r**2)
         p = model.n_states
         g_phi, g_q = np.zeros((p, p)), np.zeros((p, p))
         sums = stats.disturbances
@@ -214,7 +208,7 @@ class MatrixScore:
             full_phi, full_q = sums.rx - sums.nlp, 0.5 * (sums.rr - sums.n)
         for span in _component_spans(model):  # Φ and Q are block-diagonal by component
             g_phi[span, span], g_q[span, span] = full_phi[span, span], full_q[span, span]
-        initial = InitialTermGradient.at(model, stats.xs[:, 0], stats.p_first)
+        initial = InitialTermGradient.at(model, stats.states.first, stats.p_first)
         if initial.sensitivity is not None:
             sens = initial.sensitivity
             g_phi, g_q, g_r = g_phi + sens.g_phi, g_q + sens.g_q, g_r + sens.g_r

@@ -126,7 +126,7 @@ def loglik_grad_profile(
     pass) along a log-parameter whose score entry is not finite (the smoother's sums overflowed at a drive near
     zero)."""
     components = par.to_components(theta, base)
-    prof, model, stats = kalman.profile_and_smooth(with_components(base, components), y, z)
+    prof, model, stats = kalman.profile_and_smooth(with_components(base, components), y, z, moments=False)
     score = em.MatrixScore.at(model, stats, data or em.DataSums.of(y, z))
     grad = np.empty(theta.size)
     for k in range(theta.size):
