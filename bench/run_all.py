@@ -37,6 +37,7 @@ GOALS: list[tuple[list[str], str]] = [
     (["bench_allan.py"], "bench_allan.txt"),
     (["bench_bags.py"], "bench_bags.txt"),
     (["bench_analyze_memory.py"], "bench_analyze_memory.txt"),
+    (["bench_smoother_memory.py", "--baseline", BASELINE], "bench_analyze_memory.txt"),
     (["bench_em.py"], "bench_em.txt"),
     (["bench_em.py", "--quick"], "bench_em.txt"),
     (["bench_bank.py", "--skip-reproduction"], "bench_bank.txt"),
