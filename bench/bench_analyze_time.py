@@ -8,17 +8,18 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --rates 200 400                     # issue 11's timings
     .venv/bin/python bench/bench_analyze_time.py --rates 200 --jobs 1 0               # one process vs one per core
     .venv/bin/python bench/bench_analyze_time.py --duration 10800                     # 3 h at 400 Hz (the GMWM)
-    .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400 --baseline ../baseline  # 24 h, 200 Hz
+    .venv/bin/python bench/bench_analyze_time.py --rates 200 --duration 86400 --repeats 2 --baseline ../baseline  # 24 h
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --timeout 1500 --numbers  # measured
     .venv/bin/python bench/bench_analyze_time.py --adis 1 2 3 4 5 6 --allow-motion --timeout 1200   # all six runs
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --adis-seconds 1000 --baseline ../baseline --numbers  # 10⁵
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --repeats 3   # with the spread
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
-screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run in three turns and 24 h
-at 200 Hz, each side by side with the checkout before the report's figures were drawn side by side, all six
-ADIS16405 runs (this checkout alone), and 11 min at 100 Hz in three turns, side by side with that same checkout; each
-section's second line names its checkouts.
+screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run in three turns side by
+side with the checkout before the report's figures were drawn side by side, 24 h at 200 Hz in two turns side by side
+with the checkout before the smoother handed over sums, all six ADIS16405 runs (this checkout alone), and 11 min at
+100 Hz in three turns, side by side with the checkout before the figures; each section's second line names its
+checkouts.
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
 checkout; with ``--adis RUN …``, each whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at 100

@@ -48,7 +48,7 @@ GOALS: list[tuple[list[str], str]] = [
     (["bench_analyze_time.py", "--duration", "10800"], "bench_analyze_time.txt"),
     (["bench_analyze_time.py", "--rates", "100", "--duration", "660", "--repeats", "3", "--numbers", "--baseline",
       BASELINE], "bench_analyze_time.txt"),
-    (["bench_analyze_time.py", "--rates", "200", "--duration", "86400", "--baseline", BASELINE],
+    (["bench_analyze_time.py", "--rates", "200", "--duration", "86400", "--repeats", "2", "--baseline", BASELINE],
      "bench_analyze_time.txt"),
     (["bench_fit_time.py", "--samples", "360000", "--baseline", BASELINE], "bench_fit_time.txt"),
     (["bench_fit_time.py", "--samples", "10000000"], "bench_fit_time.txt"),
