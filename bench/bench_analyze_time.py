@@ -15,11 +15,10 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --repeats 3   # with the spread
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
-screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run in three turns side by
-side with the checkout before the report's figures were drawn side by side, 24 h at 200 Hz in two turns side by side
-with the checkout before the smoother handed over sums, all six ADIS16405 runs (this checkout alone), and 11 min at
-100 Hz in three turns, side by side with the checkout before the figures; each section's second line names its
-checkouts.
+screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run in three turns and 24 h
+at 200 Hz in two turns, each side by side with the checkout before the smoother handed over sums, all six ADIS16405
+runs (this checkout alone), and 11 min at 100 Hz in three turns, side by side with the checkout before the report's
+figures were drawn side by side; each section's second line names its checkouts.
 
 The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like), rosbag2 mcap, written once by this
 checkout; with ``--adis RUN …``, each whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at 100
