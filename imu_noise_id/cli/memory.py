@@ -2,9 +2,8 @@
 
 Need: :data:`PROCESS_BYTES` per process plus :data:`MAIN_BYTES_PER_SAMPLE` per message read (main process) and, per
 analysed sample in each worker, :data:`EM_WORKER_BYTES_PER_SAMPLE` up to the EM's length
-(:data:`~imu_noise_id.pipelines.analyze.models.EM_MAX_SAMPLES`, where the closed loop's smoother passes hold the
-model's states for every sample) or :data:`WORKER_BYTES_PER_SAMPLE` beyond it (the GMWM); measured: docs/analysis.md,
-"Quick use". Available:
+(:data:`~imu_noise_id.pipelines.analyze.models.EM_MAX_SAMPLES`, where the closed loop's smoother passes run) or
+:data:`WORKER_BYTES_PER_SAMPLE` beyond it (the GMWM); measured: docs/analysis.md, "Quick use". Available:
 ``MemAvailable`` (``/proc/meminfo``), or a cgroup's ``memory.max`` − ``memory.current`` where smaller. A record is
 refused only when the need exceeds it; the message gives the need and the ``--span`` that fits.
 """
@@ -25,7 +24,8 @@ MAIN_BYTES_PER_SAMPLE = 185
 #: :data:`PROCESS_BYTES`.
 WORKER_BYTES_PER_SAMPLE = 39
 #: Peak RSS [bytes] of one worker per sample analysed by the EM and the closed loop, over :data:`PROCESS_BYTES`: a whole
-#: measured record whose loop reached 25 states (its smoother passes hold every state for every sample).
+#: measured record whose loop reached 25 states, measured when its smoother passes held every state for every sample;
+#: kept as a margin that grows with the record now that they do not (docs/analysis.md, "Quick use").
 EM_WORKER_BYTES_PER_SAMPLE = 1870
 
 
