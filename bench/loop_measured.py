@@ -16,11 +16,17 @@ the fit) and the N of the rule before 2026-11-28 (the continuous densities of WN
 the time and the exact finish's rise in log-likelihood over the composite-likelihood fit the loop's search ended
 with (records long enough to be searched on it). The summary counts them against the issue's targets.
 
-Each finished axis is appended at once to ``OUT.jsonl`` beside ``--out`` (the full records take hours on a shared
-2-core machine); ``--resume`` skips the axes already there and summarises them with the new ones.
+The script sets one BLAS thread per process as the command line does (two processes side by side with two threads
+each spent most of their time waiting). Each finished axis is appended at once to ``OUT.jsonl`` beside ``--out``
+(the full records take hours on a shared 2-core machine); ``--resume`` skips the axes already there and summarises
+them with the new ones.
 """
 
 from __future__ import annotations
+
+# isort: off
+import imu_noise_id.cli.blas_threads  # noqa: F401  (one BLAS thread per process, set before numpy loads its BLAS)
+# isort: on
 
 import argparse
 import json
