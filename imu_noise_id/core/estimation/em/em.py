@@ -44,15 +44,13 @@ class Sums:
 
 @dataclass(frozen=True)
 class DataSums:
-    """Sums of the data alone (the same at every E-step): Σ_obs z zᵀ, Σ_obs z y, Σ_obs y², and the data."""
+    """Sums of the data alone (the same at every E-step): the observed samples' count, Σ_obs z zᵀ, Σ_obs z y and
+    Σ_obs y²."""
 
-    y_obs: np.ndarray
-    zt_obs: np.ndarray  # (k, n_obs)
+    n_obs: int
     zz: np.ndarray
     zy: np.ndarray
     yy: float
-    observed: np.ndarray
-    all_observed: bool
 
     @classmethod
     def of(cls, y: np.ndarray, z: np.ndarray) -> DataSums:
@@ -60,7 +58,7 @@ class DataSums:
         allo = bool(np.all(obs))
         yo = y if allo else y[obs]
         zt = np.ascontiguousarray((z if allo else z[obs]).T)
-        return cls(yo, zt, zt @ zt.T, zt @ yo, float(yo @ yo), obs, allo)
+        return cls(yo.size, zt @ zt.T, zt @ yo, float(yo @ yo))
 
 
 def sums_from_stats(st: kalman.SmootherStats, data: DataSums) -> Sums:
@@ -72,7 +70,7 @@ def sums_from_stats(st: kalman.SmootherStats, data: DataSums) -> Sums:
     s11 = x.gram - np.outer(x.first, x.first) + st.sum_p - st.p_first
     s00 = x.gram - np.outer(x.last, x.last) + st.sum_p - st.p_last
     return Sums(
-        n=st.observed.size, n_obs=data.y_obs.size, s11=s11, s00=s00, s10=x.lag + st.sum_lag,
+        n=st.observed.size, n_obs=data.n_obs, s11=s11, s00=s00, s10=x.lag + st.sum_lag,
         x_next=x.total - x.first, x_prev=x.total - x.last, x1=x.first.copy(), p1=st.p_first,
         pt_obs=x.gram_obs + st.sum_p_obs, yx_obs=x.y_cross, zx_obs=x.z_cross, zz_obs=data.zz, zy_obs=data.zy,
         yy_obs=data.yy, loglik=st.loglik,
@@ -199,7 +197,7 @@ class MatrixScore:
         r = float(model.r)
         if not r * r > 0.0:  # a white noise driven to (numerically) zero beside a filter that carries it: no score
             raise ValueError("the white-noise variance is zero: the likelihood's gradient is not defined there")
-        n_obs = data.y_obs.size
+        n_obs = data.n_obs
         g_r = -0.5 * (n_obs / r - smoothed_measurement_sse(model, stats) / r**2)
         p = model.n_states
         g_phi, g_q = np.zeros((p, p)), np.zeros((p, p))
