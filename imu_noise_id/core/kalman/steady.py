@@ -417,25 +417,18 @@ def _sweep(model: StateSpace, g: SteadyGains, forward: _Forward, d: np.ndarray, 
         firsts.append(w0)
         w0 = forward.after(w, d[s:stop])
     p = model.n_states
-    sums = _AdjointSums(np.zeros((p, p)), np.zeros((p, p)), g.p_pred @ b.u_inv.T)
+    back = g.p_pred @ b.u_inv.T  # σ's share of the means
+    rr, rx = np.zeros((p, p)), np.zeros((p, p))  # in the basis: Σ σ_k σ_kᵀ, Σ σ_{N−1−t} x_tᵀ
     sigma, states = np.zeros(p), None
     for (s, stop), w_start in zip(reversed(spans), reversed(firsts), strict=True):
         w = kept if kept is not None else forward.run(d[s:stop], w_start)
         adjoint, sigma = _adjoint_span(model, g, b, e[s:stop], sigma)  # σ_{N−stop} … σ_{N−s−1}; σ_{N−s}
-        sums.rr += adjoint @ adjoint.T  # σ_0 = 0 adds nothing
-        part = _reduce_span(model, b, w, adjoint, after=sigma, sums=sums, y=y[s:stop], z=z[s:stop], d=d[s:stop],
-                            moments=moments)
+        rr += adjoint @ adjoint.T  # σ_0 = 0 adds nothing
+        part, part_rx = _reduce_span(model, b, w, adjoint, after=sigma, back=back, y=y[s:stop], z=z[s:stop],
+                                     d=d[s:stop], moments=moments)
+        rx += part_rx
         states = part if states is None else StateSums.joined(part, states)
-    return states, _disturbance_sums(model, g, b, rr=sums.rr, rx=sums.rx, n=n), e
-
-
-@dataclass
-class _AdjointSums:
-    """The adjoint's sums in the basis, Σ σ_k σ_kᵀ and Σ σ_{N−1−t} x_tᵀ, and P̄ U⁻ᵀ (σ's share of the means)."""
-
-    rr: np.ndarray
-    rx: np.ndarray
-    back: np.ndarray
+    return states, _disturbance_sums(model, g, b, rr=rr, rx=rx, n=n), e
 
 
 #: Samples per block of :func:`_reduce_span` (a few p × block arrays stay in cache).
@@ -443,24 +436,26 @@ REDUCE_BLOCK = 1 << 14
 
 
 def _reduce_span(model: StateSpace, b: Basis, w: np.ndarray, adjoint: np.ndarray, *, after: np.ndarray,
-                 sums: _AdjointSums, y: np.ndarray, z: np.ndarray, d: np.ndarray, moments: bool) -> StateSums:
-    """One span's means x_t^N = U w_t + P̄ U⁻ᵀ σ_{N−t} and their sums (:class:`~.common.StateSums`), adding
-    Σ σ_{N−1−t} x_tᵀ to ``sums.rx``, block by block of :data:`REDUCE_BLOCK` samples: w (p, L) the span's predicted
-    states, ``adjoint`` (p, L) its σ_{N−s−L} … σ_{N−s−1} (:func:`_adjoint_span`), ``after`` σ_{N−s}; y, z, d the
-    span's. Each block reverses its σ into a contiguous copy (a reversed view is no BLAS operand)."""
+                 back: np.ndarray, y: np.ndarray, z: np.ndarray, d: np.ndarray,
+                 moments: bool) -> tuple[StateSums, np.ndarray]:
+    """One span's means x_t^N = U w_t + ``back`` σ_{N−t} (``back`` = P̄ U⁻ᵀ) reduced to their sums
+    (:class:`~.common.StateSums`) and to Σ σ_{N−1−t} x_tᵀ, block by block of :data:`REDUCE_BLOCK` samples: w (p, L)
+    the span's predicted states, ``adjoint`` (p, L) its σ_{N−s−L} … σ_{N−s−1} (:func:`_adjoint_span`), ``after``
+    σ_{N−s}; y, z, d the span's. Each block reverses its σ into a contiguous copy (a reversed view is no BLAS
+    operand)."""
     length = w.shape[1]
-    states = None
+    states, rx = None, np.zeros((w.shape[0], w.shape[0]))
     for first in range(0, length, REDUCE_BLOCK):
         last = min(first + REDUCE_BLOCK, length)  # times s + first … s + last − 1
         lo, hi = length - last, length - first  # their σ_{N−t} and σ_{N−1−t}: adjoint columns lo … hi
         ext = adjoint[:, lo:hi + 1] if hi < length else np.column_stack([adjoint[:, lo:], after])
         ext = np.ascontiguousarray(ext[:, ::-1])  # column i: σ_{N−t} at t = s + first + i
         xs = b.u @ w[:, first:last]
-        xs += sums.back @ ext[:, :-1]
-        sums.rx += ext[:, 1:] @ xs.T  # σ_{N−1−t} x_tᵀ (t = N − 1 meets σ_0 = 0)
+        xs += back @ ext[:, :-1]
+        rx += ext[:, 1:] @ xs.T  # σ_{N−1−t} x_tᵀ (t = N − 1 meets σ_0 = 0)
         part = StateSums.of(xs, y=y[first:last], z=z[first:last], d=d[first:last], h=model.h, moments=moments)
         states = part if states is None else StateSums.joined(states, part)
-    return states
+    return states, rx
 
 
 def _disturbance_sums(model: StateSpace, g: SteadyGains, b: Basis, *, rr: np.ndarray, rx: np.ndarray,
