@@ -319,12 +319,12 @@ def test_the_steady_smoothers_memory_does_not_grow_with_states_times_samples(mon
 
 
 def test_the_initial_state_as_the_filters_delay_state_gives_the_prepended_run_bit_for_bit():
-    """:func:`steady._strictly_proper` (the initial state w0 put into lfilter's delay state) against the run on the
+    """:func:`blockfilter.strictly_proper` (the initial state w0 put into lfilter's delay state) against the run on the
     input with w0 prepended, the form it replaces: equal to the last bit, for 1st- and 2nd-order sections over
     several columns, whatever the sign of w0."""
     from scipy.signal import lfilter
 
-    from imu_noise_id.core.kalman import steady
+    from imu_noise_id.core.kalman import blockfilter
 
     rng = np.random.default_rng(11)
     d = rng.standard_normal((3, 400))
@@ -332,14 +332,14 @@ def test_the_initial_state_as_the_filters_delay_state_gives_the_prepended_run_bi
     second = [1.0, -1.8, 0.85]
     for num, den in (((0.0, 1.0), [1.0, -0.97]), ((0.0, 1.0, -0.4), second), ((0.0, 0.0, 0.3), second)):
         prepended = lfilter(num, den, np.concatenate([w0[:, None], d], axis=1), axis=-1)[:, 1:]
-        np.testing.assert_array_equal(steady._strictly_proper(num, den, d, w0), prepended)
+        np.testing.assert_array_equal(blockfilter.strictly_proper(num, den, d, w0), prepended)
 
 
 def test_a_blocks_output_filtered_once_per_row_equals_its_recursion():
-    """:func:`steady._driven_block` (one filter of the shared input per output row, the constants' step responses
+    """:func:`blockfilter.driven_block` (one filter of the shared input per output row, the constants' step responses
     from the block's all-pole one) against x_0 = w0, x_{t+1} = B x_t + gain·y_t + const, rows c·x_t: for a 1×1 and
     a 2×2 block over several columns, with and without constant inputs and initial states."""
-    from imu_noise_id.core.kalman import steady
+    from imu_noise_id.core.kalman import blockfilter
 
     rng = np.random.default_rng(12)
     n, m = 300, 3
@@ -356,7 +356,7 @@ def test_a_blocks_output_filtered_once_per_row_equals_its_recursion():
             for t in range(n - 1):
                 x[:, :, t + 1] = B @ x[:, :, t] + gain[:, None] * y[:, t] + const
             expected = np.einsum("rs,smn->rmn", c, x)
-            out = np.array(steady._driven_block(B, c, gain, y, const=const, w0=w0))
+            out = np.array(blockfilter.driven_block(B, c, gain, y, const=const, w0=w0))
             np.testing.assert_allclose(out, expected, rtol=1e-10, atol=1e-10 * np.max(np.abs(expected)))
 
 

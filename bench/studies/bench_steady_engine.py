@@ -49,6 +49,10 @@ try:  # where the modal basis's condition bound lives (steady.py itself in older
     from imu_noise_id.core.kalman import basis as bases
 except ImportError:
     bases = steady
+try:  # where the block filters call lfilter (steady.py itself in older checkouts)
+    from imu_noise_id.core.kalman import blockfilter as filters
+except ImportError:
+    filters = steady
 from imu_noise_id.core.kalman.statespace import from_components
 from imu_noise_id.core.noise.averaging import MA
 from imu_noise_id.core.noise.components import GM, RW, WN
@@ -56,14 +60,14 @@ from imu_noise_id.core.noise.flicker import BI
 from imu_noise_id.core.noise.resonant import OSC
 
 spent = [0.0]
-plain = steady.lfilter
+plain = filters.lfilter
 def timed(*args, **kwargs):
     start = time.perf_counter()
     try:
         return plain(*args, **kwargs)
     finally:
         spent[0] += time.perf_counter() - start
-steady.lfilter = timed
+filters.lfilter = timed
 
 MODELS = {{"WN+MA+BI+2OSC+RW": [WN(6.8e-4), MA(1e-4), BI(3e-5, 1.0, 1000.0), OSC(0.55, 0.005, 2e-4),
                                 OSC(8.7, 0.4, 5e-4), RW(1e-5)],

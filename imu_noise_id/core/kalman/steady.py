@@ -10,14 +10,12 @@ P_{t−1}^N = J P_t^N Jᵀ + (P_f − J P̄ Jᵀ) (:func:`affine_power_sum`); P_
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 
 from ..errors import InputError
-from . import harmonic
+from . import blockfilter, harmonic
 from .basis import Basis, blocks, decoupled_basis
 from .common import (
     LOG_2PI,
@@ -58,93 +56,6 @@ def gains(model: StateSpace) -> SteadyGains:
     a = model.phi @ (np.eye(model.n_states) - np.outer(k, h))
     j = np.linalg.lstsq(P.T, (Pf @ model.phi.T).T, rcond=None)[0].T
     return SteadyGains(P, Pf, k, f, a, j)
-
-
-def _strictly_proper(num: tuple[float, ...], den: list[float], d: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """Strictly proper filter num/den (num[0] = 0) along the last axis of d, w0 as the initial delay state."""
-    return lfilter(num, den, d, axis=-1, zi=np.multiply.outer(w0, num[1:]))[0]
-
-
-def _accumulate(terms: Iterable[np.ndarray]) -> np.ndarray:
-    it = iter(terms)
-    out = next(it)
-    for term in it:
-        out += term
-    return out
-
-
-def _characteristic(B: np.ndarray) -> list[float]:
-    if B.shape[0] == 1:
-        return [1.0, -B[0, 0]]
-    return [1.0, -(B[0, 0] + B[1, 1]), B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]]
-
-
-def _run_block(B: np.ndarray, d: np.ndarray, w0: np.ndarray, out: np.ndarray) -> None:
-    """x_0 = w0, x_{t+1} = B x_t + d_t for one 1×1 or 2×2 block into ``out``; d, out (s, m, N), w0 (s, m)."""
-    den = _characteristic(B)
-    if B.shape[0] == 1:
-        out[...] = _strictly_proper((0.0, 1.0), den, d, w0)
-        return
-    adj = (((0.0, 1.0, -B[1, 1]), (0.0, 0.0, B[0, 1])), ((0.0, 0.0, B[1, 0]), (0.0, 1.0, -B[0, 0])))
-    for r in range(2):
-        out[r] = _accumulate(_strictly_proper(adj[r][c], den, d[c], w0[c])
-                             for c in range(2) if adj[r][c][2] != 0 or c == r)
-
-
-def _adjugate_numerators(B: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """(r, s, 3): per row of ``c`` (r, s) and state k of a 1×1 or 2×2 block B, the strictly proper numerator of
-    c·adj(zI − B)·e_k in powers of z⁻¹ (denominator :func:`_characteristic`; a 1×1 block's third tap 0)."""
-    if B.shape[0] == 1:
-        return np.stack([np.zeros_like(c[:, 0]), c[:, 0], np.zeros_like(c[:, 0])], axis=-1)[:, None, :]
-    return np.stack([
-        np.stack([np.zeros(c.shape[0]), c[:, 0], c[:, 1] * B[1, 0] - c[:, 0] * B[1, 1]], axis=-1),
-        np.stack([np.zeros(c.shape[0]), c[:, 1], c[:, 0] * B[0, 1] - c[:, 1] * B[0, 0]], axis=-1)], axis=1)
-
-
-def _driven_block(B: np.ndarray, c: np.ndarray, gain: np.ndarray, y: np.ndarray, *, const: np.ndarray,
-                  w0: np.ndarray) -> list[np.ndarray]:
-    """c·x_t, one (m, N) array per row of c (r, s), of one block's recursion x_0 = w0,
-    x_{t+1} = B x_t + gain·y_t + const, y (m, N), const and w0 (s, m). Every state's input is a multiple of y plus a
-    constant, so by linearity each row is one filter of y with numerator Σ_k gain_k·num_k (not one per state), its
-    initial delay states Σ_k w0_k·num_k, plus the constants' step responses from the block's all-pole step response
-    q = lfilter(1, den, 1) shifted by each tap; a 1×1 block filters its input directly."""
-    den = _characteristic(B)
-    nums = _adjugate_numerators(B, c)
-    n = y.shape[1]
-    if B.shape[0] == 1:
-        d, scale = (gain[0] * y + const[0][:, None], 1.0) if np.any(const) else (y, gain[0])
-        return [lfilter(scale * num[0, :2], den, d, axis=-1, zi=np.multiply.outer(w0[0], num[0, 1:2]))[0]
-                for num in nums]
-    outputs = []
-    q = None
-    for num in nums:
-        out = lfilter(gain @ num, den, y, axis=-1, zi=w0.T @ num[:, 1:])[0]
-        outputs.append(out)
-        num_c = const.T @ num  # (m, 3): the constants' numerators per column
-        rows = np.flatnonzero(np.any(num_c != 0.0, axis=1))
-        if not rows.size:
-            continue
-        if q is None:
-            q = lfilter([1.0], den, np.ones(n))
-        for tap in range(1, num_c.shape[1]):
-            out[rows, tap:] += num_c[rows, tap, None] * q[: n - tap]
-    return outputs
-
-
-def _run_modes(T: np.ndarray, gain: np.ndarray, y: np.ndarray, const: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """w_0 = w0, w_{t+1} = T w_t + gain·y_t + const (p, m, N) for quasi-triangular T, block by block from the last;
-    y (m, N), gain (p,), const and w0 (p, m). Each block's input is built when its turn comes (not p × m × N at
-    once)."""
-    m, n = y.shape
-    w = np.empty((T.shape[0], m, n))
-    for blk in reversed(blocks(T)):
-        drive = gain[blk, None, None] * y[None]
-        drive += const[blk, :, None]
-        later = slice(blk.stop, T.shape[0])
-        if later.start < later.stop and np.any(T[blk, later]):
-            drive += np.tensordot(T[blk, later], w[later], axes=1)
-        _run_block(T[blk, blk], drive, w0[blk], out=w[blk])
-    return w
 
 
 #: Sinusoidal columns go in closed form when their free responses cost less than this share of
@@ -199,11 +110,11 @@ def _filtered_output(model: StateSpace, g: SteadyGains, b: Basis, y: np.ndarray,
     gain_w = b.u_inv @ (model.phi @ g.k)
     g_w, w0, hu = b.u_inv @ u, b.u_inv @ m0, model.h @ b.u
     if not b.modal:
-        w = _run_modes(b.t, gain_w, y, g_w, w0)
+        w = blockfilter.run_modes(b.t, gain_w, y, g_w, w0)
         return (hu @ w.reshape(p, -1)).reshape(m, n)
-    outputs = (_driven_block(b.t[blk, blk], hu[blk][None, :], gain_w[blk], y, const=g_w[blk], w0=w0[blk])[0]
+    outputs = (blockfilter.driven_block(b.t[blk, blk], hu[blk][None, :], gain_w[blk], y, const=g_w[blk], w0=w0[blk])[0]
                for blk in blocks(b.t))
-    return _accumulate(outputs)
+    return blockfilter.accumulate(outputs)
 
 
 def _sinusoid_output(model: StateSpace, g: SteadyGains, b: Basis, cols: Columns, *, rows: np.ndarray,
@@ -266,24 +177,9 @@ def _modal_free_responses(b: Basis, hu: np.ndarray, length: int) -> np.ndarray:
     out = np.empty((b.t.shape[0], length))
     for blk in blocks(b.t):
         s = blk.stop - blk.start
-        out[blk] = _driven_block(b.t[blk, blk], hu[blk][None, :], np.zeros(s), np.zeros((s, length)),
+        out[blk] = blockfilter.driven_block(b.t[blk, blk], hu[blk][None, :], np.zeros(s), np.zeros((s, length)),
                                  const=np.zeros((s, s)), w0=np.eye(s))[0]
     return out
-
-
-def _block_states(T: np.ndarray, gain: np.ndarray, y: np.ndarray, const: np.ndarray, w0: np.ndarray, *,
-                  modal: bool) -> np.ndarray:
-    """w (p, N) of w_0 = w0, w_{t+1} = T w_t + gain·y_t + const for one input y (N,), const and w0 (p, 1): block by
-    block with each state one row of adj(zI − B) where T is block-diagonal (``modal``), else :func:`_run_modes`."""
-    if not modal:
-        return _run_modes(T, gain, y[None, :], const, w0)[:, 0, :]
-    w = np.empty((T.shape[0], y.size))
-    for blk in blocks(T):
-        size = blk.stop - blk.start
-        rows = _driven_block(T[blk, blk], np.eye(size), gain[blk], y[None, :], const=const[blk], w0=w0[blk])
-        for r, row in enumerate(rows):
-            w[blk.start + r] = row[0]
-    return w
 
 
 def _innovations(model: StateSpace, g: SteadyGains, cols: Columns) -> tuple[InnovationResult, Basis | None]:
@@ -361,7 +257,7 @@ class _Forward:
 
     def run(self, d: np.ndarray, w0: np.ndarray) -> np.ndarray:
         """w (p, L) over the span d (L,) from its first state w0 (p,)."""
-        return _block_states(self.b.t, self.gain, d, self.const, w0[:, None], modal=self.b.modal)
+        return blockfilter.block_states(self.b.t, self.gain, d, self.const, w0[:, None], modal=self.b.modal)
 
     def after(self, w: np.ndarray, d: np.ndarray) -> np.ndarray:
         """The state after the span whose states are w and inputs d."""
@@ -385,9 +281,10 @@ def _adjoint_span(model: StateSpace, g: SteadyGains, b: Basis, e: np.ndarray,
     tt = b.t.T
     zero = np.zeros((tt.shape[0], 1))
     if b.modal:
-        sigma = _block_states(tt, gain, e[::-1], zero, sigma0[:, None], modal=True)
+        sigma = blockfilter.block_states(tt, gain, e[::-1], zero, sigma0[:, None], modal=True)
     else:  # Tᵀ is lower quasi-triangular: run it with the states' order reversed (upper again)
-        sigma = _block_states(tt[::-1, ::-1], gain[::-1], e[::-1], zero, sigma0[::-1, None], modal=False)[::-1]
+        sigma = blockfilter.block_states(tt[::-1, ::-1], gain[::-1], e[::-1], zero, sigma0[::-1, None],
+                                         modal=False)[::-1]
     return sigma, tt @ sigma[:, -1] + gain * e[0]
 
 
