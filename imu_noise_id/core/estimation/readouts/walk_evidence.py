@@ -19,7 +19,6 @@ tell apart".
 from __future__ import annotations
 
 import math
-from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,20 +74,6 @@ class WalkReading:
         else:
             k = f"K {self.random_walk:.3g} [{self.ci95[0]:.3g}, {self.ci95[1]:.3g}]"
         return f"{self.structure} (BIC {self.delta_bic:+.1f}, AIC {self.delta_aic:+.1f} over the best): {k}"
-
-
-@dataclass(frozen=True)
-class _Read:
-    """One structure as :func:`plausible_walks` reads it: its name, ΔBIC and ΔAIC to the best, log-likelihood, visible
-    components (:func:`visible_components`), K over the record (scaled) and the scale of a screened candidate's K."""
-
-    spec: str
-    delta_bic: float
-    delta_aic: float
-    loglik: float
-    visible: list[Component]
-    random_walk: float
-    scale: float
 
 
 def visible_components(components: list[Component], n: int, dt: float) -> list[Component]:
@@ -161,28 +146,6 @@ def walk_interval(components: list[Component], n: int, dt: float) -> tuple[float
     return (k * math.exp(-Z95 * sd), k * math.exp(Z95 * sd))
 
 
-def _limit_of(simpler: tuple[str, ...], richer: tuple[str, ...]) -> bool:
-    """Whether structure ``simpler`` is a limit of ``richer``: ``richer`` with components removed (σ → 0) and GMs
-    turned into RWs (τ → ∞ at a fixed K² = 2σ²/τ); WN+RW is a limit of WN+GM, of WN+2GM and of WN+GM+RW+RR."""
-    a, b = Counter(simpler), Counter(richer)
-    spare_gms = b["GM"] - a["GM"]
-    return (spare_gms >= 0 and a["RW"] <= b["RW"] + spare_gms
-            and all(a[t] <= b[t] for t in a if t not in ("RW", "GM")))
-
-
-def _beats_its_walks(reading: _Read, walks: list[_Read], penalty: float) -> bool:
-    """Whether ``reading`` (a structure without a walk over the record) is better than every reading with a walk in
-    ``walks`` whose visible structure is a limit of its own (:func:`_limit_of`), on −2 ln L + ``penalty`` × the
-    visible components' parameters (ln N: BIC, 2: AIC): Occam's razor of Madigan & Raftery (1994, §2: a model is
-    discarded when a model nested in it has the higher posterior), here for dropping the walk. The parameters are the
-    visible components' (a collapsed walk beside a GM is no parameter of the structure read)."""
-    def criterion(r: _Read) -> float:
-        return -2.0 * r.loglik + penalty * len(mle.Parameterisation.of(r.visible).entries)
-
-    own = criterion(reading)
-    return all(own < criterion(w) for w in walks if _limit_of(_structure(w.visible), _structure(reading.visible)))
-
-
 def _statistic_walk_scale(exact: list[Component], on_statistic: tuple[Component, ...], span_s: float) -> float:
     """How much the exact fit's K exceeds what a statistic of fixed size reads for the same structure
     (:func:`record_walk` of ``exact`` over that of ``on_statistic``, the structure fitted on the statistic); 1 where
@@ -205,32 +168,27 @@ def plausible_walks(selection: SelectionResult, n: int, dt: float) -> list[WalkR
     winner = selection.best_key
     span = n * dt
     fits = {spec: f for spec, f in selection.fits.items() if f.converged}
-    found = [(spec, f.bic, f.aic, f.loglik, list(f.components), 1.0) for spec, f in fits.items()]
+    found = [(spec, f.bic, f.aic, list(f.components), 1.0) for spec, f in fits.items()]
     found += [(spec if i == 0 else f"{spec} at its {m.statistic} maximum", fits[against].bic + verdict.delta_bic_at(m),
-               fits[against].aic + verdict.delta_aic_at(m), fits[against].loglik + verdict.credited(m),
-               list(m.components), _statistic_walk_scale(list(fits[against].components), m.reference_components, span))
+               fits[against].aic + verdict.delta_aic_at(m), list(m.components),
+               _statistic_walk_scale(list(fits[against].components), m.reference_components, span))
               for spec, (against, verdict) in selection.screened.items() if against in fits
               for i, m in enumerate(verdict.maxima) if m.components]
     if not found:
         return []
     bic_min, aic_min = min(f[1] for f in found), min(f[2] for f in found)
     winner_structure = _structure(visible_components(list(selection.best.components), n, dt))
-    read = []
-    for spec, bic, aic, loglik, components, scale in sorted(found, key=lambda f: f[1]):
-        visible = visible_components(components, n, dt)
-        read.append(_Read(spec, bic - bic_min, aic - aic_min, loglik, visible, scale * record_walk(visible, span),
-                          scale))
-    walks = [r for r in read if r.random_walk > 0.0]
     readings = []
-    for r in read:
-        if r.spec == winner or _structure(r.visible) == winner_structure:
+    for spec, bic, aic, components, scale in sorted(found, key=lambda f: f[1]):
+        if spec == winner or min(bic - bic_min, aic - aic_min) > OCCAM_DELTA:
             continue
-        if not any(delta <= OCCAM_DELTA and (r.random_walk > 0.0 or _beats_its_walks(r, walks, penalty))
-                   for delta, penalty in [(r.delta_bic, math.log(n)), (r.delta_aic, 2.0)]):
+        visible = visible_components(components, n, dt)
+        if _structure(visible) == winner_structure:
             continue
-        ci = walk_interval(r.visible, n, dt)
-        readings.append(WalkReading(r.spec, r.delta_bic, r.delta_aic, r.random_walk,
-                                    None if ci is None else (r.scale * ci[0], r.scale * ci[1])))
+        ci = walk_interval(visible, n, dt)
+        k = record_walk(visible, span)
+        readings.append(WalkReading(spec, bic - bic_min, aic - aic_min, scale * k,
+                                    None if ci is None else (scale * ci[0], scale * ci[1])))
     return readings
 
 
