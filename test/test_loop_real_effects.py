@@ -717,3 +717,23 @@ def test_a_digital_low_pass_that_stood_for_a_line_goes_once_the_line_is_modelled
     assert len(oscs) == 1 and oscs[0].frequency == pytest.approx(0.5, rel=0.01)
     white = next(c for c in final.components if isinstance(c, WN))
     assert white.noise_density == pytest.approx(5e-4, rel=0.01)
+
+
+def _joint(effect: str) -> det.Finding:
+    return det.Finding.proposed(effect, "joint_search", f"joint search: {effect} added", {})
+
+
+def test_a_joint_search_addition_clears_the_av_bands_rejection_when_it_nests_the_model():
+    """The joint search (one-at-a-time stuck, the AV outside its band) proposes a GM at a tenth of the record: on
+    ADIS16405 run 1 gyro_x (whole record) it took the model's AV inside the band (z 1.4 → 0.8) with 2Δℓ = 15.2 for
+    two parameters, refused by the BIC (27.6 on 10⁶ samples), and the loop ended with the AV misfit unexplained. The
+    same likelihood-ratio rule as the AV band's own findings now applies; a swap that does not nest the model (BI
+    replaced by a GM and a walk) has no likelihood-ratio test and stays the BIC's."""
+    before = _band_diag(0.0, 2.6, 2)
+    need = stats.chi2.isf(BAND_LR_LEVEL, 2)
+    assert band_cleared(_joint("GM"), before, _band_diag(0.5 * need + 0.1, 1.05, 4))[0]
+    assert not band_cleared(_joint("GM"), before, _band_diag(0.5 * need - 0.1, 1.05, 4))[0]
+    swapped = _band_diag(0.5 * need + 5.0, 1.05, 4)
+    before.fit.components = [WN(1e-3), BI(1e-4, *band_for_record(10_000, 0.01))]
+    swapped.fit.components = [WN(1e-3), GM(tau=3.0, sigma=1e-4), RW(1e-5)]
+    assert not band_cleared(_joint("GM+RW"), before, swapped)[0]

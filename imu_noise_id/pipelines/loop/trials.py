@@ -4,6 +4,7 @@ the bounded joint search; the long-τ starts they and re-selection share. Why: d
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import replace
 
 import numpy as np
@@ -108,18 +109,29 @@ def attempt_once(loop: AxisLoop, diag: Diagnosis, new_state: LoopState,
 BAND_LR_LEVEL = 1e-3
 
 
+#: Detectors whose findings may clear the AV band's rejection (:func:`band_cleared`): the AV band's own, and the joint
+#: search's additions, tried when one-at-a-time is stuck (with the AV outside the band, on that misfit).
+BAND_CLEARING_DETECTORS = ("av_band", "joint_search")
+
+
+def _nests(richer: Diagnosis, smaller: Diagnosis) -> bool:
+    """Whether ``richer``'s components hold every one of ``smaller``'s types (as many times): a nested pair."""
+    return Counter(c.name for c in smaller.fit.components) <= Counter(c.name for c in richer.fit.components)
+
+
 def band_cleared(f: det.Finding, before: Diagnosis, after: Diagnosis) -> tuple[bool, str]:
     """Whether ``after`` (``f``'s effect added to ``before``) clears the AV band's rejection of ``before`` though the
-    BIC refuses it, and why: ``f`` is the AV band's finding (``before``'s AV outside the data's simultaneous band,
-    :func:`.rules.av_inside_band`), ``after``'s AV lies inside that band with a lower RMS AV misfit z, and the
-    likelihood-ratio statistic 2(ℓ_after − ℓ_before) of the nested pair is at least χ²_k's (1 − :data:`BAND_LR_LEVEL`)
-    quantile, k the parameters added. The BIC's penalty (k ln n, 27 for a GM on an hour at 200 Hz) asks more of a
-    small component on a long record than the two tests together: a GM of τ 20 s beside a walk on one hour gains
-    2Δℓ ≈ 20 and is refused by the BIC while the walk that stands in for it puts the model's AV 2.6x above the data's
-    at τ = 360 s. Beyond the papers (docs/loop.md, "The loop's rules" 4)."""
+    BIC refuses it, and why: ``f`` is the AV band's finding or a joint search's addition
+    (:data:`BAND_CLEARING_DETECTORS`), ``before``'s AV lies outside the data's simultaneous band
+    (:func:`.rules.av_inside_band`), ``after`` nests ``before`` and its AV lies inside that band with a lower RMS AV
+    misfit z, and the likelihood-ratio statistic 2(ℓ_after − ℓ_before) of the nested pair is at least χ²_k's
+    (1 − :data:`BAND_LR_LEVEL`) quantile, k the parameters added. The BIC's penalty (k ln n, 27 for a GM on an hour
+    at 200 Hz) asks more of a small component on a long record than the two tests together: a GM of τ 20 s beside a
+    walk on one hour gains 2Δℓ ≈ 20 and is refused by the BIC while the walk that stands in for it puts the model's
+    AV 2.6x above the data's at τ = 360 s. Beyond the papers (docs/loop.md, "The loop's rules" 4)."""
     added = after.fit.n_params - before.fit.n_params
-    if (f.detector != "av_band" or added <= 0 or av_inside_band(before) or not av_inside_band(after)
-            or av_rms_z(after) >= av_rms_z(before)):
+    if (f.detector not in BAND_CLEARING_DETECTORS or added <= 0 or not _nests(after, before)
+            or av_inside_band(before) or not av_inside_band(after) or av_rms_z(after) >= av_rms_z(before)):
         return False, ""
     lr = 2.0 * (after.errors.loglik - before.errors.loglik)
     need = float(stats.chi2.isf(BAND_LR_LEVEL, added))
@@ -260,6 +272,9 @@ def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
             trials.append(Trial(finding, new_state.name(), None, False, f"joint search: refit failed: {exc}"))
             continue
         ok, why = judge(diag, new_diag)
+        if not ok:
+            ok, cleared_why = band_cleared(finding, diag, new_diag)
+            why = f"{why}; {cleared_why}" if ok else why
         trials.append(Trial(finding, new_state.name(), new_diag.errors.bic, ok, f"joint search: {why}"))
         if ok and (best is None or new_diag.errors.bic < best[0]):
             best = (new_diag.errors.bic, new_state, new_diag, finding)
