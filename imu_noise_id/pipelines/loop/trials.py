@@ -229,12 +229,12 @@ def _one_partly(loop: AxisLoop, diag: Diagnosis, one_state: LoopState, one_diag:
 
 def explore(loop: AxisLoop, state: LoopState, diag: Diagnosis,
              trials: list[Trial]) -> tuple[float, LoopState, Diagnosis, det.Finding] | None:
-    """The bounded joint search when one-at-a-time is stuck (moves judged by the BIC and do-no-harm rules alone, the
-    best returned): a GM at a tenth of the record and BI, the RW restarted small; :func:`hump_resonance`;
-    :func:`flicker_as_gm_and_walk`. On a long record each move but the hump's is screened first
-    (:meth:`.AxisLoop.screen_reference`) and refused unrefitted if it cannot lower the BIC there. Then the AV
-    signatures at the verdict's band (:func:`band_findings`), each attempted as a detector's finding is
-    (:func:`attempt_once`: the BIC, or the band's rejection cleared). Beyond the papers."""
+    """The bounded joint search when one-at-a-time is stuck (moves judged by the BIC and do-no-harm rules, or, nesting
+    the model, by the band's rejection cleared: :func:`band_cleared`; the best returned): a GM at a tenth of the record
+    and BI, the RW restarted small; :func:`hump_resonance`; :func:`flicker_as_gm_and_walk`. On a long record each
+    move but the hump's is screened first (:meth:`.AxisLoop.screen_reference`) and refused unrefitted if it cannot
+    lower the BIC there. Then the AV signatures at the verdict's band (:func:`band_findings`), each attempted as a
+    detector's finding is (:func:`attempt_once`: the BIC, or the band's rejection cleared). Beyond the papers."""
     span = loop.n * loop.dt
     level = long_tau_level(diag)
     proposals = [("GM", {"tau": span / 10.0, "sigma": math.sqrt(level / 0.38)})]
