@@ -213,8 +213,15 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if adis_data_missing():
         return 2
-    lines = [f"# bench/loop_measured.py --runs {args.runs} --axes {args.axes} --samples {args.samples} "
-             f"(start WN+RW, full 100 Hz) at commit {_commit()}"]
+    lines: list[str] = []
+
+    def emit(*new: str) -> None:
+        """Add ``new`` to the output, printed at once (stdout and ``--out`` hold the same text)."""
+        lines.extend(new)
+        print("\n".join(new), flush=True)
+
+    emit(f"# bench/loop_measured.py --runs {args.runs} --axes {args.axes} --samples {args.samples} "
+         f"(start WN+RW, full 100 Hz) at commit {_commit()}")
     log = args.out.with_suffix(".jsonl") if args.out is not None else None
     done = {}
     if args.resume and log is not None and log.exists():
@@ -232,10 +239,9 @@ def main(argv: list[str] | None = None) -> int:
                 _append(log, res)
             res = with_data_checks(res, y, dt)
             results.append(res)
-            lines.append(line(res))
-            print(lines[-1], flush=True)
+            emit(line(res))
     if results:
-        lines += ["", *summary(results)]
+        emit("", *summary(results))
     res = done.get((0, "gyro_x"))
     if args.mtig_samples and (res is not None or not args.summarise_only):
         d = np.load(SHARED_DATA / "mtig_gyro_x_contaminated" / "mtig_cont_gyro_x.npz")
@@ -244,9 +250,7 @@ def main(argv: list[str] | None = None) -> int:
         if res is None:  # logged as run 0
             res = run_axis(0, "gyro_x", y, dt, args.intervals)
             _append(log, res)
-        lines.append(line(with_data_checks(res, y, dt)).replace("run0", "MTi-G"))
-        print(lines[-1], flush=True)
-    print("\n".join(lines[-8:]))
+        emit(line(with_data_checks(res, y, dt)).replace("run0", "MTi-G"))
     if args.out is not None:
         args.out.write_text("\n".join(lines) + "\n")
     return 0
