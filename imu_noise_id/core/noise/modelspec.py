@@ -9,6 +9,8 @@ NAME is a key of :data:`~.components.COMPONENT_TYPES`, positional values follow 
 from __future__ import annotations
 
 import re
+from collections import Counter
+from collections.abc import Sequence
 
 from ..axes import ACCEL_AXES, AXES, GYRO_AXES
 from ..errors import InputError
@@ -119,6 +121,12 @@ def canonical(components: list[Component]) -> list[Component]:
     outside it last)."""
     order = {name: i for i, name in enumerate(CANONICAL_ORDER)}
     return sorted(components, key=lambda c: order.get(c.name, len(order)))
+
+
+def nests(richer: Sequence[Component], smaller: Sequence[Component]) -> bool:
+    """Whether ``richer`` holds every component type of ``smaller`` (as many times): ``smaller``'s structure is
+    ``richer``'s with components removed, a nested pair."""
+    return not Counter(c.name for c in smaller) - Counter(c.name for c in richer)
 
 
 def structure_name(names: list[str]) -> str:

@@ -4,7 +4,6 @@ the bounded joint search; the long-τ starts they and re-selection share. Why: d
 from __future__ import annotations
 
 import math
-from collections import Counter
 from dataclasses import replace
 
 import numpy as np
@@ -19,7 +18,7 @@ from ...core.estimation.em import screen
 from ...core.noise.base import Component
 from ...core.noise.components import GM, RW, total_allan_variance
 from ...core.noise.flicker import BI, PLATEAU, band_for_record
-from ...core.noise.modelspec import canonical
+from ...core.noise.modelspec import canonical, nests
 from ...core.noise.resonant import MAX_DAMPING, OSC
 from ...core.noise.units import random_walk_at_allan_variance
 from .rules import av_inside_band, av_rms_z, better, judge, simultaneous_z
@@ -114,11 +113,6 @@ BAND_LR_LEVEL = 1e-3
 BAND_CLEARING_DETECTORS = ("av_band", "joint_search")
 
 
-def _nests(richer: Diagnosis, smaller: Diagnosis) -> bool:
-    """Whether ``richer``'s components hold every one of ``smaller``'s types (as many times): a nested pair."""
-    return Counter(c.name for c in smaller.fit.components) <= Counter(c.name for c in richer.fit.components)
-
-
 def band_cleared(f: det.Finding, before: Diagnosis, after: Diagnosis) -> tuple[bool, str]:
     """Whether ``after`` (``f``'s effect added to ``before``) clears the AV band's rejection of ``before`` though the
     BIC refuses it, and why: ``f`` is the AV band's finding or a joint search's addition
@@ -130,8 +124,9 @@ def band_cleared(f: det.Finding, before: Diagnosis, after: Diagnosis) -> tuple[b
     walk on one hour gains 2Δℓ ≈ 20 and is refused by the BIC while the walk that stands in for it puts the model's
     AV 2.6x above the data's at τ = 360 s. Beyond the papers (docs/loop.md, "The loop's rules" 4)."""
     added = after.fit.n_params - before.fit.n_params
-    if (f.detector not in BAND_CLEARING_DETECTORS or added <= 0 or not _nests(after, before)
-            or av_inside_band(before) or not av_inside_band(after) or av_rms_z(after) >= av_rms_z(before)):
+    if (f.detector not in BAND_CLEARING_DETECTORS or added <= 0
+            or not nests(after.fit.components, before.fit.components) or av_inside_band(before)
+            or not av_inside_band(after) or av_rms_z(after) >= av_rms_z(before)):
         return False, ""
     lr = 2.0 * (after.errors.loglik - before.errors.loglik)
     need = float(stats.chi2.isf(BAND_LR_LEVEL, added))

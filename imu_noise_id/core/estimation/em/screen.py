@@ -7,13 +7,13 @@ of fixed size"). Each statistic's maximum is kept (:class:`Maximum`): a reading 
 from __future__ import annotations
 
 import math
-from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ...noise.components import GM, Component
+from ...noise.modelspec import nests
 from . import block_sums, mle, whittle
 
 #: Screen ΔBIC below which a candidate is fitted exactly (units of −2 ln L).
@@ -184,6 +184,5 @@ def screen(reference: Reference, candidate: list[Component], stats: Statistics,
     at_reference = {"whittle": reference.whittle_components, "block sums": reference.block_components}
     maxima = sorted((Maximum(statistic, gain, tuple(fitted), at_reference[statistic])
                      for statistic, (gain, fitted) in best.items()), key=lambda m: -m.gain)
-    nests = not Counter(c.name for c in reference.components) - Counter(c.name for c in candidate)
     return Screen(tuple(maxima), _n_parameters(candidate) - _n_parameters(reference.components), math.log(stats.n),
-                  nests)
+                  nests(candidate, reference.components))
