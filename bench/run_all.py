@@ -131,6 +131,7 @@ STUDIES: list[tuple[list[str], str]] = [
     (["studies/composite_gap.py"], "studies/composite_gap.txt"),
     (["studies/whittle_shortfall.py", "--run", "1", "--axis", "gyro_x"], "studies/composite_gap.txt"),
     (["studies/watch_power_bound.py"], "bench_watch.txt"),
+    (["studies/loop_trace.py", "1", "gyro_x", "--samples", "0"], "loop_measured.txt"),
 ]
 
 
