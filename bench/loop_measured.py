@@ -25,6 +25,11 @@ them with the new ones.
 from __future__ import annotations
 
 # isort: off
+import sys
+from pathlib import Path
+
+# this checkout's package first: run from another worktree, the editable install would import the main one's
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import imu_noise_id.cli.blas_threads  # noqa: F401  (one BLAS thread per process, set before numpy loads its BLAS)
 # isort: on
 
@@ -33,7 +38,6 @@ import json
 import math
 import subprocess
 import time
-from pathlib import Path
 
 import numpy as np
 from common import (  # bench/common.py, beside this script

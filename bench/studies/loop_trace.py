@@ -19,6 +19,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # bench/, for its shared helpers
+# this checkout's package first: run from another worktree, the editable install would import the main one's
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from common import adis_data_missing, load_adis_run  # bench/common.py
 
