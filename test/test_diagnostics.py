@@ -329,6 +329,23 @@ def test_a_deficit_whose_longest_tau_are_too_few_to_be_significant_still_points_
     assert found[0].params["random_walk"] == pytest.approx(3e-4, rel=0.3)
 
 
+def test_a_long_tau_deficit_is_read_from_its_own_stretch_not_from_a_short_tau_deficit_before_it():
+    """The model above the data at τ = 0.05–0.2 s (a filter shape off), on the data between, and above it again from
+    τ ≈ 200 s on (a walk grown over a slow GM; ADIS16405 run 2 accel_x's whole record): the long-τ deficit starts at
+    200 s, and its GM is fitted to the slow hump, not to a short-τ bump. Before, the deficit band began at the first
+    significant τ anywhere (0.05 s) and its GM came out at τ_c ≈ 0.01 s."""
+    tau = np.geomspace(0.01, 1000.0, 41)
+    white, fast, slow = WN(3e-3), GM(tau=0.02, sigma=2e-2), GM(tau=100.0, sigma=4e-3)
+    data = total_allan_variance([white, fast, slow], tau, DT)
+    model = data * np.where((tau >= 0.05) & (tau <= 0.2), 1.3, 1.0) * np.maximum(1.0, tau / 200.0)
+    ci = (data * 0.9, data * 1.1)
+    found = [f for f in detect_av_signatures(tau, data, ci, model, av_white=white.allan_variance(tau, DT))
+             if f.significant and f.params.get("deficit")]
+    assert found and found[-1].effect == "GM", [f.evidence for f in found]
+    assert found[-1].params["band_lo"] >= 200.0
+    assert 30.0 < found[-1].params["tau"] < 300.0
+
+
 def test_residual_errors_bundle():
     e = np.random.default_rng(15).standard_normal(5000)
     err = residual_errors(e, DT, loglik=1.0, bic=2.0, av_data=np.ones(4), av_model=np.ones(4))

@@ -259,15 +259,17 @@ def test_reselection_swaps_a_random_walk_for_the_flicker_it_stands_for():
 
 def test_measured_accelerometer_random_walk_stays_within_the_long_tau_allan_variance(shared_data):
     # ADIS16405 run 1 accel_x, first 300 s: the loop kept a random walk of 3.9e-3 m/s²/√s, 12× what the AV at
-    # τ ≥ 30 s supports (its AV 10× the data's there); the flicker noise it stood for is now modelled instead.
+    # τ ≥ 30 s supports (its AV 10× the data's there); the flicker noise it stood for is now modelled instead. The
+    # whole loop: its first step depends on which finding ranks first (the long-τ deficit's GM or the 0.57 Hz line),
+    # its end does not.
     y = np.load(shared_data / "adis16405_static" / "adis16405_run1.npz")["accel"][:30_000, 0]
-    result = run_closed_loop(y, DT, "WN+RW", axis="accel_x", max_steps=1)
+    result = run_closed_loop(y, DT, "WN+RW", axis="accel_x")
     av = allan_variance(y, DT)
     far = av.tau >= 30.0
     bound = float(np.min(np.sqrt(3.0 * av.variance[far, 0] / av.tau[far])))
     rw = [c.random_walk for c in result.final.diagnosis.fit.components if isinstance(c, RW)]
     assert all(k <= bound for k in rw), (rw, bound)
-    assert result.max_rel_av_error < 2.0
+    assert result.av_inside_band and result.max_rel_av_error < 0.5
 
 
 def test_a_hump_wider_than_a_tenth_of_its_frequency_is_measured_as_the_pooled_search_saw_it():

@@ -94,13 +94,25 @@ def signature_threshold(m: int, alpha: float = ALPHA) -> float:
 LAST_DECADE = 0.1
 
 
+def long_tau_deficit(z: np.ndarray, z_star: float) -> np.ndarray:
+    """Indices of the τ where the model's AV lies significantly above the data's (z < −``z_star``) within the last
+    stretch of τ where it lies above at all (z < 0): a long-τ deficit is read from there alone, not from a deficit at
+    shorter τ (e.g. a filter shape's) that the data's AV crosses back over before it."""
+    significant = np.flatnonzero(z < -z_star)
+    if significant.size == 0:
+        return significant
+    crossed = np.flatnonzero(z[: significant[-1]] >= 0)
+    return significant[significant > crossed[-1]] if crossed.size else significant
+
+
 def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray],
                          av_model: np.ndarray, *, av_white: np.ndarray | None = None,
                          alpha: float = ALPHA, threshold: float | None = None) -> list[Finding]:
     """Bands of τ where the data's AV is significantly above (or at long τ below) the model's, each traced to a
     component: z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) beyond ``threshold`` (default :func:`signature_threshold` of
     the M τ); by position and slope of the excess QN (shortest τ, < −1.5), RR (> 1.5) or RW (to the last decade), else
-    GM (and BI when flat); a long-τ deficit → GM and K above ``av_white``. Rules: docs/loop.md."""
+    GM (and BI when flat); a long-τ deficit (:func:`long_tau_deficit`) → GM and K above ``av_white``. Rules:
+    docs/loop.md."""
     tau = np.asarray(tau, dtype=float)
     av_data = np.asarray(av_data, dtype=float)
     av_model = np.asarray(av_model, dtype=float)
@@ -110,7 +122,7 @@ def detect_av_signatures(tau: np.ndarray, av_data: np.ndarray, av_ci: tuple[np.n
     z = av_misfit_z(av_data, av_ci, av_model)
     z_star = signature_threshold(m, alpha) if threshold is None else float(threshold)
     findings: list[Finding] = []
-    deficit = np.flatnonzero(z < -z_star)
+    deficit = long_tau_deficit(z, z_star)
     if deficit.size and tau[deficit[-1]] >= LAST_DECADE * tau[-1] and np.all(z[deficit[-1]:] < 0):
         white = av_data[0] * tau[0] / tau if av_white is None else np.asarray(av_white, dtype=float)
         hump = av_data - white
