@@ -12,7 +12,7 @@ import pytest
 from imu_noise_id.core.allan import allan_variance, choose_m, identify_alpha
 from imu_noise_id.core.diagnostics import detectors as det
 from imu_noise_id.core.diagnostics.av_band import model_av_band
-from imu_noise_id.core.diagnostics.av_signatures import detect_av_signatures
+from imu_noise_id.core.diagnostics.av_signatures import detect_av_signatures, long_tau_deficit
 from imu_noise_id.core.diagnostics.monitor import InnovationMonitor
 from imu_noise_id.core.diagnostics.residuals import (
     acf,
@@ -327,6 +327,13 @@ def test_a_deficit_whose_longest_tau_are_too_few_to_be_significant_still_points_
     assert found and found[0].effect == "GM" and found[0].params["deficit"], [f.evidence for f in found]
     assert 15.0 < found[0].params["tau"] < 120.0
     assert found[0].params["random_walk"] == pytest.approx(3e-4, rel=0.3)
+
+
+def test_long_tau_deficit_keeps_the_significant_tau_after_the_data_last_rose_to_the_model():
+    z = np.array([-5.0, -4.0, 1.0, 0.5, -1.0, -4.0, -5.0, -2.0])
+    assert long_tau_deficit(z, 3.0).tolist() == [5, 6]
+    assert long_tau_deficit(np.array([-1.0, -4.0, -2.0, -5.0]), 3.0).tolist() == [1, 3]  # never crossed: all
+    assert long_tau_deficit(np.array([-1.0, 2.0, -2.0]), 3.0).size == 0
 
 
 def test_a_long_tau_deficit_is_read_from_its_own_stretch_not_from_a_short_tau_deficit_before_it():

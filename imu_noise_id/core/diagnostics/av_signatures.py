@@ -97,7 +97,17 @@ LAST_DECADE = 0.1
 def long_tau_deficit(z: np.ndarray, z_star: float) -> np.ndarray:
     """Indices of the τ where the model's AV lies significantly above the data's (z < −``z_star``) within the last
     stretch of τ where it lies above at all (z < 0): a long-τ deficit is read from there alone, not from a deficit at
-    shorter τ (e.g. a filter shape's) that the data's AV crosses back over before it."""
+    shorter τ (e.g. a filter shape's) that the data's AV crosses back over before it.
+
+    Parameters
+    ----------
+    z : the AV misfit z_τ = ln(AV_data/AV_model)/sd(ln AV_hat) at ascending τ (:func:`.residuals.av_misfit_z`)
+    z_star : the |z| a τ must exceed to count (:func:`signature_threshold`)
+
+    Returns
+    -------
+    The indices, ascending; empty where no τ is significant.
+    """
     significant = np.flatnonzero(z < -z_star)
     if significant.size == 0:
         return significant
