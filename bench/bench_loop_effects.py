@@ -36,8 +36,12 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 from pathlib import Path
+
+# this checkout's package first: run from another worktree, the editable install would import the main one's
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np
 
