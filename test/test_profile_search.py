@@ -55,3 +55,16 @@ def test_a_point_just_inside_the_end_steps_where_the_secant_puts_it():
     assert Z95 - 0.25 < r_of_d(1.0) < Z95
     v_end, points = _end(r_of_d, [1.0])
     assert points == 1 and abs(r_of_d(v_end) - Z95) < R_TOL
+
+
+def test_known_points_at_the_same_distance_and_height_are_ordered_without_comparing_their_argmaxes():
+    """Two known points with the same (v, ℓ_A) — a profile evaluated twice at one v — sorted as tuples compared their
+    argmax arrays next, and an argmax of more than one parameter raised ValueError ("truth value of an array …"): a
+    traceback from ``fit``'s intervals on a WN+OSC+RW record. Points are ordered by distance and root alone."""
+    def profile_at(v: float, starts: list[np.ndarray]) -> tuple[float, np.ndarray]:
+        return -0.5 * (1.2 * v) ** 2, np.array([v, 1.0])
+
+    twice = (2.0, -0.5 * 2.4**2)
+    pts = [(0.0, 0.0, np.zeros(2)), (*twice, np.array([2.0, 1.0])), (*twice, np.array([2.0, 3.0]))]
+    v_end = end(profile_at, lambda th: [th], pts, 1.0, first=1.0, limit=100.0)
+    assert abs(1.2 * v_end - Z95) < R_TOL

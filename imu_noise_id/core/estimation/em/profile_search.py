@@ -56,7 +56,9 @@ def end(profile_at: ProfileAt, starts_near: Callable[[np.ndarray], list[np.ndarr
     def root(a: float) -> float:
         return math.sqrt(2.0 * max(a_max - a, 0.0)) if math.isfinite(a) else math.inf
 
-    known = sorted((direction * (v - v_c), root(a), th) for v, a, th in pts_all if direction * (v - v_c) > 0)
+    # ordered by (distance, root) alone: a tie would otherwise compare the argmax arrays
+    known = sorted(((direction * (v - v_c), root(a), th) for v, a, th in pts_all if direction * (v - v_c) > 0),
+                   key=lambda p: p[:2])
     pts: list[Point] = [(0.0, 0.0, th_c)] + [p for p in known if math.isfinite(p[1])]
     inside: list[float] = [0.0, -Z95]  # Illinois regula falsi on f = r − Z95: [distance, f] with f < 0 …
     outside: list[float] | None = None  # … and with f > 0 once bracketed
