@@ -132,6 +132,7 @@ STUDIES: list[tuple[list[str], str]] = [
     (["studies/whittle_shortfall.py", "--run", "1", "--axis", "gyro_x"], "studies/composite_gap.txt"),
     (["studies/watch_power_bound.py"], "bench_watch.txt"),
     (["studies/loop_trace.py", "1", "gyro_x", "--samples", "0"], "loop_measured.txt"),
+    (["studies/loop_trace.py", "2", "accel_x", "--samples", "0"], "loop_measured.txt"),
 ]
 
 
