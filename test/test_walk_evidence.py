@@ -8,6 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.estimation.em import screen
@@ -19,6 +20,7 @@ from imu_noise_id.core.estimation.readouts.kalibr import KalibrValue
 from imu_noise_id.core.estimation.readouts.walk_evidence import (
     OCCAM_DELTA,
     WalkReading,
+    one_sided_upper,
     over_structures,
     plausible_walks,
     record_walk,
@@ -65,12 +67,28 @@ def test_a_structure_without_a_walk_makes_k_the_upper_end() -> None:
                 WalkReading("WN+GM", 3.8, 0.8, 0.0, (0.0, 0.0)),
                 WalkReading("WN+GM+RW", 9.0, 0.0, 2.1e-5, (0.9e-5, 7.5e-5))]
     bound = over_structures(k, readings)
-    assert bound.method == "bound" and bound.value == 7.5e-5 and bound.ci95 == (0.0, 7.5e-5)
+    # the largest one-sided 95 % upper limit, each interval read as Wald on ln K: K exp(z_0.95 ln(hi/K) / z_0.975)
+    z = stats.norm.ppf(0.95) / stats.norm.ppf(0.975)
+    expected = max(4.9e-5 * (6.8e-5 / 4.9e-5) ** z, 2.1e-5 * (7.5e-5 / 2.1e-5) ** z)
+    assert bound.method == "bound" and bound.value == pytest.approx(expected, rel=1e-12)
+    assert bound.ci95 == (0.0, bound.value) and bound.value < 6.8e-5  # below every two-sided upper end
     assert "WN+GM (BIC +3.8, AIC +0.8 over the best): no walk over the record" in bound.source
     # an upper bound already (not identified, or no walk in the model) stays what it is
     already = KalibrValue(6.8e-5, (0.0, 6.8e-5), "RW", method="bound")
     assert over_structures(already, readings) is already
 
+
+
+def test_a_bound_over_structures_holds_the_truth_as_often_as_its_95_percent_says() -> None:
+    """[0, U] is labelled a 95 % interval. The bug: U was the largest two-sided 95 % upper end, so beside a structure
+    without a walk [0, U] held a lognormal estimate's truth in 97.5 % of records, a wider bound than claimed."""
+    rng = np.random.default_rng(7)
+    sd = 0.13  # sd of ln K of one hour of WN + RW (K 2e-5, N 5e-4, 200 Hz)
+    estimates = K_TRUE * np.exp(sd * rng.standard_normal(20000))
+    no_walk = [WalkReading("WN+GM", 3.0, 1.4, 0.0, (0.0, 0.0))]
+    held = [over_structures(KalibrValue(float(e), (float(e) * math.exp(-1.96 * sd), float(e) * math.exp(1.96 * sd)),
+                                        "RW"), no_walk).ci95[1] >= K_TRUE for e in estimates]
+    assert np.mean(held) == pytest.approx(0.95, abs=0.005)
 
 def test_the_wald_interval_of_a_walk_agrees_with_the_fits_own() -> None:
     """Whittle's expected information of the record's length, without the data, against the fit's interval from the
@@ -128,7 +146,7 @@ def test_the_final_k_beside_an_unseen_gm_is_a_bound_that_holds_the_truth(gm_besi
     assert alone.method == "model" and alone.ci95[0] > K_TRUE  # without the other structures: confidently wrong
     final = final_model(selection.best, None, allan, selection)
     k = final.random_walk
-    assert k.method == "bound" and k.ci95[0] == 0.0 and k.value >= alone.ci95[1]
+    assert k.method == "bound" and k.ci95[0] == 0.0 and k.value >= one_sided_upper(alone.value, alone.ci95)
     assert k.ci95[0] <= K_TRUE <= k.ci95[1]
     assert "WN+GM" in {r.structure for r in final.walk_readings} and "cannot tell apart" in k.source
 

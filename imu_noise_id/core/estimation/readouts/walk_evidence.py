@@ -11,9 +11,10 @@ instead of a walk), with a 95 % Wald interval from Whittle's Fisher information 
 beside a white noise of 1e-3) enters no reading (:func:`visible_components`): its parameters have no information, and
 the reading would depend on how the machine's rounding treats that null space. K's interval is the union (hull) of the
 final model's interval and theirs (:func:`over_structures`); where it reaches zero (a structure within the evidence has
-no walk) K is given as its upper end, method ``bound``, as a K whose own interval reaches zero is
-(:func:`~.kalibr.unidentified_as_bound`). Why: docs/analysis.md, "Why K's interval spans the structures the data cannot
-tell apart".
+no walk) K is given as an upper bound U, method ``bound``, as a K whose own interval reaches zero is
+(:func:`~.kalibr.unidentified_as_bound`): the largest of the structures' one-sided 95 % upper limits
+(:func:`one_sided_upper`), so that [0, U] is the 95 % interval it is labelled, not a 97.5 % one. Why: docs/analysis.md,
+"Why K's interval spans the structures the data cannot tell apart".
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from ..em import mle, whittle
 from ..em.selection import SelectionResult
 from ..em.uncertainty import WALD_MAX_SE_LOG
 from .kalibr import KalibrValue
-from .quantiles import Z95
+from .quantiles import Z95, Z95_ONE_SIDED
 
 #: A structure is within the evidence when its BIC or AIC weight is at least this ratio of the best's.
 OCCAM_RATIO = 1.0 / 20.0
@@ -197,10 +198,22 @@ def spannable(k: KalibrValue) -> bool:
     return k.method == "model" and k.value is not None and all(math.isfinite(v) for v in k.ci95)
 
 
+def one_sided_upper(value: float, ci95: tuple[float, float]) -> float:
+    """The one-sided 95 % upper limit of K [u/s/√Hz] whose two-sided 95 % interval ``ci95`` lies about ``value`` on
+    ln K: value·(hi/value)^(Z95_ONE_SIDED/Z95), exact for a Wald interval on ln K (value·exp(±Z95·sd)), the profile's
+    quadratic approximation for a profile interval; 0 for a reading of no walk."""
+    hi = ci95[1]
+    if value <= 0.0 or hi <= value:
+        return hi
+    return value * math.exp(Z95_ONE_SIDED / Z95 * math.log(hi / value))
+
+
 def over_structures(k: KalibrValue, readings: list[WalkReading]) -> KalibrValue:
     """``k`` with its interval the hull of its own and every reading's; unchanged when they all lie inside it or
-    ``k`` is not :func:`spannable`. Where the hull reaches zero: its upper end, method ``bound``, interval (0, upper
-    end). The source names every structure read."""
+    ``k`` is not :func:`spannable`. Where the hull reaches zero (a structure within the evidence reads no walk): an
+    upper bound U, method ``bound``, interval (0, U), U the largest :func:`one_sided_upper` of the final model's and
+    the readings' intervals. [0, U] then holds the truth with 95 % probability under whichever structure carries it;
+    the two-sided upper ends would make it a 97.5 % interval labelled 95 %. The source names every structure read."""
     lo, hi = k.ci95
     if not readings or not spannable(k):
         return k
@@ -210,8 +223,10 @@ def over_structures(k: KalibrValue, readings: list[WalkReading]) -> KalibrValue:
         return k
     told = "; ".join(r.describe() for r in readings)
     if lo_all <= 0.0:
-        return KalibrValue(hi_all, (0.0, hi_all), f"{k.source}; the data cannot tell apart {told}: K lies in [0, "
-                                                  f"{hi_all:.3g}] (the final model's own interval [{lo:.3g}, "
-                                                  f"{hi:.3g}]), the upper end given", method="bound")
+        upper = max(one_sided_upper(k.value, k.ci95), *(one_sided_upper(r.random_walk, r.span) for r in readings))
+        return KalibrValue(upper, (0.0, upper), f"{k.source}; the data cannot tell apart {told}: K lies in [0, "
+                                                f"{upper:.3g}] (95 %, the largest of the structures' one-sided 95 % "
+                                                f"upper limits; the final model's own two-sided interval [{lo:.3g}, "
+                                                f"{hi:.3g}]), the upper end given", method="bound")
     return KalibrValue(k.value, (lo_all, hi_all), f"{k.source}; its interval spans the structures the data cannot "
                                                   f"tell apart ({told}; the final model's own [{lo:.3g}, {hi:.3g}])")
