@@ -78,7 +78,6 @@ def test_a_structure_without_a_walk_makes_k_the_upper_end() -> None:
     assert over_structures(already, readings) is already
 
 
-
 def test_a_bound_over_structures_holds_the_truth_as_often_as_its_95_percent_says() -> None:
     """[0, U] is labelled a 95 % interval. The bug: U was the largest two-sided 95 % upper end, so beside a structure
     without a walk [0, U] held a lognormal estimate's truth in 97.5 % of records, a wider bound than claimed."""
@@ -89,6 +88,7 @@ def test_a_bound_over_structures_holds_the_truth_as_often_as_its_95_percent_says
     held = [over_structures(KalibrValue(float(e), (float(e) * math.exp(-1.96 * sd), float(e) * math.exp(1.96 * sd)),
                                         "RW"), no_walk).ci95[1] >= K_TRUE for e in estimates]
     assert np.mean(held) == pytest.approx(0.95, abs=0.005)
+
 
 def test_the_wald_interval_of_a_walk_agrees_with_the_fits_own() -> None:
     """Whittle's expected information of the record's length, without the data, against the fit's interval from the
