@@ -1,5 +1,5 @@
-"""The normal and χ² quantiles of the 95 % intervals, written once (scipy's ``norm.ppf(0.975)`` and
-``chi2.ppf(0.95, 1)`` to the last digit; no scipy call at import)."""
+"""The normal and χ² quantiles of the 95 % intervals and bounds, written once (scipy's ``norm.ppf(0.975)``,
+``chi2.ppf(0.95, 1)`` and ``norm.ppf(0.95)`` to the last digit; no scipy call at import)."""
 
 #: Two-sided 95 % normal quantile: Wald intervals are estimate ± Z95·se, profile intervals end where the signed root
 #: of the likelihood ratio reaches ±Z95.
