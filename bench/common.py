@@ -93,10 +93,11 @@ def long_tau_rw_bounds(y: np.ndarray, dt: float, random_walk: float | None = Non
     a true K exceeds it with probability up to M·5 %.
 
     ``rw_bound95``: :func:`~imu_noise_id.core.allan.rw_bound.random_walk_bound` (what ``analyze`` flags a final K
-    by): each limit at the level 1 − 5 %/M (Bonferroni), so that the true K exceeds it with probability ≤ 5 %.
-    ``loop_measured.py``'s summary judges a fitted random walk by it.
+    by): each limit at the level 1 − 5 %/M_eff, M_eff the independent estimates the M are worth (calibrated on
+    random walks alone), so that the true K exceeds it with probability 5 %. ``loop_measured.py``'s summary judges a
+    fitted random walk by it.
 
-    ``rw_p``: how strongly the long-τ AV argues against the fitted ``random_walk`` (its Bonferroni p-value,
+    ``rw_p``: how strongly the long-τ AV argues against the fitted ``random_walk`` (its p-value over M_eff,
     :meth:`~imu_noise_id.core.allan.rw_bound.RandomWalkBound.p_value`; 1 for none): that summary also judges the
     accelerometers' random walks as one family (18 tests at 5 % each reject ≈ 0.9 true values).
     """

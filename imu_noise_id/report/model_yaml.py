@@ -105,6 +105,7 @@ def final_to_dict(final: FinalModel) -> dict:
             "value": num(final.random_walk_bound.value), "level": final.random_walk_bound.level,
             "tau_range": [num(t) for t in final.random_walk_bound.tau_range],
             "simultaneous_over": final.random_walk_bound.estimates,
+            "worth_independent_estimates": num(final.random_walk_bound.independent),
             "random_walk_above_it": final.random_walk_above_bound,
             "p_value_of_the_random_walk": (None if final.random_walk.value is None
                                            else num(final.random_walk_bound.p_value(final.random_walk.value)))},

@@ -209,7 +209,7 @@ def unmodelled_as_bound(k: KalibrValue, bound: RandomWalkBound) -> KalibrValue:
         bound.value, (0.0, bound.value),
         f"{k.source}{fitted}; bounded by the data: the largest walk the Allan variance at tau {bound.tau_range[0]:.3g}–"
         f"{bound.tau_range[1]:.3g} s supports ({100 * bound.level:.0f} %, simultaneous over {bound.estimates} "
-        "estimates), the upper end given", method="bound")
+        f"estimates, {bound.worth()}), the upper end given", method="bound")
 
 
 def walk_crossing_tau(noise_density: float, random_walk: float) -> float:
