@@ -26,7 +26,12 @@ def test_installed_node_starts_with_the_installed_parameters(built_workspace):  
         assert proc.poll() is None, proc.stdout.read()
     finally:
         proc.send_signal(signal.SIGINT)
-        out, _ = proc.communicate(timeout=20)
+        try:
+            out, _ = proc.communicate(timeout=20)
+        except subprocess.TimeoutExpired:  # never leave the node running for the tests after this one
+            proc.kill()
+            out, _ = proc.communicate()
+            pytest.fail(f"the node did not stop within 20 s of SIGINT:\n{out}")
     assert proc.returncode == 0, out
     assert "listening on /imu/data, /odom, /imu/temperature" in out
     assert "Traceback" not in out
