@@ -94,7 +94,7 @@ def random_walk_bound(res: AllanResult, axis: int = 0, *, tau_min: float | None 
         return RandomWalkBound(math.nan, level, (start, start), math.nan)
     tau = res.tau[use]
     factors = tuple(int(m) for m in res.m[use])
-    edf = np.array([edf_of("allan", -2, m, res.n) for m in factors])
+    edf = walk_edf(factors, int(res.n))
     independent = independent_estimates(factors, int(res.n), level)
     upper = res.variance[use, axis] * edf / stats.chi2.ppf((1.0 - level) / independent, edf)
     bounds = random_walk_at_allan_variance(upper, tau)
@@ -103,12 +103,18 @@ def random_walk_bound(res: AllanResult, axis: int = 0, *, tau_min: float | None 
                            res.variance[use, axis].copy(), edf, independent)
 
 
+def walk_edf(factors: tuple[int, ...], n: int) -> np.ndarray:
+    """ν_j: a random walk's EDF (:func:`~.edf.edf_of`, α = −2) of the overlapping AV at each averaging factor of
+    ``factors`` over ``n`` samples, the ν both the bound and its calibration read each estimate with."""
+    return np.array([edf_of("allan", -2, int(m), n) for m in factors])
+
+
 @functools.lru_cache(maxsize=64)
 def independent_estimates(factors: tuple[int, ...], n: int, level: float = CONFIDENCE_95) -> float:
     """M_eff ∈ [1, M]: the number of independent estimates the overlapping Allan variances of a record of ``n``
     samples at the averaging factors ``factors`` (M of them) are worth for a bound at ``level``: (1 − level)/q, q the
     (1 − level) quantile of min_j F_νj(ν_j·AV_hat_j/AV_j) over :data:`CALIBRATION_RECORDS` simulated records of a
-    random walk alone (ν_j the walk's EDF, :func:`~.edf.edf_of`). The records are simulated at a coarser step (a
+    random walk alone (ν_j the walk's EDF, :func:`walk_edf`). The records are simulated at a coarser step (a
     discrete walk of unit steps, AV_j = (2k² + 1)/(6k) at k steps), :data:`CALIBRATION_STEPS_PER_TAU` steps per the
     shortest averaging time, at most :data:`CALIBRATION_MAX_STEPS` per record; seeded (:data:`CALIBRATION_SEED`).
     Beyond NIST SP1065: module docstring."""
@@ -118,7 +124,7 @@ def independent_estimates(factors: tuple[int, ...], n: int, level: float = CONFI
     step = max(1.0, math.floor(m.min() / CALIBRATION_STEPS_PER_TAU), math.ceil(n / CALIBRATION_MAX_STEPS))
     length = int(n // step)
     k = np.clip(np.rint(m / step).astype(int), 1, max(1, (length - 1) // 2))
-    edf = np.array([edf_of("allan", -2, int(f), n) for f in factors])
+    edf = walk_edf(factors, n)
     expected = (2.0 * k**2 + 1.0) / (6.0 * k)
     rng = np.random.default_rng(CALIBRATION_SEED)
     minima = []
