@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
                                overbound_exports=getattr(args, "overbound", False),
                                processes=options.jobs or len(os.sched_getaffinity(0)))
     folder.report()
-    print(summary_table(result.static), flush=True)
+    print(summary_table(result.static, result.numbers), flush=True)
     if result.loops and args.command == "loop":
         print(loop_table(result.loops), flush=True)
     if result.finals:

@@ -10,6 +10,7 @@ from functools import partial
 
 import numpy as np
 
+from ..core.allan.slopes import SlopeComponent
 from ..core.axes import AXES, UNITS
 from ..pipelines.analyze import AnalysisResult
 from .html import LOOP_INTRO, STYLE, fmt, img_tag, loop_axis_section
@@ -38,6 +39,15 @@ def _data_section(result: AnalysisResult, meta: dict) -> str:
             f"<p>Warnings, repairs and the static check:</p><ul>{items}</ul>")
 
 
+def _allan_cell(reading: SlopeComponent, disagrees: bool) -> str:
+    """A table cell with an Allan-slope reading: '&lt;' before an upper bound; marked '≠' (class warn), with its
+    interval, where it does not overlap the pasted number's."""
+    text = f"{'&lt; ' if reading.method == 'upper_bound' else ''}{fmt(reading.value)}"
+    if not disagrees:
+        return f"<td>{text}</td>"
+    return f"<td class=warn>≠ {text} <span class=small>[{fmt(reading.ci[0])}, {fmt(reading.ci[1])}]</span></td>"
+
+
 def _numbers_section(result: AnalysisResult) -> str:
     head = ("<tr><th class=l>axis</th><th class=l>final model (source)</th><th>N [u/√Hz], 95 %</th>"
             "<th>K [u/s/√Hz], 95 %</th><th>bias instability B [u], 95 %</th><th>per-sample σ [u]</th>"
@@ -54,6 +64,7 @@ def _numbers_section(result: AnalysisResult) -> str:
             k_text = f"{k_text} ({k.method}: the final model has no random walk)"
         if f.random_walk_above_bound:
             k_text = f"{k_text} — above the long-τ AV's bound {fmt(f.random_walk_bound.value)}"
+        disagree = pasted.allan_disagreements() if pasted is not None else ()
         rows.append(
             f"<tr><td class=l>{axis} [{UNITS.get(axis, 'u')}]</td><td class=l>{html.escape(f.model)} "
             f"<span class=small>({html.escape(f.source)})</span></td>"
@@ -61,8 +72,8 @@ def _numbers_section(result: AnalysisResult) -> str:
             f"<td{' class=warn' if f.random_walk_above_bound else ''}>{html.escape(k_text)}</td>"
             f"<td>{'' if b.reached else '&lt; '}{_ci(b.value, b.ci95)} <span class=small>at τ = "
             f"{fmt(b.tau_at_minimum, '.3g')} s</span></td><td>{fmt(f.noise_stddev_per_sample)}</td>"
-            f"<td>{fmt(slopes.noise_density.value)}</td>"
-            f"<td>{'&lt; ' if slopes.random_walk.method == 'upper_bound' else ''}{fmt(slopes.random_walk.value)}</td>"
+            f"{_allan_cell(slopes.noise_density, 'noise_density' in disagree)}"
+            f"{_allan_cell(slopes.random_walk, 'random_walk' in disagree)}"
             f"<td>{'' if f.bias_instability_allan.reached else '&lt; '}{fmt(f.bias_instability_allan.value)}</td>"
             "</tr>")
     note = ("<p class=small>N is the passband white-noise density √(N_WN² + N_LPF² + N_MA² + N_OSC²), each at its "
@@ -71,6 +82,9 @@ def _numbers_section(result: AnalysisResult) -> str:
             "narrow oscillations (OSC), sinusoids, GMs, "
             "flicker noise (BI), temperature and the shape of the sensor's own filter are kept out of N and K. "
             "Where the final model has no random walk, imu.yaml gives the Allan-slope reading (marked). "
+            "An Allan-slope reading marked ≠ has a 95 % interval that does not overlap the pasted number's: the slope "
+            "line takes the Allan variance over its τ range as white noise and a walk alone, while the final model is "
+            "fitted to the whole record (a walk read through a GM's bump reads high). "
             "B = the flicker component's bias instability when the model has one, else min of the model's Allan "
             "deviation without vibration lines / 0.664 ('&lt;': still falling at a tenth of the record, an upper "
             "bound). The Kalibr keys of imu.yaml are the max of N and K over each sensor's three axes. A K above the "

@@ -23,12 +23,19 @@ def _fmt(x: float) -> str:
     return f"{x:.3e}" if math.isfinite(x) else "n/a"
 
 
-def summary_table(result: StaticAnalysis) -> str:
-    """Short text table: per axis white-noise density and random walk with their intervals."""
+def summary_table(result: StaticAnalysis, numbers: PastedNumbers | None = None) -> str:
+    """Short text table: per axis the Allan-slope white-noise density and random walk with their intervals. With the
+    analysis's ``numbers``: labelled as the slopes' readings (not what imu.yaml pastes where final models give it),
+    and below it each reading whose interval does not overlap the pasted number's (:func:`allan_disagreement_lines`)."""
     conf = 100 * result.allan.confidence
     lines = [
         f"{result.n} samples, {result.duration_s:.1f} s at {result.rate_hz:.6g} Hz ({result.topic or 'input'})",
     ]
+    if numbers is not None:
+        modelled = any(s.from_models for s in numbers.sensors.values())
+        lines.append("Allan-slope readings (IEEE Std 952 lines: N the -1/2 line at tau = 1 s, K the +1/2 line at "
+                     "tau = 3 s; " + ("imu.yaml pastes the final models' numbers, below):" if modelled
+                                      else "the numbers imu.yaml pastes):"))
     if result.period is not None and not result.period.trusted:
         lines.append(f"!! sample rate {result.period.describe()}: the stamps cannot be taken at face value (see the "
                      "warnings; --rate HZ gives the rate)")
@@ -45,7 +52,35 @@ def summary_table(result: StaticAnalysis) -> str:
             f"  {u_n}; {u_k}"
         )
     lines.append("('<': upper bound, slope not reached in this record)")
+    if numbers is not None:
+        lines += allan_disagreement_lines(result, numbers)
     return "\n".join(lines)
+
+
+#: Per parameter: its symbol and the Allan-deviation slope of its line.
+_SLOPE_LINES = {"noise_density": ("N", "-1/2"), "random_walk": ("K", "+1/2")}
+
+
+def allan_disagreement_lines(result: StaticAnalysis, numbers: PastedNumbers) -> list[str]:
+    """One line per axis and parameter whose Allan-slope reading and pasted number have 95 % intervals that share no
+    value (:meth:`~..pipelines.analyze.numbers.AxisNumbers.allan_disagreements`): both with their intervals, the τ
+    range the line was read over, the final model, and which one imu.yaml pastes."""
+    lines = []
+    for sensor in numbers.sensors.values():
+        for a in sensor.axes:
+            for parameter in a.allan_disagreements():
+                symbol, slope = _SLOPE_LINES[parameter]
+                allan, pasted = a.allan_reading(parameter), a.reading(parameter)
+                lo, hi = getattr(result.slopes[a.axis], parameter).tau_range
+                model = f" ({a.model.name})" if a.model is not None else ""
+                slope_text = _reading_text(allan.value, allan.ci95, allan.method)
+                lines.append(f"{a.axis:8s} the Allan slope's {symbol} {slope_text} (its {slope} line, read over tau "
+                             f"{lo:.3g}-{hi:.3g} s) and the final model's "
+                             f"{_reading_text(pasted.value, pasted.ci95, pasted.method)} ({pasted.method}) do not "
+                             f"overlap: the line takes the Allan variance there as white noise and a random walk "
+                             f"alone, the final model{model} is fitted to the whole record; imu.yaml pastes the final "
+                             "model's, *_allan_xyz keeps the slope's")
+    return lines
 
 
 #: The methods whose value is an upper bound (its interval (0, value)).

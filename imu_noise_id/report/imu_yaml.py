@@ -53,6 +53,7 @@ def _sensor_keys(s: SensorNumbers) -> dict:
             doc[f"{key}_allan_xyz"] = [num(r.value) for r in allan]
             doc[f"{key}_allan_ci_xyz"] = [_pair(r.ci95) for r in allan]
             doc[f"{key}_allan_method_xyz"] = [r.method for r in allan]
+            doc[f"{key}_allan_agrees_xyz"] = [parameter not in a.allan_disagreements() for a in s.axes]
             doc[f"{key}_allan"] = num(getattr(s, f"allan_{parameter}"))
         doc[f"{key}_xyz"] = [num(r.value) for r in readings]
         doc[f"{key}_ci_xyz"] = [_pair(r.ci95) for r in readings]
@@ -134,7 +135,9 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
             "# model is not trusted",
             "# (the closed loop's verdict failed, or its N disagrees with the data's passband level; *_source_xyz",
             "# says which): the value is the axis's overbound (an upper bound, below), its interval [0, value].",
-            "# The Allan-slope readings are in *_allan_xyz and *_allan.",
+            "# The Allan-slope readings are in *_allan_xyz and *_allan; *_allan_agrees_xyz is false where a reading's",
+            "# 95 % interval and the pasted number's share no value (the slope line takes the AV over its tau range as",
+            "# white noise and a walk alone, the final model is fitted to the whole record; the console says which).",
             "# *_noise_stddev_per_sample_xyz: per-sample std of the high-frequency noise at update_rate, in u: use it",
             "# (squared) as the Imu message covariance; it is below noise_density*sqrt(update_rate) where the",
             "# sensor's own low-pass cuts below the Nyquist frequency.",

@@ -29,6 +29,10 @@ if TYPE_CHECKING:
 KALIBR_COMBINE = "max"
 #: The Kalibr key prefix of each sensor.
 KALIBR_PREFIX = {"gyro": "gyroscope", "accel": "accelerometer"}
+#: The two numbers of an axis, as :class:`AxisNumbers` names them.
+PARAMETERS = ("noise_density", "random_walk")
+#: The methods of a number that is an Allan slope's reading (its own, or standing in for a model without it).
+ALLAN_METHODS = ("fit", "upper_bound", "allan_slope", "allan_upper_bound")
 
 
 @dataclass(frozen=True)
@@ -44,6 +48,13 @@ class Reading:
     ci95: tuple[float, float]
     method: str
     source: str | None = None
+
+    def disjoint_from(self, other: Reading) -> bool:
+        """Whether this reading's 95 % interval and ``other``'s share no value (False where an end is not finite)."""
+        (lo, hi), (other_lo, other_hi) = self.ci95, other.ci95
+        if not all(math.isfinite(v) for v in (lo, hi, other_lo, other_hi)):
+            return False
+        return hi < other_lo or other_hi < lo
 
 
 @dataclass(frozen=True)
@@ -73,6 +84,20 @@ class AxisNumbers:
     def reading(self, parameter: str) -> Reading:
         """``noise_density`` or ``random_walk``."""
         return getattr(self, parameter)
+
+    def allan_reading(self, parameter: str) -> Reading | None:
+        """The Allan-slope reading of ``noise_density`` or ``random_walk`` beside the pasted one (None without)."""
+        return getattr(self, f"allan_{parameter}")
+
+    def allan_disagreements(self) -> tuple[str, ...]:
+        """The parameters (of :data:`PARAMETERS`) whose Allan-slope reading and pasted number (a model's value, a
+        bound or an overbound, not the slope's own) have 95 % intervals that share no value
+        (:meth:`Reading.disjoint_from`): the slope line takes the AV over its τ range as white noise and a walk alone,
+        the final model is fitted to the whole record, and the two then read the record differently (a walk read
+        through a GM's bump, docs/analysis.md, "The numbers to paste")."""
+        return tuple(p for p in PARAMETERS
+                     if (allan := self.allan_reading(p)) is not None and self.reading(p).method not in ALLAN_METHODS
+                     and allan.disjoint_from(self.reading(p)))
 
 
 @dataclass(frozen=True)
