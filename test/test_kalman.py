@@ -523,3 +523,37 @@ def test_a_data_column_of_zeros_is_not_filtered_and_its_pass_is_the_recursions(f
     assert got.loglik == pytest.approx(want.loglik, rel=1e-9)
     np.testing.assert_allclose(got.beta, want.beta, rtol=1e-7, atol=1e-12)
     np.testing.assert_allclose(got.beta_cov, want.beta_cov, rtol=1e-7)
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+@pytest.mark.parametrize("columns", [1, 3, 6])
+def test_innovations_too_large_to_square_are_refused_without_a_warning(columns):
+    """A maximisation's trial point far out (an analyze on 1000 s of a measured gyro met one in an L-BFGS line search)
+    can drive the innovations past √(float max): their Gram matrix overflows. The point is refused (InputError, which
+    the maximisations read as a point they cannot evaluate, as for the smoother's overflowing covariance sums; it was
+    the regressors' "collinear" message, or a log-likelihood of −∞ without regressors), and numpy's overflow warning,
+    which had reached the console, is not raised. The same innovations at an ordinary scale give a finite one (each
+    column count: one product per pair, or the matrix product)."""
+    rng = np.random.default_rng(3)
+    e = rng.standard_normal((columns, 1000))
+    names = ["y", *(f"b:{i}" for i in range(columns - 1))]
+    for constant_f in (True, False):
+        fine = common.profile(common.InnovationResult(e, np.ones(1000), np.ones(1000, bool), constant_f), names)
+        assert np.isfinite(fine.loglik)
+        with pytest.raises(InputError, match="sums of squares overflow"):
+            common.profile(common.InnovationResult(e * 1e160, np.ones(1000), np.ones(1000, bool), constant_f), names)
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+@pytest.mark.parametrize(("phi", "q"), [(np.array([[1e200]]), np.array([[1e300]])),
+                                        (np.array([[1.0, 1.0], [0.0, 1.0]]), np.diag([0.0, 1e-300]))])
+def test_the_schur_riccati_fallback_refuses_a_degenerate_model_without_a_warning(phi, q):
+    """The Riccati equation's Schur fallback (scipy's ``solve_discrete_are``) at a profile's or a maximisation's trial
+    point far out: scipy's balancing met values it cannot cast and numpy's warning reached the console (seen in the
+    interval-budget and digital-filter tests). Such a point is refused (InputError, which every caller reads as outside
+    the filter's domain) or solved to a finite covariance, quietly."""
+    try:
+        p = riccati._schur_dare(phi, q, np.ones(phi.shape[0]), 1.0)
+    except InputError:
+        return
+    assert np.all(np.isfinite(p))

@@ -210,20 +210,26 @@ def gram(rows: np.ndarray) -> np.ndarray:
 
 
 def profile(inn: InnovationResult, names: list[str], keep_innovations: bool = True) -> ProfileResult:
-    """GLS β̂ minimising Σ_t e_t(β)²/F_t, e(β) = e₀ + Σ_c β_c r_c, and the exact Gaussian log-likelihood there."""
+    """GLS β̂ minimising Σ_t e_t(β)²/F_t, e(β) = e₀ + Σ_c β_c r_c, and the exact Gaussian log-likelihood there.
+    InputError where the innovations' sums of squares overflow (a maximisation's trial point far out, which it then
+    reads as a point it cannot evaluate, as it reads the smoother's overflowing covariance sums)."""
     obs = inn.observed
     all_obs = bool(np.all(obs))
     E = inn.e if all_obs else inn.e[:, obs]
-    if inn.constant_f:
-        f0 = float(inn.f[0])
-        G = gram(E) / f0
-        sum_log_f = E.shape[1] * np.log(f0)
-    else:
-        f = inn.f if all_obs else inn.f[obs]
-        Ew = E / np.sqrt(f)
-        G = gram(Ew)
-        sum_log_f = float(np.sum(np.log(f)))
     k = E.shape[0] - 1
+    with np.errstate(over="ignore", invalid="ignore"):  # not finite: refused below
+        if inn.constant_f:
+            f0 = float(inn.f[0])
+            G = gram(E) / f0
+            sum_log_f = E.shape[1] * np.log(f0)
+        else:
+            f = inn.f if all_obs else inn.f[obs]
+            Ew = E / np.sqrt(f)
+            G = gram(Ew)
+            sum_log_f = float(np.sum(np.log(f)))
+    if not np.all(np.isfinite(G)):
+        raise InputError("the innovations' sums of squares overflow: the model cannot be evaluated at these "
+                         "parameters (its variances are too far apart)")
     if k:
         try:
             cov = np.linalg.inv(G[1:, 1:])

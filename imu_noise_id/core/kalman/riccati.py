@@ -108,12 +108,18 @@ def _doubling_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> n
 
 
 def _schur_dare(phi: np.ndarray, q: np.ndarray, h: np.ndarray, r: float) -> np.ndarray:
-    """P̄ by the generalised Schur method (scipy's ``solve_discrete_are``, Arnold & Laub 1984)."""
+    """P̄ by the generalised Schur method (scipy's ``solve_discrete_are``, Arnold & Laub 1984); InputError where it
+    has no finite solution in double precision (a trial point far out: scipy's balancing then meets values it cannot
+    cast, quietly here)."""
     try:
-        P = solve_discrete_are(phi.T, h.reshape(-1, 1), q, np.array([[r]]))
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # not finite: refused below
+            P = solve_discrete_are(phi.T, h.reshape(-1, 1), q, np.array([[r]]))
     except (np.linalg.LinAlgError, ValueError) as err:
         raise InputError(f"the steady-state Riccati equation has no solution in double precision ({err}); the "
                          "model parameters are degenerate") from err
+    if not np.isfinite(P).all():
+        raise InputError("the steady-state Riccati equation has no finite solution in double precision; the model "
+                         "parameters are degenerate")
     return 0.5 * (P + P.T)
 
 
