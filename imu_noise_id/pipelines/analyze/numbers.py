@@ -91,7 +91,7 @@ class AxisNumbers:
 
     def allan_disagreements(self) -> tuple[str, ...]:
         """The parameters (of :data:`PARAMETERS`) whose Allan-slope reading and pasted number (a model's value, a
-        bound or an overbound, not the slope's own) have 95 % intervals that share no value
+        bound, or an unresolved axis's overbound; not the slope's own) have 95 % intervals that share no value
         (:meth:`Reading.disjoint_from`): the slope line takes the AV over its τ range as white noise and a walk alone,
         the final model is fitted to the whole record, and the two then read the record differently (a walk read
         through a GM's bump, docs/analysis.md, "The numbers to paste")."""
