@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from imu_noise_id.core.estimation.em.profile_search import R_TOL, Z95, end
+from imu_noise_id.core.estimation.em.profile_search import R_TOL, Z95, centre, end
 
 SHAPES = {
     "linear (a quadratic log-likelihood)": lambda d: 1.2 * d,
@@ -68,3 +68,27 @@ def test_known_points_at_the_same_distance_and_height_are_ordered_without_compar
     pts = [(0.0, 0.0, np.zeros(2)), (*twice, np.array([2.0, 1.0])), (*twice, np.array([2.0, 3.0]))]
     v_end = end(profile_at, lambda th: [th], pts, 1.0, first=1.0, limit=100.0)
     assert abs(1.2 * v_end - Z95) < R_TOL
+
+
+def _centre(v_hat: float, steps: list[float], vertex: float) -> list:
+    """``centre`` with the parabola, on ℓ_A = −(v − vertex)²/2."""
+    def profile_at(v: float, starts: list[np.ndarray]) -> tuple[float, np.ndarray]:
+        return -0.5 * (v - vertex) ** 2, np.zeros(1)
+
+    return centre(profile_at, v_hat, -0.5 * (v_hat - vertex) ** 2, np.zeros(1), steps, predict=lambda _: [],
+                  parabola=True)
+
+
+def test_the_centres_parabola_finds_the_vertex_inside_its_points():
+    pts = _centre(0.0, [-1.0, 1.0], 0.3)
+    assert len(pts) == 4 and pts[-1][0] == pytest.approx(0.3, abs=1e-9)
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("steps", [[-1e-300, 1e-300], [-1e-170, 1e-170], [1.0, 1.0]])
+def test_the_centres_parabola_is_skipped_quietly_where_its_points_do_not_determine_one(steps):
+    """Steps below the reach of squares (a slope whose standard error is ~0 gave ±1.96e-300) or repeated left the
+    parabola's fit rank-deficient: numpy warned "Polyfit may be poorly conditioned" (or divided by zero) on the
+    console, and the vertex was noise. No vertex is evaluated then, and nothing is warned."""
+    pts = _centre(0.0, steps, 0.3 * steps[-1])
+    assert len(pts) == 3

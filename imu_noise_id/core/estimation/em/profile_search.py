@@ -27,6 +27,18 @@ Point = tuple[float, float, np.ndarray]
 ProfileAt = Callable[[float, list[np.ndarray]], tuple[float, np.ndarray]]
 
 
+def _parabola_vertex(x: np.ndarray, a: np.ndarray) -> float:
+    """The maximum's abscissa of the least-squares parabola through (x, a): NaN where it opens upwards or the points
+    do not determine it (fewer than three distinct x to rounding, or x too small to square: the fit is made on x over
+    its largest |x|, and its rank checked, so no conditioning warning reaches the console)."""
+    scale = float(np.max(np.abs(x)))
+    if not (math.isfinite(scale) and scale > 0.0):
+        return math.nan
+    u = x / scale
+    (c2, c1, _), _, rank, _ = np.linalg.lstsq(np.column_stack([u * u, u, np.ones_like(u)]), a, rcond=None)
+    return -c1 / (2.0 * c2) * scale if rank == 3 and c2 < 0 else math.nan
+
+
 def centre(profile_at: ProfileAt, v_hat: float, a_hat: float, theta_hat: np.ndarray, steps: list[float], *,
            predict: Callable[[float], list[np.ndarray]], parabola: bool) -> list[tuple[float, float, np.ndarray]]:
     """Profile points (v, ℓ_A, argmax) at the estimate and at ``v_hat + step`` for each step (starts
@@ -38,8 +50,7 @@ def centre(profile_at: ProfileAt, v_hat: float, a_hat: float, theta_hat: np.ndar
     good = [p for p in pts if math.isfinite(p[1])]
     if parabola and len(good) >= 3:
         v = np.array([p[0] for p in good])
-        c2, c1, _ = np.polyfit(v - v_hat, [p[1] for p in good], 2)
-        vertex = -c1 / (2.0 * c2) if c2 < 0 else math.nan
+        vertex = _parabola_vertex(v - v_hat, np.array([p[1] for p in good]))
         if math.isfinite(vertex) and min(v - v_hat) < vertex < max(v - v_hat) and abs(vertex) > 0.05 * np.ptp(v):
             a, th = profile_at(v_hat + vertex, predict(vertex))
             pts.append((v_hat + vertex, a, th))
