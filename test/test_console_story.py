@@ -45,3 +45,15 @@ def test_the_loop_demo_prints_its_final_models_against_what_was_simulated():
     rows = truth_table({"gyro_z": final("WN+GM"), "accel_z": final("WN+LPF")}, walks).splitlines()[1:]
     assert rows[0].endswith("−RW (K pasted as bound 0.00097 ≥ the simulated 2e-05)")
     assert rows[1].endswith("+WN −RW (K pasted as bound 1e-05 < the simulated 4e-05)")
+
+
+def test_the_record_length_advice_leaves_out_a_parameter_whose_interval_reaches_zero_and_names_it():
+    """200 s of white noise fitted as WN+RW: K's interval reaches zero. A relative precision of a value the data cannot
+    tell from zero needs no finite record (the advice had said 7.85e5 h for ±10 %, 'hardest: RW.random_walk, now
+    ±37582 %'); the advice is for the parameters resolved from zero, and names the others."""
+    y = simulate_sum([WN(1e-3)], 20_000, DT, np.random.default_rng(5))
+    fit = fit_model(y, DT, "WN+RW")
+    assert fit.ci95["RW.random_walk"][0] == 0.0 < fit.ci95["WN.noise_density"][0]
+    line = record_length_lines({"gyro_x": fit})[1]
+    assert "enough for +-10 % on every parameter resolved from zero (hardest: WN.noise_density" in line
+    assert line.endswith("not resolved from zero, left out: RW.random_walk")

@@ -153,7 +153,10 @@ def _selection_section(result: AnalysisResult) -> str:
         name = result.finals[axis].model if axis in result.finals else m.fit.model
         advice = final.record_length
         if advice is not None:
+            from_zero = final.not_resolved_from_zero
             items = "".join(
+                f"<li>{html.escape(lab)}: not resolved from zero (its 95 % interval reaches 0): no record length gives "
+                "it a relative precision</li>" if lab in from_zero else
                 f"<li>{html.escape(lab)}: {fmt(advice.needed_s[lab] / 3600, '.3g')} h for ±{100 * advice.target:.0f} % "
                 f"(now ±{100 * advice.relative_halfwidth[lab]:.0f} %)"
                 + ("" if advice.reliable[lab] else " — a lower bound (correlation time not ≪ record)") + "</li>"

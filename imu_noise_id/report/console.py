@@ -220,21 +220,28 @@ def _duration(seconds: float) -> str:
 
 
 def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None = None) -> list[str]:
-    """How long to record per axis: the longest needed duration over the parameters and which one; ``names``: the
-    model's name per axis where it is not the fit's own."""
+    """How long to record per axis: the longest needed duration over the parameters resolved from zero (their 95 %
+    interval's lower end above 0) and which one, then the others by name: a relative precision of a value the data
+    cannot tell from zero needs no finite record. ``names``: the model's name per axis where it is not the fit's own."""
     lines = []
     for axis, fit in fits.items():
         advice = fit.record_length
         if advice is None or not advice.needed_s:
             continue
-        label = max(advice.needed_s, key=advice.needed_s.get)
+        from_zero = [lab for lab in advice.needed_s if lab in fit.not_resolved_from_zero]
+        resolved = [lab for lab in advice.needed_s if lab not in from_zero]
+        if not resolved:
+            continue
+        label = max(resolved, key=advice.needed_s.get)
         needed = advice.needed_s[label]
         verdict = "enough" if needed <= advice.current_s else f"record {_duration(needed)}"
         bound = "" if advice.reliable[label] else " (a lower bound: correlation time not << record)"
         name = (names or {}).get(axis, fit.model)
+        which = "every parameter resolved from zero" if from_zero else "every parameter"
+        left_out = f"; not resolved from zero, left out: {', '.join(from_zero)}" if from_zero else ""
         lines.append(f"{axis:8s} {name:22s} now {_duration(advice.current_s)}: {verdict} for +-"
-                     f"{100 * advice.target:.0f} % on every parameter (hardest: {label}, now +-"
-                     f"{100 * advice.relative_halfwidth[label]:.0f} %){bound}")
+                     f"{100 * advice.target:.0f} % on {which} (hardest: {label}, now +-"
+                     f"{100 * advice.relative_halfwidth[label]:.0f} %){bound}{left_out}")
     if lines:
         lines.insert(0, "How long to record (95 % half-widths; model.yaml record_length):")
     return lines

@@ -86,6 +86,12 @@ class FitResult:
         return {lab: how for lab, how in self.ci95_method.items() if how.endswith(BUDGET_SPENT)}
 
     @property
+    def not_resolved_from_zero(self) -> list[str]:
+        """Labels of the parameters whose 95 % interval reaches zero (lower end 0): their relative precision needs no
+        finite record, so the record-length advice leaves them out (:class:`RecordLengthAdvice`)."""
+        return [lab for lab, (lo, _) in self.ci95.items() if lo <= 0.0]
+
+    @property
     def short_of_maximum(self) -> float | None:
         """``better_loglik − loglik`` when above 1.92 = ½·χ²₁(0.95) (not at the maximum), else None."""
         if self.better_loglik is None or self.better_loglik - self.loglik <= LR_DROP_95:
