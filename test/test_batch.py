@@ -15,6 +15,7 @@ import yaml
 
 from imu_noise_id.batch import BatchOptions, discover_units, open_client, run_batch
 from imu_noise_id.cli import main
+from imu_noise_id.core.errors import InputError
 from imu_noise_id.pipelines.analyze import AnalyzeOptions, ModelStage
 
 OPTIONS = BatchOptions(AnalyzeOptions(models=ModelStage("WN+RW"), loop=False))
@@ -190,3 +191,16 @@ def test_a_unit_noisier_than_its_spec_late_in_the_record_fails_by_compares_test(
     assert rows["gyro_z"]["noise_spec_ratio"] > 1.1
     assert rows["gyro_x"]["spec"] == "pass" and rows["gyro_x"]["noise_beyond_spec_since_s"] is None
     assert "noise_spec_ratio" not in rows["accel_x"]
+
+
+@pytest.mark.parametrize("name", ["fleet.yaml", "bags.txt"])
+def test_a_manifest_given_as_a_bag_is_refused_before_any_cluster_starts(tmp_path, capsys, name):
+    """A manifest passed where the bags go (``batch fleet.yaml``) had become one unit that failed ("not a bag"), and
+    the batch exited 0 with "0 of 1 units done"; it is refused with exit 2 and told to go after --manifest."""
+    manifest = tmp_path / name
+    manifest.write_text("bags:\n  - path: /nowhere/a.mcap\n" if name.endswith(".yaml") else "/nowhere/a.mcap\n")
+    with pytest.raises(InputError, match="--manifest"):
+        discover_units([str(manifest)], None)
+    assert main(["batch", str(manifest), "--out", str(tmp_path / "out")]) == 2
+    assert f"--manifest {manifest}" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

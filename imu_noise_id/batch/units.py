@@ -92,6 +92,11 @@ def _expand(pattern: str) -> list[Path]:
     return [Path(p) for p in found]
 
 
+#: The suffixes of a manifest (:func:`read_manifest`): such a file named among the bags is refused, pointed at
+#: --manifest.
+MANIFEST_SUFFIXES = (".yaml", ".yml", ".txt")
+
+
 def read_manifest(path: Path) -> list[tuple[str, list[str] | None]]:
     """(bag path or glob, topics or None) from a manifest: YAML ``bags: [{path: …, topics: [...]}, …]`` or one
     path per line (``#`` comments)."""
@@ -115,6 +120,10 @@ def read_manifest(path: Path) -> list[tuple[str, list[str] | None]]:
 def discover_units(inputs: list[str], topics: list[str] | None, manifest: Path | None = None) -> list[Unit]:
     """The units of ``inputs`` (paths or globs) and the manifest's entries; ``topics`` None or ``["all"]``: every IMU
     topic of each bag (an unlistable bag is one unit, failing with the reader's message), else those in every bag."""
+    for pattern in inputs:  # named itself (a glob's other files stay units, failing as a bag would)
+        named = Path(pattern).expanduser()
+        if named.is_file() and named.suffix in MANIFEST_SUFFIXES:
+            raise InputError(f"{pattern!r} is a list of bags, not a bag: give it as --manifest {pattern}")
     entries = [(p, None) for p in inputs] + (read_manifest(manifest) if manifest is not None else [])
     if not entries:
         raise InputError("no bags given: pass BAG_OR_GLOB arguments or --manifest FILE")
