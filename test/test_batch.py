@@ -131,6 +131,10 @@ def test_batch_command_writes_the_fleet_table_and_report(bags, client, tmp_path,
     assert "batch [" in tty.getvalue() and "(3/3 units)" in tty.getvalue()
     assert "unchanged and skipped" not in capsys.readouterr().out
     assert main(["batch", str(tmp_path / "nothing*"), "--out", str(out)]) == 2
+    # a unit that fails: its row and message, the tables written, and exit 1 (it had exited 0 as if all were done)
+    assert main(["batch", str(bags / "broken*"), "--out", str(tmp_path / "failing"), "--model", "WN+RW", "--no-loop",
+                 "--scheduler", client.scheduler.address]) == 1
+    assert "failed: broken" in tty.getvalue() and (tmp_path / "failing" / "fleet.csv").exists()  # stderr: tty
 
 
 def test_batch_passes_rate_to_every_unit_and_refuses_a_bad_one(bags, tmp_path):

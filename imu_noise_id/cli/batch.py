@@ -21,7 +21,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "land in DIR/<unit>/ as analyze writes them; DIR/fleet.csv and DIR/fleet.parquet hold one row per unit "
             "and axis (N, K, bias instability with 95 % intervals, model, loop verdict, warnings, error); "
             "DIR/fleet_report.html shows their spread, robust outliers and the pass/fail against --spec. A failed "
-            "unit is recorded and the batch goes on; rerunning the same command skips units whose bag contents and "
+            "unit is recorded and the batch goes on (exit code 1 once it is done); rerunning the same command skips "
+            "units whose bag contents and "
             "options are unchanged. Every unit runs with analyze's options (the same flags and defaults; its axes "
             "one after another, the units side by side on the workers, so without --jobs)."),
     )
@@ -48,7 +49,8 @@ def _spec(path: Path | None) -> dict | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Discover the units, run them on Dask, write the fleet table and report."""
+    """Discover the units, run them on Dask, write the fleet table and report; 1 when a unit failed (its row and a
+    line on stderr say why), else 0."""
     from ..batch import BatchOptions, BatchProgress, discover_units, open_client, run_batch
     from ..core.errors import InputError
     from ..core.timing import check_declared_rate
@@ -87,4 +89,4 @@ def run(args: argparse.Namespace) -> int:
         print(f"failed: {o.name}: {o.error}", file=sys.stderr)
     print(f"{len(units) - len(failed)} of {len(units)} units done in {result.seconds:.0f} s; "
           + ", ".join(str(p) for p in paths))
-    return 0
+    return 1 if failed else 0
