@@ -57,3 +57,11 @@ def test_the_record_length_advice_leaves_out_a_parameter_whose_interval_reaches_
     line = record_length_lines({"gyro_x": fit})[1]
     assert "enough for +-10 % on every parameter resolved from zero (hardest: WN.noise_density" in line
     assert line.endswith("not resolved from zero, left out: RW.random_walk")
+
+
+def test_a_signed_ramp_away_from_zero_is_resolved_from_zero():
+    """A ramp's slope has a signed interval: one wholly below zero is resolved from it, K's [0, …] is not."""
+    y = simulate_sum([WN(1e-3), RW(1e-5)], 40_000, DT, np.random.default_rng(5)) - 2e-6 * np.arange(40_000) * DT
+    fit = fit_model(y, DT, "WN+RW+RR")
+    assert fit.ci95["RR.slope"][1] < 0.0
+    assert fit.not_resolved_from_zero == ["RW.random_walk"]

@@ -87,9 +87,10 @@ class FitResult:
 
     @property
     def not_resolved_from_zero(self) -> list[str]:
-        """Labels of the parameters whose 95 % interval reaches zero (lower end 0): their relative precision needs no
-        finite record, so the record-length advice leaves them out (:class:`RecordLengthAdvice`)."""
-        return [lab for lab, (lo, _) in self.ci95.items() if lo <= 0.0]
+        """Labels of the parameters whose 95 % interval holds zero (a scale's lower end 0; a signed ramp's interval
+        across it): their relative precision needs no finite record, so the record-length advice leaves them out
+        (:class:`RecordLengthAdvice`)."""
+        return [lab for lab, (lo, hi) in self.ci95.items() if lo <= 0.0 <= hi]
 
     @property
     def short_of_maximum(self) -> float | None:
