@@ -43,3 +43,23 @@ def test_a_still_record_is_not_flagged():
                     [0.0, 0.0, 9.81] + 1e-2 * rng.standard_normal((n, 3)))
     check = static_check(imu)
     assert check.static and check.still_span is None
+
+
+def test_with_bursts_the_span_offered_passes_the_block_tests_and_is_given_from_the_records_first_sample(robot):
+    """A knock at 10 s of the robot record (stand 20 s, drive 25 s, stand 20 s): the longest stretch between bursts
+    runs through the drive, and was offered unchecked (on a moving robot's bag inspect and analyze offered a span that
+    analyze then refused). The span offered now passes the block tests: the stand after the drive. Analysed from 5 s
+    on (--span 5:inf), the span offered is given from the record's first sample, as --span reads it."""
+    from crafted import touched
+
+    knocked = touched(robot, 10.0, 1.0, gyro=0.5, accel=1.0)
+    check = static_check(knocked)
+    assert check.bursts and check.still_span is not None
+    start, end = check.still_span
+    assert start >= 45.0 - 0.5 and end - start >= QUIET_MIN_S
+    assert static_check(knocked.between(start, end)).static
+    with pytest.raises(InputError) as refused:
+        analyze_static(knocked.between(5.0, np.inf), origin_s=5.0)
+    offered = [float(v) for v in refused.value.args[0].split("--span ")[-1].rstrip(")").split(":")]
+    assert offered == pytest.approx([start, end], abs=0.15)
+    assert "5 s into the record" in refused.value.args[0]

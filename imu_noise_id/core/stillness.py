@@ -114,13 +114,30 @@ def motion_bursts(imu: ImuSeries, dt: float, axes: tuple[str, ...] = AXES) -> li
     return out
 
 
-def still_span(bursts: list[MotionBurst], duration_s: float) -> tuple[float, float] | None:
-    """The longest stretch of ``duration_s`` [s] between ``bursts``, :data:`STILL_MARGIN_S` from them; None if none."""
-    if not bursts:
-        return None
+def still_span(imu: ImuSeries, bursts: list[MotionBurst], dt: float, gravity: float = STANDARD_GRAVITY,
+               axes: tuple[str, ...] = AXES) -> tuple[float, float] | None:
+    """The longest still stretch (start, end [s] from the first sample) between ``bursts``, :data:`STILL_MARGIN_S`
+    from them, that passes the block tests, or the longest :func:`quiet_span` within such a gap; at least
+    :data:`QUIET_MIN_S` long; None if none. A gap between knocks can still move slowly (a robot driving between two
+    bumps), and a span offered must pass the check it is offered to."""
+    duration_s = float(imu.t[-1] - imu.t[0])
     edges = [0.0, *[x for b in bursts for x in (b.start_s - STILL_MARGIN_S, b.end_s + STILL_MARGIN_S)], duration_s]
-    spans = [(edges[k], edges[k + 1]) for k in range(0, len(edges), 2) if edges[k + 1] > edges[k]]
-    return max(spans, key=lambda span: span[1] - span[0]) if spans else None
+    gaps = sorted(((edges[k], edges[k + 1]) for k in range(0, len(edges), 2) if edges[k + 1] - edges[k] >= QUIET_MIN_S),
+                  key=lambda gap: gap[0] - gap[1])  # the longest first
+    best: tuple[float, float] | None = None
+    for lo, hi in gaps:
+        if best is not None and hi - lo <= best[1] - best[0]:
+            break
+        part = imu.between(lo, hi)
+        origin = float(part.t[0] - imu.t[0])
+        if not _block_flags(part, dt, gravity, axes):
+            found: tuple[float, float] | None = (lo, hi)
+        else:
+            quiet = quiet_span(part, dt, gravity, axes)
+            found = None if quiet is None else (origin + quiet[0], origin + quiet[1])
+        if found is not None and (best is None or found[1] - found[0] > best[1] - best[0]):
+            best = found
+    return best
 
 
 def quiet_span(imu: ImuSeries, dt: float, gravity: float = STANDARD_GRAVITY,
@@ -213,7 +230,7 @@ def static_check(imu: ImuSeries, dt: float | None = None, gravity: float = STAND
             f"spread at least {BURST_RATIO:g}× wider than over the record ({BURST_WINDOW_S:g} s windows): the IMU "
             "was moved, touched or knocked"
         )
-        out.still_span = still_span(out.bursts, float(imu.t[-1] - imu.t[0]))
+        out.still_span = still_span(imu, out.bursts, dt, gravity, axes)
     elif out.flags:
         out.still_span = quiet_span(imu, dt, gravity, axes)
     return out

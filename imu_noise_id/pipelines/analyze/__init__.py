@@ -186,7 +186,8 @@ def analyze(imu: ImuSeries | MappedImu, temperature: ScalarSeries | None = None,
     if options.span is not None:
         imu, recording = imu.between(*options.span), None
     static = analyze_static(imu, kinds=options.kinds, per_decade=options.per_decade, confidence=options.confidence,
-                            allow_motion=options.allow_motion, progress=progress, sensors=options.sensors)
+                            allow_motion=options.allow_motion, progress=progress, sensors=options.sensors,
+                            origin_s=options.span[0] if options.span is not None else 0.0)
     result = AnalysisResult(static)
     if options.finals and len(options.sensors) < len(SENSORS):
         result.warnings.append(f"only the {' and '.join(options.sensors)} analysed (--axis): no filter exports, which "

@@ -137,6 +137,7 @@ def analyze_static(
     allow_motion: bool = False,
     progress: Callable[[int, int], None] | None = None,
     sensors: tuple[str, ...] = ("gyro", "accel"),
+    origin_s: float = 0.0,
 ) -> StaticAnalysis:
     """Allan-family variances and Allan-slope noise parameters of a static IMU recording.
 
@@ -157,6 +158,9 @@ def analyze_static(
     sensors : tuple of str
         The sensors analysed ("gyro", "accel"): the result holds their axes only, and the static check judges them
         alone (a gyro-only unit whose driver fills the accelerometer with zeros is analysed with ``("gyro",)``).
+    origin_s : float
+        Where ``imu``'s first sample lies in the recording [s] (a span's start): the still stretch a refusal offers is
+        given from the recording's first sample, as ``span`` (``--span``) reads it.
 
     Raises
     ------
@@ -193,11 +197,13 @@ def analyze_static(
     warnings = list(imu.notes) + timing
     check = static_check(imu, dt, axes=axes)
     if check.flags and not allow_motion:
+        within = "" if origin_s == 0.0 else (f" (the times above are from the analysed span's first sample, "
+                                             f"{origin_s:g} s into the record)")
         still = "" if check.still_span is None else (
             "; or analyse its longest still stretch alone: span=({0:.1f}, {1:.1f}) (CLI: --span {0:.1f}:{1:.1f})"
-            .format(*check.still_span))
+            .format(*(origin_s + t for t in check.still_span)))
         raise NotStaticError(
-            f"{imu.topic or 'input'} does not look static: " + "; ".join(check.flags)
+            f"{imu.topic or 'input'} does not look static: " + "; ".join(check.flags) + within
             + ". A static analysis needs the IMU at rest; pass allow_motion (CLI: --allow-motion) to analyse anyway"
             + still
         )
