@@ -208,3 +208,19 @@ def test_a_manifest_given_as_a_bag_is_refused_before_any_cluster_starts(tmp_path
     assert main(["batch", str(manifest), "--out", str(tmp_path / "out")]) == 2
     assert f"--manifest {manifest}" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_globs_files_that_are_not_bags_are_not_units(bags, tmp_path):
+    """``batch "fleet/*"`` over bags with a README and a notes file beside them: those are no units (each had been a
+    failed one, and the batch's exit code 1); a corrupt file named as a bag still is one, and a file named
+    explicitly is not skipped."""
+    folder = tmp_path / "fleet"
+    folder.mkdir()
+    (folder / "imu0").symlink_to(bags / "imu0", target_is_directory=True)
+    (folder / "broken.mcap").write_bytes(b"not a bag at all")
+    (folder / "README.md").write_text("three IMUs\n")
+    (folder / "notes.csv").write_text("unit,place\n")
+    assert sorted(u.name for u in discover_units([str(folder / "*")], None)) == ["broken", "imu0"]
+    assert [u.name for u in discover_units([str(folder / "notes.csv")], None)] == ["notes"]
+    with pytest.raises(InputError, match="no bag among the 1 files it matches"):
+        discover_units([str(folder / "*.md")], None)

@@ -10,6 +10,8 @@ from typing import Any
 
 from .errors import BagError
 
+#: The suffixes of a bag file (ROS 1, rosbag2 sqlite3, rosbag2 mcap); a rosbag2 directory has none.
+BAG_SUFFIXES = (".bag", ".db3", ".mcap")
 IMU_TYPE = "sensor_msgs/msg/Imu"
 ODOM_TYPE = "nav_msgs/msg/Odometry"
 TEMPERATURE_TYPE = "sensor_msgs/msg/Temperature"
@@ -44,7 +46,7 @@ def open_bag(path: str | Path) -> Iterator[Any]:
             f"bag {str(bag)!r} does not exist: give a ROS 1 .bag file, a rosbag2 directory (with metadata.yaml) "
             "or a rosbag2 .db3/.mcap file"
         )
-    if bag.is_file() and bag.suffix not in (".bag", ".db3", ".mcap"):
+    if bag.is_file() and bag.suffix not in BAG_SUFFIXES:
         raise BagError(
             f"{str(bag)!r} is not a bag: expected a ROS 1 .bag file, a rosbag2 directory or a .db3/.mcap file"
         )

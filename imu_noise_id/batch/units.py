@@ -13,7 +13,7 @@ from pathlib import Path
 
 import yaml
 
-from ..bag.topics import IMU_TYPE, open_bag
+from ..bag.topics import BAG_SUFFIXES, IMU_TYPE, open_bag
 from ..core.errors import InputError
 from ..pipelines.analyze import AnalyzeOptions
 
@@ -86,10 +86,17 @@ def imu_topics(bag: Path) -> list[str]:
 
 
 def _expand(pattern: str) -> list[Path]:
-    found = sorted(glob.glob(str(Path(pattern).expanduser()), recursive=True))
-    if not found:
+    """The paths ``pattern`` names: itself, or a glob's matches less the files that are not bags (a README beside the
+    bags is no unit; a directory may be a rosbag2 bag, a corrupt ``.mcap`` fails as a unit). InputError if none."""
+    matches = [Path(p) for p in sorted(glob.glob(str(Path(pattern).expanduser()), recursive=True))]
+    if not matches:
         raise InputError(f"{pattern!r}: no such bag (nothing matches)")
-    return [Path(p) for p in found]
+    found = ([p for p in matches if not p.is_file() or p.suffix in BAG_SUFFIXES] if glob.has_magic(pattern)
+             else matches)
+    if not found:
+        raise InputError(f"{pattern!r}: no bag among the {len(matches)} files it matches (a bag is a "
+                         f"{', '.join(BAG_SUFFIXES)} file or a rosbag2 directory)")
+    return found
 
 
 #: The suffixes of a manifest (:func:`read_manifest`): such a file named among the bags is refused, pointed at
