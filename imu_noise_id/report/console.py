@@ -228,7 +228,8 @@ def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None
         advice = fit.record_length
         if advice is None or not advice.needed_s:
             continue
-        from_zero = [lab for lab in advice.needed_s if lab in fit.not_resolved_from_zero]
+        zero = set(fit.not_resolved_from_zero)
+        from_zero = [lab for lab in advice.needed_s if lab in zero]
         resolved = [lab for lab in advice.needed_s if lab not in from_zero]
         if not resolved:
             continue

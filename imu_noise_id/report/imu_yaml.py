@@ -14,6 +14,7 @@ from ..core.errors import InputError
 from ..pipelines.analyze.numbers import (
     KALIBR_COMBINE,
     KALIBR_PREFIX,
+    PARAMETERS,
     AxisNumbers,
     ModelReadings,
     OverboundAxis,
@@ -45,11 +46,11 @@ def _sensor_keys(s: SensorNumbers) -> dict:
     """A sensor's per-axis keys: values, intervals, methods (and with final models sources, the Allan-slope readings
     beside them, the per-sample σ, the bias instability and the model names)."""
     doc: dict = {}
-    for parameter in ("noise_density", "random_walk"):
+    for parameter in PARAMETERS:
         key = f"{s.prefix}_{parameter}"
         readings = [a.reading(parameter) for a in s.axes]
         if s.from_models:
-            allan = [getattr(a, f"allan_{parameter}") for a in s.axes]
+            allan = [a.allan_reading(parameter) for a in s.axes]
             doc[f"{key}_allan_xyz"] = [num(r.value) for r in allan]
             doc[f"{key}_allan_ci_xyz"] = [_pair(r.ci95) for r in allan]
             doc[f"{key}_allan_method_xyz"] = [r.method for r in allan]
@@ -197,7 +198,7 @@ def _axes_of(doc: dict, sensor: str, prefix: str) -> tuple[AxisNumbers, ...]:
     """The per-axis readings of a sensor where imu.yaml lists its values (a hand-written file may give the Kalibr
     keys alone); intervals, methods and sources where listed (else NaN, ``""``, None)."""
     lists = {}
-    for parameter in ("noise_density", "random_walk"):
+    for parameter in PARAMETERS:
         key = f"{prefix}_{parameter}"
         values = _listed(doc, f"{key}_xyz")
         if values is None:

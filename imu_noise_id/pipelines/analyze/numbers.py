@@ -276,7 +276,7 @@ def _partly_modelled(static: StaticAnalysis, axis: str, final: FinalModel | None
     if final is not None:
         return AxisNumbers(axis, *axis_readings(static, axis, final))
     return AxisNumbers(axis, *(_allan_standing_in(static, axis, p, NOT_MODELLED)
-                               for p in ("noise_density", "random_walk")))
+                               for p in PARAMETERS))
 
 
 def _sensor(static: StaticAnalysis, sensor: str, axes: tuple[str, ...], finals: dict[str, FinalModel]) -> SensorNumbers:
