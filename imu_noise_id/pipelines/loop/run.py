@@ -27,7 +27,7 @@ from .steps import AxisLoop
 from .trials import added_name, attempt, explore
 
 #: Effects the loop adds at most per axis (docs/loop.md, "Why the loop's moves are built as they are").
-MAX_STEPS = 8
+MAX_STEPS = 14
 
 
 def run_closed_loop(
