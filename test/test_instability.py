@@ -62,6 +62,19 @@ def test_interval_from_a_real_fit_covers_the_truth():
     assert hi / lo < 2.0  # 1 h of data pins it down
 
 
+def test_the_interval_stays_within_what_the_parameters_intervals_allow():
+    """10 s of white noise fitted as WN+RW: the walk is not resolved from zero (K's profile interval [0, 2.9e-3])
+    and its log-scale variance is huge; log-normal draws of K put B's upper end at 1.9e86. Every draw is held within
+    its parameter's own 95 % interval, so B's upper end is at most the reading with N and K at their upper ends."""
+    y = simulate_sum([WN(2e-3)], 1000, DT, np.random.default_rng(0))
+    fit = fit_model(y, DT, "WN+RW")
+    assert fit.ci95["RW.random_walk"][0] == 0.0
+    got = bias_instability(fit, 1000 * DT / 10)
+    highest = [WN(fit.ci95["WN.noise_density"][1]), RW(fit.ci95["RW.random_walk"][1])]
+    lo, hi = got.ci95
+    assert lo < got.value < hi <= _truth(highest, 1000 * DT / 10) * (1 + 1e-3)
+
+
 def test_allan_reading():
     tau = np.array([0.1, 1.0, 10.0, 100.0])
     avar = np.array([4e-6, 1e-6, 2.5e-7, 1e-6])
