@@ -3,8 +3,8 @@
 IEEE Std 952: σ_min = √(2 ln 2/π)·B ≈ 0.664 B on the Allan deviation's flat bottom. From the model (beyond the
 papers): B = min_τ σ_model(τ)/0.664 over τ ≤ ``tau_max``, narrow OSCs and regressors left out; an upper bound
 (``reached = False``) when σ_model still falls there. With a BI component B is its parameter. Interval: 2.5/97.5 %
-quantiles of B over log-parameters drawn from N(θ̂, Σ) (unidentified ones held), each held within its own 95 %
-interval."""
+quantiles of B over log-parameters drawn from N(θ̂, Σ) (unidentified ones held; one not resolved from zero held
+below its interval's upper end)."""
 
 from __future__ import annotations
 
@@ -67,8 +67,8 @@ def bias_instability(fit: FitResult, tau_max: float, *, seed: int = 0) -> BiasIn
 
 
 def _interval(fit: FitResult, tau: np.ndarray, seed: int) -> tuple[float, float]:
-    """2.5/97.5 % quantiles of B over draws of the log-parameters, each held within its own 95 % interval
-    (:func:`_log_limits`; nan when the fit holds no covariance)."""
+    """2.5/97.5 % quantiles of B over draws of the log-parameters, one not resolved from zero held below its 95 %
+    interval's upper end (:func:`_log_ceilings`; nan when the fit holds no covariance)."""
     labels = list(fit.covariance_labels)
     # Parameters the data do not identify (infinite variance, e.g. a white noise driven to ~0 beside the sensor's
     # low-pass) are held at their estimates.
@@ -79,7 +79,7 @@ def _interval(fit: FitResult, tau: np.ndarray, seed: int) -> tuple[float, float]
     theta = np.array([math.log(fit.components[i].params()[name]) for i, name, _ in slots])
     cov = fit.log_covariance[np.ix_([index[lab] for *_, lab in slots], [index[lab] for *_, lab in slots])]
     draws = np.random.default_rng(seed).multivariate_normal(theta, cov, size=N_DRAWS, method="eigh")
-    draws = np.clip(draws, *_log_limits(fit, [lab for *_, lab in slots]))
+    draws = np.minimum(draws, _log_ceilings(fit, [lab for *_, lab in slots]))
     values = []
     for row in draws:
         comps = list(fit.components)
@@ -97,19 +97,17 @@ def _interval(fit: FitResult, tau: np.ndarray, seed: int) -> tuple[float, float]
     return (float(lo), float(hi))
 
 
-def _log_limits(fit: FitResult, labels: list[str]) -> tuple[np.ndarray, np.ndarray]:
-    """(lower, upper) log-limits of each parameter ``labels`` names: the logarithms of its 95 % interval's ends where
-    ``fit`` has one (−∞ for an end at or below zero, ±∞ where it has none). A log-normal draw of a parameter not
-    resolved from zero reaches far beyond its profile interval (10⁹⁰ for a walk whose interval is [0, 3·10⁻³]), and
-    B's interval would follow it."""
-    lower, upper = np.full(len(labels), -np.inf), np.full(len(labels), np.inf)
+def _log_ceilings(fit: FitResult, labels: list[str]) -> np.ndarray:
+    """The highest log-value a draw of each parameter ``labels`` names may take: for a parameter not resolved from
+    zero (its 95 % interval reaches zero) the logarithm of its interval's upper end, else +∞. The log-normal draws of
+    such a parameter reach far beyond its profile interval (10⁹⁰ for a walk whose interval is [0, 3·10⁻³]), and B's
+    interval would follow them; a resolved parameter's draws are left as drawn."""
+    ceilings = np.full(len(labels), np.inf)
     for j, lab in enumerate(labels):
         lo, hi = fit.ci95.get(lab, (math.nan, math.nan))
-        if np.isfinite(lo) and lo > 0.0:
-            lower[j] = math.log(lo)
-        if np.isfinite(hi) and hi > 0.0:
-            upper[j] = math.log(hi)
-    return lower, upper
+        if lo <= 0.0 and np.isfinite(hi) and hi > 0.0:
+            ceilings[j] = math.log(hi)
+    return ceilings
 
 
 def bias_instability_from_allan(tau: np.ndarray, avar: np.ndarray) -> BiasInstability:
