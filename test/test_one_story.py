@@ -92,6 +92,16 @@ def test_identify_probabilities_are_probabilities(identified, duration):
 
 
 @pytest.mark.parametrize("duration", [60.0, 200.0])
+def test_a_decision_resting_on_every_hypothesis_merged_is_taken_at_the_records_end(identified, duration):
+    """WN+GM merged into WN+RW leaves one merged hypothesis, whose probability is 1 at every update: the decision
+    rests on the GM's τ bound over the whole record, not on the first 0.3 s (what it said before)."""
+    entry = identified[duration][1]
+    merged = {g["hypotheses"][0] for g in entry["indistinguishable"]} | {entry["decision"]}
+    assert merged == set(entry["probabilities"])
+    assert entry["decision_time_s"] == pytest.approx(entry["duration_s"])
+
+
+@pytest.mark.parametrize("duration", [60.0, 200.0])
 def test_identify_console_line_and_yaml_tell_one_story(identified, duration):
     from imu_noise_id.report.hypotheses_yaml import decision_line
 

@@ -68,11 +68,15 @@ class BankResult:
     @property
     def decision_time(self) -> float | None:
         """Time [s] from which ``final.decision`` (merged probability) stayed ≥ γ; ``final.t`` when only the last update
-        reached it; None exactly when ``final.decision`` is None."""
+        reached it, or when the merge takes in every hypothesis (its probability is then 1 at every update, and the
+        decision rests on the long-memory GMs' τ bounds over the whole record); None exactly when ``final.decision``
+        is None."""
         decision = self.final.decision
         if decision is None:
             return None
         merged = {decision} | {g.hypothesis for g in self.final.long_memory if g.twin == decision}
+        if merged >= set(self.names):
+            return float(self.final.t)
         p = np.minimum(1.0, self.probabilities[:, [k for k, n in enumerate(self.names) if n in merged]].sum(axis=1))
         below = np.flatnonzero(p < self.gamma)
         start = 0 if below.size == 0 else below[-1] + 1
