@@ -160,6 +160,23 @@ def test_fit_prints_the_recording_length_advice(static_bag, tmp_path, capsys):
     assert "How long to record" in out and "gyro_x" in out
 
 
+def test_fit_prints_each_parameter_with_the_interval_model_yaml_holds(static_bag, tmp_path, capsys):
+    """`fit` printed the point estimates alone (WN(noise_density=…) RW(random_walk=…)); every estimate is printed
+    with its 95 % interval and how it was computed, as model.yaml holds them."""
+    import yaml
+
+    out_dir = tmp_path / "f"
+    assert main(["fit", str(static_bag), "--model", "WN+RW", "--axis", "gyro_x", "--starts", "1", "--out",
+                 str(out_dir)]) == 0
+    out = capsys.readouterr().out
+    saved = yaml.safe_load((out_dir / "model.yaml").read_text())["axes"]["gyro_x"]["components"]
+    for component, parameter in (("WN", "noise_density"), ("RW", "random_walk")):
+        c = next(c for c in saved if c["type"] == component)
+        lo, hi = c["ci95"]
+        line = next(ln for ln in out.splitlines() if f"{component}.{parameter}" in ln)
+        assert f"{c[parameter]:.4g} [{lo:.4g}, {hi:.4g}]" in line and c["ci95_method"] in line, line
+
+
 def test_analyze_shows_the_allan_then_the_model_stage_progress(static_bag, tmp_path, monkeypatch):
     tty = _Tty()
     monkeypatch.setattr(sys, "stderr", tty)

@@ -38,13 +38,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Fit each axis (progress on stderr), write model.yaml, print the advice."""
-    from ..report.console import fit_line, record_length_lines
+    from ..report.console import fit_line, parameter_lines, record_length_lines
     from ..report.model_yaml import write_model_yaml
     from .analyze import run_analysis
     from .options import analysis_options
 
     def on_axis(axis: str, fit, loop, bar) -> None:
         bar.echo(fit_line(axis, fit))
+        for line in parameter_lines(axis, fit):
+            bar.echo(line)
         if fit.budget_stop is not None:
             bar.echo(f"{axis}: {fit.budget_stop_text()}")
         if fit.beyond_budget:

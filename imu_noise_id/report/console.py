@@ -8,6 +8,7 @@ import math
 from ..core.axes import AXES, UNITS
 from ..core.estimation.em.results import FitResult
 from ..core.estimation.readouts.kalibr import walk_crossing_tau
+from ..core.noise.modelspec import parameter_labels
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
 from ..pipelines.analyze.numbers import PastedNumbers, axis_readings
@@ -177,6 +178,21 @@ def fit_line(axis: str, fit: FitResult) -> str:
     else:
         quality = f"loglik {fit.loglik:.6g}  BIC {fit.bic:.6g}"
     return f"{axis}: {fit.model}  {quality}  " + "  ".join(str(c) for c in fit.components)
+
+
+def parameter_lines(axis: str, fit: FitResult) -> list[str]:
+    """One line per fitted parameter: its value, unit (the component's, u the axis's unit), 95 % interval and how the
+    interval was computed (``ci95_method``), as model.yaml holds them; "interval not determined" where it has none."""
+    lines = []
+    for i, name, label in parameter_labels(list(fit.components)):
+        component = fit.components[i]
+        unit = component.parameter_units.get(name, "")
+        unit = UNITS.get(axis, "u") + unit[1:] if unit.startswith("u") else unit
+        lo, hi = fit.ci95.get(label, (math.nan, math.nan))
+        interval = (f"[{lo:.4g}, {hi:.4g}] ({fit.ci95_method.get(label, 'method not recorded')})"
+                    if math.isfinite(lo) and math.isfinite(hi) else "interval not determined")
+        lines.append(f"{axis:8s}   {label:24s} {component.params()[name]:.4g} {interval}  [{unit}]")
+    return lines
 
 
 def comparison_table(models: dict[str, AxisModel]) -> str:
