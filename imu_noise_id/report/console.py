@@ -191,7 +191,8 @@ def parameter_lines(axis: str, fit: FitResult) -> list[str]:
         lo, hi = fit.ci95.get(label, (math.nan, math.nan))
         interval = (f"[{lo:.4g}, {hi:.4g}] ({fit.ci95_method.get(label, 'method not recorded')})"
                     if math.isfinite(lo) and math.isfinite(hi) else "interval not determined")
-        lines.append(f"{axis:8s}   {label:24s} {component.params()[name]:.4g} {interval}  [{unit}]")
+        unit_text = f"  [{unit}]" if unit else ""
+        lines.append(f"{axis:8s}   {label:24s} {component.params()[name]:.4g} {interval}{unit_text}")
     return lines
 
 
