@@ -177,6 +177,19 @@ def test_fit_prints_each_parameter_with_the_interval_model_yaml_holds(static_bag
         assert f"{c[parameter]:.4g} [{lo:.4g}, {hi:.4g}]" in line and c["ci95_method"] in line, line
 
 
+def test_the_overbound_of_an_axis_not_analysed_says_what_its_factors_are_over(static_bag, tmp_path, capsys):
+    """`analyze --axis gyro_x` printed overbound lines for gyro_y and gyro_z too, with inflation factors over values the
+    console never gave (their Allan-slope readings, as imu.yaml's ``inflated_over`` says): the line says so."""
+    assert main(["analyze", str(static_bag), "--axis", "gyro_x", "--model", "WN+RW", "--no-loop", "--out",
+                 str(tmp_path / "a")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    start = next(i for i, ln in enumerate(lines) if ln.startswith("Overbound"))
+    rows = {ln.split()[0]: ln for ln in lines[start + 1:start + 7] if ln.split() and ln.split()[0] in ("gyro_x",
+                                                                                                    "gyro_y")}
+    assert "Allan-slope" not in rows["gyro_x"]
+    assert "over its Allan-slope readings" in rows["gyro_y"], rows["gyro_y"]
+
+
 def test_analyze_shows_the_allan_then_the_model_stage_progress(static_bag, tmp_path, monkeypatch):
     tty = _Tty()
     monkeypatch.setattr(sys, "stderr", tty)

@@ -12,7 +12,7 @@ from ..core.noise.modelspec import parameter_labels
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
 from ..pipelines.analyze.numbers import PastedNumbers, axis_readings
-from ..pipelines.analyze.overbound import AxisOverbound
+from ..pipelines.analyze.overbound import ALLAN_SLOPES, AxisOverbound
 from ..pipelines.analyze.static import StaticAnalysis
 from ..pipelines.av_band import av_band_claim
 from ..pipelines.loop import LoopResult
@@ -266,13 +266,16 @@ def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None
 
 
 def overbound_lines(overbounds: dict[str, AxisOverbound]) -> list[str]:
-    """Per axis the overbound N and K with their inflation factors over imu.yaml's values."""
+    """Per axis the overbound N and K with their inflation factors over imu.yaml's values (an axis analysed without a
+    model: over its Allan-slope readings, said on its line)."""
     if not overbounds:
         return []
     first = next(iter(overbounds.values()))
     lines = [f"Overbound (imu.yaml overbound:): smallest WN+RW above {first.covers.split(' (')[0]} for tau "
              f"{first.tau_range[0]:.3g}-{first.tau_range[1]:.3g} s:"]
     for axis, o in overbounds.items():
+        over = ("  (factors over its Allan-slope readings: the axis was not analysed with a model)"
+                if o.reference_source == ALLAN_SLOPES else "")
         lines.append(f"{axis:8s} N {_fmt(o.noise_density)} (x{o.inflation_noise_density:.3g})  "
-                     f"K {_fmt(o.random_walk)} (x{o.inflation_random_walk:.3g})")
+                     f"K {_fmt(o.random_walk)} (x{o.inflation_random_walk:.3g}){over}")
     return lines

@@ -61,11 +61,15 @@ class AxisOverbound:
         return self.bound.allan_variance(tau, dt)
 
 
+#: :attr:`AxisOverbound.reference_source` of an axis analysed without a model: its N and K are its Allan-slope readings.
+ALLAN_SLOPES = "Allan slopes"
+
+
 def _references(static: StaticAnalysis, axis: str, final: FinalModel | None) -> tuple[float, float, str]:
     """The per-axis N and K imu.yaml pastes (:func:`.numbers.axis_readings`) and where they come from, in words."""
     n, k = axis_readings(static, axis, final)
     if final is None:
-        return n.value, k.value, "Allan slopes"
+        return n.value, k.value, ALLAN_SLOPES
     if final.random_walk.value is None:
         return n.value, k.value, "final model (N), Allan slope (K: the model has no random walk)"
     return n.value, k.value, "final model"
