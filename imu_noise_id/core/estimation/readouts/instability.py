@@ -99,13 +99,14 @@ def _interval(fit: FitResult, tau: np.ndarray, seed: int) -> tuple[float, float]
 
 def _log_ceilings(fit: FitResult, labels: list[str]) -> np.ndarray:
     """The highest log-value a draw of each parameter ``labels`` names may take: for a parameter not resolved from
-    zero (its 95 % interval reaches zero) the logarithm of its interval's upper end, else +∞. The log-normal draws of
-    such a parameter reach far beyond its profile interval (10⁹⁰ for a walk whose interval is [0, 3·10⁻³]), and B's
-    interval would follow them; a resolved parameter's draws are left as drawn."""
+    zero (:attr:`~..em.results.FitResult.not_resolved_from_zero`) the logarithm of its interval's finite upper end,
+    else +∞. The log-normal draws of such a parameter reach far beyond its profile interval (10⁹⁰ for a walk whose
+    interval is [0, 3·10⁻³]), and B's interval would follow them; a resolved parameter's draws are left as drawn."""
+    zero = set(fit.not_resolved_from_zero)
     ceilings = np.full(len(labels), np.inf)
     for j, lab in enumerate(labels):
-        lo, hi = fit.ci95.get(lab, (math.nan, math.nan))
-        if lo <= 0.0 and np.isfinite(hi) and hi > 0.0:
+        hi = fit.ci95[lab][1] if lab in zero else math.inf
+        if 0.0 < hi < math.inf:
             ceilings[j] = math.log(hi)
     return ceilings
 
