@@ -99,9 +99,10 @@ def _expand(pattern: str) -> list[Path]:
     return found
 
 
-#: The suffixes of a manifest (:func:`read_manifest`): such a file named among the bags is refused, pointed at
-#: --manifest.
-MANIFEST_SUFFIXES = (".yaml", ".yml", ".txt")
+#: The suffixes of a YAML manifest (:func:`read_manifest`; any other is read as one path per line).
+YAML_MANIFEST_SUFFIXES = (".yaml", ".yml")
+#: The suffixes of a manifest: such a file named among the bags is refused, pointed at --manifest.
+MANIFEST_SUFFIXES = (*YAML_MANIFEST_SUFFIXES, ".txt")
 
 
 def read_manifest(path: Path) -> list[tuple[str, list[str] | None]]:
@@ -110,7 +111,7 @@ def read_manifest(path: Path) -> list[tuple[str, list[str] | None]]:
     if not path.is_file():
         raise InputError(f"--manifest {str(path)!r}: no such file")
     text = path.read_text()
-    if path.suffix in (".yaml", ".yml"):
+    if path.suffix in YAML_MANIFEST_SUFFIXES:
         try:
             doc = yaml.safe_load(text) or {}
             entries = doc["bags"]
