@@ -130,3 +130,30 @@ def test_the_whittle_and_composite_gradients_agree_with_and_without_the_closed_f
     _, grad_w = whittle.loglik_and_gradient(start, keys, x, bp, spectrum_parts)
     _, grad_w_plain = whittle.loglik_and_gradient(start, keys, x, bp, whittle.ComponentParts(spectrum_parts.computed))
     assert grad_w == pytest.approx(grad_w_plain, rel=1e-4, abs=1e-3)
+
+
+def _difference_spectrum_factor_long(w: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(F, ∂F/∂w) of the module docstring evaluated as written, in long double (the reference's rounding far below the
+    float64 one's)."""
+    w = np.asarray(w, dtype=np.clongdouble)[:, None]
+    omega = np.asarray(omega, dtype=np.longdouble)[None, :]
+    z = np.exp(w)
+    denominator = np.expm1(w + 1j * omega) * np.expm1(w - 1j * omega)
+    differencing = 4.0 * np.sin(omega / 2.0) ** 2
+    f = differencing * -np.expm1(2.0 * w) / denominator
+    return f, differencing * 2.0 * z * (np.expm1(w) ** 2 * np.cos(omega) - differencing * z) / denominator**2
+
+
+def test_the_difference_spectrum_factor_keeps_float64_accuracy_at_its_poles_frequencies():
+    """Slow, fast and narrow poles on a grid holding each narrow pole's own frequency and points 1e-9 and 1e-7
+    (relative) beside it, where 1 − z e^{±iω} nearly cancels: F and ∂F/∂w within 1e-13 of the long-double reference
+    (the inputs' own rounding gives ~1e-16; the sum form without its expm1 there, ~1e-10)."""
+    poles = np.array([-1e-6, -3e-4, -0.05, -0.5, -2e-7 + 0.3j, -2e-7 - 0.3j, -1e-4 + 1.2j, -1e-4 - 1.2j,
+                      -0.3 + 2.5j, -0.3 - 2.5j])
+    lines = np.abs(poles.imag[poles.imag > 0])
+    omega = np.sort(np.concatenate([np.linspace(1e-5, math.pi, 400), lines, lines * (1 + 1e-9), lines * (1 - 1e-7)]))
+    f, df = exponential_parts.difference_spectrum_factor(poles, omega)
+    f_ref, df_ref = _difference_spectrum_factor_long(poles, omega)
+    assert np.max(np.abs(f - f_ref) / np.abs(f_ref)) < 1e-13
+    # ∂F/∂w vanishes on a curve through the grid: relative to its size along each pole's row there
+    assert np.max(np.abs(df - df_ref) / np.max(np.abs(df_ref), axis=1, keepdims=True)) < 1e-13

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...noise.base import Component
-from ...noise.sampled import SERIES_LIMIT, lag_weighted_sum
+from ...noise.sampled import EXPM1_BELOW, SERIES_LIMIT, lag_weighted_sum
 
 #: Per parameter name, (∂c/∂ln ϑ, ∂w/∂ln ϑ) of the exponential terms.
 TermDerivatives = dict[str, tuple[np.ndarray, np.ndarray]]
@@ -45,19 +45,39 @@ def term_derivatives(component: Component, dt: float) -> tuple[np.ndarray, np.nd
                        for name, (dc, ds) in closed.items()}
 
 
+def _one_less_turned(one_minus_z: np.ndarray, z: np.ndarray, w: np.ndarray, omega: np.ndarray,
+                     sign: float) -> np.ndarray:
+    """1 − z e^{±iω} (k, n) for z = e^w (k, 1) at ``omega`` (n,), ``sign`` ±1, as (1 − z) + z(1 − e^{±iω}): products
+    only. Its rounding error is ~ε(|w| + ω), relative ε(|w| + ω)/|w ± iω|: a real w never cancels ±iω, a complex one
+    does near ω = ∓Im w; where the sum is below :data:`~...noise.sampled.EXPM1_BELOW` of its terms' size there, it is
+    −expm1(w ± iω) instead (the digits the sum lost)."""
+    turn = -np.expm1(sign * 1j * omega)
+    out = one_minus_z + z * turn
+    complex_rows = np.flatnonzero(w[:, 0].imag != 0.0)
+    if complex_rows.size:
+        size = np.abs(one_minus_z[complex_rows]) + np.abs(turn)
+        rows, cols = np.nonzero(np.abs(out[complex_rows]) < EXPM1_BELOW * size)
+        rows = complex_rows[rows]
+        out[rows, cols] = -np.expm1(w[rows, 0] + sign * 1j * omega[cols])
+    return out
+
+
 def difference_spectrum_factor(w: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(F, ∂F/∂w) of the differences' spectrum (module docstring) for terms ``w`` (k,) at ``omega`` (n,) [rad/sample]:
-    arrays (k, n), each factor computed without cancellation (expm1) for z near 1."""
+    arrays (k, n), each factor computed without cancellation (expm1) for z near 1 and for z e^{±iω} near 1. The
+    denominator's two factors are products of per-term and per-frequency exponentials (:func:`_one_less_turned`,
+    not k·n complex exponentials) and divided by once."""
     w = np.asarray(w, dtype=complex)[:, None]
-    omega = np.asarray(omega, dtype=float)[None, :]
+    omega = np.asarray(omega, dtype=float)
     one_minus_z = -np.expm1(w)
     z = 1.0 - one_minus_z
-    denominator = np.expm1(w + 1j * omega) * np.expm1(w - 1j * omega)  # (1 − z e^{iω})(1 − z e^{−iω})
+    inverse = 1.0 / (_one_less_turned(one_minus_z, z, w, omega, 1.0)
+                     * _one_less_turned(one_minus_z, z, w, omega, -1.0))  # 1/((1 − z e^{iω})(1 − z e^{−iω}))
     half = np.sin(omega / 2.0) ** 2
     differencing = 4.0 * half  # 2 − 2 cos ω
-    f = differencing * -np.expm1(2.0 * w) / denominator
+    f = (-np.expm1(2.0 * w) * differencing) * inverse
     numerator = 2.0 * z * (one_minus_z**2 * np.cos(omega) - 4.0 * z * half)
-    return f, differencing * numerator / denominator**2
+    return f, (numerator * differencing) * inverse * inverse
 
 
 def _g_derivative_series(m: np.ndarray, w: np.ndarray) -> np.ndarray:
