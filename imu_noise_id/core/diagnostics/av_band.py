@@ -19,7 +19,7 @@ from scipy import stats
 from ..allan import chi2_interval
 from ..constants import CONFIDENCE_95
 from ..noise.components import RR, Component, total_allan_variance
-from ..noise.sampled import lag_weighted_sum
+from ..noise.sampled import consecutive_block_sum_variance, lag_weighted_sum
 
 #: v_j for j = −2 … 2: the autocorrelation of the second difference (1, −2, 1).
 _V = (1.0, -4.0, 6.0, -4.0, 1.0)
@@ -133,11 +133,21 @@ def _computed_sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
     """K(0 … size − 1) of ``c``, linear beyond :data:`MEMORY_REACH` decay times of a finite memory > 0."""
     reach = _reach(c, size, dt)
     if reach >= size:
-        return c.sum_covariance(np.arange(size, dtype=float), dt)
+        return _leading_sum_covariance(c, size, dt)
     k = np.empty(size)
-    k[:reach] = c.sum_covariance(np.arange(reach, dtype=float), dt)
+    k[:reach] = _leading_sum_covariance(c, reach, dt)
     k[reach:] = k[reach - 1] + (k[reach - 1] - k[reach - 2]) * np.arange(1, size - reach + 1)
     return k
+
+
+def _leading_sum_covariance(c: Component, size: int, dt: float) -> np.ndarray:
+    """K(0 … size − 1) of ``c``: of complex exponential terms (a resonance's), −½ Σ_j S_j at consecutive lags
+    (:func:`~..noise.sampled.consecutive_block_sum_variance`, products of exponentials in place of one per lag), else
+    its :meth:`~..noise.base.Component.sum_covariance`."""
+    terms = c.exponential_terms()
+    if terms is None or not (np.any(np.imag(terms[0])) or np.any(np.imag(terms[1]))):
+        return c.sum_covariance(np.arange(size, dtype=float), dt)
+    return -0.5 * sum(consecutive_block_sum_variance(cj, sj, size, dt) for cj, sj in zip(*terms, strict=True))
 
 
 def _difference_covariance(k: np.ndarray, ell: np.ndarray, m: int) -> np.ndarray:

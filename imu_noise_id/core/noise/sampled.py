@@ -5,6 +5,8 @@ g(m) = z (m(1 − z) − (1 − z^m))/(1 − z)², AV(m·dt) = (4 S(m) − S(2m)
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 #: Below this m·|s·dt| the series of g(m) is used (its truncation error is ≈ (m|w|)³ relative).
@@ -87,6 +89,36 @@ def block_sum_variance(c: complex, s: complex, k: np.ndarray, dt: float) -> np.n
     if w.imag == 0.0 and complex(c).imag == 0.0:
         return complex(c).real * (k + 2.0 * _g_real(k, w.real))
     return np.real(complex(c) * (k + 2.0 * lag_weighted_sum(k, w)))
+
+
+def consecutive_powers(w: complex, size: int) -> np.ndarray:
+    """e^{kw} for k = 0 … size − 1: products e^{qBw}·e^{rw} (k = qB + r, B = ⌊√size⌋) of about 2√size exponentials,
+    each a few ulp (not size complex exponentials)."""
+    block = max(1, math.isqrt(size))
+    inner = np.exp(np.arange(block) * w)
+    outer = np.exp(np.arange(0, size, block) * w)
+    return np.multiply.outer(outer, inner).ravel()[:size]
+
+
+def consecutive_block_sum_variance(c: complex, s: complex, size: int, dt: float) -> np.ndarray:
+    """:func:`block_sum_variance` at k = 0 … size − 1 [u²]. From k₀ = ⌈1/|w|⌉ (w = s·dt, z = e^w) with g split,
+    S(k) = k·Re(c(1 + z)/(1 − z)) − 2Re(B) + 2Re(B z^k), B = c z/(1 − z)², z^k by :func:`consecutive_powers`: there
+    k|w| ≥ 1 and no part exceeds S's own scale by more than a few times; below k₀ (and for real c and s, whose
+    arithmetic is real) as block_sum_variance."""
+    c, w = complex(c), complex(s) * dt
+    if w.imag == 0.0 and c.imag == 0.0:
+        return block_sum_variance(c, s, np.arange(size, dtype=float), dt)
+    start = min(size, math.ceil(1.0 / abs(w)))
+    out = np.empty(size)
+    out[:start] = block_sum_variance(c, s, np.arange(start, dtype=float), dt)
+    if start < size:
+        one_minus_z = -np.expm1(w)
+        z = 1.0 - one_minus_z
+        b = c * z / one_minus_z**2
+        k = np.arange(start, size, dtype=float)
+        out[start:] = k * (c * (1.0 + z) / one_minus_z).real - 2.0 * b.real
+        out[start:] += 2.0 * (b * consecutive_powers(w, size - start) * np.exp(start * w)).real
+    return out
 
 
 def real_poles_sum_variance(c: float | np.ndarray, s: np.ndarray, k: np.ndarray, dt: float) -> np.ndarray:
