@@ -359,6 +359,25 @@ def test_residual_errors_bundle():
     assert err.av_misfit == 0.0 and err.ljung_box_p > 0.001 and 1.0 < err.peak_ratio < 40
 
 
+def test_residual_errors_read_the_spectral_peak_on_first_use_and_keep_it_when_pickled(monkeypatch):
+    """A refused candidate's errors are judged by their BIC and AV: the periodogram and its running median (a peak
+    ratio the report alone shows) are computed when first read, once, and travel as values."""
+    import pickle
+
+    from imu_noise_id.core.diagnostics import residuals
+
+    e = np.random.default_rng(15).standard_normal(5000)
+    calls = []
+    original = residuals.spectral_peaks
+    monkeypatch.setattr(residuals, "spectral_peaks", lambda *a, **k: calls.append(1) or original(*a, **k))
+    err = residual_errors(e, DT, loglik=1.0, bic=2.0, av_data=np.ones(4), av_model=np.ones(4))
+    assert calls == []
+    peak = original(e, DT)
+    assert (err.peak_ratio, err.peak_frequency) == (peak.ratio, peak.frequency)
+    copy = pickle.loads(pickle.dumps(err))
+    assert (copy.peak_ratio, copy.peak_frequency) == (peak.ratio, peak.frequency) and len(calls) == 1
+
+
 # --------------------------------------------------------------------------------------------- monitor
 def test_innovation_monitor_white_correlated_and_inconsistent():
     rng = np.random.default_rng(16)

@@ -4,6 +4,7 @@ paper 000 sec. 2. NaN = missing (dropped, or 0 after centring)."""
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -12,6 +13,7 @@ from scipy import ndimage, stats
 from scipy.fft import next_fast_len
 
 from ..constants import CONFIDENCE_95
+from ..deferred import Deferred
 
 #: Half-width (in periodogram bins) of the window whose median is the local floor of :func:`spectral_peaks`.
 FLOOR_HALF_WIDTH = 200
@@ -227,8 +229,9 @@ def av_misfit_z(av_data: np.ndarray, av_ci: tuple[np.ndarray, np.ndarray], av_mo
 
 @dataclass(frozen=True)
 class ResidualErrors:
-    """A fit's error measures (docs/loop.md): ``loglik``, ``bic``, ``av_misfit``, ``ljung_box_p``/``_q``/``_lags``,
-    ``peak_ratio``, ``peak_frequency`` [Hz]."""
+    """A fit's error measures (docs/loop.md): ``loglik``, ``bic``, ``av_misfit``, ``ljung_box_p``/``_q``/``_lags``;
+    ``spectral_peak`` (:func:`spectral_peaks` of the innovations, computed on first use: the loop judges a candidate
+    by its BIC and AV, the report alone shows the peak) read as :attr:`peak_ratio` and :attr:`peak_frequency` [Hz]."""
 
     loglik: float
     bic: float
@@ -236,15 +239,24 @@ class ResidualErrors:
     ljung_box_p: float
     ljung_box_q: float
     ljung_box_lags: int
-    peak_ratio: float
-    peak_frequency: float
+    spectral_peak: Deferred[SpectralPeak]
+
+    @property
+    def peak_ratio(self) -> float:
+        """The largest periodogram line over its local median floor."""
+        return self.spectral_peak().ratio
+
+    @property
+    def peak_frequency(self) -> float:
+        """Where that line is [Hz]."""
+        return self.spectral_peak().frequency
 
 
 def residual_errors(e: np.ndarray, dt: float, *, loglik: float, bic: float, av_data: np.ndarray,
                     av_model: np.ndarray, lags: int = 20) -> ResidualErrors:
-    """All error measures of one fit from its standardised innovations and its Allan variances."""
+    """All error measures of one fit from its standardised innovations ``e`` (read, not copied: not to be changed
+    afterwards) and its Allan variances."""
     lb = ljung_box(e, lags)
-    peak = spectral_peaks(e, dt)
     return ResidualErrors(loglik=float(loglik), bic=float(bic), av_misfit=av_misfit(av_data, av_model),
                           ljung_box_p=lb.p_value, ljung_box_q=lb.q, ljung_box_lags=lb.lags,
-                          peak_ratio=peak.ratio, peak_frequency=peak.frequency)
+                          spectral_peak=Deferred(functools.partial(spectral_peaks, e, dt)))

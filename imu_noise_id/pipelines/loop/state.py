@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Generic, TypeVar
 
 import numpy as np
 
+from ...core.deferred import Deferred
 from ...core.diagnostics import detectors as det
 from ...core.diagnostics.residuals import ResidualErrors
 from ...core.diagnostics.spectra import ResidualSpectra
@@ -74,25 +73,6 @@ class LoopState:
         if self.flagged.size:
             names.append("OUTLIERS")
         return structure_name(names)
-
-
-T = TypeVar("T")
-
-
-class Deferred(Generic[T]):
-    """A value computed by ``compute()`` on first use and kept (copies of its holder share it); pickled as the value."""
-
-    def __init__(self, compute: Callable[[], T]) -> None:
-        self._compute: Callable[[], T] | None = compute
-        self._value: T | None = None
-
-    def __call__(self) -> T:
-        if self._compute is not None:
-            self._value, self._compute = self._compute(), None
-        return self._value  # type: ignore[return-value]
-
-    def __getstate__(self) -> dict[str, object]:
-        return {"_compute": None, "_value": self()}
 
 
 @dataclass

@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...core.allan import AllanResult, allan_variance, choose_m
+from ...core.deferred import Deferred
 from ...core.diagnostics import detectors as det
 from ...core.diagnostics.av_band import model_av_band
 from ...core.diagnostics.av_signatures import detect_av_signatures
@@ -32,7 +33,7 @@ from ...core.noise.flicker import band_for_record
 from ...core.noise.modelspec import canonical, structure_name
 from ...core.noise.resonant import LPF, MAX_DAMPING, OSC, filter_memory_limit
 from ...core.quality import interpolate_missing
-from .state import STATE_EFFECTS, Deferred, Diagnosis, ExogTerm, LoopState
+from .state import STATE_EFFECTS, Diagnosis, ExogTerm, LoopState
 
 
 def _restarted_walk(fitted: float, f: det.Finding) -> float:
