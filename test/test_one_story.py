@@ -229,6 +229,30 @@ def test_the_node_reports_what_its_decision_rests_on_and_when_it_was_made():
         assert f"P {held:.3f}" in line and "merged" in line and f"since {made:.3g} s" in line
 
 
+def test_the_nodes_decision_resting_on_every_hypothesis_merged_is_as_of_its_latest_update():
+    """As identify's: with WN+GM merged into WN+RW the merged probability is 1 at every update, so the decision rests
+    on the GM's τ bound over every sample so far; its time is the bank's latest update (was the first feed's end)."""
+    from imu_noise_id.core.noise.components import RW
+    from imu_noise_id.pipelines.online.bank import BankFeed
+    from imu_noise_id.pipelines.online.events import EventLog
+    from imu_noise_id.resources import read_hypotheses_file
+
+    feed = BankFeed(*read_hypotheses_file(None), bank_rate=10.0, events=EventLog())
+    n, rng = 3000, np.random.default_rng(0)
+    y = np.stack([simulate_sum([WN(1e-3), RW(2e-5)], n, DT, rng) for _ in range(6)], axis=1)
+    made = []
+    for half in (slice(0, n // 2), slice(n // 2, n)):
+        for i in range(half.start, half.stop):
+            feed.add(i * DT, y[i])
+        feed.end_stretch()
+        assert feed.feed(1.0 / DT)
+        cols, table = feed.report().table()
+        assert table[2, cols.index("decision")] == cols.index("WN+RW")
+        assert table[2, cols.index("decision_probability")] == pytest.approx(1.0)
+        made.append(table[2, cols.index("decision_time_s")])
+    assert made[0] == pytest.approx(n // 2 * DT, abs=0.2) and made[1] == pytest.approx(n * DT, abs=0.2)
+
+
 def test_a_decision_held_by_hysteresis_says_so_with_the_time_it_was_made():
     from imu_noise_id.pipelines.online.results import decision_text
 

@@ -49,6 +49,15 @@ class BankSnapshot:
     long_memory: tuple[LongMemory, ...] = ()
     decision_probabilities: dict[str, float] = field(default_factory=dict)
 
+    def merged_into(self, decision: str) -> set[str]:
+        """``decision`` and the long-memory GM hypotheses merged into it (those whose RW twin it is)."""
+        return {decision} | {g.hypothesis for g in self.long_memory if g.twin == decision}
+
+    def merges_every_hypothesis(self, decision: str | None) -> bool:
+        """Whether ``decision`` takes in every hypothesis: its merged probability is then 1 at every update, and the
+        decision rests on the merged GMs' τ bounds over the samples so far, not on a moment."""
+        return decision is not None and self.merged_into(decision) >= set(self.probabilities)
+
 
 @dataclass
 class BankResult:
@@ -74,9 +83,9 @@ class BankResult:
         decision = self.final.decision
         if decision is None:
             return None
-        merged = {decision} | {g.hypothesis for g in self.final.long_memory if g.twin == decision}
-        if merged >= set(self.names):
+        if self.final.merges_every_hypothesis(decision):
             return float(self.final.t)
+        merged = self.final.merged_into(decision)
         p = np.minimum(1.0, self.probabilities[:, [k for k, n in enumerate(self.names) if n in merged]].sum(axis=1))
         below = np.flatnonzero(p < self.gamma)
         start = 0 if below.size == 0 else below[-1] + 1

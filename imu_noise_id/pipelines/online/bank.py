@@ -65,7 +65,8 @@ class BankFeed:
         self._last_t: float | None = None
         self._accel_first_offset: np.ndarray | None = None
         self._decisions: list[str | None] = [None] * 6
-        self._decided_at = [math.nan] * 6  # bank time [s] each held decision was made
+        # bank time [s] each held decision was made; the latest update's while it merges every hypothesis
+        self._decided_at = [math.nan] * 6
         self.decision_changes: list[str] = []
         self.names: tuple[str, ...] = ()
         self.parameters: tuple[str, ...] = ()
@@ -166,6 +167,8 @@ class BankFeed:
                 self._events.event(f"decision_{AXES[i]}", text)
                 self._decisions[i] = decision
                 self._decided_at[i] = math.nan if decision is None else float(snap.t)
+            if snap.merges_every_hypothesis(decision):  # as of every sample so far, not of the first update
+                self._decided_at[i] = float(snap.t)
 
     def report(self) -> HypothesesReport | None:
         """Posterior probabilities and decisions per axis, or None before the banks exist."""
