@@ -50,3 +50,28 @@ def test_on_the_composite_likelihood_a_move_that_lost_is_not_refitted_from_the_e
         record, monkeypatch):
     monkeypatch.setattr(composite, "MIN_SAMPLES", 10_000)
     assert _starts_of_refit(record, monkeypatch) == [True]
+
+
+def test_the_candidates_of_a_state_with_removed_samples_share_its_composite_statistics(monkeypatch):
+    """Every candidate of a step fits the same record with the state's removed samples imputed: its composite
+    statistics (a periodogram and block sums of the whole record) are computed once for them, again only when the
+    removed samples change, and equal those of the imputed record computed afresh."""
+    rng = np.random.default_rng(5)
+    n = composite.MIN_SAMPLES + 10_000
+    record = simulate_sum([WN(1e-3), RW(2e-5)], n, DT, rng)
+    flagged = np.array([1000, 70_000, 200_000])
+    record[flagged] += 0.5
+    loop = steps.AxisLoop(record, DT, None, alpha=0.01, lags=20, outliers="impute")
+    computed = []
+    of = composite.CompositeStatistics.of.__func__
+    monkeypatch.setattr(composite.CompositeStatistics, "of",
+                        classmethod(lambda cls, y, dt: computed.append(y.copy()) or of(cls, y, dt)))
+    imputed = record[flagged - 1]
+    for structure in ("WN+RW", "WN+GM+RW"):
+        loop.diagnose(LoopState(structure=parse_structure(structure), flagged=flagged, imputed=imputed))
+    assert len(computed) == 1
+    cleaned = record.copy()
+    cleaned[flagged] = imputed
+    assert np.array_equal(computed[0], cleaned)
+    loop.diagnose(LoopState(structure=parse_structure("WN+RW"), flagged=flagged[:2], imputed=imputed[:2]))
+    assert len(computed) == 2

@@ -72,6 +72,7 @@ class AxisLoop:
         # the floor a white noise a fit drove to ~0 restarts from (docs/loop.md, "Why the loop's moves …")
         d = np.diff(y[np.isfinite(y)])
         self.white_floor = 1e-3 * math.sqrt(max(float(np.var(d)) / 2.0, 1e-300) * dt)
+        self._cleaned: tuple[bytes, composite.CompositeStatistics] | None = None  # :meth:`cleaned_statistics`
 
     @property
     def on_composite(self) -> bool:
@@ -95,16 +96,25 @@ class AxisLoop:
             # The loop compares fits; intervals are the model selection's job.
             return model.fit(state.init, FitOptions(uncertainty=False))
         starts = [state.init] if state.init is not None else model.starting_values(FitOptions().n_starts, True)
-        stats = self.composite_statistics
-        if state.exog_terms or state.flagged.size:
-            residual = model.y
-            if model.exog_names:
-                names = list(model.exog_names)
-                at_start = model.fit(starts[0], FitOptions(em_iter=0, polish=False, uncertainty=False,
-                                                           spectral_init=False))
-                residual = model.y - model.z[:, -len(names):] @ _coef(at_start, names)
-            stats = composite.CompositeStatistics.of(residual, self.dt)
+        if model.exog_names:
+            names = list(model.exog_names)
+            at_start = model.fit(starts[0], FitOptions(em_iter=0, polish=False, uncertainty=False, spectral_init=False))
+            stats = composite.CompositeStatistics.of(model.y - model.z[:, -len(names):] @ _coef(at_start, names),
+                                                     self.dt)
+        elif state.flagged.size:
+            stats = self.cleaned_statistics(state, model.y)
+        else:
+            stats = self.composite_statistics
         return composite.fit_model(model, starts, stats)
+
+    def cleaned_statistics(self, state: LoopState, y: np.ndarray) -> composite.CompositeStatistics:
+        """The composite statistics of ``y``, the record with ``state``'s removed samples imputed (or missing): kept
+        for the next state that removes the same samples (a step's candidates all do), computed afresh when they
+        change."""
+        key = state.flagged.tobytes() + np.asarray(state.imputed, dtype=float).tobytes()
+        if self._cleaned is None or self._cleaned[0] != key:
+            self._cleaned = (key, composite.CompositeStatistics.of(y, self.dt))
+        return self._cleaned[1]
 
     @functools.cached_property
     def statistics(self) -> screen.Statistics:
