@@ -3,15 +3,23 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 
 import numpy as np
 from scipy import optimize, stats
 
-from ..noise.components import GM
+from ..noise.components import GM, Component, total_allan_variance
 from ..noise.flicker import PLATEAU
 from ..noise.units import random_walk_at_allan_variance
 from .detectors import ALPHA, Finding, bonferroni_log10_p, norm_log10_sf
 from .residuals import av_misfit_z
+
+
+def white_allan_variance(components: Iterable[Component], tau: np.ndarray, dt: float) -> np.ndarray | None:
+    """AV [u²] at ``tau`` [s] of the white parts (WN, QN) of ``components`` at ``dt`` [s]: the level a long-τ deficit's
+    excess is read above (:func:`detect_av_signatures`); None without one."""
+    white = [c for c in components if c.name in ("WN", "QN")]
+    return total_allan_variance(white, tau, dt) if white else None
 
 
 def fit_gm_to_excess(tau: np.ndarray, excess: np.ndarray) -> tuple[float, float]:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Iterable
 from dataclasses import replace
 
 import numpy as np
@@ -13,7 +12,7 @@ from ...core.allan import AllanResult, allan_variance, choose_m
 from ...core.deferred import Deferred
 from ...core.diagnostics import detectors as det
 from ...core.diagnostics.av_band import model_av_band
-from ...core.diagnostics.av_signatures import detect_av_signatures
+from ...core.diagnostics.av_signatures import detect_av_signatures, white_allan_variance
 from ...core.diagnostics.lines import (
     detect_broad_line,
     detect_innovation_hump,
@@ -28,7 +27,7 @@ from ...core.estimation.em import composite, screen
 from ...core.estimation.em.model import FitOptions, NoiseModel
 from ...core.estimation.em.relabel import gm_as_filter
 from ...core.estimation.em.results import FitResult
-from ...core.noise.components import BI, GM, MA, QN, RR, RW, WN, Component, total_allan_variance
+from ...core.noise.components import BI, GM, MA, QN, RR, RW, WN, Component
 from ...core.noise.flicker import band_for_record
 from ...core.noise.modelspec import canonical, structure_name
 from ...core.noise.resonant import LPF, MAX_DAMPING, OSC, filter_memory_limit
@@ -50,14 +49,6 @@ DECISIVE_SHARE = (0.2, 0.9)
 def _coef(fit: FitResult, names: list[str]) -> np.ndarray:
     """The fitted coefficients of the loop's regressors, in ``names`` order."""
     return np.array([float(fit.exog_coef[name]["value"]) for name in names])
-
-
-def white_allan_variance(components: Iterable[Component], tau: np.ndarray, dt: float) -> np.ndarray | None:
-    """AV [u²] at ``tau`` [s] of the white parts (WN, QN) of ``components`` at ``dt`` [s]: the level a long-τ deficit's
-    excess is read above (:func:`~imu_noise_id.core.diagnostics.av_signatures.detect_av_signatures`); None without
-    one."""
-    white = [c for c in components if c.name in ("WN", "QN")]
-    return total_allan_variance(white, tau, dt) if white else None
 
 
 class AxisLoop:

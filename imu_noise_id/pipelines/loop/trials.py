@@ -11,7 +11,12 @@ from scipy import stats
 
 from ...core.constants import CONFIDENCE_95
 from ...core.diagnostics import detectors as det
-from ...core.diagnostics.av_signatures import detect_av_signatures, fit_gm_to_excess, signature_threshold
+from ...core.diagnostics.av_signatures import (
+    detect_av_signatures,
+    fit_gm_to_excess,
+    signature_threshold,
+    white_allan_variance,
+)
 from ...core.diagnostics.lines import detect_innovation_hump
 from ...core.errors import InputError
 from ...core.estimation.em import screen
@@ -23,7 +28,7 @@ from ...core.noise.resonant import MAX_DAMPING, OSC
 from ...core.noise.units import random_walk_at_allan_variance
 from .rules import av_inside_band, av_rms_z, better, judge, simultaneous_z
 from .state import Diagnosis, LoopState, Trial
-from .steps import AxisLoop, white_allan_variance
+from .steps import AxisLoop
 
 
 def added_name(before: list[str], after: list[str], effect: str) -> str:
