@@ -132,6 +132,10 @@ def test_a_short_record_gives_k_as_a_bound_at_or_above_the_truth_and_says_so():
     assert not final.random_walk_above_bound
     printed = final_table({"gyro_x": final})
     assert "K <" in printed and "K not identified by this 10 min record" in printed
+    # the reason that applies, not a list of the possible ones
+    assert "(its 95 % interval reaches zero)" in printed and ", or " not in printed
+    no_walk = final_model(fit_axis(imu, "gyro_x", ModelStage("WN"), dt, allan).fit, None, allan)
+    assert "(the final model has no random walk: the long-τ AV bounds it)" in final_table({"gyro_x": no_walk})
 
 
 def test_a_final_model_without_a_walk_gives_the_datas_long_tau_bound(tmp_path):

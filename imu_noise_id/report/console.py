@@ -8,6 +8,7 @@ import math
 from ..core.axes import AXES, UNITS
 from ..core.estimation.em.results import FitResult
 from ..core.estimation.readouts.kalibr import walk_crossing_tau
+from ..core.noise.components import RW
 from ..core.noise.modelspec import parameter_labels
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
@@ -143,9 +144,8 @@ def short_for_walk_lines(finals: dict[str, FinalModel], static: StaticAnalysis |
             continue
         if bounded:
             smallest = walk_crossing_tau(n, 1.0) / (record / 3.0)  # K whose walk crosses at a third of the record
-            lines.append(f"{axis:8s} K not identified by this {_duration(record)} record (its interval reaches "
-                         "zero, the final model has no walk, or structures the data cannot tell apart read it "
-                         "otherwise): a record identifies walks well above "
+            lines.append(f"{axis:8s} K not identified by this {_duration(record)} record ({_why_bound(f, method)}"
+                         "): a record identifies walks well above "
                          f"3*sqrt(3)*N/T = {_fmt(smallest)} here, each tenfold smaller walk needs a tenfold longer "
                          f"record; given: K <= {_fmt(k)} ({method})")
         else:
@@ -154,6 +154,22 @@ def short_for_walk_lines(finals: dict[str, FinalModel], static: StaticAnalysis |
                          f"{_duration(3.0 * crossing)} or more to identify it. Given meanwhile: K = {_fmt(k)} "
                          f"({method})")
     return lines
+
+
+def _why_bound(f: FinalModel, method: str) -> str:
+    """Why the K given for ``f`` is a bound (``method`` as :func:`short_for_walk_lines` reads it): the reason that
+    applies, in words."""
+    if method == "unresolved":
+        return "the closed loop's verdict failed: the overbound's K"
+    if method == "Allan-slope bound":
+        return "the final model has no random walk: the Allan slope's bound"
+    if f.walk_readings:
+        return "structures the data cannot tell apart read it otherwise: the upper end of their span"
+    if not any(isinstance(c, RW) for c in f.fit.components):
+        return "the final model has no random walk: the long-τ AV bounds it"
+    if not math.isfinite(f.fit.ci95.get("RW.random_walk", (0.0, math.inf))[1]):
+        return "its 95 % interval reaches zero and has no upper end: the long-τ AV bounds it"
+    return "its 95 % interval reaches zero"
 
 
 def loop_table(results: dict[str, LoopResult]) -> str:
