@@ -188,6 +188,29 @@ def test_a_short_memory_gm_is_renamed_lpf_with_the_same_av():
     assert gm_as_filter(slow) is slow
 
 
+def test_a_renamed_gm_leaves_no_label_of_the_old_structure():
+    """WN+2GM whose short GM is read as the sensor's low-pass: every per-parameter output (intervals, covariance
+    labels, the record-length advice the console and model.yaml print) is labelled as the renamed structure's
+    parameters are (the remaining GM is ``GM``, not ``GM2``); the console printed "WN+LPF ... hardest: GM.tau"."""
+    from imu_noise_id.core.estimation.em.model import fit_model
+    from imu_noise_id.core.estimation.em.uncertainty import add_uncertainty
+    from imu_noise_id.core.noise.modelspec import parameter_labels
+
+    y = simulate_sum([WN(1e-3), GM(tau=0.012, sigma=5e-3), GM(tau=20.0, sigma=3e-4)], 60_000, DT,
+                     np.random.default_rng(4))
+    fit = add_uncertainty(fit_model(y, DT, [WN(1e-3), GM(tau=0.012, sigma=5e-3), GM(tau=20.0, sigma=3e-4)]))
+    assert fit.record_length is not None and "GM2.tau" in fit.record_length.needed_s  # the premise
+    renamed = gm_as_filter(fit)
+    assert renamed.model == "WN+LPF+GM"
+    labels = {lab for _, _, lab in parameter_labels(renamed.components)}
+    assert set(renamed.ci95) == labels and set(renamed.covariance_labels) == labels
+    assert set(renamed.record_length.needed_s) == labels
+    # the slow GM's numbers carried over under its new label, the low-pass's computed for its own parameters
+    assert renamed.ci95["GM.tau"] == fit.ci95["GM2.tau"]
+    assert renamed.record_length.needed_s["GM.tau"] == pytest.approx(fit.record_length.needed_s["GM2.tau"])
+    assert renamed.record_length.needed_s["LPF.cutoff"] == pytest.approx(fit.record_length.needed_s["GM1.tau"])
+
+
 def test_a_line_and_its_harmonics_are_one_family_added_in_one_step():
     """A wandering 0.5 Hz line with a third harmonic (the ADIS16405 accelerometers' 0.565 / 1.695 Hz pair) and a
     fixed 3 Hz sine with its second harmonic: each family is one step (issue 11's groups), the members at their

@@ -12,17 +12,19 @@ import numpy as np
 from ...errors import InputError
 from ...kalman.statespace import to_components
 from ...noise.components import GM
-from ...noise.modelspec import structure_name
+from ...noise.modelspec import parameter_labels, structure_name
 from ...noise.resonant import LPF, filter_memory_limit
 from ..readouts.quantiles import Z95
 from .results import FitResult
-from .uncertainty import add_uncertainty
+from .uncertainty import add_uncertainty, record_length_advice
 
 
 def gm_as_filter(fit: FitResult) -> FitResult:
     """``fit`` with its shortest GM renamed LPF when τ < ``filter_memory_limit(dt)`` and no LPF is present: the
     cutoff's interval is τ's through f_c = 1/(2πτ); the log covariance is carried by ln N = ln σ + ½ ln τ + ½ ln 2,
-    ln f_c = −ln τ − ln 2π, giving N a Wald interval and se."""
+    ln f_c = −ln τ − ln 2π, giving N a Wald interval and se. Every per-parameter output is labelled as the renamed
+    structure's parameters are (:func:`~...noise.modelspec.parameter_labels`: a GM left alone beside the LPF is
+    ``GM``, not ``GM2``), the record-length advice recomputed from the carried covariance."""
     gms = [(i, c) for i, c in enumerate(fit.components) if isinstance(c, GM)]
     if not gms or any(isinstance(c, LPF) for c in fit.components):
         return fit
@@ -54,8 +56,18 @@ def gm_as_filter(fit: FitResult) -> FitResult:
         se["LPF.noise_density"] = n_lpf * sd
         ci95["LPF.noise_density"] = (n_lpf * math.exp(-Z95 * sd), n_lpf * math.exp(Z95 * sd))
         how["LPF.noise_density"] = "wald"
+    # the other components keep their values; a GM's tag changes when fewer GMs remain (GM2 → GM)
+    renamed = {old: new for (_, _, old), (_, _, new) in zip(parameter_labels(fit.components),
+                                                           parameter_labels(components), strict=True)
+               if not old.startswith(f"{key}.")}
+    se, ci95, how = ({renamed.get(k, k): v for k, v in d.items()} for d in (se, ci95, how))
+    labels = [renamed.get(lab, lab) for lab in labels]
+    advice = fit.record_length
+    if advice is not None and labels:
+        advice = record_length_advice(labels, cov, components, fit.n, fit.dt, target=advice.target)
     return replace(fit, model=structure_name([c.name for c in components]), components=components, se=se,
-                   ci95=ci95, ci95_method=how, log_covariance=cov, covariance_labels=tuple(labels))
+                   ci95=ci95, ci95_method=how, log_covariance=cov, covariance_labels=tuple(labels),
+                   record_length=advice)
 
 
 def with_uncertainty(fit: FitResult) -> FitResult:

@@ -75,10 +75,12 @@ def _beyond_budget(v: float, s_log: float, conditional_end: float | None,
     return (0.0, math.inf), f"not bounded, {BUDGET_SPENT}"
 
 
-def _record_length(
+def record_length_advice(
     labels: list[str], cov: np.ndarray, comps: list[Component], n: int, dt: float, *, target: float
 ) -> RecordLengthAdvice:
-    """Advice from the per-sample information: se(T) = se(T_now)·√(T_now/T)."""
+    """How long to record for a relative 95 % half-width ``target`` on each parameter ``labels[k]``, from its log
+    standard error √cov[k, k] at the record's n·dt [s], assuming se(T) = se(T_now)·√(T_now/T); a GM's advice is a
+    lower bound (``reliable`` False) where the duration is below 20 of its τ (``comps`` give τ)."""
     t_now = n * dt
     needed, half, reliable = {}, {}, {}
     for k, lab in enumerate(labels):
@@ -261,5 +263,5 @@ def add_uncertainty(fit: FitResult, target_precision: float = 0.10) -> FitResult
     if prof.better is not None:
         fit.better_loglik = prof.better[0]
         fit.better_start = par.to_components(prof.better[1], model_ss)
-    fit.record_length = _record_length(noise_labels, cov, comps_ss, fit.n, fit.dt, target=target_precision)
+    fit.record_length = record_length_advice(noise_labels, cov, comps_ss, fit.n, fit.dt, target=target_precision)
     return fit

@@ -24,7 +24,7 @@ from ...wavelet.variance import DEFAULT_MAX_FRACTION, WaveletVariance, wavelet_v
 from ..em.model import check_signal, parse_structure_or_components
 from ..em.results import FitResult
 from ..em.starts import fit_allan
-from ..em.uncertainty import _record_length
+from ..em.uncertainty import record_length_advice
 from ..readouts.quantiles import Z95
 from . import engine as eng
 from .ramp import fit_ramp
@@ -199,7 +199,7 @@ def dress(est: Estimate, *, n: int, dt: float, options: GmwmOptions, slope: floa
     return GmwmFit(
         model=model_name(comps), components=comps, exog_coef={}, se=se, ci95=ci, loglik=math.nan, aic=math.nan,
         bic=math.nan, n=n, dt=dt, n_iter=est.best.n_eval, converged=est.best.converged,
-        record_length=_record_length(labels, cov, comps, n, dt, target=options.target_precision) if uncertainty
+        record_length=record_length_advice(labels, cov, comps, n, dt, target=options.target_precision) if uncertainty
         else None,
         information_ok=est.inference.identified, n_eval=est.best.n_eval, n_params=len(labels),
         starts=list(est.start_objectives), log_covariance=cov, covariance_labels=tuple(labels), estimator="gmwm",
