@@ -313,6 +313,22 @@ def test_mapped_recording_reads_back_the_same_arrays_read_only_and_pickles_small
     assert sizes[1] == sizes[0] < 4096
 
 
+def test_a_ten_minute_record_runs_its_axes_side_by_side(monkeypatch):
+    """By default (``jobs=0``) a record of 10 min at 100 Hz (60 000 samples per axis) gets one worker per core: the
+    loop on a measured sensor's 10 min takes tens of seconds per axis (the first 600 s of ADIS16405 run 1: minutes in
+    one process), far more than the workers' start; only records shorter than any the Allan stage characterises a
+    sensor from stay in this process."""
+    import os
+
+    from imu_noise_id.pipelines.analyze import worker_processes
+
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    assert worker_processes(0, 60_000, 6) == 2
+    assert worker_processes(0, 60_000, 1) == 1
+    assert worker_processes(0, 2_000, 6) == 1
+    assert worker_processes(3, 2_000, 6) == 3
+
+
 def test_axes_in_worker_processes_give_the_same_result(tmp_path, monkeypatch):
     """``jobs=2`` runs each axis's model stage, loop, final model and band in two worker processes (alive while the
     axes come back, in axis order) and returns what one process computes, number for number, leaving no temporary

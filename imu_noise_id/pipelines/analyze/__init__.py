@@ -40,8 +40,9 @@ from .overbound import DEFAULT_HORIZON_S, AxisOverbound, check_horizon, overboun
 from .resolution import resolve_axis
 from .static import StaticAnalysis, analyze_static
 
-#: With ``jobs=0`` (automatic) a record of fewer samples per axis runs its axes in this process.
-PARALLEL_MIN_SAMPLES = 100_000
+#: With ``jobs=0`` (automatic) a record of fewer samples per axis runs its axes in this process (docs/analysis.md,
+#: "Why only the shortest records run their axes in one process").
+PARALLEL_MIN_SAMPLES = 10_000
 
 Progress = Callable[[int, int], None]
 #: Called when an axis is done: (axis, its model-stage fit, its loop or None).
