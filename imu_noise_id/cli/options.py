@@ -239,10 +239,13 @@ def add_analysis_options(p: argparse.ArgumentParser, command: str = "analyze") -
     if command != "fit":
         _loop_options(p, command)
     if command != "batch":
+        from ..pipelines.analyze import PARALLEL_MIN_SAMPLES
+
         p.add_argument(
             "--jobs", type=int, default=0, metavar="N",
             help="worker processes for the per-axis model stage and loop, one axis each (default 0: one per "
-            "available core on records of 100000 samples or more; 1: none), and for drawing the report's figures "
+            f"available core on records of {PARALLEL_MIN_SAMPLES} samples or more; 1: none), and for drawing the "
+            "report's figures "
             "(0: one per available core, whatever the record's length). The results are the same; peak memory "
             "adds up over the workers")
 
