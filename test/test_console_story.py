@@ -65,3 +65,32 @@ def test_a_signed_ramp_away_from_zero_is_resolved_from_zero():
     fit = fit_model(y, DT, "WN+RW+RR")
     assert fit.ci95["RR.slope"][1] < 0.0
     assert fit.not_resolved_from_zero == ["RW.random_walk"]
+
+
+def test_a_parameter_whose_interval_has_no_upper_end_is_named_not_taken_as_the_hardest():
+    """An interval [lo, ∞) (the white noise beside a low-pass on 5 s of a measured accelerometer) has no finite
+    precision to reach: the advice had printed "record n/a ... (hardest: WN.noise_density, now +-inf %)" (and the
+    report "inf h ... now ±inf %"). It is for the parameters the record bounds, and names the others."""
+    import math
+
+    from imu_noise_id.core.estimation.em.results import FitResult, RecordLengthAdvice
+    from imu_noise_id.core.noise.components import LPF
+
+    advice = RecordLengthAdvice(0.1, "95 % two-sided, relative half-width", 5.0,
+                                {"WN.noise_density": math.inf, "LPF.cutoff": 30.0, "LPF.noise_density": 12.0},
+                                {"WN.noise_density": math.inf, "LPF.cutoff": 0.24, "LPF.noise_density": 0.155},
+                                {"WN.noise_density": True, "LPF.cutoff": True, "LPF.noise_density": True})
+    fit = FitResult(model="WN+LPF", components=[WN(4e-3), LPF(noise_density=5e-3, cutoff=15.0)], exog_coef={},
+                    se={}, ci95={"WN.noise_density": (3e-3, math.inf), "LPF.cutoff": (10.0, 20.0),
+                                 "LPF.noise_density": (4e-3, 6e-3)},
+                    loglik=0.0, aic=0.0, bic=0.0, n=500, dt=DT, n_iter=0, converged=True, record_length=advice)
+    from types import SimpleNamespace
+
+    from imu_noise_id.report.analysis_html import _selection_section
+
+    line = record_length_lines({"accel_x": fit})[1]
+    html = _selection_section(SimpleNamespace(models={"accel_x": SimpleNamespace(selection=None, fit=fit)},
+                                              finals={}))
+    assert "WN.noise_density: no upper end" in html and "inf" not in html.replace("info", "")
+    assert "record 0.5 min for +-10 % on every parameter the record bounds (hardest: LPF.cutoff, now +-24 %)" in line
+    assert line.endswith("no upper end, left out: WN.noise_density") and "n/a" not in line

@@ -5,6 +5,7 @@ independent tasks (:func:`report_sections`), joined by :func:`assemble_report`."
 from __future__ import annotations
 
 import html
+import math
 from collections.abc import Callable
 from functools import partial
 
@@ -157,6 +158,8 @@ def _selection_section(result: AnalysisResult) -> str:
             items = "".join(
                 f"<li>{html.escape(lab)}: not resolved from zero (its 95 % interval reaches 0): no record length gives "
                 "it a relative precision</li>" if lab in from_zero else
+                f"<li>{html.escape(lab)}: no upper end (its 95 % interval is unbounded above): this record gives no "
+                "precision to extrapolate</li>" if not math.isfinite(advice.needed_s[lab]) else
                 f"<li>{html.escape(lab)}: {fmt(advice.needed_s[lab] / 3600, '.3g')} h for ±{100 * advice.target:.0f} % "
                 f"(now ±{100 * advice.relative_halfwidth[lab]:.0f} %)"
                 + ("" if advice.reliable[lab] else " — a lower bound (correlation time not ≪ record)") + "</li>"

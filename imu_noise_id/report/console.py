@@ -253,9 +253,10 @@ def _duration(seconds: float) -> str:
 
 
 def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None = None) -> list[str]:
-    """How long to record per axis: the longest needed duration over the parameters resolved from zero (their 95 %
-    interval's lower end above 0) and which one, then the others by name: a relative precision of a value the data
-    cannot tell from zero needs no finite record. ``names``: the model's name per axis where it is not the fit's own."""
+    """How long to record per axis: the longest needed duration over the parameters the record bounds (their 95 %
+    interval's lower end above 0 and its upper end finite) and which one, then the others by name: a relative precision
+    of a value the data cannot tell from zero, or without an upper end, is no finite record's. ``names``: the model's
+    name per axis where it is not the fit's own."""
     lines = []
     for axis, fit in fits.items():
         advice = fit.record_length
@@ -263,7 +264,8 @@ def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None
             continue
         zero = set(fit.not_resolved_from_zero)
         from_zero = [lab for lab in advice.needed_s if lab in zero]
-        resolved = [lab for lab in advice.needed_s if lab not in from_zero]
+        unbounded = [lab for lab in advice.needed_s if lab not in zero and not math.isfinite(advice.needed_s[lab])]
+        resolved = [lab for lab in advice.needed_s if lab not in from_zero and lab not in unbounded]
         if not resolved:
             continue
         label = max(resolved, key=advice.needed_s.get)
@@ -271,8 +273,10 @@ def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None
         verdict = "enough" if needed <= advice.current_s else f"record {_duration(needed)}"
         bound = "" if advice.reliable[label] else " (a lower bound: correlation time not << record)"
         name = (names or {}).get(axis, fit.model)
-        which = "every parameter resolved from zero" if from_zero else "every parameter"
-        left_out = f"; not resolved from zero, left out: {', '.join(from_zero)}" if from_zero else ""
+        which = ("every parameter the record bounds" if unbounded else
+                 "every parameter resolved from zero" if from_zero else "every parameter")
+        left_out = (f"; not resolved from zero, left out: {', '.join(from_zero)}" if from_zero else "") + \
+            (f"; no upper end, left out: {', '.join(unbounded)}" if unbounded else "")
         lines.append(f"{axis:8s} {name:22s} now {_duration(advice.current_s)}: {verdict} for +-"
                      f"{100 * advice.target:.0f} % on {which} (hardest: {label}, now +-"
                      f"{100 * advice.relative_halfwidth[label]:.0f} %){bound}{left_out}")
