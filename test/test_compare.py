@@ -146,6 +146,11 @@ def test_the_command_says_within_degraded_or_refused(reference_dir, tmp_path, ca
     assert main(["compare", str(tmp_path / "noisier"), "--reference", str(out)]) == 1
     printed = capsys.readouterr().out
     assert "DEGRADED: gyro_z" in printed and "noise up" in printed
+    # a span is said, with where the times printed for it start (they are from its first sample)
+    assert main(["compare", str(tmp_path / "noisier"), "--reference", str(out), "--span", "200:600"]) == 1
+    printed = capsys.readouterr().out
+    assert "note: analysed t = 200–600 s from the first sample (span) of the record's 0–600 s" in printed
+    assert "times given for it are from its first sample, 200 s into the record" in printed
     # against a datasheet limit of 2.2e-4 (the reference's 1.7e-4 within it): the noisier gyro_z (2.55e-4 from
     # minute 5) is beyond it, the unchanged recording is not
     spec = tmp_path / "spec.yaml"

@@ -91,7 +91,8 @@ class ImuSeries:
 
     def between(self, start_s: float, end_s: float) -> ImuSeries:
         """Samples from ``start_s`` to ``end_s`` [s] after the first (both included, ``end_s`` may be inf) with a
-        note; InputError for an empty, reversed or one-sample span."""
+        note saying so (and, from ``start_s`` > 0 on, that times given for them are from their first sample);
+        InputError for an empty, reversed or one-sample span."""
         elapsed = self.t - self.t[0]
         if not (math.isfinite(start_s) and 0.0 <= start_s < end_s):
             raise InputError(f"{self.topic or 'input'}: span {start_s:g}:{end_s:g} s must be two times [s] from "
@@ -101,8 +102,9 @@ class ImuSeries:
             raise InputError(f"{self.topic or 'input'}: span {start_s:g}:{end_s:g} s holds fewer than two samples "
                              f"of the record's 0–{elapsed[-1]:.4g} s")
         orientation = self.orientation_xyzw[keep] if self.orientation_xyzw is not None else None
+        origin = f"; times given for it are from its first sample, {start_s:g} s into the record" if start_s > 0 else ""
         note = (f"analysed t = {start_s:g}–{min(end_s, float(elapsed[-1])):.4g} s from the first sample (span) of "
-                f"the record's 0–{elapsed[-1]:.4g} s")
+                f"the record's 0–{elapsed[-1]:.4g} s{origin}")
         return ImuSeries(t=self.t[keep], gyro=self.gyro[keep], accel=self.accel[keep], frame_id=self.frame_id,
                          topic=self.topic, notes=[*self.notes, note], orientation_xyzw=orientation,
                          period=self.period)

@@ -46,7 +46,7 @@ def compare(imu: ImuSeries, references: dict[str, AxisReference], rate_hz: float
     if check.flags:
         raise InputError("compare: the recording does not look static (" + "; ".join(check.flags) + "): give the "
                          "still part with --span START:END")
-    notes = []
+    notes = list(imu.notes)  # the reader's repairs and a span, as analyze's warnings give them
     if topic and imu.topic and topic != imu.topic:
         if not other_topic:
             raise InputError(f"compare: the reference was made from {topic}, this recording is {imu.topic}: another "
