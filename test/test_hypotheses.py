@@ -417,6 +417,35 @@ def test_identify_cli_on_a_simulated_bag(tmp_path):
     assert main(["identify", str(bag), "--hypotheses", str(cfg), "--axis", "accel_x", "--out", str(out)]) == 2
 
 
+def test_identify_refuses_a_moving_record_as_analyze_does(tmp_path, capsys):
+    """The hypothesis bank reads every deviation as noise: on a driven robot's IMU (the gyros turning, the
+    accelerometers speeding up and slowing down) it decided models and wrote them without a word. It is refused as
+    analyze refuses it (exit 2, the static check's findings, what to pass), analysed with --allow-motion (the findings
+    then notes), and --span takes a still stretch."""
+    from dataclasses import replace
+
+    from imu_noise_id.bag.writer import write_bag
+    from imu_noise_id.cli import main
+    from imu_noise_id.core.simulation.static import simulate_static_imu
+
+    model = {a: [WN(2e-3), RW(1e-4)] for a in ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")}
+    still = simulate_static_imu(model, 50.0, 240.0, seed=8)
+    t = still.t - still.t[0]
+    turning = np.where(t > 120.0, 0.4 * np.sin(2 * math.pi * t / 20.0), 0.0)
+    gyro, accel = still.gyro.copy(), still.accel.copy()
+    gyro[:, 2] += turning
+    accel[:, 0] += 2.0 * turning
+    write_bag(tmp_path / "driven", replace(still, gyro=gyro, accel=accel))
+    argv = ["identify", str(tmp_path / "driven"), "--axis", "gyro_z", "--refine", "0", "--no-plot"]
+    assert main([*argv, "--out", str(tmp_path / "refused")]) == 2
+    err = capsys.readouterr().err
+    assert "does not look static" in err and "--allow-motion" in err and "--span" in err and "Traceback" not in err
+    assert not (tmp_path / "refused").exists()
+    assert main([*argv, "--out", str(tmp_path / "anyway"), "--allow-motion"]) == 0
+    assert ": not static: gyro_z" in capsys.readouterr().err
+    assert main([*argv, "--out", str(tmp_path / "still"), "--span", "0:110"]) == 0
+
+
 def test_frozen_gains_change_little():
     # Freezing the gains once they change by < 1e-5 per step (here after ~1300 steps, a coarse setting) must leave the
     # probabilities and estimates close to the exact time-varying filters (tolerance 0) on 3000 samples.

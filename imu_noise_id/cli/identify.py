@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from . import add_rate_option, print_notes, results_folder
-from .options import add_axis, add_out, add_topic
+from .options import add_axis, add_out, add_topic, span_spec
 
 
 def register(subparsers: Any) -> None:
@@ -32,6 +32,11 @@ def register(subparsers: Any) -> None:
     p.add_argument("--refine", type=int, default=2, metavar="N",
                    help="grid-refinement passes: rerun with grids re-centred on the posterior (default: %(default)s)")
     p.add_argument("--no-plot", action="store_true", help="skip the PNG plot")
+    p.add_argument("--allow-motion", action="store_true",
+                   help="identify even if the static check finds motion (its findings become notes)")
+    p.add_argument("--span", type=span_spec, default=None, metavar="START:END",
+                   help="identify only the samples from START to END seconds after the first one, e.g. a still "
+                        "stretch")
     add_rate_option(p)
     p.set_defaults(run=run)
 
@@ -49,9 +54,12 @@ def run(args: argparse.Namespace) -> int:
     hypotheses, source = read_hypotheses_file(args.hypotheses)
     with TextProgress(f"reading {args.bag.name}") as progress:
         series = read_imu(args.bag, topic=args.topic, progress=progress, rate_hz=args.rate)
+    if args.span is not None:
+        series = series.between(*args.span)
     with TextProgress("hypothesis bank", unit="axes") as progress:
         progress(0, len(axes))
-        res = identify(series, axes, hypotheses, source, args.refine, progress=progress)
+        res = identify(series, axes, hypotheses, source, args.refine, progress=progress,
+                       allow_motion=args.allow_motion)
     print_notes(res.notes)
     out = args.out
     folder = results_folder(args, str(args.bag), series.topic)

@@ -12,6 +12,7 @@ from ..core.errors import InputError
 from ..core.hypotheses import BankResult, HypothesisSet
 from ..core.hypotheses.axis import identify_offline
 from ..core.hypotheses.config import hypothesis_set_factory
+from ..core.stillness import static_check
 
 #: Rows per axis kept of the probabilities over time (for the CSV and the plot).
 MAX_ROWS = 2000
@@ -44,14 +45,28 @@ class Identification:
 
 
 def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], source: str,
-             refine: int = 0, *, progress: Callable[[int, int], None] | None = None) -> Identification:
-    """Run the bank on each axis of ``series`` with ``refine`` refinement passes; ``progress(done, total)`` per axis."""
+             refine: int = 0, *, progress: Callable[[int, int], None] | None = None,
+             allow_motion: bool = False) -> Identification:
+    """Run the bank on each axis of ``series`` with ``refine`` refinement passes; ``progress(done, total)`` per axis.
+    The bank reads every deviation from its hypotheses as noise, so a recording the static check
+    (:func:`~..core.stillness.static_check`) finds moving is refused (InputError naming its findings, the still
+    stretch and ``allow_motion``), or with ``allow_motion`` identified with the findings among the notes."""
     if len(series) < 2:
         raise InputError(f"{series.topic or 'the IMU series'} has {len(series)} sample(s): need a recording")
     if refine < 0:
         raise InputError(f"--refine must be >= 0, got {refine}")
     dt = series.dt
     out = Identification(source, dt, {}, [f"{series.topic}: {note}" for note in series.notes])
+    check = static_check(series, dt, axes=tuple(axes))
+    if check.flags and not allow_motion:
+        still = "" if check.still_span is None else (
+            " identify its longest still stretch alone (--span {:.1f}:{:.1f}, times from the first sample),"
+            .format(*check.still_span))
+        raise InputError(f"{series.topic or 'input'} does not look static: " + "; ".join(check.flags)
+                         + ". The hypothesis bank reads every deviation as noise: record the IMU at rest, pass "
+                         "--allow-motion to identify anyway (the findings then notes)," + still
+                         + " or take a still part with --span START:END")
+    out.notes += [f"{series.topic}: not static: {m}" for m in check.flags]
     for axis in axes:
         make, warmup = hypothesis_set_factory(hypotheses, dt, axis.split("_")[0], source)
         y = series.axis(axis)
