@@ -60,12 +60,12 @@ def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], sou
     check = static_check(series, dt, axes=tuple(axes))
     if check.flags and not allow_motion:
         still = "" if check.still_span is None else (
-            " identify its longest still stretch alone (--span {:.1f}:{:.1f}, times from the first sample),"
-            .format(*check.still_span))
+            " identify its longest still stretch alone ({:.1f}–{:.1f} s from the first sample identified; CLI: "
+            "--span),".format(*check.still_span))
         raise InputError(f"{series.topic or 'input'} does not look static: " + "; ".join(check.flags)
                          + ". The hypothesis bank reads every deviation as noise: record the IMU at rest, pass "
-                         "--allow-motion to identify anyway (the findings then notes)," + still
-                         + " or take a still part with --span START:END")
+                         "allow_motion (CLI: --allow-motion) to identify anyway (the findings then notes)," + still
+                         + " or take a still part (CLI: --span START:END)")
     out.notes += [f"{series.topic}: not static: {m}" for m in check.flags]
     for axis in axes:
         make, warmup = hypothesis_set_factory(hypotheses, dt, axis.split("_")[0], source)
