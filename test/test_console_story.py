@@ -94,3 +94,21 @@ def test_a_parameter_whose_interval_has_no_upper_end_is_named_not_taken_as_the_h
     assert "WN.noise_density: no upper end" in html and "inf" not in html.replace("info", "")
     assert "record 0.5 min for +-10 % on every parameter the record bounds (hardest: LPF.cutoff, now +-24 %)" in line
     assert line.endswith("no upper end, left out: WN.noise_density") and "n/a" not in line
+
+
+def test_a_parameter_on_the_edge_of_its_searched_range_says_so():
+    """``fit --model WN+GM+RW`` on 20 min of a measured gyro printed "GM.tau 0.01 [0, 0.01004] (profile)": a GM of
+    one sample's memory, the least τ searched (the sensor's low-pass, which analyze names LPF), with nothing saying
+    the value is the range's end rather than a maximum inside it."""
+    import math
+
+    from imu_noise_id.core.estimation.em.results import FitResult
+    from imu_noise_id.report.console import parameter_lines
+
+    fit = FitResult(model="WN+GM+RW", components=[WN(4.5e-4), GM(tau=DT, sigma=4e-3), RW(2.3e-5)], exog_coef={},
+                    se={}, ci95={"GM.tau": (0.0, 0.01004), "GM.sigma": (3.9e-3, 4.1e-3)}, loglik=0.0, aic=0.0,
+                    bic=0.0, n=120_000, dt=DT, n_iter=0, converged=True)
+    lines = {line.split()[1]: line for line in parameter_lines("gyro_x", fit)}
+    assert "at the lower end of the range searched (0.01 s: one sample)" in lines["GM.tau"]
+    assert "range searched" not in lines["GM.sigma"] and "range searched" not in lines["WN.noise_density"]
+    assert math.isclose(fit.components[1].tau, DT)

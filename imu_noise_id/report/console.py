@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from ..core.axes import AXES, UNITS
+from ..core.estimation.em.mle import physical_bounds
 from ..core.estimation.em.results import FitResult
 from ..core.estimation.readouts.kalibr import walk_crossing_tau
 from ..core.noise.components import RW
@@ -198,7 +199,8 @@ def fit_line(axis: str, fit: FitResult) -> str:
 
 def parameter_lines(axis: str, fit: FitResult) -> list[str]:
     """One line per fitted parameter: its value, unit (the component's, u the axis's unit), 95 % interval and how the
-    interval was computed (``ci95_method``), as model.yaml holds them; "interval not determined" where it has none."""
+    interval was computed (``ci95_method``), as model.yaml holds them; "interval not determined" where it has none;
+    a value at an end of the range searched (:func:`~..core.estimation.em.mle.physical_bounds`) says so."""
     lines = []
     for i, name, label in parameter_labels(list(fit.components)):
         component = fit.components[i]
@@ -208,8 +210,33 @@ def parameter_lines(axis: str, fit: FitResult) -> list[str]:
         interval = (f"[{lo:.4g}, {hi:.4g}] ({fit.ci95_method.get(label, 'method not recorded')})"
                     if math.isfinite(lo) and math.isfinite(hi) else "interval not determined")
         unit_text = f"  [{unit}]" if unit else ""
-        lines.append(f"{axis:8s}   {label:24s} {component.params()[name]:.4g} {interval}{unit_text}")
+        value = component.params()[name]
+        lines.append(f"{axis:8s}   {label:24s} {value:.4g} {interval}{unit_text}{_range_end(name, value, fit)}")
     return lines
+
+
+#: Relative distance from an end of the range searched within which a value is said to lie at it.
+RANGE_END_TOLERANCE = 1e-3
+#: What an end of a searched range is, where it has a name: (parameter, end) → words.
+_RANGE_END_NAMES = {("tau", "lower"): "one sample", ("frequency", "upper"): "Nyquist", ("cutoff", "upper"): "Nyquist",
+                    ("bandwidth", "upper"): "Nyquist"}
+
+
+def _range_end(name: str, value: float, fit: FitResult) -> str:
+    """"; at the lower/upper end of the range searched (…)" when ``value`` of parameter ``name`` lies within
+    :data:`RANGE_END_TOLERANCE` of an end of :func:`~..core.estimation.em.mle.physical_bounds`, else ""."""
+    bounds = physical_bounds(fit.n, fit.dt).get(name)
+    if bounds is None:
+        return ""
+    if value <= bounds[0] * (1.0 + RANGE_END_TOLERANCE):
+        end, at = "lower", bounds[0]
+    elif value >= bounds[1] * (1.0 - RANGE_END_TOLERANCE):
+        end, at = "upper", bounds[1]
+    else:
+        return ""
+    named = _RANGE_END_NAMES.get((name, end))
+    return f"; at the {end} end of the range searched ({at:.4g} {'s' if name == 'tau' else 'Hz'}" + \
+        (f": {named})" if named else ")")
 
 
 def comparison_table(models: dict[str, AxisModel]) -> str:
