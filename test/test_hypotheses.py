@@ -444,6 +444,11 @@ def test_identify_refuses_a_moving_record_as_analyze_does(tmp_path, capsys):
     assert main([*argv, "--out", str(tmp_path / "anyway"), "--allow-motion"]) == 0
     assert ": not static: gyro_z" in capsys.readouterr().err
     assert main([*argv, "--out", str(tmp_path / "still"), "--span", "0:110"]) == 0
+    # after a span, its still stretch is given from the record's first sample, as analyze gives it
+    capsys.readouterr()
+    assert main([*argv, "--out", str(tmp_path / "later"), "--span", "60:240"]) == 2
+    err = capsys.readouterr().err
+    assert "60 s into the record" in err and "--span 60." in err
 
 
 def test_frozen_gains_change_little():

@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     with TextProgress("hypothesis bank", unit="axes") as progress:
         progress(0, len(axes))
         res = identify(series, axes, hypotheses, source, args.refine, progress=progress,
-                       allow_motion=args.allow_motion)
+                       allow_motion=args.allow_motion, origin_s=args.span[0] if args.span is not None else 0.0)
     print_notes(res.notes)
     out = args.out
     folder = results_folder(args, str(args.bag), series.topic)

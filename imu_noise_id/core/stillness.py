@@ -63,6 +63,19 @@ class StaticCheck:
     def static(self) -> bool:
         return not self.flags
 
+    def refusal(self, topic: str | None, *, needs: str, verb: str, origin_s: float = 0.0) -> str:
+        """The message refusing a recording with these flags: ``topic`` does not look static (the flags, their times
+        said to be from the analysed span's first sample, ``origin_s`` [s] into the record, when above 0), why it
+        ``needs`` the IMU at rest, how to ``verb`` anyway (allow_motion) and, where there is one, how to ``verb`` the
+        longest still stretch alone (span, ``origin_s`` added: times from the record's first sample)."""
+        within = "" if origin_s == 0.0 else (f" (the times above are from the analysed span's first sample, "
+                                             f"{origin_s:g} s into the record)")
+        still = "" if self.still_span is None else (
+            f"; or {verb} its longest still stretch alone: "
+            + "span=({0:.1f}, {1:.1f}) (CLI: --span {0:.1f}:{1:.1f})".format(*(origin_s + t for t in self.still_span)))
+        return (f"{topic or 'input'} does not look static: " + "; ".join(self.flags) + within
+                + f". {needs}; pass allow_motion (CLI: --allow-motion) to {verb} anyway" + still)
+
 
 def _windows(x: np.ndarray, width: int) -> np.ndarray:
     m = x.shape[0] // width

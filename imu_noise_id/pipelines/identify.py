@@ -46,11 +46,12 @@ class Identification:
 
 def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], source: str,
              refine: int = 0, *, progress: Callable[[int, int], None] | None = None,
-             allow_motion: bool = False) -> Identification:
+             allow_motion: bool = False, origin_s: float = 0.0) -> Identification:
     """Run the bank on each axis of ``series`` with ``refine`` refinement passes; ``progress(done, total)`` per axis.
     The bank reads every deviation from its hypotheses as noise, so a recording the static check
     (:func:`~..core.stillness.static_check`) finds moving is refused (InputError naming its findings, the still
-    stretch and ``allow_motion``), or with ``allow_motion`` identified with the findings among the notes."""
+    stretch and ``allow_motion``: :meth:`~..core.stillness.StaticCheck.refusal`, ``origin_s`` [s] the span's start
+    in the record), or with ``allow_motion`` identified with the findings among the notes."""
     if len(series) < 2:
         raise InputError(f"{series.topic or 'the IMU series'} has {len(series)} sample(s): need a recording")
     if refine < 0:
@@ -59,13 +60,8 @@ def identify(series: ImuSeries, axes: list[str], hypotheses: dict[str, Any], sou
     out = Identification(source, dt, {}, [f"{series.topic}: {note}" for note in series.notes])
     check = static_check(series, dt, axes=tuple(axes))
     if check.flags and not allow_motion:
-        still = "" if check.still_span is None else (
-            " identify its longest still stretch alone ({:.1f}–{:.1f} s from the first sample identified; CLI: "
-            "--span),".format(*check.still_span))
-        raise InputError(f"{series.topic or 'input'} does not look static: " + "; ".join(check.flags)
-                         + ". The hypothesis bank reads every deviation as noise: record the IMU at rest, pass "
-                         "allow_motion (CLI: --allow-motion) to identify anyway (the findings then notes)," + still
-                         + " or take a still part (CLI: --span START:END)")
+        raise InputError(check.refusal(series.topic, needs="The hypothesis bank reads every deviation as noise and "
+                                       "needs the IMU at rest", verb="identify", origin_s=origin_s))
     out.notes += [f"{series.topic}: not static: {m}" for m in check.flags]
     for axis in axes:
         make, warmup = hypothesis_set_factory(hypotheses, dt, axis.split("_")[0], source)

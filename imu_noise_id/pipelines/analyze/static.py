@@ -197,16 +197,8 @@ def analyze_static(
     warnings = list(imu.notes) + timing
     check = static_check(imu, dt, axes=axes)
     if check.flags and not allow_motion:
-        within = "" if origin_s == 0.0 else (f" (the times above are from the analysed span's first sample, "
-                                             f"{origin_s:g} s into the record)")
-        still = "" if check.still_span is None else (
-            "; or analyse its longest still stretch alone: span=({0:.1f}, {1:.1f}) (CLI: --span {0:.1f}:{1:.1f})"
-            .format(*(origin_s + t for t in check.still_span)))
-        raise NotStaticError(
-            f"{imu.topic or 'input'} does not look static: " + "; ".join(check.flags) + within
-            + ". A static analysis needs the IMU at rest; pass allow_motion (CLI: --allow-motion) to analyse anyway"
-            + still
-        )
+        raise NotStaticError(check.refusal(imu.topic, needs="A static analysis needs the IMU at rest", verb="analyse",
+                                           origin_s=origin_s))
     warnings += [f"not static: {m}" for m in check.flags] + check.notes
     wanted = ["allan", *[k for k in kinds if k != "allan"]]
     # Gyro and accel separately: no (N, 6) copy of the samples (peak memory, see docs/analysis.md).
