@@ -51,6 +51,19 @@ def test_white_noise_alone_gives_an_upper_bound():
     assert not got.reached and got.tau_at_minimum == pytest.approx(100.0) and "upper bound" in got.source
 
 
+def test_an_upper_bound_is_the_upper_end_of_its_interval_as_a_walks_bound_is():
+    """A deviation still falling at the longest τ read gives no value, only a bound: B is the 95 % upper end of the
+    reading's interval and the interval starts at zero (before: the point reading with its interval above it, so
+    the '<' value printed lay below what the interval allowed)."""
+    y = simulate_sum([WN(2e-3), RW(2e-4)], 30_000, DT, np.random.default_rng(3))
+    fit = fit_model(y, DT, "WN+RW")
+    got = bias_instability(fit, 1.0)  # the minimum (about 17 s) lies beyond the τ read
+    reading = _truth(list(fit.components), 1.0)
+    assert not got.reached and got.ci95[0] == 0.0
+    assert got.value == got.ci95[1] > reading
+    assert got.method() == "model_upper_bound" and bias_instability(fit, 300.0).method() == "model_minimum"
+
+
 def test_interval_from_a_real_fit_covers_the_truth():
     truth = [WN(1e-3), RW(1e-5)]  # deviation minimum at τ = √3·N/K ≈ 173 s, inside the 360 s supported
     n = 360_000
@@ -72,7 +85,8 @@ def test_the_interval_stays_within_what_the_parameters_intervals_allow():
     got = bias_instability(fit, 1000 * DT / 10)
     highest = [WN(fit.ci95["WN.noise_density"][1]), RW(fit.ci95["RW.random_walk"][1])]
     lo, hi = got.ci95
-    assert lo < got.value < hi <= _truth(highest, 1000 * DT / 10) * (1 + 1e-3)
+    assert not got.reached and lo == 0.0 and got.value == hi  # a bound (the minimum lies beyond 1 s)
+    assert _truth(list(fit.components), 1000 * DT / 10) < hi <= _truth(highest, 1000 * DT / 10) * (1 + 1e-3)
 
 
 def test_allan_reading():

@@ -97,3 +97,35 @@ def test_the_console_prints_the_numbers_imu_yaml_pastes(analysed):
         for i, axis in enumerate(a for a in AXES if a.startswith(sensor)):
             k = doc[f"{prefix}_random_walk_xyz"][i]
             assert f"K <{k:.3e} [0.000e+00, {k:.3e}]" in lines[axis], lines[axis]  # a bound, as imu.yaml says
+
+
+def test_each_fleet_row_carries_its_own_axis_warnings_and_the_units(analysed):
+    """The fleet table's row of one axis held every axis's warnings ("gyro_x: …" on gyro_y's row): a reader counting
+    axes with warnings counted each one six times. Now a row keeps its own axis's and the unit-wide ones."""
+    result, _ = analysed
+    warnings = ["gyro_x: the random-walk slope is not reached", "accel_z: no white-noise region",
+                "not static: gyro_x: the 1 s means vary"]
+    rows = {r["axis"]: r for r in fleet_rows(Unit(Path("bag"), None, "bag"), result, warnings)}
+    assert rows["gyro_x"]["warnings"] == " | ".join([warnings[0], warnings[2]])
+    assert rows["gyro_y"]["warnings"] == warnings[2]
+    assert rows["accel_z"]["warnings"] == " | ".join(warnings[1:])
+
+
+def test_a_bound_above_a_spec_limit_is_undecided_not_failed_and_b_says_how_it_was_read(analysed):
+    """Every K here is the long-τ AV's bound (the models have no walk): a bound above the datasheet's limit says the
+    record cannot tell, not that the unit fails it (before: ``fail``); below the limit it passes. B's method column
+    says whether it is the model's minimum or a bound, as imu.yaml does."""
+    from imu_noise_id.report.fleet import COLUMNS, annotate
+
+    result, out = analysed
+    doc = yaml.safe_load((out / "imu.yaml").read_text())
+    rows = {r["axis"]: r for r in fleet_rows(Unit(Path("bag"), None, "bag"), result, [])}
+    assert "bias_instability_method" in COLUMNS
+    assert [rows[a]["bias_instability_method"] for a in GYRO_AXES] == doc["gyroscope_bias_instability_method_xyz"]
+    walk = rows["gyro_x"]["random_walk"]
+    assert rows["gyro_x"]["random_walk_method"] == "bound"
+    below, above = (annotate([rows["gyro_x"]], {"gyro": {"random_walk": limit}})[0]["spec"]
+                    for limit in (0.5 * walk, 2.0 * walk))
+    assert below == "undecided (random_walk)" and above == "pass"
+    measured = dict(rows["gyro_x"], random_walk_method="model", random_walk_lo=0.8 * walk)
+    assert annotate([measured], {"gyro": {"random_walk": 0.5 * walk}})[0]["spec"] == "fail (random_walk)"

@@ -14,6 +14,7 @@ import uuid
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from ..core.axes import AXES
 from ..core.errors import InputError
 from ..report.numbers import num
 from .units import BatchOptions, Unit, content_hash
@@ -40,14 +41,17 @@ def _num(x: float | None) -> float | None:
 
 
 def fleet_rows(unit: Unit, result, warnings: list[str], beyond: dict | None = None) -> list[dict]:
-    """One row per axis: imu.yaml's per-axis N and K with intervals and methods (``result.numbers``), B, the loop, and
-    ``beyond`` (axis → NoiseLevel of the test against the spec's limit): the density over the limit and, when the test
-    holds the axis beyond it, since when [s]."""
+    """One row per axis: imu.yaml's per-axis N and K with intervals and methods (``result.numbers``), B with its method,
+    the loop, the ``warnings`` of that axis and of the whole unit (those naming another axis, "gyro_x: …", left out),
+    and ``beyond`` (axis → NoiseLevel of the test against the spec's limit): the density over the limit and, when the
+    test holds the axis beyond it, since when [s]."""
     rows = []
     for axis in result.static.axes:
+        others = tuple(f"{other}: " for other in AXES if other != axis)
         row = {"bag": str(unit.bag), "topic": result.static.topic, "unit": unit.name, "axis": axis,
                "status": "ok", "error": "", "rate_hz": _num(num(result.static.rate_hz)),
-               "duration_s": _num(result.static.duration_s), "warnings": " | ".join(warnings)}
+               "duration_s": _num(result.static.duration_s),
+               "warnings": " | ".join(w for w in warnings if not w.startswith(others))}
         pasted = result.numbers.axis(axis)
         n, k = pasted.noise_density, pasted.random_walk
         row |= {"noise_density": _num(n.value), "noise_density_lo": _num(n.ci95[0]),
@@ -58,10 +62,11 @@ def fleet_rows(unit: Unit, result, warnings: list[str], beyond: dict | None = No
         if final is not None:
             b = final.bias_instability
             row |= {"model": final.model, "bias_instability": _num(b.value), "bias_instability_lo": _num(b.ci95[0]),
-                    "bias_instability_hi": _num(b.ci95[1]), "source": final.source}
+                    "bias_instability_hi": _num(b.ci95[1]), "bias_instability_method": b.method(),
+                    "source": final.source}
         else:
             row |= {"model": "allan", "bias_instability": None, "bias_instability_lo": None,
-                    "bias_instability_hi": None, "source": "Allan slopes"}
+                    "bias_instability_hi": None, "bias_instability_method": None, "source": "Allan slopes"}
         loop = result.loops.get(axis)
         row |= {"loop_verdict": loop.verdict if loop else "", "loop_passed": bool(loop.passed) if loop else None}
         level = (beyond or {}).get(axis)

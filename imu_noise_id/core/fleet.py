@@ -28,14 +28,14 @@ def modified_z(values: np.ndarray) -> np.ndarray:
     return out
 
 
-def spec_verdict(value: float | None, ci_high: float | None, limit: float) -> tuple[str, float]:
-    """(``pass`` (``ci_high`` below ``limit``), ``undecided`` (only the value below), ``fail`` or ``missing``; margin
-    limit/value − 1)."""
+def spec_verdict(value: float | None, ci_high: float | None, limit: float, *, bound: bool = False) -> tuple[str, float]:
+    """(``pass`` (``ci_high`` below ``limit``), ``undecided`` (only the value below, or ``value`` an upper ``bound``
+    above the limit: the record cannot tell), ``fail`` or ``missing``; margin limit/value − 1)."""
     if value is None or not math.isfinite(value) or value <= 0:
         return "missing", math.nan
     margin = limit / value - 1.0
     if value > limit:
-        return "fail", margin
+        return ("undecided" if bound else "fail"), margin
     if ci_high is not None and math.isfinite(ci_high) and ci_high > limit:
         return "undecided", margin
     return "pass", margin

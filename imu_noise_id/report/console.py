@@ -13,7 +13,7 @@ from ..core.noise.components import RW
 from ..core.noise.modelspec import parameter_labels
 from ..pipelines.analyze.final import FinalModel
 from ..pipelines.analyze.models import AxisModel
-from ..pipelines.analyze.numbers import PastedNumbers, axis_readings
+from ..pipelines.analyze.numbers import UPPER_BOUND_METHODS, PastedNumbers, axis_readings
 from ..pipelines.analyze.overbound import ALLAN_SLOPES, AxisOverbound
 from ..pipelines.analyze.static import StaticAnalysis
 from ..pipelines.av_band import av_band_claim
@@ -84,10 +84,6 @@ def allan_disagreement_lines(result: StaticAnalysis, numbers: PastedNumbers) -> 
                              f"alone, the final model{model} is fitted to the whole record; imu.yaml pastes the final "
                              "model's, *_allan_xyz keeps the slope's")
     return lines
-
-
-#: The methods whose value is an upper bound (its interval (0, value)).
-UPPER_BOUND_METHODS = ("bound", "unresolved", "allan_upper_bound", "upper_bound")
 
 
 def _reading_text(value: float | None, ci95: tuple[float, float], method: str) -> str:

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.fleet import OUTLIER_Z, modified_z, spec_verdict
+from ..pipelines.analyze.numbers import UPPER_BOUND_METHODS
 from .html import STYLE, fmt, img_tag
 from .layout import fix_margins
 from .png import png_bytes
@@ -20,10 +21,10 @@ from .png import png_bytes
 PARAMETERS = ("noise_density", "random_walk", "bias_instability")
 COLUMNS = ("unit", "bag", "topic", "axis", "status", "error", "model", "noise_density", "noise_density_lo",
            "noise_density_hi", "noise_density_method", "random_walk", "random_walk_lo", "random_walk_hi",
-           "random_walk_method", "bias_instability",
-           "bias_instability_lo", "bias_instability_hi", "source", "loop_passed", "loop_verdict", "rate_hz",
-           "duration_s", "warnings", "noise_density_z", "random_walk_z", "bias_instability_z", "outlier",
-           "spec", "spec_margin", "noise_spec_ratio", "noise_beyond_spec_since_s")
+           "random_walk_method", "bias_instability", "bias_instability_lo", "bias_instability_hi",
+           "bias_instability_method", "source", "loop_passed", "loop_verdict", "rate_hz", "duration_s", "warnings",
+           "noise_density_z", "random_walk_z", "bias_instability_z", "outlier", "spec", "spec_margin",
+           "noise_spec_ratio", "noise_beyond_spec_since_s")
 
 
 def annotate(rows: list[dict], spec: dict | None) -> list[dict]:
@@ -39,7 +40,9 @@ def annotate(rows: list[dict], spec: dict | None) -> list[dict]:
         flagged = [p for p in PARAMETERS if r.get(f"{p}_z") is not None and abs(r[f"{p}_z"]) > OUTLIER_Z]
         r["outlier"] = ",".join(flagged)
         limits = (spec or {}).get((r.get("axis") or "").split("_")[0], {})
-        verdicts = [(p, *spec_verdict(r.get(p), r.get(f"{p}_hi"), float(limit))) for p, limit in limits.items()]
+        verdicts = [(p, *spec_verdict(r.get(p), r.get(f"{p}_hi"), float(limit),
+                                      bound=r.get(f"{p}_method") in UPPER_BOUND_METHODS))
+                    for p, limit in limits.items()]
         if r.get("noise_beyond_spec_since_s") is not None:  # the sequential test (compare --spec) holds it beyond
             verdicts.append(("noise_density beyond the limit from "
                              f"{r['noise_beyond_spec_since_s']:.0f} s, {r['noise_spec_ratio']:.3g}× it", "fail",

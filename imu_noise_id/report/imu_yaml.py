@@ -68,11 +68,10 @@ def _sensor_keys(s: SensorNumbers) -> dict:
     key = f"{s.prefix}_bias_instability"
     doc[f"{key}_xyz"] = [num(m.bias_instability.value) for m in models]
     doc[f"{key}_ci_xyz"] = [_pair(m.bias_instability.ci95) for m in models]
-    doc[f"{key}_method_xyz"] = ["model_minimum" if m.bias_instability.reached else "model_upper_bound" for m in models]
+    doc[f"{key}_method_xyz"] = [m.bias_instability.method() for m in models]
     doc[f"{key}_tau_xyz"] = [num(m.bias_instability.tau_at_minimum) for m in models]
     doc[f"{key}_allan_xyz"] = [num(m.bias_instability_allan.value) for m in models]
-    doc[f"{key}_allan_method_xyz"] = ["allan_minimum" if m.bias_instability_allan.reached else "allan_upper_bound"
-                                      for m in models]
+    doc[f"{key}_allan_method_xyz"] = [m.bias_instability_allan.method("allan") for m in models]
     doc[f"{s.prefix}_final_model_xyz"] = [m.name for m in models]
     return doc
 
@@ -144,7 +143,8 @@ def header(result: StaticAnalysis, with_models: bool) -> list[str]:
             "# sensor's own low-pass cuts below the Nyquist frequency.",
             "# *_bias_instability_xyz [rad/s or m/s^2]: min of the final model's Allan deviation (vibration lines left",
             "# out) / 0.664 (IEEE 952), at *_tau_xyz, with a 95 % interval from the fit's parameter uncertainty;",
-            "# method model_upper_bound: the deviation still falls at a tenth of the record (not reached).",
+            "# method model_upper_bound: the deviation still falls at a tenth of the record (not reached): the value",
+            "# is the 95 % upper end of that reading, its interval [0, value].",
             "# *_bias_instability_allan_xyz: the same reading off the data's Allan deviation (no interval).",
         ]
     lines += [

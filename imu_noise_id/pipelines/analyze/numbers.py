@@ -33,6 +33,9 @@ KALIBR_PREFIX = {"gyro": "gyroscope", "accel": "accelerometer"}
 PARAMETERS = ("noise_density", "random_walk")
 #: The methods of a number that is an Allan slope's reading (its own, or standing in for a model without it).
 ALLAN_METHODS = ("fit", "upper_bound", "allan_slope", "allan_upper_bound")
+#: The methods whose value is an upper bound, its interval (0, value): a K or N the record does not resolve, and a
+#: bias instability whose Allan minimum lies beyond the τ read (``BiasInstability.method``).
+UPPER_BOUND_METHODS = ("bound", "unresolved", "allan_upper_bound", "upper_bound", "model_upper_bound")
 
 
 @dataclass(frozen=True)

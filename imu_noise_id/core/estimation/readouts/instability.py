@@ -1,10 +1,11 @@
 """Bias instability B [u] from a fitted model, with its interval, and from the AV.
 
 IEEE Std 952: σ_min = √(2 ln 2/π)·B ≈ 0.664 B on the Allan deviation's flat bottom. From the model (beyond the
-papers): B = min_τ σ_model(τ)/0.664 over τ ≤ ``tau_max``, narrow OSCs and regressors left out; an upper bound
-(``reached = False``) when σ_model still falls there. With a BI component B is its parameter. Interval: 2.5/97.5 %
-quantiles of B over log-parameters drawn from N(θ̂, Σ) (unidentified ones held; one not resolved from zero held
-below its interval's upper end)."""
+papers): B = min_τ σ_model(τ)/0.664 over τ ≤ ``tau_max``, narrow OSCs and regressors left out. With a BI component B
+is its parameter. Interval: 2.5/97.5 % quantiles of B over log-parameters drawn from N(θ̂, Σ) (unidentified ones held;
+one not resolved from zero held below its interval's upper end). Where σ_model still falls at ``tau_max``
+(``reached = False``) the minimum lies beyond the record and the data give only a bound: B is then the 95 % upper end
+of that reading and its interval (0, B), as a random walk's bound is."""
 
 from __future__ import annotations
 
@@ -36,6 +37,10 @@ class BiasInstability:
     reached: bool
     source: str
 
+    def method(self, reading: str = "model") -> str:
+        """``<reading>_minimum``, or ``<reading>_upper_bound`` where the minimum was not reached (imu.yaml's names)."""
+        return f"{reading}_minimum" if self.reached else f"{reading}_upper_bound"
+
 
 def _tau_grid(dt: float, tau_max: float) -> np.ndarray:
     return np.geomspace(dt, max(tau_max, 2.0 * dt), 2000)
@@ -61,9 +66,12 @@ def bias_instability(fit: FitResult, tau_max: float, *, seed: int = 0) -> BiasIn
     value, tau_min, reached = _minimum(list(fit.components), fit.dt, tau)
     source = (f"minimum of the model's Allan deviation (without narrow {', '.join(NOT_BIAS)}) / "
               f"{FLICKER_FACTOR:.3f}")
+    interval = _interval(fit, tau, seed)
     if not reached:
-        source += f"; still falling at τ = {tau_max:.3g} s: an upper bound"
-    return BiasInstability(value, _interval(fit, tau, seed), tau_min, reached, source)
+        source += f"; still falling at τ = {tau_max:.3g} s: an upper bound, the 95 % upper end of that reading"
+        value = interval[1] if math.isfinite(interval[1]) else value
+        interval = (0.0, interval[1])
+    return BiasInstability(value, interval, tau_min, reached, source)
 
 
 def _interval(fit: FitResult, tau: np.ndarray, seed: int) -> tuple[float, float]:
