@@ -107,17 +107,28 @@ def _neighbour_intervals(t: np.ndarray, index: np.ndarray) -> np.ndarray:
     return d[neighbours] if neighbours.any() else d / np.maximum(steps, 1)
 
 
-def _lattice(intervals: np.ndarray) -> tuple[float, bool]:
-    """(period, whether the intervals are whole multiples of a step within :data:`LATTICE_TOLERANCE`)."""
+def _median_interval(intervals: np.ndarray, resolution: float) -> float:
+    """The median of ``intervals`` [s], read below the stamps' float ``resolution`` [s]: stamps since 1970 in float64
+    seconds are rounded to 2.4·10⁻⁷ s, so their intervals take whole multiples of it and the median lands on one (a
+    200 Hz record read 199.995 Hz); the mean of the intervals within two such steps of the median (the rounded values on
+    both sides of the true one, whose roundings cancel on average) is not bound to the step."""
+    median = float(np.median(intervals))
+    near = intervals[np.abs(intervals - median) <= 2.0 * resolution]
+    return float(np.mean(near)) if near.size else median
+
+
+def _lattice(intervals: np.ndarray, resolution: float) -> tuple[float, bool]:
+    """(period, whether the intervals are whole multiples of a step within :data:`LATTICE_TOLERANCE`); ``resolution``
+    [s] the stamps' float step (:func:`_median_interval`)."""
     step = float(np.quantile(intervals, 0.1))
     if not step > 0:
-        return float(np.median(intervals)), False
+        return _median_interval(intervals, resolution), False
     ratio = intervals / step
     whole = np.rint(ratio)
     near = (np.abs(ratio - whole) < LATTICE_TOLERANCE) & (whole >= 1)
     on_lattice = bool(np.mean(near) >= LATTICE_FRACTION)
     ones = intervals[near & (whole == 1)]
-    return (float(np.median(ones)) if on_lattice and ones.size else float(np.median(intervals))), on_lattice
+    return _median_interval(ones if on_lattice and ones.size else intervals, resolution), on_lattice
 
 
 def _halves(t: np.ndarray, index: np.ndarray) -> tuple[float, float] | None:
@@ -153,7 +164,7 @@ def estimate_period(
     intervals = _neighbour_intervals(t, index)
     regression = _lag_slope(t, index)
     span = (t[-1] - t[0]) / (index[-1] - index[0]) if index[-1] > index[0] else float("nan")
-    single, on_lattice = _lattice(intervals)
+    single, on_lattice = _lattice(intervals, float(np.spacing(max(abs(t[0]), abs(t[-1])))))
     estimates = {"median_interval": single, "index_regression": regression, "span_count": float(span)}
     reference = regression if np.isfinite(regression) and regression > 0 else single
     bunched = float(np.mean(intervals < 0.5 * reference))
