@@ -138,6 +138,32 @@ def test_a_short_record_gives_k_as_a_bound_at_or_above_the_truth_and_says_so():
     assert "(the final model has no random walk: the long-τ AV bounds it)" in final_table({"gyro_x": no_walk})
 
 
+def test_the_final_models_table_keeps_its_columns_beside_a_long_model_name():
+    """A measured axis's final model (WN+MA+GM+5OSC+RW+2STEP+OUTLIERS, 31 characters) pushed its row's N, K and B
+    columns past the others' (the name's column was 22 wide); the record-length lines too."""
+    from dataclasses import replace
+
+    from imu_noise_id.core.axes import ImuSeries
+    from imu_noise_id.core.noise.components import RW, WN, simulate_sum
+    from imu_noise_id.pipelines.analyze.final import final_model
+    from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
+    from imu_noise_id.report.console import final_table, record_length_lines
+
+    dt = 0.01
+    y = simulate_sum([WN(1e-3), RW(1e-4)], 30_000, dt, np.random.default_rng(5))
+    data = np.column_stack([y] * 6)
+    imu = ImuSeries(np.arange(y.size) * dt, data[:, :3], data[:, 3:])
+    from imu_noise_id.core.allan import allan_variance
+
+    allan = allan_variance(y, dt)
+    final = final_model(fit_axis(imu, "gyro_x", ModelStage("WN+RW"), dt, allan).fit, None, allan)
+    long_name = "WN+MA+GM+5OSC+RW+2STEP+OUTLIERS"
+    rows = final_table({"gyro_x": final, "gyro_y": replace(final, model=long_name)}).splitlines()[1:3]
+    assert long_name in rows[1] and rows[0].index(" N ") == rows[1].index(" N ")
+    lines = record_length_lines({"gyro_x": final.fit, "gyro_y": final.fit}, names={"gyro_y": long_name})[1:]
+    assert len(lines) == 2 and lines[0].index(" now ") == lines[1].index(" now ")
+
+
 def test_a_final_model_without_a_walk_gives_the_datas_long_tau_bound(tmp_path):
     """A final model without a random walk gives as K the largest walk the data's long-τ AV supports (method
     ``bound``, interval [0, bound]) with the τ range it was read over; the Allan-slope reading stays beside it as

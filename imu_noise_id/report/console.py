@@ -4,6 +4,7 @@ recording-length advice and the overbound."""
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 
 from ..core.axes import AXES, UNITS
 from ..core.estimation.em.mle import physical_bounds
@@ -95,6 +96,15 @@ def _reading_text(value: float | None, ci95: tuple[float, float], method: str) -
     return f"{mark}{_fmt(value)} [{_fmt(ci95[0])}, {_fmt(ci95[1])}]{named}"
 
 
+#: The least width of a table's model-name column (longer names widen it for every row).
+NAME_WIDTH = 22
+
+
+def _name_width(names: Iterable[str]) -> int:
+    """The model-name column's width: :data:`NAME_WIDTH`, or the longest of ``names``."""
+    return max([NAME_WIDTH, *(len(name) for name in names)])
+
+
 def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = None,
                 numbers: PastedNumbers | None = None) -> str:
     """Per axis the final model, N and K with 95 % intervals as imu.yaml pastes them (``numbers``, the analysis's;
@@ -102,6 +112,7 @@ def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = N
     reason."""
     lines = ["Final models (imu.yaml's numbers; N = passband white noise, K = random walk, B = bias instability, "
              "'<' an upper bound; 95 % intervals):"]
+    width = _name_width(f.model for f in finals.values())
     for axis, f in finals.items():
         pasted = numbers.axis(axis) if numbers is not None and axis in AXES else None
         n, k = (pasted.noise_density, pasted.random_walk) if pasted is not None else (f.noise_density, f.random_walk)
@@ -109,7 +120,7 @@ def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = N
         k_text = _reading_text(k.value, k.ci95, k.method)
         b = f.bias_instability
         b_text = ("" if b.reached else "<") + f"{_fmt(b.value)} [{_fmt(b.ci95[0])}, {_fmt(b.ci95[1])}]"
-        lines.append(f"{axis:8s} {f.model:22s} N {n_text:34s} K {k_text:34s} B {b_text}")
+        lines.append(f"{axis:8s} {f.model:{width}s} N {n_text:34s} K {k_text:34s} B {b_text}")
     lines += [f"{axis:8s} K flagged: {f.random_walk.source}" for axis, f in finals.items() if f.random_walk_above_bound]
     lines += [f"{axis:8s} K's interval spans the structures the data cannot tell apart: "
               + "; ".join(r.describe() for r in f.walk_readings) for axis, f in finals.items() if f.walk_readings]
@@ -281,6 +292,7 @@ def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None
     of a value the data cannot tell from zero, or without an upper end, is no finite record's. ``names``: the model's
     name per axis where it is not the fit's own."""
     lines = []
+    width = _name_width((names or {}).get(axis, fit.model) for axis, fit in fits.items())
     for axis, fit in fits.items():
         advice = fit.record_length
         if advice is None or not advice.needed_s:
@@ -300,7 +312,7 @@ def record_length_lines(fits: dict[str, FitResult], names: dict[str, str] | None
                  "every parameter resolved from zero" if from_zero else "every parameter")
         left_out = (f"; not resolved from zero, left out: {', '.join(from_zero)}" if from_zero else "") + \
             (f"; no upper end, left out: {', '.join(unbounded)}" if unbounded else "")
-        lines.append(f"{axis:8s} {name:22s} now {_duration(advice.current_s)}: {verdict} for +-"
+        lines.append(f"{axis:8s} {name:{width}s} now {_duration(advice.current_s)}: {verdict} for +-"
                      f"{100 * advice.target:.0f} % on {which} (hardest: {label}, now +-"
                      f"{100 * advice.relative_halfwidth[label]:.0f} %){bound}{left_out}")
     if lines:
