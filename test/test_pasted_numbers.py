@@ -129,3 +129,19 @@ def test_a_bound_above_a_spec_limit_is_undecided_not_failed_and_b_says_how_it_wa
     assert below == "undecided (random_walk)" and above == "pass"
     measured = dict(rows["gyro_x"], random_walk_method="model", random_walk_lo=0.8 * walk)
     assert annotate([measured], {"gyro": {"random_walk": 0.5 * walk}})[0]["spec"] == "fail (random_walk)"
+
+
+def test_the_report_marks_the_bounds_the_console_marks(analysed):
+    """report.html printed a K bound as '4.874e-05 [0, 4.874e-05]' where the console says 'K <4.874e-05 …': the
+    numbers-to-paste table now puts '<' before every value that is an upper bound, N and K as pasted."""
+    import html
+
+    from imu_noise_id.report.html import fmt
+
+    _, out = analysed
+    report = html.unescape((out / "report.html").read_text())
+    doc = yaml.safe_load((out / "imu.yaml").read_text())
+    for sensor, prefix in (("gyro", "gyroscope"), ("accel", "accelerometer")):
+        for i, _ in enumerate(a for a in AXES if a.startswith(sensor)):
+            k = doc[f"{prefix}_random_walk_xyz"][i]
+            assert f"<td>< {fmt(k)} [0, {fmt(k)}]</td>" in report

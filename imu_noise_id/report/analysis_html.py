@@ -14,12 +14,19 @@ import numpy as np
 from ..core.allan.slopes import SlopeComponent
 from ..core.axes import AXES, UNITS
 from ..pipelines.analyze import AnalysisResult
+from ..pipelines.analyze.numbers import UPPER_BOUND_METHODS
 from .html import LOOP_INTRO, STYLE, fmt, img_tag, loop_axis_section
 from .plots_model import allan_panel_png
 
 
 def _ci(value: float | None, ci: tuple[float, float]) -> str:
     return "n/a" if value is None else f"{fmt(value)} [{fmt(ci[0])}, {fmt(ci[1])}]"
+
+
+def _pasted(value: float | None, ci: tuple[float, float], method: str) -> str:
+    """:func:`_ci`, with '< ' before an upper bound (:data:`~..pipelines.analyze.numbers.UPPER_BOUND_METHODS`), as
+    the console prints it."""
+    return f"< {_ci(value, ci)}" if value is not None and method in UPPER_BOUND_METHODS else _ci(value, ci)
 
 
 def _data_section(result: AnalysisResult, meta: dict) -> str:
@@ -59,8 +66,9 @@ def _numbers_section(result: AnalysisResult) -> str:
         slopes = result.static.slopes[axis]
         b = f.bias_instability
         pasted = numbers.axis(axis) if numbers is not None and axis in AXES else None
-        k = pasted.random_walk if pasted is not None else f.random_walk
-        k_text = _ci(k.value, k.ci95) if k.value is not None else "not identifiable (no RW in the final model)"
+        n, k = (pasted.noise_density, pasted.random_walk) if pasted is not None else (f.noise_density, f.random_walk)
+        k_text = (_pasted(k.value, k.ci95, k.method) if k.value is not None
+                  else "not identifiable (no RW in the final model)")
         if k.method.startswith("allan"):
             k_text = f"{k_text} ({k.method}: the final model has no random walk)"
         if f.random_walk_above_bound:
@@ -69,7 +77,7 @@ def _numbers_section(result: AnalysisResult) -> str:
         rows.append(
             f"<tr><td class=l>{axis} [{UNITS.get(axis, 'u')}]</td><td class=l>{html.escape(f.model)} "
             f"<span class=small>({html.escape(f.source)})</span></td>"
-            f"<td>{_ci(f.noise_density.value, f.noise_density.ci95)}</td>"
+            f"<td>{html.escape(_pasted(n.value, n.ci95, n.method))}</td>"
             f"<td{' class=warn' if f.random_walk_above_bound else ''}>{html.escape(k_text)}</td>"
             f"<td>{'' if b.reached else '&lt; '}{_ci(b.value, b.ci95)} <span class=small>at τ = "
             f"{fmt(b.tau_at_minimum, '.3g')} s</span></td><td>{fmt(f.noise_stddev_per_sample)}</td>"
@@ -82,16 +90,18 @@ def _numbers_section(result: AnalysisResult) -> str:
             "corner); "
             "narrow oscillations (OSC), sinusoids, GMs, "
             "flicker noise (BI), temperature and the shape of the sensor's own filter are kept out of N and K. "
-            "Where the final model has no random walk, imu.yaml gives the Allan-slope reading (marked). "
+            "'&lt;' before N or K: an upper bound the record gives where it does not resolve the value, its "
+            "interval [0, value]. Where the final model has no random walk, imu.yaml gives the Allan-slope reading "
+            "(marked). "
             "An Allan-slope reading marked ≠ has a 95 % interval that does not overlap the pasted number's: the slope "
             "line takes the Allan variance over its τ range as white noise and a walk alone, while the final model is "
             "fitted to the whole record (a walk read through a GM's bump reads high). "
             "B = the flicker component's bias instability when the model has one, else min of the model's Allan "
             "deviation without vibration lines / 0.664 ('&lt;': still falling at a tenth of the record, an upper "
-            "bound). The Kalibr keys of imu.yaml are the max of N and K over each sensor's three axes. A K above the "
-            "long-τ AV's bound (the largest random walk the data's AV at τ beyond a tenth of the record supports, "
-            "95 % simultaneous) is flagged: a bounded wander fits the record as well, and only a longer record "
-            "tells them apart.</p>")
+            "bound, its interval [0, B]). The Kalibr keys of imu.yaml are the max of N and K over each sensor's "
+            "three axes. A K above the long-τ AV's bound (the largest random walk the data's AV at τ beyond a tenth "
+            "of the record supports, 95 % simultaneous) is flagged: a bounded wander fits the record as well, and "
+            "only a longer record tells them apart.</p>")
     return f"<h2 id=numbers>The numbers to paste</h2><table>{head}{''.join(rows)}</table>{note}"
 
 
