@@ -145,3 +145,15 @@ def test_the_report_marks_the_bounds_the_console_marks(analysed):
         for i, _ in enumerate(a for a in AXES if a.startswith(sensor)):
             k = doc[f"{prefix}_random_walk_xyz"][i]
             assert f"<td>< {fmt(k)} [0, {fmt(k)}]</td>" in report
+
+
+def test_the_spec_verdict_names_the_parameter_its_margin_is_of():
+    """A unit beyond the datasheet on N by 4 % and on B by 40 % read 'fail (noise_density)' with margin -0.40: the
+    verdict named the first failing parameter and the margin was another's. It now names the one furthest beyond."""
+    from imu_noise_id.report.fleet import annotate
+
+    row = {"unit": "u", "axis": "gyro_y", "status": "ok", "noise_density": 7.53e-4, "noise_density_hi": 7.6e-4,
+           "noise_density_method": "model", "bias_instability": 3.36e-4, "bias_instability_hi": 3.9e-4,
+           "bias_instability_method": "model_minimum"}
+    got = annotate([row], {"gyro": {"noise_density": 7.2e-4, "bias_instability": 2.0e-4}})[0]
+    assert got["spec"] == "fail (bias_instability)" and got["spec_margin"] == pytest.approx(2.0 / 3.36 - 1.0)

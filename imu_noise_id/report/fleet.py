@@ -49,7 +49,8 @@ def annotate(rows: list[dict], spec: dict | None) -> list[dict]:
                              math.nan))
         if verdicts:
             order = {"fail": 0, "undecided": 1, "missing": 2, "pass": 3}
-            worst = min(verdicts, key=lambda v: order[v[1]])
+            # the worst verdict, and among equals the parameter furthest beyond its limit (the margin shown)
+            worst = min(verdicts, key=lambda v: (order[v[1]], v[2] if math.isfinite(v[2]) else math.inf))
             r["spec"] = worst[1] if worst[1] == "pass" else f"{worst[1]} ({worst[0]})"
             r["spec_margin"] = min((v[2] for v in verdicts if math.isfinite(v[2])), default=None)
     return out
@@ -88,7 +89,9 @@ UNITS = {"noise_density": ("rad/s/√Hz", "m/s²/√Hz"), "random_walk": ("rad/s
 
 def spread_figure(rows: list[dict], parameter: str) -> object:
     """The spread of ``parameter`` across units: one panel per sensor (gyro, accelerometer), each on its own axis in
-    its own unit (:data:`UNITS`), one column of points per axis, outliers red."""
+    its own unit (:data:`UNITS`), one column of points per axis, outliers red, a value that is an upper bound (its
+    ``<parameter>_method`` in :data:`~..pipelines.analyze.numbers.UPPER_BOUND_METHODS`) an open downward triangle
+    (collection label ``upper bound``) beside the measured values' dots."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -100,19 +103,32 @@ def spread_figure(rows: list[dict], parameter: str) -> object:
                                           ("accelerometer", "accel", UNITS[parameter][1]))]
     sensors = [s for s in sensors if s[2]]
     fig, panels = plt.subplots(1, len(sensors), figsize=(7.5, 3.6), squeeze=False)
+    bounds = False
     for ax, (name, unit, axes) in zip(panels[0], sensors, strict=True):
         for i, axis in enumerate(axes):
-            vals = [(r[parameter], bool(r.get("outlier") and parameter in r["outlier"])) for r in rows
+            vals = [(r[parameter], bool(r.get("outlier") and parameter in r["outlier"]),
+                     r.get(f"{parameter}_method") in UPPER_BOUND_METHODS) for r in rows
                     if r.get("axis") == axis and r.get(parameter)]
             x = np.full(len(vals), i) + np.linspace(-0.15, 0.15, len(vals))
-            ax.scatter(x, [v for v, _ in vals], c=["C3" if o else "C0" for _, o in vals], s=18)
+            for bound in (False, True):
+                keep = [j for j, v in enumerate(vals) if v[2] == bound]
+                if not keep:
+                    continue
+                colours = ["C3" if vals[j][1] else "C0" for j in keep]
+                ax.scatter(x[keep], [vals[j][0] for j in keep], s=18, marker="v" if bound else "o",
+                           facecolors="none" if bound else colours, edgecolors=colours,
+                           label="upper bound" if bound else "value")
+                bounds = bounds or bound
         ax.set_yscale("log")
         ax.set_xticks(range(len(axes)), axes, fontsize=8)
+        ax.tick_params(axis="y", which="both", labelsize=7)
         ax.set_ylabel(f"{parameter} [{unit}]", fontsize=8)
         ax.set_title(name, fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
-    fig.suptitle(f"{parameter} across units (red: outlier, |modified z| > {OUTLIER_Z})", fontsize=9)
-    fix_margins(fig)
+    marks = "; open triangle: upper bound" if bounds else ""
+    fig.suptitle(f"{parameter} across units (red: outlier, |modified z| > {OUTLIER_Z}{marks})", fontsize=9)
+    # log axes spanning less than a decade label their minor ticks (3.8×10⁻⁴): room for them and the y label
+    fix_margins(fig, suptitle=True, left=1.15, wspace=1.3)
     return fig
 
 
