@@ -113,20 +113,26 @@ def test_a_walk_whose_interval_has_no_upper_end_takes_the_datas_bound():
     assert unmodelled_as_bound(finite, bound) is finite
 
 
-def test_a_short_record_gives_k_as_a_bound_at_or_above_the_truth_and_says_so():
+def _final_models(y: np.ndarray, dt: float, *structures: str) -> list:
+    """The final model (no loop) of each of ``structures`` fitted to ``y`` as gyro_x, as ``analyze`` builds it."""
     from imu_noise_id.core.allan import allan_variance
     from imu_noise_id.core.axes import ImuSeries
-    from imu_noise_id.core.noise.components import RW, WN, simulate_sum
     from imu_noise_id.pipelines.analyze.final import final_model
     from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
+
+    data = np.column_stack([y] * 6)
+    imu = ImuSeries(np.arange(y.size) * dt, data[:, :3], data[:, 3:])
+    allan = allan_variance(y, dt)
+    return [final_model(fit_axis(imu, "gyro_x", ModelStage(s), dt, allan).fit, None, allan) for s in structures]
+
+
+def test_a_short_record_gives_k_as_a_bound_at_or_above_the_truth_and_says_so():
+    from imu_noise_id.core.noise.components import RW, WN, simulate_sum
     from imu_noise_id.report.console import final_table
 
     dt = 0.005
     y = simulate_sum([WN(1e-3), RW(1e-5)], 120_000, dt, np.random.default_rng(3))
-    data = np.column_stack([y] * 6)
-    imu = ImuSeries(np.arange(y.size) * dt, data[:, :3], data[:, 3:])
-    allan = allan_variance(y, dt)
-    final = final_model(fit_axis(imu, "gyro_x", ModelStage("WN+RW"), dt, allan).fit, None, allan)
+    final, no_walk = _final_models(y, dt, "WN+RW", "WN")
     k = final.random_walk
     assert k.method == "bound" and k.ci95 == (0.0, k.value) and k.value >= 1e-5
     assert not final.random_walk_above_bound
@@ -134,7 +140,6 @@ def test_a_short_record_gives_k_as_a_bound_at_or_above_the_truth_and_says_so():
     assert "K <" in printed and "K not identified by this 10 min record" in printed
     # the reason that applies, not a list of the possible ones
     assert "(its 95 % interval reaches zero)" in printed and ", or " not in printed
-    no_walk = final_model(fit_axis(imu, "gyro_x", ModelStage("WN"), dt, allan).fit, None, allan)
     assert "(the final model has no random walk: the long-τ AV bounds it)" in final_table({"gyro_x": no_walk})
 
 
@@ -143,20 +148,11 @@ def test_the_final_models_table_keeps_its_columns_beside_a_long_model_name():
     columns past the others' (the name's column was 22 wide); the record-length lines too."""
     from dataclasses import replace
 
-    from imu_noise_id.core.axes import ImuSeries
     from imu_noise_id.core.noise.components import RW, WN, simulate_sum
-    from imu_noise_id.pipelines.analyze.final import final_model
-    from imu_noise_id.pipelines.analyze.models import ModelStage, fit_axis
     from imu_noise_id.report.console import final_table, record_length_lines
 
     dt = 0.01
-    y = simulate_sum([WN(1e-3), RW(1e-4)], 30_000, dt, np.random.default_rng(5))
-    data = np.column_stack([y] * 6)
-    imu = ImuSeries(np.arange(y.size) * dt, data[:, :3], data[:, 3:])
-    from imu_noise_id.core.allan import allan_variance
-
-    allan = allan_variance(y, dt)
-    final = final_model(fit_axis(imu, "gyro_x", ModelStage("WN+RW"), dt, allan).fit, None, allan)
+    (final,) = _final_models(simulate_sum([WN(1e-3), RW(1e-4)], 30_000, dt, np.random.default_rng(5)), dt, "WN+RW")
     long_name = "WN+MA+GM+5OSC+RW+2STEP+OUTLIERS"
     rows = final_table({"gyro_x": final, "gyro_y": replace(final, model=long_name)}).splitlines()[1:3]
     assert long_name in rows[1] and rows[0].index(" N ") == rows[1].index(" N ")
