@@ -47,7 +47,9 @@ def test_openvins_is_kalibrs_imu_chain_with_continuous_densities(tmp_path):
     imu0 = doc["imu0"]
     assert imu0["model"] == "kalibr" and imu0["T_i_b"] == [[float(i == j) for j in range(4)] for i in range(4)]
     assert imu0["gyroscope_noise_density"] == DOC["gyroscope_noise_density"] and imu0["update_rate"] == 200.0
-    assert "continuous-time" in text and "allan_upper_bound" in text  # the convention and the caveat are stated
+    assert "continuous-time" in text  # the convention is stated
+    # accel_y's walk is a bound, but the pasted maximum is accel_x's model value: no caveat on it
+    assert "Note: accelerometer_random_walk" not in text
 
 
 def test_orbslam3_settings_are_continuous_time(tmp_path):
@@ -88,7 +90,17 @@ def test_kalibr_is_kalibrs_own_imu_yaml(tmp_path):
     # Kalibr's discretisation, as ConfigReader does it: N / sqrt(1 / update_rate)
     sigma_d = doc["gyroscope_noise_density"] / math.sqrt(1.0 / doc["update_rate"])
     assert sigma_d == pytest.approx(1.7e-4 * math.sqrt(200))
-    assert "continuous-time" in text and "allan_upper_bound" in text
+    assert "continuous-time" in text
+
+
+def test_a_pasted_walk_that_is_a_bound_is_said_to_be_one_with_its_axis(tmp_path):
+    """Where the maximum over a sensor's axes is a bound, every export says which key, whose and what it is."""
+    bound_on_top = {**DOC, "accelerometer_random_walk": 4.0e-4,
+                    "accelerometer_random_walk_xyz": [3.0e-4, 4.0e-4, 2.5e-4]}
+    for path in write_exports(parse_imu_yaml(bound_on_top), tmp_path):
+        text = path.read_text()
+        assert "Note: accelerometer_random_walk is accel_y's upper bound (allan_upper_bound)" in text, path.name
+        assert "Note: gyroscope_random_walk" not in text, path.name
 
 
 def test_vins_values_give_the_true_variances_through_vins_propagation(tmp_path):

@@ -157,3 +157,15 @@ def test_the_spec_verdict_names_the_parameter_its_margin_is_of():
            "bias_instability_method": "model_minimum"}
     got = annotate([row], {"gyro": {"noise_density": 7.2e-4, "bias_instability": 2.0e-4}})[0]
     assert got["spec"] == "fail (bias_instability)" and got["spec_margin"] == pytest.approx(2.0 / 3.36 - 1.0)
+
+
+def test_an_export_says_which_pasted_walk_is_a_bound_and_whose(analysed, tmp_path):
+    """The exports said 'some random walks are not identifiable from the record' without saying which of the numbers
+    they hold is a bound: now per sensor, the Kalibr key, the axis it is the maximum of and its method."""
+    _, out = analysed
+    doc = yaml.safe_load((out / "imu.yaml").read_text())
+    text = (out / "exports" / "kalibr_imu_chain.yaml").read_text()
+    for sensor, prefix in (("gyro", "gyroscope"), ("accel", "accelerometer")):
+        axes = [a for a in AXES if a.startswith(sensor)]
+        top = axes[int(np.argmax(doc[f"{prefix}_random_walk_xyz"]))]
+        assert f"# Note: {prefix}_random_walk is {top}'s upper bound (bound)" in text

@@ -7,11 +7,13 @@ docs/analysis.md, "Exports".
 
 from __future__ import annotations
 
+import math
+
 import yaml
 
 from ..core.constants import STANDARD_GRAVITY
 from ..core.noise.units import step_noise_std
-from ..pipelines.analyze.numbers import PastedNumbers
+from ..pipelines.analyze.numbers import UPPER_BOUND_METHODS, PastedNumbers
 from .numbers import num
 
 _SENSORS = (("gyroscope", "gyro"), ("accelerometer", "acc"))
@@ -40,11 +42,28 @@ def _origin(numbers: PastedNumbers) -> list[str]:
         lines.append(f"OVERBOUND values (imu.yaml 'overbound:'): {ob}")
     else:
         lines.append("Values: imu.yaml's Kalibr keys (each sensor's max over x, y, z of the final models' values).")
-    methods = numbers.random_walk_methods()
-    if methods and not ob:
-        lines.append("Note: some random walks are not identifiable from the record: Allan-slope reading or bound "
-                     f"used ({', '.join(methods)}).")
+    if not ob:
+        lines += _walk_notes(numbers)
     return lines
+
+
+def _walk_notes(numbers: PastedNumbers) -> list[str]:
+    """Per sensor whose Kalibr K (the maximum over its axes) is not a final model's value: which axis it is and what
+    it is (an upper bound, or the Allan-slope reading standing in for a model without a walk)."""
+    notes = []
+    for s in numbers.sensors.values():
+        readings = [a for a in s.axes if a.random_walk.value is not None and math.isfinite(a.random_walk.value)]
+        if not readings:
+            continue
+        top = max(readings, key=lambda a: a.random_walk.value)
+        method, key = top.random_walk.method, f"{s.prefix}_random_walk"
+        if method in UPPER_BOUND_METHODS:
+            notes.append(f"Note: {key} is {top.axis}'s upper bound ({method}): the record does not resolve that walk "
+                         "(it may be far smaller); a longer record gives a value.")
+        elif method.startswith("allan"):
+            notes.append(f"Note: {key} is {top.axis}'s Allan-slope reading ({method}): its final model has no random "
+                         "walk.")
+    return notes
 
 
 def header(numbers: PastedNumbers, *convention: str, prefix: str = "# ") -> str:

@@ -193,11 +193,6 @@ class PastedNumbers:
         sensor = self.sensors.get(sensor_of(axis))
         return next((a for a in sensor.axes if a.axis == axis), None) if sensor else None
 
-    def random_walk_methods(self) -> list[str]:
-        """The methods of the axes' random walks other than ``model`` (and unknown, ``""``), sorted, without
-        repeats."""
-        return sorted({a.random_walk.method for s in self.sensors.values() for a in s.axes} - {"model", ""})
-
     def overbound_values(self) -> PastedNumbers:
         """These numbers with N and K replaced by the overbound's (method ``overbound``, interval (0, value)), no
         model readings (a WN+RW has no low-pass) and ``values_of`` saying what they are; InputError without an
