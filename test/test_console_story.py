@@ -112,3 +112,21 @@ def test_a_parameter_on_the_edge_of_its_searched_range_says_so():
     assert "at the lower end of the range searched (0.01 s: one sample)" in lines["GM.tau"]
     assert "range searched" not in lines["GM.sigma"] and "range searched" not in lines["WN.noise_density"]
     assert math.isclose(fit.components[1].tau, DT)
+
+
+def test_a_parameter_the_record_does_not_resolve_from_zero_is_said_to_be_bounded():
+    """``fit --model WN+GM+RW`` on 20 min of WN+GM+RW printed "RW.random_walk 1.839e-10 [0, 3.072e-05] (profile)":
+    a number a user pastes, 10⁵ below the walk the record allows. The line now says the record only bounds it."""
+    from imu_noise_id.core.estimation.em.results import FitResult
+    from imu_noise_id.core.noise.components import RR
+    from imu_noise_id.report.console import parameter_lines
+
+    fit = FitResult(model="WN+GM+RW+RR", components=[WN(1e-3), GM(tau=49.0, sigma=3e-4), RW(1.8e-10), RR(-2e-7)],
+                    exog_coef={}, se={}, ci95={"WN.noise_density": (9.97e-4, 1.002e-3), "GM.tau": (21.1, 395.4),
+                                               "GM.sigma": (2e-4, 6.6e-4), "RW.random_walk": (0.0, 3.072e-5),
+                                               "RR.slope": (-5e-7, 1e-7)},
+                    loglik=0.0, aic=0.0, bic=0.0, n=240_000, dt=DT, n_iter=0, converged=True)
+    lines = {line.split()[1]: line for line in parameter_lines("gyro_x", fit)}
+    assert lines["RW.random_walk"].endswith("; not resolved from zero: the record only bounds it, <= 3.072e-05")
+    assert lines["RR.slope"].endswith("; its interval holds zero: the record does not tell it from none")
+    assert "zero" not in lines["GM.tau"] and "zero" not in lines["WN.noise_density"]

@@ -207,7 +207,8 @@ def fit_line(axis: str, fit: FitResult) -> str:
 def parameter_lines(axis: str, fit: FitResult) -> list[str]:
     """One line per fitted parameter: its value, unit (the component's, u the axis's unit), 95 % interval and how the
     interval was computed (``ci95_method``), as model.yaml holds them; "interval not determined" where it has none;
-    a value at an end of the range searched (:func:`~..core.estimation.em.mle.physical_bounds`) says so."""
+    a value at an end of the range searched (:func:`~..core.estimation.em.mle.physical_bounds`) or one whose interval
+    holds zero (:func:`_from_zero`) says so."""
     lines = []
     for i, name, label in parameter_labels(list(fit.components)):
         component = fit.components[i]
@@ -218,8 +219,19 @@ def parameter_lines(axis: str, fit: FitResult) -> list[str]:
                     if math.isfinite(lo) and math.isfinite(hi) else "interval not determined")
         unit_text = f"  [{unit}]" if unit else ""
         value = component.params()[name]
-        lines.append(f"{axis:8s}   {label:24s} {value:.4g} {interval}{unit_text}{_range_end(name, value, fit)}")
+        lines.append(f"{axis:8s}   {label:24s} {value:.4g} {interval}{unit_text}{_range_end(name, value, fit)}"
+                     f"{_from_zero(lo, hi)}")
     return lines
+
+
+def _from_zero(lo: float, hi: float) -> str:
+    """What an interval (lo, hi) holding zero says: a scale (lo = 0) is only bounded, a signed value (a ramp) not
+    told from none; "" otherwise."""
+    if not lo <= 0.0 <= hi:
+        return ""
+    if lo == 0.0:
+        return f"; not resolved from zero: the record only bounds it, <= {hi:.4g}"
+    return "; its interval holds zero: the record does not tell it from none"
 
 
 #: Relative distance from an end of the range searched within which a value is said to lie at it.
