@@ -9,6 +9,7 @@ import pytest
 from imu_noise_id.core.allan import allan_variance
 from imu_noise_id.core.errors import InputError
 from imu_noise_id.core.noise.components import BI, GM, MA, QN, RR, RW, WN, simulate_sum
+from imu_noise_id.core.noise.digital import DLPF
 from imu_noise_id.core.noise.resonant import LPF, OSC
 from imu_noise_id.core.wavelet import covariance as cv
 from imu_noise_id.core.wavelet.robust import BiweightScale
@@ -88,7 +89,10 @@ def _brute_covariance(comps, m, n):
 
 
 @pytest.mark.parametrize("comps", [[WN(1e-3), RW(1e-4)], [WN(1e-3), GM(0.3, 1e-3), RW(1e-4)], [QN(1e-5), WN(1e-3)],
-                                   [WN(1e-3), OSC(5.0, 0.5, 1e-3)], [WN(1e-3), MA(1e-3), BI(2e-4, 0.1, 10.0)]],
+                                   [WN(1e-3), OSC(5.0, 0.5, 1e-3)], [WN(1e-3), MA(1e-3), BI(2e-4, 0.1, 10.0)],
+                                   [WN(1e-5), DLPF(8.8e-4, 37.0, 2), GM(10.0, 4e-4), RW(3e-5)],
+                                   [WN(1e-5), DLPF(8.8e-4, 37.0, 2), OSC(31.0, 0.2, 1e-3), GM(10.0, 4e-4)],
+                                   [WN(1e-3), DLPF(8.8e-4, 37.0, 2), OSC(0.56, 0.002, 5e-3), RW(1e-4)]],
                          ids=lambda c: "+".join(x.name for x in c))
 def test_covariance_lag_grid_equals_the_exact_lag_sum(comps):
     n = 1 << 12
@@ -97,6 +101,40 @@ def test_covariance_lag_grid_equals_the_exact_lag_sum(comps):
     grid = cv.wv_covariance(comps, m, n, DT)
     scale = np.sqrt(np.outer(np.diag(exact), np.diag(exact)))
     assert np.max(np.abs(grid - exact) / scale) < 1e-3
+
+
+class _CountedLags(WN):
+    """A white noise that counts the lags its partial sums' covariance is evaluated at."""
+
+    lags = 0
+
+    def sum_covariance(self, u, dt):
+        _CountedLags.lags += np.size(u)
+        return super().sum_covariance(u, dt)
+
+
+def test_a_low_pass_beside_a_slow_process_does_not_take_every_lag_of_the_record():
+    """A second-order low-pass (poles of a 2.5-sample period, a memory of two samples) beside a GM of τ 10 s: the
+    grid took every lag of the record for every pair of scales, the low-pass's period setting the step also where its
+    oscillation had long died out (98 s per evaluation on 30 min at 100 Hz, GMWM with such candidates minutes per
+    axis). The period now sets the step only within the oscillation's own decay around each kink; the lag sum is
+    still the exact one to 1e-3 (test above). Each oscillating component sets the step within its own decay: a slow
+    narrow line's step over the record, the low-pass's near the kinks."""
+    n = 1 << 12
+    m = dyadic_m(n)
+    every = sum(2 * n - 1 for i in range(m.size) for _ in range(i, m.size)) * 9
+    counted = _CountedLags(1e-5)
+    _CountedLags.lags = 0
+    cv.wv_covariance([counted, DLPF(8.8e-4, 37.0, 2), GM(10.0, 4e-4), RW(3e-5)], m, n, DT)
+    assert _CountedLags.lags < 0.2 * every
+    # a line of long memory keeps its oscillation over the whole record, and the fine step there
+    _CountedLags.lags = 0
+    cv.wv_covariance([counted, OSC(31.0, 0.02, 1e-3), GM(10.0, 4e-4)], m, n, DT)
+    assert _CountedLags.lags > 0.5 * every
+    # a slow narrow line (a measured accelerometer's 0.56 Hz) is followed at its own step, the low-pass near the kinks
+    _CountedLags.lags = 0
+    cv.wv_covariance([counted, DLPF(8.8e-4, 37.0, 2), OSC(0.56, 0.002, 5e-3), RW(1e-4)], m, n, DT)
+    assert _CountedLags.lags < 0.25 * every
 
 
 def test_covariance_matches_monte_carlo_classical_and_robust():

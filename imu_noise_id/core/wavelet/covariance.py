@@ -6,7 +6,9 @@ sampled components (GMWM eq. 3's ν(θ)), and for a Gaussian model, K(u) the par
     Cov(ν̂²_i, ν̂²_j) = 2 Σ_k n_ij(k) γ_ij(k)² / (M_i M_j)  (+ 4 μ_i μ_j Σ_k n_ij(k) γ_ij(k) / (M_i M_j) with a ramp)
 
 (Serroukh, Walden & Percival 2000 for one level), n_ij(k) the pairs in the record, μ_j = ω·dt·m_j/2; robust WV: γ² →
-ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), × (2/e)². Lag sum: trapezoid, dense near γ's kinks."""
+ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), × (2/e)². Lag sum: trapezoid, dense near γ's kinks, and at an eighth of
+each oscillating component's period within :data:`TAIL_DECAY_TIMES` of its memory around each kink (a sensor's
+low-pass rings for a few samples, a narrow line over the whole record), not at the shortest period over every lag."""
 
 from __future__ import annotations
 
@@ -33,13 +35,20 @@ def theoretical_wv(components: list[Component], tau: np.ndarray, dt: float) -> n
     return 0.5 * total_allan_variance(list(components), np.asarray(tau, dtype=float), dt)
 
 
-def _offsets(length: int, cap: float, fine: float) -> np.ndarray:
-    """Offsets 0..length from a kink: steps ``cap``, near the kink steps growing geometrically from max(1, fine/4)."""
+#: Per oscillating component, (lags its oscillation lasts, step that follows it) [samples].
+Rings = tuple[tuple[int, float], ...]
+
+
+def _offsets(length: int, cap: float, fine: float, rings: Rings = ()) -> np.ndarray:
+    """Offsets 0..length from a kink: steps ``cap``, near the kink steps growing geometrically from max(1, fine/4),
+    and within each ring's length of it that ring's step (an oscillation's, while it lasts)."""
     step = max(1, int(cap))
     # The first lags are always taken one by one: a component whose K jumps at u = 0 (QN, MA) puts an isolated value
     # at the kink itself, which must weigh one lag, not a whole step.
     parts = [np.arange(0, length + 1, step, dtype=np.int64), np.array([length], dtype=np.int64),
              np.arange(min(length, 3) + 1, dtype=np.int64)]
+    parts += [np.arange(0, min(length, ring) + 1, max(1, int(ring_step)), dtype=np.int64)
+              for ring, ring_step in rings if ring_step < cap]
     if math.isfinite(fine) and step > 1:
         first = max(1.0, fine / 4.0)
         n_geo = math.ceil(math.log(max(cap / first, 1.0)) / math.log1p(FAN_RATIO)) + 1
@@ -48,16 +57,16 @@ def _offsets(length: int, cap: float, fine: float) -> np.ndarray:
     return np.unique(np.concatenate(parts))
 
 
-def _lag_grid(m_i: int, m_j: int, n: int, *, margin: int, period: float,
-              fine: float) -> tuple[np.ndarray, np.ndarray]:
-    """Integer lags and trapezoid weights over [−2m_i − margin, 2m_j + margin] ∩ (−n, n)."""
+def _lag_grid(m_i: int, m_j: int, n: int, *, margin: int, fine: float, rings: Rings) -> tuple[np.ndarray, np.ndarray]:
+    """Integer lags and trapezoid weights over [−2m_i − margin, 2m_j + margin] ∩ (−n, n): :data:`PIECE_POINTS` per
+    piece between kinks, denser near each kink (``fine``, :func:`_offsets`) and within each of ``rings``."""
     lo, hi = max(-2 * m_i - margin, -(n - 1)), min(2 * m_j + margin, n - 1)
     kinks = {b * m_j - a * m_i for a in range(3) for b in range(3)}
     nodes = sorted({lo, hi, *(k for k in kinks if lo < k < hi)})
     parts = []
     for p, q in itertools.pairwise(nodes):
         length = q - p
-        off = _offsets(length // 2 + 1, min(length / PIECE_POINTS, period / 8.0), fine)
+        off = _offsets(length // 2 + 1, length / PIECE_POINTS, fine, rings)
         off = off[off <= length]
         parts += [p + off, q - off]
     k = np.unique(np.concatenate(parts)) if parts else np.array([lo], dtype=np.int64)
@@ -90,11 +99,11 @@ class _Plan:
 
 
 @lru_cache(maxsize=32)
-def _plan(m: tuple[int, ...], n: int, margin: int, period: float, fine: float) -> _Plan:
+def _plan(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Rings) -> _Plan:
     parts, pairs = [], []
     for i in range(len(m)):
         for j in range(i, len(m)):
-            k, w = _lag_grid(m[i], m[j], n, margin=margin, period=period, fine=fine)
+            k, w = _lag_grid(m[i], m[j], n, margin=margin, fine=fine, rings=rings)
             parts.append((k, w * _pair_counts(k, m[i], m[j], n), np.full(k.size, m[i]), np.full(k.size, m[j])))
             pairs.append((i, j))
     sizes = np.array([p[0].size for p in parts])
@@ -114,16 +123,16 @@ def wv_covariance(components: list[Component], m: np.ndarray, n: int, dt: float,
     m = np.asarray(m, dtype=np.int64)
     comps = list(components)
     stochastic = [c for c in comps if not isinstance(c, RR)]
-    decay, fine, period = 0.0, math.inf, math.inf
+    decay, fine, rings = 0.0, math.inf, set()
     for c in stochastic:
         longest, shortest, p = c.memory(dt)
         if longest > 0:
             decay, fine = max(decay, longest / dt), min(fine, shortest / dt)
-        period = min(period, max(p / dt, 1.0))
+        if math.isfinite(p):  # an oscillation, followed at an eighth of its period as long as its memory lasts
+            rings.add((int(min(_bucket(TAIL_DECAY_TIMES * longest / dt), n)), _bucket(max(p / dt, 1.0)) / 32.0))
     margin = int(min(_bucket(TAIL_DECAY_TIMES * decay), n))
-    period = _bucket(period) / 2.0 if math.isfinite(period) else math.inf
     fine = _bucket(fine) / 2.0 if math.isfinite(fine) else math.inf
-    plan = _plan(tuple(int(v) for v in m), int(n), margin, period, fine)
+    plan = _plan(tuple(int(v) for v in m), int(n), margin, fine, tuple(sorted(rings)))
     gamma = np.zeros(plan.k.size)
     for a in range(3):
         for b in range(3):
