@@ -13,6 +13,7 @@ checkout of the project (e.g. ``git worktree add ../baseline <commit>``) run wit
     .venv/bin/python bench/bench_analyze_time.py --adis 1 2 3 4 5 6 --allow-motion --timeout 1200   # all six runs
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --adis-seconds 1000 --baseline ../baseline --numbers  # 10⁵
     .venv/bin/python bench/bench_analyze_time.py --adis 1 --baseline ../baseline --repeats 3   # with the spread
+    .venv/bin/python bench/bench_analyze_time.py --adis 1 --estimator gmwm --baseline ../baseline --timeout 900
 
 The committed output holds these runs one after another: 1 h at 400 Hz side by side with the checkout before the
 screen on statistics of fixed size, 3 h at 400 Hz (this checkout alone), the ADIS16405 run in three turns and 24 h
@@ -24,16 +25,16 @@ The bag: WN + GM + RW on the gyros and WN + RW on the accelerometers (MEMS-like)
 checkout; with ``--adis RUN …``, each whole ADIS16405 static run RUN of ``../shared/data`` (10⁶ samples per axis at 100
 Hz, ``bench/common.py``; its first ``--adis-seconds`` only when given) instead, and with several runs each checkout's
 total wall time over them (run 4 holds motion bursts the static check refuses: ``--allow-motion`` passes that option to
-every run). A checkout still running after ``--timeout`` seconds is stopped and printed as such (the checkout before the
-composite search needs hours on a measured record). Printed: per rate, source and ``--jobs`` value, wall time, CPU time
-(user + system of the analyze process and of the worker processes it reaped) and peak memory: the largest RSS of one
-process and the largest sums of the RSS and of the PSS (shared pages split among the processes mapping them) of the
-analyze process and its workers (sampled every :data:`MEMORY_SAMPLE_PERIOD` s), the PSS also as a multiple of the
-decoded arrays (stamps and six axes, float64); with ``--numbers``, the N and K each checkout's ``imu.yaml`` gives per
-axis. Each checkout runs without the BLAS thread-count variables in its environment, as from a user's shell. With
-``--repeats R`` the checkouts take turns R times on each bag (A B A B …, so that a drift of the machine's speed falls on
-both) and each is summarised by its median wall time and range, the ratio by the median of the turns' ratios and its
-range: a difference within that range is not one this run can tell from the machine's spread.
+every run; ``--estimator`` passes that option). A checkout still running after ``--timeout`` seconds is stopped and
+printed as such (the checkout before the composite search needs hours on a measured record). Printed: per rate, source
+and ``--jobs`` value, wall time, CPU time (user + system of the analyze process and of the worker processes it reaped)
+and peak memory: the largest RSS of one process and the largest sums of the RSS and of the PSS (shared pages split among
+the processes mapping them) of the analyze process and its workers (sampled every :data:`MEMORY_SAMPLE_PERIOD` s), the
+PSS also as a multiple of the decoded arrays (stamps and six axes, float64); with ``--numbers``, the N and K each
+checkout's ``imu.yaml`` gives per axis. Each checkout runs without the BLAS thread-count variables in its environment,
+as from a user's shell. With ``--repeats R`` the checkouts take turns R times on each bag (A B A B …, so that a drift of
+the machine's speed falls on both) and each is summarised by its median wall time and range, the ratio by the median of
+the turns' ratios and its range: a difference within that range is not one this run can tell from the machine's spread.
 """
 
 from __future__ import annotations
@@ -200,6 +201,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="with --adis, the first S seconds of each run (default: the whole record)")
     parser.add_argument("--allow-motion", action="store_true",
                         help="pass --allow-motion to analyze (run 4 holds motion bursts the static check refuses)")
+    parser.add_argument("--estimator", choices=("auto", "em", "gmwm", "both"), default=None,
+                        help="pass --estimator to analyze (default: analyze's own, auto)")
     parser.add_argument("--timeout", type=float, default=math.inf,
                         help="stop a checkout still running after this many seconds")
     parser.add_argument("--repeats", type=int, default=1, metavar="R",
@@ -212,7 +215,8 @@ def main(argv: list[str] | None = None) -> int:
                                                               for p in args.baseline]
     print(f"analyze, default options, no BLAS thread-count variable set; {os.cpu_count()} CPUs; load average before: "
           f"{os.getloadavg()[0]:.2f}")
-    extra = ("--allow-motion",) if args.allow_motion else ()
+    extra = (("--allow-motion",) if args.allow_motion else ()) + (("--estimator", args.estimator) if args.estimator
+                                                                  else ())
     totals: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for rate, run in [(100.0, r) for r in args.adis] if args.adis else [(r, None) for r in args.rates]:
