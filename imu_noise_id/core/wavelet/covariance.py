@@ -6,9 +6,10 @@ sampled components (GMWM eq. 3's ν(θ)), and for a Gaussian model, K(u) the par
     Cov(ν̂²_i, ν̂²_j) = 2 Σ_k n_ij(k) γ_ij(k)² / (M_i M_j)  (+ 4 μ_i μ_j Σ_k n_ij(k) γ_ij(k) / (M_i M_j) with a ramp)
 
 (Serroukh, Walden & Percival 2000 for one level), n_ij(k) the pairs in the record, μ_j = ω·dt·m_j/2; robust WV: γ² →
-ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), × (2/e)². Lag sum: trapezoid, dense near γ's kinks, and at an eighth of
-each oscillating component's period within :data:`TAIL_DECAY_TIMES` of its memory around each kink (a sensor's
-low-pass rings for a few samples, a narrow line over the whole record), not at the shortest period over every lag."""
+ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), × (2/e)². Lag sum: trapezoid, dense near γ's kinks, and at a sixteenth
+to a thirty-second of each oscillating component's period (the next power of two over 32) within
+:data:`TAIL_DECAY_TIMES` of its memory around each kink (a sensor's low-pass rings for a few samples, a narrow line
+over the whole record), not at the shortest period over every lag."""
 
 from __future__ import annotations
 
@@ -128,7 +129,7 @@ def wv_covariance(components: list[Component], m: np.ndarray, n: int, dt: float,
         longest, shortest, p = c.memory(dt)
         if longest > 0:
             decay, fine = max(decay, longest / dt), min(fine, shortest / dt)
-        if math.isfinite(p):  # an oscillation, followed at an eighth of its period as long as its memory lasts
+        if math.isfinite(p):  # an oscillation, followed finely as long as its memory lasts
             rings.add((int(min(_bucket(TAIL_DECAY_TIMES * longest / dt), n)), _bucket(max(p / dt, 1.0)) / 32.0))
     margin = int(min(_bucket(TAIL_DECAY_TIMES * decay), n))
     fine = _bucket(fine) / 2.0 if math.isfinite(fine) else math.inf
