@@ -79,7 +79,7 @@ def _numbers_section(result: AnalysisResult) -> str:
             f"<span class=small>({html.escape(f.source)})</span></td>"
             f"<td>{html.escape(_pasted(n.value, n.ci95, n.method))}</td>"
             f"<td{' class=warn' if f.random_walk_above_bound else ''}>{html.escape(k_text)}</td>"
-            f"<td>{'' if b.reached else '&lt; '}{_ci(b.value, b.ci95)} <span class=small>at τ = "
+            f"<td>{html.escape(_pasted(b.value, b.ci95, b.method()))} <span class=small>at τ = "
             f"{fmt(b.tau_at_minimum, '.3g')} s</span></td><td>{fmt(f.noise_stddev_per_sample)}</td>"
             f"{_allan_cell(slopes.noise_density, 'noise_density' in disagree)}"
             f"{_allan_cell(slopes.random_walk, 'random_walk' in disagree)}"

@@ -119,7 +119,7 @@ def final_table(finals: dict[str, FinalModel], static: StaticAnalysis | None = N
         n_text = _reading_text(n.value, n.ci95, n.method) if n.value is not None else "n/a"
         k_text = _reading_text(k.value, k.ci95, k.method)
         b = f.bias_instability
-        b_text = ("" if b.reached else "<") + f"{_fmt(b.value)} [{_fmt(b.ci95[0])}, {_fmt(b.ci95[1])}]"
+        b_text = _reading_text(b.value, b.ci95, b.method())
         lines.append(f"{axis:8s} {f.model:{width}s} N {n_text:34s} K {k_text:34s} B {b_text}")
     lines += [f"{axis:8s} K flagged: {f.random_walk.source}" for axis, f in finals.items() if f.random_walk_above_bound]
     lines += [f"{axis:8s} K's interval spans the structures the data cannot tell apart: "
