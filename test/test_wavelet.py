@@ -3,6 +3,8 @@ the model-based covariance of the estimates and the robust (M-estimator) version
 
 from __future__ import annotations
 
+import tracemalloc
+
 import numpy as np
 import pytest
 
@@ -135,6 +137,27 @@ def test_a_low_pass_beside_a_slow_process_does_not_take_every_lag_of_the_record(
     _CountedLags.lags = 0
     cv.wv_covariance([counted, DLPF(8.8e-4, 37.0, 2), OSC(0.56, 0.002, 5e-3), RW(1e-4)], m, n, DT)
     assert _CountedLags.lags < 0.25 * every
+
+
+def test_a_line_of_long_memory_is_summed_in_bounded_memory(monkeypatch):
+    """A narrow line keeps its oscillation over the whole record, so every lag of every pair of scales is taken: all
+    pairs' lags were held at once, ten arrays of them (24 GB killed a GMWM fit with a 20 Hz line on 10⁶ samples). The
+    lag sum now runs over groups of pairs of at most CHUNK_POINTS lags (one pair's at least): the same covariance, the
+    working memory bounded by the group, not by the record times the pairs."""
+    n = 1 << 13
+    m = dyadic_m(n)
+    comps = [WN(1e-3), OSC(31.0, 0.02, 1e-3)]
+    whole = cv.wv_covariance(comps, m, n, DT)
+    monkeypatch.setattr(cv, "CHUNK_POINTS", 1 << 14)
+    tracemalloc.start()
+    try:
+        chunked = cv.wv_covariance(comps, m, n, DT)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    np.testing.assert_allclose(chunked, whole, rtol=1e-12)
+    every = sum(2 * n - 1 for i in range(m.size) for _ in range(i, m.size))
+    assert peak < 2 * every * 8  # all pairs' lags at once take ten arrays of ``every`` float64
 
 
 def test_covariance_matches_monte_carlo_classical_and_robust():

@@ -9,7 +9,8 @@ sampled components (GMWM eq. 3's ν(θ)), and for a Gaussian model, K(u) the par
 ν_i²ν_j² Σ_k a_k² ρ^k/k! (ρ = γ/(ν_i ν_j)), × (2/e)². Lag sum: trapezoid, dense near γ's kinks, and at a sixteenth
 to a thirty-second of each oscillating component's period (the next power of two over 32) within
 :data:`TAIL_DECAY_TIMES` of its memory around each kink (a sensor's low-pass rings for a few samples, a narrow line
-over the whole record), not at the shortest period over every lag."""
+over the whole record), not at the shortest period over every lag; the pairs of scales in groups of at most
+:data:`CHUNK_POINTS` lags, so that such a line's sum over every lag is held one group at a time."""
 
 from __future__ import annotations
 
@@ -88,8 +89,15 @@ def _pair_counts(k: np.ndarray, m_i: int, m_j: int, n: int) -> np.ndarray:
     return np.maximum(top - bottom + 1, 0).astype(float)
 
 
+#: Lags evaluated at once by :func:`wv_covariance` (pairs of scales grouped up to this many, one pair's at least): its
+#: working memory is some ten to twenty float64 arrays of this size, not of the record's length times the pairs.
+CHUNK_POINTS = 1 << 20
+
+
 @dataclass(frozen=True)
 class _Plan:
+    """The lags of a group of pairs of scales, each pair's from ``starts``, with their trapezoid weights × pair counts
+    and the pair's scales repeated per lag."""
 
     k: np.ndarray
     weight: np.ndarray
@@ -99,18 +107,45 @@ class _Plan:
     pairs: tuple[tuple[int, int], ...]
 
 
-@lru_cache(maxsize=32)
-def _plan(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Rings) -> _Plan:
-    parts, pairs = [], []
+def _group(parts: list[tuple[np.ndarray, np.ndarray, int, int]], pairs: list[tuple[int, int]]) -> _Plan:
+    sizes = np.array([p[0].size for p in parts])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    k, w = np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+    m_i, m_j = (np.repeat([p[q] for p in parts], sizes) for q in (2, 3))
+    return _Plan(k, w, m_i, m_j, starts, tuple(pairs))
+
+
+def _plan_groups(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Rings, *, limit: int):
+    """The pairs' lag grids in groups of at most ``limit`` lags (one pair's at least), built as they are used."""
+    parts: list[tuple[np.ndarray, np.ndarray, int, int]] = []
+    pairs: list[tuple[int, int]] = []
+    held = 0
     for i in range(len(m)):
         for j in range(i, len(m)):
             k, w = _lag_grid(m[i], m[j], n, margin=margin, fine=fine, rings=rings)
-            parts.append((k, w * _pair_counts(k, m[i], m[j], n), np.full(k.size, m[i]), np.full(k.size, m[j])))
+            if parts and held + k.size > limit:
+                yield _group(parts, pairs)
+                parts, pairs, held = [], [], 0
+            parts.append((k, w * _pair_counts(k, m[i], m[j], n), m[i], m[j]))
             pairs.append((i, j))
-    sizes = np.array([p[0].size for p in parts])
-    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    k, w, mi, mj = (np.concatenate([p[q] for p in parts]) for q in range(4))
-    return _Plan(k, w, mi, mj, starts, tuple(pairs))
+            held += k.size
+    yield _group(parts, pairs)
+
+
+@lru_cache(maxsize=32)
+def _one_group(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Rings, *, limit: int) -> _Plan | None:
+    """The plan of every pair when it fits in one group of ``limit`` lags (kept: the fits evaluate it again and
+    again), else None."""
+    groups = _plan_groups(m, n, margin, fine, rings, limit=limit)
+    first = next(groups)
+    return first if next(groups, None) is None else None
+
+
+def _plans(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Rings):
+    """The groups of pairs the lag sum runs over: one cached plan when all fit in :data:`CHUNK_POINTS` lags, else
+    groups built as they are used (held one at a time)."""
+    whole = _one_group(m, n, margin, fine, rings, limit=CHUNK_POINTS)
+    return (whole,) if whole is not None else _plan_groups(m, n, margin, fine, rings, limit=CHUNK_POINTS)
 
 
 def _bucket(x: float) -> float:
@@ -133,29 +168,36 @@ def wv_covariance(components: list[Component], m: np.ndarray, n: int, dt: float,
             rings.add((int(min(_bucket(TAIL_DECAY_TIMES * longest / dt), n)), _bucket(max(p / dt, 1.0)) / 32.0))
     margin = int(min(_bucket(TAIL_DECAY_TIMES * decay), n))
     fine = _bucket(fine) / 2.0 if math.isfinite(fine) else math.inf
-    plan = _plan(tuple(int(v) for v in m), int(n), margin, fine, tuple(sorted(rings)))
+    nu2 = theoretical_wv(comps, m * dt, dt)
+    slope = sum(abs(c.slope) for c in comps if isinstance(c, RR))
+    n_coef = (n - 2 * m + 1).astype(float)
+    out = np.empty((m.size, m.size))
+    for plan in _plans(tuple(int(v) for v in m), int(n), margin, fine, tuple(sorted(rings))):
+        i_idx = np.array([p[0] for p in plan.pairs])
+        j_idx = np.array([p[1] for p in plan.pairs])
+        sums = _lag_sums(plan, stochastic, dt, nu2[i_idx] * nu2[j_idx], scale=scale, slope=slope)
+        out[i_idx, j_idx] = out[j_idx, i_idx] = sums / (n_coef[i_idx] * n_coef[j_idx])
+    return out
+
+
+def _lag_sums(plan: _Plan, stochastic: list[Component], dt: float, nu2_products: np.ndarray, *,
+              scale: BiweightScale | None, slope: float) -> np.ndarray:
+    """Σ_k n_ij(k) w_k f(γ_ij(k)) per pair of ``plan`` (module docstring: f = 2γ², the robust WV's Hermite series, the
+    ramp's mean term); ``nu2_products``: ν_i² ν_j² per pair."""
     gamma = np.zeros(plan.k.size)
     for a in range(3):
         for b in range(3):
             u = plan.k + a * plan.m_i - b * plan.m_j
             gamma += _C[a] * _C[b] * np.sum([c.sum_covariance(u, dt) for c in stochastic], axis=0)
     gamma /= 4.0 * plan.m_i * plan.m_j
-    nu2 = theoretical_wv(comps, m * dt, dt)
-    i_idx = np.array([p[0] for p in plan.pairs])
-    j_idx = np.array([p[1] for p in plan.pairs])
     if scale is None:
         terms = 2.0 * gamma**2
     else:
-        nu_prod = np.repeat(np.sqrt(nu2[i_idx] * nu2[j_idx]), np.diff(np.append(plan.starts, plan.k.size)))
+        nu_prod = np.repeat(np.sqrt(nu2_products), np.diff(np.append(plan.starts, plan.k.size)))
         rho = gamma / nu_prod
         terms = (4.0 / scale.e**2) * nu_prod**2 * sum(h * rho**order for h, order in
                                                       zip(scale.hermite, HERMITE_ORDERS, strict=True))
-    slope = sum(abs(c.slope) for c in comps if isinstance(c, RR))
     if slope:
         mean = slope * dt * plan.m_i / 2.0, slope * dt * plan.m_j / 2.0
         terms = terms + 4.0 * mean[0] * mean[1] * gamma
-    sums = np.add.reduceat(plan.weight * terms, plan.starts)
-    n_coef = (n - 2 * m + 1).astype(float)
-    out = np.empty((m.size, m.size))
-    out[i_idx, j_idx] = out[j_idx, i_idx] = sums / (n_coef[i_idx] * n_coef[j_idx])
-    return out
+    return np.add.reduceat(plan.weight * terms, plan.starts)
