@@ -142,13 +142,15 @@ def test_a_low_pass_beside_a_slow_process_does_not_take_every_lag_of_the_record(
 def test_a_line_of_long_memory_is_summed_in_bounded_memory(monkeypatch):
     """A narrow line keeps its oscillation over the whole record, so every lag of every pair of scales is taken: all
     pairs' lags were held at once, ten arrays of them (24 GB killed a GMWM fit with a 20 Hz line on 10⁶ samples). The
-    lag sum now runs over groups of pairs of at most CHUNK_POINTS lags (one pair's at least): the same covariance, the
-    working memory bounded by the group, not by the record times the pairs."""
+    lag sum now runs over groups of pairs of at most CHUNK_POINTS lags (one pair's at least), plans kept up to
+    CACHE_POINTS lags: the same covariance, the working memory bounded by the two, not by the record times the
+    pairs."""
     n = 1 << 13
     m = dyadic_m(n)
     comps = [WN(1e-3), OSC(31.0, 0.02, 1e-3)]
     whole = cv.wv_covariance(comps, m, n, DT)
     monkeypatch.setattr(cv, "CHUNK_POINTS", 1 << 14)
+    monkeypatch.setattr(cv, "CACHE_POINTS", 1 << 14)
     tracemalloc.start()
     try:
         chunked = cv.wv_covariance(comps, m, n, DT)
@@ -158,6 +160,20 @@ def test_a_line_of_long_memory_is_summed_in_bounded_memory(monkeypatch):
     np.testing.assert_allclose(chunked, whole, rtol=1e-12)
     every = sum(2 * n - 1 for i in range(m.size) for _ in range(i, m.size))
     assert peak < 2 * every * 8  # all pairs' lags at once take ten arrays of ``every`` float64
+
+
+@pytest.mark.parametrize("frequency", [0.46, 0.56, 1.69, 10.0, 20.0, 49.0])
+def test_the_narrowest_line_rings_within_the_bound_and_not_far_inside_it(frequency):
+    """A line at its narrowest bandwidth rings over at most MAX_RING_LAGS lags per kink (the GMWM's box keeps its
+    OSCs there: a measured accelerometer's 0.56 Hz line, 0.0008 Hz wide, made each covariance take a minute), and a
+    line a quarter as wide would not."""
+    n, dt = 1_000_000, 0.01
+    narrowest = cv.narrowest_line(frequency, n, dt)
+    ring, step = cv._ring(OSC(frequency, narrowest, 1e-3), n, dt)
+    assert 2 * ring / max(1, int(step)) <= cv.MAX_RING_LAGS
+    ring, step = cv._ring(OSC(frequency, narrowest / 4, 1e-3), n, dt)
+    assert 2 * ring / max(1, int(step)) > cv.MAX_RING_LAGS
+    assert cv.narrowest_line(frequency, 1000, dt) == 0.0  # a short record: every lag is within the bound
 
 
 def test_covariance_matches_monte_carlo_classical_and_robust():

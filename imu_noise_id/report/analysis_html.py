@@ -199,10 +199,10 @@ def _gmwm_section(result: AnalysisResult) -> str:
             rows = "".join(f"<tr><td class=l>{html.escape(str(r['model']))}</td><td>{r.get('k', '')}</td>"
                            f"<td>{fmt(r.get('delta_wic', float('nan')), '.2f')}</td>"
                            f"<td>{fmt(r.get('p_value', float('nan')), '.3g')}</td>"
-                           f"<td class=l>{html.escape(str(r.get('error', '')))}</td></tr>"
+                           f"<td class=l>{html.escape(str(r.get('error', r.get('line', ''))))}</td></tr>"
                            for r in m.gmwm_selection.table)
             out.append("<table><tr><th class=l>candidate</th><th>k</th><th>ΔWIC</th><th>J-test p</th>"
-                       f"<th class=l>error</th></tr>{rows}</table>")
+                       f"<th class=l>error or line offered</th></tr>{rows}</table>")
         c = m.comparison
         if c is not None:
             rows = "".join(f"<tr><td class=l>{html.escape(r.quantity)}</td><td>{_ci(r.em, r.em_ci)}</td>"

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections import OrderedDict
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
@@ -132,24 +132,58 @@ def _plan_groups(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Ri
     yield _group(parts, pairs)
 
 
-@lru_cache(maxsize=32)
-def _one_group(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Rings, *, limit: int) -> _Plan | None:
-    """The plan of every pair when it fits in one group of ``limit`` lags (kept: the fits evaluate it again and
-    again), else None."""
-    groups = _plan_groups(m, n, margin, fine, rings, limit=limit)
-    first = next(groups)
-    return first if next(groups, None) is None else None
+#: Lags of the plans kept between calls, in total (the fits evaluate the same plan again and again; the oldest go
+#: first): 32 bytes each.
+CACHE_POINTS = 1 << 23
+_kept: OrderedDict[tuple, tuple[_Plan, ...]] = OrderedDict()
 
 
 def _plans(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Rings):
-    """The groups of pairs the lag sum runs over: one cached plan when all fit in :data:`CHUNK_POINTS` lags, else
-    groups built as they are used (held one at a time)."""
-    whole = _one_group(m, n, margin, fine, rings, limit=CHUNK_POINTS)
-    return (whole,) if whole is not None else _plan_groups(m, n, margin, fine, rings, limit=CHUNK_POINTS)
+    """The groups of pairs the lag sum runs over (at most :data:`CHUNK_POINTS` lags each): kept while all plans kept
+    hold at most :data:`CACHE_POINTS` lags, else built as they are used (held one group at a time)."""
+    key = (m, n, margin, fine, rings, CHUNK_POINTS)
+    if key in _kept:
+        _kept.move_to_end(key)
+        return _kept[key]
+    groups, held = [], 0
+    for group in _plan_groups(m, n, margin, fine, rings, limit=CHUNK_POINTS):
+        groups.append(group)
+        held += group.k.size
+        if held > CACHE_POINTS:  # too large to keep: built again group by group
+            return _plan_groups(m, n, margin, fine, rings, limit=CHUNK_POINTS)
+    while _kept and held + sum(g.k.size for plan in _kept.values() for g in plan) > CACHE_POINTS:
+        _kept.popitem(last=False)
+    _kept[key] = tuple(groups)
+    return _kept[key]
 
 
 def _bucket(x: float) -> float:
     return 0.0 if x <= 0 else (math.inf if not math.isfinite(x) else 2.0 ** math.ceil(math.log2(x)))
+
+
+def _ring(c: Component, n: int, dt: float) -> tuple[int, float] | None:
+    """An oscillating component's ring: the lags [samples] its oscillation lasts (:data:`TAIL_DECAY_TIMES` of its
+    memory, at most the record) and the step that follows it (the next power of two over its period, / 32); None for
+    a component that does not oscillate."""
+    longest, _, period = c.memory(dt)
+    if not math.isfinite(period):
+        return None
+    return int(min(_bucket(TAIL_DECAY_TIMES * longest / dt), n)), _bucket(max(period / dt, 1.0)) / 32.0
+
+
+#: Lags per kink an oscillation may add to each pair of scales (both sides of the kink) in a GMWM search: an OSC is
+#: kept at least :func:`narrowest_line` wide, so that one covariance takes seconds, not minutes (docs/gmwm.md).
+MAX_RING_LAGS = 1 << 14
+
+
+def narrowest_line(frequency: float, n: int, dt: float) -> float:
+    """The bandwidth [Hz] above which an OSC at ``frequency`` [Hz] rings over at most :data:`MAX_RING_LAGS` lags per
+    kink on n samples at ``dt`` [s] (its memory 1/(πB) over :data:`TAIL_DECAY_TIMES`, the ring's length rounded up to
+    a power of two at most doubles it); 0 when even the whole record is within it."""
+    step = max(1, int(_bucket(max(1.0 / (frequency * dt), 1.0)) / 32.0))
+    if 2 * n <= MAX_RING_LAGS * step:
+        return 0.0
+    return 4.0 * TAIL_DECAY_TIMES / (math.pi * dt * MAX_RING_LAGS * step)
 
 
 def wv_covariance(components: list[Component], m: np.ndarray, n: int, dt: float, *,
@@ -161,11 +195,12 @@ def wv_covariance(components: list[Component], m: np.ndarray, n: int, dt: float,
     stochastic = [c for c in comps if not isinstance(c, RR)]
     decay, fine, rings = 0.0, math.inf, set()
     for c in stochastic:
-        longest, shortest, p = c.memory(dt)
+        longest, shortest, _ = c.memory(dt)
         if longest > 0:
             decay, fine = max(decay, longest / dt), min(fine, shortest / dt)
-        if math.isfinite(p):  # an oscillation, followed finely as long as its memory lasts
-            rings.add((int(min(_bucket(TAIL_DECAY_TIMES * longest / dt), n)), _bucket(max(p / dt, 1.0)) / 32.0))
+        ring = _ring(c, n, dt)
+        if ring is not None:
+            rings.add(ring)
     margin = int(min(_bucket(TAIL_DECAY_TIMES * decay), n))
     fine = _bucket(fine) / 2.0 if math.isfinite(fine) else math.inf
     nu2 = theoretical_wv(comps, m * dt, dt)

@@ -20,6 +20,7 @@ from ...core.estimation.em.model import FitOptions, NoiseModel
 from ...core.estimation.em.results import FitResult
 from ...core.estimation.em.selection import SelectionResult, finish_winner, select_model
 from ...core.estimation.gmwm.fit import GmwmFit, GmwmOptions, fit_gmwm, prepare
+from ...core.estimation.gmwm.lines import record_lines
 from ...core.estimation.gmwm.select import GmwmSelection, select_gmwm
 from ...core.estimation.readouts.agreement import Comparison, compare
 from ...core.noise.digital import SensorFilter
@@ -101,7 +102,8 @@ class ModelStage:
 def _gmwm_axis(y, dt: float, stage: ModelStage, allan: AllanResult | None) -> tuple[GmwmFit, GmwmSelection | None]:
     wv, slope = prepare(y, dt, stage.gmwm)
     if stage.model == AUTO:
-        sel = select_gmwm(None, dt, options=stage.gmwm, allan=allan, wv=wv, slope=slope)
+        sel = select_gmwm(None, dt, options=stage.gmwm, allan=allan, wv=wv, slope=slope,
+                          lines=tuple(record_lines(y, dt, slope)))
         return sel.best, sel
     return fit_gmwm(None, dt, stage.model, options=stage.gmwm, wv=wv, slope=slope), None
 

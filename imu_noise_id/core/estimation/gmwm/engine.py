@@ -19,7 +19,7 @@ from scipy.optimize import least_squares
 
 from ...noise.components import Component
 from ...noise.modelspec import parameter_labels
-from ...wavelet.covariance import theoretical_wv, wv_covariance
+from ...wavelet.covariance import narrowest_line, theoretical_wv, wv_covariance
 from ...wavelet.variance import WaveletVariance
 from ..em.differences import derivative_in_domain, stepped
 from ..em.mle import covariance_from_information, physical_bounds
@@ -61,8 +61,10 @@ class Parameters:
         return [type(c)(**kw) for c, kw in zip(self.template, params, strict=True)]
 
     def bounds(self, theta0: np.ndarray, runs: list[Moments]) -> tuple[np.ndarray, np.ndarray]:
-        """Search box: physical ranges for τ and frequencies (:func:`physical_bounds`); amplitudes ±30 e-folds, the
-        lower end raised to where the component's WV is below :data:`WV_FLOOR` of the data's at every scale."""
+        """Search box: physical ranges for τ and frequencies (:func:`physical_bounds`), an OSC's bandwidth from
+        :func:`~imu_noise_id.core.wavelet.covariance.narrowest_line` (or its start, if narrower); amplitudes ±30
+        e-folds, the lower end raised to where the component's WV is below :data:`WV_FLOOR` of the data's at every
+        scale."""
         n, dt = max(r.wv.n for r in runs), runs[0].wv.dt
         phys = physical_bounds(n, dt)
         lo, hi = theta0 - AMPLITUDE_WIDTH, theta0 + AMPLITUDE_WIDTH
@@ -70,6 +72,9 @@ class Parameters:
         for k, (i, p) in enumerate(self.entries):
             if p in phys:
                 lo[k], hi[k] = math.log(phys[p][0]), math.log(phys[p][1])
+            if p == "bandwidth":  # a line narrower than this makes each covariance take minutes (start kept inside)
+                floor = narrowest_line(comps[i].frequency, n, dt)
+                lo[k] = min(max(lo[k], math.log(floor)), theta0[k]) if floor > 0 else lo[k]
             elif p in AMPLITUDES:
                 ratio = min(float(np.min(r.wv.nu2 / np.maximum(r.model([comps[i]]), 1e-300))) for r in runs)
                 if math.isfinite(ratio) and ratio > 0:  # the WV of an amplitude scales with its square
