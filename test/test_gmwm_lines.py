@@ -43,15 +43,29 @@ def test_a_line_too_narrow_for_the_covariance_is_fitted_at_the_narrowest_it_foll
     every pair of scales (a measured accelerometer's 0.56 Hz line made each GMWM fit take over ten minutes). It is
     offered at the narrowest bandwidth the covariance follows (its WV on dyadic scales the same), and the fit keeps
     it there."""
-    y = simulate_sum([WN(N_TRUE), RW(2e-5)], 100_000, DT, np.random.default_rng(1))
+    y = simulate_sum([WN(N_TRUE), OSC(5.0, 2e-3, 3e-3), RW(2e-5)], 100_000, DT, np.random.default_rng(1))
     wv, _ = prepare(y, DT, GmwmOptions())
     winner = estimate_structure(wv, "WN+RW", options=GmwmOptions())
-    narrow = LineShape(frequency=5.0, bandwidth=1e-4, sigma=1e-3, concentration=0.3, resolution=1e-3)
+    narrow = LineShape(frequency=5.0, bandwidth=1e-4, sigma=3e-3, concentration=0.3, resolution=1e-3)
     _, trials = offer_lines(wv, winner, [narrow], options=GmwmOptions())
     assert len(trials) == 1 and not trials[0].error
     fitted = trials[0].estimate
     osc = next(c for c in fitted.components if isinstance(c, OSC))
     assert osc.bandwidth >= narrowest_line(osc.frequency, wv.n, DT) * 0.999
+    assert abs(osc.frequency / 5.0 - 1.0) < 0.1 and trials[0].kept
+
+
+def test_an_osc_the_fit_moves_away_from_its_line_is_not_the_line():
+    """The WV's dyadic scales barely see a line's frequency: offered a line the record does not hold, the fit moved
+    the OSC to 32 Hz to hold broad power there (on a measured accelerometer, a 0.46 Hz line's OSC went to 14 Hz and
+    took a fifth of the white noise). Such a trial is refused and says where the OSC went."""
+    y = simulate_sum([WN(N_TRUE), RW(2e-5)], 100_000, DT, np.random.default_rng(1))
+    wv, _ = prepare(y, DT, GmwmOptions())
+    winner = estimate_structure(wv, "WN+RW", options=GmwmOptions())
+    absent = LineShape(frequency=5.0, bandwidth=1e-4, sigma=1e-3, concentration=0.3, resolution=1e-3)
+    best, trials = offer_lines(wv, winner, [absent], options=GmwmOptions())
+    assert best is winner
+    assert not trials[0].kept and "moved its OSC" in trials[0].error
 
 
 def test_a_record_without_a_line_is_offered_none():

@@ -219,8 +219,9 @@ def prepare(y: np.ndarray, dt: float, options: GmwmOptions) -> tuple[WaveletVari
 
 
 def estimate_structure(wv: WaveletVariance, structure: str | list[Component], *, options: GmwmOptions,
-                       init: list[Component] | None = None) -> Estimate:
-    """The GMWM estimate of one structure on one record's WV, before intervals (:func:`fit_gmwm`)."""
+                       init: list[Component] | None = None, more_starts: tuple[list[Component], ...] = ()) -> Estimate:
+    """The GMWM estimate of one structure on one record's WV, before intervals (:func:`fit_gmwm`); ``more_starts``:
+    further starting components, each searched under the first step's weight (:func:`estimate`)."""
     names, given = parse_structure_or_components(structure)
     ss.validate_structure(names)
     n_params = sum(len(COMPONENT_TYPES[n].parameter_names) for n in names)
@@ -230,7 +231,7 @@ def estimate_structure(wv: WaveletVariance, structure: str | list[Component], *,
     start = init or given
     starts = ([_with_ramp_start(list(start), wv)] if start is not None
               else starting_values(names, wv, options.n_starts))
-    return estimate([eng.Moments(wv)], starts)
+    return estimate([eng.Moments(wv)], starts + [_with_ramp_start(list(c), wv) for c in more_starts])
 
 
 def fit_gmwm(y: np.ndarray | None, dt: float, structure: str | list[Component], *,

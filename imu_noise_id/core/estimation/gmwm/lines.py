@@ -78,12 +78,37 @@ def record_lines(y: np.ndarray, dt: float, slope: float, *, alpha: float = ALPHA
     return found
 
 
-def _resonance(line: LineShape, n: int, dt: float) -> OSC:
-    """The OSC start of a line: its frequency, bandwidth (at least the GMWM's narrowest,
-    :func:`~imu_noise_id.core.wavelet.covariance.narrowest_line`, at most an OSC's widest) and σ."""
+#: Relative distance |f̂/f − 1| within which a fitted OSC still describes its line: the WV's dyadic scales barely see
+#: a line's frequency, and a fit that moved the OSC away (to hold broad power elsewhere) is not the line's.
+LINE_WINDOW = 0.1
+
+#: Starts of a line's OSC beside its measured shape: bandwidth × and σ × (its power partly held by the winner's
+#: components already, its width on dyadic scales barely seen).
+START_BANDWIDTH_FACTOR, START_SIGMA_FACTOR = 4.0, 0.5
+
+
+def _resonances(line: LineShape, n: int, dt: float) -> list[OSC]:
+    """The OSC starts of a line: its frequency, bandwidth (at least the GMWM's narrowest,
+    :func:`~imu_noise_id.core.wavelet.covariance.narrowest_line`, at most an OSC's widest) and σ as measured, and
+    with the bandwidth × :data:`START_BANDWIDTH_FACTOR`, the σ × :data:`START_SIGMA_FACTOR`."""
     widest = 2.0 * MAX_DAMPING * line.frequency * 0.99
     bandwidth = min(max(line.bandwidth, 1.01 * narrowest_line(line.frequency, n, dt)), widest)
-    return OSC(line.frequency, bandwidth, line.sigma)
+    return [OSC(line.frequency, min(b, widest), s) for b in (bandwidth, START_BANDWIDTH_FACTOR * bandwidth)
+            for s in (line.sigma, START_SIGMA_FACTOR * line.sigma)]
+
+
+def _strays(est: Estimate, lines: list[LineShape]) -> list[str]:
+    """The fitted OSCs of ``est`` that lie beyond :data:`LINE_WINDOW` of every line of ``lines`` not already taken by
+    a nearer one, in words."""
+    free = list(lines)
+    strays = []
+    for osc in sorted((c for c in est.components if isinstance(c, OSC)), key=lambda c: c.frequency):
+        near = min(free, key=lambda ln: abs(osc.frequency / ln.frequency - 1.0), default=None)
+        if near is None or abs(osc.frequency / near.frequency - 1.0) > LINE_WINDOW:
+            strays.append(f"{osc.frequency:.4g} Hz")
+        else:
+            free.remove(near)
+    return strays
 
 
 def _wic_pair(without: Estimate, with_line: Estimate) -> tuple[float, float]:
@@ -101,19 +126,25 @@ def offer_lines(wv: WaveletVariance, winner: Estimate, lines: list[LineShape], *
                 options: GmwmOptions) -> tuple[Estimate, list[LineTrial]]:
     """``winner`` with each of ``lines`` (strongest first) added as an OSC where it lowers the WIC (module docstring),
     and every trial."""
-    best, trials = winner, []
+    best, trials, taken = winner, [], []
     for line in lines:
-        comps = [*best.components, _resonance(line, wv.n, wv.dt)]
-        name = model_name(comps)
+        starts = [[*best.components, osc] for osc in _resonances(line, wv.n, wv.dt)]
+        name = model_name(starts[0])
         try:
-            est = estimate_structure(wv, comps, options=options)
+            est = estimate_structure(wv, starts[0], options=options, more_starts=tuple(starts[1:]))
         except (InputError, ValueError) as exc:
             trials.append(LineTrial(line, name, math.nan, math.nan, False, error=f"not fitted: {exc}"))
+            continue
+        strays = _strays(est, [*taken, line])
+        if strays:
+            trials.append(LineTrial(line, name, math.nan, math.nan, False, k=len(parameter_labels(est.components)),
+                                    estimate=est, error=f"refused: the fit moved its OSC to {', '.join(strays)}, "
+                                                        f"beyond {LINE_WINDOW:.0%} of the line"))
             continue
         without, with_line = _wic_pair(best, est)
         kept = with_line < without
         trials.append(LineTrial(line, name, without, with_line, kept, k=len(parameter_labels(est.components)),
                                 estimate=est))
         if kept:
-            best = est
+            best, taken = est, [*taken, line]
     return best, trials
