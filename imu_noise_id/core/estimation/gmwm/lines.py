@@ -7,7 +7,9 @@ weight of the structure nesting both as in :func:`.select.select_gmwm`).
 Beyond the GMWM papers, whose candidates are the classical processes: a measured IMU's vibration line or mechanical
 resonance is no such process, and on dyadic scales its power sits where the white noise is read (a 20 Hz line at
 τ = 0.01–0.04 s, a 0.56 Hz one at 0.5–2 s). Without it the efficient weight fits the finest scales, where the WV is
-most precise, and the white noise is read 35 % high (docs/gmwm.md, "Why: lines offered to the selection")."""
+most precise, and the white noise is read high. The scales barely see a line's frequency: an OSC the fit moves beyond
+:data:`LINE_WINDOW` of its line is not that line, and the trial is refused (docs/gmwm.md, "Why: lines offered to the
+selection")."""
 
 from __future__ import annotations
 
