@@ -136,6 +136,7 @@ def _plan_groups(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Ri
 #: first): 32 bytes each.
 CACHE_POINTS = 1 << 23
 _kept: OrderedDict[tuple, tuple[_Plan, ...]] = OrderedDict()
+_too_large: set[tuple] = set()
 
 
 def _plans(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Rings):
@@ -145,11 +146,14 @@ def _plans(m: tuple[int, ...], n: int, margin: int, fine: float, rings: Rings):
     if key in _kept:
         _kept.move_to_end(key)
         return _kept[key]
+    if (*key, CACHE_POINTS) in _too_large:
+        return _plan_groups(m, n, margin, fine, rings, limit=CHUNK_POINTS)
     groups, held = [], 0
     for group in _plan_groups(m, n, margin, fine, rings, limit=CHUNK_POINTS):
         groups.append(group)
         held += group.k.size
-        if held > CACHE_POINTS:  # too large to keep: built again group by group
+        if held > CACHE_POINTS:  # too large to keep: built again group by group, now and on every later call
+            _too_large.add((*key, CACHE_POINTS))
             return _plan_groups(m, n, margin, fine, rings, limit=CHUNK_POINTS)
     while _kept and held + sum(g.k.size for plan in _kept.values() for g in plan) > CACHE_POINTS:
         _kept.popitem(last=False)
