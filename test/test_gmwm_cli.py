@@ -71,6 +71,8 @@ def test_analyze_uses_the_gmwm_beyond_the_em_threshold(bag, tmp_path, capsys, mo
     err = capsys.readouterr().err
     assert "beyond what the EM fits" in err and "the GMWM was used" in err and "closed loop skipped" in err
     doc = yaml.safe_load((out / "model.yaml").read_text())["axes"]
+    # skipped, not attempted: once per axis, and the loop never began on the GMWM's fit
+    assert err.count("closed loop skipped") == len(doc) and "the starting fit must be" not in err
     for axis, entry in doc.items():
         assert entry["estimator"] == "gmwm" and "beyond what the EM fits" in entry["note"], axis
         assert "loop" not in entry and "agreement" not in entry

@@ -268,13 +268,13 @@ def _axis_stages(context: _AxisContext, axis: str) -> _AxisOutcome:
     if loop is not None and fit.estimator != "em":
         warnings.append(f"{axis}: closed loop skipped: it diagnoses the EM's one-step innovations, and this axis was "
                         "fitted by the GMWM (its J-test and per-scale residuals are in model.yaml)")
-    if model.gmwm_selection is not None and model.fit is model.gmwm:
-        warnings += [f"{axis}: {why}" for why in model.gmwm_selection.lines_left_out()]
     elif loop is not None:
         try:
             loop_result = loop.run(axis, fit)
         except InputError as exc:
             warnings.append(f"closed loop skipped: {exc}")
+    if model.gmwm_selection is not None and model.fit is model.gmwm:
+        warnings += [f"{axis}: {why}" for why in model.gmwm_selection.lines_left_out()]
     if loop_result is None or len(loop_result.steps) == 1:
         model = finish_axis(model, context.imu, axis, options.models, static.dt, allan=column)
         fit = model.fit
