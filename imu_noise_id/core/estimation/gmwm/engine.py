@@ -72,9 +72,9 @@ class Parameters:
         for k, (i, p) in enumerate(self.entries):
             if p in phys:
                 lo[k], hi[k] = math.log(phys[p][0]), math.log(phys[p][1])
-            if p == "bandwidth":  # a line narrower than this makes each covariance take minutes (start kept inside)
-                floor = narrowest_line(comps[i].frequency, n, dt)
-                lo[k] = min(max(lo[k], math.log(floor)), theta0[k]) if floor > 0 else lo[k]
+                if p == "bandwidth":  # a line narrower than this makes each covariance take minutes (start inside)
+                    floor = narrowest_line(comps[i].frequency, n, dt)
+                    lo[k] = min(max(lo[k], math.log(floor)), theta0[k]) if floor > 0 else lo[k]
             elif p in AMPLITUDES:
                 ratio = min(float(np.min(r.wv.nu2 / np.maximum(r.model([comps[i]]), 1e-300))) for r in runs)
                 if math.isfinite(ratio) and ratio > 0:  # the WV of an amplitude scales with its square

@@ -109,6 +109,13 @@ class Estimate:
     def components(self) -> list[Component]:
         return self.problem.par.to_components(self.best.theta)
 
+    def wic(self, weights: eng.Weights) -> float:
+        """WIC = J + 2·tr(Ω A H⁻¹ Aᵀ Ω V) of this structure refitted under ``weights`` (Guerrier et al. 2015), the
+        weight structures are compared under."""
+        problem = self.problem.with_weights(weights)
+        best = problem.minimise(self.best.theta)
+        return best.objective + eng.infer(problem, best, list(weights.covariance)).optimism
+
 
 def estimate(runs: list[eng.Moments], starts: list[list[Component]]) -> Estimate:
     """Steps 2–4 on the records ``runs`` (one θ for all); InputError without starts."""

@@ -113,17 +113,6 @@ def _strays(est: Estimate, lines: list[LineShape]) -> list[str]:
     return strays
 
 
-def _wic_pair(without: Estimate, with_line: Estimate) -> tuple[float, float]:
-    """The WICs of the two estimates under the weight of the one with the line (the structure nesting both)."""
-    weights = eng.Weights.at(with_line.problem.runs, with_line.components)
-    out = []
-    for est in (without, with_line):
-        problem = est.problem.with_weights(weights)
-        best = problem.minimise(est.best.theta)
-        out.append(best.objective + eng.infer(problem, best, list(weights.covariance)).optimism)
-    return out[0], out[1]
-
-
 def offer_lines(wv: WaveletVariance, winner: Estimate, lines: list[LineShape], *,
                 options: GmwmOptions) -> tuple[Estimate, list[LineTrial]]:
     """``winner`` with each of ``lines`` (strongest first) added as an OSC where it lowers the WIC (module docstring),
@@ -143,7 +132,8 @@ def offer_lines(wv: WaveletVariance, winner: Estimate, lines: list[LineShape], *
                                     estimate=est, error=f"refused: the fit moved its OSC to {', '.join(strays)}, "
                                                         f"beyond {LINE_WINDOW:.0%} of the line"))
             continue
-        without, with_line = _wic_pair(best, est)
+        weights = eng.Weights.at(est.problem.runs, est.components)  # the structure nesting both
+        without, with_line = best.wic(weights), est.wic(weights)
         kept = with_line < without
         trials.append(LineTrial(line, name, without, with_line, kept, k=len(parameter_labels(est.components)),
                                 estimate=est))

@@ -86,11 +86,7 @@ def select_gmwm(y, dt: float, candidates: list[str] | None = None, *, options: G
         reference, ref = max(ests.items(), key=lambda kv: kv[1].inference.p_value)
     runs = [eng.Moments(wv)]
     weights = eng.Weights.at(runs, ref.components)
-    wic = {}
-    for spec, est in ests.items():
-        problem = est.problem.with_weights(weights)
-        best = problem.minimise(est.best.theta)
-        wic[spec] = best.objective + eng.infer(problem, best, list(weights.covariance)).optimism
+    wic = {spec: est.wic(weights) for spec, est in ests.items()}
     low = min(wic.values())
     tied = [spec for spec in wic if wic[spec] - low <= WIC_TIE * max(1.0, abs(low))]
     alike = {walk_look_alike(ests[spec].components, wv.n * wv.dt) for spec in tied}
